@@ -1,0 +1,198 @@
+//! Scenes: the TOML file format, its validation, and the resolved scene the renderer draws.
+//!
+//! A scene file is parsed by [`load`] into a [`Scene`]: every mesh is triangulated in object
+//! space, every material and texture is resolved to an index, and every value has been checked
+//! (a bad value is a [`SceneError`] that names the file, line and field). The renderer never
+//! sees the TOML; it sees only these types.
+//!
+//! World conventions (see `docs/conventions.md`): right-handed, +Y up, metres, seconds.
+
+use std::path::PathBuf;
+
+use glam::{Quat, Vec2, Vec3};
+
+mod anim;
+mod error;
+mod format;
+mod load;
+mod mesh;
+mod texture;
+
+pub use anim::Animation;
+pub use error::SceneError;
+pub use load::{load, load_str};
+pub use mesh::Mesh;
+pub use texture::TextureData;
+
+/// Largest cube face the format accepts (texels per side); larger is an error, not a clamp.
+pub const MAX_FACE_SIZE_PX: u32 = 8192;
+/// Largest view image the format accepts on either side (pixels).
+pub const MAX_IMAGE_SIZE_PX: u32 = 8192;
+
+/// A fully validated scene, ready to render.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The file the scene came from (relative paths inside it were resolved against its folder).
+    pub source: PathBuf,
+    /// Free text from the file's `description`, for reports.
+    pub description: String,
+    pub room: Room,
+    pub mirror: Mirror,
+    /// Everything drawn into the cube map and the views besides the room and the mirror.
+    pub objects: Vec<Object>,
+    /// Triangle meshes in object space, referenced by [`Object::mesh`] and [`Room`].
+    pub meshes: Vec<Mesh>,
+    /// Materials referenced by index from objects and room walls.
+    pub materials: Vec<Material>,
+    /// Decoded PNG textures referenced by [`MaterialKind::Texture`].
+    pub textures: Vec<TextureData>,
+    pub observer: Camera,
+    pub sensor: SensorCamera,
+    pub cube: CubeSettings,
+    pub refresh: RefreshPolicy,
+    /// `None`: unlit albedo, as in the thesis.
+    pub light: Option<DirectionalLight>,
+}
+
+/// The room: an axis-aligned box seen from inside.
+#[derive(Debug, Clone)]
+pub struct Room {
+    /// Centre of the box in world space (metres).
+    pub center: Vec3,
+    /// Full extent along x, y, z (metres), all > 0.
+    pub size_m: Vec3,
+    /// Material index of each wall, in cube-face order: +X, -X, +Y (ceiling), -Y (floor), +Z, -Z.
+    pub wall_materials: [usize; 6],
+}
+
+/// The spherical mirror. It is analytic everywhere: never tessellated, never in the cube map.
+#[derive(Debug, Clone)]
+pub struct Mirror {
+    /// Centre at time 0 (world, metres).
+    pub center: Vec3,
+    /// Radius (metres), > 0.
+    pub radius_m: f32,
+    /// Moves the centre over time; `None` keeps it still.
+    pub animation: Option<Animation>,
+}
+
+/// One drawable object: a mesh instance with a material and a rigid transform.
+#[derive(Debug, Clone)]
+pub struct Object {
+    /// Name from the file (or `objects[i]`), for reports and debug labels.
+    pub name: String,
+    /// Index into [`Scene::meshes`].
+    pub mesh: usize,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Position of the object's origin at time 0 (world, metres).
+    pub position: Vec3,
+    /// Orientation (object to world).
+    pub rotation: Quat,
+    /// Per-axis scale, all > 0.
+    pub scale: Vec3,
+    /// Moves the position over time; `None` keeps it still.
+    pub animation: Option<Animation>,
+}
+
+/// A material: an albedo function of the surface point. Evaluated identically by
+/// `shaders/include/materials.glsl` (GPU) and by the CPU reference.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub kind: MaterialKind,
+}
+
+/// What a material computes. Colours are linear RGB in [0, 1].
+#[derive(Debug, Clone, PartialEq)]
+pub enum MaterialKind {
+    /// A constant albedo.
+    Color { color: Vec3 },
+    /// Squares alternating between `a` and `b`; `tiles` squares per unit of texture coordinate.
+    Checker { a: Vec3, b: Vec3, tiles: f32 },
+    /// Lines of colour `line` on `background`; `tiles` cells per unit of texture coordinate,
+    /// lines `line_width` wide as a fraction of a cell (0, 0.5].
+    Grid { background: Vec3, line: Vec3, tiles: f32, line_width: f32 },
+    /// An image, repeated `tiles` times per unit of texture coordinate, tinted by `tint`.
+    Texture { texture: usize, tint: Vec3, tiles: f32 },
+    /// Colour = 0.5 + 0.5 * normalize(p - mirror centre): a known answer for every direction,
+    /// used to test the cube-face orientation.
+    Direction,
+}
+
+/// A perspective camera.
+#[derive(Debug, Clone)]
+pub struct Camera {
+    /// Position at time 0 (world, metres).
+    pub position: Vec3,
+    /// Rotation about +Y in degrees; 0 looks along -Z, 90 looks along -X.
+    pub yaw_deg: f32,
+    /// Elevation in degrees, in (-90, 90); positive looks up.
+    pub pitch_deg: f32,
+    /// Vertical field of view in degrees, in (0, 180).
+    pub fov_y_deg: f32,
+    /// Image size in pixels (width, height).
+    pub resolution: [u32; 2],
+    /// Moves the position over time; `None` keeps it still.
+    pub animation: Option<Animation>,
+}
+
+/// The catadioptric sensor: a camera fixed below the mirror, looking straight up at it.
+#[derive(Debug, Clone)]
+pub struct SensorCamera {
+    /// Distance below the mirror centre (metres), > radius: the camera sits at centre - offset * Y.
+    pub offset_m: f32,
+    /// Vertical field of view in degrees, in (0, 180).
+    pub fov_y_deg: f32,
+    /// Image size in pixels (width, height).
+    pub resolution: [u32; 2],
+    /// The image's up direction in world space (must not be parallel to +Y); default -Z.
+    pub up: Vec3,
+}
+
+/// How the cube map is made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CubeSettings {
+    /// Texels per face side, in 1..=MAX_FACE_SIZE_PX.
+    pub face_size_px: u32,
+    /// Texel format of the colour faces.
+    pub format: CubeFormat,
+    /// Near and far planes of the six 90-degree projections (metres), 0 < near < far.
+    pub near_m: f32,
+    pub far_m: f32,
+    /// Build a full mip chain after each fill (trilinear lookups).
+    pub mipmaps: bool,
+    /// Requested anisotropy, >= 1; clamped to the device's maximum at run time.
+    pub max_anisotropy: f32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CubeFormat {
+    /// RGBA 16-bit float: linear HDR (the default).
+    Rgba16Float,
+    /// RGBA 8-bit unorm: the thesis's format; cheaper, banding in dark gradients.
+    Rgba8Unorm,
+}
+
+/// When the cube map is re-rendered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RefreshPolicy {
+    /// Every frame, whether anything moved or not.
+    EveryFrame,
+    /// Only when something that the cube sees (an object or the mirror) moved since the last fill.
+    OnChange,
+    /// Every n-th frame (n >= 1), counting from frame 0.
+    EveryN(u32),
+}
+
+/// One directional light; shading becomes albedo * (ambient + (1 - ambient) * max(0, N.L)).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DirectionalLight {
+    /// Unit vector pointing from the surface towards the light (world).
+    pub direction: Vec3,
+    /// Fraction of albedo seen in full shadow, in [0, 1].
+    pub ambient: f32,
+}
+
+/// Convenience for code that needs both a 2D texture coordinate and a position.
+pub type Uv = Vec2;
