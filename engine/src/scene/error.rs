@@ -1,0 +1,6 @@
+//! TEMPORARY stub.
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct SceneError {
+    pub message: String,
+}

@@ -1,0 +1,94 @@
+//! `specchio info`: every Vulkan device, what it supports, and which one would be used.
+
+use std::process::ExitCode;
+
+use anyhow::Result;
+use specchio::vk::device::{self, DeviceInfo, MIN_MESA_MAJOR};
+use specchio::vk::instance::{Instance, InstanceDesc};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Enable the Khronos validation layer (also: SPECCHIO_VALIDATE=1).
+    #[arg(long)]
+    validate: bool,
+}
+
+pub fn run(args: &Args) -> Result<ExitCode> {
+    let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
+    let candidates = device::enumerate(&instance)?;
+    if args.json {
+        let list: Vec<serde_json::Value> = candidates
+            .iter()
+            .map(|c| {
+                let mut v = serde_json::to_value(&c.info).unwrap_or_default();
+                v["usable"] = serde_json::json!(c.rejected.is_none());
+                v["rejected_because"] = serde_json::json!(c.rejected);
+                v["mesa_too_old"] = serde_json::json!(mesa_too_old(&c.info));
+                v
+            })
+            .collect();
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&serde_json::json!({ "devices": list }))?
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    if candidates.is_empty() {
+        println!("no Vulkan device found (Debian: apt-get install mesa-vulkan-drivers)");
+    }
+    for c in &candidates {
+        print_device(&c.info, c.rejected.as_deref());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn mesa_too_old(info: &DeviceInfo) -> bool {
+    device::mesa_major(info).is_some_and(|m| m < MIN_MESA_MAJOR)
+}
+
+fn print_device(i: &DeviceInfo, rejected: Option<&str>) {
+    let yes = |b: bool| if b { "yes" } else { "no" };
+    println!("[{}] {} ({})", i.index, i.name, i.device_type);
+    match rejected {
+        Some(why) => println!("    status:             NOT USABLE: {why}"),
+        None => println!("    status:             usable"),
+    }
+    println!(
+        "    driver:             {} {} (version {})",
+        i.driver_name, i.driver_info, i.driver_version
+    );
+    println!("    Vulkan:             {}", i.api_version);
+    if mesa_too_old(i) {
+        println!("    WARNING:            Mesa {} is older than {MIN_MESA_MAJOR}; results may differ (see README)",
+            i.mesa_version.as_deref().unwrap_or("?"));
+    }
+    let l = &i.limits;
+    let f = &i.features;
+    println!("    limits:             cube {} px, 2D {} px, {} layers, {} B push constants, anisotropy {}x, timestamp {} ns",
+        l.max_image_dimension_cube, l.max_image_dimension_2d, l.max_image_array_layers,
+        l.max_push_constants_size, l.max_sampler_anisotropy, l.timestamp_period_ns);
+    println!(
+        "    multiview:          {} (max {} views)",
+        yes(f.multiview),
+        l.max_multiview_view_count
+    );
+    println!(
+        "    geometry shader:    {} (max {} output vertices, {} invocations)",
+        yes(f.geometry_shader),
+        l.max_geometry_output_vertices,
+        l.max_geometry_shader_invocations
+    );
+    println!("    shaderOutputLayer:  {}", yes(f.shader_output_layer));
+    println!(
+        "    mesh shader:        {} (max {} output layers)",
+        yes(f.mesh_shader),
+        l.max_mesh_output_layers
+    );
+    println!("    ray query:          {}", yes(f.ray_query));
+    println!("    timestamps:         {}", yes(f.timestamps));
+    println!("    pipeline stats:     {}", yes(f.pipeline_statistics));
+    println!("    anisotropy:         {}", yes(f.sampler_anisotropy));
+}

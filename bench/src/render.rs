@@ -1,0 +1,258 @@
+//! `specchio render`: one frame (or a sequence) of a scene, written as EXR + PNG + JSON.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context, Result};
+use serde_json::json;
+use specchio::output::{write_exr, write_json, write_png};
+use specchio::render::camera::FACE_NAMES;
+use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
+use specchio::scene::MAX_FACE_SIZE_PX;
+use specchio::vk::device::{Device, DeviceDesc};
+use specchio::vk::instance::{Instance, InstanceDesc};
+
+/// More frames than this is a mistake, not a render (about an hour of video at 30 fps).
+pub const MAX_FRAMES: u32 = 100_000;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The scene file (TOML; see docs/scene-format.md).
+    scene: PathBuf,
+    /// Output folder (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Scene time of the (first) frame in seconds.
+    #[arg(long, conflicts_with = "frame")]
+    time: Option<f64>,
+    /// Frame number of the (first) frame; its time is N / fps.
+    #[arg(long)]
+    frame: Option<u64>,
+    /// Frames per second for --frame and --frames.
+    #[arg(long, default_value_t = 30.0)]
+    fps: f64,
+    /// Render K consecutive frames (numbered outputs in DIR/NNNN/).
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
+    /// Cube face size in texels (overrides the scene's cube.face_size).
+    #[arg(long)]
+    cube_size: Option<u32>,
+    /// Enable the Khronos validation layer; any message makes the command fail.
+    #[arg(long)]
+    validate: bool,
+    /// Vulkan device: index or part of its name (see `specchio info`).
+    #[arg(long)]
+    device: Option<String>,
+}
+
+/// Checks the numeric arguments before anything is loaded or written.
+fn check_args(args: &Args) -> Result<()> {
+    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 10_000.0) {
+        bail!("--fps {}: must be a number in (0, 10000]", args.fps);
+    }
+    if let Some(t) = args.time {
+        if !t.is_finite() || t < 0.0 {
+            bail!("--time {t}: must be a finite number of seconds >= 0");
+        }
+    }
+    if args.frames == 0 || args.frames > MAX_FRAMES {
+        bail!("--frames {}: must be in 1..={MAX_FRAMES}", args.frames);
+    }
+    if let Some(s) = args.cube_size {
+        if s == 0 || s > MAX_FACE_SIZE_PX {
+            bail!("--cube-size {s}: must be in 1..={MAX_FACE_SIZE_PX}");
+        }
+    }
+    Ok(())
+}
+
+pub fn run(args: &Args) -> Result<ExitCode> {
+    // 1. Everything that can be wrong with the input is found before the output folder exists.
+    check_args(args)?;
+    let scene = specchio::scene::load(&args.scene)?;
+    let start_s = args
+        .time
+        .unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);
+
+    // 2. The GPU.
+    let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
+    let log = instance.validation_log();
+    let device = Device::create(
+        &instance,
+        &DeviceDesc {
+            selector: args.device.clone(),
+        },
+    )?;
+    let validation = instance.validation;
+    drop(instance);
+    let info = device.info.clone();
+    let mut renderer = Renderer::new(
+        &device,
+        scene,
+        &RenderOptions {
+            cube_size: args.cube_size,
+        },
+    )?;
+
+    // 3. Frames.
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let progress = (args.frames > 1).then(|| indicatif::ProgressBar::new(u64::from(args.frames)));
+    let mut reports = Vec::new();
+    for i in 0..args.frames {
+        let t = start_s + f64::from(i) / args.fps;
+        let frame_index = u64::from(i);
+        let (report, images) = renderer.render_frame(
+            frame_index,
+            t,
+            Readback {
+                cube: true,
+                views: true,
+            },
+        )?;
+        let dir = if args.frames > 1 {
+            args.out.join(format!("{i:04}"))
+        } else {
+            args.out.clone()
+        };
+        write_frame(&dir, &images)?;
+        reports.push(report);
+        if let Some(p) = &progress {
+            p.inc(1);
+        }
+    }
+    if let Some(p) = progress {
+        p.finish_and_clear();
+    }
+
+    // 4. Report.
+    let summary = summarize(&reports);
+    let record = json!({
+        "scene": args.scene.display().to_string(),
+        "description": renderer.scene.description,
+        "settings": {
+            "start_time_s": start_s,
+            "fps": args.fps,
+            "frames": args.frames,
+            "method": "six-pass",
+            "cube": {
+                "face_size_px": renderer.scene.cube.face_size_px,
+                "format": format!("{:?}", renderer.scene.cube.format),
+                "near_m": renderer.scene.cube.near_m,
+                "far_m": renderer.scene.cube.far_m,
+                "mipmaps": renderer.scene.cube.mipmaps,
+                "max_anisotropy": renderer.scene.cube.max_anisotropy,
+            },
+            "refresh": format!("{:?}", renderer.scene.refresh),
+            "observer_resolution": renderer.scene.observer.resolution,
+            "sensor_resolution": renderer.scene.sensor.resolution,
+            "validation": validation,
+            "lp_num_threads": std::env::var("LP_NUM_THREADS").ok(),
+        },
+        "device": info,
+        "refresh_counters": renderer.counters,
+        "summary": summary,
+        "frames": reports,
+    });
+    drop(renderer);
+    drop(device);
+    let messages = log.messages();
+    let mut record = record;
+    record["validation_messages"] = json!(messages.len());
+    write_json(&args.out.join("render.json"), &record)?;
+    print_summary(args, &reports, &summary);
+    if !messages.is_empty() {
+        eprintln!(
+            "error: the validation layer reported {} message(s) (above)",
+            messages.len()
+        );
+        return Ok(ExitCode::from(3));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn write_frame(dir: &Path, images: &FrameImages) -> Result<()> {
+    std::fs::create_dir_all(dir.join("cube"))
+        .with_context(|| format!("cannot create {}", dir.display()))?;
+    if let Some(img) = &images.observer {
+        write_exr(&dir.join("observer.exr"), img)?;
+        write_png(&dir.join("observer.png"), img)?;
+    }
+    if let Some(img) = &images.sensor {
+        write_exr(&dir.join("sensor.exr"), img)?;
+        write_png(&dir.join("sensor.png"), img)?;
+    }
+    if let Some(img) = &images.pair {
+        write_png(&dir.join("views.png"), img)?;
+    }
+    if let Some(faces) = &images.cube {
+        for (face, img) in FACE_NAMES.iter().zip(faces) {
+            write_exr(&dir.join("cube").join(format!("{face}.exr")), img)?;
+        }
+    }
+    Ok(())
+}
+
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    Some(if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    })
+}
+
+/// Medians over frames: cube update (only frames that updated it) and each view.
+fn summarize(reports: &[FrameReport]) -> serde_json::Value {
+    let updated: Vec<&FrameReport> = reports.iter().filter(|r| r.cube_updated).collect();
+    let m = |f: &dyn Fn(&FrameReport) -> Option<f64>, rs: &[&FrameReport]| {
+        median(rs.iter().filter_map(|r| f(r)).collect())
+    };
+    let all: Vec<&FrameReport> = reports.iter().collect();
+    json!({
+        "frames": reports.len(),
+        "cube_updates": updated.len(),
+        "median_gpu_cube_update_ms": m(&|r| r.gpu_cube_ms, &updated),
+        "median_gpu_observer_ms": m(&|r| r.gpu_observer_ms, &all),
+        "median_gpu_sensor_ms": m(&|r| r.gpu_sensor_ms, &all),
+        "median_gpu_views_ms": m(&|r| r.gpu_pair_ms, &all),
+        "median_submit_wait_ms": m(&|r| Some(r.submit_wait_ms), &all),
+        "median_cpu_record_ms": m(&|r| Some(r.cpu_record_ms), &all),
+    })
+}
+
+fn print_summary(args: &Args, reports: &[FrameReport], summary: &serde_json::Value) {
+    let ms = |k: &str| {
+        summary[k]
+            .as_f64()
+            .map_or("n/a".to_owned(), |v| format!("{v:.2} ms"))
+    };
+    println!(
+        "rendered {} frame(s) of {} into {}",
+        reports.len(),
+        args.scene.display(),
+        args.out.display()
+    );
+    println!(
+        "  cube updates:       {} of {} frames",
+        summary["cube_updates"],
+        reports.len()
+    );
+    println!(
+        "  cube update (GPU):  {} median",
+        ms("median_gpu_cube_update_ms")
+    );
+    println!(
+        "  observer (GPU):     {} median",
+        ms("median_gpu_observer_ms")
+    );
+    println!(
+        "  sensor (GPU):       {} median",
+        ms("median_gpu_sensor_ms")
+    );
+    println!("  files: observer.exr/.png, sensor.exr/.png, views.png, cube/{{px,nx,py,ny,pz,nz}}.exr, render.json");
+}

@@ -1,0 +1,372 @@
+//! The renderer: fills the dynamic cube map (six passes, one per face) and draws the observer,
+//! the sensor and the side-by-side views with the analytic mirror.
+//!
+//! One frame (see `docs/architecture.md`):
+//! 1. evaluate the scene at time t ([`state::SceneState`]) and decide, by the refresh policy,
+//!    whether the cube map must be re-rendered;
+//! 2. write the per-frame buffers (views, object transforms);
+//! 3. record: six face passes (CPU-culled draws) + mip chain, then each view pass (culled
+//!    draws + the mirror), then copies of the images to read back;
+//! 4. submit, wait, read timestamps, counters and pixels.
+
+pub mod camera;
+pub mod gpu;
+mod passes;
+pub mod resources;
+pub mod state;
+pub mod targets;
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use ash::vk;
+use glam::{Mat4, UVec4, Vec3, Vec4};
+use serde::Serialize;
+
+use camera::ViewBasis;
+use gpu::{FrameData, ObjectData, ViewData};
+use resources::{SceneResources, VIEW_COUNT};
+use state::SceneState;
+use targets::{CubeTarget, ViewTarget};
+
+use crate::scene::{RefreshPolicy, Scene};
+use crate::vk::commands::{image_barriers, ImageBarrier, Submitter};
+use crate::vk::device::Device;
+use crate::vk::memory::{Buffer, BufferDesc};
+use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, PipelineLayout, ShaderStage};
+use crate::vk::queries::{PipelineStats, QueryPool};
+use crate::vk::GpuError;
+
+/// The side-by-side image of the thesis: observer left, sensor right.
+pub const PAIR_SIZE: [u32; 2] = [1200, 450];
+/// Near plane of the observer and sensor cameras (metres); their far plane is at infinity.
+pub const CAMERA_NEAR_M: f32 = 0.05;
+
+/// Timestamp slots: start, after each face, after mips, after each view, after readback.
+const TS_START: u32 = 0;
+const TS_MIPS: u32 = 7;
+const TS_OBSERVER: u32 = 8;
+const TS_SENSOR: u32 = 9;
+const TS_PAIR: u32 = 10;
+const TS_READBACK: u32 = 11;
+const TS_COUNT: u32 = 12;
+/// Statistics slots: six faces, then the three views.
+const STATS_COUNT: u32 = 9;
+
+/// Renderer settings that are not part of the scene.
+#[derive(Debug, Clone, Default)]
+pub struct RenderOptions {
+    /// Overrides the scene's `cube.face_size` (`--cube-size`).
+    pub cube_size: Option<u32>,
+}
+
+/// What to copy back to the CPU after a frame.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Readback {
+    pub cube: bool,
+    pub views: bool,
+}
+
+/// A linear-HDR RGBA image read back from the GPU, rows top to bottom.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RgbaImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+}
+
+impl RgbaImage {
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+}
+
+/// Pixels of one frame (those asked for by [`Readback`]).
+#[derive(Debug, Clone, Default)]
+pub struct FrameImages {
+    /// Mip 0 of the six faces in layer order +X, -X, +Y, -Y, +Z, -Z.
+    pub cube: Option<Vec<RgbaImage>>,
+    pub observer: Option<RgbaImage>,
+    pub sensor: Option<RgbaImage>,
+    pub pair: Option<RgbaImage>,
+}
+
+/// Timings (milliseconds) and counters of one frame.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct FrameReport {
+    pub frame: u64,
+    pub time_s: f64,
+    pub cube_updated: bool,
+    pub faces_rendered: u32,
+    /// Objects (walls included) drawn into each face; 0 for a face not re-rendered.
+    pub draws_per_face: [u32; 6],
+    pub cpu_record_ms: f64,
+    /// Submit to fence signalled (the whole frame's GPU work, readback copies included).
+    pub submit_wait_ms: f64,
+    /// GPU time per cube face, mip generation, and each view (None without timestamps).
+    pub gpu_face_ms: Option<[f64; 6]>,
+    pub gpu_cube_ms: Option<f64>,
+    pub gpu_mips_ms: Option<f64>,
+    pub gpu_observer_ms: Option<f64>,
+    pub gpu_sensor_ms: Option<f64>,
+    pub gpu_pair_ms: Option<f64>,
+    /// Pipeline statistics per cube face (None without the feature).
+    pub face_stats: Option<[PipelineStats; 6]>,
+    pub view_stats: Option<[PipelineStats; 3]>,
+}
+
+/// Running totals for the refresh policy (tested: `on-change` skips static frames).
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct RefreshCounters {
+    pub frames: u64,
+    pub cube_updates: u64,
+    pub cube_skips: u64,
+}
+
+struct Pipelines {
+    cube_scene: Pipeline,
+    view_scene: Pipeline,
+    mirror: Pipeline,
+    scene_layout: PipelineLayout,
+    mirror_layout: PipelineLayout,
+}
+
+/// Draws one scene. Field order is teardown order (everything holds an `Arc<Device>`).
+pub struct Renderer {
+    pipelines: Pipelines,
+    timestamps: Option<QueryPool>,
+    statistics: Option<QueryPool>,
+    observer_target: ViewTarget,
+    sensor_target: ViewTarget,
+    pair_target: ViewTarget,
+    cube: CubeTarget,
+    resources: SceneResources,
+    readback: Option<Buffer>,
+    submitter: Submitter,
+    /// The state the cube map shows; `None` before the first fill.
+    cube_state: Option<SceneState>,
+    /// This frame's model-to-render matrices, walls first (for culling).
+    object_matrices: Vec<Mat4>,
+    pub counters: RefreshCounters,
+    pub scene: Scene,
+    pub device: Arc<Device>,
+}
+
+impl Renderer {
+    pub fn new(
+        device: &Arc<Device>,
+        mut scene: Scene,
+        options: &RenderOptions,
+    ) -> Result<Self, GpuError> {
+        if let Some(size) = options.cube_size {
+            scene.cube.face_size_px = size;
+        }
+        let submitter = Submitter::create(device, "frame")?;
+        let resources = SceneResources::create(device, &scene, &submitter)?;
+        let cube = CubeTarget::create(device, &scene.cube)?;
+        let [ow, oh] = scene.observer.resolution;
+        let [sw, sh] = scene.sensor.resolution;
+        let observer_target = ViewTarget::create(device, ow, oh, "observer")?;
+        let sensor_target = ViewTarget::create(device, sw, sh, "sensor")?;
+        let pair_target = ViewTarget::create(device, PAIR_SIZE[0], PAIR_SIZE[1], "views")?;
+        let pipelines = passes::create_pipelines(device, &resources, cube.format)?;
+        crate::vk::descriptors::write_images(
+            device,
+            resources.environment_set,
+            0,
+            &[(cube.cube_view.raw, cube.sampler.raw)],
+        );
+        let timestamps = device
+            .info
+            .features
+            .timestamps
+            .then(|| QueryPool::timestamps(device, TS_COUNT, "frame timestamps"))
+            .transpose()?;
+        let statistics = device
+            .info
+            .features
+            .pipeline_statistics
+            .then(|| QueryPool::pipeline_statistics(device, STATS_COUNT, "frame statistics"))
+            .transpose()?;
+        Ok(Self {
+            pipelines,
+            timestamps,
+            statistics,
+            observer_target,
+            sensor_target,
+            pair_target,
+            cube,
+            resources,
+            readback: None,
+            submitter,
+            cube_state: None,
+            object_matrices: Vec::new(),
+            counters: RefreshCounters::default(),
+            scene,
+            device: Arc::clone(device),
+        })
+    }
+
+    /// Renders frame `frame` at scene time `t_s` and reads back what `readback` asks for.
+    pub fn render_frame(
+        &mut self,
+        frame: u64,
+        t_s: f64,
+        readback: Readback,
+    ) -> Result<(FrameReport, FrameImages), GpuError> {
+        let record_start = Instant::now();
+        let state = SceneState::at(&self.scene, t_s);
+        let update = match (&self.cube_state, self.scene.refresh) {
+            (None, _) => true,
+            (Some(_), RefreshPolicy::EveryFrame) => true,
+            (Some(old), RefreshPolicy::OnChange) => state.cube_differs(old),
+            (Some(_), RefreshPolicy::EveryN(n)) => frame % u64::from(n.max(1)) == 0,
+        };
+        self.counters.frames += 1;
+        if update {
+            self.counters.cube_updates += 1;
+        } else {
+            self.counters.cube_skips += 1;
+        }
+        let views = self.write_frame_buffers(&state)?;
+        let readback_bytes = self.readback_size(readback);
+        if readback_bytes > 0
+            && self
+                .readback
+                .as_ref()
+                .is_none_or(|b| b.size < readback_bytes)
+        {
+            self.readback = Some(Buffer::create(
+                &self.device,
+                &BufferDesc::new_readback(readback_bytes),
+                "readback",
+            )?);
+        }
+
+        let cmd = self.submitter.begin()?;
+        let mut report = FrameReport {
+            frame,
+            time_s: t_s,
+            cube_updated: update,
+            ..Default::default()
+        };
+        if let Some(q) = &self.timestamps {
+            q.reset(cmd);
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, TS_START);
+        }
+        if let Some(q) = &self.statistics {
+            q.reset(cmd);
+        }
+        if update {
+            self.record_cube(cmd, &views, &mut report);
+        } else if let Some(q) = &self.timestamps {
+            for ts in 1..=TS_MIPS {
+                q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
+            }
+        }
+        let copies = self.record_views(cmd, &views, readback);
+        self.record_readback(cmd, readback, &copies);
+        if let Some(q) = &self.timestamps {
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_READBACK);
+        }
+        report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
+        let wait_start = Instant::now();
+        self.submitter.submit_and_wait()?;
+        report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
+        self.read_queries(&mut report, update)?;
+        if update {
+            self.cube_state = Some(state);
+        }
+        let images = self.read_images(readback, &copies)?;
+        Ok((report, images))
+    }
+
+    /// Writes frame data, views and object transforms; returns the views (render space).
+    fn write_frame_buffers(&mut self, state: &SceneState) -> Result<Vec<ViewBasis>, GpuError> {
+        let scene = &self.scene;
+        let light = scene.light.as_ref();
+        let frame = FrameData {
+            light_dir_ambient: light.map_or(Vec4::ZERO, |l| l.direction.extend(l.ambient)),
+            // Render space is centred on the mirror.
+            mirror: Vec4::new(0.0, 0.0, 0.0, scene.mirror.radius_m),
+            flags: UVec4::new(u32::from(light.is_some()), 0, 0, 0),
+        };
+        self.resources.frame.write(&[frame])?;
+
+        let mut bases: Vec<ViewBasis> = (0..6)
+            .map(|f| ViewBasis::cube_face(Vec3::ZERO, f))
+            .collect();
+        let o = &scene.observer;
+        let observer_eye = state.observer_position - state.mirror_center;
+        let sensor_eye = Vec3::new(0.0, -scene.sensor.offset_m, 0.0);
+        let aspect = |w: u32, h: u32| w as f32 / h as f32;
+        let observer =
+            |a| ViewBasis::yaw_pitch(observer_eye, o.yaw_deg, o.pitch_deg, o.fov_y_deg, a);
+        let sensor = |a| {
+            ViewBasis::look(
+                sensor_eye,
+                Vec3::Y,
+                scene.sensor.up,
+                scene.sensor.fov_y_deg,
+                a,
+            )
+        };
+        let [ow, oh] = o.resolution;
+        let [sw, sh] = scene.sensor.resolution;
+        let half_pair = aspect(PAIR_SIZE[0] / 2, PAIR_SIZE[1]);
+        bases.push(observer(aspect(ow, oh)));
+        bases.push(sensor(aspect(sw, sh)));
+        bases.push(observer(half_pair));
+        bases.push(sensor(half_pair));
+
+        let half_w = (PAIR_SIZE[0] / 2) as f32;
+        let viewports = [
+            [0.0, 0.0, ow as f32, oh as f32],
+            [0.0, 0.0, sw as f32, sh as f32],
+            [0.0, 0.0, half_w, PAIR_SIZE[1] as f32],
+            [half_w, 0.0, half_w, PAIR_SIZE[1] as f32],
+        ];
+        let size = self.cube.size as f32;
+        let view_data: Vec<ViewData> = bases
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let (near, far, vp) = if i < 6 {
+                    (scene.cube.near_m, scene.cube.far_m, [0.0, 0.0, size, size])
+                } else {
+                    (CAMERA_NEAR_M, f32::INFINITY, viewports[i - 6])
+                };
+                ViewData {
+                    world_to_clip: b.world_to_clip(near, far),
+                    eye: b.eye.extend(1.0),
+                    ray_right: (b.right * b.tan_x).extend(0.0),
+                    ray_down: (b.down * b.tan_y).extend(0.0),
+                    ray_forward: b.forward.extend(0.0),
+                    viewport: Vec4::from_array(vp),
+                }
+            })
+            .collect();
+        debug_assert_eq!(view_data.len(), VIEW_COUNT);
+        self.resources.views.write(&view_data)?;
+
+        let walls = state.world_to_render();
+        let mut objects: Vec<ObjectData> = (0..6)
+            .map(|f| object_data(walls, scene.room.wall_materials[f]))
+            .collect();
+        objects.extend(
+            (0..scene.objects.len())
+                .map(|i| object_data(state.object_to_render(scene, i), scene.objects[i].material)),
+        );
+        self.resources.objects.write(&objects)?;
+        self.object_matrices = objects.iter().map(|o| o.model_to_world).collect();
+        Ok(bases)
+    }
+}
+
+fn object_data(model: Mat4, material: usize) -> ObjectData {
+    ObjectData {
+        model_to_world: model,
+        normal_to_world: model.inverse().transpose(),
+        material: UVec4::new(material as u32, 0, 0, 0),
+    }
+}

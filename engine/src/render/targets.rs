@@ -1,0 +1,210 @@
+//! Render targets: the cube map (colour + depth, six layers) and the 2D view images.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use crate::scene::{CubeFormat, CubeSettings};
+use crate::vk::device::Device;
+use crate::vk::image::{full_mip_count, Image, ImageDesc, ImageView, Sampler};
+use crate::vk::GpuError;
+
+/// Depth format of every pass: 32-bit float with reverse-Z keeps precision far away.
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// View images are linear HDR.
+pub const VIEW_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
+/// The dynamic environment: a cube-compatible colour image with a mip chain, a six-layer
+/// depth image, one attachment view per face and the cube view the mirror samples.
+pub struct CubeTarget {
+    /// Views first: they must go before their images.
+    pub face_views: Vec<ImageView>,
+    pub depth_views: Vec<ImageView>,
+    pub cube_view: ImageView,
+    pub sampler: Sampler,
+    pub color: Image,
+    pub depth: Image,
+    pub size: u32,
+    pub format: vk::Format,
+}
+
+impl CubeTarget {
+    pub fn create(device: &Arc<Device>, settings: &CubeSettings) -> Result<Self, GpuError> {
+        let size = settings.face_size_px;
+        if size > device.info.limits.max_image_dimension_cube {
+            return Err(GpuError::Unsupported(format!(
+                "cube face size {size} exceeds the device's maxImageDimensionCube {}",
+                device.info.limits.max_image_dimension_cube
+            )));
+        }
+        let format = match settings.format {
+            CubeFormat::Rgba16Float => vk::Format::R16G16B16A16_SFLOAT,
+            CubeFormat::Rgba8Unorm => vk::Format::R8G8B8A8_UNORM,
+        };
+        let mips = if settings.mipmaps {
+            full_mip_count(size)
+        } else {
+            1
+        };
+        if mips > 1 {
+            check_blit_support(device, format)?;
+        }
+        let color = Image::create(
+            device,
+            &ImageDesc::new_cube(
+                format,
+                size,
+                mips,
+                vk::ImageUsageFlags::COLOR_ATTACHMENT
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_SRC
+                    | vk::ImageUsageFlags::TRANSFER_DST,
+            ),
+            "cube colour",
+        )?;
+        let mut depth_desc = ImageDesc::new_cube(
+            DEPTH_FORMAT,
+            size,
+            1,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+        );
+        depth_desc.cube_compatible = false;
+        let depth = Image::create(device, &depth_desc, "cube depth")?;
+        let names = super::camera::FACE_NAMES;
+        let face_views = (0..6)
+            .map(|f| {
+                color.view(
+                    vk::ImageViewType::TYPE_2D,
+                    f,
+                    1,
+                    0,
+                    1,
+                    &format!("cube face {}", names[f as usize]),
+                )
+            })
+            .collect::<Result<_, _>>()?;
+        let depth_views = (0..6)
+            .map(|f| {
+                depth.view(
+                    vk::ImageViewType::TYPE_2D,
+                    f,
+                    1,
+                    0,
+                    1,
+                    &format!("cube depth {}", names[f as usize]),
+                )
+            })
+            .collect::<Result<_, _>>()?;
+        let cube_view = color.view(vk::ImageViewType::CUBE, 0, 6, 0, mips, "cube (sampled)")?;
+        let anisotropy = device.info.features.sampler_anisotropy && settings.max_anisotropy > 1.0;
+        // Trilinear with anisotropy, as the thesis; Vulkan filters across cube seams always.
+        let sampler = Sampler::create(
+            device,
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::LINEAR)
+                .min_filter(vk::Filter::LINEAR)
+                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .anisotropy_enable(anisotropy)
+                .max_anisotropy(
+                    settings
+                        .max_anisotropy
+                        .min(device.info.limits.max_sampler_anisotropy)
+                        .max(1.0),
+                )
+                .max_lod(vk::LOD_CLAMP_NONE),
+            "cube sampler",
+        )?;
+        Ok(Self {
+            face_views,
+            depth_views,
+            cube_view,
+            sampler,
+            color,
+            depth,
+            size,
+            format,
+        })
+    }
+
+    pub fn mip_levels(&self) -> u32 {
+        self.color.desc.mip_levels
+    }
+}
+
+fn check_blit_support(device: &Device, format: vk::Format) -> Result<(), GpuError> {
+    // SAFETY: plain query.
+    let props = unsafe {
+        device
+            .instance
+            .raw
+            .get_physical_device_format_properties(device.physical, format)
+    };
+    let need = vk::FormatFeatureFlags::BLIT_SRC
+        | vk::FormatFeatureFlags::BLIT_DST
+        | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
+    if props.optimal_tiling_features.contains(need) {
+        Ok(())
+    } else {
+        Err(GpuError::Unsupported(format!(
+            "{format:?} cannot be blitted with linear filtering on this device: set mipmaps = false"
+        )))
+    }
+}
+
+/// A 2D colour + depth target for a camera view.
+pub struct ViewTarget {
+    pub color_view: ImageView,
+    pub depth_view: ImageView,
+    pub color: Image,
+    pub depth: Image,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl ViewTarget {
+    pub fn create(
+        device: &Arc<Device>,
+        width: u32,
+        height: u32,
+        name: &str,
+    ) -> Result<Self, GpuError> {
+        let color = Image::create(
+            device,
+            &ImageDesc::new_2d(
+                VIEW_FORMAT,
+                width,
+                height,
+                vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            ),
+            &format!("{name} colour"),
+        )?;
+        let depth = Image::create(
+            device,
+            &ImageDesc::new_2d(
+                DEPTH_FORMAT,
+                width,
+                height,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            ),
+            &format!("{name} depth"),
+        )?;
+        Ok(Self {
+            color_view: color.view(vk::ImageViewType::TYPE_2D, 0, 1, 0, 1, name)?,
+            depth_view: depth.view(
+                vk::ImageViewType::TYPE_2D,
+                0,
+                1,
+                0,
+                1,
+                &format!("{name} depth"),
+            )?,
+            color,
+            depth,
+            width,
+            height,
+        })
+    }
+}

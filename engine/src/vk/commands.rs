@@ -1,0 +1,129 @@
+//! Command recording and submission: one command buffer, one fence, wait on every submit.
+//!
+//! The renderer is offline (it writes images), so each frame is recorded, submitted and waited
+//! for before the next starts. That keeps resource lifetimes trivial: after `submit_and_wait`
+//! returns, nothing on the GPU references anything.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::device::Device;
+use super::{GpuError, VkContext};
+
+/// A command pool with one primary command buffer and the fence of its last submission.
+pub struct Submitter {
+    pub cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+    pool: vk::CommandPool,
+    device: Arc<Device>,
+}
+
+impl Submitter {
+    pub fn create(device: &Arc<Device>, name: &str) -> Result<Self, GpuError> {
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(device.queue_family)
+            // Reset per frame: we re-record the same command buffer every time.
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: valid create info on a live device.
+        let pool = unsafe { device.raw.create_command_pool(&pool_info, None) }
+            .vk("vkCreateCommandPool")?;
+        let mut submitter = Self {
+            cmd: vk::CommandBuffer::null(),
+            fence: vk::Fence::null(),
+            pool,
+            device: Arc::clone(device),
+        };
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool is live; one buffer is requested and returned.
+        submitter.cmd = unsafe { device.raw.allocate_command_buffers(&alloc) }
+            .vk("vkAllocateCommandBuffers")?[0];
+        // SAFETY: valid create info.
+        submitter.fence = unsafe {
+            device
+                .raw
+                .create_fence(&vk::FenceCreateInfo::default(), None)
+        }
+        .vk("vkCreateFence")?;
+        device.set_name(pool, name);
+        device.set_name(submitter.cmd, name);
+        device.set_name(submitter.fence, name);
+        Ok(submitter)
+    }
+
+    /// Starts recording (the previous submission has completed: `submit_and_wait` waited).
+    pub fn begin(&self) -> Result<vk::CommandBuffer, GpuError> {
+        let info = vk::CommandBufferBeginInfo::default()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the buffer is not pending (the last submit was waited for).
+        unsafe {
+            self.device
+                .raw
+                .reset_command_buffer(self.cmd, vk::CommandBufferResetFlags::empty())
+        }
+        .vk("vkResetCommandBuffer")?;
+        // SAFETY: the buffer is in the initial state after the reset.
+        unsafe { self.device.raw.begin_command_buffer(self.cmd, &info) }
+            .vk("vkBeginCommandBuffer")?;
+        Ok(self.cmd)
+    }
+
+    /// Ends recording, submits, and blocks until the GPU has finished.
+    pub fn submit_and_wait(&self) -> Result<(), GpuError> {
+        let d = &self.device.raw;
+        // SAFETY: the buffer is recording (begin was called).
+        unsafe { d.end_command_buffer(self.cmd) }.vk("vkEndCommandBuffer")?;
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.cmd)];
+        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
+        // SAFETY: the fence is unsignalled (reset after every wait), the buffer is executable.
+        unsafe { d.queue_submit2(self.device.queue, &submit, self.fence) }.vk("vkQueueSubmit2")?;
+        // SAFETY: the fence belongs to this device; u64::MAX: a CPU driver may be slow, and a
+        // lost device returns an error rather than hanging.
+        unsafe { d.wait_for_fences(&[self.fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+        // SAFETY: the fence is signalled and not in use.
+        unsafe { d.reset_fences(&[self.fence]) }.vk("vkResetFences")
+    }
+}
+
+impl Drop for Submitter {
+    fn drop(&mut self) {
+        // SAFETY: the last submission was waited for; the pool frees its command buffer.
+        unsafe {
+            self.device.raw.destroy_fence(self.fence, None);
+            self.device.raw.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+/// One image layout transition (synchronization2), with the stages and accesses on each side.
+#[derive(Clone, Copy)]
+pub struct ImageBarrier {
+    pub image: vk::Image,
+    pub range: vk::ImageSubresourceRange,
+    pub from: (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2),
+    pub to: (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2),
+}
+
+/// Records a batch of image barriers.
+pub fn image_barriers(device: &Device, cmd: vk::CommandBuffer, barriers: &[ImageBarrier]) {
+    let raw: Vec<vk::ImageMemoryBarrier2> = barriers
+        .iter()
+        .map(|b| {
+            vk::ImageMemoryBarrier2::default()
+                .image(b.image)
+                .subresource_range(b.range)
+                .old_layout(b.from.0)
+                .src_stage_mask(b.from.1)
+                .src_access_mask(b.from.2)
+                .new_layout(b.to.0)
+                .dst_stage_mask(b.to.1)
+                .dst_access_mask(b.to.2)
+        })
+        .collect();
+    let dep = vk::DependencyInfo::default().image_memory_barriers(&raw);
+    // SAFETY: cmd is recording; the barriers name live images.
+    unsafe { device.raw.cmd_pipeline_barrier2(cmd, &dep) };
+}

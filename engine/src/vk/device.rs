@@ -1,0 +1,448 @@
+//! Physical-device selection, the logical device, its queue and its memory allocator.
+
+use std::ffi::CString;
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use serde::Serialize;
+
+use super::instance::Instance;
+use super::{GpuError, VkContext};
+
+/// Oldest Mesa whose lavapipe we trust (older ones miss fixes later methods rely on).
+pub const MIN_MESA_MAJOR: u32 = 24;
+
+/// How to pick and set up a device.
+#[derive(Debug, Clone, Default)]
+pub struct DeviceDesc {
+    /// `--device`: an index into the enumeration order, or a case-insensitive substring of the
+    /// device name. `None`: the best device (discrete > integrated > virtual > CPU).
+    pub selector: Option<String>,
+}
+
+/// What a device is and can do: everything `specchio info` prints.
+#[derive(Debug, Clone, Serialize)]
+pub struct DeviceInfo {
+    pub index: usize,
+    pub name: String,
+    pub device_type: String,
+    pub vendor_id: u32,
+    pub device_id: u32,
+    pub driver_name: String,
+    pub driver_info: String,
+    /// Packed driver version, decoded the Vulkan way (vendor-specific for some drivers).
+    pub driver_version: String,
+    pub api_version: String,
+    /// Mesa version parsed from the driver info string, when the driver is Mesa.
+    pub mesa_version: Option<String>,
+    pub limits: DeviceLimits,
+    pub features: DeviceFeatures,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct DeviceLimits {
+    pub max_image_dimension_cube: u32,
+    pub max_image_dimension_2d: u32,
+    pub max_image_array_layers: u32,
+    pub max_push_constants_size: u32,
+    pub max_sampler_anisotropy: f32,
+    pub max_multiview_view_count: u32,
+    pub max_geometry_output_vertices: u32,
+    pub max_geometry_shader_invocations: u32,
+    pub max_mesh_output_layers: u32,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period_ns: f32,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct DeviceFeatures {
+    pub dynamic_rendering: bool,
+    pub synchronization2: bool,
+    pub multiview: bool,
+    pub geometry_shader: bool,
+    /// `shaderOutputLayer`: `gl_Layer` written from the vertex shader.
+    pub shader_output_layer: bool,
+    pub mesh_shader: bool,
+    pub ray_query: bool,
+    pub timestamps: bool,
+    pub pipeline_statistics: bool,
+    pub sampler_anisotropy: bool,
+}
+
+/// The logical device. Owns the allocator, so every buffer and image (which hold an
+/// `Arc<Device>`) is freed before the device is destroyed.
+pub struct Device {
+    pub raw: ash::Device,
+    pub physical: vk::PhysicalDevice,
+    pub info: DeviceInfo,
+    /// The one queue used for everything: a graphics queue (also does transfers).
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    /// Object names and command labels for captures; `None` without `VK_EXT_debug_utils`.
+    debug_utils: Option<ash::ext::debug_utils::Device>,
+    /// Dropped by hand in `Drop`, before `vkDestroyDevice`.
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    /// Declared last: the instance must outlive the device.
+    pub instance: Arc<Instance>,
+}
+
+impl Device {
+    pub fn create(instance: &Arc<Instance>, desc: &DeviceDesc) -> Result<Arc<Self>, GpuError> {
+        let candidates = enumerate(instance)?;
+        let (physical, info, queue_family) = select(&candidates, desc.selector.as_deref())?;
+
+        let priorities = [1.0f32];
+        let queue_infos = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)];
+        // Only what the renderer uses: anisotropic cube lookups and work counters when present.
+        let features = vk::PhysicalDeviceFeatures::default()
+            .sampler_anisotropy(info.features.sampler_anisotropy)
+            .pipeline_statistics_query(info.features.pipeline_statistics)
+            // Materials pick their texture from an array by a per-draw (uniform) index.
+            .shader_sampled_image_array_dynamic_indexing(true);
+        let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true);
+        let create_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_infos)
+            .enabled_features(&features)
+            .push_next(&mut features13);
+        // SAFETY: physical comes from this instance; create_info points at live locals.
+        let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
+            .vk("vkCreateDevice")?;
+        // SAFETY: family and index 0 were requested above.
+        let queue = unsafe { raw.get_device_queue(queue_family, 0) };
+
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.raw.clone(),
+            device: raw.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| GpuError::Alloc {
+            name: "allocator".into(),
+            source,
+        })?;
+        let debug_utils = instance
+            .debug_utils
+            .as_ref()
+            .map(|_| ash::ext::debug_utils::Device::new(&instance.raw, &raw));
+        let device = Arc::new(Self {
+            raw,
+            physical,
+            info,
+            queue,
+            queue_family,
+            debug_utils,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            instance: Arc::clone(instance),
+        });
+        device.set_name(device.queue, "main queue");
+        Ok(device)
+    }
+
+    /// The allocator, locked. Poisoning only follows a panic elsewhere; recover the data.
+    pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
+        self.allocator.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Names an object for validation messages and captures (no-op without debug utils).
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        let (Some(du), Ok(name)) = (&self.debug_utils, CString::new(name)) else {
+            return;
+        };
+        let info = vk::DebugUtilsObjectNameInfoEXT::default()
+            .object_handle(handle)
+            .object_name(&name);
+        // SAFETY: the handle belongs to this device. A naming failure is harmless: ignore it.
+        let _ = unsafe { du.set_debug_utils_object_name(&info) };
+    }
+
+    /// Opens a labelled region in a command buffer (shows as a group in RenderDoc).
+    pub fn begin_label(&self, cmd: vk::CommandBuffer, label: &str) {
+        let (Some(du), Ok(label)) = (&self.debug_utils, CString::new(label)) else {
+            return;
+        };
+        let info = vk::DebugUtilsLabelEXT::default().label_name(&label);
+        // SAFETY: cmd is in the recording state.
+        unsafe { du.cmd_begin_debug_utils_label(cmd, &info) };
+    }
+
+    pub fn end_label(&self, cmd: vk::CommandBuffer) {
+        if let Some(du) = &self.debug_utils {
+            // SAFETY: paired with begin_label on the same recording command buffer.
+            unsafe { du.cmd_end_debug_utils_label(cmd) };
+        }
+    }
+
+    pub fn wait_idle(&self) -> Result<(), GpuError> {
+        // SAFETY: no other thread submits to this device.
+        unsafe { self.raw.device_wait_idle() }.vk("vkDeviceWaitIdle")
+    }
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        // SAFETY: every resource holds an Arc<Device>, so none is alive; the GPU may still be
+        // finishing the last submission, hence the wait.
+        unsafe {
+            let _ = self.raw.device_wait_idle();
+            ManuallyDrop::drop(&mut self.allocator);
+            self.raw.destroy_device(None);
+        }
+    }
+}
+
+/// One physical device with what we know about it, or why it cannot be used.
+pub struct Candidate {
+    pub physical: vk::PhysicalDevice,
+    pub info: DeviceInfo,
+    pub queue_family: Option<u32>,
+    pub rejected: Option<String>,
+}
+
+/// Every physical device, with its info and (if unusable) the reason.
+pub fn enumerate(instance: &Instance) -> Result<Vec<Candidate>, GpuError> {
+    // SAFETY: plain query on a live instance.
+    let physicals =
+        unsafe { instance.raw.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
+    Ok(physicals
+        .into_iter()
+        .enumerate()
+        .map(|(index, physical)| describe(instance, index, physical))
+        .collect())
+}
+
+fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> Candidate {
+    let inst = &instance.raw;
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut multiview_props = vk::PhysicalDeviceMultiviewProperties::default();
+    let mut mesh_props = vk::PhysicalDeviceMeshShaderPropertiesEXT::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut driver)
+        .push_next(&mut multiview_props)
+        .push_next(&mut mesh_props);
+    // SAFETY: the chained structs are all core 1.2+ or ignored when unknown to the driver.
+    unsafe { inst.get_physical_device_properties2(physical, &mut props2) };
+    let props = props2.properties;
+
+    let mut f11 = vk::PhysicalDeviceVulkan11Features::default();
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default();
+    let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+    let api_ok = props.api_version >= vk::API_VERSION_1_3;
+    let exts: Vec<String> = unsafe { inst.enumerate_device_extension_properties(physical) }
+        .unwrap_or_default()
+        .iter()
+        .filter_map(|e| e.extension_name_as_c_str().ok())
+        .map(|n| n.to_string_lossy().into_owned())
+        .collect();
+    let has_ext = |n: &std::ffi::CStr| exts.iter().any(|e| e.as_bytes() == n.to_bytes());
+    let mut features2 = vk::PhysicalDeviceFeatures2::default()
+        .push_next(&mut f11)
+        .push_next(&mut f12);
+    if api_ok {
+        features2 = features2.push_next(&mut f13);
+    }
+    if has_ext(ash::ext::mesh_shader::NAME) {
+        features2 = features2.push_next(&mut mesh);
+    }
+    if has_ext(ash::khr::ray_query::NAME) {
+        features2 = features2.push_next(&mut rq);
+    }
+    // SAFETY: only structs the device understands (by version or extension) are chained.
+    unsafe { inst.get_physical_device_features2(physical, &mut features2) };
+    let base = features2.features;
+
+    // SAFETY: plain query.
+    let families = unsafe { inst.get_physical_device_queue_family_properties(physical) };
+    let queue_family = families
+        .iter()
+        .position(|f| {
+            f.queue_flags.contains(vk::QueueFlags::GRAPHICS) && f.timestamp_valid_bits > 0
+        })
+        .or_else(|| {
+            families
+                .iter()
+                .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
+        })
+        .map(|i| i as u32);
+    let timestamps = queue_family
+        .map(|q| families[q as usize].timestamp_valid_bits > 0)
+        .unwrap_or(false)
+        && props.limits.timestamp_period > 0.0;
+
+    let name = props
+        .device_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let driver_info = driver
+        .driver_info_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let info = DeviceInfo {
+        index,
+        name,
+        device_type: format!("{:?}", props.device_type),
+        vendor_id: props.vendor_id,
+        device_id: props.device_id,
+        driver_name: driver
+            .driver_name_as_c_str()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        mesa_version: parse_mesa_version(&driver_info),
+        driver_info,
+        driver_version: version_string(props.driver_version),
+        api_version: version_string(props.api_version),
+        limits: DeviceLimits {
+            max_image_dimension_cube: props.limits.max_image_dimension_cube,
+            max_image_dimension_2d: props.limits.max_image_dimension2_d,
+            max_image_array_layers: props.limits.max_image_array_layers,
+            max_push_constants_size: props.limits.max_push_constants_size,
+            max_sampler_anisotropy: props.limits.max_sampler_anisotropy,
+            max_multiview_view_count: multiview_props.max_multiview_view_count,
+            max_geometry_output_vertices: props.limits.max_geometry_output_vertices,
+            max_geometry_shader_invocations: props.limits.max_geometry_shader_invocations,
+            max_mesh_output_layers: if mesh.mesh_shader == vk::TRUE {
+                mesh_props.max_mesh_output_layers
+            } else {
+                0
+            },
+            timestamp_period_ns: props.limits.timestamp_period,
+        },
+        features: DeviceFeatures {
+            dynamic_rendering: f13.dynamic_rendering == vk::TRUE,
+            synchronization2: f13.synchronization2 == vk::TRUE,
+            multiview: f11.multiview == vk::TRUE,
+            geometry_shader: base.geometry_shader == vk::TRUE,
+            shader_output_layer: f12.shader_output_layer == vk::TRUE,
+            mesh_shader: mesh.mesh_shader == vk::TRUE,
+            ray_query: rq.ray_query == vk::TRUE,
+            timestamps,
+            pipeline_statistics: base.pipeline_statistics_query == vk::TRUE,
+            sampler_anisotropy: base.sampler_anisotropy == vk::TRUE,
+        },
+    };
+    let rejected = if !api_ok {
+        Some(format!(
+            "supports Vulkan {} only; 1.3 is required",
+            info.api_version
+        ))
+    } else if queue_family.is_none() {
+        Some("has no graphics queue".into())
+    } else if base.shader_sampled_image_array_dynamic_indexing != vk::TRUE {
+        Some("lacks shaderSampledImageArrayDynamicIndexing (material textures)".into())
+    } else if !info.features.dynamic_rendering || !info.features.synchronization2 {
+        Some("lacks dynamicRendering or synchronization2 (Vulkan 1.3 core features)".into())
+    } else {
+        None
+    };
+    Candidate {
+        physical,
+        info,
+        queue_family,
+        rejected,
+    }
+}
+
+/// Picks a device: the one the selector names, else the best-ranked usable one.
+fn select(
+    candidates: &[Candidate],
+    selector: Option<&str>,
+) -> Result<(vk::PhysicalDevice, DeviceInfo, u32), GpuError> {
+    let mut report = Vec::new();
+    let mut best: Option<(&Candidate, u32)> = None;
+    for c in candidates {
+        let matches = match selector {
+            None => true,
+            Some(s) => match s.parse::<usize>() {
+                Ok(i) => i == c.info.index,
+                Err(_) => c.info.name.to_lowercase().contains(&s.to_lowercase()),
+            },
+        };
+        if !matches {
+            report.push(format!(
+                "  [{}] {}: not selected by --device {}",
+                c.info.index,
+                c.info.name,
+                selector.unwrap_or("")
+            ));
+            continue;
+        }
+        if let Some(why) = &c.rejected {
+            report.push(format!("  [{}] {}: {why}", c.info.index, c.info.name));
+            continue;
+        }
+        let rank = match c.info.device_type.as_str() {
+            "DISCRETE_GPU" => 4,
+            "INTEGRATED_GPU" => 3,
+            "VIRTUAL_GPU" => 2,
+            "CPU" => 1,
+            _ => 0,
+        };
+        if best.is_none_or(|(_, r)| rank > r) {
+            best = Some((c, rank));
+        }
+    }
+    match best {
+        Some((c, _)) => Ok((
+            c.physical,
+            c.info.clone(),
+            c.queue_family
+                .expect("usable candidates have a graphics queue"),
+        )),
+        None if candidates.is_empty() => Err(GpuError::NoDevice(
+            "  the loader found no device; install a driver (Debian: mesa-vulkan-drivers)".into(),
+        )),
+        None => Err(GpuError::NoDevice(report.join("\n"))),
+    }
+}
+
+fn version_string(v: u32) -> String {
+    format!(
+        "{}.{}.{}",
+        vk::api_version_major(v),
+        vk::api_version_minor(v),
+        vk::api_version_patch(v)
+    )
+}
+
+/// "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)" -> "25.0.7".
+pub fn parse_mesa_version(driver_info: &str) -> Option<String> {
+    let rest = driver_info.split("Mesa ").nth(1)?;
+    let version: String = rest
+        .chars()
+        .take_while(|c| c.is_ascii_digit() || *c == '.')
+        .collect();
+    (!version.is_empty()).then_some(version)
+}
+
+/// The Mesa major version, when the driver is Mesa.
+pub fn mesa_major(info: &DeviceInfo) -> Option<u32> {
+    info.mesa_version
+        .as_deref()?
+        .split('.')
+        .next()?
+        .parse()
+        .ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mesa_version_is_parsed_from_driver_info() {
+        assert_eq!(
+            parse_mesa_version("Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)").as_deref(),
+            Some("25.0.7")
+        );
+        assert_eq!(parse_mesa_version("NVIDIA 550.1"), None);
+    }
+}

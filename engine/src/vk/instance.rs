@@ -1,0 +1,195 @@
+//! The Vulkan instance, the optional Khronos validation layer and its message sink.
+
+use std::ffi::{c_void, CStr};
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+
+use super::{GpuError, VkContext};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// The environment variable that turns validation on without `--validate`.
+pub const VALIDATE_ENV: &str = "SPECCHIO_VALIDATE";
+
+/// What to create the instance with.
+#[derive(Debug, Clone, Default)]
+pub struct InstanceDesc {
+    /// Enable `VK_LAYER_KHRONOS_validation` and a messenger that records every warning and
+    /// error (it is an error if the layer is missing: a silent fallback would hide bugs).
+    pub validation: bool,
+}
+
+impl InstanceDesc {
+    /// Validation on when `requested` or when `SPECCHIO_VALIDATE` is set to anything but `0`.
+    pub fn from_env(requested: bool) -> Self {
+        let env = std::env::var(VALIDATE_ENV).map(|v| v != "0" && !v.is_empty());
+        Self {
+            validation: requested || env.unwrap_or(false),
+        }
+    }
+}
+
+/// Every warning and error the validation layer reported, in order.
+///
+/// Shared (`Arc`) so that a caller can keep reading it after the instance is gone: the
+/// layer's leak report is emitted while the device is destroyed.
+#[derive(Debug, Default)]
+pub struct ValidationLog {
+    messages: Mutex<Vec<String>>,
+}
+
+impl ValidationLog {
+    /// The messages so far (a copy).
+    pub fn messages(&self) -> Vec<String> {
+        self.messages.lock().map(|m| m.clone()).unwrap_or_default()
+    }
+
+    fn push(&self, message: String) {
+        if let Ok(mut messages) = self.messages.lock() {
+            messages.push(message);
+        }
+    }
+}
+
+/// Owns the loader entry, the instance and (with validation) the debug messenger.
+pub struct Instance {
+    /// Kept alive because every function pointer below was loaded through it.
+    pub entry: ash::Entry,
+    pub raw: ash::Instance,
+    /// `VK_EXT_debug_utils` at instance level: the messenger. `None` when the extension is absent.
+    pub debug_utils: Option<ash::ext::debug_utils::Instance>,
+    messenger: vk::DebugUtilsMessengerEXT,
+    /// Boxed `Arc` whose address is the messenger's user data; must outlive `messenger`.
+    log: Box<Arc<ValidationLog>>,
+    pub validation: bool,
+}
+
+impl Instance {
+    pub fn create(desc: &InstanceDesc) -> Result<Arc<Self>, GpuError> {
+        // SAFETY: loading libvulkan runs its initialisers; nothing else is loaded concurrently.
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loader(e.to_string()))?;
+
+        // SAFETY: plain enumeration calls on a loaded entry.
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }
+            .vk("vkEnumerateInstanceLayerProperties")?;
+        let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .vk("vkEnumerateInstanceExtensionProperties")?;
+        let has_layer = layers
+            .iter()
+            .any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER));
+        if desc.validation && !has_layer {
+            return Err(GpuError::NoValidationLayer);
+        }
+        // debug_utils gives object names and labels (RenderDoc) and the messenger.
+        let has_debug_utils = extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::debug_utils::NAME));
+
+        let app_info = vk::ApplicationInfo::default()
+            .application_name(c"specchio")
+            .application_version(vk::make_api_version(0, 0, 1, 0))
+            .engine_name(c"specchio")
+            // The core renderer needs Vulkan 1.3 (dynamic rendering, synchronization2).
+            .api_version(vk::API_VERSION_1_3);
+        let layer_names: Vec<*const i8> = if desc.validation {
+            vec![VALIDATION_LAYER.as_ptr()]
+        } else {
+            vec![]
+        };
+        let extension_names: Vec<*const i8> = if has_debug_utils {
+            vec![ash::ext::debug_utils::NAME.as_ptr()]
+        } else {
+            vec![]
+        };
+        let log: Box<Arc<ValidationLog>> = Box::default();
+        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(
+                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+            )
+            .message_type(
+                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+            )
+            .pfn_user_callback(Some(debug_callback))
+            .user_data(&*log as *const Arc<ValidationLog> as *mut c_void);
+        let mut create_info = vk::InstanceCreateInfo::default()
+            .application_info(&app_info)
+            .enabled_layer_names(&layer_names)
+            .enabled_extension_names(&extension_names);
+        let use_messenger = desc.validation && has_debug_utils;
+        if use_messenger {
+            // Chained so that messages from vkCreateInstance itself are caught too.
+            create_info = create_info.push_next(&mut messenger_info);
+        }
+        // SAFETY: every pointer in create_info points at locals that outlive the call.
+        let raw = unsafe { entry.create_instance(&create_info, None) }.vk("vkCreateInstance")?;
+
+        let debug_utils =
+            has_debug_utils.then(|| ash::ext::debug_utils::Instance::new(&entry, &raw));
+        let mut messenger = vk::DebugUtilsMessengerEXT::null();
+        if let (true, Some(du)) = (use_messenger, &debug_utils) {
+            // SAFETY: user data points into `log`, which is boxed and dropped after the messenger.
+            match unsafe { du.create_debug_utils_messenger(&messenger_info, None) } {
+                Ok(m) => messenger = m,
+                Err(result) => {
+                    // SAFETY: nothing was created from the instance yet.
+                    unsafe { raw.destroy_instance(None) };
+                    return Err(GpuError::Vk {
+                        call: "vkCreateDebugUtilsMessengerEXT",
+                        result,
+                    });
+                }
+            }
+        }
+        Ok(Arc::new(Self {
+            entry,
+            raw,
+            debug_utils,
+            messenger,
+            log,
+            validation: desc.validation,
+        }))
+    }
+
+    /// The validation messages sink (empty forever when validation is off).
+    pub fn validation_log(&self) -> Arc<ValidationLog> {
+        Arc::clone(&self.log)
+    }
+}
+
+impl Drop for Instance {
+    fn drop(&mut self) {
+        if let Some(du) = &self.debug_utils {
+            if self.messenger != vk::DebugUtilsMessengerEXT::null() {
+                // SAFETY: the messenger was created from this instance and is destroyed once.
+                unsafe { du.destroy_debug_utils_messenger(self.messenger, None) };
+            }
+        }
+        // SAFETY: every child object holds an Arc<Instance>, so none is alive any more.
+        unsafe { self.raw.destroy_instance(None) };
+    }
+}
+
+/// Records every message in the [`ValidationLog`] and echoes it to stderr.
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    kind: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user_data: *mut c_void,
+) -> vk::Bool32 {
+    // SAFETY: the layer passes a valid callback-data pointer for the duration of the call.
+    let message = unsafe { data.as_ref() }
+        .and_then(|d| unsafe { d.message_as_c_str() })
+        .map(|m| m.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "(no message)".to_owned());
+    let line = format!("[vulkan {severity:?} {kind:?}] {message}");
+    eprintln!("{line}");
+    // SAFETY: user_data is the address of the boxed Arc<ValidationLog> owned by the Instance.
+    if let Some(log) = unsafe { (user_data as *const Arc<ValidationLog>).as_ref() } {
+        log.push(line);
+    }
+    vk::FALSE
+}

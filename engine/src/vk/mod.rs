@@ -1,0 +1,54 @@
+//! The Vulkan layer: one module per Vulkan concept, each owning its handles.
+//!
+//! Ownership is the teardown order. Every resource ([`memory::Buffer`], [`image::Image`],
+//! [`pipeline::Pipeline`], ...) holds an `Arc<device::Device>`, so the device (and the
+//! allocator inside it) outlives everything created from it, and the device holds an
+//! `Arc<instance::Instance>`. Dropping the last handle destroys the object; nothing is
+//! destroyed by hand. The renderer only drops GPU objects after waiting on the fence of the
+//! last submission that used them (see `commands::Submitter`), so no deletion queue is needed
+//! for an offline renderer that waits on every frame.
+
+pub mod commands;
+pub mod descriptors;
+pub mod device;
+pub mod image;
+pub mod instance;
+pub mod memory;
+pub mod pipeline;
+pub mod queries;
+
+use ash::vk;
+
+/// Errors from the GPU layer. `anyhow` is for the CLI; the engine returns these.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("cannot load the Vulkan loader (libvulkan.so.1): {0}; install `libvulkan1` and a driver such as `mesa-vulkan-drivers`")]
+    Loader(String),
+    #[error("{call} failed: {result}")]
+    Vk {
+        call: &'static str,
+        result: vk::Result,
+    },
+    #[error("GPU memory allocation for `{name}` failed: {source}")]
+    Alloc {
+        name: String,
+        source: gpu_allocator::AllocationError,
+    },
+    #[error("no usable Vulkan device:\n{0}")]
+    NoDevice(String),
+    #[error("the Khronos validation layer was requested but is not installed (Debian: `apt-get install vulkan-validationlayers`)")]
+    NoValidationLayer,
+    #[error("unsupported: {0}")]
+    Unsupported(String),
+}
+
+/// Attaches the name of the failing Vulkan call to a raw `vk::Result`.
+pub trait VkContext<T> {
+    fn vk(self, call: &'static str) -> Result<T, GpuError>;
+}
+
+impl<T> VkContext<T> for Result<T, vk::Result> {
+    fn vk(self, call: &'static str) -> Result<T, GpuError> {
+        self.map_err(|result| GpuError::Vk { call, result })
+    }
+}

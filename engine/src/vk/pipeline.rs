@@ -1,0 +1,181 @@
+//! Shader modules, pipeline layouts and graphics pipelines (dynamic rendering, no render pass
+//! objects).
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::device::Device;
+use super::{GpuError, VkContext};
+
+/// A pipeline layout: descriptor set layouts plus one push-constant range for all stages.
+pub struct PipelineLayout {
+    pub raw: vk::PipelineLayout,
+    device: Arc<Device>,
+}
+
+impl PipelineLayout {
+    pub fn create(
+        device: &Arc<Device>,
+        set_layouts: &[vk::DescriptorSetLayout],
+        push_constant_bytes: u32,
+        name: &str,
+    ) -> Result<Self, GpuError> {
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::ALL_GRAPHICS)
+            .offset(0)
+            .size(push_constant_bytes)];
+        let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(set_layouts);
+        if push_constant_bytes > 0 {
+            info = info.push_constant_ranges(&ranges);
+        }
+        // SAFETY: valid create info; the set layouts are live.
+        let raw = unsafe { device.raw.create_pipeline_layout(&info, None) }
+            .vk("vkCreatePipelineLayout")?;
+        device.set_name(raw, name);
+        Ok(Self {
+            raw,
+            device: Arc::clone(device),
+        })
+    }
+}
+
+impl Drop for PipelineLayout {
+    fn drop(&mut self) {
+        // SAFETY: no pending command buffer uses it.
+        unsafe { self.device.raw.destroy_pipeline_layout(self.raw, None) };
+    }
+}
+
+/// A compiled shader stage: SPIR-V words embedded at build time.
+pub struct ShaderStage<'a> {
+    pub stage: vk::ShaderStageFlags,
+    pub spirv: &'a [u32],
+}
+
+/// Fixed-function state of a graphics pipeline; viewport and scissor are dynamic.
+pub struct GraphicsPipelineDesc<'a> {
+    pub stages: &'a [ShaderStage<'a>],
+    /// Vertex buffer layout; empty for shaders that generate their vertices.
+    pub vertex_bindings: &'a [vk::VertexInputBindingDescription],
+    pub vertex_attributes: &'a [vk::VertexInputAttributeDescription],
+    pub color_format: vk::Format,
+    pub depth_format: vk::Format,
+    pub cull_mode: vk::CullModeFlags,
+    /// Reverse-Z everywhere (near = 1, far = 0), so "closer" is GREATER.
+    pub depth_compare: vk::CompareOp,
+    pub depth_write: bool,
+    /// Multiview view mask (0: not multiview).
+    pub view_mask: u32,
+}
+
+/// A graphics pipeline.
+pub struct Pipeline {
+    pub raw: vk::Pipeline,
+    device: Arc<Device>,
+}
+
+impl Pipeline {
+    pub fn create_graphics(
+        device: &Arc<Device>,
+        layout: &PipelineLayout,
+        desc: &GraphicsPipelineDesc<'_>,
+        name: &str,
+    ) -> Result<Self, GpuError> {
+        let d = &device.raw;
+        // Modules are only needed while the pipeline is created.
+        let mut modules = Vec::with_capacity(desc.stages.len());
+        for s in desc.stages {
+            let info = vk::ShaderModuleCreateInfo::default().code(s.spirv);
+            // SAFETY: the words are SPIR-V produced by glslang at build time.
+            match unsafe { d.create_shader_module(&info, None) } {
+                Ok(m) => modules.push(m),
+                Err(result) => {
+                    destroy_modules(d, &modules);
+                    return Err(GpuError::Vk {
+                        call: "vkCreateShaderModule",
+                        result,
+                    });
+                }
+            }
+        }
+        let stages: Vec<_> = desc
+            .stages
+            .iter()
+            .zip(&modules)
+            .map(|(s, &m)| {
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(s.stage)
+                    .module(m)
+                    .name(c"main")
+            })
+            .collect();
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(desc.vertex_bindings)
+            .vertex_attribute_descriptions(desc.vertex_attributes);
+        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(desc.cull_mode)
+            // Our view space is x right, y down, z forward (docs/conventions.md), in which
+            // a counter-clockwise triangle (seen from outside) lands clockwise in framebuffer.
+            .front_face(vk::FrontFace::CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(desc.depth_write)
+            .depth_compare_op(desc.depth_compare);
+        let attachments = [vk::PipelineColorBlendAttachmentState::default()
+            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let color_formats = [desc.color_format];
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .view_mask(desc.view_mask)
+            .color_attachment_formats(&color_formats)
+            .depth_attachment_format(desc.depth_format);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&input_assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout.raw)
+            .push_next(&mut rendering);
+        // SAFETY: every pointer in info points at locals that outlive the call.
+        let result =
+            unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
+        destroy_modules(d, &modules);
+        let raw = result.map_err(|(_, r)| r).vk("vkCreateGraphicsPipelines")?[0];
+        device.set_name(raw, name);
+        Ok(Self {
+            raw,
+            device: Arc::clone(device),
+        })
+    }
+}
+
+fn destroy_modules(d: &ash::Device, modules: &[vk::ShaderModule]) {
+    for &m in modules {
+        // SAFETY: modules are not referenced once pipeline creation has returned.
+        unsafe { d.destroy_shader_module(m, None) };
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        // SAFETY: no pending command buffer uses it.
+        unsafe { self.device.raw.destroy_pipeline(self.raw, None) };
+    }
+}

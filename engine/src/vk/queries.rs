@@ -1,0 +1,167 @@
+//! Timestamp and pipeline-statistics query pools.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::device::Device;
+use super::{GpuError, VkContext};
+
+/// The pipeline statistics we record, in the bit order Vulkan writes them.
+pub const PIPELINE_STATISTICS: vk::QueryPipelineStatisticFlags =
+    vk::QueryPipelineStatisticFlags::from_raw(
+        vk::QueryPipelineStatisticFlags::VERTEX_SHADER_INVOCATIONS.as_raw()
+            | vk::QueryPipelineStatisticFlags::CLIPPING_INVOCATIONS.as_raw()
+            | vk::QueryPipelineStatisticFlags::CLIPPING_PRIMITIVES.as_raw()
+            | vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS.as_raw(),
+    );
+
+/// Work counters of one query (see [`PIPELINE_STATISTICS`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct PipelineStats {
+    pub vertex_invocations: u64,
+    pub clipping_invocations: u64,
+    pub clipping_primitives: u64,
+    pub fragment_invocations: u64,
+}
+
+impl std::ops::AddAssign for PipelineStats {
+    fn add_assign(&mut self, o: Self) {
+        self.vertex_invocations += o.vertex_invocations;
+        self.clipping_invocations += o.clipping_invocations;
+        self.clipping_primitives += o.clipping_primitives;
+        self.fragment_invocations += o.fragment_invocations;
+    }
+}
+
+/// A query pool of one type.
+pub struct QueryPool {
+    pub raw: vk::QueryPool,
+    pub count: u32,
+    kind: vk::QueryType,
+    device: Arc<Device>,
+}
+
+impl QueryPool {
+    pub fn timestamps(device: &Arc<Device>, count: u32, name: &str) -> Result<Self, GpuError> {
+        Self::create(device, vk::QueryType::TIMESTAMP, count, name)
+    }
+
+    pub fn pipeline_statistics(
+        device: &Arc<Device>,
+        count: u32,
+        name: &str,
+    ) -> Result<Self, GpuError> {
+        Self::create(device, vk::QueryType::PIPELINE_STATISTICS, count, name)
+    }
+
+    fn create(
+        device: &Arc<Device>,
+        kind: vk::QueryType,
+        count: u32,
+        name: &str,
+    ) -> Result<Self, GpuError> {
+        let mut info = vk::QueryPoolCreateInfo::default()
+            .query_type(kind)
+            .query_count(count.max(1));
+        if kind == vk::QueryType::PIPELINE_STATISTICS {
+            info = info.pipeline_statistics(PIPELINE_STATISTICS);
+        }
+        // SAFETY: valid create info; the feature was enabled when the type needs one.
+        let raw = unsafe { device.raw.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
+        device.set_name(raw, name);
+        Ok(Self {
+            raw,
+            count: count.max(1),
+            kind,
+            device: Arc::clone(device),
+        })
+    }
+
+    /// Resets every query (recorded; must precede their use in the same command buffer).
+    pub fn reset(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: cmd is recording outside a render pass.
+        unsafe {
+            self.device
+                .raw
+                .cmd_reset_query_pool(cmd, self.raw, 0, self.count)
+        };
+    }
+
+    /// Writes a timestamp once all previous work has passed `stage`.
+    pub fn write_timestamp(
+        &self,
+        cmd: vk::CommandBuffer,
+        stage: vk::PipelineStageFlags2,
+        index: u32,
+    ) {
+        debug_assert_eq!(self.kind, vk::QueryType::TIMESTAMP);
+        // SAFETY: index < count; the query was reset in this command buffer.
+        unsafe {
+            self.device
+                .raw
+                .cmd_write_timestamp2(cmd, stage, self.raw, index)
+        };
+    }
+
+    pub fn begin(&self, cmd: vk::CommandBuffer, index: u32) {
+        // SAFETY: index < count; the query was reset and is not active.
+        unsafe {
+            self.device
+                .raw
+                .cmd_begin_query(cmd, self.raw, index, vk::QueryControlFlags::empty())
+        };
+    }
+
+    pub fn end(&self, cmd: vk::CommandBuffer, index: u32) {
+        // SAFETY: paired with begin on the same command buffer.
+        unsafe { self.device.raw.cmd_end_query(cmd, self.raw, index) };
+    }
+
+    /// Results of the first `n` queries, each a `T` of 64-bit values. WAIT: block until they
+    /// are available (they are, after the fence; WAIT makes that explicit).
+    fn results<T: Copy + Default>(&self, n: u32) -> Result<Vec<T>, GpuError> {
+        let mut data = vec![T::default(); n as usize];
+        // SAFETY: data holds n results of size_of::<T>() bytes, the stride passed by ash.
+        unsafe {
+            self.device.raw.get_query_pool_results(
+                self.raw,
+                0,
+                &mut data,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .vk("vkGetQueryPoolResults")?;
+        Ok(data)
+    }
+
+    /// Timestamps in nanoseconds (raw ticks times the device's period).
+    pub fn timestamps_ns(&self, n: u32) -> Result<Vec<f64>, GpuError> {
+        let period = f64::from(self.device.info.limits.timestamp_period_ns);
+        Ok(self
+            .results::<u64>(n)?
+            .iter()
+            .map(|&t| t as f64 * period)
+            .collect())
+    }
+
+    pub fn statistics(&self, n: u32) -> Result<Vec<PipelineStats>, GpuError> {
+        Ok(self
+            .results::<[u64; 4]>(n)?
+            .iter()
+            .map(|c| PipelineStats {
+                vertex_invocations: c[0],
+                clipping_invocations: c[1],
+                clipping_primitives: c[2],
+                fragment_invocations: c[3],
+            })
+            .collect())
+    }
+}
+
+impl Drop for QueryPool {
+    fn drop(&mut self) {
+        // SAFETY: no command buffer in flight uses the pool.
+        unsafe { self.device.raw.destroy_query_pool(self.raw, None) };
+    }
+}

@@ -1,0 +1,48 @@
+// materials.glsl - albedo and shading. The CPU reference (engine/src/materials.rs) evaluates
+// the same functions; keep the two in step (a test compares them).
+#ifndef MATERIALS_GLSL
+#define MATERIALS_GLSL
+
+#include "shared.glsl"
+
+// Parity of the integer cell containing uv * tiles: 0 or 1.
+float checker_parity(vec2 uv, float tiles) {
+    vec2 cell = floor(uv * tiles);
+    return mod(cell.x + cell.y, 2.0);
+}
+
+// 1 on a grid line, 0 inside a cell. Lines sit on the cell borders, width w (cell fraction).
+float grid_line(vec2 uv, float tiles, float w) {
+    vec2 f = fract(uv * tiles);
+    vec2 on = step(f, vec2(0.5 * w)) + step(vec2(1.0 - 0.5 * w), f);
+    return min(on.x + on.y, 1.0);
+}
+
+// The material's albedo (linear RGB) at a surface point. p is in render space, so the
+// direction material's "from the mirror centre" is just normalize(p - mirror centre).
+vec3 material_albedo(MaterialData m, vec3 p, vec2 uv, sampler2D tex) {
+    uint kind = m.kind_texture.x;
+    float tiles = m.params.x;
+    if (kind == MATERIAL_CHECKER) {
+        return mix(m.color_a.rgb, m.color_b.rgb, checker_parity(uv, tiles));
+    } else if (kind == MATERIAL_GRID) {
+        return mix(m.color_a.rgb, m.color_b.rgb, grid_line(uv, tiles, m.params.y));
+    } else if (kind == MATERIAL_TEXTURE) {
+        return m.color_a.rgb * texture(tex, uv * tiles).rgb; // sRGB decoded by the sampler
+    } else if (kind == MATERIAL_DIRECTION) {
+        return 0.5 + 0.5 * normalize(p);
+    }
+    return m.color_a.rgb; // MATERIAL_COLOR
+}
+
+// Unlit albedo (the thesis), or albedo * (ambient + (1 - ambient) * max(0, N.L)).
+vec3 shade(vec3 albedo, vec3 n, FrameData f) {
+    if (f.flags.x == 0u) {
+        return albedo;
+    }
+    float lambert = max(dot(normalize(n), f.light_dir_ambient.xyz), 0.0);
+    float ambient = f.light_dir_ambient.w;
+    return albedo * (ambient + (1.0 - ambient) * lambert);
+}
+
+#endif

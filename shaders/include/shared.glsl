@@ -1,0 +1,64 @@
+// shared.glsl - every GPU-visible struct and constant, mirrored by engine/src/render/gpu.rs.
+// A test compares the offsets glslang gives these members with the Rust structs' offsets.
+//
+// Spaces: "world" on the GPU is world space translated so that the mirror centre is the
+// origin (render origin), which keeps f32 precise for scenes far from (0,0,0).
+// View space is x right, y down, z forward: Vulkan's framebuffer axes (docs/conventions.md).
+#ifndef SHARED_GLSL
+#define SHARED_GLSL
+
+// Texture slots bound at set 0, binding 4 (unused slots hold a 1x1 white texel).
+#define MAX_TEXTURES 16
+
+// MaterialData.kind values (engine/src/scene MaterialKind).
+#define MATERIAL_COLOR 0u
+#define MATERIAL_CHECKER 1u
+#define MATERIAL_GRID 2u
+#define MATERIAL_TEXTURE 3u
+#define MATERIAL_DIRECTION 4u
+
+// Per-frame constants.
+struct FrameData {
+    vec4 light_dir_ambient; // xyz: unit vector towards the light; w: ambient fraction
+    vec4 mirror;            // xyz: mirror centre (render space, normally 0); w: radius (m)
+    uvec4 flags;            // x: 1 when the directional light is on
+};
+
+// One camera: a cube face or a view. dir(ndc) = ray_forward + ndc.x*ray_right + ndc.y*ray_down.
+struct ViewData {
+    mat4 world_to_clip;  // reverse-Z perspective: near -> depth 1, far -> 0
+    vec4 eye;            // xyz: camera position (render space)
+    vec4 ray_right;      // xyz: right * tan(half fov x)
+    vec4 ray_down;       // xyz: down * tan(half fov y)
+    vec4 ray_forward;    // xyz: unit forward
+    vec4 viewport;       // x, y, width, height in framebuffer pixels
+};
+
+// One drawable object.
+struct ObjectData {
+    mat4 model_to_world;
+    mat4 normal_to_world; // inverse transpose of model_to_world
+    uvec4 material;       // x: index into materials[]
+};
+
+// One material (see materials.glsl for what each kind computes).
+struct MaterialData {
+    uvec4 kind_texture; // x: MATERIAL_*, y: texture slot
+    vec4 color_a;       // rgb: colour / checker a / grid background / texture tint
+    vec4 color_b;       // rgb: checker b / grid line colour
+    vec4 params;        // x: tiles per uv unit, y: grid line width (fraction of a cell)
+};
+
+// Push constants: which view and which object a draw uses.
+#define PUSH_CONSTANTS \
+    layout(push_constant) uniform Push { uint view_index; uint object_index; } push
+
+// Descriptor set 0: the scene. Set 1: the environment cube (views only).
+#define SCENE_BINDINGS \
+    layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; }; \
+    layout(set = 0, binding = 1, std430) readonly buffer ViewBlock { ViewData views[]; }; \
+    layout(set = 0, binding = 2, std430) readonly buffer ObjectBlock { ObjectData objects[]; }; \
+    layout(set = 0, binding = 3, std430) readonly buffer MaterialBlock { MaterialData materials[]; }; \
+    layout(set = 0, binding = 4) uniform sampler2D textures[MAX_TEXTURES]
+
+#endif
