@@ -18,8 +18,8 @@ mod load;
 mod mesh;
 mod texture;
 
-pub use anim::Animation;
-pub use error::SceneError;
+pub use anim::{Animation, Repeat};
+pub use error::{Location, SceneError};
 pub use load::{load, load_str};
 pub use mesh::Mesh;
 pub use texture::TextureData;
@@ -112,9 +112,18 @@ pub enum MaterialKind {
     Checker { a: Vec3, b: Vec3, tiles: f32 },
     /// Lines of colour `line` on `background`; `tiles` cells per unit of texture coordinate,
     /// lines `line_width` wide as a fraction of a cell (0, 0.5].
-    Grid { background: Vec3, line: Vec3, tiles: f32, line_width: f32 },
+    Grid {
+        background: Vec3,
+        line: Vec3,
+        tiles: f32,
+        line_width: f32,
+    },
     /// An image, repeated `tiles` times per unit of texture coordinate, tinted by `tint`.
-    Texture { texture: usize, tint: Vec3, tiles: f32 },
+    Texture {
+        texture: usize,
+        tint: Vec3,
+        tiles: f32,
+    },
     /// Colour = 0.5 + 0.5 * normalize(p - mirror centre): a known answer for every direction,
     /// used to test the cube-face orientation.
     Direction,
