@@ -1,24 +1,313 @@
-//! TEMPORARY stub (replaced by the scene-loader branch).
+//! Position animations: closed-form functions of time, so that any frame can be rendered
+//! alone (no integration, no state) and the same time always gives the same position.
+//!
+//! All arithmetic runs in f64 and is rounded to f32 once at the end, so long runs (large `t`)
+//! do not drift.
+
 use glam::Vec3;
+
+/// What happens after the end of a linear or keyframed animation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Repeat {
+    /// Stop at the end and stay there.
+    Once,
+    /// Jump back to the start and play again.
+    Loop,
+    /// Play backwards to the start, then forwards again.
+    PingPong,
+}
+
+/// A moving position. Loaded animations are validated: durations and periods are finite and
+/// positive, axes are unit length, keyframe times start at 0 and strictly increase.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Animation {
+    /// From the base position to `to` in `duration_s` seconds at constant speed.
+    Linear {
+        to: Vec3,
+        duration_s: f32,
+        repeat: Repeat,
+    },
+    /// Rotation of the base position about the line through `center` along the unit `axis`,
+    /// one turn per `period_s` seconds, counter-clockwise when looking down the axis from its
+    /// tip (right-hand rule: thumb along `axis`, fingers give the direction of travel).
     Orbit {
         center: Vec3,
         axis: Vec3,
         period_s: f32,
     },
+    /// Piecewise-linear path through absolute world `positions` at `times_s` (first time 0,
+    /// strictly increasing, same length as `positions`, at least one key).
+    Keyframes {
+        times_s: Vec<f32>,
+        positions: Vec<Vec3>,
+        repeat: Repeat,
+    },
 }
+
+/// Maps time onto [0, span] according to `repeat`. `span` > 0.
+fn wrap(t: f64, span: f64, repeat: Repeat) -> f64 {
+    match repeat {
+        Repeat::Once => t.clamp(0.0, span),
+        Repeat::Loop => t.rem_euclid(span),
+        Repeat::PingPong => {
+            let m = t.rem_euclid(2.0 * span);
+            if m <= span {
+                m
+            } else {
+                2.0 * span - m
+            }
+        }
+    }
+}
+
 impl Animation {
+    /// Position at time `t_s` (seconds) of something whose position at rest is `base`.
+    ///
+    /// For `Linear` and `Orbit`, `position_at(base, 0.0) == base` exactly (bit for bit);
+    /// `Keyframes` are absolute and give `positions[0]` at time 0.
     pub fn position_at(&self, base: Vec3, t_s: f64) -> Vec3 {
         match self {
+            Animation::Linear {
+                to,
+                duration_s,
+                repeat,
+            } => {
+                let s = wrap(t_s, f64::from(*duration_s), *repeat) / f64::from(*duration_s);
+                if s == 0.0 {
+                    // Exact at the start (also keeps -0.0 components as they were).
+                    return base;
+                }
+                let b = base.as_dvec3();
+                (b + (to.as_dvec3() - b) * s).as_vec3()
+            }
             Animation::Orbit {
                 center,
                 axis,
                 period_s,
             } => {
-                let a = (std::f64::consts::TAU * t_s / f64::from(*period_s)) as f32;
-                *center + glam::Quat::from_axis_angle(axis.normalize(), a) * (base - *center)
+                let turns = (t_s / f64::from(*period_s)).rem_euclid(1.0);
+                if turns == 0.0 {
+                    return base;
+                }
+                let angle = turns * std::f64::consts::TAU;
+                let c = center.as_dvec3();
+                let k = axis.as_dvec3().normalize();
+                let d = base.as_dvec3() - c;
+                // Rodrigues' rotation formula (right-handed about k).
+                let (sin, cos) = angle.sin_cos();
+                let rotated = d * cos + k.cross(d) * sin + k * k.dot(d) * (1.0 - cos);
+                (c + rotated).as_vec3()
+            }
+            Animation::Keyframes {
+                times_s,
+                positions,
+                repeat,
+            } => keyframe_position(times_s, positions, *repeat, t_s).unwrap_or(base),
+        }
+    }
+
+    /// The time after which the motion repeats exactly, or `None` if it stops (`Once`) or
+    /// never moves (a single keyframe).
+    pub fn period_s(&self) -> Option<f64> {
+        match self {
+            Animation::Linear {
+                duration_s, repeat, ..
+            } => match repeat {
+                Repeat::Once => None,
+                Repeat::Loop => Some(f64::from(*duration_s)),
+                Repeat::PingPong => Some(2.0 * f64::from(*duration_s)),
+            },
+            Animation::Orbit { period_s, .. } => Some(f64::from(*period_s)),
+            Animation::Keyframes {
+                times_s, repeat, ..
+            } => {
+                let end = f64::from(*times_s.last()?);
+                if end <= 0.0 {
+                    return None;
+                }
+                match repeat {
+                    Repeat::Once => None,
+                    Repeat::Loop => Some(end),
+                    Repeat::PingPong => Some(2.0 * end),
+                }
             }
         }
+    }
+
+    /// A time span `[0, span]` over which the animation visits every position it will ever
+    /// take: the period of a repeating motion, the duration of a one-shot one.
+    pub fn coverage_s(&self) -> f64 {
+        match self {
+            Animation::Linear { duration_s, .. } => f64::from(*duration_s),
+            Animation::Orbit { period_s, .. } => f64::from(*period_s),
+            Animation::Keyframes { times_s, .. } => times_s.last().map_or(0.0, |&t| f64::from(t)),
+        }
+    }
+
+    /// Times (seconds) at which to check a moving thing against the room: `samples` evenly
+    /// spaced over [`Self::coverage_s`] (end included), plus every keyframe time, where a
+    /// piecewise-linear path has its corners.
+    pub fn sample_times(&self, samples: usize) -> Vec<f64> {
+        let span = self.coverage_s();
+        let n = samples.max(1);
+        let mut times: Vec<f64> = (0..=n).map(|i| span * i as f64 / n as f64).collect();
+        if let Animation::Keyframes { times_s, .. } = self {
+            times.extend(times_s.iter().map(|&t| f64::from(t)));
+        }
+        times
+    }
+}
+
+fn keyframe_position(times: &[f32], positions: &[Vec3], repeat: Repeat, t: f64) -> Option<Vec3> {
+    let first = *positions.first()?;
+    let end = f64::from(*times.last()?);
+    if positions.len() < 2 || times.len() != positions.len() || end <= 0.0 {
+        return Some(first);
+    }
+    let t = wrap(t, end, repeat);
+    // Index of the first key strictly after t; the segment is [i - 1, i].
+    let i = times.partition_point(|&k| f64::from(k) <= t);
+    if i == 0 {
+        return Some(first);
+    }
+    if i >= times.len() {
+        return positions.last().copied();
+    }
+    let (t0, t1) = (f64::from(times[i - 1]), f64::from(times[i]));
+    let (p0, p1) = (positions[i - 1].as_dvec3(), positions[i].as_dvec3());
+    let s = (t - t0) / (t1 - t0);
+    Some((p0 + (p1 - p0) * s).as_vec3())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn orbit_quarter_turn_about_plus_y_goes_from_plus_x_to_minus_z() {
+        // Right-hand rule about +Y: +X turns towards -Z.
+        let a = Animation::Orbit {
+            center: Vec3::ZERO,
+            axis: Vec3::Y,
+            period_s: 8.0,
+        };
+        let p = a.position_at(Vec3::X, 2.0);
+        assert!(close(p, Vec3::new(0.0, 0.0, -1.0)), "{p}");
+        let p = a.position_at(Vec3::X, 4.0);
+        assert!(close(p, Vec3::new(-1.0, 0.0, 0.0)), "{p}");
+    }
+
+    #[test]
+    fn orbit_keeps_height_along_axis_and_radius() {
+        let a = Animation::Orbit {
+            center: Vec3::new(0.0, 1.5, 0.0),
+            axis: Vec3::Y,
+            period_s: 3.0,
+        };
+        let base = Vec3::new(3.0, 2.0, 0.0);
+        for i in 0..50 {
+            let p = a.position_at(base, f64::from(i) * 0.137);
+            assert!((p.y - 2.0).abs() < 1e-5);
+            assert!((Vec3::new(p.x, 0.0, p.z).length() - 3.0).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn exact_at_time_zero() {
+        let base = Vec3::new(0.1, -0.0, 1.0 / 3.0);
+        let lin = Animation::Linear {
+            to: Vec3::ONE,
+            duration_s: 2.0,
+            repeat: Repeat::Loop,
+        };
+        let orb = Animation::Orbit {
+            center: Vec3::ONE,
+            axis: Vec3::Z,
+            period_s: 0.7,
+        };
+        for a in [lin, orb] {
+            let p = a.position_at(base, 0.0);
+            assert_eq!(
+                p.to_array().map(f32::to_bits),
+                base.to_array().map(f32::to_bits)
+            );
+        }
+    }
+
+    #[test]
+    fn linear_repeat_modes() {
+        let base = Vec3::ZERO;
+        let to = Vec3::new(4.0, 0.0, 0.0);
+        let mk = |repeat| Animation::Linear {
+            to,
+            duration_s: 2.0,
+            repeat,
+        };
+        // Ping-pong at 1.5 x duration is halfway back.
+        assert!(close(
+            mk(Repeat::PingPong).position_at(base, 3.0),
+            Vec3::new(2.0, 0.0, 0.0)
+        ));
+        assert!(close(mk(Repeat::PingPong).position_at(base, 2.0), to));
+        assert!(close(
+            mk(Repeat::Loop).position_at(base, 3.0),
+            Vec3::new(2.0, 0.0, 0.0)
+        ));
+        assert!(close(
+            mk(Repeat::Loop).position_at(base, 0.5),
+            Vec3::new(1.0, 0.0, 0.0)
+        ));
+        assert!(close(mk(Repeat::Once).position_at(base, 3.0), to));
+        assert!(close(
+            mk(Repeat::Once).position_at(base, 1.0),
+            Vec3::new(2.0, 0.0, 0.0)
+        ));
+        assert_eq!(mk(Repeat::Once).period_s(), None);
+        assert_eq!(mk(Repeat::PingPong).period_s(), Some(4.0));
+    }
+
+    #[test]
+    fn keyframes_interpolate_linearly() {
+        let a = Animation::Keyframes {
+            times_s: vec![0.0, 1.0, 3.0],
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 2.0, 0.0)],
+            repeat: Repeat::Loop,
+        };
+        let ignored = Vec3::splat(9.0);
+        assert!(close(a.position_at(ignored, 0.0), Vec3::ZERO));
+        assert!(close(a.position_at(ignored, 0.5), Vec3::new(0.5, 0.0, 0.0)));
+        assert!(close(a.position_at(ignored, 2.0), Vec3::new(1.0, 1.0, 0.0)));
+        // Loop: t = 3.5 is t = 0.5.
+        assert!(close(a.position_at(ignored, 3.5), Vec3::new(0.5, 0.0, 0.0)));
+        let once = Animation::Keyframes {
+            times_s: vec![0.0, 1.0],
+            positions: vec![Vec3::ZERO, Vec3::X],
+            repeat: Repeat::Once,
+        };
+        assert!(close(once.position_at(ignored, 10.0), Vec3::X));
+        let pp = Animation::Keyframes {
+            times_s: vec![0.0, 1.0],
+            positions: vec![Vec3::ZERO, Vec3::X],
+            repeat: Repeat::PingPong,
+        };
+        assert!(close(
+            pp.position_at(ignored, 1.25),
+            Vec3::new(0.75, 0.0, 0.0)
+        ));
+    }
+
+    #[test]
+    fn large_times_do_not_drift() {
+        let a = Animation::Orbit {
+            center: Vec3::ZERO,
+            axis: Vec3::Y,
+            period_s: 8.0,
+        };
+        let p = a.position_at(Vec3::X, 8.0 * 1_000_000.0 + 2.0);
+        assert!(close(p, Vec3::new(0.0, 0.0, -1.0)), "{p}");
     }
 }

@@ -1,1 +1,219 @@
+//! The scene file exactly as written: serde structs mirroring the TOML, one per table.
+//!
+//! Nothing here is validated beyond TOML types; `load.rs` turns these into the resolved
+//! [`super::Scene`]. Numbers are read as `f64`/`i64` so that out-of-range values (`1e300`,
+//! `-1` for a size) reach the validator and get a message that says what the valid range is,
+//! instead of a generic "expected u32". Every struct denies unknown fields so a typo is an
+//! error, not a silently ignored setting.
+//!
+//! Where a value's meaning depends on a word (`type = "checker"`, `shape = "box"`), the struct
+//! is flat with optional fields and the validator checks which fields that word needs or
+//! forbids: serde's tagged enums lose the source position of errors inside them.
 
+use serde::Deserialize;
+
+pub type V3 = [f64; 3];
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub description: Option<String>,
+    pub room: Option<RoomSpec>,
+    pub mirror: Option<MirrorSpec>,
+    #[serde(default)]
+    pub materials: Vec<MaterialSpec>,
+    #[serde(default)]
+    pub objects: Vec<ObjectSpec>,
+    pub observer: Option<ObserverSpec>,
+    pub sensor: Option<SensorSpec>,
+    pub cube: Option<CubeSpec>,
+    pub refresh: Option<RefreshSpec>,
+    pub light: Option<LightSpec>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoomSpec {
+    pub center: Option<V3>,
+    pub size: V3,
+    pub walls: WallsSpec,
+}
+
+/// One material name for all six walls, or one per wall.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub enum WallsSpec {
+    All(String),
+    Each(EachWall),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EachWall {
+    pub px: String,
+    pub nx: String,
+    pub py: String,
+    pub ny: String,
+    pub pz: String,
+    pub nz: String,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MirrorSpec {
+    pub center: V3,
+    pub radius: f64,
+    pub animation: Option<AnimationSpec>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MaterialType {
+    Color,
+    Checker,
+    Grid,
+    Texture,
+    Direction,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: MaterialType,
+    pub color: Option<V3>,
+    pub a: Option<V3>,
+    pub b: Option<V3>,
+    pub tiles: Option<f64>,
+    pub background: Option<V3>,
+    pub line: Option<V3>,
+    pub line_width: Option<f64>,
+    pub file: Option<String>,
+    pub tint: Option<V3>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Shape {
+    Box,
+    Sphere,
+    Cylinder,
+    Mesh,
+}
+
+/// `scale = 2` or `scale = [1, 2, 1]`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum ScaleSpec {
+    Uniform(f64),
+    PerAxis(V3),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    pub name: Option<String>,
+    pub shape: Shape,
+    pub size: Option<V3>,
+    pub radius: Option<f64>,
+    pub height: Option<f64>,
+    pub file: Option<String>,
+    pub position: Option<V3>,
+    pub rotation: Option<V3>,
+    pub scale: Option<ScaleSpec>,
+    pub material: String,
+    pub animation: Option<AnimationSpec>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum AnimationType {
+    Linear,
+    Orbit,
+    Keyframes,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RepeatSpec {
+    Once,
+    Loop,
+    PingPong,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnimationSpec {
+    #[serde(rename = "type")]
+    pub kind: AnimationType,
+    pub to: Option<V3>,
+    pub duration: Option<f64>,
+    pub repeat: Option<RepeatSpec>,
+    pub center: Option<V3>,
+    pub axis: Option<V3>,
+    pub period: Option<f64>,
+    pub times: Option<Vec<f64>>,
+    pub positions: Option<Vec<V3>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObserverSpec {
+    pub position: Option<V3>,
+    pub yaw: Option<f64>,
+    pub pitch: Option<f64>,
+    pub fov_y: Option<f64>,
+    pub resolution: Option<[i64; 2]>,
+    pub animation: Option<AnimationSpec>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSpec {
+    pub offset: Option<f64>,
+    pub fov_y: Option<f64>,
+    pub resolution: Option<[i64; 2]>,
+    pub up: Option<V3>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+pub enum CubeFormatSpec {
+    #[serde(rename = "rgba16f")]
+    Rgba16f,
+    #[serde(rename = "rgba8")]
+    Rgba8,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CubeSpec {
+    pub face_size: Option<i64>,
+    pub format: Option<CubeFormatSpec>,
+    pub near: Option<f64>,
+    pub far: Option<f64>,
+    pub mipmaps: Option<bool>,
+    pub anisotropy: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PolicySpec {
+    EveryFrame,
+    OnChange,
+    EveryN,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RefreshSpec {
+    pub policy: PolicySpec,
+    pub n: Option<i64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightSpec {
+    pub direction: V3,
+    pub ambient: Option<f64>,
+}

@@ -1,11 +1,1122 @@
-//! TEMPORARY stub.
-use super::{Scene, SceneError};
-use std::path::Path;
+//! Loading and validating scene files.
+//!
+//! Parsing happens twice over the same text: once into toml's spanned document tree
+//! ([`DeTable`]), which knows where every key and value sits, and once through serde into the
+//! plain structs of `format.rs`. Validation works on the plain structs and names each value by
+//! its dotted field path (`objects[2].size`); the path is looked up in the spanned tree to get
+//! the line and column. One string is thus both the message's field name and the key to its
+//! position, so they cannot disagree.
+
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use glam::{EulerRot, Quat, Vec3};
+use toml::de::{DeTable, DeValue};
+use toml::Spanned;
+
+use super::anim::{Animation, Repeat};
+use super::error::{Location, SceneError};
+use super::format::*;
+use super::mesh::Mesh;
+use super::texture::TextureData;
+use super::{
+    Camera, CubeFormat, CubeSettings, DirectionalLight, Material, MaterialKind, Mirror, Object,
+    RefreshPolicy, Room, Scene, SensorCamera, MAX_FACE_SIZE_PX, MAX_IMAGE_SIZE_PX,
+};
+
+type R<T> = Result<T, SceneError>;
+
+/// How many evenly spaced times an animation is checked at (plus its keyframes).
+const ANIMATION_SAMPLES: usize = 64;
+/// Tessellation of `shape = "sphere"` objects.
+const SPHERE_SEGMENTS: u32 = 48;
+const SPHERE_RINGS: u32 = 24;
+/// Tessellation of `shape = "cylinder"` objects.
+const CYLINDER_SEGMENTS: u32 = 48;
+
+/// Reads and validates the scene file at `path`. Relative asset paths inside it are resolved
+/// against the folder that contains it.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    Err(SceneError {
-        message: format!("{}: loader not merged yet", path.display()),
-    })
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| SceneError::Io {
+        file: path.to_path_buf(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
+    })?;
+    load_str(&text, path)
 }
-pub fn load_str(_text: &str, path: &Path) -> Result<Scene, SceneError> {
-    load(path)
+
+/// Validates scene text as if it had been read from `path` (used in messages and to resolve
+/// relative asset paths against `path`'s folder; the file itself is not read).
+pub fn load_str(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    let doc = match DeTable::parse(text) {
+        Ok(doc) => doc,
+        Err(e) => {
+            let location = match e.span() {
+                Some(span) => Location::at_offset(path, text, span.start),
+                None => Location::file_only(path),
+            };
+            return Err(SceneError::Syntax {
+                location,
+                message: e.message().trim().to_string(),
+            });
+        }
+    };
+    if doc.get_ref().is_empty() {
+        return Err(SceneError::Empty {
+            file: path.to_path_buf(),
+        });
+    }
+    let locator = Locator {
+        file: path,
+        text,
+        root: doc,
+    };
+    let spec: SceneFile = toml::from_str(text).map_err(|e| locator.serde_error(&e))?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    Ctx { loc: locator, dir }.scene(spec)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Positions of fields in the source text.
+
+struct Locator<'a> {
+    file: &'a Path,
+    text: &'a str,
+    root: Spanned<DeTable<'a>>,
+}
+
+enum Segment<'p> {
+    Key(&'p str),
+    Index(usize),
+}
+
+/// `objects[2].animation.positions[0]` -> Key(objects) Index(2) Key(animation) ...
+fn segments(path: &str) -> Vec<Segment<'_>> {
+    let mut out = Vec::new();
+    for part in path.split('.') {
+        let (name, mut rest) = part.split_at(part.find('[').unwrap_or(part.len()));
+        if !name.is_empty() {
+            out.push(Segment::Key(name));
+        }
+        while let Some(close) = rest.find(']') {
+            if let Ok(i) = rest[1..close].parse() {
+                out.push(Segment::Index(i));
+            }
+            rest = &rest[close + 1..];
+        }
+    }
+    out
+}
+
+fn contains(span: &Range<usize>, offset: usize) -> bool {
+    span.start <= offset && (offset < span.end || span.start == span.end)
+}
+
+impl<'a> Locator<'a> {
+    /// The span of the value at `path`, or of the deepest part of it that exists (the table
+    /// that lacks a missing field). `None` if not even the first key exists.
+    fn span(&self, path: &str) -> Option<Range<usize>> {
+        let mut best: Option<Range<usize>> = None;
+        let mut table: Option<&DeTable<'a>> = Some(self.root.get_ref());
+        let mut value: Option<&Spanned<DeValue<'a>>> = None;
+        for seg in segments(path) {
+            let next = match seg {
+                Segment::Key(k) => {
+                    let t = match value {
+                        None => table,
+                        Some(v) => v.get_ref().as_table(),
+                    };
+                    let Some((key, v)) =
+                        t.and_then(|t| t.iter().find(|(key, _)| key.get_ref() == k))
+                    else {
+                        break;
+                    };
+                    // A `[table]`'s own span is its header; an inline value's is the value.
+                    best = Some(if v.get_ref().is_table() && v.span().is_empty() {
+                        key.span()
+                    } else {
+                        v.span()
+                    });
+                    v
+                }
+                Segment::Index(i) => {
+                    let Some(v) = value
+                        .and_then(|v| v.get_ref().as_array())
+                        .and_then(|a| a.get(i))
+                    else {
+                        break;
+                    };
+                    best = Some(v.span());
+                    v
+                }
+            };
+            value = Some(next);
+            table = None;
+        }
+        best
+    }
+
+    fn location(&self, path: &str) -> Location {
+        match self.span(path) {
+            Some(span) => Location::at_offset(self.file, self.text, span.start),
+            None => Location::file_only(self.file),
+        }
+    }
+
+    /// The dotted path of the deepest key or value whose span contains `offset`.
+    fn path_at(&self, offset: usize) -> Option<String> {
+        fn in_value(v: &Spanned<DeValue<'_>>, path: String, offset: usize) -> Option<String> {
+            match v.get_ref() {
+                DeValue::Table(t) => {
+                    if let Some(p) = in_table(t, &path, offset) {
+                        return Some(p);
+                    }
+                }
+                DeValue::Array(a) => {
+                    for (i, e) in a.iter().enumerate() {
+                        if let Some(p) = in_value(e, format!("{path}[{i}]"), offset) {
+                            return Some(p);
+                        }
+                    }
+                }
+                _ => {}
+            }
+            contains(&v.span(), offset).then_some(path)
+        }
+        fn in_table(t: &DeTable<'_>, prefix: &str, offset: usize) -> Option<String> {
+            for (k, v) in t.iter() {
+                let path = if prefix.is_empty() {
+                    k.get_ref().to_string()
+                } else {
+                    format!("{prefix}.{}", k.get_ref())
+                };
+                if contains(&k.span(), offset) {
+                    return Some(path);
+                }
+                if let Some(p) = in_value(v, path, offset) {
+                    return Some(p);
+                }
+            }
+            None
+        }
+        in_table(self.root.get_ref(), "", offset)
+    }
+
+    /// Turns a serde error (unknown field, wrong type, missing field) into a located error.
+    fn serde_error(&self, e: &toml::de::Error) -> SceneError {
+        let message = e.message().trim().to_string();
+        let (location, mut field) = match e.span() {
+            Some(span) => (
+                Location::at_offset(self.file, self.text, span.start),
+                self.path_at(span.start).unwrap_or_default(),
+            ),
+            None => (Location::file_only(self.file), String::new()),
+        };
+        // serde names the offending key in backticks; make sure the path ends with it.
+        let named = |prefix: &str| {
+            message
+                .strip_prefix(prefix)
+                .and_then(|rest| rest.split('`').next())
+                .map(str::to_string)
+        };
+        let key = named("unknown field `").or_else(|| named("missing field `"));
+        if let Some(key) = &key {
+            if !(field == *key || field.ends_with(&format!(".{key}"))) {
+                field = if field.is_empty() {
+                    key.clone()
+                } else {
+                    format!("{field}.{key}")
+                };
+            }
+        }
+        if field.is_empty() {
+            field = "(top level)".into();
+        }
+        if message.starts_with("unknown field") {
+            SceneError::UnknownField {
+                location,
+                field,
+                message,
+            }
+        } else if message.starts_with("missing field") {
+            SceneError::Invalid {
+                location,
+                field,
+                message: "required field is missing".into(),
+            }
+        } else {
+            SceneError::WrongType {
+                location,
+                field,
+                message,
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validation.
+
+struct Ctx<'a> {
+    loc: Locator<'a>,
+    dir: PathBuf,
+}
+
+fn fmt_v3(v: Vec3) -> String {
+    format!("[{}, {}, {}]", v.x, v.y, v.z)
+}
+
+impl Ctx<'_> {
+    fn invalid(&self, field: &str, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid {
+            location: self.loc.location(field),
+            field: field.to_string(),
+            message: message.into(),
+        }
+    }
+
+    fn missing(&self, field: &str, why: &str) -> SceneError {
+        self.invalid(field, format!("required field is missing ({why})"))
+    }
+
+    fn unused(&self, field: &str, why: &str) -> SceneError {
+        self.invalid(field, format!("not allowed here: {why}"))
+    }
+
+    /// A finite number that fits in f32.
+    fn num(&self, field: &str, v: f64) -> R<f32> {
+        if !v.is_finite() {
+            return Err(self.invalid(field, format!("must be a finite number, got {v}")));
+        }
+        if v.abs() > f64::from(f32::MAX) {
+            return Err(self.invalid(field, format!("out of range, got {v}")));
+        }
+        Ok(v as f32)
+    }
+
+    fn positive(&self, field: &str, v: f64) -> R<f32> {
+        let x = self.num(field, v)?;
+        if x <= 0.0 {
+            return Err(self.invalid(field, format!("must be positive, got {v}")));
+        }
+        Ok(x)
+    }
+
+    /// A number in the open or closed interval described by `lo`/`hi`.
+    fn in_range(&self, field: &str, v: f64, lo: f64, hi: f64, open: bool) -> R<f32> {
+        let x = self.num(field, v)?;
+        let ok = if open {
+            v > lo && v < hi
+        } else {
+            v >= lo && v <= hi
+        };
+        if !ok {
+            let (a, b) = if open { ("(", ")") } else { ("[", "]") };
+            return Err(self.invalid(field, format!("must be in {a}{lo}, {hi}{b}, got {v}")));
+        }
+        Ok(x)
+    }
+
+    fn vec3(&self, field: &str, v: V3) -> R<Vec3> {
+        let mut out = [0.0f32; 3];
+        for (i, c) in v.iter().enumerate() {
+            out[i] = self.num(&format!("{field}[{i}]"), *c)?;
+        }
+        Ok(Vec3::from(out))
+    }
+
+    fn positive3(&self, field: &str, v: V3) -> R<Vec3> {
+        for (i, c) in v.iter().enumerate() {
+            self.positive(&format!("{field}[{i}]"), *c)?;
+        }
+        self.vec3(field, v)
+    }
+
+    fn color(&self, field: &str, v: V3) -> R<Vec3> {
+        for (i, c) in v.iter().enumerate() {
+            self.in_range(&format!("{field}[{i}]"), *c, 0.0, 1.0, false)?;
+        }
+        self.vec3(field, v)
+    }
+
+    fn count(&self, field: &str, v: i64, max: u32) -> R<u32> {
+        if v < 1 || v > i64::from(max) {
+            return Err(self.invalid(field, format!("must be in 1..={max}, got {v}")));
+        }
+        Ok(v as u32)
+    }
+
+    fn resolution(&self, field: &str, v: Option<[i64; 2]>, default: [u32; 2]) -> R<[u32; 2]> {
+        match v {
+            None => Ok(default),
+            Some([w, h]) => Ok([
+                self.count(&format!("{field}[0]"), w, MAX_IMAGE_SIZE_PX)?,
+                self.count(&format!("{field}[1]"), h, MAX_IMAGE_SIZE_PX)?,
+            ]),
+        }
+    }
+
+    fn scene(&self, spec: SceneFile) -> R<Scene> {
+        let Some(room_spec) = &spec.room else {
+            return Err(self.invalid("room", "missing [room] table (every scene needs a room)"));
+        };
+        let Some(mirror_spec) = &spec.mirror else {
+            return Err(self.invalid("mirror", "missing [mirror] table (every scene needs one)"));
+        };
+
+        let mut textures = Vec::new();
+        let materials = self.materials(&spec.materials, &mut textures)?;
+        let material_index = |field: &str, name: &str| -> R<usize> {
+            materials
+                .iter()
+                .position(|m| m.name == name)
+                .ok_or_else(|| {
+                    let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+                    self.invalid(
+                        field,
+                        format!(
+                            "unknown material \"{name}\" (defined: {})",
+                            known.join(", ")
+                        ),
+                    )
+                })
+        };
+
+        let room = self.room(room_spec, &material_index)?;
+        let mirror = self.mirror(mirror_spec, &room)?;
+
+        let mut meshes = Vec::new();
+        let mut mesh_cache: HashMap<String, usize> = HashMap::new();
+        let mut objects = Vec::with_capacity(spec.objects.len());
+        for (i, o) in spec.objects.iter().enumerate() {
+            objects.push(self.object(i, o, &material_index, &mut meshes, &mut mesh_cache)?);
+        }
+
+        let observer = self.observer(spec.observer.as_ref(), &room, &mirror)?;
+        let sensor = self.sensor(spec.sensor.as_ref(), &room, &mirror)?;
+        let cube = self.cube(spec.cube.as_ref())?;
+        let refresh = self.refresh(spec.refresh.as_ref())?;
+        let light = match &spec.light {
+            None => None,
+            Some(l) => {
+                let d = self.vec3("light.direction", l.direction)?;
+                let direction = d
+                    .try_normalize()
+                    .filter(|n| n.is_finite())
+                    .ok_or_else(|| self.invalid("light.direction", "must be a non-zero vector"))?;
+                let ambient = match l.ambient {
+                    Some(a) => self.in_range("light.ambient", a, 0.0, 1.0, false)?,
+                    None => 0.3,
+                };
+                Some(DirectionalLight { direction, ambient })
+            }
+        };
+
+        Ok(Scene {
+            source: self.loc.file.to_path_buf(),
+            description: spec.description.clone().unwrap_or_default(),
+            room,
+            mirror,
+            objects,
+            meshes,
+            materials,
+            textures,
+            observer,
+            sensor,
+            cube,
+            refresh,
+            light,
+        })
+    }
+
+    fn materials(
+        &self,
+        specs: &[MaterialSpec],
+        textures: &mut Vec<TextureData>,
+    ) -> R<Vec<Material>> {
+        let mut out: Vec<Material> = Vec::with_capacity(specs.len());
+        for (i, m) in specs.iter().enumerate() {
+            let f = |name: &str| format!("materials[{i}].{name}");
+            if m.name.trim().is_empty() {
+                return Err(self.invalid(&f("name"), "must not be empty"));
+            }
+            if out.iter().any(|o| o.name == m.name) {
+                return Err(self.invalid(
+                    &f("name"),
+                    format!("duplicate material name \"{}\"", m.name),
+                ));
+            }
+            // Which optional fields each type takes; any other present field is an error.
+            let allowed: &[&str] = match m.kind {
+                MaterialType::Color => &["color"],
+                MaterialType::Checker => &["a", "b", "tiles"],
+                MaterialType::Grid => &["background", "line", "tiles", "line_width"],
+                MaterialType::Texture => &["file", "tint", "tiles"],
+                MaterialType::Direction => &[],
+            };
+            let present = [
+                ("color", m.color.is_some()),
+                ("a", m.a.is_some()),
+                ("b", m.b.is_some()),
+                ("tiles", m.tiles.is_some()),
+                ("background", m.background.is_some()),
+                ("line", m.line.is_some()),
+                ("line_width", m.line_width.is_some()),
+                ("file", m.file.is_some()),
+                ("tint", m.tint.is_some()),
+            ];
+            for (name, is_set) in present {
+                if is_set && !allowed.contains(&name) {
+                    return Err(self.unused(
+                        &f(name),
+                        &format!("a material of type {:?} takes only {:?}", m.kind, allowed),
+                    ));
+                }
+            }
+            let need = |v: Option<V3>, name: &str| -> R<Vec3> {
+                match v {
+                    Some(v) => self.color(&f(name), v),
+                    None => Err(self.missing(&f(name), &format!("{:?} materials need it", m.kind))),
+                }
+            };
+            let tiles =
+                |default: f64| -> R<f32> { self.positive(&f("tiles"), m.tiles.unwrap_or(default)) };
+            let kind = match m.kind {
+                MaterialType::Color => MaterialKind::Color {
+                    color: need(m.color, "color")?,
+                },
+                MaterialType::Checker => MaterialKind::Checker {
+                    a: need(m.a, "a")?,
+                    b: need(m.b, "b")?,
+                    tiles: tiles(8.0)?,
+                },
+                MaterialType::Grid => MaterialKind::Grid {
+                    background: need(m.background, "background")?,
+                    line: need(m.line, "line")?,
+                    tiles: tiles(8.0)?,
+                    line_width: match m.line_width {
+                        Some(w) => {
+                            let x = self.num(&f("line_width"), w)?;
+                            if !(w > 0.0 && w <= 0.5) {
+                                return Err(self.invalid(
+                                    &f("line_width"),
+                                    format!("must be in (0, 0.5], got {w}"),
+                                ));
+                            }
+                            x
+                        }
+                        None => 0.05,
+                    },
+                },
+                MaterialType::Texture => {
+                    let Some(file) = &m.file else {
+                        return Err(self.missing(&f("file"), "texture materials need a PNG file"));
+                    };
+                    let path = self.dir.join(file);
+                    let index = match textures.iter().position(|t| t.path == path) {
+                        Some(index) => index,
+                        None => {
+                            let t = TextureData::from_png(&path).map_err(|message| {
+                                SceneError::Asset {
+                                    location: self.loc.location(&f("file")),
+                                    field: f("file"),
+                                    asset: path.clone(),
+                                    message,
+                                }
+                            })?;
+                            textures.push(t);
+                            textures.len() - 1
+                        }
+                    };
+                    MaterialKind::Texture {
+                        texture: index,
+                        tint: match m.tint {
+                            Some(t) => self.color(&f("tint"), t)?,
+                            None => Vec3::ONE,
+                        },
+                        tiles: tiles(1.0)?,
+                    }
+                }
+                MaterialType::Direction => MaterialKind::Direction,
+            };
+            out.push(Material {
+                name: m.name.clone(),
+                kind,
+            });
+        }
+        Ok(out)
+    }
+
+    fn room(&self, spec: &RoomSpec, material: &dyn Fn(&str, &str) -> R<usize>) -> R<Room> {
+        let center = match spec.center {
+            Some(c) => self.vec3("room.center", c)?,
+            None => Vec3::ZERO,
+        };
+        let size_m = self.positive3("room.size", spec.size)?;
+        let wall_materials = match &spec.walls {
+            WallsSpec::All(name) => [material("room.walls", name)?; 6],
+            WallsSpec::Each(w) => [
+                material("room.walls.px", &w.px)?,
+                material("room.walls.nx", &w.nx)?,
+                material("room.walls.py", &w.py)?,
+                material("room.walls.ny", &w.ny)?,
+                material("room.walls.pz", &w.pz)?,
+                material("room.walls.nz", &w.nz)?,
+            ],
+        };
+        Ok(Room {
+            center,
+            size_m,
+            wall_materials,
+        })
+    }
+
+    /// Converts an animation; `base` is the animated thing's position at rest.
+    fn animation(&self, field: &str, a: &AnimationSpec, base: Vec3) -> R<Animation> {
+        let f = |name: &str| format!("{field}.{name}");
+        let allowed: &[&str] = match a.kind {
+            AnimationType::Linear => &["to", "duration", "repeat"],
+            AnimationType::Orbit => &["center", "axis", "period"],
+            AnimationType::Keyframes => &["times", "positions", "repeat"],
+        };
+        let present = [
+            ("to", a.to.is_some()),
+            ("duration", a.duration.is_some()),
+            ("repeat", a.repeat.is_some()),
+            ("center", a.center.is_some()),
+            ("axis", a.axis.is_some()),
+            ("period", a.period.is_some()),
+            ("times", a.times.is_some()),
+            ("positions", a.positions.is_some()),
+        ];
+        for (name, is_set) in present {
+            if is_set && !allowed.contains(&name) {
+                return Err(self.unused(
+                    &f(name),
+                    &format!("a {:?} animation takes only {:?}", a.kind, allowed),
+                ));
+            }
+        }
+        let repeat = match a.repeat.unwrap_or(RepeatSpec::Once) {
+            RepeatSpec::Once => Repeat::Once,
+            RepeatSpec::Loop => Repeat::Loop,
+            RepeatSpec::PingPong => Repeat::PingPong,
+        };
+        Ok(match a.kind {
+            AnimationType::Linear => Animation::Linear {
+                to: self.vec3(
+                    &f("to"),
+                    a.to.ok_or_else(|| self.missing(&f("to"), "the end point"))?,
+                )?,
+                duration_s: self.positive(
+                    &f("duration"),
+                    a.duration
+                        .ok_or_else(|| self.missing(&f("duration"), "seconds"))?,
+                )?,
+                repeat,
+            },
+            AnimationType::Orbit => {
+                let center = self.vec3(
+                    &f("center"),
+                    a.center
+                        .ok_or_else(|| self.missing(&f("center"), "a point on the axis"))?,
+                )?;
+                let axis = self.vec3(&f("axis"), a.axis.unwrap_or([0.0, 1.0, 0.0]))?;
+                let axis = axis
+                    .try_normalize()
+                    .filter(|n| n.is_finite())
+                    .ok_or_else(|| self.invalid(&f("axis"), "must be a non-zero vector"))?;
+                let period_s = self.positive(
+                    &f("period"),
+                    a.period
+                        .ok_or_else(|| self.missing(&f("period"), "seconds per turn"))?,
+                )?;
+                Animation::Orbit {
+                    center,
+                    axis,
+                    period_s,
+                }
+            }
+            AnimationType::Keyframes => {
+                let times = a
+                    .times
+                    .as_ref()
+                    .ok_or_else(|| self.missing(&f("times"), "key times in seconds"))?;
+                let positions = a
+                    .positions
+                    .as_ref()
+                    .ok_or_else(|| self.missing(&f("positions"), "key positions"))?;
+                if times.is_empty() {
+                    return Err(self.invalid(&f("times"), "needs at least one key"));
+                }
+                if times.len() != positions.len() {
+                    return Err(self.invalid(
+                        &f("positions"),
+                        format!(
+                            "has {} entries but times has {}",
+                            positions.len(),
+                            times.len()
+                        ),
+                    ));
+                }
+                let mut times_s = Vec::with_capacity(times.len());
+                for (i, &t) in times.iter().enumerate() {
+                    let tf = format!("{field}.times[{i}]");
+                    let x = self.num(&tf, t)?;
+                    if i == 0 && t != 0.0 {
+                        return Err(
+                            self.invalid(&tf, format!("the first key time must be 0, got {t}"))
+                        );
+                    }
+                    if i > 0 && x <= times_s[i - 1] {
+                        return Err(self.invalid(
+                            &tf,
+                            format!(
+                                "key times must strictly increase, got {t} after {}",
+                                times[i - 1]
+                            ),
+                        ));
+                    }
+                    times_s.push(x);
+                }
+                let mut ps = Vec::with_capacity(positions.len());
+                for (i, &p) in positions.iter().enumerate() {
+                    ps.push(self.vec3(&format!("{field}.positions[{i}]"), p)?);
+                }
+                // Keyframes are absolute; the rest position must be where they start.
+                if ps[0] != base {
+                    return Err(self.invalid(
+                        &format!("{field}.positions[0]"),
+                        format!(
+                            "the first keyframe {} must equal the position at rest {} (keyframe positions are absolute)",
+                            fmt_v3(ps[0]),
+                            fmt_v3(base)
+                        ),
+                    ));
+                }
+                Animation::Keyframes {
+                    times_s,
+                    positions: ps,
+                    repeat,
+                }
+            }
+        })
+    }
+
+    fn mirror(&self, spec: &MirrorSpec, room: &Room) -> R<Mirror> {
+        let center = self.vec3("mirror.center", spec.center)?;
+        let radius_m = self.positive("mirror.radius", spec.radius)?;
+        let animation = match &spec.animation {
+            Some(a) => Some(self.animation("mirror.animation", a, center)?),
+            None => None,
+        };
+        let (lo, hi) = (
+            room.center - room.size_m * 0.5,
+            room.center + room.size_m * 0.5,
+        );
+        for t in sample_times(animation.as_ref()) {
+            let c = position_at(animation.as_ref(), center, t);
+            if (c - radius_m).cmplt(lo).any() || (c + radius_m).cmpgt(hi).any() {
+                let field = if t == 0.0 {
+                    "mirror.center"
+                } else {
+                    "mirror.animation"
+                };
+                return Err(self.invalid(
+                    field,
+                    format!(
+                        "the mirror (radius {radius_m}) centred at {} {} is not entirely inside the room (from {} to {})",
+                        fmt_v3(c),
+                        if t == 0.0 { "at time 0".to_string() } else { format!("at t = {t:.3} s") },
+                        fmt_v3(lo),
+                        fmt_v3(hi)
+                    ),
+                ));
+            }
+        }
+        Ok(Mirror {
+            center,
+            radius_m,
+            animation,
+        })
+    }
+
+    fn object(
+        &self,
+        i: usize,
+        o: &ObjectSpec,
+        material: &dyn Fn(&str, &str) -> R<usize>,
+        meshes: &mut Vec<Mesh>,
+        cache: &mut HashMap<String, usize>,
+    ) -> R<Object> {
+        let f = |name: &str| format!("objects[{i}].{name}");
+        let allowed: &[&str] = match o.shape {
+            Shape::Box => &["size"],
+            Shape::Sphere => &["radius"],
+            Shape::Cylinder => &["radius", "height"],
+            Shape::Mesh => &["file"],
+        };
+        let present = [
+            ("size", o.size.is_some()),
+            ("radius", o.radius.is_some()),
+            ("height", o.height.is_some()),
+            ("file", o.file.is_some()),
+        ];
+        for (name, is_set) in present {
+            if is_set && !allowed.contains(&name) {
+                return Err(self.unused(
+                    &f(name),
+                    &format!("shape {:?} takes only {:?}", o.shape, allowed),
+                ));
+            }
+        }
+        let need = |v: Option<f64>, name: &str| -> R<f32> {
+            let v =
+                v.ok_or_else(|| self.missing(&f(name), &format!("shape {:?} needs it", o.shape)))?;
+            self.positive(&f(name), v)
+        };
+        // Built-in shapes are generated at their real size (no scale in the normals) and
+        // shared between objects with the same parameters.
+        let (key, build): (String, Box<dyn Fn() -> Result<Mesh, String>>) = match o.shape {
+            Shape::Box => {
+                let size = self.positive3(
+                    &f("size"),
+                    o.size
+                        .ok_or_else(|| self.missing(&f("size"), "a box needs [x, y, z]"))?,
+                )?;
+                (
+                    format!("box:{size}"),
+                    Box::new(move || Ok(Mesh::cuboid(size * 0.5))),
+                )
+            }
+            Shape::Sphere => {
+                let r = need(o.radius, "radius")?;
+                (
+                    format!("sphere:{r}"),
+                    Box::new(move || Ok(Mesh::uv_sphere(r, SPHERE_SEGMENTS, SPHERE_RINGS))),
+                )
+            }
+            Shape::Cylinder => {
+                let r = need(o.radius, "radius")?;
+                let h = need(o.height, "height")?;
+                (
+                    format!("cylinder:{r}:{h}"),
+                    Box::new(move || Ok(Mesh::cylinder(r, h * 0.5, CYLINDER_SEGMENTS))),
+                )
+            }
+            Shape::Mesh => {
+                let file = o
+                    .file
+                    .as_ref()
+                    .ok_or_else(|| self.missing(&f("file"), "a .obj, .gltf or .glb file"))?;
+                let path = self.dir.join(file);
+                let ext = path
+                    .extension()
+                    .and_then(|e| e.to_str())
+                    .map(str::to_ascii_lowercase);
+                let p = path.clone();
+                let build: Box<dyn Fn() -> Result<Mesh, String>> = match ext.as_deref() {
+                    Some("obj") => Box::new(move || {
+                        if !p.is_file() {
+                            return Err("file not found".into());
+                        }
+                        Mesh::from_obj(&p)
+                    }),
+                    Some("gltf") | Some("glb") => Box::new(move || {
+                        if !p.is_file() {
+                            return Err("file not found".into());
+                        }
+                        Mesh::from_gltf(&p)
+                    }),
+                    _ => {
+                        return Err(self.invalid(
+                            &f("file"),
+                            format!(
+                                "unsupported mesh file \"{file}\": expected .obj, .gltf or .glb"
+                            ),
+                        ))
+                    }
+                };
+                (format!("file:{}", path.display()), build)
+            }
+        };
+        let mesh = match cache.get(&key) {
+            Some(&index) => index,
+            None => {
+                let m = build().map_err(|message| SceneError::Asset {
+                    location: self.loc.location(&f("file")),
+                    field: f("file"),
+                    asset: self.dir.join(o.file.as_deref().unwrap_or_default()),
+                    message,
+                })?;
+                meshes.push(m);
+                cache.insert(key, meshes.len() - 1);
+                meshes.len() - 1
+            }
+        };
+        let material = material(&f("material"), &o.material)?;
+        let rotation = match o.rotation {
+            Some(r) => {
+                let d = self.vec3(&f("rotation"), r)?;
+                Quat::from_euler(
+                    EulerRot::XYZ,
+                    d.x.to_radians(),
+                    d.y.to_radians(),
+                    d.z.to_radians(),
+                )
+            }
+            None => Quat::IDENTITY,
+        };
+        let scale = match o.scale {
+            None => Vec3::ONE,
+            Some(ScaleSpec::Uniform(s)) => Vec3::splat(self.positive(&f("scale"), s)?),
+            Some(ScaleSpec::PerAxis(s)) => self.positive3(&f("scale"), s)?,
+        };
+        let keyframe_start = match &o.animation {
+            Some(AnimationSpec {
+                kind: AnimationType::Keyframes,
+                positions: Some(p),
+                ..
+            }) => p.first().copied(),
+            _ => None,
+        };
+        let position = match (o.position, keyframe_start) {
+            (Some(p), _) => self.vec3(&f("position"), p)?,
+            // A keyframed object may leave out `position`: it starts at its first key.
+            (None, Some(p)) => self.vec3(&format!("objects[{i}].animation.positions[0]"), p)?,
+            (None, None) => return Err(self.missing(&f("position"), "where the object is")),
+        };
+        let animation = match &o.animation {
+            Some(a) => Some(self.animation(&f("animation"), a, position)?),
+            None => None,
+        };
+        Ok(Object {
+            name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
+            mesh,
+            material,
+            position,
+            rotation,
+            scale,
+            animation,
+        })
+    }
+
+    fn observer(&self, spec: Option<&ObserverSpec>, room: &Room, mirror: &Mirror) -> R<Camera> {
+        // Without [observer]: stand 40% of the room's depth in front of (+Z of) the room
+        // centre, at the mirror's height, looking along -Z towards it.
+        let default_position = Vec3::new(
+            mirror.center.x,
+            mirror.center.y,
+            room.center.z + 0.4 * room.size_m.z,
+        );
+        let empty = ObserverSpec {
+            position: None,
+            yaw: None,
+            pitch: None,
+            fov_y: None,
+            resolution: None,
+            animation: None,
+        };
+        let s = spec.unwrap_or(&empty);
+        let position = match s.position {
+            Some(p) => self.vec3("observer.position", p)?,
+            None => default_position,
+        };
+        let camera = Camera {
+            position,
+            yaw_deg: self.num("observer.yaw", s.yaw.unwrap_or(0.0))?,
+            pitch_deg: self.in_range(
+                "observer.pitch",
+                s.pitch.unwrap_or(0.0),
+                -90.0,
+                90.0,
+                true,
+            )?,
+            fov_y_deg: self.in_range(
+                "observer.fov_y",
+                s.fov_y.unwrap_or(60.0),
+                0.0,
+                180.0,
+                true,
+            )?,
+            resolution: self.resolution("observer.resolution", s.resolution, [800, 600])?,
+            animation: match &s.animation {
+                Some(a) => Some(self.animation("observer.animation", a, position)?),
+                None => None,
+            },
+        };
+        let (lo, hi) = (
+            room.center - room.size_m * 0.5,
+            room.center + room.size_m * 0.5,
+        );
+        let mut times = sample_times(camera.animation.as_ref());
+        times.extend(sample_times(mirror.animation.as_ref()));
+        for t in times {
+            let p = position_at(camera.animation.as_ref(), camera.position, t);
+            let field = if t == 0.0 {
+                "observer.position"
+            } else {
+                "observer.animation"
+            };
+            let when = if t == 0.0 {
+                "at time 0".to_string()
+            } else {
+                format!("at t = {t:.3} s")
+            };
+            let c = position_at(mirror.animation.as_ref(), mirror.center, t);
+            if p.distance(c) <= mirror.radius_m {
+                return Err(self.invalid(
+                    field,
+                    format!(
+                        "the observer at {} is inside the mirror sphere (centre {}, radius {}) {when}",
+                        fmt_v3(p),
+                        fmt_v3(c),
+                        mirror.radius_m
+                    ),
+                ));
+            }
+            if p.cmplt(lo).any() || p.cmpgt(hi).any() {
+                return Err(self.invalid(
+                    field,
+                    format!("the observer at {} is outside the room {when}", fmt_v3(p)),
+                ));
+            }
+        }
+        Ok(camera)
+    }
+
+    fn sensor(&self, spec: Option<&SensorSpec>, room: &Room, mirror: &Mirror) -> R<SensorCamera> {
+        let empty = SensorSpec {
+            offset: None,
+            fov_y: None,
+            resolution: None,
+            up: None,
+        };
+        let s = spec.unwrap_or(&empty);
+        let offset_m = self.positive("sensor.offset", s.offset.unwrap_or(2.5))?;
+        if offset_m <= mirror.radius_m {
+            return Err(self.invalid(
+                "sensor.offset",
+                format!(
+                    "must be greater than the mirror radius {}, got {offset_m}",
+                    mirror.radius_m
+                ),
+            ));
+        }
+        let up = self.vec3("sensor.up", s.up.unwrap_or([0.0, 0.0, -1.0]))?;
+        let up = up
+            .try_normalize()
+            .filter(|u| u.is_finite() && u.cross(Vec3::Y).length() > 1e-3)
+            .ok_or_else(|| {
+                self.invalid(
+                    "sensor.up",
+                    "must be non-zero and not parallel to the Y axis",
+                )
+            })?;
+        let floor = room.center.y - 0.5 * room.size_m.y;
+        for t in sample_times(mirror.animation.as_ref()) {
+            let y = position_at(mirror.animation.as_ref(), mirror.center, t).y - offset_m;
+            if y < floor {
+                return Err(self.invalid(
+                    "sensor.offset",
+                    format!(
+                        "puts the sensor at y = {y} (t = {t:.3} s), below the floor at y = {floor}"
+                    ),
+                ));
+            }
+        }
+        Ok(SensorCamera {
+            offset_m,
+            fov_y_deg: self.in_range("sensor.fov_y", s.fov_y.unwrap_or(60.0), 0.0, 180.0, true)?,
+            resolution: self.resolution("sensor.resolution", s.resolution, [512, 512])?,
+            up,
+        })
+    }
+
+    fn cube(&self, spec: Option<&CubeSpec>) -> R<CubeSettings> {
+        let empty = CubeSpec {
+            face_size: None,
+            format: None,
+            near: None,
+            far: None,
+            mipmaps: None,
+            anisotropy: None,
+        };
+        let c = spec.unwrap_or(&empty);
+        let near_m = self.positive("cube.near", c.near.unwrap_or(0.5))?;
+        let far_m = self.positive("cube.far", c.far.unwrap_or(100.0))?;
+        if near_m >= far_m {
+            // Blame whichever the file sets (far if both or neither... far is the usual typo).
+            let field = if c.far.is_some() || c.near.is_none() {
+                "cube.far"
+            } else {
+                "cube.near"
+            };
+            return Err(self.invalid(
+                field,
+                format!("near ({near_m}) must be less than far ({far_m})"),
+            ));
+        }
+        let max_anisotropy = self.num("cube.anisotropy", c.anisotropy.unwrap_or(16.0))?;
+        if max_anisotropy < 1.0 {
+            return Err(self.invalid(
+                "cube.anisotropy",
+                format!("must be >= 1, got {max_anisotropy}"),
+            ));
+        }
+        Ok(CubeSettings {
+            face_size_px: self.count(
+                "cube.face_size",
+                c.face_size.unwrap_or(512),
+                MAX_FACE_SIZE_PX,
+            )?,
+            format: match c.format.unwrap_or(CubeFormatSpec::Rgba16f) {
+                CubeFormatSpec::Rgba16f => CubeFormat::Rgba16Float,
+                CubeFormatSpec::Rgba8 => CubeFormat::Rgba8Unorm,
+            },
+            near_m,
+            far_m,
+            mipmaps: c.mipmaps.unwrap_or(true),
+            max_anisotropy,
+        })
+    }
+
+    fn refresh(&self, spec: Option<&RefreshSpec>) -> R<RefreshPolicy> {
+        let Some(r) = spec else {
+            return Ok(RefreshPolicy::OnChange);
+        };
+        match (r.policy, r.n) {
+            (PolicySpec::EveryN, Some(n)) => Ok(RefreshPolicy::EveryN(self.count(
+                "refresh.n",
+                n,
+                u32::MAX,
+            )?)),
+            (PolicySpec::EveryN, None) => {
+                Err(self.missing("refresh.n", "policy \"every-n\" needs n"))
+            }
+            (_, Some(_)) => {
+                Err(self.unused("refresh.n", "n is used only with policy = \"every-n\""))
+            }
+            (PolicySpec::EveryFrame, None) => Ok(RefreshPolicy::EveryFrame),
+            (PolicySpec::OnChange, None) => Ok(RefreshPolicy::OnChange),
+        }
+    }
+}
+
+fn sample_times(a: Option<&Animation>) -> Vec<f64> {
+    match a {
+        Some(a) => a.sample_times(ANIMATION_SAMPLES),
+        None => vec![0.0],
+    }
+}
+
+fn position_at(a: Option<&Animation>, base: Vec3, t: f64) -> Vec3 {
+    match a {
+        Some(a) => a.position_at(base, t),
+        None => base,
+    }
 }

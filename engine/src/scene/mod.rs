@@ -18,8 +18,8 @@ mod load;
 mod mesh;
 mod texture;
 
-pub use anim::Animation;
-pub use error::SceneError;
+pub use anim::{Animation, Repeat};
+pub use error::{Location, SceneError};
 pub use load::{load, load_str};
 pub use mesh::Mesh;
 pub use texture::TextureData;

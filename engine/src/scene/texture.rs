@@ -1,8 +1,147 @@
-//! TEMPORARY stub.
-#[derive(Debug, Clone)]
+//! PNG textures, decoded to 8-bit RGBA.
+
+use std::fs::File;
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
+
+/// Largest texture side accepted (texels).
+pub const MAX_TEXTURE_SIZE_PX: u32 = 8192;
+
+/// A decoded image: `width * height` texels, rows top to bottom (first row = top of the image,
+/// texture v = 0), 4 bytes per texel, sRGB-encoded colour exactly as stored in the file
+/// (the renderer samples it through an sRGB format), alpha linear.
+#[derive(Debug, Clone, PartialEq)]
 pub struct TextureData {
-    pub path: std::path::PathBuf,
+    /// The file the image came from (resolved, as opened).
+    pub path: PathBuf,
     pub width: u32,
     pub height: u32,
     pub rgba8: Vec<u8>,
+}
+
+impl TextureData {
+    /// Decodes a PNG of any colour type and bit depth: palette and grayscale are expanded,
+    /// 16-bit channels are reduced to 8 bits, missing alpha becomes 255.
+    ///
+    /// The error is a plain message (the caller adds the scene file, line and field).
+    pub fn from_png(path: &Path) -> Result<TextureData, String> {
+        let file = File::open(path).map_err(|e| e.to_string())?;
+        let mut decoder = png::Decoder::new(BufReader::new(file));
+        decoder.set_transformations(png::Transformations::normalize_to_color8());
+        let mut reader = decoder
+            .read_info()
+            .map_err(|e| format!("not a valid PNG: {e}"))?;
+        let (width, height) = {
+            let info = reader.info();
+            (info.width, info.height)
+        };
+        // Checked before allocating the output buffer, so a huge header cannot exhaust memory.
+        if width == 0 || height == 0 || width > MAX_TEXTURE_SIZE_PX || height > MAX_TEXTURE_SIZE_PX
+        {
+            return Err(format!(
+                "image is {width}x{height}; each side must be in 1..={MAX_TEXTURE_SIZE_PX}"
+            ));
+        }
+        let size = reader
+            .output_buffer_size()
+            .ok_or_else(|| "image too large for this machine".to_string())?;
+        let mut buf = vec![0u8; size];
+        let frame = reader
+            .next_frame(&mut buf)
+            .map_err(|e| format!("not a valid PNG: {e}"))?;
+        let (color, depth) = (frame.color_type, frame.bit_depth);
+        if depth != png::BitDepth::Eight {
+            return Err(format!("unexpected bit depth {depth:?} after conversion"));
+        }
+        let texels = width as usize * height as usize;
+        let stride = frame.line_size;
+        let channels = match color {
+            png::ColorType::Grayscale => 1,
+            png::ColorType::GrayscaleAlpha => 2,
+            png::ColorType::Rgb => 3,
+            png::ColorType::Rgba => 4,
+            png::ColorType::Indexed => {
+                return Err("palette image was not expanded".to_string());
+            }
+        };
+        let mut rgba8 = Vec::with_capacity(texels * 4);
+        for row in buf.chunks(stride).take(height as usize) {
+            for px in row.chunks_exact(channels).take(width as usize) {
+                let texel = match *px {
+                    [g] => [g, g, g, 255],
+                    [g, a] => [g, g, g, a],
+                    [r, g, b] => [r, g, b, 255],
+                    [r, g, b, a] => [r, g, b, a],
+                    _ => [0, 0, 0, 255],
+                };
+                rgba8.extend_from_slice(&texel);
+            }
+        }
+        if rgba8.len() != texels * 4 {
+            return Err("image data is shorter than its header says".to_string());
+        }
+        Ok(TextureData {
+            path: path.to_path_buf(),
+            width,
+            height,
+            rgba8,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write_png(
+        path: &Path,
+        w: u32,
+        h: u32,
+        color: png::ColorType,
+        depth: png::BitDepth,
+        data: &[u8],
+    ) {
+        let file = File::create(path).unwrap();
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+        enc.set_color(color);
+        enc.set_depth(depth);
+        let mut writer = enc.write_header().unwrap();
+        writer.write_image_data(data).unwrap();
+    }
+
+    #[test]
+    fn grayscale_and_16_bit_expand_to_rgba8() {
+        let dir = std::env::temp_dir().join(format!("specchio-tex-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let gray = dir.join("gray.png");
+        write_png(
+            &gray,
+            2,
+            1,
+            png::ColorType::Grayscale,
+            png::BitDepth::Eight,
+            &[10, 200],
+        );
+        let t = TextureData::from_png(&gray).unwrap();
+        assert_eq!((t.width, t.height), (2, 1));
+        assert_eq!(t.rgba8, vec![10, 10, 10, 255, 200, 200, 200, 255]);
+
+        let rgb16 = dir.join("rgb16.png");
+        write_png(
+            &rgb16,
+            1,
+            1,
+            png::ColorType::Rgb,
+            png::BitDepth::Sixteen,
+            &[255, 0, 0, 0, 128, 0],
+        );
+        let t = TextureData::from_png(&rgb16).unwrap();
+        assert_eq!(t.rgba8, vec![255, 0, 128, 255]);
+
+        let bad = dir.join("bad.png");
+        std::fs::write(&bad, b"not a png").unwrap();
+        assert!(TextureData::from_png(&bad).is_err());
+        assert!(TextureData::from_png(&dir.join("missing.png")).is_err());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
