@@ -273,7 +273,7 @@ impl Renderer {
         let wait_start = Instant::now();
         self.submitter.submit_and_wait()?;
         report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
-        self.read_queries(&mut report, update)?;
+        self.read_queries(&mut report, update, readback.views)?;
         if update {
             self.cube_state = Some(state);
         }

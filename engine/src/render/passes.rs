@@ -424,6 +424,12 @@ impl Renderer {
     ) -> Copies {
         let mut copies = Copies::default();
         if !readback.views {
+            // Views are skipped; their timestamps are still written so every query has a result.
+            if let Some(q) = &self.timestamps {
+                for ts in [TS_OBSERVER, TS_SENSOR, TS_PAIR] {
+                    q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
+                }
+            }
             return copies;
         }
         let targets: [(&ViewTarget, &[u32], u32, &str); 3] = [
@@ -683,6 +689,7 @@ impl Renderer {
         &self,
         report: &mut FrameReport,
         update: bool,
+        views: bool,
     ) -> Result<(), GpuError> {
         if let Some(q) = &self.timestamps {
             let t = q.timestamps_ns(TS_COUNT)?;
@@ -696,9 +703,14 @@ impl Renderer {
         }
         if let Some(q) = &self.statistics {
             // Queries that were not begun this frame have no results: read only those used.
+            // Only queries begun this frame have results.
             if update {
-                let s = q.statistics(6)?;
+                let s = q.statistics(0, 6)?;
                 report.face_stats = Some(std::array::from_fn(|f| s[f]));
+            }
+            if views {
+                let s = q.statistics(6, 3)?;
+                report.view_stats = Some(std::array::from_fn(|v| s[v]));
             }
         }
         Ok(())

@@ -118,15 +118,15 @@ impl QueryPool {
         unsafe { self.device.raw.cmd_end_query(cmd, self.raw, index) };
     }
 
-    /// Results of the first `n` queries, each a `T` of 64-bit values. WAIT: block until they
+    /// Results of queries `first..first + n`, each a `T` of 64-bit values. WAIT: block until they
     /// are available (they are, after the fence; WAIT makes that explicit).
-    fn results<T: Copy + Default>(&self, n: u32) -> Result<Vec<T>, GpuError> {
+    fn results<T: Copy + Default>(&self, first: u32, n: u32) -> Result<Vec<T>, GpuError> {
         let mut data = vec![T::default(); n as usize];
         // SAFETY: data holds n results of size_of::<T>() bytes, the stride passed by ash.
         unsafe {
             self.device.raw.get_query_pool_results(
                 self.raw,
-                0,
+                first,
                 &mut data,
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
             )
@@ -139,15 +139,16 @@ impl QueryPool {
     pub fn timestamps_ns(&self, n: u32) -> Result<Vec<f64>, GpuError> {
         let period = f64::from(self.device.info.limits.timestamp_period_ns);
         Ok(self
-            .results::<u64>(n)?
+            .results::<u64>(0, n)?
             .iter()
             .map(|&t| t as f64 * period)
             .collect())
     }
 
-    pub fn statistics(&self, n: u32) -> Result<Vec<PipelineStats>, GpuError> {
+    /// Statistics of queries `first..first + n` (each must have been begun and ended).
+    pub fn statistics(&self, first: u32, n: u32) -> Result<Vec<PipelineStats>, GpuError> {
         Ok(self
-            .results::<[u64; 4]>(n)?
+            .results::<[u64; 4]>(first, n)?
             .iter()
             .map(|c| PipelineStats {
                 vertex_invocations: c[0],

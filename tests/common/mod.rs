@@ -1,0 +1,57 @@
+//! Shared test set-up: a device under the validation layer, and scene paths.
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
+use specchio::scene::Scene;
+use specchio::vk::device::{Device, DeviceDesc};
+use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
+
+/// The repository root (tests run with the bench crate as working directory).
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+pub fn scene(rel: &str) -> Scene {
+    let path = root().join(rel);
+    specchio::scene::load(&path).unwrap_or_else(|e| panic!("{rel} must load: {e}"))
+}
+
+/// A device with the Khronos validation layer on (its absence fails the test: validation is
+/// part of what the tests check). Call [`Gpu::finish`] at the end.
+pub struct Gpu {
+    pub device: Arc<Device>,
+    log: Arc<ValidationLog>,
+}
+
+impl Gpu {
+    pub fn new() -> Self {
+        let instance = Instance::create(&InstanceDesc { validation: true })
+            .expect("Vulkan with VK_LAYER_KHRONOS_validation (apt-get install vulkan-validationlayers)");
+        let log = instance.validation_log();
+        let device = Device::create(&instance, &DeviceDesc::default()).expect("a Vulkan 1.3 device");
+        Self { device, log }
+    }
+
+    /// Drops the device (the layer reports leaks then) and fails on any validation message.
+    pub fn finish(self) {
+        let Self { device, log } = self;
+        assert_eq!(Arc::strong_count(&device), 1, "something still holds the device");
+        drop(device);
+        let messages = log.messages();
+        assert!(messages.is_empty(), "validation messages:\n{}", messages.join("\n"));
+    }
+}
+
+/// Renders one frame with everything read back.
+pub fn render_once(gpu: &Gpu, scene: Scene, cube_size: u32, t_s: f64) -> (FrameReport, FrameImages) {
+    let mut r = Renderer::new(&gpu.device, scene, &RenderOptions { cube_size: Some(cube_size) }).expect("renderer");
+    r.render_frame(0, t_s, Readback { cube: true, views: true }).expect("frame")
+}
+
+pub fn close(a: [f32; 4], b: [f32; 3], tol: f32) -> bool {
+    (0..3).all(|i| (a[i] - b[i]).abs() <= tol)
+}
