@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use glam::{EulerRot, Quat, Vec3};
+use glam::{Quat, Vec3};
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
@@ -862,12 +862,11 @@ impl Ctx<'_> {
         let rotation = match o.rotation {
             Some(r) => {
                 let d = self.vec3(&f("rotation"), r)?;
-                Quat::from_euler(
-                    EulerRot::XYZ,
-                    d.x.to_radians(),
-                    d.y.to_radians(),
-                    d.z.to_radians(),
-                )
+                // Explicit product rather than a library Euler convention: Rx * Ry * Rz, so the
+                // object turns about Z first, then Y, then X (as docs/scene-format.md says).
+                Quat::from_rotation_x(d.x.to_radians())
+                    * Quat::from_rotation_y(d.y.to_radians())
+                    * Quat::from_rotation_z(d.z.to_radians())
             }
             None => Quat::IDENTITY,
         };
@@ -1267,6 +1266,19 @@ mod tests {
     const MINIMAL: &str = "[room]\ncenter = [0, 3, 0]\nsize = [10, 6, 10]\nwalls = \"w\"\n\
         [mirror]\ncenter = [0, 3, 0]\nradius = 1\n\
         [[materials]]\nname = \"w\"\ntype = \"color\"\ncolor = [0.5, 0.5, 0.5]\n";
+
+    #[test]
+    fn rotation_is_rx_ry_rz_as_documented() {
+        let text = format!(
+            "{MINIMAL}[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\n\
+             rotation = [30, 45, 60]\nmaterial = \"w\"\n"
+        );
+        let s = load_str(&text, Path::new("rot.toml")).unwrap();
+        let expected = Quat::from_rotation_x(30f32.to_radians())
+            * Quat::from_rotation_y(45f32.to_radians())
+            * Quat::from_rotation_z(60f32.to_radians());
+        assert!(s.objects[0].rotation.dot(expected).abs() > 1.0 - 1e-6);
+    }
 
     #[test]
     fn defaults_are_applied() {
