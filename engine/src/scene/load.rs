@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use glam::{EulerRot, Quat, Vec3};
+use glam::{Quat, Vec3};
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
@@ -862,12 +862,11 @@ impl Ctx<'_> {
         let rotation = match o.rotation {
             Some(r) => {
                 let d = self.vec3(&f("rotation"), r)?;
-                Quat::from_euler(
-                    EulerRot::XYZ,
-                    d.x.to_radians(),
-                    d.y.to_radians(),
-                    d.z.to_radians(),
-                )
+                // Explicit product rather than a library Euler convention: Rx * Ry * Rz, so the
+                // object turns about Z first, then Y, then X (as docs/scene-format.md says).
+                Quat::from_rotation_x(d.x.to_radians())
+                    * Quat::from_rotation_y(d.y.to_radians())
+                    * Quat::from_rotation_z(d.z.to_radians())
             }
             None => Quat::IDENTITY,
         };
@@ -1118,5 +1117,301 @@ fn position_at(a: Option<&Animation>, base: Vec3, t: f64) -> Vec3 {
     match a {
         Some(a) => a.position_at(base, t),
         None => base,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn repo(rel: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(rel)
+    }
+
+    /// (file in tests/scenes/bad, expected line, text the field/message must contain).
+    /// The expectations repeat each file's first-line comment.
+    const BAD: &[(&str, Option<u32>, &str)] = &[
+        ("syntax-error.toml", Some(4), "TOML syntax error"),
+        ("unknown-field.toml", Some(4), "mirror.radus"),
+        (
+            "negative-radius.toml",
+            Some(4),
+            "mirror.radius: must be positive",
+        ),
+        (
+            "nan-radius.toml",
+            Some(4),
+            "mirror.radius: must be a finite number",
+        ),
+        (
+            "zero-face-size.toml",
+            Some(6),
+            "cube.face_size: must be in 1..=8192, got 0",
+        ),
+        (
+            "huge-face-size.toml",
+            Some(6),
+            "cube.face_size: must be in 1..=8192, got 16384",
+        ),
+        (
+            "missing-texture.toml",
+            Some(12),
+            "materials[0].file: cannot load",
+        ),
+        ("missing-mesh.toml", Some(8), "objects[0].file: cannot load"),
+        ("mirror-outside-room.toml", Some(3), "mirror.center"),
+        ("observer-inside-mirror.toml", Some(6), "observer.position"),
+        (
+            "empty.toml",
+            None,
+            "scene is empty: expected at least [room] and [mirror]",
+        ),
+        ("wrong-type.toml", Some(4), "mirror.radius"),
+        (
+            "unknown-material.toml",
+            Some(9),
+            "objects[0].material: unknown material \"gold\"",
+        ),
+        (
+            "inf-position.toml",
+            Some(8),
+            "objects[0].position[0]: must be a finite number, got inf",
+        ),
+        ("near-not-below-far.toml", Some(7), "cube.far"),
+        (
+            "animated-mirror-leaves-room.toml",
+            Some(5),
+            "mirror.animation",
+        ),
+        ("sensor-up-parallel.toml", Some(6), "sensor.up"),
+        ("sensor-inside-mirror.toml", Some(6), "sensor.offset"),
+        (
+            "keyframes-not-increasing.toml",
+            Some(5),
+            "mirror.animation.times[2]",
+        ),
+        (
+            "colour-out-of-range.toml",
+            Some(12),
+            "materials[0].color[1]",
+        ),
+    ];
+
+    #[test]
+    fn every_bad_scene_fails_naming_file_line_and_field() {
+        let dir = repo("tests/scenes/bad");
+        let mut on_disk: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".toml"))
+            .collect();
+        on_disk.sort();
+        let mut listed: Vec<String> = BAD.iter().map(|b| b.0.to_string()).collect();
+        listed.sort();
+        assert_eq!(
+            on_disk, listed,
+            "every bad scene needs an entry in the table"
+        );
+
+        for &(name, line, needle) in BAD {
+            let path = dir.join(name);
+            let err = match load(&path) {
+                Ok(_) => panic!("{name} loaded but should fail"),
+                Err(e) => e,
+            };
+            let text = err.to_string();
+            assert!(
+                text.contains(name),
+                "{name}: message does not name the file: {text}"
+            );
+            assert_eq!(err.line(), line, "{name}: wrong line in {text}");
+            if let Some(line) = line {
+                assert!(text.contains(&format!("{name}:{line}:")), "{name}: {text}");
+            }
+            assert!(
+                text.contains(needle),
+                "{name}: expected {needle:?} in {text}"
+            );
+        }
+    }
+
+    #[test]
+    fn asset_errors_name_the_asset_path() {
+        let err = load(&repo("tests/scenes/bad/missing-mesh.toml")).unwrap_err();
+        assert!(matches!(err, SceneError::Asset { .. }));
+        assert!(err.to_string().contains("does-not-exist.obj"), "{err}");
+        let err = load(&repo("tests/scenes/bad/missing-texture.toml")).unwrap_err();
+        assert!(err.to_string().contains("does-not-exist.png"), "{err}");
+    }
+
+    #[test]
+    fn error_kinds() {
+        let p = Path::new("x.toml");
+        assert!(matches!(load_str("", p), Err(SceneError::Empty { .. })));
+        assert!(matches!(
+            load_str("# just a comment\n", p),
+            Err(SceneError::Empty { .. })
+        ));
+        let e = load(Path::new("/nonexistent/scene.toml")).unwrap_err();
+        assert!(matches!(e, SceneError::Io { .. }));
+        assert!(e.to_string().contains("/nonexistent/scene.toml"));
+        let e = load(&repo("tests/scenes/bad/unknown-field.toml")).unwrap_err();
+        assert!(matches!(e, SceneError::UnknownField { .. }), "{e}");
+        assert_eq!(e.field(), Some("mirror.radus"));
+        let e = load(&repo("tests/scenes/bad/wrong-type.toml")).unwrap_err();
+        assert!(matches!(e, SceneError::WrongType { .. }), "{e}");
+        assert_eq!(e.field(), Some("mirror.radius"));
+    }
+
+    const MINIMAL: &str = "[room]\ncenter = [0, 3, 0]\nsize = [10, 6, 10]\nwalls = \"w\"\n\
+        [mirror]\ncenter = [0, 3, 0]\nradius = 1\n\
+        [[materials]]\nname = \"w\"\ntype = \"color\"\ncolor = [0.5, 0.5, 0.5]\n";
+
+    #[test]
+    fn rotation_is_rx_ry_rz_as_documented() {
+        let text = format!(
+            "{MINIMAL}[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\n\
+             rotation = [30, 45, 60]\nmaterial = \"w\"\n"
+        );
+        let s = load_str(&text, Path::new("rot.toml")).unwrap();
+        let expected = Quat::from_rotation_x(30f32.to_radians())
+            * Quat::from_rotation_y(45f32.to_radians())
+            * Quat::from_rotation_z(60f32.to_radians());
+        assert!(s.objects[0].rotation.dot(expected).abs() > 1.0 - 1e-6);
+    }
+
+    #[test]
+    fn defaults_are_applied() {
+        let s = load_str(MINIMAL, Path::new("min.toml")).unwrap();
+        assert_eq!(s.cube.face_size_px, 512);
+        assert_eq!(s.cube.format, CubeFormat::Rgba16Float);
+        assert_eq!((s.cube.near_m, s.cube.far_m), (0.5, 100.0));
+        assert!(s.cube.mipmaps);
+        assert_eq!(s.cube.max_anisotropy, 16.0);
+        assert_eq!(s.refresh, RefreshPolicy::OnChange);
+        assert_eq!(s.observer.resolution, [800, 600]);
+        assert_eq!(s.observer.fov_y_deg, 60.0);
+        assert_eq!(s.sensor.resolution, [512, 512]);
+        assert_eq!(s.sensor.up, Vec3::NEG_Z);
+        assert_eq!(s.sensor.offset_m, 2.5);
+        assert!(s.light.is_none());
+        assert!(s.objects.is_empty());
+    }
+
+    #[test]
+    fn more_rules_with_their_fields() {
+        let cases: &[(&str, &str)] = &[
+            ("[refresh]\npolicy = \"every-n\"\n", "refresh.n: required field is missing"),
+            ("[refresh]\npolicy = \"on-change\"\nn = 3\n", "refresh.n: not allowed here"),
+            ("[cube]\nanisotropy = 0.5\n", "cube.anisotropy"),
+            ("[cube]\nformat = \"rgb32\"\n", "cube.format"),
+            ("[observer]\npitch = 90\n", "observer.pitch: must be in (-90, 90)"),
+            ("[observer]\nfov_y = 180\n", "observer.fov_y"),
+            ("[observer]\nresolution = [0, 10]\n", "observer.resolution[0]"),
+            ("[sensor]\nup = [0, 0, 0]\n", "sensor.up"),
+            ("[light]\ndirection = [0, 0, 0]\n", "light.direction"),
+            ("[light]\ndirection = [0, 1, 0]\nambient = 2\n", "light.ambient"),
+            ("[[objects]]\nshape = \"sphere\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].size: not allowed here"),
+            ("[[objects]]\nshape = \"box\"\nsize = [1, 0, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].size[1]: must be positive"),
+            ("[[objects]]\nshape = \"cylinder\"\nradius = 1\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].height: required"),
+            ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nscale = -1\nmaterial = \"w\"\n", "objects[0].scale"),
+            ("[[objects]]\nshape = \"mesh\"\nfile = \"x.stl\"\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].file: unsupported"),
+            ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"orbit\", center = [0, 0, 0], period = 0 }\n", "objects[0].animation.period: must be positive"),
+            ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"linear\", to = [0, 0, 0], duration = 1, period = 2 }\n", "objects[0].animation.period: not allowed"),
+            ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"keyframes\", times = [0, 1], positions = [[1, 1, 1], [2, 2, 2]] }\n", "objects[0].animation.positions[0]: the first keyframe"),
+            ("[[materials]]\nname = \"w\"\ntype = \"color\"\ncolor = [1, 1, 1]\n", "materials[1].name: duplicate"),
+            ("[[materials]]\nname = \"g\"\ntype = \"grid\"\nbackground = [1, 1, 1]\nline = [0, 0, 0]\nline_width = 0.7\n", "materials[1].line_width"),
+        ];
+        for (extra, needle) in cases {
+            let text = format!("{MINIMAL}{extra}");
+            let err = load_str(&text, Path::new("case.toml")).expect_err(extra);
+            let msg = err.to_string();
+            assert!(
+                msg.contains(needle),
+                "{extra:?}: expected {needle:?} in {msg}"
+            );
+            assert!(msg.starts_with("case.toml:"), "{msg}");
+            assert!(err.line().is_some(), "{msg}");
+        }
+    }
+
+    #[test]
+    fn shipped_scenes_load() {
+        for rel in [
+            "scenes/thesis-room.toml",
+            "scenes/moving-objects.toml",
+            "scenes/test/six-colour-room.toml",
+            "scenes/test/direction-room.toml",
+        ] {
+            let s = load(&repo(rel)).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(s.mirror.radius_m, 1.0, "{rel}");
+            for o in &s.objects {
+                assert!(o.mesh < s.meshes.len() && o.material < s.materials.len());
+            }
+            for m in s.room.wall_materials {
+                assert!(m < s.materials.len());
+            }
+        }
+        let thesis = load(&repo("scenes/thesis-room.toml")).unwrap();
+        assert_eq!(thesis.sensor.offset_m, 2.5);
+        assert_eq!(thesis.cube.face_size_px, 512);
+        assert_eq!(thesis.textures.len(), 1);
+        assert_eq!(
+            (thesis.textures[0].width, thesis.textures[0].height),
+            (128, 128)
+        );
+        assert!(thesis.objects.iter().any(|o| o.animation.is_some()));
+
+        let moving = load(&repo("scenes/moving-objects.toml")).unwrap();
+        let moving_count = moving
+            .objects
+            .iter()
+            .filter(|o| o.animation.is_some())
+            .count();
+        assert!(moving_count >= 6);
+        assert!(moving.mirror.animation.is_some());
+        // Distinct meshes: 2 box sizes, 2 sphere radii, 2 cylinders, the OBJ and the glTF.
+        assert_eq!(moving.meshes.len(), 8);
+
+        let six = load(&repo("scenes/test/six-colour-room.toml")).unwrap();
+        let colour = |face: usize| match &six.materials[six.room.wall_materials[face]].kind {
+            MaterialKind::Color { color } => *color,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(colour(0), Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(colour(1), Vec3::new(0.0, 1.0, 1.0));
+        assert_eq!(colour(2), Vec3::new(0.0, 1.0, 0.0));
+        assert_eq!(colour(3), Vec3::new(1.0, 0.0, 1.0));
+        assert_eq!(colour(4), Vec3::new(0.0, 0.0, 1.0));
+        assert_eq!(colour(5), Vec3::new(1.0, 1.0, 0.0));
+        assert_eq!(six.refresh, RefreshPolicy::EveryFrame);
+    }
+
+    #[test]
+    fn obj_and_gltf_meshes_load_with_expected_triangles() {
+        let obj = Mesh::from_obj(&repo("scenes/meshes/arrow.obj")).unwrap();
+        assert_eq!(obj.triangle_count(), 18);
+        let gltf = Mesh::from_gltf(&repo("scenes/meshes/pyramid.gltf")).unwrap();
+        assert_eq!(gltf.triangle_count(), 6);
+        // The node's scale 0.5 and translation +0.25 y are applied.
+        assert!((gltf.bounds_min - Vec3::new(-0.5, 0.25, -0.5)).length() < 1e-6);
+        assert!((gltf.bounds_max - Vec3::new(0.5, 1.0, 0.5)).length() < 1e-6);
+        for m in [&obj, &gltf] {
+            // Closed and outward: positive signed volume; face normals agree with winding.
+            let vol: f32 = m
+                .indices
+                .chunks_exact(3)
+                .map(|t| {
+                    let [a, b, c] = [t[0], t[1], t[2]].map(|i| m.positions[i as usize]);
+                    a.dot(b.cross(c)) / 6.0
+                })
+                .sum();
+            assert!(vol > 0.0);
+            for t in m.indices.chunks_exact(3) {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|i| m.positions[i as usize]);
+                assert!((b - a).cross(c - a).dot(m.normals[t[0] as usize]) > 0.0);
+            }
+        }
+        assert!(Mesh::from_obj(&repo("scenes/meshes/missing.obj")).is_err());
     }
 }

@@ -145,3 +145,65 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// The orientation test texture shipped as `scenes/textures/orientation.png`, generated here
+/// so that it is reproducible: 128 x 128, four tinted quadrants (top-left red, top-right green,
+/// bottom-left blue, bottom-right yellow), a dark border, a big black "F" (no rotation or
+/// mirror image of an F looks like an F) and a small up-arrow in the top-right quadrant.
+#[cfg(test)]
+pub(crate) fn orientation_texture() -> (u32, u32, Vec<u8>) {
+    const N: u32 = 128;
+    let mut rgba = Vec::with_capacity((N * N * 4) as usize);
+    for y in 0..N {
+        for x in 0..N {
+            let (left, top) = (x < N / 2, y < N / 2);
+            let mut c: [u8; 3] = match (left, top) {
+                (true, true) => [240, 170, 170],
+                (false, true) => [170, 235, 170],
+                (true, false) => [170, 185, 245],
+                (false, false) => [245, 235, 150],
+            };
+            let border = x < 4 || y < 4 || x >= N - 4 || y >= N - 4;
+            // "F": stem, top bar, middle bar.
+            let stem = (36..52).contains(&x) && (24..104).contains(&y);
+            let top_bar = (36..92).contains(&x) && (24..40).contains(&y);
+            let mid_bar = (36..80).contains(&x) && (58..72).contains(&y);
+            // Up-arrow in the top-right quadrant: shaft and a triangular head.
+            let shaft = (103..107).contains(&x) && (16..44).contains(&y);
+            let head = (8..18).contains(&y) && x.abs_diff(105) <= (y - 8);
+            if border || stem || top_bar || mid_bar || shaft || head {
+                c = [20, 20, 20];
+            }
+            rgba.extend_from_slice(&[c[0], c[1], c[2], 255]);
+        }
+    }
+    (N, N, rgba)
+}
+
+#[cfg(test)]
+mod shipped_texture {
+    use super::*;
+
+    /// The committed PNG decodes to exactly the generated pixels. Set
+    /// `SPECCHIO_WRITE_TEXTURES=1` (or delete the file) to (re)write it.
+    #[test]
+    fn orientation_png_matches_generator() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/textures/orientation.png");
+        let (w, h, rgba) = orientation_texture();
+        if std::env::var_os("SPECCHIO_WRITE_TEXTURES").is_some() || !path.exists() {
+            let file = File::create(&path).unwrap();
+            let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+            enc.set_color(png::ColorType::Rgba);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut writer = enc.write_header().unwrap();
+            writer.write_image_data(&rgba).unwrap();
+        }
+        let t = TextureData::from_png(&path).unwrap();
+        assert_eq!((t.width, t.height), (w, h));
+        assert!(
+            t.rgba8 == rgba,
+            "{} differs from the generator",
+            path.display()
+        );
+    }
+}
