@@ -47,22 +47,40 @@ fn every_bad_scene_fails_clearly_without_output() {
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
         .collect();
     files.sort();
-    assert!(files.len() >= 12, "at least 12 bad scenes, found {}", files.len());
+    assert!(
+        files.len() >= 12,
+        "at least 12 bad scenes, found {}",
+        files.len()
+    );
     for file in files {
         let text = std::fs::read_to_string(&file).unwrap();
         let out = temp_dir("bad");
-        let result = specchio(&["render", file.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let result = specchio(&[
+            "render",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
         let stderr = String::from_utf8_lossy(&result.stderr);
         let name = file.file_name().unwrap().to_string_lossy();
         assert!(!result.status.success(), "{name}: must fail");
         assert!(!stderr.contains("panicked"), "{name}: panicked:\n{stderr}");
-        assert!(stderr.contains(name.as_ref()), "{name}: error must name the file:\n{stderr}");
+        assert!(
+            stderr.contains(name.as_ref()),
+            "{name}: error must name the file:\n{stderr}"
+        );
         let (field, line) = expectation(&text);
         if let Some(field) = field {
-            assert!(stderr.contains(&field), "{name}: error must name `{field}`:\n{stderr}");
+            assert!(
+                stderr.contains(&field),
+                "{name}: error must name `{field}`:\n{stderr}"
+            );
         }
         if let Some(line) = line {
-            assert!(stderr.contains(&format!(":{line}:")), "{name}: error must name line {line}:\n{stderr}");
+            assert!(
+                stderr.contains(&format!(":{line}:")),
+                "{name}: error must name line {line}:\n{stderr}"
+            );
         }
         assert!(!out.exists(), "{name}: no output may be written");
     }
@@ -86,7 +104,10 @@ fn absurd_arguments_fail_before_writing_anything() {
         let result = specchio(&all);
         let stderr = String::from_utf8_lossy(&result.stderr);
         assert!(!result.status.success(), "{args:?} must fail");
-        assert!(stderr.contains(args[0].split('=').next().unwrap()), "{args:?}: the error must name the flag:\n{stderr}");
+        assert!(
+            stderr.contains(args[0].split('=').next().unwrap()),
+            "{args:?}: the error must name the flag:\n{stderr}"
+        );
         assert!(!out.exists(), "{args:?}: no output may be written");
     }
 }
@@ -94,7 +115,12 @@ fn absurd_arguments_fail_before_writing_anything() {
 #[test]
 fn missing_scene_file_is_named() {
     let out = temp_dir("missing");
-    let result = specchio(&["render", "no/such/scene.toml", "--out", out.to_str().unwrap()]);
+    let result = specchio(&[
+        "render",
+        "no/such/scene.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(!result.status.success());
     assert!(String::from_utf8_lossy(&result.stderr).contains("no/such/scene.toml"));
     assert!(!out.exists());
@@ -104,21 +130,48 @@ fn missing_scene_file_is_named() {
 fn render_writes_every_promised_file() {
     let out = temp_dir("render");
     let scene = root().join("scenes/test/six-colour-room.toml");
-    let result = specchio(&["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--cube-size", "16", "--validate"]);
-    assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
-    for f in ["observer.exr", "observer.png", "sensor.exr", "sensor.png", "views.png", "render.json"] {
+    let result = specchio(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cube-size",
+        "16",
+        "--validate",
+    ]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    for f in [
+        "observer.exr",
+        "observer.png",
+        "sensor.exr",
+        "sensor.png",
+        "views.png",
+        "render.json",
+    ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     for face in ["px", "nx", "py", "ny", "pz", "nz"] {
-        assert!(out.join("cube").join(format!("{face}.exr")).is_file(), "cube/{face}.exr missing");
+        assert!(
+            out.join("cube").join(format!("{face}.exr")).is_file(),
+            "cube/{face}.exr missing"
+        );
     }
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
     assert_eq!(json["validation_messages"], 0);
     assert_eq!(json["settings"]["cube"]["face_size_px"], 16);
     assert!(json["device"]["name"].is_string());
     assert!(json["device"]["driver_info"].is_string());
     // No temporary files are left behind.
-    let leftovers: Vec<_> = std::fs::read_dir(&out).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().ends_with(".partial")).collect();
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".partial"))
+        .collect();
     assert!(leftovers.is_empty());
     std::fs::remove_dir_all(&out).unwrap();
 }
@@ -127,12 +180,26 @@ fn render_writes_every_promised_file() {
 fn a_frame_sequence_is_numbered() {
     let out = temp_dir("seq");
     let scene = root().join("scenes/test/six-colour-room.toml");
-    let result = specchio(&["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--cube-size", "8", "--frames", "3"]);
-    assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+    let result = specchio(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cube-size",
+        "8",
+        "--frames",
+        "3",
+    ]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
     for i in 0..3 {
         assert!(out.join(format!("{i:04}")).join("sensor.png").is_file());
     }
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
     assert_eq!(json["frames"].as_array().unwrap().len(), 3);
     std::fs::remove_dir_all(&out).unwrap();
 }

@@ -28,7 +28,12 @@ fn each_cube_face_centre_shows_its_wall() {
         for (x, y) in [(7, 7), (8, 7), (7, 8), (8, 8)] {
             let p = img.pixel(x, y);
             // Plain unlit colours of 0 and 1 are exact in RGBA16F.
-            assert_eq!([p[0], p[1], p[2]], WALLS[f], "face {} texel ({x},{y})", FACE_NAMES[f]);
+            assert_eq!(
+                [p[0], p[1], p[2]],
+                WALLS[f],
+                "face {} texel ({x},{y})",
+                FACE_NAMES[f]
+            );
         }
     }
     gpu.finish();
@@ -52,10 +57,16 @@ fn every_cube_texel_shows_its_own_direction() {
                 let d = basis.ray(ndc(x), ndc(y)).normalize();
                 let want = 0.5 + 0.5 * d;
                 let got = img.pixel(x, y);
-                let err = (Vec3::new(got[0], got[1], got[2]) - want).abs().max_element();
+                let err = (Vec3::new(got[0], got[1], got[2]) - want)
+                    .abs()
+                    .max_element();
                 worst = worst.max(err);
                 // RGBA16F keeps 11 bits: 1/2048 relative; interpolation adds float rounding.
-                assert!(err < 2e-3, "face {} texel ({x},{y}): got {got:?}, want {want}", FACE_NAMES[f]);
+                assert!(
+                    err < 2e-3,
+                    "face {} texel ({x},{y}): got {got:?}, want {want}",
+                    FACE_NAMES[f]
+                );
             }
         }
     }
@@ -77,12 +88,22 @@ fn mirror_shows_what_is_behind_the_viewer() {
     let observer = images.observer.expect("observer");
     let sensor = images.sensor.expect("sensor");
     let centre = observer.pixel(ow / 2, oh / 2);
-    assert!(close(centre, WALLS[4], 1e-3), "observer centre {centre:?} should be +Z blue");
+    assert!(
+        close(centre, WALLS[4], 1e-3),
+        "observer centre {centre:?} should be +Z blue"
+    );
     let corner = observer.pixel(2, 2);
-    assert!(close(corner, WALLS[5], 1e-3) || close(corner, WALLS[2], 1e-3) || close(corner, WALLS[1], 1e-3),
-        "observer corner {corner:?} should be a wall, not the mirror");
+    assert!(
+        close(corner, WALLS[5], 1e-3)
+            || close(corner, WALLS[2], 1e-3)
+            || close(corner, WALLS[1], 1e-3),
+        "observer corner {corner:?} should be a wall, not the mirror"
+    );
     let up = sensor.pixel(sw / 2, sh / 2);
-    assert!(close(up, WALLS[3], 1e-3), "sensor centre {up:?} should be the floor (magenta)");
+    assert!(
+        close(up, WALLS[3], 1e-3),
+        "sensor centre {up:?} should be the floor (magenta)"
+    );
     gpu.finish();
 }
 
@@ -105,16 +126,33 @@ fn two_renders_are_identical() {
 fn on_change_skips_updates_when_nothing_moves() {
     let gpu = Gpu::new();
     let s = scene("scenes/thesis-room.toml");
-    assert_eq!(s.refresh, specchio::scene::RefreshPolicy::OnChange, "thesis-room uses on-change");
-    let mut r = Renderer::new(&gpu.device, s, &RenderOptions { cube_size: Some(32) }).unwrap();
-    let all = Readback { cube: true, views: false };
+    assert_eq!(
+        s.refresh,
+        specchio::scene::RefreshPolicy::OnChange,
+        "thesis-room uses on-change"
+    );
+    let mut r = Renderer::new(
+        &gpu.device,
+        s,
+        &RenderOptions {
+            cube_size: Some(32),
+        },
+    )
+    .unwrap();
+    let all = Readback {
+        cube: true,
+        views: false,
+    };
     let (r0, i0) = r.render_frame(0, 0.5, all).unwrap();
     let (r1, i1) = r.render_frame(1, 0.5, all).unwrap();
     let (r2, i2) = r.render_frame(2, 0.75, all).unwrap();
     assert!(r0.cube_updated, "the first frame always fills the cube");
     assert!(!r1.cube_updated, "same time, nothing moved: no update");
     assert_eq!(r1.faces_rendered, 0);
-    assert_eq!(i0.cube, i1.cube, "a skipped update leaves the cube as it was");
+    assert_eq!(
+        i0.cube, i1.cube,
+        "a skipped update leaves the cube as it was"
+    );
     assert!(r2.cube_updated, "the orbiting object moved");
     assert_ne!(i1.cube, i2.cube);
     assert_eq!((r.counters.cube_updates, r.counters.cube_skips), (2, 1));
@@ -132,5 +170,34 @@ fn faces_draw_only_what_their_frustum_holds() {
         // Four side walls and the facing wall; the opposite wall is behind the face.
         assert_eq!(n, 5, "face {}", FACE_NAMES[f]);
     }
+    gpu.finish();
+}
+
+/// A camera inside the mirror's bounding cube (but outside the sphere) still sees the mirror:
+/// the bounding cube's far faces are drawn, which the near plane cannot clip away.
+#[test]
+fn mirror_is_drawn_from_inside_its_bounding_cube() {
+    let gpu = Gpu::new();
+    let path = common::root().join("scenes/test/six-colour-room.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    // 1.07 m from the centre of the unit sphere, inside its [-1, 1]^3 bounding cube, looking
+    // at the centre: the middle pixel's ray comes back towards the camera and hits +Z (blue).
+    let pitch = (-0.5f32).atan2(0.95).to_degrees();
+    let text = text.replace(
+        "[observer]\nposition = [0, 0, 4]\nyaw = 0\n",
+        &format!("[observer]\nposition = [0, 0.5, 0.95]\nyaw = 0\npitch = {pitch}\n"),
+    );
+    assert!(
+        text.contains("0.95"),
+        "the observer block of six-colour-room.toml changed"
+    );
+    let s = specchio::scene::load_str(&text, &path).expect("scene");
+    let (w, h) = (s.observer.resolution[0], s.observer.resolution[1]);
+    let (_, images) = render_once(&gpu, s, 16, 0.0);
+    let centre = images.observer.unwrap().pixel(w / 2, h / 2);
+    assert!(
+        close(centre, WALLS[4], 1e-3),
+        "centre {centre:?} should reflect +Z (blue)"
+    );
     gpu.finish();
 }

@@ -1,7 +1,13 @@
 //! specchio: a catadioptric (camera + spherical mirror) sensor simulator on Vulkan.
 //!
-//! Module map (see `docs/architecture.md`):
-//! - [`scene`]: the TOML scene format and the validated scene the renderer draws.
+//! Module map (details in `docs/architecture.md`):
+//! - [`scene`]: the TOML scene format, its validation, and the resolved scene the renderer draws;
+//! - [`vk`]: the Vulkan layer, one module per concept (instance, device, memory, image,
+//!   descriptors, pipeline, commands, queries), each owning its handles;
+//! - [`shaders`]: SPIR-V compiled from `shaders/` at build time;
+//! - [`render`]: cameras and cube-face conventions, GPU structs, the six-pass cube fill and the
+//!   observer / sensor views with the analytic mirror;
+//! - [`output`]: EXR, PNG and JSON files, written atomically.
 
 pub mod output;
 pub mod render;

@@ -1,5 +1,5 @@
-// materials.glsl - albedo and shading. The CPU reference (engine/src/materials.rs) evaluates
-// the same functions; keep the two in step (a test compares them).
+// materials.glsl - albedo and shading. Written with plain float operations so that the CPU
+// reference ray tracer (a later issue) can mirror each function line by line in Rust.
 #ifndef MATERIALS_GLSL
 #define MATERIALS_GLSL
 

@@ -29,27 +29,57 @@ pub struct Gpu {
 
 impl Gpu {
     pub fn new() -> Self {
-        let instance = Instance::create(&InstanceDesc { validation: true })
-            .expect("Vulkan with VK_LAYER_KHRONOS_validation (apt-get install vulkan-validationlayers)");
+        let instance = Instance::create(&InstanceDesc { validation: true }).expect(
+            "Vulkan with VK_LAYER_KHRONOS_validation (apt-get install vulkan-validationlayers)",
+        );
         let log = instance.validation_log();
-        let device = Device::create(&instance, &DeviceDesc::default()).expect("a Vulkan 1.3 device");
+        let device =
+            Device::create(&instance, &DeviceDesc::default()).expect("a Vulkan 1.3 device");
         Self { device, log }
     }
 
     /// Drops the device (the layer reports leaks then) and fails on any validation message.
     pub fn finish(self) {
         let Self { device, log } = self;
-        assert_eq!(Arc::strong_count(&device), 1, "something still holds the device");
+        assert_eq!(
+            Arc::strong_count(&device),
+            1,
+            "something still holds the device"
+        );
         drop(device);
         let messages = log.messages();
-        assert!(messages.is_empty(), "validation messages:\n{}", messages.join("\n"));
+        assert!(
+            messages.is_empty(),
+            "validation messages:\n{}",
+            messages.join("\n")
+        );
     }
 }
 
 /// Renders one frame with everything read back.
-pub fn render_once(gpu: &Gpu, scene: Scene, cube_size: u32, t_s: f64) -> (FrameReport, FrameImages) {
-    let mut r = Renderer::new(&gpu.device, scene, &RenderOptions { cube_size: Some(cube_size) }).expect("renderer");
-    r.render_frame(0, t_s, Readback { cube: true, views: true }).expect("frame")
+pub fn render_once(
+    gpu: &Gpu,
+    scene: Scene,
+    cube_size: u32,
+    t_s: f64,
+) -> (FrameReport, FrameImages) {
+    let mut r = Renderer::new(
+        &gpu.device,
+        scene,
+        &RenderOptions {
+            cube_size: Some(cube_size),
+        },
+    )
+    .expect("renderer");
+    r.render_frame(
+        0,
+        t_s,
+        Readback {
+            cube: true,
+            views: true,
+        },
+    )
+    .expect("frame")
 }
 
 pub fn close(a: [f32; 4], b: [f32; 3], tol: f32) -> bool {

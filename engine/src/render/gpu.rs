@@ -68,8 +68,8 @@ pub struct Vertex {
     pub uv: [f32; 2],
 }
 
-// std430 array strides equal the Rust sizes (checked against SPIR-V ArrayStride by the
-// offsets test through the last member; the sizes are pinned here).
+// std430 array strides must equal the Rust sizes; build.rs reads member offsets only, so the
+// sizes are pinned here by hand (each is a multiple of 16, as std430 arrays of these need).
 const _: () = assert!(std::mem::size_of::<FrameData>() == 48);
 const _: () = assert!(std::mem::size_of::<ViewData>() == 144);
 const _: () = assert!(std::mem::size_of::<ObjectData>() == 144);

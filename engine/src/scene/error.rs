@@ -2,7 +2,7 @@
 //!
 //! Every error names the scene file; every error that comes from a value in the file also names
 //! the 1-based line and column of that value and its dotted field path, so that the message
-//! `scenes/x.toml:12:5: mirror.radius_m: must be positive, got -1` can be pasted into an editor's
+//! `scenes/x.toml:12:5: mirror.radius: must be positive, got -1` can be pasted into an editor's
 //! "go to" box and points at the culprit.
 
 use std::fmt;
@@ -193,12 +193,12 @@ mod tests {
                 line: Some(12),
                 column: Some(5),
             },
-            field: "mirror.radius_m".into(),
+            field: "mirror.radius".into(),
             message: "must be positive, got -1".into(),
         };
         assert_eq!(
             e.to_string(),
-            "scenes/x.toml:12:5: mirror.radius_m: must be positive, got -1"
+            "scenes/x.toml:12:5: mirror.radius: must be positive, got -1"
         );
     }
 }

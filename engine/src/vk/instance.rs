@@ -60,8 +60,8 @@ pub struct Instance {
     /// `VK_EXT_debug_utils` at instance level: the messenger. `None` when the extension is absent.
     pub debug_utils: Option<ash::ext::debug_utils::Instance>,
     messenger: vk::DebugUtilsMessengerEXT,
-    /// Boxed `Arc` whose address is the messenger's user data; must outlive `messenger`.
-    log: Box<Arc<ValidationLog>>,
+    /// The messenger's user data points into this `Arc`'s allocation; it outlives `messenger`.
+    log: Arc<ValidationLog>,
     pub validation: bool,
 }
 
@@ -102,7 +102,7 @@ impl Instance {
         } else {
             vec![]
         };
-        let log: Box<Arc<ValidationLog>> = Box::default();
+        let log: Arc<ValidationLog> = Arc::default();
         let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
             .message_severity(
                 vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
@@ -114,7 +114,7 @@ impl Instance {
                     | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
             )
             .pfn_user_callback(Some(debug_callback))
-            .user_data(&*log as *const Arc<ValidationLog> as *mut c_void);
+            .user_data(Arc::as_ptr(&log) as *mut c_void);
         let mut create_info = vk::InstanceCreateInfo::default()
             .application_info(&app_info)
             .enabled_layer_names(&layer_names)
@@ -131,7 +131,7 @@ impl Instance {
             has_debug_utils.then(|| ash::ext::debug_utils::Instance::new(&entry, &raw));
         let mut messenger = vk::DebugUtilsMessengerEXT::null();
         if let (true, Some(du)) = (use_messenger, &debug_utils) {
-            // SAFETY: user data points into `log`, which is boxed and dropped after the messenger.
+            // SAFETY: user data points into `log`'s allocation, dropped after the messenger.
             match unsafe { du.create_debug_utils_messenger(&messenger_info, None) } {
                 Ok(m) => messenger = m,
                 Err(result) => {
@@ -187,8 +187,8 @@ unsafe extern "system" fn debug_callback(
         .unwrap_or_else(|| "(no message)".to_owned());
     let line = format!("[vulkan {severity:?} {kind:?}] {message}");
     eprintln!("{line}");
-    // SAFETY: user_data is the address of the boxed Arc<ValidationLog> owned by the Instance.
-    if let Some(log) = unsafe { (user_data as *const Arc<ValidationLog>).as_ref() } {
+    // SAFETY: user_data is the ValidationLog inside the Arc owned by the Instance.
+    if let Some(log) = unsafe { (user_data as *const ValidationLog).as_ref() } {
         log.push(line);
     }
     vk::FALSE

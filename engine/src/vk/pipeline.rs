@@ -121,9 +121,10 @@ impl Pipeline {
         let raster = vk::PipelineRasterizationStateCreateInfo::default()
             .polygon_mode(vk::PolygonMode::FILL)
             .cull_mode(desc.cull_mode)
-            // Our view space is x right, y down, z forward (docs/conventions.md), in which
-            // a counter-clockwise triangle (seen from outside) lands clockwise in framebuffer.
-            .front_face(vk::FrontFace::CLOCKWISE)
+            // A triangle counter-clockwise seen from outside keeps positive area in our views
+            // (x right, y down, not mirrored), so CCW is front. Cube faces are mirrored, but
+            // the scene pipelines do not cull, so only the mirror's bounding cube relies on it.
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
