@@ -101,7 +101,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let mut reports = Vec::new();
     for i in 0..args.frames {
         let t = start_s + f64::from(i) / args.fps;
-        let frame_index = u64::from(i);
+        // Frame numbers continue from --frame, so `every-n` counts scene frames, not run frames.
+        let frame_index = args.frame.unwrap_or(0) + u64::from(i);
         let (report, images) = renderer.render_frame(
             frame_index,
             t,
