@@ -201,3 +201,42 @@ fn mirror_is_drawn_from_inside_its_bounding_cube() {
     );
     gpu.finish();
 }
+
+/// The optional directional light, known answers: light straight down from above (towards
+/// +Y), ambient 1/4. The floor faces the light (full albedo), the ceiling faces away and the
+/// walls are edge-on (ambient only).
+#[test]
+fn directional_light_known_answers() {
+    let gpu = Gpu::new();
+    let path = common::root().join("scenes/test/six-colour-room.toml");
+    let text = std::fs::read_to_string(&path).unwrap() + "\n[light]\ndirection = [0, 1, 0]\nambient = 0.25\n";
+    let s = specchio::scene::load_str(&text, &path).expect("scene with a light");
+    let (_, images) = render_once(&gpu, s, 16, 0.0);
+    let faces = images.cube.unwrap();
+    for (f, wall) in WALLS.iter().enumerate() {
+        let scale = if f == 3 { 1.0 } else { 0.25 }; // -Y (floor) faces the light
+        let want = wall.map(|c| c * scale);
+        let got = faces[f].pixel(8, 8);
+        assert!(close(got, want, 1e-3), "face {}: got {got:?}, want {want:?}", FACE_NAMES[f]);
+    }
+    gpu.finish();
+}
+
+/// The scene with every shape, OBJ and glTF meshes and a moving mirror renders under
+/// validation, and its cube draws mesh objects as well as walls.
+#[test]
+fn moving_objects_scene_renders() {
+    let gpu = Gpu::new();
+    let s = scene("scenes/moving-objects.toml");
+    let objects = s.objects.len() as u32;
+    assert!(objects >= 6);
+    let (report, images) = render_once(&gpu, s, 32, 2.0);
+    let drawn: u32 = report.draws_per_face.iter().sum();
+    // Each face draws at most its five walls plus every object; together they draw some
+    // objects, and culling keeps the total below drawing everything into every face.
+    assert!(drawn > 6 * 5 - 6, "faces drew {drawn} objects");
+    assert!(drawn < 6 * (6 + objects), "culling removed nothing ({drawn})");
+    let faces = images.cube.unwrap();
+    assert!(faces.iter().flat_map(|f| &f.pixels).all(|p| p.iter().all(|c| c.is_finite())));
+    gpu.finish();
+}
