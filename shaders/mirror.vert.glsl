@@ -3,6 +3,7 @@
 // The sphere itself is found per pixel by mirror.frag; the cube only bounds it on screen.
 #extension GL_GOOGLE_include_directive : require
 #include "shared.glsl"
+#include "vertex.glsl"
 
 SCENE_BINDINGS;
 PUSH_CONSTANTS;
@@ -17,5 +18,5 @@ void main() {
     uint c = CORNERS[gl_VertexIndex];
     vec3 corner = vec3(c & 1u, (c >> 1) & 1u, (c >> 2) & 1u) * 2.0 - 1.0;
     vec3 world = frame.mirror.xyz + frame.mirror.w * corner;
-    gl_Position = views[push.view_index].world_to_clip * vec4(world, 1.0);
+    gl_Position = world_to_clip(views[push.view_index], world);
 }

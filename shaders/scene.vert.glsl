@@ -1,7 +1,8 @@
 #version 460
-// scene.vert - transforms one object's vertices into a view (cube face or camera).
+// scene.vert - one object's vertices into one view (a cube face in six-pass, or a camera).
 #extension GL_GOOGLE_include_directive : require
 #include "shared.glsl"
+#include "vertex.glsl"
 
 SCENE_BINDINGS;
 PUSH_CONSTANTS;
@@ -13,12 +14,13 @@ layout(location = 2) in vec2 in_uv;
 layout(location = 0) out vec3 out_world_pos;
 layout(location = 1) out vec3 out_world_normal;
 layout(location = 2) out vec2 out_uv;
+layout(location = 3) flat out uint out_object;
 
 void main() {
     ObjectData object = objects[push.object_index];
-    vec4 world = object.model_to_world * vec4(in_position, 1.0);
-    out_world_pos = world.xyz;
-    out_world_normal = (object.normal_to_world * vec4(in_normal, 0.0)).xyz;
+    out_world_pos = object_to_world(object, in_position);
+    out_world_normal = normal_to_world(object, in_normal);
     out_uv = in_uv;
-    gl_Position = views[push.view_index].world_to_clip * world;
+    out_object = push.object_index;
+    gl_Position = world_to_clip(views[push.view_index], out_world_pos);
 }

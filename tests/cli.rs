@@ -200,6 +200,71 @@ fn a_frame_sequence_is_numbered() {
     }
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
-    assert_eq!(json["frames"].as_array().unwrap().len(), 3);
+    assert_eq!(json["runs"][0]["frames"].as_array().unwrap().len(), 3);
     std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn method_all_writes_each_usable_method_and_explains_the_others() {
+    let out = temp_dir("all");
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let result = specchio(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cube-size",
+        "8",
+        "--method",
+        "all",
+    ]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
+    let ran: Vec<String> = json["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["method"].as_str().unwrap().to_owned())
+        .collect();
+    assert!(ran.contains(&"six-pass".to_owned()));
+    for m in &ran {
+        for face in ["px", "nx", "py", "ny", "pz", "nz"] {
+            assert!(
+                out.join(m)
+                    .join("cube")
+                    .join(format!("{face}.exr"))
+                    .is_file(),
+                "{m}/cube/{face}.exr"
+            );
+        }
+    }
+    // Every method either ran or has a reason.
+    let skipped = json["methods_not_run"].as_array().unwrap();
+    assert_eq!(ran.len() + skipped.len(), 4);
+    assert!(skipped
+        .iter()
+        .all(|s| !s["reason"].as_str().unwrap().is_empty()));
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn an_unusable_or_unknown_method_is_refused_with_the_reason() {
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let out = temp_dir("refuse");
+    let result = specchio(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--method",
+        "sideways",
+    ]);
+    assert!(!result.status.success());
+    assert!(String::from_utf8_lossy(&result.stderr).contains("--method sideways"));
+    assert!(!out.exists());
 }

@@ -2,6 +2,7 @@
 //! arguments, then run one subcommand (each in its own module).
 
 mod info;
+mod probe;
 mod render;
 
 use std::process::ExitCode;
@@ -23,6 +24,10 @@ enum Command {
     Info(info::Args),
     /// Render a scene: observer, sensor, side-by-side views and the six cube faces.
     Render(render::Args),
+    /// (internal) Compare a cube method with six-pass on a tiny scene; run in a child process
+    /// because a broken driver may crash.
+    #[command(hide = true)]
+    Probe(probe::Args),
 }
 
 fn main() -> ExitCode {
@@ -30,6 +35,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
+        Command::Probe(args) => probe::run(&args),
     };
     match result {
         Ok(code) => code,

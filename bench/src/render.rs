@@ -7,9 +7,12 @@ use anyhow::{bail, Context, Result};
 use serde_json::json;
 use specchio::output::{write_exr, write_json, write_png};
 use specchio::render::camera::FACE_NAMES;
+use specchio::render::methods::{Method, RequiredFeatures};
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::MAX_FACE_SIZE_PX;
-use specchio::vk::device::{Device, DeviceDesc};
+use specchio::vk::device::{self, Device, DeviceDesc, DeviceInfo};
+
+use crate::probe;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 /// More frames than this is a mistake, not a render (about an hour of video at 30 fps).
@@ -37,6 +40,10 @@ pub struct Args {
     /// Cube face size in texels (overrides the scene's cube.face_size).
     #[arg(long)]
     cube_size: Option<u32>,
+    /// Cube fill method: six-pass, multiview, geometry, instanced, or all (each usable one
+    /// into DIR/<method>/).
+    #[arg(long, default_value = "six-pass")]
+    method: String,
     /// Enable the Khronos validation layer; any message makes the command fail.
     #[arg(long)]
     validate: bool,
@@ -74,29 +81,130 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         .time
         .unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);
 
-    // 2. The GPU.
+    // 2. The GPU, with the features of the methods that will run.
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
     let log = instance.validation_log();
+    let validation = instance.validation;
+    let chosen = device::choose(&instance, args.device.as_deref())?;
+    let (methods, refused) = pick_methods(&args.method, &chosen)?;
+    let features = methods
+        .iter()
+        .fold(RequiredFeatures::default(), |f, m| f.union(m.features()));
     let device = Device::create(
         &instance,
         &DeviceDesc {
             selector: args.device.clone(),
+            features,
         },
     )?;
-    let validation = instance.validation;
     drop(instance);
     let info = device.info.clone();
-    let mut renderer = Renderer::new(
-        &device,
-        scene,
-        &RenderOptions {
-            cube_size: args.cube_size,
-        },
-    )?;
 
-    // 3. Frames.
+    // 3. Frames, per method (`--method all`: each into DIR/<method>/).
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let mut runs = Vec::new();
+    for &method in &methods {
+        let out = if args.method == "all" {
+            args.out.join(method.name())
+        } else {
+            args.out.clone()
+        };
+        let options = RenderOptions {
+            cube_size: args.cube_size,
+            method,
+            ..Default::default()
+        };
+        let mut renderer = Renderer::new(&device, scene.clone(), &options)?;
+        let reports = render_frames(args, &mut renderer, start_s, &out)?;
+        let summary = summarize(&reports);
+        print_summary(args, method, &out, &reports, &summary);
+        runs.push(json!({
+            "method": method,
+            "out": out.display().to_string(),
+            "refresh_counters": renderer.counters,
+            "summary": summary,
+            "frames": reports,
+        }));
+    }
+
+    // 4. Report.
+    let mut record = json!({
+        "scene": args.scene.display().to_string(),
+        "description": scene.description,
+        "settings": {
+            "start_time_s": start_s,
+            "fps": args.fps,
+            "frames": args.frames,
+            "methods": methods,
+            "cube": {
+                "face_size_px": args.cube_size.unwrap_or(scene.cube.face_size_px),
+                "format": format!("{:?}", scene.cube.format),
+                "near_m": scene.cube.near_m,
+                "far_m": scene.cube.far_m,
+                "mipmaps": scene.cube.mipmaps,
+                "max_anisotropy": scene.cube.max_anisotropy,
+            },
+            "refresh": format!("{:?}", scene.refresh),
+            "observer_resolution": scene.observer.resolution,
+            "sensor_resolution": scene.sensor.resolution,
+            "validation": validation,
+            "lp_num_threads": std::env::var("LP_NUM_THREADS").ok(),
+        },
+        "device": info,
+        "methods_not_run": refused.iter().map(|(m, why)| json!({ "method": m, "reason": why })).collect::<Vec<_>>(),
+        "runs": runs,
+    });
+    drop(device);
+    let messages = log.messages();
+    record["validation_messages"] = json!(messages.len());
+    write_json(&args.out.join("render.json"), &record)?;
+    for (m, why) in &refused {
+        println!("  {m}: not run: {why}");
+    }
+    if !messages.is_empty() {
+        eprintln!(
+            "error: the validation layer reported {} message(s) (above)",
+            messages.len()
+        );
+        return Ok(ExitCode::from(3));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--method NAME`: that method, refused with the reason when it cannot run here.
+/// `--method all`: every usable method, and the others with their reasons.
+/// Methods that run, and methods that do not with the reason.
+type MethodChoice = (Vec<Method>, Vec<(Method, String)>);
+
+fn pick_methods(arg: &str, info: &DeviceInfo) -> Result<MethodChoice> {
+    if arg == "all" {
+        let mut run = Vec::new();
+        let mut refused = Vec::new();
+        for m in Method::ALL {
+            match probe::usable(m, info) {
+                Ok(()) => run.push(m),
+                Err(why) => refused.push((m, why)),
+            }
+        }
+        return Ok((run, refused));
+    }
+    let Some(m) = Method::parse(arg) else {
+        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+        bail!("--method {arg}: unknown; one of {}, all", names.join(", "));
+    };
+    if let Err(why) = probe::usable(m, info) {
+        bail!("--method {arg}: cannot be used on this device: {why}");
+    }
+    Ok((vec![m], vec![]))
+}
+
+fn render_frames(
+    args: &Args,
+    renderer: &mut Renderer,
+    start_s: f64,
+    out: &Path,
+) -> Result<Vec<FrameReport>> {
     let progress = (args.frames > 1).then(|| indicatif::ProgressBar::new(u64::from(args.frames)));
     let mut reports = Vec::new();
     for i in 0..args.frames {
@@ -112,9 +220,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             },
         )?;
         let dir = if args.frames > 1 {
-            args.out.join(format!("{i:04}"))
+            out.join(format!("{i:04}"))
         } else {
-            args.out.clone()
+            out.to_owned()
         };
         write_frame(&dir, &images)?;
         reports.push(report);
@@ -125,51 +233,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if let Some(p) = progress {
         p.finish_and_clear();
     }
-
-    // 4. Report.
-    let summary = summarize(&reports);
-    let record = json!({
-        "scene": args.scene.display().to_string(),
-        "description": renderer.scene.description,
-        "settings": {
-            "start_time_s": start_s,
-            "fps": args.fps,
-            "frames": args.frames,
-            "method": "six-pass",
-            "cube": {
-                "face_size_px": renderer.scene.cube.face_size_px,
-                "format": format!("{:?}", renderer.scene.cube.format),
-                "near_m": renderer.scene.cube.near_m,
-                "far_m": renderer.scene.cube.far_m,
-                "mipmaps": renderer.scene.cube.mipmaps,
-                "max_anisotropy": renderer.scene.cube.max_anisotropy,
-            },
-            "refresh": format!("{:?}", renderer.scene.refresh),
-            "observer_resolution": renderer.scene.observer.resolution,
-            "sensor_resolution": renderer.scene.sensor.resolution,
-            "validation": validation,
-            "lp_num_threads": std::env::var("LP_NUM_THREADS").ok(),
-        },
-        "device": info,
-        "refresh_counters": renderer.counters,
-        "summary": summary,
-        "frames": reports,
-    });
-    drop(renderer);
-    drop(device);
-    let messages = log.messages();
-    let mut record = record;
-    record["validation_messages"] = json!(messages.len());
-    write_json(&args.out.join("render.json"), &record)?;
-    print_summary(args, &reports, &summary);
-    if !messages.is_empty() {
-        eprintln!(
-            "error: the validation layer reported {} message(s) (above)",
-            messages.len()
-        );
-        return Ok(ExitCode::from(3));
-    }
-    Ok(ExitCode::SUCCESS)
+    Ok(reports)
 }
 
 fn write_frame(dir: &Path, images: &FrameImages) -> Result<()> {
@@ -226,17 +290,23 @@ fn summarize(reports: &[FrameReport]) -> serde_json::Value {
     })
 }
 
-fn print_summary(args: &Args, reports: &[FrameReport], summary: &serde_json::Value) {
+fn print_summary(
+    args: &Args,
+    method: Method,
+    out: &Path,
+    reports: &[FrameReport],
+    summary: &serde_json::Value,
+) {
     let ms = |k: &str| {
         summary[k]
             .as_f64()
             .map_or("n/a".to_owned(), |v| format!("{v:.2} ms"))
     };
     println!(
-        "rendered {} frame(s) of {} into {}",
+        "rendered {} frame(s) of {} with {method} into {}",
         reports.len(),
         args.scene.display(),
-        args.out.display()
+        out.display()
     );
     println!(
         "  cube updates:       {} of {} frames",

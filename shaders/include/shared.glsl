@@ -49,9 +49,13 @@ struct MaterialData {
     vec4 params;        // x: tiles per uv unit, y: grid line width (fraction of a cell)
 };
 
-// Push constants: which view and which object a draw uses.
+// Push constants: which view and which object a draw uses; which cube faces a layered pass
+// renders (bit f set: face f; the other faces keep their contents).
 #define PUSH_CONSTANTS \
-    layout(push_constant) uniform Push { uint view_index; uint object_index; } push
+    layout(push_constant) uniform Push { uint view_index; uint object_index; uint face_mask; uint pad; } push
+
+// Instanced cube fill: gl_InstanceIndex = object << INSTANCE_FACE_BITS | face.
+#define INSTANCE_FACE_BITS 3u
 
 // Descriptor set 0: the scene. Set 1: the environment cube (views only).
 #define SCENE_BINDINGS \

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use specchio::render::methods::RequiredFeatures;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::Scene;
 use specchio::vk::device::{Device, DeviceDesc};
@@ -29,12 +30,20 @@ pub struct Gpu {
 
 impl Gpu {
     pub fn new() -> Self {
+        Self::with_features(RequiredFeatures::default())
+    }
+
+    /// A device with the optional features of some cube methods enabled.
+    pub fn with_features(features: RequiredFeatures) -> Self {
         let instance = Instance::create(&InstanceDesc { validation: true }).expect(
             "Vulkan with VK_LAYER_KHRONOS_validation (apt-get install vulkan-validationlayers)",
         );
         let log = instance.validation_log();
-        let device =
-            Device::create(&instance, &DeviceDesc::default()).expect("a Vulkan 1.3 device");
+        let desc = DeviceDesc {
+            features,
+            ..DeviceDesc::default()
+        };
+        let device = Device::create(&instance, &desc).expect("a Vulkan 1.3 device");
         Self { device, log }
     }
 
@@ -68,6 +77,7 @@ pub fn render_once(
         scene,
         &RenderOptions {
             cube_size: Some(cube_size),
+            ..Default::default()
         },
     )
     .expect("renderer");

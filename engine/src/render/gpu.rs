@@ -57,7 +57,13 @@ pub struct MaterialData {
 pub struct Push {
     pub view_index: u32,
     pub object_index: u32,
+    /// Layered cube fills: bit f set renders face f.
+    pub face_mask: u32,
+    pub pad: u32,
 }
+
+/// Instanced cube fill: `gl_InstanceIndex = object << INSTANCE_FACE_BITS | face`.
+pub const INSTANCE_FACE_BITS: u32 = 3;
 
 /// One vertex of the scene's vertex buffer (locations 0, 1, 2 of scene.vert).
 #[repr(C)]
@@ -74,7 +80,7 @@ const _: () = assert!(std::mem::size_of::<FrameData>() == 48);
 const _: () = assert!(std::mem::size_of::<ViewData>() == 144);
 const _: () = assert!(std::mem::size_of::<ObjectData>() == 144);
 const _: () = assert!(std::mem::size_of::<MaterialData>() == 64);
-const _: () = assert!(std::mem::size_of::<Push>() == 8);
+const _: () = assert!(std::mem::size_of::<Push>() == 16);
 const _: () = assert!(std::mem::size_of::<Vertex>() == 32);
 
 #[cfg(test)]
@@ -123,6 +129,8 @@ mod tests {
             ("MaterialData", "params", offset_of!(MaterialData, params)),
             ("Push", "view_index", offset_of!(Push, view_index)),
             ("Push", "object_index", offset_of!(Push, object_index)),
+            ("Push", "face_mask", offset_of!(Push, face_mask)),
+            ("Push", "pad", offset_of!(Push, pad)),
         ];
         for &(s, m, offset) in rust {
             let spirv = crate::shaders::SPIRV_MEMBER_OFFSETS

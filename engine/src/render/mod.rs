@@ -10,7 +10,10 @@
 //! 4. submit, wait, read timestamps, counters and pixels.
 
 pub mod camera;
+pub mod cube_fill;
+mod draw;
 pub mod gpu;
+pub mod methods;
 mod passes;
 pub mod resources;
 pub mod state;
@@ -30,7 +33,7 @@ use state::SceneState;
 use targets::{CubeTarget, ViewTarget};
 
 use crate::scene::{RefreshPolicy, Scene};
-use crate::vk::commands::{image_barriers, ImageBarrier, Submitter};
+use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::device::Device;
 use crate::vk::memory::{Buffer, BufferDesc};
 use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, PipelineLayout, ShaderStage};
@@ -42,14 +45,17 @@ pub const PAIR_SIZE: [u32; 2] = [1200, 450];
 /// Near plane of the observer and sensor cameras (metres); their far plane is at infinity.
 pub const CAMERA_NEAR_M: f32 = 0.05;
 
-/// Timestamp slots: start, after each face, after mips, after each view, after readback.
+/// Timestamp slots: start, after each face (six-pass), after the fill, after the mips, after
+/// each view, after the readback copies.
 const TS_START: u32 = 0;
-const TS_MIPS: u32 = 7;
-const TS_OBSERVER: u32 = 8;
-const TS_SENSOR: u32 = 9;
-const TS_PAIR: u32 = 10;
-const TS_READBACK: u32 = 11;
-const TS_COUNT: u32 = 12;
+const TS_FACE0: u32 = 1;
+const TS_FILL: u32 = 7;
+const TS_MIPS: u32 = 8;
+const TS_OBSERVER: u32 = 9;
+const TS_SENSOR: u32 = 10;
+const TS_PAIR: u32 = 11;
+const TS_READBACK: u32 = 12;
+const TS_COUNT: u32 = 13;
 /// Statistics slots: six faces, then the three views.
 const STATS_COUNT: u32 = 9;
 
@@ -58,6 +64,15 @@ const STATS_COUNT: u32 = 9;
 pub struct RenderOptions {
     /// Overrides the scene's `cube.face_size` (`--cube-size`).
     pub cube_size: Option<u32>,
+    /// How the cube is filled (the device must support it: see `Method::missing_features`).
+    pub method: methods::Method,
+    /// Under `on-change`, re-render only the faces a moved object touches (old or new bounds).
+    /// Off: any change re-renders all six (the reference the incremental update is tested
+    /// against).
+    pub full_updates: bool,
+    /// Geometry method only: use the `invocations = 6` geometry shader instead of the loop
+    /// (kept to measure the difference; see docs/methods.md).
+    pub gs_invocations: bool,
 }
 
 /// What to copy back to the CPU after a frame.
@@ -98,19 +113,25 @@ pub struct FrameReport {
     pub time_s: f64,
     pub cube_updated: bool,
     pub faces_rendered: u32,
+    /// Bit f set: face f was re-rendered this frame.
+    pub face_mask: u8,
     /// Objects (walls included) drawn into each face; 0 for a face not re-rendered.
     pub draws_per_face: [u32; 6],
     pub cpu_record_ms: f64,
     /// Submit to fence signalled (the whole frame's GPU work, readback copies included).
     pub submit_wait_ms: f64,
-    /// GPU time per cube face, mip generation, and each view (None without timestamps).
+    /// GPU time per cube face (six-pass only), the fill, the fill plus mips, the mips, and
+    /// each view (None without timestamps).
     pub gpu_face_ms: Option<[f64; 6]>,
+    pub gpu_fill_ms: Option<f64>,
     pub gpu_cube_ms: Option<f64>,
     pub gpu_mips_ms: Option<f64>,
     pub gpu_observer_ms: Option<f64>,
     pub gpu_sensor_ms: Option<f64>,
     pub gpu_pair_ms: Option<f64>,
-    /// Pipeline statistics per cube face (None without the feature).
+    /// Pipeline statistics of the whole fill, and per face for six-pass (None without the
+    /// feature or when the cube was not updated).
+    pub fill_stats: Option<PipelineStats>,
     pub face_stats: Option<[PipelineStats; 6]>,
     pub view_stats: Option<[PipelineStats; 3]>,
 }
@@ -121,10 +142,13 @@ pub struct RefreshCounters {
     pub frames: u64,
     pub cube_updates: u64,
     pub cube_skips: u64,
+    /// Faces re-rendered over all frames (6 per full update).
+    pub faces_rendered: u64,
 }
 
 struct Pipelines {
-    cube_scene: Pipeline,
+    /// The chosen method's cube pipeline.
+    cube: Pipeline,
     view_scene: Pipeline,
     mirror: Pipeline,
     scene_layout: PipelineLayout,
@@ -142,12 +166,16 @@ pub struct Renderer {
     cube: CubeTarget,
     resources: SceneResources,
     readback: Option<Buffer>,
+    /// Instanced method: this frame's indirect commands and their count.
+    indirect: Option<(Buffer, u32)>,
     submitter: Submitter,
     /// The state the cube map shows; `None` before the first fill.
     cube_state: Option<SceneState>,
     /// This frame's model-to-render matrices, walls first (for culling).
     object_matrices: Vec<Mat4>,
     pub counters: RefreshCounters,
+    pub method: methods::Method,
+    full_updates: bool,
     pub scene: Scene,
     pub device: Arc<Device>,
 }
@@ -169,7 +197,19 @@ impl Renderer {
         let observer_target = ViewTarget::create(device, ow, oh, "observer")?;
         let sensor_target = ViewTarget::create(device, sw, sh, "sensor")?;
         let pair_target = ViewTarget::create(device, PAIR_SIZE[0], PAIR_SIZE[1], "views")?;
-        let pipelines = passes::create_pipelines(device, &resources, cube.format)?;
+        if let Some(why) = options.method.missing_features(&device.info) {
+            return Err(GpuError::Unsupported(format!(
+                "method {}: {why}",
+                options.method
+            )));
+        }
+        let pipelines = passes::create_pipelines(
+            device,
+            &resources,
+            cube.format,
+            options.method,
+            options.gs_invocations,
+        )?;
         crate::vk::descriptors::write_images(
             device,
             resources.environment_set,
@@ -198,10 +238,13 @@ impl Renderer {
             cube,
             resources,
             readback: None,
+            indirect: None,
             submitter,
             cube_state: None,
             object_matrices: Vec::new(),
             counters: RefreshCounters::default(),
+            method: options.method,
+            full_updates: options.full_updates,
             scene,
             device: Arc::clone(device),
         })
@@ -216,19 +259,19 @@ impl Renderer {
     ) -> Result<(FrameReport, FrameImages), GpuError> {
         let record_start = Instant::now();
         let state = SceneState::at(&self.scene, t_s);
-        let update = match (&self.cube_state, self.scene.refresh) {
-            (None, _) => true,
-            (Some(_), RefreshPolicy::EveryFrame) => true,
-            (Some(old), RefreshPolicy::OnChange) => state.cube_differs(old),
-            (Some(_), RefreshPolicy::EveryN(n)) => frame % u64::from(n.max(1)) == 0,
-        };
+        let views = self.write_frame_buffers(&state)?;
+        let dirty = self.dirty_faces(frame, &state, &views);
         self.counters.frames += 1;
-        if update {
+        if dirty != 0 {
             self.counters.cube_updates += 1;
+            self.counters.faces_rendered += u64::from(dirty.count_ones());
         } else {
             self.counters.cube_skips += 1;
         }
-        let views = self.write_frame_buffers(&state)?;
+        let plan = self.plan_cube(&views, dirty);
+        if self.method == methods::Method::Instanced && dirty != 0 {
+            self.write_indirect(&plan)?;
+        }
         let readback_bytes = self.readback_size(readback);
         if readback_bytes > 0
             && self
@@ -247,7 +290,7 @@ impl Renderer {
         let mut report = FrameReport {
             frame,
             time_s: t_s,
-            cube_updated: update,
+            cube_updated: dirty != 0,
             ..Default::default()
         };
         if let Some(q) = &self.timestamps {
@@ -257,10 +300,10 @@ impl Renderer {
         if let Some(q) = &self.statistics {
             q.reset(cmd);
         }
-        if update {
-            self.record_cube(cmd, &views, &mut report);
+        if dirty != 0 {
+            self.record_cube(cmd, &plan, self.cube_state.is_none(), &mut report);
         } else if let Some(q) = &self.timestamps {
-            for ts in 1..=TS_MIPS {
+            for ts in TS_FACE0..=TS_MIPS {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
             }
         }
@@ -273,12 +316,83 @@ impl Renderer {
         let wait_start = Instant::now();
         self.submitter.submit_and_wait()?;
         report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
-        self.read_queries(&mut report, update, readback.views)?;
-        if update {
+        self.read_queries(&mut report, dirty != 0, readback.views)?;
+        // The cube now shows `state`, except after an `every-n` frame that skipped the update.
+        if dirty != 0 || self.scene.refresh == RefreshPolicy::OnChange {
             self.cube_state = Some(state);
         }
         let images = self.read_images(readback, &copies)?;
         Ok((report, images))
+    }
+
+    /// Which faces must be re-rendered this frame (bit f: face f), by the refresh policy.
+    fn dirty_faces(&self, frame: u64, state: &SceneState, views: &[ViewBasis]) -> u8 {
+        const ALL: u8 = 0x3F;
+        let Some(old) = &self.cube_state else {
+            return ALL;
+        };
+        match self.scene.refresh {
+            RefreshPolicy::EveryFrame => ALL,
+            RefreshPolicy::EveryN(n) => {
+                if frame % u64::from(n.max(1)) == 0 {
+                    ALL
+                } else {
+                    0
+                }
+            }
+            RefreshPolicy::OnChange if !state.cube_differs(old) => 0,
+            // The mirror moved: every direction changed.
+            RefreshPolicy::OnChange
+                if self.full_updates || old.mirror_center != state.mirror_center =>
+            {
+                ALL
+            }
+            RefreshPolicy::OnChange => {
+                // Only objects moved: the faces that see where a moved object was or now is.
+                let frusta: Vec<camera::Frustum> = views[..6]
+                    .iter()
+                    .map(|v| camera::Frustum::new(v, self.scene.cube.near_m, self.scene.cube.far_m))
+                    .collect();
+                let mut mask = 0u8;
+                for (i, (a, b)) in old
+                    .object_positions
+                    .iter()
+                    .zip(&state.object_positions)
+                    .enumerate()
+                {
+                    if a == b {
+                        continue;
+                    }
+                    let d = &self.resources.drawables[6 + i];
+                    for m in [
+                        old.object_to_render(&self.scene, i),
+                        state.object_to_render(&self.scene, i),
+                    ] {
+                        let (lo, hi) = camera::transform_aabb(&m, d.bounds_min, d.bounds_max);
+                        for (f, fr) in frusta.iter().enumerate() {
+                            if fr.intersects_aabb(lo, hi) {
+                                mask |= 1 << f;
+                            }
+                        }
+                    }
+                }
+                mask
+            }
+        }
+    }
+
+    /// Instanced method: writes this frame's indirect draws (growing the buffer if needed).
+    fn write_indirect(&mut self, plan: &cube_fill::CubePlan) -> Result<(), GpuError> {
+        let commands = methods::instanced::commands(&self.resources.drawables, plan);
+        let bytes = std::mem::size_of_val(commands.as_slice()) as u64;
+        if self.indirect.as_ref().is_none_or(|(b, _)| b.size < bytes) {
+            let desc = BufferDesc::new_cpu_to_gpu(bytes, vk::BufferUsageFlags::INDIRECT_BUFFER);
+            self.indirect = Some((Buffer::create(&self.device, &desc, "indirect draws")?, 0));
+        }
+        let (buffer, count) = self.indirect.as_mut().expect("created above");
+        buffer.write(&as_words(&commands))?;
+        *count = commands.len() as u32;
+        Ok(())
     }
 
     /// Writes frame data, views and object transforms; returns the views (render space).
@@ -361,6 +475,22 @@ impl Renderer {
         self.object_matrices = objects.iter().map(|o| o.model_to_world).collect();
         Ok(bases)
     }
+}
+
+/// `VkDrawIndexedIndirectCommand` is five 32-bit fields; copy them as plain words.
+fn as_words(commands: &[vk::DrawIndexedIndirectCommand]) -> Vec<u32> {
+    commands
+        .iter()
+        .flat_map(|c| {
+            [
+                c.index_count,
+                c.instance_count,
+                c.first_index,
+                c.vertex_offset as u32,
+                c.first_instance,
+            ]
+        })
+        .collect()
 }
 
 fn object_data(model: Mat4, material: usize) -> ObjectData {

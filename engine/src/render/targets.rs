@@ -20,6 +20,9 @@ pub struct CubeTarget {
     /// Views first: they must go before their images.
     pub face_views: Vec<ImageView>,
     pub depth_views: Vec<ImageView>,
+    /// Mip 0 of all six faces as one 2D array: the attachment of the one-pass methods.
+    pub layers_view: ImageView,
+    pub depth_layers_view: ImageView,
     pub cube_view: ImageView,
     pub sampler: Sampler,
     pub color: Image,
@@ -95,6 +98,22 @@ impl CubeTarget {
                 )
             })
             .collect::<Result<_, _>>()?;
+        let layers_view = color.view(
+            vk::ImageViewType::TYPE_2D_ARRAY,
+            0,
+            6,
+            0,
+            1,
+            "cube faces (layered)",
+        )?;
+        let depth_layers_view = depth.view(
+            vk::ImageViewType::TYPE_2D_ARRAY,
+            0,
+            6,
+            0,
+            1,
+            "cube depth (layered)",
+        )?;
         let cube_view = color.view(vk::ImageViewType::CUBE, 0, 6, 0, mips, "cube (sampled)")?;
         let anisotropy = device.info.features.sampler_anisotropy && settings.max_anisotropy > 1.0;
         // Trilinear with anisotropy, as the thesis; Vulkan filters across cube seams always.
@@ -120,6 +139,8 @@ impl CubeTarget {
         Ok(Self {
             face_views,
             depth_views,
+            layers_view,
+            depth_layers_view,
             cube_view,
             sampler,
             color,

@@ -20,6 +20,9 @@ pub struct DeviceDesc {
     /// `--device`: an index into the enumeration order, or a case-insensitive substring of the
     /// device name. `None`: the best device (discrete > integrated > virtual > CPU).
     pub selector: Option<String>,
+    /// Optional features to enable (those of the cube methods that will run); the device is
+    /// rejected if it lacks one.
+    pub features: crate::render::methods::RequiredFeatures,
 }
 
 /// What a device is and can do: everything `specchio info` prints.
@@ -69,6 +72,8 @@ pub struct DeviceFeatures {
     pub timestamps: bool,
     pub pipeline_statistics: bool,
     pub sampler_anisotropy: bool,
+    pub multi_draw_indirect: bool,
+    pub draw_indirect_first_instance: bool,
 }
 
 /// The logical device. Owns the allocator, so every buffer and image (which hold an
@@ -92,6 +97,31 @@ impl Device {
     pub fn create(instance: &Arc<Instance>, desc: &DeviceDesc) -> Result<Arc<Self>, GpuError> {
         let candidates = enumerate(instance)?;
         let (physical, info, queue_family) = select(&candidates, desc.selector.as_deref())?;
+        let want = desc.features;
+        let f = &info.features;
+        let missing: Vec<&str> = [
+            (want.multiview && !f.multiview, "multiview"),
+            (want.geometry_shader && !f.geometry_shader, "geometryShader"),
+            (
+                want.shader_output_layer && !f.shader_output_layer,
+                "shaderOutputLayer",
+            ),
+            (
+                want.multi_draw_indirect
+                    && !(f.multi_draw_indirect && f.draw_indirect_first_instance),
+                "multiDrawIndirect + drawIndirectFirstInstance",
+            ),
+        ]
+        .into_iter()
+        .filter_map(|(m, name)| m.then_some(name))
+        .collect();
+        if !missing.is_empty() {
+            return Err(GpuError::Unsupported(format!(
+                "{} lacks {}",
+                info.name,
+                missing.join(", ")
+            )));
+        }
 
         let priorities = [1.0f32];
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
@@ -102,7 +132,14 @@ impl Device {
             .sampler_anisotropy(info.features.sampler_anisotropy)
             .pipeline_statistics_query(info.features.pipeline_statistics)
             // Materials pick their texture from an array by a per-draw (uniform) index.
-            .shader_sampled_image_array_dynamic_indexing(true);
+            .shader_sampled_image_array_dynamic_indexing(true)
+            .geometry_shader(want.geometry_shader)
+            .multi_draw_indirect(want.multi_draw_indirect)
+            .draw_indirect_first_instance(want.multi_draw_indirect);
+        let mut features11 =
+            vk::PhysicalDeviceVulkan11Features::default().multiview(want.multiview);
+        let mut features12 = vk::PhysicalDeviceVulkan12Features::default()
+            .shader_output_layer(want.shader_output_layer);
         let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)
@@ -111,6 +148,8 @@ impl Device {
         let create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
             .enabled_features(&features)
+            .push_next(&mut features11)
+            .push_next(&mut features12)
             .push_next(&mut features13);
         // SAFETY: physical comes from this instance; create_info points at live locals.
         let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
@@ -329,6 +368,8 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
             timestamps,
             pipeline_statistics: base.pipeline_statistics_query == vk::TRUE,
             sampler_anisotropy: base.sampler_anisotropy == vk::TRUE,
+            multi_draw_indirect: base.multi_draw_indirect == vk::TRUE,
+            draw_indirect_first_instance: base.draw_indirect_first_instance == vk::TRUE,
         },
     };
     let rejected = if !api_ok {
@@ -351,6 +392,12 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
         queue_family,
         rejected,
     }
+}
+
+/// The device `Device::create` would pick for `selector`, without creating it.
+pub fn choose(instance: &Instance, selector: Option<&str>) -> Result<DeviceInfo, GpuError> {
+    let candidates = enumerate(instance)?;
+    select(&candidates, selector).map(|(_, info, _)| info)
 }
 
 /// Picks a device: the one the selector names, else the best-ranked usable one.

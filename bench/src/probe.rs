@@ -1,0 +1,161 @@
+//! Whether a cube method can be trusted on a device: its features, and for multiview a probe.
+//!
+//! Multiview is broken on the lavapipe versions at hand (Mesa 22.3.6 draws into the wrong
+//! layers; Mesa 25.0.7 crashes in any pass whose view mask has two or more bits), with valid
+//! usage. So the program never assumes it works: `specchio probe multiview` renders a tiny
+//! cube with multiview and with six-pass in a child process and compares them bit for bit. A
+//! crash or a mismatch marks the method unusable, with the reason and the driver version.
+
+use std::process::{Command, ExitCode, Stdio};
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Result};
+use specchio::render::methods::Method;
+use specchio::render::{Readback, RenderOptions, Renderer};
+use specchio::vk::device::{Device, DeviceDesc, DeviceInfo};
+use specchio::vk::instance::{Instance, InstanceDesc};
+
+/// The probe's scene: every cube texel has a known, distinct colour (its direction).
+const PROBE_SCENE: &str = include_str!("../../scenes/test/direction-room.toml");
+/// Small, so the probe takes well under a second on a CPU driver.
+const PROBE_FACE_SIZE: u32 = 16;
+/// A probe that has not answered by then is treated as hung.
+const PROBE_TIMEOUT: Duration = Duration::from_secs(120);
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The method to compare with six-pass.
+    method: String,
+    /// Vulkan device: index or part of its name.
+    #[arg(long)]
+    device: Option<String>,
+}
+
+/// `Ok(())` when `method` can run on the device, else why not.
+pub fn usable(method: Method, info: &DeviceInfo) -> Result<(), String> {
+    if let Some(why) = method.missing_features(info) {
+        return Err(why);
+    }
+    if method != Method::Multiview {
+        return Ok(());
+    }
+    let driver = format!("{} ({})", info.driver_info, info.name);
+    let exe = std::env::current_exe()
+        .map_err(|e| format!("cannot find the specchio binary to probe: {e}"))?;
+    let mut child = Command::new(exe)
+        .args(["probe", method.name(), "--device", &info.index.to_string()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("cannot start the probe: {e}"))?;
+    let start = Instant::now();
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if start.elapsed() > PROBE_TIMEOUT => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!(
+                    "the probe hung for {}s on {driver}",
+                    PROBE_TIMEOUT.as_secs()
+                ));
+            }
+            Ok(None) => std::thread::sleep(Duration::from_millis(20)),
+            Err(e) => return Err(format!("cannot wait for the probe: {e}")),
+        }
+    };
+    let output = child
+        .wait_with_output()
+        .map_err(|e| format!("cannot read the probe: {e}"))?;
+    let said = String::from_utf8_lossy(&output.stdout);
+    let said = said.lines().last().unwrap_or("").trim().to_owned();
+    match status.code() {
+        Some(0) => Ok(()),
+        Some(_) => Err(format!(
+            "renders differently from six-pass on {driver}: {said}"
+        )),
+        None => {
+            use std::os::unix::process::ExitStatusExt;
+            let signal = status.signal().map_or("unknown".into(), |s| s.to_string());
+            Err(format!(
+                "the driver crashed (signal {signal}) rendering a {method} pass on {driver}"
+            ))
+        }
+    }
+}
+
+/// `specchio probe METHOD`: renders the probe scene with six-pass and METHOD; exit 0 when the
+/// cubes are identical, 1 with a description of the first difference otherwise.
+pub fn run(args: &Args) -> Result<ExitCode> {
+    let Some(method) = Method::parse(&args.method) else {
+        bail!("unknown method `{}`", args.method);
+    };
+    let instance = Instance::create(&InstanceDesc::from_env(false))?;
+    let device = Device::create(
+        &instance,
+        &DeviceDesc {
+            selector: args.device.clone(),
+            features: method.features(),
+        },
+    )?;
+    let path = std::path::Path::new("scenes/test/direction-room.toml");
+    let scene = specchio::scene::load_str(PROBE_SCENE, path)?;
+    let render = |m: Method| -> Result<Vec<specchio::render::RgbaImage>> {
+        let options = RenderOptions {
+            cube_size: Some(PROBE_FACE_SIZE),
+            method: m,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&device, scene.clone(), &options)?;
+        let (_, images) = r.render_frame(
+            0,
+            0.0,
+            Readback {
+                cube: true,
+                views: false,
+            },
+        )?;
+        Ok(images.cube.unwrap_or_default())
+    };
+    let reference = render(Method::SixPass)?;
+    let candidate = render(method)?;
+    match first_difference(&reference, &candidate) {
+        None => {
+            println!("{method}: identical to six-pass");
+            Ok(ExitCode::SUCCESS)
+        }
+        Some(d) => {
+            println!("{d}");
+            Ok(ExitCode::FAILURE)
+        }
+    }
+}
+
+/// Describes how two cube maps differ (None: bit-identical).
+pub fn first_difference(
+    a: &[specchio::render::RgbaImage],
+    b: &[specchio::render::RgbaImage],
+) -> Option<String> {
+    let names = specchio::render::camera::FACE_NAMES;
+    let mut count = 0usize;
+    let mut first = None;
+    for (f, (fa, fb)) in a.iter().zip(b).enumerate() {
+        for (i, (pa, pb)) in fa.pixels.iter().zip(&fb.pixels).enumerate() {
+            if pa.iter().zip(pb).any(|(x, y)| x.to_bits() != y.to_bits()) {
+                count += 1;
+                first.get_or_insert_with(|| {
+                    let (x, y) = (i as u32 % fa.width, i as u32 / fa.width);
+                    format!(
+                        "face {} texel ({x},{y}): six-pass {pa:?}, other {pb:?}",
+                        names[f]
+                    )
+                });
+            }
+        }
+    }
+    let total: usize = a.iter().map(|f| f.pixels.len()).sum();
+    if a.len() != b.len() {
+        return Some(format!("{} faces against {}", a.len(), b.len()));
+    }
+    first.map(|f| format!("{count} of {total} texels differ; first: {f}"))
+}

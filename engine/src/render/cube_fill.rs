@@ -1,0 +1,283 @@
+//! Filling the cube map: layout transitions, the chosen method's pass(es), the mip chain.
+
+use ash::vk;
+
+use super::camera::{Frustum, ViewBasis};
+use super::draw::{barrier, COLOR_OUT, DEPTH_RW, NOTHING, SAMPLED};
+
+use super::methods::Method;
+use super::{FrameReport, Renderer, TS_FILL, TS_MIPS};
+use crate::vk::commands::image_barriers;
+
+/// What one cube update draws: the faces to re-render and, per face, the visible drawables.
+#[derive(Debug, Clone, Default)]
+pub struct CubePlan {
+    /// Bit f set: face f is re-rendered; the others keep their contents.
+    pub dirty: u8,
+    /// Per face, the drawables whose bounds meet the face's frustum (empty for clean faces).
+    pub visible: [Vec<u32>; 6],
+}
+
+impl CubePlan {
+    pub fn faces(&self) -> impl Iterator<Item = u32> + '_ {
+        (0..6u32).filter(|f| self.dirty & (1 << f) != 0)
+    }
+
+    /// Every drawable visible in at least one dirty face, in drawable order (the one-pass
+    /// methods that cannot cull per face draw these).
+    pub fn union(&self) -> Vec<u32> {
+        let mut all: Vec<u32> = self.visible.iter().flatten().copied().collect();
+        all.sort_unstable();
+        all.dedup();
+        all
+    }
+}
+
+impl Renderer {
+    /// Culls every dirty face against its frustum.
+    pub(super) fn plan_cube(&self, views: &[ViewBasis], dirty: u8) -> CubePlan {
+        let mut plan = CubePlan {
+            dirty,
+            ..Default::default()
+        };
+        for f in plan.faces().collect::<Vec<_>>() {
+            let frustum = Frustum::new(
+                &views[f as usize],
+                self.scene.cube.near_m,
+                self.scene.cube.far_m,
+            );
+            plan.visible[f as usize] = self.visible(&frustum);
+        }
+        plan
+    }
+
+    /// Writes the per-face timestamp slots `faces` (six-pass: after each face).
+    pub(super) fn face_timestamps(&self, cmd: vk::CommandBuffer, faces: std::ops::Range<u32>) {
+        if let Some(q) = &self.timestamps {
+            for f in faces {
+                q.write_timestamp(
+                    cmd,
+                    vk::PipelineStageFlags2::ALL_GRAPHICS,
+                    super::TS_FACE0 + f,
+                );
+            }
+        }
+    }
+
+    /// Re-renders the dirty faces with the renderer's method, then rebuilds the mips.
+    pub(super) fn record_cube(
+        &self,
+        cmd: vk::CommandBuffer,
+        plan: &CubePlan,
+        first_fill: bool,
+        report: &mut FrameReport,
+    ) {
+        let dev = &self.device;
+        let cube = &self.cube;
+        let mip0 = vk::ImageSubresourceRange {
+            level_count: 1,
+            ..cube.color.full_range()
+        };
+        dev.begin_label(cmd, &format!("cube fill ({})", self.method.name()));
+        // Clean faces keep their pixels, so the old layout is named (UNDEFINED only before the
+        // first fill). Depth is scratch: its old contents never matter.
+        let old = if first_fill {
+            vk::ImageLayout::UNDEFINED
+        } else {
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
+        };
+        image_barriers(
+            dev,
+            cmd,
+            &[
+                barrier(
+                    cube.color.raw,
+                    mip0,
+                    (old, SAMPLED),
+                    (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
+                ),
+                barrier(
+                    cube.depth.raw,
+                    cube.depth.full_range(),
+                    (vk::ImageLayout::UNDEFINED, DEPTH_RW),
+                    (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
+                ),
+            ],
+        );
+        if let Some(q) = &self.statistics {
+            if self.method != Method::SixPass {
+                q.begin(cmd, 0);
+            }
+        }
+        if self.method != Method::SixPass {
+            // Per-face timestamps exist only for six-pass; keep every slot answered.
+            self.face_timestamps(cmd, 0..6);
+        }
+        match self.method {
+            Method::SixPass => super::methods::six_pass::record(self, cmd, plan),
+            Method::Multiview => super::methods::multiview::record(self, cmd, plan),
+            Method::Geometry => super::methods::geometry::record(self, cmd, plan),
+            Method::Instanced => super::methods::instanced::record(self, cmd, plan),
+        }
+        if let Some(q) = &self.statistics {
+            if self.method != Method::SixPass {
+                q.end(cmd, 0);
+            }
+        }
+        for f in 0..6 {
+            report.draws_per_face[f] = plan.visible[f].len() as u32;
+        }
+        report.faces_rendered = plan.dirty.count_ones();
+        report.face_mask = plan.dirty;
+        if let Some(q) = &self.timestamps {
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, TS_FILL);
+        }
+        self.record_mips(cmd);
+        if let Some(q) = &self.timestamps {
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);
+        }
+        dev.end_label(cmd);
+    }
+
+    /// Builds mips 1.. by halving blits (all six layers at once); leaves every level ready
+    /// for sampling.
+    fn record_mips(&self, cmd: vk::CommandBuffer) {
+        let dev = &self.device;
+        let cube = &self.cube;
+        let levels = cube.mip_levels();
+        let level = |m: u32| vk::ImageSubresourceRange {
+            base_mip_level: m,
+            level_count: 1,
+            ..cube.color.full_range()
+        };
+        if levels == 1 {
+            image_barriers(
+                dev,
+                cmd,
+                &[barrier(
+                    cube.color.raw,
+                    level(0),
+                    (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
+                    (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
+                )],
+            );
+            return;
+        }
+        dev.begin_label(cmd, "cube mips");
+        let blit_write = (
+            vk::PipelineStageFlags2::BLIT,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        );
+        let blit_read = (
+            vk::PipelineStageFlags2::BLIT,
+            vk::AccessFlags2::TRANSFER_READ,
+        );
+        image_barriers(
+            dev,
+            cmd,
+            &[barrier(
+                cube.color.raw,
+                level(0),
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
+                (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, blit_read),
+            )],
+        );
+        for m in 1..levels {
+            image_barriers(
+                dev,
+                cmd,
+                &[barrier(
+                    cube.color.raw,
+                    level(m),
+                    (vk::ImageLayout::UNDEFINED, NOTHING),
+                    (vk::ImageLayout::TRANSFER_DST_OPTIMAL, blit_write),
+                )],
+            );
+            let src = (cube.size >> (m - 1)).max(1) as i32;
+            let dst = (cube.size >> m).max(1) as i32;
+            let layers = |mip| vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: mip,
+                base_array_layer: 0,
+                layer_count: 6,
+            };
+            let blit = vk::ImageBlit::default()
+                .src_subresource(layers(m - 1))
+                .src_offsets([
+                    vk::Offset3D::default(),
+                    vk::Offset3D {
+                        x: src,
+                        y: src,
+                        z: 1,
+                    },
+                ])
+                .dst_subresource(layers(m))
+                .dst_offsets([
+                    vk::Offset3D::default(),
+                    vk::Offset3D {
+                        x: dst,
+                        y: dst,
+                        z: 1,
+                    },
+                ]);
+            // SAFETY: level m-1 is TRANSFER_SRC, level m is TRANSFER_DST; format supports linear blits.
+            unsafe {
+                dev.raw.cmd_blit_image(
+                    cmd,
+                    cube.color.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    cube.color.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[blit],
+                    vk::Filter::LINEAR,
+                )
+            };
+            image_barriers(
+                dev,
+                cmd,
+                &[barrier(
+                    cube.color.raw,
+                    level(m),
+                    (vk::ImageLayout::TRANSFER_DST_OPTIMAL, blit_write),
+                    (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, blit_read),
+                )],
+            );
+        }
+        image_barriers(
+            dev,
+            cmd,
+            &[barrier(
+                cube.color.raw,
+                cube.color.full_range(),
+                (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, blit_read),
+                (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
+            )],
+        );
+        dev.end_label(cmd);
+    }
+}
+
+impl Renderer {
+    /// Opens the one rendering scope of a one-pass method over all six layers and clears the
+    /// faces it re-renders (multiview clears and re-renders all six).
+    pub(super) fn begin_layered(&self, cmd: vk::CommandBuffer, dirty: u8, method: Method) {
+        let size = self.cube.size;
+        let (layers, view_mask) = method.layers_and_view_mask();
+        let all = view_mask != 0 || dirty == 0x3F;
+        self.begin_rendering(
+            cmd,
+            &super::draw::Attachments {
+                color: self.cube.layers_view.raw,
+                depth: self.cube.depth_layers_view.raw,
+                size: [size, size],
+                layers,
+                view_mask,
+                clear: all,
+            },
+        );
+        if !all {
+            self.clear_faces(cmd, dirty, size);
+        }
+        self.set_viewport(cmd, 0.0, 0.0, size as f32, size as f32);
+    }
+}

@@ -1,0 +1,295 @@
+//! Recording helpers shared by every pass: barriers' stage/access pairs, culling, draws,
+//! rendering scopes and viewports.
+
+use ash::vk;
+
+use super::camera::{transform_aabb, Frustum};
+use super::gpu::Push;
+use super::Renderer;
+use crate::vk::commands::ImageBarrier;
+use crate::vk::pipeline::Pipeline;
+
+/// A stage and access pair, one side of a barrier.
+pub(super) type Sync = (vk::PipelineStageFlags2, vk::AccessFlags2);
+
+pub(super) const COLOR_OUT: Sync = (
+    vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+    vk::AccessFlags2::from_raw(
+        vk::AccessFlags2::COLOR_ATTACHMENT_WRITE.as_raw()
+            | vk::AccessFlags2::COLOR_ATTACHMENT_READ.as_raw(),
+    ),
+);
+pub(super) const DEPTH_RW: Sync = (
+    vk::PipelineStageFlags2::from_raw(
+        vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS.as_raw()
+            | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS.as_raw(),
+    ),
+    vk::AccessFlags2::from_raw(
+        vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ.as_raw()
+            | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE.as_raw(),
+    ),
+);
+pub(super) const SAMPLED: Sync = (
+    vk::PipelineStageFlags2::FRAGMENT_SHADER,
+    vk::AccessFlags2::SHADER_SAMPLED_READ,
+);
+pub(super) const COPY_READ: Sync = (
+    vk::PipelineStageFlags2::COPY,
+    vk::AccessFlags2::TRANSFER_READ,
+);
+pub(super) const NOTHING: Sync = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
+
+pub(super) fn barrier(
+    image: vk::Image,
+    range: vk::ImageSubresourceRange,
+    from: (vk::ImageLayout, Sync),
+    to: (vk::ImageLayout, Sync),
+) -> ImageBarrier {
+    ImageBarrier {
+        image,
+        range,
+        from: (from.0, from.1 .0, from.1 .1),
+        to: (to.0, to.1 .0, to.1 .1),
+    }
+}
+
+/// The attachments of one rendering scope.
+pub(super) struct Attachments {
+    pub color: vk::ImageView,
+    pub depth: vk::ImageView,
+    pub size: [u32; 2],
+    /// Layers rendered (layered cube fills: 6); ignored when `view_mask` is set.
+    pub layers: u32,
+    /// Multiview view mask (0: not multiview).
+    pub view_mask: u32,
+    /// Clear on load (the whole attachment); otherwise keep the contents and let the method
+    /// clear the layers it re-renders.
+    pub clear: bool,
+}
+
+/// Clear values: black colour, and the far plane for reverse-Z depth.
+pub(super) const CLEAR_COLOR: vk::ClearValue = vk::ClearValue {
+    color: vk::ClearColorValue {
+        float32: [0.0, 0.0, 0.0, 1.0],
+    },
+};
+pub(super) const CLEAR_DEPTH: vk::ClearValue = vk::ClearValue {
+    depth_stencil: vk::ClearDepthStencilValue {
+        depth: 0.0,
+        stencil: 0,
+    },
+};
+
+impl Renderer {
+    /// Indices of the drawables whose render-space bounds meet `frustum`.
+    pub(super) fn visible(&self, frustum: &Frustum) -> Vec<u32> {
+        self.resources
+            .drawables
+            .iter()
+            .zip(&self.object_matrices)
+            .enumerate()
+            .filter(|(_, (d, m))| {
+                let (lo, hi) = transform_aabb(m, d.bounds_min, d.bounds_max);
+                frustum.intersects_aabb(lo, hi)
+            })
+            .map(|(i, _)| i as u32)
+            .collect()
+    }
+
+    /// Binds `pipeline` with the scene's descriptor set, vertex and index buffers.
+    pub(super) fn bind_scene(&self, cmd: vk::CommandBuffer, pipeline: &Pipeline) {
+        let d = &self.device.raw;
+        // SAFETY (whole block): cmd is recording inside a rendering scope whose attachment
+        // formats match the pipeline; buffers and sets are live and not being written.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.pipelines.scene_layout.raw,
+                0,
+                &[self.resources.scene_set],
+                &[],
+            );
+            d.cmd_bind_vertex_buffers(cmd, 0, &[self.resources.vertices.raw], &[0]);
+            d.cmd_bind_index_buffer(cmd, self.resources.indices.raw, 0, vk::IndexType::UINT32);
+        }
+    }
+
+    pub(super) fn push(&self, cmd: vk::CommandBuffer, layout: vk::PipelineLayout, push: Push) {
+        // SAFETY: the push range covers all graphics stages and this many bytes.
+        unsafe {
+            self.device.raw.cmd_push_constants(
+                cmd,
+                layout,
+                vk::ShaderStageFlags::ALL_GRAPHICS,
+                0,
+                bytemuck::bytes_of(&push),
+            )
+        };
+    }
+
+    /// Binds `pipeline` and draws `objects` in order, one indexed draw each, with push
+    /// constants `base` whose object index is replaced per draw.
+    pub(super) fn draw_objects(
+        &self,
+        cmd: vk::CommandBuffer,
+        pipeline: &Pipeline,
+        base: Push,
+        objects: &[u32],
+    ) {
+        self.bind_scene(cmd, pipeline);
+        for &i in objects {
+            let draw = &self.resources.drawables[i as usize];
+            self.push(
+                cmd,
+                self.pipelines.scene_layout.raw,
+                Push {
+                    object_index: i,
+                    ..base
+                },
+            );
+            // SAFETY: the scene is bound; the ranges lie inside the shared buffers.
+            unsafe {
+                self.device.raw.cmd_draw_indexed(
+                    cmd,
+                    draw.index_count,
+                    1,
+                    draw.first_index,
+                    draw.vertex_offset,
+                    0,
+                )
+            };
+        }
+    }
+
+    pub(super) fn draw_mirror(&self, cmd: vk::CommandBuffer, view: u32) {
+        let d = &self.device.raw;
+        let p = &self.pipelines;
+        // SAFETY: recording inside a view pass; the cube is in SHADER_READ_ONLY layout.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, p.mirror.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                p.mirror_layout.raw,
+                0,
+                &[self.resources.scene_set, self.resources.environment_set],
+                &[],
+            );
+        }
+        self.push(
+            cmd,
+            p.mirror_layout.raw,
+            Push {
+                view_index: view,
+                ..Push::default()
+            },
+        );
+        // SAFETY: as above; 36 vertices generated by mirror.vert.
+        unsafe { d.cmd_draw(cmd, 36, 1, 0, 0) };
+    }
+
+    pub(super) fn begin_rendering(&self, cmd: vk::CommandBuffer, a: &Attachments) {
+        let load = if a.clear {
+            vk::AttachmentLoadOp::CLEAR
+        } else {
+            vk::AttachmentLoadOp::LOAD
+        };
+        let color_att = [vk::RenderingAttachmentInfo::default()
+            .image_view(a.color)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(load)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(CLEAR_COLOR)];
+        let depth_att = vk::RenderingAttachmentInfo::default()
+            .image_view(a.depth)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(load)
+            // Depth is only needed within the pass.
+            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .clear_value(CLEAR_DEPTH);
+        let area = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D {
+                width: a.size[0],
+                height: a.size[1],
+            },
+        };
+        let info = vk::RenderingInfo::default()
+            .render_area(area)
+            .layer_count(a.layers)
+            .view_mask(a.view_mask)
+            .color_attachments(&color_att)
+            .depth_attachment(&depth_att);
+        // SAFETY: the attachments are in the layouts named above.
+        unsafe { self.device.raw.cmd_begin_rendering(cmd, &info) };
+    }
+
+    pub(super) fn end_rendering(&self, cmd: vk::CommandBuffer) {
+        // SAFETY: closes the scope opened by begin_rendering on this command buffer.
+        unsafe { self.device.raw.cmd_end_rendering(cmd) };
+    }
+
+    /// Inside a layered rendering scope: clears colour and depth of the faces in `mask`.
+    pub(super) fn clear_faces(&self, cmd: vk::CommandBuffer, mask: u8, size: u32) {
+        let attachments = [
+            vk::ClearAttachment {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                color_attachment: 0,
+                clear_value: CLEAR_COLOR,
+            },
+            vk::ClearAttachment {
+                aspect_mask: vk::ImageAspectFlags::DEPTH,
+                color_attachment: 0,
+                clear_value: CLEAR_DEPTH,
+            },
+        ];
+        let rects: Vec<vk::ClearRect> = (0..6u32)
+            .filter(|f| mask & (1 << f) != 0)
+            .map(|f| vk::ClearRect {
+                rect: vk::Rect2D {
+                    offset: vk::Offset2D::default(),
+                    extent: vk::Extent2D {
+                        width: size,
+                        height: size,
+                    },
+                },
+                base_array_layer: f,
+                layer_count: 1,
+            })
+            .collect();
+        // SAFETY: inside a rendering scope with 6 layers; the rects lie within it.
+        unsafe {
+            self.device
+                .raw
+                .cmd_clear_attachments(cmd, &attachments, &rects)
+        };
+    }
+
+    pub(super) fn set_viewport(&self, cmd: vk::CommandBuffer, x: f32, y: f32, w: f32, h: f32) {
+        let vp = vk::Viewport {
+            x,
+            y,
+            width: w,
+            height: h,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let scissor = vk::Rect2D {
+            offset: vk::Offset2D {
+                x: x as i32,
+                y: y as i32,
+            },
+            extent: vk::Extent2D {
+                width: w as u32,
+                height: h as u32,
+            },
+        };
+        // SAFETY: recording; viewport and scissor are dynamic in every pipeline.
+        unsafe {
+            self.device.raw.cmd_set_viewport(cmd, 0, &[vp]);
+            self.device.raw.cmd_set_scissor(cmd, 0, &[scissor]);
+        }
+    }
+}

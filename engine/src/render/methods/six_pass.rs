@@ -1,0 +1,46 @@
+//! Six-pass: one rendering scope per dirty face, drawing what that face's frustum holds.
+
+use ash::vk;
+
+use crate::render::cube_fill::CubePlan;
+use crate::render::draw::Attachments;
+use crate::render::gpu::Push;
+use crate::render::Renderer;
+
+pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
+    let size = r.cube.size;
+    for face in 0..6u32 {
+        if plan.dirty & (1 << face) != 0 {
+            r.device.begin_label(
+                cmd,
+                &format!("face {}", crate::render::camera::FACE_NAMES[face as usize]),
+            );
+            if let Some(q) = &r.statistics {
+                q.begin(cmd, face);
+            }
+            r.begin_rendering(
+                cmd,
+                &Attachments {
+                    color: r.cube.face_views[face as usize].raw,
+                    depth: r.cube.depth_views[face as usize].raw,
+                    size: [size, size],
+                    layers: 1,
+                    view_mask: 0,
+                    clear: true,
+                },
+            );
+            r.set_viewport(cmd, 0.0, 0.0, size as f32, size as f32);
+            let push = Push {
+                view_index: face,
+                ..Push::default()
+            };
+            r.draw_objects(cmd, &r.pipelines.cube, push, &plan.visible[face as usize]);
+            r.end_rendering(cmd);
+            if let Some(q) = &r.statistics {
+                q.end(cmd, face);
+            }
+            r.device.end_label(cmd);
+        }
+        r.face_timestamps(cmd, face..face + 1);
+    }
+}
