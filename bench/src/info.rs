@@ -3,7 +3,10 @@
 use std::process::ExitCode;
 
 use anyhow::Result;
+use specchio::render::methods::Method;
 use specchio::vk::device::{self, DeviceInfo, MIN_MESA_MAJOR};
+
+use crate::probe;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 #[derive(clap::Args)]
@@ -19,14 +22,27 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<ExitCode> {
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
     let candidates = device::enumerate(&instance)?;
+    // Which cube methods each usable device can run (multiview is probed in a child process).
+    let methods: Vec<Vec<(Method, Result<(), String>)>> = candidates
+        .iter()
+        .map(|c| match &c.rejected {
+            None => Method::ALL.iter().map(|&m| (m, probe::usable(m, &c.info))).collect(),
+            Some(_) => Vec::new(),
+        })
+        .collect();
     if args.json {
         let list: Vec<serde_json::Value> = candidates
             .iter()
-            .map(|c| {
+            .zip(&methods)
+            .map(|(c, ms)| {
                 let mut v = serde_json::to_value(&c.info).unwrap_or_default();
                 v["usable"] = serde_json::json!(c.rejected.is_none());
                 v["rejected_because"] = serde_json::json!(c.rejected);
                 v["mesa_too_old"] = serde_json::json!(mesa_too_old(&c.info));
+                v["methods"] = ms
+                    .iter()
+                    .map(|(m, r)| serde_json::json!({ "method": m, "usable": r.is_ok(), "reason": r.as_ref().err() }))
+                    .collect();
                 v
             })
             .collect();
@@ -39,8 +55,14 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if candidates.is_empty() {
         println!("no Vulkan device found (Debian: apt-get install mesa-vulkan-drivers)");
     }
-    for c in &candidates {
+    for (c, ms) in candidates.iter().zip(&methods) {
         print_device(&c.info, c.rejected.as_deref());
+        for (m, r) in ms {
+            match r {
+                Ok(()) => println!("    method {:<11} usable", m.name()),
+                Err(why) => println!("    method {:<11} NOT USABLE: {why}", m.name()),
+            }
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -150,6 +150,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             "sensor_resolution": scene.sensor.resolution,
             "validation": validation,
             "lp_num_threads": std::env::var("LP_NUM_THREADS").ok(),
+            "malloc_trim_threshold_bytes": crate::TRIM_THRESHOLD.get().copied().flatten(),
         },
         "device": info,
         "methods_not_run": refused.iter().map(|(m, why)| json!({ "method": m, "reason": why })).collect::<Vec<_>>(),

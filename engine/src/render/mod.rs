@@ -73,6 +73,8 @@ pub struct RenderOptions {
     /// Geometry method only: use the `invocations = 6` geometry shader instead of the loop
     /// (kept to measure the difference; see docs/methods.md).
     pub gs_invocations: bool,
+    /// Replaces the scene's refresh policy (benchmarks force `every-frame`).
+    pub refresh: Option<RefreshPolicy>,
 }
 
 /// What to copy back to the CPU after a frame.
@@ -188,6 +190,9 @@ impl Renderer {
     ) -> Result<Self, GpuError> {
         if let Some(size) = options.cube_size {
             scene.cube.face_size_px = size;
+        }
+        if let Some(policy) = options.refresh {
+            scene.refresh = policy;
         }
         let submitter = Submitter::create(device, "frame")?;
         let resources = SceneResources::create(device, &scene, &submitter)?;

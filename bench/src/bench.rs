@@ -1,0 +1,172 @@
+//! `specchio bench`: time every cube fill method on the same scenes, interleaved.
+//!
+//! A first slice of the benchmark command: full cube updates (refresh forced to every frame),
+//! methods interleaved within each round (A B C A B C ...) so a drifting machine hits all alike,
+//! pipelines built and a warm-up done before timing. Reports per method the median, p10 and p90
+//! of the wall time from submit to fence and of the GPU timestamps, and the work counters.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use serde_json::json;
+use specchio::output::write_json;
+use specchio::render::methods::{Method, RequiredFeatures};
+use specchio::render::{FrameReport, Readback, RenderOptions, Renderer};
+use specchio::scene::RefreshPolicy;
+use specchio::vk::device::{self, Device, DeviceDesc};
+use specchio::vk::instance::{Instance, InstanceDesc};
+
+use crate::probe;
+
+/// The default scene set (those that exist in this checkout).
+const DEFAULT_SCENES: [&str; 3] = ["scenes/thesis-room.toml", "scenes/moving-objects.toml", "scenes/many-objects.toml"];
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene files (default: thesis-room, moving-objects, many-objects).
+    scenes: Vec<PathBuf>,
+    /// Comma-separated methods (default: every usable one).
+    #[arg(long)]
+    methods: Option<String>,
+    /// Cube face size in texels.
+    #[arg(long, default_value_t = 512)]
+    cube_size: u32,
+    /// Timed cube updates per method.
+    #[arg(long, default_value_t = 20)]
+    updates: u32,
+    /// Untimed updates per method first.
+    #[arg(long, default_value_t = 3)]
+    warmup: u32,
+    /// Also write the results as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Vulkan device: index or part of its name.
+    #[arg(long)]
+    device: Option<String>,
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    let i = ((sorted.len() - 1) as f64 * p).round() as usize;
+    sorted[i]
+}
+
+fn stats(mut v: Vec<f64>) -> serde_json::Value {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        return json!(null);
+    }
+    json!({ "median": percentile(&v, 0.5), "p10": percentile(&v, 0.1), "p90": percentile(&v, 0.9) })
+}
+
+pub fn run(args: &Args) -> Result<ExitCode> {
+    if args.updates == 0 || args.updates > 100_000 || args.cube_size == 0 || args.cube_size > specchio::scene::MAX_FACE_SIZE_PX {
+        anyhow::bail!("--updates must be in 1..=100000 and --cube-size in 1..={}", specchio::scene::MAX_FACE_SIZE_PX);
+    }
+    let paths: Vec<PathBuf> = if args.scenes.is_empty() {
+        DEFAULT_SCENES.iter().map(PathBuf::from).filter(|p| p.exists()).collect()
+    } else {
+        args.scenes.clone()
+    };
+    let scenes = paths
+        .iter()
+        .map(|p| specchio::scene::load(p).map_err(anyhow::Error::from))
+        .collect::<Result<Vec<_>>>()?;
+    let instance = Instance::create(&InstanceDesc::from_env(false))?;
+    let chosen = device::choose(&instance, args.device.as_deref())?;
+    let wanted: Vec<Method> = match &args.methods {
+        None => Method::ALL.to_vec(),
+        Some(list) => list
+            .split(',')
+            .map(|n| Method::parse(n.trim()).with_context(|| format!("--methods: unknown method `{n}`")))
+            .collect::<Result<_>>()?,
+    };
+    let mut methods = Vec::new();
+    let mut refused = Vec::new();
+    for m in wanted {
+        match probe::usable(m, &chosen) {
+            Ok(()) => methods.push(m),
+            Err(why) => refused.push(json!({ "method": m, "reason": why })),
+        }
+    }
+    let features = methods.iter().fold(RequiredFeatures::default(), |f, m| f.union(m.features()));
+    let device = Device::create(&instance, &DeviceDesc { selector: args.device.clone(), features })?;
+
+    let mut results = Vec::new();
+    for (path, scene) in paths.iter().zip(&scenes) {
+        let mut renderers = methods
+            .iter()
+            .map(|&method| {
+                let options = RenderOptions {
+                    cube_size: Some(args.cube_size),
+                    method,
+                    refresh: Some(RefreshPolicy::EveryFrame),
+                    ..Default::default()
+                };
+                Renderer::new(&device, scene.clone(), &options)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let none = Readback::default();
+        let mut samples: Vec<Vec<FrameReport>> = vec![Vec::new(); methods.len()];
+        for round in 0..args.warmup + args.updates {
+            let t = f64::from(round) / 30.0;
+            for (i, r) in renderers.iter_mut().enumerate() {
+                let (report, _) = r.render_frame(u64::from(round), t, none)?;
+                if round >= args.warmup {
+                    samples[i].push(report);
+                }
+            }
+        }
+        println!("{} ({}² faces, {} updates per method, interleaved)", path.display(), args.cube_size, args.updates);
+        println!("  {:<10} {:>10} {:>10} {:>10} {:>11} {:>12} {:>14}", "method", "wall ms", "p10", "p90", "GPU fill ms", "vertex inv.", "fragment inv.");
+        for (m, reports) in methods.iter().zip(&samples) {
+            let wall = stats(reports.iter().map(|r| r.submit_wait_ms).collect());
+            let gpu = stats(reports.iter().filter_map(|r| r.gpu_fill_ms).collect());
+            let cube = stats(reports.iter().filter_map(|r| r.gpu_cube_ms).collect());
+            let counters = reports.last().and_then(|r| r.fill_stats);
+            let draws: u32 = reports.last().map_or(0, |r| r.draws_per_face.iter().sum());
+            let f = |v: &serde_json::Value, k: &str| v[k].as_f64().map_or("n/a".into(), |x| format!("{x:.2}"));
+            println!(
+                "  {:<10} {:>10} {:>10} {:>10} {:>11} {:>12} {:>14}",
+                m.name(),
+                f(&wall, "median"),
+                f(&wall, "p10"),
+                f(&wall, "p90"),
+                f(&gpu, "median"),
+                counters.map_or("n/a".into(), |c| c.vertex_invocations.to_string()),
+                counters.map_or("n/a".into(), |c| c.fragment_invocations.to_string()),
+            );
+            results.push(json!({
+                "scene": path.display().to_string(),
+                "method": m,
+                "cube_size": args.cube_size,
+                "updates": reports.len(),
+                "wall_ms": wall,
+                "gpu_fill_ms": gpu,
+                "gpu_fill_and_mips_ms": cube,
+                "fill_stats": counters,
+                "objects_drawn_per_face_total": draws,
+                "triangles": scene.objects.iter().map(|o| scene.meshes[o.mesh].triangle_count()).sum::<usize>() + 12,
+                "objects": scene.objects.len(),
+            }));
+        }
+    }
+    for r in &refused {
+        println!("  {}: not run: {}", r["method"].as_str().unwrap_or("?"), r["reason"].as_str().unwrap_or("?"));
+    }
+    if let Some(path) = &args.json {
+        let record = json!({
+            "command": std::env::args().collect::<Vec<_>>().join(" "),
+            "device": device.info,
+            "environment": {
+                "lp_num_threads": std::env::var("LP_NUM_THREADS").ok(),
+                "malloc_trim_threshold_bytes": crate::TRIM_THRESHOLD.get().copied().flatten(),
+                "cpus": std::thread::available_parallelism().map(|n| n.get()).ok(),
+            },
+            "methods_not_run": refused,
+            "results": results,
+        });
+        write_json(path, &record)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
