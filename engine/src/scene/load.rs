@@ -1448,6 +1448,31 @@ mod tests {
             Some(12),
             "materials[0].color[1]",
         ),
+        (
+            "generate-count-zero.toml",
+            Some(11),
+            "generate[0].count: must be in 1..=100000, got 0",
+        ),
+        (
+            "generate-count-huge.toml",
+            Some(11),
+            "generate[0].count: must be in 1..=100000, got 1000000000",
+        ),
+        (
+            "generate-region-outside-room.toml",
+            Some(15),
+            "generate[0].region_max[1]: 7.5 is outside the room (y from 0 to 6)",
+        ),
+        (
+            "generate-unknown-material.toml",
+            Some(16),
+            "generate[0].materials[1]: unknown material \"gold\"",
+        ),
+        (
+            "generate-nan-size.toml",
+            Some(13),
+            "generate[0].size[0]: must be a finite number, got NaN",
+        ),
     ];
 
     #[test]
