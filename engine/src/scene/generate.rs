@@ -194,10 +194,11 @@ pub(super) fn is_clear(
     gap(approach(o), y, f64::from(o.y), f64::from(o.y)) > keep + reach
 }
 
-/// True when a moving object's orbit keeps it (centre plus half its size) inside the room.
-pub(super) fn orbit_fits(env: &Surroundings, p: Vec3, size: f32) -> bool {
+/// True when a moving object's orbit keeps its centre at least half of `reach` (its size for
+/// built-in shapes) away from the side walls.
+pub(super) fn orbit_fits(env: &Surroundings, p: Vec3, reach: f64) -> bool {
     let limit = 0.5 * f64::from(env.room_size.x.min(env.room_size.z));
-    horizontal_distance(p, env.room_center) + 0.5 * f64::from(size) <= limit
+    horizontal_distance(p, env.room_center) + 0.5 * reach <= limit
 }
 
 /// Expands a generator into objects, in order `name[0]`, `name[1]`, ...
@@ -233,7 +234,7 @@ pub(super) fn expand(p: &Params, env: &Surroundings) -> Result<Vec<Object>, Plac
                 rng.between(lo.y, hi.y),
                 rng.between(lo.z, hi.z),
             );
-            if moves && !orbit_fits(env, candidate, size) {
+            if moves && !orbit_fits(env, candidate, reach) {
                 failure.orbit_outside += 1;
             } else if !is_clear(env, p.keep_clear, candidate, reach, moves) {
                 failure.too_close += 1;
