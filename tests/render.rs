@@ -209,7 +209,8 @@ fn mirror_is_drawn_from_inside_its_bounding_cube() {
 fn directional_light_known_answers() {
     let gpu = Gpu::new();
     let path = common::root().join("scenes/test/six-colour-room.toml");
-    let text = std::fs::read_to_string(&path).unwrap() + "\n[light]\ndirection = [0, 1, 0]\nambient = 0.25\n";
+    let text = std::fs::read_to_string(&path).unwrap()
+        + "\n[light]\ndirection = [0, 1, 0]\nambient = 0.25\n";
     let s = specchio::scene::load_str(&text, &path).expect("scene with a light");
     let (_, images) = render_once(&gpu, s, 16, 0.0);
     let faces = images.cube.unwrap();
@@ -217,7 +218,11 @@ fn directional_light_known_answers() {
         let scale = if f == 3 { 1.0 } else { 0.25 }; // -Y (floor) faces the light
         let want = wall.map(|c| c * scale);
         let got = faces[f].pixel(8, 8);
-        assert!(close(got, want, 1e-3), "face {}: got {got:?}, want {want:?}", FACE_NAMES[f]);
+        assert!(
+            close(got, want, 1e-3),
+            "face {}: got {got:?}, want {want:?}",
+            FACE_NAMES[f]
+        );
     }
     gpu.finish();
 }
@@ -235,8 +240,14 @@ fn moving_objects_scene_renders() {
     // Each face draws at most its five walls plus every object; together they draw some
     // objects, and culling keeps the total below drawing everything into every face.
     assert!(drawn > 6 * 5 - 6, "faces drew {drawn} objects");
-    assert!(drawn < 6 * (6 + objects), "culling removed nothing ({drawn})");
+    assert!(
+        drawn < 6 * (6 + objects),
+        "culling removed nothing ({drawn})"
+    );
     let faces = images.cube.unwrap();
-    assert!(faces.iter().flat_map(|f| &f.pixels).all(|p| p.iter().all(|c| c.is_finite())));
+    assert!(faces
+        .iter()
+        .flat_map(|f| &f.pixels)
+        .all(|p| p.iter().all(|c| c.is_finite())));
     gpu.finish();
 }
