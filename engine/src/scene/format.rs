@@ -24,6 +24,8 @@ pub struct SceneFile {
     pub materials: Vec<MaterialSpec>,
     #[serde(default)]
     pub objects: Vec<ObjectSpec>,
+    #[serde(default)]
+    pub generate: Vec<GenerateSpec>,
     pub observer: Option<ObserverSpec>,
     pub sensor: Option<SensorSpec>,
     pub cube: Option<CubeSpec>,
@@ -124,6 +126,25 @@ pub struct ObjectSpec {
     pub scale: Option<ScaleSpec>,
     pub material: String,
     pub animation: Option<AnimationSpec>,
+}
+
+/// `[[generate]]`: many objects placed by a seeded PRNG (see `generate.rs`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GenerateSpec {
+    pub name: Option<String>,
+    pub count: i64,
+    pub seed: Option<i64>,
+    pub shapes: Vec<Shape>,
+    pub file: Option<String>,
+    pub size: [f64; 2],
+    pub segments: Option<i64>,
+    pub region_min: V3,
+    pub region_max: V3,
+    pub keep_clear: Option<f64>,
+    pub materials: Vec<String>,
+    pub moving: Option<f64>,
+    pub period: Option<[f64; 2]>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -18,6 +18,10 @@ use toml::Spanned;
 use super::anim::{Animation, Repeat};
 use super::error::{Location, SceneError};
 use super::format::*;
+use super::generate::{
+    self, Params, ShapeChoice, Surroundings, DEFAULT_SEGMENTS, MAX_COUNT, MAX_SEGMENTS,
+    PLACEMENT_TRIES,
+};
 use super::mesh::Mesh;
 use super::texture::TextureData;
 use super::{
@@ -26,6 +30,8 @@ use super::{
 };
 
 type R<T> = Result<T, SceneError>;
+/// Builds a mesh on first use (the loader caches meshes by a key describing them).
+type MeshBuilder = Box<dyn Fn() -> Result<Mesh, String>>;
 
 /// How many evenly spaced times an animation is checked at (plus its keyframes).
 const ANIMATION_SAMPLES: usize = 64;
@@ -398,6 +404,40 @@ impl Ctx<'_> {
 
         let observer = self.observer(spec.observer.as_ref(), &room, &mirror)?;
         let sensor = self.sensor(spec.sensor.as_ref(), &room, &mirror)?;
+        // Generated objects come after the file's own, and keep clear of the cameras.
+        let surroundings = Surroundings {
+            room_center: room.center,
+            room_size: room.size_m,
+            mirror_center: mirror.center,
+            mirror_radius: mirror.radius_m,
+            sensor_offset: sensor.offset_m,
+            observer: observer.position,
+        };
+        for (i, g) in spec.generate.iter().enumerate() {
+            let params =
+                self.generator(i, g, &material_index, &room, &mut meshes, &mut mesh_cache)?;
+            let made = generate::expand(&params, &surroundings).map_err(|fail| {
+                let (field, why) = if fail.orbit_outside > fail.too_close {
+                    (
+                        "moving",
+                        "its orbit about the room's vertical axis left the room",
+                    )
+                } else {
+                    (
+                        "keep_clear",
+                        "it was too close to the mirror, the sensor's view of it or the observer",
+                    )
+                };
+                self.invalid(
+                    &format!("generate[{i}].{field}"),
+                    format!(
+                        "cannot place {}[{}]: {PLACEMENT_TRIES} positions tried, {} too close, {} with the orbit outside the room; mostly {why} (enlarge the region, or lower keep_clear, size or moving)",
+                        params.name, fail.object, fail.too_close, fail.orbit_outside
+                    ),
+                )
+            })?;
+            objects.extend(made);
+        }
         let cube = self.cube(spec.cube.as_ref())?;
         let refresh = self.refresh(spec.refresh.as_ref())?;
         let light = match &spec.light {
@@ -745,6 +785,62 @@ impl Ctx<'_> {
         })
     }
 
+    /// The cache key and loader of a mesh file named by `field`.
+    fn mesh_file(&self, field: &str, file: &str) -> R<(String, MeshBuilder)> {
+        let path = self.dir.join(file);
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        let p = path.clone();
+        let build: MeshBuilder = match ext.as_deref() {
+            Some("obj") => Box::new(move || {
+                if !p.is_file() {
+                    return Err("file not found".into());
+                }
+                Mesh::from_obj(&p)
+            }),
+            Some("gltf") | Some("glb") => Box::new(move || {
+                if !p.is_file() {
+                    return Err("file not found".into());
+                }
+                Mesh::from_gltf(&p)
+            }),
+            _ => {
+                return Err(self.invalid(
+                    field,
+                    format!("unsupported mesh file \"{file}\": expected .obj, .gltf or .glb"),
+                ))
+            }
+        };
+        Ok((format!("file:{}", path.display()), build))
+    }
+
+    /// The index of the mesh cached under `key`, building and storing it on first use. A build
+    /// failure is an asset error at `field` (the field naming `file`, if any).
+    fn cached_mesh(
+        &self,
+        field: &str,
+        file: Option<&str>,
+        key: String,
+        build: MeshBuilder,
+        meshes: &mut Vec<Mesh>,
+        cache: &mut HashMap<String, usize>,
+    ) -> R<usize> {
+        if let Some(&index) = cache.get(&key) {
+            return Ok(index);
+        }
+        let m = build().map_err(|message| SceneError::Asset {
+            location: self.loc.location(field),
+            field: field.to_string(),
+            asset: self.dir.join(file.unwrap_or_default()),
+            message,
+        })?;
+        meshes.push(m);
+        cache.insert(key, meshes.len() - 1);
+        Ok(meshes.len() - 1)
+    }
+
     fn object(
         &self,
         i: usize,
@@ -781,7 +877,7 @@ impl Ctx<'_> {
         };
         // Built-in shapes are generated at their real size (no scale in the normals) and
         // shared between objects with the same parameters.
-        let (key, build): (String, Box<dyn Fn() -> Result<Mesh, String>>) = match o.shape {
+        let (key, build): (String, MeshBuilder) = match o.shape {
             Shape::Box => {
                 let size = self.positive3(
                     &f("size"),
@@ -813,51 +909,10 @@ impl Ctx<'_> {
                     .file
                     .as_ref()
                     .ok_or_else(|| self.missing(&f("file"), "a .obj, .gltf or .glb file"))?;
-                let path = self.dir.join(file);
-                let ext = path
-                    .extension()
-                    .and_then(|e| e.to_str())
-                    .map(str::to_ascii_lowercase);
-                let p = path.clone();
-                let build: Box<dyn Fn() -> Result<Mesh, String>> = match ext.as_deref() {
-                    Some("obj") => Box::new(move || {
-                        if !p.is_file() {
-                            return Err("file not found".into());
-                        }
-                        Mesh::from_obj(&p)
-                    }),
-                    Some("gltf") | Some("glb") => Box::new(move || {
-                        if !p.is_file() {
-                            return Err("file not found".into());
-                        }
-                        Mesh::from_gltf(&p)
-                    }),
-                    _ => {
-                        return Err(self.invalid(
-                            &f("file"),
-                            format!(
-                                "unsupported mesh file \"{file}\": expected .obj, .gltf or .glb"
-                            ),
-                        ))
-                    }
-                };
-                (format!("file:{}", path.display()), build)
+                self.mesh_file(&f("file"), file)?
             }
         };
-        let mesh = match cache.get(&key) {
-            Some(&index) => index,
-            None => {
-                let m = build().map_err(|message| SceneError::Asset {
-                    location: self.loc.location(&f("file")),
-                    field: f("file"),
-                    asset: self.dir.join(o.file.as_deref().unwrap_or_default()),
-                    message,
-                })?;
-                meshes.push(m);
-                cache.insert(key, meshes.len() - 1);
-                meshes.len() - 1
-            }
-        };
+        let mesh = self.cached_mesh(&f("file"), o.file.as_deref(), key, build, meshes, cache)?;
         let material = material(&f("material"), &o.material)?;
         let rotation = match o.rotation {
             Some(r) => {
@@ -902,6 +957,204 @@ impl Ctx<'_> {
             scale,
             animation,
         })
+    }
+
+    /// Validates a `[[generate]]` table and builds (or reuses) its unit meshes.
+    fn generator(
+        &self,
+        i: usize,
+        g: &GenerateSpec,
+        material: &dyn Fn(&str, &str) -> R<usize>,
+        room: &Room,
+        meshes: &mut Vec<Mesh>,
+        cache: &mut HashMap<String, usize>,
+    ) -> R<Params> {
+        let f = |name: &str| format!("generate[{i}].{name}");
+        let name = match &g.name {
+            Some(n) if n.trim().is_empty() => {
+                return Err(self.invalid(&f("name"), "must not be empty"))
+            }
+            Some(n) => n.clone(),
+            None => format!("generate[{i}]"),
+        };
+        let count = self.count(&f("count"), g.count, MAX_COUNT)?;
+        let seed = match g.seed {
+            None => 0,
+            Some(s) => u64::try_from(s).map_err(|_| {
+                self.invalid(&f("seed"), format!("must be in 0..={}, got {s}", i64::MAX))
+            })?,
+        };
+
+        // Shapes: which fields they need.
+        if g.shapes.is_empty() {
+            return Err(self.invalid(&f("shapes"), "needs at least one shape"));
+        }
+        let has = |s: Shape| g.shapes.contains(&s);
+        let round = has(Shape::Sphere) || has(Shape::Cylinder);
+        if g.segments.is_some() && !round {
+            return Err(self.unused(
+                &f("segments"),
+                "segments is used only when shapes has \"sphere\" or \"cylinder\"",
+            ));
+        }
+        let segments = match g.segments {
+            Some(n) if n < 3 || n > i64::from(MAX_SEGMENTS) => {
+                return Err(self.invalid(
+                    &f("segments"),
+                    format!("must be in 3..={MAX_SEGMENTS}, got {n}"),
+                ))
+            }
+            Some(n) => n as u32,
+            None => DEFAULT_SEGMENTS,
+        };
+        match (&g.file, has(Shape::Mesh)) {
+            (None, true) => {
+                return Err(self.missing(&f("file"), "shapes has \"mesh\": a .obj, .gltf or .glb"))
+            }
+            (Some(_), false) => {
+                return Err(self.unused(&f("file"), "file is used only when shapes has \"mesh\""))
+            }
+            _ => {}
+        }
+        let mut shapes = Vec::with_capacity(g.shapes.len());
+        for &shape in &g.shapes {
+            // Unit-size shapes (size 1 m) scaled per object; one mesh per shape and
+            // tessellation, shared by every generator.
+            let unit = |mesh| ShapeChoice {
+                mesh,
+                scale_per_size: 1.0,
+                reach_per_size: 1.0,
+            };
+            let rings = (segments / 2).max(2);
+            let choice = match shape {
+                Shape::Box => unit(self.cached_mesh(
+                    &f("shapes"),
+                    None,
+                    "unit-box".into(),
+                    Box::new(|| Ok(Mesh::cuboid(Vec3::splat(0.5)))),
+                    meshes,
+                    cache,
+                )?),
+                Shape::Sphere => unit(self.cached_mesh(
+                    &f("shapes"),
+                    None,
+                    format!("unit-sphere:{segments}"),
+                    Box::new(move || Ok(Mesh::uv_sphere(0.5, segments, rings))),
+                    meshes,
+                    cache,
+                )?),
+                Shape::Cylinder => unit(self.cached_mesh(
+                    &f("shapes"),
+                    None,
+                    format!("unit-cylinder:{segments}"),
+                    Box::new(move || Ok(Mesh::cylinder(0.5, 0.5, segments))),
+                    meshes,
+                    cache,
+                )?),
+                Shape::Mesh => {
+                    let file = g.file.as_deref().unwrap_or_default();
+                    let (key, build) = self.mesh_file(&f("file"), file)?;
+                    let index =
+                        self.cached_mesh(&f("file"), Some(file), key, build, meshes, cache)?;
+                    let m = &meshes[index];
+                    // Size = the largest side of the bounding box; the clearance radius also
+                    // covers the farthest vertex from the mesh's origin.
+                    let side = (m.bounds_max - m.bounds_min).max_element();
+                    if !(side > 0.0 && side.is_finite()) {
+                        return Err(self.invalid(
+                            &f("file"),
+                            format!("mesh \"{file}\" has no extent to scale"),
+                        ));
+                    }
+                    let farthest = m
+                        .positions
+                        .iter()
+                        .map(|p| p.length())
+                        .fold(0.0f32, f32::max);
+                    ShapeChoice {
+                        mesh: index,
+                        scale_per_size: 1.0 / side,
+                        reach_per_size: (farthest / side).max(1.0),
+                    }
+                }
+            };
+            shapes.push(choice);
+        }
+
+        if g.materials.is_empty() {
+            return Err(self.invalid(&f("materials"), "needs at least one material"));
+        }
+        let mut materials = Vec::with_capacity(g.materials.len());
+        for (j, m) in g.materials.iter().enumerate() {
+            materials.push(material(&f(&format!("materials[{j}]")), m)?);
+        }
+
+        let size = self.interval(&f("size"), g.size)?;
+
+        let region_min = self.vec3(&f("region_min"), g.region_min)?;
+        let region_max = self.vec3(&f("region_max"), g.region_max)?;
+        let (lo, hi) = (
+            room.center - room.size_m * 0.5,
+            room.center + room.size_m * 0.5,
+        );
+        for axis in 0..3 {
+            let (a, b) = (region_min[axis], region_max[axis]);
+            let letter = ["x", "y", "z"][axis];
+            for (field, v) in [("region_min", a), ("region_max", b)] {
+                if v < lo[axis] || v > hi[axis] {
+                    return Err(self.invalid(
+                        &f(&format!("{field}[{axis}]")),
+                        format!(
+                            "{v} is outside the room ({letter} from {} to {})",
+                            lo[axis], hi[axis]
+                        ),
+                    ));
+                }
+            }
+            if a > b {
+                return Err(self.invalid(
+                    &f(&format!("region_max[{axis}]")),
+                    format!("must be >= region_min[{axis}] ({a}), got {b}"),
+                ));
+            }
+        }
+
+        let keep_clear = self.num(&f("keep_clear"), g.keep_clear.unwrap_or(0.0))?;
+        if keep_clear < 0.0 {
+            return Err(self.invalid(&f("keep_clear"), format!("must be >= 0, got {keep_clear}")));
+        }
+        let moving = self.in_range(&f("moving"), g.moving.unwrap_or(0.0), 0.0, 1.0, false)?;
+        if g.period.is_some() && moving == 0.0 {
+            return Err(self.unused(&f("period"), "period is used only when moving > 0"));
+        }
+        let period = self.interval(&f("period"), g.period.unwrap_or([8.0, 20.0]))?;
+
+        Ok(Params {
+            name,
+            count,
+            seed,
+            shapes,
+            materials,
+            size,
+            region_min,
+            region_max,
+            keep_clear,
+            moving,
+            period,
+        })
+    }
+
+    /// `[min, max]` with 0 < min <= max.
+    fn interval(&self, field: &str, v: [f64; 2]) -> R<[f32; 2]> {
+        let lo = self.positive(&format!("{field}[0]"), v[0])?;
+        let hi = self.positive(&format!("{field}[1]"), v[1])?;
+        if hi < lo {
+            return Err(self.invalid(
+                &format!("{field}[1]"),
+                format!("must be >= {field}[0] ({lo}), got {hi}"),
+            ));
+        }
+        Ok([lo, hi])
     }
 
     fn observer(&self, spec: Option<&ObserverSpec>, room: &Room, mirror: &Mirror) -> R<Camera> {
@@ -1195,6 +1448,31 @@ mod tests {
             Some(12),
             "materials[0].color[1]",
         ),
+        (
+            "generate-count-zero.toml",
+            Some(11),
+            "generate[0].count: must be in 1..=100000, got 0",
+        ),
+        (
+            "generate-count-huge.toml",
+            Some(11),
+            "generate[0].count: must be in 1..=100000, got 1000000000",
+        ),
+        (
+            "generate-region-outside-room.toml",
+            Some(15),
+            "generate[0].region_max[1]: 7.5 is outside the room (y from 0 to 6)",
+        ),
+        (
+            "generate-unknown-material.toml",
+            Some(16),
+            "generate[0].materials[1]: unknown material \"gold\"",
+        ),
+        (
+            "generate-nan-size.toml",
+            Some(13),
+            "generate[0].size[0]: must be a finite number, got NaN",
+        ),
     ];
 
     #[test]
@@ -1340,6 +1618,7 @@ mod tests {
         for rel in [
             "scenes/thesis-room.toml",
             "scenes/moving-objects.toml",
+            "scenes/many-objects.toml",
             "scenes/test/six-colour-room.toml",
             "scenes/test/direction-room.toml",
         ] {
@@ -1385,6 +1664,250 @@ mod tests {
         assert_eq!(colour(4), Vec3::new(0.0, 0.0, 1.0));
         assert_eq!(colour(5), Vec3::new(1.0, 1.0, 0.0));
         assert_eq!(six.refresh, RefreshPolicy::EveryFrame);
+    }
+
+    fn triangles(s: &Scene) -> usize {
+        s.objects
+            .iter()
+            .map(|o| s.meshes[o.mesh].triangle_count())
+            .sum()
+    }
+
+    /// An object as exactly comparable data: name, mesh, material, the bits of position,
+    /// rotation and scale, and the animation.
+    type ObjectBits = (String, usize, usize, [u32; 10], Option<Animation>);
+
+    fn bits(s: &Scene) -> Vec<ObjectBits> {
+        s.objects
+            .iter()
+            .map(|o| {
+                let (p, r, k) = (o.position, o.rotation, o.scale);
+                let v = [p.x, p.y, p.z, r.x, r.y, r.z, r.w, k.x, k.y, k.z];
+                (
+                    o.name.clone(),
+                    o.mesh,
+                    o.material,
+                    v.map(f32::to_bits),
+                    o.animation.clone(),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn many_objects_scene_has_the_stated_counts() {
+        let s = load(&repo("scenes/many-objects.toml")).unwrap_or_else(|e| panic!("{e}"));
+        let moving = s.objects.iter().filter(|o| o.animation.is_some()).count();
+        let tris = triangles(&s);
+        eprintln!(
+            "many-objects: {} objects, {tris} triangles, {moving} moving, {} meshes",
+            s.objects.len(),
+            s.meshes.len()
+        );
+        assert_eq!(s.objects.len(), 2000);
+        assert!((190_000..=210_000).contains(&tris), "{tris} triangles");
+        assert_eq!(moving, 200);
+        // One mesh per (shape, tessellation): box, sphere 16, cylinder 16.
+        assert_eq!(s.meshes.len(), 3);
+        assert_eq!(s.refresh, RefreshPolicy::OnChange);
+        assert_eq!(s.cube.face_size_px, 512);
+        assert_eq!(s.mirror.radius_m, 1.0);
+    }
+
+    #[test]
+    fn generation_is_deterministic_and_seeded() {
+        let path = repo("scenes/many-objects.toml");
+        let a = load(&path).unwrap();
+        let b = load(&path).unwrap();
+        assert_eq!(bits(&a), bits(&b));
+        assert_eq!(a.meshes, b.meshes);
+
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.contains("seed = 7\n"));
+        let c = load_str(&text.replace("seed = 7\n", "seed = 8\n"), &path).unwrap();
+        let (a, c) = (bits(&a), bits(&c));
+        // The first generator is untouched; the reseeded one has a different layout.
+        assert_eq!(a[..1800], c[..1800]);
+        let same = a[1800..]
+            .iter()
+            .zip(&c[1800..])
+            .filter(|(x, y)| x.3[..3] == y.3[..3])
+            .count();
+        assert_eq!(same, 0, "{same} of 200 positions unchanged by the new seed");
+    }
+
+    #[test]
+    fn generated_objects_stay_in_their_region_and_clear_of_the_mirror() {
+        let s = load(&repo("scenes/many-objects.toml")).unwrap();
+        let (lo, hi) = (
+            s.room.center - s.room.size_m * 0.5,
+            s.room.center + s.room.size_m * 0.5,
+        );
+        let regions = [
+            (
+                "clutter[",
+                Vec3::new(-4.6, 0.2, -4.6),
+                Vec3::new(4.6, 5.6, 4.6),
+            ),
+            (
+                "orbiters[",
+                Vec3::new(-4.5, 0.5, -4.5),
+                Vec3::new(4.5, 5.5, 4.5),
+            ),
+        ];
+        let keep_clear = 0.5;
+        let sensor = s.mirror.center - Vec3::Y * s.sensor.offset_m;
+        for o in &s.objects {
+            let (_, rmin, rmax) = regions
+                .iter()
+                .find(|r| o.name.starts_with(r.0))
+                .unwrap_or_else(|| panic!("{}", o.name));
+            assert!(
+                o.position.cmpge(*rmin).all() && o.position.cmple(*rmax).all(),
+                "{} at {} outside its region",
+                o.name,
+                o.position
+            );
+            // Built-in unit shapes: the scale is the size.
+            let size = o.scale.x;
+            assert!(o.scale == Vec3::splat(size) && (0.1..=0.4).contains(&size));
+            for t in sample_times(o.animation.as_ref()) {
+                let p = position_at(o.animation.as_ref(), o.position, t);
+                assert!(
+                    p.cmpge(lo).all() && p.cmple(hi).all(),
+                    "{} leaves the room",
+                    o.name
+                );
+                let d = p.distance(s.mirror.center);
+                assert!(
+                    d > s.mirror.radius_m + keep_clear + size - 1e-4,
+                    "{} at t = {t} is {d} m from the mirror centre",
+                    o.name
+                );
+                // The sensor's line of sight (the vertical segment below the mirror centre).
+                let y = p.y.clamp(sensor.y, s.mirror.center.y);
+                let to_axis = p.distance(Vec3::new(sensor.x, y, sensor.z));
+                assert!(to_axis > s.mirror.radius_m + keep_clear + size - 1e-4);
+                assert!(p.distance(s.observer.position) > keep_clear + size - 1e-4);
+            }
+        }
+    }
+
+    #[test]
+    fn generator_rules_with_their_fields() {
+        let gen = "[[generate]]\ncount = 10\nshapes = [\"box\"]\nsize = [0.1, 0.2]\n\
+                   region_min = [-4, 1, -4]\nregion_max = [4, 5, 4]\nmaterials = [\"w\"]\n";
+        let ok = load_str(&format!("{MINIMAL}{gen}"), Path::new("g.toml")).unwrap();
+        assert_eq!(ok.objects.len(), 10);
+        assert_eq!(ok.objects[3].name, "generate[0][3]");
+        assert!(ok.objects.iter().all(|o| o.animation.is_none()));
+        let cases: &[(&str, &str)] = &[
+            ("count = 10", "count = 0"),
+            ("count = 10", "count = 100001"),
+            ("count = 10", "count = 10\nseed = -1"),
+            ("shapes = [\"box\"]", "shapes = []"),
+            ("shapes = [\"box\"]", "shapes = [\"mesh\"]"),
+            ("shapes = [\"box\"]", "shapes = [\"box\"]\nfile = \"a.obj\""),
+            ("shapes = [\"box\"]", "shapes = [\"box\"]\nsegments = 8"),
+            ("shapes = [\"box\"]", "shapes = [\"sphere\"]\nsegments = 2"),
+            ("size = [0.1, 0.2]", "size = [0.3, 0.2]"),
+            ("size = [0.1, 0.2]", "size = [0, 0.2]"),
+            ("region_max = [4, 5, 4]", "region_max = [4, 0.5, 4]"),
+            ("region_min = [-4, 1, -4]", "region_min = [-4, -1, -4]"),
+            ("materials = [\"w\"]", "materials = []"),
+            ("materials = [\"w\"]", "materials = [\"w\", \"gold\"]"),
+            ("count = 10", "count = 10\nkeep_clear = -1"),
+            ("count = 10", "count = 10\nmoving = 1.5"),
+            ("count = 10", "count = 10\nperiod = [8, 20]"),
+            ("count = 10", "count = 10\nmoving = 1\nperiod = [20, 8]"),
+            ("count = 10", "count = 10\nname = \" \""),
+            ("count = 10", "count = 10\ncolour = 3"),
+            // The region lies inside the mirror's keep-clear zone: nowhere to put anything.
+            (
+                "region_min = [-4, 1, -4]\nregion_max = [4, 5, 4]",
+                "region_min = [-0.5, 2.5, -0.5]\nregion_max = [0.5, 3.5, 0.5]\nkeep_clear = 0.1",
+            ),
+            // Every position in the region's corners is too far out for an orbit.
+            (
+                "region_min = [-4, 1, -4]\nregion_max = [4, 5, 4]",
+                "region_min = [4, 1, 4]\nregion_max = [4.9, 5, 4.9]\nmoving = 1",
+            ),
+        ];
+        let expected = [
+            "generate[0].count: must be in 1..=100000, got 0",
+            "generate[0].count: must be in 1..=100000, got 100001",
+            "generate[0].seed: must be in 0..=",
+            "generate[0].shapes: needs at least one shape",
+            "generate[0].file: required field is missing",
+            "generate[0].file: not allowed here",
+            "generate[0].segments: not allowed here",
+            "generate[0].segments: must be in 3..=256, got 2",
+            "generate[0].size[1]: must be >= generate[0].size[0]",
+            "generate[0].size[0]: must be positive",
+            "generate[0].region_max[1]: must be >= region_min[1]",
+            "generate[0].region_min[1]: -1 is outside the room (y from 0 to 6)",
+            "generate[0].materials: needs at least one material",
+            "generate[0].materials[1]: unknown material \"gold\"",
+            "generate[0].keep_clear: must be >= 0",
+            "generate[0].moving: must be in [0, 1]",
+            "generate[0].period: not allowed here",
+            "generate[0].period[1]: must be >=",
+            "generate[0].name: must not be empty",
+            "generate[0].colour: unknown field",
+            "generate[0].keep_clear: cannot place generate[0][0]",
+            "generate[0].moving: cannot place generate[0][0]",
+        ];
+        assert_eq!(cases.len(), expected.len());
+        for ((from, to), needle) in cases.iter().zip(expected) {
+            assert!(gen.contains(from), "{from}");
+            let text = format!("{MINIMAL}{}", gen.replace(from, to));
+            let err = load_str(&text, Path::new("case.toml")).expect_err(to);
+            let msg = err.to_string();
+            assert!(msg.contains(needle), "{to:?}: expected {needle:?} in {msg}");
+            assert!(msg.starts_with("case.toml:"), "{msg}");
+            assert!(err.line().is_some(), "{msg}");
+        }
+    }
+
+    #[test]
+    fn generated_meshes_are_shared_and_scaled() {
+        let text = format!(
+            "{MINIMAL}[[objects]]\nshape = \"mesh\"\nfile = \"meshes/arrow.obj\"\n\
+             position = [3, 1, 3]\nmaterial = \"w\"\n\
+             [[generate]]\nname = \"a\"\ncount = 50\nshapes = [\"box\", \"sphere\", \"mesh\"]\n\
+             file = \"meshes/arrow.obj\"\nsize = [0.2, 0.2]\nsegments = 8\n\
+             region_min = [-4, 1, -4]\nregion_max = [4, 5, 4]\nmaterials = [\"w\"]\n\
+             [[generate]]\nname = \"b\"\ncount = 50\nshapes = [\"box\", \"cylinder\"]\n\
+             size = [0.3, 0.5]\nsegments = 8\n\
+             region_min = [-4, 1, -4]\nregion_max = [4, 5, 4]\nmaterials = [\"w\"]\n"
+        );
+        let s = load_str(&text, &repo("scenes/gen.toml")).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.objects.len(), 101);
+        assert_eq!(s.objects[1].name, "a[0]");
+        assert_eq!(s.objects[100].name, "b[49]");
+        // arrow (shared with the file's object), unit box, sphere 8, cylinder 8.
+        assert_eq!(s.meshes.len(), 4);
+        let arrow = &s.meshes[s.objects[0].mesh];
+        let side = (arrow.bounds_max - arrow.bounds_min).max_element();
+        for o in &s.objects[1..] {
+            let m = &s.meshes[o.mesh];
+            // Every generated object's bounding box has the drawn size as its largest side.
+            let extent = ((m.bounds_max - m.bounds_min) * o.scale).max_element();
+            if o.name.starts_with("a[") {
+                assert!((extent - 0.2).abs() < 1e-5, "{}: {extent}", o.name);
+            } else {
+                assert!((0.3 - 1e-5..=0.5 + 1e-5).contains(&extent), "{}", o.name);
+            }
+            if o.mesh == s.objects[0].mesh {
+                assert!((o.scale.x - 0.2 / side).abs() < 1e-6);
+            }
+        }
+        let sphere = s
+            .meshes
+            .iter()
+            .filter(|m| m.triangle_count() == 8 * 6)
+            .count();
+        assert_eq!(sphere, 1, "sphere of 8 segments x 4 rings: 48 triangles");
     }
 
     #[test]

@@ -14,6 +14,7 @@ use glam::{Quat, Vec2, Vec3};
 mod anim;
 mod error;
 mod format;
+mod generate;
 mod load;
 mod mesh;
 mod texture;
