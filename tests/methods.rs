@@ -98,6 +98,49 @@ fn methods_match_six_pass_on_thesis_room() {
 }
 
 #[test]
+fn methods_match_six_pass_on_many_objects() {
+    methods_match_six_pass("scenes/many-objects.toml", 64, 3.0);
+}
+
+/// The measured-and-rejected geometry shader variant (`invocations = 6`) draws the same too.
+#[test]
+fn geometry_invocations_variant_matches_six_pass() {
+    let gpu = Gpu::with_features(all_features());
+    if Method::Geometry
+        .missing_features(&gpu.device.info)
+        .is_some()
+    {
+        return gpu.finish();
+    }
+    let s = scene("scenes/moving-objects.toml");
+    let reference = cube(&gpu, &s, Method::SixPass, 64, &[1.0], true);
+    let options = RenderOptions {
+        cube_size: Some(64),
+        method: Method::Geometry,
+        gs_invocations: true,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&gpu.device, s, &options).expect("renderer");
+    let (_, images) = r
+        .render_frame(
+            0,
+            1.0,
+            Readback {
+                cube: true,
+                views: false,
+            },
+        )
+        .expect("frame");
+    assert_same(
+        &reference[0].1,
+        &images.cube.expect("cube"),
+        "geometry (invocations = 6) vs six-pass",
+    );
+    drop(r);
+    gpu.finish();
+}
+
+#[test]
 fn methods_match_six_pass_on_moving_objects() {
     methods_match_six_pass("scenes/moving-objects.toml", 128, 2.25);
 }

@@ -20,7 +20,11 @@ use specchio::vk::instance::{Instance, InstanceDesc};
 use crate::probe;
 
 /// The default scene set (those that exist in this checkout).
-const DEFAULT_SCENES: [&str; 3] = ["scenes/thesis-room.toml", "scenes/moving-objects.toml", "scenes/many-objects.toml"];
+const DEFAULT_SCENES: [&str; 3] = [
+    "scenes/thesis-room.toml",
+    "scenes/moving-objects.toml",
+    "scenes/many-objects.toml",
+];
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -44,6 +48,10 @@ pub struct Args {
     /// Vulkan device: index or part of its name.
     #[arg(long)]
     device: Option<String>,
+    /// Geometry method: use the `invocations = 6` geometry shader instead of the loop (to
+    /// measure the difference documented in docs/methods.md).
+    #[arg(long)]
+    gs_invocations: bool,
 }
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -60,11 +68,22 @@ fn stats(mut v: Vec<f64>) -> serde_json::Value {
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
-    if args.updates == 0 || args.updates > 100_000 || args.cube_size == 0 || args.cube_size > specchio::scene::MAX_FACE_SIZE_PX {
-        anyhow::bail!("--updates must be in 1..=100000 and --cube-size in 1..={}", specchio::scene::MAX_FACE_SIZE_PX);
+    if args.updates == 0
+        || args.updates > 100_000
+        || args.cube_size == 0
+        || args.cube_size > specchio::scene::MAX_FACE_SIZE_PX
+    {
+        anyhow::bail!(
+            "--updates must be in 1..=100000 and --cube-size in 1..={}",
+            specchio::scene::MAX_FACE_SIZE_PX
+        );
     }
     let paths: Vec<PathBuf> = if args.scenes.is_empty() {
-        DEFAULT_SCENES.iter().map(PathBuf::from).filter(|p| p.exists()).collect()
+        DEFAULT_SCENES
+            .iter()
+            .map(PathBuf::from)
+            .filter(|p| p.exists())
+            .collect()
     } else {
         args.scenes.clone()
     };
@@ -78,7 +97,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         None => Method::ALL.to_vec(),
         Some(list) => list
             .split(',')
-            .map(|n| Method::parse(n.trim()).with_context(|| format!("--methods: unknown method `{n}`")))
+            .map(|n| {
+                Method::parse(n.trim()).with_context(|| format!("--methods: unknown method `{n}`"))
+            })
             .collect::<Result<_>>()?,
     };
     let mut methods = Vec::new();
@@ -89,8 +110,16 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             Err(why) => refused.push(json!({ "method": m, "reason": why })),
         }
     }
-    let features = methods.iter().fold(RequiredFeatures::default(), |f, m| f.union(m.features()));
-    let device = Device::create(&instance, &DeviceDesc { selector: args.device.clone(), features })?;
+    let features = methods
+        .iter()
+        .fold(RequiredFeatures::default(), |f, m| f.union(m.features()));
+    let device = Device::create(
+        &instance,
+        &DeviceDesc {
+            selector: args.device.clone(),
+            features,
+        },
+    )?;
 
     let mut results = Vec::new();
     for (path, scene) in paths.iter().zip(&scenes) {
@@ -101,6 +130,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
                     cube_size: Some(args.cube_size),
                     method,
                     refresh: Some(RefreshPolicy::EveryFrame),
+                    gs_invocations: args.gs_invocations,
                     ..Default::default()
                 };
                 Renderer::new(&device, scene.clone(), &options)
@@ -117,15 +147,25 @@ pub fn run(args: &Args) -> Result<ExitCode> {
                 }
             }
         }
-        println!("{} ({}² faces, {} updates per method, interleaved)", path.display(), args.cube_size, args.updates);
-        println!("  {:<10} {:>10} {:>10} {:>10} {:>11} {:>12} {:>14}", "method", "wall ms", "p10", "p90", "GPU fill ms", "vertex inv.", "fragment inv.");
+        println!(
+            "{} ({}² faces, {} updates per method, interleaved)",
+            path.display(),
+            args.cube_size,
+            args.updates
+        );
+        println!(
+            "  {:<10} {:>10} {:>10} {:>10} {:>11} {:>12} {:>14}",
+            "method", "wall ms", "p10", "p90", "GPU fill ms", "vertex inv.", "fragment inv."
+        );
         for (m, reports) in methods.iter().zip(&samples) {
             let wall = stats(reports.iter().map(|r| r.submit_wait_ms).collect());
             let gpu = stats(reports.iter().filter_map(|r| r.gpu_fill_ms).collect());
             let cube = stats(reports.iter().filter_map(|r| r.gpu_cube_ms).collect());
             let counters = reports.last().and_then(|r| r.fill_stats);
             let draws: u32 = reports.last().map_or(0, |r| r.draws_per_face.iter().sum());
-            let f = |v: &serde_json::Value, k: &str| v[k].as_f64().map_or("n/a".into(), |x| format!("{x:.2}"));
+            let f = |v: &serde_json::Value, k: &str| {
+                v[k].as_f64().map_or("n/a".into(), |x| format!("{x:.2}"))
+            };
             println!(
                 "  {:<10} {:>10} {:>10} {:>10} {:>11} {:>12} {:>14}",
                 m.name(),
@@ -140,6 +180,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
                 "scene": path.display().to_string(),
                 "method": m,
                 "cube_size": args.cube_size,
+                "gs_invocations": args.gs_invocations,
                 "updates": reports.len(),
                 "wall_ms": wall,
                 "gpu_fill_ms": gpu,
@@ -152,7 +193,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         }
     }
     for r in &refused {
-        println!("  {}: not run: {}", r["method"].as_str().unwrap_or("?"), r["reason"].as_str().unwrap_or("?"));
+        println!(
+            "  {}: not run: {}",
+            r["method"].as_str().unwrap_or("?"),
+            r["reason"].as_str().unwrap_or("?")
+        );
     }
     if let Some(path) = &args.json {
         let record = json!({

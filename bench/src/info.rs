@@ -26,7 +26,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let methods: Vec<Vec<(Method, Result<(), String>)>> = candidates
         .iter()
         .map(|c| match &c.rejected {
-            None => Method::ALL.iter().map(|&m| (m, probe::usable(m, &c.info))).collect(),
+            None => Method::ALL
+                .iter()
+                .map(|&m| (m, probe::usable(m, &c.info)))
+                .collect(),
             Some(_) => Vec::new(),
         })
         .collect();
