@@ -26,6 +26,8 @@ fn all_features() -> RequiredFeatures {
     f
 }
 
+/// Per frame: the faces re-rendered, the six faces (mip 0) and the sensor view, which samples
+/// every mip level and so checks the mip chains too.
 fn cube(
     gpu: &Gpu,
     scene: &Scene,
@@ -33,7 +35,7 @@ fn cube(
     size: u32,
     times: &[f64],
     full_updates: bool,
-) -> Vec<(u8, Vec<RgbaImage>)> {
+) -> Vec<(u8, Vec<RgbaImage>, RgbaImage)> {
     let options = RenderOptions {
         cube_size: Some(size),
         method,
@@ -51,11 +53,15 @@ fn cube(
                     t,
                     Readback {
                         cube: true,
-                        views: false,
+                        views: true,
                     },
                 )
                 .expect("frame");
-            (report.face_mask, images.cube.expect("cube"))
+            (
+                report.face_mask,
+                images.cube.expect("cube"),
+                images.sensor.expect("sensor"),
+            )
         })
         .collect()
 }
@@ -156,8 +162,12 @@ fn incremental_update_is_exact() {
         let full = cube(&gpu, &s, m, 64, &times, true);
         let incremental = cube(&gpu, &s, m, 64, &times, false);
         let mut skipped = 0;
-        for (i, ((mask_full, a), (mask_inc, b))) in full.iter().zip(&incremental).enumerate() {
+        for (i, ((mask_full, a, sa), (mask_inc, b, sb))) in
+            full.iter().zip(&incremental).enumerate()
+        {
             assert_same(a, b, &format!("{m}, frame {i}"));
+            let (sa, sb) = (std::slice::from_ref(sa), std::slice::from_ref(sb));
+            assert_same(sa, sb, &format!("{m}, frame {i}, sensor view (mips)"));
             assert!(
                 mask_inc & !mask_full == 0,
                 "incremental renders no more than full"

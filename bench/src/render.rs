@@ -44,6 +44,10 @@ pub struct Args {
     /// into DIR/<method>/).
     #[arg(long, default_value = "six-pass")]
     method: String,
+    /// Under `on-change`, re-render all six faces on any change instead of only the faces a
+    /// moved object touches.
+    #[arg(long)]
+    full_updates: bool,
     /// Enable the Khronos validation layer; any message makes the command fail.
     #[arg(long)]
     validate: bool,
@@ -113,6 +117,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         let options = RenderOptions {
             cube_size: args.cube_size,
             method,
+            full_updates: args.full_updates,
             ..Default::default()
         };
         let mut renderer = Renderer::new(&device, scene.clone(), &options)?;
@@ -137,6 +142,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             "fps": args.fps,
             "frames": args.frames,
             "methods": methods,
+            "full_updates": args.full_updates,
             "cube": {
                 "face_size_px": args.cube_size.unwrap_or(scene.cube.face_size_px),
                 "format": format!("{:?}", scene.cube.format),
