@@ -113,12 +113,7 @@ impl Renderer {
             // Per-face timestamps exist only for six-pass; keep every slot answered.
             self.face_timestamps(cmd, 0..6);
         }
-        match self.method {
-            Method::SixPass => super::methods::six_pass::record(self, cmd, plan),
-            Method::Multiview => super::methods::multiview::record(self, cmd, plan),
-            Method::Geometry => super::methods::geometry::record(self, cmd, plan),
-            Method::Instanced => super::methods::instanced::record(self, cmd, plan),
-        }
+        self.method.record(self, cmd, plan);
         if let Some(q) = &self.statistics {
             if self.method != Method::SixPass {
                 q.end(cmd, 0);

@@ -87,6 +87,21 @@ impl Method {
         r
     }
 
+    /// Records the fill of `plan`'s dirty faces into mip 0 (layouts are set by the caller).
+    pub(crate) fn record(
+        self,
+        r: &crate::render::Renderer,
+        cmd: vk::CommandBuffer,
+        plan: &crate::render::cube_fill::CubePlan,
+    ) {
+        match self {
+            Method::SixPass => six_pass::record(r, cmd, plan),
+            Method::Multiview => multiview::record(r, cmd, plan),
+            Method::Geometry => geometry::record(r, cmd, plan),
+            Method::Instanced => instanced::record(r, cmd, plan),
+        }
+    }
+
     /// Rendering-scope layer count and view mask.
     pub(crate) fn layers_and_view_mask(self) -> (u32, u32) {
         match self {
