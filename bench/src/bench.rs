@@ -102,14 +102,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             })
             .collect::<Result<_>>()?,
     };
-    let mut methods = Vec::new();
-    let mut refused = Vec::new();
-    for m in wanted {
-        match probe::usable(m, &chosen) {
-            Ok(()) => methods.push(m),
-            Err(why) => refused.push(json!({ "method": m, "reason": why })),
-        }
-    }
+    let (methods, refused) = probe::partition(&wanted, &chosen);
+    let refused: Vec<serde_json::Value> = refused
+        .into_iter()
+        .map(|(m, why)| json!({ "method": m, "reason": why }))
+        .collect();
     let features = methods
         .iter()
         .fold(RequiredFeatures::default(), |f, m| f.union(m.features()));

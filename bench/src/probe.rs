@@ -84,6 +84,19 @@ pub fn usable(method: Method, info: &DeviceInfo) -> Result<(), String> {
     }
 }
 
+/// Splits `methods` into those that can run on the device and those that cannot, with why.
+pub fn partition(methods: &[Method], info: &DeviceInfo) -> (Vec<Method>, Vec<(Method, String)>) {
+    let mut run = Vec::new();
+    let mut refused = Vec::new();
+    for &m in methods {
+        match usable(m, info) {
+            Ok(()) => run.push(m),
+            Err(why) => refused.push((m, why)),
+        }
+    }
+    (run, refused)
+}
+
 /// `specchio probe METHOD`: renders the probe scene with six-pass and METHOD; exit 0 when the
 /// cubes are identical, 1 with a description of the first difference otherwise.
 pub fn run(args: &Args) -> Result<ExitCode> {

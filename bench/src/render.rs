@@ -186,15 +186,7 @@ type MethodChoice = (Vec<Method>, Vec<(Method, String)>);
 
 fn pick_methods(arg: &str, info: &DeviceInfo) -> Result<MethodChoice> {
     if arg == "all" {
-        let mut run = Vec::new();
-        let mut refused = Vec::new();
-        for m in Method::ALL {
-            match probe::usable(m, info) {
-                Ok(()) => run.push(m),
-                Err(why) => refused.push((m, why)),
-            }
-        }
-        return Ok((run, refused));
+        return Ok(probe::partition(&Method::ALL, info));
     }
     let Some(m) = Method::parse(arg) else {
         let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
