@@ -11,10 +11,10 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use serde_json::json;
 use specchio::output::write_json;
-use specchio::render::methods::{Method, RequiredFeatures};
+use specchio::render::methods::Method;
 use specchio::render::{FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::RefreshPolicy;
-use specchio::vk::device::{self, Device, DeviceDesc};
+use specchio::vk::device;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 use crate::probe;
@@ -107,16 +107,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         .into_iter()
         .map(|(m, why)| json!({ "method": m, "reason": why }))
         .collect();
-    let features = methods
-        .iter()
-        .fold(RequiredFeatures::default(), |f, m| f.union(m.features()));
-    let device = Device::create(
-        &instance,
-        &DeviceDesc {
-            selector: args.device.clone(),
-            features,
-        },
-    )?;
+    let device = probe::device_for(&instance, args.device.as_deref(), &methods)?;
 
     let mut results = Vec::new();
     for (path, scene) in paths.iter().zip(&scenes) {

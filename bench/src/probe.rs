@@ -10,7 +10,7 @@ use std::process::{Command, ExitCode, Stdio};
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Result};
-use specchio::render::methods::Method;
+use specchio::render::methods::{Method, RequiredFeatures};
 use specchio::render::{Readback, RenderOptions, Renderer};
 use specchio::vk::device::{Device, DeviceDesc, DeviceInfo};
 use specchio::vk::instance::{Instance, InstanceDesc};
@@ -82,6 +82,22 @@ pub fn usable(method: Method, info: &DeviceInfo) -> Result<(), String> {
             ))
         }
     }
+}
+
+/// Creates the device `selector` names with the features every method in `methods` needs.
+pub fn device_for(
+    instance: &std::sync::Arc<Instance>,
+    selector: Option<&str>,
+    methods: &[Method],
+) -> Result<std::sync::Arc<Device>> {
+    let features = methods
+        .iter()
+        .fold(RequiredFeatures::default(), |f, m| f.union(m.features()));
+    let desc = DeviceDesc {
+        selector: selector.map(str::to_owned),
+        features,
+    };
+    Ok(Device::create(instance, &desc)?)
 }
 
 /// Splits `methods` into those that can run on the device and those that cannot, with why.

@@ -7,10 +7,10 @@ use anyhow::{bail, Context, Result};
 use serde_json::json;
 use specchio::output::{write_exr, write_json, write_png};
 use specchio::render::camera::FACE_NAMES;
-use specchio::render::methods::{Method, RequiredFeatures};
+use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::MAX_FACE_SIZE_PX;
-use specchio::vk::device::{self, Device, DeviceDesc, DeviceInfo};
+use specchio::vk::device::{self, DeviceInfo};
 
 use crate::probe;
 use specchio::vk::instance::{Instance, InstanceDesc};
@@ -91,16 +91,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let validation = instance.validation;
     let chosen = device::choose(&instance, args.device.as_deref())?;
     let (methods, refused) = pick_methods(&args.method, &chosen)?;
-    let features = methods
-        .iter()
-        .fold(RequiredFeatures::default(), |f, m| f.union(m.features()));
-    let device = Device::create(
-        &instance,
-        &DeviceDesc {
-            selector: args.device.clone(),
-            features,
-        },
-    )?;
+    let device = probe::device_for(&instance, args.device.as_deref(), &methods)?;
     drop(instance);
     let info = device.info.clone();
 
