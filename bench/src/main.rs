@@ -4,6 +4,7 @@
 mod bench;
 mod info;
 mod probe;
+mod reference;
 mod render;
 
 use std::process::ExitCode;
@@ -28,6 +29,8 @@ enum Command {
     Info(info::Args),
     /// Render a scene: observer, sensor, side-by-side views and the six cube faces.
     Render(render::Args),
+    /// Ray trace the exact mirror on the CPU (the reference the cube map is judged against).
+    Reference(reference::Args),
     /// Time every cube fill method on the same scenes, interleaved (first slice of the
     /// benchmark command).
     Bench(bench::Args),
@@ -66,6 +69,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Probe(args) => probe::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Reference(args) => reference::run(&args),
     };
     match result {
         Ok(code) => code,

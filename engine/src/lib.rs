@@ -7,9 +7,11 @@
 //! - [`shaders`]: SPIR-V compiled from `shaders/` at build time;
 //! - [`render`]: cameras and cube-face conventions, GPU structs, the six-pass cube fill and the
 //!   observer / sensor views with the analytic mirror;
+//! - [`reference`]: the exact CPU ray-traced mirror (BVH, watertight triangles, analytic sphere);
 //! - [`output`]: EXR, PNG and JSON files, written atomically.
 
 pub mod output;
+pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod shaders;

@@ -416,20 +416,9 @@ impl Renderer {
             .map(|f| ViewBasis::cube_face(Vec3::ZERO, f))
             .collect();
         let o = &scene.observer;
-        let observer_eye = state.observer_position - state.mirror_center;
-        let sensor_eye = Vec3::new(0.0, -scene.sensor.offset_m, 0.0);
         let aspect = |w: u32, h: u32| w as f32 / h as f32;
-        let observer =
-            |a| ViewBasis::yaw_pitch(observer_eye, o.yaw_deg, o.pitch_deg, o.fov_y_deg, a);
-        let sensor = |a| {
-            ViewBasis::look(
-                sensor_eye,
-                Vec3::Y,
-                scene.sensor.up,
-                scene.sensor.fov_y_deg,
-                a,
-            )
-        };
+        let observer = |a| state.observer_view(scene, a);
+        let sensor = |a| state.sensor_view(scene, a);
         let [ow, oh] = o.resolution;
         let [sw, sh] = scene.sensor.resolution;
         let half_pair = aspect(PAIR_SIZE[0] / 2, PAIR_SIZE[1]);

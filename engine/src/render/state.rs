@@ -5,6 +5,7 @@
 
 use glam::{Mat4, Vec3};
 
+use super::camera::ViewBasis;
 use crate::scene::Mesh;
 use crate::scene::{Room, Scene};
 
@@ -50,6 +51,25 @@ impl SceneState {
             o.scale,
             o.rotation,
             self.object_positions[i] - self.mirror_center,
+        )
+    }
+
+    /// The observer camera in render space for an image of aspect `aspect` (width / height).
+    pub fn observer_view(&self, scene: &Scene, aspect: f32) -> ViewBasis {
+        let o = &scene.observer;
+        let eye = self.observer_position - self.mirror_center;
+        ViewBasis::yaw_pitch(eye, o.yaw_deg, o.pitch_deg, o.fov_y_deg, aspect)
+    }
+
+    /// The sensor camera in render space: `offset_m` below the mirror centre, looking up (+Y).
+    pub fn sensor_view(&self, scene: &Scene, aspect: f32) -> ViewBasis {
+        let s = &scene.sensor;
+        ViewBasis::look(
+            Vec3::new(0.0, -s.offset_m, 0.0),
+            Vec3::Y,
+            s.up,
+            s.fov_y_deg,
+            aspect,
         )
     }
 
