@@ -60,6 +60,13 @@ fn tune_allocator() -> Option<i32> {
 }
 
 fn main() -> ExitCode {
+    // Like other command-line tools, end quietly when the reader of stdout goes away
+    // (`specchio ... | head`) instead of failing on the next print.
+    #[cfg(unix)]
+    // SAFETY: restores the default disposition of one signal before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let trim = tune_allocator();
     // Read back by the subcommands that report their environment.
     TRIM_THRESHOLD.get_or_init(|| trim);

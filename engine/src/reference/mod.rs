@@ -117,13 +117,18 @@ impl<'a> Reference<'a> {
     /// Shades the closest scene surface along `o + t d`, t > t_min.
     fn surface(&self, o: Vec3, d: Vec3, t_min: f32) -> Option<(Vec3, f32, u32)> {
         let hit = self.geometry.closest_hit(o, d, t_min, f32::INFINITY)?;
+        Some(self.shade_hit(o, d, &hit))
+    }
+
+    /// Colour, distance and drawable of a hit found along `o + t d`.
+    fn shade_hit(&self, o: Vec3, d: Vec3, hit: &geometry::Hit) -> (Vec3, f32, u32) {
         let p = o + hit.hit.t * d;
-        let (n, uv) = self.geometry.attributes(&hit);
+        let (n, uv) = self.geometry.attributes(hit);
         let info = &self.geometry.info[hit.triangle as usize];
         let material = &self.scene.materials[info.material as usize];
         let albedo = materials::material_albedo(material, p, uv, &self.scene.textures);
         let color = materials::shade(albedo, n, self.scene.light.as_ref());
-        Some((color, hit.hit.t, info.object))
+        (color, hit.hit.t, info.object)
     }
 
     /// Traces one camera ray (unit `d` from `eye`).
@@ -137,15 +142,15 @@ impl<'a> Reference<'a> {
             ..Sample::default()
         };
         match (self.geometry.closest_hit(eye, d, 0.0, limit), mirror_t) {
-            // A scene surface in front of the mirror (or no mirror on this ray).
-            (Some(_), _) | (None, None) => match self.surface(eye, d, 0.0) {
-                Some((color, t, object)) => {
-                    s.color = color;
-                    s.primary_t = t;
-                    s.object = object as f32;
-                }
-                None => s.missed = true,
-            },
+            // A scene surface in front of the mirror.
+            (Some(hit), _) => {
+                let (color, t, object) = self.shade_hit(eye, d, &hit);
+                s.color = color;
+                s.primary_t = t;
+                s.object = object as f32;
+            }
+            // Neither the mirror nor anything else: out of the room.
+            (None, None) => s.missed = true,
             (None, Some(t)) => {
                 // The mirror: the hit put back on the sphere, the normal from the sphere equation.
                 let n = (eye + t * d).normalize();
