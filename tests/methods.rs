@@ -54,6 +54,7 @@ fn cube(
                     Readback {
                         cube: true,
                         views: true,
+                        ..Default::default()
                     },
                 )
                 .expect("frame");
@@ -134,6 +135,7 @@ fn geometry_invocations_variant_matches_six_pass() {
             Readback {
                 cube: true,
                 views: false,
+                ..Default::default()
             },
         )
         .expect("frame");

@@ -143,6 +143,7 @@ fn on_change_skips_updates_when_nothing_moves() {
     let all = Readback {
         cube: true,
         views: false,
+        ..Default::default()
     };
     let (r0, i0) = r.render_frame(0, 0.5, all).unwrap();
     let (r1, i1) = r.render_frame(1, 0.5, all).unwrap();

@@ -142,6 +142,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             Readback {
                 cube: true,
                 views: false,
+                ..Default::default()
             },
         )?;
         Ok(images.cube.unwrap_or_default())

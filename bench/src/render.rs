@@ -9,7 +9,7 @@ use specchio::output::{write_exr, write_json, write_png};
 use specchio::render::camera::FACE_NAMES;
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
-use specchio::scene::MAX_FACE_SIZE_PX;
+use specchio::scene::{Lookup, MAX_FACE_SIZE_PX};
 use specchio::vk::device::{self, DeviceInfo};
 
 use crate::probe;
@@ -44,6 +44,14 @@ pub struct Args {
     /// into DIR/<method>/).
     #[arg(long, default_value = "six-pass")]
     method: String,
+    /// Mirror lookup: plain (the reflected direction, as the thesis) or box (parallax-corrected
+    /// against the room box). Default: the scene's `mirror.lookup`.
+    #[arg(long)]
+    lookup: Option<String>,
+    /// Also write, per mirror pixel, the direction looked up in the cube map
+    /// (`observer.direction.exr`, `sensor.direction.exr`), to compare with `specchio reference`.
+    #[arg(long)]
+    directions: bool,
     /// Under `on-change`, re-render all six faces on any change instead of only the faces a
     /// moved object touches.
     #[arg(long)]
@@ -80,6 +88,12 @@ fn check_args(args: &Args) -> Result<()> {
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Everything that can be wrong with the input is found before the output folder exists.
     check_args(args)?;
+    let lookup = match args.lookup.as_deref() {
+        None => None,
+        Some("plain") => Some(Lookup::Plain),
+        Some("box") => Some(Lookup::Box),
+        Some(other) => bail!("--lookup {other}: must be plain or box"),
+    };
     let scene = specchio::scene::load(&args.scene)?;
     let start_s = args
         .time
@@ -109,6 +123,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             cube_size: args.cube_size,
             method,
             full_updates: args.full_updates,
+            lookup,
             ..Default::default()
         };
         let mut renderer = Renderer::new(&device, scene.clone(), &options)?;
@@ -134,6 +149,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             "frames": args.frames,
             "methods": methods,
             "full_updates": args.full_updates,
+            "lookup": lookup.unwrap_or(scene.mirror.lookup),
             "cube": {
                 "face_size_px": args.cube_size.unwrap_or(scene.cube.face_size_px),
                 "format": format!("{:?}", scene.cube.format),
@@ -207,6 +223,7 @@ fn render_frames(
             Readback {
                 cube: true,
                 views: true,
+                directions: args.directions,
             },
         )?;
         let dir = if args.frames > 1 {
@@ -239,6 +256,12 @@ fn write_frame(dir: &Path, images: &FrameImages) -> Result<()> {
     }
     if let Some(img) = &images.pair {
         write_png(&dir.join("views.png"), img)?;
+    }
+    if let Some(img) = &images.observer_direction {
+        write_exr(&dir.join("observer.direction.exr"), img)?;
+    }
+    if let Some(img) = &images.sensor_direction {
+        write_exr(&dir.join("sensor.direction.exr"), img)?;
     }
     if let Some(faces) = &images.cube {
         for (face, img) in FACE_NAMES.iter().zip(faces) {

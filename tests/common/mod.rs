@@ -87,6 +87,7 @@ pub fn render_once(
         Readback {
             cube: true,
             views: true,
+            ..Default::default()
         },
     )
     .expect("frame")

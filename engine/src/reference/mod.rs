@@ -10,6 +10,7 @@
 //! origin offset by Wächter and Binder's method, and watertight ray/triangle tests
 //! (`intersect.rs`). Everything is in render space (centred on the mirror).
 
+pub mod angular;
 pub mod geometry;
 pub mod intersect;
 pub mod materials;

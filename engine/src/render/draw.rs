@@ -163,12 +163,13 @@ impl Renderer {
         }
     }
 
-    pub(super) fn draw_mirror(&self, cmd: vk::CommandBuffer, view: u32) {
+    /// Draws the mirror's bounding cube with `pipeline` (colour or lookup directions).
+    pub(super) fn draw_mirror(&self, cmd: vk::CommandBuffer, pipeline: &Pipeline, view: u32) {
         let d = &self.device.raw;
         let p = &self.pipelines;
         // SAFETY: recording inside a view pass; the cube is in SHADER_READ_ONLY layout.
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, p.mirror.raw);
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
             d.cmd_bind_descriptor_sets(
                 cmd,
                 vk::PipelineBindPoint::GRAPHICS,

@@ -22,7 +22,13 @@ pub struct FrameData {
     pub light_dir_ambient: Vec4,
     pub mirror: Vec4,
     pub flags: UVec4,
+    pub room_min: Vec4,
+    pub room_max: Vec4,
 }
+
+/// `FrameData.flags.y` values (shared.glsl `LOOKUP_*`).
+pub const LOOKUP_PLAIN: u32 = 0;
+pub const LOOKUP_BOX: u32 = 1;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -76,7 +82,7 @@ pub struct Vertex {
 
 // std430 array strides must equal the Rust sizes; build.rs reads member offsets only, so the
 // sizes are pinned here by hand (each is a multiple of 16, as std430 arrays of these need).
-const _: () = assert!(std::mem::size_of::<FrameData>() == 48);
+const _: () = assert!(std::mem::size_of::<FrameData>() == 80);
 const _: () = assert!(std::mem::size_of::<ViewData>() == 144);
 const _: () = assert!(std::mem::size_of::<ObjectData>() == 144);
 const _: () = assert!(std::mem::size_of::<MaterialData>() == 64);
@@ -98,6 +104,8 @@ mod tests {
             ),
             ("FrameData", "mirror", offset_of!(FrameData, mirror)),
             ("FrameData", "flags", offset_of!(FrameData, flags)),
+            ("FrameData", "room_min", offset_of!(FrameData, room_min)),
+            ("FrameData", "room_max", offset_of!(FrameData, room_max)),
             (
                 "ViewData",
                 "world_to_clip",

@@ -75,6 +75,8 @@ pub struct RenderOptions {
     pub gs_invocations: bool,
     /// Replaces the scene's refresh policy (benchmarks force `every-frame`).
     pub refresh: Option<RefreshPolicy>,
+    /// Replaces the mirror's lookup mode (`--lookup`).
+    pub lookup: Option<crate::scene::Lookup>,
 }
 
 /// What to copy back to the CPU after a frame.
@@ -82,6 +84,9 @@ pub struct RenderOptions {
 pub struct Readback {
     pub cube: bool,
     pub views: bool,
+    /// The lookup direction of every observer and sensor mirror pixel (for the angular
+    /// error against the exact reference).
+    pub directions: bool,
 }
 
 /// A linear-HDR RGBA image read back from the GPU, rows top to bottom.
@@ -106,6 +111,10 @@ pub struct FrameImages {
     pub observer: Option<RgbaImage>,
     pub sensor: Option<RgbaImage>,
     pub pair: Option<RgbaImage>,
+    /// Per mirror pixel the unit direction looked up in the cube map (rgb) and alpha 1;
+    /// all zero elsewhere.
+    pub observer_direction: Option<RgbaImage>,
+    pub sensor_direction: Option<RgbaImage>,
 }
 
 /// Timings (milliseconds) and counters of one frame.
@@ -152,7 +161,10 @@ struct Pipelines {
     /// The chosen method's cube pipeline.
     cube: Pipeline,
     view_scene: Pipeline,
+    /// Direction pass: scene depth only, then the mirror's lookup directions.
+    depth_only: Pipeline,
     mirror: Pipeline,
+    mirror_direction: Pipeline,
     scene_layout: PipelineLayout,
     mirror_layout: PipelineLayout,
 }
@@ -165,6 +177,8 @@ pub struct Renderer {
     observer_target: ViewTarget,
     sensor_target: ViewTarget,
     pair_target: ViewTarget,
+    observer_direction_target: ViewTarget,
+    sensor_direction_target: ViewTarget,
     cube: CubeTarget,
     resources: SceneResources,
     readback: Option<Buffer>,
@@ -194,14 +208,23 @@ impl Renderer {
         if let Some(policy) = options.refresh {
             scene.refresh = policy;
         }
+        if let Some(lookup) = options.lookup {
+            scene.mirror.lookup = lookup;
+        }
         let submitter = Submitter::create(device, "frame")?;
         let resources = SceneResources::create(device, &scene, &submitter)?;
         let cube = CubeTarget::create(device, &scene.cube)?;
         let [ow, oh] = scene.observer.resolution;
         let [sw, sh] = scene.sensor.resolution;
-        let observer_target = ViewTarget::create(device, ow, oh, "observer")?;
-        let sensor_target = ViewTarget::create(device, sw, sh, "sensor")?;
-        let pair_target = ViewTarget::create(device, PAIR_SIZE[0], PAIR_SIZE[1], "views")?;
+        let view = targets::VIEW_FORMAT;
+        let direction = targets::DIRECTION_FORMAT;
+        let observer_target = ViewTarget::create(device, view, ow, oh, "observer")?;
+        let sensor_target = ViewTarget::create(device, view, sw, sh, "sensor")?;
+        let pair_target = ViewTarget::create(device, view, PAIR_SIZE[0], PAIR_SIZE[1], "views")?;
+        let observer_direction_target =
+            ViewTarget::create(device, direction, ow, oh, "observer directions")?;
+        let sensor_direction_target =
+            ViewTarget::create(device, direction, sw, sh, "sensor directions")?;
         if let Some(why) = options.method.missing_features(&device.info) {
             return Err(GpuError::Unsupported(format!(
                 "method {}: {why}",
@@ -240,6 +263,8 @@ impl Renderer {
             observer_target,
             sensor_target,
             pair_target,
+            observer_direction_target,
+            sensor_direction_target,
             cube,
             resources,
             readback: None,
@@ -408,7 +433,16 @@ impl Renderer {
             light_dir_ambient: light.map_or(Vec4::ZERO, |l| l.direction.extend(l.ambient)),
             // Render space is centred on the mirror.
             mirror: Vec4::new(0.0, 0.0, 0.0, scene.mirror.radius_m),
-            flags: UVec4::new(u32::from(light.is_some()), 0, 0, 0),
+            flags: UVec4::new(
+                u32::from(light.is_some()),
+                lookup_flag(scene.mirror.lookup),
+                0,
+                0,
+            ),
+            room_min: (scene.room.center - 0.5 * scene.room.size_m - state.mirror_center)
+                .extend(1.0),
+            room_max: (scene.room.center + 0.5 * scene.room.size_m - state.mirror_center)
+                .extend(1.0),
         };
         self.resources.frame.write(&[frame])?;
 
@@ -485,6 +519,13 @@ fn as_words(commands: &[vk::DrawIndexedIndirectCommand]) -> Vec<u32> {
             ]
         })
         .collect()
+}
+
+fn lookup_flag(lookup: crate::scene::Lookup) -> u32 {
+    match lookup {
+        crate::scene::Lookup::Plain => gpu::LOOKUP_PLAIN,
+        crate::scene::Lookup::Box => gpu::LOOKUP_BOX,
+    }
 }
 
 fn object_data(model: Mat4, material: usize) -> ObjectData {

@@ -6,26 +6,58 @@ use super::camera::{Frustum, ViewBasis};
 use super::draw::{barrier, Attachments, COLOR_OUT, COPY_READ, DEPTH_RW, SAMPLED};
 use super::gpu::Push;
 use super::resources::{VIEW_OBSERVER, VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT, VIEW_SENSOR};
-use super::targets::{ViewTarget, DEPTH_FORMAT, VIEW_FORMAT};
+use super::targets::{ViewTarget, DEPTH_FORMAT, DIRECTION_FORMAT, VIEW_FORMAT};
 use super::*;
 
-/// Where each read-back image sits in the readback buffer.
+/// The view images a frame can read back.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Slot {
+    Observer,
+    Sensor,
+    Pair,
+    ObserverDirection,
+    SensorDirection,
+}
+
+/// Where each read-back view image sits in the readback buffer (after the cube faces).
 #[derive(Debug, Default, Clone)]
 pub(super) struct Copies {
-    observer: Option<u64>,
-    sensor: Option<u64>,
-    pair: Option<u64>,
+    items: Vec<(Slot, u64)>,
+}
+
+/// Bytes per texel of a view target's colour format.
+fn texel_bytes(slot: Slot) -> u64 {
+    match slot {
+        Slot::ObserverDirection | Slot::SensorDirection => 16,
+        _ => 8,
+    }
 }
 
 impl Renderer {
     /// Observer, sensor and the side-by-side pair, each: culled scene draws, then the mirror.
+    /// The view targets `readback` asks for, in readback order.
+    fn view_slots(&self, readback: Readback) -> Vec<(Slot, &ViewTarget)> {
+        let mut slots = Vec::new();
+        if readback.views {
+            slots.push((Slot::Observer, &self.observer_target));
+            slots.push((Slot::Sensor, &self.sensor_target));
+            slots.push((Slot::Pair, &self.pair_target));
+        }
+        if readback.directions {
+            slots.push((Slot::ObserverDirection, &self.observer_direction_target));
+            slots.push((Slot::SensorDirection, &self.sensor_direction_target));
+        }
+        slots
+    }
+
+    /// Observer, sensor and the side-by-side pair (culled scene draws, then the mirror), and
+    /// with `readback.directions` the lookup-direction passes of observer and sensor.
     pub(super) fn record_views(
         &self,
         cmd: vk::CommandBuffer,
         views: &[ViewBasis],
         readback: Readback,
     ) -> Copies {
-        let mut copies = Copies::default();
         if !readback.views {
             // Views are skipped; their timestamps are still written so every query has a result.
             if let Some(q) = &self.timestamps {
@@ -33,56 +65,56 @@ impl Renderer {
                     q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
                 }
             }
-            return copies;
         }
-        let targets: [(&ViewTarget, &[u32], u32, &str); 3] = [
-            (
-                &self.observer_target,
-                &[VIEW_OBSERVER],
-                TS_OBSERVER,
-                "observer",
-            ),
-            (&self.sensor_target, &[VIEW_SENSOR], TS_SENSOR, "sensor"),
-            (
-                &self.pair_target,
-                &[VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT],
-                TS_PAIR,
-                "views",
-            ),
-        ];
-        for (slot, (target, view_ids, ts, name)) in targets.iter().enumerate() {
-            self.record_view(cmd, target, view_ids, views, 6 + slot as u32, name);
-            if let Some(q) = &self.timestamps {
-                q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, *ts);
-            }
-        }
+        let p = &self.pipelines;
+        let mut copies = Copies::default();
         let mut offset = self.cube_readback_bytes(readback);
-        for (i, t) in [
-            &self.observer_target,
-            &self.sensor_target,
-            &self.pair_target,
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let at = offset;
-            offset += u64::from(t.width) * u64::from(t.height) * 8;
-            match i {
-                0 => copies.observer = Some(at),
-                1 => copies.sensor = Some(at),
-                _ => copies.pair = Some(at),
+        for (slot, target) in self.view_slots(readback) {
+            let (ids, ts, stats, colour, name): (&[u32], _, _, _, _) = match slot {
+                Slot::Observer => (
+                    &[VIEW_OBSERVER],
+                    Some(TS_OBSERVER),
+                    Some(6),
+                    true,
+                    "observer",
+                ),
+                Slot::Sensor => (&[VIEW_SENSOR], Some(TS_SENSOR), Some(7), true, "sensor"),
+                Slot::Pair => (
+                    &[VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT],
+                    Some(TS_PAIR),
+                    Some(8),
+                    true,
+                    "views",
+                ),
+                Slot::ObserverDirection => {
+                    (&[VIEW_OBSERVER], None, None, false, "observer directions")
+                }
+                Slot::SensorDirection => (&[VIEW_SENSOR], None, None, false, "sensor directions"),
+            };
+            let (scene, mirror) = if colour {
+                (&p.view_scene, &p.mirror)
+            } else {
+                (&p.depth_only, &p.mirror_direction)
+            };
+            self.record_view(cmd, target, ids, views, (scene, mirror), stats, name);
+            if let (Some(q), Some(ts)) = (&self.timestamps, ts) {
+                q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
+            copies.items.push((slot, offset));
+            offset += u64::from(target.width) * u64::from(target.height) * texel_bytes(slot);
         }
         copies
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn record_view(
         &self,
         cmd: vk::CommandBuffer,
         target: &ViewTarget,
         view_ids: &[u32],
         views: &[ViewBasis],
-        stats_slot: u32,
+        (scene_pipeline, mirror_pipeline): (&Pipeline, &Pipeline),
+        stats_slot: Option<u32>,
         name: &str,
     ) {
         let dev = &self.device;
@@ -105,8 +137,8 @@ impl Renderer {
                 ),
             ],
         );
-        if let Some(q) = &self.statistics {
-            q.begin(cmd, stats_slot);
+        if let (Some(q), Some(slot)) = (&self.statistics, stats_slot) {
+            q.begin(cmd, slot);
         }
         self.begin_rendering(
             cmd,
@@ -120,34 +152,25 @@ impl Renderer {
             },
         );
         for &v in view_ids {
+            let half = (PAIR_SIZE[0] / 2) as f32;
             let vp = match v {
-                VIEW_PAIR_LEFT => [0.0, 0.0, (PAIR_SIZE[0] / 2) as f32, PAIR_SIZE[1] as f32],
-                VIEW_PAIR_RIGHT => [
-                    (PAIR_SIZE[0] / 2) as f32,
-                    0.0,
-                    (PAIR_SIZE[0] / 2) as f32,
-                    PAIR_SIZE[1] as f32,
-                ],
+                VIEW_PAIR_LEFT => [0.0, 0.0, half, PAIR_SIZE[1] as f32],
+                VIEW_PAIR_RIGHT => [half, 0.0, half, PAIR_SIZE[1] as f32],
                 _ => [0.0, 0.0, target.width as f32, target.height as f32],
             };
             self.set_viewport(cmd, vp[0], vp[1], vp[2], vp[3]);
             let frustum = Frustum::new(&views[v as usize], CAMERA_NEAR_M, f32::INFINITY);
             let visible = self.visible(&frustum);
-            self.draw_objects(
-                cmd,
-                &self.pipelines.view_scene,
-                Push {
-                    view_index: v,
-                    ..Push::default()
-                },
-                &visible,
-            );
-            self.draw_mirror(cmd, v);
+            let push = Push {
+                view_index: v,
+                ..Push::default()
+            };
+            self.draw_objects(cmd, scene_pipeline, push, &visible);
+            self.draw_mirror(cmd, mirror_pipeline, v);
         }
-        // SAFETY: closes the rendering scope begun above.
-        unsafe { dev.raw.cmd_end_rendering(cmd) };
-        if let Some(q) = &self.statistics {
-            q.end(cmd, stats_slot);
+        self.end_rendering(cmd);
+        if let (Some(q), Some(slot)) = (&self.statistics, stats_slot) {
+            q.end(cmd, slot);
         }
         image_barriers(
             dev,
@@ -176,14 +199,8 @@ impl Renderer {
 
     pub(super) fn readback_size(&self, readback: Readback) -> u64 {
         let mut bytes = self.cube_readback_bytes(readback);
-        if readback.views {
-            for t in [
-                &self.observer_target,
-                &self.sensor_target,
-                &self.pair_target,
-            ] {
-                bytes += u64::from(t.width) * u64::from(t.height) * 8;
-            }
+        for (slot, t) in self.view_slots(readback) {
+            bytes += u64::from(t.width) * u64::from(t.height) * texel_bytes(slot);
         }
         bytes
     }
@@ -250,14 +267,8 @@ impl Renderer {
                 )],
             );
         }
-        for (t, at) in [
-            (&self.observer_target, copies.observer),
-            (&self.sensor_target, copies.sensor),
-            (&self.pair_target, copies.pair),
-        ] {
-            if let Some(at) = at {
-                copy(t.color.raw, 1, t.width, t.height, at);
-            }
+        for ((_, t), &(_, at)) in self.view_slots(readback).into_iter().zip(&copies.items) {
+            copy(t.color.raw, 1, t.width, t.height, at);
         }
     }
 
@@ -288,15 +299,18 @@ impl Renderer {
                     .collect(),
             );
         }
-        let decode = |t: &ViewTarget, at: Option<u64>| {
-            at.map(|at| {
-                let n = u64::from(t.width) * u64::from(t.height) * 8;
-                decode_f16(&bytes[at as usize..(at + n) as usize], t.width, t.height)
-            })
-        };
-        images.observer = decode(&self.observer_target, copies.observer);
-        images.sensor = decode(&self.sensor_target, copies.sensor);
-        images.pair = decode(&self.pair_target, copies.pair);
+        for ((slot, t), &(_, at)) in self.view_slots(readback).into_iter().zip(&copies.items) {
+            let n = u64::from(t.width) * u64::from(t.height) * texel_bytes(slot);
+            let b = &bytes[at as usize..(at + n) as usize];
+            let (w, h) = (t.width, t.height);
+            match slot {
+                Slot::Observer => images.observer = Some(decode_f16(b, w, h)),
+                Slot::Sensor => images.sensor = Some(decode_f16(b, w, h)),
+                Slot::Pair => images.pair = Some(decode_f16(b, w, h)),
+                Slot::ObserverDirection => images.observer_direction = Some(decode_f32(b, w, h)),
+                Slot::SensorDirection => images.sensor_direction = Some(decode_f32(b, w, h)),
+            }
+        }
         Ok(images)
     }
 
@@ -361,6 +375,22 @@ fn decode_f16(bytes: &[u8], w: u32, h: u32) -> RgbaImage {
     }
 }
 
+fn decode_f32(bytes: &[u8], w: u32, h: u32) -> RgbaImage {
+    let pixels = bytes
+        .chunks_exact(16)
+        .map(|p| {
+            std::array::from_fn(|c| {
+                f32::from_le_bytes([p[4 * c], p[4 * c + 1], p[4 * c + 2], p[4 * c + 3]])
+            })
+        })
+        .collect();
+    RgbaImage {
+        width: w,
+        height: h,
+        pixels,
+    }
+}
+
 fn decode_unorm8(bytes: &[u8], w: u32, h: u32) -> RgbaImage {
     let pixels = bytes
         .chunks_exact(4)
@@ -406,7 +436,7 @@ pub(super) fn create_pipelines(
         attr(1, vk::Format::R32G32B32_SFLOAT, 12),
         attr(2, vk::Format::R32G32_SFLOAT, 24),
     ];
-    let scene_pipeline = |color_format, method: methods::Method, name| {
+    let scene_pipeline = |color_format, method: methods::Method, color_writes, name| {
         let stages: Vec<ShaderStage> = methods::stages(method, gs_invocations)
             .into_iter()
             .map(|(stage, spirv)| ShaderStage { stage, spirv })
@@ -424,50 +454,66 @@ pub(super) fn create_pipelines(
                 cull_mode: vk::CullModeFlags::NONE,
                 depth_compare: vk::CompareOp::GREATER,
                 depth_write: true,
+                color_writes,
                 view_mask: method.layers_and_view_mask().1,
             },
             name,
         )
     };
+    let mirror_pipeline = |fragment, color_format, name| {
+        Pipeline::create_graphics(
+            device,
+            &mirror_layout,
+            &GraphicsPipelineDesc {
+                stages: &[
+                    ShaderStage {
+                        stage: vk::ShaderStageFlags::VERTEX,
+                        spirv: crate::shaders::MIRROR_VERT,
+                    },
+                    ShaderStage {
+                        stage: vk::ShaderStageFlags::FRAGMENT,
+                        spirv: fragment,
+                    },
+                ],
+                vertex_bindings: &[],
+                vertex_attributes: &[],
+                color_format,
+                depth_format: DEPTH_FORMAT,
+                // Back faces of the bounding cube: still on screen when the camera is inside it.
+                cull_mode: vk::CullModeFlags::FRONT,
+                depth_compare: vk::CompareOp::GREATER,
+                depth_write: true,
+                color_writes: true,
+                view_mask: 0,
+            },
+            name,
+        )
+    };
     // The views always use the plain vertex shader and RGBA16F; the cube uses its method's
-    // shaders and the cube's format.
+    // shaders and the cube's format. The direction pass lays down depth only, then writes the
+    // mirror's lookup directions in full float.
     let cube_name = format!("cube pipeline ({method})");
-    let cube = scene_pipeline(cube_format, method, &cube_name)?;
-    let view_scene = scene_pipeline(
-        VIEW_FORMAT,
-        methods::Method::SixPass,
-        "scene pipeline (views)",
+    let six = methods::Method::SixPass;
+    let cube = scene_pipeline(cube_format, method, true, &cube_name)?;
+    let view_scene = scene_pipeline(VIEW_FORMAT, six, true, "scene pipeline (views)")?;
+    let depth_only = scene_pipeline(
+        DIRECTION_FORMAT,
+        six,
+        false,
+        "depth-only pipeline (directions)",
     )?;
-    let mirror = Pipeline::create_graphics(
-        device,
-        &mirror_layout,
-        &GraphicsPipelineDesc {
-            stages: &[
-                ShaderStage {
-                    stage: vk::ShaderStageFlags::VERTEX,
-                    spirv: crate::shaders::MIRROR_VERT,
-                },
-                ShaderStage {
-                    stage: vk::ShaderStageFlags::FRAGMENT,
-                    spirv: crate::shaders::MIRROR_FRAG,
-                },
-            ],
-            vertex_bindings: &[],
-            vertex_attributes: &[],
-            color_format: VIEW_FORMAT,
-            depth_format: DEPTH_FORMAT,
-            // Back faces of the bounding cube: still on screen when the camera is inside it.
-            cull_mode: vk::CullModeFlags::FRONT,
-            depth_compare: vk::CompareOp::GREATER,
-            depth_write: true,
-            view_mask: 0,
-        },
-        "mirror pipeline",
+    let mirror = mirror_pipeline(crate::shaders::MIRROR_FRAG, VIEW_FORMAT, "mirror pipeline")?;
+    let mirror_direction = mirror_pipeline(
+        crate::shaders::MIRROR_DIRECTION_FRAG,
+        DIRECTION_FORMAT,
+        "mirror direction pipeline",
     )?;
     Ok(Pipelines {
         cube,
         view_scene,
+        depth_only,
         mirror,
+        mirror_direction,
         scene_layout,
         mirror_layout,
     })

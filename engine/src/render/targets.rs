@@ -13,6 +13,8 @@ use crate::vk::GpuError;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// View images are linear HDR.
 pub const VIEW_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// Lookup directions need full float: a texel of a 2048-texel face is 0.04 degrees.
+pub const DIRECTION_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 /// The dynamic environment: a cube-compatible colour image with a mip chain, a six-layer
 /// depth image, one attachment view per face and the cube view the mirror samples.
@@ -188,6 +190,7 @@ pub struct ViewTarget {
 impl ViewTarget {
     pub fn create(
         device: &Arc<Device>,
+        format: vk::Format,
         width: u32,
         height: u32,
         name: &str,
@@ -195,7 +198,7 @@ impl ViewTarget {
         let color = Image::create(
             device,
             &ImageDesc::new_2d(
-                VIEW_FORMAT,
+                format,
                 width,
                 height,
                 vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,

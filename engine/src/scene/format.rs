@@ -66,6 +66,14 @@ pub struct MirrorSpec {
     pub center: V3,
     pub radius: f64,
     pub animation: Option<AnimationSpec>,
+    pub lookup: Option<LookupSpec>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LookupSpec {
+    Plain,
+    Box,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

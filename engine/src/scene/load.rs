@@ -25,8 +25,8 @@ use super::generate::{
 use super::mesh::Mesh;
 use super::texture::TextureData;
 use super::{
-    Camera, CubeFormat, CubeSettings, DirectionalLight, Material, MaterialKind, Mirror, Object,
-    RefreshPolicy, Room, Scene, SensorCamera, MAX_FACE_SIZE_PX, MAX_IMAGE_SIZE_PX,
+    Camera, CubeFormat, CubeSettings, DirectionalLight, Lookup, Material, MaterialKind, Mirror,
+    Object, RefreshPolicy, Room, Scene, SensorCamera, MAX_FACE_SIZE_PX, MAX_IMAGE_SIZE_PX,
 };
 
 type R<T> = Result<T, SceneError>;
@@ -782,6 +782,10 @@ impl Ctx<'_> {
             center,
             radius_m,
             animation,
+            lookup: match spec.lookup {
+                None | Some(LookupSpec::Plain) => Lookup::Plain,
+                Some(LookupSpec::Box) => Lookup::Box,
+            },
         })
     }
 

@@ -75,6 +75,22 @@ pub struct Mirror {
     pub radius_m: f32,
     /// Moves the centre over time; `None` keeps it still.
     pub animation: Option<Animation>,
+    /// How the reflected direction looks up the cube map.
+    pub lookup: Lookup,
+}
+
+/// How the mirror turns a reflected ray into a cube-map lookup direction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Lookup {
+    /// The thesis: look up the reflected direction R itself (exact only for an environment
+    /// infinitely far away).
+    #[default]
+    Plain,
+    /// Parallax-corrected: intersect the reflected ray from the mirror point with the room's
+    /// box and look up the direction from the cube's centre to that point (exact for an empty
+    /// box room, up to texel sampling).
+    Box,
 }
 
 /// One drawable object: a mesh instance with a material and a rigid transform.

@@ -65,6 +65,8 @@ pub struct GraphicsPipelineDesc<'a> {
     /// Reverse-Z everywhere (near = 1, far = 0), so "closer" is GREATER.
     pub depth_compare: vk::CompareOp,
     pub depth_write: bool,
+    /// False: the colour attachment is left untouched (a depth-only pass).
+    pub color_writes: bool,
     /// Multiview view mask (0: not multiview).
     pub view_mask: u32,
 }
@@ -132,8 +134,13 @@ impl Pipeline {
             .depth_test_enable(true)
             .depth_write_enable(desc.depth_write)
             .depth_compare_op(desc.depth_compare);
-        let attachments = [vk::PipelineColorBlendAttachmentState::default()
-            .color_write_mask(vk::ColorComponentFlags::RGBA)];
+        let write_mask = if desc.color_writes {
+            vk::ColorComponentFlags::RGBA
+        } else {
+            vk::ColorComponentFlags::empty()
+        };
+        let attachments =
+            [vk::PipelineColorBlendAttachmentState::default().color_write_mask(write_mask)];
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
