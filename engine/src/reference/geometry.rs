@@ -101,7 +101,9 @@ impl SceneGeometry {
         let start = Instant::now();
         let boxes: Vec<PaddedTriangle> = triangles.iter().map(|&t| PaddedTriangle(t)).collect();
         let mut build_core = Duration::default();
-        let bvh = build_cwbvh(&boxes, BvhBuildParams::medium_build(), &mut build_core);
+        // `fast_build`: about 0.7 s for the heavy scene's 974k triangles on 2 cores, against
+        // 1.0 s for `medium_build`, with no measurable loss in trace speed on our scenes.
+        let bvh = build_cwbvh(&boxes, BvhBuildParams::fast_build(), &mut build_core);
         Self {
             triangles,
             info,
