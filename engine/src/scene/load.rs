@@ -1625,6 +1625,9 @@ mod tests {
             "scenes/many-objects.toml",
             "scenes/test/six-colour-room.toml",
             "scenes/test/direction-room.toml",
+            "scenes/hard/near-walls.toml",
+            "scenes/hard/far-field.toml",
+            "scenes/heavy.toml",
         ] {
             let s = load(&repo(rel)).unwrap_or_else(|e| panic!("{e}"));
             assert_eq!(s.mirror.radius_m, 1.0, "{rel}");
@@ -1635,6 +1638,14 @@ mod tests {
                 assert!(m < s.materials.len());
             }
         }
+        // The heavy scene states its size: about a million triangles.
+        let heavy = load(&repo("scenes/heavy.toml")).unwrap();
+        let triangles: usize = heavy
+            .objects
+            .iter()
+            .map(|o| heavy.meshes[o.mesh].triangle_count())
+            .sum();
+        assert_eq!((heavy.objects.len(), triangles + 12), (2800, 974_440));
         let thesis = load(&repo("scenes/thesis-room.toml")).unwrap();
         assert_eq!(thesis.sensor.offset_m, 2.5);
         assert_eq!(thesis.cube.face_size_px, 512);
