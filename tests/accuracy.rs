@@ -107,3 +107,64 @@ fn far_field_plain_lookup_is_within_half_a_texel() {
     );
     gpu.finish();
 }
+
+/// No NaN or Inf anywhere: every cube face and view, for every method the device runs and
+/// both lookup modes, and the reference's images.
+#[test]
+fn no_nan_or_inf_for_any_method_or_lookup() {
+    use specchio::render::methods::{Method, RequiredFeatures};
+    let probe = Gpu::new();
+    let methods: Vec<Method> = Method::ALL
+        .into_iter()
+        .filter(|&m| m != Method::Multiview && m.missing_features(&probe.device.info).is_none())
+        .collect();
+    probe.finish();
+    let features = methods
+        .iter()
+        .fold(RequiredFeatures::default(), |f, m| f.union(m.features()));
+    let gpu = Gpu::with_features(features);
+    let finite = |img: &RgbaImage| img.pixels.iter().all(|p| p.iter().all(|c| c.is_finite()));
+    for rel in ["scenes/thesis-room.toml", "scenes/hard/near-walls.toml"] {
+        let s = scene(rel);
+        for &method in &methods {
+            for lookup in [Lookup::Plain, Lookup::Box] {
+                let options = RenderOptions {
+                    cube_size: Some(64),
+                    method,
+                    lookup: Some(lookup),
+                    ..Default::default()
+                };
+                let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+                let all = Readback {
+                    cube: true,
+                    views: true,
+                    directions: true,
+                };
+                let (_, i) = r.render_frame(0, 0.5, all).expect("frame");
+                let mut images: Vec<&RgbaImage> = i.cube.iter().flatten().collect();
+                images.extend(
+                    [
+                        &i.observer,
+                        &i.sensor,
+                        &i.pair,
+                        &i.observer_direction,
+                        &i.sensor_direction,
+                    ]
+                    .into_iter()
+                    .flatten(),
+                );
+                assert_eq!(images.len(), 11);
+                assert!(
+                    images.iter().all(|img| finite(img)),
+                    "{rel}, {method}, {lookup:?}: NaN or Inf"
+                );
+            }
+        }
+        let reference = Reference::new(&s, 0.5);
+        let (o, _) = reference.render(&reference.observer_view(), 96, 72, 1);
+        for img in [&o.color, &o.direction, &o.distance, &o.object] {
+            assert!(finite(img), "{rel}: reference NaN or Inf");
+        }
+    }
+    gpu.finish();
+}
