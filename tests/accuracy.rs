@@ -24,6 +24,15 @@ fn inside_rim(img: &RgbaImage, rim: i64, x: u32, y: u32) -> bool {
 /// Angular errors (degrees) of the observer's and the sensor's mirror pixels for `lookup`,
 /// leaving out pixels within `rim` pixels of the mirror's silhouette.
 fn angles(gpu: &Gpu, s: &Scene, lookup: Lookup, rim: i64) -> Vec<f64> {
+    angles_by_object(gpu, s, lookup, rim)
+        .into_iter()
+        .map(|(a, _)| a)
+        .collect()
+}
+
+/// Like [`angles`], each with the drawable the mirror pixel really shows (walls 0..6, then
+/// 6 + object index), from the reference's object layer.
+fn angles_by_object(gpu: &Gpu, s: &Scene, lookup: Lookup, rim: i64) -> Vec<(f64, u32)> {
     let options = RenderOptions {
         lookup: Some(lookup),
         ..Default::default()
@@ -41,12 +50,24 @@ fn angles(gpu: &Gpu, s: &Scene, lookup: Lookup, rim: i64) -> Vec<f64> {
     let (sen, _) = reference.render(&reference.sensor_view(), sw, sh, 1);
     let raster_obs = images.observer_direction.expect("observer directions");
     let raster_sen = images.sensor_direction.expect("sensor directions");
-    let mut all = angles_deg(&raster_obs, &obs.direction, |x, y| {
-        inside_rim(&obs.direction, rim, x, y)
-    });
-    all.extend(angles_deg(&raster_sen, &sen.direction, |x, y| {
-        inside_rim(&sen.direction, rim, x, y)
-    }));
+    let mut all = Vec::new();
+    for (raster, exact) in [(&raster_obs, &obs), (&raster_sen, &sen)] {
+        let keep = |x, y| inside_rim(&exact.direction, rim, x, y);
+        let objects: Vec<u32> = exact
+            .object
+            .pixels
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| {
+                let (x, y) = (*i as u32 % raster.width, *i as u32 / raster.width);
+                raster.pixels[*i][3] == 1.0 && exact.direction.pixels[*i][3] == 1.0 && keep(x, y)
+            })
+            .map(|(_, p)| p[0] as u32)
+            .collect();
+        let a = angles_deg(raster, &exact.direction, keep);
+        assert_eq!(a.len(), objects.len());
+        all.extend(a.into_iter().zip(objects));
+    }
     all
 }
 
@@ -166,5 +187,40 @@ fn no_nan_or_inf_for_any_method_or_lookup() {
             assert!(finite(img), "{rel}: reference NaN or Inf");
         }
     }
+    gpu.finish();
+}
+
+#[test]
+fn thin_occluder_errors_stay_within_the_pole_bound() {
+    let gpu = Gpu::new();
+    let s = scene("scenes/hard/thin-occluder.toml");
+    let texel = 90.0 / f64::from(s.cube.face_size_px);
+    let bound = (1.0f64 / 2.5).asin().to_degrees();
+    let pole = 6; // the scene's only object
+    let plain = angles_by_object(&gpu, &s, Lookup::Plain, 0);
+    let boxed = angles_by_object(&gpu, &s, Lookup::Box, 0);
+    let max = |v: &[(f64, u32)], f: &dyn Fn(u32) -> bool| {
+        v.iter().filter(|p| f(p.1)).map(|p| p.0).fold(0.0, f64::max)
+    };
+    let plain_max = max(&plain, &|_| true);
+    eprintln!("thin occluder: plain max {plain_max:.3} deg, bound {bound:.3}");
+    assert!(plain_max <= bound + texel);
+    // Box lookup: walls exact to a texel (99 %), the pole not (it is inside the box).
+    let mut walls: Vec<f64> = boxed
+        .iter()
+        .filter(|p| p.1 != pole)
+        .map(|p| p.0 / texel)
+        .collect();
+    walls.sort_by(f64::total_cmp);
+    let p99 = walls[((walls.len() - 1) as f64 * 0.99) as usize];
+    let pole_max = max(&boxed, &|o| o == pole);
+    let pole_pixels = boxed.iter().filter(|p| p.1 == pole).count();
+    eprintln!("thin occluder, box: walls p99 {p99:.3} texels; pole {pole_pixels} pixels, max {pole_max:.3} deg");
+    assert!(p99 <= 1.0, "walls p99 {p99:.3} texels");
+    assert!(pole_pixels > 20, "the mirror shows the pole");
+    assert!(
+        pole_max > texel && pole_max <= bound + texel,
+        "pole max {pole_max:.3} deg"
+    );
     gpu.finish();
 }
