@@ -26,13 +26,14 @@ fn inside_rim(img: &RgbaImage, rim: i64, x: u32, y: u32) -> bool {
 fn angles(gpu: &Gpu, s: &Scene, lookup: Lookup, rim: i64) -> Vec<f64> {
     angles_by_object(gpu, s, lookup, rim)
         .into_iter()
-        .map(|(a, _)| a)
+        .map(|(a, _, _)| a)
         .collect()
 }
 
 /// Like [`angles`], each with the drawable the mirror pixel really shows (walls 0..6, then
-/// 6 + object index), from the reference's object layer.
-fn angles_by_object(gpu: &Gpu, s: &Scene, lookup: Lookup, rim: i64) -> Vec<(f64, u32)> {
+/// 6 + object index, from the reference's object layer) and the incidence cosine |d . n| of
+/// the pixel-centre ray on the sphere.
+fn angles_by_object(gpu: &Gpu, s: &Scene, lookup: Lookup, rim: i64) -> Vec<(f64, u32, f64)> {
     let options = RenderOptions {
         lookup: Some(lookup),
         ..Default::default()
@@ -51,24 +52,52 @@ fn angles_by_object(gpu: &Gpu, s: &Scene, lookup: Lookup, rim: i64) -> Vec<(f64,
     let raster_obs = images.observer_direction.expect("observer directions");
     let raster_sen = images.sensor_direction.expect("sensor directions");
     let mut all = Vec::new();
-    for (raster, exact) in [(&raster_obs, &obs), (&raster_sen, &sen)] {
+    let cameras = [
+        (&raster_obs, &obs, reference.observer_view()),
+        (&raster_sen, &sen, reference.sensor_view()),
+    ];
+    for (raster, exact, view) in cameras {
         let keep = |x, y| inside_rim(&exact.direction, rim, x, y);
-        let objects: Vec<u32> = exact
+        let (w, h) = (raster.width, raster.height);
+        let kept: Vec<(u32, f64)> = exact
             .object
             .pixels
             .iter()
             .enumerate()
             .filter(|(i, _)| {
-                let (x, y) = (*i as u32 % raster.width, *i as u32 / raster.width);
+                let (x, y) = (*i as u32 % w, *i as u32 / w);
                 raster.pixels[*i][3] == 1.0 && exact.direction.pixels[*i][3] == 1.0 && keep(x, y)
             })
-            .map(|(_, p)| p[0] as u32)
+            .map(|(i, p)| {
+                (
+                    p[0] as u32,
+                    incidence_cosine(s, &view, i as u32 % w, i as u32 / w, w, h),
+                )
+            })
             .collect();
         let a = angles_deg(raster, &exact.direction, keep);
-        assert_eq!(a.len(), objects.len());
-        all.extend(a.into_iter().zip(objects));
+        assert_eq!(a.len(), kept.len());
+        all.extend(a.into_iter().zip(kept).map(|(a, (o, c))| (a, o, c)));
     }
     all
+}
+
+/// |d . n| for the pixel-centre ray of pixel (x, y) of a `w` x `h` camera on the mirror (0 on
+/// a miss, which the callers' masks exclude).
+fn incidence_cosine(
+    s: &Scene,
+    view: &specchio::render::camera::ViewBasis,
+    x: u32,
+    y: u32,
+    w: u32,
+    h: u32,
+) -> f64 {
+    use specchio::reference::intersect::ray_sphere;
+    let ndc = |i: u32, n: u32| 2.0 * (i as f32 + 0.5) / n as f32 - 1.0;
+    let d = view.ray(ndc(x, w), ndc(y, h)).normalize();
+    ray_sphere(view.eye, d, glam::Vec3::ZERO, s.mirror.radius_m).map_or(0.0, |t| {
+        f64::from(d.dot((view.eye + t * d).normalize()).abs())
+    })
 }
 
 fn error(gpu: &Gpu, s: &Scene, lookup: Lookup) -> AngularError {
@@ -199,7 +228,7 @@ fn thin_occluder_errors_stay_within_the_pole_bound() {
     let pole = 6; // the scene's only object
     let plain = angles_by_object(&gpu, &s, Lookup::Plain, 0);
     let boxed = angles_by_object(&gpu, &s, Lookup::Box, 0);
-    let max = |v: &[(f64, u32)], f: &dyn Fn(u32) -> bool| {
+    let max = |v: &[(f64, u32, f64)], f: &dyn Fn(u32) -> bool| {
         v.iter().filter(|p| f(p.1)).map(|p| p.0).fold(0.0, f64::max)
     };
     let plain_max = max(&plain, &|_| true);
@@ -222,5 +251,43 @@ fn thin_occluder_errors_stay_within_the_pole_bound() {
         pole_max > texel && pole_max <= bound + texel,
         "pole max {pole_max:.3} deg"
     );
+    gpu.finish();
+}
+
+#[test]
+fn grazing_errors_stay_bounded_in_every_incidence_bin() {
+    let gpu = Gpu::new();
+    let s = scene("scenes/hard/grazing.toml");
+    let texel = 90.0 / f64::from(s.cube.face_size_px);
+    let bound = (1.0f64 / 3.0).asin().to_degrees();
+    for lookup in [Lookup::Plain, Lookup::Box] {
+        let a = angles_by_object(&gpu, &s, lookup, 0);
+        assert!(
+            a.iter().filter(|p| p.2 < 0.1).count() > 100,
+            "the scene has grazing pixels"
+        );
+        for bin in 0..10 {
+            let (lo, hi) = (bin as f64 / 10.0, (bin + 1) as f64 / 10.0);
+            let mut e: Vec<f64> = a
+                .iter()
+                .filter(|p| p.2 >= lo && p.2 < hi)
+                .map(|p| p.0)
+                .collect();
+            if e.is_empty() {
+                continue;
+            }
+            e.sort_by(f64::total_cmp);
+            let (p99, max) = (e[((e.len() - 1) as f64 * 0.99) as usize], e[e.len() - 1]);
+            eprintln!("grazing {lookup:?} cos [{lo:.1}, {hi:.1}): {} px, p99 {p99:.4} deg, max {max:.4} deg", e.len());
+            assert!(max.is_finite());
+            match lookup {
+                Lookup::Plain => assert!(max <= bound + texel, "bin {bin}: max {max:.3} deg"),
+                Lookup::Box => assert!(p99 <= texel, "bin {bin}: p99 {p99:.4} deg"),
+            }
+        }
+    }
+    let r = Reference::new(&s, 0.0);
+    let (_, stats) = r.render(&r.observer_view(), 192, 144, 4);
+    assert_eq!(stats.misses, 0);
     gpu.finish();
 }
