@@ -291,3 +291,43 @@ fn grazing_errors_stay_bounded_in_every_incidence_bin() {
     assert_eq!(stats.misses, 0);
     gpu.finish();
 }
+
+/// Seams: more than 10^7 reference rays, aimed at a room whose edges and corners the mirror's
+/// reflections meet exactly, with the sensor's image up along -Z and +Z: none escapes; the
+/// rasterized mirror never shows black (nothing sampled outside the cube's six faces).
+#[test]
+fn seams_no_ray_escapes_and_no_black_in_the_mirror() {
+    let gpu = Gpu::new();
+    let mut rays = 0u64;
+    for up in [glam::Vec3::NEG_Z, glam::Vec3::Z] {
+        let mut s = scene("scenes/hard/seams.toml");
+        s.sensor.up = up;
+        let r = Reference::new(&s, 0.0);
+        let (_, a) = r.render(&r.sensor_view(), 512, 512, 16);
+        let (_, b) = r.render(&r.observer_view(), 400, 300, 16);
+        assert_eq!(a.misses + b.misses, 0, "up {up}: rays escaped");
+        rays += a.rays + b.rays;
+        let options = RenderOptions {
+            cube_size: Some(64),
+            ..Default::default()
+        };
+        let mut renderer = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+        let all = Readback {
+            views: true,
+            directions: true,
+            ..Default::default()
+        };
+        let (_, images) = renderer.render_frame(0, 0.0, all).expect("frame");
+        let (sensor, dirs) = (images.sensor.unwrap(), images.sensor_direction.unwrap());
+        for (c, d) in sensor.pixels.iter().zip(&dirs.pixels) {
+            if d[3] == 1.0 {
+                assert!(
+                    c[0] + c[1] + c[2] > 0.5,
+                    "up {up}: a mirror pixel is black: {c:?}"
+                );
+            }
+        }
+    }
+    assert!(rays > 10_000_000, "{rays} rays");
+    gpu.finish();
+}
