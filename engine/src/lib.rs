@@ -7,8 +7,10 @@
 //! - [`shaders`]: SPIR-V compiled from `shaders/` at build time;
 //! - [`render`]: cameras and cube-face conventions, GPU structs, the six-pass cube fill and the
 //!   observer / sensor views with the analytic mirror;
-//! - [`output`]: EXR, PNG and JSON files, written atomically.
+//! - [`output`]: EXR, PNG and JSON files, written atomically;
+//! - [`metrics`]: image-error metrics (RMSE, PSNR, relMSE, FLIP) and the FLIP heatmap.
 
+pub mod metrics;
 pub mod output;
 pub mod render;
 pub mod scene;
