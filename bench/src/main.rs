@@ -2,6 +2,7 @@
 //! arguments, then run one subcommand (each in its own module).
 
 mod bench;
+mod compare;
 mod info;
 mod probe;
 mod render;
@@ -31,6 +32,9 @@ enum Command {
     /// Time every cube fill method on the same scenes, interleaved (first slice of the
     /// benchmark command).
     Bench(bench::Args),
+    /// Error metrics of a test image against a reference (RMSE, PSNR, relMSE, FLIP), with an
+    /// optional mask and FLIP heatmap.
+    Compare(compare::Args),
     /// (internal) Compare a cube method with six-pass on a tiny scene; run in a child process
     /// because a broken driver may crash.
     #[command(hide = true)]
@@ -66,6 +70,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Probe(args) => probe::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Compare(args) => compare::run(&args),
     };
     match result {
         Ok(code) => code,
