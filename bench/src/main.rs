@@ -2,6 +2,7 @@
 //! arguments, then run one subcommand (each in its own module).
 
 mod bench;
+mod compare;
 mod info;
 mod probe;
 mod reference;
@@ -34,6 +35,9 @@ enum Command {
     /// Time every cube fill method on the same scenes, interleaved (first slice of the
     /// benchmark command).
     Bench(bench::Args),
+    /// Error metrics of a test image against a reference (RMSE, PSNR, relMSE, FLIP), with an
+    /// optional mask and FLIP heatmap.
+    Compare(compare::Args),
     /// (internal) Compare a cube method with six-pass on a tiny scene; run in a child process
     /// because a broken driver may crash.
     #[command(hide = true)]
@@ -77,6 +81,7 @@ fn main() -> ExitCode {
         Command::Probe(args) => probe::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Reference(args) => reference::run(&args),
+        Command::Compare(args) => compare::run(&args),
     };
     match result {
         Ok(code) => code,

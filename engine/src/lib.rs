@@ -8,8 +8,10 @@
 //! - [`render`]: cameras and cube-face conventions, GPU structs, the six-pass cube fill and the
 //!   observer / sensor views with the analytic mirror;
 //! - [`reference`]: the exact CPU ray-traced mirror (BVH, watertight triangles, analytic sphere);
+//! - [`metrics`]: image-error metrics (RMSE, PSNR, relMSE, FLIP) and the FLIP heatmap;
 //! - [`output`]: EXR, PNG and JSON files, written atomically.
 
+pub mod metrics;
 pub mod output;
 pub mod reference;
 pub mod render;

@@ -78,9 +78,26 @@ pub fn linear_to_srgb(v: f32) -> f32 {
 
 /// An 8-bit sRGB RGB preview of a linear image.
 pub fn write_png(path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
+    let bytes: Vec<u8> = image
+        .pixels
+        .iter()
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .map(|v| (linear_to_srgb(v) * 255.0).round() as u8)
+        .collect();
+    write_png_rgb8(path, image.width, image.height, &bytes)
+}
+
+/// An 8-bit sRGB RGB PNG from bytes already encoded (3 per pixel, rows top to bottom), e.g. a
+/// colour-mapped error heatmap.
+pub fn write_png_rgb8(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb8: &[u8],
+) -> Result<(), OutputError> {
     atomically(path, |tmp| {
         let file = fs::File::create(tmp).map_err(io(tmp))?;
-        let mut encoder = png::Encoder::new(BufWriter::new(file), image.width, image.height);
+        let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
         encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
@@ -89,13 +106,7 @@ pub fn write_png(path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
             message: e.to_string(),
         };
         let mut writer = encoder.write_header().map_err(enc)?;
-        let bytes: Vec<u8> = image
-            .pixels
-            .iter()
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .map(|v| (linear_to_srgb(v) * 255.0).round() as u8)
-            .collect();
-        writer.write_image_data(&bytes).map_err(enc)?;
+        writer.write_image_data(rgb8).map_err(enc)?;
         writer.finish().map_err(enc)
     })
 }

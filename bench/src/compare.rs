@@ -1,0 +1,129 @@
+//! `specchio compare TEST REFERENCE`: error metrics of one linear EXR against another (see
+//! `docs/accuracy.md`, "Metrics"). Exits 0 whenever the images were compared, however much
+//! they differ; bad input is an error naming the file, and writes nothing.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Result;
+use serde_json::json;
+use specchio::metrics::{
+    self, Comparison, FLIP_PERCENTILE, FLIP_PIXELS_PER_DEGREE, MASK_THRESHOLD, PSNR_PEAK,
+    REL_MSE_EPSILON,
+};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The image under test (linear OpenEXR, first RGBA layer).
+    test: PathBuf,
+    /// The reference image (linear OpenEXR), same size; relMSE divides by it.
+    reference: PathBuf,
+    /// Compare only the pixels whose red channel is above 0.5 (EXR, or PNG by its stored value).
+    #[arg(long)]
+    mask: Option<PathBuf>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Write the per-pixel FLIP error as a colour-mapped PNG (magma; grey: not compared).
+    #[arg(long)]
+    heatmap: Option<PathBuf>,
+}
+
+pub fn run(args: &Args) -> Result<ExitCode> {
+    // 1. Read and compare; any bad input stops here, before a file is written.
+    let comparison = metrics::compare_files(&args.test, &args.reference, args.mask.as_deref())?;
+
+    // 2. The heatmap, written atomically.
+    if let Some(path) = &args.heatmap {
+        metrics::write_heatmap(path, &comparison)?;
+    }
+
+    // 3. Report.
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&to_json(args, &comparison))?
+        );
+    } else {
+        print_table(args, &comparison);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The JSON report; every key is documented in docs/accuracy.md. Undefined metrics (nothing
+/// compared) and an infinite PSNR are null, never a non-number.
+fn to_json(args: &Args, c: &Comparison) -> serde_json::Value {
+    let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
+    let finite = |v: Option<f64>| v.filter(|v| v.is_finite());
+    json!({
+        "test": args.test.display().to_string(),
+        "reference": args.reference.display().to_string(),
+        "mask": path(&args.mask),
+        "heatmap": path(&args.heatmap),
+        "width": c.width,
+        "height": c.height,
+        "pixels_in_mask": c.pixels_in_mask,
+        "pixels_compared": c.pixels_compared,
+        "test_nan_pixels": c.test_non_finite.nan_pixels,
+        "test_inf_pixels": c.test_non_finite.inf_pixels,
+        "reference_nan_pixels": c.reference_non_finite.nan_pixels,
+        "reference_inf_pixels": c.reference_non_finite.inf_pixels,
+        "rmse": c.rmse,
+        "psnr_db": finite(c.psnr_db),
+        "psnr_infinite": c.psnr_is_infinite(),
+        "rel_mse": c.rel_mse,
+        "max_abs_error": c.max_abs_error,
+        "flip_mean": c.flip_mean,
+        "flip_p99": c.flip_p99,
+        "settings": {
+            "psnr_peak": PSNR_PEAK,
+            "rel_mse_epsilon": REL_MSE_EPSILON,
+            "mask_threshold": MASK_THRESHOLD,
+            "flip_pixels_per_degree": FLIP_PIXELS_PER_DEGREE,
+            "flip_percentile": FLIP_PERCENTILE,
+        },
+    })
+}
+
+fn print_table(args: &Args, c: &Comparison) {
+    let num = |v: Option<f64>| v.map_or("n/a".to_owned(), |v| format!("{v:.6}"));
+    let psnr = match c.psnr_db {
+        None => "n/a".to_owned(),
+        Some(v) if v.is_infinite() => "inf (identical)".to_owned(),
+        Some(v) => format!("{v:.2} dB"),
+    };
+    println!(
+        "compared {} against {} ({}x{})",
+        args.test.display(),
+        args.reference.display(),
+        c.width,
+        c.height
+    );
+    if let Some(mask) = &args.mask {
+        println!("  mask:            {}", mask.display());
+    }
+    println!(
+        "  pixels:          {} compared of {} in the mask",
+        c.pixels_compared, c.pixels_in_mask
+    );
+    println!(
+        "  NaN / Inf:       test {} / {}, reference {} / {} (excluded)",
+        c.test_non_finite.nan_pixels,
+        c.test_non_finite.inf_pixels,
+        c.reference_non_finite.nan_pixels,
+        c.reference_non_finite.inf_pixels
+    );
+    println!("  RMSE:            {}", num(c.rmse));
+    println!("  {:<17}{psnr}", format!("PSNR (peak {PSNR_PEAK}):"));
+    println!(
+        "  {:<17}{}",
+        format!("relMSE (e {REL_MSE_EPSILON}):"),
+        num(c.rel_mse)
+    );
+    println!("  max |error|:     {}", num(c.max_abs_error));
+    println!("  FLIP mean:       {}", num(c.flip_mean));
+    println!("  FLIP 99th pct:   {}", num(c.flip_p99));
+    if let Some(path) = &args.heatmap {
+        println!("  heatmap:         {}", path.display());
+    }
+}

@@ -1,0 +1,360 @@
+//! Image-error metrics: a test image against a reference, both linear HDR RGB.
+//!
+//! [`compare`] computes, over the pixels selected by an optional [`Mask`]: RMSE, PSNR, relMSE,
+//! the largest absolute error, the NaN / Inf pixel counts of each image, and FLIP (NVIDIA's
+//! perceptual difference, through the `nv-flip` crate) on 8-bit sRGB versions of both. The
+//! exact definitions, with units and constants, are in `docs/accuracy.md` ("Metrics").
+//!
+//! ```no_run
+//! use std::path::Path;
+//! use specchio::metrics;
+//!
+//! let test = metrics::read_exr(Path::new("a/observer.exr"))?;
+//! let reference = metrics::read_exr(Path::new("b/observer.exr"))?;
+//! let c = metrics::compare(&test, &reference, None)?;
+//! println!("RMSE {:?}, FLIP mean {:?}", c.rmse, c.flip_mean);
+//! metrics::write_heatmap(Path::new("flip.png"), &c)?;
+//! # Ok::<(), metrics::MetricsError>(())
+//! ```
+
+mod heatmap;
+
+use std::path::{Path, PathBuf};
+
+use crate::output::{linear_to_srgb, OutputError};
+use crate::render::RgbaImage;
+use crate::scene::TextureData;
+
+pub use heatmap::{colour_map, write_heatmap, NOT_COMPARED_RGB8};
+
+/// PSNR's peak signal: linear 1.0 (diffuse white). HDR values above it are not clipped, so an
+/// error larger than 1 gives a negative PSNR.
+pub const PSNR_PEAK: f64 = 1.0;
+
+/// relMSE's epsilon in `(a - b)^2 / (b^2 + epsilon)`: keeps black reference pixels from
+/// dividing by zero; an error of 0.1 on black then weighs 1.0.
+pub const REL_MSE_EPSILON: f64 = 0.01;
+
+/// FLIP's pixels per degree of visual angle: FLIP's default, a 0.7 m wide 4K monitor seen from
+/// 0.7 m. Larger values hide finer detail.
+pub const FLIP_PIXELS_PER_DEGREE: f32 = 67.0;
+
+/// The FLIP percentile reported next to the mean (nearest rank, see [`Comparison::flip_p99`]).
+pub const FLIP_PERCENTILE: f64 = 0.99;
+
+/// A mask pixel selects its image pixel when its red channel is above this (EXR: the linear
+/// value; PNG: the stored value scaled to [0, 1], so 128 and up in 8 bits).
+pub const MASK_THRESHOLD: f32 = 0.5;
+
+#[derive(Debug, thiserror::Error)]
+pub enum MetricsError {
+    #[error("{path}: no such file")]
+    Missing { path: PathBuf },
+    #[error("cannot read {path}: {message}")]
+    Read { path: PathBuf, message: String },
+    #[error("size mismatch: {a_name} is {}x{}, {b_name} is {}x{}", a_size.0, a_size.1, b_size.0, b_size.1)]
+    SizeMismatch {
+        a_name: String,
+        a_size: (u32, u32),
+        b_name: String,
+        b_size: (u32, u32),
+    },
+    #[error(transparent)]
+    Output(#[from] OutputError),
+}
+
+/// Which pixels take part: `selected[y * width + x]`, rows top to bottom.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mask {
+    pub width: u32,
+    pub height: u32,
+    pub selected: Vec<bool>,
+}
+
+impl Mask {
+    /// Every pixel whose red channel is above [`MASK_THRESHOLD`].
+    pub fn from_red(image: &RgbaImage) -> Mask {
+        Mask {
+            width: image.width,
+            height: image.height,
+            selected: image.pixels.iter().map(|p| p[0] > MASK_THRESHOLD).collect(),
+        }
+    }
+}
+
+/// NaN and Inf pixels of one image, among the masked pixels. A pixel is NaN when any of its
+/// R, G, B is NaN, otherwise Inf when any is infinite; alpha is ignored.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NonFinite {
+    pub nan_pixels: u64,
+    pub inf_pixels: u64,
+}
+
+/// The result of [`compare`]. The error metrics are `None` when no pixel was compared (empty
+/// mask, or every masked pixel non-finite in one of the images).
+#[derive(Debug, Clone)]
+pub struct Comparison {
+    pub width: u32,
+    pub height: u32,
+    /// Pixels the mask selects (`width * height` without a mask).
+    pub pixels_in_mask: u64,
+    /// Masked pixels finite in both images: the ones every metric below is taken over.
+    pub pixels_compared: u64,
+    pub test_non_finite: NonFinite,
+    pub reference_non_finite: NonFinite,
+    /// `sqrt(mean((a - b)^2))` over R, G, B of the compared pixels (linear units).
+    pub rmse: Option<f64>,
+    /// `10 log10(PSNR_PEAK^2 / MSE)` in dB; `+inf` when the RMSE is 0.
+    pub psnr_db: Option<f64>,
+    /// `mean((a - b)^2 / (b^2 + REL_MSE_EPSILON))` over R, G, B, b the reference.
+    pub rel_mse: Option<f64>,
+    /// `max |a - b|` over R, G, B of the compared pixels (linear units).
+    pub max_abs_error: Option<f64>,
+    /// Mean of the FLIP map over the compared pixels, in [0, 1].
+    pub flip_mean: Option<f64>,
+    /// The 99th percentile of the FLIP map over the compared pixels, nearest rank: the
+    /// `ceil(0.99 n)`-th smallest value.
+    pub flip_p99: Option<f64>,
+    /// The per-pixel FLIP value of every pixel (rows top to bottom), masked or not.
+    pub flip_map: Vec<f32>,
+    /// Which pixels were compared (in the mask and finite in both images).
+    pub compared: Vec<bool>,
+}
+
+impl Comparison {
+    /// Whether the images are identical on the compared pixels (PSNR is infinite).
+    pub fn psnr_is_infinite(&self) -> bool {
+        self.psnr_db.is_some_and(f64::is_infinite)
+    }
+}
+
+/// The first RGBA layer of an OpenEXR file, as 32-bit float (alpha 1 when the file has none).
+pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
+    check_exists(path)?;
+    let read = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res, _| RgbaImage {
+            width: res.width() as u32,
+            height: res.height() as u32,
+            pixels: vec![[0.0; 4]; res.width() * res.height()],
+        },
+        |img: &mut RgbaImage, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            let i = pos.y() * img.width as usize + pos.x();
+            img.pixels[i] = [r, g, b, a];
+        },
+    )
+    .map_err(|e| MetricsError::Read {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
+    Ok(read.layer_data.channel_data.pixels)
+}
+
+/// A mask from an EXR (by extension `.exr`, any case) or any other file decoded as PNG.
+pub fn read_mask(path: &Path) -> Result<Mask, MetricsError> {
+    let is_exr = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if is_exr {
+        return Ok(Mask::from_red(&read_exr(path)?));
+    }
+    check_exists(path)?;
+    let png = TextureData::from_png(path).map_err(|message| MetricsError::Read {
+        path: path.to_owned(),
+        message,
+    })?;
+    Ok(Mask {
+        width: png.width,
+        height: png.height,
+        selected: png
+            .rgba8
+            .chunks_exact(4)
+            .map(|p| f32::from(p[0]) / 255.0 > MASK_THRESHOLD)
+            .collect(),
+    })
+}
+
+/// Reads the files and compares them; a size mismatch names the files.
+pub fn compare_files(
+    test: &Path,
+    reference: &Path,
+    mask: Option<&Path>,
+) -> Result<Comparison, MetricsError> {
+    let test_image = read_exr(test)?;
+    let reference_image = read_exr(reference)?;
+    let mask = mask
+        .map(|m| read_mask(m).map(|mask| (m, mask)))
+        .transpose()?;
+    let name = |p: &Path| p.display().to_string();
+    same_size(
+        (&name(test), &test_image),
+        (&name(reference), &reference_image),
+    )?;
+    if let Some((path, mask)) = &mask {
+        same_size_as_mask((&name(reference), &reference_image), (&name(path), mask))?;
+    }
+    compare(&test_image, &reference_image, mask.as_ref().map(|(_, m)| m))
+}
+
+/// Compares `test` with `reference` (same size) over the pixels `mask` selects (all without
+/// one). See the fields of [`Comparison`] for the definitions.
+pub fn compare(
+    test: &RgbaImage,
+    reference: &RgbaImage,
+    mask: Option<&Mask>,
+) -> Result<Comparison, MetricsError> {
+    same_size(("the test image", test), ("the reference image", reference))?;
+    if let Some(mask) = mask {
+        same_size_as_mask(("the reference image", reference), ("the mask", mask))?;
+    }
+
+    // 1. Which pixels count: in the mask, and finite in both images.
+    let n = reference.pixels.len();
+    let in_mask = |i: usize| mask.is_none_or(|m| m.selected[i]);
+    let (mut test_non_finite, mut reference_non_finite) =
+        (NonFinite::default(), NonFinite::default());
+    let mut compared = vec![false; n];
+    for (i, c) in compared.iter_mut().enumerate() {
+        if !in_mask(i) {
+            continue;
+        }
+        let a = count_non_finite(&test.pixels[i], &mut test_non_finite);
+        let b = count_non_finite(&reference.pixels[i], &mut reference_non_finite);
+        *c = a && b;
+    }
+
+    // 2. Linear metrics, accumulated in f64.
+    let (mut sum_sq, mut sum_rel, mut max_abs, mut count) = (0.0f64, 0.0f64, 0.0f64, 0u64);
+    for i in (0..n).filter(|&i| compared[i]) {
+        for ch in 0..3 {
+            let a = f64::from(test.pixels[i][ch]);
+            let b = f64::from(reference.pixels[i][ch]);
+            let d = a - b;
+            sum_sq += d * d;
+            sum_rel += d * d / (b * b + REL_MSE_EPSILON);
+            max_abs = max_abs.max(d.abs());
+        }
+        count += 1;
+    }
+    let channels = (count * 3) as f64;
+    let some = |v: f64| (count > 0).then_some(v);
+    let mse = sum_sq / channels;
+    let rmse = some(mse.sqrt());
+    let psnr_db = some(if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        10.0 * (PSNR_PEAK * PSNR_PEAK / mse).log10()
+    });
+
+    // 3. FLIP on 8-bit sRGB, the whole image (its filters are spatial), pooled over the
+    //    compared pixels.
+    let flip_map = flip_map(test, reference);
+    let mut flip: Vec<f32> = (0..n)
+        .filter(|&i| compared[i])
+        .map(|i| flip_map[i])
+        .collect();
+    flip.sort_by(f32::total_cmp);
+    let flip_mean = some(flip.iter().map(|&v| f64::from(v)).sum::<f64>() / flip.len() as f64);
+    let flip_p99 = flip
+        .get(nearest_rank(flip.len(), FLIP_PERCENTILE))
+        .map(|&v| f64::from(v));
+
+    Ok(Comparison {
+        width: reference.width,
+        height: reference.height,
+        pixels_in_mask: (0..n).filter(|&i| in_mask(i)).count() as u64,
+        pixels_compared: count,
+        test_non_finite,
+        reference_non_finite,
+        rmse,
+        psnr_db,
+        rel_mse: some(sum_rel / channels),
+        max_abs_error: some(max_abs),
+        flip_mean,
+        flip_p99,
+        flip_map,
+        compared,
+    })
+}
+
+/// The per-pixel FLIP map (LDR FLIP, [`FLIP_PIXELS_PER_DEGREE`]) of two same-size linear
+/// images, each first encoded to 8-bit sRGB exactly as the PNG previews are
+/// ([`linear_to_srgb`], clamped to [0, 1], NaN as 0).
+pub fn flip_map(test: &RgbaImage, reference: &RgbaImage) -> Vec<f32> {
+    let to_flip = |img: &RgbaImage| {
+        let bytes: Vec<u8> = img
+            .pixels
+            .iter()
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .map(|v| (linear_to_srgb(v) * 255.0).round() as u8)
+            .collect();
+        nv_flip::FlipImageRgb8::with_data(img.width, img.height, &bytes)
+    };
+    nv_flip::flip(to_flip(reference), to_flip(test), FLIP_PIXELS_PER_DEGREE).to_vec()
+}
+
+/// Index of the nearest-rank percentile `p` in a sorted list of `n` values: `ceil(p n) - 1`.
+fn nearest_rank(n: usize, p: f64) -> usize {
+    ((p * n as f64).ceil() as usize).saturating_sub(1)
+}
+
+/// Counts a NaN or Inf pixel; returns whether the pixel is finite.
+fn count_non_finite(p: &[f32; 4], counts: &mut NonFinite) -> bool {
+    let rgb = &p[..3];
+    if rgb.iter().any(|v| v.is_nan()) {
+        counts.nan_pixels += 1;
+        false
+    } else if rgb.iter().any(|v| v.is_infinite()) {
+        counts.inf_pixels += 1;
+        false
+    } else {
+        true
+    }
+}
+
+fn same_size(a: (&str, &RgbaImage), b: (&str, &RgbaImage)) -> Result<(), MetricsError> {
+    check_size(a.0, (a.1.width, a.1.height), b.0, (b.1.width, b.1.height))
+}
+
+fn same_size_as_mask(a: (&str, &RgbaImage), mask: (&str, &Mask)) -> Result<(), MetricsError> {
+    check_size(
+        a.0,
+        (a.1.width, a.1.height),
+        mask.0,
+        (mask.1.width, mask.1.height),
+    )
+}
+
+fn check_size(
+    a_name: &str,
+    a_size: (u32, u32),
+    b_name: &str,
+    b_size: (u32, u32),
+) -> Result<(), MetricsError> {
+    if a_size == b_size {
+        return Ok(());
+    }
+    Err(MetricsError::SizeMismatch {
+        a_name: a_name.to_owned(),
+        a_size,
+        b_name: b_name.to_owned(),
+        b_size,
+    })
+}
+
+/// A missing file gets its own error (the decoders' messages do not always name it).
+fn check_exists(path: &Path) -> Result<(), MetricsError> {
+    match std::fs::metadata(path) {
+        Ok(_) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(MetricsError::Missing {
+            path: path.to_owned(),
+        }),
+        Err(e) => Err(MetricsError::Read {
+            path: path.to_owned(),
+            message: e.to_string(),
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,254 @@
+//! Known answers for every metric.
+
+use super::*;
+
+fn image(width: u32, height: u32, f: impl Fn(u32, u32) -> [f32; 4]) -> RgbaImage {
+    RgbaImage {
+        width,
+        height,
+        pixels: (0..height)
+            .flat_map(|y| (0..width).map(move |x| (x, y)))
+            .map(|(x, y)| f(x, y))
+            .collect(),
+    }
+}
+
+/// A smooth gradient with every channel in [0.2, 0.8], so +-0.1 stays in range.
+fn gradient(width: u32, height: u32) -> RgbaImage {
+    image(width, height, |x, y| {
+        let u = x as f32 / width as f32;
+        let v = y as f32 / height as f32;
+        [0.2 + 0.6 * u, 0.2 + 0.6 * v, 0.5, 1.0]
+    })
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("specchio-metrics-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn identical_images_have_zero_error_and_infinite_psnr() {
+    let a = gradient(16, 8);
+    let c = compare(&a, &a, None).unwrap();
+    assert_eq!(c.pixels_compared, 128);
+    assert_eq!(c.pixels_in_mask, 128);
+    assert_eq!(c.rmse, Some(0.0));
+    assert_eq!(c.rel_mse, Some(0.0));
+    assert_eq!(c.max_abs_error, Some(0.0));
+    assert!(c.psnr_is_infinite());
+    assert_eq!(c.flip_mean, Some(0.0));
+    assert_eq!(c.flip_p99, Some(0.0));
+}
+
+#[test]
+fn constant_offset_of_a_tenth_is_rmse_0_1_and_psnr_20_db() {
+    let reference = gradient(16, 8);
+    let test = image(16, 8, |x, y| {
+        let p = reference.pixel(x, y);
+        [p[0] + 0.1, p[1] - 0.1, p[2] + 0.1, 0.0]
+    });
+    let c = compare(&test, &reference, None).unwrap();
+    // f32 rounding of p + 0.1 is below 1e-7 at these magnitudes.
+    assert!((c.rmse.unwrap() - 0.1).abs() < 1e-6, "{:?}", c.rmse);
+    // PSNR = 10 log10(1 / 0.01) = 20 dB.
+    assert!((c.psnr_db.unwrap() - 20.0).abs() < 1e-4, "{:?}", c.psnr_db);
+    assert!((c.max_abs_error.unwrap() - 0.1).abs() < 1e-6);
+    assert!(!c.psnr_is_infinite());
+}
+
+#[test]
+fn rel_mse_of_a_hand_computed_2x1_image() {
+    // Pixel 0: reference (1, 0, 0.5), test (0, 0, 0.5): only R differs, by 1.
+    //   (1)^2 / (1^2 + 0.01) = 1 / 1.01 = 0.990099010
+    // Pixel 1: reference (0.5, 0.5, 0.5), test (0.75, 0.5, 0.25): R and B differ by 0.25.
+    //   2 * 0.0625 / (0.25 + 0.01) = 0.480769231
+    // Mean over 6 channel values: 1.470868241 / 6 = 0.245144707.
+    let reference = RgbaImage {
+        width: 2,
+        height: 1,
+        pixels: vec![[1.0, 0.0, 0.5, 1.0], [0.5, 0.5, 0.5, 1.0]],
+    };
+    let test = RgbaImage {
+        width: 2,
+        height: 1,
+        pixels: vec![[0.0, 0.0, 0.5, 1.0], [0.75, 0.5, 0.25, 1.0]],
+    };
+    let c = compare(&test, &reference, None).unwrap();
+    assert!(
+        (c.rel_mse.unwrap() - 0.245_144_707).abs() < 1e-8,
+        "{:?}",
+        c.rel_mse
+    );
+    // MSE = (1 + 2 * 0.0625) / 6 = 0.1875.
+    assert!((c.rmse.unwrap() - 0.1875f64.sqrt()).abs() < 1e-12);
+    assert_eq!(c.max_abs_error, Some(1.0));
+}
+
+#[test]
+fn only_masked_pixels_count() {
+    // The left half differs by 0.5, the right half by 0.1; the mask keeps the right half.
+    let reference = image(8, 4, |_, _| [0.5, 0.5, 0.5, 1.0]);
+    let test = image(8, 4, |x, _| {
+        let d = if x < 4 { 0.5 } else { 0.1 };
+        [0.5 + d, 0.5 + d, 0.5 + d, 1.0]
+    });
+    let mask = Mask::from_red(&image(8, 4, |x, _| {
+        [if x < 4 { 0.0 } else { 1.0 }, 0.0, 0.0, 1.0]
+    }));
+    let c = compare(&test, &reference, Some(&mask)).unwrap();
+    assert_eq!(c.pixels_in_mask, 16);
+    assert_eq!(c.pixels_compared, 16);
+    assert!((c.rmse.unwrap() - 0.1).abs() < 1e-6);
+    assert!((c.max_abs_error.unwrap() - 0.1).abs() < 1e-6);
+    let unmasked = compare(&test, &reference, None).unwrap();
+    assert!((unmasked.max_abs_error.unwrap() - 0.5).abs() < 1e-6);
+    // An empty mask compares nothing: every metric is undefined, not zero.
+    let empty = Mask {
+        width: 8,
+        height: 4,
+        selected: vec![false; 32],
+    };
+    let c = compare(&test, &reference, Some(&empty)).unwrap();
+    assert_eq!(c.pixels_compared, 0);
+    assert_eq!((c.rmse, c.psnr_db, c.flip_mean), (None, None, None));
+}
+
+#[test]
+fn nan_and_inf_pixels_are_counted_and_excluded() {
+    let reference = image(4, 1, |_, _| [0.5, 0.5, 0.5, 1.0]);
+    let mut test = image(4, 1, |_, _| [0.6, 0.6, 0.6, 1.0]);
+    test.pixels[0] = [f32::NAN, 0.0, 0.0, 1.0];
+    test.pixels[1] = [0.0, f32::INFINITY, 0.0, 1.0];
+    // NaN in alpha is ignored: the pixel is finite.
+    test.pixels[2] = [0.6, 0.6, 0.6, f32::NAN];
+    let mut reference_bad = reference.clone();
+    reference_bad.pixels[3] = [f32::NEG_INFINITY, f32::NAN, 0.0, 1.0];
+
+    let c = compare(&test, &reference_bad, None).unwrap();
+    let nf = |nan_pixels, inf_pixels| NonFinite {
+        nan_pixels,
+        inf_pixels,
+    };
+    assert_eq!(c.test_non_finite, nf(1, 1));
+    // NaN wins over Inf within one pixel.
+    assert_eq!(c.reference_non_finite, nf(1, 0));
+    assert_eq!(c.pixels_compared, 1);
+    assert!((c.rmse.unwrap() - 0.1).abs() < 1e-6);
+    assert!(c.rmse.unwrap().is_finite() && c.flip_mean.unwrap().is_finite());
+    assert_eq!(c.compared, [false, false, true, false]);
+}
+
+#[test]
+fn flip_of_black_against_white_is_high_and_of_an_image_against_itself_zero() {
+    let black = image(32, 32, |_, _| [0.0, 0.0, 0.0, 1.0]);
+    let white = image(32, 32, |_, _| [1.0, 1.0, 1.0, 1.0]);
+    let c = compare(&black, &white, None).unwrap();
+    assert!(c.flip_mean.unwrap() > 0.5, "{:?}", c.flip_mean);
+    assert!(c.flip_p99.unwrap() <= 1.0);
+    let g = gradient(32, 32);
+    assert!(flip_map(&g, &g).iter().all(|&v| v == 0.0));
+}
+
+#[test]
+fn flip_p99_is_the_nearest_rank() {
+    assert_eq!(nearest_rank(100, 0.99), 98);
+    assert_eq!(nearest_rank(101, 0.99), 99);
+    assert_eq!(nearest_rank(1, 0.99), 0);
+    assert_eq!(nearest_rank(0, 0.99), 0);
+}
+
+#[test]
+fn a_size_mismatch_names_both_sizes() {
+    let e = compare(&gradient(4, 2), &gradient(3, 2), None).unwrap_err();
+    let text = e.to_string();
+    assert!(text.contains("4x2") && text.contains("3x2"), "{text}");
+    let mask = Mask::from_red(&gradient(4, 3));
+    let text = compare(&gradient(4, 2), &gradient(4, 2), Some(&mask))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        text.contains("4x2") && text.contains("4x3") && text.contains("mask"),
+        "{text}"
+    );
+}
+
+#[test]
+fn files_are_named_in_errors() {
+    let dir = temp_dir("files");
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    crate::output::write_exr(&a, &gradient(4, 2)).unwrap();
+    crate::output::write_exr(&b, &gradient(2, 2)).unwrap();
+    let text = compare_files(&a, &b, None).unwrap_err().to_string();
+    assert!(text.contains("a.exr") && text.contains("b.exr"), "{text}");
+    assert!(text.contains("4x2") && text.contains("2x2"), "{text}");
+
+    let missing = dir.join("none.exr");
+    let e = compare_files(&a, &missing, None).unwrap_err();
+    assert!(matches!(e, MetricsError::Missing { .. }));
+    assert!(e.to_string().contains("none.exr"));
+
+    let garbage = dir.join("garbage.exr");
+    std::fs::write(&garbage, b"not an exr").unwrap();
+    let e = read_exr(&garbage).unwrap_err();
+    assert!(matches!(e, MetricsError::Read { .. }));
+    assert!(e.to_string().contains("garbage.exr"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn masks_read_from_exr_and_png_agree() {
+    let dir = temp_dir("masks");
+    // Red 0, 0.25, 0.75, 1: the right two pixels are selected.
+    let m = image(4, 1, |x, _| {
+        [x as f32 / 4.0 + 0.25 * (x / 2) as f32, 1.0, 1.0, 1.0]
+    });
+    let exr = dir.join("m.exr");
+    let png = dir.join("m.png");
+    crate::output::write_exr(&exr, &m).unwrap();
+    crate::output::write_png(&png, &m).unwrap();
+    let from_exr = read_mask(&exr).unwrap();
+    assert_eq!(from_exr.selected, [false, false, true, true]);
+    // The PNG stores sRGB-encoded red, which is above half exactly where linear is above ~0.21;
+    // the threshold applies to the stored value, so the 0.25 pixel is selected there.
+    assert_eq!(read_mask(&png).unwrap().selected, [false, true, true, true]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn colour_map_is_ordered_and_heatmap_has_the_image_size() {
+    assert_eq!(colour_map(0.0), [0, 0, 4]);
+    assert_eq!(colour_map(1.0), [252, 253, 191]);
+    assert_eq!(colour_map(f32::NAN), colour_map(0.0));
+    // Relative luminance of the sRGB bytes rises with the value.
+    let luminance = |c: [u8; 3]| {
+        let lin = |v: u8| {
+            let v = f32::from(v) / 255.0;
+            if v <= 0.04045 {
+                v / 12.92
+            } else {
+                ((v + 0.055) / 1.055).powf(2.4)
+            }
+        };
+        0.2126 * lin(c[0]) + 0.7152 * lin(c[1]) + 0.0722 * lin(c[2])
+    };
+    let mut last = -1.0;
+    for i in 0..=64 {
+        let c = colour_map(i as f32 / 64.0);
+        assert_ne!(c, NOT_COMPARED_RGB8);
+        let l = luminance(c);
+        assert!(l > last, "luminance falls at {i}/64");
+        last = l;
+    }
+
+    let dir = temp_dir("heatmap");
+    let path = dir.join("flip.png");
+    let c = compare(&gradient(5, 3), &gradient(5, 3), None).unwrap();
+    write_heatmap(&path, &c).unwrap();
+    let png = TextureData::from_png(&path).unwrap();
+    assert_eq!((png.width, png.height), (5, 3));
+    assert_eq!(&png.rgba8[..3], &[0, 0, 4]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
