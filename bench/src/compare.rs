@@ -11,6 +11,7 @@ use specchio::metrics::{
     self, Comparison, FLIP_PERCENTILE, FLIP_PIXELS_PER_DEGREE, MASK_THRESHOLD, PSNR_PEAK,
     REL_MSE_EPSILON,
 };
+use specchio::reference::angular;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -27,9 +28,17 @@ pub struct Args {
     /// Write the per-pixel FLIP error as a colour-mapped PNG (magma; grey: not compared).
     #[arg(long)]
     heatmap: Option<PathBuf>,
+    /// The two files are direction images (`render --directions` against the reference's
+    /// `NAME.direction.exr`): report the mirror's angular lookup error instead, in degrees and
+    /// in texels of a cube face of this size.
+    #[arg(long, value_name = "FACE_SIZE")]
+    angular: Option<u32>,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
+    if let Some(face_size) = args.angular {
+        return angular(args, face_size);
+    }
     // 1. Read and compare; any bad input stops here, before a file is written.
     let comparison = metrics::compare_files(&args.test, &args.reference, args.mask.as_deref())?;
 
@@ -46,6 +55,61 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         );
     } else {
         print_table(args, &comparison);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--angular`: the angle between the looked-up and the exact direction per mirror pixel.
+fn angular(args: &Args, face_size: u32) -> Result<ExitCode> {
+    if face_size == 0 || face_size > specchio::scene::MAX_FACE_SIZE_PX {
+        anyhow::bail!(
+            "--angular {face_size}: the face size must be in 1..={}",
+            specchio::scene::MAX_FACE_SIZE_PX
+        );
+    }
+    let test = metrics::read_exr(&args.test)?;
+    let reference = metrics::read_exr(&args.reference)?;
+    if (test.width, test.height) != (reference.width, reference.height) {
+        anyhow::bail!(
+            "{} is {}x{} but {} is {}x{}",
+            args.test.display(),
+            test.width,
+            test.height,
+            args.reference.display(),
+            reference.width,
+            reference.height
+        );
+    }
+    let mask = args.mask.as_deref().map(metrics::read_mask).transpose()?;
+    if let Some(m) = &mask {
+        if (m.width, m.height) != (test.width, test.height) {
+            anyhow::bail!(
+                "the mask is {}x{} but the images are {}x{}",
+                m.width,
+                m.height,
+                test.width,
+                test.height
+            );
+        }
+    }
+    let keep = |x: u32, y: u32| {
+        mask.as_ref()
+            .is_none_or(|m| m.selected[(y * m.width + x) as usize])
+    };
+    let angles = angular::angles_deg(&test, &reference, keep);
+    let e = angular::summarize(angles, face_size);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&e)?);
+    } else {
+        println!("mirror pixels compared: {}", e.pixels);
+        println!(
+            "angular error (deg):    mean {:.4}  p99 {:.4}  max {:.4}",
+            e.mean_deg, e.p99_deg, e.max_deg
+        );
+        println!(
+            "in texels of {face_size}²:    mean {:.4}  p99 {:.4}  max {:.4}",
+            e.mean_texels, e.p99_texels, e.max_texels
+        );
     }
     Ok(ExitCode::SUCCESS)
 }
