@@ -253,3 +253,27 @@ fn moving_objects_scene_renders() {
         .all(|p| p.iter().all(|c| c.is_finite())));
     gpu.finish();
 }
+
+/// The thesis's 8-bit cube format renders the same plain colours (0 and 1 are exact in both).
+#[test]
+fn rgba8_cube_format_renders_the_walls() {
+    let gpu = Gpu::new();
+    let path = common::root().join("scenes/test/six-colour-room.toml");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("[cube]\n", "[cube]\nformat = \"rgba8\"\n");
+    let s = specchio::scene::load_str(&text, &path).expect("scene with an 8-bit cube");
+    assert_eq!(s.cube.format, specchio::scene::CubeFormat::Rgba8Unorm);
+    let (_, images) = render_once(&gpu, s, 16, 0.0);
+    for (f, img) in images.cube.unwrap().iter().enumerate() {
+        let p = img.pixel(8, 8);
+        assert_eq!([p[0], p[1], p[2]], WALLS[f], "face {}", FACE_NAMES[f]);
+    }
+    let sensor = images.sensor.unwrap();
+    let (w, h) = (sensor.width, sensor.height);
+    assert!(
+        close(sensor.pixel(w / 2, h / 2), WALLS[3], 1e-3),
+        "the mirror samples the 8-bit cube"
+    );
+    gpu.finish();
+}
