@@ -22,6 +22,29 @@ fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// Renders the six-colour room into a fresh folder with `extra` arguments, requires success,
+/// and returns the folder and its render.json.
+fn render_six_colour(name: &str, extra: &[&str]) -> (PathBuf, serde_json::Value) {
+    let out = temp_dir(name);
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let result = specchio(&args);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let json =
+        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
+    (out, json)
+}
+
 /// What a bad scene's first-line comment says the error must name: (field, line).
 fn expectation(text: &str) -> (Option<String>, Option<u32>) {
     let first = text.lines().next().unwrap_or("");
@@ -128,22 +151,7 @@ fn missing_scene_file_is_named() {
 
 #[test]
 fn render_writes_every_promised_file() {
-    let out = temp_dir("render");
-    let scene = root().join("scenes/test/six-colour-room.toml");
-    let result = specchio(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--cube-size",
-        "16",
-        "--validate",
-    ]);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
+    let (out, json) = render_six_colour("render", &["--cube-size", "16", "--validate"]);
     for f in [
         "observer.exr",
         "observer.png",
@@ -160,8 +168,6 @@ fn render_writes_every_promised_file() {
             "cube/{face}.exr missing"
         );
     }
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
     assert_eq!(json["validation_messages"], 0);
     assert_eq!(json["settings"]["cube"]["face_size_px"], 16);
     assert!(json["device"]["name"].is_string());
@@ -178,53 +184,17 @@ fn render_writes_every_promised_file() {
 
 #[test]
 fn a_frame_sequence_is_numbered() {
-    let out = temp_dir("seq");
-    let scene = root().join("scenes/test/six-colour-room.toml");
-    let result = specchio(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--cube-size",
-        "8",
-        "--frames",
-        "3",
-    ]);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
+    let (out, json) = render_six_colour("seq", &["--cube-size", "8", "--frames", "3"]);
     for i in 0..3 {
         assert!(out.join(format!("{i:04}")).join("sensor.png").is_file());
     }
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
     assert_eq!(json["runs"][0]["frames"].as_array().unwrap().len(), 3);
     std::fs::remove_dir_all(&out).unwrap();
 }
 
 #[test]
 fn method_all_writes_each_usable_method_and_explains_the_others() {
-    let out = temp_dir("all");
-    let scene = root().join("scenes/test/six-colour-room.toml");
-    let result = specchio(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--cube-size",
-        "8",
-        "--method",
-        "all",
-    ]);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
+    let (out, json) = render_six_colour("all", &["--cube-size", "8", "--method", "all"]);
     let ran: Vec<String> = json["runs"]
         .as_array()
         .unwrap()
