@@ -52,7 +52,25 @@ pub struct Args {
     /// measure the difference documented in docs/methods.md).
     #[arg(long)]
     gs_invocations: bool,
+    /// A CI-sized run: thesis-room and moving-objects at 64², 5 updates after 1 warm-up
+    /// (explicit scenes and numbers given with it still apply).
+    #[arg(long)]
+    quick: bool,
+    /// Compare with an earlier `--json` file: any change of a work counter fails (exit 1);
+    /// with --max-regression, so does a time ratio that grew by more than that many percent.
+    #[arg(long)]
+    baseline: Option<PathBuf>,
+    /// Allowed growth, in percent, of each method's median time relative to six-pass in the
+    /// same run, against the baseline's ratio (times are not gated without it).
+    #[arg(long)]
+    max_regression: Option<f64>,
+    /// Also write one CSV row per scene and method.
+    #[arg(long)]
+    csv: Option<PathBuf>,
 }
+
+/// The `--quick` scene set.
+const QUICK_SCENES: [&str; 2] = ["scenes/thesis-room.toml", "scenes/moving-objects.toml"];
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
     let i = ((sorted.len() - 1) as f64 * p).round() as usize;
@@ -68,6 +86,39 @@ fn stats(mut v: Vec<f64>) -> serde_json::Value {
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
+    let quick;
+    let args = if args.quick {
+        quick = Args {
+            scenes: if args.scenes.is_empty() {
+                QUICK_SCENES.iter().map(PathBuf::from).collect()
+            } else {
+                args.scenes.clone()
+            },
+            cube_size: 64,
+            updates: 5,
+            warmup: 1,
+            methods: args.methods.clone(),
+            json: args.json.clone(),
+            device: args.device.clone(),
+            baseline: args.baseline.clone(),
+            csv: args.csv.clone(),
+            ..*args
+        };
+        &quick
+    } else {
+        args
+    };
+    if let Some(p) = args.max_regression {
+        if !(p.is_finite() && p >= 0.0) {
+            anyhow::bail!("--max-regression {p}: must be a percentage >= 0");
+        }
+    }
+    // Read the baseline first: a bad baseline fails before the long run.
+    let baseline = args
+        .baseline
+        .as_deref()
+        .map(crate::gate::read_baseline)
+        .transpose()?;
     if args.updates == 0
         || args.updates > 100_000
         || args.cube_size == 0
@@ -151,6 +202,20 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             let cube = stats(reports.iter().filter_map(|r| r.gpu_cube_ms).collect());
             let counters = reports.last().and_then(|r| r.fill_stats);
             let draws: u32 = reports.last().map_or(0, |r| r.draws_per_face.iter().sum());
+            // Work over all timed updates: deterministic for a given scene, method and run
+            // length, so a baseline can compare it exactly.
+            let work = reports.iter().filter_map(|r| r.fill_stats).fold(
+                specchio::vk::queries::PipelineStats::default(),
+                |mut a, s| {
+                    a += s;
+                    a
+                },
+            );
+            let faces: u32 = reports.iter().map(|r| r.faces_rendered).sum();
+            let drawn: u32 = reports
+                .iter()
+                .map(|r| r.draws_per_face.iter().sum::<u32>())
+                .sum();
             let f = |v: &serde_json::Value, k: &str| {
                 v[k].as_f64().map_or("n/a".into(), |x| format!("{x:.2}"))
             };
@@ -177,6 +242,13 @@ pub fn run(args: &Args) -> Result<ExitCode> {
                 "objects_drawn_per_face_total": draws,
                 "triangles": scene.objects.iter().map(|o| scene.meshes[o.mesh].triangle_count()).sum::<usize>() + 12,
                 "objects": scene.objects.len(),
+                "work": {
+                    "vertex_invocations": work.vertex_invocations,
+                    "clipping_primitives": work.clipping_primitives,
+                    "fragment_invocations": work.fragment_invocations,
+                    "faces_rendered": faces,
+                    "objects_drawn": drawn,
+                },
             }));
         }
     }
@@ -186,6 +258,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             r["method"].as_str().unwrap_or("?"),
             r["reason"].as_str().unwrap_or("?")
         );
+    }
+    if let Some(path) = &args.csv {
+        crate::gate::write_csv(path, &results)?;
     }
     if let Some(path) = &args.json {
         let record = json!({
@@ -200,6 +275,25 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             "results": results,
         });
         write_json(path, &record)?;
+    }
+    if let Some(baseline) = &baseline {
+        let failures = crate::gate::check(baseline, &results, args.max_regression);
+        if !failures.is_empty() {
+            eprintln!(
+                "regression gate: {} case(s) got worse or changed:",
+                failures.len()
+            );
+            for f in &failures {
+                eprintln!("  {f}");
+            }
+            return Ok(ExitCode::FAILURE);
+        }
+        println!(
+            "regression gate: passed against {}",
+            args.baseline
+                .as_ref()
+                .map_or(String::new(), |p| p.display().to_string())
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

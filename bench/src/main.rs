@@ -3,6 +3,7 @@
 
 mod bench;
 mod compare;
+mod gate;
 mod info;
 mod probe;
 mod reference;

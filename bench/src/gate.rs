@@ -1,0 +1,172 @@
+//! The benchmark's regression gate and CSV output.
+//!
+//! The rule (docs/methods.md, "Regression gate"):
+//! - **Work counters are exact.** Vertex and fragment invocations, clipped primitives, faces
+//!   rendered and objects drawn, summed over the timed updates, do not depend on timing: for the
+//!   same scene, method, face size and run length on the same driver they are the same numbers.
+//!   Any difference from the baseline fails, so a change in culling or drawing cannot pass
+//!   unnoticed unless the baseline is updated with it.
+//! - **Times are compared within a run.** A drifting or shared machine slows every method alike,
+//!   so each method's median wall time is divided by six-pass's median in the same run, and that
+//!   ratio is compared with the baseline's ratio: it fails when it grew by more than
+//!   `--max-regression` percent. Without that option times are reported, not gated.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use serde_json::Value;
+
+/// The `results` array of an earlier `specchio bench --json` file.
+pub fn read_baseline(path: &Path) -> Result<Vec<Value>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read the baseline {}", path.display()))?;
+    let json: Value =
+        serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
+    json["results"].as_array().cloned().with_context(|| {
+        format!(
+            "{}: no `results` array (not a `specchio bench --json` file?)",
+            path.display()
+        )
+    })
+}
+
+/// The case a result row is for.
+fn key(r: &Value) -> String {
+    let scene = r["scene"].as_str().unwrap_or("?");
+    let method = r["method"].as_str().unwrap_or("?");
+    format!("{scene} / {method} / {}²", r["cube_size"])
+}
+
+/// Median wall time over six-pass's in the same run, for the row's scene and face size.
+fn ratio(rows: &[Value], r: &Value) -> Option<f64> {
+    let six = rows.iter().find(|o| {
+        o["scene"] == r["scene"] && o["cube_size"] == r["cube_size"] && o["method"] == "six-pass"
+    })?;
+    Some(r["wall_ms"]["median"].as_f64()? / six["wall_ms"]["median"].as_f64()?)
+}
+
+/// Every way `results` is worse than `baseline`, one line each (empty: the gate passes).
+pub fn check(baseline: &[Value], results: &[Value], max_regression: Option<f64>) -> Vec<String> {
+    let mut failures = Vec::new();
+    for r in results {
+        let Some(b) = baseline.iter().find(|b| key(b) == key(r)) else {
+            continue; // a new case: nothing to compare with
+        };
+        if r["updates"] != b["updates"] {
+            failures.push(format!(
+                "{}: {} updates against {} in the baseline; counters need equal runs",
+                key(r),
+                r["updates"],
+                b["updates"]
+            ));
+            continue;
+        }
+        for counter in [
+            "vertex_invocations",
+            "clipping_primitives",
+            "fragment_invocations",
+            "faces_rendered",
+            "objects_drawn",
+        ] {
+            let (new, old) = (&r["work"][counter], &b["work"][counter]);
+            if new != old {
+                failures.push(format!("{}: {counter} {new} (baseline {old})", key(r)));
+            }
+        }
+        if let (Some(limit), Some(new), Some(old)) =
+            (max_regression, ratio(results, r), ratio(baseline, b))
+        {
+            if new > old * (1.0 + limit / 100.0) {
+                failures.push(format!(
+                    "{}: {:.3}x six-pass time (baseline {:.3}x), more than {limit}% worse",
+                    key(r),
+                    new,
+                    old
+                ));
+            }
+        }
+    }
+    for b in baseline {
+        if !results.iter().any(|r| key(r) == key(b)) {
+            failures.push(format!("{}: in the baseline but not measured", key(b)));
+        }
+    }
+    failures
+}
+
+/// One row per result: the case, times (median, p10, p90) and work counters.
+pub fn write_csv(path: &Path, results: &[Value]) -> Result<()> {
+    let mut text = String::from(
+        "scene,method,cube_size,updates,wall_median_ms,wall_p10_ms,wall_p90_ms,gpu_fill_median_ms,vertex_invocations,clipping_primitives,fragment_invocations,faces_rendered,objects_drawn\n",
+    );
+    for r in results {
+        let f = |v: &Value| v.as_f64().map_or(String::new(), |x| format!("{x:.4}"));
+        let w = &r["work"];
+        text.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            r["scene"].as_str().unwrap_or(""),
+            r["method"].as_str().unwrap_or(""),
+            r["cube_size"],
+            r["updates"],
+            f(&r["wall_ms"]["median"]),
+            f(&r["wall_ms"]["p10"]),
+            f(&r["wall_ms"]["p90"]),
+            f(&r["gpu_fill_ms"]["median"]),
+            w["vertex_invocations"],
+            w["clipping_primitives"],
+            w["fragment_invocations"],
+            w["faces_rendered"],
+            w["objects_drawn"],
+        ));
+    }
+    let tmp = path.with_extension("csv.partial");
+    std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn row(method: &str, wall: f64, vertices: u64) -> Value {
+        json!({
+            "scene": "s.toml", "method": method, "cube_size": 64, "updates": 5,
+            "wall_ms": { "median": wall },
+            "work": { "vertex_invocations": vertices, "clipping_primitives": 1,
+                      "fragment_invocations": 2, "faces_rendered": 30, "objects_drawn": 40 },
+        })
+    }
+
+    #[test]
+    fn identical_results_pass() {
+        let base = vec![row("six-pass", 10.0, 100), row("instanced", 11.0, 100)];
+        assert!(check(&base, &base, Some(10.0)).is_empty());
+    }
+
+    #[test]
+    fn a_changed_counter_fails_and_names_the_case() {
+        let base = vec![row("six-pass", 10.0, 100)];
+        let new = vec![row("six-pass", 10.0, 101)];
+        let f = check(&base, &new, None);
+        assert_eq!(f.len(), 1);
+        assert!(
+            f[0].contains("s.toml / six-pass / 64²") && f[0].contains("vertex_invocations 101"),
+            "{f:?}"
+        );
+    }
+
+    #[test]
+    fn a_slower_method_fails_only_beyond_the_limit_and_relative_to_six_pass() {
+        let base = vec![row("six-pass", 10.0, 100), row("instanced", 11.0, 100)];
+        // The whole machine twice as slow: ratios unchanged, passes.
+        let slow_machine = vec![row("six-pass", 20.0, 100), row("instanced", 22.0, 100)];
+        assert!(check(&base, &slow_machine, Some(10.0)).is_empty());
+        // Instanced 20 % worse relative to six-pass: fails at 10 %, passes at 25 %.
+        let worse = vec![row("six-pass", 10.0, 100), row("instanced", 13.2, 100)];
+        assert_eq!(check(&base, &worse, Some(10.0)).len(), 1);
+        assert!(check(&base, &worse, Some(25.0)).is_empty());
+        // Without --max-regression times are not gated.
+        assert!(check(&base, &worse, None).is_empty());
+    }
+}
