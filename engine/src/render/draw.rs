@@ -37,6 +37,10 @@ pub(super) const COPY_READ: Sync = (
     vk::PipelineStageFlags2::COPY,
     vk::AccessFlags2::TRANSFER_READ,
 );
+pub(super) const COPY_WRITE: Sync = (
+    vk::PipelineStageFlags2::COPY,
+    vk::AccessFlags2::TRANSFER_WRITE,
+);
 pub(super) const NOTHING: Sync = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
 
 pub(super) fn barrier(

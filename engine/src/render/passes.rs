@@ -361,49 +361,46 @@ impl Renderer {
     }
 }
 
+/// Decodes tightly packed texels of `texel_bytes` bytes each with `texel` into an image.
+fn decode(
+    bytes: &[u8],
+    w: u32,
+    h: u32,
+    texel_bytes: usize,
+    texel: impl Fn(&[u8]) -> [f32; 4],
+) -> RgbaImage {
+    let pixels = bytes.chunks_exact(texel_bytes).map(texel).collect();
+    RgbaImage {
+        width: w,
+        height: h,
+        pixels,
+    }
+}
+
+/// RGBA16F texels.
 fn decode_f16(bytes: &[u8], w: u32, h: u32) -> RgbaImage {
-    let pixels = bytes
-        .chunks_exact(8)
-        .map(|p| {
-            std::array::from_fn(|c| half::f16::from_le_bytes([p[2 * c], p[2 * c + 1]]).to_f32())
-        })
-        .collect();
-    RgbaImage {
-        width: w,
-        height: h,
-        pixels,
-    }
+    decode(bytes, w, h, 8, |p| {
+        std::array::from_fn(|c| half::f16::from_le_bytes([p[2 * c], p[2 * c + 1]]).to_f32())
+    })
 }
 
+/// RGBA32F texels.
 fn decode_f32(bytes: &[u8], w: u32, h: u32) -> RgbaImage {
-    let pixels = bytes
-        .chunks_exact(16)
-        .map(|p| {
-            std::array::from_fn(|c| {
-                f32::from_le_bytes([p[4 * c], p[4 * c + 1], p[4 * c + 2], p[4 * c + 3]])
-            })
+    decode(bytes, w, h, 16, |p| {
+        std::array::from_fn(|c| {
+            f32::from_le_bytes([p[4 * c], p[4 * c + 1], p[4 * c + 2], p[4 * c + 3]])
         })
-        .collect();
-    RgbaImage {
-        width: w,
-        height: h,
-        pixels,
-    }
+    })
 }
 
+/// RGBA8 unorm texels.
 fn decode_unorm8(bytes: &[u8], w: u32, h: u32) -> RgbaImage {
-    let pixels = bytes
-        .chunks_exact(4)
-        .map(|p| std::array::from_fn(|c| f32::from(p[c]) / 255.0))
-        .collect();
-    RgbaImage {
-        width: w,
-        height: h,
-        pixels,
-    }
+    decode(bytes, w, h, 4, |p| {
+        std::array::from_fn(|c| f32::from(p[c]) / 255.0)
+    })
 }
 
-/// The scene and mirror pipelines, both drawing into RGBA16F colour with reverse-Z depth.
+/// The cube, view, depth-only and mirror pipelines (reverse-Z depth everywhere).
 pub(super) fn create_pipelines(
     device: &Arc<Device>,
     res: &SceneResources,

@@ -6,10 +6,11 @@ use std::sync::Arc;
 use ash::vk;
 use glam::{UVec4, Vec3, Vec4};
 
+use super::draw::{barrier, COPY_WRITE, NOTHING, SAMPLED};
 use super::gpu::{self, MaterialData, ObjectData, Vertex, ViewData};
 use super::state::room_meshes;
 use crate::scene::{MaterialKind, Mesh, Scene};
-use crate::vk::commands::{image_barriers, ImageBarrier, Submitter};
+use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::Device;
 use crate::vk::image::{Image, ImageDesc, ImageView, Sampler};
@@ -354,24 +355,13 @@ fn upload_textures(
             &name,
         )?;
         let range = image.full_range();
-        image_barriers(
-            device,
-            cmd,
-            &[ImageBarrier {
-                image: image.raw,
-                range,
-                from: (
-                    vk::ImageLayout::UNDEFINED,
-                    vk::PipelineStageFlags2::NONE,
-                    vk::AccessFlags2::NONE,
-                ),
-                to: (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::PipelineStageFlags2::COPY,
-                    vk::AccessFlags2::TRANSFER_WRITE,
-                ),
-            }],
+        let to_dst = barrier(
+            image.raw,
+            range,
+            (vk::ImageLayout::UNDEFINED, NOTHING),
+            (vk::ImageLayout::TRANSFER_DST_OPTIMAL, COPY_WRITE),
         );
+        image_barriers(device, cmd, &[to_dst]);
         let region = vk::BufferImageCopy::default()
             .image_subresource(vk::ImageSubresourceLayers {
                 aspect_mask: vk::ImageAspectFlags::COLOR,
@@ -394,24 +384,13 @@ fn upload_textures(
                 &[region],
             )
         };
-        image_barriers(
-            device,
-            cmd,
-            &[ImageBarrier {
-                image: image.raw,
-                range,
-                from: (
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::PipelineStageFlags2::COPY,
-                    vk::AccessFlags2::TRANSFER_WRITE,
-                ),
-                to: (
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                    vk::PipelineStageFlags2::FRAGMENT_SHADER,
-                    vk::AccessFlags2::SHADER_SAMPLED_READ,
-                ),
-            }],
+        let to_sampled = barrier(
+            image.raw,
+            range,
+            (vk::ImageLayout::TRANSFER_DST_OPTIMAL, COPY_WRITE),
+            (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
         );
+        image_barriers(device, cmd, &[to_sampled]);
         views.push(image.view(vk::ImageViewType::TYPE_2D, 0, 1, 0, 1, &name)?);
         images.push(image);
         staging.push(buf);
