@@ -9,7 +9,7 @@ use specchio::output::{write_exr, write_json, write_png};
 use specchio::render::camera::FACE_NAMES;
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
-use specchio::scene::{Lookup, MAX_FACE_SIZE_PX};
+use specchio::scene::{CubeFormat, Lookup, RefreshPolicy, MAX_FACE_SIZE_PX};
 use specchio::vk::device::{self, DeviceInfo};
 
 use crate::probe;
@@ -152,13 +152,13 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             "lookup": lookup.unwrap_or(scene.mirror.lookup),
             "cube": {
                 "face_size_px": args.cube_size.unwrap_or(scene.cube.face_size_px),
-                "format": format!("{:?}", scene.cube.format),
+                "format": format_name(scene.cube.format),
                 "near_m": scene.cube.near_m,
                 "far_m": scene.cube.far_m,
                 "mipmaps": scene.cube.mipmaps,
                 "max_anisotropy": scene.cube.max_anisotropy,
             },
-            "refresh": format!("{:?}", scene.refresh),
+            "refresh": refresh_name(scene.refresh),
             "observer_resolution": scene.observer.resolution,
             "sensor_resolution": scene.sensor.resolution,
             "validation": validation,
@@ -241,6 +241,23 @@ fn render_frames(
         p.finish_and_clear();
     }
     Ok(reports)
+}
+
+/// The cube format as the scene file spells it.
+fn format_name(f: CubeFormat) -> &'static str {
+    match f {
+        CubeFormat::Rgba16Float => "rgba16f",
+        CubeFormat::Rgba8Unorm => "rgba8",
+    }
+}
+
+/// The refresh policy as the scene file spells it (`every-n` with its n).
+fn refresh_name(p: RefreshPolicy) -> String {
+    match p {
+        RefreshPolicy::EveryFrame => "every-frame".into(),
+        RefreshPolicy::OnChange => "on-change".into(),
+        RefreshPolicy::EveryN(n) => format!("every-n ({n})"),
+    }
 }
 
 fn write_frame(dir: &Path, images: &FrameImages) -> Result<()> {
