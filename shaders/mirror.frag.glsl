@@ -19,6 +19,5 @@ void main() {
         discard;
     }
     out_color = vec4(texture(environment, lookup).rgb, 1.0);
-    vec4 clip = view.world_to_clip * vec4(hit, 1.0);
-    gl_FragDepth = clip.z / clip.w;
+    gl_FragDepth = mirror_depth(view, hit);
 }

@@ -18,6 +18,5 @@ void main() {
         discard;
     }
     out_direction = vec4(normalize(lookup), 1.0);
-    vec4 clip = view.world_to_clip * vec4(hit, 1.0);
-    gl_FragDepth = clip.z / clip.w;
+    gl_FragDepth = mirror_depth(view, hit);
 }

@@ -33,4 +33,10 @@ bool mirror_pixel(ViewData view, FrameData f, out vec3 hit, out vec3 lookup) {
     return true;
 }
 
+// The depth of the sphere's hit point, so that the mirror occludes and is occluded exactly.
+float mirror_depth(ViewData view, vec3 hit) {
+    vec4 clip = view.world_to_clip * vec4(hit, 1.0);
+    return clip.z / clip.w;
+}
+
 #endif

@@ -245,27 +245,14 @@ impl Renderer {
                 level_count: 1,
                 ..cube.color.full_range()
             };
-            image_barriers(
-                dev,
-                cmd,
-                &[barrier(
-                    cube.color.raw,
-                    mip0,
-                    (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
-                    (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, COPY_READ),
-                )],
-            );
+            // Out of sampling for the copy and back: the cube stays valid for the next frame.
+            let sampled = (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED);
+            let source = (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, COPY_READ);
+            let transition =
+                |from, to| image_barriers(dev, cmd, &[barrier(cube.color.raw, mip0, from, to)]);
+            transition(sampled, source);
             copy(cube.color.raw, 6, cube.size, cube.size, 0);
-            image_barriers(
-                dev,
-                cmd,
-                &[barrier(
-                    cube.color.raw,
-                    mip0,
-                    (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, COPY_READ),
-                    (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
-                )],
-            );
+            transition(source, sampled);
         }
         for ((_, t), &(_, at)) in self.view_slots(readback).into_iter().zip(&copies.items) {
             copy(t.color.raw, 1, t.width, t.height, at);
