@@ -70,6 +70,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         "scene": args.scene.display().to_string(),
         "time_s": args.time,
         "spp": args.spp,
+        "origin": scene.origin.to_array(),
         "triangles": geometry.triangle_count(),
         "bvh_build_total_ms": geometry.build_total.as_secs_f64() * 1e3,
         "bvh_build_core_ms": geometry.build_core.as_secs_f64() * 1e3,

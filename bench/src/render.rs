@@ -143,6 +143,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let mut record = json!({
         "scene": args.scene.display().to_string(),
         "description": scene.description,
+        // World position of the mirror's centre at time 0: everything is rendered relative to it.
+        "origin": scene.origin.to_array(),
         "settings": {
             "start_time_s": start_s,
             "fps": args.fps,

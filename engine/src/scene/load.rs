@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use glam::{Quat, Vec3};
+use glam::{DVec3, Quat, Vec3};
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
@@ -83,7 +83,20 @@ pub fn load_str(text: &str, path: &Path) -> Result<Scene, SceneError> {
     };
     let spec: SceneFile = toml::from_str(text).map_err(|e| locator.serde_error(&e))?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    Ctx { loc: locator, dir }.scene(spec)
+    // Every position is stored relative to the mirror's centre (see `Scene::origin`); a
+    // non-finite centre is reported by `mirror()`, so any origin will do until then.
+    let origin = spec
+        .mirror
+        .as_ref()
+        .map(|m| DVec3::from_array(m.center))
+        .filter(|c| c.is_finite())
+        .unwrap_or(DVec3::ZERO);
+    Ctx {
+        loc: locator,
+        dir,
+        origin,
+    }
+    .scene(spec)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -270,10 +283,8 @@ impl<'a> Locator<'a> {
 struct Ctx<'a> {
     loc: Locator<'a>,
     dir: PathBuf,
-}
-
-fn fmt_v3(v: Vec3) -> String {
-    format!("[{}, {}, {}]", v.x, v.y, v.z)
+    /// World position of the scene's local origin (the mirror's centre at time 0).
+    origin: DVec3,
 }
 
 impl Ctx<'_> {
@@ -333,6 +344,22 @@ impl Ctx<'_> {
             out[i] = self.num(&format!("{field}[{i}]"), *c)?;
         }
         Ok(Vec3::from(out))
+    }
+
+    /// A position: finite in the file (f64), stored relative to the origin. The subtraction
+    /// happens in f64, so a scene far from the world origin keeps f32 precision near the mirror.
+    fn point(&self, field: &str, v: V3) -> R<Vec3> {
+        for (i, c) in v.iter().enumerate() {
+            self.num(&format!("{field}[{i}]"), *c)?;
+        }
+        let local = DVec3::from_array(v) - self.origin;
+        self.vec3(field, local.to_array())
+    }
+
+    /// A local position written back in the file's (world) coordinates, for messages.
+    fn fmt_point(&self, v: Vec3) -> String {
+        let w = self.origin + v.as_dvec3();
+        format!("[{}, {}, {}]", w.x as f32, w.y as f32, w.z as f32)
     }
 
     fn positive3(&self, field: &str, v: V3) -> R<Vec3> {
@@ -457,6 +484,7 @@ impl Ctx<'_> {
         };
 
         Ok(Scene {
+            origin: self.origin,
             source: self.loc.file.to_path_buf(),
             description: spec.description.clone().unwrap_or_default(),
             room,
@@ -593,8 +621,9 @@ impl Ctx<'_> {
 
     fn room(&self, spec: &RoomSpec, material: &dyn Fn(&str, &str) -> R<usize>) -> R<Room> {
         let center = match spec.center {
-            Some(c) => self.vec3("room.center", c)?,
-            None => Vec3::ZERO,
+            Some(c) => self.point("room.center", c)?,
+            // The world origin, which is not the local one.
+            None => self.point("room.center", [0.0; 3])?,
         };
         let size_m = self.positive3("room.size", spec.size)?;
         let wall_materials = match &spec.walls {
@@ -648,7 +677,7 @@ impl Ctx<'_> {
         };
         Ok(match a.kind {
             AnimationType::Linear => Animation::Linear {
-                to: self.vec3(
+                to: self.point(
                     &f("to"),
                     a.to.ok_or_else(|| self.missing(&f("to"), "the end point"))?,
                 )?,
@@ -660,7 +689,7 @@ impl Ctx<'_> {
                 repeat,
             },
             AnimationType::Orbit => {
-                let center = self.vec3(
+                let center = self.point(
                     &f("center"),
                     a.center
                         .ok_or_else(|| self.missing(&f("center"), "a point on the axis"))?,
@@ -725,7 +754,7 @@ impl Ctx<'_> {
                 }
                 let mut ps = Vec::with_capacity(positions.len());
                 for (i, &p) in positions.iter().enumerate() {
-                    ps.push(self.vec3(&format!("{field}.positions[{i}]"), p)?);
+                    ps.push(self.point(&format!("{field}.positions[{i}]"), p)?);
                 }
                 // Keyframes are absolute; the rest position must be where they start.
                 if ps[0] != base {
@@ -733,8 +762,8 @@ impl Ctx<'_> {
                         &format!("{field}.positions[0]"),
                         format!(
                             "the first keyframe {} must equal the position at rest {} (keyframe positions are absolute)",
-                            fmt_v3(ps[0]),
-                            fmt_v3(base)
+                            self.fmt_point(ps[0]),
+                            self.fmt_point(base)
                         ),
                     ));
                 }
@@ -748,7 +777,7 @@ impl Ctx<'_> {
     }
 
     fn mirror(&self, spec: &MirrorSpec, room: &Room) -> R<Mirror> {
-        let center = self.vec3("mirror.center", spec.center)?;
+        let center = self.point("mirror.center", spec.center)?;
         let radius_m = self.positive("mirror.radius", spec.radius)?;
         let animation = match &spec.animation {
             Some(a) => Some(self.animation("mirror.animation", a, center)?),
@@ -770,10 +799,10 @@ impl Ctx<'_> {
                     field,
                     format!(
                         "the mirror (radius {radius_m}) centred at {} {} is not entirely inside the room (from {} to {})",
-                        fmt_v3(c),
+                        self.fmt_point(c),
                         if t == 0.0 { "at time 0".to_string() } else { format!("at t = {t:.3} s") },
-                        fmt_v3(lo),
-                        fmt_v3(hi)
+                        self.fmt_point(lo),
+                        self.fmt_point(hi)
                     ),
                 ));
             }
@@ -943,9 +972,9 @@ impl Ctx<'_> {
             _ => None,
         };
         let position = match (o.position, keyframe_start) {
-            (Some(p), _) => self.vec3(&f("position"), p)?,
+            (Some(p), _) => self.point(&f("position"), p)?,
             // A keyframed object may leave out `position`: it starts at its first key.
-            (None, Some(p)) => self.vec3(&format!("objects[{i}].animation.positions[0]"), p)?,
+            (None, Some(p)) => self.point(&format!("objects[{i}].animation.positions[0]"), p)?,
             (None, None) => return Err(self.missing(&f("position"), "where the object is")),
         };
         let animation = match &o.animation {
@@ -1095,12 +1124,14 @@ impl Ctx<'_> {
 
         let size = self.interval(&f("size"), g.size)?;
 
-        let region_min = self.vec3(&f("region_min"), g.region_min)?;
-        let region_max = self.vec3(&f("region_max"), g.region_max)?;
+        let region_min = self.point(&f("region_min"), g.region_min)?;
+        let region_max = self.point(&f("region_max"), g.region_max)?;
         let (lo, hi) = (
             room.center - room.size_m * 0.5,
             room.center + room.size_m * 0.5,
         );
+        // Messages give world coordinates, as the file does.
+        let world = |axis: usize, v: f32| (self.origin[axis] + f64::from(v)) as f32;
         for axis in 0..3 {
             let (a, b) = (region_min[axis], region_max[axis]);
             let letter = ["x", "y", "z"][axis];
@@ -1109,8 +1140,10 @@ impl Ctx<'_> {
                     return Err(self.invalid(
                         &f(&format!("{field}[{axis}]")),
                         format!(
-                            "{v} is outside the room ({letter} from {} to {})",
-                            lo[axis], hi[axis]
+                            "{} is outside the room ({letter} from {} to {})",
+                            world(axis, v),
+                            world(axis, lo[axis]),
+                            world(axis, hi[axis])
                         ),
                     ));
                 }
@@ -1118,7 +1151,11 @@ impl Ctx<'_> {
             if a > b {
                 return Err(self.invalid(
                     &f(&format!("region_max[{axis}]")),
-                    format!("must be >= region_min[{axis}] ({a}), got {b}"),
+                    format!(
+                        "must be >= region_min[{axis}] ({}), got {}",
+                        world(axis, a),
+                        world(axis, b)
+                    ),
                 ));
             }
         }
@@ -1179,7 +1216,7 @@ impl Ctx<'_> {
         };
         let s = spec.unwrap_or(&empty);
         let position = match s.position {
-            Some(p) => self.vec3("observer.position", p)?,
+            Some(p) => self.point("observer.position", p)?,
             None => default_position,
         };
         let camera = Camera {
@@ -1229,8 +1266,8 @@ impl Ctx<'_> {
                     field,
                     format!(
                         "the observer at {} is inside the mirror sphere (centre {}, radius {}) {when}",
-                        fmt_v3(p),
-                        fmt_v3(c),
+                        self.fmt_point(p),
+                        self.fmt_point(c),
                         mirror.radius_m
                     ),
                 ));
@@ -1238,7 +1275,10 @@ impl Ctx<'_> {
             if p.cmplt(lo).any() || p.cmpgt(hi).any() {
                 return Err(self.invalid(
                     field,
-                    format!("the observer at {} is outside the room {when}", fmt_v3(p)),
+                    format!(
+                        "the observer at {} is outside the room {when}",
+                        self.fmt_point(p)
+                    ),
                 ));
             }
         }
@@ -1772,13 +1812,16 @@ mod tests {
         ];
         let keep_clear = 0.5;
         let sensor = s.mirror.center - Vec3::Y * s.sensor.offset_m;
+        // The regions are written in world coordinates; positions are local to the mirror.
+        let local = s.origin.as_vec3();
         for o in &s.objects {
             let (_, rmin, rmax) = regions
                 .iter()
                 .find(|r| o.name.starts_with(r.0))
+                .map(|&(n, a, b)| (n, a - local, b - local))
                 .unwrap_or_else(|| panic!("{}", o.name));
             assert!(
-                o.position.cmpge(*rmin).all() && o.position.cmple(*rmax).all(),
+                o.position.cmpge(rmin).all() && o.position.cmple(rmax).all(),
                 "{} at {} outside its region",
                 o.name,
                 o.position

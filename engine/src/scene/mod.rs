@@ -9,7 +9,7 @@
 
 use std::path::PathBuf;
 
-use glam::{Quat, Vec2, Vec3};
+use glam::{DVec3, Quat, Vec2, Vec3};
 
 mod anim;
 mod error;
@@ -31,8 +31,16 @@ pub const MAX_FACE_SIZE_PX: u32 = 8192;
 pub const MAX_IMAGE_SIZE_PX: u32 = 8192;
 
 /// A fully validated scene, ready to render.
+///
+/// Every position in it (room, mirror, objects, cameras, animation points) is *local*:
+/// relative to [`Scene::origin`], the mirror's centre at time 0. The file's coordinates are
+/// f64; they are recentred in f64 and only then rounded to f32, so a scene placed 10^5 m from
+/// the world origin renders exactly as it does at the origin (f32 alone would have 8 mm steps
+/// there). Directions, sizes and scales are not positions and are unchanged.
 #[derive(Debug, Clone)]
 pub struct Scene {
+    /// World position (the file's coordinates) of the local origin: world = origin + local.
+    pub origin: DVec3,
     /// The file the scene came from (relative paths inside it were resolved against its folder).
     pub source: PathBuf,
     /// Free text from the file's `description`, for reports.
