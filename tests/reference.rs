@@ -119,3 +119,127 @@ fn cpu_materials_match_the_gpu_cube_texels() {
     assert!(off * 100 <= total, "{off} of {total} texels differ");
     gpu.finish();
 }
+
+/// Every material kind, lit: materials.glsl run by `materials_check.comp` (full f32) against
+/// the CPU twin in `reference::materials`, at 4,096 random points per material plus uvs placed
+/// exactly on checker and grid cell borders (where floor() decides). Colour, checker, grid and
+/// direction materials and the lighting must agree to float rounding (a few ulps); a texture
+/// to the sampler's sub-texel precision (linear-filter weights have only
+/// `subTexelPrecisionBits` bits, 8 on lavapipe), which is 2 * 2^-bits of the texel range.
+#[test]
+fn cpu_materials_match_the_gpu_in_f32() {
+    use specchio::reference::materials::{material_albedo, shade};
+    use specchio::render::gpu::MaterialSample;
+    use specchio::render::{RenderOptions, Renderer};
+    let text = r#"
+        [room]
+        center = [0, 0, 0]
+        size = [10, 10, 10]
+        walls = "color"
+        [mirror]
+        center = [0, 0, 0]
+        radius = 1
+        [light]
+        direction = [0.3, 1, 0.2]
+        ambient = 0.35
+        [[materials]]
+        name = "color"
+        type = "color"
+        color = [0.95, 0.75, 0.1]
+        [[materials]]
+        name = "checker"
+        type = "checker"
+        a = [0.85, 0.15, 0.12]
+        b = [0.95, 0.85, 0.8]
+        tiles = 5
+        [[materials]]
+        name = "grid"
+        type = "grid"
+        background = [0.15, 0.6, 0.2]
+        line = [0.95, 0.95, 0.9]
+        tiles = 6
+        line_width = 0.08
+        [[materials]]
+        name = "texture"
+        type = "texture"
+        file = "textures/orientation.png"
+        tint = [0.9, 0.8, 1.0]
+        tiles = 3
+        [[materials]]
+        name = "direction"
+        type = "direction"
+    "#;
+    let path = common::root().join("scenes/material-check.toml");
+    let s = specchio::scene::load_str(text, &path).expect("scene");
+    let gpu = Gpu::new();
+    let bits = gpu.device.info.limits.sub_texel_precision_bits;
+    let mut r = Renderer::new(&gpu.device, s.clone(), &RenderOptions::default()).unwrap();
+    let mut seed = 12345u64;
+    let mut next = move |lo: f32, hi: f32| {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        lo + (hi - lo) * ((seed >> 40) as f32 / (1u64 << 24) as f32)
+    };
+    let mut points = Vec::new();
+    for (m, material) in s.materials.iter().enumerate() {
+        let tiles = match material.kind {
+            specchio::scene::MaterialKind::Checker { tiles, .. }
+            | specchio::scene::MaterialKind::Grid { tiles, .. } => tiles,
+            _ => 1.0,
+        };
+        for i in 0..4096 {
+            let mut uv = glam::Vec2::new(next(-2.5, 2.5), next(-2.5, 2.5));
+            if i % 4 == 0 {
+                // Exactly on a cell border, as far as f32 can say.
+                uv.x = (uv.x * tiles).round() / tiles;
+            }
+            let sample = MaterialSample {
+                position: Vec3::new(next(-4.9, 4.9), next(-4.9, 4.9), next(-4.9, 4.9)).extend(1.0),
+                normal: Vec3::new(next(-1.0, 1.0), next(-1.0, 1.0), next(-1.0, 1.0)).extend(0.0),
+                uv: uv.extend(0.0).extend(0.0),
+            };
+            points.push((m, sample));
+        }
+    }
+    let gpu_rgb = r.evaluate_materials(&points).expect("materials check");
+    drop(r);
+    for (m, material) in s.materials.iter().enumerate() {
+        let (mut worst, mut exact) = (0.0f32, 0);
+        let mine: Vec<usize> = (0..points.len()).filter(|&i| points[i].0 == m).collect();
+        for &i in &mine {
+            let p = &points[i].1;
+            let albedo = material_albedo(
+                material,
+                p.position.truncate(),
+                p.uv.truncate().truncate(),
+                &s.textures,
+            );
+            let cpu = shade(albedo, p.normal.truncate(), s.light.as_ref());
+            let g = gpu_rgb[i];
+            for c in 0..3 {
+                let err = (g[c] - cpu[c]).abs();
+                worst = worst.max(err);
+            }
+            exact += usize::from(g == cpu);
+        }
+        eprintln!(
+            "{}: {} of {} points bit-identical; worst difference {worst:e}",
+            material.name,
+            exact,
+            mine.len()
+        );
+        let tolerance = if material.name == "texture" {
+            2.0 * (-(bits as f32)).exp2() + 1e-6
+        } else {
+            // A few ulps of values in [0, 1]: the GPU may fuse or reorder a multiply-add.
+            4.0 * f32::EPSILON
+        };
+        assert!(
+            worst <= tolerance,
+            "{}: worst {worst:e} > {tolerance:e}",
+            material.name
+        );
+    }
+    gpu.finish();
+}

@@ -1,5 +1,7 @@
 // materials.glsl - albedo and shading. Written with plain float operations so that the CPU
-// reference ray tracer (a later issue) can mirror each function line by line in Rust.
+// reference ray tracer mirrors each function line by line in Rust
+// (engine/src/reference/materials.rs); materials_check.comp runs them for the test that
+// compares the two.
 #ifndef MATERIALS_GLSL
 #define MATERIALS_GLSL
 
@@ -28,7 +30,9 @@ vec3 material_albedo(MaterialData m, vec3 p, vec2 uv, sampler2D tex) {
     } else if (kind == MATERIAL_GRID) {
         return mix(m.color_a.rgb, m.color_b.rgb, grid_line(uv, tiles, m.params.y));
     } else if (kind == MATERIAL_TEXTURE) {
-        return m.color_a.rgb * texture(tex, uv * tiles).rgb; // sRGB decoded by the sampler
+        // Level 0, bilinear, sRGB decoded by the sampler. Explicit LOD: the sampler allows
+        // only level 0 anyway, and this also runs in the compute check (no derivatives).
+        return m.color_a.rgb * textureLod(tex, uv * tiles, 0.0).rgb;
     } else if (kind == MATERIAL_DIRECTION) {
         return 0.5 + 0.5 * normalize(p);
     }

@@ -55,6 +55,18 @@ struct MaterialData {
     vec4 params;        // x: tiles per uv unit, y: grid line width (fraction of a cell)
 };
 
+// One point at which materials_check.comp evaluates a material: what a scene fragment sees.
+struct MaterialSample {
+    vec4 position; // xyz: render space
+    vec4 normal;   // xyz: interpolated normal (shade() normalizes it)
+    vec4 uv;       // xy: texture coordinate
+};
+
+// materials_check.comp's push constants: samples first .. first + count, all of one material
+// (so that the texture index is dynamically uniform, as in scene.frag).
+#define CHECK_PUSH_CONSTANTS \
+    layout(push_constant) uniform CheckPush { uint first; uint count; uint material; uint pad; } check
+
 // Push constants: which view and which object a draw uses; which cube faces a layered pass
 // renders (bit f set: face f; the other faces keep their contents).
 #define PUSH_CONSTANTS \

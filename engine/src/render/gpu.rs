@@ -68,6 +68,25 @@ pub struct Push {
     pub pad: u32,
 }
 
+/// One point for the materials check (`materials_check.comp`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MaterialSample {
+    pub position: Vec4,
+    pub normal: Vec4,
+    pub uv: Vec4,
+}
+
+/// `materials_check.comp`'s push constants: samples `first..first + count`, one material.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct CheckPush {
+    pub first: u32,
+    pub count: u32,
+    pub material: u32,
+    pub pad: u32,
+}
+
 /// Instanced cube fill: `gl_InstanceIndex = object << INSTANCE_FACE_BITS | face`.
 pub const INSTANCE_FACE_BITS: u32 = 3;
 
@@ -139,6 +158,21 @@ mod tests {
             ("Push", "object_index", offset_of!(Push, object_index)),
             ("Push", "face_mask", offset_of!(Push, face_mask)),
             ("Push", "pad", offset_of!(Push, pad)),
+            (
+                "MaterialSample",
+                "position",
+                offset_of!(MaterialSample, position),
+            ),
+            (
+                "MaterialSample",
+                "normal",
+                offset_of!(MaterialSample, normal),
+            ),
+            ("MaterialSample", "uv", offset_of!(MaterialSample, uv)),
+            ("CheckPush", "first", offset_of!(CheckPush, first)),
+            ("CheckPush", "count", offset_of!(CheckPush, count)),
+            ("CheckPush", "material", offset_of!(CheckPush, material)),
+            ("CheckPush", "pad", offset_of!(CheckPush, pad)),
         ];
         for &(s, m, offset) in rust {
             let spirv = crate::shaders::SPIRV_MEMBER_OFFSETS

@@ -13,6 +13,7 @@ pub mod camera;
 pub mod cube_fill;
 mod draw;
 pub mod gpu;
+pub mod material_check;
 pub mod methods;
 mod passes;
 pub mod resources;

@@ -147,7 +147,8 @@ impl SceneResources {
             "material textures",
         )?;
 
-        let all = vk::ShaderStageFlags::ALL_GRAPHICS;
+        // Compute too: the materials check (materials_check.comp) reads the scene set.
+        let all = vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE;
         let binding = |b: u32, ty: vk::DescriptorType, count: u32| {
             vk::DescriptorSetLayoutBinding::default()
                 .binding(b)

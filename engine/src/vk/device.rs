@@ -46,6 +46,8 @@ pub struct DeviceInfo {
 
 #[derive(Debug, Clone, Serialize)]
 pub struct DeviceLimits {
+    /// Bits of sub-texel position a linear filter uses (its weights are that coarse).
+    pub sub_texel_precision_bits: u32,
     pub max_image_dimension_cube: u32,
     pub max_image_dimension_2d: u32,
     pub max_image_array_layers: u32,
@@ -342,6 +344,7 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
         driver_version: version_string(props.driver_version),
         api_version: version_string(props.api_version),
         limits: DeviceLimits {
+            sub_texel_precision_bits: props.limits.sub_texel_precision_bits,
             max_image_dimension_cube: props.limits.max_image_dimension_cube,
             max_image_dimension_2d: props.limits.max_image_dimension2_d,
             max_image_array_layers: props.limits.max_image_array_layers,

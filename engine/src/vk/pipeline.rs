@@ -1,5 +1,5 @@
-//! Shader modules, pipeline layouts and graphics pipelines (dynamic rendering, no render pass
-//! objects).
+//! Shader modules, pipeline layouts, graphics pipelines (dynamic rendering, no render pass
+//! objects) and compute pipelines.
 
 use std::sync::Arc;
 
@@ -15,14 +15,37 @@ pub struct PipelineLayout {
 }
 
 impl PipelineLayout {
+    /// A layout for graphics pipelines (push constants visible to every graphics stage).
     pub fn create(
         device: &Arc<Device>,
         set_layouts: &[vk::DescriptorSetLayout],
         push_constant_bytes: u32,
         name: &str,
     ) -> Result<Self, GpuError> {
+        let stages = vk::ShaderStageFlags::ALL_GRAPHICS;
+        Self::create_for(device, set_layouts, push_constant_bytes, stages, name)
+    }
+
+    /// A layout for a compute pipeline.
+    pub fn create_compute(
+        device: &Arc<Device>,
+        set_layouts: &[vk::DescriptorSetLayout],
+        push_constant_bytes: u32,
+        name: &str,
+    ) -> Result<Self, GpuError> {
+        let stages = vk::ShaderStageFlags::COMPUTE;
+        Self::create_for(device, set_layouts, push_constant_bytes, stages, name)
+    }
+
+    fn create_for(
+        device: &Arc<Device>,
+        set_layouts: &[vk::DescriptorSetLayout],
+        push_constant_bytes: u32,
+        stages: vk::ShaderStageFlags,
+        name: &str,
+    ) -> Result<Self, GpuError> {
         let ranges = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::ALL_GRAPHICS)
+            .stage_flags(stages)
             .offset(0)
             .size(push_constant_bytes)];
         let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(set_layouts);
@@ -78,6 +101,36 @@ pub struct Pipeline {
 }
 
 impl Pipeline {
+    /// A compute pipeline from one shader's SPIR-V.
+    pub fn create_compute(
+        device: &Arc<Device>,
+        layout: &PipelineLayout,
+        spirv: &[u32],
+        name: &str,
+    ) -> Result<Self, GpuError> {
+        let d = &device.raw;
+        let info = vk::ShaderModuleCreateInfo::default().code(spirv);
+        // SAFETY: the words are SPIR-V produced by glslang at build time.
+        let module = unsafe { d.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main");
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout.raw);
+        // SAFETY: every pointer in info points at locals that outlive the call.
+        let result =
+            unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
+        destroy_modules(d, &[module]);
+        let raw = result.map_err(|(_, r)| r).vk("vkCreateComputePipelines")?[0];
+        device.set_name(raw, name);
+        Ok(Self {
+            raw,
+            device: Arc::clone(device),
+        })
+    }
+
     pub fn create_graphics(
         device: &Arc<Device>,
         layout: &PipelineLayout,

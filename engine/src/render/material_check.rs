@@ -1,0 +1,159 @@
+//! The materials check: `shaders/include/materials.glsl` run by a compute pass at given points,
+//! results in full f32. It exists so that a test can hold the CPU reference's twin of the
+//! shader functions (`reference::materials`) to float rounding; nothing renders with it.
+
+use ash::vk;
+use glam::Vec3;
+use gpu_allocator::MemoryLocation;
+
+use super::gpu::{CheckPush, MaterialSample};
+use super::state::SceneState;
+use super::Renderer;
+use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
+use crate::vk::memory::{Buffer, BufferDesc};
+use crate::vk::pipeline::{Pipeline, PipelineLayout};
+use crate::vk::GpuError;
+
+/// Invocations per workgroup (`local_size_x` in materials_check.comp).
+const GROUP: u32 = 64;
+
+impl Renderer {
+    /// `shade(material_albedo(...))` exactly as `scene.frag` computes it, for material
+    /// `points[i].0` at the fragment inputs `points[i].1`, with the scene's light. Returns
+    /// linear RGB in input order. Each material index must be below the scene's count.
+    pub fn evaluate_materials(
+        &mut self,
+        points: &[(usize, MaterialSample)],
+    ) -> Result<Vec<Vec3>, GpuError> {
+        let count = self.scene.materials.len();
+        if let Some((m, _)) = points.iter().find(|(m, _)| *m >= count) {
+            return Err(GpuError::Unsupported(format!(
+                "material {m} does not exist (the scene has {count})"
+            )));
+        }
+        // The frame block carries the light; time 0 is as good as any (lights do not move).
+        self.write_frame_buffers(&SceneState::at(&self.scene, 0.0))?;
+
+        // One dispatch per material, so the texture index is dynamically uniform.
+        let mut order: Vec<usize> = (0..points.len()).collect();
+        order.sort_by_key(|&i| points[i].0);
+        let sorted: Vec<MaterialSample> = order.iter().map(|&i| points[i].1).collect();
+        let device = &self.device;
+        let sample_bytes = std::mem::size_of_val(sorted.as_slice()) as u64;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let mut samples = Buffer::create(
+            device,
+            &BufferDesc::new_cpu_to_gpu(sample_bytes, storage),
+            "material samples",
+        )?;
+        samples.write(&sorted)?;
+        let results_desc = BufferDesc {
+            size: 16 * points.len() as u64,
+            usage: storage,
+            location: MemoryLocation::GpuToCpu,
+        };
+        let results = Buffer::create(device, &results_desc, "material results")?;
+
+        let binding = |b: u32| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(b)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::COMPUTE)
+        };
+        let set_layout =
+            DescriptorSetLayout::create(device, &[binding(0), binding(1)], "check set layout")?;
+        let sizes = [vk::DescriptorPoolSize {
+            ty: vk::DescriptorType::STORAGE_BUFFER,
+            descriptor_count: 2,
+        }];
+        let pool = DescriptorPool::create(device, 1, &sizes, "check descriptors")?;
+        let set = pool.allocate(&set_layout, "check set")?;
+        descriptors::write_buffer(
+            device,
+            set,
+            0,
+            vk::DescriptorType::STORAGE_BUFFER,
+            samples.raw,
+        );
+        descriptors::write_buffer(
+            device,
+            set,
+            1,
+            vk::DescriptorType::STORAGE_BUFFER,
+            results.raw,
+        );
+        let layout = PipelineLayout::create_compute(
+            device,
+            &[self.resources.scene_set_layout.raw, set_layout.raw],
+            std::mem::size_of::<CheckPush>() as u32,
+            "check layout",
+        )?;
+        let pipeline = Pipeline::create_compute(
+            device,
+            &layout,
+            crate::shaders::MATERIALS_CHECK_COMP,
+            "materials check",
+        )?;
+
+        let cmd = self.submitter.begin()?;
+        let d = &device.raw;
+        // SAFETY (whole block): cmd is recording; the pipeline, sets and buffers are live
+        // until after submit_and_wait below; the push range matches the layout.
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                layout.raw,
+                0,
+                &[self.resources.scene_set, set],
+                &[],
+            );
+            let mut first = 0;
+            while first < order.len() {
+                let material = points[order[first]].0;
+                let n = order[first..]
+                    .iter()
+                    .take_while(|&&i| points[i].0 == material)
+                    .count();
+                let push = CheckPush {
+                    first: first as u32,
+                    count: n as u32,
+                    material: material as u32,
+                    pad: 0,
+                };
+                d.cmd_push_constants(
+                    cmd,
+                    layout.raw,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    bytemuck::bytes_of(&push),
+                );
+                d.cmd_dispatch(cmd, (n as u32).div_ceil(GROUP), 1, 1);
+                first += n;
+            }
+            let to_host = [vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+                .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ)];
+            d.cmd_pipeline_barrier2(
+                cmd,
+                &vk::DependencyInfo::default().memory_barriers(&to_host),
+            );
+        }
+        self.submitter.submit_and_wait()?;
+
+        let bytes = results.mapped()?;
+        let mut out = vec![Vec3::ZERO; points.len()];
+        for (k, &i) in order.iter().enumerate() {
+            let texel = &bytes[16 * k..16 * k + 12];
+            let c: [f32; 3] = std::array::from_fn(|j| {
+                f32::from_le_bytes(texel[4 * j..4 * j + 4].try_into().expect("4 bytes"))
+            });
+            out[i] = Vec3::from(c);
+        }
+        Ok(out)
+    }
+}
