@@ -9,6 +9,22 @@ use super::methods::Method;
 use super::{FrameReport, Renderer, TS_FILL, TS_MIPS};
 use crate::vk::commands::{image_barriers, ImageBarrier};
 
+/// What fills the dirty faces of a cube update.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Fill {
+    Method(Method),
+    Floor(super::floors::Floor),
+}
+
+impl Fill {
+    fn name(self) -> &'static str {
+        match self {
+            Fill::Method(m) => m.name(),
+            Fill::Floor(f) => f.name(),
+        }
+    }
+}
+
 /// What one cube update draws: the faces to re-render and, per face, the visible drawables.
 #[derive(Debug, Clone, Default)]
 pub struct CubePlan {
@@ -72,13 +88,31 @@ impl Renderer {
         first_fill: bool,
         report: &mut FrameReport,
     ) {
+        self.record_cube_fill(cmd, plan, first_fill, report, Fill::Method(self.method));
+    }
+
+    /// Like [`Self::record_cube`], with `fill` drawing the faces (a method or a floor).
+    pub(super) fn record_cube_fill(
+        &self,
+        cmd: vk::CommandBuffer,
+        plan: &CubePlan,
+        first_fill: bool,
+        report: &mut FrameReport,
+        fill: Fill,
+    ) {
         let dev = &self.device;
         let cube = &self.cube;
         let mip0 = vk::ImageSubresourceRange {
             level_count: 1,
             ..cube.color.full_range()
         };
-        dev.begin_label(cmd, &format!("cube fill ({})", self.method.name()));
+        dev.begin_label(cmd, &format!("cube fill ({})", fill.name()));
+        // Six-pass brackets each face with its own statistics query and timestamp; the
+        // one-pass methods and the floors get one query for the whole fill.
+        let (one_query, per_face_marks) = match fill {
+            Fill::Method(Method::SixPass) => (false, true),
+            Fill::Method(_) | Fill::Floor(_) => (true, false),
+        };
         // Clean faces keep their pixels, so the old layout is named (UNDEFINED only before the
         // first fill). Depth is scratch: its old contents never matter.
         let old = if first_fill {
@@ -104,20 +138,19 @@ impl Renderer {
                 ),
             ],
         );
-        if let Some(q) = &self.statistics {
-            if self.method != Method::SixPass {
-                q.begin(cmd, 0);
-            }
+        if let (Some(q), true) = (&self.statistics, one_query) {
+            q.begin(cmd, 0);
         }
-        if self.method != Method::SixPass {
+        if !per_face_marks {
             // Per-face timestamps exist only for six-pass; keep every slot answered.
             self.face_timestamps(cmd, 0..6);
         }
-        self.method.record(self, cmd, plan);
-        if let Some(q) = &self.statistics {
-            if self.method != Method::SixPass {
-                q.end(cmd, 0);
-            }
+        match fill {
+            Fill::Method(m) => m.record(self, cmd, plan),
+            Fill::Floor(f) => self.record_floor(cmd, plan, f),
+        }
+        if let (Some(q), true) = (&self.statistics, one_query) {
+            q.end(cmd, 0);
         }
         for f in 0..6 {
             report.draws_per_face[f] = plan.visible[f].len() as u32;

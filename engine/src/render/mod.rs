@@ -12,6 +12,7 @@
 pub mod camera;
 pub mod cube_fill;
 mod draw;
+pub mod floors;
 pub mod gpu;
 pub mod material_check;
 pub mod methods;
@@ -172,6 +173,8 @@ struct Pipelines {
 
 /// Draws one scene. Field order is teardown order (everything holds an `Arc<Device>`).
 pub struct Renderer {
+    /// The benchmark's floor pipelines (made on first `render_floor`).
+    floor_pipelines: Option<floors::FloorPipelines>,
     pipelines: Pipelines,
     timestamps: Option<QueryPool>,
     statistics: Option<QueryPool>,
@@ -258,6 +261,7 @@ impl Renderer {
             .then(|| QueryPool::pipeline_statistics(device, STATS_COUNT, "frame statistics"))
             .transpose()?;
         Ok(Self {
+            floor_pipelines: None,
             pipelines,
             timestamps,
             statistics,

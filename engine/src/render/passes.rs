@@ -387,6 +387,30 @@ fn decode_unorm8(bytes: &[u8], w: u32, h: u32) -> RgbaImage {
     })
 }
 
+/// The scene vertex buffer's layout: `gpu::Vertex` (position, normal, uv) at binding 0.
+pub(super) fn vertex_layout() -> (
+    [vk::VertexInputBindingDescription; 1],
+    [vk::VertexInputAttributeDescription; 3],
+) {
+    let bindings = [vk::VertexInputBindingDescription {
+        binding: 0,
+        stride: std::mem::size_of::<gpu::Vertex>() as u32,
+        input_rate: vk::VertexInputRate::VERTEX,
+    }];
+    let attr = |location, format, offset| vk::VertexInputAttributeDescription {
+        location,
+        binding: 0,
+        format,
+        offset,
+    };
+    let attributes = [
+        attr(0, vk::Format::R32G32B32_SFLOAT, 0),
+        attr(1, vk::Format::R32G32B32_SFLOAT, 12),
+        attr(2, vk::Format::R32G32_SFLOAT, 24),
+    ];
+    (bindings, attributes)
+}
+
 /// The cube, view, depth-only and mirror pipelines (reverse-Z depth everywhere).
 pub(super) fn create_pipelines(
     device: &Arc<Device>,
@@ -404,22 +428,7 @@ pub(super) fn create_pipelines(
         push,
         "mirror layout",
     )?;
-    let bindings = [vk::VertexInputBindingDescription {
-        binding: 0,
-        stride: std::mem::size_of::<gpu::Vertex>() as u32,
-        input_rate: vk::VertexInputRate::VERTEX,
-    }];
-    let attr = |location, format, offset| vk::VertexInputAttributeDescription {
-        location,
-        binding: 0,
-        format,
-        offset,
-    };
-    let attributes = [
-        attr(0, vk::Format::R32G32B32_SFLOAT, 0),
-        attr(1, vk::Format::R32G32B32_SFLOAT, 12),
-        attr(2, vk::Format::R32G32_SFLOAT, 24),
-    ];
+    let (bindings, attributes) = vertex_layout();
     let scene_pipeline = |color_format, method: methods::Method, color_writes, name| {
         let stages: Vec<ShaderStage> = methods::stages(method, gs_invocations)
             .into_iter()
@@ -440,6 +449,7 @@ pub(super) fn create_pipelines(
                 depth_write: true,
                 color_writes,
                 view_mask: method.layers_and_view_mask().1,
+                rasterizer_discard: false,
             },
             name,
         )
@@ -469,6 +479,7 @@ pub(super) fn create_pipelines(
                 depth_write: true,
                 color_writes: true,
                 view_mask: 0,
+                rasterizer_discard: false,
             },
             name,
         )

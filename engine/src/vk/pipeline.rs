@@ -92,6 +92,8 @@ pub struct GraphicsPipelineDesc<'a> {
     pub color_writes: bool,
     /// Multiview view mask (0: not multiview).
     pub view_mask: u32,
+    /// Primitives are discarded before rasterization (the benchmark's geometry floor).
+    pub rasterizer_discard: bool,
 }
 
 /// A graphics pipeline.
@@ -174,6 +176,7 @@ impl Pipeline {
             .viewport_count(1)
             .scissor_count(1);
         let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .rasterizer_discard_enable(desc.rasterizer_discard)
             .polygon_mode(vk::PolygonMode::FILL)
             .cull_mode(desc.cull_mode)
             // A triangle counter-clockwise seen from outside keeps positive area in our views

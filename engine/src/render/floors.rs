@@ -1,0 +1,191 @@
+//! The benchmark's floors: what a cube update costs when part of the work is taken away. Each
+//! is recorded exactly like a method's update (same cube, same faces, same mip rebuild), so
+//! their times compare directly with the methods' (docs/benchmarks.md, "Floors"):
+//!
+//! - **clear**: each face's rendering scope opened with a clear and closed, nothing drawn;
+//! - **fill**: one triangle per face covering it, shaded by the real `scene.frag` as the face's
+//!   wall (every texel shaded once, no overdraw, no scene geometry);
+//! - **geometry**: six-pass's culled draws with rasterizer discard (all vertex work, no pixel).
+//!
+//! A method cannot beat clear; a perfect one would cost about geometry + fill − clear.
+
+use std::time::Instant;
+
+use ash::vk;
+
+use super::cube_fill::{CubePlan, Fill};
+use super::draw::Attachments;
+use super::gpu::Push;
+use super::state::SceneState;
+use super::targets::DEPTH_FORMAT;
+use super::{methods, FrameReport, Readback, Renderer, TS_READBACK, TS_START};
+use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, ShaderStage};
+use crate::vk::GpuError;
+
+/// A floor of the cube update's cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Floor {
+    Clear,
+    Fill,
+    Geometry,
+}
+
+impl Floor {
+    pub const ALL: [Floor; 3] = [Floor::Clear, Floor::Fill, Floor::Geometry];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Floor::Clear => "clear",
+            Floor::Fill => "fill",
+            Floor::Geometry => "geometry",
+        }
+    }
+}
+
+/// The floors' pipelines, made on first use (rendering never needs them).
+pub(super) struct FloorPipelines {
+    fill: Pipeline,
+    geometry: Pipeline,
+}
+
+impl Renderer {
+    /// One full cube update with `floor` in place of the method's draws, at time `t_s`, timed
+    /// like [`Renderer::render_frame`] (nothing is read back). The cube's contents are not a
+    /// picture afterwards: the next real frame re-renders every face.
+    pub fn render_floor(
+        &mut self,
+        floor: Floor,
+        frame: u64,
+        t_s: f64,
+    ) -> Result<FrameReport, GpuError> {
+        if self.floor_pipelines.is_none() {
+            self.floor_pipelines = Some(self.create_floor_pipelines()?);
+        }
+        let record_start = Instant::now();
+        let state = SceneState::at(&self.scene, t_s);
+        let views = self.write_frame_buffers(&state)?;
+        let plan = self.plan_cube(&views, 0x3F);
+        let cmd = self.submitter.begin()?;
+        let mut report = FrameReport {
+            frame,
+            time_s: t_s,
+            cube_updated: true,
+            ..Default::default()
+        };
+        if let Some(q) = &self.timestamps {
+            q.reset(cmd);
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, TS_START);
+        }
+        if let Some(q) = &self.statistics {
+            q.reset(cmd);
+        }
+        let first = self.cube_state.is_none();
+        self.record_cube_fill(cmd, &plan, first, &mut report, Fill::Floor(floor));
+        // Keeps the remaining timestamp slots answered (no view is drawn).
+        self.record_views(cmd, &views, Readback::default());
+        if let Some(q) = &self.timestamps {
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_READBACK);
+        }
+        report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
+        let wait_start = Instant::now();
+        self.submitter.submit_and_wait()?;
+        report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
+        self.read_queries(&mut report, false, false)?;
+        report.gpu_face_ms = None;
+        if let Some(q) = &self.statistics {
+            report.fill_stats = Some(q.statistics(0, 1)?[0]);
+        }
+        self.cube_state = None;
+        Ok(report)
+    }
+
+    /// Records `floor` into every face of `plan` (the caller set the layouts).
+    pub(super) fn record_floor(&self, cmd: vk::CommandBuffer, plan: &CubePlan, floor: Floor) {
+        let size = self.cube.size;
+        let pipelines = self.floor_pipelines.as_ref().expect("made by render_floor");
+        for face in plan.faces() {
+            self.begin_rendering(
+                cmd,
+                &Attachments {
+                    color: self.cube.face_views[face as usize].raw,
+                    depth: self.cube.depth_views[face as usize].raw,
+                    size: [size, size],
+                    layers: 1,
+                    view_mask: 0,
+                    clear: true,
+                },
+            );
+            self.set_viewport(cmd, 0.0, 0.0, size as f32, size as f32);
+            let push = Push {
+                view_index: face,
+                ..Push::default()
+            };
+            match floor {
+                Floor::Clear => {}
+                Floor::Geometry => {
+                    self.draw_objects(cmd, &pipelines.geometry, push, &plan.visible[face as usize])
+                }
+                Floor::Fill => {
+                    // Wall `face` is the one a face looks at (walls are in cube-face order).
+                    self.bind_scene(cmd, &pipelines.fill);
+                    let push = Push {
+                        object_index: face,
+                        ..push
+                    };
+                    self.push(cmd, self.pipelines.scene_layout.raw, push);
+                    // SAFETY: the scene is bound; floor_fill.vert makes its 3 vertices.
+                    unsafe { self.device.raw.cmd_draw(cmd, 3, 1, 0, 0) };
+                }
+            }
+            self.end_rendering(cmd);
+        }
+    }
+
+    fn create_floor_pipelines(&self) -> Result<FloorPipelines, GpuError> {
+        let layout = &self.pipelines.scene_layout;
+        let vertex = |spirv| ShaderStage {
+            stage: vk::ShaderStageFlags::VERTEX,
+            spirv,
+        };
+        let fragment = ShaderStage {
+            stage: vk::ShaderStageFlags::FRAGMENT,
+            spirv: crate::shaders::SCENE_FRAG,
+        };
+        let (bindings, attributes) = super::passes::vertex_layout();
+        let desc = |stages, discard, with_vertices: bool| GraphicsPipelineDesc {
+            stages,
+            vertex_bindings: if with_vertices { &bindings } else { &[] },
+            vertex_attributes: if with_vertices { &attributes } else { &[] },
+            color_format: self.cube.format,
+            depth_format: DEPTH_FORMAT,
+            cull_mode: vk::CullModeFlags::NONE,
+            depth_compare: vk::CompareOp::GREATER,
+            depth_write: true,
+            color_writes: true,
+            view_mask: methods::Method::SixPass.layers_and_view_mask().1,
+            rasterizer_discard: discard,
+        };
+        let fill_stages = [vertex(crate::shaders::FLOOR_FILL_VERT), fragment];
+        let fill = Pipeline::create_graphics(
+            &self.device,
+            layout,
+            &desc(&fill_stages, false, false),
+            "fill floor pipeline",
+        )?;
+        let geometry_stages = [
+            vertex(crate::shaders::SCENE_VERT),
+            ShaderStage {
+                stage: vk::ShaderStageFlags::FRAGMENT,
+                spirv: crate::shaders::SCENE_FRAG,
+            },
+        ];
+        let geometry = Pipeline::create_graphics(
+            &self.device,
+            layout,
+            &desc(&geometry_stages, true, true),
+            "geometry floor pipeline",
+        )?;
+        Ok(FloorPipelines { fill, geometry })
+    }
+}
