@@ -20,6 +20,7 @@ fn temp(name: &str) -> PathBuf {
 fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     let json = temp("base.json");
     let csv = temp("base.csv");
+    let svg = temp("plot.svg");
     let run = specchio(&[
         "bench",
         "--quick",
@@ -29,16 +30,24 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
         json.to_str().unwrap(),
         "--csv",
         csv.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
     ]);
     assert!(
         run.status.success(),
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    assert!(
-        std::fs::read_to_string(&csv).unwrap().lines().count() >= 3,
-        "a header and a row per case"
+    // Two scenes x two methods x two lookups, and the header.
+    assert_eq!(
+        std::fs::read_to_string(&csv).unwrap().lines().count(),
+        1 + 8
     );
+    let plot = std::fs::read_to_string(&svg).unwrap();
+    assert!(plot.starts_with("<svg") && plot.contains("six-pass 64² box"));
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    check_record(&record);
 
     // The same run against itself: counters are deterministic.
     let same = specchio(&[
@@ -87,7 +96,7 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     let missing = specchio(&["bench", "--quick", "--baseline", "no/such/baseline.json"]);
     assert!(!missing.status.success());
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no/such/baseline.json"));
-    for f in [json, csv, worse] {
+    for f in [json, csv, worse, svg] {
         let _ = std::fs::remove_file(f);
     }
 }
@@ -108,4 +117,103 @@ fn the_committed_quick_baseline_matches() {
         String::from_utf8_lossy(&run.stdout),
         String::from_utf8_lossy(&run.stderr)
     );
+}
+
+/// What one quick run's JSON must hold besides the gate's rows (issue: speed against error).
+fn check_record(r: &serde_json::Value) {
+    let rows = |k: &str| {
+        r[k].as_array()
+            .unwrap_or_else(|| panic!("`{k}` array"))
+            .clone()
+    };
+    // Timing rows: 2 scenes x 2 methods; floors: 2 scenes x 3.
+    assert_eq!(rows("results").len(), 4);
+    assert_eq!(rows("floors").len(), 6);
+    for f in rows("floors") {
+        assert!(f["wall_ms"]["median"].as_f64().unwrap() > 0.0);
+    }
+    // The fill floor shades every texel once: 6 faces x 64² in an update.
+    let fill = rows("floors")
+        .into_iter()
+        .find(|f| f["floor"] == "fill")
+        .unwrap();
+    assert_eq!(fill["fill_stats"]["fragment_invocations"], 6 * 64 * 64);
+    for row in rows("results") {
+        assert!(row["efficiency"]["vs_geometry_plus_fill"].as_f64().unwrap() > 0.0);
+    }
+    // Accuracy: per scene and lookup; the methods agree; box is better than plain.
+    let acc = rows("accuracy");
+    assert_eq!(acc.len(), 4);
+    for a in &acc {
+        assert_eq!(a["methods_identical"], true);
+        assert_eq!(a["non_finite_pixels"], 0);
+    }
+    let flip = |lookup: &str| {
+        acc.iter()
+            .find(|a| a["lookup"] == lookup && a["scene"] == "scenes/thesis-room.toml")
+            .unwrap()["flip_mean"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(flip("box") < flip("plain"));
+    assert_eq!(rows("speed_vs_error").len(), 8);
+    // Both quick scenes move: incremental against full, frame by frame.
+    let dynamic = rows("dynamic");
+    assert_eq!(dynamic.len(), 2);
+    let thesis = &dynamic[0];
+    assert!(thesis["frames"].as_array().unwrap().len() >= 4);
+    // One small ball moves in the thesis's room: fewer faces than a full update.
+    assert!(thesis["faces_incremental_median"].as_f64().unwrap() < 6.0);
+    // Provenance.
+    assert!(r["peak_rss_bytes"].as_u64().unwrap() > 0);
+    assert!(r["command"].as_str().unwrap().contains("bench"));
+    assert!(r["device"]["driver_info"].is_string());
+    assert!(r["settings"]["cube_sizes"] == serde_json::json!([64]));
+}
+
+/// `--format github` prints github-action-benchmark's array on stdout (the table on stderr);
+/// bad options fail before running, naming the option, and write nothing.
+#[test]
+fn github_format_and_bad_options() {
+    let run = specchio(&[
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass",
+        "--no-accuracy",
+        "--no-dynamic",
+        "--no-floors",
+        "--format",
+        "github",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let array: serde_json::Value = serde_json::from_slice(&run.stdout).expect("stdout is JSON");
+    let array = array.as_array().unwrap();
+    assert_eq!(array.len(), 2, "one row per scene: {array:?}");
+    assert_eq!(array[0]["unit"], "ms");
+    assert!(array[0]["value"].as_f64().unwrap() > 0.0);
+    assert!(String::from_utf8_lossy(&run.stderr).contains("median ms"));
+
+    let json = temp("bad.json");
+    for (args, message) in [
+        (&["--cube-sizes", "0"][..], "--cube-sizes"),
+        (&["--cube-sizes", "64,x"][..], "--cube-sizes: `x`"),
+        (&["--lookups", "sphere"][..], "--lookups: `sphere`"),
+        (&["--threads", "0"][..], "--threads"),
+        (&["--runs", "0"][..], "--runs"),
+        (&["--frames", "0"][..], "--frames"),
+        (&["--methods", "nine-pass"][..], "--methods: `nine-pass`"),
+    ] {
+        let mut all = vec!["bench", "--json", json.to_str().unwrap()];
+        all.extend_from_slice(args);
+        let out = specchio(&all);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+        assert!(!json.exists(), "{args:?} wrote {}", json.display());
+    }
 }

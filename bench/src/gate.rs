@@ -1,4 +1,4 @@
-//! The benchmark's regression gate and CSV output.
+//! The benchmark's regression gate.
 //!
 //! The rule (docs/methods.md, "Regression gate"):
 //! - **Work counters are exact.** Vertex and fragment invocations, clipped primitives, faces
@@ -92,36 +92,6 @@ pub fn check(baseline: &[Value], results: &[Value], max_regression: Option<f64>)
         }
     }
     failures
-}
-
-/// One row per result: the case, times (median, p10, p90) and work counters.
-pub fn write_csv(path: &Path, results: &[Value]) -> Result<()> {
-    let mut text = String::from(
-        "scene,method,cube_size,updates,wall_median_ms,wall_p10_ms,wall_p90_ms,gpu_fill_median_ms,vertex_invocations,clipping_primitives,fragment_invocations,faces_rendered,objects_drawn\n",
-    );
-    for r in results {
-        let f = |v: &Value| v.as_f64().map_or(String::new(), |x| format!("{x:.4}"));
-        let w = &r["work"];
-        text.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            r["scene"].as_str().unwrap_or(""),
-            r["method"].as_str().unwrap_or(""),
-            r["cube_size"],
-            r["updates"],
-            f(&r["wall_ms"]["median"]),
-            f(&r["wall_ms"]["p10"]),
-            f(&r["wall_ms"]["p90"]),
-            f(&r["gpu_fill_ms"]["median"]),
-            w["vertex_invocations"],
-            w["clipping_primitives"],
-            w["fragment_invocations"],
-            w["faces_rendered"],
-            w["objects_drawn"],
-        ));
-    }
-    let tmp = path.with_extension("csv.partial");
-    std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))
 }
 
 #[cfg(test)]

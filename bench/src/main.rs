@@ -33,8 +33,8 @@ enum Command {
     Render(render::Args),
     /// Ray trace the exact mirror on the CPU (the reference the cube map is judged against).
     Reference(reference::Args),
-    /// Time every cube fill method on the same scenes, interleaved (first slice of the
-    /// benchmark command).
+    /// Speed against error of every cube fill method: interleaved timings, floors, error
+    /// against the exact reference, incremental updates; JSON, CSV, SVG and a regression gate.
     Bench(bench::Args),
     /// Error metrics of a test image against a reference (RMSE, PSNR, relMSE, FLIP), with an
     /// optional mask and FLIP heatmap.

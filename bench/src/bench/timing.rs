@@ -1,0 +1,110 @@
+//! Timing: every method and floor of one scene at one face size, interleaved within each
+//! round (A B C floors, A B C floors, ...) so that a drifting machine slows all alike.
+
+use anyhow::Result;
+use specchio::render::floors::Floor;
+use specchio::render::methods::Method;
+use specchio::render::{FrameReport, Readback, RenderOptions, Renderer};
+use specchio::scene::{RefreshPolicy, Scene};
+use specchio::vk::device::Device;
+
+use super::Plan;
+
+/// The timed updates of one method or floor, and each run's median wall time.
+#[derive(Default)]
+pub struct Timed {
+    pub reports: Vec<FrameReport>,
+    pub run_medians_ms: Vec<f64>,
+}
+
+/// What one scene at one face size measured, with the renderers kept for the accuracy frames.
+pub struct SizeTiming {
+    pub renderers: Vec<Renderer>,
+    pub methods: Vec<Timed>,
+    pub floors: Vec<(Floor, Timed)>,
+}
+
+/// The `p` quantile of `v` by nearest rank on (n - 1) p, as every figure of the benchmark
+/// (sorts `v`); 0 for an empty slice.
+pub fn quantile(v: &mut [f64], p: f64) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * p).round() as usize]
+}
+
+/// Times `methods` and the floors on `scene` at `size`: `plan.runs` runs of `plan.warmup`
+/// untimed then `plan.frames` timed rounds. Floors run on the six-pass renderer (or an extra
+/// one when six-pass is not among the methods).
+pub fn time_size(
+    device: &std::sync::Arc<Device>,
+    scene: &Scene,
+    methods: &[Method],
+    size: u32,
+    plan: &Plan,
+    tick: &dyn Fn(),
+) -> Result<SizeTiming> {
+    let make = |method| {
+        let options = RenderOptions {
+            cube_size: Some(size),
+            method,
+            refresh: Some(RefreshPolicy::EveryFrame),
+            gs_invocations: plan.gs_invocations,
+            ..Default::default()
+        };
+        Renderer::new(device, scene.clone(), &options)
+    };
+    let mut renderers = methods
+        .iter()
+        .map(|&m| make(m))
+        .collect::<Result<Vec<_>, _>>()?;
+    let floor_host = match methods.iter().position(|&m| m == Method::SixPass) {
+        Some(i) => i,
+        None => {
+            renderers.push(make(Method::SixPass)?);
+            renderers.len() - 1
+        }
+    };
+    let mut timed: Vec<Timed> = methods.iter().map(|_| Timed::default()).collect();
+    let mut floors: Vec<(Floor, Timed)> = if plan.floors {
+        Floor::ALL.iter().map(|&f| (f, Timed::default())).collect()
+    } else {
+        Vec::new()
+    };
+    let none = Readback::default();
+    for _ in 0..plan.runs {
+        let mut run_m: Vec<Vec<f64>> = vec![Vec::new(); methods.len()];
+        let mut run_f: Vec<Vec<f64>> = vec![Vec::new(); floors.len()];
+        for round in 0..plan.warmup + plan.frames {
+            let t = f64::from(round) / 30.0;
+            let frame = u64::from(round);
+            for (i, r) in renderers.iter_mut().take(methods.len()).enumerate() {
+                let (report, _) = r.render_frame(frame, t, none)?;
+                if round >= plan.warmup {
+                    run_m[i].push(report.submit_wait_ms);
+                    timed[i].reports.push(report);
+                }
+            }
+            for (k, (floor, t_f)) in floors.iter_mut().enumerate() {
+                let report = renderers[floor_host].render_floor(*floor, frame, t)?;
+                if round >= plan.warmup {
+                    run_f[k].push(report.submit_wait_ms);
+                    t_f.reports.push(report);
+                }
+            }
+            tick();
+        }
+        for (t, mut v) in timed.iter_mut().zip(run_m) {
+            t.run_medians_ms.push(quantile(&mut v, 0.5));
+        }
+        for ((_, t), mut v) in floors.iter_mut().zip(run_f) {
+            t.run_medians_ms.push(quantile(&mut v, 0.5));
+        }
+    }
+    Ok(SizeTiming {
+        renderers,
+        methods: timed,
+        floors,
+    })
+}
