@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
-# The main job: set up, build, and render the thesis's scene on the default device.
-# Usage: scripts/run.sh [SCENE] [OUT]   (defaults: scenes/thesis-room.toml out/thesis-room)
+# The main job: set up, build, and run the benchmark (speed against error of every cube fill
+# method) on the default scene set, then render the thesis's scene.
+# Usage: scripts/run.sh [BENCH ARGUMENTS...]   e.g. scripts/run.sh --quick
+#        (default: every scene of the default set; results in out/bench/)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 cargo build --release --locked -p specchio-cli
-scene=${1:-scenes/thesis-room.toml}
-out=${2:-out/$(basename "$scene" .toml)}
-target/release/specchio info
-target/release/specchio render "$scene" --out "$out" --frames 1
-echo "open $out/views.png (observer | sensor), $out/render.json for settings and timings"
+bin=target/release/specchio
+mkdir -p out/bench
+$bin info
+$bin bench "$@" --json out/bench/bench.json --csv out/bench/bench.csv --plot out/bench/bench.svg
+$bin render scenes/thesis-room.toml --out out/thesis-room --frames 1
+echo "benchmark: out/bench/bench.json, bench.csv, bench.svg (speed against error);"
+echo "views: out/thesis-room/views.png (observer | sensor), out/thesis-room/render.json"

@@ -30,8 +30,11 @@ impl Fill {
 pub struct CubePlan {
     /// Bit f set: face f is re-rendered; the others keep their contents.
     pub dirty: u8,
-    /// Per face, the drawables whose bounds meet the face's frustum (empty for clean faces).
+    /// Per face, the drawables whose bounds meet the face's frustum (empty for clean faces),
+    /// in `order`.
     pub visible: [Vec<u32>; 6],
+    /// The frame's draw order (front to back from the cube's centre, walls last).
+    pub order: Vec<u32>,
 }
 
 impl CubePlan {
@@ -39,13 +42,27 @@ impl CubePlan {
         (0..6u32).filter(|f| self.dirty & (1 << f) != 0)
     }
 
-    /// Every drawable visible in at least one dirty face, in drawable order (the one-pass
+    /// Every drawable visible in at least one dirty face, in draw order (the one-pass
     /// methods that cannot cull per face draw these).
     pub fn union(&self) -> Vec<u32> {
-        let mut all: Vec<u32> = self.visible.iter().flatten().copied().collect();
-        all.sort_unstable();
-        all.dedup();
-        all
+        let mut seen = vec![false; self.order.iter().max().map_or(0, |&m| m as usize + 1)];
+        for &o in self.visible.iter().flatten() {
+            seen[o as usize] = true;
+        }
+        self.order
+            .iter()
+            .copied()
+            .filter(|&o| seen[o as usize])
+            .collect()
+    }
+
+    /// Each drawable's position in `order`.
+    pub fn ranks(&self) -> Vec<u32> {
+        let mut rank = vec![u32::MAX; self.order.iter().max().map_or(0, |&m| m as usize + 1)];
+        for (r, &o) in self.order.iter().enumerate() {
+            rank[o as usize] = r as u32;
+        }
+        rank
     }
 }
 
@@ -54,6 +71,7 @@ impl Renderer {
     pub(super) fn plan_cube(&self, views: &[ViewBasis], dirty: u8) -> CubePlan {
         let mut plan = CubePlan {
             dirty,
+            order: self.draw_order.clone(),
             ..Default::default()
         };
         for f in plan.faces().collect::<Vec<_>>() {

@@ -2,6 +2,7 @@
 //! rendering scopes and viewports.
 
 use ash::vk;
+use glam::Vec3;
 
 use super::camera::{transform_aabb, Frustum};
 use super::gpu::Push;
@@ -85,18 +86,43 @@ pub(super) const CLEAR_DEPTH: vk::ClearValue = vk::ClearValue {
 };
 
 impl Renderer {
-    /// Indices of the drawables whose render-space bounds meet `frustum`.
+    /// Indices of the drawables whose render-space bounds meet `frustum`, in draw order.
     pub(super) fn visible(&self, frustum: &Frustum) -> Vec<u32> {
-        self.resources
-            .drawables
+        self.draw_order
             .iter()
-            .zip(&self.object_matrices)
-            .enumerate()
-            .filter(|(_, (d, m))| {
+            .copied()
+            .filter(|&i| {
+                let d = &self.resources.drawables[i as usize];
+                let m = &self.object_matrices[i as usize];
                 let (lo, hi) = transform_aabb(m, d.bounds_min, d.bounds_max);
                 frustum.intersects_aabb(lo, hi)
             })
-            .map(|(i, _)| i as u32)
+            .collect()
+    }
+
+    /// The draw order of this frame: objects by the distance of their bounds from the cube's
+    /// centre (the render origin), nearest first, then the six walls. Every cube face looks
+    /// out from that one point, so this one order is front to back for all six faces at once:
+    /// the depth test then rejects hidden fragments before they are shaded (early depth),
+    /// instead of shading every wall texel and painting objects over it. Ties go by index, so
+    /// the order is deterministic and every method uses the same one (equal depths resolve
+    /// alike).
+    pub(super) fn front_to_back(&self) -> Vec<u32> {
+        let walls = 6;
+        let mut objects: Vec<(f32, u32)> = (walls..self.resources.drawables.len())
+            .map(|i| {
+                let d = &self.resources.drawables[i];
+                let (lo, hi) = transform_aabb(&self.object_matrices[i], d.bounds_min, d.bounds_max);
+                // Distance from the origin to the nearest point of the box (0 inside it).
+                let nearest = Vec3::ZERO.clamp(lo, hi);
+                (nearest.length_squared(), i as u32)
+            })
+            .collect();
+        objects.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        objects
+            .into_iter()
+            .map(|(_, i)| i)
+            .chain(0..walls as u32)
             .collect()
     }
 

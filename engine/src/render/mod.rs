@@ -193,6 +193,8 @@ pub struct Renderer {
     cube_state: Option<SceneState>,
     /// This frame's model-to-render matrices, walls first (for culling).
     object_matrices: Vec<Mat4>,
+    /// This frame's draw order: objects front to back from the cube's centre, walls last.
+    draw_order: Vec<u32>,
     pub counters: RefreshCounters,
     pub method: methods::Method,
     full_updates: bool,
@@ -277,6 +279,7 @@ impl Renderer {
             submitter,
             cube_state: None,
             object_matrices: Vec::new(),
+            draw_order: Vec::new(),
             counters: RefreshCounters::default(),
             method: options.method,
             full_updates: options.full_updates,
@@ -506,6 +509,7 @@ impl Renderer {
         );
         self.resources.objects.write(&objects)?;
         self.object_matrices = objects.iter().map(|o| o.model_to_world).collect();
+        self.draw_order = self.front_to_back();
         Ok(bases)
     }
 }

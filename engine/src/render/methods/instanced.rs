@@ -9,17 +9,19 @@ use crate::render::gpu::INSTANCE_FACE_BITS;
 use crate::render::resources::Drawable;
 use crate::render::Renderer;
 
-/// The indirect commands for `plan`, object-major so that within a face the draw order is the
-/// drawable order, as in six-pass (equal depths resolve the same way).
+/// The indirect commands for `plan`, object-major in the plan's draw order, so that within a
+/// face objects are drawn in the same order as six-pass draws them (front to back; equal
+/// depths resolve the same way).
 pub(crate) fn commands(
     drawables: &[Drawable],
     plan: &CubePlan,
 ) -> Vec<vk::DrawIndexedIndirectCommand> {
+    let rank = plan.ranks();
     let mut pairs: Vec<(u32, u32)> = plan
         .faces()
         .flat_map(|f| plan.visible[f as usize].iter().map(move |&o| (o, f)))
         .collect();
-    pairs.sort_unstable();
+    pairs.sort_unstable_by_key(|&(o, f)| (rank[o as usize], f));
     pairs
         .into_iter()
         .map(|(o, f)| {
