@@ -66,6 +66,10 @@ pub fn time_size(
             renderers.len() - 1
         }
     };
+    if plan.floors {
+        // Pipelines are built before anything is timed, the floors' too.
+        renderers[floor_host].prepare_floors()?;
+    }
     let mut timed: Vec<Timed> = methods.iter().map(|_| Timed::default()).collect();
     let mut floors: Vec<(Floor, Timed)> = if plan.floors {
         Floor::ALL.iter().map(|&f| (f, Timed::default())).collect()
