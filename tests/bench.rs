@@ -12,6 +12,34 @@ fn specchio(args: &[&str]) -> Output {
         .expect("the specchio binary runs")
 }
 
+/// Fails with the command's stderr unless it succeeded.
+fn assert_ok(out: &Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// A quick run of six-pass alone, timing only (no error, floors or dynamic part), plus `extra`.
+fn lean_quick(extra: &[&str]) -> Output {
+    let mut args = vec![
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass",
+        "--no-accuracy",
+        "--no-dynamic",
+        "--no-floors",
+    ];
+    args.extend_from_slice(extra);
+    specchio(&args)
+}
+
 fn temp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("specchio-bench-{}-{name}", std::process::id()))
 }
@@ -33,11 +61,7 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
         "--plot",
         svg.to_str().unwrap(),
     ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    assert_ok(&run);
     // Two scenes x two methods x two lookups, and the header.
     assert_eq!(
         std::fs::read_to_string(&csv).unwrap().lines().count(),
@@ -45,9 +69,7 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     );
     let plot = std::fs::read_to_string(&svg).unwrap();
     assert!(plot.starts_with("<svg") && plot.contains("six-pass 64² box"));
-    let record: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    check_record(&record);
+    check_record(&read_json(&json));
 
     // The same run against itself: counters are deterministic.
     let same = specchio(&[
@@ -58,15 +80,10 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
         "--baseline",
         json.to_str().unwrap(),
     ]);
-    assert!(
-        same.status.success(),
-        "{}",
-        String::from_utf8_lossy(&same.stderr)
-    );
+    assert_ok(&same);
 
     // A baseline that claims less work: the run "got worse" and the gate names the case.
-    let mut base: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let mut base = read_json(&json);
     let first = &mut base["results"][0];
     let case = format!(
         "{} / {}",
@@ -175,28 +192,26 @@ fn check_record(r: &serde_json::Value) {
 /// bad options fail before running, naming the option, and write nothing.
 #[test]
 fn github_format_and_bad_options() {
-    let run = specchio(&[
-        "bench",
-        "--quick",
-        "--methods",
-        "six-pass",
-        "--no-accuracy",
-        "--no-dynamic",
-        "--no-floors",
-        "--format",
-        "github",
-    ]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let run = lean_quick(&["--format", "github"]);
+    assert_ok(&run);
     let array: serde_json::Value = serde_json::from_slice(&run.stdout).expect("stdout is JSON");
     let array = array.as_array().unwrap();
     assert_eq!(array.len(), 2, "one row per scene: {array:?}");
     assert_eq!(array[0]["unit"], "ms");
     assert!(array[0]["value"].as_f64().unwrap() > 0.0);
     assert!(String::from_utf8_lossy(&run.stderr).contains("median ms"));
+
+    // --threads reaches lavapipe through LP_NUM_THREADS and is recorded.
+    let json = temp("threads.json");
+    assert_ok(&lean_quick(&[
+        "--threads",
+        "1",
+        "--json",
+        json.to_str().unwrap(),
+    ]));
+    let record = read_json(&json);
+    assert_eq!(record["environment"]["lp_num_threads"], "1");
+    std::fs::remove_file(&json).unwrap();
 
     let json = temp("bad.json");
     for (args, message) in [
