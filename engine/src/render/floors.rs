@@ -14,7 +14,7 @@ use std::time::Instant;
 use ash::vk;
 
 use super::cube_fill::{CubePlan, Fill};
-use super::draw::Attachments;
+use super::draw::{Attachments, CUBE_FRONT};
 use super::gpu::Push;
 use super::state::SceneState;
 use super::targets::DEPTH_FORMAT;
@@ -130,7 +130,8 @@ impl Renderer {
             match floor {
                 Floor::Clear => {}
                 Floor::Geometry => {
-                    self.draw_objects(cmd, &pipelines.geometry, push, &plan.visible[face as usize])
+                    let visible = &plan.visible[face as usize];
+                    self.draw_objects(cmd, &pipelines.geometry, push, visible, CUBE_FRONT)
                 }
                 Floor::Fill => {
                     // Wall `face` is the one a face looks at (walls are in cube-face order).
@@ -166,6 +167,7 @@ impl Renderer {
             color_format: self.cube.format,
             depth_format: DEPTH_FORMAT,
             cull_mode: vk::CullModeFlags::NONE,
+            dynamic_culling: with_vertices,
             depth_compare: vk::CompareOp::GREATER,
             depth_write: true,
             color_writes: true,

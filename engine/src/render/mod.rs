@@ -186,8 +186,8 @@ pub struct Renderer {
     cube: CubeTarget,
     resources: SceneResources,
     readback: Option<Buffer>,
-    /// Instanced method: this frame's indirect commands and their count.
-    indirect: Option<(Buffer, u32)>,
+    /// Instanced method: this frame's indirect commands, as runs of equal culling.
+    indirect: Option<(Buffer, Vec<methods::instanced::Run>)>,
     submitter: Submitter,
     /// The state the cube map shows; `None` before the first fill.
     cube_state: Option<SceneState>,
@@ -421,15 +421,16 @@ impl Renderer {
 
     /// Instanced method: writes this frame's indirect draws (growing the buffer if needed).
     fn write_indirect(&mut self, plan: &cube_fill::CubePlan) -> Result<(), GpuError> {
-        let commands = methods::instanced::commands(&self.resources.drawables, plan);
+        let (commands, new_runs) = methods::instanced::commands(&self.resources.drawables, plan);
         let bytes = std::mem::size_of_val(commands.as_slice()) as u64;
         if self.indirect.as_ref().is_none_or(|(b, _)| b.size < bytes) {
             let desc = BufferDesc::new_cpu_to_gpu(bytes, vk::BufferUsageFlags::INDIRECT_BUFFER);
-            self.indirect = Some((Buffer::create(&self.device, &desc, "indirect draws")?, 0));
+            let buffer = Buffer::create(&self.device, &desc, "indirect draws")?;
+            self.indirect = Some((buffer, Vec::new()));
         }
-        let (buffer, count) = self.indirect.as_mut().expect("created above");
+        let (buffer, runs) = self.indirect.as_mut().expect("created above");
         buffer.write(&as_words(&commands))?;
-        *count = commands.len() as u32;
+        *runs = new_runs;
         Ok(())
     }
 

@@ -3,7 +3,7 @@
 use ash::vk;
 
 use super::camera::{Frustum, ViewBasis};
-use super::draw::{barrier, Attachments, COLOR_OUT, COPY_READ, DEPTH_RW, SAMPLED};
+use super::draw::{barrier, Attachments, COLOR_OUT, COPY_READ, DEPTH_RW, SAMPLED, VIEW_FRONT};
 use super::gpu::Push;
 use super::resources::{VIEW_OBSERVER, VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT, VIEW_SENSOR};
 use super::targets::{ViewTarget, DEPTH_FORMAT, DIRECTION_FORMAT, VIEW_FORMAT};
@@ -165,7 +165,7 @@ impl Renderer {
                 view_index: v,
                 ..Push::default()
             };
-            self.draw_objects(cmd, scene_pipeline, push, &visible);
+            self.draw_objects(cmd, scene_pipeline, push, &visible, VIEW_FRONT);
             self.draw_mirror(cmd, mirror_pipeline, v);
         }
         self.end_rendering(cmd);
@@ -445,6 +445,7 @@ pub(super) fn create_pipelines(
                 depth_format: DEPTH_FORMAT,
                 // Room walls are seen from inside and meshes may be open: draw both sides.
                 cull_mode: vk::CullModeFlags::NONE,
+                dynamic_culling: true,
                 depth_compare: vk::CompareOp::GREATER,
                 depth_write: true,
                 color_writes,
@@ -475,6 +476,7 @@ pub(super) fn create_pipelines(
                 depth_format: DEPTH_FORMAT,
                 // Back faces of the bounding cube: still on screen when the camera is inside it.
                 cull_mode: vk::CullModeFlags::FRONT,
+                dynamic_culling: false,
                 depth_compare: vk::CompareOp::GREATER,
                 depth_write: true,
                 color_writes: true,

@@ -33,6 +33,8 @@ pub struct Drawable {
     pub vertex_offset: i32,
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
+    /// Back faces may be culled (the mesh is closed: see `Mesh::closed`).
+    pub cull_back: bool,
 }
 
 /// Owns every scene buffer and texture. Field order is drop order: sets' pool first.
@@ -75,6 +77,7 @@ impl SceneResources {
                     vertex_offset: vertices.len() as i32,
                     bounds_min: m.bounds_min,
                     bounds_max: m.bounds_max,
+                    cull_back: m.closed,
                 };
                 vertices.extend(m.positions.iter().zip(&m.normals).zip(&m.uvs).map(
                     |((p, n), uv)| Vertex {

@@ -27,6 +27,10 @@ pub struct Mesh {
     /// Axis-aligned bounds of `positions`.
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
+    /// The back of every triangle is hidden by the mesh itself wherever a viewer can be (a
+    /// closed, outward-wound solid seen from outside; a room wall seen from inside), so back
+    /// faces may be culled. False for loaded meshes, which may be open.
+    pub closed: bool,
 }
 
 /// Builds meshes vertex by vertex and fixes bounds at the end.
@@ -82,6 +86,7 @@ impl Builder {
         }
     }
 
+    /// The mesh, which may be open (its back faces must be drawn).
     fn finish(self) -> Mesh {
         let (bounds_min, bounds_max) = bounds(&self.positions);
         Mesh {
@@ -91,6 +96,15 @@ impl Builder {
             indices: self.indices,
             bounds_min,
             bounds_max,
+            closed: false,
+        }
+    }
+
+    /// The mesh, whose back faces are never seen (see [`Mesh::closed`]).
+    fn finish_closed(self) -> Mesh {
+        Mesh {
+            closed: true,
+            ..self.finish()
         }
     }
 }
@@ -141,7 +155,7 @@ impl Mesh {
         b.quad(-y, x, z, Vec3::NEG_Y);
         b.quad(z, x, y, Vec3::Z);
         b.quad(-z, -x, y, Vec3::NEG_Z);
-        b.finish()
+        b.finish_closed()
     }
 
     /// A sphere centred at the origin with `segments` around +Y (>= 3) and `rings` from pole
@@ -169,7 +183,7 @@ impl Mesh {
                 b.outward_triangle(a, c, d);
             }
         }
-        b.finish()
+        b.finish_closed()
     }
 
     /// A closed cylinder about +Y, centred at the origin, from y = -half_height to
@@ -202,7 +216,7 @@ impl Mesh {
                 b.outward_triangle(center, first + j, first + j + 1);
             }
         }
-        b.finish()
+        b.finish_closed()
     }
 
     /// Wall `face` of the room (cube order +X, -X, +Y ceiling, -Y floor, +Z, -Z) as one quad
@@ -238,7 +252,7 @@ impl Mesh {
         let normal = -offset.normalize_or_zero();
         let mut b = Builder::default();
         b.quad(room.center + offset, right, up, normal);
-        b.finish()
+        b.finish_closed()
     }
 
     /// Loads every model of a Wavefront OBJ file (faces triangulated). Missing normals are
@@ -475,6 +489,7 @@ mod tests {
     /// vertex normals' side).
     fn check_closed_convex(mesh: &Mesh, expected_volume: f32, tolerance: f32) {
         assert_eq!(open_edges(mesh), 0, "mesh is not closed");
+        assert!(mesh.closed, "a closed solid may have its back faces culled");
         let v = signed_volume(mesh);
         assert!(v > 0.0, "inward winding: volume {v}");
         assert!(

@@ -84,7 +84,11 @@ pub struct GraphicsPipelineDesc<'a> {
     pub vertex_attributes: &'a [vk::VertexInputAttributeDescription],
     pub color_format: vk::Format,
     pub depth_format: vk::Format,
+    /// Ignored when `dynamic_culling` is set.
     pub cull_mode: vk::CullModeFlags,
+    /// Cull mode and front face are set while recording (`vkCmdSetCullMode`,
+    /// `vkCmdSetFrontFace`, core in Vulkan 1.3), per draw and per pass.
+    pub dynamic_culling: bool,
     /// Reverse-Z everywhere (near = 1, far = 0), so "closer" is GREATER.
     pub depth_compare: vk::CompareOp,
     pub depth_write: bool,
@@ -198,7 +202,10 @@ impl Pipeline {
         let attachments =
             [vk::PipelineColorBlendAttachmentState::default().color_write_mask(write_mask)];
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let mut dynamic_states = vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        if desc.dynamic_culling {
+            dynamic_states.extend([vk::DynamicState::CULL_MODE, vk::DynamicState::FRONT_FACE]);
+        }
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let color_formats = [desc.color_format];
         let mut rendering = vk::PipelineRenderingCreateInfo::default()

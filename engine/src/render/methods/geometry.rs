@@ -14,6 +14,13 @@ pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
         face_mask: u32::from(plan.dirty),
         ..Push::default()
     };
-    r.draw_objects(cmd, &r.pipelines.cube, push, &plan.union());
+    let objects = plan.union();
+    r.draw_objects(
+        cmd,
+        &r.pipelines.cube,
+        push,
+        &objects,
+        crate::render::draw::CUBE_FRONT,
+    );
     r.end_rendering(cmd);
 }

@@ -12,6 +12,8 @@ use crate::render::Renderer;
 
 pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
     r.begin_layered(cmd, 0x3F, super::Method::Multiview);
-    r.draw_objects(cmd, &r.pipelines.cube, Push::default(), &plan.union());
+    let objects = plan.union();
+    let front = crate::render::draw::CUBE_FRONT;
+    r.draw_objects(cmd, &r.pipelines.cube, Push::default(), &objects, front);
     r.end_rendering(cmd);
 }

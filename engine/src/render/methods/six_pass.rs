@@ -3,7 +3,7 @@
 use ash::vk;
 
 use crate::render::cube_fill::CubePlan;
-use crate::render::draw::Attachments;
+use crate::render::draw::{Attachments, CUBE_FRONT};
 use crate::render::gpu::Push;
 use crate::render::Renderer;
 
@@ -34,7 +34,8 @@ pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
                 view_index: face,
                 ..Push::default()
             };
-            r.draw_objects(cmd, &r.pipelines.cube, push, &plan.visible[face as usize]);
+            let visible = &plan.visible[face as usize];
+            r.draw_objects(cmd, &r.pipelines.cube, push, visible, CUBE_FRONT);
             r.end_rendering(cmd);
             if let Some(q) = &r.statistics {
                 q.end(cmd, face);
