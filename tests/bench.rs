@@ -222,6 +222,8 @@ fn github_format_and_bad_options() {
         (&["--runs", "0"][..], "--runs"),
         (&["--frames", "0"][..], "--frames"),
         (&["--methods", "nine-pass"][..], "--methods: `nine-pass`"),
+        (&["--plot", "no/such/folder/p.svg"][..], "no/such/folder"),
+        (&["no/such/scene.toml"][..], "no/such/scene.toml"),
     ] {
         let mut all = vec!["bench", "--json", json.to_str().unwrap()];
         all.extend_from_slice(args);

@@ -182,6 +182,19 @@ fn settle(args: &Args) -> Result<(Args, Vec<u32>, Vec<Lookup>)> {
             "--max-regression {p}: must be a percentage >= 0"
         );
     }
+    // Output folders must exist before the run, not after minutes of it.
+    for (option, path) in [("--json", &a.json), ("--csv", &a.csv), ("--plot", &a.plot)] {
+        if let Some(path) = path {
+            let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+            if dir.is_some_and(|d| !d.is_dir()) {
+                anyhow::bail!(
+                    "{option} {}: the folder {} does not exist",
+                    path.display(),
+                    dir.map_or(String::new(), |d| d.display().to_string())
+                );
+            }
+        }
+    }
     if a.scenes.is_empty() {
         a.scenes = DEFAULT_SCENES.iter().map(PathBuf::from).collect();
     }
