@@ -143,8 +143,16 @@ fn parse_list<T>(what: &str, text: &str, parse: impl Fn(&str) -> Option<T>) -> R
     Ok(items)
 }
 
+/// What `settle` makes of the options.
+struct Settled {
+    args: Args,
+    sizes: Vec<u32>,
+    lookups: Vec<Lookup>,
+    methods: Vec<Method>,
+}
+
 /// The arguments after `--quick` and the checks every option gets before anything runs.
-fn settle(args: &Args) -> Result<(Args, Vec<u32>, Vec<Lookup>)> {
+fn settle(args: &Args) -> Result<Settled> {
     let mut a = args.clone();
     if a.quick {
         if a.scenes.is_empty() {
@@ -176,10 +184,19 @@ fn settle(args: &Args) -> Result<(Args, Vec<u32>, Vec<Lookup>)> {
     if let Some(t) = a.threads {
         anyhow::ensure!((1..=1024).contains(&t), "--threads must be in 1..=1024");
     }
+    let methods: Vec<Method> = match &a.methods {
+        None => Method::ALL.to_vec(),
+        Some(list) => parse_list("methods", list, Method::parse)?,
+    };
     if let Some(p) = a.max_regression {
         anyhow::ensure!(
             p.is_finite() && p >= 0.0,
             "--max-regression {p}: must be a percentage >= 0"
+        );
+        anyhow::ensure!(
+            methods.contains(&Method::SixPass),
+            "--max-regression compares each method's time with six-pass's in the same run: \
+             include six-pass in --methods"
         );
     }
     // Output folders must exist before the run, not after minutes of it.
@@ -198,11 +215,21 @@ fn settle(args: &Args) -> Result<(Args, Vec<u32>, Vec<Lookup>)> {
     if a.scenes.is_empty() {
         a.scenes = DEFAULT_SCENES.iter().map(PathBuf::from).collect();
     }
-    Ok((a, sizes, lookups))
+    Ok(Settled {
+        args: a,
+        sizes,
+        lookups,
+        methods,
+    })
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
-    let (args, sizes, lookups) = settle(args)?;
+    let Settled {
+        args,
+        sizes,
+        lookups,
+        methods: wanted,
+    } = settle(args)?;
     // Read the baseline first: a bad baseline fails before the long run.
     let baseline = args
         .baseline
@@ -220,10 +247,6 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     }
     let instance = Instance::create(&InstanceDesc::from_env(false))?;
     let chosen = device::choose(&instance, args.device.as_deref())?;
-    let wanted: Vec<Method> = match &args.methods {
-        None => Method::ALL.to_vec(),
-        Some(list) => parse_list("methods", list, Method::parse)?,
-    };
     let (methods, refused) = probe::partition(&wanted, &chosen);
     anyhow::ensure!(
         !methods.is_empty(),
@@ -505,10 +528,10 @@ fn result_row(
             a
         },
     );
-    let faces: u32 = reports.iter().map(|r| r.faces_rendered).sum();
-    let drawn: u32 = reports
+    let faces: u64 = reports.iter().map(|r| u64::from(r.faces_rendered)).sum();
+    let drawn: u64 = reports
         .iter()
-        .map(|r| r.draws_per_face.iter().sum::<u32>())
+        .flat_map(|r| r.draws_per_face.iter().map(|&d| u64::from(d)))
         .sum();
     let per_face: Option<Vec<Value>> = (method == Method::SixPass).then(|| {
         (0..6)

@@ -14,7 +14,7 @@ use std::time::Instant;
 use ash::vk;
 
 use super::cube_fill::{CubePlan, Fill};
-use super::draw::{Attachments, CUBE_FRONT};
+use super::draw::Attachments;
 use super::gpu::Push;
 use super::state::SceneState;
 use super::targets::DEPTH_FORMAT;
@@ -110,6 +110,7 @@ impl Renderer {
     pub(super) fn record_floor(&self, cmd: vk::CommandBuffer, plan: &CubePlan, floor: Floor) {
         let size = self.cube.size;
         let pipelines = self.floor_pipelines.as_ref().expect("made by render_floor");
+        let facing = self.cube_facing();
         for face in plan.faces() {
             self.begin_rendering(
                 cmd,
@@ -131,7 +132,7 @@ impl Renderer {
                 Floor::Clear => {}
                 Floor::Geometry => {
                     let visible = &plan.visible[face as usize];
-                    self.draw_objects(cmd, &pipelines.geometry, push, visible, CUBE_FRONT)
+                    self.draw_objects(cmd, &pipelines.geometry, push, visible, &facing)
                 }
                 Floor::Fill => {
                     // Wall `face` is the one a face looks at (walls are in cube-face order).

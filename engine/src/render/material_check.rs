@@ -25,6 +25,9 @@ impl Renderer {
         &mut self,
         points: &[(usize, MaterialSample)],
     ) -> Result<Vec<Vec3>, GpuError> {
+        if points.is_empty() {
+            return Ok(Vec::new()); // (and Vulkan buffers may not be empty)
+        }
         let count = self.scene.materials.len();
         if let Some((m, _)) = points.iter().find(|(m, _)| *m >= count) {
             return Err(GpuError::Unsupported(format!(

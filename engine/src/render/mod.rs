@@ -298,7 +298,12 @@ impl Renderer {
         let record_start = Instant::now();
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
-        let dirty = self.dirty_faces(frame, &state, &views);
+        let mut dirty = self.dirty_faces(frame, &state, &views);
+        if self.method == methods::Method::Multiview && dirty != 0 {
+            // A multiview pass clears and draws all six views: cull for all six, or objects
+            // seen only in a clean face would vanish from it.
+            dirty = 0x3F;
+        }
         self.counters.frames += 1;
         if dirty != 0 {
             self.counters.cube_updates += 1;
@@ -421,7 +426,9 @@ impl Renderer {
 
     /// Instanced method: writes this frame's indirect draws (growing the buffer if needed).
     fn write_indirect(&mut self, plan: &cube_fill::CubePlan) -> Result<(), GpuError> {
-        let (commands, new_runs) = methods::instanced::commands(&self.resources.drawables, plan);
+        let cull = self.cube_facing().cull;
+        let (commands, new_runs) =
+            methods::instanced::commands(&self.resources.drawables, plan, &cull);
         let bytes = std::mem::size_of_val(commands.as_slice()) as u64;
         if self.indirect.as_ref().is_none_or(|(b, _)| b.size < bytes) {
             let desc = BufferDesc::new_cpu_to_gpu(bytes, vk::BufferUsageFlags::INDIRECT_BUFFER);

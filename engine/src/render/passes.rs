@@ -3,7 +3,7 @@
 use ash::vk;
 
 use super::camera::{Frustum, ViewBasis};
-use super::draw::{barrier, Attachments, COLOR_OUT, COPY_READ, DEPTH_RW, SAMPLED, VIEW_FRONT};
+use super::draw::{barrier, Attachments, COLOR_OUT, COPY_READ, DEPTH_RW, SAMPLED};
 use super::gpu::Push;
 use super::resources::{VIEW_OBSERVER, VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT, VIEW_SENSOR};
 use super::targets::{ViewTarget, DEPTH_FORMAT, DIRECTION_FORMAT, VIEW_FORMAT};
@@ -165,7 +165,8 @@ impl Renderer {
                 view_index: v,
                 ..Push::default()
             };
-            self.draw_objects(cmd, scene_pipeline, push, &visible, VIEW_FRONT);
+            let facing = self.view_facing(&views[v as usize]);
+            self.draw_objects(cmd, scene_pipeline, push, &visible, &facing);
             self.draw_mirror(cmd, mirror_pipeline, v);
         }
         self.end_rendering(cmd);

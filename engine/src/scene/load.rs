@@ -1320,7 +1320,9 @@ impl Ctx<'_> {
                 return Err(self.invalid(
                     "sensor.offset",
                     format!(
-                        "puts the sensor at y = {y} (t = {t:.3} s), below the floor at y = {floor}"
+                        "puts the sensor at y = {} (t = {t:.3} s), below the floor at y = {}",
+                        (self.origin.y + f64::from(y)) as f32,
+                        (self.origin.y + f64::from(floor)) as f32
                     ),
                 ));
             }

@@ -27,9 +27,10 @@ pub struct Mesh {
     /// Axis-aligned bounds of `positions`.
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
-    /// The back of every triangle is hidden by the mesh itself wherever a viewer can be (a
-    /// closed, outward-wound solid seen from outside; a room wall seen from inside), so back
-    /// faces may be culled. False for loaded meshes, which may be open.
+    /// The back of every triangle is hidden by the mesh itself from any eye outside it (a
+    /// closed, outward-wound solid; a room wall, whose outside is never inside the room), so
+    /// back faces may be culled while the eye and the near plane stay out of it (the renderer
+    /// checks per pass: `render::draw::Facing`). False for loaded meshes, which may be open.
     pub closed: bool,
 }
 

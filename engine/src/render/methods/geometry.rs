@@ -15,12 +15,6 @@ pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
         ..Push::default()
     };
     let objects = plan.union();
-    r.draw_objects(
-        cmd,
-        &r.pipelines.cube,
-        push,
-        &objects,
-        crate::render::draw::CUBE_FRONT,
-    );
+    r.draw_objects(cmd, &r.pipelines.cube, push, &objects, &r.cube_facing());
     r.end_rendering(cmd);
 }

@@ -21,10 +21,11 @@ pub(crate) struct Run {
 /// The indirect commands for `plan`, object-major in the plan's draw order, so that within a
 /// face objects are drawn in the same order as six-pass draws them (front to back; equal
 /// depths resolve the same way); and the runs of commands that share a cull mode (one
-/// indirect draw each: closed meshes are drawn with back faces culled, open ones two-sided).
+/// indirect draw each), from `cull` (per drawable: back faces may be culled in the cube).
 pub(crate) fn commands(
     drawables: &[Drawable],
     plan: &CubePlan,
+    cull: &[bool],
 ) -> (Vec<vk::DrawIndexedIndirectCommand>, Vec<Run>) {
     let rank = plan.ranks();
     let mut pairs: Vec<(u32, u32)> = plan
@@ -34,7 +35,7 @@ pub(crate) fn commands(
     pairs.sort_unstable_by_key(|&(o, f)| (rank[o as usize], f));
     let mut runs: Vec<Run> = Vec::new();
     for (k, &(o, _)) in pairs.iter().enumerate() {
-        let cull_back = drawables[o as usize].cull_back;
+        let cull_back = cull[o as usize];
         match runs.last_mut() {
             Some(run) if run.cull_back == cull_back => run.count += 1,
             _ => runs.push(Run {

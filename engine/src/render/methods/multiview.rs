@@ -13,7 +13,7 @@ use crate::render::Renderer;
 pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
     r.begin_layered(cmd, 0x3F, super::Method::Multiview);
     let objects = plan.union();
-    let front = crate::render::draw::CUBE_FRONT;
-    r.draw_objects(cmd, &r.pipelines.cube, Push::default(), &objects, front);
+    let facing = r.cube_facing();
+    r.draw_objects(cmd, &r.pipelines.cube, Push::default(), &objects, &facing);
     r.end_rendering(cmd);
 }

@@ -3,12 +3,13 @@
 use ash::vk;
 
 use crate::render::cube_fill::CubePlan;
-use crate::render::draw::{Attachments, CUBE_FRONT};
+use crate::render::draw::Attachments;
 use crate::render::gpu::Push;
 use crate::render::Renderer;
 
 pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
     let size = r.cube.size;
+    let facing = r.cube_facing();
     for face in 0..6u32 {
         if plan.dirty & (1 << face) != 0 {
             r.device.begin_label(
@@ -35,7 +36,7 @@ pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
                 ..Push::default()
             };
             let visible = &plan.visible[face as usize];
-            r.draw_objects(cmd, &r.pipelines.cube, push, visible, CUBE_FRONT);
+            r.draw_objects(cmd, &r.pipelines.cube, push, visible, &facing);
             r.end_rendering(cmd);
             if let Some(q) = &r.statistics {
                 q.end(cmd, face);
