@@ -223,6 +223,10 @@ fn github_format_and_bad_options() {
         (&["--frames", "0"][..], "--frames"),
         (&["--methods", "nine-pass"][..], "--methods: `nine-pass`"),
         (&["--plot", "no/such/folder/p.svg"][..], "no/such/folder"),
+        (
+            &["--methods", "instanced", "--max-regression", "10"][..],
+            "include six-pass",
+        ),
         (&["no/such/scene.toml"][..], "no/such/scene.toml"),
     ] {
         let mut all = vec!["bench", "--json", json.to_str().unwrap()];
