@@ -266,14 +266,11 @@ fn floors_do_the_work_they_claim() {
     gpu.finish();
 }
 
-/// Front-to-back draw order (objects nearest the cube's centre first, walls last) and
-/// back-face culling of closed meshes: nothing hidden is shaded. A red box whose near side
-/// exactly fills the +X face: that face shades each texel exactly once (the wall behind is
-/// rejected by the depth test before shading, the box's other sides face away and are
-/// culled), for every method, and still shows the box.
-#[test]
-fn hidden_surfaces_are_not_shaded() {
-    let text = r#"
+/// A grey room (mirror of radius 0.5 at its centre) holding one red box of side `side` centred
+/// at (`x`, 0, 0).
+fn red_box_in_grey_room(side: f32, x: f32) -> Scene {
+    let text = format!(
+        r#"
         [room]
         size = [10, 10, 10]
         walls = "grey"
@@ -290,15 +287,26 @@ fn hidden_surfaces_are_not_shaded() {
         color = [1, 0, 0]
         [[objects]]
         shape = "box"
-        size = [2, 2, 2]
-        position = [2, 0, 0]
+        size = [{side}, {side}, {side}]
+        position = [{x}, 0, 0]
         material = "red"
         [observer]
         position = [0, 0, 4]
         [sensor]
-        offset = 2
-    "#;
-    let s = specchio::scene::load_str(text, &root().join("scenes/occluder.toml")).unwrap();
+        offset = 4
+    "#
+    );
+    specchio::scene::load_str(&text, &root().join("scenes/red-box.toml")).unwrap()
+}
+
+/// Front-to-back draw order (objects nearest the cube's centre first, walls last) and
+/// back-face culling of closed meshes: nothing hidden is shaded. A red box whose near side
+/// exactly fills the +X face: that face shades each texel exactly once (the wall behind is
+/// rejected by the depth test before shading, the box's other sides face away and are
+/// culled), for every method, and still shows the box.
+#[test]
+fn hidden_surfaces_are_not_shaded() {
+    let s = red_box_in_grey_room(2.0, 2.0);
     let gpu = Gpu::with_features(all_features());
     let size = 64u32;
     let texels = u64::from(size * size);
@@ -335,52 +343,16 @@ fn hidden_surfaces_are_not_shaded() {
 /// the cube sees and must not be culled (the reference, which never culls, shows them too).
 #[test]
 fn a_closed_mesh_around_the_eye_is_drawn_from_inside() {
-    let text = r#"
-        [room]
-        size = [10, 10, 10]
-        walls = "grey"
-        [mirror]
-        center = [0, 0, 0]
-        radius = 0.5
-        [[materials]]
-        name = "grey"
-        type = "color"
-        color = [0.5, 0.5, 0.5]
-        [[materials]]
-        name = "red"
-        type = "color"
-        color = [1, 0, 0]
-        [[objects]]
-        shape = "box"
-        size = [3, 3, 3]
-        position = [0, 0, 0]
-        material = "red"
-        [observer]
-        position = [0, 0, 4]
-        [sensor]
-        offset = 4
-    "#;
-    let s = specchio::scene::load_str(text, &root().join("scenes/enclosed.toml")).unwrap();
+    let s = red_box_in_grey_room(3.0, 0.0);
     let gpu = Gpu::with_features(all_features());
     for method in methods(&gpu) {
-        let options = RenderOptions {
-            cube_size: Some(16),
-            method,
-            ..Default::default()
-        };
-        let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
-        let readback = Readback {
-            cube: true,
-            ..Default::default()
-        };
-        let (_, images) = r.render_frame(0, 0.0, readback).expect("frame");
-        for (f, face) in images.cube.expect("cube").iter().enumerate() {
+        let (_, faces, _) = cube(&gpu, &s, method, 16, &[0.0], false).remove(0);
+        for (f, face) in faces.iter().enumerate() {
             assert!(
                 face.pixels.iter().all(|p| p[..3] == [1.0, 0.0, 0.0]),
                 "{method}: face {f} does not show the box's inside"
             );
         }
-        drop(r);
     }
     gpu.finish();
 }

@@ -334,6 +334,24 @@ impl Renderer {
 }
 
 impl Renderer {
+    /// Opens a rendering scope on cube face `face` alone, cleared, with its viewport (six-pass
+    /// and the floors).
+    pub(super) fn begin_face(&self, cmd: vk::CommandBuffer, face: u32) {
+        let size = self.cube.size;
+        self.begin_rendering(
+            cmd,
+            &super::draw::Attachments {
+                color: self.cube.face_views[face as usize].raw,
+                depth: self.cube.depth_views[face as usize].raw,
+                size: [size, size],
+                layers: 1,
+                view_mask: 0,
+                clear: true,
+            },
+        );
+        self.set_viewport(cmd, 0.0, 0.0, size as f32, size as f32);
+    }
+
     /// Opens the one rendering scope of a one-pass method over all six layers and clears the
     /// faces it re-renders (multiview clears and re-renders all six).
     pub(super) fn begin_layered(&self, cmd: vk::CommandBuffer, dirty: u8, method: Method) {

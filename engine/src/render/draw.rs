@@ -4,7 +4,7 @@
 use ash::vk;
 use glam::Vec3;
 
-use super::camera::{transform_aabb, Frustum};
+use super::camera::Frustum;
 use super::gpu::Push;
 use super::Renderer;
 use crate::vk::commands::ImageBarrier;
@@ -108,9 +108,7 @@ impl Renderer {
             .iter()
             .copied()
             .filter(|&i| {
-                let d = &self.resources.drawables[i as usize];
-                let m = &self.object_matrices[i as usize];
-                let (lo, hi) = transform_aabb(m, d.bounds_min, d.bounds_max);
+                let (lo, hi) = self.object_bounds[i as usize];
                 frustum.intersects_aabb(lo, hi)
             })
             .collect()
@@ -125,10 +123,9 @@ impl Renderer {
     /// alike).
     pub(super) fn front_to_back(&self) -> Vec<u32> {
         let walls = 6;
-        let mut objects: Vec<(f32, u32)> = (walls..self.resources.drawables.len())
+        let mut objects: Vec<(f32, u32)> = (walls..self.object_bounds.len())
             .map(|i| {
-                let d = &self.resources.drawables[i];
-                let (lo, hi) = transform_aabb(&self.object_matrices[i], d.bounds_min, d.bounds_max);
+                let (lo, hi) = self.object_bounds[i];
                 // Distance from the origin to the nearest point of the box (0 inside it).
                 let nearest = Vec3::ZERO.clamp(lo, hi);
                 (nearest.length_squared(), i as u32)
@@ -264,9 +261,8 @@ impl Renderer {
             .resources
             .drawables
             .iter()
-            .zip(&self.object_matrices)
-            .map(|(d, m)| {
-                let (lo, hi) = transform_aabb(m, d.bounds_min, d.bounds_max);
+            .zip(&self.object_bounds)
+            .map(|(d, &(lo, hi))| {
                 // Nearest point of the box to the eye; culling only when it is out of reach.
                 d.cull_back && eye.clamp(lo, hi).distance(eye) > reach
             })

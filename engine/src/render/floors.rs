@@ -14,11 +14,10 @@ use std::time::Instant;
 use ash::vk;
 
 use super::cube_fill::{CubePlan, Fill};
-use super::draw::Attachments;
 use super::gpu::Push;
 use super::state::SceneState;
 use super::targets::DEPTH_FORMAT;
-use super::{methods, FrameReport, Readback, Renderer, TS_READBACK, TS_START};
+use super::{methods, FrameReport, Readback, Renderer};
 use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, ShaderStage};
 use crate::vk::GpuError;
 
@@ -64,31 +63,18 @@ impl Renderer {
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
         let plan = self.plan_cube(&views, 0x3F);
-        let cmd = self.submitter.begin()?;
+        let cmd = self.begin_frame()?;
         let mut report = FrameReport {
             frame,
             time_s: t_s,
             cube_updated: true,
             ..Default::default()
         };
-        if let Some(q) = &self.timestamps {
-            q.reset(cmd);
-            q.write_timestamp(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, TS_START);
-        }
-        if let Some(q) = &self.statistics {
-            q.reset(cmd);
-        }
         let first = self.cube_state.is_none();
         self.record_cube_fill(cmd, &plan, first, &mut report, Fill::Floor(floor));
         // Keeps the remaining timestamp slots answered (no view is drawn).
         self.record_views(cmd, &views, Readback::default());
-        if let Some(q) = &self.timestamps {
-            q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_READBACK);
-        }
-        report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
-        let wait_start = Instant::now();
-        self.submitter.submit_and_wait()?;
-        report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
+        self.submit_frame(cmd, record_start, &mut report)?;
         self.read_queries(&mut report, false, false)?;
         report.gpu_face_ms = None;
         if let Some(q) = &self.statistics {
@@ -108,22 +94,10 @@ impl Renderer {
 
     /// Records `floor` into every face of `plan` (the caller set the layouts).
     pub(super) fn record_floor(&self, cmd: vk::CommandBuffer, plan: &CubePlan, floor: Floor) {
-        let size = self.cube.size;
         let pipelines = self.floor_pipelines.as_ref().expect("made by render_floor");
         let facing = self.cube_facing();
         for face in plan.faces() {
-            self.begin_rendering(
-                cmd,
-                &Attachments {
-                    color: self.cube.face_views[face as usize].raw,
-                    depth: self.cube.depth_views[face as usize].raw,
-                    size: [size, size],
-                    layers: 1,
-                    view_mask: 0,
-                    clear: true,
-                },
-            );
-            self.set_viewport(cmd, 0.0, 0.0, size as f32, size as f32);
+            self.begin_face(cmd, face);
             let push = Push {
                 view_index: face,
                 ..Push::default()
@@ -161,40 +135,30 @@ impl Renderer {
             spirv: crate::shaders::SCENE_FRAG,
         };
         let (bindings, attributes) = super::passes::vertex_layout();
-        let desc = |stages, discard, with_vertices: bool| GraphicsPipelineDesc {
-            stages,
-            vertex_bindings: if with_vertices { &bindings } else { &[] },
-            vertex_attributes: if with_vertices { &attributes } else { &[] },
-            color_format: self.cube.format,
-            depth_format: DEPTH_FORMAT,
-            cull_mode: vk::CullModeFlags::NONE,
-            dynamic_culling: with_vertices,
-            depth_compare: vk::CompareOp::GREATER,
-            depth_write: true,
-            color_writes: true,
-            view_mask: methods::Method::SixPass.layers_and_view_mask().1,
-            rasterizer_discard: discard,
+        // The fill floor makes its own vertices; the geometry floor draws the scene's.
+        let make = |vertex_spirv, discard, with_vertices: bool, name| {
+            let stages = [vertex(vertex_spirv), fragment];
+            let desc = GraphicsPipelineDesc {
+                stages: &stages,
+                vertex_bindings: if with_vertices { &bindings } else { &[] },
+                vertex_attributes: if with_vertices { &attributes } else { &[] },
+                color_format: self.cube.format,
+                depth_format: DEPTH_FORMAT,
+                cull_mode: vk::CullModeFlags::NONE,
+                dynamic_culling: with_vertices,
+                depth_compare: vk::CompareOp::GREATER,
+                depth_write: true,
+                color_writes: true,
+                view_mask: methods::Method::SixPass.layers_and_view_mask().1,
+                rasterizer_discard: discard,
+            };
+            Pipeline::create_graphics(&self.device, layout, &desc, name)
         };
-        let fill_stages = [vertex(crate::shaders::FLOOR_FILL_VERT), fragment];
-        let fill = Pipeline::create_graphics(
-            &self.device,
-            layout,
-            &desc(&fill_stages, false, false),
-            "fill floor pipeline",
-        )?;
-        let geometry_stages = [
-            vertex(crate::shaders::SCENE_VERT),
-            ShaderStage {
-                stage: vk::ShaderStageFlags::FRAGMENT,
-                spirv: crate::shaders::SCENE_FRAG,
-            },
-        ];
-        let geometry = Pipeline::create_graphics(
-            &self.device,
-            layout,
-            &desc(&geometry_stages, true, true),
-            "geometry floor pipeline",
-        )?;
-        Ok(FloorPipelines { fill, geometry })
+        let fill_vs = crate::shaders::FLOOR_FILL_VERT;
+        let scene_vs = crate::shaders::SCENE_VERT;
+        Ok(FloorPipelines {
+            fill: make(fill_vs, false, false, "fill floor pipeline")?,
+            geometry: make(scene_vs, true, true, "geometry floor pipeline")?,
+        })
     }
 }

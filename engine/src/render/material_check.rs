@@ -57,15 +57,15 @@ impl Renderer {
         };
         let results = Buffer::create(device, &results_desc, "material results")?;
 
-        let binding = |b: u32| {
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(b)
-                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::COMPUTE)
+        let storage_binding = |b| {
+            let kind = vk::DescriptorType::STORAGE_BUFFER;
+            descriptors::binding(b, kind, 1, vk::ShaderStageFlags::COMPUTE)
         };
-        let set_layout =
-            DescriptorSetLayout::create(device, &[binding(0), binding(1)], "check set layout")?;
+        let set_layout = DescriptorSetLayout::create(
+            device,
+            &[storage_binding(0), storage_binding(1)],
+            "check set layout",
+        )?;
         let sizes = [vk::DescriptorPoolSize {
             ty: vk::DescriptorType::STORAGE_BUFFER,
             descriptor_count: 2,

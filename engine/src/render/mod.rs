@@ -191,8 +191,9 @@ pub struct Renderer {
     submitter: Submitter,
     /// The state the cube map shows; `None` before the first fill.
     cube_state: Option<SceneState>,
-    /// This frame's model-to-render matrices, walls first (for culling).
-    object_matrices: Vec<Mat4>,
+    /// This frame's render-space bounds of every drawable, walls first (for culling, draw
+    /// order and the back-face guard; computed once per frame).
+    object_bounds: Vec<(Vec3, Vec3)>,
     /// This frame's draw order: objects front to back from the cube's centre, walls last.
     draw_order: Vec<u32>,
     pub counters: RefreshCounters,
@@ -278,7 +279,7 @@ impl Renderer {
             indirect: None,
             submitter,
             cube_state: None,
-            object_matrices: Vec::new(),
+            object_bounds: Vec::new(),
             draw_order: Vec::new(),
             counters: RefreshCounters::default(),
             method: options.method,
@@ -329,20 +330,13 @@ impl Renderer {
             )?);
         }
 
-        let cmd = self.submitter.begin()?;
+        let cmd = self.begin_frame()?;
         let mut report = FrameReport {
             frame,
             time_s: t_s,
             cube_updated: dirty != 0,
             ..Default::default()
         };
-        if let Some(q) = &self.timestamps {
-            q.reset(cmd);
-            q.write_timestamp(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, TS_START);
-        }
-        if let Some(q) = &self.statistics {
-            q.reset(cmd);
-        }
         if dirty != 0 {
             self.record_cube(cmd, &plan, self.cube_state.is_none(), &mut report);
         } else if let Some(q) = &self.timestamps {
@@ -352,13 +346,7 @@ impl Renderer {
         }
         let copies = self.record_views(cmd, &views, readback);
         self.record_readback(cmd, readback, &copies);
-        if let Some(q) = &self.timestamps {
-            q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_READBACK);
-        }
-        report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
-        let wait_start = Instant::now();
-        self.submitter.submit_and_wait()?;
-        report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
+        self.submit_frame(cmd, record_start, &mut report)?;
         self.read_queries(&mut report, dirty != 0, readback.views)?;
         // The cube now shows `state`, except after an `every-n` frame that skipped the update.
         if dirty != 0 || self.scene.refresh == RefreshPolicy::OnChange {
@@ -366,6 +354,37 @@ impl Renderer {
         }
         let images = self.read_images(readback, &copies)?;
         Ok((report, images))
+    }
+
+    /// Starts recording a frame: queries reset, the start timestamp written.
+    fn begin_frame(&self) -> Result<vk::CommandBuffer, GpuError> {
+        let cmd = self.submitter.begin()?;
+        if let Some(q) = &self.timestamps {
+            q.reset(cmd);
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, TS_START);
+        }
+        if let Some(q) = &self.statistics {
+            q.reset(cmd);
+        }
+        Ok(cmd)
+    }
+
+    /// Ends a frame begun by [`Self::begin_frame`]: the last timestamp, submit and wait; the
+    /// CPU recording time (since `record_start`) and the submit-to-fence time go in `report`.
+    fn submit_frame(
+        &self,
+        cmd: vk::CommandBuffer,
+        record_start: Instant,
+        report: &mut FrameReport,
+    ) -> Result<(), GpuError> {
+        if let Some(q) = &self.timestamps {
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_READBACK);
+        }
+        report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
+        let wait_start = Instant::now();
+        self.submitter.submit_and_wait()?;
+        report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
+        Ok(())
     }
 
     /// Which faces must be re-rendered this frame (bit f: face f), by the refresh policy.
@@ -516,7 +535,11 @@ impl Renderer {
                 .map(|i| object_data(state.object_to_render(scene, i), scene.objects[i].material)),
         );
         self.resources.objects.write(&objects)?;
-        self.object_matrices = objects.iter().map(|o| o.model_to_world).collect();
+        self.object_bounds = objects
+            .iter()
+            .zip(&self.resources.drawables)
+            .map(|(o, d)| camera::transform_aabb(&o.model_to_world, d.bounds_min, d.bounds_max))
+            .collect();
         self.draw_order = self.front_to_back();
         Ok(bases)
     }

@@ -152,13 +152,7 @@ impl SceneResources {
 
         // Compute too: the materials check (materials_check.comp) reads the scene set.
         let all = vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE;
-        let binding = |b: u32, ty: vk::DescriptorType, count: u32| {
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(b)
-                .descriptor_type(ty)
-                .descriptor_count(count)
-                .stage_flags(all)
-        };
+        let binding = |b, ty, count| descriptors::binding(b, ty, count, all);
         let scene_set_layout = DescriptorSetLayout::create(
             device,
             &[

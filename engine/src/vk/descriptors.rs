@@ -7,6 +7,20 @@ use ash::vk;
 use super::device::Device;
 use super::{GpuError, VkContext};
 
+/// One binding of a set layout: `count` descriptors of `kind` at `binding`, seen by `stages`.
+pub fn binding(
+    binding: u32,
+    kind: vk::DescriptorType,
+    count: u32,
+    stages: vk::ShaderStageFlags,
+) -> vk::DescriptorSetLayoutBinding<'static> {
+    vk::DescriptorSetLayoutBinding::default()
+        .binding(binding)
+        .descriptor_type(kind)
+        .descriptor_count(count)
+        .stage_flags(stages)
+}
+
 /// A descriptor set layout.
 pub struct DescriptorSetLayout {
     pub raw: vk::DescriptorSetLayout,

@@ -71,6 +71,7 @@ impl Drop for PipelineLayout {
 }
 
 /// A compiled shader stage: SPIR-V words embedded at build time.
+#[derive(Clone, Copy)]
 pub struct ShaderStage<'a> {
     pub stage: vk::ShaderStageFlags,
     pub spirv: &'a [u32],

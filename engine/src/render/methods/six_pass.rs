@@ -3,12 +3,10 @@
 use ash::vk;
 
 use crate::render::cube_fill::CubePlan;
-use crate::render::draw::Attachments;
 use crate::render::gpu::Push;
 use crate::render::Renderer;
 
 pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
-    let size = r.cube.size;
     let facing = r.cube_facing();
     for face in 0..6u32 {
         if plan.dirty & (1 << face) != 0 {
@@ -19,18 +17,7 @@ pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
             if let Some(q) = &r.statistics {
                 q.begin(cmd, face);
             }
-            r.begin_rendering(
-                cmd,
-                &Attachments {
-                    color: r.cube.face_views[face as usize].raw,
-                    depth: r.cube.depth_views[face as usize].raw,
-                    size: [size, size],
-                    layers: 1,
-                    view_mask: 0,
-                    clear: true,
-                },
-            );
-            r.set_viewport(cmd, 0.0, 0.0, size as f32, size as f32);
+            r.begin_face(cmd, face);
             let push = Push {
                 view_index: face,
                 ..Push::default()
