@@ -297,6 +297,28 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         });
     };
 
+    say(format!(
+        "specchio bench: {} scene(s) x face sizes {:?} x methods {}{}{}{}; \
+         columns explained in docs/benchmarks.md",
+        scenes.len(),
+        sizes,
+        methods
+            .iter()
+            .map(|m| m.name())
+            .collect::<Vec<_>>()
+            .join(", "),
+        if args.no_floors { "" } else { ", with floors" },
+        if args.no_accuracy {
+            ""
+        } else {
+            ", error against the reference per lookup"
+        },
+        if args.no_dynamic {
+            ""
+        } else {
+            ", incremental vs full updates"
+        },
+    ));
     let mut results = Vec::new();
     let mut floors_out = Vec::new();
     let mut accuracy_out = Vec::new();
@@ -467,14 +489,21 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         "speed_vs_error": speed_vs_error,
         "dynamic": dynamic_out,
     });
+    let mut written = Vec::new();
     if let Some(path) = &args.json {
         write_json(path, &record)?;
+        written.push(path);
     }
     if let Some(path) = &args.csv {
         report::write_csv(path, &record)?;
+        written.push(path);
     }
     if let Some(path) = &args.plot {
         report::write_atomically(path, plot::svg(&plot_scenes).as_bytes())?;
+        written.push(path);
+    }
+    for path in written {
+        say(format!("wrote {}", path.display()));
     }
     if args.format == Format::Github {
         let mut out = std::io::stdout().lock();
