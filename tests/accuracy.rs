@@ -86,7 +86,7 @@ fn angles_by_object(gpu: &Gpu, s: &Scene, lookup: Lookup, rim: i64) -> Vec<(f64,
 /// a miss, which the callers' masks exclude).
 fn incidence_cosine(
     s: &Scene,
-    view: &specchio::render::camera::ViewBasis,
+    view: &specchio::scene::camera::ViewBasis,
     x: u32,
     y: u32,
     w: u32,
@@ -162,17 +162,7 @@ fn far_field_plain_lookup_is_within_half_a_texel() {
 /// both lookup modes, and the reference's images.
 #[test]
 fn no_nan_or_inf_for_any_method_or_lookup() {
-    use specchio::render::methods::{Method, RequiredFeatures};
-    let probe = Gpu::new();
-    let methods: Vec<Method> = Method::ALL
-        .into_iter()
-        .filter(|&m| m != Method::Multiview && m.missing_features(&probe.device.info).is_none())
-        .collect();
-    probe.finish();
-    let features = methods
-        .iter()
-        .fold(RequiredFeatures::default(), |f, m| f.union(m.features()));
-    let gpu = Gpu::with_features(features);
+    let (gpu, methods) = Gpu::with_all_methods();
     let finite = |img: &RgbaImage| img.pixels.iter().all(|p| p.iter().all(|c| c.is_finite()));
     for rel in ["scenes/thesis-room.toml", "scenes/hard/near-walls.toml"] {
         let s = scene(rel);

@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+use specchio::image::RgbaImage;
 use specchio::output::write_exr;
-use specchio::render::RgbaImage;
 
 fn specchio(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_specchio"))

@@ -93,7 +93,7 @@ fn reference_agrees_with_the_rasterizer_off_the_mirror() {
 /// edge (GPU filtering uses limited sub-texel precision): at most 1 % of the texels.
 #[test]
 fn cpu_materials_match_the_gpu_cube_texels() {
-    use specchio::render::camera::ViewBasis;
+    use specchio::scene::camera::ViewBasis;
     let gpu = Gpu::new();
     let s = scene("scenes/thesis-room.toml");
     let n = 128;

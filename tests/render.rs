@@ -5,8 +5,8 @@ mod common;
 
 use common::{close, render_once, scene, Gpu};
 use glam::Vec3;
-use specchio::render::camera::{ViewBasis, FACE_NAMES};
 use specchio::render::{Readback, RenderOptions, Renderer};
+use specchio::scene::camera::{ViewBasis, FACE_NAMES};
 
 /// scenes/test/six-colour-room.toml states the colour of each wall.
 const WALLS: [[f32; 3]; 6] = [

@@ -26,9 +26,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let methods: Vec<Vec<(Method, Result<(), String>)>> = candidates
         .iter()
         .map(|c| match &c.rejected {
-            None => Method::ALL
-                .iter()
-                .map(|&m| (m, probe::usable(m, &c.info)))
+            None => Method::all()
+                .map(|m| (m, probe::usable(m, &c.info)))
                 .collect(),
             Some(_) => Vec::new(),
         })
@@ -62,8 +61,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         print_device(&c.info, c.rejected.as_deref());
         for (m, r) in ms {
             match r {
-                Ok(()) => println!("    method {:<11} usable", m.name()),
-                Err(why) => println!("    method {:<11} NOT USABLE: {why}", m.name()),
+                Ok(()) => println!("    method {:<20} usable", m.name()),
+                Err(why) => println!("    method {:<20} NOT USABLE: {why}", m.name()),
             }
         }
     }

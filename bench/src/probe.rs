@@ -1,18 +1,23 @@
-//! Whether a cube method can be trusted on a device: its features, and for multiview a probe.
+//! Whether a cube method can be trusted on a device: its features and limits, and for a
+//! method whose needs say so (multiview) a probe.
 //!
-//! Multiview is broken on the lavapipe versions at hand (Mesa 22.3.6 draws into the wrong
-//! layers; Mesa 25.0.7 crashes in any pass whose view mask has two or more bits), with valid
-//! usage. So the program never assumes it works: `specchio probe multiview` renders a tiny
-//! cube with multiview and with six-pass in a child process and compares them bit for bit. A
-//! crash or a mismatch marks the method unusable, with the reason and the driver version.
+//! Drivers have broken multiview with valid usage (Mesa 22.3.6's lavapipe drew into the wrong
+//! layers; 25.0.7 corrupts its query pool after a multiview pass, see
+//! `specchio::render::methods::view_mask_leak`). So the program never assumes a probed method
+//! works: `specchio probe METHOD` renders a tiny cube with it and with six-pass in a child
+//! process and compares them bit for bit. A crash or a mismatch marks the method unusable,
+//! with the reason and the driver version.
+//!
+//! `specchio probe view-mask-leak [--no-reset]` measures lavapipe's view-mask bug alone and
+//! prints the result as JSON (the evidence test runs it in a child process).
 
 use std::process::{Command, ExitCode, Stdio};
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Result};
-use specchio::render::methods::{Method, RequiredFeatures};
+use specchio::render::methods::Method;
 use specchio::render::{Readback, RenderOptions, Renderer};
-use specchio::vk::device::{Device, DeviceDesc, DeviceInfo};
+use specchio::vk::device::{Device, DeviceDesc, DeviceInfo, OptionalFeatures};
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 /// The probe's scene: every cube texel has a known, distinct colour (its direction).
@@ -24,8 +29,11 @@ const PROBE_TIMEOUT: Duration = Duration::from_secs(120);
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The method to compare with six-pass.
+    /// The method to compare with six-pass, or `view-mask-leak`.
     method: String,
+    /// view-mask-leak: leave out the workaround (the empty rendering scope after the pass).
+    #[arg(long)]
+    no_reset: bool,
     /// Vulkan device: index or part of its name.
     #[arg(long)]
     device: Option<String>,
@@ -36,7 +44,7 @@ pub fn usable(method: Method, info: &DeviceInfo) -> Result<(), String> {
     if let Some(why) = method.missing_features(info) {
         return Err(why);
     }
-    if method != Method::Multiview {
+    if !method.needs().probe {
         return Ok(());
     }
     let driver = format!("{} ({})", info.driver_info, info.name);
@@ -92,7 +100,7 @@ pub fn device_for(
 ) -> Result<std::sync::Arc<Device>> {
     let features = methods
         .iter()
-        .fold(RequiredFeatures::default(), |f, m| f.union(m.features()));
+        .fold(OptionalFeatures::default(), |f, m| f.union(m.features()));
     let desc = DeviceDesc {
         selector: selector.map(str::to_owned),
         features,
@@ -116,6 +124,9 @@ pub fn partition(methods: &[Method], info: &DeviceInfo) -> (Vec<Method>, Vec<(Me
 /// `specchio probe METHOD`: renders the probe scene with six-pass and METHOD; exit 0 when the
 /// cubes are identical, 1 with a description of the first difference otherwise.
 pub fn run(args: &Args) -> Result<ExitCode> {
+    if args.method == "view-mask-leak" {
+        return view_mask_leak(args);
+    }
     let Some(method) = Method::parse(&args.method) else {
         bail!("unknown method `{}`", args.method);
     };
@@ -129,7 +140,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     )?;
     let path = std::path::Path::new("scenes/test/direction-room.toml");
     let scene = specchio::scene::load_str(PROBE_SCENE, path)?;
-    let render = |m: Method| -> Result<Vec<specchio::render::RgbaImage>> {
+    let render = |m: Method| -> Result<Vec<specchio::image::RgbaImage>> {
         let options = RenderOptions {
             cube_size: Some(PROBE_FACE_SIZE),
             method: m,
@@ -147,7 +158,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         )?;
         Ok(images.cube.unwrap_or_default())
     };
-    let reference = render(Method::SixPass)?;
+    let reference = render(Method::SIX_PASS)?;
     let candidate = render(method)?;
     match first_difference(&reference, &candidate) {
         None => {
@@ -161,12 +172,36 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     }
 }
 
+/// `specchio probe view-mask-leak`: which query slots one timestamp after a multiview pass
+/// fills, with or without the workaround, as one JSON line.
+fn view_mask_leak(args: &Args) -> Result<ExitCode> {
+    let instance = Instance::create(&InstanceDesc::from_env(false))?;
+    let features = OptionalFeatures {
+        multiview: true,
+        ..Default::default()
+    };
+    let device = Device::create(
+        &instance,
+        &DeviceDesc {
+            selector: args.device.clone(),
+            features,
+        },
+    )?;
+    let leak = specchio::render::methods::view_mask_leak(&device, !args.no_reset)?;
+    let mut line = serde_json::to_value(&leak)?;
+    line["device"] = serde_json::json!(device.info.name);
+    line["driver_info"] = serde_json::json!(device.info.driver_info);
+    line["mesa_version"] = serde_json::json!(device.info.mesa_version);
+    println!("{line}");
+    Ok(ExitCode::SUCCESS)
+}
+
 /// Describes how two cube maps differ (None: bit-identical).
 pub fn first_difference(
-    a: &[specchio::render::RgbaImage],
-    b: &[specchio::render::RgbaImage],
+    a: &[specchio::image::RgbaImage],
+    b: &[specchio::image::RgbaImage],
 ) -> Option<String> {
-    let names = specchio::render::camera::FACE_NAMES;
+    let names = specchio::scene::camera::FACE_NAMES;
     let mut count = 0usize;
     let mut first = None;
     for (f, (fa, fb)) in a.iter().zip(b).enumerate() {

@@ -6,9 +6,9 @@ use std::process::ExitCode;
 use anyhow::{bail, Context, Result};
 use serde_json::json;
 use specchio::output::{write_exr, write_json, write_png};
-use specchio::render::camera::FACE_NAMES;
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
+use specchio::scene::camera::FACE_NAMES;
 use specchio::scene::{CubeFormat, Lookup, RefreshPolicy, MAX_FACE_SIZE_PX};
 use specchio::vk::device::{self, DeviceInfo};
 
@@ -40,8 +40,8 @@ pub struct Args {
     /// Cube face size in texels (overrides the scene's cube.face_size).
     #[arg(long)]
     cube_size: Option<u32>,
-    /// Cube fill method: six-pass, multiview, geometry, instanced, or all (each usable one
-    /// into DIR/<method>/).
+    /// Cube fill method (`specchio info` lists them, with what this device can run), or all
+    /// (each usable one into DIR/<method>/; measurement variants only when named).
     #[arg(long, default_value = "six-pass")]
     method: String,
     /// Mirror lookup: plain (the reflected direction, as the thesis) or box (parallax-corrected
@@ -195,11 +195,13 @@ type MethodChoice = (Vec<Method>, Vec<(Method, String)>);
 
 fn pick_methods(arg: &str, info: &DeviceInfo) -> Result<MethodChoice> {
     if arg == "all" {
-        return Ok(probe::partition(&Method::ALL, info));
+        return Ok(probe::partition(
+            &Method::listed().collect::<Vec<_>>(),
+            info,
+        ));
     }
     let Some(m) = Method::parse(arg) else {
-        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-        bail!("--method {arg}: unknown; one of {}, all", names.join(", "));
+        bail!("--method {arg}: unknown; one of {}, all", Method::names());
     };
     if let Err(why) = probe::usable(m, info) {
         bail!("--method {arg}: cannot be used on this device: {why}");

@@ -1,16 +1,20 @@
 //! specchio: a catadioptric (camera + spherical mirror) sensor simulator on Vulkan.
 //!
 //! Module map (details in `docs/architecture.md`):
-//! - [`scene`]: the TOML scene format, its validation, and the resolved scene the renderer draws;
+//! - [`scene`]: the TOML scene format, its validation, the resolved scene the renderer draws,
+//!   its state at a time and its cameras (no Vulkan);
+//! - [`image`]: the CPU image type shared by the renderer's readback, the reference and the
+//!   metrics;
 //! - [`vk`]: the Vulkan layer, one module per concept (instance, device, memory, image,
 //!   descriptors, pipeline, commands, queries), each owning its handles;
 //! - [`shaders`]: SPIR-V compiled from `shaders/` at build time;
-//! - [`render`]: cameras and cube-face conventions, GPU structs, the six-pass cube fill and the
-//!   observer / sensor views with the analytic mirror;
+//! - [`render`]: the renderer: GPU structs, the cube fill methods (plug-ins, see
+//!   [`render::methods`]) and the observer / sensor views with the analytic mirror;
 //! - [`reference`]: the exact CPU ray-traced mirror (BVH, watertight triangles, analytic sphere);
 //! - [`metrics`]: image-error metrics (RMSE, PSNR, relMSE, FLIP) and the FLIP heatmap;
 //! - [`output`]: EXR, PNG and JSON files, written atomically.
 
+pub mod image;
 pub mod metrics;
 pub mod output;
 pub mod reference;

@@ -7,7 +7,7 @@ use std::fs;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
-use crate::render::RgbaImage;
+use crate::image::RgbaImage;
 
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {

@@ -5,10 +5,10 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use specchio::render::methods::RequiredFeatures;
+use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::Scene;
-use specchio::vk::device::{Device, DeviceDesc};
+use specchio::vk::device::{Device, DeviceDesc, OptionalFeatures};
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
 /// The repository root (tests run with the bench crate as working directory).
@@ -30,11 +30,11 @@ pub struct Gpu {
 
 impl Gpu {
     pub fn new() -> Self {
-        Self::with_features(RequiredFeatures::default())
+        Self::with_features(OptionalFeatures::default())
     }
 
     /// A device with the optional features of some cube methods enabled.
-    pub fn with_features(features: RequiredFeatures) -> Self {
+    pub fn with_features(features: OptionalFeatures) -> Self {
         let instance = Instance::create(&InstanceDesc { validation: true }).expect(
             "Vulkan with VK_LAYER_KHRONOS_validation (apt-get install vulkan-validationlayers)",
         );
@@ -45,6 +45,20 @@ impl Gpu {
         };
         let device = Device::create(&instance, &desc).expect("a Vulkan 1.3 device");
         Self { device, log }
+    }
+
+    /// A device with the features of every registered cube method it can run (variants
+    /// included) enabled, and those methods in registry order.
+    pub fn with_all_methods() -> (Self, Vec<Method>) {
+        let probe = Self::new();
+        let methods: Vec<Method> = Method::all()
+            .filter(|m| m.missing_features(&probe.device.info).is_none())
+            .collect();
+        probe.finish();
+        let features = methods
+            .iter()
+            .fold(OptionalFeatures::default(), |f, m| f.union(m.features()));
+        (Self::with_features(features), methods)
     }
 
     /// Drops the device (the layer reports leaks then) and fails on any validation message.

@@ -44,7 +44,7 @@ pub fn measure(
         ..Default::default()
     };
     for &lookup in lookups {
-        let mut first: Option<(specchio::render::RgbaImage, specchio::render::RgbaImage)> = None;
+        let mut first: Option<(specchio::image::RgbaImage, specchio::image::RgbaImage)> = None;
         let mut identical = true;
         for r in renderers.iter_mut() {
             let saved = r.scene.mirror.lookup;

@@ -100,9 +100,6 @@ pub struct Args {
     /// Vulkan device: index or part of its name.
     #[arg(long)]
     device: Option<String>,
-    /// Geometry method: use the `invocations = 6` geometry shader instead of the loop.
-    #[arg(long)]
-    gs_invocations: bool,
     /// Skip the error measurement (no reference is traced).
     #[arg(long)]
     no_accuracy: bool,
@@ -120,7 +117,6 @@ pub struct Plan {
     pub warmup: u32,
     pub runs: u32,
     pub floors: bool,
-    pub gs_invocations: bool,
 }
 
 fn stats(mut v: Vec<f64>) -> Value {
@@ -185,7 +181,7 @@ fn settle(args: &Args) -> Result<Settled> {
         anyhow::ensure!((1..=1024).contains(&t), "--threads must be in 1..=1024");
     }
     let methods: Vec<Method> = match &a.methods {
-        None => Method::ALL.to_vec(),
+        None => Method::listed().collect(),
         Some(list) => parse_list("methods", list, Method::parse)?,
     };
     if let Some(p) = a.max_regression {
@@ -194,7 +190,7 @@ fn settle(args: &Args) -> Result<Settled> {
             "--max-regression {p}: must be a percentage >= 0"
         );
         anyhow::ensure!(
-            methods.contains(&Method::SixPass),
+            methods.contains(&Method::SIX_PASS),
             "--max-regression compares each method's time with six-pass's in the same run: \
              include six-pass in --methods"
         );
@@ -267,7 +263,6 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         warmup: args.warmup,
         runs: args.runs,
         floors: !args.no_floors,
-        gs_invocations: args.gs_invocations,
     };
     let dynamic_size = if sizes.contains(&512) {
         512
@@ -370,15 +365,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             ));
             let mut size_rows = Vec::new();
             for (m, timed) in methods.iter().zip(&t.methods) {
-                let row = result_row(
-                    &name,
-                    scene,
-                    *m,
-                    size,
-                    &args,
-                    timed,
-                    (clear, fill, geometry),
-                );
+                let row = result_row(&name, scene, *m, size, timed, (clear, fill, geometry));
                 say(table_row(m.name(), &row));
                 size_rows.push(row);
             }
@@ -543,7 +530,6 @@ fn result_row(
     scene: &specchio::scene::Scene,
     method: Method,
     size: u32,
-    args: &Args,
     timed: &Timed,
     (clear, fill, geometry): (Option<f64>, Option<f64>, Option<f64>),
 ) -> Value {
@@ -562,7 +548,7 @@ fn result_row(
         .iter()
         .flat_map(|r| r.draws_per_face.iter().map(|&d| u64::from(d)))
         .sum();
-    let per_face: Option<Vec<Value>> = (method == Method::SixPass).then(|| {
+    let per_face: Option<Vec<Value>> = (method == Method::SIX_PASS).then(|| {
         (0..6)
             .map(|f| {
                 stats(
@@ -578,7 +564,6 @@ fn result_row(
         "scene": scene_name,
         "method": method,
         "cube_size": size,
-        "gs_invocations": args.gs_invocations,
         "updates": reports.len(),
         "wall_ms": wall,
         "run_medians_ms": timed.run_medians_ms,

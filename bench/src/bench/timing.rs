@@ -50,7 +50,6 @@ pub fn time_size(
             cube_size: Some(size),
             method,
             refresh: Some(RefreshPolicy::EveryFrame),
-            gs_invocations: plan.gs_invocations,
             ..Default::default()
         };
         Renderer::new(device, scene.clone(), &options)
@@ -59,10 +58,10 @@ pub fn time_size(
         .iter()
         .map(|&m| make(m))
         .collect::<Result<Vec<_>, _>>()?;
-    let floor_host = match methods.iter().position(|&m| m == Method::SixPass) {
+    let floor_host = match methods.iter().position(|&m| m == Method::SIX_PASS) {
         Some(i) => i,
         None => {
-            renderers.push(make(Method::SixPass)?);
+            renderers.push(make(Method::SIX_PASS)?);
             renderers.len() - 1
         }
     };

@@ -21,8 +21,8 @@ mod heatmap;
 
 use std::path::{Path, PathBuf};
 
+use crate::image::RgbaImage;
 use crate::output::{linear_to_srgb, OutputError};
-use crate::render::RgbaImage;
 use crate::scene::TextureData;
 
 pub use heatmap::{colour_map, write_heatmap, NOT_COMPARED_RGB8};

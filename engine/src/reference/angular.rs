@@ -5,7 +5,7 @@
 use glam::Vec3;
 use serde::Serialize;
 
-use crate::render::RgbaImage;
+use crate::image::RgbaImage;
 
 /// Summary of the angular error over the pixels both images mark as mirror pixels.
 #[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]

@@ -10,7 +10,7 @@ use obvhs::ray::{Ray, RayHit};
 use obvhs::{Boundable, BvhBuildParams};
 
 use super::intersect::{ray_triangle, TriangleHit};
-use crate::render::state::{room_meshes, SceneState};
+use crate::scene::state::{room_meshes, SceneState};
 use crate::scene::{Mesh, Scene};
 
 /// Per-vertex shading attributes of one triangle, and what it belongs to.

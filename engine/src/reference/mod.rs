@@ -21,9 +21,9 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::render::camera::ViewBasis;
-use crate::render::state::SceneState;
-use crate::render::RgbaImage;
+use crate::image::RgbaImage;
+use crate::scene::camera::ViewBasis;
+use crate::scene::state::SceneState;
 use crate::scene::Scene;
 use geometry::SceneGeometry;
 use intersect::{offset_ray_origin, ray_sphere};

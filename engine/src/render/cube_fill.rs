@@ -2,68 +2,19 @@
 
 use ash::vk;
 
-use super::camera::{Frustum, ViewBasis};
 use super::draw::{barrier, Sync, COLOR_OUT, DEPTH_RW, NOTHING, SAMPLED};
+use crate::scene::camera::{Frustum, ViewBasis};
 
-use super::methods::Method;
+use super::methods::{CubeLayout, CubePlan, CubeRecorder};
 use super::{FrameReport, Renderer, TS_FILL, TS_MIPS};
 use crate::vk::commands::{image_barriers, ImageBarrier};
 
 /// What fills the dirty faces of a cube update.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Fill {
-    Method(Method),
+    /// The renderer's method.
+    Method,
     Floor(super::floors::Floor),
-}
-
-impl Fill {
-    fn name(self) -> &'static str {
-        match self {
-            Fill::Method(m) => m.name(),
-            Fill::Floor(f) => f.name(),
-        }
-    }
-}
-
-/// What one cube update draws: the faces to re-render and, per face, the visible drawables.
-#[derive(Debug, Clone, Default)]
-pub struct CubePlan {
-    /// Bit f set: face f is re-rendered; the others keep their contents.
-    pub dirty: u8,
-    /// Per face, the drawables whose bounds meet the face's frustum (empty for clean faces),
-    /// in `order`.
-    pub visible: [Vec<u32>; 6],
-    /// The frame's draw order (front to back from the cube's centre, walls last).
-    pub order: Vec<u32>,
-}
-
-impl CubePlan {
-    pub fn faces(&self) -> impl Iterator<Item = u32> + '_ {
-        (0..6u32).filter(|f| self.dirty & (1 << f) != 0)
-    }
-
-    /// Every drawable visible in at least one dirty face, in draw order (the one-pass
-    /// methods that cannot cull per face draw these).
-    pub fn union(&self) -> Vec<u32> {
-        let mut seen = vec![false; self.order.iter().max().map_or(0, |&m| m as usize + 1)];
-        for &o in self.visible.iter().flatten() {
-            seen[o as usize] = true;
-        }
-        self.order
-            .iter()
-            .copied()
-            .filter(|&o| seen[o as usize])
-            .collect()
-    }
-
-    /// Each drawable's position in `order`.
-    pub fn ranks(&self) -> Vec<u32> {
-        let mut rank = vec![u32::MAX; self.order.iter().max().map_or(0, |&m| m as usize + 1)];
-        for (r, &o) in self.order.iter().enumerate() {
-            rank[o as usize] = r as u32;
-        }
-        rank
-    }
 }
 
 impl Renderer {
@@ -98,6 +49,13 @@ impl Renderer {
         }
     }
 
+    /// Whether the renderer's method brackets each face with its own statistics query and
+    /// timestamp (a per-face layout); the one-pass methods and the floors get one query for
+    /// the whole fill.
+    pub(super) fn per_face_marks(&self) -> bool {
+        self.method.layout() == CubeLayout::PerFace
+    }
+
     /// Re-renders the dirty faces with the renderer's method, then rebuilds the mips.
     pub(super) fn record_cube(
         &self,
@@ -106,10 +64,10 @@ impl Renderer {
         first_fill: bool,
         report: &mut FrameReport,
     ) {
-        self.record_cube_fill(cmd, plan, first_fill, report, Fill::Method(self.method));
+        self.record_cube_fill(cmd, plan, first_fill, report, Fill::Method);
     }
 
-    /// Like [`Self::record_cube`], with `fill` drawing the faces (a method or a floor).
+    /// Like [`Self::record_cube`], with `fill` drawing the faces (the method or a floor).
     pub(super) fn record_cube_fill(
         &self,
         cmd: vk::CommandBuffer,
@@ -124,13 +82,12 @@ impl Renderer {
             level_count: 1,
             ..cube.color.full_range()
         };
-        dev.begin_label(cmd, &format!("cube fill ({})", fill.name()));
-        // Six-pass brackets each face with its own statistics query and timestamp; the
-        // one-pass methods and the floors get one query for the whole fill.
-        let (one_query, per_face_marks) = match fill {
-            Fill::Method(Method::SixPass) => (false, true),
-            Fill::Method(_) | Fill::Floor(_) => (true, false),
+        let name = match fill {
+            Fill::Method => self.method.name(),
+            Fill::Floor(f) => f.name(),
         };
+        dev.begin_label(cmd, &format!("cube fill ({name})"));
+        let per_face_marks = fill == Fill::Method && self.per_face_marks();
         // Clean faces keep their pixels, so the old layout is named (UNDEFINED only before the
         // first fill). Depth is scratch: its old contents never matter.
         let old = if first_fill {
@@ -156,18 +113,24 @@ impl Renderer {
                 ),
             ],
         );
-        if let (Some(q), true) = (&self.statistics, one_query) {
+        if let (Some(q), false) = (&self.statistics, per_face_marks) {
             q.begin(cmd, 0);
         }
         if !per_face_marks {
-            // Per-face timestamps exist only for six-pass; keep every slot answered.
+            // Per-face timestamps exist only for per-face methods; keep every slot answered.
             self.face_timestamps(cmd, 0..6);
         }
         match fill {
-            Fill::Method(m) => m.record(self, cmd, plan),
-            Fill::Floor(f) => self.record_floor(cmd, plan, f),
+            Fill::Method => {
+                let rec = CubeRecorder::new(self, cmd, self.method.layout(), per_face_marks);
+                self.fill.record(&rec, plan);
+            }
+            Fill::Floor(f) => {
+                let rec = CubeRecorder::new(self, cmd, CubeLayout::PerFace, false);
+                self.record_floor(&rec, plan, f);
+            }
         }
-        if let (Some(q), true) = (&self.statistics, one_query) {
+        if let (Some(q), false) = (&self.statistics, per_face_marks) {
             q.end(cmd, 0);
         }
         for f in 0..6 {
@@ -330,48 +293,5 @@ impl Renderer {
         ));
         image_barriers(dev, cmd, &back);
         dev.end_label(cmd);
-    }
-}
-
-impl Renderer {
-    /// Opens a rendering scope on cube face `face` alone, cleared, with its viewport (six-pass
-    /// and the floors).
-    pub(super) fn begin_face(&self, cmd: vk::CommandBuffer, face: u32) {
-        let size = self.cube.size;
-        self.begin_rendering(
-            cmd,
-            &super::draw::Attachments {
-                color: self.cube.face_views[face as usize].raw,
-                depth: self.cube.depth_views[face as usize].raw,
-                size: [size, size],
-                layers: 1,
-                view_mask: 0,
-                clear: true,
-            },
-        );
-        self.set_viewport(cmd, 0.0, 0.0, size as f32, size as f32);
-    }
-
-    /// Opens the one rendering scope of a one-pass method over all six layers and clears the
-    /// faces it re-renders (multiview clears and re-renders all six).
-    pub(super) fn begin_layered(&self, cmd: vk::CommandBuffer, dirty: u8, method: Method) {
-        let size = self.cube.size;
-        let (layers, view_mask) = method.layers_and_view_mask();
-        let all = view_mask != 0 || dirty == 0x3F;
-        self.begin_rendering(
-            cmd,
-            &super::draw::Attachments {
-                color: self.cube.layers_view.raw,
-                depth: self.cube.depth_layers_view.raw,
-                size: [size, size],
-                layers,
-                view_mask,
-                clear: all,
-            },
-        );
-        if !all {
-            self.clear_faces(cmd, dirty, size);
-        }
-        self.set_viewport(cmd, 0.0, 0.0, size as f32, size as f32);
     }
 }

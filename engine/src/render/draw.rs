@@ -4,9 +4,9 @@
 use ash::vk;
 use glam::Vec3;
 
-use super::camera::Frustum;
 use super::gpu::Push;
 use super::Renderer;
+use crate::scene::camera::Frustum;
 use crate::vk::commands::ImageBarrier;
 use crate::vk::pipeline::Pipeline;
 
@@ -251,7 +251,7 @@ impl Renderer {
     }
 
     /// The facing of a camera view.
-    pub(super) fn view_facing(&self, view: &super::camera::ViewBasis) -> Facing {
+    pub(super) fn view_facing(&self, view: &crate::scene::camera::ViewBasis) -> Facing {
         let corner = (1.0 + view.tan_x * view.tan_x + view.tan_y * view.tan_y).sqrt();
         self.facing(VIEW_FRONT, view.eye, super::CAMERA_NEAR_M * corner)
     }

@@ -13,11 +13,12 @@ use std::time::Instant;
 
 use ash::vk;
 
-use super::cube_fill::{CubePlan, Fill};
+use super::cube_fill::Fill;
 use super::gpu::Push;
-use super::state::SceneState;
+use super::methods::{CubePlan, CubeRecorder};
 use super::targets::DEPTH_FORMAT;
-use super::{methods, FrameReport, Readback, Renderer};
+use super::{FrameReport, Readback, Renderer};
+use crate::scene::state::SceneState;
 use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, ShaderStage};
 use crate::vk::GpuError;
 
@@ -93,11 +94,10 @@ impl Renderer {
     }
 
     /// Records `floor` into every face of `plan` (the caller set the layouts).
-    pub(super) fn record_floor(&self, cmd: vk::CommandBuffer, plan: &CubePlan, floor: Floor) {
+    pub(super) fn record_floor(&self, rec: &CubeRecorder<'_>, plan: &CubePlan, floor: Floor) {
         let pipelines = self.floor_pipelines.as_ref().expect("made by render_floor");
-        let facing = self.cube_facing();
         for face in plan.faces() {
-            self.begin_face(cmd, face);
+            rec.begin_face(face);
             let push = Push {
                 view_index: face,
                 ..Push::default()
@@ -105,22 +105,21 @@ impl Renderer {
             match floor {
                 Floor::Clear => {}
                 Floor::Geometry => {
-                    let visible = &plan.visible[face as usize];
-                    self.draw_objects(cmd, &pipelines.geometry, push, visible, &facing)
+                    rec.draw_objects(&pipelines.geometry, push, &plan.visible[face as usize])
                 }
                 Floor::Fill => {
                     // Wall `face` is the one a face looks at (walls are in cube-face order).
-                    self.bind_scene(cmd, &pipelines.fill);
-                    let push = Push {
+                    rec.bind(&pipelines.fill);
+                    rec.set_cull_back(false);
+                    rec.push(Push {
                         object_index: face,
                         ..push
-                    };
-                    self.push(cmd, self.pipelines.scene_layout.raw, push);
+                    });
                     // SAFETY: the scene is bound; floor_fill.vert makes its 3 vertices.
-                    unsafe { self.device.raw.cmd_draw(cmd, 3, 1, 0, 0) };
+                    unsafe { rec.device().raw.cmd_draw(rec.cmd(), 3, 1, 0, 0) };
                 }
             }
-            self.end_rendering(cmd);
+            rec.end_face(face);
         }
     }
 
@@ -145,11 +144,12 @@ impl Renderer {
                 color_format: self.cube.format,
                 depth_format: DEPTH_FORMAT,
                 cull_mode: vk::CullModeFlags::NONE,
-                dynamic_culling: with_vertices,
+                // Every cube pipeline sets its culling per draw.
+                dynamic_culling: true,
                 depth_compare: vk::CompareOp::GREATER,
                 depth_write: true,
                 color_writes: true,
-                view_mask: methods::Method::SixPass.layers_and_view_mask().1,
+                view_mask: 0,
                 rasterizer_discard: discard,
             };
             Pipeline::create_graphics(&self.device, layout, &desc, name)

@@ -7,8 +7,8 @@ use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 
 use super::gpu::{CheckPush, MaterialSample};
-use super::state::SceneState;
 use super::Renderer;
+use crate::scene::state::SceneState;
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::memory::{Buffer, BufferDesc};
 use crate::vk::pipeline::{Pipeline, PipelineLayout};

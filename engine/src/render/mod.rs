@@ -2,14 +2,13 @@
 //! the sensor and the side-by-side views with the analytic mirror.
 //!
 //! One frame (see `docs/architecture.md`):
-//! 1. evaluate the scene at time t ([`state::SceneState`]) and decide, by the refresh policy,
+//! 1. evaluate the scene at time t ([`SceneState`]) and decide, by the refresh policy,
 //!    whether the cube map must be re-rendered;
 //! 2. write the per-frame buffers (views, object transforms);
 //! 3. record: six face passes (CPU-culled draws) + mip chain, then each view pass (culled
 //!    draws + the mirror), then copies of the images to read back;
 //! 4. submit, wait, read timestamps, counters and pixels.
 
-pub mod camera;
 pub mod cube_fill;
 mod draw;
 pub mod floors;
@@ -18,7 +17,6 @@ pub mod material_check;
 pub mod methods;
 mod passes;
 pub mod resources;
-pub mod state;
 pub mod targets;
 
 use std::sync::Arc;
@@ -28,12 +26,13 @@ use ash::vk;
 use glam::{Mat4, UVec4, Vec3, Vec4};
 use serde::Serialize;
 
-use camera::ViewBasis;
 use gpu::{FrameData, ObjectData, ViewData};
 use resources::{SceneResources, VIEW_COUNT};
-use state::SceneState;
 use targets::{CubeTarget, ViewTarget};
 
+pub use crate::image::RgbaImage;
+use crate::scene::camera::{self, ViewBasis};
+use crate::scene::state::SceneState;
 use crate::scene::{RefreshPolicy, Scene};
 use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::device::Device;
@@ -72,9 +71,6 @@ pub struct RenderOptions {
     /// Off: any change re-renders all six (the reference the incremental update is tested
     /// against).
     pub full_updates: bool,
-    /// Geometry method only: use the `invocations = 6` geometry shader instead of the loop
-    /// (kept to measure the difference; see docs/methods.md).
-    pub gs_invocations: bool,
     /// Replaces the scene's refresh policy (benchmarks force `every-frame`).
     pub refresh: Option<RefreshPolicy>,
     /// Replaces the mirror's lookup mode (`--lookup`).
@@ -89,20 +85,6 @@ pub struct Readback {
     /// The lookup direction of every observer and sensor mirror pixel (for the angular
     /// error against the exact reference).
     pub directions: bool,
-}
-
-/// A linear-HDR RGBA image read back from the GPU, rows top to bottom.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RgbaImage {
-    pub width: u32,
-    pub height: u32,
-    pub pixels: Vec<[f32; 4]>,
-}
-
-impl RgbaImage {
-    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
-        self.pixels[(y * self.width + x) as usize]
-    }
 }
 
 /// Pixels of one frame (those asked for by [`Readback`]).
@@ -160,8 +142,6 @@ pub struct RefreshCounters {
 }
 
 struct Pipelines {
-    /// The chosen method's cube pipeline.
-    cube: Pipeline,
     view_scene: Pipeline,
     /// Direction pass: scene depth only, then the mirror's lookup directions.
     depth_only: Pipeline,
@@ -175,6 +155,8 @@ struct Pipelines {
 pub struct Renderer {
     /// The benchmark's floor pipelines (made on first `render_floor`).
     floor_pipelines: Option<floors::FloorPipelines>,
+    /// The method's pipeline and per-renderer state.
+    fill: Box<dyn methods::FillPass>,
     pipelines: Pipelines,
     timestamps: Option<QueryPool>,
     statistics: Option<QueryPool>,
@@ -186,8 +168,6 @@ pub struct Renderer {
     cube: CubeTarget,
     resources: SceneResources,
     readback: Option<Buffer>,
-    /// Instanced method: this frame's indirect commands, as runs of equal culling.
-    indirect: Option<(Buffer, Vec<methods::instanced::Run>)>,
     submitter: Submitter,
     /// The state the cube map shows; `None` before the first fill.
     cube_state: Option<SceneState>,
@@ -238,13 +218,18 @@ impl Renderer {
                 options.method
             )));
         }
-        let pipelines = passes::create_pipelines(
+        let pipelines = passes::create_pipelines(device, &resources)?;
+        let fill = options.method.create(&methods::MethodContext {
             device,
-            &resources,
-            cube.format,
-            options.method,
-            options.gs_invocations,
-        )?;
+            scene: &scene,
+            drawables: &resources.drawables,
+            vertices: &resources.vertices,
+            indices: &resources.indices,
+            scene_set_layout: resources.scene_set_layout.raw,
+            scene_layout: &pipelines.scene_layout,
+            cube_format: cube.format,
+            layout: options.method.layout(),
+        })?;
         crate::vk::descriptors::write_images(
             device,
             resources.environment_set,
@@ -265,6 +250,7 @@ impl Renderer {
             .transpose()?;
         Ok(Self {
             floor_pipelines: None,
+            fill,
             pipelines,
             timestamps,
             statistics,
@@ -276,7 +262,6 @@ impl Renderer {
             cube,
             resources,
             readback: None,
-            indirect: None,
             submitter,
             cube_state: None,
             object_bounds: Vec::new(),
@@ -300,7 +285,7 @@ impl Renderer {
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
         let mut dirty = self.dirty_faces(frame, &state, &views);
-        if self.method == methods::Method::Multiview && dirty != 0 {
+        if self.method.layout() == methods::CubeLayout::Multiview && dirty != 0 {
             // A multiview pass clears and draws all six views: cull for all six, or objects
             // seen only in a clean face would vanish from it.
             dirty = 0x3F;
@@ -313,8 +298,14 @@ impl Renderer {
             self.counters.cube_skips += 1;
         }
         let plan = self.plan_cube(&views, dirty);
-        if self.method == methods::Method::Instanced && dirty != 0 {
-            self.write_indirect(&plan)?;
+        if dirty != 0 {
+            let cull_back = self.cube_facing().cull;
+            let prepare = methods::Prepare {
+                device: &self.device,
+                drawables: &self.resources.drawables,
+                cull_back: &cull_back,
+            };
+            self.fill.prepare(&plan, &prepare)?;
         }
         let readback_bytes = self.readback_size(readback);
         if readback_bytes > 0
@@ -443,23 +434,6 @@ impl Renderer {
         }
     }
 
-    /// Instanced method: writes this frame's indirect draws (growing the buffer if needed).
-    fn write_indirect(&mut self, plan: &cube_fill::CubePlan) -> Result<(), GpuError> {
-        let cull = self.cube_facing().cull;
-        let (commands, new_runs) =
-            methods::instanced::commands(&self.resources.drawables, plan, &cull);
-        let bytes = std::mem::size_of_val(commands.as_slice()) as u64;
-        if self.indirect.as_ref().is_none_or(|(b, _)| b.size < bytes) {
-            let desc = BufferDesc::new_cpu_to_gpu(bytes, vk::BufferUsageFlags::INDIRECT_BUFFER);
-            let buffer = Buffer::create(&self.device, &desc, "indirect draws")?;
-            self.indirect = Some((buffer, Vec::new()));
-        }
-        let (buffer, runs) = self.indirect.as_mut().expect("created above");
-        buffer.write(&as_words(&commands))?;
-        *runs = new_runs;
-        Ok(())
-    }
-
     /// Writes frame data, views and object transforms; returns the views (render space).
     fn write_frame_buffers(&mut self, state: &SceneState) -> Result<Vec<ViewBasis>, GpuError> {
         let scene = &self.scene;
@@ -543,22 +517,6 @@ impl Renderer {
         self.draw_order = self.front_to_back();
         Ok(bases)
     }
-}
-
-/// `VkDrawIndexedIndirectCommand` is five 32-bit fields; copy them as plain words.
-fn as_words(commands: &[vk::DrawIndexedIndirectCommand]) -> Vec<u32> {
-    commands
-        .iter()
-        .flat_map(|c| {
-            [
-                c.index_count,
-                c.instance_count,
-                c.first_index,
-                c.vertex_offset as u32,
-                c.first_instance,
-            ]
-        })
-        .collect()
 }
 
 fn lookup_flag(lookup: crate::scene::Lookup) -> u32 {

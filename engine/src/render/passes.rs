@@ -2,12 +2,12 @@
 
 use ash::vk;
 
-use super::camera::{Frustum, ViewBasis};
 use super::draw::{barrier, Attachments, COLOR_OUT, COPY_READ, DEPTH_RW, SAMPLED};
 use super::gpu::Push;
 use super::resources::{VIEW_OBSERVER, VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT, VIEW_SENSOR};
 use super::targets::{ViewTarget, DEPTH_FORMAT, DIRECTION_FORMAT, VIEW_FORMAT};
 use super::*;
+use crate::scene::camera::{Frustum, ViewBasis};
 
 /// The view images a frame can read back.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -311,7 +311,7 @@ impl Renderer {
         if let Some(q) = &self.timestamps {
             let t = q.timestamps_ns(TS_COUNT)?;
             let ms = |a: u32, b: u32| (t[b as usize] - t[a as usize]) / 1e6;
-            if self.method == methods::Method::SixPass {
+            if self.per_face_marks() {
                 report.gpu_face_ms = Some(std::array::from_fn(|f| {
                     ms(TS_FACE0 + f as u32 - 1, TS_FACE0 + f as u32)
                 }));
@@ -326,7 +326,7 @@ impl Renderer {
         if let Some(q) = &self.statistics {
             // Only queries begun this frame have results. Six-pass uses slots 0..6 (one per
             // dirty face), the one-pass methods slot 0.
-            if update && self.method == methods::Method::SixPass {
+            if update && self.per_face_marks() {
                 let mut faces = [PipelineStats::default(); 6];
                 let mut total = PipelineStats::default();
                 for f in 0..6u32 {
@@ -412,13 +412,60 @@ pub(super) fn vertex_layout() -> (
     (bindings, attributes)
 }
 
-/// The cube, view, depth-only and mirror pipelines (reverse-Z depth everywhere).
+/// A scene pipeline: `stages` (vertex or mesh stages, then a fragment shader), the scene's
+/// vertex layout unless the stages include a mesh shader, reverse-Z depth, culling set per
+/// draw. Used by the views and, through `methods::MethodContext`, by every cube method.
+pub(super) fn scene_pipeline(
+    device: &Arc<Device>,
+    layout: &PipelineLayout,
+    stages: &[ShaderStage<'_>],
+    color_format: vk::Format,
+    view_mask: u32,
+    name: &str,
+) -> Result<Pipeline, GpuError> {
+    scene_pipeline_with_writes(device, layout, stages, color_format, view_mask, true, name)
+}
+
+fn scene_pipeline_with_writes(
+    device: &Arc<Device>,
+    layout: &PipelineLayout,
+    stages: &[ShaderStage<'_>],
+    color_format: vk::Format,
+    view_mask: u32,
+    color_writes: bool,
+    name: &str,
+) -> Result<Pipeline, GpuError> {
+    let (bindings, attributes) = vertex_layout();
+    let mesh = stages
+        .iter()
+        .any(|s| s.stage.contains(vk::ShaderStageFlags::MESH_EXT));
+    Pipeline::create_graphics(
+        device,
+        layout,
+        &GraphicsPipelineDesc {
+            stages,
+            vertex_bindings: if mesh { &[] } else { &bindings },
+            vertex_attributes: if mesh { &[] } else { &attributes },
+            color_format,
+            depth_format: DEPTH_FORMAT,
+            // Set per draw: room walls are seen from inside and meshes may be open.
+            cull_mode: vk::CullModeFlags::NONE,
+            dynamic_culling: true,
+            depth_compare: vk::CompareOp::GREATER,
+            depth_write: true,
+            color_writes,
+            view_mask,
+            rasterizer_discard: false,
+        },
+        name,
+    )
+}
+
+/// The view, depth-only and mirror pipelines (reverse-Z depth everywhere); the cube's
+/// pipeline belongs to its method.
 pub(super) fn create_pipelines(
     device: &Arc<Device>,
     res: &SceneResources,
-    cube_format: vk::Format,
-    method: methods::Method,
-    gs_invocations: bool,
 ) -> Result<Pipelines, GpuError> {
     let push = std::mem::size_of::<Push>() as u32;
     let scene_layout =
@@ -429,33 +476,6 @@ pub(super) fn create_pipelines(
         push,
         "mirror layout",
     )?;
-    let (bindings, attributes) = vertex_layout();
-    let scene_pipeline = |color_format, method: methods::Method, color_writes, name| {
-        let stages: Vec<ShaderStage> = methods::stages(method, gs_invocations)
-            .into_iter()
-            .map(|(stage, spirv)| ShaderStage { stage, spirv })
-            .collect();
-        Pipeline::create_graphics(
-            device,
-            &scene_layout,
-            &GraphicsPipelineDesc {
-                stages: &stages,
-                vertex_bindings: &bindings,
-                vertex_attributes: &attributes,
-                color_format,
-                depth_format: DEPTH_FORMAT,
-                // Room walls are seen from inside and meshes may be open: draw both sides.
-                cull_mode: vk::CullModeFlags::NONE,
-                dynamic_culling: true,
-                depth_compare: vk::CompareOp::GREATER,
-                depth_write: true,
-                color_writes,
-                view_mask: method.layers_and_view_mask().1,
-                rasterizer_discard: false,
-            },
-            name,
-        )
-    };
     let mirror_pipeline = |fragment, color_format, name| {
         Pipeline::create_graphics(
             device,
@@ -487,16 +507,32 @@ pub(super) fn create_pipelines(
             name,
         )
     };
-    // The views always use the plain vertex shader and RGBA16F; the cube uses its method's
-    // shaders and the cube's format. The direction pass lays down depth only, then writes the
-    // mirror's lookup directions in full float.
-    let cube_name = format!("cube pipeline ({method})");
-    let six = methods::Method::SixPass;
-    let cube = scene_pipeline(cube_format, method, true, &cube_name)?;
-    let view_scene = scene_pipeline(VIEW_FORMAT, six, true, "scene pipeline (views)")?;
-    let depth_only = scene_pipeline(
+    // The views use the plain vertex shader and RGBA16F. The direction pass lays down depth
+    // only, then writes the mirror's lookup directions in full float.
+    let scene_stages = [
+        ShaderStage {
+            stage: vk::ShaderStageFlags::VERTEX,
+            spirv: crate::shaders::SCENE_VERT,
+        },
+        ShaderStage {
+            stage: vk::ShaderStageFlags::FRAGMENT,
+            spirv: crate::shaders::SCENE_FRAG,
+        },
+    ];
+    let view_scene = scene_pipeline(
+        device,
+        &scene_layout,
+        &scene_stages,
+        VIEW_FORMAT,
+        0,
+        "scene pipeline (views)",
+    )?;
+    let depth_only = scene_pipeline_with_writes(
+        device,
+        &scene_layout,
+        &scene_stages,
         DIRECTION_FORMAT,
-        six,
+        0,
         false,
         "depth-only pipeline (directions)",
     )?;
@@ -507,7 +543,6 @@ pub(super) fn create_pipelines(
         "mirror direction pipeline",
     )?;
     Ok(Pipelines {
-        cube,
         view_scene,
         depth_only,
         mirror,

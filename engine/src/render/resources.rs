@@ -8,7 +8,7 @@ use glam::{UVec4, Vec3, Vec4};
 
 use super::draw::{barrier, COPY_WRITE, NOTHING, SAMPLED};
 use super::gpu::{self, MaterialData, ObjectData, Vertex, ViewData};
-use super::state::room_meshes;
+use crate::scene::state::room_meshes;
 use crate::scene::{MaterialKind, Mesh, Scene};
 use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};

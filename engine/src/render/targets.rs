@@ -75,7 +75,7 @@ impl CubeTarget {
         );
         depth_desc.cube_compatible = false;
         let depth = Image::create(device, &depth_desc, "cube depth")?;
-        let names = super::camera::FACE_NAMES;
+        let names = crate::scene::camera::FACE_NAMES;
         let face_views = (0..6)
             .map(|f| {
                 color.view(

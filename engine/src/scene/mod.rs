@@ -1,4 +1,6 @@
-//! Scenes: the TOML file format, its validation, and the resolved scene the renderer draws.
+//! Scenes: the TOML file format, its validation, the resolved scene the renderer draws, the
+//! scene's state at a time ([`state`]) and its cameras ([`camera`]). No Vulkan here: the exact
+//! reference and the metrics use these types too.
 //!
 //! A scene file is parsed by [`load`] into a [`Scene`]: every mesh is triangulated in object
 //! space, every material and texture is resolved to an index, and every value has been checked
@@ -12,11 +14,13 @@ use std::path::PathBuf;
 use glam::{DVec3, Quat, Vec2, Vec3};
 
 mod anim;
+pub mod camera;
 mod error;
 mod format;
 mod generate;
 mod load;
 mod mesh;
+pub mod state;
 mod texture;
 
 pub use anim::{Animation, Repeat};

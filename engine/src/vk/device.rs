@@ -22,7 +22,92 @@ pub struct DeviceDesc {
     pub selector: Option<String>,
     /// Optional features to enable (those of the cube methods that will run); the device is
     /// rejected if it lacks one.
-    pub features: crate::render::methods::RequiredFeatures,
+    pub features: OptionalFeatures,
+}
+
+/// Optional device features a renderer can ask for on top of the core set. Device creation
+/// enables exactly these and refuses a device that lacks one; the cube fill methods state
+/// theirs as this type (`render::methods::Needs`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OptionalFeatures {
+    /// `VK_KHR_multiview` (core 1.1): one draw replayed per view.
+    pub multiview: bool,
+    pub geometry_shader: bool,
+    /// `gl_Layer` written from a vertex shader (core 1.2).
+    pub shader_output_layer: bool,
+    /// multiDrawIndirect and drawIndirectFirstInstance, always asked for together.
+    pub multi_draw_indirect: bool,
+    /// `VK_EXT_mesh_shader` with its task shaders.
+    pub mesh_shader: bool,
+}
+
+impl OptionalFeatures {
+    pub fn union(self, o: Self) -> Self {
+        Self {
+            multiview: self.multiview || o.multiview,
+            geometry_shader: self.geometry_shader || o.geometry_shader,
+            shader_output_layer: self.shader_output_layer || o.shader_output_layer,
+            multi_draw_indirect: self.multi_draw_indirect || o.multi_draw_indirect,
+            mesh_shader: self.mesh_shader || o.mesh_shader,
+        }
+    }
+
+    /// The features asked for that `have` lacks, by their Vulkan names.
+    pub fn missing(self, have: &DeviceFeatures) -> Vec<&'static str> {
+        [
+            (self.multiview && !have.multiview, "multiview"),
+            (
+                self.geometry_shader && !have.geometry_shader,
+                "geometryShader",
+            ),
+            (
+                self.shader_output_layer && !have.shader_output_layer,
+                "shaderOutputLayer",
+            ),
+            (
+                self.multi_draw_indirect
+                    && !(have.multi_draw_indirect && have.draw_indirect_first_instance),
+                "multiDrawIndirect + drawIndirectFirstInstance",
+            ),
+            (
+                self.mesh_shader && !(have.mesh_shader && have.task_shader),
+                "meshShader + taskShader (VK_EXT_mesh_shader)",
+            ),
+        ]
+        .into_iter()
+        .filter_map(|(lacks, name)| lacks.then_some(name))
+        .collect()
+    }
+}
+
+/// A device limit a renderer may need a minimum of (the methods state theirs as data).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Limit {
+    MultiviewViewCount,
+    GeometryOutputVertices,
+    GeometryShaderInvocations,
+    MeshOutputLayers,
+}
+
+impl Limit {
+    /// The limit's Vulkan name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Limit::MultiviewViewCount => "maxMultiviewViewCount",
+            Limit::GeometryOutputVertices => "maxGeometryOutputVertices",
+            Limit::GeometryShaderInvocations => "maxGeometryShaderInvocations",
+            Limit::MeshOutputLayers => "maxMeshOutputLayers",
+        }
+    }
+
+    pub fn value(self, limits: &DeviceLimits) -> u32 {
+        match self {
+            Limit::MultiviewViewCount => limits.max_multiview_view_count,
+            Limit::GeometryOutputVertices => limits.max_geometry_output_vertices,
+            Limit::GeometryShaderInvocations => limits.max_geometry_shader_invocations,
+            Limit::MeshOutputLayers => limits.max_mesh_output_layers,
+        }
+    }
 }
 
 /// What a device is and can do: everything `specchio info` prints.
@@ -70,6 +155,9 @@ pub struct DeviceFeatures {
     /// `shaderOutputLayer`: `gl_Layer` written from the vertex shader.
     pub shader_output_layer: bool,
     pub mesh_shader: bool,
+    pub task_shader: bool,
+    /// Task and mesh shader invocations are counted by pipeline-statistics queries.
+    pub mesh_shader_queries: bool,
     pub ray_query: bool,
     pub timestamps: bool,
     pub pipeline_statistics: bool,
@@ -84,6 +172,8 @@ pub struct Device {
     pub raw: ash::Device,
     pub physical: vk::PhysicalDevice,
     pub info: DeviceInfo,
+    /// The optional features this device was created with.
+    pub enabled: OptionalFeatures,
     /// The one queue used for everything: a graphics queue (also does transfers).
     pub queue: vk::Queue,
     pub queue_family: u32,
@@ -100,23 +190,7 @@ impl Device {
         let candidates = enumerate(instance)?;
         let (physical, info, queue_family) = select(&candidates, desc.selector.as_deref())?;
         let want = desc.features;
-        let f = &info.features;
-        let missing: Vec<&str> = [
-            (want.multiview && !f.multiview, "multiview"),
-            (want.geometry_shader && !f.geometry_shader, "geometryShader"),
-            (
-                want.shader_output_layer && !f.shader_output_layer,
-                "shaderOutputLayer",
-            ),
-            (
-                want.multi_draw_indirect
-                    && !(f.multi_draw_indirect && f.draw_indirect_first_instance),
-                "multiDrawIndirect + drawIndirectFirstInstance",
-            ),
-        ]
-        .into_iter()
-        .filter_map(|(m, name)| m.then_some(name))
-        .collect();
+        let missing = want.missing(&info.features);
         if !missing.is_empty() {
             return Err(GpuError::Unsupported(format!(
                 "{} lacks {}",
@@ -147,12 +221,24 @@ impl Device {
             .synchronization2(true)
             // SPIR-V 1.6 turns `discard` into OpDemoteToHelperInvocation (mandatory in 1.3).
             .shader_demote_to_helper_invocation(true);
-        let create_info = vk::DeviceCreateInfo::default()
+        // Mesh and task shaders come from an extension; their invocations are counted by the
+        // pipeline-statistics query only with meshShaderQueries.
+        let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default()
+            .mesh_shader(true)
+            .task_shader(true)
+            .mesh_shader_queries(info.features.mesh_shader_queries);
+        let mut extensions = Vec::new();
+        let mut create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
             .enabled_features(&features)
             .push_next(&mut features11)
             .push_next(&mut features12)
             .push_next(&mut features13);
+        if want.mesh_shader {
+            extensions.push(ash::ext::mesh_shader::NAME.as_ptr());
+            create_info = create_info.push_next(&mut mesh);
+        }
+        let create_info = create_info.enabled_extension_names(&extensions);
         // SAFETY: physical comes from this instance; create_info points at live locals.
         let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
             .vk("vkCreateDevice")?;
@@ -179,6 +265,7 @@ impl Device {
             raw,
             physical,
             info,
+            enabled: want,
             queue,
             queue_family,
             debug_utils,
@@ -367,6 +454,9 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
             geometry_shader: base.geometry_shader == vk::TRUE,
             shader_output_layer: f12.shader_output_layer == vk::TRUE,
             mesh_shader: mesh.mesh_shader == vk::TRUE,
+            task_shader: mesh.task_shader == vk::TRUE,
+            mesh_shader_queries: mesh.mesh_shader_queries == vk::TRUE
+                && base.pipeline_statistics_query == vk::TRUE,
             ray_query: rq.ray_query == vk::TRUE,
             timestamps,
             pipeline_statistics: base.pipeline_statistics_query == vk::TRUE,

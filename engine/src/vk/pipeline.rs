@@ -213,10 +213,19 @@ impl Pipeline {
             .view_mask(desc.view_mask)
             .color_attachment_formats(&color_formats)
             .depth_attachment_format(desc.depth_format);
-        let info = vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stages)
-            .vertex_input_state(&vertex_input)
-            .input_assembly_state(&input_assembly)
+        let mut info = vk::GraphicsPipelineCreateInfo::default().stages(&stages);
+        // A mesh pipeline makes its own primitives: it must have no vertex input or input
+        // assembly state.
+        let mesh = desc
+            .stages
+            .iter()
+            .any(|s| s.stage.contains(vk::ShaderStageFlags::MESH_EXT));
+        if !mesh {
+            info = info
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&input_assembly);
+        }
+        let info = info
             .viewport_state(&viewport)
             .rasterization_state(&raster)
             .multisample_state(&multisample)

@@ -7,7 +7,7 @@ use ash::vk;
 use super::device::Device;
 use super::{GpuError, VkContext};
 
-/// The pipeline statistics we record, in the bit order Vulkan writes them.
+/// The pipeline statistics every pool records, in the bit order Vulkan writes them.
 pub const PIPELINE_STATISTICS: vk::QueryPipelineStatisticFlags =
     vk::QueryPipelineStatisticFlags::from_raw(
         vk::QueryPipelineStatisticFlags::VERTEX_SHADER_INVOCATIONS.as_raw()
@@ -16,21 +16,40 @@ pub const PIPELINE_STATISTICS: vk::QueryPipelineStatisticFlags =
             | vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS.as_raw(),
     );
 
-/// Work counters of one query (see [`PIPELINE_STATISTICS`]).
+/// Added on devices created with mesh shaders whose queries count them (meshShaderQueries);
+/// their bits come after the fragment shader's, so their results follow.
+pub const MESH_STATISTICS: vk::QueryPipelineStatisticFlags =
+    vk::QueryPipelineStatisticFlags::from_raw(
+        vk::QueryPipelineStatisticFlags::TASK_SHADER_INVOCATIONS_EXT.as_raw()
+            | vk::QueryPipelineStatisticFlags::MESH_SHADER_INVOCATIONS_EXT.as_raw(),
+    );
+
+/// Work counters of one query (see [`PIPELINE_STATISTICS`]). The task and mesh counters are
+/// `None` where the device does not count them (absent, never zero).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct PipelineStats {
     pub vertex_invocations: u64,
     pub clipping_invocations: u64,
     pub clipping_primitives: u64,
     pub fragment_invocations: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub task_invocations: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh_invocations: Option<u64>,
 }
 
 impl std::ops::AddAssign for PipelineStats {
     fn add_assign(&mut self, o: Self) {
+        let add = |a: Option<u64>, b: Option<u64>| match (a, b) {
+            (None, None) => None,
+            (a, b) => Some(a.unwrap_or(0) + b.unwrap_or(0)),
+        };
         self.vertex_invocations += o.vertex_invocations;
         self.clipping_invocations += o.clipping_invocations;
         self.clipping_primitives += o.clipping_primitives;
         self.fragment_invocations += o.fragment_invocations;
+        self.task_invocations = add(self.task_invocations, o.task_invocations);
+        self.mesh_invocations = add(self.mesh_invocations, o.mesh_invocations);
     }
 }
 
@@ -39,6 +58,8 @@ pub struct QueryPool {
     pub raw: vk::QueryPool,
     pub count: u32,
     kind: vk::QueryType,
+    /// Statistics pools: whether task and mesh invocations are counted too.
+    mesh_counted: bool,
     device: Arc<Device>,
 }
 
@@ -64,8 +85,16 @@ impl QueryPool {
         let mut info = vk::QueryPoolCreateInfo::default()
             .query_type(kind)
             .query_count(count.max(1));
+        let mesh_counted = kind == vk::QueryType::PIPELINE_STATISTICS
+            && device.enabled.mesh_shader
+            && device.info.features.mesh_shader_queries;
         if kind == vk::QueryType::PIPELINE_STATISTICS {
-            info = info.pipeline_statistics(PIPELINE_STATISTICS);
+            let mesh = if mesh_counted {
+                MESH_STATISTICS
+            } else {
+                vk::QueryPipelineStatisticFlags::empty()
+            };
+            info = info.pipeline_statistics(PIPELINE_STATISTICS | mesh);
         }
         // SAFETY: valid create info; the feature was enabled when the type needs one.
         let raw = unsafe { device.raw.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
@@ -74,6 +103,7 @@ impl QueryPool {
             raw,
             count: count.max(1),
             kind,
+            mesh_counted,
             device: Arc::clone(device),
         })
     }
@@ -135,6 +165,26 @@ impl QueryPool {
         Ok(data)
     }
 
+    /// Whether each of queries `0..n` holds a result, without waiting (a query that was
+    /// reset and never written has none).
+    pub fn availability(&self, n: u32) -> Result<Vec<bool>, GpuError> {
+        let mut data = vec![[0u64; 2]; n as usize];
+        // SAFETY: each element holds one 64-bit result and its 64-bit availability word, the
+        // layout WITH_AVAILABILITY writes; without WAIT, unavailable queries are skipped.
+        let result = unsafe {
+            self.device.raw.get_query_pool_results(
+                self.raw,
+                0,
+                &mut data,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WITH_AVAILABILITY,
+            )
+        };
+        match result {
+            Ok(()) | Err(vk::Result::NOT_READY) => Ok(data.iter().map(|d| d[1] != 0).collect()),
+            Err(e) => Err(e).vk("vkGetQueryPoolResults"),
+        }
+    }
+
     /// Timestamps in nanoseconds (raw ticks times the device's period).
     pub fn timestamps_ns(&self, n: u32) -> Result<Vec<f64>, GpuError> {
         let period = f64::from(self.device.info.limits.timestamp_period_ns);
@@ -147,14 +197,24 @@ impl QueryPool {
 
     /// Statistics of queries `first..first + n` (each must have been begun and ended).
     pub fn statistics(&self, first: u32, n: u32) -> Result<Vec<PipelineStats>, GpuError> {
-        Ok(self
-            .results::<[u64; 4]>(first, n)?
+        let rows: Vec<[u64; 6]> = if self.mesh_counted {
+            self.results::<[u64; 6]>(first, n)?
+        } else {
+            let four = self.results::<[u64; 4]>(first, n)?;
+            four.iter()
+                .map(|c| [c[0], c[1], c[2], c[3], 0, 0])
+                .collect()
+        };
+        let counted = |c: &[u64; 6], i: usize| self.mesh_counted.then_some(c[i]);
+        Ok(rows
             .iter()
             .map(|c| PipelineStats {
                 vertex_invocations: c[0],
                 clipping_invocations: c[1],
                 clipping_primitives: c[2],
                 fragment_invocations: c[3],
+                task_invocations: counted(c, 4),
+                mesh_invocations: counted(c, 5),
             })
             .collect())
     }

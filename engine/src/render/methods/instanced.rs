@@ -1,28 +1,126 @@
 //! Instanced layered fill: every (object, dirty face) pair that survived culling becomes one
 //! indirect draw of one instance whose `firstInstance` encodes `object << 3 | face`; the vertex
-//! shader writes `gl_Layer`. One `vkCmdDrawIndexedIndirect` draws them all.
+//! shader writes `gl_Layer`. One `vkCmdDrawIndexedIndirect` per run of equal culling draws
+//! them all.
 
 use ash::vk;
 
-use crate::render::cube_fill::CubePlan;
-use crate::render::draw::CUBE_FRONT;
+use super::{
+    CubeLayout, CubePlan, CubeRecorder, FillMethod, FillPass, MethodContext, Needs, Prepare,
+};
 use crate::render::gpu::INSTANCE_FACE_BITS;
 use crate::render::resources::Drawable;
-use crate::render::Renderer;
+use crate::vk::device::OptionalFeatures;
+use crate::vk::memory::{Buffer, BufferDesc};
+use crate::vk::pipeline::Pipeline;
+use crate::vk::GpuError;
+
+pub struct Instanced;
+
+impl FillMethod for Instanced {
+    fn name(&self) -> &'static str {
+        "instanced"
+    }
+
+    fn summary(&self) -> &'static str {
+        "one layered pass; one instance per (object, face) pair, gl_Layer from the vertex shader"
+    }
+
+    fn needs(&self) -> Needs {
+        Needs {
+            features: OptionalFeatures {
+                shader_output_layer: true,
+                multi_draw_indirect: true,
+                ..Default::default()
+            },
+            limits: &[],
+            probe: false,
+        }
+    }
+
+    fn layout(&self) -> CubeLayout {
+        CubeLayout::Layered
+    }
+
+    fn create(&self, ctx: &MethodContext<'_>) -> Result<Box<dyn FillPass>, GpuError> {
+        let vertex = (
+            vk::ShaderStageFlags::VERTEX,
+            crate::shaders::CUBE_INSTANCED_VERT,
+        );
+        let pipeline = ctx.pipeline(&[vertex], "cube pipeline (instanced)")?;
+        Ok(Box::new(InstancedFill {
+            pipeline,
+            indirect: None,
+            runs: Vec::new(),
+        }))
+    }
+}
+
+struct InstancedFill {
+    pipeline: Pipeline,
+    /// This update's indirect commands (grown when an update needs more).
+    indirect: Option<Buffer>,
+    /// The runs of commands that share a cull mode, one indirect draw each.
+    runs: Vec<Run>,
+}
 
 /// Consecutive indirect commands drawn with one cull mode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Run {
-    pub first: u32,
-    pub count: u32,
-    pub cull_back: bool,
+struct Run {
+    first: u32,
+    count: u32,
+    cull_back: bool,
+}
+
+impl FillPass for InstancedFill {
+    fn prepare(&mut self, plan: &CubePlan, ctx: &Prepare<'_>) -> Result<(), GpuError> {
+        let (commands, runs) = commands(ctx.drawables, plan, ctx.cull_back);
+        self.runs = runs;
+        if commands.is_empty() {
+            return Ok(());
+        }
+        let words = as_words(&commands);
+        let bytes = std::mem::size_of_val(words.as_slice()) as u64;
+        if self.indirect.as_ref().is_none_or(|b| b.size < bytes) {
+            let desc = BufferDesc::new_cpu_to_gpu(bytes, vk::BufferUsageFlags::INDIRECT_BUFFER);
+            self.indirect = Some(Buffer::create(ctx.device, &desc, "indirect draws")?);
+        }
+        if let Some(buffer) = &mut self.indirect {
+            buffer.write(&words)?;
+        }
+        Ok(())
+    }
+
+    fn record(&self, rec: &CubeRecorder<'_>, plan: &CubePlan) {
+        rec.begin_cube(plan.dirty);
+        if let (Some(buffer), false) = (&self.indirect, self.runs.is_empty()) {
+            rec.bind(&self.pipeline);
+            let stride = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u32;
+            for run in &self.runs {
+                rec.set_cull_back(run.cull_back);
+                // SAFETY: the buffer holds the commands of every run, written in `prepare`;
+                // the device has multiDrawIndirect and drawIndirectFirstInstance (the
+                // method's needs).
+                unsafe {
+                    rec.device().raw.cmd_draw_indexed_indirect(
+                        rec.cmd(),
+                        buffer.raw,
+                        u64::from(run.first) * u64::from(stride),
+                        run.count,
+                        stride,
+                    )
+                };
+            }
+        }
+        rec.end_cube();
+    }
 }
 
 /// The indirect commands for `plan`, object-major in the plan's draw order, so that within a
 /// face objects are drawn in the same order as six-pass draws them (front to back; equal
-/// depths resolve the same way); and the runs of commands that share a cull mode (one
-/// indirect draw each), from `cull` (per drawable: back faces may be culled in the cube).
-pub(crate) fn commands(
+/// depths resolve the same way); and the runs of commands that share a cull mode, from
+/// `cull` (per drawable: back faces may be culled in the cube).
+fn commands(
     drawables: &[Drawable],
     plan: &CubePlan,
     cull: &[bool],
@@ -61,28 +159,18 @@ pub(crate) fn commands(
     (commands, runs)
 }
 
-pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
-    let Some((buffer, runs)) = r.indirect.as_ref() else {
-        return;
-    };
-    r.begin_layered(cmd, plan.dirty, super::Method::Instanced);
-    r.bind_scene(cmd, &r.pipelines.cube);
-    r.set_front_face(cmd, CUBE_FRONT);
-    let stride = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u32;
-    for run in runs {
-        r.set_cull_back(cmd, run.cull_back);
-        // SAFETY: the buffer holds the commands of every run, written before recording; the
-        // device has multiDrawIndirect and drawIndirectFirstInstance (checked when the method
-        // was chosen).
-        unsafe {
-            r.device.raw.cmd_draw_indexed_indirect(
-                cmd,
-                buffer.raw,
-                u64::from(run.first) * u64::from(stride),
-                run.count,
-                stride,
-            )
-        };
-    }
-    r.end_rendering(cmd);
+/// `VkDrawIndexedIndirectCommand` is five 32-bit fields; copy them as plain words.
+fn as_words(commands: &[vk::DrawIndexedIndirectCommand]) -> Vec<u32> {
+    commands
+        .iter()
+        .flat_map(|c| {
+            [
+                c.index_count,
+                c.instance_count,
+                c.first_index,
+                c.vertex_offset as u32,
+                c.first_instance,
+            ]
+        })
+        .collect()
 }

@@ -1,114 +1,200 @@
-//! Cube fill methods. Each one renders the dirty faces of a [`CubePlan`] into the cube's mip 0
-//! and must give the same pixels as every other (tested bit for bit).
+//! Cube fill methods as plug-ins. Each fills the dirty faces of a [`CubePlan`] into the cube's
+//! mip 0, and every one must give the same pixels as six-pass, bit for bit (tested on every
+//! installed driver).
 //!
-//! Adding a method means one variant here, one module beside this file, and its shaders.
+//! A method is one module beside this file with a type implementing [`FillMethod`]: it states
+//! what it needs from the device as data ([`Needs`]: device creation, `specchio info`, the
+//! CLI's `--method` and the tests all read it), how it addresses the cube ([`CubeLayout`]),
+//! and builds its per-renderer state ([`FillPass`]: its pipeline, its buffers), which records
+//! through the narrow [`CubeRecorder`]. Adding a method is that module, its shaders, and one
+//! line in [`REGISTRY`]; everything that lists methods iterates the registry.
 
-pub mod geometry;
-pub mod instanced;
-pub mod multiview;
-pub mod six_pass;
+mod geometry;
+mod instanced;
+mod multiview;
+mod plan;
+mod recorder;
+mod six_pass;
 
-use ash::vk;
+use crate::vk::device::{DeviceInfo, Limit, OptionalFeatures};
+use crate::vk::GpuError;
 
-use crate::vk::device::DeviceInfo;
+pub use multiview::{view_mask_leak, ViewMaskLeak};
+pub use plan::CubePlan;
+pub use recorder::{CubeRecorder, MethodContext, Prepare};
 
-/// How the six faces of the cube map are filled.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// One render pass per face, CPU-culled per face (the thesis).
-    #[default]
-    SixPass,
-    /// One pass with `VK_KHR_multiview`, view mask 0x3F; `gl_ViewIndex` picks the face.
-    Multiview,
-    /// One layered pass; a geometry shader sends each triangle to the faces it touches.
-    Geometry,
-    /// One layered pass; each (object, face) pair that survives culling is an instance whose
-    /// vertex shader writes `gl_Layer`, all from one indirect draw.
-    Instanced,
+/// Every cube fill method, in the order the CLI, `specchio info`, the docs and the benchmark
+/// list them. Six-pass comes first: it is the reference the others are compared with.
+static REGISTRY: &[&dyn FillMethod] = &[
+    &six_pass::SixPass,
+    &multiview::Multiview,
+    &geometry::Geometry,
+    &geometry::GeometryInvocations,
+    &instanced::Instanced,
+];
+
+/// One cube fill method: what it is, what it needs, and how it makes its per-renderer pass.
+pub trait FillMethod: Sync {
+    /// The name on the command line and in every report (kebab-case).
+    fn name(&self) -> &'static str;
+    /// One line saying how a triangle reaches its face (CLI help, `info`, docs).
+    fn summary(&self) -> &'static str;
+    /// `Some(method)`: a variant of another method kept for measurement; it runs only when
+    /// named (never in `--method all` or the benchmark's default set).
+    fn variant_of(&self) -> Option<&'static str> {
+        None
+    }
+    /// What the device must have.
+    fn needs(&self) -> Needs;
+    /// How the method's pass(es) address the cube's faces.
+    fn layout(&self) -> CubeLayout;
+    /// Builds the method's pipeline and state for one renderer.
+    fn create(&self, ctx: &MethodContext<'_>) -> Result<Box<dyn FillPass>, GpuError>;
 }
 
-impl Method {
-    pub const ALL: [Method; 4] = [
-        Method::SixPass,
-        Method::Multiview,
-        Method::Geometry,
-        Method::Instanced,
-    ];
+/// A method's per-renderer state: its pipeline(s) and buffers.
+pub trait FillPass {
+    /// Before recording a cube update: per-update data of the method's own (indirect
+    /// commands, say). Most methods need none.
+    fn prepare(&mut self, _plan: &CubePlan, _ctx: &Prepare<'_>) -> Result<(), GpuError> {
+        Ok(())
+    }
+    /// Records the fill of `plan`'s dirty faces into mip 0 (the caller set the layouts and
+    /// rebuilds the mips afterwards).
+    fn record(&self, rec: &CubeRecorder<'_>, plan: &CubePlan);
+}
 
-    pub fn name(self) -> &'static str {
+/// What a method needs from the device, as data.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Needs {
+    /// Optional features device creation must enable.
+    pub features: OptionalFeatures,
+    /// Minimum values of device limits.
+    pub limits: &'static [(Limit, u32)],
+    /// The method must first render a small cube in a child process and match six-pass bit
+    /// for bit (`specchio probe`): drivers have crashed or drawn wrongly with valid usage.
+    pub probe: bool,
+}
+
+/// How a method's pass(es) address the cube.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CubeLayout {
+    /// One rendering scope per dirty face, on a single-layer view of that face. Each face gets
+    /// its own statistics query and timestamp.
+    PerFace,
+    /// One rendering scope over a six-layer view; the shaders pick each primitive's face
+    /// (`gl_Layer`). A partial update clears only the dirty layers.
+    Layered,
+    /// One multiview scope with view mask `0x3F`; the driver replays each draw per view. A
+    /// pipeline's view mask is fixed, so every update re-renders all six faces.
+    Multiview,
+}
+
+impl CubeLayout {
+    /// Multiview view mask of the method's pipeline and rendering scope (0: none).
+    pub fn view_mask(self) -> u32 {
         match self {
-            Method::SixPass => "six-pass",
-            Method::Multiview => "multiview",
-            Method::Geometry => "geometry",
-            Method::Instanced => "instanced",
+            CubeLayout::Multiview => 0x3F,
+            CubeLayout::PerFace | CubeLayout::Layered => 0,
         }
+    }
+}
+
+/// A cube fill method: a cheap, copyable handle to its registry entry (compared, hashed and
+/// written by name).
+#[derive(Clone, Copy)]
+pub struct Method(&'static dyn FillMethod);
+
+impl Method {
+    /// The thesis's method and the reference every other method must match.
+    pub const SIX_PASS: Method = Method(&six_pass::SixPass);
+
+    /// Every registered method, variants included.
+    pub fn all() -> impl Iterator<Item = Method> {
+        REGISTRY.iter().map(|&m| Method(m))
+    }
+
+    /// The methods `--method all` and the benchmark run by default (variants left out).
+    pub fn listed() -> impl Iterator<Item = Method> {
+        Self::all().filter(|m| m.0.variant_of().is_none())
     }
 
     pub fn parse(name: &str) -> Option<Method> {
-        Self::ALL.into_iter().find(|m| m.name() == name)
+        Self::all().find(|m| m.name() == name)
     }
 
-    /// Why the device cannot run this method by its features (None: it can, as far as features
-    /// go; multiview is also probed, see `render::probe`).
+    /// Every registered name, comma-separated (for error messages and help).
+    pub fn names() -> String {
+        Self::all().map(Method::name).collect::<Vec<_>>().join(", ")
+    }
+
+    pub fn name(self) -> &'static str {
+        self.0.name()
+    }
+
+    pub fn summary(self) -> &'static str {
+        self.0.summary()
+    }
+
+    pub fn variant_of(self) -> Option<&'static str> {
+        self.0.variant_of()
+    }
+
+    pub fn needs(self) -> Needs {
+        self.0.needs()
+    }
+
+    pub fn layout(self) -> CubeLayout {
+        self.0.layout()
+    }
+
+    pub(crate) fn create(self, ctx: &MethodContext<'_>) -> Result<Box<dyn FillPass>, GpuError> {
+        self.0.create(ctx)
+    }
+
+    /// Why the device cannot run this method by its features and limits (None: it can, as
+    /// far as those go; a method that `needs().probe` must also pass its probe).
     pub fn missing_features(self, info: &DeviceInfo) -> Option<String> {
-        let f = &info.features;
-        let lacks = |what: &str| Some(format!("the device lacks {what}"));
-        match self {
-            Method::SixPass => None,
-            Method::Multiview if !f.multiview => lacks("the multiview feature (VK_KHR_multiview)"),
-            Method::Multiview if info.limits.max_multiview_view_count < 6 => Some(format!(
-                "maxMultiviewViewCount is {}, 6 views are needed",
-                info.limits.max_multiview_view_count
-            )),
-            Method::Geometry if !f.geometry_shader => lacks("geometryShader"),
-            Method::Instanced if !f.shader_output_layer => {
-                lacks("shaderOutputLayer (gl_Layer in a vertex shader)")
-            }
-            Method::Instanced if !f.multi_draw_indirect || !f.draw_indirect_first_instance => {
-                lacks("multiDrawIndirect and drawIndirectFirstInstance")
-            }
-            _ => None,
+        let needs = self.needs();
+        let lacks = needs.features.missing(&info.features);
+        if !lacks.is_empty() {
+            return Some(format!("the device lacks {}", lacks.join(", ")));
         }
+        needs.limits.iter().find_map(|&(limit, min)| {
+            let have = limit.value(&info.limits);
+            (have < min).then(|| format!("{} is {have}, {min} are needed", limit.name()))
+        })
     }
 
-    /// The device features this method needs enabled (on top of the core set).
-    pub fn features(self) -> RequiredFeatures {
-        let mut r = RequiredFeatures::default();
-        match self {
-            Method::SixPass => {}
-            Method::Multiview => r.multiview = true,
-            Method::Geometry => r.geometry_shader = true,
-            Method::Instanced => {
-                r.shader_output_layer = true;
-                r.multi_draw_indirect = true;
-            }
-        }
-        r
+    /// The optional device features this method needs enabled.
+    pub fn features(self) -> OptionalFeatures {
+        self.needs().features
     }
+}
 
-    /// Records the fill of `plan`'s dirty faces into mip 0 (layouts are set by the caller).
-    pub(crate) fn record(
-        self,
-        r: &crate::render::Renderer,
-        cmd: vk::CommandBuffer,
-        plan: &crate::render::cube_fill::CubePlan,
-    ) {
-        match self {
-            Method::SixPass => six_pass::record(r, cmd, plan),
-            Method::Multiview => multiview::record(r, cmd, plan),
-            Method::Geometry => geometry::record(r, cmd, plan),
-            Method::Instanced => instanced::record(r, cmd, plan),
-        }
+impl Default for Method {
+    fn default() -> Self {
+        Method::SIX_PASS
     }
+}
 
-    /// Rendering-scope layer count and view mask.
-    pub(crate) fn layers_and_view_mask(self) -> (u32, u32) {
-        match self {
-            Method::SixPass => (1, 0),
-            Method::Multiview => (0, 0x3F),
-            Method::Geometry | Method::Instanced => (6, 0),
-        }
+impl PartialEq for Method {
+    fn eq(&self, other: &Self) -> bool {
+        self.name() == other.name()
+    }
+}
+
+impl Eq for Method {}
+
+impl std::hash::Hash for Method {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.name().hash(state);
+    }
+}
+
+impl std::fmt::Debug for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -118,49 +204,36 @@ impl std::fmt::Display for Method {
     }
 }
 
-/// Optional device features a method needs; `Device::create` enables exactly these.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct RequiredFeatures {
-    pub multiview: bool,
-    pub geometry_shader: bool,
-    pub shader_output_layer: bool,
-    /// multiDrawIndirect and drawIndirectFirstInstance.
-    pub multi_draw_indirect: bool,
-}
-
-impl RequiredFeatures {
-    pub fn union(self, o: Self) -> Self {
-        Self {
-            multiview: self.multiview || o.multiview,
-            geometry_shader: self.geometry_shader || o.geometry_shader,
-            shader_output_layer: self.shader_output_layer || o.shader_output_layer,
-            multi_draw_indirect: self.multi_draw_indirect || o.multi_draw_indirect,
-        }
+impl serde::Serialize for Method {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
     }
 }
 
-/// The shader stages of a method's cube pipeline.
-pub(crate) fn stages(
-    method: Method,
-    gs_invocations: bool,
-) -> Vec<(vk::ShaderStageFlags, &'static [u32])> {
-    use crate::shaders as s;
-    let frag = (vk::ShaderStageFlags::FRAGMENT, s::SCENE_FRAG);
-    match method {
-        Method::SixPass => vec![(vk::ShaderStageFlags::VERTEX, s::SCENE_VERT), frag],
-        Method::Multiview => vec![(vk::ShaderStageFlags::VERTEX, s::CUBE_MULTIVIEW_VERT), frag],
-        Method::Geometry => vec![
-            (vk::ShaderStageFlags::VERTEX, s::CUBE_LAYERED_VERT),
-            (
-                vk::ShaderStageFlags::GEOMETRY,
-                if gs_invocations {
-                    s::CUBE_LAYERED_INVOCATIONS_GEOM
-                } else {
-                    s::CUBE_LAYERED_GEOM
-                },
-            ),
-            frag,
-        ],
-        Method::Instanced => vec![(vk::ShaderStageFlags::VERTEX, s::CUBE_INSTANCED_VERT), frag],
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_names_are_unique_kebab_case_and_six_pass_is_first() {
+        let names: Vec<&str> = Method::all().map(Method::name).collect();
+        assert_eq!(names[0], "six-pass");
+        for (i, n) in names.iter().enumerate() {
+            assert!(!names[..i].contains(n), "{n} registered twice");
+            assert!(
+                n.chars()
+                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-'),
+                "{n} is not kebab-case"
+            );
+        }
+        for m in Method::all() {
+            if let Some(of) = m.variant_of() {
+                assert!(
+                    Method::parse(of).is_some(),
+                    "{m} is a variant of unknown {of}"
+                );
+            }
+            assert_eq!(Method::parse(m.name()), Some(m));
+        }
     }
 }

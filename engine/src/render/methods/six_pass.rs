@@ -1,35 +1,56 @@
-//! Six-pass: one rendering scope per dirty face, drawing what that face's frustum holds.
+//! Six-pass: one rendering scope per dirty face, drawing what that face's frustum holds (the
+//! thesis's method, and the reference every other method must match bit for bit).
 
 use ash::vk;
 
-use crate::render::cube_fill::CubePlan;
+use super::{CubeLayout, CubePlan, CubeRecorder, FillMethod, FillPass, MethodContext, Needs};
 use crate::render::gpu::Push;
-use crate::render::Renderer;
+use crate::vk::pipeline::Pipeline;
+use crate::vk::GpuError;
 
-pub(crate) fn record(r: &Renderer, cmd: vk::CommandBuffer, plan: &CubePlan) {
-    let facing = r.cube_facing();
-    for face in 0..6u32 {
-        if plan.dirty & (1 << face) != 0 {
-            r.device.begin_label(
-                cmd,
-                &format!("face {}", crate::render::camera::FACE_NAMES[face as usize]),
-            );
-            if let Some(q) = &r.statistics {
-                q.begin(cmd, face);
+pub struct SixPass;
+
+impl FillMethod for SixPass {
+    fn name(&self) -> &'static str {
+        "six-pass"
+    }
+
+    fn summary(&self) -> &'static str {
+        "one pass per dirty face; each object culled per face on the CPU"
+    }
+
+    fn needs(&self) -> Needs {
+        Needs::default()
+    }
+
+    fn layout(&self) -> CubeLayout {
+        CubeLayout::PerFace
+    }
+
+    fn create(&self, ctx: &MethodContext<'_>) -> Result<Box<dyn FillPass>, GpuError> {
+        let vertex = (vk::ShaderStageFlags::VERTEX, crate::shaders::SCENE_VERT);
+        let pipeline = ctx.pipeline(&[vertex], "cube pipeline (six-pass)")?;
+        Ok(Box::new(SixPassFill { pipeline }))
+    }
+}
+
+struct SixPassFill {
+    pipeline: Pipeline,
+}
+
+impl FillPass for SixPassFill {
+    fn record(&self, rec: &CubeRecorder<'_>, plan: &CubePlan) {
+        for face in 0..6u32 {
+            if plan.dirty & (1 << face) != 0 {
+                rec.begin_face(face);
+                let push = Push {
+                    view_index: face,
+                    ..Push::default()
+                };
+                rec.draw_objects(&self.pipeline, push, &plan.visible[face as usize]);
+                rec.end_face(face);
             }
-            r.begin_face(cmd, face);
-            let push = Push {
-                view_index: face,
-                ..Push::default()
-            };
-            let visible = &plan.visible[face as usize];
-            r.draw_objects(cmd, &r.pipelines.cube, push, visible, &facing);
-            r.end_rendering(cmd);
-            if let Some(q) = &r.statistics {
-                q.end(cmd, face);
-            }
-            r.device.end_label(cmd);
+            rec.face_timestamp(face);
         }
-        r.face_timestamps(cmd, face..face + 1);
     }
 }

@@ -1,0 +1,217 @@
+//! What a fill method sees of the renderer: a context to build its pipeline and state once,
+//! per-update inputs, and a recorder for the cube's rendering scopes and the scene's draws.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::CubeLayout;
+use crate::render::draw::{Attachments, Facing, CUBE_FRONT};
+use crate::render::gpu::Push;
+use crate::render::resources::Drawable;
+use crate::render::Renderer;
+use crate::scene::Scene;
+use crate::vk::device::Device;
+use crate::vk::memory::Buffer;
+use crate::vk::pipeline::{Pipeline, PipelineLayout, ShaderStage};
+use crate::vk::GpuError;
+
+/// What a method may use to build its pipeline and state ([`super::FillMethod::create`]).
+pub struct MethodContext<'a> {
+    pub device: &'a Arc<Device>,
+    /// The resolved scene (its meshes, objects and room, for methods that preprocess them).
+    pub scene: &'a Scene,
+    /// Walls 0..6, then one per object: where each one's triangles sit in the shared buffers.
+    pub drawables: &'a [Drawable],
+    /// The shared scene vertex (`gpu::Vertex`) and index buffers.
+    pub vertices: &'a Buffer,
+    pub indices: &'a Buffer,
+    /// Set 0 (the scene) and the layout of set 0 plus the push constants ([`Push`]).
+    pub scene_set_layout: vk::DescriptorSetLayout,
+    pub scene_layout: &'a PipelineLayout,
+    pub cube_format: vk::Format,
+    /// The method's own layout (its pipeline's view mask follows from it).
+    pub layout: CubeLayout,
+}
+
+/// A shader stage of a method's cube pipeline: its stage and SPIR-V (`crate::shaders`).
+pub type Stage = (vk::ShaderStageFlags, &'static [u32]);
+
+impl MethodContext<'_> {
+    /// A cube pipeline with the scene's pipeline layout (see [`Self::pipeline_with`]).
+    pub fn pipeline(&self, stages: &[Stage], name: &str) -> Result<Pipeline, GpuError> {
+        self.pipeline_with(self.scene_layout, stages, name)
+    }
+
+    /// A cube pipeline: `stages` followed by `scene.frag`, which every method shares so that
+    /// equal inputs give equal pixels; the scene's vertex layout unless it is a mesh
+    /// pipeline; reverse-Z depth; culling set per draw; the cube's colour format and the
+    /// layout's view mask. `layout` must start with set 0 and the scene's push range.
+    pub fn pipeline_with(
+        &self,
+        layout: &PipelineLayout,
+        stages: &[Stage],
+        name: &str,
+    ) -> Result<Pipeline, GpuError> {
+        let fragment = (vk::ShaderStageFlags::FRAGMENT, crate::shaders::SCENE_FRAG);
+        let stages: Vec<ShaderStage<'_>> = stages
+            .iter()
+            .chain([&fragment])
+            .map(|&(stage, spirv)| ShaderStage { stage, spirv })
+            .collect();
+        crate::render::passes::scene_pipeline(
+            self.device,
+            layout,
+            &stages,
+            self.cube_format,
+            self.layout.view_mask(),
+            name,
+        )
+    }
+}
+
+/// Per-update inputs of [`super::FillPass::prepare`].
+pub struct Prepare<'a> {
+    pub device: &'a Arc<Device>,
+    pub drawables: &'a [Drawable],
+    /// Per drawable: whether its back faces may be culled in the cube this update.
+    pub cull_back: &'a [bool],
+}
+
+/// Records a cube fill: the rendering scopes on the cube, the scene's draws, and the
+/// per-face marks (statistics queries, timestamps) of per-face methods. A method records
+/// through this and through `device()` / `cmd()` for draw calls of its own.
+pub struct CubeRecorder<'a> {
+    r: &'a Renderer,
+    cmd: vk::CommandBuffer,
+    layout: CubeLayout,
+    /// Per-face statistics queries and timestamps (six-pass); off for one-pass methods and
+    /// the floors, which get one query for the whole fill.
+    per_face_marks: bool,
+    facing: Facing,
+}
+
+impl<'a> CubeRecorder<'a> {
+    pub(in crate::render) fn new(
+        r: &'a Renderer,
+        cmd: vk::CommandBuffer,
+        layout: CubeLayout,
+        per_face_marks: bool,
+    ) -> Self {
+        Self {
+            r,
+            cmd,
+            layout,
+            per_face_marks,
+            facing: r.cube_facing(),
+        }
+    }
+
+    pub fn device(&self) -> &Device {
+        &self.r.device
+    }
+
+    pub fn cmd(&self) -> vk::CommandBuffer {
+        self.cmd
+    }
+
+    pub fn face_size(&self) -> u32 {
+        self.r.cube.size
+    }
+
+    /// Opens a rendering scope on face `face` alone, cleared, with its viewport (and, for a
+    /// per-face method, its statistics query).
+    pub fn begin_face(&self, face: u32) {
+        let dev = self.device();
+        let name = crate::scene::camera::FACE_NAMES[face as usize];
+        dev.begin_label(self.cmd, &format!("face {name}"));
+        if let (Some(q), true) = (&self.r.statistics, self.per_face_marks) {
+            q.begin(self.cmd, face);
+        }
+        let size = self.face_size();
+        self.r.begin_rendering(
+            self.cmd,
+            &Attachments {
+                color: self.r.cube.face_views[face as usize].raw,
+                depth: self.r.cube.depth_views[face as usize].raw,
+                size: [size, size],
+                layers: 1,
+                view_mask: 0,
+                clear: true,
+            },
+        );
+        self.r
+            .set_viewport(self.cmd, 0.0, 0.0, size as f32, size as f32);
+    }
+
+    /// Closes the scope opened by [`Self::begin_face`].
+    pub fn end_face(&self, face: u32) {
+        self.r.end_rendering(self.cmd);
+        if let (Some(q), true) = (&self.r.statistics, self.per_face_marks) {
+            q.end(self.cmd, face);
+        }
+        self.device().end_label(self.cmd);
+    }
+
+    /// A per-face method calls this after face `face`'s work, for every face in order, dirty
+    /// or not (a clean face's time is then zero).
+    pub fn face_timestamp(&self, face: u32) {
+        if self.per_face_marks {
+            self.r.face_timestamps(self.cmd, face..face + 1);
+        }
+    }
+
+    /// Opens the one rendering scope of a one-pass method over all six faces and clears the
+    /// faces in `dirty` (a multiview scope clears all six: it re-renders them all).
+    pub fn begin_cube(&self, dirty: u8) {
+        let size = self.face_size();
+        let view_mask = self.layout.view_mask();
+        let all = view_mask != 0 || dirty == 0x3F;
+        self.r.begin_rendering(
+            self.cmd,
+            &Attachments {
+                color: self.r.cube.layers_view.raw,
+                depth: self.r.cube.depth_layers_view.raw,
+                size: [size, size],
+                layers: if view_mask != 0 { 0 } else { 6 },
+                view_mask,
+                clear: all,
+            },
+        );
+        if !all {
+            self.r.clear_faces(self.cmd, dirty, size);
+        }
+        self.r
+            .set_viewport(self.cmd, 0.0, 0.0, size as f32, size as f32);
+    }
+
+    /// Closes the scope opened by [`Self::begin_cube`].
+    pub fn end_cube(&self) {
+        self.r.end_rendering(self.cmd);
+    }
+
+    /// Binds `pipeline` with the scene's set 0, vertex and index buffers, and the cube's
+    /// front-face winding (cube faces see the world mirrored).
+    pub fn bind(&self, pipeline: &Pipeline) {
+        self.r.bind_scene(self.cmd, pipeline);
+        self.r.set_front_face(self.cmd, CUBE_FRONT);
+    }
+
+    /// Binds `pipeline` and draws `objects` in order, one indexed draw each, with push
+    /// constants `base` whose object index is set per draw, back faces culled where allowed.
+    pub fn draw_objects(&self, pipeline: &Pipeline, base: Push, objects: &[u32]) {
+        self.r
+            .draw_objects(self.cmd, pipeline, base, objects, &self.facing);
+    }
+
+    /// Sets the push constants of the draws that follow.
+    pub fn push(&self, push: Push) {
+        self.r
+            .push(self.cmd, self.r.pipelines.scene_layout.raw, push);
+    }
+
+    /// Back faces culled (`true`) or drawn for the draws that follow.
+    pub fn set_cull_back(&self, cull: bool) {
+        self.r.set_cull_back(self.cmd, cull);
+    }
+}
