@@ -102,13 +102,14 @@ impl SceneResources {
         };
         let mut vertex_buffer = host(
             std::mem::size_of_val(vertices.as_slice()),
-            vk::BufferUsageFlags::VERTEX_BUFFER,
+            // Storage too: a method may fetch vertices in its own shaders (mesh shading).
+            vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
             "scene vertices",
         )?;
         vertex_buffer.write(&vertices)?;
         let mut index_buffer = host(
             std::mem::size_of_val(indices.as_slice()),
-            vk::BufferUsageFlags::INDEX_BUFFER,
+            vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
             "scene indices",
         )?;
         index_buffer.write(&indices)?;
