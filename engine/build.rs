@@ -124,6 +124,7 @@ fn main() {
         }
         panic!("shader compilation failed:\n{}", failures.join("\n"));
     }
+    out.push_str(&shared_constants(&include_dir.join("shared.glsl")));
     out.push_str("/// (struct, member, byte offset) as glslang laid them out.\npub const SPIRV_MEMBER_OFFSETS: &[(&str, &str, u32)] = &[\n");
     for ((s, m), o) in &offsets {
         let _ = writeln!(out, "    ({s:?}, {m:?}, {o}),");
@@ -132,6 +133,42 @@ fn main() {
     let dest =
         PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("shaders.rs");
     std::fs::write(dest, out).expect("OUT_DIR writable");
+}
+
+/// The integer `#define`s of shared.glsl as a Rust module `shared`: the constants the shaders
+/// and the engine share are written once, in GLSL. Each gets the comment on its line or the
+/// comment block right above it as its doc comment.
+fn shared_constants(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).expect("shaders/include/shared.glsl readable");
+    let mut out = String::from(
+        "/// Integer constants `#define`d in `shaders/include/shared.glsl`, their one definition.\n\
+         pub mod shared {\n",
+    );
+    let mut above: Vec<&str> = Vec::new();
+    for line in text.lines().map(str::trim) {
+        if let Some(comment) = line.strip_prefix("//") {
+            above.push(comment.trim());
+            continue;
+        }
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if let ["#define", name, value, rest @ ..] = words.as_slice() {
+            let digits = value.trim_end_matches('u');
+            if !digits.is_empty() && digits.chars().all(|c| c.is_ascii_digit()) {
+                let trailing = rest.join(" ");
+                let doc = match trailing.strip_prefix("//") {
+                    Some(c) => c.trim().to_owned(),
+                    None if !above.is_empty() => above.join(" "),
+                    None => format!("`{name}` in shared.glsl."),
+                };
+                let _ = writeln!(out, "    /// {doc}\n    pub const {name}: u32 = {digits};");
+                // A comment block above a run of defines describes each of them.
+                continue;
+            }
+        }
+        above.clear();
+    }
+    out.push_str("}\n");
+    out
 }
 
 /// Collects struct member offsets (OpMemberDecorate Offset) by struct and member debug name.

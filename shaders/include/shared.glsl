@@ -1,5 +1,7 @@
-// shared.glsl - every GPU-visible struct and constant, mirrored by engine/src/render/gpu.rs.
-// A test compares the offsets glslang gives these members with the Rust structs' offsets.
+// shared.glsl - every GPU-visible struct and constant. The structs are mirrored by
+// engine/src/render/gpu.rs, and a test compares the offsets glslang gives these members with
+// the Rust structs' offsets; every integer #define here is generated as a Rust constant by
+// engine/build.rs (crate::shaders::shared), so it is written only once.
 //
 // Spaces: "world" on the GPU is world space translated so that the mirror centre is the
 // origin (render origin), which keeps f32 precise for scenes far from (0,0,0).

@@ -164,7 +164,7 @@ impl SceneResources {
                 binding(
                     4,
                     vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    gpu::MAX_TEXTURES as u32,
+                    gpu::MAX_TEXTURES,
                 ),
             ],
             "scene set layout",
@@ -188,7 +188,7 @@ impl SceneResources {
                 },
                 vk::DescriptorPoolSize {
                     ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    descriptor_count: gpu::MAX_TEXTURES as u32 + 1,
+                    descriptor_count: gpu::MAX_TEXTURES + 1,
                 },
             ],
             "scene descriptors",
@@ -225,7 +225,7 @@ impl SceneResources {
         );
         // Every slot must hold a valid image; unused ones repeat slot 0 (a 1x1 white texel
         // when the scene has no textures).
-        let slots: Vec<(vk::ImageView, vk::Sampler)> = (0..gpu::MAX_TEXTURES)
+        let slots: Vec<(vk::ImageView, vk::Sampler)> = (0..gpu::MAX_TEXTURES as usize)
             .map(|i| {
                 (
                     texture_views[i.min(texture_views.len() - 1)].raw,
@@ -313,7 +313,7 @@ fn upload_textures(
     scene: &Scene,
     submitter: &Submitter,
 ) -> Result<(Vec<Image>, Vec<ImageView>), GpuError> {
-    if scene.textures.len() > gpu::MAX_TEXTURES {
+    if scene.textures.len() > gpu::MAX_TEXTURES as usize {
         return Err(GpuError::Unsupported(format!(
             "{} textures; at most {} are supported",
             scene.textures.len(),
