@@ -160,12 +160,12 @@ impl Renderer {
     }
 
     pub(super) fn push(&self, cmd: vk::CommandBuffer, layout: vk::PipelineLayout, push: Push) {
-        // SAFETY: the push range covers all graphics stages and this many bytes.
+        // SAFETY: the push range covers the device's graphics stages and this many bytes.
         unsafe {
             self.device.raw.cmd_push_constants(
                 cmd,
                 layout,
-                vk::ShaderStageFlags::ALL_GRAPHICS,
+                self.device.graphics_stages(),
                 0,
                 bytemuck::bytes_of(&push),
             )

@@ -152,7 +152,7 @@ impl SceneResources {
         )?;
 
         // Compute too: the materials check (materials_check.comp) reads the scene set.
-        let all = vk::ShaderStageFlags::ALL_GRAPHICS | vk::ShaderStageFlags::COMPUTE;
+        let all = device.graphics_stages() | vk::ShaderStageFlags::COMPUTE;
         let binding = |b, ty, count| descriptors::binding(b, ty, count, all);
         let scene_set_layout = DescriptorSetLayout::create(
             device,

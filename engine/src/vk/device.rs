@@ -276,6 +276,18 @@ impl Device {
         Ok(device)
     }
 
+    /// The shader stages a graphics pipeline on this device can have: every classic graphics
+    /// stage, plus task and mesh when mesh shading is enabled. Push-constant ranges and shared
+    /// descriptor bindings use this set, so any pipeline built on this device can read them
+    /// (naming a mesh stage without the feature would be invalid).
+    pub fn graphics_stages(&self) -> vk::ShaderStageFlags {
+        let mut stages = vk::ShaderStageFlags::ALL_GRAPHICS;
+        if self.enabled.mesh_shader {
+            stages |= vk::ShaderStageFlags::TASK_EXT | vk::ShaderStageFlags::MESH_EXT;
+        }
+        stages
+    }
+
     /// The allocator, locked. Poisoning only follows a panic elsewhere; recover the data.
     pub fn allocator(&self) -> MutexGuard<'_, Allocator> {
         self.allocator.lock().unwrap_or_else(|p| p.into_inner())

@@ -15,14 +15,15 @@ pub struct PipelineLayout {
 }
 
 impl PipelineLayout {
-    /// A layout for graphics pipelines (push constants visible to every graphics stage).
+    /// A layout for graphics pipelines (push constants visible to every graphics stage the
+    /// device has, see `Device::graphics_stages`).
     pub fn create(
         device: &Arc<Device>,
         set_layouts: &[vk::DescriptorSetLayout],
         push_constant_bytes: u32,
         name: &str,
     ) -> Result<Self, GpuError> {
-        let stages = vk::ShaderStageFlags::ALL_GRAPHICS;
+        let stages = device.graphics_stages();
         Self::create_for(device, set_layouts, push_constant_bytes, stages, name)
     }
 
