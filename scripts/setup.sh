@@ -4,8 +4,11 @@
 #     (nothing else is taken from backports but what that package needs),
 #   - the Vulkan loader (libvulkan1) and the Khronos validation layers,
 #   - a C++ compiler for the glslang crate's build.
+#   - Google's SwiftShader Vulkan driver, the second CPU driver, unpacked project-locally into
+#     .drivers/swiftshader/ from Debian's chromium-common package (Chromium is not installed).
 # On other distributions it installs nothing and says what to install when something is missing.
 set -euo pipefail
+cd "$(dirname "$0")/.."
 
 log() { printf 'setup: %s\n' "$*" >&2; }
 
@@ -24,8 +27,57 @@ if ! command -v cargo >/dev/null; then
     exit 1
 fi
 
+# SwiftShader, project-local: chromium-common ships it as libvk_swiftshader.so with its ICD
+# manifest. apt-get download checks the package against the signed archive index; we compare
+# its SHA256 with the index once more before unpacking the two files. .cargo/config.toml
+# points the Vulkan loader at the manifest (VK_ADD_DRIVER_FILES) for cargo run and cargo test.
+swiftshader_dir=.drivers/swiftshader
+provide_swiftshader() {
+    if [ -e "$swiftshader_dir/vk_swiftshader_icd.json" ] && [ -e "$swiftshader_dir/libvk_swiftshader.so" ]; then
+        return 0
+    fi
+    if [ -z "$(apt-cache policy chromium-common 2>/dev/null | sed -n 's/^ *Candidate: *//p' | grep -v '(none)')" ]; then
+        log "apt-get update (for chromium-common, which carries SwiftShader)"
+        as_root apt-get update -qq
+    fi
+    local version tmp deb want got
+    version=$(apt-cache policy chromium-common | sed -n 's/^ *Candidate: *//p')
+    if [ -z "$version" ] || [ "$version" = "(none)" ]; then
+        log "chromium-common is not in the apt sources: SwiftShader not provided (lavapipe only)"
+        return 0
+    fi
+    tmp=$(mktemp -d)
+    log "providing SwiftShader from chromium-common $version into $swiftshader_dir"
+    chmod 755 "$tmp"
+    chown _apt "$tmp" 2>/dev/null || true # apt downloads as the _apt user where it can
+    (cd "$tmp" && apt-get download -qq "chromium-common=$version")
+    deb=$(ls "$tmp"/chromium-common_*.deb)
+    want=$(apt-cache show "chromium-common=$version" | sed -n 's/^SHA256: //p' | head -n 1)
+    got=$(sha256sum "$deb" | cut -d' ' -f1)
+    if [ -z "$want" ] || [ "$want" != "$got" ]; then
+        log "chromium-common $version: SHA256 $got does not match the archive's ${want:-(none)}"
+        rm -rf "$tmp"
+        exit 1
+    fi
+    mkdir -p "$tmp/x"
+    dpkg-deb --fsys-tarfile "$deb" |
+        tar -x -C "$tmp/x" ./usr/lib/chromium/libvk_swiftshader.so ./usr/lib/chromium/vk_swiftshader_icd.json
+    # Into place only whole: a half-copied driver must not look present next time.
+    mkdir -p .drivers
+    rm -rf "$swiftshader_dir.new"
+    mkdir "$swiftshader_dir.new"
+    cp "$tmp/x/usr/lib/chromium/libvk_swiftshader.so" "$tmp/x/usr/lib/chromium/vk_swiftshader_icd.json" "$swiftshader_dir.new/"
+    echo "chromium-common $version sha256 $got" > "$swiftshader_dir.new/SOURCE"
+    rm -rf "$swiftshader_dir"
+    mv "$swiftshader_dir.new" "$swiftshader_dir"
+    rm -rf "$tmp"
+}
+
 codename=$( . /etc/os-release 2>/dev/null && echo "${VERSION_CODENAME:-}" )
 if [ "$codename" != "bookworm" ]; then
+    if [ ! -e "$swiftshader_dir/vk_swiftshader_icd.json" ]; then
+        log "not Debian 12: SwiftShader is not provided; put libvk_swiftshader.so and vk_swiftshader_icd.json in $swiftshader_dir to test on it"
+    fi
     if [ ! -e /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json ] ||
        ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
         log "not Debian 12: install Mesa >= 24 lavapipe, the Vulkan loader and the Khronos validation layers with your package manager"
@@ -64,4 +116,6 @@ SRC
         as_root apt-get install -y -qq --no-install-recommends -t bookworm-backports mesa-vulkan-drivers >/dev/null
     fi
 fi
+provide_swiftshader
+log "ready: SwiftShader $(cut -d' ' -f2 "$swiftshader_dir/SOURCE" 2>/dev/null || echo 'not provided')"
 log "ready: mesa-vulkan-drivers $(dpkg-query -W -f='${Version}' mesa-vulkan-drivers), vulkan-validationlayers $(dpkg-query -W -f='${Version}' vulkan-validationlayers)"

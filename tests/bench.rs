@@ -238,3 +238,61 @@ fn github_format_and_bad_options() {
         assert!(!json.exists(), "{args:?} wrote {}", json.display());
     }
 }
+
+/// On SwiftShader (no pipeline statistics) the work counters are absent, never zero, in the
+/// JSON and the CSV; and a baseline recorded on lavapipe is refused before the run, naming
+/// both drivers.
+#[test]
+fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    if !root
+        .join(".drivers/swiftshader/vk_swiftshader_icd.json")
+        .exists()
+    {
+        eprintln!("SwiftShader is not provided here: nothing to check");
+        return;
+    }
+    let json = temp("swiftshader.json");
+    let csv = temp("swiftshader.csv");
+    let out = lean_quick(&[
+        "--device",
+        "swiftshader",
+        "--json",
+        json.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert_ok(&out);
+    let record = read_json(&json);
+    for r in record["results"].as_array().expect("results") {
+        for counter in ["vertex_invocations", "fragment_invocations"] {
+            assert!(r["work"][counter].is_null(), "{counter}: {}", r["work"]);
+            assert!(r["fill_stats"].is_null());
+        }
+        assert!(r["work"]["faces_rendered"].as_u64().unwrap() > 0);
+    }
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let column = header
+        .iter()
+        .position(|c| *c == "vertex_invocations")
+        .unwrap();
+    for line in text.lines().skip(1) {
+        assert_eq!(line.split(',').nth(column), Some(""), "{line}");
+    }
+    let refused = lean_quick(&[
+        "--device",
+        "swiftshader",
+        "--baseline",
+        "bench/baselines/quick.json",
+    ]);
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success());
+    assert!(
+        said.contains("llvmpipe") && said.contains("SwiftShader") && !said.contains("timed"),
+        "{said}"
+    );
+    for f in [json, csv] {
+        let _ = std::fs::remove_file(f);
+    }
+}

@@ -238,3 +238,44 @@ fn an_unusable_or_unknown_method_is_refused_with_the_reason() {
     assert!(String::from_utf8_lossy(&result.stderr).contains("--method sideways"));
     assert!(!out.exists());
 }
+
+/// `specchio info` lists every installed CPU driver with what each can run and why not:
+/// lavapipe (the default) runs every method; SwiftShader, where `scripts/setup.sh` provided
+/// it, runs six-pass and multiview and says that it lacks the geometry shader.
+#[test]
+fn info_lists_both_cpu_drivers_and_their_methods() {
+    let out = specchio(&["info", "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).expect("info JSON");
+    let devices = json["devices"].as_array().expect("devices");
+    let find = |short: &str| devices.iter().find(|d| d["short_name"] == short);
+    let usable = |d: &serde_json::Value, method: &str| {
+        let m = d["methods"].as_array().expect("methods");
+        let m = m.iter().find(|m| m["method"] == method).expect(method);
+        (
+            m["usable"] == true,
+            m["reason"].as_str().unwrap_or("").to_owned(),
+        )
+    };
+    let lavapipe = find("lavapipe").expect("lavapipe is installed (scripts/setup.sh)");
+    assert_eq!(lavapipe["default"], true, "lavapipe is the default device");
+    for m in specchio::render::methods::Method::all() {
+        assert!(usable(lavapipe, m.name()).0, "{m} on lavapipe");
+    }
+    let manifest = root().join(".drivers/swiftshader/vk_swiftshader_icd.json");
+    if !manifest.exists() {
+        eprintln!("SwiftShader is not provided here: only lavapipe checked");
+        return;
+    }
+    let swiftshader = find("swiftshader").expect("the provided SwiftShader is found by the loader");
+    assert_eq!(swiftshader["usable"], true);
+    assert_eq!(swiftshader["default"], false);
+    assert!(usable(swiftshader, "six-pass").0);
+    assert!(usable(swiftshader, "multiview").0);
+    let (geometry, why) = usable(swiftshader, "geometry");
+    assert!(!geometry && why.contains("geometryShader"), "{why}");
+}

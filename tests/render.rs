@@ -1,9 +1,10 @@
 //! GPU integration tests, each under the Khronos validation layer: any validation message
-//! fails the test. They render small cube maps on whatever device is default (lavapipe in CI).
+//! fails the test. They render small cube maps on the default device (lavapipe in CI); the
+//! known-answer tests run on every installed driver (lavapipe and SwiftShader).
 
 mod common;
 
-use common::{close, render_once, scene, Gpu};
+use common::{close, devices, render_once, scene, Gpu};
 use glam::Vec3;
 use specchio::render::{Readback, RenderOptions, Renderer};
 use specchio::scene::camera::{ViewBasis, FACE_NAMES};
@@ -20,23 +21,25 @@ const WALLS: [[f32; 3]; 6] = [
 
 #[test]
 fn each_cube_face_centre_shows_its_wall() {
-    let gpu = Gpu::new();
-    let (_, images) = render_once(&gpu, scene("scenes/test/six-colour-room.toml"), 16, 0.0);
-    let faces = images.cube.expect("cube read back");
-    for (f, img) in faces.iter().enumerate() {
-        // The four texels around the centre of an even-sized face.
-        for (x, y) in [(7, 7), (8, 7), (7, 8), (8, 8)] {
-            let p = img.pixel(x, y);
-            // Plain unlit colours of 0 and 1 are exact in RGBA16F.
-            assert_eq!(
-                [p[0], p[1], p[2]],
-                WALLS[f],
-                "face {} texel ({x},{y})",
-                FACE_NAMES[f]
-            );
+    for device in devices() {
+        let gpu = Gpu::on(&device, Default::default());
+        let (_, images) = render_once(&gpu, scene("scenes/test/six-colour-room.toml"), 16, 0.0);
+        let faces = images.cube.expect("cube read back");
+        for (f, img) in faces.iter().enumerate() {
+            // The four texels around the centre of an even-sized face.
+            for (x, y) in [(7, 7), (8, 7), (7, 8), (8, 8)] {
+                let p = img.pixel(x, y);
+                // Plain unlit colours of 0 and 1 are exact in RGBA16F.
+                assert_eq!(
+                    [p[0], p[1], p[2]],
+                    WALLS[f],
+                    "{device}: face {} texel ({x},{y})",
+                    FACE_NAMES[f]
+                );
+            }
         }
+        gpu.finish();
     }
-    gpu.finish();
 }
 
 /// Every texel of every face shows the direction of its own texel-centre ray (the `direction`
@@ -44,34 +47,36 @@ fn each_cube_face_centre_shows_its_wall() {
 /// is the one Vulkan's cube lookup expects, texel by texel.
 #[test]
 fn every_cube_texel_shows_its_own_direction() {
-    let gpu = Gpu::new();
-    let n = 16;
-    let (_, images) = render_once(&gpu, scene("scenes/test/direction-room.toml"), n, 0.0);
-    let faces = images.cube.expect("cube read back");
-    let mut worst = 0.0f32;
-    for (f, img) in faces.iter().enumerate() {
-        let basis = ViewBasis::cube_face(Vec3::ZERO, f);
-        for y in 0..n {
-            for x in 0..n {
-                let ndc = |i: u32| 2.0 * (i as f32 + 0.5) / n as f32 - 1.0;
-                let d = basis.ray(ndc(x), ndc(y)).normalize();
-                let want = 0.5 + 0.5 * d;
-                let got = img.pixel(x, y);
-                let err = (Vec3::new(got[0], got[1], got[2]) - want)
-                    .abs()
-                    .max_element();
-                worst = worst.max(err);
-                // RGBA16F keeps 11 bits: 1/2048 relative; interpolation adds float rounding.
-                assert!(
-                    err < 2e-3,
-                    "face {} texel ({x},{y}): got {got:?}, want {want}",
-                    FACE_NAMES[f]
-                );
+    for device in devices() {
+        let gpu = Gpu::on(&device, Default::default());
+        let n = 16;
+        let (_, images) = render_once(&gpu, scene("scenes/test/direction-room.toml"), n, 0.0);
+        let faces = images.cube.expect("cube read back");
+        let mut worst = 0.0f32;
+        for (f, img) in faces.iter().enumerate() {
+            let basis = ViewBasis::cube_face(Vec3::ZERO, f);
+            for y in 0..n {
+                for x in 0..n {
+                    let ndc = |i: u32| 2.0 * (i as f32 + 0.5) / n as f32 - 1.0;
+                    let d = basis.ray(ndc(x), ndc(y)).normalize();
+                    let want = 0.5 + 0.5 * d;
+                    let got = img.pixel(x, y);
+                    let err = (Vec3::new(got[0], got[1], got[2]) - want)
+                        .abs()
+                        .max_element();
+                    worst = worst.max(err);
+                    // RGBA16F keeps 11 bits: 1/2048 relative; interpolation adds float rounding.
+                    assert!(
+                        err < 2e-3,
+                        "{device}: face {} texel ({x},{y}): got {got:?}, want {want}",
+                        FACE_NAMES[f]
+                    );
+                }
             }
         }
+        eprintln!("{device}: worst direction error {worst}");
+        gpu.finish();
     }
-    eprintln!("worst direction error {worst}");
-    gpu.finish();
 }
 
 /// Known answers for the mirror. The observer looks along -Z at the sphere: the ray through
@@ -80,31 +85,33 @@ fn every_cube_texel_shows_its_own_direction() {
 /// (-Y, magenta). Outside the sphere the observer sees the -Z wall (yellow).
 #[test]
 fn mirror_shows_what_is_behind_the_viewer() {
-    let gpu = Gpu::new();
-    let s = scene("scenes/test/six-colour-room.toml");
-    let (ow, oh) = (s.observer.resolution[0], s.observer.resolution[1]);
-    let (sw, sh) = (s.sensor.resolution[0], s.sensor.resolution[1]);
-    let (_, images) = render_once(&gpu, s, 32, 0.0);
-    let observer = images.observer.expect("observer");
-    let sensor = images.sensor.expect("sensor");
-    let centre = observer.pixel(ow / 2, oh / 2);
-    assert!(
-        close(centre, WALLS[4], 1e-3),
-        "observer centre {centre:?} should be +Z blue"
-    );
-    let corner = observer.pixel(2, 2);
-    assert!(
-        close(corner, WALLS[5], 1e-3)
-            || close(corner, WALLS[2], 1e-3)
-            || close(corner, WALLS[1], 1e-3),
-        "observer corner {corner:?} should be a wall, not the mirror"
-    );
-    let up = sensor.pixel(sw / 2, sh / 2);
-    assert!(
-        close(up, WALLS[3], 1e-3),
-        "sensor centre {up:?} should be the floor (magenta)"
-    );
-    gpu.finish();
+    for device in devices() {
+        let gpu = Gpu::on(&device, Default::default());
+        let s = scene("scenes/test/six-colour-room.toml");
+        let (ow, oh) = (s.observer.resolution[0], s.observer.resolution[1]);
+        let (sw, sh) = (s.sensor.resolution[0], s.sensor.resolution[1]);
+        let (_, images) = render_once(&gpu, s, 32, 0.0);
+        let observer = images.observer.expect("observer");
+        let sensor = images.sensor.expect("sensor");
+        let centre = observer.pixel(ow / 2, oh / 2);
+        assert!(
+            close(centre, WALLS[4], 1e-3),
+            "{device}: observer centre {centre:?} should be +Z blue"
+        );
+        let corner = observer.pixel(2, 2);
+        assert!(
+            close(corner, WALLS[5], 1e-3)
+                || close(corner, WALLS[2], 1e-3)
+                || close(corner, WALLS[1], 1e-3),
+            "{device}: observer corner {corner:?} should be a wall, not the mirror"
+        );
+        let up = sensor.pixel(sw / 2, sh / 2);
+        assert!(
+            close(up, WALLS[3], 1e-3),
+            "{device}: sensor centre {up:?} should be the floor (magenta)"
+        );
+        gpu.finish();
+    }
 }
 
 /// The same frame rendered twice, by two renderers, gives identical bytes.
@@ -209,24 +216,26 @@ fn mirror_is_drawn_from_inside_its_bounding_cube() {
 /// walls are edge-on (ambient only).
 #[test]
 fn directional_light_known_answers() {
-    let gpu = Gpu::new();
-    let path = common::root().join("scenes/test/six-colour-room.toml");
-    let text = std::fs::read_to_string(&path).unwrap()
-        + "\n[light]\ndirection = [0, 1, 0]\nambient = 0.25\n";
-    let s = specchio::scene::load_str(&text, &path).expect("scene with a light");
-    let (_, images) = render_once(&gpu, s, 16, 0.0);
-    let faces = images.cube.unwrap();
-    for (f, wall) in WALLS.iter().enumerate() {
-        let scale = if f == 3 { 1.0 } else { 0.25 }; // -Y (floor) faces the light
-        let want = wall.map(|c| c * scale);
-        let got = faces[f].pixel(8, 8);
-        assert!(
-            close(got, want, 1e-3),
-            "face {}: got {got:?}, want {want:?}",
-            FACE_NAMES[f]
-        );
+    for device in devices() {
+        let gpu = Gpu::on(&device, Default::default());
+        let path = common::root().join("scenes/test/six-colour-room.toml");
+        let text = std::fs::read_to_string(&path).unwrap()
+            + "\n[light]\ndirection = [0, 1, 0]\nambient = 0.25\n";
+        let s = specchio::scene::load_str(&text, &path).expect("scene with a light");
+        let (_, images) = render_once(&gpu, s, 16, 0.0);
+        let faces = images.cube.unwrap();
+        for (f, wall) in WALLS.iter().enumerate() {
+            let scale = if f == 3 { 1.0 } else { 0.25 }; // -Y (floor) faces the light
+            let want = wall.map(|c| c * scale);
+            let got = faces[f].pixel(8, 8);
+            assert!(
+                close(got, want, 1e-3),
+                "{device}: face {}: got {got:?}, want {want:?}",
+                FACE_NAMES[f]
+            );
+        }
+        gpu.finish();
     }
-    gpu.finish();
 }
 
 /// The scene with every shape, OBJ and glTF meshes and a moving mirror renders under

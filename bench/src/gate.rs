@@ -16,18 +16,66 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use serde_json::Value;
 
-/// The `results` array of an earlier `specchio bench --json` file.
-pub fn read_baseline(path: &Path) -> Result<Vec<Value>> {
+/// An earlier `specchio bench --json` file: its results and the driver that measured them.
+pub struct Baseline {
+    pub results: Vec<Value>,
+    /// The driver's name (`llvmpipe`, `SwiftShader driver`, ...): counters compare only on
+    /// the same driver.
+    pub driver_name: String,
+    /// The driver's version string, for a warning when it differs.
+    pub driver_info: String,
+}
+
+pub fn read_baseline(path: &Path) -> Result<Baseline> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read the baseline {}", path.display()))?;
     let json: Value =
         serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
-    json["results"].as_array().cloned().with_context(|| {
+    let results = json["results"].as_array().cloned().with_context(|| {
         format!(
             "{}: no `results` array (not a `specchio bench --json` file?)",
             path.display()
         )
+    })?;
+    let field = |k: &str| {
+        json["device"][k]
+            .as_str()
+            .map(str::to_owned)
+            .with_context(|| format!("{}: field `device.{k}` is missing", path.display()))
+    };
+    Ok(Baseline {
+        results,
+        driver_name: field("driver_name")?,
+        driver_info: field("driver_info")?,
     })
+}
+
+/// Whether a run on `device` may be compared with `baseline`: the same driver, or an error
+/// that says which drivers differ (a warning when only the version differs).
+pub fn same_driver(
+    baseline: &Baseline,
+    device: &specchio::vk::device::DeviceInfo,
+    path: &Path,
+) -> Result<()> {
+    let named = |name: &str, info: &str| match info {
+        "" => name.to_owned(),
+        _ => format!("{name} ({info})"),
+    };
+    anyhow::ensure!(
+        baseline.driver_name == device.driver_name,
+        "{} was measured on {}, this run is on {}: work counters compare only on the same \
+         driver (pick it with --device, or record a baseline for this one)",
+        path.display(),
+        named(&baseline.driver_name, &baseline.driver_info),
+        named(&device.driver_name, &device.driver_info),
+    );
+    if baseline.driver_info != device.driver_info {
+        eprintln!(
+            "regression gate: warning: baseline driver {} differs from this run's {}",
+            baseline.driver_info, device.driver_info
+        );
+    }
+    Ok(())
 }
 
 /// The case a result row is for.
@@ -65,9 +113,12 @@ pub fn check(baseline: &[Value], results: &[Value], max_regression: Option<f64>)
             "vertex_invocations",
             "clipping_primitives",
             "fragment_invocations",
+            "task_invocations",
+            "mesh_invocations",
             "faces_rendered",
             "objects_drawn",
         ] {
+            // A counter the driver lacks is null in both; null on one side only fails.
             let (new, old) = (&r["work"][counter], &b["work"][counter]);
             if new != old {
                 failures.push(format!("{}: {counter} {new} (baseline {old})", key(r)));

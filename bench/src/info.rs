@@ -22,6 +22,8 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<ExitCode> {
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
     let candidates = device::enumerate(&instance)?;
+    // The device a command without `--device` would use.
+    let default = device::choose(&instance, None).ok().map(|d| d.index);
     // Which cube methods each usable device can run (multiview is probed in a child process).
     let methods: Vec<Vec<(Method, Result<(), String>)>> = candidates
         .iter()
@@ -39,6 +41,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             .map(|(c, ms)| {
                 let mut v = serde_json::to_value(&c.info).unwrap_or_default();
                 v["usable"] = serde_json::json!(c.rejected.is_none());
+                v["default"] = serde_json::json!(default == Some(c.info.index));
                 v["rejected_because"] = serde_json::json!(c.rejected);
                 v["mesa_too_old"] = serde_json::json!(mesa_too_old(&c.info));
                 v["methods"] = ms
@@ -58,7 +61,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         println!("no Vulkan device found (Debian: apt-get install mesa-vulkan-drivers)");
     }
     for (c, ms) in candidates.iter().zip(&methods) {
-        print_device(&c.info, c.rejected.as_deref());
+        print_device(
+            &c.info,
+            c.rejected.as_deref(),
+            default == Some(c.info.index),
+        );
         for (m, r) in ms {
             match r {
                 Ok(()) => println!("    method {:<20} usable", m.name()),
@@ -73,9 +80,11 @@ fn mesa_too_old(info: &DeviceInfo) -> bool {
     device::mesa_major(info).is_some_and(|m| m < MIN_MESA_MAJOR)
 }
 
-fn print_device(i: &DeviceInfo, rejected: Option<&str>) {
+fn print_device(i: &DeviceInfo, rejected: Option<&str>, default: bool) {
     let yes = |b: bool| if b { "yes" } else { "no" };
-    println!("[{}] {} ({})", i.index, i.name, i.device_type);
+    let mark = if default { "  <- default" } else { "" };
+    println!("[{}] {} ({}){mark}", i.index, i.name, i.device_type);
+    println!("    --device:           {} (or {})", i.short_name, i.index);
     match rejected {
         Some(why) => println!("    status:             NOT USABLE: {why}"),
         None => println!("    status:             usable"),

@@ -64,6 +64,23 @@ fn tune_allocator() -> Option<i32> {
     None
 }
 
+/// The second CPU driver, SwiftShader, lives in this checkout's `.drivers/` (put there by
+/// `scripts/setup.sh`, not installed system-wide). Unless the user chose drivers through the
+/// loader's variables, add it, so that `specchio` run from here lists it beside the system's
+/// drivers (`cargo run` and `cargo test` get the same through `.cargo/config.toml`).
+fn add_project_drivers() {
+    const CHOSEN: [&str; 3] = ["VK_ADD_DRIVER_FILES", "VK_DRIVER_FILES", "VK_ICD_FILENAMES"];
+    if CHOSEN.iter().any(|v| std::env::var_os(v).is_some()) {
+        return;
+    }
+    let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../.drivers/swiftshader/vk_swiftshader_icd.json");
+    if manifest.exists() {
+        // Sound: no other thread exists yet, and the loader reads it when it is loaded.
+        std::env::set_var("VK_ADD_DRIVER_FILES", manifest);
+    }
+}
+
 fn main() -> ExitCode {
     // Like other command-line tools, end quietly when the reader of stdout goes away
     // (`specchio ... | head`) instead of failing on the next print.
@@ -72,6 +89,7 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    add_project_drivers();
     let trim = tune_allocator();
     // Read back by the subcommands that report their environment.
     TRIM_THRESHOLD.get_or_init(|| trim);

@@ -28,29 +28,59 @@ pub struct Gpu {
     log: Arc<ValidationLog>,
 }
 
+/// Every usable device the loader finds, by short name (`--device`): lavapipe, and
+/// SwiftShader where `scripts/setup.sh` provided it. Tests that must hold on every driver
+/// loop over these.
+pub fn devices() -> Vec<String> {
+    let instance = Instance::create(&InstanceDesc { validation: false }).expect("Vulkan");
+    let found: Vec<String> = specchio::vk::device::enumerate(&instance)
+        .expect("enumerate devices")
+        .into_iter()
+        .filter(|c| c.rejected.is_none())
+        .map(|c| c.info.short_name)
+        .collect();
+    assert!(!found.is_empty(), "no usable Vulkan device");
+    found
+}
+
 impl Gpu {
+    /// The default device.
     pub fn new() -> Self {
         Self::with_features(OptionalFeatures::default())
     }
 
-    /// A device with the optional features of some cube methods enabled.
+    /// The default device with the optional features of some cube methods enabled.
     pub fn with_features(features: OptionalFeatures) -> Self {
+        Self::create(None, features)
+    }
+
+    /// Device `device` (a short name from [`devices`]) with `features` enabled.
+    pub fn on(device: &str, features: OptionalFeatures) -> Self {
+        Self::create(Some(device), features)
+    }
+
+    fn create(selector: Option<&str>, features: OptionalFeatures) -> Self {
         let instance = Instance::create(&InstanceDesc { validation: true }).expect(
             "Vulkan with VK_LAYER_KHRONOS_validation (apt-get install vulkan-validationlayers)",
         );
         let log = instance.validation_log();
         let desc = DeviceDesc {
+            selector: selector.map(str::to_owned),
             features,
-            ..DeviceDesc::default()
         };
         let device = Device::create(&instance, &desc).expect("a Vulkan 1.3 device");
         Self { device, log }
     }
 
-    /// A device with the features of every registered cube method it can run (variants
-    /// included) enabled, and those methods in registry order.
+    /// The default device with the features of every registered cube method it can run
+    /// (variants included) enabled, and those methods in registry order.
     pub fn with_all_methods() -> (Self, Vec<Method>) {
-        let probe = Self::new();
+        Self::with_all_methods_on(None)
+    }
+
+    /// [`Self::with_all_methods`] on device `device` (`None`: the default one).
+    pub fn with_all_methods_on(device: Option<&str>) -> (Self, Vec<Method>) {
+        let probe = Self::create(device, OptionalFeatures::default());
         let methods: Vec<Method> = Method::all()
             .filter(|m| m.missing_features(&probe.device.info).is_none())
             .collect();
@@ -58,7 +88,7 @@ impl Gpu {
         let features = methods
             .iter()
             .fold(OptionalFeatures::default(), |f, m| f.union(m.features()));
-        (Self::with_features(features), methods)
+        (Self::create(device, features), methods)
     }
 
     /// Drops the device (the layer reports leaks then) and fails on any validation message.

@@ -258,6 +258,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         .map(|(m, why)| json!({ "method": m, "reason": why }))
         .collect();
     let device = probe::device_for(&instance, args.device.as_deref(), &methods)?;
+    if let (Some(b), Some(path)) = (&baseline, &args.baseline) {
+        crate::gate::same_driver(b, &device.info, path)?;
+    }
     let plan = Plan {
         frames: args.frames,
         warmup: args.warmup,
@@ -498,7 +501,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         writeln!(out)?;
     }
     if let Some(baseline) = &baseline {
-        let failures = crate::gate::check(baseline, &results, args.max_regression);
+        let failures = crate::gate::check(&baseline.results, &results, args.max_regression);
         if !failures.is_empty() {
             eprintln!(
                 "regression gate: {} case(s) got worse or changed:",
@@ -536,13 +539,12 @@ fn result_row(
     let reports = &timed.reports;
     let wall = stats(reports.iter().map(|r| r.submit_wait_ms).collect());
     let median = wall["median"].as_f64().unwrap_or(f64::NAN);
-    let work = reports.iter().filter_map(|r| r.fill_stats).fold(
-        specchio::vk::queries::PipelineStats::default(),
-        |mut a, s| {
-            a += s;
-            a
-        },
-    );
+    // Summed over the updates; `None` where the driver has no pipeline statistics
+    // (SwiftShader): such counters are reported absent (null), never zero.
+    let work = reports
+        .iter()
+        .map(|r| r.fill_stats)
+        .sum::<Option<specchio::vk::queries::PipelineStats>>();
     let faces: u64 = reports.iter().map(|r| u64::from(r.faces_rendered)).sum();
     let drawn: u64 = reports
         .iter()
@@ -575,9 +577,11 @@ fn result_row(
         "triangles": scene.objects.iter().map(|o| scene.meshes[o.mesh].triangle_count()).sum::<usize>() + 12,
         "objects": scene.objects.len(),
         "work": {
-            "vertex_invocations": work.vertex_invocations,
-            "clipping_primitives": work.clipping_primitives,
-            "fragment_invocations": work.fragment_invocations,
+            "vertex_invocations": work.map(|w| w.vertex_invocations),
+            "clipping_primitives": work.map(|w| w.clipping_primitives),
+            "fragment_invocations": work.map(|w| w.fragment_invocations),
+            "task_invocations": work.and_then(|w| w.task_invocations),
+            "mesh_invocations": work.and_then(|w| w.mesh_invocations),
             "faces_rendered": faces,
             "objects_drawn": drawn,
         },

@@ -93,6 +93,8 @@ pub fn write_csv(path: &Path, record: &Value) -> Result<()> {
         "scene,method,cube_size,lookup,updates,wall_median_ms,wall_p10_ms,wall_p90_ms,gpu_fill_median_ms,vertex_invocations,fragment_invocations,faces_rendered,objects_drawn,vs_floors,flip_mean,flip_p99,angular_mean_deg,angular_p99_deg\n",
     );
     let f = |v: &Value| v.as_f64().map_or(String::new(), |x| format!("{x:.6}"));
+    // A counter the driver does not have is an empty field, not 0 or "null".
+    let n = |v: &Value| v.as_u64().map_or(String::new(), |x| x.to_string());
     for s in record["speed_vs_error"].as_array().into_iter().flatten() {
         let r = &s["result"];
         let a = &s["accuracy"];
@@ -108,10 +110,10 @@ pub fn write_csv(path: &Path, record: &Value) -> Result<()> {
             f(&r["wall_ms"]["p10"]),
             f(&r["wall_ms"]["p90"]),
             f(&r["gpu_fill_ms"]["median"]),
-            w["vertex_invocations"],
-            w["fragment_invocations"],
-            w["faces_rendered"],
-            w["objects_drawn"],
+            n(&w["vertex_invocations"]),
+            n(&w["fragment_invocations"]),
+            n(&w["faces_rendered"]),
+            n(&w["objects_drawn"]),
             f(&r["efficiency"]["vs_geometry_plus_fill"]),
             f(&a["flip_mean"]),
             f(&a["flip_p99"]),

@@ -17,8 +17,9 @@ pub const MIN_MESA_MAJOR: u32 = 24;
 /// How to pick and set up a device.
 #[derive(Debug, Clone, Default)]
 pub struct DeviceDesc {
-    /// `--device`: an index into the enumeration order, or a case-insensitive substring of the
-    /// device name. `None`: the best device (discrete > integrated > virtual > CPU).
+    /// `--device`: an index into the enumeration order, or a case-insensitive part of the
+    /// device's name, short name (`lavapipe`, `swiftshader`) or driver name. `None`: the
+    /// best-ranked usable device (see `DeviceInfo::rank`).
     pub selector: Option<String>,
     /// Optional features to enable (those of the cube methods that will run); the device is
     /// rejected if it lacks one.
@@ -115,6 +116,9 @@ impl Limit {
 pub struct DeviceInfo {
     pub index: usize,
     pub name: String,
+    /// A short, stable name for `--device` and reports: `lavapipe`, `swiftshader` for the two
+    /// CPU drivers we test on, else the driver's name in lower case.
+    pub short_name: String,
     pub device_type: String,
     pub vendor_id: u32,
     pub device_id: u32,
@@ -365,11 +369,23 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut multiview_props = vk::PhysicalDeviceMultiviewProperties::default();
     let mut mesh_props = vk::PhysicalDeviceMeshShaderPropertiesEXT::default();
+    // SAFETY: plain query; a failure reads as "no extensions".
+    let exts: Vec<String> = unsafe { inst.enumerate_device_extension_properties(physical) }
+        .unwrap_or_default()
+        .iter()
+        .filter_map(|e| e.extension_name_as_c_str().ok())
+        .map(|n| n.to_string_lossy().into_owned())
+        .collect();
+    let has_ext = |n: &std::ffi::CStr| exts.iter().any(|e| e.as_bytes() == n.to_bytes());
     let mut props2 = vk::PhysicalDeviceProperties2::default()
         .push_next(&mut driver)
-        .push_next(&mut multiview_props)
-        .push_next(&mut mesh_props);
-    // SAFETY: the chained structs are all core 1.2+ or ignored when unknown to the driver.
+        .push_next(&mut multiview_props);
+    // Chained only where the extension exists: SwiftShader warns on stderr about structs it
+    // does not know.
+    if has_ext(ash::ext::mesh_shader::NAME) {
+        props2 = props2.push_next(&mut mesh_props);
+    }
+    // SAFETY: the chained structs are core 1.2+ or belong to a supported extension.
     unsafe { inst.get_physical_device_properties2(physical, &mut props2) };
     let props = props2.properties;
 
@@ -379,13 +395,6 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
     let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default();
     let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
     let api_ok = props.api_version >= vk::API_VERSION_1_3;
-    let exts: Vec<String> = unsafe { inst.enumerate_device_extension_properties(physical) }
-        .unwrap_or_default()
-        .iter()
-        .filter_map(|e| e.extension_name_as_c_str().ok())
-        .map(|n| n.to_string_lossy().into_owned())
-        .collect();
-    let has_ext = |n: &std::ffi::CStr| exts.iter().any(|e| e.as_bytes() == n.to_bytes());
     let mut features2 = vk::PhysicalDeviceFeatures2::default()
         .push_next(&mut f11)
         .push_next(&mut f12);
@@ -428,16 +437,18 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
         .driver_info_as_c_str()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let driver_name = driver
+        .driver_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let info = DeviceInfo {
         index,
         name,
+        short_name: short_name(driver.driver_id, &driver_name),
         device_type: format!("{:?}", props.device_type),
         vendor_id: props.vendor_id,
         device_id: props.device_id,
-        driver_name: driver
-            .driver_name_as_c_str()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default(),
+        driver_name,
         mesa_version: parse_mesa_version(&driver_info),
         driver_info,
         driver_version: version_string(props.driver_version),
@@ -511,15 +522,9 @@ fn select(
     selector: Option<&str>,
 ) -> Result<(vk::PhysicalDevice, DeviceInfo, u32), GpuError> {
     let mut report = Vec::new();
-    let mut best: Option<(&Candidate, u32)> = None;
+    let mut best: Option<(&Candidate, Rank)> = None;
     for c in candidates {
-        let matches = match selector {
-            None => true,
-            Some(s) => match s.parse::<usize>() {
-                Ok(i) => i == c.info.index,
-                Err(_) => c.info.name.to_lowercase().contains(&s.to_lowercase()),
-            },
-        };
+        let matches = selector.is_none_or(|s| c.info.selected_by(s));
         if !matches {
             report.push(format!(
                 "  [{}] {}: not selected by --device {}",
@@ -533,14 +538,8 @@ fn select(
             report.push(format!("  [{}] {}: {why}", c.info.index, c.info.name));
             continue;
         }
-        let rank = match c.info.device_type.as_str() {
-            "DISCRETE_GPU" => 4,
-            "INTEGRATED_GPU" => 3,
-            "VIRTUAL_GPU" => 2,
-            "CPU" => 1,
-            _ => 0,
-        };
-        if best.is_none_or(|(_, r)| rank > r) {
+        let rank = c.info.rank();
+        if best.as_ref().is_none_or(|(_, r)| rank > *r) {
             best = Some((c, rank));
         }
     }
@@ -555,6 +554,56 @@ fn select(
             "  the loader found no device; install a driver (Debian: mesa-vulkan-drivers)".into(),
         )),
         None => Err(GpuError::NoDevice(report.join("\n"))),
+    }
+}
+
+/// How a device ranks for the default choice: GPUs before CPUs, then the one that can run
+/// more (lavapipe before SwiftShader), then by name, so that the choice does not depend on
+/// the order in which the loader lists its drivers.
+type Rank = (u32, u32, std::cmp::Reverse<String>);
+
+impl DeviceInfo {
+    fn rank(&self) -> Rank {
+        let kind = match self.device_type.as_str() {
+            "DISCRETE_GPU" => 4,
+            "INTEGRATED_GPU" => 3,
+            "VIRTUAL_GPU" => 2,
+            "CPU" => 1,
+            _ => 0,
+        };
+        let f = &self.features;
+        let abilities = [
+            f.multiview,
+            f.geometry_shader,
+            f.shader_output_layer,
+            f.mesh_shader,
+            f.ray_query,
+            f.pipeline_statistics,
+            f.timestamps,
+        ];
+        let can = abilities.iter().filter(|&&b| b).count() as u32;
+        (kind, can, std::cmp::Reverse(self.name.clone()))
+    }
+
+    /// Whether `--device SELECTOR` names this device: its index, or a case-insensitive part
+    /// of its name, short name or driver name.
+    pub fn selected_by(&self, selector: &str) -> bool {
+        if let Ok(i) = selector.parse::<usize>() {
+            return i == self.index;
+        }
+        let s = selector.to_lowercase();
+        [&self.name, &self.short_name, &self.driver_name]
+            .iter()
+            .any(|n| n.to_lowercase().contains(&s))
+    }
+}
+
+/// See [`DeviceInfo::short_name`].
+fn short_name(id: vk::DriverId, driver_name: &str) -> String {
+    match id {
+        vk::DriverId::MESA_LLVMPIPE => "lavapipe".into(),
+        vk::DriverId::GOOGLE_SWIFTSHADER => "swiftshader".into(),
+        _ => driver_name.to_lowercase().replace(' ', "-"),
     }
 }
 

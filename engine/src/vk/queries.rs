@@ -53,6 +53,15 @@ impl std::ops::AddAssign for PipelineStats {
     }
 }
 
+impl std::iter::Sum for PipelineStats {
+    fn sum<I: Iterator<Item = Self>>(iter: I) -> Self {
+        iter.fold(Self::default(), |mut a, s| {
+            a += s;
+            a
+        })
+    }
+}
+
 /// A query pool of one type.
 pub struct QueryPool {
     pub raw: vk::QueryPool,
