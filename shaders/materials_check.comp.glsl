@@ -3,10 +3,12 @@
 // arbitrary points, and writes full f32 results: the GPU side of the test that the CPU
 // reference's twin of materials.glsl computes the same thing (not a rendering pass).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_nonuniform_qualifier : require
 #include "shared.glsl"
-#include "materials.glsl"
 
 SCENE_BINDINGS;
+
+#include "materials.glsl"
 CHECK_PUSH_CONSTANTS;
 
 layout(set = 1, binding = 0, std430) readonly buffer SampleBlock { MaterialSample samples[]; };
@@ -20,7 +22,6 @@ void main() {
     }
     uint i = check.first + gl_GlobalInvocationID.x;
     MaterialData m = materials[check.material];
-    vec3 albedo = material_albedo(m, samples[i].position.xyz, samples[i].uv.xy,
-                                  textures[m.kind_texture.y]);
+    vec3 albedo = material_albedo(m, samples[i].position.xyz, samples[i].uv.xy);
     results[i] = vec4(shade(albedo, samples[i].normal.xyz, frame), 1.0);
 }

@@ -2,10 +2,12 @@
 // scene.frag - the albedo (and optional light) of everything but the mirror. Shared by every
 // cube method and every view, so equal inputs give equal pixels.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_nonuniform_qualifier : require
 #include "shared.glsl"
-#include "materials.glsl"
 
 SCENE_BINDINGS;
+
+#include "materials.glsl"
 
 layout(location = 0) in vec3 in_world_pos;
 layout(location = 1) in vec3 in_world_normal;
@@ -16,8 +18,6 @@ layout(location = 0) out vec4 out_color;
 
 void main() {
     MaterialData m = materials[objects[in_object].material.x];
-    // One object per draw (or per instance): the texture slot is the same for every fragment
-    // of a primitive, which dynamic indexing of a sampler array requires.
-    vec3 albedo = material_albedo(m, in_world_pos, in_uv, textures[m.kind_texture.y]);
+    vec3 albedo = material_albedo(m, in_world_pos, in_uv);
     out_color = vec4(shade(albedo, in_world_normal, frame), 1.0);
 }

@@ -7,6 +7,12 @@
 
 #include "shared.glsl"
 
+// The including shader declares the scene's bindings (SCENE_BINDINGS: `textures`) first and
+// enables GL_EXT_nonuniform_qualifier (material_albedo indexes the texture array with it).
+#ifndef GL_EXT_nonuniform_qualifier
+#error "materials.glsl needs #extension GL_EXT_nonuniform_qualifier : require"
+#endif
+
 // Parity of the integer cell containing uv * tiles: 0 or 1.
 float checker_parity(vec2 uv, float tiles) {
     vec2 cell = floor(uv * tiles);
@@ -22,7 +28,7 @@ float grid_line(vec2 uv, float tiles, float w) {
 
 // The material's albedo (linear RGB) at a surface point. p is in render space, so the
 // direction material's "from the mirror centre" is just normalize(p - mirror centre).
-vec3 material_albedo(MaterialData m, vec3 p, vec2 uv, sampler2D tex) {
+vec3 material_albedo(MaterialData m, vec3 p, vec2 uv) {
     uint kind = m.kind_texture.x;
     float tiles = m.params.x;
     if (kind == MATERIAL_CHECKER) {
@@ -32,7 +38,11 @@ vec3 material_albedo(MaterialData m, vec3 p, vec2 uv, sampler2D tex) {
     } else if (kind == MATERIAL_TEXTURE) {
         // Level 0, bilinear, sRGB decoded by the sampler. Explicit LOD: the sampler allows
         // only level 0 anyway, and this also runs in the compute check (no derivatives).
-        return m.color_a.rgb * textureLod(tex, uv * tiles, 0.0).rgb;
+        // nonuniformEXT: one draw may shade several objects (a mesh-shader workgroup list,
+        // instanced draws), so the texture slot need not be the same across the draw, and
+        // indexing a descriptor array with a non-uniform value is undefined without it.
+        uint slot = m.kind_texture.y;
+        return m.color_a.rgb * textureLod(textures[nonuniformEXT(slot)], uv * tiles, 0.0).rgb;
     } else if (kind == MATERIAL_DIRECTION) {
         return 0.5 + 0.5 * normalize(p);
     }

@@ -9,6 +9,7 @@ use gpu_allocator::MemoryLocation;
 use super::gpu::{CheckPush, MaterialSample};
 use super::Renderer;
 use crate::scene::state::SceneState;
+use crate::vk::commands::host_read_barrier;
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::memory::{Buffer, BufferDesc};
 use crate::vk::pipeline::{Pipeline, PipelineLayout};
@@ -136,16 +137,13 @@ impl Renderer {
                 d.cmd_dispatch(cmd, (n as u32).div_ceil(GROUP), 1, 1);
                 first += n;
             }
-            let to_host = [vk::MemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
-                .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-                .dst_access_mask(vk::AccessFlags2::HOST_READ)];
-            d.cmd_pipeline_barrier2(
-                cmd,
-                &vk::DependencyInfo::default().memory_barriers(&to_host),
-            );
         }
+        host_read_barrier(
+            device,
+            cmd,
+            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            vk::AccessFlags2::SHADER_STORAGE_WRITE,
+        );
         self.submitter.submit_and_wait()?;
 
         let bytes = results.mapped()?;

@@ -8,6 +8,7 @@ use super::resources::{VIEW_OBSERVER, VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT, VIEW_SENS
 use super::targets::{ViewTarget, DEPTH_FORMAT, DIRECTION_FORMAT, VIEW_FORMAT};
 use super::*;
 use crate::scene::camera::{Frustum, ViewBasis};
+use crate::vk::commands::host_read_barrier;
 
 /// The view images a frame can read back.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -258,6 +259,13 @@ impl Renderer {
         for ((_, t), &(_, at)) in self.view_slots(readback).into_iter().zip(&copies.items) {
             copy(t.color.raw, 1, t.width, t.height, at);
         }
+        // The host reads the buffer after the fence (read_images).
+        host_read_barrier(
+            dev,
+            cmd,
+            vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        );
     }
 
     pub(super) fn read_images(

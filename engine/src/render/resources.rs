@@ -14,7 +14,7 @@ use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::Device;
 use crate::vk::image::{Image, ImageDesc, ImageView, Sampler};
-use crate::vk::memory::{Buffer, BufferDesc};
+use crate::vk::memory::{Buffer, BufferDesc, Upload};
 use crate::vk::GpuError;
 
 /// Views in the view buffer: the six cube faces first, then the cameras.
@@ -100,19 +100,20 @@ impl SceneResources {
                 name,
             )
         };
-        let mut vertex_buffer = host(
-            std::mem::size_of_val(vertices.as_slice()),
+        // Geometry never changes: device-local, read by every pass.
+        let mut upload = Upload::begin(device, submitter)?;
+        let vertex_buffer = upload.buffer(
+            &vertices,
             // Storage too: a method may fetch vertices in its own shaders (mesh shading).
             vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
             "scene vertices",
         )?;
-        vertex_buffer.write(&vertices)?;
-        let mut index_buffer = host(
-            std::mem::size_of_val(indices.as_slice()),
+        let index_buffer = upload.buffer(
+            &indices,
             vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
             "scene indices",
         )?;
-        index_buffer.write(&indices)?;
+        upload.finish()?;
         let materials_data: Vec<MaterialData> = scene.materials.iter().map(material_data).collect();
         let mut materials = host(
             std::mem::size_of_val(materials_data.as_slice()),

@@ -127,3 +127,22 @@ pub fn image_barriers(device: &Device, cmd: vk::CommandBuffer, barriers: &[Image
     // SAFETY: cmd is recording; the barriers name live images.
     unsafe { device.raw.cmd_pipeline_barrier2(cmd, &dep) };
 }
+
+/// Makes writes by `stage` (`access`) visible to the host: required before the CPU reads
+/// GPU-written memory after the fence, even host-coherent memory (the fence alone only
+/// orders execution; "Host Write Ordering Guarantees" in the spec cover the other direction).
+pub fn host_read_barrier(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    stage: vk::PipelineStageFlags2,
+    access: vk::AccessFlags2,
+) {
+    let to_host = [vk::MemoryBarrier2::default()
+        .src_stage_mask(stage)
+        .src_access_mask(access)
+        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+        .dst_access_mask(vk::AccessFlags2::HOST_READ)];
+    let dep = vk::DependencyInfo::default().memory_barriers(&to_host);
+    // SAFETY: cmd is recording.
+    unsafe { device.raw.cmd_pipeline_barrier2(cmd, &dep) };
+}

@@ -211,7 +211,7 @@ impl Device {
         let features = vk::PhysicalDeviceFeatures::default()
             .sampler_anisotropy(info.features.sampler_anisotropy)
             .pipeline_statistics_query(info.features.pipeline_statistics)
-            // Materials pick their texture from an array by a per-draw (uniform) index.
+            // Materials pick their texture from an array by index.
             .shader_sampled_image_array_dynamic_indexing(true)
             .geometry_shader(want.geometry_shader)
             .multi_draw_indirect(want.multi_draw_indirect)
@@ -219,7 +219,9 @@ impl Device {
         let mut features11 =
             vk::PhysicalDeviceVulkan11Features::default().multiview(want.multiview);
         let mut features12 = vk::PhysicalDeviceVulkan12Features::default()
-            .shader_output_layer(want.shader_output_layer);
+            .shader_output_layer(want.shader_output_layer)
+            // ... an index that may vary within a draw (materials.glsl, nonuniformEXT).
+            .shader_sampled_image_array_non_uniform_indexing(true);
         let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)
@@ -495,8 +497,14 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
         ))
     } else if queue_family.is_none() {
         Some("has no graphics queue".into())
-    } else if base.shader_sampled_image_array_dynamic_indexing != vk::TRUE {
-        Some("lacks shaderSampledImageArrayDynamicIndexing (material textures)".into())
+    } else if base.shader_sampled_image_array_dynamic_indexing != vk::TRUE
+        || f12.shader_sampled_image_array_non_uniform_indexing != vk::TRUE
+    {
+        Some(
+            "lacks shaderSampledImageArrayDynamicIndexing or ...NonUniformIndexing (material \
+             textures)"
+                .into(),
+        )
     } else if !info.features.dynamic_rendering || !info.features.synchronization2 {
         Some("lacks dynamicRendering or synchronization2 (Vulkan 1.3 core features)".into())
     } else {

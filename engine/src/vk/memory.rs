@@ -6,6 +6,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
+use super::commands::Submitter;
 use super::device::Device;
 use super::{GpuError, VkContext};
 
@@ -24,6 +25,15 @@ impl BufferDesc {
             size,
             usage,
             location: MemoryLocation::CpuToGpu,
+        }
+    }
+
+    /// Read by the GPU only, in its fastest memory (filled through [`Upload`]).
+    pub fn new_device_local(size: u64, usage: vk::BufferUsageFlags) -> Self {
+        Self {
+            size,
+            usage: usage | vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuOnly,
         }
     }
 
@@ -135,5 +145,80 @@ impl Drop for Buffer {
         if let Some(a) = self.allocation.take() {
             let _ = self.device.allocator().free(a);
         }
+    }
+}
+
+/// Fills device-local buffers with data that does not change (scene geometry, say) through
+/// host-visible staging buffers, all in one submission. On a discrete GPU the passes then
+/// read video memory rather than system memory over the bus; on a CPU driver both are the
+/// same memory and nothing changes but one copy at load.
+pub struct Upload<'a> {
+    device: &'a Arc<Device>,
+    submitter: &'a Submitter,
+    cmd: vk::CommandBuffer,
+    /// Kept until the copies have run.
+    staging: Vec<Buffer>,
+}
+
+impl<'a> Upload<'a> {
+    /// Starts recording the copies on `submitter`'s command buffer.
+    pub fn begin(device: &'a Arc<Device>, submitter: &'a Submitter) -> Result<Self, GpuError> {
+        Ok(Self {
+            device,
+            submitter,
+            cmd: submitter.begin()?,
+            staging: Vec::new(),
+        })
+    }
+
+    /// A device-local buffer with `usage` that will hold `data` once [`Self::finish`] returns.
+    pub fn buffer<T: bytemuck::Pod>(
+        &mut self,
+        data: &[T],
+        usage: vk::BufferUsageFlags,
+        name: &str,
+    ) -> Result<Buffer, GpuError> {
+        let bytes = std::mem::size_of_val(data) as u64;
+        let mut staging = Buffer::create(
+            self.device,
+            &BufferDesc::new_cpu_to_gpu(bytes, vk::BufferUsageFlags::TRANSFER_SRC),
+            &format!("{name} (staging)"),
+        )?;
+        staging.write(data)?;
+        let buffer = Buffer::create(
+            self.device,
+            &BufferDesc::new_device_local(bytes, usage),
+            name,
+        )?;
+        if bytes > 0 {
+            let region = [vk::BufferCopy::default().size(bytes)];
+            // SAFETY: both buffers are live and hold at least `bytes` bytes; cmd is recording.
+            unsafe {
+                self.device
+                    .raw
+                    .cmd_copy_buffer(self.cmd, staging.raw, buffer.raw, &region)
+            };
+        }
+        self.staging.push(staging);
+        Ok(buffer)
+    }
+
+    /// Runs the copies and waits for them; the copies are made visible to every later read on
+    /// the device (vertex and index fetch, shaders), so the buffers are ready for any pass.
+    pub fn finish(self) -> Result<(), GpuError> {
+        let visible = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_access_mask(vk::AccessFlags2::MEMORY_READ)];
+        // SAFETY: cmd is recording.
+        unsafe {
+            self.device.raw.cmd_pipeline_barrier2(
+                self.cmd,
+                &vk::DependencyInfo::default().memory_barriers(&visible),
+            )
+        };
+        self.submitter.submit_and_wait()
+        // The staging buffers are dropped here, after the wait.
     }
 }
