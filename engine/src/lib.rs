@@ -22,3 +22,7 @@ pub mod render;
 pub mod scene;
 pub mod shaders;
 pub mod vk;
+
+/// The module arrows of docs/architecture.md, checked on the source.
+#[cfg(test)]
+mod module_arrows;
