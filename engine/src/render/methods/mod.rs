@@ -236,4 +236,19 @@ mod tests {
             assert_eq!(Method::parse(m.name()), Some(m));
         }
     }
+
+    /// docs/methods.md documents every registered method: a table row for each listed one,
+    /// and each variant by name.
+    #[test]
+    fn the_methods_doc_covers_the_registry() {
+        let doc = include_str!("../../../../docs/methods.md");
+        for m in Method::all() {
+            let row = format!("| `{}` |", m.name());
+            let named = format!("`{}`", m.name());
+            match m.variant_of() {
+                None => assert!(doc.contains(&row), "docs/methods.md has no row for {m}"),
+                Some(_) => assert!(doc.contains(&named), "docs/methods.md never names {m}"),
+            }
+        }
+    }
 }
