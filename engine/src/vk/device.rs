@@ -226,7 +226,10 @@ impl Device {
             .dynamic_rendering(true)
             .synchronization2(true)
             // SPIR-V 1.6 turns `discard` into OpDemoteToHelperInvocation (mandatory in 1.3).
-            .shader_demote_to_helper_invocation(true);
+            .shader_demote_to_helper_invocation(true)
+            // glslang writes a task or mesh shader's workgroup size as LocalSizeId when it
+            // targets SPIR-V 1.6, which needs maintenance4 (mandatory in 1.3).
+            .maintenance4(want.mesh_shader);
         // Mesh and task shaders come from an extension; their invocations are counted by the
         // pipeline-statistics query only with meshShaderQueries.
         let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default()
