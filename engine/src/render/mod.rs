@@ -229,6 +229,7 @@ impl Renderer {
             scene_layout: &pipelines.scene_layout,
             cube_format: cube.format,
             layout: options.method.layout(),
+            submitter: &submitter,
         })?;
         crate::vk::descriptors::write_images(
             device,

@@ -12,7 +12,8 @@ use crate::render::resources::Drawable;
 use crate::render::Renderer;
 use crate::scene::Scene;
 use crate::vk::device::Device;
-use crate::vk::memory::Buffer;
+use crate::vk::commands::Submitter;
+use crate::vk::memory::{Buffer, Upload};
 use crate::vk::pipeline::{Pipeline, PipelineLayout, ShaderStage};
 use crate::vk::GpuError;
 
@@ -32,12 +33,30 @@ pub struct MethodContext<'a> {
     pub cube_format: vk::Format,
     /// The method's own layout (its pipeline's view mask follows from it).
     pub layout: CubeLayout,
+    /// For uploads at creation ([`Self::upload`]); idle between them.
+    pub submitter: &'a Submitter,
 }
 
 /// A shader stage of a method's cube pipeline: its stage and SPIR-V (`crate::shaders`).
 pub type Stage = (vk::ShaderStageFlags, &'static [u32]);
 
 impl MethodContext<'_> {
+    /// Device-local buffers holding data a method builds once (meshlets, say), uploaded in
+    /// one submission through staging buffers: one per `(bytes, usage, name)` (cast typed
+    /// data with `bytemuck::cast_slice`).
+    pub fn upload(
+        &self,
+        buffers: &[(&[u8], vk::BufferUsageFlags, &str)],
+    ) -> Result<Vec<Buffer>, GpuError> {
+        let mut upload = Upload::begin(self.device, self.submitter)?;
+        let made = buffers
+            .iter()
+            .map(|&(data, usage, name)| upload.buffer(data, usage, name))
+            .collect::<Result<Vec<_>, _>>()?;
+        upload.finish()?;
+        Ok(made)
+    }
+
     /// A cube pipeline with the scene's pipeline layout (see [`Self::pipeline_with`]).
     pub fn pipeline(&self, stages: &[Stage], name: &str) -> Result<Pipeline, GpuError> {
         self.pipeline_with(self.scene_layout, stages, name)
