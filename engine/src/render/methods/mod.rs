@@ -11,6 +11,7 @@
 
 mod geometry;
 mod instanced;
+mod mesh;
 mod multiview;
 mod plan;
 mod recorder;
@@ -31,6 +32,8 @@ static REGISTRY: &[&dyn FillMethod] = &[
     &geometry::Geometry,
     &geometry::GeometryInvocations,
     &instanced::Instanced,
+    &mesh::MeshShader,
+    &mesh::MeshShaderWide,
 ];
 
 /// One cube fill method: what it is, what it needs, and how it makes its per-renderer pass.
