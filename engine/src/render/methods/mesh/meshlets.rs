@@ -100,97 +100,144 @@ pub fn ordered(positions: &[Vec3], indices: &[u32]) -> Vec<Meshlet> {
 /// surface instead of leaving islands), else the first free triangle in index order; a
 /// meshlet whose neighbours are used up continues with that first free triangle.
 pub fn clustered(positions: &[Vec3], indices: &[u32]) -> Vec<Meshlet> {
-    let tris: Vec<[u32; 3]> = triangles(indices).collect();
-    let adjacency = Adjacency::new(positions.len(), &tris);
-    let normals: Vec<Vec3> = tris
-        .iter()
-        .map(|&t| face_normal(positions, t).normalize_or_zero().as_vec3())
-        .collect();
-    let centroids: Vec<Vec3> = tris
-        .iter()
-        .map(|t| t.iter().map(|&v| positions[v as usize]).sum::<Vec3>() / 3.0)
-        .collect();
-    // Distances are compared in units of a typical edge, so the normal term weighs alike on
-    // meshes of any size.
-    let edge = tris
-        .iter()
-        .map(|t| positions[t[0] as usize].distance(positions[t[1] as usize]))
-        .sum::<f32>()
-        / tris.len().max(1) as f32;
-    let unit = if edge > 0.0 { 1.0 / edge } else { 1.0 };
-
-    let mut assigned = vec![false; tris.len()];
-    // Per triangle: the meshlet (+ 1) whose candidate list holds it.
-    let mut listed = vec![0u32; tris.len()];
-    let mut first_free = 0usize;
+    let mut mesh = Clusters::new(positions, indices);
     let mut open = Open::new(positions.len());
-    let mut candidates: Vec<u32> = Vec::new();
     let mut out = Vec::new();
-    loop {
-        let free_neighbours = |t: u32, assigned: &[bool]| {
-            adjacency
-                .around(&tris[t as usize])
-                .filter(|&u| !assigned[u as usize])
+    while let Some(seed) = mesh.seed() {
+        mesh.grow(seed, &mut open, out.len() as u32 + 1);
+        out.push(open.close(positions));
+    }
+    out
+}
+
+/// The state of [`clustered`]: the mesh's triangles with what the greedy growth scores them
+/// by, and which are taken.
+struct Clusters {
+    tris: Vec<[u32; 3]>,
+    adjacency: Adjacency,
+    /// Unit normals (zero for degenerate triangles) and centroids.
+    normals: Vec<Vec3>,
+    centroids: Vec<Vec3>,
+    /// 1 / a typical edge length: distances are compared in edges, so the normal term
+    /// weighs alike on meshes of any size.
+    per_edge: f32,
+    assigned: Vec<bool>,
+    /// Per triangle: the stamp of the meshlet whose candidate list holds it.
+    listed: Vec<u32>,
+    /// No triangle before this one is free.
+    first_free: usize,
+    /// The free triangles sharing a vertex with the meshlet being grown (or the last one).
+    candidates: Vec<u32>,
+}
+
+impl Clusters {
+    fn new(positions: &[Vec3], indices: &[u32]) -> Self {
+        let tris: Vec<[u32; 3]> = triangles(indices).collect();
+        let normals = tris
+            .iter()
+            .map(|&t| face_normal(positions, t).normalize_or_zero().as_vec3())
+            .collect();
+        let centroids = tris
+            .iter()
+            .map(|t| t.iter().map(|&v| positions[v as usize]).sum::<Vec3>() / 3.0)
+            .collect();
+        let edge = tris
+            .iter()
+            .map(|t| positions[t[0] as usize].distance(positions[t[1] as usize]))
+            .sum::<f32>()
+            / tris.len().max(1) as f32;
+        Self {
+            adjacency: Adjacency::new(positions.len(), &tris),
+            normals,
+            centroids,
+            per_edge: if edge > 0.0 { 1.0 / edge } else { 1.0 },
+            assigned: vec![false; tris.len()],
+            listed: vec![0; tris.len()],
+            first_free: 0,
+            candidates: Vec::new(),
+            tris,
+        }
+    }
+
+    /// The first free triangle in index order.
+    fn next_free(&mut self) -> Option<u32> {
+        while self.first_free < self.tris.len() && self.assigned[self.first_free] {
+            self.first_free += 1;
+        }
+        (self.first_free < self.tris.len()).then_some(self.first_free as u32)
+    }
+
+    /// The next meshlet's first triangle: the last meshlet's free neighbour with the fewest
+    /// free neighbours of its own, else the first free triangle.
+    fn seed(&mut self) -> Option<u32> {
+        let free_neighbours = |t: u32| {
+            self.adjacency
+                .around(&self.tris[t as usize])
+                .filter(|&u| !self.assigned[u as usize])
                 .count()
         };
-        let leftover = candidates
+        let leftover = self
+            .candidates
             .iter()
             .copied()
-            .filter(|&t| !assigned[t as usize])
-            .min_by_key(|&t| (free_neighbours(t, &assigned), t));
-        while first_free < tris.len() && assigned[first_free] {
-            first_free += 1;
-        }
-        let Some(seed) = leftover.or((first_free < tris.len()).then_some(first_free as u32)) else {
-            break;
-        };
-        let stamp = out.len() as u32 + 1;
-        candidates.clear();
+            .filter(|&t| !self.assigned[t as usize])
+            .min_by_key(|&t| (free_neighbours(t), t));
+        leftover.or_else(|| self.next_free())
+    }
+
+    /// Grows `open` (empty) from `seed` until a limit is reached or nothing fits.
+    fn grow(&mut self, seed: u32, open: &mut Open, stamp: u32) {
+        self.candidates.clear();
         let mut normal_sum = Vec3::ZERO;
         let mut centroid_sum = Vec3::ZERO;
         let mut next = Some(seed);
         while let Some(t) = next {
-            let tri = tris[t as usize];
+            let tri = self.tris[t as usize];
             open.add(tri);
-            assigned[t as usize] = true;
-            normal_sum += normals[t as usize];
-            centroid_sum += centroids[t as usize];
-            for u in adjacency.around(&tri) {
-                if !assigned[u as usize] && listed[u as usize] != stamp {
-                    listed[u as usize] = stamp;
-                    candidates.push(u);
+            self.assigned[t as usize] = true;
+            normal_sum += self.normals[t as usize];
+            centroid_sum += self.centroids[t as usize];
+            for u in self.adjacency.around(&tri) {
+                if !self.assigned[u as usize] && self.listed[u as usize] != stamp {
+                    self.listed[u as usize] = stamp;
+                    self.candidates.push(u);
                 }
             }
             if open.triangles.len() == MAX_TRIANGLES {
-                break;
+                return;
             }
-            candidates.retain(|&u| !assigned[u as usize]);
+            let assigned = &self.assigned;
+            self.candidates.retain(|&u| !assigned[u as usize]);
             let center = centroid_sum / open.triangles.len() as f32;
-            let axis = normal_sum.normalize_or_zero();
-            let score = |u: u32| {
-                let spread = 1.0 - normals[u as usize].dot(axis);
-                let distance = centroids[u as usize].distance(center) * unit;
-                (open.new_vertices(tris[u as usize]), distance + 2.0 * spread)
-            };
-            next = candidates
-                .iter()
-                .copied()
-                .filter(|&u| open.fits(tris[u as usize]))
-                .map(|u| (score(u), u))
-                .min_by(|(a, ua), (b, ub)| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(ua.cmp(ub)))
-                .map(|(_, u)| u);
-            if next.is_none() && candidates.is_empty() {
+            next = self.best_candidate(open, center, normal_sum.normalize_or_zero());
+            if next.is_none() && self.candidates.is_empty() {
                 // This part of the mesh is used up: carry on with the next free triangle.
-                while first_free < tris.len() && assigned[first_free] {
-                    first_free += 1;
-                }
-                next = (first_free < tris.len() && open.fits(tris[first_free]))
-                    .then_some(first_free as u32);
+                next = self
+                    .next_free()
+                    .filter(|&u| open.fits(self.tris[u as usize]));
             }
         }
-        out.push(open.close(positions));
     }
-    out
+
+    /// The candidate that fits and adds the fewest new vertices, then lies nearest the
+    /// meshlet's `center` and closest to its mean normal `axis`; ties to the lowest index.
+    fn best_candidate(&self, open: &Open, center: Vec3, axis: Vec3) -> Option<u32> {
+        let score = |u: u32| {
+            let spread = 1.0 - self.normals[u as usize].dot(axis);
+            let distance = self.centroids[u as usize].distance(center) * self.per_edge;
+            (
+                open.new_vertices(self.tris[u as usize]),
+                distance + 2.0 * spread,
+            )
+        };
+        self.candidates
+            .iter()
+            .copied()
+            .filter(|&u| open.fits(self.tris[u as usize]))
+            .map(|u| (score(u), u))
+            .min_by(|(a, ua), (b, ub)| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(ua.cmp(ub)))
+            .map(|(_, u)| u)
+    }
 }
 
 fn triangles(indices: &[u32]) -> impl Iterator<Item = [u32; 3]> + '_ {
