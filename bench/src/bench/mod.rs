@@ -615,6 +615,11 @@ fn table_row(label: &str, row: &Value) -> String {
     let f = |v: &Value| v.as_f64().map_or("n/a".into(), |x| format!("{x:.2}"));
     let stats = &row["fill_stats"];
     let count = |k: &str| stats[k].as_u64().map_or("n/a".into(), |c| c.to_string());
+    // A mesh pipeline has no vertex shader: its vertex work is its mesh invocations.
+    let vertices = match stats["mesh_invocations"].as_u64() {
+        Some(m) if stats["vertex_invocations"].as_u64() == Some(0) => format!("{m} mesh"),
+        _ => count("vertex_invocations"),
+    };
     format!(
         "  {:<16} {:>9} {:>9} {:>9} {:>11} {:>12} {:>14} {:>9}",
         label,
@@ -622,7 +627,7 @@ fn table_row(label: &str, row: &Value) -> String {
         f(&row["wall_ms"]["p10"]),
         f(&row["wall_ms"]["p90"]),
         f(&row["gpu_fill_ms"]["median"]),
-        count("vertex_invocations"),
+        vertices,
         count("fragment_invocations"),
         row["efficiency"]["vs_geometry_plus_fill"]
             .as_f64()
