@@ -9,14 +9,21 @@ use super::{GpuError, VkContext};
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
+/// The `pMessageIdName` the Vulkan loader gives the messages it sends itself (e.g. "env var
+/// 'VK_INSTANCE_LAYERS' defined"): they describe the user's environment, not our API usage,
+/// so they are shown but do not count as validation messages.
+const LOADER_MESSAGE_ID: &CStr = c"Loader Message";
+
 /// The environment variable that turns validation on without `--validate`.
 pub const VALIDATE_ENV: &str = "SPECCHIO_VALIDATE";
 
 /// What to create the instance with.
 #[derive(Debug, Clone, Default)]
 pub struct InstanceDesc {
-    /// Enable `VK_LAYER_KHRONOS_validation` and a messenger that records every warning and
-    /// error (it is an error if the layer is missing: a silent fallback would hide bugs).
+    /// Enable `VK_LAYER_KHRONOS_validation`, with its synchronization checks
+    /// (`VK_EXT_validation_features`), and a messenger that records every warning and error
+    /// (it is an error if the layer or its synchronization checks are missing: a silent
+    /// fallback would hide bugs).
     pub validation: bool,
 }
 
@@ -37,17 +44,50 @@ impl InstanceDesc {
 #[derive(Debug, Default)]
 pub struct ValidationLog {
     messages: Mutex<Vec<String>>,
+    loader_notes: Mutex<Vec<String>>,
 }
 
 impl ValidationLog {
-    /// The messages so far (a copy).
+    /// The validation layer's messages so far (a copy). Any one of them is a failure.
     pub fn messages(&self) -> Vec<String> {
         self.messages.lock().map(|m| m.clone()).unwrap_or_default()
     }
 
-    fn push(&self, message: String) {
-        if let Ok(mut messages) = self.messages.lock() {
-            messages.push(message);
+    /// The loader's own warnings so far (a copy): about the environment (e.g. layers added
+    /// through `VK_INSTANCE_LAYERS`), never about our use of the API, so not failures.
+    pub fn loader_notes(&self) -> Vec<String> {
+        self.loader_notes
+            .lock()
+            .map(|m| m.clone())
+            .unwrap_or_default()
+    }
+
+    fn push(&self, source: MessageSource, message: String) {
+        let list = match source {
+            MessageSource::Layer => &self.messages,
+            MessageSource::Loader => &self.loader_notes,
+        };
+        if let Ok(mut list) = list.lock() {
+            list.push(message);
+        }
+    }
+}
+
+/// Who sent a debug-utils message.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum MessageSource {
+    /// The Vulkan loader, about the environment.
+    Loader,
+    /// A layer (the validation layer): about the application's use of the API.
+    Layer,
+}
+
+impl MessageSource {
+    fn of(message_id_name: Option<&CStr>) -> Self {
+        if message_id_name == Some(LOADER_MESSAGE_ID) {
+            Self::Loader
+        } else {
+            Self::Layer
         }
     }
 }
@@ -81,6 +121,20 @@ impl Instance {
         if desc.validation && !has_layer {
             return Err(GpuError::NoValidationLayer);
         }
+        // The layer provides VK_EXT_validation_features, which turns its synchronization
+        // checks on (off by default: hazards such as two unordered writes pass silently).
+        let has_validation_features = desc.validation && {
+            // SAFETY: plain enumeration call for a layer the loader listed.
+            let layer_extensions =
+                unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
+                    .vk("vkEnumerateInstanceExtensionProperties")?;
+            layer_extensions
+                .iter()
+                .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::validation_features::NAME))
+        };
+        if desc.validation && !has_validation_features {
+            return Err(GpuError::NoSynchronizationValidation);
+        }
         // debug_utils gives object names and labels (RenderDoc) and the messenger.
         let has_debug_utils = extensions
             .iter()
@@ -97,32 +151,32 @@ impl Instance {
         } else {
             vec![]
         };
-        let extension_names: Vec<*const i8> = if has_debug_utils {
-            vec![ash::ext::debug_utils::NAME.as_ptr()]
-        } else {
-            vec![]
-        };
+        let mut extension_names: Vec<*const i8> = Vec::new();
+        if has_debug_utils {
+            extension_names.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+        if has_validation_features {
+            extension_names.push(ash::ext::validation_features::NAME.as_ptr());
+        }
+        let enabled_checks = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut validation_features =
+            vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_checks);
         let log: Arc<ValidationLog> = Arc::default();
-        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-            .message_severity(
-                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                    | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-            )
-            .message_type(
-                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-            )
-            .pfn_user_callback(Some(debug_callback))
-            .user_data(Arc::as_ptr(&log) as *mut c_void);
+        // One messenger description for the chain of vkCreateInstance (messages from the call
+        // itself) and one for the messenger proper: a chained struct gets a pNext, which
+        // vkCreateDebugUtilsMessengerEXT must not see.
+        let mut messenger_for_create = messenger_info(&log);
         let mut create_info = vk::InstanceCreateInfo::default()
             .application_info(&app_info)
             .enabled_layer_names(&layer_names)
             .enabled_extension_names(&extension_names);
+        if has_validation_features {
+            create_info = create_info.push_next(&mut validation_features);
+        }
         let use_messenger = desc.validation && has_debug_utils;
         if use_messenger {
             // Chained so that messages from vkCreateInstance itself are caught too.
-            create_info = create_info.push_next(&mut messenger_info);
+            create_info = create_info.push_next(&mut messenger_for_create);
         }
         // SAFETY: every pointer in create_info points at locals that outlive the call.
         let raw = unsafe { entry.create_instance(&create_info, None) }.vk("vkCreateInstance")?;
@@ -132,7 +186,7 @@ impl Instance {
         let mut messenger = vk::DebugUtilsMessengerEXT::null();
         if let (true, Some(du)) = (use_messenger, &debug_utils) {
             // SAFETY: user data points into `log`'s allocation, dropped after the messenger.
-            match unsafe { du.create_debug_utils_messenger(&messenger_info, None) } {
+            match unsafe { du.create_debug_utils_messenger(&messenger_info(&log), None) } {
                 Ok(m) => messenger = m,
                 Err(result) => {
                     // SAFETY: nothing was created from the instance yet.
@@ -173,6 +227,22 @@ impl Drop for Instance {
     }
 }
 
+/// The messenger: warnings and errors of every type, into `log`.
+fn messenger_info(log: &Arc<ValidationLog>) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+    vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(
+            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+        )
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback))
+        .user_data(Arc::as_ptr(log) as *mut c_void)
+}
+
 /// Records every message in the [`ValidationLog`] and echoes it to stderr.
 unsafe extern "system" fn debug_callback(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
@@ -180,16 +250,45 @@ unsafe extern "system" fn debug_callback(
     data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
     user_data: *mut c_void,
 ) -> vk::Bool32 {
-    // SAFETY: the layer passes a valid callback-data pointer for the duration of the call.
-    let message = unsafe { data.as_ref() }
+    // SAFETY: the sender passes a valid callback-data pointer for the duration of the call.
+    let data = unsafe { data.as_ref() };
+    // SAFETY: both strings are null or NUL-terminated, valid for the call.
+    let message = data
         .and_then(|d| unsafe { d.message_as_c_str() })
         .map(|m| m.to_string_lossy().into_owned())
         .unwrap_or_else(|| "(no message)".to_owned());
-    let line = format!("[vulkan {severity:?} {kind:?}] {message}");
+    let source = MessageSource::of(data.and_then(|d| unsafe { d.message_id_name_as_c_str() }));
+    let line = match source {
+        MessageSource::Layer => format!("[vulkan {severity:?} {kind:?}] {message}"),
+        MessageSource::Loader => format!("[vulkan loader {severity:?}] {message}"),
+    };
     eprintln!("{line}");
     // SAFETY: user_data is the ValidationLog inside the Arc owned by the Instance.
     if let Some(log) = unsafe { (user_data as *const ValidationLog).as_ref() } {
-        log.push(line);
+        log.push(source, line);
     }
     vk::FALSE
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_loaders_messages_are_told_from_the_layers() {
+        assert_eq!(
+            MessageSource::of(Some(c"Loader Message")),
+            MessageSource::Loader
+        );
+        assert_eq!(
+            MessageSource::of(Some(c"SYNC-HAZARD-WRITE-AFTER-WRITE")),
+            MessageSource::Layer
+        );
+        assert_eq!(MessageSource::of(None), MessageSource::Layer);
+        let log = ValidationLog::default();
+        log.push(MessageSource::Loader, "env var".into());
+        log.push(MessageSource::Layer, "VUID".into());
+        assert_eq!(log.messages(), ["VUID"]);
+        assert_eq!(log.loader_notes(), ["env var"]);
+    }
 }

@@ -16,6 +16,8 @@ pub mod instance;
 pub mod memory;
 pub mod pipeline;
 pub mod queries;
+#[cfg(test)]
+mod validation_tests;
 
 use ash::vk;
 
@@ -38,6 +40,11 @@ pub enum GpuError {
     NoDevice(String),
     #[error("the Khronos validation layer was requested but is not installed (Debian: `apt-get install vulkan-validationlayers`)")]
     NoValidationLayer,
+    #[error("the installed Khronos validation layer does not offer VK_EXT_validation_features, which turns on its synchronization checks; install a newer `vulkan-validationlayers`")]
+    NoSynchronizationValidation,
+    /// A resource larger than the device can hold, found before anything was allocated.
+    #[error("too large for this device: {0}")]
+    TooLarge(String),
     #[error("unsupported: {0}")]
     Unsupported(String),
 }
