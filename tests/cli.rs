@@ -4,6 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+mod common;
+
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
@@ -279,4 +281,56 @@ fn info_lists_both_cpu_drivers_and_their_methods() {
     assert!(usable(swiftshader, "multiview").0);
     let (geometry, why) = usable(swiftshader, "geometry");
     assert!(!geometry && why.contains("geometryShader"), "{why}");
+}
+
+/// The documented largest cube (8192 px per face) needs one 4 GiB colour image: more than
+/// lavapipe's 2 GiB (and SwiftShader's 1 GiB) maxMemoryAllocationSize. It is refused before
+/// any work, naming the option and the largest size that fits, on every driver.
+#[test]
+fn a_cube_larger_than_one_allocation_is_refused_naming_the_option() {
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    for device in common::devices() {
+        let out = temp_dir(&format!("cube-8192-{device}"));
+        let result = specchio(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--cube-size",
+            "8192",
+            "--device",
+            &device,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(!result.status.success(), "{device}: {stderr}");
+        for needle in [
+            "--cube-size = 8192",
+            "maxMemoryAllocationSize",
+            "the largest face size that fits is",
+        ] {
+            assert!(
+                stderr.contains(needle),
+                "{device}: no {needle:?} in {stderr}"
+            );
+        }
+        assert!(!stderr.contains("vkBindImageMemory"), "{stderr}");
+    }
+}
+
+/// The loader's own warnings (here: a layer added through `VK_INSTANCE_LAYERS`) describe the
+/// environment, not our use of the API: shown, but they do not fail `--validate`.
+#[test]
+fn the_loaders_warnings_do_not_count_as_validation_messages() {
+    let out = temp_dir("loader-notes");
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let result = Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(["render", scene.to_str().unwrap(), "--validate", "--out"])
+        .arg(&out)
+        .env("VK_INSTANCE_LAYERS", "VK_LAYER_KHRONOS_validation")
+        .output()
+        .expect("the specchio binary runs");
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{stderr}");
+    assert!(stderr.contains("[vulkan loader"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&out);
 }

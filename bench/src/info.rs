@@ -104,6 +104,11 @@ fn print_device(i: &DeviceInfo, rejected: Option<&str>, default: bool) {
         l.max_image_dimension_cube, l.max_image_dimension_2d, l.max_image_array_layers,
         l.max_push_constants_size, l.max_sampler_anisotropy, l.timestamp_period_ns);
     println!(
+        "    memory:             {} per allocation, {} device-local heap",
+        specchio::render::budget::bytes_text(l.max_memory_allocation_bytes),
+        specchio::render::budget::bytes_text(l.device_local_heap_bytes)
+    );
+    println!(
         "    multiview:          {} (max {} views)",
         yes(f.multiview),
         l.max_multiview_view_count

@@ -9,6 +9,7 @@
 //!    draws + the mirror), then copies of the images to read back;
 //! 4. submit, wait, read timestamps, counters and pixels.
 
+pub mod budget;
 pub mod cube_fill;
 mod draw;
 pub mod floors;
@@ -189,15 +190,20 @@ impl Renderer {
         mut scene: Scene,
         options: &RenderOptions,
     ) -> Result<Self, GpuError> {
-        if let Some(size) = options.cube_size {
-            scene.cube.face_size_px = size;
-        }
+        let cube_setting = match options.cube_size {
+            Some(size) => {
+                scene.cube.face_size_px = size;
+                "--cube-size"
+            }
+            None => "cube.face_size",
+        };
         if let Some(policy) = options.refresh {
             scene.refresh = policy;
         }
         if let Some(lookup) = options.lookup {
             scene.mirror.lookup = lookup;
         }
+        budget::check_targets(device, &scene, cube_setting)?;
         let submitter = Submitter::create(device, "frame")?;
         let resources = SceneResources::create(device, &scene, &submitter)?;
         let cube = CubeTarget::create(device, &scene.cube)?;
@@ -315,6 +321,7 @@ impl Renderer {
                 .as_ref()
                 .is_none_or(|b| b.size < readback_bytes)
         {
+            budget::check_buffer(&self.device, "this frame's readback", readback_bytes)?;
             self.readback = Some(Buffer::create(
                 &self.device,
                 &BufferDesc::new_readback(readback_bytes),

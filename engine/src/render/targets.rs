@@ -34,6 +34,38 @@ pub struct CubeTarget {
 }
 
 impl CubeTarget {
+    /// The cube's colour image: `settings.face_size_px` per face, six layers, a full mip
+    /// chain when mipmaps are on.
+    pub fn color_desc(settings: &CubeSettings) -> ImageDesc {
+        let size = settings.face_size_px;
+        let mips = if settings.mipmaps {
+            full_mip_count(size)
+        } else {
+            1
+        };
+        ImageDesc::new_cube(
+            cube_format(settings.format),
+            size,
+            mips,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::TRANSFER_DST,
+        )
+    }
+
+    /// The cube's depth: six layers of one level (never sampled, so not cube-compatible).
+    pub fn depth_desc(settings: &CubeSettings) -> ImageDesc {
+        let mut desc = ImageDesc::new_cube(
+            DEPTH_FORMAT,
+            settings.face_size_px,
+            1,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+        );
+        desc.cube_compatible = false;
+        desc
+    }
+
     pub fn create(device: &Arc<Device>, settings: &CubeSettings) -> Result<Self, GpuError> {
         let size = settings.face_size_px;
         if size > device.info.limits.max_image_dimension_cube {
@@ -42,39 +74,13 @@ impl CubeTarget {
                 device.info.limits.max_image_dimension_cube
             )));
         }
-        let format = match settings.format {
-            CubeFormat::Rgba16Float => vk::Format::R16G16B16A16_SFLOAT,
-            CubeFormat::Rgba8Unorm => vk::Format::R8G8B8A8_UNORM,
-        };
-        let mips = if settings.mipmaps {
-            full_mip_count(size)
-        } else {
-            1
-        };
+        let color_desc = Self::color_desc(settings);
+        let (format, mips) = (color_desc.format, color_desc.mip_levels);
         if mips > 1 {
             check_blit_support(device, format)?;
         }
-        let color = Image::create(
-            device,
-            &ImageDesc::new_cube(
-                format,
-                size,
-                mips,
-                vk::ImageUsageFlags::COLOR_ATTACHMENT
-                    | vk::ImageUsageFlags::SAMPLED
-                    | vk::ImageUsageFlags::TRANSFER_SRC
-                    | vk::ImageUsageFlags::TRANSFER_DST,
-            ),
-            "cube colour",
-        )?;
-        let mut depth_desc = ImageDesc::new_cube(
-            DEPTH_FORMAT,
-            size,
-            1,
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-        );
-        depth_desc.cube_compatible = false;
-        let depth = Image::create(device, &depth_desc, "cube depth")?;
+        let color = Image::create(device, &color_desc, "cube colour")?;
+        let depth = Image::create(device, &Self::depth_desc(settings), "cube depth")?;
         let names = crate::scene::camera::FACE_NAMES;
         let face_views = (0..6)
             .map(|f| {
@@ -157,6 +163,14 @@ impl CubeTarget {
     }
 }
 
+/// The Vulkan format of a cube format setting.
+pub fn cube_format(format: CubeFormat) -> vk::Format {
+    match format {
+        CubeFormat::Rgba16Float => vk::Format::R16G16B16A16_SFLOAT,
+        CubeFormat::Rgba8Unorm => vk::Format::R8G8B8A8_UNORM,
+    }
+}
+
 fn check_blit_support(device: &Device, format: vk::Format) -> Result<(), GpuError> {
     // SAFETY: plain query.
     let props = unsafe {
@@ -188,6 +202,24 @@ pub struct ViewTarget {
 }
 
 impl ViewTarget {
+    /// Colour (rendered, then copied out) and depth of a `width` x `height` view.
+    pub fn descs(format: vk::Format, width: u32, height: u32) -> [ImageDesc; 2] {
+        [
+            ImageDesc::new_2d(
+                format,
+                width,
+                height,
+                vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            ),
+            ImageDesc::new_2d(
+                DEPTH_FORMAT,
+                width,
+                height,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            ),
+        ]
+    }
+
     pub fn create(
         device: &Arc<Device>,
         format: vk::Format,
@@ -195,26 +227,9 @@ impl ViewTarget {
         height: u32,
         name: &str,
     ) -> Result<Self, GpuError> {
-        let color = Image::create(
-            device,
-            &ImageDesc::new_2d(
-                format,
-                width,
-                height,
-                vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
-            ),
-            &format!("{name} colour"),
-        )?;
-        let depth = Image::create(
-            device,
-            &ImageDesc::new_2d(
-                DEPTH_FORMAT,
-                width,
-                height,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-            ),
-            &format!("{name} depth"),
-        )?;
+        let [color_desc, depth_desc] = Self::descs(format, width, height);
+        let color = Image::create(device, &color_desc, &format!("{name} colour"))?;
+        let depth = Image::create(device, &depth_desc, &format!("{name} depth"))?;
         Ok(Self {
             color_view: color.view(vk::ImageViewType::TYPE_2D, 0, 1, 0, 1, name)?,
             depth_view: depth.view(

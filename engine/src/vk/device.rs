@@ -148,6 +148,11 @@ pub struct DeviceLimits {
     pub max_mesh_output_layers: u32,
     /// Nanoseconds per timestamp tick.
     pub timestamp_period_ns: f32,
+    /// `maxMemoryAllocationSize`: the largest single allocation (one image or buffer) the
+    /// driver promises to make (lavapipe: 2 GiB); larger requests may fail.
+    pub max_memory_allocation_bytes: u64,
+    /// The largest device-local heap: all the memory our images and buffers can share.
+    pub device_local_heap_bytes: u64,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -369,10 +374,24 @@ pub fn enumerate(instance: &Instance) -> Result<Vec<Candidate>, GpuError> {
         .collect())
 }
 
+/// The size of the largest heap flagged device-local (every device has at least one).
+fn device_local_heap_bytes(inst: &ash::Instance, physical: vk::PhysicalDevice) -> u64 {
+    // SAFETY: plain query on an enumerated physical device.
+    let memory = unsafe { inst.get_physical_device_memory_properties(physical) };
+    let heaps = &memory.memory_heaps[..memory.memory_heap_count as usize];
+    heaps
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0)
+}
+
 fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> Candidate {
     let inst = &instance.raw;
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut multiview_props = vk::PhysicalDeviceMultiviewProperties::default();
+    let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
     let mut mesh_props = vk::PhysicalDeviceMeshShaderPropertiesEXT::default();
     // SAFETY: plain query; a failure reads as "no extensions".
     let exts: Vec<String> = unsafe { inst.enumerate_device_extension_properties(physical) }
@@ -384,7 +403,8 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
     let has_ext = |n: &std::ffi::CStr| exts.iter().any(|e| e.as_bytes() == n.to_bytes());
     let mut props2 = vk::PhysicalDeviceProperties2::default()
         .push_next(&mut driver)
-        .push_next(&mut multiview_props);
+        .push_next(&mut multiview_props)
+        .push_next(&mut maintenance3);
     // Chained only where the extension exists: SwiftShader warns on stderr about structs it
     // does not know.
     if has_ext(ash::ext::mesh_shader::NAME) {
@@ -474,6 +494,8 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
                 0
             },
             timestamp_period_ns: props.limits.timestamp_period,
+            max_memory_allocation_bytes: maintenance3.max_memory_allocation_size,
+            device_local_heap_bytes: device_local_heap_bytes(inst, physical),
         },
         features: DeviceFeatures {
             dynamic_rendering: f13.dynamic_rendering == vk::TRUE,

@@ -53,6 +53,46 @@ impl ImageDesc {
         }
     }
 
+    /// The create info of an optimally tiled, single-sample, exclusive image: shared by
+    /// [`Image::create`] and by the memory estimate that runs before anything is created.
+    pub fn create_info(&self) -> vk::ImageCreateInfo<'static> {
+        vk::ImageCreateInfo::default()
+            .flags(if self.cube_compatible {
+                vk::ImageCreateFlags::CUBE_COMPATIBLE
+            } else {
+                vk::ImageCreateFlags::empty()
+            })
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(self.format)
+            .extent(vk::Extent3D {
+                width: self.width,
+                height: self.height,
+                depth: 1,
+            })
+            .mip_levels(self.mip_levels)
+            .array_layers(self.layers)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(self.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+    }
+
+    /// The bytes this image needs on `device`, asked of the driver without creating it
+    /// (`vkGetDeviceImageMemoryRequirements`, Vulkan 1.3).
+    pub fn memory_bytes(&self, device: &Device) -> u64 {
+        let info = self.create_info();
+        let query = vk::DeviceImageMemoryRequirements::default().create_info(&info);
+        let mut out = vk::MemoryRequirements2::default();
+        // SAFETY: valid create info; the query creates nothing.
+        unsafe {
+            device
+                .raw
+                .get_device_image_memory_requirements(&query, &mut out)
+        };
+        out.memory_requirements.size
+    }
+
     pub fn aspect(&self) -> vk::ImageAspectFlags {
         match self.format {
             vk::Format::D32_SFLOAT | vk::Format::D16_UNORM => vk::ImageAspectFlags::DEPTH,
@@ -76,26 +116,7 @@ pub struct Image {
 
 impl Image {
     pub fn create(device: &Arc<Device>, desc: &ImageDesc, name: &str) -> Result<Self, GpuError> {
-        let info = vk::ImageCreateInfo::default()
-            .flags(if desc.cube_compatible {
-                vk::ImageCreateFlags::CUBE_COMPATIBLE
-            } else {
-                vk::ImageCreateFlags::empty()
-            })
-            .image_type(vk::ImageType::TYPE_2D)
-            .format(desc.format)
-            .extent(vk::Extent3D {
-                width: desc.width,
-                height: desc.height,
-                depth: 1,
-            })
-            .mip_levels(desc.mip_levels)
-            .array_layers(desc.layers)
-            .samples(vk::SampleCountFlags::TYPE_1)
-            .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(desc.usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE)
-            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let info = desc.create_info();
         // SAFETY: valid create info on a live device.
         let raw = unsafe { device.raw.create_image(&info, None) }.vk("vkCreateImage")?;
         // SAFETY: raw was just created on this device.
