@@ -1,6 +1,8 @@
 #version 460
 // mirror.frag - the analytic mirror: the pixel-centre ray hits the sphere, reflects, and the
-// lookup direction (plain or box-corrected, see mirror.glsl) samples the cube map.
+// lookup direction (plain or box-corrected, see mirror.glsl) samples the cube map, filtered
+// over the footprint of the pixel's neighbours' lookups (computed per pixel, see
+// lookup_gradients).
 #extension GL_GOOGLE_include_directive : require
 #include "shared.glsl"
 
@@ -18,6 +20,8 @@ void main() {
     if (!mirror_pixel(view, frame, hit, lookup)) {
         discard;
     }
-    out_color = vec4(texture(environment, lookup).rgb, 1.0);
+    vec3 d_dx, d_dy;
+    lookup_gradients(view, frame, lookup, d_dx, d_dy);
+    out_color = vec4(textureGrad(environment, lookup, d_dx, d_dy).rgb, 1.0);
     gl_FragDepth = mirror_depth(view, hit);
 }

@@ -13,12 +13,31 @@ vec3 room_exit(vec3 p, vec3 r, FrameData f) {
     return p + min(t.x, min(t.y, t.z)) * r;
 }
 
+// The world-space ray through `ndc` (the viewport's [-1, 1] coordinates).
+vec3 view_ray(ViewData view, vec2 ndc) {
+    return normalize(view.ray_forward.xyz + ndc.x * view.ray_right.xyz + ndc.y * view.ray_down.xyz);
+}
+
+// The cube-map lookup of the ray `dir` reflected at the sphere's unit normal `n`: the plain
+// reflected direction, or (box lookup) the direction from the cube's centre to where the
+// reflected ray leaves the room.
+vec3 lookup_at(FrameData f, vec3 dir, vec3 n) {
+    vec3 centre = f.mirror.xyz;
+    vec3 hit = centre + f.mirror.w * n;
+    vec3 r = reflect(dir, n); // R = I - 2 (N.I) N
+    return f.flags.y == LOOKUP_BOX ? room_exit(hit, r, f) - centre : r;
+}
+
+// The pixel centre's viewport coordinates in [-1, 1].
+vec2 pixel_ndc(ViewData view) {
+    // gl_FragCoord is the pixel centre: the same point the rasterizer samples.
+    return (gl_FragCoord.xy - view.viewport.xy) / view.viewport.zw * 2.0 - 1.0;
+}
+
 // False when this pixel's ray misses the mirror. Otherwise the hit point on the sphere and
 // the direction to look up in the cube map (world space, no texture-matrix rotation).
 bool mirror_pixel(ViewData view, FrameData f, out vec3 hit, out vec3 lookup) {
-    // The same pixel-centre ray the rasterizer samples (gl_FragCoord is the pixel centre).
-    vec2 ndc = (gl_FragCoord.xy - view.viewport.xy) / view.viewport.zw * 2.0 - 1.0;
-    vec3 dir = normalize(view.ray_forward.xyz + ndc.x * view.ray_right.xyz + ndc.y * view.ray_down.xyz);
+    vec3 dir = view_ray(view, pixel_ndc(view));
     vec3 centre = f.mirror.xyz;
     float radius = f.mirror.w;
     float t;
@@ -28,9 +47,38 @@ bool mirror_pixel(ViewData view, FrameData f, out vec3 hit, out vec3 lookup) {
     // Normal from the sphere equation; the hit point is put back on the surface.
     vec3 n = normalize(view.eye.xyz + t * dir - centre);
     hit = centre + radius * n;
-    vec3 r = reflect(dir, n); // R = I - 2 (N.I) N
-    lookup = f.flags.y == LOOKUP_BOX ? room_exit(hit, r, f) - centre : r;
+    lookup = lookup_at(f, dir, n);
     return true;
+}
+
+// The lookup of the ray through `ndc`, defined for every ray: one that misses the sphere is
+// reflected where it passes closest to it (its grazing continuation), so a pixel on the
+// silhouette still has a neighbour to difference against.
+vec3 lookup_through(ViewData view, FrameData f, vec2 ndc) {
+    vec3 dir = view_ray(view, ndc);
+    vec3 centre = f.mirror.xyz;
+    float t;
+    vec3 n;
+    if (intersect_sphere(view.eye.xyz, dir, centre, f.mirror.w, t)) {
+        n = normalize(view.eye.xyz + t * dir - centre);
+    } else {
+        vec3 o = view.eye.xyz - centre;
+        n = normalize(o - dot(o, dir) * dir); // closest approach, perpendicular to dir
+    }
+    return lookup_at(f, dir, n);
+}
+
+// How the lookup changes from this pixel to its right and lower neighbours, computed here
+// rather than by the 2x2 quad's differences (dFdx/dFdy, what texture() uses): a quad that
+// straddles a cube-face edge or the silhouette has lanes looking up other faces or nothing,
+// and their differences gave some drivers a footprint spanning half the cube (wrong-colour
+// lines along the projected face edges). The vector differences are continuous everywhere;
+// textureGrad projects them onto the face this pixel samples.
+void lookup_gradients(ViewData view, FrameData f, vec3 lookup, out vec3 d_dx, out vec3 d_dy) {
+    vec2 ndc = pixel_ndc(view);
+    vec2 step_ndc = 2.0 / view.viewport.zw; // one pixel in viewport coordinates
+    d_dx = lookup_through(view, f, ndc + vec2(step_ndc.x, 0.0)) - lookup;
+    d_dy = lookup_through(view, f, ndc + vec2(0.0, step_ndc.y)) - lookup;
 }
 
 // The depth of the sphere's hit point, so that the mirror occludes and is occluded exactly.

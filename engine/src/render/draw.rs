@@ -88,10 +88,12 @@ pub(super) struct Facing {
     pub cull: Vec<bool>,
 }
 
-/// Clear values: black colour, and the far plane for reverse-Z depth.
+/// Clear values: transparent black colour (a direction image is then zero, alpha included,
+/// wherever the mirror is not; the room covers every other target), and the far plane for
+/// reverse-Z depth.
 pub(super) const CLEAR_COLOR: vk::ClearValue = vk::ClearValue {
     color: vk::ClearColorValue {
-        float32: [0.0, 0.0, 0.0, 1.0],
+        float32: [0.0, 0.0, 0.0, 0.0],
     },
 };
 pub(super) const CLEAR_DEPTH: vk::ClearValue = vk::ClearValue {
