@@ -244,3 +244,25 @@ fn cpu_materials_match_the_gpu_in_f32() {
     }
     gpu.finish();
 }
+
+/// The per-pixel layers are the pixel centre's at every sample count: from the centre sample
+/// when the pattern has one (9 spp), from one extra centre path when it has not (16 spp), and
+/// no extra path at 1 or 9 spp. The colour averages exactly `spp` camera paths.
+#[test]
+fn layers_are_the_pixel_centres_and_no_path_is_wasted() {
+    let s = scene("scenes/thesis-room.toml");
+    let r = Reference::new(&s, 0.0);
+    let view = r.sensor_view();
+    let (one, one_stats) = r.render(&view, 48, 48, 1);
+    for spp in [9, 16] {
+        let (many, stats) = r.render(&view, 48, 48, spp);
+        assert_eq!(many.direction.pixels, one.direction.pixels, "{spp} spp");
+        assert_eq!(many.distance.pixels, one.distance.pixels, "{spp} spp");
+        assert_eq!(many.object.pixels, one.object.pixels, "{spp} spp");
+        assert_eq!(stats.camera_paths, 48 * 48 * u64::from(spp));
+        let centre_paths = if spp == 9 { 0 } else { 48 * 48 };
+        assert_eq!(stats.centre_paths, centre_paths, "{spp} spp");
+    }
+    assert_eq!(one_stats.centre_paths, 0);
+    assert_eq!(one_stats.camera_paths, 48 * 48);
+}

@@ -31,6 +31,31 @@ use intersect::{offset_ray_origin, ray_sphere};
 /// Largest samples-per-pixel accepted (a 64 x 64 stratified grid).
 pub const MAX_SPP: u32 = 4096;
 
+/// Sample positions in the unit pixel for `n` samples: the centres of `n` cells of equal area
+/// that tile the pixel, so the pattern is stratified for every `n`, not only for squares.
+/// `round(sqrt(n))` rows; the first `n mod rows` rows hold one cell more; each row is as tall
+/// as its share of the cells (cells per row / n) and is cut into equal cells. A square `n`
+/// gives the regular grid; `n = 1` the pixel centre; the mean of the pattern is always the
+/// centre. Deterministic, so reference images repeat bit for bit.
+pub fn sample_offsets(n: u32) -> Vec<Vec2> {
+    let n = n.max(1);
+    let rows = (f64::from(n).sqrt().round() as u32).clamp(1, n);
+    let (base, extra) = (n / rows, n % rows);
+    let mut offsets = Vec::with_capacity(n as usize);
+    let mut top = 0u32; // cells above this row: the row starts at top / n
+    for row in 0..rows {
+        let cells = base + u32::from(row < extra);
+        // Centre of the row: (top + cells / 2) / n, in exact integer halves.
+        let y = (2 * top + cells) as f32 / (2 * n) as f32;
+        for c in 0..cells {
+            let x = (2 * c + 1) as f32 / (2 * cells) as f32;
+            offsets.push(Vec2::new(x, y));
+        }
+        top += cells;
+    }
+    offsets
+}
+
 /// One camera's reference images. Row 0 is the top, as everywhere.
 #[derive(Debug, Clone)]
 pub struct ReferenceImages {
@@ -53,13 +78,18 @@ pub struct ReferenceStats {
     pub triangles: usize,
     pub bvh_build_core_ms: f64,
     pub bvh_build_total_ms: f64,
-    /// Camera rays plus reflected rays.
+    /// Camera rays plus reflected rays (of the camera paths and the centre paths).
     pub rays: u64,
     pub trace_ms: f64,
     pub rays_per_second: f64,
     pub mirror_pixels: u64,
     /// Rays that met nothing at all (in a closed room this should be 0).
     pub misses: u64,
+    /// Colour samples: pixels x spp. Each is one camera ray plus, on the mirror, its reflection.
+    pub camera_paths: u64,
+    /// Extra pixel-centre paths traced only for the per-pixel layers, where the sample pattern
+    /// has no sample at the centre (0 for spp 1, 9, 25, ...); their rays are in `rays`.
+    pub centre_paths: u64,
     pub spp: u32,
     pub threads: usize,
 }
@@ -175,8 +205,10 @@ impl<'a> Reference<'a> {
         s
     }
 
-    /// Renders a camera at `width` x `height` with `spp` samples per pixel on a fixed stratified
-    /// grid (spp = 1 traces the pixel centre, exactly the rasterizer's sample point).
+    /// Renders a camera at `width` x `height` with `spp` samples per pixel at the cell centres
+    /// of [`sample_offsets`] (spp = 1 traces the pixel centre, exactly the rasterizer's sample
+    /// point). The per-pixel layers (direction, distance, object) are those of the pixel centre:
+    /// one of the samples when the pattern has it, else one more path per pixel.
     pub fn render(
         &self,
         view: &ViewBasis,
@@ -185,15 +217,8 @@ impl<'a> Reference<'a> {
         spp: u32,
     ) -> (ReferenceImages, ReferenceStats) {
         let spp = spp.clamp(1, MAX_SPP);
-        let grid = (f64::from(spp).sqrt().ceil()) as u32;
-        let offsets: Vec<Vec2> = (0..spp)
-            .map(|k| {
-                Vec2::new(
-                    ((k % grid) as f32 + 0.5) / grid as f32,
-                    ((k / grid) as f32 + 0.5) / grid as f32,
-                )
-            })
-            .collect();
+        let offsets = sample_offsets(spp);
+        let centre_index = offsets.iter().position(|o| *o == Vec2::splat(0.5));
         let start = Instant::now();
         let ray = |px: f32, py: f32| {
             let ndc_x = 2.0 * px / width as f32 - 1.0;
@@ -205,21 +230,24 @@ impl<'a> Reference<'a> {
             .map(|y| {
                 (0..width)
                     .map(|x| {
-                        let centre = self.trace(view.eye, ray(x as f32 + 0.5, y as f32 + 0.5));
                         let (mut sum, mut rays, mut misses) = (Vec3::ZERO, 0u32, 0u32);
-                        if spp == 1 {
-                            sum = centre.color;
-                            rays = centre.rays;
-                            misses = u32::from(centre.missed);
-                        } else {
-                            for o in &offsets {
-                                let s = self.trace(view.eye, ray(x as f32 + o.x, y as f32 + o.y));
-                                sum += s.color;
-                                rays += s.rays;
-                                misses += u32::from(s.missed);
+                        let mut centre = None;
+                        for (k, o) in offsets.iter().enumerate() {
+                            let s = self.trace(view.eye, ray(x as f32 + o.x, y as f32 + o.y));
+                            sum += s.color;
+                            rays += s.rays;
+                            misses += u32::from(s.missed);
+                            if Some(k) == centre_index {
+                                centre = Some(s);
                             }
-                            rays += centre.rays;
                         }
+                        // Not one of the samples: traced for the layers only (not a colour
+                        // sample, so it is counted apart from the camera paths).
+                        let centre = centre.unwrap_or_else(|| {
+                            let c = self.trace(view.eye, ray(x as f32 + 0.5, y as f32 + 0.5));
+                            rays += c.rays;
+                            c
+                        });
                         Pixel {
                             centre,
                             color: sum / spp as f32,
@@ -266,9 +294,85 @@ impl<'a> Reference<'a> {
                 .filter(|p| p.centre.via_mirror)
                 .count() as u64,
             misses: rows.iter().flatten().map(|p| u64::from(p.misses)).sum(),
+            camera_paths: u64::from(width) * u64::from(height) * u64::from(spp),
+            centre_paths: if centre_index.is_some() {
+                0
+            } else {
+                u64::from(width) * u64::from(height)
+            },
             spp,
             threads: rayon::current_num_threads(),
         };
         (images, stats)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sample_offsets;
+    use glam::Vec2;
+
+    #[test]
+    fn small_patterns_are_the_known_cell_centres() {
+        assert_eq!(sample_offsets(1), [Vec2::splat(0.5)]);
+        // One row of two cells (round(sqrt 2) = 1).
+        assert_eq!(
+            sample_offsets(2),
+            [Vec2::new(0.25, 0.5), Vec2::new(0.75, 0.5)]
+        );
+        // Two rows: two cells in a row 2/3 tall, one in a row 1/3 tall.
+        assert_eq!(
+            sample_offsets(3),
+            [
+                Vec2::new(0.25, 1.0 / 3.0),
+                Vec2::new(0.75, 1.0 / 3.0),
+                Vec2::new(0.5, 5.0 / 6.0)
+            ]
+        );
+        let grid: Vec<Vec2> = (0..16)
+            .map(|k| Vec2::new((k % 4) as f32 + 0.5, (k / 4) as f32 + 0.5) / 4.0)
+            .collect();
+        assert_eq!(sample_offsets(16), grid);
+    }
+
+    /// Every N from 1 to 300: N samples, each the centre of its own cell, the cells of equal
+    /// area tiling the pixel (each row's cells fill it; the rows' heights sum to 1); no two
+    /// samples alike; the pattern's mean is the pixel centre (no bias towards a side, the
+    /// fault of taking the first N cells of a ceil(sqrt N)^2 grid).
+    #[test]
+    fn every_count_is_stratified_in_equal_cells_centred_on_the_pixel() {
+        for n in 1..=300u32 {
+            let s = sample_offsets(n);
+            assert_eq!(s.len(), n as usize);
+            let mean = s.iter().copied().sum::<Vec2>() / n as f32;
+            assert!(
+                (mean - Vec2::splat(0.5)).abs().max_element() < 1e-5,
+                "{n}: mean {mean}"
+            );
+            let mut rows: Vec<(f32, u32)> = Vec::new();
+            for p in &s {
+                assert!(p.x > 0.0 && p.x < 1.0 && p.y > 0.0 && p.y < 1.0, "{n}: {p}");
+                match rows.last_mut() {
+                    Some((y, count)) if *y == p.y => *count += 1,
+                    _ => rows.push((p.y, 1)),
+                }
+            }
+            // Row r of c cells is c/n tall and centred on its y: consecutive rows must touch.
+            let mut top = 0.0f64;
+            for &(y, c) in &rows {
+                let height = f64::from(c) / f64::from(n);
+                assert!(
+                    (f64::from(y) - (top + height / 2.0)).abs() < 1e-6,
+                    "{n}: row at {y}"
+                );
+                top += height;
+            }
+            assert!((top - 1.0).abs() < 1e-9, "{n}: rows cover {top}");
+            let mut sorted: Vec<(u32, u32)> =
+                s.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect();
+            sorted.sort_unstable();
+            sorted.dedup();
+            assert_eq!(sorted.len(), n as usize, "{n}: repeated samples");
+        }
     }
 }
