@@ -187,3 +187,23 @@ fn one_target_twice_and_writes_outside_the_outputs_are_refused_and_dropped_files
     assert!(names(&dir).is_empty());
     fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Temporaries of a run that was killed (its process is gone) are removed by the next run into
+/// the same target; those of a live process are not.
+#[test]
+fn a_killed_runs_temporary_is_removed_by_the_next_run() {
+    let dir = scratch("stale");
+    let mut child = std::process::Command::new("true").spawn().unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    let stale = dir.join(format!(".out.partial-{dead}-0"));
+    fs::create_dir_all(stale.join("cube")).unwrap();
+    let live = dir.join(format!(".out.partial-{}-999999", std::process::id()));
+    fs::create_dir(&live).unwrap();
+    let mut out = Transaction::new();
+    out.folder(&dir.join("out"), "render.json").unwrap();
+    out.commit().unwrap();
+    assert!(!stale.exists());
+    assert!(live.exists());
+    fs::remove_dir_all(&dir).unwrap();
+}

@@ -64,6 +64,7 @@ impl Transaction {
         check_replaceable(target, &resolved, marker)?;
         let parent = parent_of(&resolved);
         self.create_parents(&parent)?;
+        remove_stale(&parent, &name);
         let temp = temp_beside(&parent, &name);
         fs::create_dir(&temp).map_err(io(target))?;
         self.staged.push(Staged {
@@ -93,6 +94,7 @@ impl Transaction {
                 folder: parent,
             });
         }
+        remove_stale(&parent, &name);
         self.staged.push(Staged {
             given: target.to_owned(),
             target: resolved,
@@ -224,6 +226,35 @@ fn temp_beside(dir: &Path, name: &str) -> PathBuf {
     dir.join(format!(".{name}.partial-{}-{id}", std::process::id()))
 }
 
+/// Removes the temporaries of earlier runs for `name` in `dir` whose process is gone (killed
+/// before it could clean up: SIGKILL, a second Ctrl-C, a power cut). Linux only: elsewhere
+/// whether a process lives is not checked, and nothing is removed.
+fn remove_stale(dir: &Path, name: &str) {
+    if !cfg!(target_os = "linux") {
+        return;
+    }
+    let prefix = format!(".{name}.partial-");
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file_name = entry.file_name().to_string_lossy().into_owned();
+        let Some(rest) = file_name.strip_prefix(&prefix) else {
+            continue;
+        };
+        // `PID-N`, or `PID-N.old` for an earlier output moved aside.
+        let pid = rest.split('-').next().and_then(|p| p.parse::<u32>().ok());
+        if pid.is_some_and(|pid| !Path::new(&format!("/proc/{pid}")).exists()) {
+            let path = entry.path();
+            let _ = if path.is_dir() {
+                fs::remove_dir_all(&path)
+            } else {
+                fs::remove_file(&path)
+            };
+        }
+    }
+}
+
 /// Ok when `target` is free, or a folder that is empty or an earlier output holding `marker`.
 fn check_replaceable(given: &Path, target: &Path, marker: &str) -> Result<(), OutputError> {
     let meta = match fs::symlink_metadata(target) {
@@ -277,7 +308,9 @@ fn place_folder(s: &Staged) -> Result<(), OutputError> {
 /// Old output to `temp.old`, new one into place, old one to `temp` (for the caller to remove);
 /// if the second rename fails the old output is put back.
 fn replace_in_two_steps(s: &Staged) -> Result<(), OutputError> {
-    let aside = s.temp.with_extension("old");
+    let mut aside = s.temp.clone().into_os_string();
+    aside.push(".old");
+    let aside = PathBuf::from(aside);
     fs::rename(&s.target, &aside).map_err(io(&s.given))?;
     if let Err(source) = fs::rename(&s.temp, &s.target) {
         let _ = fs::rename(&aside, &s.target);
@@ -328,4 +361,35 @@ fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
 #[cfg(not(target_os = "linux"))]
 fn exchange(_: &Path, _: &Path) -> std::io::Result<()> {
     Err(std::io::ErrorKind::Unsupported.into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fallback for file systems without the atomic swap: the new folder ends up in place,
+    /// the old one where the temporary was (for the caller to remove), nothing else beside.
+    #[test]
+    fn the_two_step_replacement_puts_new_in_place_and_old_aside() {
+        let dir = std::env::temp_dir().join(format!("specchio-swap-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        let (target, temp) = (dir.join("out"), dir.join(".out.partial-1-0"));
+        fs::create_dir_all(&target).unwrap();
+        fs::write(target.join("old.txt"), b"old").unwrap();
+        fs::create_dir_all(&temp).unwrap();
+        fs::write(temp.join("new.txt"), b"new").unwrap();
+        let staged = Staged {
+            given: target.clone(),
+            target: target.clone(),
+            temp: temp.clone(),
+            kind: Kind::Folder {
+                marker: "render.json".into(),
+            },
+        };
+        replace_in_two_steps(&staged).unwrap();
+        assert!(target.join("new.txt").is_file());
+        assert!(temp.join("old.txt").is_file());
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 2);
+        fs::remove_dir_all(&dir).unwrap();
+    }
 }
