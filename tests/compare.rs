@@ -93,7 +93,7 @@ fn json_reports_known_answers_and_the_heatmap_has_the_image_size() {
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert!(names.iter().all(|n| !n.ends_with(".partial")), "{names:?}");
+    assert!(names.iter().all(|n| !n.contains(".partial")), "{names:?}");
 
     // Identical images: PSNR is null in JSON (never inf) and flagged infinite.
     let json = json_of(&specchio(&["compare", s(&b), s(&b), "--json"]));
@@ -189,6 +189,34 @@ fn bad_input_fails_naming_the_file_and_writes_no_heatmap() {
         }
         assert!(!heat.exists(), "{args:?}: no heatmap on error");
         assert!(out.stdout.is_empty(), "{args:?}: no report on error");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A heatmap that cannot be written (its folder missing, a file where its folder must be, a
+/// folder in its place) fails naming the path the user gave, never the hidden temporary one,
+/// and leaves nothing.
+#[test]
+fn an_unwritable_heatmap_is_named_as_the_user_gave_it() {
+    let dir = temp_dir("heatmap");
+    let a = dir.join("a.exr");
+    write_exr(&a, &image(0.0)).unwrap();
+    let folder = dir.join("folder");
+    std::fs::create_dir(&folder).unwrap();
+    for heat in [dir.join("nodir/h.png"), a.join("h.png"), folder.clone()] {
+        let out = specchio(&["compare", s(&a), s(&a), "--heatmap", s(&heat)]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{heat:?} must fail");
+        assert!(stderr.contains(s(&heat)), "must name {heat:?}:\n{stderr}");
+        assert!(!stderr.contains("partial"), "names a temporary:\n{stderr}");
+        assert!(out.stdout.is_empty(), "no report on error");
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a.exr", "folder"]);
+        assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 0);
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

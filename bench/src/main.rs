@@ -5,6 +5,7 @@ mod bench;
 mod compare;
 mod gate;
 mod info;
+mod interrupt;
 mod probe;
 mod reference;
 mod render;

@@ -3,16 +3,17 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use serde_json::json;
-use specchio::output::{write_exr, write_json, write_png};
+use specchio::output::Transaction;
 use specchio::reference::{Reference, ReferenceImages, MAX_SPP};
 
 #[derive(clap::Args)]
 pub struct Args {
     /// The scene file (TOML; see docs/scene-format.md).
     scene: PathBuf,
-    /// Output folder (created if missing).
+    /// Output folder: created with everything in it at the end, or not at all; an earlier
+    /// reference there is replaced.
     #[arg(long)]
     out: PathBuf,
     /// Scene time in seconds.
@@ -34,9 +35,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         bail!("--spp {}: must be in 1..={MAX_SPP}", args.spp);
     }
     let scene = specchio::scene::load(&args.scene)?;
+    // All or nothing: written into a hidden folder beside --out, renamed into place at the end.
+    let mut out = Transaction::new();
+    out.folder(&args.out, "reference.json")?;
+    crate::interrupt::catch();
     let reference = Reference::new(&scene, args.time);
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut cameras = serde_json::Map::new();
     for (name, view, [w, h]) in [
         (
@@ -46,8 +49,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         ),
         ("sensor", reference.sensor_view(), scene.sensor.resolution),
     ] {
+        crate::interrupt::check(&format!("before tracing the {name} camera"))?;
         let (images, stats) = reference.render(&view, w, h, args.spp);
-        write_images(&args.out, name, &images)?;
+        write_images(&out, &args.out, name, &images)?;
         println!(
             "{name}: {w}x{h}, {} spp, {} rays in {:.0} ms ({:.2} M rays/s), {} mirror pixels, {} misses",
             stats.spp,
@@ -77,7 +81,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         "threads": rayon_threads(),
         "cameras": cameras,
     });
-    write_json(&args.out.join("reference.json"), &record)?;
+    out.write_json(&args.out.join("reference.json"), &record)?;
+    out.commit()?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -87,14 +92,14 @@ fn rayon_threads() -> usize {
         .unwrap_or(1)
 }
 
-fn write_images(dir: &Path, name: &str, images: &ReferenceImages) -> Result<()> {
-    write_exr(&dir.join(format!("{name}.exr")), &images.color)?;
-    write_png(&dir.join(format!("{name}.png")), &images.color)?;
-    write_exr(
+fn write_images(out: &Transaction, dir: &Path, name: &str, images: &ReferenceImages) -> Result<()> {
+    out.write_exr(&dir.join(format!("{name}.exr")), &images.color)?;
+    out.write_png(&dir.join(format!("{name}.png")), &images.color)?;
+    out.write_exr(
         &dir.join(format!("{name}.direction.exr")),
         &images.direction,
     )?;
-    write_exr(&dir.join(format!("{name}.distance.exr")), &images.distance)?;
-    write_exr(&dir.join(format!("{name}.object.exr")), &images.object)?;
+    out.write_exr(&dir.join(format!("{name}.distance.exr")), &images.distance)?;
+    out.write_exr(&dir.join(format!("{name}.object.exr")), &images.object)?;
     Ok(())
 }

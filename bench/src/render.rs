@@ -3,9 +3,9 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use serde_json::json;
-use specchio::output::{write_exr, write_json, write_png};
+use specchio::output::Transaction;
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::camera::FACE_NAMES;
@@ -22,7 +22,8 @@ pub const MAX_FRAMES: u32 = 100_000;
 pub struct Args {
     /// The scene file (TOML; see docs/scene-format.md).
     scene: PathBuf,
-    /// Output folder (created if missing).
+    /// Output folder: created with everything in it at the end, or not at all; an earlier
+    /// render there is replaced.
     #[arg(long)]
     out: PathBuf,
     /// Scene time of the (first) frame in seconds.
@@ -77,6 +78,16 @@ fn check_args(args: &Args) -> Result<()> {
     if args.frames == 0 || args.frames > MAX_FRAMES {
         bail!("--frames {}: must be in 1..={MAX_FRAMES}", args.frames);
     }
+    // Frame numbers count on from --frame; the last must exist (u64::MAX + 1 does not).
+    if let Some(f) = args.frame {
+        if f.checked_add(u64::from(args.frames) - 1).is_none() {
+            bail!(
+                "--frame {f}: with --frames {} the last frame number would pass {}",
+                args.frames,
+                u64::MAX
+            );
+        }
+    }
     if let Some(s) = args.cube_size {
         if s == 0 || s > MAX_FACE_SIZE_PX {
             bail!("--cube-size {s}: must be in 1..={MAX_FACE_SIZE_PX}");
@@ -98,6 +109,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let start_s = args
         .time
         .unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);
+    // Everything is written into a hidden folder beside --out, renamed into place at the end
+    // (dropped, it is removed): a failure anywhere below leaves nothing behind.
+    let mut out = Transaction::new();
+    out.folder(&args.out, "render.json")?;
+    crate::interrupt::catch();
 
     // 2. The GPU, with the features of the methods that will run.
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
@@ -110,11 +126,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let info = device.info.clone();
 
     // 3. Frames, per method (`--method all`: each into DIR/<method>/).
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut runs = Vec::new();
     for &method in &methods {
-        let out = if args.method == "all" {
+        let dir = if args.method == "all" {
             args.out.join(method.name())
         } else {
             args.out.clone()
@@ -127,12 +141,12 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             ..Default::default()
         };
         let mut renderer = Renderer::new(&device, scene.clone(), &options)?;
-        let reports = render_frames(args, &mut renderer, start_s, &out)?;
+        let reports = render_frames(args, &mut renderer, start_s, &out, &dir)?;
         let summary = summarize(&reports);
-        print_summary(args, method, &out, &reports, &summary);
+        print_summary(args, method, &dir, &reports, &summary);
         runs.push(json!({
             "method": method,
-            "out": out.display().to_string(),
+            "out": dir.display().to_string(),
             "refresh_counters": renderer.counters,
             "summary": summary,
             "frames": reports,
@@ -174,7 +188,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     drop(device);
     let messages = log.messages();
     record["validation_messages"] = json!(messages.len());
-    write_json(&args.out.join("render.json"), &record)?;
+    out.write_json(&args.out.join("render.json"), &record)?;
+    out.commit()?;
     for (m, why) in &refused {
         println!("  {m}: not run: {why}");
     }
@@ -213,11 +228,13 @@ fn render_frames(
     args: &Args,
     renderer: &mut Renderer,
     start_s: f64,
-    out: &Path,
+    out: &Transaction,
+    dir: &Path,
 ) -> Result<Vec<FrameReport>> {
     let progress = (args.frames > 1).then(|| indicatif::ProgressBar::new(u64::from(args.frames)));
     let mut reports = Vec::new();
     for i in 0..args.frames {
+        crate::interrupt::check(&format!("after {i} of {} frame(s)", args.frames))?;
         let t = start_s + f64::from(i) / args.fps;
         // Frame numbers continue from --frame, so `every-n` counts scene frames, not run frames.
         let frame_index = args.frame.unwrap_or(0) + u64::from(i);
@@ -230,12 +247,12 @@ fn render_frames(
                 directions: args.directions,
             },
         )?;
-        let dir = if args.frames > 1 {
-            out.join(format!("{i:04}"))
+        let frame_dir = if args.frames > 1 {
+            dir.join(format!("{i:04}"))
         } else {
-            out.to_owned()
+            dir.to_owned()
         };
-        write_frame(&dir, &images)?;
+        write_frame(out, &frame_dir, &images)?;
         reports.push(report);
         if let Some(p) = &progress {
             p.inc(1);
@@ -264,29 +281,27 @@ fn refresh_name(p: RefreshPolicy) -> String {
     }
 }
 
-fn write_frame(dir: &Path, images: &FrameImages) -> Result<()> {
-    std::fs::create_dir_all(dir.join("cube"))
-        .with_context(|| format!("cannot create {}", dir.display()))?;
+fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()> {
     if let Some(img) = &images.observer {
-        write_exr(&dir.join("observer.exr"), img)?;
-        write_png(&dir.join("observer.png"), img)?;
+        out.write_exr(&dir.join("observer.exr"), img)?;
+        out.write_png(&dir.join("observer.png"), img)?;
     }
     if let Some(img) = &images.sensor {
-        write_exr(&dir.join("sensor.exr"), img)?;
-        write_png(&dir.join("sensor.png"), img)?;
+        out.write_exr(&dir.join("sensor.exr"), img)?;
+        out.write_png(&dir.join("sensor.png"), img)?;
     }
     if let Some(img) = &images.pair {
-        write_png(&dir.join("views.png"), img)?;
+        out.write_png(&dir.join("views.png"), img)?;
     }
     if let Some(img) = &images.observer_direction {
-        write_exr(&dir.join("observer.direction.exr"), img)?;
+        out.write_exr(&dir.join("observer.direction.exr"), img)?;
     }
     if let Some(img) = &images.sensor_direction {
-        write_exr(&dir.join("sensor.direction.exr"), img)?;
+        out.write_exr(&dir.join("sensor.direction.exr"), img)?;
     }
     if let Some(faces) = &images.cube {
         for (face, img) in FACE_NAMES.iter().zip(faces) {
-            write_exr(&dir.join("cube").join(format!("{face}.exr")), img)?;
+            out.write_exr(&dir.join("cube").join(format!("{face}.exr")), img)?;
         }
     }
     Ok(())

@@ -71,7 +71,7 @@ fn cpu_modules_reach_no_vulkan() {
     let mut stack: Vec<_> = ["scene", "reference", "metrics"]
         .iter()
         .map(|m| src.join(m))
-        .chain(["image.rs", "output.rs"].iter().map(|f| src.join(f)))
+        .chain(["image.rs", "output"].iter().map(|f| src.join(f)))
         .collect();
     while let Some(p) = stack.pop() {
         if p.is_dir() {

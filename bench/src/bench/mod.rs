@@ -19,7 +19,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use serde_json::{json, Value};
-use specchio::output::write_json;
+use specchio::output::Transaction;
 use specchio::reference::Reference;
 use specchio::render::methods::Method;
 use specchio::scene::Lookup;
@@ -226,6 +226,16 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         lookups,
         methods: wanted,
     } = settle(args)?;
+    // The report files are staged now, so that a path given twice or a folder where a file
+    // must go fails before the long run; they appear together at the end or not at all.
+    let written: Vec<&PathBuf> = [&args.json, &args.csv, &args.plot]
+        .into_iter()
+        .flatten()
+        .collect();
+    let mut out = Transaction::new();
+    for path in &written {
+        out.file(path)?;
+    }
     // Read the baseline first: a bad baseline fails before the long run.
     let baseline = args
         .baseline
@@ -479,19 +489,16 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         "speed_vs_error": speed_vs_error,
         "dynamic": dynamic_out,
     });
-    let mut written = Vec::new();
     if let Some(path) = &args.json {
-        write_json(path, &record)?;
-        written.push(path);
+        out.write_json(path, &record)?;
     }
     if let Some(path) = &args.csv {
-        report::write_csv(path, &record)?;
-        written.push(path);
+        report::write_csv(&out, path, &record)?;
     }
     if let Some(path) = &args.plot {
-        report::write_atomically(path, plot::svg(&plot_scenes).as_bytes())?;
-        written.push(path);
+        out.write_bytes(path, plot::svg(&plot_scenes).as_bytes())?;
     }
+    out.commit()?;
     for path in written {
         say(format!("wrote {}", path.display()));
     }

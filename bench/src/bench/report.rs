@@ -4,8 +4,9 @@
 use std::path::Path;
 use std::process::Command;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use serde_json::{json, Value};
+use specchio::output::Transaction;
 
 /// Peak resident memory of this process so far, in bytes (Linux: `ru_maxrss` is in KiB).
 pub fn peak_rss_bytes() -> Option<u64> {
@@ -87,8 +88,8 @@ pub fn github(record: &Value) -> Value {
 }
 
 /// One CSV row per speed-against-error case (scene, method, face size, lookup): times, work
-/// counters, efficiency and error.
-pub fn write_csv(path: &Path, record: &Value) -> Result<()> {
+/// counters, efficiency and error; `path` is staged in `out`.
+pub fn write_csv(out: &Transaction, path: &Path, record: &Value) -> Result<()> {
     let mut text = String::from(
         "scene,method,cube_size,lookup,updates,wall_median_ms,wall_p10_ms,wall_p90_ms,gpu_fill_median_ms,vertex_invocations,fragment_invocations,faces_rendered,objects_drawn,vs_floors,flip_mean,flip_p99,angular_mean_deg,angular_p99_deg\n",
     );
@@ -121,17 +122,7 @@ pub fn write_csv(path: &Path, record: &Value) -> Result<()> {
             f(&a["angular"]["p99_deg"]),
         ));
     }
-    write_atomically(path, text.as_bytes())
-}
-
-/// Writes `bytes` to a temporary file beside `path`, then renames it: no half-written output.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let name = path
-        .file_name()
-        .with_context(|| format!("{}: not a file name", path.display()))?;
-    let tmp = path.with_file_name(format!(".{}.partial", name.to_string_lossy()));
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))
+    Ok(out.write_bytes(path, text.as_bytes())?)
 }
 
 #[cfg(test)]

@@ -1,0 +1,208 @@
+//! Output files: linear EXR, sRGB PNG previews and JSON, all written through a
+//! [`Transaction`] so that a command's outputs appear together or not at all.
+//!
+//! The one-file functions (`write_exr`, `write_png`, ...) are a transaction of one file: a
+//! failed or interrupted write never leaves a half-written file, and every error names the
+//! user's path, never the hidden temporary one.
+
+mod transaction;
+
+use std::fs;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, Vec2, WritableImage};
+
+use crate::image::RgbaImage;
+
+pub use transaction::Transaction;
+
+/// Why an output could not be written. Each names the user's path; an I/O cause is the
+/// error's `source` (printed after it by `{:#}` in the CLI), not repeated in the message.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("cannot write {path}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("cannot create the folder {path}")]
+    CreateFolder {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("cannot encode {path}: {message}")]
+    Encode { path: PathBuf, message: String },
+    #[error("cannot write {path}: the folder {folder} does not exist")]
+    NoFolder { path: PathBuf, folder: PathBuf },
+    #[error("cannot write {path}: it is a folder; a file name is needed")]
+    IsAFolder { path: PathBuf },
+    #[error("cannot write {path}: it exists and is not a folder (a file or a symbolic link)")]
+    NotAFolder { path: PathBuf },
+    #[error(
+        "{path} exists and is not an earlier output (it holds files but no {marker}): \
+         refusing to replace it; choose a new folder, or remove it first"
+    )]
+    NotAnOutput { path: PathBuf, marker: String },
+    #[error("cannot write {path}: it names no file or folder")]
+    NoName { path: PathBuf },
+    #[error("{path} is given for two outputs of one command")]
+    Twice { path: PathBuf },
+    #[error("{path} is not among this command's outputs (a bug in the caller)")]
+    NotStaged { path: PathBuf },
+}
+
+/// An I/O failure is reported as one, naming `path`; anything else the encoder says is an
+/// encoding failure.
+fn exr_error(path: &Path, e: exr::error::Error) -> OutputError {
+    match e {
+        exr::error::Error::Io(source) => OutputError::Io {
+            path: path.to_owned(),
+            source,
+        },
+        other => OutputError::Encode {
+            path: path.to_owned(),
+            message: other.to_string(),
+        },
+    }
+}
+
+fn png_error(path: &Path, e: png::EncodingError) -> OutputError {
+    match e {
+        png::EncodingError::IoError(source) => OutputError::Io {
+            path: path.to_owned(),
+            source,
+        },
+        other => OutputError::Encode {
+            path: path.to_owned(),
+            message: other.to_string(),
+        },
+    }
+}
+
+/// The EXR layout: the crate's default (RLE in 64x64 tiles), with the chunks in increasing
+/// order. With its default unspecified order the crate writes chunks as its parallel
+/// compressors finish, so the same image gave different bytes from run to run; a fixed order
+/// makes the files byte-identical, so checksums can compare them.
+const EXR_ENCODING: Encoding = Encoding {
+    line_order: LineOrder::Increasing,
+    ..Encoding::FAST_LOSSLESS
+};
+
+impl Transaction {
+    /// Linear RGBA, 32-bit float, as OpenEXR at `path` (staged in this transaction).
+    pub fn write_exr(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
+        let to = self.path_for(path)?;
+        let w = image.width as usize;
+        let channels = SpecificChannels::rgba(|Vec2(x, y)| {
+            let p: [f32; 4] = image.pixels[y * w + x];
+            (p[0], p[1], p[2], p[3])
+        });
+        Image::from_encoded_channels((w, image.height as usize), EXR_ENCODING, channels)
+            .write()
+            .to_file(&to)
+            .map_err(|e| exr_error(path, e))
+    }
+
+    /// An 8-bit sRGB RGB preview of a linear image.
+    pub fn write_png(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
+        let bytes: Vec<u8> = image
+            .pixels
+            .iter()
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .map(|v| (linear_to_srgb(v) * 255.0).round() as u8)
+            .collect();
+        self.write_png_rgb8(path, image.width, image.height, &bytes)
+    }
+
+    /// An 8-bit sRGB RGB PNG from bytes already encoded (3 per pixel, rows top to bottom),
+    /// e.g. a colour-mapped error heatmap.
+    pub fn write_png_rgb8(
+        &self,
+        path: &Path,
+        width: u32,
+        height: u32,
+        rgb8: &[u8],
+    ) -> Result<(), OutputError> {
+        let to = self.path_for(path)?;
+        let file = fs::File::create(&to).map_err(|source| OutputError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let enc = |e| png_error(path, e);
+        let mut writer = encoder.write_header().map_err(enc)?;
+        writer.write_image_data(rgb8).map_err(enc)?;
+        writer.finish().map_err(enc)
+    }
+
+    /// JSON, pretty-printed, with a final newline.
+    pub fn write_json(&self, path: &Path, value: &serde_json::Value) -> Result<(), OutputError> {
+        let text = serde_json::to_string_pretty(value).map_err(|e| OutputError::Encode {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        self.write_bytes(path, (text + "\n").as_bytes())
+    }
+
+    /// Bytes as they are (CSV, SVG, ...).
+    pub fn write_bytes(&self, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+        let to = self.path_for(path)?;
+        fs::write(&to, bytes).map_err(|source| OutputError::Io {
+            path: path.to_owned(),
+            source,
+        })
+    }
+}
+
+/// Runs `write` in a transaction of the one file `path`.
+fn one_file(
+    path: &Path,
+    write: impl FnOnce(&Transaction) -> Result<(), OutputError>,
+) -> Result<(), OutputError> {
+    let mut out = Transaction::new();
+    out.file(path)?;
+    write(&out)?;
+    out.commit()
+}
+
+/// Linear RGBA, 32-bit float, as OpenEXR, atomically.
+pub fn write_exr(path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
+    one_file(path, |out| out.write_exr(path, image))
+}
+
+/// An 8-bit sRGB RGB preview of a linear image, atomically.
+pub fn write_png(path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
+    one_file(path, |out| out.write_png(path, image))
+}
+
+/// [`Transaction::write_png_rgb8`] as one file, atomically.
+pub fn write_png_rgb8(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb8: &[u8],
+) -> Result<(), OutputError> {
+    one_file(path, |out| out.write_png_rgb8(path, width, height, rgb8))
+}
+
+/// JSON (pretty), atomically.
+pub fn write_json(path: &Path, value: &serde_json::Value) -> Result<(), OutputError> {
+    one_file(path, |out| out.write_json(path, value))
+}
+
+/// The linear-to-sRGB transfer function (IEC 61966-2-1), input clamped to [0, 1].
+pub fn linear_to_srgb(v: f32) -> f32 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+#[cfg(test)]
+mod tests;

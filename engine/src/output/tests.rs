@@ -1,0 +1,209 @@
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use super::*;
+
+/// A fresh folder for one test (tests run in parallel threads of one process).
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("specchio-output-{}-{name}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Every name in `dir`, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn image(width: u32, height: u32) -> RgbaImage {
+    // Varied enough that every 64x64 tile compresses differently.
+    let pixels = (0..width * height)
+        .map(|i| {
+            let f = (i.wrapping_mul(2_654_435_761) >> 8) as f32 / 16_777_216.0;
+            [f, (i % 97) as f32 * 0.01, 2.0, 1.0]
+        })
+        .collect();
+    RgbaImage {
+        width,
+        height,
+        pixels,
+    }
+}
+
+#[test]
+fn srgb_known_values() {
+    assert_eq!(linear_to_srgb(0.0), 0.0);
+    assert!((linear_to_srgb(1.0) - 1.0).abs() < 1e-6);
+    // 18% grey is about 46% in sRGB.
+    assert!((linear_to_srgb(0.18) - 0.4614).abs() < 1e-3);
+    assert_eq!(linear_to_srgb(f32::NAN), 0.0);
+}
+
+#[test]
+fn exr_round_trips_and_leaves_no_temporary() {
+    let dir = scratch("exr");
+    let image = image(3, 2);
+    let path = dir.join("a.exr");
+    write_exr(&path, &image).unwrap();
+    let read = exr::prelude::read_first_rgba_layer_from_file(
+        &path,
+        |res, _| vec![[0f32; 4]; res.width() * res.height()],
+        |px: &mut Vec<[f32; 4]>, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * 3 + pos.x()] = [r, g, b, a]
+        },
+    )
+    .unwrap();
+    assert_eq!(read.layer_data.channel_data.pixels, image.pixels);
+    assert_eq!(names(&dir), ["a.exr"]);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The same image gives the same bytes, however many threads compress it: the chunks are in
+/// increasing order, not in the order the compressors finish.
+#[test]
+fn exr_bytes_do_not_depend_on_compression_threads() {
+    let dir = scratch("exr-bytes");
+    let image = image(512, 384); // 48 tiles
+    let path = dir.join("a.exr");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(8)
+        .build()
+        .unwrap();
+    let mut files = Vec::new();
+    for _ in 0..6 {
+        pool.install(|| write_exr(&path, &image)).unwrap();
+        files.push(fs::read(&path).unwrap());
+    }
+    assert!(files.iter().all(|f| f == &files[0]), "EXR bytes differ");
+    let meta = exr::meta::MetaData::read_from_file(&path, false).unwrap();
+    assert_eq!(meta.headers[0].line_order, LineOrder::Increasing);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_dropped_transaction_leaves_nothing_not_even_the_parents_it_made() {
+    let dir = scratch("drop");
+    let target = dir.join("new/deeper/out");
+    {
+        let mut out = Transaction::new();
+        out.folder(&target, "render.json").unwrap();
+        out.write_exr(&target.join("cube/px.exr"), &image(4, 4))
+            .unwrap();
+        out.write_json(&target.join("render.json"), &serde_json::json!({}))
+            .unwrap();
+        // Dropped here, as on an error before the commit.
+    }
+    assert!(names(&dir).is_empty(), "{:?}", names(&dir));
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_commit_places_the_folder_and_replaces_an_earlier_output() {
+    let dir = scratch("replace");
+    let target = dir.join("out");
+    let render = |file: &str| {
+        let mut out = Transaction::new();
+        out.folder(&target, "render.json").unwrap();
+        out.write_bytes(&target.join(file), b"x").unwrap();
+        out.write_json(&target.join("render.json"), &serde_json::json!({}))
+            .unwrap();
+        out.commit().unwrap();
+    };
+    render("first.txt");
+    assert_eq!(names(&target), ["first.txt", "render.json"]);
+    render("second.txt");
+    assert_eq!(names(&target), ["render.json", "second.txt"]);
+    assert_eq!(names(&dir), ["out"], "no temporary left beside it");
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_folder_that_is_not_an_earlier_output_is_refused_untouched() {
+    let dir = scratch("refuse");
+    let target = dir.join("home");
+    fs::create_dir(&target).unwrap();
+    fs::write(target.join("notes.txt"), b"mine").unwrap();
+    let err = Transaction::new()
+        .folder(&target, "render.json")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains(&target.display().to_string()), "{err}");
+    assert!(err.contains("render.json"), "{err}");
+    assert_eq!(names(&target), ["notes.txt"]);
+    assert_eq!(names(&dir), ["home"]);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Real failures: a regular file where a folder must go, and a folder the kernel will not
+/// create (/proc). Each error names the user's path (never the temporary) and is an I/O
+/// error, not an encoding one; nothing is left behind.
+#[test]
+fn io_failures_name_the_users_path_and_leave_nothing() {
+    let dir = scratch("io");
+    let file = dir.join("file");
+    fs::write(&file, b"a file").unwrap();
+    let under_file = file.join("out");
+    let err = Transaction::new()
+        .folder(&under_file, "render.json")
+        .unwrap_err();
+    assert!(matches!(err, OutputError::Io { .. }), "{err:?}");
+    assert!(err.to_string().contains(&under_file.display().to_string()));
+    let err = Transaction::new().folder(&file, "render.json").unwrap_err();
+    assert!(matches!(err, OutputError::NotAFolder { .. }), "{err:?}");
+    assert_eq!(names(&dir), ["file"]);
+
+    let proc = Path::new("/proc/specchio-no-such.exr");
+    let err = write_exr(proc, &image(4, 4)).unwrap_err();
+    assert!(matches!(err, OutputError::Io { .. }), "{err:?}");
+    let text = err.to_string();
+    assert!(text.contains("/proc/specchio-no-such.exr"), "{text}");
+    assert!(!text.contains("partial"), "{text}");
+
+    let missing = dir.join("nodir/h.png");
+    let err = write_png(&missing, &image(4, 4)).unwrap_err().to_string();
+    assert!(err.contains(&missing.display().to_string()), "{err}");
+    assert!(!err.contains("partial"), "{err}");
+    assert_eq!(names(&dir), ["file"]);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn one_target_twice_and_writes_outside_the_outputs_are_refused_and_dropped_files_go() {
+    let dir = scratch("twice");
+    let mut out = Transaction::new();
+    out.file(&dir.join("a.json")).unwrap();
+    out.write_bytes(&dir.join("a.json"), b"{}").unwrap();
+    let err = out.file(&dir.join("a.json")).unwrap_err();
+    assert!(matches!(err, OutputError::Twice { .. }), "{err:?}");
+    let err = out.write_bytes(&dir.join("b.json"), b"{}").unwrap_err();
+    assert!(matches!(err, OutputError::NotStaged { .. }), "{err:?}");
+    drop(out);
+    assert!(names(&dir).is_empty());
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Temporaries of a run that was killed (its process is gone) are removed by the next run into
+/// the same target; those of a live process are not.
+#[test]
+fn a_killed_runs_temporary_is_removed_by_the_next_run() {
+    let dir = scratch("stale");
+    let mut child = std::process::Command::new("true").spawn().unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    let stale = dir.join(format!(".out.partial-{dead}-0"));
+    fs::create_dir_all(stale.join("cube")).unwrap();
+    let live = dir.join(format!(".out.partial-{}-999999", std::process::id()));
+    fs::create_dir(&live).unwrap();
+    let mut out = Transaction::new();
+    out.folder(&dir.join("out"), "render.json").unwrap();
+    out.commit().unwrap();
+    assert!(!stale.exists());
+    assert!(live.exists());
+    fs::remove_dir_all(&dir).unwrap();
+}
