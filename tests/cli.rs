@@ -591,3 +591,24 @@ fn the_loaders_warnings_do_not_count_as_validation_messages() {
     assert!(stderr.contains("[vulkan loader"), "{stderr}");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// An error's cause is said once, however the error chains it.
+#[test]
+fn a_missing_scene_is_named_once_with_its_cause_once() {
+    let out = temp_dir("missing-scene");
+    let result = specchio(&[
+        "render",
+        "/nonexistent/scene.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success());
+    assert!(stderr.contains("/nonexistent/scene.toml"), "{stderr}");
+    assert_eq!(
+        stderr.matches("No such file or directory").count(),
+        1,
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}

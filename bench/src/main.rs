@@ -106,8 +106,39 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_text(&e));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// The error and its causes on one line, each cause once: many errors already say their
+/// cause in their own message (`cannot read x: No such file`), and printing the chain as well
+/// (`{:#}`) would repeat it.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text = format!("{text}: {cause}");
+        }
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::error_text;
+    use anyhow::Context;
+
+    #[test]
+    fn each_cause_is_said_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file");
+        // A cause that its error's message already includes is not repeated...
+        let e = anyhow::Error::new(io).context("cannot read x.toml: No such file");
+        assert_eq!(error_text(&e), "cannot read x.toml: No such file");
+        // ...one it does not include is appended.
+        let e: anyhow::Result<()> = Err(anyhow::anyhow!("disk full")).context("cannot write y");
+        assert_eq!(error_text(&e.unwrap_err()), "cannot write y: disk full");
     }
 }
