@@ -9,7 +9,7 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::{Boundable, BvhBuildParams};
 
-use super::intersect::{ray_triangle, TriangleHit};
+use super::intersect::{ShearedRay, TriangleHit};
 use crate::scene::state::{room_meshes, SceneState};
 use crate::scene::{Mesh, Scene};
 
@@ -118,10 +118,11 @@ impl SceneGeometry {
         let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), t_min, t_max);
         let mut best: Option<Hit> = None;
         let mut ray_hit = RayHit::none();
+        let sheared = ShearedRay::new(o, d);
         self.bvh.ray_traverse(ray, &mut ray_hit, |r, id| {
             let tri = self.bvh.primitive_indices[id];
             let [v0, v1, v2] = self.triangles[tri as usize];
-            match ray_triangle(o, d, v0, v1, v2, r.tmin, r.tmax) {
+            match sheared.hit_triangle(v0, v1, v2, r.tmin, r.tmax) {
                 Some(hit) => {
                     best = Some(Hit { triangle: tri, hit });
                     hit.t

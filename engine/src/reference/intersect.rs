@@ -44,64 +44,112 @@ pub fn ray_triangle(
     t_min: f32,
     t_max: f32,
 ) -> Option<TriangleHit> {
-    // The dimension where the direction is largest becomes z; x, y follow with the winding kept.
-    let kz = d.abs().max_position();
-    let mut kx = (kz + 1) % 3;
-    let mut ky = (kx + 1) % 3;
-    if d[kz] < 0.0 {
-        std::mem::swap(&mut kx, &mut ky);
+    ShearedRay::new(o, d).hit_triangle(v0, v1, v2, t_min, t_max)
+}
+
+/// A ray prepared for [`ray_triangle`]'s test: the axis permutation and shear depend on the
+/// ray alone, so a traversal computes them once rather than per triangle (the same numbers,
+/// so the same hits, bit for bit).
+#[derive(Debug, Clone, Copy)]
+pub struct ShearedRay {
+    o: Vec3,
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    sx: f32,
+    sy: f32,
+    sz: f32,
+}
+
+impl ShearedRay {
+    pub fn new(o: Vec3, d: Vec3) -> Self {
+        // The dimension where the direction is largest becomes z; x, y follow with the winding
+        // kept.
+        let kz = d.abs().max_position();
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let sz = 1.0 / d[kz];
+        Self {
+            o,
+            kx,
+            ky,
+            kz,
+            sx: d[kx] * sz,
+            sy: d[ky] * sz,
+            sz,
+        }
     }
-    let sz = 1.0 / d[kz];
-    let sx = d[kx] * sz;
-    let sy = d[ky] * sz;
-    let a = v0 - o;
-    let b = v1 - o;
-    let c = v2 - o;
-    let ax = a[kx] - sx * a[kz];
-    let ay = a[ky] - sy * a[kz];
-    let bx = b[kx] - sx * b[kz];
-    let by = b[ky] - sy * b[kz];
-    let cx = c[kx] - sx * c[kz];
-    let cy = c[ky] - sy * c[kz];
-    let mut u = cx * by - cy * bx;
-    let mut v = ax * cy - ay * cx;
-    let mut w = bx * ay - by * ax;
-    if u == 0.0 || v == 0.0 || w == 0.0 {
-        // Exactly on an edge in single precision: decide in double precision, consistently for
-        // both triangles sharing the edge.
-        let (ax, ay, bx, by, cx, cy) = (
-            f64::from(ax),
-            f64::from(ay),
-            f64::from(bx),
-            f64::from(by),
-            f64::from(cx),
-            f64::from(cy),
-        );
-        u = (cx * by - cy * bx) as f32;
-        v = (ax * cy - ay * cx) as f32;
-        w = (bx * ay - by * ax) as f32;
+
+    /// [`ray_triangle`] for this ray.
+    pub fn hit_triangle(
+        &self,
+        v0: Vec3,
+        v1: Vec3,
+        v2: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        let Self {
+            o,
+            kx,
+            ky,
+            kz,
+            sx,
+            sy,
+            sz,
+        } = *self;
+        let a = v0 - o;
+        let b = v1 - o;
+        let c = v2 - o;
+        let ax = a[kx] - sx * a[kz];
+        let ay = a[ky] - sy * a[kz];
+        let bx = b[kx] - sx * b[kz];
+        let by = b[ky] - sy * b[kz];
+        let cx = c[kx] - sx * c[kz];
+        let cy = c[ky] - sy * c[kz];
+        let mut u = cx * by - cy * bx;
+        let mut v = ax * cy - ay * cx;
+        let mut w = bx * ay - by * ax;
+        if u == 0.0 || v == 0.0 || w == 0.0 {
+            // Exactly on an edge in single precision: decide in double precision, consistently for
+            // both triangles sharing the edge.
+            let (ax, ay, bx, by, cx, cy) = (
+                f64::from(ax),
+                f64::from(ay),
+                f64::from(bx),
+                f64::from(by),
+                f64::from(cx),
+                f64::from(cy),
+            );
+            u = (cx * by - cy * bx) as f32;
+            v = (ax * cy - ay * cx) as f32;
+            w = (bx * ay - by * ax) as f32;
+        }
+        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+            return None;
+        }
+        let det = u + v + w;
+        if det == 0.0 {
+            return None;
+        }
+        let az = sz * a[kz];
+        let bz = sz * b[kz];
+        let cz = sz * c[kz];
+        let t_scaled = u * az + v * bz + w * cz;
+        let inv = 1.0 / det;
+        let t = t_scaled * inv;
+        if !(t > t_min && t < t_max) {
+            return None;
+        }
+        Some(TriangleHit {
+            t,
+            u: v * inv,
+            v: w * inv,
+        })
     }
-    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
-        return None;
-    }
-    let det = u + v + w;
-    if det == 0.0 {
-        return None;
-    }
-    let az = sz * a[kz];
-    let bz = sz * b[kz];
-    let cz = sz * c[kz];
-    let t_scaled = u * az + v * bz + w * cz;
-    let inv = 1.0 / det;
-    let t = t_scaled * inv;
-    if !(t > t_min && t < t_max) {
-        return None;
-    }
-    Some(TriangleHit {
-        t,
-        u: v * inv,
-        v: w * inv,
-    })
 }
 
 /// Moves a ray origin off a surface along its geometric normal by a few float steps, scaled to
