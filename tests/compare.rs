@@ -220,3 +220,30 @@ fn an_unwritable_heatmap_is_named_as_the_user_gave_it() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A heatmap path that names an input (under any spelling) is refused before anything is
+/// written: the input survives byte for byte.
+#[test]
+fn a_heatmap_over_an_input_is_refused_and_the_input_kept() {
+    let dir = temp_dir("heatmap-over-input");
+    let (test, reference) = (dir.join("test.exr"), dir.join("reference.exr"));
+    write_exr(&test, &image(0.1)).unwrap();
+    write_exr(&reference, &image(0.0)).unwrap();
+    let before = std::fs::read(&reference).unwrap();
+    let respelled = dir.join(".").join("reference.exr");
+    let out = specchio(&[
+        "compare",
+        s(&test),
+        s(&reference),
+        "--heatmap",
+        s(&respelled),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("--heatmap") && stderr.contains("is the input"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read(&reference).unwrap(), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -36,6 +36,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
+    check_heatmap_is_no_input(args)?;
     if let Some(face_size) = args.angular {
         return angular(args, face_size);
     }
@@ -57,6 +58,28 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         print_table(args, &comparison);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// A heatmap written over an input would destroy the user's image: refused before anything is
+/// read (the same file under any spelling: paths are compared once resolved).
+fn check_heatmap_is_no_input(args: &Args) -> Result<()> {
+    let Some(heatmap) = &args.heatmap else {
+        return Ok(());
+    };
+    let Ok(heatmap_real) = std::fs::canonicalize(heatmap) else {
+        return Ok(()); // not there yet: no input can be it
+    };
+    let inputs = [Some(&args.test), Some(&args.reference), args.mask.as_ref()];
+    for input in inputs.into_iter().flatten() {
+        if std::fs::canonicalize(input).is_ok_and(|real| real == heatmap_real) {
+            anyhow::bail!(
+                "--heatmap {}: is the input {}; the heatmap must go to another file",
+                heatmap.display(),
+                input.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 /// `--angular`: the angle between the looked-up and the exact direction per mirror pixel.

@@ -131,6 +131,7 @@ impl Comparison {
 /// The first RGBA layer of an OpenEXR file, as 32-bit float (alpha 1 when the file has none).
 pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
     check_exists(path)?;
+    check_exr_size(path)?;
     let read = exr::prelude::read_first_rgba_layer_from_file(
         path,
         |res, _| RgbaImage {
@@ -143,11 +144,53 @@ pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
             img.pixels[i] = [r, g, b, a];
         },
     )
-    .map_err(|e| MetricsError::Read {
-        path: path.to_owned(),
-        message: e.to_string(),
-    })?;
+    .map_err(|e| exr_error(path, e))?;
     Ok(read.layer_data.channel_data.pixels)
+}
+
+/// The largest image side the metrics read: twice the largest view specchio writes (8192 px),
+/// so a corrupt or hostile header cannot ask for gigabytes before a pixel is read.
+pub const MAX_INPUT_SIDE_PX: usize = 16384;
+
+/// Refuses an EXR whose header declares a layer larger than [`MAX_INPUT_SIDE_PX`] a side,
+/// from the header alone (the pixels would be allocated before they are read).
+fn check_exr_size(path: &Path) -> Result<(), MetricsError> {
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
+    for header in meta.headers.iter() {
+        let size = header.layer_size;
+        if size.0 > MAX_INPUT_SIDE_PX || size.1 > MAX_INPUT_SIDE_PX {
+            return Err(MetricsError::Read {
+                path: path.to_owned(),
+                message: format!(
+                    "the image is {}x{}; at most {MAX_INPUT_SIDE_PX} px a side is read",
+                    size.0, size.1
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// An OpenEXR reading error in words a user can act on.
+fn exr_error(path: &Path, e: exr::error::Error) -> MetricsError {
+    let message = match e {
+        exr::error::Error::Invalid(why) if why.contains("identifier") => {
+            "not an OpenEXR image (expected the linear .exr files that `specchio render` and \
+             `specchio reference` write)"
+                .to_owned()
+        }
+        exr::error::Error::Invalid(why) if why.contains("missing bytes") => {
+            "the OpenEXR file is truncated".to_owned()
+        }
+        exr::error::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "the OpenEXR file is truncated".to_owned()
+        }
+        other => format!("not a readable OpenEXR image: {other}"),
+    };
+    MetricsError::Read {
+        path: path.to_owned(),
+        message,
+    }
 }
 
 /// A mask from an EXR (by extension `.exr`, any case) or any other file decoded as PNG.
@@ -343,9 +386,15 @@ fn check_size(
 }
 
 /// A missing file gets its own error (the decoders' messages do not always name it).
+/// The path names a regular file (a folder, a FIFO or a device is refused before it is
+/// opened: reading a FIFO would block forever).
 fn check_exists(path: &Path) -> Result<(), MetricsError> {
     match std::fs::metadata(path) {
-        Ok(_) => Ok(()),
+        Ok(m) if m.is_file() => Ok(()),
+        Ok(_) => Err(MetricsError::Read {
+            path: path.to_owned(),
+            message: "not a regular file".to_owned(),
+        }),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(MetricsError::Missing {
             path: path.to_owned(),
         }),

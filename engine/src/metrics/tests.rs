@@ -252,3 +252,56 @@ fn colour_map_is_ordered_and_heatmap_has_the_image_size() {
     assert_eq!(&png.rgba8[..3], &[0, 0, 4]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Bad EXR inputs are refused with what is wrong: not an EXR, truncated, a header that claims
+/// a layer larger than [`MAX_INPUT_SIDE_PX`] (refused from the header, before its pixels would
+/// be allocated: 100,000² RGBA f32 is 160 GB), and a folder.
+#[test]
+fn bad_exr_inputs_say_what_is_wrong() {
+    let dir = temp_dir("bad-exr");
+    let good = dir.join("good.exr");
+    crate::output::write_exr(&good, &gradient(4, 3)).unwrap();
+    let bytes = std::fs::read(&good).unwrap();
+    let cases = [
+        (
+            "png.exr",
+            b"\x89PNG\r\n\x1a\n not an exr".to_vec(),
+            "not an OpenEXR image",
+        ),
+        (
+            "truncated.exr",
+            bytes[..bytes.len() / 2].to_vec(),
+            "truncated",
+        ),
+        (
+            "huge.exr",
+            huge_data_window(&bytes),
+            "at most 16384 px a side",
+        ),
+    ];
+    for (name, data, must_say) in cases {
+        let path = dir.join(name);
+        std::fs::write(&path, data).unwrap();
+        let e = read_exr(&path).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains(must_say), "{name}: {e}");
+    }
+    let e = read_exr(&dir).unwrap_err().to_string();
+    assert!(e.contains("not a regular file"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `bytes` (a small EXR) with its data window's corner moved to (99999, 99999).
+fn huge_data_window(bytes: &[u8]) -> Vec<u8> {
+    let key = b"dataWindow\0box2i\0";
+    let at = bytes
+        .windows(key.len())
+        .position(|w| w == key)
+        .expect("a dataWindow attribute")
+        + key.len()
+        + 4; // the attribute's size field
+    let mut out = bytes.to_vec();
+    // box2i: xMin, yMin, xMax, yMax as little-endian i32.
+    out[at + 8..at + 12].copy_from_slice(&99_999i32.to_le_bytes());
+    out[at + 12..at + 16].copy_from_slice(&99_999i32.to_le_bytes());
+    out
+}
