@@ -1,6 +1,6 @@
 //! The scene file exactly as written: serde structs mirroring the TOML, one per table.
 //!
-//! Nothing here is validated beyond TOML types; `load.rs` turns these into the resolved
+//! Nothing here is validated beyond TOML types; `load/` turns these into the resolved
 //! [`super::Scene`]. Numbers are read as `f64`/`i64` so that out-of-range values (`1e300`,
 //! `-1` for a size) reach the validator and get a message that says what the valid range is,
 //! instead of a generic "expected u32". Every struct denies unknown fields so a typo is an

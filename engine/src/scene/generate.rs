@@ -1,6 +1,6 @@
 //! `[[generate]]`: many objects from a few parameters, placed by a seeded PRNG.
 //!
-//! The loader (`load.rs`) validates a generator's fields and builds its shared meshes; this
+//! The loader (`load/`) validates a generator's fields and builds its shared meshes; this
 //! module turns the validated [`Params`] into ordinary [`Object`]s.
 //!
 //! Determinism: the random sequence is SplitMix64, written here so that no dependency update

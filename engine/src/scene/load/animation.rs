@@ -1,0 +1,141 @@
+//! Animations (inline tables): linear, orbit and keyframes, with the keys each type takes.
+
+use glam::Vec3;
+
+use super::{Ctx, R};
+use crate::scene::anim::{Animation, Repeat};
+use crate::scene::format::{AnimationSpec, AnimationType, RepeatSpec};
+
+impl Ctx<'_> {
+    /// Converts an animation; `base` is the animated thing's position at rest.
+    pub(super) fn animation(&self, field: &str, a: &AnimationSpec, base: Vec3) -> R<Animation> {
+        let f = |name: &str| format!("{field}.{name}");
+        let allowed: &[&str] = match a.kind {
+            AnimationType::Linear => &["to", "duration", "repeat"],
+            AnimationType::Orbit => &["center", "axis", "period"],
+            AnimationType::Keyframes => &["times", "positions", "repeat"],
+        };
+        let present = [
+            ("to", a.to.is_some()),
+            ("duration", a.duration.is_some()),
+            ("repeat", a.repeat.is_some()),
+            ("center", a.center.is_some()),
+            ("axis", a.axis.is_some()),
+            ("period", a.period.is_some()),
+            ("times", a.times.is_some()),
+            ("positions", a.positions.is_some()),
+        ];
+        for (name, is_set) in present {
+            if is_set && !allowed.contains(&name) {
+                return Err(self.unused(
+                    &f(name),
+                    &format!("a {:?} animation takes only {:?}", a.kind, allowed),
+                ));
+            }
+        }
+        let repeat = match a.repeat.unwrap_or(RepeatSpec::Once) {
+            RepeatSpec::Once => Repeat::Once,
+            RepeatSpec::Loop => Repeat::Loop,
+            RepeatSpec::PingPong => Repeat::PingPong,
+        };
+        Ok(match a.kind {
+            AnimationType::Linear => Animation::Linear {
+                to: self.point(
+                    &f("to"),
+                    a.to.ok_or_else(|| self.missing(&f("to"), "the end point"))?,
+                )?,
+                duration_s: self.positive(
+                    &f("duration"),
+                    a.duration
+                        .ok_or_else(|| self.missing(&f("duration"), "seconds"))?,
+                )?,
+                repeat,
+            },
+            AnimationType::Orbit => {
+                let center = self.point(
+                    &f("center"),
+                    a.center
+                        .ok_or_else(|| self.missing(&f("center"), "a point on the axis"))?,
+                )?;
+                let axis = self.vec3(&f("axis"), a.axis.unwrap_or([0.0, 1.0, 0.0]))?;
+                let axis = axis
+                    .try_normalize()
+                    .filter(|n| n.is_finite())
+                    .ok_or_else(|| self.invalid(&f("axis"), "must be a non-zero vector"))?;
+                let period_s = self.positive(
+                    &f("period"),
+                    a.period
+                        .ok_or_else(|| self.missing(&f("period"), "seconds per turn"))?,
+                )?;
+                Animation::Orbit {
+                    center,
+                    axis,
+                    period_s,
+                }
+            }
+            AnimationType::Keyframes => {
+                let times = a
+                    .times
+                    .as_ref()
+                    .ok_or_else(|| self.missing(&f("times"), "key times in seconds"))?;
+                let positions = a
+                    .positions
+                    .as_ref()
+                    .ok_or_else(|| self.missing(&f("positions"), "key positions"))?;
+                if times.is_empty() {
+                    return Err(self.invalid(&f("times"), "needs at least one key"));
+                }
+                if times.len() != positions.len() {
+                    return Err(self.invalid(
+                        &f("positions"),
+                        format!(
+                            "has {} entries but times has {}",
+                            positions.len(),
+                            times.len()
+                        ),
+                    ));
+                }
+                let mut times_s = Vec::with_capacity(times.len());
+                for (i, &t) in times.iter().enumerate() {
+                    let tf = format!("{field}.times[{i}]");
+                    let x = self.num(&tf, t)?;
+                    if i == 0 && t != 0.0 {
+                        return Err(
+                            self.invalid(&tf, format!("the first key time must be 0, got {t}"))
+                        );
+                    }
+                    if i > 0 && x <= times_s[i - 1] {
+                        return Err(self.invalid(
+                            &tf,
+                            format!(
+                                "key times must strictly increase, got {t} after {}",
+                                times[i - 1]
+                            ),
+                        ));
+                    }
+                    times_s.push(x);
+                }
+                let mut ps = Vec::with_capacity(positions.len());
+                for (i, &p) in positions.iter().enumerate() {
+                    ps.push(self.point(&format!("{field}.positions[{i}]"), p)?);
+                }
+                // Keyframes are absolute; the rest position must be where they start.
+                if ps[0] != base {
+                    return Err(self.invalid(
+                        &format!("{field}.positions[0]"),
+                        format!(
+                            "the first keyframe {} must equal the position at rest {} (keyframe positions are absolute)",
+                            self.fmt_point(ps[0]),
+                            self.fmt_point(base)
+                        ),
+                    ));
+                }
+                Animation::Keyframes {
+                    times_s,
+                    positions: ps,
+                    repeat,
+                }
+            }
+        })
+    }
+}

@@ -1,0 +1,156 @@
+//! `[observer]` and `[sensor]`: the two cameras, kept inside the room and outside the mirror.
+
+use glam::Vec3;
+
+use super::{position_at, sample_times, Ctx, R};
+use crate::scene::format::{ObserverSpec, SensorSpec};
+use crate::scene::{Camera, Mirror, Room, SensorCamera};
+
+impl Ctx<'_> {
+    pub(super) fn observer(
+        &self,
+        spec: Option<&ObserverSpec>,
+        room: &Room,
+        mirror: &Mirror,
+    ) -> R<Camera> {
+        // Without [observer]: stand 40% of the room's depth in front of (+Z of) the room
+        // centre, at the mirror's height, looking along -Z towards it.
+        let default_position = Vec3::new(
+            mirror.center.x,
+            mirror.center.y,
+            room.center.z + 0.4 * room.size_m.z,
+        );
+        let empty = ObserverSpec {
+            position: None,
+            yaw: None,
+            pitch: None,
+            fov_y: None,
+            resolution: None,
+            animation: None,
+        };
+        let s = spec.unwrap_or(&empty);
+        let position = match s.position {
+            Some(p) => self.point("observer.position", p)?,
+            None => default_position,
+        };
+        let camera = Camera {
+            position,
+            yaw_deg: self.num("observer.yaw", s.yaw.unwrap_or(0.0))?,
+            pitch_deg: self.in_range(
+                "observer.pitch",
+                s.pitch.unwrap_or(0.0),
+                -90.0,
+                90.0,
+                true,
+            )?,
+            fov_y_deg: self.in_range(
+                "observer.fov_y",
+                s.fov_y.unwrap_or(60.0),
+                0.0,
+                180.0,
+                true,
+            )?,
+            resolution: self.resolution("observer.resolution", s.resolution, [800, 600])?,
+            animation: match &s.animation {
+                Some(a) => Some(self.animation("observer.animation", a, position)?),
+                None => None,
+            },
+        };
+        let (lo, hi) = (
+            room.center - room.size_m * 0.5,
+            room.center + room.size_m * 0.5,
+        );
+        let mut times = sample_times(camera.animation.as_ref());
+        times.extend(sample_times(mirror.animation.as_ref()));
+        for t in times {
+            let p = position_at(camera.animation.as_ref(), camera.position, t);
+            let field = if t == 0.0 {
+                "observer.position"
+            } else {
+                "observer.animation"
+            };
+            let when = if t == 0.0 {
+                "at time 0".to_string()
+            } else {
+                format!("at t = {t:.3} s")
+            };
+            let c = position_at(mirror.animation.as_ref(), mirror.center, t);
+            if p.distance(c) <= mirror.radius_m {
+                return Err(self.invalid(
+                    field,
+                    format!(
+                        "the observer at {} is inside the mirror sphere (centre {}, radius {}) {when}",
+                        self.fmt_point(p),
+                        self.fmt_point(c),
+                        mirror.radius_m
+                    ),
+                ));
+            }
+            if p.cmplt(lo).any() || p.cmpgt(hi).any() {
+                return Err(self.invalid(
+                    field,
+                    format!(
+                        "the observer at {} is outside the room {when}",
+                        self.fmt_point(p)
+                    ),
+                ));
+            }
+        }
+        Ok(camera)
+    }
+
+    pub(super) fn sensor(
+        &self,
+        spec: Option<&SensorSpec>,
+        room: &Room,
+        mirror: &Mirror,
+    ) -> R<SensorCamera> {
+        let empty = SensorSpec {
+            offset: None,
+            fov_y: None,
+            resolution: None,
+            up: None,
+        };
+        let s = spec.unwrap_or(&empty);
+        let offset_m = self.positive("sensor.offset", s.offset.unwrap_or(2.5))?;
+        if offset_m <= mirror.radius_m {
+            return Err(self.invalid(
+                "sensor.offset",
+                format!(
+                    "must be greater than the mirror radius {}, got {offset_m}",
+                    mirror.radius_m
+                ),
+            ));
+        }
+        let up = self.vec3("sensor.up", s.up.unwrap_or([0.0, 0.0, -1.0]))?;
+        let up = up
+            .try_normalize()
+            .filter(|u| u.is_finite() && u.cross(Vec3::Y).length() > 1e-3)
+            .ok_or_else(|| {
+                self.invalid(
+                    "sensor.up",
+                    "must be non-zero and not parallel to the Y axis",
+                )
+            })?;
+        let floor = room.center.y - 0.5 * room.size_m.y;
+        for t in sample_times(mirror.animation.as_ref()) {
+            let y = position_at(mirror.animation.as_ref(), mirror.center, t).y - offset_m;
+            if y < floor {
+                return Err(self.invalid(
+                    "sensor.offset",
+                    format!(
+                        "puts the sensor at y = {} (t = {t:.3} s), below the floor at y = {}",
+                        (self.origin.y + f64::from(y)) as f32,
+                        (self.origin.y + f64::from(floor)) as f32
+                    ),
+                ));
+            }
+        }
+        Ok(SensorCamera {
+            offset_m,
+            fov_y_deg: self.in_range("sensor.fov_y", s.fov_y.unwrap_or(60.0), 0.0, 180.0, true)?,
+            resolution: self.resolution("sensor.resolution", s.resolution, [512, 512])?,
+            up,
+        })
+    }
+}

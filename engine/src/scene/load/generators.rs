@@ -1,0 +1,207 @@
+//! `[[generate]]`: validates a generator table and prepares its shared unit meshes; the
+//! expansion into objects is `scene::generate`'s.
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+
+use super::{Ctx, R};
+use crate::scene::format::{GenerateSpec, Shape};
+use crate::scene::generate::{Params, ShapeChoice, DEFAULT_SEGMENTS, MAX_COUNT, MAX_SEGMENTS};
+use crate::scene::mesh::Mesh;
+use crate::scene::Room;
+
+impl Ctx<'_> {
+    /// Validates a `[[generate]]` table and builds (or reuses) its unit meshes.
+    pub(super) fn generator(
+        &self,
+        i: usize,
+        g: &GenerateSpec,
+        material: &dyn Fn(&str, &str) -> R<usize>,
+        room: &Room,
+        meshes: &mut Vec<Mesh>,
+        cache: &mut HashMap<String, usize>,
+    ) -> R<Params> {
+        let f = |name: &str| format!("generate[{i}].{name}");
+        let name = match &g.name {
+            Some(n) if n.trim().is_empty() => {
+                return Err(self.invalid(&f("name"), "must not be empty"))
+            }
+            Some(n) => n.clone(),
+            None => format!("generate[{i}]"),
+        };
+        let count = self.count(&f("count"), g.count, MAX_COUNT)?;
+        let seed = match g.seed {
+            None => 0,
+            Some(s) => u64::try_from(s).map_err(|_| {
+                self.invalid(&f("seed"), format!("must be in 0..={}, got {s}", i64::MAX))
+            })?,
+        };
+
+        // Shapes: which fields they need.
+        if g.shapes.is_empty() {
+            return Err(self.invalid(&f("shapes"), "needs at least one shape"));
+        }
+        let has = |s: Shape| g.shapes.contains(&s);
+        let round = has(Shape::Sphere) || has(Shape::Cylinder);
+        if g.segments.is_some() && !round {
+            return Err(self.unused(
+                &f("segments"),
+                "segments is used only when shapes has \"sphere\" or \"cylinder\"",
+            ));
+        }
+        let segments = match g.segments {
+            Some(n) if n < 3 || n > i64::from(MAX_SEGMENTS) => {
+                return Err(self.invalid(
+                    &f("segments"),
+                    format!("must be in 3..={MAX_SEGMENTS}, got {n}"),
+                ))
+            }
+            Some(n) => n as u32,
+            None => DEFAULT_SEGMENTS,
+        };
+        match (&g.file, has(Shape::Mesh)) {
+            (None, true) => {
+                return Err(self.missing(&f("file"), "shapes has \"mesh\": a .obj, .gltf or .glb"))
+            }
+            (Some(_), false) => {
+                return Err(self.unused(&f("file"), "file is used only when shapes has \"mesh\""))
+            }
+            _ => {}
+        }
+        let mut shapes = Vec::with_capacity(g.shapes.len());
+        for &shape in &g.shapes {
+            // Unit-size shapes (size 1 m) scaled per object; one mesh per shape and
+            // tessellation, shared by every generator.
+            let unit = |mesh| ShapeChoice {
+                mesh,
+                scale_per_size: 1.0,
+                reach_per_size: 1.0,
+            };
+            let rings = (segments / 2).max(2);
+            let choice = match shape {
+                Shape::Box => unit(self.cached_mesh(
+                    &f("shapes"),
+                    None,
+                    "unit-box".into(),
+                    Box::new(|| Ok(Mesh::cuboid(Vec3::splat(0.5)))),
+                    meshes,
+                    cache,
+                )?),
+                Shape::Sphere => unit(self.cached_mesh(
+                    &f("shapes"),
+                    None,
+                    format!("unit-sphere:{segments}"),
+                    Box::new(move || Ok(Mesh::uv_sphere(0.5, segments, rings))),
+                    meshes,
+                    cache,
+                )?),
+                Shape::Cylinder => unit(self.cached_mesh(
+                    &f("shapes"),
+                    None,
+                    format!("unit-cylinder:{segments}"),
+                    Box::new(move || Ok(Mesh::cylinder(0.5, 0.5, segments))),
+                    meshes,
+                    cache,
+                )?),
+                Shape::Mesh => {
+                    let file = g.file.as_deref().unwrap_or_default();
+                    let (key, build) = self.mesh_file(&f("file"), file)?;
+                    let index =
+                        self.cached_mesh(&f("file"), Some(file), key, build, meshes, cache)?;
+                    let m = &meshes[index];
+                    // Size = the largest side of the bounding box; the clearance radius also
+                    // covers the farthest vertex from the mesh's origin.
+                    let side = (m.bounds_max - m.bounds_min).max_element();
+                    if !(side > 0.0 && side.is_finite()) {
+                        return Err(self.invalid(
+                            &f("file"),
+                            format!("mesh \"{file}\" has no extent to scale"),
+                        ));
+                    }
+                    let farthest = m
+                        .positions
+                        .iter()
+                        .map(|p| p.length())
+                        .fold(0.0f32, f32::max);
+                    ShapeChoice {
+                        mesh: index,
+                        scale_per_size: 1.0 / side,
+                        reach_per_size: (farthest / side).max(1.0),
+                    }
+                }
+            };
+            shapes.push(choice);
+        }
+
+        if g.materials.is_empty() {
+            return Err(self.invalid(&f("materials"), "needs at least one material"));
+        }
+        let mut materials = Vec::with_capacity(g.materials.len());
+        for (j, m) in g.materials.iter().enumerate() {
+            materials.push(material(&f(&format!("materials[{j}]")), m)?);
+        }
+
+        let size = self.interval(&f("size"), g.size)?;
+
+        let region_min = self.point(&f("region_min"), g.region_min)?;
+        let region_max = self.point(&f("region_max"), g.region_max)?;
+        let (lo, hi) = (
+            room.center - room.size_m * 0.5,
+            room.center + room.size_m * 0.5,
+        );
+        // Messages give world coordinates, as the file does.
+        let world = |axis: usize, v: f32| (self.origin[axis] + f64::from(v)) as f32;
+        for axis in 0..3 {
+            let (a, b) = (region_min[axis], region_max[axis]);
+            let letter = ["x", "y", "z"][axis];
+            for (field, v) in [("region_min", a), ("region_max", b)] {
+                if v < lo[axis] || v > hi[axis] {
+                    return Err(self.invalid(
+                        &f(&format!("{field}[{axis}]")),
+                        format!(
+                            "{} is outside the room ({letter} from {} to {})",
+                            world(axis, v),
+                            world(axis, lo[axis]),
+                            world(axis, hi[axis])
+                        ),
+                    ));
+                }
+            }
+            if a > b {
+                return Err(self.invalid(
+                    &f(&format!("region_max[{axis}]")),
+                    format!(
+                        "must be >= region_min[{axis}] ({}), got {}",
+                        world(axis, a),
+                        world(axis, b)
+                    ),
+                ));
+            }
+        }
+
+        let keep_clear = self.num(&f("keep_clear"), g.keep_clear.unwrap_or(0.0))?;
+        if keep_clear < 0.0 {
+            return Err(self.invalid(&f("keep_clear"), format!("must be >= 0, got {keep_clear}")));
+        }
+        let moving = self.in_range(&f("moving"), g.moving.unwrap_or(0.0), 0.0, 1.0, false)?;
+        if g.period.is_some() && moving == 0.0 {
+            return Err(self.unused(&f("period"), "period is used only when moving > 0"));
+        }
+        let period = self.interval(&f("period"), g.period.unwrap_or([8.0, 20.0]))?;
+
+        Ok(Params {
+            name,
+            count,
+            seed,
+            shapes,
+            materials,
+            size,
+            region_min,
+            region_max,
+            keep_clear,
+            moving,
+            period,
+        })
+    }
+}

@@ -1,0 +1,129 @@
+//! `[[materials]]`: albedo functions, with the fields each type takes and its textures.
+
+use glam::Vec3;
+
+use super::{Ctx, R};
+use crate::scene::error::SceneError;
+use crate::scene::format::{MaterialSpec, MaterialType, V3};
+use crate::scene::texture::TextureData;
+use crate::scene::{Material, MaterialKind};
+
+impl Ctx<'_> {
+    pub(super) fn materials(
+        &self,
+        specs: &[MaterialSpec],
+        textures: &mut Vec<TextureData>,
+    ) -> R<Vec<Material>> {
+        let mut out: Vec<Material> = Vec::with_capacity(specs.len());
+        for (i, m) in specs.iter().enumerate() {
+            let f = |name: &str| format!("materials[{i}].{name}");
+            if m.name.trim().is_empty() {
+                return Err(self.invalid(&f("name"), "must not be empty"));
+            }
+            if out.iter().any(|o| o.name == m.name) {
+                return Err(self.invalid(
+                    &f("name"),
+                    format!("duplicate material name \"{}\"", m.name),
+                ));
+            }
+            // Which optional fields each type takes; any other present field is an error.
+            let allowed: &[&str] = match m.kind {
+                MaterialType::Color => &["color"],
+                MaterialType::Checker => &["a", "b", "tiles"],
+                MaterialType::Grid => &["background", "line", "tiles", "line_width"],
+                MaterialType::Texture => &["file", "tint", "tiles"],
+                MaterialType::Direction => &[],
+            };
+            let present = [
+                ("color", m.color.is_some()),
+                ("a", m.a.is_some()),
+                ("b", m.b.is_some()),
+                ("tiles", m.tiles.is_some()),
+                ("background", m.background.is_some()),
+                ("line", m.line.is_some()),
+                ("line_width", m.line_width.is_some()),
+                ("file", m.file.is_some()),
+                ("tint", m.tint.is_some()),
+            ];
+            for (name, is_set) in present {
+                if is_set && !allowed.contains(&name) {
+                    return Err(self.unused(
+                        &f(name),
+                        &format!("a material of type {:?} takes only {:?}", m.kind, allowed),
+                    ));
+                }
+            }
+            let need = |v: Option<V3>, name: &str| -> R<Vec3> {
+                match v {
+                    Some(v) => self.color(&f(name), v),
+                    None => Err(self.missing(&f(name), &format!("{:?} materials need it", m.kind))),
+                }
+            };
+            let tiles =
+                |default: f64| -> R<f32> { self.positive(&f("tiles"), m.tiles.unwrap_or(default)) };
+            let kind = match m.kind {
+                MaterialType::Color => MaterialKind::Color {
+                    color: need(m.color, "color")?,
+                },
+                MaterialType::Checker => MaterialKind::Checker {
+                    a: need(m.a, "a")?,
+                    b: need(m.b, "b")?,
+                    tiles: tiles(8.0)?,
+                },
+                MaterialType::Grid => MaterialKind::Grid {
+                    background: need(m.background, "background")?,
+                    line: need(m.line, "line")?,
+                    tiles: tiles(8.0)?,
+                    line_width: match m.line_width {
+                        Some(w) => {
+                            let x = self.num(&f("line_width"), w)?;
+                            if !(w > 0.0 && w <= 0.5) {
+                                return Err(self.invalid(
+                                    &f("line_width"),
+                                    format!("must be in (0, 0.5], got {w}"),
+                                ));
+                            }
+                            x
+                        }
+                        None => 0.05,
+                    },
+                },
+                MaterialType::Texture => {
+                    let Some(file) = &m.file else {
+                        return Err(self.missing(&f("file"), "texture materials need a PNG file"));
+                    };
+                    let path = self.dir.join(file);
+                    let index = match textures.iter().position(|t| t.path == path) {
+                        Some(index) => index,
+                        None => {
+                            let t = TextureData::from_png(&path).map_err(|message| {
+                                SceneError::Asset {
+                                    location: self.loc.location(&f("file")),
+                                    field: f("file"),
+                                    asset: path.clone(),
+                                    message,
+                                }
+                            })?;
+                            textures.push(t);
+                            textures.len() - 1
+                        }
+                    };
+                    MaterialKind::Texture {
+                        texture: index,
+                        tint: match m.tint {
+                            Some(t) => self.color(&f("tint"), t)?,
+                            None => Vec3::ONE,
+                        },
+                        tiles: tiles(1.0)?,
+                    }
+                }
+                MaterialType::Direction => MaterialKind::Direction,
+            };
+            out.push(Material {
+                name: m.name.clone(),
+                kind,
+            });
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,239 @@
+//! Loading and validating scene files.
+//!
+//! Parsing happens twice over the same text: once into toml's spanned document tree
+//! ([`DeTable`]), which knows where every key and value sits, and once through serde into the
+//! plain structs of `format.rs`. Validation works on the plain structs and names each value by
+//! its dotted field path (`objects[2].size`); the path is looked up in the spanned tree to get
+//! the line and column. One string is thus both the message's field name and the key to its
+//! position, so they cannot disagree.
+
+mod animation;
+mod cameras;
+mod cube;
+mod generators;
+mod locate;
+mod materials;
+mod numbers;
+mod objects;
+mod room;
+#[cfg(test)]
+mod tests;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use glam::{DVec3, Vec3};
+use toml::de::DeTable;
+
+use super::anim::Animation;
+use super::error::{Location, SceneError};
+use super::format::*;
+use super::generate::{self, Surroundings, PLACEMENT_TRIES};
+use super::mesh::Mesh;
+use super::Scene;
+use locate::Locator;
+
+type R<T> = Result<T, SceneError>;
+/// Builds a mesh on first use (the loader caches meshes by a key describing them).
+type MeshBuilder = Box<dyn Fn() -> Result<Mesh, String>>;
+
+/// How many evenly spaced times an animation is checked at (plus its keyframes).
+const ANIMATION_SAMPLES: usize = 64;
+/// Tessellation of `shape = "sphere"` objects.
+const SPHERE_SEGMENTS: u32 = 48;
+const SPHERE_RINGS: u32 = 24;
+/// Tessellation of `shape = "cylinder"` objects.
+const CYLINDER_SEGMENTS: u32 = 48;
+
+/// Reads and validates the scene file at `path`. Relative asset paths inside it are resolved
+/// against the folder that contains it.
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| SceneError::Io {
+        file: path.to_path_buf(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
+    })?;
+    load_str(&text, path)
+}
+
+/// Validates scene text as if it had been read from `path` (used in messages and to resolve
+/// relative asset paths against `path`'s folder; the file itself is not read).
+pub fn load_str(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    let doc = match DeTable::parse(text) {
+        Ok(doc) => doc,
+        Err(e) => {
+            let location = match e.span() {
+                Some(span) => Location::at_offset(path, text, span.start),
+                None => Location::file_only(path),
+            };
+            return Err(SceneError::Syntax {
+                location,
+                message: e.message().trim().to_string(),
+            });
+        }
+    };
+    if doc.get_ref().is_empty() {
+        return Err(SceneError::Empty {
+            file: path.to_path_buf(),
+        });
+    }
+    let locator = Locator {
+        file: path,
+        text,
+        root: doc,
+    };
+    let spec: SceneFile = toml::from_str(text).map_err(|e| locator.serde_error(&e))?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    // Every position is stored relative to the mirror's centre (see `Scene::origin`); a
+    // non-finite centre is reported by `mirror()`, so any origin will do until then.
+    let origin = spec
+        .mirror
+        .as_ref()
+        .map(|m| DVec3::from_array(m.center))
+        .filter(|c| c.is_finite())
+        .unwrap_or(DVec3::ZERO);
+    Ctx {
+        loc: locator,
+        dir,
+        origin,
+    }
+    .scene(spec)
+}
+// ---------------------------------------------------------------------------------------------
+// Validation.
+
+struct Ctx<'a> {
+    loc: Locator<'a>,
+    dir: PathBuf,
+    /// World position of the scene's local origin (the mirror's centre at time 0).
+    origin: DVec3,
+}
+
+impl Ctx<'_> {
+    fn invalid(&self, field: &str, message: impl Into<String>) -> SceneError {
+        SceneError::Invalid {
+            location: self.loc.location(field),
+            field: field.to_string(),
+            message: message.into(),
+        }
+    }
+
+    fn missing(&self, field: &str, why: &str) -> SceneError {
+        self.invalid(field, format!("required field is missing ({why})"))
+    }
+
+    fn unused(&self, field: &str, why: &str) -> SceneError {
+        self.invalid(field, format!("not allowed here: {why}"))
+    }
+
+    fn scene(&self, spec: SceneFile) -> R<Scene> {
+        let Some(room_spec) = &spec.room else {
+            return Err(self.invalid("room", "missing [room] table (every scene needs a room)"));
+        };
+        let Some(mirror_spec) = &spec.mirror else {
+            return Err(self.invalid("mirror", "missing [mirror] table (every scene needs one)"));
+        };
+
+        let mut textures = Vec::new();
+        let materials = self.materials(&spec.materials, &mut textures)?;
+        let material_index = |field: &str, name: &str| -> R<usize> {
+            materials
+                .iter()
+                .position(|m| m.name == name)
+                .ok_or_else(|| {
+                    let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+                    self.invalid(
+                        field,
+                        format!(
+                            "unknown material \"{name}\" (defined: {})",
+                            known.join(", ")
+                        ),
+                    )
+                })
+        };
+
+        let room = self.room(room_spec, &material_index)?;
+        let mirror = self.mirror(mirror_spec, &room)?;
+
+        let mut meshes = Vec::new();
+        let mut mesh_cache: HashMap<String, usize> = HashMap::new();
+        let mut objects = Vec::with_capacity(spec.objects.len());
+        for (i, o) in spec.objects.iter().enumerate() {
+            objects.push(self.object(i, o, &material_index, &mut meshes, &mut mesh_cache)?);
+        }
+
+        let observer = self.observer(spec.observer.as_ref(), &room, &mirror)?;
+        let sensor = self.sensor(spec.sensor.as_ref(), &room, &mirror)?;
+        // Generated objects come after the file's own, and keep clear of the cameras.
+        let surroundings = Surroundings {
+            room_center: room.center,
+            room_size: room.size_m,
+            mirror_center: mirror.center,
+            mirror_radius: mirror.radius_m,
+            sensor_offset: sensor.offset_m,
+            observer: observer.position,
+        };
+        for (i, g) in spec.generate.iter().enumerate() {
+            let params =
+                self.generator(i, g, &material_index, &room, &mut meshes, &mut mesh_cache)?;
+            let made = generate::expand(&params, &surroundings).map_err(|fail| {
+                let (field, why) = if fail.orbit_outside > fail.too_close {
+                    (
+                        "moving",
+                        "its orbit about the room's vertical axis left the room",
+                    )
+                } else {
+                    (
+                        "keep_clear",
+                        "it was too close to the mirror, the sensor's view of it or the observer",
+                    )
+                };
+                self.invalid(
+                    &format!("generate[{i}].{field}"),
+                    format!(
+                        "cannot place {}[{}]: {PLACEMENT_TRIES} positions tried, {} too close, {} with the orbit outside the room; mostly {why} (enlarge the region, or lower keep_clear, size or moving)",
+                        params.name, fail.object, fail.too_close, fail.orbit_outside
+                    ),
+                )
+            })?;
+            objects.extend(made);
+        }
+        let cube = self.cube(spec.cube.as_ref())?;
+        let refresh = self.refresh(spec.refresh.as_ref())?;
+        let light = self.light(spec.light.as_ref())?;
+
+        Ok(Scene {
+            origin: self.origin,
+            source: self.loc.file.to_path_buf(),
+            description: spec.description.clone().unwrap_or_default(),
+            room,
+            mirror,
+            objects,
+            meshes,
+            materials,
+            textures,
+            observer,
+            sensor,
+            cube,
+            refresh,
+            light,
+        })
+    }
+}
+
+fn sample_times(a: Option<&Animation>) -> Vec<f64> {
+    match a {
+        Some(a) => a.sample_times(ANIMATION_SAMPLES),
+        None => vec![0.0],
+    }
+}
+
+fn position_at(a: Option<&Animation>, base: Vec3, t: f64) -> Vec3 {
+    match a {
+        Some(a) => a.position_at(base, t),
+        None => base,
+    }
+}

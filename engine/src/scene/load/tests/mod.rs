@@ -1,0 +1,52 @@
+//! The loader's tests: bad files and rules with the field and line each names
+//! (`bad_files`, `rules`), and the shipped and generated scenes (`scenes`).
+
+use std::path::{Path, PathBuf};
+
+use glam::{Quat, Vec3};
+
+use super::*;
+use crate::scene::{CubeFormat, RefreshPolicy};
+
+mod bad_files;
+mod rules;
+mod scenes;
+
+pub(super) fn repo(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(rel)
+}
+
+pub(super) const MINIMAL: &str = "[room]\ncenter = [0, 3, 0]\nsize = [10, 6, 10]\nwalls = \"w\"\n\
+    [mirror]\ncenter = [0, 3, 0]\nradius = 1\n\
+    [[materials]]\nname = \"w\"\ntype = \"color\"\ncolor = [0.5, 0.5, 0.5]\n";
+
+#[test]
+fn rotation_is_rx_ry_rz_as_documented() {
+    let text = format!(
+        "{MINIMAL}[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\n\
+         rotation = [30, 45, 60]\nmaterial = \"w\"\n"
+    );
+    let s = load_str(&text, Path::new("rot.toml")).unwrap();
+    let expected = Quat::from_rotation_x(30f32.to_radians())
+        * Quat::from_rotation_y(45f32.to_radians())
+        * Quat::from_rotation_z(60f32.to_radians());
+    assert!(s.objects[0].rotation.dot(expected).abs() > 1.0 - 1e-6);
+}
+
+#[test]
+fn defaults_are_applied() {
+    let s = load_str(MINIMAL, Path::new("min.toml")).unwrap();
+    assert_eq!(s.cube.face_size_px, 512);
+    assert_eq!(s.cube.format, CubeFormat::Rgba16Float);
+    assert_eq!((s.cube.near_m, s.cube.far_m), (0.5, 100.0));
+    assert!(s.cube.mipmaps);
+    assert_eq!(s.cube.max_anisotropy, 16.0);
+    assert_eq!(s.refresh, RefreshPolicy::OnChange);
+    assert_eq!(s.observer.resolution, [800, 600]);
+    assert_eq!(s.observer.fov_y_deg, 60.0);
+    assert_eq!(s.sensor.resolution, [512, 512]);
+    assert_eq!(s.sensor.up, Vec3::NEG_Z);
+    assert_eq!(s.sensor.offset_m, 2.5);
+    assert!(s.light.is_none());
+    assert!(s.objects.is_empty());
+}

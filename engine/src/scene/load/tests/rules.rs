@@ -1,0 +1,139 @@
+//! Rules checked on small inline scenes: each case names the field and line it breaks.
+
+use std::path::Path;
+
+use super::{repo, MINIMAL};
+use crate::scene::error::SceneError;
+use crate::scene::{load, load_str};
+
+#[test]
+fn error_kinds() {
+    let p = Path::new("x.toml");
+    assert!(matches!(load_str("", p), Err(SceneError::Empty { .. })));
+    assert!(matches!(
+        load_str("# just a comment\n", p),
+        Err(SceneError::Empty { .. })
+    ));
+    let e = load(Path::new("/nonexistent/scene.toml")).unwrap_err();
+    assert!(matches!(e, SceneError::Io { .. }));
+    assert!(e.to_string().contains("/nonexistent/scene.toml"));
+    let e = load(&repo("tests/scenes/bad/unknown-field.toml")).unwrap_err();
+    assert!(matches!(e, SceneError::UnknownField { .. }), "{e}");
+    assert_eq!(e.field(), Some("mirror.radus"));
+    let e = load(&repo("tests/scenes/bad/wrong-type.toml")).unwrap_err();
+    assert!(matches!(e, SceneError::WrongType { .. }), "{e}");
+    assert_eq!(e.field(), Some("mirror.radius"));
+}
+
+#[test]
+fn more_rules_with_their_fields() {
+    let cases: &[(&str, &str)] = &[
+        ("[refresh]\npolicy = \"every-n\"\n", "refresh.n: required field is missing"),
+        ("[refresh]\npolicy = \"on-change\"\nn = 3\n", "refresh.n: not allowed here"),
+        ("[cube]\nanisotropy = 0.5\n", "cube.anisotropy"),
+        ("[cube]\nformat = \"rgb32\"\n", "cube.format"),
+        ("[observer]\npitch = 90\n", "observer.pitch: must be in (-90, 90)"),
+        ("[observer]\nfov_y = 180\n", "observer.fov_y"),
+        ("[observer]\nresolution = [0, 10]\n", "observer.resolution[0]"),
+        ("[sensor]\nup = [0, 0, 0]\n", "sensor.up"),
+        ("[light]\ndirection = [0, 0, 0]\n", "light.direction"),
+        ("[light]\ndirection = [0, 1, 0]\nambient = 2\n", "light.ambient"),
+        ("[[objects]]\nshape = \"sphere\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].size: not allowed here"),
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 0, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].size[1]: must be positive"),
+        ("[[objects]]\nshape = \"cylinder\"\nradius = 1\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].height: required"),
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nscale = -1\nmaterial = \"w\"\n", "objects[0].scale"),
+        ("[[objects]]\nshape = \"mesh\"\nfile = \"x.stl\"\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].file: unsupported"),
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"orbit\", center = [0, 0, 0], period = 0 }\n", "objects[0].animation.period: must be positive"),
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"linear\", to = [0, 0, 0], duration = 1, period = 2 }\n", "objects[0].animation.period: not allowed"),
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"keyframes\", times = [0, 1], positions = [[1, 1, 1], [2, 2, 2]] }\n", "objects[0].animation.positions[0]: the first keyframe"),
+        ("[[materials]]\nname = \"w\"\ntype = \"color\"\ncolor = [1, 1, 1]\n", "materials[1].name: duplicate"),
+        ("[[materials]]\nname = \"g\"\ntype = \"grid\"\nbackground = [1, 1, 1]\nline = [0, 0, 0]\nline_width = 0.7\n", "materials[1].line_width"),
+    ];
+    for (extra, needle) in cases {
+        let text = format!("{MINIMAL}{extra}");
+        let err = load_str(&text, Path::new("case.toml")).expect_err(extra);
+        let msg = err.to_string();
+        assert!(
+            msg.contains(needle),
+            "{extra:?}: expected {needle:?} in {msg}"
+        );
+        assert!(msg.starts_with("case.toml:"), "{msg}");
+        assert!(err.line().is_some(), "{msg}");
+    }
+}
+
+#[test]
+fn generator_rules_with_their_fields() {
+    let gen = "[[generate]]\ncount = 10\nshapes = [\"box\"]\nsize = [0.1, 0.2]\n\
+               region_min = [-4, 1, -4]\nregion_max = [4, 5, 4]\nmaterials = [\"w\"]\n";
+    let ok = load_str(&format!("{MINIMAL}{gen}"), Path::new("g.toml")).unwrap();
+    assert_eq!(ok.objects.len(), 10);
+    assert_eq!(ok.objects[3].name, "generate[0][3]");
+    assert!(ok.objects.iter().all(|o| o.animation.is_none()));
+    let cases: &[(&str, &str)] = &[
+        ("count = 10", "count = 0"),
+        ("count = 10", "count = 100001"),
+        ("count = 10", "count = 10\nseed = -1"),
+        ("shapes = [\"box\"]", "shapes = []"),
+        ("shapes = [\"box\"]", "shapes = [\"mesh\"]"),
+        ("shapes = [\"box\"]", "shapes = [\"box\"]\nfile = \"a.obj\""),
+        ("shapes = [\"box\"]", "shapes = [\"box\"]\nsegments = 8"),
+        ("shapes = [\"box\"]", "shapes = [\"sphere\"]\nsegments = 2"),
+        ("size = [0.1, 0.2]", "size = [0.3, 0.2]"),
+        ("size = [0.1, 0.2]", "size = [0, 0.2]"),
+        ("region_max = [4, 5, 4]", "region_max = [4, 0.5, 4]"),
+        ("region_min = [-4, 1, -4]", "region_min = [-4, -1, -4]"),
+        ("materials = [\"w\"]", "materials = []"),
+        ("materials = [\"w\"]", "materials = [\"w\", \"gold\"]"),
+        ("count = 10", "count = 10\nkeep_clear = -1"),
+        ("count = 10", "count = 10\nmoving = 1.5"),
+        ("count = 10", "count = 10\nperiod = [8, 20]"),
+        ("count = 10", "count = 10\nmoving = 1\nperiod = [20, 8]"),
+        ("count = 10", "count = 10\nname = \" \""),
+        ("count = 10", "count = 10\ncolour = 3"),
+        // The region lies inside the mirror's keep-clear zone: nowhere to put anything.
+        (
+            "region_min = [-4, 1, -4]\nregion_max = [4, 5, 4]",
+            "region_min = [-0.5, 2.5, -0.5]\nregion_max = [0.5, 3.5, 0.5]\nkeep_clear = 0.1",
+        ),
+        // Every position in the region's corners is too far out for an orbit.
+        (
+            "region_min = [-4, 1, -4]\nregion_max = [4, 5, 4]",
+            "region_min = [4, 1, 4]\nregion_max = [4.9, 5, 4.9]\nmoving = 1",
+        ),
+    ];
+    let expected = [
+        "generate[0].count: must be in 1..=100000, got 0",
+        "generate[0].count: must be in 1..=100000, got 100001",
+        "generate[0].seed: must be in 0..=",
+        "generate[0].shapes: needs at least one shape",
+        "generate[0].file: required field is missing",
+        "generate[0].file: not allowed here",
+        "generate[0].segments: not allowed here",
+        "generate[0].segments: must be in 3..=256, got 2",
+        "generate[0].size[1]: must be >= generate[0].size[0]",
+        "generate[0].size[0]: must be positive",
+        "generate[0].region_max[1]: must be >= region_min[1]",
+        "generate[0].region_min[1]: -1 is outside the room (y from 0 to 6)",
+        "generate[0].materials: needs at least one material",
+        "generate[0].materials[1]: unknown material \"gold\"",
+        "generate[0].keep_clear: must be >= 0",
+        "generate[0].moving: must be in [0, 1]",
+        "generate[0].period: not allowed here",
+        "generate[0].period[1]: must be >=",
+        "generate[0].name: must not be empty",
+        "generate[0].colour: unknown field",
+        "generate[0].keep_clear: cannot place generate[0][0]",
+        "generate[0].moving: cannot place generate[0][0]",
+    ];
+    assert_eq!(cases.len(), expected.len());
+    for ((from, to), needle) in cases.iter().zip(expected) {
+        assert!(gen.contains(from), "{from}");
+        let text = format!("{MINIMAL}{}", gen.replace(from, to));
+        let err = load_str(&text, Path::new("case.toml")).expect_err(to);
+        let msg = err.to_string();
+        assert!(msg.contains(needle), "{to:?}: expected {needle:?} in {msg}");
+        assert!(msg.starts_with("case.toml:"), "{msg}");
+        assert!(err.line().is_some(), "{msg}");
+    }
+}
