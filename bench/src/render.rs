@@ -292,17 +292,9 @@ fn write_frame(dir: &Path, images: &FrameImages) -> Result<()> {
     Ok(())
 }
 
+/// The project's one median (nearest rank: the lower middle of an even count).
 fn median(mut v: Vec<f64>) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
+    specchio::metrics::percentile::median(&mut v)
 }
 
 /// Medians over frames: cube update (only frames that updated it) and each view.
