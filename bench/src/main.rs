@@ -1,6 +1,7 @@
 //! `specchio`: the command-line tool. `main` reads like a table of contents: parse the
 //! arguments, then run one subcommand (each in its own module).
 
+mod args;
 mod bench;
 mod compare;
 mod gate;
@@ -8,6 +9,7 @@ mod info;
 mod probe;
 mod reference;
 mod render;
+mod validation;
 
 use std::process::ExitCode;
 
@@ -106,7 +108,7 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            validation::exit_code(&e)
         }
     }
 }

@@ -8,7 +8,8 @@ use serde::Serialize;
 use crate::image::RgbaImage;
 
 /// Summary of the angular error over the pixels both images mark as mirror pixels.
-#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, Serialize, serde::Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
 pub struct AngularError {
     /// Pixels compared (mirror pixels in both images).
     pub pixels: usize,
