@@ -31,7 +31,7 @@ pub struct Args {
     /// The two files are direction images (`render --directions` against the reference's
     /// `NAME.direction.exr`): report the mirror's angular lookup error instead, in degrees and
     /// in texels of a cube face of this size.
-    #[arg(long, value_name = "FACE_SIZE")]
+    #[arg(long, allow_negative_numbers = true, value_name = "FACE_SIZE", value_parser = crate::args::face_size)]
     angular: Option<u32>,
 }
 
@@ -61,12 +61,6 @@ pub fn run(args: &Args) -> Result<ExitCode> {
 
 /// `--angular`: the angle between the looked-up and the exact direction per mirror pixel.
 fn angular(args: &Args, face_size: u32) -> Result<ExitCode> {
-    if face_size == 0 || face_size > specchio::scene::MAX_FACE_SIZE_PX {
-        anyhow::bail!(
-            "--angular {face_size}: the face size must be in 1..={}",
-            specchio::scene::MAX_FACE_SIZE_PX
-        );
-    }
     let test = metrics::read_exr(&args.test)?;
     let reference = metrics::read_exr(&args.reference)?;
     if (test.width, test.height) != (reference.width, reference.height) {

@@ -14,13 +14,21 @@ pub struct Args {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
-    /// Enable the Khronos validation layer (also: SPECCHIO_VALIDATE=1).
+    /// Enable the Khronos validation layer (also: SPECCHIO_VALIDATE=1); any message makes the
+    /// command fail (exit 3).
     #[arg(long)]
     validate: bool,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
+    let log = instance.validation_log();
+    let listed = list(args, instance);
+    crate::validation::checked(&log, listed)
+}
+
+/// Prints every device; the instance is gone when it returns.
+fn list(args: &Args, instance: std::sync::Arc<Instance>) -> Result<ExitCode> {
     let candidates = device::enumerate(&instance)?;
     // The device a command without `--device` would use.
     let default = device::choose(&instance, None).ok().map(|d| d.index);

@@ -3,10 +3,12 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use serde_json::json;
 use specchio::output::{write_exr, write_json, write_png};
 use specchio::reference::{Reference, ReferenceImages, MAX_SPP};
+
+use crate::args::{real, whole};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -15,24 +17,17 @@ pub struct Args {
     /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Scene time in seconds.
-    #[arg(long, default_value_t = 0.0)]
+    /// Scene time in seconds (finite, >= 0).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true,
+          value_parser = real(0.0, false, f64::INFINITY))]
     time: f64,
-    /// Samples per pixel on a fixed stratified grid; 1 traces pixel centres only.
-    #[arg(long, default_value_t = 1)]
+    /// Samples per pixel on a fixed stratified grid, 1..=4096; 1 traces pixel centres only.
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_parser = whole(1..=MAX_SPP))]
     spp: u32,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
-    if !args.time.is_finite() || args.time < 0.0 {
-        bail!(
-            "--time {}: must be a finite number of seconds >= 0",
-            args.time
-        );
-    }
-    if args.spp == 0 || args.spp > MAX_SPP {
-        bail!("--spp {}: must be in 1..={MAX_SPP}", args.spp);
-    }
+    // --time and --spp were range-checked by clap (`crate::args`).
     let scene = specchio::scene::load(&args.scene)?;
     let reference = Reference::new(&scene, args.time);
     std::fs::create_dir_all(&args.out)

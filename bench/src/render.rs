@@ -9,14 +9,18 @@ use specchio::output::{write_exr, write_json, write_png};
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::camera::FACE_NAMES;
-use specchio::scene::{CubeFormat, Lookup, RefreshPolicy, MAX_FACE_SIZE_PX};
+use specchio::scene::{CubeFormat, Lookup, RefreshPolicy};
 use specchio::vk::device::{self, DeviceInfo};
 
+use crate::args::{face_size, real, whole};
 use crate::probe;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 /// More frames than this is a mistake, not a render (about an hour of video at 30 fps).
 pub const MAX_FRAMES: u32 = 100_000;
+
+/// The largest `--frame` (a year of frames at 30 fps): frame numbers stay far from overflow.
+pub const MAX_FRAME_INDEX: u64 = 1_000_000_000;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -25,20 +29,22 @@ pub struct Args {
     /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Scene time of the (first) frame in seconds.
-    #[arg(long, conflicts_with = "frame")]
+    /// Scene time of the (first) frame in seconds (finite, >= 0).
+    #[arg(long, conflicts_with = "frame", allow_negative_numbers = true,
+          value_parser = real(0.0, false, f64::INFINITY))]
     time: Option<f64>,
-    /// Frame number of the (first) frame; its time is N / fps.
-    #[arg(long)]
+    /// Frame number of the (first) frame, 0..=1000000000; its time is N / fps.
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(0..=MAX_FRAME_INDEX))]
     frame: Option<u64>,
-    /// Frames per second for --frame and --frames.
-    #[arg(long, default_value_t = 30.0)]
+    /// Frames per second for --frame and --frames, in (0, 10000].
+    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true,
+          value_parser = real(0.0, true, 10_000.0))]
     fps: f64,
-    /// Render K consecutive frames (numbered outputs in DIR/NNNN/).
-    #[arg(long, default_value_t = 1)]
+    /// Render K consecutive frames (numbered outputs in DIR/NNNN/), 1..=100000.
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_parser = whole(1..=MAX_FRAMES))]
     frames: u32,
     /// Cube face size in texels (overrides the scene's cube.face_size).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = face_size)]
     cube_size: Option<u32>,
     /// Cube fill method (`specchio info` lists them, with what this device can run), or all
     /// (each usable one into DIR/<method>/; measurement variants only when named).
@@ -64,30 +70,9 @@ pub struct Args {
     device: Option<String>,
 }
 
-/// Checks the numeric arguments before anything is loaded or written.
-fn check_args(args: &Args) -> Result<()> {
-    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 10_000.0) {
-        bail!("--fps {}: must be a number in (0, 10000]", args.fps);
-    }
-    if let Some(t) = args.time {
-        if !t.is_finite() || t < 0.0 {
-            bail!("--time {t}: must be a finite number of seconds >= 0");
-        }
-    }
-    if args.frames == 0 || args.frames > MAX_FRAMES {
-        bail!("--frames {}: must be in 1..={MAX_FRAMES}", args.frames);
-    }
-    if let Some(s) = args.cube_size {
-        if s == 0 || s > MAX_FACE_SIZE_PX {
-            bail!("--cube-size {s}: must be in 1..={MAX_FACE_SIZE_PX}");
-        }
-    }
-    Ok(())
-}
-
 pub fn run(args: &Args) -> Result<ExitCode> {
-    // 1. Everything that can be wrong with the input is found before the output folder exists.
-    check_args(args)?;
+    // 1. Everything that can be wrong with the input is found before the output folder exists
+    //    (the numbers' ranges by clap, `crate::args`).
     let lookup = match args.lookup.as_deref() {
         None => None,
         Some("plain") => Some(Lookup::Plain),
@@ -178,13 +163,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     for (m, why) in &refused {
         println!("  {m}: not run: {why}");
     }
-    if !messages.is_empty() {
-        eprintln!(
-            "error: the validation layer reported {} message(s) (above)",
-            messages.len()
-        );
-        return Ok(ExitCode::from(3));
-    }
+    crate::validation::verdict(&messages)?;
     Ok(ExitCode::SUCCESS)
 }
 
