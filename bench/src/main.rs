@@ -7,6 +7,7 @@ mod compare;
 mod gate;
 mod info;
 mod probe;
+mod records;
 mod reference;
 mod render;
 mod validation;

@@ -207,11 +207,13 @@ fn measure_view_mask_leak(args: &Args, instance: Arc<Instance>) -> Result<ExitCo
         },
     )?;
     let leak = specchio::render::methods::view_mask_leak(&device, !args.no_reset)?;
-    let mut line = serde_json::to_value(&leak)?;
-    line["device"] = serde_json::json!(device.info.name);
-    line["driver_info"] = serde_json::json!(device.info.driver_info);
-    line["mesa_version"] = serde_json::json!(device.info.mesa_version);
-    println!("{line}");
+    let line = crate::records::ViewMaskLeakLine {
+        leak,
+        device: device.info.name.clone(),
+        driver_info: device.info.driver_info.clone(),
+        mesa_version: device.info.mesa_version.clone(),
+    };
+    println!("{}", serde_json::to_string(&line)?);
     Ok(ExitCode::SUCCESS)
 }
 

@@ -4,11 +4,11 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
-use serde_json::json;
 use specchio::output::{write_exr, write_json, write_png};
-use specchio::reference::{Reference, ReferenceImages, MAX_SPP};
+use specchio::reference::{Reference, ReferenceImages, ReferenceStats, MAX_SPP};
 
 use crate::args::{real, whole};
+use crate::records::{ReferenceCameras, ReferenceRecord};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -32,15 +32,16 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let reference = Reference::new(&scene, args.time);
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let mut cameras = serde_json::Map::new();
-    for (name, view, [w, h]) in [
+    // Filled in the order traced: observer, sensor.
+    let mut cameras: [ReferenceStats; 2] = Default::default();
+    for (slot, (name, view, [w, h])) in cameras.iter_mut().zip([
         (
             "observer",
             reference.observer_view(),
             scene.observer.resolution,
         ),
         ("sensor", reference.sensor_view(), scene.sensor.resolution),
-    ] {
+    ]) {
         let (images, stats) = reference.render(&view, w, h, args.spp);
         write_images(&args.out, name, &images)?;
         println!(
@@ -52,7 +53,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             stats.mirror_pixels,
             stats.misses
         );
-        cameras.insert(name.to_owned(), json!(stats));
+        *slot = stats;
     }
     let geometry = &reference.geometry;
     println!(
@@ -61,18 +62,22 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         geometry.build_total.as_secs_f64() * 1e3,
         geometry.build_core.as_secs_f64() * 1e3
     );
-    let record = json!({
-        "scene": args.scene.display().to_string(),
-        "time_s": args.time,
-        "spp": args.spp,
-        "origin": scene.origin.to_array(),
-        "triangles": geometry.triangle_count(),
-        "bvh_build_total_ms": geometry.build_total.as_secs_f64() * 1e3,
-        "bvh_build_core_ms": geometry.build_core.as_secs_f64() * 1e3,
-        "threads": rayon_threads(),
-        "cameras": cameras,
-    });
-    write_json(&args.out.join("reference.json"), &record)?;
+    let [observer, sensor] = cameras;
+    let record = ReferenceRecord {
+        scene: args.scene.display().to_string(),
+        time_s: args.time,
+        spp: args.spp,
+        origin: scene.origin.to_array(),
+        triangles: geometry.triangle_count(),
+        bvh_build_total_ms: geometry.build_total.as_secs_f64() * 1e3,
+        bvh_build_core_ms: geometry.build_core.as_secs_f64() * 1e3,
+        threads: rayon_threads(),
+        cameras: ReferenceCameras { observer, sensor },
+    };
+    write_json(
+        &args.out.join("reference.json"),
+        &serde_json::to_value(&record)?,
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 

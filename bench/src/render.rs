@@ -4,7 +4,6 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
-use serde_json::json;
 use specchio::output::{write_exr, write_json, write_png};
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
@@ -14,6 +13,9 @@ use specchio::vk::device::{self, DeviceInfo};
 
 use crate::args::{face_size, real, whole};
 use crate::probe;
+use crate::records::{
+    CubeSettings, NotRun, RenderRecord, RenderRun, RenderSettings, RenderSummary,
+};
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 /// More frames than this is a mistake, not a render (about an hour of video at 30 fps).
@@ -115,51 +117,61 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         let reports = render_frames(args, &mut renderer, start_s, &out)?;
         let summary = summarize(&reports);
         print_summary(args, method, &out, &reports, &summary);
-        runs.push(json!({
-            "method": method,
-            "out": out.display().to_string(),
-            "refresh_counters": renderer.counters,
-            "summary": summary,
-            "frames": reports,
-        }));
+        runs.push(RenderRun {
+            method,
+            out: out.display().to_string(),
+            refresh_counters: renderer.counters,
+            summary,
+            frames: reports,
+        });
     }
 
     // 4. Report.
-    let mut record = json!({
-        "scene": args.scene.display().to_string(),
-        "description": scene.description,
-        // World position of the mirror's centre at time 0: everything is rendered relative to it.
-        "origin": scene.origin.to_array(),
-        "settings": {
-            "start_time_s": start_s,
-            "fps": args.fps,
-            "frames": args.frames,
-            "methods": methods,
-            "full_updates": args.full_updates,
-            "lookup": lookup.unwrap_or(scene.mirror.lookup),
-            "cube": {
-                "face_size_px": args.cube_size.unwrap_or(scene.cube.face_size_px),
-                "format": format_name(scene.cube.format),
-                "near_m": scene.cube.near_m,
-                "far_m": scene.cube.far_m,
-                "mipmaps": scene.cube.mipmaps,
-                "max_anisotropy": scene.cube.max_anisotropy,
+    let cube = &scene.cube;
+    let mut record = RenderRecord {
+        scene: args.scene.display().to_string(),
+        description: scene.description.clone(),
+        origin: scene.origin.to_array(),
+        settings: RenderSettings {
+            start_time_s: start_s,
+            fps: args.fps,
+            frames: args.frames,
+            methods,
+            full_updates: args.full_updates,
+            lookup: lookup.unwrap_or(scene.mirror.lookup),
+            cube: CubeSettings {
+                face_size_px: args.cube_size.unwrap_or(cube.face_size_px),
+                format: format_name(cube.format),
+                near_m: cube.near_m,
+                far_m: cube.far_m,
+                mipmaps: cube.mipmaps,
+                max_anisotropy: cube.max_anisotropy,
             },
-            "refresh": refresh_name(scene.refresh),
-            "observer_resolution": scene.observer.resolution,
-            "sensor_resolution": scene.sensor.resolution,
-            "validation": validation,
-            "lp_num_threads": std::env::var("LP_NUM_THREADS").ok(),
-            "malloc_trim_threshold_bytes": crate::TRIM_THRESHOLD.get().copied().flatten(),
+            refresh: refresh_name(scene.refresh),
+            observer_resolution: scene.observer.resolution,
+            sensor_resolution: scene.sensor.resolution,
+            validation,
+            lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
+            malloc_trim_threshold_bytes: crate::TRIM_THRESHOLD.get().copied().flatten(),
         },
-        "device": info,
-        "methods_not_run": refused.iter().map(|(m, why)| json!({ "method": m, "reason": why })).collect::<Vec<_>>(),
-        "runs": runs,
-    });
+        device: info,
+        methods_not_run: refused
+            .iter()
+            .map(|(m, why)| NotRun {
+                method: *m,
+                reason: why.clone(),
+            })
+            .collect(),
+        runs,
+        validation_messages: 0,
+    };
     drop(device);
     let messages = log.messages();
-    record["validation_messages"] = json!(messages.len());
-    write_json(&args.out.join("render.json"), &record)?;
+    record.validation_messages = messages.len();
+    write_json(
+        &args.out.join("render.json"),
+        &serde_json::to_value(&record)?,
+    )?;
     for (m, why) in &refused {
         println!("  {m}: not run: {why}");
     }
@@ -277,22 +289,22 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
 }
 
 /// Medians over frames: cube update (only frames that updated it) and each view.
-fn summarize(reports: &[FrameReport]) -> serde_json::Value {
+fn summarize(reports: &[FrameReport]) -> RenderSummary {
     let updated: Vec<&FrameReport> = reports.iter().filter(|r| r.cube_updated).collect();
     let m = |f: &dyn Fn(&FrameReport) -> Option<f64>, rs: &[&FrameReport]| {
         median(rs.iter().filter_map(|r| f(r)).collect())
     };
     let all: Vec<&FrameReport> = reports.iter().collect();
-    json!({
-        "frames": reports.len(),
-        "cube_updates": updated.len(),
-        "median_gpu_cube_update_ms": m(&|r| r.gpu_cube_ms, &updated),
-        "median_gpu_observer_ms": m(&|r| r.gpu_observer_ms, &all),
-        "median_gpu_sensor_ms": m(&|r| r.gpu_sensor_ms, &all),
-        "median_gpu_views_ms": m(&|r| r.gpu_pair_ms, &all),
-        "median_submit_wait_ms": m(&|r| Some(r.submit_wait_ms), &all),
-        "median_cpu_record_ms": m(&|r| Some(r.cpu_record_ms), &all),
-    })
+    RenderSummary {
+        frames: reports.len(),
+        cube_updates: updated.len(),
+        median_gpu_cube_update_ms: m(&|r| r.gpu_cube_ms, &updated),
+        median_gpu_observer_ms: m(&|r| r.gpu_observer_ms, &all),
+        median_gpu_sensor_ms: m(&|r| r.gpu_sensor_ms, &all),
+        median_gpu_views_ms: m(&|r| r.gpu_pair_ms, &all),
+        median_submit_wait_ms: m(&|r| Some(r.submit_wait_ms), &all),
+        median_cpu_record_ms: m(&|r| Some(r.cpu_record_ms), &all),
+    }
 }
 
 fn print_summary(
@@ -300,13 +312,9 @@ fn print_summary(
     method: Method,
     out: &Path,
     reports: &[FrameReport],
-    summary: &serde_json::Value,
+    summary: &RenderSummary,
 ) {
-    let ms = |k: &str| {
-        summary[k]
-            .as_f64()
-            .map_or("n/a".to_owned(), |v| format!("{v:.2} ms"))
-    };
+    let ms = |v: Option<f64>| v.map_or("n/a".to_owned(), |v| format!("{v:.2} ms"));
     println!(
         "rendered {} frame(s) of {} with {method} into {}",
         reports.len(),
@@ -315,20 +323,20 @@ fn print_summary(
     );
     println!(
         "  cube updates:       {} of {} frames",
-        summary["cube_updates"],
+        summary.cube_updates,
         reports.len()
     );
     println!(
         "  cube update (GPU):  {} median",
-        ms("median_gpu_cube_update_ms")
+        ms(summary.median_gpu_cube_update_ms)
     );
     println!(
         "  observer (GPU):     {} median",
-        ms("median_gpu_observer_ms")
+        ms(summary.median_gpu_observer_ms)
     );
     println!(
         "  sensor (GPU):       {} median",
-        ms("median_gpu_sensor_ms")
+        ms(summary.median_gpu_sensor_ms)
     );
     println!("  files: observer.exr/.png, sensor.exr/.png, views.png, cube/{{px,nx,py,ny,pz,nz}}.exr, render.json");
 }
