@@ -213,30 +213,200 @@ fn github_format_and_bad_options() {
     assert_eq!(record["environment"]["lp_num_threads"], "1");
     std::fs::remove_file(&json).unwrap();
 
+    // Values clap refuses (exit 2) and combinations the run refuses (exit 1), each before
+    // anything runs, naming the option (and the allowed values), writing nothing.
     let json = temp("bad.json");
-    for (args, message) in [
-        (&["--cube-sizes", "0"][..], "--cube-sizes"),
-        (&["--cube-sizes", "64,x"][..], "--cube-sizes: `x`"),
-        (&["--lookups", "sphere"][..], "--lookups: `sphere`"),
-        (&["--threads", "0"][..], "--threads"),
-        (&["--runs", "0"][..], "--runs"),
-        (&["--frames", "0"][..], "--frames"),
-        (&["--methods", "nine-pass"][..], "--methods: `nine-pass`"),
-        (&["--plot", "no/such/folder/p.svg"][..], "no/such/folder"),
+    for (args, message, code) in [
+        (
+            &["--cube-sizes", "0"][..],
+            "'--cube-sizes <CUBE_SIZES>': `0` is not a face size: a whole number in 1..=8192",
+            2,
+        ),
+        (
+            &["--cube-sizes", "64,x"][..],
+            "'--cube-sizes <CUBE_SIZES>': `x`",
+            2,
+        ),
+        (
+            &["--cube-sizes", "64,64"][..],
+            "--cube-sizes: 64 is given twice",
+            1,
+        ),
+        (
+            &["--lookups", "sphere"][..],
+            "'--lookups <LOOKUPS>': `sphere` is not a lookup: plain or box",
+            2,
+        ),
+        (
+            &["--threads", "0"][..],
+            "'--threads <THREADS>': must be a whole number in 1..=1024",
+            2,
+        ),
+        (
+            &["--runs", "0"][..],
+            "'--runs <RUNS>': must be a whole number in 1..=1000",
+            2,
+        ),
+        (
+            &["--frames", "0"][..],
+            "'--frames <FRAMES>': must be a whole number in 1..=100000",
+            2,
+        ),
+        (&["--warmup", "-1"][..], "--warmup", 2),
+        (
+            &["--max-regression", "-5"][..],
+            "'--max-regression <MAX_REGRESSION>': must be a number in [0, 10000]",
+            2,
+        ),
+        (
+            &["--methods", "nine-pass"][..],
+            "'--methods <METHODS>': `nine-pass` is not a method: one of six-pass",
+            2,
+        ),
+        (&["--plot", "no/such/folder/p.svg"][..], "no/such/folder", 1),
         (
             &["--methods", "instanced", "--max-regression", "10"][..],
             "include six-pass",
+            1,
         ),
-        (&["no/such/scene.toml"][..], "no/such/scene.toml"),
+        (&["no/such/scene.toml"][..], "no/such/scene.toml", 1),
     ] {
         let mut all = vec!["bench", "--json", json.to_str().unwrap()];
         all.extend_from_slice(args);
         let out = specchio(&all);
         let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert_eq!(out.status.code(), Some(code), "{args:?}: {stderr}");
         assert!(stderr.contains(message), "{args:?}: {stderr}");
         assert!(!json.exists(), "{args:?} wrote {}", json.display());
     }
+}
+
+/// `--quick` changes only the defaults: an explicit value is checked exactly as without it
+/// (issue 11: `--quick --cube-sizes 0` used to run, ignoring it) and is honoured.
+#[test]
+fn quick_checks_and_honours_explicit_values() {
+    for (args, option, range) in [
+        (&["--cube-sizes", "0"][..], "--cube-sizes", "1..=8192"),
+        (&["--cube-sizes", "100000"][..], "--cube-sizes", "1..=8192"),
+        (&["--cube-sizes", "64,,abc"][..], "--cube-sizes", "1..=8192"),
+        (&["--frames", "0"][..], "--frames", "1..=100000"),
+        (&["--runs", "0"][..], "--runs", "1..=1000"),
+        (&["--warmup", "20000"][..], "--warmup", "0..=10000"),
+    ] {
+        let out = lean_quick(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "--quick {args:?}: {stderr}");
+        assert!(
+            stderr.contains(option) && stderr.contains(range),
+            "--quick {args:?}: {stderr}"
+        );
+    }
+    let json = temp("quick-explicit.json");
+    assert_ok(&lean_quick(&[
+        "--cube-sizes",
+        "32",
+        "--frames",
+        "3",
+        "--warmup",
+        "0",
+        "--runs",
+        "2",
+        "--json",
+        json.to_str().unwrap(),
+    ]));
+    let record = read_json(&json);
+    let settings = &record["settings"];
+    assert_eq!(settings["cube_sizes"], serde_json::json!([32]));
+    assert_eq!(
+        (&settings["frames"], &settings["warmup"], &settings["runs"]),
+        (
+            &serde_json::json!(3),
+            &serde_json::json!(0),
+            &serde_json::json!(2)
+        )
+    );
+    for row in record["results"].as_array().unwrap() {
+        assert_eq!(row["cube_size"], 32);
+        // 3 timed updates in each of 2 runs.
+        assert_eq!(row["updates"], 6);
+        assert_eq!(row["run_medians_ms"].as_array().unwrap().len(), 2);
+    }
+    std::fs::remove_file(&json).unwrap();
+}
+
+/// A baseline is read through the record's own types: a misspelt, missing or mistyped key is
+/// refused before the run, naming the file and the key (it used to read as "no value" and
+/// change the gate's verdict silently).
+#[test]
+fn a_damaged_baseline_is_refused_naming_the_key() {
+    let good = read_json(&Path::new(env!("CARGO_MANIFEST_DIR")).join("baselines/quick.json"));
+    let misspelt =
+        good.to_string()
+            .replacen("\"fragment_invocations\"", "\"fragment_invocatons\"", 1);
+    let mut missing = good.clone();
+    missing["results"][0]["work"]
+        .as_object_mut()
+        .unwrap()
+        .remove("vertex_invocations");
+    let mut mistyped = good.clone();
+    mistyped["device"]["driver_name"] = serde_json::json!(7);
+    for (name, text, says) in [
+        ("misspelt", misspelt, "unknown field `fragment_invocatons`"),
+        (
+            "missing",
+            missing.to_string(),
+            "key `results[0].work.vertex_invocations` is missing",
+        ),
+        ("mistyped", mistyped.to_string(), "invalid type"),
+    ] {
+        let path = temp(&format!("{name}.json"));
+        std::fs::write(&path, text).unwrap();
+        let out = lean_quick(&["--baseline", path.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
+        assert!(
+            stderr.contains(path.to_str().unwrap()) && stderr.contains(says),
+            "{name}: {stderr}"
+        );
+        // Refused before the run: no table was printed.
+        assert!(out.stdout.is_empty(), "{name}: the run started");
+        std::fs::remove_file(&path).unwrap();
+    }
+}
+
+/// Under validation, a message from the layer fails the benchmark (exit 3) and no output is
+/// written. The message is provoked through the layer's own documented setting
+/// `VK_LAYER_ENABLES` (best-practices checks warn about enabling VK_EXT_debug_utils).
+#[test]
+fn a_validation_message_fails_the_bench_without_output() {
+    let json = temp("validation.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args([
+            "bench",
+            "--quick",
+            "--methods",
+            "six-pass",
+            "--no-accuracy",
+            "--no-dynamic",
+            "--no-floors",
+            "--json",
+            json.to_str().unwrap(),
+        ])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .env("SPECCHIO_VALIDATE", "1")
+        .env(
+            "VK_LAYER_ENABLES",
+            "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT",
+        )
+        .output()
+        .expect("the specchio binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(
+        stderr.contains("the Vulkan validation layer reported"),
+        "{stderr}"
+    );
+    assert!(!json.exists(), "a failed run wrote {}", json.display());
 }
 
 /// On SwiftShader (no pipeline statistics) the work counters are absent, never zero, in the

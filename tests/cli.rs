@@ -115,28 +115,93 @@ fn every_bad_scene_fails_clearly_without_output() {
 fn absurd_arguments_fail_before_writing_anything() {
     let scene = root().join("scenes/test/six-colour-room.toml");
     let scene = scene.to_str().unwrap();
-    for args in [
-        vec!["--frames", "1000000000"],
-        vec!["--frames", "0"],
-        vec!["--cube-size", "0"],
-        vec!["--cube-size", "100000"],
-        vec!["--time", "NaN"],
-        vec!["--fps=-3"],
-        // The last frame number, u64::MAX + 1, would overflow (it panicked).
-        vec!["--frame", "18446744073709551615", "--frames", "2"],
+    for (args, range) in [
+        (vec!["--frames", "1000000000"], "1..=100000"),
+        (vec!["--frames", "0"], "1..=100000"),
+        (vec!["--cube-size", "0"], "1..=8192"),
+        (vec!["--cube-size", "100000"], "1..=8192"),
+        (vec!["--time", "NaN"], "finite number >= 0"),
+        (vec!["--time", "-1"], "finite number >= 0"),
+        (vec!["--fps=-3"], "(0, 10000]"),
+        // Frame numbers would overflow counting on from here.
+        (vec!["--frame", "18446744073709551615"], "0..=1000000000"),
     ] {
         let out = temp_dir("args");
         let mut all = vec!["render", scene, "--out", out.to_str().unwrap()];
         all.extend(&args);
         let result = specchio(&all);
         let stderr = String::from_utf8_lossy(&result.stderr);
-        assert!(!result.status.success(), "{args:?} must fail");
+        assert_eq!(
+            result.status.code(),
+            Some(2),
+            "{args:?} must fail:\n{stderr}"
+        );
         assert!(
-            stderr.contains(args[0].split('=').next().unwrap()),
-            "{args:?}: the error must name the flag:\n{stderr}"
+            stderr.contains(args[0].split('=').next().unwrap()) && stderr.contains(range),
+            "{args:?}: the error must name the flag and the range {range}:\n{stderr}"
         );
         assert!(!out.exists(), "{args:?}: no output may be written");
     }
+    // The other commands' numbers, likewise.
+    for (args, range) in [
+        (
+            vec!["reference", scene, "--out", "x", "--spp", "0"],
+            "1..=4096",
+        ),
+        (
+            vec!["reference", scene, "--out", "x", "--time", "inf"],
+            ">= 0",
+        ),
+        (
+            vec!["compare", "a.exr", "b.exr", "--angular", "0"],
+            "1..=8192",
+        ),
+    ] {
+        let result = specchio(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{args:?}:\n{stderr}");
+        assert!(stderr.contains(range), "{args:?}:\n{stderr}");
+    }
+}
+
+/// Every command that creates a Vulkan instance holds validation to "no messages": a message
+/// fails it with exit 3 and says so. The message is provoked through the layer's documented
+/// setting `VK_LAYER_ENABLES` (best practices warn about enabling VK_EXT_debug_utils).
+#[test]
+fn a_validation_message_fails_every_vulkan_command() {
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let out = temp_dir("validation");
+    let out_arg = out.to_str().unwrap().to_owned();
+    for args in [
+        vec!["info"],
+        vec!["info", "--json"],
+        vec!["probe", "six-pass"],
+        vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--out",
+            &out_arg,
+            "--cube-size",
+            "8",
+        ],
+    ] {
+        let result = Command::new(env!("CARGO_BIN_EXE_specchio"))
+            .args(&args)
+            .env("SPECCHIO_VALIDATE", "1")
+            .env(
+                "VK_LAYER_ENABLES",
+                "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT",
+            )
+            .output()
+            .expect("the specchio binary runs");
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(3), "{args:?}:\n{stderr}");
+        assert!(
+            stderr.contains("the Vulkan validation layer reported"),
+            "{args:?}:\n{stderr}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]

@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use crate::records::{CompareRecord, CompareSettings};
 use anyhow::Result;
-use serde_json::json;
 use specchio::metrics::{
     self, Comparison, FLIP_PERCENTILE, FLIP_PIXELS_PER_DEGREE, MASK_THRESHOLD, PSNR_PEAK,
     REL_MSE_EPSILON,
@@ -31,7 +31,7 @@ pub struct Args {
     /// The two files are direction images (`render --directions` against the reference's
     /// `NAME.direction.exr`): report the mirror's angular lookup error instead, in degrees and
     /// in texels of a cube face of this size.
-    #[arg(long, value_name = "FACE_SIZE")]
+    #[arg(long, allow_negative_numbers = true, value_name = "FACE_SIZE", value_parser = crate::args::face_size)]
     angular: Option<u32>,
 }
 
@@ -84,12 +84,6 @@ fn check_heatmap_is_no_input(args: &Args) -> Result<()> {
 
 /// `--angular`: the angle between the looked-up and the exact direction per mirror pixel.
 fn angular(args: &Args, face_size: u32) -> Result<ExitCode> {
-    if face_size == 0 || face_size > specchio::scene::MAX_FACE_SIZE_PX {
-        anyhow::bail!(
-            "--angular {face_size}: the face size must be in 1..={}",
-            specchio::scene::MAX_FACE_SIZE_PX
-        );
-    }
     let test = metrics::read_exr(&args.test)?;
     let reference = metrics::read_exr(&args.reference)?;
     if (test.width, test.height) != (reference.width, reference.height) {
@@ -139,37 +133,37 @@ fn angular(args: &Args, face_size: u32) -> Result<ExitCode> {
 
 /// The JSON report; every key is documented in docs/accuracy.md. Undefined metrics (nothing
 /// compared) and an infinite PSNR are null, never a non-number.
-fn to_json(args: &Args, c: &Comparison) -> serde_json::Value {
+fn to_json(args: &Args, c: &Comparison) -> CompareRecord {
     let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
     let finite = |v: Option<f64>| v.filter(|v| v.is_finite());
-    json!({
-        "test": args.test.display().to_string(),
-        "reference": args.reference.display().to_string(),
-        "mask": path(&args.mask),
-        "heatmap": path(&args.heatmap),
-        "width": c.width,
-        "height": c.height,
-        "pixels_in_mask": c.pixels_in_mask,
-        "pixels_compared": c.pixels_compared,
-        "test_nan_pixels": c.test_non_finite.nan_pixels,
-        "test_inf_pixels": c.test_non_finite.inf_pixels,
-        "reference_nan_pixels": c.reference_non_finite.nan_pixels,
-        "reference_inf_pixels": c.reference_non_finite.inf_pixels,
-        "rmse": c.rmse,
-        "psnr_db": finite(c.psnr_db),
-        "psnr_infinite": c.psnr_is_infinite(),
-        "rel_mse": c.rel_mse,
-        "max_abs_error": c.max_abs_error,
-        "flip_mean": c.flip_mean,
-        "flip_p99": c.flip_p99,
-        "settings": {
-            "psnr_peak": PSNR_PEAK,
-            "rel_mse_epsilon": REL_MSE_EPSILON,
-            "mask_threshold": MASK_THRESHOLD,
-            "flip_pixels_per_degree": FLIP_PIXELS_PER_DEGREE,
-            "flip_percentile": FLIP_PERCENTILE,
+    CompareRecord {
+        test: args.test.display().to_string(),
+        reference: args.reference.display().to_string(),
+        mask: path(&args.mask),
+        heatmap: path(&args.heatmap),
+        width: c.width,
+        height: c.height,
+        pixels_in_mask: c.pixels_in_mask,
+        pixels_compared: c.pixels_compared,
+        test_nan_pixels: c.test_non_finite.nan_pixels,
+        test_inf_pixels: c.test_non_finite.inf_pixels,
+        reference_nan_pixels: c.reference_non_finite.nan_pixels,
+        reference_inf_pixels: c.reference_non_finite.inf_pixels,
+        rmse: c.rmse,
+        psnr_db: finite(c.psnr_db),
+        psnr_infinite: c.psnr_is_infinite(),
+        rel_mse: c.rel_mse,
+        max_abs_error: c.max_abs_error,
+        flip_mean: c.flip_mean,
+        flip_p99: c.flip_p99,
+        settings: CompareSettings {
+            psnr_peak: PSNR_PEAK,
+            rel_mse_epsilon: REL_MSE_EPSILON,
+            mask_threshold: MASK_THRESHOLD,
+            flip_pixels_per_degree: FLIP_PIXELS_PER_DEGREE,
+            flip_percentile: FLIP_PERCENTILE,
         },
-    })
+    }
 }
 
 fn print_table(args: &Args, c: &Comparison) {

@@ -13,12 +13,14 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
-use serde_json::Value;
+use anyhow::Result;
+use specchio::render::methods::Method;
+
+use crate::bench::record::{self, MethodRow};
 
 /// An earlier `specchio bench --json` file: its results and the driver that measured them.
 pub struct Baseline {
-    pub results: Vec<Value>,
+    pub results: Vec<MethodRow>,
     /// The driver's name (`llvmpipe`, `SwiftShader driver`, ...): counters compare only on
     /// the same driver.
     pub driver_name: String,
@@ -26,27 +28,14 @@ pub struct Baseline {
     pub driver_info: String,
 }
 
+/// Reads the baseline through the record's own types: a key that is misspelt, missing or of
+/// the wrong type is an error naming it, never a silently different verdict.
 pub fn read_baseline(path: &Path) -> Result<Baseline> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("cannot read the baseline {}", path.display()))?;
-    let json: Value =
-        serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
-    let results = json["results"].as_array().cloned().with_context(|| {
-        format!(
-            "{}: no `results` array (not a `specchio bench --json` file?)",
-            path.display()
-        )
-    })?;
-    let field = |k: &str| {
-        json["device"][k]
-            .as_str()
-            .map(str::to_owned)
-            .with_context(|| format!("{}: field `device.{k}` is missing", path.display()))
-    };
+    let record = record::read(path)?;
     Ok(Baseline {
-        results,
-        driver_name: field("driver_name")?,
-        driver_info: field("driver_info")?,
+        results: record.results,
+        driver_name: record.device.driver_name,
+        driver_info: record.device.driver_info,
     })
 }
 
@@ -78,50 +67,44 @@ pub fn same_driver(
     Ok(())
 }
 
-/// The case a result row is for.
-fn key(r: &Value) -> String {
-    let scene = r["scene"].as_str().unwrap_or("?");
-    let method = r["method"].as_str().unwrap_or("?");
-    format!("{scene} / {method} / {}²", r["cube_size"])
-}
-
 /// Median wall time over six-pass's in the same run, for the row's scene and face size.
-fn ratio(rows: &[Value], r: &Value) -> Option<f64> {
+fn ratio(rows: &[MethodRow], r: &MethodRow) -> Option<f64> {
     let six = rows.iter().find(|o| {
-        o["scene"] == r["scene"] && o["cube_size"] == r["cube_size"] && o["method"] == "six-pass"
+        o.scene == r.scene && o.cube_size == r.cube_size && o.method == Method::SIX_PASS
     })?;
-    Some(r["wall_ms"]["median"].as_f64()? / six["wall_ms"]["median"].as_f64()?)
+    Some(r.wall_ms?.median / six.wall_ms?.median)
 }
 
 /// Every way `results` is worse than `baseline`, one line each (empty: the gate passes).
-pub fn check(baseline: &[Value], results: &[Value], max_regression: Option<f64>) -> Vec<String> {
+pub fn check(
+    baseline: &[MethodRow],
+    results: &[MethodRow],
+    max_regression: Option<f64>,
+) -> Vec<String> {
     let mut failures = Vec::new();
     for r in results {
-        let Some(b) = baseline.iter().find(|b| key(b) == key(r)) else {
+        let Some(b) = baseline.iter().find(|b| b.case() == r.case()) else {
             continue; // a new case: nothing to compare with
         };
-        if r["updates"] != b["updates"] {
+        if r.updates != b.updates {
             failures.push(format!(
                 "{}: {} updates against {} in the baseline; counters need equal runs",
-                key(r),
-                r["updates"],
-                b["updates"]
+                r.case(),
+                r.updates,
+                b.updates
             ));
             continue;
         }
-        for counter in [
-            "vertex_invocations",
-            "clipping_primitives",
-            "fragment_invocations",
-            "task_invocations",
-            "mesh_invocations",
-            "faces_rendered",
-            "objects_drawn",
-        ] {
-            // A counter the driver lacks is null in both; null on one side only fails.
-            let (new, old) = (&r["work"][counter], &b["work"][counter]);
+        // A counter the driver lacks is null in both; null on one side only fails.
+        for ((counter, new), (_, old)) in r.work.counters().into_iter().zip(b.work.counters()) {
             if new != old {
-                failures.push(format!("{}: {counter} {new} (baseline {old})", key(r)));
+                let show = |v: Option<u64>| v.map_or("null".to_owned(), |v| v.to_string());
+                failures.push(format!(
+                    "{}: {counter} {} (baseline {})",
+                    r.case(),
+                    show(new),
+                    show(old)
+                ));
             }
         }
         if let (Some(limit), Some(new), Some(old)) =
@@ -130,7 +113,7 @@ pub fn check(baseline: &[Value], results: &[Value], max_regression: Option<f64>)
             if new > old * (1.0 + limit / 100.0) {
                 failures.push(format!(
                     "{}: {:.3}x six-pass time (baseline {:.3}x), more than {limit}% worse",
-                    key(r),
+                    r.case(),
                     new,
                     old
                 ));
@@ -138,8 +121,8 @@ pub fn check(baseline: &[Value], results: &[Value], max_regression: Option<f64>)
         }
     }
     for b in baseline {
-        if !results.iter().any(|r| key(r) == key(b)) {
-            failures.push(format!("{}: in the baseline but not measured", key(b)));
+        if !results.iter().any(|r| r.case() == b.case()) {
+            failures.push(format!("{}: in the baseline but not measured", b.case()));
         }
     }
     failures
@@ -148,15 +131,41 @@ pub fn check(baseline: &[Value], results: &[Value], max_regression: Option<f64>)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
+    use crate::bench::record::{Efficiency, Stats, Work};
 
-    fn row(method: &str, wall: f64, vertices: u64) -> Value {
-        json!({
-            "scene": "s.toml", "method": method, "cube_size": 64, "updates": 5,
-            "wall_ms": { "median": wall },
-            "work": { "vertex_invocations": vertices, "clipping_primitives": 1,
-                      "fragment_invocations": 2, "faces_rendered": 30, "objects_drawn": 40 },
-        })
+    fn row(method: &str, wall: f64, vertices: u64) -> MethodRow {
+        MethodRow {
+            scene: "s.toml".into(),
+            method: Method::parse(method).unwrap(),
+            cube_size: 64,
+            updates: 5,
+            wall_ms: Some(Stats {
+                median: wall,
+                p10: wall,
+                p90: wall,
+            }),
+            run_medians_ms: vec![wall],
+            cpu_record_ms: None,
+            gpu_fill_ms: None,
+            gpu_fill_and_mips_ms: None,
+            gpu_face_ms: None,
+            fill_stats: None,
+            triangles: 12,
+            objects: 0,
+            work: Work {
+                vertex_invocations: Some(vertices),
+                clipping_primitives: Some(1),
+                fragment_invocations: Some(2),
+                task_invocations: None,
+                mesh_invocations: None,
+                faces_rendered: 30,
+                objects_drawn: 40,
+            },
+            efficiency: Efficiency {
+                vs_geometry_plus_fill: None,
+                vs_clear: None,
+            },
+        }
     }
 
     #[test]

@@ -7,6 +7,7 @@ use specchio::render::methods::Method;
 use specchio::vk::device::{self, DeviceInfo, MIN_MESA_MAJOR};
 
 use crate::probe;
+use crate::records::{InfoDevice, InfoMethod, InfoRecord};
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 #[derive(clap::Args)]
@@ -14,13 +15,21 @@ pub struct Args {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
-    /// Enable the Khronos validation layer (also: SPECCHIO_VALIDATE=1).
+    /// Enable the Khronos validation layer (also: SPECCHIO_VALIDATE=1); any message makes the
+    /// command fail (exit 3).
     #[arg(long)]
     validate: bool,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
+    let log = instance.validation_log();
+    let listed = list(args, instance);
+    crate::validation::checked(&log, listed)
+}
+
+/// Prints every device; the instance is gone when it returns.
+fn list(args: &Args, instance: std::sync::Arc<Instance>) -> Result<ExitCode> {
     let candidates = device::enumerate(&instance)?;
     // The device a command without `--device` would use.
     let default = device::choose(&instance, None).ok().map(|d| d.index);
@@ -35,26 +44,26 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         })
         .collect();
     if args.json {
-        let list: Vec<serde_json::Value> = candidates
+        let devices = candidates
             .iter()
             .zip(&methods)
-            .map(|(c, ms)| {
-                let mut v = serde_json::to_value(&c.info).unwrap_or_default();
-                v["usable"] = serde_json::json!(c.rejected.is_none());
-                v["default"] = serde_json::json!(default == Some(c.info.index));
-                v["rejected_because"] = serde_json::json!(c.rejected);
-                v["mesa_too_old"] = serde_json::json!(mesa_too_old(&c.info));
-                v["methods"] = ms
+            .map(|(c, ms)| InfoDevice {
+                info: c.info.clone(),
+                usable: c.rejected.is_none(),
+                default: default == Some(c.info.index),
+                rejected_because: c.rejected.clone(),
+                mesa_too_old: mesa_too_old(&c.info),
+                methods: ms
                     .iter()
-                    .map(|(m, r)| serde_json::json!({ "method": m, "usable": r.is_ok(), "reason": r.as_ref().err() }))
-                    .collect();
-                v
+                    .map(|(m, r)| InfoMethod {
+                        method: *m,
+                        usable: r.is_ok(),
+                        reason: r.as_ref().err().cloned(),
+                    })
+                    .collect(),
             })
             .collect();
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&serde_json::json!({ "devices": list }))?
-        );
+        println!("{}", serde_json::to_string_pretty(&InfoRecord { devices })?);
         return Ok(ExitCode::SUCCESS);
     }
     if candidates.is_empty() {

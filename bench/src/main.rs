@@ -1,14 +1,17 @@
 //! `specchio`: the command-line tool. `main` reads like a table of contents: parse the
 //! arguments, then run one subcommand (each in its own module).
 
+mod args;
 mod bench;
 mod compare;
 mod gate;
 mod info;
 mod interrupt;
 mod probe;
+mod records;
 mod reference;
 mod render;
+mod validation;
 
 use std::process::ExitCode;
 
@@ -107,7 +110,7 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {}", error_text(&e));
-            ExitCode::FAILURE
+            validation::exit_code(&e)
         }
     }
 }

@@ -12,6 +12,7 @@
 //! prints the result as JSON (the evidence test runs it in a child process).
 
 use std::process::{Command, ExitCode, Stdio};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Result};
@@ -79,6 +80,10 @@ pub fn usable(method: Method, info: &DeviceInfo) -> Result<(), String> {
     let said = said.lines().last().unwrap_or("").trim().to_owned();
     match status.code() {
         Some(0) => Ok(()),
+        Some(code) if code == i32::from(crate::validation::EXIT_VALIDATION) => Err(format!(
+            "the validation layer reported messages while probing it on {driver} (run `specchio \
+             probe {method}` with SPECCHIO_VALIDATE=1 to see them)"
+        )),
         Some(_) => Err(format!(
             "renders differently from six-pass on {driver}: {said}"
         )),
@@ -131,6 +136,13 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         bail!("unknown method `{}`", args.method);
     };
     let instance = Instance::create(&InstanceDesc::from_env(false))?;
+    let log = instance.validation_log();
+    let compared = compare(args, method, instance);
+    crate::validation::checked(&log, compared)
+}
+
+/// Renders the probe scene with six-pass and `method`; the instance is gone when it returns.
+fn compare(args: &Args, method: Method, instance: Arc<Instance>) -> Result<ExitCode> {
     let device = Device::create(
         &instance,
         &DeviceDesc {
@@ -176,6 +188,13 @@ pub fn run(args: &Args) -> Result<ExitCode> {
 /// fills, with or without the workaround, as one JSON line.
 fn view_mask_leak(args: &Args) -> Result<ExitCode> {
     let instance = Instance::create(&InstanceDesc::from_env(false))?;
+    let log = instance.validation_log();
+    let measured = measure_view_mask_leak(args, instance);
+    crate::validation::checked(&log, measured)
+}
+
+/// [`view_mask_leak`]'s measurement; the instance is gone when it returns.
+fn measure_view_mask_leak(args: &Args, instance: Arc<Instance>) -> Result<ExitCode> {
     let features = OptionalFeatures {
         multiview: true,
         ..Default::default()
@@ -188,11 +207,13 @@ fn view_mask_leak(args: &Args) -> Result<ExitCode> {
         },
     )?;
     let leak = specchio::render::methods::view_mask_leak(&device, !args.no_reset)?;
-    let mut line = serde_json::to_value(&leak)?;
-    line["device"] = serde_json::json!(device.info.name);
-    line["driver_info"] = serde_json::json!(device.info.driver_info);
-    line["mesa_version"] = serde_json::json!(device.info.mesa_version);
-    println!("{line}");
+    let line = crate::records::ViewMaskLeakLine {
+        leak,
+        device: device.info.name.clone(),
+        driver_info: device.info.driver_info.clone(),
+        mesa_version: device.info.mesa_version.clone(),
+    };
+    println!("{}", serde_json::to_string(&line)?);
     Ok(ExitCode::SUCCESS)
 }
 

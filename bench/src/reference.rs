@@ -3,52 +3,47 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
-use serde_json::json;
+use anyhow::Result;
 use specchio::output::Transaction;
-use specchio::reference::{Reference, ReferenceImages, MAX_SPP};
+use specchio::reference::{Reference, ReferenceImages, ReferenceStats, MAX_SPP};
+
+use crate::args::{real, whole};
+use crate::records::{ReferenceCameras, ReferenceRecord};
 
 #[derive(clap::Args)]
 pub struct Args {
     /// The scene file (TOML; see docs/scene-format.md).
     scene: PathBuf,
-    /// Output folder: created with everything in it at the end, or not at all; an earlier
-    /// reference there is replaced.
+    /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Scene time in seconds.
-    #[arg(long, default_value_t = 0.0)]
+    /// Scene time in seconds (finite, >= 0).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true,
+          value_parser = real(0.0, false, f64::INFINITY))]
     time: f64,
-    /// Samples per pixel on a fixed stratified grid; 1 traces pixel centres only.
-    #[arg(long, default_value_t = 1)]
+    /// Samples per pixel on a fixed stratified grid, 1..=4096; 1 traces pixel centres only.
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_parser = whole(1..=MAX_SPP))]
     spp: u32,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
-    if !args.time.is_finite() || args.time < 0.0 {
-        bail!(
-            "--time {}: must be a finite number of seconds >= 0",
-            args.time
-        );
-    }
-    if args.spp == 0 || args.spp > MAX_SPP {
-        bail!("--spp {}: must be in 1..={MAX_SPP}", args.spp);
-    }
+    // --time and --spp were range-checked by clap (`crate::args`).
     let scene = specchio::scene::load(&args.scene)?;
     // All or nothing: written into a hidden folder beside --out, renamed into place at the end.
     let mut out = Transaction::new();
     out.folder(&args.out, "reference.json")?;
     crate::interrupt::catch();
     let reference = Reference::new(&scene, args.time);
-    let mut cameras = serde_json::Map::new();
-    for (name, view, [w, h]) in [
+    // Filled in the order traced: observer, sensor.
+    let mut cameras: [ReferenceStats; 2] = Default::default();
+    for (slot, (name, view, [w, h])) in cameras.iter_mut().zip([
         (
             "observer",
             reference.observer_view(),
             scene.observer.resolution,
         ),
         ("sensor", reference.sensor_view(), scene.sensor.resolution),
-    ] {
+    ]) {
         crate::interrupt::check(&format!("before tracing the {name} camera"))?;
         let (images, stats) = reference.render(&view, w, h, args.spp);
         write_images(&out, &args.out, name, &images)?;
@@ -61,7 +56,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             stats.mirror_pixels,
             stats.misses
         );
-        cameras.insert(name.to_owned(), json!(stats));
+        *slot = stats;
     }
     let geometry = &reference.geometry;
     println!(
@@ -70,17 +65,18 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         geometry.build_total.as_secs_f64() * 1e3,
         geometry.build_core.as_secs_f64() * 1e3
     );
-    let record = json!({
-        "scene": args.scene.display().to_string(),
-        "time_s": args.time,
-        "spp": args.spp,
-        "origin": scene.origin.to_array(),
-        "triangles": geometry.triangle_count(),
-        "bvh_build_total_ms": geometry.build_total.as_secs_f64() * 1e3,
-        "bvh_build_core_ms": geometry.build_core.as_secs_f64() * 1e3,
-        "threads": rayon_threads(),
-        "cameras": cameras,
-    });
+    let [observer, sensor] = cameras;
+    let record = ReferenceRecord {
+        scene: args.scene.display().to_string(),
+        time_s: args.time,
+        spp: args.spp,
+        origin: scene.origin.to_array(),
+        triangles: geometry.triangle_count(),
+        bvh_build_total_ms: geometry.build_total.as_secs_f64() * 1e3,
+        bvh_build_core_ms: geometry.build_core.as_secs_f64() * 1e3,
+        threads: rayon_threads(),
+        cameras: ReferenceCameras { observer, sensor },
+    };
     out.write_json(&args.out.join("reference.json"), &record)?;
     out.commit()?;
     Ok(ExitCode::SUCCESS)

@@ -4,19 +4,25 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{bail, Result};
-use serde_json::json;
 use specchio::output::Transaction;
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::camera::FACE_NAMES;
-use specchio::scene::{CubeFormat, Lookup, RefreshPolicy, MAX_FACE_SIZE_PX};
+use specchio::scene::{CubeFormat, Lookup, RefreshPolicy};
 use specchio::vk::device::{self, DeviceInfo};
 
+use crate::args::{face_size, real, whole};
 use crate::probe;
+use crate::records::{
+    CubeSettings, NotRun, RenderRecord, RenderRun, RenderSettings, RenderSummary,
+};
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 /// More frames than this is a mistake, not a render (about an hour of video at 30 fps).
 pub const MAX_FRAMES: u32 = 100_000;
+
+/// The largest `--frame` (a year of frames at 30 fps): frame numbers stay far from overflow.
+pub const MAX_FRAME_INDEX: u64 = 1_000_000_000;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -26,20 +32,22 @@ pub struct Args {
     /// render there is replaced.
     #[arg(long)]
     out: PathBuf,
-    /// Scene time of the (first) frame in seconds.
-    #[arg(long, conflicts_with = "frame")]
+    /// Scene time of the (first) frame in seconds (finite, >= 0).
+    #[arg(long, conflicts_with = "frame", allow_negative_numbers = true,
+          value_parser = real(0.0, false, f64::INFINITY))]
     time: Option<f64>,
-    /// Frame number of the (first) frame; its time is N / fps.
-    #[arg(long)]
+    /// Frame number of the (first) frame, 0..=1000000000; its time is N / fps.
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(0..=MAX_FRAME_INDEX))]
     frame: Option<u64>,
-    /// Frames per second for --frame and --frames.
-    #[arg(long, default_value_t = 30.0)]
+    /// Frames per second for --frame and --frames, in (0, 10000].
+    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true,
+          value_parser = real(0.0, true, 10_000.0))]
     fps: f64,
-    /// Render K consecutive frames (numbered outputs in DIR/NNNN/).
-    #[arg(long, default_value_t = 1)]
+    /// Render K consecutive frames (numbered outputs in DIR/NNNN/), 1..=100000.
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_parser = whole(1..=MAX_FRAMES))]
     frames: u32,
     /// Cube face size in texels (overrides the scene's cube.face_size).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = face_size)]
     cube_size: Option<u32>,
     /// Cube fill method (`specchio info` lists them, with what this device can run), or all
     /// (each usable one into DIR/<method>/; measurement variants only when named).
@@ -65,40 +73,9 @@ pub struct Args {
     device: Option<String>,
 }
 
-/// Checks the numeric arguments before anything is loaded or written.
-fn check_args(args: &Args) -> Result<()> {
-    if !(args.fps.is_finite() && args.fps > 0.0 && args.fps <= 10_000.0) {
-        bail!("--fps {}: must be a number in (0, 10000]", args.fps);
-    }
-    if let Some(t) = args.time {
-        if !t.is_finite() || t < 0.0 {
-            bail!("--time {t}: must be a finite number of seconds >= 0");
-        }
-    }
-    if args.frames == 0 || args.frames > MAX_FRAMES {
-        bail!("--frames {}: must be in 1..={MAX_FRAMES}", args.frames);
-    }
-    // Frame numbers count on from --frame; the last must exist (u64::MAX + 1 does not).
-    if let Some(f) = args.frame {
-        if f.checked_add(u64::from(args.frames) - 1).is_none() {
-            bail!(
-                "--frame {f}: with --frames {} the last frame number would pass {}",
-                args.frames,
-                u64::MAX
-            );
-        }
-    }
-    if let Some(s) = args.cube_size {
-        if s == 0 || s > MAX_FACE_SIZE_PX {
-            bail!("--cube-size {s}: must be in 1..={MAX_FACE_SIZE_PX}");
-        }
-    }
-    Ok(())
-}
-
 pub fn run(args: &Args) -> Result<ExitCode> {
-    // 1. Everything that can be wrong with the input is found before the output folder exists.
-    check_args(args)?;
+    // 1. Everything that can be wrong with the input is found before the output folder exists
+    //    (the numbers' ranges by clap, `crate::args`).
     let lookup = match args.lookup.as_deref() {
         None => None,
         Some("plain") => Some(Lookup::Plain),
@@ -144,62 +121,63 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         let reports = render_frames(args, &mut renderer, start_s, &out, &dir)?;
         let summary = summarize(&reports);
         print_summary(args, method, &dir, &reports, &summary);
-        runs.push(json!({
-            "method": method,
-            "out": dir.display().to_string(),
-            "refresh_counters": renderer.counters,
-            "summary": summary,
-            "frames": reports,
-        }));
+        runs.push(RenderRun {
+            method,
+            out: dir.display().to_string(),
+            refresh_counters: renderer.counters,
+            summary,
+            frames: reports,
+        });
     }
 
     // 4. Report.
-    let mut record = json!({
-        "scene": args.scene.display().to_string(),
-        "description": scene.description,
-        // World position of the mirror's centre at time 0: everything is rendered relative to it.
-        "origin": scene.origin.to_array(),
-        "settings": {
-            "start_time_s": start_s,
-            "fps": args.fps,
-            "frames": args.frames,
-            "methods": methods,
-            "full_updates": args.full_updates,
-            "lookup": lookup.unwrap_or(scene.mirror.lookup),
-            "cube": {
-                "face_size_px": args.cube_size.unwrap_or(scene.cube.face_size_px),
-                "format": format_name(scene.cube.format),
-                "near_m": scene.cube.near_m,
-                "far_m": scene.cube.far_m,
-                "mipmaps": scene.cube.mipmaps,
-                "max_anisotropy": scene.cube.max_anisotropy,
+    let cube = &scene.cube;
+    let mut record = RenderRecord {
+        scene: args.scene.display().to_string(),
+        description: scene.description.clone(),
+        origin: scene.origin.to_array(),
+        settings: RenderSettings {
+            start_time_s: start_s,
+            fps: args.fps,
+            frames: args.frames,
+            methods,
+            full_updates: args.full_updates,
+            lookup: lookup.unwrap_or(scene.mirror.lookup),
+            cube: CubeSettings {
+                face_size_px: args.cube_size.unwrap_or(cube.face_size_px),
+                format: format_name(cube.format),
+                near_m: cube.near_m,
+                far_m: cube.far_m,
+                mipmaps: cube.mipmaps,
+                max_anisotropy: cube.max_anisotropy,
             },
-            "refresh": refresh_name(scene.refresh),
-            "observer_resolution": scene.observer.resolution,
-            "sensor_resolution": scene.sensor.resolution,
-            "validation": validation,
-            "lp_num_threads": std::env::var("LP_NUM_THREADS").ok(),
-            "malloc_trim_threshold_bytes": crate::TRIM_THRESHOLD.get().copied().flatten(),
+            refresh: refresh_name(scene.refresh),
+            observer_resolution: scene.observer.resolution,
+            sensor_resolution: scene.sensor.resolution,
+            validation,
+            lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
+            malloc_trim_threshold_bytes: crate::TRIM_THRESHOLD.get().copied().flatten(),
         },
-        "device": info,
-        "methods_not_run": refused.iter().map(|(m, why)| json!({ "method": m, "reason": why })).collect::<Vec<_>>(),
-        "runs": runs,
-    });
+        device: info,
+        methods_not_run: refused
+            .iter()
+            .map(|(m, why)| NotRun {
+                method: *m,
+                reason: why.clone(),
+            })
+            .collect(),
+        runs,
+        validation_messages: 0,
+    };
     drop(device);
     let messages = log.messages();
-    record["validation_messages"] = json!(messages.len());
+    record.validation_messages = messages.len();
     out.write_json(&args.out.join("render.json"), &record)?;
     out.commit()?;
     for (m, why) in &refused {
         println!("  {m}: not run: {why}");
     }
-    if !messages.is_empty() {
-        eprintln!(
-            "error: the validation layer reported {} message(s) (above)",
-            messages.len()
-        );
-        return Ok(ExitCode::from(3));
-    }
+    crate::validation::verdict(&messages)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -307,36 +285,28 @@ fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()
     Ok(())
 }
 
+/// The project's one median (nearest rank: the lower middle of an even count).
 fn median(mut v: Vec<f64>) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    Some(if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    })
+    specchio::metrics::percentile::median(&mut v)
 }
 
 /// Medians over frames: cube update (only frames that updated it) and each view.
-fn summarize(reports: &[FrameReport]) -> serde_json::Value {
+fn summarize(reports: &[FrameReport]) -> RenderSummary {
     let updated: Vec<&FrameReport> = reports.iter().filter(|r| r.cube_updated).collect();
     let m = |f: &dyn Fn(&FrameReport) -> Option<f64>, rs: &[&FrameReport]| {
         median(rs.iter().filter_map(|r| f(r)).collect())
     };
     let all: Vec<&FrameReport> = reports.iter().collect();
-    json!({
-        "frames": reports.len(),
-        "cube_updates": updated.len(),
-        "median_gpu_cube_update_ms": m(&|r| r.gpu_cube_ms, &updated),
-        "median_gpu_observer_ms": m(&|r| r.gpu_observer_ms, &all),
-        "median_gpu_sensor_ms": m(&|r| r.gpu_sensor_ms, &all),
-        "median_gpu_views_ms": m(&|r| r.gpu_pair_ms, &all),
-        "median_submit_wait_ms": m(&|r| Some(r.submit_wait_ms), &all),
-        "median_cpu_record_ms": m(&|r| Some(r.cpu_record_ms), &all),
-    })
+    RenderSummary {
+        frames: reports.len(),
+        cube_updates: updated.len(),
+        median_gpu_cube_update_ms: m(&|r| r.gpu_cube_ms, &updated),
+        median_gpu_observer_ms: m(&|r| r.gpu_observer_ms, &all),
+        median_gpu_sensor_ms: m(&|r| r.gpu_sensor_ms, &all),
+        median_gpu_views_ms: m(&|r| r.gpu_pair_ms, &all),
+        median_submit_wait_ms: m(&|r| Some(r.submit_wait_ms), &all),
+        median_cpu_record_ms: m(&|r| Some(r.cpu_record_ms), &all),
+    }
 }
 
 fn print_summary(
@@ -344,13 +314,9 @@ fn print_summary(
     method: Method,
     out: &Path,
     reports: &[FrameReport],
-    summary: &serde_json::Value,
+    summary: &RenderSummary,
 ) {
-    let ms = |k: &str| {
-        summary[k]
-            .as_f64()
-            .map_or("n/a".to_owned(), |v| format!("{v:.2} ms"))
-    };
+    let ms = |v: Option<f64>| v.map_or("n/a".to_owned(), |v| format!("{v:.2} ms"));
     println!(
         "rendered {} frame(s) of {} with {method} into {}",
         reports.len(),
@@ -359,20 +325,20 @@ fn print_summary(
     );
     println!(
         "  cube updates:       {} of {} frames",
-        summary["cube_updates"],
+        summary.cube_updates,
         reports.len()
     );
     println!(
         "  cube update (GPU):  {} median",
-        ms("median_gpu_cube_update_ms")
+        ms(summary.median_gpu_cube_update_ms)
     );
     println!(
         "  observer (GPU):     {} median",
-        ms("median_gpu_observer_ms")
+        ms(summary.median_gpu_observer_ms)
     );
     println!(
         "  sensor (GPU):       {} median",
-        ms("median_gpu_sensor_ms")
+        ms(summary.median_gpu_sensor_ms)
     );
     println!("  files: observer.exr/.png, sensor.exr/.png, views.png, cube/{{px,nx,py,ny,pz,nz}}.exr, render.json");
 }

@@ -2,32 +2,13 @@
 //! reference at the same instant (t = 0) and the same pixel centres (1 sample per pixel).
 
 use anyhow::{Context, Result};
-use serde::Serialize;
 use specchio::metrics::compare;
-use specchio::reference::angular::{angles_deg, summarize, AngularError};
+use specchio::reference::angular::{angles_deg, summarize};
 use specchio::reference::ReferenceImages;
 use specchio::render::{Readback, Renderer};
 use specchio::scene::Lookup;
 
-/// The error of one scene, face size and lookup mode (the same for every method: see
-/// `methods_identical`).
-#[derive(Debug, Clone, Serialize)]
-pub struct Accuracy {
-    pub scene: String,
-    pub cube_size: u32,
-    pub lookup: Lookup,
-    /// Which image: the sensor view (the catadioptric camera).
-    pub camera: &'static str,
-    pub flip_mean: Option<f64>,
-    pub flip_p99: Option<f64>,
-    pub rmse: Option<f64>,
-    /// NaN or Inf pixels in the rasterized image (0 expected).
-    pub non_finite_pixels: u64,
-    /// Angle between the direction each mirror pixel looked up and the exact one.
-    pub angular: AngularError,
-    /// Whether every method gave the same sensor image, bit for bit.
-    pub methods_identical: bool,
-}
+pub use super::record::Accuracy;
 
 /// One frame at t = 0 per renderer and lookup (the renderers' lookup is switched in place),
 /// compared with `exact` (the reference's sensor images).
@@ -70,7 +51,7 @@ pub fn measure(
             scene: scene.to_string(),
             cube_size: size,
             lookup,
-            camera: "sensor",
+            camera: "sensor".to_owned(),
             flip_mean: c.flip_mean,
             flip_p99: c.flip_p99,
             rmse: c.rmse,

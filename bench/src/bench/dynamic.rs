@@ -3,39 +3,15 @@
 //! same frames in alternating order.
 
 use anyhow::Result;
-use serde::Serialize;
 use specchio::render::{Readback, RenderOptions, Renderer};
 use specchio::scene::{RefreshPolicy, Scene};
 use specchio::vk::device::Device;
 
+use specchio::render::methods::Method;
+
+use super::record::{Dynamic, DynamicFrame};
 use super::timing::quantile;
 use super::Plan;
-
-/// One frame: faces re-rendered and submit-to-fence times of both updates.
-#[derive(Debug, Clone, Serialize)]
-pub struct DynamicFrame {
-    pub time_s: f64,
-    pub faces_incremental: u32,
-    pub faces_full: u32,
-    pub incremental_ms: f64,
-    pub full_ms: f64,
-}
-
-/// The frames of one scene and their summary.
-#[derive(Debug, Clone, Serialize)]
-pub struct Dynamic {
-    pub scene: String,
-    pub method: &'static str,
-    pub cube_size: u32,
-    pub frames: Vec<DynamicFrame>,
-    /// Over the frames where something moved (full update ran): medians and the ratio of the
-    /// medians, incremental over full.
-    pub changed_frames: usize,
-    pub faces_incremental_median: f64,
-    pub incremental_ms_median: f64,
-    pub full_ms_median: f64,
-    pub ratio: Option<f64>,
-}
 
 /// Whether anything in `scene` moves (else there is nothing to update incrementally).
 pub fn animated(scene: &Scene) -> bool {
@@ -92,7 +68,7 @@ pub fn measure(
     let (inc, fu) = (col(|f| f.incremental_ms), col(|f| f.full_ms));
     Ok(Dynamic {
         scene: name.to_string(),
-        method: "six-pass",
+        method: Method::SIX_PASS,
         cube_size: size,
         changed_frames: changed.len(),
         faces_incremental_median: col(|f| f64::from(f.faces_incremental)),

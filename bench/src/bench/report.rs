@@ -5,8 +5,10 @@ use std::path::Path;
 use std::process::Command;
 
 use anyhow::Result;
-use serde_json::{json, Value};
+use serde::Serialize;
 use specchio::output::Transaction;
+
+use super::record::{Git, Record};
 
 /// Peak resident memory of this process so far, in bytes (Linux: `ru_maxrss` is in KiB).
 pub fn peak_rss_bytes() -> Option<u64> {
@@ -26,7 +28,7 @@ pub fn peak_rss_bytes() -> Option<u64> {
 
 /// The checkout's commit and whether files differ from it (None outside a git checkout or
 /// without git).
-pub fn git_commit() -> Value {
+pub fn git_commit() -> Option<Git> {
     let run = |args: &[&str]| {
         Command::new("git")
             .args(args)
@@ -35,13 +37,10 @@ pub fn git_commit() -> Value {
             .filter(|o| o.status.success())
             .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
     };
-    match run(&["rev-parse", "HEAD"]) {
-        None => json!(null),
-        Some(commit) => json!({
-            "commit": commit,
-            "modified": run(&["status", "--porcelain", "--untracked-files=no"]).map(|s| !s.is_empty()),
-        }),
-    }
+    run(&["rev-parse", "HEAD"]).map(|commit| Git {
+        commit,
+        modified: run(&["status", "--porcelain", "--untracked-files=no"]).map(|s| !s.is_empty()),
+    })
 }
 
 /// "15.0.6" from a driver string such as "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)".
@@ -54,73 +53,104 @@ pub fn llvm_version(driver_info: &str) -> Option<String> {
     (!v.is_empty()).then_some(v)
 }
 
+/// One entry of github-action-benchmark's `customSmallerIsBetter` array.
+#[derive(Debug, Serialize)]
+pub struct GithubEntry {
+    pub name: String,
+    pub unit: &'static str,
+    /// null where the value was not measured.
+    pub value: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub range: Option<String>,
+}
+
 /// The `customSmallerIsBetter` array of github-action-benchmark: every case's median cube
 /// update time, each floor's, and each accuracy row's mean FLIP and angular error.
-pub fn github(record: &Value) -> Value {
+pub fn github(record: &Record) -> Vec<GithubEntry> {
     let mut out = Vec::new();
-    let rows = |k: &str| record[k].as_array().cloned().unwrap_or_default();
-    for r in rows("results") {
-        out.push(json!({
-            "name": format!("{} / {} / {}² cube update", r["scene"].as_str().unwrap_or("?"), r["method"].as_str().unwrap_or("?"), r["cube_size"]),
-            "unit": "ms",
-            "value": r["wall_ms"]["median"],
-            "range": format!("p10 {:.3}, p90 {:.3}", r["wall_ms"]["p10"].as_f64().unwrap_or(f64::NAN), r["wall_ms"]["p90"].as_f64().unwrap_or(f64::NAN)),
-        }));
+    for r in &record.results {
+        out.push(GithubEntry {
+            name: format!("{} cube update", r.case()),
+            unit: "ms",
+            value: r.wall_ms.map(|w| w.median),
+            range: r
+                .wall_ms
+                .map(|w| format!("p10 {:.3}, p90 {:.3}", w.p10, w.p90)),
+        });
     }
-    for f in rows("floors") {
-        out.push(json!({
-            "name": format!("{} / {} floor / {}²", f["scene"].as_str().unwrap_or("?"), f["floor"].as_str().unwrap_or("?"), f["cube_size"]),
-            "unit": "ms",
-            "value": f["wall_ms"]["median"],
-        }));
+    for f in &record.floors {
+        out.push(GithubEntry {
+            name: format!("{} / {} floor / {}²", f.scene, f.floor.name(), f.cube_size),
+            unit: "ms",
+            value: f.wall_ms.map(|w| w.median),
+            range: None,
+        });
     }
-    for a in rows("accuracy") {
+    for a in &record.accuracy {
         let case = format!(
             "{} / {}² / {} lookup",
-            a["scene"].as_str().unwrap_or("?"),
-            a["cube_size"],
-            a["lookup"].as_str().unwrap_or("?")
+            a.scene,
+            a.cube_size,
+            lookup_name(a.lookup)
         );
-        out.push(json!({ "name": format!("{case} / mean FLIP"), "unit": "FLIP", "value": a["flip_mean"] }));
-        out.push(json!({ "name": format!("{case} / mean angular error"), "unit": "degrees", "value": a["angular"]["mean_deg"] }));
+        out.push(GithubEntry {
+            name: format!("{case} / mean FLIP"),
+            unit: "FLIP",
+            value: a.flip_mean,
+            range: None,
+        });
+        out.push(GithubEntry {
+            name: format!("{case} / mean angular error"),
+            unit: "degrees",
+            value: Some(a.angular.mean_deg),
+            range: None,
+        });
     }
-    Value::Array(out)
+    out
+}
+
+/// A lookup mode as the options and the record spell it.
+pub fn lookup_name(lookup: specchio::scene::Lookup) -> &'static str {
+    match lookup {
+        specchio::scene::Lookup::Plain => "plain",
+        specchio::scene::Lookup::Box => "box",
+    }
 }
 
 /// One CSV row per speed-against-error case (scene, method, face size, lookup): times, work
 /// counters, efficiency and error; `path` is staged in `out`.
-pub fn write_csv(out: &Transaction, path: &Path, record: &Value) -> Result<()> {
+pub fn write_csv(out: &Transaction, path: &Path, record: &Record) -> Result<()> {
     let mut text = String::from(
         "scene,method,cube_size,lookup,updates,wall_median_ms,wall_p10_ms,wall_p90_ms,gpu_fill_median_ms,vertex_invocations,fragment_invocations,faces_rendered,objects_drawn,vs_floors,flip_mean,flip_p99,angular_mean_deg,angular_p99_deg\n",
     );
-    let f = |v: &Value| v.as_f64().map_or(String::new(), |x| format!("{x:.6}"));
+    let f = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.6}"));
     // A counter the driver does not have is an empty field, not 0 or "null".
-    let n = |v: &Value| v.as_u64().map_or(String::new(), |x| x.to_string());
-    for s in record["speed_vs_error"].as_array().into_iter().flatten() {
-        let r = &s["result"];
-        let a = &s["accuracy"];
-        let w = &r["work"];
-        text.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            r["scene"].as_str().unwrap_or(""),
-            r["method"].as_str().unwrap_or(""),
-            r["cube_size"],
-            a["lookup"].as_str().unwrap_or(""),
-            r["updates"],
-            f(&r["wall_ms"]["median"]),
-            f(&r["wall_ms"]["p10"]),
-            f(&r["wall_ms"]["p90"]),
-            f(&r["gpu_fill_ms"]["median"]),
-            n(&w["vertex_invocations"]),
-            n(&w["fragment_invocations"]),
-            n(&w["faces_rendered"]),
-            n(&w["objects_drawn"]),
-            f(&r["efficiency"]["vs_geometry_plus_fill"]),
-            f(&a["flip_mean"]),
-            f(&a["flip_p99"]),
-            f(&a["angular"]["mean_deg"]),
-            f(&a["angular"]["p99_deg"]),
-        ));
+    let n = |v: Option<u64>| v.map_or(String::new(), |x| x.to_string());
+    for s in &record.speed_vs_error {
+        let (r, a) = (&s.result, &s.accuracy);
+        let w = &r.work;
+        let cells = [
+            r.scene.clone(),
+            r.method.name().to_owned(),
+            r.cube_size.to_string(),
+            lookup_name(a.lookup).to_owned(),
+            r.updates.to_string(),
+            f(r.wall_ms.map(|w| w.median)),
+            f(r.wall_ms.map(|w| w.p10)),
+            f(r.wall_ms.map(|w| w.p90)),
+            f(r.gpu_fill_ms.map(|g| g.median)),
+            n(w.vertex_invocations),
+            n(w.fragment_invocations),
+            n(Some(w.faces_rendered)),
+            n(Some(w.objects_drawn)),
+            f(r.efficiency.vs_geometry_plus_fill),
+            f(a.flip_mean),
+            f(a.flip_p99),
+            f(Some(a.angular.mean_deg)),
+            f(Some(a.angular.p99_deg)),
+        ];
+        text.push_str(&cells.join(","));
+        text.push('\n');
     }
     Ok(out.write_bytes(path, text.as_bytes())?)
 }
@@ -140,22 +170,18 @@ mod tests {
 
     #[test]
     fn github_array_names_every_case() {
-        let record = json!({
-            "results": [{ "scene": "s.toml", "method": "six-pass", "cube_size": 64,
-                          "wall_ms": { "median": 2.5, "p10": 2.0, "p90": 3.0 } }],
-            "floors": [{ "scene": "s.toml", "floor": "clear", "cube_size": 64, "wall_ms": { "median": 0.5 } }],
-            "accuracy": [{ "scene": "s.toml", "cube_size": 64, "lookup": "box", "flip_mean": 0.07,
-                           "angular": { "mean_deg": 0.02 } }],
-        });
+        let record: Record =
+            serde_json::from_str(include_str!("../../baselines/quick.json")).unwrap();
         let g = github(&record);
-        let a = g.as_array().unwrap();
-        assert_eq!(a.len(), 4);
-        assert_eq!(a[0]["name"], "s.toml / six-pass / 64² cube update");
-        assert_eq!(a[0]["value"], 2.5);
-        assert_eq!(a[0]["unit"], "ms");
+        // The baseline has timing rows only (no floors, no accuracy).
+        assert_eq!(g.len(), record.results.len());
         assert_eq!(
-            a[3]["name"],
-            "s.toml / 64² / box lookup / mean angular error"
+            g[0].name,
+            "scenes/thesis-room.toml / six-pass / 64² cube update"
         );
+        assert_eq!(g[0].value, record.results[0].wall_ms.map(|w| w.median));
+        assert_eq!(g[0].unit, "ms");
+        let json = serde_json::to_value(&g).unwrap();
+        assert!(json[0]["range"].as_str().unwrap().starts_with("p10 "));
     }
 }

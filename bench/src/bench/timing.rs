@@ -24,14 +24,10 @@ pub struct SizeTiming {
     pub floors: Vec<(Floor, Timed)>,
 }
 
-/// The `p` quantile of `v` by nearest rank on (n - 1) p, as every figure of the benchmark
-/// (sorts `v`); 0 for an empty slice.
+/// The `p` percentile of `v` by the project's one definition (nearest rank,
+/// `specchio::metrics::percentile`; sorts `v`); 0 for an empty slice.
 pub fn quantile(v: &mut [f64], p: f64) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    v[((v.len() - 1) as f64 * p).round() as usize]
+    specchio::metrics::percentile::percentile(v, p).unwrap_or(0.0)
 }
 
 /// Times `methods` and the floors on `scene` at `size`: `plan.runs` runs of `plan.warmup`

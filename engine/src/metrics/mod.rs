@@ -18,6 +18,7 @@
 //! ```
 
 mod heatmap;
+pub mod percentile;
 
 use std::path::{Path, PathBuf};
 
@@ -39,7 +40,7 @@ pub const REL_MSE_EPSILON: f64 = 0.01;
 /// 0.7 m. Larger values hide finer detail.
 pub const FLIP_PIXELS_PER_DEGREE: f32 = 67.0;
 
-/// The FLIP percentile reported next to the mean (nearest rank, see [`Comparison::flip_p99`]).
+/// The FLIP percentile reported next to the mean (nearest rank, [`percentile`]).
 pub const FLIP_PERCENTILE: f64 = 0.99;
 
 /// A mask pixel selects its image pixel when its red channel is above this (EXR: the linear
@@ -298,9 +299,7 @@ pub fn compare(
         .collect();
     flip.sort_by(f32::total_cmp);
     let flip_mean = some(flip.iter().map(|&v| f64::from(v)).sum::<f64>() / flip.len() as f64);
-    let flip_p99 = flip
-        .get(nearest_rank(flip.len(), FLIP_PERCENTILE))
-        .map(|&v| f64::from(v));
+    let flip_p99 = percentile::of_sorted(&flip, FLIP_PERCENTILE).map(f64::from);
 
     Ok(Comparison {
         width: reference.width,
@@ -334,11 +333,6 @@ pub fn flip_map(test: &RgbaImage, reference: &RgbaImage) -> Vec<f32> {
         nv_flip::FlipImageRgb8::with_data(img.width, img.height, &bytes)
     };
     nv_flip::flip(to_flip(reference), to_flip(test), FLIP_PIXELS_PER_DEGREE).to_vec()
-}
-
-/// Index of the nearest-rank percentile `p` in a sorted list of `n` values: `ceil(p n) - 1`.
-fn nearest_rank(n: usize, p: f64) -> usize {
-    ((p * n as f64).ceil() as usize).saturating_sub(1)
 }
 
 /// Counts a NaN or Inf pixel; returns whether the pixel is finite.

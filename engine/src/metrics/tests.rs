@@ -154,10 +154,21 @@ fn flip_of_black_against_white_is_high_and_of_an_image_against_itself_zero() {
 
 #[test]
 fn flip_p99_is_the_nearest_rank() {
-    assert_eq!(nearest_rank(100, 0.99), 98);
-    assert_eq!(nearest_rank(101, 0.99), 99);
-    assert_eq!(nearest_rank(1, 0.99), 0);
-    assert_eq!(nearest_rank(0, 0.99), 0);
+    assert_eq!(percentile::rank(100, 0.99), Some(98));
+    assert_eq!(percentile::rank(101, 0.99), Some(99));
+    assert_eq!(percentile::rank(1, 0.99), Some(0));
+    assert_eq!(percentile::rank(0, 0.99), None);
+    // The reported p99 is the ceil(0.99 n)-th smallest FLIP value of the compared pixels.
+    let (a, mut b) = (gradient(16, 16), gradient(16, 16));
+    for (i, p) in b.pixels.iter_mut().enumerate() {
+        p[0] += 0.001 * (i % 97) as f32;
+    }
+    let c = compare(&a, &b, None).unwrap();
+    let mut flips: Vec<f32> = c.flip_map.clone();
+    flips.sort_by(f32::total_cmp);
+    let n = flips.len();
+    let expected = f64::from(flips[(0.99 * n as f64).ceil() as usize - 1]);
+    assert_eq!(c.flip_p99, Some(expected));
 }
 
 #[test]

@@ -139,8 +139,12 @@ impl Transaction {
         writer.finish().map_err(enc)
     }
 
-    /// JSON, pretty-printed, with a final newline.
-    pub fn write_json(&self, path: &Path, value: &serde_json::Value) -> Result<(), OutputError> {
+    /// JSON of any serialisable record, pretty-printed, with a final newline.
+    pub fn write_json<T: serde::Serialize + ?Sized>(
+        &self,
+        path: &Path,
+        value: &T,
+    ) -> Result<(), OutputError> {
         let text = serde_json::to_string_pretty(value).map_err(|e| OutputError::Encode {
             path: path.to_owned(),
             message: e.to_string(),
@@ -190,7 +194,7 @@ pub fn write_png_rgb8(
 }
 
 /// JSON (pretty), atomically.
-pub fn write_json(path: &Path, value: &serde_json::Value) -> Result<(), OutputError> {
+pub fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> Result<(), OutputError> {
     one_file(path, |out| out.write_json(path, value))
 }
 

@@ -8,7 +8,8 @@ use serde::Serialize;
 use crate::image::RgbaImage;
 
 /// Summary of the angular error over the pixels both images mark as mirror pixels.
-#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, Serialize, serde::Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
 pub struct AngularError {
     /// Pixels compared (mirror pixels in both images).
     pub pixels: usize,
@@ -48,7 +49,7 @@ pub fn angles_deg(
         .collect()
 }
 
-/// Mean, 99th percentile and maximum of `angles`.
+/// Mean, 99th percentile (nearest rank, `metrics::percentile`) and maximum of `angles`.
 pub fn summarize(mut angles: Vec<f64>, face_size_px: u32) -> AngularError {
     if angles.is_empty() {
         return AngularError {
@@ -59,7 +60,7 @@ pub fn summarize(mut angles: Vec<f64>, face_size_px: u32) -> AngularError {
     angles.sort_by(f64::total_cmp);
     let n = angles.len();
     let mean = angles.iter().sum::<f64>() / n as f64;
-    let p99 = angles[((n - 1) as f64 * 0.99).round() as usize];
+    let p99 = crate::metrics::percentile::of_sorted(&angles, 0.99).unwrap_or(0.0);
     let max = angles[n - 1];
     let texel = 90.0 / f64::from(face_size_px.max(1));
     AngularError {
@@ -101,5 +102,9 @@ mod tests {
         let e = summarize(vec![0.0, 1.0, 2.0], 90);
         assert_eq!((e.pixels, e.max_deg, e.max_texels), (3, 2.0, 2.0));
         assert!((e.mean_deg - 1.0).abs() < 1e-12);
+        // p99 by nearest rank: the ceil(0.99 n)-th smallest, here ceil(59.4) = the 60th of
+        // 1..=60 (a rounded (n - 1) p would give the 59th).
+        let e = summarize((1..=60).rev().map(f64::from).collect(), 90);
+        assert_eq!(e.p99_deg, 60.0);
     }
 }

@@ -73,7 +73,8 @@ pub struct ReferenceImages {
 }
 
 /// Counters and timings of one reference render.
-#[derive(Debug, Clone, Default, Serialize)]
+#[derive(Debug, Clone, Default, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ReferenceStats {
     pub triangles: usize,
     pub bvh_build_core_ms: f64,

@@ -23,7 +23,7 @@ use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, ShaderStage};
 use crate::vk::GpuError;
 
 /// A floor of the cube update's cost.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Floor {
     Clear,

@@ -92,7 +92,7 @@ pub struct Mirror {
 }
 
 /// How the mirror turns a reflected ray into a cube-map lookup direction.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Lookup {
     /// The thesis: look up the reflected direction R itself (exact only for an environment

@@ -6,7 +6,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::instance::Instance;
 use super::{GpuError, VkContext};
@@ -112,7 +112,8 @@ impl Limit {
 }
 
 /// What a device is and can do: everything `specchio info` prints.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DeviceInfo {
     pub index: usize,
     pub name: String,
@@ -133,7 +134,8 @@ pub struct DeviceInfo {
     pub features: DeviceFeatures,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DeviceLimits {
     /// Bits of sub-texel position a linear filter uses (its weights are that coarse).
     pub sub_texel_precision_bits: u32,
@@ -155,7 +157,8 @@ pub struct DeviceLimits {
     pub device_local_heap_bytes: u64,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DeviceFeatures {
     pub dynamic_rendering: bool,
     pub synchronization2: bool,

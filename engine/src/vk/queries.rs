@@ -26,7 +26,8 @@ pub const MESH_STATISTICS: vk::QueryPipelineStatisticFlags =
 
 /// Work counters of one query (see [`PIPELINE_STATISTICS`]). The task and mesh counters are
 /// `None` where the device does not count them (absent, never zero).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PipelineStats {
     pub vertex_invocations: u64,
     pub clipping_invocations: u64,

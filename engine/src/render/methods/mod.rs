@@ -213,6 +213,19 @@ impl serde::Serialize for Method {
     }
 }
 
+/// Read back by name (benchmark records); an unknown name is an error listing the known ones.
+impl<'de> serde::Deserialize<'de> for Method {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        Method::parse(&name).ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "unknown method `{name}`, expected one of {}",
+                Method::names()
+            ))
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

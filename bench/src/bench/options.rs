@@ -1,0 +1,181 @@
+//! `specchio bench`'s options: what each accepts (checked by clap while parsing, see
+//! `crate::args`), and what `--quick` and the defaults make of them.
+//!
+//! `--quick` only changes defaults: the quick scene set, 64² faces, 5 frames after 1 warm-up,
+//! 1 run. A value given explicitly is checked and honoured, with or without `--quick`.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use specchio::render::methods::Method;
+use specchio::scene::Lookup;
+
+use crate::args::{face_size, lookup, method, real, whole};
+
+/// The default scene set: the thesis's room, a few moving objects, a crowd, ~1 M triangles.
+const DEFAULT_SCENES: [&str; 4] = [
+    "scenes/thesis-room.toml",
+    "scenes/moving-objects.toml",
+    "scenes/many-objects.toml",
+    "scenes/heavy.toml",
+];
+
+/// The `--quick` scene set.
+const QUICK_SCENES: [&str; 2] = ["scenes/thesis-room.toml", "scenes/moving-objects.toml"];
+
+/// Defaults without and with `--quick`: (cube sizes, frames, warm-up, runs).
+const FULL: (&[u32], u32, u32, u32) = (&[128, 512], 20, 3, 1);
+const QUICK: (&[u32], u32, u32, u32) = (&[64], 5, 1, 1);
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// The readable table.
+    Table,
+    /// github-action-benchmark's `customSmallerIsBetter` JSON array (the table goes to stderr).
+    Github,
+}
+
+#[derive(clap::Args, Clone)]
+pub struct Args {
+    /// Scene files (default: thesis-room, moving-objects, many-objects, heavy).
+    pub scenes: Vec<PathBuf>,
+    /// Comma-separated methods (default: every usable one).
+    #[arg(long, value_delimiter = ',', value_parser = method)]
+    pub methods: Option<Vec<Method>>,
+    /// Comma-separated cube face sizes in texels, each within the scene format's limit
+    /// [default: 128,512; --quick: 64].
+    #[arg(long, allow_negative_numbers = true, value_delimiter = ',', value_parser = face_size)]
+    pub cube_sizes: Option<Vec<u32>>,
+    /// Comma-separated lookup modes for the error measurement: plain, box.
+    #[arg(long, value_delimiter = ',', value_parser = lookup, default_value = "plain,box")]
+    pub lookups: Vec<Lookup>,
+    /// Timed cube updates per method, floor and run, 1..=100000 [default: 20; --quick: 5].
+    #[arg(long, allow_negative_numbers = true, visible_alias = "updates", value_parser = whole(1u32..=100_000))]
+    pub frames: Option<u32>,
+    /// Untimed updates before each run, 0..=10000 [default: 3; --quick: 1].
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(0u32..=10_000))]
+    pub warmup: Option<u32>,
+    /// Runs of the whole interleaved measurement (each a warm-up, then the timed frames),
+    /// 1..=1000 [default: 1].
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(1u32..=1000))]
+    pub runs: Option<u32>,
+    /// Rasterizer threads, 1..=1024: sets LP_NUM_THREADS for lavapipe (other drivers ignore it).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(1u32..=1024))]
+    pub threads: Option<u32>,
+    /// A CI-sized run: thesis-room and moving-objects at 64², 5 frames after 1 warm-up. Only
+    /// the defaults change: explicit scenes and values still apply.
+    #[arg(long)]
+    pub quick: bool,
+    /// Write everything measured as JSON.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Write one CSV row per scene, method, face size and lookup.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Write the speed-against-error plot as SVG.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// What stdout gets.
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    pub format: Format,
+    /// Compare with an earlier `--json` file: any change of a work counter fails (exit 1);
+    /// with --max-regression, so does a time ratio that grew by more than that many percent.
+    #[arg(long)]
+    pub baseline: Option<PathBuf>,
+    /// Allowed growth, in percent (0..=10000), of each method's median time relative to
+    /// six-pass in the same run, against the baseline's ratio (times are not gated without it).
+    #[arg(long, allow_negative_numbers = true, value_parser = real(0.0, false, 10_000.0))]
+    pub max_regression: Option<f64>,
+    /// Vulkan device: index or part of its name.
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Skip the error measurement (no reference is traced).
+    #[arg(long)]
+    pub no_accuracy: bool,
+    /// Skip the floors.
+    #[arg(long)]
+    pub no_floors: bool,
+    /// Skip the incremental-against-full measurement of animated scenes.
+    #[arg(long)]
+    pub no_dynamic: bool,
+}
+
+/// The options with every default filled in.
+pub struct Settled {
+    pub args: Args,
+    pub scenes: Vec<PathBuf>,
+    pub sizes: Vec<u32>,
+    pub lookups: Vec<Lookup>,
+    pub methods: Vec<Method>,
+    pub frames: u32,
+    pub warmup: u32,
+    pub runs: u32,
+}
+
+/// A list option naming one thing twice would measure it twice under one name (and the gate
+/// could not tell the rows apart).
+fn no_repeats<T: PartialEq + std::fmt::Debug>(option: &str, list: &[T]) -> Result<()> {
+    for (i, item) in list.iter().enumerate() {
+        anyhow::ensure!(
+            !list[..i].contains(item),
+            "{option}: {item:?} is given twice; name each at most once"
+        );
+    }
+    Ok(())
+}
+
+/// Fills in the defaults (`--quick`'s or the full run's) and checks what depends on more than
+/// one option, before anything runs.
+pub fn settle(args: &Args) -> Result<Settled> {
+    let (sizes, frames, warmup, runs) = if args.quick { QUICK } else { FULL };
+    let methods: Vec<Method> = match &args.methods {
+        None => Method::listed().collect(),
+        Some(list) => list.clone(),
+    };
+    if let Some(list) = &args.cube_sizes {
+        no_repeats("--cube-sizes", list)?;
+    }
+    if let Some(list) = &args.methods {
+        no_repeats("--methods", list)?;
+    }
+    no_repeats("--lookups", &args.lookups)?;
+    if args.max_regression.is_some() {
+        anyhow::ensure!(
+            methods.contains(&Method::SIX_PASS),
+            "--max-regression compares each method's time with six-pass's in the same run: \
+             include six-pass in --methods"
+        );
+    }
+    // Output folders must exist before the run, not after minutes of it.
+    for (option, path) in [
+        ("--json", &args.json),
+        ("--csv", &args.csv),
+        ("--plot", &args.plot),
+    ] {
+        if let Some(path) = path {
+            let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+            if let Some(dir) = dir.filter(|d| !d.is_dir()) {
+                anyhow::bail!(
+                    "{option} {}: the folder {} does not exist",
+                    path.display(),
+                    dir.display()
+                );
+            }
+        }
+    }
+    let scenes = match (&args.scenes[..], args.quick) {
+        ([], true) => QUICK_SCENES.iter().map(PathBuf::from).collect(),
+        ([], false) => DEFAULT_SCENES.iter().map(PathBuf::from).collect(),
+        (given, _) => given.to_vec(),
+    };
+    Ok(Settled {
+        args: args.clone(),
+        scenes,
+        sizes: args.cube_sizes.clone().unwrap_or_else(|| sizes.to_vec()),
+        lookups: args.lookups.clone(),
+        methods,
+        frames: args.frames.unwrap_or(frames),
+        warmup: args.warmup.unwrap_or(warmup),
+        runs: args.runs.unwrap_or(runs),
+    })
+}
