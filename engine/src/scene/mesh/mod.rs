@@ -299,3 +299,28 @@ mod tests {
         assert!(assemble(vec![out_of_range]).is_err());
     }
 }
+
+#[cfg(test)]
+mod file_tests {
+    use super::*;
+    use crate::scene::files::FileError;
+
+    /// The loaders read through the regular-file rule: a directory is named as one, not as
+    /// a missing file or an OS error.
+    #[test]
+    fn mesh_paths_that_are_not_regular_files_say_what_they_are() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/meshes");
+        for e in [Mesh::load_obj(&dir), Mesh::load_gltf(&dir)].map(|r| r.unwrap_err()) {
+            assert!(
+                matches!(
+                    e,
+                    AssetError::File(FileError::NotRegular {
+                        what: "a directory",
+                        ..
+                    })
+                ),
+                "{e}"
+            );
+        }
+    }
+}
