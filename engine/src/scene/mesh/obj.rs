@@ -37,6 +37,8 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Part, AssetError> {
         all_normals: true,
         ..Reader::default()
     };
+    // A byte-order mark is not part of the first statement (some editors write one).
+    let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
     for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line = i + 1;
         let at = |message: String| AssetError::Obj { line, message };
@@ -251,6 +253,9 @@ mod tests {
         // v flipped to top-down; no normals anywhere: none kept.
         assert_eq!(p.uvs[0], Vec2::new(0.0, 1.0));
         assert!(p.normals.is_empty());
+        // A byte-order mark and CRLF line ends are accepted.
+        let p = parse("\u{feff}v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n".as_bytes()).unwrap();
+        assert_eq!(p.indices, vec![0, 1, 2]);
     }
 
     #[test]
