@@ -14,8 +14,10 @@ use std::path::PathBuf;
 use glam::{DVec3, Quat, Vec2, Vec3};
 
 mod anim;
+mod asset;
 pub mod camera;
 mod error;
+mod files;
 mod format;
 mod generate;
 mod load;
@@ -24,10 +26,15 @@ pub mod state;
 mod texture;
 
 pub use anim::{Animation, Repeat};
+pub use asset::AssetError;
 pub use error::{Location, SceneError};
+pub use files::{
+    read_regular_file, FileError, MAX_GLTF_BUFFER_BYTES, MAX_MESH_FILE_BYTES, MAX_SCENE_BYTES,
+    MAX_TEXTURE_FILE_BYTES,
+};
 pub use load::{load, load_str};
-pub use mesh::Mesh;
-pub use texture::TextureData;
+pub use mesh::{Mesh, MAX_MESH_INDICES, MAX_MESH_VERTICES};
+pub use texture::{TextureData, MAX_TEXTURE_SIZE_PX};
 
 /// Largest cube face the format accepts (texels per side); larger is an error, not a clamp.
 pub const MAX_FACE_SIZE_PX: u32 = 8192;

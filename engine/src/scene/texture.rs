@@ -1,8 +1,12 @@
 //! PNG textures, decoded to 8-bit RGBA.
 
+#[cfg(test)]
 use std::fs::File;
-use std::io::BufReader;
+use std::io::Cursor;
 use std::path::{Path, PathBuf};
+
+use super::asset::AssetError;
+use super::files::{read_regular_file, MAX_TEXTURE_FILE_BYTES};
 
 /// Largest texture side accepted (texels).
 pub const MAX_TEXTURE_SIZE_PX: u32 = 8192;
@@ -20,17 +24,30 @@ pub struct TextureData {
 }
 
 impl TextureData {
-    /// Decodes a PNG of any colour type and bit depth: palette and grayscale are expanded,
-    /// 16-bit channels are reduced to 8 bits, missing alpha becomes 255.
+    /// Decodes the PNG at `path` (see [`TextureData::from_png_bytes`]).
     ///
-    /// The error is a plain message (the caller adds the scene file, line and field).
+    /// The error is a plain message (the caller adds the scene file, line and field);
+    /// [`TextureData::load_png`] gives the typed error.
     pub fn from_png(path: &Path) -> Result<TextureData, String> {
-        let file = File::open(path).map_err(|e| e.to_string())?;
-        let mut decoder = png::Decoder::new(BufReader::new(file));
+        Self::load_png(path).map_err(|e| e.to_string())
+    }
+
+    /// [`TextureData::from_png`] with a typed error. Only a regular file of at most
+    /// [`MAX_TEXTURE_FILE_BYTES`] is read.
+    pub fn load_png(path: &Path) -> Result<TextureData, AssetError> {
+        let bytes = read_regular_file(path, MAX_TEXTURE_FILE_BYTES)?;
+        Self::from_png_bytes(&bytes, path)
+    }
+
+    /// Decodes a PNG of any colour type and bit depth: palette and grayscale are expanded,
+    /// 16-bit channels are reduced to 8 bits, missing alpha becomes 255. `path` is recorded
+    /// as the texture's source. Each side must be in 1..=[`MAX_TEXTURE_SIZE_PX`], checked from
+    /// the header before any pixel memory is allocated.
+    pub fn from_png_bytes(bytes: &[u8], path: &Path) -> Result<TextureData, AssetError> {
+        let bad = |e: png::DecodingError| AssetError::Png(format!("not a valid PNG: {e}"));
+        let mut decoder = png::Decoder::new(Cursor::new(bytes));
         decoder.set_transformations(png::Transformations::normalize_to_color8());
-        let mut reader = decoder
-            .read_info()
-            .map_err(|e| format!("not a valid PNG: {e}"))?;
+        let mut reader = decoder.read_info().map_err(bad)?;
         let (width, height) = {
             let info = reader.info();
             (info.width, info.height)
@@ -38,48 +55,16 @@ impl TextureData {
         // Checked before allocating the output buffer, so a huge header cannot exhaust memory.
         if width == 0 || height == 0 || width > MAX_TEXTURE_SIZE_PX || height > MAX_TEXTURE_SIZE_PX
         {
-            return Err(format!(
+            return Err(AssetError::Png(format!(
                 "image is {width}x{height}; each side must be in 1..={MAX_TEXTURE_SIZE_PX}"
-            ));
+            )));
         }
         let size = reader
             .output_buffer_size()
-            .ok_or_else(|| "image too large for this machine".to_string())?;
+            .ok_or_else(|| AssetError::Png("image too large for this machine".into()))?;
         let mut buf = vec![0u8; size];
-        let frame = reader
-            .next_frame(&mut buf)
-            .map_err(|e| format!("not a valid PNG: {e}"))?;
-        let (color, depth) = (frame.color_type, frame.bit_depth);
-        if depth != png::BitDepth::Eight {
-            return Err(format!("unexpected bit depth {depth:?} after conversion"));
-        }
-        let texels = width as usize * height as usize;
-        let stride = frame.line_size;
-        let channels = match color {
-            png::ColorType::Grayscale => 1,
-            png::ColorType::GrayscaleAlpha => 2,
-            png::ColorType::Rgb => 3,
-            png::ColorType::Rgba => 4,
-            png::ColorType::Indexed => {
-                return Err("palette image was not expanded".to_string());
-            }
-        };
-        let mut rgba8 = Vec::with_capacity(texels * 4);
-        for row in buf.chunks(stride).take(height as usize) {
-            for px in row.chunks_exact(channels).take(width as usize) {
-                let texel = match *px {
-                    [g] => [g, g, g, 255],
-                    [g, a] => [g, g, g, a],
-                    [r, g, b] => [r, g, b, 255],
-                    [r, g, b, a] => [r, g, b, a],
-                    _ => [0, 0, 0, 255],
-                };
-                rgba8.extend_from_slice(&texel);
-            }
-        }
-        if rgba8.len() != texels * 4 {
-            return Err("image data is shorter than its header says".to_string());
-        }
+        let frame = reader.next_frame(&mut buf).map_err(bad)?;
+        let rgba8 = expand(&buf, &frame, width, height)?;
         Ok(TextureData {
             path: path.to_path_buf(),
             width,
@@ -87,6 +72,50 @@ impl TextureData {
             rgba8,
         })
     }
+}
+
+/// The decoded frame as RGBA8, one texel per pixel.
+fn expand(
+    buf: &[u8],
+    frame: &png::OutputInfo,
+    width: u32,
+    height: u32,
+) -> Result<Vec<u8>, AssetError> {
+    if frame.bit_depth != png::BitDepth::Eight {
+        return Err(AssetError::Png(format!(
+            "unexpected bit depth {:?} after conversion",
+            frame.bit_depth
+        )));
+    }
+    let channels = match frame.color_type {
+        png::ColorType::Grayscale => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        png::ColorType::Rgb => 3,
+        png::ColorType::Rgba => 4,
+        png::ColorType::Indexed => {
+            return Err(AssetError::Png("palette image was not expanded".into()));
+        }
+    };
+    let texels = width as usize * height as usize;
+    let mut rgba8 = Vec::with_capacity(texels * 4);
+    for row in buf.chunks(frame.line_size.max(1)).take(height as usize) {
+        for px in row.chunks_exact(channels).take(width as usize) {
+            let texel = match *px {
+                [g] => [g, g, g, 255],
+                [g, a] => [g, g, g, a],
+                [r, g, b] => [r, g, b, 255],
+                [r, g, b, a] => [r, g, b, a],
+                _ => [0, 0, 0, 255],
+            };
+            rgba8.extend_from_slice(&texel);
+        }
+    }
+    if rgba8.len() != texels * 4 {
+        return Err(AssetError::Png(
+            "image data is shorter than its header says".into(),
+        ));
+    }
+    Ok(rgba8)
 }
 
 #[cfg(test)]

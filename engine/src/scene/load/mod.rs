@@ -27,6 +27,7 @@ use toml::de::DeTable;
 
 use super::anim::Animation;
 use super::error::{Location, SceneError};
+use super::files::{read_regular_file, MAX_SCENE_BYTES};
 use super::format::*;
 use super::generate::{self, Surroundings, PLACEMENT_TRIES};
 use super::mesh::Mesh;
@@ -48,9 +49,9 @@ const CYLINDER_SEGMENTS: u32 = 48;
 /// Reads and validates the scene file at `path`. Relative asset paths inside it are resolved
 /// against the folder that contains it.
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+    let bytes = read_regular_file(path, MAX_SCENE_BYTES).map_err(|e| SceneError::Io {
         file: path.to_path_buf(),
-        source,
+        source: e.into(),
     })?;
     let text = String::from_utf8(bytes).map_err(|e| SceneError::Io {
         file: path.to_path_buf(),
