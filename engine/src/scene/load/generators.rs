@@ -5,6 +5,7 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
+use super::numbers::{num_text, Range};
 use super::{Ctx, R};
 use crate::scene::format::{GenerateSpec, Shape};
 use crate::scene::generate::{Params, ShapeChoice, DEFAULT_SEGMENTS, MAX_COUNT, MAX_SEGMENTS};
@@ -151,7 +152,7 @@ impl Ctx<'_> {
             room.center + room.size_m * 0.5,
         );
         // Messages give world coordinates, as the file does.
-        let world = |axis: usize, v: f32| (self.origin[axis] + f64::from(v)) as f32;
+        let world = |axis: usize, v: f32| num_text((self.origin[axis] + f64::from(v)) as f32);
         for axis in 0..3 {
             let (a, b) = (region_min[axis], region_max[axis]);
             let letter = ["x", "y", "z"][axis];
@@ -180,11 +181,12 @@ impl Ctx<'_> {
             }
         }
 
-        let keep_clear = self.num(&f("keep_clear"), g.keep_clear.unwrap_or(0.0))?;
-        if keep_clear < 0.0 {
-            return Err(self.invalid(&f("keep_clear"), format!("must be >= 0, got {keep_clear}")));
-        }
-        let moving = self.in_range(&f("moving"), g.moving.unwrap_or(0.0), 0.0, 1.0, false)?;
+        let keep_clear = self.non_negative(&f("keep_clear"), g.keep_clear.unwrap_or(0.0))?;
+        let moving = self.ranged(
+            &f("moving"),
+            g.moving.unwrap_or(0.0),
+            Range::closed(0.0, 1.0),
+        )?;
         if g.period.is_some() && moving == 0.0 {
             return Err(self.unused(&f("period"), "period is used only when moving > 0"));
         }

@@ -157,6 +157,8 @@ impl Ctx<'_> {
 
         let room = self.room(room_spec, &material_index)?;
         let mirror = self.mirror(mirror_spec, &room)?;
+        // Before any mesh is built: a room f32 cannot hold fails here.
+        let extent = self.extent(&room, &mirror)?;
 
         let mut meshes = Vec::new();
         let mut mesh_cache: HashMap<String, usize> = HashMap::new();
@@ -201,7 +203,7 @@ impl Ctx<'_> {
             })?;
             objects.extend(made);
         }
-        let cube = self.cube(spec.cube.as_ref())?;
+        let cube = self.cube(spec.cube.as_ref(), &mirror, extent)?;
         let refresh = self.refresh(spec.refresh.as_ref())?;
         let light = self.light(spec.light.as_ref())?;
 

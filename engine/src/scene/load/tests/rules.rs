@@ -137,3 +137,62 @@ fn generator_rules_with_their_fields() {
         assert!(err.line().is_some(), "{msg}");
     }
 }
+
+/// Ranges hold for the f32 value the renderer uses, and the cube's planes fit the scene.
+#[test]
+fn values_are_checked_as_used_and_planes_fit_the_scene() {
+    let cases: &[(&str, &str)] = &[
+        // f64 values that round to a bound in f32.
+        ("[observer]\nfov_y = 1e-50\n", "observer.fov_y: must be in [0.1, 179.99], got 1e-50 (0 in single precision)"),
+        ("[observer]\nfov_y = 179.99999999999\n", "observer.fov_y: must be in [0.1, 179.99]"),
+        ("[observer]\npitch = 89.999999999\n", "observer.pitch: must be in (-90, 90), got 89.999999999 (90 in single precision)"),
+        ("[sensor]\nfov_y = 179.999\n", "sensor.fov_y: must be in [0.1, 179.99], got 179.999"),
+        ("[[materials]]\nname = \"g\"\ntype = \"grid\"\nbackground = [1, 1, 1]\nline = [0, 0, 0]\nline_width = 1e-50\n", "materials[1].line_width: must be in (0, 0.5], got 1e-50 (0 in single precision)"),
+        // Numbers in messages stay short.
+        ("[sensor]\noffset = 1e-310\n", "sensor.offset: must be positive, got 1e-310 (0 in single precision)"),
+        ("[cube]\nanisotropy = 0.5\n", "cube.anisotropy: must be >= 1, got 0.5"),
+        // The cube's planes set by hand must not clip what the mirror shows.
+        ("[cube]\nnear = 0.6\n", "cube.near: clips reflections"),
+        ("[cube]\nfar = 7\n", "cube.far: clips the room: a room corner is 7.6811457 m"),
+    ];
+    for (extra, needle) in cases {
+        let text = format!("{MINIMAL}{extra}");
+        let err = load_str(&text, Path::new("case.toml")).expect_err(extra);
+        let msg = err.to_string();
+        assert!(
+            msg.contains(needle),
+            "{extra:?}: expected {needle:?} in {msg}"
+        );
+        assert!(err.line().is_some(), "{msg}");
+    }
+    // A room f32 cannot hold, and a mirror too small for its room.
+    let scaled = |room: &str, radius: &str| {
+        MINIMAL
+            .replace(
+                "size = [10, 6, 10]",
+                &format!("size = [{room}, {room}, {room}]"),
+            )
+            .replace("radius = 1\n", &format!("radius = {radius}\n"))
+    };
+    for (room, radius, needle) in [
+        (
+            "1e31",
+            "1e30",
+            "room.size: the room reaches 8.660254e30 m from the mirror's centre; at most 1e12 m",
+        ),
+        ("3.4e38", "1", "room.size: the room reaches"),
+        ("1e8", "1", "mirror.radius: is too small for the room"),
+    ] {
+        let err = load_str(&scaled(room, radius), Path::new("case.toml")).unwrap_err();
+        assert!(err.to_string().contains(needle), "{room}/{radius}: {err}");
+    }
+    // Explicit planes that clip nothing are kept; a big room gets a far plane beyond it.
+    let s = load_str(
+        &format!("{MINIMAL}[cube]\nnear = 0.57\nfar = 7.7\n"),
+        Path::new("c.toml"),
+    )
+    .unwrap();
+    assert_eq!((s.cube.near_m, s.cube.far_m), (0.57, 7.7));
+    let s = load_str(&scaled("1000", "1"), Path::new("c.toml")).unwrap();
+    assert!(s.cube.far_m > 3f32.sqrt() * 500.0, "{}", s.cube.far_m);
+}
