@@ -97,6 +97,7 @@ impl Ctx<'_> {
                                 }
                             })?;
                             textures.push(t);
+                            self.texture_budget(&f("file"), textures)?;
                             textures.len() - 1
                         }
                     };

@@ -8,6 +8,7 @@
 //! position, so they cannot disagree.
 
 mod animation;
+mod budget;
 mod cameras;
 mod cube;
 mod generators;
@@ -19,7 +20,6 @@ mod room;
 #[cfg(test)]
 mod tests;
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
@@ -28,10 +28,11 @@ use toml::de::DeTable;
 use super::anim::Animation;
 use super::error::{Location, SceneError};
 use super::format::*;
-use super::generate::{self, Surroundings, PLACEMENT_TRIES};
+use super::generate::Surroundings;
 use super::mesh::Mesh;
 use super::Scene;
 use locate::Locator;
+use objects::MeshStore;
 
 type R<T> = Result<T, SceneError>;
 /// Builds a mesh on first use (the loader caches meshes by a key describing them).
@@ -39,9 +40,9 @@ type MeshBuilder = Box<dyn Fn() -> Result<Mesh, String>>;
 
 /// How many evenly spaced times an animation is checked at (plus its keyframes).
 const ANIMATION_SAMPLES: usize = 64;
-/// Tessellation of `shape = "sphere"` objects.
+/// Tessellation of `shape = "sphere"` objects: 48 segments and, as for every sphere, half as
+/// many rings (see `objects::unit_shape`).
 const SPHERE_SEGMENTS: u32 = 48;
-const SPHERE_RINGS: u32 = 24;
 /// Tessellation of `shape = "cylinder"` objects.
 const CYLINDER_SEGMENTS: u32 = 48;
 
@@ -160,11 +161,13 @@ impl Ctx<'_> {
         // Before any mesh is built: a room f32 cannot hold fails here.
         let extent = self.extent(&room, &mirror)?;
 
-        let mut meshes = Vec::new();
-        let mut mesh_cache: HashMap<String, usize> = HashMap::new();
+        // Counted before any object is made; triangles summed as objects are resolved, and a
+        // generator's before it is expanded.
+        self.object_budget(&spec)?;
+        let mut store = MeshStore::default();
         let mut objects = Vec::with_capacity(spec.objects.len());
         for (i, o) in spec.objects.iter().enumerate() {
-            objects.push(self.object(i, o, &material_index, &mut meshes, &mut mesh_cache)?);
+            objects.push(self.object(i, o, &material_index, &mut store)?);
         }
 
         let observer = self.observer(spec.observer.as_ref(), &room, &mirror)?;
@@ -179,28 +182,7 @@ impl Ctx<'_> {
             observer: observer.position,
         };
         for (i, g) in spec.generate.iter().enumerate() {
-            let params =
-                self.generator(i, g, &material_index, &room, &mut meshes, &mut mesh_cache)?;
-            let made = generate::expand(&params, &surroundings).map_err(|fail| {
-                let (field, why) = if fail.orbit_outside > fail.too_close {
-                    (
-                        "moving",
-                        "its orbit about the room's vertical axis left the room",
-                    )
-                } else {
-                    (
-                        "keep_clear",
-                        "it was too close to the mirror, the sensor's view of it or the observer",
-                    )
-                };
-                self.invalid(
-                    &format!("generate[{i}].{field}"),
-                    format!(
-                        "cannot place {}[{}]: {PLACEMENT_TRIES} positions tried, {} too close, {} with the orbit outside the room; mostly {why} (enlarge the region, or lower keep_clear, size or moving)",
-                        params.name, fail.object, fail.too_close, fail.orbit_outside
-                    ),
-                )
-            })?;
+            let made = self.generated(i, g, &material_index, &room, &surroundings, &mut store)?;
             objects.extend(made);
         }
         let cube = self.cube(spec.cube.as_ref(), &mirror, extent)?;
@@ -214,7 +196,7 @@ impl Ctx<'_> {
             room,
             mirror,
             objects,
-            meshes,
+            meshes: store.meshes,
             materials,
             textures,
             observer,
