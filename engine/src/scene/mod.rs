@@ -16,6 +16,7 @@ use glam::{DVec3, Quat, Vec2, Vec3};
 mod anim;
 pub mod camera;
 mod error;
+mod fixed;
 mod format;
 mod generate;
 mod load;

@@ -196,3 +196,48 @@ fn values_are_checked_as_used_and_planes_fit_the_scene() {
     let s = load_str(&scaled("1000", "1"), Path::new("c.toml")).unwrap();
     assert!(s.cube.far_m > 3f32.sqrt() * 500.0, "{}", s.cube.far_m);
 }
+
+/// Fixed-length arrays refuse extra elements (nothing is silently dropped), and fields that
+/// take one of two shapes say what is wrong and what is allowed.
+#[test]
+fn arrays_have_exact_lengths_and_either_or_fields_say_what_they_take() {
+    let with = |from: &str, to: &str| MINIMAL.replace(from, to);
+    let box_with = |extra: &str| {
+        format!(
+            "{MINIMAL}[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\n\
+             material = \"w\"\n{extra}"
+        )
+    };
+    let size = "size = [10, 6, 10]";
+    let walls = "walls = \"w\"";
+    let cases: Vec<(String, &str)> = vec![
+        (with(size, "size = [10, 6, 10, \"oops\"]"), "room.size: invalid length 4, expected an array of exactly 3 elements"),
+        (with(size, "size = [10, 6]"), "room.size: invalid length 2, expected an array of exactly 3 elements"),
+        (format!("{MINIMAL}[observer]\nresolution = [800, 600, 1]\n"), "observer.resolution: invalid length 3, expected an array of exactly 2"),
+        (box_with("scale = [1, 2]\n"), "objects[0].scale: invalid length 2, expected an array of exactly 3"),
+        (box_with("scale = \"big\"\n"), "objects[0].scale: invalid type: string \"big\", expected a number (uniform scale) or an array of exactly 3 numbers"),
+        (box_with("animation = { type = \"keyframes\", times = [0, 1], positions = [[2, 2, 2], [1, 1, 1, 1]] }\n"), "objects[0].animation.positions[1]: invalid length 4"),
+        (with(walls, "walls = 5"), "room.walls: invalid type: integer `5`, expected a material name for all six walls, or a table { px, nx, py, ny, pz, nz }"),
+        (with(walls, "walls = { px = \"w\", nx = \"w\", py = \"w\", ny = \"w\", pz = \"w\" }"), "room.walls.nz: required field is missing"),
+    ];
+    for (text, needle) in &cases {
+        let err = load_str(text, Path::new("case.toml")).expect_err(needle);
+        let msg = err.to_string();
+        assert!(msg.contains(needle), "expected {needle:?} in {msg}");
+        assert!(err.line().is_some(), "{msg}");
+    }
+    // A million-element centre: refused, with a short message.
+    let big = format!("center = [{}]", vec!["0"; 1_000_000].join(", "));
+    let err = load_str(
+        &with("center = [0, 3, 0]\nsize", &format!("{big}\nsize")),
+        Path::new("case.toml"),
+    )
+    .unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("room.center: invalid length 1000000, expected an array of exactly 3"),
+        "{}",
+        &msg[..msg.len().min(300)]
+    );
+    assert!(msg.len() < 300, "{} characters", msg.len());
+}
