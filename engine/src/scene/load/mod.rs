@@ -17,6 +17,7 @@ mod materials;
 mod numbers;
 mod objects;
 mod room;
+mod source;
 #[cfg(test)]
 mod tests;
 
@@ -26,7 +27,7 @@ use glam::{DVec3, Vec3};
 use toml::de::DeTable;
 
 use super::anim::Animation;
-use super::error::{Location, SceneError};
+use super::error::SceneError;
 use super::format::*;
 use super::generate::Surroundings;
 use super::mesh::Mesh;
@@ -53,29 +54,14 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         file: path.to_path_buf(),
         source,
     })?;
-    let text = String::from_utf8(bytes).map_err(|e| SceneError::Io {
-        file: path.to_path_buf(),
-        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
-    })?;
+    let text = source::decode(path, bytes)?;
     load_str(&text, path)
 }
 
 /// Validates scene text as if it had been read from `path` (used in messages and to resolve
 /// relative asset paths against `path`'s folder; the file itself is not read).
 pub fn load_str(text: &str, path: &Path) -> Result<Scene, SceneError> {
-    let doc = match DeTable::parse(text) {
-        Ok(doc) => doc,
-        Err(e) => {
-            let location = match e.span() {
-                Some(span) => Location::at_offset(path, text, span.start),
-                None => Location::file_only(path),
-            };
-            return Err(SceneError::Syntax {
-                location,
-                message: e.message().trim().to_string(),
-            });
-        }
-    };
+    let doc = DeTable::parse(text).map_err(|e| source::syntax_error(path, text, &e))?;
     if doc.get_ref().is_empty() {
         return Err(SceneError::Empty {
             file: path.to_path_buf(),

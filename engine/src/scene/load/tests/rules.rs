@@ -241,3 +241,39 @@ fn arrays_have_exact_lengths_and_either_or_fields_say_what_they_take() {
     );
     assert!(msg.len() < 300, "{} characters", msg.len());
 }
+
+/// Nesting past the TOML reader's limit is a located message that says what is allowed, for
+/// dotted headers and keys (where the reader gives no position) and for arrays and inline
+/// tables.
+#[test]
+fn nesting_too_deep_is_located() {
+    let dotted = vec!["a"; 20000].join(".");
+    for (extra, column) in [
+        (format!("[{dotted}]\nx = 1\n"), 1),
+        (format!("{dotted} = 1\n"), 1),
+        (
+            format!("x = {}1{}\n", "[".repeat(20000), "]".repeat(20000)),
+            0,
+        ),
+        (
+            format!("x = {}1{}\n", "{a = ".repeat(20000), "}".repeat(20000)),
+            0,
+        ),
+    ] {
+        let err = load_str(
+            &format!("{MINIMAL}# a comment. with. dots.\n{extra}"),
+            Path::new("p.toml"),
+        )
+        .unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.starts_with("p.toml:13:"), "{msg}");
+        assert!(msg.contains("nesting too deep"), "{msg}");
+        assert!(
+            msg.contains("the scene format nests at most 4 levels"),
+            "{msg}"
+        );
+        if column > 0 {
+            assert_eq!(err.column(), Some(column), "{msg}");
+        }
+    }
+}
