@@ -78,7 +78,8 @@ fn every_bad_scene_fails_clearly_without_output() {
         files.len()
     );
     for file in files {
-        let text = std::fs::read_to_string(&file).unwrap();
+        // Lossy: some bad scenes are deliberately not UTF-8 (UTF-16, Latin-1).
+        let text = String::from_utf8_lossy(&std::fs::read(&file).unwrap()).into_owned();
         let out = temp_dir("bad");
         let result = specchio(&[
             "render",

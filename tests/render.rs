@@ -286,3 +286,58 @@ fn rgba8_cube_format_renders_the_walls() {
     );
     gpu.finish();
 }
+
+/// six-colour-room with `edit` applied to its text (loaded as if it were that file).
+fn six_colour_room_with(edit: impl Fn(String) -> String) -> specchio::scene::Scene {
+    let path = common::root().join("scenes/test/six-colour-room.toml");
+    let text = edit(std::fs::read_to_string(&path).unwrap());
+    specchio::scene::load_str(&text, &path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A room far larger than the old fixed far plane (100 m): the cube's far plane comes from the
+/// room, so every face still shows its wall rather than the black clear colour.
+#[test]
+fn a_room_beyond_100_m_fills_every_face() {
+    let s = six_colour_room_with(|t| t.replace("size = [10, 10, 10]", "size = [300, 300, 300]"));
+    assert!(s.cube.far_m > 150.0 * 3f32.sqrt(), "far {}", s.cube.far_m);
+    let gpu = Gpu::new();
+    let (_, images) = render_once(&gpu, s, 16, 0.0);
+    for (f, img) in images.cube.expect("cube").iter().enumerate() {
+        for (x, y) in [(0, 0), (7, 8), (15, 15)] {
+            let p = img.pixel(x, y);
+            assert_eq!(
+                [p[0], p[1], p[2]],
+                WALLS[f],
+                "face {} ({x},{y})",
+                FACE_NAMES[f]
+            );
+        }
+    }
+    gpu.finish();
+}
+
+/// A field of view near the 179.99-degree limit: the near plane follows the field of view, so
+/// the walls beside the observer are drawn. Looking along -Z, the middle of the left edge looks
+/// along about -X (cyan), the right +X (red), the top +Y (green), the bottom -Y (magenta).
+#[test]
+fn a_179_99_degree_view_shows_the_walls_beside_the_observer() {
+    let s = six_colour_room_with(|t| t.replace("yaw = 0", "yaw = 0\nfov_y = 179.99"));
+    let [w, h] = s.observer.resolution;
+    let gpu = Gpu::new();
+    let (_, images) = render_once(&gpu, s, 16, 0.0);
+    let observer = images.observer.expect("observer");
+    for ((x, y), wall) in [
+        ((0, h / 2), 1),
+        ((w - 1, h / 2), 0),
+        ((w / 2, 0), 2),
+        ((w / 2, h - 1), 3),
+    ] {
+        let p = observer.pixel(x, y);
+        assert!(
+            close(p, WALLS[wall], 1e-3),
+            "({x},{y}): {p:?}, want {:?}",
+            WALLS[wall]
+        );
+    }
+    gpu.finish();
+}

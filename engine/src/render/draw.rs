@@ -252,10 +252,10 @@ impl Renderer {
         self.facing(CUBE_FRONT, Vec3::ZERO, reach)
     }
 
-    /// The facing of a camera view.
+    /// The facing of a camera view: its near plane's corners are `CAMERA_NEAR_M` from the eye
+    /// (`ViewBasis::near_plane_for`).
     pub(super) fn view_facing(&self, view: &crate::scene::camera::ViewBasis) -> Facing {
-        let corner = (1.0 + view.tan_x * view.tan_x + view.tan_y * view.tan_y).sqrt();
-        self.facing(VIEW_FRONT, view.eye, super::CAMERA_NEAR_M * corner)
+        self.facing(VIEW_FRONT, view.eye, super::CAMERA_NEAR_M)
     }
 
     fn facing(&self, front: vk::FrontFace, eye: Vec3, reach: f32) -> Facing {

@@ -44,7 +44,9 @@ use crate::vk::GpuError;
 
 /// The side-by-side image of the thesis: observer left, sensor right.
 pub const PAIR_SIZE: [u32; 2] = [1200, 450];
-/// Near plane of the observer and sensor cameras (metres); their far plane is at infinity.
+/// The observer and sensor cameras draw everything at least this far from the eye (metres):
+/// their near plane is placed so that its corners are this far (`ViewBasis::near_plane_for`);
+/// their far plane is at infinity.
 pub const CAMERA_NEAR_M: f32 = 0.05;
 
 /// Timestamp slots: start, after each face (six-pass), after the fill, after the mips, after
@@ -493,7 +495,11 @@ impl Renderer {
                 let (near, far, vp) = if i < 6 {
                     (scene.cube.near_m, scene.cube.far_m, [0.0, 0.0, size, size])
                 } else {
-                    (CAMERA_NEAR_M, f32::INFINITY, viewports[i - 6])
+                    (
+                        b.near_plane_for(CAMERA_NEAR_M),
+                        f32::INFINITY,
+                        viewports[i - 6],
+                    )
                 };
                 ViewData {
                     world_to_clip: b.world_to_clip(near, far),

@@ -73,6 +73,15 @@ impl ViewBasis {
         Self::look(eye, forward, Vec3::Y, fov_y_deg, aspect)
     }
 
+    /// The near-plane distance that keeps everything at least `clear_m` from the eye in view,
+    /// whatever the field of view: the most oblique rays (the image's corners) meet the plane
+    /// `near * sqrt(1 + tan_x^2 + tan_y^2)` from the eye. A fixed near plane would clip all
+    /// but the centre of a very wide view (at 179.99 degrees the corner rays meet a 0.05 m
+    /// plane some 700 m away).
+    pub fn near_plane_for(&self, clear_m: f32) -> f32 {
+        clear_m / (1.0 + self.tan_x * self.tan_x + self.tan_y * self.tan_y).sqrt()
+    }
+
     /// World (render space) to view: rows are right, down, forward.
     pub fn world_to_view(&self) -> Mat4 {
         let r = Mat4::from_cols(

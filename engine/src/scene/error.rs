@@ -72,13 +72,19 @@ pub(crate) fn line_column(text: &str, offset: usize) -> (usize, usize) {
 /// Why a scene could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// The scene file itself could not be read (missing, unreadable, not UTF-8).
-    #[error("{}: cannot read scene file: {source}", file.display())]
+    /// The scene file itself could not be read (missing, unreadable). The reason is the
+    /// `source` error, not part of this message: error reporters that print the chain
+    /// (anyhow's `{:#}`) would print it twice.
+    #[error("{}: cannot read scene file", file.display())]
     Io {
         file: PathBuf,
         #[source]
         source: std::io::Error,
     },
+
+    /// The file is not UTF-8 text; `location` is the first byte that is not.
+    #[error("{location}: {message}")]
+    Encoding { location: Location, message: String },
 
     /// The file has no tables or keys at all (empty, or only comments).
     #[error("{}: scene is empty: expected at least [room] and [mirror]", file.display())]
@@ -130,7 +136,8 @@ impl SceneError {
     pub fn file(&self) -> &Path {
         match self {
             SceneError::Io { file, .. } | SceneError::Empty { file } => file,
-            SceneError::Syntax { location, .. }
+            SceneError::Encoding { location, .. }
+            | SceneError::Syntax { location, .. }
             | SceneError::UnknownField { location, .. }
             | SceneError::WrongType { location, .. }
             | SceneError::Invalid { location, .. }
@@ -151,7 +158,10 @@ impl SceneError {
     /// The dotted field path (`objects[2].size`), when the error is about a field.
     pub fn field(&self) -> Option<&str> {
         match self {
-            SceneError::Io { .. } | SceneError::Empty { .. } | SceneError::Syntax { .. } => None,
+            SceneError::Io { .. }
+            | SceneError::Empty { .. }
+            | SceneError::Encoding { .. }
+            | SceneError::Syntax { .. } => None,
             SceneError::UnknownField { field, .. }
             | SceneError::WrongType { field, .. }
             | SceneError::Invalid { field, .. }
@@ -162,7 +172,8 @@ impl SceneError {
     fn location(&self) -> Option<&Location> {
         match self {
             SceneError::Io { .. } | SceneError::Empty { .. } => None,
-            SceneError::Syntax { location, .. }
+            SceneError::Encoding { location, .. }
+            | SceneError::Syntax { location, .. }
             | SceneError::UnknownField { location, .. }
             | SceneError::WrongType { location, .. }
             | SceneError::Invalid { location, .. }

@@ -9,8 +9,13 @@
 //! Where a value's meaning depends on a word (`type = "checker"`, `shape = "box"`), the struct
 //! is flat with optional fields and the validator checks which fields that word needs or
 //! forbids: serde's tagged enums lose the source position of errors inside them.
+//!
+//! Fixed-length arrays are read through `fixed.rs`, which refuses extra elements (serde alone
+//! would drop them silently).
 
 use serde::Deserialize;
+
+use super::fixed;
 
 pub type V3 = [f64; 3];
 
@@ -36,14 +41,17 @@ pub struct SceneFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RoomSpec {
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub center: Option<V3>,
+    #[serde(deserialize_with = "fixed::exact")]
     pub size: V3,
     pub walls: WallsSpec,
 }
 
-/// One material name for all six walls, or one per wall.
-#[derive(Debug, Deserialize)]
-#[serde(untagged)]
+/// One material name for all six walls, or one per wall. (Not `#[serde(untagged)]`: its
+/// error, "did not match any variant", says neither what is wrong nor what is allowed; see
+/// `fixed.rs` for the hand-written reader.)
+#[derive(Debug)]
 pub enum WallsSpec {
     All(String),
     Each(EachWall),
@@ -63,6 +71,7 @@ pub struct EachWall {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MirrorSpec {
+    #[serde(deserialize_with = "fixed::exact")]
     pub center: V3,
     pub radius: f64,
     pub animation: Option<AnimationSpec>,
@@ -92,14 +101,20 @@ pub struct MaterialSpec {
     pub name: String,
     #[serde(rename = "type")]
     pub kind: MaterialType,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub color: Option<V3>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub a: Option<V3>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub b: Option<V3>,
     pub tiles: Option<f64>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub background: Option<V3>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub line: Option<V3>,
     pub line_width: Option<f64>,
     pub file: Option<String>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub tint: Option<V3>,
 }
 
@@ -112,9 +127,8 @@ pub enum Shape {
     Mesh,
 }
 
-/// `scale = 2` or `scale = [1, 2, 1]`.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(untagged)]
+/// `scale = 2` or `scale = [1, 2, 1]` (read by hand in `fixed.rs`, as `WallsSpec`).
+#[derive(Debug, Clone, Copy)]
 pub enum ScaleSpec {
     Uniform(f64),
     PerAxis(V3),
@@ -125,11 +139,14 @@ pub enum ScaleSpec {
 pub struct ObjectSpec {
     pub name: Option<String>,
     pub shape: Shape,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub size: Option<V3>,
     pub radius: Option<f64>,
     pub height: Option<f64>,
     pub file: Option<String>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub position: Option<V3>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub rotation: Option<V3>,
     pub scale: Option<ScaleSpec>,
     pub material: String,
@@ -145,13 +162,17 @@ pub struct GenerateSpec {
     pub seed: Option<i64>,
     pub shapes: Vec<Shape>,
     pub file: Option<String>,
+    #[serde(deserialize_with = "fixed::exact")]
     pub size: [f64; 2],
     pub segments: Option<i64>,
+    #[serde(deserialize_with = "fixed::exact")]
     pub region_min: V3,
+    #[serde(deserialize_with = "fixed::exact")]
     pub region_max: V3,
     pub keep_clear: Option<f64>,
     pub materials: Vec<String>,
     pub moving: Option<f64>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub period: Option<[f64; 2]>,
 }
 
@@ -176,23 +197,29 @@ pub enum RepeatSpec {
 pub struct AnimationSpec {
     #[serde(rename = "type")]
     pub kind: AnimationType,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub to: Option<V3>,
     pub duration: Option<f64>,
     pub repeat: Option<RepeatSpec>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub center: Option<V3>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub axis: Option<V3>,
     pub period: Option<f64>,
     pub times: Option<Vec<f64>>,
+    #[serde(default, deserialize_with = "fixed::exact_list")]
     pub positions: Option<Vec<V3>>,
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObserverSpec {
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub position: Option<V3>,
     pub yaw: Option<f64>,
     pub pitch: Option<f64>,
     pub fov_y: Option<f64>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub resolution: Option<[i64; 2]>,
     pub animation: Option<AnimationSpec>,
 }
@@ -202,7 +229,9 @@ pub struct ObserverSpec {
 pub struct SensorSpec {
     pub offset: Option<f64>,
     pub fov_y: Option<f64>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub resolution: Option<[i64; 2]>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub up: Option<V3>,
 }
 
@@ -243,6 +272,7 @@ pub struct RefreshSpec {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightSpec {
+    #[serde(deserialize_with = "fixed::exact")]
     pub direction: V3,
     pub ambient: Option<f64>,
 }

@@ -18,6 +18,7 @@ mod asset;
 pub mod camera;
 mod error;
 mod files;
+mod fixed;
 mod format;
 mod generate;
 mod load;
@@ -174,7 +175,7 @@ pub struct Camera {
     pub yaw_deg: f32,
     /// Elevation in degrees, in (-90, 90); positive looks up.
     pub pitch_deg: f32,
-    /// Vertical field of view in degrees, in (0, 180).
+    /// Vertical field of view in degrees, in [0.1, 179.99] (docs/scene-format.md says why).
     pub fov_y_deg: f32,
     /// Image size in pixels (width, height).
     pub resolution: [u32; 2],
@@ -187,7 +188,7 @@ pub struct Camera {
 pub struct SensorCamera {
     /// Distance below the mirror centre (metres), > radius: the camera sits at centre - offset * Y.
     pub offset_m: f32,
-    /// Vertical field of view in degrees, in (0, 180).
+    /// Vertical field of view in degrees, in [0.1, 179.99].
     pub fov_y_deg: f32,
     /// Image size in pixels (width, height).
     pub resolution: [u32; 2],
@@ -202,7 +203,9 @@ pub struct CubeSettings {
     pub face_size_px: u32,
     /// Texel format of the colour faces.
     pub format: CubeFormat,
-    /// Near and far planes of the six 90-degree projections (metres), 0 < near < far.
+    /// Near and far planes of the six 90-degree projections (metres): by default half the
+    /// mirror's radius and 1.01 x the farthest room corner's distance from the mirror's centre;
+    /// never clipping what the mirror shows (near <= radius / sqrt 3, far >= that distance).
     pub near_m: f32,
     pub far_m: f32,
     /// Build a full mip chain after each fill (trilinear lookups).

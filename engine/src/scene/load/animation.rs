@@ -2,6 +2,7 @@
 
 use glam::Vec3;
 
+use super::numbers::num_text;
 use super::{Ctx, R};
 use crate::scene::anim::{Animation, Repeat};
 use crate::scene::format::{AnimationSpec, AnimationType, RepeatSpec};
@@ -100,16 +101,18 @@ impl Ctx<'_> {
                     let tf = format!("{field}.times[{i}]");
                     let x = self.num(&tf, t)?;
                     if i == 0 && t != 0.0 {
-                        return Err(
-                            self.invalid(&tf, format!("the first key time must be 0, got {t}"))
-                        );
+                        return Err(self.invalid(
+                            &tf,
+                            format!("the first key time must be 0, got {}", num_text(t)),
+                        ));
                     }
                     if i > 0 && x <= times_s[i - 1] {
                         return Err(self.invalid(
                             &tf,
                             format!(
-                                "key times must strictly increase, got {t} after {}",
-                                times[i - 1]
+                                "key times must strictly increase, got {} after {}",
+                                num_text(t),
+                                num_text(times[i - 1])
                             ),
                         ));
                     }

@@ -2,9 +2,20 @@
 
 use glam::Vec3;
 
+use super::numbers::{num_text, time_text, Range};
 use super::{position_at, sample_times, Ctx, R};
 use crate::scene::format::{ObserverSpec, SensorSpec};
 use crate::scene::{Camera, Mirror, Room, SensorCamera};
+
+/// Pitch, checked on its f32 value: at 90 the view direction is parallel to the up axis and
+/// the camera has no right direction.
+const PITCH_DEG: Range = Range::open(-90.0, 90.0);
+
+/// Vertical field of view of the observer and the sensor. Below 0.1 degrees neighbouring
+/// pixels' rays (at 8192 pixels) differ by less than f32 resolves around a unit vector; above
+/// 179.99 the f32 tangent of half the angle is off by more than 0.1% (the angle is within an
+/// f32 rounding of 90 degrees), so the image would not have the field of view asked for.
+pub(crate) const FOV_Y_DEG: Range = Range::closed(0.1, 179.99);
 
 impl Ctx<'_> {
     pub(super) fn observer(
@@ -36,20 +47,8 @@ impl Ctx<'_> {
         let camera = Camera {
             position,
             yaw_deg: self.num("observer.yaw", s.yaw.unwrap_or(0.0))?,
-            pitch_deg: self.in_range(
-                "observer.pitch",
-                s.pitch.unwrap_or(0.0),
-                -90.0,
-                90.0,
-                true,
-            )?,
-            fov_y_deg: self.in_range(
-                "observer.fov_y",
-                s.fov_y.unwrap_or(60.0),
-                0.0,
-                180.0,
-                true,
-            )?,
+            pitch_deg: self.ranged("observer.pitch", s.pitch.unwrap_or(0.0), PITCH_DEG)?,
+            fov_y_deg: self.ranged("observer.fov_y", s.fov_y.unwrap_or(60.0), FOV_Y_DEG)?,
             resolution: self.resolution("observer.resolution", s.resolution, [800, 600])?,
             animation: match &s.animation {
                 Some(a) => Some(self.animation("observer.animation", a, position)?),
@@ -72,7 +71,7 @@ impl Ctx<'_> {
             let when = if t == 0.0 {
                 "at time 0".to_string()
             } else {
-                format!("at t = {t:.3} s")
+                format!("at t = {} s", time_text(t))
             };
             let c = position_at(mirror.animation.as_ref(), mirror.center, t);
             if p.distance(c) <= mirror.radius_m {
@@ -82,7 +81,7 @@ impl Ctx<'_> {
                         "the observer at {} is inside the mirror sphere (centre {}, radius {}) {when}",
                         self.fmt_point(p),
                         self.fmt_point(c),
-                        mirror.radius_m
+                        num_text(mirror.radius_m)
                     ),
                 ));
             }
@@ -117,8 +116,9 @@ impl Ctx<'_> {
             return Err(self.invalid(
                 "sensor.offset",
                 format!(
-                    "must be greater than the mirror radius {}, got {offset_m}",
-                    mirror.radius_m
+                    "must be greater than the mirror radius {}, got {}",
+                    num_text(mirror.radius_m),
+                    num_text(offset_m)
                 ),
             ));
         }
@@ -139,16 +139,17 @@ impl Ctx<'_> {
                 return Err(self.invalid(
                     "sensor.offset",
                     format!(
-                        "puts the sensor at y = {} (t = {t:.3} s), below the floor at y = {}",
-                        (self.origin.y + f64::from(y)) as f32,
-                        (self.origin.y + f64::from(floor)) as f32
+                        "puts the sensor at y = {} (t = {} s), below the floor at y = {}",
+                        num_text((self.origin.y + f64::from(y)) as f32),
+                        time_text(t),
+                        num_text((self.origin.y + f64::from(floor)) as f32)
                     ),
                 ));
             }
         }
         Ok(SensorCamera {
             offset_m,
-            fov_y_deg: self.in_range("sensor.fov_y", s.fov_y.unwrap_or(60.0), 0.0, 180.0, true)?,
+            fov_y_deg: self.ranged("sensor.fov_y", s.fov_y.unwrap_or(60.0), FOV_Y_DEG)?,
             resolution: self.resolution("sensor.resolution", s.resolution, [512, 512])?,
             up,
         })

@@ -1,17 +1,64 @@
 //! `[[generate]]`: validates a generator table and prepares its shared unit meshes; the
 //! expansion into objects is `scene::generate`'s.
 
-use std::collections::HashMap;
-
-use glam::Vec3;
-
+use super::numbers::{num_text, Range};
+use super::objects::{unit_shape, MeshStore};
 use super::{Ctx, R};
 use crate::scene::format::{GenerateSpec, Shape};
-use crate::scene::generate::{Params, ShapeChoice, DEFAULT_SEGMENTS, MAX_COUNT, MAX_SEGMENTS};
-use crate::scene::mesh::Mesh;
-use crate::scene::Room;
+use crate::scene::generate::{
+    self, Params, ShapeChoice, Surroundings, DEFAULT_SEGMENTS, MAX_COUNT, MAX_SEGMENTS,
+    PLACEMENT_TRIES,
+};
+use crate::scene::{Object, Room};
 
 impl Ctx<'_> {
+    /// The objects of `[[generate]]` table `i`: validated, checked against the triangle budget
+    /// (before any object is made), then placed.
+    pub(super) fn generated(
+        &self,
+        i: usize,
+        g: &GenerateSpec,
+        material: &dyn Fn(&str, &str) -> R<usize>,
+        room: &Room,
+        surroundings: &Surroundings,
+        store: &mut MeshStore,
+    ) -> R<Vec<Object>> {
+        let params = self.generator(i, g, material, room, store)?;
+        // Any object may draw the largest of the shapes: the bound holds for every seed.
+        let largest = params
+            .shapes
+            .iter()
+            .map(|s| store.meshes[s.mesh].triangle_count() as u64)
+            .max()
+            .unwrap_or(0);
+        self.triangle_budget(
+            &format!("generate[{i}].count"),
+            &mut store.triangles,
+            u64::from(params.count) * largest,
+            &format!(
+                "count {} x {largest} triangles (its largest shape; fewer segments make fewer)",
+                params.count
+            ),
+        )?;
+        generate::expand(&params, surroundings).map_err(|fail| {
+            let (field, why) = if fail.orbit_outside > fail.too_close {
+                ("moving", "its orbit about the room's vertical axis left the room")
+            } else {
+                (
+                    "keep_clear",
+                    "it was too close to the mirror, the sensor's view of it or the observer",
+                )
+            };
+            self.invalid(
+                &format!("generate[{i}].{field}"),
+                format!(
+                    "cannot place {}[{}]: {PLACEMENT_TRIES} positions tried, {} too close, {} with the orbit outside the room; mostly {why} (enlarge the region, or lower keep_clear, size or moving)",
+                    params.name, fail.object, fail.too_close, fail.orbit_outside
+                ),
+            )
+        })
+    }
+
     /// Validates a `[[generate]]` table and builds (or reuses) its unit meshes.
     pub(super) fn generator(
         &self,
@@ -19,8 +66,7 @@ impl Ctx<'_> {
         g: &GenerateSpec,
         material: &dyn Fn(&str, &str) -> R<usize>,
         room: &Room,
-        meshes: &mut Vec<Mesh>,
-        cache: &mut HashMap<String, usize>,
+        store: &mut MeshStore,
     ) -> R<Params> {
         let f = |name: &str| format!("generate[{i}].{name}");
         let name = match &g.name {
@@ -78,38 +124,15 @@ impl Ctx<'_> {
                 scale_per_size: 1.0,
                 reach_per_size: 1.0,
             };
-            let rings = (segments / 2).max(2);
-            let choice = match shape {
-                Shape::Box => unit(self.cached_mesh(
-                    &f("shapes"),
-                    None,
-                    "unit-box".into(),
-                    Box::new(|| Ok(Mesh::cuboid(Vec3::splat(0.5)))),
-                    meshes,
-                    cache,
-                )?),
-                Shape::Sphere => unit(self.cached_mesh(
-                    &f("shapes"),
-                    None,
-                    format!("unit-sphere:{segments}"),
-                    Box::new(move || Ok(Mesh::uv_sphere(0.5, segments, rings))),
-                    meshes,
-                    cache,
-                )?),
-                Shape::Cylinder => unit(self.cached_mesh(
-                    &f("shapes"),
-                    None,
-                    format!("unit-cylinder:{segments}"),
-                    Box::new(move || Ok(Mesh::cylinder(0.5, 0.5, segments))),
-                    meshes,
-                    cache,
-                )?),
-                Shape::Mesh => {
+            let choice = match unit_shape(shape, segments) {
+                Some((key, build)) => {
+                    unit(self.cached_mesh(&f("shapes"), None, key, build, store)?)
+                }
+                None => {
                     let file = g.file.as_deref().unwrap_or_default();
                     let (key, build) = self.mesh_file(&f("file"), file)?;
-                    let index =
-                        self.cached_mesh(&f("file"), Some(file), key, build, meshes, cache)?;
-                    let m = &meshes[index];
+                    let index = self.cached_mesh(&f("file"), Some(file), key, build, store)?;
+                    let m = &store.meshes[index];
                     // Size = the largest side of the bounding box; the clearance radius also
                     // covers the farthest vertex from the mesh's origin.
                     let side = (m.bounds_max - m.bounds_min).max_element();
@@ -151,7 +174,7 @@ impl Ctx<'_> {
             room.center + room.size_m * 0.5,
         );
         // Messages give world coordinates, as the file does.
-        let world = |axis: usize, v: f32| (self.origin[axis] + f64::from(v)) as f32;
+        let world = |axis: usize, v: f32| num_text((self.origin[axis] + f64::from(v)) as f32);
         for axis in 0..3 {
             let (a, b) = (region_min[axis], region_max[axis]);
             let letter = ["x", "y", "z"][axis];
@@ -180,11 +203,12 @@ impl Ctx<'_> {
             }
         }
 
-        let keep_clear = self.num(&f("keep_clear"), g.keep_clear.unwrap_or(0.0))?;
-        if keep_clear < 0.0 {
-            return Err(self.invalid(&f("keep_clear"), format!("must be >= 0, got {keep_clear}")));
-        }
-        let moving = self.in_range(&f("moving"), g.moving.unwrap_or(0.0), 0.0, 1.0, false)?;
+        let keep_clear = self.non_negative(&f("keep_clear"), g.keep_clear.unwrap_or(0.0))?;
+        let moving = self.ranged(
+            &f("moving"),
+            g.moving.unwrap_or(0.0),
+            Range::closed(0.0, 1.0),
+        )?;
         if g.period.is_some() && moving == 0.0 {
             return Err(self.unused(&f("period"), "period is used only when moving > 0"));
         }

@@ -2,6 +2,7 @@
 
 use glam::Vec3;
 
+use super::numbers::Range;
 use super::{Ctx, R};
 use crate::scene::error::SceneError;
 use crate::scene::format::{MaterialSpec, MaterialType, V3};
@@ -75,16 +76,7 @@ impl Ctx<'_> {
                     line: need(m.line, "line")?,
                     tiles: tiles(8.0)?,
                     line_width: match m.line_width {
-                        Some(w) => {
-                            let x = self.num(&f("line_width"), w)?;
-                            if !(w > 0.0 && w <= 0.5) {
-                                return Err(self.invalid(
-                                    &f("line_width"),
-                                    format!("must be in (0, 0.5], got {w}"),
-                                ));
-                            }
-                            x
-                        }
+                        Some(w) => self.ranged(&f("line_width"), w, Range::above(0.0, 0.5))?,
                         None => 0.05,
                     },
                 },
@@ -105,6 +97,7 @@ impl Ctx<'_> {
                                 }
                             })?;
                             textures.push(t);
+                            self.texture_budget(&f("file"), textures)?;
                             textures.len() - 1
                         }
                     };

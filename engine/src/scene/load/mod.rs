@@ -8,6 +8,7 @@
 //! position, so they cannot disagree.
 
 mod animation;
+mod budget;
 mod cameras;
 mod cube;
 mod generators;
@@ -16,23 +17,24 @@ mod materials;
 mod numbers;
 mod objects;
 mod room;
+mod source;
 #[cfg(test)]
 mod tests;
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
 use toml::de::DeTable;
 
 use super::anim::Animation;
-use super::error::{Location, SceneError};
+use super::error::SceneError;
 use super::files::{read_regular_file, MAX_SCENE_BYTES};
 use super::format::*;
-use super::generate::{self, Surroundings, PLACEMENT_TRIES};
+use super::generate::Surroundings;
 use super::mesh::Mesh;
 use super::Scene;
 use locate::Locator;
+use objects::MeshStore;
 
 type R<T> = Result<T, SceneError>;
 /// Builds a mesh on first use (the loader caches meshes by a key describing them).
@@ -40,9 +42,9 @@ type MeshBuilder = Box<dyn Fn() -> Result<Mesh, String>>;
 
 /// How many evenly spaced times an animation is checked at (plus its keyframes).
 const ANIMATION_SAMPLES: usize = 64;
-/// Tessellation of `shape = "sphere"` objects.
+/// Tessellation of `shape = "sphere"` objects: 48 segments and, as for every sphere, half as
+/// many rings (see `objects::unit_shape`).
 const SPHERE_SEGMENTS: u32 = 48;
-const SPHERE_RINGS: u32 = 24;
 /// Tessellation of `shape = "cylinder"` objects.
 const CYLINDER_SEGMENTS: u32 = 48;
 
@@ -53,29 +55,14 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         file: path.to_path_buf(),
         source: e.into(),
     })?;
-    let text = String::from_utf8(bytes).map_err(|e| SceneError::Io {
-        file: path.to_path_buf(),
-        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
-    })?;
+    let text = source::decode(path, bytes)?;
     load_str(&text, path)
 }
 
 /// Validates scene text as if it had been read from `path` (used in messages and to resolve
 /// relative asset paths against `path`'s folder; the file itself is not read).
 pub fn load_str(text: &str, path: &Path) -> Result<Scene, SceneError> {
-    let doc = match DeTable::parse(text) {
-        Ok(doc) => doc,
-        Err(e) => {
-            let location = match e.span() {
-                Some(span) => Location::at_offset(path, text, span.start),
-                None => Location::file_only(path),
-            };
-            return Err(SceneError::Syntax {
-                location,
-                message: e.message().trim().to_string(),
-            });
-        }
-    };
+    let doc = DeTable::parse(text).map_err(|e| source::syntax_error(path, text, &e))?;
     if doc.get_ref().is_empty() {
         return Err(SceneError::Empty {
             file: path.to_path_buf(),
@@ -158,12 +145,16 @@ impl Ctx<'_> {
 
         let room = self.room(room_spec, &material_index)?;
         let mirror = self.mirror(mirror_spec, &room)?;
+        // Before any mesh is built: a room f32 cannot hold fails here.
+        let extent = self.extent(&room, &mirror)?;
 
-        let mut meshes = Vec::new();
-        let mut mesh_cache: HashMap<String, usize> = HashMap::new();
+        // Counted before any object is made; triangles summed as objects are resolved, and a
+        // generator's before it is expanded.
+        self.object_budget(&spec)?;
+        let mut store = MeshStore::default();
         let mut objects = Vec::with_capacity(spec.objects.len());
         for (i, o) in spec.objects.iter().enumerate() {
-            objects.push(self.object(i, o, &material_index, &mut meshes, &mut mesh_cache)?);
+            objects.push(self.object(i, o, &material_index, &mut store)?);
         }
 
         let observer = self.observer(spec.observer.as_ref(), &room, &mirror)?;
@@ -178,31 +169,10 @@ impl Ctx<'_> {
             observer: observer.position,
         };
         for (i, g) in spec.generate.iter().enumerate() {
-            let params =
-                self.generator(i, g, &material_index, &room, &mut meshes, &mut mesh_cache)?;
-            let made = generate::expand(&params, &surroundings).map_err(|fail| {
-                let (field, why) = if fail.orbit_outside > fail.too_close {
-                    (
-                        "moving",
-                        "its orbit about the room's vertical axis left the room",
-                    )
-                } else {
-                    (
-                        "keep_clear",
-                        "it was too close to the mirror, the sensor's view of it or the observer",
-                    )
-                };
-                self.invalid(
-                    &format!("generate[{i}].{field}"),
-                    format!(
-                        "cannot place {}[{}]: {PLACEMENT_TRIES} positions tried, {} too close, {} with the orbit outside the room; mostly {why} (enlarge the region, or lower keep_clear, size or moving)",
-                        params.name, fail.object, fail.too_close, fail.orbit_outside
-                    ),
-                )
-            })?;
+            let made = self.generated(i, g, &material_index, &room, &surroundings, &mut store)?;
             objects.extend(made);
         }
-        let cube = self.cube(spec.cube.as_ref())?;
+        let cube = self.cube(spec.cube.as_ref(), &mirror, extent)?;
         let refresh = self.refresh(spec.refresh.as_ref())?;
         let light = self.light(spec.light.as_ref())?;
 
@@ -213,7 +183,7 @@ impl Ctx<'_> {
             room,
             mirror,
             objects,
-            meshes,
+            meshes: store.meshes,
             materials,
             textures,
             observer,

@@ -4,11 +4,44 @@ use std::collections::HashMap;
 
 use glam::{Quat, Vec3};
 
-use super::{Ctx, MeshBuilder, CYLINDER_SEGMENTS, R, SPHERE_RINGS, SPHERE_SEGMENTS};
+use super::{Ctx, MeshBuilder, CYLINDER_SEGMENTS, R, SPHERE_SEGMENTS};
 use crate::scene::error::SceneError;
 use crate::scene::format::{AnimationSpec, AnimationType, ObjectSpec, ScaleSpec, Shape};
 use crate::scene::mesh::Mesh;
 use crate::scene::Object;
+
+/// The cache key and builder of a built-in shape at unit size (1 m across: a cube with edges 1,
+/// a sphere of diameter 1 with `segments` around and max(2, segments / 2) rings, a cylinder of
+/// diameter and height 1 with `segments` around). Objects of any size share it and get their
+/// size through their transform (`Object::scale`), so a scene's memory does not grow with the
+/// number of distinct sizes. `None` for `Shape::Mesh`.
+pub(super) fn unit_shape(shape: Shape, segments: u32) -> Option<(String, MeshBuilder)> {
+    let rings = (segments / 2).max(2);
+    Some(match shape {
+        Shape::Box => (
+            "unit-box".into(),
+            Box::new(|| Ok(Mesh::cuboid(Vec3::splat(0.5)))),
+        ),
+        Shape::Sphere => (
+            format!("unit-sphere:{segments}"),
+            Box::new(move || Ok(Mesh::uv_sphere(0.5, segments, rings))),
+        ),
+        Shape::Cylinder => (
+            format!("unit-cylinder:{segments}"),
+            Box::new(move || Ok(Mesh::cylinder(0.5, 0.5, segments))),
+        ),
+        Shape::Mesh => return None,
+    })
+}
+
+/// The scene's distinct meshes, the key each was built under, and the triangles one pass over
+/// the objects made so far draws (for the budget).
+#[derive(Default)]
+pub(super) struct MeshStore {
+    pub meshes: Vec<Mesh>,
+    pub cache: HashMap<String, usize>,
+    pub triangles: u64,
+}
 
 impl Ctx<'_> {
     /// The cache key and loader of a mesh file named by `field`.
@@ -20,18 +53,10 @@ impl Ctx<'_> {
             .map(str::to_ascii_lowercase);
         let p = path.clone();
         let build: MeshBuilder = match ext.as_deref() {
-            Some("obj") => Box::new(move || {
-                if !p.is_file() {
-                    return Err("file not found".into());
-                }
-                Mesh::from_obj(&p)
-            }),
-            Some("gltf") | Some("glb") => Box::new(move || {
-                if !p.is_file() {
-                    return Err("file not found".into());
-                }
-                Mesh::from_gltf(&p)
-            }),
+            // The loaders read through `files::read_regular_file`, which says what the path
+            // is when it is not a regular file (a folder, a FIFO, a symlink loop, missing).
+            Some("obj") => Box::new(move || Mesh::from_obj(&p)),
+            Some("gltf") | Some("glb") => Box::new(move || Mesh::from_gltf(&p)),
             _ => {
                 return Err(self.invalid(
                     field,
@@ -50,9 +75,9 @@ impl Ctx<'_> {
         file: Option<&str>,
         key: String,
         build: MeshBuilder,
-        meshes: &mut Vec<Mesh>,
-        cache: &mut HashMap<String, usize>,
+        store: &mut MeshStore,
     ) -> R<usize> {
+        let MeshStore { meshes, cache, .. } = store;
         if let Some(&index) = cache.get(&key) {
             return Ok(index);
         }
@@ -63,6 +88,7 @@ impl Ctx<'_> {
             message,
         })?;
         meshes.push(m);
+        self.geometry_budget(field, meshes)?;
         cache.insert(key, meshes.len() - 1);
         Ok(meshes.len() - 1)
     }
@@ -72,8 +98,7 @@ impl Ctx<'_> {
         i: usize,
         o: &ObjectSpec,
         material: &dyn Fn(&str, &str) -> R<usize>,
-        meshes: &mut Vec<Mesh>,
-        cache: &mut HashMap<String, usize>,
+        store: &mut MeshStore,
     ) -> R<Object> {
         let f = |name: &str| format!("objects[{i}].{name}");
         let allowed: &[&str] = match o.shape {
@@ -101,36 +126,32 @@ impl Ctx<'_> {
                 v.ok_or_else(|| self.missing(&f(name), &format!("shape {:?} needs it", o.shape)))?;
             self.positive(&f(name), v)
         };
-        // Built-in shapes are generated at their real size (no scale in the normals) and
-        // shared between objects with the same parameters.
-        let (key, build): (String, MeshBuilder) = match o.shape {
-            Shape::Box => {
-                let size = self.positive3(
+        // Built-in shapes share one unit mesh per shape and tessellation (also with the
+        // generators); the object's size becomes a scale in its transform, which the renderer
+        // and the reference apply to normals through the inverse transpose.
+        let (size, segments) = match o.shape {
+            Shape::Box => (
+                self.positive3(
                     &f("size"),
                     o.size
                         .ok_or_else(|| self.missing(&f("size"), "a box needs [x, y, z]"))?,
-                )?;
-                (
-                    format!("box:{size}"),
-                    Box::new(move || Ok(Mesh::cuboid(size * 0.5))),
-                )
-            }
-            Shape::Sphere => {
-                let r = need(o.radius, "radius")?;
-                (
-                    format!("sphere:{r}"),
-                    Box::new(move || Ok(Mesh::uv_sphere(r, SPHERE_SEGMENTS, SPHERE_RINGS))),
-                )
-            }
+                )?,
+                0,
+            ),
+            Shape::Sphere => (
+                Vec3::splat(2.0 * need(o.radius, "radius")?),
+                SPHERE_SEGMENTS,
+            ),
             Shape::Cylinder => {
-                let r = need(o.radius, "radius")?;
+                let d = 2.0 * need(o.radius, "radius")?;
                 let h = need(o.height, "height")?;
-                (
-                    format!("cylinder:{r}:{h}"),
-                    Box::new(move || Ok(Mesh::cylinder(r, h * 0.5, CYLINDER_SEGMENTS))),
-                )
+                (Vec3::new(d, h, d), CYLINDER_SEGMENTS)
             }
-            Shape::Mesh => {
+            Shape::Mesh => (Vec3::ONE, 0),
+        };
+        let (key, build): (String, MeshBuilder) = match unit_shape(o.shape, segments) {
+            Some(unit) => unit,
+            None => {
                 let file = o
                     .file
                     .as_ref()
@@ -138,7 +159,14 @@ impl Ctx<'_> {
                 self.mesh_file(&f("file"), file)?
             }
         };
-        let mesh = self.cached_mesh(&f("file"), o.file.as_deref(), key, build, meshes, cache)?;
+        let mesh = self.cached_mesh(&f("file"), o.file.as_deref(), key, build, store)?;
+        let triangles = store.meshes[mesh].triangle_count() as u64;
+        self.triangle_budget(
+            &format!("objects[{i}]"),
+            &mut store.triangles,
+            triangles,
+            "this object",
+        )?;
         let material = material(&f("material"), &o.material)?;
         let rotation = match o.rotation {
             Some(r) => {
@@ -156,6 +184,18 @@ impl Ctx<'_> {
             Some(ScaleSpec::Uniform(s)) => Vec3::splat(self.positive(&f("scale"), s)?),
             Some(ScaleSpec::PerAxis(s)) => self.positive3(&f("scale"), s)?,
         };
+        // The shape's size and the object's scale meet in one f32 scale: it must stay a
+        // positive finite number (1e30 x 1e30 and 1e-30 x 1e-30 do not).
+        let scale = size * scale;
+        if !(scale.is_finite() && scale.min_element() > 0.0) {
+            return Err(self.invalid(
+                &f("scale"),
+                format!(
+                    "size x scale is {}, which single precision cannot hold (each must be a positive finite number)",
+                    scale
+                ),
+            ));
+        }
         let keyframe_start = match &o.animation {
             Some(AnimationSpec {
                 kind: AnimationType::Keyframes,

@@ -1,8 +1,28 @@
 //! `[room]` and `[mirror]`: the box and the sphere that every scene has.
 
+use super::numbers::{num_text, time_text};
 use super::{position_at, sample_times, Ctx, R};
 use crate::scene::format::{LookupSpec, MirrorSpec, RoomSpec, WallsSpec};
 use crate::scene::{Lookup, Mirror, Room};
+
+/// The farthest a room corner may be from the mirror's centre (m). The shaders square lengths
+/// in f32 (ray/sphere tests, |p - c|^2) and multiply such squares by lengths; 1e12 keeps
+/// those products (1e36) below f32's largest value (3.4e38).
+pub(crate) const MAX_EXTENT_M: f32 = 1e12;
+
+/// The smallest mirror radius as a fraction of that distance: f32 spaces numbers about 1.2e-7
+/// of their size apart, so a mirror 1e-6 of the room's extent spans about 8 such steps there
+/// and its surface and normals are still resolved.
+pub(crate) const MIN_RADIUS_PER_EXTENT: f32 = 1e-6;
+
+/// How far the room reaches from the mirror: the largest distance from the mirror's centre
+/// (at any checked time) to a room corner.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Extent {
+    pub reach_m: f32,
+    /// The time at which the farthest corner is farthest.
+    pub t: f64,
+}
 
 impl Ctx<'_> {
     pub(super) fn room(
@@ -56,9 +76,10 @@ impl Ctx<'_> {
                 return Err(self.invalid(
                     field,
                     format!(
-                        "the mirror (radius {radius_m}) centred at {} {} is not entirely inside the room (from {} to {})",
+                        "the mirror (radius {}) centred at {} {} is not entirely inside the room (from {} to {})",
+                        num_text(radius_m),
                         self.fmt_point(c),
-                        if t == 0.0 { "at time 0".to_string() } else { format!("at t = {t:.3} s") },
+                        if t == 0.0 { "at time 0".to_string() } else { format!("at t = {} s", time_text(t)) },
                         self.fmt_point(lo),
                         self.fmt_point(hi)
                     ),
@@ -74,5 +95,51 @@ impl Ctx<'_> {
                 Some(LookupSpec::Box) => Lookup::Box,
             },
         })
+    }
+
+    /// The room's extent seen from the mirror, refused when f32 cannot hold the scene: the
+    /// shaders' squared lengths would overflow, or the mirror would be too small to resolve.
+    pub(super) fn extent(&self, room: &Room, mirror: &Mirror) -> R<Extent> {
+        let mut far = Extent {
+            reach_m: 0.0,
+            t: 0.0,
+        };
+        for t in sample_times(mirror.animation.as_ref()) {
+            let c = position_at(mirror.animation.as_ref(), mirror.center, t).as_dvec3();
+            // In f64: for a room near f32's largest value the corner distance itself overflows f32.
+            let half = room.size_m.as_dvec3() * 0.5;
+            let corner = (room.center.as_dvec3() - c).abs() + half;
+            let reach = corner.length();
+            if reach > f64::from(far.reach_m) {
+                far = Extent {
+                    reach_m: reach.min(f64::from(f32::MAX)) as f32,
+                    t,
+                };
+            }
+            if reach > f64::from(MAX_EXTENT_M) {
+                return Err(self.invalid(
+                    "room.size",
+                    format!(
+                        "the room reaches {} m from the mirror's centre; at most {} m is allowed (the renderer squares lengths in single precision, which overflows beyond about 1e19)",
+                        num_text(reach as f32),
+                        num_text(MAX_EXTENT_M)
+                    ),
+                ));
+            }
+        }
+        let min_radius = far.reach_m * MIN_RADIUS_PER_EXTENT;
+        if mirror.radius_m < min_radius {
+            return Err(self.invalid(
+                "mirror.radius",
+                format!(
+                    "is too small for the room: a room corner is {} m from the mirror's centre, and single precision resolves only about 1e-7 of that; the radius must be at least {} of it ({} m), got {}",
+                    num_text(far.reach_m),
+                    num_text(MIN_RADIUS_PER_EXTENT),
+                    num_text(min_radius),
+                    num_text(mirror.radius_m)
+                ),
+            ));
+        }
+        Ok(far)
     }
 }

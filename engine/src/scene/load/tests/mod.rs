@@ -38,7 +38,14 @@ fn defaults_are_applied() {
     let s = load_str(MINIMAL, Path::new("min.toml")).unwrap();
     assert_eq!(s.cube.face_size_px, 512);
     assert_eq!(s.cube.format, CubeFormat::Rgba16Float);
-    assert_eq!((s.cube.near_m, s.cube.far_m), (0.5, 100.0));
+    // Near: half the mirror's radius; far: 1.01 x the farthest room corner from the mirror
+    // (room 10 x 6 x 10 centred on the mirror: sqrt(5^2 + 3^2 + 5^2)).
+    assert_eq!(s.cube.near_m, 0.5);
+    assert!(
+        (s.cube.far_m - 59f32.sqrt() * 1.01).abs() < 1e-5,
+        "{}",
+        s.cube.far_m
+    );
     assert!(s.cube.mipmaps);
     assert_eq!(s.cube.max_anisotropy, 16.0);
     assert_eq!(s.refresh, RefreshPolicy::OnChange);

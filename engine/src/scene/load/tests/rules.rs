@@ -137,3 +137,143 @@ fn generator_rules_with_their_fields() {
         assert!(err.line().is_some(), "{msg}");
     }
 }
+
+/// Ranges hold for the f32 value the renderer uses, and the cube's planes fit the scene.
+#[test]
+fn values_are_checked_as_used_and_planes_fit_the_scene() {
+    let cases: &[(&str, &str)] = &[
+        // f64 values that round to a bound in f32.
+        ("[observer]\nfov_y = 1e-50\n", "observer.fov_y: must be in [0.1, 179.99], got 1e-50 (0 in single precision)"),
+        ("[observer]\nfov_y = 179.99999999999\n", "observer.fov_y: must be in [0.1, 179.99]"),
+        ("[observer]\npitch = 89.999999999\n", "observer.pitch: must be in (-90, 90), got 89.999999999 (90 in single precision)"),
+        ("[sensor]\nfov_y = 179.999\n", "sensor.fov_y: must be in [0.1, 179.99], got 179.999"),
+        ("[[materials]]\nname = \"g\"\ntype = \"grid\"\nbackground = [1, 1, 1]\nline = [0, 0, 0]\nline_width = 1e-50\n", "materials[1].line_width: must be in (0, 0.5], got 1e-50 (0 in single precision)"),
+        // Numbers in messages stay short.
+        ("[sensor]\noffset = 1e-310\n", "sensor.offset: must be positive, got 1e-310 (0 in single precision)"),
+        ("[cube]\nanisotropy = 0.5\n", "cube.anisotropy: must be >= 1, got 0.5"),
+        // The cube's planes set by hand must not clip what the mirror shows.
+        ("[cube]\nnear = 0.6\n", "cube.near: clips reflections"),
+        ("[cube]\nfar = 7\n", "cube.far: clips the room: a room corner is 7.6811457 m"),
+    ];
+    for (extra, needle) in cases {
+        let text = format!("{MINIMAL}{extra}");
+        let err = load_str(&text, Path::new("case.toml")).expect_err(extra);
+        let msg = err.to_string();
+        assert!(
+            msg.contains(needle),
+            "{extra:?}: expected {needle:?} in {msg}"
+        );
+        assert!(err.line().is_some(), "{msg}");
+    }
+    // A room f32 cannot hold, and a mirror too small for its room.
+    let scaled = |room: &str, radius: &str| {
+        MINIMAL
+            .replace(
+                "size = [10, 6, 10]",
+                &format!("size = [{room}, {room}, {room}]"),
+            )
+            .replace("radius = 1\n", &format!("radius = {radius}\n"))
+    };
+    for (room, radius, needle) in [
+        (
+            "1e31",
+            "1e30",
+            "room.size: the room reaches 8.660254e30 m from the mirror's centre; at most 1e12 m",
+        ),
+        ("3.4e38", "1", "room.size: the room reaches"),
+        ("1e8", "1", "mirror.radius: is too small for the room"),
+    ] {
+        let err = load_str(&scaled(room, radius), Path::new("case.toml")).unwrap_err();
+        assert!(err.to_string().contains(needle), "{room}/{radius}: {err}");
+    }
+    // Explicit planes that clip nothing are kept; a big room gets a far plane beyond it.
+    let s = load_str(
+        &format!("{MINIMAL}[cube]\nnear = 0.57\nfar = 7.7\n"),
+        Path::new("c.toml"),
+    )
+    .unwrap();
+    assert_eq!((s.cube.near_m, s.cube.far_m), (0.57, 7.7));
+    let s = load_str(&scaled("1000", "1"), Path::new("c.toml")).unwrap();
+    assert!(s.cube.far_m > 3f32.sqrt() * 500.0, "{}", s.cube.far_m);
+}
+
+/// Fixed-length arrays refuse extra elements (nothing is silently dropped), and fields that
+/// take one of two shapes say what is wrong and what is allowed.
+#[test]
+fn arrays_have_exact_lengths_and_either_or_fields_say_what_they_take() {
+    let with = |from: &str, to: &str| MINIMAL.replace(from, to);
+    let box_with = |extra: &str| {
+        format!(
+            "{MINIMAL}[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\n\
+             material = \"w\"\n{extra}"
+        )
+    };
+    let size = "size = [10, 6, 10]";
+    let walls = "walls = \"w\"";
+    let cases: Vec<(String, &str)> = vec![
+        (with(size, "size = [10, 6, 10, \"oops\"]"), "room.size: invalid length 4, expected an array of exactly 3 elements"),
+        (with(size, "size = [10, 6]"), "room.size: invalid length 2, expected an array of exactly 3 elements"),
+        (format!("{MINIMAL}[observer]\nresolution = [800, 600, 1]\n"), "observer.resolution: invalid length 3, expected an array of exactly 2"),
+        (box_with("scale = [1, 2]\n"), "objects[0].scale: invalid length 2, expected an array of exactly 3"),
+        (box_with("scale = \"big\"\n"), "objects[0].scale: invalid type: string \"big\", expected a number (uniform scale) or an array of exactly 3 numbers"),
+        (box_with("animation = { type = \"keyframes\", times = [0, 1], positions = [[2, 2, 2], [1, 1, 1, 1]] }\n"), "objects[0].animation.positions[1]: invalid length 4"),
+        (with(walls, "walls = 5"), "room.walls: invalid type: integer `5`, expected a material name for all six walls, or a table { px, nx, py, ny, pz, nz }"),
+        (with(walls, "walls = { px = \"w\", nx = \"w\", py = \"w\", ny = \"w\", pz = \"w\" }"), "room.walls.nz: required field is missing"),
+    ];
+    for (text, needle) in &cases {
+        let err = load_str(text, Path::new("case.toml")).expect_err(needle);
+        let msg = err.to_string();
+        assert!(msg.contains(needle), "expected {needle:?} in {msg}");
+        assert!(err.line().is_some(), "{msg}");
+    }
+    // A million-element centre: refused, with a short message.
+    let big = format!("center = [{}]", vec!["0"; 1_000_000].join(", "));
+    let err = load_str(
+        &with("center = [0, 3, 0]\nsize", &format!("{big}\nsize")),
+        Path::new("case.toml"),
+    )
+    .unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("room.center: invalid length 1000000, expected an array of exactly 3"),
+        "{}",
+        &msg[..msg.len().min(300)]
+    );
+    assert!(msg.len() < 300, "{} characters", msg.len());
+}
+
+/// Nesting past the TOML reader's limit is a located message that says what is allowed, for
+/// dotted headers and keys (where the reader gives no position) and for arrays and inline
+/// tables.
+#[test]
+fn nesting_too_deep_is_located() {
+    let dotted = vec!["a"; 20000].join(".");
+    for (extra, column) in [
+        (format!("[{dotted}]\nx = 1\n"), 1),
+        (format!("{dotted} = 1\n"), 1),
+        (
+            format!("x = {}1{}\n", "[".repeat(20000), "]".repeat(20000)),
+            0,
+        ),
+        (
+            format!("x = {}1{}\n", "{a = ".repeat(20000), "}".repeat(20000)),
+            0,
+        ),
+    ] {
+        let err = load_str(
+            &format!("{MINIMAL}# a comment. with. dots.\n{extra}"),
+            Path::new("p.toml"),
+        )
+        .unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.starts_with("p.toml:13:"), "{msg}");
+        assert!(msg.contains("nesting too deep"), "{msg}");
+        assert!(
+            msg.contains("the scene format nests at most 4 levels"),
+            "{msg}"
+        );
+        if column > 0 {
+            assert_eq!(err.column(), Some(column), "{msg}");
+        }
+    }
+}

@@ -1,6 +1,8 @@
 //! The shipped scenes load with their stated contents; generated objects are deterministic,
 //! placed by the rules and share their meshes.
 
+use std::path::Path;
+
 use glam::Vec3;
 
 use super::{repo, MINIMAL};
@@ -56,8 +58,9 @@ fn shipped_scenes_load() {
         .count();
     assert!(moving_count >= 6);
     assert!(moving.mirror.animation.is_some());
-    // Distinct meshes: 2 box sizes, 2 sphere radii, 2 cylinders, the OBJ and the glTF.
-    assert_eq!(moving.meshes.len(), 8);
+    // Distinct meshes: one unit box, sphere and cylinder whatever their sizes (2 box sizes, 2
+    // sphere radii and 2 cylinders in the file), the OBJ and the glTF.
+    assert_eq!(moving.meshes.len(), 5);
 
     let six = load(&repo("scenes/test/six-colour-room.toml")).unwrap();
     let colour = |face: usize| match &six.materials[six.room.wall_materials[face]].kind {
@@ -270,4 +273,72 @@ fn obj_and_gltf_meshes_load_with_expected_triangles() {
         }
     }
     assert!(Mesh::from_obj(&repo("scenes/meshes/missing.obj")).is_err());
+}
+
+/// `[[objects]]` of any size share one unit mesh per shape, sized by their transform: 1,000
+/// spheres of different radii are one mesh, and each one's bounds are its own size.
+#[test]
+fn objects_share_unit_meshes_scaled_to_their_size() {
+    let mut text = MINIMAL.to_string();
+    for k in 0..1000 {
+        let r = 0.01 + 0.0001 * k as f64;
+        text += &format!(
+            "[[objects]]\nshape = \"sphere\"\nradius = {r}\nposition = [3, 1, 3]\nmaterial = \"w\"\n"
+        );
+    }
+    text += "[[objects]]\nshape = \"box\"\nsize = [1, 2, 3]\nposition = [3, 1, 3]\nscale = [2, 1, 1]\nmaterial = \"w\"\n\
+             [[objects]]\nshape = \"cylinder\"\nradius = 0.5\nheight = 2\nposition = [3, 1, 3]\nmaterial = \"w\"\n";
+    let s = load_str(&text, Path::new("shared.toml")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.meshes.len(), 3, "one unit sphere, box and cylinder");
+    let extent = |o: &crate::scene::Object| {
+        let m = &s.meshes[o.mesh];
+        (m.bounds_max - m.bounds_min) * o.scale
+    };
+    for (k, o) in s.objects[..1000].iter().enumerate() {
+        let d = 2.0 * (0.01 + 0.0001 * k as f32);
+        assert!(
+            (extent(o) - Vec3::splat(d)).abs().max_element() < 1e-6,
+            "{k}: {}",
+            extent(o)
+        );
+        assert_eq!(s.meshes[o.mesh].triangle_count(), 48 * (2 * 24 - 2));
+    }
+    // The box's size and its per-axis scale multiply; the cylinder is 1 across and 2 high.
+    assert_eq!(extent(&s.objects[1000]), Vec3::new(2.0, 2.0, 3.0));
+    assert_eq!(extent(&s.objects[1001]), Vec3::new(1.0, 2.0, 1.0));
+}
+
+/// Work is bounded before it is done: a generator at its documented maxima (100,000 spheres of
+/// 256 segments, 6.5e9 triangles a pass) and too many objects are refused, naming the count.
+#[test]
+fn budgets_refuse_scenes_too_big_to_render() {
+    let gen = |count: u32, segments: u32| {
+        format!(
+            "[[generate]]\ncount = {count}\nshapes = [\"sphere\"]\nsegments = {segments}\nsize = [0.1, 0.2]\n\
+             region_min = [-4, 1, -4]\nregion_max = [4, 5, 4]\nmaterials = [\"w\"]\n"
+        )
+    };
+    let err = load_str(
+        &format!("{MINIMAL}{}", gen(100_000, 256)),
+        Path::new("g.toml"),
+    )
+    .unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("generate[0].count: too much geometry: count 100000 x 65024 triangles"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("6.5024e9 triangles a pass, at most 20000000"),
+        "{msg}"
+    );
+    assert_eq!(err.line(), Some(13), "{msg}");
+    let three = format!(
+        "{MINIMAL}{}{}{}",
+        gen(100_000, 3),
+        gen(100_000, 3),
+        gen(1, 3)
+    );
+    let err = load_str(&three, Path::new("g.toml")).unwrap_err();
+    assert!(err.to_string().contains("generate[2].count: too many objects: this generator brings the scene to 200001, at most 200000"), "{err}");
 }
