@@ -3,7 +3,9 @@
 use std::process::ExitCode;
 
 use anyhow::Result;
+use specchio::render::lookups;
 use specchio::render::methods::Method;
+use specchio::scene::Lookup;
 use specchio::vk::device::{self, DeviceInfo, MIN_MESA_MAJOR};
 
 use crate::probe;
@@ -48,6 +50,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
                     .iter()
                     .map(|(m, r)| serde_json::json!({ "method": m, "usable": r.is_ok(), "reason": r.as_ref().err() }))
                     .collect();
+                v["lookups"] = lookup_support(c)
+                    .iter()
+                    .map(|(l, why)| serde_json::json!({ "lookup": l, "usable": why.is_none(), "reason": why }))
+                    .collect();
                 v
             })
             .collect();
@@ -72,8 +78,25 @@ pub fn run(args: &Args) -> Result<ExitCode> {
                 Err(why) => println!("    method {:<20} NOT USABLE: {why}", m.name()),
             }
         }
+        for (l, why) in lookup_support(c) {
+            match why {
+                None => println!("    lookup {:<20} usable", l.name()),
+                Some(why) => println!("    lookup {:<20} NOT USABLE: {why}", l.name()),
+            }
+        }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Each mirror lookup on a usable device, with why it cannot run (none on a rejected device).
+fn lookup_support(c: &device::Candidate) -> Vec<(Lookup, Option<String>)> {
+    if c.rejected.is_some() {
+        return Vec::new();
+    }
+    Lookup::ALL
+        .into_iter()
+        .map(|l| (l, lookups::missing_features(l, &c.info)))
+        .collect()
 }
 
 fn mesa_too_old(info: &DeviceInfo) -> bool {

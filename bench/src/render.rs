@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Result};
 use serde_json::json;
 use specchio::output::Transaction;
+use specchio::render::lookups;
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::camera::FACE_NAMES;
@@ -45,8 +46,8 @@ pub struct Args {
     /// (each usable one into DIR/<method>/; measurement variants only when named).
     #[arg(long, default_value = "six-pass")]
     method: String,
-    /// Mirror lookup: plain (the reflected direction, as the thesis) or box (parallax-corrected
-    /// against the room box). Default: the scene's `mirror.lookup`.
+    /// Mirror lookup (`specchio info` lists them, with what this device can run; see
+    /// docs/accuracy.md). Default: the scene's `mirror.lookup`.
     #[arg(long)]
     lookup: Option<String>,
     /// Also write, per mirror pixel, the direction looked up in the cube map
@@ -101,9 +102,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     check_args(args)?;
     let lookup = match args.lookup.as_deref() {
         None => None,
-        Some("plain") => Some(Lookup::Plain),
-        Some("box") => Some(Lookup::Box),
-        Some(other) => bail!("--lookup {other}: must be plain or box"),
+        Some(name) => match Lookup::parse(name) {
+            Some(l) => Some(l),
+            None => bail!("--lookup {name}: must be one of {}", Lookup::names()),
+        },
     };
     let scene = specchio::scene::load(&args.scene)?;
     let start_s = args
@@ -121,7 +123,16 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let validation = instance.validation;
     let chosen = device::choose(&instance, args.device.as_deref())?;
     let (methods, refused) = pick_methods(&args.method, &chosen)?;
-    let device = probe::device_for(&instance, args.device.as_deref(), &methods)?;
+    let lookup_used = lookup.unwrap_or(scene.mirror.lookup);
+    if let Some(why) = lookups::missing_features(lookup_used, &chosen) {
+        bail!("lookup {lookup_used} cannot run on {}: {why}", chosen.name);
+    }
+    let device = probe::device_for(
+        &instance,
+        args.device.as_deref(),
+        &methods,
+        lookups::features(lookup_used),
+    )?;
     drop(instance);
     let info = device.info.clone();
 

@@ -58,7 +58,7 @@ pub struct Args {
     /// Comma-separated cube face sizes in texels.
     #[arg(long, default_value = "128,512")]
     cube_sizes: String,
-    /// Comma-separated lookup modes for the error measurement: plain, box.
+    /// Comma-separated lookup modes for the error measurement (docs/accuracy.md lists them).
     #[arg(long, default_value = "plain,box")]
     lookups: String,
     /// Timed cube updates per method, floor and run.
@@ -165,12 +165,8 @@ fn settle(args: &Args) -> Result<Settled> {
             .filter(|n| (1..=specchio::scene::MAX_FACE_SIZE_PX).contains(n))
     })
     .with_context(|| format!("face sizes are 1..={}", specchio::scene::MAX_FACE_SIZE_PX))?;
-    let lookups = parse_list("lookups", &a.lookups, |s| match s {
-        "plain" => Some(Lookup::Plain),
-        "box" => Some(Lookup::Box),
-        _ => None,
-    })
-    .context("lookups are plain and box")?;
+    let lookups = parse_list("lookups", &a.lookups, Lookup::parse)
+        .with_context(|| format!("lookups are {}", Lookup::names()))?;
     anyhow::ensure!(
         (1..=100_000).contains(&a.frames),
         "--frames must be in 1..=100000"
@@ -267,7 +263,14 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         .into_iter()
         .map(|(m, why)| json!({ "method": m, "reason": why }))
         .collect();
-    let device = probe::device_for(&instance, args.device.as_deref(), &methods)?;
+    let lookup_features = lookups.iter().try_fold(
+        specchio::vk::device::OptionalFeatures::default(),
+        |f, &l| match specchio::render::lookups::missing_features(l, &chosen) {
+            None => Ok(f.union(specchio::render::lookups::features(l))),
+            Some(why) => Err(anyhow::anyhow!("--lookups {l}: {why}")),
+        },
+    )?;
+    let device = probe::device_for(&instance, args.device.as_deref(), &methods, lookup_features)?;
     if let (Some(b), Some(path)) = (&baseline, &args.baseline) {
         crate::gate::same_driver(b, &device.info, path)?;
     }

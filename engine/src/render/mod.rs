@@ -14,6 +14,7 @@ pub mod cube_fill;
 mod draw;
 pub mod floors;
 pub mod gpu;
+pub mod lookups;
 pub mod material_check;
 pub mod methods;
 mod passes;
@@ -146,10 +147,7 @@ struct Pipelines {
     view_scene: Pipeline,
     /// Direction pass: scene depth only, then the mirror's lookup directions.
     depth_only: Pipeline,
-    mirror: Pipeline,
-    mirror_direction: Pipeline,
     scene_layout: PipelineLayout,
-    mirror_layout: PipelineLayout,
 }
 
 /// Draws one scene. Field order is teardown order (everything holds an `Arc<Device>`).
@@ -158,6 +156,10 @@ pub struct Renderer {
     floor_pipelines: Option<floors::FloorPipelines>,
     /// The method's pipeline and per-renderer state.
     fill: Box<dyn methods::FillPass>,
+    /// The mirror lookup's pipelines and per-renderer state, and the lookup it is for (the
+    /// pass is rebuilt when `scene.mirror.lookup` is switched in place).
+    lookup_pass: Box<dyn lookups::LookupPass>,
+    pass_lookup: crate::scene::Lookup,
     pipelines: Pipelines,
     timestamps: Option<QueryPool>,
     statistics: Option<QueryPool>,
@@ -225,6 +227,8 @@ impl Renderer {
             )));
         }
         let pipelines = passes::create_pipelines(device, &resources)?;
+        let lookup = scene.mirror.lookup;
+        let lookup_pass = create_lookup_pass(device, &resources, lookup)?;
         let fill = options.method.create(&methods::MethodContext {
             device,
             scene: &scene,
@@ -258,6 +262,8 @@ impl Renderer {
         Ok(Self {
             floor_pipelines: None,
             fill,
+            lookup_pass,
+            pass_lookup: lookup,
             pipelines,
             timestamps,
             statistics,
@@ -289,6 +295,11 @@ impl Renderer {
         readback: Readback,
     ) -> Result<(FrameReport, FrameImages), GpuError> {
         let record_start = Instant::now();
+        if self.scene.mirror.lookup != self.pass_lookup {
+            let lookup = self.scene.mirror.lookup;
+            self.lookup_pass = create_lookup_pass(&self.device, &self.resources, lookup)?;
+            self.pass_lookup = lookup;
+        }
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
         let mut dirty = self.dirty_faces(frame, &state, &views);
@@ -452,7 +463,7 @@ impl Renderer {
             mirror: Vec4::new(0.0, 0.0, 0.0, scene.mirror.radius_m),
             flags: UVec4::new(
                 u32::from(light.is_some()),
-                lookup_flag(scene.mirror.lookup),
+                lookups::plugin(scene.mirror.lookup).flag(),
                 0,
                 0,
             ),
@@ -527,11 +538,20 @@ impl Renderer {
     }
 }
 
-fn lookup_flag(lookup: crate::scene::Lookup) -> u32 {
-    match lookup {
-        crate::scene::Lookup::Plain => gpu::LOOKUP_PLAIN,
-        crate::scene::Lookup::Box => gpu::LOOKUP_BOX,
+/// The pass of `lookup`, refused with the reason when the device cannot run it.
+fn create_lookup_pass(
+    device: &Arc<Device>,
+    resources: &SceneResources,
+    lookup: crate::scene::Lookup,
+) -> Result<Box<dyn lookups::LookupPass>, GpuError> {
+    if let Some(why) = lookups::missing_features(lookup, &device.info) {
+        return Err(GpuError::Unsupported(format!("lookup {lookup}: {why}")));
     }
+    lookups::plugin(lookup).create(&lookups::LookupContext {
+        device,
+        resources,
+        push_size: std::mem::size_of::<gpu::Push>() as u32,
+    })
 }
 
 fn object_data(model: Mat4, material: usize) -> ObjectData {

@@ -105,6 +105,35 @@ pub enum Lookup {
     Box,
 }
 
+impl Lookup {
+    /// Every lookup, in the order the CLI, `specchio info` and the docs list them. What each
+    /// needs and does lives in its plug-in (`render::lookups`); the scene only names it.
+    pub const ALL: [Lookup; 2] = [Lookup::Plain, Lookup::Box];
+
+    /// The name in scene files, on the command line and in every report (kebab-case).
+    pub fn name(self) -> &'static str {
+        match self {
+            Lookup::Plain => "plain",
+            Lookup::Box => "box",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Lookup> {
+        Self::ALL.into_iter().find(|l| l.name() == name)
+    }
+
+    /// Every name, comma-separated (for error messages and help).
+    pub fn names() -> String {
+        Self::ALL.map(Lookup::name).join(", ")
+    }
+}
+
+impl std::fmt::Display for Lookup {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// One drawable object: a mesh instance with a material and a rigid transform.
 #[derive(Debug, Clone)]
 pub struct Object {
