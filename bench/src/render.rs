@@ -154,7 +154,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         let mut renderer = Renderer::new(&device, scene.clone(), &options)?;
         let reports = render_frames(args, &mut renderer, start_s, &out, &dir)?;
         let summary = summarize(&reports);
-        print_summary(args, method, &dir, &reports, &summary);
+        let lookup = renderer.scene.mirror.lookup;
+        print_summary(args, (method, lookup), &dir, &reports, &summary);
         runs.push(json!({
             "method": method,
             "out": dir.display().to_string(),
@@ -253,7 +254,8 @@ fn render_frames(
             frame_index,
             t,
             Readback {
-                cube: true,
+                // A lookup that reads no cube (ray-query) leaves it unfilled: nothing to write.
+                cube: lookups::plugin(renderer.scene.mirror.lookup).uses_cube(),
                 views: true,
                 directions: args.directions,
             },
@@ -352,7 +354,7 @@ fn summarize(reports: &[FrameReport]) -> serde_json::Value {
 
 fn print_summary(
     args: &Args,
-    method: Method,
+    (method, lookup): (Method, Lookup),
     out: &Path,
     reports: &[FrameReport],
     summary: &serde_json::Value,
@@ -363,7 +365,7 @@ fn print_summary(
             .map_or("n/a".to_owned(), |v| format!("{v:.2} ms"))
     };
     println!(
-        "rendered {} frame(s) of {} with {method} into {}",
+        "rendered {} frame(s) of {} with {method}, lookup {lookup}, into {}",
         reports.len(),
         args.scene.display(),
         out.display()
@@ -385,5 +387,10 @@ fn print_summary(
         "  sensor (GPU):       {} median",
         ms("median_gpu_sensor_ms")
     );
-    println!("  files: observer.exr/.png, sensor.exr/.png, views.png, cube/{{px,nx,py,ny,pz,nz}}.exr, render.json");
+    let cube = if lookups::plugin(lookup).uses_cube() {
+        " cube/{px,nx,py,ny,pz,nz}.exr,"
+    } else {
+        ""
+    };
+    println!("  files: observer.exr/.png, sensor.exr/.png, views.png,{cube} render.json");
 }

@@ -228,7 +228,7 @@ impl Renderer {
         }
         let pipelines = passes::create_pipelines(device, &resources)?;
         let lookup = scene.mirror.lookup;
-        let lookup_pass = create_lookup_pass(device, &resources, lookup)?;
+        let lookup_pass = create_lookup_pass(device, &resources, &submitter, lookup)?;
         let fill = options.method.create(&methods::MethodContext {
             device,
             scene: &scene,
@@ -297,12 +297,20 @@ impl Renderer {
         let record_start = Instant::now();
         if self.scene.mirror.lookup != self.pass_lookup {
             let lookup = self.scene.mirror.lookup;
-            self.lookup_pass = create_lookup_pass(&self.device, &self.resources, lookup)?;
+            self.lookup_pass =
+                create_lookup_pass(&self.device, &self.resources, &self.submitter, lookup)?;
             self.pass_lookup = lookup;
         }
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
-        let mut dirty = self.dirty_faces(frame, &state, &views);
+        // A lookup that does not read the cube (ray-query) skips its fill, unless the cube
+        // itself is read back; the cube then keeps what it last showed.
+        let fill_cube = lookups::plugin(self.pass_lookup).uses_cube() || readback.cube;
+        let mut dirty = if fill_cube {
+            self.dirty_faces(frame, &state, &views)
+        } else {
+            0
+        };
         if self.method.layout() == methods::CubeLayout::Multiview && dirty != 0 {
             // A multiview pass clears and draws all six views: cull for all six, or objects
             // seen only in a clean face would vanish from it.
@@ -347,6 +355,9 @@ impl Renderer {
             cube_updated: dirty != 0,
             ..Default::default()
         };
+        // The lookup's own work (the ray-query TLAS build) comes first: without a cube update
+        // it is all that lies between the start and fill timestamps (`gpu_fill_ms`).
+        self.lookup_pass.record(cmd);
         if dirty != 0 {
             self.record_cube(cmd, &plan, self.cube_state.is_none(), &mut report);
         } else if let Some(q) = &self.timestamps {
@@ -359,7 +370,7 @@ impl Renderer {
         self.submit_frame(cmd, record_start, &mut report)?;
         self.read_queries(&mut report, dirty != 0, readback.views)?;
         // The cube now shows `state`, except after an `every-n` frame that skipped the update.
-        if dirty != 0 || self.scene.refresh == RefreshPolicy::OnChange {
+        if dirty != 0 || (fill_cube && self.scene.refresh == RefreshPolicy::OnChange) {
             self.cube_state = Some(state);
         }
         let images = self.read_images(readback, &copies)?;
@@ -528,6 +539,7 @@ impl Renderer {
                 .map(|i| object_data(state.object_to_render(scene, i), scene.objects[i].material)),
         );
         self.resources.objects.write(&objects)?;
+        self.lookup_pass.prepare(&objects)?;
         self.object_bounds = objects
             .iter()
             .zip(&self.resources.drawables)
@@ -542,6 +554,7 @@ impl Renderer {
 fn create_lookup_pass(
     device: &Arc<Device>,
     resources: &SceneResources,
+    submitter: &Submitter,
     lookup: crate::scene::Lookup,
 ) -> Result<Box<dyn lookups::LookupPass>, GpuError> {
     if let Some(why) = lookups::missing_features(lookup, &device.info) {
@@ -550,6 +563,7 @@ fn create_lookup_pass(
     lookups::plugin(lookup).create(&lookups::LookupContext {
         device,
         resources,
+        submitter,
         push_size: std::mem::size_of::<gpu::Push>() as u32,
     })
 }

@@ -10,6 +10,7 @@
 //! `Lookup`, its module and shaders, and one line in [`REGISTRY`].
 
 mod cube;
+mod ray_query;
 
 use std::sync::Arc;
 
@@ -18,12 +19,13 @@ use ash::vk;
 use super::gpu::ObjectData;
 use super::resources::SceneResources;
 use crate::scene::Lookup;
+use crate::vk::commands::Submitter;
 use crate::vk::device::{Device, DeviceInfo, OptionalFeatures};
 use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
 
 /// Every lookup's plug-in, in [`Lookup::ALL`]'s order (a test checks it).
-static REGISTRY: &[&dyn MirrorLookup] = &[&cube::PLAIN, &cube::BOX];
+static REGISTRY: &[&dyn MirrorLookup] = &[&cube::PLAIN, &cube::BOX, &ray_query::RayQuery];
 
 /// One mirror lookup: what it is, what it needs, and how it makes its per-renderer pass.
 pub trait MirrorLookup: Sync {
@@ -55,6 +57,8 @@ pub struct LookupNeeds {
 pub struct LookupContext<'a> {
     pub device: &'a Arc<Device>,
     pub resources: &'a SceneResources,
+    /// For the lookup's own one-off GPU work (building acceleration structures).
+    pub submitter: &'a Submitter,
     /// Push-constant bytes of the mirror's shaders (`gpu::Push`).
     pub push_size: u32,
 }
@@ -157,7 +161,7 @@ mod tests {
                 "docs/accuracy.md has no row for {l}"
             );
             let named = format!("`{}`", l.name());
-            assert!(readme.contains(&l.name()), "README never names {l}");
+            assert!(readme.contains(&named), "README never names `{l}`");
             assert!(
                 format.contains(&named) || format.contains(&format!("\"{}\"", l.name())),
                 "docs/scene-format.md never names {l}"
