@@ -73,11 +73,8 @@ pub fn method(text: &str) -> Result<Method, String> {
 
 /// A mirror lookup mode.
 pub fn lookup(text: &str) -> Result<Lookup, String> {
-    match text.trim() {
-        "plain" => Ok(Lookup::Plain),
-        "box" => Ok(Lookup::Box),
-        _ => Err(format!("`{text}` is not a lookup: plain or box")),
-    }
+    Lookup::parse(text.trim())
+        .ok_or_else(|| format!("`{text}` is not a lookup: one of {}", Lookup::names()))
 }
 
 #[cfg(test)]
@@ -126,6 +123,8 @@ mod tests {
         assert!(face_size("").unwrap_err().starts_with("an empty entry"));
         assert!(method("nine-pass").unwrap_err().contains("six-pass"));
         assert_eq!(lookup("box"), Ok(Lookup::Box));
-        assert!(lookup("sphere").unwrap_err().contains("plain or box"));
+        assert!(lookup("sphere")
+            .unwrap_err()
+            .contains("plain, box, ray-query"));
     }
 }

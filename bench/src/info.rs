@@ -3,11 +3,13 @@
 use std::process::ExitCode;
 
 use anyhow::Result;
+use specchio::render::lookups;
 use specchio::render::methods::Method;
+use specchio::scene::Lookup;
 use specchio::vk::device::{self, DeviceInfo, MIN_MESA_MAJOR};
 
 use crate::probe;
-use crate::records::{InfoDevice, InfoMethod, InfoRecord};
+use crate::records::{InfoDevice, InfoLookup, InfoMethod, InfoRecord};
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 #[derive(clap::Args)]
@@ -61,6 +63,14 @@ fn list(args: &Args, instance: std::sync::Arc<Instance>) -> Result<ExitCode> {
                         reason: r.as_ref().err().cloned(),
                     })
                     .collect(),
+                lookups: lookup_support(c)
+                    .into_iter()
+                    .map(|(lookup, why)| InfoLookup {
+                        lookup,
+                        usable: why.is_none(),
+                        reason: why,
+                    })
+                    .collect(),
             })
             .collect();
         println!("{}", serde_json::to_string_pretty(&InfoRecord { devices })?);
@@ -81,8 +91,25 @@ fn list(args: &Args, instance: std::sync::Arc<Instance>) -> Result<ExitCode> {
                 Err(why) => println!("    method {:<20} NOT USABLE: {why}", m.name()),
             }
         }
+        for (l, why) in lookup_support(c) {
+            match why {
+                None => println!("    lookup {:<20} usable", l.name()),
+                Some(why) => println!("    lookup {:<20} NOT USABLE: {why}", l.name()),
+            }
+        }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Each mirror lookup on a usable device, with why it cannot run (none on a rejected device).
+fn lookup_support(c: &device::Candidate) -> Vec<(Lookup, Option<String>)> {
+    if c.rejected.is_some() {
+        return Vec::new();
+    }
+    Lookup::ALL
+        .into_iter()
+        .map(|l| (l, lookups::missing_features(l, &c.info)))
+        .collect()
 }
 
 fn mesa_too_old(info: &DeviceInfo) -> bool {

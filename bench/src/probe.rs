@@ -97,15 +97,15 @@ pub fn usable(method: Method, info: &DeviceInfo) -> Result<(), String> {
     }
 }
 
-/// Creates the device `selector` names with the features every method in `methods` needs.
+/// Creates the device `selector` names with the features every method in `methods` needs,
+/// and `lookups` (those of the mirror lookups that will run).
 pub fn device_for(
     instance: &std::sync::Arc<Instance>,
     selector: Option<&str>,
     methods: &[Method],
+    lookups: OptionalFeatures,
 ) -> Result<std::sync::Arc<Device>> {
-    let features = methods
-        .iter()
-        .fold(OptionalFeatures::default(), |f, m| f.union(m.features()));
+    let features = methods.iter().fold(lookups, |f, m| f.union(m.features()));
     let desc = DeviceDesc {
         selector: selector.map(str::to_owned),
         features,

@@ -155,6 +155,15 @@ pub struct InfoDevice {
     pub rejected_because: Option<String>,
     pub mesa_too_old: bool,
     pub methods: Vec<InfoMethod>,
+    pub lookups: Vec<InfoLookup>,
+}
+
+/// Whether a device can run one mirror lookup, and why not.
+#[derive(Debug, Serialize)]
+pub struct InfoLookup {
+    pub lookup: specchio::scene::Lookup,
+    pub usable: bool,
+    pub reason: Option<String>,
 }
 
 #[derive(Debug, Serialize)]

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Result};
 use specchio::output::Transaction;
+use specchio::render::lookups;
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::camera::FACE_NAMES;
@@ -53,8 +54,8 @@ pub struct Args {
     /// (each usable one into DIR/<method>/; measurement variants only when named).
     #[arg(long, default_value = "six-pass")]
     method: String,
-    /// Mirror lookup: plain (the reflected direction, as the thesis) or box (parallax-corrected
-    /// against the room box). Default: the scene's `mirror.lookup`.
+    /// Mirror lookup (`specchio info` lists them, with what this device can run; see
+    /// docs/accuracy.md). Default: the scene's `mirror.lookup`.
     #[arg(long)]
     lookup: Option<String>,
     /// Also write, per mirror pixel, the direction looked up in the cube map
@@ -78,9 +79,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     //    (the numbers' ranges by clap, `crate::args`).
     let lookup = match args.lookup.as_deref() {
         None => None,
-        Some("plain") => Some(Lookup::Plain),
-        Some("box") => Some(Lookup::Box),
-        Some(other) => bail!("--lookup {other}: must be plain or box"),
+        Some(name) => match Lookup::parse(name) {
+            Some(l) => Some(l),
+            None => bail!("--lookup {name}: must be one of {}", Lookup::names()),
+        },
     };
     let scene = specchio::scene::load(&args.scene)?;
     let start_s = args
@@ -98,7 +100,16 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let validation = instance.validation;
     let chosen = device::choose(&instance, args.device.as_deref())?;
     let (methods, refused) = pick_methods(&args.method, &chosen)?;
-    let device = probe::device_for(&instance, args.device.as_deref(), &methods)?;
+    let lookup_used = lookup.unwrap_or(scene.mirror.lookup);
+    if let Some(why) = lookups::missing_features(lookup_used, &chosen) {
+        bail!("lookup {lookup_used} cannot run on {}: {why}", chosen.name);
+    }
+    let device = probe::device_for(
+        &instance,
+        args.device.as_deref(),
+        &methods,
+        lookups::features(lookup_used),
+    )?;
     drop(instance);
     let info = device.info.clone();
 
@@ -120,7 +131,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         let mut renderer = Renderer::new(&device, scene.clone(), &options)?;
         let reports = render_frames(args, &mut renderer, start_s, &out, &dir)?;
         let summary = summarize(&reports);
-        print_summary(args, method, &dir, &reports, &summary);
+        let lookup = renderer.scene.mirror.lookup;
+        print_summary(args, (method, lookup), &dir, &reports, &summary);
         runs.push(RenderRun {
             method,
             out: dir.display().to_string(),
@@ -220,7 +232,8 @@ fn render_frames(
             frame_index,
             t,
             Readback {
-                cube: true,
+                // A lookup that reads no cube (ray-query) leaves it unfilled: nothing to write.
+                cube: lookups::plugin(renderer.scene.mirror.lookup).uses_cube(),
                 views: true,
                 directions: args.directions,
             },
@@ -311,14 +324,14 @@ fn summarize(reports: &[FrameReport]) -> RenderSummary {
 
 fn print_summary(
     args: &Args,
-    method: Method,
+    (method, lookup): (Method, Lookup),
     out: &Path,
     reports: &[FrameReport],
     summary: &RenderSummary,
 ) {
     let ms = |v: Option<f64>| v.map_or("n/a".to_owned(), |v| format!("{v:.2} ms"));
     println!(
-        "rendered {} frame(s) of {} with {method} into {}",
+        "rendered {} frame(s) of {} with {method}, lookup {lookup}, into {}",
         reports.len(),
         args.scene.display(),
         out.display()
@@ -340,5 +353,10 @@ fn print_summary(
         "  sensor (GPU):       {} median",
         ms(summary.median_gpu_sensor_ms)
     );
-    println!("  files: observer.exr/.png, sensor.exr/.png, views.png, cube/{{px,nx,py,ny,pz,nz}}.exr, render.json");
+    let cube = if lookups::plugin(lookup).uses_cube() {
+        " cube/{px,nx,py,ny,pz,nz}.exr,"
+    } else {
+        ""
+    };
+    println!("  files: observer.exr/.png, sensor.exr/.png, views.png,{cube} render.json");
 }

@@ -31,6 +31,7 @@ struct FrameData {
 // FrameData.flags.y: how the mirror turns its reflected ray into a cube-map direction.
 #define LOOKUP_PLAIN 0u // the reflected direction itself (the thesis)
 #define LOOKUP_BOX 1u   // from the cube's centre to where the reflected ray leaves the room box
+#define LOOKUP_RAY_QUERY 2u // no cube: the reflected ray is traced (mirror_ray_query*.frag)
 
 // One camera: a cube face or a view. dir(ndc) = ray_forward + ndc.x*ray_right + ndc.y*ray_down.
 struct ViewData {

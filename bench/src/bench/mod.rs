@@ -123,7 +123,14 @@ fn measure(
             .collect::<Vec<_>>()
             .join("; ")
     );
-    let device = probe::device_for(&instance, args.device.as_deref(), &methods)?;
+    let lookup_features = settled.lookups.iter().try_fold(
+        specchio::vk::device::OptionalFeatures::default(),
+        |f, &l| match specchio::render::lookups::missing_features(l, &chosen) {
+            None => Ok(f.union(specchio::render::lookups::features(l))),
+            Some(why) => Err(anyhow::anyhow!("--lookups {l}: {why}")),
+        },
+    )?;
+    let device = probe::device_for(&instance, args.device.as_deref(), &methods, lookup_features)?;
     drop(instance);
     if let (Some(b), Some(path)) = (baseline, &args.baseline) {
         crate::gate::same_driver(b, &device.info, path)?;

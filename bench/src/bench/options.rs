@@ -46,7 +46,7 @@ pub struct Args {
     /// [default: 128,512; --quick: 64].
     #[arg(long, allow_negative_numbers = true, value_delimiter = ',', value_parser = face_size)]
     pub cube_sizes: Option<Vec<u32>>,
-    /// Comma-separated lookup modes for the error measurement: plain, box.
+    /// Comma-separated lookup modes for the error measurement (docs/accuracy.md lists them).
     #[arg(long, value_delimiter = ',', value_parser = lookup, default_value = "plain,box")]
     pub lookups: Vec<Lookup>,
     /// Timed cube updates per method, floor and run, 1..=100000 [default: 20; --quick: 5].

@@ -111,10 +111,7 @@ pub fn github(record: &Record) -> Vec<GithubEntry> {
 
 /// A lookup mode as the options and the record spell it.
 pub fn lookup_name(lookup: specchio::scene::Lookup) -> &'static str {
-    match lookup {
-        specchio::scene::Lookup::Plain => "plain",
-        specchio::scene::Lookup::Box => "box",
-    }
+    lookup.name()
 }
 
 /// One CSV row per speed-against-error case (scene, method, face size, lookup): times, work

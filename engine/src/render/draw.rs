@@ -217,25 +217,31 @@ impl Renderer {
         }
     }
 
-    /// Draws the mirror's bounding cube with `pipeline` (colour or lookup directions).
-    pub(super) fn draw_mirror(&self, cmd: vk::CommandBuffer, pipeline: &Pipeline, view: u32) {
+    /// Draws the mirror's bounding cube with the lookup's colour or direction pipeline.
+    pub(super) fn draw_mirror(&self, cmd: vk::CommandBuffer, directions: bool, view: u32) {
         let d = &self.device.raw;
-        let p = &self.pipelines;
-        // SAFETY: recording inside a view pass; the cube is in SHADER_READ_ONLY layout.
+        let lookup = &self.lookup_pass;
+        let layout = lookup.layout().raw;
+        // SAFETY: recording inside a view pass; what set 1 holds is ready for reading (the cube
+        // in SHADER_READ_ONLY layout, or the lookup's own data after its barrier).
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+            d.cmd_bind_pipeline(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                lookup.pipeline(directions).raw,
+            );
             d.cmd_bind_descriptor_sets(
                 cmd,
                 vk::PipelineBindPoint::GRAPHICS,
-                p.mirror_layout.raw,
+                layout,
                 0,
-                &[self.resources.scene_set, self.resources.environment_set],
+                &[self.resources.scene_set, lookup.set()],
                 &[],
             );
         }
         self.push(
             cmd,
-            p.mirror_layout.raw,
+            layout,
             Push {
                 view_index: view,
                 ..Push::default()

@@ -14,6 +14,7 @@ pub mod cube_fill;
 mod draw;
 pub mod floors;
 pub mod gpu;
+pub mod lookups;
 pub mod material_check;
 pub mod methods;
 mod passes;
@@ -148,10 +149,7 @@ struct Pipelines {
     view_scene: Pipeline,
     /// Direction pass: scene depth only, then the mirror's lookup directions.
     depth_only: Pipeline,
-    mirror: Pipeline,
-    mirror_direction: Pipeline,
     scene_layout: PipelineLayout,
-    mirror_layout: PipelineLayout,
 }
 
 /// Draws one scene. Field order is teardown order (everything holds an `Arc<Device>`).
@@ -160,6 +158,10 @@ pub struct Renderer {
     floor_pipelines: Option<floors::FloorPipelines>,
     /// The method's pipeline and per-renderer state.
     fill: Box<dyn methods::FillPass>,
+    /// The mirror lookup's pipelines and per-renderer state, and the lookup it is for (the
+    /// pass is rebuilt when `scene.mirror.lookup` is switched in place).
+    lookup_pass: Box<dyn lookups::LookupPass>,
+    pass_lookup: crate::scene::Lookup,
     pipelines: Pipelines,
     timestamps: Option<QueryPool>,
     statistics: Option<QueryPool>,
@@ -227,6 +229,8 @@ impl Renderer {
             )));
         }
         let pipelines = passes::create_pipelines(device, &resources)?;
+        let lookup = scene.mirror.lookup;
+        let lookup_pass = create_lookup_pass(device, &resources, &submitter, lookup)?;
         let fill = options.method.create(&methods::MethodContext {
             device,
             scene: &scene,
@@ -260,6 +264,8 @@ impl Renderer {
         Ok(Self {
             floor_pipelines: None,
             fill,
+            lookup_pass,
+            pass_lookup: lookup,
             pipelines,
             timestamps,
             statistics,
@@ -291,9 +297,22 @@ impl Renderer {
         readback: Readback,
     ) -> Result<(FrameReport, FrameImages), GpuError> {
         let record_start = Instant::now();
+        if self.scene.mirror.lookup != self.pass_lookup {
+            let lookup = self.scene.mirror.lookup;
+            self.lookup_pass =
+                create_lookup_pass(&self.device, &self.resources, &self.submitter, lookup)?;
+            self.pass_lookup = lookup;
+        }
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
-        let mut dirty = self.dirty_faces(frame, &state, &views);
+        // A lookup that does not read the cube (ray-query) skips its fill, unless the cube
+        // itself is read back; the cube then keeps what it last showed.
+        let fill_cube = lookups::plugin(self.pass_lookup).uses_cube() || readback.cube;
+        let mut dirty = if fill_cube {
+            self.dirty_faces(frame, &state, &views)
+        } else {
+            0
+        };
         if self.method.layout() == methods::CubeLayout::Multiview && dirty != 0 {
             // A multiview pass clears and draws all six views: cull for all six, or objects
             // seen only in a clean face would vanish from it.
@@ -338,6 +357,9 @@ impl Renderer {
             cube_updated: dirty != 0,
             ..Default::default()
         };
+        // The lookup's own work (the ray-query TLAS build) comes first: without a cube update
+        // it is all that lies between the start and fill timestamps (`gpu_fill_ms`).
+        self.lookup_pass.record(cmd);
         if dirty != 0 {
             self.record_cube(cmd, &plan, self.cube_state.is_none(), &mut report);
         } else if let Some(q) = &self.timestamps {
@@ -350,7 +372,7 @@ impl Renderer {
         self.submit_frame(cmd, record_start, &mut report)?;
         self.read_queries(&mut report, dirty != 0, readback.views)?;
         // The cube now shows `state`, except after an `every-n` frame that skipped the update.
-        if dirty != 0 || self.scene.refresh == RefreshPolicy::OnChange {
+        if dirty != 0 || (fill_cube && self.scene.refresh == RefreshPolicy::OnChange) {
             self.cube_state = Some(state);
         }
         let images = self.read_images(readback, &copies)?;
@@ -454,7 +476,7 @@ impl Renderer {
             mirror: Vec4::new(0.0, 0.0, 0.0, scene.mirror.radius_m),
             flags: UVec4::new(
                 u32::from(light.is_some()),
-                lookup_flag(scene.mirror.lookup),
+                lookups::plugin(scene.mirror.lookup).flag(),
                 0,
                 0,
             ),
@@ -523,6 +545,7 @@ impl Renderer {
                 .map(|i| object_data(state.object_to_render(scene, i), scene.objects[i].material)),
         );
         self.resources.objects.write(&objects)?;
+        self.lookup_pass.prepare(&objects)?;
         self.object_bounds = objects
             .iter()
             .zip(&self.resources.drawables)
@@ -533,11 +556,22 @@ impl Renderer {
     }
 }
 
-fn lookup_flag(lookup: crate::scene::Lookup) -> u32 {
-    match lookup {
-        crate::scene::Lookup::Plain => gpu::LOOKUP_PLAIN,
-        crate::scene::Lookup::Box => gpu::LOOKUP_BOX,
+/// The pass of `lookup`, refused with the reason when the device cannot run it.
+fn create_lookup_pass(
+    device: &Arc<Device>,
+    resources: &SceneResources,
+    submitter: &Submitter,
+    lookup: crate::scene::Lookup,
+) -> Result<Box<dyn lookups::LookupPass>, GpuError> {
+    if let Some(why) = lookups::missing_features(lookup, &device.info) {
+        return Err(GpuError::Unsupported(format!("lookup {lookup}: {why}")));
     }
+    lookups::plugin(lookup).create(&lookups::LookupContext {
+        device,
+        resources,
+        submitter,
+        push_size: std::mem::size_of::<gpu::Push>() as u32,
+    })
 }
 
 fn object_data(model: Mat4, material: usize) -> ObjectData {

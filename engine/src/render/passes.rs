@@ -92,12 +92,8 @@ impl Renderer {
                 }
                 Slot::SensorDirection => (&[VIEW_SENSOR], None, None, false, "sensor directions"),
             };
-            let (scene, mirror) = if colour {
-                (&p.view_scene, &p.mirror)
-            } else {
-                (&p.depth_only, &p.mirror_direction)
-            };
-            self.record_view(cmd, target, ids, views, (scene, mirror), stats, name);
+            let scene = if colour { &p.view_scene } else { &p.depth_only };
+            self.record_view(cmd, target, ids, views, (scene, !colour), stats, name);
             if let (Some(q), Some(ts)) = (&self.timestamps, ts) {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
@@ -114,7 +110,7 @@ impl Renderer {
         target: &ViewTarget,
         view_ids: &[u32],
         views: &[ViewBasis],
-        (scene_pipeline, mirror_pipeline): (&Pipeline, &Pipeline),
+        (scene_pipeline, directions): (&Pipeline, bool),
         stats_slot: Option<u32>,
         name: &str,
     ) {
@@ -172,7 +168,7 @@ impl Renderer {
             };
             let facing = self.view_facing(&views[v as usize]);
             self.draw_objects(cmd, scene_pipeline, push, &visible, &facing);
-            self.draw_mirror(cmd, mirror_pipeline, v);
+            self.draw_mirror(cmd, directions, v);
         }
         self.end_rendering(cmd);
         if let (Some(q), Some(slot)) = (&self.statistics, stats_slot) {
@@ -473,8 +469,49 @@ fn scene_pipeline_with_writes(
     )
 }
 
-/// The view, depth-only and mirror pipelines (reverse-Z depth everywhere); the cube's
-/// pipeline belongs to its method.
+/// A mirror pipeline: the bounding cube of `mirror.vert` and `fragment` (a lookup's shader),
+/// reverse-Z depth written from the sphere's hit point. Each lookup makes its own
+/// (`lookups::LookupPass`).
+pub(crate) fn mirror_pipeline(
+    device: &Arc<Device>,
+    layout: &PipelineLayout,
+    fragment: &[u32],
+    color_format: vk::Format,
+    name: &str,
+) -> Result<Pipeline, GpuError> {
+    Pipeline::create_graphics(
+        device,
+        layout,
+        &GraphicsPipelineDesc {
+            stages: &[
+                ShaderStage {
+                    stage: vk::ShaderStageFlags::VERTEX,
+                    spirv: crate::shaders::MIRROR_VERT,
+                },
+                ShaderStage {
+                    stage: vk::ShaderStageFlags::FRAGMENT,
+                    spirv: fragment,
+                },
+            ],
+            vertex_bindings: &[],
+            vertex_attributes: &[],
+            color_format,
+            depth_format: DEPTH_FORMAT,
+            // Back faces of the bounding cube: still on screen when the camera is inside it.
+            cull_mode: vk::CullModeFlags::FRONT,
+            dynamic_culling: false,
+            depth_compare: vk::CompareOp::GREATER,
+            depth_write: true,
+            color_writes: true,
+            view_mask: 0,
+            rasterizer_discard: false,
+        },
+        name,
+    )
+}
+
+/// The view and depth-only pipelines (reverse-Z depth everywhere); the cube's pipeline
+/// belongs to its method, the mirror's to its lookup.
 pub(super) fn create_pipelines(
     device: &Arc<Device>,
     res: &SceneResources,
@@ -482,45 +519,8 @@ pub(super) fn create_pipelines(
     let push = std::mem::size_of::<Push>() as u32;
     let scene_layout =
         PipelineLayout::create(device, &[res.scene_set_layout.raw], push, "scene layout")?;
-    let mirror_layout = PipelineLayout::create(
-        device,
-        &[res.scene_set_layout.raw, res.environment_set_layout.raw],
-        push,
-        "mirror layout",
-    )?;
-    let mirror_pipeline = |fragment, color_format, name| {
-        Pipeline::create_graphics(
-            device,
-            &mirror_layout,
-            &GraphicsPipelineDesc {
-                stages: &[
-                    ShaderStage {
-                        stage: vk::ShaderStageFlags::VERTEX,
-                        spirv: crate::shaders::MIRROR_VERT,
-                    },
-                    ShaderStage {
-                        stage: vk::ShaderStageFlags::FRAGMENT,
-                        spirv: fragment,
-                    },
-                ],
-                vertex_bindings: &[],
-                vertex_attributes: &[],
-                color_format,
-                depth_format: DEPTH_FORMAT,
-                // Back faces of the bounding cube: still on screen when the camera is inside it.
-                cull_mode: vk::CullModeFlags::FRONT,
-                dynamic_culling: false,
-                depth_compare: vk::CompareOp::GREATER,
-                depth_write: true,
-                color_writes: true,
-                view_mask: 0,
-                rasterizer_discard: false,
-            },
-            name,
-        )
-    };
     // The views use the plain vertex shader and RGBA16F. The direction pass lays down depth
-    // only, then writes the mirror's lookup directions in full float.
+    // only, then the lookup writes the mirror's directions in full float.
     let scene_stages = [
         ShaderStage {
             stage: vk::ShaderStageFlags::VERTEX,
@@ -548,18 +548,9 @@ pub(super) fn create_pipelines(
         false,
         "depth-only pipeline (directions)",
     )?;
-    let mirror = mirror_pipeline(crate::shaders::MIRROR_FRAG, VIEW_FORMAT, "mirror pipeline")?;
-    let mirror_direction = mirror_pipeline(
-        crate::shaders::MIRROR_DIRECTION_FRAG,
-        DIRECTION_FORMAT,
-        "mirror direction pipeline",
-    )?;
     Ok(Pipelines {
         view_scene,
         depth_only,
-        mirror,
-        mirror_direction,
         scene_layout,
-        mirror_layout,
     })
 }

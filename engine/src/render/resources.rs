@@ -31,6 +31,8 @@ pub struct Drawable {
     pub first_index: u32,
     pub index_count: u32,
     pub vertex_offset: i32,
+    /// Vertices of the mesh, from `vertex_offset` (acceleration-structure builds need it).
+    pub vertex_count: u32,
     pub bounds_min: Vec3,
     pub bounds_max: Vec3,
     /// Back faces may be culled (the mesh is closed: see `Mesh::closed`).
@@ -75,6 +77,7 @@ impl SceneResources {
                     first_index: indices.len() as u32,
                     index_count: m.indices.len() as u32,
                     vertex_offset: vertices.len() as i32,
+                    vertex_count: m.positions.len() as u32,
                     bounds_min: m.bounds_min,
                     bounds_max: m.bounds_max,
                     cull_back: m.closed,
@@ -101,16 +104,24 @@ impl SceneResources {
             )
         };
         // Geometry never changes: device-local, read by every pass.
+        // With ray queries, acceleration-structure builds read them by address too.
+        let build_input = if device.enabled.ray_query {
+            crate::vk::acceleration::BUILD_INPUT_USAGE
+        } else {
+            vk::BufferUsageFlags::empty()
+        };
         let mut upload = Upload::begin(device, submitter)?;
         let vertex_buffer = upload.buffer(
             &vertices,
             // Storage too: a method may fetch vertices in its own shaders (mesh shading).
-            vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+            vk::BufferUsageFlags::VERTEX_BUFFER
+                | vk::BufferUsageFlags::STORAGE_BUFFER
+                | build_input,
             "scene vertices",
         )?;
         let index_buffer = upload.buffer(
             &indices,
-            vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+            vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | build_input,
             "scene indices",
         )?;
         upload.finish()?;

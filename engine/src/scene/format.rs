@@ -83,6 +83,7 @@ pub struct MirrorSpec {
 pub enum LookupSpec {
     Plain,
     Box,
+    RayQuery,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

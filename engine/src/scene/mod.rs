@@ -111,6 +111,39 @@ pub enum Lookup {
     /// box and look up the direction from the cube's centre to that point (exact for an empty
     /// box room, up to texel sampling).
     Box,
+    /// Exact: the reflected ray is traced through the scene on the GPU (ray queries); no
+    /// cube map.
+    RayQuery,
+}
+
+impl Lookup {
+    /// Every lookup, in the order the CLI, `specchio info` and the docs list them. What each
+    /// needs and does lives in its plug-in (`render::lookups`); the scene only names it.
+    pub const ALL: [Lookup; 3] = [Lookup::Plain, Lookup::Box, Lookup::RayQuery];
+
+    /// The name in scene files, on the command line and in every report (kebab-case).
+    pub fn name(self) -> &'static str {
+        match self {
+            Lookup::Plain => "plain",
+            Lookup::Box => "box",
+            Lookup::RayQuery => "ray-query",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Lookup> {
+        Self::ALL.into_iter().find(|l| l.name() == name)
+    }
+
+    /// Every name, comma-separated (for error messages and help).
+    pub fn names() -> String {
+        Self::ALL.map(Lookup::name).join(", ")
+    }
+}
+
+impl std::fmt::Display for Lookup {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// One drawable object: a mesh instance with a material and a rigid transform.

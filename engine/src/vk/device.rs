@@ -40,6 +40,9 @@ pub struct OptionalFeatures {
     pub multi_draw_indirect: bool,
     /// `VK_EXT_mesh_shader` with its task shaders.
     pub mesh_shader: bool,
+    /// `VK_KHR_ray_query` with `VK_KHR_acceleration_structure` (and the deferred host
+    /// operations and buffer device addresses it requires): the exact mirror lookup.
+    pub ray_query: bool,
 }
 
 impl OptionalFeatures {
@@ -50,6 +53,7 @@ impl OptionalFeatures {
             shader_output_layer: self.shader_output_layer || o.shader_output_layer,
             multi_draw_indirect: self.multi_draw_indirect || o.multi_draw_indirect,
             mesh_shader: self.mesh_shader || o.mesh_shader,
+            ray_query: self.ray_query || o.ray_query,
         }
     }
 
@@ -73,6 +77,10 @@ impl OptionalFeatures {
             (
                 self.mesh_shader && !(have.mesh_shader && have.task_shader),
                 "meshShader + taskShader (VK_EXT_mesh_shader)",
+            ),
+            (
+                self.ray_query && !have.ray_query,
+                "rayQuery + accelerationStructure (VK_KHR_ray_query, VK_KHR_acceleration_structure)",
             ),
         ]
         .into_iter()
@@ -170,6 +178,8 @@ pub struct DeviceFeatures {
     pub task_shader: bool,
     /// Task and mesh shader invocations are counted by pipeline-statistics queries.
     pub mesh_shader_queries: bool,
+    /// `rayQuery`, `accelerationStructure` and `bufferDeviceAddress` together: what tracing
+    /// a ray from a fragment shader needs.
     pub ray_query: bool,
     pub timestamps: bool,
     pub pipeline_statistics: bool,
@@ -229,7 +239,9 @@ impl Device {
         let mut features12 = vk::PhysicalDeviceVulkan12Features::default()
             .shader_output_layer(want.shader_output_layer)
             // ... an index that may vary within a draw (materials.glsl, nonuniformEXT).
-            .shader_sampled_image_array_non_uniform_indexing(true);
+            .shader_sampled_image_array_non_uniform_indexing(true)
+            // Acceleration-structure builds read their inputs by device address.
+            .buffer_device_address(want.ray_query);
         let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)
@@ -244,6 +256,9 @@ impl Device {
             .mesh_shader(true)
             .task_shader(true)
             .mesh_shader_queries(info.features.mesh_shader_queries);
+        let mut acceleration = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
+            .acceleration_structure(true);
+        let mut ray_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
         let mut extensions = Vec::new();
         let mut create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
@@ -254,6 +269,17 @@ impl Device {
         if want.mesh_shader {
             extensions.push(ash::ext::mesh_shader::NAME.as_ptr());
             create_info = create_info.push_next(&mut mesh);
+        }
+        if want.ray_query {
+            extensions.extend([
+                ash::khr::acceleration_structure::NAME.as_ptr(),
+                ash::khr::ray_query::NAME.as_ptr(),
+                // Required by VK_KHR_acceleration_structure (we build on the device only).
+                ash::khr::deferred_host_operations::NAME.as_ptr(),
+            ]);
+            create_info = create_info
+                .push_next(&mut acceleration)
+                .push_next(&mut ray_query);
         }
         let create_info = create_info.enabled_extension_names(&extensions);
         // SAFETY: physical comes from this instance; create_info points at live locals.
@@ -267,7 +293,9 @@ impl Device {
             device: raw.clone(),
             physical_device: physical,
             debug_settings: Default::default(),
-            buffer_device_address: false,
+            // Buffers read by address (acceleration-structure inputs) need their memory
+            // allocated with the device-address flag.
+            buffer_device_address: want.ray_query,
             allocation_sizes: Default::default(),
         })
         .map_err(|source| GpuError::Alloc {
@@ -422,6 +450,7 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
     let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
     let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default();
     let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+    let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
     let api_ok = props.api_version >= vk::API_VERSION_1_3;
     let mut features2 = vk::PhysicalDeviceFeatures2::default()
         .push_next(&mut f11)
@@ -432,8 +461,11 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
     if has_ext(ash::ext::mesh_shader::NAME) {
         features2 = features2.push_next(&mut mesh);
     }
-    if has_ext(ash::khr::ray_query::NAME) {
-        features2 = features2.push_next(&mut rq);
+    let ray_exts = has_ext(ash::khr::ray_query::NAME)
+        && has_ext(ash::khr::acceleration_structure::NAME)
+        && has_ext(ash::khr::deferred_host_operations::NAME);
+    if ray_exts {
+        features2 = features2.push_next(&mut rq).push_next(&mut accel);
     }
     // SAFETY: only structs the device understands (by version or extension) are chained.
     unsafe { inst.get_physical_device_features2(physical, &mut features2) };
@@ -510,7 +542,9 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
             task_shader: mesh.task_shader == vk::TRUE,
             mesh_shader_queries: mesh.mesh_shader_queries == vk::TRUE
                 && base.pipeline_statistics_query == vk::TRUE,
-            ray_query: rq.ray_query == vk::TRUE,
+            ray_query: rq.ray_query == vk::TRUE
+                && accel.acceleration_structure == vk::TRUE
+                && f12.buffer_device_address == vk::TRUE,
             timestamps,
             pipeline_statistics: base.pipeline_statistics_query == vk::TRUE,
             sampler_anisotropy: base.sampler_anisotropy == vk::TRUE,

@@ -8,6 +8,7 @@
 //! last submission that used them (see `commands::Submitter`), so no deletion queue is needed
 //! for an offline renderer that waits on every frame.
 
+pub mod acceleration;
 pub mod commands;
 pub mod descriptors;
 pub mod device;

@@ -93,6 +93,7 @@ impl Ctx<'_> {
             lookup: match spec.lookup {
                 None | Some(LookupSpec::Plain) => Lookup::Plain,
                 Some(LookupSpec::Box) => Lookup::Box,
+                Some(LookupSpec::RayQuery) => Lookup::RayQuery,
             },
         })
     }

@@ -1,0 +1,108 @@
+//! The cube-map lookups, `plain` and `box`: the mirror samples the cube map (set 1: the
+//! environment cube), in the reflected direction or in the box-corrected one. One pass serves
+//! both; `FrameData.flags.y` tells `mirror.glsl` which direction to look up.
+
+use ash::vk;
+
+use super::{LookupContext, LookupPass, MirrorLookup};
+use crate::render::gpu::{LOOKUP_BOX, LOOKUP_PLAIN};
+use crate::render::targets::{DIRECTION_FORMAT, VIEW_FORMAT};
+use crate::scene::Lookup;
+use crate::vk::pipeline::{Pipeline, PipelineLayout};
+use crate::vk::GpuError;
+
+/// A lookup into the cube map.
+pub struct CubeLookup {
+    lookup: Lookup,
+    flag: u32,
+    summary: &'static str,
+}
+
+pub static PLAIN: CubeLookup = CubeLookup {
+    lookup: Lookup::Plain,
+    flag: LOOKUP_PLAIN,
+    summary: "the cube map in the reflected direction (the thesis; exact only for an \
+              environment infinitely far away)",
+};
+
+pub static BOX: CubeLookup = CubeLookup {
+    lookup: Lookup::Box,
+    flag: LOOKUP_BOX,
+    summary: "the cube map towards where the reflected ray leaves the room's box \
+              (parallax-corrected; exact for an empty box room up to texel sampling)",
+};
+
+impl MirrorLookup for CubeLookup {
+    fn lookup(&self) -> Lookup {
+        self.lookup
+    }
+
+    fn summary(&self) -> &'static str {
+        self.summary
+    }
+
+    fn uses_cube(&self) -> bool {
+        true
+    }
+
+    fn flag(&self) -> u32 {
+        self.flag
+    }
+
+    fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
+        let res = ctx.resources;
+        let layout = PipelineLayout::create(
+            ctx.device,
+            &[res.scene_set_layout.raw, res.environment_set_layout.raw],
+            ctx.push_size,
+            "mirror layout",
+        )?;
+        let colour = crate::render::passes::mirror_pipeline(
+            ctx.device,
+            &layout,
+            crate::shaders::MIRROR_FRAG,
+            VIEW_FORMAT,
+            "mirror pipeline",
+        )?;
+        let directions = crate::render::passes::mirror_pipeline(
+            ctx.device,
+            &layout,
+            crate::shaders::MIRROR_DIRECTION_FRAG,
+            DIRECTION_FORMAT,
+            "mirror direction pipeline",
+        )?;
+        Ok(Box::new(CubePass {
+            colour,
+            directions,
+            layout,
+            set: res.environment_set,
+        }))
+    }
+}
+
+/// The cube lookups' pipelines. Field order is drop order: pipelines before their layout.
+struct CubePass {
+    colour: Pipeline,
+    directions: Pipeline,
+    layout: PipelineLayout,
+    /// The environment set (the cube map), owned by the scene resources.
+    set: vk::DescriptorSet,
+}
+
+impl LookupPass for CubePass {
+    fn pipeline(&self, directions: bool) -> &Pipeline {
+        if directions {
+            &self.directions
+        } else {
+            &self.colour
+        }
+    }
+
+    fn layout(&self) -> &PipelineLayout {
+        &self.layout
+    }
+
+    fn set(&self) -> vk::DescriptorSet {
+        self.set
+    }
+}

@@ -1,0 +1,171 @@
+//! Mirror lookups as plug-ins: how the mirror's fragment shader turns the reflected pixel-centre
+//! ray into a colour. Each states what it needs from the device as data ([`LookupNeeds`]:
+//! device creation, `specchio info`, `--lookup` and the tests read it), whether it reads the
+//! cube map (a lookup that does not skips the cube fill), and builds its per-renderer pass
+//! ([`LookupPass`]: its mirror pipelines, the descriptor set they read at set 1, and any
+//! per-frame work of its own).
+//!
+//! The scene file names a lookup ([`Lookup`]; the scene module has no Vulkan, so the name lives
+//! there); everything else about it lives in its module here. Adding a lookup is a variant of
+//! `Lookup`, its module and shaders, and one line in [`REGISTRY`].
+
+mod cube;
+mod ray_query;
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use super::gpu::ObjectData;
+use super::resources::SceneResources;
+use crate::scene::Lookup;
+use crate::vk::commands::Submitter;
+use crate::vk::device::{Device, DeviceInfo, OptionalFeatures};
+use crate::vk::pipeline::{Pipeline, PipelineLayout};
+use crate::vk::GpuError;
+
+/// Every lookup's plug-in, in [`Lookup::ALL`]'s order (a test checks it).
+static REGISTRY: &[&dyn MirrorLookup] = &[&cube::PLAIN, &cube::BOX, &ray_query::RayQuery];
+
+/// One mirror lookup: what it is, what it needs, and how it makes its per-renderer pass.
+pub trait MirrorLookup: Sync {
+    /// The lookup this plug-in implements (its name comes from there).
+    fn lookup(&self) -> Lookup;
+    /// One line saying what the mirror shows and when it is exact (CLI help, `info`, docs).
+    fn summary(&self) -> &'static str;
+    /// What the device must have.
+    fn needs(&self) -> LookupNeeds {
+        LookupNeeds::default()
+    }
+    /// Whether the mirror samples the cube map. When not, the renderer skips the cube fill
+    /// (unless the cube itself is read back).
+    fn uses_cube(&self) -> bool;
+    /// The `LOOKUP_*` code written in `FrameData.flags.y`.
+    fn flag(&self) -> u32;
+    /// Builds the lookup's mirror pipelines and state for one renderer.
+    fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError>;
+}
+
+/// What a lookup needs from the device, as data.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LookupNeeds {
+    /// Optional features (and their extensions) device creation must enable.
+    pub features: OptionalFeatures,
+}
+
+/// What a lookup's pass is built from.
+pub struct LookupContext<'a> {
+    pub device: &'a Arc<Device>,
+    pub resources: &'a SceneResources,
+    /// For the lookup's own one-off GPU work (building acceleration structures).
+    pub submitter: &'a Submitter,
+    /// Push-constant bytes of the mirror's shaders (`gpu::Push`).
+    pub push_size: u32,
+}
+
+/// A lookup's per-renderer state: the pipelines that draw the mirror.
+pub trait LookupPass {
+    /// The colour pipeline (`directions` false) or the one writing the direction each mirror
+    /// pixel sees (the angular error's input).
+    fn pipeline(&self, directions: bool) -> &Pipeline;
+    /// Their layout: the scene set at 0, [`LookupPass::set`] at 1.
+    fn layout(&self) -> &PipelineLayout;
+    /// The descriptor set the pipelines read at set 1.
+    fn set(&self) -> vk::DescriptorSet;
+    /// Before the frame is recorded: per-frame data of the lookup's own, from this frame's
+    /// drawables (walls first). Most lookups have none.
+    fn prepare(&mut self, _objects: &[ObjectData]) -> Result<(), GpuError> {
+        Ok(())
+    }
+    /// Records the lookup's per-frame GPU work before the views (made visible to the
+    /// fragment shaders that read it). Most lookups have none.
+    fn record(&self, _cmd: vk::CommandBuffer) {}
+}
+
+/// The plug-in of `lookup`.
+pub fn plugin(lookup: Lookup) -> &'static dyn MirrorLookup {
+    *REGISTRY
+        .iter()
+        .find(|p| p.lookup() == lookup)
+        .expect("every Lookup has a plug-in (tested)")
+}
+
+/// Why the device cannot run `lookup` (None: it can).
+pub fn missing_features(lookup: Lookup, info: &DeviceInfo) -> Option<String> {
+    let lacks = plugin(lookup).needs().features.missing(&info.features);
+    (!lacks.is_empty()).then(|| format!("the device lacks {}", lacks.join(", ")))
+}
+
+/// The optional device features `lookup` needs enabled.
+pub fn features(lookup: Lookup) -> OptionalFeatures {
+    plugin(lookup).needs().features
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_matches_the_scene_lookups_one_to_one_in_order() {
+        let ids: Vec<Lookup> = REGISTRY.iter().map(|p| p.lookup()).collect();
+        assert_eq!(ids, Lookup::ALL);
+        for l in Lookup::ALL {
+            assert_eq!(Lookup::parse(l.name()), Some(l));
+            assert!(l
+                .name()
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-'));
+            // Reports write the lookup through serde: the same name.
+            assert_eq!(serde_json::to_value(l).unwrap(), l.name());
+        }
+    }
+
+    /// Every registered lookup is accepted by the scene format under its own name.
+    #[test]
+    fn scene_files_accept_every_registered_lookup() {
+        let base = include_str!("../../../../scenes/test/six-colour-room.toml");
+        for l in Lookup::ALL {
+            let text = with_lookup(base, l.name());
+            let scene = crate::scene::load_str(&text, std::path::Path::new("lookup.toml"))
+                .unwrap_or_else(|e| panic!("lookup = \"{l}\": {e}"));
+            assert_eq!(scene.mirror.lookup, l);
+        }
+    }
+
+    /// `text` with `lookup = "name"` in its `[mirror]` table (replacing any lookup there).
+    fn with_lookup(text: &str, name: &str) -> String {
+        let mut out = String::new();
+        for line in text.lines() {
+            if line.trim_start().starts_with("lookup") {
+                continue;
+            }
+            out.push_str(line);
+            out.push('\n');
+            if line.trim() == "[mirror]" {
+                out.push_str(&format!("lookup = \"{name}\"\n"));
+            }
+        }
+        out
+    }
+
+    /// docs/accuracy.md has a row for every lookup and README names each.
+    #[test]
+    fn the_docs_cover_the_registry() {
+        let accuracy = include_str!("../../../../docs/accuracy.md");
+        let readme = include_str!("../../../../README.md");
+        let format = include_str!("../../../../docs/scene-format.md");
+        for l in Lookup::ALL {
+            let row = format!("| `{}` |", l.name());
+            assert!(
+                accuracy.contains(&row),
+                "docs/accuracy.md has no row for {l}"
+            );
+            let named = format!("`{}`", l.name());
+            assert!(readme.contains(&named), "README never names `{l}`");
+            assert!(
+                format.contains(&named) || format.contains(&format!("\"{}\"", l.name())),
+                "docs/scene-format.md never names {l}"
+            );
+        }
+    }
+}
