@@ -234,7 +234,7 @@ fn github_format_and_bad_options() {
         ),
         (
             &["--lookups", "sphere"][..],
-            "'--lookups <LOOKUPS>': `sphere` is not a lookup: plain or box",
+            "'--lookups <LOOKUPS>': `sphere` is not a lookup: one of plain, box, ray-query",
             2,
         ),
         (

@@ -672,7 +672,7 @@ fn a_missing_scene_is_named_once_with_its_cause_once() {
     assert!(!result.status.success());
     assert!(stderr.contains("/nonexistent/scene.toml"), "{stderr}");
     assert_eq!(
-        stderr.matches("No such file or directory").count(),
+        stderr.matches("file not found").count(),
         1,
         "{stderr}"
     );
