@@ -16,6 +16,22 @@ pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// Runs the `specchio` binary with `args`, validation on.
+pub fn specchio(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(args)
+        .env("SPECCHIO_VALIDATE", "1")
+        .output()
+        .expect("the specchio binary runs")
+}
+
+/// A fresh, absent folder in the temporary directory, unique to this test process.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("specchio-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
 pub fn scene(rel: &str) -> Scene {
     let path = root().join(rel);
     specchio::scene::load(&path).unwrap_or_else(|e| panic!("{rel} must load: {e}"))

@@ -1,0 +1,288 @@
+//! Every command's output is all or nothing: a failed or interrupted run leaves exactly what
+//! was there before, an earlier output is replaced as a whole, and the same run writes the
+//! same bytes.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+mod common;
+
+use common::{root, specchio, temp_dir};
+
+/// Renders the six-colour room into a fresh folder with `extra` arguments, requires success,
+/// and returns the folder and its render.json.
+fn render_six_colour(name: &str, extra: &[&str]) -> (PathBuf, serde_json::Value) {
+    let out = temp_dir(name);
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let result = specchio(&args);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let json =
+        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
+    (out, json)
+}
+
+/// Every entry under `dir`, as paths relative to it, sorted (empty when `dir` is missing).
+fn tree(dir: &Path) -> Vec<String> {
+    let mut found = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        for e in entries {
+            let path = e.unwrap().path();
+            found.push(path.strip_prefix(dir).unwrap().display().to_string());
+            if path.is_dir() {
+                stack.push(path);
+            }
+        }
+    }
+    found.sort();
+    found
+}
+
+/// A scratch folder that exists (unlike `temp_dir`), for tests that put things in it.
+fn scratch(name: &str) -> PathBuf {
+    let d = temp_dir(name);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Real failures at every stage of `specchio render`, each leaving the disk as it was: no
+/// target folder, no hidden temporary folder, no folder the command created.
+#[test]
+fn a_failed_render_leaves_nothing_behind() {
+    let dir = scratch("fail");
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let file = dir.join("file");
+    std::fs::write(&file, b"a file").unwrap();
+    let mine = dir.join("mine");
+    std::fs::create_dir(&mine).unwrap();
+    std::fs::write(mine.join("notes.txt"), b"the user's").unwrap();
+    let before = tree(&dir);
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let cases: Vec<(String, Vec<&str>, Vec<String>)> = vec![
+        // The largest documented cube (about 4 GiB) is more than lavapipe allows in one
+        // allocation: refused after the output was staged, in parents it had to create.
+        (
+            s(&dir.join("new/deeper/out")),
+            vec!["--cube-size", "8192", "--device", "lavapipe"],
+            vec!["allocation".into()],
+        ),
+        // A regular file where a folder must go, as the target and as its parent.
+        (s(&file), vec![], vec![s(&file), "not a folder".into()]),
+        (
+            s(&file.join("out")),
+            vec![],
+            vec![s(&file.join("out")), "Not a directory".into()],
+        ),
+        // A folder that is not an earlier render is never replaced.
+        (s(&mine), vec![], vec![s(&mine), "render.json".into()]),
+        // The kernel refuses to create anything in /proc.
+        (
+            format!("/proc/specchio-cli-{}", std::process::id()),
+            vec![],
+            vec![format!("/proc/specchio-cli-{}", std::process::id())],
+        ),
+    ];
+    for (out, extra, must_say) in cases {
+        let mut args = vec!["render", scene.to_str().unwrap(), "--out", &out];
+        if extra.is_empty() {
+            args.extend(["--cube-size", "8"]);
+        }
+        args.extend(&extra);
+        let result = specchio(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(!result.status.success(), "{out} {extra:?} must fail");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(!stderr.contains("partial"), "names a temporary:\n{stderr}");
+        for m in must_say {
+            assert!(stderr.contains(&m), "{out}: must say {m}:\n{stderr}");
+        }
+        assert_eq!(tree(&dir), before, "{out} {extra:?}: left something");
+    }
+    assert!(!Path::new(&format!("/proc/specchio-cli-{}", std::process::id())).exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Ctrl-C in the middle of a long `--frames` run: the frames already written are removed and
+/// no render.json appears (the run stops at the next frame with an error, exit 1).
+#[test]
+fn an_interrupted_sequence_leaves_nothing_behind() {
+    let dir = scratch("interrupt");
+    let out = dir.join("seq");
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(["render", scene.to_str().unwrap(), "--out"])
+        .arg(&out)
+        .args(["--cube-size", "8", "--frames", "100000"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait (a condition, not a duration) until the hidden folder holds a finished frame.
+    let started = std::time::Instant::now();
+    while !tree(&dir).iter().any(|p| p.ends_with("0001/views.png")) {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the render ended early"
+        );
+        assert!(started.elapsed().as_secs() < 300, "no frame after 300 s");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    // SAFETY: signals our own child process.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let result = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("interrupted after"), "{stderr}");
+    assert_eq!(tree(&dir), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Re-running into the same folder (as scripts/run.sh does) replaces the earlier render as a
+/// whole: nothing of the earlier sequence is mixed into the new single frame.
+#[test]
+fn a_render_replaces_an_earlier_render_as_a_whole() {
+    let (out, _) = render_six_colour("again", &["--cube-size", "8", "--frames", "2"]);
+    assert!(out.join("0001").is_dir());
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let result = specchio(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cube-size",
+        "8",
+    ]);
+    assert!(result.status.success());
+    let mut top: Vec<String> = tree(&out)
+        .into_iter()
+        .filter(|p| !p.contains('/'))
+        .collect();
+    top.sort();
+    let expected = [
+        "cube",
+        "observer.exr",
+        "observer.png",
+        "render.json",
+        "sensor.exr",
+        "sensor.png",
+        "views.png",
+    ];
+    assert_eq!(top, expected);
+    let parent = out.parent().unwrap();
+    let name = out.file_name().unwrap().to_string_lossy().into_owned();
+    let beside: Vec<_> = std::fs::read_dir(parent)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(&format!(".{name}.partial")))
+        .collect();
+    assert!(beside.is_empty(), "{beside:?}");
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// Two runs of the same scene, with different rasterizer thread counts, write byte-identical
+/// files (EXR included, so checksums work); only render.json differs (it holds timings).
+#[test]
+fn two_renders_write_byte_identical_files() {
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let run = |name: &str, threads: &str| {
+        let out = temp_dir(name);
+        let result = Command::new(env!("CARGO_BIN_EXE_specchio"))
+            .args(["render", scene.to_str().unwrap(), "--out"])
+            .arg(&out)
+            .args(["--cube-size", "64", "--directions"])
+            .env("LP_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        assert!(
+            result.status.success(),
+            "{}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+        out
+    };
+    let (a, b) = (run("bytes-a", "1"), run("bytes-b", "2"));
+    let files = tree(&a);
+    assert_eq!(files, tree(&b));
+    assert!(files.iter().any(|f| f == "observer.direction.exr"));
+    for f in files.iter().filter(|f| a.join(f).is_file()) {
+        if f == "render.json" {
+            continue;
+        }
+        let (x, y) = (
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+        );
+        assert!(x == y, "{f} differs between the two runs");
+    }
+    std::fs::remove_dir_all(&a).unwrap();
+    std::fs::remove_dir_all(&b).unwrap();
+}
+
+/// The benchmark's report files are checked and staged before the run: a folder where a file
+/// must go, or one file named twice, fails at once and writes none of them.
+#[test]
+fn bench_report_files_fail_before_the_run_and_together() {
+    let dir = scratch("bench-files");
+    let json = dir.join("b.json");
+    let folder = dir.join("folder");
+    std::fs::create_dir(&folder).unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    for (csv, must_say) in [
+        (s(&folder), vec![s(&folder), "is a folder".to_owned()]),
+        (s(&json), vec![s(&json), "two outputs".to_owned()]),
+    ] {
+        let result = specchio(&["bench", "--quick", "--json", &s(&json), "--csv", &csv]);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(!result.status.success());
+        for m in must_say {
+            assert!(stderr.contains(&m), "must say {m}:\n{stderr}");
+        }
+        assert_eq!(tree(&dir), ["folder"]);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `specchio reference` shares the all-or-nothing output: it never replaces a folder that is
+/// not an earlier reference (here an earlier render), and a file in the way fails at once.
+#[test]
+fn reference_output_is_all_or_nothing_too() {
+    let (render, _) = render_six_colour("ref-over-render", &["--cube-size", "8"]);
+    let before = tree(&render);
+    let dir = scratch("ref");
+    let file = dir.join("file");
+    std::fs::write(&file, b"a file").unwrap();
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    for (out, must_say) in [
+        (render.clone(), "reference.json"),
+        (file.join("out"), "Not a directory"),
+    ] {
+        let result = specchio(&[
+            "reference",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(!result.status.success(), "{out:?} must fail");
+        assert!(stderr.contains(out.to_str().unwrap()), "{stderr}");
+        assert!(stderr.contains(must_say), "must say {must_say}:\n{stderr}");
+    }
+    assert_eq!(tree(&render), before, "the render is untouched");
+    assert_eq!(tree(&dir), ["file"]);
+    std::fs::remove_dir_all(&render).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
