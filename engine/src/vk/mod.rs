@@ -15,6 +15,7 @@ pub mod device;
 pub mod image;
 pub mod instance;
 pub mod memory;
+pub mod physical;
 pub mod pipeline;
 pub mod queries;
 #[cfg(test)]
