@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 
 use crate::image::RgbaImage;
 use crate::output::{linear_to_srgb, OutputError};
+use crate::scene::files::{read_regular_file, FileError};
 use crate::scene::TextureData;
 
 pub use heatmap::{colour_map, write_heatmap, NOT_COMPARED_RGB8};
@@ -131,21 +132,37 @@ impl Comparison {
 
 /// The first RGBA layer of an OpenEXR file, as 32-bit float (alpha 1 when the file has none).
 pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
-    check_exists(path)?;
-    check_exr_size(path)?;
-    let read = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |res, _| RgbaImage {
-            width: res.width() as u32,
-            height: res.height() as u32,
-            pixels: vec![[0.0; 4]; res.width() * res.height()],
+    // One read, through the loaders' regular-file reader (a FIFO would block, a folder fail
+    // late); the header check and the decoding both work on these bytes.
+    let bytes = read_regular_file(path, MAX_INPUT_FILE_BYTES).map_err(|e| match e {
+        FileError::NotFound { .. } => MetricsError::Missing {
+            path: path.to_owned(),
         },
-        |img: &mut RgbaImage, pos, (r, g, b, a): (f32, f32, f32, f32)| {
-            let i = pos.y() * img.width as usize + pos.x();
-            img.pixels[i] = [r, g, b, a];
+        other => MetricsError::Read {
+            path: path.to_owned(),
+            message: other.to_string(),
         },
-    )
-    .map_err(|e| exr_error(path, e))?;
+    })?;
+    check_exr_size(path, &bytes)?;
+    use exr::prelude::{ReadChannels as _, ReadLayers as _};
+    let read = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res: exr::math::Vec2<usize>, _: &exr::prelude::RgbaChannels| RgbaImage {
+                width: res.width() as u32,
+                height: res.height() as u32,
+                pixels: vec![[0.0; 4]; res.width() * res.height()],
+            },
+            |img: &mut RgbaImage, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                let i = pos.y() * img.width as usize + pos.x();
+                img.pixels[i] = [r, g, b, a];
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(&bytes))
+        .map_err(|e| exr_error(path, e))?;
     Ok(read.layer_data.channel_data.pixels)
 }
 
@@ -153,10 +170,15 @@ pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
 /// so a corrupt or hostile header cannot ask for gigabytes before a pixel is read.
 pub const MAX_INPUT_SIDE_PX: usize = 16384;
 
+/// The largest EXR file the metrics read: an uncompressed RGBA f32 image of
+/// [`MAX_INPUT_SIDE_PX`] a side, with room for its header and offset tables.
+const MAX_INPUT_FILE_BYTES: u64 = (MAX_INPUT_SIDE_PX * MAX_INPUT_SIDE_PX * 16) as u64 + (64 << 20);
+
 /// Refuses an EXR whose header declares a layer larger than [`MAX_INPUT_SIDE_PX`] a side,
 /// from the header alone (the pixels would be allocated before they are read).
-fn check_exr_size(path: &Path) -> Result<(), MetricsError> {
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
+fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<(), MetricsError> {
+    let meta =
+        exr::meta::MetaData::read_from_buffered(bytes, false).map_err(|e| exr_error(path, e))?;
     for header in meta.headers.iter() {
         let size = header.layer_size;
         if size.0 > MAX_INPUT_SIDE_PX || size.1 > MAX_INPUT_SIDE_PX {
@@ -380,15 +402,9 @@ fn check_size(
 }
 
 /// A missing file gets its own error (the decoders' messages do not always name it).
-/// The path names a regular file (a folder, a FIFO or a device is refused before it is
-/// opened: reading a FIFO would block forever).
 fn check_exists(path: &Path) -> Result<(), MetricsError> {
     match std::fs::metadata(path) {
-        Ok(m) if m.is_file() => Ok(()),
-        Ok(_) => Err(MetricsError::Read {
-            path: path.to_owned(),
-            message: "not a regular file".to_owned(),
-        }),
+        Ok(_) => Ok(()),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(MetricsError::Missing {
             path: path.to_owned(),
         }),

@@ -17,7 +17,7 @@ mod anim;
 mod asset;
 pub mod camera;
 mod error;
-mod files;
+pub(crate) mod files;
 mod fixed;
 mod format;
 mod generate;
