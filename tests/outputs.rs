@@ -7,30 +7,7 @@ use std::process::Command;
 
 mod common;
 
-use common::{root, specchio, temp_dir};
-
-/// Renders the six-colour room into a fresh folder with `extra` arguments, requires success,
-/// and returns the folder and its render.json.
-fn render_six_colour(name: &str, extra: &[&str]) -> (PathBuf, serde_json::Value) {
-    let out = temp_dir(name);
-    let scene = root().join("scenes/test/six-colour-room.toml");
-    let mut args = vec![
-        "render",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend_from_slice(extra);
-    let result = specchio(&args);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
-    let json =
-        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
-    (out, json)
-}
+use common::{render_six_colour, root, specchio, temp_dir};
 
 /// Every entry under `dir`, as paths relative to it, sorted (empty when `dir` is missing).
 fn tree(dir: &Path) -> Vec<String> {

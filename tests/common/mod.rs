@@ -32,6 +32,29 @@ pub fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// Renders the six-colour room into a fresh folder with `extra` arguments, requires success,
+/// and returns the folder and its render.json.
+pub fn render_six_colour(name: &str, extra: &[&str]) -> (PathBuf, serde_json::Value) {
+    let out = temp_dir(name);
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let result = specchio(&args);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let json =
+        serde_json::from_str(&std::fs::read_to_string(out.join("render.json")).unwrap()).unwrap();
+    (out, json)
+}
+
 pub fn scene(rel: &str) -> Scene {
     let path = root().join(rel);
     specchio::scene::load(&path).unwrap_or_else(|e| panic!("{rel} must load: {e}"))
