@@ -34,10 +34,10 @@ vec2 pixel_ndc(ViewData view) {
     return (gl_FragCoord.xy - view.viewport.xy) / view.viewport.zw * 2.0 - 1.0;
 }
 
-// False when this pixel's ray misses the mirror. Otherwise the hit point on the sphere and
-// the direction to look up in the cube map (world space, no texture-matrix rotation).
-bool mirror_pixel(ViewData view, FrameData f, out vec3 hit, out vec3 lookup) {
-    vec3 dir = view_ray(view, pixel_ndc(view));
+// False when this pixel's ray misses the mirror. Otherwise the ray's direction, the hit point
+// on the sphere and the sphere's unit normal there; every lookup starts from these.
+bool mirror_hit(ViewData view, FrameData f, out vec3 dir, out vec3 hit, out vec3 n) {
+    dir = view_ray(view, pixel_ndc(view));
     vec3 centre = f.mirror.xyz;
     float radius = f.mirror.w;
     float t;
@@ -45,8 +45,18 @@ bool mirror_pixel(ViewData view, FrameData f, out vec3 hit, out vec3 lookup) {
         return false;
     }
     // Normal from the sphere equation; the hit point is put back on the surface.
-    vec3 n = normalize(view.eye.xyz + t * dir - centre);
+    n = normalize(view.eye.xyz + t * dir - centre);
     hit = centre + radius * n;
+    return true;
+}
+
+// False when this pixel's ray misses the mirror. Otherwise the hit point on the sphere and
+// the direction to look up in the cube map (world space, no texture-matrix rotation).
+bool mirror_pixel(ViewData view, FrameData f, out vec3 hit, out vec3 lookup) {
+    vec3 dir, n;
+    if (!mirror_hit(view, f, dir, hit, n)) {
+        return false;
+    }
     lookup = lookup_at(f, dir, n);
     return true;
 }

@@ -98,15 +98,10 @@ Reflection trace_reflection(FrameData f, vec3 dir, vec3 hit, vec3 n) {
 // The mirror seen through this pixel: false when the pixel's ray misses the sphere; else the
 // sphere point (for depth) and what the reflected ray meets.
 bool mirror_reflection(ViewData view, FrameData f, out vec3 hit, out Reflection reflection) {
-    vec3 dir = view_ray(view, pixel_ndc(view));
-    vec3 centre = f.mirror.xyz;
-    float radius = f.mirror.w;
-    float t;
-    if (!intersect_sphere(view.eye.xyz, dir, centre, radius, t)) {
+    vec3 dir, n;
+    if (!mirror_hit(view, f, dir, hit, n)) {
         return false;
     }
-    vec3 n = normalize(view.eye.xyz + t * dir - centre);
-    hit = centre + radius * n;
     reflection = trace_reflection(f, dir, hit, n);
     return true;
 }
