@@ -11,6 +11,8 @@
 //! - [`render`]: the renderer: GPU structs, the cube fill methods (plug-ins, see
 //!   [`render::methods`]) and the observer / sensor views with the analytic mirror;
 //! - [`reference`]: the exact CPU ray-traced mirror (BVH, watertight triangles, analytic sphere);
+//! - [`sensor`]: the sensor's exact ray map (the non-central ground truth) and what derives
+//!   from it;
 //! - [`metrics`]: image-error metrics (RMSE, PSNR, relMSE, FLIP) and the FLIP heatmap;
 //! - [`output`]: EXR, PNG and JSON files, written atomically.
 
@@ -20,6 +22,7 @@ pub mod output;
 pub mod reference;
 pub mod render;
 pub mod scene;
+pub mod sensor;
 pub mod shaders;
 pub mod vk;
 

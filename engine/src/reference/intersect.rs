@@ -21,6 +21,33 @@ pub fn ray_sphere(o: Vec3, d: Vec3, c: Vec3, r: f32) -> Option<f32> {
     (t > 0.0).then_some(t)
 }
 
+/// Where a camera ray meets the mirror sphere (centred at the origin) and where it goes next.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MirrorReflection {
+    /// Distance along the (unit) camera ray to the sphere.
+    pub t: f32,
+    /// Outward unit normal at the hit.
+    pub normal: Vec3,
+    /// The hit, put back on the sphere (`normal * radius`).
+    pub point: Vec3,
+    /// The reflected unit direction.
+    pub direction: Vec3,
+}
+
+/// The reflection of the unit ray `eye + t d` on the sphere of `radius` at the origin, or None
+/// when the ray misses it (or starts inside it). The normal comes from the sphere equation at
+/// the hit, and the hit is put back on the sphere, as `shaders/include/mirror.glsl` does.
+pub fn mirror_reflection(eye: Vec3, d: Vec3, radius: f32) -> Option<MirrorReflection> {
+    let t = ray_sphere(eye, d, Vec3::ZERO, radius)?;
+    let normal = (eye + t * d).normalize();
+    Some(MirrorReflection {
+        t,
+        normal,
+        point: normal * radius,
+        direction: d - 2.0 * d.dot(normal) * normal,
+    })
+}
+
 /// A triangle hit: distance and barycentric weights of v1 and v2.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TriangleHit {
@@ -182,6 +209,35 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Straight up into the sphere's lowest point: reflected straight back down.
+    #[test]
+    fn the_central_ray_comes_straight_back() {
+        let m = mirror_reflection(Vec3::new(0.0, -3.0, 0.0), Vec3::Y, 1.0).unwrap();
+        assert_eq!(m.t, 2.0);
+        assert_eq!(m.point, Vec3::NEG_Y);
+        assert_eq!(m.direction, Vec3::NEG_Y);
+    }
+
+    /// A ray meeting the sphere at 45 degrees of incidence leaves at a right angle to it.
+    #[test]
+    fn a_45_degree_hit_turns_the_ray_by_90_degrees() {
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        // Aimed at the point (-h, -h, 0) of the unit sphere, travelling +Y.
+        let m = mirror_reflection(Vec3::new(-h, -5.0, 0.0), Vec3::Y, 1.0).unwrap();
+        assert!((m.point - Vec3::new(-h, -h, 0.0)).length() < 1e-6);
+        assert!(
+            (m.direction - Vec3::NEG_X).length() < 1e-6,
+            "{}",
+            m.direction
+        );
+    }
+
+    #[test]
+    fn misses_and_inside_starts_are_none() {
+        assert!(mirror_reflection(Vec3::new(2.0, -5.0, 0.0), Vec3::Y, 1.0).is_none());
+        assert!(mirror_reflection(Vec3::ZERO, Vec3::Y, 1.0).is_none());
+    }
 
     #[test]
     fn sphere_known_answers() {

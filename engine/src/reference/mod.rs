@@ -26,7 +26,7 @@ use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
 use crate::scene::Scene;
 use geometry::SceneGeometry;
-use intersect::{offset_ray_origin, ray_sphere};
+use intersect::{mirror_reflection, offset_ray_origin, ray_sphere};
 
 /// Largest samples-per-pixel accepted (a 64 x 64 stratified grid).
 pub const MAX_SPP: u32 = 4096;
@@ -183,12 +183,11 @@ impl<'a> Reference<'a> {
             }
             // Neither the mirror nor anything else: out of the room.
             (None, None) => s.missed = true,
-            (None, Some(t)) => {
-                // The mirror: the hit put back on the sphere, the normal from the sphere equation.
-                let n = (eye + t * d).normalize();
-                let p = n * radius;
-                let r = d - 2.0 * d.dot(n) * n;
-                s.primary_t = t;
+            (None, Some(_)) => {
+                // The mirror: the same reflection as the sensor's ray map.
+                let m = mirror_reflection(eye, d, radius).expect("the sphere was hit");
+                let (n, p, r) = (m.normal, m.point, m.direction);
+                s.primary_t = m.t;
                 s.via_mirror = true;
                 s.rays = 2;
                 let origin = offset_ray_origin(p, n);
