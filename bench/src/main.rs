@@ -3,6 +3,7 @@
 
 mod args;
 mod bench;
+mod calibrate;
 mod compare;
 mod gate;
 mod info;
@@ -40,6 +41,9 @@ enum Command {
     /// Speed against error of every cube fill method: interleaved timings, floors, error
     /// against the exact reference, incremental updates; JSON, CSV, SVG and a regression gate.
     Bench(bench::Args),
+    /// Fit the central models robotics tools calibrate (OpenCV omnidir, Kalibr omni,
+    /// OCamCalib) to the sensor's exact rays; export them with their residuals.
+    Calibrate(calibrate::Args),
     /// Error metrics of a test image against a reference (RMSE, PSNR, relMSE, FLIP), with an
     /// optional mask and FLIP heatmap.
     Compare(compare::Args),
@@ -105,6 +109,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::Reference(args) => reference::run(&args),
         Command::Compare(args) => compare::run(&args),
+        Command::Calibrate(args) => calibrate::run(&args),
     };
     match result {
         Ok(code) => code,
