@@ -43,7 +43,8 @@ impl MeiModel {
     pub fn project(&self, p: DVec3) -> Option<DVec2> {
         let s = p.normalize();
         let w = s.z + self.xi;
-        if !(w > 0.0) {
+        // NaN (a zero-length point) is refused with the points behind the second centre.
+        if w.is_nan() || w <= 0.0 {
             return None;
         }
         let d = self.distort(DVec2::new(s.x / w, s.y / w));
@@ -155,7 +156,7 @@ impl MeiModel {
                 den += m.length_squared();
             }
         }
-        if !(den > 0.0) {
+        if den.is_nan() || den <= 0.0 {
             return Err(FitError::NoStart("no sample projects with xi = 1"));
         }
         let f = num / den;

@@ -11,11 +11,16 @@ pub fn least_squares(a: &[f64], b: &[f64], rows: usize, cols: usize) -> Option<V
     assert_eq!(b.len(), rows, "one right-hand side value per row");
     let (mut a, mut b) = (a.to_vec(), b.to_vec());
     let at = |r: usize, c: usize| r * cols + c;
+    // A column counts as dependent when less than this fraction of its norm is left once the
+    // earlier columns are taken out.
+    const RANK_TOLERANCE: f64 = 1e-12;
+    let original: Vec<f64> = (0..cols)
+        .map(|c| (0..rows).map(|r| a[at(r, c)].powi(2)).sum::<f64>().sqrt())
+        .collect();
     for k in 0..cols {
         // The Householder reflection that zeroes column k below the diagonal.
         let norm = (k..rows).map(|r| a[at(r, k)].powi(2)).sum::<f64>().sqrt();
-        let scale = (k..rows).map(|r| a[at(r, k)].abs()).fold(0.0, f64::max);
-        if norm <= 1e-13 * scale.max(f64::MIN_POSITIVE) || norm == 0.0 {
+        if norm == 0.0 || norm <= RANK_TOLERANCE * original[k] {
             return None;
         }
         let alpha = if a[at(k, k)] > 0.0 { -norm } else { norm };
