@@ -5,10 +5,21 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 # The central-model exports are checked against OpenCV itself (tests/calibrate.rs runs
-# scripts/check-omnidir.py): a project-local venv with OpenCV's contrib wheel, made once.
-if [ ! -x .venv-check/bin/python ]; then
-    python3 -m venv .venv-check
-    .venv-check/bin/pip install --quiet opencv-contrib-python-headless
+# scripts/check-omnidir.py): a project-local venv with OpenCV's contrib wheel, made once and
+# moved into place only whole (a failed pip install must not look like a ready venv).
+if [ ! -x .venv-check/bin/python ] || ! .venv-check/bin/python -c "import cv2" 2>/dev/null; then
+    if ! python3 -m venv --help >/dev/null 2>&1 || ! python3 -c "import ensurepip" 2>/dev/null; then
+        echo "test: installing python3-venv (for the OpenCV check's venv)" >&2
+        if [ "$(id -u)" -eq 0 ]; then apt-get update -qq && apt-get install -y -qq python3-venv
+        else sudo apt-get update -qq && sudo apt-get install -y -qq python3-venv
+        fi
+    fi
+    rm -rf .venv-check .venv-check.new
+    python3 -m venv .venv-check.new
+    .venv-check.new/bin/pip install --quiet opencv-contrib-python-headless
+    # The venv's scripts name their folder: made as .new, it is rebuilt in place.
+    mv .venv-check.new .venv-check
+    python3 -m venv --upgrade .venv-check >/dev/null
 fi
 export SPECCHIO_REQUIRE_TOOL_CHECKS=1
 export SPECCHIO_VALIDATE=1
