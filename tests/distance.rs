@@ -47,7 +47,10 @@ fn angles(gpu: &Gpu, s: &Scene, lookup: Lookup) -> Vec<f64> {
 fn empty_rooms_are_exact_to_float_rounding() {
     for device in devices() {
         let gpu = Gpu::on(&device, Default::default());
-        for path in ["scenes/test/six-colour-room.toml", "scenes/hard/face-edges.toml"] {
+        for path in [
+            "scenes/test/six-colour-room.toml",
+            "scenes/hard/face-edges.toml",
+        ] {
             let s = scene(path);
             let mut a = angles(&gpu, &s, Lookup::Distance);
             a.sort_by(f64::total_cmp);

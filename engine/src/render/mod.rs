@@ -299,8 +299,7 @@ impl Renderer {
         let record_start = Instant::now();
         if self.scene.mirror.lookup != self.pass_lookup {
             let lookup = self.scene.mirror.lookup;
-            self.lookup_pass =
-                create_lookup_pass(
+            self.lookup_pass = create_lookup_pass(
                 &self.device,
                 &self.resources,
                 &self.cube,

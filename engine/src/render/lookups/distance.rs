@@ -77,18 +77,8 @@ impl MirrorLookup for Distance {
             "cube depth sampler",
         )?;
         let cube = ctx.cube;
-        descriptors::write_images(
-            device,
-            set,
-            0,
-            &[(cube.cube_view.raw, cube.sampler.raw)],
-        );
-        descriptors::write_images(
-            device,
-            set,
-            1,
-            &[(cube.depth_layers_view.raw, nearest.raw)],
-        );
+        descriptors::write_images(device, set, 0, &[(cube.cube_view.raw, cube.sampler.raw)]);
+        descriptors::write_images(device, set, 1, &[(cube.depth_layers_view.raw, nearest.raw)]);
         let layout = PipelineLayout::create(
             device,
             &[res.scene_set_layout.raw, set_layout.raw],
@@ -152,7 +142,6 @@ impl LookupPass for DistancePass {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::scene::camera::ViewBasis;
     use glam::Vec3;
 
