@@ -41,6 +41,9 @@ pub struct RenderSettings {
     pub methods: Vec<Method>,
     pub full_updates: bool,
     pub lookup: Lookup,
+    /// The distance lookup's search steps (used only by it).
+    pub distance_steps: u32,
+    pub secant_steps: u32,
     pub cube: CubeSettings,
     pub refresh: String,
     pub observer_resolution: [u32; 2],

@@ -9,7 +9,7 @@ use specchio::render::lookups;
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::camera::FACE_NAMES;
-use specchio::scene::{CubeFormat, Lookup, RefreshPolicy};
+use specchio::scene::{CubeFormat, Lookup, RefreshPolicy, MAX_DISTANCE_STEPS, MAX_SECANT_STEPS};
 use specchio::vk::device::{self, DeviceInfo};
 
 use crate::args::{face_size, real, whole};
@@ -58,6 +58,13 @@ pub struct Args {
     /// docs/accuracy.md). Default: the scene's `mirror.lookup`.
     #[arg(long)]
     lookup: Option<String>,
+    /// The distance lookup's linear search steps, 1..=256 (overrides the scene's
+    /// mirror.distance_steps; see docs/accuracy.md).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(1..=MAX_DISTANCE_STEPS))]
+    distance_steps: Option<u32>,
+    /// The distance lookup's secant refinements, 0..=32 (overrides mirror.secant_steps).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(0..=MAX_SECANT_STEPS))]
+    secant_steps: Option<u32>,
     /// Also write, per mirror pixel, the direction looked up in the cube map
     /// (`observer.direction.exr`, `sensor.direction.exr`), to compare with `specchio reference`.
     #[arg(long)]
@@ -84,7 +91,13 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             None => bail!("--lookup {name}: must be one of {}", Lookup::names()),
         },
     };
-    let scene = specchio::scene::load(&args.scene)?;
+    let mut scene = specchio::scene::load(&args.scene)?;
+    if let Some(n) = args.distance_steps {
+        scene.mirror.distance_steps = n;
+    }
+    if let Some(n) = args.secant_steps {
+        scene.mirror.secant_steps = n;
+    }
     let start_s = args
         .time
         .unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);
@@ -155,6 +168,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             methods,
             full_updates: args.full_updates,
             lookup: lookup.unwrap_or(scene.mirror.lookup),
+            distance_steps: scene.mirror.distance_steps,
+            secant_steps: scene.mirror.secant_steps,
             cube: CubeSettings {
                 face_size_px: args.cube_size.unwrap_or(cube.face_size_px),
                 format: format_name(cube.format),

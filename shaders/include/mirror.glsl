@@ -20,12 +20,14 @@ vec3 view_ray(ViewData view, vec2 ndc) {
 
 // The cube-map lookup of the ray `dir` reflected at the sphere's unit normal `n`: the plain
 // reflected direction, or (box lookup) the direction from the cube's centre to where the
-// reflected ray leaves the room.
+// reflected ray leaves the room. The distance lookup starts from the box direction: it gives
+// the footprint of its filtered lookup and its answer where the search finds no surface.
 vec3 lookup_at(FrameData f, vec3 dir, vec3 n) {
     vec3 centre = f.mirror.xyz;
     vec3 hit = centre + f.mirror.w * n;
     vec3 r = reflect(dir, n); // R = I - 2 (N.I) N
-    return f.flags.y == LOOKUP_BOX ? room_exit(hit, r, f) - centre : r;
+    bool box = f.flags.y == LOOKUP_BOX || f.flags.y == LOOKUP_DISTANCE;
+    return box ? room_exit(hit, r, f) - centre : r;
 }
 
 // The pixel centre's viewport coordinates in [-1, 1].

@@ -23,15 +23,19 @@
 struct FrameData {
     vec4 light_dir_ambient; // xyz: unit vector towards the light; w: ambient fraction
     vec4 mirror;            // xyz: mirror centre (render space, normally 0); w: radius (m)
-    uvec4 flags;            // x: 1 when the directional light is on; y: LOOKUP_* mode
+    uvec4 flags;            // x: 1 when the directional light is on; y: LOOKUP_* mode;
+                            // z, w: the distance lookup's linear and secant steps
     vec4 room_min;          // xyz: the room box's low corner (render space)
     vec4 room_max;          // xyz: its high corner
+    vec4 cube_depth;        // x, y: the cube faces' near and far planes (m), to turn their
+                            // reverse-Z depth back into distances (distance_search.glsl)
 };
 
 // FrameData.flags.y: how the mirror turns its reflected ray into a cube-map direction.
 #define LOOKUP_PLAIN 0u // the reflected direction itself (the thesis)
 #define LOOKUP_BOX 1u   // from the cube's centre to where the reflected ray leaves the room box
 #define LOOKUP_RAY_QUERY 2u // no cube: the reflected ray is traced (mirror_ray_query*.frag)
+#define LOOKUP_DISTANCE 3u  // the reflected ray searched through the cube's depth (mirror_distance*.frag)
 
 // One camera: a cube face or a view. dir(ndc) = ray_forward + ndc.x*ray_right + ndc.y*ray_down.
 struct ViewData {

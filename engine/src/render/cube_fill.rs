@@ -88,8 +88,9 @@ impl Renderer {
         };
         dev.begin_label(cmd, &format!("cube fill ({name})"));
         let per_face_marks = fill == Fill::Method && self.per_face_marks();
-        // Clean faces keep their pixels, so the old layout is named (UNDEFINED only before the
-        // first fill). Depth is scratch: its old contents never matter.
+        // Clean faces keep their pixels, colour and depth (the `distance` lookup's distance
+        // map), so the old layout is named (UNDEFINED only before the first fill); the last
+        // readers were the mirror's fragment shaders.
         let old = if first_fill {
             vk::ImageLayout::UNDEFINED
         } else {
@@ -108,7 +109,7 @@ impl Renderer {
                 barrier(
                     cube.depth.raw,
                     cube.depth.full_range(),
-                    (vk::ImageLayout::UNDEFINED, DEPTH_RW),
+                    (old, SAMPLED),
                     (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
                 ),
             ],
@@ -141,6 +142,17 @@ impl Renderer {
         if let Some(q) = &self.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, TS_FILL);
         }
+        // The depth the fill wrote, for the mirror's fragment shaders (distance lookup).
+        image_barriers(
+            dev,
+            cmd,
+            &[barrier(
+                cube.depth.raw,
+                cube.depth.full_range(),
+                (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
+                (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
+            )],
+        );
         self.record_mips(cmd, plan.dirty);
         if let Some(q) = &self.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);

@@ -70,6 +70,9 @@ pub(super) struct Attachments {
     /// Clear on load (the whole attachment); otherwise keep the contents and let the method
     /// clear the layers it re-renders.
     pub clear: bool,
+    /// Keep the depth after the scope: the cube's depth is the `distance` lookup's distance
+    /// map, and a face not re-rendered keeps it; a view's depth is needed only within.
+    pub store_depth: bool,
 }
 
 /// How a front face (counter-clockwise seen from the front, as every mesh is wound) turns on
@@ -311,8 +314,11 @@ impl Renderer {
             .image_view(a.depth)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
             .load_op(load)
-            // Depth is only needed within the pass.
-            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .store_op(if a.store_depth {
+                vk::AttachmentStoreOp::STORE
+            } else {
+                vk::AttachmentStoreOp::DONT_CARE
+            })
             .clear_value(CLEAR_DEPTH);
         let area = vk::Rect2D {
             offset: vk::Offset2D { x: 0, y: 0 },

@@ -230,7 +230,7 @@ impl Renderer {
         }
         let pipelines = passes::create_pipelines(device, &resources)?;
         let lookup = scene.mirror.lookup;
-        let lookup_pass = create_lookup_pass(device, &resources, &submitter, lookup)?;
+        let lookup_pass = create_lookup_pass(device, &resources, &cube, &submitter, lookup)?;
         let fill = options.method.create(&methods::MethodContext {
             device,
             scene: &scene,
@@ -299,8 +299,13 @@ impl Renderer {
         let record_start = Instant::now();
         if self.scene.mirror.lookup != self.pass_lookup {
             let lookup = self.scene.mirror.lookup;
-            self.lookup_pass =
-                create_lookup_pass(&self.device, &self.resources, &self.submitter, lookup)?;
+            self.lookup_pass = create_lookup_pass(
+                &self.device,
+                &self.resources,
+                &self.cube,
+                &self.submitter,
+                lookup,
+            )?;
             self.pass_lookup = lookup;
         }
         let state = SceneState::at(&self.scene, t_s);
@@ -477,13 +482,14 @@ impl Renderer {
             flags: UVec4::new(
                 u32::from(light.is_some()),
                 lookups::plugin(scene.mirror.lookup).flag(),
-                0,
-                0,
+                scene.mirror.distance_steps,
+                scene.mirror.secant_steps,
             ),
             room_min: (scene.room.center - 0.5 * scene.room.size_m - state.mirror_center)
                 .extend(1.0),
             room_max: (scene.room.center + 0.5 * scene.room.size_m - state.mirror_center)
                 .extend(1.0),
+            cube_depth: Vec4::new(scene.cube.near_m, scene.cube.far_m, 0.0, 0.0),
         };
         self.resources.frame.write(&[frame])?;
 
@@ -560,6 +566,7 @@ impl Renderer {
 fn create_lookup_pass(
     device: &Arc<Device>,
     resources: &SceneResources,
+    cube: &CubeTarget,
     submitter: &Submitter,
     lookup: crate::scene::Lookup,
 ) -> Result<Box<dyn lookups::LookupPass>, GpuError> {
@@ -569,6 +576,7 @@ fn create_lookup_pass(
     lookups::plugin(lookup).create(&lookups::LookupContext {
         device,
         resources,
+        cube,
         submitter,
         push_size: std::mem::size_of::<gpu::Push>() as u32,
     })

@@ -146,6 +146,7 @@ impl Renderer {
                 layers: 1,
                 view_mask: 0,
                 clear: true,
+                store_depth: false,
             },
         );
         for &v in view_ids {

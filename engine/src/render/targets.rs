@@ -54,13 +54,15 @@ impl CubeTarget {
         )
     }
 
-    /// The cube's depth: six layers of one level (never sampled, so not cube-compatible).
+    /// The cube's depth: six layers of one level, kept after the fill and sampled by the
+    /// `distance` lookup. It reads texels one by one (texelFetch on the six-layer array view,
+    /// choosing the face itself), so the image need not be cube-compatible.
     pub fn depth_desc(settings: &CubeSettings) -> ImageDesc {
         let mut desc = ImageDesc::new_cube(
             DEPTH_FORMAT,
             settings.face_size_px,
             1,
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
         );
         desc.cube_compatible = false;
         desc

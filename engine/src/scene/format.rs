@@ -76,6 +76,8 @@ pub struct MirrorSpec {
     pub radius: f64,
     pub animation: Option<AnimationSpec>,
     pub lookup: Option<LookupSpec>,
+    pub distance_steps: Option<i64>,
+    pub secant_steps: Option<i64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -84,6 +86,7 @@ pub enum LookupSpec {
     Plain,
     Box,
     RayQuery,
+    Distance,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -97,7 +97,21 @@ pub struct Mirror {
     pub animation: Option<Animation>,
     /// How the reflected direction looks up the cube map.
     pub lookup: Lookup,
+    /// The `distance` lookup's linear search: steps from the mirror to infinity
+    /// (`mirror.distance_steps`, 1..=[`MAX_DISTANCE_STEPS`]).
+    pub distance_steps: u32,
+    /// The `distance` lookup's secant refinements of the bracket the linear search found
+    /// (`mirror.secant_steps`, 0..=[`MAX_SECANT_STEPS`]).
+    pub secant_steps: u32,
 }
+
+/// Default linear search steps of the `distance` lookup (GPU Gems 3 ch. 17 used 10 to 30).
+pub const DEFAULT_DISTANCE_STEPS: u32 = 16;
+/// Default secant refinements of the `distance` lookup.
+pub const DEFAULT_SECANT_STEPS: u32 = 2;
+/// Upper limits of the two (a ray's cost grows linearly with each).
+pub const MAX_DISTANCE_STEPS: u32 = 256;
+pub const MAX_SECANT_STEPS: u32 = 32;
 
 /// How the mirror turns a reflected ray into a cube-map lookup direction.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -114,12 +128,21 @@ pub enum Lookup {
     /// Exact: the reflected ray is traced through the scene on the GPU (ray queries); no
     /// cube map.
     RayQuery,
+    /// Distance-searched: the reflected ray is marched through the cube's own depth (each
+    /// texel's distance from the cube's centre) and the colour is looked up where it meets
+    /// it (Szirmay-Kalos et al. 2005). Exact for surfaces the cube's centre sees.
+    Distance,
 }
 
 impl Lookup {
     /// Every lookup, in the order the CLI, `specchio info` and the docs list them. What each
     /// needs and does lives in its plug-in (`render::lookups`); the scene only names it.
-    pub const ALL: [Lookup; 3] = [Lookup::Plain, Lookup::Box, Lookup::RayQuery];
+    pub const ALL: [Lookup; 4] = [
+        Lookup::Plain,
+        Lookup::Box,
+        Lookup::RayQuery,
+        Lookup::Distance,
+    ];
 
     /// The name in scene files, on the command line and in every report (kebab-case).
     pub fn name(self) -> &'static str {
@@ -127,6 +150,7 @@ impl Lookup {
             Lookup::Plain => "plain",
             Lookup::Box => "box",
             Lookup::RayQuery => "ray-query",
+            Lookup::Distance => "distance",
         }
     }
 

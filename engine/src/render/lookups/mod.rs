@@ -10,6 +10,7 @@
 //! `Lookup`, its module and shaders, and one line in [`REGISTRY`].
 
 mod cube;
+mod distance;
 mod ray_query;
 
 use std::sync::Arc;
@@ -18,6 +19,7 @@ use ash::vk;
 
 use super::gpu::ObjectData;
 use super::resources::SceneResources;
+use super::targets::CubeTarget;
 use crate::scene::Lookup;
 use crate::vk::commands::Submitter;
 use crate::vk::device::{Device, DeviceInfo, OptionalFeatures};
@@ -25,7 +27,12 @@ use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
 
 /// Every lookup's plug-in, in [`Lookup::ALL`]'s order (a test checks it).
-static REGISTRY: &[&dyn MirrorLookup] = &[&cube::PLAIN, &cube::BOX, &ray_query::RayQuery];
+static REGISTRY: &[&dyn MirrorLookup] = &[
+    &cube::PLAIN,
+    &cube::BOX,
+    &ray_query::RayQuery,
+    &distance::Distance,
+];
 
 /// One mirror lookup: what it is, what it needs, and how it makes its per-renderer pass.
 pub trait MirrorLookup: Sync {
@@ -57,6 +64,8 @@ pub struct LookupNeeds {
 pub struct LookupContext<'a> {
     pub device: &'a Arc<Device>,
     pub resources: &'a SceneResources,
+    /// The cube map (colour and depth) the cube lookups read.
+    pub cube: &'a CubeTarget,
     /// For the lookup's own one-off GPU work (building acceleration structures).
     pub submitter: &'a Submitter,
     /// Push-constant bytes of the mirror's shaders (`gpu::Push`).

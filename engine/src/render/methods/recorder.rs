@@ -157,6 +157,7 @@ impl<'a> CubeRecorder<'a> {
                 layers: 1,
                 view_mask: 0,
                 clear: true,
+                store_depth: true,
             },
         );
         self.r
@@ -195,6 +196,7 @@ impl<'a> CubeRecorder<'a> {
                 layers: if view_mask != 0 { 0 } else { 6 },
                 view_mask,
                 clear: all,
+                store_depth: true,
             },
         );
         if !all {

@@ -3,7 +3,10 @@
 use super::numbers::{num_text, time_text};
 use super::{position_at, sample_times, Ctx, R};
 use crate::scene::format::{LookupSpec, MirrorSpec, RoomSpec, WallsSpec};
-use crate::scene::{Lookup, Mirror, Room};
+use crate::scene::{
+    Lookup, Mirror, Room, DEFAULT_DISTANCE_STEPS, DEFAULT_SECANT_STEPS, MAX_DISTANCE_STEPS,
+    MAX_SECANT_STEPS,
+};
 
 /// The farthest a room corner may be from the mirror's centre (m). The shaders square lengths
 /// in f32 (ray/sphere tests, |p - c|^2) and multiply such squares by lengths; 1e12 keeps
@@ -94,8 +97,29 @@ impl Ctx<'_> {
                 None | Some(LookupSpec::Plain) => Lookup::Plain,
                 Some(LookupSpec::Box) => Lookup::Box,
                 Some(LookupSpec::RayQuery) => Lookup::RayQuery,
+                Some(LookupSpec::Distance) => Lookup::Distance,
             },
+            // Accepted whatever the lookup: `--lookup distance` may pick it for any scene.
+            distance_steps: self.count(
+                "mirror.distance_steps",
+                spec.distance_steps
+                    .unwrap_or(i64::from(DEFAULT_DISTANCE_STEPS)),
+                MAX_DISTANCE_STEPS,
+            )?,
+            secant_steps: self.secant_steps(spec.secant_steps)?,
         })
+    }
+
+    /// `mirror.secant_steps`: 0 (the linear search's bracket, interpolated once) or more.
+    fn secant_steps(&self, v: Option<i64>) -> R<u32> {
+        match v {
+            None => Ok(DEFAULT_SECANT_STEPS),
+            Some(v) if (0..=i64::from(MAX_SECANT_STEPS)).contains(&v) => Ok(v as u32),
+            Some(v) => Err(self.invalid(
+                "mirror.secant_steps",
+                format!("must be in 0..={MAX_SECANT_STEPS}, got {v}"),
+            )),
+        }
     }
 
     /// The room's extent seen from the mirror, refused when f32 cannot hold the scene: the

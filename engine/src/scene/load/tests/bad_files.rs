@@ -30,6 +30,16 @@ const BAD: &[(&str, Option<u32>, &str)] = &[
         "cube.face_size: must be in 1..=8192, got 16384",
     ),
     (
+        "zero-distance-steps.toml",
+        Some(5),
+        "mirror.distance_steps: must be in 1..=256, got 0",
+    ),
+    (
+        "many-secant-steps.toml",
+        Some(5),
+        "mirror.secant_steps: must be in 0..=32, got 33",
+    ),
+    (
         "missing-texture.toml",
         Some(12),
         "materials[0].file: cannot load",

@@ -1,0 +1,189 @@
+//! The `distance` lookup: the reflected ray is searched through the cube's own depth buffer
+//! (Szirmay-Kalos et al. 2005, "Approximate ray-tracing on the GPU with distance impostors";
+//! GPU Gems 3 ch. 17), and the colour is looked up in the direction of the point where the
+//! ray meets the surface the cube stored, instead of the reflected direction (`plain`) or the
+//! room box's exit (`box`).
+//!
+//! The distance map is the depth every fill method already writes (32-bit float, reverse-Z),
+//! kept after the fill and read texel by texel, so no method changes. The search itself is in
+//! `shaders/include/distance_search.glsl`; set 1 holds the colour cube (binding 0, filtered
+//! as for `box`) and the depth's six layers (binding 1, read with `texelFetch`).
+
+use ash::vk;
+
+use super::{LookupContext, LookupPass, MirrorLookup};
+use crate::render::gpu::LOOKUP_DISTANCE;
+use crate::render::targets::{DIRECTION_FORMAT, VIEW_FORMAT};
+use crate::scene::Lookup;
+use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
+use crate::vk::image::Sampler;
+use crate::vk::pipeline::{Pipeline, PipelineLayout};
+use crate::vk::GpuError;
+
+pub struct Distance;
+
+impl MirrorLookup for Distance {
+    fn lookup(&self) -> Lookup {
+        Lookup::Distance
+    }
+
+    fn summary(&self) -> &'static str {
+        "the reflected ray searched through the cube's depth, looked up where it meets it \
+         (exact for surfaces the cube's centre sees, up to the search's steps)"
+    }
+
+    fn uses_cube(&self) -> bool {
+        true
+    }
+
+    fn flag(&self) -> u32 {
+        LOOKUP_DISTANCE
+    }
+
+    fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
+        let device = ctx.device;
+        let res = ctx.resources;
+        let stage = vk::ShaderStageFlags::FRAGMENT;
+        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let set_layout = DescriptorSetLayout::create(
+            device,
+            &[
+                descriptors::binding(0, sampled, 1, stage),
+                descriptors::binding(1, sampled, 1, stage),
+            ],
+            "distance set layout",
+        )?;
+        let pool = DescriptorPool::create(
+            device,
+            1,
+            &[vk::DescriptorPoolSize {
+                ty: sampled,
+                descriptor_count: 2,
+            }],
+            "distance descriptors",
+        )?;
+        let set = pool.allocate(&set_layout, "distance set")?;
+        // texelFetch ignores the sampler's filter; a combined sampler is still needed, and
+        // nearest makes the intent plain.
+        let nearest = Sampler::create(
+            device,
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::NEAREST)
+                .min_filter(vk::Filter::NEAREST)
+                .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
+            "cube depth sampler",
+        )?;
+        let cube = ctx.cube;
+        descriptors::write_images(device, set, 0, &[(cube.cube_view.raw, cube.sampler.raw)]);
+        descriptors::write_images(device, set, 1, &[(cube.depth_layers_view.raw, nearest.raw)]);
+        let layout = PipelineLayout::create(
+            device,
+            &[res.scene_set_layout.raw, set_layout.raw],
+            ctx.push_size,
+            "distance mirror layout",
+        )?;
+        let colour = crate::render::passes::mirror_pipeline(
+            device,
+            &layout,
+            crate::shaders::MIRROR_DISTANCE_FRAG,
+            VIEW_FORMAT,
+            "distance mirror pipeline",
+        )?;
+        let directions = crate::render::passes::mirror_pipeline(
+            device,
+            &layout,
+            crate::shaders::MIRROR_DISTANCE_DIRECTION_FRAG,
+            DIRECTION_FORMAT,
+            "distance mirror direction pipeline",
+        )?;
+        Ok(Box::new(DistancePass {
+            colour,
+            directions,
+            layout,
+            _pool: pool,
+            set,
+            _set_layout: set_layout,
+            _nearest: nearest,
+        }))
+    }
+}
+
+/// The distance lookup's pipelines and set. Field order is drop order.
+struct DistancePass {
+    colour: Pipeline,
+    directions: Pipeline,
+    layout: PipelineLayout,
+    _pool: DescriptorPool,
+    set: vk::DescriptorSet,
+    _set_layout: DescriptorSetLayout,
+    _nearest: Sampler,
+}
+
+impl LookupPass for DistancePass {
+    fn pipeline(&self, directions: bool) -> &Pipeline {
+        if directions {
+            &self.directions
+        } else {
+            &self.colour
+        }
+    }
+
+    fn layout(&self) -> &PipelineLayout {
+        &self.layout
+    }
+
+    fn set(&self) -> vk::DescriptorSet {
+        self.set
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::scene::camera::ViewBasis;
+    use glam::Vec3;
+
+    /// The distance from the cube's centre, in direction `d` (any length), of the surface a
+    /// cube face stored at reverse-Z `depth` (`near`, `far`: the faces' planes): what
+    /// `distance_search.glsl` computes (`depth_to_z`, `behind`), restated to check the maths.
+    /// The face's view depth is z = b / (depth - a) with a = -near / (far - near) and
+    /// b = near far / (far - near) (`ViewBasis::view_to_clip`), and the point in direction d
+    /// at view depth z lies z |d| / max|d_i| from the centre.
+    fn depth_to_distance(depth: f32, near: f32, far: f32, d: glam::Vec3) -> f32 {
+        let a = -near / (far - near);
+        let b = near * far / (far - near);
+        let z = b / (depth - a);
+        z * d.length() / d.abs().max_element()
+    }
+
+    /// Known answers: a point projected by a cube face's own matrix comes back at its
+    /// distance from the centre, for points on every face, near and far.
+    #[test]
+    fn depth_turns_back_into_the_distance_from_the_centre() {
+        let (near, far) = (0.05, 40.0);
+        let points = [
+            Vec3::new(2.0, 0.5, -0.25),
+            Vec3::new(-0.3, 0.2, 0.1),
+            Vec3::new(0.0, 7.0, 6.9),
+            Vec3::new(0.4, -3.0, 1.0),
+            Vec3::new(-10.0, 10.0, 39.0),
+            Vec3::new(0.1, 0.0, -0.06),
+        ];
+        for p in points {
+            let (face, _, _) = crate::scene::camera::cube_face_lookup(p);
+            let view = ViewBasis::cube_face(Vec3::ZERO, face);
+            let clip = view.world_to_clip(near, far) * p.extend(1.0);
+            let depth = clip.z / clip.w;
+            assert!((0.0..=1.0).contains(&depth), "{p}: depth {depth}");
+            let got = depth_to_distance(depth, near, far, p * 3.0);
+            let want = p.length();
+            // f32 rounding of the projection and its inverse: a few ulps.
+            assert!((got - want).abs() <= 1e-5 * want, "{p}: {got} != {want}");
+        }
+        // The cleared depth (0) is the far plane; depth 1 the near plane.
+        assert!((depth_to_distance(0.0, near, far, Vec3::Z) - far).abs() < 1e-3);
+        assert!((depth_to_distance(1.0, near, far, Vec3::X) - near).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,34 @@
+#version 460
+// mirror_distance.frag - the distance lookup's mirror: the reflected pixel-centre ray is
+// searched through the cube's depth (distance_search.glsl), and the cube map is sampled in the
+// direction of the point found, filtered over the footprint of the box lookup's neighbours
+// (lookup_gradients): searching the neighbours' rays too would triple the cost, and the box
+// footprint is the right one wherever the ray meets a wall.
+#extension GL_GOOGLE_include_directive : require
+#include "shared.glsl"
+
+SCENE_BINDINGS;
+PUSH_CONSTANTS;
+layout(set = 1, binding = 0) uniform samplerCube environment;
+
+#include "mirror.glsl"
+#include "distance_search.glsl"
+
+layout(location = 0) out vec4 out_color;
+
+void main() {
+    ViewData view = views[push.view_index];
+    vec3 dir, hit, n;
+    if (!mirror_hit(view, frame, dir, hit, n)) {
+        discard;
+    }
+    vec3 box = lookup_at(frame, dir, n);
+    vec3 found = distance_lookup(frame, hit, reflect(dir, n), box);
+    vec3 d_dx, d_dy;
+    lookup_gradients(view, frame, box, d_dx, d_dy);
+    // textureGrad reads the gradients relative to the lookup vector's length: give the found
+    // direction the box vector's length so that the footprint keeps its angular size.
+    vec3 lookup = normalize(found) * length(box);
+    out_color = vec4(textureGrad(environment, lookup, d_dx, d_dy).rgb, 1.0);
+    gl_FragDepth = mirror_depth(view, hit);
+}
