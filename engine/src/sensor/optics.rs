@@ -87,7 +87,9 @@ impl SensorOptics {
     /// looks along the axis and its pixels are square: `tan_x / tan_y` is the aspect).
     pub fn disc_radius_px(&self) -> f32 {
         let rim = self.camera_ray(self.rim_angle(), 0.0);
-        let at = self.project(rim).expect("the rim is in front of the camera");
+        let at = self
+            .project(rim)
+            .expect("the rim is in front of the camera");
         (at - self.disc_centre_px()).length()
     }
 
@@ -180,7 +182,9 @@ mod tests {
     fn the_disc_follows_from_the_pose_and_the_sphere() {
         let o = SensorOptics::at(&six_colour(), 0.0);
         assert!((o.rim_angle() - 0.4f64.asin()).abs() < 1e-6);
-        assert!((o.max_elevation().to_degrees() - (90.0 - 0.4f64.asin().to_degrees())).abs() < 1e-4);
+        assert!(
+            (o.max_elevation().to_degrees() - (90.0 - 0.4f64.asin().to_degrees())).abs() < 1e-4
+        );
         let c = o.disc_centre_px();
         assert!((c - Vec2::new(o.width as f32, o.height as f32) * 0.5).length() < 1e-3);
         // Radius: the tangent of the rim angle over the tangent of half the field of view,
@@ -201,7 +205,10 @@ mod tests {
             for x in 0..map.width {
                 let at = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - c).length();
                 let seen = map.get(x, y).is_some();
-                assert!(!seen || at <= r + 1e-3, "({x}, {y}) at {at} px sees the mirror");
+                assert!(
+                    !seen || at <= r + 1e-3,
+                    "({x}, {y}) at {at} px sees the mirror"
+                );
                 assert!(seen || at >= r - 1.0, "({x}, {y}) at {at} px misses it");
             }
         }
@@ -219,7 +226,11 @@ mod tests {
             let m = crate::reference::intersect::mirror_reflection(o.view.eye, d, o.radius_m)
                 .expect("on the mirror");
             let want = direction(e, a);
-            assert!(m.direction.angle_between(want) < 1e-4, "{elev_deg}, {az_deg}: {}", m.direction);
+            assert!(
+                m.direction.angle_between(want) < 1e-4,
+                "{elev_deg}, {az_deg}: {}",
+                m.direction
+            );
             let (e2, a2) = elevation_azimuth(m.direction);
             assert!((e2 - e).abs() < 1e-4 && (a2 - a).abs() < 1e-4);
         }

@@ -168,7 +168,12 @@ pub fn bilinear(image: &RgbaImage, p: Vec2) -> [f32; 4] {
     let (fx, fy) = (q.x - x0, q.y - y0);
     let at = |x: i64, y: i64| image.pixel(x.clamp(0, w - 1) as u32, y.clamp(0, h - 1) as u32);
     let (x0, y0) = (x0 as i64, y0 as i64);
-    let (a, b, c, d) = (at(x0, y0), at(x0 + 1, y0), at(x0, y0 + 1), at(x0 + 1, y0 + 1));
+    let (a, b, c, d) = (
+        at(x0, y0),
+        at(x0 + 1, y0),
+        at(x0, y0 + 1),
+        at(x0 + 1, y0 + 1),
+    );
     std::array::from_fn(|k| {
         let top = a[k] + fx * (b[k] - a[k]);
         let bottom = c[k] + fx * (d[k] - c[k]);

@@ -54,9 +54,14 @@ fn each_ray_ends_where_the_reference_says() {
             continue;
         };
         let end = ray.origin + out.range[i] * ray.direction;
-        assert!((end.abs().max_element() - 5.0).abs() < 1e-4, "pixel {i}: {end}");
+        assert!(
+            (end.abs().max_element() - 5.0).abs() < 1e-4,
+            "pixel {i}: {end}"
+        );
         // Within a millimetre of an edge, which of two walls is met is a matter of rounding.
-        let on_walls = (end.abs() - Vec3::splat(5.0)).abs().cmplt(Vec3::splat(1e-3));
+        let on_walls = (end.abs() - Vec3::splat(5.0))
+            .abs()
+            .cmplt(Vec3::splat(1e-3));
         if on_walls.bitmask().count_ones() == 1 {
             assert_eq!(out.ids[i], wall_of(end), "pixel {i}: {end}");
         }
@@ -97,7 +102,11 @@ fn an_unwrap_puts_each_wall_in_its_known_column() {
         // The lon-lat panorama's bottom row looks nearly straight down, the cylinder's at -45
         // degrees, which from the mirror meets the floor 5 m down and at most 5 m out.
         let bottom = pano.pixel(layout.width / 3, layout.height - 1);
-        assert_eq!(&bottom[..3], &[1.0, 0.0, 1.0], "{kind:?} bottom row is the floor");
+        assert_eq!(
+            &bottom[..3],
+            &[1.0, 0.0, 1.0],
+            "{kind:?} bottom row is the floor"
+        );
     }
 }
 
