@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use specchio::output::Transaction;
 use specchio::reference::{Reference, ReferenceImages, ReferenceStats, MAX_SPP};
+use specchio::sensor::SensorOutputs;
 
 use crate::args::{real, whole};
 use crate::records::{ReferenceCameras, ReferenceRecord};
@@ -24,6 +25,10 @@ pub struct Args {
     /// Samples per pixel on a fixed stratified grid, 1..=4096; 1 traces pixel centres only.
     #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_parser = whole(1..=MAX_SPP))]
     spp: u32,
+    /// Also write the sensor outputs: ray map, range, object ids, panoramas and camera.json
+    /// (docs/sensor.md).
+    #[arg(long)]
+    sensor_outputs: bool,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
@@ -47,6 +52,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         crate::interrupt::check(&format!("before tracing the {name} camera"))?;
         let (images, stats) = reference.render(&view, w, h, args.spp);
         write_images(&out, &args.out, name, &images)?;
+        if name == "sensor" && args.sensor_outputs {
+            SensorOutputs::from_reference(&scene, args.time, &images).write(&out, &args.out)?;
+        }
         println!(
             "{name}: {w}x{h}, {} spp, {} rays in {:.0} ms ({:.2} M rays/s), {} mirror pixels, {} misses",
             stats.spp,

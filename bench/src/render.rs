@@ -10,6 +10,7 @@ use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::camera::FACE_NAMES;
 use specchio::scene::{CubeFormat, Lookup, RefreshPolicy, MAX_DISTANCE_STEPS, MAX_SECANT_STEPS};
+use specchio::sensor::SensorOutputs;
 use specchio::vk::device::{self, DeviceInfo};
 
 use crate::args::{face_size, real, whole};
@@ -69,6 +70,11 @@ pub struct Args {
     /// (`observer.direction.exr`, `sensor.direction.exr`), to compare with `specchio reference`.
     #[arg(long)]
     directions: bool,
+    /// Also write the sensor outputs from the cube path: ray map, range and ids (the room
+    /// box's), panoramas from the sensor image and from the cube, camera.json (docs/sensor.md).
+    /// Needs a cube lookup (plain or box).
+    #[arg(long)]
+    sensor_outputs: bool,
     /// Under `on-change`, re-render all six faces on any change instead of only the faces a
     /// moved object touches.
     #[arg(long)]
@@ -98,6 +104,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if let Some(n) = args.secant_steps {
         scene.mirror.secant_steps = n;
     }
+    check_sensor_outputs(args, lookup.unwrap_or(scene.mirror.lookup))?;
     let start_s = args
         .time
         .unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);
@@ -251,6 +258,7 @@ fn render_frames(
                 cube: lookups::plugin(renderer.scene.mirror.lookup).uses_cube(),
                 views: true,
                 directions: args.directions,
+                rays: args.sensor_outputs,
             },
         )?;
         let frame_dir = if args.frames > 1 {
@@ -259,6 +267,9 @@ fn render_frames(
             dir.to_owned()
         };
         write_frame(out, &frame_dir, &images)?;
+        if args.sensor_outputs {
+            write_sensor_outputs(out, &frame_dir, renderer, t, images)?;
+        }
         reports.push(report);
         if let Some(p) = &progress {
             p.inc(1);
@@ -310,6 +321,44 @@ fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()
             out.write_exr(&dir.join("cube").join(format!("{face}.exr")), img)?;
         }
     }
+    Ok(())
+}
+
+/// `--sensor-outputs` reads the cube path's rays and the cube itself: a lookup without a cube
+/// (ray-query) has neither; the exact outputs come from `specchio reference --sensor-outputs`.
+fn check_sensor_outputs(args: &Args, lookup: Lookup) -> Result<()> {
+    if args.sensor_outputs && !lookups::plugin(lookup).uses_cube() {
+        bail!(
+            "--sensor-outputs: the lookup {lookup} reads no cube map; use a cube lookup \
+             (--lookup plain or box), or `specchio reference --sensor-outputs` for the exact \
+             outputs"
+        );
+    }
+    Ok(())
+}
+
+/// The sensor outputs of one frame from its ray-map images (`Readback::rays`).
+fn write_sensor_outputs(
+    out: &Transaction,
+    dir: &Path,
+    renderer: &Renderer,
+    t_s: f64,
+    images: FrameImages,
+) -> Result<()> {
+    let missing = || anyhow::anyhow!("the frame's sensor ray map was not read back (a bug)");
+    let origin = images.sensor_ray_origin.as_ref().ok_or_else(missing)?;
+    let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;
+    let sensor = images.sensor.clone().ok_or_else(missing)?;
+    let lookup = renderer.scene.mirror.lookup.to_string();
+    let outputs = SensorOutputs::from_gpu(
+        &renderer.scene,
+        t_s,
+        &lookup,
+        sensor,
+        (origin, direction),
+        images.cube,
+    );
+    outputs.write(out, dir)?;
     Ok(())
 }
 

@@ -13,6 +13,17 @@ vec3 room_exit(vec3 p, vec3 r, FrameData f) {
     return p + min(t.x, min(t.y, t.z)) * r;
 }
 
+// How far the ray from p (inside the room box) along r runs to the box, and the wall it leaves
+// through, in cube-face order (+X, -X, +Y, -Y, +Z, -Z: the walls' drawable ids). The sensor's
+// ray map reports these as the cube path's range and object id (mirror_ray_*.frag).
+float room_exit_distance(vec3 p, vec3 r, FrameData f, out uint wall) {
+    vec3 bound = mix(f.room_min.xyz, f.room_max.xyz, greaterThan(r, vec3(0.0)));
+    vec3 t = (bound - p) / r; // +inf on an axis r does not move along
+    uint axis = (t.x <= t.y && t.x <= t.z) ? 0u : (t.y <= t.z ? 1u : 2u);
+    wall = 2u * axis + (r[axis] > 0.0 ? 0u : 1u);
+    return t[axis];
+}
+
 // The world-space ray through `ndc` (the viewport's [-1, 1] coordinates).
 vec3 view_ray(ViewData view, vec2 ndc) {
     return normalize(view.ray_forward.xyz + ndc.x * view.ray_right.xyz + ndc.y * view.ray_down.xyz);

@@ -54,7 +54,7 @@ pub enum OutputError {
 
 /// An I/O failure is reported as one, naming `path`; anything else the encoder says is an
 /// encoding failure.
-fn exr_error(path: &Path, e: exr::error::Error) -> OutputError {
+pub(crate) fn exr_error(path: &Path, e: exr::error::Error) -> OutputError {
     match e {
         exr::error::Error::Io(source) => OutputError::Io {
             path: path.to_owned(),
@@ -84,7 +84,7 @@ fn png_error(path: &Path, e: png::EncodingError) -> OutputError {
 /// order. With its default unspecified order the crate writes chunks as its parallel
 /// compressors finish, so the same image gave different bytes from run to run; a fixed order
 /// makes the files byte-identical, so checksums can compare them.
-const EXR_ENCODING: Encoding = Encoding {
+pub(crate) const EXR_ENCODING: Encoding = Encoding {
     line_order: LineOrder::Increasing,
     ..Encoding::FAST_LOSSLESS
 };

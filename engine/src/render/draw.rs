@@ -5,6 +5,7 @@ use ash::vk;
 use glam::Vec3;
 
 use super::gpu::Push;
+use super::sensor_rays::MirrorOutput;
 use super::Renderer;
 use crate::scene::camera::Frustum;
 use crate::vk::commands::ImageBarrier;
@@ -220,27 +221,34 @@ impl Renderer {
         }
     }
 
-    /// Draws the mirror's bounding cube with the lookup's colour or direction pipeline.
-    pub(super) fn draw_mirror(&self, cmd: vk::CommandBuffer, directions: bool, view: u32) {
+    /// Draws the mirror's bounding cube with the lookup's colour or direction pipeline, or
+    /// one of the sensor ray map's (which read the scene set only).
+    pub(super) fn draw_mirror(&self, cmd: vk::CommandBuffer, output: MirrorOutput, view: u32) {
         let d = &self.device.raw;
         let lookup = &self.lookup_pass;
-        let layout = lookup.layout().raw;
+        let p = &self.pipelines;
+        let (pipeline, layout, sets) = match output {
+            MirrorOutput::Colour | MirrorOutput::LookupDirection => (
+                lookup.pipeline(output == MirrorOutput::LookupDirection).raw,
+                lookup.layout().raw,
+                vec![self.resources.scene_set, lookup.set()],
+            ),
+            MirrorOutput::RayOrigin => (
+                p.ray_origin.raw,
+                p.scene_layout.raw,
+                vec![self.resources.scene_set],
+            ),
+            MirrorOutput::RayDirection => (
+                p.ray_direction.raw,
+                p.scene_layout.raw,
+                vec![self.resources.scene_set],
+            ),
+        };
         // SAFETY: recording inside a view pass; what set 1 holds is ready for reading (the cube
         // in SHADER_READ_ONLY layout, or the lookup's own data after its barrier).
         unsafe {
-            d.cmd_bind_pipeline(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                lookup.pipeline(directions).raw,
-            );
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                layout,
-                0,
-                &[self.resources.scene_set, lookup.set()],
-                &[],
-            );
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, layout, 0, &sets, &[]);
         }
         self.push(
             cmd,

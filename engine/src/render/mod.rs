@@ -19,6 +19,7 @@ pub mod material_check;
 pub mod methods;
 mod passes;
 pub mod resources;
+mod sensor_rays;
 pub mod targets;
 
 use std::sync::Arc;
@@ -89,6 +90,8 @@ pub struct Readback {
     /// The lookup direction of every observer and sensor mirror pixel (for the angular
     /// error against the exact reference).
     pub directions: bool,
+    /// The sensor's ray map (`sensor_rays.rs`).
+    pub rays: bool,
 }
 
 /// Pixels of one frame (those asked for by [`Readback`]).
@@ -103,6 +106,9 @@ pub struct FrameImages {
     /// all zero elsewhere.
     pub observer_direction: Option<RgbaImage>,
     pub sensor_direction: Option<RgbaImage>,
+    /// The sensor's ray map: hit and range, direction and wall (`sensor_rays.rs`).
+    pub sensor_ray_origin: Option<RgbaImage>,
+    pub sensor_ray_direction: Option<RgbaImage>,
 }
 
 /// Timings (milliseconds) and counters of one frame.
@@ -149,6 +155,9 @@ struct Pipelines {
     view_scene: Pipeline,
     /// Direction pass: scene depth only, then the mirror's lookup directions.
     depth_only: Pipeline,
+    /// The sensor's ray map, in two passes (origin and range, direction and wall).
+    ray_origin: Pipeline,
+    ray_direction: Pipeline,
     scene_layout: PipelineLayout,
 }
 
@@ -170,6 +179,8 @@ pub struct Renderer {
     pair_target: ViewTarget,
     observer_direction_target: ViewTarget,
     sensor_direction_target: ViewTarget,
+    /// The sensor ray map's two targets (origin, direction), made on first use.
+    sensor_ray_targets: Option<[ViewTarget; 2]>,
     cube: CubeTarget,
     resources: SceneResources,
     readback: Option<Buffer>,
@@ -274,6 +285,7 @@ impl Renderer {
             pair_target,
             observer_direction_target,
             sensor_direction_target,
+            sensor_ray_targets: None,
             cube,
             resources,
             readback: None,
@@ -339,6 +351,9 @@ impl Renderer {
                 cull_back: &cull_back,
             };
             self.fill.prepare(&plan, &prepare)?;
+        }
+        if readback.rays && self.sensor_ray_targets.is_none() {
+            self.sensor_ray_targets = Some(self.create_ray_targets()?);
         }
         let readback_bytes = self.readback_size(readback);
         if readback_bytes > 0

@@ -5,6 +5,7 @@ use ash::vk;
 use super::draw::{barrier, Attachments, COLOR_OUT, COPY_READ, DEPTH_RW, SAMPLED};
 use super::gpu::Push;
 use super::resources::{VIEW_OBSERVER, VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT, VIEW_SENSOR};
+use super::sensor_rays::MirrorOutput;
 use super::targets::{ViewTarget, DEPTH_FORMAT, DIRECTION_FORMAT, VIEW_FORMAT};
 use super::*;
 use crate::scene::camera::{Frustum, ViewBasis};
@@ -18,6 +19,8 @@ enum Slot {
     Pair,
     ObserverDirection,
     SensorDirection,
+    SensorRayOrigin,
+    SensorRayDirection,
 }
 
 /// Where each read-back view image sits in the readback buffer (after the cube faces).
@@ -29,7 +32,10 @@ pub(super) struct Copies {
 /// Bytes per texel of a view target's colour format.
 fn texel_bytes(slot: Slot) -> u64 {
     match slot {
-        Slot::ObserverDirection | Slot::SensorDirection => 16,
+        Slot::ObserverDirection
+        | Slot::SensorDirection
+        | Slot::SensorRayOrigin
+        | Slot::SensorRayDirection => 16,
         _ => 8,
     }
 }
@@ -47,6 +53,10 @@ impl Renderer {
         if readback.directions {
             slots.push((Slot::ObserverDirection, &self.observer_direction_target));
             slots.push((Slot::SensorDirection, &self.sensor_direction_target));
+        }
+        if let (true, Some([origin, direction])) = (readback.rays, &self.sensor_ray_targets) {
+            slots.push((Slot::SensorRayOrigin, origin));
+            slots.push((Slot::SensorRayDirection, direction));
         }
         slots
     }
@@ -71,29 +81,52 @@ impl Renderer {
         let mut copies = Copies::default();
         let mut offset = self.cube_readback_bytes(readback);
         for (slot, target) in self.view_slots(readback) {
-            let (ids, ts, stats, colour, name): (&[u32], _, _, _, _) = match slot {
+            use MirrorOutput::*;
+            let (ids, ts, stats, output, name): (&[u32], _, _, _, _) = match slot {
                 Slot::Observer => (
                     &[VIEW_OBSERVER],
                     Some(TS_OBSERVER),
                     Some(6),
-                    true,
+                    Colour,
                     "observer",
                 ),
-                Slot::Sensor => (&[VIEW_SENSOR], Some(TS_SENSOR), Some(7), true, "sensor"),
+                Slot::Sensor => (&[VIEW_SENSOR], Some(TS_SENSOR), Some(7), Colour, "sensor"),
                 Slot::Pair => (
                     &[VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT],
                     Some(TS_PAIR),
                     Some(8),
-                    true,
+                    Colour,
                     "views",
                 ),
-                Slot::ObserverDirection => {
-                    (&[VIEW_OBSERVER], None, None, false, "observer directions")
-                }
-                Slot::SensorDirection => (&[VIEW_SENSOR], None, None, false, "sensor directions"),
+                Slot::ObserverDirection => (
+                    &[VIEW_OBSERVER],
+                    None,
+                    None,
+                    LookupDirection,
+                    "observer directions",
+                ),
+                Slot::SensorDirection => (
+                    &[VIEW_SENSOR],
+                    None,
+                    None,
+                    LookupDirection,
+                    "sensor directions",
+                ),
+                Slot::SensorRayOrigin => (&[VIEW_SENSOR], None, None, RayOrigin, "sensor rays"),
+                Slot::SensorRayDirection => (
+                    &[VIEW_SENSOR],
+                    None,
+                    None,
+                    RayDirection,
+                    "sensor ray directions",
+                ),
             };
-            let scene = if colour { &p.view_scene } else { &p.depth_only };
-            self.record_view(cmd, target, ids, views, (scene, !colour), stats, name);
+            let scene = if output == Colour {
+                &p.view_scene
+            } else {
+                &p.depth_only
+            };
+            self.record_view(cmd, target, ids, views, (scene, output), stats, name);
             if let (Some(q), Some(ts)) = (&self.timestamps, ts) {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
@@ -110,7 +143,7 @@ impl Renderer {
         target: &ViewTarget,
         view_ids: &[u32],
         views: &[ViewBasis],
-        (scene_pipeline, directions): (&Pipeline, bool),
+        (scene_pipeline, output): (&Pipeline, MirrorOutput),
         stats_slot: Option<u32>,
         name: &str,
     ) {
@@ -169,7 +202,7 @@ impl Renderer {
             };
             let facing = self.view_facing(&views[v as usize]);
             self.draw_objects(cmd, scene_pipeline, push, &visible, &facing);
-            self.draw_mirror(cmd, directions, v);
+            self.draw_mirror(cmd, output, v);
         }
         self.end_rendering(cmd);
         if let (Some(q), Some(slot)) = (&self.statistics, stats_slot) {
@@ -306,6 +339,8 @@ impl Renderer {
                 Slot::Pair => images.pair = Some(decode_f16(b, w, h)),
                 Slot::ObserverDirection => images.observer_direction = Some(decode_f32(b, w, h)),
                 Slot::SensorDirection => images.sensor_direction = Some(decode_f32(b, w, h)),
+                Slot::SensorRayOrigin => images.sensor_ray_origin = Some(decode_f32(b, w, h)),
+                Slot::SensorRayDirection => images.sensor_ray_direction = Some(decode_f32(b, w, h)),
             }
         }
         Ok(images)
@@ -549,9 +584,12 @@ pub(super) fn create_pipelines(
         false,
         "depth-only pipeline (directions)",
     )?;
+    let [ray_origin, ray_direction] = super::sensor_rays::create_pipelines(device, &scene_layout)?;
     Ok(Pipelines {
         view_scene,
         depth_only,
+        ray_origin,
+        ray_direction,
         scene_layout,
     })
 }

@@ -3,8 +3,20 @@
 //!
 //! A spherical mirror has no single effective viewpoint (its viewpoints form a caustic), so
 //! every pixel's ray has its own origin on the mirror; [`ray_map`] gives both per pixel.
+//! [`optics`] finds the mirror's image disc from the pose and the sphere, [`panorama`] unwraps
+//! the sensor image (and reads the same panoramas from a cube map), and [`outputs`] gathers one
+//! frame's layers from the reference or the GPU and writes them ([`files`]: EXR channels).
 
 pub mod central;
+pub mod files;
+pub mod optics;
+pub mod outputs;
+pub mod panorama;
 pub mod ray_map;
 
+pub use optics::SensorOptics;
+pub use outputs::SensorOutputs;
 pub use ray_map::{PixelRay, RayMap};
+
+#[cfg(test)]
+mod tests;

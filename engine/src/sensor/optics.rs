@@ -1,0 +1,239 @@
+//! Where the mirror lies in the sensor image, and which pixel sees a given direction.
+//!
+//! The sensor camera sits on the vertical axis through the mirror's centre, `offset` below it,
+//! looking straight up (`SceneState::sensor_view`). The whole system is then symmetric about
+//! that axis: the mirror's image is a disc centred on the projection of the sphere's centre,
+//! bounded by the tangent cone from the eye (half-angle `asin(R / offset)`), and a camera ray
+//! at angle `theta` from the axis and azimuth `phi` reflects into a ray of the same azimuth
+//! whose elevation grows monotonically with `theta`, from -90 degrees (straight back down at
+//! the disc's centre) to `90 - asin(R / offset)` degrees (grazing, at the rim). Inverting that
+//! one-dimensional map is all an unwrap needs; nothing about the disc is guessed.
+//!
+//! Angles: elevation `asin(d.y)` above the horizontal plane; azimuth `atan2(d.z, d.x)` in
+//! [0, 2 pi), 0 along world +X, 90 degrees along +Z: clockwise seen from above (+Y), so that a
+//! panorama's columns run the way a person standing at the mirror turns to the right.
+
+use glam::{DVec2, Vec2, Vec3};
+
+use crate::scene::camera::ViewBasis;
+use crate::scene::state::SceneState;
+use crate::scene::Scene;
+
+/// The sensor camera and the mirror it looks at, at one instant.
+#[derive(Debug, Clone, Copy)]
+pub struct SensorOptics {
+    /// The sensor camera in render space (centred on the mirror).
+    pub view: ViewBasis,
+    pub width: u32,
+    pub height: u32,
+    pub radius_m: f32,
+    /// The mirror's centre in world space.
+    pub mirror_center: Vec3,
+}
+
+impl SensorOptics {
+    pub fn at(scene: &Scene, t_s: f64) -> Self {
+        let state = SceneState::at(scene, t_s);
+        let [width, height] = scene.sensor.resolution;
+        Self {
+            view: state.sensor_view(scene, width as f32 / height as f32),
+            width,
+            height,
+            radius_m: scene.mirror.radius_m,
+            mirror_center: state.mirror_center,
+        }
+    }
+
+    /// Distance from the eye to the mirror's centre (metres).
+    fn eye_distance(&self) -> f64 {
+        f64::from(self.view.eye.length())
+    }
+
+    /// Half-angle of the tangent cone from the eye to the sphere (radians): the disc's rim.
+    pub fn rim_angle(&self) -> f64 {
+        (f64::from(self.radius_m) / self.eye_distance()).asin()
+    }
+
+    /// The highest elevation the mirror shows (radians): a grazing ray goes on along the
+    /// tangent cone, `90 degrees - rim angle` above the horizon. The lowest is -90 degrees.
+    pub fn max_elevation(&self) -> f64 {
+        std::f64::consts::FRAC_PI_2 - self.rim_angle()
+    }
+
+    /// Where the world direction `d` (from the eye, render space) lands in the image, in pixels
+    /// ((0, 0) the top-left corner, pixel centres at +0.5); None behind the camera. The
+    /// inverse of `ray_map::pixel_ray`.
+    pub fn project(&self, d: Vec3) -> Option<Vec2> {
+        let v = &self.view;
+        let z = d.dot(v.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        let ndc = Vec2::new(
+            d.dot(v.right) / (z * v.tan_x),
+            d.dot(v.down) / (z * v.tan_y),
+        );
+        let size = Vec2::new(self.width as f32, self.height as f32);
+        Some((ndc + Vec2::ONE) * 0.5 * size)
+    }
+
+    /// The image of the mirror's centre: the centre of the mirror's disc (pixels).
+    pub fn disc_centre_px(&self) -> Vec2 {
+        self.project(-self.view.eye)
+            .expect("the sensor looks at the mirror's centre")
+    }
+
+    /// The disc's radius in pixels: the image of the tangent cone (a circle, since the camera
+    /// looks along the axis and its pixels are square: `tan_x / tan_y` is the aspect).
+    pub fn disc_radius_px(&self) -> f32 {
+        let rim = self.camera_ray(self.rim_angle(), 0.0);
+        let at = self
+            .project(rim)
+            .expect("the rim is in front of the camera");
+        (at - self.disc_centre_px()).length()
+    }
+
+    /// The unit camera ray at angle `theta` from the axis, at azimuth `phi` (radians).
+    pub fn camera_ray(&self, theta: f64, phi: f64) -> Vec3 {
+        let (st, ct) = theta.sin_cos();
+        let (sp, cp) = phi.sin_cos();
+        let axis = (-self.view.eye).normalize().as_dvec3();
+        // Horizontal unit vectors along azimuth 0 (+X) and 90 degrees (+Z), square to the axis.
+        let e1 = (glam::DVec3::X - axis * axis.x).normalize();
+        let e2 = e1.cross(axis);
+        (axis * ct + (e1 * cp + e2 * sp) * st).as_vec3()
+    }
+
+    /// Elevation (radians) of the reflection of the camera ray at angle `theta` from the
+    /// axis, `theta` in [0, rim angle]. Exact 2-D geometry in f64 in the plane through the
+    /// axis: eye at distance D below the centre, ray (sin t, cos t), sphere of radius R.
+    pub fn reflected_elevation(&self, theta: f64) -> f64 {
+        let (d, r) = (self.eye_distance(), f64::from(self.radius_m));
+        let dir = DVec2::new(theta.sin(), theta.cos());
+        let eye = DVec2::new(0.0, -d);
+        // Nearest root of |eye + t dir| = R, clamped at the rim where the discriminant is 0.
+        let half_b = -eye.dot(dir);
+        let disc = (r * r - (eye + half_b * dir).length_squared()).max(0.0);
+        let t = half_b - disc.sqrt();
+        let n = (eye + t * dir) / r;
+        let reflected = dir - 2.0 * dir.dot(n) * n;
+        reflected.y.clamp(-1.0, 1.0).asin()
+    }
+
+    /// The camera-ray angle from the axis whose reflection has elevation `elevation`
+    /// (radians), by bisection on the monotonic [`Self::reflected_elevation`]; None outside
+    /// [-90 degrees, max elevation].
+    pub fn theta_for_elevation(&self, elevation: f64) -> Option<f64> {
+        let (mut lo, mut hi) = (0.0, self.rim_angle());
+        if !(-std::f64::consts::FRAC_PI_2..=self.max_elevation()).contains(&elevation) {
+            return None;
+        }
+        // 60 halvings take the bracket below f64 resolution of any angle here.
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if self.reflected_elevation(mid) < elevation {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(0.5 * (lo + hi))
+    }
+
+    /// The image point (pixels) that sees, through the mirror, the direction of elevation
+    /// `elevation` and azimuth `azimuth` (radians); None beyond what the mirror shows.
+    pub fn pixel_seeing(&self, elevation: f64, azimuth: f64) -> Option<Vec2> {
+        let theta = self.theta_for_elevation(elevation)?;
+        self.project(self.camera_ray(theta, azimuth))
+    }
+}
+
+/// Elevation and azimuth (radians; azimuth in [0, 2 pi)) of a unit direction, as defined in
+/// the module documentation.
+pub fn elevation_azimuth(d: Vec3) -> (f64, f64) {
+    let d = d.as_dvec3();
+    let azimuth = d.z.atan2(d.x).rem_euclid(std::f64::consts::TAU);
+    (d.y.clamp(-1.0, 1.0).asin(), azimuth)
+}
+
+/// The unit direction of elevation `elevation` and azimuth `azimuth` (radians).
+pub fn direction(elevation: f64, azimuth: f64) -> Vec3 {
+    let (se, ce) = elevation.sin_cos();
+    let (sa, ca) = azimuth.sin_cos();
+    glam::DVec3::new(ce * ca, se, ce * sa).as_vec3()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sensor::RayMap;
+
+    fn six_colour() -> Scene {
+        crate::scene::load(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../scenes/test/six-colour-room.toml"
+        )))
+        .unwrap()
+    }
+
+    /// The six-colour room's sensor is 2.5 m below a 1 m sphere: the rim is asin(0.4) from
+    /// the axis, the highest elevation 90 degrees minus that, and the disc is centred.
+    #[test]
+    fn the_disc_follows_from_the_pose_and_the_sphere() {
+        let o = SensorOptics::at(&six_colour(), 0.0);
+        assert!((o.rim_angle() - 0.4f64.asin()).abs() < 1e-6);
+        assert!(
+            (o.max_elevation().to_degrees() - (90.0 - 0.4f64.asin().to_degrees())).abs() < 1e-4
+        );
+        let c = o.disc_centre_px();
+        assert!((c - Vec2::new(o.width as f32, o.height as f32) * 0.5).length() < 1e-3);
+        // Radius: the tangent of the rim angle over the tangent of half the field of view,
+        // times half the image height.
+        let expect = (0.4f64.asin().tan() / f64::from(o.view.tan_y)) * f64::from(o.height) / 2.0;
+        assert!((f64::from(o.disc_radius_px()) - expect).abs() < 1e-3);
+    }
+
+    /// The disc is where the ray map says the mirror is: every mirror pixel centre lies inside
+    /// it, and every pixel centre a pixel inside the rim sees the mirror.
+    #[test]
+    fn the_disc_matches_the_ray_maps_mask() {
+        let scene = six_colour();
+        let o = SensorOptics::at(&scene, 0.0);
+        let map = RayMap::exact(&scene, 0.0);
+        let (c, r) = (o.disc_centre_px(), o.disc_radius_px());
+        for y in 0..map.height {
+            for x in 0..map.width {
+                let at = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) - c).length();
+                let seen = map.get(x, y).is_some();
+                assert!(
+                    !seen || at <= r + 1e-3,
+                    "({x}, {y}) at {at} px sees the mirror"
+                );
+                assert!(seen || at >= r - 1.0, "({x}, {y}) at {at} px misses it");
+            }
+        }
+    }
+
+    /// The inverse map lands on pixels whose exact rays have the asked-for direction.
+    #[test]
+    fn pixel_seeing_inverts_the_ray_map() {
+        let scene = six_colour();
+        let o = SensorOptics::at(&scene, 0.0);
+        for (elev_deg, az_deg) in [(-60.0, 10.0), (0.0, 90.0), (30.0, 200.0), (-10.0, 300.0)] {
+            let (e, a) = (f64::to_radians(elev_deg), f64::to_radians(az_deg));
+            let p = o.pixel_seeing(e, a).unwrap();
+            let d = crate::sensor::ray_map::pixel_ray(&o.view, p, o.width, o.height);
+            let m = crate::reference::intersect::mirror_reflection(o.view.eye, d, o.radius_m)
+                .expect("on the mirror");
+            let want = direction(e, a);
+            assert!(
+                m.direction.angle_between(want) < 1e-4,
+                "{elev_deg}, {az_deg}: {}",
+                m.direction
+            );
+            let (e2, a2) = elevation_azimuth(m.direction);
+            assert!((e2 - e).abs() < 1e-4 && (a2 - a).abs() < 1e-4);
+        }
+        assert!(o.pixel_seeing(o.max_elevation() + 1e-3, 0.0).is_none());
+    }
+}

@@ -1,0 +1,331 @@
+//! The sensor outputs of one frame, from the exact reference or from the GPU's cube path, and
+//! the files they are written to (`render --sensor-outputs`, `reference --sensor-outputs`;
+//! docs/sensor.md lists them).
+
+use std::path::Path;
+
+use glam::{Mat3, Quat, Vec3};
+use serde::Serialize;
+
+use super::files::{write_channels, Samples};
+use super::optics::SensorOptics;
+use super::panorama::{PanoramaKind, PanoramaLayout};
+use super::ray_map::{PixelRay, RayMap};
+use crate::image::RgbaImage;
+use crate::output::{OutputError, Transaction};
+use crate::reference::ReferenceImages;
+use crate::scene::Scene;
+
+/// The id of a pixel that sees no object through the mirror (or not the mirror at all).
+pub const NO_ID: u32 = u32::MAX;
+
+/// File names inside the output folder.
+pub const RAYS_FILE: &str = "sensor.rays.exr";
+pub const RANGE_FILE: &str = "sensor.range.exr";
+pub const ID_FILE: &str = "sensor.id.exr";
+pub const CAMERA_FILE: &str = "camera.json";
+/// Channels of [`RAYS_FILE`] (world space, metres; `mask` 1 where the pixel sees the mirror).
+pub const RAY_CHANNELS: [&str; 7] = [
+    "origin.X",
+    "origin.Y",
+    "origin.Z",
+    "direction.X",
+    "direction.Y",
+    "direction.Z",
+    "mask",
+];
+
+/// One frame's sensor outputs.
+#[derive(Debug, Clone)]
+pub struct SensorOutputs {
+    /// "reference" or "cube (plain lookup)", ... : where the layers come from.
+    pub source: String,
+    pub time_s: f64,
+    pub optics: SensorOptics,
+    pub rays: RayMap,
+    /// Per pixel, metres along the reflected ray to what it meets (0 off the mirror).
+    pub range: Vec<f32>,
+    /// What `range` measures (the reference's exact hit, or the cube path's room box).
+    pub range_model: &'static str,
+    /// Per pixel, the drawable seen through the mirror (walls 0..6 in the cube-face order
+    /// +X, -X, +Y, -Y, +Z, -Z, objects 6 + i), [`NO_ID`] for none.
+    pub ids: Vec<u32>,
+    pub id_model: &'static str,
+    /// The sensor's colour image the panoramas unwrap.
+    pub image: RgbaImage,
+    /// The cube map's faces (mip 0), for the panoramas straight from the cube; None for the
+    /// reference, which has no cube.
+    pub cube: Option<Vec<RgbaImage>>,
+}
+
+impl SensorOutputs {
+    /// From the exact reference's sensor render at `t_s`: the exact ray map, masked where the
+    /// pixel centre's ray really reaches the mirror (nothing in front of it), with the
+    /// reference's centre-ray distance and object layers.
+    pub fn from_reference(scene: &Scene, t_s: f64, images: &ReferenceImages) -> Self {
+        let mut rays = RayMap::exact(scene, t_s);
+        let seen: Vec<bool> = images.object.pixels.iter().map(|p| p[1] == 1.0).collect();
+        for (ray, &seen) in rays.rays.iter_mut().zip(&seen) {
+            if !seen {
+                *ray = None;
+            }
+        }
+        let range = images
+            .distance
+            .pixels
+            .iter()
+            .zip(&seen)
+            .map(|(d, &s)| if s { d[0] } else { 0.0 })
+            .collect();
+        let ids = images
+            .object
+            .pixels
+            .iter()
+            .zip(&seen)
+            .map(|(o, &s)| if s && o[0] >= 0.0 { o[0] as u32 } else { NO_ID })
+            .collect();
+        Self {
+            source: "reference".into(),
+            time_s: t_s,
+            optics: SensorOptics::at(scene, t_s),
+            rays,
+            range,
+            range_model: "exact: the distance to the first scene surface the reflected ray meets",
+            ids,
+            id_model: "exact: the drawable that surface belongs to",
+            image: images.color.clone(),
+            cube: None,
+        }
+    }
+
+    /// From the GPU's sensor ray passes (`shaders/mirror_ray_*.frag.glsl`): `origin_range` holds
+    /// the mirror hit in render space (rgb) and the distance along the reflected ray to the
+    /// room box (a); `direction_wall` the reflected direction (rgb) and 1 + the wall the ray
+    /// leaves the room box through (a; 0, the clear value, off the mirror).
+    pub fn from_gpu(
+        scene: &Scene,
+        t_s: f64,
+        lookup: &str,
+        image: RgbaImage,
+        (origin_range, direction_wall): (&RgbaImage, &RgbaImage),
+        cube: Option<Vec<RgbaImage>>,
+    ) -> Self {
+        let optics = SensorOptics::at(scene, t_s);
+        let rays = origin_range
+            .pixels
+            .iter()
+            .zip(&direction_wall.pixels)
+            .map(|(o, d)| {
+                (d[3] > 0.0).then(|| PixelRay {
+                    origin: Vec3::new(o[0], o[1], o[2]) + optics.mirror_center,
+                    direction: Vec3::new(d[0], d[1], d[2]),
+                })
+            })
+            .collect();
+        let seen = |d: &[f32; 4]| d[3] > 0.0;
+        Self {
+            source: format!("cube ({lookup} lookup)"),
+            time_s: t_s,
+            optics,
+            rays: RayMap {
+                width: origin_range.width,
+                height: origin_range.height,
+                rays,
+            },
+            range: origin_range
+                .pixels
+                .iter()
+                .zip(&direction_wall.pixels)
+                .map(|(o, d)| if seen(d) { o[3] } else { 0.0 })
+                .collect(),
+            range_model: "room box: the distance along the reflected ray to the room's walls, \
+                          the box lookup's proxy (objects are not seen: no depth cube is read)",
+            ids: direction_wall
+                .pixels
+                .iter()
+                .map(|d| if seen(d) { d[3] as u32 - 1 } else { NO_ID })
+                .collect(),
+            id_model: "room box: the wall the reflected ray leaves the room box through \
+                       (walls only: no id cube is read)",
+            image,
+            cube,
+        }
+    }
+
+    /// The panoramas from the sensor image, and from the cube where there is one.
+    pub fn panoramas(&self) -> Vec<(String, PanoramaLayout, RgbaImage)> {
+        let mut all = Vec::new();
+        for kind in PanoramaKind::ALL {
+            let layout = PanoramaLayout::for_sensor(&self.optics, kind);
+            let name = format!("sensor.panorama.{}", kind.name());
+            all.push((name, layout, layout.unwrap(&self.optics, &self.image)));
+            if let Some(faces) = &self.cube {
+                let name = format!("cube.panorama.{}", kind.name());
+                all.push((name, layout, layout.from_cube(faces)));
+            }
+        }
+        all
+    }
+
+    /// Writes every output into `dir` (staged in `out`): the ray map, range, ids, panoramas
+    /// (EXR and PNG) and `camera.json`.
+    pub fn write(&self, out: &Transaction, dir: &Path) -> Result<(), OutputError> {
+        let (w, h) = (self.rays.width, self.rays.height);
+        let ray_channels = RAY_CHANNELS
+            .iter()
+            .enumerate()
+            .map(|(c, name)| {
+                let v = self
+                    .rays
+                    .rays
+                    .iter()
+                    .map(|r| match r {
+                        Some(r) if c < 3 => r.origin[c],
+                        Some(r) if c < 6 => r.direction[c - 3],
+                        Some(_) => 1.0,
+                        None => 0.0,
+                    })
+                    .collect();
+                (*name, Samples::F32(v))
+            })
+            .collect();
+        write_channels(out, &dir.join(RAYS_FILE), (w, h), ray_channels)?;
+        let range = vec![("range", Samples::F32(self.range.clone()))];
+        write_channels(out, &dir.join(RANGE_FILE), (w, h), range)?;
+        let ids = vec![("id", Samples::U32(self.ids.clone()))];
+        write_channels(out, &dir.join(ID_FILE), (w, h), ids)?;
+        let mut panoramas = Vec::new();
+        for (name, layout, image) in self.panoramas() {
+            out.write_exr(&dir.join(format!("{name}.exr")), &image)?;
+            out.write_png(&dir.join(format!("{name}.png")), &image)?;
+            panoramas.push(PanoramaRecord::new(format!("{name}.exr"), &layout));
+        }
+        out.write_json(&dir.join(CAMERA_FILE), &self.camera_record(panoramas))
+    }
+
+    fn camera_record(&self, panoramas: Vec<PanoramaRecord>) -> CameraRecord {
+        let o = &self.optics;
+        let v = &o.view;
+        let rotation = Mat3::from_cols(v.right, v.down, v.forward);
+        let (w, h) = (o.width as f32, o.height as f32);
+        CameraRecord {
+            source: self.source.clone(),
+            time_s: self.time_s,
+            frame: "world space, metres; the camera's axes x right, y down, z forward (OpenCV's)",
+            sensor: SensorRecord {
+                position_m: (v.eye + o.mirror_center).to_array(),
+                camera_to_world: rotation.transpose().to_cols_array_2d(),
+                quaternion_xyzw: Quat::from_mat3(&rotation).to_array(),
+                right: v.right.to_array(),
+                down: v.down.to_array(),
+                forward: v.forward.to_array(),
+                image_size: [o.width, o.height],
+                fov_x_deg: 2.0 * v.tan_x.atan().to_degrees(),
+                fov_y_deg: 2.0 * v.tan_y.atan().to_degrees(),
+                focal_px: [0.5 * w / v.tan_x, 0.5 * h / v.tan_y],
+                principal_point_px: [0.5 * w, 0.5 * h],
+            },
+            mirror: MirrorRecord {
+                centre_m: o.mirror_center.to_array(),
+                radius_m: o.radius_m,
+            },
+            disc: DiscRecord {
+                centre_px: o.disc_centre_px().to_array(),
+                radius_px: o.disc_radius_px(),
+                rim_angle_deg: o.rim_angle().to_degrees(),
+                max_elevation_deg: o.max_elevation().to_degrees(),
+            },
+            files: FilesRecord {
+                rays: RAYS_FILE,
+                ray_channels: RAY_CHANNELS,
+                range: RANGE_FILE,
+                range_model: self.range_model,
+                ids: ID_FILE,
+                id_model: self.id_model,
+                no_id: NO_ID,
+                panoramas,
+            },
+        }
+    }
+}
+
+/// `camera.json`: the sensor's pose and intrinsics, the mirror, its image disc, and the files.
+#[derive(Debug, Serialize)]
+pub struct CameraRecord {
+    pub source: String,
+    pub time_s: f64,
+    pub frame: &'static str,
+    pub sensor: SensorRecord,
+    pub mirror: MirrorRecord,
+    pub disc: DiscRecord,
+    pub files: FilesRecord,
+}
+
+#[derive(Debug, Serialize)]
+pub struct SensorRecord {
+    pub position_m: [f32; 3],
+    /// Rows of the camera-to-world rotation (its columns are right, down, forward).
+    pub camera_to_world: [[f32; 3]; 3],
+    /// The same rotation as a unit quaternion (x, y, z, w).
+    pub quaternion_xyzw: [f32; 4],
+    pub right: [f32; 3],
+    pub down: [f32; 3],
+    pub forward: [f32; 3],
+    pub image_size: [u32; 2],
+    pub fov_x_deg: f32,
+    pub fov_y_deg: f32,
+    /// Pinhole intrinsics in pixels: fx, fy, and the principal point (cx, cy), with pixel
+    /// (0, 0)'s top-left corner at the origin (its centre at 0.5, 0.5).
+    pub focal_px: [f32; 2],
+    pub principal_point_px: [f32; 2],
+}
+
+#[derive(Debug, Serialize)]
+pub struct MirrorRecord {
+    pub centre_m: [f32; 3],
+    pub radius_m: f32,
+}
+
+/// The mirror's image (`optics`): a disc, derived from the pose and the sphere.
+#[derive(Debug, Serialize)]
+pub struct DiscRecord {
+    pub centre_px: [f32; 2],
+    pub radius_px: f32,
+    pub rim_angle_deg: f64,
+    pub max_elevation_deg: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct FilesRecord {
+    pub rays: &'static str,
+    pub ray_channels: [&'static str; 7],
+    pub range: &'static str,
+    pub range_model: &'static str,
+    pub ids: &'static str,
+    pub id_model: &'static str,
+    pub no_id: u32,
+    pub panoramas: Vec<PanoramaRecord>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct PanoramaRecord {
+    pub file: String,
+    pub kind: PanoramaKind,
+    pub width: u32,
+    pub height: u32,
+    pub top_elevation_deg: f64,
+    pub bottom_elevation_deg: f64,
+}
+
+impl PanoramaRecord {
+    fn new(file: String, l: &PanoramaLayout) -> Self {
+        Self {
+            file,
+            kind: l.kind,
+            width: l.width,
+            height: l.height,
+            top_elevation_deg: l.top_elevation_rad.to_degrees(),
+            bottom_elevation_deg: l.bottom_elevation_rad.to_degrees(),
+        }
+    }
+}

@@ -1,0 +1,135 @@
+//! Known answers for the sensor outputs from the exact reference, in the six-colour room
+//! (walls 5 m from the mirror's centre, +X red, -X cyan, +Y green, -Y magenta, +Z blue,
+//! -Z yellow; unlit, so the colours are exact).
+
+use glam::Vec3;
+
+use super::outputs::{SensorOutputs, NO_ID};
+use super::panorama::{PanoramaKind, PanoramaLayout};
+use crate::reference::Reference;
+use crate::scene::Scene;
+
+fn six_colour() -> Scene {
+    crate::scene::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/test/six-colour-room.toml"
+    )))
+    .unwrap()
+}
+
+fn reference_outputs(scene: &Scene) -> SensorOutputs {
+    let reference = Reference::new(scene, 0.0);
+    let [w, h] = scene.sensor.resolution;
+    let (images, _) = reference.render(&reference.sensor_view(), w, h, 1);
+    SensorOutputs::from_reference(scene, 0.0, &images)
+}
+
+/// The angle (radians) between two directions, in f64 from the chord: f32's
+/// `angle_between` (an acos) cannot resolve angles below about 3e-4 rad.
+pub(crate) fn angle(a: Vec3, b: Vec3) -> f64 {
+    let (a, b) = (a.as_dvec3().normalize(), b.as_dvec3().normalize());
+    2.0 * ((a - b).length() / 2.0).asin()
+}
+
+/// The wall (cube-face order) a point on the room's surface lies on, from its coordinates.
+fn wall_of(p: Vec3) -> u32 {
+    let axis = p.abs().max_position();
+    2 * axis as u32 + u32::from(p[axis] < 0.0)
+}
+
+/// Every mirror pixel's ray, followed for its range, ends on a wall of the 10 m room (a
+/// coordinate at +-5 m), on the wall its id names, in the direction (from the mirror's centre)
+/// the reference's own direction layer gives.
+#[test]
+fn each_ray_ends_where_the_reference_says() {
+    let scene = six_colour();
+    let reference = Reference::new(&scene, 0.0);
+    let [w, h] = scene.sensor.resolution;
+    let (images, _) = reference.render(&reference.sensor_view(), w, h, 1);
+    let out = SensorOutputs::from_reference(&scene, 0.0, &images);
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for (i, ray) in out.rays.rays.iter().enumerate() {
+        let Some(ray) = ray else {
+            assert_eq!(out.ids[i], NO_ID);
+            continue;
+        };
+        let end = ray.origin + out.range[i] * ray.direction;
+        assert!(
+            (end.abs().max_element() - 5.0).abs() < 1e-4,
+            "pixel {i}: {end}"
+        );
+        // Within a millimetre of an edge, which of two walls is met is a matter of rounding.
+        let on_walls = (end.abs() - Vec3::splat(5.0))
+            .abs()
+            .cmplt(Vec3::splat(1e-3));
+        if on_walls.bitmask().count_ones() == 1 {
+            assert_eq!(out.ids[i], wall_of(end), "pixel {i}: {end}");
+        }
+        let d = images.direction.pixels[i];
+        let want = Vec3::new(d[0], d[1], d[2]);
+        worst = worst.max(angle(end, want));
+        checked += 1;
+    }
+    eprintln!("largest angle between the ray's end and the reference's direction: {worst:e} rad");
+    // The reference's reflected ray leaves from the mirror point moved off the sphere by a
+    // few hundred float steps (offset_ray_origin, about 3e-5 m here): 3e-5 m seen from 4 m
+    // and more is under 1e-5 rad.
+    assert!(worst < 1e-5);
+    assert!(checked > 1000, "{checked} mirror pixels");
+}
+
+/// Known columns: at the horizon (elevation 0) the azimuths 0, 90, 180 and 270 degrees look
+/// at the centres of the +X, +Z, -X and -Z walls; the bottom row looks down at the floor. In
+/// both panorama kinds, from the reference's sensor image.
+#[test]
+fn an_unwrap_puts_each_wall_in_its_known_column() {
+    let scene = six_colour();
+    let out = reference_outputs(&scene);
+    for kind in PanoramaKind::ALL {
+        let layout = PanoramaLayout::for_sensor(&out.optics, kind);
+        let pano = layout.unwrap(&out.optics, &out.image);
+        let horizon = layout.row(0.0) as u32;
+        for (azimuth_deg, colour) in [
+            (0.0, [1.0, 0.0, 0.0]),
+            (90.0, [0.0, 0.0, 1.0]),
+            (180.0, [0.0, 1.0, 1.0]),
+            (270.0, [1.0, 1.0, 0.0]),
+        ] {
+            let column = layout.column(f64::to_radians(azimuth_deg)) as u32;
+            let p = pano.pixel(column, horizon);
+            assert_eq!(&p[..3], &colour, "{kind:?} at {azimuth_deg} degrees");
+        }
+        // The lon-lat panorama's bottom row looks nearly straight down, the cylinder's at -45
+        // degrees, which from the mirror meets the floor 5 m down and at most 5 m out.
+        let bottom = pano.pixel(layout.width / 3, layout.height - 1);
+        assert_eq!(
+            &bottom[..3],
+            &[1.0, 0.0, 1.0],
+            "{kind:?} bottom row is the floor"
+        );
+    }
+}
+
+/// The column of a known wall point: the corner where the +X and +Z walls meet at the
+/// mirror's height lies at azimuth 45 degrees, and the colour changes from red to blue there
+/// (within the pixel or two that the mirror's non-central rays shift it by).
+#[test]
+fn the_red_blue_corner_is_at_45_degrees() {
+    let scene = six_colour();
+    let out = reference_outputs(&scene);
+    let layout = PanoramaLayout::for_sensor(&out.optics, PanoramaKind::LonLat);
+    let pano = layout.unwrap(&out.optics, &out.image);
+    let row = layout.row(0.0) as u32;
+    let corner = layout.column(f64::to_radians(45.0));
+    let red_until = (0..layout.width / 4)
+        .take_while(|&j| pano.pixel(j, row)[2] < 0.5)
+        .last()
+        .unwrap();
+    // The corner's direction from a point on the mirror differs from the centre's by at most
+    // asin(R / distance) = asin(1 / 7.07): bound the shift by that angle in columns.
+    let slack = (1.0f64 / 50f64.sqrt()).asin() / std::f64::consts::TAU * f64::from(layout.width);
+    assert!(
+        (f64::from(red_until) + 1.0 - corner).abs() <= slack + 1.0,
+        "red ends at column {red_until}, the corner is at {corner:.1} (slack {slack:.1})"
+    );
+}

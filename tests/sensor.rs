@@ -1,0 +1,248 @@
+//! The sensor outputs (docs/sensor.md): the GPU's ray map against the exact CPU one on every
+//! device, the cube path's room-box range and ids against the reference where the room box
+//! is the whole scene, and `--sensor-outputs` on the command line.
+
+mod common;
+
+use common::{devices, root, scene, specchio, temp_dir, Gpu};
+use glam::Vec3;
+use specchio::reference::Reference;
+use specchio::render::{Readback, RenderOptions, Renderer};
+use specchio::sensor::files::{f32_channel, read_channels, read_u32_channel};
+use specchio::sensor::outputs::{NO_ID, RAY_CHANNELS};
+use specchio::sensor::{RayMap, SensorOptics, SensorOutputs};
+
+/// The angle (radians) between two directions, in f64 from the chord (f32's acos-based
+/// `angle_between` cannot resolve angles below about 3e-4 rad).
+fn angle(a: Vec3, b: Vec3) -> f64 {
+    let (a, b) = (a.as_dvec3().normalize(), b.as_dvec3().normalize());
+    2.0 * ((a - b).length() / 2.0).asin()
+}
+
+/// The GPU's sensor outputs of the six-colour room on `gpu`.
+fn gpu_outputs(gpu: &Gpu, scene: specchio::scene::Scene) -> SensorOutputs {
+    let options = RenderOptions {
+        cube_size: Some(64),
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&gpu.device, scene, &options).expect("renderer");
+    let readback = Readback {
+        cube: true,
+        views: true,
+        rays: true,
+        ..Default::default()
+    };
+    let (_, images) = r.render_frame(0, 0.0, readback).expect("frame");
+    let origin = images.sensor_ray_origin.expect("ray origins read back");
+    let direction = images
+        .sensor_ray_direction
+        .expect("ray directions read back");
+    let sensor = images.sensor.expect("sensor read back");
+    SensorOutputs::from_gpu(
+        &r.scene,
+        0.0,
+        "plain",
+        sensor,
+        (&origin, &direction),
+        images.cube,
+    )
+}
+
+/// On every device, the GPU's ray map is the exact one to float rounding. Inside the disc
+/// (more than 2 pixels from the rim) origins agree within 2e-6 m on the 1 m sphere and
+/// directions within 1e-5 rad. Towards the rim the ray grazes the sphere: the hit's position
+/// along the ray is ill-conditioned there (its error grows as 1 / sqrt of the discriminant),
+/// and a driver's own sqrt and fused multiply-adds move it further, so there the bounds are
+/// 1e-4 m and 1e-4 rad; the masks may differ only where the discriminant rounds to 0.
+/// Measured maxima are printed.
+#[test]
+fn the_gpu_ray_map_is_the_exact_one_on_every_device() {
+    let s = scene("scenes/test/six-colour-room.toml");
+    let exact = RayMap::exact(&s, 0.0);
+    let optics = SensorOptics::at(&s, 0.0);
+    let (centre, radius) = (optics.disc_centre_px(), optics.disc_radius_px());
+    for device in devices() {
+        let gpu = Gpu::on(&device, Default::default());
+        let out = gpu_outputs(&gpu, s.clone());
+        gpu.finish();
+        let mut mask_differs = 0;
+        // [inside, rim]: the largest origin and direction differences.
+        let mut worst = [(0.0f32, 0.0f64); 2];
+        for (i, (a, b)) in out.rays.rays.iter().zip(&exact.rays).enumerate() {
+            let pixel = glam::Vec2::new(
+                (i as u32 % exact.width) as f32,
+                (i as u32 / exact.width) as f32,
+            );
+            let rim = (pixel + glam::Vec2::splat(0.5) - centre).length() > radius - 2.0;
+            match (a, b) {
+                (Some(a), Some(b)) => {
+                    let w = &mut worst[usize::from(rim)];
+                    w.0 = w.0.max((a.origin - b.origin).length());
+                    w.1 = w.1.max(angle(a.direction, b.direction));
+                }
+                (None, None) => {}
+                _ => mask_differs += 1,
+            }
+        }
+        eprintln!(
+            "{device}: {} mirror pixels, mask differs at {mask_differs}; inside: origins \
+             within {:e} m, directions within {:e} rad; rim: {:e} m, {:e} rad",
+            exact.mirror_pixels(),
+            worst[0].0,
+            worst[0].1,
+            worst[1].0,
+            worst[1].1
+        );
+        assert!(
+            mask_differs <= 8,
+            "{device}: {mask_differs} mask differences"
+        );
+        assert!(
+            worst[0].0 < 2e-6 && worst[0].1 < 1e-5,
+            "{device}: inside {:?}",
+            worst[0]
+        );
+        assert!(
+            worst[1].0 < 1e-4 && worst[1].1 < 1e-4,
+            "{device}: rim {:?}",
+            worst[1]
+        );
+    }
+}
+
+/// In the six-colour room there is nothing but the room box, so the cube path's room-box range
+/// and wall id are exact: they must match the reference's (ids away from the room's edges).
+#[test]
+fn the_room_box_range_and_ids_are_exact_in_an_empty_room() {
+    let s = scene("scenes/test/six-colour-room.toml");
+    let reference = Reference::new(&s, 0.0);
+    let [w, h] = s.sensor.resolution;
+    let (images, _) = reference.render(&reference.sensor_view(), w, h, 1);
+    let exact = SensorOutputs::from_reference(&s, 0.0, &images);
+    let gpu = Gpu::new();
+    let out = gpu_outputs(&gpu, s.clone());
+    gpu.finish();
+    let mut worst = 0.0f32;
+    for (i, ray) in exact.rays.rays.iter().enumerate() {
+        let (Some(ray), Some(_)) = (ray, out.rays.rays[i]) else {
+            continue;
+        };
+        worst = worst.max((out.range[i] - exact.range[i]).abs());
+        let end = ray.origin + exact.range[i] * ray.direction;
+        let near_walls = (end.abs() - Vec3::splat(5.0))
+            .abs()
+            .cmplt(Vec3::splat(1e-2));
+        if near_walls.bitmask().count_ones() == 1 {
+            assert_eq!(out.ids[i], exact.ids[i], "pixel {i}: {end}");
+        }
+    }
+    eprintln!("room-box range against the reference's: within {worst:e} m");
+    assert!(worst < 1e-4, "ranges differ by {worst} m");
+}
+
+fn run_ok(args: &[&str]) {
+    let r = specchio(args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+}
+
+/// `render` and `reference` with `--sensor-outputs` write the same ray map (to float
+/// rounding), the camera description, and panoramas whose known column shows its wall.
+#[test]
+fn both_commands_write_the_sensor_outputs() {
+    let scene_path = root().join("scenes/test/six-colour-room.toml");
+    let scene_path = scene_path.to_str().unwrap();
+    let (gpu_dir, cpu_dir) = (temp_dir("sensor-gpu"), temp_dir("sensor-cpu"));
+    let (g, c) = (gpu_dir.to_str().unwrap(), cpu_dir.to_str().unwrap());
+    run_ok(&[
+        "render",
+        scene_path,
+        "--out",
+        g,
+        "--sensor-outputs",
+        "--cube-size",
+        "64",
+    ]);
+    run_ok(&["reference", scene_path, "--out", c, "--sensor-outputs"]);
+    let (a, b) = (
+        read_channels(&gpu_dir.join("sensor.rays.exr")).unwrap(),
+        read_channels(&cpu_dir.join("sensor.rays.exr")).unwrap(),
+    );
+    for name in RAY_CHANNELS {
+        let (x, y) = (
+            f32_channel(&a, name).unwrap(),
+            f32_channel(&b, name).unwrap(),
+        );
+        let (both, mask) = (
+            f32_channel(&a, "mask").unwrap(),
+            f32_channel(&b, "mask").unwrap(),
+        );
+        let worst = (0..x.len())
+            .filter(|&i| both[i] == 1.0 && mask[i] == 1.0)
+            .map(|i| (x[i] - y[i]).abs())
+            .fold(0.0f32, f32::max);
+        // Directions change fastest at the rim (see the test above): 1e-4 per component.
+        assert!(worst < 1e-4, "{name}: {worst}");
+    }
+    for dir in [&gpu_dir, &cpu_dir] {
+        let ids = read_channels(&dir.join("sensor.id.exr")).unwrap();
+        let ids = read_u32_channel(&ids, "id").expect("ids as u32");
+        assert!(ids.contains(&0) && ids.contains(&NO_ID));
+        let camera: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("camera.json")).unwrap())
+                .unwrap();
+        assert_eq!(camera["files"]["rays"], "sensor.rays.exr");
+        assert_eq!(camera["mirror"]["radius_m"], 1.0);
+        assert_eq!(
+            camera["sensor"]["position_m"],
+            serde_json::json!([0.0, -2.5, 0.0])
+        );
+        // Azimuth 0 (+X) at the horizon is the red wall, from the image and from the cube.
+        let panoramas = camera["files"]["panoramas"].as_array().unwrap();
+        assert_eq!(panoramas.len(), if dir == &gpu_dir { 4 } else { 2 });
+        for p in panoramas {
+            let file = dir.join(p["file"].as_str().unwrap());
+            let channels = read_channels(&file).unwrap();
+            let (w, h) = (p["width"].as_u64().unwrap(), p["height"].as_u64().unwrap());
+            let (top, bottom) = (
+                p["top_elevation_deg"].as_f64().unwrap(),
+                p["bottom_elevation_deg"].as_f64().unwrap(),
+            );
+            let row = if p["kind"] == "lon-lat" {
+                (top / (top - bottom) * h as f64) as u64
+            } else {
+                let (t, b) = (top.to_radians().tan(), bottom.to_radians().tan());
+                (t / (t - b) * h as f64) as u64
+            };
+            let at = (row * w + 2) as usize; // column 2: azimuth (2.5 / w) * 360 degrees
+            let rgb = ["R", "G", "B"].map(|n| f32_channel(&channels, n).unwrap()[at]);
+            assert_eq!(rgb, [1.0, 0.0, 0.0], "{}", file.display());
+        }
+    }
+    for d in [gpu_dir, cpu_dir] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+/// A lookup without a cube cannot give the cube path's outputs: a clear error, exit 1, and
+/// nothing written.
+#[test]
+fn sensor_outputs_refuse_the_ray_query_lookup() {
+    let out = temp_dir("sensor-ray-query");
+    let scene_path = root().join("scenes/test/six-colour-room.toml");
+    let r = specchio(&[
+        "render",
+        scene_path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--sensor-outputs",
+        "--lookup",
+        "ray-query",
+    ]);
+    assert_eq!(r.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        stderr.contains("--sensor-outputs: the lookup ray-query reads no cube map"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}
