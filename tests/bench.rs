@@ -25,7 +25,8 @@ fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
-/// A quick run of six-pass alone, timing only (no error, floors or dynamic part), plus `extra`.
+/// A quick run of six-pass alone, timing only (no error, floors, dynamic part or trade-off),
+/// plus `extra`.
 fn lean_quick(extra: &[&str]) -> Output {
     let mut args = vec![
         "bench",
@@ -35,6 +36,7 @@ fn lean_quick(extra: &[&str]) -> Output {
         "--no-accuracy",
         "--no-dynamic",
         "--no-floors",
+        "--no-tradeoff",
     ];
     args.extend_from_slice(extra);
     specchio(&args)
@@ -62,13 +64,11 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
         svg.to_str().unwrap(),
     ]);
     assert_ok(&run);
-    // Two scenes x two methods x two lookups, and the header.
-    assert_eq!(
-        std::fs::read_to_string(&csv).unwrap().lines().count(),
-        1 + 8
-    );
-    let plot = std::fs::read_to_string(&svg).unwrap();
-    assert!(plot.starts_with("<svg") && plot.contains("six-pass 64² box"));
+    // The header, two scenes x two methods x two lookups, and two scenes x three rungs.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 1 + 8 + 6);
+    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 6);
+    check_plot(&std::fs::read_to_string(&svg).unwrap());
     check_record(&read_json(&json));
 
     // The same run against itself: counters are deterministic.
@@ -106,6 +106,35 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     assert_eq!(fail.status.code(), Some(1), "{stderr}");
     assert!(
         stderr.contains(&case) && stderr.contains("fragment_invocations"),
+        "{stderr}"
+    );
+
+    // A rung's counter changed: the gate names the rung's case and the counter.
+    let mut base = read_json(&json);
+    let rung = &mut base["tradeoff"][1];
+    let case = format!(
+        "{} / rung {} / 64²",
+        rung["scene"].as_str().unwrap(),
+        rung["rung"].as_str().unwrap()
+    );
+    let v = rung["work"]["sensor_fragment_invocations"]
+        .as_u64()
+        .unwrap();
+    rung["work"]["sensor_fragment_invocations"] = serde_json::json!(v + 1);
+    std::fs::write(&worse, base.to_string()).unwrap();
+    let fail = specchio(&[
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass,instanced",
+        "--no-accuracy",
+        "--baseline",
+        worse.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&fail.stderr);
+    assert_eq!(fail.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!("{case}: sensor_fragment_invocations {v}")),
         "{stderr}"
     );
 
@@ -181,11 +210,103 @@ fn check_record(r: &serde_json::Value) {
     assert!(thesis["frames"].as_array().unwrap().len() >= 4);
     // One small ball moves in the thesis's room: fewer faces than a full update.
     assert!(thesis["faces_incremental_median"].as_f64().unwrap() < 6.0);
+    check_tradeoff(r);
     // Provenance.
     assert!(r["peak_rss_bytes"].as_u64().unwrap() > 0);
     assert!(r["command"].as_str().unwrap().contains("bench"));
     assert!(r["device"]["driver_info"].is_string());
     assert!(r["settings"]["cube_sizes"] == serde_json::json!([64]));
+}
+
+/// The trade-off rows of a quick run on lavapipe: every rung on every scene, with its costs,
+/// counters and both views' errors, and the Pareto flags of the measured points.
+fn check_tradeoff(r: &serde_json::Value) {
+    let rows = r["tradeoff"].as_array().expect("`tradeoff` array");
+    assert_eq!(
+        r["settings"]["rungs"],
+        serde_json::json!(["plain", "box", "ray-query"])
+    );
+    assert_eq!(r["rungs_not_run"], serde_json::json!([]));
+    for scene in ["scenes/thesis-room.toml", "scenes/moving-objects.toml"] {
+        let here: Vec<&serde_json::Value> = rows.iter().filter(|t| t["scene"] == scene).collect();
+        let labels: Vec<&str> = here.iter().map(|t| t["rung"].as_str().unwrap()).collect();
+        assert_eq!(labels, ["plain", "box", "ray-query"], "{scene}");
+        let mut points = Vec::new();
+        for t in &here {
+            let rung = t["rung"].as_str().unwrap();
+            assert_eq!(t["frames"], 5, "{scene} {rung}");
+            let cost = t["frame_cost_ms"]["median"].as_f64().unwrap();
+            let parts = t["gpu_cube_ms"]["median"].as_f64().unwrap()
+                + t["gpu_sensor_ms"]["median"].as_f64().unwrap();
+            assert!(
+                cost > 0.0 && cost <= 2.0 * parts,
+                "{scene} {rung}: {cost} vs {parts}"
+            );
+            // The cube lookups fill all six faces every frame; ray-query fills none.
+            let faces = if rung == "ray-query" { 0 } else { 30 };
+            assert_eq!(t["work"]["faces_rendered"], faces, "{scene} {rung}");
+            assert!(t["work"]["sensor_fragment_invocations"].as_u64().unwrap() > 0);
+            for view in ["sensor", "observer"] {
+                assert_eq!(t[view]["non_finite_pixels"], 0, "{scene} {rung} {view}");
+                assert!(t[view]["angular"]["pixels"].as_u64().unwrap() > 0);
+            }
+            points.push((cost, t["sensor"]["flip_mean"].as_f64().unwrap()));
+        }
+        // Each rung nearer the exact answer than the one before it, in both views.
+        for view in ["sensor", "observer"] {
+            let flip: Vec<f64> = here
+                .iter()
+                .map(|t| t[view]["flip_mean"].as_f64().unwrap())
+                .collect();
+            assert!(
+                flip[0] > flip[1] && flip[1] > flip[2],
+                "{scene} {view}: {flip:?}"
+            );
+        }
+        // The flags are the front of these very points: on it when nothing is at most as
+        // dear and at most as wrong, and better in one.
+        for (t, &(c, e)) in here.iter().zip(&points) {
+            let dominated = points
+                .iter()
+                .any(|&(c2, e2)| c2 <= c && e2 <= e && (c2 < c || e2 < e));
+            assert_eq!(t["pareto"], !dominated, "{scene} {}", t["rung"]);
+        }
+        // The least wrong point is always on the front.
+        assert!(here
+            .iter()
+            .any(|t| t["rung"] == "ray-query" && t["pareto"] == true));
+    }
+}
+
+/// The plot is well-formed SVG with one trade-off panel (and one method panel) per scene, and
+/// every rung labelled.
+fn check_plot(text: &str) {
+    let doc = roxmltree::Document::parse(text).expect("the plot is well-formed XML");
+    assert_eq!(doc.root_element().tag_name().name(), "svg");
+    let texts: Vec<String> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("text"))
+        .map(|n| n.text().unwrap_or("").trim().to_owned())
+        .collect();
+    for scene in ["scenes/thesis-room.toml", "scenes/moving-objects.toml"] {
+        for panel in [
+            "frame cost against sensor error",
+            "cube update per fill method",
+        ] {
+            let title = format!("{scene}: {panel}");
+            assert_eq!(texts.iter().filter(|t| **t == title).count(), 1, "{title}");
+        }
+    }
+    assert_eq!(
+        texts
+            .iter()
+            .filter(|t| t.ends_with("frame cost against sensor error"))
+            .count(),
+        2
+    );
+    for rung in ["plain 64²", "box 64²", "ray-query 64²"] {
+        assert_eq!(texts.iter().filter(|t| *t == rung).count(), 2, "{rung}");
+    }
 }
 
 /// `--format github` prints github-action-benchmark's array on stdout (the table on stderr);
@@ -270,6 +391,21 @@ fn github_format_and_bad_options() {
             1,
         ),
         (&["no/such/scene.toml"][..], "no/such/scene.toml", 1),
+        (
+            &["--rungs", "box,sphere"][..],
+            "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, ray-query",
+            2,
+        ),
+        (
+            &["--rungs", "box,box"][..],
+            "--rungs: \"box\" is given twice",
+            1,
+        ),
+        (
+            &["--rungs", "box", "--no-tradeoff"][..],
+            "cannot be used with '--no-tradeoff'",
+            2,
+        ),
     ] {
         let mut all = vec!["bench", "--json", json.to_str().unwrap()];
         all.extend_from_slice(args);
@@ -424,7 +560,15 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
     }
     let json = temp("swiftshader.json");
     let csv = temp("swiftshader.csv");
-    let out = lean_quick(&[
+    // With the trade-off's rungs (their cost only): ray-query cannot run there.
+    let out = specchio(&[
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass",
+        "--no-accuracy",
+        "--no-dynamic",
+        "--no-floors",
         "--device",
         "swiftshader",
         "--json",
@@ -434,6 +578,32 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
     ]);
     assert_ok(&out);
     let record = read_json(&json);
+    let not_run = &record["rungs_not_run"];
+    assert_eq!(not_run.as_array().unwrap().len(), 1, "{not_run}");
+    assert_eq!(not_run[0]["rung"], "ray-query");
+    assert!(not_run[0]["reason"].as_str().unwrap().contains("ray"));
+    let rungs = record["tradeoff"].as_array().expect("tradeoff");
+    assert_eq!(rungs.len(), 2 * 2);
+    for t in rungs {
+        assert_eq!(t["work"]["faces_rendered"], 30);
+        assert!(t["work"]["sensor_fragment_invocations"].is_null(), "{t}");
+        assert!(t["sensor"].is_null() && t["pareto"].is_null());
+    }
+    let refused = specchio(&[
+        "bench",
+        "--quick",
+        "--no-accuracy",
+        "--device",
+        "swiftshader",
+        "--rungs",
+        "ray-query",
+    ]);
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("--rungs ray-query: the device lacks"),
+        "{said}"
+    );
     for r in record["results"].as_array().expect("results") {
         for counter in ["vertex_invocations", "fragment_invocations"] {
             assert!(r["work"][counter].is_null(), "{counter}: {}", r["work"]);
