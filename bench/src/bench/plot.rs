@@ -2,8 +2,8 @@
 //! into the SVG as `<text>` and the viewer's default sans-serif draws it). One row per scene:
 //!
 //! - left, **the trade-off**: every rung as a labelled point, x = frame cost (GPU ms per
-//!   sensor frame), y = sensor mean FLIP against the reference, both logarithmic (the rungs
-//!   span orders of magnitude in both); one colour per face size, and that size's Pareto front
+//!   sensor frame, linear from 0), y = sensor mean FLIP against the reference, logarithmic
+//!   (the rungs span orders of magnitude in error, not in cost); one colour per face size, and that size's Pareto front
 //!   as a line through its points in order of cost;
 //! - right, **the fill methods**: each method's median cube update time per face size (the
 //!   methods give the same images, so only their times differ).
@@ -89,6 +89,7 @@ fn tick(v: f64) -> String {
         a if a >= 100.0 => format!("{v:.0}"),
         a if a >= 1.0 => format!("{v:.1}"),
         a if a >= 0.01 => format!("{v:.2}"),
+        a if a >= 0.001 => format!("{v:.3}"),
         _ => format!("{v:.0e}"),
     }
 }
@@ -113,21 +114,22 @@ fn tradeoff_panel(area: &Area, scene: &str, rungs: &[&RungRow], sizes: &[u32]) -
         .map_err(drawing)?;
         return Ok(());
     }
-    let xs = log_range(points.iter().map(|p| p.1));
+    let x_max = points.iter().map(|p| p.1).fold(0.0, f64::max);
     let ys = log_range(points.iter().map(|p| p.2));
+    // Headroom above the worst point: the legend sits there, clear of the points and labels.
+    let ys = ys.start..ys.end * 8.0;
     let floor = ys.start;
     let mut chart = ChartBuilder::on(area)
         .caption(&title, ("sans-serif", TITLE_PX))
         .margin(12)
         .x_label_area_size(50)
         .y_label_area_size(70)
-        .build_cartesian_2d(xs.log_scale(), ys.log_scale())
+        .build_cartesian_2d(0.0..x_max * 1.15, ys.log_scale())
         .map_err(drawing)?;
     chart
         .configure_mesh()
         .x_desc("GPU ms per sensor frame (cube update + sensor view)")
         .y_desc("sensor mean FLIP")
-        .x_labels(8)
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))
         .label_style(("sans-serif", LABEL_PX))
