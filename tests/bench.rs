@@ -1,6 +1,9 @@
 //! The benchmark's regression gate as CI runs it: an identical baseline passes, a worsened one
 //! fails and names the case.
 
+mod bench_tradeoff;
+
+use bench_tradeoff::{check_plot, check_tradeoff};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -25,7 +28,8 @@ fn read_json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
-/// A quick run of six-pass alone, timing only (no error, floors or dynamic part), plus `extra`.
+/// A quick run of six-pass alone, timing only (no error, floors, dynamic part or trade-off),
+/// plus `extra`.
 fn lean_quick(extra: &[&str]) -> Output {
     let mut args = vec![
         "bench",
@@ -35,6 +39,7 @@ fn lean_quick(extra: &[&str]) -> Output {
         "--no-accuracy",
         "--no-dynamic",
         "--no-floors",
+        "--no-tradeoff",
     ];
     args.extend_from_slice(extra);
     specchio(&args)
@@ -62,13 +67,11 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
         svg.to_str().unwrap(),
     ]);
     assert_ok(&run);
-    // Two scenes x two methods x two lookups, and the header.
-    assert_eq!(
-        std::fs::read_to_string(&csv).unwrap().lines().count(),
-        1 + 8
-    );
-    let plot = std::fs::read_to_string(&svg).unwrap();
-    assert!(plot.starts_with("<svg") && plot.contains("six-pass 64² box"));
+    // The header, two scenes x two methods x two lookups, and two scenes x three rungs.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 1 + 8 + 6);
+    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 6);
+    check_plot(&std::fs::read_to_string(&svg).unwrap());
     check_record(&read_json(&json));
 
     // The same run against itself: counters are deterministic.
@@ -106,6 +109,35 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     assert_eq!(fail.status.code(), Some(1), "{stderr}");
     assert!(
         stderr.contains(&case) && stderr.contains("fragment_invocations"),
+        "{stderr}"
+    );
+
+    // A rung's counter changed: the gate names the rung's case and the counter.
+    let mut base = read_json(&json);
+    let rung = &mut base["tradeoff"][1];
+    let case = format!(
+        "{} / rung {} / 64²",
+        rung["scene"].as_str().unwrap(),
+        rung["rung"].as_str().unwrap()
+    );
+    let v = rung["work"]["sensor_fragment_invocations"]
+        .as_u64()
+        .unwrap();
+    rung["work"]["sensor_fragment_invocations"] = serde_json::json!(v + 1);
+    std::fs::write(&worse, base.to_string()).unwrap();
+    let fail = specchio(&[
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass,instanced",
+        "--no-accuracy",
+        "--baseline",
+        worse.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&fail.stderr);
+    assert_eq!(fail.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!("{case}: sensor_fragment_invocations {v}")),
         "{stderr}"
     );
 
@@ -181,6 +213,7 @@ fn check_record(r: &serde_json::Value) {
     assert!(thesis["frames"].as_array().unwrap().len() >= 4);
     // One small ball moves in the thesis's room: fewer faces than a full update.
     assert!(thesis["faces_incremental_median"].as_f64().unwrap() < 6.0);
+    check_tradeoff(r);
     // Provenance.
     assert!(r["peak_rss_bytes"].as_u64().unwrap() > 0);
     assert!(r["command"].as_str().unwrap().contains("bench"));
@@ -270,6 +303,21 @@ fn github_format_and_bad_options() {
             1,
         ),
         (&["no/such/scene.toml"][..], "no/such/scene.toml", 1),
+        (
+            &["--rungs", "box,sphere"][..],
+            "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, ray-query",
+            2,
+        ),
+        (
+            &["--rungs", "box,box"][..],
+            "--rungs: \"box\" is given twice",
+            1,
+        ),
+        (
+            &["--rungs", "box", "--no-tradeoff"][..],
+            "cannot be used with '--no-tradeoff'",
+            2,
+        ),
     ] {
         let mut all = vec!["bench", "--json", json.to_str().unwrap()];
         all.extend_from_slice(args);
@@ -424,7 +472,15 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
     }
     let json = temp("swiftshader.json");
     let csv = temp("swiftshader.csv");
-    let out = lean_quick(&[
+    // With the trade-off's rungs (their cost only): ray-query cannot run there.
+    let out = specchio(&[
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass",
+        "--no-accuracy",
+        "--no-dynamic",
+        "--no-floors",
         "--device",
         "swiftshader",
         "--json",
@@ -434,6 +490,32 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
     ]);
     assert_ok(&out);
     let record = read_json(&json);
+    let not_run = &record["rungs_not_run"];
+    assert_eq!(not_run.as_array().unwrap().len(), 1, "{not_run}");
+    assert_eq!(not_run[0]["rung"], "ray-query");
+    assert!(not_run[0]["reason"].as_str().unwrap().contains("ray"));
+    let rungs = record["tradeoff"].as_array().expect("tradeoff");
+    assert_eq!(rungs.len(), 2 * 2);
+    for t in rungs {
+        assert_eq!(t["work"]["faces_rendered"], 30);
+        assert!(t["work"]["sensor_fragment_invocations"].is_null(), "{t}");
+        assert!(t["sensor"].is_null() && t["pareto"].is_null());
+    }
+    let refused = specchio(&[
+        "bench",
+        "--quick",
+        "--no-accuracy",
+        "--device",
+        "swiftshader",
+        "--rungs",
+        "ray-query",
+    ]);
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("--rungs ray-query: the device lacks"),
+        "{said}"
+    );
     for r in record["results"].as_array().expect("results") {
         for counter in ["vertex_invocations", "fragment_invocations"] {
             assert!(r["work"][counter].is_null(), "{counter}: {}", r["work"]);

@@ -10,17 +10,22 @@
 //!   so each method's median wall time is divided by six-pass's median in the same run, and that
 //!   ratio is compared with the baseline's ratio: it fails when it grew by more than
 //!   `--max-regression` percent. Without that option times are reported, not gated.
+//! - **The trade-off's rungs are gated on their counters only** (faces the fill drew, its
+//!   vertex and fragment invocations, the sensor view's fragment invocations): exact like the
+//!   methods'. Their frame costs and errors are reported, not gated.
 
 use std::path::Path;
 
 use anyhow::Result;
 use specchio::render::methods::Method;
 
-use crate::bench::record::{self, MethodRow};
+use crate::bench::record::{self, MethodRow, RungRow};
 
 /// An earlier `specchio bench --json` file: its results and the driver that measured them.
 pub struct Baseline {
     pub results: Vec<MethodRow>,
+    /// The trade-off's rungs.
+    pub tradeoff: Vec<RungRow>,
     /// The driver's name (`llvmpipe`, `SwiftShader driver`, ...): counters compare only on
     /// the same driver.
     pub driver_name: String,
@@ -34,6 +39,7 @@ pub fn read_baseline(path: &Path) -> Result<Baseline> {
     let record = record::read(path)?;
     Ok(Baseline {
         results: record.results,
+        tradeoff: record.tradeoff,
         driver_name: record.device.driver_name,
         driver_info: record.device.driver_info,
     })
@@ -128,10 +134,46 @@ pub fn check(
     failures
 }
 
+/// Every way the rungs of `results` differ from `baseline` in their counters, one line each.
+pub fn check_rungs(baseline: &[RungRow], results: &[RungRow]) -> Vec<String> {
+    let mut failures = Vec::new();
+    for r in results {
+        let Some(b) = baseline.iter().find(|b| b.case() == r.case()) else {
+            continue; // a new rung: nothing to compare with
+        };
+        if r.frames != b.frames {
+            failures.push(format!(
+                "{}: {} frames against {} in the baseline; counters need equal runs",
+                r.case(),
+                r.frames,
+                b.frames
+            ));
+            continue;
+        }
+        for ((counter, new), (_, old)) in r.work.counters().into_iter().zip(b.work.counters()) {
+            if new != old {
+                let show = |v: Option<u64>| v.map_or("null".to_owned(), |v| v.to_string());
+                failures.push(format!(
+                    "{}: {counter} {} (baseline {})",
+                    r.case(),
+                    show(new),
+                    show(old)
+                ));
+            }
+        }
+    }
+    for b in baseline {
+        if !results.iter().any(|r| r.case() == b.case()) {
+            failures.push(format!("{}: in the baseline but not measured", b.case()));
+        }
+    }
+    failures
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::record::{Efficiency, Stats, Work};
+    use crate::bench::record::{Efficiency, RungWork, Stats, Work};
 
     fn row(method: &str, wall: f64, vertices: u64) -> MethodRow {
         MethodRow {
@@ -198,5 +240,51 @@ mod tests {
         assert!(check(&base, &worse, Some(25.0)).is_empty());
         // Without --max-regression times are not gated.
         assert!(check(&base, &worse, None).is_empty());
+    }
+
+    fn rung(label: &str, sensor_fragments: u64) -> RungRow {
+        RungRow {
+            scene: "s.toml".into(),
+            cube_size: 64,
+            rung: label.into(),
+            lookup: specchio::scene::Lookup::Box,
+            frames: 5,
+            frame_cost_ms: None,
+            gpu_cube_ms: None,
+            gpu_sensor_ms: None,
+            wall_ms: None,
+            work: RungWork {
+                faces_rendered: 30,
+                fill_vertex_invocations: Some(100),
+                fill_fragment_invocations: Some(200),
+                sensor_fragment_invocations: Some(sensor_fragments),
+            },
+            sensor: None,
+            observer: None,
+            pareto: None,
+        }
+    }
+
+    #[test]
+    fn rungs_pass_unchanged_and_fail_on_a_changed_or_missing_counter() {
+        let base = vec![rung("plain", 50), rung("box", 60)];
+        assert!(check_rungs(&base, &base).is_empty());
+        let changed = vec![rung("plain", 50), rung("box", 61)];
+        let f = check_rungs(&base, &changed);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert!(
+            f[0].contains("s.toml / rung box / 64²")
+                && f[0].contains("sensor_fragment_invocations 61 (baseline 60)"),
+            "{f:?}"
+        );
+        let mut absent = rung("box", 60);
+        absent.work.fill_fragment_invocations = None;
+        let f = check_rungs(&base, &[rung("plain", 50), absent]);
+        assert!(f[0].contains("fill_fragment_invocations null"), "{f:?}");
+        let f = check_rungs(&base, &[rung("plain", 50)]);
+        assert_eq!(
+            f,
+            ["s.toml / rung box / 64²: in the baseline but not measured"]
+        );
     }
 }

@@ -16,6 +16,7 @@ pub mod record;
 mod report;
 mod rows;
 mod timing;
+mod tradeoff;
 
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -33,7 +34,7 @@ use crate::gate::Baseline;
 use crate::probe;
 use options::{settle, Settled};
 pub use options::{Args, Format};
-use record::{Environment, MethodRow, NotRun, Record, ReferenceRow, Settings, SpeedVsError};
+use record::{Environment, NotRun, Record, ReferenceRow, RungNotRun, Settings, SpeedVsError};
 use report::lookup_name;
 use timing::{quantile, Timed};
 
@@ -43,12 +44,6 @@ pub struct Plan {
     pub warmup: u32,
     pub runs: u32,
     pub floors: bool,
-}
-
-/// What a measurement made: the record and the plot's points, once the device is gone.
-struct Measured {
-    record: Record,
-    plot_scenes: Vec<(String, Vec<plot::Point>)>,
 }
 
 /// A line of the table: on stdout, or on stderr when stdout carries the github array.
@@ -89,15 +84,12 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let instance = Instance::create(&InstanceDesc::from_env(false))?;
     let log = instance.validation_log();
     let measured = measure(&settled, &scenes, instance, baseline.as_ref());
-    let Measured {
-        record,
-        plot_scenes,
-    } = crate::validation::checked(&log, measured)?;
+    let record = crate::validation::checked(&log, measured)?;
 
     // 3. Outputs, then the gate.
-    write_outputs(&settled.args, out, &record, &plot_scenes)?;
+    write_outputs(&settled.args, out, &record)?;
     match &baseline {
-        Some(baseline) => Ok(gate(&settled.args, baseline, &record.results)),
+        Some(baseline) => Ok(gate(&settled.args, baseline, &record)),
         None => Ok(ExitCode::SUCCESS),
     }
 }
@@ -109,7 +101,7 @@ fn measure(
     scenes: &[Scene],
     instance: std::sync::Arc<Instance>,
     baseline: Option<&Baseline>,
-) -> Result<Measured> {
+) -> Result<Record> {
     let args = &settled.args;
     let sizes = &settled.sizes;
     let chosen = device::choose(&instance, args.device.as_deref())?;
@@ -130,6 +122,22 @@ fn measure(
             Some(why) => Err(anyhow::anyhow!("--lookups {l}: {why}")),
         },
     )?;
+    // Rungs named on the command line must run; by default those the device cannot run are
+    // reported as not run.
+    let (mut rungs, mut rungs_not_run) = (Vec::new(), Vec::new());
+    for &rung in &settled.rungs {
+        match tradeoff::missing(rung, &chosen) {
+            None => rungs.push(rung),
+            Some(why) if settled.rungs_named => anyhow::bail!("--rungs {}: {why}", rung.label),
+            Some(reason) => rungs_not_run.push(RungNotRun {
+                rung: rung.label.to_owned(),
+                reason,
+            }),
+        }
+    }
+    let lookup_features = rungs.iter().fold(lookup_features, |f, r| {
+        f.union(specchio::render::lookups::features(r.lookup))
+    });
     let device = probe::device_for(&instance, args.device.as_deref(), &methods, lookup_features)?;
     drop(instance);
     if let (Some(b), Some(path)) = (baseline, &args.baseline) {
@@ -153,6 +161,7 @@ fn measure(
         .iter()
         .map(|s| {
             sizes.len() as u64 * u64::from(plan.runs) * rounds
+                + u64::from(!rungs.is_empty()) * sizes.len() as u64 * u64::from(plan.runs) * rounds
                 + u64::from(!args.no_dynamic && dynamic::animated(s)) * rounds
         })
         .sum();
@@ -165,7 +174,7 @@ fn measure(
     let say = |line: String| bar.suspend(|| say(args.format, &line));
 
     say(format!(
-        "specchio bench: {} scene(s) x face sizes {:?} x methods {}{}{}{}; \
+        "specchio bench: {} scene(s) x face sizes {:?} x methods {}{}{}{}{}; \
          columns explained in docs/benchmarks.md",
         scenes.len(),
         sizes,
@@ -184,6 +193,14 @@ fn measure(
             ""
         } else {
             ", incremental vs full updates"
+        },
+        if rungs.is_empty() {
+            String::new()
+        } else {
+            format!(
+                ", trade-off rungs {}",
+                rungs.iter().map(|r| r.label).collect::<Vec<_>>().join(", ")
+            )
         },
     ));
     let mut record = Record {
@@ -206,6 +223,7 @@ fn measure(
             methods: methods.clone(),
             cube_sizes: sizes.clone(),
             lookups: settled.lookups.clone(),
+            rungs: settled.rungs.iter().map(|r| r.label.to_owned()).collect(),
             frames: plan.frames,
             warmup: plan.warmup,
             runs: plan.runs,
@@ -223,28 +241,17 @@ fn measure(
         accuracy: Vec::new(),
         references: Vec::new(),
         speed_vs_error: Vec::new(),
+        tradeoff: Vec::new(),
+        rungs_not_run,
         dynamic: Vec::new(),
     };
-    let mut plot_scenes = Vec::new();
     for (path, scene) in settled.scenes.iter().zip(scenes) {
         let name = path.display().to_string();
         bar.set_message(name.clone());
-        let exact = if args.no_accuracy {
-            None
-        } else {
-            let reference = Reference::new(scene, 0.0);
-            let [w, h] = scene.sensor.resolution;
-            let (images, stats) = reference.render(&reference.sensor_view(), w, h, 1);
-            record.references.push(ReferenceRow {
-                scene: name.clone(),
-                time_s: 0.0,
-                camera: "sensor".to_owned(),
-                spp: 1,
-                stats,
-            });
-            Some(images)
-        };
-        let mut points = Vec::new();
+        let exact = (!args.no_accuracy).then(|| {
+            // The observer's only for the trade-off, which measures both views.
+            references(&name, scene, !rungs.is_empty(), &mut record.references)
+        });
         for &size in sizes {
             let mut t = timing::time_size(&device, scene, &methods, size, &plan, &tick)?;
             let floor_median = |f: Floor| {
@@ -292,7 +299,7 @@ fn measure(
                     &name,
                     &mut t.renderers[..methods.len()],
                     &settled.lookups,
-                    exact,
+                    &exact.sensor,
                 )?;
                 say(format!(
                     "  {:<8} {:>9} {:>9} {:>12} {:>10} {:>12} {:>10}",
@@ -317,7 +324,6 @@ fn measure(
                         if a.methods_identical { "yes" } else { "NO" }
                     ));
                     for r in &size_rows {
-                        points.push(plot_point(r, &a));
                         record.speed_vs_error.push(SpeedVsError {
                             result: r.clone(),
                             accuracy: a.clone(),
@@ -327,6 +333,28 @@ fn measure(
                 }
             }
             record.results.extend(size_rows);
+            // The methods' renderers go before the rungs' are made.
+            drop(t);
+            if !rungs.is_empty() {
+                let rows = tradeoff::measure(
+                    &device,
+                    (&name, scene),
+                    &rungs,
+                    size,
+                    &plan,
+                    exact.as_ref(),
+                    &tick,
+                )?;
+                say(format!(
+                    "  trade-off at {size}²: GPU ms per sensor frame (cube update + sensor view) \
+                     against error at t = 0; * on the Pareto front"
+                ));
+                say(tradeoff::table_header());
+                for r in &rows {
+                    say(tradeoff::table_row(r));
+                }
+                record.tradeoff.extend(rows);
+            }
         }
         if !args.no_dynamic && dynamic::animated(scene) {
             let d = dynamic::measure(&device, &name, scene, dynamic_size, &plan, &tick)?;
@@ -340,11 +368,13 @@ fn measure(
             ));
             record.dynamic.push(d);
         }
-        plot_scenes.push((name, points));
     }
     bar.finish_and_clear();
     for r in &record.methods_not_run {
         say(format!("  {}: not run: {}", r.method, r.reason));
+    }
+    for r in &record.rungs_not_run {
+        say(format!("  rung {}: not run: {}", r.rung, r.reason));
     }
     record.peak_rss_bytes = report::peak_rss_bytes();
     say(format!(
@@ -353,22 +383,38 @@ fn measure(
             .peak_rss_bytes
             .map_or("n/a".into(), |b| format!("{:.0} MiB", b as f64 / 1048576.0))
     ));
-    Ok(Measured {
-        record,
-        plot_scenes,
-    })
+    Ok(record)
 }
 
-/// The plot's point for a method's row at the error of one lookup.
-fn plot_point(r: &MethodRow, a: &accuracy::Accuracy) -> plot::Point {
-    plot::Point {
-        method: r.method.name().to_owned(),
-        cube_size: r.cube_size,
-        lookup: lookup_name(a.lookup).to_owned(),
-        ms: r.wall_ms.map_or(f64::NAN, |w| w.median),
-        flip_mean: a.flip_mean.unwrap_or(f64::NAN),
-        angular_mean_deg: a.angular.mean_deg,
-    }
+/// The exact reference of `scene` at t = 0, 1 sample per pixel: the sensor's, and the
+/// observer's when `observer` (the trade-off compares both views); each noted in `rows`.
+fn references(
+    name: &str,
+    scene: &Scene,
+    observer: bool,
+    rows: &mut Vec<ReferenceRow>,
+) -> tradeoff::Exact {
+    let reference = Reference::new(scene, 0.0);
+    let mut trace = |camera: &str, view, [w, h]: [u32; 2]| {
+        let (images, stats) = reference.render(&view, w, h, 1);
+        rows.push(ReferenceRow {
+            scene: name.to_owned(),
+            time_s: 0.0,
+            camera: camera.to_owned(),
+            spp: 1,
+            stats,
+        });
+        images
+    };
+    let sensor = trace("sensor", reference.sensor_view(), scene.sensor.resolution);
+    let observer = observer.then(|| {
+        trace(
+            "observer",
+            reference.observer_view(),
+            scene.observer.resolution,
+        )
+    });
+    tradeoff::Exact { sensor, observer }
 }
 
 /// The report files asked for: `--json`, `--csv`, `--plot`.
@@ -381,12 +427,7 @@ fn report_paths(args: &Args) -> Vec<&PathBuf> {
 
 /// `--json`, `--csv`, `--plot` (through `out`, where they were staged) and `--format github`,
 /// from the one record.
-fn write_outputs(
-    args: &Args,
-    out: Transaction,
-    record: &Record,
-    plot_scenes: &[(String, Vec<plot::Point>)],
-) -> Result<()> {
+fn write_outputs(args: &Args, out: Transaction, record: &Record) -> Result<()> {
     if let Some(path) = &args.json {
         out.write_json(path, record)?;
     }
@@ -394,7 +435,7 @@ fn write_outputs(
         report::write_csv(&out, path, record)?;
     }
     if let Some(path) = &args.plot {
-        out.write_bytes(path, plot::svg(plot_scenes).as_bytes())?;
+        out.write_bytes(path, plot::svg(record)?.as_bytes())?;
     }
     out.commit()?;
     let written = report_paths(args);
@@ -409,9 +450,13 @@ fn write_outputs(
     Ok(())
 }
 
-/// The regression gate's verdict on `results`, printed on stderr.
-fn gate(args: &Args, baseline: &Baseline, results: &[MethodRow]) -> ExitCode {
-    let failures = crate::gate::check(&baseline.results, results, args.max_regression);
+/// The regression gate's verdict on the record's methods and rungs, printed on stderr.
+fn gate(args: &Args, baseline: &Baseline, record: &Record) -> ExitCode {
+    let mut failures = crate::gate::check(&baseline.results, &record.results, args.max_regression);
+    failures.extend(crate::gate::check_rungs(
+        &baseline.tradeoff,
+        &record.tradeoff,
+    ));
     if !failures.is_empty() {
         eprintln!(
             "regression gate: {} case(s) got worse or changed:",

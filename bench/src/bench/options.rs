@@ -10,6 +10,7 @@ use anyhow::Result;
 use specchio::render::methods::Method;
 use specchio::scene::Lookup;
 
+use super::tradeoff::{rung, Rung, LADDER};
 use crate::args::{face_size, lookup, method, real, whole};
 
 /// The default scene set: the thesis's room, a few moving objects, a crowd, ~1 M triangles.
@@ -98,6 +99,25 @@ pub struct Args {
     /// Skip the incremental-against-full measurement of animated scenes.
     #[arg(long)]
     pub no_dynamic: bool,
+    /// Comma-separated rungs of the trade-off ladder (default: every rung the device can run;
+    /// docs/benchmarks.md lists them).
+    #[arg(long, value_delimiter = ',', value_parser = rung_label, conflicts_with = "no_tradeoff")]
+    pub rungs: Option<Vec<&'static str>>,
+    /// Skip the trade-off ladder (frame cost against error per lookup).
+    #[arg(long)]
+    pub no_tradeoff: bool,
+}
+
+/// A rung's label, checked against the ladder.
+fn rung_label(text: &str) -> Result<&'static str, String> {
+    super::tradeoff::rung(text.trim())
+        .map(|r| r.label)
+        .ok_or_else(|| {
+            format!(
+                "`{text}` is not a rung: one of {}",
+                super::tradeoff::labels()
+            )
+        })
 }
 
 /// The options with every default filled in.
@@ -107,6 +127,10 @@ pub struct Settled {
     pub sizes: Vec<u32>,
     pub lookups: Vec<Lookup>,
     pub methods: Vec<Method>,
+    /// The rungs asked for: explicitly named ones must run; by default those the device
+    /// cannot run are listed as not run.
+    pub rungs: Vec<&'static Rung>,
+    pub rungs_named: bool,
     pub frames: u32,
     pub warmup: u32,
     pub runs: u32,
@@ -139,6 +163,9 @@ pub fn settle(args: &Args) -> Result<Settled> {
         no_repeats("--methods", list)?;
     }
     no_repeats("--lookups", &args.lookups)?;
+    if let Some(list) = &args.rungs {
+        no_repeats("--rungs", list)?;
+    }
     if args.max_regression.is_some() {
         anyhow::ensure!(
             methods.contains(&Method::SIX_PASS),
@@ -174,6 +201,12 @@ pub fn settle(args: &Args) -> Result<Settled> {
         sizes: args.cube_sizes.clone().unwrap_or_else(|| sizes.to_vec()),
         lookups: args.lookups.clone(),
         methods,
+        rungs: match (&args.rungs, args.no_tradeoff) {
+            (_, true) => Vec::new(),
+            (None, false) => LADDER.iter().collect(),
+            (Some(list), false) => list.iter().filter_map(|l| rung(l)).collect(),
+        },
+        rungs_named: args.rungs.is_some(),
         frames: args.frames.unwrap_or(frames),
         warmup: args.warmup.unwrap_or(warmup),
         runs: args.runs.unwrap_or(runs),

@@ -1,324 +1,335 @@
-//! `--plot FILE.svg`: speed against error, one row of two panels per scene (cube update time
-//! against mean FLIP, and against mean angular lookup error), one point per method, face size
-//! and lookup mode. Plain SVG, written by hand: no plotting dependency.
+//! `--plot FILE.svg`, drawn with `plotters` (its SVG backend; no font is read: the text goes
+//! into the SVG as `<text>` and the viewer's default sans-serif draws it). One row per scene:
+//!
+//! - left, **the trade-off**: every rung as a labelled point, x = frame cost (GPU ms per
+//!   sensor frame, linear from 0), y = sensor mean FLIP against the reference, logarithmic
+//!   (the rungs span orders of magnitude in error, not in cost); one colour per face size, and that size's Pareto front
+//!   as a line through its points in order of cost;
+//! - right, **the fill methods**: each method's median cube update time per face size (the
+//!   methods give the same images, so only their times differ).
+//!
+//! Labels are placed greedily beside their points, trying a few positions until one overlaps
+//! neither an earlier label nor the panel's edge (the hand-written SVG before it overlapped
+//! labels).
 
-use std::fmt::Write as _;
+use anyhow::{anyhow, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
 
-/// One point: a method at a face size with a lookup mode.
-pub struct Point {
-    pub method: String,
-    pub cube_size: u32,
-    pub lookup: String,
-    pub ms: f64,
-    pub flip_mean: f64,
-    pub angular_mean_deg: f64,
-}
+use super::record::{Record, RungRow};
 
-const PANEL_W: f64 = 420.0;
-const PANEL_H: f64 = 260.0;
-const MARGIN: (f64, f64, f64, f64) = (60.0, 20.0, 30.0, 45.0); // left, right, top, bottom
-const COLOURS: [&str; 6] = [
-    "#1b6ca8", "#d1495b", "#2a9d8f", "#e9a23b", "#6a4c93", "#555555",
+const WIDTH: u32 = 1200;
+const ROW_HEIGHT: u32 = 420;
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(0x1b, 0x6c, 0xa8),
+    RGBColor(0xd1, 0x49, 0x5b),
+    RGBColor(0x2a, 0x9d, 0x8f),
+    RGBColor(0xe9, 0xa2, 0x3b),
+    RGBColor(0x6a, 0x4c, 0x93),
+    RGBColor(0x55, 0x55, 0x55),
 ];
+/// Font sizes as plotters takes them (it draws text at 1/1.24 of the size given).
+const LABEL_PX: u32 = 16;
+const TITLE_PX: u32 = 19;
+/// The title suffix of each scene's trade-off panel (the tests count panels by it).
+pub const TRADEOFF_TITLE: &str = "frame cost against sensor error";
 
-/// A value axis: linear from 0, or logarithmic (decades).
-struct Axis {
-    lo: f64,
-    hi: f64,
-    log: bool,
+type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+/// plotters' errors carry the backend's type; the message is what matters here.
+fn drawing<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow!("drawing the plot: {e}")
 }
 
-impl Axis {
-    fn fit(values: &[f64], log: bool) -> Axis {
-        let finite: Vec<f64> = values
+/// The whole plot as SVG text.
+pub fn svg(record: &Record) -> Result<String> {
+    let scenes = &record.settings.scenes;
+    let mut text = String::new();
+    {
+        let rows = u32::try_from(scenes.len().max(1))?;
+        let root =
+            SVGBackend::with_string(&mut text, (WIDTH, ROW_HEIGHT * rows)).into_drawing_area();
+        root.fill(&WHITE).map_err(drawing)?;
+        let panels = root.split_evenly((scenes.len().max(1), 2));
+        for (scene, pair) in scenes.iter().zip(panels.chunks(2)) {
+            let rungs: Vec<&RungRow> = record
+                .tradeoff
+                .iter()
+                .filter(|r| &r.scene == scene)
+                .collect();
+            tradeoff_panel(&pair[0], scene, &rungs, &record.settings.cube_sizes)?;
+            methods_panel(&pair[1], scene, record)?;
+        }
+        root.present().map_err(drawing)?;
+    }
+    Ok(text)
+}
+
+/// The colour of a face size: its place in the run's list.
+fn size_colour(sizes: &[u32], size: u32) -> RGBColor {
+    let i = sizes.iter().position(|&s| s == size).unwrap_or(0);
+    PALETTE[i % PALETTE.len()]
+}
+
+/// A log axis's range covering `values` (positive ones) with some room.
+fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    if lo > hi {
+        return 0.1..10.0;
+    }
+    lo / 2.0..hi * 2.0
+}
+
+/// A short number for a tick label.
+fn tick(v: f64) -> String {
+    match v.abs() {
+        0.0 => "0".to_owned(),
+        a if a >= 100.0 => format!("{v:.0}"),
+        a if a >= 1.0 => format!("{v:.1}"),
+        a if a >= 0.01 => format!("{v:.2}"),
+        a if a >= 0.001 => format!("{v:.3}"),
+        _ => format!("{v:.0e}"),
+    }
+}
+
+fn tradeoff_panel(area: &Area, scene: &str, rungs: &[&RungRow], sizes: &[u32]) -> Result<()> {
+    let title = format!("{scene}: {TRADEOFF_TITLE}");
+    // A point needs both a cost and an error; a FLIP of exactly 0 cannot sit on a log axis
+    // and is drawn at the axis's floor (its label says 0).
+    let points: Vec<(&RungRow, f64, f64)> = rungs
+        .iter()
+        .filter_map(|r| Some((*r, r.frame_cost_ms?.median, r.sensor.as_ref()?.flip_mean?)))
+        .collect();
+    if points.is_empty() {
+        area.titled(&title, ("sans-serif", TITLE_PX))
+            .map_err(drawing)?;
+        area.draw(&Text::new(
+            "no trade-off point: the rungs' error was not measured (--no-accuracy), \
+             or no rung ran (--no-tradeoff)",
+            (20, 60),
+            ("sans-serif", LABEL_PX),
+        ))
+        .map_err(drawing)?;
+        return Ok(());
+    }
+    let x_max = points.iter().map(|p| p.1).fold(0.0, f64::max);
+    let ys = log_range(points.iter().map(|p| p.2));
+    // Headroom above the worst point: the legend sits there, clear of the points and labels.
+    let ys = ys.start..ys.end * 8.0;
+    let floor = ys.start;
+    let mut chart = ChartBuilder::on(area)
+        .caption(&title, ("sans-serif", TITLE_PX))
+        .margin(12)
+        .x_label_area_size(50)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..x_max * 1.15, ys.log_scale())
+        .map_err(drawing)?;
+    chart
+        .configure_mesh()
+        .x_desc("GPU ms per sensor frame (cube update + sensor view)")
+        .y_desc("sensor mean FLIP")
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
+        .label_style(("sans-serif", LABEL_PX))
+        .axis_desc_style(("sans-serif", LABEL_PX))
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(drawing)?;
+    let mut placed: Vec<Rect> = Vec::new();
+    for &size in sizes {
+        let colour = size_colour(sizes, size);
+        let here: Vec<(&RungRow, f64, f64)> = points
             .iter()
-            .copied()
-            .filter(|v| v.is_finite() && (!log || *v > 0.0))
+            .filter(|p| p.0.cube_size == size)
+            .map(|&(r, x, y)| (r, x, y.max(floor)))
             .collect();
-        let max = finite.iter().copied().fold(f64::MIN, f64::max);
-        let min = finite.iter().copied().fold(f64::MAX, f64::min);
-        if finite.is_empty() {
-            return Axis {
-                lo: if log { 1.0 } else { 0.0 },
-                hi: 10.0,
-                log,
-            };
-        }
-        if log {
-            let lo = 10f64.powf(min.log10().floor());
-            let hi = 10f64.powf(max.log10().ceil()).max(lo * 10.0);
-            Axis { lo, hi, log }
-        } else {
-            Axis {
-                lo: 0.0,
-                hi: if max > 0.0 { max * 1.1 } else { 1.0 },
-                log,
-            }
-        }
-    }
-
-    /// Position in [0, 1] along the axis.
-    fn at(&self, v: f64) -> f64 {
-        if self.log {
-            (v.max(self.lo).log10() - self.lo.log10()) / (self.hi.log10() - self.lo.log10())
-        } else {
-            (v - self.lo) / (self.hi - self.lo)
-        }
-    }
-
-    fn ticks(&self) -> Vec<f64> {
-        if self.log {
-            let mut t = Vec::new();
-            let mut v = self.lo;
-            while v <= self.hi * 1.0001 {
-                t.push(v);
-                v *= 10.0;
-            }
-            t
-        } else {
-            (0..=4)
-                .map(|i| self.lo + (self.hi - self.lo) * f64::from(i) / 4.0)
-                .collect()
-        }
-    }
-}
-
-fn label(v: f64) -> String {
-    if v == 0.0 {
-        "0".into()
-    } else if v.abs() >= 100.0 {
-        format!("{v:.0}")
-    } else if v.abs() >= 1.0 {
-        format!("{v:.1}")
-    } else {
-        format!("{v:.3}")
-    }
-}
-
-/// Escapes text for SVG.
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
-
-#[allow(clippy::too_many_arguments)]
-fn panel(
-    out: &mut String,
-    (ox, oy): (f64, f64),
-    points: &[Point],
-    y: fn(&Point) -> f64,
-    y_log: bool,
-    title: &str,
-    y_label: &str,
-    methods: &[String],
-) {
-    let (l, r, t, b) = MARGIN;
-    let (w, h) = (PANEL_W - l - r, PANEL_H - t - b);
-    let xs: Vec<f64> = points.iter().map(|p| p.ms).collect();
-    let ys: Vec<f64> = points.iter().map(y).collect();
-    let (ax, ay) = (Axis::fit(&xs, true), Axis::fit(&ys, y_log));
-    let px = |v: f64| ox + l + ax.at(v) * w;
-    let py = |v: f64| oy + t + (1.0 - ay.at(v)) * h;
-    let _ = writeln!(
-        out,
-        r##"<text x="{:.1}" y="{:.1}" font-size="13" font-weight="bold">{}</text>"##,
-        ox + l,
-        oy + t - 10.0,
-        esc(title)
-    );
-    let _ = writeln!(
-        out,
-        r##"<rect x="{:.1}" y="{:.1}" width="{w:.1}" height="{h:.1}" fill="none" stroke="#999"/>"##,
-        ox + l,
-        oy + t
-    );
-    for v in ax.ticks() {
-        let x = px(v);
-        let _ = writeln!(
-            out,
-            r##"<line x1="{x:.1}" y1="{:.1}" x2="{x:.1}" y2="{:.1}" stroke="#ddd"/><text x="{x:.1}" y="{:.1}" font-size="10" text-anchor="middle">{}</text>"##,
-            oy + t,
-            oy + t + h,
-            oy + t + h + 14.0,
-            label(v)
-        );
-    }
-    for v in ay.ticks() {
-        let yy = py(v);
-        let _ = writeln!(
-            out,
-            r##"<line x1="{:.1}" y1="{yy:.1}" x2="{:.1}" y2="{yy:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" font-size="10" text-anchor="end">{}</text>"##,
-            ox + l,
-            ox + l + w,
-            ox + l - 4.0,
-            yy + 3.0,
-            label(v)
-        );
-    }
-    let _ = writeln!(
-        out,
-        r##"<text x="{:.1}" y="{:.1}" font-size="11" text-anchor="middle">cube update, ms (log)</text>"##,
-        ox + l + w / 2.0,
-        oy + t + h + 32.0
-    );
-    let _ = writeln!(
-        out,
-        r##"<text x="{:.1}" y="{:.1}" font-size="11" text-anchor="middle" transform="rotate(-90 {:.1} {:.1})">{}</text>"##,
-        ox + 14.0,
-        oy + t + h / 2.0,
-        ox + 14.0,
-        oy + t + h / 2.0,
-        esc(y_label)
-    );
-    for p in points {
-        let (x, yv) = (p.ms, y(p));
-        if !(x.is_finite() && yv.is_finite()) || (y_log && yv <= 0.0) {
+        if here.is_empty() {
             continue;
         }
-        let colour =
-            COLOURS[methods.iter().position(|m| *m == p.method).unwrap_or(0) % COLOURS.len()];
-        let (cx, cy) = (px(x), py(yv));
-        let tip = format!(
-            "{} {}² {}: {:.2} ms, {:.4}",
-            p.method, p.cube_size, p.lookup, x, yv
-        );
-        let shape = if p.lookup == "box" {
-            format!(
-                r##"<rect x="{:.1}" y="{:.1}" width="8" height="8" fill="{colour}" fill-opacity="0.8">"##,
-                cx - 4.0,
-                cy - 4.0
+        let mut front: Vec<(f64, f64)> = here
+            .iter()
+            .filter(|p| p.0.pareto == Some(true))
+            .map(|p| (p.1, p.2))
+            .collect();
+        front.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart
+            .draw_series(LineSeries::new(front, colour.stroke_width(2)))
+            .map_err(drawing)?
+            .label(format!("{size}² faces: Pareto front"))
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2)));
+        chart
+            .draw_series(here.iter().map(|p| {
+                let style = if p.0.pareto == Some(true) {
+                    colour.filled()
+                } else {
+                    colour.stroke_width(2)
+                };
+                Circle::new((p.1, p.2), 5, style)
+            }))
+            .map_err(drawing)?;
+        for (r, x, y) in &here {
+            let zero = r.sensor.as_ref().and_then(|v| v.flip_mean) == Some(0.0);
+            let text = format!("{} {size}²{}", r.rung, if zero { " (FLIP 0)" } else { "" });
+            let at = chart.backend_coord(&(*x, *y));
+            let spot = place(&text, at, &placed, area_rect(area));
+            area_root_text(area, &text, spot.origin(), colour)?;
+            placed.push(spot);
+        }
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .label_font(("sans-serif", LABEL_PX))
+        .draw()
+        .map_err(drawing)?;
+    Ok(())
+}
+
+fn methods_panel(area: &Area, scene: &str, record: &Record) -> Result<()> {
+    let title = format!("{scene}: cube update per fill method");
+    let methods = &record.settings.methods;
+    let sizes = &record.settings.cube_sizes;
+    let rows: Vec<_> = record
+        .results
+        .iter()
+        .filter(|r| r.scene == scene)
+        .filter_map(|r| {
+            let i = methods.iter().position(|m| *m == r.method)?;
+            Some((i, r.cube_size, r.wall_ms?.median))
+        })
+        .collect();
+    let max = rows.iter().map(|r| r.2).fold(0.0, f64::max);
+    let n = methods.len().max(1);
+    let mut chart = ChartBuilder::on(area)
+        .caption(&title, ("sans-serif", TITLE_PX))
+        .margin(12)
+        .x_label_area_size(50)
+        .y_label_area_size(110)
+        .build_cartesian_2d(0.0..(max * 1.15).max(1e-3), -0.5..n as f64 - 0.5)
+        .map_err(drawing)?;
+    chart
+        .configure_mesh()
+        .x_desc("median ms per full cube update (submit to fence)")
+        .x_label_formatter(&|v| tick(*v))
+        .label_style(("sans-serif", LABEL_PX))
+        .axis_desc_style(("sans-serif", LABEL_PX))
+        .y_labels(n)
+        .y_label_formatter(&|v| {
+            let i = v.round();
+            match methods.get(i as usize) {
+                Some(m) if (v - i).abs() < 1e-6 && i >= 0.0 => m.name().to_owned(),
+                _ => String::new(),
+            }
+        })
+        .light_line_style(WHITE.mix(0.0))
+        .draw()
+        .map_err(drawing)?;
+    for (k, &size) in sizes.iter().enumerate() {
+        let colour = size_colour(sizes, size);
+        // Sizes side by side within a method's row, so that equal times do not hide each other.
+        let dy = (k as f64 - (sizes.len() as f64 - 1.0) / 2.0) * 0.18;
+        chart
+            .draw_series(
+                rows.iter()
+                    .filter(|r| r.1 == size)
+                    .map(|&(i, _, ms)| Circle::new((ms, i as f64 + dy), 5, colour.filled())),
             )
-        } else {
-            format!(
-                r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="4.5" fill="{colour}" fill-opacity="0.8">"##
-            )
-        };
-        let end = if p.lookup == "box" {
-            "</rect>"
-        } else {
-            "</circle>"
-        };
-        let _ = writeln!(out, "{shape}<title>{}</title>{end}", esc(&tip));
-        let _ = writeln!(
-            out,
-            r##"<text x="{:.1}" y="{:.1}" font-size="9" fill="#444">{}</text>"##,
-            cx + 6.0,
-            cy - 4.0,
-            p.cube_size
-        );
+            .map_err(drawing)?
+            .label(format!("{size}² faces"))
+            .legend(move |(x, y)| Circle::new((x + 9, y), 5, colour.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .label_font(("sans-serif", LABEL_PX))
+        .draw()
+        .map_err(drawing)?;
+    Ok(())
+}
+
+/// A label's box in pixels: left, top, right, bottom.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Rect(i32, i32, i32, i32);
+
+impl Rect {
+    fn overlaps(&self, o: &Rect) -> bool {
+        self.0 < o.2 && o.0 < self.2 && self.1 < o.3 && o.1 < self.3
+    }
+    fn inside(&self, o: &Rect) -> bool {
+        self.0 >= o.0 && self.1 >= o.1 && self.2 <= o.2 && self.3 <= o.3
+    }
+    /// Where the text is drawn (its top-left corner).
+    fn origin(&self) -> (i32, i32) {
+        (self.0, self.1)
     }
 }
 
-/// The whole figure: `scenes` in order, each with its points.
-pub fn svg(scenes: &[(String, Vec<Point>)]) -> String {
-    let mut methods: Vec<String> = Vec::new();
-    for (_, pts) in scenes {
-        for p in pts {
-            if !methods.contains(&p.method) {
-                methods.push(p.method.clone());
-            }
-        }
-    }
-    let legend_h = 30.0;
-    let (width, height) = (
-        2.0 * PANEL_W,
-        legend_h + PANEL_H * scenes.len().max(1) as f64,
-    );
-    let mut out = String::new();
-    let _ = writeln!(
-        out,
-        r##"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif">"##
-    );
-    let _ = writeln!(out, r##"<rect width="100%" height="100%" fill="white"/>"##);
-    let mut x = 10.0;
-    for (i, m) in methods.iter().enumerate() {
-        let _ = writeln!(
-            out,
-            r##"<circle cx="{:.1}" cy="15" r="5" fill="{}"/><text x="{:.1}" y="19" font-size="12">{}</text>"##,
-            x + 5.0,
-            COLOURS[i % COLOURS.len()],
-            x + 14.0,
-            esc(m)
-        );
-        x += 24.0 + 8.0 * m.len() as f64;
-    }
-    let _ = writeln!(
-        out,
-        r##"<text x="{:.1}" y="19" font-size="12">circle: plain lookup, square: box lookup; labels: face size</text>"##,
-        x + 10.0
-    );
-    for (row, (scene, pts)) in scenes.iter().enumerate() {
-        let oy = legend_h + PANEL_H * row as f64;
-        panel(
-            &mut out,
-            (0.0, oy),
-            pts,
-            |p| p.flip_mean,
-            false,
-            &format!("{scene}: FLIP"),
-            "mean FLIP (sensor view)",
-            &methods,
-        );
-        panel(
-            &mut out,
-            (PANEL_W, oy),
-            pts,
-            |p| p.angular_mean_deg,
-            true,
-            &format!("{scene}: lookup direction"),
-            "mean angular error, degrees (log)",
-            &methods,
-        );
-    }
-    out.push_str("</svg>\n");
-    out
+fn area_rect(area: &Area) -> Rect {
+    let (x, y) = area.get_base_pixel();
+    let (w, h) = area.dim_in_pixel();
+    Rect(x, y, x + w as i32, y + h as i32)
+}
+
+/// The first of a few spots around the point `at` whose box overlaps no `placed` one and lies
+/// within `bounds` (the first spot when none does). The width is estimated: about 0.6 em a
+/// character in a sans-serif font.
+fn place(text: &str, at: (i32, i32), placed: &[Rect], bounds: Rect) -> Rect {
+    let w = (text.chars().count() as f64 * f64::from(LABEL_PX) * 0.6).ceil() as i32;
+    let h = LABEL_PX as i32 + 2;
+    let (x, y) = at;
+    let spots = [
+        (x + 8, y - h / 2),
+        (x + 8, y - h - 4),
+        (x + 8, y + 4),
+        (x - w - 8, y - h / 2),
+        (x - w - 8, y - h - 4),
+        (x - w - 8, y + 4),
+        (x - w / 2, y - h - 8),
+        (x - w / 2, y + 8),
+    ];
+    let rect = |(l, t): (i32, i32)| Rect(l, t, l + w, t + h);
+    spots
+        .iter()
+        .map(|&s| rect(s))
+        .find(|r| r.inside(&bounds) && placed.iter().all(|p| !p.overlaps(r)))
+        .unwrap_or_else(|| rect(spots[0]))
+}
+
+/// Draws `text` with its top-left corner at the absolute pixel `at`.
+fn area_root_text(area: &Area, text: &str, at: (i32, i32), colour: RGBColor) -> Result<()> {
+    let (bx, by) = area.get_base_pixel();
+    let style = TextStyle::from(("sans-serif", LABEL_PX).into_font()).color(&colour);
+    area.draw(&Text::new(text.to_owned(), (at.0 - bx, at.1 - by), style))
+        .map_err(drawing)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn point(method: &str, size: u32, lookup: &str, ms: f64, flip: f64, deg: f64) -> Point {
-        Point {
-            method: method.into(),
-            cube_size: size,
-            lookup: lookup.into(),
-            ms,
-            flip_mean: flip,
-            angular_mean_deg: deg,
-        }
+    #[test]
+    fn labels_avoid_each_other_and_the_edges() {
+        let bounds = Rect(0, 0, 400, 300);
+        let first = place("box 64²", (100, 100), &[], bounds);
+        assert!(first.0 > 100, "right of the point first: {first:?}");
+        // A second point at the same spot takes another place.
+        let second = place("plain 64²", (100, 100), &[first], bounds);
+        assert!(!second.overlaps(&first), "{first:?} {second:?}");
+        // Near the right edge the label goes to the left of the point.
+        let left = place("ray-query 512²", (395, 100), &[], bounds);
+        assert!(left.2 < 395 && left.inside(&bounds), "{left:?}");
     }
 
     #[test]
-    fn svg_has_a_mark_per_point_and_is_well_formed() {
-        let pts = vec![
-            point("six-pass", 128, "plain", 3.0, 0.25, 7.6),
-            point("six-pass", 512, "box", 30.0, 0.03, 0.02),
-            point("instanced", 512, "plain", 28.0, 0.25, 7.6),
-        ];
-        let s = svg(&[("thesis-room".into(), pts)]);
-        assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
-        // Two panels, three points each: 4 circles + 2 squares, plus 2 legend circles.
-        assert_eq!(s.matches("<circle").count(), 4 + 2);
-        assert_eq!(
-            s.matches("<rect x=").count(),
-            2 + 2,
-            "2 squares + 2 panel frames"
-        );
-        assert!(s.contains("<title>six-pass 512² box: 30.00 ms, 0.0300</title>"));
-    }
-
-    #[test]
-    fn axes_fit_their_data() {
-        let a = Axis::fit(&[3.0, 30.0], true);
-        assert_eq!((a.lo, a.hi), (1.0, 100.0));
-        assert!((a.at(10.0) - 0.5).abs() < 1e-12);
-        let b = Axis::fit(&[0.5, 1.0], false);
-        assert_eq!(b.lo, 0.0);
-        assert!(b.hi > 1.0);
-        // Non-positive values are left out of a log axis, not a panic.
-        let c = Axis::fit(&[0.0, -1.0], true);
-        assert!(c.lo > 0.0);
+    fn log_ranges_cover_positive_values_only() {
+        let r = log_range([0.0, 0.01, 1.0, f64::NAN].into_iter());
+        assert_eq!(r, 0.005..2.0);
+        assert_eq!(log_range(std::iter::empty()), 0.1..10.0);
     }
 }

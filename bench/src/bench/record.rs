@@ -38,6 +38,9 @@ pub struct Record {
     pub accuracy: Vec<Accuracy>,
     pub references: Vec<ReferenceRow>,
     pub speed_vs_error: Vec<SpeedVsError>,
+    /// The trade-off ladder: every rung's frame cost and error (docs/benchmarks.md).
+    pub tradeoff: Vec<RungRow>,
+    pub rungs_not_run: Vec<RungNotRun>,
     pub dynamic: Vec<Dynamic>,
 }
 
@@ -65,6 +68,8 @@ pub struct Settings {
     pub methods: Vec<Method>,
     pub cube_sizes: Vec<u32>,
     pub lookups: Vec<Lookup>,
+    /// The trade-off rungs asked for (by label; empty with `--no-tradeoff`).
+    pub rungs: Vec<String>,
     pub frames: u32,
     pub warmup: u32,
     pub runs: u32,
@@ -220,6 +225,91 @@ pub struct ReferenceRow {
 pub struct SpeedVsError {
     pub result: MethodRow,
     pub accuracy: Accuracy,
+}
+
+/// One rung of the trade-off ladder on one scene at one face size: what a sensor frame costs
+/// with it and how far its views are from the exact reference.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RungRow {
+    pub scene: String,
+    pub cube_size: u32,
+    /// The rung's label (`box`, `ray-query`, ...), unique in the ladder.
+    pub rung: String,
+    pub lookup: Lookup,
+    /// Timed frames (all at t = 0, the frame whose error is measured).
+    pub frames: usize,
+    /// Per frame, the GPU time of the cube's update (six-pass fill of all six faces plus
+    /// mips; for ray-query, the top-level acceleration structure's rebuild) plus the sensor
+    /// view (scene and mirror): what the sensor frame costs. None without timestamps.
+    pub frame_cost_ms: Option<Stats>,
+    /// Its two parts.
+    pub gpu_cube_ms: Option<Stats>,
+    pub gpu_sensor_ms: Option<Stats>,
+    /// Submit to fence of the whole frame (observer, sensor, the pair and readback included).
+    pub wall_ms: Option<Stats>,
+    pub work: RungWork,
+    /// Error against the reference at 1 sample per pixel (None with `--no-accuracy`).
+    pub sensor: Option<ViewError>,
+    pub observer: Option<ViewError>,
+    /// On the Pareto front of frame cost against sensor mean FLIP among the rungs of the same
+    /// scene and face size (None when either is unmeasured).
+    pub pareto: Option<bool>,
+}
+
+impl RungRow {
+    /// The case the row is for, as the gate names it.
+    pub fn case(&self) -> String {
+        format!("{} / rung {} / {}²", self.scene, self.rung, self.cube_size)
+    }
+}
+
+/// A rung's work counters summed over its timed frames; None where the driver has no
+/// pipeline statistics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RungWork {
+    /// Faces the cube fill drew (0 for a lookup that reads no cube map).
+    pub faces_rendered: u64,
+    pub fill_vertex_invocations: Option<u64>,
+    pub fill_fragment_invocations: Option<u64>,
+    /// Fragment shader invocations of the sensor view (its scene draws and the mirror).
+    pub sensor_fragment_invocations: Option<u64>,
+}
+
+impl RungWork {
+    /// Every counter with its name (the names only label the gate's messages).
+    pub fn counters(&self) -> [(&'static str, Option<u64>); 4] {
+        [
+            ("faces_rendered", Some(self.faces_rendered)),
+            ("fill_vertex_invocations", self.fill_vertex_invocations),
+            ("fill_fragment_invocations", self.fill_fragment_invocations),
+            (
+                "sensor_fragment_invocations",
+                self.sensor_fragment_invocations,
+            ),
+        ]
+    }
+}
+
+/// One view's error against the reference's image of the same view and instant.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViewError {
+    pub flip_mean: Option<f64>,
+    pub flip_p99: Option<f64>,
+    /// NaN or Inf pixels in the rasterized image (0 expected).
+    pub non_finite_pixels: u64,
+    /// Angle between the direction each mirror pixel looked up and the exact one.
+    pub angular: AngularError,
+}
+
+/// A rung the device cannot run, and why.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RungNotRun {
+    pub rung: String,
+    pub reason: String,
 }
 
 /// One frame of an animated scene: faces re-rendered and submit-to-fence times of both updates.

@@ -1,0 +1,347 @@
+//! The trade-off in one run: every rung of the ladder of mirror lookups, from the thesis's
+//! plain cube-map lookup to exact GPU ray tracing, as frame cost against error.
+//!
+//! A rung is data ([`Rung`]): a label, the lookup, and how it configures the scene. Per scene
+//! and face size each rung gets its own six-pass renderer with full updates every frame; the
+//! rungs are timed interleaved (one frame of each per round, so a drifting machine slows all
+//! alike), every frame at t = 0, the instant whose error is then measured on one more frame
+//! of each rung against the exact reference's sensor and observer images (1 sample per
+//! pixel). The frame cost is the GPU's own time for the cube update plus the sensor view
+//! (`gpu_cube_ms + gpu_sensor_ms`): the cube fill and its mips for the cube lookups, the
+//! acceleration structure's rebuild for ray-query, which skips the fill. The observer, the
+//! side-by-side pair and the readback copies are left out: they do not belong to the sensor
+//! frame.
+
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use specchio::image::RgbaImage;
+use specchio::metrics::compare;
+use specchio::reference::angular::{angles_deg, summarize};
+use specchio::reference::ReferenceImages;
+use specchio::render::methods::Method;
+use specchio::render::{FrameReport, Readback, RenderOptions, Renderer};
+use specchio::scene::{Lookup, RefreshPolicy, Scene};
+use specchio::vk::device::{Device, DeviceInfo};
+
+use super::record::{RungRow, RungWork, Stats, ViewError};
+use super::Plan;
+
+/// One rung: a lookup and the scene settings it runs with.
+pub struct Rung {
+    /// Unique in the ladder; names the rung in `--rungs`, the table, the record and the plot.
+    pub label: &'static str,
+    pub lookup: Lookup,
+    /// Sets whatever else the rung needs in the scene (the lookup itself is set for it).
+    pub configure: fn(&mut Scene),
+}
+
+/// A rung that needs nothing beyond its lookup.
+fn as_is(_: &mut Scene) {}
+
+/// The ladder, cheapest and least exact first.
+pub static LADDER: &[Rung] = &[
+    Rung {
+        label: "plain",
+        lookup: Lookup::Plain,
+        configure: as_is,
+    },
+    Rung {
+        label: "box",
+        lookup: Lookup::Box,
+        configure: as_is,
+    },
+    // ── The distance-searched lookup's rungs go here, one per step count (2–3 of them) and
+    //    one with its disocclusion fix, each with a `configure` that sets its steps, e.g.
+    //    Rung { label: "distance-8", lookup: Lookup::Distance, configure: |s| s.mirror.distance_steps = 8 },
+    Rung {
+        label: "ray-query",
+        lookup: Lookup::RayQuery,
+        configure: as_is,
+    },
+];
+
+/// The rung labelled `label`.
+pub fn rung(label: &str) -> Option<&'static Rung> {
+    LADDER.iter().find(|r| r.label == label)
+}
+
+/// Every rung's label, for messages.
+pub fn labels() -> String {
+    LADDER
+        .iter()
+        .map(|r| r.label)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Why `device` cannot run `rung` (None: it can).
+pub fn missing(rung: &Rung, device: &DeviceInfo) -> Option<String> {
+    specchio::render::lookups::missing_features(rung.lookup, device)
+}
+
+/// The exact images a rung's views are compared with: the same instant, pixel centres.
+pub struct Exact {
+    pub sensor: ReferenceImages,
+    /// Traced only when rungs are measured.
+    pub observer: Option<ReferenceImages>,
+}
+
+/// Measures `rungs` on `scene` at face size `size`: interleaved timed frames, then the error
+/// against `exact` where given. Returns one row per rung (Pareto flags not yet set).
+pub fn measure(
+    device: &Arc<Device>,
+    (scene_name, scene): (&str, &Scene),
+    rungs: &[&Rung],
+    size: u32,
+    plan: &Plan,
+    exact: Option<&Exact>,
+    tick: &dyn Fn(),
+) -> Result<Vec<RungRow>> {
+    let mut renderers = rungs
+        .iter()
+        .map(|r| renderer(device, scene, r, size))
+        .collect::<Result<Vec<_>>>()?;
+    let mut reports: Vec<Vec<FrameReport>> = vec![Vec::new(); rungs.len()];
+    let views = Readback {
+        views: true,
+        ..Default::default()
+    };
+    for _ in 0..plan.runs {
+        for round in 0..plan.warmup + plan.frames {
+            for (r, timed) in renderers.iter_mut().zip(&mut reports) {
+                let (report, _) = r.render_frame(u64::from(round), 0.0, views)?;
+                if round >= plan.warmup {
+                    timed.push(report);
+                }
+            }
+            tick();
+        }
+    }
+    let stats = device.info.features.pipeline_statistics;
+    let mut rows = Vec::new();
+    for ((rung, r), timed) in rungs.iter().zip(&mut renderers).zip(&reports) {
+        let (sensor, observer) = match exact {
+            Some(exact) => {
+                let (s, o) = errors(r, exact)?;
+                (Some(s), Some(o))
+            }
+            None => (None, None),
+        };
+        rows.push(RungRow {
+            scene: scene_name.to_owned(),
+            cube_size: size,
+            rung: rung.label.to_owned(),
+            lookup: rung.lookup,
+            frames: timed.len(),
+            frame_cost_ms: Stats::of(
+                timed
+                    .iter()
+                    .filter_map(|r| Some(r.gpu_cube_ms? + r.gpu_sensor_ms?))
+                    .collect(),
+            ),
+            gpu_cube_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_cube_ms).collect()),
+            gpu_sensor_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_sensor_ms).collect()),
+            wall_ms: Stats::of(timed.iter().map(|r| r.submit_wait_ms).collect()),
+            work: work(timed, stats),
+            sensor,
+            observer,
+            pareto: None,
+        });
+    }
+    mark_pareto(&mut rows);
+    Ok(rows)
+}
+
+/// A six-pass renderer updating the whole cube every frame, with the rung's settings.
+fn renderer(device: &Arc<Device>, scene: &Scene, rung: &Rung, size: u32) -> Result<Renderer> {
+    let mut scene = scene.clone();
+    scene.mirror.lookup = rung.lookup;
+    (rung.configure)(&mut scene);
+    let options = RenderOptions {
+        cube_size: Some(size),
+        method: Method::SIX_PASS,
+        refresh: Some(RefreshPolicy::EveryFrame),
+        lookup: Some(rung.lookup),
+        ..Default::default()
+    };
+    Renderer::new(device, scene, &options)
+        .with_context(|| format!("rung {} at {size}²", rung.label))
+}
+
+/// The counters summed over the timed frames; the statistics-based ones None when the driver
+/// has none (a frame without a cube update adds 0 to the fill's).
+fn work(timed: &[FrameReport], has_stats: bool) -> RungWork {
+    let sum = |f: &dyn Fn(&FrameReport) -> u64| has_stats.then(|| timed.iter().map(f).sum());
+    RungWork {
+        faces_rendered: timed.iter().map(|r| u64::from(r.faces_rendered)).sum(),
+        fill_vertex_invocations: sum(&|r| r.fill_stats.map_or(0, |s| s.vertex_invocations)),
+        fill_fragment_invocations: sum(&|r| r.fill_stats.map_or(0, |s| s.fragment_invocations)),
+        sensor_fragment_invocations: sum(&|r| {
+            r.view_stats.map_or(0, |v| v[1].fragment_invocations)
+        }),
+    }
+}
+
+/// One more frame at t = 0, with the lookup directions: the sensor's and the observer's error.
+fn errors(r: &mut Renderer, exact: &Exact) -> Result<(ViewError, ViewError)> {
+    let readback = Readback {
+        views: true,
+        directions: true,
+        ..Default::default()
+    };
+    let (_, images) = r.render_frame(0, 0.0, readback)?;
+    let size = r.scene.cube.face_size_px;
+    let image = |i: Option<RgbaImage>, what: &str| i.with_context(|| format!("{what} read back"));
+    let sensor = view_error(
+        &image(images.sensor, "sensor image")?,
+        &image(images.sensor_direction, "sensor directions")?,
+        &exact.sensor,
+        size,
+    )?;
+    let observer = view_error(
+        &image(images.observer, "observer image")?,
+        &image(images.observer_direction, "observer directions")?,
+        exact
+            .observer
+            .as_ref()
+            .context("the observer's reference was not traced")?,
+        size,
+    )?;
+    Ok((sensor, observer))
+}
+
+fn view_error(
+    colour: &RgbaImage,
+    directions: &RgbaImage,
+    exact: &ReferenceImages,
+    face_size: u32,
+) -> Result<ViewError> {
+    let c = compare(colour, &exact.color, None)?;
+    Ok(ViewError {
+        flip_mean: c.flip_mean,
+        flip_p99: c.flip_p99,
+        non_finite_pixels: c.test_non_finite.nan_pixels + c.test_non_finite.inf_pixels,
+        angular: summarize(
+            angles_deg(directions, &exact.direction, |_, _| true),
+            face_size,
+        ),
+    })
+}
+
+/// Sets each row's `pareto` flag among the rows of one scene and face size: on the front when
+/// no other row is at most as costly and at most as wrong, and better in one of the two.
+pub fn mark_pareto(rows: &mut [RungRow]) {
+    let point = |r: &RungRow| Some((r.frame_cost_ms?.median, r.sensor.as_ref()?.flip_mean?));
+    let points: Vec<Option<(f64, f64)>> = rows.iter().map(point).collect();
+    let measured: Vec<(f64, f64)> = points.iter().flatten().copied().collect();
+    let front = pareto_front(&measured);
+    let mut on = front.into_iter();
+    for (row, p) in rows.iter_mut().zip(&points) {
+        row.pareto = p.and_then(|_| on.next());
+    }
+}
+
+/// For each (cost, error) point, whether it is on the Pareto front (lower is better in both).
+/// Equal points are all on it or all off it.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
+    points
+        .iter()
+        .map(|&(c, e)| {
+            !points
+                .iter()
+                .any(|&(c2, e2)| c2 <= c && e2 <= e && (c2 < c || e2 < e))
+        })
+        .collect()
+}
+
+/// The trade-off table's header.
+pub fn table_header() -> String {
+    format!(
+        "  {:<12} {:>9} {:>8} {:>9} {:>11} {:>11} {:>13} {:>13} {:>5}",
+        "rung",
+        "frame ms",
+        "cube ms",
+        "sensor ms",
+        "sensor FLIP",
+        "sensor p99°",
+        "observer FLIP",
+        "observer p99°",
+        "front"
+    )
+}
+
+/// One rung's line: costs, errors, and a `*` on the Pareto front.
+pub fn table_row(r: &RungRow) -> String {
+    let ms = |s: Option<Stats>| s.map_or("n/a".into(), |s| format!("{:.2}", s.median));
+    let flip = |v: &Option<ViewError>| {
+        v.as_ref()
+            .and_then(|v| v.flip_mean)
+            .map_or("n/a".into(), |x| format!("{x:.4}"))
+    };
+    let p99 = |v: &Option<ViewError>| {
+        v.as_ref()
+            .map_or("n/a".into(), |v| format!("{:.3}", v.angular.p99_deg))
+    };
+    format!(
+        "  {:<12} {:>9} {:>8} {:>9} {:>11} {:>11} {:>13} {:>13} {:>5}",
+        r.rung,
+        ms(r.frame_cost_ms),
+        ms(r.gpu_cube_ms),
+        ms(r.gpu_sensor_ms),
+        flip(&r.sensor),
+        p99(&r.sensor),
+        flip(&r.observer),
+        p99(&r.observer),
+        match r.pareto {
+            Some(true) => "*",
+            Some(false) => "",
+            None => "n/a",
+        }
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_pareto_front_of_known_points() {
+        // (cost, error): a cheap bad one, a dear exact one, one dominated by the second,
+        // one between them, and a duplicate of the cheap one.
+        let points = [
+            (1.0, 0.3),
+            (5.0, 0.001),
+            (6.0, 0.002),
+            (2.0, 0.1),
+            (1.0, 0.3),
+            (2.5, 0.1),
+        ];
+        assert_eq!(
+            pareto_front(&points),
+            [true, true, false, true, true, false]
+        );
+        // Same cost, less error wins; same error, less cost wins.
+        assert_eq!(pareto_front(&[(1.0, 0.2), (1.0, 0.1)]), [false, true]);
+        assert_eq!(pareto_front(&[(2.0, 0.1), (1.0, 0.1)]), [false, true]);
+        assert_eq!(pareto_front(&[]), Vec::<bool>::new());
+    }
+
+    #[test]
+    fn the_ladder_has_every_lookup_once_under_unique_labels() {
+        for (i, r) in LADDER.iter().enumerate() {
+            assert!(
+                LADDER[..i].iter().all(|o| o.label != r.label),
+                "{} twice",
+                r.label
+            );
+            assert_eq!(rung(r.label).map(|x| x.lookup), Some(r.lookup));
+        }
+        for l in Lookup::ALL {
+            assert!(
+                LADDER.iter().any(|r| r.lookup == l),
+                "no rung for the {l} lookup"
+            );
+        }
+    }
+}
