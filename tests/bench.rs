@@ -67,10 +67,10 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
         svg.to_str().unwrap(),
     ]);
     assert_ok(&run);
-    // The header, two scenes x two methods x two lookups, and two scenes x three rungs.
+    // The header, two scenes x two methods x two lookups, and two scenes x six rungs.
     let text = std::fs::read_to_string(&csv).unwrap();
-    assert_eq!(text.lines().count(), 1 + 8 + 6);
-    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 6);
+    assert_eq!(text.lines().count(), 1 + 8 + 12);
+    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 12);
     check_plot(&std::fs::read_to_string(&svg).unwrap());
     check_record(&read_json(&json));
 
@@ -305,7 +305,7 @@ fn github_format_and_bad_options() {
         (&["no/such/scene.toml"][..], "no/such/scene.toml", 1),
         (
             &["--rungs", "box,sphere"][..],
-            "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, ray-query",
+            "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, distance-8, distance-16, distance-32, ray-query",
             2,
         ),
         (
@@ -495,7 +495,8 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
     assert_eq!(not_run[0]["rung"], "ray-query");
     assert!(not_run[0]["reason"].as_str().unwrap().contains("ray"));
     let rungs = record["tradeoff"].as_array().expect("tradeoff");
-    assert_eq!(rungs.len(), 2 * 2);
+    // Two scenes, every rung but ray-query.
+    assert_eq!(rungs.len(), 2 * 5);
     for t in rungs {
         assert_eq!(t["work"]["faces_rendered"], 30);
         assert!(t["work"]["sensor_fragment_invocations"].is_null(), "{t}");

@@ -1,19 +1,26 @@
 //! What `tests/bench.rs` checks of the trade-off ladder's outputs: its rows in the JSON and
 //! the plot.
 
+/// The ladder, in its order.
+const RUNGS: [&str; 6] = [
+    "plain",
+    "box",
+    "distance-8",
+    "distance-16",
+    "distance-32",
+    "ray-query",
+];
+
 /// The trade-off rows of a quick run on lavapipe: every rung on every scene, with its costs,
 /// counters and both views' errors, and the Pareto flags of the measured points.
 pub fn check_tradeoff(r: &serde_json::Value) {
     let rows = r["tradeoff"].as_array().expect("`tradeoff` array");
-    assert_eq!(
-        r["settings"]["rungs"],
-        serde_json::json!(["plain", "box", "ray-query"])
-    );
+    assert_eq!(r["settings"]["rungs"], serde_json::json!(RUNGS));
     assert_eq!(r["rungs_not_run"], serde_json::json!([]));
     for scene in ["scenes/thesis-room.toml", "scenes/moving-objects.toml"] {
         let here: Vec<&serde_json::Value> = rows.iter().filter(|t| t["scene"] == scene).collect();
         let labels: Vec<&str> = here.iter().map(|t| t["rung"].as_str().unwrap()).collect();
-        assert_eq!(labels, ["plain", "box", "ray-query"], "{scene}");
+        assert_eq!(labels, RUNGS, "{scene}");
         let mut points = Vec::new();
         for t in &here {
             let rung = t["rung"].as_str().unwrap();
@@ -41,10 +48,12 @@ pub fn check_tradeoff(r: &serde_json::Value) {
                 .iter()
                 .map(|t| t[view]["flip_mean"].as_f64().unwrap())
                 .collect();
-            assert!(
-                flip[0] > flip[1] && flip[1] > flip[2],
-                "{scene} {view}: {flip:?}"
-            );
+            let (plain, boxed, exact) = (flip[0], flip[1], flip[RUNGS.len() - 1]);
+            assert!(plain > boxed && boxed > exact, "{scene} {view}: {flip:?}");
+            // The distance search: better than the plain lookup, not as good as tracing.
+            for f in &flip[2..RUNGS.len() - 1] {
+                assert!(plain > *f && *f > exact, "{scene} {view}: {flip:?}");
+            }
         }
         // The flags are the front of these very points: on it when nothing is at most as
         // dear and at most as wrong, and better in one.
@@ -87,7 +96,7 @@ pub fn check_plot(text: &str) {
             .count(),
         2
     );
-    for rung in ["plain 64²", "box 64²", "ray-query 64²"] {
-        assert_eq!(texts.iter().filter(|t| *t == rung).count(), 2, "{rung}");
+    for rung in RUNGS.map(|r| format!("{r} 64²")) {
+        assert_eq!(texts.iter().filter(|t| **t == rung).count(), 2, "{rung}");
     }
 }

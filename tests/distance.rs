@@ -42,9 +42,10 @@ fn angles(gpu: &Gpu, s: &Scene, lookup: Lookup) -> Vec<f64> {
 }
 
 /// Empty rooms (the six-colour room with its mirror at the centre, the face-edges room with
-/// an off-centre one), on every driver: the distance lookup's direction is the exact one.
+/// an off-centre one), on every driver: the distance lookup's direction is the exact one to the
+/// stored depth's rounding (below).
 #[test]
-fn empty_rooms_are_exact_to_float_rounding() {
+fn empty_rooms_agree_with_the_reference_to_the_depth_rounding() {
     for device in devices() {
         let gpu = Gpu::on(&device, Default::default());
         for path in [

@@ -51,9 +51,23 @@ pub static LADDER: &[Rung] = &[
         lookup: Lookup::Box,
         configure: as_is,
     },
-    // ── The distance-searched lookup's rungs go here, one per step count (2–3 of them) and
-    //    one with its disocclusion fix, each with a `configure` that sets its steps, e.g.
-    //    Rung { label: "distance-8", lookup: Lookup::Distance, configure: |s| s.mirror.distance_steps = 8 },
+    // The distance-searched lookup at three linear step counts (its secant steps as the scene
+    // sets them): fewer steps cost less and miss thin features between two samples.
+    Rung {
+        label: "distance-8",
+        lookup: Lookup::Distance,
+        configure: |s| s.mirror.distance_steps = 8,
+    },
+    Rung {
+        label: "distance-16",
+        lookup: Lookup::Distance,
+        configure: |s| s.mirror.distance_steps = 16,
+    },
+    Rung {
+        label: "distance-32",
+        lookup: Lookup::Distance,
+        configure: |s| s.mirror.distance_steps = 32,
+    },
     Rung {
         label: "ray-query",
         lookup: Lookup::RayQuery,
