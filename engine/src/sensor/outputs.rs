@@ -41,6 +41,9 @@ pub struct SensorOutputs {
     /// "reference" or "cube (plain lookup)", ... : where the layers come from.
     pub source: String,
     pub time_s: f64,
+    /// The scene's local origin in the file's (world) coordinates: every position written is
+    /// local (world = this + local), as the renderer and the reference work in f32 about it.
+    pub scene_origin: glam::DVec3,
     pub optics: SensorOptics,
     pub rays: RayMap,
     /// Per pixel, metres along the reflected ray to what it meets (0 off the mirror).
@@ -87,6 +90,7 @@ impl SensorOutputs {
         Self {
             source: "reference".into(),
             time_s: t_s,
+            scene_origin: scene.origin,
             optics: SensorOptics::at(scene, t_s),
             rays,
             range,
@@ -126,6 +130,7 @@ impl SensorOutputs {
         Self {
             source: format!("cube ({lookup} lookup)"),
             time_s: t_s,
+            scene_origin: scene.origin,
             optics,
             rays: RayMap {
                 width: origin_range.width,
@@ -203,7 +208,7 @@ impl SensorOutputs {
         out.write_json(&dir.join(CAMERA_FILE), &self.camera_record(panoramas))
     }
 
-    fn camera_record(&self, panoramas: Vec<PanoramaRecord>) -> CameraRecord {
+    pub(crate) fn camera_record(&self, panoramas: Vec<PanoramaRecord>) -> CameraRecord {
         let o = &self.optics;
         let v = &o.view;
         let rotation = Mat3::from_cols(v.right, v.down, v.forward);
@@ -211,7 +216,10 @@ impl SensorOutputs {
         CameraRecord {
             source: self.source.clone(),
             time_s: self.time_s,
-            frame: "world space, metres; the camera's axes x right, y down, z forward (OpenCV's)",
+            frame: "the scene frame: world minus scene_origin_m (the mirror's centre at time 0 in \
+                    the scene file's coordinates), metres; the camera's axes x right, y down, \
+                    z forward (OpenCV's)",
+            scene_origin_m: self.scene_origin.to_array(),
             sensor: SensorRecord {
                 position_m: (v.eye + o.mirror_center).to_array(),
                 camera_to_world: rotation.transpose().to_cols_array_2d(),
@@ -255,6 +263,8 @@ pub struct CameraRecord {
     pub source: String,
     pub time_s: f64,
     pub frame: &'static str,
+    /// World (the scene file's coordinates) = this + every position here and in the files.
+    pub scene_origin_m: [f64; 3],
     pub sensor: SensorRecord,
     pub mirror: MirrorRecord,
     pub disc: DiscRecord,

@@ -11,7 +11,7 @@ use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
 use crate::scene::Scene;
 
-/// One mirror pixel's ray, in world space (metres): it leaves the mirror at `origin` along the
+/// One mirror pixel's ray, in the scene frame (metres; world = `Scene::origin` + this): it leaves the mirror at `origin` along the
 /// unit `direction`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PixelRay {
@@ -41,7 +41,7 @@ impl RayMap {
                 let pixel = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
                 let d = pixel_ray(&view, pixel, width, height);
                 mirror_reflection(view.eye, d, radius).map(|m| PixelRay {
-                    // Render space is world space minus the mirror's centre.
+                    // Render space is the scene frame minus the mirror's centre now.
                     origin: m.point + state.mirror_center,
                     direction: m.direction,
                 })

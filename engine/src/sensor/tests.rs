@@ -133,3 +133,25 @@ fn the_red_blue_corner_is_at_45_degrees() {
         "red ends at column {red_until}, the corner is at {corner:.1} (slack {slack:.1})"
     );
 }
+
+/// camera.json's positions are in the scene frame and say so: the thesis room's mirror sits at
+/// (0, 3, 0) in its file (the scene's origin), the sensor 2.5 m below it; adding
+/// `scene_origin_m` gives the file's coordinates.
+#[test]
+fn camera_positions_are_local_with_the_scene_origin_beside_them() {
+    let scene = crate::scene::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/thesis-room.toml"
+    )))
+    .unwrap();
+    let mut small = scene.clone();
+    small.sensor.resolution = [32, 32];
+    let record = reference_outputs(&small).camera_record(Vec::new());
+    assert_eq!(record.scene_origin_m, [0.0, 3.0, 0.0]);
+    assert!(record.frame.contains("scene_origin_m"));
+    let world = |local: [f32; 3]| {
+        glam::DVec3::from_array(record.scene_origin_m) + Vec3::from_array(local).as_dvec3()
+    };
+    assert!((world(record.mirror.centre_m) - glam::DVec3::new(0.0, 3.0, 0.0)).length() < 1e-6);
+    assert!((world(record.sensor.position_m) - glam::DVec3::new(0.0, 0.5, 0.0)).length() < 1e-6);
+}
