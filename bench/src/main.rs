@@ -12,6 +12,7 @@ mod records;
 mod reference;
 mod render;
 mod validation;
+mod view;
 
 use std::process::ExitCode;
 
@@ -43,6 +44,9 @@ enum Command {
     /// Error metrics of a test image against a reference (RMSE, PSNR, relMSE, FLIP), with an
     /// optional mask and FLIP heatmap.
     Compare(compare::Args),
+    /// The live viewer: a window with the observer and the sensor side by side, keyboard
+    /// control of the observer, the sphere, time, method, lookup and refresh (docs/viewer.md).
+    View(view::Args),
     /// (internal) Compare a cube method with six-pass on a tiny scene; run in a child process
     /// because a broken driver may crash.
     #[command(hide = true)]
@@ -105,6 +109,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::Reference(args) => reference::run(&args),
         Command::Compare(args) => compare::run(&args),
+        Command::View(args) => view::run(&args),
     };
     match result {
         Ok(code) => code,
