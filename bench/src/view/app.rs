@@ -47,6 +47,9 @@ pub struct Outcome {
 /// A scripted run waits at most this long for the window to take a size it asked for (the X
 /// server answers a resize request asynchronously) before its last frame.
 const RESIZE_WAIT: Duration = Duration::from_secs(5);
+/// The observer or the sensor alone is drawn at the thesis's 800x600, whatever resolution
+/// the scene gives it for `specchio render`.
+pub const SINGLE_VIEW_SIZE: [u32; 2] = [800, 600];
 /// How often the window title's figures are refreshed.
 const TITLE_EVERY: Duration = Duration::from_millis(500);
 
@@ -100,6 +103,9 @@ pub fn run(
     mut scene: Scene,
     settings: Settings,
 ) -> Result<Outcome> {
+    // The thesis's single viewport, for either camera (the pair has its own fixed size).
+    scene.observer.resolution = SINGLE_VIEW_SIZE;
+    scene.sensor.resolution = SINGLE_VIEW_SIZE;
     if let Some(size) = settings.cube_size {
         scene.cube.face_size_px = size;
     }
