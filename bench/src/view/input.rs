@@ -209,41 +209,49 @@ mod tests {
         specchio::scene::load(&root.join("scenes/thesis-room.toml")).unwrap()
     }
 
+    /// A scene position back in the file's (world) coordinates: the loader keeps positions
+    /// relative to `scene.origin`.
+    fn world(s: &Scene, local: Vec3) -> Vec3 {
+        (s.origin + local.as_dvec3()).as_vec3()
+    }
+
     #[test]
     fn walking_follows_the_yaw_convention() {
         // thesis-room: the observer at (0, 3.5, 4.5) looks along -Z (yaw 0).
         let mut s = scene();
+        let at = |s: &Scene| world(s, s.observer.position);
         move_observer(&mut s, walk(1, 0, 0));
-        assert_eq!(s.observer.position, Vec3::new(0.0, 3.5, 4.25));
+        assert_eq!(at(&s), Vec3::new(0.0, 3.5, 4.25));
         move_observer(&mut s, walk(0, 1, 0));
-        assert_eq!(s.observer.position, Vec3::new(0.25, 3.5, 4.25));
+        assert_eq!(at(&s), Vec3::new(0.25, 3.5, 4.25));
         // Turned left by 90 degrees it looks along -X: forward is -X.
         for _ in 0..18 {
             move_observer(&mut s, Action::Turn { yaw: 1, pitch: 0 });
         }
         assert_eq!(s.observer.yaw_deg, 90.0);
         move_observer(&mut s, walk(1, 0, 0));
-        assert!((s.observer.position - Vec3::new(0.0, 3.5, 4.25)).length() < 1e-6);
+        assert!((at(&s) - Vec3::new(0.0, 3.5, 4.25)).length() < 1e-6);
     }
 
     #[test]
     fn the_sphere_moves_by_steps_and_stays_in_the_room() {
         let mut s = scene();
+        let at = |s: &Scene| world(s, s.mirror.center);
         move_sphere(&mut s, (1, 0, 0)).unwrap();
-        assert_eq!(s.mirror.center, Vec3::new(0.25, 3.0, 0.0));
+        assert_eq!(at(&s), Vec3::new(0.25, 3.0, 0.0));
         // The room's +X wall is at x = 5, the radius 1: x = 4 is the last position.
         for _ in 0..15 {
             move_sphere(&mut s, (1, 0, 0)).unwrap();
         }
-        assert_eq!(s.mirror.center.x, 4.0);
+        assert_eq!(at(&s).x, 4.0);
         assert!(move_sphere(&mut s, (1, 0, 0)).is_err());
-        assert_eq!(s.mirror.center.x, 4.0);
+        assert_eq!(at(&s).x, 4.0);
         // The sensor hangs 2.5 m below: the centre cannot go below y = 2.5.
         let e = (0..3)
             .map(|_| move_sphere(&mut s, (0, -1, 0)))
             .last()
             .unwrap();
         assert!(e.unwrap_err().contains("floor"));
-        assert_eq!(s.mirror.center.y, 2.75);
+        assert_eq!(at(&s).y, 2.75);
     }
 }
