@@ -213,6 +213,21 @@ fn without_a_display_it_says_so_and_names_render() {
 }
 
 #[test]
+fn swiftshader_is_refused_with_a_reason_not_a_crash() {
+    let Some(x) = Xvfb::start() else { return };
+    let out = x.view(&[
+        thesis_room().to_str().unwrap(),
+        "--device",
+        "swiftshader",
+        "--frames",
+        "1",
+    ]);
+    let err = text(&out.stderr);
+    // Without SwiftShader installed the device selection itself refuses: exit 1 as well.
+    assert_eq!(out.status.code(), Some(1), "{err}");
+}
+
+#[test]
 fn both_views_show_what_render_writes() {
     let Some(x) = Xvfb::start() else { return };
     let shot = temp_dir("view-both.png");

@@ -117,6 +117,16 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if let Some(why) = lookups::missing_features(lookup_used, &chosen) {
         bail!("lookup {lookup_used} cannot run on {}: {why}", chosen.name);
     }
+    if chosen.short_name == "swiftshader" {
+        // Measured: Chromium's SwiftShader build (the one scripts/setup.sh unpacks) crashes
+        // inside vkGetPhysicalDeviceSurfaceCapabilitiesKHR on an X11 window; refused here
+        // rather than crashing (docs/viewer.md).
+        bail!(
+            "--device swiftshader cannot present to a window (its build crashes querying the \
+             window's surface); use lavapipe for `specchio view`, or `specchio render --device \
+             swiftshader` without a window"
+        );
+    }
     let features = switchable_features(&chosen);
     let desc = DeviceDesc {
         selector: args.device.clone(),
