@@ -3,7 +3,8 @@
 #   - Mesa lavapipe 25 (mesa-vulkan-drivers) from Debian's official bookworm-backports suite
 #     (nothing else is taken from backports but what that package needs),
 #   - the Vulkan loader (libvulkan1) and the Khronos validation layers,
-#   - a C++ compiler for the glslang crate's build.
+#   - a C++ compiler for the glslang crate's build,
+#   - Xvfb, xdotool and the X client libraries winit loads (the viewer's tests),
 #   - Google's SwiftShader Vulkan driver, the second CPU driver, unpacked project-locally into
 #     .drivers/swiftshader/ from Debian's chromium-common package (Chromium is not installed).
 # On other distributions it installs nothing and says what to install when something is missing.
@@ -87,7 +88,9 @@ fi
 
 export DEBIAN_FRONTEND=noninteractive
 missing=()
-for p in libvulkan1 vulkan-validationlayers g++; do
+# xvfb, xdotool and the X client libraries winit loads at run time: the viewer tests (tests/viewer.rs)
+# run `specchio view` in a virtual X server.
+for p in libvulkan1 vulkan-validationlayers g++ xvfb xdotool libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0; do
     installed "$p" || missing+=("$p")
 done
 major=$(mesa_major || true)

@@ -13,6 +13,7 @@ mod records;
 mod reference;
 mod render;
 mod validation;
+mod view;
 
 use std::process::ExitCode;
 
@@ -47,6 +48,9 @@ enum Command {
     /// Error metrics of a test image against a reference (RMSE, PSNR, relMSE, FLIP), with an
     /// optional mask and FLIP heatmap.
     Compare(compare::Args),
+    /// The live viewer: a window with the observer and the sensor side by side, keyboard
+    /// control of the observer, the sphere, time, method, lookup and refresh (docs/viewer.md).
+    View(view::Args),
     /// (internal) Compare a cube method with six-pass on a tiny scene; run in a child process
     /// because a broken driver may crash.
     #[command(hide = true)]
@@ -110,6 +114,7 @@ fn main() -> ExitCode {
         Command::Reference(args) => reference::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Calibrate(args) => calibrate::run(&args),
+        Command::View(args) => view::run(&args),
     };
     match result {
         Ok(code) => code,

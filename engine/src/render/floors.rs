@@ -74,7 +74,7 @@ impl Renderer {
         let first = self.cube_state.is_none();
         self.record_cube_fill(cmd, &plan, first, &mut report, Fill::Floor(floor));
         // Keeps the remaining timestamp slots answered (no view is drawn).
-        self.record_views(cmd, &views, Readback::default());
+        self.record_views(cmd, &views, Readback::default(), None);
         self.submit_frame(cmd, record_start, &mut report)?;
         self.read_queries(&mut report, false, false)?;
         report.gpu_face_ms = None;

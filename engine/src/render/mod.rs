@@ -11,6 +11,7 @@
 
 pub mod budget;
 pub mod cube_fill;
+pub mod display;
 mod draw;
 pub mod floors;
 pub mod gpu;
@@ -308,6 +309,18 @@ impl Renderer {
         t_s: f64,
         readback: Readback,
     ) -> Result<(FrameReport, FrameImages), GpuError> {
+        self.render_frame_views(frame, t_s, readback, None)
+    }
+
+    /// [`Self::render_frame`]; with `display`, only that view is drawn (for a window, see
+    /// `display.rs`) and `readback` must ask for nothing.
+    fn render_frame_views(
+        &mut self,
+        frame: u64,
+        t_s: f64,
+        readback: Readback,
+        display: Option<display::DisplayView>,
+    ) -> Result<(FrameReport, FrameImages), GpuError> {
         let record_start = Instant::now();
         if self.scene.mirror.lookup != self.pass_lookup {
             let lookup = self.scene.mirror.lookup;
@@ -387,7 +400,7 @@ impl Renderer {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
             }
         }
-        let copies = self.record_views(cmd, &views, readback);
+        let copies = self.record_views(cmd, &views, readback, display);
         self.record_readback(cmd, readback, &copies);
         self.submit_frame(cmd, record_start, &mut report)?;
         self.read_queries(&mut report, dirty != 0, readback.views)?;

@@ -63,24 +63,51 @@ impl Renderer {
 
     /// Observer, sensor and the side-by-side pair (culled scene draws, then the mirror), and
     /// with `readback.directions` the lookup-direction passes of observer and sensor.
+    /// With `display`, only that view is drawn and nothing is copied (the viewer's frame).
     pub(super) fn record_views(
         &self,
         cmd: vk::CommandBuffer,
         views: &[ViewBasis],
         readback: Readback,
+        display: Option<super::display::DisplayView>,
     ) -> Copies {
-        if !readback.views {
-            // Views are skipped; their timestamps are still written so every query has a result.
+        let slots = match display {
+            Some(view) => vec![self.display_slot(view)],
+            None => self.view_slots(readback),
+        };
+        // A colour view that is not drawn still gets its timestamp, so every query has a
+        // result: those before the first drawn view in slot order are written first, the
+        // others after the drawn views, so the drawn view's time is its own.
+        let colour = [
+            (Slot::Observer, TS_OBSERVER),
+            (Slot::Sensor, TS_SENSOR),
+            (Slot::Pair, TS_PAIR),
+        ];
+        let drawn = |s: Slot| slots.iter().any(|&(d, _)| d == s);
+        let first = colour
+            .iter()
+            .position(|&(s, _)| drawn(s))
+            .unwrap_or(colour.len());
+        let undrawn = |range: std::ops::Range<usize>| {
+            colour[range]
+                .iter()
+                .filter(|&&(s, _)| !drawn(s))
+                .map(|&(_, ts)| ts)
+                .collect::<Vec<u32>>()
+        };
+        let (before, after) = (undrawn(0..first), undrawn(first..colour.len()));
+        let mark = |stamps: &[u32]| {
             if let Some(q) = &self.timestamps {
-                for ts in [TS_OBSERVER, TS_SENSOR, TS_PAIR] {
+                for &ts in stamps {
                     q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
                 }
             }
-        }
+        };
+        mark(&before);
         let p = &self.pipelines;
         let mut copies = Copies::default();
         let mut offset = self.cube_readback_bytes(readback);
-        for (slot, target) in self.view_slots(readback) {
+        for (slot, target) in slots {
             use MirrorOutput::*;
             let (ids, ts, stats, output, name): (&[u32], _, _, _, _) = match slot {
                 Slot::Observer => (
@@ -130,9 +157,13 @@ impl Renderer {
             if let (Some(q), Some(ts)) = (&self.timestamps, ts) {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
+            if display.is_some() {
+                continue;
+            }
             copies.items.push((slot, offset));
             offset += u64::from(target.width) * u64::from(target.height) * texel_bytes(slot);
         }
+        mark(&after);
         copies
     }
 
@@ -219,6 +250,16 @@ impl Renderer {
             )],
         );
         dev.end_label(cmd);
+    }
+
+    /// The slot and target of a view drawn for a window.
+    fn display_slot(&self, view: super::display::DisplayView) -> (Slot, &ViewTarget) {
+        use super::display::DisplayView;
+        match view {
+            DisplayView::Pair => (Slot::Pair, &self.pair_target),
+            DisplayView::Observer => (Slot::Observer, &self.observer_target),
+            DisplayView::Sensor => (Slot::Sensor, &self.sensor_target),
+        }
     }
 
     fn cube_readback_bytes(&self, readback: Readback) -> u64 {

@@ -1,6 +1,6 @@
 //! Physical-device selection, the logical device, its queue and its memory allocator.
 
-use std::ffi::CString;
+use std::ffi::{CStr, CString};
 use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex, MutexGuard};
 
@@ -144,6 +144,16 @@ pub struct Device {
 
 impl Device {
     pub fn create(instance: &Arc<Instance>, desc: &DeviceDesc) -> Result<Arc<Self>, GpuError> {
+        Self::create_with_extensions(instance, desc, &[])
+    }
+
+    /// [`Self::create`] with `extra` device extensions enabled as well (the viewer's
+    /// `VK_KHR_swapchain`); a device that lacks one is refused by name.
+    pub fn create_with_extensions(
+        instance: &Arc<Instance>,
+        desc: &DeviceDesc,
+        extra: &[&'static CStr],
+    ) -> Result<Arc<Self>, GpuError> {
         let candidates = enumerate(instance)?;
         let (physical, info, queue_family) = select(&candidates, desc.selector.as_deref())?;
         let want = desc.features;
@@ -194,7 +204,22 @@ impl Device {
         let mut acceleration = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
             .acceleration_structure(true);
         let mut ray_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
-        let mut extensions = Vec::new();
+        // SAFETY: physical comes from this instance.
+        let offered = unsafe { instance.raw.enumerate_device_extension_properties(physical) }
+            .vk("vkEnumerateDeviceExtensionProperties")?;
+        if let Some(absent) = extra.iter().find(|&&name| {
+            !offered
+                .iter()
+                .any(|e| e.extension_name_as_c_str() == Ok(name))
+        }) {
+            return Err(GpuError::Unsupported(format!(
+                "{} offers no device extension {}",
+                info.name,
+                absent.to_string_lossy()
+            )));
+        }
+        let mut extensions: Vec<*const std::ffi::c_char> =
+            extra.iter().map(|name| name.as_ptr()).collect();
         let mut create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
             .enabled_features(&features)

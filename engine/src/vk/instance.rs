@@ -106,7 +106,19 @@ pub struct Instance {
 }
 
 impl Instance {
+    /// The instance the offline commands use: no extensions beyond debug utilities and the
+    /// validation features.
     pub fn create(desc: &InstanceDesc) -> Result<Arc<Self>, GpuError> {
+        Self::create_with_extensions(desc, &[])
+    }
+
+    /// [`Self::create`] with `extra` instance extensions enabled as well (the viewer's surface
+    /// extensions, `surface::Surface::required_extensions`); one the loader does not offer is
+    /// refused by name.
+    pub fn create_with_extensions(
+        desc: &InstanceDesc,
+        extra: &[&'static CStr],
+    ) -> Result<Arc<Self>, GpuError> {
         // SAFETY: loading libvulkan runs its initialisers; nothing else is loaded concurrently.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loader(e.to_string()))?;
 
@@ -135,6 +147,16 @@ impl Instance {
         if desc.validation && !has_validation_features {
             return Err(GpuError::NoSynchronizationValidation);
         }
+        if let Some(absent) = extra.iter().find(|&&name| {
+            !extensions
+                .iter()
+                .any(|e| e.extension_name_as_c_str() == Ok(name))
+        }) {
+            return Err(GpuError::Unsupported(format!(
+                "the Vulkan loader offers no instance extension {}",
+                absent.to_string_lossy()
+            )));
+        }
         // debug_utils gives object names and labels (RenderDoc) and the messenger.
         let has_debug_utils = extensions
             .iter()
@@ -158,6 +180,7 @@ impl Instance {
         if has_validation_features {
             extension_names.push(ash::ext::validation_features::NAME.as_ptr());
         }
+        extension_names.extend(extra.iter().map(|name| name.as_ptr()));
         let enabled_checks = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let mut validation_features =
             vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_checks);

@@ -6,18 +6,22 @@
 //! `Arc<instance::Instance>`. Dropping the last handle destroys the object; nothing is
 //! destroyed by hand. The renderer only drops GPU objects after waiting on the fence of the
 //! last submission that used them (see `commands::Submitter`), so no deletion queue is needed
-//! for an offline renderer that waits on every frame.
+//! for an offline renderer that waits on every frame. The live viewer keeps frames in flight:
+//! it hands what the GPU may still use to `frames::FrameRing::defer`, the deletion queue.
 
 pub mod acceleration;
 pub mod commands;
 pub mod descriptors;
 pub mod device;
+pub mod frames;
 pub mod image;
 pub mod instance;
 pub mod memory;
 pub mod physical;
 pub mod pipeline;
 pub mod queries;
+pub mod surface;
+pub mod swapchain;
 #[cfg(test)]
 mod validation_tests;
 

@@ -1,0 +1,257 @@
+//! The viewer's keys: one table from key name to action, used by the keyboard and by the
+//! `--keys` script alike (so a test can drive the viewer without an X input tool).
+
+use anyhow::{bail, Result};
+use glam::Vec3;
+use specchio::render::display::DisplayView;
+use specchio::scene::Scene;
+
+/// How far one key press moves the observer or the sphere (metres). A multiple of a power of
+/// two, so scripted moves land on positions a scene file states exactly (4.5 - 0.25 = 4.25).
+pub const MOVE_STEP_M: f32 = 0.25;
+/// How far one key press turns the observer (degrees).
+pub const TURN_STEP_DEG: f32 = 5.0;
+/// The observer's pitch stays inside the scene format's open range (-90, 90).
+const MAX_PITCH_DEG: f32 = 85.0;
+
+/// What a key does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Action {
+    /// Observer: forward/back along its horizontal view direction, sideways, up/down (metres
+    /// along world axes in units of `MOVE_STEP_M`).
+    Walk {
+        forward: i8,
+        right: i8,
+        up: i8,
+    },
+    /// Observer: yaw (left positive) and pitch (up positive), in units of `TURN_STEP_DEG`.
+    Turn {
+        yaw: i8,
+        pitch: i8,
+    },
+    /// The sphere (the sensor follows it), in world axes, in units of `MOVE_STEP_M`.
+    MoveSphere {
+        x: i8,
+        y: i8,
+        z: i8,
+    },
+    PauseResume,
+    /// Pause and advance the scene by one frame (1/30 s).
+    Step,
+    Show(DisplayView),
+    NextMethod,
+    NextLookup,
+    NextRefresh,
+    Reset,
+    Help,
+    Quit,
+}
+
+/// Every key: its name (in the `--keys` script and winit's logical key, lower case), the
+/// action and the line the help shows.
+pub const KEYS: &[(&str, Action, &str)] = &[
+    ("w", walk(1, 0, 0), "observer forward"),
+    ("s", walk(-1, 0, 0), "observer back"),
+    ("a", walk(0, -1, 0), "observer left"),
+    ("d", walk(0, 1, 0), "observer right"),
+    ("r", walk(0, 0, 1), "observer up"),
+    ("f", walk(0, 0, -1), "observer down"),
+    (
+        "left",
+        Action::Turn { yaw: 1, pitch: 0 },
+        "observer turns left",
+    ),
+    (
+        "right",
+        Action::Turn { yaw: -1, pitch: 0 },
+        "observer turns right",
+    ),
+    ("up", Action::Turn { yaw: 0, pitch: 1 }, "observer looks up"),
+    (
+        "down",
+        Action::Turn { yaw: 0, pitch: -1 },
+        "observer looks down",
+    ),
+    ("j", sphere(-1, 0, 0), "sphere -X"),
+    ("l", sphere(1, 0, 0), "sphere +X"),
+    ("i", sphere(0, 0, -1), "sphere -Z"),
+    ("k", sphere(0, 0, 1), "sphere +Z"),
+    ("t", sphere(0, 1, 0), "sphere up"),
+    ("g", sphere(0, -1, 0), "sphere down"),
+    ("space", Action::PauseResume, "pause / resume the animation"),
+    (".", Action::Step, "pause and step one frame (1/30 s)"),
+    (
+        "1",
+        Action::Show(DisplayView::Pair),
+        "both views (observer | sensor)",
+    ),
+    ("2", Action::Show(DisplayView::Observer), "observer only"),
+    ("3", Action::Show(DisplayView::Sensor), "sensor only"),
+    ("m", Action::NextMethod, "next cube fill method"),
+    ("x", Action::NextLookup, "next mirror lookup"),
+    ("e", Action::NextRefresh, "next refresh policy"),
+    ("0", Action::Reset, "reset poses, time and settings"),
+    ("h", Action::Help, "print this help"),
+    ("q", Action::Quit, "quit (also Escape)"),
+    ("escape", Action::Quit, "quit"),
+];
+
+const fn walk(forward: i8, right: i8, up: i8) -> Action {
+    Action::Walk { forward, right, up }
+}
+
+const fn sphere(x: i8, y: i8, z: i8) -> Action {
+    Action::MoveSphere { x, y, z }
+}
+
+/// The action of key `name` (case-insensitive), if any.
+pub fn action(name: &str) -> Option<Action> {
+    let name = name.trim().to_ascii_lowercase();
+    KEYS.iter().find(|(k, _, _)| *k == name).map(|&(_, a, _)| a)
+}
+
+/// `--keys "w,w,left,2"`: the actions in order; an unknown name is an error naming it and
+/// its position.
+pub fn parse_script(script: &str) -> Result<Vec<Action>> {
+    let mut actions = Vec::new();
+    for (i, name) in script.split(',').enumerate() {
+        match action(name) {
+            Some(a) => actions.push(a),
+            None => bail!(
+                "--keys: entry {} `{}` is not a key; the keys are {}",
+                i + 1,
+                name.trim(),
+                KEYS.iter().map(|k| k.0).collect::<Vec<_>>().join(", ")
+            ),
+        }
+    }
+    Ok(actions)
+}
+
+/// The key list the help prints.
+pub fn help() -> String {
+    let mut text = String::from("specchio view keys:\n");
+    for (key, _, what) in KEYS {
+        text.push_str(&format!("  {key:<7} {what}\n"));
+    }
+    text
+}
+
+/// Moves or turns the observer by `action` (a `Walk` or `Turn`); other actions are ignored.
+pub fn move_observer(scene: &mut Scene, action: Action) {
+    let o = &mut scene.observer;
+    match action {
+        Action::Walk { forward, right, up } => {
+            // Yaw 0 looks along -Z and 90 along -X (docs/conventions.md): forward on the
+            // floor plane is (-sin yaw, 0, -cos yaw), right is (cos yaw, 0, -sin yaw).
+            let (sin, cos) = o.yaw_deg.to_radians().sin_cos();
+            let ahead = Vec3::new(-sin, 0.0, -cos);
+            let side = Vec3::new(cos, 0.0, -sin);
+            let step =
+                ahead * f32::from(forward) + side * f32::from(right) + Vec3::Y * f32::from(up);
+            o.position += step * MOVE_STEP_M;
+        }
+        Action::Turn { yaw, pitch } => {
+            o.yaw_deg = (o.yaw_deg + f32::from(yaw) * TURN_STEP_DEG).rem_euclid(360.0);
+            o.pitch_deg = (o.pitch_deg + f32::from(pitch) * TURN_STEP_DEG)
+                .clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
+        }
+        _ => {}
+    }
+}
+
+/// Moves the sphere by `MOVE_STEP_M` per unit of (x, y, z) unless that takes it (or the sensor
+/// below it) out of the room, in which case it stays and the reason is returned.
+pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8)) -> Result<(), String> {
+    let step = Vec3::new(f32::from(x), f32::from(y), f32::from(z)) * MOVE_STEP_M;
+    let to = scene.mirror.center + step;
+    let lo = scene.room.center - 0.5 * scene.room.size_m;
+    let hi = scene.room.center + 0.5 * scene.room.size_m;
+    let r = scene.mirror.radius_m;
+    let inside = (to - Vec3::splat(r)).cmpge(lo).all() && (to + Vec3::splat(r)).cmple(hi).all();
+    let sensor_y = to.y - scene.sensor.offset_m;
+    if !inside {
+        return Err(format!("the sphere would leave the room at {to}"));
+    }
+    if sensor_y <= lo.y {
+        return Err(format!(
+            "the sensor would go below the floor (y = {sensor_y})"
+        ));
+    }
+    scene.mirror.center = to;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_key_name_is_unique_and_parses_back() {
+        for (i, (name, a, _)) in KEYS.iter().enumerate() {
+            assert_eq!(action(name), Some(*a), "{name}");
+            assert!(KEYS[..i].iter().all(|k| k.0 != *name), "{name} twice");
+        }
+    }
+
+    #[test]
+    fn a_script_is_read_in_order_and_an_unknown_key_is_named() {
+        let a = parse_script("w, W,left,2").unwrap();
+        assert_eq!(a[0], a[1]);
+        assert_eq!(a[2], Action::Turn { yaw: 1, pitch: 0 });
+        assert_eq!(a[3], Action::Show(DisplayView::Observer));
+        let e = parse_script("w,zz").unwrap_err().to_string();
+        assert!(e.contains("entry 2 `zz`"), "{e}");
+    }
+
+    fn scene() -> Scene {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        specchio::scene::load(&root.join("scenes/thesis-room.toml")).unwrap()
+    }
+
+    /// A scene position back in the file's (world) coordinates: the loader keeps positions
+    /// relative to `scene.origin`.
+    fn world(s: &Scene, local: Vec3) -> Vec3 {
+        (s.origin + local.as_dvec3()).as_vec3()
+    }
+
+    #[test]
+    fn walking_follows_the_yaw_convention() {
+        // thesis-room: the observer at (0, 3.5, 4.5) looks along -Z (yaw 0).
+        let mut s = scene();
+        let at = |s: &Scene| world(s, s.observer.position);
+        move_observer(&mut s, walk(1, 0, 0));
+        assert_eq!(at(&s), Vec3::new(0.0, 3.5, 4.25));
+        move_observer(&mut s, walk(0, 1, 0));
+        assert_eq!(at(&s), Vec3::new(0.25, 3.5, 4.25));
+        // Turned left by 90 degrees it looks along -X: forward is -X.
+        for _ in 0..18 {
+            move_observer(&mut s, Action::Turn { yaw: 1, pitch: 0 });
+        }
+        assert_eq!(s.observer.yaw_deg, 90.0);
+        move_observer(&mut s, walk(1, 0, 0));
+        assert!((at(&s) - Vec3::new(0.0, 3.5, 4.25)).length() < 1e-6);
+    }
+
+    #[test]
+    fn the_sphere_moves_by_steps_and_stays_in_the_room() {
+        let mut s = scene();
+        let at = |s: &Scene| world(s, s.mirror.center);
+        move_sphere(&mut s, (1, 0, 0)).unwrap();
+        assert_eq!(at(&s), Vec3::new(0.25, 3.0, 0.0));
+        // The room's +X wall is at x = 5, the radius 1: x = 4 is the last position.
+        for _ in 0..15 {
+            move_sphere(&mut s, (1, 0, 0)).unwrap();
+        }
+        assert_eq!(at(&s).x, 4.0);
+        assert!(move_sphere(&mut s, (1, 0, 0)).is_err());
+        assert_eq!(at(&s).x, 4.0);
+        // The sensor hangs 2.5 m below: the centre cannot go below y = 2.5.
+        let e = (0..3)
+            .map(|_| move_sphere(&mut s, (0, -1, 0)))
+            .last()
+            .unwrap();
+        assert!(e.unwrap_err().contains("floor"));
+        assert_eq!(at(&s).y, 2.75);
+    }
+}

@@ -1,0 +1,348 @@
+//! Getting a drawn view onto the window: the swapchain, the frames in flight, and the blit.
+//!
+//! Each frame: wait for the frame slot's previous use (its fence), acquire a swapchain image,
+//! record a blit from the renderer's view image (linear HDR) into it (an sRGB image: the blit
+//! encodes), transition it for presentation, submit waiting on "image available" and
+//! signalling the image's "drawn" semaphore, present. Swapchain recreation (resize, out of
+//! date) retires the old swapchain through the ring's deletion queue.
+
+use std::sync::Arc;
+
+use anyhow::{bail, Result};
+use ash::vk;
+use specchio::render::display::DisplayImage;
+use specchio::vk::commands::{image_barriers, ImageBarrier};
+use specchio::vk::device::Device;
+use specchio::vk::frames::{FrameRing, FRAMES_IN_FLIGHT};
+use specchio::vk::memory::{Buffer, BufferDesc};
+use specchio::vk::surface::Surface;
+use specchio::vk::swapchain::{Acquired, PresentPreference, Swapchain, SwapchainDesc};
+
+/// What became of one frame.
+pub enum Shown {
+    Presented,
+    /// Nothing shown: the window has no area (minimised) or the swapchain was out of date;
+    /// the caller tries again with the next frame.
+    Skipped,
+}
+
+/// A screenshot: the presented image's pixels as 8-bit sRGB RGB, rows top to bottom.
+pub struct Screenshot {
+    pub width: u32,
+    pub height: u32,
+    pub rgb8: Vec<u8>,
+}
+
+/// Field order is teardown order: the ring first (its drop waits for every frame in flight
+/// and releases what it deferred), then the swapchain, the surface, the device.
+pub struct Presenter {
+    pub ring: FrameRing,
+    swapchain: Option<Swapchain>,
+    /// The swapchain no longer matches the window: recreate before the next frame.
+    stale: bool,
+    pub surface: Arc<Surface>,
+    present: PresentPreference,
+    device: Arc<Device>,
+}
+
+impl Presenter {
+    pub fn create(
+        device: &Arc<Device>,
+        surface: Surface,
+        present: PresentPreference,
+    ) -> Result<Self> {
+        surface.check_present(device)?;
+        Ok(Self {
+            ring: FrameRing::create(device, FRAMES_IN_FLIGHT)?,
+            swapchain: None,
+            stale: true,
+            surface: Arc::new(surface),
+            present,
+            device: Arc::clone(device),
+        })
+    }
+
+    /// The window changed size: the swapchain is recreated before the next frame.
+    pub fn resized(&mut self) {
+        self.stale = true;
+    }
+
+    /// Shows `source` in the window (scaled to fit, aspect kept, centred on black when the
+    /// sizes differ; copied 1:1 when they match). With `screenshot`, the presented image is
+    /// also read back (the call then waits for the frame).
+    pub fn show(
+        &mut self,
+        window_size: [u32; 2],
+        source: &DisplayImage,
+        screenshot: bool,
+    ) -> Result<(Shown, Option<Screenshot>)> {
+        if self.stale && !self.recreate(window_size)? {
+            return Ok((Shown::Skipped, None));
+        }
+        let Some(swapchain) = &self.swapchain else {
+            return Ok((Shown::Skipped, None));
+        };
+        if screenshot && !swapchain.readable {
+            bail!("--screenshot: this window's swapchain images cannot be read back");
+        }
+        let (extent, format) = (swapchain.extent, swapchain.format.format);
+        let slot_semaphore = self.ring.begin()?.image_available;
+        let index = match swapchain.acquire(slot_semaphore)? {
+            Acquired::Image { index, suboptimal } => {
+                self.stale |= suboptimal;
+                index
+            }
+            Acquired::OutOfDate => {
+                self.ring.abandon()?;
+                self.stale = true;
+                return Ok((Shown::Skipped, None));
+            }
+        };
+        let target = swapchain.images[index as usize];
+        let cmd = self.ring.slot().cmd;
+        let readback = screenshot
+            .then(|| {
+                let bytes = u64::from(extent.width) * u64::from(extent.height) * 4;
+                Buffer::create(&self.device, &BufferDesc::new_readback(bytes), "screenshot")
+            })
+            .transpose()?;
+        record_blit(&self.device, cmd, source, target, extent, readback.as_ref());
+        let drawn = swapchain.render_done[index as usize];
+        // The blit (and the clear before it) write the image: they wait for its acquisition.
+        let wait_stage = vk::PipelineStageFlags2::BLIT | vk::PipelineStageFlags2::CLEAR;
+        self.ring.submit((slot_semaphore, wait_stage), drawn)?;
+        self.stale |= swapchain.present(index)?;
+        let shot = match readback {
+            Some(buffer) => {
+                self.ring.wait_all()?;
+                Some(read_screenshot(&buffer, extent, format)?)
+            }
+            None => None,
+        };
+        Ok((Shown::Presented, shot))
+    }
+
+    /// Replaces the swapchain for the window's current size; `false` when the window has no
+    /// area (nothing to present to until it is resized).
+    fn recreate(&mut self, window_size: [u32; 2]) -> Result<bool> {
+        let desc = SwapchainDesc {
+            window_size,
+            present: self.present,
+        };
+        let new = Swapchain::create(&self.device, &self.surface, &desc, self.swapchain.as_ref())?;
+        if let Some(old) = self.swapchain.take() {
+            // Frames in flight may still present the old images: retired, not destroyed.
+            self.ring.defer(old);
+        }
+        if let Some(s) = &new {
+            // One line per (re)creation: what the window presents with.
+            println!(
+                "swapchain: {}x{} {:?} {:?}",
+                s.extent.width, s.extent.height, s.format.format, s.present_mode
+            );
+        }
+        self.swapchain = new;
+        self.stale = self.swapchain.is_none();
+        Ok(self.swapchain.is_some())
+    }
+}
+
+/// Records: source COPY -> BLIT; target UNDEFINED -> TRANSFER_DST; a clear where the blit
+/// leaves bars; the blit; source BLIT -> COPY (for the renderer's next frame, see
+/// `DisplayImage`); target -> PRESENT_SRC, or via TRANSFER_SRC and a copy into `readback`.
+fn record_blit(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    source: &DisplayImage,
+    target: vk::Image,
+    extent: vk::Extent2D,
+    readback: Option<&Buffer>,
+) {
+    use vk::AccessFlags2 as A;
+    use vk::ImageLayout as L;
+    use vk::PipelineStageFlags2 as S;
+    let whole = vk::ImageSubresourceRange {
+        aspect_mask: vk::ImageAspectFlags::COLOR,
+        base_mip_level: 0,
+        level_count: 1,
+        base_array_layer: 0,
+        layer_count: 1,
+    };
+    let src_layout = L::TRANSFER_SRC_OPTIMAL;
+    let dst = |from: (L, S, A), to: (L, S, A)| ImageBarrier {
+        image: target,
+        range: whole,
+        from,
+        to,
+    };
+    let write_stages = S::BLIT | S::CLEAR;
+    image_barriers(
+        device,
+        cmd,
+        &[
+            // The renderer made its writes visible to COPY; chain on to the blit's reads.
+            ImageBarrier {
+                image: source.image,
+                range: source.range,
+                from: (src_layout, S::COPY, A::NONE),
+                to: (src_layout, S::BLIT, A::TRANSFER_READ),
+            },
+            // First scope = the stages that waited on the acquire semaphore (chaining).
+            dst(
+                (L::UNDEFINED, write_stages, A::NONE),
+                (L::TRANSFER_DST_OPTIMAL, write_stages, A::TRANSFER_WRITE),
+            ),
+        ],
+    );
+    let (rect, covers) = fit(source.width, source.height, extent);
+    let d = &device.raw;
+    if !covers {
+        let black = vk::ClearColorValue {
+            float32: [0.0, 0.0, 0.0, 1.0],
+        };
+        // SAFETY: the image is in TRANSFER_DST layout; the range is its only subresource.
+        unsafe { d.cmd_clear_color_image(cmd, target, L::TRANSFER_DST_OPTIMAL, &black, &[whole]) };
+        image_barriers(
+            device,
+            cmd,
+            &[dst(
+                (L::TRANSFER_DST_OPTIMAL, S::CLEAR, A::TRANSFER_WRITE),
+                (L::TRANSFER_DST_OPTIMAL, S::BLIT, A::TRANSFER_WRITE),
+            )],
+        );
+    }
+    let layers = vk::ImageSubresourceLayers {
+        aspect_mask: vk::ImageAspectFlags::COLOR,
+        mip_level: 0,
+        base_array_layer: 0,
+        layer_count: 1,
+    };
+    let corner = |x: u32, y: u32| vk::Offset3D {
+        x: x as i32,
+        y: y as i32,
+        z: 1,
+    };
+    let region = vk::ImageBlit {
+        src_subresource: layers,
+        src_offsets: [vk::Offset3D::default(), corner(source.width, source.height)],
+        dst_subresource: layers,
+        dst_offsets: [
+            vk::Offset3D {
+                x: rect[0] as i32,
+                y: rect[1] as i32,
+                z: 0,
+            },
+            corner(rect[0] + rect[2], rect[1] + rect[3]),
+        ],
+    };
+    // 1:1 copies every texel exactly; a scaled view is filtered.
+    let filter = if [rect[2], rect[3]] == [source.width, source.height] {
+        vk::Filter::NEAREST
+    } else {
+        vk::Filter::LINEAR
+    };
+    // SAFETY: both images are in the layouts named, the regions lie inside them.
+    unsafe {
+        d.cmd_blit_image(
+            cmd,
+            source.image,
+            src_layout,
+            target,
+            L::TRANSFER_DST_OPTIMAL,
+            &[region],
+            filter,
+        )
+    };
+    let blit_written = (L::TRANSFER_DST_OPTIMAL, S::BLIT, A::TRANSFER_WRITE);
+    let present = (L::PRESENT_SRC_KHR, S::NONE, A::NONE);
+    let source_done = ImageBarrier {
+        image: source.image,
+        range: source.range,
+        from: (src_layout, S::BLIT, A::NONE),
+        to: (src_layout, S::COPY, A::NONE),
+    };
+    let Some(buffer) = readback else {
+        image_barriers(device, cmd, &[source_done, dst(blit_written, present)]);
+        return;
+    };
+    let readable = (L::TRANSFER_SRC_OPTIMAL, S::COPY, A::TRANSFER_READ);
+    image_barriers(device, cmd, &[source_done, dst(blit_written, readable)]);
+    let copy = vk::BufferImageCopy::default()
+        .image_subresource(layers)
+        .image_extent(vk::Extent3D {
+            width: extent.width,
+            height: extent.height,
+            depth: 1,
+        });
+    // SAFETY: the image is in TRANSFER_SRC layout; the buffer holds width x height x 4 bytes.
+    unsafe {
+        d.cmd_copy_image_to_buffer(cmd, target, L::TRANSFER_SRC_OPTIMAL, buffer.raw, &[copy])
+    };
+    specchio::vk::commands::host_read_barrier(device, cmd, S::COPY, A::TRANSFER_WRITE);
+    image_barriers(device, cmd, &[dst(readable, present)]);
+}
+
+/// Where a `w` x `h` image goes in `extent`: [x, y, width, height], as large as fits with its
+/// aspect ratio kept, centred; and whether it covers the whole extent.
+pub fn fit(w: u32, h: u32, extent: vk::Extent2D) -> ([u32; 4], bool) {
+    let (ew, eh) = (u64::from(extent.width), u64::from(extent.height));
+    let (w64, h64) = (u64::from(w), u64::from(h));
+    // Width-limited when ew / eh <= w / h (compared in integers: no rounding).
+    let (fw, fh) = if ew * h64 <= eh * w64 {
+        (ew, (ew * h64 / w64).max(1))
+    } else {
+        ((eh * w64 / h64).max(1), eh)
+    };
+    let (x, y) = ((ew - fw) / 2, (eh - fh) / 2);
+    let rect = [x as u32, y as u32, fw as u32, fh as u32];
+    (rect, fw == ew && fh == eh)
+}
+
+/// The read-back swapchain image as RGB8 (the swapchain's byte order undone).
+fn read_screenshot(
+    buffer: &Buffer,
+    extent: vk::Extent2D,
+    format: vk::Format,
+) -> Result<Screenshot> {
+    let bgra = match format {
+        vk::Format::B8G8R8A8_SRGB | vk::Format::B8G8R8A8_UNORM => true,
+        vk::Format::R8G8B8A8_SRGB | vk::Format::R8G8B8A8_UNORM => false,
+        other => bail!("--screenshot: cannot read a swapchain image of format {other:?}"),
+    };
+    let n = extent.width as usize * extent.height as usize;
+    let bytes = &buffer.mapped()?[..n * 4];
+    let rgb8 = bytes
+        .chunks_exact(4)
+        .flat_map(|p| {
+            if bgra {
+                [p[2], p[1], p[0]]
+            } else {
+                [p[0], p[1], p[2]]
+            }
+        })
+        .collect();
+    Ok(Screenshot {
+        width: extent.width,
+        height: extent.height,
+        rgb8,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn e(width: u32, height: u32) -> vk::Extent2D {
+        vk::Extent2D { width, height }
+    }
+
+    #[test]
+    fn an_image_fits_its_window_with_its_aspect_kept() {
+        assert_eq!(fit(1200, 450, e(1200, 450)), ([0, 0, 1200, 450], true));
+        // Twice as tall a window: bars above and below.
+        assert_eq!(fit(1200, 450, e(1200, 900)), ([0, 225, 1200, 450], false));
+        // A wider window: bars left and right.
+        assert_eq!(fit(800, 600, e(1000, 600)), ([100, 0, 800, 600], false));
+        assert_eq!(fit(800, 600, e(400, 300)), ([0, 0, 400, 300], true));
+    }
+}

@@ -1,0 +1,76 @@
+//! Frames for a window (the live viewer): one view drawn, nothing read back.
+//!
+//! The viewer does not read pixels back to the CPU. It asks for one of the renderer's own
+//! view targets (the 1200x450 pair, the observer or the sensor), drawn exactly as for
+//! `specchio render`, and copies that image into its swapchain image in its own submission
+//! (`bench/src/view/`). The renderer still records, submits and waits per frame, so its
+//! targets are never written while the previous frame's copy may read them: the copy is
+//! submitted to the same queue before the next frame's submission, whose first barrier on the
+//! target chains after the copy's closing barrier (see [`DisplayImage`]).
+
+use ash::vk;
+
+use super::{FrameReport, Readback, Renderer};
+use crate::vk::GpuError;
+
+/// Which of the renderer's views a window shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DisplayView {
+    /// Observer left, sensor right, at [`super::PAIR_SIZE`] (the thesis's window).
+    #[default]
+    Pair,
+    /// The observer alone, at the scene's `observer.resolution`.
+    Observer,
+    /// The sensor alone, at the scene's `sensor.resolution`.
+    Sensor,
+}
+
+/// A drawn view image, ready to be copied by the caller.
+///
+/// State after [`Renderer::render_display_frame`] returned: layout `TRANSFER_SRC_OPTIMAL`,
+/// its colour writes available and visible to `COPY`-stage transfer reads. A caller that
+/// reads it at another stage (a blit: `BLIT`) first records a barrier from `COPY` to its
+/// stage, and after reading, a barrier from its stage to `COPY`: the renderer's next frame
+/// starts with a layout transition whose first scope is `COPY` (the readback copies'
+/// stage), so that chain orders the caller's read before the next overwrite.
+#[derive(Debug, Clone, Copy)]
+pub struct DisplayImage {
+    pub image: vk::Image,
+    pub range: vk::ImageSubresourceRange,
+    pub width: u32,
+    pub height: u32,
+    /// Linear HDR (`targets::VIEW_FORMAT`): a blit into an sRGB image encodes it.
+    pub format: vk::Format,
+}
+
+impl Renderer {
+    /// Renders frame `frame` at scene time `t_s` with only `view` drawn (no readback, no cube
+    /// or direction copies) and returns its image. The frame has finished on the GPU when
+    /// this returns (as every frame of the renderer).
+    pub fn render_display_frame(
+        &mut self,
+        frame: u64,
+        t_s: f64,
+        view: DisplayView,
+    ) -> Result<(FrameReport, DisplayImage), GpuError> {
+        let (report, _) = self.render_frame_views(frame, t_s, Readback::default(), Some(view))?;
+        Ok((report, self.display_image(view)))
+    }
+
+    /// The image `view` is drawn into (valid as described at [`DisplayImage`] only after a
+    /// `render_display_frame` of that view).
+    pub fn display_image(&self, view: DisplayView) -> DisplayImage {
+        let target = match view {
+            DisplayView::Pair => &self.pair_target,
+            DisplayView::Observer => &self.observer_target,
+            DisplayView::Sensor => &self.sensor_target,
+        };
+        DisplayImage {
+            image: target.color.raw,
+            range: target.color.full_range(),
+            width: target.width,
+            height: target.height,
+            format: super::targets::VIEW_FORMAT,
+        }
+    }
+}
