@@ -133,7 +133,7 @@ impl Renderer {
             stage: vk::ShaderStageFlags::FRAGMENT,
             spirv: crate::shaders::SCENE_FRAG,
         };
-        let (bindings, attributes) = super::passes::vertex_layout();
+        let (bindings, attributes) = super::pipelines::vertex_layout();
         // The fill floor makes its own vertices; the geometry floor draws the scene's.
         let make = |vertex_spirv, discard, with_vertices: bool, name| {
             let stages = [vertex(vertex_spirv), fragment];

@@ -14,11 +14,14 @@ pub mod cube_fill;
 pub mod display;
 mod draw;
 pub mod floors;
+mod frame;
 pub mod gpu;
 pub mod lookups;
 pub mod material_check;
 pub mod methods;
 mod passes;
+pub(crate) mod pipelines;
+mod readback;
 pub mod resources;
 mod sensor_rays;
 pub mod targets;
@@ -28,7 +31,6 @@ use std::time::Instant;
 
 use ash::vk;
 use glam::{Mat4, UVec4, Vec3, Vec4};
-use serde::Serialize;
 
 use gpu::{FrameData, ObjectData, ViewData};
 use resources::{SceneResources, VIEW_COUNT};
@@ -44,6 +46,7 @@ use crate::vk::memory::{Buffer, BufferDesc};
 use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, PipelineLayout, ShaderStage};
 use crate::vk::queries::{PipelineStats, QueryPool};
 use crate::vk::GpuError;
+pub use frame::{FrameImages, FrameReport, Readback, RefreshCounters, RenderOptions};
 
 /// The side-by-side image of the thesis: observer left, sensor right.
 pub const PAIR_SIZE: [u32; 2] = [1200, 450];
@@ -65,92 +68,6 @@ const TS_READBACK: u32 = 12;
 const TS_COUNT: u32 = 13;
 /// Statistics slots: six faces, then the three views.
 const STATS_COUNT: u32 = 9;
-
-/// Renderer settings that are not part of the scene.
-#[derive(Debug, Clone, Default)]
-pub struct RenderOptions {
-    /// Overrides the scene's `cube.face_size` (`--cube-size`).
-    pub cube_size: Option<u32>,
-    /// How the cube is filled (the device must support it: see `Method::missing_features`).
-    pub method: methods::Method,
-    /// Under `on-change`, re-render only the faces a moved object touches (old or new bounds).
-    /// Off: any change re-renders all six (the reference the incremental update is tested
-    /// against).
-    pub full_updates: bool,
-    /// Replaces the scene's refresh policy (benchmarks force `every-frame`).
-    pub refresh: Option<RefreshPolicy>,
-    /// Replaces the mirror's lookup mode (`--lookup`).
-    pub lookup: Option<crate::scene::Lookup>,
-}
-
-/// What to copy back to the CPU after a frame.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Readback {
-    pub cube: bool,
-    pub views: bool,
-    /// The lookup direction of every observer and sensor mirror pixel (for the angular
-    /// error against the exact reference).
-    pub directions: bool,
-    /// The sensor's ray map (`sensor_rays.rs`).
-    pub rays: bool,
-}
-
-/// Pixels of one frame (those asked for by [`Readback`]).
-#[derive(Debug, Clone, Default)]
-pub struct FrameImages {
-    /// Mip 0 of the six faces in layer order +X, -X, +Y, -Y, +Z, -Z.
-    pub cube: Option<Vec<RgbaImage>>,
-    pub observer: Option<RgbaImage>,
-    pub sensor: Option<RgbaImage>,
-    pub pair: Option<RgbaImage>,
-    /// Per mirror pixel the unit direction looked up in the cube map (rgb) and alpha 1;
-    /// all zero elsewhere.
-    pub observer_direction: Option<RgbaImage>,
-    pub sensor_direction: Option<RgbaImage>,
-    /// The sensor's ray map: hit and range, direction and wall (`sensor_rays.rs`).
-    pub sensor_ray_origin: Option<RgbaImage>,
-    pub sensor_ray_direction: Option<RgbaImage>,
-}
-
-/// Timings (milliseconds) and counters of one frame.
-#[derive(Debug, Clone, Default, Serialize)]
-pub struct FrameReport {
-    pub frame: u64,
-    pub time_s: f64,
-    pub cube_updated: bool,
-    pub faces_rendered: u32,
-    /// Bit f set: face f was re-rendered this frame.
-    pub face_mask: u8,
-    /// Objects (walls included) drawn into each face; 0 for a face not re-rendered.
-    pub draws_per_face: [u32; 6],
-    pub cpu_record_ms: f64,
-    /// Submit to fence signalled (the whole frame's GPU work, readback copies included).
-    pub submit_wait_ms: f64,
-    /// GPU time per cube face (six-pass only), the fill, the fill plus mips, the mips, and
-    /// each view (None without timestamps).
-    pub gpu_face_ms: Option<[f64; 6]>,
-    pub gpu_fill_ms: Option<f64>,
-    pub gpu_cube_ms: Option<f64>,
-    pub gpu_mips_ms: Option<f64>,
-    pub gpu_observer_ms: Option<f64>,
-    pub gpu_sensor_ms: Option<f64>,
-    pub gpu_pair_ms: Option<f64>,
-    /// Pipeline statistics of the whole fill, and per face for six-pass (None without the
-    /// feature or when the cube was not updated).
-    pub fill_stats: Option<PipelineStats>,
-    pub face_stats: Option<[PipelineStats; 6]>,
-    pub view_stats: Option<[PipelineStats; 3]>,
-}
-
-/// Running totals for the refresh policy (tested: `on-change` skips static frames).
-#[derive(Debug, Clone, Copy, Default, Serialize)]
-pub struct RefreshCounters {
-    pub frames: u64,
-    pub cube_updates: u64,
-    pub cube_skips: u64,
-    /// Faces re-rendered over all frames (6 per full update).
-    pub faces_rendered: u64,
-}
 
 struct Pipelines {
     view_scene: Pipeline,
@@ -240,7 +157,7 @@ impl Renderer {
                 options.method
             )));
         }
-        let pipelines = passes::create_pipelines(device, &resources)?;
+        let pipelines = pipelines::create_pipelines(device, &resources)?;
         let lookup = scene.mirror.lookup;
         let lookup_pass = create_lookup_pass(device, &resources, &cube, &submitter, lookup)?;
         let fill = options.method.create(&methods::MethodContext {

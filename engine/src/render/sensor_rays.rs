@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use super::passes::mirror_pipeline;
+use super::pipelines::mirror_pipeline;
 use super::targets::{ViewTarget, DIRECTION_FORMAT};
 use super::Renderer;
 use crate::vk::device::Device;

@@ -57,14 +57,14 @@ impl MirrorLookup for CubeLookup {
             ctx.push_size,
             "mirror layout",
         )?;
-        let colour = crate::render::passes::mirror_pipeline(
+        let colour = crate::render::pipelines::mirror_pipeline(
             ctx.device,
             &layout,
             crate::shaders::MIRROR_FRAG,
             VIEW_FORMAT,
             "mirror pipeline",
         )?;
-        let directions = crate::render::passes::mirror_pipeline(
+        let directions = crate::render::pipelines::mirror_pipeline(
             ctx.device,
             &layout,
             crate::shaders::MIRROR_DIRECTION_FRAG,

@@ -85,14 +85,14 @@ impl MirrorLookup for Distance {
             ctx.push_size,
             "distance mirror layout",
         )?;
-        let colour = crate::render::passes::mirror_pipeline(
+        let colour = crate::render::pipelines::mirror_pipeline(
             device,
             &layout,
             crate::shaders::MIRROR_DISTANCE_FRAG,
             VIEW_FORMAT,
             "distance mirror pipeline",
         )?;
-        let directions = crate::render::passes::mirror_pipeline(
+        let directions = crate::render::pipelines::mirror_pipeline(
             device,
             &layout,
             crate::shaders::MIRROR_DISTANCE_DIRECTION_FRAG,

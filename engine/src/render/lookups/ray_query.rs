@@ -144,14 +144,14 @@ impl RayQueryPass {
             ctx.push_size,
             "ray-query mirror layout",
         )?;
-        let colour = crate::render::passes::mirror_pipeline(
+        let colour = crate::render::pipelines::mirror_pipeline(
             device,
             &layout,
             crate::shaders::MIRROR_RAY_QUERY_FRAG,
             VIEW_FORMAT,
             "ray-query mirror pipeline",
         )?;
-        let directions = crate::render::passes::mirror_pipeline(
+        let directions = crate::render::pipelines::mirror_pipeline(
             device,
             &layout,
             crate::shaders::MIRROR_RAY_QUERY_DIRECTION_FRAG,

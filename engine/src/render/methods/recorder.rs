@@ -78,7 +78,7 @@ impl MethodContext<'_> {
             .chain([&fragment])
             .map(|&(stage, spirv)| ShaderStage { stage, spirv })
             .collect();
-        crate::render::passes::scene_pipeline(
+        crate::render::pipelines::scene_pipeline(
             self.device,
             layout,
             &stages,

@@ -1,0 +1,96 @@
+//! What a caller gives and gets per frame: the renderer's options, what to read back, the
+//! pixels read back, and the frame's timings and counters.
+
+use serde::Serialize;
+
+use crate::image::RgbaImage;
+use crate::scene::RefreshPolicy;
+use crate::vk::queries::PipelineStats;
+
+use super::methods;
+
+/// Renderer settings that are not part of the scene.
+#[derive(Debug, Clone, Default)]
+pub struct RenderOptions {
+    /// Overrides the scene's `cube.face_size` (`--cube-size`).
+    pub cube_size: Option<u32>,
+    /// How the cube is filled (the device must support it: see `Method::missing_features`).
+    pub method: methods::Method,
+    /// Under `on-change`, re-render only the faces a moved object touches (old or new bounds).
+    /// Off: any change re-renders all six (the reference the incremental update is tested
+    /// against).
+    pub full_updates: bool,
+    /// Replaces the scene's refresh policy (benchmarks force `every-frame`).
+    pub refresh: Option<RefreshPolicy>,
+    /// Replaces the mirror's lookup mode (`--lookup`).
+    pub lookup: Option<crate::scene::Lookup>,
+}
+
+/// What to copy back to the CPU after a frame.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Readback {
+    pub cube: bool,
+    pub views: bool,
+    /// The lookup direction of every observer and sensor mirror pixel (for the angular
+    /// error against the exact reference).
+    pub directions: bool,
+    /// The sensor's ray map (`sensor_rays.rs`).
+    pub rays: bool,
+}
+
+/// Pixels of one frame (those asked for by [`Readback`]).
+#[derive(Debug, Clone, Default)]
+pub struct FrameImages {
+    /// Mip 0 of the six faces in layer order +X, -X, +Y, -Y, +Z, -Z.
+    pub cube: Option<Vec<RgbaImage>>,
+    pub observer: Option<RgbaImage>,
+    pub sensor: Option<RgbaImage>,
+    pub pair: Option<RgbaImage>,
+    /// Per mirror pixel the unit direction looked up in the cube map (rgb) and alpha 1;
+    /// all zero elsewhere.
+    pub observer_direction: Option<RgbaImage>,
+    pub sensor_direction: Option<RgbaImage>,
+    /// The sensor's ray map: hit and range, direction and wall (`sensor_rays.rs`).
+    pub sensor_ray_origin: Option<RgbaImage>,
+    pub sensor_ray_direction: Option<RgbaImage>,
+}
+
+/// Timings (milliseconds) and counters of one frame.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct FrameReport {
+    pub frame: u64,
+    pub time_s: f64,
+    pub cube_updated: bool,
+    pub faces_rendered: u32,
+    /// Bit f set: face f was re-rendered this frame.
+    pub face_mask: u8,
+    /// Objects (walls included) drawn into each face; 0 for a face not re-rendered.
+    pub draws_per_face: [u32; 6],
+    pub cpu_record_ms: f64,
+    /// Submit to fence signalled (the whole frame's GPU work, readback copies included).
+    pub submit_wait_ms: f64,
+    /// GPU time per cube face (six-pass only), the fill, the fill plus mips, the mips, and
+    /// each view (None without timestamps).
+    pub gpu_face_ms: Option<[f64; 6]>,
+    pub gpu_fill_ms: Option<f64>,
+    pub gpu_cube_ms: Option<f64>,
+    pub gpu_mips_ms: Option<f64>,
+    pub gpu_observer_ms: Option<f64>,
+    pub gpu_sensor_ms: Option<f64>,
+    pub gpu_pair_ms: Option<f64>,
+    /// Pipeline statistics of the whole fill, and per face for six-pass (None without the
+    /// feature or when the cube was not updated).
+    pub fill_stats: Option<PipelineStats>,
+    pub face_stats: Option<[PipelineStats; 6]>,
+    pub view_stats: Option<[PipelineStats; 3]>,
+}
+
+/// Running totals for the refresh policy (tested: `on-change` skips static frames).
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct RefreshCounters {
+    pub frames: u64,
+    pub cube_updates: u64,
+    pub cube_skips: u64,
+    /// Faces re-rendered over all frames (6 per full update).
+    pub faces_rendered: u64,
+}

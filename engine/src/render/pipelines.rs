@@ -1,0 +1,170 @@
+//! The renderer's own pipelines: the scene's vertex layout, the view scene pipeline, the
+//! mirror pipelines every lookup builds on, and the fixed set made once per renderer.
+
+use ash::vk;
+
+use super::gpu::Push;
+use super::targets::{DEPTH_FORMAT, DIRECTION_FORMAT, VIEW_FORMAT};
+use super::*;
+
+/// The scene vertex buffer's layout: `gpu::Vertex` (position, normal, uv) at binding 0.
+pub(super) fn vertex_layout() -> (
+    [vk::VertexInputBindingDescription; 1],
+    [vk::VertexInputAttributeDescription; 3],
+) {
+    let bindings = [vk::VertexInputBindingDescription {
+        binding: 0,
+        stride: std::mem::size_of::<gpu::Vertex>() as u32,
+        input_rate: vk::VertexInputRate::VERTEX,
+    }];
+    let attr = |location, format, offset| vk::VertexInputAttributeDescription {
+        location,
+        binding: 0,
+        format,
+        offset,
+    };
+    let attributes = [
+        attr(0, vk::Format::R32G32B32_SFLOAT, 0),
+        attr(1, vk::Format::R32G32B32_SFLOAT, 12),
+        attr(2, vk::Format::R32G32_SFLOAT, 24),
+    ];
+    (bindings, attributes)
+}
+
+/// A scene pipeline: `stages` (vertex or mesh stages, then a fragment shader), the scene's
+/// vertex layout unless the stages include a mesh shader, reverse-Z depth, culling set per
+/// draw. Used by the views and, through `methods::MethodContext`, by every cube method.
+pub(super) fn scene_pipeline(
+    device: &Arc<Device>,
+    layout: &PipelineLayout,
+    stages: &[ShaderStage<'_>],
+    color_format: vk::Format,
+    view_mask: u32,
+    name: &str,
+) -> Result<Pipeline, GpuError> {
+    scene_pipeline_with_writes(device, layout, stages, color_format, view_mask, true, name)
+}
+
+fn scene_pipeline_with_writes(
+    device: &Arc<Device>,
+    layout: &PipelineLayout,
+    stages: &[ShaderStage<'_>],
+    color_format: vk::Format,
+    view_mask: u32,
+    color_writes: bool,
+    name: &str,
+) -> Result<Pipeline, GpuError> {
+    let (bindings, attributes) = vertex_layout();
+    let mesh = stages
+        .iter()
+        .any(|s| s.stage.contains(vk::ShaderStageFlags::MESH_EXT));
+    Pipeline::create_graphics(
+        device,
+        layout,
+        &GraphicsPipelineDesc {
+            stages,
+            vertex_bindings: if mesh { &[] } else { &bindings },
+            vertex_attributes: if mesh { &[] } else { &attributes },
+            color_format,
+            depth_format: DEPTH_FORMAT,
+            // Set per draw: room walls are seen from inside and meshes may be open.
+            cull_mode: vk::CullModeFlags::NONE,
+            dynamic_culling: true,
+            depth_compare: vk::CompareOp::GREATER,
+            depth_write: true,
+            color_writes,
+            view_mask,
+            rasterizer_discard: false,
+        },
+        name,
+    )
+}
+
+/// A mirror pipeline: the bounding cube of `mirror.vert` and `fragment` (a lookup's shader),
+/// reverse-Z depth written from the sphere's hit point. Each lookup makes its own
+/// (`lookups::LookupPass`).
+pub(crate) fn mirror_pipeline(
+    device: &Arc<Device>,
+    layout: &PipelineLayout,
+    fragment: &[u32],
+    color_format: vk::Format,
+    name: &str,
+) -> Result<Pipeline, GpuError> {
+    Pipeline::create_graphics(
+        device,
+        layout,
+        &GraphicsPipelineDesc {
+            stages: &[
+                ShaderStage {
+                    stage: vk::ShaderStageFlags::VERTEX,
+                    spirv: crate::shaders::MIRROR_VERT,
+                },
+                ShaderStage {
+                    stage: vk::ShaderStageFlags::FRAGMENT,
+                    spirv: fragment,
+                },
+            ],
+            vertex_bindings: &[],
+            vertex_attributes: &[],
+            color_format,
+            depth_format: DEPTH_FORMAT,
+            // Back faces of the bounding cube: still on screen when the camera is inside it.
+            cull_mode: vk::CullModeFlags::FRONT,
+            dynamic_culling: false,
+            depth_compare: vk::CompareOp::GREATER,
+            depth_write: true,
+            color_writes: true,
+            view_mask: 0,
+            rasterizer_discard: false,
+        },
+        name,
+    )
+}
+
+/// The view and depth-only pipelines (reverse-Z depth everywhere); the cube's pipeline
+/// belongs to its method, the mirror's to its lookup.
+pub(super) fn create_pipelines(
+    device: &Arc<Device>,
+    res: &SceneResources,
+) -> Result<Pipelines, GpuError> {
+    let push = std::mem::size_of::<Push>() as u32;
+    let scene_layout =
+        PipelineLayout::create(device, &[res.scene_set_layout.raw], push, "scene layout")?;
+    // The views use the plain vertex shader and RGBA16F. The direction pass lays down depth
+    // only, then the lookup writes the mirror's directions in full float.
+    let scene_stages = [
+        ShaderStage {
+            stage: vk::ShaderStageFlags::VERTEX,
+            spirv: crate::shaders::SCENE_VERT,
+        },
+        ShaderStage {
+            stage: vk::ShaderStageFlags::FRAGMENT,
+            spirv: crate::shaders::SCENE_FRAG,
+        },
+    ];
+    let view_scene = scene_pipeline(
+        device,
+        &scene_layout,
+        &scene_stages,
+        VIEW_FORMAT,
+        0,
+        "scene pipeline (views)",
+    )?;
+    let depth_only = scene_pipeline_with_writes(
+        device,
+        &scene_layout,
+        &scene_stages,
+        DIRECTION_FORMAT,
+        0,
+        false,
+        "depth-only pipeline (directions)",
+    )?;
+    let [ray_origin, ray_direction] = super::sensor_rays::create_pipelines(device, &scene_layout)?;
+    Ok(Pipelines {
+        view_scene,
+        depth_only,
+        ray_origin,
+        ray_direction,
+        scene_layout,
+    })
+}
