@@ -8,6 +8,7 @@ mod compare;
 mod gate;
 mod info;
 mod interrupt;
+mod localise;
 mod probe;
 mod records;
 mod reference;
@@ -45,6 +46,9 @@ enum Command {
     /// Fit the central models robotics tools calibrate (OpenCV omnidir, Kalibr omni,
     /// OCamCalib) to the sensor's exact rays; export them with their residuals.
     Calibrate(calibrate::Args),
+    /// Appearance-based localisation: landmarks on a floor grid, random queries matched to
+    /// them by a descriptor of the sensor's panorama; recall, position and heading errors.
+    Localise(localise::Args),
     /// Error metrics of a test image against a reference (RMSE, PSNR, relMSE, FLIP), with an
     /// optional mask and FLIP heatmap.
     Compare(compare::Args),
@@ -115,6 +119,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => compare::run(&args),
         Command::Calibrate(args) => calibrate::run(&args),
         Command::View(args) => view::run(&args),
+        Command::Localise(args) => localise::run(&args),
     };
     match result {
         Ok(code) => code,

@@ -9,6 +9,7 @@
 
 pub mod central;
 pub mod files;
+pub mod localise;
 pub mod optics;
 pub mod outputs;
 pub mod panorama;

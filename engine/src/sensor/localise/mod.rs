@@ -1,0 +1,111 @@
+//! Appearance-based localisation: where is the robot, from its sensor image alone?
+//!
+//! The robot is the mirror and the sensor camera below it, moving together. A database holds
+//! the sensor's *descriptor* at known poses (landmarks on a floor grid, [`poses`]); a query
+//! image is described the same way and matched to its nearest landmark, and the heading is
+//! recovered by comparing the two descriptors.
+//!
+//! Descriptors are plug-ins behind [`Descriptor`], each with one home (a module here) and a
+//! name in [`DescriptorKind`], so that a second one can be compared with the first on the
+//! same sweep. The first is the Fourier signature of the cylindrical panorama ([`fourier`]).
+
+pub mod fourier;
+pub mod poses;
+
+use serde::{Deserialize, Serialize};
+
+use crate::image::RgbaImage;
+
+/// What localisation can refuse.
+#[derive(Debug, thiserror::Error)]
+pub enum LocaliseError {
+    #[error(
+        "no landmark fits: at spacing {spacing_m} m no grid pose keeps the mirror (radius \
+         {radius_m} m) and the sensor's line of sight inside the room and clear of objects"
+    )]
+    NoLandmarks { spacing_m: f64, radius_m: f32 },
+    #[error(
+        "the sensor camera ({sensor_y_m} m) is outside the room (floor {floor_m} m, ceiling \
+         {ceiling_m} m) at the mirror's height"
+    )]
+    SensorOutsideRoom {
+        sensor_y_m: f32,
+        floor_m: f32,
+        ceiling_m: f32,
+    },
+    #[error(
+        "no free query pose found in {tries} random tries at time {time_s} s: the room's free \
+         floor is (almost) empty"
+    )]
+    NoFreePose { tries: u32, time_s: f64 },
+}
+
+/// A descriptor of one panorama, as numbers a [`Descriptor`] made and reads.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Signature {
+    /// The panorama's width in columns (a heading is a column shift of this many).
+    pub columns: u32,
+    pub values: Vec<f32>,
+}
+
+/// A way to describe a panorama, compare two descriptions and recover the turn between them.
+pub trait Descriptor: Sync {
+    /// Its name in reports and on the command line.
+    fn name(&self) -> &'static str;
+    /// The descriptor of a panorama whose columns span 360 degrees of azimuth.
+    fn describe(&self, panorama: &RgbaImage) -> Signature;
+    /// Dissimilarity of two descriptors (0 for equal ones; smaller is more alike).
+    fn distance(&self, a: &Signature, b: &Signature) -> f64;
+    /// The turn (radians, in [0, 2 pi)) that maps `landmark`'s panorama onto `query`'s: the
+    /// query's column at azimuth `a` shows what the landmark's shows at `a - turn`.
+    fn turn(&self, landmark: &Signature, query: &Signature) -> f64;
+}
+
+/// The registered descriptors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DescriptorKind {
+    Fourier,
+}
+
+impl DescriptorKind {
+    pub const ALL: [Self; 1] = [Self::Fourier];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Fourier => "fourier",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|d| d.name() == name)
+    }
+
+    pub fn names() -> String {
+        Self::ALL.map(Self::name).join(", ")
+    }
+
+    /// The descriptor, with `coefficients` its size parameter (Fourier: per row).
+    pub fn build(self, coefficients: u32) -> Box<dyn Descriptor> {
+        match self {
+            Self::Fourier => Box::new(fourier::FourierSignature { coefficients }),
+        }
+    }
+}
+
+/// Grey level of a linear RGB pixel (Rec. 709 luminance): descriptors compare brightness,
+/// which also keeps them cheap.
+pub fn luminance(p: [f32; 4]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+/// Indices of `database` by increasing `descriptor` distance to `query` (ties by index).
+pub fn rank(descriptor: &dyn Descriptor, database: &[Signature], query: &Signature) -> Vec<usize> {
+    let d: Vec<f64> = database
+        .iter()
+        .map(|s| descriptor.distance(s, query))
+        .collect();
+    let mut order: Vec<usize> = (0..database.len()).collect();
+    order.sort_by(|&a, &b| d[a].total_cmp(&d[b]).then(a.cmp(&b)));
+    order
+}
