@@ -124,8 +124,8 @@ impl PanoramaLayout {
         )
     }
 
-    /// A panorama whose pixel colours come from `colour(elevation, azimuth)`.
-    fn fill(&self, colour: impl Fn(f64, f64) -> [f32; 4] + Sync) -> RgbaImage {
+    /// A panorama whose pixel colours come from `colour(row, elevation, azimuth)`.
+    fn fill(&self, colour: impl Fn(u32, f64, f64) -> [f32; 4] + Sync) -> RgbaImage {
         use rayon::prelude::*;
         let pixels = (0..self.height)
             .into_par_iter()
@@ -133,7 +133,7 @@ impl PanoramaLayout {
                 let colour = &colour;
                 (0..self.width).map(move |j| {
                     let (e, a) = self.pixel_angles(j, i);
-                    colour(e, a)
+                    colour(i, e, a)
                 })
             })
             .collect();
@@ -147,16 +147,23 @@ impl PanoramaLayout {
     /// The sensor image `image` unwrapped (see the module documentation); a direction the
     /// mirror does not show is black with alpha 0.
     pub fn unwrap(&self, optics: &SensorOptics, image: &RgbaImage) -> RgbaImage {
-        self.fill(|e, a| match optics.pixel_seeing(e, a) {
-            Some(p) => bilinear(image, p),
-            None => [0.0; 4],
+        // A row is one elevation, so the camera-ray angle that sees it (a bisection) is found
+        // once per row, not once per pixel: it was most of the localisation sweep's time.
+        let thetas: Vec<Option<f64>> = (0..self.height)
+            .map(|i| optics.theta_for_elevation(self.elevation(f64::from(i) + 0.5)))
+            .collect();
+        self.fill(|i, _, a| {
+            match thetas[i as usize].and_then(|theta| optics.project(optics.camera_ray(theta, a))) {
+                Some(p) => bilinear(image, p),
+                None => [0.0; 4],
+            }
         })
     }
 
     /// The same panorama looked up in the cube map `faces` (layer order +X, -X, +Y, -Y, +Z,
     /// -Z, Vulkan's face orientation) from its centre.
     pub fn from_cube(&self, faces: &[RgbaImage]) -> RgbaImage {
-        self.fill(|e, a| sample_cube(faces, direction(e, a)))
+        self.fill(|_, e, a| sample_cube(faces, direction(e, a)))
     }
 }
 
