@@ -380,7 +380,12 @@ impl App<'_> {
 
     /// Switches to the next method the device can run (probed ones are probed first).
     fn next_method(&mut self) -> Result<()> {
-        let current = self.viewer.as_ref().expect("keys act on a viewer").renderer.method;
+        let current = self
+            .viewer
+            .as_ref()
+            .expect("keys act on a viewer")
+            .renderer
+            .method;
         let all: Vec<Method> = Method::listed().collect();
         let start = all.iter().position(|&m| m == current).map_or(0, |i| i + 1);
         for k in 0..all.len() {
@@ -463,4 +468,3 @@ fn key_name(key: &Key) -> Option<String> {
         _ => None,
     }
 }
-

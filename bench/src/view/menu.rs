@@ -204,7 +204,11 @@ fn menu_window(ctx: &Context, s: &Status, actions: &mut Vec<Action>) -> Option<R
             }
         });
         ui.horizontal(|ui| {
-            let pause = if s.paused { "resume (space)" } else { "pause (space)" };
+            let pause = if s.paused {
+                "resume (space)"
+            } else {
+                "pause (space)"
+            };
             if ui.button(pause).clicked() {
                 actions.push(Action::PauseResume);
             }

@@ -126,7 +126,11 @@ impl Overlay {
 
     /// Applies egui's texture changes before recording: new and updated textures now (the
     /// upload waits for the queue), freed ones through the deletion queue.
-    pub fn update_textures(&mut self, ring: &mut FrameRing, delta: &mut TexturesDelta) -> Result<()> {
+    pub fn update_textures(
+        &mut self,
+        ring: &mut FrameRing,
+        delta: &mut TexturesDelta,
+    ) -> Result<()> {
         let mut renderer = lock(&self.renderer);
         for (id, images) in delta.set.drain() {
             for image in &images {
@@ -201,12 +205,8 @@ impl Overlay {
         // SAFETY: the view is of `target`, now in COLOR_ATTACHMENT_OPTIMAL; the renderer's
         // pipeline was made for this format with dynamic rendering.
         unsafe { d.cmd_begin_rendering(cmd, &info) };
-        let drawn = lock(&self.renderer).cmd_draw(
-            cmd,
-            extent,
-            paint.pixels_per_point,
-            &paint.primitives,
-        );
+        let drawn =
+            lock(&self.renderer).cmd_draw(cmd, extent, paint.pixels_per_point, &paint.primitives);
         // SAFETY: a rendering pass was begun on this command buffer above.
         unsafe { d.cmd_end_rendering(cmd) };
         drawn.context("recording the menu")?;

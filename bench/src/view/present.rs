@@ -338,9 +338,13 @@ fn record_finish(
         });
     // SAFETY: the image is in TRANSFER_SRC layout; the buffer holds width x height x 4 bytes.
     unsafe {
-        device
-            .raw
-            .cmd_copy_image_to_buffer(cmd, target, L::TRANSFER_SRC_OPTIMAL, buffer.raw, &[copy])
+        device.raw.cmd_copy_image_to_buffer(
+            cmd,
+            target,
+            L::TRANSFER_SRC_OPTIMAL,
+            buffer.raw,
+            &[copy],
+        )
     };
     specchio::vk::commands::host_read_barrier(device, cmd, S::COPY, A::TRANSFER_WRITE);
     image_barriers(device, cmd, &[dst(readable, present)]);

@@ -236,7 +236,11 @@ impl Drop for Swapchain {
 }
 
 /// A 2D colour view of a swapchain image, for rendering into it.
-fn color_view(device: &Device, image: vk::Image, format: vk::Format) -> Result<vk::ImageView, GpuError> {
+fn color_view(
+    device: &Device,
+    image: vk::Image,
+    format: vk::Format,
+) -> Result<vk::ImageView, GpuError> {
     let info = vk::ImageViewCreateInfo::default()
         .image(image)
         .view_type(vk::ImageViewType::TYPE_2D)
