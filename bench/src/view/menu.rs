@@ -70,6 +70,9 @@ impl Menu {
         ctx.all_styles_mut(|style| {
             style.visuals.window_shadow = Shadow::NONE;
             style.visuals.popup_shadow = Shadow::NONE;
+            // No fade-in: egui animates by wall-clock time, which would make a scripted
+            // screenshot depend on how fast the machine is.
+            style.animation_time = 0.0;
         });
         let input = egui_winit::State::new(
             ctx.clone(),
