@@ -36,8 +36,14 @@ impl Xvfb {
             );
             return None;
         }
-        // A display number of this process's own, away from common ones (0..10).
-        for n in (100 + std::process::id() % 800..).step_by(7).take(50) {
+        // A display number of this process's own, away from common ones (0..10), and of
+        // this test's own: tests run in parallel threads of one process, and two that
+        // checked the same free number before either server took it would share a server
+        // (the first to finish would stop it under the other).
+        static STARTED: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let own = STARTED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let first = 100 + (std::process::id() % 400) * 2 + own * 1000;
+        for n in (first..).step_by(7).take(50) {
             if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
                 || Path::new(&format!("/tmp/.X{n}-lock")).exists()
             {
