@@ -36,8 +36,14 @@ impl Xvfb {
             );
             return None;
         }
-        // A display number of this process's own, away from common ones (0..10).
-        for n in (100 + std::process::id() % 800..).step_by(7).take(50) {
+        // A display number of this process's own, away from common ones (0..10), and of
+        // this test's own: tests run in parallel threads of one process, and two that
+        // checked the same free number before either server took it would share a server
+        // (the first to finish would stop it under the other).
+        static STARTED: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let own = STARTED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let first = 100 + (std::process::id() % 400) * 2 + own * 1000;
+        for n in (first..).step_by(7).take(50) {
             if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
                 || Path::new(&format!("/tmp/.X{n}-lock")).exists()
             {
@@ -382,4 +388,90 @@ fn resizing_recreates_the_swapchain_and_quitting_is_clean() {
     let stdout = reader.join().unwrap();
     ok(&out, "specchio view");
     assert!(stdout.contains("frames: "), "{stdout}");
+}
+
+/// The last `NAME: x y w h` line the viewer printed (the menu's or the help's rectangle in
+/// window pixels).
+fn reported_rect(stdout: &str, name: &str) -> [u32; 4] {
+    let line = stdout
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix(&format!("{name}: ")))
+        .unwrap_or_else(|| panic!("no `{name}:` line in\n{stdout}"));
+    let v: Vec<u32> = line.split(' ').map(|n| n.parse().unwrap()).collect();
+    [v[0], v[1], v[2], v[3]]
+}
+
+/// Channels that differ inside and outside `rect`.
+fn differences_around(a: &Path, b: &Path, [x, y, w, h]: [u32; 4]) -> (usize, usize) {
+    let (wa, ha, pa) = read_png(a);
+    let (wb, hb, pb) = read_png(b);
+    assert_eq!((wa, ha), (wb, hb));
+    let (mut inside, mut outside) = (0, 0);
+    for (i, (p, q)) in pa.chunks_exact(3).zip(pb.chunks_exact(3)).enumerate() {
+        let (px, py) = (i as u32 % wa, i as u32 / wa);
+        let within = (x..x + w).contains(&px) && (y..y + h).contains(&py);
+        let n = p.iter().zip(q).filter(|(u, v)| u != v).count();
+        if within {
+            inside += n;
+        } else {
+            outside += n;
+        }
+    }
+    (inside, outside)
+}
+
+/// `specchio view thesis-room --keys KEYS --frames 3 --screenshot FILE`: (file, stdout).
+fn shot_with_keys(x: &Xvfb, keys: &str, name: &str) -> (PathBuf, String) {
+    let shot = temp_dir(name);
+    let out = x.view(&[
+        thesis_room().to_str().unwrap(),
+        "--keys",
+        keys,
+        "--frames",
+        "3",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    ok(&out, "specchio view");
+    (shot, text(&out.stdout))
+}
+
+#[test]
+fn the_menu_covers_only_its_rectangle_and_its_lookup_is_the_keys() {
+    let Some(x) = Xvfb::start() else { return };
+    // x: the next lookup (plain -> box), with the menu open (f1) and without; the menu's own
+    // lookup choice goes through the same action as the key (`App::act`).
+    let (with_menu, stdout) = shot_with_keys(&x, "f1,x", "view-menu.png");
+    let (without, _) = shot_with_keys(&x, "x", "view-menu-none.png");
+    let (plain, _) = shot_with_keys(&x, "1", "view-menu-plain.png");
+    let rect = reported_rect(&stdout, "menu");
+    assert!(rect[2] > 100 && rect[3] > 100, "a menu of {rect:?}");
+    // The views around the menu are exactly those without it; inside, the menu shows.
+    let (inside, outside) = differences_around(&with_menu, &without, rect);
+    assert_eq!(outside, 0, "the menu changed pixels outside {rect:?}");
+    assert!(
+        inside > 1000,
+        "the menu drew almost nothing: {inside} channels"
+    );
+    // And the lookup did switch: outside the menu, box differs from plain.
+    let (_, switched) = differences_around(&with_menu, &plain, rect);
+    assert!(
+        switched > 0,
+        "x with the menu open did not change the lookup"
+    );
+}
+
+#[test]
+fn the_help_lists_the_keys_in_the_window_and_h_closes_it() {
+    let Some(x) = Xvfb::start() else { return };
+    let (open, stdout) = shot_with_keys(&x, "h", "view-help.png");
+    let (closed, _) = shot_with_keys(&x, "h,h", "view-help-closed.png");
+    let (none, _) = shot_with_keys(&x, "1", "view-help-none.png");
+    let rect = reported_rect(&stdout, "help");
+    let (inside, outside) = differences_around(&open, &none, rect);
+    assert_eq!(outside, 0, "the help changed pixels outside {rect:?}");
+    assert!(inside > 1000, "the help drew almost nothing");
+    let (max, _) = difference(&closed, &none);
+    assert_eq!(max, 0, "h twice leaves the help open");
 }

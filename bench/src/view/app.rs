@@ -21,7 +21,9 @@ use winit::keyboard::{Key, NamedKey};
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
 
+use super::clock::{Clock, Figures};
 use super::input::{self, Action};
+use super::menu::{Menu, Status};
 use super::present::{Presenter, Screenshot, Shown};
 use super::SCRIPTED_FPS;
 
@@ -50,8 +52,6 @@ const RESIZE_WAIT: Duration = Duration::from_secs(5);
 /// The observer or the sensor alone is drawn at the thesis's 800x600, whatever resolution
 /// the scene gives it for `specchio render`.
 pub const SINGLE_VIEW_SIZE: [u32; 2] = [800, 600];
-/// How often the window title's figures are refreshed.
-const TITLE_EVERY: Duration = Duration::from_millis(500);
 
 /// The running viewer. Field order is teardown order: the presenter (it waits for the frames
 /// in flight) before the renderer it reads from, both before the window their surface is on.
@@ -62,6 +62,10 @@ struct Viewer {
     view: DisplayView,
     /// The size last asked of the window (view switch), until a resize brings it.
     size_asked: Option<(PhysicalSize<u32>, Instant)>,
+    menu: Menu,
+    /// The methods and lookups this device can run (what the menu offers).
+    methods: Vec<Method>,
+    lookups: Vec<Lookup>,
 }
 
 struct App<'a> {
@@ -75,25 +79,6 @@ struct App<'a> {
     figures: Figures,
     outcome: Outcome,
     error: Option<anyhow::Error>,
-}
-
-/// Scene time: wall clock while running, frozen while paused; `frame / 30` when scripted.
-struct Clock {
-    time_s: f64,
-    paused: bool,
-    last: Option<Instant>,
-    frame: u64,
-    scripted: bool,
-}
-
-/// Frame times since the title was last refreshed, and over the whole run.
-#[derive(Default)]
-struct Figures {
-    since: Option<Instant>,
-    frames: u32,
-    frame_ms: Vec<f64>,
-    cube_ms: Option<f64>,
-    faces: u32,
 }
 
 pub fn run(
@@ -157,6 +142,12 @@ impl ApplicationHandler for App<'_> {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        // egui sees every event first; one it used (a click on the menu) goes no further.
+        if let Some(v) = &mut self.viewer {
+            if v.menu.on_event(&v.window, &event) {
+                return;
+            }
+        }
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {
@@ -206,12 +197,23 @@ impl App<'_> {
         let presenter = Presenter::create(self.device, surface, self.settings.present)?;
         let renderer = self.new_renderer(self.initial.clone(), self.settings.method)?;
         event_loop.set_control_flow(ControlFlow::Poll);
+        let info = &self.device.info;
+        let methods = Method::listed()
+            .filter(|m| m.missing_features(info).is_none())
+            .collect();
+        let lookups = Lookup::ALL
+            .into_iter()
+            .filter(|&l| lookups::missing_features(l, info).is_none())
+            .collect();
         Ok(Viewer {
+            menu: Menu::new(&window),
             presenter,
             renderer,
             window,
             view,
             size_asked: None,
+            methods,
+            lookups,
         })
     }
 
@@ -245,9 +247,32 @@ impl App<'_> {
                 .render_display_frame(self.clock.frame, t_s, viewer.view)?;
         let size = viewer.window.inner_size();
         let shot = last && self.settings.screenshot;
-        let (shown, screenshot) = viewer
-            .presenter
-            .show([size.width, size.height], &image, shot)?;
+        let status = Status {
+            view: viewer.view,
+            method: viewer.renderer.method,
+            methods: &viewer.methods,
+            lookup: viewer.renderer.scene.mirror.lookup,
+            lookups: &viewer.lookups,
+            refresh: viewer.renderer.scene.refresh,
+            paused: self.clock.paused,
+            frame_ms: self.figures.frame_ms.last().copied(),
+            cube_ms: self.figures.cube_ms,
+            faces: report.faces_rendered,
+            driver: &self.device.info.name,
+        };
+        let mut menu = viewer.menu.frame(&viewer.window, &status);
+        let (shown, screenshot) = viewer.presenter.show(
+            [size.width, size.height],
+            &image,
+            Some(&mut menu.paint),
+            shot,
+        )?;
+        viewer.menu.unapplied(&mut menu.paint);
+        // The menu's choices act from the next frame on, as a key pressed now would.
+        for action in menu.actions {
+            self.act(event_loop, action);
+        }
+        let viewer = self.viewer.as_mut().expect("frame() runs with a viewer");
         if let Shown::Skipped = shown {
             // Minimised or out of date: no frame counted; wait for a resize instead of
             // spinning when there is nothing to present to.
@@ -279,11 +304,13 @@ impl App<'_> {
 
     /// Applies one key's action.
     fn act(&mut self, event_loop: &ActiveEventLoop, action: Action) {
-        if action == Action::NextMethod {
-            if let Err(e) = self.next_method() {
-                self.fail(event_loop, e);
-            }
-            return;
+        let switched = match action {
+            Action::NextMethod => self.next_method(),
+            Action::SetMethod(method) => self.set_method(method).map(|_| ()),
+            _ => Ok(()),
+        };
+        if let Err(e) = switched {
+            self.fail(event_loop, e);
         }
         let Some(viewer) = self.viewer.as_mut() else {
             return;
@@ -312,8 +339,18 @@ impl App<'_> {
                     }
                 }
             }
-            Action::NextMethod => unreachable!("handled above"),
+            Action::NextMethod | Action::SetMethod(_) => {} // above
             Action::NextLookup => next_lookup(&mut viewer.renderer),
+            Action::SetLookup(lookup) => {
+                if viewer.lookups.contains(&lookup) {
+                    scene.mirror.lookup = lookup;
+                    println!("lookup: {lookup}");
+                }
+            }
+            Action::SetRefresh(refresh) => {
+                scene.refresh = refresh;
+                println!("refresh: {refresh:?}");
+            }
             Action::NextRefresh => {
                 scene.refresh = match scene.refresh {
                     RefreshPolicy::OnChange => RefreshPolicy::EveryFrame,
@@ -335,42 +372,50 @@ impl App<'_> {
                     ..self.clock
                 };
             }
-            Action::Help => print!("{}", input::help()),
+            Action::Menu => viewer.menu.open = !viewer.menu.open,
+            Action::Help => viewer.menu.help = !viewer.menu.help,
             Action::Quit => event_loop.exit(),
         }
     }
 
-    /// Switches to the next method the device can run (probed ones are probed first); the
-    /// old renderer is retired through the deletion queue: a frame in flight may still copy
-    /// from its view image.
+    /// Switches to the next method the device can run (probed ones are probed first).
     fn next_method(&mut self) -> Result<()> {
-        let viewer = self.viewer.as_mut().expect("keys act on a viewer");
-        let info = &self.device.info;
+        let current = self
+            .viewer
+            .as_ref()
+            .expect("keys act on a viewer")
+            .renderer
+            .method;
         let all: Vec<Method> = Method::listed().collect();
-        let at = all.iter().position(|&m| m == viewer.renderer.method);
-        let start = at.map_or(0, |i| i + 1);
+        let start = all.iter().position(|&m| m == current).map_or(0, |i| i + 1);
         for k in 0..all.len() {
             let method = all[(start + k) % all.len()];
-            if method == viewer.renderer.method {
+            if method == current || self.set_method(method)? {
                 break;
-            }
-            match crate::probe::usable(method, info) {
-                Ok(()) => {
-                    let scene = viewer.renderer.scene.clone();
-                    let options = RenderOptions {
-                        method,
-                        ..Default::default()
-                    };
-                    let renderer = Renderer::new(self.device, scene, &options)?;
-                    let old = std::mem::replace(&mut viewer.renderer, renderer);
-                    viewer.presenter.ring.defer(old);
-                    println!("method: {method}");
-                    return Ok(());
-                }
-                Err(why) => println!("method {method} skipped: {why}"),
             }
         }
         Ok(())
+    }
+
+    /// Switches to `method` if the device can run it (`false`, with the reason printed, if
+    /// not). The old renderer is retired through the deletion queue: a frame in flight may
+    /// still copy from its view image.
+    fn set_method(&mut self, method: Method) -> Result<bool> {
+        let viewer = self.viewer.as_mut().expect("keys act on a viewer");
+        if let Err(why) = crate::probe::usable(method, &self.device.info) {
+            println!("method {method} skipped: {why}");
+            return Ok(false);
+        }
+        let scene = viewer.renderer.scene.clone();
+        let options = RenderOptions {
+            method,
+            ..Default::default()
+        };
+        let renderer = Renderer::new(self.device, scene, &options)?;
+        let old = std::mem::replace(&mut viewer.renderer, renderer);
+        viewer.presenter.ring.defer(old);
+        println!("method: {method}");
+        Ok(true)
     }
 
     fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
@@ -419,73 +464,7 @@ fn key_name(key: &Key) -> Option<String> {
         Key::Named(NamedKey::ArrowRight) => Some("right".into()),
         Key::Named(NamedKey::ArrowUp) => Some("up".into()),
         Key::Named(NamedKey::ArrowDown) => Some("down".into()),
+        Key::Named(NamedKey::F1) => Some("f1".into()),
         _ => None,
-    }
-}
-
-impl Clock {
-    /// This frame's scene time.
-    fn tick(&mut self) -> f64 {
-        if self.scripted {
-            if !self.paused {
-                self.time_s = self.frame as f64 / SCRIPTED_FPS;
-            }
-            return self.time_s;
-        }
-        let now = Instant::now();
-        if let (false, Some(last)) = (self.paused, self.last) {
-            self.time_s += now.duration_since(last).as_secs_f64();
-        }
-        self.last = Some(now);
-        self.time_s
-    }
-}
-
-impl Figures {
-    fn add(&mut self, frame_ms: f64, cube_ms: Option<f64>, faces: u32) {
-        self.frames += 1;
-        self.frame_ms.push(frame_ms);
-        if cube_ms.is_some() {
-            self.cube_ms = cube_ms;
-        }
-        self.faces = faces;
-    }
-
-    /// The window title with the figures, every `TITLE_EVERY`.
-    fn title(&mut self, renderer: &Renderer, scene: &str) -> Option<String> {
-        let since = *self.since.get_or_insert_with(Instant::now);
-        let elapsed = since.elapsed();
-        if elapsed < TITLE_EVERY {
-            return None;
-        }
-        let fps = f64::from(self.frames) / elapsed.as_secs_f64();
-        self.since = Some(Instant::now());
-        self.frames = 0;
-        let cube = self
-            .cube_ms
-            .map_or("-".to_owned(), |ms| format!("{ms:.1} ms"));
-        Some(format!(
-            "specchio view: {scene} | {}, {}, {:?} | {fps:.1} frames/s, last cube update {cube}, {} faces this frame | {}",
-            renderer.method,
-            renderer.scene.mirror.lookup,
-            renderer.scene.refresh,
-            self.faces,
-            renderer.device.info.name,
-        ))
-    }
-
-    /// Frame-time summary on stdout (for docs/viewer.md's measurements).
-    fn print_summary(&self) {
-        if self.frame_ms.is_empty() {
-            return;
-        }
-        let mut ms = self.frame_ms.clone();
-        let total: f64 = ms.iter().sum();
-        let median = specchio::metrics::percentile::median(&mut ms).unwrap_or(f64::NAN);
-        println!(
-            "frames: {}, median frame {median:.2} ms, mean {:.1} frames/s",
-            ms.len(),
-            1e3 * ms.len() as f64 / total
-        );
     }
 }

@@ -4,7 +4,8 @@
 use anyhow::{bail, Result};
 use glam::Vec3;
 use specchio::render::display::DisplayView;
-use specchio::scene::Scene;
+use specchio::render::methods::Method;
+use specchio::scene::{Lookup, RefreshPolicy, Scene};
 
 /// How far one key press moves the observer or the sphere (metres). A multiple of a power of
 /// two, so scripted moves land on positions a scene file states exactly (4.5 - 0.25 = 4.25).
@@ -42,7 +43,14 @@ pub enum Action {
     NextMethod,
     NextLookup,
     NextRefresh,
+    /// A choice made in the menu (the keys cycle; the menu picks one).
+    SetMethod(Method),
+    SetLookup(Lookup),
+    SetRefresh(RefreshPolicy),
     Reset,
+    /// Open or close the menu (F1).
+    Menu,
+    /// Open or close the help window.
     Help,
     Quit,
 }
@@ -91,7 +99,8 @@ pub const KEYS: &[(&str, Action, &str)] = &[
     ("x", Action::NextLookup, "next mirror lookup"),
     ("e", Action::NextRefresh, "next refresh policy"),
     ("0", Action::Reset, "reset poses, time and settings"),
-    ("h", Action::Help, "print this help"),
+    ("f1", Action::Menu, "open / close the menu"),
+    ("h", Action::Help, "open / close this list in the window"),
     ("q", Action::Quit, "quit (also Escape)"),
     ("escape", Action::Quit, "quit"),
 ];

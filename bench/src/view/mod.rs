@@ -7,7 +7,10 @@
 //! readback); `present.rs` blits it into the swapchain image. `app.rs` is the event loop.
 
 mod app;
+mod clock;
 pub mod input;
+mod menu;
+mod overlay;
 mod present;
 
 use std::path::PathBuf;

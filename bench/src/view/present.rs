@@ -18,6 +18,8 @@ use specchio::vk::memory::{Buffer, BufferDesc};
 use specchio::vk::surface::Surface;
 use specchio::vk::swapchain::{Acquired, PresentPreference, Swapchain, SwapchainDesc};
 
+use super::overlay::{Overlay, Paint};
+
 /// What became of one frame.
 pub enum Shown {
     Presented,
@@ -37,6 +39,9 @@ pub struct Screenshot {
 /// and releases what it deferred), then the swapchain, the surface, the device.
 pub struct Presenter {
     pub ring: FrameRing,
+    /// The menu's egui renderer, for the swapchain's format; `None` while there is no
+    /// swapchain or its images cannot be drawn into (the menu is then not shown).
+    overlay: Option<Overlay>,
     swapchain: Option<Swapchain>,
     /// The swapchain no longer matches the window: recreate before the next frame.
     stale: bool,
@@ -54,6 +59,7 @@ impl Presenter {
         surface.check_present(device)?;
         Ok(Self {
             ring: FrameRing::create(device, FRAMES_IN_FLIGHT)?,
+            overlay: None,
             swapchain: None,
             stale: true,
             surface: Arc::new(surface),
@@ -74,6 +80,7 @@ impl Presenter {
         &mut self,
         window_size: [u32; 2],
         source: &DisplayImage,
+        mut paint: Option<&mut Paint>,
         screenshot: bool,
     ) -> Result<(Shown, Option<Screenshot>)> {
         if self.stale && !self.recreate(window_size)? {
@@ -84,6 +91,11 @@ impl Presenter {
         };
         if screenshot && !swapchain.readable {
             bail!("--screenshot: this window's swapchain images cannot be read back");
+        }
+        // Textures first: an upload waits for the queue, so it goes before this frame's
+        // submission rather than inside its recording.
+        if let (Some(p), Some(overlay)) = (paint.as_deref_mut(), &mut self.overlay) {
+            overlay.update_textures(&mut self.ring, &mut p.textures)?;
         }
         let (extent, format) = (swapchain.extent, swapchain.format.format);
         let slot_semaphore = self.ring.begin()?.image_available;
@@ -106,9 +118,26 @@ impl Presenter {
                 Buffer::create(&self.device, &BufferDesc::new_readback(bytes), "screenshot")
             })
             .transpose()?;
-        record_blit(&self.device, cmd, source, target, extent, readback.as_ref());
+        record_blit(&self.device, cmd, source, target, extent);
+        let mut last = (
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::PipelineStageFlags2::BLIT,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        );
+        let paint = paint.filter(|p| !p.primitives.is_empty());
+        if let (Some(paint), Some(overlay)) = (paint, &self.overlay) {
+            let view = swapchain.views[index as usize];
+            overlay.record(cmd, target, view, extent, paint)?;
+            last = (
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+            );
+        }
+        record_finish(&self.device, cmd, target, extent, last, readback.as_ref());
         let drawn = swapchain.render_done[index as usize];
-        // The blit (and the clear before it) write the image: they wait for its acquisition.
+        // The blit (and the clear before it) write the image first: they wait for its
+        // acquisition; the menu pass after them is ordered by barriers.
         let wait_stage = vk::PipelineStageFlags2::BLIT | vk::PipelineStageFlags2::CLEAR;
         self.ring.submit((slot_semaphore, wait_stage), drawn)?;
         self.stale |= swapchain.present(index)?;
@@ -141,33 +170,49 @@ impl Presenter {
                 s.extent.width, s.extent.height, s.format.format, s.present_mode
             );
         }
+        self.replace_overlay(new.as_ref())?;
         self.swapchain = new;
         self.stale = self.swapchain.is_none();
         Ok(self.swapchain.is_some())
     }
 }
 
+impl Presenter {
+    /// Keeps the menu renderer when the new swapchain has the same format; otherwise makes
+    /// one for the new format and retires the old one through the deletion queue (a frame
+    /// in flight may still draw with its pipeline and buffers).
+    fn replace_overlay(&mut self, swapchain: Option<&Swapchain>) -> Result<()> {
+        let wanted = swapchain
+            .filter(|s| !s.views.is_empty())
+            .map(|s| (s.format.format, s.is_srgb()));
+        if self.overlay.as_ref().map(Overlay::format) == wanted.map(|w| w.0) {
+            return Ok(());
+        }
+        let new = match wanted {
+            Some((format, srgb)) => Some(Overlay::create(&self.device, format, srgb)?),
+            None => None,
+        };
+        if let Some(old) = std::mem::replace(&mut self.overlay, new) {
+            self.ring.defer(old);
+        }
+        Ok(())
+    }
+}
+
 /// Records: source COPY -> BLIT; target UNDEFINED -> TRANSFER_DST; a clear where the blit
 /// leaves bars; the blit; source BLIT -> COPY (for the renderer's next frame, see
-/// `DisplayImage`); target -> PRESENT_SRC, or via TRANSFER_SRC and a copy into `readback`.
+/// `DisplayImage`). The target is left in TRANSFER_DST, written at BLIT (and CLEAR).
 fn record_blit(
     device: &Device,
     cmd: vk::CommandBuffer,
     source: &DisplayImage,
     target: vk::Image,
     extent: vk::Extent2D,
-    readback: Option<&Buffer>,
 ) {
     use vk::AccessFlags2 as A;
     use vk::ImageLayout as L;
     use vk::PipelineStageFlags2 as S;
-    let whole = vk::ImageSubresourceRange {
-        aspect_mask: vk::ImageAspectFlags::COLOR,
-        base_mip_level: 0,
-        level_count: 1,
-        base_array_layer: 0,
-        layer_count: 1,
-    };
+    let whole = COLOR_RANGE;
     let src_layout = L::TRANSFER_SRC_OPTIMAL;
     let dst = |from: (L, S, A), to: (L, S, A)| ImageBarrier {
         image: target,
@@ -211,12 +256,7 @@ fn record_blit(
             )],
         );
     }
-    let layers = vk::ImageSubresourceLayers {
-        aspect_mask: vk::ImageAspectFlags::COLOR,
-        mip_level: 0,
-        base_array_layer: 0,
-        layer_count: 1,
-    };
+    let layers = COLOR_LAYER;
     let corner = |x: u32, y: u32| vk::Offset3D {
         x: x as i32,
         y: y as i32,
@@ -253,22 +293,44 @@ fn record_blit(
             filter,
         )
     };
-    let blit_written = (L::TRANSFER_DST_OPTIMAL, S::BLIT, A::TRANSFER_WRITE);
-    let present = (L::PRESENT_SRC_KHR, S::NONE, A::NONE);
+    // The view image is free for the renderer's next frame (see `DisplayImage`).
     let source_done = ImageBarrier {
         image: source.image,
         range: source.range,
         from: (src_layout, S::BLIT, A::NONE),
         to: (src_layout, S::COPY, A::NONE),
     };
+    image_barriers(device, cmd, &[source_done]);
+}
+
+/// Records the end of a frame: `target` from `last` (the blit's or the menu's writes) to
+/// PRESENT_SRC, or via TRANSFER_SRC and a copy into `readback` (the screenshot).
+fn record_finish(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    target: vk::Image,
+    extent: vk::Extent2D,
+    last: (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2),
+    readback: Option<&Buffer>,
+) {
+    use vk::AccessFlags2 as A;
+    use vk::ImageLayout as L;
+    use vk::PipelineStageFlags2 as S;
+    let dst = |from, to| ImageBarrier {
+        image: target,
+        range: COLOR_RANGE,
+        from,
+        to,
+    };
+    let present = (L::PRESENT_SRC_KHR, S::NONE, A::NONE);
     let Some(buffer) = readback else {
-        image_barriers(device, cmd, &[source_done, dst(blit_written, present)]);
+        image_barriers(device, cmd, &[dst(last, present)]);
         return;
     };
     let readable = (L::TRANSFER_SRC_OPTIMAL, S::COPY, A::TRANSFER_READ);
-    image_barriers(device, cmd, &[source_done, dst(blit_written, readable)]);
+    image_barriers(device, cmd, &[dst(last, readable)]);
     let copy = vk::BufferImageCopy::default()
-        .image_subresource(layers)
+        .image_subresource(COLOR_LAYER)
         .image_extent(vk::Extent3D {
             width: extent.width,
             height: extent.height,
@@ -276,11 +338,32 @@ fn record_blit(
         });
     // SAFETY: the image is in TRANSFER_SRC layout; the buffer holds width x height x 4 bytes.
     unsafe {
-        d.cmd_copy_image_to_buffer(cmd, target, L::TRANSFER_SRC_OPTIMAL, buffer.raw, &[copy])
+        device.raw.cmd_copy_image_to_buffer(
+            cmd,
+            target,
+            L::TRANSFER_SRC_OPTIMAL,
+            buffer.raw,
+            &[copy],
+        )
     };
     specchio::vk::commands::host_read_barrier(device, cmd, S::COPY, A::TRANSFER_WRITE);
     image_barriers(device, cmd, &[dst(readable, present)]);
 }
+
+/// The one colour subresource of a swapchain image.
+const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
+    aspect_mask: vk::ImageAspectFlags::COLOR,
+    base_mip_level: 0,
+    level_count: 1,
+    base_array_layer: 0,
+    layer_count: 1,
+};
+const COLOR_LAYER: vk::ImageSubresourceLayers = vk::ImageSubresourceLayers {
+    aspect_mask: vk::ImageAspectFlags::COLOR,
+    mip_level: 0,
+    base_array_layer: 0,
+    layer_count: 1,
+};
 
 /// Where a `w` x `h` image goes in `extent`: [x, y, width, height], as large as fits with its
 /// aspect ratio kept, centred; and whether it covers the whole extent.

@@ -50,6 +50,9 @@ pub struct Swapchain {
     pub present_mode: vk::PresentModeKHR,
     /// Whether the images allow `TRANSFER_SRC` (the viewer's `--screenshot` copies one).
     pub readable: bool,
+    /// One colour view per image where the images allow `COLOR_ATTACHMENT` (the viewer's menu
+    /// is drawn into them); empty otherwise.
+    pub views: Vec<vk::ImageView>,
     loader: ash::khr::swapchain::Device,
     /// Held so that the surface outlives its swapchain.
     _surface: Arc<Surface>,
@@ -93,9 +96,15 @@ impl Swapchain {
         let readable = caps
             .supported_usage_flags
             .contains(vk::ImageUsageFlags::TRANSFER_SRC);
+        let drawable = caps
+            .supported_usage_flags
+            .contains(vk::ImageUsageFlags::COLOR_ATTACHMENT);
         let mut usage = vk::ImageUsageFlags::TRANSFER_DST;
         if readable {
             usage |= vk::ImageUsageFlags::TRANSFER_SRC;
+        }
+        if drawable {
+            usage |= vk::ImageUsageFlags::COLOR_ATTACHMENT;
         }
         // One more than the minimum, so acquiring never waits for the presentation engine to
         // release an image while we could be drawing (0 means no maximum).
@@ -137,6 +146,7 @@ impl Swapchain {
             extent,
             present_mode,
             readable,
+            views: Vec::new(),
             loader,
             _surface: Arc::clone(surface),
             device: Arc::clone(device),
@@ -155,6 +165,10 @@ impl Swapchain {
             swapchain.render_done.push(s);
             device.set_name(s, &format!("swapchain image {i} drawn"));
             device.set_name(swapchain.images[i], &format!("swapchain image {i}"));
+            if drawable {
+                let view = color_view(device, swapchain.images[i], format.format)?;
+                swapchain.views.push(view);
+            }
         }
         Ok(Some(swapchain))
     }
@@ -213,9 +227,34 @@ impl Drop for Swapchain {
             for &s in &self.render_done {
                 self.device.raw.destroy_semaphore(s, None);
             }
+            for &v in &self.views {
+                self.device.raw.destroy_image_view(v, None);
+            }
             self.loader.destroy_swapchain(self.raw, None);
         }
     }
+}
+
+/// A 2D colour view of a swapchain image, for rendering into it.
+fn color_view(
+    device: &Device,
+    image: vk::Image,
+    format: vk::Format,
+) -> Result<vk::ImageView, GpuError> {
+    let info = vk::ImageViewCreateInfo::default()
+        .image(image)
+        .view_type(vk::ImageViewType::TYPE_2D)
+        .format(format)
+        .subresource_range(vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: 1,
+        });
+    // SAFETY: the image belongs to a live swapchain of this device; the view is destroyed
+    // with the swapchain.
+    unsafe { device.raw.create_image_view(&info, None) }.vk("vkCreateImageView")
 }
 
 /// The surface's fixed extent, or the window's size clamped to its limits; `None` for a
