@@ -305,7 +305,7 @@ fn github_format_and_bad_options() {
         (&["no/such/scene.toml"][..], "no/such/scene.toml", 1),
         (
             &["--rungs", "box,sphere"][..],
-            "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, distance-8, distance-16, distance-32, ray-query",
+            "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, distance-8, distance-16, distance-32, distance-exact, ray-query",
             2,
         ),
         (
@@ -472,7 +472,8 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
     }
     let json = temp("swiftshader.json");
     let csv = temp("swiftshader.csv");
-    // With the trade-off's rungs (their cost only): ray-query cannot run there.
+    // With the trade-off's rungs (their cost only): distance-exact and ray-query cannot run
+    // there.
     let out = specchio(&[
         "bench",
         "--quick",
@@ -491,11 +492,14 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
     assert_ok(&out);
     let record = read_json(&json);
     let not_run = &record["rungs_not_run"];
-    assert_eq!(not_run.as_array().unwrap().len(), 1, "{not_run}");
-    assert_eq!(not_run[0]["rung"], "ray-query");
-    assert!(not_run[0]["reason"].as_str().unwrap().contains("ray"));
+    assert_eq!(not_run.as_array().unwrap().len(), 2, "{not_run}");
+    assert_eq!(not_run[0]["rung"], "distance-exact");
+    assert_eq!(not_run[1]["rung"], "ray-query");
+    for n in not_run.as_array().unwrap() {
+        assert!(n["reason"].as_str().unwrap().contains("ray"), "{n}");
+    }
     let rungs = record["tradeoff"].as_array().expect("tradeoff");
-    // Two scenes, every rung but ray-query.
+    // Two scenes, every rung but distance-exact and ray-query.
     assert_eq!(rungs.len(), 2 * 5);
     for t in rungs {
         assert_eq!(t["work"]["faces_rendered"], 30);

@@ -2,12 +2,13 @@
 //! the plot.
 
 /// The ladder, in its order.
-const RUNGS: [&str; 6] = [
+const RUNGS: [&str; 7] = [
     "plain",
     "box",
     "distance-8",
     "distance-16",
     "distance-32",
+    "distance-exact",
     "ray-query",
 ];
 

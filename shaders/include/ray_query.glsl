@@ -11,13 +11,24 @@
 #include "shared.glsl"
 #include "mirror.glsl"
 
-// Set 1 of the ray-query lookup (engine/src/render/lookups/ray_query.rs).
-layout(set = 1, binding = 0) uniform accelerationStructureEXT scene_tlas;
+// Set 1 of the lookups that trace (engine/src/render/lookups/tracing.rs), four consecutive
+// bindings from RAY_QUERY_BINDING: 0 for ray-query; a lookup that also reads the cube map
+// defines it higher before including this file.
+#ifndef RAY_QUERY_BINDING
+#define RAY_QUERY_BINDING 0
+#endif
+layout(set = 1, binding = RAY_QUERY_BINDING) uniform accelerationStructureEXT scene_tlas;
 // The scene's vertex buffer as floats: position xyz, normal xyz, uv (8 per vertex, gpu::Vertex).
-layout(set = 1, binding = 1, std430) readonly buffer VertexBlock { float vertex_data[]; };
-layout(set = 1, binding = 2, std430) readonly buffer IndexBlock { uint index_data[]; };
+layout(set = 1, binding = RAY_QUERY_BINDING + 1, std430) readonly buffer VertexBlock {
+    float vertex_data[];
+};
+layout(set = 1, binding = RAY_QUERY_BINDING + 2, std430) readonly buffer IndexBlock {
+    uint index_data[];
+};
 // Per drawable (the instance's custom index): x first index, y vertex offset.
-layout(set = 1, binding = 3, std430) readonly buffer RangeBlock { uvec4 ranges[]; };
+layout(set = 1, binding = RAY_QUERY_BINDING + 3, std430) readonly buffer RangeBlock {
+    uvec4 ranges[];
+};
 
 #define VERTEX_FLOATS 8u
 

@@ -36,6 +36,7 @@ struct FrameData {
 #define LOOKUP_BOX 1u   // from the cube's centre to where the reflected ray leaves the room box
 #define LOOKUP_RAY_QUERY 2u // no cube: the reflected ray is traced (mirror_ray_query*.frag)
 #define LOOKUP_DISTANCE 3u  // the reflected ray searched through the cube's depth (mirror_distance*.frag)
+#define LOOKUP_DISTANCE_EXACT 4u // that search, the rays it cannot resolve traced (mirror_distance_exact*.frag)
 
 // One camera: a cube face or a view. dir(ndc) = ray_forward + ndc.x*ray_right + ndc.y*ray_down.
 struct ViewData {

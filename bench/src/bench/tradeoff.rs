@@ -68,6 +68,12 @@ pub static LADDER: &[Rung] = &[
         lookup: Lookup::Distance,
         configure: |s| s.mirror.distance_steps = 32,
     },
+    // The disocclusion fix: the 16-step search, with the rays it cannot resolve traced.
+    Rung {
+        label: "distance-exact",
+        lookup: Lookup::DistanceExact,
+        configure: |s| s.mirror.distance_steps = 16,
+    },
     Rung {
         label: "ray-query",
         lookup: Lookup::RayQuery,
@@ -272,7 +278,7 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
 /// The trade-off table's header.
 pub fn table_header() -> String {
     format!(
-        "  {:<12} {:>9} {:>8} {:>9} {:>11} {:>11} {:>13} {:>13} {:>5}",
+        "  {:<14} {:>9} {:>8} {:>9} {:>11} {:>11} {:>13} {:>13} {:>5}",
         "rung",
         "frame ms",
         "cube ms",
@@ -298,7 +304,7 @@ pub fn table_row(r: &RungRow) -> String {
             .map_or("n/a".into(), |v| format!("{:.3}", v.angular.p99_deg))
     };
     format!(
-        "  {:<12} {:>9} {:>8} {:>9} {:>11} {:>11} {:>13} {:>13} {:>5}",
+        "  {:<14} {:>9} {:>8} {:>9} {:>11} {:>11} {:>13} {:>13} {:>5}",
         r.rung,
         ms(r.frame_cost_ms),
         ms(r.gpu_cube_ms),

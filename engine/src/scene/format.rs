@@ -87,6 +87,7 @@ pub enum LookupSpec {
     Box,
     RayQuery,
     Distance,
+    DistanceExact,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -132,16 +132,22 @@ pub enum Lookup {
     /// texel's distance from the cube's centre) and the colour is looked up where it meets
     /// it (Szirmay-Kalos et al. 2005). Exact for surfaces the cube's centre sees.
     Distance,
+    /// Distance-searched, with the exact ray for the rays the search cannot resolve: where
+    /// it crossed a jump in the stored distance that was not a hit (the ray passed behind an
+    /// occluder, as seen from the cube's centre) or found nothing, the reflected ray is traced
+    /// (ray queries). Exact wherever it falls back; `distance` elsewhere.
+    DistanceExact,
 }
 
 impl Lookup {
     /// Every lookup, in the order the CLI, `specchio info` and the docs list them. What each
     /// needs and does lives in its plug-in (`render::lookups`); the scene only names it.
-    pub const ALL: [Lookup; 4] = [
+    pub const ALL: [Lookup; 5] = [
         Lookup::Plain,
         Lookup::Box,
         Lookup::RayQuery,
         Lookup::Distance,
+        Lookup::DistanceExact,
     ];
 
     /// The name in scene files, on the command line and in every report (kebab-case).
@@ -151,6 +157,7 @@ impl Lookup {
             Lookup::Box => "box",
             Lookup::RayQuery => "ray-query",
             Lookup::Distance => "distance",
+            Lookup::DistanceExact => "distance-exact",
         }
     }
 

@@ -9,6 +9,8 @@
 //! `shaders/include/distance_search.glsl`; set 1 holds the colour cube (binding 0, filtered
 //! as for `box`) and the depth's six layers (binding 1, read with `texelFetch`).
 
+use std::sync::Arc;
+
 use ash::vk;
 
 use super::{LookupContext, LookupPass, MirrorLookup};
@@ -16,6 +18,7 @@ use crate::render::gpu::LOOKUP_DISTANCE;
 use crate::render::targets::{DIRECTION_FORMAT, VIEW_FORMAT};
 use crate::scene::Lookup;
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
+use crate::vk::device::Device;
 use crate::vk::image::Sampler;
 use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
@@ -43,42 +46,12 @@ impl MirrorLookup for Distance {
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
         let device = ctx.device;
         let res = ctx.resources;
-        let stage = vk::ShaderStageFlags::FRAGMENT;
-        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-        let set_layout = DescriptorSetLayout::create(
-            device,
-            &[
-                descriptors::binding(0, sampled, 1, stage),
-                descriptors::binding(1, sampled, 1, stage),
-            ],
-            "distance set layout",
-        )?;
-        let pool = DescriptorPool::create(
-            device,
-            1,
-            &[vk::DescriptorPoolSize {
-                ty: sampled,
-                descriptor_count: 2,
-            }],
-            "distance descriptors",
-        )?;
+        let set_layout =
+            DescriptorSetLayout::create(device, &cube_bindings(), "distance set layout")?;
+        let pool = DescriptorPool::create(device, 1, &[cube_pool_size()], "distance descriptors")?;
         let set = pool.allocate(&set_layout, "distance set")?;
-        // texelFetch ignores the sampler's filter; a combined sampler is still needed, and
-        // nearest makes the intent plain.
-        let nearest = Sampler::create(
-            device,
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::NEAREST)
-                .min_filter(vk::Filter::NEAREST)
-                .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
-            "cube depth sampler",
-        )?;
-        let cube = ctx.cube;
-        descriptors::write_images(device, set, 0, &[(cube.cube_view.raw, cube.sampler.raw)]);
-        descriptors::write_images(device, set, 1, &[(cube.depth_layers_view.raw, nearest.raw)]);
+        let nearest = depth_sampler(device)?;
+        write_cube(ctx, set, &nearest);
         let layout = PipelineLayout::create(
             device,
             &[res.scene_set_layout.raw, set_layout.raw],
@@ -109,6 +82,49 @@ impl MirrorLookup for Distance {
             _nearest: nearest,
         }))
     }
+}
+
+/// Bindings 0 and 1 of set 1 of the lookups that search the cube's depth (distance and
+/// distance-exact): the colour cube and its depth's six layers.
+pub(super) fn cube_bindings() -> [vk::DescriptorSetLayoutBinding<'static>; 2] {
+    let stage = vk::ShaderStageFlags::FRAGMENT;
+    let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+    [
+        descriptors::binding(0, sampled, 1, stage),
+        descriptors::binding(1, sampled, 1, stage),
+    ]
+}
+
+/// What a pool needs for [`cube_bindings`].
+pub(super) fn cube_pool_size() -> vk::DescriptorPoolSize {
+    vk::DescriptorPoolSize {
+        ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+        descriptor_count: 2,
+    }
+}
+
+/// The depth's sampler. texelFetch ignores the sampler's filter; a combined sampler is still
+/// needed, and nearest makes the intent plain.
+pub(super) fn depth_sampler(device: &Arc<Device>) -> Result<Sampler, GpuError> {
+    Sampler::create(
+        device,
+        &vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::NEAREST)
+            .min_filter(vk::Filter::NEAREST)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
+        "cube depth sampler",
+    )
+}
+
+/// Points [`cube_bindings`] of `set` at the cube's colour (filtered as for `box`) and depth.
+pub(super) fn write_cube(ctx: &LookupContext<'_>, set: vk::DescriptorSet, nearest: &Sampler) {
+    let cube = ctx.cube;
+    let device = ctx.device;
+    descriptors::write_images(device, set, 0, &[(cube.cube_view.raw, cube.sampler.raw)]);
+    descriptors::write_images(device, set, 1, &[(cube.depth_layers_view.raw, nearest.raw)]);
 }
 
 /// The distance lookup's pipelines and set. Field order is drop order.

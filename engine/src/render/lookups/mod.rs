@@ -11,7 +11,9 @@
 
 mod cube;
 mod distance;
+mod distance_exact;
 mod ray_query;
+mod tracing;
 
 use std::sync::Arc;
 
@@ -32,6 +34,7 @@ static REGISTRY: &[&dyn MirrorLookup] = &[
     &cube::BOX,
     &ray_query::RayQuery,
     &distance::Distance,
+    &distance_exact::DistanceExact,
 ];
 
 /// One mirror lookup: what it is, what it needs, and how it makes its per-renderer pass.

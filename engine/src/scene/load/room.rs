@@ -98,6 +98,7 @@ impl Ctx<'_> {
                 Some(LookupSpec::Box) => Lookup::Box,
                 Some(LookupSpec::RayQuery) => Lookup::RayQuery,
                 Some(LookupSpec::Distance) => Lookup::Distance,
+                Some(LookupSpec::DistanceExact) => Lookup::DistanceExact,
             },
             // Accepted whatever the lookup: `--lookup distance` may pick it for any scene.
             distance_steps: self.count(

@@ -1,0 +1,164 @@
+//! The `distance-exact` lookup: the distance search (`distance`), and for the rays it cannot
+//! resolve, the exact ray traced with a ray query through the scene (`ray-query`'s
+//! acceleration structures, [`super::tracing`]).
+//!
+//! Unresolved means: before meeting the stored surface, the search crossed a jump in the
+//! stored distance that was no hit, or it met nothing. A jump is where the ray passes behind
+//! an occluder as seen from the cube's centre; behind it lies what the centre never saw, the
+//! only place a surface the cube did not store can be met (the disocclusion `distance` gets
+//! wrong). A ray crossing no jump moves through space the centre sees all of, so the first
+//! surface the search meets is the one the ray meets, up to the steps' resolution. The test
+//! is conservative: a ray that passes behind an occluder and meets nothing hidden is traced
+//! too, which costs time, not accuracy.
+//!
+//! Set 1: the colour cube and its depth at bindings 0 and 1, as `distance`; the traced scene
+//! at 2..=5 (`shaders/mirror_distance_exact*.frag.glsl`).
+
+use ash::vk;
+
+use super::distance::{cube_bindings, cube_pool_size, depth_sampler, write_cube};
+use super::tracing::SceneTrace;
+use super::{LookupContext, LookupNeeds, LookupPass, MirrorLookup};
+use crate::render::gpu::{ObjectData, LOOKUP_DISTANCE_EXACT};
+use crate::render::targets::{DIRECTION_FORMAT, VIEW_FORMAT};
+use crate::scene::Lookup;
+use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
+use crate::vk::device::OptionalFeatures;
+use crate::vk::image::Sampler;
+use crate::vk::pipeline::{Pipeline, PipelineLayout};
+use crate::vk::GpuError;
+
+/// Where the traced scene's bindings start (`RAY_QUERY_BINDING` in the shaders).
+const TRACE_BINDING: u32 = 2;
+
+pub struct DistanceExact;
+
+impl MirrorLookup for DistanceExact {
+    fn lookup(&self) -> Lookup {
+        Lookup::DistanceExact
+    }
+
+    fn summary(&self) -> &'static str {
+        "the distance search, with the rays it cannot resolve (behind an occluder as the \
+         cube's centre sees it) traced exactly (VK_KHR_ray_query)"
+    }
+
+    fn needs(&self) -> LookupNeeds {
+        LookupNeeds {
+            features: OptionalFeatures {
+                ray_query: true,
+                ..Default::default()
+            },
+        }
+    }
+
+    fn uses_cube(&self) -> bool {
+        true
+    }
+
+    fn flag(&self) -> u32 {
+        LOOKUP_DISTANCE_EXACT
+    }
+
+    fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
+        if !ctx.device.enabled.ray_query {
+            return Err(GpuError::Unsupported(
+                "lookup distance-exact: the device was created without ray queries".into(),
+            ));
+        }
+        Ok(Box::new(DistanceExactPass::create(ctx)?))
+    }
+}
+
+/// The distance-exact lookup's per-renderer state. Field order is drop order.
+struct DistanceExactPass {
+    colour: Pipeline,
+    directions: Pipeline,
+    layout: PipelineLayout,
+    _pool: DescriptorPool,
+    set: vk::DescriptorSet,
+    _set_layout: DescriptorSetLayout,
+    _nearest: Sampler,
+    trace: SceneTrace,
+}
+
+impl DistanceExactPass {
+    fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
+        let device = ctx.device;
+        let res = ctx.resources;
+        let trace = SceneTrace::create(ctx)?;
+        let bindings: Vec<_> = cube_bindings()
+            .into_iter()
+            .chain(SceneTrace::bindings(TRACE_BINDING))
+            .collect();
+        let set_layout =
+            DescriptorSetLayout::create(device, &bindings, "distance-exact set layout")?;
+        let [structures, storage] = SceneTrace::pool_sizes();
+        let pool = DescriptorPool::create(
+            device,
+            1,
+            &[cube_pool_size(), structures, storage],
+            "distance-exact descriptors",
+        )?;
+        let set = pool.allocate(&set_layout, "distance-exact set")?;
+        let nearest = depth_sampler(device)?;
+        write_cube(ctx, set, &nearest);
+        trace.write(ctx, set, TRACE_BINDING);
+        let layout = PipelineLayout::create(
+            device,
+            &[res.scene_set_layout.raw, set_layout.raw],
+            ctx.push_size,
+            "distance-exact mirror layout",
+        )?;
+        let colour = crate::render::pipelines::mirror_pipeline(
+            device,
+            &layout,
+            crate::shaders::MIRROR_DISTANCE_EXACT_FRAG,
+            VIEW_FORMAT,
+            "distance-exact mirror pipeline",
+        )?;
+        let directions = crate::render::pipelines::mirror_pipeline(
+            device,
+            &layout,
+            crate::shaders::MIRROR_DISTANCE_EXACT_DIRECTION_FRAG,
+            DIRECTION_FORMAT,
+            "distance-exact mirror direction pipeline",
+        )?;
+        Ok(Self {
+            colour,
+            directions,
+            layout,
+            _pool: pool,
+            set,
+            _set_layout: set_layout,
+            _nearest: nearest,
+            trace,
+        })
+    }
+}
+
+impl LookupPass for DistanceExactPass {
+    fn pipeline(&self, directions: bool) -> &Pipeline {
+        if directions {
+            &self.directions
+        } else {
+            &self.colour
+        }
+    }
+
+    fn layout(&self) -> &PipelineLayout {
+        &self.layout
+    }
+
+    fn set(&self) -> vk::DescriptorSet {
+        self.set
+    }
+
+    fn prepare(&mut self, objects: &[ObjectData]) -> Result<(), GpuError> {
+        self.trace.prepare(objects)
+    }
+
+    fn record(&self, cmd: vk::CommandBuffer) {
+        self.trace.record(cmd);
+    }
+}

@@ -1,0 +1,203 @@
+//! The scene as ray queries see it, shared by the lookups that trace (`ray-query` for every
+//! mirror pixel, `distance-exact` for the rays its search cannot resolve): one bottom-level
+//! acceleration structure per mesh, built once on the device, and a top-level one over every
+//! drawable (walls and objects), plus the drawables' index ranges the shader needs to fetch a
+//! hit triangle's attributes. Its four descriptors (`shaders/include/ray_query.glsl`) sit at
+//! consecutive bindings from a first one the lookup chooses.
+//!
+//! The top-level structure is rebuilt every frame from the drawables' transforms at time t,
+//! not refit: it holds one instance per drawable (tens), which a rebuild handles in well under
+//! a millisecond, and a rebuild's quality does not decay as objects move far from where the
+//! structure was first built (a refit only stretches the old boxes).
+
+use std::collections::HashMap;
+
+use ash::vk;
+use glam::UVec4;
+
+use super::LookupContext;
+use crate::render::gpu::{ObjectData, Vertex};
+use crate::vk::acceleration::{self, AccelerationStructure, TopLevel, TriangleMesh};
+use crate::vk::descriptors;
+use crate::vk::device::Device;
+use crate::vk::memory::{Buffer, BufferDesc};
+use crate::vk::GpuError;
+
+/// The acceleration structures and the drawables' ranges. Field order is drop order.
+pub struct SceneTrace {
+    ranges: Buffer,
+    top: TopLevel,
+    /// Index into `bottom` of each drawable's mesh.
+    mesh_of: Vec<usize>,
+    bottom: Vec<AccelerationStructure>,
+}
+
+impl SceneTrace {
+    /// Builds the bottom-level structures (waiting for the device) and an empty top level.
+    pub fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
+        let device = ctx.device;
+        let res = ctx.resources;
+        let (meshes, mesh_of) = unique_meshes(ctx);
+        let bottom = acceleration::build_bottom_levels(device, ctx.submitter, &meshes)?;
+        let top = TopLevel::create(device, res.drawables.len() as u32, "scene TLAS")?;
+        // Where each drawable's triangles start: the shader fetches their attributes.
+        let ranges: Vec<UVec4> = res
+            .drawables
+            .iter()
+            .map(|d| UVec4::new(d.first_index, d.vertex_offset as u32, 0, 0))
+            .collect();
+        let mut range_buffer = Buffer::create(
+            device,
+            &BufferDesc::new_cpu_to_gpu(
+                std::mem::size_of_val(ranges.as_slice()) as u64,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            ),
+            "traced drawable ranges",
+        )?;
+        range_buffer.write(&ranges)?;
+        Ok(Self {
+            ranges: range_buffer,
+            top,
+            mesh_of,
+            bottom,
+        })
+    }
+
+    /// The set-layout bindings `ray_query.glsl` reads, from binding `first` on: the top-level
+    /// structure, then the vertex, index and range buffers.
+    pub fn bindings(first: u32) -> [vk::DescriptorSetLayoutBinding<'static>; 4] {
+        let stage = vk::ShaderStageFlags::FRAGMENT;
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        [
+            descriptors::binding(
+                first,
+                vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
+                1,
+                stage,
+            ),
+            descriptors::binding(first + 1, storage, 1, stage),
+            descriptors::binding(first + 2, storage, 1, stage),
+            descriptors::binding(first + 3, storage, 1, stage),
+        ]
+    }
+
+    /// What a pool needs for one set holding [`SceneTrace::bindings`].
+    pub fn pool_sizes() -> [vk::DescriptorPoolSize; 2] {
+        [
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
+                descriptor_count: 1,
+            },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_BUFFER,
+                descriptor_count: 3,
+            },
+        ]
+    }
+
+    /// Points [`SceneTrace::bindings`] of `set`, from `first`, at this scene.
+    pub fn write(&self, ctx: &LookupContext<'_>, set: vk::DescriptorSet, first: u32) {
+        let res = ctx.resources;
+        write_structure(ctx.device, set, first, &self.top.structure);
+        let buffers = [&res.vertices, &res.indices, &self.ranges];
+        for (binding, buffer) in (first + 1..).zip(buffers) {
+            descriptors::write_buffer(
+                ctx.device,
+                set,
+                binding,
+                vk::DescriptorType::STORAGE_BUFFER,
+                buffer.raw,
+            );
+        }
+    }
+
+    /// This frame's instances (the drawables at time t, walls first).
+    pub fn prepare(&mut self, objects: &[ObjectData]) -> Result<(), GpuError> {
+        let records: Vec<vk::AccelerationStructureInstanceKHR> = objects
+            .iter()
+            .enumerate()
+            .map(|(i, o)| instance(i, o, self.bottom[self.mesh_of[i]].address))
+            .collect();
+        self.top.write_instances(&records)
+    }
+
+    /// Records the top level's rebuild.
+    pub fn record(&self, cmd: vk::CommandBuffer) {
+        self.top.record_build(cmd);
+    }
+}
+
+/// One triangle mesh per distinct range of the index buffer (objects sharing a mesh share
+/// its bottom-level structure), and which of them each drawable uses.
+fn unique_meshes(ctx: &LookupContext<'_>) -> (Vec<TriangleMesh>, Vec<usize>) {
+    let res = ctx.resources;
+    let vertex_address = acceleration::buffer_address(ctx.device, &res.vertices);
+    let index_address = acceleration::buffer_address(ctx.device, &res.indices);
+    let mut meshes = Vec::new();
+    let mut seen: HashMap<(u32, i32), usize> = HashMap::new();
+    let mesh_of = res
+        .drawables
+        .iter()
+        .map(|d| {
+            *seen
+                .entry((d.first_index, d.vertex_offset))
+                .or_insert_with(|| {
+                    meshes.push(TriangleMesh {
+                        vertex_address,
+                        vertex_stride: std::mem::size_of::<Vertex>() as u64,
+                        vertex_count: d.vertex_count,
+                        first_vertex: d.vertex_offset as u32,
+                        index_address,
+                        first_index: d.first_index,
+                        index_count: d.index_count,
+                    });
+                    meshes.len() - 1
+                })
+        })
+        .collect();
+    (meshes, mesh_of)
+}
+
+/// Points `binding` of `set` at the top-level structure.
+fn write_structure(
+    device: &Device,
+    set: vk::DescriptorSet,
+    binding: u32,
+    s: &AccelerationStructure,
+) {
+    let structures = [s.raw];
+    let mut info = vk::WriteDescriptorSetAccelerationStructureKHR::default()
+        .acceleration_structures(&structures);
+    let write = vk::WriteDescriptorSet::default()
+        .dst_set(set)
+        .dst_binding(binding)
+        .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
+        .descriptor_count(1)
+        .push_next(&mut info);
+    // SAFETY: the set and the structure are live; no command buffer using the set is pending.
+    unsafe { device.raw.update_descriptor_sets(&[write], &[]) };
+}
+
+/// The instance record of drawable `index`: its model-to-render transform (row-major 3x4),
+/// its index as the custom index (the shader's key to its ranges and object data), every
+/// ray mask bit, both faces.
+fn instance(
+    index: usize,
+    o: &ObjectData,
+    blas: vk::DeviceAddress,
+) -> vk::AccelerationStructureInstanceKHR {
+    let m = o.model_to_world;
+    let rows = [m.row(0), m.row(1), m.row(2)];
+    let matrix: [f32; 12] = std::array::from_fn(|i| rows[i / 4][i % 4]);
+    vk::AccelerationStructureInstanceKHR {
+        transform: vk::TransformMatrixKHR { matrix },
+        instance_custom_index_and_mask: vk::Packed24_8::new(index as u32, 0xFF),
+        instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
+            0,
+            vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw() as u8,
+        ),
+        acceleration_structure_reference: vk::AccelerationStructureReferenceKHR {
+            device_handle: blas,
+        },
+    }
+}

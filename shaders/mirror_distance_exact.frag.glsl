@@ -1,0 +1,42 @@
+#version 460
+// mirror_distance_exact.frag - the distance-exact lookup's mirror: the distance search
+// (distance_search.glsl), stopped at the first jump in the stored distance it crosses without
+// a hit. A ray it resolves is coloured as the distance lookup does (the cube map sampled,
+// filtered, in the direction of the point met); a ray it cannot resolve may be meeting a
+// surface the cube's centre never saw, so it is traced exactly through the scene
+// (ray_query.glsl) and shaded as the ray-query lookup and the reference shade it.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_nonuniform_qualifier : require
+#include "shared.glsl"
+
+SCENE_BINDINGS;
+PUSH_CONSTANTS;
+// Set 1: the colour cube (0) and its depth (1, distance_search.glsl), then the traced scene.
+layout(set = 1, binding = 0) uniform samplerCube environment;
+#define RAY_QUERY_BINDING 2
+
+#include "materials.glsl"
+#include "distance_search.glsl"
+#include "ray_query.glsl"
+
+layout(location = 0) out vec4 out_color;
+
+void main() {
+    ViewData view = views[push.view_index];
+    vec3 dir, hit, n;
+    if (!mirror_hit(view, frame, dir, hit, n)) {
+        discard;
+    }
+    vec3 found;
+    if (distance_search(frame, hit, reflect(dir, n), true, found) == SEARCH_HIT) {
+        // As mirror_distance.frag: the box lookup's footprint, at the found direction.
+        vec3 box = lookup_at(frame, dir, n);
+        vec3 d_dx, d_dy;
+        lookup_gradients(view, frame, box, d_dx, d_dy);
+        vec3 lookup = normalize(found) * length(box);
+        out_color = vec4(textureGrad(environment, lookup, d_dx, d_dy).rgb, 1.0);
+    } else {
+        out_color = vec4(trace_reflection(frame, dir, hit, n).colour, 1.0);
+    }
+    gl_FragDepth = mirror_depth(view, hit);
+}
