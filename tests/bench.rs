@@ -67,10 +67,10 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
         svg.to_str().unwrap(),
     ]);
     assert_ok(&run);
-    // The header, two scenes x two methods x two lookups, and two scenes x six rungs.
+    // The header, two scenes x two methods x two lookups, and two scenes x seven rungs.
     let text = std::fs::read_to_string(&csv).unwrap();
-    assert_eq!(text.lines().count(), 1 + 8 + 12);
-    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 12);
+    assert_eq!(text.lines().count(), 1 + 8 + 14);
+    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 14);
     check_plot(&std::fs::read_to_string(&svg).unwrap());
     check_record(&read_json(&json));
 
