@@ -4,11 +4,9 @@
 
 use ash::vk;
 
-use super::{LookupContext, LookupPass, MirrorLookup};
+use super::{LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders};
 use crate::render::gpu::{LOOKUP_BOX, LOOKUP_PLAIN};
-use crate::render::targets::{DIRECTION_FORMAT, VIEW_FORMAT};
 use crate::scene::Lookup;
-use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
 
 /// A lookup into the cube map.
@@ -51,55 +49,29 @@ impl MirrorLookup for CubeLookup {
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
         let res = ctx.resources;
-        let layout = PipelineLayout::create(
-            ctx.device,
-            &[res.scene_set_layout.raw, res.environment_set_layout.raw],
-            ctx.push_size,
-            "mirror layout",
-        )?;
-        let colour = crate::render::pipelines::mirror_pipeline(
-            ctx.device,
-            &layout,
-            crate::shaders::MIRROR_FRAG,
-            VIEW_FORMAT,
-            "mirror pipeline",
-        )?;
-        let directions = crate::render::pipelines::mirror_pipeline(
-            ctx.device,
-            &layout,
-            crate::shaders::MIRROR_DIRECTION_FRAG,
-            DIRECTION_FORMAT,
-            "mirror direction pipeline",
-        )?;
+        let shaders = MirrorShaders {
+            colour: crate::shaders::MIRROR_FRAG,
+            directions: crate::shaders::MIRROR_DIRECTION_FRAG,
+        };
+        let pipelines =
+            MirrorPipelines::create(ctx, res.environment_set_layout.raw, shaders, "mirror")?;
         Ok(Box::new(CubePass {
-            colour,
-            directions,
-            layout,
+            pipelines,
             set: res.environment_set,
         }))
     }
 }
 
-/// The cube lookups' pipelines. Field order is drop order: pipelines before their layout.
+/// The cube lookups' pipelines.
 struct CubePass {
-    colour: Pipeline,
-    directions: Pipeline,
-    layout: PipelineLayout,
+    pipelines: MirrorPipelines,
     /// The environment set (the cube map), owned by the scene resources.
     set: vk::DescriptorSet,
 }
 
 impl LookupPass for CubePass {
-    fn pipeline(&self, directions: bool) -> &Pipeline {
-        if directions {
-            &self.directions
-        } else {
-            &self.colour
-        }
-    }
-
-    fn layout(&self) -> &PipelineLayout {
-        &self.layout
+    fn pipelines(&self) -> &MirrorPipelines {
+        &self.pipelines
     }
 
     fn set(&self) -> vk::DescriptorSet {

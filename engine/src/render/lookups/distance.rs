@@ -13,14 +13,12 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::{LookupContext, LookupPass, MirrorLookup};
+use super::{LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders};
 use crate::render::gpu::LOOKUP_DISTANCE;
-use crate::render::targets::{DIRECTION_FORMAT, VIEW_FORMAT};
 use crate::scene::Lookup;
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::Device;
 use crate::vk::image::Sampler;
-use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
 
 pub struct Distance;
@@ -45,37 +43,19 @@ impl MirrorLookup for Distance {
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
         let device = ctx.device;
-        let res = ctx.resources;
         let set_layout =
             DescriptorSetLayout::create(device, &cube_bindings(), "distance set layout")?;
         let pool = DescriptorPool::create(device, 1, &[cube_pool_size()], "distance descriptors")?;
         let set = pool.allocate(&set_layout, "distance set")?;
         let nearest = depth_sampler(device)?;
         write_cube(ctx, set, &nearest);
-        let layout = PipelineLayout::create(
-            device,
-            &[res.scene_set_layout.raw, set_layout.raw],
-            ctx.push_size,
-            "distance mirror layout",
-        )?;
-        let colour = crate::render::pipelines::mirror_pipeline(
-            device,
-            &layout,
-            crate::shaders::MIRROR_DISTANCE_FRAG,
-            VIEW_FORMAT,
-            "distance mirror pipeline",
-        )?;
-        let directions = crate::render::pipelines::mirror_pipeline(
-            device,
-            &layout,
-            crate::shaders::MIRROR_DISTANCE_DIRECTION_FRAG,
-            DIRECTION_FORMAT,
-            "distance mirror direction pipeline",
-        )?;
+        let shaders = MirrorShaders {
+            colour: crate::shaders::MIRROR_DISTANCE_FRAG,
+            directions: crate::shaders::MIRROR_DISTANCE_DIRECTION_FRAG,
+        };
+        let pipelines = MirrorPipelines::create(ctx, set_layout.raw, shaders, "distance mirror")?;
         Ok(Box::new(DistancePass {
-            colour,
-            directions,
-            layout,
+            pipelines,
             _pool: pool,
             set,
             _set_layout: set_layout,
@@ -129,9 +109,7 @@ pub(super) fn write_cube(ctx: &LookupContext<'_>, set: vk::DescriptorSet, neares
 
 /// The distance lookup's pipelines and set. Field order is drop order.
 struct DistancePass {
-    colour: Pipeline,
-    directions: Pipeline,
-    layout: PipelineLayout,
+    pipelines: MirrorPipelines,
     _pool: DescriptorPool,
     set: vk::DescriptorSet,
     _set_layout: DescriptorSetLayout,
@@ -139,16 +117,8 @@ struct DistancePass {
 }
 
 impl LookupPass for DistancePass {
-    fn pipeline(&self, directions: bool) -> &Pipeline {
-        if directions {
-            &self.directions
-        } else {
-            &self.colour
-        }
-    }
-
-    fn layout(&self) -> &PipelineLayout {
-        &self.layout
+    fn pipelines(&self) -> &MirrorPipelines {
+        &self.pipelines
     }
 
     fn set(&self) -> vk::DescriptorSet {

@@ -18,14 +18,11 @@ use ash::vk;
 
 use super::distance::{cube_bindings, cube_pool_size, depth_sampler, write_cube};
 use super::tracing::SceneTrace;
-use super::{LookupContext, LookupNeeds, LookupPass, MirrorLookup};
+use super::{LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders};
 use crate::render::gpu::{ObjectData, LOOKUP_DISTANCE_EXACT};
-use crate::render::targets::{DIRECTION_FORMAT, VIEW_FORMAT};
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
-use crate::vk::device::OptionalFeatures;
 use crate::vk::image::Sampler;
-use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
 
 /// Where the traced scene's bindings start (`RAY_QUERY_BINDING` in the shaders).
@@ -44,12 +41,7 @@ impl MirrorLookup for DistanceExact {
     }
 
     fn needs(&self) -> LookupNeeds {
-        LookupNeeds {
-            features: OptionalFeatures {
-                ray_query: true,
-                ..Default::default()
-            },
-        }
+        SceneTrace::NEEDS
     }
 
     fn uses_cube(&self) -> bool {
@@ -61,20 +53,14 @@ impl MirrorLookup for DistanceExact {
     }
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
-        if !ctx.device.enabled.ray_query {
-            return Err(GpuError::Unsupported(
-                "lookup distance-exact: the device was created without ray queries".into(),
-            ));
-        }
+        SceneTrace::require(ctx, "distance-exact")?;
         Ok(Box::new(DistanceExactPass::create(ctx)?))
     }
 }
 
 /// The distance-exact lookup's per-renderer state. Field order is drop order.
 struct DistanceExactPass {
-    colour: Pipeline,
-    directions: Pipeline,
-    layout: PipelineLayout,
+    pipelines: MirrorPipelines,
     _pool: DescriptorPool,
     set: vk::DescriptorSet,
     _set_layout: DescriptorSetLayout,
@@ -85,7 +71,6 @@ struct DistanceExactPass {
 impl DistanceExactPass {
     fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
         let device = ctx.device;
-        let res = ctx.resources;
         let trace = SceneTrace::create(ctx)?;
         let bindings: Vec<_> = cube_bindings()
             .into_iter()
@@ -104,30 +89,14 @@ impl DistanceExactPass {
         let nearest = depth_sampler(device)?;
         write_cube(ctx, set, &nearest);
         trace.write(ctx, set, TRACE_BINDING);
-        let layout = PipelineLayout::create(
-            device,
-            &[res.scene_set_layout.raw, set_layout.raw],
-            ctx.push_size,
-            "distance-exact mirror layout",
-        )?;
-        let colour = crate::render::pipelines::mirror_pipeline(
-            device,
-            &layout,
-            crate::shaders::MIRROR_DISTANCE_EXACT_FRAG,
-            VIEW_FORMAT,
-            "distance-exact mirror pipeline",
-        )?;
-        let directions = crate::render::pipelines::mirror_pipeline(
-            device,
-            &layout,
-            crate::shaders::MIRROR_DISTANCE_EXACT_DIRECTION_FRAG,
-            DIRECTION_FORMAT,
-            "distance-exact mirror direction pipeline",
-        )?;
+        let shaders = MirrorShaders {
+            colour: crate::shaders::MIRROR_DISTANCE_EXACT_FRAG,
+            directions: crate::shaders::MIRROR_DISTANCE_EXACT_DIRECTION_FRAG,
+        };
+        let pipelines =
+            MirrorPipelines::create(ctx, set_layout.raw, shaders, "distance-exact mirror")?;
         Ok(Self {
-            colour,
-            directions,
-            layout,
+            pipelines,
             _pool: pool,
             set,
             _set_layout: set_layout,
@@ -138,16 +107,8 @@ impl DistanceExactPass {
 }
 
 impl LookupPass for DistanceExactPass {
-    fn pipeline(&self, directions: bool) -> &Pipeline {
-        if directions {
-            &self.directions
-        } else {
-            &self.colour
-        }
-    }
-
-    fn layout(&self) -> &PipelineLayout {
-        &self.layout
+    fn pipelines(&self) -> &MirrorPipelines {
+        &self.pipelines
     }
 
     fn set(&self) -> vk::DescriptorSet {

@@ -22,6 +22,8 @@ use ash::vk;
 use super::gpu::ObjectData;
 use super::resources::SceneResources;
 use super::targets::CubeTarget;
+use crate::render::pipelines::mirror_pipeline;
+use crate::render::targets::{DIRECTION_FORMAT, VIEW_FORMAT};
 use crate::scene::Lookup;
 use crate::vk::commands::Submitter;
 use crate::vk::device::{Device, DeviceInfo, OptionalFeatures};
@@ -77,11 +79,22 @@ pub struct LookupContext<'a> {
 
 /// A lookup's per-renderer state: the pipelines that draw the mirror.
 pub trait LookupPass {
+    /// The lookup's two mirror pipelines and their layout.
+    fn pipelines(&self) -> &MirrorPipelines;
     /// The colour pipeline (`directions` false) or the one writing the direction each mirror
     /// pixel sees (the angular error's input).
-    fn pipeline(&self, directions: bool) -> &Pipeline;
+    fn pipeline(&self, directions: bool) -> &Pipeline {
+        let p = self.pipelines();
+        if directions {
+            &p.directions
+        } else {
+            &p.colour
+        }
+    }
     /// Their layout: the scene set at 0, [`LookupPass::set`] at 1.
-    fn layout(&self) -> &PipelineLayout;
+    fn layout(&self) -> &PipelineLayout {
+        &self.pipelines().layout
+    }
     /// The descriptor set the pipelines read at set 1.
     fn set(&self) -> vk::DescriptorSet;
     /// Before the frame is recorded: per-frame data of the lookup's own, from this frame's
@@ -92,6 +105,59 @@ pub trait LookupPass {
     /// Records the lookup's per-frame GPU work before the views (made visible to the
     /// fragment shaders that read it). Most lookups have none.
     fn record(&self, _cmd: vk::CommandBuffer) {}
+}
+
+/// The two pipelines every lookup draws the mirror with: one writing colour, one writing the
+/// direction each mirror pixel sees. Both read the scene set at 0 and the lookup's own set at
+/// 1. Field order is drop order: pipelines before their layout.
+pub struct MirrorPipelines {
+    colour: Pipeline,
+    directions: Pipeline,
+    layout: PipelineLayout,
+}
+
+/// A lookup's two fragment shaders (`shaders/mirror_*.frag.glsl`).
+pub(super) struct MirrorShaders {
+    pub colour: &'static [u32],
+    pub directions: &'static [u32],
+}
+
+impl MirrorPipelines {
+    /// The layout over the scene set and `set_layout`, and both pipelines on it; `name`
+    /// prefixes their debug names.
+    fn create(
+        ctx: &LookupContext<'_>,
+        set_layout: vk::DescriptorSetLayout,
+        shaders: MirrorShaders,
+        name: &str,
+    ) -> Result<Self, GpuError> {
+        let device = ctx.device;
+        let layout = PipelineLayout::create(
+            device,
+            &[ctx.resources.scene_set_layout.raw, set_layout],
+            ctx.push_size,
+            &format!("{name} layout"),
+        )?;
+        let colour = mirror_pipeline(
+            device,
+            &layout,
+            shaders.colour,
+            VIEW_FORMAT,
+            &format!("{name} pipeline"),
+        )?;
+        let directions = mirror_pipeline(
+            device,
+            &layout,
+            shaders.directions,
+            DIRECTION_FORMAT,
+            &format!("{name} direction pipeline"),
+        )?;
+        Ok(Self {
+            colour,
+            directions,
+            layout,
+        })
+    }
 }
 
 /// The plug-in of `lookup`.

@@ -8,13 +8,10 @@
 use ash::vk;
 
 use super::tracing::SceneTrace;
-use super::{LookupContext, LookupNeeds, LookupPass, MirrorLookup};
+use super::{LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders};
 use crate::render::gpu::{ObjectData, LOOKUP_RAY_QUERY};
-use crate::render::targets::{DIRECTION_FORMAT, VIEW_FORMAT};
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
-use crate::vk::device::OptionalFeatures;
-use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
 
 pub struct RayQuery;
@@ -29,12 +26,7 @@ impl MirrorLookup for RayQuery {
     }
 
     fn needs(&self) -> LookupNeeds {
-        LookupNeeds {
-            features: OptionalFeatures {
-                ray_query: true,
-                ..Default::default()
-            },
-        }
+        SceneTrace::NEEDS
     }
 
     fn uses_cube(&self) -> bool {
@@ -46,20 +38,14 @@ impl MirrorLookup for RayQuery {
     }
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
-        if !ctx.device.enabled.ray_query {
-            return Err(GpuError::Unsupported(
-                "lookup ray-query: the device was created without ray queries".into(),
-            ));
-        }
+        SceneTrace::require(ctx, "ray-query")?;
         Ok(Box::new(RayQueryPass::create(ctx)?))
     }
 }
 
 /// The ray-query lookup's per-renderer state. Field order is drop order.
 struct RayQueryPass {
-    colour: Pipeline,
-    directions: Pipeline,
-    layout: PipelineLayout,
+    pipelines: MirrorPipelines,
     _pool: DescriptorPool,
     set: vk::DescriptorSet,
     _set_layout: DescriptorSetLayout,
@@ -69,7 +55,6 @@ struct RayQueryPass {
 impl RayQueryPass {
     fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
         let device = ctx.device;
-        let res = ctx.resources;
         let trace = SceneTrace::create(ctx)?;
         let set_layout =
             DescriptorSetLayout::create(device, &SceneTrace::bindings(0), "ray-query set layout")?;
@@ -81,30 +66,13 @@ impl RayQueryPass {
         )?;
         let set = pool.allocate(&set_layout, "ray-query set")?;
         trace.write(ctx, set, 0);
-        let layout = PipelineLayout::create(
-            device,
-            &[res.scene_set_layout.raw, set_layout.raw],
-            ctx.push_size,
-            "ray-query mirror layout",
-        )?;
-        let colour = crate::render::pipelines::mirror_pipeline(
-            device,
-            &layout,
-            crate::shaders::MIRROR_RAY_QUERY_FRAG,
-            VIEW_FORMAT,
-            "ray-query mirror pipeline",
-        )?;
-        let directions = crate::render::pipelines::mirror_pipeline(
-            device,
-            &layout,
-            crate::shaders::MIRROR_RAY_QUERY_DIRECTION_FRAG,
-            DIRECTION_FORMAT,
-            "ray-query mirror direction pipeline",
-        )?;
+        let shaders = MirrorShaders {
+            colour: crate::shaders::MIRROR_RAY_QUERY_FRAG,
+            directions: crate::shaders::MIRROR_RAY_QUERY_DIRECTION_FRAG,
+        };
+        let pipelines = MirrorPipelines::create(ctx, set_layout.raw, shaders, "ray-query mirror")?;
         Ok(Self {
-            colour,
-            directions,
-            layout,
+            pipelines,
             _pool: pool,
             set,
             _set_layout: set_layout,
@@ -114,16 +82,8 @@ impl RayQueryPass {
 }
 
 impl LookupPass for RayQueryPass {
-    fn pipeline(&self, directions: bool) -> &Pipeline {
-        if directions {
-            &self.directions
-        } else {
-            &self.colour
-        }
-    }
-
-    fn layout(&self) -> &PipelineLayout {
-        &self.layout
+    fn pipelines(&self) -> &MirrorPipelines {
+        &self.pipelines
     }
 
     fn set(&self) -> vk::DescriptorSet {

@@ -15,11 +15,11 @@ use std::collections::HashMap;
 use ash::vk;
 use glam::UVec4;
 
-use super::LookupContext;
+use super::{LookupContext, LookupNeeds};
 use crate::render::gpu::{ObjectData, Vertex};
 use crate::vk::acceleration::{self, AccelerationStructure, TopLevel, TriangleMesh};
 use crate::vk::descriptors;
-use crate::vk::device::Device;
+use crate::vk::device::{Device, OptionalFeatures};
 use crate::vk::memory::{Buffer, BufferDesc};
 use crate::vk::GpuError;
 
@@ -33,6 +33,29 @@ pub struct SceneTrace {
 }
 
 impl SceneTrace {
+    /// What a lookup that traces needs from the device.
+    pub const NEEDS: LookupNeeds = LookupNeeds {
+        features: OptionalFeatures {
+            ray_query: true,
+            multiview: false,
+            geometry_shader: false,
+            shader_output_layer: false,
+            multi_draw_indirect: false,
+            mesh_shader: false,
+        },
+    };
+
+    /// Refuses `lookup` when the device was created without ray queries.
+    pub fn require(ctx: &LookupContext<'_>, lookup: &str) -> Result<(), GpuError> {
+        if ctx.device.enabled.ray_query {
+            Ok(())
+        } else {
+            Err(GpuError::Unsupported(format!(
+                "lookup {lookup}: the device was created without ray queries"
+            )))
+        }
+    }
+
     /// Builds the bottom-level structures (waiting for the device) and an empty top level.
     pub fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
         let device = ctx.device;
