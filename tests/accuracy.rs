@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{scene, Gpu};
+use common::{lookup_directions, scene, Gpu};
 use specchio::metrics::percentile::percentile;
 use specchio::reference::angular::{angles_deg, summarize, AngularError};
 use specchio::reference::Reference;
@@ -35,29 +35,9 @@ fn angles(gpu: &Gpu, s: &Scene, lookup: Lookup, rim: i64) -> Vec<f64> {
 /// 6 + object index, from the reference's object layer) and the incidence cosine |d . n| of
 /// the pixel-centre ray on the sphere.
 fn angles_by_object(gpu: &Gpu, s: &Scene, lookup: Lookup, rim: i64) -> Vec<(f64, u32, f64)> {
-    let options = RenderOptions {
-        lookup: Some(lookup),
-        ..Default::default()
-    };
-    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
-    let readback = Readback {
-        directions: true,
-        ..Default::default()
-    };
-    let (_, images) = r.render_frame(0, 0.0, readback).expect("frame");
-    let reference = Reference::new(s, 0.0);
-    let [ow, oh] = s.observer.resolution;
-    let [sw, sh] = s.sensor.resolution;
-    let (obs, _) = reference.render(&reference.observer_view(), ow, oh, 1);
-    let (sen, _) = reference.render(&reference.sensor_view(), sw, sh, 1);
-    let raster_obs = images.observer_direction.expect("observer directions");
-    let raster_sen = images.sensor_direction.expect("sensor directions");
     let mut all = Vec::new();
-    let cameras = [
-        (&raster_obs, &obs, reference.observer_view()),
-        (&raster_sen, &sen, reference.sensor_view()),
-    ];
-    for (raster, exact, view) in cameras {
+    for pair in lookup_directions(gpu, s, lookup) {
+        let (raster, exact, view) = (&pair.gpu, &pair.exact, pair.view);
         let keep = |x, y| inside_rim(&exact.direction, rim, x, y);
         let (w, h) = (raster.width, raster.height);
         let kept: Vec<(u32, f64)> = exact

@@ -5,40 +5,42 @@
 
 mod common;
 
-use common::{devices, scene, Gpu};
+use common::{devices, lookup_directions, scene, Gpu};
 use specchio::reference::angular::angles_deg;
-use specchio::reference::Reference;
-use specchio::render::{lookups, Readback, RenderOptions, Renderer};
+use specchio::render::{lookups, RenderOptions, Renderer};
 use specchio::scene::{Lookup, Scene};
 
 /// Angular errors (degrees) of every observer and sensor mirror pixel of `lookup` at 1 spp.
 fn angles(gpu: &Gpu, s: &Scene, lookup: Lookup) -> Vec<f64> {
-    let options = RenderOptions {
-        lookup: Some(lookup),
-        ..Default::default()
-    };
-    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
-    let readback = Readback {
-        directions: true,
-        ..Default::default()
-    };
-    let (_, images) = r.render_frame(0, 0.0, readback).expect("frame");
-    let reference = Reference::new(s, 0.0);
-    let [ow, oh] = s.observer.resolution;
-    let [sw, sh] = s.sensor.resolution;
-    let (obs, _) = reference.render(&reference.observer_view(), ow, oh, 1);
-    let (sen, _) = reference.render(&reference.sensor_view(), sw, sh, 1);
-    let mut all = angles_deg(
-        &images.observer_direction.expect("observer directions"),
-        &obs.direction,
-        |_, _| true,
-    );
-    all.extend(angles_deg(
-        &images.sensor_direction.expect("sensor directions"),
-        &sen.direction,
-        |_, _| true,
-    ));
-    all
+    lookup_directions(gpu, s, lookup)
+        .iter()
+        .flat_map(|p| angles_deg(&p.gpu, &p.exact.direction, |_, _| true))
+        .collect()
+}
+
+/// Checks that `lookup` is exact to the stored depth's rounding in the empty rooms (the
+/// six-colour room with its mirror at the centre, the face-edges room with an off-centre one).
+fn assert_empty_rooms_exact(gpu: &Gpu, device: &str, lookup: Lookup) {
+    for path in [
+        "scenes/test/six-colour-room.toml",
+        "scenes/hard/face-edges.toml",
+    ] {
+        let s = scene(path);
+        let mut a = angles(gpu, &s, lookup);
+        a.sort_by(f64::total_cmp);
+        let texel = 90.0 / f64::from(s.cube.face_size_px);
+        let ties = a.iter().filter(|&&x| x > TIE_TEXELS * texel).count();
+        let (p99, max) = (a[a.len() * 99 / 100], a[a.len() - 1]);
+        eprintln!(
+            "{device} {lookup} {path}: {} px, p99 {p99:.6} deg, max {max:.5} deg, {ties} ties (texel {texel:.3} deg)",
+            a.len()
+        );
+        assert!(a.len() > 10_000, "the mirror is in view");
+        assert!(p99 <= ROUNDING_TEXELS * texel, "p99 {p99} deg");
+        // Ties: rare, and at most one texel off.
+        assert!(ties * 1000 <= a.len(), "{ties} ties");
+        assert!(max <= texel, "max {max} deg");
+    }
 }
 
 /// Empty rooms (the six-colour room with its mirror at the centre, the face-edges room with
@@ -48,26 +50,7 @@ fn angles(gpu: &Gpu, s: &Scene, lookup: Lookup) -> Vec<f64> {
 fn empty_rooms_agree_with_the_reference_to_the_depth_rounding() {
     for device in devices() {
         let gpu = Gpu::on(&device, Default::default());
-        for path in [
-            "scenes/test/six-colour-room.toml",
-            "scenes/hard/face-edges.toml",
-        ] {
-            let s = scene(path);
-            let mut a = angles(&gpu, &s, Lookup::Distance);
-            a.sort_by(f64::total_cmp);
-            let texel = 90.0 / f64::from(s.cube.face_size_px);
-            let ties = a.iter().filter(|&&x| x > TIE_TEXELS * texel).count();
-            let (p99, max) = (a[a.len() * 99 / 100], a[a.len() - 1]);
-            eprintln!(
-                "{device} {path}: {} px, p99 {p99:.6} deg, max {max:.5} deg, {ties} ties (texel {texel:.3} deg)",
-                a.len()
-            );
-            assert!(a.len() > 10_000, "the mirror is in view");
-            assert!(p99 <= ROUNDING_TEXELS * texel, "p99 {p99} deg");
-            // Ties: rare, and at most one texel off.
-            assert!(ties * 1000 <= a.len(), "{ties} ties");
-            assert!(max <= texel, "max {max} deg");
-        }
+        assert_empty_rooms_exact(&gpu, &device, Lookup::Distance);
         gpu.finish();
     }
 }
@@ -149,25 +132,7 @@ const DISOCCLUDED_LEFT: f64 = 0.45;
 #[test]
 fn distance_exact_keeps_an_empty_room_exact() {
     let gpu = Gpu::with_features(lookups::features(Lookup::DistanceExact));
-    for path in [
-        "scenes/test/six-colour-room.toml",
-        "scenes/hard/face-edges.toml",
-    ] {
-        let s = scene(path);
-        let mut a = angles(&gpu, &s, Lookup::DistanceExact);
-        a.sort_by(f64::total_cmp);
-        let texel = 90.0 / f64::from(s.cube.face_size_px);
-        let ties = a.iter().filter(|&&x| x > TIE_TEXELS * texel).count();
-        let (p99, max) = (a[a.len() * 99 / 100], a[a.len() - 1]);
-        eprintln!(
-            "{path}: {} px, p99 {p99:.6} deg, max {max:.5} deg, {ties} ties",
-            a.len()
-        );
-        assert!(a.len() > 10_000, "the mirror is in view");
-        assert!(p99 <= ROUNDING_TEXELS * texel, "p99 {p99} deg");
-        assert!(ties * 1000 <= a.len(), "{ties} ties");
-        assert!(max <= texel, "max {max} deg");
-    }
+    assert_empty_rooms_exact(&gpu, "default", Lookup::DistanceExact);
     gpu.finish();
 }
 

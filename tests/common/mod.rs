@@ -5,9 +5,11 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use specchio::reference::{Reference, ReferenceImages};
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
-use specchio::scene::Scene;
+use specchio::scene::camera::ViewBasis;
+use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::{Device, DeviceDesc, OptionalFeatures};
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
@@ -174,6 +176,50 @@ pub fn render_once(
         },
     )
     .expect("frame")
+}
+
+/// The lookup directions of one camera: the GPU's (`lookup` at frame 0) and the exact
+/// reference's layers at 1 sample per pixel, with the reference's view of that camera.
+pub struct DirectionPair {
+    pub gpu: specchio::render::RgbaImage,
+    pub exact: ReferenceImages,
+    pub view: ViewBasis,
+}
+
+/// [`DirectionPair`]s of the observer and the sensor (in that order) of `s` rendered with
+/// `lookup`.
+pub fn lookup_directions(gpu: &Gpu, s: &Scene, lookup: Lookup) -> [DirectionPair; 2] {
+    let options = RenderOptions {
+        lookup: Some(lookup),
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+    let readback = Readback {
+        directions: true,
+        ..Default::default()
+    };
+    let (_, images) = r.render_frame(0, 0.0, readback).expect("frame");
+    let reference = Reference::new(s, 0.0);
+    let pair = |raster: Option<specchio::render::RgbaImage>, view: ViewBasis, [w, h]: [u32; 2]| {
+        let (exact, _) = reference.render(&view, w, h, 1);
+        DirectionPair {
+            gpu: raster.expect("lookup directions read back"),
+            exact,
+            view,
+        }
+    };
+    [
+        pair(
+            images.observer_direction,
+            reference.observer_view(),
+            s.observer.resolution,
+        ),
+        pair(
+            images.sensor_direction,
+            reference.sensor_view(),
+            s.sensor.resolution,
+        ),
+    ]
 }
 
 pub fn close(a: [f32; 4], b: [f32; 3], tol: f32) -> bool {
