@@ -92,26 +92,12 @@ pub fn check(
         let Some(b) = baseline.iter().find(|b| b.case() == r.case()) else {
             continue; // a new case: nothing to compare with
         };
-        if r.updates != b.updates {
-            failures.push(format!(
-                "{}: {} updates against {} in the baseline; counters need equal runs",
-                r.case(),
-                r.updates,
-                b.updates
-            ));
+        let (updates, counters) = (
+            (r.updates, b.updates),
+            (r.work.counters(), b.work.counters()),
+        );
+        if !counters_match(&r.case(), "updates", updates, &counters, &mut failures) {
             continue;
-        }
-        // A counter the driver lacks is null in both; null on one side only fails.
-        for ((counter, new), (_, old)) in r.work.counters().into_iter().zip(b.work.counters()) {
-            if new != old {
-                let show = |v: Option<u64>| v.map_or("null".to_owned(), |v| v.to_string());
-                failures.push(format!(
-                    "{}: {counter} {} (baseline {})",
-                    r.case(),
-                    show(new),
-                    show(old)
-                ));
-            }
         }
         if let (Some(limit), Some(new), Some(old)) =
             (max_regression, ratio(results, r), ratio(baseline, b))
@@ -126,11 +112,10 @@ pub fn check(
             }
         }
     }
-    for b in baseline {
-        if !results.iter().any(|r| r.case() == b.case()) {
-            failures.push(format!("{}: in the baseline but not measured", b.case()));
-        }
-    }
+    failures.extend(unmeasured(
+        baseline.iter().map(|b| b.case()),
+        results.iter().map(|r| r.case()),
+    ));
     failures
 }
 
@@ -141,33 +126,60 @@ pub fn check_rungs(baseline: &[RungRow], results: &[RungRow]) -> Vec<String> {
         let Some(b) = baseline.iter().find(|b| b.case() == r.case()) else {
             continue; // a new rung: nothing to compare with
         };
-        if r.frames != b.frames {
-            failures.push(format!(
-                "{}: {} frames against {} in the baseline; counters need equal runs",
-                r.case(),
-                r.frames,
-                b.frames
-            ));
-            continue;
-        }
-        for ((counter, new), (_, old)) in r.work.counters().into_iter().zip(b.work.counters()) {
-            if new != old {
-                let show = |v: Option<u64>| v.map_or("null".to_owned(), |v| v.to_string());
-                failures.push(format!(
-                    "{}: {counter} {} (baseline {})",
-                    r.case(),
-                    show(new),
-                    show(old)
-                ));
-            }
-        }
+        let (frames, counters) = ((r.frames, b.frames), (r.work.counters(), b.work.counters()));
+        counters_match(&r.case(), "frames", frames, &counters, &mut failures);
     }
-    for b in baseline {
-        if !results.iter().any(|r| r.case() == b.case()) {
-            failures.push(format!("{}: in the baseline but not measured", b.case()));
-        }
-    }
+    failures.extend(unmeasured(
+        baseline.iter().map(|b| b.case()),
+        results.iter().map(|r| r.case()),
+    ));
     failures
+}
+
+/// A row's work counters by name (`Work::counters`, `RungWork::counters`).
+type Counters<const N: usize> = [(&'static str, Option<u64>); N];
+
+/// Compares one case's work counters with the baseline's (`counters`: new, old), pushing a
+/// line per difference. Counters compare only over equal runs (`runs`: new, old, counted in
+/// `unit`); when they differ that is the one line, and false is returned.
+fn counters_match<const N: usize>(
+    case: &str,
+    unit: &str,
+    runs: (usize, usize),
+    counters: &(Counters<N>, Counters<N>),
+    failures: &mut Vec<String>,
+) -> bool {
+    if runs.0 != runs.1 {
+        failures.push(format!(
+            "{case}: {} {unit} against {} in the baseline; counters need equal runs",
+            runs.0, runs.1
+        ));
+        return false;
+    }
+    // A counter the driver lacks is null in both; null on one side only fails.
+    let show = |v: Option<u64>| v.map_or("null".to_owned(), |v| v.to_string());
+    for ((counter, new), (_, old)) in counters.0.iter().zip(&counters.1) {
+        if new != old {
+            failures.push(format!(
+                "{case}: {counter} {} (baseline {})",
+                show(*new),
+                show(*old)
+            ));
+        }
+    }
+    true
+}
+
+/// One line per baseline case that was not measured.
+fn unmeasured(
+    baseline: impl Iterator<Item = String>,
+    results: impl Iterator<Item = String>,
+) -> Vec<String> {
+    let measured: Vec<String> = results.collect();
+    baseline
+        .filter(|case| !measured.contains(case))
+        .map(|case| format!("{case}: in the baseline but not measured"))
+        .collect()
 }
 
 #[cfg(test)]
