@@ -14,10 +14,14 @@ PUSH_CONSTANTS;
 // Set 1: the colour cube (0) and its depth (1, distance_search.glsl), then the traced scene.
 layout(set = 1, binding = 0) uniform samplerCube environment;
 #define RAY_QUERY_BINDING 2
+// ...and the tally of traced rays after the traced scene's four bindings.
+#define TALLY_BINDING 6
+#define TALLY_PASS TALLY_PASS_COLOUR
 
 #include "materials.glsl"
 #include "distance_search.glsl"
 #include "ray_query.glsl"
+#include "trace_tally.glsl"
 
 layout(location = 0) out vec4 out_color;
 
@@ -28,7 +32,9 @@ void main() {
         discard;
     }
     vec3 found;
-    if (distance_search(frame, hit, reflect(dir, n), true, found) == SEARCH_HIT) {
+    bool resolved = distance_search(frame, hit, reflect(dir, n), true, found) == SEARCH_HIT;
+    count_fragment(!resolved);
+    if (resolved) {
         // As mirror_distance.frag: the box lookup's footprint, at the found direction.
         vec3 box = lookup_at(frame, dir, n);
         vec3 d_dx, d_dy;

@@ -10,10 +10,14 @@
 SCENE_BINDINGS;
 PUSH_CONSTANTS;
 #define RAY_QUERY_BINDING 2
+// ...and the tally of traced rays after the traced scene's four bindings.
+#define TALLY_BINDING 6
+#define TALLY_PASS TALLY_PASS_DIRECTION
 
 #include "materials.glsl"
 #include "distance_search.glsl"
 #include "ray_query.glsl"
+#include "trace_tally.glsl"
 
 layout(location = 0) out vec4 out_direction;
 
@@ -25,7 +29,9 @@ void main() {
     }
     vec3 found;
     vec3 d;
-    if (distance_search(frame, hit, reflect(dir, n), true, found) == SEARCH_HIT) {
+    bool resolved = distance_search(frame, hit, reflect(dir, n), true, found) == SEARCH_HIT;
+    count_fragment(!resolved);
+    if (resolved) {
         d = normalize(found);
     } else {
         Reflection reflection = trace_reflection(frame, dir, hit, n);

@@ -41,6 +41,14 @@ pub fn check_tradeoff(r: &serde_json::Value) {
                 assert_eq!(t[view]["non_finite_pixels"], 0, "{scene} {rung} {view}");
                 assert!(t[view]["angular"]["pixels"].as_u64().unwrap() > 0);
             }
+            // Only distance-exact keeps a tally of the rays it traced: a share, not all.
+            let traced = t["sensor_traced_fraction"].as_f64();
+            if rung == "distance-exact" {
+                let f = traced.expect("distance-exact's traced fraction");
+                assert!((0.0..1.0).contains(&f), "{scene}: traced {f}");
+            } else {
+                assert_eq!(traced, None, "{scene} {rung}");
+            }
             points.push((cost, t["sensor"]["flip_mean"].as_f64().unwrap()));
         }
         // Each rung nearer the exact answer than the one before it, in both views.

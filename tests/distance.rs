@@ -7,7 +7,7 @@ mod common;
 
 use common::{devices, lookup_directions, scene, Gpu};
 use specchio::reference::angular::angles_deg;
-use specchio::render::{lookups, RenderOptions, Renderer};
+use specchio::render::{lookups, Readback, RenderOptions, Renderer};
 use specchio::scene::{Lookup, Scene};
 
 /// Angular errors (degrees) of every observer and sensor mirror pixel of `lookup` at 1 spp.
@@ -161,4 +161,49 @@ fn distance_exact_is_refused_with_the_reason_where_the_driver_lacks_ray_queries(
         }
         gpu.finish();
     }
+}
+
+/// The tally of traced rays (render/lookups/tally.rs) against known answers: every sensor
+/// mirror pixel is one fragment of the colour pass (nothing hides the mirror from the sensor,
+/// so none is shaded and then hidden); the empty room traces none of them (no jump in its
+/// stored distance); pole-and-box traces some behind its objects, not all. Lookups that trace
+/// all or none report no tally.
+#[test]
+fn distance_exact_counts_the_rays_it_traces() {
+    let gpu = Gpu::with_features(lookups::features(Lookup::DistanceExact));
+    let tally = |path: &str, lookup: Lookup| {
+        let s = scene(path);
+        let options = RenderOptions {
+            lookup: Some(lookup),
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu.device, s, &options).expect("renderer");
+        let readback = Readback {
+            views: true,
+            directions: true,
+            ..Default::default()
+        };
+        let (report, images) = r.render_frame(0, 0.0, readback).expect("frame");
+        let sensor = images.sensor_direction.expect("sensor directions");
+        let mirror = sensor.pixels.iter().filter(|p| p[3] == 1.0).count() as u64;
+        (report.traced_rays, mirror)
+    };
+    let (empty, mirror) = tally("scenes/test/six-colour-room.toml", Lookup::DistanceExact);
+    let empty = empty.expect("distance-exact reports its tally");
+    eprintln!("six-colour room: {empty:?}, {mirror} sensor mirror pixels");
+    assert_eq!(empty.sensor.fragments, mirror);
+    assert!(empty.observer.fragments > 0);
+    assert_eq!((empty.sensor.traced, empty.observer.traced), (0, 0));
+
+    let (hard, mirror) = tally("scenes/hard/pole-and-box.toml", Lookup::DistanceExact);
+    let hard = hard.expect("distance-exact reports its tally");
+    eprintln!("pole-and-box: {hard:?}, {mirror} sensor mirror pixels");
+    assert_eq!(hard.sensor.fragments, mirror);
+    assert!(hard.sensor.traced > 0 && hard.sensor.traced < hard.sensor.fragments);
+
+    for lookup in [Lookup::Distance, Lookup::RayQuery] {
+        let (none, _) = tally("scenes/hard/pole-and-box.toml", lookup);
+        assert_eq!(none, None, "{lookup}");
+    }
+    gpu.finish();
 }

@@ -271,6 +271,7 @@ mod tests {
                 fill_fragment_invocations: Some(200),
                 sensor_fragment_invocations: Some(sensor_fragments),
             },
+            sensor_traced_fraction: None,
             sensor: None,
             observer: None,
             pareto: None,

@@ -38,6 +38,12 @@ struct FrameData {
 #define LOOKUP_DISTANCE 3u  // the reflected ray searched through the cube's depth (mirror_distance*.frag)
 #define LOOKUP_DISTANCE_EXACT 4u // that search, the rays it cannot resolve traced (mirror_distance_exact*.frag)
 
+// distance-exact's tally (trace_tally.glsl, render/lookups/tally.rs): a uvec2 (fragments,
+// traced) per view and pass, at view_index * TALLY_PASSES + the pass.
+#define TALLY_PASSES 2u
+#define TALLY_PASS_COLOUR 0u
+#define TALLY_PASS_DIRECTION 1u
+
 // One camera: a cube face or a view. dir(ndc) = ray_forward + ndc.x*ray_right + ndc.y*ray_down.
 struct ViewData {
     mat4 world_to_clip;  // reverse-Z perspective: near -> depth 1, far -> 0

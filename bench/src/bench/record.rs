@@ -249,6 +249,9 @@ pub struct RungRow {
     /// Submit to fence of the whole frame (observer, sensor, the pair and readback included).
     pub wall_ms: Option<Stats>,
     pub work: RungWork,
+    /// Of the sensor's mirror fragments over the timed frames, the share whose ray the lookup
+    /// traced (only `distance-exact`: the rays its search could not resolve).
+    pub sensor_traced_fraction: Option<f64>,
     /// Error against the reference at 1 sample per pixel (None with `--no-accuracy`).
     pub sensor: Option<ViewError>,
     pub observer: Option<ViewError>,

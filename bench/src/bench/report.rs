@@ -132,7 +132,7 @@ pub fn lookup_name(lookup: specchio::scene::Lookup) -> &'static str {
 }
 
 /// The CSV's columns: those of the speed-against-error rows, then the trade-off's own.
-const CSV_HEADER: &str = "row,scene,method,cube_size,lookup,updates,wall_median_ms,wall_p10_ms,wall_p90_ms,gpu_fill_median_ms,vertex_invocations,fragment_invocations,faces_rendered,objects_drawn,vs_floors,flip_mean,flip_p99,angular_mean_deg,angular_p99_deg,rung,frame_cost_median_ms,frame_cost_p10_ms,frame_cost_p90_ms,gpu_cube_median_ms,gpu_sensor_median_ms,sensor_fragment_invocations,observer_flip_mean,observer_flip_p99,observer_angular_mean_deg,observer_angular_p99_deg,pareto";
+const CSV_HEADER: &str = "row,scene,method,cube_size,lookup,updates,wall_median_ms,wall_p10_ms,wall_p90_ms,gpu_fill_median_ms,vertex_invocations,fragment_invocations,faces_rendered,objects_drawn,vs_floors,flip_mean,flip_p99,angular_mean_deg,angular_p99_deg,rung,frame_cost_median_ms,frame_cost_p10_ms,frame_cost_p90_ms,gpu_cube_median_ms,gpu_sensor_median_ms,sensor_fragment_invocations,observer_flip_mean,observer_flip_p99,observer_angular_mean_deg,observer_angular_p99_deg,pareto,sensor_traced_fraction";
 
 /// A number with six decimals; absent is an empty field.
 fn real(v: Option<f64>) -> String {
@@ -225,6 +225,7 @@ fn rung_cells(r: &RungRow) -> Vec<String> {
         real(observer.map(|v| v.angular.mean_deg)),
         real(observer.map(|v| v.angular.p99_deg)),
         r.pareto.map_or(String::new(), |p| p.to_string()),
+        real(r.sensor_traced_fraction),
     ]
 }
 

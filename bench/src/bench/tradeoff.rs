@@ -164,6 +164,7 @@ pub fn measure(
             gpu_sensor_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_sensor_ms).collect()),
             wall_ms: Stats::of(timed.iter().map(|r| r.submit_wait_ms).collect()),
             work: work(timed, stats),
+            sensor_traced_fraction: traced_fraction(timed),
             sensor,
             observer,
             pareto: None,
@@ -187,6 +188,23 @@ fn renderer(device: &Arc<Device>, scene: &Scene, rung: &Rung, size: u32) -> Resu
     };
     Renderer::new(device, scene, &options)
         .with_context(|| format!("rung {} at {size}²", rung.label))
+}
+
+/// The share of the sensor's mirror fragments the lookup traced, over the timed frames (None
+/// for a lookup that keeps no tally).
+fn traced_fraction(timed: &[FrameReport]) -> Option<f64> {
+    let tallies: Vec<_> = timed.iter().filter_map(|r| r.traced_rays).collect();
+    if tallies.is_empty() {
+        return None;
+    }
+    let sum = |f: fn(&specchio::render::lookups::TracedRays) -> u64| -> u64 {
+        tallies.iter().map(|t| f(&t.sensor)).sum()
+    };
+    specchio::render::lookups::TracedRays {
+        fragments: sum(|t| t.fragments),
+        traced: sum(|t| t.traced),
+    }
+    .fraction()
 }
 
 /// The counters summed over the timed frames; the statistics-based ones None when the driver

@@ -83,6 +83,9 @@ pub struct FrameReport {
     pub fill_stats: Option<PipelineStats>,
     pub face_stats: Option<[PipelineStats; 6]>,
     pub view_stats: Option<[PipelineStats; 3]>,
+    /// The lookup's traced rays among the observer's and sensor's mirror fragments (only
+    /// `distance-exact`, which traces the rays its search cannot resolve).
+    pub traced_rays: Option<crate::render::lookups::FrameTally>,
 }
 
 /// Running totals for the refresh policy (tested: `on-change` skips static frames).

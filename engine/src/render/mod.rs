@@ -318,9 +318,11 @@ impl Renderer {
             }
         }
         let copies = self.record_views(cmd, &views, readback, display);
+        self.lookup_pass.record_after_views(cmd);
         self.record_readback(cmd, readback, &copies);
         self.submit_frame(cmd, record_start, &mut report)?;
         self.read_queries(&mut report, dirty != 0, readback.views)?;
+        report.traced_rays = self.lookup_pass.tally()?;
         // The cube now shows `state`, except after an `every-n` frame that skipped the update.
         if dirty != 0 || (fill_cube && self.scene.refresh == RefreshPolicy::OnChange) {
             self.cube_state = Some(state);

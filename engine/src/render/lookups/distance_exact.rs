@@ -12,11 +12,13 @@
 //! too, which costs time, not accuracy.
 //!
 //! Set 1: the colour cube and its depth at bindings 0 and 1, as `distance`; the traced scene
-//! at 2..=5 (`shaders/mirror_distance_exact*.frag.glsl`).
+//! at 2..=5 (`shaders/mirror_distance_exact*.frag.glsl`); at 6 the tally of the rays traced
+//! ([`super::tally`]), reported per frame.
 
 use ash::vk;
 
 use super::distance::{cube_bindings, cube_pool_size, depth_sampler, write_cube};
+use super::tally::{FrameTally, TraceTally};
 use super::tracing::SceneTrace;
 use super::{LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders};
 use crate::render::gpu::{ObjectData, LOOKUP_DISTANCE_EXACT};
@@ -27,6 +29,8 @@ use crate::vk::GpuError;
 
 /// Where the traced scene's bindings start (`RAY_QUERY_BINDING` in the shaders).
 const TRACE_BINDING: u32 = 2;
+/// The tally of traced rays, after the traced scene's four (`TALLY_BINDING`).
+const TALLY_BINDING: u32 = TRACE_BINDING + 4;
 
 pub struct DistanceExact;
 
@@ -66,19 +70,23 @@ struct DistanceExactPass {
     _set_layout: DescriptorSetLayout,
     _nearest: Sampler,
     trace: SceneTrace,
+    tally: TraceTally,
 }
 
 impl DistanceExactPass {
     fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
         let device = ctx.device;
         let trace = SceneTrace::create(ctx)?;
+        let tally = TraceTally::create(device)?;
         let bindings: Vec<_> = cube_bindings()
             .into_iter()
             .chain(SceneTrace::bindings(TRACE_BINDING))
+            .chain([TraceTally::binding(TALLY_BINDING)])
             .collect();
         let set_layout =
             DescriptorSetLayout::create(device, &bindings, "distance-exact set layout")?;
-        let [structures, storage] = SceneTrace::pool_sizes();
+        let [structures, mut storage] = SceneTrace::pool_sizes();
+        storage.descriptor_count += 1; // the tally
         let pool = DescriptorPool::create(
             device,
             1,
@@ -89,6 +97,7 @@ impl DistanceExactPass {
         let nearest = depth_sampler(device)?;
         write_cube(ctx, set, &nearest);
         trace.write(ctx, set, TRACE_BINDING);
+        tally.write(set, TALLY_BINDING);
         let shaders = MirrorShaders {
             colour: crate::shaders::MIRROR_DISTANCE_EXACT_FRAG,
             directions: crate::shaders::MIRROR_DISTANCE_EXACT_DIRECTION_FRAG,
@@ -102,6 +111,7 @@ impl DistanceExactPass {
             _set_layout: set_layout,
             _nearest: nearest,
             trace,
+            tally,
         })
     }
 }
@@ -120,6 +130,15 @@ impl LookupPass for DistanceExactPass {
     }
 
     fn record(&self, cmd: vk::CommandBuffer) {
+        self.tally.record_reset(cmd);
         self.trace.record(cmd);
+    }
+
+    fn record_after_views(&self, cmd: vk::CommandBuffer) {
+        self.tally.record_to_host(cmd);
+    }
+
+    fn tally(&self) -> Result<Option<FrameTally>, GpuError> {
+        self.tally.read().map(Some)
     }
 }

@@ -13,7 +13,10 @@ mod cube;
 mod distance;
 mod distance_exact;
 mod ray_query;
+mod tally;
 mod tracing;
+
+pub use tally::{FrameTally, TracedRays};
 
 use std::sync::Arc;
 
@@ -105,6 +108,13 @@ pub trait LookupPass {
     /// Records the lookup's per-frame GPU work before the views (made visible to the
     /// fragment shaders that read it). Most lookups have none.
     fn record(&self, _cmd: vk::CommandBuffer) {}
+    /// Records what follows the frame's views (results made visible to the host).
+    fn record_after_views(&self, _cmd: vk::CommandBuffer) {}
+    /// After the frame's fence: how many mirror rays the lookup traced (None: it traces all
+    /// or none, so there is nothing to count).
+    fn tally(&self) -> Result<Option<FrameTally>, GpuError> {
+        Ok(None)
+    }
 }
 
 /// The two pipelines every lookup draws the mirror with: one writing colour, one writing the

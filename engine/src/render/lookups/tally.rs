@@ -1,0 +1,130 @@
+//! How often `distance-exact` falls back to tracing: per mirror draw, the fragments it shaded
+//! and, among them, the rays its distance search could not resolve and it traced
+//! (`shaders/include/trace_tally.glsl`). The fraction is what that lookup costs over
+//! `distance`, so the benchmark and `render.json` report it.
+//!
+//! One `uvec2` (fragments, traced) per view and pass (colour or directions): every mirror draw
+//! of a frame adds to its own slot, so no two draws write the same bytes and they need no
+//! barrier between them. Zeroed at the start of each frame, read by the host after its fence.
+//! Helper invocations (the 2x2 quads' fill-ins) do not count: their atomics have no effect.
+
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use serde::Serialize;
+
+use crate::render::resources::{VIEW_COUNT, VIEW_OBSERVER, VIEW_SENSOR};
+use crate::vk::commands::host_read_barrier;
+use crate::vk::descriptors;
+use crate::vk::device::Device;
+use crate::vk::memory::{Buffer, BufferDesc};
+use crate::vk::GpuError;
+
+/// The mirror fragments of one view and the rays traced among them (colour pass).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct TracedRays {
+    pub fragments: u64,
+    pub traced: u64,
+}
+
+impl TracedRays {
+    /// traced / fragments (None when the mirror was not drawn).
+    pub fn fraction(&self) -> Option<f64> {
+        (self.fragments > 0).then(|| self.traced as f64 / self.fragments as f64)
+    }
+}
+
+/// One frame's tally: the observer's and the sensor's colour passes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct FrameTally {
+    pub observer: TracedRays,
+    pub sensor: TracedRays,
+}
+
+/// Slots per view: the colour pass and the direction pass (`TALLY_PASS_*` in the shaders).
+const PASSES: usize = 2;
+const SLOT_BYTES: u64 = 2 * std::mem::size_of::<u32>() as u64;
+
+/// The tally's storage buffer (host-visible: a few dozen bytes read every frame).
+pub struct TraceTally {
+    device: Arc<Device>,
+    buffer: Buffer,
+}
+
+impl TraceTally {
+    pub fn create(device: &Arc<Device>) -> Result<Self, GpuError> {
+        let desc = BufferDesc {
+            size: (VIEW_COUNT * PASSES) as u64 * SLOT_BYTES,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuToCpu,
+        };
+        let buffer = Buffer::create(device, &desc, "trace tally")?;
+        Ok(Self {
+            device: device.clone(),
+            buffer,
+        })
+    }
+
+    /// The tally's set-layout binding.
+    pub fn binding(binding: u32) -> vk::DescriptorSetLayoutBinding<'static> {
+        let stage = vk::ShaderStageFlags::FRAGMENT;
+        descriptors::binding(binding, vk::DescriptorType::STORAGE_BUFFER, 1, stage)
+    }
+
+    /// Points `binding` of `set` at the tally.
+    pub fn write(&self, set: vk::DescriptorSet, binding: u32) {
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        descriptors::write_buffer(&self.device, set, binding, storage, self.buffer.raw);
+    }
+
+    /// Zeroes the tally before the frame's mirror draws (made visible to their atomics).
+    pub fn record_reset(&self, cmd: vk::CommandBuffer) {
+        let d = &self.device.raw;
+        let to_shaders = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::FRAGMENT_SHADER)
+            .dst_access_mask(
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            )];
+        let dep = vk::DependencyInfo::default().memory_barriers(&to_shaders);
+        // SAFETY: cmd is recording; the buffer lives as long as the lookup pass, which
+        // outlives the frame (the renderer waits for it).
+        unsafe {
+            d.cmd_fill_buffer(cmd, self.buffer.raw, 0, vk::WHOLE_SIZE, 0);
+            d.cmd_pipeline_barrier2(cmd, &dep);
+        }
+    }
+
+    /// After the frame's mirror draws: their counts made visible to the host.
+    pub fn record_to_host(&self, cmd: vk::CommandBuffer) {
+        host_read_barrier(
+            &self.device,
+            cmd,
+            vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            vk::AccessFlags2::SHADER_STORAGE_WRITE,
+        );
+    }
+
+    /// The finished frame's counts (call after its fence).
+    pub fn read(&self) -> Result<FrameTally, GpuError> {
+        let bytes = self.buffer.mapped()?;
+        let slot = |view: u32| {
+            // The colour pass's slot: index view * PASSES (TALLY_PASS_COLOUR = 0).
+            let at = (view as usize * PASSES) * SLOT_BYTES as usize;
+            let word = |i: usize| {
+                let b = &bytes[at + 4 * i..at + 4 * i + 4];
+                u64::from(u32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
+            };
+            TracedRays {
+                fragments: word(0),
+                traced: word(1),
+            }
+        };
+        Ok(FrameTally {
+            observer: slot(VIEW_OBSERVER),
+            sensor: slot(VIEW_SENSOR),
+        })
+    }
+}
