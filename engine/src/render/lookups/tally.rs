@@ -15,6 +15,7 @@ use gpu_allocator::MemoryLocation;
 use serde::Serialize;
 
 use crate::render::resources::{VIEW_COUNT, VIEW_OBSERVER, VIEW_SENSOR};
+use crate::shaders::shared::{TALLY_PASSES, TALLY_PASS_COLOUR};
 use crate::vk::commands::host_read_barrier;
 use crate::vk::descriptors;
 use crate::vk::device::Device;
@@ -42,8 +43,8 @@ pub struct FrameTally {
     pub sensor: TracedRays,
 }
 
-/// Slots per view: the colour pass and the direction pass (`TALLY_PASS_*` in the shaders).
-const PASSES: usize = 2;
+/// Slots per view: the colour pass and the direction pass (shared.glsl's `TALLY_PASS_*`).
+const PASSES: usize = TALLY_PASSES as usize;
 const SLOT_BYTES: u64 = 2 * std::mem::size_of::<u32>() as u64;
 
 /// The tally's storage buffer (host-visible: a few dozen bytes read every frame).
@@ -111,8 +112,7 @@ impl TraceTally {
     pub fn read(&self) -> Result<FrameTally, GpuError> {
         let bytes = self.buffer.mapped()?;
         let slot = |view: u32| {
-            // The colour pass's slot: index view * PASSES (TALLY_PASS_COLOUR = 0).
-            let at = (view as usize * PASSES) * SLOT_BYTES as usize;
+            let at = (view as usize * PASSES + TALLY_PASS_COLOUR as usize) * SLOT_BYTES as usize;
             let word = |i: usize| {
                 let b = &bytes[at + 4 * i..at + 4 * i + 4];
                 u64::from(u32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
