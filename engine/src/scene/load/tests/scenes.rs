@@ -15,6 +15,7 @@ use crate::scene::{load, load_str, MaterialKind, RefreshPolicy, Scene};
 fn shipped_scenes_load() {
     for rel in [
         "scenes/thesis-room.toml",
+        "scenes/furnished-room.toml",
         "scenes/moving-objects.toml",
         "scenes/many-objects.toml",
         "scenes/test/six-colour-room.toml",
