@@ -63,6 +63,15 @@ fn shipped_scenes_load() {
     // sphere radii and 2 cylinders in the file), the OBJ and the glTF.
     assert_eq!(moving.meshes.len(), 5);
 
+    // The furnished room: furniture plus three moving things, and free floor for the 0.5 m
+    // landmark grid of the localisation experiment (docs/sensor.md).
+    let furnished = load(&repo("scenes/furnished-room.toml")).unwrap();
+    let moving = furnished.objects.iter().filter(|o| o.animation.is_some());
+    assert_eq!(moving.count(), 3);
+    assert!(furnished.objects.len() >= 15 && furnished.materials.len() >= 15);
+    let grid = crate::sensor::localise::poses::grid(&furnished, 0.5, 0.0).unwrap();
+    assert!(grid.len() >= 200, "{} landmarks", grid.len());
+
     let six = load(&repo("scenes/test/six-colour-room.toml")).unwrap();
     let colour = |face: usize| match &six.materials[six.room.wall_materials[face]].kind {
         MaterialKind::Color { color } => *color,
