@@ -9,9 +9,20 @@ use common::{devices, root, specchio, temp_dir};
 /// must come back within one panorama column.
 #[test]
 fn queries_at_landmarks_are_found_exactly_on_every_device() {
+    queries_at_landmarks_are_found_exactly("fourier");
+}
+
+/// The same check with the second descriptor, the low-resolution panorama whose heading is a
+/// column-shift search.
+#[test]
+fn column_shift_finds_queries_at_landmarks_exactly_on_every_device() {
+    queries_at_landmarks_are_found_exactly("column-shift");
+}
+
+fn queries_at_landmarks_are_found_exactly(descriptor: &str) {
     let scene = root().join("scenes/thesis-room.toml");
     for device in devices() {
-        let out = temp_dir(&format!("localise-{device}"));
+        let out = temp_dir(&format!("localise-{descriptor}-{device}"));
         let result = specchio(&[
             "localise",
             scene.to_str().unwrap(),
@@ -28,6 +39,8 @@ fn queries_at_landmarks_are_found_exactly_on_every_device() {
             "128",
             "--cube-size",
             "64",
+            "--descriptor",
+            descriptor,
             "--device",
             &device,
         ]);
@@ -59,7 +72,8 @@ fn queries_at_landmarks_are_found_exactly_on_every_device() {
         assert!(headings.iter().any(|h| (h - headings[0]).abs() > 10.0));
         let db = read("landmarks.json");
         assert_eq!(db["landmarks"].as_array().unwrap().len(), 8);
-        assert_eq!(db["descriptor"], "fourier");
+        assert_eq!(db["descriptor"], descriptor);
+        assert_eq!(report["descriptor"], descriptor);
         std::fs::remove_dir_all(&out).unwrap();
     }
 }

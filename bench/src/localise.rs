@@ -42,7 +42,8 @@ pub struct Args {
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true,
           value_parser = real(0.0, true, 100.0))]
     grid: f64,
-    /// Descriptor coefficients per panorama row (Fourier: the first k DFT terms), 1..=256.
+    /// Descriptor size, 1..=256 (fourier: the first k DFT terms per panorama row;
+    /// column-shift: 8k columns).
     #[arg(long, default_value_t = 8, allow_negative_numbers = true,
           value_parser = whole(1..=MAX_COEFFICIENTS))]
     k: u32,
@@ -62,7 +63,7 @@ pub struct Args {
     /// whose every match must be exact.
     #[arg(long)]
     queries_at_landmarks: bool,
-    /// Descriptor (fourier).
+    /// Descriptor (fourier, column-shift; docs/sensor.md).
     #[arg(long, default_value = "fourier")]
     descriptor: String,
     /// Sensor image side in pixels (square), 16..=8192.

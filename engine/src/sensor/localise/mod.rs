@@ -7,10 +7,13 @@
 //!
 //! Descriptors are plug-ins behind [`Descriptor`], each with one home (a module here) and a
 //! name in [`DescriptorKind`], so that a second one can be compared with the first on the
-//! same sweep. The first is the Fourier signature of the cylindrical panorama ([`fourier`]).
+//! same sweep. The first is the Fourier signature of the cylindrical panorama ([`fourier`]),
+//! which forgets the heading; the second, a low-resolution panorama compared over every
+//! column shift ([`shift`]), searches it.
 
 pub mod fourier;
 pub mod poses;
+pub mod shift;
 
 use serde::{Deserialize, Serialize};
 
@@ -66,14 +69,16 @@ pub trait Descriptor: Sync {
 #[serde(rename_all = "kebab-case")]
 pub enum DescriptorKind {
     Fourier,
+    ColumnShift,
 }
 
 impl DescriptorKind {
-    pub const ALL: [Self; 1] = [Self::Fourier];
+    pub const ALL: [Self; 2] = [Self::Fourier, Self::ColumnShift];
 
     pub fn name(self) -> &'static str {
         match self {
             Self::Fourier => "fourier",
+            Self::ColumnShift => "column-shift",
         }
     }
 
@@ -85,10 +90,12 @@ impl DescriptorKind {
         Self::ALL.map(Self::name).join(", ")
     }
 
-    /// The descriptor, with `coefficients` its size parameter (Fourier: per row).
+    /// The descriptor, with `coefficients` its size parameter (Fourier: per row; column
+    /// shift: 8 columns each).
     pub fn build(self, coefficients: u32) -> Box<dyn Descriptor> {
         match self {
             Self::Fourier => Box::new(fourier::FourierSignature { coefficients }),
+            Self::ColumnShift => Box::new(shift::ColumnShift::for_k(coefficients)),
         }
     }
 }

@@ -15,6 +15,7 @@ use crate::scene::{load, load_str, MaterialKind, RefreshPolicy, Scene};
 fn shipped_scenes_load() {
     for rel in [
         "scenes/thesis-room.toml",
+        "scenes/furnished-room.toml",
         "scenes/moving-objects.toml",
         "scenes/many-objects.toml",
         "scenes/test/six-colour-room.toml",
@@ -61,6 +62,15 @@ fn shipped_scenes_load() {
     // Distinct meshes: one unit box, sphere and cylinder whatever their sizes (2 box sizes, 2
     // sphere radii and 2 cylinders in the file), the OBJ and the glTF.
     assert_eq!(moving.meshes.len(), 5);
+
+    // The furnished room: furniture plus three moving things, and free floor for the 0.5 m
+    // landmark grid of the localisation experiment (docs/sensor.md).
+    let furnished = load(&repo("scenes/furnished-room.toml")).unwrap();
+    let moving = furnished.objects.iter().filter(|o| o.animation.is_some());
+    assert_eq!(moving.count(), 3);
+    assert!(furnished.objects.len() >= 15 && furnished.materials.len() >= 15);
+    let grid = crate::sensor::localise::poses::grid(&furnished, 0.5, 0.0).unwrap();
+    assert!(grid.len() >= 200, "{} landmarks", grid.len());
 
     let six = load(&repo("scenes/test/six-colour-room.toml")).unwrap();
     let colour = |face: usize| match &six.materials[six.room.wall_materials[face]].kind {
