@@ -23,6 +23,7 @@ fn angle(a: Vec3, b: Vec3) -> f64 {
 fn gpu_outputs(gpu: &Gpu, scene: specchio::scene::Scene) -> SensorOutputs {
     let options = RenderOptions {
         cube_size: Some(64),
+        id_cube: true,
         ..Default::default()
     };
     let mut r = Renderer::new(&gpu.device, scene, &options).expect("renderer");
