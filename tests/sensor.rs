@@ -19,10 +19,21 @@ fn angle(a: Vec3, b: Vec3) -> f64 {
     2.0 * ((a - b).length() / 2.0).asin()
 }
 
-/// The GPU's sensor outputs of the six-colour room on `gpu`.
+/// The GPU's sensor outputs of `scene` on `gpu`, with a 64-texel cube.
 fn gpu_outputs(gpu: &Gpu, scene: specchio::scene::Scene) -> SensorOutputs {
+    gpu_outputs_with(gpu, scene, 64, Default::default())
+}
+
+/// The GPU's sensor outputs of `scene` on `gpu` with a `cube_size` cube filled by `method`.
+fn gpu_outputs_with(
+    gpu: &Gpu,
+    scene: specchio::scene::Scene,
+    cube_size: u32,
+    method: specchio::render::methods::Method,
+) -> SensorOutputs {
     let options = RenderOptions {
-        cube_size: Some(64),
+        cube_size: Some(cube_size),
+        method,
         id_cube: true,
         ..Default::default()
     };
