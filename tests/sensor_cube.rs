@@ -85,7 +85,9 @@ fn range_and_ids_through_the_cube_agree_with_the_reference() {
     let exact = SensorOutputs::from_reference(&s, 0.0, &images);
     for device in devices() {
         let gpu = Gpu::on(&device, Default::default());
-        let out = gpu_frames(&gpu, &s, Method::SIX_PASS, 256, &[0.0], true).remove(0).1;
+        let out = gpu_frames(&gpu, &s, Method::SIX_PASS, 256, &[0.0], true)
+            .remove(0)
+            .1;
         gpu.finish();
         let (mut both, mut equal, mut edge_differs, mut interior_differs) = (0, 0, 0, 0);
         let mut relative = Vec::new();
@@ -123,9 +125,15 @@ fn range_and_ids_through_the_cube_agree_with_the_reference() {
         // median 2.7e-6, p99 3.4e-4 (SwiftShader) and 1.0e-5 (lavapipe). A silhouette texel
         // is known to a texel only as seen from the cube's centre, so those pixels may take
         // either side's id; nowhere else may the id be wrong.
-        assert_eq!(interior_differs, 0, "{device}: ids differ away from silhouettes");
+        assert_eq!(
+            interior_differs, 0,
+            "{device}: ids differ away from silhouettes"
+        );
         assert!(agree >= 0.99, "{device}: ids agree on {agree}");
-        assert!(median < 1e-5 && p99 < 1e-3, "{device}: ranges {median} {p99}");
+        assert!(
+            median < 1e-5 && p99 < 1e-3,
+            "{device}: ranges {median} {p99}"
+        );
     }
 }
 
@@ -138,7 +146,9 @@ fn every_method_writes_six_pass_ids() {
     s.sensor.resolution = [128, 128];
     for device in devices() {
         let (gpu, methods) = Gpu::with_all_methods_on(Some(&device));
-        let six = gpu_frames(&gpu, &s, Method::SIX_PASS, 64, &[3.0], true).remove(0).1;
+        let six = gpu_frames(&gpu, &s, Method::SIX_PASS, 64, &[3.0], true)
+            .remove(0)
+            .1;
         let objects = six.ids.iter().filter(|&&id| id >= 6 && id != NO_ID).count();
         assert!(objects > 0, "{device}: no object seen");
         let names: Vec<&str> = methods.iter().map(|m| m.name()).collect();

@@ -131,8 +131,7 @@ impl Renderer {
         match fill {
             Fill::Method => {
                 let ids = self.cube.ids.is_some();
-                let rec =
-                    CubeRecorder::new(self, cmd, self.method.layout(), per_face_marks, ids);
+                let rec = CubeRecorder::new(self, cmd, self.method.layout(), per_face_marks, ids);
                 self.fill.record(&rec, plan);
             }
             Fill::Floor(f) => {

@@ -203,7 +203,8 @@ impl Pipeline {
         } else {
             vk::ColorComponentFlags::empty()
         };
-        let attachment = vk::PipelineColorBlendAttachmentState::default().color_write_mask(write_mask);
+        let attachment =
+            vk::PipelineColorBlendAttachmentState::default().color_write_mask(write_mask);
         let attachments = [attachment; 2];
         let count = 1 + usize::from(desc.id_format.is_some());
         let blend =
@@ -213,8 +214,10 @@ impl Pipeline {
             dynamic_states.extend([vk::DynamicState::CULL_MODE, vk::DynamicState::FRONT_FACE]);
         }
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let color_formats: Vec<vk::Format> =
-            [desc.color_format].into_iter().chain(desc.id_format).collect();
+        let color_formats: Vec<vk::Format> = [desc.color_format]
+            .into_iter()
+            .chain(desc.id_format)
+            .collect();
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .view_mask(desc.view_mask)
             .color_attachment_formats(&color_formats)

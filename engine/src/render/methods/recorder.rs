@@ -144,7 +144,10 @@ impl<'a> CubeRecorder<'a> {
     }
 
     /// The id cube's view `pick` (a face's or the six layers'), when this fill writes it.
-    fn id_view(&self, pick: impl Fn(&crate::render::targets::IdCube) -> vk::ImageView) -> Option<vk::ImageView> {
+    fn id_view(
+        &self,
+        pick: impl Fn(&crate::render::targets::IdCube) -> vk::ImageView,
+    ) -> Option<vk::ImageView> {
         self.r.cube.ids.as_ref().filter(|_| self.ids).map(pick)
     }
 
