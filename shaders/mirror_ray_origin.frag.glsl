@@ -1,10 +1,10 @@
 #version 460
 // mirror_ray_origin.frag - the sensor's ray map, first half: per mirror pixel, the point where
 // the pixel centre's ray meets the sphere (render space, rgb) and how far the reflected ray
-// runs to the room box (a), the range the box lookup assumes. The second half
-// (mirror_ray_direction.frag) writes the reflected direction. The arithmetic is mirror_hit's,
-// the same as every lookup's, so this is the ray the colour pass really looked up; the CPU's
-// exact ray map (engine/src/sensor/ray_map.rs) must agree to float rounding.
+// runs to what it meets, through the cube's depth (a; sensor_ray.glsl). The second half
+// (mirror_ray_direction.frag) writes the reflected direction and the id. The arithmetic is
+// mirror_hit's, the same as every lookup's, so this is the ray the colour pass really looked
+// up; the CPU's exact ray map (engine/src/sensor/ray_map.rs) must agree to float rounding.
 #extension GL_GOOGLE_include_directive : require
 #include "shared.glsl"
 
@@ -12,6 +12,7 @@ SCENE_BINDINGS;
 PUSH_CONSTANTS;
 
 #include "mirror.glsl"
+#include "sensor_ray.glsl"
 
 layout(location = 0) out vec4 out_origin_range;
 
@@ -21,8 +22,9 @@ void main() {
     if (!mirror_hit(view, frame, dir, hit, n)) {
         discard;
     }
-    uint wall;
-    float range = room_exit_distance(hit, reflect(dir, n), frame, wall);
+    float range;
+    uint id;
+    sensor_range_id(frame, hit, reflect(dir, n), range, id);
     out_origin_range = vec4(hit, range);
     gl_FragDepth = mirror_depth(view, hit);
 }

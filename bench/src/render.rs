@@ -146,6 +146,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             method,
             full_updates: args.full_updates,
             lookup,
+            // Range and ids through the cube: only when asked for, so timings never pay.
+            id_cube: args.sensor_outputs,
             ..Default::default()
         };
         let mut renderer = Renderer::new(&device, scene.clone(), &options)?;

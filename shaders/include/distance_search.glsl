@@ -139,13 +139,19 @@ float behind(vec3 q_h, float w, FrameData f) {
 // the steps lie inside the room. flags.z steps of 1/flags.z; the first bracket of a sign
 // change is then refined by flags.w secant steps (regula falsi: the bracket shrinks around
 // the root) and one last secant estimate.
-uint distance_search(FrameData f, vec3 p, vec3 r, bool stop_at_jump, out vec3 found) {
+//
+// `range` is the distance along r from p to the point found (for SEARCH_HIT): with
+// q = p + s a / (1 - a) r, it is s a / (1 - a) (the sensor's range, sensor_ray.glsl).
+uint distance_search_range(FrameData f, vec3 p, vec3 r, bool stop_at_jump, out vec3 found,
+                           out float range) {
     vec3 p0 = p - f.mirror.xyz;
-    vec3 far_end = length(room_exit(p, r, f) - p) / 3.0 * r;
+    float s = length(room_exit(p, r, f) - p) / 3.0;
+    vec3 far_end = s * r;
     uint steps = max(f.flags.z, 1u);
     float a0 = 0.0;
     float h0 = behind(p0, 1.0, f);
     found = far_end;
+    range = 0.0;
     for (uint i = 1u; i <= steps; i++) {
         float a1 = float(i) / float(steps);
         float h1 = behind(mix(p0, far_end, a1), 1.0 - a1, f);
@@ -167,6 +173,7 @@ uint distance_search(FrameData f, vec3 p, vec3 r, bool stop_at_jump, out vec3 fo
             float tolerance = stop_at_jump ? DISTANCE_EXACT_HIT_TOLERANCE : DISTANCE_HIT_TOLERANCE;
             if (abs(behind(q_h, 1.0 - a, f)) <= tolerance) {
                 found = q_h;
+                range = s * a / (1.0 - a);
                 // A hit on a silhouette texel is known to a texel only as seen from the
                 // centre; seen from the mirror, the ray may pass beside the occluder into what
                 // the centre never saw (or meet it where the centre saw what lies behind).
@@ -182,6 +189,11 @@ uint distance_search(FrameData f, vec3 p, vec3 r, bool stop_at_jump, out vec3 fo
         h0 = h1;
     }
     return SEARCH_NONE;
+}
+
+uint distance_search(FrameData f, vec3 p, vec3 r, bool stop_at_jump, out vec3 found) {
+    float range;
+    return distance_search_range(f, p, r, stop_at_jump, found, range);
 }
 
 // The distance lookup's direction: the point the search met, or `fallback` (the box

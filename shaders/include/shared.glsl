@@ -86,6 +86,10 @@ struct MaterialSample {
 #define PUSH_CONSTANTS \
     layout(push_constant) uniform Push { uint view_index; uint object_index; uint face_mask; uint pad; } push
 
+// The id cube's value where no drawable was drawn (its clear value), and the sensor's id for
+// "nothing": drawables are numbered walls 0..6 (face order), then objects 6 + i.
+#define OBJECT_NONE 4294967295u
+
 // Instanced cube fill: gl_InstanceIndex = object << INSTANCE_FACE_BITS | face.
 #define INSTANCE_FACE_BITS 3u
 

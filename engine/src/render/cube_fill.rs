@@ -96,24 +96,31 @@ impl Renderer {
         } else {
             vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
         };
-        image_barriers(
-            dev,
-            cmd,
-            &[
-                barrier(
-                    cube.color.raw,
-                    mip0,
-                    (old, SAMPLED),
-                    (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-                ),
-                barrier(
-                    cube.depth.raw,
-                    cube.depth.full_range(),
-                    (old, SAMPLED),
-                    (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
-                ),
-            ],
-        );
+        // The id cube, where there is one, goes the same way as the depth: kept for the clean
+        // faces, read by the sensor ray passes' fragment shaders.
+        let mut to_fill = vec![
+            barrier(
+                cube.color.raw,
+                mip0,
+                (old, SAMPLED),
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
+            ),
+            barrier(
+                cube.depth.raw,
+                cube.depth.full_range(),
+                (old, SAMPLED),
+                (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
+            ),
+        ];
+        to_fill.extend(cube.ids.as_ref().map(|ids| {
+            barrier(
+                ids.image.raw,
+                ids.image.full_range(),
+                (old, SAMPLED),
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
+            )
+        }));
+        image_barriers(dev, cmd, &to_fill);
         if let (Some(q), false) = (&self.statistics, per_face_marks) {
             q.begin(cmd, 0);
         }
@@ -123,11 +130,14 @@ impl Renderer {
         }
         match fill {
             Fill::Method => {
-                let rec = CubeRecorder::new(self, cmd, self.method.layout(), per_face_marks);
+                let ids = self.cube.ids.is_some();
+                let rec = CubeRecorder::new(self, cmd, self.method.layout(), per_face_marks, ids);
                 self.fill.record(&rec, plan);
             }
             Fill::Floor(f) => {
-                let rec = CubeRecorder::new(self, cmd, CubeLayout::PerFace, false);
+                // The floors write no ids: the id cube keeps what it had (the floors are
+                // benchmark passes, which never read ids).
+                let rec = CubeRecorder::new(self, cmd, CubeLayout::PerFace, false, false);
                 self.record_floor(&rec, plan, f);
             }
         }
@@ -142,17 +152,23 @@ impl Renderer {
         if let Some(q) = &self.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, TS_FILL);
         }
-        // The depth the fill wrote, for the mirror's fragment shaders (distance lookup).
-        image_barriers(
-            dev,
-            cmd,
-            &[barrier(
-                cube.depth.raw,
-                cube.depth.full_range(),
-                (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
+        // The depth the fill wrote, for the mirror's fragment shaders (distance lookup, sensor
+        // ray passes), and the ids it wrote (sensor ray passes).
+        let mut to_read = vec![barrier(
+            cube.depth.raw,
+            cube.depth.full_range(),
+            (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
+            (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
+        )];
+        to_read.extend(cube.ids.as_ref().map(|ids| {
+            barrier(
+                ids.image.raw,
+                ids.image.full_range(),
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
                 (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
-            )],
-        );
+            )
+        }));
+        image_barriers(dev, cmd, &to_read);
         self.record_mips(cmd, plan.dirty);
         if let Some(q) = &self.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);

@@ -62,6 +62,8 @@ pub(super) fn barrier(
 /// The attachments of one rendering scope.
 pub(super) struct Attachments {
     pub color: vk::ImageView,
+    /// The id cube's view, attachment 1 of a cube fill that writes ids.
+    pub ids: Option<vk::ImageView>,
     pub depth: vk::ImageView,
     pub size: [u32; 2],
     /// Layers rendered (layered cube fills: 6); ignored when `view_mask` is set.
@@ -98,6 +100,12 @@ pub(super) struct Facing {
 pub(super) const CLEAR_COLOR: vk::ClearValue = vk::ClearValue {
     color: vk::ClearColorValue {
         float32: [0.0, 0.0, 0.0, 0.0],
+    },
+};
+/// The id cube's clear value: no drawable (`OBJECT_NONE`).
+pub(super) const CLEAR_ID: vk::ClearValue = vk::ClearValue {
+    color: vk::ClearColorValue {
+        uint32: [crate::shaders::shared::OBJECT_NONE; 4],
     },
 };
 pub(super) const CLEAR_DEPTH: vk::ClearValue = vk::ClearValue {
@@ -222,30 +230,36 @@ impl Renderer {
     }
 
     /// Draws the mirror's bounding cube with the lookup's colour or direction pipeline, or
-    /// one of the sensor ray map's (which read the scene set only).
+    /// one of the sensor ray map's (which read the cube's depth and ids).
     pub(super) fn draw_mirror(&self, cmd: vk::CommandBuffer, output: MirrorOutput, view: u32) {
         let d = &self.device.raw;
         let lookup = &self.lookup_pass;
-        let p = &self.pipelines;
         let (pipeline, layout, sets) = match output {
             MirrorOutput::Colour | MirrorOutput::LookupDirection => (
                 lookup.pipeline(output == MirrorOutput::LookupDirection).raw,
                 lookup.layout().raw,
                 vec![self.resources.scene_set, lookup.set()],
             ),
-            MirrorOutput::RayOrigin => (
-                p.ray_origin.raw,
-                p.scene_layout.raw,
-                vec![self.resources.scene_set],
-            ),
-            MirrorOutput::RayDirection => (
-                p.ray_direction.raw,
-                p.scene_layout.raw,
-                vec![self.resources.scene_set],
-            ),
+            MirrorOutput::RayOrigin | MirrorOutput::RayDirection => {
+                let (rays, _) = self
+                    .sensor_rays
+                    .as_ref()
+                    .expect("the ray map's passes are made before a frame that draws them");
+                let pipeline = if output == MirrorOutput::RayOrigin {
+                    &rays.origin
+                } else {
+                    &rays.direction
+                };
+                (
+                    pipeline.raw,
+                    rays.layout.raw,
+                    vec![self.resources.scene_set, rays.set],
+                )
+            }
         };
-        // SAFETY: recording inside a view pass; what set 1 holds is ready for reading (the cube
-        // in SHADER_READ_ONLY layout, or the lookup's own data after its barrier).
+        // SAFETY: recording inside a view pass; what set 1 holds is ready for reading (the
+        // cube's colour, depth and ids in SHADER_READ_ONLY layout, or the lookup's own data
+        // after its barrier).
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
             d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, layout, 0, &sets, &[]);
@@ -312,12 +326,19 @@ impl Renderer {
         } else {
             vk::AttachmentLoadOp::LOAD
         };
-        let color_att = [vk::RenderingAttachmentInfo::default()
-            .image_view(a.color)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(load)
-            .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(CLEAR_COLOR)];
+        let colour = |view, clear| {
+            vk::RenderingAttachmentInfo::default()
+                .image_view(view)
+                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .load_op(load)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .clear_value(clear)
+        };
+        let color_att: Vec<vk::RenderingAttachmentInfo> = [(a.color, CLEAR_COLOR)]
+            .into_iter()
+            .chain(a.ids.map(|ids| (ids, CLEAR_ID)))
+            .map(|(view, clear)| colour(view, clear))
+            .collect();
         let depth_att = vk::RenderingAttachmentInfo::default()
             .image_view(a.depth)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -350,9 +371,10 @@ impl Renderer {
         unsafe { self.device.raw.cmd_end_rendering(cmd) };
     }
 
-    /// Inside a layered rendering scope: clears colour and depth of the faces in `mask`.
-    pub(super) fn clear_faces(&self, cmd: vk::CommandBuffer, mask: u8, size: u32) {
-        let attachments = [
+    /// Inside a layered rendering scope: clears colour and depth of the faces in `mask`, and
+    /// with `ids` the id cube (attachment 1) too.
+    pub(super) fn clear_faces(&self, cmd: vk::CommandBuffer, mask: u8, size: u32, ids: bool) {
+        let all = [
             vk::ClearAttachment {
                 aspect_mask: vk::ImageAspectFlags::COLOR,
                 color_attachment: 0,
@@ -363,7 +385,13 @@ impl Renderer {
                 color_attachment: 0,
                 clear_value: CLEAR_DEPTH,
             },
+            vk::ClearAttachment {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                color_attachment: 1,
+                clear_value: CLEAR_ID,
+            },
         ];
+        let attachments = &all[..if ids { 3 } else { 2 }];
         let rects: Vec<vk::ClearRect> = (0..6u32)
             .filter(|f| mask & (1 << f) != 0)
             .map(|f| vk::ClearRect {
@@ -382,7 +410,7 @@ impl Renderer {
         unsafe {
             self.device
                 .raw
-                .cmd_clear_attachments(cmd, &attachments, &rects)
+                .cmd_clear_attachments(cmd, attachments, &rects)
         };
     }
 

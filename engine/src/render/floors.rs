@@ -142,6 +142,7 @@ impl Renderer {
                 vertex_bindings: if with_vertices { &bindings } else { &[] },
                 vertex_attributes: if with_vertices { &attributes } else { &[] },
                 color_format: self.cube.format,
+                id_format: None,
                 depth_format: DEPTH_FORMAT,
                 cull_mode: vk::CullModeFlags::NONE,
                 // Every cube pipeline sets its culling per draw.

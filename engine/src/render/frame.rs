@@ -24,6 +24,10 @@ pub struct RenderOptions {
     pub refresh: Option<RefreshPolicy>,
     /// Replaces the mirror's lookup mode (`--lookup`).
     pub lookup: Option<crate::scene::Lookup>,
+    /// Make the id cube (an R32_UINT attachment every fill writes, `targets::IdCube`): the
+    /// sensor's ray map (`Readback::rays`) reads range and id through it and refuses to run
+    /// without it. Off by default, so the benchmark's fills do not pay for it.
+    pub id_cube: bool,
 }
 
 /// What to copy back to the CPU after a frame.
@@ -34,7 +38,8 @@ pub struct Readback {
     /// The lookup direction of every observer and sensor mirror pixel (for the angular
     /// error against the exact reference).
     pub directions: bool,
-    /// The sensor's ray map (`sensor_rays.rs`).
+    /// The sensor's ray map with range and ids through the cube (`sensor_rays.rs`; needs
+    /// `RenderOptions::id_cube`).
     pub rays: bool,
 }
 

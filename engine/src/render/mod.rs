@@ -73,9 +73,6 @@ struct Pipelines {
     view_scene: Pipeline,
     /// Direction pass: scene depth only, then the mirror's lookup directions.
     depth_only: Pipeline,
-    /// The sensor's ray map, in two passes (origin and range, direction and wall).
-    ray_origin: Pipeline,
-    ray_direction: Pipeline,
     scene_layout: PipelineLayout,
 }
 
@@ -97,8 +94,8 @@ pub struct Renderer {
     pair_target: ViewTarget,
     observer_direction_target: ViewTarget,
     sensor_direction_target: ViewTarget,
-    /// The sensor ray map's two targets (origin, direction), made on first use.
-    sensor_ray_targets: Option<[ViewTarget; 2]>,
+    /// The sensor ray map's passes and two targets (origin, direction), made on first use.
+    sensor_rays: Option<(sensor_rays::SensorRays, [ViewTarget; 2])>,
     cube: CubeTarget,
     resources: SceneResources,
     readback: Option<Buffer>,
@@ -139,7 +136,7 @@ impl Renderer {
         budget::check_targets(device, &scene, cube_setting)?;
         let submitter = Submitter::create(device, "frame")?;
         let resources = SceneResources::create(device, &scene, &submitter)?;
-        let cube = CubeTarget::create(device, &scene.cube)?;
+        let cube = CubeTarget::create(device, &scene.cube, options.id_cube)?;
         let [ow, oh] = scene.observer.resolution;
         let [sw, sh] = scene.sensor.resolution;
         let view = targets::VIEW_FORMAT;
@@ -169,6 +166,7 @@ impl Renderer {
             scene_set_layout: resources.scene_set_layout.raw,
             scene_layout: &pipelines.scene_layout,
             cube_format: cube.format,
+            ids: options.id_cube,
             layout: options.method.layout(),
             submitter: &submitter,
         })?;
@@ -203,7 +201,7 @@ impl Renderer {
             pair_target,
             observer_direction_target,
             sensor_direction_target,
-            sensor_ray_targets: None,
+            sensor_rays: None,
             cube,
             resources,
             readback: None,
@@ -253,8 +251,13 @@ impl Renderer {
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
         // A lookup that does not read the cube (ray-query) skips its fill, unless the cube
-        // itself is read back; the cube then keeps what it last showed.
-        let fill_cube = lookups::plugin(self.pass_lookup).uses_cube() || readback.cube;
+        // itself or the sensor's ray map (which reads its depth and ids) is read back; the
+        // cube then keeps what it last showed.
+        let fill_cube =
+            lookups::plugin(self.pass_lookup).uses_cube() || readback.cube || readback.rays;
+        if readback.rays {
+            self.prepare_sensor_rays()?;
+        }
         let mut dirty = if fill_cube {
             self.dirty_faces(frame, &state, &views)
         } else {
@@ -281,9 +284,6 @@ impl Renderer {
                 cull_back: &cull_back,
             };
             self.fill.prepare(&plan, &prepare)?;
-        }
-        if readback.rays && self.sensor_ray_targets.is_none() {
-            self.sensor_ray_targets = Some(self.create_ray_targets()?);
         }
         let readback_bytes = self.readback_size(readback);
         if readback_bytes > 0

@@ -54,7 +54,7 @@ impl Renderer {
             slots.push((Slot::ObserverDirection, &self.observer_direction_target));
             slots.push((Slot::SensorDirection, &self.sensor_direction_target));
         }
-        if let (true, Some([origin, direction])) = (readback.rays, &self.sensor_ray_targets) {
+        if let (true, Some((_, [origin, direction]))) = (readback.rays, &self.sensor_rays) {
             slots.push((Slot::SensorRayOrigin, origin));
             slots.push((Slot::SensorRayDirection, direction));
         }
@@ -205,6 +205,7 @@ impl Renderer {
             cmd,
             &Attachments {
                 color: target.color_view.raw,
+                ids: None,
                 depth: target.depth_view.raw,
                 size: [target.width, target.height],
                 layers: 1,

@@ -31,6 +31,16 @@ pub(super) fn vertex_layout() -> (
     (bindings, attributes)
 }
 
+/// The attachments a scene pipeline renders to.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct SceneTargets {
+    pub color_format: vk::Format,
+    /// The id cube's format when the fill writes ids too (`scene_id.frag`).
+    pub id_format: Option<vk::Format>,
+    /// Multiview view mask (0: none).
+    pub view_mask: u32,
+}
+
 /// A scene pipeline: `stages` (vertex or mesh stages, then a fragment shader), the scene's
 /// vertex layout unless the stages include a mesh shader, reverse-Z depth, culling set per
 /// draw. Used by the views and, through `methods::MethodContext`, by every cube method.
@@ -38,22 +48,25 @@ pub(super) fn scene_pipeline(
     device: &Arc<Device>,
     layout: &PipelineLayout,
     stages: &[ShaderStage<'_>],
-    color_format: vk::Format,
-    view_mask: u32,
+    targets: SceneTargets,
     name: &str,
 ) -> Result<Pipeline, GpuError> {
-    scene_pipeline_with_writes(device, layout, stages, color_format, view_mask, true, name)
+    scene_pipeline_with_writes(device, layout, stages, targets, true, name)
 }
 
 fn scene_pipeline_with_writes(
     device: &Arc<Device>,
     layout: &PipelineLayout,
     stages: &[ShaderStage<'_>],
-    color_format: vk::Format,
-    view_mask: u32,
+    targets: SceneTargets,
     color_writes: bool,
     name: &str,
 ) -> Result<Pipeline, GpuError> {
+    let SceneTargets {
+        color_format,
+        id_format,
+        view_mask,
+    } = targets;
     let (bindings, attributes) = vertex_layout();
     let mesh = stages
         .iter()
@@ -66,6 +79,7 @@ fn scene_pipeline_with_writes(
             vertex_bindings: if mesh { &[] } else { &bindings },
             vertex_attributes: if mesh { &[] } else { &attributes },
             color_format,
+            id_format,
             depth_format: DEPTH_FORMAT,
             // Set per draw: room walls are seen from inside and meshes may be open.
             cull_mode: vk::CullModeFlags::NONE,
@@ -107,6 +121,7 @@ pub(crate) fn mirror_pipeline(
             vertex_bindings: &[],
             vertex_attributes: &[],
             color_format,
+            id_format: None,
             depth_format: DEPTH_FORMAT,
             // Back faces of the bounding cube: still on screen when the camera is inside it.
             cull_mode: vk::CullModeFlags::FRONT,
@@ -142,29 +157,29 @@ pub(super) fn create_pipelines(
             spirv: crate::shaders::SCENE_FRAG,
         },
     ];
+    let view = |color_format| SceneTargets {
+        color_format,
+        id_format: None,
+        view_mask: 0,
+    };
     let view_scene = scene_pipeline(
         device,
         &scene_layout,
         &scene_stages,
-        VIEW_FORMAT,
-        0,
+        view(VIEW_FORMAT),
         "scene pipeline (views)",
     )?;
     let depth_only = scene_pipeline_with_writes(
         device,
         &scene_layout,
         &scene_stages,
-        DIRECTION_FORMAT,
-        0,
+        view(DIRECTION_FORMAT),
         false,
         "depth-only pipeline (directions)",
     )?;
-    let [ray_origin, ray_direction] = super::sensor_rays::create_pipelines(device, &scene_layout)?;
     Ok(Pipelines {
         view_scene,
         depth_only,
-        ray_origin,
-        ray_direction,
         scene_layout,
     })
 }

@@ -16,9 +16,61 @@ pub const VIEW_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// Lookup directions need full float: a texel of a 2048-texel face is 0.04 degrees.
 pub const DIRECTION_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
+/// The id cube's format: one drawable index per texel (walls 0..6, objects 6 + i).
+pub const ID_FORMAT: vk::Format = vk::Format::R32_UINT;
+
+/// The id cube: per texel of every face, the drawable the fill drew there
+/// (`shaders/scene_id.frag.glsl`), made only for the sensor outputs
+/// (`RenderOptions::id_cube`). Six layers of one level, read texel by texel like the depth.
+pub struct IdCube {
+    /// Views first: they must go before their image.
+    pub face_views: Vec<ImageView>,
+    pub layers_view: ImageView,
+    pub image: Image,
+}
+
+impl IdCube {
+    pub fn desc(settings: &CubeSettings) -> ImageDesc {
+        let mut desc = ImageDesc::new_cube(
+            ID_FORMAT,
+            settings.face_size_px,
+            1,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+        );
+        desc.cube_compatible = false;
+        desc
+    }
+
+    fn create(device: &Arc<Device>, settings: &CubeSettings) -> Result<Self, GpuError> {
+        let image = Image::create(device, &Self::desc(settings), "id cube")?;
+        let names = crate::scene::camera::FACE_NAMES;
+        let face_views = (0..6)
+            .map(|f| {
+                let name = format!("id cube {}", names[f as usize]);
+                image.view(vk::ImageViewType::TYPE_2D, f, 1, 0, 1, &name)
+            })
+            .collect::<Result<_, _>>()?;
+        let layers_view = image.view(
+            vk::ImageViewType::TYPE_2D_ARRAY,
+            0,
+            6,
+            0,
+            1,
+            "id cube (layered)",
+        )?;
+        Ok(Self {
+            face_views,
+            layers_view,
+            image,
+        })
+    }
+}
+
 /// The dynamic environment: a cube-compatible colour image with a mip chain, a six-layer
-/// depth image, one attachment view per face and the cube view the mirror samples.
+/// depth image, one attachment view per face and the cube view the mirror samples; and the
+/// id cube when it is asked for.
 pub struct CubeTarget {
+    pub ids: Option<IdCube>,
     /// Views first: they must go before their images.
     pub face_views: Vec<ImageView>,
     pub depth_views: Vec<ImageView>,
@@ -68,7 +120,12 @@ impl CubeTarget {
         desc
     }
 
-    pub fn create(device: &Arc<Device>, settings: &CubeSettings) -> Result<Self, GpuError> {
+    /// The cube of `settings`, with the id cube when `ids`.
+    pub fn create(
+        device: &Arc<Device>,
+        settings: &CubeSettings,
+        ids: bool,
+    ) -> Result<Self, GpuError> {
         let size = settings.face_size_px;
         if size > device.info.limits.max_image_dimension_cube {
             return Err(GpuError::Unsupported(format!(
@@ -146,7 +203,9 @@ impl CubeTarget {
                 .max_lod(vk::LOD_CLAMP_NONE),
             "cube sampler",
         )?;
+        let ids = ids.then(|| IdCube::create(device, settings)).transpose()?;
         Ok(Self {
+            ids,
             face_views,
             depth_views,
             layers_view,

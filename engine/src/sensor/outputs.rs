@@ -103,9 +103,11 @@ impl SensorOutputs {
     }
 
     /// From the GPU's sensor ray passes (`shaders/mirror_ray_*.frag.glsl`): `origin_range` holds
-    /// the mirror hit in render space (rgb) and the distance along the reflected ray to the
-    /// room box (a); `direction_wall` the reflected direction (rgb) and 1 + the wall the ray
-    /// leaves the room box through (a; 0, the clear value, off the mirror).
+    /// the mirror hit in render space (rgb) and the distance along the reflected ray to what
+    /// it meets through the cube's depth (a); `direction_wall` the reflected direction (rgb)
+    /// and 1 + the id the id cube holds there (a; 0, the clear value, off the mirror). Where
+    /// the search through the depth finds no hit, both are the room box's (its range and the
+    /// wall the ray leaves through): `shaders/include/sensor_ray.glsl`.
     pub fn from_gpu(
         scene: &Scene,
         t_s: f64,
@@ -143,15 +145,19 @@ impl SensorOutputs {
                 .zip(&direction_wall.pixels)
                 .map(|(o, d)| if seen(d) { o[3] } else { 0.0 })
                 .collect(),
-            range_model: "room box: the distance along the reflected ray to the room's walls, \
-                          the box lookup's proxy (objects are not seen: no depth cube is read)",
+            range_model: "depth cube: the distance along the reflected ray to where it meets \
+                          the surface the cube's depth stored (the distance lookup's search), \
+                          an approximation where the mirror sees what the cube's centre does \
+                          not (disocclusion) and at silhouettes; the room box's distance \
+                          where the search finds no hit",
             ids: direction_wall
                 .pixels
                 .iter()
                 .map(|d| if seen(d) { d[3] as u32 - 1 } else { NO_ID })
                 .collect(),
-            id_model: "room box: the wall the reflected ray leaves the room box through \
-                       (walls only: no id cube is read)",
+            id_model: "id cube: the drawable the cube fill drew at the texel (nearest, never \
+                       filtered) where the reflected ray meets the depth cube's surface; the \
+                       wall the ray leaves the room box through where the search finds no hit",
             image,
             cube,
         }

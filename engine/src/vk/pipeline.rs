@@ -85,6 +85,8 @@ pub struct GraphicsPipelineDesc<'a> {
     pub vertex_bindings: &'a [vk::VertexInputBindingDescription],
     pub vertex_attributes: &'a [vk::VertexInputAttributeDescription],
     pub color_format: vk::Format,
+    /// A second colour attachment (the cube fill's id cube), written whole, never blended.
+    pub id_format: Option<vk::Format>,
     pub depth_format: vk::Format,
     /// Ignored when `dynamic_culling` is set.
     pub cull_mode: vk::CullModeFlags,
@@ -201,15 +203,21 @@ impl Pipeline {
         } else {
             vk::ColorComponentFlags::empty()
         };
-        let attachments =
-            [vk::PipelineColorBlendAttachmentState::default().color_write_mask(write_mask)];
-        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+        let attachment =
+            vk::PipelineColorBlendAttachmentState::default().color_write_mask(write_mask);
+        let attachments = [attachment; 2];
+        let count = 1 + usize::from(desc.id_format.is_some());
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments[..count]);
         let mut dynamic_states = vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         if desc.dynamic_culling {
             dynamic_states.extend([vk::DynamicState::CULL_MODE, vk::DynamicState::FRONT_FACE]);
         }
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let color_formats = [desc.color_format];
+        let color_formats: Vec<vk::Format> = [desc.color_format]
+            .into_iter()
+            .chain(desc.id_format)
+            .collect();
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .view_mask(desc.view_mask)
             .color_attachment_formats(&color_formats)

@@ -31,6 +31,9 @@ pub struct MethodContext<'a> {
     pub scene_set_layout: vk::DescriptorSetLayout,
     pub scene_layout: &'a PipelineLayout,
     pub cube_format: vk::Format,
+    /// The fill writes the id cube too (`RenderOptions::id_cube`): the pipelines get its
+    /// attachment and `scene_id.frag` instead of `scene.frag`.
+    pub ids: bool,
     /// The method's own layout (its pipeline's view mask follows from it).
     pub layout: CubeLayout,
     /// For uploads at creation ([`Self::upload`]); idle between them.
@@ -62,17 +65,23 @@ impl MethodContext<'_> {
         self.pipeline_with(self.scene_layout, stages, name)
     }
 
-    /// A cube pipeline: `stages` followed by `scene.frag`, which every method shares so that
-    /// equal inputs give equal pixels; the scene's vertex layout unless it is a mesh
-    /// pipeline; reverse-Z depth; culling set per draw; the cube's colour format and the
-    /// layout's view mask. `layout` must start with set 0 and the scene's push range.
+    /// A cube pipeline: `stages` followed by `scene.frag` (`scene_id.frag` with the id cube),
+    /// which every method shares so that equal inputs give equal pixels; the scene's vertex
+    /// layout unless it is a mesh pipeline; reverse-Z depth; culling set per draw; the cube's
+    /// colour format (and the id cube's) and the layout's view mask. `layout` must start with
+    /// set 0 and the scene's push range.
     pub fn pipeline_with(
         &self,
         layout: &PipelineLayout,
         stages: &[Stage],
         name: &str,
     ) -> Result<Pipeline, GpuError> {
-        let fragment = (vk::ShaderStageFlags::FRAGMENT, crate::shaders::SCENE_FRAG);
+        let shader = if self.ids {
+            crate::shaders::SCENE_ID_FRAG
+        } else {
+            crate::shaders::SCENE_FRAG
+        };
+        let fragment = (vk::ShaderStageFlags::FRAGMENT, shader);
         let stages: Vec<ShaderStage<'_>> = stages
             .iter()
             .chain([&fragment])
@@ -82,8 +91,11 @@ impl MethodContext<'_> {
             self.device,
             layout,
             &stages,
-            self.cube_format,
-            self.layout.view_mask(),
+            crate::render::pipelines::SceneTargets {
+                color_format: self.cube_format,
+                id_format: self.ids.then_some(crate::render::targets::ID_FORMAT),
+                view_mask: self.layout.view_mask(),
+            },
             name,
         )
     }
@@ -107,6 +119,9 @@ pub struct CubeRecorder<'a> {
     /// Per-face statistics queries and timestamps (six-pass); off for one-pass methods and
     /// the floors, which get one query for the whole fill.
     per_face_marks: bool,
+    /// The fill writes the id cube (the method's pipelines were made with it); the
+    /// benchmark's floors never do.
+    ids: bool,
     facing: Facing,
 }
 
@@ -116,14 +131,24 @@ impl<'a> CubeRecorder<'a> {
         cmd: vk::CommandBuffer,
         layout: CubeLayout,
         per_face_marks: bool,
+        ids: bool,
     ) -> Self {
         Self {
             r,
             cmd,
             layout,
             per_face_marks,
+            ids,
             facing: r.cube_facing(),
         }
+    }
+
+    /// The id cube's view `pick` (a face's or the six layers'), when this fill writes it.
+    fn id_view(
+        &self,
+        pick: impl Fn(&crate::render::targets::IdCube) -> vk::ImageView,
+    ) -> Option<vk::ImageView> {
+        self.r.cube.ids.as_ref().filter(|_| self.ids).map(pick)
     }
 
     pub fn device(&self) -> &Device {
@@ -152,6 +177,7 @@ impl<'a> CubeRecorder<'a> {
             self.cmd,
             &Attachments {
                 color: self.r.cube.face_views[face as usize].raw,
+                ids: self.id_view(|ids| ids.face_views[face as usize].raw),
                 depth: self.r.cube.depth_views[face as usize].raw,
                 size: [size, size],
                 layers: 1,
@@ -191,6 +217,7 @@ impl<'a> CubeRecorder<'a> {
             self.cmd,
             &Attachments {
                 color: self.r.cube.layers_view.raw,
+                ids: self.id_view(|ids| ids.layers_view.raw),
                 depth: self.r.cube.depth_layers_view.raw,
                 size: [size, size],
                 layers: if view_mask != 0 { 0 } else { 6 },
@@ -200,7 +227,7 @@ impl<'a> CubeRecorder<'a> {
             },
         );
         if !all {
-            self.r.clear_faces(self.cmd, dirty, size);
+            self.r.clear_faces(self.cmd, dirty, size, self.ids);
         }
         self.r
             .set_viewport(self.cmd, 0.0, 0.0, size as f32, size as f32);
