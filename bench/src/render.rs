@@ -72,7 +72,7 @@ pub struct Args {
     directions: bool,
     /// Also write the sensor outputs from the cube path: ray map, range and ids (the room
     /// box's), panoramas from the sensor image and from the cube, camera.json (docs/sensor.md).
-    /// Needs a cube lookup (plain or box).
+    /// Needs a lookup that reads the cube map (not ray-query).
     #[arg(long)]
     sensor_outputs: bool,
     /// Under `on-change`, re-render all six faces on any change instead of only the faces a
@@ -332,7 +332,7 @@ fn check_sensor_outputs(args: &Args, lookup: Lookup) -> Result<()> {
     if args.sensor_outputs && !lookups::plugin(lookup).uses_cube() {
         bail!(
             "--sensor-outputs: the lookup {lookup} reads no cube map; use a cube lookup \
-             (--lookup plain or box), or `specchio reference --sensor-outputs` for the exact \
+             (plain, box, distance, distance-exact), or `specchio reference --sensor-outputs` for the exact \
              outputs"
         );
     }

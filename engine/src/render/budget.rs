@@ -12,7 +12,7 @@ use crate::vk::device::Device;
 use crate::vk::image::ImageDesc;
 use crate::vk::GpuError;
 
-use super::targets::{CubeTarget, ViewTarget, DIRECTION_FORMAT, VIEW_FORMAT};
+use super::targets::{CubeTarget, IdCube, ViewTarget, DIRECTION_FORMAT, VIEW_FORMAT};
 use super::PAIR_SIZE;
 
 /// One image the renderer will create, with the setting that sizes it.
@@ -28,10 +28,15 @@ struct Planned {
 /// Checks every render target of `scene` against the device's allocation limit and its
 /// device-local heap. `cube_setting` names where the face size came from (a command-line
 /// option or the scene's field), for the message.
-pub fn check_targets(device: &Device, scene: &Scene, cube_setting: &str) -> Result<(), GpuError> {
+pub fn check_targets(
+    device: &Device,
+    scene: &Scene,
+    cube_setting: &str,
+    id_cube: bool,
+) -> Result<(), GpuError> {
     let limits = &device.info.limits;
     check_dimensions(device, scene, cube_setting)?;
-    let plan = planned_targets(device, scene, cube_setting);
+    let plan = planned_targets(device, scene, cube_setting, id_cube);
     for p in &plan {
         if p.bytes > limits.max_memory_allocation_bytes {
             let hint = if p.cube {
@@ -105,7 +110,12 @@ pub fn check_buffer(device: &Device, what: &str, bytes: u64) -> Result<(), GpuEr
 }
 
 /// The images `Renderer::new` creates, in its order.
-fn planned_targets(device: &Device, scene: &Scene, cube_setting: &str) -> Vec<Planned> {
+fn planned_targets(
+    device: &Device,
+    scene: &Scene,
+    cube_setting: &str,
+    id_cube: bool,
+) -> Vec<Planned> {
     let mut plan = Vec::new();
     let mut add = |what: String, setting: String, desc: ImageDesc| {
         plan.push(Planned {
@@ -124,9 +134,12 @@ fn planned_targets(device: &Device, scene: &Scene, cube_setting: &str) -> Vec<Pl
     );
     add(
         "the cube map's depth".into(),
-        size,
+        size.clone(),
         CubeTarget::depth_desc(cube),
     );
+    if id_cube {
+        add("the id cube".into(), size, IdCube::desc(cube));
+    }
     let views = [
         ("observer", "observer.resolution", scene.observer.resolution),
         ("sensor", "sensor.resolution", scene.sensor.resolution),

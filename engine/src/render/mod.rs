@@ -133,7 +133,7 @@ impl Renderer {
         if let Some(lookup) = options.lookup {
             scene.mirror.lookup = lookup;
         }
-        budget::check_targets(device, &scene, cube_setting)?;
+        budget::check_targets(device, &scene, cube_setting, options.id_cube)?;
         let submitter = Submitter::create(device, "frame")?;
         let resources = SceneResources::create(device, &scene, &submitter)?;
         let cube = CubeTarget::create(device, &scene.cube, options.id_cube)?;
