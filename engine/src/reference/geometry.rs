@@ -143,6 +143,15 @@ impl SceneGeometry {
         (n, uv)
     }
 
+    /// Whether any triangle reaches into the closed box `lo..=hi` (by its bounding box, so a
+    /// "yes" may be a near miss; a "no" is certain: no point of any triangle is in the box).
+    pub fn any_triangle_in_box(&self, lo: Vec3, hi: Vec3) -> bool {
+        self.triangles.iter().any(|&[a, b, c]| {
+            let (t_lo, t_hi) = (a.min(b).min(c), a.max(b).max(c));
+            t_lo.cmple(hi).all() && t_hi.cmpge(lo).all()
+        })
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
     }

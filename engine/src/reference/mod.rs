@@ -26,7 +26,7 @@ use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
 use crate::scene::Scene;
 use geometry::SceneGeometry;
-use intersect::{mirror_reflection, offset_ray_origin, ray_sphere};
+use intersect::{mirror_reflection_at, offset_ray_origin, ray_sphere};
 
 /// Largest samples-per-pixel accepted (a 64 x 64 stratified grid).
 pub const MAX_SPP: u32 = 4096;
@@ -163,17 +163,35 @@ impl<'a> Reference<'a> {
         (color, hit.hit.t, info.object)
     }
 
-    /// Traces one camera ray (unit `d` from `eye`).
-    fn trace(&self, eye: Vec3, d: Vec3) -> Sample {
+    /// Whether no triangle can stand between `eye` and the mirror: none reaches into the box
+    /// around the eye and the sphere, padded. Every camera ray that meets the sphere runs inside
+    /// that box up to the sphere (the box is convex and holds both ends), so when it is empty
+    /// the BVH cannot find anything before the mirror and [`Self::trace`] need not ask it. The
+    /// padding (a millimetre per metre of the box's coordinates) is far above the rounding of a
+    /// triangle test's t, so the answer is the one the traversal would give.
+    fn nothing_before_mirror(&self, eye: Vec3) -> bool {
+        let r = Vec3::splat(self.scene.mirror.radius_m);
+        let (lo, hi) = (eye.min(-r), eye.max(r));
+        let pad = 1e-3 * lo.abs().max(hi.abs()).max_element().max(1.0);
+        !self.geometry.any_triangle_in_box(lo - pad, hi + pad)
+    }
+
+    /// Traces one camera ray (unit `d` from `eye`). `clear`: [`Self::nothing_before_mirror`]
+    /// for this eye.
+    fn trace(&self, eye: Vec3, d: Vec3, clear: bool) -> Sample {
         let radius = self.scene.mirror.radius_m;
         let mirror_t = ray_sphere(eye, d, Vec3::ZERO, radius);
-        let limit = mirror_t.unwrap_or(f32::INFINITY);
         let mut s = Sample {
             object: -1.0,
             rays: 1,
             ..Sample::default()
         };
-        match (self.geometry.closest_hit(eye, d, 0.0, limit), mirror_t) {
+        let first = match mirror_t {
+            Some(_) if clear => None,
+            Some(limit) => self.geometry.closest_hit(eye, d, 0.0, limit),
+            None => self.geometry.closest_hit(eye, d, 0.0, f32::INFINITY),
+        };
+        match (first, mirror_t) {
             // A scene surface in front of the mirror.
             (Some(hit), _) => {
                 let (color, t, object) = self.shade_hit(eye, d, &hit);
@@ -183,9 +201,9 @@ impl<'a> Reference<'a> {
             }
             // Neither the mirror nor anything else: out of the room.
             (None, None) => s.missed = true,
-            (None, Some(_)) => {
+            (None, Some(t)) => {
                 // The mirror: the same reflection as the sensor's ray map.
-                let m = mirror_reflection(eye, d, radius).expect("the sphere was hit");
+                let m = mirror_reflection_at(eye, d, t, radius);
                 let (n, p, r) = (m.normal, m.point, m.direction);
                 s.primary_t = m.t;
                 s.via_mirror = true;
@@ -220,6 +238,7 @@ impl<'a> Reference<'a> {
         let offsets = sample_offsets(spp);
         let centre_index = offsets.iter().position(|o| *o == Vec2::splat(0.5));
         let start = Instant::now();
+        let clear = self.nothing_before_mirror(view.eye);
         let ray = |px: f32, py: f32| {
             let ndc_x = 2.0 * px / width as f32 - 1.0;
             let ndc_y = 2.0 * py / height as f32 - 1.0;
@@ -233,7 +252,7 @@ impl<'a> Reference<'a> {
                         let (mut sum, mut rays, mut misses) = (Vec3::ZERO, 0u32, 0u32);
                         let mut centre = None;
                         for (k, o) in offsets.iter().enumerate() {
-                            let s = self.trace(view.eye, ray(x as f32 + o.x, y as f32 + o.y));
+                            let s = self.trace(view.eye, ray(x as f32 + o.x, y as f32 + o.y), clear);
                             sum += s.color;
                             rays += s.rays;
                             misses += u32::from(s.missed);
@@ -244,7 +263,7 @@ impl<'a> Reference<'a> {
                         // Not one of the samples: traced for the layers only (not a colour
                         // sample, so it is counted apart from the camera paths).
                         let centre = centre.unwrap_or_else(|| {
-                            let c = self.trace(view.eye, ray(x as f32 + 0.5, y as f32 + 0.5));
+                            let c = self.trace(view.eye, ray(x as f32 + 0.5, y as f32 + 0.5), clear);
                             rays += c.rays;
                             c
                         });
