@@ -24,7 +24,7 @@ use serde::Serialize;
 use crate::image::RgbaImage;
 use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
-use crate::scene::Scene;
+use crate::scene::{MaterialKind, Scene};
 use geometry::SceneGeometry;
 use intersect::{mirror_reflection_at, offset_ray_origin, ray_sphere};
 
@@ -158,11 +158,18 @@ impl<'a> Reference<'a> {
     /// Colour, distance and drawable of a hit found along `o + t d`.
     fn shade_hit(&self, o: Vec3, d: Vec3, hit: &geometry::Hit) -> (Vec3, f32, u32) {
         let p = o + hit.hit.t * d;
-        let (n, uv) = self.geometry.attributes(hit);
         let info = &self.geometry.info[hit.triangle as usize];
         let material = &self.scene.materials[info.material as usize];
+        // Only what the material and the light read is interpolated (flat colours and unlit
+        // rooms are common, and this runs once per camera path); the same numbers otherwise.
+        let uv = match material.kind {
+            MaterialKind::Color { .. } | MaterialKind::Direction => Vec2::ZERO,
+            _ => self.geometry.uv(hit),
+        };
         let albedo = materials::material_albedo(material, p, uv, &self.scene.textures);
-        let color = materials::shade(albedo, n, self.scene.light.as_ref());
+        let light = self.scene.light.as_ref();
+        let n = light.map_or(Vec3::ZERO, |_| self.geometry.normal(hit));
+        let color = materials::shade(albedo, n, light);
         (color, hit.hit.t, info.object)
     }
 
