@@ -19,6 +19,8 @@ Debian's libllvm19):
     apt-get install libllvm19
     cargo build --release -p specchio-cli
     /tmp/mi/bin/python scripts/mitsuba-compare.py [--size 512] [--spp 16] [--threads 2] [--runs 3]
+The binary is target/release/specchio, or $SPECCHIO_BIN when set (a build with its own
+CARGO_TARGET_DIR).
 It prints camera paths per second for each renderer and the mean absolute difference of the
 Mitsuba images from specchio's (the same pixels, so the work is the same).
 """
@@ -118,7 +120,8 @@ def time_mitsuba(scene, spp, runs):
 
 
 def time_specchio(size, spp, runs):
-    binary = os.path.join(ROOT, "target", "release", "specchio")
+    # SPECCHIO_BIN overrides the binary (e.g. a build with its own CARGO_TARGET_DIR).
+    binary = os.environ.get("SPECCHIO_BIN") or os.path.join(ROOT, "target", "release", "specchio")
     best, folder = None, tempfile.mkdtemp(prefix="specchio-mitsuba-")
     with open(SCENE) as f:
         text = f.read()

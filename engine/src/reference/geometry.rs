@@ -135,12 +135,32 @@ impl SceneGeometry {
 
     /// Interpolated normal and uv at a hit.
     pub fn attributes(&self, hit: &Hit) -> (Vec3, Vec2) {
+        (self.normal(hit), self.uv(hit))
+    }
+
+    /// Interpolated (unnormalised) shading normal at a hit.
+    pub fn normal(&self, hit: &Hit) -> Vec3 {
         let i = &self.info[hit.triangle as usize];
         let (u, v) = (hit.hit.u, hit.hit.v);
         let w = 1.0 - u - v;
-        let n = i.normals[0] * w + i.normals[1] * u + i.normals[2] * v;
-        let uv = i.uvs[0] * w + i.uvs[1] * u + i.uvs[2] * v;
-        (n, uv)
+        i.normals[0] * w + i.normals[1] * u + i.normals[2] * v
+    }
+
+    /// Interpolated texture coordinates at a hit.
+    pub fn uv(&self, hit: &Hit) -> Vec2 {
+        let i = &self.info[hit.triangle as usize];
+        let (u, v) = (hit.hit.u, hit.hit.v);
+        let w = 1.0 - u - v;
+        i.uvs[0] * w + i.uvs[1] * u + i.uvs[2] * v
+    }
+
+    /// Whether any triangle reaches into the closed box `lo..=hi` (by its bounding box, so a
+    /// "yes" may be a near miss; a "no" is certain: no point of any triangle is in the box).
+    pub fn any_triangle_in_box(&self, lo: Vec3, hi: Vec3) -> bool {
+        self.triangles.iter().any(|&[a, b, c]| {
+            let (t_lo, t_hi) = (a.min(b).min(c), a.max(b).max(c));
+            t_lo.cmple(hi).all() && t_hi.cmpge(lo).all()
+        })
     }
 
     pub fn triangle_count(&self) -> usize {

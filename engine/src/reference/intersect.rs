@@ -39,13 +39,19 @@ pub struct MirrorReflection {
 /// the hit, and the hit is put back on the sphere, as `shaders/include/mirror.glsl` does.
 pub fn mirror_reflection(eye: Vec3, d: Vec3, radius: f32) -> Option<MirrorReflection> {
     let t = ray_sphere(eye, d, Vec3::ZERO, radius)?;
+    Some(mirror_reflection_at(eye, d, t, radius))
+}
+
+/// [`mirror_reflection`] for a ray already known to meet the sphere at `t` (from
+/// [`ray_sphere`]): the same numbers without solving the quadratic twice.
+pub fn mirror_reflection_at(eye: Vec3, d: Vec3, t: f32, radius: f32) -> MirrorReflection {
     let normal = (eye + t * d).normalize();
-    Some(MirrorReflection {
+    MirrorReflection {
         t,
         normal,
         point: normal * radius,
         direction: d - 2.0 * d.dot(normal) * normal,
-    })
+    }
 }
 
 /// A triangle hit: distance and barycentric weights of v1 and v2.

@@ -24,9 +24,9 @@ use serde::Serialize;
 use crate::image::RgbaImage;
 use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
-use crate::scene::Scene;
+use crate::scene::{MaterialKind, Scene};
 use geometry::SceneGeometry;
-use intersect::{mirror_reflection, offset_ray_origin, ray_sphere};
+use intersect::{mirror_reflection_at, offset_ray_origin, ray_sphere};
 
 /// Largest samples-per-pixel accepted (a 64 x 64 stratified grid).
 pub const MAX_SPP: u32 = 4096;
@@ -99,7 +99,10 @@ pub struct ReferenceStats {
 #[derive(Debug, Clone, Copy, Default)]
 struct Sample {
     color: Vec3,
-    direction: Vec3,
+    /// The reflected ray's hit (render space, relative to the mirror centre); only the pixel
+    /// centre's is used, normalised into the direction layer when the image is assembled, so
+    /// the colour samples do not pay for a normalisation they never use.
+    reflected_hit: Vec3,
     reflected_t: f32,
     primary_t: f32,
     object: f32,
@@ -155,25 +158,50 @@ impl<'a> Reference<'a> {
     /// Colour, distance and drawable of a hit found along `o + t d`.
     fn shade_hit(&self, o: Vec3, d: Vec3, hit: &geometry::Hit) -> (Vec3, f32, u32) {
         let p = o + hit.hit.t * d;
-        let (n, uv) = self.geometry.attributes(hit);
         let info = &self.geometry.info[hit.triangle as usize];
         let material = &self.scene.materials[info.material as usize];
+        // Only what the material and the light read is interpolated (flat colours and unlit
+        // rooms are common, and this runs once per camera path); the same numbers otherwise.
+        let uv = match material.kind {
+            MaterialKind::Color { .. } | MaterialKind::Direction => Vec2::ZERO,
+            _ => self.geometry.uv(hit),
+        };
         let albedo = materials::material_albedo(material, p, uv, &self.scene.textures);
-        let color = materials::shade(albedo, n, self.scene.light.as_ref());
+        let light = self.scene.light.as_ref();
+        let n = light.map_or(Vec3::ZERO, |_| self.geometry.normal(hit));
+        let color = materials::shade(albedo, n, light);
         (color, hit.hit.t, info.object)
     }
 
-    /// Traces one camera ray (unit `d` from `eye`).
-    fn trace(&self, eye: Vec3, d: Vec3) -> Sample {
+    /// Whether no triangle can stand between `eye` and the mirror: none reaches into the box
+    /// around the eye and the sphere, padded. Every camera ray that meets the sphere runs inside
+    /// that box up to the sphere (the box is convex and holds both ends), so when it is empty
+    /// the BVH cannot find anything before the mirror and [`Self::trace`] need not ask it. The
+    /// padding (a millimetre per metre of the box's coordinates) is far above the rounding of a
+    /// triangle test's t, so the answer is the one the traversal would give.
+    fn nothing_before_mirror(&self, eye: Vec3) -> bool {
+        let r = Vec3::splat(self.scene.mirror.radius_m);
+        let (lo, hi) = (eye.min(-r), eye.max(r));
+        let pad = 1e-3 * lo.abs().max(hi.abs()).max_element().max(1.0);
+        !self.geometry.any_triangle_in_box(lo - pad, hi + pad)
+    }
+
+    /// Traces one camera ray (unit `d` from `eye`). `clear`: [`Self::nothing_before_mirror`]
+    /// for this eye.
+    fn trace(&self, eye: Vec3, d: Vec3, clear: bool) -> Sample {
         let radius = self.scene.mirror.radius_m;
         let mirror_t = ray_sphere(eye, d, Vec3::ZERO, radius);
-        let limit = mirror_t.unwrap_or(f32::INFINITY);
         let mut s = Sample {
             object: -1.0,
             rays: 1,
             ..Sample::default()
         };
-        match (self.geometry.closest_hit(eye, d, 0.0, limit), mirror_t) {
+        let first = match mirror_t {
+            Some(_) if clear => None,
+            Some(limit) => self.geometry.closest_hit(eye, d, 0.0, limit),
+            None => self.geometry.closest_hit(eye, d, 0.0, f32::INFINITY),
+        };
+        match (first, mirror_t) {
             // A scene surface in front of the mirror.
             (Some(hit), _) => {
                 let (color, t, object) = self.shade_hit(eye, d, &hit);
@@ -183,9 +211,9 @@ impl<'a> Reference<'a> {
             }
             // Neither the mirror nor anything else: out of the room.
             (None, None) => s.missed = true,
-            (None, Some(_)) => {
+            (None, Some(t)) => {
                 // The mirror: the same reflection as the sensor's ray map.
-                let m = mirror_reflection(eye, d, radius).expect("the sphere was hit");
+                let m = mirror_reflection_at(eye, d, t, radius);
                 let (n, p, r) = (m.normal, m.point, m.direction);
                 s.primary_t = m.t;
                 s.via_mirror = true;
@@ -196,7 +224,7 @@ impl<'a> Reference<'a> {
                         s.color = color;
                         s.reflected_t = t2;
                         s.object = object as f32;
-                        s.direction = (origin + t2 * r).normalize();
+                        s.reflected_hit = origin + t2 * r;
                     }
                     None => s.missed = true,
                 }
@@ -220,6 +248,7 @@ impl<'a> Reference<'a> {
         let offsets = sample_offsets(spp);
         let centre_index = offsets.iter().position(|o| *o == Vec2::splat(0.5));
         let start = Instant::now();
+        let clear = self.nothing_before_mirror(view.eye);
         let ray = |px: f32, py: f32| {
             let ndc_x = 2.0 * px / width as f32 - 1.0;
             let ndc_y = 2.0 * py / height as f32 - 1.0;
@@ -233,7 +262,8 @@ impl<'a> Reference<'a> {
                         let (mut sum, mut rays, mut misses) = (Vec3::ZERO, 0u32, 0u32);
                         let mut centre = None;
                         for (k, o) in offsets.iter().enumerate() {
-                            let s = self.trace(view.eye, ray(x as f32 + o.x, y as f32 + o.y));
+                            let s =
+                                self.trace(view.eye, ray(x as f32 + o.x, y as f32 + o.y), clear);
                             sum += s.color;
                             rays += s.rays;
                             misses += u32::from(s.missed);
@@ -244,7 +274,8 @@ impl<'a> Reference<'a> {
                         // Not one of the samples: traced for the layers only (not a colour
                         // sample, so it is counted apart from the camera paths).
                         let centre = centre.unwrap_or_else(|| {
-                            let c = self.trace(view.eye, ray(x as f32 + 0.5, y as f32 + 0.5));
+                            let c =
+                                self.trace(view.eye, ray(x as f32 + 0.5, y as f32 + 0.5), clear);
                             rays += c.rays;
                             c
                         });
@@ -267,7 +298,7 @@ impl<'a> Reference<'a> {
         let images = ReferenceImages {
             color: image(&|p| [p.color.x, p.color.y, p.color.z, 1.0]),
             direction: image(&|p| {
-                let d = p.centre.direction;
+                let d = p.centre.reflected_hit.normalize_or_zero();
                 [d.x, d.y, d.z, if p.centre.via_mirror { 1.0 } else { 0.0 }]
             }),
             distance: image(&|p| [p.centre.reflected_t, p.centre.primary_t, 0.0, 1.0]),
@@ -309,8 +340,43 @@ impl<'a> Reference<'a> {
 
 #[cfg(test)]
 mod tests {
-    use super::sample_offsets;
+    use super::{sample_offsets, Reference};
     use glam::Vec2;
+    use std::path::Path;
+
+    /// The shortcut that skips the BVH before the mirror ([`Reference::nothing_before_mirror`])
+    /// changes no sample: every ray of a 64 x 64 grid through both cameras traces bit for bit
+    /// as with the full traversal, in scenes where the shortcut is taken (the six-colour room's
+    /// empty middle) and where an object stands near the mirror and it must be refused.
+    #[test]
+    fn skipping_the_bvh_before_the_mirror_changes_no_sample() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let mut taken = Vec::new();
+        for rel in [
+            "scenes/test/six-colour-room.toml",
+            "scenes/hard/pole-and-box.toml",
+            "scenes/many-objects.toml",
+        ] {
+            let scene = crate::scene::load(&root.join(rel)).unwrap();
+            let r = Reference::new(&scene, 0.0);
+            for (name, view) in [("observer", r.observer_view()), ("sensor", r.sensor_view())] {
+                let clear = r.nothing_before_mirror(view.eye);
+                taken.push(clear);
+                let mut mirror = 0;
+                for k in 0..64 * 64 {
+                    let (x, y) = ((k % 64) as f32 + 0.5, (k / 64) as f32 + 0.5);
+                    let d = view.ray(x / 32.0 - 1.0, y / 32.0 - 1.0).normalize();
+                    let (fast, full) = (r.trace(view.eye, d, clear), r.trace(view.eye, d, false));
+                    // Debug prints every float exactly (and tells -0 from 0).
+                    assert_eq!(format!("{fast:?}"), format!("{full:?}"), "{rel} {name} {k}");
+                    mirror += u32::from(full.via_mirror);
+                }
+                assert!(mirror > 0, "{rel} {name}: no ray met the mirror");
+                eprintln!("{rel} {name}: shortcut {clear}, {mirror} mirror rays");
+            }
+        }
+        assert!(taken.contains(&true) && taken.contains(&false), "{taken:?}");
+    }
 
     #[test]
     fn small_patterns_are_the_known_cell_centres() {
