@@ -239,19 +239,24 @@ fn saved_landmarks_are_reused_and_mismatches_refused() {
     );
 
     let refused = temp_dir("localise-refused");
-    let cases: [(&[&str], &str); 3] = [
-        (&["--k", "4"], "`coefficients`"),
-        (&["--sensor-size", "96"], "`sensor_px`"),
-        (&["--sources", "reference"], "`source`"),
+    // A file written at another sensor size (edited here: the run's own options all fixed).
+    let mut other = json(&saved);
+    other["sensor_px"] = 96.into();
+    let resized = first.join("landmarks-96.json");
+    std::fs::write(&resized, other.to_string()).unwrap();
+    let cases: [(&std::path::Path, &[&str], &str); 3] = [
+        (&saved, &["--k", "4"], "`coefficients`"),
+        (&saved, &["--sources", "reference"], "`source`"),
+        (&resized, &[], "`sensor_px`"),
     ];
-    for (extra, field) in cases {
-        let mut args = vec!["--landmarks", saved.to_str().unwrap()];
+    for (file, extra, field) in cases {
+        let mut args = vec!["--landmarks", file.to_str().unwrap()];
         args.extend_from_slice(extra);
         let result = small_run(&refused, &args);
         let stderr = String::from_utf8_lossy(&result.stderr);
         assert!(!result.status.success(), "{extra:?} was accepted");
         assert!(
-            stderr.contains(field) && stderr.contains("landmarks.json"),
+            stderr.contains(field) && stderr.contains(&*file.to_string_lossy()),
             "{extra:?}: {stderr}"
         );
         assert!(!refused.exists());
