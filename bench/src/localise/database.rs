@@ -1,0 +1,182 @@
+//! The landmark database file (`landmarks.json`): written by every run, read back by
+//! `--landmarks FILE` to skip the sweep. One typed record for both directions; a file that does
+//! not fit this run (another scene, descriptor, size, panorama or source settings) is refused
+//! naming the file and the field, since its signatures would be compared with unlike ones.
+
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use serde::{Deserialize, Serialize};
+use specchio::sensor::localise::Signature;
+
+/// The file's `format` value.
+pub const FORMAT: &str = "specchio-landmarks";
+/// Version 2 added the source, grid, scene hash and cube size (version 1 had none of them and
+/// cannot be checked, so it is refused).
+pub const VERSION: u32 = 2;
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Landmark {
+    /// The mirror's centre, local (scene file minus `scene_origin_m`).
+    pub position_m: [f32; 3],
+    pub signature: Signature,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Database {
+    pub format: String,
+    pub version: u32,
+    /// The scene file as given on the command line (for people; `scene_hash` is checked).
+    pub scene: String,
+    /// FNV-1a (64 bit) of the scene file's bytes, in hex: a changed scene is another scene.
+    pub scene_hash: String,
+    pub scene_origin_m: [f64; 3],
+    /// Which images the signatures describe (`--sources`: a lookup or `reference`).
+    pub source: String,
+    pub descriptor: String,
+    pub coefficients: u32,
+    pub grid_m: f64,
+    pub sensor_px: u32,
+    /// Cube face size of a lookup's images; none for the reference, which has no cube.
+    pub cube_px: Option<u32>,
+    /// The cylindrical panorama the signatures were taken from (`PanoramaLayout`).
+    pub panorama: serde_json::Value,
+    pub landmarks: Vec<Landmark>,
+}
+
+/// FNV-1a, 64 bit: a cheap, stable fingerprint (not a defence against forgery).
+pub fn fnv1a64(bytes: &[u8]) -> String {
+    let hash = bytes.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    });
+    format!("{hash:016x}")
+}
+
+/// Reads `path` and checks it against `expected_for(source)`: this run's settings for the
+/// file's source (its landmarks empty), or why that source is not part of this run.
+pub fn load(
+    path: &Path,
+    expected_for: &dyn Fn(&str) -> Result<Database, String>,
+) -> Result<Database> {
+    let name = path.display();
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("--landmarks {name}: reading"))?;
+    // Format and version first, so an old or foreign file says so rather than "missing field".
+    let value: serde_json::Value = serde_json::from_str(&text)
+        .with_context(|| format!("--landmarks {name}: not a landmarks file (malformed JSON)"))?;
+    let format = value.get("format").and_then(|v| v.as_str());
+    if format != Some(FORMAT) {
+        bail!("--landmarks {name}: field `format` is {format:?}, expected \"{FORMAT}\"");
+    }
+    let version = value.get("version").and_then(|v| v.as_u64());
+    if version != Some(u64::from(VERSION)) {
+        bail!("--landmarks {name}: field `version` is {version:?}, this specchio reads {VERSION}");
+    }
+    let db: Database = serde_json::from_str(&text)
+        .with_context(|| format!("--landmarks {name}: not a version {VERSION} landmarks file"))?;
+    let expected =
+        expected_for(&db.source).map_err(|e| anyhow::anyhow!("--landmarks {name}: {e}"))?;
+    check_matches(&db, &expected).map_err(|e| anyhow::anyhow!("--landmarks {name}: {e}"))?;
+    check_signatures(&db).map_err(|e| anyhow::anyhow!("--landmarks {name}: {e}"))?;
+    Ok(db)
+}
+
+/// The first field that differs from this run's settings, with both values.
+fn check_matches(db: &Database, run: &Database) -> Result<(), String> {
+    let fields: [(&str, String, String, &str); 8] = [
+        (
+            "scene_hash",
+            db.scene_hash.clone(),
+            run.scene_hash.clone(),
+            "the scene file's contents",
+        ),
+        (
+            "descriptor",
+            db.descriptor.clone(),
+            run.descriptor.clone(),
+            "--descriptor",
+        ),
+        (
+            "coefficients",
+            db.coefficients.to_string(),
+            run.coefficients.to_string(),
+            "--k",
+        ),
+        (
+            "grid_m",
+            db.grid_m.to_string(),
+            run.grid_m.to_string(),
+            "--grid",
+        ),
+        (
+            "sensor_px",
+            db.sensor_px.to_string(),
+            run.sensor_px.to_string(),
+            "--sensor-size",
+        ),
+        (
+            "panorama",
+            db.panorama.to_string(),
+            run.panorama.to_string(),
+            "the sensor's panorama",
+        ),
+        (
+            "scene_origin_m",
+            format!("{:?}", db.scene_origin_m),
+            format!("{:?}", run.scene_origin_m),
+            "the scene's origin",
+        ),
+        (
+            "cube_px",
+            format!("{:?}", db.cube_px),
+            format!("{:?}", run.cube_px),
+            "--cube-size",
+        ),
+    ];
+    for (field, saved, now, from) in fields {
+        if saved != now {
+            return Err(format!(
+                "field `{field}` is {saved}, this run has {now} ({from}): the landmarks were \
+                 taken with other settings"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Every signature must be as long as the first and finite, and there must be one.
+fn check_signatures(db: &Database) -> Result<(), String> {
+    let Some(first) = db.landmarks.first() else {
+        return Err("field `landmarks` is empty".to_owned());
+    };
+    let width = db.panorama.get("width").and_then(|w| w.as_u64());
+    for (i, l) in db.landmarks.iter().enumerate() {
+        let s = &l.signature;
+        if s.values.len() != first.signature.values.len()
+            || Some(u64::from(s.columns)) != width
+            || !s.values.iter().all(|v| v.is_finite())
+            || !l.position_m.iter().all(|v| v.is_finite())
+        {
+            return Err(format!(
+                "field `landmarks[{i}]`: its signature or position does not fit the others \
+                 (length, columns or a non-finite value)"
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fnv1a64;
+
+    #[test]
+    fn fnv1a64_known_answers() {
+        // The published FNV-1a 64 test vectors.
+        assert_eq!(fnv1a64(b""), "cbf29ce484222325");
+        assert_eq!(fnv1a64(b"a"), "af63dc4c8601ec8c");
+        assert_eq!(fnv1a64(b"foobar"), "85944171f73967e8");
+    }
+}

@@ -1,0 +1,185 @@
+//! Where the robot's images come from: a mirror lookup of the GPU renderer (the simulator the
+//! user would build on) or the exact CPU reference (the stand-in for the real mirror). Each
+//! source is one robot that renders a list of poses and describes every image.
+
+use std::sync::Arc;
+
+use anyhow::{bail, Result};
+use glam::{Quat, Vec3};
+use specchio::image::RgbaImage;
+use specchio::reference::Reference;
+use specchio::render::{Readback, RenderOptions, Renderer};
+use specchio::scene::camera::ViewBasis;
+use specchio::scene::{Lookup, RefreshPolicy, Scene};
+use specchio::sensor::localise::{Descriptor, Signature};
+use specchio::sensor::panorama::PanoramaLayout;
+use specchio::sensor::SensorOptics;
+use specchio::vk::device::Device;
+
+/// The name of the exact reference among `--sources`.
+pub const REFERENCE: &str = "reference";
+
+/// One image source of the experiment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    Lookup(Lookup),
+    Reference,
+}
+
+impl Source {
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Lookup(l) => l.name(),
+            Self::Reference => REFERENCE,
+        }
+    }
+}
+
+/// A `--sources` entry (a clap value parser).
+pub fn parse(text: &str) -> Result<Source, String> {
+    match text.trim() {
+        REFERENCE => Ok(Source::Reference),
+        t => Lookup::parse(t).map(Source::Lookup).ok_or_else(|| {
+            format!(
+                "`{text}` is not a source: `{REFERENCE}` or a lookup ({})",
+                Lookup::names()
+            )
+        }),
+    }
+}
+
+/// A pose to image: where the mirror is and which way the robot faces (radians about +Y).
+pub type Pose = (Vec3, f64);
+
+/// What every robot shares: the scene it carries, and the unwrap of its images in its own
+/// frame (the robot does not know its heading, so it unwraps with the unturned optics).
+pub struct Body {
+    pub scene: Scene,
+    pub layout: PanoramaLayout,
+    pub optics: SensorOptics,
+}
+
+impl Body {
+    /// The sensor's `up` turned by `heading`: the camera turns with the robot.
+    fn turned_up(&self, heading: f64) -> Vec3 {
+        Quat::from_rotation_y(heading as f32) * self.scene.sensor.up
+    }
+}
+
+/// A robot whose images come from one source.
+pub enum Robot<'a> {
+    /// One renderer, reused for every pose: the mirror is moved and the cube re-rendered.
+    Gpu {
+        body: &'a Body,
+        renderer: Box<Renderer>,
+        frame: u64,
+    },
+    /// The exact reference: one BVH per scene time, the mirror moved through it per pose.
+    Reference { body: &'a Body },
+}
+
+impl<'a> Robot<'a> {
+    pub fn new(
+        body: &'a Body,
+        source: Source,
+        device: Option<&Arc<Device>>,
+        options: &RenderOptions,
+    ) -> Result<Self> {
+        match source {
+            Source::Reference => Ok(Self::Reference { body }),
+            Source::Lookup(lookup) => {
+                let Some(device) = device else {
+                    bail!("no device for the {lookup} source (a bug)");
+                };
+                let mut scene = body.scene.clone();
+                scene.mirror.lookup = lookup;
+                let options = RenderOptions {
+                    // The robot moves every image: the whole cube is re-rendered anyway.
+                    refresh: Some(RefreshPolicy::EveryFrame),
+                    ..options.clone()
+                };
+                Ok(Self::Gpu {
+                    body,
+                    renderer: Box::new(Renderer::new(device, scene, &options)?),
+                    frame: 0,
+                })
+            }
+        }
+    }
+
+    /// The descriptor of the image at every pose, at scene time `t_s`; `what` names the
+    /// poses in an interruption message.
+    pub fn describe(
+        &mut self,
+        poses: &[Pose],
+        t_s: f64,
+        descriptor: &dyn Descriptor,
+        what: &str,
+    ) -> Result<Vec<Signature>> {
+        let check =
+            |i: usize| crate::interrupt::check(&format!("after {i} of {} {what}", poses.len()));
+        let mut out = Vec::with_capacity(poses.len());
+        match self {
+            Self::Gpu {
+                body,
+                renderer,
+                frame,
+            } => {
+                for (i, &(p, heading)) in poses.iter().enumerate() {
+                    check(i)?;
+                    let image = gpu_image(body, renderer, frame, (p, heading), t_s)?;
+                    out.push(descriptor.describe(&body.layout.unwrap(&body.optics, &image)));
+                }
+            }
+            Self::Reference { body } => {
+                let mut reference = Reference::new(&body.scene, t_s);
+                let [w, h] = body.scene.sensor.resolution;
+                for (i, &(p, heading)) in poses.iter().enumerate() {
+                    check(i)?;
+                    reference.move_mirror(p);
+                    let view = sensor_view(body, heading);
+                    // One sample at the pixel centre: the rasterizer's sample point.
+                    let (images, _) = reference.render(&view, w, h, 1);
+                    out.push(descriptor.describe(&body.layout.unwrap(&body.optics, &images.color)));
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// One sensor image from the GPU renderer with the robot at `pose`.
+fn gpu_image(
+    body: &Body,
+    renderer: &mut Renderer,
+    frame: &mut u64,
+    (position, heading): Pose,
+    t_s: f64,
+) -> Result<RgbaImage> {
+    renderer.scene.mirror.center = position;
+    renderer.scene.sensor.up = body.turned_up(heading);
+    let readback = Readback {
+        views: true,
+        ..Default::default()
+    };
+    let (_, images) = renderer.render_frame(*frame, t_s, readback)?;
+    *frame += 1;
+    let Some(image) = images.sensor else {
+        bail!("the sensor image was not read back (a bug)");
+    };
+    Ok(image)
+}
+
+/// The reference's sensor camera (render space: below the mirror, looking up) turned by
+/// `heading`, as the GPU renderer builds it from the turned `up`.
+fn sensor_view(body: &Body, heading: f64) -> ViewBasis {
+    let s = &body.scene.sensor;
+    let [w, h] = s.resolution;
+    ViewBasis::look(
+        Vec3::new(0.0, -s.offset_m, 0.0),
+        Vec3::Y,
+        body.turned_up(heading),
+        s.fov_y_deg,
+        w as f32 / h as f32,
+    )
+}
