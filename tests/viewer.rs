@@ -18,8 +18,7 @@ mod common;
 mod viewer_support;
 
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
 
 use common::{root, temp_dir};
 use viewer_support::*;
@@ -176,78 +175,20 @@ fn the_sensor_follows_the_sphere() {
 #[test]
 fn resizing_recreates_the_swapchain_and_quitting_is_clean() {
     let Some(x) = Xvfb::start() else { return };
-    if Command::new("xdotool").arg("version").output().is_err() {
-        eprintln!("skipped: xdotool is not installed (scripts/setup.sh installs it)");
+    if !has_xdotool() {
         return;
     }
-    let mut child = x
-        .command(&[thesis_room().to_str().unwrap(), "--frames", "100000"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // The viewer's stdout, line by line, as it comes.
-    let (lines, printed) = std::sync::mpsc::channel();
-    let stdout = child.stdout.take().unwrap();
-    let reader = std::thread::spawn(move || {
-        use std::io::BufRead;
-        let mut all = String::new();
-        for line in std::io::BufReader::new(stdout)
-            .lines()
-            .map_while(Result::ok)
-        {
-            all.push_str(&line);
-            all.push('\n');
-            let _ = lines.send(line);
-        }
-        all
-    });
-    let wait_for = |what: &str| {
-        let start = Instant::now();
-        while start.elapsed() < Duration::from_secs(120) {
-            match printed.recv_timeout(Duration::from_secs(1)) {
-                Ok(line) if line.starts_with(what) => return,
-                Ok(_) | Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
-                Err(_) => break,
-            }
-        }
-        panic!("the viewer never printed `{what}`");
-    };
-    let xdotool = |args: &[&str]| {
-        Command::new("xdotool")
-            .args(args)
-            .env("DISPLAY", &x.display)
-            .output()
-            .unwrap()
-    };
+    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--frames", "100000"]);
     // Presenting at the window's first size, then resized from outside, as a user would.
-    wait_for("swapchain: 1200x450");
-    let found = xdotool(&["search", "--name", "specchio view"]);
-    let id = text(&found.stdout).lines().next().unwrap_or("").to_owned();
-    assert!(!id.is_empty(), "no viewer window: {}", text(&found.stderr));
-    ok(
-        &xdotool(&["windowsize", &id, "640", "480"]),
-        "xdotool windowsize",
-    );
-    wait_for("swapchain: 640x480");
+    viewer.wait_for("swapchain: 1200x450");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowsize", &id, "640", "480"]);
+    viewer.wait_for("swapchain: 640x480");
     // A key typed into the focused window (XTEST, as a keyboard would): q quits. Events sent
     // to a window directly (`key --window`) are synthetic, and winit ignores them.
-    ok(
-        &xdotool(&["windowfocus", "--sync", &id]),
-        "xdotool windowfocus",
-    );
-    ok(&xdotool(&["key", "q"]), "xdotool key");
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(60) {
-            let _ = child.kill();
-            panic!("the viewer did not quit on q");
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    let out = child.wait_with_output().unwrap();
-    let stdout = reader.join().unwrap();
-    ok(&out, "specchio view");
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    xdotool(&x, &["key", "q"]);
+    let stdout = viewer.finish();
     assert!(stdout.contains("frames: "), "{stdout}");
 }
 
