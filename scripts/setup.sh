@@ -5,6 +5,7 @@
 #   - the Vulkan loader (libvulkan1) and the Khronos validation layers,
 #   - a C++ compiler for the glslang crate's build,
 #   - Xvfb, xdotool and the X client libraries winit loads (the viewer's tests),
+#   - weston, whose headless backend is the Wayland compositor of the viewer's Wayland test,
 #   - Google's SwiftShader Vulkan driver, the second CPU driver, unpacked project-locally into
 #     .drivers/swiftshader/ from Debian's chromium-common package (Chromium is not installed).
 # On other distributions it installs nothing and says what to install when something is missing.
@@ -89,8 +90,9 @@ fi
 export DEBIAN_FRONTEND=noninteractive
 missing=()
 # xvfb, xdotool and the X client libraries winit loads at run time: the viewer tests (tests/viewer.rs)
-# run `specchio view` in a virtual X server.
-for p in libvulkan1 vulkan-validationlayers g++ xvfb xdotool libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0; do
+# run `specchio view` in a virtual X server; weston (headless) is their Wayland compositor, and
+# brings the Wayland client libraries winit loads.
+for p in libvulkan1 vulkan-validationlayers g++ xvfb xdotool weston libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0; do
     installed "$p" || missing+=("$p")
 done
 major=$(mesa_major || true)

@@ -15,149 +15,13 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
-use std::time::{Duration, Instant};
+mod viewer_support;
+
+use std::path::PathBuf;
+use std::process::Command;
 
 use common::{root, temp_dir};
-
-/// A private X server on a free display number, stopped on drop.
-struct Xvfb {
-    child: Child,
-    display: String,
-}
-
-impl Xvfb {
-    /// Starts one, or `None` (with the reason printed) when Xvfb is not installed.
-    fn start() -> Option<Self> {
-        if Command::new("Xvfb").arg("-help").output().is_err() {
-            eprintln!(
-                "skipped: Xvfb is not installed (apt-get install xvfb; scripts/setup.sh does)"
-            );
-            return None;
-        }
-        // A display number of this process's own, away from common ones (0..10), and of
-        // this test's own: tests run in parallel threads of one process, and two that
-        // checked the same free number before either server took it would share a server
-        // (the first to finish would stop it under the other).
-        static STARTED: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
-        let own = STARTED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let first = 100 + (std::process::id() % 400) * 2 + own * 1000;
-        for n in (first..).step_by(7).take(50) {
-            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
-                || Path::new(&format!("/tmp/.X{n}-lock")).exists()
-            {
-                continue;
-            }
-            let display = format!(":{n}");
-            let child = Command::new("Xvfb")
-                .args([&display, "-screen", "0", "1920x1080x24", "-nolisten", "tcp"])
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .spawn()
-                .expect("Xvfb starts");
-            let socket = format!("/tmp/.X11-unix/X{n}");
-            let start = Instant::now();
-            while !Path::new(&socket).exists() && start.elapsed() < Duration::from_secs(10) {
-                std::thread::sleep(Duration::from_millis(50));
-            }
-            assert!(Path::new(&socket).exists(), "Xvfb {display} did not start");
-            return Some(Self { child, display });
-        }
-        panic!("no free X display number");
-    }
-
-    /// `specchio view ARGS` on this display, validation on.
-    fn command(&self, args: &[&str]) -> Command {
-        let mut c = Command::new(env!("CARGO_BIN_EXE_specchio"));
-        c.arg("view")
-            .args(args)
-            .env("DISPLAY", &self.display)
-            .env_remove("WAYLAND_DISPLAY")
-            .env("SPECCHIO_VALIDATE", "1");
-        c
-    }
-
-    fn view(&self, args: &[&str]) -> Output {
-        self.command(args).output().expect("specchio view runs")
-    }
-}
-
-impl Drop for Xvfb {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-fn ok(output: &Output, what: &str) {
-    assert!(
-        output.status.success(),
-        "{what}: {:?}\nstdout:\n{}\nstderr:\n{}",
-        output.status,
-        text(&output.stdout),
-        text(&output.stderr)
-    );
-}
-
-/// An RGB8 image from a PNG file: (width, height, bytes).
-fn read_png(path: &Path) -> (u32, u32, Vec<u8>) {
-    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
-        .read_info()
-        .unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    assert_eq!(info.color_type, png::ColorType::Rgb, "{}", path.display());
-    buf.truncate(info.buffer_size());
-    (info.width, info.height, buf)
-}
-
-/// The largest channel difference and how many channels differ at all.
-fn difference(a: &Path, b: &Path) -> (u8, usize) {
-    let (wa, ha, pa) = read_png(a);
-    let (wb, hb, pb) = read_png(b);
-    assert_eq!((wa, ha), (wb, hb), "{} vs {}", a.display(), b.display());
-    let diffs = pa.iter().zip(&pb).map(|(x, y)| x.abs_diff(*y));
-    diffs.fold((0, 0), |(max, n), d| (max.max(d), n + usize::from(d > 0)))
-}
-
-/// The viewer's screenshot equals the render's image within the stated tolerance (one
-/// 8-bit code, see the module comment).
-fn assert_same_image(shot: &Path, rendered: &Path) {
-    let (max, n) = difference(shot, rendered);
-    println!(
-        "{} vs {}: max difference {max}, {n} channels differ",
-        shot.display(),
-        rendered.display()
-    );
-    assert!(
-        max <= 1,
-        "{} differs from {} by up to {max}",
-        shot.display(),
-        rendered.display()
-    );
-}
-
-/// `specchio render SCENE --frame F` into a fresh folder.
-fn render(scene: &Path, frame: u32, name: &str) -> PathBuf {
-    let out = temp_dir(name);
-    let frame = frame.to_string();
-    let result = common::specchio(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--frame",
-        &frame,
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    ok(&result, "specchio render");
-    out
-}
+use viewer_support::*;
 
 /// thesis-room with lines replaced (`(section, key, value)`: the line starting with `key `
 /// inside `[section]`), in a fresh folder with the textures beside it.
@@ -195,10 +59,6 @@ fn edited_thesis_room(name: &str, edits: &[(&str, &str, &str)]) -> PathBuf {
     let path = dir.join("scene.toml");
     std::fs::write(&path, lines.join("\n")).unwrap();
     path
-}
-
-fn thesis_room() -> PathBuf {
-    root().join("scenes/thesis-room.toml")
 }
 
 #[test]
@@ -315,126 +175,21 @@ fn the_sensor_follows_the_sphere() {
 #[test]
 fn resizing_recreates_the_swapchain_and_quitting_is_clean() {
     let Some(x) = Xvfb::start() else { return };
-    if Command::new("xdotool").arg("version").output().is_err() {
-        eprintln!("skipped: xdotool is not installed (scripts/setup.sh installs it)");
+    if !has_xdotool() {
         return;
     }
-    let mut child = x
-        .command(&[thesis_room().to_str().unwrap(), "--frames", "100000"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // The viewer's stdout, line by line, as it comes.
-    let (lines, printed) = std::sync::mpsc::channel();
-    let stdout = child.stdout.take().unwrap();
-    let reader = std::thread::spawn(move || {
-        use std::io::BufRead;
-        let mut all = String::new();
-        for line in std::io::BufReader::new(stdout)
-            .lines()
-            .map_while(Result::ok)
-        {
-            all.push_str(&line);
-            all.push('\n');
-            let _ = lines.send(line);
-        }
-        all
-    });
-    let wait_for = |what: &str| {
-        let start = Instant::now();
-        while start.elapsed() < Duration::from_secs(120) {
-            match printed.recv_timeout(Duration::from_secs(1)) {
-                Ok(line) if line.starts_with(what) => return,
-                Ok(_) | Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
-                Err(_) => break,
-            }
-        }
-        panic!("the viewer never printed `{what}`");
-    };
-    let xdotool = |args: &[&str]| {
-        Command::new("xdotool")
-            .args(args)
-            .env("DISPLAY", &x.display)
-            .output()
-            .unwrap()
-    };
+    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--frames", "100000"]);
     // Presenting at the window's first size, then resized from outside, as a user would.
-    wait_for("swapchain: 1200x450");
-    let found = xdotool(&["search", "--name", "specchio view"]);
-    let id = text(&found.stdout).lines().next().unwrap_or("").to_owned();
-    assert!(!id.is_empty(), "no viewer window: {}", text(&found.stderr));
-    ok(
-        &xdotool(&["windowsize", &id, "640", "480"]),
-        "xdotool windowsize",
-    );
-    wait_for("swapchain: 640x480");
+    viewer.wait_for("swapchain: 1200x450");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowsize", &id, "640", "480"]);
+    viewer.wait_for("swapchain: 640x480");
     // A key typed into the focused window (XTEST, as a keyboard would): q quits. Events sent
     // to a window directly (`key --window`) are synthetic, and winit ignores them.
-    ok(
-        &xdotool(&["windowfocus", "--sync", &id]),
-        "xdotool windowfocus",
-    );
-    ok(&xdotool(&["key", "q"]), "xdotool key");
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(60) {
-            let _ = child.kill();
-            panic!("the viewer did not quit on q");
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    let out = child.wait_with_output().unwrap();
-    let stdout = reader.join().unwrap();
-    ok(&out, "specchio view");
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    xdotool(&x, &["key", "q"]);
+    let stdout = viewer.finish();
     assert!(stdout.contains("frames: "), "{stdout}");
-}
-
-/// The last `NAME: x y w h` line the viewer printed (the menu's or the help's rectangle in
-/// window pixels).
-fn reported_rect(stdout: &str, name: &str) -> [u32; 4] {
-    let line = stdout
-        .lines()
-        .rev()
-        .find_map(|l| l.strip_prefix(&format!("{name}: ")))
-        .unwrap_or_else(|| panic!("no `{name}:` line in\n{stdout}"));
-    let v: Vec<u32> = line.split(' ').map(|n| n.parse().unwrap()).collect();
-    [v[0], v[1], v[2], v[3]]
-}
-
-/// Channels that differ inside and outside `rect`.
-fn differences_around(a: &Path, b: &Path, [x, y, w, h]: [u32; 4]) -> (usize, usize) {
-    let (wa, ha, pa) = read_png(a);
-    let (wb, hb, pb) = read_png(b);
-    assert_eq!((wa, ha), (wb, hb));
-    let (mut inside, mut outside) = (0, 0);
-    for (i, (p, q)) in pa.chunks_exact(3).zip(pb.chunks_exact(3)).enumerate() {
-        let (px, py) = (i as u32 % wa, i as u32 / wa);
-        let within = (x..x + w).contains(&px) && (y..y + h).contains(&py);
-        let n = p.iter().zip(q).filter(|(u, v)| u != v).count();
-        if within {
-            inside += n;
-        } else {
-            outside += n;
-        }
-    }
-    (inside, outside)
-}
-
-/// `specchio view thesis-room --keys KEYS --frames 3 --screenshot FILE`: (file, stdout).
-fn shot_with_keys(x: &Xvfb, keys: &str, name: &str) -> (PathBuf, String) {
-    let shot = temp_dir(name);
-    let out = x.view(&[
-        thesis_room().to_str().unwrap(),
-        "--keys",
-        keys,
-        "--frames",
-        "3",
-        "--screenshot",
-        shot.to_str().unwrap(),
-    ]);
-    ok(&out, "specchio view");
-    (shot, text(&out.stdout))
 }
 
 #[test]

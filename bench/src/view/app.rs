@@ -38,6 +38,10 @@ pub struct Settings {
     pub screenshot: bool,
     pub present: PresentPreference,
     pub scene_name: String,
+    /// Print the menu's widget rectangles (`--widgets`).
+    pub widgets: bool,
+    /// A new menu renderer every frame (a test hook).
+    pub renew_menu_renderer: bool,
 }
 
 /// What the loop leaves behind.
@@ -194,7 +198,8 @@ impl App<'_> {
             window.display_handle()?.as_raw(),
             window.window_handle()?.as_raw(),
         )?;
-        let presenter = Presenter::create(self.device, surface, self.settings.present)?;
+        let mut presenter = Presenter::create(self.device, surface, self.settings.present)?;
+        presenter.renew_overlay = self.settings.renew_menu_renderer;
         let renderer = self.new_renderer(self.initial.clone(), self.settings.method)?;
         event_loop.set_control_flow(ControlFlow::Poll);
         let info = &self.device.info;
@@ -205,8 +210,10 @@ impl App<'_> {
             .into_iter()
             .filter(|&l| lookups::missing_features(l, info).is_none())
             .collect();
+        let mut menu = Menu::new(&window);
+        menu.print_widgets = self.settings.widgets;
         Ok(Viewer {
-            menu: Menu::new(&window),
+            menu,
             presenter,
             renderer,
             window,

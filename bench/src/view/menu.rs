@@ -45,6 +45,10 @@ pub struct Menu {
     pub help: bool,
     /// The pixel rectangles last reported (printed when they change, for scripts and tests).
     reported: [Option<[u32; 4]>; 2],
+    /// Print the menu's widgets' rectangles too (`--widgets`), so that a script can click
+    /// them; the last list printed.
+    pub print_widgets: bool,
+    reported_widgets: Vec<(String, [u32; 4])>,
     /// Texture changes not applied yet (the frame that carried them was skipped).
     pending: egui::TexturesDelta,
 }
@@ -88,6 +92,8 @@ impl Menu {
             open: false,
             help: false,
             reported: [None, None],
+            print_widgets: false,
+            reported_widgets: Vec::new(),
             pending: egui::TexturesDelta::default(),
         }
     }
@@ -109,11 +115,12 @@ impl Menu {
         let raw = self.input.take_egui_input(window);
         let mut actions = Vec::new();
         let mut rects = [None, None];
+        let mut widgets = Widgets::default();
         let (open, help) = (self.open, self.help);
         let full = self.ctx.run_ui(raw, |ui| {
             let ctx = ui.ctx().clone();
             if open {
-                rects[0] = menu_window(&ctx, status, &mut actions);
+                rects[0] = menu_window(&ctx, status, &mut actions, &mut widgets);
             }
             if help {
                 rects[1] = help_window(&ctx);
@@ -132,6 +139,9 @@ impl Menu {
                 self.reported[i] = px;
             }
         }
+        if self.print_widgets {
+            self.report_widgets(widgets, ppp);
+        }
         let primitives = self.ctx.tessellate(full.shapes, ppp);
         let mut textures = std::mem::take(&mut self.pending);
         textures.append(full.textures_delta);
@@ -146,6 +156,43 @@ impl Menu {
     }
 }
 
+impl Menu {
+    /// Prints `widget: NAME X Y W H` for every widget of the menu (window pixels, the
+    /// widget's own rectangle: a click at its centre hits it) when the list changed.
+    fn report_widgets(&mut self, widgets: Widgets, pixels_per_point: f32) {
+        let now: Vec<(String, [u32; 4])> = widgets
+            .0
+            .into_iter()
+            .map(|(name, r)| (name, widget_rect(r, pixels_per_point)))
+            .collect();
+        if now != self.reported_widgets {
+            for (name, [x, y, w, h]) in &now {
+                println!("widget: {name} {x} {y} {w} {h}");
+            }
+            self.reported_widgets = now;
+        }
+    }
+}
+
+/// The menu's clickable widgets this frame, by name (`lookup=box`, `view=sensor`, ...).
+#[derive(Default)]
+struct Widgets(Vec<(String, Rect)>);
+
+impl Widgets {
+    /// Records `response`'s rectangle under `name` and says whether it was clicked.
+    fn clicked(&mut self, name: String, response: egui::Response) -> bool {
+        self.0.push((name, response.rect));
+        response.clicked()
+    }
+}
+
+/// A widget's rectangle in window pixels [x, y, width, height], rounded to whole pixels.
+fn widget_rect(rect: Rect, pixels_per_point: f32) -> [u32; 4] {
+    let px = |v: f32| (v * pixels_per_point).round().max(0.0) as u32;
+    let (x, y) = (px(rect.min.x), px(rect.min.y));
+    [x, y, px(rect.max.x) - x, px(rect.max.y) - y]
+}
+
 /// The rectangle an egui window covers, in window pixels [x, y, width, height]: its outline
 /// grown by egui's anti-aliasing feather (one pixel) and rounded outwards, inside the window.
 pub fn pixel_rect(rect: Rect, pixels_per_point: f32, window: [u32; 2]) -> [u32; 4] {
@@ -158,7 +205,12 @@ pub fn pixel_rect(rect: Rect, pixels_per_point: f32, window: [u32; 2]) -> [u32; 
 }
 
 /// The menu: the keys' choices and the live figures. Returns the rectangle it covers.
-fn menu_window(ctx: &Context, s: &Status, actions: &mut Vec<Action>) -> Option<Rect> {
+fn menu_window(
+    ctx: &Context,
+    s: &Status,
+    actions: &mut Vec<Action>,
+    widgets: &mut Widgets,
+) -> Option<Rect> {
     let window = egui::Window::new("specchio  (F1 closes)")
         .fixed_pos(Pos2::new(MARGIN, MARGIN))
         .resizable(false)
@@ -166,30 +218,34 @@ fn menu_window(ctx: &Context, s: &Status, actions: &mut Vec<Action>) -> Option<R
     let shown = window.show(ctx, |ui| {
         ui.label("View");
         ui.horizontal(|ui| {
-            for (view, name) in [
-                (DisplayView::Pair, "both (1)"),
-                (DisplayView::Observer, "observer (2)"),
-                (DisplayView::Sensor, "sensor (3)"),
+            for (view, name, id) in [
+                (DisplayView::Pair, "both (1)", "both"),
+                (DisplayView::Observer, "observer (2)", "observer"),
+                (DisplayView::Sensor, "sensor (3)", "sensor"),
             ] {
-                if ui.radio(s.view == view, name).clicked() && s.view != view {
+                let radio = ui.radio(s.view == view, name);
+                if widgets.clicked(format!("view={id}"), radio) && s.view != view {
                     actions.push(Action::Show(view));
                 }
             }
         });
-        egui::ComboBox::from_label("fill method (m)")
+        let combo = egui::ComboBox::from_label("fill method (m)")
             .selected_text(s.method.to_string())
             .show_ui(ui, |ui| {
                 for &m in s.methods {
-                    if ui.selectable_label(s.method == m, m.to_string()).clicked() && s.method != m
-                    {
+                    let label = ui.selectable_label(s.method == m, m.to_string());
+                    if widgets.clicked(format!("method={m}"), label) && s.method != m {
                         actions.push(Action::SetMethod(m));
                     }
                 }
             });
+        // The combo box's button opens the list of methods (listed while it is open).
+        widgets.clicked("method".into(), combo.response);
         ui.horizontal(|ui| {
             ui.label("lookup (x)");
             for &l in s.lookups {
-                if ui.radio(s.lookup == l, l.to_string()).clicked() && s.lookup != l {
+                let radio = ui.radio(s.lookup == l, l.to_string());
+                if widgets.clicked(format!("lookup={l}"), radio) && s.lookup != l {
                     actions.push(Action::SetLookup(l));
                 }
             }
@@ -201,7 +257,9 @@ fn menu_window(ctx: &Context, s: &Status, actions: &mut Vec<Action>) -> Option<R
                 RefreshPolicy::EveryFrame,
                 RefreshPolicy::EveryN(4),
             ] {
-                if ui.radio(s.refresh == r, refresh_name(r)).clicked() && s.refresh != r {
+                let radio = ui.radio(s.refresh == r, refresh_name(r));
+                if widgets.clicked(format!("refresh={}", refresh_name(r)), radio) && s.refresh != r
+                {
                     actions.push(Action::SetRefresh(r));
                 }
             }
@@ -212,13 +270,13 @@ fn menu_window(ctx: &Context, s: &Status, actions: &mut Vec<Action>) -> Option<R
             } else {
                 "pause (space)"
             };
-            if ui.button(pause).clicked() {
+            if widgets.clicked("pause".into(), ui.button(pause)) {
                 actions.push(Action::PauseResume);
             }
-            if ui.button("step (.)").clicked() {
+            if widgets.clicked("step".into(), ui.button("step (.)")) {
                 actions.push(Action::Step);
             }
-            if ui.button("reset (0)").clicked() {
+            if widgets.clicked("reset".into(), ui.button("reset (0)")) {
                 actions.push(Action::Reset);
             }
         });

@@ -68,9 +68,16 @@ pub struct Args {
     /// Present with MAILBOX (lowest latency, may drop frames) instead of FIFO, where offered.
     #[arg(long)]
     pub mailbox: bool,
+    /// Print the menu's widgets' rectangles in window pixels when they change
+    /// (`widget: NAME X Y W H`), so that a script can click them.
+    #[arg(long)]
+    pub widgets: bool,
     /// Enable the Khronos validation layer; any message makes the command fail (exit 3).
     #[arg(long)]
     pub validate: bool,
+    /// Test hook: a new menu renderer every frame (docs/viewer.md).
+    #[arg(long, hide = true)]
+    pub renew_menu_renderer: bool,
 }
 
 /// `WxH` with both sides in 1..=MAX_WINDOW_SIDE.
@@ -152,6 +159,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             PresentPreference::Fifo
         },
         scene_name: args.scene.display().to_string(),
+        widgets: args.widgets,
+        renew_menu_renderer: args.renew_menu_renderer,
     };
     let outcome = app::run(event_loop, &instance, &device, scene, settings);
     drop(device);

@@ -10,11 +10,18 @@
 //! frame while an earlier frame in flight may still sample it, so the free is handed to the
 //! frame ring's deletion queue (`FrameRing::defer`) and runs once those frames finished. A
 //! renderer made for another swapchain format is retired the same way.
+//!
+//! egui sends a texture once and then only patches (new glyphs go into the font atlas as
+//! partial updates). A renderer made later (a swapchain format change) would lack what was
+//! sent before, so `Textures` keeps every texture's whole current image on the CPU, and a
+//! new renderer is given all of them before its first draw.
 
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use anyhow::{Context, Result};
 use ash::vk;
+use egui::epaint::{ColorImage, ImageData, ImageDelta};
 use egui::{ClippedPrimitive, TextureId, TexturesDelta};
 use egui_ash_renderer::{allocator::DefaultAllocator, DynamicRendering, Options, RenderMode};
 use specchio::vk::commands::{image_barriers, ImageBarrier};
@@ -125,28 +132,45 @@ impl Overlay {
     }
 
     /// Applies egui's texture changes before recording: new and updated textures now (the
-    /// upload waits for the queue), freed ones through the deletion queue.
+    /// upload waits for the queue), freed ones through the deletion queue. `kept` follows
+    /// along, so that a later renderer can be given the same textures.
     pub fn update_textures(
         &mut self,
         ring: &mut FrameRing,
         delta: &mut TexturesDelta,
+        kept: &mut Textures,
     ) -> Result<()> {
-        let mut renderer = lock(&self.renderer);
         for (id, images) in delta.set.drain() {
             for image in &images {
-                renderer
-                    .set_texture(self.device.queue, self.upload_pool.raw, id, image)
-                    .context("uploading a menu texture")?;
+                self.upload(id, image)?;
+                kept.set(id, image);
             }
         }
-        drop(renderer);
         if !delta.free.is_empty() {
+            for id in &delta.free {
+                kept.free(*id);
+            }
             ring.defer(DeferredFree {
                 renderer: Arc::clone(&self.renderer),
                 ids: delta.free.drain().collect(),
             });
         }
         Ok(())
+    }
+
+    /// Uploads every texture egui holds (a new renderer's first step: egui will not send
+    /// again what an earlier renderer was given).
+    pub fn restore(&mut self, kept: &Textures) -> Result<()> {
+        for (&id, image) in &kept.images {
+            self.upload(id, image)?;
+        }
+        Ok(())
+    }
+
+    fn upload(&self, id: TextureId, image: &ImageDelta) -> Result<()> {
+        lock(&self.renderer)
+            .set_texture(self.device.queue, self.upload_pool.raw, id, image)
+            .context("uploading a menu texture")
     }
 
     /// Records the menu pass over `target` (written by the blit, in TRANSFER_DST_OPTIMAL);
@@ -211,5 +235,81 @@ impl Overlay {
         unsafe { d.cmd_end_rendering(cmd) };
         drawn.context("recording the menu")?;
         Ok(())
+    }
+}
+
+/// Every texture egui currently holds, whole, as egui has set and patched it.
+#[derive(Default)]
+pub struct Textures {
+    images: HashMap<TextureId, ImageDelta>,
+}
+
+impl Textures {
+    /// Applies one of egui's changes: a whole image replaces, a patch is copied in.
+    pub fn set(&mut self, id: TextureId, delta: &ImageDelta) {
+        let Some(pos) = delta.pos else {
+            self.images.insert(id, delta.clone());
+            return;
+        };
+        let Some(whole) = self.images.get_mut(&id) else {
+            // A patch of a texture never set whole: egui does not send one; nothing to keep.
+            return;
+        };
+        let (ImageData::Color(target), ImageData::Color(patch)) = (&mut whole.image, &delta.image);
+        let target: &mut ColorImage = Arc::make_mut(target);
+        let [w, _] = target.size;
+        let [pw, ph] = patch.size;
+        for row in 0..ph {
+            let start = (pos[1] + row) * w + pos[0];
+            target.pixels[start..start + pw].copy_from_slice(&patch.pixels[row * pw..][..pw]);
+        }
+        whole.options = delta.options;
+    }
+
+    pub fn free(&mut self, id: TextureId) {
+        self.images.remove(&id);
+    }
+
+    /// The whole current image of `id`.
+    #[cfg(test)]
+    fn image(&self, id: TextureId) -> Option<&ColorImage> {
+        self.images.get(&id).map(|d| match &d.image {
+            ImageData::Color(image) => &**image,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use egui::{Color32, TextureOptions};
+
+    fn image(size: [usize; 2], value: u8) -> ColorImage {
+        ColorImage::new(size, vec![Color32::from_gray(value); size[0] * size[1]])
+    }
+
+    #[test]
+    fn kept_textures_follow_whole_images_patches_and_frees() {
+        let (font, other) = (TextureId::Managed(0), TextureId::Managed(1));
+        let opts = TextureOptions::LINEAR;
+        let mut kept = Textures::default();
+        kept.set(font, &ImageDelta::full(image([4, 3], 10), opts));
+        kept.set(other, &ImageDelta::full(image([1, 1], 5), opts));
+        // A 2x2 patch at (1, 1), as a new glyph goes into the atlas.
+        kept.set(font, &ImageDelta::partial([1, 1], image([2, 2], 200), opts));
+        let font_image = kept.image(font).unwrap();
+        let gray: Vec<u8> = font_image.pixels.iter().map(|c| c.r()).collect();
+        #[rustfmt::skip]
+        assert_eq!(gray, [
+            10, 10, 10, 10,
+            10, 200, 200, 10,
+            10, 200, 200, 10,
+        ]);
+        // A whole image replaces what was there, size included.
+        kept.set(font, &ImageDelta::full(image([2, 1], 7), opts));
+        assert_eq!(kept.image(font).unwrap().size, [2, 1]);
+        kept.free(other);
+        assert!(kept.image(other).is_none());
+        assert_eq!(kept.images.len(), 1);
     }
 }

@@ -18,7 +18,7 @@ use specchio::vk::memory::{Buffer, BufferDesc};
 use specchio::vk::surface::Surface;
 use specchio::vk::swapchain::{Acquired, PresentPreference, Swapchain, SwapchainDesc};
 
-use super::overlay::{Overlay, Paint};
+use super::overlay::{Overlay, Paint, Textures};
 
 /// What became of one frame.
 pub enum Shown {
@@ -42,11 +42,16 @@ pub struct Presenter {
     /// The menu's egui renderer, for the swapchain's format; `None` while there is no
     /// swapchain or its images cannot be drawn into (the menu is then not shown).
     overlay: Option<Overlay>,
+    /// Every texture egui holds, for a menu renderer made later.
+    textures: Textures,
     swapchain: Option<Swapchain>,
     /// The swapchain no longer matches the window: recreate before the next frame.
     stale: bool,
     pub surface: Arc<Surface>,
     present: PresentPreference,
+    /// Test hook (`--renew-menu-renderer`): a new menu renderer every frame, as a swapchain
+    /// format change makes one, to show that it is given egui's textures.
+    pub renew_overlay: bool,
     device: Arc<Device>,
 }
 
@@ -60,10 +65,12 @@ impl Presenter {
         Ok(Self {
             ring: FrameRing::create(device, FRAMES_IN_FLIGHT)?,
             overlay: None,
+            textures: Textures::default(),
             swapchain: None,
             stale: true,
             surface: Arc::new(surface),
             present,
+            renew_overlay: false,
             device: Arc::clone(device),
         })
     }
@@ -86,6 +93,12 @@ impl Presenter {
         if self.stale && !self.recreate(window_size)? {
             return Ok((Shown::Skipped, None));
         }
+        if self.renew_overlay {
+            if let Some(old) = self.overlay.take() {
+                self.ring.defer(old);
+            }
+            self.replace_overlay(overlay_format(self.swapchain.as_ref()))?;
+        }
         let Some(swapchain) = &self.swapchain else {
             return Ok((Shown::Skipped, None));
         };
@@ -95,7 +108,7 @@ impl Presenter {
         // Textures first: an upload waits for the queue, so it goes before this frame's
         // submission rather than inside its recording.
         if let (Some(p), Some(overlay)) = (paint.as_deref_mut(), &mut self.overlay) {
-            overlay.update_textures(&mut self.ring, &mut p.textures)?;
+            overlay.update_textures(&mut self.ring, &mut p.textures, &mut self.textures)?;
         }
         let (extent, format) = (swapchain.extent, swapchain.format.format);
         let slot_semaphore = self.ring.begin()?.image_available;
@@ -170,7 +183,7 @@ impl Presenter {
                 s.extent.width, s.extent.height, s.format.format, s.present_mode
             );
         }
-        self.replace_overlay(new.as_ref())?;
+        self.replace_overlay(overlay_format(new.as_ref()))?;
         self.swapchain = new;
         self.stale = self.swapchain.is_none();
         Ok(self.swapchain.is_some())
@@ -181,15 +194,16 @@ impl Presenter {
     /// Keeps the menu renderer when the new swapchain has the same format; otherwise makes
     /// one for the new format and retires the old one through the deletion queue (a frame
     /// in flight may still draw with its pipeline and buffers).
-    fn replace_overlay(&mut self, swapchain: Option<&Swapchain>) -> Result<()> {
-        let wanted = swapchain
-            .filter(|s| !s.views.is_empty())
-            .map(|s| (s.format.format, s.is_srgb()));
+    fn replace_overlay(&mut self, wanted: Option<(vk::Format, bool)>) -> Result<()> {
         if self.overlay.as_ref().map(Overlay::format) == wanted.map(|w| w.0) {
             return Ok(());
         }
         let new = match wanted {
-            Some((format, srgb)) => Some(Overlay::create(&self.device, format, srgb)?),
+            Some((format, srgb)) => {
+                let mut overlay = Overlay::create(&self.device, format, srgb)?;
+                overlay.restore(&self.textures)?;
+                Some(overlay)
+            }
             None => None,
         };
         if let Some(old) = std::mem::replace(&mut self.overlay, new) {
@@ -197,6 +211,14 @@ impl Presenter {
         }
         Ok(())
     }
+}
+
+/// The format (and whether it encodes sRGB) a menu renderer for `swapchain` draws into;
+/// `None` without a swapchain or with images that cannot be drawn into.
+fn overlay_format(swapchain: Option<&Swapchain>) -> Option<(vk::Format, bool)> {
+    swapchain
+        .filter(|s| !s.views.is_empty())
+        .map(|s| (s.format.format, s.is_srgb()))
 }
 
 /// Records: source COPY -> BLIT; target UNDEFINED -> TRANSFER_DST; a clear where the blit

@@ -1,0 +1,377 @@
+//! What the viewer's window tests share: display servers to run `specchio view` on (Xvfb,
+//! headless weston), a viewer kept running while a test drives it, and image comparisons.
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::common::{self, root, temp_dir};
+
+/// A private X server on a free display number, stopped on drop.
+pub struct Xvfb {
+    child: Child,
+    pub display: String,
+}
+
+impl Xvfb {
+    /// Starts one, or `None` (with the reason printed) when Xvfb is not installed.
+    pub fn start() -> Option<Self> {
+        if Command::new("Xvfb").arg("-help").output().is_err() {
+            eprintln!(
+                "skipped: Xvfb is not installed (apt-get install xvfb; scripts/setup.sh does)"
+            );
+            return None;
+        }
+        // A display number of this process's own, away from common ones (0..10), and of
+        // this test's own: tests run in parallel threads of one process, and two that
+        // checked the same free number before either server took it would share a server
+        // (the first to finish would stop it under the other).
+        static STARTED: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let own = STARTED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let first = 100 + (std::process::id() % 400) * 2 + own * 1000;
+        for n in (first..).step_by(7).take(50) {
+            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
+                || Path::new(&format!("/tmp/.X{n}-lock")).exists()
+            {
+                continue;
+            }
+            let display = format!(":{n}");
+            let child = Command::new("Xvfb")
+                .args([&display, "-screen", "0", "1920x1080x24", "-nolisten", "tcp"])
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .expect("Xvfb starts");
+            let socket = format!("/tmp/.X11-unix/X{n}");
+            let start = Instant::now();
+            while !Path::new(&socket).exists() && start.elapsed() < Duration::from_secs(10) {
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            assert!(Path::new(&socket).exists(), "Xvfb {display} did not start");
+            return Some(Self { child, display });
+        }
+        panic!("no free X display number");
+    }
+}
+
+/// A display server the viewer can be started on.
+pub trait Display {
+    /// `specchio view ARGS` on this display, validation on.
+    fn command(&self, args: &[&str]) -> Command;
+
+    fn view(&self, args: &[&str]) -> Output {
+        self.command(args).output().expect("specchio view runs")
+    }
+}
+
+impl Display for Xvfb {
+    fn command(&self, args: &[&str]) -> Command {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_specchio"));
+        c.arg("view")
+            .args(args)
+            .env("DISPLAY", &self.display)
+            .env_remove("WAYLAND_DISPLAY")
+            .env("SPECCHIO_VALIDATE", "1");
+        c
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+pub fn ok(output: &Output, what: &str) {
+    assert!(
+        output.status.success(),
+        "{what}: {:?}\nstdout:\n{}\nstderr:\n{}",
+        output.status,
+        text(&output.stdout),
+        text(&output.stderr)
+    );
+}
+
+/// An RGB8 image from a PNG file: (width, height, bytes).
+pub fn read_png(path: &Path) -> (u32, u32, Vec<u8>) {
+    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb, "{}", path.display());
+    buf.truncate(info.buffer_size());
+    (info.width, info.height, buf)
+}
+
+/// The largest channel difference and how many channels differ at all.
+pub fn difference(a: &Path, b: &Path) -> (u8, usize) {
+    let (wa, ha, pa) = read_png(a);
+    let (wb, hb, pb) = read_png(b);
+    assert_eq!((wa, ha), (wb, hb), "{} vs {}", a.display(), b.display());
+    let diffs = pa.iter().zip(&pb).map(|(x, y)| x.abs_diff(*y));
+    diffs.fold((0, 0), |(max, n), d| (max.max(d), n + usize::from(d > 0)))
+}
+
+/// The viewer's screenshot equals the render's image within the stated tolerance (one
+/// 8-bit code, see the module comment).
+pub fn assert_same_image(shot: &Path, rendered: &Path) {
+    let (max, n) = difference(shot, rendered);
+    println!(
+        "{} vs {}: max difference {max}, {n} channels differ",
+        shot.display(),
+        rendered.display()
+    );
+    assert!(
+        max <= 1,
+        "{} differs from {} by up to {max}",
+        shot.display(),
+        rendered.display()
+    );
+}
+
+/// `specchio render SCENE --frame F` into a fresh folder.
+pub fn render(scene: &Path, frame: u32, name: &str) -> PathBuf {
+    let out = temp_dir(name);
+    let frame = frame.to_string();
+    let result = common::specchio(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--frame",
+        &frame,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    ok(&result, "specchio render");
+    out
+}
+
+pub fn thesis_room() -> PathBuf {
+    root().join("scenes/thesis-room.toml")
+}
+
+/// The last `NAME: x y w h` line the viewer printed (the menu's or the help's rectangle in
+/// window pixels).
+pub fn reported_rect(stdout: &str, name: &str) -> [u32; 4] {
+    let line = stdout
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix(&format!("{name}: ")))
+        .unwrap_or_else(|| panic!("no `{name}:` line in\n{stdout}"));
+    let v: Vec<u32> = line.split(' ').map(|n| n.parse().unwrap()).collect();
+    [v[0], v[1], v[2], v[3]]
+}
+
+/// Channels that differ inside and outside `rect`.
+pub fn differences_around(a: &Path, b: &Path, [x, y, w, h]: [u32; 4]) -> (usize, usize) {
+    let (wa, ha, pa) = read_png(a);
+    let (wb, hb, pb) = read_png(b);
+    assert_eq!((wa, ha), (wb, hb));
+    let (mut inside, mut outside) = (0, 0);
+    for (i, (p, q)) in pa.chunks_exact(3).zip(pb.chunks_exact(3)).enumerate() {
+        let (px, py) = (i as u32 % wa, i as u32 / wa);
+        let within = (x..x + w).contains(&px) && (y..y + h).contains(&py);
+        let n = p.iter().zip(q).filter(|(u, v)| u != v).count();
+        if within {
+            inside += n;
+        } else {
+            outside += n;
+        }
+    }
+    (inside, outside)
+}
+
+/// `specchio view thesis-room --keys KEYS --frames 3 --screenshot FILE`: (file, stdout).
+pub fn shot_with_keys(x: &impl Display, keys: &str, name: &str) -> (PathBuf, String) {
+    let shot = temp_dir(name);
+    let out = x.view(&[
+        thesis_room().to_str().unwrap(),
+        "--keys",
+        keys,
+        "--frames",
+        "3",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    ok(&out, "specchio view");
+    (shot, text(&out.stdout))
+}
+
+/// A private headless Wayland compositor (weston's headless backend), stopped on drop. It
+/// listens in a runtime folder of its own (0700, as Wayland asks of XDG_RUNTIME_DIR).
+pub struct Weston {
+    child: Child,
+    runtime_dir: PathBuf,
+    socket: String,
+}
+
+impl Weston {
+    /// Starts one, or `None` (with the reason printed) when weston is not installed.
+    pub fn start(name: &str) -> Option<Self> {
+        if Command::new("weston").arg("--version").output().is_err() {
+            eprintln!(
+                "skipped: weston is not installed (apt-get install weston; scripts/setup.sh does)"
+            );
+            return None;
+        }
+        use std::os::unix::fs::PermissionsExt;
+        let runtime_dir = temp_dir(&format!("{name}-xdg"));
+        std::fs::create_dir_all(&runtime_dir).unwrap();
+        std::fs::set_permissions(&runtime_dir, std::fs::Permissions::from_mode(0o700)).unwrap();
+        let socket = format!("specchio-{name}");
+        // No renderer (the headless default): the compositor still takes the buffers and
+        // answers frame callbacks, and the test reads the swapchain image, not the screen.
+        let child = Command::new("weston")
+            .args([
+                "--backend=headless-backend.so",
+                &format!("--socket={socket}"),
+                "--idle-time=0",
+                "--no-config",
+                "--width=1920",
+                "--height=1080",
+            ])
+            .env("XDG_RUNTIME_DIR", &runtime_dir)
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("weston starts");
+        let path = runtime_dir.join(&socket);
+        let start = Instant::now();
+        while !path.exists() && start.elapsed() < Duration::from_secs(20) {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        assert!(path.exists(), "weston did not open {}", path.display());
+        Some(Self {
+            child,
+            runtime_dir,
+            socket,
+        })
+    }
+}
+
+impl Display for Weston {
+    fn command(&self, args: &[&str]) -> Command {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_specchio"));
+        c.arg("view")
+            .args(args)
+            .env("WAYLAND_DISPLAY", &self.socket)
+            .env("XDG_RUNTIME_DIR", &self.runtime_dir)
+            .env_remove("DISPLAY")
+            .env("SPECCHIO_VALIDATE", "1");
+        c
+    }
+}
+
+impl Drop for Weston {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = std::fs::remove_dir_all(&self.runtime_dir);
+    }
+}
+
+/// `true` when xdotool can be run (it is what sends keys and clicks under Xvfb).
+pub fn has_xdotool() -> bool {
+    if Command::new("xdotool").arg("version").output().is_err() {
+        eprintln!("skipped: xdotool is not installed (scripts/setup.sh installs it)");
+        return false;
+    }
+    true
+}
+
+/// A viewer left running while a test drives it, its stdout read line by line as it comes.
+pub struct Running {
+    child: Child,
+    lines: std::sync::mpsc::Receiver<String>,
+    reader: std::thread::JoinHandle<String>,
+}
+
+impl Running {
+    pub fn spawn(display: &impl Display, args: &[&str]) -> Self {
+        let mut child = display
+            .command(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let (sender, lines) = std::sync::mpsc::channel();
+        let stdout = child.stdout.take().unwrap();
+        let reader = std::thread::spawn(move || {
+            use std::io::BufRead;
+            let mut all = String::new();
+            for line in std::io::BufReader::new(stdout)
+                .lines()
+                .map_while(Result::ok)
+            {
+                all.push_str(&line);
+                all.push('\n');
+                let _ = sender.send(line);
+            }
+            all
+        });
+        Self {
+            child,
+            lines,
+            reader,
+        }
+    }
+
+    /// Waits (at most two minutes) for a line starting with `what`, and returns it.
+    pub fn wait_for(&self, what: &str) -> String {
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(120) {
+            match self.lines.recv_timeout(Duration::from_secs(1)) {
+                Ok(line) if line.starts_with(what) => return line,
+                Ok(_) | Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+                Err(_) => break,
+            }
+        }
+        panic!("the viewer never printed `{what}`");
+    }
+
+    /// Waits (at most a minute) for the viewer to exit by itself; requires success and
+    /// returns all it printed.
+    pub fn finish(mut self) -> String {
+        let start = Instant::now();
+        while self.child.try_wait().unwrap().is_none() {
+            if start.elapsed() > Duration::from_secs(60) {
+                let _ = self.child.kill();
+                panic!("the viewer did not quit");
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        let out = self.child.wait_with_output().unwrap();
+        let stdout = self.reader.join().unwrap();
+        ok(&out, "specchio view");
+        stdout
+    }
+}
+
+/// `xdotool ARGS` on `x`'s display, required to succeed; its stdout.
+pub fn xdotool(x: &Xvfb, args: &[&str]) -> String {
+    let out = Command::new("xdotool")
+        .args(args)
+        .env("DISPLAY", &x.display)
+        .output()
+        .unwrap();
+    ok(&out, &format!("xdotool {args:?}"));
+    text(&out.stdout)
+}
+
+/// The id of the viewer's window on `x`.
+pub fn viewer_window(x: &Xvfb) -> String {
+    let found = xdotool(x, &["search", "--name", "specchio view"]);
+    let id = found.lines().next().unwrap_or("").to_owned();
+    assert!(!id.is_empty(), "no viewer window");
+    id
+}
