@@ -74,19 +74,7 @@ impl SensorRays {
         };
         let pool = DescriptorPool::create(device, 1, &[size], "sensor ray descriptors")?;
         let set = pool.allocate(&set_layout, "sensor ray set")?;
-        // texelFetch ignores the filter, but a combined sampler is needed; nearest says why
-        // (and an integer image may not be sampled with a linear filter at all).
-        let nearest = Sampler::create(
-            device,
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::NEAREST)
-                .min_filter(vk::Filter::NEAREST)
-                .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
-            "sensor ray sampler",
-        )?;
+        let nearest = Sampler::nearest(device, "sensor ray sampler")?;
         descriptors::write_images(device, set, 1, &[(cube.depth_layers_view.raw, nearest.raw)]);
         descriptors::write_images(device, set, 2, &[(ids.layers_view.raw, nearest.raw)]);
         let layout = PipelineLayout::create(

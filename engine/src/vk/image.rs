@@ -242,6 +242,21 @@ impl Sampler {
             device: Arc::clone(device),
         })
     }
+
+    /// Nearest filtering, clamped at the edges: for images read texel by texel (`texelFetch`
+    /// ignores the filter, but a combined sampler is still needed; an integer image may not
+    /// be sampled with a linear filter at all).
+    pub fn nearest(device: &Arc<Device>, name: &str) -> Result<Self, GpuError> {
+        let clamp = vk::SamplerAddressMode::CLAMP_TO_EDGE;
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::NEAREST)
+            .min_filter(vk::Filter::NEAREST)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(clamp)
+            .address_mode_v(clamp)
+            .address_mode_w(clamp);
+        Self::create(device, &info, name)
+    }
 }
 
 impl Drop for Sampler {

@@ -83,20 +83,9 @@ pub(super) fn cube_pool_size() -> vk::DescriptorPoolSize {
     }
 }
 
-/// The depth's sampler. texelFetch ignores the sampler's filter; a combined sampler is still
-/// needed, and nearest makes the intent plain.
+/// The depth's sampler, nearest ([`Sampler::nearest`]).
 pub(super) fn depth_sampler(device: &Arc<Device>) -> Result<Sampler, GpuError> {
-    Sampler::create(
-        device,
-        &vk::SamplerCreateInfo::default()
-            .mag_filter(vk::Filter::NEAREST)
-            .min_filter(vk::Filter::NEAREST)
-            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
-        "cube depth sampler",
-    )
+    Sampler::nearest(device, "cube depth sampler")
 }
 
 /// Points [`cube_bindings`] of `set` at the cube's colour (filtered as for `box`) and depth.

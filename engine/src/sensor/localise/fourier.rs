@@ -137,24 +137,7 @@ impl Descriptor for FourierSignature {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A one-row-per-function panorama: pixel j of row r is `f(r, azimuth of column j)`.
-    fn panorama(width: u32, rows: u32, f: impl Fn(u32, f64) -> f32) -> RgbaImage {
-        let pixels = (0..rows)
-            .flat_map(|r| {
-                let f = &f;
-                (0..width).map(move |j| {
-                    let v = f(r, (f64::from(j) + 0.5) / f64::from(width) * TAU);
-                    [v, v, v, 1.0]
-                })
-            })
-            .collect();
-        RgbaImage {
-            width,
-            height: rows,
-            pixels,
-        }
-    }
+    use crate::sensor::localise::test_panorama as panorama;
 
     fn magnitudes(s: &Signature) -> Vec<f64> {
         s.values

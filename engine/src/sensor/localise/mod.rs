@@ -116,3 +116,24 @@ pub fn rank(descriptor: &dyn Descriptor, database: &[Signature], query: &Signatu
     order.sort_by(|&a, &b| d[a].total_cmp(&d[b]).then(a.cmp(&b)));
     order
 }
+
+/// A test panorama whose pixel (j, r) is `f(r, azimuth of column j)`, grey: the descriptors'
+/// tests build their known answers on it.
+#[cfg(test)]
+pub(crate) fn test_panorama(width: u32, rows: u32, f: impl Fn(u32, f64) -> f32) -> RgbaImage {
+    use std::f64::consts::TAU;
+    let pixels = (0..rows)
+        .flat_map(|r| {
+            let f = &f;
+            (0..width).map(move |j| {
+                let v = f(r, (f64::from(j) + 0.5) / f64::from(width) * TAU);
+                [v, v, v, 1.0]
+            })
+        })
+        .collect();
+    RgbaImage {
+        width,
+        height: rows,
+        pixels,
+    }
+}

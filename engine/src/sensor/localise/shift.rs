@@ -160,24 +160,7 @@ impl Descriptor for ColumnShift {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A panorama whose pixel (j, r) is `f(r, azimuth of column j)`, grey.
-    fn panorama(width: u32, rows: u32, f: impl Fn(u32, f64) -> f32) -> RgbaImage {
-        let pixels = (0..rows)
-            .flat_map(|r| {
-                let f = &f;
-                (0..width).map(move |j| {
-                    let v = f(r, (f64::from(j) + 0.5) / f64::from(width) * TAU);
-                    [v, v, v, 1.0]
-                })
-            })
-            .collect();
-        RgbaImage {
-            width,
-            height: rows,
-            pixels,
-        }
-    }
+    use crate::sensor::localise::test_panorama as panorama;
 
     /// A known small example: a 12 x 3 panorama of column index values, box-filtered to 4
     /// columns and 1 row (3 x 4 aspect), holds the means of each run of three columns.
