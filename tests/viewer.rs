@@ -91,6 +91,9 @@ fn swiftshader_is_refused_with_a_reason_not_a_crash() {
     let err = text(&out.stderr);
     // Without SwiftShader installed the device selection itself refuses: exit 1 as well.
     assert_eq!(out.status.code(), Some(1), "{err}");
+    if common::devices().iter().any(|d| d == "swiftshader") {
+        assert!(err.contains("X11") && err.contains("Wayland"), "{err}");
+    }
 }
 
 #[test]

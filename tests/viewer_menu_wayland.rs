@@ -1,6 +1,6 @@
 //! More of `specchio view`, validation layer on: the viewer on Wayland (a headless weston)
 //! shows what `specchio render` writes, as it does under X11; a click on the menu's widget
-//! switches the lookup, as the key does; and a menu renderer made anew (as a swapchain format
+//! switches the lookup, as the key does; SwiftShader presents there too; and a menu renderer made anew (as a swapchain format
 //! change makes one) draws the same menu, font included.
 //!
 //! Without weston, Xvfb or xdotool the tests that need them print why and pass without
@@ -35,6 +35,33 @@ fn on_wayland_both_views_show_what_render_writes() {
         text(&out.stdout)
     );
     let rendered = render(&thesis_room(), 2, "view-wayland-render");
+    assert_same_image(&shot, &rendered.join("views.png"));
+}
+
+/// SwiftShader presents on Wayland (its build crashes only querying an X11 window's surface,
+/// where the viewer refuses it: tests/viewer.rs) and shows what `render` on SwiftShader writes.
+#[test]
+fn on_wayland_swiftshader_shows_what_render_writes_on_it() {
+    if !common::devices().iter().any(|d| d == "swiftshader") {
+        eprintln!("skipped: SwiftShader is not installed (scripts/setup.sh unpacks it)");
+        return;
+    }
+    let Some(wayland) = Weston::start("view-wayland-swiftshader") else {
+        return;
+    };
+    let shot = temp_dir("view-wayland-swiftshader.png");
+    let out = wayland.view(&[
+        thesis_room().to_str().unwrap(),
+        "--device",
+        "swiftshader",
+        "--frames",
+        "3",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    ok(&out, "specchio view --device swiftshader on Wayland");
+    let device = ["--device", "swiftshader"];
+    let rendered = render_with(&thesis_room(), 2, "view-wayland-ss-render", &device);
     assert_same_image(&shot, &rendered.join("views.png"));
 }
 

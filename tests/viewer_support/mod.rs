@@ -140,16 +140,23 @@ pub fn assert_same_image(shot: &Path, rendered: &Path) {
 
 /// `specchio render SCENE --frame F` into a fresh folder.
 pub fn render(scene: &Path, frame: u32, name: &str) -> PathBuf {
+    render_with(scene, frame, name, &[])
+}
+
+/// [`render`] with more arguments (`--device swiftshader`).
+pub fn render_with(scene: &Path, frame: u32, name: &str, extra: &[&str]) -> PathBuf {
     let out = temp_dir(name);
     let frame = frame.to_string();
-    let result = common::specchio(&[
+    let mut args = vec![
         "render",
         scene.to_str().unwrap(),
         "--frame",
         &frame,
         "--out",
         out.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let result = common::specchio(&args);
     ok(&result, "specchio render");
     out
 }
