@@ -117,11 +117,35 @@ float behind(vec3 q_h, float w, FrameData f) {
     return 1.0 - stored_z(q_h, f) * w / major;
 }
 
+// The stored distance D in the direction of q = q_h / w, from behind()'s h = 1 - D / |q|.
+// Only asked in front of the surface (h < 0), where w > 0.
+float stored_distance(vec3 q_h, float w, float h) {
+    return (1.0 - h) * length(q_h) / max(w, 1e-30);
+}
+
+// Whether a step that stays in front of the stored surface at both ends (h < 0 at both) may
+// still have clipped a surface between them. The step moves from a direction where the
+// centre saw a surface at distance d0 to one where it sees a surface much farther (d1, a jump
+// outwards: the step crossed the silhouette of the nearer surface, as seen from the centre),
+// and by its end the ray is as far from the centre as that nearer surface was, less the
+// silhouette fraction as slack for a surface nearer at its edge than at the sample (|q| only
+// grows along a reflected ray, which leaves the sphere outwards). Between the two samples
+// the ray then crossed the nearer surface's depth while crossing its silhouette: whether it
+// crossed the surface itself, or passed beside it, only a finer look can tell. A ray that
+// clips a corner of the box of scenes/hard/pole-and-box.toml within one step does this:
+// in front of the box at one sample, in front of the wall beyond at the next.
+bool clipped_between(float d0, float d1, vec3 q1_h, float w1) {
+    bool jump_outwards = d1 > d0 * (1.0 + DISTANCE_SILHOUETTE);
+    bool reached_depth = length(q1_h) >= d0 * (1.0 - DISTANCE_SILHOUETTE) * w1;
+    return jump_outwards && reached_depth;
+}
+
 // What the search made of a ray (distance_search's result).
 #define SEARCH_HIT 0u  // it met the stored surface: the point found is the answer
 #define SEARCH_JUMP 1u // before any hit, it crossed a jump in the stored distance that was no
                        // hit (the ray passed behind an occluder as seen from the centre, where
-                       // it may meet a surface the cube never stored), or its hit lies on a
+                       // it may meet a surface the cube never stored), or a step that may
+                       // have clipped a corner (clipped_between), or its hit lies on a
                        // silhouette texel (stop_at_jump only)
 #define SEARCH_NONE 2u // it bracketed nothing it could call a hit
 
@@ -138,7 +162,9 @@ float behind(vec3 q_h, float w, FrameData f) {
 // a = 3/4 (s is a third of the distance to the room box's exit), so that three quarters of
 // the steps lie inside the room. flags.z steps of 1/flags.z; the first bracket of a sign
 // change is then refined by flags.w secant steps (regula falsi: the bracket shrinks around
-// the root) and one last secant estimate.
+// the root) and one last secant estimate. With stop_at_jump it also gives up on a step that
+// stays in front of the stored surface at both ends yet may have met a surface between them
+// (clipped_between): the linear steps only see what lies at their samples.
 //
 // `range` is the distance along r from p to the point found (for SEARCH_HIT): with
 // q = p + s a / (1 - a) r, it is s a / (1 - a) (the sensor's range, sensor_ray.glsl).
@@ -150,11 +176,17 @@ uint distance_search_range(FrameData f, vec3 p, vec3 r, bool stop_at_jump, out v
     uint steps = max(f.flags.z, 1u);
     float a0 = 0.0;
     float h0 = behind(p0, 1.0, f);
+    float d0 = stored_distance(p0, 1.0, h0);
     found = far_end;
     range = 0.0;
     for (uint i = 1u; i <= steps; i++) {
         float a1 = float(i) / float(steps);
-        float h1 = behind(mix(p0, far_end, a1), 1.0 - a1, f);
+        vec3 q1_h = mix(p0, far_end, a1);
+        float h1 = behind(q1_h, 1.0 - a1, f);
+        float d1 = stored_distance(q1_h, 1.0 - a1, h1);
+        if (stop_at_jump && h0 < 0.0 && h1 < 0.0 && clipped_between(d0, d1, q1_h, 1.0 - a1)) {
+            return SEARCH_JUMP;
+        }
         if (h0 < 0.0 && h1 >= 0.0) {
             float lo = a0, h_lo = h0, hi = a1, h_hi = h1;
             for (uint k = 0u; k < f.flags.w; k++) {
@@ -187,6 +219,7 @@ uint distance_search_range(FrameData f, vec3 p, vec3 r, bool stop_at_jump, out v
         }
         a0 = a1;
         h0 = h1;
+        d0 = d1;
     }
     return SEARCH_NONE;
 }

@@ -3,13 +3,16 @@
 //! acceleration structures, [`super::tracing`]).
 //!
 //! Unresolved means: before meeting the stored surface, the search crossed a jump in the
-//! stored distance that was no hit, or it met nothing. A jump is where the ray passes behind
-//! an occluder as seen from the cube's centre; behind it lies what the centre never saw, the
-//! only place a surface the cube did not store can be met (the disocclusion `distance` gets
-//! wrong). A ray crossing no jump moves through space the centre sees all of, so the first
-//! surface the search meets is the one the ray meets, up to the steps' resolution. The test
-//! is conservative: a ray that passes behind an occluder and meets nothing hidden is traced
-//! too, which costs time, not accuracy.
+//! stored distance that was no hit; or a step crossed a silhouette outwards (from a near
+//! surface to a far one) while the ray reached the near surface's depth, so it may have
+//! clipped that surface between two samples; or its hit lies on a silhouette texel; or it met
+//! nothing. A jump is where the ray passes behind an occluder as seen from the cube's centre;
+//! behind it lies what the centre never saw, the only place a surface the cube did not store
+//! can be met (the disocclusion `distance` gets wrong). A ray crossing no jump moves through
+//! space the centre sees all of, so the first surface the search meets is the one the ray
+//! meets, up to the steps' resolution (which the corner test covers for the steps that cross
+//! a silhouette). The test is conservative: a ray that passes behind an occluder and meets
+//! nothing hidden is traced too, which costs time, not accuracy.
 //!
 //! Set 1: the colour cube and its depth at bindings 0 and 1, as `distance`; the traced scene
 //! at 2..=5 (`shaders/mirror_distance_exact*.frag.glsl`); at 6 the tally of the rays traced
