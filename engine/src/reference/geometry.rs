@@ -9,7 +9,7 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::{Boundable, BvhBuildParams};
 
-use super::intersect::{ShearedRay, TriangleHit};
+use super::intersect::{AxisVisitor, ShearedRay, TriangleHit};
 use crate::scene::state::{room_meshes, SceneState};
 use crate::scene::{Mesh, Scene};
 
@@ -64,6 +64,39 @@ pub struct Hit {
     pub hit: TriangleHit,
 }
 
+/// One closest-hit search through the BVH, compiled once per axis order of the triangle test
+/// (see [`ShearedRay::with_axes`]).
+struct Traversal<'g> {
+    geometry: &'g SceneGeometry,
+    ray: Ray,
+}
+
+impl AxisVisitor for Traversal<'_> {
+    type Output = Option<Hit>;
+
+    #[inline(always)]
+    fn visit<const KX: usize, const KY: usize, const KZ: usize>(
+        self,
+        sheared: &ShearedRay,
+    ) -> Option<Hit> {
+        let g = self.geometry;
+        let mut best: Option<Hit> = None;
+        let mut ray_hit = RayHit::none();
+        g.bvh.ray_traverse(self.ray, &mut ray_hit, |r, id| {
+            let tri = g.bvh.primitive_indices[id];
+            let [v0, v1, v2] = g.triangles[tri as usize];
+            match sheared.hit_triangle_in::<KX, KY, KZ>(v0, v1, v2, r.tmin, r.tmax) {
+                Some(hit) => {
+                    best = Some(Hit { triangle: tri, hit });
+                    hit.t
+                }
+                None => f32::INFINITY,
+            }
+        });
+        best
+    }
+}
+
 impl SceneGeometry {
     pub fn build(scene: &Scene, state: &SceneState) -> Self {
         let mut triangles = Vec::new();
@@ -116,21 +149,10 @@ impl SceneGeometry {
     /// The closest triangle hit along `o + t d` with t in (t_min, t_max).
     pub fn closest_hit(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
         let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), t_min, t_max);
-        let mut best: Option<Hit> = None;
-        let mut ray_hit = RayHit::none();
-        let sheared = ShearedRay::new(o, d);
-        self.bvh.ray_traverse(ray, &mut ray_hit, |r, id| {
-            let tri = self.bvh.primitive_indices[id];
-            let [v0, v1, v2] = self.triangles[tri as usize];
-            match sheared.hit_triangle(v0, v1, v2, r.tmin, r.tmax) {
-                Some(hit) => {
-                    best = Some(Hit { triangle: tri, hit });
-                    hit.t
-                }
-                None => f32::INFINITY,
-            }
-        });
-        best
+        ShearedRay::new(o, d).with_axes(Traversal {
+            geometry: self,
+            ray,
+        })
     }
 
     /// Interpolated normal and uv at a hit.
