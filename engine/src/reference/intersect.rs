@@ -1,6 +1,6 @@
 //! Ray intersection in the numerically careful forms the exact reference needs.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// Nearest t > 0 with |o + t d - c| = r for unit `d`, or None (also when `o` is inside).
 ///
@@ -85,7 +85,7 @@ pub fn ray_triangle(
 /// so the same hits, bit for bit).
 #[derive(Debug, Clone, Copy)]
 pub struct ShearedRay {
-    o: Vec3,
+    o: Vec3A,
     /// The axis where the direction is largest (it becomes z), and whether x and y were swapped
     /// to keep the winding: together one of six axis orders.
     kz: usize,
@@ -98,7 +98,7 @@ pub struct ShearedRay {
 /// Component `K` of `v`, with `K` known at compile time: a plain field read, where a run-time
 /// index is a branch or a trip through memory on every use.
 #[inline(always)]
-fn axis<const K: usize>(v: Vec3) -> f32 {
+fn axis<const K: usize>(v: Vec3A) -> f32 {
     match K {
         0 => v.x,
         1 => v.y,
@@ -119,7 +119,7 @@ impl ShearedRay {
         }
         let sz = 1.0 / d[kz];
         Self {
-            o,
+            o: o.into(),
             kz,
             swapped,
             sx: d[kx] * sz,
@@ -161,6 +161,7 @@ impl ShearedRay {
                 ray: &ShearedRay,
             ) -> Self::Output {
                 let One([v0, v1, v2], t_min, t_max) = self;
+                let [v0, v1, v2] = [v0, v1, v2].map(Vec3A::from);
                 ray.hit_triangle_in::<KX, KY, KZ>(v0, v1, v2, t_min, t_max)
             }
         }
@@ -172,9 +173,9 @@ impl ShearedRay {
     #[inline(always)]
     pub fn hit_triangle_in<const KX: usize, const KY: usize, const KZ: usize>(
         &self,
-        v0: Vec3,
-        v1: Vec3,
-        v2: Vec3,
+        v0: Vec3A,
+        v1: Vec3A,
+        v2: Vec3A,
         t_min: f32,
         t_max: f32,
     ) -> Option<TriangleHit> {
