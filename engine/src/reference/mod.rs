@@ -267,19 +267,19 @@ impl<'a> Reference<'a> {
         let centre_index = offsets.iter().position(|o| *o == Vec2::splat(0.5));
         let start = Instant::now();
         let clear = self.nothing_before_mirror(view.eye);
-        let rays = CameraRays::new(view, width, height, &offsets);
+        let camera = CameraRays::new(view, width, height, &offsets);
         let rows: Vec<Vec<Pixel>> = (0..height)
             .into_par_iter()
             .map(|y| {
-                let row_terms = rays.row_terms(y);
+                let row_terms = camera.row_terms(y);
                 (0..width)
                     .map(|x| {
-                        let (mut sum, mut rays_traced, mut misses) = (Vec3::ZERO, 0u32, 0u32);
+                        let (mut sum, mut rays, mut misses) = (Vec3::ZERO, 0u32, 0u32);
                         let mut centre = None;
                         for k in 0..offsets.len() {
-                            let s = self.trace(view.eye, rays.ray(x, k, &row_terms), clear);
+                            let s = self.trace(view.eye, camera.ray(x, k, &row_terms), clear);
                             sum += s.color;
-                            rays_traced += s.rays;
+                            rays += s.rays;
                             misses += u32::from(s.missed);
                             if Some(k) == centre_index {
                                 centre = Some(s);
@@ -288,14 +288,14 @@ impl<'a> Reference<'a> {
                         // Not one of the samples: traced for the layers only (not a colour
                         // sample, so it is counted apart from the camera paths).
                         let centre = centre.unwrap_or_else(|| {
-                            let c = self.trace(view.eye, rays.centre(x, y), clear);
-                            rays_traced += c.rays;
+                            let c = self.trace(view.eye, camera.centre(x, y), clear);
+                            rays += c.rays;
                             c
                         });
                         Pixel {
                             centre,
                             color: sum / spp as f32,
-                            rays: rays_traced,
+                            rays: rays,
                             misses,
                         }
                     })
