@@ -295,7 +295,7 @@ impl<'a> Reference<'a> {
                         Pixel {
                             centre,
                             color: sum / spp as f32,
-                            rays: rays,
+                            rays,
                             misses,
                         }
                     })
