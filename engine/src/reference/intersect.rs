@@ -1,6 +1,6 @@
 //! Ray intersection in the numerically careful forms the exact reference needs.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// Nearest t > 0 with |o + t d - c| = r for unit `d`, or None (also when `o` is inside).
 ///
@@ -85,13 +85,25 @@ pub fn ray_triangle(
 /// so the same hits, bit for bit).
 #[derive(Debug, Clone, Copy)]
 pub struct ShearedRay {
-    o: Vec3,
-    kx: usize,
-    ky: usize,
+    o: Vec3A,
+    /// The axis where the direction is largest (it becomes z), and whether x and y were swapped
+    /// to keep the winding: together one of six axis orders.
     kz: usize,
+    swapped: bool,
     sx: f32,
     sy: f32,
     sz: f32,
+}
+
+/// Component `K` of `v`, with `K` known at compile time: a plain field read, where a run-time
+/// index is a branch or a trip through memory on every use.
+#[inline(always)]
+fn axis<const K: usize>(v: Vec3A) -> f32 {
+    match K {
+        0 => v.x,
+        1 => v.y,
+        _ => v.z,
+    }
 }
 
 impl ShearedRay {
@@ -101,18 +113,34 @@ impl ShearedRay {
         let kz = d.abs().max_position();
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
-        if d[kz] < 0.0 {
+        let swapped = d[kz] < 0.0;
+        if swapped {
             std::mem::swap(&mut kx, &mut ky);
         }
         let sz = 1.0 / d[kz];
         Self {
-            o,
-            kx,
-            ky,
+            o: o.into(),
             kz,
+            swapped,
             sx: d[kx] * sz,
             sy: d[ky] * sz,
             sz,
+        }
+    }
+
+    /// Calls the visitor's `visit::<KX, KY, KZ>` with this ray's axis order as constants, so
+    /// that everything it runs per triangle (a whole BVH traversal, in
+    /// `SceneGeometry::closest_hit`) is compiled once per order with the indexing resolved:
+    /// one branch per ray instead of several per triangle.
+    #[inline(always)]
+    pub fn with_axes<V: AxisVisitor>(&self, visitor: V) -> V::Output {
+        match (self.kz, self.swapped) {
+            (0, false) => visitor.visit::<1, 2, 0>(self),
+            (0, true) => visitor.visit::<2, 1, 0>(self),
+            (1, false) => visitor.visit::<2, 0, 1>(self),
+            (1, true) => visitor.visit::<0, 2, 1>(self),
+            (_, false) => visitor.visit::<0, 1, 2>(self),
+            (_, true) => visitor.visit::<1, 0, 2>(self),
         }
     }
 
@@ -125,24 +153,42 @@ impl ShearedRay {
         t_min: f32,
         t_max: f32,
     ) -> Option<TriangleHit> {
-        let Self {
-            o,
-            kx,
-            ky,
-            kz,
-            sx,
-            sy,
-            sz,
-        } = *self;
+        struct One([Vec3; 3], f32, f32);
+        impl AxisVisitor for One {
+            type Output = Option<TriangleHit>;
+            fn visit<const KX: usize, const KY: usize, const KZ: usize>(
+                self,
+                ray: &ShearedRay,
+            ) -> Self::Output {
+                let One([v0, v1, v2], t_min, t_max) = self;
+                let [v0, v1, v2] = [v0, v1, v2].map(Vec3A::from);
+                ray.hit_triangle_in::<KX, KY, KZ>(v0, v1, v2, t_min, t_max)
+            }
+        }
+        self.with_axes(One([v0, v1, v2], t_min, t_max))
+    }
+
+    /// [`ray_triangle`] for this ray, its axis order given as constants (they must be the
+    /// ray's own, as [`Self::with_axes`] passes them).
+    #[inline(always)]
+    pub fn hit_triangle_in<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        v0: Vec3A,
+        v1: Vec3A,
+        v2: Vec3A,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<TriangleHit> {
+        let Self { o, sx, sy, sz, .. } = *self;
         let a = v0 - o;
         let b = v1 - o;
         let c = v2 - o;
-        let ax = a[kx] - sx * a[kz];
-        let ay = a[ky] - sy * a[kz];
-        let bx = b[kx] - sx * b[kz];
-        let by = b[ky] - sy * b[kz];
-        let cx = c[kx] - sx * c[kz];
-        let cy = c[ky] - sy * c[kz];
+        let ax = axis::<KX>(a) - sx * axis::<KZ>(a);
+        let ay = axis::<KY>(a) - sy * axis::<KZ>(a);
+        let bx = axis::<KX>(b) - sx * axis::<KZ>(b);
+        let by = axis::<KY>(b) - sy * axis::<KZ>(b);
+        let cx = axis::<KX>(c) - sx * axis::<KZ>(c);
+        let cy = axis::<KY>(c) - sy * axis::<KZ>(c);
         let mut u = cx * by - cy * bx;
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
@@ -168,9 +214,9 @@ impl ShearedRay {
         if det == 0.0 {
             return None;
         }
-        let az = sz * a[kz];
-        let bz = sz * b[kz];
-        let cz = sz * c[kz];
+        let az = sz * axis::<KZ>(a);
+        let bz = sz * axis::<KZ>(b);
+        let cz = sz * axis::<KZ>(c);
         let t_scaled = u * az + v * bz + w * cz;
         let inv = 1.0 / det;
         let t = t_scaled * inv;
@@ -183,6 +229,15 @@ impl ShearedRay {
             v: w * inv,
         })
     }
+}
+
+/// Work to run with a ray's axis order as compile-time constants ([`ShearedRay::with_axes`]).
+pub trait AxisVisitor {
+    type Output;
+    fn visit<const KX: usize, const KY: usize, const KZ: usize>(
+        self,
+        ray: &ShearedRay,
+    ) -> Self::Output;
 }
 
 /// Moves a ray origin off a surface along its geometric normal by a few float steps, scaled to

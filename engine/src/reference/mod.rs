@@ -11,6 +11,7 @@
 //! (`intersect.rs`). Everything is in render space (centred on the mirror).
 
 pub mod angular;
+mod camera_rays;
 pub mod geometry;
 pub mod intersect;
 pub mod materials;
@@ -25,6 +26,7 @@ use crate::image::RgbaImage;
 use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
 use crate::scene::{MaterialKind, Scene};
+use camera_rays::CameraRays;
 use geometry::SceneGeometry;
 use intersect::{mirror_reflection_at, offset_ray_origin, ray_sphere};
 
@@ -265,21 +267,17 @@ impl<'a> Reference<'a> {
         let centre_index = offsets.iter().position(|o| *o == Vec2::splat(0.5));
         let start = Instant::now();
         let clear = self.nothing_before_mirror(view.eye);
-        let ray = |px: f32, py: f32| {
-            let ndc_x = 2.0 * px / width as f32 - 1.0;
-            let ndc_y = 2.0 * py / height as f32 - 1.0;
-            view.ray(ndc_x, ndc_y).normalize()
-        };
+        let camera = CameraRays::new(view, width, height, &offsets);
         let rows: Vec<Vec<Pixel>> = (0..height)
             .into_par_iter()
             .map(|y| {
+                let row_terms = camera.row_terms(y);
                 (0..width)
                     .map(|x| {
                         let (mut sum, mut rays, mut misses) = (Vec3::ZERO, 0u32, 0u32);
                         let mut centre = None;
-                        for (k, o) in offsets.iter().enumerate() {
-                            let s =
-                                self.trace(view.eye, ray(x as f32 + o.x, y as f32 + o.y), clear);
+                        for k in 0..offsets.len() {
+                            let s = self.trace(view.eye, camera.ray(x, k, &row_terms), clear);
                             sum += s.color;
                             rays += s.rays;
                             misses += u32::from(s.missed);
@@ -290,8 +288,7 @@ impl<'a> Reference<'a> {
                         // Not one of the samples: traced for the layers only (not a colour
                         // sample, so it is counted apart from the camera paths).
                         let centre = centre.unwrap_or_else(|| {
-                            let c =
-                                self.trace(view.eye, ray(x as f32 + 0.5, y as f32 + 0.5), clear);
+                            let c = self.trace(view.eye, camera.centre(x, y), clear);
                             rays += c.rays;
                             c
                         });
