@@ -60,7 +60,7 @@ impl MirrorLookup for DistanceExact {
     }
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
-        SceneTrace::require(ctx, "distance-exact")?;
+        SceneTrace::require(ctx, self.lookup().name())?;
         Ok(Box::new(DistanceExactPass::create(ctx)?))
     }
 }

@@ -38,7 +38,7 @@ impl MirrorLookup for RayQuery {
     }
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
-        SceneTrace::require(ctx, "ray-query")?;
+        SceneTrace::require(ctx, self.lookup().name())?;
         Ok(Box::new(RayQueryPass::create(ctx)?))
     }
 }

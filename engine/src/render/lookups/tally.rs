@@ -110,16 +110,14 @@ impl TraceTally {
 
     /// The finished frame's counts (call after its fence).
     pub fn read(&self) -> Result<FrameTally, GpuError> {
-        let bytes = self.buffer.mapped()?;
+        let size = VIEW_COUNT * PASSES * SLOT_BYTES as usize;
+        // The mapping is at least 4-byte aligned; the slots are (fragments, traced) u32 pairs.
+        let words: &[u32] = bytemuck::cast_slice(&self.buffer.mapped()?[..size]);
         let slot = |view: u32| {
-            let at = (view as usize * PASSES + TALLY_PASS_COLOUR as usize) * SLOT_BYTES as usize;
-            let word = |i: usize| {
-                let b = &bytes[at + 4 * i..at + 4 * i + 4];
-                u64::from(u32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
-            };
+            let at = 2 * (view as usize * PASSES + TALLY_PASS_COLOUR as usize);
             TracedRays {
-                fragments: word(0),
-                traced: word(1),
+                fragments: u64::from(words[at]),
+                traced: u64::from(words[at + 1]),
             }
         };
         Ok(FrameTally {
