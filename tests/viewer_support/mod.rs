@@ -38,19 +38,41 @@ impl Xvfb {
                 continue;
             }
             let display = format!(":{n}");
-            let child = Command::new("Xvfb")
-                .args([&display, "-screen", "0", "1920x1080x24", "-nolisten", "tcp"])
+            let mut child = Command::new("Xvfb")
+                // -noreset: by default the server resets when its last client leaves, and a
+                // viewer connecting during that reset fails ("cannot connect to the display").
+                .args([
+                    &display,
+                    "-screen",
+                    "0",
+                    "1920x1080x24",
+                    "-nolisten",
+                    "tcp",
+                    "-noreset",
+                ])
                 .stdout(Stdio::null())
                 .stderr(Stdio::null())
                 .spawn()
                 .expect("Xvfb starts");
+            // Ready when its socket accepts a connection: the socket file alone can exist
+            // before the server serves it, or belong to a server that then failed (a number
+            // another process took meanwhile), in which case the next number is tried.
             let socket = format!("/tmp/.X11-unix/X{n}");
             let start = Instant::now();
-            while !Path::new(&socket).exists() && start.elapsed() < Duration::from_secs(10) {
+            let mut exited = false;
+            while start.elapsed() < Duration::from_secs(10) {
+                if std::os::unix::net::UnixStream::connect(&socket).is_ok() {
+                    return Some(Self { child, display });
+                }
+                if child.try_wait().ok().flatten().is_some() {
+                    exited = true;
+                    break;
+                }
                 std::thread::sleep(Duration::from_millis(50));
             }
-            assert!(Path::new(&socket).exists(), "Xvfb {display} did not start");
-            return Some(Self { child, display });
+            let _ = child.kill();
+            let _ = child.wait();
+            assert!(exited, "Xvfb {display} did not accept connections in 10 s");
         }
         panic!("no free X display number");
     }
