@@ -125,6 +125,31 @@ fn a_click_on_the_menus_lookup_switches_it() {
     assert_eq!(stdout.matches("lookup: ").count(), 1, "{stdout}");
 }
 
+/// The menu's first frame is egui's sizing pass, in which nothing takes clicks: its widgets
+/// are listed from the second frame on, so a click sent where a listed widget is lands on it
+/// (a click sent during the first frame was lost, and the test above failed by chance).
+#[test]
+fn widgets_are_listed_once_they_take_clicks() {
+    let Some(x) = Xvfb::start() else { return };
+    let listed = |frames: &str| {
+        let out = x.view(&[
+            thesis_room().to_str().unwrap(),
+            "--keys",
+            "f1",
+            "--frames",
+            frames,
+            "--widgets",
+        ]);
+        ok(&out, "specchio view --widgets");
+        text(&out.stdout).matches("widget: ").count()
+    };
+    assert_eq!(listed("1"), 0, "widgets listed in the sizing pass");
+    assert!(
+        listed("2") > 10,
+        "the menu's widgets are listed in its second frame"
+    );
+}
+
 #[test]
 fn a_new_menu_renderer_draws_the_same_menu() {
     let Some(x) = Xvfb::start() else { return };

@@ -78,6 +78,11 @@ impl Menu {
             // screenshot depend on how fast the machine is.
             style.animation_time = 0.0;
         });
+        // A press and its release are a click however long apart: on a CPU driver a frame
+        // can outlast egui's default 0.8 s, and a press and release that fall in two frames
+        // would then be taken for a long press, and the click lost. The menu has nothing
+        // that a long press or a drag would do instead.
+        ctx.options_mut(|options| options.input_options.max_click_duration = f64::INFINITY);
         let input = egui_winit::State::new(
             ctx.clone(),
             egui::ViewportId::ROOT,
@@ -179,9 +184,14 @@ impl Menu {
 struct Widgets(Vec<(String, Rect)>);
 
 impl Widgets {
-    /// Records `response`'s rectangle under `name` and says whether it was clicked.
-    fn clicked(&mut self, name: String, response: egui::Response) -> bool {
-        self.0.push((name, response.rect));
+    /// Records `response`'s rectangle under `name` and says whether it was clicked. A
+    /// widget laid out in a sizing pass (egui's first, invisible pass of a new window or
+    /// popup) is not recorded: nothing in that pass takes clicks, so a click sent to its
+    /// rectangle before the next frame would be lost.
+    fn clicked(&mut self, ui: &egui::Ui, name: String, response: egui::Response) -> bool {
+        if !ui.is_sizing_pass() {
+            self.0.push((name, response.rect));
+        }
         response.clicked()
     }
 }
@@ -224,7 +234,7 @@ fn menu_window(
                 (DisplayView::Sensor, "sensor (3)", "sensor"),
             ] {
                 let radio = ui.radio(s.view == view, name);
-                if widgets.clicked(format!("view={id}"), radio) && s.view != view {
+                if widgets.clicked(ui, format!("view={id}"), radio) && s.view != view {
                     actions.push(Action::Show(view));
                 }
             }
@@ -234,18 +244,18 @@ fn menu_window(
             .show_ui(ui, |ui| {
                 for &m in s.methods {
                     let label = ui.selectable_label(s.method == m, m.to_string());
-                    if widgets.clicked(format!("method={m}"), label) && s.method != m {
+                    if widgets.clicked(ui, format!("method={m}"), label) && s.method != m {
                         actions.push(Action::SetMethod(m));
                     }
                 }
             });
         // The combo box's button opens the list of methods (listed while it is open).
-        widgets.clicked("method".into(), combo.response);
+        widgets.clicked(ui, "method".into(), combo.response);
         ui.horizontal(|ui| {
             ui.label("lookup (x)");
             for &l in s.lookups {
                 let radio = ui.radio(s.lookup == l, l.to_string());
-                if widgets.clicked(format!("lookup={l}"), radio) && s.lookup != l {
+                if widgets.clicked(ui, format!("lookup={l}"), radio) && s.lookup != l {
                     actions.push(Action::SetLookup(l));
                 }
             }
@@ -258,7 +268,8 @@ fn menu_window(
                 RefreshPolicy::EveryN(4),
             ] {
                 let radio = ui.radio(s.refresh == r, refresh_name(r));
-                if widgets.clicked(format!("refresh={}", refresh_name(r)), radio) && s.refresh != r
+                if widgets.clicked(ui, format!("refresh={}", refresh_name(r)), radio)
+                    && s.refresh != r
                 {
                     actions.push(Action::SetRefresh(r));
                 }
@@ -270,13 +281,16 @@ fn menu_window(
             } else {
                 "pause (space)"
             };
-            if widgets.clicked("pause".into(), ui.button(pause)) {
+            let button = ui.button(pause);
+            if widgets.clicked(ui, "pause".into(), button) {
                 actions.push(Action::PauseResume);
             }
-            if widgets.clicked("step".into(), ui.button("step (.)")) {
+            let button = ui.button("step (.)");
+            if widgets.clicked(ui, "step".into(), button) {
                 actions.push(Action::Step);
             }
-            if widgets.clicked("reset".into(), ui.button("reset (0)")) {
+            let button = ui.button("reset (0)");
+            if widgets.clicked(ui, "reset".into(), button) {
                 actions.push(Action::Reset);
             }
         });

@@ -4,7 +4,8 @@
 //! record a blit from the renderer's view image (linear HDR) into it (an sRGB image: the blit
 //! encodes), transition it for presentation, submit waiting on "image available" and
 //! signalling the image's "drawn" semaphore, present. Swapchain recreation (resize, out of
-//! date) retires the old swapchain through the ring's deletion queue.
+//! date) waits for the idle queue before destroying the old swapchain: a present has no
+//! fence. A menu renderer replaced meanwhile goes through the ring's deletion queue.
 
 use std::sync::Arc;
 
@@ -35,8 +36,8 @@ pub struct Screenshot {
     pub rgb8: Vec<u8>,
 }
 
-/// Field order is teardown order: the ring first (its drop waits for every frame in flight
-/// and releases what it deferred), then the swapchain, the surface, the device.
+/// Teardown: the drop waits for the idle queue (a present has no fence); then, in field
+/// order, the ring (releasing what it deferred), the swapchain, the surface, the device.
 pub struct Presenter {
     pub ring: FrameRing,
     /// The menu's egui renderer, for the swapchain's format; `None` while there is no
@@ -173,8 +174,12 @@ impl Presenter {
         };
         let new = Swapchain::create(&self.device, &self.surface, &desc, self.swapchain.as_ref())?;
         if let Some(old) = self.swapchain.take() {
-            // Frames in flight may still present the old images: retired, not destroyed.
-            self.ring.defer(old);
+            // A frame's fence says its drawing finished, not that its present did, and the
+            // old swapchain's "drawn" semaphores may still be waited on by one. Only an idle
+            // queue says so (VK_EXT_swapchain_maintenance1's present fences would, but not
+            // every driver has them); a resize is rare enough to wait for it.
+            self.device.wait_idle()?;
+            drop(old);
         }
         if let Some(s) = &new {
             // One line per (re)creation: what the window presents with.
@@ -187,6 +192,15 @@ impl Presenter {
         self.swapchain = new;
         self.stale = self.swapchain.is_none();
         Ok(self.swapchain.is_some())
+    }
+}
+
+impl Drop for Presenter {
+    fn drop(&mut self) {
+        // The last frame's present may still wait on its image's "drawn" semaphore, which
+        // the swapchain destroys, and no fence covers a present: wait for the idle queue
+        // first (the ring's own drop then finds its fences signalled).
+        let _ = self.device.wait_idle();
     }
 }
 

@@ -148,11 +148,6 @@ impl FrameRing {
         });
     }
 
-    /// How many deferred objects are still waiting (the viewer's figures and tests).
-    pub fn deferred(&self) -> usize {
-        self.deletions.len()
-    }
-
     /// Waits for every frame in flight and drops everything deferred.
     pub fn wait_all(&mut self) -> Result<(), GpuError> {
         for s in 0..self.slots.len() {
