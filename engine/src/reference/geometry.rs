@@ -1,4 +1,5 @@
-//! The scene as triangles in render space (world minus the mirror centre) and a BVH over them.
+//! The scene in render space (world minus the mirror centre): the room's walls as an analytic
+//! box, the objects as triangles with a BVH over them.
 
 use std::time::{Duration, Instant};
 
@@ -10,24 +11,31 @@ use obvhs::ray::{Ray, RayHit};
 use obvhs::{Boundable, BvhBuildParams};
 
 use super::intersect::{AxisVisitor, ShearedRay, TriangleHit};
-use crate::scene::state::{room_meshes, SceneState};
+use super::room::RoomBox;
+use crate::scene::state::SceneState;
 use crate::scene::{Mesh, Scene};
 
-/// Per-vertex shading attributes of one triangle, and what it belongs to.
+/// Per-vertex shading attributes of one object triangle, and what it belongs to.
 #[derive(Debug, Clone, Copy)]
 pub struct TriangleInfo {
     pub normals: [Vec3; 3],
     pub uvs: [Vec2; 3],
-    /// Drawable index as on the GPU: 0..6 the room walls, then 6 + scene object index.
+    /// Drawable index as on the GPU: 6 + scene object index (0..6 are the room's walls).
     pub object: u32,
     pub material: u32,
 }
 
-/// Every triangle of the scene at one instant, with a BVH for closest-hit queries.
+/// The scene at one instant: the room's box, and the objects' triangles with a BVH for
+/// closest-hit queries.
 pub struct SceneGeometry {
+    room: RoomBox,
+    /// The walls' materials, in the room box's face order.
+    wall_materials: [u32; 6],
+    /// The objects' triangles (not the walls').
     pub triangles: Vec<[Vec3; 3]>,
     pub info: Vec<TriangleInfo>,
-    bvh: CwBvh,
+    /// `None` when no object has a triangle (an empty room).
+    bvh: Option<CwBvh>,
     /// The triangles again, in the BVH's leaf order and 16-byte aligned: the traversal reads
     /// them straight, without the BVH's index table, each corner one aligned load.
     leaf_triangles: Vec<[Vec3A; 3]>,
@@ -60,17 +68,25 @@ impl Boundable for PaddedTriangle {
     }
 }
 
-/// A closest hit: the triangle, distance and barycentrics.
-#[derive(Debug, Clone, Copy)]
+/// What a ray met: a wall of the room, or an object's triangle at barycentrics (u, v).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Surface {
+    Wall(usize),
+    Triangle { index: u32, u: f32, v: f32 },
+}
+
+/// A closest hit: its distance along the ray and the surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hit {
-    pub triangle: u32,
-    pub hit: TriangleHit,
+    pub t: f32,
+    pub surface: Surface,
 }
 
 /// One closest-hit search through the BVH, compiled once per axis order of the triangle test
 /// (see [`ShearedRay::with_axes`]).
 struct Traversal<'g> {
     geometry: &'g SceneGeometry,
+    bvh: &'g CwBvh,
     ray: Ray,
 }
 
@@ -87,7 +103,7 @@ impl AxisVisitor for Traversal<'_> {
         // once, for the final hit.
         let mut best: Option<(usize, TriangleHit)> = None;
         let mut ray_hit = RayHit::none();
-        g.bvh.ray_traverse(self.ray, &mut ray_hit, |r, id| {
+        self.bvh.ray_traverse(self.ray, &mut ray_hit, |r, id| {
             let [v0, v1, v2] = g.leaf_triangles[id];
             match sheared.hit_triangle_in::<KX, KY, KZ>(v0, v1, v2, r.tmin, r.tmax) {
                 Some(hit) => {
@@ -98,8 +114,12 @@ impl AxisVisitor for Traversal<'_> {
             }
         });
         best.map(|(id, hit)| Hit {
-            triangle: g.bvh.primitive_indices[id],
-            hit,
+            t: hit.t,
+            surface: Surface::Triangle {
+                index: self.bvh.primitive_indices[id],
+                u: hit.u,
+                v: hit.v,
+            },
         })
     }
 }
@@ -121,15 +141,6 @@ impl SceneGeometry {
                 });
             }
         };
-        let walls = state.world_to_render();
-        for (face, mesh) in room_meshes(&scene.room).iter().enumerate() {
-            add(
-                mesh,
-                walls,
-                face as u32,
-                scene.room.wall_materials[face] as u32,
-            );
-        }
         for (i, o) in scene.objects.iter().enumerate() {
             add(
                 &scene.meshes[o.mesh],
@@ -143,13 +154,17 @@ impl SceneGeometry {
         let mut build_core = Duration::default();
         // `fast_build`: about 0.7 s for the heavy scene's 974k triangles on 2 cores, against
         // 1.0 s for `medium_build`, with no measurable loss in trace speed on our scenes.
-        let bvh = build_cwbvh(&boxes, BvhBuildParams::fast_build(), &mut build_core);
-        let leaf_triangles = bvh
-            .primitive_indices
-            .iter()
-            .map(|&i| triangles[i as usize].map(Vec3A::from))
-            .collect();
+        let bvh = (!boxes.is_empty())
+            .then(|| build_cwbvh(&boxes, BvhBuildParams::fast_build(), &mut build_core));
+        let leaf_triangles = bvh.as_ref().map_or_else(Vec::new, |bvh| {
+            bvh.primitive_indices
+                .iter()
+                .map(|&i| triangles[i as usize].map(Vec3A::from))
+                .collect()
+        });
         Self {
+            room: RoomBox::new(&scene.room, state.mirror_center),
+            wall_materials: scene.room.wall_materials.map(|m| m as u32),
             triangles,
             info,
             bvh,
@@ -159,37 +174,67 @@ impl SceneGeometry {
         }
     }
 
-    /// The closest triangle hit along `o + t d` with t in (t_min, t_max).
+    /// The closest hit along `o + t d` with t in (t_min, t_max): the room's wall where the ray
+    /// crosses it, unless an object's triangle is nearer. The wall's distance bounds the
+    /// objects' traversal; an object exactly on a wall's plane (a picture hung flat on it)
+    /// wins the tie, as it is what is meant to be seen there.
     pub fn closest_hit(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
-        let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), t_min, t_max);
-        ShearedRay::new(o, d).with_axes(Traversal {
-            geometry: self,
-            ray,
+        let wall = self.wall_hit(o, d, t_min, t_max);
+        let object = self.bvh.as_ref().and_then(|bvh| {
+            // The next float above the wall's t (positive and finite: bits + 1).
+            let limit = wall.map_or(t_max, |w| f32::from_bits(w.t.to_bits() + 1));
+            let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), t_min, limit);
+            ShearedRay::new(o, d).with_axes(Traversal {
+                geometry: self,
+                bvh,
+                ray,
+            })
+        });
+        object.or(wall)
+    }
+
+    /// Where `o + t d` crosses the room's walls with t in (t_min, t_max), objects ignored.
+    pub fn wall_hit(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
+        self.room.first_crossing(o, d, t_min, t_max).map(|w| Hit {
+            t: w.t,
+            surface: Surface::Wall(w.face),
         })
     }
 
-    /// Interpolated normal and uv at a hit.
-    pub fn attributes(&self, hit: &Hit) -> (Vec3, Vec2) {
-        (self.normal(hit), self.uv(hit))
+    /// The drawable index (walls 0..6, objects 6 + i) and material of a hit's surface.
+    pub fn drawable(&self, hit: &Hit) -> (u32, u32) {
+        match hit.surface {
+            Surface::Wall(face) => (face as u32, self.wall_materials[face]),
+            Surface::Triangle { index, .. } => {
+                let i = &self.info[index as usize];
+                (i.object, i.material)
+            }
+        }
     }
 
     /// Interpolated (unnormalised) shading normal at a hit.
     pub fn normal(&self, hit: &Hit) -> Vec3 {
-        let i = &self.info[hit.triangle as usize];
-        let (u, v) = (hit.hit.u, hit.hit.v);
-        let w = 1.0 - u - v;
-        i.normals[0] * w + i.normals[1] * u + i.normals[2] * v
+        match hit.surface {
+            Surface::Wall(face) => self.room.normal(face),
+            Surface::Triangle { index, u, v } => {
+                let i = &self.info[index as usize];
+                i.normals[0] * (1.0 - u - v) + i.normals[1] * u + i.normals[2] * v
+            }
+        }
     }
 
-    /// Interpolated texture coordinates at a hit.
-    pub fn uv(&self, hit: &Hit) -> Vec2 {
-        let i = &self.info[hit.triangle as usize];
-        let (u, v) = (hit.hit.u, hit.hit.v);
-        let w = 1.0 - u - v;
-        i.uvs[0] * w + i.uvs[1] * u + i.uvs[2] * v
+    /// Texture coordinates at a hit, which lies at `p` (in the BVH's space).
+    pub fn uv(&self, hit: &Hit, p: Vec3) -> Vec2 {
+        match hit.surface {
+            Surface::Wall(face) => self.room.uv(face, p),
+            Surface::Triangle { index, u, v } => {
+                let i = &self.info[index as usize];
+                i.uvs[0] * (1.0 - u - v) + i.uvs[1] * u + i.uvs[2] * v
+            }
+        }
     }
 
-    /// Whether any triangle reaches into the closed box `lo..=hi` (by its bounding box, so a
+    /// Whether any object triangle reaches into the closed box `lo..=hi` (by its bounding box, so a
     /// "yes" may be a near miss; a "no" is certain: no point of any triangle is in the box).
     pub fn any_triangle_in_box(&self, lo: Vec3, hi: Vec3) -> bool {
         self.triangles.iter().any(|&[a, b, c]| {
@@ -198,6 +243,7 @@ impl SceneGeometry {
         })
     }
 
+    /// The objects' triangles (the walls are not triangles here).
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
     }
@@ -211,13 +257,18 @@ mod tests {
 
     use super::*;
 
-    /// Closest hit distance through obvhs's Möller–Trumbore test instead of ours.
-    fn closest_t_moller(g: &SceneGeometry, o: Vec3, d: Vec3, t_min: f32) -> f32 {
+    /// Closest hit distance through obvhs's Möller–Trumbore test instead of ours, over the
+    /// objects' BVH and the room's wall triangles (render space), the way the reference
+    /// traced before the walls became a box.
+    fn closest_t_moller(
+        g: &SceneGeometry,
+        walls: &[[Vec3; 3]],
+        o: Vec3,
+        d: Vec3,
+        t_min: f32,
+    ) -> f32 {
         let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), t_min, f32::INFINITY);
-        let mut ray_hit = RayHit::none();
-        let mut best = f32::INFINITY;
-        g.bvh.ray_traverse(ray, &mut ray_hit, |r, id| {
-            let [v0, v1, v2] = g.triangles[g.bvh.primitive_indices[id] as usize];
+        let moller = |[v0, v1, v2]: [Vec3; 3], r: &Ray| {
             let tri = Triangle {
                 v0: v0.into(),
                 v1: v1.into(),
@@ -225,13 +276,36 @@ mod tests {
             };
             let t = tri.intersect(r);
             if t > r.tmin && t < r.tmax {
-                best = best.min(t);
                 t
             } else {
                 f32::INFINITY
             }
+        };
+        let mut best = walls
+            .iter()
+            .map(|&w| moller(w, &ray))
+            .fold(f32::INFINITY, f32::min);
+        let mut ray_hit = RayHit::none();
+        let bvh = g.bvh.as_ref().unwrap();
+        bvh.ray_traverse(ray, &mut ray_hit, |r, id| {
+            let t = moller(g.triangles[bvh.primitive_indices[id] as usize], r);
+            best = best.min(t);
+            t
         });
         best
+    }
+
+    /// The room's wall triangles in render space.
+    fn wall_triangles(scene: &Scene, state: &SceneState) -> Vec<[Vec3; 3]> {
+        let walls = crate::scene::state::room_meshes(&scene.room);
+        let to_render = state.world_to_render();
+        let corners = |m: &Mesh, t: &[u32]| {
+            [0, 1, 2].map(|k| to_render.transform_point3(m.positions[t[k] as usize]))
+        };
+        walls
+            .iter()
+            .flat_map(|m| m.indices.chunks_exact(3).map(move |t| corners(m, t)))
+            .collect()
     }
 
     /// Whole scenes, the rays the reference really traces (from the mirror's surface) aimed
@@ -249,6 +323,11 @@ mod tests {
             let scene = crate::scene::load(&root.join(rel)).unwrap();
             let state = SceneState::at(&scene, 0.0);
             let g = SceneGeometry::build(&scene, &state);
+            let walls = wall_triangles(&scene, &state);
+            // Targets on the walls' triangles (as the rasterizer draws them) and the objects'.
+            let targets: Vec<([Vec3; 3], bool)> = (walls.iter().map(|&w| (w, true)))
+                .chain(g.triangles.iter().map(|&t| (t, false)))
+                .collect();
             let r = scene.mirror.radius_m;
             let mut seed = 0x9E37_79B9_7F4A_7C15u64;
             let mut next = || {
@@ -263,8 +342,8 @@ mod tests {
             let (mut ours_missed, mut ours_passed) = (0, 0);
             let (mut theirs_missed, mut theirs_passed, mut theirs_farther) = (0, 0, 0);
             for i in 0..n {
-                let index = (next() * g.triangles.len() as f32) as usize % g.triangles.len();
-                let (tri, wall) = (g.triangles[index], g.info[index].object < 6);
+                let index = (next() * targets.len() as f32) as usize % targets.len();
+                let (tri, wall) = targets[index];
                 let e = (next() * 3.0) as usize % 3;
                 let s = if i % 2 == 0 { next() } else { 0.0 };
                 let target = tri[e].lerp(tri[(e + 1) % 3], s);
@@ -275,8 +354,8 @@ mod tests {
                 if d == Vec3::ZERO {
                     continue;
                 }
-                let ours = g.closest_hit(o, d, 0.0, f32::INFINITY).map(|h| h.hit.t);
-                let theirs = closest_t_moller(&g, o, d, 0.0);
+                let ours = g.closest_hit(o, d, 0.0, f32::INFINITY).map(|h| h.t);
+                let theirs = closest_t_moller(&g, &walls, o, d, 0.0);
                 match ours {
                     None => ours_missed += 1,
                     Some(t) => {

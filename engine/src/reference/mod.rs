@@ -15,6 +15,7 @@ mod camera_rays;
 pub mod geometry;
 pub mod intersect;
 pub mod materials;
+mod room;
 
 use std::time::Instant;
 
@@ -173,26 +174,27 @@ impl<'a> Reference<'a> {
 
     /// Colour, distance and drawable of a hit found along `o + t d`.
     fn shade_hit(&self, o: Vec3, d: Vec3, hit: &geometry::Hit) -> (Vec3, f32, u32) {
-        let p = o + hit.hit.t * d;
-        let info = &self.geometry.info[hit.triangle as usize];
-        let material = &self.scene.materials[info.material as usize];
+        let p = o + hit.t * d;
+        let (object, material) = self.geometry.drawable(hit);
+        let material = &self.scene.materials[material as usize];
         // Only what the material and the light read is interpolated (flat colours and unlit
         // rooms are common, and this runs once per camera path); the same numbers otherwise.
         let uv = match material.kind {
             MaterialKind::Color { .. } | MaterialKind::Direction => Vec2::ZERO,
-            _ => self.geometry.uv(hit),
+            _ => self.geometry.uv(hit, p + self.shift),
         };
         let albedo = materials::material_albedo(material, p, uv, &self.scene.textures);
         let light = self.scene.light.as_ref();
         let n = light.map_or(Vec3::ZERO, |_| self.geometry.normal(hit));
         let color = materials::shade(albedo, n, light);
-        (color, hit.hit.t, info.object)
+        (color, hit.t, object)
     }
 
-    /// Whether no triangle can stand between `eye` and the mirror: none reaches into the box
-    /// around the eye and the sphere, padded. Every camera ray that meets the sphere runs inside
-    /// that box up to the sphere (the box is convex and holds both ends), so when it is empty
-    /// the BVH cannot find anything before the mirror and [`Self::trace`] need not ask it. The
+    /// Whether no object's triangle can stand between `eye` and the mirror: none reaches into
+    /// the box around the eye and the sphere, padded. Every camera ray that meets the sphere
+    /// runs inside that box up to the sphere (the box is convex and holds both ends), so when
+    /// it is empty the BVH cannot find anything before the mirror and [`Self::trace`] asks only
+    /// the room's walls (an eye outside the room sees one before the mirror). The
     /// padding (a millimetre per metre of the box's coordinates) is far above the rounding of a
     /// triangle test's t, so the answer is the one the traversal would give.
     fn nothing_before_mirror(&self, eye: Vec3) -> bool {
@@ -215,7 +217,7 @@ impl<'a> Reference<'a> {
         };
         let eye_bvh = eye + self.shift;
         let first = match mirror_t {
-            Some(_) if clear => None,
+            Some(limit) if clear => self.geometry.wall_hit(eye_bvh, d, 0.0, limit),
             Some(limit) => self.geometry.closest_hit(eye_bvh, d, 0.0, limit),
             None => self.geometry.closest_hit(eye_bvh, d, 0.0, f32::INFINITY),
         };
