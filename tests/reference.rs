@@ -266,3 +266,29 @@ fn layers_are_the_pixel_centres_and_no_path_is_wasted() {
     assert_eq!(one_stats.centre_paths, 0);
     assert_eq!(one_stats.camera_paths, 48 * 48);
 }
+
+/// Every mirror pixel is counted once by the layer its reflected hit is in, seen from the
+/// mirror's centre, and the object layer's b says which: in the empty six-colour room all are
+/// in the first layer; in pole-and-box some are behind the crate or the pole (an even count:
+/// in and out of a closed object) and most are not.
+#[test]
+fn hidden_layers_count_every_mirror_pixel_once() {
+    for (path, some_hidden) in [
+        ("scenes/test/six-colour-room.toml", false),
+        ("scenes/hard/pole-and-box.toml", true),
+    ] {
+        let s = scene(path);
+        let r = Reference::new(&s, 0.0);
+        let (images, stats) = r.render(&r.sensor_view(), 96, 96, 1);
+        let h = stats.hidden_layers;
+        assert_eq!(h.iter().sum::<u64>(), stats.mirror_pixels, "{path}: {h:?}");
+        let mut from_image = [0u64; 8];
+        for p in images.object.pixels.iter().filter(|p| p[1] == 1.0) {
+            from_image[(p[2] as usize).min(7)] += 1;
+        }
+        assert_eq!(from_image, h, "{path}");
+        let hidden: u64 = h[1..].iter().sum();
+        assert_eq!(hidden > 0, some_hidden, "{path}: {h:?}");
+        assert!(h[0] > 9 * hidden, "{path}: {h:?}");
+    }
+}

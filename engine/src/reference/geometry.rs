@@ -193,6 +193,35 @@ impl SceneGeometry {
         object.or(wall)
     }
 
+    /// How many object surfaces the segment from `from` to `to` crosses, its far end left
+    /// out (the last 0.01 % of its length, where the surface it ends on lies). From the
+    /// cube's centre to what a reflected ray really meets, that is the depth layer the
+    /// surface would be in, seen from the centre: 0 when the cube map stores it, n when n
+    /// surfaces hide it (a closed object in between counts twice, in and out). The walls
+    /// are never in between: the room is convex.
+    pub fn surfaces_between(&self, from: Vec3, to: Vec3) -> u32 {
+        let Some(bvh) = &self.bvh else { return 0 };
+        let (d, length) = ((to - from).normalize_or_zero(), from.distance(to));
+        if d == Vec3::ZERO {
+            return 0;
+        }
+        let end = length * (1.0 - 1e-4);
+        let sheared = ShearedRay::new(from, d);
+        let ray = Ray::new(Vec3A::from(from), Vec3A::from(d), 0.0, end);
+        let mut count = 0;
+        let mut ray_hit = RayHit::none();
+        // Every hit is counted and none accepted (the callback answers "no hit"), so the
+        // traversal visits every triangle the segment meets instead of stopping at the first.
+        bvh.ray_traverse(ray, &mut ray_hit, |r, id| {
+            let [v0, v1, v2] = self.leaf_triangles[id].map(Vec3::from);
+            if sheared.hit_triangle(v0, v1, v2, r.tmin, end).is_some() {
+                count += 1;
+            }
+            f32::INFINITY
+        });
+        count
+    }
+
     /// Where `o + t d` crosses the room's walls with t in (t_min, t_max), objects ignored.
     pub fn wall_hit(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
         self.room.first_crossing(o, d, t_min, t_max).map(|w| Hit {
@@ -306,6 +335,33 @@ mod tests {
             .iter()
             .flat_map(|m| m.indices.chunks_exact(3).map(move |t| corners(m, t)))
             .collect()
+    }
+
+    /// Known layers in the pole-and-box hard case (mirror at the origin, so render space is
+    /// world space): the crate's front face is stored in a cube map at the centre (0), the
+    /// wall behind the crate is behind its front and back faces (2), as is the wall behind
+    /// the pole; a wall seen past everything has nothing in front (0).
+    #[test]
+    fn surfaces_between_the_centre_and_a_hit_count_the_depth_layers() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let scene = crate::scene::load(&root.join("scenes/hard/pole-and-box.toml")).unwrap();
+        let g = SceneGeometry::build(&scene, &SceneState::at(&scene, 0.0));
+        let centre = Vec3::ZERO;
+        let layers = |target: Vec3| {
+            let d = target.normalize();
+            let first = g.closest_hit(centre, d, 0.0, f32::INFINITY).unwrap();
+            let wall = g.wall_hit(centre, d, 0.0, f32::INFINITY).unwrap();
+            (
+                g.surfaces_between(centre, centre + first.t * d),
+                g.surfaces_between(centre, centre + wall.t * d),
+                first.surface == wall.surface,
+            )
+        };
+        // Through the crate's centre, then through the pole's axis at mid-height.
+        assert_eq!(layers(Vec3::new(-1.9, -0.6, -2.2)), (0, 2, false));
+        assert_eq!(layers(Vec3::new(0.6, 0.1, -2.5)), (0, 2, false));
+        // Away from both: the wall is the first surface, nothing in front of it.
+        assert_eq!(layers(Vec3::new(1.0, 0.2, 1.0)), (0, 0, true));
     }
 
     /// Whole scenes, the rays the reference really traces (from the mirror's surface) aimed

@@ -71,7 +71,8 @@ pub struct ReferenceImages {
     /// camera ray to the first surface (the mirror or a scene surface). 0 where none.
     pub distance: RgbaImage,
     /// r: drawable index of the surface finally seen (walls 0..6, objects 6 + i), -1 for none;
-    /// g: 1 when seen in the mirror.
+    /// g: 1 when seen in the mirror; b (mirror pixels): how many surfaces hide that surface
+    /// from the mirror's centre (0: a cube map rendered there stores it).
     pub object: RgbaImage,
 }
 
@@ -94,6 +95,11 @@ pub struct ReferenceStats {
     /// Extra pixel-centre paths traced only for the per-pixel layers, where the sample pattern
     /// has no sample at the centre (0 for spp 1, 9, 25, ...); their rays are in `rays`.
     pub centre_paths: u64,
+    /// Mirror pixels by how many surfaces hide what their reflected ray meets from the
+    /// mirror's centre: [0] are stored in a cube map rendered there, [n] would be in its
+    /// (n+1)-th depth layer; the last entry counts 7 or more.
+    #[serde(default)]
+    pub hidden_layers: [u64; 8],
     pub spp: u32,
     pub threads: usize,
 }
@@ -119,6 +125,8 @@ struct Sample {
 #[derive(Debug, Clone, Copy)]
 struct Pixel {
     centre: Sample,
+    /// Surfaces between the mirror's centre and the centre sample's reflected hit.
+    hidden: u32,
     color: Vec3,
     rays: u32,
     misses: u32,
@@ -253,6 +261,15 @@ impl<'a> Reference<'a> {
         s
     }
 
+    /// How many surfaces stand between the mirror's centre (where a cube map is rendered) and
+    /// the surface a mirror sample's reflected ray really meets: what no single-layer cube
+    /// lookup can see, however exact its search.
+    fn hidden_from_centre(&self, sample: &Sample) -> u32 {
+        // The centre is the render space's origin; the BVH's space is shifted from it.
+        let to = sample.reflected_hit + self.shift;
+        self.geometry.surfaces_between(self.shift, to)
+    }
+
     /// Renders a camera at `width` x `height` with `spp` samples per pixel at the cell centres
     /// of [`sample_offsets`] (spp = 1 traces the pixel centre, exactly the rasterizer's sample
     /// point). The per-pixel layers (direction, distance, object) are those of the pixel centre:
@@ -294,8 +311,14 @@ impl<'a> Reference<'a> {
                             rays += c.rays;
                             c
                         });
+                        let hidden = if centre.via_mirror {
+                            self.hidden_from_centre(&centre)
+                        } else {
+                            0
+                        };
                         Pixel {
                             centre,
+                            hidden,
                             color: sum / spp as f32,
                             rays,
                             misses,
@@ -321,12 +344,16 @@ impl<'a> Reference<'a> {
                 [
                     p.centre.object,
                     if p.centre.via_mirror { 1.0 } else { 0.0 },
-                    0.0,
+                    p.hidden as f32,
                     1.0,
                 ]
             }),
         };
         let rays: u64 = rows.iter().flatten().map(|p| u64::from(p.rays)).sum();
+        let mut hidden_layers = [0u64; 8];
+        for p in rows.iter().flatten().filter(|p| p.centre.via_mirror) {
+            hidden_layers[(p.hidden as usize).min(7)] += 1;
+        }
         let stats = ReferenceStats {
             triangles: self.geometry.triangle_count(),
             bvh_build_core_ms: self.geometry.build_core.as_secs_f64() * 1e3,
@@ -346,6 +373,7 @@ impl<'a> Reference<'a> {
             } else {
                 u64::from(width) * u64::from(height)
             },
+            hidden_layers,
             spp,
             threads: rayon::current_num_threads(),
         };
