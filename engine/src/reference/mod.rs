@@ -125,8 +125,6 @@ struct Sample {
 #[derive(Debug, Clone, Copy)]
 struct Pixel {
     centre: Sample,
-    /// Surfaces between the mirror's centre and the centre sample's reflected hit.
-    hidden: u32,
     color: Vec3,
     rays: u32,
     misses: u32,
@@ -263,8 +261,11 @@ impl<'a> Reference<'a> {
 
     /// How many surfaces stand between the mirror's centre (where a cube map is rendered) and
     /// the surface a mirror sample's reflected ray really meets: what no single-layer cube
-    /// lookup can see, however exact its search.
+    /// lookup can see, however exact its search. 0 for a sample off the mirror.
     fn hidden_from_centre(&self, sample: &Sample) -> u32 {
+        if !sample.via_mirror {
+            return 0;
+        }
         // The centre is the render space's origin; the BVH's space is shifted from it.
         let to = sample.reflected_hit + self.shift;
         self.geometry.surfaces_between(self.shift, to)
@@ -311,14 +312,8 @@ impl<'a> Reference<'a> {
                             rays += c.rays;
                             c
                         });
-                        let hidden = if centre.via_mirror {
-                            self.hidden_from_centre(&centre)
-                        } else {
-                            0
-                        };
                         Pixel {
                             centre,
-                            hidden,
                             color: sum / spp as f32,
                             rays,
                             misses,
@@ -328,31 +323,43 @@ impl<'a> Reference<'a> {
             })
             .collect();
         let trace = start.elapsed();
-        let image = |f: &dyn Fn(&Pixel) -> [f32; 4]| RgbaImage {
+        // After the timing: a segment query per mirror pixel, not part of the camera paths.
+        let hidden: Vec<u32> = rows
+            .par_iter()
+            .flat_map_iter(|row| row.iter().map(|p| self.hidden_from_centre(&p.centre)))
+            .collect();
+        let image = |f: &dyn Fn(&Pixel, u32) -> [f32; 4]| RgbaImage {
             width,
             height,
-            pixels: rows.iter().flatten().map(f).collect(),
+            pixels: rows
+                .iter()
+                .flatten()
+                .zip(&hidden)
+                .map(|(p, &h)| f(p, h))
+                .collect(),
         };
         let images = ReferenceImages {
-            color: image(&|p| [p.color.x, p.color.y, p.color.z, 1.0]),
-            direction: image(&|p| {
+            color: image(&|p, _| [p.color.x, p.color.y, p.color.z, 1.0]),
+            direction: image(&|p, _| {
                 let d = p.centre.reflected_hit.normalize_or_zero();
                 [d.x, d.y, d.z, if p.centre.via_mirror { 1.0 } else { 0.0 }]
             }),
-            distance: image(&|p| [p.centre.reflected_t, p.centre.primary_t, 0.0, 1.0]),
-            object: image(&|p| {
+            distance: image(&|p, _| [p.centre.reflected_t, p.centre.primary_t, 0.0, 1.0]),
+            object: image(&|p, hidden| {
                 [
                     p.centre.object,
                     if p.centre.via_mirror { 1.0 } else { 0.0 },
-                    p.hidden as f32,
+                    hidden as f32,
                     1.0,
                 ]
             }),
         };
         let rays: u64 = rows.iter().flatten().map(|p| u64::from(p.rays)).sum();
         let mut hidden_layers = [0u64; 8];
-        for p in rows.iter().flatten().filter(|p| p.centre.via_mirror) {
-            hidden_layers[(p.hidden as usize).min(7)] += 1;
+        for (p, &h) in rows.iter().flatten().zip(&hidden) {
+            if p.centre.via_mirror {
+                hidden_layers[(h as usize).min(7)] += 1;
+            }
         }
         let stats = ReferenceStats {
             triangles: self.geometry.triangle_count(),
