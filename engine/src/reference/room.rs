@@ -10,7 +10,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::scene::Room;
+use crate::scene::{Mesh, Room};
 
 /// One wall: its plane's centre, half-extent vectors along the mesh's u (right) and v (up)
 /// edges, and inward normal, in render space.
@@ -44,16 +44,7 @@ impl RoomBox {
         let h = room.size_m * 0.5;
         let center = room.center - origin;
         let walls = std::array::from_fn(|face| {
-            // The same frames as `Mesh::room_wall`: (offset, right, up) per face.
-            let (x, y, z) = (Vec3::X * h.x, Vec3::Y * h.y, Vec3::Z * h.z);
-            let (offset, right, up) = match face {
-                0 => (x, z, y),
-                1 => (-x, -z, y),
-                2 => (y, -x, -z),
-                3 => (-y, x, -z),
-                4 => (z, -x, y),
-                _ => (-z, x, y),
-            };
+            let (offset, right, up) = Mesh::room_wall_frame(room, face);
             Wall {
                 center: center + offset,
                 right,
@@ -129,6 +120,7 @@ impl RoomBox {
 mod tests {
     use super::*;
     use crate::reference::intersect::ray_triangle;
+    use crate::scene::generate::SplitMix64;
     use crate::scene::state::room_meshes;
 
     fn room() -> Room {
@@ -139,15 +131,6 @@ mod tests {
         }
     }
 
-    /// SplitMix64 in [0, 1).
-    fn random(seed: &mut u64) -> f32 {
-        *seed = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = *seed;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-
     /// The wall meshes the rasterizer draws, tested triangle by triangle: the same wall, the
     /// same distance, uv and normal (to float rounding) for rays from inside and outside.
     #[test]
@@ -156,10 +139,10 @@ mod tests {
         let origin = Vec3::new(0.3, 2.5, 0.2);
         let walls = room_meshes(&room);
         let analytic = RoomBox::new(&room, origin);
-        let mut seed = 7;
+        let mut rng = SplitMix64::new(7);
         let (mut inside, mut outside) = (0, 0);
         for i in 0..20_000 {
-            let mut r = || random(&mut seed) * 2.0 - 1.0;
+            let mut r = || rng.unit() as f32 * 2.0 - 1.0;
             // Half the origins inside the room, half up to a room's size beyond it.
             let spread = if i % 2 == 0 { 0.95 } else { 2.0 };
             let o = Vec3::new(r() * 5.0, r() * 3.0, r() * 4.0) * spread + room.center - origin;

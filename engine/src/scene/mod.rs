@@ -20,7 +20,7 @@ mod error;
 pub(crate) mod files;
 mod fixed;
 mod format;
-mod generate;
+pub(crate) mod generate;
 mod load;
 mod mesh;
 pub mod state;

@@ -119,21 +119,27 @@ impl Mesh {
     ///
     /// `face` >= 6 is treated as `face % 6`.
     pub fn room_wall(room: &Room, face: usize) -> Mesh {
+        let (offset, right, up) = Self::room_wall_frame(room, face);
+        let normal = -offset.normalize_or_zero();
+        let mut b = Builder::default();
+        b.quad(room.center + offset, right, up, normal);
+        b.finish_closed()
+    }
+
+    /// Wall `face`'s frame, as [`Mesh::room_wall`] lays it out: the offset of its centre from
+    /// the room's centre, and the half-extent vectors along its u (right) and up edges
+    /// (right = view x up; v runs down `up`). Shared with the reference's analytic room box.
+    pub fn room_wall_frame(room: &Room, face: usize) -> (Vec3, Vec3, Vec3) {
         let h = room.size_m * 0.5;
         let (x, y, z) = (Vec3::X * h.x, Vec3::Y * h.y, Vec3::Z * h.z);
-        // (offset of the wall centre from the room centre, right, up); right = view x up.
-        let (offset, right, up) = match face % 6 {
+        match face % 6 {
             0 => (x, z, y),
             1 => (-x, -z, y),
             2 => (y, -x, -z),
             3 => (-y, x, -z),
             4 => (z, -x, y),
             _ => (-z, x, y),
-        };
-        let normal = -offset.normalize_or_zero();
-        let mut b = Builder::default();
-        b.quad(room.center + offset, right, up, normal);
-        b.finish_closed()
+        }
     }
 }
 
