@@ -6,15 +6,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+mod common;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("specchio-assets-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use common::{root, temp_dir};
 
 /// Runs `specchio render SCENE --out OUT`. A run that has not ended after `patience` is
 /// killed and reported: the point is to fail rather than hang the suite if a read blocks.

@@ -2,9 +2,10 @@
 //! fails and names the case.
 
 mod bench_tradeoff;
+mod common;
 
 use bench_tradeoff::{check_plot, check_tradeoff};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn specchio(args: &[&str]) -> Output {
@@ -45,15 +46,11 @@ fn lean_quick(extra: &[&str]) -> Output {
     specchio(&args)
 }
 
-fn temp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("specchio-bench-{}-{name}", std::process::id()))
-}
-
 #[test]
 fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
-    let json = temp("base.json");
-    let csv = temp("base.csv");
-    let svg = temp("plot.svg");
+    let json = common::temp_dir("base.json");
+    let csv = common::temp_dir("base.csv");
+    let svg = common::temp_dir("plot.svg");
     let run = specchio(&[
         "bench",
         "--quick",
@@ -95,7 +92,7 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     );
     let v = first["work"]["fragment_invocations"].as_u64().unwrap();
     first["work"]["fragment_invocations"] = serde_json::json!(v - 1);
-    let worse = temp("worse.json");
+    let worse = common::temp_dir("worse.json");
     std::fs::write(&worse, base.to_string()).unwrap();
     let fail = specchio(&[
         "bench",
@@ -235,7 +232,7 @@ fn github_format_and_bad_options() {
     assert!(String::from_utf8_lossy(&run.stderr).contains("median ms"));
 
     // --threads reaches lavapipe through LP_NUM_THREADS and is recorded.
-    let json = temp("threads.json");
+    let json = common::temp_dir("threads.json");
     assert_ok(&lean_quick(&[
         "--threads",
         "1",
@@ -248,7 +245,7 @@ fn github_format_and_bad_options() {
 
     // Values clap refuses (exit 2) and combinations the run refuses (exit 1), each before
     // anything runs, naming the option (and the allowed values), writing nothing.
-    let json = temp("bad.json");
+    let json = common::temp_dir("bad.json");
     for (args, message, code) in [
         (
             &["--cube-sizes", "0"][..],
@@ -349,7 +346,7 @@ fn quick_checks_and_honours_explicit_values() {
             "--quick {args:?}: {stderr}"
         );
     }
-    let json = temp("quick-explicit.json");
+    let json = common::temp_dir("quick-explicit.json");
     assert_ok(&lean_quick(&[
         "--cube-sizes",
         "32",
@@ -407,7 +404,7 @@ fn a_damaged_baseline_is_refused_naming_the_key() {
         ),
         ("mistyped", mistyped.to_string(), "invalid type"),
     ] {
-        let path = temp(&format!("{name}.json"));
+        let path = common::temp_dir(&format!("{name}.json"));
         std::fs::write(&path, text).unwrap();
         let out = lean_quick(&["--baseline", path.to_str().unwrap()]);
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -427,7 +424,7 @@ fn a_damaged_baseline_is_refused_naming_the_key() {
 /// `VK_LAYER_ENABLES` (best-practices checks warn about enabling VK_EXT_debug_utils).
 #[test]
 fn a_validation_message_fails_the_bench_without_output() {
-    let json = temp("validation.json");
+    let json = common::temp_dir("validation.json");
     let out = Command::new(env!("CARGO_BIN_EXE_specchio"))
         .args([
             "bench",
@@ -470,8 +467,8 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
         eprintln!("SwiftShader is not provided here: nothing to check");
         return;
     }
-    let json = temp("swiftshader.json");
-    let csv = temp("swiftshader.csv");
+    let json = common::temp_dir("swiftshader.json");
+    let csv = common::temp_dir("swiftshader.csv");
     // With the trade-off's rungs (their cost only): distance-exact and ray-query cannot run
     // there.
     let out = specchio(&[

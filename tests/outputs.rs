@@ -2,12 +2,12 @@
 //! was there before, an earlier output is replaced as a whole, and the same run writes the
 //! same bytes.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 mod common;
 
-use common::{render_six_colour, root, specchio, temp_dir};
+use common::{render_six_colour, root, specchio, temp_dir, Scratch};
 
 /// Every entry under `dir`, as paths relative to it, sorted (empty when `dir` is missing).
 fn tree(dir: &Path) -> Vec<String> {
@@ -30,7 +30,7 @@ fn tree(dir: &Path) -> Vec<String> {
 }
 
 /// A scratch folder that exists (unlike `temp_dir`), for tests that put things in it.
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> Scratch {
     let d = temp_dir(name);
     std::fs::create_dir_all(&d).unwrap();
     d
@@ -244,7 +244,7 @@ fn reference_output_is_all_or_nothing_too() {
     std::fs::write(&file, b"a file").unwrap();
     let scene = root().join("scenes/test/six-colour-room.toml");
     for (out, must_say) in [
-        (render.clone(), "reference.json"),
+        (render.to_path_buf(), "reference.json"),
         (file.join("out"), "Not a directory"),
     ] {
         let result = specchio(&[

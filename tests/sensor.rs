@@ -213,7 +213,7 @@ fn both_commands_write_the_sensor_outputs() {
         );
         // Azimuth 0 (+X) at the horizon is the red wall, from the image and from the cube.
         let panoramas = camera["files"]["panoramas"].as_array().unwrap();
-        assert_eq!(panoramas.len(), if dir == &gpu_dir { 4 } else { 2 });
+        assert_eq!(panoramas.len(), if **dir == *gpu_dir { 4 } else { 2 });
         for p in panoramas {
             let file = dir.join(p["file"].as_str().unwrap());
             let channels = read_channels(&file).unwrap();

@@ -27,16 +27,59 @@ pub fn specchio(args: &[&str]) -> std::process::Output {
         .expect("the specchio binary runs")
 }
 
-/// A fresh, absent folder in the temporary directory, unique to this test process.
-pub fn temp_dir(name: &str) -> PathBuf {
+/// A fresh, absent path in the temporary directory, unique to this test process, removed
+/// when the test is done with it (see [`Scratch`]).
+pub fn temp_dir(name: &str) -> Scratch {
     let d = std::env::temp_dir().join(format!("specchio-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+    remove(&d);
+    Scratch(d)
+}
+
+/// A test's scratch path (a folder or a file) that is removed, with all under it, when dropped.
+/// Tests write renders of tens of megabytes; a CI run leaves none of them behind. A failing
+/// test keeps its files for a look (dropped while panicking, it names them instead).
+pub struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for Scratch {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("test files kept: {}", self.0.display());
+        } else {
+            remove(&self.0);
+        }
+    }
+}
+
+fn remove(path: &Path) {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.is_dir() => drop(std::fs::remove_dir_all(path)),
+        Ok(_) => drop(std::fs::remove_file(path)),
+        Err(_) => {}
+    }
 }
 
 /// Renders the six-colour room into a fresh folder with `extra` arguments, requires success,
 /// and returns the folder and its render.json.
-pub fn render_six_colour(name: &str, extra: &[&str]) -> (PathBuf, serde_json::Value) {
+pub fn render_six_colour(name: &str, extra: &[&str]) -> (Scratch, serde_json::Value) {
     let out = temp_dir(name);
     let scene = root().join("scenes/test/six-colour-room.toml");
     let mut args = vec![

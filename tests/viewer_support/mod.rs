@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::common::{self, root, temp_dir};
+use crate::common::{self, root, temp_dir, Scratch};
 
 /// A private X server on a free display number, stopped on drop.
 pub struct Xvfb {
@@ -161,12 +161,12 @@ pub fn assert_same_image(shot: &Path, rendered: &Path) {
 }
 
 /// `specchio render SCENE --frame F` into a fresh folder.
-pub fn render(scene: &Path, frame: u32, name: &str) -> PathBuf {
+pub fn render(scene: &Path, frame: u32, name: &str) -> Scratch {
     render_with(scene, frame, name, &[])
 }
 
 /// [`render`] with more arguments (`--device swiftshader`).
-pub fn render_with(scene: &Path, frame: u32, name: &str, extra: &[&str]) -> PathBuf {
+pub fn render_with(scene: &Path, frame: u32, name: &str, extra: &[&str]) -> Scratch {
     let out = temp_dir(name);
     let frame = frame.to_string();
     let mut args = vec![
@@ -219,7 +219,7 @@ pub fn differences_around(a: &Path, b: &Path, [x, y, w, h]: [u32; 4]) -> (usize,
 }
 
 /// `specchio view thesis-room --keys KEYS --frames 3 --screenshot FILE`: (file, stdout).
-pub fn shot_with_keys(x: &impl Display, keys: &str, name: &str) -> (PathBuf, String) {
+pub fn shot_with_keys(x: &impl Display, keys: &str, name: &str) -> (Scratch, String) {
     let shot = temp_dir(name);
     let out = x.view(&[
         thesis_room().to_str().unwrap(),
@@ -238,7 +238,8 @@ pub fn shot_with_keys(x: &impl Display, keys: &str, name: &str) -> (PathBuf, Str
 /// listens in a runtime folder of its own (0700, as Wayland asks of XDG_RUNTIME_DIR).
 pub struct Weston {
     child: Child,
-    runtime_dir: PathBuf,
+    // Removed when the compositor is (fields drop after `Drop::drop` has stopped it).
+    runtime_dir: Scratch,
     socket: String,
 }
 
@@ -305,7 +306,6 @@ impl Drop for Weston {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
-        let _ = std::fs::remove_dir_all(&self.runtime_dir);
     }
 }
 
