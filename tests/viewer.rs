@@ -17,15 +17,15 @@ mod common;
 
 mod viewer_support;
 
-use std::path::PathBuf;
 use std::process::Command;
 
-use common::{root, temp_dir};
+use common::{root, temp_dir, Scratch};
 use viewer_support::*;
 
 /// thesis-room with lines replaced (`(section, key, value)`: the line starting with `key `
-/// inside `[section]`), in a fresh folder with the textures beside it.
-fn edited_thesis_room(name: &str, edits: &[(&str, &str, &str)]) -> PathBuf {
+/// inside `[section]`), as `scene.toml` in a fresh folder with the textures beside it. The
+/// folder is returned: the scene lasts as long as it does.
+fn edited_thesis_room(name: &str, edits: &[(&str, &str, &str)]) -> Scratch {
     let dir = temp_dir(name);
     std::fs::create_dir_all(dir.join("textures")).unwrap();
     let textures = root().join("scenes/textures/orientation.png");
@@ -56,9 +56,8 @@ fn edited_thesis_room(name: &str, edits: &[(&str, &str, &str)]) -> PathBuf {
         edits.len(),
         "thesis-room has each edited line once"
     );
-    let path = dir.join("scene.toml");
-    std::fs::write(&path, lines.join("\n")).unwrap();
-    path
+    std::fs::write(dir.join("scene.toml"), lines.join("\n")).unwrap();
+    dir
 }
 
 #[test]
@@ -140,7 +139,7 @@ fn keys_move_the_observer_as_an_edited_scene_places_it() {
         "view-walk-scene",
         &[("observer", "position", "[0.25, 3.5, 4.0]")],
     );
-    let rendered = render(&moved, 0, "view-walk-render");
+    let rendered = render(&moved.join("scene.toml"), 0, "view-walk-render");
     assert_same_image(&shot, &rendered.join("observer.png"));
     // And the move shows: the unmoved observer's image is different.
     let unmoved = render(&thesis_room(), 0, "view-walk-unmoved");
@@ -171,7 +170,7 @@ fn the_sensor_follows_the_sphere() {
             ("sensor", "resolution", "[800, 600]"),
         ],
     );
-    let rendered = render(&moved, 0, "view-sphere-render");
+    let rendered = render(&moved.join("scene.toml"), 0, "view-sphere-render");
     assert_same_image(&shot, &rendered.join("sensor.png"));
 }
 
