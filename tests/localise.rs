@@ -62,6 +62,9 @@ fn queries_at_landmarks_are_found_exactly(descriptor: &str) {
         for q in row["per_query"].as_array().unwrap() {
             assert_eq!(q["matches"][0], q["nearest_landmark"], "{device}: {q}");
             assert_eq!(q["position_error_m"], 0.0, "{device}: {q}");
+            // The fitted position refines the match within its grid cell (4 m here).
+            let fitted = q["fitted_position_error_m"].as_f64().unwrap();
+            assert!(fitted <= 2.0 * 2f64.sqrt() + 1e-6, "{device}: {q}");
             let err = q["heading_error_deg"].as_f64().unwrap();
             assert!(
                 err < column,

@@ -362,7 +362,7 @@ fn report(
                 (db.source.name(), &db.landmarks, &plan.landmark_poses),
                 (q.source.name(), &q.queries[ti], &plan.queries[ti]),
                 t,
-                column_deg,
+                (column_deg, args.grid),
             );
             row.landmark_images_per_s = rate(db, plan);
             rows.push(row);

@@ -5,7 +5,7 @@ use glam::Vec3;
 use serde::Serialize;
 use specchio::metrics::percentile::percentile;
 use specchio::render::methods::Method;
-use specchio::sensor::localise::{self, Descriptor, Signature};
+use specchio::sensor::localise::{self, position, Descriptor, Signature};
 
 #[derive(Serialize)]
 pub struct QueryResult {
@@ -15,7 +15,12 @@ pub struct QueryResult {
     pub nearest_landmark: usize,
     /// The three best matches, best first.
     pub matches: Vec<usize>,
+    /// The best match's distance from the true position.
     pub position_error_m: f64,
+    /// The position fitted to the descriptor distances around the best match, within its
+    /// grid cell (`specchio::sensor::localise::position`), and its distance from the truth.
+    pub fitted_position_m: [f32; 3],
+    pub fitted_position_error_m: f64,
     pub heading_estimate_deg: f64,
     pub heading_error_deg: f64,
 }
@@ -28,6 +33,9 @@ pub struct Summary {
     pub recall_at_3: f64,
     pub median_position_error_m: f64,
     pub p90_position_error_m: f64,
+    /// The fitted position's error.
+    pub median_fitted_position_error_m: f64,
+    pub p90_fitted_position_error_m: f64,
     pub median_heading_error_deg: f64,
     pub p90_heading_error_deg: f64,
     /// One panorama column in degrees: the heading's natural resolution.
@@ -80,12 +88,12 @@ pub fn row(
     (landmarks_from, database, positions): (&'static str, &[Signature], &[Vec3]),
     (queries_from, queries, truth): (&'static str, &[Signature], &[(Vec3, f64)]),
     query_time_s: f64,
-    column_deg: f64,
+    (column_deg, grid_m): (f64, f64),
 ) -> Row {
     let per_query: Vec<QueryResult> = queries
         .iter()
         .zip(truth)
-        .map(|(q, &t)| judge(descriptor, (database, positions), q, t))
+        .map(|(q, &t)| judge(descriptor, (database, positions, grid_m), q, t))
         .collect();
     Row {
         landmarks_from,
@@ -100,11 +108,12 @@ pub fn row(
 /// One query's answer against the truth.
 fn judge(
     descriptor: &dyn Descriptor,
-    (database, positions): (&[Signature], &[Vec3]),
+    (database, positions, grid_m): (&[Signature], &[Vec3], f64),
     query: &Signature,
     (truth, heading): (Vec3, f64),
 ) -> QueryResult {
-    let order = localise::rank(descriptor, database, query);
+    let distances = localise::distances(descriptor, database, query);
+    let order = localise::rank(&distances);
     let best = order[0];
     let nearest = (0..positions.len())
         .min_by(|&a, &b| {
@@ -113,6 +122,7 @@ fn judge(
                 .total_cmp(&positions[b].distance(truth))
         })
         .expect("at least one landmark");
+    let fitted = position::fit_position(positions, &distances, best, grid_m);
     let estimate = descriptor.turn(&database[best], query).to_degrees();
     let true_deg = heading.to_degrees();
     QueryResult {
@@ -121,6 +131,8 @@ fn judge(
         nearest_landmark: nearest,
         matches: order.into_iter().take(3).collect(),
         position_error_m: f64::from(positions[best].distance(truth)),
+        fitted_position_m: fitted.to_array(),
+        fitted_position_error_m: f64::from(fitted.distance(truth)),
         heading_estimate_deg: estimate,
         heading_error_deg: ((estimate - true_deg + 180.0).rem_euclid(360.0) - 180.0).abs(),
     }
@@ -131,6 +143,7 @@ fn summarize(results: &[QueryResult], landmarks: usize, column_deg: f64) -> Summ
     let share =
         |f: &dyn Fn(&QueryResult) -> bool| results.iter().filter(|r| f(r)).count() as f64 / n;
     let mut pos: Vec<f64> = results.iter().map(|r| r.position_error_m).collect();
+    let mut fitted: Vec<f64> = results.iter().map(|r| r.fitted_position_error_m).collect();
     let mut head: Vec<f64> = results.iter().map(|r| r.heading_error_deg).collect();
     let p = |v: &mut [f64], q| percentile(v, q).unwrap_or(f64::NAN);
     Summary {
@@ -140,6 +153,8 @@ fn summarize(results: &[QueryResult], landmarks: usize, column_deg: f64) -> Summ
         recall_at_3: share(&|r| r.matches.contains(&r.nearest_landmark)),
         median_position_error_m: p(&mut pos, 0.5),
         p90_position_error_m: p(&mut pos, 0.9),
+        median_fitted_position_error_m: p(&mut fitted, 0.5),
+        p90_fitted_position_error_m: p(&mut fitted, 0.9),
         median_heading_error_deg: p(&mut head, 0.5),
         p90_heading_error_deg: p(&mut head, 0.9),
         column_deg,
@@ -161,7 +176,7 @@ pub fn print_table(r: &Report, out: &std::path::Path) {
             .map_or(f64::NAN, |row| row.summary.column_deg)
     );
     println!(
-        "  {:<14} {:<14} {:>6} {:>9} {:>8} {:>8} {:>12} {:>10} {:>10} {:>9}",
+        "  {:<14} {:<14} {:>6} {:>9} {:>8} {:>8} {:>12} {:>10} {:>12} {:>10} {:>10} {:>9}",
         "landmarks",
         "queries",
         "time",
@@ -170,17 +185,19 @@ pub fn print_table(r: &Report, out: &std::path::Path) {
         "recall@3",
         "position m",
         "",
+        "fitted m",
+        "",
         "heading °",
         "sweep"
     );
     println!(
-        "  {:<14} {:<14} {:>6} {:>9} {:>8} {:>8} {:>12} {:>10} {:>10} {:>9}",
-        "from", "from", "s", "", "%", "%", "median", "p90", "median", "images/s"
+        "  {:<14} {:<14} {:>6} {:>9} {:>8} {:>8} {:>12} {:>10} {:>12} {:>10} {:>10} {:>9}",
+        "from", "from", "s", "", "%", "%", "median", "p90", "median", "p90", "median", "images/s"
     );
     for row in &r.rows {
         let s = &row.summary;
         println!(
-            "  {:<14} {:<14} {:>6} {:>9} {:>8.1} {:>8.1} {:>12.3} {:>10.3} {:>10.2} {:>9}",
+            "  {:<14} {:<14} {:>6} {:>9} {:>8.1} {:>8.1} {:>12.3} {:>10.3} {:>12.3} {:>10.3} {:>10.2} {:>9}",
             row.landmarks_from,
             row.queries_from,
             row.query_time_s,
@@ -189,6 +206,8 @@ pub fn print_table(r: &Report, out: &std::path::Path) {
             100.0 * s.recall_at_3,
             s.median_position_error_m,
             s.p90_position_error_m,
+            s.median_fitted_position_error_m,
+            s.p90_fitted_position_error_m,
             s.median_heading_error_deg,
             row.landmark_images_per_s
                 .map_or("loaded".to_owned(), |r| format!("{r:.2}"))

@@ -13,6 +13,7 @@
 
 pub mod fourier;
 pub mod poses;
+pub mod position;
 pub mod shift;
 
 use serde::{Deserialize, Serialize};
@@ -106,13 +107,21 @@ pub fn luminance(p: [f32; 4]) -> f32 {
     0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
 }
 
-/// Indices of `database` by increasing `descriptor` distance to `query` (ties by index).
-pub fn rank(descriptor: &dyn Descriptor, database: &[Signature], query: &Signature) -> Vec<usize> {
-    let d: Vec<f64> = database
+/// The `descriptor` distance of every landmark in `database` to `query`.
+pub fn distances(
+    descriptor: &dyn Descriptor,
+    database: &[Signature],
+    query: &Signature,
+) -> Vec<f64> {
+    database
         .iter()
         .map(|s| descriptor.distance(s, query))
-        .collect();
-    let mut order: Vec<usize> = (0..database.len()).collect();
+        .collect()
+}
+
+/// Indices of landmarks by increasing distance `d` (from [`distances`]; ties by index).
+pub fn rank(d: &[f64]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..d.len()).collect();
     order.sort_by(|&a, &b| d[a].total_cmp(&d[b]).then(a.cmp(&b)));
     order
 }
