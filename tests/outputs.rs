@@ -150,6 +150,7 @@ fn a_render_replaces_an_earlier_render_as_a_whole() {
         .collect();
     top.sort();
     let expected = [
+        ".specchio-files",
         "cube",
         "observer.exr",
         "observer.png",
@@ -262,4 +263,26 @@ fn reference_output_is_all_or_nothing_too() {
     assert_eq!(tree(&dir), ["file"]);
     std::fs::remove_dir_all(&render).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// An earlier render that the user put the scene (or anything else) into is not replaced:
+/// the run is refused, naming what would have been lost, and the folder is left as it was.
+#[test]
+fn a_render_never_deletes_what_it_did_not_write() {
+    let (out, _) = render_six_colour("foreign", &["--cube-size", "8"]);
+    let scene = out.join("scene.toml");
+    std::fs::copy(root().join("scenes/test/six-colour-room.toml"), &scene).unwrap();
+    let before = tree(&out);
+    let result = specchio(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cube-size",
+        "8",
+    ]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success(), "{stderr}");
+    assert!(stderr.contains("scene.toml"), "{stderr}");
+    assert_eq!(tree(&out), before);
 }

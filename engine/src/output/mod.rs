@@ -15,7 +15,7 @@ use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, Vec2, WritableI
 
 use crate::image::RgbaImage;
 
-pub use transaction::Transaction;
+pub use transaction::{Transaction, MANIFEST};
 
 /// Why an output could not be written. Each names the user's path; an I/O cause is the
 /// error's `source` (printed after it by `{:#}` in the CLI), not repeated in the message.
@@ -44,6 +44,15 @@ pub enum OutputError {
          refusing to replace it; choose a new folder, or remove it first"
     )]
     NotAnOutput { path: PathBuf, marker: String },
+    #[error(
+        "{path} holds {entry}, which no earlier output there wrote (an output lists its files \
+         in {manifest}): refusing to replace it; choose a new folder, or move {entry} out first"
+    )]
+    Foreign {
+        path: PathBuf,
+        entry: String,
+        manifest: &'static str,
+    },
     #[error("cannot write {path}: it names no file or folder")]
     NoName { path: PathBuf },
     #[error("{path} is given for two outputs of one command")]

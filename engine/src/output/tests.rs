@@ -116,9 +116,51 @@ fn a_commit_places_the_folder_and_replaces_an_earlier_output() {
         out.commit().unwrap();
     };
     render("first.txt");
-    assert_eq!(names(&target), ["first.txt", "render.json"]);
+    assert_eq!(
+        names(&target),
+        [".specchio-files", "first.txt", "render.json"]
+    );
+    assert_eq!(
+        fs::read_to_string(target.join(MANIFEST)).unwrap(),
+        "first.txt\nrender.json\n"
+    );
     render("second.txt");
-    assert_eq!(names(&target), ["render.json", "second.txt"]);
+    assert_eq!(
+        names(&target),
+        [".specchio-files", "render.json", "second.txt"]
+    );
+    assert_eq!(names(&dir), ["out"], "no temporary left beside it");
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A marker file does not make a folder an earlier output: anything the output did not write
+/// there (a scene, notes, a source tree) makes it irreplaceable, and nothing is deleted.
+#[test]
+fn a_folder_holding_what_no_output_wrote_is_never_replaced() {
+    let dir = scratch("foreign");
+    let target = dir.join("out");
+    let render = || -> Result<(), OutputError> {
+        let mut out = Transaction::new();
+        out.folder(&target, "render.json")?;
+        out.write_json(&target.join("render.json"), &serde_json::json!({}))?;
+        out.commit()
+    };
+    // A user's folder with a stray marker, and an earlier output the user added to.
+    fs::create_dir_all(target.join("src")).unwrap();
+    fs::write(target.join("src/main.c"), "important").unwrap();
+    fs::write(target.join("render.json"), "{}").unwrap();
+    let e = render().unwrap_err();
+    assert!(matches!(e, OutputError::Foreign { .. }), "{e}");
+    assert_eq!(
+        fs::read_to_string(target.join("src/main.c")).unwrap(),
+        "important"
+    );
+    fs::remove_dir_all(&target).unwrap();
+    render().unwrap();
+    fs::write(target.join("scene.toml"), "[room]").unwrap();
+    let e = render().unwrap_err();
+    assert!(e.to_string().contains("scene.toml"), "{e}");
+    assert!(target.join("scene.toml").is_file());
     assert_eq!(names(&dir), ["out"], "no temporary left beside it");
     fs::remove_dir_all(&dir).unwrap();
 }

@@ -9,7 +9,10 @@
 //!
 //! An existing target folder is replaced atomically, but only when it is an earlier output of
 //! the same command (it holds the command's marker file, e.g. `render.json`) or is empty;
-//! anything else is refused, so `--out ~` can never delete a home folder.
+//! anything else is refused, so `--out ~` can never delete a home folder. The marker alone
+//! does not make a folder an earlier output: every output folder lists what it holds in
+//! [`MANIFEST`], and a folder is replaced only when it holds nothing else (a scene file, the
+//! user's notes or a source tree beside a `render.json` are never deleted).
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -20,6 +23,10 @@ use super::OutputError;
 /// Makes temporary names unique within the process (the pid makes them unique across
 /// processes writing the same target at once).
 static NEXT_ID: AtomicU64 = AtomicU64::new(0);
+
+/// The file in every output folder that lists, one relative path a line, what the output
+/// wrote there: what a later run may replace.
+pub const MANIFEST: &str = ".specchio-files";
 
 #[derive(Debug)]
 enum Kind {
@@ -133,6 +140,7 @@ impl Transaction {
     pub fn commit(mut self) -> Result<(), OutputError> {
         for s in &self.staged {
             if let Kind::Folder { marker } = &s.kind {
+                write_manifest(s)?;
                 check_replaceable(&s.given, &s.target, marker)?;
             }
         }
@@ -273,14 +281,57 @@ fn check_replaceable(given: &Path, target: &Path, marker: &str) -> Result<(), Ou
         });
     }
     let empty = fs::read_dir(target).map_err(io(given))?.next().is_none();
-    if empty || target.join(marker).is_file() {
-        Ok(())
-    } else {
-        Err(OutputError::NotAnOutput {
+    if empty {
+        return Ok(());
+    }
+    if !target.join(marker).is_file() {
+        return Err(OutputError::NotAnOutput {
             path: given.to_owned(),
             marker: marker.to_owned(),
-        })
+        });
     }
+    let listed = fs::read_to_string(target.join(MANIFEST)).unwrap_or_default();
+    let listed: std::collections::HashSet<&str> = listed.lines().collect();
+    let held = entries(target).map_err(io(given))?;
+    match held.into_iter().find(|e| !listed.contains(e.as_str())) {
+        Some(entry) => Err(OutputError::Foreign {
+            path: given.to_owned(),
+            entry,
+            manifest: MANIFEST,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Every file and folder under `dir` (symbolic links not followed) as relative paths with
+/// `/` separators, sorted; the manifest itself left out.
+fn entries(dir: &Path) -> std::io::Result<Vec<String>> {
+    let mut found = Vec::new();
+    let mut pending = vec![PathBuf::new()];
+    while let Some(rel) = pending.pop() {
+        for entry in fs::read_dir(dir.join(&rel))? {
+            let entry = entry?;
+            let path = rel.join(entry.file_name());
+            if entry.file_type()?.is_dir() {
+                pending.push(path.clone());
+            }
+            let name = path
+                .to_string_lossy()
+                .replace(std::path::MAIN_SEPARATOR, "/");
+            if name != MANIFEST {
+                found.push(name);
+            }
+        }
+    }
+    found.sort();
+    Ok(found)
+}
+
+/// Lists the staged folder's contents in its manifest, just before it is placed.
+fn write_manifest(s: &Staged) -> Result<(), OutputError> {
+    let mut text = entries(&s.temp).map_err(io(&s.given))?.join("\n");
+    text.push('\n');
+    fs::write(s.temp.join(MANIFEST), text).map_err(io(&s.given.join(MANIFEST)))
 }
 
 /// Renames the staged folder to its target; an earlier output there is swapped out in one
