@@ -550,3 +550,33 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
         let _ = std::fs::remove_file(f);
     }
 }
+
+/// A report file named like one of the run's inputs (a scene, the baseline) is refused before
+/// anything runs, and the input is left as it was.
+#[test]
+fn a_report_never_replaces_an_input() {
+    let dir = common::temp_dir("inputs");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::copy(
+        common::root().join("scenes/test/six-colour-room.toml"),
+        &scene,
+    )
+    .unwrap();
+    let original = std::fs::read(&scene).unwrap();
+    let s = scene.to_str().unwrap();
+    for flag in ["--json", "--csv", "--plot"] {
+        let out = lean_quick(&[s, flag, s]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{flag}: {stderr}");
+        assert!(stderr.contains("it is the input"), "{flag}: {stderr}");
+        assert_eq!(std::fs::read(&scene).unwrap(), original, "{flag}");
+    }
+    let baseline = dir.join("base.json");
+    std::fs::write(&baseline, b"{}").unwrap();
+    let b = baseline.to_str().unwrap();
+    let out = lean_quick(&["--json", b, "--baseline", b]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("it is the input"));
+    assert_eq!(std::fs::read(&baseline).unwrap(), b"{}");
+}

@@ -60,6 +60,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     //    fails first; they appear together at the end or not at all.
     let settled = settle(args)?;
     let mut out = Transaction::new();
+    for input in settled.scenes.iter().chain(&settled.args.baseline) {
+        out.input(input)?;
+    }
     for path in report_paths(&settled.args) {
         out.file(path)?;
     }

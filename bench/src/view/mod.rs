@@ -100,6 +100,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     };
     let scene = specchio::scene::load(&args.scene)?;
     let mut out = Transaction::new();
+    out.input(&args.scene)?;
     if let Some(path) = &args.screenshot {
         out.file(path)?;
     }

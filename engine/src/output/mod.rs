@@ -55,6 +55,8 @@ pub enum OutputError {
     },
     #[error("cannot write {path}: it names no file or folder")]
     NoName { path: PathBuf },
+    #[error("cannot write {path}: it is the input {input}; the output must go to another file")]
+    IsAnInput { path: PathBuf, input: PathBuf },
     #[error("{path} is given for two outputs of one command")]
     Twice { path: PathBuf },
     #[error("{path} is not among this command's outputs (a bug in the caller)")]

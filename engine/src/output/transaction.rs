@@ -54,6 +54,8 @@ pub struct Transaction {
     staged: Vec<Staged>,
     /// Parent folders this transaction created, outermost first; removed again on rollback.
     created: Vec<PathBuf>,
+    /// The command's input files (real paths): no output may replace one.
+    inputs: Vec<(PathBuf, PathBuf)>,
     committed: bool,
 }
 
@@ -85,10 +87,38 @@ impl Transaction {
         Ok(())
     }
 
-    /// Stages the file `target`, whose folder must exist; an existing file is replaced.
+    /// Records an input file of the command: staging it as an output file, before or after
+    /// this, fails (`--json scene.toml` must not replace the scene it benchmarks).
+    pub fn input(&mut self, path: &Path) -> Result<(), OutputError> {
+        let Ok(real) = fs::canonicalize(path) else {
+            return Ok(()); // the command's own read reports a missing input
+        };
+        for s in &self.staged {
+            if matches!(s.kind, Kind::File) && fs::canonicalize(&s.target).is_ok_and(|t| t == real)
+            {
+                return Err(OutputError::IsAnInput {
+                    path: s.given.clone(),
+                    input: path.to_owned(),
+                });
+            }
+        }
+        self.inputs.push((path.to_owned(), real));
+        Ok(())
+    }
+
+    /// Stages the file `target`, whose folder must exist; an existing file is replaced,
+    /// unless it is one of the command's inputs ([`Transaction::input`]).
     pub fn file(&mut self, target: &Path) -> Result<(), OutputError> {
         let (resolved, name) = named(target)?;
         self.check_new(target)?;
+        if let Ok(real) = fs::canonicalize(&resolved) {
+            if let Some((input, _)) = self.inputs.iter().find(|(_, r)| *r == real) {
+                return Err(OutputError::IsAnInput {
+                    path: target.to_owned(),
+                    input: input.clone(),
+                });
+            }
+        }
         if resolved.is_dir() {
             return Err(OutputError::IsAFolder {
                 path: target.to_owned(),
