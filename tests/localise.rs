@@ -87,7 +87,8 @@ fn queries_at_landmarks_are_found_exactly(descriptor: &str) {
 fn bad_options_are_refused() {
     let scene = root().join("scenes/thesis-room.toml");
     let out = temp_dir("localise-bad");
-    let cases: [(&[&str], &str); 10] = [
+    let many_times = vec!["0"; 200].join(",");
+    let cases: [(&[&str], &str); 12] = [
         (&["--grid", "0"], "--grid"),
         (&["--grid", "nan"], "--grid"),
         (&["--k", "0"], "--k"),
@@ -98,6 +99,12 @@ fn bad_options_are_refused() {
         (&["--sources", "plain,mirror"], "--sources"),
         (&["--times", "0,-3"], "--times"),
         (&["--times", "0", "--time", "1"], "--time"),
+        // Bounded work: a tiny spacing, and options whose product is years of rendering.
+        (&["--grid", "1e-6"], "choose a larger spacing"),
+        (
+            &["--queries", "100000", "--times", &many_times],
+            "more than the 200000 one run may",
+        ),
     ];
     for (extra, needle) in cases {
         let mut args = vec![

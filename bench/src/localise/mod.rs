@@ -251,11 +251,41 @@ fn plan(args: &Args) -> Result<Plan> {
     } else {
         plan.landmark_poses = poses::grid(&plan.body.scene, args.grid, 0.0)?;
     }
+    check_work(args, &plan)?;
     for &t in &plan.times {
         let q = query_poses(args, &plan.body.scene, &plan.landmark_poses, t)?;
         plan.queries.push(q);
     }
     Ok(plan)
+}
+
+/// The most sensor images one run renders or traces (landmarks and queries, every source):
+/// each option is bounded, but their product must be too.
+const MAX_IMAGES: u64 = 200_000;
+
+/// Refuses a run whose images (landmark sweeps plus queries at every time, per source)
+/// exceed [`MAX_IMAGES`], before any query pose is made.
+fn check_work(args: &Args, plan: &Plan) -> Result<()> {
+    let sources = plan.sources.len() as u64;
+    let sweeps = if plan.saved.is_some() {
+        sources - 1
+    } else {
+        sources
+    };
+    let landmarks = plan.landmark_poses.len() as u64 * sweeps;
+    let queries = u64::from(args.queries) * plan.times.len() as u64 * sources;
+    let images = landmarks.saturating_add(queries);
+    if images > MAX_IMAGES {
+        bail!(
+            "this run would render {images} sensor images ({} landmarks x {sweeps} sweeps, \
+             {} queries x {} times x {sources} sources), more than the {MAX_IMAGES} one run may: \
+             fewer --queries, --times or --sources",
+            plan.landmark_poses.len(),
+            args.queries,
+            plan.times.len()
+        );
+    }
+    Ok(())
 }
 
 /// Keeps the first of each source, in the order given.

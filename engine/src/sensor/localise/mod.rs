@@ -42,7 +42,20 @@ pub enum LocaliseError {
          floor is (almost) empty"
     )]
     NoFreePose { tries: u32, time_s: f64 },
+    #[error(
+        "a landmark grid of spacing {spacing_m} m spans {count} poses over this room's floor, \
+         more than the {max} a sweep may render: choose a larger spacing"
+    )]
+    TooManyLandmarks {
+        spacing_m: f64,
+        count: u64,
+        max: u64,
+    },
 }
+
+/// The most grid poses a landmark sweep renders (half an hour at 10 sensor images/s), checked
+/// before any pose is made: a tiny spacing must be refused, not run for days.
+pub const MAX_LANDMARKS: u64 = 20_000;
 
 /// A descriptor of one panorama, as numbers a [`Descriptor`] made and reads.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -80,6 +80,15 @@ pub fn grid(scene: &Scene, spacing_m: f64, t_s: f64) -> Result<Vec<Vec3>, Locali
     // Whole steps from the centre that stay inside [lo, hi] (a small slack for rounding).
     let steps = |lo: f32, c: f32| ((f64::from(c - lo) + 1e-6) / spacing_m).floor() as i64;
     let (nx, nz) = (steps(lo.x, c.x), steps(lo.y, c.y));
+    let side = |n: i64| (n as u64).saturating_mul(2).saturating_add(1);
+    let count = side(nx).saturating_mul(side(nz));
+    if count > super::MAX_LANDMARKS {
+        return Err(LocaliseError::TooManyLandmarks {
+            spacing_m,
+            count,
+            max: super::MAX_LANDMARKS,
+        });
+    }
     let objects = object_spheres(scene, &SceneState::at(scene, t_s));
     let y = scene.mirror.center.y;
     let mut out = Vec::new();
