@@ -384,3 +384,38 @@ fn a_missing_scene_is_named_once_with_its_cause_once() {
     assert_eq!(stderr.matches("file not found").count(), 1, "{stderr}");
     assert!(!out.exists());
 }
+
+/// Options that are each within range but together mean hours of work or tens of gigabytes
+/// are refused before anything is written: 8192² pixels at 4096 samples for the reference,
+/// an 8192² sensor for the calibration.
+#[test]
+fn work_beyond_the_budgets_is_refused_up_front() {
+    let dir = temp_dir("budget");
+    std::fs::create_dir_all(&dir).unwrap();
+    let original =
+        std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
+    let scene = dir.join("big.toml");
+    let big = original
+        .replace("[observer]\n", "[observer]\nresolution = [8192, 8192]\n")
+        .replace("[sensor]\n", "[sensor]\nresolution = [8192, 8192]\n");
+    std::fs::write(&scene, big).unwrap();
+    let out = dir.join("out");
+    let s = scene.to_str().unwrap();
+    let o = out.to_str().unwrap();
+    for (args, needle) in [
+        (
+            vec!["reference", s, "--out", o, "--spp", "4096"],
+            "camera paths",
+        ),
+        (vec!["calibrate", s, "--out", o], "pixels (4096x4096)"),
+    ] {
+        let result = specchio(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(!result.status.success(), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(needle) && stderr.contains("big.toml"),
+            "{stderr}"
+        );
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use specchio::image::RgbaImage;
 use specchio::output::Transaction;
 use specchio::sensor::central::record::{
@@ -43,13 +43,27 @@ const RESIDUAL_OCAMCALIB: &str = "residual_ocamcalib.exr";
 const CHECK_POINTS: &str = "check_points.json";
 const RECORD: &str = "calibration.json";
 
+/// The most sensor pixels a calibration fits (4096²): the fits hold about 200 bytes per
+/// pixel, so 8192² would need some 14 GB.
+const MAX_PIXELS: u64 = 4096 * 4096;
+
 pub fn run(args: &Args) -> Result<ExitCode> {
     let scene = specchio::scene::load(&args.scene)?;
+    let [w, h] = scene.sensor.resolution;
+    if u64::from(w) * u64::from(h) > MAX_PIXELS {
+        bail!(
+            "{}: sensor.resolution {w}x{h} is more than the {MAX_PIXELS} pixels (4096x4096) a \
+             calibration fits; the models do not need more",
+            args.scene.display()
+        );
+    }
     // All or nothing: written into a hidden folder beside --out, renamed into place at the end.
     let mut out = Transaction::new();
     out.folder(&args.out, RECORD)?;
+    crate::interrupt::catch();
     let (cal, map) = Calibration::of_scene(&scene, args.time)
         .with_context(|| format!("{}: cannot fit the central models", args.scene.display()))?;
+    crate::interrupt::check("after fitting the models")?;
     let dir = &args.out;
     let (w, h) = (cal.width, cal.height);
     out.write_bytes(

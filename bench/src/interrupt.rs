@@ -1,26 +1,45 @@
 //! Ctrl-C (SIGINT) and SIGTERM during a command that writes outputs: the command stops at its
 //! next check and returns an error, so its output transaction is dropped and removes what it
 //! had written, instead of the process dying with a hidden half-written folder on disk. A
-//! second signal ends the process at once (the handler is one-shot).
+//! second signal ends the process at once, but only half a second or more after the first:
+//! `timeout` sends its SIGTERM to the process and then to its process group, and that second
+//! copy must not cut the clean stop short.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI64, Ordering};
 
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// When the first signal came, in monotonic-clock milliseconds.
+static FIRST_MS: AtomicI64 = AtomicI64::new(0);
 
-extern "C" fn on_signal(_: libc::c_int) {
-    // Only an atomic store: async-signal-safe.
-    INTERRUPTED.store(true, Ordering::SeqCst);
+/// Signals closer than this to the first are taken for copies of it.
+const REPEAT_MS: i64 = 500;
+
+/// The monotonic clock in milliseconds (`clock_gettime` is async-signal-safe).
+fn now_ms() -> i64 {
+    // SAFETY: clock_gettime writes the timespec it is given; CLOCK_MONOTONIC always exists.
+    let mut t: libc::timespec = unsafe { std::mem::zeroed() };
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut t) };
+    t.tv_sec * 1000 + t.tv_nsec / 1_000_000
+}
+
+extern "C" fn on_signal(signal: libc::c_int) {
+    // Atomics, the clock and _exit only: all async-signal-safe.
+    if !INTERRUPTED.swap(true, Ordering::SeqCst) {
+        FIRST_MS.store(now_ms(), Ordering::SeqCst);
+    } else if now_ms() - FIRST_MS.load(Ordering::SeqCst) >= REPEAT_MS {
+        // SAFETY: _exit ends the process without running anything else.
+        unsafe { libc::_exit(128 + signal) };
+    }
 }
 
 /// Installs the handler for SIGINT and SIGTERM (once per process is enough; again is harmless).
 pub fn catch() {
     for signal in [libc::SIGINT, libc::SIGTERM] {
-        // SAFETY: a zeroed sigaction is valid (empty mask); the handler only stores an atomic.
-        // SA_RESETHAND restores the default after the first signal, so a second one kills.
+        // SAFETY: a zeroed sigaction is valid (empty mask); the handler is async-signal-safe.
         unsafe {
             let mut action: libc::sigaction = std::mem::zeroed();
             action.sa_sigaction = on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
-            action.sa_flags = libc::SA_RESETHAND | libc::SA_RESTART;
+            action.sa_flags = libc::SA_RESTART;
             libc::sigaction(signal, &action, std::ptr::null_mut());
         }
     }
