@@ -247,3 +247,32 @@ fn a_heatmap_over_an_input_is_refused_and_the_input_kept() {
     assert_eq!(std::fs::read(&reference).unwrap(), before);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--angular` over images with no pixel to compare (alpha 0 everywhere: no mirror) reports
+/// the metrics as undefined, null in JSON, never as a perfect 0.
+#[test]
+fn angular_with_nothing_compared_is_undefined_not_zero() {
+    let dir = temp_dir("angular-none");
+    let mut empty = image(0.0);
+    for p in &mut empty.pixels {
+        p[3] = 0.0;
+    }
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    write_exr(&a, &empty).unwrap();
+    write_exr(&b, &image(0.0)).unwrap();
+    let json = json_of(&specchio(&[
+        "compare",
+        s(&a),
+        s(&b),
+        "--angular",
+        "16",
+        "--json",
+    ]));
+    assert_eq!(json["pixels"], 0);
+    for key in ["mean_deg", "p99_deg", "max_deg", "mean_texels"] {
+        assert!(json[key].is_null(), "{key}: {json}");
+    }
+    let text = specchio(&["compare", s(&a), s(&b), "--angular", "16"]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("n/a"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -116,7 +116,19 @@ fn angular(args: &Args, face_size: u32) -> Result<ExitCode> {
     let angles = angular::angles_deg(&test, &reference, keep);
     let e = angular::summarize(angles, face_size);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&e)?);
+        let mut value = serde_json::to_value(e)?;
+        if e.pixels == 0 {
+            // Nothing compared: the metrics are undefined, null as in the colour report.
+            for (key, v) in value.as_object_mut().into_iter().flatten() {
+                if key.ends_with("_deg") || key.ends_with("_texels") {
+                    *v = serde_json::Value::Null;
+                }
+            }
+        }
+        println!("{}", serde_json::to_string_pretty(&value)?);
+    } else if e.pixels == 0 {
+        println!("mirror pixels compared: 0 (no pixel has alpha 1 in both images inside the mask)");
+        println!("angular error (deg):    n/a");
     } else {
         println!("mirror pixels compared: {}", e.pixels);
         println!(

@@ -66,13 +66,22 @@ pub fn load(
     // Format and version first, so an old or foreign file says so rather than "missing field".
     let value: serde_json::Value = serde_json::from_str(&text)
         .with_context(|| format!("--landmarks {name}: not a landmarks file (malformed JSON)"))?;
-    let format = value.get("format").and_then(|v| v.as_str());
-    if format != Some(FORMAT) {
-        bail!("--landmarks {name}: field `format` is {format:?}, expected \"{FORMAT}\"");
+    // What a field holds, as the file spells it.
+    let shown = |field: &str| match value.get(field) {
+        Some(v) => format!("is {v}"),
+        None => "is missing".to_owned(),
+    };
+    if value.get("format").and_then(|v| v.as_str()) != Some(FORMAT) {
+        bail!(
+            "--landmarks {name}: field `format` {}, expected \"{FORMAT}\"",
+            shown("format")
+        );
     }
-    let version = value.get("version").and_then(|v| v.as_u64());
-    if version != Some(u64::from(VERSION)) {
-        bail!("--landmarks {name}: field `version` is {version:?}, this specchio reads {VERSION}");
+    if value.get("version").and_then(|v| v.as_u64()) != Some(u64::from(VERSION)) {
+        bail!(
+            "--landmarks {name}: field `version` {}, this specchio reads {VERSION}",
+            shown("version")
+        );
     }
     let db: Database = serde_json::from_str(&text)
         .with_context(|| format!("--landmarks {name}: not a version {VERSION} landmarks file"))?;
@@ -152,18 +161,33 @@ fn check_signatures(db: &Database) -> Result<(), String> {
         return Err("field `landmarks` is empty".to_owned());
     };
     let width = db.panorama.get("width").and_then(|w| w.as_u64());
+    // The length most landmarks have (a single damaged one, even the first, is then named).
+    let mut lengths = std::collections::BTreeMap::<usize, usize>::new();
+    for l in &db.landmarks {
+        *lengths.entry(l.signature.values.len()).or_default() += 1;
+    }
+    let usual = lengths
+        .iter()
+        .max_by_key(|&(&len, &n)| (n, std::cmp::Reverse(len)))
+        .map_or(first.signature.values.len(), |(&len, _)| len);
     for (i, l) in db.landmarks.iter().enumerate() {
         let s = &l.signature;
-        if s.values.len() != first.signature.values.len()
-            || Some(u64::from(s.columns)) != width
-            || !s.values.iter().all(|v| v.is_finite())
-            || !l.position_m.iter().all(|v| v.is_finite())
-        {
-            return Err(format!(
-                "field `landmarks[{i}]`: its signature or position does not fit the others \
-                 (length, columns or a non-finite value)"
-            ));
-        }
+        let problem = if s.values.len() != usual {
+            format!(
+                "{} signature values, where the others have {usual}",
+                s.values.len()
+            )
+        } else if Some(u64::from(s.columns)) != width {
+            let width = width.map_or("no width".to_owned(), |w| format!("{w}"));
+            format!("{} columns, where the panorama has {width}", s.columns)
+        } else if !s.values.iter().all(|v| v.is_finite()) {
+            "a non-finite signature value".to_owned()
+        } else if !l.position_m.iter().all(|v| v.is_finite()) {
+            "a non-finite position".to_owned()
+        } else {
+            continue;
+        };
+        return Err(format!("field `landmarks[{i}]`: {problem}"));
     }
     Ok(())
 }
