@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use super::numbers::num_text;
+use super::numbers::{num_text, unit};
 use super::{Ctx, R};
 use crate::scene::anim::{Animation, Repeat};
 use crate::scene::format::{AnimationSpec, AnimationType, RepeatSpec};
@@ -59,9 +59,7 @@ impl Ctx<'_> {
                         .ok_or_else(|| self.missing(&f("center"), "a point on the axis"))?,
                 )?;
                 let axis = self.vec3(&f("axis"), a.axis.unwrap_or([0.0, 1.0, 0.0]))?;
-                let axis = axis
-                    .try_normalize()
-                    .filter(|n| n.is_finite())
+                let axis = unit(axis)
                     .ok_or_else(|| self.invalid(&f("axis"), "must be a non-zero vector"))?;
                 let period_s = self.positive(
                     &f("period"),

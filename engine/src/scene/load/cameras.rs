@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use super::numbers::{num_text, time_text, Range};
+use super::numbers::{num_text, time_text, unit, Range};
 use super::{position_at, sample_times, Ctx, R};
 use crate::scene::format::{ObserverSpec, SensorSpec};
 use crate::scene::{Camera, Mirror, Room, SensorCamera};
@@ -123,9 +123,8 @@ impl Ctx<'_> {
             ));
         }
         let up = self.vec3("sensor.up", s.up.unwrap_or([0.0, 0.0, -1.0]))?;
-        let up = up
-            .try_normalize()
-            .filter(|u| u.is_finite() && u.cross(Vec3::Y).length() > 1e-3)
+        let up = unit(up)
+            .filter(|u| u.cross(Vec3::Y).length() > 1e-3)
             .ok_or_else(|| {
                 self.invalid(
                     "sensor.up",

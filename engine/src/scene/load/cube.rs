@@ -1,6 +1,6 @@
 //! `[cube]`, `[refresh]` and `[light]`: render settings.
 
-use super::numbers::{num_text, time_text, Range};
+use super::numbers::{num_text, time_text, unit, Range};
 use super::room::Extent;
 use super::{Ctx, R};
 use crate::scene::format::{CubeFormatSpec, CubeSpec, LightSpec, PolicySpec, RefreshSpec};
@@ -106,10 +106,8 @@ impl Ctx<'_> {
             return Ok(None);
         };
         let d = self.vec3("light.direction", l.direction)?;
-        let direction = d
-            .try_normalize()
-            .filter(|n| n.is_finite())
-            .ok_or_else(|| self.invalid("light.direction", "must be a non-zero vector"))?;
+        let direction =
+            unit(d).ok_or_else(|| self.invalid("light.direction", "must be a non-zero vector"))?;
         let ambient = match l.ambient {
             Some(a) => self.ranged("light.ambient", a, Range::closed(0.0, 1.0))?,
             None => 0.3,

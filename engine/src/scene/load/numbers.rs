@@ -11,6 +11,15 @@ use super::{Ctx, R};
 use crate::scene::format::V3;
 use crate::scene::MAX_IMAGE_SIZE_PX;
 
+/// `v` as a unit vector, normalised in f64 so that components near f32's limit (whose squared
+/// length overflows f32) still give their direction; `None` for the zero vector.
+pub(crate) fn unit(v: Vec3) -> Option<Vec3> {
+    v.as_dvec3()
+        .try_normalize()
+        .map(DVec3::as_vec3)
+        .filter(|u| u.is_finite() && u.length_squared() > 0.0)
+}
+
 /// A number for a message: plain digits in the everyday range, scientific notation outside it
 /// (`1e-310`, not a 0 followed by 300 digits; `3.4028235e38`, not 39 digits). f32 values print
 /// as f32 (shortest digits that read back to the same f32).

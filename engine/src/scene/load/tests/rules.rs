@@ -277,3 +277,16 @@ fn nesting_too_deep_is_located() {
         }
     }
 }
+
+/// Directions are normalised in f64: components near f32's limit (whose squared length
+/// overflows f32) give their direction, where they used to be called zero vectors.
+#[test]
+fn directions_near_the_f32_limit_keep_their_direction() {
+    let text = format!("{MINIMAL}[light]\ndirection = [3e38, 3e38, 3e38]\n");
+    let scene = load_str(&text, Path::new("l.toml")).unwrap();
+    let d = scene.light.unwrap().direction;
+    assert!((d - glam::Vec3::ONE.normalize()).length() < 1e-6, "{d}");
+    let text = format!("{MINIMAL}[light]\ndirection = [0, 0, 0]\n");
+    let e = load_str(&text, Path::new("l.toml")).unwrap_err();
+    assert!(e.to_string().contains("must be a non-zero vector"), "{e}");
+}
