@@ -29,6 +29,18 @@ fn tree(dir: &Path) -> Vec<String> {
     found
 }
 
+/// `specchio render SCENE --out OUT` with 8-texel cube faces (fast).
+fn render_small(scene: &Path, out: &Path) -> std::process::Output {
+    specchio(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--cube-size",
+        "8",
+    ])
+}
+
 /// A scratch folder that exists (unlike `temp_dir`), for tests that put things in it.
 fn scratch(name: &str) -> Scratch {
     let d = temp_dir(name);
@@ -135,14 +147,7 @@ fn a_render_replaces_an_earlier_render_as_a_whole() {
     let (out, _) = render_six_colour("again", &["--cube-size", "8", "--frames", "2"]);
     assert!(out.join("0001").is_dir());
     let scene = root().join("scenes/test/six-colour-room.toml");
-    let result = specchio(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--cube-size",
-        "8",
-    ]);
+    let result = render_small(&scene, &out);
     assert!(result.status.success());
     let mut top: Vec<String> = tree(&out)
         .into_iter()
@@ -273,14 +278,7 @@ fn a_render_never_deletes_what_it_did_not_write() {
     let scene = out.join("scene.toml");
     std::fs::copy(root().join("scenes/test/six-colour-room.toml"), &scene).unwrap();
     let before = tree(&out);
-    let result = specchio(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--cube-size",
-        "8",
-    ]);
+    let result = render_small(&scene, &out);
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert!(!result.status.success(), "{stderr}");
     assert!(stderr.contains("scene.toml"), "{stderr}");

@@ -6,11 +6,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use crate::records::{CompareRecord, CompareSettings};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use specchio::metrics::{
     self, Comparison, FLIP_PERCENTILE, FLIP_PIXELS_PER_DEGREE, MASK_THRESHOLD, PSNR_PEAK,
     REL_MSE_EPSILON,
 };
+use specchio::output::Transaction;
 use specchio::reference::angular;
 
 #[derive(clap::Args)]
@@ -36,7 +37,7 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
-    check_heatmap_is_no_input(args)?;
+    let out = stage_heatmap(args)?;
     if let Some(face_size) = args.angular {
         return angular(args, face_size);
     }
@@ -45,7 +46,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
 
     // 2. The heatmap, written atomically.
     if let Some(path) = &args.heatmap {
-        metrics::write_heatmap(path, &comparison)?;
+        let rgb8 = metrics::heatmap_rgb8(&comparison);
+        out.write_png_rgb8(path, comparison.width, comparison.height, &rgb8)?;
+        out.commit()?;
     }
 
     // 3. Report.
@@ -60,26 +63,21 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// A heatmap written over an input would destroy the user's image: refused before anything is
-/// read (the same file under any spelling: paths are compared once resolved).
-fn check_heatmap_is_no_input(args: &Args) -> Result<()> {
-    let Some(heatmap) = &args.heatmap else {
-        return Ok(());
-    };
-    let Ok(heatmap_real) = std::fs::canonicalize(heatmap) else {
-        return Ok(()); // not there yet: no input can be it
-    };
-    let inputs = [Some(&args.test), Some(&args.reference), args.mask.as_ref()];
-    for input in inputs.into_iter().flatten() {
-        if std::fs::canonicalize(input).is_ok_and(|real| real == heatmap_real) {
-            anyhow::bail!(
-                "--heatmap {}: is the input {}; the heatmap must go to another file",
-                heatmap.display(),
-                input.display()
-            );
+/// Stages `--heatmap` before anything is read. A heatmap written over an input would destroy
+/// the user's image: the transaction refuses an output that is one of its inputs.
+fn stage_heatmap(args: &Args) -> Result<Transaction> {
+    let mut out = Transaction::new();
+    if let Some(heatmap) = &args.heatmap {
+        for input in [Some(&args.test), Some(&args.reference), args.mask.as_ref()]
+            .into_iter()
+            .flatten()
+        {
+            out.input(input)?;
         }
+        out.file(heatmap)
+            .with_context(|| format!("--heatmap {}", heatmap.display()))?;
     }
-    Ok(())
+    Ok(out)
 }
 
 /// `--angular`: the angle between the looked-up and the exact direction per mirror pixel.

@@ -44,7 +44,19 @@ pub fn colour_map(value: f32) -> [u8; 3] {
 /// Writes the heatmap of `comparison` as an 8-bit PNG the size of the images, atomically
 /// (nothing at `path` on error).
 pub fn write_heatmap(path: &Path, comparison: &Comparison) -> Result<(), MetricsError> {
-    let rgb8: Vec<u8> = comparison
+    write_png_rgb8(
+        path,
+        comparison.width,
+        comparison.height,
+        &heatmap_rgb8(comparison),
+    )?;
+    Ok(())
+}
+
+/// The heatmap's pixels, 8-bit RGB rows top to bottom (for a caller writing it through its own
+/// output transaction).
+pub fn heatmap_rgb8(comparison: &Comparison) -> Vec<u8> {
+    comparison
         .flip_map
         .iter()
         .zip(&comparison.compared)
@@ -55,7 +67,5 @@ pub fn write_heatmap(path: &Path, comparison: &Comparison) -> Result<(), Metrics
                 NOT_COMPARED_RGB8
             }
         })
-        .collect();
-    write_png_rgb8(path, comparison.width, comparison.height, &rgb8)?;
-    Ok(())
+        .collect()
 }

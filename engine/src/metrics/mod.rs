@@ -27,7 +27,7 @@ use crate::output::{linear_to_srgb, OutputError};
 use crate::scene::files::{read_regular_file, FileError};
 use crate::scene::TextureData;
 
-pub use heatmap::{colour_map, write_heatmap, NOT_COMPARED_RGB8};
+pub use heatmap::{colour_map, heatmap_rgb8, write_heatmap, NOT_COMPARED_RGB8};
 
 /// PSNR's peak signal: linear 1.0 (diffuse white). HDR values above it are not clipped, so an
 /// error larger than 1 gives a negative PSNR.
