@@ -41,6 +41,9 @@ pub struct RenderSettings {
     pub methods: Vec<Method>,
     pub full_updates: bool,
     pub lookup: Lookup,
+    /// The order the tracing lookups handed their acceleration-structure builds (`split` or
+    /// `given`; only they read it).
+    pub trace_order: &'static str,
     /// The distance lookup's search steps (used only by it).
     pub distance_steps: u32,
     pub secant_steps: u32,

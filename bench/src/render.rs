@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Result};
 use specchio::output::Transaction;
-use specchio::render::lookups;
+use specchio::render::lookups::{self, TraceOrder};
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::camera::FACE_NAMES;
@@ -79,6 +79,11 @@ pub struct Args {
     /// moved object touches.
     #[arg(long)]
     full_updates: bool,
+    /// The order the tracing lookups (ray-query, distance-exact) hand their acceleration-
+    /// structure builds: `split` (spatially coherent, the default) or `given` (the scene's own,
+    /// to measure what the order is worth on a driver that keeps it: docs/accuracy.md).
+    #[arg(long, value_parser = trace_order, default_value = "split")]
+    trace_order: TraceOrder,
     /// Enable the Khronos validation layer; any message makes the command fail.
     #[arg(long)]
     validate: bool,
@@ -148,6 +153,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             lookup,
             // Range and ids through the cube: only when asked for, so timings never pay.
             id_cube: args.sensor_outputs,
+            trace_order: args.trace_order,
             ..Default::default()
         };
         let mut renderer = Renderer::new(&device, scene.clone(), &options)?;
@@ -177,6 +183,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             methods,
             full_updates: args.full_updates,
             lookup: lookup.unwrap_or(scene.mirror.lookup),
+            trace_order: args.trace_order.name(),
             distance_steps: scene.mirror.distance_steps,
             secant_steps: scene.mirror.secant_steps,
             cube: CubeSettings {
@@ -324,6 +331,14 @@ fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()
         }
     }
     Ok(())
+}
+
+/// A `--trace-order` value.
+fn trace_order(text: &str) -> std::result::Result<TraceOrder, String> {
+    TraceOrder::ALL
+        .into_iter()
+        .find(|o| o.name() == text.trim())
+        .ok_or_else(|| format!("`{text}` is not a trace order: split or given"))
 }
 
 /// `--sensor-outputs` reads the cube path's rays and the cube itself: a lookup without a cube

@@ -28,6 +28,9 @@ pub struct RenderOptions {
     /// sensor's ray map (`Readback::rays`) reads range and id through it and refuses to run
     /// without it. Off by default, so the benchmark's fills do not pay for it.
     pub id_cube: bool,
+    /// The order the tracing lookups hand their acceleration-structure builds (`--trace-order`;
+    /// `given` reproduces the scene's order, to measure what the split order gains).
+    pub trace_order: super::lookups::TraceOrder,
 }
 
 /// What to copy back to the CPU after a frame.

@@ -86,6 +86,8 @@ pub struct Renderer {
     /// pass is rebuilt when `scene.mirror.lookup` is switched in place).
     lookup_pass: Box<dyn lookups::LookupPass>,
     pass_lookup: crate::scene::Lookup,
+    /// The order the tracing lookups hand their builds (kept for a lookup switched in place).
+    trace_order: lookups::TraceOrder,
     pipelines: Pipelines,
     timestamps: Option<QueryPool>,
     statistics: Option<QueryPool>,
@@ -156,7 +158,14 @@ impl Renderer {
         }
         let pipelines = pipelines::create_pipelines(device, &resources)?;
         let lookup = scene.mirror.lookup;
-        let lookup_pass = create_lookup_pass(device, &resources, &cube, &submitter, lookup)?;
+        let lookup_pass = create_lookup_pass(
+            device,
+            &resources,
+            &cube,
+            &submitter,
+            lookup,
+            options.trace_order,
+        )?;
         let fill = options.method.create(&methods::MethodContext {
             device,
             scene: &scene,
@@ -193,6 +202,7 @@ impl Renderer {
             fill,
             lookup_pass,
             pass_lookup: lookup,
+            trace_order: options.trace_order,
             pipelines,
             timestamps,
             statistics,
@@ -245,6 +255,7 @@ impl Renderer {
                 &self.cube,
                 &self.submitter,
                 lookup,
+                self.trace_order,
             )?;
             self.pass_lookup = lookup;
         }
@@ -498,12 +509,12 @@ impl Renderer {
                 .map(|i| object_data(state.object_to_render(scene, i), scene.objects[i].material)),
         );
         self.resources.objects.write(&objects)?;
-        self.lookup_pass.prepare(&objects)?;
         self.object_bounds = objects
             .iter()
             .zip(&self.resources.drawables)
             .map(|(o, d)| camera::transform_aabb(&o.model_to_world, d.bounds_min, d.bounds_max))
             .collect();
+        self.lookup_pass.prepare(&objects, &self.object_bounds)?;
         self.draw_order = self.front_to_back();
         Ok(bases)
     }
@@ -516,6 +527,7 @@ fn create_lookup_pass(
     cube: &CubeTarget,
     submitter: &Submitter,
     lookup: crate::scene::Lookup,
+    trace_order: lookups::TraceOrder,
 ) -> Result<Box<dyn lookups::LookupPass>, GpuError> {
     if let Some(why) = lookups::missing_features(lookup, &device.info) {
         return Err(GpuError::Unsupported(format!("lookup {lookup}: {why}")));
@@ -526,6 +538,7 @@ fn create_lookup_pass(
         cube,
         submitter,
         push_size: std::mem::size_of::<gpu::Push>() as u32,
+        trace_order,
     })
 }
 

@@ -10,6 +10,7 @@ use super::draw::{barrier, COPY_WRITE, NOTHING, SAMPLED};
 use super::gpu::{self, MaterialData, ObjectData, Vertex, ViewData};
 use crate::scene::state::room_meshes;
 use crate::scene::{MaterialKind, Mesh, Scene};
+use crate::vk::build_order::triangles_in_split_order;
 use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::Device;
@@ -49,6 +50,11 @@ pub struct SceneResources {
     pub environment_set_layout: DescriptorSetLayout,
     pub vertices: Buffer,
     pub indices: Buffer,
+    /// With ray queries: the same triangles, each mesh's in the order its bottom-level build
+    /// wants them (`vk::build_order`: lavapipe keeps the order it is given), at the same
+    /// ranges as in `indices`. The draws keep `indices`: their order decides early depth
+    /// tests, which the benchmark's counters see.
+    pub traced_indices: Option<Buffer>,
     /// Drawables 0..6 are the room walls (world space), then one per scene object.
     pub drawables: Vec<Drawable>,
     pub frame: Buffer,
@@ -71,6 +77,8 @@ impl SceneResources {
         let walls = room_meshes(&scene.room);
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
+        let traces = device.enabled.ray_query;
+        let mut traced_indices: Vec<u32> = Vec::new();
         let mut push_mesh =
             |m: &Mesh| {
                 let d = Drawable {
@@ -90,6 +98,9 @@ impl SceneResources {
                     },
                 ));
                 indices.extend_from_slice(&m.indices);
+                if traces {
+                    traced_indices.extend(triangles_in_split_order(&m.positions, &m.indices));
+                }
                 d
             };
         let mut drawables: Vec<Drawable> = walls.iter().map(&mut push_mesh).collect();
@@ -124,6 +135,15 @@ impl SceneResources {
             vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | build_input,
             "scene indices",
         )?;
+        let traced_index_buffer = traces
+            .then(|| {
+                upload.buffer(
+                    &traced_indices,
+                    vk::BufferUsageFlags::STORAGE_BUFFER | build_input,
+                    "scene indices (traced order)",
+                )
+            })
+            .transpose()?;
         upload.finish()?;
         let materials_data: Vec<MaterialData> = scene.materials.iter().map(material_data).collect();
         let mut materials = host(
@@ -255,6 +275,7 @@ impl SceneResources {
             environment_set_layout,
             vertices: vertex_buffer,
             indices: index_buffer,
+            traced_indices: traced_index_buffer,
             drawables,
             frame,
             views,

@@ -54,7 +54,7 @@ impl SplitMix64 {
     }
 
     /// Uniform in `0..n` (`n` >= 1), by multiply-shift (bias below n / 2^64).
-    pub(super) fn below(&mut self, n: usize) -> usize {
+    pub(crate) fn below(&mut self, n: usize) -> usize {
         ((u128::from(self.next_u64()) * n as u128) >> 64) as usize
     }
 

@@ -19,6 +19,7 @@
 //! ([`super::tally`]), reported per frame.
 
 use ash::vk;
+use glam::Vec3;
 
 use super::distance::{cube_bindings, cube_pool_size, depth_sampler, write_cube};
 use super::tally::{FrameTally, TraceTally};
@@ -128,8 +129,8 @@ impl LookupPass for DistanceExactPass {
         self.set
     }
 
-    fn prepare(&mut self, objects: &[ObjectData]) -> Result<(), GpuError> {
-        self.trace.prepare(objects)
+    fn prepare(&mut self, objects: &[ObjectData], bounds: &[(Vec3, Vec3)]) -> Result<(), GpuError> {
+        self.trace.prepare(objects, bounds)
     }
 
     fn record(&self, cmd: vk::CommandBuffer) {

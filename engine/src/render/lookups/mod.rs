@@ -17,10 +17,12 @@ mod tally;
 mod tracing;
 
 pub use tally::{FrameTally, TracedRays};
+pub use tracing::TraceOrder;
 
 use std::sync::Arc;
 
 use ash::vk;
+use glam::Vec3;
 
 use super::gpu::ObjectData;
 use super::resources::SceneResources;
@@ -78,6 +80,8 @@ pub struct LookupContext<'a> {
     pub submitter: &'a Submitter,
     /// Push-constant bytes of the mirror's shaders (`gpu::Push`).
     pub push_size: u32,
+    /// The order the tracing lookups hand their builds (`RenderOptions::trace_order`).
+    pub trace_order: TraceOrder,
 }
 
 /// A lookup's per-renderer state: the pipelines that draw the mirror.
@@ -101,8 +105,12 @@ pub trait LookupPass {
     /// The descriptor set the pipelines read at set 1.
     fn set(&self) -> vk::DescriptorSet;
     /// Before the frame is recorded: per-frame data of the lookup's own, from this frame's
-    /// drawables (walls first). Most lookups have none.
-    fn prepare(&mut self, _objects: &[ObjectData]) -> Result<(), GpuError> {
+    /// drawables (walls first) and their render-space bounds. Most lookups have none.
+    fn prepare(
+        &mut self,
+        _objects: &[ObjectData],
+        _bounds: &[(Vec3, Vec3)],
+    ) -> Result<(), GpuError> {
         Ok(())
     }
     /// Records the lookup's per-frame GPU work before the views (made visible to the

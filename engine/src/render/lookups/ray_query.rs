@@ -6,6 +6,7 @@
 //! [`super::tracing`], which `distance-exact` shares.
 
 use ash::vk;
+use glam::Vec3;
 
 use super::tracing::SceneTrace;
 use super::{LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders};
@@ -90,8 +91,8 @@ impl LookupPass for RayQueryPass {
         self.set
     }
 
-    fn prepare(&mut self, objects: &[ObjectData]) -> Result<(), GpuError> {
-        self.trace.prepare(objects)
+    fn prepare(&mut self, objects: &[ObjectData], bounds: &[(Vec3, Vec3)]) -> Result<(), GpuError> {
+        self.trace.prepare(objects, bounds)
     }
 
     fn record(&self, cmd: vk::CommandBuffer) {

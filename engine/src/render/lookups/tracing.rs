@@ -6,22 +6,54 @@
 //! consecutive bindings from a first one the lookup chooses.
 //!
 //! The top-level structure is rebuilt every frame from the drawables' transforms at time t,
-//! not refit: it holds one instance per drawable (tens), which a rebuild handles in well under
-//! a millisecond, and a rebuild's quality does not decay as objects move far from where the
-//! structure was first built (a refit only stretches the old boxes).
+//! not refit: a rebuild's quality does not decay as objects move far from where the structure
+//! was first built (a refit only stretches the old boxes). Its instance records are handed over
+//! in traversal order ([`TraceOrder::Split`], `vk::build_order`) and each mesh's triangles
+//! likewise (`SceneResources::traced_indices`): lavapipe builds its tree from the order it is
+//! given, and the scene's own order (generated crowds are random) made it ~20x slower.
 
 use std::collections::HashMap;
 
 use ash::vk;
-use glam::UVec4;
+use glam::{UVec4, Vec3};
 
 use super::{LookupContext, LookupNeeds};
 use crate::render::gpu::{ObjectData, Vertex};
 use crate::vk::acceleration::{self, AccelerationStructure, TopLevel, TriangleMesh};
+use crate::vk::build_order::midpoint_split_order;
 use crate::vk::descriptors;
 use crate::vk::device::{Device, OptionalFeatures};
 use crate::vk::memory::{Buffer, BufferDesc};
 use crate::vk::GpuError;
+
+/// The order acceleration-structure builds are handed their leaves in.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum TraceOrder {
+    /// Instances and each mesh's triangles by a recursive median split of their boxes, the
+    /// ranges a midpoint-splitting builder (lavapipe's) makes coherent (`vk::build_order`).
+    #[default]
+    Split,
+    /// The scene's own order (drawables as listed, triangles as the mesh has them): what was
+    /// built before, kept to measure the difference and to test that the images agree.
+    Given,
+}
+
+impl TraceOrder {
+    pub const ALL: [TraceOrder; 2] = [TraceOrder::Split, TraceOrder::Given];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            TraceOrder::Split => "split",
+            TraceOrder::Given => "given",
+        }
+    }
+}
+
+impl std::fmt::Display for TraceOrder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 /// The acceleration structures and the drawables' ranges. Field order is drop order.
 pub struct SceneTrace {
@@ -30,6 +62,9 @@ pub struct SceneTrace {
     /// Index into `bottom` of each drawable's mesh.
     mesh_of: Vec<usize>,
     bottom: Vec<AccelerationStructure>,
+    order: TraceOrder,
+    /// This frame's instance records (reused: no allocation per frame).
+    records: Vec<vk::AccelerationStructureInstanceKHR>,
 }
 
 impl SceneTrace {
@@ -83,6 +118,8 @@ impl SceneTrace {
             top,
             mesh_of,
             bottom,
+            order: ctx.trace_order,
+            records: Vec::with_capacity(res.drawables.len()),
         })
     }
 
@@ -122,7 +159,10 @@ impl SceneTrace {
     pub fn write(&self, ctx: &LookupContext<'_>, set: vk::DescriptorSet, first: u32) {
         let res = ctx.resources;
         write_structure(ctx.device, set, first, &self.top.structure);
-        let buffers = [&res.vertices, &res.indices, &self.ranges];
+        // The triangle order the bottom levels were built from: a hit's primitive index
+        // counts in it.
+        let indices = traced_indices(ctx);
+        let buffers = [&res.vertices, indices, &self.ranges];
         for (binding, buffer) in (first + 1..).zip(buffers) {
             descriptors::write_buffer(
                 ctx.device,
@@ -134,14 +174,24 @@ impl SceneTrace {
         }
     }
 
-    /// This frame's instances (the drawables at time t, walls first).
-    pub fn prepare(&mut self, objects: &[ObjectData]) -> Result<(), GpuError> {
-        let records: Vec<vk::AccelerationStructureInstanceKHR> = objects
-            .iter()
-            .enumerate()
-            .map(|(i, o)| instance(i, o, self.bottom[self.mesh_of[i]].address))
-            .collect();
-        self.top.write_instances(&records)
+    /// This frame's instances (the drawables at time t, walls first, and their render-space
+    /// bounds), handed to the build in [`TraceOrder`]. Each keeps its drawable index as its
+    /// custom index, so the order changes nothing the shaders see.
+    pub fn prepare(
+        &mut self,
+        objects: &[ObjectData],
+        bounds: &[(Vec3, Vec3)],
+    ) -> Result<(), GpuError> {
+        let order: Vec<u32> = match self.order {
+            TraceOrder::Split => midpoint_split_order(bounds),
+            TraceOrder::Given => (0..objects.len() as u32).collect(),
+        };
+        self.records.clear();
+        self.records.extend(order.iter().map(|&i| {
+            let i = i as usize;
+            instance(i, &objects[i], self.bottom[self.mesh_of[i]].address)
+        }));
+        self.top.write_instances(&self.records)
     }
 
     /// Records the top level's rebuild.
@@ -155,7 +205,7 @@ impl SceneTrace {
 fn unique_meshes(ctx: &LookupContext<'_>) -> (Vec<TriangleMesh>, Vec<usize>) {
     let res = ctx.resources;
     let vertex_address = acceleration::buffer_address(ctx.device, &res.vertices);
-    let index_address = acceleration::buffer_address(ctx.device, &res.indices);
+    let index_address = acceleration::buffer_address(ctx.device, traced_indices(ctx));
     let mut meshes = Vec::new();
     let mut seen: HashMap<(u32, i32), usize> = HashMap::new();
     let mesh_of = res
@@ -179,6 +229,16 @@ fn unique_meshes(ctx: &LookupContext<'_>) -> (Vec<TriangleMesh>, Vec<usize>) {
         })
         .collect();
     (meshes, mesh_of)
+}
+
+/// The index buffer the bottom levels are built from: each mesh's triangles in split order
+/// (made with the scene's buffers on a device with ray queries), or as the scene has them.
+fn traced_indices<'a>(ctx: &LookupContext<'a>) -> &'a Buffer {
+    let res = ctx.resources;
+    match (ctx.trace_order, &res.traced_indices) {
+        (TraceOrder::Split, Some(sorted)) => sorted,
+        _ => &res.indices,
+    }
 }
 
 /// Points `binding` of `set` at the top-level structure.
