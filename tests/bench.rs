@@ -218,6 +218,82 @@ fn check_record(r: &serde_json::Value) {
     assert!(r["settings"]["cube_sizes"] == serde_json::json!([64]));
 }
 
+/// `--format bmf` prints Bencher Metric Format on stdout (the answer and tables on stderr) and
+/// `--bmf FILE` writes the same document: one benchmark per scene, method or rung, face size
+/// and device, with the documented measures (the schema itself is checked in `bench::bmf`).
+#[test]
+fn bmf_format_and_file_carry_the_same_benchmarks() {
+    let file = common::temp_dir("run.bmf.json");
+    let run = specchio(&[
+        "bench",
+        "--quick",
+        "scenes/thesis-room.toml",
+        "--methods",
+        "six-pass,multiview",
+        "--no-dynamic",
+        "--no-floors",
+        "--rungs",
+        "plain,box",
+        "--format",
+        "bmf",
+        "--bmf",
+        file.to_str().unwrap(),
+    ]);
+    assert_ok(&run);
+    let printed: serde_json::Value = serde_json::from_slice(&run.stdout).expect("stdout is JSON");
+    assert_eq!(printed, read_json(&file), "--format bmf and --bmf differ");
+    assert!(String::from_utf8_lossy(&run.stderr).contains("the answer on "));
+    let benchmarks = printed.as_object().expect("an object of benchmarks");
+    let names: Vec<&str> = benchmarks.keys().map(String::as_str).collect();
+    assert_eq!(names.len(), 4, "{names:?}");
+    for (case, measures) in [
+        ("six-pass", &["cube-update-ms"][..]),
+        ("multiview", &["cube-update-ms"]),
+        ("rung-plain", &["frame-cost-ms", "sensor-flip-mean"]),
+        ("rung-box", &["frame-cost-ms", "sensor-flip-mean"]),
+    ] {
+        let prefix = format!("thesis-room/{case}/64/");
+        let (_, benchmark) = benchmarks
+            .iter()
+            .find(|(name, _)| name.starts_with(&prefix))
+            .unwrap_or_else(|| panic!("no {prefix}* in {names:?}"));
+        let got: Vec<&str> = benchmark
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        assert_eq!(got, measures, "{prefix}");
+        let time = &benchmark[measures[0]];
+        let (lo, v, hi) = (
+            time["lower_value"].as_f64().unwrap(),
+            time["value"].as_f64().unwrap(),
+            time["upper_value"].as_f64().unwrap(),
+        );
+        assert!(lo <= v && v <= hi, "{prefix}: {time}");
+    }
+
+    // Two scenes with one file name would share benchmark names: refused before the run.
+    let twin = common::temp_dir("twin");
+    std::fs::create_dir_all(twin.join("a")).unwrap();
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/test/six-colour-room.toml"),
+        twin.join("a/thesis-room.toml"),
+    )
+    .unwrap();
+    let twin_scene = twin.join("a/thesis-room.toml");
+    let refused = lean_quick(&[
+        "scenes/thesis-room.toml",
+        twin_scene.to_str().unwrap(),
+        "--format",
+        "bmf",
+    ]);
+    assert_eq!(refused.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(err.contains("would share one"), "{err}");
+    assert!(refused.stdout.is_empty());
+}
+
 /// `--format github` prints github-action-benchmark's array on stdout (the table on stderr);
 /// bad options fail before running, naming the option, and write nothing.
 #[test]

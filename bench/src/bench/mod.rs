@@ -9,12 +9,15 @@
 //! docs/benchmarks.md.
 
 mod accuracy;
+mod answer;
+mod bmf;
 mod dynamic;
 mod options;
 mod plot;
 pub mod record;
 mod report;
 mod rows;
+mod tables;
 mod timing;
 mod tradeoff;
 
@@ -35,7 +38,6 @@ use crate::probe;
 use options::{settle, Settled};
 pub use options::{Args, Format};
 use record::{Environment, NotRun, Record, ReferenceRow, RungNotRun, Settings, SpeedVsError};
-use report::lookup_name;
 use timing::{quantile, Timed};
 
 /// How each measurement loops (shared by timing and dynamic).
@@ -46,11 +48,11 @@ pub struct Plan {
     pub floors: bool,
 }
 
-/// A line of the table: on stdout, or on stderr when stdout carries the github array.
+/// A line of the table: on stdout, or on stderr when stdout carries a JSON document.
 fn say(format: Format, line: &str) {
     match format {
         Format::Table => println!("{line}"),
-        Format::Github => eprintln!("{line}"),
+        Format::Github | Format::Bmf => eprintln!("{line}"),
     }
 }
 
@@ -89,7 +91,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let measured = measure(&settled, &scenes, instance, baseline.as_ref());
     let record = crate::validation::checked(&log, measured)?;
 
-    // 3. Outputs, then the gate.
+    // 3. The answer first, then the tables, the outputs and the gate.
+    for line in answer::lines(&record).iter().chain(&tables::lines(&record)) {
+        say(args.format, line);
+    }
     write_outputs(&settled.args, out, &record)?;
     match &baseline {
         Some(baseline) => Ok(gate(&settled.args, baseline, &record)),
@@ -231,6 +236,7 @@ fn measure(
             warmup: plan.warmup,
             runs: plan.runs,
             quick: args.quick,
+            full: args.full,
             dynamic_cube_size: dynamic_size,
             refresh: "every-frame (timing); on-change (dynamic)".to_owned(),
         },
@@ -256,137 +262,91 @@ fn measure(
             references(&name, scene, !rungs.is_empty(), &mut record.references)
         });
         for &size in sizes {
-            let mut t = timing::time_size(&device, scene, &methods, size, &plan, &tick)?;
-            let floor_median = |f: Floor| {
-                t.floors
-                    .iter()
-                    .find(|(g, _)| *g == f)
-                    .map(|(_, timed)| wall_median(timed))
-            };
-            let floors = (
-                floor_median(Floor::Clear),
-                floor_median(Floor::Fill),
-                floor_median(Floor::Geometry),
-            );
-            say(format!(
-                "{name}: {size}² faces, {} timed updates x {} run(s), interleaved",
-                plan.frames, plan.runs
-            ));
-            say(rows::table_header());
-            let mut size_rows = Vec::new();
-            for (m, timed) in methods.iter().zip(&t.methods) {
-                let row = rows::method_row(&name, scene, *m, size, timed, floors);
-                say(rows::table_row(
-                    m.name(),
-                    row.wall_ms,
-                    row.gpu_fill_ms,
-                    row.fill_stats,
-                    row.efficiency.vs_geometry_plus_fill,
-                ));
-                size_rows.push(row);
-            }
-            for (f, timed) in &t.floors {
-                let row = rows::floor_row(&name, *f, size, timed);
-                let label = format!("floor: {}", f.name());
-                say(rows::table_row(
-                    &label,
-                    row.wall_ms,
-                    row.gpu_fill_ms,
-                    row.fill_stats,
-                    None,
-                ));
-                record.floors.push(row);
-            }
-            if let Some(exact) = &exact {
-                let rows = accuracy::measure(
-                    &name,
-                    &mut t.renderers[..methods.len()],
-                    &settled.lookups,
-                    &exact.sensor,
-                )?;
-                say(format!(
-                    "  {:<8} {:>9} {:>9} {:>12} {:>10} {:>12} {:>10}",
-                    "lookup",
-                    "FLIP mean",
-                    "FLIP p99",
-                    "angle mean°",
-                    "p99°",
-                    "p99 texels",
-                    "identical"
-                ));
-                for a in rows {
-                    let f = |v: Option<f64>| v.map_or("n/a".into(), |x| format!("{x:.4}"));
-                    say(format!(
-                        "  {:<8} {:>9} {:>9} {:>12.4} {:>10.4} {:>12.2} {:>10}",
-                        lookup_name(a.lookup),
-                        f(a.flip_mean),
-                        f(a.flip_p99),
-                        a.angular.mean_deg,
-                        a.angular.p99_deg,
-                        a.angular.p99_texels,
-                        if a.methods_identical { "yes" } else { "NO" }
-                    ));
-                    for r in &size_rows {
-                        record.speed_vs_error.push(SpeedVsError {
-                            result: r.clone(),
-                            accuracy: a.clone(),
-                        });
-                    }
-                    record.accuracy.push(a);
-                }
-            }
-            record.results.extend(size_rows);
-            // The methods' renderers go before the rungs' are made.
-            drop(t);
-            if !rungs.is_empty() {
-                let rows = tradeoff::measure(
-                    &device,
-                    (&name, scene),
-                    &rungs,
-                    size,
-                    &plan,
-                    exact.as_ref(),
-                    &tick,
-                )?;
-                say(format!(
-                    "  trade-off at {size}²: GPU ms per sensor frame (cube update + sensor view) \
-                     against error at t = 0; * on the Pareto front"
-                ));
-                say(tradeoff::table_header());
-                for r in &rows {
-                    say(tradeoff::table_row(r));
-                }
-                record.tradeoff.extend(rows);
-            }
+            measure_size(
+                (&device, &name, scene, size),
+                (&methods, &settled.lookups, &rungs),
+                &plan,
+                exact.as_ref(),
+                &tick,
+                &mut record,
+            )?;
         }
         if !args.no_dynamic && dynamic::animated(scene) {
             let d = dynamic::measure(&device, &name, scene, dynamic_size, &plan, &tick)?;
-            say(format!(
-                "  dynamic (six-pass, {dynamic_size}², {} frames with motion): incremental {:.2} ms ({} faces median) vs full {:.2} ms = {}",
-                d.changed_frames,
-                d.incremental_ms_median,
-                d.faces_incremental_median,
-                d.full_ms_median,
-                d.ratio.map_or("n/a".into(), |r| format!("{r:.2}x"))
-            ));
             record.dynamic.push(d);
         }
     }
     bar.finish_and_clear();
-    for r in &record.methods_not_run {
-        say(format!("  {}: not run: {}", r.method, r.reason));
-    }
-    for r in &record.rungs_not_run {
-        say(format!("  rung {}: not run: {}", r.rung, r.reason));
-    }
     record.peak_rss_bytes = report::peak_rss_bytes();
-    say(format!(
-        "peak resident memory: {}",
-        record
-            .peak_rss_bytes
-            .map_or("n/a".into(), |b| format!("{:.0} MiB", b as f64 / 1048576.0))
-    ));
     Ok(record)
+}
+
+/// One scene at one face size: the methods and floors timed interleaved, the error per lookup
+/// (with the methods' renderers), then the trade-off ladder's rungs, each into `record`.
+fn measure_size(
+    (device, name, scene, size): (
+        &std::sync::Arc<specchio::vk::device::Device>,
+        &str,
+        &Scene,
+        u32,
+    ),
+    (methods, lookups, rungs): (
+        &[specchio::render::methods::Method],
+        &[specchio::scene::Lookup],
+        &[&tradeoff::Rung],
+    ),
+    plan: &Plan,
+    exact: Option<&tradeoff::Exact>,
+    tick: &dyn Fn(),
+    record: &mut Record,
+) -> Result<()> {
+    let mut t = timing::time_size(device, scene, methods, size, plan, tick)?;
+    let floor_median = |f: Floor| {
+        t.floors
+            .iter()
+            .find(|(g, _)| *g == f)
+            .map(|(_, timed)| wall_median(timed))
+    };
+    let floors = (
+        floor_median(Floor::Clear),
+        floor_median(Floor::Fill),
+        floor_median(Floor::Geometry),
+    );
+    let size_rows: Vec<_> = methods
+        .iter()
+        .zip(&t.methods)
+        .map(|(m, timed)| rows::method_row(name, scene, *m, size, timed, floors))
+        .collect();
+    record.floors.extend(
+        t.floors
+            .iter()
+            .map(|(f, timed)| rows::floor_row(name, *f, size, timed)),
+    );
+    if let Some(exact) = exact {
+        let measured = accuracy::measure(
+            name,
+            &mut t.renderers[..methods.len()],
+            lookups,
+            &exact.sensor,
+        )?;
+        for a in measured {
+            record
+                .speed_vs_error
+                .extend(size_rows.iter().map(|r| SpeedVsError {
+                    result: r.clone(),
+                    accuracy: a.clone(),
+                }));
+            record.accuracy.push(a);
+        }
+    }
+    record.results.extend(size_rows);
+    // The methods' renderers go before the rungs' are made.
+    drop(t);
+    if !rungs.is_empty() {
+        let rows = tradeoff::measure(device, (name, scene), rungs, size, plan, exact, tick)?;
+        record.tradeoff.extend(rows);
+    }
+    Ok(())
 }
 
 /// The exact reference of `scene` at t = 0, 1 sample per pixel: the sensor's, and the
@@ -420,16 +380,16 @@ fn references(
     tradeoff::Exact { sensor, observer }
 }
 
-/// The report files asked for: `--json`, `--csv`, `--plot`.
+/// The report files asked for: `--json`, `--csv`, `--plot`, `--bmf`.
 fn report_paths(args: &Args) -> Vec<&PathBuf> {
-    [&args.json, &args.csv, &args.plot]
+    [&args.json, &args.csv, &args.plot, &args.bmf]
         .into_iter()
         .flatten()
         .collect()
 }
 
-/// `--json`, `--csv`, `--plot` (through `out`, where they were staged) and `--format github`,
-/// from the one record.
+/// `--json`, `--csv`, `--plot`, `--bmf` (through `out`, where they were staged) and
+/// `--format github|bmf`, from the one record.
 fn write_outputs(args: &Args, out: Transaction, record: &Record) -> Result<()> {
     if let Some(path) = &args.json {
         out.write_json(path, record)?;
@@ -440,15 +400,22 @@ fn write_outputs(args: &Args, out: Transaction, record: &Record) -> Result<()> {
     if let Some(path) = &args.plot {
         out.write_bytes(path, plot::svg(record)?.as_bytes())?;
     }
+    if let Some(path) = &args.bmf {
+        out.write_bytes(path, bmf::json(&bmf::bmf(record)?)?.as_bytes())?;
+    }
     out.commit()?;
     let written = report_paths(args);
     for path in written {
         say(args.format, &format!("wrote {}", path.display()));
     }
-    if args.format == Format::Github {
-        let mut out = std::io::stdout().lock();
-        serde_json::to_writer_pretty(&mut out, &report::github(record))?;
-        writeln!(out)?;
+    match args.format {
+        Format::Table => {}
+        Format::Github => {
+            let mut out = std::io::stdout().lock();
+            serde_json::to_writer_pretty(&mut out, &report::github(record))?;
+            writeln!(out)?;
+        }
+        Format::Bmf => print!("{}", bmf::json(&bmf::bmf(record)?)?),
     }
     Ok(())
 }

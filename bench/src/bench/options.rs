@@ -1,8 +1,13 @@
 //! `specchio bench`'s options: what each accepts (checked by clap while parsing, see
 //! `crate::args`), and what `--quick` and the defaults make of them.
 //!
-//! `--quick` only changes defaults: the quick scene set, 64² faces, 5 frames after 1 warm-up,
-//! 1 run. A value given explicitly is checked and honoured, with or without `--quick`.
+//! Three presets change only the defaults; a value given explicitly is checked and honoured
+//! under any of them:
+//! - the default run answers the design's two questions (six passes or one; cost against
+//!   error) on the thesis's room and a crowded one at 512², in about two minutes on 2 cores;
+//! - `--full`, every default scene at 128² and 512² with more frames (the sweep the docs'
+//!   tables come from; its measured duration is printed before it starts);
+//! - `--quick`, CI's run: the quick scene set at 64², 5 frames after 1 warm-up.
 
 use std::path::PathBuf;
 
@@ -13,8 +18,11 @@ use specchio::scene::Lookup;
 use super::tradeoff::{rung, Rung, LADDER};
 use crate::args::{face_size, lookup, method, real, whole};
 
-/// The default scene set: the thesis's room, a few moving objects, a crowd, ~1 M triangles.
-const DEFAULT_SCENES: [&str; 4] = [
+/// The default run's scenes: the thesis's room and a crowd (2,000 objects, 10 % moving).
+const DEFAULT_SCENES: [&str; 2] = ["scenes/thesis-room.toml", "scenes/many-objects.toml"];
+
+/// `--full`'s scenes: the thesis's room, a few moving objects, a crowd, ~1 M triangles.
+pub const FULL_SCENES: [&str; 4] = [
     "scenes/thesis-room.toml",
     "scenes/moving-objects.toml",
     "scenes/many-objects.toml",
@@ -24,7 +32,8 @@ const DEFAULT_SCENES: [&str; 4] = [
 /// The `--quick` scene set.
 const QUICK_SCENES: [&str; 2] = ["scenes/thesis-room.toml", "scenes/moving-objects.toml"];
 
-/// Defaults without and with `--quick`: (cube sizes, frames, warm-up, runs).
+/// Defaults of the default run, `--full` and `--quick`: (cube sizes, frames, warm-up, runs).
+const DEFAULT: (&[u32], u32, u32, u32) = (&[512], 10, 2, 1);
 const FULL: (&[u32], u32, u32, u32) = (&[128, 512], 20, 3, 1);
 const QUICK: (&[u32], u32, u32, u32) = (&[64], 5, 1, 1);
 
@@ -34,26 +43,30 @@ pub enum Format {
     Table,
     /// github-action-benchmark's `customSmallerIsBetter` JSON array (the table goes to stderr).
     Github,
+    /// Bencher Metric Format, the JSON object `bencher run --adapter json` reads (the table
+    /// goes to stderr; docs/benchmarks.md).
+    Bmf,
 }
 
 #[derive(clap::Args, Clone)]
 pub struct Args {
-    /// Scene files (default: thesis-room, moving-objects, many-objects, heavy).
+    /// Scene files (default: thesis-room and many-objects; --full: also moving-objects and
+    /// heavy; --quick: thesis-room and moving-objects).
     pub scenes: Vec<PathBuf>,
     /// Comma-separated methods (default: every usable one).
     #[arg(long, value_delimiter = ',', value_parser = method)]
     pub methods: Option<Vec<Method>>,
     /// Comma-separated cube face sizes in texels, each within the scene format's limit
-    /// [default: 128,512; --quick: 64].
+    /// [default: 512; --full: 128,512; --quick: 64].
     #[arg(long, allow_negative_numbers = true, value_delimiter = ',', value_parser = face_size)]
     pub cube_sizes: Option<Vec<u32>>,
     /// Comma-separated lookup modes for the error measurement (docs/accuracy.md lists them).
     #[arg(long, value_delimiter = ',', value_parser = lookup, default_value = "plain,box")]
     pub lookups: Vec<Lookup>,
-    /// Timed cube updates per method, floor and run, 1..=100000 [default: 20; --quick: 5].
+    /// Timed cube updates per method, floor and run, 1..=100000 [default: 10; --full: 20; --quick: 5].
     #[arg(long, allow_negative_numbers = true, visible_alias = "updates", value_parser = whole(1u32..=100_000))]
     pub frames: Option<u32>,
-    /// Untimed updates before each run, 0..=10000 [default: 3; --quick: 1].
+    /// Untimed updates before each run, 0..=10000 [default: 2; --full: 3; --quick: 1].
     #[arg(long, allow_negative_numbers = true, value_parser = whole(0u32..=10_000))]
     pub warmup: Option<u32>,
     /// Runs of the whole interleaved measurement (each a warm-up, then the timed frames),
@@ -65,8 +78,13 @@ pub struct Args {
     pub threads: Option<u32>,
     /// A CI-sized run: thesis-room and moving-objects at 64², 5 frames after 1 warm-up. Only
     /// the defaults change: explicit scenes and values still apply.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "full")]
     pub quick: bool,
+    /// The full sweep: thesis-room, moving-objects, many-objects and heavy at 128² and 512²,
+    /// 20 frames after 3 warm-ups (its measured duration is printed before it starts). Only
+    /// the defaults change.
+    #[arg(long)]
+    pub full: bool,
     /// Write everything measured as JSON.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -76,6 +94,9 @@ pub struct Args {
     /// Write the speed-against-error plot as SVG.
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Write the run in Bencher Metric Format (as `--format bmf` prints it).
+    #[arg(long)]
+    pub bmf: Option<PathBuf>,
     /// What stdout gets.
     #[arg(long, value_enum, default_value_t = Format::Table)]
     pub format: Format,
@@ -151,7 +172,11 @@ fn no_repeats<T: PartialEq + std::fmt::Debug>(option: &str, list: &[T]) -> Resul
 /// Fills in the defaults (`--quick`'s or the full run's) and checks what depends on more than
 /// one option, before anything runs.
 pub fn settle(args: &Args) -> Result<Settled> {
-    let (sizes, frames, warmup, runs) = if args.quick { QUICK } else { FULL };
+    let (sizes, frames, warmup, runs) = match (args.quick, args.full) {
+        (true, _) => QUICK,
+        (_, true) => FULL,
+        _ => DEFAULT,
+    };
     let methods: Vec<Method> = match &args.methods {
         None => Method::listed().collect(),
         Some(list) => list.clone(),
@@ -178,6 +203,7 @@ pub fn settle(args: &Args) -> Result<Settled> {
         ("--json", &args.json),
         ("--csv", &args.csv),
         ("--plot", &args.plot),
+        ("--bmf", &args.bmf),
     ] {
         if let Some(path) = path {
             let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
@@ -190,11 +216,32 @@ pub fn settle(args: &Args) -> Result<Settled> {
             }
         }
     }
-    let scenes = match (&args.scenes[..], args.quick) {
-        ([], true) => QUICK_SCENES.iter().map(PathBuf::from).collect(),
-        ([], false) => DEFAULT_SCENES.iter().map(PathBuf::from).collect(),
-        (given, _) => given.to_vec(),
+    let preset: &[&str] = match (args.quick, args.full) {
+        (true, _) => &QUICK_SCENES,
+        (_, true) => &FULL_SCENES,
+        _ => &DEFAULT_SCENES,
     };
+    let scenes = match &args.scenes[..] {
+        [] => preset.iter().map(PathBuf::from).collect(),
+        given => given.to_vec(),
+    };
+    if args.bmf.is_some() || args.format == Format::Bmf {
+        // BMF names a benchmark by the scene's file stem: two scenes with one stem would
+        // collide after the whole run.
+        for (i, a) in scenes.iter().enumerate() {
+            if let Some(b) = scenes[..i].iter().find(|b| {
+                super::bmf::scene_slug(&b.display().to_string())
+                    == super::bmf::scene_slug(&a.display().to_string())
+            }) {
+                anyhow::bail!(
+                    "Bencher Metric Format names benchmarks by the scene's file name: {} and {} \
+                     would share one; rename one of them",
+                    b.display(),
+                    a.display()
+                );
+            }
+        }
+    }
     Ok(Settled {
         args: args.clone(),
         scenes,

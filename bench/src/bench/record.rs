@@ -74,6 +74,8 @@ pub struct Settings {
     pub warmup: u32,
     pub runs: u32,
     pub quick: bool,
+    /// `--full`'s defaults.
+    pub full: bool,
     pub dynamic_cube_size: u32,
     pub refresh: String,
 }
@@ -358,7 +360,7 @@ pub fn read(path: &Path) -> Result<Record> {
 }
 
 /// [`read`] on text.
-fn parse(text: &str) -> Result<Record> {
+pub fn parse(text: &str) -> Result<Record> {
     // serde's message names the key and the line and column.
     let record: Record = serde_json::from_str(text)?;
     // serde fills a missing `Option` with None; the record writes every key, so a missing

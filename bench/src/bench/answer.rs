@@ -1,0 +1,156 @@
+//! The benchmark's answer, printed before its tables: per scene and face size, which fill
+//! method was fastest and by how much against six-pass and the floors (the thesis's question:
+//! six passes or one), and the trade-off ladder's Pareto front in one line with what the most
+//! accurate rung costs against `box` (the design's other question: cost against error).
+//! Everything comes from the record; nothing here measures.
+
+use super::record::{FloorRow, MethodRow, Record, RungRow};
+use specchio::render::floors::Floor;
+use specchio::render::methods::Method;
+
+/// The answer's lines: a heading, then per scene and face size a fill line and a ladder line
+/// (each left out when its part did not run).
+pub fn lines(record: &Record) -> Vec<String> {
+    let d = &record.device;
+    let mut out = vec![format!(
+        "the answer on {} ({}{}), median times:",
+        d.name,
+        d.short_name,
+        d.mesa_version
+            .as_deref()
+            .map_or(String::new(), |v| format!(" {v}")),
+    )];
+    for scene in &record.settings.scenes {
+        for &size in &record.settings.cube_sizes {
+            let fill = fill_line(record, scene, size);
+            let ladder = ladder_line(record, scene, size);
+            if fill.is_none() && ladder.is_none() {
+                continue;
+            }
+            out.push(format!("  {scene}, {size}² faces:"));
+            out.extend(fill.map(|l| format!("    fill:   {l}")));
+            out.extend(ladder.map(|l| format!("    ladder: {l}")));
+        }
+    }
+    out
+}
+
+/// `multiview is fastest: 41.2 ms a cube update, 0.78x six-pass (52.8 ms), 1.9x the floors`.
+fn fill_line(record: &Record, scene: &str, size: u32) -> Option<String> {
+    let rows: Vec<(&MethodRow, f64)> = record
+        .results
+        .iter()
+        .filter(|r| r.scene == scene && r.cube_size == size)
+        .filter_map(|r| Some((r, r.wall_ms?.median)))
+        .collect();
+    let &(fastest, ms) = rows.iter().min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let mut line = if rows.len() == 1 {
+        format!("{} alone: {ms:.1} ms a cube update", fastest.method)
+    } else {
+        format!("{} is fastest: {ms:.1} ms a cube update", fastest.method)
+    };
+    let six = rows.iter().find(|(r, _)| r.method == Method::SIX_PASS);
+    match six {
+        Some((_, six_ms)) if fastest.method != Method::SIX_PASS => {
+            line += &format!(", {:.2}x six-pass ({six_ms:.1} ms)", ms / six_ms);
+        }
+        Some(_) if rows.len() > 1 => line += " (every one-pass method is slower)",
+        _ => {}
+    }
+    if let Some(x) = fastest.efficiency.vs_geometry_plus_fill {
+        let floors = floor_ms(record, scene, size, Floor::Geometry)
+            .zip(floor_ms(record, scene, size, Floor::Fill))
+            .map(|(g, f)| g + f);
+        line += &format!(", {x:.2}x the floors");
+        if let Some(f) = floors {
+            line += &format!(" (geometry + fill {f:.1} ms)");
+        }
+    }
+    let identical = record
+        .accuracy
+        .iter()
+        .filter(|a| a.scene == scene && a.cube_size == size)
+        .map(|a| a.methods_identical)
+        .reduce(|a, b| a && b);
+    match identical {
+        Some(true) if rows.len() > 1 => line += "; same pixels",
+        Some(false) => line += "; the methods' pixels DIFFER (see the tables)",
+        _ => {}
+    }
+    Some(line)
+}
+
+fn floor_ms(record: &Record, scene: &str, size: u32, floor: Floor) -> Option<f64> {
+    record
+        .floors
+        .iter()
+        .find(|f: &&FloorRow| f.scene == scene && f.cube_size == size && f.floor == floor)
+        .and_then(|f| Some(f.wall_ms?.median))
+}
+
+/// `front plain 6.0 ms FLIP 0.300 → box 7.0 ms 0.200 → ray-query 9.0 ms 3.0e-4; most
+/// accurate: ray-query, 1.29x box's frame cost`, or, when one rung is the whole front, that
+/// it is both the cheapest and the most accurate. Costs are GPU ms per sensor frame.
+fn ladder_line(record: &Record, scene: &str, size: u32) -> Option<String> {
+    let rungs: Vec<(&RungRow, f64, f64)> = record
+        .tradeoff
+        .iter()
+        .filter(|r| r.scene == scene && r.cube_size == size)
+        .filter_map(|r| Some((r, r.frame_cost_ms?.median, r.sensor.as_ref()?.flip_mean?)))
+        .collect();
+    let mut front: Vec<&(&RungRow, f64, f64)> =
+        rungs.iter().filter(|p| p.0.pareto == Some(true)).collect();
+    front.sort_by(|a, b| a.1.total_cmp(&b.1));
+    if front.is_empty() {
+        return None;
+    }
+    let vs_box = |rung: &RungRow, ms: f64| match rungs.iter().find(|p| p.0.rung == "box") {
+        Some(&(_, box_ms, _)) if rung.rung != "box" => {
+            format!(", {:.2}x box's frame cost", ms / box_ms)
+        }
+        _ => String::new(),
+    };
+    // The most accurate rung is the front's last (dearest) point.
+    let &&(best, best_ms, best_flip) = front.last()?;
+    if front.len() == 1 {
+        return Some(format!(
+            "{} is both the cheapest and the most accurate rung: {best_ms:.1} ms, FLIP {}{}",
+            best.rung,
+            flip_text(best_flip),
+            vs_box(best, best_ms)
+        ));
+    }
+    let steps: Vec<String> = front
+        .iter()
+        .enumerate()
+        .map(|(i, (r, ms, flip))| {
+            let flip = if i == 0 {
+                format!("FLIP {}", flip_text(*flip))
+            } else {
+                flip_text(*flip)
+            };
+            format!("{} {ms:.1} ms {flip}", r.rung)
+        })
+        .collect();
+    let line = format!(
+        "front {}; most accurate: {}{}",
+        steps.join(" → "),
+        best.rung,
+        vs_box(best, best_ms)
+    );
+    Some(line)
+}
+
+/// A FLIP value with the digits it needs (errors span 0.3 to 0.0002).
+fn flip_text(v: f64) -> String {
+    if v == 0.0 {
+        "0".to_owned()
+    } else if v >= 0.01 {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
+#[cfg(test)]
+mod tests;
