@@ -6,6 +6,7 @@
 
 use std::ops::RangeInclusive;
 
+use specchio::render::lookups::TraceOrder;
 use specchio::render::methods::Method;
 use specchio::scene::{Lookup, MAX_FACE_SIZE_PX};
 
@@ -75,6 +76,14 @@ pub fn method(text: &str) -> Result<Method, String> {
 pub fn lookup(text: &str) -> Result<Lookup, String> {
     Lookup::parse(text.trim())
         .ok_or_else(|| format!("`{text}` is not a lookup: one of {}", Lookup::names()))
+}
+
+/// A `--trace-order` value.
+pub fn trace_order(text: &str) -> Result<TraceOrder, String> {
+    TraceOrder::ALL
+        .into_iter()
+        .find(|o| o.name() == text.trim())
+        .ok_or_else(|| format!("`{text}` is not a trace order: split or given"))
 }
 
 #[cfg(test)]

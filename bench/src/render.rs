@@ -82,7 +82,7 @@ pub struct Args {
     /// The order the tracing lookups (ray-query, distance-exact) hand their acceleration-
     /// structure builds: `split` (spatially coherent, the default) or `given` (the scene's own,
     /// to measure what the order is worth on a driver that keeps it: docs/accuracy.md).
-    #[arg(long, value_parser = trace_order, default_value = "split")]
+    #[arg(long, value_parser = crate::args::trace_order, default_value = "split")]
     trace_order: TraceOrder,
     /// Enable the Khronos validation layer; any message makes the command fail.
     #[arg(long)]
@@ -331,14 +331,6 @@ fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()
         }
     }
     Ok(())
-}
-
-/// A `--trace-order` value.
-fn trace_order(text: &str) -> std::result::Result<TraceOrder, String> {
-    TraceOrder::ALL
-        .into_iter()
-        .find(|o| o.name() == text.trim())
-        .ok_or_else(|| format!("`{text}` is not a trace order: split or given"))
 }
 
 /// `--sensor-outputs` reads the cube path's rays and the cube itself: a lookup without a cube

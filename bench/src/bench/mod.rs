@@ -46,6 +46,8 @@ pub struct Plan {
     pub warmup: u32,
     pub runs: u32,
     pub floors: bool,
+    /// The order the tracing rungs hand their acceleration-structure builds.
+    pub trace_order: specchio::render::lookups::TraceOrder,
 }
 
 /// A line of the table: on stdout, or on stderr when stdout carries a JSON document.
@@ -156,6 +158,7 @@ fn measure(
         warmup: settled.warmup,
         runs: settled.runs,
         floors: !args.no_floors,
+        trace_order: args.trace_order,
     };
     let dynamic_size = if sizes.contains(&512) {
         512
@@ -237,6 +240,7 @@ fn measure(
             runs: plan.runs,
             quick: args.quick,
             full: args.full,
+            trace_order: args.trace_order.name().to_owned(),
             dynamic_cube_size: dynamic_size,
             refresh: "every-frame (timing); on-change (dynamic)".to_owned(),
         },

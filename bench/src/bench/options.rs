@@ -127,6 +127,11 @@ pub struct Args {
     /// Skip the trade-off ladder (frame cost against error per lookup).
     #[arg(long)]
     pub no_tradeoff: bool,
+    /// The order the tracing rungs (ray-query, distance-exact) hand their acceleration-structure
+    /// builds: split (the default) or given (the scene's own, to measure what the order is
+    /// worth: docs/accuracy.md).
+    #[arg(long, value_parser = crate::args::trace_order, default_value = "split")]
+    pub trace_order: specchio::render::lookups::TraceOrder,
 }
 
 /// A rung's label, checked against the ladder.

@@ -2,21 +2,42 @@
 //! into the SVG as `<text>` and the viewer's default sans-serif draws it). One row per scene:
 //!
 //! - left, **the trade-off**: every rung as a labelled point, x = frame cost (GPU ms per
-//!   sensor frame, linear from 0), y = sensor mean FLIP against the reference, logarithmic
-//!   (the rungs span orders of magnitude in error, not in cost); one colour per face size, and that size's Pareto front
-//!   as a line through its points in order of cost;
+//!   sensor frame), y = sensor mean FLIP against the reference; one colour per face size,
+//!   that size's Pareto front as a line through its points in order of cost, filled markers
+//!   on the front, hollow ones off it;
 //! - right, **the fill methods**: each method's median cube update time per face size (the
 //!   methods give the same images, so only their times differ).
 //!
-//! Labels are placed greedily beside their points, trying a few positions until one overlaps
-//! neither an earlier label nor the panel's edge (the hand-written SVG before it overlapped
-//! labels).
+//! Every axis is logarithmic. The rungs span orders of magnitude in error, and on crowded
+//! scenes in cost too (ray-query and distance-exact cost 10 to 20 times the cube rungs, which
+//! a linear axis squashed into one corner). The methods panel is log for the same two
+//! reasons: its face sizes differ by orders of magnitude in fill work, and what one reads off
+//! it is a ratio ("multiview takes 0.8 of six-pass"), which a log axis shows as the same
+//! distance at every size. Ticks are round numbers that keep apart (`axis`).
+//!
+//! Labels never overlap one another, a marker or the plotting area's edge: `labels` places
+//! them, beside their points where there is room, further out with a leader line where not,
+//! and as a last resort lists them in the legend strip. The legend is that strip, drawn by
+//! us between the caption and the plot (`legend`): outside the plotting area, so it can cover
+//! no point and take no label's room, and of a height we compute (plotters' own legend sits
+//! inside the plot, where it covered points, at a size it only estimates).
+
+mod axis;
+mod labels;
+mod legend;
+
+use std::ops::Range;
 
 use anyhow::{anyhow, Result};
+use plotters::coord::combinators::{LogCoord, WithKeyPoints};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::record::{Record, RungRow};
+use axis::{log_range, log_ticks, tick};
+use labels::{Align, Label, Rect, Spot, MARKER_RADIUS_PX};
+use legend::{draw_legend, strip_height, strip_width, Entry, Swatch};
 
 const WIDTH: u32 = 1200;
 const ROW_HEIGHT: u32 = 420;
@@ -31,10 +52,30 @@ const PALETTE: [RGBColor; 6] = [
 /// Font sizes as plotters takes them (it draws text at 1/1.24 of the size given).
 const LABEL_PX: u32 = 16;
 const TITLE_PX: u32 = 19;
+/// The label font's size as drawn, which the label boxes are measured in.
+const LABEL_DRAWN_PX: f64 = LABEL_PX as f64 / 1.24;
 /// The title suffix of each scene's trade-off panel (the tests count panels by it).
 pub const TRADEOFF_TITLE: &str = "frame cost against sensor error";
+/// Air around each chart, and the room of the axes' tick labels (the methods panel's y labels
+/// are method names, wider than numbers).
+const MARGIN_PX: u32 = 12;
+const X_LABEL_AREA_PX: u32 = 50;
+const TRADEOFF_Y_LABEL_AREA_PX: u32 = 70;
+const METHODS_Y_LABEL_AREA_PX: u32 = 110;
+/// Room around the points on the log axes, as factors: the cost axis a little (a label that
+/// does not fit beside the outermost point goes to its other side), the error axis more (the
+/// labels above the worst point need a line).
+const COST_ROOM: f64 = 1.3;
+const ERROR_ROOM: f64 = 2.0;
+/// The least distance between neighbouring ticks: across, enough that the axis does not read
+/// as a ruler (and at least their labels' half widths and air, see `axis::log_ticks`); up, a
+/// line of text and air.
+const X_TICK_GAP_PX: f64 = 40.0;
+const Y_TICK_GAP_PX: f64 = 30.0;
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+type LogAxis = WithKeyPoints<LogCoord<f64>>;
+type LogChart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<LogAxis, LogAxis>>;
 
 /// plotters' errors carry the backend's type; the message is what matters here.
 fn drawing<E: std::fmt::Display>(e: E) -> anyhow::Error {
@@ -71,61 +112,138 @@ fn size_colour(sizes: &[u32], size: u32) -> RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
-/// A log axis's range covering `values` (positive ones) with some room.
-fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
-    let (lo, hi) = values
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
-    if lo > hi {
-        return 0.1..10.0;
-    }
-    lo / 2.0..hi * 2.0
+/// A chart's frame in `plot`: margins and the axes' label areas.
+fn frame<'a, 'b>(plot: &'a Area<'b>, y_label_px: u32) -> ChartBuilder<'a, 'a, SVGBackend<'b>> {
+    let mut builder = ChartBuilder::on(plot);
+    builder
+        .margin(MARGIN_PX)
+        .x_label_area_size(X_LABEL_AREA_PX)
+        .y_label_area_size(y_label_px);
+    builder
 }
 
-/// A short number for a tick label.
-fn tick(v: f64) -> String {
-    match v.abs() {
-        0.0 => "0".to_owned(),
-        a if a >= 100.0 => format!("{v:.0}"),
-        a if a >= 1.0 => format!("{v:.1}"),
-        a if a >= 0.01 => format!("{v:.2}"),
-        a if a >= 0.001 => format!("{v:.3}"),
-        _ => format!("{v:.0e}"),
-    }
+/// The plotting area's size inside [`frame`], in pixels, measured by plotters itself.
+fn plot_size(plot: &Area, y_label_px: u32) -> Result<(f64, f64)> {
+    let probe = frame(plot, y_label_px)
+        .build_cartesian_2d(0.0..1.0, 0.0..1.0)
+        .map_err(drawing)?;
+    let (w, h) = probe.plotting_area().dim_in_pixel();
+    Ok((f64::from(w), f64::from(h)))
+}
+
+/// A cost axis's ticks, their labels side by side.
+fn x_ticks(range: &Range<f64>, axis_px: f64) -> Vec<f64> {
+    let label_px = |v: f64| f64::from(labels::text_box(tick(v).len(), LABEL_DRAWN_PX).0);
+    log_ticks(range, axis_px, X_TICK_GAP_PX, label_px)
+}
+
+/// A chart with log axes over these ranges, ticked for its size.
+fn log_chart<'a, 'b>(
+    plot: &'a Area<'b>,
+    y_label_px: u32,
+    xs: &Range<f64>,
+    ys: &Range<f64>,
+) -> Result<LogChart<'a, 'b>> {
+    let (w, h) = plot_size(plot, y_label_px)?;
+    let x = (xs.clone().log_scale()).with_key_points(x_ticks(xs, w));
+    let y = (ys.clone().log_scale()).with_key_points(log_ticks(ys, h, Y_TICK_GAP_PX, |_| 0.0));
+    frame(plot, y_label_px)
+        .build_cartesian_2d(x, y)
+        .map_err(drawing)
+}
+
+/// A rung's point on the trade-off panel.
+struct Point {
+    size: u32,
+    cost_ms: f64,
+    /// The sensor's mean FLIP; 0 is drawn at the axis's floor.
+    flip: f64,
+    front: bool,
+    text: String,
+    colour: RGBColor,
+}
+
+/// The rungs with both a cost and an error, the Pareto front's first (their labels are placed
+/// first, nearest their points).
+fn trade_points(rungs: &[&RungRow], sizes: &[u32]) -> Vec<Point> {
+    let mut points: Vec<Point> = sizes
+        .iter()
+        .flat_map(|&size| rungs.iter().filter(move |r| r.cube_size == size))
+        .filter_map(|r| {
+            let flip = r.sensor.as_ref()?.flip_mean?;
+            let zero = if flip == 0.0 { " (FLIP 0)" } else { "" };
+            Some(Point {
+                size: r.cube_size,
+                cost_ms: r.frame_cost_ms?.median,
+                flip,
+                front: r.pareto == Some(true),
+                text: format!("{} {}²{zero}", r.rung, r.cube_size),
+                colour: size_colour(sizes, r.cube_size),
+            })
+        })
+        .collect();
+    points.sort_by_key(|p| !p.front);
+    points
 }
 
 fn tradeoff_panel(area: &Area, scene: &str, rungs: &[&RungRow], sizes: &[u32]) -> Result<()> {
     let title = format!("{scene}: {TRADEOFF_TITLE}");
-    // A point needs both a cost and an error; a FLIP of exactly 0 cannot sit on a log axis
-    // and is drawn at the axis's floor (its label says 0).
-    let points: Vec<(&RungRow, f64, f64)> = rungs
-        .iter()
-        .filter_map(|r| Some((*r, r.frame_cost_ms?.median, r.sensor.as_ref()?.flip_mean?)))
-        .collect();
+    let mut points = trade_points(rungs, sizes);
+    let body = area
+        .titled(&title, ("sans-serif", TITLE_PX))
+        .map_err(drawing)?;
     if points.is_empty() {
-        area.titled(&title, ("sans-serif", TITLE_PX))
-            .map_err(drawing)?;
-        area.draw(&Text::new(
-            "no trade-off point: the rungs' error was not measured (--no-accuracy), \
-             or no rung ran (--no-tradeoff)",
-            (20, 60),
-            ("sans-serif", LABEL_PX),
-        ))
-        .map_err(drawing)?;
-        return Ok(());
+        return body
+            .draw(&Text::new(
+                "no trade-off point: the rungs' error was not measured (--no-accuracy), \
+                 or no rung ran (--no-tradeoff)",
+                (20, 30),
+                ("sans-serif", LABEL_PX),
+            ))
+            .map_err(drawing);
     }
-    let x_max = points.iter().map(|p| p.1).fold(0.0, f64::max);
-    let ys = log_range(points.iter().map(|p| p.2));
-    // Headroom above the worst point: the legend sits there, clear of the points and labels.
-    let ys = ys.start..ys.end * 8.0;
-    let floor = ys.start;
-    let mut chart = ChartBuilder::on(area)
-        .caption(&title, ("sans-serif", TITLE_PX))
-        .margin(12)
-        .x_label_area_size(50)
-        .y_label_area_size(70)
-        .build_cartesian_2d(0.0..x_max * 1.15, ys.log_scale())
-        .map_err(drawing)?;
+    let xs = log_range(points.iter().map(|p| p.cost_ms), COST_ROOM);
+    let ys = log_range(points.iter().map(|p| p.flip), ERROR_ROOM);
+    // A FLIP of exactly 0 cannot sit on a log axis: it is drawn at the floor (its label says 0).
+    for p in &mut points {
+        p.flip = p.flip.max(ys.start);
+    }
+    let legend = tradeoff_legend(&points, sizes);
+    let width = strip_width(&body, TRADEOFF_Y_LABEL_AREA_PX);
+    // The labels with no room in the plot are listed in the strip, which then takes rows from
+    // the plot, where the labels are placed again: until the strip holds its list. A list
+    // that would take half the panel is drawn as it is, overflowing.
+    let mut strip_px = strip_height(&legend, width);
+    loop {
+        let (strip, plot) = body.split_vertically(strip_px);
+        let chart = log_chart(&plot, TRADEOFF_Y_LABEL_AREA_PX, &xs, &ys)?;
+        let spots = place_labels(&chart, &points);
+        let mut entries = legend.clone();
+        entries.extend(listed(&points, &spots));
+        let need = strip_height(&entries, width);
+        if need <= strip_px || need > body.dim_in_pixel().1 as i32 / 2 {
+            draw_tradeoff(area, chart, &points, &spots)?;
+            return draw_legend(&strip, &entries, TRADEOFF_Y_LABEL_AREA_PX);
+        }
+        strip_px = need;
+    }
+}
+
+/// Every point's label spot, in the plotting area.
+fn place_labels(chart: &LogChart, points: &[Point]) -> Vec<Spot> {
+    let labels: Vec<Label> = points
+        .iter()
+        .map(|p| Label {
+            at: chart.backend_coord(&(p.cost_ms, p.flip)),
+            size: labels::text_box(p.text.chars().count(), LABEL_DRAWN_PX),
+        })
+        .collect();
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    labels::place(&labels, Rect(xr.start, yr.start, xr.end, yr.end), &[])
+}
+
+/// The trade-off's mesh, leaders, fronts, markers and labels (leaders first, under the rest).
+fn draw_tradeoff(area: &Area, mut chart: LogChart, points: &[Point], spots: &[Spot]) -> Result<()> {
     chart
         .configure_mesh()
         .x_desc("GPU ms per sensor frame (cube update + sensor view)")
@@ -134,59 +252,86 @@ fn tradeoff_panel(area: &Area, scene: &str, rungs: &[&RungRow], sizes: &[u32]) -
         .y_label_formatter(&|v| tick(*v))
         .label_style(("sans-serif", LABEL_PX))
         .axis_desc_style(("sans-serif", LABEL_PX))
-        .light_line_style(WHITE.mix(0.0))
         .draw()
         .map_err(drawing)?;
-    let mut placed: Vec<Rect> = Vec::new();
-    for &size in sizes {
-        let colour = size_colour(sizes, size);
-        let here: Vec<(&RungRow, f64, f64)> = points
-            .iter()
-            .filter(|p| p.0.cube_size == size)
-            .map(|&(r, x, y)| (r, x, y.max(floor)))
-            .collect();
-        if here.is_empty() {
-            continue;
+    let (bx, by) = area.get_base_pixel();
+    for (p, spot) in points.iter().zip(spots) {
+        if let Spot::Leader(_, a, b) = *spot {
+            let path = [(a.0 - bx, a.1 - by), (b.0 - bx, b.1 - by)];
+            area.draw(&PathElement::new(path, p.colour.mix(0.5).stroke_width(1)))
+                .map_err(drawing)?;
         }
-        let mut front: Vec<(f64, f64)> = here
-            .iter()
-            .filter(|p| p.0.pareto == Some(true))
-            .map(|p| (p.1, p.2))
+    }
+    let mut sizes: Vec<u32> = points.iter().map(|p| p.size).collect();
+    sizes.sort_unstable();
+    sizes.dedup();
+    for size in sizes {
+        let here = || points.iter().filter(move |p| p.size == size);
+        let Some(colour) = here().next().map(|p| p.colour) else {
+            continue;
+        };
+        let mut front: Vec<(f64, f64)> = here()
+            .filter(|p| p.front)
+            .map(|p| (p.cost_ms, p.flip))
             .collect();
         front.sort_by(|a, b| a.0.total_cmp(&b.0));
         chart
             .draw_series(LineSeries::new(front, colour.stroke_width(2)))
-            .map_err(drawing)?
-            .label(format!("{size}² faces: Pareto front"))
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2)));
+            .map_err(drawing)?;
         chart
-            .draw_series(here.iter().map(|p| {
-                let style = if p.0.pareto == Some(true) {
+            .draw_series(here().map(|p| {
+                let style = if p.front {
                     colour.filled()
                 } else {
                     colour.stroke_width(2)
                 };
-                Circle::new((p.1, p.2), 5, style)
+                Circle::new((p.cost_ms, p.flip), MARKER_RADIUS_PX, style)
             }))
             .map_err(drawing)?;
-        for (r, x, y) in &here {
-            let zero = r.sensor.as_ref().and_then(|v| v.flip_mean) == Some(0.0);
-            let text = format!("{} {size}²{}", r.rung, if zero { " (FLIP 0)" } else { "" });
-            let at = chart.backend_coord(&(*x, *y));
-            let spot = place(&text, at, &placed, area_rect(area));
-            area_root_text(area, &text, spot.origin(), colour)?;
-            placed.push(spot);
+    }
+    for (p, spot) in points.iter().zip(spots) {
+        if let Some(r) = spot.rect() {
+            let (at, align) = r.text_anchor(chart.backend_coord(&(p.cost_ms, p.flip)));
+            area_root_text(area, &p.text, at, align, p.colour)?;
         }
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .label_font(("sans-serif", LABEL_PX))
-        .draw()
-        .map_err(drawing)?;
     Ok(())
+}
+
+/// The trade-off's legend: each face size's front, and the hollow marker.
+fn tradeoff_legend(points: &[Point], sizes: &[u32]) -> Vec<Entry> {
+    let mut entries: Vec<Entry> = sizes
+        .iter()
+        .filter(|&&s| points.iter().any(|p| p.size == s))
+        .map(|&s| {
+            let text = format!("{s}² faces: Pareto front");
+            Entry::new(Swatch::Front, text, size_colour(sizes, s))
+        })
+        .collect();
+    if points.iter().any(|p| !p.front) {
+        let grey = PALETTE[5];
+        entries.push(Entry::new(Swatch::Hollow, "off the front".to_owned(), grey));
+    }
+    entries
+}
+
+/// The labels that found no room, as entries after a heading (none when all found room).
+fn listed(points: &[Point], spots: &[Spot]) -> Vec<Entry> {
+    let out: Vec<Entry> = points
+        .iter()
+        .zip(spots)
+        .filter(|(_, s)| **s == Spot::Listed)
+        .map(|(p, _)| Entry::new(Swatch::None, p.text.clone(), p.colour))
+        .collect();
+    if out.is_empty() {
+        return out;
+    }
+    let heading = Entry::new(
+        Swatch::None,
+        "no room beside their points:".to_owned(),
+        BLACK,
+    );
+    std::iter::once(heading).chain(out).collect()
 }
 
 fn methods_panel(area: &Area, scene: &str, record: &Record) -> Result<()> {
@@ -202,14 +347,22 @@ fn methods_panel(area: &Area, scene: &str, record: &Record) -> Result<()> {
             Some((i, r.cube_size, r.wall_ms?.median))
         })
         .collect();
-    let max = rows.iter().map(|r| r.2).fold(0.0, f64::max);
+    let body = area
+        .titled(&title, ("sans-serif", TITLE_PX))
+        .map_err(drawing)?;
+    let legend: Vec<Entry> = sizes
+        .iter()
+        .filter(|&&s| rows.iter().any(|r| r.1 == s))
+        .map(|&s| Entry::new(Swatch::Dot, format!("{s}² faces"), size_colour(sizes, s)))
+        .collect();
+    let strip_px = strip_height(&legend, strip_width(&body, METHODS_Y_LABEL_AREA_PX));
+    let (strip, plot) = body.split_vertically(strip_px);
     let n = methods.len().max(1);
-    let mut chart = ChartBuilder::on(area)
-        .caption(&title, ("sans-serif", TITLE_PX))
-        .margin(12)
-        .x_label_area_size(50)
-        .y_label_area_size(110)
-        .build_cartesian_2d(0.0..(max * 1.15).max(1e-3), -0.5..n as f64 - 0.5)
+    let xs = log_range(rows.iter().map(|r| r.2), COST_ROOM);
+    let (w, _) = plot_size(&plot, METHODS_Y_LABEL_AREA_PX)?;
+    let x = (xs.clone().log_scale()).with_key_points(x_ticks(&xs, w));
+    let mut chart = frame(&plot, METHODS_Y_LABEL_AREA_PX)
+        .build_cartesian_2d(x, -0.5..n as f64 - 0.5)
         .map_err(drawing)?;
     chart
         .configure_mesh()
@@ -233,103 +386,34 @@ fn methods_panel(area: &Area, scene: &str, record: &Record) -> Result<()> {
         // Sizes side by side within a method's row, so that equal times do not hide each other.
         let dy = (k as f64 - (sizes.len() as f64 - 1.0) / 2.0) * 0.18;
         chart
-            .draw_series(
-                rows.iter()
-                    .filter(|r| r.1 == size)
-                    .map(|&(i, _, ms)| Circle::new((ms, i as f64 + dy), 5, colour.filled())),
-            )
-            .map_err(drawing)?
-            .label(format!("{size}² faces"))
-            .legend(move |(x, y)| Circle::new((x + 9, y), 5, colour.filled()));
+            .draw_series(rows.iter().filter(|r| r.1 == size).map(|&(i, _, ms)| {
+                Circle::new((ms, i as f64 + dy), MARKER_RADIUS_PX, colour.filled())
+            }))
+            .map_err(drawing)?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::LowerRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .label_font(("sans-serif", LABEL_PX))
-        .draw()
-        .map_err(drawing)?;
-    Ok(())
+    draw_legend(&strip, &legend, METHODS_Y_LABEL_AREA_PX)
 }
 
-/// A label's box in pixels: left, top, right, bottom.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Rect(i32, i32, i32, i32);
-
-impl Rect {
-    fn overlaps(&self, o: &Rect) -> bool {
-        self.0 < o.2 && o.0 < self.2 && self.1 < o.3 && o.1 < self.3
-    }
-    fn inside(&self, o: &Rect) -> bool {
-        self.0 >= o.0 && self.1 >= o.1 && self.2 <= o.2 && self.3 <= o.3
-    }
-    /// Where the text is drawn (its top-left corner).
-    fn origin(&self) -> (i32, i32) {
-        (self.0, self.1)
-    }
-}
-
-fn area_rect(area: &Area) -> Rect {
-    let (x, y) = area.get_base_pixel();
-    let (w, h) = area.dim_in_pixel();
-    Rect(x, y, x + w as i32, y + h as i32)
-}
-
-/// The first of a few spots around the point `at` whose box overlaps no `placed` one and lies
-/// within `bounds` (the first spot when none does). The width is estimated: about 0.6 em a
-/// character in a sans-serif font.
-fn place(text: &str, at: (i32, i32), placed: &[Rect], bounds: Rect) -> Rect {
-    let w = (text.chars().count() as f64 * f64::from(LABEL_PX) * 0.6).ceil() as i32;
-    let h = LABEL_PX as i32 + 2;
-    let (x, y) = at;
-    let spots = [
-        (x + 8, y - h / 2),
-        (x + 8, y - h - 4),
-        (x + 8, y + 4),
-        (x - w - 8, y - h / 2),
-        (x - w - 8, y - h - 4),
-        (x - w - 8, y + 4),
-        (x - w / 2, y - h - 8),
-        (x - w / 2, y + 8),
-    ];
-    let rect = |(l, t): (i32, i32)| Rect(l, t, l + w, t + h);
-    spots
-        .iter()
-        .map(|&s| rect(s))
-        .find(|r| r.inside(&bounds) && placed.iter().all(|p| !p.overlaps(r)))
-        .unwrap_or_else(|| rect(spots[0]))
-}
-
-/// Draws `text` with its top-left corner at the absolute pixel `at`.
-fn area_root_text(area: &Area, text: &str, at: (i32, i32), colour: RGBColor) -> Result<()> {
+/// Draws `text` with the top of its `align` end at the absolute pixel `at`.
+fn area_root_text(
+    area: &Area,
+    text: &str,
+    at: (i32, i32),
+    align: Align,
+    colour: RGBColor,
+) -> Result<()> {
     let (bx, by) = area.get_base_pixel();
-    let style = TextStyle::from(("sans-serif", LABEL_PX).into_font()).color(&colour);
+    let h = match align {
+        Align::Left => HPos::Left,
+        Align::Centre => HPos::Center,
+        Align::Right => HPos::Right,
+    };
+    let style = TextStyle::from(("sans-serif", LABEL_PX).into_font())
+        .color(&colour)
+        .pos(Pos::new(h, VPos::Top));
     area.draw(&Text::new(text.to_owned(), (at.0 - bx, at.1 - by), style))
         .map_err(drawing)
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn labels_avoid_each_other_and_the_edges() {
-        let bounds = Rect(0, 0, 400, 300);
-        let first = place("box 64²", (100, 100), &[], bounds);
-        assert!(first.0 > 100, "right of the point first: {first:?}");
-        // A second point at the same spot takes another place.
-        let second = place("plain 64²", (100, 100), &[first], bounds);
-        assert!(!second.overlaps(&first), "{first:?} {second:?}");
-        // Near the right edge the label goes to the left of the point.
-        let left = place("ray-query 512²", (395, 100), &[], bounds);
-        assert!(left.2 < 395 && left.inside(&bounds), "{left:?}");
-    }
-
-    #[test]
-    fn log_ranges_cover_positive_values_only() {
-        let r = log_range([0.0, 0.01, 1.0, f64::NAN].into_iter());
-        assert_eq!(r, 0.005..2.0);
-        assert_eq!(log_range(std::iter::empty()), 0.1..10.0);
-    }
-}
+mod tests;

@@ -76,6 +76,8 @@ pub struct Settings {
     pub quick: bool,
     /// `--full`'s defaults.
     pub full: bool,
+    /// The tracing rungs' build order (`--trace-order`: split or given).
+    pub trace_order: String,
     pub dynamic_cube_size: u32,
     pub refresh: String,
 }

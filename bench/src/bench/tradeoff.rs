@@ -120,7 +120,7 @@ pub fn measure(
 ) -> Result<Vec<RungRow>> {
     let mut renderers = rungs
         .iter()
-        .map(|r| renderer(device, scene, r, size))
+        .map(|r| renderer(device, scene, r, size, plan))
         .collect::<Result<Vec<_>>>()?;
     let mut reports: Vec<Vec<FrameReport>> = vec![Vec::new(); rungs.len()];
     let views = Readback {
@@ -175,7 +175,13 @@ pub fn measure(
 }
 
 /// A six-pass renderer updating the whole cube every frame, with the rung's settings.
-fn renderer(device: &Arc<Device>, scene: &Scene, rung: &Rung, size: u32) -> Result<Renderer> {
+fn renderer(
+    device: &Arc<Device>,
+    scene: &Scene,
+    rung: &Rung,
+    size: u32,
+    plan: &Plan,
+) -> Result<Renderer> {
     let mut scene = scene.clone();
     scene.mirror.lookup = rung.lookup;
     (rung.configure)(&mut scene);
@@ -184,6 +190,7 @@ fn renderer(device: &Arc<Device>, scene: &Scene, rung: &Rung, size: u32) -> Resu
         method: Method::SIX_PASS,
         refresh: Some(RefreshPolicy::EveryFrame),
         lookup: Some(rung.lookup),
+        trace_order: plan.trace_order,
         ..Default::default()
     };
     Renderer::new(device, scene, &options)
