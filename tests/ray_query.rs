@@ -208,7 +208,7 @@ fn symmetric_about_the_mirror(s: &Scene) -> bool {
 }
 
 /// The order the builds are handed their leaves in changes the tree, not what a ray meets: the
-/// images with the split order (`vk::build_order`) equal those with the scene's own order, but
+/// images with the split order (`render::lookups::build_order`) equal those with the scene's own order, but
 /// for ties, where a ray meets two surfaces at the same distance and the traversal order picks
 /// the side. A tie is a pixel whose new colour a neighbour had before (an object standing on
 /// the floor or against a wall, boxes touching), or a sensor pixel on the image's diagonals

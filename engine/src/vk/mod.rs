@@ -10,7 +10,6 @@
 //! it hands what the GPU may still use to `frames::FrameRing::defer`, the deletion queue.
 
 pub mod acceleration;
-pub mod build_order;
 pub mod commands;
 pub mod descriptors;
 pub mod device;

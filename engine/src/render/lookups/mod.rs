@@ -9,6 +9,8 @@
 //! there); everything else about it lives in its module here. Adding a lookup is a variant of
 //! `Lookup`, its module and shaders, and one line in [`REGISTRY`].
 
+/// The order the tracing lookups hand their acceleration-structure builds their leaves in.
+pub mod build_order;
 mod cube;
 mod distance;
 mod distance_exact;
