@@ -207,13 +207,8 @@ fn render_writes_every_promised_file() {
     assert_eq!(json["settings"]["cube"]["face_size_px"], 16);
     assert!(json["device"]["name"].is_string());
     assert!(json["device"]["driver_info"].is_string());
-    // No temporary files are left behind.
-    let leftovers: Vec<_> = std::fs::read_dir(&out)
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .filter(|e| e.file_name().to_string_lossy().contains(".partial"))
-        .collect();
-    assert!(leftovers.is_empty());
+    // No staging folder is left behind.
+    assert!(common::staging_folders(&out).is_empty());
     std::fs::remove_dir_all(&out).unwrap();
 }
 

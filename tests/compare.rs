@@ -7,6 +7,8 @@ use std::process::{Command, Output};
 use specchio::image::RgbaImage;
 use specchio::output::write_exr;
 
+mod common;
+
 fn specchio(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_specchio"))
         .args(args)
@@ -93,7 +95,10 @@ fn json_reports_known_answers_and_the_heatmap_has_the_image_size() {
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert!(names.iter().all(|n| !n.contains(".partial")), "{names:?}");
+    assert!(
+        names.iter().all(|n| !common::names_a_staging_folder(n)),
+        "{names:?}"
+    );
 
     // Identical images: PSNR is null in JSON (never inf) and flagged infinite.
     let json = json_of(&specchio(&["compare", s(&b), s(&b), "--json"]));
@@ -208,7 +213,10 @@ fn an_unwritable_heatmap_is_named_as_the_user_gave_it() {
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{heat:?} must fail");
         assert!(stderr.contains(s(&heat)), "must name {heat:?}:\n{stderr}");
-        assert!(!stderr.contains("partial"), "names a temporary:\n{stderr}");
+        assert!(
+            !common::names_a_staging_folder(&stderr),
+            "names a temporary:\n{stderr}"
+        );
         assert!(out.stdout.is_empty(), "no report on error");
         let mut names: Vec<String> = std::fs::read_dir(&dir)
             .unwrap()

@@ -95,7 +95,10 @@ fn a_failed_render_leaves_nothing_behind() {
         let stderr = String::from_utf8_lossy(&result.stderr);
         assert!(!result.status.success(), "{out} {extra:?} must fail");
         assert!(!stderr.contains("panicked"), "{stderr}");
-        assert!(!stderr.contains("partial"), "names a temporary:\n{stderr}");
+        assert!(
+            !common::names_a_staging_folder(&stderr),
+            "names a temporary:\n{stderr}"
+        );
         for m in must_say {
             assert!(stderr.contains(&m), "{out}: must say {m}:\n{stderr}");
         }
@@ -170,9 +173,12 @@ fn a_render_replaces_an_earlier_render_as_a_whole() {
     let beside: Vec<_> = std::fs::read_dir(parent)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.starts_with(&format!(".{name}.partial")))
+        .filter(|n| n.starts_with(&format!(".{name}.")))
         .collect();
-    assert!(beside.is_empty(), "{beside:?}");
+    assert!(
+        beside.is_empty(),
+        "no staging folder left beside it: {beside:?}"
+    );
     std::fs::remove_dir_all(&out).unwrap();
 }
 

@@ -105,6 +105,7 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    specchio::output::survive_file_size_limit();
     add_project_drivers();
     let trim = tune_allocator();
     // Read back by the subcommands that report their environment.

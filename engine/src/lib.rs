@@ -3,6 +3,8 @@
 //! Module map (details in `docs/architecture.md`):
 //! - [`scene`]: the TOML scene format, its validation, the resolved scene the renderer draws,
 //!   its state at a time and its cameras (no Vulkan);
+//! - [`files`]: the one reader of input files (regular files only, each within a budget) and
+//!   the record of what was read, by identity, which no output may replace;
 //! - [`image`]: the CPU image type shared by the renderer's readback, the reference and the
 //!   metrics;
 //! - [`vk`]: the Vulkan layer, one module per concept (instance, device, memory, image,
@@ -16,6 +18,7 @@
 //! - [`metrics`]: image-error metrics (RMSE, PSNR, relMSE, FLIP) and the FLIP heatmap;
 //! - [`output`]: EXR, PNG and JSON files, written atomically.
 
+pub mod files;
 pub mod image;
 pub mod metrics;
 pub mod output;

@@ -27,6 +27,32 @@ pub fn specchio(args: &[&str]) -> std::process::Output {
         .expect("the specchio binary runs")
 }
 
+/// Whether `text` names a staging folder (`.NAME.specchio-` and 32 hex digits,
+/// engine/src/output/stage.rs): errors must name the user's path, never a staging one.
+pub fn names_a_staging_folder(text: &str) -> bool {
+    text.match_indices(".specchio-").any(|(i, m)| {
+        let rest = &text.as_bytes()[i + m.len()..];
+        rest.len() >= 32 && rest[..32].iter().all(u8::is_ascii_hexdigit)
+    })
+}
+
+/// The staging folders of `target` beside it (a run leaves none once it ends, however it ends
+/// but SIGKILL). Only `target`'s own: tests running beside this one stage theirs in the same
+/// temporary folder.
+pub fn staging_folders(target: &Path) -> Vec<String> {
+    let name = target.file_name().unwrap().to_string_lossy().into_owned();
+    let prefix = format!(".{name}.specchio-");
+    std::fs::read_dir(target.parent().unwrap())
+        .map(|entries| {
+            entries
+                .filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.starts_with(&prefix) && names_a_staging_folder(n))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// A fresh, absent path in the temporary directory, unique to this test process, removed
 /// when the test is done with it (see [`Scratch`]).
 pub fn temp_dir(name: &str) -> Scratch {

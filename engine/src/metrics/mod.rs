@@ -22,9 +22,9 @@ pub mod percentile;
 
 use std::path::{Path, PathBuf};
 
+use crate::files::{read_regular_file, FileError};
 use crate::image::RgbaImage;
 use crate::output::{linear_to_srgb, OutputError};
-use crate::scene::files::{read_regular_file, FileError};
 use crate::scene::TextureData;
 
 pub use heatmap::{colour_map, heatmap_rgb8, write_heatmap, NOT_COMPARED_RGB8};

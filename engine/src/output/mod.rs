@@ -5,10 +5,12 @@
 //! failed or interrupted write never leaves a half-written file, and every error names the
 //! user's path, never the hidden temporary one.
 
+mod replace;
+mod stage;
+mod sys;
 mod transaction;
 
-use std::fs;
-use std::io::BufWriter;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, Vec2, WritableImage};
@@ -55,12 +57,45 @@ pub enum OutputError {
     },
     #[error("cannot write {path}: it names no file or folder")]
     NoName { path: PathBuf },
+    #[error("cannot write {path}: its name is not valid UTF-8")]
+    NotUtf8 { path: PathBuf },
+    #[error(
+        "{path} was replaced, but {} kept in {kept}: nothing was deleted; look through it \
+         and remove it",
+        written_meanwhile(.entries)
+    )]
+    KeptAside {
+        path: PathBuf,
+        entries: Vec<String>,
+        kept: PathBuf,
+    },
+    #[error(
+        "{path} held what no earlier output wrote once it was swapped out, and it could not be \
+         swapped back: the earlier folder is in {at}, move it back by hand"
+    )]
+    StuckAside {
+        path: PathBuf,
+        at: PathBuf,
+        source: std::io::Error,
+    },
     #[error("cannot write {path}: it is the input {input}; the output must go to another file")]
     IsAnInput { path: PathBuf, input: PathBuf },
     #[error("{path} is given for two outputs of one command")]
     Twice { path: PathBuf },
     #[error("{path} is not among this command's outputs (a bug in the caller)")]
     NotStaged { path: PathBuf },
+}
+
+/// What appeared in an earlier output while it was replaced, in words.
+fn written_meanwhile(entries: &[String]) -> String {
+    let (count, verb) = match entries.len() {
+        1 => ("1 entry".to_owned(), "is"),
+        n => (format!("{n} entries"), "are"),
+    };
+    format!(
+        "{count} written into the earlier output while it was being replaced ({}) {verb}",
+        entries.join(", ")
+    )
 }
 
 /// An I/O failure is reported as one, naming `path`; anything else the encoder says is an
@@ -103,7 +138,7 @@ pub(crate) const EXR_ENCODING: Encoding = Encoding {
 impl Transaction {
     /// Linear RGBA, 32-bit float, as OpenEXR at `path` (staged in this transaction).
     pub fn write_exr(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
-        let to = self.path_for(path)?;
+        let file = self.create(path)?;
         let w = image.width as usize;
         let channels = SpecificChannels::rgba(|Vec2(x, y)| {
             let p: [f32; 4] = image.pixels[y * w + x];
@@ -111,7 +146,7 @@ impl Transaction {
         });
         Image::from_encoded_channels((w, image.height as usize), EXR_ENCODING, channels)
             .write()
-            .to_file(&to)
+            .to_buffered(BufWriter::new(file))
             .map_err(|e| exr_error(path, e))
     }
 
@@ -135,11 +170,7 @@ impl Transaction {
         height: u32,
         rgb8: &[u8],
     ) -> Result<(), OutputError> {
-        let to = self.path_for(path)?;
-        let file = fs::File::create(&to).map_err(|source| OutputError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let file = self.create(path)?;
         let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
@@ -165,11 +196,24 @@ impl Transaction {
 
     /// Bytes as they are (CSV, SVG, ...).
     pub fn write_bytes(&self, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-        let to = self.path_for(path)?;
-        fs::write(&to, bytes).map_err(|source| OutputError::Io {
-            path: path.to_owned(),
-            source,
-        })
+        let mut file = self.create(path)?;
+        file.write_all(bytes)
+            .and_then(|()| file.flush())
+            .map_err(|source| OutputError::Io {
+                path: path.to_owned(),
+                source,
+            })
+    }
+}
+
+/// Makes a write beyond a file-size limit (`ulimit -f`) fail with `File too large` instead of
+/// killing the process with SIGXFSZ, so that the output transaction removes what it wrote, as
+/// after any other error. Call it once at start-up, before other threads exist.
+pub fn survive_file_size_limit() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: sets the disposition of one signal; called before other threads start.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
     }
 }
 
@@ -219,5 +263,7 @@ pub fn linear_to_srgb(v: f32) -> f32 {
     }
 }
 
+#[cfg(test)]
+mod protocol_tests;
 #[cfg(test)]
 mod tests;

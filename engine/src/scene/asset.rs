@@ -4,7 +4,7 @@
 //! for OBJ, a JSON path such as `accessors[2].count` for glTF. The scene loader wraps these in
 //! [`super::SceneError::Asset`], which adds the scene file, line and field that named the asset.
 
-use super::files::FileError;
+use crate::files::FileError;
 
 #[derive(Debug, thiserror::Error)]
 pub enum AssetError {

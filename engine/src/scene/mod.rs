@@ -17,7 +17,6 @@ mod anim;
 mod asset;
 pub mod camera;
 mod error;
-pub(crate) mod files;
 mod fixed;
 mod format;
 pub(crate) mod generate;
@@ -26,13 +25,13 @@ mod mesh;
 pub mod state;
 mod texture;
 
-pub use anim::{Animation, Repeat};
-pub use asset::AssetError;
-pub use error::{Location, SceneError};
-pub use files::{
+pub use crate::files::{
     read_regular_file, FileError, MAX_GLTF_BUFFER_BYTES, MAX_MESH_FILE_BYTES, MAX_SCENE_BYTES,
     MAX_TEXTURE_FILE_BYTES,
 };
+pub use anim::{Animation, Repeat};
+pub use asset::AssetError;
+pub use error::{Location, SceneError};
 pub use load::{load, load_str};
 pub use mesh::{Mesh, MAX_MESH_INDICES, MAX_MESH_VERTICES};
 pub use texture::{TextureData, MAX_TEXTURE_SIZE_PX};

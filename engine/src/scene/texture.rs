@@ -6,7 +6,7 @@ use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 use super::asset::AssetError;
-use super::files::{read_regular_file, MAX_TEXTURE_FILE_BYTES};
+use crate::files::{read_regular_file, MAX_TEXTURE_FILE_BYTES};
 
 /// Largest texture side accepted (texels).
 pub const MAX_TEXTURE_SIZE_PX: u32 = 8192;

@@ -22,7 +22,7 @@ pub fn write_channels(
     (width, height): (u32, u32),
     channels: Vec<(&str, Samples)>,
 ) -> Result<(), OutputError> {
-    let to = out.path_for(path)?;
+    let file = out.create(path)?;
     let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
         .into_iter()
         .map(|(name, samples)| {
@@ -39,7 +39,7 @@ pub fn write_channels(
         AnyChannels::sort(list),
     )
     .write()
-    .to_file(&to)
+    .to_buffered(std::io::BufWriter::new(file))
     .map_err(|e| exr_error(path, e))
 }
 

@@ -28,11 +28,11 @@ use toml::de::DeTable;
 
 use super::anim::Animation;
 use super::error::SceneError;
-use super::files::{read_regular_file, MAX_SCENE_BYTES};
 use super::format::*;
 use super::generate::Surroundings;
 use super::mesh::Mesh;
 use super::Scene;
+use crate::files::{read_regular_file, MAX_SCENE_BYTES};
 use locate::Locator;
 use objects::MeshStore;
 

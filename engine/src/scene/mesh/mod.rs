@@ -9,7 +9,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 
 use super::asset::AssetError;
-use super::files::{read_regular_file, MAX_MESH_FILE_BYTES};
+use crate::files::{read_regular_file, MAX_MESH_FILE_BYTES};
 
 mod gltf;
 mod obj;
@@ -303,7 +303,7 @@ mod tests {
 #[cfg(test)]
 mod file_tests {
     use super::*;
-    use crate::scene::files::FileError;
+    use crate::files::FileError;
 
     /// The loaders read through the regular-file rule: a directory is named as one, not as
     /// a missing file or an OS error.

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 
 use gltf::json::Root;
 
+use crate::files::{read_regular_file, MAX_GLTF_BUFFER_BYTES};
 use crate::scene::asset::AssetError;
-use crate::scene::files::{read_regular_file, MAX_GLTF_BUFFER_BYTES};
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
 const CHUNK_JSON: u32 = 0x4E4F_534A;

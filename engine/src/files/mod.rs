@@ -1,9 +1,13 @@
-//! The one way scene-related files are read: the scene file, meshes, glTF buffers, textures.
+//! The one way input files are read: the scene file, meshes, glTF buffers, textures, images
+//! to compare, baselines and landmark files.
 //!
-//! Every reader goes through [`read_regular_file`], so the same three rules hold everywhere:
+//! Every reader goes through [`read_regular_file`], so the same rules hold everywhere:
 //! only regular files are opened (a FIFO or a character device would block or never end, a
 //! directory is a user's slip), the bytes read are bounded by a stated budget, and every
-//! refusal says what the path is and what is allowed.
+//! refusal says what the path is and what is allowed. And every file read is recorded by
+//! identity ([`identity`]): no output of the command may replace it.
+
+pub mod identity;
 
 use std::fs::{File, Metadata};
 use std::io::{self, Read};
@@ -76,7 +80,9 @@ pub fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> 
     let meta = std::fs::metadata(path).map_err(io_err)?;
     check_regular(path, &meta, limit)?;
     let file = File::open(path).map_err(io_err)?;
-    check_regular(path, &file.metadata().map_err(io_err)?, limit)?;
+    let opened = file.metadata().map_err(io_err)?;
+    check_regular(path, &opened, limit)?;
+    identity::record(path, &opened);
     let mut bytes = Vec::with_capacity(meta.len() as usize);
     file.take(limit + 1)
         .read_to_end(&mut bytes)

@@ -1,0 +1,220 @@
+//! A run's staging folder: where one output is written before it is placed.
+//!
+//! `.NAME.specchio-HEX` beside the target `NAME`, where `HEX` is 128 random bits: made with an
+//! exclusive `mkdir` (a name that exists, a planted link included, is never taken over), never
+//! reused. It holds the output under its final name, and [`TOKEN`], a file whose text repeats
+//! `HEX` and which the run keeps locked (`flock`) for as long as it lives. That is the proof of
+//! ownership: a later run removes a staging folder only when it finds the token with the
+//! folder's own `HEX` in it and can take its lock, that is, when the run that made it is gone
+//! (killed before it could clean up). A name that merely looks like a staging folder, a link of
+//! that shape, or a folder whose run still lives (in whatever PID namespace) is never touched.
+
+use std::fs::{self, File};
+use std::io::{self, Read, Write};
+use std::path::{Path, PathBuf};
+
+use super::sys;
+
+/// The file in every staging folder that names it and carries its run's lock.
+pub const TOKEN: &str = ".specchio-stage";
+/// Between the target's name and the random part, in a staging folder's name.
+const INFIX: &str = ".specchio-";
+/// The random part: 128 bits as 32 lower-case hex digits.
+const HEX_DIGITS: usize = 32;
+/// The most bytes of the target's name a staging folder's name repeats.
+const NAME_BYTES: usize = 160;
+
+/// One output's staging folder, owned by this run: dropped, it is removed with everything in
+/// it (unless [`Stage::keep`] was called because it holds what must not be lost).
+#[derive(Debug)]
+pub struct Stage {
+    dir: PathBuf,
+    /// The token file, open and locked: closing it (this run ending, however) frees the lock.
+    lock: Option<File>,
+    keep: bool,
+}
+
+impl Stage {
+    /// Makes a fresh staging folder for the target `name` in `parent`.
+    pub fn create(parent: &Path, name: &str) -> io::Result<Stage> {
+        let hex = random_hex()?;
+        let dir = parent.join(format!(".{}{INFIX}{hex}", short(name)));
+        fs::create_dir(&dir)?;
+        let mut stage = Stage {
+            dir,
+            lock: None,
+            keep: false,
+        };
+        // Lock before the text is written: a sweeper that reads a matching token always finds
+        // it locked while this run lives.
+        let mut token = sys::create_new(&stage.dir.join(TOKEN))?;
+        if !sys::try_lock(&token).unwrap_or(true) {
+            return Err(io::Error::other(
+                "a new staging token is locked by another file",
+            ));
+        }
+        token.write_all(token_text(&hex).as_bytes())?;
+        stage.lock = Some(token);
+        Ok(stage)
+    }
+
+    /// The staging folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Leaves the folder on disk when dropped (it holds a user's files the run could not put
+    /// back; the error that says so names it).
+    pub fn keep(&mut self) {
+        self.keep = true;
+    }
+}
+
+impl Drop for Stage {
+    fn drop(&mut self) {
+        if !self.keep {
+            // Best effort: a folder that will not go is swept by a later run once this one's
+            // lock is free. `remove_dir_all` does not follow links.
+            let _ = fs::remove_dir_all(&self.dir);
+        }
+        self.lock.take();
+    }
+}
+
+/// Removes the staging folders for `name` in `parent` whose run is gone: each must be a real
+/// folder (not a link) named `.NAME.specchio-HEX`, hold a [`TOKEN`] (not a link) whose text
+/// names the same `HEX`, and have that token's lock free. Best effort: what cannot be read or
+/// removed is left.
+pub fn sweep_dead(parent: &Path, name: &str) {
+    let Ok(entries) = fs::read_dir(parent) else {
+        return;
+    };
+    let prefix = format!(".{}{INFIX}", short(name));
+    for entry in entries.flatten() {
+        let file_name = entry.file_name();
+        let Some(hex) = file_name.to_str().and_then(|n| n.strip_prefix(&prefix)) else {
+            continue;
+        };
+        if !is_hex(hex) || !entry.file_type().is_ok_and(|t| t.is_dir()) {
+            continue;
+        }
+        let dir = entry.path();
+        if let Ok(Some(_lock)) = dead_token(&dir, hex) {
+            // Removed while we hold the dead run's lock, so two sweepers cannot both start.
+            let _ = fs::remove_dir_all(&dir);
+        }
+    }
+}
+
+/// The token of `dir`, locked by us, when it names `hex` and its run is gone.
+fn dead_token(dir: &Path, hex: &str) -> io::Result<Option<File>> {
+    let mut token = sys::open_no_follow(&dir.join(TOKEN))?;
+    if !token.metadata()?.is_file() {
+        return Ok(None);
+    }
+    let mut text = String::new();
+    (&mut token).take(256).read_to_string(&mut text)?;
+    if text != token_text(hex) {
+        return Ok(None);
+    }
+    Ok(sys::try_lock(&token)?.then_some(token))
+}
+
+/// At most [`NAME_BYTES`] of the target's name, so that a staging folder's name stays within
+/// the 255 bytes file systems allow (two targets sharing a long prefix then share a sweep,
+/// which is safe: a sweep removes only what dead runs provably made).
+fn short(name: &str) -> &str {
+    let mut end = name.len().min(NAME_BYTES);
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    &name[..end]
+}
+
+fn token_text(hex: &str) -> String {
+    format!("specchio staging folder {hex}: its run holds this file locked\n")
+}
+
+fn is_hex(s: &str) -> bool {
+    s.len() == HEX_DIGITS && s.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'))
+}
+
+/// 128 bits from the operating system's random source, as hex.
+fn random_hex() -> io::Result<String> {
+    let mut bytes = [0u8; HEX_DIGITS / 2];
+    getrandom::fill(&mut bytes).map_err(|e| io::Error::other(e.to_string()))?;
+    Ok(bytes.iter().map(|b| format!("{b:02x}")).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("specchio-stage-{}-{name}", std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// A live stage is never swept, a dead one is, and nothing merely shaped like one is:
+    /// a folder of that name without a token, with another stage's token, or a link.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn only_a_dead_runs_own_stage_is_swept() {
+        let d = scratch("sweep");
+        let live = Stage::create(&d, "out").unwrap();
+        let dead = Stage::create(&d, "out").unwrap();
+        let dead_dir = dead.dir().to_owned();
+        // A killed run: its folder stays, its lock goes (the descriptor is closed).
+        let mut dead = dead;
+        dead.keep();
+        drop(dead);
+        let fake = d.join(format!(".out{INFIX}{}", "0".repeat(32)));
+        fs::create_dir(&fake).unwrap();
+        fs::write(fake.join("notes.txt"), b"mine").unwrap();
+        let borrowed = d.join(format!(".out{INFIX}{}", "1".repeat(32)));
+        fs::create_dir(&borrowed).unwrap();
+        fs::copy(live.dir().join(TOKEN), borrowed.join(TOKEN)).unwrap();
+        let link = d.join(format!(".out{INFIX}{}", "2".repeat(32)));
+        std::os::unix::fs::symlink(&dead_dir, &link).unwrap();
+        let other = d.join(".out.partial-99999-notes");
+        fs::write(&other, b"mine").unwrap();
+
+        sweep_dead(&d, "out");
+        assert!(live.dir().join(TOKEN).is_file(), "a live stage is kept");
+        assert!(!dead_dir.exists(), "a dead stage is removed");
+        assert!(fake.join("notes.txt").is_file(), "no token: kept");
+        assert!(
+            borrowed.join(TOKEN).is_file(),
+            "another stage's token: kept"
+        );
+        assert!(fs::symlink_metadata(&link).is_ok(), "a link: kept");
+        assert!(other.is_file(), "another shape: kept");
+        drop(live);
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// A planted link at a stage's token name is not written through: the create fails.
+    #[cfg(unix)]
+    #[test]
+    fn names_are_random_and_never_reused() {
+        let d = scratch("names");
+        let a = Stage::create(&d, "x").unwrap();
+        let b = Stage::create(&d, "x").unwrap();
+        assert_ne!(a.dir(), b.dir());
+        let victim = d.join("victim.txt");
+        fs::write(&victim, b"keep").unwrap();
+        let planted = d.join("planted");
+        std::os::unix::fs::symlink(&victim, &planted).unwrap();
+        assert!(sys::create_new(&planted).is_err());
+        assert_eq!(fs::read(&victim).unwrap(), b"keep");
+        drop((a, b));
+        assert_eq!(
+            fs::read_dir(&d).unwrap().count(),
+            2,
+            "stages removed on drop"
+        );
+        fs::remove_dir_all(&d).unwrap();
+    }
+}
