@@ -11,6 +11,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
+use specchio::files::read_regular_file;
 use specchio::reference::angular::AngularError;
 use specchio::reference::ReferenceStats;
 use specchio::render::floors::Floor;
@@ -347,11 +348,16 @@ pub struct Dynamic {
     pub ratio: Option<f64>,
 }
 
+/// Largest `--baseline` record read (bytes): the full sweep's record is well under 1 MiB.
+pub const MAX_RECORD_BYTES: u64 = 64 << 20;
+
 /// Reads a `specchio bench --json` file: refused, naming the file and the key, when a key is
 /// unknown (misspelt), missing, or of the wrong type.
 pub fn read(path: &Path) -> Result<Record> {
-    let text = std::fs::read_to_string(path)
+    let bytes = read_regular_file(path, MAX_RECORD_BYTES)
         .with_context(|| format!("cannot read the baseline {}", path.display()))?;
+    let text = String::from_utf8(bytes)
+        .with_context(|| format!("the baseline {} is not UTF-8 text", path.display()))?;
     parse(&text).with_context(|| {
         format!(
             "{}: not a `specchio bench --json` record of this version (regenerate it: see \

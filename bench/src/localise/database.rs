@@ -7,7 +7,13 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
+use specchio::files::read_regular_file;
 use specchio::sensor::localise::Signature;
+
+/// Largest landmarks file read (bytes): the largest database a run makes, 20,000 landmarks
+/// (`MAX_LANDMARKS`) of 256 coefficients (`MAX_COEFFICIENTS`) at about 20 characters a JSON
+/// number, is about 100 MiB.
+pub const MAX_LANDMARKS_FILE_BYTES: u64 = 256 << 20;
 
 /// The file's `format` value.
 pub const FORMAT: &str = "specchio-landmarks";
@@ -61,8 +67,10 @@ pub fn load(
     expected_for: &dyn Fn(&str) -> Result<Database, String>,
 ) -> Result<Database> {
     let name = path.display();
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("--landmarks {name}: reading"))?;
+    let bytes = read_regular_file(path, MAX_LANDMARKS_FILE_BYTES)
+        .with_context(|| format!("--landmarks {name}: reading"))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| anyhow::anyhow!("--landmarks {name}: not UTF-8 text ({e})"))?;
     // Format and version first, so an old or foreign file says so rather than "missing field".
     let value: serde_json::Value = serde_json::from_str(&text)
         .with_context(|| format!("--landmarks {name}: not a landmarks file (malformed JSON)"))?;

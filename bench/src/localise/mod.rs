@@ -17,6 +17,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
+use specchio::files::{read_regular_file, MAX_SCENE_BYTES};
 use specchio::output::Transaction;
 use specchio::render::lookups;
 use specchio::render::methods::Method;
@@ -204,8 +205,9 @@ fn plan(args: &Args) -> Result<Plan> {
             DescriptorKind::names()
         );
     };
-    let scene_bytes =
-        std::fs::read(&args.scene).with_context(|| format!("reading {}", args.scene.display()))?;
+    // Through the one reader: a FIFO or /dev/zero as the scene is refused, not waited on.
+    let scene_bytes = read_regular_file(&args.scene, MAX_SCENE_BYTES)
+        .with_context(|| format!("reading {}", args.scene.display()))?;
     let scene = robot_scene(specchio::scene::load(&args.scene)?, args.sensor_size);
     let mut sources = if args.sources.is_empty() {
         vec![Source::Lookup(scene.mirror.lookup)]
