@@ -62,6 +62,9 @@ pub const SINGLE_VIEW_SIZE: [u32; 2] = [800, 600];
 struct Viewer {
     presenter: Presenter,
     renderer: Renderer,
+    /// Whether a submitted frame has read `renderer`'s view image (then it is retired through
+    /// the deletion queue, else freed at once).
+    renderer_shown: bool,
     window: Arc<Window>,
     view: DisplayView,
     /// The size last asked of the window (view switch), until a resize brings it.
@@ -216,6 +219,7 @@ impl App<'_> {
             menu,
             presenter,
             renderer,
+            renderer_shown: false,
             window,
             view,
             size_asked: None,
@@ -274,6 +278,7 @@ impl App<'_> {
             Some(&mut menu.paint),
             shot,
         )?;
+        viewer.renderer_shown = true;
         viewer.menu.unapplied(&mut menu.paint);
         // The menu's choices act from the next frame on, as a key pressed now would.
         for action in menu.actions {
@@ -405,8 +410,10 @@ impl App<'_> {
     }
 
     /// Switches to `method` if the device can run it (`false`, with the reason printed, if
-    /// not). The old renderer is retired through the deletion queue: a frame in flight may
-    /// still copy from its view image.
+    /// not). The old renderer is retired through the deletion queue when a frame in flight may
+    /// still copy from its view image, and freed at once when no frame has shown it (a script
+    /// of many switches before a frame, `--keys m,m,m,...`, so holds at most three renderers,
+    /// not one per switch).
     fn set_method(&mut self, method: Method) -> Result<bool> {
         let viewer = self.viewer.as_mut().expect("keys act on a viewer");
         if let Err(why) = crate::probe::usable(method, &self.device.info) {
@@ -420,7 +427,11 @@ impl App<'_> {
         };
         let renderer = Renderer::new(self.device, scene, &options)?;
         let old = std::mem::replace(&mut viewer.renderer, renderer);
-        viewer.presenter.ring.defer(old);
+        if std::mem::take(&mut viewer.renderer_shown) {
+            viewer.presenter.ring.defer(old);
+        } else {
+            drop(old);
+        }
         println!("method: {method}");
         Ok(true)
     }
