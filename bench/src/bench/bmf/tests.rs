@@ -186,6 +186,12 @@ fn the_text_is_the_documented_layout() {
 }
 "#;
     assert_eq!(json(&bmf(&r).unwrap()).unwrap(), expected);
+    let docs = include_str!("../../../../docs/benchmarks.md");
+    let shown = format!("```json\n{expected}```");
+    assert!(
+        docs.contains(&shown),
+        "docs/benchmarks.md (\"Bencher Metric Format\") shows this example"
+    );
 }
 
 #[test]
