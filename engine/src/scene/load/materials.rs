@@ -16,12 +16,14 @@ impl Ctx<'_> {
         textures: &mut Vec<TextureData>,
     ) -> R<Vec<Material>> {
         let mut out: Vec<Material> = Vec::with_capacity(specs.len());
+        // By name, so that the duplicate check stays linear (200,000 materials took minutes).
+        let mut seen = std::collections::HashSet::with_capacity(specs.len());
         for (i, m) in specs.iter().enumerate() {
             let f = |name: &str| format!("materials[{i}].{name}");
             if m.name.trim().is_empty() {
                 return Err(self.invalid(&f("name"), "must not be empty"));
             }
-            if out.iter().any(|o| o.name == m.name) {
+            if !seen.insert(m.name.as_str()) {
                 return Err(self.invalid(
                     &f("name"),
                     format!("duplicate material name \"{}\"", m.name),

@@ -127,20 +127,22 @@ impl Ctx<'_> {
 
         let mut textures = Vec::new();
         let materials = self.materials(&spec.materials, &mut textures)?;
+        // A map, not a scan per object: scenes may hold many materials and many objects.
+        let by_name: std::collections::HashMap<&str, usize> = materials
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (m.name.as_str(), i))
+            .collect();
         let material_index = |field: &str, name: &str| -> R<usize> {
-            materials
-                .iter()
-                .position(|m| m.name == name)
-                .ok_or_else(|| {
-                    let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
-                    self.invalid(
-                        field,
-                        format!(
-                            "unknown material \"{name}\" (defined: {})",
-                            known.join(", ")
-                        ),
-                    )
-                })
+            by_name.get(name).copied().ok_or_else(|| {
+                self.invalid(
+                    field,
+                    format!(
+                        "unknown material \"{name}\" (defined: {})",
+                        some_names(&materials)
+                    ),
+                )
+            })
         };
 
         let room = self.room(room_spec, &material_index)?;
@@ -206,5 +208,19 @@ fn position_at(a: Option<&Animation>, base: Vec3, t: f64) -> Vec3 {
     match a {
         Some(a) => a.position_at(base, t),
         None => base,
+    }
+}
+
+/// The materials' names for a message: all of a few, the first of many and how many more.
+fn some_names(materials: &[crate::scene::Material]) -> String {
+    const SHOWN: usize = 12;
+    let names: Vec<&str> = materials
+        .iter()
+        .take(SHOWN)
+        .map(|m| m.name.as_str())
+        .collect();
+    match materials.len().saturating_sub(SHOWN) {
+        0 => names.join(", "),
+        more => format!("{}, and {more} more", names.join(", ")),
     }
 }

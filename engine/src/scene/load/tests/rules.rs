@@ -290,3 +290,36 @@ fn directions_near_the_f32_limit_keep_their_direction() {
     let e = load_str(&text, Path::new("l.toml")).unwrap_err();
     assert!(e.to_string().contains("must be a non-zero vector"), "{e}");
 }
+
+/// Many materials load in linear time (names are looked up in a map: 200,000 took minutes
+/// with a scan per material and per object), the last one's duplicate is still found, and
+/// an unknown name's message lists a dozen of them, not all.
+#[test]
+fn many_materials_are_found_by_name_and_listed_briefly() {
+    let mut text = MINIMAL.to_owned();
+    for i in 0..20_000 {
+        text.push_str(&format!(
+            "[[materials]]\nname = \"m{i}\"\ntype = \"color\"\ncolor = [1, 0, 0]\n"
+        ));
+    }
+    let objects = "[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\n";
+    let ok = format!("{text}{objects}material = \"m19999\"\n");
+    let s = load_str(&ok, Path::new("many.toml")).unwrap();
+    assert_eq!(s.materials.len(), 20_001);
+    let unknown = format!("{text}{objects}material = \"nowhere\"\n");
+    let e = load_str(&unknown, Path::new("many.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("unknown material \"nowhere\""), "{e}");
+    assert!(e.contains("and 19989 more"), "{e}");
+    assert!(e.len() < 400, "{} characters", e.len());
+    let twice =
+        format!("{text}[[materials]]\nname = \"m7\"\ntype = \"color\"\ncolor = [1, 0, 0]\n");
+    let e = load_str(&twice, Path::new("many.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("materials[20001].name: duplicate material name \"m7\""),
+        "{e}"
+    );
+}
