@@ -57,6 +57,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             args.scene.display()
         );
     }
+    crate::memory::calibrate(&scene).with_context(|| args.scene.display().to_string())?;
     // All or nothing: written into a hidden folder beside --out, renamed into place at the end.
     let mut out = Transaction::new();
     out.folder(&args.out, RECORD)?;

@@ -9,6 +9,7 @@ mod gate;
 mod info;
 mod interrupt;
 mod localise;
+mod memory;
 mod probe;
 mod records;
 mod reference;

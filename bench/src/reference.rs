@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use specchio::output::Transaction;
 use specchio::reference::{Reference, ReferenceImages, ReferenceStats, MAX_SPP};
 use specchio::sensor::SensorOutputs;
@@ -54,6 +54,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             );
         }
     }
+    crate::memory::reference(&scene, args.sensor_outputs)
+        .with_context(|| args.scene.display().to_string())?;
     // All or nothing: written into a hidden folder beside --out, renamed into place at the end.
     let mut out = Transaction::new();
     out.folder(&args.out, "reference.json")?;

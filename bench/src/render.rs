@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use specchio::output::Transaction;
 use specchio::render::lookups::{self, TraceOrder};
 use specchio::render::methods::Method;
@@ -110,6 +110,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         scene.mirror.secant_steps = n;
     }
     check_sensor_outputs(args, lookup.unwrap_or(scene.mirror.lookup))?;
+    let face_size_px = args.cube_size.unwrap_or(scene.cube.face_size_px);
+    crate::memory::render(&scene, face_size_px, args.directions, args.sensor_outputs)
+        .with_context(|| args.scene.display().to_string())?;
     let start_s = args
         .time
         .unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);

@@ -5,6 +5,8 @@
 //!   its state at a time and its cameras (no Vulkan);
 //! - [`files`]: the one reader of input files (regular files only, each within a budget) and
 //!   the record of what was read, by identity, which no output may replace;
+//! - [`memory`]: the host-memory budget every command's estimate is checked against before
+//!   it starts;
 //! - [`image`]: the CPU image type shared by the renderer's readback, the reference and the
 //!   metrics;
 //! - [`vk`]: the Vulkan layer, one module per concept (instance, device, memory, image,
@@ -20,6 +22,7 @@
 
 pub mod files;
 pub mod image;
+pub mod memory;
 pub mod metrics;
 pub mod output;
 pub mod reference;
