@@ -268,10 +268,26 @@ fn saved_landmarks_are_reused_and_mismatches_refused() {
     other["sensor_px"] = 96.into();
     let resized = first.join("landmarks-96.json");
     std::fs::write(&resized, other.to_string()).unwrap();
-    let cases: [(&std::path::Path, &[&str], &str); 3] = [
+    // A landmark far outside the room (it once gave "recall 100 %, error 0 m"), and one whose
+    // signature is all zeros (it matches every query alike).
+    let mut far = json(&saved);
+    far["landmarks"][1]["position_m"][0] = 1e30.into();
+    let far_file = first.join("landmarks-far.json");
+    std::fs::write(&far_file, far.to_string()).unwrap();
+    let mut zeros = json(&saved);
+    let n = zeros["landmarks"][2]["signature"]["values"]
+        .as_array()
+        .unwrap()
+        .len();
+    zeros["landmarks"][2]["signature"]["values"] = vec![0.0; n].into();
+    let zeros_file = first.join("landmarks-zeros.json");
+    std::fs::write(&zeros_file, zeros.to_string()).unwrap();
+    let cases: [(&std::path::Path, &[&str], &str); 5] = [
         (&saved, &["--k", "4"], "`coefficients`"),
         (&saved, &["--sources", "reference"], "`source`"),
         (&resized, &[], "`sensor_px`"),
+        (&far_file, &[], "`landmarks[1].position_m`"),
+        (&zeros_file, &[], "`landmarks[2]`: a signature of zeros"),
     ];
     for (file, extra, field) in cases {
         let mut args = vec!["--landmarks", file.to_str().unwrap()];

@@ -192,6 +192,9 @@ fn check_signatures(db: &Database) -> Result<(), String> {
             "a non-finite signature value".to_owned()
         } else if !l.position_m.iter().all(|v| v.is_finite()) {
             "a non-finite position".to_owned()
+        } else if s.values.iter().all(|&v| v == 0.0) {
+            // Every distance to it is the query's own norm: it would match arbitrarily.
+            "a signature of zeros, which describes no image (a damaged file)".to_owned()
         } else {
             continue;
         };

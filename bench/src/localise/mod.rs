@@ -244,6 +244,7 @@ fn plan(args: &Args) -> Result<Plan> {
             )),
         };
         let db = database::load(path, &expected)?;
+        check_landmark_positions(path, &db, &plan.body.scene)?;
         plan.landmark_poses = db
             .landmarks
             .iter()
@@ -254,11 +255,46 @@ fn plan(args: &Args) -> Result<Plan> {
         plan.landmark_poses = poses::grid(&plan.body.scene, args.grid, 0.0)?;
     }
     check_work(args, &plan)?;
+    check_memory(args, &plan)?;
     for &t in &plan.times {
         let q = query_poses(args, &plan.body.scene, &plan.landmark_poses, t)?;
         plan.queries.push(q);
     }
     Ok(plan)
+}
+
+/// Every saved landmark must be a pose of this run's robot in this room: over the free floor
+/// (`poses::floor_extent`) at the mirror's height, as the sweep places them. A position far
+/// outside (1e30 m) would otherwise give "recall 100 %, error 0 m" with queries placed at the
+/// landmarks, and renders of nothing.
+fn check_landmark_positions(path: &std::path::Path, db: &Database, scene: &Scene) -> Result<()> {
+    /// Rounding room for positions written as decimal text and read back as f32.
+    const SLACK_M: f32 = 1e-3;
+    let (lo, hi) = poses::floor_extent(scene)?;
+    let y = scene.mirror.center.y;
+    for (i, l) in db.landmarks.iter().enumerate() {
+        let [px, py, pz] = l.position_m;
+        let inside = px >= lo.x - SLACK_M
+            && px <= hi.x + SLACK_M
+            && pz >= lo.y - SLACK_M
+            && pz <= hi.y + SLACK_M
+            && (py - y).abs() <= SLACK_M;
+        if !inside {
+            bail!(
+                "--landmarks {}: field `landmarks[{i}].position_m` is {:?}, not a pose of this \
+                 robot in this room (x in [{}, {}], z in [{}, {}], y = {} m, local \
+                 coordinates): the file is for another scene or damaged",
+                path.display(),
+                l.position_m,
+                lo.x,
+                hi.x,
+                lo.y,
+                hi.y,
+                y
+            );
+        }
+    }
+    Ok(())
 }
 
 /// The most sensor images one run renders or traces (landmarks and queries, every source):
@@ -288,6 +324,16 @@ fn check_work(args: &Args, plan: &Plan) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The memory the run will hold at once (one renderer, the sensor, every source's landmark
+/// signatures), against the budget.
+fn check_memory(args: &Args, plan: &Plan) -> Result<()> {
+    // A signature is at most 8k values a panorama row (column-shift; fourier keeps 2k).
+    let values = u64::from(plan.body.layout.height) * 8 * u64::from(args.k);
+    let landmarks = plan.landmark_poses.len() as u64 * plan.sources.len() as u64;
+    crate::memory::localise(&plan.body.scene, args.sensor_size, landmarks, values)
+        .with_context(|| args.scene.display().to_string())
 }
 
 /// Keeps the first of each source, in the order given.

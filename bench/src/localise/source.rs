@@ -116,8 +116,18 @@ impl<'a> Robot<'a> {
         descriptor: &dyn Descriptor,
         what: &str,
     ) -> Result<Vec<Signature>> {
-        let check =
-            |i: usize| crate::interrupt::check(&format!("after {i} of {} {what}", poses.len()));
+        // Said first, so that a long loop is never silent; the bar (on a terminal only)
+        // counts its images.
+        eprintln!("localise: {} {what}", poses.len());
+        let bar = indicatif::ProgressBar::new(poses.len() as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} images, {elapsed}")
+                .expect("a valid template"),
+        );
+        let check = |i: usize| {
+            bar.set_position(i as u64);
+            crate::interrupt::check(&format!("after {i} of {} {what}", poses.len()))
+        };
         let mut out = Vec::with_capacity(poses.len());
         match self {
             Self::Gpu {
@@ -144,6 +154,7 @@ impl<'a> Robot<'a> {
                 }
             }
         }
+        bar.finish_and_clear();
         Ok(out)
     }
 }
