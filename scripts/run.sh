@@ -10,7 +10,8 @@ cargo build --release --locked -p specchio-cli
 bin=target/release/specchio
 mkdir -p out/bench
 $bin info
-$bin bench "$@" --json out/bench/bench.json --csv out/bench/bench.csv --plot out/bench/bench.svg
+$bin bench "$@" --json out/bench/bench.json --csv out/bench/bench.csv --plot out/bench/bench.svg \
+    --bmf out/bench/bench.bmf.json
 $bin render scenes/thesis-room.toml --out out/thesis-room --frames 1
-echo "benchmark: out/bench/bench.json, bench.csv, bench.svg (speed against error);"
+echo "benchmark: out/bench/bench.json, bench.csv, bench.svg (speed against error), bench.bmf.json (Bencher);"
 echo "views: out/thesis-room/views.png (observer | sensor), out/thesis-room/render.json"
