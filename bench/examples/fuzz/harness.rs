@@ -15,6 +15,15 @@ use std::time::{Duration, Instant};
 
 use specchio::scene::{load_str, Mesh, TextureData};
 
+// The command's own readers of the files a user hands it besides scenes: the bench baseline
+// and the landmarks file (the `specchio` binary's modules, compiled in here as they are).
+#[path = "../../src/localise/database.rs"]
+#[allow(dead_code)]
+mod database;
+#[path = "../../src/bench/record.rs"]
+#[allow(dead_code)]
+mod record;
+
 /// What a fuzz input is fed to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Target {
@@ -24,15 +33,21 @@ pub enum Target {
     Gltf,
     Glb,
     Png,
+    /// A `specchio bench --json` record read as `--baseline`.
+    Baseline,
+    /// A `specchio localise` landmarks file read as `--landmarks`, checked against its seed.
+    Landmarks,
 }
 
 impl Target {
-    pub const ALL: [Target; 5] = [
+    pub const ALL: [Target; 7] = [
         Target::Scene,
         Target::Obj,
         Target::Gltf,
         Target::Glb,
         Target::Png,
+        Target::Baseline,
+        Target::Landmarks,
     ];
 
     pub fn name(self) -> &'static str {
@@ -42,6 +57,8 @@ impl Target {
             Target::Gltf => "gltf",
             Target::Glb => "glb",
             Target::Png => "png",
+            Target::Baseline => "baseline",
+            Target::Landmarks => "landmarks",
         }
     }
 
@@ -53,7 +70,26 @@ impl Target {
     fn extension(self) -> &'static str {
         match self {
             Target::Scene => "toml",
+            Target::Baseline | Target::Landmarks => "json",
             other => other.name(),
+        }
+    }
+
+    /// The folders its seeds come from.
+    fn seed_folders(self) -> &'static [&'static str] {
+        match self {
+            Target::Baseline => &["bench/baselines"],
+            Target::Landmarks => &["tests/seeds/landmarks"],
+            _ => &[
+                "scenes",
+                "scenes/hard",
+                "scenes/test",
+                "scenes/meshes",
+                "scenes/textures",
+                "tests/scenes/bad",
+                "tests/scenes/bad-assets",
+                "tests/scenes/bad-assets/assets",
+            ],
         }
     }
 }
@@ -68,18 +104,8 @@ pub struct Seed {
 /// The seeds of `target`: every file with its extension in the given folders, sorted, so a
 /// run with a fixed random seed is reproducible.
 pub fn seeds(root: &Path, target: Target) -> Vec<Seed> {
-    let folders = [
-        "scenes",
-        "scenes/hard",
-        "scenes/test",
-        "scenes/meshes",
-        "scenes/textures",
-        "tests/scenes/bad",
-        "tests/scenes/bad-assets",
-        "tests/scenes/bad-assets/assets",
-    ];
     let mut out = Vec::new();
-    for folder in folders {
+    for folder in target.seed_folders() {
         let Ok(entries) = std::fs::read_dir(root.join(folder)) else {
             continue;
         };
@@ -106,7 +132,26 @@ pub fn execute(target: Target, input: &[u8], seed_path: &Path) -> bool {
         Target::Obj => Mesh::from_obj_bytes(input).is_ok(),
         Target::Gltf | Target::Glb => Mesh::from_gltf_bytes(input, folder).is_ok(),
         Target::Png => TextureData::from_png_bytes(input, seed_path).is_ok(),
+        Target::Baseline => record::parse(&String::from_utf8_lossy(input)).is_ok(),
+        Target::Landmarks => landmarks(input, seed_path),
     }
+}
+
+/// A landmarks file, checked as `localise --landmarks` checks it against a run with the
+/// seed's own settings (so mutated inputs reach the signature checks behind the match).
+fn landmarks(input: &[u8], seed_path: &Path) -> bool {
+    let seed: Option<database::Database> = std::fs::read(seed_path)
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok());
+    let Some(mut run) = seed else {
+        return false;
+    };
+    run.landmarks.clear();
+    let expected = |source: &str| match source == run.source {
+        true => Ok(run.clone()),
+        false => Err(format!("field `source` is {source}, not {}", run.source)),
+    };
+    database::parse(input, "fuzz input", &expected).is_ok()
 }
 
 /// xorshift64*: small, fast, and the same sequence on every platform.
@@ -300,13 +345,15 @@ fn text_number(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
 /// stays parseable and reaches the checks behind the parser.
 fn structured(rng: &mut Rng, d: Vec<u8>, target: Target) -> Vec<u8> {
     match target {
-        Target::Gltf => match serde_json::from_slice::<serde_json::Value>(&d) {
-            Ok(mut v) => {
-                edit_json(rng, &mut v);
-                serde_json::to_vec(&v).unwrap_or(d)
+        Target::Gltf | Target::Baseline | Target::Landmarks => {
+            match serde_json::from_slice::<serde_json::Value>(&d) {
+                Ok(mut v) => {
+                    edit_json(rng, &mut v);
+                    serde_json::to_vec(&v).unwrap_or(d)
+                }
+                Err(_) => d,
             }
-            Err(_) => d,
-        },
+        }
         Target::Scene => match std::str::from_utf8(&d)
             .ok()
             .and_then(|t| t.parse::<toml::Table>().ok())

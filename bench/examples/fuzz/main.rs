@@ -4,7 +4,7 @@
 //! cargo run --release -p specchio-cli --example fuzz -- --target gltf --iterations 1000000
 //! ```
 //!
-//! Options: `--target scene|obj|gltf|glb|png|all` (default all, run one after another),
+//! Options: `--target scene|obj|gltf|glb|png|baseline|landmarks|all` (default all, run one after another),
 //! `--iterations N` per target (default 100000), `--seed S` (default 1), `--time-limit-ms MS`
 //! per input before it counts as a hang (default 2000), `--out DIR` for faulting inputs
 //! (default `out/fuzz`). Exits with status 1 if any input panicked or hung.
@@ -12,6 +12,8 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+// Loaded by path, as tests/fuzz.rs loads it, so that its own `#[path]` modules resolve alike.
+#[path = "harness.rs"]
 mod harness;
 
 use harness::{Config, Target};

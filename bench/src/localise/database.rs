@@ -69,10 +69,19 @@ pub fn load(
     let name = path.display();
     let bytes = read_regular_file(path, MAX_LANDMARKS_FILE_BYTES)
         .with_context(|| format!("--landmarks {name}: reading"))?;
-    let text = String::from_utf8(bytes)
+    parse(&bytes, &name.to_string(), expected_for)
+}
+
+/// [`load`] on the file's bytes; `name` is how errors name the file.
+pub fn parse(
+    bytes: &[u8],
+    name: &str,
+    expected_for: &dyn Fn(&str) -> Result<Database, String>,
+) -> Result<Database> {
+    let text = std::str::from_utf8(bytes)
         .map_err(|e| anyhow::anyhow!("--landmarks {name}: not UTF-8 text ({e})"))?;
     // Format and version first, so an old or foreign file says so rather than "missing field".
-    let value: serde_json::Value = serde_json::from_str(&text)
+    let value: serde_json::Value = serde_json::from_str(text)
         .with_context(|| format!("--landmarks {name}: not a landmarks file (malformed JSON)"))?;
     // What a field holds, as the file spells it.
     let shown = |field: &str| match value.get(field) {
@@ -91,7 +100,7 @@ pub fn load(
             shown("version")
         );
     }
-    let db: Database = serde_json::from_str(&text)
+    let db: Database = serde_json::from_str(text)
         .with_context(|| format!("--landmarks {name}: not a version {VERSION} landmarks file"))?;
     let expected =
         expected_for(&db.source).map_err(|e| anyhow::anyhow!("--landmarks {name}: {e}"))?;
