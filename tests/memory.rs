@@ -8,11 +8,11 @@
 //! too loose to mean anything fails too).
 
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::Command;
 
 mod common;
 
-use common::{root, temp_dir};
+use common::{root, run_measured, temp_dir};
 
 /// "about 349.3 MiB" in `text`, as bytes.
 fn estimate(text: &str) -> u64 {
@@ -35,29 +35,12 @@ fn estimate(text: &str) -> u64 {
 /// resident memory in bytes.
 fn run(args: &[&str], budget: Option<&str>) -> (Option<i32>, String, u64) {
     let mut command = Command::new(env!("CARGO_BIN_EXE_specchio"));
-    command
-        .args(args)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .env_remove("SPECCHIO_MEMORY_BUDGET");
+    command.args(args).env_remove("SPECCHIO_MEMORY_BUDGET");
     if let Some(b) = budget {
         command.env("SPECCHIO_MEMORY_BUDGET", b);
     }
-    // Reaped below by wait4, which, unlike `Child::wait`, gives the child's own peak memory.
-    #[allow(clippy::zombie_processes)]
-    let child = command.spawn().expect("the specchio binary runs");
-    let pid = child.id() as libc::pid_t;
-    let mut stderr = child.stderr.unwrap();
-    let mut text = String::new();
-    std::io::Read::read_to_string(&mut stderr, &mut text).unwrap();
-    let mut status = 0;
-    // SAFETY: a zeroed rusage is valid; wait4 fills it for our own child.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    let waited = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
-    assert_eq!(waited, pid, "wait4");
-    let code = libc::WIFEXITED(status).then(|| libc::WEXITSTATUS(status));
-    // Linux reports ru_maxrss in KiB.
-    (code, text, usage.ru_maxrss as u64 * 1024)
+    let m = run_measured(command);
+    (m.code, m.stderr, m.peak_bytes)
 }
 
 /// thesis-room with both views at `side`², in `dir` (with the textures it names).

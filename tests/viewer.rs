@@ -232,3 +232,31 @@ fn the_help_lists_the_keys_in_the_window_and_h_closes_it() {
     let (max, _) = difference(&closed, &none);
     assert_eq!(max, 0, "h twice leaves the help open");
 }
+
+/// A script of many method switches before the first frame (`m` 60 times) holds a renderer
+/// or two at a time, not one per switch: its peak memory stays within half again that of two
+/// switches. Before, each replaced renderer waited in the deletion queue for a frame that had
+/// never shown it (900 switches took 5.1 GB).
+#[test]
+fn many_switches_before_a_frame_hold_few_renderers() {
+    let Some(x) = Xvfb::start() else { return };
+    let peak = |switches: usize| {
+        let keys = vec!["m"; switches].join(",");
+        let scene = thesis_room();
+        let m = common::run_measured(x.command(&[
+            scene.to_str().unwrap(),
+            "--keys",
+            &keys,
+            "--frames",
+            "1",
+        ]));
+        assert_eq!(m.code, Some(0), "{}", m.stderr);
+        m.peak_bytes
+    };
+    let (two, sixty) = (peak(2), peak(60));
+    eprintln!("peak memory: 2 switches {two} bytes, 60 switches {sixty} bytes");
+    assert!(
+        sixty * 2 <= two * 3,
+        "60 switches peaked at {sixty} bytes, 2 at {two}"
+    );
+}

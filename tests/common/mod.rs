@@ -53,6 +53,39 @@ pub fn staging_folders(target: &Path) -> Vec<String> {
         .unwrap_or_default()
 }
 
+/// What [`run_measured`] gives back: the exit code (None when a signal ended it), stderr,
+/// and the child's own peak resident memory.
+pub struct Measured {
+    pub code: Option<i32>,
+    pub stderr: String,
+    pub peak_bytes: u64,
+}
+
+/// Runs `command` (stdout discarded) and measures its peak resident memory with `wait4`,
+/// which, unlike `Child::wait`, reports the child's own usage (tests run children in
+/// parallel threads, so the process-wide RUSAGE_CHILDREN would mix them).
+pub fn run_measured(mut command: std::process::Command) -> Measured {
+    use std::process::Stdio;
+    command.stdout(Stdio::null()).stderr(Stdio::piped());
+    // Reaped below by wait4.
+    #[allow(clippy::zombie_processes)]
+    let child = command.spawn().expect("the command runs");
+    let pid = child.id() as libc::pid_t;
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.unwrap(), &mut stderr).unwrap();
+    let mut status = 0;
+    // SAFETY: a zeroed rusage is valid; wait4 fills it for our own child.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let waited = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
+    assert_eq!(waited, pid, "wait4");
+    Measured {
+        code: libc::WIFEXITED(status).then(|| libc::WEXITSTATUS(status)),
+        stderr,
+        // Linux reports ru_maxrss in KiB.
+        peak_bytes: usage.ru_maxrss as u64 * 1024,
+    }
+}
+
 /// A fresh, absent path in the temporary directory, unique to this test process, removed
 /// when the test is done with it (see [`Scratch`]).
 pub fn temp_dir(name: &str) -> Scratch {
