@@ -105,10 +105,22 @@ impl Ctx<'_> {
                         ));
                     }
                     if i > 0 && x <= times_s[i - 1] {
+                        // Increasing in the file but equal once held in single precision: say
+                        // so, with the spacing that f32 can hold there.
+                        let why = if t > times[i - 1] {
+                            format!(
+                                "; they are equal in single precision, which holds key times \
+                                 near {} s only {} s apart or more",
+                                num_text(t),
+                                num_text(f64::from(spacing(x)))
+                            )
+                        } else {
+                            String::new()
+                        };
                         return Err(self.invalid(
                             &tf,
                             format!(
-                                "key times must strictly increase, got {} after {}",
+                                "key times must strictly increase, got {} after {}{why}",
                                 num_text(t),
                                 num_text(times[i - 1])
                             ),
@@ -139,4 +151,9 @@ impl Ctx<'_> {
             }
         })
     }
+}
+
+/// The distance from `x` (finite, >= 0) to the next larger f32.
+fn spacing(x: f32) -> f32 {
+    f32::from_bits(x.to_bits() + 1) - x
 }

@@ -77,6 +77,12 @@ const BAD: &[(&str, Option<u32>, &str)] = &[
         "mirror.animation.times[2]",
     ),
     (
+        "keyframes-equal-in-f32.toml",
+        Some(5),
+        "mirror.animation.times[2]: key times must strictly increase, got 1.00000001 after 1; \
+         they are equal in single precision",
+    ),
+    (
         "colour-out-of-range.toml",
         Some(12),
         "materials[0].color[1]",
