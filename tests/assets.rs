@@ -3,37 +3,17 @@
 //! line and field that referred to the asset, the asset, and what inside the asset is wrong.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Command, Output};
+use std::time::Duration;
 
 mod common;
 
-use common::{root, temp_dir};
+use common::{root, specchio_within, temp_dir};
 
-/// Runs `specchio render SCENE --out OUT`. A run that has not ended after `patience` is
-/// killed and reported: the point is to fail rather than hang the suite if a read blocks.
+/// `specchio render SCENE --out OUT`, killed and reported if still running after `patience`.
 fn render(scene: &Path, out: &Path, patience: Duration) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args([
-            "render",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .env("SPECCHIO_VALIDATE", "1")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the specchio binary runs");
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > patience {
-            child.kill().unwrap();
-            panic!("{}: still running after {patience:?}", scene.display());
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().unwrap()
+    let (scene, out) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    specchio_within(&["render", scene, "--out", out], patience)
 }
 
 /// The expectations in a bad-asset scene's first line:

@@ -4,32 +4,16 @@
 //! replaces a file the command read.
 
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Command, Output};
+use std::time::Duration;
 
 mod common;
 
 use common::{root, temp_dir};
 
-/// Runs `specchio ARGS`; one still running after two minutes is killed and reported (the
-/// point is to fail, not to hang the suite, when a read blocks).
+/// `specchio ARGS`, with two minutes to end.
 fn specchio_within(args: &[&str]) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args(args)
-        .env("SPECCHIO_VALIDATE", "1")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the specchio binary runs");
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(120) {
-            child.kill().unwrap();
-            panic!("specchio {args:?}: still running after 120 s");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().unwrap()
+    common::specchio_within(args, Duration::from_secs(120))
 }
 
 fn mkfifo(p: &Path) {

@@ -53,6 +53,28 @@ pub fn staging_folders(target: &Path) -> Vec<String> {
         .unwrap_or_default()
 }
 
+/// Runs `specchio ARGS`, validation on; one still running after `patience` is killed and
+/// reported (the point is to fail rather than hang the suite when a read blocks).
+pub fn specchio_within(args: &[&str], patience: std::time::Duration) -> std::process::Output {
+    use std::process::Stdio;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(args)
+        .env("SPECCHIO_VALIDATE", "1")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the specchio binary runs");
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > patience {
+            child.kill().unwrap();
+            panic!("specchio {args:?}: still running after {patience:?}");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
 /// What [`run_measured`] gives back: the exit code (None when a signal ended it), stderr,
 /// and the child's own peak resident memory.
 pub struct Measured {

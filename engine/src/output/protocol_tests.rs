@@ -10,23 +10,8 @@ use std::process::{Command, Stdio};
 
 use super::replace::Point;
 use super::stage::{self, Stage, TOKEN};
+use super::tests::{names, scratch};
 use super::*;
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("specchio-protocol-{}-{name}", std::process::id()));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
 
 /// A render-like output of `out` holding `file`, committed with `hook` in its commit.
 fn render(
