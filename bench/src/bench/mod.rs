@@ -59,12 +59,19 @@ fn say(format: Format, line: &str) {
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
-    // 1. Everything that can be wrong with the input, before the long run: the baseline and
-    //    the scenes are read first (every file they bring, meshes and textures too, is then
-    //    an input no report may replace), then the report files are staged, so that a path
-    //    given twice, a folder where a file must go or an input named as an output fails
-    //    now; they appear together at the end or not at all.
+    // 1. Everything that can be wrong with the input, before the long run. The report files
+    //    are staged first, so that a path given twice, a folder where a file must go or a
+    //    report over the scene or the baseline fails at once; then the baseline and the
+    //    scenes are read, and the reports checked again against every file they brought
+    //    (meshes, textures). They appear together at the end or not at all.
     let settled = settle(args)?;
+    let mut out = Transaction::new();
+    for input in settled.scenes.iter().chain(&settled.args.baseline) {
+        out.input(input)?;
+    }
+    for path in report_paths(&settled.args) {
+        out.file(path)?;
+    }
     let baseline = settled
         .args
         .baseline
@@ -76,10 +83,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         .iter()
         .map(|p| specchio::scene::load(p).map_err(anyhow::Error::from))
         .collect::<Result<Vec<_>>>()?;
-    let mut out = Transaction::new();
-    for path in report_paths(&settled.args) {
-        out.file(path)?;
-    }
+    out.check_inputs()?;
     if let Some(t) = settled.args.threads {
         // Before the driver starts: lavapipe reads it when the device is created.
         std::env::set_var("LP_NUM_THREADS", t.to_string());

@@ -125,6 +125,17 @@ impl Transaction {
         Ok(())
     }
 
+    /// Checks the staged files against every input so far: a command that stages its outputs
+    /// before it reads the files a scene names (meshes, textures) calls this after reading
+    /// them, so that an output over one is refused before the work, not at the commit.
+    pub fn check_inputs(&self) -> Result<(), OutputError> {
+        let inputs = self.inputs();
+        for s in self.staged.iter().filter(|s| matches!(s.kind, Kind::File)) {
+            check_not_an_input(&s.given, &s.target, &inputs)?;
+        }
+        Ok(())
+    }
+
     /// Stages the file `target`, whose folder must exist; an existing file is replaced,
     /// unless it is one of the command's inputs.
     pub fn file(&mut self, target: &Path) -> Result<(), OutputError> {
