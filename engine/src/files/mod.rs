@@ -79,7 +79,9 @@ pub fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> 
     let io_err = |source: io::Error| classify(path, source);
     let meta = std::fs::metadata(path).map_err(io_err)?;
     check_regular(path, &meta, limit)?;
-    let file = File::open(path).map_err(io_err)?;
+    // Without waiting: if the path became a FIFO since the check, the open returns at once
+    // (`O_NONBLOCK`; it changes nothing for a regular file) and the check below refuses it.
+    let file = open_no_wait(path).map_err(io_err)?;
     let opened = file.metadata().map_err(io_err)?;
     check_regular(path, &opened, limit)?;
     identity::record(path, &opened);
@@ -95,6 +97,18 @@ pub fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> 
         });
     }
     Ok(bytes)
+}
+
+/// Opens `path` for reading with `O_NONBLOCK` where the OS has it.
+fn open_no_wait(path: &Path) -> io::Result<File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    options.open(path)
 }
 
 fn check_regular(path: &Path, meta: &Metadata, limit: u64) -> Result<(), FileError> {

@@ -39,6 +39,8 @@ pub enum OutputError {
     NoFolder { path: PathBuf, folder: PathBuf },
     #[error("cannot write {path}: it is a folder; a file name is needed")]
     IsAFolder { path: PathBuf },
+    #[error("cannot write {path}: it is {what}; a file output replaces only a regular file")]
+    NotAFile { path: PathBuf, what: &'static str },
     #[error("cannot write {path}: it exists and is not a folder (a file or a symbolic link)")]
     NotAFolder { path: PathBuf },
     #[error(
@@ -70,8 +72,9 @@ pub enum OutputError {
         kept: PathBuf,
     },
     #[error(
-        "{path} held what no earlier output wrote once it was swapped out, and it could not be \
-         swapped back: the earlier folder is in {at}, move it back by hand"
+        "{path}: a rename failed while the earlier output was being replaced, and the earlier \
+         output could not be put back: it is kept in {at} (nothing was deleted); move it back or \
+         remove it by hand"
     )]
     StuckAside {
         path: PathBuf,
@@ -93,7 +96,8 @@ fn written_meanwhile(entries: &[String]) -> String {
         n => (format!("{n} entries"), "are"),
     };
     format!(
-        "{count} written into the earlier output while it was being replaced ({}) {verb}",
+        "{count} of the earlier output that it did not write or that could not be removed \
+         ({}) {verb}",
         entries.join(", ")
     )
 }

@@ -197,10 +197,9 @@ fn inputs_are_known_by_identity_not_by_spelling() {
 #[test]
 fn a_run_in_another_process_is_alive_while_it_holds_its_lock() {
     let dir = scratch("alive");
-    let mut orphan = Stage::create(&dir, "out").unwrap();
+    let orphan = Stage::create(&dir, "out").unwrap();
     let orphan_dir = orphan.dir().to_owned();
-    orphan.keep();
-    drop(orphan); // its lock is free now, as if its run had been killed
+    orphan.abandon(); // its lock is free now, as if its run had been killed
     let mut other = Command::new("flock")
         .arg("--exclusive")
         .arg(orphan_dir.join(TOKEN))
@@ -279,5 +278,104 @@ fn a_write_over_the_file_size_limit_fails_and_leaves_nothing() {
         .unwrap();
     assert!(status.success(), "the child under ulimit -f: {status:?}");
     assert_eq!(names(&dir), Vec::<String>::new());
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A file output replaces only a regular file: a FIFO, a symbolic link (to a file, dangling,
+/// or `/dev/stdout`-like to a device) or a device at the name is refused and left as it was.
+#[cfg(unix)]
+#[test]
+fn a_file_output_replaces_only_a_regular_file() {
+    let dir = scratch("targets");
+    let fifo = dir.join("pipe.json");
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let mine = dir.join("mine.txt");
+    fs::write(&mine, b"mine").unwrap();
+    let link = dir.join("link.json");
+    std::os::unix::fs::symlink(&mine, &link).unwrap();
+    let dangling = dir.join("dangling.json");
+    std::os::unix::fs::symlink(dir.join("nothing"), &dangling).unwrap();
+    let device = dir.join("null.json");
+    std::os::unix::fs::symlink("/dev/null", &device).unwrap();
+    for target in [&fifo, &link, &dangling, &device] {
+        let e = write_json(target, &serde_json::json!({})).unwrap_err();
+        assert!(matches!(e, OutputError::NotAFile { .. }), "{e}");
+    }
+    use std::os::unix::fs::FileTypeExt;
+    assert!(fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+    assert!(fs::symlink_metadata(&link).unwrap().is_symlink());
+    assert_eq!(fs::read(&mine).unwrap(), b"mine");
+    assert_eq!(names(&dir).len(), 5, "nothing added: {:?}", names(&dir));
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// One file given for two outputs is refused however it is spelt, not written twice (the
+/// second write would replace the first).
+#[test]
+fn one_file_under_two_spellings_is_refused() {
+    let dir = scratch("spellings");
+    fs::create_dir(dir.join("sub")).unwrap();
+    let mut t = Transaction::new();
+    t.file(&dir.join("x.json")).unwrap();
+    for other in ["sub/../x.json", "./x.json", "sub/./../x.json"] {
+        let e = t.file(&dir.join(other)).unwrap_err();
+        assert!(matches!(e, OutputError::Twice { .. }), "{other}: {e}");
+    }
+    t.file(&dir.join("sub/x.json")).unwrap();
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// What no output writes, a symbolic link, at a name the manifest lists is the user's: the
+/// folder is refused, the link kept.
+#[cfg(unix)]
+#[test]
+fn a_link_at_a_listed_name_makes_the_folder_the_users() {
+    let dir = scratch("listed-link");
+    let out = dir.join("out");
+    render(&out, "a.txt", None).unwrap();
+    let mine = dir.join("mine");
+    fs::create_dir(&mine).unwrap();
+    fs::remove_file(out.join("a.txt")).unwrap();
+    std::os::unix::fs::symlink(&mine, out.join("a.txt")).unwrap();
+    let e = render(&out, "b.txt", None).unwrap_err();
+    assert!(
+        matches!(&e, OutputError::Foreign { entry, .. } if entry.contains("a.txt")),
+        "{e}"
+    );
+    assert!(fs::symlink_metadata(out.join("a.txt"))
+        .unwrap()
+        .is_symlink());
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A FIFO where the protocol reads (an earlier output's manifest, a staging folder's token)
+/// is never waited on: the run goes on (refusing the folder) instead of hanging.
+#[cfg(unix)]
+#[test]
+fn fifos_where_the_protocol_reads_do_not_block_it() {
+    let dir = scratch("protocol-fifos");
+    let out = dir.join("out");
+    render(&out, "a.txt", None).unwrap();
+    fs::remove_file(out.join(MANIFEST)).unwrap();
+    assert!(Command::new("mkfifo")
+        .arg(out.join(MANIFEST))
+        .status()
+        .unwrap()
+        .success());
+    let e = render(&out, "b.txt", None).unwrap_err();
+    assert!(matches!(e, OutputError::Foreign { .. }), "{e}");
+    let shaped = dir.join(format!(".other.specchio-{}", "a".repeat(32)));
+    fs::create_dir(&shaped).unwrap();
+    assert!(Command::new("mkfifo")
+        .arg(shaped.join(TOKEN))
+        .status()
+        .unwrap()
+        .success());
+    render(&dir.join("other"), "a.txt", None).unwrap();
+    assert!(shaped.join(TOKEN).exists(), "a look-alike is kept");
     fs::remove_dir_all(&dir).unwrap();
 }

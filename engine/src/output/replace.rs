@@ -62,7 +62,22 @@ pub fn place(
         return Ok(Placed::Clean);
     }
     let spare = spare_name(s);
-    swap(&item, &s.target, &spare).map_err(io(&s.given))?;
+    if let Err(e) = swap(&item, &s.target, &spare) {
+        // A swap in three renames that failed at its last step leaves the old output at
+        // `spare`: it must survive this run, named in the error.
+        if fs::symlink_metadata(&spare).is_ok() {
+            s.stage.keep();
+            return Err(OutputError::StuckAside {
+                path: s.given.clone(),
+                at: spare,
+                source: e,
+            });
+        }
+        return Err(OutputError::Io {
+            path: s.given.clone(),
+            source: e,
+        });
+    }
     // `item` is now the old output.
     if let Err(refusal) = check_replaceable(&s.given, &item, &marker, inputs) {
         if let Err(e) = swap(&item, &s.target, &spare) {
@@ -177,9 +192,16 @@ pub fn check_replaceable(
         });
     }
     for entry in &held {
-        let id = fs::symlink_metadata(target.join(entry))
-            .ok()
-            .and_then(|m| FileId::of(&m));
+        let meta = fs::symlink_metadata(target.join(entry)).ok();
+        // No output writes a link: one at a listed name is the user's, put there since.
+        if meta.as_ref().is_some_and(|m| m.file_type().is_symlink()) {
+            return Err(OutputError::Foreign {
+                path: given.to_owned(),
+                entry: format!("{entry} (a symbolic link)"),
+                manifest: MANIFEST,
+            });
+        }
+        let id = meta.as_ref().and_then(FileId::of);
         if let Some((_, input)) = inputs.iter().find(|(i, _)| Some(*i) == id) {
             return Err(OutputError::IsAnInput {
                 path: given.join(entry),

@@ -63,9 +63,18 @@ impl Stage {
         &self.dir
     }
 
+    /// Leaves the folder and its token on disk and frees the lock, as a killed run does (for
+    /// the tests of the sweep).
+    #[cfg(test)]
+    pub fn abandon(mut self) {
+        self.keep = true;
+    }
+
     /// Leaves the folder on disk when dropped (it holds a user's files the run could not put
-    /// back; the error that says so names it).
+    /// back; the error that says so names it). Its token goes first, so that no later run
+    /// takes it for a dead run's staging and sweeps it: it is the user's now.
     pub fn keep(&mut self) {
+        let _ = fs::remove_file(self.dir.join(TOKEN));
         self.keep = true;
     }
 }
@@ -167,9 +176,7 @@ mod tests {
         let dead = Stage::create(&d, "out").unwrap();
         let dead_dir = dead.dir().to_owned();
         // A killed run: its folder stays, its lock goes (the descriptor is closed).
-        let mut dead = dead;
-        dead.keep();
-        drop(dead);
+        dead.abandon();
         let fake = d.join(format!(".out{INFIX}{}", "0".repeat(32)));
         fs::create_dir(&fake).unwrap();
         fs::write(fake.join("notes.txt"), b"mine").unwrap();
@@ -181,7 +188,19 @@ mod tests {
         let other = d.join(".out.partial-99999-notes");
         fs::write(&other, b"mine").unwrap();
 
+        // A stage kept for the user (it holds what a failed replace could not put back)
+        // loses its token: no later sweep takes it for a dead run's.
+        let mut kept = Stage::create(&d, "out").unwrap();
+        let kept_dir = kept.dir().to_owned();
+        fs::write(kept_dir.join("old-output.txt"), b"theirs").unwrap();
+        kept.keep();
+        drop(kept);
+
         sweep_dead(&d, "out");
+        assert!(
+            kept_dir.join("old-output.txt").is_file(),
+            "a kept stage stays"
+        );
         assert!(live.dir().join(TOKEN).is_file(), "a live stage is kept");
         assert!(!dead_dir.exists(), "a dead stage is removed");
         assert!(fake.join("notes.txt").is_file(), "no token: kept");

@@ -21,14 +21,16 @@ pub fn create_new(path: &Path) -> io::Result<File> {
     options.open(path)
 }
 
-/// Opens `path` for reading without following a final symbolic link.
+/// Opens `path` for reading without following a final symbolic link and without waiting: a
+/// FIFO planted at the name opens at once (`O_NONBLOCK`) instead of blocking until a writer
+/// comes, and the caller's regular-file check on the handle then refuses it.
 pub fn open_no_follow(path: &Path) -> io::Result<File> {
     let mut options = OpenOptions::new();
     options.read(true);
     #[cfg(unix)]
     {
         use std::os::unix::fs::OpenOptionsExt;
-        options.custom_flags(libc_flags::NOFOLLOW);
+        options.custom_flags(libc_flags::NOFOLLOW | libc_flags::NONBLOCK);
     }
     options.open(path)
 }
@@ -36,11 +38,13 @@ pub fn open_no_follow(path: &Path) -> io::Result<File> {
 #[cfg(target_os = "linux")]
 mod libc_flags {
     pub const NOFOLLOW: i32 = libc::O_NOFOLLOW;
+    pub const NONBLOCK: i32 = libc::O_NONBLOCK;
 }
 #[cfg(all(unix, not(target_os = "linux")))]
 mod libc_flags {
     // Not linked to libc here: O_CREAT | O_EXCL already refuses a final link.
     pub const NOFOLLOW: i32 = 0;
+    pub const NONBLOCK: i32 = 0;
 }
 
 /// Takes the exclusive advisory lock (`flock`) on `file` without waiting: `Ok(true)` when

@@ -99,7 +99,7 @@ impl Transaction {
     /// an earlier output holding `marker`.
     pub fn folder(&mut self, target: &Path, marker: &str) -> Result<(), OutputError> {
         let (resolved, name) = named(target)?;
-        self.check_new(target)?;
+        self.check_new(target, &resolved, &name)?;
         replace::check_replaceable(target, &resolved, marker, &self.inputs())?;
         let parent = parent_of(&resolved);
         self.create_parents(&parent)?;
@@ -140,12 +140,9 @@ impl Transaction {
     /// unless it is one of the command's inputs.
     pub fn file(&mut self, target: &Path) -> Result<(), OutputError> {
         let (resolved, name) = named(target)?;
-        self.check_new(target)?;
-        if fs::metadata(&resolved).is_ok_and(|m| m.is_dir()) {
-            return Err(OutputError::IsAFolder {
-                path: target.to_owned(),
-            });
-        }
+        self.check_new(target, &resolved, &name)?;
+        check_not_an_input(target, &resolved, &self.inputs())?;
+        check_file_target(target, &resolved)?;
         let parent = parent_of(&resolved);
         if !parent.is_dir() {
             return Err(OutputError::NoFolder {
@@ -153,7 +150,6 @@ impl Transaction {
                 folder: parent,
             });
         }
-        check_not_an_input(target, &resolved, &self.inputs())?;
         // The file itself is created by the first write (`create`), exclusively.
         self.stage(target, resolved, name, &parent, |_| Ok(()))
     }
@@ -198,7 +194,10 @@ impl Transaction {
         let inputs = self.inputs();
         for s in &self.staged {
             match &s.kind {
-                Kind::File => check_not_an_input(&s.given, &s.target, &inputs)?,
+                Kind::File => {
+                    check_file_target(&s.given, &s.target)?;
+                    check_not_an_input(&s.given, &s.target, &inputs)?;
+                }
                 Kind::Folder { marker } => {
                     replace::write_manifest(s)?;
                     replace::check_replaceable(&s.given, &s.target, marker, &inputs)?;
@@ -255,13 +254,22 @@ impl Transaction {
         Ok(())
     }
 
-    /// The same target twice would make one output silently overwrite the other.
-    fn check_new(&self, target: &Path) -> Result<(), OutputError> {
-        match self.staged.iter().find(|s| s.given == target) {
-            Some(_) => Err(OutputError::Twice {
-                path: target.to_owned(),
+    /// The same target twice would make one output silently overwrite the other, however it
+    /// is spelt (`x` and `sub/../x`, `./x`, an absolute path, a linked folder): targets are
+    /// compared by their folder's identity and their name.
+    fn check_new(&self, given: &Path, resolved: &Path, name: &str) -> Result<(), OutputError> {
+        let folder = FileId::of_path(&parent_of(resolved));
+        let same = |s: &Staged| {
+            s.given == given
+                || (folder.is_some()
+                    && s.name == name
+                    && FileId::of_path(&parent_of(&s.target)) == folder)
+        };
+        match self.staged.iter().any(same) {
+            true => Err(OutputError::Twice {
+                path: given.to_owned(),
             }),
-            None => Ok(()),
+            false => Ok(()),
         }
     }
 
@@ -294,6 +302,33 @@ impl Drop for Transaction {
             let _ = fs::remove_dir(d);
         }
     }
+}
+
+/// A file output replaces only a regular file: not a folder, and not a symbolic link, FIFO,
+/// device or socket, which a rename would replace by a file (`--json /dev/stdout` would
+/// replace the system's link; a link's target would be left as it was, not written).
+fn check_file_target(given: &Path, target: &Path) -> Result<(), OutputError> {
+    let Ok(meta) = fs::symlink_metadata(target) else {
+        return Ok(()); // free
+    };
+    let t = meta.file_type();
+    if t.is_file() {
+        return Ok(());
+    }
+    if t.is_dir() || fs::metadata(target).is_ok_and(|m| m.is_dir()) {
+        return Err(OutputError::IsAFolder {
+            path: given.to_owned(),
+        });
+    }
+    let what = if t.is_symlink() {
+        "a symbolic link (name the file it leads to instead)"
+    } else {
+        "not a regular file (a FIFO, device or socket)"
+    };
+    Err(OutputError::NotAFile {
+        path: given.to_owned(),
+        what,
+    })
 }
 
 /// A file output's `target` must not be an input, under any name: neither its own entry (a link
