@@ -108,39 +108,93 @@ fn a_failed_render_leaves_nothing_behind() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Ctrl-C in the middle of a long `--frames` run: the frames already written are removed and
-/// no render.json appears (the run stops at the next frame with an error, exit 1).
+/// Ctrl-C in the middle of a long `--frames` run, or any other signal that would end the
+/// process (SIGHUP when a terminal closes, SIGUSR1, SIGALRM): the frames already written are
+/// removed and no render.json appears (the run stops at the next frame with an error, exit 1).
 #[test]
 fn an_interrupted_sequence_leaves_nothing_behind() {
-    let dir = scratch("interrupt");
-    let out = dir.join("seq");
-    let scene = root().join("scenes/test/six-colour-room.toml");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args(["render", scene.to_str().unwrap(), "--out"])
-        .arg(&out)
-        .args(["--cube-size", "8", "--frames", "100000"])
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Wait (a condition, not a duration) until the hidden folder holds a finished frame.
-    let started = std::time::Instant::now();
-    while !tree(&dir).iter().any(|p| p.ends_with("0001/views.png")) {
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "the render ended early"
-        );
-        assert!(started.elapsed().as_secs() < 300, "no frame after 300 s");
-        std::thread::sleep(std::time::Duration::from_millis(50));
+    for (signal, name) in [
+        (libc::SIGINT, "INT"),
+        (libc::SIGHUP, "HUP"),
+        (libc::SIGUSR1, "USR1"),
+        (libc::SIGALRM, "ALRM"),
+    ] {
+        let dir = scratch(&format!("interrupt-{name}"));
+        let out = dir.join("seq");
+        let scene = root().join("scenes/test/six-colour-room.toml");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
+            .args(["render", scene.to_str().unwrap(), "--out"])
+            .arg(&out)
+            .args(["--cube-size", "8", "--frames", "100000"])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Wait (a condition, not a duration) until the staging holds a finished frame.
+        let started = std::time::Instant::now();
+        while !tree(&dir).iter().any(|p| p.ends_with("0001/views.png")) {
+            assert!(
+                child.try_wait().unwrap().is_none(),
+                "the render ended early"
+            );
+            assert!(started.elapsed().as_secs() < 300, "no frame after 300 s");
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        // SAFETY: signals our own child process.
+        unsafe { libc::kill(child.id() as i32, signal) };
+        let result = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "SIG{name}: {stderr}");
+        assert!(stderr.contains("interrupted after"), "SIG{name}: {stderr}");
+        assert_eq!(tree(&dir), Vec::<String>::new(), "SIG{name}");
+        std::fs::remove_dir_all(&*dir).unwrap();
     }
-    // SAFETY: signals our own child process.
-    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
-    let result = child.wait_with_output().unwrap();
+}
+
+/// Standard output that goes away or fills up is no reason to lose a run: with stdout a
+/// closed pipe the render is written whole (exit 0); with stdout full it is written too, and
+/// the command ends with an error that says stdout failed (exit 1), never a panic.
+#[test]
+fn a_failing_stdout_neither_kills_nor_panics() {
+    let dir = scratch("stdout");
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let run = |out: &Path, stdout: std::process::Stdio| {
+        Command::new(env!("CARGO_BIN_EXE_specchio"))
+            .args(["render", scene.to_str().unwrap(), "--out"])
+            .arg(out)
+            .args(["--cube-size", "8"])
+            .env("SPECCHIO_VALIDATE", "1")
+            .stdout(stdout)
+            .stderr(std::process::Stdio::piped())
+            .output()
+            .unwrap()
+    };
+    // A pipe whose reader is gone before the first line.
+    let mut fds = [0; 2];
+    // SAFETY: pipe fills two descriptors we then own: the read end is closed at once, the
+    // write end handed to the child as its stdout.
+    assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
+    unsafe { libc::close(fds[0]) };
+    let writer = unsafe { <std::fs::File as std::os::fd::FromRawFd>::from_raw_fd(fds[1]) };
+    let closed = run(&dir.join("closed"), writer.into());
+    let stderr = String::from_utf8_lossy(&closed.stderr);
+    assert_eq!(closed.status.code(), Some(0), "{stderr}");
+    assert!(dir.join("closed/render.json").is_file());
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let result = run(&dir.join("full"), full.into());
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert_eq!(result.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("interrupted after"), "{stderr}");
-    assert_eq!(tree(&dir), Vec::<String>::new());
-    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(
+        stderr.contains("cannot write to standard output"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(dir.join("full/render.json").is_file());
+    assert!(common::staging_folders(&dir.join("closed")).is_empty());
+    std::fs::remove_dir_all(&*dir).unwrap();
 }
 
 /// Re-running into the same folder (as scripts/run.sh does) replaces the earlier render as a

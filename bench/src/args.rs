@@ -72,6 +72,14 @@ pub fn method(text: &str) -> Result<Method, String> {
         .ok_or_else(|| format!("`{text}` is not a method: one of {}", Method::names()))
 }
 
+/// A method name or `all` (`render --method`).
+pub fn method_or_all(text: &str) -> Result<String, String> {
+    match text.trim() {
+        "all" => Ok("all".to_owned()),
+        other => method(other).map(|m| m.name().to_owned()),
+    }
+}
+
 /// A mirror lookup mode.
 pub fn lookup(text: &str) -> Result<Lookup, String> {
     Lookup::parse(text.trim())

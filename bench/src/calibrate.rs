@@ -94,6 +94,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let record = record(&cal, &args.scene, args.time);
     print_summary(&record, &cal);
     out.write_json(&dir.join(RECORD), &record)?;
+    // A signal that came after the last check still stops the run: nothing is placed.
+    crate::interrupt::check("before placing the output")?;
     out.commit()?;
     Ok(ExitCode::SUCCESS)
 }
@@ -169,12 +171,12 @@ fn record(cal: &Calibration, scene: &Path, time_s: f64) -> CalibrationRecord {
 
 fn print_summary(record: &CalibrationRecord, cal: &Calibration) {
     let line = |name: &str, s: &Summary, lost: usize| {
-        println!(
+        crate::say!(
             "{name}: residual mean {:.3}, p99 {:.3}, max {:.3} degrees; {lost} mirror pixels without a ray",
             s.mean, s.p99, s.max
         );
     };
-    println!(
+    crate::say!(
         "{} mirror pixels; viewpoint {:?} (world, m); rays pass it at mean {:.3}, p99 {:.3}, max {:.3} m",
         cal.mirror_pixels,
         record.viewpoint_world,

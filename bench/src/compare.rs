@@ -53,7 +53,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
 
     // 3. Report.
     if args.json {
-        println!(
+        crate::say!(
             "{}",
             serde_json::to_string_pretty(&to_json(args, &comparison))?
         );
@@ -123,19 +123,25 @@ fn angular(args: &Args, face_size: u32) -> Result<ExitCode> {
                 }
             }
         }
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        crate::say!("{}", serde_json::to_string_pretty(&value)?);
     } else if e.pixels == 0 {
-        println!("mirror pixels compared: 0 (no pixel has alpha 1 in both images inside the mask)");
-        println!("angular error (deg):    n/a");
-    } else {
-        println!("mirror pixels compared: {}", e.pixels);
-        println!(
-            "angular error (deg):    mean {:.4}  p99 {:.4}  max {:.4}",
-            e.mean_deg, e.p99_deg, e.max_deg
+        crate::say!(
+            "mirror pixels compared: 0 (no pixel has alpha 1 in both images inside the mask)"
         );
-        println!(
+        crate::say!("angular error (deg):    n/a");
+    } else {
+        crate::say!("mirror pixels compared: {}", e.pixels);
+        crate::say!(
+            "angular error (deg):    mean {:.4}  p99 {:.4}  max {:.4}",
+            e.mean_deg,
+            e.p99_deg,
+            e.max_deg
+        );
+        crate::say!(
             "in texels of {face_size}²:    mean {:.4}  p99 {:.4}  max {:.4}",
-            e.mean_texels, e.p99_texels, e.max_texels
+            e.mean_texels,
+            e.p99_texels,
+            e.max_texels
         );
     }
     Ok(ExitCode::SUCCESS)
@@ -183,7 +189,7 @@ fn print_table(args: &Args, c: &Comparison) {
         Some(v) if v.is_infinite() => "inf (identical)".to_owned(),
         Some(v) => format!("{v:.2} dB"),
     };
-    println!(
+    crate::say!(
         "compared {} against {} ({}x{})",
         args.test.display(),
         args.reference.display(),
@@ -191,30 +197,31 @@ fn print_table(args: &Args, c: &Comparison) {
         c.height
     );
     if let Some(mask) = &args.mask {
-        println!("  mask:            {}", mask.display());
+        crate::say!("  mask:            {}", mask.display());
     }
-    println!(
+    crate::say!(
         "  pixels:          {} compared of {} in the mask",
-        c.pixels_compared, c.pixels_in_mask
+        c.pixels_compared,
+        c.pixels_in_mask
     );
-    println!(
+    crate::say!(
         "  NaN / Inf:       test {} / {}, reference {} / {} (excluded)",
         c.test_non_finite.nan_pixels,
         c.test_non_finite.inf_pixels,
         c.reference_non_finite.nan_pixels,
         c.reference_non_finite.inf_pixels
     );
-    println!("  RMSE:            {}", num(c.rmse));
-    println!("  {:<17}{psnr}", format!("PSNR (peak {PSNR_PEAK}):"));
-    println!(
+    crate::say!("  RMSE:            {}", num(c.rmse));
+    crate::say!("  {:<17}{psnr}", format!("PSNR (peak {PSNR_PEAK}):"));
+    crate::say!(
         "  {:<17}{}",
         format!("relMSE (e {REL_MSE_EPSILON}):"),
         num(c.rel_mse)
     );
-    println!("  max |error|:     {}", num(c.max_abs_error));
-    println!("  FLIP mean:       {}", num(c.flip_mean));
-    println!("  FLIP 99th pct:   {}", num(c.flip_p99));
+    crate::say!("  max |error|:     {}", num(c.max_abs_error));
+    crate::say!("  FLIP mean:       {}", num(c.flip_mean));
+    crate::say!("  FLIP 99th pct:   {}", num(c.flip_p99));
     if let Some(path) = &args.heatmap {
-        println!("  heatmap:         {}", path.display());
+        crate::say!("  heatmap:         {}", path.display());
     }
 }

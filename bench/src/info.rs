@@ -73,11 +73,11 @@ fn list(args: &Args, instance: std::sync::Arc<Instance>) -> Result<ExitCode> {
                     .collect(),
             })
             .collect();
-        println!("{}", serde_json::to_string_pretty(&InfoRecord { devices })?);
+        crate::say!("{}", serde_json::to_string_pretty(&InfoRecord { devices })?);
         return Ok(ExitCode::SUCCESS);
     }
     if candidates.is_empty() {
-        println!("no Vulkan device found (Debian: apt-get install mesa-vulkan-drivers)");
+        crate::say!("no Vulkan device found (Debian: apt-get install mesa-vulkan-drivers)");
     }
     for (c, ms) in candidates.iter().zip(&methods) {
         print_device(
@@ -87,14 +87,14 @@ fn list(args: &Args, instance: std::sync::Arc<Instance>) -> Result<ExitCode> {
         );
         for (m, r) in ms {
             match r {
-                Ok(()) => println!("    method {:<20} usable", m.name()),
-                Err(why) => println!("    method {:<20} NOT USABLE: {why}", m.name()),
+                Ok(()) => crate::say!("    method {:<20} usable", m.name()),
+                Err(why) => crate::say!("    method {:<20} NOT USABLE: {why}", m.name()),
             }
         }
         for (l, why) in lookup_support(c) {
             match why {
-                None => println!("    lookup {:<20} usable", l.name()),
-                Some(why) => println!("    lookup {:<20} NOT USABLE: {why}", l.name()),
+                None => crate::say!("    lookup {:<20} usable", l.name()),
+                Some(why) => crate::say!("    lookup {:<20} NOT USABLE: {why}", l.name()),
             }
         }
     }
@@ -119,50 +119,52 @@ fn mesa_too_old(info: &DeviceInfo) -> bool {
 fn print_device(i: &DeviceInfo, rejected: Option<&str>, default: bool) {
     let yes = |b: bool| if b { "yes" } else { "no" };
     let mark = if default { "  <- default" } else { "" };
-    println!("[{}] {} ({}){mark}", i.index, i.name, i.device_type);
-    println!("    --device:           {} (or {})", i.short_name, i.index);
+    crate::say!("[{}] {} ({}){mark}", i.index, i.name, i.device_type);
+    crate::say!("    --device:           {} (or {})", i.short_name, i.index);
     match rejected {
-        Some(why) => println!("    status:             NOT USABLE: {why}"),
-        None => println!("    status:             usable"),
+        Some(why) => crate::say!("    status:             NOT USABLE: {why}"),
+        None => crate::say!("    status:             usable"),
     }
-    println!(
+    crate::say!(
         "    driver:             {} {} (version {})",
-        i.driver_name, i.driver_info, i.driver_version
+        i.driver_name,
+        i.driver_info,
+        i.driver_version
     );
-    println!("    Vulkan:             {}", i.api_version);
+    crate::say!("    Vulkan:             {}", i.api_version);
     if mesa_too_old(i) {
-        println!("    WARNING:            Mesa {} is older than {MIN_MESA_MAJOR}; results may differ (see README)",
+        crate::say!("    WARNING:            Mesa {} is older than {MIN_MESA_MAJOR}; results may differ (see README)",
             i.mesa_version.as_deref().unwrap_or("?"));
     }
     let l = &i.limits;
     let f = &i.features;
-    println!("    limits:             cube {} px, 2D {} px, {} layers, {} B push constants, anisotropy {}x, timestamp {} ns",
+    crate::say!("    limits:             cube {} px, 2D {} px, {} layers, {} B push constants, anisotropy {}x, timestamp {} ns",
         l.max_image_dimension_cube, l.max_image_dimension_2d, l.max_image_array_layers,
         l.max_push_constants_size, l.max_sampler_anisotropy, l.timestamp_period_ns);
-    println!(
+    crate::say!(
         "    memory:             {} per allocation, {} device-local heap",
         specchio::render::budget::bytes_text(l.max_memory_allocation_bytes),
         specchio::render::budget::bytes_text(l.device_local_heap_bytes)
     );
-    println!(
+    crate::say!(
         "    multiview:          {} (max {} views)",
         yes(f.multiview),
         l.max_multiview_view_count
     );
-    println!(
+    crate::say!(
         "    geometry shader:    {} (max {} output vertices, {} invocations)",
         yes(f.geometry_shader),
         l.max_geometry_output_vertices,
         l.max_geometry_shader_invocations
     );
-    println!("    shaderOutputLayer:  {}", yes(f.shader_output_layer));
-    println!(
+    crate::say!("    shaderOutputLayer:  {}", yes(f.shader_output_layer));
+    crate::say!(
         "    mesh shader:        {} (max {} output layers)",
         yes(f.mesh_shader),
         l.max_mesh_output_layers
     );
-    println!("    ray query:          {}", yes(f.ray_query));
-    println!("    timestamps:         {}", yes(f.timestamps));
-    println!("    pipeline stats:     {}", yes(f.pipeline_statistics));
-    println!("    anisotropy:         {}", yes(f.sampler_anisotropy));
+    crate::say!("    ray query:          {}", yes(f.ray_query));
+    crate::say!("    timestamps:         {}", yes(f.timestamps));
+    crate::say!("    pipeline stats:     {}", yes(f.pipeline_statistics));
+    crate::say!("    anisotropy:         {}", yes(f.sampler_anisotropy));
 }

@@ -1,5 +1,7 @@
-//! Ctrl-C (SIGINT) and SIGTERM during a command that writes outputs: the command stops at its
-//! next check and returns an error, so its output transaction is dropped and removes what it
+//! Ctrl-C (SIGINT), SIGTERM and the other signals that would end the process (SIGHUP when
+//! the terminal closes, SIGQUIT, SIGUSR1/2, SIGALRM) during a command that writes outputs:
+//! the command stops at its next check (and always before it places its output) and returns
+//! an error, so its output transaction is dropped and removes what it
 //! had written, instead of the process dying with a hidden half-written folder on disk. A
 //! second signal ends the process at once, but only half a second or more after the first:
 //! `timeout` sends its SIGTERM to the process and then to its process group, and that second
@@ -32,9 +34,23 @@ extern "C" fn on_signal(signal: libc::c_int) {
     }
 }
 
-/// Installs the handler for SIGINT and SIGTERM (once per process is enough; again is harmless).
+/// The signals whose default action would end the process with its staging folder on disk:
+/// each stops the run cleanly instead (SIGPIPE is ignored in `main`; SIGKILL and SIGSTOP
+/// cannot be caught).
+const STOPPING: [libc::c_int; 7] = [
+    libc::SIGINT,
+    libc::SIGTERM,
+    libc::SIGHUP,
+    libc::SIGQUIT,
+    libc::SIGUSR1,
+    libc::SIGUSR2,
+    libc::SIGALRM,
+];
+
+/// Installs the handler for the [`STOPPING`] signals (once per process is enough; again is
+/// harmless).
 pub fn catch() {
-    for signal in [libc::SIGINT, libc::SIGTERM] {
+    for signal in STOPPING {
         // SAFETY: a zeroed sigaction is valid (empty mask); the handler is async-signal-safe.
         unsafe {
             let mut action: libc::sigaction = std::mem::zeroed();

@@ -14,6 +14,7 @@ mod probe;
 mod records;
 mod reference;
 mod render;
+mod stdout;
 mod validation;
 mod view;
 
@@ -99,12 +100,12 @@ fn add_project_drivers() {
 }
 
 fn main() -> ExitCode {
-    // Like other command-line tools, end quietly when the reader of stdout goes away
-    // (`specchio ... | head`) instead of failing on the next print.
+    // A reader of stdout that goes away (`specchio ... | head`) must not kill the run with
+    // its staging folder on disk: writes then fail with EPIPE, which `stdout` handles.
     #[cfg(unix)]
-    // SAFETY: restores the default disposition of one signal before any thread starts.
+    // SAFETY: sets the disposition of one signal before any thread starts.
     unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+        libc::signal(libc::SIGPIPE, libc::SIG_IGN);
     }
     specchio::output::survive_file_size_limit();
     add_project_drivers();
@@ -123,6 +124,8 @@ fn main() -> ExitCode {
         Command::View(args) => view::run(&args),
         Command::Localise(args) => localise::run(&args),
     };
+    // A failed write to stdout (not the reader leaving) is the command's failure too.
+    let result = result.and_then(|code| stdout::verdict().map(|()| code));
     match result {
         Ok(code) => code,
         Err(e) => {

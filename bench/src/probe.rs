@@ -174,11 +174,11 @@ fn compare(args: &Args, method: Method, instance: Arc<Instance>) -> Result<ExitC
     let candidate = render(method)?;
     match first_difference(&reference, &candidate) {
         None => {
-            println!("{method}: identical to six-pass");
+            crate::say!("{method}: identical to six-pass");
             Ok(ExitCode::SUCCESS)
         }
         Some(d) => {
-            println!("{d}");
+            crate::say!("{d}");
             Ok(ExitCode::FAILURE)
         }
     }
@@ -213,7 +213,7 @@ fn measure_view_mask_leak(args: &Args, instance: Arc<Instance>) -> Result<ExitCo
         driver_info: device.info.driver_info.clone(),
         mesa_version: device.info.mesa_version.clone(),
     };
-    println!("{}", serde_json::to_string(&line)?);
+    crate::say!("{}", serde_json::to_string(&line)?);
     Ok(ExitCode::SUCCESS)
 }
 

@@ -77,7 +77,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         if name == "sensor" && args.sensor_outputs {
             SensorOutputs::from_reference(&scene, args.time, &images).write(&out, &args.out)?;
         }
-        println!(
+        crate::say!(
             "{name}: {w}x{h}, {} spp, {} rays in {:.0} ms ({:.2} M rays/s), {} mirror pixels, {} misses",
             stats.spp,
             stats.rays,
@@ -89,7 +89,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         *slot = stats;
     }
     let geometry = &reference.geometry;
-    println!(
+    crate::say!(
         "BVH: {} object triangles built in {:.1} ms ({:.1} ms core); the room's walls are an analytic box",
         geometry.triangle_count(),
         geometry.build_total.as_secs_f64() * 1e3,
@@ -108,6 +108,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         cameras: ReferenceCameras { observer, sensor },
     };
     out.write_json(&args.out.join("reference.json"), &record)?;
+    // A signal that came after the last check still stops the run: nothing is placed.
+    crate::interrupt::check("before placing the output")?;
     out.commit()?;
     Ok(ExitCode::SUCCESS)
 }

@@ -53,12 +53,12 @@ pub struct Args {
     cube_size: Option<u32>,
     /// Cube fill method (`specchio info` lists them, with what this device can run), or all
     /// (each usable one into DIR/<method>/; measurement variants only when named).
-    #[arg(long, default_value = "six-pass")]
+    #[arg(long, default_value = "six-pass", value_parser = crate::args::method_or_all)]
     method: String,
     /// Mirror lookup (`specchio info` lists them, with what this device can run; see
     /// docs/accuracy.md). Default: the scene's `mirror.lookup`.
-    #[arg(long)]
-    lookup: Option<String>,
+    #[arg(long, value_parser = crate::args::lookup)]
+    lookup: Option<Lookup>,
     /// The distance lookup's linear search steps, 1..=256 (overrides the scene's
     /// mirror.distance_steps; see docs/accuracy.md).
     #[arg(long, allow_negative_numbers = true, value_parser = whole(1..=MAX_DISTANCE_STEPS))]
@@ -95,13 +95,7 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Everything that can be wrong with the input is found before the output folder exists
     //    (the numbers' ranges by clap, `crate::args`).
-    let lookup = match args.lookup.as_deref() {
-        None => None,
-        Some(name) => match Lookup::parse(name) {
-            Some(l) => Some(l),
-            None => bail!("--lookup {name}: must be one of {}", Lookup::names()),
-        },
-    };
+    let lookup = args.lookup;
     let mut scene = specchio::scene::load(&args.scene)?;
     if let Some(n) = args.distance_steps {
         scene.mirror.distance_steps = n;
@@ -219,9 +213,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let messages = log.messages();
     record.validation_messages = messages.len();
     out.write_json(&args.out.join("render.json"), &record)?;
+    // A signal that came after the last check still stops the run: nothing is placed.
+    crate::interrupt::check("before placing the output")?;
     out.commit()?;
     for (m, why) in &refused {
-        println!("  {m}: not run: {why}");
+        crate::say!("  {m}: not run: {why}");
     }
     crate::validation::verdict(&messages)?;
     Ok(ExitCode::SUCCESS)
@@ -406,26 +402,26 @@ fn print_summary(
     summary: &RenderSummary,
 ) {
     let ms = |v: Option<f64>| v.map_or("n/a".to_owned(), |v| format!("{v:.2} ms"));
-    println!(
+    crate::say!(
         "rendered {} frame(s) of {} with {method}, lookup {lookup}, into {}",
         reports.len(),
         args.scene.display(),
         out.display()
     );
-    println!(
+    crate::say!(
         "  cube updates:       {} of {} frames",
         summary.cube_updates,
         reports.len()
     );
-    println!(
+    crate::say!(
         "  cube update (GPU):  {} median",
         ms(summary.median_gpu_cube_update_ms)
     );
-    println!(
+    crate::say!(
         "  observer (GPU):     {} median",
         ms(summary.median_gpu_observer_ms)
     );
-    println!(
+    crate::say!(
         "  sensor (GPU):       {} median",
         ms(summary.median_gpu_sensor_ms)
     );
@@ -434,5 +430,5 @@ fn print_summary(
     } else {
         ""
     };
-    println!("  files: observer.exr/.png, sensor.exr/.png, views.png,{cube} render.json");
+    crate::say!("  files: observer.exr/.png, sensor.exr/.png, views.png,{cube} render.json");
 }

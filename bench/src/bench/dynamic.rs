@@ -24,7 +24,7 @@ pub fn measure(
     scene: &Scene,
     size: u32,
     plan: &Plan,
-    tick: &dyn Fn(),
+    tick: &dyn Fn() -> Result<()>,
 ) -> Result<Dynamic> {
     let make = |full_updates| {
         let options = RenderOptions {
@@ -58,7 +58,7 @@ pub fn measure(
                 full_ms: b.submit_wait_ms,
             });
         }
-        tick();
+        tick()?;
     }
     let changed: Vec<&DynamicFrame> = frames.iter().filter(|f| f.faces_full > 0).collect();
     let col = |f: fn(&DynamicFrame) -> f64| {

@@ -21,7 +21,6 @@ mod tables;
 mod timing;
 mod tradeoff;
 
-use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -53,7 +52,7 @@ pub struct Plan {
 /// A line of the table: on stdout, or on stderr when stdout carries a JSON document.
 fn say(format: Format, line: &str) {
     match format {
-        Format::Table => println!("{line}"),
+        Format::Table => crate::say!("{line}"),
         Format::Github | Format::Bmf => eprintln!("{line}"),
     }
 }
@@ -65,6 +64,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     //    scenes are read, and the reports checked again against every file they brought
     //    (meshes, textures). They appear together at the end or not at all.
     let settled = settle(args)?;
+    crate::interrupt::catch();
     let mut out = Transaction::new();
     for input in settled.scenes.iter().chain(&settled.args.baseline) {
         out.input(input)?;
@@ -184,7 +184,11 @@ fn measure(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rounds, {elapsed} {msg}")
             .expect("a valid template"),
     );
-    let tick = || bar.inc(1);
+    // Each round is also where Ctrl-C or SIGTERM stops the run (nothing is written then).
+    let tick = || {
+        bar.inc(1);
+        crate::interrupt::check(&format!("after {} of {} rounds", bar.position(), total))
+    };
     let say = |line: String| bar.suspend(|| say(args.format, &line));
 
     say(format!(
@@ -304,7 +308,7 @@ fn measure_size(
     ),
     plan: &Plan,
     exact: Option<&tradeoff::Exact>,
-    tick: &dyn Fn(),
+    tick: &dyn Fn() -> Result<()>,
     record: &mut Record,
 ) -> Result<()> {
     let mut t = timing::time_size(device, scene, methods, size, plan, tick)?;
@@ -410,6 +414,7 @@ fn write_outputs(args: &Args, out: Transaction, record: &Record) -> Result<()> {
     if let Some(path) = &args.bmf {
         out.write_bytes(path, bmf::json(&bmf::bmf(record)?)?.as_bytes())?;
     }
+    crate::interrupt::check("before placing the reports")?;
     out.commit()?;
     let written = report_paths(args);
     for path in written {
@@ -417,12 +422,8 @@ fn write_outputs(args: &Args, out: Transaction, record: &Record) -> Result<()> {
     }
     match args.format {
         Format::Table => {}
-        Format::Github => {
-            let mut out = std::io::stdout().lock();
-            serde_json::to_writer_pretty(&mut out, &report::github(record))?;
-            writeln!(out)?;
-        }
-        Format::Bmf => print!("{}", bmf::json(&bmf::bmf(record)?)?),
+        Format::Github => crate::say!("{}", serde_json::to_string_pretty(&report::github(record))?),
+        Format::Bmf => crate::say_part!("{}", bmf::json(&bmf::bmf(record)?)?),
     }
     Ok(())
 }

@@ -39,7 +39,7 @@ pub fn time_size(
     methods: &[Method],
     size: u32,
     plan: &Plan,
-    tick: &dyn Fn(),
+    tick: &dyn Fn() -> Result<()>,
 ) -> Result<SizeTiming> {
     let make = |method| {
         let options = RenderOptions {
@@ -92,7 +92,7 @@ pub fn time_size(
                     t_f.reports.push(report);
                 }
             }
-            tick();
+            tick()?;
         }
         for (t, mut v) in timed.iter_mut().zip(run_m) {
             t.run_medians_ms.push(quantile(&mut v, 0.5));

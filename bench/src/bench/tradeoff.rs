@@ -116,7 +116,7 @@ pub fn measure(
     size: u32,
     plan: &Plan,
     exact: Option<&Exact>,
-    tick: &dyn Fn(),
+    tick: &dyn Fn() -> Result<()>,
 ) -> Result<Vec<RungRow>> {
     let mut renderers = rungs
         .iter()
@@ -135,7 +135,7 @@ pub fn measure(
                     timed.push(report);
                 }
             }
-            tick();
+            tick()?;
         }
     }
     let stats = device.info.features.pipeline_statistics;

@@ -88,7 +88,7 @@ pub struct Args {
     #[arg(long)]
     queries_at_landmarks: bool,
     /// Descriptor (fourier, column-shift; docs/sensor.md).
-    #[arg(long, default_value = "fourier")]
+    #[arg(long, default_value = "fourier", value_parser = descriptor_name)]
     descriptor: String,
     /// Sensor image side in pixels (square), 16..=8192.
     #[arg(long, default_value_t = 256, allow_negative_numbers = true,
@@ -189,6 +189,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     }
     out.write_bytes(&args.out.join("localise.svg"), map.as_bytes())?;
     out.write_json(&args.out.join("localise.json"), &report)?;
+    // A signal that came after the last check still stops the run: nothing is placed.
+    crate::interrupt::check("before placing the output")?;
     out.commit()?;
     report::print_table(&report, &args.out);
     crate::validation::verdict(&messages)?;
@@ -334,6 +336,18 @@ fn check_memory(args: &Args, plan: &Plan) -> Result<()> {
     let landmarks = plan.landmark_poses.len() as u64 * plan.sources.len() as u64;
     crate::memory::localise(&plan.body.scene, args.sensor_size, landmarks, values)
         .with_context(|| args.scene.display().to_string())
+}
+
+/// A `--descriptor` value, checked while the arguments are parsed (exit 2 like every other
+/// value out of its range).
+fn descriptor_name(text: &str) -> std::result::Result<String, String> {
+    match DescriptorKind::parse(text.trim()) {
+        Some(_) => Ok(text.trim().to_owned()),
+        None => Err(format!(
+            "`{text}` is not a descriptor: one of {}",
+            DescriptorKind::names()
+        )),
+    }
 }
 
 /// Keeps the first of each source, in the order given.

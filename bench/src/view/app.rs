@@ -122,7 +122,7 @@ pub fn run(
         outcome: Outcome::default(),
         error: None,
     };
-    print!("{}", input::help());
+    crate::say_part!("{}", input::help());
     event_loop.run_app(&mut app)?;
     // The viewer goes first (its presenter waits for the frames in flight).
     app.viewer = None;
@@ -332,7 +332,7 @@ impl App<'_> {
             Action::Walk { .. } | Action::Turn { .. } => input::move_observer(scene, action),
             Action::MoveSphere { x, y, z } => {
                 if let Err(why) = input::move_sphere(scene, (x, y, z)) {
-                    println!("sphere not moved: {why}");
+                    crate::say!("sphere not moved: {why}");
                 }
             }
             Action::PauseResume => self.clock.paused = !self.clock.paused,
@@ -356,12 +356,12 @@ impl App<'_> {
             Action::SetLookup(lookup) => {
                 if viewer.lookups.contains(&lookup) {
                     scene.mirror.lookup = lookup;
-                    println!("lookup: {lookup}");
+                    crate::say!("lookup: {lookup}");
                 }
             }
             Action::SetRefresh(refresh) => {
                 scene.refresh = refresh;
-                println!("refresh: {refresh:?}");
+                crate::say!("refresh: {refresh:?}");
             }
             Action::NextRefresh => {
                 scene.refresh = match scene.refresh {
@@ -369,7 +369,7 @@ impl App<'_> {
                     RefreshPolicy::EveryFrame => RefreshPolicy::EveryN(4),
                     RefreshPolicy::EveryN(_) => RefreshPolicy::OnChange,
                 };
-                println!("refresh: {:?}", scene.refresh);
+                crate::say!("refresh: {:?}", scene.refresh);
             }
             Action::Reset => {
                 let initial = &self.initial;
@@ -417,7 +417,7 @@ impl App<'_> {
     fn set_method(&mut self, method: Method) -> Result<bool> {
         let viewer = self.viewer.as_mut().expect("keys act on a viewer");
         if let Err(why) = crate::probe::usable(method, &self.device.info) {
-            println!("method {method} skipped: {why}");
+            crate::say!("method {method} skipped: {why}");
             return Ok(false);
         }
         let scene = viewer.renderer.scene.clone();
@@ -432,7 +432,7 @@ impl App<'_> {
         } else {
             drop(old);
         }
-        println!("method: {method}");
+        crate::say!("method: {method}");
         Ok(true)
     }
 
@@ -455,10 +455,10 @@ fn next_lookup(renderer: &mut Renderer) {
         match lookups::missing_features(lookup, info) {
             None => {
                 renderer.scene.mirror.lookup = lookup;
-                println!("lookup: {lookup}");
+                crate::say!("lookup: {lookup}");
                 return;
             }
-            Some(why) => println!("lookup {lookup} skipped: {why}"),
+            Some(why) => crate::say!("lookup {lookup} skipped: {why}"),
         }
     }
 }

@@ -87,7 +87,7 @@ impl Figures {
         let mut ms = self.frame_ms.clone();
         let total: f64 = ms.iter().sum();
         let median = specchio::metrics::percentile::median(&mut ms).unwrap_or(f64::NAN);
-        println!(
+        crate::say!(
             "frames: {}, median frame {median:.2} ms, mean {:.1} frames/s",
             ms.len(),
             1e3 * ms.len() as f64 / total

@@ -139,7 +139,7 @@ impl Menu {
             let px = rects[i].map(|r| pixel_rect(r, ppp, [size.width, size.height]));
             if px != self.reported[i] {
                 if let Some([x, y, w, h]) = px {
-                    println!("{name}: {x} {y} {w} {h}");
+                    crate::say!("{name}: {x} {y} {w} {h}");
                 }
                 self.reported[i] = px;
             }
@@ -172,7 +172,7 @@ impl Menu {
             .collect();
         if now != self.reported_widgets {
             for (name, [x, y, w, h]) in &now {
-                println!("widget: {name} {x} {y} {w} {h}");
+                crate::say!("widget: {name} {x} {y} {w} {h}");
             }
             self.reported_widgets = now;
         }

@@ -176,7 +176,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if let (Some(path), Some(shot)) = (&args.screenshot, outcome.screenshot) {
         out.write_png_rgb8(path, shot.width, shot.height, &shot.rgb8)?;
         out.commit()?;
-        println!(
+        crate::say!(
             "screenshot: {} ({}x{})",
             path.display(),
             shot.width,

@@ -183,9 +183,12 @@ impl Presenter {
         }
         if let Some(s) = &new {
             // One line per (re)creation: what the window presents with.
-            println!(
+            crate::say!(
                 "swapchain: {}x{} {:?} {:?}",
-                s.extent.width, s.extent.height, s.format.format, s.present_mode
+                s.extent.width,
+                s.extent.height,
+                s.format.format,
+                s.present_mode
             );
         }
         self.replace_overlay(overlay_format(new.as_ref()))?;
