@@ -91,6 +91,9 @@ fn absurd_arguments_fail_before_writing_anything() {
         (vec!["--fps=-3"], "(0, 10000]"),
         // Frame numbers would overflow counting on from here.
         (vec!["--frame", "18446744073709551615"], "0..=1000000000"),
+        // Names out of their lists, likewise (they exited 1 before).
+        (vec!["--method", "nope"], "one of six-pass"),
+        (vec!["--lookup", "nope"], "one of plain"),
     ] {
         let out = temp_dir("args");
         let mut all = vec!["render", scene, "--out", out.to_str().unwrap()];
@@ -265,8 +268,12 @@ fn an_unusable_or_unknown_method_is_refused_with_the_reason() {
         "--method",
         "sideways",
     ]);
-    assert!(!result.status.success());
-    assert!(String::from_utf8_lossy(&result.stderr).contains("--method sideways"));
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("'sideways' for '--method") && stderr.contains("one of six-pass"),
+        "{stderr}"
+    );
     assert!(!out.exists());
 }
 

@@ -94,7 +94,7 @@ fn bad_options_are_refused() {
         (&["--k", "0"], "--k"),
         (&["--queries", "0"], "--queries"),
         (&["--time", "-1"], "--time"),
-        (&["--descriptor", "sift"], "--descriptor sift"),
+        (&["--descriptor", "sift"], "`sift` is not a descriptor"),
         (&["--sensor-size", "4"], "--sensor-size"),
         (&["--sources", "plain,mirror"], "--sources"),
         (&["--times", "0,-3"], "--times"),
