@@ -5,6 +5,7 @@
 //! failed or interrupted write never leaves a half-written file, and every error names the
 //! user's path, never the hidden temporary one.
 
+mod dir;
 mod replace;
 mod stage;
 mod sys;

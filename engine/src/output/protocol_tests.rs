@@ -379,3 +379,60 @@ fn fifos_where_the_protocol_reads_do_not_block_it() {
     assert!(shaped.join(TOKEN).exists(), "a look-alike is kept");
     fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A run killed between its swap and its end leaves the earlier output in its staging folder,
+/// perhaps with what a user wrote into it meanwhile: the next run's sweep removes what the
+/// earlier output's manifest lists and moves the rest beside the target, never deletes it.
+#[test]
+fn a_run_killed_after_its_swap_loses_none_of_the_users_files() {
+    let dir = scratch("killed-after-swap");
+    let out = dir.join("out");
+    let mut stage = Stage::create(&dir, "out").unwrap();
+    stage.mark_may_hold_earlier_output().unwrap();
+    let old = stage.dir().join("out");
+    fs::create_dir(&old).unwrap();
+    fs::write(old.join("render.json"), b"{}").unwrap();
+    fs::write(old.join(MANIFEST), b"render.json\n").unwrap();
+    fs::write(old.join("late.txt"), b"mine").unwrap();
+    let stage_dir = stage.dir().to_owned();
+    stage.abandon();
+
+    render(&out, "a.txt", None).unwrap();
+    assert!(!stage_dir.exists(), "the dead stage is gone");
+    assert_eq!(fs::read(dir.join("out.kept-1/late.txt")).unwrap(), b"mine");
+    assert_eq!(names(&dir.join("out.kept-1")), ["late.txt"]);
+    assert_eq!(names(&dir), ["out", "out.kept-1"]);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The earlier output is removed through open folders, not paths: a staging folder renamed
+/// away and replaced by a link to a look-alike of the output while the removal runs leaves
+/// the look-alike whole.
+#[cfg(target_os = "linux")]
+#[test]
+fn the_removal_never_follows_a_link_planted_at_the_staging_path() {
+    let dir = scratch("planted-stage");
+    let out = dir.join("out");
+    render(&out, "a.txt", None).unwrap();
+    let victim = dir.join("victim");
+    fs::create_dir_all(victim.join("out")).unwrap();
+    for f in ["a.txt", "render.json", MANIFEST] {
+        fs::write(victim.join("out").join(f), b"victim's").unwrap();
+    }
+    let moved = dir.join("moved");
+    let (m, v) = (moved.clone(), victim.clone());
+    let hook = move |point: Point, item: &Path| {
+        if point == Point::BeforeRetire {
+            let stage = item.parent().unwrap();
+            fs::rename(stage, &m).unwrap();
+            std::os::unix::fs::symlink(&v, stage).unwrap();
+        }
+    };
+    render(&out, "b.txt", Some(Box::new(hook))).unwrap();
+    assert_eq!(
+        names(&victim.join("out")),
+        [MANIFEST, "a.txt", "render.json"]
+    );
+    assert_eq!(names(&out), [MANIFEST, "b.txt", "render.json"]);
+    fs::remove_dir_all(&dir).unwrap();
+}

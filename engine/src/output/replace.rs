@@ -12,10 +12,12 @@
 //! visible folder beside the target and reported, never deleted.
 
 use std::collections::HashSet;
+use std::ffi::{OsStr, OsString};
 use std::fs;
 use std::io::Read;
 use std::path::{Component, Path, PathBuf};
 
+use super::dir::{Dir, Entry, Rename};
 use super::sys;
 use super::transaction::{io, Kind, Staged, MANIFEST};
 use super::OutputError;
@@ -52,51 +54,72 @@ pub fn place(
     hook: Hook,
 ) -> Result<Placed, OutputError> {
     let item = s.item();
+    let name = OsString::from(&s.name);
     let Kind::Folder { marker } = &s.kind else {
-        fs::rename(&item, &s.target).map_err(io(&s.given))?;
+        let stage = s.stage.handle();
+        stage
+            .rename_out(&name, &s.target, Rename::Replace)
+            .map_err(io(&s.given))?;
         return Ok(Placed::Clean);
     };
     let marker = marker.clone();
     run_hook(hook, Point::BeforeSwap, &item);
-    if place_if_free(s, &item)? {
+    if place_if_free(s, &name)? {
         return Ok(Placed::Clean);
     }
+    s.stage
+        .mark_may_hold_earlier_output()
+        .map_err(io(&s.given))?;
     let spare = spare_name(s);
-    if let Err(e) = swap(&item, &s.target, &spare) {
+    if let Err(e) = swap(s, &name, &spare) {
         // A swap in three renames that failed at its last step leaves the old output at
         // `spare`: it must survive this run, named in the error.
-        if fs::symlink_metadata(&spare).is_ok() {
-            s.stage.keep();
-            return Err(OutputError::StuckAside {
-                path: s.given.clone(),
-                at: spare,
-                source: e,
-            });
+        if s.stage.handle().entry(&spare).is_ok() {
+            return Err(stuck(s, &spare, e));
         }
         return Err(OutputError::Io {
             path: s.given.clone(),
             source: e,
         });
     }
-    // `item` is now the old output.
-    if let Err(refusal) = check_replaceable(&s.given, &item, &marker, inputs) {
-        if let Err(e) = swap(&item, &s.target, &spare) {
-            s.stage.keep();
-            return Err(OutputError::StuckAside {
-                path: s.given.clone(),
-                at: item,
-                source: e,
-            });
+    // `name` in the staging folder is now the old output: opened by handle, checked again.
+    let old = s.stage.handle().open_dir(&name);
+    let checked = match &old {
+        Ok(old) => check_replaceable(&s.given, &old.path(), &marker, inputs),
+        Err(_) => Err(OutputError::NotAFolder {
+            path: s.given.clone(),
+        }),
+    };
+    if let Err(refusal) = checked {
+        drop(old);
+        if let Err(e) = swap(s, &name, &spare) {
+            return Err(stuck(s, &name, e));
         }
         return Err(refusal);
     }
+    let old = old.expect("checked above");
     run_hook(hook, Point::BeforeRetire, &item);
-    let left = retire(&item);
+    let left = retire(&old, s.stage.handle(), &name);
     if left.is_empty() {
         return Ok(Placed::Clean);
     }
-    let kept = keep_aside(s, &item)?;
-    Ok(Placed::KeptAside(left, kept))
+    match keep_aside(s.stage.handle(), &name, &s.target) {
+        Some(kept) => Ok(Placed::KeptAside(left, kept)),
+        None => {
+            s.stage.keep();
+            Ok(Placed::KeptAside(left, item))
+        }
+    }
+}
+
+/// The error for an earlier output left at `at` in the staging folder, which is kept.
+fn stuck(s: &mut Staged, at: &OsStr, source: std::io::Error) -> OutputError {
+    s.stage.keep();
+    OutputError::StuckAside {
+        path: s.given.clone(),
+        at: s.stage.dir().join(at),
+        source,
+    }
 }
 
 fn run_hook(hook: Hook, point: Point, item: &Path) {
@@ -105,15 +128,17 @@ fn run_hook(hook: Hook, point: Point, item: &Path) {
     }
 }
 
-/// Renames `item` to the target when nothing is there; false when something is.
-fn place_if_free(s: &Staged, item: &Path) -> Result<bool, OutputError> {
-    match sys::rename_no_replace(item, &s.target) {
+/// Renames the staged `name` to the target when nothing is there; false when something is.
+fn place_if_free(s: &Staged, name: &OsStr) -> Result<bool, OutputError> {
+    let stage = s.stage.handle();
+    match stage.rename_out(name, &s.target, Rename::NoReplace) {
         Ok(()) => Ok(true),
         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(false),
         Err(e) if sys::unsupported(&e) => match fs::symlink_metadata(&s.target) {
             // Without the flag: a plain rename, which the first check and this test guard.
-            Err(_) => fs::rename(item, &s.target)
-                .map(|_| true)
+            Err(_) => stage
+                .rename_out(name, &s.target, Rename::Replace)
+                .map(|()| true)
                 .map_err(io(&s.given)),
             Ok(_) => Ok(false),
         },
@@ -125,29 +150,30 @@ fn place_if_free(s: &Staged, item: &Path) -> Result<bool, OutputError> {
 }
 
 /// A name in the staging folder that is neither the token nor the staged item.
-fn spare_name(s: &Staged) -> PathBuf {
-    let spare = if s.name == ".specchio-old" {
-        ".specchio-old-"
-    } else {
-        ".specchio-old"
-    };
-    s.stage.dir().join(spare)
+fn spare_name(s: &Staged) -> OsString {
+    OsString::from(if s.name == SPARE { SPARE_TOO } else { SPARE })
 }
 
-/// Swaps `a` and `b`: atomically where the file system can, else in three renames through
-/// `spare` (a folder written into `b` meanwhile moves with it, so nothing is lost either way;
-/// a failed middle step is undone).
-fn swap(a: &Path, b: &Path, spare: &Path) -> std::io::Result<()> {
-    match sys::exchange(a, b) {
+/// Where a swap in three renames parks the target's folder (and its alternative, should the
+/// target be called that).
+const SPARE: &str = ".specchio-old";
+const SPARE_TOO: &str = ".specchio-old-";
+
+/// Swaps the staged `name` with the target: atomically where the file system can, else in
+/// three renames through `spare` (a folder written into the target meanwhile moves with it,
+/// so nothing is lost either way; a failed middle step is undone). The same call swaps back.
+fn swap(s: &Staged, name: &OsStr, spare: &OsStr) -> std::io::Result<()> {
+    let stage = s.stage.handle();
+    match stage.rename_out(name, &s.target, Rename::Exchange) {
         Err(e) if sys::unsupported(&e) => {}
         other => return other,
     }
-    fs::rename(b, spare)?;
-    if let Err(e) = fs::rename(a, b) {
-        let _ = fs::rename(spare, b);
+    stage.rename_in(&s.target, spare)?;
+    if let Err(e) = stage.rename_out(name, &s.target, Rename::Replace) {
+        let _ = stage.rename_out(spare, &s.target, Rename::Replace);
         return Err(e);
     }
-    fs::rename(spare, a)
+    stage.rename(spare, (stage, name), Rename::Replace)
 }
 
 /// Ok when `target` is free, or a folder that is empty or an earlier output holding `marker`
@@ -262,30 +288,44 @@ pub fn write_manifest(s: &Staged) -> Result<(), OutputError> {
 }
 
 /// Removes what the old output's manifest lists from `old` (deepest first; a folder only when
-/// empty; never through a link), then the manifest and `old` itself if nothing else is left.
-/// Returns what is left.
-fn retire(old: &Path) -> Vec<String> {
-    let mut listed: Vec<String> = read_manifest(old)
+/// empty; never a link, never through one: every step is relative to an open folder), then
+/// the manifest and `old` itself (`name` in `stage`) if nothing else is left. Returns what is
+/// left.
+fn retire(old: &Dir, stage: &Dir, name: &OsStr) -> Vec<String> {
+    let mut listed: Vec<String> = read_manifest(&old.path())
         .into_iter()
         .filter(|e| is_plain_relative(e))
         .collect();
     listed.sort();
     for rel in listed.iter().rev() {
-        if !parents_are_folders(old, rel) {
-            continue;
-        }
-        let path = old.join(rel);
-        let _ = match fs::symlink_metadata(&path) {
-            Ok(m) if m.is_dir() => fs::remove_dir(&path),
-            Ok(_) => fs::remove_file(&path),
-            Err(_) => Ok(()),
-        };
+        let _ = remove_listed(old, rel);
     }
-    let _ = fs::remove_file(old.join(MANIFEST));
-    if fs::remove_dir(old).is_ok() {
+    let _ = old.remove(OsStr::new(MANIFEST), false);
+    if stage.remove(name, true).is_ok() {
         return Vec::new();
     }
-    entries(old).unwrap_or_else(|_| vec!["(unreadable)".to_owned()])
+    entries(&old.path()).unwrap_or_else(|_| vec!["(unreadable)".to_owned()])
+}
+
+/// Removes the listed `rel` under `old`, walking its folders by handle (a link among them
+/// ends the walk: what lies beyond is not the output's).
+fn remove_listed(old: &Dir, rel: &str) -> std::io::Result<()> {
+    let parts: Vec<&OsStr> = Path::new(rel).iter().collect();
+    let Some((last, folders)) = parts.split_last() else {
+        return Ok(());
+    };
+    let mut walked: Option<Dir> = None;
+    for folder in folders {
+        let next = walked.as_ref().unwrap_or(old).open_dir(folder)?;
+        walked = Some(next);
+    }
+    let at = walked.as_ref().unwrap_or(old);
+    match at.entry(last)? {
+        Entry::Folder => at.remove(last, true),
+        Entry::Other => at.remove(last, false),
+        // No output writes a link: it is the user's.
+        Entry::Link => Ok(()),
+    }
 }
 
 /// A manifest line that names a path inside the folder: no root, no `..`, no `.`.
@@ -296,38 +336,55 @@ fn is_plain_relative(entry: &str) -> bool {
             .all(|c| matches!(c, Component::Normal(_)))
 }
 
-/// Every folder on the way from `root` to `rel` is a real folder, not a link (removing through
-/// a link would reach outside).
-fn parents_are_folders(root: &Path, rel: &str) -> bool {
-    let mut at = root.to_owned();
-    let parts: Vec<_> = Path::new(rel).components().collect();
-    for part in &parts[..parts.len().saturating_sub(1)] {
-        at.push(part);
-        if !fs::symlink_metadata(&at).is_ok_and(|m| m.is_dir()) {
-            return false;
-        }
-    }
-    true
-}
-
-/// Moves `old` (what remained of the earlier output) to `NAME.kept-N` beside the target, the
-/// first free N; if none can be taken the staging folder is kept where it is.
-fn keep_aside(s: &mut Staged, old: &Path) -> Result<PathBuf, OutputError> {
+/// Moves `name` of `stage` (what remained of an earlier output) to `TARGET.kept-N` beside the
+/// target, the first free N; None when no name could be taken.
+fn keep_aside(stage: &Dir, name: &OsStr, target: &Path) -> Option<PathBuf> {
     for n in 1..=MAX_KEPT_NAMES {
-        let mut name = s.target.clone().into_os_string();
-        name.push(format!(".kept-{n}"));
-        let kept = PathBuf::from(name);
-        match sys::rename_no_replace(old, &kept) {
-            Ok(()) => return Ok(kept),
+        let mut kept = target.to_owned().into_os_string();
+        kept.push(format!(".kept-{n}"));
+        let kept = PathBuf::from(kept);
+        match stage.rename_out(name, &kept, Rename::NoReplace) {
+            Ok(()) => return Some(kept),
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
             Err(e) if sys::unsupported(&e) && fs::symlink_metadata(&kept).is_err() => {
-                if fs::rename(old, &kept).is_ok() {
-                    return Ok(kept);
+                if stage.rename_out(name, &kept, Rename::Replace).is_ok() {
+                    return Some(kept);
                 }
             }
             Err(_) => {}
         }
     }
-    s.stage.keep();
-    Ok(old.to_owned())
+    None
+}
+
+/// A dead run's staging folder that may hold an earlier output of `target` (it was killed
+/// between its swap and its end): each folder in it is retired by its manifest, as a live run
+/// would, and what is left moved beside the target and reported on stderr. True when nothing
+/// of the user's is left in it.
+pub fn recover(stage: &Dir, name: &str, target: &Path) -> bool {
+    let mut clean = true;
+    for item in [name, SPARE, SPARE_TOO].map(OsStr::new) {
+        if stage.entry(item).ok() != Some(Entry::Folder) {
+            continue;
+        }
+        let Ok(folder) = stage.open_dir(item) else {
+            clean = false;
+            continue;
+        };
+        let left = retire(&folder, stage, item);
+        if left.is_empty() {
+            continue;
+        }
+        match keep_aside(stage, item, target) {
+            Some(kept) => eprintln!(
+                "specchio: a run killed while it replaced {} left {} in the earlier output that \
+                 the output did not write: kept in {}",
+                target.display(),
+                left.join(", "),
+                kept.display()
+            ),
+            None => clean = false,
+        }
+    }
+    clean
 }

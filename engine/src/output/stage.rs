@@ -8,11 +8,18 @@
 //! folder's own `HEX` in it and can take its lock, that is, when the run that made it is gone
 //! (killed before it could clean up). A name that merely looks like a staging folder, a link of
 //! that shape, or a folder whose run still lives (in whatever PID namespace) is never touched.
+//!
+//! Just before a run swaps its output with an earlier one, it rewrites the token to say that
+//! the folder may now hold that earlier output. A run killed after that point leaves a folder
+//! that may hold the user's files written into the old output, so the sweep does not simply
+//! remove it: it removes what the earlier output's manifest lists and moves anything else to
+//! `NAME.kept-N`, as a run that lives does (`replace::recover`).
 
 use std::fs::{self, File};
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
 
+use super::dir::Dir;
 use super::sys;
 
 /// The file in every staging folder that names it and carries its run's lock.
@@ -29,6 +36,9 @@ const NAME_BYTES: usize = 160;
 #[derive(Debug)]
 pub struct Stage {
     dir: PathBuf,
+    /// The folder, open: what is renamed and removed in it is addressed through this handle.
+    handle: Dir,
+    hex: String,
     /// The token file, open and locked: closing it (this run ending, however) frees the lock.
     lock: Option<File>,
     keep: bool,
@@ -40,8 +50,11 @@ impl Stage {
         let hex = random_hex()?;
         let dir = parent.join(format!(".{}{INFIX}{hex}", short(name)));
         fs::create_dir(&dir)?;
+        let handle = Dir::open(&dir)?;
         let mut stage = Stage {
             dir,
+            handle,
+            hex,
             lock: None,
             keep: false,
         };
@@ -53,7 +66,7 @@ impl Stage {
                 "a new staging token is locked by another file",
             ));
         }
-        token.write_all(token_text(&hex).as_bytes())?;
+        token.write_all(token_text(&stage.hex).as_bytes())?;
         stage.lock = Some(token);
         Ok(stage)
     }
@@ -61,6 +74,21 @@ impl Stage {
     /// The staging folder.
     pub fn dir(&self) -> &Path {
         &self.dir
+    }
+
+    /// The staging folder, open.
+    pub fn handle(&self) -> &Dir {
+        &self.handle
+    }
+
+    /// Says in the token, before an earlier output is swapped in here, that a sweep must
+    /// recover this folder by manifest rather than remove it.
+    pub fn mark_may_hold_earlier_output(&mut self) -> io::Result<()> {
+        use std::io::Seek;
+        let token = self.lock.as_mut().expect("a created stage holds its token");
+        token.set_len(0)?;
+        token.rewind()?;
+        token.write_all(swapping_text(&self.hex).as_bytes())
     }
 
     /// Leaves the folder and its token on disk and frees the lock, as a killed run does (for
@@ -108,25 +136,39 @@ pub fn sweep_dead(parent: &Path, name: &str) {
             continue;
         }
         let dir = entry.path();
-        if let Ok(Some(_lock)) = dead_token(&dir, hex) {
-            // Removed while we hold the dead run's lock, so two sweepers cannot both start.
-            let _ = fs::remove_dir_all(&dir);
+        let Ok(Some((_lock, may_hold_output))) = dead_token(&dir, hex) else {
+            continue;
+        };
+        // Handled while we hold the dead run's lock, so two sweepers cannot both start.
+        if may_hold_output {
+            let recovered = Dir::open(&dir)
+                .map(|d| super::replace::recover(&d, name, &parent.join(name)))
+                .unwrap_or(false);
+            if !recovered {
+                // What could not be moved aside stays, token removed: it is the user's now.
+                let _ = fs::remove_file(dir.join(TOKEN));
+                continue;
+            }
         }
+        let _ = fs::remove_dir_all(&dir);
     }
 }
 
-/// The token of `dir`, locked by us, when it names `hex` and its run is gone.
-fn dead_token(dir: &Path, hex: &str) -> io::Result<Option<File>> {
+/// The token of `dir`, locked by us, when it names `hex` and its run is gone, and whether it
+/// says the folder may hold an earlier output.
+fn dead_token(dir: &Path, hex: &str) -> io::Result<Option<(File, bool)>> {
     let mut token = sys::open_no_follow(&dir.join(TOKEN))?;
     if !token.metadata()?.is_file() {
         return Ok(None);
     }
     let mut text = String::new();
     (&mut token).take(256).read_to_string(&mut text)?;
-    if text != token_text(hex) {
-        return Ok(None);
-    }
-    Ok(sys::try_lock(&token)?.then_some(token))
+    let may_hold_output = match text {
+        t if t == token_text(hex) => false,
+        t if t == swapping_text(hex) => true,
+        _ => return Ok(None),
+    };
+    Ok(sys::try_lock(&token)?.then_some((token, may_hold_output)))
 }
 
 /// At most [`NAME_BYTES`] of the target's name, so that a staging folder's name stays within
@@ -142,6 +184,13 @@ fn short(name: &str) -> &str {
 
 fn token_text(hex: &str) -> String {
     format!("specchio staging folder {hex}: its run holds this file locked\n")
+}
+
+fn swapping_text(hex: &str) -> String {
+    format!(
+        "{}it may hold an earlier output: recover it by its manifest\n",
+        token_text(hex)
+    )
 }
 
 fn is_hex(s: &str) -> bool {

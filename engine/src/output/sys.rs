@@ -1,6 +1,6 @@
-//! The system calls the output protocol needs beyond `std`: an atomic swap of two paths, a
-//! rename that never replaces, an advisory lock that dies with its process, and an exclusive
-//! create that never follows a link. Linux has them all; elsewhere each says `Unsupported`
+//! The system calls the output protocol needs beyond `std`, besides the folder handles of
+//! `dir.rs`: an advisory lock that dies with its process, an exclusive create that never
+//! follows a link, and an open that never waits. Linux has them all; elsewhere each says `Unsupported`
 //! and the protocol takes its fallback (docs/architecture.md, "Output files").
 
 use std::fs::{File, OpenOptions};
@@ -72,29 +72,6 @@ pub fn try_lock(_: &File) -> io::Result<bool> {
     Err(io::ErrorKind::Unsupported.into())
 }
 
-/// Swaps two paths atomically (`renameat2(RENAME_EXCHANGE)`).
-pub fn exchange(a: &Path, b: &Path) -> io::Result<()> {
-    #[cfg(target_os = "linux")]
-    return renameat2(a, b, libc::RENAME_EXCHANGE);
-    #[cfg(not(target_os = "linux"))]
-    {
-        let _ = (a, b);
-        Err(io::ErrorKind::Unsupported.into())
-    }
-}
-
-/// Renames `from` to `to` only if nothing is at `to` (`renameat2(RENAME_NOREPLACE)`): a plain
-/// rename would replace an empty folder, or a file, that appeared at `to` meanwhile.
-pub fn rename_no_replace(from: &Path, to: &Path) -> io::Result<()> {
-    #[cfg(target_os = "linux")]
-    return renameat2(from, to, libc::RENAME_NOREPLACE);
-    #[cfg(not(target_os = "linux"))]
-    {
-        let _ = (from, to);
-        Err(io::ErrorKind::Unsupported.into())
-    }
-}
-
 /// The kernel or the file system has no such rename (vfat has neither flag; some network
 /// file systems refuse them).
 pub fn unsupported(e: &io::Error) -> bool {
@@ -103,30 +80,4 @@ pub fn unsupported(e: &io::Error) -> bool {
         return true;
     }
     e.kind() == io::ErrorKind::Unsupported
-}
-
-#[cfg(target_os = "linux")]
-fn renameat2(a: &Path, b: &Path, flags: libc::c_uint) -> io::Result<()> {
-    use std::ffi::CString;
-    use std::os::unix::ffi::OsStrExt;
-    let c = |p: &Path| {
-        CString::new(p.as_os_str().as_bytes())
-            .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))
-    };
-    let (a, b) = (c(a)?, c(b)?);
-    // SAFETY: two valid NUL-terminated paths relative to the working directory.
-    let rc = unsafe {
-        libc::renameat2(
-            libc::AT_FDCWD,
-            a.as_ptr(),
-            libc::AT_FDCWD,
-            b.as_ptr(),
-            flags,
-        )
-    };
-    if rc == 0 {
-        Ok(())
-    } else {
-        Err(io::Error::last_os_error())
-    }
 }
