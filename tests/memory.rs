@@ -72,7 +72,21 @@ fn each_command_stays_within_its_estimate_and_is_refused_above_the_budget() {
     let scene = thesis_at(&dir, 1024);
     let out = dir.join("out");
     let o = out.to_str().unwrap();
-    let cases: [Vec<&str>; 5] = [
+    let six = root().join("scenes/test/six-colour-room.toml");
+    let six = six.to_str().unwrap();
+    let json = dir.join("bench.json");
+    let cases: [Vec<&str>; 6] = [
+        // The whole benchmark (every method, the floors, the ladder and its errors) on a
+        // small scene; `--json` is its output, removed below like the folders.
+        vec![
+            "bench",
+            six,
+            "--quick",
+            "--cube-sizes",
+            "256",
+            "--json",
+            json.to_str().unwrap(),
+        ],
         vec!["render", &scene, "--out", o],
         vec![
             "render",
@@ -102,11 +116,15 @@ fn each_command_stays_within_its_estimate_and_is_refused_above_the_budget() {
         let (code, refusal, _) = run(args, Some("1"));
         assert_eq!(code, Some(1), "{args:?} under a 1-byte budget:\n{refusal}");
         assert!(refusal.contains("SPECCHIO_MEMORY_BUDGET=1"), "{refusal}");
-        assert!(!out.exists(), "{args:?}: refused, yet wrote its output");
+        assert!(
+            !out.exists() && !json.exists(),
+            "{args:?}: refused, yet wrote its output"
+        );
         let estimated = estimate(&refusal);
         let (code, stderr, peak) = run(args, None);
         assert_eq!(code, Some(0), "{args:?}:\n{stderr}");
-        std::fs::remove_dir_all(&out).unwrap();
+        let _ = std::fs::remove_dir_all(&out);
+        let _ = std::fs::remove_file(&json);
         eprintln!("{}: estimate {estimated}, peak {peak}", args[0]);
         if peak > estimated || estimated > 2 * peak {
             failures.push(format!(

@@ -55,6 +55,19 @@ const CALIBRATE_PIXEL_BYTES: u64 = 245;
 /// lookup; the reference's pixel is at most `REFERENCE_PIXEL_BYTES`).
 const LOCALISE_PIXEL_BYTES: u64 = 80;
 
+/// `bench`: a fill method's renderer per cube texel in the timing phase (14.4 measured), and
+/// its fixed part (about 7 MiB).
+const BENCH_METHOD_TEXEL_BYTES: u64 = 16;
+const BENCH_METHOD_BASE_BYTES: u64 = 8 * MIB;
+/// `bench`: a rung's renderer per cube texel (12.3 measured) and per view pixel (its views,
+/// read back with their directions: about 50 measured).
+const BENCH_RUNG_TEXEL_BYTES: u64 = 14;
+const BENCH_RUNG_VIEW_PIXEL_BYTES: u64 = 55;
+/// `bench`: the error measurement per view pixel: the reference's images and layers and each
+/// lookup's read back images and directions (thesis-room: 336 MiB for 742,144 view pixels,
+/// the same at 512² and 1024² faces).
+const BENCH_ACCURACY_VIEW_PIXEL_BYTES: u64 = 500;
+
 /// A decoded texel of the scene's textures: the decoded image, its upload and its mips.
 const TEXEL_BYTES: u64 = 12;
 
@@ -176,4 +189,53 @@ pub fn localise(
         4,
     );
     e.check(&Budget::from_env()?, "lower --sensor-size or --cube-size")
+}
+
+/// `specchio bench`: scenes and face sizes are measured one after another, so the estimate is
+/// that of the largest; within one, the fill methods' renderers (`methods`, the timing phase)
+/// and the ladder's (`rungs`) are alive in turn, each renderer with the scene, and the error
+/// measurement with the reference beside them. Measured phase by phase on thesis-room at 512²
+/// and 1024² faces (the constants above).
+pub fn bench(
+    scenes: &[&Scene],
+    face_sizes: &[u32],
+    methods: usize,
+    rungs: usize,
+    accuracy: bool,
+) -> Result<(), MemoryError> {
+    let face = u64::from(face_sizes.iter().copied().max().unwrap_or(0));
+    let texels = 6 * face * face;
+    let mut worst = Estimate::new();
+    for scene in scenes {
+        let views = pixels(scene.observer.resolution) + pixels(scene.sensor.resolution);
+        let mut one = Estimate::new();
+        scene_parts(&mut one, scene, RENDER_TRIANGLE_BYTES);
+        let per_scene = one.total();
+        let method = texels * BENCH_METHOD_TEXEL_BYTES + BENCH_METHOD_BASE_BYTES + per_scene;
+        let rung =
+            texels * BENCH_RUNG_TEXEL_BYTES + views * BENCH_RUNG_VIEW_PIXEL_BYTES + per_scene;
+        let mut e = Estimate::new();
+        e.add("the driver and the program", RENDER_BASE_BYTES);
+        let timing = (methods as u64).saturating_mul(method);
+        let ladder = (rungs as u64).saturating_mul(rung);
+        match timing >= ladder {
+            true => e.add(format!("{methods} fill methods' renderers"), timing),
+            false => e.add(format!("{rungs} rungs' renderers"), ladder),
+        };
+        if accuracy {
+            e.add_many(
+                "the error measurement",
+                views,
+                BENCH_ACCURACY_VIEW_PIXEL_BYTES,
+            );
+            scene_parts(&mut e, scene, REFERENCE_TRIANGLE_BYTES);
+        }
+        if e.total() > worst.total() {
+            worst = e;
+        }
+    }
+    worst.check(
+        &Budget::from_env()?,
+        "lower --cube-sizes, or measure fewer --methods or --rungs at once",
+    )
 }

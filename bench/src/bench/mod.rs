@@ -84,6 +84,18 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         .map(|p| specchio::scene::load(p).map_err(anyhow::Error::from))
         .collect::<Result<Vec<_>>>()?;
     out.check_inputs()?;
+    let rungs = if settled.args.no_tradeoff {
+        0
+    } else {
+        settled.rungs.len()
+    };
+    crate::memory::bench(
+        &scenes.iter().collect::<Vec<_>>(),
+        &settled.sizes,
+        settled.methods.len(),
+        rungs,
+        !settled.args.no_accuracy,
+    )?;
     if let Some(t) = settled.args.threads {
         // Before the driver starts: lavapipe reads it when the device is created.
         std::env::set_var("LP_NUM_THREADS", t.to_string());
