@@ -344,3 +344,47 @@ fn a_render_never_deletes_what_it_did_not_write() {
     assert!(stderr.contains("scene.toml"), "{stderr}");
     assert_eq!(tree(&out), before);
 }
+
+/// Ctrl-C (or SIGTERM) during a long run stops the benchmark at its next round with an error,
+/// and its reports' staging goes with it: nothing is written.
+#[test]
+fn an_interrupted_bench_writes_nothing() {
+    for signal in [libc::SIGINT, libc::SIGTERM] {
+        let dir = common::temp_dir(&format!("bench-interrupt-{signal}"));
+        std::fs::create_dir_all(&dir).unwrap();
+        let json = dir.join("b.json");
+        let scene = common::root().join("scenes/test/six-colour-room.toml");
+        let child = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
+            .args(["bench", scene.to_str().unwrap(), "--quick", "--no-accuracy"])
+            .args([
+                "--no-floors",
+                "--no-dynamic",
+                "--no-tradeoff",
+                "--frames",
+                "100000",
+            ])
+            .arg("--json")
+            .arg(&json)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The reports are staged once the run is set up (its handler is in place by then).
+        let started = std::time::Instant::now();
+        while common::staging_folders(&json).is_empty() {
+            assert!(started.elapsed().as_secs() < 120, "no staging after 120 s");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        // SAFETY: signals our own child process.
+        unsafe { libc::kill(child.id() as i32, signal) };
+        let result = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "signal {signal}: {stderr}");
+        assert!(stderr.contains("interrupted after"), "{stderr}");
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            0,
+            "signal {signal}"
+        );
+    }
+}

@@ -15,14 +15,9 @@ use std::time::{Duration, Instant};
 
 use specchio::scene::{load_str, Mesh, TextureData};
 
-// The command's own readers of the files a user hands it besides scenes: the bench baseline
-// and the landmarks file (the `specchio` binary's modules, compiled in here as they are).
-#[path = "../../src/localise/database.rs"]
-#[allow(dead_code)]
-mod database;
-#[path = "../../src/bench/record.rs"]
-#[allow(dead_code)]
-mod record;
+// The readers of the bench baseline and the landmarks file.
+#[path = "records.rs"]
+mod records;
 
 /// What a fuzz input is fed to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -132,26 +127,9 @@ pub fn execute(target: Target, input: &[u8], seed_path: &Path) -> bool {
         Target::Obj => Mesh::from_obj_bytes(input).is_ok(),
         Target::Gltf | Target::Glb => Mesh::from_gltf_bytes(input, folder).is_ok(),
         Target::Png => TextureData::from_png_bytes(input, seed_path).is_ok(),
-        Target::Baseline => record::parse(&String::from_utf8_lossy(input)).is_ok(),
-        Target::Landmarks => landmarks(input, seed_path),
+        Target::Baseline => records::baseline(input),
+        Target::Landmarks => records::landmarks(input, seed_path),
     }
-}
-
-/// A landmarks file, checked as `localise --landmarks` checks it against a run with the
-/// seed's own settings (so mutated inputs reach the signature checks behind the match).
-fn landmarks(input: &[u8], seed_path: &Path) -> bool {
-    let seed: Option<database::Database> = std::fs::read(seed_path)
-        .ok()
-        .and_then(|b| serde_json::from_slice(&b).ok());
-    let Some(mut run) = seed else {
-        return false;
-    };
-    run.landmarks.clear();
-    let expected = |source: &str| match source == run.source {
-        true => Ok(run.clone()),
-        false => Err(format!("field `source` is {source}, not {}", run.source)),
-    };
-    database::parse(input, "fuzz input", &expected).is_ok()
 }
 
 /// xorshift64*: small, fast, and the same sequence on every platform.
