@@ -11,7 +11,8 @@
 //! printed).
 //!
 //! Without Xvfb (Debian: `apt-get install xvfb`, done by scripts/setup.sh) the window tests
-//! print why and pass without checking; CI installs it, so they run there.
+//! print why and pass without checking, except under `SPECCHIO_REQUIRE_TOOL_CHECKS`
+//! (scripts/test.sh, CI), where a missing tool fails them.
 
 mod common;
 

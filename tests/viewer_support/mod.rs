@@ -19,9 +19,7 @@ impl Xvfb {
     /// Starts one, or `None` (with the reason printed) when Xvfb is not installed.
     pub fn start() -> Option<Self> {
         if Command::new("Xvfb").arg("-help").output().is_err() {
-            eprintln!(
-                "skipped: Xvfb is not installed (apt-get install xvfb; scripts/setup.sh does)"
-            );
+            missing("Xvfb", "apt-get install xvfb; scripts/setup.sh does");
             return None;
         }
         // A display number of this process's own, away from common ones (0..10), and of
@@ -234,6 +232,17 @@ pub fn shot_with_keys(x: &impl Display, keys: &str, name: &str) -> (Scratch, Str
     (shot, text(&out.stdout))
 }
 
+/// A window test cannot check anything without `tool`: under `SPECCHIO_REQUIRE_TOOL_CHECKS`
+/// (set by scripts/test.sh, whose set-up installs every tool) that is a failure, elsewhere the
+/// test says it skipped.
+fn missing(tool: &str, install: &str) {
+    assert!(
+        std::env::var_os("SPECCHIO_REQUIRE_TOOL_CHECKS").is_none(),
+        "{tool} is missing, and SPECCHIO_REQUIRE_TOOL_CHECKS says the checks must run ({install})"
+    );
+    eprintln!("skipped: {tool} is not installed ({install})");
+}
+
 /// A private headless Wayland compositor (weston's headless backend), stopped on drop. It
 /// listens in a runtime folder of its own (0700, as Wayland asks of XDG_RUNTIME_DIR).
 pub struct Weston {
@@ -247,9 +256,7 @@ impl Weston {
     /// Starts one, or `None` (with the reason printed) when weston is not installed.
     pub fn start(name: &str) -> Option<Self> {
         if Command::new("weston").arg("--version").output().is_err() {
-            eprintln!(
-                "skipped: weston is not installed (apt-get install weston; scripts/setup.sh does)"
-            );
+            missing("weston", "apt-get install weston; scripts/setup.sh does");
             return None;
         }
         use std::os::unix::fs::PermissionsExt;
@@ -312,7 +319,7 @@ impl Drop for Weston {
 /// `true` when xdotool can be run (it is what sends keys and clicks under Xvfb).
 pub fn has_xdotool() -> bool {
     if Command::new("xdotool").arg("version").output().is_err() {
-        eprintln!("skipped: xdotool is not installed (scripts/setup.sh installs it)");
+        missing("xdotool", "scripts/setup.sh installs it");
         return false;
     }
     true
