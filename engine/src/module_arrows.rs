@@ -1,84 +1,262 @@
-//! The module arrows of docs/architecture.md, checked on the source: the Vulkan layer knows
-//! nothing of the renderer or the scene, and the CPU-only modules (scene, image, reference,
-//! metrics, output) reach no Vulkan through their imports.
-use std::path::Path;
+//! The module arrows of docs/architecture.md, checked on the source as the compiler reads it:
+//! every file is parsed (`syn`), and every path it names (`use` trees with their `{..}` groups,
+//! paths in code, `super::super::...`) is resolved to the module it reaches. Two rules:
+//!
+//! - the Vulkan layer knows nothing of the renderer or the scene, and the CPU-only modules
+//!   (scene, image, files, memory, reference, metrics, output, sensor) reach no Vulkan;
+//! - no two modules import each other (a parent and its own child modules aside: a folder's
+//!   `mod.rs` and its files are one module split up). Longer loops are not looked for yet.
 
-/// Every `crate::NAME` path in the `.rs` files under `dir`, as (file, NAME).
-fn crate_paths(dir: &Path) -> Vec<(String, String)> {
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+use syn::visit::Visit;
+
+/// A module path below the crate root, as its names (`["render", "cube_fill"]`).
+type Module = Vec<String>;
+
+/// Every `.rs` file under `src` with the module it defines.
+fn modules(src: &Path) -> Vec<(PathBuf, Module)> {
     let mut found = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for entry in std::fs::read_dir(&d).expect("source folder") {
+    let mut stack = vec![src.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).expect("source folder") {
             let path = entry.expect("entry").path();
             if path.is_dir() {
                 stack.push(path);
                 continue;
             }
-            let text = std::fs::read_to_string(&path).expect("source file");
-            for piece in text.split("crate::").skip(1) {
-                let name: String = piece
-                    .chars()
-                    .take_while(|c| c.is_alphanumeric() || *c == '_')
-                    .collect();
-                found.push((path.display().to_string(), name));
+            if path.extension().is_none_or(|e| e != "rs") {
+                continue;
             }
+            let rel = path.strip_prefix(src).expect("under src");
+            let mut names: Module = rel
+                .iter()
+                .map(|p| p.to_string_lossy().trim_end_matches(".rs").to_owned())
+                .collect();
+            if matches!(
+                names.last().map(String::as_str),
+                Some("mod" | "lib" | "main")
+            ) {
+                names.pop();
+            }
+            found.push((path, names));
         }
     }
+    found.sort();
     found
 }
 
-fn assert_no_imports(module: &str, forbidden: &[&str]) {
+/// The modules a file's paths reach, resolved from `here` (the file's own module).
+struct Paths<'a> {
+    here: &'a Module,
+    /// The inline modules (`mod tests { .. }`) being visited, inside `here`.
+    inline: Vec<String>,
+    reached: BTreeSet<Module>,
+}
+
+impl Paths<'_> {
+    /// Resolves a path's leading segments: `crate::a::b`, `super::x`, `self::y`. Others
+    /// (external crates, locals, prelude) are not modules of this crate.
+    fn add(&mut self, segments: &[String]) {
+        let mut at: Module = match segments.first().map(String::as_str) {
+            Some("crate") => Vec::new(),
+            Some("super") | Some("self") => {
+                let mut at = self.here.clone();
+                at.extend(self.inline.iter().cloned());
+                at
+            }
+            _ => return,
+        };
+        for s in segments {
+            match s.as_str() {
+                "crate" | "self" => {}
+                "super" => {
+                    at.pop();
+                }
+                name => at.push(name.to_owned()),
+            }
+        }
+        self.reached.insert(at);
+    }
+
+    fn tree(&mut self, prefix: &mut Vec<String>, tree: &syn::UseTree) {
+        match tree {
+            syn::UseTree::Path(p) => {
+                prefix.push(p.ident.to_string());
+                self.tree(prefix, &p.tree);
+                prefix.pop();
+            }
+            syn::UseTree::Name(n) => {
+                prefix.push(n.ident.to_string());
+                self.add(prefix);
+                prefix.pop();
+            }
+            syn::UseTree::Rename(r) => {
+                prefix.push(r.ident.to_string());
+                self.add(prefix);
+                prefix.pop();
+            }
+            syn::UseTree::Glob(_) => self.add(prefix),
+            syn::UseTree::Group(g) => {
+                for t in &g.items {
+                    self.tree(prefix, t);
+                }
+            }
+        }
+    }
+}
+
+impl<'ast> Visit<'ast> for Paths<'_> {
+    fn visit_item_mod(&mut self, m: &'ast syn::ItemMod) {
+        self.inline.push(m.ident.to_string());
+        syn::visit::visit_item_mod(self, m);
+        self.inline.pop();
+    }
+
+    fn visit_item_use(&mut self, u: &'ast syn::ItemUse) {
+        self.tree(&mut Vec::new(), &u.tree);
+    }
+
+    fn visit_path(&mut self, p: &'ast syn::Path) {
+        let segments: Vec<String> = p.segments.iter().map(|s| s.ident.to_string()).collect();
+        self.add(&segments);
+        syn::visit::visit_path(self, p);
+    }
+}
+
+/// Each module's reached modules, cut to the depth of modules that exist (a path to an item
+/// `render::floors::Floor` reaches the module `render::floors`).
+fn graph() -> BTreeMap<Module, BTreeSet<Module>> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let dir = src.join(module);
-    let paths = if dir.is_dir() {
-        crate_paths(&dir)
-    } else {
-        let file = src.join(format!("{module}.rs"));
-        let text = std::fs::read_to_string(&file).expect("module file");
-        text.split("crate::")
-            .skip(1)
-            .map(|p| {
-                let name = p
-                    .chars()
-                    .take_while(|c| c.is_alphanumeric() || *c == '_')
-                    .collect();
-                (file.display().to_string(), name)
-            })
-            .collect()
-    };
-    let bad: Vec<_> = paths
+    let files = modules(&src);
+    let known: BTreeSet<Module> = files.iter().map(|(_, m)| m.clone()).collect();
+    let mut graph: BTreeMap<Module, BTreeSet<Module>> = BTreeMap::new();
+    for (path, module) in &files {
+        let text = std::fs::read_to_string(path).expect("source file");
+        let file = syn::parse_file(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut paths = Paths {
+            here: module,
+            inline: Vec::new(),
+            reached: BTreeSet::new(),
+        };
+        paths.visit_file(&file);
+        let edges = graph.entry(module.clone()).or_default();
+        for mut target in paths.reached {
+            while !target.is_empty() && !known.contains(&target) {
+                target.pop();
+            }
+            if !target.is_empty() && target != *module {
+                edges.insert(target);
+            }
+        }
+    }
+    graph
+}
+
+fn starts_with(m: &Module, prefix: &[&str]) -> bool {
+    m.len() >= prefix.len() && m.iter().zip(prefix).all(|(a, b)| a == b)
+}
+
+/// Every edge from a module under `from` to one under any of `to`.
+fn edges_between(
+    graph: &BTreeMap<Module, BTreeSet<Module>>,
+    from: &str,
+    to: &[&str],
+) -> Vec<String> {
+    graph
         .iter()
-        .filter(|(_, name)| forbidden.contains(&name.as_str()))
-        .collect();
-    assert!(
-        bad.is_empty(),
-        "{module} must not use {forbidden:?}: {bad:?}"
-    );
+        .filter(|(m, _)| starts_with(m, &[from]))
+        .flat_map(|(m, reached)| {
+            reached
+                .iter()
+                .filter(|t| to.iter().any(|p| starts_with(t, &[p])))
+                .map(move |t| format!("{} -> {}", m.join("::"), t.join("::")))
+        })
+        .collect()
 }
 
 #[test]
 fn vulkan_layer_imports_neither_renderer_nor_scene() {
-    assert_no_imports("vk", &["render", "scene", "reference", "metrics"]);
+    let bad = edges_between(&graph(), "vk", &["render", "scene", "reference", "metrics"]);
+    assert!(bad.is_empty(), "the Vulkan layer reaches up: {bad:#?}");
 }
 
 #[test]
 fn cpu_modules_reach_no_vulkan() {
-    for module in ["scene", "image", "reference", "metrics", "output", "sensor"] {
-        assert_no_imports(module, &["vk", "render", "shaders"]);
+    let graph = graph();
+    for module in [
+        "scene",
+        "image",
+        "files",
+        "memory",
+        "reference",
+        "metrics",
+        "output",
+        "sensor",
+    ] {
+        let bad = edges_between(&graph, module, &["vk", "render", "shaders"]);
+        assert!(bad.is_empty(), "{module} reaches Vulkan: {bad:#?}");
     }
-    // Nor the Vulkan bindings directly.
+    // Nor the Vulkan bindings directly (an external crate, so looked for by name).
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut stack: Vec<_> = ["scene", "reference", "metrics", "sensor"]
+    for (path, module) in modules(&src) {
+        let cpu = [
+            "scene",
+            "reference",
+            "metrics",
+            "sensor",
+            "image",
+            "output",
+            "files",
+        ]
         .iter()
-        .map(|m| src.join(m))
-        .chain(["image.rs", "output"].iter().map(|f| src.join(f)))
-        .collect();
-    while let Some(p) = stack.pop() {
-        if p.is_dir() {
-            stack.extend(std::fs::read_dir(&p).unwrap().map(|e| e.unwrap().path()));
-        } else {
-            let text = std::fs::read_to_string(&p).unwrap();
-            assert!(!text.contains("ash::"), "{} uses ash", p.display());
+        .any(|p| starts_with(&module, &[p]));
+        if cpu {
+            let text = std::fs::read_to_string(&path).unwrap();
+            assert!(!text.contains("ash::"), "{} uses ash", path.display());
         }
+    }
+}
+
+/// A module and its own descendants are one unit split over files; the other pairs must
+/// keep their arrows one way.
+fn related(a: &Module, b: &Module) -> bool {
+    starts_with(a, &b.iter().map(String::as_str).collect::<Vec<_>>())
+        || starts_with(b, &a.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+#[test]
+fn no_two_modules_import_each_other() {
+    let graph = graph();
+    let mut cycles = Vec::new();
+    for (a, reached) in &graph {
+        for b in reached {
+            if a < b && !related(a, b) && graph.get(b).is_some_and(|r| r.contains(a)) {
+                cycles.push(format!("{} <-> {}", a.join("::"), b.join("::")));
+            }
+        }
+    }
+    assert!(cycles.is_empty(), "import cycles: {cycles:#?}");
+}
+
+/// The guard sees what the old text search missed: a `{..}` group and `super::super`.
+#[test]
+fn the_guard_reads_groups_and_super_paths() {
+    let here: Module = vec!["render".into(), "lookups".into()];
+    let file = syn::parse_file(
+        "use crate::{scene::camera, vk::{device::Device}};\n\
+         fn f() { super::super::metrics::compare(); }",
+    )
+    .unwrap();
+    let mut paths = Paths {
+        here: &here,
+        inline: Vec::new(),
+        reached: BTreeSet::new(),
+    };
+    paths.visit_file(&file);
+    let reached: Vec<String> = paths.reached.iter().map(|m| m.join("::")).collect();
+    for expected in ["scene::camera", "vk::device::Device", "metrics::compare"] {
+        assert!(reached.contains(&expected.to_owned()), "{reached:?}");
     }
 }

@@ -8,6 +8,7 @@
 mod dir;
 mod replace;
 mod stage;
+mod staged;
 mod sys;
 mod transaction;
 
@@ -18,7 +19,8 @@ use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, Vec2, WritableI
 
 use crate::image::RgbaImage;
 
-pub use transaction::{Transaction, MANIFEST};
+pub use staged::MANIFEST;
+pub use transaction::Transaction;
 
 /// Why an output could not be written. Each names the user's path; an I/O cause is the
 /// error's `source` (printed after it by `{:#}` in the CLI), not repeated in the message.

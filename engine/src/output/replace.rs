@@ -18,8 +18,8 @@ use std::io::Read;
 use std::path::{Component, Path, PathBuf};
 
 use super::dir::{Dir, Entry, Rename};
+use super::staged::{io, Kind, Staged, MANIFEST};
 use super::sys;
-use super::transaction::{io, Kind, Staged, MANIFEST};
 use super::OutputError;
 use crate::files::identity::FileId;
 

@@ -11,7 +11,7 @@
 //! - a run writes only into staging folders it made itself ([`stage`]): random names,
 //!   exclusive creation, never a link followed, never a name reused;
 //! - an existing folder is replaced only when it is an earlier output of the same command (it
-//!   holds the command's marker file and nothing its manifest, [`MANIFEST`], does not list),
+//!   holds the command's marker file and nothing its manifest, [`MANIFEST`](super::MANIFEST), does not list),
 //!   or is empty; this is checked once before any work, and again on the old folder itself
 //!   after it has been swapped out atomically, where no path can reach it: an entry that
 //!   appeared in between makes the run swap back and refuse ([`replace`]);
@@ -25,41 +25,9 @@ use std::path::{Path, PathBuf};
 
 use super::replace::{self, Placed};
 use super::stage::{self, Stage};
+use super::staged::{io, Kind, Staged};
 use super::{sys, OutputError};
 use crate::files::identity::{self, FileId};
-
-/// The file in every output folder that lists, one relative path a line, what the output
-/// wrote there: what a later run may replace.
-pub const MANIFEST: &str = ".specchio-files";
-
-#[derive(Debug)]
-pub(super) enum Kind {
-    File,
-    /// A folder, replaceable when it holds this marker file (or is empty).
-    Folder {
-        marker: String,
-    },
-}
-
-#[derive(Debug)]
-pub(super) struct Staged {
-    /// The target as the user spelled it: what writes are addressed to and errors name.
-    pub given: PathBuf,
-    /// The target the staged output is renamed to (`given`, or its real path for `.`, `..`).
-    pub target: PathBuf,
-    /// The target's final name: the staged output's name inside `stage`.
-    pub name: String,
-    /// This run's staging folder for it.
-    pub stage: Stage,
-    pub kind: Kind,
-}
-
-impl Staged {
-    /// The staged output: the file or folder that becomes `target`.
-    pub fn item(&self) -> PathBuf {
-        self.stage.dir().join(&self.name)
-    }
-}
 
 /// A test's hook into [`Transaction::commit`], run at the named point with the staged item.
 #[cfg(test)]
@@ -361,13 +329,6 @@ fn hook(h: &Option<Hook>) -> replace::Hook<'_> {
 #[cfg(not(test))]
 fn hook(_: &Option<Hook>) -> replace::Hook<'_> {
     None
-}
-
-pub(super) fn io(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
-    move |source| OutputError::Io {
-        path: path.to_owned(),
-        source,
-    }
 }
 
 /// The target with a final name to stage it under: `.` and `..` are resolved to the folder

@@ -9,12 +9,18 @@ use super::methods::{CubeLayout, CubePlan, CubeRecorder};
 use super::{FrameReport, Renderer, TS_FILL, TS_MIPS};
 use crate::vk::commands::{image_barriers, ImageBarrier};
 
-/// What fills the dirty faces of a cube update.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Fill {
+/// What fills the dirty faces of a cube update: the renderer's method, or another recording
+/// into the same cube and faces (the benchmark's floors), which gets one timestamp pair, no
+/// per-face marks and no id cube. Given as a recording, not as a floor, so that this module
+/// knows nothing of the floors (they use it, not the other way round).
+#[derive(Clone, Copy)]
+pub(super) enum Fill<'a> {
     /// The renderer's method.
     Method,
-    Floor(super::floors::Floor),
+    Other {
+        name: &'static str,
+        record: &'a dyn Fn(&CubeRecorder<'_>, &CubePlan),
+    },
 }
 
 impl Renderer {
@@ -84,10 +90,10 @@ impl Renderer {
         };
         let name = match fill {
             Fill::Method => self.method.name(),
-            Fill::Floor(f) => f.name(),
+            Fill::Other { name, .. } => name,
         };
         dev.begin_label(cmd, &format!("cube fill ({name})"));
-        let per_face_marks = fill == Fill::Method && self.per_face_marks();
+        let per_face_marks = matches!(fill, Fill::Method) && self.per_face_marks();
         // Clean faces keep their pixels, colour and depth (the `distance` lookup's distance
         // map), so the old layout is named (UNDEFINED only before the first fill); the last
         // readers were the mirror's fragment shaders.
@@ -134,11 +140,11 @@ impl Renderer {
                 let rec = CubeRecorder::new(self, cmd, self.method.layout(), per_face_marks, ids);
                 self.fill.record(&rec, plan);
             }
-            Fill::Floor(f) => {
-                // The floors write no ids: the id cube keeps what it had (the floors are
+            Fill::Other { record, .. } => {
+                // Other fills write no ids: the id cube keeps what it had (the floors are
                 // benchmark passes, which never read ids).
                 let rec = CubeRecorder::new(self, cmd, CubeLayout::PerFace, false, false);
-                self.record_floor(&rec, plan, f);
+                record(&rec, plan);
             }
         }
         if let (Some(q), false) = (&self.statistics, per_face_marks) {

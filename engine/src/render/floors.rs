@@ -72,7 +72,12 @@ impl Renderer {
             ..Default::default()
         };
         let first = self.cube_state.is_none();
-        self.record_cube_fill(cmd, &plan, first, &mut report, Fill::Floor(floor));
+        let record = |rec: &CubeRecorder<'_>, plan: &CubePlan| self.record_floor(rec, plan, floor);
+        let fill = Fill::Other {
+            name: floor.name(),
+            record: &record,
+        };
+        self.record_cube_fill(cmd, &plan, first, &mut report, fill);
         // Keeps the remaining timestamp slots answered (no view is drawn).
         self.record_views(cmd, &views, Readback::default(), None);
         self.submit_frame(cmd, record_start, &mut report)?;

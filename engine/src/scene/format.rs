@@ -13,9 +13,13 @@
 //! Fixed-length arrays are read through `fixed.rs`, which refuses extra elements (serde alone
 //! would drop them silently).
 
+use std::fmt;
+
+use serde::de::value::{MapAccessDeserializer, SeqAccessDeserializer};
+use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
 
-use super::fixed;
+use super::fixed::{self, exact};
 
 pub type V3 = [f64; 3];
 
@@ -280,4 +284,54 @@ pub struct LightSpec {
     #[serde(deserialize_with = "fixed::exact")]
     pub direction: V3,
     pub ambient: Option<f64>,
+}
+
+// The two fields that take one of two shapes (`walls`, `scale`), read by hand: serde's
+// untagged enums answer any mistake with "data did not match any variant of untagged enum",
+// which names neither what is wrong nor what is allowed.
+
+impl<'de> Deserialize<'de> for WallsSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Walls;
+        impl<'de> Visitor<'de> for Walls {
+            type Value = WallsSpec;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(
+                    "a material name for all six walls, or a table { px, nx, py, ny, pz, nz } naming one per wall",
+                )
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<WallsSpec, E> {
+                Ok(WallsSpec::All(v.to_string()))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<WallsSpec, A::Error> {
+                EachWall::deserialize(MapAccessDeserializer::new(map)).map(WallsSpec::Each)
+            }
+        }
+        d.deserialize_any(Walls)
+    }
+}
+
+impl<'de> Deserialize<'de> for ScaleSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Scale;
+        impl<'de> Visitor<'de> for Scale {
+            type Value = ScaleSpec;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number (uniform scale) or an array of exactly 3 numbers [x, y, z]")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<ScaleSpec, E> {
+                Ok(ScaleSpec::Uniform(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<ScaleSpec, E> {
+                Ok(ScaleSpec::Uniform(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<ScaleSpec, E> {
+                Ok(ScaleSpec::Uniform(v as f64))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<ScaleSpec, A::Error> {
+                exact(SeqAccessDeserializer::new(seq)).map(ScaleSpec::PerAxis)
+            }
+        }
+        d.deserialize_any(Scale)
+    }
 }
