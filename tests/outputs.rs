@@ -48,6 +48,28 @@ fn scratch(name: &str) -> Scratch {
     d
 }
 
+/// Waits (for a condition, not a duration: at most 300 s) until `ready` holds while `child`
+/// still runs, then sends it `signal` and collects its output.
+fn signal_when(
+    mut child: std::process::Child,
+    signal: libc::c_int,
+    what: &str,
+    ready: impl Fn() -> bool,
+) -> std::process::Output {
+    let started = std::time::Instant::now();
+    while !ready() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before {what}"
+        );
+        assert!(started.elapsed().as_secs() < 300, "no {what} after 300 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // SAFETY: signals our own child process.
+    unsafe { libc::kill(child.id() as i32, signal) };
+    child.wait_with_output().unwrap()
+}
+
 /// Real failures at every stage of `specchio render`, each leaving the disk as it was: no
 /// target folder, no hidden temporary folder, no folder the command created.
 #[test]
@@ -122,7 +144,7 @@ fn an_interrupted_sequence_leaves_nothing_behind() {
         let dir = scratch(&format!("interrupt-{name}"));
         let out = dir.join("seq");
         let scene = root().join("scenes/test/six-colour-room.toml");
-        let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
+        let child = Command::new(env!("CARGO_BIN_EXE_specchio"))
             .args(["render", scene.to_str().unwrap(), "--out"])
             .arg(&out)
             .args(["--cube-size", "8", "--frames", "100000"])
@@ -130,19 +152,10 @@ fn an_interrupted_sequence_leaves_nothing_behind() {
             .stderr(std::process::Stdio::piped())
             .spawn()
             .unwrap();
-        // Wait (a condition, not a duration) until the staging holds a finished frame.
-        let started = std::time::Instant::now();
-        while !tree(&dir).iter().any(|p| p.ends_with("0001/views.png")) {
-            assert!(
-                child.try_wait().unwrap().is_none(),
-                "the render ended early"
-            );
-            assert!(started.elapsed().as_secs() < 300, "no frame after 300 s");
-            std::thread::sleep(std::time::Duration::from_millis(50));
-        }
-        // SAFETY: signals our own child process.
-        unsafe { libc::kill(child.id() as i32, signal) };
-        let result = child.wait_with_output().unwrap();
+        // Once the staging holds a finished frame.
+        let result = signal_when(child, signal, "a finished frame", || {
+            tree(&dir).iter().any(|p| p.ends_with("0001/views.png"))
+        });
         let stderr = String::from_utf8_lossy(&result.stderr);
         assert_eq!(result.status.code(), Some(1), "SIG{name}: {stderr}");
         assert!(stderr.contains("interrupted after"), "SIG{name}: {stderr}");
@@ -370,14 +383,9 @@ fn an_interrupted_bench_writes_nothing() {
             .spawn()
             .unwrap();
         // The reports are staged once the run is set up (its handler is in place by then).
-        let started = std::time::Instant::now();
-        while common::staging_folders(&json).is_empty() {
-            assert!(started.elapsed().as_secs() < 120, "no staging after 120 s");
-            std::thread::sleep(std::time::Duration::from_millis(20));
-        }
-        // SAFETY: signals our own child process.
-        unsafe { libc::kill(child.id() as i32, signal) };
-        let result = child.wait_with_output().unwrap();
+        let result = signal_when(child, signal, "the reports' staging", || {
+            !common::staging_folders(&json).is_empty()
+        });
         let stderr = String::from_utf8_lossy(&result.stderr);
         assert_eq!(result.status.code(), Some(1), "signal {signal}: {stderr}");
         assert!(stderr.contains("interrupted after"), "{stderr}");
