@@ -89,7 +89,7 @@ fi
 
 export DEBIAN_FRONTEND=noninteractive
 missing=()
-# xvfb, xdotool and the X client libraries winit loads at run time: the viewer tests (tests/viewer.rs)
+# xvfb, xdotool and the X client libraries winit loads at run time: the viewer tests (tests/cli/viewer.rs)
 # run `specchio view` in a virtual X server; weston (headless) is their Wayland compositor, and
 # brings the Wayland client libraries winit loads.
 for p in libvulkan1 vulkan-validationlayers g++ xvfb xdotool weston libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0; do

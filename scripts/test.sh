@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
-# The central-model exports are checked against OpenCV itself (tests/calibrate.rs runs
+# The central-model exports are checked against OpenCV itself (tests/cli/calibrate.rs runs
 # scripts/check-omnidir.py): a project-local venv with OpenCV's contrib wheel, made once and
 # moved into place only whole (a failed pip install must not look like a ready venv).
 if [ ! -x .venv-check/bin/python ] || ! .venv-check/bin/python -c "import cv2" 2>/dev/null; then

@@ -4,7 +4,7 @@
 //! ```sh
 //! specchio render    SCENE --out G --sensor-outputs
 //! specchio reference SCENE --out R --sensor-outputs --spp 1
-//! cargo run --release -p specchio-cli --example sensor_agreement -- G R
+//! cargo run --release -p specchio-bench --example sensor_agreement -- G R
 //! ```
 //!
 //! Over the pixels both masks call mirror pixels: the fraction whose ids are equal, how many

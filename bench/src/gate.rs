@@ -19,7 +19,7 @@ use std::path::Path;
 use anyhow::Result;
 use specchio::render::methods::Method;
 
-use crate::bench::record::{self, MethodRow, RungRow};
+use crate::record::{self, MethodRow, RungRow};
 
 /// An earlier `specchio bench --json` file: its results and the driver that measured them.
 pub struct Baseline {
@@ -185,7 +185,7 @@ fn unmeasured(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::record::{Efficiency, RungWork, Stats, Work};
+    use crate::record::{Efficiency, RungWork, Stats, Work};
 
     fn row(method: &str, wall: f64, vertices: u64) -> MethodRow {
         MethodRow {

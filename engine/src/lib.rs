@@ -18,13 +18,15 @@
 //! - [`sensor`]: the sensor's exact ray map (the non-central ground truth) and what derives
 //!   from it;
 //! - [`metrics`]: image-error metrics (RMSE, PSNR, relMSE, FLIP) and the FLIP heatmap;
-//! - [`output`]: EXR, PNG and JSON files, written atomically.
+//! - [`output`]: EXR, PNG and JSON files, written atomically;
+//! - [`process`]: what the programs on top share (stdout, signals, the validation verdict).
 
 pub mod files;
 pub mod image;
 pub mod memory;
 pub mod metrics;
 pub mod output;
+pub mod process;
 pub mod reference;
 pub mod render;
 pub mod scene;

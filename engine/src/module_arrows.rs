@@ -5,7 +5,12 @@
 //! - the Vulkan layer knows nothing of the renderer or the scene, and the CPU-only modules
 //!   (scene, image, files, memory, reference, metrics, output, sensor) reach no Vulkan;
 //! - no two modules import each other (a parent and its own child modules aside: a folder's
-//!   `mod.rs` and its files are one module split up). Longer loops are not looked for yet.
+//!   `mod.rs` and its files are one module split up). Longer loops are not looked for yet;
+//! - [`crate::process`], what the programs on top share, is imported by nothing below it.
+//!
+//! And one rule for the crates of the workspace, read from their manifests: the engine
+//! depends on none of them, the benchmark and the viewer on the engine only, the CLI on
+//! those three.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -258,5 +263,82 @@ fn the_guard_reads_groups_and_super_paths() {
     let reached: Vec<String> = paths.reached.iter().map(|m| m.join("::")).collect();
     for expected in ["scene::camera", "vk::device::Device", "metrics::compare"] {
         assert!(reached.contains(&expected.to_owned()), "{reached:?}");
+    }
+}
+
+#[test]
+fn nothing_below_imports_the_process_module() {
+    let graph = graph();
+    let bad: Vec<String> = graph
+        .iter()
+        .filter(|(m, _)| !starts_with(m, &["process"]))
+        .flat_map(|(m, reached)| {
+            reached
+                .iter()
+                .filter(|t| starts_with(t, &["process"]))
+                .map(move |t| format!("{} -> {}", m.join("::"), t.join("::")))
+        })
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "the engine reaches up into process: {bad:#?}"
+    );
+}
+
+/// The workspace's crates, by folder, with the workspace crates each may depend on.
+const CRATE_ARROWS: [(&str, &[&str]); 4] = [
+    ("engine", &[]),
+    ("bench", &["engine"]),
+    ("viewer", &["engine"]),
+    ("cli", &["engine", "bench", "viewer"]),
+];
+
+/// The workspace crates (by folder) that the manifest in `folder` depends on, in any of its
+/// dependency tables.
+fn workspace_dependencies(root: &Path, folder: &str) -> BTreeSet<String> {
+    let path = root.join(folder).join("Cargo.toml");
+    let text = std::fs::read_to_string(&path).expect("a crate manifest");
+    let manifest: toml::Table = text.parse().expect("a well-formed manifest");
+    let mut found = BTreeSet::new();
+    for table in ["dependencies", "dev-dependencies", "build-dependencies"] {
+        let Some(deps) = manifest.get(table).and_then(|t| t.as_table()) else {
+            continue;
+        };
+        for dep in deps.values() {
+            if let Some(p) = dep.get("path").and_then(|p| p.as_str()) {
+                let target = Path::new(folder).join(p);
+                let name = target.file_name().expect("a folder").to_string_lossy();
+                found.insert(name.into_owned());
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn crates_depend_one_way() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let workspace: toml::Table = std::fs::read_to_string(root.join("Cargo.toml"))
+        .expect("the workspace manifest")
+        .parse()
+        .expect("a well-formed manifest");
+    let members: BTreeSet<&str> = workspace["workspace"]["members"]
+        .as_array()
+        .expect("members")
+        .iter()
+        .map(|m| m.as_str().expect("a member folder"))
+        .collect();
+    let known: BTreeSet<&str> = CRATE_ARROWS.iter().map(|(c, _)| *c).collect();
+    assert_eq!(
+        members, known,
+        "a crate was added or removed: give it its arrows here"
+    );
+    for (folder, allowed) in CRATE_ARROWS {
+        for dep in workspace_dependencies(&root, folder) {
+            assert!(
+                allowed.contains(&dep.as_str()),
+                "{folder} depends on {dep}: only on {allowed:?} (docs/architecture.md)"
+            );
+        }
     }
 }

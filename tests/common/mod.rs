@@ -13,14 +13,24 @@ use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::{Device, DeviceDesc, OptionalFeatures};
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
-/// The repository root (tests run with the bench crate as working directory).
+/// The `specchio` binary: only the CLI crate's tests (tests/cli/) have it, so the engine's
+/// tests, which share this module, compile without it and never call this.
+fn binary() -> &'static str {
+    match option_env!("CARGO_BIN_EXE_specchio") {
+        Some(path) => path,
+        None => panic!("only the tests in tests/cli/ have the specchio binary to run"),
+    }
+}
+
+/// The repository root (every crate's folder is one level below it; tests run with their
+/// crate's folder as working directory).
 pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
 /// Runs the `specchio` binary with `args`, validation on.
 pub fn specchio(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
+    std::process::Command::new(binary())
         .args(args)
         .env("SPECCHIO_VALIDATE", "1")
         .output()
@@ -57,7 +67,7 @@ pub fn staging_folders(target: &Path) -> Vec<String> {
 /// reported (the point is to fail rather than hang the suite when a read blocks).
 pub fn specchio_within(args: &[&str], patience: std::time::Duration) -> std::process::Output {
     use std::process::Stdio;
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
+    let mut child = std::process::Command::new(binary())
         .args(args)
         .env("SPECCHIO_VALIDATE", "1")
         .stdout(Stdio::piped())

@@ -5,7 +5,7 @@
 //! JSON and TOML well-formed so that the loaders' deeper checks are reached). Each input runs on
 //! a worker thread under `catch_unwind`; a panic, or an input that has not finished within the
 //! time limit (a hang), is counted and the input saved. Shared by the `fuzz` example (long runs)
-//! and `tests/fuzz.rs` (a short fixed-seed run in the test suite).
+//! and `tests/bench/fuzz.rs` (a short fixed-seed run in the test suite).
 
 use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};

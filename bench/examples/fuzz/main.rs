@@ -1,7 +1,7 @@
 //! Long fuzz runs of the scene and asset loaders (see `docs/fuzzing.md` for how to use it):
 //!
 //! ```sh
-//! cargo run --release -p specchio-cli --example fuzz -- --target gltf --iterations 1000000
+//! cargo run --release -p specchio-bench --example fuzz -- --target gltf --iterations 1000000
 //! ```
 //!
 //! Options: `--target scene|obj|gltf|glb|png|baseline|landmarks|all` (default all, run one after another),
@@ -12,7 +12,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-// Loaded by path, as tests/fuzz.rs loads it, so that its own `#[path]` modules resolve alike.
+// Loaded by path, as tests/bench/fuzz.rs loads it, so that its own `#[path]` modules resolve alike.
 #[path = "harness.rs"]
 mod harness;
 

@@ -1,15 +1,10 @@
 //! The fuzz targets that are files a user hands a command besides scenes: the bench baseline
-//! and the landmarks file, read by the `specchio` binary's own modules, compiled in here as
-//! they are.
+//! and the landmarks file, read by the benchmark crate's own readers.
 
 use std::path::Path;
 
-#[path = "../../src/localise/database.rs"]
-#[allow(dead_code)]
-mod database;
-#[path = "../../src/bench/record.rs"]
-#[allow(dead_code)]
-mod record;
+use specchio_bench::localise::database;
+use specchio_bench::record;
 
 /// A `specchio bench --json` record, read as `--baseline` reads it.
 pub fn baseline(input: &[u8]) -> bool {

@@ -5,7 +5,7 @@
 //! The same experiment runs per image source (`--sources`: lookups and the exact reference),
 //! each row one landmark source against one query source at one time.
 
-mod database;
+pub mod database;
 mod plot;
 mod report;
 mod source;
@@ -29,10 +29,10 @@ use specchio::sensor::SensorOptics;
 use specchio::vk::device::{Device, OptionalFeatures};
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
-use crate::args::{face_size, method, real, whole};
 use database::{Database, Landmark};
 use report::{Report, SourceRun};
 use source::{Body, Pose, Robot, Source};
+use specchio::process::args::{face_size, method, real, whole};
 
 /// More queries than this is a mistake, not an experiment.
 pub const MAX_QUERIES: u32 = 100_000;
@@ -135,7 +135,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let plan = plan(args)?;
     let mut out = Transaction::new();
     out.folder(&args.out, "localise.json")?;
-    crate::interrupt::catch();
+    specchio::process::interrupt::catch();
 
     // 2. One device for every lookup's robot (none when only the reference runs).
     let lookups_used: Vec<Lookup> = plan
@@ -190,10 +190,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     out.write_bytes(&args.out.join("localise.svg"), map.as_bytes())?;
     out.write_json(&args.out.join("localise.json"), &report)?;
     // A signal that came after the last check still stops the run: nothing is placed.
-    crate::interrupt::check("before placing the output")?;
+    specchio::process::interrupt::check("before placing the output")?;
     out.commit()?;
     report::print_table(&report, &args.out);
-    crate::validation::verdict(&messages)?;
+    specchio::process::validation::verdict(&messages)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -334,7 +334,7 @@ fn check_memory(args: &Args, plan: &Plan) -> Result<()> {
     // A signature is at most 8k values a panorama row (column-shift; fourier keeps 2k).
     let values = u64::from(plan.body.layout.height) * 8 * u64::from(args.k);
     let landmarks = plan.landmark_poses.len() as u64 * plan.sources.len() as u64;
-    crate::memory::localise(&plan.body.scene, args.sensor_size, landmarks, values)
+    specchio::memory::estimates::localise(&plan.body.scene, args.sensor_size, landmarks, values)
         .with_context(|| args.scene.display().to_string())
 }
 
@@ -376,14 +376,18 @@ fn open_device(args: &Args, used: &[Lookup]) -> Result<(Arc<Device>, Arc<Validat
     let features = used.iter().fold(OptionalFeatures::default(), |f, &l| {
         f.union(lookups::features(l))
     });
-    let device =
-        crate::probe::device_for(&instance, args.device.as_deref(), &[args.method], features)
-            .with_context(|| {
-                format!(
-                    "--sources: no device runs the lookups {}",
-                    used.iter().map(|l| l.name()).collect::<Vec<_>>().join(", ")
-                )
-            })?;
+    let device = specchio::process::probe::device_for(
+        &instance,
+        args.device.as_deref(),
+        &[args.method],
+        features,
+    )
+    .with_context(|| {
+        format!(
+            "--sources: no device runs the lookups {}",
+            used.iter().map(|l| l.name()).collect::<Vec<_>>().join(", ")
+        )
+    })?;
     for &l in used {
         if let Some(why) = lookups::missing_features(l, &device.info) {
             bail!("--sources {l}: unavailable on {}: {why}", device.info.name);

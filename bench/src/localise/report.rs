@@ -163,7 +163,7 @@ fn summarize(results: &[QueryResult], landmarks: usize, column_deg: f64) -> Summ
 
 /// The printed table: one line per row, then the sweeps.
 pub fn print_table(r: &Report, out: &std::path::Path) {
-    crate::say!(
+    specchio::say!(
         "localisation in {} (grid {} m, {} k={}, {}² sensor, {}² cube, a panorama column {:.3}°)",
         r.scene,
         r.grid_m,
@@ -175,7 +175,7 @@ pub fn print_table(r: &Report, out: &std::path::Path) {
             .first()
             .map_or(f64::NAN, |row| row.summary.column_deg)
     );
-    crate::say!(
+    specchio::say!(
         "  {:<14} {:<14} {:>6} {:>9} {:>8} {:>8} {:>12} {:>10} {:>12} {:>10} {:>10} {:>9}",
         "landmarks",
         "queries",
@@ -190,7 +190,7 @@ pub fn print_table(r: &Report, out: &std::path::Path) {
         "heading °",
         "sweep"
     );
-    crate::say!(
+    specchio::say!(
         "  {:<14} {:<14} {:>6} {:>9} {:>8} {:>8} {:>12} {:>10} {:>12} {:>10} {:>10} {:>9}",
         "from",
         "from",
@@ -207,7 +207,7 @@ pub fn print_table(r: &Report, out: &std::path::Path) {
     );
     for row in &r.rows {
         let s = &row.summary;
-        crate::say!(
+        specchio::say!(
             "  {:<14} {:<14} {:>6} {:>9} {:>8.1} {:>8.1} {:>12.3} {:>10.3} {:>12.3} {:>10.3} {:>10.2} {:>9}",
             row.landmarks_from,
             row.queries_from,
@@ -226,20 +226,20 @@ pub fn print_table(r: &Report, out: &std::path::Path) {
     }
     for s in &r.sources {
         match s.sweep_images_per_s {
-            Some(rate) => crate::say!(
+            Some(rate) => specchio::say!(
                 "  {} landmark sweep: {rate:.2} sensor images/s ({:.2} s) -> {}",
                 s.source,
                 s.sweep_seconds.unwrap_or(f64::NAN),
                 s.landmarks_file
             ),
-            None => crate::say!(
+            None => specchio::say!(
                 "  {} landmarks loaded (no sweep) -> {}",
                 s.source,
                 s.landmarks_file
             ),
         }
     }
-    crate::say!(
+    specchio::say!(
         "  files: localise.json, localise.svg and the landmark files in {}",
         out.display()
     );

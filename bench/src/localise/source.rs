@@ -126,7 +126,7 @@ impl<'a> Robot<'a> {
         );
         let check = |i: usize| {
             bar.set_position(i as u64);
-            crate::interrupt::check(&format!("after {i} of {} {what}", poses.len()))
+            specchio::process::interrupt::check(&format!("after {i} of {} {what}", poses.len()))
         };
         let mut out = Vec::with_capacity(poses.len());
         match self {

@@ -3,7 +3,7 @@
 //! The viewer does not read pixels back to the CPU. It asks for one of the renderer's own
 //! view targets (the 1200x450 pair, the observer or the sensor), drawn exactly as for
 //! `specchio render`, and copies that image into its swapchain image in its own submission
-//! (`bench/src/view/`). The renderer still records, submits and waits per frame, so its
+//! (`viewer/src/`). The renderer still records, submits and waits per frame, so its
 //! targets are never written while the previous frame's copy may read them: the copy is
 //! submitted to the same queue before the next frame's submission, whose first barrier on the
 //! target chains after the copy's closing barrier (see [`DisplayImage`]).

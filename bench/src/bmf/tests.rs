@@ -1,0 +1,500 @@
+//! Known answers of the BMF writer, and a BMF validator written apart from it.
+
+use serde_json::Value;
+use specchio::reference::angular::AngularError;
+use specchio::render::methods::Method;
+
+use super::*;
+use crate::record::{MethodRow, RungRow, ViewError};
+use crate::tradeoff::LADDER;
+
+/// The committed baseline, for the parts of a record these tests do not care about (settings,
+/// environment, a row to copy), with the device named as lavapipe names it.
+fn template() -> Record {
+    let mut r: Record = serde_json::from_str(include_str!("../../baselines/quick.json"))
+        .expect("bench/baselines/quick.json is a record");
+    r.device.name = "llvmpipe (LLVM 15.0.6, 256 bits)".into();
+    r.device.short_name = "lavapipe".into();
+    r
+}
+
+fn stats(p10: f64, median: f64, p90: f64) -> Option<Stats> {
+    Some(Stats { median, p10, p90 })
+}
+
+/// A template's record with its rows replaced by `results` and `tradeoff`.
+fn record(results: Vec<MethodRow>, tradeoff: Vec<RungRow>) -> Record {
+    let mut r = template();
+    r.results = results;
+    r.tradeoff = tradeoff;
+    r
+}
+
+fn method_row(scene: &str, method: &str, size: u32, wall_ms: Option<Stats>) -> MethodRow {
+    let mut row = template().results[0].clone();
+    row.scene = scene.into();
+    row.method = Method::parse(method).expect("a registered method");
+    row.cube_size = size;
+    row.wall_ms = wall_ms;
+    row
+}
+
+/// A rung row; `flip` None: no error measured, Some(None): measured without a FLIP figure.
+fn rung_row(
+    scene: &str,
+    rung: &str,
+    size: u32,
+    cost: Option<Stats>,
+    flip: Option<Option<f64>>,
+) -> RungRow {
+    let mut row = template().tradeoff[0].clone();
+    row.scene = scene.into();
+    row.rung = rung.into();
+    row.cube_size = size;
+    row.frame_cost_ms = cost;
+    row.sensor = flip.map(|flip_mean| ViewError {
+        flip_mean,
+        flip_p99: None,
+        non_finite_pixels: 0,
+        angular: AngularError::default(),
+    });
+    row
+}
+
+const ROOM: &str = "scenes/thesis-room.toml";
+const MANY: &str = "scenes/many-objects.toml";
+
+/// Two scenes, three methods at two sizes, four rungs; rows without statistics, with a NaN, an
+/// infinity and percentiles out of order.
+fn mixed() -> Record {
+    record(
+        vec![
+            method_row(ROOM, "six-pass", 64, stats(1.5, 2.0, 3.0)),
+            method_row(ROOM, "mesh", 64, None),
+            method_row(MANY, "six-pass", 512, stats(10.0, 12.5, 20.0)),
+            method_row(MANY, "multiview", 512, stats(10.0, f64::NAN, 20.0)),
+            method_row(MANY, "geometry", 512, stats(10.0, 11.0, f64::INFINITY)),
+        ],
+        vec![
+            rung_row(ROOM, "box", 64, stats(6.0, 7.0, 8.0), Some(Some(0.25))),
+            rung_row(ROOM, "ray-query", 64, stats(9.0, 10.0, 11.0), None),
+            rung_row(MANY, "distance-exact", 512, None, Some(Some(0.01))),
+            rung_row(
+                MANY,
+                "ray-query",
+                512,
+                stats(5.0, 4.0, 6.0),
+                Some(Some(f64::NAN)),
+            ),
+            rung_row(MANY, "plain", 512, None, Some(None)),
+        ],
+    )
+}
+
+fn spread(lower: f64, value: f64, upper: f64) -> Metric {
+    Metric {
+        value,
+        lower_value: Some(lower),
+        upper_value: Some(upper),
+    }
+}
+
+fn single(value: f64) -> Metric {
+    Metric {
+        value,
+        lower_value: None,
+        upper_value: None,
+    }
+}
+
+fn document(entries: &[(&str, &[(Measure, Metric)])]) -> Bmf {
+    Bmf(entries
+        .iter()
+        .map(|(name, measures)| {
+            let measures = measures
+                .iter()
+                .map(|(m, metric)| (m.slug().to_owned(), *metric))
+                .collect();
+            (name.to_string(), measures)
+        })
+        .collect())
+}
+
+#[test]
+fn every_measured_row_and_only_those_are_written() {
+    // Left out: mesh (no times), multiview (NaN median), geometry (infinite p90), many-objects'
+    // ray-query (p10 above the median, NaN FLIP) and plain (no FLIP figure).
+    let expected = document(&[
+        (
+            "many-objects/rung-distance-exact/512/llvmpipe",
+            &[(Measure::SensorFlipMean, single(0.01))],
+        ),
+        (
+            "many-objects/six-pass/512/llvmpipe",
+            &[(Measure::CubeUpdateMs, spread(10.0, 12.5, 20.0))],
+        ),
+        (
+            "thesis-room/rung-box/64/llvmpipe",
+            &[
+                (Measure::FrameCostMs, spread(6.0, 7.0, 8.0)),
+                (Measure::SensorFlipMean, single(0.25)),
+            ],
+        ),
+        (
+            "thesis-room/rung-ray-query/64/llvmpipe",
+            &[(Measure::FrameCostMs, spread(9.0, 10.0, 11.0))],
+        ),
+        (
+            "thesis-room/six-pass/64/llvmpipe",
+            &[(Measure::CubeUpdateMs, spread(1.5, 2.0, 3.0))],
+        ),
+    ]);
+    assert_eq!(bmf(&mixed()).unwrap(), expected);
+}
+
+#[test]
+fn the_text_is_the_documented_layout() {
+    // The example in docs/benchmarks.md ("Bencher Metric Format") is this text.
+    let r = record(
+        vec![method_row(ROOM, "six-pass", 64, stats(1.5, 2.0, 3.0))],
+        vec![rung_row(
+            ROOM,
+            "box",
+            64,
+            stats(6.0, 7.0, 8.0),
+            Some(Some(0.25)),
+        )],
+    );
+    let expected = r#"{
+  "thesis-room/rung-box/64/llvmpipe": {
+    "frame-cost-ms": {
+      "value": 7.0,
+      "lower_value": 6.0,
+      "upper_value": 8.0
+    },
+    "sensor-flip-mean": {
+      "value": 0.25
+    }
+  },
+  "thesis-room/six-pass/64/llvmpipe": {
+    "cube-update-ms": {
+      "value": 2.0,
+      "lower_value": 1.5,
+      "upper_value": 3.0
+    }
+  }
+}
+"#;
+    assert_eq!(json(&bmf(&r).unwrap()).unwrap(), expected);
+    let docs = include_str!("../../../docs/benchmarks.md");
+    let shown = format!("```json\n{expected}```");
+    assert!(
+        docs.contains(&shown),
+        "docs/benchmarks.md (\"Bencher Metric Format\") shows this example"
+    );
+}
+
+#[test]
+fn the_text_reads_back_as_the_same_document() {
+    let doc = bmf(&mixed()).unwrap();
+    let back: Bmf = serde_json::from_str(&json(&doc).unwrap()).unwrap();
+    assert_eq!(back, doc);
+}
+
+#[test]
+fn an_empty_run_is_an_empty_object() {
+    let r = record(Vec::new(), Vec::new());
+    assert_eq!(json(&bmf(&r).unwrap()).unwrap(), "{}\n");
+}
+
+#[test]
+fn two_scenes_with_one_stem_are_refused_naming_both_rows() {
+    let r = record(
+        vec![
+            method_row("a/room.toml", "six-pass", 64, stats(1.0, 2.0, 3.0)),
+            // No times: it would write nothing, but it still may not share the name.
+            method_row("b/room.toml", "six-pass", 64, None),
+        ],
+        Vec::new(),
+    );
+    let e = bmf(&r).unwrap_err().to_string();
+    assert!(
+        e.contains("`room/six-pass/64/llvmpipe`")
+            && e.contains("a/room.toml / six-pass / 64²")
+            && e.contains("b/room.toml / six-pass / 64²"),
+        "{e}"
+    );
+}
+
+#[test]
+fn device_names_lose_what_drivers_put_in_parentheses() {
+    let mut d = template().device;
+    for (name, short, expected) in [
+        ("llvmpipe (LLVM 15.0.6, 256 bits)", "lavapipe", "llvmpipe"),
+        (
+            "SwiftShader Device (Subzero) (0x0000C0DE)",
+            "swiftshader",
+            "swiftshader-device",
+        ),
+        ("NVIDIA H100 80GB HBM3", "nvidia", "nvidia-h100-80gb-hbm3"),
+        (
+            "AMD Radeon RX 7900 XTX (RADV NAVI31)",
+            "radv",
+            "amd-radeon-rx-7900-xtx",
+        ),
+        // A parenthesis without a space before it is part of the name.
+        (
+            "Intel(R) Arc(tm) A770 Graphics (DG2)",
+            "intel",
+            "intel-r-arc-tm-a770-graphics",
+        ),
+        // Nothing before the parenthesis: the whole name; no letter at all: the short name.
+        ("(Software Rasterizer)", "x", "software-rasterizer"),
+        ("∆ ∇", "My Driver", "my-driver"),
+        ("∆", "", "device"),
+    ] {
+        d.name = name.into();
+        d.short_name = short.into();
+        assert_eq!(device_slug(&d), expected, "{name}");
+    }
+}
+
+#[test]
+fn scene_names_are_the_file_stem() {
+    for (scene, expected) in [
+        ("scenes/thesis-room.toml", "thesis-room"),
+        ("/home/x/My Scenes/Big Room.v2.toml", "big-room-v2"),
+        ("room", "room"),
+        ("../--.toml", "toml"),
+        ("", "scene"),
+    ] {
+        assert_eq!(scene_slug(scene), expected, "{scene:?}");
+    }
+}
+
+#[test]
+fn method_names_and_rung_labels_are_kept_as_the_table_prints_them() {
+    // So a benchmark name can be read against the table, and a rung never takes a method's.
+    for m in Method::all() {
+        assert_eq!(slug(m.name()), m.name());
+        assert!(!m.name().starts_with("rung-"), "{}", m.name());
+    }
+    for r in LADDER {
+        assert_eq!(slug(r.label), r.label);
+    }
+}
+
+#[test]
+fn the_module_documentation_lists_every_measure() {
+    let source = include_str!("../bmf.rs");
+    for m in Measure::ALL {
+        assert!(
+            source.contains(&format!("//! | `{}` |", m.slug())),
+            "{} is not in the table",
+            m.slug()
+        );
+    }
+}
+
+// ---- The validator: BMF's rules, written from Bencher's documentation, not from the writer.
+
+/// Bencher's limits: a benchmark name is 1 to 1024 characters, a measure's slug or name 1 to 64
+/// (https://bencher.dev/docs/how-to/track-custom-benchmarks/,
+/// https://bencher.dev/docs/reference/bencher-metric-format/, "Order of Precedence").
+const MAX_BENCHMARK_NAME: usize = 1024;
+const MAX_MEASURE: usize = 64;
+
+/// Every way `text` breaks BMF, each with where. Bencher's rules (its JSON schema,
+/// https://bencher.dev/bmf.json, and the limits above): an object of benchmark names, each an
+/// object of measures, each an object with a number `value` and optional number `lower_value`
+/// and `upper_value`. Ours on top: no other key in a metric, every number finite and
+/// lower_value <= value <= upper_value (Bencher checks neither), a measure key that is a slug
+/// (so Bencher finds or creates the measure by that slug), no benchmark without measures.
+fn violations(text: &str) -> Vec<String> {
+    let doc: Value = match serde_json::from_str(text) {
+        Ok(v) => v,
+        // NaN and Infinity are not JSON: they end here.
+        Err(e) => return vec![format!("not JSON: {e}")],
+    };
+    let mut out = Vec::new();
+    let Some(benchmarks) = doc.as_object() else {
+        return vec!["the top level is not an object".into()];
+    };
+    for (name, measures) in benchmarks {
+        if name.is_empty() || name.chars().count() > MAX_BENCHMARK_NAME {
+            out.push(format!("benchmark name {name:?}: not 1 to 1024 characters"));
+        }
+        let Some(measures) = measures.as_object() else {
+            out.push(format!("{name}: not an object"));
+            continue;
+        };
+        if measures.is_empty() {
+            out.push(format!("{name}: no measures"));
+        }
+        for (measure, metric) in measures {
+            let at = format!("{name} / {measure}");
+            if !is_slug(measure) {
+                out.push(format!(
+                    "{at}: the measure is not a slug of 1 to 64 characters"
+                ));
+            }
+            out.extend(
+                metric_violations(metric)
+                    .into_iter()
+                    .map(|v| format!("{at}: {v}")),
+            );
+        }
+    }
+    out
+}
+
+fn metric_violations(metric: &Value) -> Vec<String> {
+    let Some(metric) = metric.as_object() else {
+        return vec!["the metric is not an object".into()];
+    };
+    let mut out = Vec::new();
+    for key in metric.keys() {
+        if !["value", "lower_value", "upper_value"].contains(&key.as_str()) {
+            out.push(format!("unknown key `{key}`"));
+        }
+    }
+    let number = |key: &str, out: &mut Vec<String>| match metric.get(key) {
+        None => None,
+        Some(v) => match v.as_f64().filter(|x| x.is_finite()) {
+            Some(x) => Some(x),
+            None => {
+                out.push(format!("`{key}` is {v}, not a finite number"));
+                None
+            }
+        },
+    };
+    let value = number("value", &mut out);
+    if !metric.contains_key("value") {
+        out.push("`value` is missing".into());
+    }
+    let lower = number("lower_value", &mut out);
+    let upper = number("upper_value", &mut out);
+    if let (Some(l), Some(v)) = (lower, value) {
+        if l > v {
+            out.push(format!("lower_value {l} above value {v}"));
+        }
+    }
+    if let (Some(v), Some(u)) = (value, upper) {
+        if v > u {
+            out.push(format!("value {v} above upper_value {u}"));
+        }
+    }
+    out
+}
+
+/// Lower-case ASCII letters, digits and single inner hyphens, 1 to 64 characters (the form of
+/// Bencher's slugs, `lib/bencher_valid/src/slug.rs`).
+fn is_slug(s: &str) -> bool {
+    let chars_ok = s
+        .chars()
+        .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-');
+    chars_ok
+        && (1..=MAX_MEASURE).contains(&s.len())
+        && !s.starts_with('-')
+        && !s.ends_with('-')
+        && !s.contains("--")
+}
+
+#[test]
+fn the_validator_accepts_a_document_like_benchers_own_example() {
+    // The shape of the example on Bencher's BMF page: two measures with bounds, one without,
+    // a benchmark name with spaces and slashes.
+    let text = r#"{
+        "parse/small": {
+            "latency": { "value": 41.5, "lower_value": 40.0, "upper_value": 44.25 },
+            "throughput": { "value": 2.5, "lower_value": 2.0, "upper_value": 3.0 }
+        },
+        "/bin/sh -c ./build.sh": { "build-time": { "value": 12.0 } }
+    }"#;
+    assert_eq!(violations(text), Vec::<String>::new());
+}
+
+/// Documents that break one rule each, and a word of the violation expected.
+const BROKEN: &[(&str, &str)] = &[
+    ("[]", "top level"),
+    (r#"{"a": {"m": {"value": NaN}}}"#, "not JSON"),
+    (r#"{"": {"m": {"value": 1}}}"#, "benchmark name"),
+    (r#"{"a": []}"#, "not an object"),
+    (r#"{"a": {}}"#, "no measures"),
+    (r#"{"a": {"m": 1}}"#, "metric is not an object"),
+    (r#"{"a": {"m": {}}}"#, "`value` is missing"),
+    (r#"{"a": {"m": {"value": null}}}"#, "not a finite number"),
+    (r#"{"a": {"m": {"value": "1"}}}"#, "not a finite number"),
+    (
+        r#"{"a": {"m": {"value": 1, "lower_value": true}}}"#,
+        "not a finite",
+    ),
+    (r#"{"a": {"m": {"value": 1, "unit": "ms"}}}"#, "unknown key"),
+    (
+        r#"{"a": {"m": {"value": 1, "lower_value": 2}}}"#,
+        "lower_value 2 above",
+    ),
+    (
+        r#"{"a": {"m": {"value": 3, "upper_value": 2}}}"#,
+        "above upper_value",
+    ),
+    (r#"{"a": {"Cube Update": {"value": 1}}}"#, "not a slug"),
+    (r#"{"a": {"cube--update": {"value": 1}}}"#, "not a slug"),
+];
+
+#[test]
+fn the_validator_catches_every_broken_rule() {
+    let long_name = "x".repeat(MAX_BENCHMARK_NAME + 1);
+    let long_measure = "m".repeat(MAX_MEASURE + 1);
+    let too_long = [
+        (
+            format!(r#"{{"{long_name}": {{"m": {{"value": 1}}}}}}"#),
+            "benchmark name",
+        ),
+        (
+            format!(r#"{{"a": {{"{long_measure}": {{"value": 1}}}}}}"#),
+            "not a slug",
+        ),
+    ];
+    let broken = BROKEN.iter().map(|&(t, e)| (t.to_owned(), e));
+    for (text, expected) in broken.chain(too_long) {
+        let v = violations(&text);
+        assert!(
+            v.iter().any(|v| v.contains(expected)),
+            "{text}: expected `{expected}`, got {v:?}"
+        );
+    }
+}
+
+#[test]
+fn a_nan_that_got_past_the_writer_would_be_caught() {
+    // serde_json writes a non-finite f64 as null; Bencher would refuse the whole report.
+    let mut doc = bmf(&mixed()).unwrap();
+    let name = "thesis-room/six-pass/64/llvmpipe";
+    doc.0
+        .get_mut(name)
+        .unwrap()
+        .insert(Measure::CubeUpdateMs.slug().to_owned(), single(f64::NAN));
+    let v = violations(&json(&doc).unwrap());
+    assert!(v.iter().any(|v| v.contains("is null")), "{v:?}");
+}
+
+#[test]
+fn the_written_documents_follow_every_rule() {
+    let baseline: Record = serde_json::from_str(include_str!("../../baselines/quick.json"))
+        .expect("bench/baselines/quick.json is a record");
+    for (what, r) in [
+        ("mixed rows", mixed()),
+        ("the committed baseline", baseline),
+    ] {
+        let text = json(&bmf(&r).unwrap()).unwrap();
+        assert_eq!(violations(&text), Vec::<String>::new(), "{what}");
+        // Only the measures this module documents.
+        let doc: Value = serde_json::from_str(&text).unwrap();
+        for measures in doc.as_object().unwrap().values() {
+            for slug in measures.as_object().unwrap().keys() {
+                assert!(Measure::ALL.iter().any(|m| m.slug() == slug), "{slug}");
+            }
+        }
+    }
+}

@@ -1,0 +1,227 @@
+//! `specchio compare TEST REFERENCE`: error metrics of one linear EXR against another (see
+//! `docs/accuracy.md`, "Metrics"). Exits 0 whenever the images were compared, however much
+//! they differ; bad input is an error naming the file, and writes nothing.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use crate::records::{CompareRecord, CompareSettings};
+use anyhow::{Context, Result};
+use specchio::metrics::{
+    self, Comparison, FLIP_PERCENTILE, FLIP_PIXELS_PER_DEGREE, MASK_THRESHOLD, PSNR_PEAK,
+    REL_MSE_EPSILON,
+};
+use specchio::output::Transaction;
+use specchio::reference::angular;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The image under test (linear OpenEXR, first RGBA layer).
+    test: PathBuf,
+    /// The reference image (linear OpenEXR), same size; relMSE divides by it.
+    reference: PathBuf,
+    /// Compare only the pixels whose red channel is above 0.5 (EXR, or PNG by its stored value).
+    #[arg(long)]
+    mask: Option<PathBuf>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Write the per-pixel FLIP error as a colour-mapped PNG (magma; grey: not compared).
+    #[arg(long)]
+    heatmap: Option<PathBuf>,
+    /// The two files are direction images (`render --directions` against the reference's
+    /// `NAME.direction.exr`): report the mirror's angular lookup error instead, in degrees and
+    /// in texels of a cube face of this size.
+    #[arg(long, allow_negative_numbers = true, value_name = "FACE_SIZE", value_parser = specchio::process::args::face_size)]
+    angular: Option<u32>,
+}
+
+pub fn run(args: &Args) -> Result<ExitCode> {
+    let out = stage_heatmap(args)?;
+    if let Some(face_size) = args.angular {
+        return angular(args, face_size);
+    }
+    // 1. Read and compare; any bad input stops here, before a file is written.
+    let comparison = metrics::compare_files(&args.test, &args.reference, args.mask.as_deref())?;
+
+    // 2. The heatmap, written atomically.
+    if let Some(path) = &args.heatmap {
+        let rgb8 = metrics::heatmap_rgb8(&comparison);
+        out.write_png_rgb8(path, comparison.width, comparison.height, &rgb8)?;
+        out.commit()?;
+    }
+
+    // 3. Report.
+    if args.json {
+        specchio::say!(
+            "{}",
+            serde_json::to_string_pretty(&to_json(args, &comparison))?
+        );
+    } else {
+        print_table(args, &comparison);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Stages `--heatmap` before anything is read. A heatmap written over an input would destroy
+/// the user's image: the transaction refuses an output that is one of its inputs.
+fn stage_heatmap(args: &Args) -> Result<Transaction> {
+    let mut out = Transaction::new();
+    if let Some(heatmap) = &args.heatmap {
+        for input in [Some(&args.test), Some(&args.reference), args.mask.as_ref()]
+            .into_iter()
+            .flatten()
+        {
+            out.input(input)?;
+        }
+        out.file(heatmap)
+            .with_context(|| format!("--heatmap {}", heatmap.display()))?;
+    }
+    Ok(out)
+}
+
+/// `--angular`: the angle between the looked-up and the exact direction per mirror pixel.
+fn angular(args: &Args, face_size: u32) -> Result<ExitCode> {
+    let test = metrics::read_exr(&args.test)?;
+    let reference = metrics::read_exr(&args.reference)?;
+    if (test.width, test.height) != (reference.width, reference.height) {
+        anyhow::bail!(
+            "{} is {}x{} but {} is {}x{}",
+            args.test.display(),
+            test.width,
+            test.height,
+            args.reference.display(),
+            reference.width,
+            reference.height
+        );
+    }
+    let mask = args.mask.as_deref().map(metrics::read_mask).transpose()?;
+    if let Some(m) = &mask {
+        if (m.width, m.height) != (test.width, test.height) {
+            anyhow::bail!(
+                "the mask is {}x{} but the images are {}x{}",
+                m.width,
+                m.height,
+                test.width,
+                test.height
+            );
+        }
+    }
+    let keep = |x: u32, y: u32| {
+        mask.as_ref()
+            .is_none_or(|m| m.selected[(y * m.width + x) as usize])
+    };
+    let angles = angular::angles_deg(&test, &reference, keep);
+    let e = angular::summarize(angles, face_size);
+    if args.json {
+        let mut value = serde_json::to_value(e)?;
+        if e.pixels == 0 {
+            // Nothing compared: the metrics are undefined, null as in the colour report.
+            for (key, v) in value.as_object_mut().into_iter().flatten() {
+                if key.ends_with("_deg") || key.ends_with("_texels") {
+                    *v = serde_json::Value::Null;
+                }
+            }
+        }
+        specchio::say!("{}", serde_json::to_string_pretty(&value)?);
+    } else if e.pixels == 0 {
+        specchio::say!(
+            "mirror pixels compared: 0 (no pixel has alpha 1 in both images inside the mask)"
+        );
+        specchio::say!("angular error (deg):    n/a");
+    } else {
+        specchio::say!("mirror pixels compared: {}", e.pixels);
+        specchio::say!(
+            "angular error (deg):    mean {:.4}  p99 {:.4}  max {:.4}",
+            e.mean_deg,
+            e.p99_deg,
+            e.max_deg
+        );
+        specchio::say!(
+            "in texels of {face_size}²:    mean {:.4}  p99 {:.4}  max {:.4}",
+            e.mean_texels,
+            e.p99_texels,
+            e.max_texels
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The JSON report; every key is documented in docs/accuracy.md. Undefined metrics (nothing
+/// compared) and an infinite PSNR are null, never a non-number.
+fn to_json(args: &Args, c: &Comparison) -> CompareRecord {
+    let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
+    let finite = |v: Option<f64>| v.filter(|v| v.is_finite());
+    CompareRecord {
+        test: args.test.display().to_string(),
+        reference: args.reference.display().to_string(),
+        mask: path(&args.mask),
+        heatmap: path(&args.heatmap),
+        width: c.width,
+        height: c.height,
+        pixels_in_mask: c.pixels_in_mask,
+        pixels_compared: c.pixels_compared,
+        test_nan_pixels: c.test_non_finite.nan_pixels,
+        test_inf_pixels: c.test_non_finite.inf_pixels,
+        reference_nan_pixels: c.reference_non_finite.nan_pixels,
+        reference_inf_pixels: c.reference_non_finite.inf_pixels,
+        rmse: c.rmse,
+        psnr_db: finite(c.psnr_db),
+        psnr_infinite: c.psnr_is_infinite(),
+        rel_mse: c.rel_mse,
+        max_abs_error: c.max_abs_error,
+        flip_mean: c.flip_mean,
+        flip_p99: c.flip_p99,
+        settings: CompareSettings {
+            psnr_peak: PSNR_PEAK,
+            rel_mse_epsilon: REL_MSE_EPSILON,
+            mask_threshold: MASK_THRESHOLD,
+            flip_pixels_per_degree: FLIP_PIXELS_PER_DEGREE,
+            flip_percentile: FLIP_PERCENTILE,
+        },
+    }
+}
+
+fn print_table(args: &Args, c: &Comparison) {
+    let num = |v: Option<f64>| v.map_or("n/a".to_owned(), |v| format!("{v:.6}"));
+    let psnr = match c.psnr_db {
+        None => "n/a".to_owned(),
+        Some(v) if v.is_infinite() => "inf (identical)".to_owned(),
+        Some(v) => format!("{v:.2} dB"),
+    };
+    specchio::say!(
+        "compared {} against {} ({}x{})",
+        args.test.display(),
+        args.reference.display(),
+        c.width,
+        c.height
+    );
+    if let Some(mask) = &args.mask {
+        specchio::say!("  mask:            {}", mask.display());
+    }
+    specchio::say!(
+        "  pixels:          {} compared of {} in the mask",
+        c.pixels_compared,
+        c.pixels_in_mask
+    );
+    specchio::say!(
+        "  NaN / Inf:       test {} / {}, reference {} / {} (excluded)",
+        c.test_non_finite.nan_pixels,
+        c.test_non_finite.inf_pixels,
+        c.reference_non_finite.nan_pixels,
+        c.reference_non_finite.inf_pixels
+    );
+    specchio::say!("  RMSE:            {}", num(c.rmse));
+    specchio::say!("  {:<17}{psnr}", format!("PSNR (peak {PSNR_PEAK}):"));
+    specchio::say!(
+        "  {:<17}{}",
+        format!("relMSE (e {REL_MSE_EPSILON}):"),
+        num(c.rel_mse)
+    );
+    specchio::say!("  max |error|:     {}", num(c.max_abs_error));
+    specchio::say!("  FLIP mean:       {}", num(c.flip_mean));
+    specchio::say!("  FLIP 99th pct:   {}", num(c.flip_p99));
+    if let Some(path) = &args.heatmap {
+        specchio::say!("  heatmap:         {}", path.display());
+    }
+}

@@ -1,0 +1,183 @@
+//! `specchio`: the command-line tool. `main` reads like a table of contents: parse the
+//! arguments, then run one subcommand. The commands of this crate parse, call the engine and
+//! say what they did; the benchmark and the localisation experiment are `specchio-bench`'s,
+//! the viewer is `specchio-viewer`'s.
+
+mod calibrate;
+mod compare;
+mod info;
+mod probe;
+mod records;
+mod reference;
+mod render;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use specchio::process::{allocator, stdout, validation};
+use specchio_bench::localise;
+use specchio_viewer as view;
+
+/// Simulates a catadioptric camera (a camera looking at a spherical mirror) with dynamic
+/// cube-map reflections on Vulkan.
+#[derive(Parser)]
+#[command(name = "specchio", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// What the Vulkan devices are and which features later methods need.
+    Info(info::Args),
+    /// Render a scene: observer, sensor, side-by-side views and the six cube faces.
+    Render(render::Args),
+    /// Ray trace the exact mirror on the CPU (the reference the cube map is judged against).
+    Reference(reference::Args),
+    /// Speed against error of every cube fill method: interleaved timings, floors, error
+    /// against the exact reference, incremental updates; JSON, CSV, SVG and a regression gate.
+    Bench(specchio_bench::Args),
+    /// Fit the central models robotics tools calibrate (OpenCV omnidir, Kalibr omni,
+    /// OCamCalib) to the sensor's exact rays; export them with their residuals.
+    Calibrate(calibrate::Args),
+    /// Appearance-based localisation: landmarks on a floor grid, random queries matched to
+    /// them by a descriptor of the sensor's panorama; recall, position and heading errors.
+    Localise(localise::Args),
+    /// Error metrics of a test image against a reference (RMSE, PSNR, relMSE, FLIP), with an
+    /// optional mask and FLIP heatmap.
+    Compare(compare::Args),
+    /// The live viewer: a window with the observer and the sensor side by side, keyboard
+    /// control of the observer, the sphere, time, method, lookup and refresh (docs/viewer.md).
+    View(view::Args),
+    /// (internal) Compare a cube method with six-pass on a tiny scene; run in a child process
+    /// because a broken driver may crash.
+    #[command(hide = true)]
+    Probe(probe::Args),
+}
+
+/// The second CPU driver, SwiftShader, lives in this checkout's `.drivers/` (put there by
+/// `scripts/setup.sh`, not installed system-wide). Unless the user chose drivers through the
+/// loader's variables, add it, so that `specchio` run from here lists it beside the system's
+/// drivers (`cargo run` and `cargo test` get the same through `.cargo/config.toml`).
+fn add_project_drivers() {
+    const CHOSEN: [&str; 3] = ["VK_ADD_DRIVER_FILES", "VK_DRIVER_FILES", "VK_ICD_FILENAMES"];
+    if CHOSEN.iter().any(|v| std::env::var_os(v).is_some()) {
+        return;
+    }
+    let manifest = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../.drivers/swiftshader/vk_swiftshader_icd.json");
+    if manifest.exists() {
+        // Sound: no other thread exists yet, and the loader reads it when it is loaded.
+        std::env::set_var("VK_ADD_DRIVER_FILES", manifest);
+    }
+}
+
+fn main() -> ExitCode {
+    // A reader of stdout that goes away (`specchio ... | head`) must not kill the run with
+    // its staging folder on disk: writes then fail with EPIPE, which `stdout` handles.
+    #[cfg(unix)]
+    // SAFETY: sets the disposition of one signal before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_IGN);
+    }
+    specchio::output::survive_file_size_limit();
+    add_project_drivers();
+    allocator::tune();
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Info(args) => info::run(&args),
+        Command::Render(args) => render::run(&args),
+        Command::Probe(args) => probe::run(&args),
+        Command::Bench(args) => specchio_bench::run(&args),
+        Command::Reference(args) => reference::run(&args),
+        Command::Compare(args) => compare::run(&args),
+        Command::Calibrate(args) => calibrate::run(&args),
+        Command::View(args) => view::run(&args),
+        Command::Localise(args) => localise::run(&args),
+    };
+    // A failed write to stdout (not the reader leaving) is the command's failure too.
+    let result = result.and_then(|code| Ok(stdout::verdict().map(|()| code)?));
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {}", error_text(&e));
+            exit_code(&e)
+        }
+    }
+}
+
+/// The exit status for an error: [`validation::EXIT_VALIDATION`] when the validation layer
+/// reported messages (whether or not the work failed too), else 1.
+fn exit_code(e: &anyhow::Error) -> ExitCode {
+    if e.downcast_ref::<validation::ValidationFailed>().is_some() {
+        ExitCode::from(validation::EXIT_VALIDATION)
+    } else {
+        ExitCode::FAILURE
+    }
+}
+
+/// The error and its causes on one line, each cause once: many errors already say their
+/// cause in their own message (`cannot read x: No such file`), and printing the chain as well
+/// (`{:#}`) would repeat it.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text = format!("{text}: {cause}");
+        }
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{error_text, exit_code};
+    use anyhow::Context;
+    use specchio::process::validation::{checked, ValidationFailed};
+    use specchio::vk::instance::ValidationLog;
+    use std::process::ExitCode;
+
+    fn failed(work: Option<&str>) -> anyhow::Error {
+        ValidationFailed {
+            count: 2,
+            first: "[vulkan ERROR] VUID-x".into(),
+            work: work.map(|w| anyhow::anyhow!("{w}").into()),
+        }
+        .into()
+    }
+
+    #[test]
+    fn validation_messages_exit_3_and_keep_the_work_error() {
+        let e = failed(None);
+        assert_eq!(exit_code(&e), ExitCode::from(3));
+        assert!(
+            error_text(&e).contains("2 message(s)"),
+            "{}",
+            error_text(&e)
+        );
+        let e = failed(Some("device lost"));
+        assert_eq!(exit_code(&e), ExitCode::from(3));
+        let text = error_text(&e);
+        assert!(
+            text.contains("2 message(s)") && text.contains("device lost"),
+            "{text}"
+        );
+        // No messages: the work's own error, exit 1.
+        let plain: anyhow::Result<()> =
+            checked(&ValidationLog::default(), Err(anyhow::anyhow!("bad scene")));
+        assert_eq!(exit_code(&plain.unwrap_err()), ExitCode::FAILURE);
+    }
+
+    #[test]
+    fn each_cause_is_said_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file");
+        // A cause that its error's message already includes is not repeated...
+        let e = anyhow::Error::new(io).context("cannot read x.toml: No such file");
+        assert_eq!(error_text(&e), "cannot read x.toml: No such file");
+        // ...one it does not include is appended.
+        let e: anyhow::Result<()> = Err(anyhow::anyhow!("disk full")).context("cannot write y");
+        assert_eq!(error_text(&e.unwrap_err()), "cannot write y: disk full");
+    }
+}

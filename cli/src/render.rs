@@ -1,0 +1,434 @@
+//! `specchio render`: one frame (or a sequence) of a scene, written as EXR + PNG + JSON.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Context, Result};
+use specchio::output::Transaction;
+use specchio::render::lookups::{self, TraceOrder};
+use specchio::render::methods::Method;
+use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
+use specchio::scene::camera::FACE_NAMES;
+use specchio::scene::{CubeFormat, Lookup, RefreshPolicy, MAX_DISTANCE_STEPS, MAX_SECANT_STEPS};
+use specchio::sensor::SensorOutputs;
+use specchio::vk::device::{self, DeviceInfo};
+
+use crate::records::{
+    CubeSettings, NotRun, RenderRecord, RenderRun, RenderSettings, RenderSummary,
+};
+use specchio::process::args::{face_size, real, whole};
+use specchio::process::probe;
+use specchio::vk::instance::{Instance, InstanceDesc};
+
+/// More frames than this is a mistake, not a render (about an hour of video at 30 fps).
+pub const MAX_FRAMES: u32 = 100_000;
+
+/// The largest `--frame` (a year of frames at 30 fps): frame numbers stay far from overflow.
+pub const MAX_FRAME_INDEX: u64 = 1_000_000_000;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The scene file (TOML; see docs/scene-format.md).
+    scene: PathBuf,
+    /// Output folder: created with everything in it at the end, or not at all; an earlier
+    /// render there is replaced.
+    #[arg(long)]
+    out: PathBuf,
+    /// Scene time of the (first) frame in seconds (finite, >= 0).
+    #[arg(long, conflicts_with = "frame", allow_negative_numbers = true,
+          value_parser = real(0.0, false, f64::INFINITY))]
+    time: Option<f64>,
+    /// Frame number of the (first) frame, 0..=1000000000; its time is N / fps.
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(0..=MAX_FRAME_INDEX))]
+    frame: Option<u64>,
+    /// Frames per second for --frame and --frames, in (0, 10000].
+    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true,
+          value_parser = real(0.0, true, 10_000.0))]
+    fps: f64,
+    /// Render K consecutive frames (numbered outputs in DIR/NNNN/), 1..=100000.
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_parser = whole(1..=MAX_FRAMES))]
+    frames: u32,
+    /// Cube face size in texels (overrides the scene's cube.face_size).
+    #[arg(long, allow_negative_numbers = true, value_parser = face_size)]
+    cube_size: Option<u32>,
+    /// Cube fill method (`specchio info` lists them, with what this device can run), or all
+    /// (each usable one into DIR/<method>/; measurement variants only when named).
+    #[arg(long, default_value = "six-pass", value_parser = specchio::process::args::method_or_all)]
+    method: String,
+    /// Mirror lookup (`specchio info` lists them, with what this device can run; see
+    /// docs/accuracy.md). Default: the scene's `mirror.lookup`.
+    #[arg(long, value_parser = specchio::process::args::lookup)]
+    lookup: Option<Lookup>,
+    /// The distance lookup's linear search steps, 1..=256 (overrides the scene's
+    /// mirror.distance_steps; see docs/accuracy.md).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(1..=MAX_DISTANCE_STEPS))]
+    distance_steps: Option<u32>,
+    /// The distance lookup's secant refinements, 0..=32 (overrides mirror.secant_steps).
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(0..=MAX_SECANT_STEPS))]
+    secant_steps: Option<u32>,
+    /// Also write, per mirror pixel, the direction looked up in the cube map
+    /// (`observer.direction.exr`, `sensor.direction.exr`), to compare with `specchio reference`.
+    #[arg(long)]
+    directions: bool,
+    /// Also write the sensor outputs from the cube path: ray map, range and ids (the room
+    /// box's), panoramas from the sensor image and from the cube, camera.json (docs/sensor.md).
+    /// Needs a lookup that reads the cube map (not ray-query).
+    #[arg(long)]
+    sensor_outputs: bool,
+    /// Under `on-change`, re-render all six faces on any change instead of only the faces a
+    /// moved object touches.
+    #[arg(long)]
+    full_updates: bool,
+    /// The order the tracing lookups (ray-query, distance-exact) hand their acceleration-
+    /// structure builds: `split` (spatially coherent, the default) or `given` (the scene's own,
+    /// to measure what the order is worth on a driver that keeps it: docs/accuracy.md).
+    #[arg(long, value_parser = specchio::process::args::trace_order, default_value = "split")]
+    trace_order: TraceOrder,
+    /// Enable the Khronos validation layer; any message makes the command fail.
+    #[arg(long)]
+    validate: bool,
+    /// Vulkan device: index or part of its name (see `specchio info`).
+    #[arg(long)]
+    device: Option<String>,
+}
+
+pub fn run(args: &Args) -> Result<ExitCode> {
+    // 1. Everything that can be wrong with the input is found before the output folder exists
+    //    (the numbers' ranges by clap, `specchio::process::args`).
+    let lookup = args.lookup;
+    let mut scene = specchio::scene::load(&args.scene)?;
+    if let Some(n) = args.distance_steps {
+        scene.mirror.distance_steps = n;
+    }
+    if let Some(n) = args.secant_steps {
+        scene.mirror.secant_steps = n;
+    }
+    check_sensor_outputs(args, lookup.unwrap_or(scene.mirror.lookup))?;
+    let face_size_px = args.cube_size.unwrap_or(scene.cube.face_size_px);
+    specchio::memory::estimates::render(&scene, face_size_px, args.directions, args.sensor_outputs)
+        .with_context(|| args.scene.display().to_string())?;
+    let start_s = args
+        .time
+        .unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);
+    // Everything is written into a hidden folder beside --out, renamed into place at the end
+    // (dropped, it is removed): a failure anywhere below leaves nothing behind.
+    let mut out = Transaction::new();
+    out.folder(&args.out, "render.json")?;
+    specchio::process::interrupt::catch();
+
+    // 2. The GPU, with the features of the methods that will run.
+    let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
+    let log = instance.validation_log();
+    let validation = instance.validation;
+    let chosen = device::choose(&instance, args.device.as_deref())?;
+    let (methods, refused) = pick_methods(&args.method, &chosen)?;
+    let lookup_used = lookup.unwrap_or(scene.mirror.lookup);
+    if let Some(why) = lookups::missing_features(lookup_used, &chosen) {
+        bail!("lookup {lookup_used} cannot run on {}: {why}", chosen.name);
+    }
+    let device = probe::device_for(
+        &instance,
+        args.device.as_deref(),
+        &methods,
+        lookups::features(lookup_used),
+    )?;
+    drop(instance);
+    let info = device.info.clone();
+
+    // 3. Frames, per method (`--method all`: each into DIR/<method>/).
+    let mut runs = Vec::new();
+    for &method in &methods {
+        let dir = if args.method == "all" {
+            args.out.join(method.name())
+        } else {
+            args.out.clone()
+        };
+        let options = RenderOptions {
+            cube_size: args.cube_size,
+            method,
+            full_updates: args.full_updates,
+            lookup,
+            // Range and ids through the cube: only when asked for, so timings never pay.
+            id_cube: args.sensor_outputs,
+            trace_order: args.trace_order,
+            ..Default::default()
+        };
+        let mut renderer = Renderer::new(&device, scene.clone(), &options)?;
+        let reports = render_frames(args, &mut renderer, start_s, &out, &dir)?;
+        let summary = summarize(&reports);
+        let lookup = renderer.scene.mirror.lookup;
+        print_summary(args, (method, lookup), &dir, &reports, &summary);
+        runs.push(RenderRun {
+            method,
+            out: dir.display().to_string(),
+            refresh_counters: renderer.counters,
+            summary,
+            frames: reports,
+        });
+    }
+
+    // 4. Report.
+    let cube = &scene.cube;
+    let mut record = RenderRecord {
+        scene: args.scene.display().to_string(),
+        description: scene.description.clone(),
+        origin: scene.origin.to_array(),
+        settings: RenderSettings {
+            start_time_s: start_s,
+            fps: args.fps,
+            frames: args.frames,
+            methods,
+            full_updates: args.full_updates,
+            lookup: lookup.unwrap_or(scene.mirror.lookup),
+            trace_order: args.trace_order.name(),
+            distance_steps: scene.mirror.distance_steps,
+            secant_steps: scene.mirror.secant_steps,
+            cube: CubeSettings {
+                face_size_px: args.cube_size.unwrap_or(cube.face_size_px),
+                format: format_name(cube.format),
+                near_m: cube.near_m,
+                far_m: cube.far_m,
+                mipmaps: cube.mipmaps,
+                max_anisotropy: cube.max_anisotropy,
+            },
+            refresh: refresh_name(scene.refresh),
+            observer_resolution: scene.observer.resolution,
+            sensor_resolution: scene.sensor.resolution,
+            validation,
+            lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
+            malloc_trim_threshold_bytes: specchio::process::allocator::trim_threshold(),
+        },
+        device: info,
+        methods_not_run: refused
+            .iter()
+            .map(|(m, why)| NotRun {
+                method: *m,
+                reason: why.clone(),
+            })
+            .collect(),
+        runs,
+        validation_messages: 0,
+    };
+    drop(device);
+    let messages = log.messages();
+    record.validation_messages = messages.len();
+    out.write_json(&args.out.join("render.json"), &record)?;
+    // A signal that came after the last check still stops the run: nothing is placed.
+    specchio::process::interrupt::check("before placing the output")?;
+    out.commit()?;
+    for (m, why) in &refused {
+        specchio::say!("  {m}: not run: {why}");
+    }
+    specchio::process::validation::verdict(&messages)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--method NAME`: that method, refused with the reason when it cannot run here.
+/// `--method all`: every usable method, and the others with their reasons.
+/// Methods that run, and methods that do not with the reason.
+type MethodChoice = (Vec<Method>, Vec<(Method, String)>);
+
+fn pick_methods(arg: &str, info: &DeviceInfo) -> Result<MethodChoice> {
+    if arg == "all" {
+        return Ok(probe::partition(
+            &Method::listed().collect::<Vec<_>>(),
+            info,
+        ));
+    }
+    let Some(m) = Method::parse(arg) else {
+        bail!("--method {arg}: unknown; one of {}, all", Method::names());
+    };
+    if let Err(why) = probe::usable(m, info) {
+        bail!("--method {arg}: cannot be used on this device: {why}");
+    }
+    Ok((vec![m], vec![]))
+}
+
+fn render_frames(
+    args: &Args,
+    renderer: &mut Renderer,
+    start_s: f64,
+    out: &Transaction,
+    dir: &Path,
+) -> Result<Vec<FrameReport>> {
+    let progress = (args.frames > 1).then(|| indicatif::ProgressBar::new(u64::from(args.frames)));
+    let mut reports = Vec::new();
+    for i in 0..args.frames {
+        specchio::process::interrupt::check(&format!("after {i} of {} frame(s)", args.frames))?;
+        let t = start_s + f64::from(i) / args.fps;
+        // Frame numbers continue from --frame, so `every-n` counts scene frames, not run frames.
+        let frame_index = args.frame.unwrap_or(0) + u64::from(i);
+        let (report, images) = renderer.render_frame(
+            frame_index,
+            t,
+            Readback {
+                // A lookup that reads no cube (ray-query) leaves it unfilled: nothing to write.
+                cube: lookups::plugin(renderer.scene.mirror.lookup).uses_cube(),
+                views: true,
+                directions: args.directions,
+                rays: args.sensor_outputs,
+            },
+        )?;
+        let frame_dir = if args.frames > 1 {
+            dir.join(format!("{i:04}"))
+        } else {
+            dir.to_owned()
+        };
+        write_frame(out, &frame_dir, &images)?;
+        if args.sensor_outputs {
+            write_sensor_outputs(out, &frame_dir, renderer, t, images)?;
+        }
+        reports.push(report);
+        if let Some(p) = &progress {
+            p.inc(1);
+        }
+    }
+    if let Some(p) = progress {
+        p.finish_and_clear();
+    }
+    Ok(reports)
+}
+
+/// The cube format as the scene file spells it.
+fn format_name(f: CubeFormat) -> &'static str {
+    match f {
+        CubeFormat::Rgba16Float => "rgba16f",
+        CubeFormat::Rgba8Unorm => "rgba8",
+    }
+}
+
+/// The refresh policy as the scene file spells it (`every-n` with its n).
+fn refresh_name(p: RefreshPolicy) -> String {
+    match p {
+        RefreshPolicy::EveryFrame => "every-frame".into(),
+        RefreshPolicy::OnChange => "on-change".into(),
+        RefreshPolicy::EveryN(n) => format!("every-n ({n})"),
+    }
+}
+
+fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()> {
+    if let Some(img) = &images.observer {
+        out.write_exr(&dir.join("observer.exr"), img)?;
+        out.write_png(&dir.join("observer.png"), img)?;
+    }
+    if let Some(img) = &images.sensor {
+        out.write_exr(&dir.join("sensor.exr"), img)?;
+        out.write_png(&dir.join("sensor.png"), img)?;
+    }
+    if let Some(img) = &images.pair {
+        out.write_png(&dir.join("views.png"), img)?;
+    }
+    if let Some(img) = &images.observer_direction {
+        out.write_exr(&dir.join("observer.direction.exr"), img)?;
+    }
+    if let Some(img) = &images.sensor_direction {
+        out.write_exr(&dir.join("sensor.direction.exr"), img)?;
+    }
+    if let Some(faces) = &images.cube {
+        for (face, img) in FACE_NAMES.iter().zip(faces) {
+            out.write_exr(&dir.join("cube").join(format!("{face}.exr")), img)?;
+        }
+    }
+    Ok(())
+}
+
+/// `--sensor-outputs` reads the cube path's rays and the cube itself: a lookup without a cube
+/// (ray-query) has neither; the exact outputs come from `specchio reference --sensor-outputs`.
+fn check_sensor_outputs(args: &Args, lookup: Lookup) -> Result<()> {
+    if args.sensor_outputs && !lookups::plugin(lookup).uses_cube() {
+        bail!(
+            "--sensor-outputs: the lookup {lookup} reads no cube map; use a cube lookup \
+             (plain, box, distance, distance-exact), or `specchio reference --sensor-outputs` for the exact \
+             outputs"
+        );
+    }
+    Ok(())
+}
+
+/// The sensor outputs of one frame from its ray-map images (`Readback::rays`).
+fn write_sensor_outputs(
+    out: &Transaction,
+    dir: &Path,
+    renderer: &Renderer,
+    t_s: f64,
+    images: FrameImages,
+) -> Result<()> {
+    let missing = || anyhow::anyhow!("the frame's sensor ray map was not read back (a bug)");
+    let origin = images.sensor_ray_origin.as_ref().ok_or_else(missing)?;
+    let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;
+    let sensor = images.sensor.clone().ok_or_else(missing)?;
+    let lookup = renderer.scene.mirror.lookup.to_string();
+    let outputs = SensorOutputs::from_gpu(
+        &renderer.scene,
+        t_s,
+        &lookup,
+        sensor,
+        (origin, direction),
+        images.cube,
+    );
+    outputs.write(out, dir)?;
+    Ok(())
+}
+
+/// The project's one median (nearest rank: the lower middle of an even count).
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    specchio::metrics::percentile::median(&mut v)
+}
+
+/// Medians over frames: cube update (only frames that updated it) and each view.
+fn summarize(reports: &[FrameReport]) -> RenderSummary {
+    let updated: Vec<&FrameReport> = reports.iter().filter(|r| r.cube_updated).collect();
+    let m = |f: &dyn Fn(&FrameReport) -> Option<f64>, rs: &[&FrameReport]| {
+        median(rs.iter().filter_map(|r| f(r)).collect())
+    };
+    let all: Vec<&FrameReport> = reports.iter().collect();
+    RenderSummary {
+        frames: reports.len(),
+        cube_updates: updated.len(),
+        median_gpu_cube_update_ms: m(&|r| r.gpu_cube_ms, &updated),
+        median_gpu_observer_ms: m(&|r| r.gpu_observer_ms, &all),
+        median_gpu_sensor_ms: m(&|r| r.gpu_sensor_ms, &all),
+        median_gpu_views_ms: m(&|r| r.gpu_pair_ms, &all),
+        median_submit_wait_ms: m(&|r| Some(r.submit_wait_ms), &all),
+        median_cpu_record_ms: m(&|r| Some(r.cpu_record_ms), &all),
+    }
+}
+
+fn print_summary(
+    args: &Args,
+    (method, lookup): (Method, Lookup),
+    out: &Path,
+    reports: &[FrameReport],
+    summary: &RenderSummary,
+) {
+    let ms = |v: Option<f64>| v.map_or("n/a".to_owned(), |v| format!("{v:.2} ms"));
+    specchio::say!(
+        "rendered {} frame(s) of {} with {method}, lookup {lookup}, into {}",
+        reports.len(),
+        args.scene.display(),
+        out.display()
+    );
+    specchio::say!(
+        "  cube updates:       {} of {} frames",
+        summary.cube_updates,
+        reports.len()
+    );
+    specchio::say!(
+        "  cube update (GPU):  {} median",
+        ms(summary.median_gpu_cube_update_ms)
+    );
+    specchio::say!(
+        "  observer (GPU):     {} median",
+        ms(summary.median_gpu_observer_ms)
+    );
+    specchio::say!(
+        "  sensor (GPU):       {} median",
+        ms(summary.median_gpu_sensor_ms)
+    );
+    let cube = if lookups::plugin(lookup).uses_cube() {
+        " cube/{px,nx,py,ny,pz,nz}.exr,"
+    } else {
+        ""
+    };
+    specchio::say!("  files: observer.exr/.png, sensor.exr/.png, views.png,{cube} render.json");
+}

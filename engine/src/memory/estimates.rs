@@ -1,0 +1,241 @@
+//! Each command's host-memory estimate, checked against the budget ([`super::Budget`]) before
+//! the command starts any work: a resolution, sensor size or cube size that would need more
+//! than the machine has is refused with the figures, instead of growing until the OS kills
+//! the run.
+//!
+//! The constants are measured peaks of this project's commands (release build, lavapipe,
+//! whose device memory is host memory), rounded up by about a tenth, so that each estimate
+//! is an upper bound: `/usr/bin/time -f %M` of `render`, `reference`, `calibrate` and
+//! `localise` on thesis-room with both views (or the sensor) at 1024², 2048² and 4096², the
+//! cube at 1024, 2048 and 4096, and on heavy for the per-triangle parts; every one grew
+//! linearly. `tests/cli/memory.rs` checks the estimates against measured peaks.
+
+use super::{Budget, Estimate, MemoryError};
+use crate::scene::Scene;
+
+const MIB: u64 = 1 << 20;
+
+/// The driver, the device, the pipelines and the program itself (render at small sizes:
+/// about 132 MiB besides its images; the validation layer adds some 25 MiB).
+const RENDER_BASE_BYTES: u64 = 192 * MIB;
+/// A view pixel (observer or sensor): its target, readback, EXR and PNG encoding (37.8
+/// measured).
+const RENDER_VIEW_PIXEL_BYTES: u64 = 42;
+/// `--directions`: a view pixel's direction image, read back and encoded (52 measured).
+const RENDER_DIRECTION_PIXEL_BYTES: u64 = 58;
+/// A cube texel (6 a face² in all): colour, depth and mips on the device, the faces read back
+/// and written (39 measured).
+const RENDER_CUBE_TEXEL_BYTES: u64 = 44;
+/// `--sensor-outputs`: a sensor pixel's ray map, range, ids, the id cube's share and the
+/// panoramas (294 measured), and their fixed part.
+const RENDER_SENSOR_OUTPUT_PIXEL_BYTES: u64 = 330;
+const RENDER_SENSOR_OUTPUT_BASE_BYTES: u64 = 32 * MIB;
+/// A triangle of one pass over the scene: vertex and index buffers, meshlets, per-object
+/// data (heavy: about 188 measured).
+const RENDER_TRIANGLE_BYTES: u64 = 210;
+
+/// The program and the scene without its triangles (reference at 1024²: 144 MiB in all).
+const REFERENCE_BASE_BYTES: u64 = 64 * MIB;
+/// A traced pixel (observer or sensor): colour, direction, distance, ids, hidden layers and
+/// their encoding (66–68 measured; samples per pixel do not change it).
+const REFERENCE_PIXEL_BYTES: u64 = 75;
+/// A triangle in world space with its BVH (heavy: about 310 measured).
+const REFERENCE_TRIANGLE_BYTES: u64 = 340;
+/// `--sensor-outputs` on the reference: a sensor pixel's layers and panoramas (30–57
+/// measured), and their fixed part.
+const REFERENCE_SENSOR_OUTPUT_PIXEL_BYTES: u64 = 66;
+const REFERENCE_SENSOR_OUTPUT_BASE_BYTES: u64 = 128 * MIB;
+
+/// A sensor pixel of `calibrate`: the exact ray map and the models' fits over it (222
+/// measured).
+const CALIBRATE_PIXEL_BYTES: u64 = 245;
+
+/// A sensor pixel of `localise` (`--sensor-size` squared): the renderer's targets or the
+/// reference's layers, the read back image and its panorama (66.7 measured with a cube
+/// lookup; the reference's pixel is at most `REFERENCE_PIXEL_BYTES`).
+const LOCALISE_PIXEL_BYTES: u64 = 80;
+
+/// `bench`: a fill method's renderer per cube texel in the timing phase (14.4 measured), and
+/// its fixed part (about 7 MiB).
+const BENCH_METHOD_TEXEL_BYTES: u64 = 16;
+const BENCH_METHOD_BASE_BYTES: u64 = 8 * MIB;
+/// `bench`: a rung's renderer per cube texel (12.3 measured) and per view pixel (its views,
+/// read back with their directions: about 50 measured).
+const BENCH_RUNG_TEXEL_BYTES: u64 = 14;
+const BENCH_RUNG_VIEW_PIXEL_BYTES: u64 = 55;
+/// `bench`: the error measurement per view pixel: the reference's images and layers and each
+/// lookup's read back images and directions (thesis-room: 336 MiB for 742,144 view pixels,
+/// the same at 512² and 1024² faces).
+const BENCH_ACCURACY_VIEW_PIXEL_BYTES: u64 = 500;
+
+/// A decoded texel of the scene's textures: the decoded image, its upload and its mips.
+const TEXEL_BYTES: u64 = 12;
+
+/// What the scene itself costs a renderer or the reference: its triangles a pass (every
+/// object's, walls included) at `triangle_bytes` each, and its textures.
+fn scene_parts(e: &mut Estimate, scene: &Scene, triangle_bytes: u64) {
+    let triangles: u64 = scene
+        .objects
+        .iter()
+        .map(|o| scene.meshes[o.mesh].indices.len() as u64 / 3)
+        .sum();
+    e.add_many("the scene's triangles", triangles, triangle_bytes);
+    let texels: u64 = scene
+        .textures
+        .iter()
+        .map(|t| u64::from(t.width) * u64::from(t.height))
+        .sum();
+    e.add_many("the scene's textures", texels, TEXEL_BYTES);
+}
+
+fn pixels([w, h]: [u32; 2]) -> u64 {
+    u64::from(w) * u64::from(h)
+}
+
+/// `specchio render`, with cube faces of `face_size_px`.
+pub fn render(
+    scene: &Scene,
+    face_size_px: u32,
+    directions: bool,
+    sensor_outputs: bool,
+) -> Result<(), MemoryError> {
+    let views = pixels(scene.observer.resolution) + pixels(scene.sensor.resolution);
+    let face = u64::from(face_size_px);
+    let mut e = Estimate::new();
+    e.add("the driver and the renderer", RENDER_BASE_BYTES);
+    scene_parts(&mut e, scene, RENDER_TRIANGLE_BYTES);
+    e.add_many("the two views", views, RENDER_VIEW_PIXEL_BYTES);
+    e.add_many("the cube", 6 * face * face, RENDER_CUBE_TEXEL_BYTES);
+    if directions {
+        e.add_many("the direction images", views, RENDER_DIRECTION_PIXEL_BYTES);
+    }
+    if sensor_outputs {
+        let sensor = pixels(scene.sensor.resolution);
+        e.add_many(
+            "the sensor outputs",
+            sensor,
+            RENDER_SENSOR_OUTPUT_PIXEL_BYTES,
+        )
+        .add(
+            "the sensor outputs' fixed part",
+            RENDER_SENSOR_OUTPUT_BASE_BYTES,
+        );
+    }
+    e.check(
+        &Budget::from_env()?,
+        "lower observer.resolution, sensor.resolution or the cube's face size (--cube-size)",
+    )
+}
+
+/// `specchio reference`.
+pub fn reference(scene: &Scene, sensor_outputs: bool) -> Result<(), MemoryError> {
+    let views = pixels(scene.observer.resolution) + pixels(scene.sensor.resolution);
+    let mut e = Estimate::new();
+    e.add("the program", REFERENCE_BASE_BYTES);
+    scene_parts(&mut e, scene, REFERENCE_TRIANGLE_BYTES);
+    e.add_many("the two traced views", views, REFERENCE_PIXEL_BYTES);
+    if sensor_outputs {
+        let sensor = pixels(scene.sensor.resolution);
+        e.add_many(
+            "the sensor outputs",
+            sensor,
+            REFERENCE_SENSOR_OUTPUT_PIXEL_BYTES,
+        )
+        .add(
+            "the sensor outputs' fixed part",
+            REFERENCE_SENSOR_OUTPUT_BASE_BYTES,
+        );
+    }
+    e.check(
+        &Budget::from_env()?,
+        "lower observer.resolution or sensor.resolution",
+    )
+}
+
+/// `specchio calibrate`.
+pub fn calibrate(scene: &Scene) -> Result<(), MemoryError> {
+    let mut e = Estimate::new();
+    e.add("the program", REFERENCE_BASE_BYTES);
+    scene_parts(&mut e, scene, REFERENCE_TRIANGLE_BYTES);
+    e.add_many(
+        "the sensor's ray map and fits",
+        pixels(scene.sensor.resolution),
+        CALIBRATE_PIXEL_BYTES,
+    );
+    e.check(&Budget::from_env()?, "lower sensor.resolution")
+}
+
+/// `specchio localise`: one renderer at a time, a `sensor_px`² sensor, and the landmarks'
+/// signatures (`signature_values` floats each, for `landmarks` landmarks per source).
+pub fn localise(
+    scene: &Scene,
+    sensor_px: u32,
+    landmarks: u64,
+    signature_values: u64,
+) -> Result<(), MemoryError> {
+    let face = u64::from(scene.cube.face_size_px);
+    let mut e = Estimate::new();
+    e.add("the driver and the renderer", RENDER_BASE_BYTES);
+    scene_parts(
+        &mut e,
+        scene,
+        RENDER_TRIANGLE_BYTES.max(REFERENCE_TRIANGLE_BYTES),
+    );
+    e.add_many("the sensor", pixels([sensor_px; 2]), LOCALISE_PIXEL_BYTES);
+    e.add_many("the cube", 6 * face * face, RENDER_CUBE_TEXEL_BYTES);
+    e.add_many(
+        "the landmarks' signatures",
+        landmarks.saturating_mul(signature_values),
+        4,
+    );
+    e.check(&Budget::from_env()?, "lower --sensor-size or --cube-size")
+}
+
+/// `specchio bench`: scenes and face sizes are measured one after another, so the estimate is
+/// that of the largest; within one, the fill methods' renderers (`methods`, the timing phase)
+/// and the ladder's (`rungs`) are alive in turn, each renderer with the scene, and the error
+/// measurement with the reference beside them. Measured phase by phase on thesis-room at 512²
+/// and 1024² faces (the constants above).
+pub fn bench(
+    scenes: &[&Scene],
+    face_sizes: &[u32],
+    methods: usize,
+    rungs: usize,
+    accuracy: bool,
+) -> Result<(), MemoryError> {
+    let face = u64::from(face_sizes.iter().copied().max().unwrap_or(0));
+    let texels = 6 * face * face;
+    let mut worst = Estimate::new();
+    for scene in scenes {
+        let views = pixels(scene.observer.resolution) + pixels(scene.sensor.resolution);
+        let mut one = Estimate::new();
+        scene_parts(&mut one, scene, RENDER_TRIANGLE_BYTES);
+        let per_scene = one.total();
+        let method = texels * BENCH_METHOD_TEXEL_BYTES + BENCH_METHOD_BASE_BYTES + per_scene;
+        let rung =
+            texels * BENCH_RUNG_TEXEL_BYTES + views * BENCH_RUNG_VIEW_PIXEL_BYTES + per_scene;
+        let mut e = Estimate::new();
+        e.add("the driver and the program", RENDER_BASE_BYTES);
+        let timing = (methods as u64).saturating_mul(method);
+        let ladder = (rungs as u64).saturating_mul(rung);
+        match timing >= ladder {
+            true => e.add(format!("{methods} fill methods' renderers"), timing),
+            false => e.add(format!("{rungs} rungs' renderers"), ladder),
+        };
+        if accuracy {
+            e.add_many(
+                "the error measurement",
+                views,
+                BENCH_ACCURACY_VIEW_PIXEL_BYTES,
+            );
+            scene_parts(&mut e, scene, REFERENCE_TRIANGLE_BYTES);
+        }
+        if e.total() > worst.total() {
+            worst = e;
+        }
+    }
+    worst.check(
+        &Budget::from_env()?,
+        "lower --cube-sizes, or measure fewer --methods or --rungs at once",
+    )
+}

@@ -1,0 +1,147 @@
+//! Range checks of command-line values, as clap value parsers: every value given on the
+//! command line is checked while the arguments are parsed, whatever other options say, before
+//! anything is loaded, run or written. A bad value is clap's usage error (exit 2), naming the
+//! option, the value and the allowed range. The ranges are listed in docs/benchmarks.md and
+//! the README.
+
+use std::ops::RangeInclusive;
+
+use crate::render::lookups::TraceOrder;
+use crate::render::methods::Method;
+use crate::scene::{Lookup, MAX_FACE_SIZE_PX};
+
+/// A whole number in `range`.
+pub fn whole<T>(
+    range: RangeInclusive<T>,
+) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
+where
+    T: std::str::FromStr + PartialOrd + std::fmt::Display + Copy + Send + Sync + 'static,
+{
+    move |text: &str| {
+        text.trim()
+            .parse::<T>()
+            .ok()
+            .filter(|v| range.contains(v))
+            .ok_or_else(|| {
+                format!(
+                    "must be a whole number in {}..={}",
+                    range.start(),
+                    range.end()
+                )
+            })
+    }
+}
+
+/// A cube face size in texels (the scene format's limit, `MAX_FACE_SIZE_PX`).
+pub fn face_size(text: &str) -> Result<u32, String> {
+    whole(1..=MAX_FACE_SIZE_PX)(text).map_err(|_| {
+        let what = match text.trim() {
+            "" => "an empty entry".to_owned(),
+            t => format!("`{t}`"),
+        };
+        format!("{what} is not a face size: a whole number in 1..={MAX_FACE_SIZE_PX}")
+    })
+}
+
+/// A finite number in `[lo, hi]`, or `(lo, hi]` when `lo_open`; `hi` may be infinite (no
+/// upper bound; the value must still be finite).
+pub fn real(
+    lo: f64,
+    lo_open: bool,
+    hi: f64,
+) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+    move |text: &str| {
+        let above = |v: f64| if lo_open { v > lo } else { v >= lo };
+        let ok = |v: &f64| v.is_finite() && above(*v) && *v <= hi;
+        text.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(ok)
+            .ok_or_else(|| match (hi.is_finite(), lo_open) {
+                (true, true) => format!("must be a number in ({lo}, {hi}]"),
+                (true, false) => format!("must be a number in [{lo}, {hi}]"),
+                (false, true) => format!("must be a finite number > {lo}"),
+                (false, false) => format!("must be a finite number >= {lo}"),
+            })
+    }
+}
+
+/// A registered cube fill method.
+pub fn method(text: &str) -> Result<Method, String> {
+    Method::parse(text.trim())
+        .ok_or_else(|| format!("`{text}` is not a method: one of {}", Method::names()))
+}
+
+/// A method name or `all` (`render --method`).
+pub fn method_or_all(text: &str) -> Result<String, String> {
+    match text.trim() {
+        "all" => Ok("all".to_owned()),
+        other => method(other).map(|m| m.name().to_owned()),
+    }
+}
+
+/// A mirror lookup mode.
+pub fn lookup(text: &str) -> Result<Lookup, String> {
+    Lookup::parse(text.trim())
+        .ok_or_else(|| format!("`{text}` is not a lookup: one of {}", Lookup::names()))
+}
+
+/// A `--trace-order` value.
+pub fn trace_order(text: &str) -> Result<TraceOrder, String> {
+    TraceOrder::ALL
+        .into_iter()
+        .find(|o| o.name() == text.trim())
+        .ok_or_else(|| format!("`{text}` is not a trace order: split or given"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn whole_numbers_are_checked_against_their_range() {
+        let frames = whole(1u32..=100);
+        assert_eq!(frames("1"), Ok(1));
+        assert_eq!(frames("100"), Ok(100));
+        for bad in ["0", "101", "", "abc", "-1", "1.5", "99999999999"] {
+            assert_eq!(
+                frames(bad),
+                Err("must be a whole number in 1..=100".into()),
+                "{bad}"
+            );
+        }
+    }
+
+    #[test]
+    fn reals_are_finite_and_in_range() {
+        let fps = real(0.0, true, 10.0);
+        assert_eq!(fps("10"), Ok(10.0));
+        for bad in ["0", "-3", "NaN", "inf", "10.5", "x"] {
+            assert_eq!(fps(bad), Err("must be a number in (0, 10]".into()), "{bad}");
+        }
+        assert_eq!(real(0.0, false, 1.0)("0"), Ok(0.0));
+        let seconds = real(0.0, false, f64::INFINITY);
+        assert_eq!(seconds("1e300"), Ok(1e300));
+        for bad in ["-1", "inf", "NaN"] {
+            assert_eq!(
+                seconds(bad),
+                Err("must be a finite number >= 0".into()),
+                "{bad}"
+            );
+        }
+    }
+
+    #[test]
+    fn names_list_what_is_allowed() {
+        assert_eq!(face_size("64"), Ok(64));
+        assert!(face_size("0")
+            .unwrap_err()
+            .contains("`0` is not a face size: a whole number in 1..="));
+        assert!(face_size("").unwrap_err().starts_with("an empty entry"));
+        assert!(method("nine-pass").unwrap_err().contains("six-pass"));
+        assert_eq!(lookup("box"), Ok(Lookup::Box));
+        assert!(lookup("sphere")
+            .unwrap_err()
+            .contains("plain, box, ray-query"));
+    }
+}

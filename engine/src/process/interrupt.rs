@@ -1,0 +1,75 @@
+//! Ctrl-C (SIGINT), SIGTERM and the other signals that would end the process (SIGHUP when
+//! the terminal closes, SIGQUIT, SIGUSR1/2, SIGALRM) during a command that writes outputs:
+//! the command stops at its next check (and always before it places its output) and returns
+//! an error, so its output transaction is dropped and removes what it
+//! had written, instead of the process dying with a hidden half-written folder on disk. A
+//! second signal ends the process at once, but only half a second or more after the first:
+//! `timeout` sends its SIGTERM to the process and then to its process group, and that second
+//! copy must not cut the clean stop short.
+
+use std::sync::atomic::{AtomicBool, AtomicI64, Ordering};
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// When the first signal came, in monotonic-clock milliseconds.
+static FIRST_MS: AtomicI64 = AtomicI64::new(0);
+
+/// Signals closer than this to the first are taken for copies of it.
+const REPEAT_MS: i64 = 500;
+
+/// The monotonic clock in milliseconds (`clock_gettime` is async-signal-safe).
+fn now_ms() -> i64 {
+    // SAFETY: clock_gettime writes the timespec it is given; CLOCK_MONOTONIC always exists.
+    let mut t: libc::timespec = unsafe { std::mem::zeroed() };
+    unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut t) };
+    t.tv_sec * 1000 + t.tv_nsec / 1_000_000
+}
+
+extern "C" fn on_signal(signal: libc::c_int) {
+    // Atomics, the clock and _exit only: all async-signal-safe.
+    if !INTERRUPTED.swap(true, Ordering::SeqCst) {
+        FIRST_MS.store(now_ms(), Ordering::SeqCst);
+    } else if now_ms() - FIRST_MS.load(Ordering::SeqCst) >= REPEAT_MS {
+        // SAFETY: _exit ends the process without running anything else.
+        unsafe { libc::_exit(128 + signal) };
+    }
+}
+
+/// The signals whose default action would end the process with its staging folder on disk:
+/// each stops the run cleanly instead (SIGPIPE is ignored in `main`; SIGKILL and SIGSTOP
+/// cannot be caught).
+const STOPPING: [libc::c_int; 7] = [
+    libc::SIGINT,
+    libc::SIGTERM,
+    libc::SIGHUP,
+    libc::SIGQUIT,
+    libc::SIGUSR1,
+    libc::SIGUSR2,
+    libc::SIGALRM,
+];
+
+/// Installs the handler for the [`STOPPING`] signals (once per process is enough; again is
+/// harmless).
+pub fn catch() {
+    for signal in STOPPING {
+        // SAFETY: a zeroed sigaction is valid (empty mask); the handler is async-signal-safe.
+        unsafe {
+            let mut action: libc::sigaction = std::mem::zeroed();
+            action.sa_sigaction = on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
+            action.sa_flags = libc::SA_RESTART;
+            libc::sigaction(signal, &action, std::ptr::null_mut());
+        }
+    }
+}
+
+/// An error once a signal has arrived; `progress` says how far the command got.
+pub fn check(progress: &str) -> Result<(), Interrupted> {
+    if INTERRUPTED.load(Ordering::SeqCst) {
+        return Err(Interrupted(progress.to_owned()));
+    }
+    Ok(())
+}
+
+/// A signal stopped the command; the text says how far it got.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted {0}: nothing was written")]
+pub struct Interrupted(String);

@@ -1,0 +1,659 @@
+//! The benchmark's regression gate as CI runs it: an identical baseline passes, a worsened one
+//! fails and names the case.
+
+mod bench_tradeoff;
+#[path = "../common/mod.rs"]
+mod common;
+
+use bench_tradeoff::{check_plot, check_tradeoff};
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn specchio(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .output()
+        .expect("the specchio binary runs")
+}
+
+/// Fails with the command's stderr unless it succeeded.
+fn assert_ok(out: &Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// A quick run of six-pass alone, timing only (no error, floors, dynamic part or trade-off),
+/// plus `extra`.
+fn lean_quick(extra: &[&str]) -> Output {
+    let mut args = vec![
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass",
+        "--no-accuracy",
+        "--no-dynamic",
+        "--no-floors",
+        "--no-tradeoff",
+    ];
+    args.extend_from_slice(extra);
+    specchio(&args)
+}
+
+#[test]
+fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
+    let json = common::temp_dir("base.json");
+    let csv = common::temp_dir("base.csv");
+    let svg = common::temp_dir("plot.svg");
+    let run = specchio(&[
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass,instanced",
+        "--json",
+        json.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    assert_ok(&run);
+    // The header, two scenes x two methods x two lookups, and two scenes x seven rungs.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 1 + 8 + 14);
+    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 14);
+    check_plot(&std::fs::read_to_string(&svg).unwrap());
+    check_record(&read_json(&json));
+
+    // The same run against itself: counters are deterministic.
+    let same = specchio(&[
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass,instanced",
+        "--baseline",
+        json.to_str().unwrap(),
+    ]);
+    assert_ok(&same);
+
+    // A baseline that claims less work: the run "got worse" and the gate names the case.
+    let mut base = read_json(&json);
+    let first = &mut base["results"][0];
+    let case = format!(
+        "{} / {}",
+        first["scene"].as_str().unwrap(),
+        first["method"].as_str().unwrap()
+    );
+    let v = first["work"]["fragment_invocations"].as_u64().unwrap();
+    first["work"]["fragment_invocations"] = serde_json::json!(v - 1);
+    let worse = common::temp_dir("worse.json");
+    std::fs::write(&worse, base.to_string()).unwrap();
+    let fail = specchio(&[
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass,instanced",
+        "--baseline",
+        worse.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&fail.stderr);
+    assert_eq!(fail.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&case) && stderr.contains("fragment_invocations"),
+        "{stderr}"
+    );
+
+    // A rung's counter changed: the gate names the rung's case and the counter.
+    let mut base = read_json(&json);
+    let rung = &mut base["tradeoff"][1];
+    let case = format!(
+        "{} / rung {} / 64²",
+        rung["scene"].as_str().unwrap(),
+        rung["rung"].as_str().unwrap()
+    );
+    let v = rung["work"]["sensor_fragment_invocations"]
+        .as_u64()
+        .unwrap();
+    rung["work"]["sensor_fragment_invocations"] = serde_json::json!(v + 1);
+    std::fs::write(&worse, base.to_string()).unwrap();
+    let fail = specchio(&[
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass,instanced",
+        "--no-accuracy",
+        "--baseline",
+        worse.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&fail.stderr);
+    assert_eq!(fail.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!("{case}: sensor_fragment_invocations {v}")),
+        "{stderr}"
+    );
+
+    // A missing baseline is an error that names it, before any run.
+    let missing = specchio(&["bench", "--quick", "--baseline", "no/such/baseline.json"]);
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no/such/baseline.json"));
+    for f in [json, csv, worse, svg] {
+        let _ = std::fs::remove_file(f);
+    }
+}
+
+/// The committed CI baseline still matches this tree's work counters (a counter change must
+/// come with a baseline update).
+#[test]
+fn the_committed_quick_baseline_matches() {
+    let run = specchio(&[
+        "bench",
+        "--quick",
+        "--baseline",
+        "bench/baselines/quick.json",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&run.stdout),
+        String::from_utf8_lossy(&run.stderr)
+    );
+}
+
+/// What one quick run's JSON must hold besides the gate's rows (issue: speed against error).
+fn check_record(r: &serde_json::Value) {
+    let rows = |k: &str| {
+        r[k].as_array()
+            .unwrap_or_else(|| panic!("`{k}` array"))
+            .clone()
+    };
+    // Timing rows: 2 scenes x 2 methods; floors: 2 scenes x 3.
+    assert_eq!(rows("results").len(), 4);
+    assert_eq!(rows("floors").len(), 6);
+    for f in rows("floors") {
+        assert!(f["wall_ms"]["median"].as_f64().unwrap() > 0.0);
+    }
+    // The fill floor shades every texel once: 6 faces x 64² in an update.
+    let fill = rows("floors")
+        .into_iter()
+        .find(|f| f["floor"] == "fill")
+        .unwrap();
+    assert_eq!(fill["fill_stats"]["fragment_invocations"], 6 * 64 * 64);
+    for row in rows("results") {
+        assert!(row["efficiency"]["vs_geometry_plus_fill"].as_f64().unwrap() > 0.0);
+    }
+    // Accuracy: per scene and lookup; the methods agree; box is better than plain.
+    let acc = rows("accuracy");
+    assert_eq!(acc.len(), 4);
+    for a in &acc {
+        assert_eq!(a["methods_identical"], true);
+        assert_eq!(a["non_finite_pixels"], 0);
+    }
+    let flip = |lookup: &str| {
+        acc.iter()
+            .find(|a| a["lookup"] == lookup && a["scene"] == "scenes/thesis-room.toml")
+            .unwrap()["flip_mean"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(flip("box") < flip("plain"));
+    assert_eq!(rows("speed_vs_error").len(), 8);
+    // Both quick scenes move: incremental against full, frame by frame.
+    let dynamic = rows("dynamic");
+    assert_eq!(dynamic.len(), 2);
+    let thesis = &dynamic[0];
+    assert!(thesis["frames"].as_array().unwrap().len() >= 4);
+    // One small ball moves in the thesis's room: fewer faces than a full update.
+    assert!(thesis["faces_incremental_median"].as_f64().unwrap() < 6.0);
+    check_tradeoff(r);
+    // Provenance.
+    assert!(r["peak_rss_bytes"].as_u64().unwrap() > 0);
+    assert!(r["command"].as_str().unwrap().contains("bench"));
+    assert!(r["device"]["driver_info"].is_string());
+    assert!(r["settings"]["cube_sizes"] == serde_json::json!([64]));
+}
+
+/// `--format bmf` prints Bencher Metric Format on stdout (the answer and tables on stderr) and
+/// `--bmf FILE` writes the same document: one benchmark per scene, method or rung, face size
+/// and device, with the documented measures (the schema itself is checked in `bench::bmf`).
+#[test]
+fn bmf_format_and_file_carry_the_same_benchmarks() {
+    let file = common::temp_dir("run.bmf.json");
+    let run = specchio(&[
+        "bench",
+        "--quick",
+        "scenes/thesis-room.toml",
+        "--methods",
+        "six-pass,multiview",
+        "--no-dynamic",
+        "--no-floors",
+        "--rungs",
+        "plain,box",
+        "--format",
+        "bmf",
+        "--bmf",
+        file.to_str().unwrap(),
+    ]);
+    assert_ok(&run);
+    let printed: serde_json::Value = serde_json::from_slice(&run.stdout).expect("stdout is JSON");
+    assert_eq!(printed, read_json(&file), "--format bmf and --bmf differ");
+    assert!(String::from_utf8_lossy(&run.stderr).contains("the answer on "));
+    let benchmarks = printed.as_object().expect("an object of benchmarks");
+    let names: Vec<&str> = benchmarks.keys().map(String::as_str).collect();
+    assert_eq!(names.len(), 4, "{names:?}");
+    for (case, measures) in [
+        ("six-pass", &["cube-update-ms"][..]),
+        ("multiview", &["cube-update-ms"]),
+        ("rung-plain", &["frame-cost-ms", "sensor-flip-mean"]),
+        ("rung-box", &["frame-cost-ms", "sensor-flip-mean"]),
+    ] {
+        let prefix = format!("thesis-room/{case}/64/");
+        let (_, benchmark) = benchmarks
+            .iter()
+            .find(|(name, _)| name.starts_with(&prefix))
+            .unwrap_or_else(|| panic!("no {prefix}* in {names:?}"));
+        let got: Vec<&str> = benchmark
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        assert_eq!(got, measures, "{prefix}");
+        let time = &benchmark[measures[0]];
+        let (lo, v, hi) = (
+            time["lower_value"].as_f64().unwrap(),
+            time["value"].as_f64().unwrap(),
+            time["upper_value"].as_f64().unwrap(),
+        );
+        assert!(lo <= v && v <= hi, "{prefix}: {time}");
+    }
+
+    // Two scenes with one file name would share benchmark names: refused before the run.
+    let twin = common::temp_dir("twin");
+    std::fs::create_dir_all(twin.join("a")).unwrap();
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/test/six-colour-room.toml"),
+        twin.join("a/thesis-room.toml"),
+    )
+    .unwrap();
+    let twin_scene = twin.join("a/thesis-room.toml");
+    let refused = lean_quick(&[
+        "scenes/thesis-room.toml",
+        twin_scene.to_str().unwrap(),
+        "--format",
+        "bmf",
+    ]);
+    assert_eq!(refused.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(err.contains("would share one"), "{err}");
+    assert!(refused.stdout.is_empty());
+}
+
+/// `--format github` prints github-action-benchmark's array on stdout (the table on stderr);
+/// bad options fail before running, naming the option, and write nothing.
+#[test]
+fn github_format_and_bad_options() {
+    let run = lean_quick(&["--format", "github"]);
+    assert_ok(&run);
+    let array: serde_json::Value = serde_json::from_slice(&run.stdout).expect("stdout is JSON");
+    let array = array.as_array().unwrap();
+    assert_eq!(array.len(), 2, "one row per scene: {array:?}");
+    assert_eq!(array[0]["unit"], "ms");
+    assert!(array[0]["value"].as_f64().unwrap() > 0.0);
+    assert!(String::from_utf8_lossy(&run.stderr).contains("median ms"));
+
+    // --threads reaches lavapipe through LP_NUM_THREADS and is recorded.
+    let json = common::temp_dir("threads.json");
+    assert_ok(&lean_quick(&[
+        "--threads",
+        "1",
+        "--json",
+        json.to_str().unwrap(),
+    ]));
+    let record = read_json(&json);
+    assert_eq!(record["environment"]["lp_num_threads"], "1");
+    std::fs::remove_file(&json).unwrap();
+
+    // Values clap refuses (exit 2) and combinations the run refuses (exit 1), each before
+    // anything runs, naming the option (and the allowed values), writing nothing.
+    let json = common::temp_dir("bad.json");
+    for (args, message, code) in [
+        (
+            &["--cube-sizes", "0"][..],
+            "'--cube-sizes <CUBE_SIZES>': `0` is not a face size: a whole number in 1..=8192",
+            2,
+        ),
+        (
+            &["--cube-sizes", "64,x"][..],
+            "'--cube-sizes <CUBE_SIZES>': `x`",
+            2,
+        ),
+        (
+            &["--cube-sizes", "64,64"][..],
+            "--cube-sizes: 64 is given twice",
+            1,
+        ),
+        (
+            &["--lookups", "sphere"][..],
+            "'--lookups <LOOKUPS>': `sphere` is not a lookup: one of plain, box, ray-query",
+            2,
+        ),
+        (
+            &["--threads", "0"][..],
+            "'--threads <THREADS>': must be a whole number in 1..=1024",
+            2,
+        ),
+        (
+            &["--runs", "0"][..],
+            "'--runs <RUNS>': must be a whole number in 1..=1000",
+            2,
+        ),
+        (
+            &["--frames", "0"][..],
+            "'--frames <FRAMES>': must be a whole number in 1..=100000",
+            2,
+        ),
+        (&["--warmup", "-1"][..], "--warmup", 2),
+        (
+            &["--max-regression", "-5"][..],
+            "'--max-regression <MAX_REGRESSION>': must be a number in [0, 10000]",
+            2,
+        ),
+        (
+            &["--methods", "nine-pass"][..],
+            "'--methods <METHODS>': `nine-pass` is not a method: one of six-pass",
+            2,
+        ),
+        (&["--plot", "no/such/folder/p.svg"][..], "no/such/folder", 1),
+        (
+            &["--methods", "instanced", "--max-regression", "10"][..],
+            "include six-pass",
+            1,
+        ),
+        (&["no/such/scene.toml"][..], "no/such/scene.toml", 1),
+        (
+            &["--rungs", "box,sphere"][..],
+            "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, distance-8, distance-16, distance-32, distance-exact, ray-query",
+            2,
+        ),
+        (
+            &["--rungs", "box,box"][..],
+            "--rungs: \"box\" is given twice",
+            1,
+        ),
+        (
+            &["--rungs", "box", "--no-tradeoff"][..],
+            "cannot be used with '--no-tradeoff'",
+            2,
+        ),
+    ] {
+        let mut all = vec!["bench", "--json", json.to_str().unwrap()];
+        all.extend_from_slice(args);
+        let out = specchio(&all);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "{args:?}: {stderr}");
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+        assert!(!json.exists(), "{args:?} wrote {}", json.display());
+    }
+}
+
+/// `--quick` changes only the defaults: an explicit value is checked exactly as without it
+/// (issue 11: `--quick --cube-sizes 0` used to run, ignoring it) and is honoured.
+#[test]
+fn quick_checks_and_honours_explicit_values() {
+    for (args, option, range) in [
+        (&["--cube-sizes", "0"][..], "--cube-sizes", "1..=8192"),
+        (&["--cube-sizes", "100000"][..], "--cube-sizes", "1..=8192"),
+        (&["--cube-sizes", "64,,abc"][..], "--cube-sizes", "1..=8192"),
+        (&["--frames", "0"][..], "--frames", "1..=100000"),
+        (&["--runs", "0"][..], "--runs", "1..=1000"),
+        (&["--warmup", "20000"][..], "--warmup", "0..=10000"),
+    ] {
+        let out = lean_quick(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "--quick {args:?}: {stderr}");
+        assert!(
+            stderr.contains(option) && stderr.contains(range),
+            "--quick {args:?}: {stderr}"
+        );
+    }
+    let json = common::temp_dir("quick-explicit.json");
+    assert_ok(&lean_quick(&[
+        "--cube-sizes",
+        "32",
+        "--frames",
+        "3",
+        "--warmup",
+        "0",
+        "--runs",
+        "2",
+        "--json",
+        json.to_str().unwrap(),
+    ]));
+    let record = read_json(&json);
+    let settings = &record["settings"];
+    assert_eq!(settings["cube_sizes"], serde_json::json!([32]));
+    assert_eq!(
+        (&settings["frames"], &settings["warmup"], &settings["runs"]),
+        (
+            &serde_json::json!(3),
+            &serde_json::json!(0),
+            &serde_json::json!(2)
+        )
+    );
+    for row in record["results"].as_array().unwrap() {
+        assert_eq!(row["cube_size"], 32);
+        // 3 timed updates in each of 2 runs.
+        assert_eq!(row["updates"], 6);
+        assert_eq!(row["run_medians_ms"].as_array().unwrap().len(), 2);
+    }
+    std::fs::remove_file(&json).unwrap();
+}
+
+/// A baseline is read through the record's own types: a misspelt, missing or mistyped key is
+/// refused before the run, naming the file and the key (it used to read as "no value" and
+/// change the gate's verdict silently).
+#[test]
+fn a_damaged_baseline_is_refused_naming_the_key() {
+    let good = read_json(&common::root().join("bench/baselines/quick.json"));
+    let misspelt =
+        good.to_string()
+            .replacen("\"fragment_invocations\"", "\"fragment_invocatons\"", 1);
+    let mut missing = good.clone();
+    missing["results"][0]["work"]
+        .as_object_mut()
+        .unwrap()
+        .remove("vertex_invocations");
+    let mut mistyped = good.clone();
+    mistyped["device"]["driver_name"] = serde_json::json!(7);
+    for (name, text, says) in [
+        ("misspelt", misspelt, "unknown field `fragment_invocatons`"),
+        (
+            "missing",
+            missing.to_string(),
+            "key `results[0].work.vertex_invocations` is missing",
+        ),
+        ("mistyped", mistyped.to_string(), "invalid type"),
+    ] {
+        let path = common::temp_dir(&format!("{name}.json"));
+        std::fs::write(&path, text).unwrap();
+        let out = lean_quick(&["--baseline", path.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
+        assert!(
+            stderr.contains(path.to_str().unwrap()) && stderr.contains(says),
+            "{name}: {stderr}"
+        );
+        // Refused before the run: no table was printed.
+        assert!(out.stdout.is_empty(), "{name}: the run started");
+        std::fs::remove_file(&path).unwrap();
+    }
+}
+
+/// Under validation, a message from the layer fails the benchmark (exit 3) and no output is
+/// written. The message is provoked through the layer's own documented setting
+/// `VK_LAYER_ENABLES` (best-practices checks warn about enabling VK_EXT_debug_utils).
+#[test]
+fn a_validation_message_fails_the_bench_without_output() {
+    let json = common::temp_dir("validation.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args([
+            "bench",
+            "--quick",
+            "--methods",
+            "six-pass",
+            "--no-accuracy",
+            "--no-dynamic",
+            "--no-floors",
+            "--json",
+            json.to_str().unwrap(),
+        ])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .env("SPECCHIO_VALIDATE", "1")
+        .env(
+            "VK_LAYER_ENABLES",
+            "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT",
+        )
+        .output()
+        .expect("the specchio binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(
+        stderr.contains("the Vulkan validation layer reported"),
+        "{stderr}"
+    );
+    assert!(!json.exists(), "a failed run wrote {}", json.display());
+}
+
+/// On SwiftShader (no pipeline statistics) the work counters are absent, never zero, in the
+/// JSON and the CSV; and a baseline recorded on lavapipe is refused before the run, naming
+/// both drivers.
+#[test]
+fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    if !root
+        .join(".drivers/swiftshader/vk_swiftshader_icd.json")
+        .exists()
+    {
+        eprintln!("SwiftShader is not provided here: nothing to check");
+        return;
+    }
+    let json = common::temp_dir("swiftshader.json");
+    let csv = common::temp_dir("swiftshader.csv");
+    // With the trade-off's rungs (their cost only): distance-exact and ray-query cannot run
+    // there.
+    let out = specchio(&[
+        "bench",
+        "--quick",
+        "--methods",
+        "six-pass",
+        "--no-accuracy",
+        "--no-dynamic",
+        "--no-floors",
+        "--device",
+        "swiftshader",
+        "--json",
+        json.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert_ok(&out);
+    let record = read_json(&json);
+    let not_run = &record["rungs_not_run"];
+    assert_eq!(not_run.as_array().unwrap().len(), 2, "{not_run}");
+    assert_eq!(not_run[0]["rung"], "distance-exact");
+    assert_eq!(not_run[1]["rung"], "ray-query");
+    for n in not_run.as_array().unwrap() {
+        assert!(n["reason"].as_str().unwrap().contains("ray"), "{n}");
+    }
+    let rungs = record["tradeoff"].as_array().expect("tradeoff");
+    // Two scenes, every rung but distance-exact and ray-query.
+    assert_eq!(rungs.len(), 2 * 5);
+    for t in rungs {
+        assert_eq!(t["work"]["faces_rendered"], 30);
+        assert!(t["work"]["sensor_fragment_invocations"].is_null(), "{t}");
+        assert!(t["sensor"].is_null() && t["pareto"].is_null());
+    }
+    let refused = specchio(&[
+        "bench",
+        "--quick",
+        "--no-accuracy",
+        "--device",
+        "swiftshader",
+        "--rungs",
+        "ray-query",
+    ]);
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("--rungs ray-query: the device lacks"),
+        "{said}"
+    );
+    for r in record["results"].as_array().expect("results") {
+        for counter in ["vertex_invocations", "fragment_invocations"] {
+            assert!(r["work"][counter].is_null(), "{counter}: {}", r["work"]);
+            assert!(r["fill_stats"].is_null());
+        }
+        assert!(r["work"]["faces_rendered"].as_u64().unwrap() > 0);
+    }
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let column = header
+        .iter()
+        .position(|c| *c == "vertex_invocations")
+        .unwrap();
+    for line in text.lines().skip(1) {
+        assert_eq!(line.split(',').nth(column), Some(""), "{line}");
+    }
+    let refused = lean_quick(&[
+        "--device",
+        "swiftshader",
+        "--baseline",
+        "bench/baselines/quick.json",
+    ]);
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(!refused.status.success());
+    assert!(
+        said.contains("llvmpipe") && said.contains("SwiftShader") && !said.contains("timed"),
+        "{said}"
+    );
+    for f in [json, csv] {
+        let _ = std::fs::remove_file(f);
+    }
+}
+
+/// A report file named like one of the run's inputs (a scene, the baseline) is refused before
+/// anything runs, and the input is left as it was.
+#[test]
+fn a_report_never_replaces_an_input() {
+    let dir = common::temp_dir("inputs");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::copy(
+        common::root().join("scenes/test/six-colour-room.toml"),
+        &scene,
+    )
+    .unwrap();
+    let original = std::fs::read(&scene).unwrap();
+    let s = scene.to_str().unwrap();
+    for flag in ["--json", "--csv", "--plot"] {
+        let out = lean_quick(&[s, flag, s]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{flag}: {stderr}");
+        assert!(stderr.contains("it is the input"), "{flag}: {stderr}");
+        assert_eq!(std::fs::read(&scene).unwrap(), original, "{flag}");
+    }
+    let baseline = dir.join("base.json");
+    std::fs::write(&baseline, b"{}").unwrap();
+    let b = baseline.to_str().unwrap();
+    let out = lean_quick(&["--json", b, "--baseline", b]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("it is the input"));
+    assert_eq!(std::fs::read(&baseline).unwrap(), b"{}");
+}

@@ -1,0 +1,142 @@
+//! `specchio calibrate` as a user runs it: every promised file, the exports parsed back to the
+//! numbers calibration.json records, the check against OpenCV itself (when the check venv
+//! exists), and bad input refused without output.
+
+use std::path::Path;
+use std::process::Command;
+
+use specchio::sensor::central::export;
+use specchio::sensor::central::record::{CalibrationRecord, CheckPoints};
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use common::{root, specchio, temp_dir};
+
+fn calibrate(out: &Path) -> CalibrationRecord {
+    let scene = root().join("scenes/thesis-room.toml");
+    let result = specchio(&[
+        "calibrate",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let text = std::fs::read_to_string(out.join("calibration.json")).unwrap();
+    serde_json::from_str(&text).expect("calibration.json is a CalibrationRecord")
+}
+
+#[test]
+fn the_exports_parse_back_to_the_recorded_models() {
+    let out = temp_dir("calibrate-exports");
+    let record = calibrate(&out);
+    for file in &record.files {
+        assert!(out.join(file).is_file(), "{file} is missing");
+    }
+    let read = |name: &str| std::fs::read_to_string(out.join(name)).unwrap();
+    let size = record.image;
+    // The two YAML files hold the same numbers to the last bit; calibration.json agrees to
+    // serde_json's float parsing, which may differ in the last digit (it does not promise
+    // round trips without its `float_roundtrip` feature).
+    let (opencv, opencv_size) = export::read_opencv_yaml(&read("opencv_omnidir.yaml")).unwrap();
+    let (kalibr, kalibr_size) = export::read_kalibr_yaml(&read("kalibr_camchain.yaml")).unwrap();
+    assert_eq!((opencv, opencv_size), (kalibr, kalibr_size));
+    assert_eq!(opencv_size, size);
+    let json = record.omnidir.model;
+    let pairs = [
+        (opencv.fx, json.fx),
+        (opencv.fy, json.fy),
+        (opencv.cx, json.cx),
+        (opencv.cy, json.cy),
+        (opencv.xi, json.xi),
+        (opencv.k1, json.k1),
+        (opencv.k2, json.k2),
+        (opencv.p1, json.p1),
+        (opencv.p2, json.p2),
+    ];
+    let ocam = export::read_ocamcalib_txt(&read("ocamcalib_calib_results.txt")).unwrap();
+    let json = &record.ocamcalib.model;
+    let ocam_pairs = [
+        (ocam.xc, json.xc),
+        (ocam.yc, json.yc),
+        (ocam.c, json.c),
+        (ocam.d, json.d),
+        (ocam.e, json.e),
+    ];
+    let polys = ocam
+        .ss
+        .iter()
+        .zip(&json.ss)
+        .chain(ocam.invpol.iter().zip(&json.invpol));
+    for (a, b) in pairs
+        .into_iter()
+        .chain(ocam_pairs)
+        .chain(polys.map(|(a, b)| (*a, *b)))
+    {
+        assert!((a - b).abs() <= 1e-15 * b.abs(), "{a} != {b}");
+    }
+    assert_eq!(
+        (ocam.ss.len(), ocam.invpol.len()),
+        (json.ss.len(), json.invpol.len())
+    );
+    assert_eq!([ocam.width, ocam.height], size);
+    // The residual image holds the per-pixel angles the summary was taken from.
+    assert!(record.omnidir.residual_deg.max > 0.0 && record.ocamcalib.residual_deg.max > 0.0);
+    let points: CheckPoints = serde_json::from_str(&read("check_points.json")).unwrap();
+    assert!(points.points.len() > 1000, "{}", points.points.len());
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// scripts/check-omnidir.py: OpenCV's own omnidir projection (and a port of OCamCalib's
+/// world2cam) of points on the exact rays must give the pixels our models predict. Runs
+/// when the check venv (.venv-check/, made by scripts/test.sh) exists; scripts/test.sh sets
+/// SPECCHIO_REQUIRE_TOOL_CHECKS=1, so there a missing venv fails instead of skipping.
+#[test]
+fn opencv_projects_the_export_as_our_model_does() {
+    let python = root().join(".venv-check/bin/python");
+    if !python.exists() {
+        assert!(
+            std::env::var_os("SPECCHIO_REQUIRE_TOOL_CHECKS").is_none(),
+            "{} is missing (scripts/test.sh creates it)",
+            python.display()
+        );
+        eprintln!(
+            "skipped: no {} (scripts/test.sh creates it)",
+            python.display()
+        );
+        return;
+    }
+    let out = temp_dir("calibrate-opencv");
+    calibrate(&out);
+    let check = Command::new(&python)
+        .arg(root().join("scripts/check-omnidir.py"))
+        .arg(&out)
+        .output()
+        .expect("python runs");
+    let stdout = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        check.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    assert!(stdout.contains("OpenCV omnidir"), "{stdout}");
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn bad_input_is_refused_without_output() {
+    let out = temp_dir("calibrate-bad");
+    let scene = root().join("scenes/thesis-room.toml");
+    let (scene, dir) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    let negative = specchio(&["calibrate", scene, "--out", dir, "--time", "-1"]);
+    assert_eq!(negative.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&negative.stderr).contains("--time"));
+    let missing = specchio(&["calibrate", "no-such-scene.toml", "--out", dir]);
+    assert_eq!(missing.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no-such-scene.toml"));
+    assert!(!out.exists());
+}

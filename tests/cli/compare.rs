@@ -1,0 +1,287 @@
+//! `specchio compare` as a user runs it: known answers in the JSON, exit codes, errors that
+//! name the file, and a heatmap the size of the images (or no file at all on error).
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use specchio::image::RgbaImage;
+use specchio::output::write_exr;
+
+#[path = "../common/mod.rs"]
+mod common;
+
+fn specchio(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(args)
+        .output()
+        .expect("the specchio binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("specchio-compare-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// 16x8, every channel `base + offset` with base in [0.2, 0.8].
+fn image(offset: f32) -> RgbaImage {
+    let (width, height) = (16, 8);
+    let pixels = (0..height)
+        .flat_map(|y| (0..width).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let u = x as f32 / width as f32;
+            let v = y as f32 / height as f32;
+            [
+                0.2 + 0.6 * u + offset,
+                0.2 + 0.6 * v + offset,
+                0.5 + offset,
+                1.0,
+            ]
+        })
+        .collect();
+    RgbaImage {
+        width,
+        height,
+        pixels,
+    }
+}
+
+fn s(p: &std::path::Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn json_of(out: &Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
+}
+
+#[test]
+fn json_reports_known_answers_and_the_heatmap_has_the_image_size() {
+    let dir = temp_dir("json");
+    let (a, b, heat) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("flip.png"));
+    write_exr(&a, &image(0.1)).unwrap();
+    write_exr(&b, &image(0.0)).unwrap();
+
+    let json = json_of(&specchio(&[
+        "compare",
+        s(&a),
+        s(&b),
+        "--json",
+        "--heatmap",
+        s(&heat),
+    ]));
+    assert_eq!(json["width"], 16);
+    assert_eq!(json["height"], 8);
+    assert_eq!(json["pixels_compared"], 128);
+    assert_eq!(json["pixels_in_mask"], 128);
+    assert_eq!(json["test_nan_pixels"], 0);
+    assert_eq!(json["reference_inf_pixels"], 0);
+    assert!((json["rmse"].as_f64().unwrap() - 0.1).abs() < 1e-6);
+    assert!((json["psnr_db"].as_f64().unwrap() - 20.0).abs() < 1e-4);
+    assert_eq!(json["psnr_infinite"], false);
+    assert!(json["flip_mean"].as_f64().unwrap() > 0.0);
+    assert_eq!(json["settings"]["flip_pixels_per_degree"], 67.0);
+    assert_eq!(json["settings"]["rel_mse_epsilon"], 0.01);
+    assert_eq!(json["heatmap"], s(&heat));
+
+    // The heatmap: a PNG of the image's size, and no temporary left beside it.
+    let png = specchio::scene::TextureData::from_png(&heat).unwrap();
+    assert_eq!((png.width, png.height), (16, 8));
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        names.iter().all(|n| !common::names_a_staging_folder(n)),
+        "{names:?}"
+    );
+
+    // Identical images: PSNR is null in JSON (never inf) and flagged infinite.
+    let json = json_of(&specchio(&["compare", s(&b), s(&b), "--json"]));
+    assert_eq!(json["rmse"], 0.0);
+    assert_eq!(json["psnr_db"], serde_json::Value::Null);
+    assert_eq!(json["psnr_infinite"], true);
+    assert_eq!(json["flip_mean"], 0.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_table_is_the_default_and_a_mask_restricts_the_pixels() {
+    let dir = temp_dir("table");
+    let (a, b, m) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("m.exr"));
+    write_exr(&a, &image(0.1)).unwrap();
+    write_exr(&b, &image(0.0)).unwrap();
+    // The mask keeps the left 4 columns: 4 x 8 = 32 pixels.
+    let mut mask = image(0.0);
+    for (i, p) in mask.pixels.iter_mut().enumerate() {
+        p[0] = if i % 16 < 4 { 1.0 } else { 0.0 };
+    }
+    write_exr(&m, &mask).unwrap();
+
+    let out = specchio(&["compare", s(&a), s(&b)]);
+    assert!(out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("RMSE") && stdout.contains("FLIP mean"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("20.00 dB"), "{stdout}");
+
+    let json = json_of(&specchio(&[
+        "compare",
+        s(&a),
+        s(&b),
+        "--mask",
+        s(&m),
+        "--json",
+    ]));
+    assert_eq!(json["pixels_in_mask"], 32);
+    assert_eq!(json["pixels_compared"], 32);
+    assert_eq!(json["mask"], s(&m));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_input_fails_naming_the_file_and_writes_no_heatmap() {
+    let dir = temp_dir("bad");
+    let (a, small, heat) = (
+        dir.join("a.exr"),
+        dir.join("small.exr"),
+        dir.join("flip.png"),
+    );
+    write_exr(&a, &image(0.0)).unwrap();
+    write_exr(
+        &small,
+        &RgbaImage {
+            width: 3,
+            height: 2,
+            pixels: vec![[0.0; 4]; 6],
+        },
+    )
+    .unwrap();
+    let missing = dir.join("missing.exr");
+    let garbage = dir.join("garbage.exr");
+    std::fs::write(&garbage, b"not an exr").unwrap();
+
+    for (args, must_name) in [
+        (vec![s(&a), s(&missing)], vec!["missing.exr"]),
+        (vec![s(&garbage), s(&a)], vec!["garbage.exr"]),
+        (
+            vec![s(&a), s(&small)],
+            vec!["a.exr", "small.exr", "16x8", "3x2"],
+        ),
+        (
+            vec![s(&a), s(&a), "--mask", s(&small)],
+            vec!["small.exr", "16x8", "3x2"],
+        ),
+    ] {
+        let mut all = vec!["compare"];
+        all.extend(&args);
+        all.extend(["--heatmap", s(&heat)]);
+        let out = specchio(&all);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} must fail");
+        assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
+        for name in must_name {
+            assert!(
+                stderr.contains(name),
+                "{args:?}: must name {name}:\n{stderr}"
+            );
+        }
+        assert!(!heat.exists(), "{args:?}: no heatmap on error");
+        assert!(out.stdout.is_empty(), "{args:?}: no report on error");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A heatmap that cannot be written (its folder missing, a file where its folder must be, a
+/// folder in its place) fails naming the path the user gave, never the hidden temporary one,
+/// and leaves nothing.
+#[test]
+fn an_unwritable_heatmap_is_named_as_the_user_gave_it() {
+    let dir = temp_dir("heatmap");
+    let a = dir.join("a.exr");
+    write_exr(&a, &image(0.0)).unwrap();
+    let folder = dir.join("folder");
+    std::fs::create_dir(&folder).unwrap();
+    for heat in [dir.join("nodir/h.png"), a.join("h.png"), folder.clone()] {
+        let out = specchio(&["compare", s(&a), s(&a), "--heatmap", s(&heat)]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{heat:?} must fail");
+        assert!(stderr.contains(s(&heat)), "must name {heat:?}:\n{stderr}");
+        assert!(
+            !common::names_a_staging_folder(&stderr),
+            "names a temporary:\n{stderr}"
+        );
+        assert!(out.stdout.is_empty(), "no report on error");
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a.exr", "folder"]);
+        assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 0);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A heatmap path that names an input (under any spelling) is refused before anything is
+/// written: the input survives byte for byte.
+#[test]
+fn a_heatmap_over_an_input_is_refused_and_the_input_kept() {
+    let dir = temp_dir("heatmap-over-input");
+    let (test, reference) = (dir.join("test.exr"), dir.join("reference.exr"));
+    write_exr(&test, &image(0.1)).unwrap();
+    write_exr(&reference, &image(0.0)).unwrap();
+    let before = std::fs::read(&reference).unwrap();
+    let respelled = dir.join(".").join("reference.exr");
+    let out = specchio(&[
+        "compare",
+        s(&test),
+        s(&reference),
+        "--heatmap",
+        s(&respelled),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("--heatmap") && stderr.contains("is the input"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read(&reference).unwrap(), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--angular` over images with no pixel to compare (alpha 0 everywhere: no mirror) reports
+/// the metrics as undefined, null in JSON, never as a perfect 0.
+#[test]
+fn angular_with_nothing_compared_is_undefined_not_zero() {
+    let dir = temp_dir("angular-none");
+    let mut empty = image(0.0);
+    for p in &mut empty.pixels {
+        p[3] = 0.0;
+    }
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    write_exr(&a, &empty).unwrap();
+    write_exr(&b, &image(0.0)).unwrap();
+    let json = json_of(&specchio(&[
+        "compare",
+        s(&a),
+        s(&b),
+        "--angular",
+        "16",
+        "--json",
+    ]));
+    assert_eq!(json["pixels"], 0);
+    for key in ["mean_deg", "p99_deg", "max_deg", "mean_texels"] {
+        assert!(json[key].is_null(), "{key}: {json}");
+    }
+    let text = specchio(&["compare", s(&a), s(&b), "--angular", "16"]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("n/a"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

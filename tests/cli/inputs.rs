@@ -1,0 +1,167 @@
+//! Every command reads its input files through the one reader (`specchio::files`): a FIFO is
+//! refused before it is opened (opening one blocks until a writer comes), a device such as
+//! `/dev/zero` is refused before it is read (it never ends); and no output, under any name,
+//! replaces a file the command read.
+
+use std::path::Path;
+use std::process::{Command, Output};
+use std::time::Duration;
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use common::{root, temp_dir};
+
+/// `specchio ARGS`, with two minutes to end.
+fn specchio_within(args: &[&str]) -> Output {
+    common::specchio_within(args, Duration::from_secs(120))
+}
+
+fn mkfifo(p: &Path) {
+    let ok = Command::new("mkfifo").arg(p).status().unwrap().success();
+    assert!(ok, "mkfifo {}", p.display());
+}
+
+/// The inputs that were read without the checks before: `localise`'s scene and `--landmarks`,
+/// `bench --baseline`. Each fails at once, naming the file and what it is, and writes nothing.
+#[cfg(target_os = "linux")]
+#[test]
+fn fifos_and_devices_are_refused_by_every_command() {
+    let dir = temp_dir("special-inputs");
+    std::fs::create_dir_all(&dir).unwrap();
+    let fifo = dir.join("pipe.json");
+    mkfifo(&fifo);
+    let scene_fifo = dir.join("scene.toml");
+    mkfifo(&scene_fifo);
+    let out = dir.join("out");
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let thesis = s(&root().join("scenes/thesis-room.toml"));
+    let small = ["--grid", "4", "--queries", "2", "--sensor-size", "32"];
+    let cases: Vec<(Vec<String>, String, &str)> = vec![
+        (
+            vec!["localise".into(), s(&scene_fifo), "--out".into(), s(&out)],
+            s(&scene_fifo),
+            "FIFO",
+        ),
+        (
+            vec!["localise".into(), thesis.clone(), "--out".into(), s(&out)]
+                .into_iter()
+                .chain(small.iter().map(|a| a.to_string()))
+                .chain(["--landmarks".into(), s(&fifo)])
+                .collect(),
+            s(&fifo),
+            "FIFO",
+        ),
+        (
+            vec!["localise".into(), thesis.clone(), "--out".into(), s(&out)]
+                .into_iter()
+                .chain(small.iter().map(|a| a.to_string()))
+                .chain(["--landmarks".into(), "/dev/zero".into()])
+                .collect(),
+            "/dev/zero".into(),
+            "a device",
+        ),
+        (
+            vec![
+                "bench".into(),
+                "--quick".into(),
+                "--baseline".into(),
+                s(&fifo),
+            ],
+            s(&fifo),
+            "FIFO",
+        ),
+        (
+            vec![
+                "bench".into(),
+                "--quick".into(),
+                "--baseline".into(),
+                "/dev/zero".into(),
+            ],
+            "/dev/zero".into(),
+            "a device",
+        ),
+    ];
+    for (args, names, what) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let result = specchio_within(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "{args:?}:\n{stderr}");
+        assert!(
+            stderr.contains(&names),
+            "{args:?}: must name {names}:\n{stderr}"
+        );
+        assert!(
+            stderr.contains(what),
+            "{args:?}: must say {what}:\n{stderr}"
+        );
+        assert!(stderr.contains("not a regular file"), "{stderr}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+    std::fs::remove_dir_all(&*dir).unwrap();
+}
+
+/// No report replaces a file the command read, however it is named: the benchmarked scene by
+/// a hard link to it (as `S.TOML` names `s.toml` on a case-insensitive file system), the
+/// scene's mesh, which only the scene names, and a compared image by a link. Each is refused
+/// before any work, the file untouched.
+#[cfg(unix)]
+#[test]
+fn no_output_replaces_an_input_under_another_name() {
+    let dir = temp_dir("input-identity");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mesh = dir.join("m.obj");
+    std::fs::write(&mesh, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let scene = dir.join("s.toml");
+    std::fs::write(
+        &scene,
+        "[room]\ncenter = [0, 0, 0]\nsize = [10, 10, 10]\nwalls = \"red\"\n\
+         [mirror]\ncenter = [0, 0, 0]\nradius = 1.0\n\
+         [[materials]]\nname = \"red\"\ntype = \"color\"\ncolor = [1, 0, 0]\n\
+         [[objects]]\nname = \"tri\"\nshape = \"mesh\"\nfile = \"m.obj\"\n\
+         position = [2, 1, 2]\nmaterial = \"red\"\n",
+    )
+    .unwrap();
+    std::fs::hard_link(&scene, dir.join("S.TOML")).unwrap();
+    std::fs::hard_link(&mesh, dir.join("M.OBJ")).unwrap();
+    let image = dir.join("a.exr");
+    let grey = specchio::image::RgbaImage {
+        width: 4,
+        height: 4,
+        pixels: vec![[0.5; 4]; 16],
+    };
+    specchio::output::write_exr(&image, &grey).unwrap();
+    std::os::unix::fs::symlink(&image, dir.join("A.EXR")).unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let quick = ["--quick", "--no-accuracy", "--no-floors", "--no-dynamic"];
+    let bench = |json: &Path| -> Vec<String> {
+        let mut a = vec!["bench".to_owned(), s(&scene)];
+        a.extend(quick.iter().map(|q| q.to_string()));
+        a.extend(["--json".to_owned(), s(json)]);
+        a
+    };
+    let cases = [
+        (bench(&dir.join("S.TOML")), &scene),
+        (bench(&dir.join("M.OBJ")), &mesh),
+        (
+            vec![
+                "compare".to_owned(),
+                s(&image),
+                s(&image),
+                "--heatmap".to_owned(),
+                s(&dir.join("A.EXR")),
+            ],
+            &image,
+        ),
+    ];
+    for (args, input) in cases {
+        let before = std::fs::read(input).unwrap();
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let result = specchio_within(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "{args:?}:\n{stderr}");
+        assert!(stderr.contains("is the input"), "{args:?}:\n{stderr}");
+        assert_eq!(std::fs::read(input).unwrap(), before, "{args:?}");
+    }
+    std::fs::remove_dir_all(&*dir).unwrap();
+}

@@ -1,0 +1,319 @@
+//! `specchio localise`: a small run whose answers are known, on every device, and refusals.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use common::{devices, root, specchio, temp_dir};
+
+/// Thesis room at grid 4 m: 8 landmarks (the orbiting ball blocks the ninth). Queries at the
+/// landmark positions with random headings must each find their own landmark, and the heading
+/// must come back within one panorama column.
+#[test]
+fn queries_at_landmarks_are_found_exactly_on_every_device() {
+    queries_at_landmarks_are_found_exactly("fourier");
+}
+
+/// The same check with the second descriptor, the low-resolution panorama whose heading is a
+/// column-shift search.
+#[test]
+fn column_shift_finds_queries_at_landmarks_exactly_on_every_device() {
+    queries_at_landmarks_are_found_exactly("column-shift");
+}
+
+fn queries_at_landmarks_are_found_exactly(descriptor: &str) {
+    let scene = root().join("scenes/thesis-room.toml");
+    for device in devices() {
+        let out = temp_dir(&format!("localise-{descriptor}-{device}"));
+        let result = specchio(&[
+            "localise",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--grid",
+            "4",
+            "--queries",
+            "8",
+            "--queries-at-landmarks",
+            "--seed",
+            "5",
+            "--sensor-size",
+            "128",
+            "--cube-size",
+            "64",
+            "--descriptor",
+            descriptor,
+            "--device",
+            &device,
+        ]);
+        assert!(
+            result.status.success(),
+            "{device}: {}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+        let read = |name: &str| -> serde_json::Value {
+            serde_json::from_str(&std::fs::read_to_string(out.join(name)).unwrap()).unwrap()
+        };
+        let report = read("localise.json");
+        let row = &report["rows"][0];
+        let s = &row["summary"];
+        assert_eq!(s["landmarks"], 8, "{device}");
+        assert_eq!(s["recall_at_1"], 1.0, "{device}");
+        let column = s["column_deg"].as_f64().unwrap();
+        let mut headings = Vec::new();
+        for q in row["per_query"].as_array().unwrap() {
+            assert_eq!(q["matches"][0], q["nearest_landmark"], "{device}: {q}");
+            assert_eq!(q["position_error_m"], 0.0, "{device}: {q}");
+            // The fitted position refines the match within its grid cell (4 m here).
+            let fitted = q["fitted_position_error_m"].as_f64().unwrap();
+            assert!(fitted <= 2.0 * 2f64.sqrt() + 1e-6, "{device}: {q}");
+            let err = q["heading_error_deg"].as_f64().unwrap();
+            assert!(
+                err < column,
+                "{device}: heading error {err} deg >= a column {column}"
+            );
+            headings.push(q["heading_deg"].as_f64().unwrap());
+        }
+        // The headings really differ (a turned sensor, not the landmark's own image).
+        assert!(headings.iter().any(|h| (h - headings[0]).abs() > 10.0));
+        let db = read("landmarks.json");
+        assert_eq!(db["landmarks"].as_array().unwrap().len(), 8);
+        assert_eq!(db["descriptor"], descriptor);
+        assert_eq!(report["descriptor"], descriptor);
+        std::fs::remove_dir_all(&out).unwrap();
+    }
+}
+
+/// Bad options are refused before anything is written, naming the option.
+#[test]
+fn bad_options_are_refused() {
+    let scene = root().join("scenes/thesis-room.toml");
+    let out = temp_dir("localise-bad");
+    let many_times = vec!["0"; 200].join(",");
+    let cases: [(&[&str], &str); 12] = [
+        (&["--grid", "0"], "--grid"),
+        (&["--grid", "nan"], "--grid"),
+        (&["--k", "0"], "--k"),
+        (&["--queries", "0"], "--queries"),
+        (&["--time", "-1"], "--time"),
+        (&["--descriptor", "sift"], "`sift` is not a descriptor"),
+        (&["--sensor-size", "4"], "--sensor-size"),
+        (&["--sources", "plain,mirror"], "--sources"),
+        (&["--times", "0,-3"], "--times"),
+        (&["--times", "0", "--time", "1"], "--time"),
+        // Bounded work: a tiny spacing, and options whose product is years of rendering.
+        (&["--grid", "1e-6"], "choose a larger spacing"),
+        (
+            &["--queries", "100000", "--times", &many_times],
+            "more than the 200000 one run may",
+        ),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec![
+            "localise",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let result = specchio(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(!result.status.success(), "{extra:?} was accepted");
+        assert!(stderr.contains(needle), "{extra:?}: {stderr}");
+        assert!(!out.exists(), "{extra:?} left {}", out.display());
+    }
+}
+
+/// The small run the tests below share: thesis room at grid 4 m (8 landmarks), 6 random
+/// queries, 64² sensor, 32² cube, on the default device; `extra` adds options.
+fn small_run(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let scene = root().join("scenes/thesis-room.toml");
+    let mut args = vec![
+        "localise",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--grid",
+        "4",
+        "--queries",
+        "6",
+        "--seed",
+        "3",
+        "--sensor-size",
+        "64",
+        "--cube-size",
+        "32",
+    ];
+    args.extend_from_slice(extra);
+    specchio(&args)
+}
+
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// The floor map is an SVG with one triangle per query (landmarks are dots), and its title
+/// states the row's recall@1.
+#[test]
+fn the_floor_map_has_one_marker_per_query() {
+    let out = temp_dir("localise-plot");
+    let result = small_run(&out, &[]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let svg = std::fs::read_to_string(out.join("localise.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") || svg.contains("<svg "),
+        "not an SVG"
+    );
+    assert_eq!(svg.matches("<polygon").count(), 6);
+    assert_eq!(svg.matches("<circle").count(), 8);
+    let recall = json(&out.join("localise.json"))["rows"][0]["summary"]["recall_at_1"]
+        .as_f64()
+        .unwrap();
+    assert!(svg.contains(&format!("recall@1 {:.1} %", 100.0 * recall)));
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// Two sources give a row each, plus the cross row (the lookup's landmarks against the
+/// reference's queries), and the reference queried against itself at landmark poses is exact.
+#[test]
+fn two_sources_give_their_rows_and_the_cross_row() {
+    let out = temp_dir("localise-sources");
+    let result = small_run(
+        &out,
+        &[
+            "--sources",
+            "box,reference",
+            "--queries-at-landmarks",
+            "--times",
+            "0,3",
+        ],
+    );
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let report = json(&out.join("localise.json"));
+    let rows = report["rows"].as_array().unwrap();
+    let pairs: Vec<(String, String, f64)> = rows
+        .iter()
+        .map(|r| {
+            (
+                r["landmarks_from"].as_str().unwrap().to_owned(),
+                r["queries_from"].as_str().unwrap().to_owned(),
+                r["query_time_s"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    let expected: Vec<(String, String, f64)> = [0.0, 3.0]
+        .into_iter()
+        .flat_map(|t| {
+            [
+                ("box", "box"),
+                ("reference", "reference"),
+                ("box", "reference"),
+            ]
+            .map(|(a, b)| (a.to_owned(), b.to_owned(), t))
+        })
+        .collect();
+    assert_eq!(pairs, expected);
+    // Queries on landmark poses at time 0: each source finds every one of its own landmarks.
+    for r in &rows[..2] {
+        assert_eq!(r["summary"]["recall_at_1"], 1.0, "{r}");
+    }
+    // The table prints one line per row.
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    let cross = stdout
+        .lines()
+        .filter(|l| l.contains("box            reference"))
+        .count();
+    assert_eq!(cross, 2, "{stdout}");
+    assert!(out.join("landmarks.json").exists());
+    assert_eq!(
+        json(&out.join("landmarks-reference.json"))["source"],
+        "reference"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// A saved database reused gives the same matches as the run that wrote it, without a sweep;
+/// one written with other settings is refused naming the file and the field.
+#[test]
+fn saved_landmarks_are_reused_and_mismatches_refused() {
+    let first = temp_dir("localise-save");
+    assert!(small_run(&first, &[]).status.success());
+    let saved = first.join("landmarks.json");
+    let again = temp_dir("localise-reuse");
+    let result = small_run(&again, &["--landmarks", saved.to_str().unwrap()]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let (a, b) = (
+        json(&first.join("localise.json")),
+        json(&again.join("localise.json")),
+    );
+    assert_eq!(a["rows"][0]["per_query"], b["rows"][0]["per_query"]);
+    assert_eq!(
+        b["sources"][0]["sweep_images_per_s"],
+        serde_json::Value::Null
+    );
+
+    let refused = temp_dir("localise-refused");
+    // A file written at another sensor size (edited here: the run's own options all fixed).
+    let mut other = json(&saved);
+    other["sensor_px"] = 96.into();
+    let resized = first.join("landmarks-96.json");
+    std::fs::write(&resized, other.to_string()).unwrap();
+    // A landmark far outside the room (it once gave "recall 100 %, error 0 m"), and one whose
+    // signature is all zeros (it matches every query alike).
+    let mut far = json(&saved);
+    far["landmarks"][1]["position_m"][0] = 1e30.into();
+    let far_file = first.join("landmarks-far.json");
+    std::fs::write(&far_file, far.to_string()).unwrap();
+    let mut zeros = json(&saved);
+    let n = zeros["landmarks"][2]["signature"]["values"]
+        .as_array()
+        .unwrap()
+        .len();
+    zeros["landmarks"][2]["signature"]["values"] = vec![0.0; n].into();
+    let zeros_file = first.join("landmarks-zeros.json");
+    std::fs::write(&zeros_file, zeros.to_string()).unwrap();
+    let cases: [(&std::path::Path, &[&str], &str); 5] = [
+        (&saved, &["--k", "4"], "`coefficients`"),
+        (&saved, &["--sources", "reference"], "`source`"),
+        (&resized, &[], "`sensor_px`"),
+        (&far_file, &[], "`landmarks[1].position_m`"),
+        (&zeros_file, &[], "`landmarks[2]`: a signature of zeros"),
+    ];
+    for (file, extra, field) in cases {
+        let mut args = vec!["--landmarks", file.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let result = small_run(&refused, &args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert!(!result.status.success(), "{extra:?} was accepted");
+        assert!(
+            stderr.contains(field) && stderr.contains(&*file.to_string_lossy()),
+            "{extra:?}: {stderr}"
+        );
+        assert!(!refused.exists());
+    }
+    // A truncated file is a clear error too.
+    let text = std::fs::read_to_string(&saved).unwrap();
+    let cut = first.join("cut.json");
+    std::fs::write(&cut, &text[..text.len() / 2]).unwrap();
+    let result = small_run(&refused, &["--landmarks", cut.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success());
+    assert!(
+        stderr.contains("cut.json") && stderr.contains("malformed"),
+        "{stderr}"
+    );
+    for d in [first, again] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}

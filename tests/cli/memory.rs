@@ -1,0 +1,160 @@
+//! Every command that scales with a user's numbers checks a memory estimate before it starts
+//! (`engine/src/memory/estimates.rs`, `specchio::memory`): refused over the budget with the figures and
+//! nothing written, and, where it runs, never using more than it estimated.
+//!
+//! The estimate is read from the refusal under a one-byte budget (`SPECCHIO_MEMORY_BUDGET=1`),
+//! then the same command runs under the default budget and its peak resident memory (from
+//! `wait4`, the child's own) must stay within it, and within twice what it uses (an estimate
+//! too loose to mean anything fails too).
+
+use std::path::Path;
+use std::process::Command;
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use common::{root, run_measured, temp_dir};
+
+/// "about 349.3 MiB" in `text`, as bytes.
+fn estimate(text: &str) -> u64 {
+    let at = text
+        .find("would need about ")
+        .unwrap_or_else(|| panic!("no estimate in:\n{text}"));
+    let mut words = text[at + 17..].split_whitespace();
+    let number: f64 = words.next().unwrap().parse().unwrap();
+    let unit = match words.next().unwrap() {
+        "bytes" => 1u64,
+        "KiB" => 1 << 10,
+        "MiB" => 1 << 20,
+        "GiB" => 1 << 30,
+        other => panic!("unit {other}"),
+    };
+    (number * unit as f64) as u64
+}
+
+/// Runs `specchio ARGS` with `budget` (None: the default); its exit code, stderr and peak
+/// resident memory in bytes.
+fn run(args: &[&str], budget: Option<&str>) -> (Option<i32>, String, u64) {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_specchio"));
+    command.args(args).env_remove("SPECCHIO_MEMORY_BUDGET");
+    if let Some(b) = budget {
+        command.env("SPECCHIO_MEMORY_BUDGET", b);
+    }
+    let m = run_measured(command);
+    (m.code, m.stderr, m.peak_bytes)
+}
+
+/// thesis-room with both views at `side`², in `dir` (with the textures it names).
+fn thesis_at(dir: &Path, side: u32) -> String {
+    let text = std::fs::read_to_string(root().join("scenes/thesis-room.toml")).unwrap();
+    let text = text
+        .replace(
+            "resolution = [800, 600]",
+            &format!("resolution = [{side}, {side}]"),
+        )
+        .replace(
+            "resolution = [512, 512]",
+            &format!("resolution = [{side}, {side}]"),
+        );
+    std::fs::create_dir_all(dir.join("textures")).unwrap();
+    for entry in std::fs::read_dir(root().join("scenes/textures")).unwrap() {
+        let entry = entry.unwrap();
+        std::fs::copy(entry.path(), dir.join("textures").join(entry.file_name())).unwrap();
+    }
+    let path = dir.join("thesis.toml");
+    std::fs::write(&path, text).unwrap();
+    path.to_str().unwrap().to_owned()
+}
+
+#[test]
+fn each_command_stays_within_its_estimate_and_is_refused_above_the_budget() {
+    let dir = temp_dir("memory");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = thesis_at(&dir, 1024);
+    let out = dir.join("out");
+    let o = out.to_str().unwrap();
+    let six = root().join("scenes/test/six-colour-room.toml");
+    let six = six.to_str().unwrap();
+    let json = dir.join("bench.json");
+    let cases: [Vec<&str>; 6] = [
+        // The whole benchmark (every method, the floors, the ladder and its errors) on a
+        // small scene; `--json` is its output, removed below like the folders.
+        vec![
+            "bench",
+            six,
+            "--quick",
+            "--cube-sizes",
+            "256",
+            "--json",
+            json.to_str().unwrap(),
+        ],
+        vec!["render", &scene, "--out", o],
+        vec![
+            "render",
+            &scene,
+            "--out",
+            o,
+            "--sensor-outputs",
+            "--directions",
+        ],
+        vec!["reference", &scene, "--out", o, "--sensor-outputs"],
+        vec!["calibrate", &scene, "--out", o],
+        vec![
+            "localise",
+            &scene,
+            "--out",
+            o,
+            "--sensor-size",
+            "1024",
+            "--grid",
+            "4",
+            "--queries",
+            "2",
+        ],
+    ];
+    let mut failures = Vec::new();
+    for args in &cases {
+        let (code, refusal, _) = run(args, Some("1"));
+        assert_eq!(code, Some(1), "{args:?} under a 1-byte budget:\n{refusal}");
+        assert!(refusal.contains("SPECCHIO_MEMORY_BUDGET=1"), "{refusal}");
+        assert!(
+            !out.exists() && !json.exists(),
+            "{args:?}: refused, yet wrote its output"
+        );
+        let estimated = estimate(&refusal);
+        let (code, stderr, peak) = run(args, None);
+        assert_eq!(code, Some(0), "{args:?}:\n{stderr}");
+        let _ = std::fs::remove_dir_all(&out);
+        let _ = std::fs::remove_file(&json);
+        eprintln!("{}: estimate {estimated}, peak {peak}", args[0]);
+        if peak > estimated || estimated > 2 * peak {
+            failures.push(format!(
+                "{args:?}: estimate {estimated} bytes, measured peak {peak} bytes"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The budget's own variable is checked: a value that is not a size is an error that says
+/// how to write one, before any work.
+#[test]
+fn a_budget_that_is_not_a_size_is_refused() {
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let out = temp_dir("memory-bad");
+    let (code, stderr, _) = run(
+        &[
+            "reference",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        Some("lots"),
+    );
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("SPECCHIO_MEMORY_BUDGET=lots is not a size"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}

@@ -1,0 +1,116 @@
+//! `render` and `reference` with `--sensor-outputs`: the files they write and agree on, and
+//! what they refuse.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use common::{root, specchio, temp_dir};
+use specchio::sensor::files::{f32_channel, read_channels, read_u32_channel};
+use specchio::sensor::outputs::{NO_ID, RAY_CHANNELS};
+
+fn run_ok(args: &[&str]) {
+    let r = specchio(args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+}
+
+/// `render` and `reference` with `--sensor-outputs` write the same ray map (to float
+/// rounding), the camera description, and panoramas whose known column shows its wall.
+#[test]
+fn both_commands_write_the_sensor_outputs() {
+    let scene_path = root().join("scenes/test/six-colour-room.toml");
+    let scene_path = scene_path.to_str().unwrap();
+    let (gpu_dir, cpu_dir) = (temp_dir("sensor-gpu"), temp_dir("sensor-cpu"));
+    let (g, c) = (gpu_dir.to_str().unwrap(), cpu_dir.to_str().unwrap());
+    run_ok(&[
+        "render",
+        scene_path,
+        "--out",
+        g,
+        "--sensor-outputs",
+        "--cube-size",
+        "64",
+    ]);
+    run_ok(&["reference", scene_path, "--out", c, "--sensor-outputs"]);
+    let (a, b) = (
+        read_channels(&gpu_dir.join("sensor.rays.exr")).unwrap(),
+        read_channels(&cpu_dir.join("sensor.rays.exr")).unwrap(),
+    );
+    for name in RAY_CHANNELS {
+        let (x, y) = (
+            f32_channel(&a, name).unwrap(),
+            f32_channel(&b, name).unwrap(),
+        );
+        let (both, mask) = (
+            f32_channel(&a, "mask").unwrap(),
+            f32_channel(&b, "mask").unwrap(),
+        );
+        let worst = (0..x.len())
+            .filter(|&i| both[i] == 1.0 && mask[i] == 1.0)
+            .map(|i| (x[i] - y[i]).abs())
+            .fold(0.0f32, f32::max);
+        // Directions change fastest at the rim (see the test above): 1e-4 per component.
+        assert!(worst < 1e-4, "{name}: {worst}");
+    }
+    for dir in [&gpu_dir, &cpu_dir] {
+        let ids = read_channels(&dir.join("sensor.id.exr")).unwrap();
+        let ids = read_u32_channel(&ids, "id").expect("ids as u32");
+        assert!(ids.contains(&0) && ids.contains(&NO_ID));
+        let camera: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("camera.json")).unwrap())
+                .unwrap();
+        assert_eq!(camera["files"]["rays"], "sensor.rays.exr");
+        assert_eq!(camera["mirror"]["radius_m"], 1.0);
+        assert_eq!(
+            camera["sensor"]["position_m"],
+            serde_json::json!([0.0, -2.5, 0.0])
+        );
+        // Azimuth 0 (+X) at the horizon is the red wall, from the image and from the cube.
+        let panoramas = camera["files"]["panoramas"].as_array().unwrap();
+        assert_eq!(panoramas.len(), if **dir == *gpu_dir { 4 } else { 2 });
+        for p in panoramas {
+            let file = dir.join(p["file"].as_str().unwrap());
+            let channels = read_channels(&file).unwrap();
+            let (w, h) = (p["width"].as_u64().unwrap(), p["height"].as_u64().unwrap());
+            let (top, bottom) = (
+                p["top_elevation_deg"].as_f64().unwrap(),
+                p["bottom_elevation_deg"].as_f64().unwrap(),
+            );
+            let row = if p["kind"] == "lon-lat" {
+                (top / (top - bottom) * h as f64) as u64
+            } else {
+                let (t, b) = (top.to_radians().tan(), bottom.to_radians().tan());
+                (t / (t - b) * h as f64) as u64
+            };
+            let at = (row * w + 2) as usize; // column 2: azimuth (2.5 / w) * 360 degrees
+            let rgb = ["R", "G", "B"].map(|n| f32_channel(&channels, n).unwrap()[at]);
+            assert_eq!(rgb, [1.0, 0.0, 0.0], "{}", file.display());
+        }
+    }
+    for d in [gpu_dir, cpu_dir] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+/// A lookup without a cube cannot give the cube path's outputs: a clear error, exit 1, and
+/// nothing written.
+#[test]
+fn sensor_outputs_refuse_the_ray_query_lookup() {
+    let out = temp_dir("sensor-ray-query");
+    let scene_path = root().join("scenes/test/six-colour-room.toml");
+    let r = specchio(&[
+        "render",
+        scene_path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--sensor-outputs",
+        "--lookup",
+        "ray-query",
+    ]);
+    assert_eq!(r.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        stderr.contains("--sensor-outputs: the lookup ray-query reads no cube map"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}

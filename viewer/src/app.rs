@@ -1,0 +1,488 @@
+//! The viewer's event loop (winit): window and surface on `resumed`, keys, resizes and close
+//! in `window_event`, one frame per turn of the loop in `about_to_wait`.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use specchio::render::display::DisplayView;
+use specchio::render::methods::Method;
+use specchio::render::{lookups, RenderOptions, Renderer, PAIR_SIZE};
+use specchio::scene::{Lookup, RefreshPolicy, Scene};
+use specchio::vk::device::Device;
+use specchio::vk::instance::Instance;
+use specchio::vk::surface::Surface;
+use specchio::vk::swapchain::PresentPreference;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{Key, NamedKey};
+use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use winit::window::{Window, WindowId};
+
+use super::clock::{Clock, Figures};
+use super::input::{self, Action};
+use super::menu::{Menu, Status};
+use super::present::{Presenter, Screenshot, Shown};
+use super::SCRIPTED_FPS;
+
+/// What `view::run` decided before the loop.
+pub struct Settings {
+    pub method: Method,
+    pub lookup: Option<Lookup>,
+    pub cube_size: Option<u32>,
+    pub size: Option<[u32; 2]>,
+    pub keys: Vec<Action>,
+    pub frames: Option<u32>,
+    pub screenshot: bool,
+    pub present: PresentPreference,
+    pub scene_name: String,
+    /// Print the menu's widget rectangles (`--widgets`).
+    pub widgets: bool,
+    /// A new menu renderer every frame (a test hook).
+    pub renew_menu_renderer: bool,
+}
+
+/// What the loop leaves behind.
+#[derive(Default)]
+pub struct Outcome {
+    pub screenshot: Option<Screenshot>,
+}
+
+/// A scripted run waits at most this long for the window to take a size it asked for (the X
+/// server answers a resize request asynchronously) before its last frame.
+const RESIZE_WAIT: Duration = Duration::from_secs(5);
+/// The observer or the sensor alone is drawn at the thesis's 800x600, whatever resolution
+/// the scene gives it for `specchio render`.
+pub const SINGLE_VIEW_SIZE: [u32; 2] = [800, 600];
+
+/// The running viewer. Field order is teardown order: the presenter (it waits for the frames
+/// in flight) before the renderer it reads from, both before the window their surface is on.
+struct Viewer {
+    presenter: Presenter,
+    renderer: Renderer,
+    /// Whether a submitted frame has read `renderer`'s view image (then it is retired through
+    /// the deletion queue, else freed at once).
+    renderer_shown: bool,
+    window: Arc<Window>,
+    view: DisplayView,
+    /// The size last asked of the window (view switch), until a resize brings it.
+    size_asked: Option<(PhysicalSize<u32>, Instant)>,
+    menu: Menu,
+    /// The methods and lookups this device can run (what the menu offers).
+    methods: Vec<Method>,
+    lookups: Vec<Lookup>,
+}
+
+struct App<'a> {
+    settings: Settings,
+    instance: &'a Arc<Instance>,
+    device: &'a Arc<Device>,
+    /// The scene as loaded (with the command line's overrides): what `0` resets to.
+    initial: Scene,
+    viewer: Option<Viewer>,
+    clock: Clock,
+    figures: Figures,
+    outcome: Outcome,
+    error: Option<anyhow::Error>,
+}
+
+pub fn run(
+    event_loop: EventLoop<()>,
+    instance: &Arc<Instance>,
+    device: &Arc<Device>,
+    mut scene: Scene,
+    settings: Settings,
+) -> Result<Outcome> {
+    // The thesis's single viewport, for either camera (the pair has its own fixed size).
+    scene.observer.resolution = SINGLE_VIEW_SIZE;
+    scene.sensor.resolution = SINGLE_VIEW_SIZE;
+    if let Some(size) = settings.cube_size {
+        scene.cube.face_size_px = size;
+    }
+    if let Some(lookup) = settings.lookup {
+        scene.mirror.lookup = lookup;
+    }
+    let scripted = settings.frames.is_some();
+    let mut app = App {
+        settings,
+        instance,
+        device,
+        initial: scene,
+        viewer: None,
+        clock: Clock {
+            time_s: 0.0,
+            paused: false,
+            last: None,
+            frame: 0,
+            scripted,
+        },
+        figures: Figures::default(),
+        outcome: Outcome::default(),
+        error: None,
+    };
+    specchio::say_part!("{}", input::help());
+    event_loop.run_app(&mut app)?;
+    // The viewer goes first (its presenter waits for the frames in flight).
+    app.viewer = None;
+    if let Some(e) = app.error {
+        return Err(e);
+    }
+    app.figures.print_summary();
+    Ok(app.outcome)
+}
+
+impl ApplicationHandler for App<'_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.viewer.is_some() {
+            return;
+        }
+        match self.open(event_loop) {
+            Ok(viewer) => self.viewer = Some(viewer),
+            Err(e) => self.fail(event_loop, e),
+        }
+        let keys = std::mem::take(&mut self.settings.keys);
+        for action in keys {
+            self.act(event_loop, action);
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        // egui sees every event first; one it used (a click on the menu) goes no further.
+        if let Some(v) = &mut self.viewer {
+            if v.menu.on_event(&v.window, &event) {
+                return;
+            }
+        }
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                if let Some(v) = &mut self.viewer {
+                    v.presenter.resized();
+                    if v.size_asked.is_some_and(|(asked, _)| asked == size) {
+                        v.size_asked = None;
+                    }
+                }
+            }
+            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+                if let Some(action) = key_name(&event.logical_key).and_then(|k| input::action(&k)) {
+                    self.act(event_loop, action);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        if self.error.is_some() || self.viewer.is_none() {
+            return;
+        }
+        if let Err(e) = self.frame(event_loop) {
+            self.fail(event_loop, e);
+        }
+    }
+}
+
+impl App<'_> {
+    /// The window at the view's size, its surface, the presenter and the renderer.
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<Viewer> {
+        let view = DisplayView::Pair;
+        let [w, h] = self
+            .settings
+            .size
+            .unwrap_or_else(|| natural_size(&self.initial, view));
+        let attributes = Window::default_attributes()
+            .with_title(format!("specchio view: {}", self.settings.scene_name))
+            .with_inner_size(PhysicalSize::new(w, h));
+        let window = Arc::new(event_loop.create_window(attributes)?);
+        let surface = Surface::create(
+            self.instance,
+            window.display_handle()?.as_raw(),
+            window.window_handle()?.as_raw(),
+        )?;
+        let mut presenter = Presenter::create(self.device, surface, self.settings.present)?;
+        presenter.renew_overlay = self.settings.renew_menu_renderer;
+        let renderer = self.new_renderer(self.initial.clone(), self.settings.method)?;
+        event_loop.set_control_flow(ControlFlow::Poll);
+        let info = &self.device.info;
+        let methods = Method::listed()
+            .filter(|m| m.missing_features(info).is_none())
+            .collect();
+        let lookups = Lookup::ALL
+            .into_iter()
+            .filter(|&l| lookups::missing_features(l, info).is_none())
+            .collect();
+        let mut menu = Menu::new(&window);
+        menu.print_widgets = self.settings.widgets;
+        Ok(Viewer {
+            menu,
+            presenter,
+            renderer,
+            renderer_shown: false,
+            window,
+            view,
+            size_asked: None,
+            methods,
+            lookups,
+        })
+    }
+
+    fn new_renderer(&self, scene: Scene, method: Method) -> Result<Renderer> {
+        let options = RenderOptions {
+            method,
+            ..Default::default()
+        };
+        Ok(Renderer::new(self.device, scene, &options)?)
+    }
+
+    /// One frame: advance the clock, draw the view, show it; quit after `--frames`.
+    fn frame(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let frames = self.settings.frames;
+        let last = frames.is_some_and(|n| self.clock.frame + 1 >= u64::from(n));
+        let viewer = self.viewer.as_mut().expect("frame() runs with a viewer");
+        if last {
+            if let Some((_, asked)) = viewer.size_asked {
+                // Let the window reach the size its view asked for before the final image.
+                if asked.elapsed() < RESIZE_WAIT {
+                    return Ok(());
+                }
+                viewer.size_asked = None;
+            }
+        }
+        let t_s = self.clock.tick();
+        let start = Instant::now();
+        let (report, image) =
+            viewer
+                .renderer
+                .render_display_frame(self.clock.frame, t_s, viewer.view)?;
+        let size = viewer.window.inner_size();
+        let shot = last && self.settings.screenshot;
+        let status = Status {
+            view: viewer.view,
+            method: viewer.renderer.method,
+            methods: &viewer.methods,
+            lookup: viewer.renderer.scene.mirror.lookup,
+            lookups: &viewer.lookups,
+            refresh: viewer.renderer.scene.refresh,
+            paused: self.clock.paused,
+            frame_ms: self.figures.frame_ms.last().copied(),
+            cube_ms: self.figures.cube_ms,
+            faces: report.faces_rendered,
+            driver: &self.device.info.name,
+        };
+        let mut menu = viewer.menu.frame(&viewer.window, &status);
+        let (shown, screenshot) = viewer.presenter.show(
+            [size.width, size.height],
+            &image,
+            Some(&mut menu.paint),
+            shot,
+        )?;
+        viewer.renderer_shown = true;
+        viewer.menu.unapplied(&mut menu.paint);
+        // The menu's choices act from the next frame on, as a key pressed now would.
+        for action in menu.actions {
+            self.act(event_loop, action);
+        }
+        let viewer = self.viewer.as_mut().expect("frame() runs with a viewer");
+        if let Shown::Skipped = shown {
+            // Minimised or out of date: no frame counted; wait for a resize instead of
+            // spinning when there is nothing to present to.
+            event_loop.set_control_flow(ControlFlow::WaitUntil(
+                Instant::now() + Duration::from_millis(50),
+            ));
+            return Ok(());
+        }
+        event_loop.set_control_flow(ControlFlow::Poll);
+        self.clock.frame += 1;
+        let cube_ms = report.cube_updated.then_some(report.gpu_cube_ms).flatten();
+        self.figures.add(
+            start.elapsed().as_secs_f64() * 1e3,
+            cube_ms,
+            report.faces_rendered,
+        );
+        if let Some(title) = self
+            .figures
+            .title(&viewer.renderer, &self.settings.scene_name)
+        {
+            viewer.window.set_title(&title);
+        }
+        if last {
+            self.outcome.screenshot = screenshot;
+            event_loop.exit();
+        }
+        Ok(())
+    }
+
+    /// Applies one key's action.
+    fn act(&mut self, event_loop: &ActiveEventLoop, action: Action) {
+        let switched = match action {
+            Action::NextMethod => self.next_method(),
+            Action::SetMethod(method) => self.set_method(method).map(|_| ()),
+            _ => Ok(()),
+        };
+        if let Err(e) = switched {
+            self.fail(event_loop, e);
+        }
+        let Some(viewer) = self.viewer.as_mut() else {
+            return;
+        };
+        let scene = &mut viewer.renderer.scene;
+        match action {
+            Action::Walk { .. } | Action::Turn { .. } => input::move_observer(scene, action),
+            Action::MoveSphere { x, y, z } => {
+                if let Err(why) = input::move_sphere(scene, (x, y, z)) {
+                    specchio::say!("sphere not moved: {why}");
+                }
+            }
+            Action::PauseResume => self.clock.paused = !self.clock.paused,
+            Action::Step => {
+                self.clock.paused = true;
+                self.clock.time_s += 1.0 / SCRIPTED_FPS;
+            }
+            Action::Show(view) => {
+                viewer.view = view;
+                let [w, h] = natural_size(&viewer.renderer.scene, view);
+                let size = PhysicalSize::new(w, h);
+                if viewer.window.inner_size() != size {
+                    match viewer.window.request_inner_size(size) {
+                        Some(_) => viewer.presenter.resized(),
+                        None => viewer.size_asked = Some((size, Instant::now())),
+                    }
+                }
+            }
+            Action::NextMethod | Action::SetMethod(_) => {} // above
+            Action::NextLookup => next_lookup(&mut viewer.renderer),
+            Action::SetLookup(lookup) => {
+                if viewer.lookups.contains(&lookup) {
+                    scene.mirror.lookup = lookup;
+                    specchio::say!("lookup: {lookup}");
+                }
+            }
+            Action::SetRefresh(refresh) => {
+                scene.refresh = refresh;
+                specchio::say!("refresh: {refresh:?}");
+            }
+            Action::NextRefresh => {
+                scene.refresh = match scene.refresh {
+                    RefreshPolicy::OnChange => RefreshPolicy::EveryFrame,
+                    RefreshPolicy::EveryFrame => RefreshPolicy::EveryN(4),
+                    RefreshPolicy::EveryN(_) => RefreshPolicy::OnChange,
+                };
+                specchio::say!("refresh: {:?}", scene.refresh);
+            }
+            Action::Reset => {
+                let initial = &self.initial;
+                scene.observer = initial.observer.clone();
+                scene.mirror.center = initial.mirror.center;
+                scene.mirror.lookup = initial.mirror.lookup;
+                scene.refresh = initial.refresh;
+                self.clock = Clock {
+                    time_s: 0.0,
+                    paused: false,
+                    last: None,
+                    ..self.clock
+                };
+            }
+            Action::Menu => viewer.menu.open = !viewer.menu.open,
+            Action::Help => viewer.menu.help = !viewer.menu.help,
+            Action::Quit => event_loop.exit(),
+        }
+    }
+
+    /// Switches to the next method the device can run (probed ones are probed first).
+    fn next_method(&mut self) -> Result<()> {
+        let current = self
+            .viewer
+            .as_ref()
+            .expect("keys act on a viewer")
+            .renderer
+            .method;
+        let all: Vec<Method> = Method::listed().collect();
+        let start = all.iter().position(|&m| m == current).map_or(0, |i| i + 1);
+        for k in 0..all.len() {
+            let method = all[(start + k) % all.len()];
+            if method == current || self.set_method(method)? {
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// Switches to `method` if the device can run it (`false`, with the reason printed, if
+    /// not). The old renderer is retired through the deletion queue when a frame in flight may
+    /// still copy from its view image, and freed at once when no frame has shown it (a script
+    /// of many switches before a frame, `--keys m,m,m,...`, so holds at most three renderers,
+    /// not one per switch).
+    fn set_method(&mut self, method: Method) -> Result<bool> {
+        let viewer = self.viewer.as_mut().expect("keys act on a viewer");
+        if let Err(why) = specchio::process::probe::usable(method, &self.device.info) {
+            specchio::say!("method {method} skipped: {why}");
+            return Ok(false);
+        }
+        let scene = viewer.renderer.scene.clone();
+        let options = RenderOptions {
+            method,
+            ..Default::default()
+        };
+        let renderer = Renderer::new(self.device, scene, &options)?;
+        let old = std::mem::replace(&mut viewer.renderer, renderer);
+        if std::mem::take(&mut viewer.renderer_shown) {
+            viewer.presenter.ring.defer(old);
+        } else {
+            drop(old);
+        }
+        specchio::say!("method: {method}");
+        Ok(true)
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        self.error.get_or_insert(e);
+        event_loop.exit();
+    }
+}
+
+/// The next lookup this device can run.
+fn next_lookup(renderer: &mut Renderer) {
+    let info = &renderer.device.info;
+    let all = Lookup::ALL;
+    let at = all
+        .iter()
+        .position(|&l| l == renderer.scene.mirror.lookup)
+        .unwrap_or(0);
+    for k in 1..all.len() {
+        let lookup = all[(at + k) % all.len()];
+        match lookups::missing_features(lookup, info) {
+            None => {
+                renderer.scene.mirror.lookup = lookup;
+                specchio::say!("lookup: {lookup}");
+                return;
+            }
+            Some(why) => specchio::say!("lookup {lookup} skipped: {why}"),
+        }
+    }
+}
+
+/// The window size that shows `view` pixel for pixel.
+fn natural_size(scene: &Scene, view: DisplayView) -> [u32; 2] {
+    match view {
+        DisplayView::Pair => PAIR_SIZE,
+        DisplayView::Observer => scene.observer.resolution,
+        DisplayView::Sensor => scene.sensor.resolution,
+    }
+}
+
+/// The help's name of a key (winit's logical key).
+fn key_name(key: &Key) -> Option<String> {
+    match key {
+        Key::Character(c) => Some(c.to_lowercase()),
+        Key::Named(NamedKey::Space) => Some("space".into()),
+        Key::Named(NamedKey::Escape) => Some("escape".into()),
+        Key::Named(NamedKey::ArrowLeft) => Some("left".into()),
+        Key::Named(NamedKey::ArrowRight) => Some("right".into()),
+        Key::Named(NamedKey::ArrowUp) => Some("up".into()),
+        Key::Named(NamedKey::ArrowDown) => Some("down".into()),
+        Key::Named(NamedKey::F1) => Some("f1".into()),
+        _ => None,
+    }
+}

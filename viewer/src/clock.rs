@@ -1,0 +1,96 @@
+//! The viewer's scene clock and its frame figures (window title, menu, exit summary).
+
+use std::time::{Duration, Instant};
+
+use specchio::render::Renderer;
+
+use super::SCRIPTED_FPS;
+
+/// How often the window title's figures are refreshed.
+const TITLE_EVERY: Duration = Duration::from_millis(500);
+
+/// Scene time: wall clock while running, frozen while paused; `frame / 30` when scripted.
+pub struct Clock {
+    pub time_s: f64,
+    pub paused: bool,
+    pub last: Option<Instant>,
+    pub frame: u64,
+    pub scripted: bool,
+}
+
+/// Frame times since the title was last refreshed, and over the whole run.
+#[derive(Default)]
+pub struct Figures {
+    since: Option<Instant>,
+    frames: u32,
+    pub frame_ms: Vec<f64>,
+    pub cube_ms: Option<f64>,
+    faces: u32,
+}
+
+impl Clock {
+    /// This frame's scene time.
+    pub fn tick(&mut self) -> f64 {
+        if self.scripted {
+            if !self.paused {
+                self.time_s = self.frame as f64 / SCRIPTED_FPS;
+            }
+            return self.time_s;
+        }
+        let now = Instant::now();
+        if let (false, Some(last)) = (self.paused, self.last) {
+            self.time_s += now.duration_since(last).as_secs_f64();
+        }
+        self.last = Some(now);
+        self.time_s
+    }
+}
+
+impl Figures {
+    pub fn add(&mut self, frame_ms: f64, cube_ms: Option<f64>, faces: u32) {
+        self.frames += 1;
+        self.frame_ms.push(frame_ms);
+        if cube_ms.is_some() {
+            self.cube_ms = cube_ms;
+        }
+        self.faces = faces;
+    }
+
+    /// The window title with the figures, every `TITLE_EVERY`.
+    pub fn title(&mut self, renderer: &Renderer, scene: &str) -> Option<String> {
+        let since = *self.since.get_or_insert_with(Instant::now);
+        let elapsed = since.elapsed();
+        if elapsed < TITLE_EVERY {
+            return None;
+        }
+        let fps = f64::from(self.frames) / elapsed.as_secs_f64();
+        self.since = Some(Instant::now());
+        self.frames = 0;
+        let cube = self
+            .cube_ms
+            .map_or("-".to_owned(), |ms| format!("{ms:.1} ms"));
+        Some(format!(
+            "specchio view: {scene} | {}, {}, {:?} | {fps:.1} frames/s, last cube update {cube}, {} faces this frame | {}",
+            renderer.method,
+            renderer.scene.mirror.lookup,
+            renderer.scene.refresh,
+            self.faces,
+            renderer.device.info.name,
+        ))
+    }
+
+    /// Frame-time summary on stdout (for docs/viewer.md's measurements).
+    pub fn print_summary(&self) {
+        if self.frame_ms.is_empty() {
+            return;
+        }
+        let mut ms = self.frame_ms.clone();
+        let total: f64 = ms.iter().sum();
+        let median = specchio::metrics::percentile::median(&mut ms).unwrap_or(f64::NAN);
+        specchio::say!(
+            "frames: {}, median frame {median:.2} ms, mean {:.1} frames/s",
+            ms.len(),
+            1e3 * ms.len() as f64 / total
+        );
+    }
+}

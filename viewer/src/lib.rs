@@ -1,0 +1,230 @@
+//! `specchio view`: the thesis's interactive program on today's renderer. A window shows the
+//! observer and the sensor side by side (1200x450), or one of them alone; the keyboard moves
+//! the observer and the sphere, pauses and steps time, and switches the fill method, the
+//! lookup and the refresh policy (docs/viewer.md).
+//!
+//! The renderer draws one view image per frame exactly as `specchio render` does (no
+//! readback); `present.rs` blits it into the swapchain image. `app.rs` is the event loop.
+
+mod app;
+mod clock;
+pub mod input;
+mod menu;
+mod overlay;
+mod present;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, Context, Result};
+use specchio::output::Transaction;
+use specchio::render::lookups;
+use specchio::render::methods::Method;
+use specchio::scene::Lookup;
+use specchio::vk::device::{Device, DeviceDesc, OptionalFeatures};
+use specchio::vk::instance::{Instance, InstanceDesc};
+use specchio::vk::surface::Surface;
+use specchio::vk::swapchain::PresentPreference;
+use winit::event_loop::EventLoop;
+use winit::raw_window_handle::{HasDisplayHandle, RawDisplayHandle};
+
+use specchio::process::args::{face_size, lookup, method, whole};
+
+/// More than this is a mistake (about an hour at 30 frames/s).
+pub const MAX_FRAMES: u32 = 100_000;
+/// Window sides in pixels (the largest is a common maximum image size of drivers).
+pub const MAX_WINDOW_SIDE: u32 = 16_384;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The scene file (TOML; see docs/scene-format.md).
+    pub scene: PathBuf,
+    /// Cube fill method to start with (the `m` key cycles through those the device runs).
+    #[arg(long, default_value = "six-pass", value_parser = method)]
+    pub method: Method,
+    /// Mirror lookup to start with (default: the scene's; the `x` key cycles).
+    #[arg(long, value_parser = lookup)]
+    pub lookup: Option<Lookup>,
+    /// Cube face size in texels (overrides the scene's cube.face_size).
+    #[arg(long, allow_negative_numbers = true, value_parser = face_size)]
+    pub cube_size: Option<u32>,
+    /// Vulkan device: index or part of its name (see `specchio info`).
+    #[arg(long)]
+    pub device: Option<String>,
+    /// Initial window size WxH in pixels (default: the view's own size, 1200x450 for both).
+    #[arg(long, value_parser = window_size)]
+    pub size: Option<[u32; 2]>,
+    /// Keys applied in order before the first frame, comma-separated (`w,w,left,2`; the names
+    /// are those of `h`'s help, docs/viewer.md).
+    #[arg(long)]
+    pub keys: Option<String>,
+    /// Render this many frames, then quit (1..=100000); scene time is then frame / 30 s,
+    /// whatever the wall clock says, so a run is reproducible.
+    #[arg(long, allow_negative_numbers = true, value_parser = whole(1..=MAX_FRAMES))]
+    pub frames: Option<u32>,
+    /// Save the window's last image as PNG (needs --frames).
+    #[arg(long, requires = "frames")]
+    pub screenshot: Option<PathBuf>,
+    /// Present with MAILBOX (lowest latency, may drop frames) instead of FIFO, where offered.
+    #[arg(long)]
+    pub mailbox: bool,
+    /// Print the menu's widgets' rectangles in window pixels when they change
+    /// (`widget: NAME X Y W H`), so that a script can click them.
+    #[arg(long)]
+    pub widgets: bool,
+    /// Enable the Khronos validation layer; any message makes the command fail (exit 3).
+    #[arg(long)]
+    pub validate: bool,
+    /// Test hook: a new menu renderer every frame (docs/viewer.md).
+    #[arg(long, hide = true)]
+    pub renew_menu_renderer: bool,
+}
+
+/// `WxH` with both sides in 1..=MAX_WINDOW_SIDE.
+fn window_size(text: &str) -> Result<[u32; 2], String> {
+    let bad = || format!("`{text}` is not a window size: WxH, each side in 1..={MAX_WINDOW_SIDE}");
+    let (w, h) = text.trim().split_once(['x', 'X']).ok_or_else(bad)?;
+    let side = whole(1..=MAX_WINDOW_SIDE);
+    Ok([side(w).map_err(|_| bad())?, side(h).map_err(|_| bad())?])
+}
+
+/// Frame rate of scripted runs (`--frames`): frame n is drawn at scene time n / 30 s, the
+/// default of `specchio render --fps`.
+pub const SCRIPTED_FPS: f64 = 30.0;
+
+pub fn run(args: &Args) -> Result<ExitCode> {
+    // 1. Input and outputs first: nothing is opened before they are known good.
+    let keys = match &args.keys {
+        Some(script) => input::parse_script(script)?,
+        None => Vec::new(),
+    };
+    let scene = specchio::scene::load(&args.scene)?;
+    let mut out = Transaction::new();
+    out.input(&args.scene)?;
+    if let Some(path) = &args.screenshot {
+        out.file(path)?;
+    }
+    check_display()?;
+
+    // 2. The window system, then a Vulkan instance with its surface extensions and a device
+    //    that can run every method and lookup the viewer may switch to.
+    let event_loop = EventLoop::new().context(
+        "cannot connect to the display; `specchio render` renders without one (headless)",
+    )?;
+    let display = event_loop.display_handle()?.as_raw();
+    let extensions = Surface::required_extensions(display)?;
+    let instance =
+        Instance::create_with_extensions(&InstanceDesc::from_env(args.validate), &extensions)?;
+    let log = instance.validation_log();
+    let chosen = specchio::vk::device::choose(&instance, args.device.as_deref())?;
+    if let Some(why) = args.method.missing_features(&chosen) {
+        bail!(
+            "method {} cannot run on {}: {why}",
+            args.method,
+            chosen.name
+        );
+    }
+    let lookup_used = args.lookup.unwrap_or(scene.mirror.lookup);
+    if let Some(why) = lookups::missing_features(lookup_used, &chosen) {
+        bail!("lookup {lookup_used} cannot run on {}: {why}", chosen.name);
+    }
+    let on_x11 = matches!(
+        display,
+        RawDisplayHandle::Xlib(_) | RawDisplayHandle::Xcb(_)
+    );
+    if chosen.short_name == "swiftshader" && on_x11 {
+        // Measured: Chromium's SwiftShader build (the one scripts/setup.sh unpacks) crashes
+        // inside vkGetPhysicalDeviceSurfaceCapabilitiesKHR on an X11 window; refused here
+        // rather than crashing. On Wayland it presents (tested; docs/viewer.md).
+        bail!(
+            "--device swiftshader cannot present to an X11 window (its build crashes querying \
+             the window's surface); run the viewer on Wayland, use lavapipe, or `specchio \
+             render --device swiftshader` without a window"
+        );
+    }
+    let features = switchable_features(&chosen);
+    let desc = DeviceDesc {
+        selector: args.device.clone(),
+        features,
+    };
+    let device = Device::create_with_extensions(&instance, &desc, &[ash::khr::swapchain::NAME])?;
+
+    // 3. The event loop until the window closes (or --frames are done).
+    let settings = app::Settings {
+        method: args.method,
+        lookup: args.lookup,
+        cube_size: args.cube_size,
+        size: args.size,
+        keys,
+        frames: args.frames,
+        screenshot: args.screenshot.is_some(),
+        present: if args.mailbox {
+            PresentPreference::Mailbox
+        } else {
+            PresentPreference::Fifo
+        },
+        scene_name: args.scene.display().to_string(),
+        widgets: args.widgets,
+        renew_menu_renderer: args.renew_menu_renderer,
+    };
+    let outcome = app::run(event_loop, &instance, &device, scene, settings);
+    drop(device);
+    drop(instance);
+    let outcome = specchio::process::validation::checked(&log, outcome)?;
+
+    // 4. The screenshot, all or nothing.
+    if let (Some(path), Some(shot)) = (&args.screenshot, outcome.screenshot) {
+        out.write_png_rgb8(path, shot.width, shot.height, &shot.rgb8)?;
+        out.commit()?;
+        specchio::say!(
+            "screenshot: {} ({}x{})",
+            path.display(),
+            shot.width,
+            shot.height
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Without a display server there is no window: say so, and what to run instead.
+fn check_display() -> Result<()> {
+    let set = |name| std::env::var_os(name).is_some_and(|v| !v.is_empty());
+    if !set("DISPLAY") && !set("WAYLAND_DISPLAY") && !set("WAYLAND_SOCKET") {
+        bail!(
+            "no display: neither DISPLAY nor WAYLAND_DISPLAY is set, so `specchio view` cannot \
+             open a window; use `specchio render SCENE --out DIR` to render without a display \
+             (headless), or start the viewer under a display server (e.g. `Xvfb :99 &` and \
+             DISPLAY=:99)"
+        );
+    }
+    Ok(())
+}
+
+/// The features of every method and lookup this device can run without a probe, so that
+/// the `m` and `x` keys can switch to them without a new device.
+fn switchable_features(info: &specchio::vk::device::DeviceInfo) -> OptionalFeatures {
+    let methods = Method::listed()
+        .filter(|m| m.missing_features(info).is_none())
+        .map(Method::features);
+    let lookups = Lookup::ALL
+        .into_iter()
+        .filter(|&l| lookups::missing_features(l, info).is_none())
+        .map(lookups::features);
+    methods
+        .chain(lookups)
+        .fold(OptionalFeatures::default(), OptionalFeatures::union)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn window_sizes_are_range_checked() {
+        assert_eq!(window_size("1200x450"), Ok([1200, 450]));
+        assert_eq!(window_size(" 800X600 "), Ok([800, 600]));
+        for bad in ["0x10", "10", "x", "10x-1", "99999x10", "axb"] {
+            assert!(window_size(bad).is_err(), "{bad}");
+        }
+    }
+}

@@ -1,0 +1,365 @@
+//! The in-window menu (F1) and help (h), built with egui each frame.
+//!
+//! The menu offers the keys' choices (view, method, lookup, refresh, pause, step, reset) and
+//! shows the live figures; what it selects comes back as the keys' `Action`s, applied by the
+//! same code as a key press (`App::act`), so a choice made in the menu and the same choice
+//! made by key give the same image. `overlay.rs` draws what egui outputs.
+
+use std::sync::Arc;
+
+use egui::{Align2, Color32, Context, Pos2, Rect, Shadow};
+use specchio::render::display::DisplayView;
+use specchio::render::methods::Method;
+use specchio::scene::{Lookup, RefreshPolicy};
+use winit::event::WindowEvent;
+use winit::window::Window;
+
+use super::input::{Action, KEYS};
+use super::overlay::Paint;
+
+/// The menu's and the help's distance from the window's corners (egui points).
+const MARGIN: f32 = 8.0;
+
+/// What the menu shows this frame.
+pub struct Status<'a> {
+    pub view: DisplayView,
+    pub method: Method,
+    /// Methods the device can run (offered in the menu).
+    pub methods: &'a [Method],
+    pub lookup: Lookup,
+    /// Lookups the device can run.
+    pub lookups: &'a [Lookup],
+    pub refresh: RefreshPolicy,
+    pub paused: bool,
+    pub frame_ms: Option<f64>,
+    pub cube_ms: Option<f64>,
+    pub faces: u32,
+    pub driver: &'a str,
+}
+
+/// egui's state between frames, and which panels are open.
+pub struct Menu {
+    ctx: Context,
+    input: egui_winit::State,
+    pub open: bool,
+    pub help: bool,
+    /// The pixel rectangles last reported (printed when they change, for scripts and tests).
+    reported: [Option<[u32; 4]>; 2],
+    /// Print the menu's widgets' rectangles too (`--widgets`), so that a script can click
+    /// them; the last list printed.
+    pub print_widgets: bool,
+    reported_widgets: Vec<(String, [u32; 4])>,
+    /// Texture changes not applied yet (the frame that carried them was skipped).
+    pending: egui::TexturesDelta,
+}
+
+impl Drop for Menu {
+    fn drop(&mut self) {
+        // The GPU textures go with the renderer; what was never uploaded needs no release.
+        self.pending.clear();
+    }
+}
+
+/// One frame of the menu: what it asks to draw, and the actions chosen in it.
+pub struct Output {
+    pub paint: Paint,
+    pub actions: Vec<Action>,
+}
+
+impl Menu {
+    pub fn new(window: &Window) -> Self {
+        let ctx = Context::default();
+        // No drop shadows: the menu then covers exactly its outlined rectangle, which is
+        // what it reports (and what the tests compare outside of).
+        ctx.all_styles_mut(|style| {
+            style.visuals.window_shadow = Shadow::NONE;
+            style.visuals.popup_shadow = Shadow::NONE;
+            // No fade-in: egui animates by wall-clock time, which would make a scripted
+            // screenshot depend on how fast the machine is.
+            style.animation_time = 0.0;
+        });
+        // A press and its release are a click however long apart: on a CPU driver a frame
+        // can outlast egui's default 0.8 s, and a press and release that fall in two frames
+        // would then be taken for a long press, and the click lost. The menu has nothing
+        // that a long press or a drag would do instead.
+        ctx.options_mut(|options| options.input_options.max_click_duration = f64::INFINITY);
+        let input = egui_winit::State::new(
+            ctx.clone(),
+            egui::ViewportId::ROOT,
+            window,
+            Some(window.scale_factor() as f32),
+            None,
+            None,
+        );
+        Self {
+            ctx,
+            input,
+            open: false,
+            help: false,
+            reported: [None, None],
+            print_widgets: false,
+            reported_widgets: Vec::new(),
+            pending: egui::TexturesDelta::default(),
+        }
+    }
+
+    /// Passes a window event to egui; `true` when egui used it (a click on the menu), so
+    /// that it is not also taken as a key.
+    pub fn on_event(&mut self, window: &Window, event: &WindowEvent) -> bool {
+        let response = self.input.on_window_event(window, event);
+        response.consumed && (self.open || self.help)
+    }
+
+    /// Takes back the texture changes a skipped frame did not apply.
+    pub fn unapplied(&mut self, paint: &mut Paint) {
+        self.pending.append(std::mem::take(&mut paint.textures));
+    }
+
+    /// Builds this frame's menu and help (nothing when both are closed).
+    pub fn frame(&mut self, window: &Arc<Window>, status: &Status) -> Output {
+        let raw = self.input.take_egui_input(window);
+        let mut actions = Vec::new();
+        let mut rects = [None, None];
+        let mut widgets = Widgets::default();
+        let (open, help) = (self.open, self.help);
+        let full = self.ctx.run_ui(raw, |ui| {
+            let ctx = ui.ctx().clone();
+            if open {
+                rects[0] = menu_window(&ctx, status, &mut actions, &mut widgets);
+            }
+            if help {
+                rects[1] = help_window(&ctx);
+            }
+        });
+        self.input
+            .handle_platform_output(window, full.platform_output);
+        let ppp = full.pixels_per_point;
+        let size = window.inner_size();
+        for (i, name) in ["menu", "help"].into_iter().enumerate() {
+            let px = rects[i].map(|r| pixel_rect(r, ppp, [size.width, size.height]));
+            if px != self.reported[i] {
+                if let Some([x, y, w, h]) = px {
+                    specchio::say!("{name}: {x} {y} {w} {h}");
+                }
+                self.reported[i] = px;
+            }
+        }
+        if self.print_widgets {
+            self.report_widgets(widgets, ppp);
+        }
+        let primitives = self.ctx.tessellate(full.shapes, ppp);
+        let mut textures = std::mem::take(&mut self.pending);
+        textures.append(full.textures_delta);
+        Output {
+            paint: Paint {
+                primitives,
+                textures,
+                pixels_per_point: ppp,
+            },
+            actions,
+        }
+    }
+}
+
+impl Menu {
+    /// Prints `widget: NAME X Y W H` for every widget of the menu (window pixels, the
+    /// widget's own rectangle: a click at its centre hits it) when the list changed.
+    fn report_widgets(&mut self, widgets: Widgets, pixels_per_point: f32) {
+        let now: Vec<(String, [u32; 4])> = widgets
+            .0
+            .into_iter()
+            .map(|(name, r)| (name, widget_rect(r, pixels_per_point)))
+            .collect();
+        if now != self.reported_widgets {
+            for (name, [x, y, w, h]) in &now {
+                specchio::say!("widget: {name} {x} {y} {w} {h}");
+            }
+            self.reported_widgets = now;
+        }
+    }
+}
+
+/// The menu's clickable widgets this frame, by name (`lookup=box`, `view=sensor`, ...).
+#[derive(Default)]
+struct Widgets(Vec<(String, Rect)>);
+
+impl Widgets {
+    /// Records `response`'s rectangle under `name` and says whether it was clicked. A
+    /// widget laid out in a sizing pass (egui's first, invisible pass of a new window or
+    /// popup) is not recorded: nothing in that pass takes clicks, so a click sent to its
+    /// rectangle before the next frame would be lost.
+    fn clicked(&mut self, ui: &egui::Ui, name: String, response: egui::Response) -> bool {
+        if !ui.is_sizing_pass() {
+            self.0.push((name, response.rect));
+        }
+        response.clicked()
+    }
+}
+
+/// A widget's rectangle in window pixels [x, y, width, height], rounded to whole pixels.
+fn widget_rect(rect: Rect, pixels_per_point: f32) -> [u32; 4] {
+    let px = |v: f32| (v * pixels_per_point).round().max(0.0) as u32;
+    let (x, y) = (px(rect.min.x), px(rect.min.y));
+    [x, y, px(rect.max.x) - x, px(rect.max.y) - y]
+}
+
+/// The rectangle an egui window covers, in window pixels [x, y, width, height]: its outline
+/// grown by egui's anti-aliasing feather (one pixel) and rounded outwards, inside the window.
+pub fn pixel_rect(rect: Rect, pixels_per_point: f32, window: [u32; 2]) -> [u32; 4] {
+    let r = rect.expand(1.0 / pixels_per_point);
+    let x0 = (r.min.x * pixels_per_point).floor().max(0.0) as u32;
+    let y0 = (r.min.y * pixels_per_point).floor().max(0.0) as u32;
+    let x1 = ((r.max.x * pixels_per_point).ceil() as u32).min(window[0]);
+    let y1 = ((r.max.y * pixels_per_point).ceil() as u32).min(window[1]);
+    [x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0)]
+}
+
+/// The menu: the keys' choices and the live figures. Returns the rectangle it covers.
+fn menu_window(
+    ctx: &Context,
+    s: &Status,
+    actions: &mut Vec<Action>,
+    widgets: &mut Widgets,
+) -> Option<Rect> {
+    let window = egui::Window::new("specchio  (F1 closes)")
+        .fixed_pos(Pos2::new(MARGIN, MARGIN))
+        .resizable(false)
+        .collapsible(false);
+    let shown = window.show(ctx, |ui| {
+        ui.label("View");
+        ui.horizontal(|ui| {
+            for (view, name, id) in [
+                (DisplayView::Pair, "both (1)", "both"),
+                (DisplayView::Observer, "observer (2)", "observer"),
+                (DisplayView::Sensor, "sensor (3)", "sensor"),
+            ] {
+                let radio = ui.radio(s.view == view, name);
+                if widgets.clicked(ui, format!("view={id}"), radio) && s.view != view {
+                    actions.push(Action::Show(view));
+                }
+            }
+        });
+        let combo = egui::ComboBox::from_label("fill method (m)")
+            .selected_text(s.method.to_string())
+            .show_ui(ui, |ui| {
+                for &m in s.methods {
+                    let label = ui.selectable_label(s.method == m, m.to_string());
+                    if widgets.clicked(ui, format!("method={m}"), label) && s.method != m {
+                        actions.push(Action::SetMethod(m));
+                    }
+                }
+            });
+        // The combo box's button opens the list of methods (listed while it is open).
+        widgets.clicked(ui, "method".into(), combo.response);
+        ui.horizontal(|ui| {
+            ui.label("lookup (x)");
+            for &l in s.lookups {
+                let radio = ui.radio(s.lookup == l, l.to_string());
+                if widgets.clicked(ui, format!("lookup={l}"), radio) && s.lookup != l {
+                    actions.push(Action::SetLookup(l));
+                }
+            }
+        });
+        ui.horizontal(|ui| {
+            ui.label("refresh (e)");
+            for r in [
+                RefreshPolicy::OnChange,
+                RefreshPolicy::EveryFrame,
+                RefreshPolicy::EveryN(4),
+            ] {
+                let radio = ui.radio(s.refresh == r, refresh_name(r));
+                if widgets.clicked(ui, format!("refresh={}", refresh_name(r)), radio)
+                    && s.refresh != r
+                {
+                    actions.push(Action::SetRefresh(r));
+                }
+            }
+        });
+        ui.horizontal(|ui| {
+            let pause = if s.paused {
+                "resume (space)"
+            } else {
+                "pause (space)"
+            };
+            let button = ui.button(pause);
+            if widgets.clicked(ui, "pause".into(), button) {
+                actions.push(Action::PauseResume);
+            }
+            let button = ui.button("step (.)");
+            if widgets.clicked(ui, "step".into(), button) {
+                actions.push(Action::Step);
+            }
+            let button = ui.button("reset (0)");
+            if widgets.clicked(ui, "reset".into(), button) {
+                actions.push(Action::Reset);
+            }
+        });
+        ui.separator();
+        figures(ui, s);
+    });
+    shown.map(|inner| inner.response.rect)
+}
+
+/// The live figures, as the window title shows them.
+fn figures(ui: &mut egui::Ui, s: &Status) {
+    let ms = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.1} ms"));
+    let fps = s
+        .frame_ms
+        .filter(|&v| v > 0.0)
+        .map_or("-".to_owned(), |v| format!("{:.1}", 1e3 / v));
+    egui::Grid::new("figures").num_columns(2).show(ui, |ui| {
+        for (name, value) in [
+            ("frame time", format!("{} ({fps} frames/s)", ms(s.frame_ms))),
+            ("last cube update", ms(s.cube_ms)),
+            ("faces this frame", s.faces.to_string()),
+            ("method", s.method.to_string()),
+            ("lookup", s.lookup.to_string()),
+            ("driver", s.driver.to_owned()),
+        ] {
+            ui.label(name);
+            ui.colored_label(Color32::WHITE, value);
+            ui.end_row();
+        }
+    });
+}
+
+/// The help: every key and what it does (the same table as the terminal's help).
+fn help_window(ctx: &Context) -> Option<Rect> {
+    let window = egui::Window::new("keys  (h closes)")
+        .anchor(Align2::RIGHT_TOP, [-MARGIN, MARGIN])
+        .resizable(false)
+        .collapsible(false);
+    let shown = window.show(ctx, |ui| {
+        // Two keys a row: the whole list fits the 1200x450 window's height.
+        egui::Grid::new("keys").num_columns(4).show(ui, |ui| {
+            for pair in KEYS.chunks(2) {
+                for (key, _, what) in pair {
+                    ui.monospace(*key);
+                    ui.label(*what);
+                }
+                ui.end_row();
+            }
+        });
+    });
+    shown.map(|inner| inner.response.rect)
+}
+
+fn refresh_name(r: RefreshPolicy) -> String {
+    match r {
+        RefreshPolicy::OnChange => "on-change".into(),
+        RefreshPolicy::EveryFrame => "every-frame".into(),
+        RefreshPolicy::EveryN(n) => format!("every-{n}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pixel_rect_grows_by_the_feather_and_stays_in_the_window() {
+        let r = Rect::from_min_max(Pos2::new(8.0, 8.0), Pos2::new(100.5, 50.0));
+        assert_eq!(pixel_rect(r, 1.0, [1200, 450]), [7, 7, 95, 44]);
+        assert_eq!(pixel_rect(r, 2.0, [150, 450]), [15, 15, 135, 86]);
+    }
+}
