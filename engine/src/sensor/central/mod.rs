@@ -18,6 +18,7 @@
 //! only the pixels of points at a finite distance do (parallax).
 
 pub mod export;
+pub mod folder;
 pub mod mei;
 pub mod record;
 pub mod scaramuzza;
