@@ -19,7 +19,8 @@
 //!   from it;
 //! - [`metrics`]: image-error metrics (RMSE, PSNR, relMSE, FLIP) and the FLIP heatmap;
 //! - [`output`]: EXR, PNG and JSON files, written atomically;
-//! - [`process`]: what the programs on top share (stdout, signals, the validation verdict).
+//! - [`process`]: what the programs on top share (stdout, signals, the validation verdict);
+//! - [`random`]: the one seeded random sequence (SplitMix64).
 
 pub mod files;
 pub mod image;
@@ -27,6 +28,7 @@ pub mod memory;
 pub mod metrics;
 pub mod output;
 pub mod process;
+pub mod random;
 pub mod reference;
 pub mod render;
 pub mod scene;

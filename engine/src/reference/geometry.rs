@@ -385,15 +385,9 @@ mod tests {
                 .chain(g.triangles.iter().map(|&t| (t, false)))
                 .collect();
             let r = scene.mirror.radius_m;
-            let mut seed = 0x9E37_79B9_7F4A_7C15u64;
-            let mut next = || {
-                // SplitMix64, mapped to [0, 1).
-                seed = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-                let mut z = seed;
-                z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-                z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-                ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-            };
+            let mut rng = crate::random::SplitMix64::new(0x9E37_79B9_7F4A_7C15);
+            // The top 24 bits, mapped to [0, 1).
+            let mut next = || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
             let n = 200_000;
             let (mut ours_missed, mut ours_passed) = (0, 0);
             let (mut theirs_missed, mut theirs_passed, mut theirs_farther) = (0, 0, 0);

@@ -119,8 +119,8 @@ impl RoomBox {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::random::SplitMix64;
     use crate::reference::intersect::ray_triangle;
-    use crate::scene::generate::SplitMix64;
     use crate::scene::state::room_meshes;
 
     fn room() -> Room {

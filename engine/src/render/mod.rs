@@ -1,12 +1,14 @@
-//! The renderer: fills the dynamic cube map (six passes, one per face) and draws the observer,
-//! the sensor and the side-by-side views with the analytic mirror.
+//! The renderer: fills the dynamic cube map (by the chosen method: six passes, one pass with
+//! layered or multiview rendering, instancing or meshlets) and draws the observer, the sensor
+//! and the side-by-side views with the analytic mirror.
 //!
 //! One frame (see `docs/architecture.md`):
 //! 1. evaluate the scene at time t ([`SceneState`]) and decide, by the refresh policy,
 //!    whether the cube map must be re-rendered;
 //! 2. write the per-frame buffers (views, object transforms);
-//! 3. record: six face passes (CPU-culled draws) + mip chain, then each view pass (culled
-//!    draws + the mirror), then copies of the images to read back;
+//! 3. record: the lookup's own work, the cube fill of the dirty faces (skipped for a lookup
+//!    that reads no cube) + mip chain, then each view pass (culled draws + the mirror), then
+//!    copies of the images to read back;
 //! 4. submit, wait, read timestamps, counters and pixels.
 
 pub mod budget;

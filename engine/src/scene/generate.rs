@@ -3,8 +3,8 @@
 //! The loader (`load/`) validates a generator's fields and builds its shared meshes; this
 //! module turns the validated [`Params`] into ordinary [`Object`]s.
 //!
-//! Determinism: the random sequence is SplitMix64, written here so that no dependency update
-//! can change it. Draws become numbers only through integer arithmetic and IEEE `+ - * / sqrt`
+//! Determinism: the random sequence is SplitMix64 ([`crate::random`]), written in this
+//! project so that no dependency update can change it. Draws become numbers only through integer arithmetic and IEEE `+ - * / sqrt`
 //! (all correctly rounded, so identical on every machine; no `sin`/`cos`), and each object
 //! makes its draws in a fixed order. The same file therefore yields bit-identical objects
 //! everywhere. The order, per object `k` (documented in `docs/scene-format.md`):
@@ -18,6 +18,7 @@
 use glam::{Quat, Vec3};
 
 use super::{Animation, Object};
+use crate::random::SplitMix64;
 
 /// Most objects one generator may make.
 pub(super) const MAX_COUNT: u32 = 100_000;
@@ -28,36 +29,8 @@ pub(super) const MAX_SEGMENTS: u32 = 256;
 /// Segments of generated spheres and cylinders when the file does not say.
 pub(super) const DEFAULT_SEGMENTS: u32 = 16;
 
-/// SplitMix64 (Steele, Lea, Flood 2014; the reference `splitmix64.c` by Vigna): a 64-bit
-/// counter passed through a bijective mixer. Small, fast, and good enough to scatter objects.
-#[derive(Debug, Clone)]
-pub(crate) struct SplitMix64 {
-    state: u64,
-}
-
+/// The generator's own draws, on the project's one random sequence.
 impl SplitMix64 {
-    pub(crate) fn new(seed: u64) -> Self {
-        Self { state: seed }
-    }
-
-    pub(crate) fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1): the top 53 bits as a fraction.
-    pub(crate) fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// Uniform in `0..n` (`n` >= 1), by multiply-shift (bias below n / 2^64).
-    pub(crate) fn below(&mut self, n: usize) -> usize {
-        ((u128::from(self.next_u64()) * n as u128) >> 64) as usize
-    }
-
     /// Uniform in [lo, hi] (lo <= hi), computed in f64 and rounded once.
     fn between(&mut self, lo: f32, hi: f32) -> f32 {
         let (a, b) = (f64::from(lo), f64::from(hi));
@@ -266,23 +239,6 @@ pub(super) fn expand(p: &Params, env: &Surroundings) -> Result<Vec<Object>, Plac
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn splitmix64_matches_the_reference_sequence() {
-        // Outputs of Vigna's splitmix64.c seeded with 1234567.
-        let mut r = SplitMix64::new(1_234_567);
-        let got: Vec<u64> = (0..5).map(|_| r.next_u64()).collect();
-        assert_eq!(
-            got,
-            [
-                6_457_827_717_110_365_317,
-                3_203_168_211_198_807_973,
-                9_817_491_932_198_370_423,
-                4_593_380_528_125_082_431,
-                16_408_922_859_458_223_821,
-            ]
-        );
-    }
 
     #[test]
     fn draws_stay_in_range() {

@@ -14,6 +14,7 @@ pub mod optics;
 pub mod outputs;
 pub mod panorama;
 pub mod ray_map;
+pub mod solve;
 
 pub use optics::SensorOptics;
 pub use outputs::SensorOutputs;

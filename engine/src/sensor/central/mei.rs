@@ -9,8 +9,8 @@
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::solve::{levenberg_marquardt, LmReport, LmSettings};
 use super::{FitError, Sample};
+use crate::sensor::solve::{levenberg_marquardt, LmReport, LmSettings};
 
 /// The parameters, named as OpenCV names them (K = [fx s cx; 0 fy cy; 0 0 1], xi,
 /// D = [k1 k2 p1 p2]); Kalibr's `[xi, fu, fv, pu, pv]` and radtan `[k1, k2, r1, r2]` are the

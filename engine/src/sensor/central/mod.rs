@@ -22,7 +22,6 @@ pub mod folder;
 pub mod mei;
 pub mod record;
 pub mod scaramuzza;
-pub mod solve;
 
 use glam::{DVec2, DVec3};
 
@@ -34,7 +33,7 @@ use crate::metrics::percentile::percentile;
 use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
 use crate::scene::Scene;
-use solve::LmReport;
+use crate::sensor::solve::{self, LmReport};
 
 /// One pixel's observation for a fit: its image point in the model's own pixel convention and
 /// the unit direction it sees, in the model's frame.

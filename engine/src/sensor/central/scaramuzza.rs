@@ -15,8 +15,8 @@
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::solve::{least_squares, levenberg_marquardt, LmReport, LmSettings};
 use super::{FitError, Sample};
+use crate::sensor::solve::{least_squares, levenberg_marquardt, LmReport, LmSettings};
 
 /// The model as `calib_results.txt` holds it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

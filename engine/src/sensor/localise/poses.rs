@@ -13,6 +13,7 @@
 use glam::{Vec2, Vec3};
 
 use super::LocaliseError;
+use crate::random::SplitMix64;
 use crate::scene::state::SceneState;
 use crate::scene::Scene;
 
@@ -121,7 +122,7 @@ pub fn random(
 ) -> Result<Vec<(Vec3, f64)>, LocaliseError> {
     let (lo, hi) = floor_extent(scene)?;
     let objects = object_spheres(scene, &SceneState::at(scene, t_s));
-    let mut rng = SplitMix64(seed);
+    let mut rng = SplitMix64::new(seed);
     let mut out = Vec::with_capacity(count as usize);
     for _ in 0..count {
         let mut tries = 0;
@@ -144,24 +145,10 @@ pub fn random(
 
 /// `count` random headings, from `seed` (for queries placed at given positions).
 pub fn random_headings(count: usize, seed: u64) -> Vec<f64> {
-    let mut rng = SplitMix64(seed);
+    let mut rng = SplitMix64::new(seed);
     (0..count)
         .map(|_| rng.unit() * std::f64::consts::TAU)
         .collect()
-}
-
-/// SplitMix64 (the scene generator's generator, which is private to it): reproducible from
-/// the seed on every platform, which is all query sampling needs.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
 }
 
 #[cfg(test)]

@@ -12,6 +12,8 @@
 
 use glam::Vec3;
 
+use crate::sensor::solve::least_squares;
+
 /// Landmarks within this many grid spacings of the best match (on the floor) enter the fit:
 /// the best match's 3 x 3 block of the grid.
 const NEIGHBOURHOOD: f64 = 1.5;
@@ -57,18 +59,19 @@ fn quadratic_minimum(points: &[((f64, f64), f64)]) -> Option<(f64, f64)> {
     if points.len() < 6 {
         return None;
     }
-    // Normal equations: (sum m m^T) coefficients = sum m f, m the six monomials.
-    let mut normal = [[0.0f64; 7]; 6];
-    for &((x, z), f) in points {
-        let m = [1.0, x, z, x * x, x * z, z * z];
-        for (i, row) in normal.iter_mut().enumerate() {
-            for j in 0..6 {
-                row[j] += m[i] * m[j];
-            }
-            row[6] += m[i] * f;
-        }
+    // Least squares over the six monomials, by the sensor's QR solver.
+    let (mut a, mut f) = (
+        Vec::with_capacity(6 * points.len()),
+        Vec::with_capacity(points.len()),
+    );
+    for &((x, z), value) in points {
+        a.extend([1.0, x, z, x * x, x * z, z * z]);
+        f.push(value);
     }
-    let [_, b, c, d, e, g] = solve(normal)?;
+    let coefficients = least_squares(&a, &f, points.len(), 6)?;
+    let &[_, b, c, d, e, g] = coefficients.as_slice() else {
+        return None;
+    };
     // The gradient (b + 2 d x + e z, c + e x + 2 g z) vanishes at the stationary point; it is
     // a minimum when the Hessian [[2d, e], [e, 2g]] is positive definite.
     let det = 4.0 * d * g - e * e;
@@ -78,33 +81,6 @@ fn quadratic_minimum(points: &[((f64, f64), f64)]) -> Option<(f64, f64)> {
     let x = (e * c - 2.0 * g * b) / det;
     let z = (e * b - 2.0 * d * c) / det;
     Some((x, z))
-}
-
-/// Gaussian elimination with partial pivoting of the 6 x 6 system whose right-hand side is
-/// each row's last entry; `None` when it is singular (to its scale).
-fn solve(mut a: [[f64; 7]; 6]) -> Option<[f64; 6]> {
-    let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    for col in 0..6 {
-        let pivot = (col..6).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[pivot][col].abs() <= 1e-12 * scale {
-            return None;
-        }
-        a.swap(col, pivot);
-        let (done, below) = a.split_at_mut(col + 1);
-        let pivot_row = &done[col];
-        for row in below {
-            let f = row[col] / pivot_row[col];
-            for (x, p) in row[col..].iter_mut().zip(&pivot_row[col..]) {
-                *x -= f * p;
-            }
-        }
-    }
-    let mut x = [0.0; 6];
-    for row in (0..6).rev() {
-        let rest: f64 = (row + 1..6).map(|k| a[row][k] * x[k]).sum();
-        x[row] = (a[row][6] - rest) / a[row][row];
-    }
-    Some(x)
 }
 
 #[cfg(test)]

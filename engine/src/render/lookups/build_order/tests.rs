@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use super::{midpoint_split_order, midpoint_tree_cost, Aabb};
-use crate::scene::generate::SplitMix64;
+use crate::random::SplitMix64;
 
 /// A unit cube with its minimum corner at `at`.
 fn unit_box(at: Vec3) -> Aabb {

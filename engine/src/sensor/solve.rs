@@ -1,4 +1,5 @@
-//! The two small solvers the model fits need, in f64: linear least squares by Householder QR
+//! The two small solvers the sensor's fits need (the central models, the localisation's
+//! position refinement), in f64: linear least squares by Householder QR
 //! (stable for the ill-conditioned polynomial bases of OCamCalib's `invpol`, where the normal
 //! equations would square the condition number) and Levenberg–Marquardt with a numeric
 //! Jacobian (nine parameters at most, so a dense normal-equation step is cheap and exact
