@@ -8,7 +8,7 @@ use anyhow::Result;
 use serde::Serialize;
 use specchio::output::Transaction;
 
-use super::record::{Git, Record, RungRow, Stats};
+use super::record::{Accuracy, Git, MethodRow, Record, RungRow, Stats};
 
 /// Peak resident memory of this process so far, in bytes (Linux: `ru_maxrss` is in KiB).
 pub fn peak_rss_bytes() -> Option<u64> {
@@ -131,102 +131,145 @@ pub fn lookup_name(lookup: specchio::scene::Lookup) -> &'static str {
     lookup.name()
 }
 
-/// The CSV's columns: those of the speed-against-error rows, then the trade-off's own.
-const CSV_HEADER: &str = "row,scene,method,cube_size,lookup,updates,wall_median_ms,wall_p10_ms,wall_p90_ms,gpu_fill_median_ms,vertex_invocations,fragment_invocations,faces_rendered,objects_drawn,vs_floors,flip_mean,flip_p99,angular_mean_deg,angular_p99_deg,rung,frame_cost_median_ms,frame_cost_p10_ms,frame_cost_p90_ms,gpu_cube_median_ms,gpu_sensor_median_ms,sensor_fragment_invocations,observer_flip_mean,observer_flip_p99,observer_angular_mean_deg,observer_angular_p99_deg,pareto,sensor_traced_fraction";
+/// A number written with six decimals.
+#[derive(Debug, Clone, Copy)]
+struct Real(f64);
 
-/// A number with six decimals; absent is an empty field.
-fn real(v: Option<f64>) -> String {
-    v.map_or(String::new(), |x| format!("{x:.6}"))
+impl Serialize for Real {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(&format_args!("{:.6}", self.0))
+    }
 }
 
-/// A counter; one the driver does not have is an empty field, not 0 or "null".
-fn count(v: Option<u64>) -> String {
-    v.map_or(String::new(), |x| x.to_string())
+fn real(v: Option<f64>) -> Option<Real> {
+    v.map(Real)
 }
 
-/// The CSV: one `method` row per speed-against-error case (scene, method, face size, lookup:
-/// times, work counters, efficiency and error), then one `rung` row per trade-off point (the
-/// same columns where they mean the same, the sensor's error in the error columns, and the
-/// trade-off's own columns); a column that does not apply to a row is empty. `path` is staged
-/// in `out`.
+/// One CSV row: a `method` row per speed-against-error case (scene, method, face size, lookup:
+/// times, work counters, efficiency and error) or a `rung` row per trade-off point (the same
+/// columns where they mean the same, the sensor's error in the error columns, and the
+/// trade-off's own columns). The header is these field names, in this order; a column that
+/// does not apply to a row, or a counter the driver does not have, is empty (not 0 or
+/// "null"). The `csv` crate quotes what needs it: a comma in a scene path stays one cell.
+#[derive(Debug, Default, Serialize)]
+struct CsvRow {
+    row: &'static str,
+    scene: String,
+    method: &'static str,
+    cube_size: u32,
+    lookup: &'static str,
+    updates: usize,
+    wall_median_ms: Option<Real>,
+    wall_p10_ms: Option<Real>,
+    wall_p90_ms: Option<Real>,
+    gpu_fill_median_ms: Option<Real>,
+    vertex_invocations: Option<u64>,
+    fragment_invocations: Option<u64>,
+    faces_rendered: Option<u64>,
+    objects_drawn: Option<u64>,
+    vs_floors: Option<Real>,
+    flip_mean: Option<Real>,
+    flip_p99: Option<Real>,
+    angular_mean_deg: Option<Real>,
+    angular_p99_deg: Option<Real>,
+    rung: String,
+    frame_cost_median_ms: Option<Real>,
+    frame_cost_p10_ms: Option<Real>,
+    frame_cost_p90_ms: Option<Real>,
+    gpu_cube_median_ms: Option<Real>,
+    gpu_sensor_median_ms: Option<Real>,
+    sensor_fragment_invocations: Option<u64>,
+    observer_flip_mean: Option<Real>,
+    observer_flip_p99: Option<Real>,
+    observer_angular_mean_deg: Option<Real>,
+    observer_angular_p99_deg: Option<Real>,
+    pareto: Option<bool>,
+    sensor_traced_fraction: Option<Real>,
+}
+
+/// The CSV (see [`CsvRow`]): the `method` rows, then the `rung` rows. `path` is staged in
+/// `out`.
 pub fn write_csv(out: &Transaction, path: &Path, record: &Record) -> Result<()> {
-    let mut text = format!("{CSV_HEADER}\n");
-    let trade_off_blank = vec![String::new(); 12];
+    Ok(out.write_bytes(path, &csv_bytes(record)?)?)
+}
+
+/// The CSV's bytes.
+fn csv_bytes(record: &Record) -> Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
     for s in &record.speed_vs_error {
-        let (r, a) = (&s.result, &s.accuracy);
-        let w = &r.work;
-        let mut cells = vec![
-            "method".to_owned(),
-            r.scene.clone(),
-            r.method.name().to_owned(),
-            r.cube_size.to_string(),
-            lookup_name(a.lookup).to_owned(),
-            r.updates.to_string(),
-            real(r.wall_ms.map(|w| w.median)),
-            real(r.wall_ms.map(|w| w.p10)),
-            real(r.wall_ms.map(|w| w.p90)),
-            real(r.gpu_fill_ms.map(|g| g.median)),
-            count(w.vertex_invocations),
-            count(w.fragment_invocations),
-            count(Some(w.faces_rendered)),
-            count(Some(w.objects_drawn)),
-            real(r.efficiency.vs_geometry_plus_fill),
-            real(a.flip_mean),
-            real(a.flip_p99),
-            real(Some(a.angular.mean_deg)),
-            real(Some(a.angular.p99_deg)),
-        ];
-        cells.extend(trade_off_blank.iter().cloned());
-        text.push_str(&cells.join(","));
-        text.push('\n');
+        w.serialize(method_row(&s.result, &s.accuracy))?;
     }
     for r in &record.tradeoff {
-        text.push_str(&rung_cells(r).join(","));
-        text.push('\n');
+        w.serialize(rung_row(r))?;
     }
-    Ok(out.write_bytes(path, text.as_bytes())?)
+    Ok(w.into_inner().map_err(|e| e.into_error())?)
 }
 
-/// One trade-off point's CSV cells.
-fn rung_cells(r: &RungRow) -> Vec<String> {
+/// One speed-against-error case's row.
+fn method_row(r: &MethodRow, a: &Accuracy) -> CsvRow {
+    let w = &r.work;
+    CsvRow {
+        row: "method",
+        scene: r.scene.clone(),
+        method: r.method.name(),
+        cube_size: r.cube_size,
+        lookup: lookup_name(a.lookup),
+        updates: r.updates,
+        wall_median_ms: real(r.wall_ms.map(|w| w.median)),
+        wall_p10_ms: real(r.wall_ms.map(|w| w.p10)),
+        wall_p90_ms: real(r.wall_ms.map(|w| w.p90)),
+        gpu_fill_median_ms: real(r.gpu_fill_ms.map(|g| g.median)),
+        vertex_invocations: w.vertex_invocations,
+        fragment_invocations: w.fragment_invocations,
+        faces_rendered: Some(w.faces_rendered),
+        objects_drawn: Some(w.objects_drawn),
+        vs_floors: real(r.efficiency.vs_geometry_plus_fill),
+        flip_mean: real(a.flip_mean),
+        flip_p99: real(a.flip_p99),
+        angular_mean_deg: real(Some(a.angular.mean_deg)),
+        angular_p99_deg: real(Some(a.angular.p99_deg)),
+        ..CsvRow::default()
+    }
+}
+
+/// One trade-off point's row.
+fn rung_row(r: &RungRow) -> CsvRow {
     let uses_cube = specchio::render::lookups::plugin(r.lookup).uses_cube();
     let (sensor, observer) = (r.sensor.as_ref(), r.observer.as_ref());
     let stat = |s: Option<Stats>, f: fn(Stats) -> f64| real(s.map(f));
-    vec![
-        "rung".to_owned(),
-        r.scene.clone(),
+    CsvRow {
+        row: "rung",
+        scene: r.scene.clone(),
         // The cube lookups fill with six passes; a lookup without a cube map fills nothing.
-        if uses_cube { "six-pass" } else { "" }.to_owned(),
-        r.cube_size.to_string(),
-        lookup_name(r.lookup).to_owned(),
-        r.frames.to_string(),
-        stat(r.wall_ms, |s| s.median),
-        stat(r.wall_ms, |s| s.p10),
-        stat(r.wall_ms, |s| s.p90),
-        String::new(),
-        count(r.work.fill_vertex_invocations),
-        count(r.work.fill_fragment_invocations),
-        count(Some(r.work.faces_rendered)),
-        String::new(),
-        String::new(),
-        real(sensor.and_then(|v| v.flip_mean)),
-        real(sensor.and_then(|v| v.flip_p99)),
-        real(sensor.map(|v| v.angular.mean_deg)),
-        real(sensor.map(|v| v.angular.p99_deg)),
-        r.rung.clone(),
-        stat(r.frame_cost_ms, |s| s.median),
-        stat(r.frame_cost_ms, |s| s.p10),
-        stat(r.frame_cost_ms, |s| s.p90),
-        stat(r.gpu_cube_ms, |s| s.median),
-        stat(r.gpu_sensor_ms, |s| s.median),
-        count(r.work.sensor_fragment_invocations),
-        real(observer.and_then(|v| v.flip_mean)),
-        real(observer.and_then(|v| v.flip_p99)),
-        real(observer.map(|v| v.angular.mean_deg)),
-        real(observer.map(|v| v.angular.p99_deg)),
-        r.pareto.map_or(String::new(), |p| p.to_string()),
-        real(r.sensor_traced_fraction),
-    ]
+        method: if uses_cube { "six-pass" } else { "" },
+        cube_size: r.cube_size,
+        lookup: lookup_name(r.lookup),
+        updates: r.frames,
+        wall_median_ms: stat(r.wall_ms, |s| s.median),
+        wall_p10_ms: stat(r.wall_ms, |s| s.p10),
+        wall_p90_ms: stat(r.wall_ms, |s| s.p90),
+        vertex_invocations: r.work.fill_vertex_invocations,
+        fragment_invocations: r.work.fill_fragment_invocations,
+        faces_rendered: Some(r.work.faces_rendered),
+        flip_mean: real(sensor.and_then(|v| v.flip_mean)),
+        flip_p99: real(sensor.and_then(|v| v.flip_p99)),
+        angular_mean_deg: real(sensor.map(|v| v.angular.mean_deg)),
+        angular_p99_deg: real(sensor.map(|v| v.angular.p99_deg)),
+        rung: r.rung.clone(),
+        frame_cost_median_ms: stat(r.frame_cost_ms, |s| s.median),
+        frame_cost_p10_ms: stat(r.frame_cost_ms, |s| s.p10),
+        frame_cost_p90_ms: stat(r.frame_cost_ms, |s| s.p90),
+        gpu_cube_median_ms: stat(r.gpu_cube_ms, |s| s.median),
+        gpu_sensor_median_ms: stat(r.gpu_sensor_ms, |s| s.median),
+        sensor_fragment_invocations: r.work.sensor_fragment_invocations,
+        observer_flip_mean: real(observer.and_then(|v| v.flip_mean)),
+        observer_flip_p99: real(observer.and_then(|v| v.flip_p99)),
+        observer_angular_mean_deg: real(observer.map(|v| v.angular.mean_deg)),
+        observer_angular_p99_deg: real(observer.map(|v| v.angular.p99_deg)),
+        pareto: r.pareto,
+        sensor_traced_fraction: real(r.sensor_traced_fraction),
+        ..CsvRow::default()
+    }
 }
 
 #[cfg(test)]
@@ -256,5 +299,40 @@ mod tests {
         assert_eq!(g[0].unit, "ms");
         let json = serde_json::to_value(&g).unwrap();
         assert!(json[0]["range"].as_str().unwrap().starts_with("p10 "));
+    }
+
+    #[test]
+    fn csv_cells_stay_in_their_columns_whatever_the_scene_path() {
+        let mut record: Record =
+            serde_json::from_str(include_str!("../baselines/quick.json")).unwrap();
+        let odd = "scenes/a, \"b\"\nc.toml";
+        for r in &mut record.tradeoff {
+            r.scene = odd.to_owned();
+        }
+        let bytes = csv_bytes(&record).unwrap();
+        let mut reader = csv::Reader::from_reader(bytes.as_slice());
+        let header = reader.headers().unwrap().clone();
+        let column = |name: &str| header.iter().position(|h| h == name).unwrap();
+        assert_eq!(header.len(), 32);
+        let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.unwrap()).collect();
+        assert_eq!(
+            rows.len(),
+            record.speed_vs_error.len() + record.tradeoff.len()
+        );
+        for (row, r) in rows
+            .iter()
+            .skip(record.speed_vs_error.len())
+            .zip(&record.tradeoff)
+        {
+            assert_eq!(row.len(), 32);
+            assert_eq!(&row[column("scene")], odd);
+            assert_eq!(&row[column("row")], "rung");
+            assert_eq!(&row[column("rung")], r.rung);
+            let median = r.frame_cost_ms.map(|s| format!("{:.6}", s.median));
+            assert_eq!(
+                &row[column("frame_cost_median_ms")],
+                median.unwrap_or_default()
+            );
+        }
     }
 }
