@@ -24,13 +24,14 @@ fn now_ms() -> i64 {
     t.tv_sec * 1000 + t.tv_nsec / 1_000_000
 }
 
-extern "C" fn on_signal(signal: libc::c_int) {
-    // Atomics, the clock and _exit only: all async-signal-safe.
+/// What a stopping signal does: the first one raises the flag; one that comes half a second
+/// or more after it ends the process. Runs in the signal handler: atomics, the clock and
+/// `_exit` only, all async-signal-safe.
+fn on_signal(signal: libc::c_int) {
     if !INTERRUPTED.swap(true, Ordering::SeqCst) {
         FIRST_MS.store(now_ms(), Ordering::SeqCst);
     } else if now_ms() - FIRST_MS.load(Ordering::SeqCst) >= REPEAT_MS {
-        // SAFETY: _exit ends the process without running anything else.
-        unsafe { libc::_exit(128 + signal) };
+        signal_hook::low_level::exit(128 + signal);
     }
 }
 
@@ -47,18 +48,22 @@ const STOPPING: [libc::c_int; 7] = [
     libc::SIGALRM,
 ];
 
-/// Installs the handler for the [`STOPPING`] signals (once per process is enough; again is
-/// harmless).
+/// Installs the handler for the [`STOPPING`] signals, once per process (`signal-hook` keeps
+/// any handler installed before ours and runs it too).
 pub fn catch() {
-    for signal in STOPPING {
-        // SAFETY: a zeroed sigaction is valid (empty mask); the handler is async-signal-safe.
-        unsafe {
-            let mut action: libc::sigaction = std::mem::zeroed();
-            action.sa_sigaction = on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
-            action.sa_flags = libc::SA_RESTART;
-            libc::sigaction(signal, &action, std::ptr::null_mut());
+    static INSTALLED: std::sync::Once = std::sync::Once::new();
+    INSTALLED.call_once(|| {
+        for signal in STOPPING {
+            // SAFETY: `on_signal` is async-signal-safe (see there); none of these signals is
+            // one signal-hook forbids (SIGKILL, SIGSTOP, the fault signals).
+            let installed =
+                unsafe { signal_hook::low_level::register(signal, move || on_signal(signal)) };
+            if let Err(e) = installed {
+                // The run still works; only a signal would then end it the default way.
+                eprintln!("warning: cannot catch signal {signal}: {e}");
+            }
         }
-    }
+    });
 }
 
 /// An error once a signal has arrived; `progress` says how far the command got.
