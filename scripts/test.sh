@@ -21,6 +21,26 @@ if [ ! -x .venv-check/bin/python ] || ! .venv-check/bin/python -c "import cv2" 2
     mv .venv-check.new .venv-check
     python3 -m venv --upgrade .venv-check >/dev/null
 fi
+# Every check must run here: a test that cannot make one (a missing tool or driver) fails
+# instead of passing without checking (tests/common: `skip`). Checks that do not apply to a
+# device (it lacks a feature) are allowed; both kinds are logged and counted below.
 export SPECCHIO_REQUIRE_TOOL_CHECKS=1
 export SPECCHIO_VALIDATE=1
-cargo test --locked --workspace
+export SPECCHIO_SKIP_LOG="$PWD/target/test-skips.log"
+mkdir -p target
+rm -f "$SPECCHIO_SKIP_LOG"
+status=0
+cargo test --locked --workspace || status=$?
+skipped=0
+not_applicable=0
+if [ -f "$SPECCHIO_SKIP_LOG" ]; then
+    skipped=$(grep -c '^skipped' "$SPECCHIO_SKIP_LOG" || true)
+    not_applicable=$(grep -c '^not-applicable' "$SPECCHIO_SKIP_LOG" || true)
+    sed 's/^/test: /' "$SPECCHIO_SKIP_LOG" >&2
+fi
+echo "test: $skipped check(s) skipped, $not_applicable not applicable to a device (listed above)" >&2
+if [ "$status" -eq 0 ] && [ "$skipped" -gt 0 ]; then
+    echo "test: a check that must run was skipped" >&2
+    status=1
+fi
+exit "$status"

@@ -94,19 +94,15 @@ fn the_exports_parse_back_to_the_recorded_models() {
 /// scripts/check-omnidir.py: OpenCV's own omnidir projection (and a port of OCamCalib's
 /// world2cam) of points on the exact rays must give the pixels our models predict. Runs
 /// when the check venv (.venv-check/, made by scripts/test.sh) exists; scripts/test.sh sets
-/// SPECCHIO_REQUIRE_TOOL_CHECKS=1, so there a missing venv fails instead of skipping.
+/// SPECCHIO_REQUIRE_TOOL_CHECKS=1, so there a missing venv fails instead of skipping
+/// (`common::skip`).
 #[test]
 fn opencv_projects_the_export_as_our_model_does() {
     let python = root().join(".venv-check/bin/python");
     if !python.exists() {
-        assert!(
-            std::env::var_os("SPECCHIO_REQUIRE_TOOL_CHECKS").is_none(),
-            "{} is missing (scripts/test.sh creates it)",
-            python.display()
-        );
-        eprintln!(
-            "skipped: no {} (scripts/test.sh creates it)",
-            python.display()
+        common::skip(
+            "OpenCV's projection of the export",
+            &format!("no {} (scripts/test.sh creates it)", python.display()),
         );
         return;
     }

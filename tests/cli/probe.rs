@@ -23,7 +23,7 @@ fn probed_methods_pass_their_probe_on(device: &str) {
     gpu.finish();
     for m in Method::all().filter(|m| m.needs().probe) {
         if let Some(why) = m.missing_features(&info) {
-            eprintln!("{m}: not probed on {}: {why}", info.name);
+            common::not_applicable(&format!("{m}'s probe on {}", info.name), &why);
             continue;
         }
         let out = specchio_cli(&["probe", m.name(), "--device", device]);
@@ -54,6 +54,10 @@ fn view_mask_leak_on(device: &str) {
     let info = gpu.device.info.clone();
     gpu.finish();
     if !info.features.multiview {
+        common::not_applicable(
+            &format!("the view-mask leak on {}", info.name),
+            "no multiview",
+        );
         return;
     }
     let leak = |reset: bool| -> Vec<u64> {

@@ -44,7 +44,7 @@ fn on_wayland_both_views_show_what_render_writes() {
 #[test]
 fn on_wayland_swiftshader_shows_what_render_writes_on_it() {
     if !common::devices().iter().any(|d| d == "swiftshader") {
-        eprintln!("skipped: SwiftShader is not installed (scripts/setup.sh unpacks it)");
+        common::skip("SwiftShader on Wayland", "SwiftShader is not installed");
         return;
     }
     let Some(wayland) = Weston::start("view-wayland-swiftshader") else {

@@ -204,8 +204,9 @@ pub struct Gpu {
 }
 
 /// Every usable device the loader finds, by short name (`--device`): lavapipe, and
-/// SwiftShader where `scripts/setup.sh` provided it. Tests that must hold on every driver
-/// loop over these.
+/// SwiftShader where `scripts/setup.sh` provided it, and whatever GPU the machine has. Tests
+/// that must hold on every driver loop over these. Without SwiftShader, the second CPU driver
+/// every such test is meant to run on, that part of the test is a [`skip`].
 pub fn devices() -> Vec<String> {
     let instance = Instance::create(&InstanceDesc { validation: false }).expect("Vulkan");
     let found: Vec<String> = specchio::vk::device::enumerate(&instance)
@@ -215,7 +216,68 @@ pub fn devices() -> Vec<String> {
         .map(|c| c.info.short_name)
         .collect();
     assert!(!found.is_empty(), "no usable Vulkan device");
+    if !found.iter().any(|d| d == "swiftshader") {
+        skip(
+            "the SwiftShader half of an every-driver test",
+            &format!(
+                "SwiftShader is not installed (scripts/setup.sh unpacks it); ran on {found:?}"
+            ),
+        );
+    }
     found
+}
+
+/// A check this test could not make on this machine, because a tool or driver that the
+/// project's set-up installs is missing (Xvfb, weston, xdotool, SwiftShader, the OpenCV venv).
+/// It is said on stderr and written to the skip log, which `scripts/test.sh` counts and
+/// prints after the run; under `SPECCHIO_REQUIRE_TOOL_CHECKS` (set by `scripts/test.sh`, so in
+/// CI) it fails the test instead: there everything the tests are meant to check must run.
+pub fn skip(what: &str, why: &str) {
+    let line = format!("{}: {what}: {why}", test_name());
+    assert!(
+        std::env::var_os("SPECCHIO_REQUIRE_TOOL_CHECKS").is_none(),
+        "SPECCHIO_REQUIRE_TOOL_CHECKS says every check must run, but this one cannot: {line}"
+    );
+    eprintln!("SKIPPED {line}");
+    log_skip("skipped", &line);
+}
+
+/// A check that does not apply to a device, which lacks what it checks (a feature such as
+/// multiview or ray queries): said and counted like a [`skip`], but never a failure, since a
+/// conforming device may lack it.
+pub fn not_applicable(what: &str, why: &str) {
+    let line = format!("{}: {what}: {why}", test_name());
+    eprintln!("NOT APPLICABLE {line}");
+    log_skip("not-applicable", &line);
+}
+
+/// The test's target and name (libtest names each test's thread after the test).
+fn test_name() -> String {
+    let thread = std::thread::current();
+    format!(
+        "{}::{}",
+        env!("CARGO_CRATE_NAME"),
+        thread.name().unwrap_or("(unnamed test)")
+    )
+}
+
+/// Appends one line to the skip log: `SPECCHIO_SKIP_LOG`, else `target/test-skips.log`.
+/// One `write` of a short line to a file opened for appending, so lines from test processes
+/// running at once do not interleave.
+fn log_skip(kind: &str, line: &str) {
+    use std::io::Write;
+    let path = std::env::var_os("SPECCHIO_SKIP_LOG")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join("target/test-skips.log"));
+    let text = format!("{kind}\t{}\n", line.replace(['\n', '\t'], " "));
+    let written = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)
+        .and_then(|mut f| f.write_all(text.as_bytes()));
+    if let Err(e) = written {
+        eprintln!("cannot record the skip in {}: {e}", path.display());
+    }
 }
 
 impl Gpu {
@@ -256,9 +318,14 @@ impl Gpu {
     /// [`Self::with_all_methods`] on device `device` (`None`: the default one).
     pub fn with_all_methods_on(device: Option<&str>) -> (Self, Vec<Method>) {
         let probe = Self::create(device, OptionalFeatures::default());
-        let methods: Vec<Method> = Method::all()
-            .filter(|m| m.missing_features(&probe.device.info).is_none())
-            .collect();
+        let info = &probe.device.info;
+        let mut methods = Vec::new();
+        for m in Method::all() {
+            match m.missing_features(info) {
+                None => methods.push(m),
+                Some(why) => not_applicable(&format!("{m} on {}", info.name), &why),
+            }
+        }
         probe.finish();
         let features = methods
             .iter()

@@ -150,9 +150,15 @@ fn incremental_update_is_exact_on(device: &str) {
 }
 
 /// The benchmark's floors do the work they stand for, by the pipeline statistics: clear draws
-/// nothing; fill shades every texel of the six faces exactly once; geometry runs six-pass's
-/// vertex work and no fragment. After a floor, the next frame re-renders all six faces (the
-/// cube no longer shows the scene).
+/// nothing; fill shades every texel of the six faces; geometry runs six-pass's vertex work
+/// and no fragment. After a floor, the next frame re-renders all six faces (the cube no
+/// longer shows the scene).
+///
+/// The counts are exact on lavapipe, which shades each covered pixel once, counts no helper
+/// invocations and runs the vertex shader once per vertex of a draw. On other devices the
+/// statistics are implementation-defined within bounds (helper invocations may be counted; a
+/// post-transform cache may skip or repeat vertex invocations), so there the test holds them
+/// to the bounds every conforming device meets.
 #[test]
 fn floors_do_the_work_they_claim() {
     use specchio::render::floors::Floor;
@@ -166,7 +172,14 @@ fn floors_do_the_work_they_claim() {
     };
     let mut r = Renderer::new(&gpu.device, s, &options).expect("renderer");
     let (six, _) = r.render_frame(0, 0.0, Readback::default()).expect("frame");
-    let six = six.fill_stats.expect("pipeline statistics on lavapipe");
+    let Some(six) = six.fill_stats else {
+        common::not_applicable("the floors' work counts", "no pipeline statistics");
+        drop(r);
+        gpu.finish();
+        return;
+    };
+    let exact = gpu.device.info.short_name == "lavapipe";
+    let texels = 6 * u64::from(size * size);
     let stats = |r: &mut Renderer, f| {
         let report = r.render_floor(f, 1, 0.0).expect("floor");
         report.fill_stats.expect("statistics")
@@ -177,11 +190,19 @@ fn floors_do_the_work_they_claim() {
         (0, 0)
     );
     let fill = stats(&mut r, Floor::Fill);
-    assert_eq!(fill.fragment_invocations, 6 * u64::from(size * size));
-    assert!((1..=18).contains(&fill.vertex_invocations), "{fill:?}");
     let geometry = stats(&mut r, Floor::Geometry);
-    assert_eq!(geometry.vertex_invocations, six.vertex_invocations);
+    // Rasterizer discard: no fragment anywhere.
     assert_eq!(geometry.fragment_invocations, 0);
+    if exact {
+        // One full-screen triangle per face, each texel shaded once.
+        assert_eq!(fill.fragment_invocations, texels);
+        assert!((1..=18).contains(&fill.vertex_invocations), "{fill:?}");
+        assert_eq!(geometry.vertex_invocations, six.vertex_invocations);
+    } else {
+        assert!(fill.fragment_invocations >= texels, "{fill:?}");
+        assert!(fill.vertex_invocations >= 1, "{fill:?}");
+        assert!(geometry.vertex_invocations >= 1, "{geometry:?}");
+    }
     // The scene did not move, but the cube was overwritten: all six faces again.
     let (after, _) = r.render_frame(2, 0.0, Readback::default()).expect("frame");
     assert_eq!(after.faces_rendered, 6);
