@@ -79,19 +79,10 @@ pub struct MirrorSpec {
     pub center: V3,
     pub radius: f64,
     pub animation: Option<AnimationSpec>,
-    pub lookup: Option<LookupSpec>,
+    /// Read as the scene's own lookup names (`Lookup`'s serde names, one list).
+    pub lookup: Option<super::Lookup>,
     pub distance_steps: Option<i64>,
     pub secant_steps: Option<i64>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum LookupSpec {
-    Plain,
-    Box,
-    RayQuery,
-    Distance,
-    DistanceExact,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -2,9 +2,9 @@
 
 use super::numbers::{num_text, time_text};
 use super::{position_at, sample_times, Ctx, R};
-use crate::scene::format::{LookupSpec, MirrorSpec, RoomSpec, WallsSpec};
+use crate::scene::format::{MirrorSpec, RoomSpec, WallsSpec};
 use crate::scene::{
-    Lookup, Mirror, Room, DEFAULT_DISTANCE_STEPS, DEFAULT_SECANT_STEPS, MAX_DISTANCE_STEPS,
+    Mirror, Room, DEFAULT_DISTANCE_STEPS, DEFAULT_SECANT_STEPS, MAX_DISTANCE_STEPS,
     MAX_SECANT_STEPS,
 };
 
@@ -93,13 +93,7 @@ impl Ctx<'_> {
             center,
             radius_m,
             animation,
-            lookup: match spec.lookup {
-                None | Some(LookupSpec::Plain) => Lookup::Plain,
-                Some(LookupSpec::Box) => Lookup::Box,
-                Some(LookupSpec::RayQuery) => Lookup::RayQuery,
-                Some(LookupSpec::Distance) => Lookup::Distance,
-                Some(LookupSpec::DistanceExact) => Lookup::DistanceExact,
-            },
+            lookup: spec.lookup.unwrap_or_default(),
             // Accepted whatever the lookup: `--lookup distance` may pick it for any scene.
             distance_steps: self.count(
                 "mirror.distance_steps",
