@@ -234,7 +234,10 @@ pub fn shot_with_keys(x: &impl Display, keys: &str, name: &str) -> (Scratch, Str
 
 /// A window test cannot check anything without `tool`: a [`common::skip`].
 fn missing(tool: &str, install: &str) {
-    common::skip("the window test", &format!("{tool} is not installed ({install})"));
+    common::skip(
+        "the window test",
+        &format!("{tool} is not installed ({install})"),
+    );
 }
 
 /// A private headless Wayland compositor (weston's headless backend), stopped on drop. It
