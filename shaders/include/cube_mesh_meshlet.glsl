@@ -32,10 +32,17 @@ layout(location = 3) flat out uint out_object[];
 // The meshlet's clip positions, for the triangle tests.
 shared vec4 clip_positions[MESHLET_MAX_VERTICES];
 
-// How far (pixels, per axis) the rasterizer's vertex positions may be from ours: it snaps to
-// 1/256 px (lavapipe; other rasterizers are as fine or finer) after its own f32 arithmetic.
-// A quarter of that margin would do; the rest is slack.
-const float SNAP_MARGIN_PX = 1.0 / 64.0;
+// The rasterizer's sub-pixel precision (VkPhysicalDeviceLimits::subPixelPrecisionBits: 8 on
+// lavapipe, as few as 4 on a conforming device), given when the pipeline is made: it snaps
+// vertex positions to 1 / 2^bits px.
+layout(constant_id = SPEC_SUB_PIXEL_BITS) const uint SUB_PIXEL_BITS = 8u;
+
+// How far (pixels, per axis) the rasterizer's vertex positions may be from ours: half a snap
+// step, after its own f32 arithmetic. Four steps: a quarter of that margin would do; the rest
+// is slack (1/64 px on lavapipe).
+float snap_margin_px() {
+    return 4.0 / float(1u << SUB_PIXEL_BITS);
+}
 
 // True when all three vertices are outside the same plane of the clip volume (-w <= x, y <= w;
 // reverse-Z 0 <= z <= w): clipping leaves nothing (layered_geom.glsl's test).
@@ -52,7 +59,7 @@ bool outside(vec4 a, vec4 b, vec4 c) {
 // True when the rasterizer is sure to find the triangle back-facing. Cube faces see the world
 // mirrored: front faces turn clockwise on screen (CUBE_FRONT), so in framebuffer coordinates
 // (y down) a back face has cross(b - a, c - a) < 0. It counts as back-facing here only if it
-// stays so when every vertex moves by SNAP_MARGIN_PX per axis, which changes each edge by up
+// stays so when every vertex moves by snap_margin_px() per axis, which changes each edge by up
 // to d = 2 margins per axis and the cross product by at most d (|e1|_1 + |e2|_1) + 2 d^2.
 // Triangles reaching behind the eye (w <= 0) are left to the clipper.
 bool back_facing(vec4 a, vec4 b, vec4 c, vec2 half_size_px) {
@@ -62,7 +69,7 @@ bool back_facing(vec4 a, vec4 b, vec4 c, vec2 half_size_px) {
     vec2 pa = a.xy / a.w * half_size_px;
     vec2 e1 = b.xy / b.w * half_size_px - pa;
     vec2 e2 = c.xy / c.w * half_size_px - pa;
-    float d = 2.0 * SNAP_MARGIN_PX;
+    float d = 2.0 * snap_margin_px();
     float slack = d * (abs(e1.x) + abs(e1.y) + abs(e2.x) + abs(e2.y)) + 2.0 * d * d;
     return e1.x * e2.y - e1.y * e2.x < -slack;
 }

@@ -130,14 +130,8 @@ impl Renderer {
 
     fn create_floor_pipelines(&self) -> Result<FloorPipelines, GpuError> {
         let layout = &self.pipelines.scene_layout;
-        let vertex = |spirv| ShaderStage {
-            stage: vk::ShaderStageFlags::VERTEX,
-            spirv,
-        };
-        let fragment = ShaderStage {
-            stage: vk::ShaderStageFlags::FRAGMENT,
-            spirv: crate::shaders::SCENE_FRAG,
-        };
+        let vertex = |spirv| ShaderStage::new(vk::ShaderStageFlags::VERTEX, spirv);
+        let fragment = ShaderStage::new(vk::ShaderStageFlags::FRAGMENT, crate::shaders::SCENE_FRAG);
         let (bindings, attributes) = super::pipelines::vertex_layout();
         // The fill floor makes its own vertices; the geometry floor draws the scene's.
         let make = |vertex_spirv, discard, with_vertices: bool, name| {

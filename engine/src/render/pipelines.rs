@@ -109,14 +109,8 @@ pub(crate) fn mirror_pipeline(
         layout,
         &GraphicsPipelineDesc {
             stages: &[
-                ShaderStage {
-                    stage: vk::ShaderStageFlags::VERTEX,
-                    spirv: crate::shaders::MIRROR_VERT,
-                },
-                ShaderStage {
-                    stage: vk::ShaderStageFlags::FRAGMENT,
-                    spirv: fragment,
-                },
+                ShaderStage::new(vk::ShaderStageFlags::VERTEX, crate::shaders::MIRROR_VERT),
+                ShaderStage::new(vk::ShaderStageFlags::FRAGMENT, fragment),
             ],
             vertex_bindings: &[],
             vertex_attributes: &[],
@@ -148,14 +142,8 @@ pub(super) fn create_pipelines(
     // The views use the plain vertex shader and RGBA16F. The direction pass lays down depth
     // only, then the lookup writes the mirror's directions in full float.
     let scene_stages = [
-        ShaderStage {
-            stage: vk::ShaderStageFlags::VERTEX,
-            spirv: crate::shaders::SCENE_VERT,
-        },
-        ShaderStage {
-            stage: vk::ShaderStageFlags::FRAGMENT,
-            spirv: crate::shaders::SCENE_FRAG,
-        },
+        ShaderStage::new(vk::ShaderStageFlags::VERTEX, crate::shaders::SCENE_VERT),
+        ShaderStage::new(vk::ShaderStageFlags::FRAGMENT, crate::shaders::SCENE_FRAG),
     ];
     let view = |color_format| SceneTargets {
         color_format,

@@ -39,6 +39,10 @@ pub struct DeviceInfo {
 pub struct DeviceLimits {
     /// Bits of sub-texel position a linear filter uses (its weights are that coarse).
     pub sub_texel_precision_bits: u32,
+    /// Bits of sub-pixel position the rasterizer snaps vertices to (at least 4). Records
+    /// written before it was recorded read as 0.
+    #[serde(default)]
+    pub sub_pixel_precision_bits: u32,
     pub max_image_dimension_cube: u32,
     pub max_image_dimension_2d: u32,
     pub max_image_array_layers: u32,
@@ -210,6 +214,7 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
         api_version: version_string(props.api_version),
         limits: DeviceLimits {
             sub_texel_precision_bits: props.limits.sub_texel_precision_bits,
+            sub_pixel_precision_bits: props.limits.sub_pixel_precision_bits,
             max_image_dimension_cube: props.limits.max_image_dimension_cube,
             max_image_dimension_2d: props.limits.max_image_dimension2_d,
             max_image_array_layers: props.limits.max_image_array_layers,

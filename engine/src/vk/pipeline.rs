@@ -71,11 +71,32 @@ impl Drop for PipelineLayout {
     }
 }
 
-/// A compiled shader stage: SPIR-V words embedded at build time.
+/// A compiled shader stage: SPIR-V words embedded at build time, and the values of its
+/// specialization constants (what only the device knows, such as its sub-pixel precision).
 #[derive(Clone, Copy)]
 pub struct ShaderStage<'a> {
     pub stage: vk::ShaderStageFlags,
     pub spirv: &'a [u32],
+    pub constants: &'a [SpecConstant],
+}
+
+impl<'a> ShaderStage<'a> {
+    /// A stage whose specialization constants keep their defaults.
+    pub const fn new(stage: vk::ShaderStageFlags, spirv: &'a [u32]) -> Self {
+        Self {
+            stage,
+            spirv,
+            constants: &[],
+        }
+    }
+}
+
+/// One specialization constant: its `constant_id` in the shader and a 32-bit value (a
+/// `uint`, `int` or `bool` constant).
+#[derive(Clone, Copy, Debug)]
+pub struct SpecConstant {
+    pub id: u32,
+    pub value: u32,
 }
 
 /// Fixed-function state of a graphics pipeline; viewport and scissor are dynamic.
@@ -164,15 +185,49 @@ impl Pipeline {
                 }
             }
         }
+        // Each stage's constants: map entries into its values' bytes, both alive until the
+        // pipeline is made.
+        let entries: Vec<Vec<vk::SpecializationMapEntry>> = desc
+            .stages
+            .iter()
+            .map(|s| {
+                (s.constants.iter().enumerate())
+                    .map(|(i, c)| vk::SpecializationMapEntry {
+                        constant_id: c.id,
+                        offset: (4 * i) as u32,
+                        size: 4,
+                    })
+                    .collect()
+            })
+            .collect();
+        let values: Vec<Vec<u8>> = (desc.stages.iter())
+            .map(|s| {
+                s.constants
+                    .iter()
+                    .flat_map(|c| c.value.to_ne_bytes())
+                    .collect()
+            })
+            .collect();
+        let specializations: Vec<vk::SpecializationInfo> = entries
+            .iter()
+            .zip(&values)
+            .map(|(e, v)| vk::SpecializationInfo::default().map_entries(e).data(v))
+            .collect();
         let stages: Vec<_> = desc
             .stages
             .iter()
             .zip(&modules)
-            .map(|(s, &m)| {
-                vk::PipelineShaderStageCreateInfo::default()
+            .zip(&specializations)
+            .map(|((s, &m), spec)| {
+                let info = vk::PipelineShaderStageCreateInfo::default()
                     .stage(s.stage)
                     .module(m)
-                    .name(c"main")
+                    .name(c"main");
+                if s.constants.is_empty() {
+                    info
+                } else {
+                    info.specialization_info(spec)
+                }
             })
             .collect();
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()

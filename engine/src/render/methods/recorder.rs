@@ -76,17 +76,26 @@ impl MethodContext<'_> {
         stages: &[Stage],
         name: &str,
     ) -> Result<Pipeline, GpuError> {
+        let stages: Vec<ShaderStage<'_>> = (stages.iter())
+            .map(|&(stage, spirv)| ShaderStage::new(stage, spirv))
+            .collect();
+        self.pipeline_of(layout, &stages, name)
+    }
+
+    /// [`Self::pipeline_with`] for stages that set specialization constants.
+    pub fn pipeline_of(
+        &self,
+        layout: &PipelineLayout,
+        stages: &[ShaderStage<'_>],
+        name: &str,
+    ) -> Result<Pipeline, GpuError> {
         let shader = if self.ids {
             crate::shaders::SCENE_ID_FRAG
         } else {
             crate::shaders::SCENE_FRAG
         };
-        let fragment = (vk::ShaderStageFlags::FRAGMENT, shader);
-        let stages: Vec<ShaderStage<'_>> = stages
-            .iter()
-            .chain([&fragment])
-            .map(|&(stage, spirv)| ShaderStage { stage, spirv })
-            .collect();
+        let fragment = ShaderStage::new(vk::ShaderStageFlags::FRAGMENT, shader);
+        let stages: Vec<ShaderStage<'_>> = stages.iter().copied().chain([fragment]).collect();
         crate::render::pipelines::scene_pipeline(
             self.device,
             layout,

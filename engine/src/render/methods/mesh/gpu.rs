@@ -8,6 +8,9 @@ use glam::Vec4;
 
 /// `TASK_MESHLETS`: meshlet draws one task workgroup culls (one invocation each).
 pub const TASK_MESHLETS: u32 = 128;
+/// `SPEC_SUB_PIXEL_BITS`: the mesh shader's specialization constant id for the device's
+/// `subPixelPrecisionBits`.
+pub const SPEC_SUB_PIXEL_BITS: u32 = 0;
 
 /// `Meshlet`: one meshlet in its mesh's object space.
 #[repr(C)]
@@ -85,9 +88,34 @@ mod tests {
             meshlets::MAX_TRIANGLES
         );
         assert_eq!(define("TASK_MESHLETS"), TASK_MESHLETS);
+        assert_eq!(define("SPEC_SUB_PIXEL_BITS"), SPEC_SUB_PIXEL_BITS);
         // A face index (0..6) fits its bits, and a draw index within a task workgroup the rest.
         let face_bits = define("MESH_FACE_BITS");
         assert!(6 <= 1 << face_bits && TASK_MESHLETS <= u32::MAX >> face_bits);
+    }
+
+    /// The `constant_id` of every specialization constant in a SPIR-V module: its
+    /// `OpDecorate %c SpecId N` instructions (opcode 71, decoration 1).
+    fn spec_ids(words: &[u32]) -> Vec<u32> {
+        let mut ids = Vec::new();
+        let mut at = 5; // past the header
+        while at < words.len() {
+            let (count, opcode) = ((words[at] >> 16) as usize, words[at] & 0xffff);
+            if opcode == 71 && count >= 4 && words[at + 2] == 1 {
+                ids.push(words[at + 3]);
+            }
+            at += count.max(1);
+        }
+        ids
+    }
+
+    /// Both mesh shaders take the device's sub-pixel bits under the id the method sets.
+    #[test]
+    fn the_mesh_shaders_read_the_sub_pixel_bits_the_method_gives() {
+        for spirv in [crate::shaders::CUBE_MESH_MESH, crate::shaders::CUBE_MESH_NARROW_MESH] {
+            assert_eq!(spec_ids(spirv), [SPEC_SUB_PIXEL_BITS]);
+        }
+        assert!(spec_ids(crate::shaders::CUBE_MESH_TASK).is_empty());
     }
 
     #[test]

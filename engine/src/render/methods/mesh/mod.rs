@@ -29,9 +29,9 @@ use super::{
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::{Device, Limit, OptionalFeatures};
 use crate::vk::memory::{Buffer, BufferDesc};
-use crate::vk::pipeline::{Pipeline, PipelineLayout};
+use crate::vk::pipeline::{Pipeline, PipelineLayout, ShaderStage, SpecConstant};
 use crate::vk::GpuError;
-use gpu::{MeshPush, MeshletDraw, TASK_MESHLETS};
+use gpu::{MeshPush, MeshletDraw, SPEC_SUB_PIXEL_BITS, TASK_MESHLETS};
 use library::{DrawableMeshlets, MeshletBuffers, MeshletLibrary};
 
 /// Task workgroups one draw call launches at most: the least `maxTaskWorkGroupCount[0]` the
@@ -191,12 +191,23 @@ impl MeshFill {
         } else {
             crate::shaders::CUBE_MESH_MESH
         };
-        let task = crate::shaders::CUBE_MESH_TASK;
-        let pipeline = ctx.pipeline_with(
+        // The mesh shader culls back faces with a margin of the rasterizer's snapping, whose
+        // step only the device knows.
+        let sub_pixel_bits = [SpecConstant {
+            id: SPEC_SUB_PIXEL_BITS,
+            value: device.info.limits.sub_pixel_precision_bits,
+        }];
+        let pipeline = ctx.pipeline_of(
             &layout,
             &[
-                (vk::ShaderStageFlags::TASK_EXT, task),
-                (vk::ShaderStageFlags::MESH_EXT, mesh),
+                ShaderStage::new(
+                    vk::ShaderStageFlags::TASK_EXT,
+                    crate::shaders::CUBE_MESH_TASK,
+                ),
+                ShaderStage {
+                    constants: &sub_pixel_bits,
+                    ..ShaderStage::new(vk::ShaderStageFlags::MESH_EXT, mesh)
+                },
             ],
             "cube pipeline (mesh)",
         )?;
