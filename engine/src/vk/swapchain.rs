@@ -82,7 +82,16 @@ impl Swapchain {
         let Some(extent) = choose_extent(&caps, desc.window_size) else {
             return Ok(None);
         };
-        let format = choose_format(&support.formats)?;
+        // The viewer blits into the images, so their format must take a blit destination
+        // (optional for swapchain formats in general; sRGB ones lack it on some GPUs).
+        let blittable = |format| {
+            // SAFETY: a query on the device's own physical device; no handles are created.
+            let props = unsafe {
+                (device.instance.raw).get_physical_device_format_properties(device.physical, format)
+            };
+            (props.optimal_tiling_features).contains(vk::FormatFeatureFlags::BLIT_DST)
+        };
+        let format = choose_format(&support.formats, blittable)?;
         let present_mode = choose_present_mode(&support.present_modes, desc.present);
         // The viewer blits into the images (TRANSFER_DST) and reads one back for screenshots.
         if !caps
@@ -278,15 +287,27 @@ fn is_srgb(format: vk::Format) -> bool {
     )
 }
 
-/// An 8-bit sRGB format when the surface offers one (the blit then encodes linear colours
-/// exactly as the PNG writer does), else the first format offered.
-fn choose_format(formats: &[vk::SurfaceFormatKHR]) -> Result<vk::SurfaceFormatKHR, GpuError> {
-    formats
-        .iter()
-        .find(|f| is_srgb(f.format) && f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR)
-        .or_else(|| formats.first())
-        .copied()
-        .ok_or_else(|| GpuError::Unsupported("the window's surface offers no format".into()))
+/// Of the formats the surface offers that can be blitted into, an 8-bit sRGB one when there
+/// is one (the blit then encodes linear colours exactly as the PNG writer does), else the
+/// first.
+fn choose_format(
+    formats: &[vk::SurfaceFormatKHR],
+    blittable: impl Fn(vk::Format) -> bool,
+) -> Result<vk::SurfaceFormatKHR, GpuError> {
+    let usable: Vec<&vk::SurfaceFormatKHR> =
+        formats.iter().filter(|f| blittable(f.format)).collect();
+    let srgb = |f: &&&vk::SurfaceFormatKHR| {
+        is_srgb(f.format) && f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR
+    };
+    (usable.iter().find(srgb).or_else(|| usable.first()))
+        .map(|&&f| f)
+        .ok_or_else(|| {
+            GpuError::Unsupported(format!(
+                "none of the window surface's {} format(s) can be blitted into \
+                 (VK_FORMAT_FEATURE_BLIT_DST_BIT), which the viewer needs",
+                formats.len()
+            ))
+        })
 }
 
 fn choose_present_mode(
@@ -350,10 +371,20 @@ mod tests {
             color_space: vk::ColorSpaceKHR::SRGB_NONLINEAR,
         };
         let offered = [f(vk::Format::B8G8R8A8_UNORM), f(vk::Format::B8G8R8A8_SRGB)];
+        let all = |_| true;
         assert_eq!(
-            choose_format(&offered).unwrap().format,
+            choose_format(&offered, all).unwrap().format,
             vk::Format::B8G8R8A8_SRGB
         );
-        assert!(choose_format(&[]).is_err());
+        assert!(choose_format(&[], all).is_err());
+        // An sRGB format that cannot be blitted into is passed over, and without any format
+        // that can, the viewer is refused with the reason.
+        let unorm_only = |format| format == vk::Format::B8G8R8A8_UNORM;
+        assert_eq!(
+            choose_format(&offered, unorm_only).unwrap().format,
+            vk::Format::B8G8R8A8_UNORM
+        );
+        let error = choose_format(&offered, |_| false).unwrap_err().to_string();
+        assert!(error.contains("BLIT_DST"), "{error}");
     }
 }
