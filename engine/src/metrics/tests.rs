@@ -141,13 +141,95 @@ fn nan_and_inf_pixels_are_counted_and_excluded() {
     assert_eq!(c.compared, [false, false, true, false]);
 }
 
+/// FLIP of two uniform colours, from its definition (Andersson et al., "FLIP: A Difference
+/// Evaluator for Alternating Images", HPG 2020, section 4), independently of the `nv-flip` code:
+/// a uniform image has no edges or points, so the feature difference is 0 and FLIP is the
+/// colour difference alone; the CSF filters are normalised, so they leave a uniform image as it
+/// is. The colour pipeline: linear sRGB to CIELAB (D65 white), the Hunt adjustment (a and b
+/// scaled by 0.01 L), the HyAB distance |dL| + |d(a, b)|, raised to q_c = 0.7, then mapped to
+/// [0, 1]: linearly to p_t = 0.95 at the knee p_c = 0.4 of the largest distance (Hunt-adjusted
+/// green to blue), linearly from there to 1 at that distance. `a` and `b` are linear RGB.
+fn flip_of_uniform(a: [f64; 3], b: [f64; 3]) -> f64 {
+    const Q_C: f64 = 0.7;
+    const P_C: f64 = 0.4;
+    const P_T: f64 = 0.95;
+    // Linear sRGB to XYZ (IEC 61966-2-1); white (1, 1, 1) maps to the row sums, D65.
+    const M: [[f64; 3]; 3] = [
+        [0.412_456_4, 0.357_576_1, 0.180_437_5],
+        [0.212_672_9, 0.715_152_2, 0.072_175_0],
+        [0.019_333_9, 0.119_192_0, 0.950_304_1],
+    ];
+    let hunt_lab = |rgb: [f64; 3]| {
+        let xyz: [f64; 3] = std::array::from_fn(|i| {
+            (0..3).map(|j| M[i][j] * rgb[j]).sum::<f64>() / M[i].iter().sum::<f64>()
+        });
+        let delta: f64 = 6.0 / 29.0;
+        let f = |t: f64| {
+            if t > delta.powi(3) {
+                t.cbrt()
+            } else {
+                t / (3.0 * delta * delta) + 4.0 / 29.0
+            }
+        };
+        let [fx, fy, fz] = xyz.map(f);
+        let l = 116.0 * fy - 16.0;
+        [
+            l,
+            0.01 * l * 500.0 * (fx - fy),
+            0.01 * l * 200.0 * (fy - fz),
+        ]
+    };
+    let hyab = |p: [f64; 3], q: [f64; 3]| (p[0] - q[0]).abs() + (p[1] - q[1]).hypot(p[2] - q[2]);
+    let cmax = hyab(hunt_lab([0.0, 1.0, 0.0]), hunt_lab([0.0, 0.0, 1.0])).powf(Q_C);
+    let knee = P_C * cmax;
+    let e = hyab(hunt_lab(a), hunt_lab(b)).powf(Q_C);
+    if e < knee {
+        e * P_T / knee
+    } else {
+        P_T + (e - knee) / (cmax - knee) * (1.0 - P_T)
+    }
+}
+
+/// Uniform pairs whose FLIP the definition gives ([`flip_of_uniform`]): black against white
+/// (HyAB 100, above the knee: 0.967), red against green (chroma too: 0.987) and black against
+/// the dark grey of sRGB byte 64 (below the knee: 0.58). Every pixel, the mean and the p99 are
+/// that value. Colours are 8-bit exact (0, 64 and 255 after the sRGB encoding `compare`
+/// applies), so FLIP sees exactly the colours the definition is evaluated at.
+/// Tolerance 2e-4: FLIP runs in f32 (~1e-6 from its colour conversions), and its feature
+/// filters' weights cancel on a uniform image only to f32 rounding (a residue r ~ 1e-7 in the
+/// edge and point responses); FLIP raises the colour term c to 1 - sqrt(r / sqrt 2) ~
+/// 1 - 3e-4, which moves it by c |ln c| 3e-4: at most 1e-4 here (0.58 |ln 0.58| 3e-4). A
+/// wrong constant moves them by more: q_c = 0.71 instead of 0.7 by 4e-4, p_t = 0.96 by 7e-3.
 #[test]
-fn flip_of_black_against_white_is_high_and_of_an_image_against_itself_zero() {
-    let black = image(32, 32, |_, _| [0.0, 0.0, 0.0, 1.0]);
-    let white = image(32, 32, |_, _| [1.0, 1.0, 1.0, 1.0]);
-    let c = compare(&black, &white, None).unwrap();
-    assert!(c.flip_mean.unwrap() > 0.5, "{:?}", c.flip_mean);
-    assert!(c.flip_p99.unwrap() <= 1.0);
+fn flip_of_uniform_colours_is_their_colour_difference_and_of_an_image_against_itself_zero() {
+    // The linear value of sRGB byte 64 (the sRGB decoding FLIP applies to its 8-bit input).
+    let grey = ((64.0 / 255.0 + 0.055) / 1.055f64).powf(2.4);
+    for (a, b) in [
+        ([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]),
+        ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, 0.0], [grey, grey, grey]),
+    ] {
+        let expected = flip_of_uniform(a, b);
+        let uniform =
+            |c: [f64; 3]| image(32, 32, |_, _| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0]);
+        let c = compare(&uniform(a), &uniform(b), None).unwrap();
+        let worst = c
+            .flip_map
+            .iter()
+            .map(|&v| (f64::from(v) - expected).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 2e-4,
+            "{a:?} vs {b:?}: a pixel off by {worst}, expected {expected}"
+        );
+        for (name, v) in [("mean", c.flip_mean), ("p99", c.flip_p99)] {
+            let v = v.unwrap();
+            assert!(
+                (v - expected).abs() < 2e-4,
+                "{a:?} vs {b:?}: {name} {v}, expected {expected}"
+            );
+        }
+    }
     let g = gradient(32, 32);
     assert!(flip_map(&g, &g).iter().all(|&v| v == 0.0));
 }

@@ -112,7 +112,10 @@ mod tests {
     /// Both mesh shaders take the device's sub-pixel bits under the id the method sets.
     #[test]
     fn the_mesh_shaders_read_the_sub_pixel_bits_the_method_gives() {
-        for spirv in [crate::shaders::CUBE_MESH_MESH, crate::shaders::CUBE_MESH_NARROW_MESH] {
+        for spirv in [
+            crate::shaders::CUBE_MESH_MESH,
+            crate::shaders::CUBE_MESH_NARROW_MESH,
+        ] {
             assert_eq!(spec_ids(spirv), [SPEC_SUB_PIXEL_BITS]);
         }
         assert!(spec_ids(crate::shaders::CUBE_MESH_TASK).is_empty());
