@@ -1,6 +1,7 @@
 //! Compiles every `shaders/NAME.STAGE.glsl` to SPIR-V with glslang and embeds the words.
 //!
-//! Generates `$OUT_DIR/shaders.rs` with one `pub const NAME_STAGE: &[u32]` per shader, and
+//! Generates `$OUT_DIR/shaders.rs` with one `pub const NAME_STAGE: &[u32]` per shader (or per
+//! module its `// build:` line names, each compiled with its own define), and
 //! `SPIRV_MEMBER_OFFSETS`: (struct, member, byte offset) read back from the SPIR-V, which a
 //! test compares with the `#[repr(C)]` Rust mirrors of `shaders/include/shared.glsl`.
 //! A compile error fails the build and prints glslang's message with file and line.
@@ -40,6 +41,41 @@ fn stage_of(name: &str) -> Option<ShaderStage> {
         "task" => ShaderStage::Task,
         _ => return None,
     })
+}
+
+/// One module built from a source file: its name (None: the file's own) and its define.
+type Build = (Option<String>, Option<String>);
+
+/// What one source file is built into: its `// build: MODULE=DEFINE ...` line, where a shader
+/// that is one technique with several outputs (a lookup's colour and its direction) names each
+/// module it makes and the define that selects its output; the file itself (no define)
+/// without such a line. A module `mirror_direction` of `mirror.frag.glsl` becomes the
+/// constant `MIRROR_DIRECTION_FRAG`.
+fn variants(text: &str) -> Result<Vec<Build>, String> {
+    let Some(line) = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("// build:"))
+    else {
+        return Ok(vec![(None, None)]);
+    };
+    let mut builds = Vec::new();
+    for item in line.split_whitespace() {
+        let (module, define) = item
+            .split_once('=')
+            .ok_or_else(|| format!("`{item}` in its `// build:` line is not MODULE=DEFINE"))?;
+        let word =
+            |w: &str| !w.is_empty() && w.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !word(module) || !word(define) {
+            return Err(format!(
+                "`{item}` in its `// build:` line: letters, digits and _ only"
+            ));
+        }
+        builds.push((Some(module.to_owned()), Some(define.to_owned())));
+    }
+    if builds.is_empty() {
+        return Err("its `// build:` line names no module".into());
+    }
+    Ok(builds)
 }
 
 fn main() {
@@ -83,36 +119,56 @@ fn main() {
             continue;
         };
         let text = std::fs::read_to_string(file).expect("shader readable");
-        let source = ShaderSource::from(text);
-        let mut includes = Includes {
-            dir: include_dir.clone(),
-        };
-        let compiled = ShaderInput::new(
-            &source,
-            stage,
-            &options,
-            None::<&[(&str, Option<&str>)]>,
-            Some(&mut includes),
-        )
-        .and_then(|input| compiler.create_shader(input))
-        .and_then(|shader| shader.compile());
-        match compiled {
-            Ok(words) => {
-                read_offsets(&words, &mut offsets);
-                let ident = name
-                    .trim_end_matches(".glsl")
-                    .replace(['.', '-'], "_")
-                    .to_uppercase();
-                let _ = writeln!(
-                    out,
-                    "/// SPIR-V of `shaders/{name}`.\npub const {ident}: &[u32] = &{words:?};"
-                );
+        let stage_name = name
+            .trim_end_matches(".glsl")
+            .rsplit('.')
+            .next()
+            .unwrap_or("");
+        let builds = match variants(&text) {
+            Ok(v) => v,
+            Err(why) => {
+                failures.push(format!("shaders/{name}: {why}"));
+                continue;
             }
-            // glslang names the top file "0"; put its real path in front of the line number.
-            Err(e) => failures.push(
-                e.to_string()
-                    .replace("ERROR: 0:", &format!("ERROR: shaders/{name}:")),
-            ),
+        };
+        let source = ShaderSource::from(text);
+        for (module, define) in builds {
+            let mut includes = Includes {
+                dir: include_dir.clone(),
+            };
+            let defines = define.as_deref().map(|d| [(d, None::<&str>)]);
+            let compiled = ShaderInput::new(
+                &source,
+                stage,
+                &options,
+                defines.as_ref().map(|d| &d[..]),
+                Some(&mut includes),
+            )
+            .and_then(|input| compiler.create_shader(input))
+            .and_then(|shader| shader.compile());
+            let base = name.split('.').next().unwrap_or(&name);
+            let module = module.unwrap_or_else(|| base.to_owned());
+            let built = match &define {
+                Some(d) => format!("`shaders/{name}` with `{d}` defined"),
+                None => format!("`shaders/{name}`"),
+            };
+            match compiled {
+                Ok(words) => {
+                    read_offsets(&words, &mut offsets);
+                    let ident = format!("{module}_{stage_name}")
+                        .replace(['.', '-'], "_")
+                        .to_uppercase();
+                    let _ = writeln!(
+                        out,
+                        "/// SPIR-V of {built}.\npub const {ident}: &[u32] = &{words:?};"
+                    );
+                }
+                // glslang names the top file "0"; put its real path in front of the line number.
+                Err(e) => failures.push(
+                    e.to_string()
+                        .replace("ERROR: 0:", &format!("ERROR: shaders/{name} ({built}):")),
+                ),
+            }
         }
     }
     if !failures.is_empty() {

@@ -1,6 +1,13 @@
 #version 460
-// mirror_ray_query.frag - the ray-query lookup's colour: the reflected pixel-centre ray traced
-// through the scene (ray_query.glsl); no cube map.
+// mirror_ray_query.frag - the ray-query lookup's mirror: the reflected pixel-centre ray is
+// traced through the scene (ray_query.glsl); no cube map.
+//
+// One technique, two outputs (engine/build.rs builds both from this file):
+// - OUTPUT_COLOUR: the colour of the surface the ray meets, shaded as the reference does;
+// - OUTPUT_DIRECTION: the direction from the mirror's centre (the cube's centre) to the point
+//   the ray meets, as the reference's direction layer; zero where it meets nothing. The
+//   angular error against the reference is then float rounding only.
+// build: mirror_ray_query=OUTPUT_COLOUR mirror_ray_query_direction=OUTPUT_DIRECTION
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_nonuniform_qualifier : require
 #include "shared.glsl"
@@ -11,7 +18,7 @@ PUSH_CONSTANTS;
 #include "materials.glsl"
 #include "ray_query.glsl"
 
-layout(location = 0) out vec4 out_color;
+layout(location = 0) out vec4 out_value;
 
 void main() {
     ViewData view = views[push.view_index];
@@ -20,6 +27,11 @@ void main() {
     if (!mirror_reflection(view, frame, hit, reflection)) {
         discard;
     }
-    out_color = vec4(reflection.colour, 1.0);
+#ifdef OUTPUT_COLOUR
+    out_value = vec4(reflection.colour, 1.0);
+#else
+    vec3 d = reflection.found ? normalize(reflection.point - frame.mirror.xyz) : vec3(0.0);
+    out_value = vec4(d, 1.0);
+#endif
     gl_FragDepth = mirror_depth(view, hit);
 }

@@ -1,7 +1,7 @@
 // distance_search.glsl - the distance lookup: the reflected ray searched through the cube's
 // depth buffer, after Szirmay-Kalos et al. 2005 ("Approximate ray-tracing on the GPU with
 // distance impostors") and GPU Gems 3 ch. 17 ("Robust multiple specular reflections and
-// refractions"). Shared by mirror_distance.frag (colour) and mirror_distance_direction.frag.
+// refractions"). Shared by mirror_distance.frag's two outputs (colour, direction) and distance-exact's.
 //
 // The cube map was rendered from its centre c (the mirror's centre), so each texel also knows
 // how far from c the surface it shows lies: its depth. The reflected ray starts on the mirror

@@ -1,5 +1,6 @@
 // mirror.glsl - the analytic mirror seen through one pixel: shared by the colour pass
-// (mirror.frag) and the pass that writes the lookup direction (mirror_direction.frag).
+// (mirror.frag built with OUTPUT_COLOUR) and the pass that writes the lookup direction
+// (OUTPUT_DIRECTION).
 #ifndef MIRROR_GLSL
 #define MIRROR_GLSL
 

@@ -1,6 +1,6 @@
 // sensor_ray.glsl - what the sensor's reflected ray meets, through the cube: its range and
 // the id of the drawable it meets. Shared by the two halves of the sensor's ray map
-// (mirror_ray_origin.frag writes the range, mirror_ray_direction.frag the id), which must
+// (mirror_ray.frag: its origin half writes the range, its direction half the id), which must
 // agree on every pixel, so both make the same search.
 //
 // The range comes from the distance lookup's search through the cube's depth

@@ -34,9 +34,9 @@ struct FrameData {
 // FrameData.flags.y: how the mirror turns its reflected ray into a cube-map direction.
 #define LOOKUP_PLAIN 0u // the reflected direction itself (the thesis)
 #define LOOKUP_BOX 1u   // from the cube's centre to where the reflected ray leaves the room box
-#define LOOKUP_RAY_QUERY 2u // no cube: the reflected ray is traced (mirror_ray_query*.frag)
-#define LOOKUP_DISTANCE 3u  // the reflected ray searched through the cube's depth (mirror_distance*.frag)
-#define LOOKUP_DISTANCE_EXACT 4u // that search, the rays it cannot resolve traced (mirror_distance_exact*.frag)
+#define LOOKUP_RAY_QUERY 2u // no cube: the reflected ray is traced (mirror_ray_query.frag)
+#define LOOKUP_DISTANCE 3u  // the reflected ray searched through the cube's depth (mirror_distance.frag)
+#define LOOKUP_DISTANCE_EXACT 4u // that search, the rays it cannot resolve traced (mirror_distance_exact.frag)
 
 // distance-exact's tally (trace_tally.glsl, render/lookups/tally.rs): a uvec2 (fragments,
 // traced) per view and pass, at view_index * TALLY_PASSES + the pass.

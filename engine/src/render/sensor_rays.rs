@@ -1,6 +1,6 @@
 //! The sensor's ray map on the GPU: two passes over the sensor view that write, per mirror
-//! pixel, the sphere hit with the range (`mirror_ray_origin.frag.glsl`) and the reflected
-//! direction with the id of what the ray meets (`mirror_ray_direction.frag.glsl`). Range and
+//! pixel, the sphere hit with the range (`mirror_ray.frag.glsl` built as `mirror_ray_origin`) and the reflected
+//! direction with the id of what the ray meets (built as `mirror_ray_direction`). Range and
 //! id come through the cube (`shaders/include/sensor_ray.glsl`): the distance lookup's search
 //! along the reflected ray through the cube's depth, and the id cube's texel where it lands.
 //! They depend on no lookup (the ray is the same whatever the cube lookup does with it), so

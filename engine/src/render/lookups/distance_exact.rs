@@ -15,7 +15,7 @@
 //! nothing hidden is traced too, which costs time, not accuracy.
 //!
 //! Set 1: the colour cube and its depth at bindings 0 and 1, as `distance`; the traced scene
-//! at 2..=5 (`shaders/mirror_distance_exact*.frag.glsl`); at 6 the tally of the rays traced
+//! at 2..=5 (`shaders/mirror_distance_exact.frag.glsl`, both outputs); at 6 the tally of the rays traced
 //! ([`super::tally`]), reported per frame.
 
 use ash::vk;
