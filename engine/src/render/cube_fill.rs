@@ -2,7 +2,7 @@
 
 use ash::vk;
 
-use super::draw::{barrier, Sync, COLOR_OUT, DEPTH_RW, NOTHING, SAMPLED};
+use super::draw::{barrier, Sync, COLOR_OUT, DEPTH_RW, SAMPLED};
 use crate::scene::camera::{Frustum, ViewBasis};
 
 use super::methods::{CubeLayout, CubePlan, CubeRecorder};
@@ -237,13 +237,15 @@ impl Renderer {
         );
         image_barriers(dev, cmd, &[mip0_to_src]);
         for m in 1..levels {
-            // The dirty faces' level m is overwritten whole: its old contents can go.
+            // The dirty faces' level m is overwritten whole: its old contents can go, but not
+            // before the last frame's mirror has sampled them (a write after read: with
+            // frames in flight that frame may still be drawing).
             image_barriers(
                 dev,
                 cmd,
                 &per_face(
                     m,
-                    (vk::ImageLayout::UNDEFINED, NOTHING),
+                    (vk::ImageLayout::UNDEFINED, SAMPLED),
                     (vk::ImageLayout::TRANSFER_DST_OPTIMAL, blit_write),
                 ),
             );
