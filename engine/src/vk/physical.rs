@@ -39,9 +39,8 @@ pub struct DeviceInfo {
 pub struct DeviceLimits {
     /// Bits of sub-texel position a linear filter uses (its weights are that coarse).
     pub sub_texel_precision_bits: u32,
-    /// Bits of sub-pixel position the rasterizer snaps vertices to (at least 4). Records
-    /// written before it was recorded read as 0.
-    #[serde(default)]
+    /// Bits of sub-pixel position the rasterizer snaps vertices to (at least 4; lavapipe 8,
+    /// SwiftShader 4).
     pub sub_pixel_precision_bits: u32,
     pub max_image_dimension_cube: u32,
     pub max_image_dimension_2d: u32,
