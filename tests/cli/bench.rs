@@ -1,11 +1,14 @@
 //! The benchmark's regression gate as CI runs it: an identical baseline passes, a worsened one
 //! fails and names the case.
 
+mod bench_drivers;
+mod bench_record;
 mod bench_tradeoff;
 #[path = "../common/mod.rs"]
 mod common;
 
-use bench_tradeoff::{check_plot, check_tradeoff};
+use bench_record::check_record;
+use bench_tradeoff::check_plot;
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -52,25 +55,30 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     let json = common::temp_dir("base.json");
     let csv = common::temp_dir("base.csv");
     let svg = common::temp_dir("plot.svg");
-    let run = specchio(&[
-        "bench",
-        "--quick",
-        "--methods",
-        "six-pass,instanced",
-        "--json",
-        json.to_str().unwrap(),
-        "--csv",
-        csv.to_str().unwrap(),
-        "--plot",
-        svg.to_str().unwrap(),
-    ]);
-    assert_ok(&run);
+    // Run with its peak memory measured from outside (wait4), to check the record's own.
+    let mut command = Command::new(env!("CARGO_BIN_EXE_specchio"));
+    command
+        .args([
+            "bench",
+            "--quick",
+            "--methods",
+            "six-pass,instanced",
+            "--json",
+            json.to_str().unwrap(),
+            "--csv",
+            csv.to_str().unwrap(),
+            "--plot",
+            svg.to_str().unwrap(),
+        ])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."));
+    let run = common::run_measured(command);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
     // The header, two scenes x two methods x two lookups, and two scenes x seven rungs.
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), 1 + 8 + 14);
     assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 14);
     check_plot(&std::fs::read_to_string(&svg).unwrap());
-    check_record(&read_json(&json));
+    check_record(&read_json(&json), run.peak_bytes);
 
     // The same run against itself: counters are deterministic.
     let same = specchio(&[
@@ -166,59 +174,6 @@ fn the_committed_quick_baseline_matches() {
     );
 }
 
-/// What one quick run's JSON must hold besides the gate's rows (issue: speed against error).
-fn check_record(r: &serde_json::Value) {
-    let rows = |k: &str| {
-        r[k].as_array()
-            .unwrap_or_else(|| panic!("`{k}` array"))
-            .clone()
-    };
-    // Timing rows: 2 scenes x 2 methods; floors: 2 scenes x 3.
-    assert_eq!(rows("results").len(), 4);
-    assert_eq!(rows("floors").len(), 6);
-    for f in rows("floors") {
-        assert!(f["wall_ms"]["median"].as_f64().unwrap() > 0.0);
-    }
-    // The fill floor shades every texel once: 6 faces x 64² in an update.
-    let fill = rows("floors")
-        .into_iter()
-        .find(|f| f["floor"] == "fill")
-        .unwrap();
-    assert_eq!(fill["fill_stats"]["fragment_invocations"], 6 * 64 * 64);
-    for row in rows("results") {
-        assert!(row["efficiency"]["vs_geometry_plus_fill"].as_f64().unwrap() > 0.0);
-    }
-    // Accuracy: per scene and lookup; the methods agree; box is better than plain.
-    let acc = rows("accuracy");
-    assert_eq!(acc.len(), 4);
-    for a in &acc {
-        assert_eq!(a["methods_identical"], true);
-        assert_eq!(a["non_finite_pixels"], 0);
-    }
-    let flip = |lookup: &str| {
-        acc.iter()
-            .find(|a| a["lookup"] == lookup && a["scene"] == "scenes/thesis-room.toml")
-            .unwrap()["flip_mean"]
-            .as_f64()
-            .unwrap()
-    };
-    assert!(flip("box") < flip("plain"));
-    assert_eq!(rows("speed_vs_error").len(), 8);
-    // Both quick scenes move: incremental against full, frame by frame.
-    let dynamic = rows("dynamic");
-    assert_eq!(dynamic.len(), 2);
-    let thesis = &dynamic[0];
-    assert!(thesis["frames"].as_array().unwrap().len() >= 4);
-    // One small ball moves in the thesis's room: fewer faces than a full update.
-    assert!(thesis["faces_incremental_median"].as_f64().unwrap() < 6.0);
-    check_tradeoff(r);
-    // Provenance.
-    assert!(r["peak_rss_bytes"].as_u64().unwrap() > 0);
-    assert!(r["command"].as_str().unwrap().contains("bench"));
-    assert!(r["device"]["driver_info"].is_string());
-    assert!(r["settings"]["cube_sizes"] == serde_json::json!([64]));
-}
-
 /// `--format bmf` prints Bencher Metric Format on stdout (the answer and tables on stderr) and
 /// `--bmf FILE` writes the same document: one benchmark per scene, method or rung, face size
 /// and device, with the documented measures (the schema itself is checked in `bench::bmf`).
@@ -299,13 +254,30 @@ fn bmf_format_and_file_carry_the_same_benchmarks() {
 /// bad options fail before running, naming the option, and write nothing.
 #[test]
 fn github_format_and_bad_options() {
-    let run = lean_quick(&["--format", "github"]);
+    let record_file = common::temp_dir("github.json");
+    let run = lean_quick(&[
+        "--format",
+        "github",
+        "--json",
+        record_file.to_str().unwrap(),
+    ]);
     assert_ok(&run);
     let array: serde_json::Value = serde_json::from_slice(&run.stdout).expect("stdout is JSON");
     let array = array.as_array().unwrap();
     assert_eq!(array.len(), 2, "one row per scene: {array:?}");
-    assert_eq!(array[0]["unit"], "ms");
-    assert!(array[0]["value"].as_f64().unwrap() > 0.0);
+    // Each entry is its case's median update as the same run's JSON record holds it.
+    let record = read_json(&record_file);
+    let results = record["results"].as_array().unwrap();
+    assert_eq!(results.len(), 2);
+    for (entry, row) in array.iter().zip(results) {
+        let name = format!(
+            "{} / six-pass / 64² cube update",
+            row["scene"].as_str().unwrap()
+        );
+        assert_eq!(entry["name"], name.as_str());
+        assert_eq!(entry["unit"], "ms");
+        assert_eq!(entry["value"], row["wall_ms"]["median"], "{name}");
+    }
     assert!(String::from_utf8_lossy(&run.stderr).contains("median ms"));
 
     // --threads reaches lavapipe through LP_NUM_THREADS and is recorded.
@@ -529,103 +501,6 @@ fn a_validation_message_fails_the_bench_without_output() {
         "{stderr}"
     );
     assert!(!json.exists(), "a failed run wrote {}", json.display());
-}
-
-/// On SwiftShader (no pipeline statistics) the work counters are absent, never zero, in the
-/// JSON and the CSV; and a baseline recorded on lavapipe is refused before the run, naming
-/// both drivers.
-#[test]
-fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    if !root
-        .join(".drivers/swiftshader/vk_swiftshader_icd.json")
-        .exists()
-    {
-        eprintln!("SwiftShader is not provided here: nothing to check");
-        return;
-    }
-    let json = common::temp_dir("swiftshader.json");
-    let csv = common::temp_dir("swiftshader.csv");
-    // With the trade-off's rungs (their cost only): distance-exact and ray-query cannot run
-    // there.
-    let out = specchio(&[
-        "bench",
-        "--quick",
-        "--methods",
-        "six-pass",
-        "--no-accuracy",
-        "--no-dynamic",
-        "--no-floors",
-        "--device",
-        "swiftshader",
-        "--json",
-        json.to_str().unwrap(),
-        "--csv",
-        csv.to_str().unwrap(),
-    ]);
-    assert_ok(&out);
-    let record = read_json(&json);
-    let not_run = &record["rungs_not_run"];
-    assert_eq!(not_run.as_array().unwrap().len(), 2, "{not_run}");
-    assert_eq!(not_run[0]["rung"], "distance-exact");
-    assert_eq!(not_run[1]["rung"], "ray-query");
-    for n in not_run.as_array().unwrap() {
-        assert!(n["reason"].as_str().unwrap().contains("ray"), "{n}");
-    }
-    let rungs = record["tradeoff"].as_array().expect("tradeoff");
-    // Two scenes, every rung but distance-exact and ray-query.
-    assert_eq!(rungs.len(), 2 * 5);
-    for t in rungs {
-        assert_eq!(t["work"]["faces_rendered"], 30);
-        assert!(t["work"]["sensor_fragment_invocations"].is_null(), "{t}");
-        assert!(t["sensor"].is_null() && t["pareto"].is_null());
-    }
-    let refused = specchio(&[
-        "bench",
-        "--quick",
-        "--no-accuracy",
-        "--device",
-        "swiftshader",
-        "--rungs",
-        "ray-query",
-    ]);
-    let said = String::from_utf8_lossy(&refused.stderr);
-    assert_eq!(refused.status.code(), Some(1), "{said}");
-    assert!(
-        said.contains("--rungs ray-query: the device lacks"),
-        "{said}"
-    );
-    for r in record["results"].as_array().expect("results") {
-        for counter in ["vertex_invocations", "fragment_invocations"] {
-            assert!(r["work"][counter].is_null(), "{counter}: {}", r["work"]);
-            assert!(r["fill_stats"].is_null());
-        }
-        assert!(r["work"]["faces_rendered"].as_u64().unwrap() > 0);
-    }
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
-    let column = header
-        .iter()
-        .position(|c| *c == "vertex_invocations")
-        .unwrap();
-    for line in text.lines().skip(1) {
-        assert_eq!(line.split(',').nth(column), Some(""), "{line}");
-    }
-    let refused = lean_quick(&[
-        "--device",
-        "swiftshader",
-        "--baseline",
-        "bench/baselines/quick.json",
-    ]);
-    let said = String::from_utf8_lossy(&refused.stderr);
-    assert!(!refused.status.success());
-    assert!(
-        said.contains("llvmpipe") && said.contains("SwiftShader") && !said.contains("timed"),
-        "{said}"
-    );
-    for f in [json, csv] {
-        let _ = std::fs::remove_file(f);
-    }
 }
 
 /// A report file named like one of the run's inputs (a scene, the baseline) is refused before

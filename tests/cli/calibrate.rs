@@ -5,8 +5,8 @@
 use std::path::Path;
 use std::process::Command;
 
-use specchio::sensor::central::export;
 use specchio::sensor::central::record::{CalibrationRecord, CheckPoints};
+use specchio::sensor::central::{export, folder};
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -84,10 +84,72 @@ fn the_exports_parse_back_to_the_recorded_models() {
         (json.ss.len(), json.invpol.len())
     );
     assert_eq!([ocam.width, ocam.height], size);
-    // The residual image holds the per-pixel angles the summary was taken from.
-    assert!(record.omnidir.residual_deg.max > 0.0 && record.ocamcalib.residual_deg.max > 0.0);
+    // Each residual image holds the per-pixel angles its summary was taken from: the summary
+    // and the pixel counts recomputed from the image (A = 1 on the mirror, G = 1 where the
+    // model has no ray, R the angle) agree with calibration.json. The image stores the angles
+    // as f32, so a mean, p99 or max read from it is the recorded one to f32 rounding (the
+    // rounding is monotonic: the p99 and max are the same pixels' values), 1e-6 relative.
+    let mut mirror = Vec::new();
+    for (file, model, recorded_without) in [
+        (
+            &record.omnidir.residual_image,
+            record.omnidir.residual_deg,
+            record.omnidir.pixels_without_ray,
+        ),
+        (
+            &record.ocamcalib.residual_image,
+            record.ocamcalib.residual_deg,
+            record.ocamcalib.pixels_without_ray,
+        ),
+    ] {
+        let image = specchio::metrics::read_exr(&out.join(file)).unwrap();
+        assert_eq!([image.width, image.height], size, "{file}");
+        let on_mirror: Vec<&[f32; 4]> = image.pixels.iter().filter(|p| p[3] == 1.0).collect();
+        assert_eq!(on_mirror.len(), record.mirror_pixels, "{file}");
+        let without = on_mirror.iter().filter(|p| p[1] == 1.0).count();
+        let mut degrees: Vec<f64> = on_mirror
+            .iter()
+            .filter(|p| p[1] != 1.0)
+            .map(|p| f64::from(p[0]))
+            .collect();
+        degrees.sort_by(f64::total_cmp);
+        let n = degrees.len();
+        let mean = degrees.iter().sum::<f64>() / n as f64;
+        let p99 = degrees[(0.99 * n as f64).ceil() as usize - 1];
+        let max = degrees[n - 1];
+        for (what, recorded, from_image) in [
+            ("mean", model.mean, mean),
+            ("p99", model.p99, p99),
+            ("max", model.max, max),
+        ] {
+            assert!(
+                (recorded - from_image).abs() <= 1e-6 * recorded,
+                "{file} {what}: {recorded} recorded, {from_image} in the image"
+            );
+        }
+        assert_eq!(without, recorded_without, "{file}");
+        mirror = image.pixels.iter().map(|p| p[3] == 1.0).collect();
+    }
+    // The check points: for every CHECK_STRIDE-th pixel in rows and columns (from half a
+    // stride) that the residual images mark as mirror, one point at each distance, in order.
+    let stride = folder::CHECK_STRIDE;
+    let expected: Vec<([u32; 2], f64)> = (stride / 2..size[1])
+        .step_by(stride as usize)
+        .flat_map(|y| {
+            (stride / 2..size[0])
+                .step_by(stride as usize)
+                .map(move |x| [x, y])
+        })
+        .filter(|&[x, y]| mirror[(y * size[0] + x) as usize])
+        .flat_map(|pixel| folder::CHECK_DISTANCES_M.map(|d| (pixel, d)))
+        .collect();
     let points: CheckPoints = serde_json::from_str(&read("check_points.json")).unwrap();
-    assert!(points.points.len() > 1000, "{}", points.points.len());
+    let got: Vec<([u32; 2], f64)> = points
+        .points
+        .iter()
+        .map(|p| (p.pixel, p.distance_m))
+        .collect();
+    assert_eq!(got, expected);
     std::fs::remove_dir_all(&out).unwrap();
 }
 

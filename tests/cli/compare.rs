@@ -47,6 +47,31 @@ fn image(offset: f32) -> RgbaImage {
     }
 }
 
+/// How closely a heatmap colour gives its FLIP value back: the colour map interpolates 9 stops
+/// 1/8 apart and rounds each channel to a byte; every stretch between stops moves some channel
+/// by at least 48 levels, so one byte triple covers at most 1/(8 * 48) of the value, and the
+/// middle of that stretch is within half of it (0.0013) of the value drawn, plus the 1e-5 step
+/// it is found with. A mean or p99 (1-Lipschitz in the values) inherits the bound.
+const HEATMAP_FLIP_RESOLUTION: f64 = 1.0 / (8.0 * 48.0) / 2.0 + 1e-5;
+
+/// The FLIP value each heatmap colour stands for: the middle of the values the colour map
+/// (`specchio::metrics::colour_map`) draws in that colour, scanned in steps of 1e-5.
+fn colour_values() -> std::collections::HashMap<[u8; 3], f64> {
+    const STEPS: u32 = 100_000;
+    let mut spans = std::collections::HashMap::<[u8; 3], (f64, f64)>::new();
+    for i in 0..=STEPS {
+        let v = f64::from(i) / f64::from(STEPS);
+        let span = spans
+            .entry(specchio::metrics::colour_map(v as f32))
+            .or_insert((v, v));
+        span.1 = v;
+    }
+    spans
+        .into_iter()
+        .map(|(colour, (lo, hi))| (colour, (lo + hi) / 2.0))
+        .collect()
+}
+
 fn s(p: &std::path::Path) -> &str {
     p.to_str().unwrap()
 }
@@ -84,7 +109,6 @@ fn json_reports_known_answers_and_the_heatmap_has_the_image_size() {
     assert!((json["rmse"].as_f64().unwrap() - 0.1).abs() < 1e-6);
     assert!((json["psnr_db"].as_f64().unwrap() - 20.0).abs() < 1e-4);
     assert_eq!(json["psnr_infinite"], false);
-    assert!(json["flip_mean"].as_f64().unwrap() > 0.0);
     assert_eq!(json["settings"]["flip_pixels_per_degree"], 67.0);
     assert_eq!(json["settings"]["rel_mse_epsilon"], 0.01);
     assert_eq!(json["heatmap"], s(&heat));
@@ -92,6 +116,24 @@ fn json_reports_known_answers_and_the_heatmap_has_the_image_size() {
     // The heatmap: a PNG of the image's size, and no temporary left beside it.
     let png = specchio::scene::TextureData::from_png(&heat).unwrap();
     assert_eq!((png.width, png.height), (16, 8));
+    // The FLIP mean and p99 recomputed from the heatmap, by the other route the command
+    // offers: each pixel's colour read back through the colour map to its FLIP value.
+    let values = colour_values();
+    let mut flip: Vec<f64> = png
+        .rgba8
+        .chunks(4)
+        .map(|p| values[&[p[0], p[1], p[2]]])
+        .collect();
+    flip.sort_by(f64::total_cmp);
+    let mean = flip.iter().sum::<f64>() / flip.len() as f64;
+    let p99 = flip[(0.99 * flip.len() as f64).ceil() as usize - 1];
+    for (key, from_heatmap) in [("flip_mean", mean), ("flip_p99", p99)] {
+        let reported = json[key].as_f64().unwrap();
+        assert!(
+            (reported - from_heatmap).abs() <= HEATMAP_FLIP_RESOLUTION,
+            "{key} {reported}, the heatmap says {from_heatmap}"
+        );
+    }
     let names: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

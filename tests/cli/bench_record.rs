@@ -1,0 +1,107 @@
+//! What `tests/cli/bench.rs` checks of one quick run's JSON record besides the gate's rows.
+
+use crate::bench_tradeoff::check_tradeoff;
+
+/// What one quick run's JSON must hold besides the gate's rows (issue: speed against error);
+/// `peak_bytes` is the run's peak resident memory as its parent measured it.
+pub fn check_record(r: &serde_json::Value, peak_bytes: u64) {
+    let rows = |k: &str| {
+        r[k].as_array()
+            .unwrap_or_else(|| panic!("`{k}` array"))
+            .clone()
+    };
+    // Timing rows: 2 scenes x 2 methods; floors: 2 scenes x 3.
+    assert_eq!(rows("results").len(), 4);
+    assert_eq!(rows("floors").len(), 6);
+    // --quick times 5 updates in one run, so each row has 5 updates and one run median, which
+    // is the median of those same 5 (one nearest-rank definition for both).
+    for row in rows("floors").iter().chain(&rows("results")) {
+        assert_eq!(row["updates"], 5, "{row}");
+        assert_eq!(
+            row["run_medians_ms"],
+            serde_json::json!([row["wall_ms"]["median"]]),
+            "{row}"
+        );
+    }
+    // The fill floor shades every texel once: 6 faces x 64² in an update.
+    let fill = rows("floors")
+        .into_iter()
+        .find(|f| f["floor"] == "fill")
+        .unwrap();
+    assert_eq!(fill["fill_stats"]["fragment_invocations"], 6 * 64 * 64);
+    // Efficiency is the method's median update over its scene's floors' medians: recomputed
+    // from the rows (1e-12: the JSON's shortest decimals read back within an ulp or two).
+    let floor = |scene: &serde_json::Value, name: &str| {
+        rows("floors")
+            .into_iter()
+            .find(|f| f["scene"] == *scene && f["floor"] == name)
+            .unwrap()["wall_ms"]["median"]
+            .as_f64()
+            .unwrap()
+    };
+    for row in rows("results") {
+        let median = row["wall_ms"]["median"].as_f64().unwrap();
+        let scene = &row["scene"];
+        for (key, want) in [
+            (
+                "vs_geometry_plus_fill",
+                median / (floor(scene, "geometry") + floor(scene, "fill")),
+            ),
+            ("vs_clear", median / floor(scene, "clear")),
+        ] {
+            let got = row["efficiency"][key].as_f64().unwrap();
+            assert!((got - want).abs() <= 1e-12 * want, "{key}: {got} != {want}");
+        }
+    }
+    // Accuracy: per scene and lookup; the methods agree; box is better than plain.
+    let acc = rows("accuracy");
+    assert_eq!(acc.len(), 4);
+    for a in &acc {
+        assert_eq!(a["methods_identical"], true);
+        assert_eq!(a["non_finite_pixels"], 0);
+    }
+    let flip = |lookup: &str| {
+        acc.iter()
+            .find(|a| a["lookup"] == lookup && a["scene"] == "scenes/thesis-room.toml")
+            .unwrap()["flip_mean"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(flip("box") < flip("plain"));
+    assert_eq!(rows("speed_vs_error").len(), 8);
+    // Both quick scenes move: incremental against full, frame by frame.
+    let dynamic = rows("dynamic");
+    assert_eq!(dynamic.len(), 2);
+    let thesis = &dynamic[0];
+    assert_eq!(thesis["scene"], "scenes/thesis-room.toml");
+    // One frame per timed round: the settings' 5 (the first round, a full fill in both
+    // renderers whatever moved, is the warm-up).
+    let frames = thesis["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 5);
+    // The thesis room's one moving object is the ball (radius 0.3 m, orbiting 3 m from the
+    // mirror at its height, a turn in 8 s): over the frames' first 1/6 s it stays within
+    // 2 pi / 8 * 1/6 = 0.13 rad of +X, so its bounding box (x >= 2.67 m, |y| <= 0.3 m,
+    // |z| <= 0.69 m) lies in the +X face's frustum alone (|y|, |z| < x) at both its old and
+    // its new place: an incremental update renders one face where a full one renders six.
+    for f in frames {
+        assert_eq!(
+            (&f["faces_incremental"], &f["faces_full"]),
+            (&1.into(), &6.into()),
+            "{f}"
+        );
+    }
+    assert_eq!(thesis["faces_incremental_median"], 1.0);
+    check_tradeoff(r);
+    // Provenance. The record's peak memory is the process's own high-water mark read after
+    // all the rendering and tracing, so it is at most the lifetime peak its parent measured
+    // (the same kernel counter), and what runs after the reading, writing a few report files,
+    // cannot double a resident set that has held the device, the cubes and the references.
+    let recorded = r["peak_rss_bytes"].as_u64().unwrap();
+    assert!(
+        recorded <= peak_bytes && 2 * recorded >= peak_bytes,
+        "recorded {recorded} B, measured {peak_bytes} B"
+    );
+    assert!(r["command"].as_str().unwrap().contains("bench"));
+    assert!(r["device"]["driver_info"].is_string());
+    assert!(r["settings"]["cube_sizes"] == serde_json::json!([64]));
+}
