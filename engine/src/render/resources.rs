@@ -68,215 +68,32 @@ pub struct SceneResources {
 }
 
 impl SceneResources {
+    /// Uploads `scene`: its meshes, materials and textures, the per-frame buffers, and the
+    /// descriptor sets that show them to the shaders.
     pub fn create(
         device: &Arc<Device>,
         scene: &Scene,
         submitter: &Submitter,
     ) -> Result<Self, GpuError> {
-        // Meshes: walls, then each object's mesh (shared meshes are stored once).
-        let walls = room_meshes(&scene.room);
-        let mut vertices: Vec<Vertex> = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        let traces = device.enabled.ray_query;
-        let mut traced_indices: Vec<u32> = Vec::new();
-        let mut push_mesh =
-            |m: &Mesh| {
-                let d = Drawable {
-                    first_index: indices.len() as u32,
-                    index_count: m.indices.len() as u32,
-                    vertex_offset: vertices.len() as i32,
-                    vertex_count: m.positions.len() as u32,
-                    bounds_min: m.bounds_min,
-                    bounds_max: m.bounds_max,
-                    cull_back: m.closed,
-                };
-                vertices.extend(m.positions.iter().zip(&m.normals).zip(&m.uvs).map(
-                    |((p, n), uv)| Vertex {
-                        position: p.to_array(),
-                        normal: n.to_array(),
-                        uv: uv.to_array(),
-                    },
-                ));
-                indices.extend_from_slice(&m.indices);
-                if traces {
-                    traced_indices.extend(triangles_in_split_order(&m.positions, &m.indices));
-                }
-                d
-            };
-        let mut drawables: Vec<Drawable> = walls.iter().map(&mut push_mesh).collect();
-        let mesh_draws: Vec<Drawable> = scene.meshes.iter().map(&mut push_mesh).collect();
-        drawables.extend(scene.objects.iter().map(|o| mesh_draws[o.mesh]));
-
-        let host = |size: usize, usage, name: &str| {
-            Buffer::create(
-                device,
-                &BufferDesc::new_cpu_to_gpu(size as u64, usage),
-                name,
-            )
-        };
-        // Geometry never changes: device-local, read by every pass.
-        // With ray queries, acceleration-structure builds read them by address too.
-        let build_input = if device.enabled.ray_query {
-            crate::vk::acceleration::BUILD_INPUT_USAGE
-        } else {
-            vk::BufferUsageFlags::empty()
-        };
-        let mut upload = Upload::begin(device, submitter)?;
-        let vertex_buffer = upload.buffer(
-            &vertices,
-            // Storage too: a method may fetch vertices in its own shaders (mesh shading).
-            vk::BufferUsageFlags::VERTEX_BUFFER
-                | vk::BufferUsageFlags::STORAGE_BUFFER
-                | build_input,
-            "scene vertices",
-        )?;
-        let index_buffer = upload.buffer(
-            &indices,
-            vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | build_input,
-            "scene indices",
-        )?;
-        let traced_index_buffer = traces
-            .then(|| {
-                upload.buffer(
-                    &traced_indices,
-                    vk::BufferUsageFlags::STORAGE_BUFFER | build_input,
-                    "scene indices (traced order)",
-                )
-            })
-            .transpose()?;
-        upload.finish()?;
-        let materials_data: Vec<MaterialData> = scene.materials.iter().map(material_data).collect();
-        let mut materials = host(
-            std::mem::size_of_val(materials_data.as_slice()),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            "materials",
-        )?;
-        materials.write(&materials_data)?;
-        let frame = host(
-            std::mem::size_of::<gpu::FrameData>(),
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            "frame data",
-        )?;
-        let views = host(
-            VIEW_COUNT * std::mem::size_of::<ViewData>(),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            "views",
-        )?;
-        let objects = host(
-            drawables.len() * std::mem::size_of::<ObjectData>(),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            "objects",
-        )?;
-
+        let meshes = Meshes::gather(scene, device.enabled.ray_query);
+        let (vertices, indices, traced_indices) = upload_meshes(device, submitter, &meshes)?;
+        let materials = material_buffer(device, scene)?;
+        let [frame, views, objects] = per_frame_buffers(device, meshes.drawables.len())?;
         let (textures, texture_views) = upload_textures(device, scene, submitter)?;
-        // Bilinear, repeating, no mips: simple enough for the CPU reference to reproduce.
-        let texture_sampler = Sampler::create(
-            device,
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::LINEAR)
-                .min_filter(vk::Filter::LINEAR)
-                .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-                .address_mode_u(vk::SamplerAddressMode::REPEAT)
-                .address_mode_v(vk::SamplerAddressMode::REPEAT)
-                .address_mode_w(vk::SamplerAddressMode::REPEAT)
-                .max_lod(0.0),
-            "material textures",
-        )?;
-
-        // Compute too: the materials check (materials_check.comp) reads the scene set.
-        let all = device.graphics_stages() | vk::ShaderStageFlags::COMPUTE;
-        let binding = |b, ty, count| descriptors::binding(b, ty, count, all);
-        let scene_set_layout = DescriptorSetLayout::create(
-            device,
-            &[
-                binding(0, vk::DescriptorType::UNIFORM_BUFFER, 1),
-                binding(1, vk::DescriptorType::STORAGE_BUFFER, 1),
-                binding(2, vk::DescriptorType::STORAGE_BUFFER, 1),
-                binding(3, vk::DescriptorType::STORAGE_BUFFER, 1),
-                binding(
-                    4,
-                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    gpu::MAX_TEXTURES,
-                ),
-            ],
-            "scene set layout",
-        )?;
-        let environment_set_layout = DescriptorSetLayout::create(
-            device,
-            &[binding(0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, 1)],
-            "environment set layout",
-        )?;
-        let pool = DescriptorPool::create(
-            device,
-            2,
-            &[
-                vk::DescriptorPoolSize {
-                    ty: vk::DescriptorType::UNIFORM_BUFFER,
-                    descriptor_count: 1,
-                },
-                vk::DescriptorPoolSize {
-                    ty: vk::DescriptorType::STORAGE_BUFFER,
-                    descriptor_count: 3,
-                },
-                vk::DescriptorPoolSize {
-                    ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    descriptor_count: gpu::MAX_TEXTURES + 1,
-                },
-            ],
-            "scene descriptors",
-        )?;
-        let scene_set = pool.allocate(&scene_set_layout, "scene set")?;
-        let environment_set = pool.allocate(&environment_set_layout, "environment set")?;
-        descriptors::write_buffer(
-            device,
-            scene_set,
-            0,
-            vk::DescriptorType::UNIFORM_BUFFER,
-            frame.raw,
-        );
-        descriptors::write_buffer(
-            device,
-            scene_set,
-            1,
-            vk::DescriptorType::STORAGE_BUFFER,
-            views.raw,
-        );
-        descriptors::write_buffer(
-            device,
-            scene_set,
-            2,
-            vk::DescriptorType::STORAGE_BUFFER,
-            objects.raw,
-        );
-        descriptors::write_buffer(
-            device,
-            scene_set,
-            3,
-            vk::DescriptorType::STORAGE_BUFFER,
-            materials.raw,
-        );
-        // Every slot must hold a valid image; unused ones repeat slot 0 (a 1x1 white texel
-        // when the scene has no textures).
-        let slots: Vec<(vk::ImageView, vk::Sampler)> = (0..gpu::MAX_TEXTURES as usize)
-            .map(|i| {
-                (
-                    texture_views[i.min(texture_views.len() - 1)].raw,
-                    texture_sampler.raw,
-                )
-            })
-            .collect();
-        descriptors::write_images(device, scene_set, 4, &slots);
-
+        let texture_sampler = texture_sampler(device)?;
+        let sets = SceneSets::create(device)?;
+        let slots = [&frame, &views, &objects, &materials];
+        sets.write_scene(device, slots, &texture_views, &texture_sampler);
         Ok(Self {
-            pool,
-            scene_set,
-            environment_set,
-            scene_set_layout,
-            environment_set_layout,
-            vertices: vertex_buffer,
-            indices: index_buffer,
-            traced_indices: traced_index_buffer,
-            drawables,
+            pool: sets.pool,
+            scene_set: sets.scene,
+            environment_set: sets.environment,
+            scene_set_layout: sets.scene_layout,
+            environment_set_layout: sets.environment_layout,
+            vertices,
+            indices,
+            traced_indices,
+            drawables: meshes.drawables,
             frame,
             views,
             objects,
@@ -285,6 +102,246 @@ impl SceneResources {
             _textures: textures,
             _texture_sampler: texture_sampler,
         })
+    }
+}
+
+/// Every mesh's vertices and indices in one array each, with its drawable: walls first, then
+/// one drawable per object (a mesh shared by several objects is stored once).
+struct Meshes {
+    vertices: Vec<Vertex>,
+    indices: Vec<u32>,
+    /// With ray queries, the same triangles in the order their builds want them.
+    traced_indices: Option<Vec<u32>>,
+    drawables: Vec<Drawable>,
+}
+
+impl Meshes {
+    fn gather(scene: &Scene, traces: bool) -> Self {
+        let mut all = Self {
+            vertices: Vec::new(),
+            indices: Vec::new(),
+            traced_indices: traces.then(Vec::new),
+            drawables: Vec::new(),
+        };
+        let walls: Vec<Drawable> = (room_meshes(&scene.room).iter())
+            .map(|m| all.push(m))
+            .collect();
+        let meshes: Vec<Drawable> = scene.meshes.iter().map(|m| all.push(m)).collect();
+        all.drawables = walls;
+        all.drawables
+            .extend(scene.objects.iter().map(|o| meshes[o.mesh]));
+        all
+    }
+
+    /// Appends `m`; returns its drawable.
+    fn push(&mut self, m: &Mesh) -> Drawable {
+        let d = Drawable {
+            first_index: self.indices.len() as u32,
+            index_count: m.indices.len() as u32,
+            vertex_offset: self.vertices.len() as i32,
+            vertex_count: m.positions.len() as u32,
+            bounds_min: m.bounds_min,
+            bounds_max: m.bounds_max,
+            cull_back: m.closed,
+        };
+        let vertices = m.positions.iter().zip(&m.normals).zip(&m.uvs);
+        self.vertices.extend(vertices.map(|((p, n), uv)| Vertex {
+            position: p.to_array(),
+            normal: n.to_array(),
+            uv: uv.to_array(),
+        }));
+        self.indices.extend_from_slice(&m.indices);
+        if let Some(traced) = &mut self.traced_indices {
+            traced.extend(triangles_in_split_order(&m.positions, &m.indices));
+        }
+        d
+    }
+}
+
+/// The geometry, device-local (it never changes; every pass reads it): vertices, indices and
+/// the traced order's indices. With ray queries, acceleration-structure builds read them by
+/// address too.
+fn upload_meshes(
+    device: &Arc<Device>,
+    submitter: &Submitter,
+    meshes: &Meshes,
+) -> Result<(Buffer, Buffer, Option<Buffer>), GpuError> {
+    let build_input = if device.enabled.ray_query {
+        crate::vk::acceleration::BUILD_INPUT_USAGE
+    } else {
+        vk::BufferUsageFlags::empty()
+    };
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER | build_input;
+    let mut upload = Upload::begin(device, submitter)?;
+    // Storage too: a method may fetch vertices in its own shaders (mesh shading).
+    let vertex_usage = vk::BufferUsageFlags::VERTEX_BUFFER | storage;
+    let vertices = upload.buffer(&meshes.vertices, vertex_usage, "scene vertices")?;
+    let index_usage = vk::BufferUsageFlags::INDEX_BUFFER | storage;
+    let indices = upload.buffer(&meshes.indices, index_usage, "scene indices")?;
+    let traced = (meshes.traced_indices.as_ref())
+        .map(|t| upload.buffer(t, storage, "scene indices (traced order)"))
+        .transpose()?;
+    upload.finish()?;
+    Ok((vertices, indices, traced))
+}
+
+/// A buffer the host writes and the device reads.
+fn host_buffer(
+    device: &Arc<Device>,
+    size: usize,
+    usage: vk::BufferUsageFlags,
+    name: &str,
+) -> Result<Buffer, GpuError> {
+    Buffer::create(
+        device,
+        &BufferDesc::new_cpu_to_gpu(size as u64, usage),
+        name,
+    )
+}
+
+/// The materials, written once.
+fn material_buffer(device: &Arc<Device>, scene: &Scene) -> Result<Buffer, GpuError> {
+    let data: Vec<MaterialData> = scene.materials.iter().map(material_data).collect();
+    let size = std::mem::size_of_val(data.as_slice());
+    let mut materials = host_buffer(
+        device,
+        size,
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        "materials",
+    )?;
+    materials.write(&data)?;
+    Ok(materials)
+}
+
+/// The buffers written every frame: the frame's data, the views, the objects' transforms.
+fn per_frame_buffers(device: &Arc<Device>, drawables: usize) -> Result<[Buffer; 3], GpuError> {
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    Ok([
+        host_buffer(
+            device,
+            std::mem::size_of::<gpu::FrameData>(),
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            "frame data",
+        )?,
+        host_buffer(
+            device,
+            VIEW_COUNT * std::mem::size_of::<ViewData>(),
+            storage,
+            "views",
+        )?,
+        host_buffer(
+            device,
+            drawables * std::mem::size_of::<ObjectData>(),
+            storage,
+            "objects",
+        )?,
+    ])
+}
+
+/// Bilinear, repeating, no mips: simple enough for the CPU reference to reproduce.
+fn texture_sampler(device: &Arc<Device>) -> Result<Sampler, GpuError> {
+    Sampler::create(
+        device,
+        &vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::REPEAT)
+            .address_mode_v(vk::SamplerAddressMode::REPEAT)
+            .address_mode_w(vk::SamplerAddressMode::REPEAT)
+            .max_lod(0.0),
+        "material textures",
+    )
+}
+
+/// Set 0 (the scene: frame data, views, objects, materials, textures) and set 1 (the
+/// environment cube, written by the renderer), with their layouts and pool.
+struct SceneSets {
+    pool: DescriptorPool,
+    scene: vk::DescriptorSet,
+    environment: vk::DescriptorSet,
+    scene_layout: DescriptorSetLayout,
+    environment_layout: DescriptorSetLayout,
+}
+
+impl SceneSets {
+    fn create(device: &Arc<Device>) -> Result<Self, GpuError> {
+        // Compute too: the materials check (materials_check.comp) reads the scene set.
+        let all = device.graphics_stages() | vk::ShaderStageFlags::COMPUTE;
+        let binding = |b, ty, count| descriptors::binding(b, ty, count, all);
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let scene_layout = DescriptorSetLayout::create(
+            device,
+            &[
+                binding(0, vk::DescriptorType::UNIFORM_BUFFER, 1),
+                binding(1, storage, 1),
+                binding(2, storage, 1),
+                binding(3, storage, 1),
+                binding(4, sampled, gpu::MAX_TEXTURES),
+            ],
+            "scene set layout",
+        )?;
+        let environment_layout = DescriptorSetLayout::create(
+            device,
+            &[binding(0, sampled, 1)],
+            "environment set layout",
+        )?;
+        let size = |ty, descriptor_count| vk::DescriptorPoolSize {
+            ty,
+            descriptor_count,
+        };
+        let pool = DescriptorPool::create(
+            device,
+            2,
+            &[
+                size(vk::DescriptorType::UNIFORM_BUFFER, 1),
+                size(storage, 3),
+                size(sampled, gpu::MAX_TEXTURES + 1),
+            ],
+            "scene descriptors",
+        )?;
+        let scene = pool.allocate(&scene_layout, "scene set")?;
+        let environment = pool.allocate(&environment_layout, "environment set")?;
+        Ok(Self {
+            pool,
+            scene,
+            environment,
+            scene_layout,
+            environment_layout,
+        })
+    }
+
+    /// Set 0's bindings: the frame's uniform (0), the views, objects and materials (1..=3),
+    /// and the textures (4). Every texture slot must hold a valid image; unused ones repeat
+    /// slot 0 (a 1x1 white texel when the scene has no textures).
+    fn write_scene(
+        &self,
+        device: &Arc<Device>,
+        [frame, views, objects, materials]: [&Buffer; 4],
+        texture_views: &[ImageView],
+        sampler: &Sampler,
+    ) {
+        descriptors::write_buffer(
+            device,
+            self.scene,
+            0,
+            vk::DescriptorType::UNIFORM_BUFFER,
+            frame.raw,
+        );
+        for (binding, buffer) in [(1, views), (2, objects), (3, materials)] {
+            let storage = vk::DescriptorType::STORAGE_BUFFER;
+            descriptors::write_buffer(device, self.scene, binding, storage, buffer.raw);
+        }
+        let slots: Vec<(vk::ImageView, vk::Sampler)> = (0..gpu::MAX_TEXTURES as usize)
+            .map(|i| {
+                (
+                    texture_views[i.min(texture_views.len() - 1)].raw,
+                    sampler.raw,
+                )
+            })
+            .collect();
+        descriptors::write_images(device, self.scene, 4, &slots);
     }
 }
 
