@@ -20,8 +20,16 @@ layout(local_size_x = TASK_MESHLETS) in;
 
 taskPayloadSharedEXT MeshTaskPayload payload;
 
-// Each invocation's surviving faces, for the workgroup's prefix sum.
+// The workgroup's prefix sum runs in two levels over chunks of SCAN_CHUNK consecutive draws.
+#define SCAN_CHUNK 8u
+#define SCAN_CHUNKS (TASK_MESHLETS / SCAN_CHUNK)
+#if TASK_MESHLETS % 8 != 0
+#error TASK_MESHLETS must be a whole number of scan chunks
+#endif
+
+// Each invocation's count of surviving faces, and each chunk's sum of them.
 shared uint surviving[TASK_MESHLETS];
+shared uint chunk_sums[SCAN_CHUNKS];
 
 // Slack for rounding in the culling tests (fraction of the sphere's distance and size): the
 // rasterizer works on rounded clip coordinates, so a sphere is only dropped when it is clear
@@ -85,15 +93,31 @@ void main() {
     if (first + i < mesh_push.draw_count) {
         faces = visible_faces(draws[mesh_push.first_draw + first + i]);
     }
-    surviving[i] = faces;
+    surviving[i] = bitCount(faces);
     barrier();
-    // Exclusive prefix sum in invocation (= draw) order, and the total.
+    // Exclusive prefix sum in invocation (= draw) order, and the total, in two levels: the
+    // first SCAN_CHUNKS invocations each add up one chunk, then every invocation adds the
+    // chunks before its own and the counts before it in its chunk. About 24 additions each
+    // instead of 128 (TASK_MESHLETS), for one more barrier. Not a subgroup scan: Vulkan does
+    // not tie subgroups to consecutive invocation indices, and the order is the point (each
+    // face must receive its triangles in draw order).
+    if (i < SCAN_CHUNKS) {
+        uint sum = 0u;
+        for (uint j = 0u; j < SCAN_CHUNK; j++) {
+            sum += surviving[i * SCAN_CHUNK + j];
+        }
+        chunk_sums[i] = sum;
+    }
+    barrier();
+    uint chunk = i / SCAN_CHUNK;
     uint offset = 0u;
     uint total = 0u;
-    for (uint j = 0u; j < TASK_MESHLETS; j++) {
-        uint n = bitCount(surviving[j]);
-        offset += j < i ? n : 0u;
-        total += n;
+    for (uint c = 0u; c < SCAN_CHUNKS; c++) {
+        offset += c < chunk ? chunk_sums[c] : 0u;
+        total += chunk_sums[c];
+    }
+    for (uint j = chunk * SCAN_CHUNK; j < i; j++) {
+        offset += surviving[j];
     }
     for (uint f = 0u; f < 6u; f++) {
         if ((faces & (1u << f)) != 0u) {
