@@ -23,8 +23,10 @@ pub mod percentile;
 use std::path::{Path, PathBuf};
 
 use crate::files::{read_regular_file, FileError};
+use crate::image::exr;
+use crate::image::png::linear_to_srgb;
 use crate::image::RgbaImage;
-use crate::output::{linear_to_srgb, OutputError};
+use crate::output::OutputError;
 use crate::scene::TextureData;
 
 pub use heatmap::{colour_map, heatmap_rgb8, write_heatmap, NOT_COMPARED_RGB8};
@@ -144,26 +146,7 @@ pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
         },
     })?;
     check_exr_size(path, &bytes)?;
-    use exr::prelude::{ReadChannels as _, ReadLayers as _};
-    let read = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            |res: exr::math::Vec2<usize>, _: &exr::prelude::RgbaChannels| RgbaImage {
-                width: res.width() as u32,
-                height: res.height() as u32,
-                pixels: vec![[0.0; 4]; res.width() * res.height()],
-            },
-            |img: &mut RgbaImage, pos, (r, g, b, a): (f32, f32, f32, f32)| {
-                let i = pos.y() * img.width as usize + pos.x();
-                img.pixels[i] = [r, g, b, a];
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(std::io::Cursor::new(&bytes))
-        .map_err(|e| exr_error(path, e))?;
-    Ok(read.layer_data.channel_data.pixels)
+    exr::decode_rgba(&bytes).map_err(|e| exr_error(path, e))
 }
 
 /// The largest image side the metrics read: twice the largest view specchio writes (8192 px),
@@ -177,16 +160,12 @@ const MAX_INPUT_FILE_BYTES: u64 = (MAX_INPUT_SIDE_PX * MAX_INPUT_SIDE_PX * 16) a
 /// Refuses an EXR whose header declares a layer larger than [`MAX_INPUT_SIDE_PX`] a side,
 /// from the header alone (the pixels would be allocated before they are read).
 fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<(), MetricsError> {
-    let meta =
-        exr::meta::MetaData::read_from_buffered(bytes, false).map_err(|e| exr_error(path, e))?;
-    for header in meta.headers.iter() {
-        let size = header.layer_size;
-        if size.0 > MAX_INPUT_SIDE_PX || size.1 > MAX_INPUT_SIDE_PX {
+    for (w, h) in exr::layer_sizes(bytes).map_err(|e| exr_error(path, e))? {
+        if w > MAX_INPUT_SIDE_PX || h > MAX_INPUT_SIDE_PX {
             return Err(MetricsError::Read {
                 path: path.to_owned(),
                 message: format!(
-                    "the image is {}x{}; at most {MAX_INPUT_SIDE_PX} px a side is read",
-                    size.0, size.1
+                    "the image is {w}x{h}; at most {MAX_INPUT_SIDE_PX} px a side is read"
                 ),
             });
         }
@@ -195,17 +174,17 @@ fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<(), MetricsError> {
 }
 
 /// An OpenEXR reading error in words a user can act on.
-fn exr_error(path: &Path, e: exr::error::Error) -> MetricsError {
+fn exr_error(path: &Path, e: exr::Error) -> MetricsError {
     let message = match e {
-        exr::error::Error::Invalid(why) if why.contains("identifier") => {
+        exr::Error::Invalid(why) if why.contains("identifier") => {
             "not an OpenEXR image (expected the linear .exr files that `specchio render` and \
              `specchio reference` write)"
                 .to_owned()
         }
-        exr::error::Error::Invalid(why) if why.contains("missing bytes") => {
+        exr::Error::Invalid(why) if why.contains("missing bytes") => {
             "the OpenEXR file is truncated".to_owned()
         }
-        exr::error::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+        exr::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
             "the OpenEXR file is truncated".to_owned()
         }
         other => format!("not a readable OpenEXR image: {other}"),

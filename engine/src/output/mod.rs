@@ -15,9 +15,7 @@ mod transaction;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, Vec2, WritableImage};
-
-use crate::image::RgbaImage;
+use crate::image::{exr, png, RgbaImage};
 
 pub use staged::MANIFEST;
 pub use transaction::Transaction;
@@ -107,9 +105,9 @@ fn written_meanwhile(entries: &[String]) -> String {
 
 /// An I/O failure is reported as one, naming `path`; anything else the encoder says is an
 /// encoding failure.
-pub(crate) fn exr_error(path: &Path, e: exr::error::Error) -> OutputError {
+pub(crate) fn exr_error(path: &Path, e: exr::Error) -> OutputError {
     match e {
-        exr::error::Error::Io(source) => OutputError::Io {
+        exr::Error::Io(source) => OutputError::Io {
             path: path.to_owned(),
             source,
         },
@@ -133,39 +131,16 @@ fn png_error(path: &Path, e: png::EncodingError) -> OutputError {
     }
 }
 
-/// The EXR layout: the crate's default (RLE in 64x64 tiles), with the chunks in increasing
-/// order. With its default unspecified order the crate writes chunks as its parallel
-/// compressors finish, so the same image gave different bytes from run to run; a fixed order
-/// makes the files byte-identical, so checksums can compare them.
-pub(crate) const EXR_ENCODING: Encoding = Encoding {
-    line_order: LineOrder::Increasing,
-    ..Encoding::FAST_LOSSLESS
-};
-
 impl Transaction {
     /// Linear RGBA, 32-bit float, as OpenEXR at `path` (staged in this transaction).
     pub fn write_exr(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
         let file = self.create(path)?;
-        let w = image.width as usize;
-        let channels = SpecificChannels::rgba(|Vec2(x, y)| {
-            let p: [f32; 4] = image.pixels[y * w + x];
-            (p[0], p[1], p[2], p[3])
-        });
-        Image::from_encoded_channels((w, image.height as usize), EXR_ENCODING, channels)
-            .write()
-            .to_buffered(BufWriter::new(file))
-            .map_err(|e| exr_error(path, e))
+        exr::encode_rgba(BufWriter::new(file), image).map_err(|e| exr_error(path, e))
     }
 
     /// An 8-bit sRGB RGB preview of a linear image.
     pub fn write_png(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
-        let bytes: Vec<u8> = image
-            .pixels
-            .iter()
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .map(|v| (linear_to_srgb(v) * 255.0).round() as u8)
-            .collect();
-        self.write_png_rgb8(path, image.width, image.height, &bytes)
+        self.write_png_rgb8(path, image.width, image.height, &png::srgb8_rgb(image))
     }
 
     /// An 8-bit sRGB RGB PNG from bytes already encoded (3 per pixel, rows top to bottom),
@@ -178,14 +153,7 @@ impl Transaction {
         rgb8: &[u8],
     ) -> Result<(), OutputError> {
         let file = self.create(path)?;
-        let mut encoder = png::Encoder::new(BufWriter::new(file), width, height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let enc = |e| png_error(path, e);
-        let mut writer = encoder.write_header().map_err(enc)?;
-        writer.write_image_data(rgb8).map_err(enc)?;
-        writer.finish().map_err(enc)
+        png::encode_rgb8(BufWriter::new(file), width, height, rgb8).map_err(|e| png_error(path, e))
     }
 
     /// JSON of any serialisable record, pretty-printed, with a final newline.
@@ -258,16 +226,6 @@ pub fn write_png_rgb8(
 /// JSON (pretty), atomically.
 pub fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> Result<(), OutputError> {
     one_file(path, |out| out.write_json(path, value))
-}
-
-/// The linear-to-sRGB transfer function (IEC 61966-2-1), input clamped to [0, 1].
-pub fn linear_to_srgb(v: f32) -> f32 {
-    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-    if v <= 0.003_130_8 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    }
 }
 
 #[cfg(test)]

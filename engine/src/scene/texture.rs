@@ -2,7 +2,6 @@
 
 #[cfg(test)]
 use std::fs::File;
-use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 use super::asset::AssetError;
@@ -44,27 +43,8 @@ impl TextureData {
     /// as the texture's source. Each side must be in 1..=[`MAX_TEXTURE_SIZE_PX`], checked from
     /// the header before any pixel memory is allocated.
     pub fn from_png_bytes(bytes: &[u8], path: &Path) -> Result<TextureData, AssetError> {
-        let bad = |e: png::DecodingError| AssetError::Png(format!("not a valid PNG: {e}"));
-        let mut decoder = png::Decoder::new(Cursor::new(bytes));
-        decoder.set_transformations(png::Transformations::normalize_to_color8());
-        let mut reader = decoder.read_info().map_err(bad)?;
-        let (width, height) = {
-            let info = reader.info();
-            (info.width, info.height)
-        };
-        // Checked before allocating the output buffer, so a huge header cannot exhaust memory.
-        if width == 0 || height == 0 || width > MAX_TEXTURE_SIZE_PX || height > MAX_TEXTURE_SIZE_PX
-        {
-            return Err(AssetError::Png(format!(
-                "image is {width}x{height}; each side must be in 1..={MAX_TEXTURE_SIZE_PX}"
-            )));
-        }
-        let size = reader
-            .output_buffer_size()
-            .ok_or_else(|| AssetError::Png("image too large for this machine".into()))?;
-        let mut buf = vec![0u8; size];
-        let frame = reader.next_frame(&mut buf).map_err(bad)?;
-        let rgba8 = expand(&buf, &frame, width, height)?;
+        let (width, height, rgba8) =
+            crate::image::png::decode_rgba8(bytes, MAX_TEXTURE_SIZE_PX).map_err(AssetError::Png)?;
         Ok(TextureData {
             path: path.to_path_buf(),
             width,
@@ -72,50 +52,6 @@ impl TextureData {
             rgba8,
         })
     }
-}
-
-/// The decoded frame as RGBA8, one texel per pixel.
-fn expand(
-    buf: &[u8],
-    frame: &png::OutputInfo,
-    width: u32,
-    height: u32,
-) -> Result<Vec<u8>, AssetError> {
-    if frame.bit_depth != png::BitDepth::Eight {
-        return Err(AssetError::Png(format!(
-            "unexpected bit depth {:?} after conversion",
-            frame.bit_depth
-        )));
-    }
-    let channels = match frame.color_type {
-        png::ColorType::Grayscale => 1,
-        png::ColorType::GrayscaleAlpha => 2,
-        png::ColorType::Rgb => 3,
-        png::ColorType::Rgba => 4,
-        png::ColorType::Indexed => {
-            return Err(AssetError::Png("palette image was not expanded".into()));
-        }
-    };
-    let texels = width as usize * height as usize;
-    let mut rgba8 = Vec::with_capacity(texels * 4);
-    for row in buf.chunks(frame.line_size.max(1)).take(height as usize) {
-        for px in row.chunks_exact(channels).take(width as usize) {
-            let texel = match *px {
-                [g] => [g, g, g, 255],
-                [g, a] => [g, g, g, a],
-                [r, g, b] => [r, g, b, 255],
-                [r, g, b, a] => [r, g, b, a],
-                _ => [0, 0, 0, 255],
-            };
-            rgba8.extend_from_slice(&texel);
-        }
-    }
-    if rgba8.len() != texels * 4 {
-        return Err(AssetError::Png(
-            "image data is shorter than its header says".into(),
-        ));
-    }
-    Ok(rgba8)
 }
 
 #[cfg(test)]

@@ -1,5 +1,11 @@
 //! The CPU image type every part of the engine exchanges: the GPU readback, the exact
-//! reference, the metrics and the file writers. No Vulkan here.
+//! reference, the metrics and the file writers; and the one home of image encoding and
+//! decoding ([`exr`], [`png`]), which the output writers, the metrics, the sensor layers and
+//! the textures call. Codecs only: where bytes come from and go to (the one reader, the output
+//! transaction) and what errors mean to a user stay with the callers. No Vulkan here.
+
+pub mod exr;
+pub mod png;
 
 /// A linear-HDR RGBA image, rows top to bottom.
 #[derive(Debug, Clone, PartialEq)]

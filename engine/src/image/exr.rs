@@ -1,0 +1,127 @@
+//! OpenEXR: linear RGBA images (the views, the cube faces, the reference) and layers of named
+//! channels (the sensor's rays, ranges and ids), written byte-identically from run to run.
+
+use std::io::{Seek, Write};
+use std::path::Path;
+
+use ::exr::prelude::{
+    AnyChannel, AnyChannels, Encoding, FlatSamples, Image, LineOrder, SmallVec, SpecificChannels,
+    Vec2, WritableImage,
+};
+
+use super::RgbaImage;
+
+pub use ::exr::error::Error;
+pub use ::exr::prelude::FlatSamples as Channel;
+
+/// The layout: the crate's default (RLE in 64x64 tiles), with the chunks in increasing order.
+/// With its default unspecified order the crate writes chunks as its parallel compressors
+/// finish, so the same image gave different bytes from run to run; a fixed order makes the
+/// files byte-identical, so checksums can compare them.
+pub const ENCODING: Encoding = Encoding {
+    line_order: LineOrder::Increasing,
+    ..Encoding::FAST_LOSSLESS
+};
+
+/// Linear RGBA, 32-bit float.
+pub fn encode_rgba(to: impl Write + Seek, image: &RgbaImage) -> Result<(), Error> {
+    let w = image.width as usize;
+    let channels = SpecificChannels::rgba(|Vec2(x, y)| {
+        let p: [f32; 4] = image.pixels[y * w + x];
+        (p[0], p[1], p[2], p[3])
+    });
+    Image::from_encoded_channels((w, image.height as usize), ENCODING, channels)
+        .write()
+        .to_buffered(to)
+}
+
+/// One channel's samples, row 0 at the top.
+pub enum Samples {
+    F32(Vec<f32>),
+    U32(Vec<u32>),
+}
+
+/// `channels` (name, samples of `width * height`) as one layer, listed alphabetically as EXR
+/// requires.
+pub fn encode_channels(
+    to: impl Write + Seek,
+    (width, height): (u32, u32),
+    channels: Vec<(&str, Samples)>,
+) -> Result<(), Error> {
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
+        .into_iter()
+        .map(|(name, samples)| {
+            let flat = match samples {
+                Samples::F32(v) => FlatSamples::F32(v),
+                Samples::U32(v) => FlatSamples::U32(v),
+            };
+            AnyChannel::new(name, flat)
+        })
+        .collect();
+    let size = (width as usize, height as usize);
+    Image::from_encoded_channels(size, ENCODING, AnyChannels::sort(list))
+        .write()
+        .to_buffered(to)
+}
+
+/// The size of every layer the header declares, from the header alone (before any pixel
+/// memory is allocated: a reader checks them against its limits first).
+pub fn layer_sizes(bytes: &[u8]) -> Result<Vec<(usize, usize)>, Error> {
+    let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)?;
+    Ok(meta
+        .headers
+        .iter()
+        .map(|h| (h.layer_size.0, h.layer_size.1))
+        .collect())
+}
+
+/// The first RGBA layer as 32-bit float (alpha 1 when the file has none).
+pub fn decode_rgba(bytes: &[u8]) -> Result<RgbaImage, Error> {
+    use ::exr::prelude::{ReadChannels as _, ReadLayers as _};
+    let read = ::exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res: ::exr::math::Vec2<usize>, _: &::exr::prelude::RgbaChannels| RgbaImage {
+                width: res.width() as u32,
+                height: res.height() as u32,
+                pixels: vec![[0.0; 4]; res.width() * res.height()],
+            },
+            |img: &mut RgbaImage, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                let i = pos.y() * img.width as usize + pos.x();
+                img.pixels[i] = [r, g, b, a];
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))?;
+    Ok(read.layer_data.channel_data.pixels)
+}
+
+/// Every channel of the first layer of the file at `path`, by name (for tests and tools that
+/// check the files): floats as f32, ids as u32 (see [`u32_channel`]).
+pub fn read_channels(path: &Path) -> Result<Vec<(String, Channel)>, Error> {
+    let image = ::exr::prelude::read_all_flat_layers_from_file(path)?;
+    let layer =
+        (image.layer_data.into_iter().next()).ok_or_else(|| Error::Invalid("no layer".into()))?;
+    Ok((layer.channel_data.list.into_iter())
+        .map(|c| (c.name.to_string(), c.sample_data))
+        .collect())
+}
+
+/// The samples of channel `name` as f32, if it is a float channel.
+pub fn f32_channel<'a>(channels: &'a [(String, Channel)], name: &str) -> Option<&'a [f32]> {
+    channels.iter().find_map(|(n, s)| match s {
+        FlatSamples::F32(v) if n == name => Some(v.as_slice()),
+        _ => None,
+    })
+}
+
+/// The samples of channel `name` as u32, if it is an integer channel (ids: exact, where a
+/// float would round them above 2^24).
+pub fn u32_channel<'a>(channels: &'a [(String, Channel)], name: &str) -> Option<&'a [u32]> {
+    channels.iter().find_map(|(n, s)| match s {
+        FlatSamples::U32(v) if n == name => Some(v.as_slice()),
+        _ => None,
+    })
+}

@@ -1,0 +1,132 @@
+//! PNG: the 8-bit sRGB previews of linear images (and colour maps) the commands write, and
+//! the textures and masks they read, decoded to 8-bit RGBA.
+
+use std::io::{Cursor, Write};
+
+use super::RgbaImage;
+
+pub use ::png::{DecodingError, EncodingError};
+
+/// The linear-to-sRGB transfer function (IEC 61966-2-1), input clamped to [0, 1], NaN as 0.
+pub fn linear_to_srgb(v: f32) -> f32 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// A linear image's colour as 8-bit sRGB bytes, 3 per pixel (alpha dropped).
+pub fn srgb8_rgb(image: &RgbaImage) -> Vec<u8> {
+    (image.pixels.iter())
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .map(|v| (linear_to_srgb(v) * 255.0).round() as u8)
+        .collect()
+}
+
+/// An 8-bit sRGB RGB PNG from bytes already encoded (3 per pixel, rows top to bottom).
+pub fn encode_rgb8(
+    to: impl Write,
+    width: u32,
+    height: u32,
+    rgb8: &[u8],
+) -> Result<(), EncodingError> {
+    let mut encoder = ::png::Encoder::new(to, width, height);
+    encoder.set_color(::png::ColorType::Rgb);
+    encoder.set_depth(::png::BitDepth::Eight);
+    encoder.set_source_srgb(::png::SrgbRenderingIntent::Perceptual);
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(rgb8)?;
+    writer.finish()
+}
+
+/// A PNG of any colour type and bit depth decoded to 8-bit RGBA, rows top to bottom, colour as
+/// stored (sRGB-encoded): palette and grayscale expanded, 16-bit channels reduced to 8 bits,
+/// missing alpha 255. Each side must be in 1..=`max_side`, checked from the header before any
+/// pixel memory is allocated. The error is a message for the caller to place.
+pub fn decode_rgba8(bytes: &[u8], max_side: u32) -> Result<(u32, u32, Vec<u8>), String> {
+    let bad = |e: DecodingError| format!("not a valid PNG: {e}");
+    let mut decoder = ::png::Decoder::new(Cursor::new(bytes));
+    decoder.set_transformations(::png::Transformations::normalize_to_color8());
+    let mut reader = decoder.read_info().map_err(bad)?;
+    let (width, height) = (reader.info().width, reader.info().height);
+    if width == 0 || height == 0 || width > max_side || height > max_side {
+        return Err(format!(
+            "image is {width}x{height}; each side must be in 1..={max_side}"
+        ));
+    }
+    let size = (reader.output_buffer_size()).ok_or("image too large for this machine")?;
+    let mut buf = vec![0u8; size];
+    let frame = reader.next_frame(&mut buf).map_err(bad)?;
+    let rgba8 = expand(&buf, &frame, width, height)?;
+    Ok((width, height, rgba8))
+}
+
+/// The decoded frame as RGBA8, one texel per pixel.
+fn expand(
+    buf: &[u8],
+    frame: &::png::OutputInfo,
+    width: u32,
+    height: u32,
+) -> Result<Vec<u8>, String> {
+    if frame.bit_depth != ::png::BitDepth::Eight {
+        return Err(format!(
+            "unexpected bit depth {:?} after conversion",
+            frame.bit_depth
+        ));
+    }
+    let channels = match frame.color_type {
+        ::png::ColorType::Grayscale => 1,
+        ::png::ColorType::GrayscaleAlpha => 2,
+        ::png::ColorType::Rgb => 3,
+        ::png::ColorType::Rgba => 4,
+        ::png::ColorType::Indexed => return Err("palette image was not expanded".into()),
+    };
+    let texels = width as usize * height as usize;
+    let mut rgba8 = Vec::with_capacity(texels * 4);
+    for row in buf.chunks(frame.line_size.max(1)).take(height as usize) {
+        for px in row.chunks_exact(channels).take(width as usize) {
+            let texel = match *px {
+                [g] => [g, g, g, 255],
+                [g, a] => [g, g, g, a],
+                [r, g, b] => [r, g, b, 255],
+                [r, g, b, a] => [r, g, b, a],
+                _ => [0, 0, 0, 255],
+            };
+            rgba8.extend_from_slice(&texel);
+        }
+    }
+    if rgba8.len() != texels * 4 {
+        return Err("image data is shorter than its header says".into());
+    }
+    Ok(rgba8)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_encoding_matches_the_standard() {
+        assert_eq!(linear_to_srgb(0.0), 0.0);
+        assert!((linear_to_srgb(1.0) - 1.0).abs() < 1e-6);
+        // 18 % grey is about 46 % in sRGB.
+        assert!((linear_to_srgb(0.18) - 0.4614).abs() < 1e-3);
+        assert_eq!(linear_to_srgb(f32::NAN), 0.0);
+    }
+
+    #[test]
+    fn what_is_encoded_decodes_to_the_same_bytes() {
+        let rgb = [255, 0, 0, 0, 255, 0, 0, 0, 255, 10, 20, 30];
+        let mut file = Vec::new();
+        encode_rgb8(&mut file, 2, 2, &rgb).unwrap();
+        let (w, h, rgba) = decode_rgba8(&file, 2).unwrap();
+        assert_eq!((w, h), (2, 2));
+        let back: Vec<u8> = rgba.chunks(4).flat_map(|t| [t[0], t[1], t[2]]).collect();
+        assert_eq!(back, rgb);
+        assert!(rgba.chunks(4).all(|t| t[3] == 255));
+        let too_big = decode_rgba8(&file, 1).unwrap_err();
+        assert!(too_big.contains("1..=1"), "{too_big}");
+    }
+}
