@@ -7,8 +7,11 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
+use super::features::Enables;
 use super::instance::Instance;
 use super::{GpuError, VkContext};
+
+pub use super::features::OptionalFeatures;
 
 // The physical side (what a device can do, and which one is chosen) lives in `physical.rs`;
 // re-exported so that callers keep one path for everything about devices.
@@ -28,69 +31,6 @@ pub struct DeviceDesc {
     /// Optional features to enable (those of the cube methods that will run); the device is
     /// rejected if it lacks one.
     pub features: OptionalFeatures,
-}
-
-/// Optional device features a renderer can ask for on top of the core set. Device creation
-/// enables exactly these and refuses a device that lacks one; the cube fill methods state
-/// theirs as this type (`render::methods::Needs`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct OptionalFeatures {
-    /// `VK_KHR_multiview` (core 1.1): one draw replayed per view.
-    pub multiview: bool,
-    pub geometry_shader: bool,
-    /// `gl_Layer` written from a vertex shader (core 1.2).
-    pub shader_output_layer: bool,
-    /// multiDrawIndirect and drawIndirectFirstInstance, always asked for together.
-    pub multi_draw_indirect: bool,
-    /// `VK_EXT_mesh_shader` with its task shaders.
-    pub mesh_shader: bool,
-    /// `VK_KHR_ray_query` with `VK_KHR_acceleration_structure` (and the deferred host
-    /// operations and buffer device addresses it requires): the exact mirror lookup.
-    pub ray_query: bool,
-}
-
-impl OptionalFeatures {
-    pub fn union(self, o: Self) -> Self {
-        Self {
-            multiview: self.multiview || o.multiview,
-            geometry_shader: self.geometry_shader || o.geometry_shader,
-            shader_output_layer: self.shader_output_layer || o.shader_output_layer,
-            multi_draw_indirect: self.multi_draw_indirect || o.multi_draw_indirect,
-            mesh_shader: self.mesh_shader || o.mesh_shader,
-            ray_query: self.ray_query || o.ray_query,
-        }
-    }
-
-    /// The features asked for that `have` lacks, by their Vulkan names.
-    pub fn missing(self, have: &DeviceFeatures) -> Vec<&'static str> {
-        [
-            (self.multiview && !have.multiview, "multiview"),
-            (
-                self.geometry_shader && !have.geometry_shader,
-                "geometryShader",
-            ),
-            (
-                self.shader_output_layer && !have.shader_output_layer,
-                "shaderOutputLayer",
-            ),
-            (
-                self.multi_draw_indirect
-                    && !(have.multi_draw_indirect && have.draw_indirect_first_instance),
-                "multiDrawIndirect + drawIndirectFirstInstance",
-            ),
-            (
-                self.mesh_shader && !(have.mesh_shader && have.task_shader),
-                "meshShader + taskShader (VK_EXT_mesh_shader)",
-            ),
-            (
-                self.ray_query && !have.ray_query,
-                "rayQuery + accelerationStructure (VK_KHR_ray_query, VK_KHR_acceleration_structure)",
-            ),
-        ]
-        .into_iter()
-        .filter_map(|(lacks, name)| lacks.then_some(name))
-        .collect()
-    }
 }
 
 /// A device limit a renderer may need a minimum of (the methods state theirs as data).
@@ -170,40 +110,12 @@ impl Device {
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
-        // Only what the renderer uses: anisotropic cube lookups and work counters when present.
-        let features = vk::PhysicalDeviceFeatures::default()
-            .sampler_anisotropy(info.features.sampler_anisotropy)
-            .pipeline_statistics_query(info.features.pipeline_statistics)
-            // Materials pick their texture from an array by index.
-            .shader_sampled_image_array_dynamic_indexing(true)
-            .geometry_shader(want.geometry_shader)
-            .multi_draw_indirect(want.multi_draw_indirect)
-            .draw_indirect_first_instance(want.multi_draw_indirect);
-        let mut features11 =
-            vk::PhysicalDeviceVulkan11Features::default().multiview(want.multiview);
-        let mut features12 = vk::PhysicalDeviceVulkan12Features::default()
-            .shader_output_layer(want.shader_output_layer)
-            // ... an index that may vary within a draw (materials.glsl, nonuniformEXT).
-            .shader_sampled_image_array_non_uniform_indexing(true)
-            // Acceleration-structure builds read their inputs by device address.
-            .buffer_device_address(want.ray_query);
-        let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
-            .dynamic_rendering(true)
-            .synchronization2(true)
-            // SPIR-V 1.6 turns `discard` into OpDemoteToHelperInvocation (mandatory in 1.3).
-            .shader_demote_to_helper_invocation(true)
-            // glslang writes a task or mesh shader's workgroup size as LocalSizeId when it
-            // targets SPIR-V 1.6, which needs maintenance4 (mandatory in 1.3).
-            .maintenance4(want.mesh_shader);
-        // Mesh and task shaders come from an extension; their invocations are counted by the
-        // pipeline-statistics query only with meshShaderQueries.
-        let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default()
-            .mesh_shader(true)
-            .task_shader(true)
-            .mesh_shader_queries(info.features.mesh_shader_queries);
-        let mut acceleration = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
-            .acceleration_structure(true);
-        let mut ray_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+        // The core set, then what the optional features wanted add (`features.rs`).
+        let mut enables = want.enables(core_enables(&info.features));
+        if let Some(mesh) = &mut enables.mesh {
+            // Mesh and task invocations are counted by the statistics query only with this.
+            *mesh = mesh.mesh_shader_queries(info.features.mesh_shader_queries);
+        }
         // SAFETY: physical comes from this instance.
         let offered = unsafe { instance.raw.enumerate_device_extension_properties(physical) }
             .vk("vkEnumerateDeviceExtensionProperties")?;
@@ -218,28 +130,33 @@ impl Device {
                 absent.to_string_lossy()
             )));
         }
-        let mut extensions: Vec<*const std::ffi::c_char> =
-            extra.iter().map(|name| name.as_ptr()).collect();
+        let extensions: Vec<*const std::ffi::c_char> = (extra.iter().chain(&enables.extensions))
+            .map(|name| name.as_ptr())
+            .collect();
+        let Enables {
+            core,
+            v11,
+            v12,
+            v13,
+            mesh,
+            acceleration,
+            ray_query,
+            ..
+        } = &mut enables;
         let mut create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
-            .enabled_features(&features)
-            .push_next(&mut features11)
-            .push_next(&mut features12)
-            .push_next(&mut features13);
-        if want.mesh_shader {
-            extensions.push(ash::ext::mesh_shader::NAME.as_ptr());
-            create_info = create_info.push_next(&mut mesh);
+            .enabled_features(core)
+            .push_next(v11)
+            .push_next(v12)
+            .push_next(v13);
+        if let Some(m) = mesh {
+            create_info = create_info.push_next(m);
         }
-        if want.ray_query {
-            extensions.extend([
-                ash::khr::acceleration_structure::NAME.as_ptr(),
-                ash::khr::ray_query::NAME.as_ptr(),
-                // Required by VK_KHR_acceleration_structure (we build on the device only).
-                ash::khr::deferred_host_operations::NAME.as_ptr(),
-            ]);
-            create_info = create_info
-                .push_next(&mut acceleration)
-                .push_next(&mut ray_query);
+        if let Some(a) = acceleration {
+            create_info = create_info.push_next(a);
+        }
+        if let Some(r) = ray_query {
+            create_info = create_info.push_next(r);
         }
         let create_info = create_info.enabled_extension_names(&extensions);
         // SAFETY: physical comes from this instance; create_info points at live locals.
@@ -342,5 +259,27 @@ impl Drop for Device {
             ManuallyDrop::drop(&mut self.allocator);
             self.raw.destroy_device(None);
         }
+    }
+}
+
+/// The features every device is created with, whatever the renderer asks for: dynamic
+/// rendering and synchronization2 (required), the texture array's indexing, and what the
+/// device offers of anisotropic cube lookups and work counters.
+fn core_enables(offered: &super::physical::DeviceFeatures) -> Enables {
+    Enables {
+        core: vk::PhysicalDeviceFeatures::default()
+            .sampler_anisotropy(offered.sampler_anisotropy)
+            .pipeline_statistics_query(offered.pipeline_statistics)
+            // Materials pick their texture from an array by index...
+            .shader_sampled_image_array_dynamic_indexing(true),
+        // ... an index that may vary within a draw (materials.glsl, nonuniformEXT).
+        v12: vk::PhysicalDeviceVulkan12Features::default()
+            .shader_sampled_image_array_non_uniform_indexing(true),
+        v13: vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true)
+            // SPIR-V 1.6 turns `discard` into OpDemoteToHelperInvocation (mandatory in 1.3).
+            .shader_demote_to_helper_invocation(true),
+        ..Enables::default()
     }
 }

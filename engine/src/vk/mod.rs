@@ -13,6 +13,7 @@ pub mod acceleration;
 pub mod commands;
 pub mod descriptors;
 pub mod device;
+pub mod features;
 pub mod frames;
 pub mod image;
 pub mod instance;

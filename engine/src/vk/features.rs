@@ -1,0 +1,232 @@
+//! The optional device features a fill method or a mirror lookup may need, as one table:
+//! each row says what the feature is called in messages, whether a device offers it (read
+//! from [`DeviceFeatures`], which `physical.rs` queries), and what asking for it enables when
+//! the device is created. `OptionalFeatures` names the rows a renderer wants; a new optional
+//! feature is a field there and a row here.
+
+use std::ffi::CStr;
+
+use ash::vk;
+
+use super::physical::DeviceFeatures;
+
+/// Optional device features a renderer can ask for on top of the core set. Device creation
+/// enables exactly these and refuses a device that lacks one; the cube fill methods and the
+/// lookups state theirs as this type (`render::methods::Needs`, `render::lookups`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OptionalFeatures {
+    /// `VK_KHR_multiview` (core 1.1): one draw replayed per view.
+    pub multiview: bool,
+    pub geometry_shader: bool,
+    /// `gl_Layer` written from a vertex shader (core 1.2).
+    pub shader_output_layer: bool,
+    /// multiDrawIndirect and drawIndirectFirstInstance, always asked for together.
+    pub multi_draw_indirect: bool,
+    /// `VK_EXT_mesh_shader` with its task shaders.
+    pub mesh_shader: bool,
+    /// `VK_KHR_ray_query` with `VK_KHR_acceleration_structure` (and the deferred host
+    /// operations and buffer device addresses it requires): the exact mirror lookup.
+    pub ray_query: bool,
+}
+
+/// One optional feature: its row of the table.
+struct Optional {
+    /// The Vulkan names, as messages say them.
+    vulkan: &'static str,
+    /// Whether a renderer asks for it.
+    wanted: fn(&OptionalFeatures) -> bool,
+    /// Whether the device offers it.
+    offered: fn(&DeviceFeatures) -> bool,
+    /// What asking for it enables at device creation.
+    enable: fn(&mut Enables),
+}
+
+/// The table: every optional feature, in the order messages list them.
+const OPTIONAL: [Optional; 6] = [
+    Optional {
+        vulkan: "multiview",
+        wanted: |w| w.multiview,
+        offered: |d| d.multiview,
+        enable: |e| e.v11.multiview = vk::TRUE,
+    },
+    Optional {
+        vulkan: "geometryShader",
+        wanted: |w| w.geometry_shader,
+        offered: |d| d.geometry_shader,
+        enable: |e| e.core.geometry_shader = vk::TRUE,
+    },
+    Optional {
+        vulkan: "shaderOutputLayer",
+        wanted: |w| w.shader_output_layer,
+        offered: |d| d.shader_output_layer,
+        enable: |e| e.v12.shader_output_layer = vk::TRUE,
+    },
+    Optional {
+        vulkan: "multiDrawIndirect + drawIndirectFirstInstance",
+        wanted: |w| w.multi_draw_indirect,
+        offered: |d| d.multi_draw_indirect && d.draw_indirect_first_instance,
+        enable: |e| {
+            e.core.multi_draw_indirect = vk::TRUE;
+            e.core.draw_indirect_first_instance = vk::TRUE;
+        },
+    },
+    Optional {
+        vulkan: "meshShader + taskShader (VK_EXT_mesh_shader)",
+        wanted: |w| w.mesh_shader,
+        offered: |d| d.mesh_shader && d.task_shader,
+        enable: |e| {
+            // glslang writes a task or mesh shader's workgroup size as LocalSizeId when it
+            // targets SPIR-V 1.6, which needs maintenance4 (mandatory in 1.3).
+            e.v13.maintenance4 = vk::TRUE;
+            e.mesh = Some(
+                vk::PhysicalDeviceMeshShaderFeaturesEXT::default()
+                    .mesh_shader(true)
+                    .task_shader(true),
+            );
+            e.extensions.push(ash::ext::mesh_shader::NAME);
+        },
+    },
+    Optional {
+        vulkan: "rayQuery + accelerationStructure (VK_KHR_ray_query, \
+                 VK_KHR_acceleration_structure)",
+        wanted: |w| w.ray_query,
+        offered: |d| d.ray_query,
+        enable: |e| {
+            // Acceleration-structure builds read their inputs by device address.
+            e.v12.buffer_device_address = vk::TRUE;
+            e.acceleration = Some(
+                vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
+                    .acceleration_structure(true),
+            );
+            e.ray_query = Some(vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true));
+            e.extensions.extend([
+                ash::khr::acceleration_structure::NAME,
+                ash::khr::ray_query::NAME,
+                // Required by VK_KHR_acceleration_structure (we build on the device only).
+                ash::khr::deferred_host_operations::NAME,
+            ]);
+        },
+    },
+];
+
+impl OptionalFeatures {
+    pub fn union(self, o: Self) -> Self {
+        Self {
+            multiview: self.multiview || o.multiview,
+            geometry_shader: self.geometry_shader || o.geometry_shader,
+            shader_output_layer: self.shader_output_layer || o.shader_output_layer,
+            multi_draw_indirect: self.multi_draw_indirect || o.multi_draw_indirect,
+            mesh_shader: self.mesh_shader || o.mesh_shader,
+            ray_query: self.ray_query || o.ray_query,
+        }
+    }
+
+    /// The features asked for that `have` lacks, by their Vulkan names.
+    pub fn missing(self, have: &DeviceFeatures) -> Vec<&'static str> {
+        (OPTIONAL.iter())
+            .filter(|o| (o.wanted)(&self) && !(o.offered)(have))
+            .map(|o| o.vulkan)
+            .collect()
+    }
+
+    /// What device creation enables for these features, on top of `core`.
+    pub(super) fn enables(self, core: Enables) -> Enables {
+        let mut e = core;
+        for o in OPTIONAL.iter().filter(|o| (o.wanted)(&self)) {
+            (o.enable)(&mut e);
+        }
+        e
+    }
+}
+
+/// What `vkCreateDevice` is given: the feature structs (chained in `device.rs`) and the
+/// device extensions.
+#[derive(Default)]
+pub(super) struct Enables {
+    pub core: vk::PhysicalDeviceFeatures,
+    pub v11: vk::PhysicalDeviceVulkan11Features<'static>,
+    pub v12: vk::PhysicalDeviceVulkan12Features<'static>,
+    pub v13: vk::PhysicalDeviceVulkan13Features<'static>,
+    pub mesh: Option<vk::PhysicalDeviceMeshShaderFeaturesEXT<'static>>,
+    pub acceleration: Option<vk::PhysicalDeviceAccelerationStructureFeaturesKHR<'static>>,
+    pub ray_query: Option<vk::PhysicalDeviceRayQueryFeaturesKHR<'static>>,
+    pub extensions: Vec<&'static CStr>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn every() -> OptionalFeatures {
+        OptionalFeatures {
+            multiview: true,
+            geometry_shader: true,
+            shader_output_layer: true,
+            multi_draw_indirect: true,
+            mesh_shader: true,
+            ray_query: true,
+        }
+    }
+
+    /// Every field of `OptionalFeatures` has its row: asking for one feature alone enables
+    /// something and, on a device that offers nothing, is missing by exactly one name.
+    #[test]
+    fn every_feature_has_its_row() {
+        let nothing: DeviceFeatures = serde_json::from_value(serde_json::json!({
+            "dynamic_rendering": true, "synchronization2": true, "multiview": false,
+            "geometry_shader": false, "shader_output_layer": false, "mesh_shader": false,
+            "task_shader": false, "mesh_shader_queries": false, "ray_query": false,
+            "timestamps": false, "pipeline_statistics": false, "sampler_anisotropy": false,
+            "multi_draw_indirect": false, "draw_indirect_first_instance": false
+        }))
+        .unwrap();
+        let all = every();
+        let single = [
+            OptionalFeatures {
+                multiview: true,
+                ..Default::default()
+            },
+            OptionalFeatures {
+                geometry_shader: true,
+                ..Default::default()
+            },
+            OptionalFeatures {
+                shader_output_layer: true,
+                ..Default::default()
+            },
+            OptionalFeatures {
+                multi_draw_indirect: true,
+                ..Default::default()
+            },
+            OptionalFeatures {
+                mesh_shader: true,
+                ..Default::default()
+            },
+            OptionalFeatures {
+                ray_query: true,
+                ..Default::default()
+            },
+        ];
+        assert_eq!(
+            single
+                .iter()
+                .fold(OptionalFeatures::default(), |a, b| a.union(*b)),
+            all
+        );
+        for (f, row) in single.iter().zip(&OPTIONAL) {
+            assert_eq!(f.missing(&nothing), [row.vulkan], "{f:?}");
+        }
+        assert_eq!(
+            OptionalFeatures::default().missing(&nothing),
+            Vec::<&str>::new()
+        );
+        let enabled = all.enables(Enables::default());
+        assert_eq!(enabled.v11.multiview, vk::TRUE);
+        assert_eq!(enabled.core.geometry_shader, vk::TRUE);
+        assert_eq!(enabled.v12.buffer_device_address, vk::TRUE);
+        assert!(enabled.mesh.is_some() && enabled.ray_query.is_some());
+        assert_eq!(enabled.extensions.len(), 4);
+        let none = OptionalFeatures::default().enables(Enables::default());
+        assert!(none.extensions.is_empty() && none.mesh.is_none());
+    }
+}
