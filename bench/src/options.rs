@@ -15,8 +15,9 @@ use anyhow::Result;
 use specchio::render::methods::Method;
 use specchio::scene::Lookup;
 
-use super::tradeoff::{rung, Rung, LADDER};
+use super::tradeoff::{rung, Rung};
 use specchio::process::args::{face_size, lookup, method, real, whole};
+use specchio::render::lookups::ladder;
 
 /// The default run's scenes: the thesis's room and a crowd (2,000 objects, 10 % moving).
 const DEFAULT_SCENES: [&str; 2] = ["scenes/thesis-room.toml", "scenes/many-objects.toml"];
@@ -255,7 +256,7 @@ pub fn settle(args: &Args) -> Result<Settled> {
         methods,
         rungs: match (&args.rungs, args.no_tradeoff) {
             (_, true) => Vec::new(),
-            (None, false) => LADDER.iter().collect(),
+            (None, false) => ladder(),
             (Some(list), false) => list.iter().filter_map(|l| rung(l)).collect(),
         },
         rungs_named: args.rungs.is_some(),

@@ -1,7 +1,8 @@
 //! The trade-off in one run: every rung of the ladder of mirror lookups, from the thesis's
 //! plain cube-map lookup to exact GPU ray tracing, as frame cost against error.
 //!
-//! A rung is data ([`Rung`]): a label, the lookup, and how it configures the scene. Per scene
+//! A rung is data ([`Rung`]): a label, the lookup, and how it configures the scene; each
+//! lookup lists its own rungs (`specchio::render::lookups`), and the ladder is all of them. Per scene
 //! and face size each rung gets its own six-pass renderer with full updates every frame; the
 //! rungs are timed interleaved (one frame of each per round, so a drifting machine slows all
 //! alike), every frame at t = 0, the instant whose error is then measured on one more frame
@@ -19,76 +20,24 @@ use specchio::image::RgbaImage;
 use specchio::metrics::compare;
 use specchio::reference::angular::{angles_deg, summarize};
 use specchio::reference::ReferenceImages;
+use specchio::render::lookups;
+pub use specchio::render::lookups::Rung;
 use specchio::render::methods::Method;
 use specchio::render::{FrameReport, Readback, RenderOptions, Renderer};
-use specchio::scene::{Lookup, RefreshPolicy, Scene};
+use specchio::scene::{RefreshPolicy, Scene};
 use specchio::vk::device::{Device, DeviceInfo};
 
 use super::record::{RungRow, RungWork, Stats, ViewError};
 use super::Plan;
 
-/// One rung: a lookup and the scene settings it runs with.
-pub struct Rung {
-    /// Unique in the ladder; names the rung in `--rungs`, the table, the record and the plot.
-    pub label: &'static str,
-    pub lookup: Lookup,
-    /// Sets whatever else the rung needs in the scene (the lookup itself is set for it).
-    pub configure: fn(&mut Scene),
-}
-
-/// A rung that needs nothing beyond its lookup.
-fn as_is(_: &mut Scene) {}
-
-/// The ladder, cheapest and least exact first.
-pub static LADDER: &[Rung] = &[
-    Rung {
-        label: "plain",
-        lookup: Lookup::Plain,
-        configure: as_is,
-    },
-    Rung {
-        label: "box",
-        lookup: Lookup::Box,
-        configure: as_is,
-    },
-    // The distance-searched lookup at three linear step counts (its secant steps as the scene
-    // sets them): fewer steps cost less and miss thin features between two samples.
-    Rung {
-        label: "distance-8",
-        lookup: Lookup::Distance,
-        configure: |s| s.mirror.distance_steps = 8,
-    },
-    Rung {
-        label: "distance-16",
-        lookup: Lookup::Distance,
-        configure: |s| s.mirror.distance_steps = 16,
-    },
-    Rung {
-        label: "distance-32",
-        lookup: Lookup::Distance,
-        configure: |s| s.mirror.distance_steps = 32,
-    },
-    // The disocclusion fix: the 16-step search, with the rays it cannot resolve traced.
-    Rung {
-        label: "distance-exact",
-        lookup: Lookup::DistanceExact,
-        configure: |s| s.mirror.distance_steps = 16,
-    },
-    Rung {
-        label: "ray-query",
-        lookup: Lookup::RayQuery,
-        configure: as_is,
-    },
-];
-
 /// The rung labelled `label`.
 pub fn rung(label: &str) -> Option<&'static Rung> {
-    LADDER.iter().find(|r| r.label == label)
+    lookups::ladder().into_iter().find(|r| r.label == label)
 }
 
 /// Every rung's label, for messages.
 pub fn labels() -> String {
-    LADDER
+    lookups::ladder()
         .iter()
         .map(|r| r.label)
         .collect::<Vec<_>>()
@@ -349,6 +298,7 @@ pub fn table_row(r: &RungRow) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use specchio::scene::Lookup;
 
     #[test]
     fn the_pareto_front_of_known_points() {
@@ -374,9 +324,12 @@ mod tests {
 
     #[test]
     fn the_ladder_has_every_lookup_once_under_unique_labels() {
-        for (i, r) in LADDER.iter().enumerate() {
+        let ladder = lookups::ladder();
+        for (i, r) in ladder.iter().enumerate() {
             assert!(
-                LADDER[..i].iter().all(|o| o.label != r.label),
+                ladder[..i]
+                    .iter()
+                    .all(|o| o.label != r.label && o.order < r.order),
                 "{} twice",
                 r.label
             );
@@ -384,7 +337,7 @@ mod tests {
         }
         for l in Lookup::ALL {
             assert!(
-                LADDER.iter().any(|r| r.lookup == l),
+                ladder.iter().any(|r| r.lookup == l),
                 "no rung for the {l} lookup"
             );
         }

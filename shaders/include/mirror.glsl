@@ -38,8 +38,7 @@ vec3 lookup_at(FrameData f, vec3 dir, vec3 n) {
     vec3 centre = f.mirror.xyz;
     vec3 hit = centre + f.mirror.w * n;
     vec3 r = reflect(dir, n); // R = I - 2 (N.I) N
-    bool box = f.flags.y == LOOKUP_BOX || f.flags.y == LOOKUP_DISTANCE
-        || f.flags.y == LOOKUP_DISTANCE_EXACT;
+    bool box = f.flags.y == LOOKUP_FROM_ROOM_BOX;
     return box ? room_exit(hit, r, f) - centre : r;
 }
 

@@ -23,7 +23,7 @@
 struct FrameData {
     vec4 light_dir_ambient; // xyz: unit vector towards the light; w: ambient fraction
     vec4 mirror;            // xyz: mirror centre (render space, normally 0); w: radius (m)
-    uvec4 flags;            // x: 1 when the directional light is on; y: LOOKUP_* mode;
+    uvec4 flags;            // x: 1 when the directional light is on; y: LOOKUP_FROM_*;
                             // z, w: the distance lookup's linear and secant steps
     vec4 room_min;          // xyz: the room box's low corner (render space)
     vec4 room_max;          // xyz: its high corner
@@ -31,12 +31,11 @@ struct FrameData {
                             // reverse-Z depth back into distances (distance_search.glsl)
 };
 
-// FrameData.flags.y: how the mirror turns its reflected ray into a cube-map direction.
-#define LOOKUP_PLAIN 0u // the reflected direction itself (the thesis)
-#define LOOKUP_BOX 1u   // from the cube's centre to where the reflected ray leaves the room box
-#define LOOKUP_RAY_QUERY 2u // no cube: the reflected ray is traced (mirror_ray_query.frag)
-#define LOOKUP_DISTANCE 3u  // the reflected ray searched through the cube's depth (mirror_distance.frag)
-#define LOOKUP_DISTANCE_EXACT 4u // that search, the rays it cannot resolve traced (mirror_distance_exact.frag)
+// FrameData.flags.y: the cube-map direction a lookup starts from (mirror.glsl lookup_at). Each
+// lookup's own technique is its shader (render/lookups: a lookup's `start`); only this choice
+// is shared, so a new lookup adds no code here.
+#define LOOKUP_FROM_REFLECTION 0u // the reflected direction itself (the thesis's plain lookup)
+#define LOOKUP_FROM_ROOM_BOX 1u   // from the cube's centre to where the reflected ray leaves the room box
 
 // distance-exact's tally (trace_tally.glsl, render/lookups/tally.rs): a uvec2 (fragments,
 // traced) per view and pass, at view_index * TALLY_PASSES + the pass.

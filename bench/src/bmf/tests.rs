@@ -6,7 +6,7 @@ use specchio::render::methods::Method;
 
 use super::*;
 use crate::record::{MethodRow, RungRow, ViewError};
-use crate::tradeoff::LADDER;
+use specchio::render::lookups::ladder;
 
 /// The committed baseline, for the parts of a record these tests do not care about (settings,
 /// environment, a row to copy), with the device named as lavapipe names it.
@@ -279,7 +279,7 @@ fn method_names_and_rung_labels_are_kept_as_the_table_prints_them() {
         assert_eq!(slug(m.name()), m.name());
         assert!(!m.name().starts_with("rung-"), "{}", m.name());
     }
-    for r in LADDER {
+    for r in ladder() {
         assert_eq!(slug(r.label), r.label);
     }
 }

@@ -73,7 +73,10 @@ fn exr_bytes_do_not_depend_on_compression_threads() {
     }
     assert!(files.iter().all(|f| f == &files[0]), "EXR bytes differ");
     let meta = ::exr::meta::MetaData::read_from_file(&path, false).unwrap();
-    assert_eq!(meta.headers[0].line_order, ::exr::meta::attribute::LineOrder::Increasing);
+    assert_eq!(
+        meta.headers[0].line_order,
+        ::exr::meta::attribute::LineOrder::Increasing
+    );
     fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -441,7 +441,7 @@ impl Renderer {
             mirror: Vec4::new(0.0, 0.0, 0.0, scene.mirror.radius_m),
             flags: UVec4::new(
                 u32::from(light.is_some()),
-                lookups::plugin(scene.mirror.lookup).flag(),
+                lookups::plugin(scene.mirror.lookup).start().code(),
                 scene.mirror.distance_steps,
                 scene.mirror.secant_steps,
             ),

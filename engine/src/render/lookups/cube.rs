@@ -4,30 +4,44 @@
 
 use ash::vk;
 
-use super::{LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders};
-use crate::render::gpu::{LOOKUP_BOX, LOOKUP_PLAIN};
+use super::{
+    as_is, LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders, Rung, Start,
+};
 use crate::scene::Lookup;
 use crate::vk::GpuError;
 
 /// A lookup into the cube map.
 pub struct CubeLookup {
     lookup: Lookup,
-    flag: u32,
+    start: Start,
     summary: &'static str,
+    rungs: &'static [Rung],
 }
 
 pub static PLAIN: CubeLookup = CubeLookup {
     lookup: Lookup::Plain,
-    flag: LOOKUP_PLAIN,
+    start: Start::Reflection,
     summary: "the cube map in the reflected direction (the thesis; exact only for an \
               environment infinitely far away)",
+    rungs: &[Rung {
+        label: "plain",
+        lookup: Lookup::Plain,
+        order: 0,
+        configure: as_is,
+    }],
 };
 
 pub static BOX: CubeLookup = CubeLookup {
     lookup: Lookup::Box,
-    flag: LOOKUP_BOX,
+    start: Start::RoomBox,
     summary: "the cube map towards where the reflected ray leaves the room's box \
               (parallax-corrected; exact for an empty box room up to texel sampling)",
+    rungs: &[Rung {
+        label: "box",
+        lookup: Lookup::Box,
+        order: 1,
+        configure: as_is,
+    }],
 };
 
 impl MirrorLookup for CubeLookup {
@@ -43,8 +57,12 @@ impl MirrorLookup for CubeLookup {
         true
     }
 
-    fn flag(&self) -> u32 {
-        self.flag
+    fn start(&self) -> Start {
+        self.start
+    }
+
+    fn rungs(&self) -> &'static [Rung] {
+        self.rungs
     }
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {

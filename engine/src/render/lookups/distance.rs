@@ -13,8 +13,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::{LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders};
-use crate::render::gpu::LOOKUP_DISTANCE;
+use super::{LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders, Rung, Start};
 use crate::scene::Lookup;
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::Device;
@@ -37,8 +36,33 @@ impl MirrorLookup for Distance {
         true
     }
 
-    fn flag(&self) -> u32 {
-        LOOKUP_DISTANCE
+    fn start(&self) -> Start {
+        Start::RoomBox
+    }
+
+    /// At three linear step counts (its secant steps as the scene sets them): fewer steps
+    /// cost less and miss thin features between two samples.
+    fn rungs(&self) -> &'static [Rung] {
+        &[
+            Rung {
+                label: "distance-8",
+                lookup: Lookup::Distance,
+                order: 2,
+                configure: |s| s.mirror.distance_steps = 8,
+            },
+            Rung {
+                label: "distance-16",
+                lookup: Lookup::Distance,
+                order: 3,
+                configure: |s| s.mirror.distance_steps = 16,
+            },
+            Rung {
+                label: "distance-32",
+                lookup: Lookup::Distance,
+                order: 4,
+                configure: |s| s.mirror.distance_steps = 32,
+            },
+        ]
     }
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {

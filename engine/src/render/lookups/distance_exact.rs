@@ -24,8 +24,11 @@ use glam::Vec3;
 use super::distance::{cube_bindings, cube_pool_size, depth_sampler, write_cube};
 use super::tally::{FrameTally, TraceTally};
 use super::tracing::SceneTrace;
-use super::{LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders};
-use crate::render::gpu::{ObjectData, LOOKUP_DISTANCE_EXACT};
+use super::{
+    LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders, Rung,
+    Start,
+};
+use crate::render::gpu::ObjectData;
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
 use crate::vk::image::Sampler;
@@ -56,8 +59,18 @@ impl MirrorLookup for DistanceExact {
         true
     }
 
-    fn flag(&self) -> u32 {
-        LOOKUP_DISTANCE_EXACT
+    fn start(&self) -> Start {
+        Start::RoomBox
+    }
+
+    /// The disocclusion fix: the 16-step search, with the rays it cannot resolve traced.
+    fn rungs(&self) -> &'static [Rung] {
+        &[Rung {
+            label: "distance-exact",
+            lookup: Lookup::DistanceExact,
+            order: 5,
+            configure: |s| s.mirror.distance_steps = 16,
+        }]
     }
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {

@@ -6,8 +6,11 @@
 //! per-frame work of its own).
 //!
 //! The scene file names a lookup ([`Lookup`]; the scene module has no Vulkan, so the name lives
-//! there); everything else about it lives in its module here. Adding a lookup is a variant of
-//! `Lookup`, its module and shaders, and one line in [`REGISTRY`].
+//! there); everything else about it lives in its module here: what it needs, the direction its
+//! shader starts from ([`Start`], the one choice the shared shader code makes), its shaders,
+//! its pass and its rungs in the benchmark's ladder ([`Rung`]). Adding a lookup is a variant
+//! of `Lookup`, its module and shaders, and one line in [`REGISTRY`]; nothing in
+//! `shared.glsl`, the benchmark or the CLI.
 
 /// The order the tracing lookups hand their acceleration-structure builds their leaves in.
 pub mod build_order;
@@ -59,10 +62,58 @@ pub trait MirrorLookup: Sync {
     /// Whether the mirror samples the cube map. When not, the renderer skips the cube fill
     /// (unless the cube itself is read back).
     fn uses_cube(&self) -> bool;
-    /// The `LOOKUP_*` code written in `FrameData.flags.y`.
-    fn flag(&self) -> u32;
+    /// The cube-map direction its shader starts from (`FrameData.flags.y`).
+    fn start(&self) -> Start;
+    /// Its rungs in the benchmark's ladder: the settings it is measured at.
+    fn rungs(&self) -> &'static [Rung];
     /// Builds the lookup's mirror pipelines and state for one renderer.
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError>;
+}
+
+/// The cube-map direction a lookup starts from: what `mirror.glsl`'s `lookup_at` returns
+/// for it. The only per-lookup choice the shared shader code makes; the rest of a lookup's
+/// technique is its own shader.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Start {
+    /// The reflected direction itself (the thesis's plain lookup; a lookup that reads no
+    /// cube has this too, unused).
+    Reflection,
+    /// From the cube's centre to where the reflected ray leaves the room's box (the box
+    /// lookup; the distance searches' footprint and their answer where they find nothing).
+    RoomBox,
+}
+
+impl Start {
+    /// Its `LOOKUP_FROM_*` code in `FrameData.flags.y`.
+    pub fn code(self) -> u32 {
+        match self {
+            Start::Reflection => super::gpu::LOOKUP_FROM_REFLECTION,
+            Start::RoomBox => super::gpu::LOOKUP_FROM_ROOM_BOX,
+        }
+    }
+}
+
+/// One rung of the benchmark's trade-off ladder (`specchio bench`): a lookup with the
+/// settings it is measured at. Each lookup lists its own ([`MirrorLookup::rungs`]); the
+/// ladder is all of them in their `order` ([`ladder`]).
+pub struct Rung {
+    /// Unique in the ladder; names the rung in `--rungs`, the table, the record and the plot.
+    pub label: &'static str,
+    pub lookup: Lookup,
+    /// Its place in the ladder, from the thesis's lookup (0) towards the exact one.
+    pub order: u8,
+    /// Sets whatever else the rung needs in the scene (the lookup itself is set for it).
+    pub configure: fn(&mut crate::scene::Scene),
+}
+
+/// A rung that needs nothing beyond its lookup.
+pub fn as_is(_: &mut crate::scene::Scene) {}
+
+/// The ladder: every lookup's rungs, in their order.
+pub fn ladder() -> Vec<&'static Rung> {
+    let mut all: Vec<&'static Rung> = REGISTRY.iter().flat_map(|l| l.rungs()).collect();
+    all.sort_by_key(|r| r.order);
+    all
 }
 
 /// What a lookup needs from the device, as data.

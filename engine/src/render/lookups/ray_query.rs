@@ -9,8 +9,11 @@ use ash::vk;
 use glam::Vec3;
 
 use super::tracing::SceneTrace;
-use super::{LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders};
-use crate::render::gpu::{ObjectData, LOOKUP_RAY_QUERY};
+use super::{
+    as_is, LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders,
+    Rung, Start,
+};
+use crate::render::gpu::ObjectData;
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
 use crate::vk::GpuError;
@@ -34,8 +37,17 @@ impl MirrorLookup for RayQuery {
         false
     }
 
-    fn flag(&self) -> u32 {
-        LOOKUP_RAY_QUERY
+    fn start(&self) -> Start {
+        Start::Reflection
+    }
+
+    fn rungs(&self) -> &'static [Rung] {
+        &[Rung {
+            label: "ray-query",
+            lookup: Lookup::RayQuery,
+            order: 6,
+            configure: as_is,
+        }]
     }
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
