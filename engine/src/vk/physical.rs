@@ -116,150 +116,267 @@ fn device_local_heap_bytes(inst: &ash::Instance, physical: vk::PhysicalDevice) -
         .unwrap_or(0)
 }
 
+/// One physical device as a candidate: what it is, what it has, and why it cannot be used
+/// (if it cannot).
 fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> Candidate {
     let inst = &instance.raw;
-    let mut driver = vk::PhysicalDeviceDriverProperties::default();
-    let mut multiview_props = vk::PhysicalDeviceMultiviewProperties::default();
-    let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
-    let mut mesh_props = vk::PhysicalDeviceMeshShaderPropertiesEXT::default();
-    // SAFETY: plain query; a failure reads as "no extensions".
-    let exts: Vec<String> = unsafe { inst.enumerate_device_extension_properties(physical) }
+    let extensions = extensions(inst, physical);
+    let has = |n: &std::ffi::CStr| extensions.iter().any(|e| e.as_bytes() == n.to_bytes());
+    let p = Properties::query(inst, physical, &has);
+    let f = Features::query(inst, physical, &has, p.core.api_version);
+    let (queue_family, timestamp_bits) = graphics_queue(inst, physical);
+    let timestamps = timestamp_bits && p.core.limits.timestamp_period > 0.0;
+    let text = |c: Result<&std::ffi::CStr, _>| c.map(|s| s.to_string_lossy().into_owned());
+    let name = text(p.core.device_name_as_c_str()).unwrap_or_default();
+    let driver_info = text(p.driver.driver_info_as_c_str()).unwrap_or_default();
+    let driver_name = text(p.driver.driver_name_as_c_str()).unwrap_or_default();
+    let info = DeviceInfo {
+        index,
+        name,
+        short_name: short_name(p.driver.driver_id, &driver_name),
+        device_type: format!("{:?}", p.core.device_type),
+        vendor_id: p.core.vendor_id,
+        device_id: p.core.device_id,
+        driver_name,
+        mesa_version: parse_mesa_version(&driver_info),
+        driver_info,
+        driver_version: version_string(p.core.driver_version),
+        api_version: version_string(p.core.api_version),
+        limits: p.limits(&f, device_local_heap_bytes(inst, physical)),
+        features: f.offered(timestamps),
+    };
+    let rejected = rejection(&info, &f, p.core.api_version, queue_family);
+    Candidate {
+        physical,
+        info,
+        queue_family,
+        rejected,
+    }
+}
+
+/// The device extensions it offers, by name (a failed query reads as none).
+fn extensions(inst: &ash::Instance, physical: vk::PhysicalDevice) -> Vec<String> {
+    // SAFETY: plain query on an enumerated physical device.
+    unsafe { inst.enumerate_device_extension_properties(physical) }
         .unwrap_or_default()
         .iter()
         .filter_map(|e| e.extension_name_as_c_str().ok())
         .map(|n| n.to_string_lossy().into_owned())
-        .collect();
-    let has_ext = |n: &std::ffi::CStr| exts.iter().any(|e| e.as_bytes() == n.to_bytes());
-    let mut props2 = vk::PhysicalDeviceProperties2::default()
-        .push_next(&mut driver)
-        .push_next(&mut multiview_props)
-        .push_next(&mut maintenance3);
-    // Chained only where the extension exists: SwiftShader warns on stderr about structs it
-    // does not know.
-    if has_ext(ash::ext::mesh_shader::NAME) {
-        props2 = props2.push_next(&mut mesh_props);
-    }
-    // SAFETY: the chained structs are core 1.2+ or belong to a supported extension.
-    unsafe { inst.get_physical_device_properties2(physical, &mut props2) };
-    let props = props2.properties;
+        .collect()
+}
 
-    let mut f11 = vk::PhysicalDeviceVulkan11Features::default();
-    let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
-    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
-    let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default();
-    let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
-    let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
-    let api_ok = props.api_version >= vk::API_VERSION_1_3;
-    let mut features2 = vk::PhysicalDeviceFeatures2::default()
-        .push_next(&mut f11)
-        .push_next(&mut f12);
-    if api_ok {
-        features2 = features2.push_next(&mut f13);
-    }
-    if has_ext(ash::ext::mesh_shader::NAME) {
-        features2 = features2.push_next(&mut mesh);
-    }
-    let ray_exts = has_ext(ash::khr::ray_query::NAME)
-        && has_ext(ash::khr::acceleration_structure::NAME)
-        && has_ext(ash::khr::deferred_host_operations::NAME);
-    if ray_exts {
-        features2 = features2.push_next(&mut rq).push_next(&mut accel);
-    }
-    // SAFETY: only structs the device understands (by version or extension) are chained.
-    unsafe { inst.get_physical_device_features2(physical, &mut features2) };
-    let base = features2.features;
-
-    // SAFETY: plain query.
+/// The first graphics queue family with timestamps, else the first graphics one; and
+/// whether it has timestamps.
+fn graphics_queue(inst: &ash::Instance, physical: vk::PhysicalDevice) -> (Option<u32>, bool) {
+    // SAFETY: plain query on an enumerated physical device.
     let families = unsafe { inst.get_physical_device_queue_family_properties(physical) };
-    let queue_family = families
+    let graphics =
+        |f: &&vk::QueueFamilyProperties| f.queue_flags.contains(vk::QueueFlags::GRAPHICS);
+    let family = (families
         .iter()
-        .position(|f| {
-            f.queue_flags.contains(vk::QueueFlags::GRAPHICS) && f.timestamp_valid_bits > 0
-        })
-        .or_else(|| {
-            families
-                .iter()
-                .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
-        })
-        .map(|i| i as u32);
-    let timestamps = queue_family
-        .map(|q| families[q as usize].timestamp_valid_bits > 0)
-        .unwrap_or(false)
-        && props.limits.timestamp_period > 0.0;
+        .position(|f| graphics(&f) && f.timestamp_valid_bits > 0))
+    .or_else(|| families.iter().position(|f| graphics(&f)));
+    let timestamps = family.is_some_and(|q| families[q].timestamp_valid_bits > 0);
+    (family.map(|q| q as u32), timestamps)
+}
 
-    let name = props
-        .device_name_as_c_str()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let driver_info = driver
-        .driver_info_as_c_str()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let driver_name = driver
-        .driver_name_as_c_str()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let info = DeviceInfo {
-        index,
-        name,
-        short_name: short_name(driver.driver_id, &driver_name),
-        device_type: format!("{:?}", props.device_type),
-        vendor_id: props.vendor_id,
-        device_id: props.device_id,
-        driver_name,
-        mesa_version: parse_mesa_version(&driver_info),
-        driver_info,
-        driver_version: version_string(props.driver_version),
-        api_version: version_string(props.api_version),
-        limits: DeviceLimits {
-            sub_texel_precision_bits: props.limits.sub_texel_precision_bits,
-            sub_pixel_precision_bits: props.limits.sub_pixel_precision_bits,
-            max_image_dimension_cube: props.limits.max_image_dimension_cube,
-            max_image_dimension_2d: props.limits.max_image_dimension2_d,
-            max_image_array_layers: props.limits.max_image_array_layers,
-            max_push_constants_size: props.limits.max_push_constants_size,
-            max_sampler_anisotropy: props.limits.max_sampler_anisotropy,
-            max_multiview_view_count: multiview_props.max_multiview_view_count,
-            max_geometry_output_vertices: props.limits.max_geometry_output_vertices,
-            max_geometry_shader_invocations: props.limits.max_geometry_shader_invocations,
-            max_mesh_output_layers: if mesh.mesh_shader == vk::TRUE {
-                mesh_props.max_mesh_output_layers
+/// The properties queried, core and chained.
+struct Properties {
+    core: vk::PhysicalDeviceProperties,
+    driver: vk::PhysicalDeviceDriverProperties<'static>,
+    multiview: vk::PhysicalDeviceMultiviewProperties<'static>,
+    maintenance3: vk::PhysicalDeviceMaintenance3Properties<'static>,
+    /// Zero where the device has no mesh shaders.
+    mesh: vk::PhysicalDeviceMeshShaderPropertiesEXT<'static>,
+}
+
+impl Properties {
+    fn query(
+        inst: &ash::Instance,
+        physical: vk::PhysicalDevice,
+        has: &dyn Fn(&std::ffi::CStr) -> bool,
+    ) -> Self {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut multiview = vk::PhysicalDeviceMultiviewProperties::default();
+        let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
+        let mut mesh = vk::PhysicalDeviceMeshShaderPropertiesEXT::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default()
+            .push_next(&mut driver)
+            .push_next(&mut multiview)
+            .push_next(&mut maintenance3);
+        // Chained only where the extension exists: SwiftShader warns on stderr about structs
+        // it does not know.
+        if has(ash::ext::mesh_shader::NAME) {
+            props2 = props2.push_next(&mut mesh);
+        }
+        // SAFETY: the chained structs are core 1.2+ or belong to a supported extension.
+        unsafe { inst.get_physical_device_properties2(physical, &mut props2) };
+        let core = props2.properties;
+        // The chain's pointers are not followed again: each struct is kept for its values.
+        let null = std::ptr::null_mut();
+        Self {
+            core,
+            driver: vk::PhysicalDeviceDriverProperties {
+                p_next: null,
+                ..driver
+            },
+            multiview: vk::PhysicalDeviceMultiviewProperties {
+                p_next: null,
+                ..multiview
+            },
+            maintenance3: vk::PhysicalDeviceMaintenance3Properties {
+                p_next: null,
+                ..maintenance3
+            },
+            mesh: vk::PhysicalDeviceMeshShaderPropertiesEXT {
+                p_next: null,
+                ..mesh
+            },
+        }
+    }
+
+    fn limits(&self, f: &Features, device_local_heap_bytes: u64) -> DeviceLimits {
+        let l = &self.core.limits;
+        DeviceLimits {
+            sub_texel_precision_bits: l.sub_texel_precision_bits,
+            sub_pixel_precision_bits: l.sub_pixel_precision_bits,
+            max_image_dimension_cube: l.max_image_dimension_cube,
+            max_image_dimension_2d: l.max_image_dimension2_d,
+            max_image_array_layers: l.max_image_array_layers,
+            max_push_constants_size: l.max_push_constants_size,
+            max_sampler_anisotropy: l.max_sampler_anisotropy,
+            max_multiview_view_count: self.multiview.max_multiview_view_count,
+            max_geometry_output_vertices: l.max_geometry_output_vertices,
+            max_geometry_shader_invocations: l.max_geometry_shader_invocations,
+            max_mesh_output_layers: if f.mesh.mesh_shader == vk::TRUE {
+                self.mesh.max_mesh_output_layers
             } else {
                 0
             },
-            timestamp_period_ns: props.limits.timestamp_period,
-            max_memory_allocation_bytes: maintenance3.max_memory_allocation_size,
-            device_local_heap_bytes: device_local_heap_bytes(inst, physical),
-        },
-        features: DeviceFeatures {
-            dynamic_rendering: f13.dynamic_rendering == vk::TRUE,
-            synchronization2: f13.synchronization2 == vk::TRUE,
-            multiview: f11.multiview == vk::TRUE,
-            geometry_shader: base.geometry_shader == vk::TRUE,
-            shader_output_layer: f12.shader_output_layer == vk::TRUE,
-            mesh_shader: mesh.mesh_shader == vk::TRUE,
-            task_shader: mesh.task_shader == vk::TRUE,
-            mesh_shader_queries: mesh.mesh_shader_queries == vk::TRUE
-                && base.pipeline_statistics_query == vk::TRUE,
-            ray_query: rq.ray_query == vk::TRUE
-                && accel.acceleration_structure == vk::TRUE
-                && f12.buffer_device_address == vk::TRUE,
+            timestamp_period_ns: l.timestamp_period,
+            max_memory_allocation_bytes: self.maintenance3.max_memory_allocation_size,
+            device_local_heap_bytes,
+        }
+    }
+}
+
+/// The features queried: core, the 1.1 to 1.3 sets, and the extensions' where offered.
+struct Features {
+    base: vk::PhysicalDeviceFeatures,
+    f11: vk::PhysicalDeviceVulkan11Features<'static>,
+    f12: vk::PhysicalDeviceVulkan12Features<'static>,
+    f13: vk::PhysicalDeviceVulkan13Features<'static>,
+    mesh: vk::PhysicalDeviceMeshShaderFeaturesEXT<'static>,
+    ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR<'static>,
+    acceleration: vk::PhysicalDeviceAccelerationStructureFeaturesKHR<'static>,
+}
+
+impl Features {
+    fn query(
+        inst: &ash::Instance,
+        physical: vk::PhysicalDevice,
+        has: &dyn Fn(&std::ffi::CStr) -> bool,
+        api_version: u32,
+    ) -> Self {
+        let mut f11 = vk::PhysicalDeviceVulkan11Features::default();
+        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+        let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default();
+        let mut ray_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+        let mut acceleration = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+        let mut features2 = vk::PhysicalDeviceFeatures2::default()
+            .push_next(&mut f11)
+            .push_next(&mut f12);
+        if api_version >= vk::API_VERSION_1_3 {
+            features2 = features2.push_next(&mut f13);
+        }
+        if has(ash::ext::mesh_shader::NAME) {
+            features2 = features2.push_next(&mut mesh);
+        }
+        let ray_extensions = has(ash::khr::ray_query::NAME)
+            && has(ash::khr::acceleration_structure::NAME)
+            && has(ash::khr::deferred_host_operations::NAME);
+        if ray_extensions {
+            features2 = features2
+                .push_next(&mut ray_query)
+                .push_next(&mut acceleration);
+        }
+        // SAFETY: only structs the device understands (by version or extension) are chained.
+        unsafe { inst.get_physical_device_features2(physical, &mut features2) };
+        let base = features2.features;
+        // The chain's pointers are not followed again: each struct is kept for its values.
+        let null = std::ptr::null_mut();
+        Self {
+            base,
+            f11: vk::PhysicalDeviceVulkan11Features {
+                p_next: null,
+                ..f11
+            },
+            f12: vk::PhysicalDeviceVulkan12Features {
+                p_next: null,
+                ..f12
+            },
+            f13: vk::PhysicalDeviceVulkan13Features {
+                p_next: null,
+                ..f13
+            },
+            mesh: vk::PhysicalDeviceMeshShaderFeaturesEXT {
+                p_next: null,
+                ..mesh
+            },
+            ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR {
+                p_next: null,
+                ..ray_query
+            },
+            acceleration: vk::PhysicalDeviceAccelerationStructureFeaturesKHR {
+                p_next: null,
+                ..acceleration
+            },
+        }
+    }
+
+    /// What the device offers, as the project names it.
+    fn offered(&self, timestamps: bool) -> DeviceFeatures {
+        let on = |b: vk::Bool32| b == vk::TRUE;
+        let base = &self.base;
+        DeviceFeatures {
+            dynamic_rendering: on(self.f13.dynamic_rendering),
+            synchronization2: on(self.f13.synchronization2),
+            multiview: on(self.f11.multiview),
+            geometry_shader: on(base.geometry_shader),
+            shader_output_layer: on(self.f12.shader_output_layer),
+            mesh_shader: on(self.mesh.mesh_shader),
+            task_shader: on(self.mesh.task_shader),
+            mesh_shader_queries: on(self.mesh.mesh_shader_queries)
+                && on(base.pipeline_statistics_query),
+            ray_query: on(self.ray_query.ray_query)
+                && on(self.acceleration.acceleration_structure)
+                && on(self.f12.buffer_device_address),
             timestamps,
-            pipeline_statistics: base.pipeline_statistics_query == vk::TRUE,
-            sampler_anisotropy: base.sampler_anisotropy == vk::TRUE,
-            multi_draw_indirect: base.multi_draw_indirect == vk::TRUE,
-            draw_indirect_first_instance: base.draw_indirect_first_instance == vk::TRUE,
-        },
-    };
-    let rejected = if !api_ok {
+            pipeline_statistics: on(base.pipeline_statistics_query),
+            sampler_anisotropy: on(base.sampler_anisotropy),
+            multi_draw_indirect: on(base.multi_draw_indirect),
+            draw_indirect_first_instance: on(base.draw_indirect_first_instance),
+        }
+    }
+}
+
+/// Why the device cannot be used at all (None: it can).
+fn rejection(
+    info: &DeviceInfo,
+    f: &Features,
+    api_version: u32,
+    queue_family: Option<u32>,
+) -> Option<String> {
+    if api_version < vk::API_VERSION_1_3 {
         Some(format!(
             "supports Vulkan {} only; 1.3 is required",
             info.api_version
         ))
     } else if queue_family.is_none() {
         Some("has no graphics queue".into())
-    } else if base.shader_sampled_image_array_dynamic_indexing != vk::TRUE
-        || f12.shader_sampled_image_array_non_uniform_indexing != vk::TRUE
+    } else if f.base.shader_sampled_image_array_dynamic_indexing != vk::TRUE
+        || f.f12.shader_sampled_image_array_non_uniform_indexing != vk::TRUE
     {
         Some(
             "lacks shaderSampledImageArrayDynamicIndexing or ...NonUniformIndexing (material \
@@ -270,12 +387,6 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
         Some("lacks dynamicRendering or synchronization2 (Vulkan 1.3 core features)".into())
     } else {
         None
-    };
-    Candidate {
-        physical,
-        info,
-        queue_family,
-        rejected,
     }
 }
 
