@@ -2,12 +2,12 @@
 
 use ash::vk;
 
-use super::draw::{barrier, Sync, COLOR_OUT, DEPTH_RW, SAMPLED};
+use super::draw::{barrier, COLOR_OUT, DEPTH_RW, SAMPLED};
 use crate::scene::camera::{Frustum, ViewBasis};
 
 use super::methods::{CubeLayout, CubePlan, CubeRecorder};
 use super::{FrameReport, Renderer, TS_FILL, TS_MIPS};
-use crate::vk::commands::{image_barriers, ImageBarrier};
+use crate::vk::commands::image_barriers;
 
 /// What fills the dirty faces of a cube update: the renderer's method, or another recording
 /// into the same cube and faces (the benchmark's floors), which gets one timestamp pair, no
@@ -175,159 +175,10 @@ impl Renderer {
             )
         }));
         image_barriers(dev, cmd, &to_read);
-        self.record_mips(cmd, plan.dirty);
+        super::mips::record(&self.device, cmd, &self.cube, plan.dirty);
         if let Some(q) = &self.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);
         }
-        dev.end_label(cmd);
-    }
-
-    /// Rebuilds mips 1.. of the dirty faces by halving blits (a clean face's mips still match
-    /// its unchanged mip 0); leaves every level of every face ready for sampling.
-    fn record_mips(&self, cmd: vk::CommandBuffer, dirty: u8) {
-        let dev = &self.device;
-        let cube = &self.cube;
-        let levels = cube.mip_levels();
-        let whole_level = |m: u32| vk::ImageSubresourceRange {
-            base_mip_level: m,
-            level_count: 1,
-            ..cube.color.full_range()
-        };
-        let face_level = |m: u32, f: u32| vk::ImageSubresourceRange {
-            base_mip_level: m,
-            level_count: 1,
-            base_array_layer: f,
-            layer_count: 1,
-            ..cube.color.full_range()
-        };
-        let faces: Vec<u32> = (0..6u32).filter(|f| dirty & (1 << f) != 0).collect();
-        let blit_write = (
-            vk::PipelineStageFlags2::BLIT,
-            vk::AccessFlags2::TRANSFER_WRITE,
-        );
-        let blit_read = (
-            vk::PipelineStageFlags2::BLIT,
-            vk::AccessFlags2::TRANSFER_READ,
-        );
-        let per_face = |m: u32,
-                        from: (vk::ImageLayout, Sync),
-                        to: (vk::ImageLayout, Sync)|
-         -> Vec<ImageBarrier> {
-            faces
-                .iter()
-                .map(|&f| barrier(cube.color.raw, face_level(m, f), from, to))
-                .collect()
-        };
-        if levels == 1 {
-            let to_sampled = barrier(
-                cube.color.raw,
-                whole_level(0),
-                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-                (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
-            );
-            image_barriers(dev, cmd, &[to_sampled]);
-            return;
-        }
-        dev.begin_label(cmd, "cube mips");
-        let mip0_to_src = barrier(
-            cube.color.raw,
-            whole_level(0),
-            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-            (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, blit_read),
-        );
-        image_barriers(dev, cmd, &[mip0_to_src]);
-        for m in 1..levels {
-            // The dirty faces' level m is overwritten whole: its old contents can go, but not
-            // before the last frame's mirror has sampled them (a write after read: with
-            // frames in flight that frame may still be drawing).
-            image_barriers(
-                dev,
-                cmd,
-                &per_face(
-                    m,
-                    (vk::ImageLayout::UNDEFINED, SAMPLED),
-                    (vk::ImageLayout::TRANSFER_DST_OPTIMAL, blit_write),
-                ),
-            );
-            let src = (cube.size >> (m - 1)).max(1) as i32;
-            let dst = (cube.size >> m).max(1) as i32;
-            let layer = |mip, f| vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: mip,
-                base_array_layer: f,
-                layer_count: 1,
-            };
-            let blits: Vec<vk::ImageBlit> = faces
-                .iter()
-                .map(|&f| {
-                    vk::ImageBlit::default()
-                        .src_subresource(layer(m - 1, f))
-                        .src_offsets([
-                            vk::Offset3D::default(),
-                            vk::Offset3D {
-                                x: src,
-                                y: src,
-                                z: 1,
-                            },
-                        ])
-                        .dst_subresource(layer(m, f))
-                        .dst_offsets([
-                            vk::Offset3D::default(),
-                            vk::Offset3D {
-                                x: dst,
-                                y: dst,
-                                z: 1,
-                            },
-                        ])
-                })
-                .collect();
-            // SAFETY: level m-1 is TRANSFER_SRC, level m of these faces TRANSFER_DST; the
-            // format supports linear blits (checked when the cube was created).
-            unsafe {
-                dev.raw.cmd_blit_image(
-                    cmd,
-                    cube.color.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    cube.color.raw,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &blits,
-                    vk::Filter::LINEAR,
-                )
-            };
-            image_barriers(
-                dev,
-                cmd,
-                &per_face(
-                    m,
-                    (vk::ImageLayout::TRANSFER_DST_OPTIMAL, blit_write),
-                    (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, blit_read),
-                ),
-            );
-        }
-        // Everything the blits touched goes back to sampling; clean faces' levels 1.. never left.
-        let upper = |f: u32| vk::ImageSubresourceRange {
-            base_mip_level: 1,
-            level_count: levels - 1,
-            ..face_level(0, f)
-        };
-        let mut back: Vec<ImageBarrier> = faces
-            .iter()
-            .map(|&f| {
-                barrier(
-                    cube.color.raw,
-                    upper(f),
-                    (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, blit_read),
-                    (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
-                )
-            })
-            .collect();
-        back.push(barrier(
-            cube.color.raw,
-            whole_level(0),
-            (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, blit_read),
-            (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
-        ));
-        image_barriers(dev, cmd, &back);
         dev.end_label(cmd);
     }
 }

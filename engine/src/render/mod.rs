@@ -21,6 +21,7 @@ pub mod gpu;
 pub mod lookups;
 pub mod material_check;
 pub mod methods;
+mod mips;
 mod passes;
 pub(crate) mod pipelines;
 mod readback;
