@@ -14,6 +14,12 @@
 //! that may hold the user's files written into the old output, so the sweep does not simply
 //! remove it: it removes what the earlier output's manifest lists and moves anything else to
 //! `NAME.kept-N`, as a run that lives does (`replace::recover`).
+//!
+//! Not `tempfile::TempDir`: it would give the random name and the exclusive `mkdir`, but its
+//! drop removes the folder by path, recursively, whatever is in it; here a folder is removed
+//! only by its manifest, through a held handle, and a dead run's folder only once its lock
+//! proves the run gone. Keeping a `TempDir` just for its name would leave a dozen lines of
+//! ours for a dependency whose main behaviour must be switched off.
 
 use std::fs::{self, File};
 use std::io::{self, Read, Write};
