@@ -2,6 +2,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use specchio::output::Transaction;
@@ -9,9 +10,11 @@ use specchio::render::lookups::{self, TraceOrder};
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::camera::FACE_NAMES;
-use specchio::scene::{CubeFormat, Lookup, RefreshPolicy, MAX_DISTANCE_STEPS, MAX_SECANT_STEPS};
+use specchio::scene::{
+    CubeFormat, Lookup, RefreshPolicy, Scene, MAX_DISTANCE_STEPS, MAX_SECANT_STEPS,
+};
 use specchio::sensor::SensorOutputs;
-use specchio::vk::device::{self, DeviceInfo};
+use specchio::vk::device::{self, Device, DeviceInfo};
 
 use crate::records::{
     CubeSettings, NotRun, RenderRecord, RenderRun, RenderSettings, RenderSummary,
@@ -95,21 +98,8 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Everything that can be wrong with the input is found before the output folder exists
     //    (the numbers' ranges by clap, `specchio::process::args`).
-    let lookup = args.lookup;
-    let mut scene = specchio::scene::load(&args.scene)?;
-    if let Some(n) = args.distance_steps {
-        scene.mirror.distance_steps = n;
-    }
-    if let Some(n) = args.secant_steps {
-        scene.mirror.secant_steps = n;
-    }
-    check_sensor_outputs(args, lookup.unwrap_or(scene.mirror.lookup))?;
-    let face_size_px = args.cube_size.unwrap_or(scene.cube.face_size_px);
-    specchio::memory::estimates::render(&scene, face_size_px, args.directions, args.sensor_outputs)
-        .with_context(|| args.scene.display().to_string())?;
-    let start_s = args
-        .time
-        .unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);
+    let scene = load_scene(args)?;
+    let start_s = (args.time).unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);
     // Everything is written into a hidden folder beside --out, renamed into place at the end
     // (dropped, it is removed): a failure anywhere below leaves nothing behind.
     let mut out = Transaction::new();
@@ -122,54 +112,105 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let validation = instance.validation;
     let chosen = device::choose(&instance, args.device.as_deref())?;
     let (methods, refused) = pick_methods(&args.method, &chosen)?;
-    let lookup_used = lookup.unwrap_or(scene.mirror.lookup);
-    if let Some(why) = lookups::missing_features(lookup_used, &chosen) {
-        bail!("lookup {lookup_used} cannot run on {}: {why}", chosen.name);
+    let lookup = args.lookup.unwrap_or(scene.mirror.lookup);
+    if let Some(why) = lookups::missing_features(lookup, &chosen) {
+        bail!("lookup {lookup} cannot run on {}: {why}", chosen.name);
     }
-    let device = probe::device_for(
-        &instance,
-        args.device.as_deref(),
-        &methods,
-        lookups::features(lookup_used),
-    )?;
+    let features = lookups::features(lookup);
+    let device = probe::device_for(&instance, args.device.as_deref(), &methods, features)?;
     drop(instance);
-    let info = device.info.clone();
 
     // 3. Frames, per method (`--method all`: each into DIR/<method>/).
-    let mut runs = Vec::new();
-    for &method in &methods {
-        let dir = if args.method == "all" {
-            args.out.join(method.name())
-        } else {
-            args.out.clone()
-        };
-        let options = RenderOptions {
-            cube_size: args.cube_size,
-            method,
-            full_updates: args.full_updates,
-            lookup,
-            // Range and ids through the cube: only when asked for, so timings never pay.
-            id_cube: args.sensor_outputs,
-            trace_order: args.trace_order,
-            ..Default::default()
-        };
-        let mut renderer = Renderer::new(&device, scene.clone(), &options)?;
-        let reports = render_frames(args, &mut renderer, start_s, &out, &dir)?;
-        let summary = summarize(&reports);
-        let lookup = renderer.scene.mirror.lookup;
-        print_summary(args, (method, lookup), &dir, &reports, &summary);
-        runs.push(RenderRun {
-            method,
-            out: dir.display().to_string(),
-            refresh_counters: renderer.counters,
-            summary,
-            frames: reports,
-        });
-    }
+    let runs = (methods.iter())
+        .map(|&method| render_method(args, &device, &scene, method, start_s, &out))
+        .collect::<Result<Vec<_>>>()?;
 
-    // 4. Report.
+    // 4. The record, once the device is gone (the layer's leak report comes then).
+    let info = device.info.clone();
+    drop(device);
+    let messages = log.messages();
+    let mut record = render_record(args, &scene, start_s, (methods, &refused), info, runs);
+    record.settings.validation = validation;
+    // Counted once the device was dropped: its leak report is in.
+    record.validation_messages = messages.len();
+    out.write_json(&args.out.join("render.json"), &record)?;
+    // A signal that came after the last check still stops the run: nothing is placed.
+    specchio::process::interrupt::check("before placing the output")?;
+    out.commit()?;
+    for (m, why) in &refused {
+        specchio::say!("  {m}: not run: {why}");
+    }
+    specchio::process::validation::verdict(&messages)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The scene with the command line's search settings, checked against what the command was
+/// asked to write and against the memory it would take.
+fn load_scene(args: &Args) -> Result<Scene> {
+    let mut scene = specchio::scene::load(&args.scene)?;
+    if let Some(n) = args.distance_steps {
+        scene.mirror.distance_steps = n;
+    }
+    if let Some(n) = args.secant_steps {
+        scene.mirror.secant_steps = n;
+    }
+    check_sensor_outputs(args, args.lookup.unwrap_or(scene.mirror.lookup))?;
+    let face_size_px = args.cube_size.unwrap_or(scene.cube.face_size_px);
+    specchio::memory::estimates::render(&scene, face_size_px, args.directions, args.sensor_outputs)
+        .with_context(|| args.scene.display().to_string())?;
+    Ok(scene)
+}
+
+/// One method's frames, written into its folder, and its summary printed.
+fn render_method(
+    args: &Args,
+    device: &Arc<Device>,
+    scene: &Scene,
+    method: Method,
+    start_s: f64,
+    out: &Transaction,
+) -> Result<RenderRun> {
+    let dir = if args.method == "all" {
+        args.out.join(method.name())
+    } else {
+        args.out.clone()
+    };
+    let options = RenderOptions {
+        cube_size: args.cube_size,
+        method,
+        full_updates: args.full_updates,
+        lookup: args.lookup,
+        // Range and ids through the cube: only when asked for, so timings never pay.
+        id_cube: args.sensor_outputs,
+        trace_order: args.trace_order,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(device, scene.clone(), &options)?;
+    let reports = render_frames(args, &mut renderer, start_s, out, &dir)?;
+    let summary = summarize(&reports);
+    let lookup = renderer.scene.mirror.lookup;
+    print_summary(args, (method, lookup), &dir, &reports, &summary);
+    Ok(RenderRun {
+        method,
+        out: dir.display().to_string(),
+        refresh_counters: renderer.counters,
+        summary,
+        frames: reports,
+    })
+}
+
+/// `render.json`: the settings the runs had, the device, what did not run, the runs (the
+/// validation setting and the message count are the caller's to fill in).
+fn render_record(
+    args: &Args,
+    scene: &Scene,
+    start_s: f64,
+    (methods, refused): (Vec<Method>, &[(Method, String)]),
+    device: DeviceInfo,
+    runs: Vec<RenderRun>,
+) -> RenderRecord {
     let cube = &scene.cube;
-    let mut record = RenderRecord {
+    RenderRecord {
         scene: args.scene.display().to_string(),
         description: scene.description.clone(),
         origin: scene.origin.to_array(),
@@ -179,7 +220,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             frames: args.frames,
             methods,
             full_updates: args.full_updates,
-            lookup: lookup.unwrap_or(scene.mirror.lookup),
+            lookup: args.lookup.unwrap_or(scene.mirror.lookup),
             trace_order: args.trace_order.name(),
             distance_steps: scene.mirror.distance_steps,
             secant_steps: scene.mirror.secant_steps,
@@ -194,13 +235,12 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             refresh: refresh_name(scene.refresh),
             observer_resolution: scene.observer.resolution,
             sensor_resolution: scene.sensor.resolution,
-            validation,
+            validation: false,
             lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
             malloc_trim_threshold_bytes: specchio::process::allocator::trim_threshold(),
         },
-        device: info,
-        methods_not_run: refused
-            .iter()
+        device,
+        methods_not_run: (refused.iter())
             .map(|(m, why)| NotRun {
                 method: *m,
                 reason: why.clone(),
@@ -208,19 +248,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             .collect(),
         runs,
         validation_messages: 0,
-    };
-    drop(device);
-    let messages = log.messages();
-    record.validation_messages = messages.len();
-    out.write_json(&args.out.join("render.json"), &record)?;
-    // A signal that came after the last check still stops the run: nothing is placed.
-    specchio::process::interrupt::check("before placing the output")?;
-    out.commit()?;
-    for (m, why) in &refused {
-        specchio::say!("  {m}: not run: {why}");
     }
-    specchio::process::validation::verdict(&messages)?;
-    Ok(ExitCode::SUCCESS)
 }
 
 /// `--method NAME`: that method, refused with the reason when it cannot run here.
