@@ -61,9 +61,9 @@ impl Renderer {
     /// `render_display_frame` of that view).
     pub fn display_image(&self, view: DisplayView) -> DisplayImage {
         let target = match view {
-            DisplayView::Pair => &self.pair_target,
-            DisplayView::Observer => &self.observer_target,
-            DisplayView::Sensor => &self.sensor_target,
+            DisplayView::Pair => &self.targets.pair,
+            DisplayView::Observer => &self.targets.observer,
+            DisplayView::Sensor => &self.targets.sensor,
         };
         DisplayImage {
             image: target.color.raw,

@@ -83,7 +83,7 @@ impl Renderer {
         self.submit_frame(cmd, record_start, &mut report)?;
         self.read_queries(&mut report, false, false)?;
         report.gpu_face_ms = None;
-        if let Some(q) = &self.statistics {
+        if let Some(q) = &self.queries.statistics {
             report.fill_stats = Some(q.statistics(0, 1)?[0]);
         }
         self.cube_state = None;

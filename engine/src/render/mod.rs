@@ -24,6 +24,7 @@ pub mod methods;
 mod mips;
 mod passes;
 pub(crate) mod pipelines;
+mod queries;
 mod readback;
 pub mod resources;
 mod sensor_rays;
@@ -37,7 +38,7 @@ use glam::{Mat4, UVec4, Vec3, Vec4};
 
 use gpu::{FrameData, ObjectData, ViewData};
 use resources::{SceneResources, VIEW_COUNT};
-use targets::{CubeTarget, ViewTarget};
+use targets::{CubeTarget, ViewTarget, ViewTargets};
 
 pub use crate::image::RgbaImage;
 use crate::scene::camera::{self, ViewBasis};
@@ -47,9 +48,10 @@ use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::device::Device;
 use crate::vk::memory::{Buffer, BufferDesc};
 use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, PipelineLayout, ShaderStage};
-use crate::vk::queries::{PipelineStats, QueryPool};
+use crate::vk::queries::PipelineStats;
 use crate::vk::GpuError;
 pub use frame::{FrameImages, FrameReport, Readback, RefreshCounters, RenderOptions};
+use queries::*;
 
 /// The side-by-side image of the thesis: observer left, sensor right.
 pub const PAIR_SIZE: [u32; 2] = [1200, 450];
@@ -57,20 +59,6 @@ pub const PAIR_SIZE: [u32; 2] = [1200, 450];
 /// their near plane is placed so that its corners are this far (`ViewBasis::near_plane_for`);
 /// their far plane is at infinity.
 pub const CAMERA_NEAR_M: f32 = 0.05;
-
-/// Timestamp slots: start, after each face (six-pass), after the fill, after the mips, after
-/// each view, after the readback copies.
-const TS_START: u32 = 0;
-const TS_FACE0: u32 = 1;
-const TS_FILL: u32 = 7;
-const TS_MIPS: u32 = 8;
-const TS_OBSERVER: u32 = 9;
-const TS_SENSOR: u32 = 10;
-const TS_PAIR: u32 = 11;
-const TS_READBACK: u32 = 12;
-const TS_COUNT: u32 = 13;
-/// Statistics slots: six faces, then the three views.
-const STATS_COUNT: u32 = 9;
 
 struct Pipelines {
     view_scene: Pipeline,
@@ -92,13 +80,10 @@ pub struct Renderer {
     /// The order the tracing lookups hand their builds (kept for a lookup switched in place).
     trace_order: lookups::TraceOrder,
     pipelines: Pipelines,
-    timestamps: Option<QueryPool>,
-    statistics: Option<QueryPool>,
-    observer_target: ViewTarget,
-    sensor_target: ViewTarget,
-    pair_target: ViewTarget,
-    observer_direction_target: ViewTarget,
-    sensor_direction_target: ViewTarget,
+    /// The frame's timestamps and pipeline statistics (where the device has them).
+    queries: FrameQueries,
+    /// The view passes' targets (observer, sensor, pair, the two direction images).
+    targets: ViewTargets,
     /// The sensor ray map's passes and two targets (origin, direction), made on first use.
     sensor_rays: Option<(sensor_rays::SensorRays, [ViewTarget; 2])>,
     cube: CubeTarget,
@@ -142,17 +127,7 @@ impl Renderer {
         let submitter = Submitter::create(device, "frame")?;
         let resources = SceneResources::create(device, &scene, &submitter)?;
         let cube = CubeTarget::create(device, &scene.cube, options.id_cube)?;
-        let [ow, oh] = scene.observer.resolution;
-        let [sw, sh] = scene.sensor.resolution;
-        let view = targets::VIEW_FORMAT;
-        let direction = targets::DIRECTION_FORMAT;
-        let observer_target = ViewTarget::create(device, view, ow, oh, "observer")?;
-        let sensor_target = ViewTarget::create(device, view, sw, sh, "sensor")?;
-        let pair_target = ViewTarget::create(device, view, PAIR_SIZE[0], PAIR_SIZE[1], "views")?;
-        let observer_direction_target =
-            ViewTarget::create(device, direction, ow, oh, "observer directions")?;
-        let sensor_direction_target =
-            ViewTarget::create(device, direction, sw, sh, "sensor directions")?;
+        let targets = ViewTargets::create(device, &scene)?;
         if let Some(why) = options.method.missing_features(&device.info) {
             return Err(GpuError::Unsupported(format!(
                 "method {}: {why}",
@@ -188,18 +163,7 @@ impl Renderer {
             0,
             &[(cube.cube_view.raw, cube.sampler.raw)],
         );
-        let timestamps = device
-            .info
-            .features
-            .timestamps
-            .then(|| QueryPool::timestamps(device, TS_COUNT, "frame timestamps"))
-            .transpose()?;
-        let statistics = device
-            .info
-            .features
-            .pipeline_statistics
-            .then(|| QueryPool::pipeline_statistics(device, STATS_COUNT, "frame statistics"))
-            .transpose()?;
+        let queries = FrameQueries::create(device)?;
         Ok(Self {
             floor_pipelines: None,
             fill,
@@ -207,13 +171,8 @@ impl Renderer {
             pass_lookup: lookup,
             trace_order: options.trace_order,
             pipelines,
-            timestamps,
-            statistics,
-            observer_target,
-            sensor_target,
-            pair_target,
-            observer_direction_target,
-            sensor_direction_target,
+            queries,
+            targets,
             sensor_rays: None,
             cube,
             resources,
@@ -326,7 +285,7 @@ impl Renderer {
         self.lookup_pass.record(cmd);
         if dirty != 0 {
             self.record_cube(cmd, &plan, self.cube_state.is_none(), &mut report);
-        } else if let Some(q) = &self.timestamps {
+        } else if let Some(q) = &self.queries.timestamps {
             for ts in TS_FACE0..=TS_MIPS {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
             }
@@ -348,13 +307,7 @@ impl Renderer {
     /// Starts recording a frame: queries reset, the start timestamp written.
     fn begin_frame(&self) -> Result<vk::CommandBuffer, GpuError> {
         let cmd = self.submitter.begin()?;
-        if let Some(q) = &self.timestamps {
-            q.reset(cmd);
-            q.write_timestamp(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, TS_START);
-        }
-        if let Some(q) = &self.statistics {
-            q.reset(cmd);
-        }
+        self.queries.begin_frame(cmd);
         Ok(cmd)
     }
 
@@ -366,7 +319,7 @@ impl Renderer {
         record_start: Instant,
         report: &mut FrameReport,
     ) -> Result<(), GpuError> {
-        if let Some(q) = &self.timestamps {
+        if let Some(q) = &self.queries.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_READBACK);
         }
         report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;

@@ -46,13 +46,13 @@ impl Renderer {
     pub(super) fn view_slots(&self, readback: Readback) -> Vec<(Slot, &ViewTarget)> {
         let mut slots = Vec::new();
         if readback.views {
-            slots.push((Slot::Observer, &self.observer_target));
-            slots.push((Slot::Sensor, &self.sensor_target));
-            slots.push((Slot::Pair, &self.pair_target));
+            slots.push((Slot::Observer, &self.targets.observer));
+            slots.push((Slot::Sensor, &self.targets.sensor));
+            slots.push((Slot::Pair, &self.targets.pair));
         }
         if readback.directions {
-            slots.push((Slot::ObserverDirection, &self.observer_direction_target));
-            slots.push((Slot::SensorDirection, &self.sensor_direction_target));
+            slots.push((Slot::ObserverDirection, &self.targets.observer_directions));
+            slots.push((Slot::SensorDirection, &self.targets.sensor_directions));
         }
         if let (true, Some((_, [origin, direction]))) = (readback.rays, &self.sensor_rays) {
             slots.push((Slot::SensorRayOrigin, origin));
@@ -97,7 +97,7 @@ impl Renderer {
         };
         let (before, after) = (undrawn(0..first), undrawn(first..colour.len()));
         let mark = |stamps: &[u32]| {
-            if let Some(q) = &self.timestamps {
+            if let Some(q) = &self.queries.timestamps {
                 for &ts in stamps {
                     q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
                 }
@@ -154,7 +154,7 @@ impl Renderer {
                 &p.depth_only
             };
             self.record_view(cmd, target, ids, views, (scene, output), stats, name);
-            if let (Some(q), Some(ts)) = (&self.timestamps, ts) {
+            if let (Some(q), Some(ts)) = (&self.queries.timestamps, ts) {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
             if display.is_some() {
@@ -198,7 +198,7 @@ impl Renderer {
                 ),
             ],
         );
-        if let (Some(q), Some(slot)) = (&self.statistics, stats_slot) {
+        if let (Some(q), Some(slot)) = (&self.queries.statistics, stats_slot) {
             q.begin(cmd, slot);
         }
         self.begin_rendering(
@@ -237,7 +237,7 @@ impl Renderer {
             self.draw_mirror(cmd, output, v);
         }
         self.end_rendering(cmd);
-        if let (Some(q), Some(slot)) = (&self.statistics, stats_slot) {
+        if let (Some(q), Some(slot)) = (&self.queries.statistics, stats_slot) {
             q.end(cmd, slot);
         }
         image_barriers(
@@ -257,9 +257,9 @@ impl Renderer {
     fn display_slot(&self, view: super::display::DisplayView) -> (Slot, &ViewTarget) {
         use super::display::DisplayView;
         match view {
-            DisplayView::Pair => (Slot::Pair, &self.pair_target),
-            DisplayView::Observer => (Slot::Observer, &self.observer_target),
-            DisplayView::Sensor => (Slot::Sensor, &self.sensor_target),
+            DisplayView::Pair => (Slot::Pair, &self.targets.pair),
+            DisplayView::Observer => (Slot::Observer, &self.targets.observer),
+            DisplayView::Sensor => (Slot::Sensor, &self.targets.sensor),
         }
     }
 }

@@ -141,7 +141,7 @@ impl Renderer {
         update: bool,
         views: bool,
     ) -> Result<(), GpuError> {
-        if let Some(q) = &self.timestamps {
+        if let Some(q) = &self.queries.timestamps {
             let t = q.timestamps_ns(TS_COUNT)?;
             let ms = |a: u32, b: u32| (t[b as usize] - t[a as usize]) / 1e6;
             if self.per_face_marks() {
@@ -156,7 +156,7 @@ impl Renderer {
             report.gpu_sensor_ms = Some(ms(TS_OBSERVER, TS_SENSOR));
             report.gpu_pair_ms = Some(ms(TS_SENSOR, TS_PAIR));
         }
-        if let Some(q) = &self.statistics {
+        if let Some(q) = &self.queries.statistics {
             // Only queries begun this frame have results. Six-pass uses slots 0..6 (one per
             // dirty face), the one-pass methods slot 0.
             if update && self.per_face_marks() {

@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use crate::scene::{CubeFormat, CubeSettings};
+use crate::scene::{CubeFormat, CubeSettings, Scene};
 use crate::vk::device::Device;
 use crate::vk::image::{full_mip_count, Image, ImageDesc, ImageView, Sampler};
 use crate::vk::GpuError;
@@ -305,6 +305,43 @@ impl ViewTarget {
             depth,
             width,
             height,
+        })
+    }
+}
+
+/// The view passes' targets: the observer, the sensor and the side-by-side pair (RGBA16F),
+/// and the two views' direction images (RGBA32F), each at its camera's resolution.
+pub struct ViewTargets {
+    pub observer: ViewTarget,
+    pub sensor: ViewTarget,
+    pub pair: ViewTarget,
+    pub observer_directions: ViewTarget,
+    pub sensor_directions: ViewTarget,
+}
+
+impl ViewTargets {
+    pub fn create(device: &Arc<Device>, scene: &Scene) -> Result<Self, GpuError> {
+        let [ow, oh] = scene.observer.resolution;
+        let [sw, sh] = scene.sensor.resolution;
+        let [pw, ph] = super::PAIR_SIZE;
+        Ok(Self {
+            observer: ViewTarget::create(device, VIEW_FORMAT, ow, oh, "observer")?,
+            sensor: ViewTarget::create(device, VIEW_FORMAT, sw, sh, "sensor")?,
+            pair: ViewTarget::create(device, VIEW_FORMAT, pw, ph, "views")?,
+            observer_directions: ViewTarget::create(
+                device,
+                DIRECTION_FORMAT,
+                ow,
+                oh,
+                "observer directions",
+            )?,
+            sensor_directions: ViewTarget::create(
+                device,
+                DIRECTION_FORMAT,
+                sw,
+                sh,
+                "sensor directions",
+            )?,
         })
     }
 }

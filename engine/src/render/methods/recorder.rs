@@ -178,7 +178,7 @@ impl<'a> CubeRecorder<'a> {
         let dev = self.device();
         let name = crate::scene::camera::FACE_NAMES[face as usize];
         dev.begin_label(self.cmd, &format!("face {name}"));
-        if let (Some(q), true) = (&self.r.statistics, self.per_face_marks) {
+        if let (Some(q), true) = (&self.r.queries.statistics, self.per_face_marks) {
             q.begin(self.cmd, face);
         }
         let size = self.face_size();
@@ -202,7 +202,7 @@ impl<'a> CubeRecorder<'a> {
     /// Closes the scope opened by [`Self::begin_face`].
     pub fn end_face(&self, face: u32) {
         self.r.end_rendering(self.cmd);
-        if let (Some(q), true) = (&self.r.statistics, self.per_face_marks) {
+        if let (Some(q), true) = (&self.r.queries.statistics, self.per_face_marks) {
             q.end(self.cmd, face);
         }
         self.device().end_label(self.cmd);

@@ -1,0 +1,58 @@
+//! The frame's queries, one part of the renderer: timestamps at the frame's milestones and
+//! pipeline statistics per face and per view, where the device has them. The fill, the view
+//! passes and the readback write and read them through this part's pools and slots.
+
+use std::sync::Arc;
+
+use ash::vk;
+
+use crate::vk::device::Device;
+use crate::vk::queries::QueryPool;
+use crate::vk::GpuError;
+
+/// Timestamp slots: start, after each face (six-pass), after the fill, after the mips, after
+/// each view, after the readback copies.
+pub(super) const TS_START: u32 = 0;
+pub(super) const TS_FACE0: u32 = 1;
+pub(super) const TS_FILL: u32 = 7;
+pub(super) const TS_MIPS: u32 = 8;
+pub(super) const TS_OBSERVER: u32 = 9;
+pub(super) const TS_SENSOR: u32 = 10;
+pub(super) const TS_PAIR: u32 = 11;
+pub(super) const TS_READBACK: u32 = 12;
+pub(super) const TS_COUNT: u32 = 13;
+/// Statistics slots: six faces, then the three views.
+pub(super) const STATS_COUNT: u32 = 9;
+
+/// The two pools, each `None` where the device lacks its kind of query.
+pub(super) struct FrameQueries {
+    pub timestamps: Option<QueryPool>,
+    pub statistics: Option<QueryPool>,
+}
+
+impl FrameQueries {
+    pub fn create(device: &Arc<Device>) -> Result<Self, GpuError> {
+        let features = &device.info.features;
+        let timestamps = (features.timestamps)
+            .then(|| QueryPool::timestamps(device, TS_COUNT, "frame timestamps"))
+            .transpose()?;
+        let statistics = (features.pipeline_statistics)
+            .then(|| QueryPool::pipeline_statistics(device, STATS_COUNT, "frame statistics"))
+            .transpose()?;
+        Ok(Self {
+            timestamps,
+            statistics,
+        })
+    }
+
+    /// At the start of a frame's commands: both pools reset, the start timestamp written.
+    pub fn begin_frame(&self, cmd: vk::CommandBuffer) {
+        if let Some(q) = &self.timestamps {
+            q.reset(cmd);
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, TS_START);
+        }
+        if let Some(q) = &self.statistics {
+            q.reset(cmd);
+        }
+    }
+}
