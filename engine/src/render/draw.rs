@@ -233,7 +233,7 @@ impl Renderer {
     /// one of the sensor ray map's (which read the cube's depth and ids).
     pub(super) fn draw_mirror(&self, cmd: vk::CommandBuffer, output: MirrorOutput, view: u32) {
         let d = &self.device.raw;
-        let lookup = &self.lookup_pass;
+        let lookup = &self.mirror.pass;
         let (pipeline, layout, sets) = match output {
             MirrorOutput::Colour | MirrorOutput::LookupDirection => (
                 lookup.pipeline(output == MirrorOutput::LookupDirection).raw,

@@ -22,6 +22,7 @@ pub mod lookups;
 pub mod material_check;
 pub mod methods;
 mod mips;
+mod mirror;
 mod passes;
 pub(crate) mod pipelines;
 mod queries;
@@ -75,10 +76,7 @@ pub struct Renderer {
     fill: Box<dyn methods::FillPass>,
     /// The mirror lookup's pipelines and per-renderer state, and the lookup it is for (the
     /// pass is rebuilt when `scene.mirror.lookup` is switched in place).
-    lookup_pass: Box<dyn lookups::LookupPass>,
-    pass_lookup: crate::scene::Lookup,
-    /// The order the tracing lookups hand their builds (kept for a lookup switched in place).
-    trace_order: lookups::TraceOrder,
+    mirror: mirror::Mirror,
     pipelines: Pipelines,
     /// The frame's timestamps and pipeline statistics (where the device has them).
     queries: FrameQueries,
@@ -135,13 +133,9 @@ impl Renderer {
             )));
         }
         let pipelines = pipelines::create_pipelines(device, &resources)?;
-        let lookup = scene.mirror.lookup;
-        let lookup_pass = create_lookup_pass(
-            device,
-            &resources,
-            &cube,
-            &submitter,
-            lookup,
+        let mirror = mirror::Mirror::create(
+            (device, &resources, &cube, &submitter),
+            scene.mirror.lookup,
             options.trace_order,
         )?;
         let fill = options.method.create(&methods::MethodContext {
@@ -167,9 +161,7 @@ impl Renderer {
         Ok(Self {
             floor_pipelines: None,
             fill,
-            lookup_pass,
-            pass_lookup: lookup,
-            trace_order: options.trace_order,
+            mirror,
             pipelines,
             queries,
             targets,
@@ -209,25 +201,17 @@ impl Renderer {
         display: Option<display::DisplayView>,
     ) -> Result<(FrameReport, FrameImages), GpuError> {
         let record_start = Instant::now();
-        if self.scene.mirror.lookup != self.pass_lookup {
-            let lookup = self.scene.mirror.lookup;
-            self.lookup_pass = create_lookup_pass(
-                &self.device,
-                &self.resources,
-                &self.cube,
-                &self.submitter,
-                lookup,
-                self.trace_order,
-            )?;
-            self.pass_lookup = lookup;
-        }
+        self.mirror.follow(
+            (&self.device, &self.resources, &self.cube, &self.submitter),
+            self.scene.mirror.lookup,
+        )?;
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
         // A lookup that does not read the cube (ray-query) skips its fill, unless the cube
         // itself or the sensor's ray map (which reads its depth and ids) is read back; the
         // cube then keeps what it last showed.
         let fill_cube =
-            lookups::plugin(self.pass_lookup).uses_cube() || readback.cube || readback.rays;
+            lookups::plugin(self.mirror.lookup()).uses_cube() || readback.cube || readback.rays;
         if readback.rays {
             self.prepare_sensor_rays()?;
         }
@@ -282,7 +266,7 @@ impl Renderer {
         };
         // The lookup's own work (the ray-query TLAS build) comes first: without a cube update
         // it is all that lies between the start and fill timestamps (`gpu_fill_ms`).
-        self.lookup_pass.record(cmd);
+        self.mirror.pass.record(cmd);
         if dirty != 0 {
             self.record_cube(cmd, &plan, self.cube_state.is_none(), &mut report);
         } else if let Some(q) = &self.queries.timestamps {
@@ -291,11 +275,11 @@ impl Renderer {
             }
         }
         let copies = self.record_views(cmd, &views, readback, display);
-        self.lookup_pass.record_after_views(cmd);
+        self.mirror.pass.record_after_views(cmd);
         self.record_readback(cmd, readback, &copies);
         self.submit_frame(cmd, record_start, &mut report)?;
         self.read_queries(&mut report, dirty != 0, readback.views)?;
-        report.traced_rays = self.lookup_pass.tally()?;
+        report.traced_rays = self.mirror.pass.tally()?;
         // The cube now shows `state`, except after an `every-n` frame that skipped the update.
         if dirty != 0 || (fill_cube && self.scene.refresh == RefreshPolicy::OnChange) {
             self.cube_state = Some(state);
@@ -470,32 +454,10 @@ impl Renderer {
             .zip(&self.resources.drawables)
             .map(|(o, d)| camera::transform_aabb(&o.model_to_world, d.bounds_min, d.bounds_max))
             .collect();
-        self.lookup_pass.prepare(&objects, &self.object_bounds)?;
+        self.mirror.pass.prepare(&objects, &self.object_bounds)?;
         self.draw_order = self.front_to_back();
         Ok(bases)
     }
-}
-
-/// The pass of `lookup`, refused with the reason when the device cannot run it.
-fn create_lookup_pass(
-    device: &Arc<Device>,
-    resources: &SceneResources,
-    cube: &CubeTarget,
-    submitter: &Submitter,
-    lookup: crate::scene::Lookup,
-    trace_order: lookups::TraceOrder,
-) -> Result<Box<dyn lookups::LookupPass>, GpuError> {
-    if let Some(why) = lookups::missing_features(lookup, &device.info) {
-        return Err(GpuError::Unsupported(format!("lookup {lookup}: {why}")));
-    }
-    lookups::plugin(lookup).create(&lookups::LookupContext {
-        device,
-        resources,
-        cube,
-        submitter,
-        push_size: std::mem::size_of::<gpu::Push>() as u32,
-        trace_order,
-    })
 }
 
 fn object_data(model: Mat4, material: usize) -> ObjectData {

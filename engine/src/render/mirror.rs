@@ -1,0 +1,75 @@
+//! The mirror part of the renderer: the lookup's pass it holds (its pipelines, its set 1, its
+//! per-frame work), rebuilt when the scene's lookup is switched in place (the viewer's menu).
+
+use std::sync::Arc;
+
+use super::gpu;
+use super::lookups::{self, LookupPass, TraceOrder};
+use super::resources::SceneResources;
+use super::targets::CubeTarget;
+use crate::scene::Lookup;
+use crate::vk::commands::Submitter;
+use crate::vk::device::Device;
+use crate::vk::GpuError;
+
+/// What a lookup's pass is built from: the device, the scene on it, the cube, the submitter.
+pub(super) type Inputs<'a> = (
+    &'a Arc<Device>,
+    &'a SceneResources,
+    &'a CubeTarget,
+    &'a Submitter,
+);
+
+pub(super) struct Mirror {
+    pub pass: Box<dyn LookupPass>,
+    lookup: Lookup,
+    /// The order the tracing lookups hand their builds (kept for a lookup switched in place).
+    trace_order: TraceOrder,
+}
+
+impl Mirror {
+    pub fn create(
+        inputs: Inputs<'_>,
+        lookup: Lookup,
+        trace_order: TraceOrder,
+    ) -> Result<Self, GpuError> {
+        Ok(Self {
+            pass: create_pass(inputs, lookup, trace_order)?,
+            lookup,
+            trace_order,
+        })
+    }
+
+    /// The lookup the pass is for.
+    pub fn lookup(&self) -> Lookup {
+        self.lookup
+    }
+
+    /// Rebuilds the pass when the scene's lookup is no longer the one it was made for.
+    pub fn follow(&mut self, inputs: Inputs<'_>, lookup: Lookup) -> Result<(), GpuError> {
+        if lookup != self.lookup {
+            self.pass = create_pass(inputs, lookup, self.trace_order)?;
+            self.lookup = lookup;
+        }
+        Ok(())
+    }
+}
+
+/// The pass of `lookup`, refused with the reason when the device cannot run it.
+fn create_pass(
+    (device, resources, cube, submitter): Inputs<'_>,
+    lookup: Lookup,
+    trace_order: TraceOrder,
+) -> Result<Box<dyn LookupPass>, GpuError> {
+    if let Some(why) = lookups::missing_features(lookup, &device.info) {
+        return Err(GpuError::Unsupported(format!("lookup {lookup}: {why}")));
+    }
+    lookups::plugin(lookup).create(&lookups::LookupContext {
+        device,
+        resources,
+        cube,
+        submitter,
+        push_size: std::mem::size_of::<gpu::Push>() as u32,
+        trace_order,
+    })
+}
