@@ -139,89 +139,37 @@ impl Pipeline {
         spirv: &[u32],
         name: &str,
     ) -> Result<Self, GpuError> {
-        let d = &device.raw;
-        let info = vk::ShaderModuleCreateInfo::default().code(spirv);
-        // SAFETY: the words are SPIR-V produced by glslang at build time.
-        let module = unsafe { d.create_shader_module(&info, None) }.vk("vkCreateShaderModule")?;
+        let modules = Modules::create(device, [spirv])?;
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module)
+            .module(modules.raw[0])
             .name(c"main");
         let info = vk::ComputePipelineCreateInfo::default()
             .stage(stage)
             .layout(layout.raw);
         // SAFETY: every pointer in info points at locals that outlive the call.
-        let result =
-            unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
-        destroy_modules(d, &[module]);
-        let raw = result.map_err(|(_, r)| r).vk("vkCreateComputePipelines")?[0];
-        device.set_name(raw, name);
-        Ok(Self {
-            raw,
-            device: Arc::clone(device),
-        })
+        let result = unsafe {
+            (device.raw).create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+        };
+        Self::made(device, result, "vkCreateComputePipelines", name)
     }
 
+    /// A graphics pipeline: the stages with their constants, the fixed-function state `desc`
+    /// describes, dynamic rendering into its formats.
     pub fn create_graphics(
         device: &Arc<Device>,
         layout: &PipelineLayout,
         desc: &GraphicsPipelineDesc<'_>,
         name: &str,
     ) -> Result<Self, GpuError> {
-        let d = &device.raw;
-        // Modules are only needed while the pipeline is created.
-        let mut modules = Vec::with_capacity(desc.stages.len());
-        for s in desc.stages {
-            let info = vk::ShaderModuleCreateInfo::default().code(s.spirv);
-            // SAFETY: the words are SPIR-V produced by glslang at build time.
-            match unsafe { d.create_shader_module(&info, None) } {
-                Ok(m) => modules.push(m),
-                Err(result) => {
-                    destroy_modules(d, &modules);
-                    return Err(GpuError::Vk {
-                        call: "vkCreateShaderModule",
-                        result,
-                    });
-                }
-            }
-        }
-        // Each stage's constants: map entries into its values' bytes, both alive until the
-        // pipeline is made.
-        let entries: Vec<Vec<vk::SpecializationMapEntry>> = desc
-            .stages
-            .iter()
-            .map(|s| {
-                (s.constants.iter().enumerate())
-                    .map(|(i, c)| vk::SpecializationMapEntry {
-                        constant_id: c.id,
-                        offset: (4 * i) as u32,
-                        size: 4,
-                    })
-                    .collect()
-            })
-            .collect();
-        let values: Vec<Vec<u8>> = (desc.stages.iter())
-            .map(|s| {
-                s.constants
-                    .iter()
-                    .flat_map(|c| c.value.to_ne_bytes())
-                    .collect()
-            })
-            .collect();
-        let specializations: Vec<vk::SpecializationInfo> = entries
-            .iter()
-            .zip(&values)
-            .map(|(e, v)| vk::SpecializationInfo::default().map_entries(e).data(v))
-            .collect();
-        let stages: Vec<_> = desc
-            .stages
-            .iter()
-            .zip(&modules)
-            .zip(&specializations)
-            .map(|((s, &m), spec)| {
+        let modules = Modules::create(device, desc.stages.iter().map(|s| s.spirv))?;
+        let constants = Constants::of(desc.stages);
+        let specializations = constants.infos();
+        let stages: Vec<_> = (desc.stages.iter().zip(&modules.raw).zip(&specializations))
+            .map(|((s, &module), spec)| {
                 let info = vk::PipelineShaderStageCreateInfo::default()
                     .stage(s.stage)
-                    .module(m)
+                    .module(module)
                     .name(c"main");
                 if s.constants.is_empty() {
                     info
@@ -230,60 +178,22 @@ impl Pipeline {
                 }
             })
             .collect();
-        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-            .vertex_binding_descriptions(desc.vertex_bindings)
-            .vertex_attribute_descriptions(desc.vertex_attributes);
-        let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let fixed = FixedFunction::of(desc);
+        let (vertex_input, input_assembly) = fixed.vertex_input();
         let viewport = vk::PipelineViewportStateCreateInfo::default()
             .viewport_count(1)
             .scissor_count(1);
-        let raster = vk::PipelineRasterizationStateCreateInfo::default()
-            .rasterizer_discard_enable(desc.rasterizer_discard)
-            .polygon_mode(vk::PolygonMode::FILL)
-            .cull_mode(desc.cull_mode)
-            // A triangle counter-clockwise seen from outside keeps positive area in our views
-            // (x right, y down, not mirrored), so CCW is front. Cube faces are mirrored, but
-            // the scene pipelines do not cull, so only the mirror's bounding cube relies on it.
-            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-            .line_width(1.0);
+        let raster = fixed.rasterization();
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(desc.depth_write)
-            .depth_compare_op(desc.depth_compare);
-        let write_mask = if desc.color_writes {
-            vk::ColorComponentFlags::RGBA
-        } else {
-            vk::ColorComponentFlags::empty()
-        };
-        let attachment =
-            vk::PipelineColorBlendAttachmentState::default().color_write_mask(write_mask);
-        let attachments = [attachment; 2];
-        let count = 1 + usize::from(desc.id_format.is_some());
-        let blend =
-            vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments[..count]);
-        let mut dynamic_states = vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-        if desc.dynamic_culling {
-            dynamic_states.extend([vk::DynamicState::CULL_MODE, vk::DynamicState::FRONT_FACE]);
-        }
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let color_formats: Vec<vk::Format> = [desc.color_format]
-            .into_iter()
-            .chain(desc.id_format)
-            .collect();
-        let mut rendering = vk::PipelineRenderingCreateInfo::default()
-            .view_mask(desc.view_mask)
-            .color_attachment_formats(&color_formats)
-            .depth_attachment_format(desc.depth_format);
+        let depth = fixed.depth();
+        let blend = fixed.blend();
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&fixed.dynamic);
+        let mut rendering = fixed.rendering();
         let mut info = vk::GraphicsPipelineCreateInfo::default().stages(&stages);
         // A mesh pipeline makes its own primitives: it must have no vertex input or input
         // assembly state.
-        let mesh = desc
-            .stages
-            .iter()
-            .any(|s| s.stage.contains(vk::ShaderStageFlags::MESH_EXT));
+        let mesh = (desc.stages.iter()).any(|s| s.stage.contains(vk::ShaderStageFlags::MESH_EXT));
         if !mesh {
             info = info
                 .vertex_input_state(&vertex_input)
@@ -299,10 +209,20 @@ impl Pipeline {
             .layout(layout.raw)
             .push_next(&mut rendering);
         // SAFETY: every pointer in info points at locals that outlive the call.
-        let result =
-            unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
-        destroy_modules(d, &modules);
-        let raw = result.map_err(|(_, r)| r).vk("vkCreateGraphicsPipelines")?[0];
+        let result = unsafe {
+            (device.raw).create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+        };
+        Self::made(device, result, "vkCreateGraphicsPipelines", name)
+    }
+
+    /// The pipeline a `vkCreate*Pipelines` call made, named, or its error.
+    fn made(
+        device: &Arc<Device>,
+        result: Result<Vec<vk::Pipeline>, (Vec<vk::Pipeline>, vk::Result)>,
+        call: &'static str,
+        name: &str,
+    ) -> Result<Self, GpuError> {
+        let raw = result.map_err(|(_, r)| r).vk(call)?[0];
         device.set_name(raw, name);
         Ok(Self {
             raw,
@@ -311,10 +231,161 @@ impl Pipeline {
     }
 }
 
-fn destroy_modules(d: &ash::Device, modules: &[vk::ShaderModule]) {
-    for &m in modules {
-        // SAFETY: modules are not referenced once pipeline creation has returned.
-        unsafe { d.destroy_shader_module(m, None) };
+/// Shader modules, needed only while a pipeline is made: destroyed when dropped, on success
+/// and on every error path alike.
+struct Modules<'a> {
+    device: &'a Device,
+    raw: Vec<vk::ShaderModule>,
+}
+
+impl<'a> Modules<'a> {
+    fn create<'s>(
+        device: &'a Device,
+        spirv: impl IntoIterator<Item = &'s [u32]>,
+    ) -> Result<Self, GpuError> {
+        let mut modules = Self {
+            device,
+            raw: Vec::new(),
+        };
+        for words in spirv {
+            let info = vk::ShaderModuleCreateInfo::default().code(words);
+            // SAFETY: the words are SPIR-V produced by glslang at build time.
+            let module = unsafe { device.raw.create_shader_module(&info, None) }
+                .vk("vkCreateShaderModule")?;
+            modules.raw.push(module);
+        }
+        Ok(modules)
+    }
+}
+
+impl Drop for Modules<'_> {
+    fn drop(&mut self) {
+        for &m in &self.raw {
+            // SAFETY: modules are not referenced once pipeline creation has returned.
+            unsafe { self.device.raw.destroy_shader_module(m, None) };
+        }
+    }
+}
+
+/// Each stage's specialization constants: map entries into its values' bytes, both alive
+/// until the pipeline is made.
+struct Constants {
+    entries: Vec<Vec<vk::SpecializationMapEntry>>,
+    values: Vec<Vec<u8>>,
+}
+
+impl Constants {
+    fn of(stages: &[ShaderStage<'_>]) -> Self {
+        let entries = (stages.iter())
+            .map(|s| {
+                (s.constants.iter().enumerate())
+                    .map(|(i, c)| vk::SpecializationMapEntry {
+                        constant_id: c.id,
+                        offset: (4 * i) as u32,
+                        size: 4,
+                    })
+                    .collect()
+            })
+            .collect();
+        let values = (stages.iter())
+            .map(|s| {
+                s.constants
+                    .iter()
+                    .flat_map(|c| c.value.to_ne_bytes())
+                    .collect()
+            })
+            .collect();
+        Self { entries, values }
+    }
+
+    /// One `VkSpecializationInfo` per stage (empty for a stage without constants).
+    fn infos(&self) -> Vec<vk::SpecializationInfo<'_>> {
+        (self.entries.iter().zip(&self.values))
+            .map(|(e, v)| vk::SpecializationInfo::default().map_entries(e).data(v))
+            .collect()
+    }
+}
+
+/// The fixed-function state of `desc`, with the arrays the create infos point into.
+struct FixedFunction<'a> {
+    desc: &'a GraphicsPipelineDesc<'a>,
+    attachments: [vk::PipelineColorBlendAttachmentState; 2],
+    dynamic: Vec<vk::DynamicState>,
+    color_formats: Vec<vk::Format>,
+}
+
+impl<'a> FixedFunction<'a> {
+    fn of(desc: &'a GraphicsPipelineDesc<'a>) -> Self {
+        let write_mask = if desc.color_writes {
+            vk::ColorComponentFlags::RGBA
+        } else {
+            vk::ColorComponentFlags::empty()
+        };
+        let attachment =
+            vk::PipelineColorBlendAttachmentState::default().color_write_mask(write_mask);
+        let mut dynamic = vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        if desc.dynamic_culling {
+            dynamic.extend([vk::DynamicState::CULL_MODE, vk::DynamicState::FRONT_FACE]);
+        }
+        Self {
+            desc,
+            attachments: [attachment; 2],
+            dynamic,
+            color_formats: [desc.color_format]
+                .into_iter()
+                .chain(desc.id_format)
+                .collect(),
+        }
+    }
+
+    /// The vertex buffers' layout and triangle lists (not for mesh pipelines).
+    fn vertex_input(
+        &self,
+    ) -> (
+        vk::PipelineVertexInputStateCreateInfo<'a>,
+        vk::PipelineInputAssemblyStateCreateInfo<'static>,
+    ) {
+        (
+            vk::PipelineVertexInputStateCreateInfo::default()
+                .vertex_binding_descriptions(self.desc.vertex_bindings)
+                .vertex_attribute_descriptions(self.desc.vertex_attributes),
+            vk::PipelineInputAssemblyStateCreateInfo::default()
+                .topology(vk::PrimitiveTopology::TRIANGLE_LIST),
+        )
+    }
+
+    fn rasterization(&self) -> vk::PipelineRasterizationStateCreateInfo<'static> {
+        vk::PipelineRasterizationStateCreateInfo::default()
+            .rasterizer_discard_enable(self.desc.rasterizer_discard)
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(self.desc.cull_mode)
+            // A triangle counter-clockwise seen from outside keeps positive area in our views
+            // (x right, y down, not mirrored), so CCW is front. Cube faces are mirrored, but
+            // the scene pipelines do not cull, so only the mirror's bounding cube relies on it.
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0)
+    }
+
+    fn depth(&self) -> vk::PipelineDepthStencilStateCreateInfo<'static> {
+        vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(self.desc.depth_write)
+            .depth_compare_op(self.desc.depth_compare)
+    }
+
+    /// One attachment's state per colour attachment (the id cube's too): written whole,
+    /// never blended.
+    fn blend(&self) -> vk::PipelineColorBlendStateCreateInfo<'_> {
+        let count = self.color_formats.len();
+        vk::PipelineColorBlendStateCreateInfo::default().attachments(&self.attachments[..count])
+    }
+
+    /// Dynamic rendering into the colour (and id) and depth formats, with the view mask.
+    fn rendering(&self) -> vk::PipelineRenderingCreateInfo<'_> {
+        vk::PipelineRenderingCreateInfo::default()
+            .view_mask(self.desc.view_mask)
+            .color_attachment_formats(&self.color_formats)
+            .depth_attachment_format(self.desc.depth_format)
     }
 }
 
