@@ -83,8 +83,48 @@ impl Ctx<'_> {
                 self.invalid(&f("seed"), format!("must be in 0..={}, got {s}", i64::MAX))
             })?,
         };
+        let shapes = self.generator_shapes(&f, g, store)?;
+        if g.materials.is_empty() {
+            return Err(self.invalid(&f("materials"), "needs at least one material"));
+        }
+        let materials = (g.materials.iter().enumerate())
+            .map(|(j, m)| material(&f(&format!("materials[{j}]")), m))
+            .collect::<R<Vec<usize>>>()?;
+        let size = self.interval(&f("size"), g.size)?;
+        let (region_min, region_max) = self.generator_region(&f, g, room)?;
+        let keep_clear = self.non_negative(&f("keep_clear"), g.keep_clear.unwrap_or(0.0))?;
+        let moving = self.ranged(
+            &f("moving"),
+            g.moving.unwrap_or(0.0),
+            Range::closed(0.0, 1.0),
+        )?;
+        if g.period.is_some() && moving == 0.0 {
+            return Err(self.unused(&f("period"), "period is used only when moving > 0"));
+        }
+        let period = self.interval(&f("period"), g.period.unwrap_or([8.0, 20.0]))?;
+        Ok(Params {
+            name,
+            count,
+            seed,
+            shapes,
+            materials,
+            size,
+            region_min,
+            region_max,
+            keep_clear,
+            moving,
+            period,
+        })
+    }
 
-        // Shapes: which fields they need.
+    /// The generator's shapes, each a unit mesh (built once per shape and tessellation, shared
+    /// by every generator) with how it scales; checks the fields only some shapes use.
+    fn generator_shapes(
+        &self,
+        f: &dyn Fn(&str) -> String,
+        g: &GenerateSpec,
+        store: &mut MeshStore,
+    ) -> R<Vec<ShapeChoice>> {
         if g.shapes.is_empty() {
             return Err(self.invalid(&f("shapes"), "needs at least one shape"));
         }
@@ -117,63 +157,62 @@ impl Ctx<'_> {
         }
         let mut shapes = Vec::with_capacity(g.shapes.len());
         for &shape in &g.shapes {
-            // Unit-size shapes (size 1 m) scaled per object; one mesh per shape and
-            // tessellation, shared by every generator.
-            let unit = |mesh| ShapeChoice {
-                mesh,
-                scale_per_size: 1.0,
-                reach_per_size: 1.0,
-            };
             let choice = match unit_shape(shape, segments) {
-                Some((key, build)) => {
-                    unit(self.cached_mesh(&f("shapes"), None, key, build, store)?)
-                }
-                None => {
-                    let file = g.file.as_deref().unwrap_or_default();
-                    let (key, build) = self.mesh_file(&f("file"), file)?;
-                    let index = self.cached_mesh(&f("file"), Some(file), key, build, store)?;
-                    let m = &store.meshes[index];
-                    // Size = the largest side of the bounding box; the clearance radius also
-                    // covers the farthest vertex from the mesh's origin.
-                    let side = (m.bounds_max - m.bounds_min).max_element();
-                    if !(side > 0.0 && side.is_finite()) {
-                        return Err(self.invalid(
-                            &f("file"),
-                            format!("mesh \"{file}\" has no extent to scale"),
-                        ));
-                    }
-                    let farthest = m
-                        .positions
-                        .iter()
-                        .map(|p| p.length())
-                        .fold(0.0f32, f32::max);
-                    ShapeChoice {
-                        mesh: index,
-                        scale_per_size: 1.0 / side,
-                        reach_per_size: (farthest / side).max(1.0),
-                    }
-                }
+                // Unit-size shapes (size 1 m) scaled per object.
+                Some((key, build)) => ShapeChoice {
+                    mesh: self.cached_mesh(&f("shapes"), None, key, build, store)?,
+                    scale_per_size: 1.0,
+                    reach_per_size: 1.0,
+                },
+                None => self.generator_mesh(f, g.file.as_deref().unwrap_or_default(), store)?,
             };
             shapes.push(choice);
         }
+        Ok(shapes)
+    }
 
-        if g.materials.is_empty() {
-            return Err(self.invalid(&f("materials"), "needs at least one material"));
+    /// The `"mesh"` shape: the file's mesh, its size the largest side of its bounding box; the
+    /// clearance radius also covers the farthest vertex from the mesh's origin.
+    fn generator_mesh(
+        &self,
+        f: &dyn Fn(&str) -> String,
+        file: &str,
+        store: &mut MeshStore,
+    ) -> R<ShapeChoice> {
+        let (key, build) = self.mesh_file(&f("file"), file)?;
+        let index = self.cached_mesh(&f("file"), Some(file), key, build, store)?;
+        let m = &store.meshes[index];
+        let side = (m.bounds_max - m.bounds_min).max_element();
+        if !(side > 0.0 && side.is_finite()) {
+            return Err(self.invalid(
+                &f("file"),
+                format!("mesh \"{file}\" has no extent to scale"),
+            ));
         }
-        let mut materials = Vec::with_capacity(g.materials.len());
-        for (j, m) in g.materials.iter().enumerate() {
-            materials.push(material(&f(&format!("materials[{j}]")), m)?);
-        }
+        let farthest = (m.positions.iter())
+            .map(|p| p.length())
+            .fold(0.0f32, f32::max);
+        Ok(ShapeChoice {
+            mesh: index,
+            scale_per_size: 1.0 / side,
+            reach_per_size: (farthest / side).max(1.0),
+        })
+    }
 
-        let size = self.interval(&f("size"), g.size)?;
-
+    /// The region objects are placed in: inside the room, its low corner at or below its
+    /// high one, axis by axis. Messages give world coordinates, as the file does.
+    fn generator_region(
+        &self,
+        f: &dyn Fn(&str) -> String,
+        g: &GenerateSpec,
+        room: &Room,
+    ) -> R<(glam::Vec3, glam::Vec3)> {
         let region_min = self.point(&f("region_min"), g.region_min)?;
         let region_max = self.point(&f("region_max"), g.region_max)?;
         let (lo, hi) = (
             room.center - room.size_m * 0.5,
             room.center + room.size_m * 0.5,
         );
-        // Messages give world coordinates, as the file does.
         let world = |axis: usize, v: f32| num_text((self.origin[axis] + f64::from(v)) as f32);
         for axis in 0..3 {
             let (a, b) = (region_min[axis], region_max[axis]);
@@ -202,30 +241,6 @@ impl Ctx<'_> {
                 ));
             }
         }
-
-        let keep_clear = self.non_negative(&f("keep_clear"), g.keep_clear.unwrap_or(0.0))?;
-        let moving = self.ranged(
-            &f("moving"),
-            g.moving.unwrap_or(0.0),
-            Range::closed(0.0, 1.0),
-        )?;
-        if g.period.is_some() && moving == 0.0 {
-            return Err(self.unused(&f("period"), "period is used only when moving > 0"));
-        }
-        let period = self.interval(&f("period"), g.period.unwrap_or([8.0, 20.0]))?;
-
-        Ok(Params {
-            name,
-            count,
-            seed,
-            shapes,
-            materials,
-            size,
-            region_min,
-            region_max,
-            keep_clear,
-            moving,
-            period,
-        })
+        Ok((region_min, region_max))
     }
 }
