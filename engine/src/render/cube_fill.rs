@@ -28,7 +28,7 @@ impl Renderer {
     pub(super) fn plan_cube(&self, views: &[ViewBasis], dirty: u8) -> CubePlan {
         let mut plan = CubePlan {
             dirty,
-            order: self.draw_order.clone(),
+            order: self.drawn.order.clone(),
             ..Default::default()
         };
         for f in plan.faces().collect::<Vec<_>>() {

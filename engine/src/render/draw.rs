@@ -115,42 +115,56 @@ pub(super) const CLEAR_DEPTH: vk::ClearValue = vk::ClearValue {
     },
 };
 
-impl Renderer {
-    /// Indices of the drawables whose render-space bounds meet `frustum`, in draw order.
-    pub(super) fn visible(&self, frustum: &Frustum) -> Vec<u32> {
-        self.draw_order
-            .iter()
-            .copied()
-            .filter(|&i| {
-                let (lo, hi) = self.object_bounds[i as usize];
-                frustum.intersects_aabb(lo, hi)
-            })
-            .collect()
-    }
+/// This frame's drawables in render space: their bounds (walls first) and the order they are
+/// drawn in. One part, remade each frame by `write_frame_buffers`; culling, the draw order and
+/// the back-face guard read it.
+#[derive(Default)]
+pub(super) struct DrawOrder {
+    /// Render-space bounds of every drawable, walls first.
+    pub bounds: Vec<(Vec3, Vec3)>,
+    /// Objects front to back from the cube's centre, walls last ([`DrawOrder::of`]).
+    pub order: Vec<u32>,
+}
 
-    /// The draw order of this frame: objects by the distance of their bounds from the cube's
-    /// centre (the render origin), nearest first, then the six walls. Every cube face looks
-    /// out from that one point, so this one order is front to back for all six faces at once:
-    /// the depth test then rejects hidden fragments before they are shaded (early depth),
-    /// instead of shading every wall texel and painting objects over it. Ties go by index, so
-    /// the order is deterministic and every method uses the same one (equal depths resolve
-    /// alike).
-    pub(super) fn front_to_back(&self) -> Vec<u32> {
+impl DrawOrder {
+    /// The order for `bounds`: objects by the distance of their bounds from the cube's centre
+    /// (the render origin), nearest first, then the six walls. Every cube face looks out from
+    /// that one point, so this one order is front to back for all six faces at once: the
+    /// depth test then rejects hidden fragments before they are shaded (early depth), instead
+    /// of shading every wall texel and painting objects over it. Ties go by index, so the order
+    /// is deterministic and every method uses the same one (equal depths resolve alike).
+    pub fn of(bounds: Vec<(Vec3, Vec3)>) -> Self {
         let walls = 6;
-        let mut objects: Vec<(f32, u32)> = (walls..self.object_bounds.len())
+        let mut objects: Vec<(f32, u32)> = (walls..bounds.len())
             .map(|i| {
-                let (lo, hi) = self.object_bounds[i];
+                let (lo, hi) = bounds[i];
                 // Distance from the origin to the nearest point of the box (0 inside it).
                 let nearest = Vec3::ZERO.clamp(lo, hi);
                 (nearest.length_squared(), i as u32)
             })
             .collect();
         objects.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        objects
-            .into_iter()
-            .map(|(_, i)| i)
+        let order = (objects.into_iter().map(|(_, i)| i))
             .chain(0..walls as u32)
+            .collect();
+        Self { bounds, order }
+    }
+
+    /// Indices of the drawables whose render-space bounds meet `frustum`, in draw order.
+    pub fn visible(&self, frustum: &Frustum) -> Vec<u32> {
+        (self.order.iter().copied())
+            .filter(|&i| {
+                let (lo, hi) = self.bounds[i as usize];
+                frustum.intersects_aabb(lo, hi)
+            })
             .collect()
+    }
+}
+
+impl Renderer {
+    /// Indices of the drawables whose render-space bounds meet `frustum`, in draw order.
+    pub(super) fn visible(&self, frustum: &Frustum) -> Vec<u32> {
+        self.drawn.visible(frustum)
     }
 
     /// Binds `pipeline` with the scene's descriptor set, vertex and index buffers.
@@ -294,7 +308,7 @@ impl Renderer {
             .resources
             .drawables
             .iter()
-            .zip(&self.object_bounds)
+            .zip(&self.drawn.bounds)
             .map(|(d, &(lo, hi))| {
                 // Nearest point of the box to the eye; culling only when it is out of reach.
                 d.cull_back && eye.clamp(lo, hi).distance(eye) > reach

@@ -90,11 +90,8 @@ pub struct Renderer {
     submitter: Submitter,
     /// The state the cube map shows; `None` before the first fill.
     cube_state: Option<SceneState>,
-    /// This frame's render-space bounds of every drawable, walls first (for culling, draw
-    /// order and the back-face guard; computed once per frame).
-    object_bounds: Vec<(Vec3, Vec3)>,
-    /// This frame's draw order: objects front to back from the cube's centre, walls last.
-    draw_order: Vec<u32>,
+    /// This frame's drawables: their render-space bounds and their draw order.
+    drawn: draw::DrawOrder,
     pub counters: RefreshCounters,
     pub method: methods::Method,
     full_updates: bool,
@@ -171,8 +168,7 @@ impl Renderer {
             readback: None,
             submitter,
             cube_state: None,
-            object_bounds: Vec::new(),
-            draw_order: Vec::new(),
+            drawn: draw::DrawOrder::default(),
             counters: RefreshCounters::default(),
             method: options.method,
             full_updates: options.full_updates,
@@ -449,13 +445,11 @@ impl Renderer {
                 .map(|i| object_data(state.object_to_render(scene, i), scene.objects[i].material)),
         );
         self.resources.objects.write(&objects)?;
-        self.object_bounds = objects
-            .iter()
-            .zip(&self.resources.drawables)
+        let bounds = (objects.iter().zip(&self.resources.drawables))
             .map(|(o, d)| camera::transform_aabb(&o.model_to_world, d.bounds_min, d.bounds_max))
             .collect();
-        self.mirror.pass.prepare(&objects, &self.object_bounds)?;
-        self.draw_order = self.front_to_back();
+        self.drawn = draw::DrawOrder::of(bounds);
+        self.mirror.pass.prepare(&objects, &self.drawn.bounds)?;
         Ok(bases)
     }
 }
