@@ -193,7 +193,7 @@ fn render_method(
     Ok(RenderRun {
         method,
         out: dir.display().to_string(),
-        refresh_counters: renderer.counters,
+        refresh_counters: renderer.counters(),
         summary,
         frames: reports,
     })

@@ -165,7 +165,7 @@ fn on_change_skips_updates_when_nothing_moves() {
     );
     assert!(r2.cube_updated, "the orbiting object moved");
     assert_ne!(i1.cube, i2.cube);
-    assert_eq!((r.counters.cube_updates, r.counters.cube_skips), (2, 1));
+    assert_eq!((r.counters().cube_updates, r.counters().cube_skips), (2, 1));
     drop(r);
     gpu.finish();
 }

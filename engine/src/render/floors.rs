@@ -71,7 +71,7 @@ impl Renderer {
             cube_updated: true,
             ..Default::default()
         };
-        let first = self.cube_state.is_none();
+        let first = self.refresh.first_fill();
         let record = |rec: &CubeRecorder<'_>, plan: &CubePlan| self.record_floor(rec, plan, floor);
         let fill = Fill::Other {
             name: floor.name(),
@@ -86,7 +86,7 @@ impl Renderer {
         if let Some(q) = &self.queries.statistics {
             report.fill_stats = Some(q.statistics(0, 1)?[0]);
         }
-        self.cube_state = None;
+        self.refresh.shows(None);
         Ok(report)
     }
 

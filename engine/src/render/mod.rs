@@ -27,6 +27,7 @@ mod passes;
 pub(crate) mod pipelines;
 mod queries;
 mod readback;
+mod refresh;
 pub mod resources;
 mod sensor_rays;
 pub mod targets;
@@ -88,13 +89,11 @@ pub struct Renderer {
     resources: SceneResources,
     readback: Option<Buffer>,
     submitter: Submitter,
-    /// The state the cube map shows; `None` before the first fill.
-    cube_state: Option<SceneState>,
+    /// What the cube shows, which faces a frame re-renders, and the counts of both.
+    refresh: refresh::Refresh,
     /// This frame's drawables: their render-space bounds and their draw order.
     drawn: draw::DrawOrder,
-    pub counters: RefreshCounters,
     pub method: methods::Method,
-    full_updates: bool,
     pub scene: Scene,
     pub device: Arc<Device>,
 }
@@ -167,14 +166,17 @@ impl Renderer {
             resources,
             readback: None,
             submitter,
-            cube_state: None,
+            refresh: refresh::Refresh::new(options.full_updates),
             drawn: draw::DrawOrder::default(),
-            counters: RefreshCounters::default(),
             method: options.method,
-            full_updates: options.full_updates,
             scene,
             device: Arc::clone(device),
         })
+    }
+
+    /// How many frames updated the cube, skipped it, and the faces rendered, so far.
+    pub fn counters(&self) -> RefreshCounters {
+        self.refresh.counters
     }
 
     /// Renders frame `frame` at scene time `t_s` and reads back what `readback` asks for.
@@ -212,7 +214,13 @@ impl Renderer {
             self.prepare_sensor_rays()?;
         }
         let mut dirty = if fill_cube {
-            self.dirty_faces(frame, &state, &views)
+            self.refresh.dirty_faces(
+                &self.scene,
+                &self.resources.drawables,
+                frame,
+                &state,
+                &views,
+            )
         } else {
             0
         };
@@ -221,13 +229,7 @@ impl Renderer {
             // seen only in a clean face would vanish from it.
             dirty = 0x3F;
         }
-        self.counters.frames += 1;
-        if dirty != 0 {
-            self.counters.cube_updates += 1;
-            self.counters.faces_rendered += u64::from(dirty.count_ones());
-        } else {
-            self.counters.cube_skips += 1;
-        }
+        self.refresh.count(dirty);
         let plan = self.plan_cube(&views, dirty);
         if dirty != 0 {
             let cull_back = self.cube_facing().cull;
@@ -264,7 +266,7 @@ impl Renderer {
         // it is all that lies between the start and fill timestamps (`gpu_fill_ms`).
         self.mirror.pass.record(cmd);
         if dirty != 0 {
-            self.record_cube(cmd, &plan, self.cube_state.is_none(), &mut report);
+            self.record_cube(cmd, &plan, self.refresh.first_fill(), &mut report);
         } else if let Some(q) = &self.queries.timestamps {
             for ts in TS_FACE0..=TS_MIPS {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
@@ -278,7 +280,7 @@ impl Renderer {
         report.traced_rays = self.mirror.pass.tally()?;
         // The cube now shows `state`, except after an `every-n` frame that skipped the update.
         if dirty != 0 || (fill_cube && self.scene.refresh == RefreshPolicy::OnChange) {
-            self.cube_state = Some(state);
+            self.refresh.shows(Some(state));
         }
         let images = self.read_images(readback, &copies)?;
         Ok((report, images))
@@ -307,62 +309,6 @@ impl Renderer {
         self.submitter.submit_and_wait()?;
         report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
         Ok(())
-    }
-
-    /// Which faces must be re-rendered this frame (bit f: face f), by the refresh policy.
-    fn dirty_faces(&self, frame: u64, state: &SceneState, views: &[ViewBasis]) -> u8 {
-        const ALL: u8 = 0x3F;
-        let Some(old) = &self.cube_state else {
-            return ALL;
-        };
-        match self.scene.refresh {
-            RefreshPolicy::EveryFrame => ALL,
-            RefreshPolicy::EveryN(n) => {
-                if frame % u64::from(n.max(1)) == 0 {
-                    ALL
-                } else {
-                    0
-                }
-            }
-            RefreshPolicy::OnChange if !state.cube_differs(old) => 0,
-            // The mirror moved: every direction changed.
-            RefreshPolicy::OnChange
-                if self.full_updates || old.mirror_center != state.mirror_center =>
-            {
-                ALL
-            }
-            RefreshPolicy::OnChange => {
-                // Only objects moved: the faces that see where a moved object was or now is.
-                let frusta: Vec<camera::Frustum> = views[..6]
-                    .iter()
-                    .map(|v| camera::Frustum::new(v, self.scene.cube.near_m, self.scene.cube.far_m))
-                    .collect();
-                let mut mask = 0u8;
-                for (i, (a, b)) in old
-                    .object_positions
-                    .iter()
-                    .zip(&state.object_positions)
-                    .enumerate()
-                {
-                    if a == b {
-                        continue;
-                    }
-                    let d = &self.resources.drawables[6 + i];
-                    for m in [
-                        old.object_to_render(&self.scene, i),
-                        state.object_to_render(&self.scene, i),
-                    ] {
-                        let (lo, hi) = camera::transform_aabb(&m, d.bounds_min, d.bounds_max);
-                        for (f, fr) in frusta.iter().enumerate() {
-                            if fr.intersects_aabb(lo, hi) {
-                                mask |= 1 << f;
-                            }
-                        }
-                    }
-                }
-                mask
-            }
-        }
     }
 
     /// Writes frame data, views and object transforms; returns the views (render space).
