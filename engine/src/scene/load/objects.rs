@@ -101,6 +101,46 @@ impl Ctx<'_> {
         store: &mut MeshStore,
     ) -> R<Object> {
         let f = |name: &str| format!("objects[{i}].{name}");
+        self.shape_keys(&f, o)?;
+        let (mesh, size) = self.object_mesh(&f, o, store)?;
+        let triangles = store.meshes[mesh].triangle_count() as u64;
+        self.triangle_budget(
+            &format!("objects[{i}]"),
+            &mut store.triangles,
+            triangles,
+            "this object",
+        )?;
+        let material = material(&f("material"), &o.material)?;
+        let rotation = match o.rotation {
+            Some(r) => {
+                let d = self.vec3(&f("rotation"), r)?;
+                // Explicit product rather than a library Euler convention: Rx * Ry * Rz, so the
+                // object turns about Z first, then Y, then X (as docs/scene-format.md says).
+                Quat::from_rotation_x(d.x.to_radians())
+                    * Quat::from_rotation_y(d.y.to_radians())
+                    * Quat::from_rotation_z(d.z.to_radians())
+            }
+            None => Quat::IDENTITY,
+        };
+        let scale = self.object_scale(&f, o, size)?;
+        let position = self.object_position(i, &f, o)?;
+        let animation = match &o.animation {
+            Some(a) => Some(self.animation(&f("animation"), a, position)?),
+            None => None,
+        };
+        Ok(Object {
+            name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
+            mesh,
+            material,
+            position,
+            rotation,
+            scale,
+            animation,
+        })
+    }
+
+    /// Refuses a key that the object's shape does not take.
+    fn shape_keys(&self, f: &dyn Fn(&str) -> String, o: &ObjectSpec) -> R<()> {
         let allowed: &[&str] = match o.shape {
             Shape::Box => &["size"],
             Shape::Sphere => &["radius"],
@@ -121,14 +161,24 @@ impl Ctx<'_> {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// The object's mesh in the store and the size its shape gives it. Built-in shapes share
+    /// one unit mesh per shape and tessellation (also with the generators); the object's size
+    /// becomes a scale in its transform, which the renderer and the reference apply to normals
+    /// through the inverse transpose.
+    fn object_mesh(
+        &self,
+        f: &dyn Fn(&str) -> String,
+        o: &ObjectSpec,
+        store: &mut MeshStore,
+    ) -> R<(usize, Vec3)> {
         let need = |v: Option<f64>, name: &str| -> R<f32> {
             let v =
                 v.ok_or_else(|| self.missing(&f(name), &format!("shape {:?} needs it", o.shape)))?;
             self.positive(&f(name), v)
         };
-        // Built-in shapes share one unit mesh per shape and tessellation (also with the
-        // generators); the object's size becomes a scale in its transform, which the renderer
-        // and the reference apply to normals through the inverse transpose.
         let (size, segments) = match o.shape {
             Shape::Box => (
                 self.positive3(
@@ -152,40 +202,23 @@ impl Ctx<'_> {
         let (key, build): (String, MeshBuilder) = match unit_shape(o.shape, segments) {
             Some(unit) => unit,
             None => {
-                let file = o
-                    .file
-                    .as_ref()
+                let file = (o.file.as_ref())
                     .ok_or_else(|| self.missing(&f("file"), "a .obj, .gltf or .glb file"))?;
                 self.mesh_file(&f("file"), file)?
             }
         };
         let mesh = self.cached_mesh(&f("file"), o.file.as_deref(), key, build, store)?;
-        let triangles = store.meshes[mesh].triangle_count() as u64;
-        self.triangle_budget(
-            &format!("objects[{i}]"),
-            &mut store.triangles,
-            triangles,
-            "this object",
-        )?;
-        let material = material(&f("material"), &o.material)?;
-        let rotation = match o.rotation {
-            Some(r) => {
-                let d = self.vec3(&f("rotation"), r)?;
-                // Explicit product rather than a library Euler convention: Rx * Ry * Rz, so the
-                // object turns about Z first, then Y, then X (as docs/scene-format.md says).
-                Quat::from_rotation_x(d.x.to_radians())
-                    * Quat::from_rotation_y(d.y.to_radians())
-                    * Quat::from_rotation_z(d.z.to_radians())
-            }
-            None => Quat::IDENTITY,
-        };
+        Ok((mesh, size))
+    }
+
+    /// The shape's size times the object's scale, in one f32 scale that must stay a positive
+    /// finite number (1e30 x 1e30 and 1e-30 x 1e-30 do not).
+    fn object_scale(&self, f: &dyn Fn(&str) -> String, o: &ObjectSpec, size: Vec3) -> R<Vec3> {
         let scale = match o.scale {
             None => Vec3::ONE,
             Some(ScaleSpec::Uniform(s)) => Vec3::splat(self.positive(&f("scale"), s)?),
             Some(ScaleSpec::PerAxis(s)) => self.positive3(&f("scale"), s)?,
         };
-        // The shape's size and the object's scale meet in one f32 scale: it must stay a
-        // positive finite number (1e30 x 1e30 and 1e-30 x 1e-30 do not).
         let scale = size * scale;
         if !(scale.is_finite() && scale.min_element() > 0.0) {
             return Err(self.invalid(
@@ -196,6 +229,12 @@ impl Ctx<'_> {
                 ),
             ));
         }
+        Ok(scale)
+    }
+
+    /// Where the object is: its `position`, or, for a keyframed object that leaves it out,
+    /// its first key.
+    fn object_position(&self, i: usize, f: &dyn Fn(&str) -> String, o: &ObjectSpec) -> R<Vec3> {
         let keyframe_start = match &o.animation {
             Some(AnimationSpec {
                 kind: AnimationType::Keyframes,
@@ -204,24 +243,10 @@ impl Ctx<'_> {
             }) => p.first().copied(),
             _ => None,
         };
-        let position = match (o.position, keyframe_start) {
-            (Some(p), _) => self.point(&f("position"), p)?,
-            // A keyframed object may leave out `position`: it starts at its first key.
-            (None, Some(p)) => self.point(&format!("objects[{i}].animation.positions[0]"), p)?,
-            (None, None) => return Err(self.missing(&f("position"), "where the object is")),
-        };
-        let animation = match &o.animation {
-            Some(a) => Some(self.animation(&f("animation"), a, position)?),
-            None => None,
-        };
-        Ok(Object {
-            name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
-            mesh,
-            material,
-            position,
-            rotation,
-            scale,
-            animation,
-        })
+        match (o.position, keyframe_start) {
+            (Some(p), _) => self.point(&f("position"), p),
+            (None, Some(p)) => self.point(&format!("objects[{i}].animation.positions[0]"), p),
+            (None, None) => Err(self.missing(&f("position"), "where the object is")),
+        }
     }
 }
