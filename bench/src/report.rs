@@ -202,7 +202,24 @@ fn csv_bytes(record: &Record) -> Result<Vec<u8>> {
     for r in &record.tradeoff {
         w.serialize(rung_row(r))?;
     }
-    Ok(w.into_inner().map_err(|e| e.into_error())?)
+    let bytes = w.into_inner().map_err(|e| e.into_error())?;
+    if bytes.is_empty() {
+        // The writer writes the header with the first row: without rows, the header alone.
+        return header_only();
+    }
+    Ok(bytes)
+}
+
+/// The header line alone, as the writer makes it from [`CsvRow`]'s fields.
+fn header_only() -> Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.serialize(CsvRow::default())?;
+    let bytes = w.into_inner().map_err(|e| e.into_error())?;
+    let end = bytes
+        .iter()
+        .position(|&b| b == b'\n')
+        .map_or(bytes.len(), |i| i + 1);
+    Ok(bytes[..end].to_vec())
 }
 
 /// One speed-against-error case's row.
@@ -299,6 +316,19 @@ mod tests {
         assert_eq!(g[0].unit, "ms");
         let json = serde_json::to_value(&g).unwrap();
         assert!(json[0]["range"].as_str().unwrap().starts_with("p10 "));
+    }
+
+    #[test]
+    fn a_run_without_rows_still_writes_the_header() {
+        let mut record: Record =
+            serde_json::from_str(include_str!("../baselines/quick.json")).unwrap();
+        record.speed_vs_error.clear();
+        record.tradeoff.clear();
+        let text = String::from_utf8(csv_bytes(&record).unwrap()).unwrap();
+        assert_eq!(text.lines().count(), 1, "{text}");
+        let header: Vec<&str> = text.trim_end().split(',').collect();
+        assert_eq!(header.len(), 32);
+        assert_eq!((header[0], header[31]), ("row", "sensor_traced_fraction"));
     }
 
     #[test]

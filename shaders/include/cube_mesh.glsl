@@ -15,7 +15,8 @@
 // A task payload entry: (draw within the workgroup) << MESH_FACE_BITS | face.
 #define MESH_FACE_BITS 3
 // The specialization constant id of the device's subPixelPrecisionBits (the mesh shader's
-// SUB_PIXEL_BITS, set when the method makes its pipeline: gpu.rs SPEC_SUB_PIXEL_BITS).
+// SUB_PIXEL_BITS, set when the method makes its pipeline, methods/mesh/mod.rs; the id's Rust
+// twin is methods/mesh/gpu.rs SPEC_SUB_PIXEL_BITS).
 #define SPEC_SUB_PIXEL_BITS 0
 
 // One meshlet, in its mesh's object space.

@@ -234,12 +234,13 @@ pub fn devices() -> Vec<String> {
 /// CI) it fails the test instead: there everything the tests are meant to check must run.
 pub fn skip(what: &str, why: &str) {
     let line = format!("{}: {what}: {why}", test_name());
+    // Logged first, so that the count includes the skips that fail their test below.
+    log_skip("skipped", &line);
     assert!(
         std::env::var_os("SPECCHIO_REQUIRE_TOOL_CHECKS").is_none(),
         "SPECCHIO_REQUIRE_TOOL_CHECKS says every check must run, but this one cannot: {line}"
     );
     eprintln!("SKIPPED {line}");
-    log_skip("skipped", &line);
 }
 
 /// A check that does not apply to a device, which lacks what it checks (a feature such as

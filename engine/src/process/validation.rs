@@ -6,7 +6,8 @@
 
 use crate::vk::instance::ValidationLog;
 
-/// The exit status of a command whose work succeeded but whose validation did not.
+/// The exit status of a command the validation layer reported messages for, whether its work
+/// succeeded or failed too (the work's error is then the failure's cause).
 pub const EXIT_VALIDATION: u8 = 3;
 
 /// The work's own error, kept as the cause of a validation failure.
