@@ -336,6 +336,19 @@ impl Gpu {
 
     /// Drops the device (the layer reports leaks then) and fails on any validation message.
     pub fn finish(self) {
+        let messages = self.finish_with_messages();
+        assert!(
+            messages.is_empty(),
+            "validation messages:\n{}",
+            messages.join("\n")
+        );
+    }
+}
+
+impl Gpu {
+    /// Drops the device and returns the validation layer's messages (for a test that
+    /// expects some).
+    pub fn finish_with_messages(self) -> Vec<String> {
         let Self { device, log } = self;
         assert_eq!(
             Arc::strong_count(&device),
@@ -343,12 +356,7 @@ impl Gpu {
             "something still holds the device"
         );
         drop(device);
-        let messages = log.messages();
-        assert!(
-            messages.is_empty(),
-            "validation messages:\n{}",
-            messages.join("\n")
-        );
+        log.messages()
     }
 }
 

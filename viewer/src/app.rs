@@ -10,6 +10,7 @@ use specchio::render::methods::Method;
 use specchio::render::{lookups, RenderOptions, Renderer, PAIR_SIZE};
 use specchio::scene::{Lookup, RefreshPolicy, Scene};
 use specchio::vk::device::Device;
+use specchio::vk::frames::FRAMES_IN_FLIGHT;
 use specchio::vk::instance::Instance;
 use specchio::vk::surface::Surface;
 use specchio::vk::swapchain::PresentPreference;
@@ -231,6 +232,7 @@ impl App<'_> {
     fn new_renderer(&self, scene: Scene, method: Method) -> Result<Renderer> {
         let options = RenderOptions {
             method,
+            frames_in_flight: FRAMES_IN_FLIGHT,
             ..Default::default()
         };
         Ok(Renderer::new(self.device, scene, &options)?)
@@ -252,10 +254,13 @@ impl App<'_> {
         }
         let t_s = self.clock.tick();
         let start = Instant::now();
-        let (report, image) =
+        let (reports, image) =
             viewer
                 .renderer
                 .render_display_frame(self.clock.frame, t_s, viewer.view)?;
+        for report in &reports {
+            self.figures.finished(report);
+        }
         let size = viewer.window.inner_size();
         let shot = last && self.settings.screenshot;
         let status = Status {
@@ -268,7 +273,7 @@ impl App<'_> {
             paused: self.clock.paused,
             frame_ms: self.figures.frame_ms.last().copied(),
             cube_ms: self.figures.cube_ms,
-            faces: report.faces_rendered,
+            faces: self.figures.faces,
             driver: &self.device.info.name,
         };
         let mut menu = viewer.menu.frame(&viewer.window, &status);
@@ -295,12 +300,7 @@ impl App<'_> {
         }
         event_loop.set_control_flow(ControlFlow::Poll);
         self.clock.frame += 1;
-        let cube_ms = report.cube_updated.then_some(report.gpu_cube_ms).flatten();
-        self.figures.add(
-            start.elapsed().as_secs_f64() * 1e3,
-            cube_ms,
-            report.faces_rendered,
-        );
+        self.figures.add(start.elapsed().as_secs_f64() * 1e3);
         if let Some(title) = self
             .figures
             .title(&viewer.renderer, &self.settings.scene_name)
@@ -423,6 +423,7 @@ impl App<'_> {
         let scene = viewer.renderer.scene.clone();
         let options = RenderOptions {
             method,
+            frames_in_flight: FRAMES_IN_FLIGHT,
             ..Default::default()
         };
         let renderer = Renderer::new(self.device, scene, &options)?;

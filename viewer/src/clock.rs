@@ -25,7 +25,8 @@ pub struct Figures {
     frames: u32,
     pub frame_ms: Vec<f64>,
     pub cube_ms: Option<f64>,
-    faces: u32,
+    /// Faces the last finished frame re-rendered.
+    pub faces: u32,
 }
 
 impl Clock {
@@ -47,13 +48,19 @@ impl Clock {
 }
 
 impl Figures {
-    pub fn add(&mut self, frame_ms: f64, cube_ms: Option<f64>, faces: u32) {
+    /// One frame shown, `frame_ms` after the last.
+    pub fn add(&mut self, frame_ms: f64) {
         self.frames += 1;
         self.frame_ms.push(frame_ms);
-        if cube_ms.is_some() {
-            self.cube_ms = cube_ms;
+    }
+
+    /// A frame finished on the GPU (the renderer's reports arrive a frame or so after the
+    /// frame was shown: it keeps frames in flight).
+    pub fn finished(&mut self, report: &specchio::render::FrameReport) {
+        if let (true, Some(ms)) = (report.cube_updated, report.gpu_cube_ms) {
+            self.cube_ms = Some(ms);
         }
-        self.faces = faces;
+        self.faces = report.faces_rendered;
     }
 
     /// The window title with the figures, every `TITLE_EVERY`.

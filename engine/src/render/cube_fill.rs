@@ -44,7 +44,7 @@ impl Renderer {
 
     /// Writes the per-face timestamp slots `faces` (six-pass: after each face).
     pub(super) fn face_timestamps(&self, cmd: vk::CommandBuffer, faces: std::ops::Range<u32>) {
-        if let Some(q) = &self.queries.timestamps {
+        if let Some(q) = &self.queries().timestamps {
             for f in faces {
                 q.write_timestamp(
                     cmd,
@@ -127,7 +127,7 @@ impl Renderer {
             )
         }));
         image_barriers(dev, cmd, &to_fill);
-        if let (Some(q), false) = (&self.queries.statistics, per_face_marks) {
+        if let (Some(q), false) = (&self.queries().statistics, per_face_marks) {
             q.begin(cmd, 0);
         }
         if !per_face_marks {
@@ -147,7 +147,7 @@ impl Renderer {
                 record(&rec, plan);
             }
         }
-        if let (Some(q), false) = (&self.queries.statistics, per_face_marks) {
+        if let (Some(q), false) = (&self.queries().statistics, per_face_marks) {
             q.end(cmd, 0);
         }
         for f in 0..6 {
@@ -155,7 +155,7 @@ impl Renderer {
         }
         report.faces_rendered = plan.dirty.count_ones();
         report.face_mask = plan.dirty;
-        if let Some(q) = &self.queries.timestamps {
+        if let Some(q) = &self.queries().timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, TS_FILL);
         }
         // The depth the fill wrote, for the mirror's fragment shaders (distance lookup, sensor
@@ -176,7 +176,7 @@ impl Renderer {
         }));
         image_barriers(dev, cmd, &to_read);
         super::mips::record(&self.device, cmd, &self.cube, plan.dirty);
-        if let Some(q) = &self.queries.timestamps {
+        if let Some(q) = &self.queries().timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);
         }
         dev.end_label(cmd);

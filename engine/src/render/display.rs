@@ -3,10 +3,10 @@
 //! The viewer does not read pixels back to the CPU. It asks for one of the renderer's own
 //! view targets (the 1200x450 pair, the observer or the sensor), drawn exactly as for
 //! `specchio render`, and copies that image into its swapchain image in its own submission
-//! (`viewer/src/`). The renderer still records, submits and waits per frame, so its
-//! targets are never written while the previous frame's copy may read them: the copy is
-//! submitted to the same queue before the next frame's submission, whose first barrier on the
-//! target chains after the copy's closing barrier (see [`DisplayImage`]).
+//! (`viewer/src/`). The renderer does not wait for its frame (it keeps its frames in flight,
+//! `in_flight.rs`): the copy is submitted to the same queue after the frame and before the
+//! next one, whose first barrier on the target chains after the copy's closing barrier (see
+//! [`DisplayImage`]), so the target is never overwritten while the copy may read it.
 
 use ash::vk;
 
@@ -44,17 +44,20 @@ pub struct DisplayImage {
 }
 
 impl Renderer {
-    /// Renders frame `frame` at scene time `t_s` with only `view` drawn (no readback, no cube
-    /// or direction copies) and returns its image. The frame has finished on the GPU when
-    /// this returns (as every frame of the renderer).
+    /// Submits frame `frame` at scene time `t_s` with only `view` drawn (no readback, no cube
+    /// or direction copies) and returns its image, which the caller copies in a submission
+    /// of its own after this one; and the reports of the frames finished by now, oldest first
+    /// (the frame just submitted is usually not among them: it is still running).
     pub fn render_display_frame(
         &mut self,
         frame: u64,
         t_s: f64,
         view: DisplayView,
-    ) -> Result<(FrameReport, DisplayImage), GpuError> {
-        let (report, _) = self.render_frame_views(frame, t_s, Readback::default(), Some(view))?;
-        Ok((report, self.display_image(view)))
+    ) -> Result<(Vec<FrameReport>, DisplayImage), GpuError> {
+        self.submit_frame_views(frame, t_s, Readback::default(), Some(view))?;
+        let finished = self.finished_frames()?;
+        let reports = finished.into_iter().map(|(report, _)| report).collect();
+        Ok((reports, self.display_image(view)))
     }
 
     /// The image `view` is drawn into (valid as described at [`DisplayImage`] only after a

@@ -61,6 +61,7 @@ impl Renderer {
     ) -> Result<FrameReport, GpuError> {
         self.prepare_floors()?;
         let record_start = Instant::now();
+        self.acquire_slot()?;
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
         let plan = self.plan_cube(&views, 0x3F);
@@ -80,10 +81,14 @@ impl Renderer {
         self.record_cube_fill(cmd, &plan, first, &mut report, fill);
         // Keeps the remaining timestamp slots answered (no view is drawn).
         self.record_views(cmd, &views, Readback::default(), None);
-        self.submit_frame(cmd, record_start, &mut report)?;
-        self.read_queries(&mut report, false, false)?;
+        self.end_frame(cmd, record_start, &mut report);
+        let wait_start = Instant::now();
+        let slot = self.submit_slot_and_wait()?;
+        report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
+        let queries = self.slot_queries(slot);
+        self.read_queries(queries, &mut report, false, false)?;
         report.gpu_face_ms = None;
-        if let Some(q) = &self.queries.statistics {
+        if let Some(q) = &queries.statistics {
             report.fill_stats = Some(q.statistics(0, 1)?[0]);
         }
         self.refresh.shows(None);

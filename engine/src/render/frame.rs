@@ -31,6 +31,10 @@ pub struct RenderOptions {
     /// The order the tracing lookups hand their acceleration-structure builds (`--trace-order`;
     /// `given` reproduces the scene's order, to measure what the split order gains).
     pub trace_order: super::lookups::TraceOrder,
+    /// Frames the renderer may have submitted and not finished (`Renderer::submit_frame`),
+    /// 1 to `MAX_FRAMES_IN_FLIGHT`; 0 counts as 1. With 1, each frame waits for the one
+    /// before; the live viewer keeps 2, so that it records a frame while the GPU runs the last.
+    pub frames_in_flight: usize,
 }
 
 /// What to copy back to the CPU after a frame.

@@ -25,6 +25,8 @@ pub(super) struct Mirror {
     lookup: Lookup,
     /// The order the tracing lookups hand their builds (kept for a lookup switched in place).
     trace_order: TraceOrder,
+    /// The renderer's frames in flight (a pass keeps per-frame copies of what the host reads).
+    frames_in_flight: usize,
 }
 
 impl Mirror {
@@ -32,11 +34,13 @@ impl Mirror {
         inputs: Inputs<'_>,
         lookup: Lookup,
         trace_order: TraceOrder,
+        frames_in_flight: usize,
     ) -> Result<Self, GpuError> {
         Ok(Self {
-            pass: create_pass(inputs, lookup, trace_order)?,
+            pass: create_pass(inputs, lookup, trace_order, frames_in_flight)?,
             lookup,
             trace_order,
+            frames_in_flight,
         })
     }
 
@@ -45,10 +49,11 @@ impl Mirror {
         self.lookup
     }
 
-    /// Rebuilds the pass when the scene's lookup is no longer the one it was made for.
+    /// Rebuilds the pass when the scene's lookup is no longer the one it was made for (the
+    /// caller has waited for the frames that used the old one).
     pub fn follow(&mut self, inputs: Inputs<'_>, lookup: Lookup) -> Result<(), GpuError> {
         if lookup != self.lookup {
-            self.pass = create_pass(inputs, lookup, self.trace_order)?;
+            self.pass = create_pass(inputs, lookup, self.trace_order, self.frames_in_flight)?;
             self.lookup = lookup;
         }
         Ok(())
@@ -60,6 +65,7 @@ fn create_pass(
     (device, resources, cube, submitter): Inputs<'_>,
     lookup: Lookup,
     trace_order: TraceOrder,
+    frames_in_flight: usize,
 ) -> Result<Box<dyn LookupPass>, GpuError> {
     if let Some(why) = lookups::missing_features(lookup, &device.info) {
         return Err(GpuError::Unsupported(format!("lookup {lookup}: {why}")));
@@ -71,5 +77,6 @@ fn create_pass(
         submitter,
         push_size: std::mem::size_of::<gpu::Push>() as u32,
         trace_order,
+        frames_in_flight,
     })
 }

@@ -9,7 +9,8 @@
 //! 3. record: the lookup's own work, the cube fill of the dirty faces (skipped for a lookup
 //!    that reads no cube) + mip chain, then each view pass (culled draws + the mirror), then
 //!    copies of the images to read back;
-//! 4. submit, wait, read timestamps, counters and pixels.
+//! 4. submit; when the frame's slot comes round again (or the caller asks for its results),
+//!    wait for its fence and read timestamps, counters and pixels (`in_flight.rs`).
 
 pub mod budget;
 pub mod cube_fill;
@@ -18,6 +19,7 @@ mod draw;
 pub mod floors;
 mod frame;
 pub mod gpu;
+mod in_flight;
 pub mod lookups;
 pub mod material_check;
 pub mod methods;
@@ -53,6 +55,7 @@ use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, PipelineLayout, Shader
 use crate::vk::queries::PipelineStats;
 use crate::vk::GpuError;
 pub use frame::{FrameImages, FrameReport, Readback, RefreshCounters, RenderOptions};
+pub use in_flight::MAX_FRAMES_IN_FLIGHT;
 use queries::*;
 
 /// The side-by-side image of the thesis: observer left, sensor right.
@@ -71,6 +74,9 @@ struct Pipelines {
 
 /// Draws one scene. Field order is teardown order (everything holds an `Arc<Device>`).
 pub struct Renderer {
+    /// The frames in flight: first, so that dropping the renderer waits for them before
+    /// anything they use is destroyed.
+    frames: in_flight::InFlight,
     /// The benchmark's floor pipelines (made on first `render_floor`).
     floor_pipelines: Option<floors::FloorPipelines>,
     /// The method's pipeline and per-renderer state.
@@ -79,15 +85,13 @@ pub struct Renderer {
     /// pass is rebuilt when `scene.mirror.lookup` is switched in place).
     mirror: mirror::Mirror,
     pipelines: Pipelines,
-    /// The frame's timestamps and pipeline statistics (where the device has them).
-    queries: FrameQueries,
     /// The view passes' targets (observer, sensor, pair, the two direction images).
     targets: ViewTargets,
     /// The sensor ray map's passes and two targets (origin, direction), made on first use.
     sensor_rays: Option<(sensor_rays::SensorRays, [ViewTarget; 2])>,
     cube: CubeTarget,
     resources: SceneResources,
-    readback: Option<Buffer>,
+    /// One-off work: uploads at creation, acceleration-structure builds, the material check.
     submitter: Submitter,
     /// What the cube shows, which faces a frame re-renders, and the counts of both.
     refresh: refresh::Refresh,
@@ -117,6 +121,12 @@ impl Renderer {
         if let Some(lookup) = options.lookup {
             scene.mirror.lookup = lookup;
         }
+        let frames_in_flight = options.frames_in_flight.max(1);
+        if frames_in_flight > MAX_FRAMES_IN_FLIGHT {
+            return Err(GpuError::Unsupported(format!(
+                "{frames_in_flight} frames in flight (at most {MAX_FRAMES_IN_FLIGHT})"
+            )));
+        }
         budget::check_targets(device, &scene, cube_setting, options.id_cube)?;
         let submitter = Submitter::create(device, "frame")?;
         let resources = SceneResources::create(device, &scene, &submitter)?;
@@ -133,6 +143,7 @@ impl Renderer {
             (device, &resources, &cube, &submitter),
             scene.mirror.lookup,
             options.trace_order,
+            frames_in_flight,
         )?;
         let fill = options.method.create(&methods::MethodContext {
             device,
@@ -153,18 +164,16 @@ impl Renderer {
             0,
             &[(cube.cube_view.raw, cube.sampler.raw)],
         );
-        let queries = FrameQueries::create(device)?;
         Ok(Self {
+            frames: in_flight::InFlight::create(device, frames_in_flight)?,
             floor_pipelines: None,
             fill,
             mirror,
             pipelines,
-            queries,
             targets,
             sensor_rays: None,
             cube,
             resources,
-            readback: None,
             submitter,
             refresh: refresh::Refresh::new(options.full_updates),
             drawn: draw::DrawOrder::default(),
@@ -179,26 +188,38 @@ impl Renderer {
         self.refresh.counters
     }
 
-    /// Renders frame `frame` at scene time `t_s` and reads back what `readback` asks for.
+    /// Renders frame `frame` at scene time `t_s`, waits for it and reads back what
+    /// `readback` asks for. Frames submitted before it (by [`Self::submit_frame`]) are
+    /// finished too; their results stay queued for [`Self::finish_frame`].
     pub fn render_frame(
         &mut self,
         frame: u64,
         t_s: f64,
         readback: Readback,
     ) -> Result<(FrameReport, FrameImages), GpuError> {
-        self.render_frame_views(frame, t_s, readback, None)
+        self.submit_frame_views(frame, t_s, readback, None)?;
+        self.drain()?;
+        Ok(self
+            .frames
+            .take_newest()
+            .expect("the frame just submitted was finished by drain"))
     }
 
-    /// [`Self::render_frame`]; with `display`, only that view is drawn (for a window, see
+    /// [`Self::submit_frame`]; with `display`, only that view is drawn (for a window, see
     /// `display.rs`) and `readback` must ask for nothing.
-    fn render_frame_views(
+    fn submit_frame_views(
         &mut self,
         frame: u64,
         t_s: f64,
         readback: Readback,
         display: Option<display::DisplayView>,
-    ) -> Result<(FrameReport, FrameImages), GpuError> {
+    ) -> Result<(), GpuError> {
         let record_start = Instant::now();
+        self.acquire_slot()?;
+        if self.mirror.lookup() != self.scene.mirror.lookup {
+            // The old lookup's pass may still be in use by the frames in flight.
+            self.drain()?;
+        }
         self.mirror.follow(
             (&self.device, &self.resources, &self.cube, &self.submitter),
             self.scene.mirror.lookup,
@@ -233,27 +254,15 @@ impl Renderer {
         let plan = self.plan_cube(&views, dirty);
         if dirty != 0 {
             let cull_back = self.cube_facing().cull;
-            let prepare = methods::Prepare {
+            let mut prepare = methods::Prepare {
                 device: &self.device,
                 drawables: &self.resources.drawables,
                 cull_back: &cull_back,
+                uploads: &mut self.frames.current_mut().uploads,
             };
-            self.fill.prepare(&plan, &prepare)?;
+            self.fill.prepare(&plan, &mut prepare)?;
         }
-        let readback_bytes = self.readback_size(readback);
-        if readback_bytes > 0
-            && self
-                .readback
-                .as_ref()
-                .is_none_or(|b| b.size < readback_bytes)
-        {
-            budget::check_buffer(&self.device, "this frame's readback", readback_bytes)?;
-            self.readback = Some(Buffer::create(
-                &self.device,
-                &BufferDesc::new_readback(readback_bytes),
-                "readback",
-            )?);
-        }
+        self.grow_readback(readback)?;
 
         let cmd = self.begin_frame()?;
         let mut report = FrameReport {
@@ -267,48 +276,53 @@ impl Renderer {
         self.mirror.pass.record(cmd);
         if dirty != 0 {
             self.record_cube(cmd, &plan, self.refresh.first_fill(), &mut report);
-        } else if let Some(q) = &self.queries.timestamps {
+        } else if let Some(q) = &self.queries().timestamps {
             for ts in TS_FACE0..=TS_MIPS {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
             }
         }
         let copies = self.record_views(cmd, &views, readback, display);
-        self.mirror.pass.record_after_views(cmd);
+        self.mirror
+            .pass
+            .record_after_views(cmd, self.frames.current_index());
         self.record_readback(cmd, readback, &copies);
-        self.submit_frame(cmd, record_start, &mut report)?;
-        self.read_queries(&mut report, dirty != 0, readback.views)?;
-        report.traced_rays = self.mirror.pass.tally()?;
-        // The cube now shows `state`, except after an `every-n` frame that skipped the update.
+        self.end_frame(cmd, record_start, &mut report);
+        // The cube shows `state` once this frame has run (later frames run after it), except
+        // after an `every-n` frame that skipped the update.
         if dirty != 0 || (fill_cube && self.scene.refresh == RefreshPolicy::OnChange) {
             self.refresh.shows(Some(state));
         }
-        let images = self.read_images(readback, &copies)?;
-        Ok((report, images))
+        self.submit_slot(in_flight::Pending {
+            report,
+            readback,
+            copies,
+            updated: dirty != 0,
+            submitted: Instant::now(),
+        })
     }
 
-    /// Starts recording a frame: queries reset, the start timestamp written.
-    fn begin_frame(&self) -> Result<vk::CommandBuffer, GpuError> {
-        let cmd = self.submitter.begin()?;
-        self.queries.begin_frame(cmd);
+    /// The current frame's queries (per frame in flight: a slot's are read after its fence).
+    fn queries(&self) -> &FrameQueries {
+        &self.frames.current().queries
+    }
+
+    /// Starts recording a frame in the current slot (acquired: its last frame finished): the
+    /// frame's uploads copied, queries reset, the start timestamp written.
+    fn begin_frame(&mut self) -> Result<vk::CommandBuffer, GpuError> {
+        let slot = self.frames.current_mut();
+        let cmd = slot.submitter.begin()?;
+        slot.uploads.record(cmd)?;
+        slot.queries.begin_frame(cmd);
         Ok(cmd)
     }
 
-    /// Ends a frame begun by [`Self::begin_frame`]: the last timestamp, submit and wait; the
-    /// CPU recording time (since `record_start`) and the submit-to-fence time go in `report`.
-    fn submit_frame(
-        &self,
-        cmd: vk::CommandBuffer,
-        record_start: Instant,
-        report: &mut FrameReport,
-    ) -> Result<(), GpuError> {
-        if let Some(q) = &self.queries.timestamps {
+    /// Ends a frame begun by [`Self::begin_frame`] with its last timestamp; the CPU recording
+    /// time (since `record_start`) goes in `report`.
+    fn end_frame(&self, cmd: vk::CommandBuffer, record_start: Instant, report: &mut FrameReport) {
+        if let Some(q) = &self.queries().timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_READBACK);
         }
         report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
-        let wait_start = Instant::now();
-        self.submitter.submit_and_wait()?;
-        report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
-        Ok(())
     }
 
     /// Writes frame data, views and object transforms; returns the views (render space).
@@ -331,7 +345,8 @@ impl Renderer {
                 .extend(1.0),
             cube_depth: Vec4::new(scene.cube.near_m, scene.cube.far_m, 0.0, 0.0),
         };
-        self.resources.frame.write(&[frame])?;
+        let uploads = &mut self.frames.current_mut().uploads;
+        uploads.write(&self.resources.frame, &[frame])?;
 
         let mut bases: Vec<ViewBasis> = (0..6)
             .map(|f| ViewBasis::cube_face(Vec3::ZERO, f))
@@ -380,7 +395,7 @@ impl Renderer {
             })
             .collect();
         debug_assert_eq!(view_data.len(), VIEW_COUNT);
-        self.resources.views.write(&view_data)?;
+        uploads.write(&self.resources.views, &view_data)?;
 
         let walls = state.world_to_render();
         let mut objects: Vec<ObjectData> = (0..6)
@@ -390,12 +405,14 @@ impl Renderer {
             (0..scene.objects.len())
                 .map(|i| object_data(state.object_to_render(scene, i), scene.objects[i].material)),
         );
-        self.resources.objects.write(&objects)?;
+        uploads.write(&self.resources.objects, &objects)?;
         let bounds = (objects.iter().zip(&self.resources.drawables))
             .map(|(o, d)| camera::transform_aabb(&o.model_to_world, d.bounds_min, d.bounds_max))
             .collect();
         self.drawn = draw::DrawOrder::of(bounds);
-        self.mirror.pass.prepare(&objects, &self.drawn.bounds)?;
+        self.mirror
+            .pass
+            .prepare(uploads, &objects, &self.drawn.bounds)?;
         Ok(bases)
     }
 }

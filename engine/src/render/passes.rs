@@ -97,7 +97,7 @@ impl Renderer {
         };
         let (before, after) = (undrawn(0..first), undrawn(first..colour.len()));
         let mark = |stamps: &[u32]| {
-            if let Some(q) = &self.queries.timestamps {
+            if let Some(q) = &self.queries().timestamps {
                 for &ts in stamps {
                     q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
                 }
@@ -154,7 +154,7 @@ impl Renderer {
                 &p.depth_only
             };
             self.record_view(cmd, target, ids, views, (scene, output), stats, name);
-            if let (Some(q), Some(ts)) = (&self.queries.timestamps, ts) {
+            if let (Some(q), Some(ts)) = (&self.queries().timestamps, ts) {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
             if display.is_some() {
@@ -198,7 +198,7 @@ impl Renderer {
                 ),
             ],
         );
-        if let (Some(q), Some(slot)) = (&self.queries.statistics, stats_slot) {
+        if let (Some(q), Some(slot)) = (&self.queries().statistics, stats_slot) {
             q.begin(cmd, slot);
         }
         self.begin_rendering(
@@ -237,7 +237,7 @@ impl Renderer {
             self.draw_mirror(cmd, output, v);
         }
         self.end_rendering(cmd);
-        if let (Some(q), Some(slot)) = (&self.queries.statistics, stats_slot) {
+        if let (Some(q), Some(slot)) = (&self.queries().statistics, stats_slot) {
             q.end(cmd, slot);
         }
         image_barriers(

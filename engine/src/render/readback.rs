@@ -30,6 +30,20 @@ impl Renderer {
         bytes
     }
 
+    /// Makes the current slot's readback buffer large enough for `readback` (replacing it is
+    /// safe: the slot's previous frame has finished).
+    pub(super) fn grow_readback(&mut self, readback: Readback) -> Result<(), GpuError> {
+        let bytes = self.readback_size(readback);
+        let slot = self.frames.current();
+        if bytes == 0 || slot.readback.as_ref().is_some_and(|b| b.size >= bytes) {
+            return Ok(());
+        }
+        budget::check_buffer(&self.device, "this frame's readback", bytes)?;
+        let buffer = Buffer::create(&self.device, &BufferDesc::new_readback(bytes), "readback")?;
+        self.frames.current_mut().readback = Some(buffer);
+        Ok(())
+    }
+
     /// Copies mip 0 of the cube faces and the view images into the readback buffer.
     pub(super) fn record_readback(
         &self,
@@ -37,7 +51,9 @@ impl Renderer {
         readback: Readback,
         copies: &Copies,
     ) {
-        let Some(buffer) = &self.readback else { return };
+        let Some(buffer) = &self.frames.current().readback else {
+            return;
+        };
         let dev = &self.device;
         let copy = |image: vk::Image, layers: u32, w: u32, h: u32, offset: u64| {
             let region = vk::BufferImageCopy::default()
@@ -91,13 +107,15 @@ impl Renderer {
         );
     }
 
+    /// Decodes a finished frame's pixels from its slot's readback `buffer`.
     pub(super) fn read_images(
         &self,
+        buffer: Option<&Buffer>,
         readback: Readback,
         copies: &Copies,
     ) -> Result<FrameImages, GpuError> {
         let mut images = FrameImages::default();
-        let Some(buffer) = &self.readback else {
+        let Some(buffer) = buffer else {
             return Ok(images);
         };
         let bytes = buffer.mapped()?;
@@ -135,13 +153,15 @@ impl Renderer {
         Ok(images)
     }
 
+    /// A finished frame's timestamps and statistics from its slot's `queries`.
     pub(super) fn read_queries(
         &self,
+        queries: &FrameQueries,
         report: &mut FrameReport,
         update: bool,
         views: bool,
     ) -> Result<(), GpuError> {
-        if let Some(q) = &self.queries.timestamps {
+        if let Some(q) = &queries.timestamps {
             let t = q.timestamps_ns(TS_COUNT)?;
             let ms = |a: u32, b: u32| (t[b as usize] - t[a as usize]) / 1e6;
             if self.per_face_marks() {
@@ -156,7 +176,7 @@ impl Renderer {
             report.gpu_sensor_ms = Some(ms(TS_OBSERVER, TS_SENSOR));
             report.gpu_pair_ms = Some(ms(TS_SENSOR, TS_PAIR));
         }
-        if let Some(q) = &self.queries.statistics {
+        if let Some(q) = &queries.statistics {
             // Only queries begun this frame have results. Six-pass uses slots 0..6 (one per
             // dirty face), the one-pass methods slot 0.
             if update && self.per_face_marks() {

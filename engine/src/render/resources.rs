@@ -215,22 +215,28 @@ fn material_buffer(device: &Arc<Device>, scene: &Scene) -> Result<Buffer, GpuErr
 
 /// The buffers written every frame: the frame's data, the views, the objects' transforms.
 fn per_frame_buffers(device: &Arc<Device>, drawables: usize) -> Result<[Buffer; 3], GpuError> {
+    // Device-local: each frame's data reaches them through its uploads (`vk::uploads`), so
+    // that the frames in flight share these buffers and the sets that name them.
+    let buffer = |size: usize, usage, name| {
+        Buffer::create(
+            device,
+            &BufferDesc::new_device_local(size as u64, usage),
+            name,
+        )
+    };
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
     Ok([
-        host_buffer(
-            device,
+        buffer(
             std::mem::size_of::<gpu::FrameData>(),
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             "frame data",
         )?,
-        host_buffer(
-            device,
+        buffer(
             VIEW_COUNT * std::mem::size_of::<ViewData>(),
             storage,
             "views",
         )?,
-        host_buffer(
-            device,
+        buffer(
             drawables * std::mem::size_of::<ObjectData>(),
             storage,
             "objects",

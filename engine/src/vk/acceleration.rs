@@ -13,6 +13,7 @@ use gpu_allocator::MemoryLocation;
 use super::commands::Submitter;
 use super::device::Device;
 use super::memory::{Buffer, BufferDesc};
+use super::uploads::FrameUploads;
 use super::{GpuError, VkContext};
 
 /// The extension's device functions (loaded once per owner: a table of pointers).
@@ -333,7 +334,7 @@ impl TopLevel {
         let record = std::mem::size_of::<vk::AccelerationStructureInstanceKHR>() as u64;
         let instances = Buffer::create(
             device,
-            &BufferDesc::new_cpu_to_gpu(u64::from(capacity.max(1)) * record, BUILD_INPUT_USAGE),
+            &BufferDesc::new_device_local(u64::from(capacity.max(1)) * record, BUILD_INPUT_USAGE),
             &format!("{name} instances"),
         )?;
         let instances_address = buffer_address(device, &instances);
@@ -376,10 +377,11 @@ impl TopLevel {
             .geometry(vk::AccelerationStructureGeometryDataKHR { instances })
     }
 
-    /// Writes this frame's instance records (read by the next build). The previous frame's
-    /// build has completed: every frame waits on its fence.
+    /// Queues this frame's instance records for the frame's build (through `uploads`: the
+    /// frames in flight may still be building from the last ones).
     pub fn write_instances(
         &mut self,
+        uploads: &mut FrameUploads,
         records: &[vk::AccelerationStructureInstanceKHR],
     ) -> Result<(), GpuError> {
         if records.len() > self.capacity as usize {
@@ -397,7 +399,7 @@ impl TopLevel {
                 std::mem::size_of_val(records),
             )
         };
-        self.instances.write(bytes)?;
+        uploads.write(&self.instances, bytes)?;
         self.count = records.len() as u32;
         Ok(())
     }

@@ -1,9 +1,9 @@
-//! Command recording and submission: one command buffer, one fence, wait on every submit.
+//! Command recording and submission: one command buffer and the fence of its submission.
 //!
-//! The renderer is offline (it writes images), so each frame is recorded, submitted and waited
-//! for before the next starts. That keeps resource lifetimes trivial: after `submit_and_wait`
-//! returns, nothing on the GPU references anything.
+//! One-off work (uploads, builds) submits and waits at once. The renderer's frames in flight
+//! (`render::in_flight`) each own a submitter and wait for it only when its slot comes round.
 
+use std::cell::Cell;
 use std::sync::Arc;
 
 use ash::vk;
@@ -15,6 +15,8 @@ use super::{GpuError, VkContext};
 pub struct Submitter {
     pub cmd: vk::CommandBuffer,
     fence: vk::Fence,
+    /// Submitted and not yet waited for: the fence will signal.
+    in_flight: Cell<bool>,
     pool: vk::CommandPool,
     device: Arc<Device>,
 }
@@ -31,6 +33,7 @@ impl Submitter {
         let mut submitter = Self {
             cmd: vk::CommandBuffer::null(),
             fence: vk::Fence::null(),
+            in_flight: Cell::new(false),
             pool,
             device: Arc::clone(device),
         };
@@ -54,8 +57,13 @@ impl Submitter {
         Ok(submitter)
     }
 
-    /// Starts recording (the previous submission has completed: `submit_and_wait` waited).
+    /// Starts recording; the previous submission must have been waited for ([`Self::wait`]).
     pub fn begin(&self) -> Result<vk::CommandBuffer, GpuError> {
+        if self.in_flight.get() {
+            return Err(GpuError::Unsupported(
+                "a command buffer re-recorded before its submission was waited for".into(),
+            ));
+        }
         let info = vk::CommandBufferBeginInfo::default()
             .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: the buffer is not pending (the last submit was waited for).
@@ -73,6 +81,12 @@ impl Submitter {
 
     /// Ends recording, submits, and blocks until the GPU has finished.
     pub fn submit_and_wait(&self) -> Result<(), GpuError> {
+        self.submit()?;
+        self.wait()
+    }
+
+    /// Ends recording and submits; the fence signals when the GPU has finished.
+    pub fn submit(&self) -> Result<(), GpuError> {
         let d = &self.device.raw;
         // SAFETY: the buffer is recording (begin was called).
         unsafe { d.end_command_buffer(self.cmd) }.vk("vkEndCommandBuffer")?;
@@ -80,17 +94,43 @@ impl Submitter {
         let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
         // SAFETY: the fence is unsignalled (reset after every wait), the buffer is executable.
         unsafe { d.queue_submit2(self.device.queue, &submit, self.fence) }.vk("vkQueueSubmit2")?;
+        self.in_flight.set(true);
+        Ok(())
+    }
+
+    /// Blocks until the last submission has finished (at once when nothing is in flight).
+    pub fn wait(&self) -> Result<(), GpuError> {
+        if !self.in_flight.get() {
+            return Ok(());
+        }
+        let d = &self.device.raw;
         // SAFETY: the fence belongs to this device; u64::MAX: a CPU driver may be slow, and a
         // lost device returns an error rather than hanging.
         unsafe { d.wait_for_fences(&[self.fence], true, u64::MAX) }.vk("vkWaitForFences")?;
         // SAFETY: the fence is signalled and not in use.
-        unsafe { d.reset_fences(&[self.fence]) }.vk("vkResetFences")
+        unsafe { d.reset_fences(&[self.fence]) }.vk("vkResetFences")?;
+        self.in_flight.set(false);
+        Ok(())
+    }
+
+    /// Whether the last submission has finished (true when nothing is in flight); no wait.
+    pub fn is_finished(&self) -> Result<bool, GpuError> {
+        if !self.in_flight.get() {
+            return Ok(true);
+        }
+        // SAFETY: the fence is live.
+        unsafe { self.device.raw.get_fence_status(self.fence) }.vk("vkGetFenceStatus")
     }
 }
 
 impl Drop for Submitter {
     fn drop(&mut self) {
-        // SAFETY: the last submission was waited for; the pool frees its command buffer.
+        // Nothing may be destroyed under a running submission; if the wait fails (device
+        // lost), wait for the whole device.
+        if self.wait().is_err() {
+            let _ = self.device.wait_idle();
+        }
+        // SAFETY: the last submission has finished; the pool frees its command buffer.
         unsafe {
             self.device.raw.destroy_fence(self.fence, None);
             self.device.raw.destroy_command_pool(self.pool, None);

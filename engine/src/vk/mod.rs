@@ -23,6 +23,7 @@ pub mod pipeline;
 pub mod queries;
 pub mod surface;
 pub mod swapchain;
+pub mod uploads;
 #[cfg(test)]
 mod validation_tests;
 

@@ -32,6 +32,7 @@ use crate::render::gpu::ObjectData;
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
 use crate::vk::image::Sampler;
+use crate::vk::uploads::FrameUploads;
 use crate::vk::GpuError;
 
 /// Where the traced scene's bindings start (`RAY_QUERY_BINDING` in the shaders).
@@ -94,7 +95,7 @@ impl DistanceExactPass {
     fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
         let device = ctx.device;
         let trace = SceneTrace::create(ctx)?;
-        let tally = TraceTally::create(device)?;
+        let tally = TraceTally::create(device, ctx.frames_in_flight)?;
         let bindings: Vec<_> = cube_bindings()
             .into_iter()
             .chain(SceneTrace::bindings(TRACE_BINDING))
@@ -142,8 +143,13 @@ impl LookupPass for DistanceExactPass {
         self.set
     }
 
-    fn prepare(&mut self, objects: &[ObjectData], bounds: &[(Vec3, Vec3)]) -> Result<(), GpuError> {
-        self.trace.prepare(objects, bounds)
+    fn prepare(
+        &mut self,
+        uploads: &mut FrameUploads,
+        objects: &[ObjectData],
+        bounds: &[(Vec3, Vec3)],
+    ) -> Result<(), GpuError> {
+        self.trace.prepare(uploads, objects, bounds)
     }
 
     fn record(&self, cmd: vk::CommandBuffer) {
@@ -151,11 +157,11 @@ impl LookupPass for DistanceExactPass {
         self.trace.record(cmd);
     }
 
-    fn record_after_views(&self, cmd: vk::CommandBuffer) {
-        self.tally.record_to_host(cmd);
+    fn record_after_views(&self, cmd: vk::CommandBuffer, slot: usize) {
+        self.tally.record_to_host(cmd, slot);
     }
 
-    fn tally(&self) -> Result<Option<FrameTally>, GpuError> {
-        self.tally.read().map(Some)
+    fn tally(&self, slot: usize) -> Result<Option<FrameTally>, GpuError> {
+        self.tally.read(slot).map(Some)
     }
 }

@@ -38,6 +38,7 @@ use crate::scene::Lookup;
 use crate::vk::commands::Submitter;
 use crate::vk::device::{Device, DeviceInfo, OptionalFeatures};
 use crate::vk::pipeline::{Pipeline, PipelineLayout};
+use crate::vk::uploads::FrameUploads;
 use crate::vk::GpuError;
 
 /// Every lookup's plug-in, in [`Lookup::ALL`]'s order (a test checks it).
@@ -135,6 +136,9 @@ pub struct LookupContext<'a> {
     pub push_size: u32,
     /// The order the tracing lookups hand their builds (`RenderOptions::trace_order`).
     pub trace_order: TraceOrder,
+    /// The renderer's frames in flight: what the host reads back per frame needs one copy
+    /// per frame (`tally.rs`).
+    pub frames_in_flight: usize,
 }
 
 /// A lookup's per-renderer state: the pipelines that draw the mirror.
@@ -158,9 +162,11 @@ pub trait LookupPass {
     /// The descriptor set the pipelines read at set 1.
     fn set(&self) -> vk::DescriptorSet;
     /// Before the frame is recorded: per-frame data of the lookup's own, from this frame's
-    /// drawables (walls first) and their render-space bounds. Most lookups have none.
+    /// drawables (walls first) and their render-space bounds, written to its device buffers
+    /// through the frame's `uploads`. Most lookups have none.
     fn prepare(
         &mut self,
+        _uploads: &mut FrameUploads,
         _objects: &[ObjectData],
         _bounds: &[(Vec3, Vec3)],
     ) -> Result<(), GpuError> {
@@ -169,11 +175,12 @@ pub trait LookupPass {
     /// Records the lookup's per-frame GPU work before the views (made visible to the
     /// fragment shaders that read it). Most lookups have none.
     fn record(&self, _cmd: vk::CommandBuffer) {}
-    /// Records what follows the frame's views (results made visible to the host).
-    fn record_after_views(&self, _cmd: vk::CommandBuffer) {}
-    /// After the frame's fence: how many mirror rays the lookup traced (None: it traces all
-    /// or none, so there is nothing to count).
-    fn tally(&self) -> Result<Option<FrameTally>, GpuError> {
+    /// Records what follows the frame's views: results copied for the host into the copy of
+    /// frame slot `slot` (one of `LookupContext::frames_in_flight`).
+    fn record_after_views(&self, _cmd: vk::CommandBuffer, _slot: usize) {}
+    /// After the fence of slot `slot`'s frame: how many mirror rays the lookup traced (None:
+    /// it traces all or none, so there is nothing to count).
+    fn tally(&self, _slot: usize) -> Result<Option<FrameTally>, GpuError> {
         Ok(None)
     }
 }

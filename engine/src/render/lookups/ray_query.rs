@@ -16,6 +16,7 @@ use super::{
 use crate::render::gpu::ObjectData;
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
+use crate::vk::uploads::FrameUploads;
 use crate::vk::GpuError;
 
 pub struct RayQuery;
@@ -103,8 +104,13 @@ impl LookupPass for RayQueryPass {
         self.set
     }
 
-    fn prepare(&mut self, objects: &[ObjectData], bounds: &[(Vec3, Vec3)]) -> Result<(), GpuError> {
-        self.trace.prepare(objects, bounds)
+    fn prepare(
+        &mut self,
+        uploads: &mut FrameUploads,
+        objects: &[ObjectData],
+        bounds: &[(Vec3, Vec3)],
+    ) -> Result<(), GpuError> {
+        self.trace.prepare(uploads, objects, bounds)
     }
 
     fn record(&self, cmd: vk::CommandBuffer) {

@@ -5,7 +5,7 @@
 //!
 //! One `uvec2` (fragments, traced) per view and pass (colour or directions): every mirror draw
 //! of a frame adds to its own slot, so no two draws write the same bytes and they need no
-//! barrier between them. Zeroed at the start of each frame, read by the host after its fence.
+//! barrier between them. Zeroed at the start of each frame, copied for the host at its end.
 //! Helper invocations (the 2x2 quads' fill-ins) do not count: their atomics have no effect.
 
 use std::sync::Arc;
@@ -47,23 +47,37 @@ pub struct FrameTally {
 const PASSES: usize = TALLY_PASSES as usize;
 const SLOT_BYTES: u64 = 2 * std::mem::size_of::<u32>() as u64;
 
-/// The tally's storage buffer (host-visible: a few dozen bytes read every frame).
+/// The tally's storage buffer, which the frame's mirror draws count into, and one host copy
+/// per frame in flight (the next frame resets the device buffer while the host may not yet
+/// have read the last one's counts).
 pub struct TraceTally {
     device: Arc<Device>,
     buffer: Buffer,
+    host: Vec<Buffer>,
 }
 
+const TALLY_BYTES: u64 = (VIEW_COUNT * PASSES) as u64 * SLOT_BYTES;
+
 impl TraceTally {
-    pub fn create(device: &Arc<Device>) -> Result<Self, GpuError> {
+    pub fn create(device: &Arc<Device>, frames_in_flight: usize) -> Result<Self, GpuError> {
         let desc = BufferDesc {
-            size: (VIEW_COUNT * PASSES) as u64 * SLOT_BYTES,
-            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            location: MemoryLocation::GpuToCpu,
+            size: TALLY_BYTES,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            location: MemoryLocation::GpuOnly,
         };
         let buffer = Buffer::create(device, &desc, "trace tally")?;
+        let host = (0..frames_in_flight)
+            .map(|i| {
+                let desc = BufferDesc::new_readback(TALLY_BYTES);
+                Buffer::create(device, &desc, &format!("trace tally, frame {i}"))
+            })
+            .collect::<Result<_, _>>()?;
         Ok(Self {
             device: device.clone(),
             buffer,
+            host,
         })
     }
 
@@ -79,40 +93,76 @@ impl TraceTally {
         descriptors::write_buffer(&self.device, set, binding, storage, self.buffer.raw);
     }
 
-    /// Zeroes the tally before the frame's mirror draws (made visible to their atomics).
+    /// Zeroes the tally before the frame's mirror draws: after the last frame's draws
+    /// counted into it and its copy for the host read it; made visible to this frame's
+    /// atomics.
     pub fn record_reset(&self, cmd: vk::CommandBuffer) {
         let d = &self.device.raw;
+        let storage =
+            vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE;
+        let after_last = [vk::MemoryBarrier2::default()
+            .src_stage_mask(
+                vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COPY,
+            )
+            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
+            .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)];
         let to_shaders = [vk::MemoryBarrier2::default()
             .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
             .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
             .dst_stage_mask(vk::PipelineStageFlags2::FRAGMENT_SHADER)
-            .dst_access_mask(
-                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
-            )];
-        let dep = vk::DependencyInfo::default().memory_barriers(&to_shaders);
-        // SAFETY: cmd is recording; the buffer lives as long as the lookup pass, which
-        // outlives the frame (the renderer waits for it).
+            .dst_access_mask(storage)];
+        // SAFETY: cmd is recording; the buffer lives as long as the lookup pass, which the
+        // renderer keeps until its frames in flight have finished.
         unsafe {
+            d.cmd_pipeline_barrier2(
+                cmd,
+                &vk::DependencyInfo::default().memory_barriers(&after_last),
+            );
             d.cmd_fill_buffer(cmd, self.buffer.raw, 0, vk::WHOLE_SIZE, 0);
-            d.cmd_pipeline_barrier2(cmd, &dep);
+            d.cmd_pipeline_barrier2(
+                cmd,
+                &vk::DependencyInfo::default().memory_barriers(&to_shaders),
+            );
         }
     }
 
-    /// After the frame's mirror draws: their counts made visible to the host.
-    pub fn record_to_host(&self, cmd: vk::CommandBuffer) {
+    /// After the frame's mirror draws: their counts copied into slot `slot`'s host copy and
+    /// made visible to the host.
+    pub fn record_to_host(&self, cmd: vk::CommandBuffer, slot: usize) {
+        let d = &self.device.raw;
+        let to_copy = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::FRAGMENT_SHADER)
+            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+            .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)];
+        let region = [vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: TALLY_BYTES,
+        }];
+        // SAFETY: cmd is recording; both buffers hold TALLY_BYTES; the slot's host copy is not
+        // read before this frame's fence.
+        unsafe {
+            d.cmd_pipeline_barrier2(
+                cmd,
+                &vk::DependencyInfo::default().memory_barriers(&to_copy),
+            );
+            d.cmd_copy_buffer(cmd, self.buffer.raw, self.host[slot].raw, &region);
+        }
         host_read_barrier(
             &self.device,
             cmd,
-            vk::PipelineStageFlags2::FRAGMENT_SHADER,
-            vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::TRANSFER_WRITE,
         );
     }
 
-    /// The finished frame's counts (call after its fence).
-    pub fn read(&self) -> Result<FrameTally, GpuError> {
-        let size = VIEW_COUNT * PASSES * SLOT_BYTES as usize;
+    /// The counts of slot `slot`'s frame (call after its fence).
+    pub fn read(&self, slot: usize) -> Result<FrameTally, GpuError> {
+        let size = TALLY_BYTES as usize;
         // The mapping is at least 4-byte aligned; the slots are (fragments, traced) u32 pairs.
-        let words: &[u32] = bytemuck::cast_slice(&self.buffer.mapped()?[..size]);
+        let words: &[u32] = bytemuck::cast_slice(&self.host[slot].mapped()?[..size]);
         let slot = |view: u32| {
             let at = 2 * (view as usize * PASSES + TALLY_PASS_COLOUR as usize);
             TracedRays {

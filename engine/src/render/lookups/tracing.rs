@@ -24,6 +24,7 @@ use crate::vk::acceleration::{self, AccelerationStructure, TopLevel, TriangleMes
 use crate::vk::descriptors;
 use crate::vk::device::{Device, OptionalFeatures};
 use crate::vk::memory::{Buffer, BufferDesc};
+use crate::vk::uploads::FrameUploads;
 use crate::vk::GpuError;
 
 /// The order acceleration-structure builds are handed their leaves in.
@@ -179,6 +180,7 @@ impl SceneTrace {
     /// custom index, so the order changes nothing the shaders see.
     pub fn prepare(
         &mut self,
+        uploads: &mut FrameUploads,
         objects: &[ObjectData],
         bounds: &[(Vec3, Vec3)],
     ) -> Result<(), GpuError> {
@@ -191,7 +193,7 @@ impl SceneTrace {
             let i = i as usize;
             instance(i, &objects[i], self.bottom[self.mesh_of[i]].address)
         }));
-        self.top.write_instances(&self.records)
+        self.top.write_instances(uploads, &self.records)
     }
 
     /// Records the top level's rebuild.

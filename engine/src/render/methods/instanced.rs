@@ -48,9 +48,16 @@ impl FillMethod for Instanced {
             crate::shaders::CUBE_INSTANCED_VERT,
         );
         let pipeline = ctx.pipeline(&[vertex], "cube pipeline (instanced)")?;
+        // At most one command per drawable and face: sized once, so that no frame in flight
+        // ever reads a buffer that was replaced.
+        let most = 6 * ctx.drawables.len() as u64;
+        let command = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u64;
+        let desc =
+            BufferDesc::new_device_local(most * command, vk::BufferUsageFlags::INDIRECT_BUFFER);
+        let indirect = Buffer::create(ctx.device, &desc, "indirect draws")?;
         Ok(Box::new(InstancedFill {
             pipeline,
-            indirect: None,
+            indirect,
             runs: Vec::new(),
         }))
     }
@@ -58,8 +65,8 @@ impl FillMethod for Instanced {
 
 struct InstancedFill {
     pipeline: Pipeline,
-    /// This update's indirect commands (grown when an update needs more).
-    indirect: Option<Buffer>,
+    /// This update's indirect commands (device-local, filled through the frame's uploads).
+    indirect: Buffer,
     /// The runs of commands that share a cull mode, one indirect draw each.
     runs: Vec<Run>,
 }
@@ -73,27 +80,16 @@ struct Run {
 }
 
 impl FillPass for InstancedFill {
-    fn prepare(&mut self, plan: &CubePlan, ctx: &Prepare<'_>) -> Result<(), GpuError> {
+    fn prepare(&mut self, plan: &CubePlan, ctx: &mut Prepare<'_>) -> Result<(), GpuError> {
         let (commands, runs) = commands(ctx.drawables, plan, ctx.cull_back);
         self.runs = runs;
-        if commands.is_empty() {
-            return Ok(());
-        }
-        let words = as_words(&commands);
-        let bytes = std::mem::size_of_val(words.as_slice()) as u64;
-        if self.indirect.as_ref().is_none_or(|b| b.size < bytes) {
-            let desc = BufferDesc::new_cpu_to_gpu(bytes, vk::BufferUsageFlags::INDIRECT_BUFFER);
-            self.indirect = Some(Buffer::create(ctx.device, &desc, "indirect draws")?);
-        }
-        if let Some(buffer) = &mut self.indirect {
-            buffer.write(&words)?;
-        }
-        Ok(())
+        ctx.uploads.write(&self.indirect, &as_words(&commands))
     }
 
     fn record(&self, rec: &CubeRecorder<'_>, plan: &CubePlan) {
         rec.begin_cube(plan.dirty);
-        if let (Some(buffer), false) = (&self.indirect, self.runs.is_empty()) {
+        if !self.runs.is_empty() {
+            let buffer = &self.indirect;
             rec.bind(&self.pipeline);
             let stride = std::mem::size_of::<vk::DrawIndexedIndirectCommand>() as u32;
             for run in &self.runs {

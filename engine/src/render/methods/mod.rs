@@ -59,7 +59,7 @@ pub trait FillMethod: Sync {
 pub trait FillPass {
     /// Before recording a cube update: per-update data of the method's own (indirect
     /// commands, say). Most methods need none.
-    fn prepare(&mut self, _plan: &CubePlan, _ctx: &Prepare<'_>) -> Result<(), GpuError> {
+    fn prepare(&mut self, _plan: &CubePlan, _ctx: &mut Prepare<'_>) -> Result<(), GpuError> {
         Ok(())
     }
     /// Records the fill of `plan`'s dirty faces into mip 0 (the caller set the layouts and

@@ -15,6 +15,7 @@ use crate::vk::commands::Submitter;
 use crate::vk::device::Device;
 use crate::vk::memory::{Buffer, Upload};
 use crate::vk::pipeline::{Pipeline, PipelineLayout, ShaderStage};
+use crate::vk::uploads::FrameUploads;
 use crate::vk::GpuError;
 
 /// What a method may use to build its pipeline and state ([`super::FillMethod::create`]).
@@ -116,6 +117,9 @@ pub struct Prepare<'a> {
     pub drawables: &'a [Drawable],
     /// Per drawable: whether its back faces may be culled in the cube this update.
     pub cull_back: &'a [bool],
+    /// This frame's uploads: a method's per-update data goes to its device buffers through
+    /// them (frames in flight may still read the last update's: see `vk::uploads`).
+    pub uploads: &'a mut FrameUploads,
 }
 
 /// Records a cube fill: the rendering scopes on the cube, the scene's draws, and the
@@ -178,7 +182,7 @@ impl<'a> CubeRecorder<'a> {
         let dev = self.device();
         let name = crate::scene::camera::FACE_NAMES[face as usize];
         dev.begin_label(self.cmd, &format!("face {name}"));
-        if let (Some(q), true) = (&self.r.queries.statistics, self.per_face_marks) {
+        if let (Some(q), true) = (&self.r.queries().statistics, self.per_face_marks) {
             q.begin(self.cmd, face);
         }
         let size = self.face_size();
@@ -202,7 +206,7 @@ impl<'a> CubeRecorder<'a> {
     /// Closes the scope opened by [`Self::begin_face`].
     pub fn end_face(&self, face: u32) {
         self.r.end_rendering(self.cmd);
-        if let (Some(q), true) = (&self.r.queries.statistics, self.per_face_marks) {
+        if let (Some(q), true) = (&self.r.queries().statistics, self.per_face_marks) {
             q.end(self.cmd, face);
         }
         self.device().end_label(self.cmd);

@@ -149,7 +149,7 @@ impl MeshFill {
         let draws_size = (library.most_draws().max(1) * std::mem::size_of::<MeshletDraw>()) as u64;
         let draws = Buffer::create(
             device,
-            &BufferDesc::new_cpu_to_gpu(draws_size, vk::BufferUsageFlags::STORAGE_BUFFER),
+            &BufferDesc::new_device_local(draws_size, vk::BufferUsageFlags::STORAGE_BUFFER),
             "meshlet draws",
         )?;
 
@@ -260,10 +260,10 @@ impl MeshFill {
 }
 
 impl FillPass for MeshFill {
-    fn prepare(&mut self, plan: &CubePlan, ctx: &Prepare<'_>) -> Result<(), GpuError> {
+    fn prepare(&mut self, plan: &CubePlan, ctx: &mut Prepare<'_>) -> Result<(), GpuError> {
         let (draws, runs) = meshlet_draws(&self.drawables, plan, ctx.cull_back);
         self.runs = runs;
-        self.draws.write(&draws)
+        ctx.uploads.write(&self.draws, &draws)
     }
 
     fn record(&self, rec: &CubeRecorder<'_>, plan: &CubePlan) {

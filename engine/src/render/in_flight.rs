@@ -1,0 +1,215 @@
+//! Frames in flight, one part of the renderer: what each frame owns while the GPU runs it,
+//! and the frame's life from submission to its results.
+//!
+//! With N frames in flight the CPU records frame k+1 (up to k+N-1) while the GPU still runs
+//! frame k. Everything the host writes or reads for a frame is per slot: the command buffer
+//! and its fence, the uploads' staging buffer (`vk::uploads`: views, objects, indirect
+//! commands, meshlet draws and acceleration-structure instances reach the device buffers
+//! through it), the query pools and the readback buffer. What only the GPU touches (the
+//! cube, the view targets, the acceleration structures, the device buffers) is shared: the
+//! frames run on one queue, and each barrier names the last use of the frame before, so the
+//! frames' work is ordered as if it ran one after the other (validated with 2 and 3 frames in
+//! flight: `tests/engine/in_flight.rs`).
+//!
+//! A slot is reused after its fence: its frame is then finished (timestamps, statistics,
+//! tally and pixels read) and its results wait in `done` for [`Renderer::finish_frame`].
+
+use std::collections::VecDeque;
+use std::time::Instant;
+
+use super::passes::Copies;
+use super::queries::FrameQueries;
+use super::{FrameImages, FrameReport, Readback, Renderer};
+use crate::vk::commands::Submitter;
+use crate::vk::device::Device;
+use crate::vk::memory::Buffer;
+use crate::vk::uploads::FrameUploads;
+use crate::vk::GpuError;
+
+/// At most this many frames in flight (`RenderOptions::frames_in_flight`): more only adds
+/// latency and memory, since a frame's GPU work is serial on the one queue.
+pub const MAX_FRAMES_IN_FLIGHT: usize = 3;
+
+/// What one frame in flight owns.
+pub(super) struct FrameSlot {
+    pub submitter: Submitter,
+    pub uploads: FrameUploads,
+    pub queries: FrameQueries,
+    /// Grown when a frame reads back more (safe: the slot's previous frame has finished).
+    pub readback: Option<Buffer>,
+    /// The submitted frame, until it is finished.
+    pending: Option<Pending>,
+}
+
+/// What finishing a submitted frame needs, kept from its recording.
+pub(super) struct Pending {
+    pub report: FrameReport,
+    pub readback: Readback,
+    pub copies: Copies,
+    /// The cube was re-rendered (its statistics queries have results).
+    pub updated: bool,
+    pub submitted: Instant,
+}
+
+/// The slots, the one being recorded, and the frames submitted and finished.
+pub(super) struct InFlight {
+    slots: Vec<FrameSlot>,
+    current: usize,
+    /// Slots holding a submitted, unfinished frame, oldest first.
+    order: VecDeque<usize>,
+    /// Frames finished (to free their slot, or by `drain`) and not yet taken, oldest first.
+    done: VecDeque<(FrameReport, FrameImages)>,
+}
+
+impl InFlight {
+    pub fn create(device: &std::sync::Arc<Device>, count: usize) -> Result<Self, GpuError> {
+        let slots = (0..count)
+            .map(|i| {
+                Ok(FrameSlot {
+                    submitter: Submitter::create(device, &format!("frame {i}"))?,
+                    uploads: FrameUploads::new(device, &format!("frame {i} uploads")),
+                    queries: FrameQueries::create(device)?,
+                    readback: None,
+                    pending: None,
+                })
+            })
+            .collect::<Result<Vec<_>, GpuError>>()?;
+        Ok(Self {
+            slots,
+            current: 0,
+            order: VecDeque::new(),
+            done: VecDeque::new(),
+        })
+    }
+
+    /// The slot being recorded (or about to be).
+    pub fn current(&self) -> &FrameSlot {
+        &self.slots[self.current]
+    }
+
+    pub fn current_mut(&mut self) -> &mut FrameSlot {
+        &mut self.slots[self.current]
+    }
+
+    /// The current slot's index, for the parts that keep per-slot state of their own.
+    pub fn current_index(&self) -> usize {
+        self.current
+    }
+
+    /// The newest finished frame's results (the one `render_frame` just waited for).
+    pub fn take_newest(&mut self) -> Option<(FrameReport, FrameImages)> {
+        self.done.pop_back()
+    }
+}
+
+impl Renderer {
+    /// Records, submits and does not wait: the frame's results come from
+    /// [`Renderer::finish_frame`]. When all `frames_in_flight` slots are busy, this first
+    /// waits for the oldest frame and finishes it (its results are kept for `finish_frame`).
+    pub fn submit_frame(
+        &mut self,
+        frame: u64,
+        t_s: f64,
+        readback: Readback,
+    ) -> Result<(), GpuError> {
+        self.submit_frame_views(frame, t_s, readback, None)
+    }
+
+    /// The oldest submitted frame's report and pixels, waiting for it if it is still running;
+    /// `None` when no frame is pending.
+    pub fn finish_frame(&mut self) -> Result<Option<(FrameReport, FrameImages)>, GpuError> {
+        if self.frames.done.is_empty() {
+            if let Some(&oldest) = self.frames.order.front() {
+                self.finish_slot(oldest)?;
+            }
+        }
+        Ok(self.frames.done.pop_front())
+    }
+
+    /// The results of the frames that have finished by now, without waiting, oldest first.
+    pub fn finished_frames(&mut self) -> Result<Vec<(FrameReport, FrameImages)>, GpuError> {
+        while let Some(&oldest) = self.frames.order.front() {
+            if !self.frames.slots[oldest].submitter.is_finished()? {
+                break;
+            }
+            self.finish_slot(oldest)?;
+        }
+        Ok(self.frames.done.drain(..).collect())
+    }
+
+    /// Makes the current slot free to record: its previous frame finished (waited for).
+    pub(super) fn acquire_slot(&mut self) -> Result<(), GpuError> {
+        let current = self.frames.current;
+        if self.frames.slots[current].pending.is_some() {
+            // Slots are used in turn, so every older frame is finished first.
+            while let Some(&oldest) = self.frames.order.front() {
+                self.finish_slot(oldest)?;
+                if oldest == current {
+                    break;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Waits for every submitted frame and finishes it (before replacing anything the GPU
+    /// may still use, such as a lookup switched in place).
+    pub(super) fn drain(&mut self) -> Result<(), GpuError> {
+        while let Some(&oldest) = self.frames.order.front() {
+            self.finish_slot(oldest)?;
+        }
+        Ok(())
+    }
+
+    /// Submits the current slot's recorded frame and moves to the next slot.
+    pub(super) fn submit_slot(&mut self, pending: Pending) -> Result<(), GpuError> {
+        let current = self.frames.current;
+        let slot = &mut self.frames.slots[current];
+        slot.submitter.submit()?;
+        slot.pending = Some(pending);
+        self.frames.order.push_back(current);
+        self.frames.current = (current + 1) % self.frames.slots.len();
+        Ok(())
+    }
+
+    /// Submits the current slot's recorded work (a floor's) and waits for it, outside the
+    /// frames' queue; the caller reads its queries with [`Self::slot_queries`].
+    pub(super) fn submit_slot_and_wait(&mut self) -> Result<usize, GpuError> {
+        let current = self.frames.current;
+        self.frames.slots[current].submitter.submit_and_wait()?;
+        self.frames.current = (current + 1) % self.frames.slots.len();
+        Ok(current)
+    }
+
+    pub(super) fn slot_queries(&self, slot: usize) -> &FrameQueries {
+        &self.frames.slots[slot].queries
+    }
+
+    /// Waits for slot `s`'s frame and turns it into results in `done`.
+    fn finish_slot(&mut self, s: usize) -> Result<(), GpuError> {
+        debug_assert_eq!(
+            self.frames.order.front(),
+            Some(&s),
+            "frames finish in order"
+        );
+        self.frames.order.pop_front();
+        let slot = &mut self.frames.slots[s];
+        slot.submitter.wait()?;
+        let Some(mut pending) = slot.pending.take() else {
+            return Ok(());
+        };
+        pending.report.submit_wait_ms = pending.submitted.elapsed().as_secs_f64() * 1e3;
+        let slot = &self.frames.slots[s];
+        let mut report = pending.report;
+        self.read_queries(
+            &slot.queries,
+            &mut report,
+            pending.updated,
+            pending.readback.views,
+        )?;
+        report.traced_rays = self.mirror.pass.tally(s)?;
+        let images = self.read_images(slot.readback.as_ref(), pending.readback, &pending.copies)?;
+        self.frames.done.push_back((report, images));
+        Ok(())
+    }
+}

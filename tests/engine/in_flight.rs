@@ -1,0 +1,250 @@
+//! Frames in flight: with 2 and 3 frames submitted before the first is waited for, every fill
+//! method and the lookups with per-frame state of their own (the ray-query TLAS, the
+//! distance-exact tally) give, frame by frame, the pixels, face masks and tallies of one frame
+//! at a time, on every driver, and the validation layer (synchronization checks included)
+//! stays silent. The scene moves, so each frame's uploads differ from the last: a frame that
+//! read another frame's views, transforms, indirect commands, meshlet draws or instances
+//! would show it.
+//!
+//! The hazards that matter here are between submissions: the layer checks those only with
+//! its queue-submit enable (`VK_LAYER_ENABLES`, which `scripts/test.sh` sets); without it
+//! these tests are a [`common::skip`]. The first test proves the layer then sees them.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use common::{devices, scene, Gpu};
+use specchio::render::lookups::{self, FrameTally};
+use specchio::render::methods::Method;
+use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer, RgbaImage};
+use specchio::scene::{Lookup, RefreshPolicy, Scene};
+use specchio::vk::device::OptionalFeatures;
+
+const FRAMES: usize = 7;
+
+const QUEUE_SUBMIT_CHECKS: &str = "VALIDATION_CHECK_ENABLE_SYNCHRONIZATION_VALIDATION_QUEUE_SUBMIT";
+
+/// Whether the layer will check hazards between submissions; a [`common::skip`] if not.
+fn checks_between_submissions() -> bool {
+    let on = std::env::var("VK_LAYER_ENABLES").is_ok_and(|v| v.contains(QUEUE_SUBMIT_CHECKS));
+    if !on {
+        common::skip(
+            "synchronization checks between submissions",
+            &format!("VK_LAYER_ENABLES lacks {QUEUE_SUBMIT_CHECKS} (scripts/test.sh sets it)"),
+        );
+    }
+    on
+}
+
+/// Two fills of the same bytes in two submissions, the second submitted before the first
+/// was waited for and with no barrier: the layer reports the write after write. (One
+/// command buffer alone shows nothing wrong: the hazard exists only between submissions.)
+#[test]
+fn the_layer_reports_a_hazard_between_submissions() {
+    use specchio::vk::commands::Submitter;
+    use specchio::vk::memory::{Buffer, BufferDesc};
+    if !checks_between_submissions() {
+        return;
+    }
+    let gpu = Gpu::new();
+    {
+        let device = &gpu.device;
+        let desc = BufferDesc::new_device_local(256, ash::vk::BufferUsageFlags::TRANSFER_DST);
+        let buffer = Buffer::create(device, &desc, "two fills").expect("buffer");
+        let first = Submitter::create(device, "first fill").expect("submitter");
+        let second = Submitter::create(device, "second fill").expect("submitter");
+        for (submitter, value) in [(&first, 1), (&second, 2)] {
+            let cmd = submitter.begin().expect("begin");
+            // SAFETY: cmd is recording; the buffer is live and has TRANSFER_DST usage.
+            unsafe { device.raw.cmd_fill_buffer(cmd, buffer.raw, 0, 256, value) };
+            submitter.submit().expect("submit");
+        }
+        first.wait().expect("wait");
+        second.wait().expect("wait");
+    }
+    let messages = gpu.finish_with_messages();
+    assert!(
+        messages
+            .iter()
+            .any(|m| m.contains("SYNC-HAZARD-WRITE-AFTER-WRITE")),
+        "two unordered fills in two submissions must be reported; got {messages:#?}"
+    );
+}
+
+/// What must not depend on the frames in flight.
+#[derive(Debug, PartialEq)]
+struct Seen {
+    frame: u64,
+    face_mask: u8,
+    faces_rendered: u32,
+    traced_rays: Option<FrameTally>,
+}
+
+type Frame = (Seen, Vec<RgbaImage>);
+
+fn seen(report: &FrameReport, images: FrameImages) -> Frame {
+    let mut all = images.cube.unwrap_or_default();
+    all.extend(
+        [
+            images.observer,
+            images.sensor,
+            images.observer_direction,
+            images.sensor_direction,
+        ]
+        .into_iter()
+        .map(|i| i.expect("every view was read back")),
+    );
+    let s = Seen {
+        frame: report.frame,
+        face_mask: report.face_mask,
+        faces_rendered: report.faces_rendered,
+        traced_rays: report.traced_rays,
+    };
+    (s, all)
+}
+
+/// `FRAMES` frames of `s` with `in_flight` frames in flight: all submitted first (taking the
+/// results that are ready after each submission), then the rest finished in order.
+fn run(gpu: &Gpu, s: &Scene, method: Method, lookup: Lookup, in_flight: usize) -> Vec<Frame> {
+    let options = RenderOptions {
+        cube_size: Some(32),
+        method,
+        lookup: Some(lookup),
+        refresh: Some(RefreshPolicy::OnChange),
+        frames_in_flight: in_flight,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+    let readback = Readback {
+        cube: true,
+        views: true,
+        directions: true,
+        rays: false,
+    };
+    let mut out = Vec::new();
+    for i in 0..FRAMES {
+        // Two still frames in the middle: on-change skips them, the cube keeps its last fill.
+        let t = [0.0, 0.4, 0.8, 0.8, 0.8, 1.3, 1.9][i];
+        r.submit_frame(i as u64, t, readback).expect("submit");
+        let ready = r.finished_frames().expect("finished frames");
+        out.extend(ready.into_iter().map(|(rep, img)| seen(&rep, img)));
+    }
+    while let Some((rep, img)) = r.finish_frame().expect("finish") {
+        out.push(seen(&rep, img));
+    }
+    out
+}
+
+fn assert_same_frames(one: &[Frame], many: &[Frame], what: &str) {
+    assert_eq!(one.len(), FRAMES, "{what}: one at a time");
+    assert_eq!(many.len(), FRAMES, "{what}: every frame comes back once");
+    for ((a, ia), (b, ib)) in one.iter().zip(many) {
+        assert_eq!(a, b, "{what}: frame {}", a.frame);
+        for (k, (x, y)) in ia.iter().zip(ib).enumerate() {
+            let differing = (x.pixels.iter().zip(&y.pixels))
+                .filter(|(p, q)| p.map(f32::to_bits) != q.map(f32::to_bits))
+                .count();
+            assert_eq!(differing, 0, "{what}: frame {}, image {k}", a.frame);
+        }
+    }
+    let skipped = one.iter().filter(|(s, _)| s.face_mask == 0).count();
+    assert!(skipped > 0, "{what}: the still frames skipped their update");
+}
+
+/// The device's methods and the lookups under test that it can run, and a device with all
+/// their features.
+fn gpu_for(device: &str) -> (Gpu, Vec<Method>, Vec<Lookup>) {
+    let (probe, methods) = Gpu::with_all_methods_on(Some(device));
+    let info = probe.device.info.clone();
+    probe.finish();
+    let mut tested = Vec::new();
+    for lookup in [Lookup::Plain, Lookup::DistanceExact, Lookup::RayQuery] {
+        match lookups::missing_features(lookup, &info) {
+            None => tested.push(lookup),
+            Some(why) => common::not_applicable(&format!("{lookup} on {device}"), &why),
+        }
+    }
+    let features = (methods.iter().map(|m| m.features()))
+        .chain(tested.iter().map(|&l| lookups::features(l)))
+        .fold(OptionalFeatures::default(), |f, g| f.union(g));
+    (Gpu::on(device, features), methods, tested)
+}
+
+#[test]
+fn frames_in_flight_change_nothing_but_the_overlap() {
+    if !checks_between_submissions() {
+        return;
+    }
+    let s = scene("scenes/moving-objects.toml");
+    for device in devices() {
+        let (gpu, methods, tested) = gpu_for(&device);
+        // Every method with the plain lookup; every lookup with six-pass.
+        let cases = (methods.iter().map(|&m| (m, Lookup::Plain)))
+            .chain(tested.iter().skip(1).map(|&l| (Method::SIX_PASS, l)));
+        for (method, lookup) in cases {
+            let one = run(&gpu, &s, method, lookup, 1);
+            for in_flight in [2, 3] {
+                let many = run(&gpu, &s, method, lookup, in_flight);
+                let what = format!("{method}, {lookup}, {in_flight} in flight on {device}");
+                assert_same_frames(&one, &many, &what);
+            }
+            eprintln!("{device}: {method} with {lookup}: 2 and 3 frames in flight = 1");
+        }
+        gpu.finish();
+    }
+}
+
+/// Switching the lookup in place (the viewer's menu) and dropping the renderer with frames
+/// still running wait for what those frames use: the validation layer would report an object
+/// destroyed while in use. The frames before the switch still come back, in order.
+#[test]
+fn a_lookup_switch_and_a_drop_wait_for_the_frames_in_flight() {
+    if !checks_between_submissions() {
+        return;
+    }
+    for device in devices() {
+        switch_and_drop_on(&device);
+    }
+}
+
+fn switch_and_drop_on(device: &str) {
+    let s = scene("scenes/moving-objects.toml");
+    let (gpu, _, tested) = gpu_for(device);
+    let options = RenderOptions {
+        cube_size: Some(32),
+        frames_in_flight: 3,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&gpu.device, s, &options).expect("renderer");
+    let mut frame = 0;
+    for &lookup in tested.iter().chain([&Lookup::Box]) {
+        r.scene.mirror.lookup = lookup;
+        for _ in 0..2 {
+            let t = frame as f64 * 0.3;
+            r.submit_frame(frame, t, Readback::default())
+                .expect("submit");
+            frame += 1;
+        }
+    }
+    let (first, _) = r.finish_frame().expect("finish").expect("a frame");
+    assert_eq!(first.frame, 0, "frames come back oldest first");
+    let (second, _) = r.finish_frame().expect("finish").expect("a frame");
+    assert_eq!(second.frame, 1);
+    // The rest are still pending (or finished and queued): the drop must wait for them.
+    drop(r);
+    gpu.finish();
+}
+
+#[test]
+fn more_frames_in_flight_than_the_renderer_keeps_are_refused() {
+    let gpu = Gpu::new();
+    let options = RenderOptions {
+        frames_in_flight: specchio::render::MAX_FRAMES_IN_FLIGHT + 1,
+        ..Default::default()
+    };
+    let err = Renderer::new(&gpu.device, scene("scenes/thesis-room.toml"), &options)
+        .err()
+        .expect("refused");
+    assert!(err.to_string().contains("frames in flight"), "{err}");
+    gpu.finish();
+}
