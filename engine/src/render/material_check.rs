@@ -2,6 +2,8 @@
 //! results in full f32. It exists so that a test can hold the CPU reference's twin of the
 //! shader functions (`reference::materials`) to float rounding; nothing renders with it.
 
+use std::sync::Arc;
+
 use ash::vk;
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
@@ -35,14 +37,16 @@ impl Renderer {
                 "material {m} does not exist (the scene has {count})"
             )));
         }
-        // The frame block carries the light; time 0 is as good as any (lights do not move).
+        // The frame block carries the light; time 0 is as good as any (lights do not move). It
+        // reaches the device through a frame slot's uploads, recorded before the dispatches.
+        self.acquire_slot()?;
         self.write_frame_buffers(&SceneState::at(&self.scene, 0.0))?;
 
         // One dispatch per material, so the texture index is dynamically uniform.
         let mut order: Vec<usize> = (0..points.len()).collect();
         order.sort_by_key(|&i| points[i].0);
         let sorted: Vec<MaterialSample> = order.iter().map(|&i| points[i].1).collect();
-        let device = &self.device;
+        let device = &Arc::clone(&self.device);
         let sample_bytes = std::mem::size_of_val(sorted.as_slice()) as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let mut samples = Buffer::create(
@@ -100,10 +104,10 @@ impl Renderer {
             "materials check",
         )?;
 
-        let cmd = self.submitter.begin()?;
+        let cmd = self.begin_frame()?;
         let d = &device.raw;
         // SAFETY (whole block): cmd is recording; the pipeline, sets and buffers are live
-        // until after submit_and_wait below; the push range matches the layout.
+        // until after the slot is waited for below; the push range matches the layout.
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
             d.cmd_bind_descriptor_sets(
@@ -144,7 +148,7 @@ impl Renderer {
             vk::PipelineStageFlags2::COMPUTE_SHADER,
             vk::AccessFlags2::SHADER_STORAGE_WRITE,
         );
-        self.submitter.submit_and_wait()?;
+        self.submit_slot_and_wait()?;
 
         let bytes = results.mapped()?;
         let mut out = vec![Vec3::ZERO; points.len()];
