@@ -26,11 +26,6 @@ fi
 # device (it lacks a feature) are allowed; both kinds are logged and counted below.
 export SPECCHIO_REQUIRE_TOOL_CHECKS=1
 export SPECCHIO_VALIDATE=1
-# The validation layer's synchronization checks see each command buffer alone unless this
-# enable is set (Vulkan-ValidationLayers 1.3.239 reads it from the environment): with it they
-# also check hazards between submissions, which frames in flight are about
-# (tests/engine/in_flight.rs).
-export VK_LAYER_ENABLES="${VK_LAYER_ENABLES:+$VK_LAYER_ENABLES,}VALIDATION_CHECK_ENABLE_SYNCHRONIZATION_VALIDATION_QUEUE_SUBMIT"
 export SPECCHIO_SKIP_LOG="$PWD/target/test-skips.log"
 mkdir -p target
 rm -f "$SPECCHIO_SKIP_LOG"
