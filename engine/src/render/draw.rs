@@ -297,10 +297,11 @@ impl Renderer {
         self.facing(CUBE_FRONT, Vec3::ZERO, reach)
     }
 
-    /// The facing of a camera view: its near plane's corners are `CAMERA_NEAR_M` from the eye
-    /// (`ViewBasis::near_plane_for`).
+    /// The facing of a camera view: its near plane's corners are `camera_clearance` from the
+    /// eye (`ViewBasis::near_plane_for`).
     pub(super) fn view_facing(&self, view: &crate::scene::camera::ViewBasis) -> Facing {
-        self.facing(VIEW_FRONT, view.eye, super::CAMERA_NEAR_M)
+        let reach = super::camera_clearance(view.eye, self.scene.mirror.radius_m);
+        self.facing(VIEW_FRONT, view.eye, reach)
     }
 
     fn facing(&self, front: vk::FrontFace, eye: Vec3, reach: f32) -> Facing {

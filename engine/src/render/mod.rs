@@ -60,10 +60,23 @@ use queries::*;
 
 /// The side-by-side image of the thesis: observer left, sensor right.
 pub const PAIR_SIZE: [u32; 2] = [1200, 450];
-/// The observer and sensor cameras draw everything at least this far from the eye (metres):
-/// their near plane is placed so that its corners are this far (`ViewBasis::near_plane_for`);
-/// their far plane is at infinity.
+/// The observer and sensor cameras draw everything at least this far from the eye (metres),
+/// and the mirror whatever its distance ([`camera_clearance`]): their near plane is placed so
+/// that its corners are that far (`ViewBasis::near_plane_for`); their far plane is at infinity.
 pub const CAMERA_NEAR_M: f32 = 0.05;
+
+/// How far from a camera at `eye` (render space: the mirror's centre at the origin) its view
+/// keeps everything: [`CAMERA_NEAR_M`], or half the eye's distance to the mirror's surface when
+/// that is less. Every point of the sphere in view is then at least twice the near plane's
+/// distance away along the view (a point in the frustum at distance D has depth at least D
+/// over the corner rays' stretch, which `near_plane_for` divides by too), so the near plane
+/// clips none of it and its fragment depths (reverse-Z: near / depth) stay at most 0.5. A fixed
+/// 5 cm would cut a 1 cm mirror seen from 3 cm below (`scenes/hard/close-sensor.toml`). The
+/// floor of 1 micrometre only keeps the projection finite for an eye inside the sphere,
+/// which the scene loader refuses and the viewer's keys do not reach.
+pub fn camera_clearance(eye: Vec3, mirror_radius_m: f32) -> f32 {
+    CAMERA_NEAR_M.min(0.5 * (eye.length() - mirror_radius_m)).max(1e-6)
+}
 
 struct Pipelines {
     view_scene: Pipeline,
@@ -379,7 +392,7 @@ impl Renderer {
                     (scene.cube.near_m, scene.cube.far_m, [0.0, 0.0, size, size])
                 } else {
                     (
-                        b.near_plane_for(CAMERA_NEAR_M),
+                        b.near_plane_for(camera_clearance(b.eye, scene.mirror.radius_m)),
                         f32::INFINITY,
                         viewports[i - 6],
                     )

@@ -222,11 +222,9 @@ impl Renderer {
                 _ => [0.0, 0.0, target.width as f32, target.height as f32],
             };
             self.set_viewport(cmd, vp[0], vp[1], vp[2], vp[3]);
-            let frustum = Frustum::new(
-                &views[v as usize],
-                views[v as usize].near_plane_for(CAMERA_NEAR_M),
-                f32::INFINITY,
-            );
+            let view = &views[v as usize];
+            let clearance = camera_clearance(view.eye, self.scene.mirror.radius_m);
+            let frustum = Frustum::new(view, view.near_plane_for(clearance), f32::INFINITY);
             let visible = self.visible(&frustum);
             let push = Push {
                 view_index: v,
