@@ -75,7 +75,9 @@ pub const CAMERA_NEAR_M: f32 = 0.05;
 /// floor of 1 micrometre only keeps the projection finite for an eye inside the sphere,
 /// which the scene loader refuses and the viewer's keys do not reach.
 pub fn camera_clearance(eye: Vec3, mirror_radius_m: f32) -> f32 {
-    CAMERA_NEAR_M.min(0.5 * (eye.length() - mirror_radius_m)).max(1e-6)
+    CAMERA_NEAR_M
+        .min(0.5 * (eye.length() - mirror_radius_m))
+        .max(1e-6)
 }
 
 struct Pipelines {

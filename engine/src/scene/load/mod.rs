@@ -10,6 +10,7 @@
 mod animation;
 mod budget;
 mod cameras;
+mod clearance;
 mod cube;
 mod generators;
 mod locate;
@@ -170,15 +171,18 @@ impl Ctx<'_> {
             sensor_offset: sensor.offset_m,
             observer: observer.position,
         };
+        let mut origins: Vec<clearance::Origin> =
+            (0..objects.len()).map(clearance::Origin::Listed).collect();
         for (i, g) in spec.generate.iter().enumerate() {
             let made = self.generated(i, g, &material_index, &room, &surroundings, &mut store)?;
+            origins.extend(made.iter().map(|_| clearance::Origin::Generated(i)));
             objects.extend(made);
         }
         let cube = self.cube(spec.cube.as_ref(), &mirror, extent)?;
         let refresh = self.refresh(spec.refresh.as_ref())?;
         let light = self.light(spec.light.as_ref())?;
 
-        Ok(Scene {
+        let scene = Scene {
             origin: self.origin,
             source: self.loc.file.to_path_buf(),
             description: spec.description.clone().unwrap_or_default(),
@@ -193,7 +197,9 @@ impl Ctx<'_> {
             cube,
             refresh,
             light,
-        })
+        };
+        self.objects_clear_of_mirror(&scene, &origins)?;
+        Ok(scene)
     }
 }
 

@@ -323,3 +323,40 @@ fn many_materials_are_found_by_name_and_listed_briefly() {
         "{e}"
     );
 }
+
+/// Objects stay outside the mirror: one through it, one passing through it later and one
+/// around it are refused naming the object, the mirror and when; one just outside loads.
+#[test]
+fn objects_that_reach_into_the_mirror_are_refused_naming_both() {
+    let with =
+        |body: &str| format!("{MINIMAL}[[objects]]\nname = \"rod\"\nmaterial = \"w\"\n{body}");
+    let cases = [
+        (
+            "shape = \"cylinder\"\nradius = 0.1\nheight = 4\nposition = [0, 3, 0]\n",
+            "objects[0].position: object \"rod\" reaches into the mirror (centre [0, 3, 0], \
+             radius 1) at time 0",
+        ),
+        (
+            "shape = \"box\"\nsize = [0.5, 0.5, 0.5]\nposition = [3, 3, 0]\n\
+             animation = { type = \"linear\", to = [-3, 3, 0], duration = 4.0 }\n",
+            "objects[0].animation: object \"rod\" reaches into the mirror (centre [0, 3, 0], \
+             radius 1) at t = ",
+        ),
+        (
+            "shape = \"box\"\nsize = [3, 3, 3]\nposition = [0, 3, 0]\n",
+            "objects[0].position: object \"rod\" encloses the mirror",
+        ),
+    ];
+    for (body, needle) in cases {
+        let err = load_str(&with(body), Path::new("case.toml")).expect_err(body);
+        let msg = err.to_string();
+        assert!(
+            msg.contains(needle),
+            "{body:?}: expected {needle:?} in {msg}"
+        );
+        assert!(err.line().is_some(), "{msg}");
+    }
+    // Its near face 0.05 m from the sphere.
+    let clear = "shape = \"box\"\nsize = [0.5, 0.5, 0.5]\nposition = [1.3, 3, 0]\n";
+    load_str(&with(clear), Path::new("clear.toml")).expect("a box outside the mirror loads");
+}

@@ -1,0 +1,222 @@
+//! Objects kept out of the mirror: no object may reach into the sphere or enclose it, at time
+//! 0 or at the sampled times of its own and the mirror's animation.
+//!
+//! The mirror is a perfect sphere the renderer draws analytically over everything: a cube map
+//! rendered from its centre would store the inside of an object through it (the `box` and
+//! `distance` lookups then show a ghost of it), the reference and the ray-query lookup would
+//! trace from a surface inside the object, and the sensor would see the mirror through a solid.
+//! No scene means that, so it is refused, naming the object and the mirror.
+
+use glam::{Mat4, Vec3};
+
+use super::numbers::{num_text, time_text};
+use super::{position_at, Ctx, R};
+use crate::scene::Animation;
+use crate::scene::{Mesh, Scene};
+
+/// Where an object came from in the file, for the error's field.
+pub(super) enum Origin {
+    /// `[[objects]]` entry i.
+    Listed(usize),
+    /// Made by `[[generate]]` entry g.
+    Generated(usize),
+}
+
+impl Ctx<'_> {
+    /// Refuses the first object that reaches into the mirror (`origins[i]`: where object i
+    /// came from).
+    pub(super) fn objects_clear_of_mirror(&self, scene: &Scene, origins: &[Origin]) -> R<()> {
+        let r = scene.mirror.radius_m;
+        for (o, origin) in scene.objects.iter().zip(origins) {
+            let mut times = dense_times(o.animation.as_ref());
+            times.extend(dense_times(scene.mirror.animation.as_ref()));
+            for t in times {
+                let centre = position_at(scene.mirror.animation.as_ref(), scene.mirror.center, t);
+                // Render space: the mirror's centre at the origin.
+                let model = Mat4::from_scale_rotation_translation(
+                    o.scale,
+                    o.rotation,
+                    position_at(o.animation.as_ref(), o.position, t) - centre,
+                );
+                let Some(why) = reaches_into(&scene.meshes[o.mesh], model, r) else {
+                    continue;
+                };
+                let field = match (origin, t == 0.0) {
+                    (Origin::Listed(k), true) => format!("objects[{k}].position"),
+                    (Origin::Listed(k), false) => format!("objects[{k}].animation"),
+                    (Origin::Generated(g), _) => format!("generate[{g}]"),
+                };
+                let when = if t == 0.0 {
+                    "at time 0".to_owned()
+                } else {
+                    format!("at t = {} s", time_text(t))
+                };
+                return Err(self.invalid(
+                    &field,
+                    format!(
+                        "object \"{}\" {why} the mirror (centre {}, radius {}) {when}; an object \
+                         must stay outside the sphere",
+                        o.name,
+                        self.fmt_point(centre),
+                        num_text(r)
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Times an object and the mirror are checked at: more than the cameras' 64 per cycle, since
+/// an object's far end sweeps faster than its centre (a 1.5 m arrow orbiting at 3 m every 10 s
+/// moves 0.04 m between two of these times).
+const SAMPLES: usize = 1024;
+
+fn dense_times(a: Option<&Animation>) -> Vec<f64> {
+    a.map_or_else(|| vec![0.0], |a| a.sample_times(SAMPLES))
+}
+
+/// How the mesh, placed by `model` (the sphere at the origin), reaches into a sphere of
+/// radius `r`: "reaches into" when a triangle comes closer than `r` to the centre, "encloses"
+/// when a closed mesh holds the centre; `None` when it stays outside.
+fn reaches_into(mesh: &Mesh, model: Mat4, r: f32) -> Option<&'static str> {
+    // The transformed bounds first: most objects are nowhere near.
+    let corners = (0..8).map(|c| {
+        let pick = |bit: u32, lo: f32, hi: f32| if c & bit == 0 { lo } else { hi };
+        let (lo, hi) = (mesh.bounds_min, mesh.bounds_max);
+        model.transform_point3(Vec3::new(
+            pick(1, lo.x, hi.x),
+            pick(2, lo.y, hi.y),
+            pick(4, lo.z, hi.z),
+        ))
+    });
+    let (lo, hi) = corners.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+        (lo.min(p), hi.max(p))
+    });
+    if Vec3::ZERO.clamp(lo, hi).length() >= r {
+        return None;
+    }
+    let triangles = mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| [0, 1, 2].map(|k| model.transform_point3(mesh.positions[t[k] as usize])));
+    let mut crossings = [0u32; 3];
+    for [a, b, c] in triangles {
+        if closest_to_origin(a, b, c).length() < r {
+            return Some("reaches into");
+        }
+        for (n, &d) in crossings.iter_mut().zip(&PROBES) {
+            *n += u32::from(crosses(d, a, b, c));
+        }
+    }
+    // A ray through an edge or a vertex counts two triangles or none: the majority of three
+    // rays in unrelated directions decides.
+    let odd = crossings.iter().filter(|&&n| n % 2 == 1).count();
+    (mesh.closed && odd >= 2).then_some("encloses")
+}
+
+/// Directions of the rays that count a closed mesh's crossings: unrelated to the axes and to
+/// each other, so that no ray of a box or a tessellated solid runs along an edge.
+const PROBES: [Vec3; 3] = [
+    Vec3::new(0.8017, 0.3921, 0.4511),
+    Vec3::new(-0.2737, 0.8853, -0.3759),
+    Vec3::new(0.3313, -0.5189, -0.7880),
+];
+
+/// The point of triangle abc closest to the origin (Ericson, "Real-Time Collision Detection",
+/// 5.1.5: by the Voronoi region of the triangle the origin lies in).
+fn closest_to_origin(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let (ab, ac, ap) = (b - a, c - a, -a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = -b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = -c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+/// Whether the ray from the origin along `d` crosses triangle abc (Moller-Trumbore); a closed
+/// mesh crossed an odd number of times holds the origin.
+fn crosses(d: Vec3, a: Vec3, b: Vec3, c: Vec3) -> bool {
+    let (e1, e2) = (b - a, c - a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < f32::EPSILON * e1.length() * e2.length() {
+        return false;
+    }
+    let s = -a / det;
+    let u = s.dot(p);
+    let q = s.cross(e1);
+    let v = d.dot(q);
+    let t = e2.dot(q);
+    (0.0..=1.0).contains(&u) && v >= 0.0 && u + v <= 1.0 && t > 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_closest_point_is_found_in_every_region() {
+        let (a, b, c) = (
+            Vec3::new(1.0, -1.0, 2.0),
+            Vec3::new(1.0, 1.0, 2.0),
+            Vec3::new(-1.0, 0.0, 2.0),
+        );
+        // The origin projects inside: the closest point is straight ahead.
+        assert!(closest_to_origin(a, b, c).abs_diff_eq(Vec3::new(0.0, 0.0, 2.0), 1e-6));
+        // The origin in a vertex's region, then in an edge's (the plane z = 1).
+        let p = |x: f32, y: f32| Vec3::new(x, y, 1.0);
+        let (a, b, c) = (p(1.0, 1.0), p(2.0, 1.0), p(1.0, 2.0));
+        assert!(closest_to_origin(a, b, c).abs_diff_eq(a, 1e-6));
+        assert!(
+            closest_to_origin(c, a, b).abs_diff_eq(a, 1e-6),
+            "any vertex order"
+        );
+        let on_edge = closest_to_origin(p(-1.0, 1.0), p(1.0, 1.0), p(0.0, 2.0));
+        assert!(on_edge.abs_diff_eq(p(0.0, 1.0), 1e-6), "{on_edge}");
+    }
+
+    #[test]
+    fn a_box_through_the_sphere_reaches_in_and_one_around_it_encloses_it() {
+        let unit = Mesh::cuboid(Vec3::splat(0.5));
+        let at = |scale: f32, x: f32| {
+            Mat4::from_scale_rotation_translation(
+                Vec3::splat(scale),
+                glam::Quat::IDENTITY,
+                Vec3::new(x, 0.0, 0.0),
+            )
+        };
+        // A 0.2 m box 0.55 m from a 0.5 m sphere's centre: its near face is 0.45 m away.
+        assert_eq!(
+            reaches_into(&unit, at(0.2, 0.55), 0.5),
+            Some("reaches into")
+        );
+        // 0.65 m: its near face is 0.55 m away, outside.
+        assert_eq!(reaches_into(&unit, at(0.2, 0.65), 0.5), None);
+        // A 4 m box around the sphere: no face comes near, but it holds the centre.
+        assert_eq!(reaches_into(&unit, at(4.0, 0.1), 0.5), Some("encloses"));
+    }
+}
