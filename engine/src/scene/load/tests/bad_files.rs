@@ -7,6 +7,11 @@ use crate::scene::load;
 /// (file in tests/scenes/bad, expected line, text the field/message must contain).
 /// The expectations repeat each file's first-line comment.
 const BAD: &[(&str, Option<u32>, &str)] = &[
+    (
+        "object-through-mirror.toml",
+        Some(16),
+        "objects[0].position: object \"rod\" reaches into the mirror (centre [0, 3, 0], radius 1)",
+    ),
     ("syntax-error.toml", Some(4), "TOML syntax error"),
     ("unknown-field.toml", Some(4), "mirror.radus"),
     (
