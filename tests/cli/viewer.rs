@@ -262,3 +262,59 @@ fn many_switches_before_a_frame_hold_few_renderers() {
         "60 switches peaked at {sixty} bytes, 2 at {two}"
     );
 }
+
+/// A window destroyed from outside (`xdotool windowclose`: no close request, the window is
+/// simply gone) ends the viewer cleanly, saying why, whichever notices first: the window's
+/// `Destroyed` event or the surface. It used to panic inside winit asking the gone window its
+/// size. Run several times: which one notices first is a race.
+#[test]
+fn a_window_destroyed_from_outside_ends_the_viewer_cleanly() {
+    let Some(x) = Xvfb::start() else { return };
+    if !has_xdotool() {
+        return;
+    }
+    for attempt in 0..3 {
+        let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--frames", "100000"]);
+        viewer.wait_for("swapchain: ");
+        let id = viewer_window(&x);
+        xdotool(&x, &["windowclose", &id]);
+        let (out, stdout) = viewer.exit();
+        let stderr = text(&out.stderr);
+        assert!(
+            out.status.success() && !stderr.contains("panicked"),
+            "attempt {attempt}: {:?}\n{stderr}",
+            out.status
+        );
+        assert!(
+            stdout.contains("the window was destroyed from outside")
+                || stdout.contains("the window's surface was lost"),
+            "attempt {attempt}: no reason given:\n{stdout}"
+        );
+    }
+}
+
+/// The display connection killed under the viewer (`xdotool windowkill`: the X server drops
+/// the client) ends it with Xlib's message and exit status 1, not a panic: Xlib's handler of
+/// a lost connection ends the process itself (nothing can be drawn or torn down through a
+/// display that is gone; the process's exit frees it all).
+#[test]
+fn a_killed_display_connection_ends_the_viewer_with_a_message() {
+    let Some(x) = Xvfb::start() else { return };
+    if !has_xdotool() {
+        return;
+    }
+    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--frames", "100000"]);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowkill", &id]);
+    let (out, _) = viewer.exit();
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    // Xlib's own words, which vary with where it noticed: "X connection to :N broken" or
+    // "XIO: fatal IO error".
+    assert!(
+        stderr.contains("X connection") || stderr.contains("XIO:"),
+        "{stderr}"
+    );
+}

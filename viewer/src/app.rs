@@ -68,6 +68,9 @@ struct Viewer {
     renderer_shown: bool,
     window: Arc<Window>,
     view: DisplayView,
+    /// The window's size, from its creation and its `Resized` events: asking the window each
+    /// frame would ask a window that may have been destroyed under it.
+    size: PhysicalSize<u32>,
     /// The size last asked of the window (view switch), until a resize brings it.
     size_asked: Option<(PhysicalSize<u32>, Instant)>,
     menu: Menu,
@@ -87,6 +90,8 @@ struct App<'a> {
     figures: Figures,
     outcome: Outcome,
     error: Option<anyhow::Error>,
+    /// The window was destroyed from outside: no more frames.
+    window_gone: bool,
 }
 
 pub fn run(
@@ -122,11 +127,19 @@ pub fn run(
         figures: Figures::default(),
         outcome: Outcome::default(),
         error: None,
+        window_gone: false,
     };
     specchio::say_part!("{}", input::help());
-    event_loop.run_app(&mut app)?;
+    let ran = event_loop.run_app(&mut app);
     // The viewer goes first (its presenter waits for the frames in flight).
     app.viewer = None;
+    match ran {
+        // Once the window is gone, the display reports errors for what was still on its way
+        // to it (a presented image for a window that no longer exists): that is how it went,
+        // not a new failure.
+        Err(_) if app.window_gone => {}
+        ran => ran?,
+    }
     if let Some(e) = app.error {
         return Err(e);
     }
@@ -158,8 +171,18 @@ impl ApplicationHandler for App<'_> {
         }
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Destroyed => {
+                // Destroyed from outside (`xdotool windowclose`, a crashed window manager):
+                // nothing may ask the window anything any more (winit's X11 backend panics on
+                // a gone window's geometry), so no further frame; the presenter and renderer
+                // are torn down as on a quit.
+                specchio::say!("the window was destroyed from outside: quitting");
+                self.window_gone = true;
+                event_loop.exit();
+            }
             WindowEvent::Resized(size) => {
                 if let Some(v) = &mut self.viewer {
+                    v.size = size;
                     v.presenter.resized();
                     if v.size_asked.is_some_and(|(asked, _)| asked == size) {
                         v.size_asked = None;
@@ -176,11 +199,20 @@ impl ApplicationHandler for App<'_> {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
-        if self.error.is_some() || self.viewer.is_none() {
+        if self.error.is_some() || self.viewer.is_none() || self.window_gone || event_loop.exiting()
+        {
             return;
         }
-        if let Err(e) = self.frame(event_loop) {
-            self.fail(event_loop, e);
+        match self.frame(event_loop) {
+            Ok(()) => {}
+            // The window went away between two events (destroyed, or its display lost) and
+            // the surface found out first: the same clean exit as on `Destroyed`.
+            Err(e) if surface_lost(&e) => {
+                specchio::say!("the window's surface was lost ({e}): quitting");
+                self.window_gone = true;
+                event_loop.exit();
+            }
+            Err(e) => self.fail(event_loop, e),
         }
     }
 }
@@ -216,7 +248,9 @@ impl App<'_> {
             .collect();
         let mut menu = Menu::new(&window);
         menu.print_widgets = self.settings.widgets;
+        let size = window.inner_size();
         Ok(Viewer {
+            size,
             menu,
             presenter,
             renderer,
@@ -261,7 +295,7 @@ impl App<'_> {
         for report in &reports {
             self.figures.finished(report);
         }
-        let size = viewer.window.inner_size();
+        let size = viewer.size;
         let shot = last && self.settings.screenshot;
         let status = Status {
             view: viewer.view,
@@ -276,7 +310,9 @@ impl App<'_> {
             faces: self.figures.faces,
             driver: &self.device.info.name,
         };
-        let mut menu = viewer.menu.frame(&viewer.window, &status);
+        let mut menu = viewer
+            .menu
+            .frame(&viewer.window, [size.width, size.height], &status);
         let (shown, screenshot) = viewer.presenter.show(
             [size.width, size.height],
             &image,
@@ -344,7 +380,7 @@ impl App<'_> {
                 viewer.view = view;
                 let [w, h] = natural_size(&viewer.renderer.scene, view);
                 let size = PhysicalSize::new(w, h);
-                if viewer.window.inner_size() != size {
+                if viewer.size != size {
                     match viewer.window.request_inner_size(size) {
                         Some(_) => viewer.presenter.resized(),
                         None => viewer.size_asked = Some((size, Instant::now())),
@@ -441,6 +477,19 @@ impl App<'_> {
         self.error.get_or_insert(e);
         event_loop.exit();
     }
+}
+
+/// Whether `e` says the window's surface is gone (`VK_ERROR_SURFACE_LOST_KHR`).
+fn surface_lost(e: &anyhow::Error) -> bool {
+    e.chain().any(|cause| {
+        matches!(
+            cause.downcast_ref::<specchio::vk::GpuError>(),
+            Some(specchio::vk::GpuError::Vk {
+                result: ash::vk::Result::ERROR_SURFACE_LOST_KHR,
+                ..
+            })
+        )
+    })
 }
 
 /// The next lookup this device can run.

@@ -51,6 +51,8 @@ pub struct Menu {
     reported_widgets: Vec<(String, [u32; 4])>,
     /// Texture changes not applied yet (the frame that carried them was skipped).
     pending: egui::TexturesDelta,
+    /// egui's clock (its input's `time`).
+    start: std::time::Instant,
 }
 
 impl Drop for Menu {
@@ -100,6 +102,7 @@ impl Menu {
             print_widgets: false,
             reported_widgets: Vec::new(),
             pending: egui::TexturesDelta::default(),
+            start: std::time::Instant::now(),
         }
     }
 
@@ -115,9 +118,30 @@ impl Menu {
         self.pending.append(std::mem::take(&mut paint.textures));
     }
 
+    /// This frame's input for egui: what `egui_winit::State::take_egui_input` gives, with the
+    /// screen from the size the viewer last heard of instead of asking the window, which
+    /// winit's X11 backend answers with a panic once the window was destroyed under it.
+    fn take_input(&mut self, window: &Window, size: [u32; 2]) -> egui::RawInput {
+        // Kept by winit from its events: no round trip to the display.
+        let native = window.scale_factor() as f32;
+        let points = egui::vec2(size[0] as f32, size[1] as f32) / (self.ctx.zoom_factor() * native);
+        let input = self.input.egui_input_mut();
+        input.time = Some(self.start.elapsed().as_secs_f64());
+        input.screen_rect =
+            (points.x > 0.0 && points.y > 0.0).then(|| Rect::from_min_size(Pos2::ZERO, points));
+        input.viewport_id = egui::ViewportId::ROOT;
+        input
+            .viewports
+            .entry(egui::ViewportId::ROOT)
+            .or_default()
+            .native_pixels_per_point = Some(native);
+        input.take()
+    }
+
     /// Builds this frame's menu and help (nothing when both are closed).
-    pub fn frame(&mut self, window: &Arc<Window>, status: &Status) -> Output {
-        let raw = self.input.take_egui_input(window);
+    /// `size`: the window's inner size as the viewer last heard it (`Resized`).
+    pub fn frame(&mut self, window: &Arc<Window>, size: [u32; 2], status: &Status) -> Output {
+        let raw = self.take_input(window, size);
         let mut actions = Vec::new();
         let mut rects = [None, None];
         let mut widgets = Widgets::default();
@@ -134,9 +158,8 @@ impl Menu {
         self.input
             .handle_platform_output(window, full.platform_output);
         let ppp = full.pixels_per_point;
-        let size = window.inner_size();
         for (i, name) in ["menu", "help"].into_iter().enumerate() {
-            let px = rects[i].map(|r| pixel_rect(r, ppp, [size.width, size.height]));
+            let px = rects[i].map(|r| pixel_rect(r, ppp, size));
             if px != self.reported[i] {
                 if let Some([x, y, w, h]) = px {
                     specchio::say!("{name}: {x} {y} {w} {h}");

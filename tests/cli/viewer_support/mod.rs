@@ -374,7 +374,15 @@ impl Running {
 
     /// Waits (at most a minute) for the viewer to exit by itself; requires success and
     /// returns all it printed.
-    pub fn finish(mut self) -> String {
+    pub fn finish(self) -> String {
+        let (out, stdout) = self.exit();
+        ok(&out, "specchio view");
+        stdout
+    }
+
+    /// Waits (at most a minute) for the viewer to exit by itself, however it ends: its exit
+    /// status and stderr, and all it printed on stdout.
+    pub fn exit(mut self) -> (Output, String) {
         let start = Instant::now();
         while self.child.try_wait().unwrap().is_none() {
             if start.elapsed() > Duration::from_secs(60) {
@@ -384,9 +392,7 @@ impl Running {
             std::thread::sleep(Duration::from_millis(100));
         }
         let out = self.child.wait_with_output().unwrap();
-        let stdout = self.reader.join().unwrap();
-        ok(&out, "specchio view");
-        stdout
+        (out, self.reader.join().unwrap())
     }
 }
 
