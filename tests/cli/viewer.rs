@@ -318,3 +318,29 @@ fn a_killed_display_connection_ends_the_viewer_with_a_message() {
         "{stderr}"
     );
 }
+
+/// A toggle acts once per press, however long the key is held: the keyboard's auto-repeat
+/// (Xvfb repeats a held key as a real keyboard does) switches nothing more. Held for 1.5 s,
+/// `e` used to switch the refresh policy 23 times and `m` to rebuild the renderer as often.
+#[test]
+fn a_held_toggle_key_acts_once() {
+    let Some(x) = Xvfb::start() else { return };
+    if !has_xdotool() {
+        return;
+    }
+    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--frames", "100000"]);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    for key in ["e", "m"] {
+        xdotool(&x, &["keydown", key]);
+        std::thread::sleep(std::time::Duration::from_millis(1500));
+        xdotool(&x, &["keyup", key]);
+    }
+    xdotool(&x, &["key", "q"]);
+    let stdout = viewer.finish();
+    for what in ["refresh: ", "method: "] {
+        let n = stdout.lines().filter(|l| l.starts_with(what)).count();
+        assert_eq!(n, 1, "`{what}` printed {n} times:\n{stdout}");
+    }
+}

@@ -189,8 +189,15 @@ impl ApplicationHandler for App<'_> {
                     }
                 }
             }
-            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
-                if let Some(action) = key_name(&event.logical_key).and_then(|k| input::action(&k)) {
+            // A synthetic press is winit's report of a key already held when the window got
+            // the focus, not a press: it acts on nothing.
+            WindowEvent::KeyboardInput {
+                event,
+                is_synthetic: false,
+                ..
+            } if event.state == ElementState::Pressed => {
+                let action = key_name(&event.logical_key).and_then(|k| input::action(&k));
+                if let Some(action) = action.filter(|a| !event.repeat || a.repeats()) {
                     self.act(event_loop, action);
                 }
             }

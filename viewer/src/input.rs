@@ -55,6 +55,18 @@ pub enum Action {
     Quit,
 }
 
+impl Action {
+    /// Whether a held key repeats it (the keyboard's auto-repeat): the moves and the single
+    /// step do, as a held arrow key would; a toggle or a switch acts once per press (holding
+    /// `e` switched the refresh policy 23 times in 1.5 s, `m` rebuilt the renderer as often).
+    pub fn repeats(&self) -> bool {
+        matches!(
+            self,
+            Action::Walk { .. } | Action::Turn { .. } | Action::MoveSphere { .. } | Action::Step
+        )
+    }
+}
+
 /// Every key: its name (in the `--keys` script and winit's logical key, lower case), the
 /// action and the line the help shows.
 pub const KEYS: &[(&str, Action, &str)] = &[
