@@ -191,12 +191,24 @@ pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8)) -> Result<(), Str
     let r = scene.mirror.radius_m;
     let inside = (to - Vec3::splat(r)).cmpge(lo).all() && (to + Vec3::splat(r)).cmple(hi).all();
     let sensor_y = to.y - scene.sensor.offset_m;
+    // Messages speak the file's coordinates: the scene keeps positions relative to its origin.
+    let file = |p: Vec3| scene.origin + p.as_dvec3();
+    let short = |v: f64| (v * 1e6).round() / 1e6;
     if !inside {
-        return Err(format!("the sphere would leave the room at {to}"));
+        let w = file(to);
+        return Err(format!(
+            "the sphere would leave the room at [{}, {}, {}]",
+            short(w.x),
+            short(w.y),
+            short(w.z)
+        ));
     }
     if sensor_y <= lo.y {
+        let (sensor, floor) = (file(Vec3::Y * sensor_y).y, file(Vec3::Y * lo.y).y);
         return Err(format!(
-            "the sensor would go below the floor (y = {sensor_y})"
+            "the sensor would go below the floor (y = {}, the floor is at y = {})",
+            short(sensor),
+            short(floor)
         ));
     }
     scene.mirror.center = to;
@@ -265,14 +277,18 @@ mod tests {
             move_sphere(&mut s, (1, 0, 0)).unwrap();
         }
         assert_eq!(at(&s).x, 4.0);
-        assert!(move_sphere(&mut s, (1, 0, 0)).is_err());
+        // Refused, named in the file's coordinates (thesis-room's mirror is at y = 3).
+        let e = move_sphere(&mut s, (1, 0, 0)).unwrap_err();
+        assert!(e.contains("at [4.25, 3, 0]"), "{e}");
         assert_eq!(at(&s).x, 4.0);
         // The sensor hangs 2.5 m below: the centre cannot go below y = 2.5.
         let e = (0..3)
             .map(|_| move_sphere(&mut s, (0, -1, 0)))
             .last()
             .unwrap();
-        assert!(e.unwrap_err().contains("floor"));
+        // 2.5 - 2.5 = 0: the file's floor, not the scene's internal y = -3.
+        let e = e.unwrap_err();
+        assert!(e.contains("(y = 0, the floor is at y = 0)"), "{e}");
         assert_eq!(at(&s).y, 2.75);
     }
 }
