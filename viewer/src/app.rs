@@ -130,7 +130,7 @@ pub fn run(
         window_gone: false,
     };
     specchio::say_part!("{}", input::help());
-    let ran = event_loop.run_app(&mut app);
+    let ran = run_catching_window_panics(event_loop, &mut app);
     // The viewer goes first (its presenter waits for the frames in flight).
     app.viewer = None;
     match ran {
@@ -483,6 +483,48 @@ impl App<'_> {
     fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
         self.error.get_or_insert(e);
         event_loop.exit();
+    }
+}
+
+/// Runs the event loop; a panic inside the window system's code becomes an error. winit's X11
+/// backend unwraps the replies of a display that reports the window gone: asked the size of
+/// a destroyed window, or destroying its input context while an error for an image presented
+/// to it is pending, it panics inside `run_app` (`xdotool windowclose` under Xvfb, about one
+/// run in five). The viewer's own state is whole (a panic in winit leaves it between two
+/// events), so it is torn down as on any error, and the user reads what happened instead of a
+/// crash report. The default panic message is held back while the loop runs.
+fn run_catching_window_panics(event_loop: EventLoop<()>, app: &mut App<'_>) -> Result<()> {
+    use std::panic::{catch_unwind, set_hook, take_hook, AssertUnwindSafe};
+    let caught: Arc<std::sync::Mutex<Option<String>>> = Arc::default();
+    let previous = take_hook();
+    let held = Arc::clone(&caught);
+    set_hook(Box::new(move |info| {
+        let place = info
+            .location()
+            .map_or(String::new(), |l| format!(" at {l}"));
+        let message = (info.payload().downcast_ref::<&str>().map(|s| s.to_string()))
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        *held.lock().unwrap_or_else(|e| e.into_inner()) = Some(format!("{message}{place}"));
+    }));
+    let ran = catch_unwind(AssertUnwindSafe(|| event_loop.run_app(app)));
+    set_hook(previous);
+    match ran {
+        Ok(result) => Ok(result?),
+        Err(_) => {
+            let what =
+                (caught.lock().unwrap_or_else(|e| e.into_inner()).take()).unwrap_or_default();
+            // X's words for a window that no longer exists.
+            let gone = what.contains("BadWindow") || what.contains("BadDrawable");
+            if app.window_gone || gone {
+                if !app.window_gone {
+                    specchio::say!("the window was destroyed from outside ({what}): quitting");
+                }
+                app.window_gone = true;
+                return Ok(());
+            }
+            anyhow::bail!("the window system failed: {what}")
+        }
     }
 }
 
