@@ -168,6 +168,24 @@ pub fn image_barriers(device: &Device, cmd: vk::CommandBuffer, barriers: &[Image
     unsafe { device.raw.cmd_pipeline_barrier2(cmd, &dep) };
 }
 
+/// One global memory barrier from `src` to `dst` (stage, access): everything before it in
+/// `src`'s scope is ordered before (and its writes visible to) what comes after in `dst`'s.
+pub fn memory_barrier(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+    dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    let barrier = [vk::MemoryBarrier2::default()
+        .src_stage_mask(src.0)
+        .src_access_mask(src.1)
+        .dst_stage_mask(dst.0)
+        .dst_access_mask(dst.1)];
+    let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
+    // SAFETY: cmd is recording.
+    unsafe { device.raw.cmd_pipeline_barrier2(cmd, &dep) };
+}
+
 /// Makes writes by `stage` (`access`) visible to the host: required before the CPU reads
 /// GPU-written memory after the fence, even host-coherent memory (the fence alone only
 /// orders execution; "Host Write Ordering Guarantees" in the spec cover the other direction).
@@ -177,12 +195,6 @@ pub fn host_read_barrier(
     stage: vk::PipelineStageFlags2,
     access: vk::AccessFlags2,
 ) {
-    let to_host = [vk::MemoryBarrier2::default()
-        .src_stage_mask(stage)
-        .src_access_mask(access)
-        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-        .dst_access_mask(vk::AccessFlags2::HOST_READ)];
-    let dep = vk::DependencyInfo::default().memory_barriers(&to_host);
-    // SAFETY: cmd is recording.
-    unsafe { device.raw.cmd_pipeline_barrier2(cmd, &dep) };
+    let host = (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ);
+    memory_barrier(device, cmd, (stage, access), host);
 }

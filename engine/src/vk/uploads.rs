@@ -15,6 +15,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use super::commands::memory_barrier;
 use super::device::Device;
 use super::memory::{Buffer, BufferDesc};
 use super::GpuError;
@@ -137,21 +138,4 @@ impl FrameUploads {
         self.data.clear();
         Ok(())
     }
-}
-
-/// One global memory barrier from `src` to `dst` (stage, access).
-fn memory_barrier(
-    device: &Device,
-    cmd: vk::CommandBuffer,
-    src: (vk::PipelineStageFlags2, vk::AccessFlags2),
-    dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
-) {
-    let barrier = [vk::MemoryBarrier2::default()
-        .src_stage_mask(src.0)
-        .src_access_mask(src.1)
-        .dst_stage_mask(dst.0)
-        .dst_access_mask(dst.1)];
-    let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
-    // SAFETY: cmd is recording.
-    unsafe { device.raw.cmd_pipeline_barrier2(cmd, &dep) };
 }

@@ -16,7 +16,7 @@ use serde::Serialize;
 
 use crate::render::resources::{VIEW_COUNT, VIEW_OBSERVER, VIEW_SENSOR};
 use crate::shaders::shared::{TALLY_PASSES, TALLY_PASS_COLOUR};
-use crate::vk::commands::host_read_barrier;
+use crate::vk::commands::{host_read_barrier, memory_barrier};
 use crate::vk::descriptors;
 use crate::vk::device::Device;
 use crate::vk::memory::{Buffer, BufferDesc};
@@ -97,45 +97,38 @@ impl TraceTally {
     /// counted into it and its copy for the host read it; made visible to this frame's
     /// atomics.
     pub fn record_reset(&self, cmd: vk::CommandBuffer) {
-        let d = &self.device.raw;
         let storage =
             vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE;
-        let after_last = [vk::MemoryBarrier2::default()
-            .src_stage_mask(
-                vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COPY,
-            )
-            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
-            .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)];
-        let to_shaders = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::ALL_TRANSFER)
-            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::FRAGMENT_SHADER)
-            .dst_access_mask(storage)];
+        let transfer = (
+            vk::PipelineStageFlags2::ALL_TRANSFER,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        );
+        let last_uses = (
+            vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::SHADER_STORAGE_WRITE,
+        );
+        memory_barrier(&self.device, cmd, last_uses, transfer);
         // SAFETY: cmd is recording; the buffer lives as long as the lookup pass, which the
         // renderer keeps until its frames in flight have finished.
         unsafe {
-            d.cmd_pipeline_barrier2(
-                cmd,
-                &vk::DependencyInfo::default().memory_barriers(&after_last),
-            );
-            d.cmd_fill_buffer(cmd, self.buffer.raw, 0, vk::WHOLE_SIZE, 0);
-            d.cmd_pipeline_barrier2(
-                cmd,
-                &vk::DependencyInfo::default().memory_barriers(&to_shaders),
-            );
+            (self.device.raw).cmd_fill_buffer(cmd, self.buffer.raw, 0, vk::WHOLE_SIZE, 0);
         }
+        let shaders = (vk::PipelineStageFlags2::FRAGMENT_SHADER, storage);
+        memory_barrier(&self.device, cmd, transfer, shaders);
     }
 
     /// After the frame's mirror draws: their counts copied into slot `slot`'s host copy and
     /// made visible to the host.
     pub fn record_to_host(&self, cmd: vk::CommandBuffer, slot: usize) {
-        let d = &self.device.raw;
-        let to_copy = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::FRAGMENT_SHADER)
-            .src_access_mask(vk::AccessFlags2::SHADER_STORAGE_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-            .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)];
+        let written = (
+            vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            vk::AccessFlags2::SHADER_STORAGE_WRITE,
+        );
+        let read = (
+            vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::TRANSFER_READ,
+        );
+        memory_barrier(&self.device, cmd, written, read);
         let region = [vk::BufferCopy {
             src_offset: 0,
             dst_offset: 0,
@@ -144,11 +137,7 @@ impl TraceTally {
         // SAFETY: cmd is recording; both buffers hold TALLY_BYTES; the slot's host copy is not
         // read before this frame's fence.
         unsafe {
-            d.cmd_pipeline_barrier2(
-                cmd,
-                &vk::DependencyInfo::default().memory_barriers(&to_copy),
-            );
-            d.cmd_copy_buffer(cmd, self.buffer.raw, self.host[slot].raw, &region);
+            (self.device.raw).cmd_copy_buffer(cmd, self.buffer.raw, self.host[slot].raw, &region);
         }
         host_read_barrier(
             &self.device,

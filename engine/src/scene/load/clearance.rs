@@ -10,8 +10,7 @@
 use glam::{Mat4, Vec3};
 
 use super::numbers::{num_text, time_text};
-use super::{position_at, Ctx, R};
-use crate::scene::Animation;
+use super::{position_at, sample_times_n, Ctx, R};
 use crate::scene::{Mesh, Scene};
 
 /// Where an object came from in the file, for the error's field.
@@ -28,8 +27,8 @@ impl Ctx<'_> {
     pub(super) fn objects_clear_of_mirror(&self, scene: &Scene, origins: &[Origin]) -> R<()> {
         let r = scene.mirror.radius_m;
         for (o, origin) in scene.objects.iter().zip(origins) {
-            let mut times = dense_times(o.animation.as_ref());
-            times.extend(dense_times(scene.mirror.animation.as_ref()));
+            let mut times = sample_times_n(o.animation.as_ref(), SAMPLES);
+            times.extend(sample_times_n(scene.mirror.animation.as_ref(), SAMPLES));
             for t in times {
                 let centre = position_at(scene.mirror.animation.as_ref(), scene.mirror.center, t);
                 // Render space: the mirror's centre at the origin.
@@ -71,10 +70,6 @@ impl Ctx<'_> {
 /// an object's far end sweeps faster than its centre (a 1.5 m arrow orbiting at 3 m every 10 s
 /// moves 0.04 m between two of these times).
 const SAMPLES: usize = 1024;
-
-fn dense_times(a: Option<&Animation>) -> Vec<f64> {
-    a.map_or_else(|| vec![0.0], |a| a.sample_times(SAMPLES))
-}
 
 /// How the mesh, placed by `model` (the sphere at the origin), reaches into a sphere of
 /// radius `r`: "reaches into" when a triangle comes closer than `r` to the centre, "encloses"

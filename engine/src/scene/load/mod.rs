@@ -204,10 +204,13 @@ impl Ctx<'_> {
 }
 
 fn sample_times(a: Option<&Animation>) -> Vec<f64> {
-    match a {
-        Some(a) => a.sample_times(ANIMATION_SAMPLES),
-        None => vec![0.0],
-    }
+    sample_times_n(a, ANIMATION_SAMPLES)
+}
+
+/// `samples` evenly spaced times over the animation's cycle (and its keyframes); time 0 alone
+/// without one.
+fn sample_times_n(a: Option<&Animation>, samples: usize) -> Vec<f64> {
+    a.map_or_else(|| vec![0.0], |a| a.sample_times(samples))
 }
 
 fn position_at(a: Option<&Animation>, base: Vec3, t: f64) -> Vec3 {
