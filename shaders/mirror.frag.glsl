@@ -16,6 +16,7 @@ SCENE_BINDINGS;
 PUSH_CONSTANTS;
 #ifdef OUTPUT_COLOUR
 layout(set = 1, binding = 0) uniform samplerCube environment;
+#include "footprint_filter.glsl"
 #endif
 
 #include "mirror.glsl"
@@ -31,7 +32,7 @@ void main() {
 #ifdef OUTPUT_COLOUR
     vec3 d_dx, d_dy;
     lookup_gradients(view, frame, lookup, d_dx, d_dy);
-    out_value = vec4(textureGrad(environment, lookup, d_dx, d_dy).rgb, 1.0);
+    out_value = vec4(filter_footprint(environment, lookup, d_dx, d_dy, frame.cube.z), 1.0);
 #else
     out_value = vec4(normalize(lookup), 1.0);
 #endif

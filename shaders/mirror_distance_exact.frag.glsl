@@ -22,6 +22,7 @@ PUSH_CONSTANTS;
 #ifdef OUTPUT_COLOUR
 // Set 1: the colour cube (0) and its depth (1, distance_search.glsl), then the traced scene.
 layout(set = 1, binding = 0) uniform samplerCube environment;
+#include "footprint_filter.glsl"
 #define TALLY_PASS TALLY_PASS_COLOUR
 #else
 #define TALLY_PASS TALLY_PASS_DIRECTION
@@ -53,7 +54,7 @@ void main() {
         vec3 d_dx, d_dy;
         lookup_gradients(view, frame, box, d_dx, d_dy);
         vec3 lookup = normalize(found) * length(box);
-        out_value = vec4(textureGrad(environment, lookup, d_dx, d_dy).rgb, 1.0);
+        out_value = vec4(filter_footprint(environment, lookup, d_dx, d_dy, frame.cube.z), 1.0);
     } else {
         out_value = vec4(trace_reflection(frame, dir, hit, n).colour, 1.0);
     }

@@ -63,7 +63,7 @@ pub struct CubeSettings {
     pub near_m: f32,
     pub far_m: f32,
     pub mipmaps: bool,
-    pub max_anisotropy: f32,
+    pub anisotropy: u32,
 }
 
 /// One method's frames.

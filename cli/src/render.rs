@@ -230,7 +230,7 @@ fn render_record(
                 near_m: cube.near_m,
                 far_m: cube.far_m,
                 mipmaps: cube.mipmaps,
-                max_anisotropy: cube.max_anisotropy,
+                anisotropy: cube.anisotropy,
             },
             refresh: refresh_name(scene.refresh),
             observer_resolution: scene.observer.resolution,

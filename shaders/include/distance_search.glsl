@@ -58,8 +58,8 @@ uint cube_face(vec3 d, out vec2 st) {
 // projection maps view depth z to a + b / z (ViewBasis::view_to_clip), so z = b / (depth - a).
 // The cleared depth 0 is the far plane.
 float depth_to_z(float depth, FrameData f) {
-    float near = f.cube_depth.x;
-    float far = f.cube_depth.y;
+    float near = f.cube.x;
+    float far = f.cube.y;
     float a = -near / (far - near);
     float b = near * far / (far - near);
     return b / (depth - a);

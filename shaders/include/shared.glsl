@@ -27,8 +27,10 @@ struct FrameData {
                             // z, w: the distance lookup's linear and secant steps
     vec4 room_min;          // xyz: the room box's low corner (render space)
     vec4 room_max;          // xyz: its high corner
-    vec4 cube_depth;        // x, y: the cube faces' near and far planes (m), to turn their
-                            // reverse-Z depth back into distances (distance_search.glsl)
+    vec4 cube;              // x, y: the cube faces' near and far planes (m), to turn their
+                            // reverse-Z depth back into distances (distance_search.glsl);
+                            // z: the most samples a pixel's footprint filter takes along its
+                            // long side, >= 1 ([cube] anisotropy, footprint_filter.glsl)
 };
 
 // FrameData.flags.y: the cube-map direction a lookup starts from (mirror.glsl lookup_at). Each

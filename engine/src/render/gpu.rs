@@ -20,7 +20,7 @@ pub struct FrameData {
     pub flags: UVec4,
     pub room_min: Vec4,
     pub room_max: Vec4,
-    pub cube_depth: Vec4,
+    pub cube: Vec4,
 }
 
 #[repr(C)]
@@ -115,7 +115,7 @@ mod tests {
             ("FrameData", "flags", offset_of!(FrameData, flags)),
             ("FrameData", "room_min", offset_of!(FrameData, room_min)),
             ("FrameData", "room_max", offset_of!(FrameData, room_max)),
-            ("FrameData", "cube_depth", offset_of!(FrameData, cube_depth)),
+            ("FrameData", "cube", offset_of!(FrameData, cube)),
             (
                 "ViewData",
                 "world_to_clip",

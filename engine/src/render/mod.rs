@@ -358,7 +358,12 @@ impl Renderer {
                 .extend(1.0),
             room_max: (scene.room.center + 0.5 * scene.room.size_m - state.mirror_center)
                 .extend(1.0),
-            cube_depth: Vec4::new(scene.cube.near_m, scene.cube.far_m, 0.0, 0.0),
+            cube: Vec4::new(
+                scene.cube.near_m,
+                scene.cube.far_m,
+                scene.cube.anisotropy as f32,
+                0.0,
+            ),
         };
         let uploads = &mut self.frames.current_mut().uploads;
         uploads.write(&self.resources.frame, &[frame])?;

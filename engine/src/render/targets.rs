@@ -182,8 +182,9 @@ impl CubeTarget {
             "cube depth (layered)",
         )?;
         let cube_view = color.view(vk::ImageViewType::CUBE, 0, 6, 0, mips, "cube (sampled)")?;
-        let anisotropy = device.info.features.sampler_anisotropy && settings.max_anisotropy > 1.0;
-        // Trilinear with anisotropy, as the thesis; Vulkan filters across cube seams always.
+        // Trilinear; Vulkan filters across cube seams always. Anisotropic filtering is the
+        // mirror shaders' own (footprint_filter.glsl), so that every device filters alike:
+        // the sampler's would come on top of it, differently per device.
         let sampler = Sampler::create(
             device,
             &vk::SamplerCreateInfo::default()
@@ -193,13 +194,6 @@ impl CubeTarget {
                 .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
                 .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
                 .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .anisotropy_enable(anisotropy)
-                .max_anisotropy(
-                    settings
-                        .max_anisotropy
-                        .min(device.info.limits.max_sampler_anisotropy)
-                        .max(1.0),
-                )
                 .max_lod(vk::LOD_CLAMP_NONE),
             "cube sampler",
         )?;

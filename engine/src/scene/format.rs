@@ -251,7 +251,7 @@ pub struct CubeSpec {
     pub near: Option<f64>,
     pub far: Option<f64>,
     pub mipmaps: Option<bool>,
-    pub anisotropy: Option<f64>,
+    pub anisotropy: Option<i64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

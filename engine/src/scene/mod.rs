@@ -38,6 +38,9 @@ pub use texture::{TextureData, MAX_TEXTURE_SIZE_PX};
 
 /// Largest cube face the format accepts (texels per side); larger is an error, not a clamp.
 pub const MAX_FACE_SIZE_PX: u32 = 8192;
+/// The most samples along a mirror pixel's footprint (`[cube] anisotropy`): 16, the largest
+/// maxAnisotropy GPUs offer; more would cost a sample each for footprints rarely that long.
+pub const MAX_ANISOTROPY: u32 = 16;
 /// Largest view image the format accepts on either side (pixels).
 pub const MAX_IMAGE_SIZE_PX: u32 = 8192;
 
@@ -273,8 +276,9 @@ pub struct CubeSettings {
     pub far_m: f32,
     /// Build a full mip chain after each fill (trilinear lookups).
     pub mipmaps: bool,
-    /// Requested anisotropy, >= 1; clamped to the device's maximum at run time.
-    pub max_anisotropy: f32,
+    /// The most samples the mirror's footprint filter takes along a pixel's footprint, in
+    /// 1..=[`MAX_ANISOTROPY`] (1: isotropic trilinear; shaders/include/footprint_filter.glsl).
+    pub anisotropy: u32,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

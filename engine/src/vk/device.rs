@@ -264,11 +264,11 @@ impl Drop for Device {
 
 /// The features every device is created with, whatever the renderer asks for: dynamic
 /// rendering and synchronization2 (required), the texture array's indexing, and what the
-/// device offers of anisotropic cube lookups and work counters.
+/// device offers of work counters. (Anisotropic filtering is the mirror shaders' own, not the
+/// sampler's: `samplerAnisotropy` is reported by `specchio info` but not enabled.)
 fn core_enables(offered: &super::physical::DeviceFeatures) -> Enables {
     Enables {
         core: vk::PhysicalDeviceFeatures::default()
-            .sampler_anisotropy(offered.sampler_anisotropy)
             .pipeline_statistics_query(offered.pipeline_statistics)
             // Materials pick their texture from an array by index...
             .shader_sampled_image_array_dynamic_indexing(true),

@@ -5,7 +5,9 @@ use super::room::Extent;
 use super::{Ctx, R};
 use crate::scene::format::{CubeFormatSpec, CubeSpec, LightSpec, PolicySpec, RefreshSpec};
 use crate::scene::Mirror;
-use crate::scene::{CubeFormat, CubeSettings, DirectionalLight, RefreshPolicy, MAX_FACE_SIZE_PX};
+use crate::scene::{
+    CubeFormat, CubeSettings, DirectionalLight, RefreshPolicy, MAX_ANISOTROPY, MAX_FACE_SIZE_PX,
+};
 
 /// The default near plane as a fraction of the mirror's radius. The cube is rendered from the
 /// mirror's centre, and reflected rays start on the mirror's surface, so nothing inside the
@@ -58,10 +60,10 @@ impl Ctx<'_> {
             ));
         }
         self.near_far_clip_nothing(mirror, extent, near_m, far_m)?;
-        let max_anisotropy = self.ranged(
+        let anisotropy = self.count(
             "cube.anisotropy",
-            c.anisotropy.unwrap_or(16.0),
-            Range::closed(1.0, f32::MAX),
+            c.anisotropy.unwrap_or(16),
+            MAX_ANISOTROPY,
         )?;
         Ok(CubeSettings {
             face_size_px: self.count(
@@ -76,7 +78,7 @@ impl Ctx<'_> {
             near_m,
             far_m,
             mipmaps: c.mipmaps.unwrap_or(true),
-            max_anisotropy,
+            anisotropy,
         })
     }
 

@@ -47,7 +47,7 @@ fn defaults_are_applied() {
         s.cube.far_m
     );
     assert!(s.cube.mipmaps);
-    assert_eq!(s.cube.max_anisotropy, 16.0);
+    assert_eq!(s.cube.anisotropy, 16);
     assert_eq!(s.refresh, RefreshPolicy::OnChange);
     assert_eq!(s.observer.resolution, [800, 600]);
     assert_eq!(s.observer.fov_y_deg, 60.0);

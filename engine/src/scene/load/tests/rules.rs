@@ -31,6 +31,7 @@ fn more_rules_with_their_fields() {
         ("[refresh]\npolicy = \"every-n\"\n", "refresh.n: required field is missing"),
         ("[refresh]\npolicy = \"on-change\"\nn = 3\n", "refresh.n: not allowed here"),
         ("[cube]\nanisotropy = 0.5\n", "cube.anisotropy"),
+        ("[cube]\nanisotropy = 17\n", "cube.anisotropy: must be in 1..=16, got 17"),
         ("[cube]\nformat = \"rgb32\"\n", "cube.format"),
         ("[observer]\npitch = 90\n", "observer.pitch: must be in (-90, 90)"),
         ("[observer]\nfov_y = 180\n", "observer.fov_y"),
@@ -150,7 +151,7 @@ fn values_are_checked_as_used_and_planes_fit_the_scene() {
         ("[[materials]]\nname = \"g\"\ntype = \"grid\"\nbackground = [1, 1, 1]\nline = [0, 0, 0]\nline_width = 1e-50\n", "materials[1].line_width: must be in (0, 0.5], got 1e-50 (0 in single precision)"),
         // Numbers in messages stay short.
         ("[sensor]\noffset = 1e-310\n", "sensor.offset: must be positive, got 1e-310 (0 in single precision)"),
-        ("[cube]\nanisotropy = 0.5\n", "cube.anisotropy: must be >= 1, got 0.5"),
+        ("[cube]\nanisotropy = 0\n", "cube.anisotropy: must be in 1..=16, got 0"),
         // The cube's planes set by hand must not clip what the mirror shows.
         ("[cube]\nnear = 0.6\n", "cube.near: clips reflections"),
         ("[cube]\nfar = 7\n", "cube.far: clips the room: a room corner is 7.6811457 m"),

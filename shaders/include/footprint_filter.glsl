@@ -1,0 +1,57 @@
+#ifndef FOOTPRINT_FILTER_GLSL
+#define FOOTPRINT_FILTER_GLSL
+// footprint_filter.glsl - anisotropic filtering of a cube-map lookup over a pixel's footprint,
+// done in the shader so that every device filters alike.
+//
+// A mirror pixel covers a parallelogram of lookup directions, spanned by the differences to
+// its right and lower neighbours (d_dx, d_dy from lookup_gradients in mirror.glsl). textureGrad
+// with those two vectors filters isotropically: one trilinear sample at the mip level of the
+// LONGER side, so a footprint stretched towards the mirror's grazing rim (many texels long, one
+// wide) is blurred across its width as much as along its length.
+//
+// Anisotropic filtering (the model of EXT_texture_filter_anisotropic) instead takes
+// N = min(ceil(long / short), max_taps) trilinear samples spread evenly along the long side,
+// each filtered at the level of the SHORT side (or of long / N, whichever is larger), and
+// averages them. The sampler could do this (maxAnisotropy), but what a device does with it is
+// its own choice: lavapipe 25 and SwiftShader ignore it for explicit gradients, GPUs use
+// approximations of their own. Done here, the images are the same on every device, and
+// `[cube] anisotropy` is the N a footprint may take.
+//
+// The short side is the parallelogram's height over the long one (area / long), not the other
+// gradient's length: a sheared footprint is thin even when both of its gradients are long.
+// Lengths are measured as angles (the gradients' parts across the lookup direction, over its
+// length), which is what the cube map's texels tile; the sampler then projects each sample's
+// gradients onto its face to choose the level, as for any textureGrad.
+//
+// Needs: the cube map `environment` passed in, max_taps >= 1.
+
+vec3 filter_footprint(samplerCube environment, vec3 lookup, vec3 d_dx, vec3 d_dy,
+                      float max_taps) {
+    vec3 axis = normalize(lookup);
+    float scale = 1.0 / length(lookup);
+    // Each gradient's part across the lookup direction, as an angle (radians).
+    vec3 across_x = (d_dx - dot(d_dx, axis) * axis) * scale;
+    vec3 across_y = (d_dy - dot(d_dy, axis) * axis) * scale;
+    bool x_longer = dot(across_x, across_x) >= dot(across_y, across_y);
+    vec3 long_side = x_longer ? d_dx : d_dy;
+    vec3 other_side = x_longer ? d_dy : d_dx;
+    float long_angle = length(x_longer ? across_x : across_y);
+    float short_angle = length(cross(across_x, across_y)) / max(long_angle, 1e-30);
+    float taps = min(ceil(long_angle / max(short_angle, 1e-30)), max_taps);
+    if (!(taps > 1.0)) {
+        // Isotropic (or max_taps 1, or a degenerate footprint): the sampler's own filter.
+        return textureGrad(environment, lookup, d_dx, d_dy).rgb;
+    }
+    // The short side as a vector: the other gradient without its part along the long side.
+    vec3 short_side = other_side - dot(other_side, long_side) / dot(long_side, long_side) * long_side;
+    vec3 step_along = long_side / taps;
+    vec3 sum = vec3(0.0);
+    for (float k = 0.0; k < taps; k += 1.0) {
+        // Sample centres at (k + 1/2) / N of the long side, centred on the pixel's lookup.
+        vec3 at = lookup + ((k + 0.5) / taps - 0.5) * long_side;
+        sum += textureGrad(environment, at, step_along, short_side).rgb;
+    }
+    return sum / taps;
+}
+
+#endif
