@@ -6,6 +6,7 @@
 #   - a C++ compiler for the glslang crate's build,
 #   - Xvfb, xdotool and the X client libraries winit loads (the viewer's tests),
 #   - weston, whose headless backend is the Wayland compositor of the viewer's Wayland test,
+#   - openbox, a window manager, for the viewer's test of a minimised window,
 #   - Google's SwiftShader Vulkan driver, the second CPU driver, unpacked project-locally into
 #     .drivers/swiftshader/ from Debian's chromium-common package (Chromium is not installed).
 # On other distributions it installs nothing and says what to install when something is missing.
@@ -91,8 +92,8 @@ export DEBIAN_FRONTEND=noninteractive
 missing=()
 # xvfb, xdotool and the X client libraries winit loads at run time: the viewer tests (tests/cli/viewer.rs)
 # run `specchio view` in a virtual X server; weston (headless) is their Wayland compositor, and
-# brings the Wayland client libraries winit loads.
-for p in libvulkan1 vulkan-validationlayers g++ xvfb xdotool weston libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0; do
+# brings the Wayland client libraries winit loads; openbox minimises a window as a desktop does.
+for p in libvulkan1 vulkan-validationlayers g++ xvfb xdotool weston openbox libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0; do
     installed "$p" || missing+=("$p")
 done
 major=$(mesa_major || true)

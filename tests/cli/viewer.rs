@@ -344,3 +344,82 @@ fn a_held_toggle_key_acts_once() {
         assert_eq!(n, 1, "`{what}` printed {n} times:\n{stdout}");
     }
 }
+
+/// The frame count of the viewer's exit summary (`frames: N, ...`).
+fn frames_drawn(stdout: &str) -> usize {
+    let line = (stdout.lines().find(|l| l.starts_with("frames: ")))
+        .unwrap_or_else(|| panic!("no frame summary:\n{stdout}"));
+    line["frames: ".len()..]
+        .split(',')
+        .next()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("unreadable summary: {line}"))
+}
+
+/// The viewer draws on demand: a paused scene is drawn after each change and then waits for
+/// events. Paused for 2 s, turned once with a key, idle again for 1 s: the first frame, the
+/// turn's frame, and at most a few for the window's own events (exposure, focus). Drawing
+/// every turn of the loop, as it did, made a frame per display refresh (an idle paused window
+/// used 88-93 % of a core).
+#[test]
+fn a_paused_window_draws_only_when_something_changes() {
+    let Some(x) = Xvfb::start() else { return };
+    if !has_xdotool() {
+        return;
+    }
+    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--keys", "space"]);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    xdotool(&x, &["key", "Left"]);
+    std::thread::sleep(std::time::Duration::from_secs(1));
+    xdotool(&x, &["key", "q"]);
+    let frames = frames_drawn(&viewer.finish());
+    eprintln!("{frames} frames drawn in 3 s, paused, one key");
+    assert!(
+        (2..=6).contains(&frames),
+        "{frames} frames drawn for one change in 3 s"
+    );
+}
+
+/// The frame number in the viewer's line starting with `what` ("... after frame N: ...").
+fn frame_of(line: &str) -> u64 {
+    let after = line.split("after frame ").nth(1).expect("a frame number");
+    after
+        .split(':')
+        .next()
+        .unwrap()
+        .parse()
+        .expect("a frame number")
+}
+
+/// A minimised window is not drawn, and drawing resumes when it is restored. Under openbox,
+/// the moving thesis-room is minimised for 2 s: the frame counter stands still meanwhile, and
+/// moves on after the restore. (Which of two signs the viewer sees first is a race: X's
+/// visibility event, winit's `Occluded`, or the window manager's `_NET_WM_STATE_HIDDEN`,
+/// which the viewer reads while it draws, since X sends no event for it.)
+#[test]
+fn a_minimised_window_is_not_drawn() {
+    let Some(x) = Xvfb::start() else { return };
+    if !has_xdotool() {
+        return;
+    }
+    let Some(_manager) = Openbox::start(&x) else {
+        return;
+    };
+    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap()]);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowminimize", "--sync", &id]);
+    let minimised = frame_of(&viewer.wait_for("window hidden"));
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    xdotool(&x, &["windowactivate", "--sync", &id]);
+    let restored = frame_of(&viewer.wait_for("window shown"));
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    xdotool(&x, &["key", "q"]);
+    let frames = frames_drawn(&viewer.finish());
+    eprintln!("minimised after frame {minimised}, restored after {restored}, {frames} in all");
+    assert_eq!(minimised, restored, "frames drawn while minimised");
+    assert!(frames as u64 > restored, "no frame after the restore");
+}

@@ -23,6 +23,8 @@ use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
 
 use super::clock::{Clock, Figures};
+use super::demand::{Demand, NextFrame};
+use super::failures::{run_catching_window_panics, surface_lost};
 use super::input::{self, Action};
 use super::menu::{Menu, Status};
 use super::present::{Presenter, Screenshot, Shown};
@@ -92,6 +94,8 @@ struct App<'a> {
     error: Option<anyhow::Error>,
     /// The window was destroyed from outside: no more frames.
     window_gone: bool,
+    /// When the next frame is due (drawing on demand).
+    demand: Demand,
 }
 
 pub fn run(
@@ -128,9 +132,10 @@ pub fn run(
         outcome: Outcome::default(),
         error: None,
         window_gone: false,
+        demand: Demand::default(),
     };
     specchio::say_part!("{}", input::help());
-    let ran = run_catching_window_panics(event_loop, &mut app);
+    let ran = run_catching_window_panics(event_loop, &mut app, |app| &mut app.window_gone);
     // The viewer goes first (its presenter waits for the frames in flight).
     app.viewer = None;
     match ran {
@@ -153,7 +158,10 @@ impl ApplicationHandler for App<'_> {
             return;
         }
         match self.open(event_loop) {
-            Ok(viewer) => self.viewer = Some(viewer),
+            Ok(viewer) => {
+                self.viewer = Some(viewer);
+                self.demand = Demand::first_frame();
+            }
             Err(e) => self.fail(event_loop, e),
         }
         let keys = std::mem::take(&mut self.settings.keys);
@@ -165,7 +173,11 @@ impl ApplicationHandler for App<'_> {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         // egui sees every event first; one it used (a click on the menu) goes no further.
         if let Some(v) = &mut self.viewer {
-            if v.menu.on_event(&v.window, &event) {
+            let response = v.menu.on_event(&v.window, &event);
+            if response.repaint {
+                self.demand.changed();
+            }
+            if response.consumed {
                 return;
             }
         }
@@ -180,7 +192,11 @@ impl ApplicationHandler for App<'_> {
                 self.window_gone = true;
                 event_loop.exit();
             }
+            // The window shows again what it showed (exposed, uncovered): draw it.
+            WindowEvent::RedrawRequested => self.demand.changed(),
+            WindowEvent::Occluded(hidden) => self.demand.occluded(hidden),
             WindowEvent::Resized(size) => {
+                self.demand.changed();
                 if let Some(v) = &mut self.viewer {
                     v.size = size;
                     v.presenter.resized();
@@ -210,7 +226,16 @@ impl ApplicationHandler for App<'_> {
         {
             return;
         }
-        match self.frame(event_loop) {
+        let drawn = match self.next_frame() {
+            NextFrame::Now => self.frame(event_loop),
+            NextFrame::At(_) | NextFrame::OnEvent => Ok(()),
+        };
+        event_loop.set_control_flow(match self.next_frame() {
+            NextFrame::Now => ControlFlow::Poll,
+            NextFrame::At(t) => ControlFlow::WaitUntil(t),
+            NextFrame::OnEvent => ControlFlow::Wait,
+        });
+        match drawn {
             Ok(()) => {}
             // The window went away between two events (destroyed, or its display lost) and
             // the surface found out first: the same clean exit as on `Destroyed`.
@@ -293,6 +318,9 @@ impl App<'_> {
                 viewer.size_asked = None;
             }
         }
+        // What asked for this frame is answered by it; what comes during it (an action the
+        // menu takes below) asks for the next.
+        self.demand.drawing();
         let t_s = self.clock.tick();
         let start = Instant::now();
         let (reports, image) =
@@ -328,6 +356,11 @@ impl App<'_> {
         )?;
         viewer.renderer_shown = true;
         viewer.menu.unapplied(&mut menu.paint);
+        // egui's own repaints (its first frames' layout passes, its animations) matter only
+        // while it shows something.
+        let menu_shown = viewer.menu.open || viewer.menu.help;
+        self.demand
+            .menu_repaint(menu.repaint_after.filter(|_| menu_shown), start);
         // The menu's choices act from the next frame on, as a key pressed now would.
         for action in menu.actions {
             self.act(event_loop, action);
@@ -336,12 +369,9 @@ impl App<'_> {
         if let Shown::Skipped = shown {
             // Minimised or out of date: no frame counted; wait for a resize instead of
             // spinning when there is nothing to present to.
-            event_loop.set_control_flow(ControlFlow::WaitUntil(
-                Instant::now() + Duration::from_millis(50),
-            ));
+            self.demand.skipped(Instant::now());
             return Ok(());
         }
-        event_loop.set_control_flow(ControlFlow::Poll);
         self.clock.frame += 1;
         self.figures.add(start.elapsed().as_secs_f64() * 1e3);
         if let Some(title) = self
@@ -357,8 +387,30 @@ impl App<'_> {
         Ok(())
     }
 
+    /// When the next frame is due ([`Demand::next`]), the window asked whether it is
+    /// minimised first where that matters.
+    fn next_frame(&mut self) -> NextFrame {
+        let now = Instant::now();
+        let scripted = self.clock.scripted;
+        let Some(viewer) = &self.viewer else {
+            return NextFrame::OnEvent;
+        };
+        let moving = !self.clock.paused && viewer.renderer.scene.moves();
+        if self.demand.watching(scripted, moving) {
+            self.demand.watch_minimised(&viewer.window, now);
+        }
+        let frame = self.clock.frame;
+        match self.demand.visibility_change() {
+            Some(true) => specchio::say!("window hidden after frame {frame}: not drawing"),
+            Some(false) => specchio::say!("window shown after frame {frame}: drawing"),
+            None => {}
+        }
+        self.demand.next(scripted, moving, now)
+    }
+
     /// Applies one key's action.
     fn act(&mut self, event_loop: &ActiveEventLoop, action: Action) {
+        self.demand.changed();
         let switched = match action {
             Action::NextMethod => self.next_method(),
             Action::SetMethod(method) => self.set_method(method).map(|_| ()),
@@ -484,61 +536,6 @@ impl App<'_> {
         self.error.get_or_insert(e);
         event_loop.exit();
     }
-}
-
-/// Runs the event loop; a panic inside the window system's code becomes an error. winit's X11
-/// backend unwraps the replies of a display that reports the window gone: asked the size of
-/// a destroyed window, or destroying its input context while an error for an image presented
-/// to it is pending, it panics inside `run_app` (`xdotool windowclose` under Xvfb, about one
-/// run in five). The viewer's own state is whole (a panic in winit leaves it between two
-/// events), so it is torn down as on any error, and the user reads what happened instead of a
-/// crash report. The default panic message is held back while the loop runs.
-fn run_catching_window_panics(event_loop: EventLoop<()>, app: &mut App<'_>) -> Result<()> {
-    use std::panic::{catch_unwind, set_hook, take_hook, AssertUnwindSafe};
-    let caught: Arc<std::sync::Mutex<Option<String>>> = Arc::default();
-    let previous = take_hook();
-    let held = Arc::clone(&caught);
-    set_hook(Box::new(move |info| {
-        let place = info
-            .location()
-            .map_or(String::new(), |l| format!(" at {l}"));
-        let message = (info.payload().downcast_ref::<&str>().map(|s| s.to_string()))
-            .or_else(|| info.payload().downcast_ref::<String>().cloned())
-            .unwrap_or_default();
-        *held.lock().unwrap_or_else(|e| e.into_inner()) = Some(format!("{message}{place}"));
-    }));
-    let ran = catch_unwind(AssertUnwindSafe(|| event_loop.run_app(app)));
-    set_hook(previous);
-    match ran {
-        Ok(result) => Ok(result?),
-        Err(_) => {
-            let what =
-                (caught.lock().unwrap_or_else(|e| e.into_inner()).take()).unwrap_or_default();
-            // X's words for a window that no longer exists.
-            let gone = what.contains("BadWindow") || what.contains("BadDrawable");
-            if app.window_gone || gone {
-                if !app.window_gone {
-                    specchio::say!("the window was destroyed from outside ({what}): quitting");
-                }
-                app.window_gone = true;
-                return Ok(());
-            }
-            anyhow::bail!("the window system failed: {what}")
-        }
-    }
-}
-
-/// Whether `e` says the window's surface is gone (`VK_ERROR_SURFACE_LOST_KHR`).
-fn surface_lost(e: &anyhow::Error) -> bool {
-    e.chain().any(|cause| {
-        matches!(
-            cause.downcast_ref::<specchio::vk::GpuError>(),
-            Some(specchio::vk::GpuError::Vk {
-                result: ash::vk::Result::ERROR_SURFACE_LOST_KHR,
-                ..
-            })
-        )
-    })
 }
 
 /// The next lookup this device can run.

@@ -8,6 +8,8 @@
 
 mod app;
 mod clock;
+mod demand;
+mod failures;
 pub mod input;
 mod menu;
 mod overlay;

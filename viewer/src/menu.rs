@@ -6,6 +6,7 @@
 //! made by key give the same image. `overlay.rs` draws what egui outputs.
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use egui::{Align2, Color32, Context, Pos2, Rect, Shadow};
 use specchio::render::display::DisplayView;
@@ -66,6 +67,17 @@ impl Drop for Menu {
 pub struct Output {
     pub paint: Paint,
     pub actions: Vec<Action>,
+    /// When egui wants to be drawn again without any event (an animation it runs, a tooltip's
+    /// delay), if it does.
+    pub repaint_after: Option<Duration>,
+}
+
+/// What an event meant to the menu.
+pub struct EventResponse {
+    /// The menu used it (a click on a widget): it goes no further.
+    pub consumed: bool,
+    /// The menu looks different after it (a hover, a press): draw a frame.
+    pub repaint: bool,
 }
 
 impl Menu {
@@ -108,9 +120,13 @@ impl Menu {
 
     /// Passes a window event to egui; `true` when egui used it (a click on the menu), so
     /// that it is not also taken as a key.
-    pub fn on_event(&mut self, window: &Window, event: &WindowEvent) -> bool {
+    pub fn on_event(&mut self, window: &Window, event: &WindowEvent) -> EventResponse {
         let response = self.input.on_window_event(window, event);
-        response.consumed && (self.open || self.help)
+        let shown = self.open || self.help;
+        EventResponse {
+            consumed: response.consumed && shown,
+            repaint: response.repaint && shown,
+        }
     }
 
     /// Takes back the texture changes a skipped frame did not apply.
@@ -157,6 +173,9 @@ impl Menu {
         });
         self.input
             .handle_platform_output(window, full.platform_output);
+        let repaint_after = (full.viewport_output.get(&egui::ViewportId::ROOT))
+            .map(|v| v.repaint_delay)
+            .filter(|&delay| delay < Duration::MAX);
         let ppp = full.pixels_per_point;
         for (i, name) in ["menu", "help"].into_iter().enumerate() {
             let px = rects[i].map(|r| pixel_rect(r, ppp, size));
@@ -180,6 +199,7 @@ impl Menu {
                 pixels_per_point: ppp,
             },
             actions,
+            repaint_after,
         }
     }
 }

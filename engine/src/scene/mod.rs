@@ -77,6 +77,16 @@ pub struct Scene {
     pub light: Option<DirectionalLight>,
 }
 
+impl Scene {
+    /// Whether anything in the scene moves with time (an animated object, mirror or observer):
+    /// a still scene looks the same at every time, so a viewer need not draw it again.
+    pub fn moves(&self) -> bool {
+        self.mirror.animation.is_some()
+            || self.observer.animation.is_some()
+            || self.objects.iter().any(|o| o.animation.is_some())
+    }
+}
+
 /// The room: an axis-aligned box seen from inside.
 #[derive(Debug, Clone)]
 pub struct Room {

@@ -322,6 +322,53 @@ pub fn has_xdotool() -> bool {
     true
 }
 
+/// The openbox window manager on an X server, stopped on drop: what minimises a window as a
+/// desktop does (unmapped, `_NET_WM_STATE_HIDDEN` set). `None` (the reason printed) when it
+/// is not installed.
+pub struct Openbox(Child);
+
+impl Openbox {
+    pub fn start(x: &Xvfb) -> Option<Self> {
+        let Ok(child) = Command::new("openbox")
+            .env("DISPLAY", &x.display)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+        else {
+            missing("openbox", "scripts/setup.sh installs it");
+            return None;
+        };
+        let manager = Self(child);
+        // Managing once a window of its own (class "openbox") exists.
+        let start = Instant::now();
+        while xdotool_may_fail(x, &["search", "--class", "openbox"]).is_empty() {
+            assert!(
+                start.elapsed() < Duration::from_secs(20),
+                "openbox did not start"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        Some(manager)
+    }
+}
+
+impl Drop for Openbox {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// `xdotool ARGS` on `x`'s display, its stdout (empty when it failed: `search` with no match).
+fn xdotool_may_fail(x: &Xvfb, args: &[&str]) -> String {
+    let out = Command::new("xdotool")
+        .args(args)
+        .env("DISPLAY", &x.display)
+        .output()
+        .unwrap();
+    text(&out.stdout)
+}
+
 /// A viewer left running while a test drives it, its stdout read line by line as it comes.
 pub struct Running {
     child: Child,

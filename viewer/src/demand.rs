@@ -1,0 +1,206 @@
+//! When the viewer draws: on demand. A scene that moves is drawn as fast as the window takes
+//! frames; a still or paused one once after each change (a key, a resize, an uncovered
+//! window, a menu that looks different), and then the loop sleeps until the next event: an
+//! idle window costs no CPU. A hidden or minimised window is not drawn at all.
+//!
+//! This is eframe's reactive mode and bevy's desktop-app setting, with the scene's own motion
+//! as the one continuous source of frames.
+
+use std::time::{Duration, Instant};
+
+use winit::window::Window;
+
+/// A frame that could not be presented (minimised, swapchain out of date) is tried again
+/// after this long rather than at once.
+const RETRY_SKIPPED: Duration = Duration::from_millis(50);
+
+/// How often the window is asked whether it is minimised. X11 sends no event when a window
+/// manager iconifies a window (it unmaps it and sets `_NET_WM_STATE_HIDDEN`, which winit does
+/// not report), so the viewer asks: one property read, while it draws and while it waits to
+/// be restored.
+const MINIMISED_POLL: Duration = Duration::from_millis(250);
+
+/// When the loop should run the next frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NextFrame {
+    Now,
+    At(Instant),
+    /// Nothing to draw until an event comes.
+    OnEvent,
+}
+
+/// What asks for a frame besides a moving scene, and what forbids one.
+#[derive(Debug, Default)]
+pub struct Demand {
+    /// Something changed since the last frame.
+    redraw: bool,
+    /// The window is fully covered (winit's `Occluded`).
+    hidden: bool,
+    /// The window manager minimised it (`Window::is_minimized`), and when that was last asked.
+    minimised: bool,
+    asked_at: Option<Instant>,
+    /// egui asked to be drawn again at this time (its animations, its first frames' layout).
+    menu_at: Option<Instant>,
+    /// The last frame could not be presented: try again at this time.
+    retry_at: Option<Instant>,
+    /// Whether the window was last reported hidden ([`Demand::visibility_change`]).
+    reported_hidden: bool,
+}
+
+impl Demand {
+    /// A new window: its first frame is due.
+    pub fn first_frame() -> Self {
+        Self {
+            redraw: true,
+            ..Self::default()
+        }
+    }
+
+    /// Something the frame shows changed (a key's action, a resize, an exposed window).
+    pub fn changed(&mut self) {
+        self.redraw = true;
+    }
+
+    /// winit's `Occluded`: fully covered or not. Uncovered, it is drawn again.
+    pub fn occluded(&mut self, hidden: bool) {
+        self.hidden = hidden;
+        self.redraw |= !hidden;
+    }
+
+    /// A frame starts: what asked for it is answered by it; what comes during it (an action
+    /// the menu takes) asks for the next.
+    pub fn drawing(&mut self) {
+        self.redraw = false;
+        self.retry_at = None;
+    }
+
+    /// The frame drawn at `start` showed the menu and egui wants another after `after`.
+    pub fn menu_repaint(&mut self, after: Option<Duration>, start: Instant) {
+        self.menu_at = after.map(|delay| start + delay);
+    }
+
+    /// The frame could not be presented: try again a little later.
+    pub fn skipped(&mut self, now: Instant) {
+        self.retry_at = Some(now + RETRY_SKIPPED);
+    }
+
+    /// Asks the window whether it is minimised, at most every [`MINIMISED_POLL`]. On restore
+    /// the window is drawn again.
+    pub fn watch_minimised(&mut self, window: &Window, now: Instant) {
+        if self.asked_at.is_some_and(|t| now < t + MINIMISED_POLL) {
+            return;
+        }
+        self.asked_at = Some(now);
+        // None where the platform cannot tell (Wayland, whose compositor throttles a hidden
+        // surface's frames itself). A window gone under the viewer reads as not minimised.
+        let minimised = window.is_minimized().unwrap_or(false);
+        self.redraw |= self.minimised && !minimised;
+        self.minimised = minimised;
+    }
+
+    /// Whether the window became hidden (covered or minimised: `Some(true)`) or shown again
+    /// (`Some(false)`) since this was last asked.
+    pub fn visibility_change(&mut self) -> Option<bool> {
+        let hidden = self.hidden || self.minimised;
+        let changed = hidden != self.reported_hidden;
+        self.reported_hidden = hidden;
+        changed.then_some(hidden)
+    }
+
+    /// When the next frame is due, at `now`: at once while the scene moves (or a script
+    /// runs: every frame of `--frames` is drawn), after a change, or when the menu asked;
+    /// never while the window is hidden or minimised (a minimised one is asked again when
+    /// [`MINIMISED_POLL`] has passed); else on the next event.
+    pub fn next(&self, scripted: bool, moving: bool, now: Instant) -> NextFrame {
+        let due = |t: Instant| {
+            if t <= now {
+                NextFrame::Now
+            } else {
+                NextFrame::At(t)
+            }
+        };
+        if let Some(t) = self.retry_at {
+            return due(t);
+        }
+        if scripted {
+            return NextFrame::Now;
+        }
+        if self.minimised {
+            return NextFrame::At(self.asked_at.unwrap_or(now) + MINIMISED_POLL);
+        }
+        if self.hidden {
+            return NextFrame::OnEvent;
+        }
+        if self.redraw || moving {
+            return NextFrame::Now;
+        }
+        self.menu_at.map_or(NextFrame::OnEvent, due)
+    }
+
+    /// Whether the window should be asked if it is minimised before deciding: while frames
+    /// are being drawn, and while it is minimised (no event tells of a restore on X11).
+    pub fn watching(&self, scripted: bool, moving: bool) -> bool {
+        !scripted && (self.minimised || moving)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_still_window_draws_once_per_change() {
+        let now = Instant::now();
+        let mut d = Demand::first_frame();
+        assert_eq!(d.next(false, false, now), NextFrame::Now);
+        d.drawing();
+        assert_eq!(d.next(false, false, now), NextFrame::OnEvent);
+        d.changed();
+        assert_eq!(d.next(false, false, now), NextFrame::Now);
+        d.drawing();
+        assert_eq!(d.next(false, false, now), NextFrame::OnEvent);
+        // A moving scene, or a script, draws every turn.
+        assert_eq!(d.next(false, true, now), NextFrame::Now);
+        assert_eq!(d.next(true, false, now), NextFrame::Now);
+    }
+
+    #[test]
+    fn a_hidden_or_minimised_window_is_not_drawn() {
+        let now = Instant::now();
+        let mut d = Demand::first_frame();
+        d.occluded(true);
+        assert_eq!(d.next(false, true, now), NextFrame::OnEvent);
+        d.occluded(false);
+        assert_eq!(d.next(false, false, now), NextFrame::Now);
+        d.drawing();
+        d.minimised = true;
+        d.asked_at = Some(now);
+        assert_eq!(
+            d.next(false, true, now),
+            NextFrame::At(now + MINIMISED_POLL)
+        );
+        assert!(d.watching(false, false));
+        // A script draws every frame it was asked for, whatever the window does.
+        assert_eq!(d.next(true, false, now), NextFrame::Now);
+    }
+
+    #[test]
+    fn the_menu_and_a_skipped_frame_are_drawn_when_they_ask() {
+        let now = Instant::now();
+        let mut d = Demand::default();
+        d.menu_repaint(Some(Duration::from_millis(100)), now);
+        assert_eq!(
+            d.next(false, false, now),
+            NextFrame::At(now + Duration::from_millis(100))
+        );
+        assert_eq!(
+            d.next(false, false, now + Duration::from_millis(100)),
+            NextFrame::Now
+        );
+        d.menu_repaint(None, now);
+        d.skipped(now);
+        assert_eq!(d.next(true, true, now), NextFrame::At(now + RETRY_SKIPPED));
+        d.drawing();
+        assert_eq!(d.next(false, false, now), NextFrame::OnEvent);
+    }
+}

@@ -1,0 +1,73 @@
+//! What the window system's failures mean to the viewer: a window destroyed under it, a
+//! display that reports it gone, a lost surface. Each ends the viewer cleanly, saying why,
+//! instead of a crash.
+
+use std::sync::Arc;
+
+use anyhow::Result;
+use winit::event_loop::EventLoop;
+
+use winit::application::ApplicationHandler;
+
+/// Runs the event loop; a panic inside the window system's code becomes an error. winit's X11
+/// backend unwraps the replies of a display that reports the window gone: asked the size of
+/// a destroyed window, or destroying its input context while an error for an image presented
+/// to it is pending, it panics inside `run_app` (`xdotool windowclose` under Xvfb, about one
+/// run in five). The viewer's own state is whole (a panic in winit leaves it between two
+/// events), so it is torn down as on any error, and the user reads what happened instead of a
+/// crash report. The default panic message is held back while the loop runs.
+///
+/// `window_gone` tells whether the viewer already knew its window was gone (then any panic is
+/// that window's); it is set when the panic's message says so.
+pub(super) fn run_catching_window_panics<A: ApplicationHandler>(
+    event_loop: EventLoop<()>,
+    app: &mut A,
+    window_gone: impl Fn(&mut A) -> &mut bool,
+) -> Result<()> {
+    use std::panic::{catch_unwind, set_hook, take_hook, AssertUnwindSafe};
+    let caught: Arc<std::sync::Mutex<Option<String>>> = Arc::default();
+    let previous = take_hook();
+    let held = Arc::clone(&caught);
+    set_hook(Box::new(move |info| {
+        let place = info
+            .location()
+            .map_or(String::new(), |l| format!(" at {l}"));
+        let message = (info.payload().downcast_ref::<&str>().map(|s| s.to_string()))
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        *held.lock().unwrap_or_else(|e| e.into_inner()) = Some(format!("{message}{place}"));
+    }));
+    let ran = catch_unwind(AssertUnwindSafe(|| event_loop.run_app(app)));
+    set_hook(previous);
+    match ran {
+        Ok(result) => Ok(result?),
+        Err(_) => {
+            let what =
+                (caught.lock().unwrap_or_else(|e| e.into_inner()).take()).unwrap_or_default();
+            // X's words for a window that no longer exists.
+            let gone = what.contains("BadWindow") || what.contains("BadDrawable");
+            let known = window_gone(app);
+            if *known || gone {
+                if !*known {
+                    specchio::say!("the window was destroyed from outside ({what}): quitting");
+                }
+                *known = true;
+                return Ok(());
+            }
+            anyhow::bail!("the window system failed: {what}")
+        }
+    }
+}
+
+/// Whether `e` says the window's surface is gone (`VK_ERROR_SURFACE_LOST_KHR`).
+pub(super) fn surface_lost(e: &anyhow::Error) -> bool {
+    e.chain().any(|cause| {
+        matches!(
+            cause.downcast_ref::<specchio::vk::GpuError>(),
+            Some(specchio::vk::GpuError::Vk {
+                result: ash::vk::Result::ERROR_SURFACE_LOST_KHR,
+                ..
+            })
+        )
+    })
+}
