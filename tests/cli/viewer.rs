@@ -423,3 +423,37 @@ fn a_minimised_window_is_not_drawn() {
     assert_eq!(minimised, restored, "frames drawn while minimised");
     assert!(frames as u64 > restored, "no frame after the restore");
 }
+
+/// An idle window costs next to nothing beside a moving one: the viewer's CPU time over 2 s
+/// paused, against 2 s of the same run moving (thesis-room's orbiting ball, `space` to resume).
+/// Drawing every turn of the loop, paused cost as much as moving (183.7 % and 180.5 % of a
+/// core, docs/viewer.md); now it must be under 5 % of it.
+#[test]
+fn an_idle_window_costs_a_small_fraction_of_a_moving_one() {
+    let Some(x) = Xvfb::start() else { return };
+    if !has_xdotool() {
+        return;
+    }
+    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--keys", "space"]);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    let stretch = || {
+        let start = viewer.cpu_ticks();
+        std::thread::sleep(std::time::Duration::from_secs(2));
+        viewer.cpu_ticks() - start
+    };
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let idle = stretch();
+    xdotool(&x, &["key", "space"]);
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let moving = stretch();
+    xdotool(&x, &["key", "q"]);
+    viewer.finish();
+    eprintln!("CPU ticks over 2 s: paused {idle}, moving {moving}");
+    assert!(moving > 0, "the moving scene used no CPU");
+    assert!(
+        (idle as f64) < 0.05 * moving as f64,
+        "paused {idle} ticks against {moving} moving"
+    );
+}

@@ -406,6 +406,17 @@ impl Running {
         }
     }
 
+    /// The CPU time the viewer has used so far, in the kernel's clock ticks (user and system,
+    /// fields 14 and 15 of `/proc/PID/stat`): for ratios of two stretches of one run.
+    pub fn cpu_ticks(&self) -> u64 {
+        let stat = std::fs::read_to_string(format!("/proc/{}/stat", self.child.id()))
+            .expect("the viewer's /proc stat");
+        // The command name (field 2) is in parentheses and may hold spaces: count after it.
+        let after = &stat[stat.rfind(')').expect("a stat line") + 2..];
+        let fields: Vec<&str> = after.split_whitespace().collect();
+        fields[11].parse::<u64>().unwrap() + fields[12].parse::<u64>().unwrap()
+    }
+
     /// Waits (at most two minutes) for a line starting with `what`, and returns it.
     pub fn wait_for(&self, what: &str) -> String {
         let start = Instant::now();
