@@ -457,3 +457,63 @@ fn an_idle_window_costs_a_small_fraction_of_a_moving_one() {
         "paused {idle} ticks against {moving} moving"
     );
 }
+
+/// The observer's position and yaw in a pose line (`observer [x, y, z] yaw Y pitch P, ...`).
+fn observer_pose(line: &str) -> ([f64; 3], f64) {
+    let inside = &line[line.find('[').unwrap() + 1..line.find(']').unwrap()];
+    let p: Vec<f64> = inside
+        .split(',')
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
+    let yaw = line
+        .split(" yaw ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap();
+    ([p[0], p[1], p[2]], yaw.parse().unwrap())
+}
+
+/// Keys and the mouse as a person uses them: `w` held for 1.5 s walks at 2 m/s (3 m; the
+/// tolerance is the time the viewer takes to see the press and the release, up to a frame
+/// each), a 50-pixel drag to the right turns the observer 10 degrees to the right, and a wheel
+/// notch walks 0.25 m along the new heading. Each ends with the pose printed in the file's
+/// coordinates.
+#[test]
+fn held_keys_move_at_a_speed_and_the_mouse_looks_around() {
+    let Some(x) = Xvfb::start() else { return };
+    if !has_xdotool() {
+        return;
+    }
+    // Paused: the ball's orbit does not matter here.
+    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--keys", "space"]);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    // thesis-room's observer starts at (0, 3.5, 4.5) looking along -Z (yaw 0).
+    xdotool(&x, &["keydown", "w"]);
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    xdotool(&x, &["keyup", "w"]);
+    let (p, yaw) = observer_pose(&viewer.wait_for("observer "));
+    eprintln!("held w for 1.5 s: at {p:?}, yaw {yaw}");
+    assert_eq!((p[0], p[1], yaw), (0.0, 3.5, 0.0));
+    assert!((p[2] - 1.5).abs() < 0.5, "walked to z = {}", p[2]);
+    xdotool(&x, &["mousemove", "--window", &id, "600", "225"]);
+    xdotool(&x, &["mousedown", "1"]);
+    xdotool(&x, &["mousemove_relative", "--", "50", "0"]);
+    xdotool(&x, &["mouseup", "1"]);
+    let (q, yaw) = observer_pose(&viewer.wait_for("observer "));
+    assert_eq!((q, yaw), (p, 350.0), "the drag turns, it does not move");
+    // Wheel up (button 4): one notch forward, along yaw 350 (10 degrees right of -Z).
+    xdotool(&x, &["click", "4"]);
+    let (r, _) = observer_pose(&viewer.wait_for("observer "));
+    let (sin, cos) = 350f64.to_radians().sin_cos();
+    let expected = [p[0] - 0.25 * sin, p[1], p[2] - 0.25 * cos];
+    assert!(
+        (0..3).all(|k| (r[k] - expected[k]).abs() < 1e-3),
+        "{r:?} against {expected:?}"
+    );
+    xdotool(&x, &["key", "q"]);
+    viewer.finish();
+}

@@ -16,7 +16,7 @@ use specchio::vk::surface::Surface;
 use specchio::vk::swapchain::PresentPreference;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
-use winit::event::{ElementState, WindowEvent};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
@@ -27,6 +27,7 @@ use super::demand::{Demand, NextFrame};
 use super::failures::{run_catching_window_panics, surface_lost};
 use super::input::{self, Action};
 use super::menu::{Menu, Status};
+use super::motion::{self, Motion};
 use super::present::{Presenter, Screenshot, Shown};
 use super::SCRIPTED_FPS;
 
@@ -96,6 +97,8 @@ struct App<'a> {
     window_gone: bool,
     /// When the next frame is due (drawing on demand).
     demand: Demand,
+    /// Keys held and the mouse's drag.
+    motion: Motion,
 }
 
 pub fn run(
@@ -133,6 +136,7 @@ pub fn run(
         error: None,
         window_gone: false,
         demand: Demand::default(),
+        motion: Motion::default(),
     };
     specchio::say_part!("{}", input::help());
     let ran = run_catching_window_panics(event_loop, &mut app, |app| &mut app.window_gone);
@@ -205,16 +209,56 @@ impl ApplicationHandler for App<'_> {
                     }
                 }
             }
-            // A synthetic press is winit's report of a key already held when the window got
-            // the focus, not a press: it acts on nothing.
             WindowEvent::KeyboardInput {
                 event,
-                is_synthetic: false,
+                is_synthetic,
                 ..
-            } if event.state == ElementState::Pressed => {
-                let action = key_name(&event.logical_key).and_then(|k| input::action(&k));
-                if let Some(action) = action.filter(|a| !event.repeat || a.repeats()) {
+            } => {
+                let Some(action) = key_name(&event.logical_key).and_then(|k| input::action(&k))
+                else {
+                    return;
+                };
+                let pressed = event.state == ElementState::Pressed;
+                if motion::is_move(action) {
+                    // Held, a move key moves at a speed until it is released (a synthetic
+                    // release, on losing the focus, stops it too).
+                    if pressed && !is_synthetic {
+                        self.motion.press(action, Instant::now());
+                        self.demand.changed();
+                    } else if !pressed {
+                        self.release(action);
+                    }
+                } else if pressed && !is_synthetic && (!event.repeat || action.repeats()) {
+                    // A synthetic press is winit's report of a key already held when the
+                    // window got the focus, not a press: it acts on nothing.
                     self.act(event_loop, action);
+                }
+            }
+            WindowEvent::MouseInput {
+                state,
+                button: MouseButton::Left,
+                ..
+            } => {
+                self.motion.button(state == ElementState::Pressed);
+                self.say_pose_when_settled();
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                if let Some(v) = &mut self.viewer {
+                    if self.motion.pointer(position, &mut v.renderer.scene) {
+                        self.demand.changed();
+                    }
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let notches = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    // Touchpads: one notch per 40 pixels, about a line of text.
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                if let Some(v) = &mut self.viewer {
+                    self.motion.wheel(notches, &mut v.renderer.scene);
+                    self.demand.changed();
+                    self.say_pose_when_settled();
                 }
             }
             _ => {}
@@ -321,6 +365,12 @@ impl App<'_> {
         // What asked for this frame is answered by it; what comes during it (an action the
         // menu takes below) asks for the next.
         self.demand.drawing();
+        for why in self
+            .motion
+            .advance(Instant::now(), &mut viewer.renderer.scene)
+        {
+            specchio::say!("sphere not moved: {why}");
+        }
         let t_s = self.clock.tick();
         let start = Instant::now();
         let (reports, image) =
@@ -395,7 +445,7 @@ impl App<'_> {
         let Some(viewer) = &self.viewer else {
             return NextFrame::OnEvent;
         };
-        let moving = !self.clock.paused && viewer.renderer.scene.moves();
+        let moving = (!self.clock.paused && viewer.renderer.scene.moves()) || self.motion.moving();
         if self.demand.watching(scripted, moving) {
             self.demand.watch_minimised(&viewer.window, now);
         }
@@ -406,6 +456,28 @@ impl App<'_> {
             None => {}
         }
         self.demand.next(scripted, moving, now)
+    }
+
+    /// A held move key went up: it moves for the rest of the time it was held.
+    fn release(&mut self, action: Action) {
+        let Some(v) = &mut self.viewer else { return };
+        if let Some(why) = self
+            .motion
+            .release(action, Instant::now(), &mut v.renderer.scene)
+        {
+            specchio::say!("sphere not moved: {why}");
+        }
+        self.demand.changed();
+        self.say_pose_when_settled();
+    }
+
+    /// Once a move ends (keys released, the button up, a wheel turn): where the observer and
+    /// the sphere are, in the file's coordinates, to put into a scene file.
+    fn say_pose_when_settled(&mut self) {
+        let Some(v) = &self.viewer else { return };
+        if self.motion.settled() {
+            specchio::say!("{}", input::pose(&v.renderer.scene));
+        }
     }
 
     /// Applies one key's action.
@@ -424,9 +496,9 @@ impl App<'_> {
         };
         let scene = &mut viewer.renderer.scene;
         match action {
-            Action::Walk { .. } | Action::Turn { .. } => input::move_observer(scene, action),
+            Action::Walk { .. } | Action::Turn { .. } => input::move_observer(scene, action, 1.0),
             Action::MoveSphere { x, y, z } => {
-                if let Err(why) = input::move_sphere(scene, (x, y, z)) {
+                if let Err(why) = input::move_sphere(scene, (x, y, z), 1.0) {
                     specchio::say!("sphere not moved: {why}");
                 }
             }

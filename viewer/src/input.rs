@@ -56,14 +56,12 @@ pub enum Action {
 }
 
 impl Action {
-    /// Whether a held key repeats it (the keyboard's auto-repeat): the moves and the single
-    /// step do, as a held arrow key would; a toggle or a switch acts once per press (holding
-    /// `e` switched the refresh policy 23 times in 1.5 s, `m` rebuilt the renderer as often).
+    /// Whether a held key repeats it (the keyboard's auto-repeat): the single step does, as
+    /// a held arrow key would; a toggle or a switch acts once per press (holding `e` switched
+    /// the refresh policy 23 times in 1.5 s, `m` rebuilt the renderer as often). The moves
+    /// do not repeat either: held, they move at a speed (`motion.rs`).
     pub fn repeats(&self) -> bool {
-        matches!(
-            self,
-            Action::Walk { .. } | Action::Turn { .. } | Action::MoveSphere { .. } | Action::Step
-        )
+        matches!(self, Action::Step)
     }
 }
 
@@ -158,8 +156,10 @@ pub fn help() -> String {
     text
 }
 
-/// Moves or turns the observer by `action` (a `Walk` or `Turn`); other actions are ignored.
-pub fn move_observer(scene: &mut Scene, action: Action) {
+/// Moves or turns the observer by `steps` of `action` (a `Walk` or `Turn`: one step is
+/// [`MOVE_STEP_M`] or [`TURN_STEP_DEG`]; a held key moves by fractions of a step, see
+/// `motion.rs`); other actions are ignored.
+pub fn move_observer(scene: &mut Scene, action: Action, steps: f32) {
     let o = &mut scene.observer;
     match action {
         Action::Walk { forward, right, up } => {
@@ -170,21 +170,31 @@ pub fn move_observer(scene: &mut Scene, action: Action) {
             let side = Vec3::new(cos, 0.0, -sin);
             let step =
                 ahead * f32::from(forward) + side * f32::from(right) + Vec3::Y * f32::from(up);
-            o.position += step * MOVE_STEP_M;
+            o.position += step * (MOVE_STEP_M * steps);
         }
         Action::Turn { yaw, pitch } => {
-            o.yaw_deg = (o.yaw_deg + f32::from(yaw) * TURN_STEP_DEG).rem_euclid(360.0);
-            o.pitch_deg = (o.pitch_deg + f32::from(pitch) * TURN_STEP_DEG)
-                .clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
+            turn_observer(
+                scene,
+                f32::from(yaw) * TURN_STEP_DEG * steps,
+                f32::from(pitch) * TURN_STEP_DEG * steps,
+            );
         }
         _ => {}
     }
 }
 
-/// Moves the sphere by `MOVE_STEP_M` per unit of (x, y, z) unless that takes it (or the sensor
-/// below it) out of the room, in which case it stays and the reason is returned.
-pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8)) -> Result<(), String> {
-    let step = Vec3::new(f32::from(x), f32::from(y), f32::from(z)) * MOVE_STEP_M;
+/// Turns the observer by `yaw` (left positive) and `pitch` (up positive) degrees, the pitch
+/// kept inside (-85, 85).
+pub fn turn_observer(scene: &mut Scene, yaw: f32, pitch: f32) {
+    let o = &mut scene.observer;
+    o.yaw_deg = (o.yaw_deg + yaw).rem_euclid(360.0);
+    o.pitch_deg = (o.pitch_deg + pitch).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
+}
+
+/// Moves the sphere by `steps` of [`MOVE_STEP_M`] per unit of (x, y, z) unless that takes it
+/// (or the sensor below it) out of the room, in which case it stays and the reason is returned.
+pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8), steps: f32) -> Result<(), String> {
+    let step = Vec3::new(f32::from(x), f32::from(y), f32::from(z)) * (MOVE_STEP_M * steps);
     let to = scene.mirror.center + step;
     let lo = scene.room.center - 0.5 * scene.room.size_m;
     let hi = scene.room.center + 0.5 * scene.room.size_m;
@@ -213,6 +223,25 @@ pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8)) -> Result<(), Str
     }
     scene.mirror.center = to;
     Ok(())
+}
+
+/// Where the observer and the sphere are, in the file's coordinates (the scene keeps positions
+/// relative to its origin): `observer [x, y, z] yaw Y pitch P, sphere [x, y, z]`.
+pub fn pose(scene: &Scene) -> String {
+    let file = |p: Vec3| {
+        let w = scene.origin + p.as_dvec3();
+        let short = |v: f64| (v * 1e4).round() / 1e4;
+        format!("[{}, {}, {}]", short(w.x), short(w.y), short(w.z))
+    };
+    let o = &scene.observer;
+    let angle = |a: f32| (a * 100.0).round() / 100.0;
+    format!(
+        "observer {} yaw {} pitch {}, sphere {}",
+        file(o.position),
+        angle(o.yaw_deg),
+        angle(o.pitch_deg),
+        file(scene.mirror.center)
+    )
 }
 
 #[cfg(test)]
@@ -253,16 +282,16 @@ mod tests {
         // thesis-room: the observer at (0, 3.5, 4.5) looks along -Z (yaw 0).
         let mut s = scene();
         let at = |s: &Scene| world(s, s.observer.position);
-        move_observer(&mut s, walk(1, 0, 0));
+        move_observer(&mut s, walk(1, 0, 0), 1.0);
         assert_eq!(at(&s), Vec3::new(0.0, 3.5, 4.25));
-        move_observer(&mut s, walk(0, 1, 0));
+        move_observer(&mut s, walk(0, 1, 0), 1.0);
         assert_eq!(at(&s), Vec3::new(0.25, 3.5, 4.25));
         // Turned left by 90 degrees it looks along -X: forward is -X.
         for _ in 0..18 {
-            move_observer(&mut s, Action::Turn { yaw: 1, pitch: 0 });
+            move_observer(&mut s, Action::Turn { yaw: 1, pitch: 0 }, 1.0);
         }
         assert_eq!(s.observer.yaw_deg, 90.0);
-        move_observer(&mut s, walk(1, 0, 0));
+        move_observer(&mut s, walk(1, 0, 0), 1.0);
         assert!((at(&s) - Vec3::new(0.0, 3.5, 4.25)).length() < 1e-6);
     }
 
@@ -270,20 +299,20 @@ mod tests {
     fn the_sphere_moves_by_steps_and_stays_in_the_room() {
         let mut s = scene();
         let at = |s: &Scene| world(s, s.mirror.center);
-        move_sphere(&mut s, (1, 0, 0)).unwrap();
+        move_sphere(&mut s, (1, 0, 0), 1.0).unwrap();
         assert_eq!(at(&s), Vec3::new(0.25, 3.0, 0.0));
         // The room's +X wall is at x = 5, the radius 1: x = 4 is the last position.
         for _ in 0..15 {
-            move_sphere(&mut s, (1, 0, 0)).unwrap();
+            move_sphere(&mut s, (1, 0, 0), 1.0).unwrap();
         }
         assert_eq!(at(&s).x, 4.0);
         // Refused, named in the file's coordinates (thesis-room's mirror is at y = 3).
-        let e = move_sphere(&mut s, (1, 0, 0)).unwrap_err();
+        let e = move_sphere(&mut s, (1, 0, 0), 1.0).unwrap_err();
         assert!(e.contains("at [4.25, 3, 0]"), "{e}");
         assert_eq!(at(&s).x, 4.0);
         // The sensor hangs 2.5 m below: the centre cannot go below y = 2.5.
         let e = (0..3)
-            .map(|_| move_sphere(&mut s, (0, -1, 0)))
+            .map(|_| move_sphere(&mut s, (0, -1, 0), 1.0))
             .last()
             .unwrap();
         // 2.5 - 2.5 = 0: the file's floor, not the scene's internal y = -3.

@@ -12,6 +12,7 @@ mod demand;
 mod failures;
 pub mod input;
 mod menu;
+mod motion;
 mod overlay;
 mod present;
 

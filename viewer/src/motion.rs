@@ -1,0 +1,239 @@
+//! Moving as a person expects: a held key moves the observer or the sphere at a speed for as
+//! long as it is held, whatever the frame rate (the distance is the speed times the time held,
+//! to the release); dragging with the left mouse button looks around; the wheel walks.
+//!
+//! A `--keys` script still moves in steps (`input::MOVE_STEP_M`, `input::TURN_STEP_DEG`), so
+//! that a scripted run lands on positions a scene file states exactly.
+
+use std::time::Instant;
+
+use specchio::scene::Scene;
+use winit::dpi::PhysicalPosition;
+
+use super::input::{self, Action, MOVE_STEP_M, TURN_STEP_DEG};
+
+/// Speeds of a held key.
+pub const WALK_SPEED_M_S: f32 = 2.0;
+pub const TURN_SPEED_DEG_S: f32 = 60.0;
+pub const SPHERE_SPEED_M_S: f32 = 1.0;
+/// Dragging: degrees of yaw or pitch per pixel the pointer moves.
+pub const LOOK_DEG_PER_PX: f32 = 0.2;
+/// The wheel: metres forward per notch (one line of scroll).
+pub const WHEEL_STEP_M: f32 = MOVE_STEP_M;
+
+/// One held key: what it does, up to when it has been applied, and whether the sphere refused
+/// to go on (said once per press, not per frame).
+struct HeldKey {
+    action: Action,
+    applied_to: Instant,
+    refused: bool,
+}
+
+/// The keys held and the pointer's drag.
+#[derive(Default)]
+pub struct Motion {
+    held: Vec<HeldKey>,
+    /// Where the pointer was last seen in the window.
+    cursor: Option<PhysicalPosition<f64>>,
+    /// The left button is down: the pointer's moves turn the observer.
+    dragging: bool,
+    /// The pose changed since it was last printed.
+    moved: bool,
+}
+
+/// Whether a key's action is a move a held key repeats at a speed.
+pub fn is_move(action: Action) -> bool {
+    matches!(
+        action,
+        Action::Walk { .. } | Action::Turn { .. } | Action::MoveSphere { .. }
+    )
+}
+
+impl Motion {
+    /// A move key went down (its auto-repeats are not presses: the key is simply held).
+    pub fn press(&mut self, action: Action, now: Instant) {
+        if !self.held.iter().any(|h| h.action == action) {
+            self.held.push(HeldKey {
+                action,
+                applied_to: now,
+                refused: false,
+            });
+        }
+    }
+
+    /// A move key went up at `now`: it moves for the time it was held up to then, and stops.
+    /// The sphere's refusal, if it met one.
+    pub fn release(&mut self, action: Action, now: Instant, scene: &mut Scene) -> Option<String> {
+        let at = self.held.iter().position(|h| h.action == action)?;
+        let mut key = self.held.remove(at);
+        self.apply(&mut key, now, scene)
+    }
+
+    /// Every held key moved up to `now`; the sphere's refusals met meanwhile.
+    pub fn advance(&mut self, now: Instant, scene: &mut Scene) -> Vec<String> {
+        let mut held = std::mem::take(&mut self.held);
+        let refusals = (held.iter_mut())
+            .filter_map(|key| self.apply(key, now, scene))
+            .collect();
+        self.held = held;
+        refusals
+    }
+
+    /// Whether something moves while no event comes (a key is held).
+    pub fn moving(&self) -> bool {
+        !self.held.is_empty()
+    }
+
+    /// The left mouse button went down or up.
+    pub fn button(&mut self, pressed: bool) {
+        self.moved |= self.dragging && !pressed;
+        self.dragging = pressed;
+    }
+
+    /// The pointer moved: while dragging, the observer turns with it (right and down look
+    /// right and down). Whether it turned.
+    pub fn pointer(&mut self, to: PhysicalPosition<f64>, scene: &mut Scene) -> bool {
+        let from = self.cursor.replace(to);
+        let (true, Some(from)) = (self.dragging, from) else {
+            return false;
+        };
+        let (dx, dy) = ((to.x - from.x) as f32, (to.y - from.y) as f32);
+        input::turn_observer(scene, -dx * LOOK_DEG_PER_PX, -dy * LOOK_DEG_PER_PX);
+        dx != 0.0 || dy != 0.0
+    }
+
+    /// The wheel turned by `notches` (positive away from the user): the observer walks
+    /// forward by that many [`WHEEL_STEP_M`].
+    pub fn wheel(&mut self, notches: f32, scene: &mut Scene) {
+        let forward = Action::Walk {
+            forward: 1,
+            right: 0,
+            up: 0,
+        };
+        input::move_observer(scene, forward, notches * WHEEL_STEP_M / MOVE_STEP_M);
+        self.moved = true;
+    }
+
+    /// True once after a move ended (every key released, the button up, a wheel turn): the
+    /// moment to say where the observer and the sphere are.
+    pub fn settled(&mut self) -> bool {
+        let settled = self.moved && self.held.is_empty() && !self.dragging;
+        if settled {
+            self.moved = false;
+        }
+        settled
+    }
+
+    fn apply(&mut self, key: &mut HeldKey, now: Instant, scene: &mut Scene) -> Option<String> {
+        let seconds = now.saturating_duration_since(key.applied_to).as_secs_f32();
+        key.applied_to = now;
+        self.moved = true;
+        match key.action {
+            Action::Walk { .. } => {
+                input::move_observer(scene, key.action, WALK_SPEED_M_S * seconds / MOVE_STEP_M);
+            }
+            Action::Turn { .. } => {
+                let steps = TURN_SPEED_DEG_S * seconds / TURN_STEP_DEG;
+                input::move_observer(scene, key.action, steps);
+            }
+            Action::MoveSphere { x, y, z } => {
+                let steps = SPHERE_SPEED_M_S * seconds / MOVE_STEP_M;
+                match input::move_sphere(scene, (x, y, z), steps) {
+                    Ok(()) => key.refused = false,
+                    Err(why) if !key.refused => {
+                        key.refused = true;
+                        return Some(why);
+                    }
+                    Err(_) => {}
+                }
+            }
+            _ => {}
+        }
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Duration;
+
+    use super::*;
+
+    fn scene() -> Scene {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        specchio::scene::load(&root.join("scenes/thesis-room.toml")).unwrap()
+    }
+
+    const FORWARD: Action = Action::Walk {
+        forward: 1,
+        right: 0,
+        up: 0,
+    };
+
+    /// Held for 1.5 s, the observer walks 3 m whether the frames come 100 or 3 times a second.
+    #[test]
+    fn a_held_key_moves_at_its_speed_whatever_the_frame_rate() {
+        for frames_per_s in [100u32, 3] {
+            let mut s = scene();
+            let start_z = s.observer.position.z;
+            let mut m = Motion::default();
+            let t0 = Instant::now();
+            m.press(FORWARD, t0);
+            let held = Duration::from_millis(1500);
+            let frame = Duration::from_secs(1) / frames_per_s;
+            let mut t = t0;
+            while t + frame < t0 + held {
+                t += frame;
+                assert!(m.advance(t, &mut s).is_empty());
+            }
+            assert!(m.moving());
+            m.release(FORWARD, t0 + held, &mut s);
+            assert!(!m.moving() && m.settled() && !m.settled());
+            // Yaw 0 looks along -Z.
+            let walked = start_z - s.observer.position.z;
+            assert!((walked - 3.0).abs() < 1e-4, "{frames_per_s}/s: {walked} m");
+        }
+    }
+
+    #[test]
+    fn a_drag_turns_the_observer_and_the_wheel_walks() {
+        let mut s = scene();
+        let mut m = Motion::default();
+        let at = |x: f64, y: f64| PhysicalPosition::new(x, y);
+        let pitch = s.observer.pitch_deg;
+        // Pointer moves without the button turn nothing.
+        assert!(!m.pointer(at(90.0, 100.0), &mut s));
+        assert!(!m.pointer(at(100.0, 100.0), &mut s));
+        m.button(true);
+        let turned = m.pointer(at(150.0, 90.0), &mut s);
+        assert!(turned, "turns from where the button went down");
+        assert!(!m.settled(), "still dragging");
+        m.button(false);
+        assert!(m.settled());
+        // 50 px right: 10 degrees to the right (yaw is left-positive); 10 px up: 2 up.
+        let yaw = s.observer.yaw_deg;
+        assert!((yaw - 350.0).abs() < 1e-4, "{yaw}");
+        assert!((s.observer.pitch_deg - (pitch + 2.0)).abs() < 1e-4);
+        let before = s.observer.position;
+        let (sin, cos) = s.observer.yaw_deg.to_radians().sin_cos();
+        m.wheel(2.0, &mut s);
+        let expected = before + glam::Vec3::new(-sin, 0.0, -cos) * (2.0 * WHEEL_STEP_M);
+        assert!((s.observer.position - expected).length() < 1e-5);
+    }
+
+    #[test]
+    fn a_held_sphere_key_stops_at_the_wall_and_says_so_once() {
+        let mut s = scene();
+        let mut m = Motion::default();
+        let right = Action::MoveSphere { x: 1, y: 0, z: 0 };
+        let t0 = Instant::now();
+        m.press(right, t0);
+        let mut refusals = 0;
+        // 20 s at 1 m/s would be 20 m: the room's +X wall stops it.
+        for k in 1..=200 {
+            refusals += m.advance(t0 + Duration::from_millis(100 * k), &mut s).len();
+        }
+        assert_eq!(refusals, 1);
+        assert!(s.mirror.center.x + s.mirror.radius_m <= 5.0 + 1e-4);
+    }
+}
