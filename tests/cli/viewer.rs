@@ -517,3 +517,118 @@ fn held_keys_move_at_a_speed_and_the_mouse_looks_around() {
     xdotool(&x, &["key", "q"]);
     viewer.finish();
 }
+
+/// The screenshot key writes the window's image as the next numbered PNG in the current
+/// folder and says where, never replacing a file: with a file of the user's at 0001, two
+/// presses write 0002 and 0003, each the size of the window, and 0001 keeps its bytes.
+#[test]
+fn the_screenshot_key_writes_numbered_pngs_beside_the_users_files() {
+    let Some(x) = Xvfb::start() else { return };
+    if !has_xdotool() {
+        return;
+    }
+    let folder = temp_dir("viewer-screenshot-key");
+    std::fs::create_dir_all(&folder).unwrap();
+    std::fs::write(folder.join("specchio-view-0001.png"), b"mine").unwrap();
+    let scene = thesis_room();
+    let viewer = Running::spawn_in(&x, &[scene.to_str().unwrap(), "--keys", "space"], &folder);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    let mut said = Vec::new();
+    for _ in 0..2 {
+        xdotool(&x, &["key", "p"]);
+        said.push(viewer.wait_for("screenshot: "));
+    }
+    xdotool(&x, &["key", "q"]);
+    viewer.finish();
+    for (line, n) in said.iter().zip(["0002", "0003"]) {
+        let path = folder.join(format!("specchio-view-{n}.png"));
+        assert!(line.contains(&path.display().to_string()), "{line}");
+        let (w, h, rgb) = read_png(&path);
+        assert_eq!((w, h), (1200, 450), "{line}");
+        assert!(rgb.iter().any(|&v| v > 0), "a black screenshot");
+    }
+    assert_eq!(
+        std::fs::read(folder.join("specchio-view-0001.png")).unwrap(),
+        b"mine"
+    );
+}
+
+/// The reload key reads the scene file again: an edit shows (the far wall's colour changed
+/// between two screenshots), the observer stays where the user took it (`w`: 0.25 m forward,
+/// z 4 -> 3.75), and a file that no longer loads is reported with its field while the scene
+/// shown stays.
+#[test]
+fn the_reload_key_shows_the_edited_file_and_keeps_the_pose() {
+    let Some(x) = Xvfb::start() else { return };
+    if !has_xdotool() {
+        return;
+    }
+    let folder = temp_dir("viewer-reload-key");
+    std::fs::create_dir_all(&folder).unwrap();
+    let original =
+        std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
+    let scene = folder.join("room.toml");
+    std::fs::write(&scene, &original).unwrap();
+    let viewer = Running::spawn_in(&x, &[scene.to_str().unwrap(), "--keys", "w,2"], &folder);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    xdotool(&x, &["key", "p"]);
+    viewer.wait_for("screenshot: ");
+    // The far wall (-Z, which the observer faces) from yellow to dark grey.
+    let edited = original.replace("color = [1, 1, 0]", "color = [0.1, 0.1, 0.1]");
+    assert_ne!(edited, original);
+    std::fs::write(&scene, &edited).unwrap();
+    xdotool(&x, &["key", "F5"]);
+    let reloaded = viewer.wait_for("scene reloaded: ");
+    assert!(
+        reloaded.contains("observer [0, 0, 3.75] yaw 0"),
+        "{reloaded}"
+    );
+    xdotool(&x, &["key", "p"]);
+    viewer.wait_for("screenshot: ");
+    std::fs::write(&scene, edited.replace("radius = 1.0", "radius = -1")).unwrap();
+    xdotool(&x, &["key", "F5"]);
+    let refused = viewer.wait_for("scene not reloaded: ");
+    assert!(
+        refused.contains("room.toml") && refused.contains("mirror.radius"),
+        "{refused}"
+    );
+    xdotool(&x, &["key", "q"]);
+    viewer.finish();
+    let (before, after) = (
+        folder.join("specchio-view-0001.png"),
+        folder.join("specchio-view-0002.png"),
+    );
+    let (most, differing) = difference(&before, &after);
+    eprintln!("the edit changed {differing} channels (most {most})");
+    assert!(
+        differing > 10_000 && most > 100,
+        "{differing} channels, most {most}"
+    );
+}
+
+/// The fullscreen key (under openbox, which honours it): the window takes the whole 1920x1080
+/// screen and the swapchain follows; pressed again, it returns to the view's size.
+#[test]
+fn the_fullscreen_key_fills_the_screen_and_returns() {
+    let Some(x) = Xvfb::start() else { return };
+    if !has_xdotool() {
+        return;
+    }
+    let Some(_manager) = Openbox::start(&x) else {
+        return;
+    };
+    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--keys", "space"]);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowactivate", "--sync", &id]);
+    xdotool(&x, &["key", "F11"]);
+    viewer.wait_for("swapchain: 1920x1080");
+    xdotool(&x, &["key", "F11"]);
+    viewer.wait_for("swapchain: 1200x450");
+    xdotool(&x, &["key", "q"]);
+    viewer.finish();
+}

@@ -48,6 +48,12 @@ pub enum Action {
     SetLookup(Lookup),
     SetRefresh(RefreshPolicy),
     Reset,
+    /// Save the next frame shown as a numbered PNG in the current folder.
+    Screenshot,
+    /// Read the scene file again, keeping the observer's pose.
+    Reload,
+    /// Fullscreen on or off.
+    Fullscreen,
     /// Open or close the menu (F1).
     Menu,
     /// Open or close the help window.
@@ -109,7 +115,18 @@ pub const KEYS: &[(&str, Action, &str)] = &[
     ("x", Action::NextLookup, "next mirror lookup"),
     ("e", Action::NextRefresh, "next refresh policy"),
     ("0", Action::Reset, "reset poses, time and settings"),
+    (
+        "p",
+        Action::Screenshot,
+        "save a screenshot (specchio-view-NNNN.png, here)",
+    ),
     ("f1", Action::Menu, "open / close the menu"),
+    (
+        "f5",
+        Action::Reload,
+        "reload the scene file (the observer's pose kept)",
+    ),
+    ("f11", Action::Fullscreen, "fullscreen on / off"),
     ("h", Action::Help, "open / close this list in the window"),
     ("q", Action::Quit, "quit (also Escape)"),
     ("escape", Action::Quit, "quit"),

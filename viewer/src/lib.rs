@@ -167,6 +167,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             PresentPreference::Fifo
         },
         scene_name: args.scene.display().to_string(),
+        scene_path: args.scene.clone(),
         widgets: args.widgets,
         renew_menu_renderer: args.renew_menu_renderer,
     };

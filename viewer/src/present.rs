@@ -81,6 +81,12 @@ impl Presenter {
         self.stale = true;
     }
 
+    /// Whether a screenshot can be taken: the swapchain's images can be read back (the
+    /// surface offers them as transfer sources). True before the first swapchain exists.
+    pub fn can_read_back(&self) -> bool {
+        self.swapchain.as_ref().is_none_or(|s| s.readable)
+    }
+
     /// Shows `source` in the window (scaled to fit, aspect kept, centred on black when the
     /// sizes differ; copied 1:1 when they match). With `screenshot`, the presented image is
     /// also read back (the call then waits for the frame).

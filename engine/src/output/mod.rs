@@ -6,6 +6,7 @@
 //! user's path, never the hidden temporary one.
 
 mod dir;
+mod numbered;
 mod replace;
 mod stage;
 mod staged;
@@ -221,6 +222,20 @@ pub fn write_png_rgb8(
     rgb8: &[u8],
 ) -> Result<(), OutputError> {
     one_file(path, |out| out.write_png_rgb8(path, width, height, rgb8))
+}
+
+/// An 8-bit sRGB RGB PNG (as [`Transaction::write_png_rgb8`]) as the first free
+/// `PREFIX-NNNN.png` in `folder`, never replacing a file; its path.
+pub fn write_png_rgb8_numbered(
+    folder: &Path,
+    prefix: &str,
+    width: u32,
+    height: u32,
+    rgb8: &[u8],
+) -> Result<PathBuf, OutputError> {
+    let mut bytes = Vec::new();
+    png::encode_rgb8(&mut bytes, width, height, rgb8).map_err(|e| png_error(folder, e))?;
+    numbered::write_numbered(folder, prefix, "png", &bytes)
 }
 
 /// JSON (pretty), atomically.

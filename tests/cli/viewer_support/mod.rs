@@ -378,8 +378,18 @@ pub struct Running {
 
 impl Running {
     pub fn spawn(display: &impl Display, args: &[&str]) -> Self {
-        let mut child = display
-            .command(args)
+        Self::spawn_command(display.command(args))
+    }
+
+    /// [`Running::spawn`] with `folder` as the viewer's current folder.
+    pub fn spawn_in(display: &impl Display, args: &[&str], folder: &Path) -> Self {
+        let mut command = display.command(args);
+        command.current_dir(folder);
+        Self::spawn_command(command)
+    }
+
+    fn spawn_command(mut command: Command) -> Self {
+        let mut child = command
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()

@@ -8,7 +8,7 @@ use anyhow::Result;
 use specchio::render::display::DisplayView;
 use specchio::render::methods::Method;
 use specchio::render::{lookups, RenderOptions, Renderer, PAIR_SIZE};
-use specchio::scene::{Lookup, RefreshPolicy, Scene};
+use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::Device;
 use specchio::vk::frames::FRAMES_IN_FLIGHT;
 use specchio::vk::instance::Instance;
@@ -22,6 +22,8 @@ use winit::keyboard::{Key, NamedKey};
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
 
+mod actions;
+
 use super::clock::{Clock, Figures};
 use super::demand::{Demand, NextFrame};
 use super::failures::{run_catching_window_panics, surface_lost};
@@ -29,7 +31,6 @@ use super::input::{self, Action};
 use super::menu::{Menu, Status};
 use super::motion::{self, Motion};
 use super::present::{Presenter, Screenshot, Shown};
-use super::SCRIPTED_FPS;
 
 /// What `view::run` decided before the loop.
 pub struct Settings {
@@ -42,6 +43,8 @@ pub struct Settings {
     pub screenshot: bool,
     pub present: PresentPreference,
     pub scene_name: String,
+    /// The scene file, read again by the reload key.
+    pub scene_path: std::path::PathBuf,
     /// Print the menu's widget rectangles (`--widgets`).
     pub widgets: bool,
     /// A new menu renderer every frame (a test hook).
@@ -54,6 +57,8 @@ pub struct Outcome {
     pub screenshot: Option<Screenshot>,
 }
 
+/// The screenshot key's files: `specchio-view-0001.png`, ...
+const SCREENSHOT_PREFIX: &str = "specchio-view";
 /// A scripted run waits at most this long for the window to take a size it asked for (the X
 /// server answers a resize request asynchronously) before its last frame.
 const RESIZE_WAIT: Duration = Duration::from_secs(5);
@@ -77,6 +82,8 @@ struct Viewer {
     /// The size last asked of the window (view switch), until a resize brings it.
     size_asked: Option<(PhysicalSize<u32>, Instant)>,
     menu: Menu,
+    /// Fullscreen (the fullscreen key), as the viewer last asked of the window.
+    fullscreen: bool,
     /// The methods and lookups this device can run (what the menu offers).
     methods: Vec<Method>,
     lookups: Vec<Lookup>,
@@ -99,6 +106,8 @@ struct App<'a> {
     demand: Demand,
     /// Keys held and the mouse's drag.
     motion: Motion,
+    /// The screenshot key was pressed: the next frame shown is saved.
+    shot_asked: bool,
 }
 
 pub fn run(
@@ -108,15 +117,7 @@ pub fn run(
     mut scene: Scene,
     settings: Settings,
 ) -> Result<Outcome> {
-    // The thesis's single viewport, for either camera (the pair has its own fixed size).
-    scene.observer.resolution = SINGLE_VIEW_SIZE;
-    scene.sensor.resolution = SINGLE_VIEW_SIZE;
-    if let Some(size) = settings.cube_size {
-        scene.cube.face_size_px = size;
-    }
-    if let Some(lookup) = settings.lookup {
-        scene.mirror.lookup = lookup;
-    }
+    viewer_overrides(&mut scene, &settings);
     let scripted = settings.frames.is_some();
     let mut app = App {
         settings,
@@ -137,6 +138,7 @@ pub fn run(
         window_gone: false,
         demand: Demand::default(),
         motion: Motion::default(),
+        shot_asked: false,
     };
     specchio::say_part!("{}", input::help());
     let ran = run_catching_window_panics(event_loop, &mut app, |app| &mut app.window_gone);
@@ -334,6 +336,7 @@ impl App<'_> {
             window,
             view,
             size_asked: None,
+            fullscreen: false,
             methods,
             lookups,
         })
@@ -381,7 +384,7 @@ impl App<'_> {
             self.figures.finished(report);
         }
         let size = viewer.size;
-        let shot = last && self.settings.screenshot;
+        let shot = (last && self.settings.screenshot) || self.shot_asked;
         let status = Status {
             view: viewer.view,
             method: viewer.renderer.method,
@@ -430,8 +433,11 @@ impl App<'_> {
         {
             viewer.window.set_title(&title);
         }
+        if let (true, Some(shot)) = (std::mem::take(&mut self.shot_asked), &screenshot) {
+            actions::save_screenshot(shot);
+        }
         if last {
-            self.outcome.screenshot = screenshot;
+            self.outcome.screenshot = screenshot.filter(|_| self.settings.screenshot);
             event_loop.exit();
         }
         Ok(())
@@ -458,176 +464,22 @@ impl App<'_> {
         self.demand.next(scripted, moving, now)
     }
 
-    /// A held move key went up: it moves for the rest of the time it was held.
-    fn release(&mut self, action: Action) {
-        let Some(v) = &mut self.viewer else { return };
-        if let Some(why) = self
-            .motion
-            .release(action, Instant::now(), &mut v.renderer.scene)
-        {
-            specchio::say!("sphere not moved: {why}");
-        }
-        self.demand.changed();
-        self.say_pose_when_settled();
-    }
-
-    /// Once a move ends (keys released, the button up, a wheel turn): where the observer and
-    /// the sphere are, in the file's coordinates, to put into a scene file.
-    fn say_pose_when_settled(&mut self) {
-        let Some(v) = &self.viewer else { return };
-        if self.motion.settled() {
-            specchio::say!("{}", input::pose(&v.renderer.scene));
-        }
-    }
-
-    /// Applies one key's action.
-    fn act(&mut self, event_loop: &ActiveEventLoop, action: Action) {
-        self.demand.changed();
-        let switched = match action {
-            Action::NextMethod => self.next_method(),
-            Action::SetMethod(method) => self.set_method(method).map(|_| ()),
-            _ => Ok(()),
-        };
-        if let Err(e) = switched {
-            self.fail(event_loop, e);
-        }
-        let Some(viewer) = self.viewer.as_mut() else {
-            return;
-        };
-        let scene = &mut viewer.renderer.scene;
-        match action {
-            Action::Walk { .. } | Action::Turn { .. } => input::move_observer(scene, action, 1.0),
-            Action::MoveSphere { x, y, z } => {
-                if let Err(why) = input::move_sphere(scene, (x, y, z), 1.0) {
-                    specchio::say!("sphere not moved: {why}");
-                }
-            }
-            Action::PauseResume => self.clock.paused = !self.clock.paused,
-            Action::Step => {
-                self.clock.paused = true;
-                self.clock.time_s += 1.0 / SCRIPTED_FPS;
-            }
-            Action::Show(view) => {
-                viewer.view = view;
-                let [w, h] = natural_size(&viewer.renderer.scene, view);
-                let size = PhysicalSize::new(w, h);
-                if viewer.size != size {
-                    match viewer.window.request_inner_size(size) {
-                        Some(_) => viewer.presenter.resized(),
-                        None => viewer.size_asked = Some((size, Instant::now())),
-                    }
-                }
-            }
-            Action::NextMethod | Action::SetMethod(_) => {} // above
-            Action::NextLookup => next_lookup(&mut viewer.renderer),
-            Action::SetLookup(lookup) => {
-                if viewer.lookups.contains(&lookup) {
-                    scene.mirror.lookup = lookup;
-                    specchio::say!("lookup: {lookup}");
-                }
-            }
-            Action::SetRefresh(refresh) => {
-                scene.refresh = refresh;
-                specchio::say!("refresh: {refresh:?}");
-            }
-            Action::NextRefresh => {
-                scene.refresh = match scene.refresh {
-                    RefreshPolicy::OnChange => RefreshPolicy::EveryFrame,
-                    RefreshPolicy::EveryFrame => RefreshPolicy::EveryN(4),
-                    RefreshPolicy::EveryN(_) => RefreshPolicy::OnChange,
-                };
-                specchio::say!("refresh: {:?}", scene.refresh);
-            }
-            Action::Reset => {
-                let initial = &self.initial;
-                scene.observer = initial.observer.clone();
-                scene.mirror.center = initial.mirror.center;
-                scene.mirror.lookup = initial.mirror.lookup;
-                scene.refresh = initial.refresh;
-                self.clock = Clock {
-                    time_s: 0.0,
-                    paused: false,
-                    last: None,
-                    ..self.clock
-                };
-            }
-            Action::Menu => viewer.menu.open = !viewer.menu.open,
-            Action::Help => viewer.menu.help = !viewer.menu.help,
-            Action::Quit => event_loop.exit(),
-        }
-    }
-
-    /// Switches to the next method the device can run (probed ones are probed first).
-    fn next_method(&mut self) -> Result<()> {
-        let current = self
-            .viewer
-            .as_ref()
-            .expect("keys act on a viewer")
-            .renderer
-            .method;
-        let all: Vec<Method> = Method::listed().collect();
-        let start = all.iter().position(|&m| m == current).map_or(0, |i| i + 1);
-        for k in 0..all.len() {
-            let method = all[(start + k) % all.len()];
-            if method == current || self.set_method(method)? {
-                break;
-            }
-        }
-        Ok(())
-    }
-
-    /// Switches to `method` if the device can run it (`false`, with the reason printed, if
-    /// not). The old renderer is retired through the deletion queue when a frame in flight may
-    /// still copy from its view image, and freed at once when no frame has shown it (a script
-    /// of many switches before a frame, `--keys m,m,m,...`, so holds at most three renderers,
-    /// not one per switch).
-    fn set_method(&mut self, method: Method) -> Result<bool> {
-        let viewer = self.viewer.as_mut().expect("keys act on a viewer");
-        if let Err(why) = specchio::process::probe::usable(method, &self.device.info) {
-            specchio::say!("method {method} skipped: {why}");
-            return Ok(false);
-        }
-        let scene = viewer.renderer.scene.clone();
-        let options = RenderOptions {
-            method,
-            frames_in_flight: FRAMES_IN_FLIGHT,
-            ..Default::default()
-        };
-        let renderer = Renderer::new(self.device, scene, &options)?;
-        let old = std::mem::replace(&mut viewer.renderer, renderer);
-        if std::mem::take(&mut viewer.renderer_shown) {
-            viewer.presenter.ring.defer(old);
-        } else {
-            drop(old);
-        }
-        specchio::say!("method: {method}");
-        Ok(true)
-    }
-
     fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
         self.error.get_or_insert(e);
         event_loop.exit();
     }
 }
 
-/// The next lookup this device can run.
-fn next_lookup(renderer: &mut Renderer) {
-    let info = &renderer.device.info;
-    let all = Lookup::ALL;
-    let at = all
-        .iter()
-        .position(|&l| l == renderer.scene.mirror.lookup)
-        .unwrap_or(0);
-    for k in 1..all.len() {
-        let lookup = all[(at + k) % all.len()];
-        match lookups::missing_features(lookup, info) {
-            None => {
-                renderer.scene.mirror.lookup = lookup;
-                specchio::say!("lookup: {lookup}");
-                return;
-            }
-            Some(why) => specchio::say!("lookup {lookup} skipped: {why}"),
-        }
+/// What the viewer changes in a scene it loads: the thesis's single viewport for either camera
+/// (the pair has its own fixed size), and the command line's cube size and lookup.
+fn viewer_overrides(scene: &mut Scene, settings: &Settings) {
+    scene.observer.resolution = SINGLE_VIEW_SIZE;
+    scene.sensor.resolution = SINGLE_VIEW_SIZE;
+    if let Some(size) = settings.cube_size {
+        scene.cube.face_size_px = size;
+    }
+    if let Some(lookup) = settings.lookup {
+        scene.mirror.lookup = lookup;
     }
 }
 
@@ -651,6 +503,8 @@ fn key_name(key: &Key) -> Option<String> {
         Key::Named(NamedKey::ArrowUp) => Some("up".into()),
         Key::Named(NamedKey::ArrowDown) => Some("down".into()),
         Key::Named(NamedKey::F1) => Some("f1".into()),
+        Key::Named(NamedKey::F5) => Some("f5".into()),
+        Key::Named(NamedKey::F11) => Some("f11".into()),
         _ => None,
     }
 }

@@ -1,0 +1,249 @@
+//! What the keys, the mouse and the menu do to the running viewer: one action at a time
+//! (`act`), the held moves' ends, the method switch, the screenshot.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Result;
+use specchio::render::methods::Method;
+use specchio::render::{lookups, Renderer};
+use specchio::scene::{Lookup, RefreshPolicy, Scene};
+use winit::dpi::PhysicalSize;
+use winit::event_loop::ActiveEventLoop;
+use winit::window::Fullscreen;
+
+use super::{natural_size, viewer_overrides, App, SCREENSHOT_PREFIX};
+use crate::clock::Clock;
+use crate::input::{self, Action};
+use crate::present::Screenshot;
+use crate::SCRIPTED_FPS;
+
+impl App<'_> {
+    /// A held move key went up: it moves for the rest of the time it was held.
+    pub(super) fn release(&mut self, action: Action) {
+        let Some(v) = &mut self.viewer else { return };
+        if let Some(why) = self
+            .motion
+            .release(action, Instant::now(), &mut v.renderer.scene)
+        {
+            specchio::say!("sphere not moved: {why}");
+        }
+        self.demand.changed();
+        self.say_pose_when_settled();
+    }
+
+    /// Once a move ends (keys released, the button up, a wheel turn): where the observer and
+    /// the sphere are, in the file's coordinates, to put into a scene file.
+    pub(super) fn say_pose_when_settled(&mut self) {
+        let Some(v) = &self.viewer else { return };
+        if self.motion.settled() {
+            specchio::say!("{}", input::pose(&v.renderer.scene));
+        }
+    }
+
+    /// Applies one key's action.
+    pub(super) fn act(&mut self, event_loop: &ActiveEventLoop, action: Action) {
+        self.demand.changed();
+        let switched = match action {
+            Action::NextMethod => self.next_method(),
+            Action::SetMethod(method) => self.set_method(method).map(|_| ()),
+            Action::Reload => self.reload(),
+            _ => Ok(()),
+        };
+        if let Err(e) = switched {
+            self.fail(event_loop, e);
+        }
+        let Some(viewer) = self.viewer.as_mut() else {
+            return;
+        };
+        let scene = &mut viewer.renderer.scene;
+        match action {
+            Action::Walk { .. } | Action::Turn { .. } => input::move_observer(scene, action, 1.0),
+            Action::MoveSphere { x, y, z } => {
+                if let Err(why) = input::move_sphere(scene, (x, y, z), 1.0) {
+                    specchio::say!("sphere not moved: {why}");
+                }
+            }
+            Action::PauseResume => self.clock.paused = !self.clock.paused,
+            Action::Step => {
+                self.clock.paused = true;
+                self.clock.time_s += 1.0 / SCRIPTED_FPS;
+            }
+            Action::Show(view) => {
+                viewer.view = view;
+                let [w, h] = natural_size(&viewer.renderer.scene, view);
+                let size = PhysicalSize::new(w, h);
+                if viewer.size != size {
+                    match viewer.window.request_inner_size(size) {
+                        Some(_) => viewer.presenter.resized(),
+                        None => viewer.size_asked = Some((size, Instant::now())),
+                    }
+                }
+            }
+            Action::NextMethod | Action::SetMethod(_) | Action::Reload => {} // above
+            Action::Fullscreen => {
+                viewer.fullscreen = !viewer.fullscreen;
+                let mode = viewer.fullscreen.then_some(Fullscreen::Borderless(None));
+                viewer.window.set_fullscreen(mode);
+            }
+            Action::NextLookup => next_lookup(&mut viewer.renderer),
+            Action::SetLookup(lookup) => {
+                if viewer.lookups.contains(&lookup) {
+                    scene.mirror.lookup = lookup;
+                    specchio::say!("lookup: {lookup}");
+                }
+            }
+            Action::SetRefresh(refresh) => {
+                scene.refresh = refresh;
+                specchio::say!("refresh: {refresh:?}");
+            }
+            Action::NextRefresh => {
+                scene.refresh = match scene.refresh {
+                    RefreshPolicy::OnChange => RefreshPolicy::EveryFrame,
+                    RefreshPolicy::EveryFrame => RefreshPolicy::EveryN(4),
+                    RefreshPolicy::EveryN(_) => RefreshPolicy::OnChange,
+                };
+                specchio::say!("refresh: {:?}", scene.refresh);
+            }
+            Action::Reset => {
+                let initial = &self.initial;
+                scene.observer = initial.observer.clone();
+                scene.mirror.center = initial.mirror.center;
+                scene.mirror.lookup = initial.mirror.lookup;
+                scene.refresh = initial.refresh;
+                self.clock = Clock {
+                    time_s: 0.0,
+                    paused: false,
+                    last: None,
+                    ..self.clock
+                };
+            }
+            Action::Screenshot => match viewer.presenter.can_read_back() {
+                true => self.shot_asked = true,
+                false => specchio::say!("screenshot: this window's images cannot be read back"),
+            },
+            Action::Menu => viewer.menu.open = !viewer.menu.open,
+            Action::Help => viewer.menu.help = !viewer.menu.help,
+            Action::Quit => event_loop.exit(),
+        }
+    }
+
+    /// Switches to the next method the device can run (probed ones are probed first).
+    pub(super) fn next_method(&mut self) -> Result<()> {
+        let current = self
+            .viewer
+            .as_ref()
+            .expect("keys act on a viewer")
+            .renderer
+            .method;
+        let all: Vec<Method> = Method::listed().collect();
+        let start = all.iter().position(|&m| m == current).map_or(0, |i| i + 1);
+        for k in 0..all.len() {
+            let method = all[(start + k) % all.len()];
+            if method == current || self.set_method(method)? {
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// Switches to `method` if the device can run it (`false`, with the reason printed, if
+    /// not). The old renderer is retired through the deletion queue when a frame in flight may
+    /// still copy from its view image, and freed at once when no frame has shown it (a script
+    /// of many switches before a frame, `--keys m,m,m,...`, so holds at most three renderers,
+    /// not one per switch).
+    pub(super) fn set_method(&mut self, method: Method) -> Result<bool> {
+        let viewer = self.viewer.as_mut().expect("keys act on a viewer");
+        if let Err(why) = specchio::process::probe::usable(method, &self.device.info) {
+            specchio::say!("method {method} skipped: {why}");
+            return Ok(false);
+        }
+        let scene = viewer.renderer.scene.clone();
+        self.replace_renderer(scene, method)?;
+        specchio::say!("method: {method}");
+        Ok(true)
+    }
+
+    /// A new renderer for `scene`. The old one is retired through the deletion queue when a
+    /// frame in flight may still copy from its view image, and freed at once when no frame
+    /// has shown it (a script of many switches before a frame, `--keys m,m,m,...`, so holds
+    /// at most three renderers, not one per switch).
+    fn replace_renderer(&mut self, scene: Scene, method: Method) -> Result<()> {
+        let renderer = self.new_renderer(scene, method)?;
+        let viewer = self.viewer.as_mut().expect("keys act on a viewer");
+        let old = std::mem::replace(&mut viewer.renderer, renderer);
+        if std::mem::take(&mut viewer.renderer_shown) {
+            viewer.presenter.ring.defer(old);
+        } else {
+            drop(old);
+        }
+        Ok(())
+    }
+
+    /// Reads the scene file again (`F5`): what the file now says, with the observer where the
+    /// user took it and the session's lookup, refresh policy, method and clock kept. A file
+    /// that no longer loads is reported (file, line and field) and the scene shown stays.
+    pub(super) fn reload(&mut self) -> Result<()> {
+        let path = self.settings.scene_path.clone();
+        let mut scene = match specchio::scene::load(&path) {
+            Ok(scene) => scene,
+            Err(e) => {
+                specchio::say!("scene not reloaded: {e:#}");
+                return Ok(());
+            }
+        };
+        viewer_overrides(&mut scene, &self.settings);
+        let viewer = self.viewer.as_ref().expect("keys act on a viewer");
+        let old = &viewer.renderer.scene;
+        // Positions are relative to each scene's own origin: carried over through the file's
+        // coordinates, in case the edit moved the origin.
+        let world = old.origin + old.observer.position.as_dvec3();
+        scene.observer.position = (world - scene.origin).as_vec3();
+        scene.observer.yaw_deg = old.observer.yaw_deg;
+        scene.observer.pitch_deg = old.observer.pitch_deg;
+        scene.mirror.lookup = old.mirror.lookup;
+        scene.refresh = old.refresh;
+        let method = viewer.renderer.method;
+        self.initial = scene.clone();
+        self.replace_renderer(scene, method)?;
+        let pose = input::pose(&self.initial);
+        specchio::say!("scene reloaded: {} ({pose})", path.display());
+        Ok(())
+    }
+}
+
+/// Saves the screenshot key's image as the next numbered PNG in the current folder, never
+/// replacing a file, and says where (or why not: the viewer goes on either way).
+pub(super) fn save_screenshot(shot: &Screenshot) {
+    let folder = Path::new(".");
+    let (w, h) = (shot.width, shot.height);
+    match specchio::output::write_png_rgb8_numbered(folder, SCREENSHOT_PREFIX, w, h, &shot.rgb8) {
+        Ok(path) => {
+            let name = path.strip_prefix(folder).unwrap_or(&path);
+            let shown = std::env::current_dir().map_or(name.to_owned(), |cwd| cwd.join(name));
+            specchio::say!("screenshot: {} ({w}x{h})", shown.display());
+        }
+        Err(e) => specchio::say!("screenshot not saved: {e:#}"),
+    }
+}
+
+/// The next lookup this device can run.
+fn next_lookup(renderer: &mut Renderer) {
+    let info = &renderer.device.info;
+    let all = Lookup::ALL;
+    let at = all
+        .iter()
+        .position(|&l| l == renderer.scene.mirror.lookup)
+        .unwrap_or(0);
+    for k in 1..all.len() {
+        let lookup = all[(at + k) % all.len()];
+        match lookups::missing_features(lookup, info) {
+            None => {
+                renderer.scene.mirror.lookup = lookup;
+                specchio::say!("lookup: {lookup}");
+                return;
+            }
+            Some(why) => specchio::say!("lookup {lookup} skipped: {why}"),
+        }
+    }
+}
