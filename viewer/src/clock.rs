@@ -4,6 +4,7 @@ use std::time::{Duration, Instant};
 
 use specchio::render::Renderer;
 
+use super::history::History;
 use super::SCRIPTED_FPS;
 
 /// How often the window title's figures are refreshed.
@@ -27,6 +28,8 @@ pub struct Figures {
     pub cube_ms: Option<f64>,
     /// Faces the last finished frame re-rendered.
     pub faces: u32,
+    /// The last few seconds, for the menu's graph.
+    pub history: History,
 }
 
 impl Clock {
@@ -52,6 +55,7 @@ impl Figures {
     pub fn add(&mut self, frame_ms: f64) {
         self.frames += 1;
         self.frame_ms.push(frame_ms);
+        self.history.frame(Instant::now(), frame_ms);
     }
 
     /// A frame finished on the GPU (the renderer's reports arrive a frame or so after the
@@ -59,6 +63,7 @@ impl Figures {
     pub fn finished(&mut self, report: &specchio::render::FrameReport) {
         if let (true, Some(ms)) = (report.cube_updated, report.gpu_cube_ms) {
             self.cube_ms = Some(ms);
+            self.history.cube_update(Instant::now(), ms);
         }
         self.faces = report.faces_rendered;
     }

@@ -10,6 +10,7 @@ mod app;
 mod clock;
 mod demand;
 mod failures;
+mod history;
 pub mod input;
 mod menu;
 mod motion;

@@ -8,13 +8,14 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use egui::{Align2, Color32, Context, Pos2, Rect, Shadow};
+use egui::{Color32, Context, Pos2, Rect, Shadow, Vec2};
 use specchio::render::display::DisplayView;
 use specchio::render::methods::Method;
 use specchio::scene::{Lookup, RefreshPolicy};
 use winit::event::WindowEvent;
 use winit::window::Window;
 
+use super::history::{self, History};
 use super::input::{Action, KEYS};
 use super::overlay::Paint;
 
@@ -36,6 +37,8 @@ pub struct Status<'a> {
     pub cube_ms: Option<f64>,
     pub faces: u32,
     pub driver: &'a str,
+    /// The last seconds of frame and cube-update times (the graph).
+    pub history: &'a History,
 }
 
 /// egui's state between frames, and which panels are open.
@@ -168,7 +171,7 @@ impl Menu {
                 rects[0] = menu_window(&ctx, status, &mut actions, &mut widgets);
             }
             if help {
-                rects[1] = help_window(&ctx);
+                rects[1] = help_window(&ctx, rects[0]);
             }
         });
         self.input
@@ -264,8 +267,12 @@ fn menu_window(
     actions: &mut Vec<Action>,
     widgets: &mut Widgets,
 ) -> Option<Rect> {
+    // Within the window's height, scrolling when the window is shorter than the menu.
+    let height = ctx.content_rect().height() - 2.0 * MARGIN - WINDOW_CHROME.y;
     let window = egui::Window::new("specchio  (F1 closes)")
         .fixed_pos(Pos2::new(MARGIN, MARGIN))
+        .max_height(height.max(1.0))
+        .vscroll(true)
         .resizable(false)
         .collapsible(false);
     let shown = window.show(ctx, |ui| {
@@ -364,27 +371,73 @@ fn figures(ui: &mut egui::Ui, s: &Status) {
             ui.end_row();
         }
     });
+    history::graph(ui, s.history, std::time::Instant::now());
 }
 
-/// The help: every key and what it does (the same table as the terminal's help).
-fn help_window(ctx: &Context) -> Option<Rect> {
+/// The help: every key and what it does (the same table as the terminal's help). It never
+/// covers the menu: beside it when the window is wide enough, else below it, and in any case
+/// within the window, scrolling when the list is longer than the room left.
+fn help_window(ctx: &Context, menu: Option<Rect>) -> Option<Rect> {
+    let screen = ctx.content_rect();
+    let (origin, room) = help_place(screen, menu);
+    // Two keys a row where there is width for it (the whole list then fits the 1200x450
+    // window's height), else one.
+    let columns = if room.x >= TWO_KEYS_A_ROW_WIDTH { 2 } else { 1 };
     let window = egui::Window::new("keys  (h closes)")
-        .anchor(Align2::RIGHT_TOP, [-MARGIN, MARGIN])
+        .fixed_pos(origin)
+        .max_size(room)
+        .vscroll(true)
         .resizable(false)
         .collapsible(false);
     let shown = window.show(ctx, |ui| {
-        // Two keys a row: the whole list fits the 1200x450 window's height.
-        egui::Grid::new("keys").num_columns(4).show(ui, |ui| {
-            for pair in KEYS.chunks(2) {
-                for (key, _, what) in pair {
-                    ui.monospace(*key);
-                    ui.label(*what);
+        if columns == 2 {
+            egui::Grid::new("keys").num_columns(4).show(ui, |ui| {
+                for pair in KEYS.chunks(2) {
+                    for (key, _, what) in pair {
+                        ui.monospace(*key);
+                        ui.label(*what);
+                    }
+                    ui.end_row();
                 }
-                ui.end_row();
+            });
+        } else {
+            // Narrow: one key a line, its text wrapping within the room there is.
+            ui.set_max_width(room.x);
+            for (key, _, what) in KEYS {
+                ui.horizontal_wrapped(|ui| {
+                    ui.monospace(format!("{key:<7}"));
+                    ui.label(*what);
+                });
             }
-        });
+        }
     });
     shown.map(|inner| inner.response.rect)
+}
+
+/// The help's width (points) with two keys a row.
+const TWO_KEYS_A_ROW_WIDTH: f32 = 560.0;
+/// The narrowest help worth putting beside the menu rather than below it (its lines wrap).
+const HELP_MIN_WIDTH: f32 = 120.0;
+/// The room a window's frame and title take besides its contents (points).
+const WINDOW_CHROME: Vec2 = Vec2::new(16.0, 40.0);
+
+/// Where the help goes and the most room its contents may take: right of the menu if that
+/// leaves [`HELP_MIN_WIDTH`], else under it; at the top right when the menu is closed.
+fn help_place(screen: Rect, menu: Option<Rect>) -> (Pos2, Vec2) {
+    let right = screen.right() - MARGIN;
+    let bottom = screen.bottom() - MARGIN;
+    let origin = match menu {
+        None => Pos2::new(
+            (right - TWO_KEYS_A_ROW_WIDTH - WINDOW_CHROME.x).max(MARGIN),
+            MARGIN,
+        ),
+        Some(m) if right - (m.right() + MARGIN) >= HELP_MIN_WIDTH + WINDOW_CHROME.x => {
+            Pos2::new(m.right() + MARGIN, MARGIN)
+        }
+        Some(m) => Pos2::new(MARGIN, m.bottom() + MARGIN),
+    };
+    let room = Vec2::new(right - origin.x, bottom - origin.y) - WINDOW_CHROME;
+    (origin, room.max(Vec2::splat(1.0)))
 }
 
 fn refresh_name(r: RefreshPolicy) -> String {

@@ -396,6 +396,7 @@ impl App<'_> {
             frame_ms: self.figures.frame_ms.last().copied(),
             cube_ms: self.figures.cube_ms,
             faces: self.figures.faces,
+            history: &self.figures.history,
             driver: &self.device.info.name,
         };
         let mut menu = viewer
