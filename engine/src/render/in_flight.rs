@@ -137,6 +137,13 @@ impl Renderer {
         Ok(self.frames.done.drain(..).collect())
     }
 
+    /// Whether a frame can be submitted now without waiting: the slot it would use has no
+    /// frame still running (a loop that must not wait for the GPU asks this first).
+    pub fn ready_for_frame(&self) -> Result<bool, GpuError> {
+        let slot = &self.frames.slots[self.frames.current];
+        Ok(slot.pending.is_none() || slot.submitter.is_finished()?)
+    }
+
     /// Makes the current slot free to record: its previous frame finished (waited for).
     pub(super) fn acquire_slot(&mut self) -> Result<(), GpuError> {
         let current = self.frames.current;

@@ -91,6 +91,14 @@ impl FrameRing {
         Ok(slot)
     }
 
+    /// Whether [`Self::begin`] would start at once: the current slot's last frame finished
+    /// (a loop that must not wait for the GPU asks this first).
+    pub fn ready(&self) -> Result<bool, GpuError> {
+        let slot = &self.slots[self.current];
+        // SAFETY: the fence is live.
+        unsafe { self.device.raw.get_fence_status(slot.fence) }.vk("vkGetFenceStatus")
+    }
+
     /// The slot [`Self::begin`] started.
     pub fn slot(&self) -> &FrameSlot {
         &self.slots[self.current]

@@ -158,20 +158,26 @@ impl QueryPool {
         unsafe { self.device.raw.cmd_end_query(cmd, self.raw, index) };
     }
 
-    /// Results of queries `first..first + n`, each a `T` of 64-bit values. WAIT: block until they
-    /// are available (they are, after the fence; WAIT makes that explicit).
+    /// Results of queries `first..first + n`, each a `T` of 64-bit values, read after the
+    /// fence of their frame. Asked without WAIT first: they are available then, and lavapipe
+    /// answers a WAIT by waiting for its whole queue, later frames in flight included (seen
+    /// blocking the viewer for a whole slow frame). WAIT only if the driver says not yet.
     fn results<T: Copy + Default>(&self, first: u32, n: u32) -> Result<Vec<T>, GpuError> {
         let mut data = vec![T::default(); n as usize];
-        // SAFETY: data holds n results of size_of::<T>() bytes, the stride passed by ash.
-        unsafe {
-            self.device.raw.get_query_pool_results(
-                self.raw,
-                first,
-                &mut data,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-            )
+        let mut read = Err(vk::Result::NOT_READY);
+        for flags in [
+            vk::QueryResultFlags::TYPE_64,
+            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+        ] {
+            // SAFETY: data holds n results of size_of::<T>() bytes, the stride passed by ash.
+            read = unsafe {
+                (self.device.raw).get_query_pool_results(self.raw, first, &mut data, flags)
+            };
+            if read != Err(vk::Result::NOT_READY) {
+                break;
+            }
         }
-        .vk("vkGetQueryPoolResults")?;
+        read.vk("vkGetQueryPoolResults")?;
         Ok(data)
     }
 

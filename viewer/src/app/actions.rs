@@ -124,7 +124,7 @@ impl App<'_> {
             },
             Action::Menu => viewer.menu.open = !viewer.menu.open,
             Action::Help => viewer.menu.help = !viewer.menu.help,
-            Action::Quit => event_loop.exit(),
+            Action::Quit => self.quit(event_loop),
         }
     }
 

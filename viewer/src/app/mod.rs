@@ -188,7 +188,7 @@ impl ApplicationHandler for App<'_> {
             }
         }
         match event {
-            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::CloseRequested => self.quit(event_loop),
             WindowEvent::Destroyed => {
                 // Destroyed from outside (`xdotool windowclose`, a crashed window manager):
                 // nothing may ask the window anything any more (winit's X11 backend panics on
@@ -462,13 +462,38 @@ impl App<'_> {
             Some(false) => specchio::say!("window shown after frame {frame}: drawing"),
             None => {}
         }
-        self.demand.next(scripted, moving, now)
+        let next = self.demand.next(scripted, moving, now);
+        // The loop never waits for the GPU: while the frame slots the next frame would use
+        // still run, it looks again shortly and handles events meanwhile.
+        if next == NextFrame::Now && !gpu_ready(viewer) {
+            return NextFrame::At(now + GPU_POLL);
+        }
+        next
+    }
+
+    /// Quits: the window goes at once (the GPU may still be finishing a slow frame, which the
+    /// teardown waits for), then the loop ends.
+    fn quit(&mut self, event_loop: &ActiveEventLoop) {
+        if let Some(v) = &self.viewer {
+            v.window.set_visible(false);
+        }
+        event_loop.exit();
     }
 
     fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
         self.error.get_or_insert(e);
         event_loop.exit();
     }
+}
+
+/// How often a loop that waits for a frame slot looks again.
+const GPU_POLL: Duration = Duration::from_millis(2);
+
+/// Whether the renderer and the presenter can each start a frame without waiting for the GPU
+/// (an error here is reported by the frame itself).
+fn gpu_ready(viewer: &Viewer) -> bool {
+    viewer.renderer.ready_for_frame().unwrap_or(true)
+        && viewer.presenter.ring.ready().unwrap_or(true)
 }
 
 /// What the viewer changes in a scene it loads: the thesis's single viewport for either camera
