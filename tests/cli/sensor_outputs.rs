@@ -114,3 +114,58 @@ fn sensor_outputs_refuse_the_ray_query_lookup() {
     );
     assert!(!out.exists());
 }
+
+/// Beside the id layer, `sensor.id.json` says what each id is: the six walls (0..6, named,
+/// with their materials) and each object (6 + its index) with its name, material and shape, as
+/// the scene file gives them; both commands write the same map, camera.json names it, and
+/// every id in the layer is in it.
+#[test]
+fn the_id_map_names_every_id_of_the_layer() {
+    let scene_path = root().join("scenes/hard/pole-and-box.toml");
+    let scene_path = scene_path.to_str().unwrap();
+    let (gpu_dir, cpu_dir) = (temp_dir("id-map-gpu"), temp_dir("id-map-cpu"));
+    let (g, c) = (gpu_dir.to_str().unwrap(), cpu_dir.to_str().unwrap());
+    run_ok(&[
+        "render",
+        scene_path,
+        "--out",
+        g,
+        "--sensor-outputs",
+        "--cube-size",
+        "64",
+    ]);
+    run_ok(&["reference", scene_path, "--out", c, "--sensor-outputs"]);
+    let read = |dir: &std::path::Path, file: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join(file)).unwrap()).unwrap()
+    };
+    let map = read(&cpu_dir, "sensor.id.json");
+    assert_eq!(map, read(&gpu_dir, "sensor.id.json"));
+    assert_eq!(map["no_id"], NO_ID);
+    let drawables = map["drawables"].as_array().unwrap();
+    let entry = |id: usize| {
+        let d = &drawables[id];
+        assert_eq!(d["id"], id);
+        [&d["kind"], &d["name"], &d["material"], &d["shape"]]
+            .map(|v| v.as_str().unwrap().to_owned())
+    };
+    assert_eq!(drawables.len(), 8);
+    assert_eq!(entry(0), ["wall", "+X wall", "grid", "wall"]);
+    assert_eq!(entry(5), ["wall", "-Z wall", "picture", "wall"]);
+    assert_eq!(entry(6), ["object", "pole", "pole", "cylinder"]);
+    assert_eq!(entry(7), ["object", "crate", "crate", "box"]);
+    for dir in [&gpu_dir, &cpu_dir] {
+        assert_eq!(
+            read(dir, "camera.json")["files"]["id_map"],
+            "sensor.id.json"
+        );
+        let ids = read_channels(&dir.join("sensor.id.exr")).unwrap();
+        let ids = read_u32_channel(&ids, "id").expect("ids as u32");
+        assert!(
+            ids.contains(&6) && ids.contains(&7),
+            "both objects are seen"
+        );
+        assert!(ids
+            .iter()
+            .all(|&id| id == NO_ID || (id as usize) < drawables.len()));
+    }
+}

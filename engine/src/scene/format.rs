@@ -127,6 +127,27 @@ pub enum Shape {
     Mesh,
 }
 
+impl Shape {
+    /// The name the scene file uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Shape::Box => "box",
+            Shape::Sphere => "sphere",
+            Shape::Cylinder => "cylinder",
+            Shape::Mesh => "mesh",
+        }
+    }
+
+    /// What an object of this shape is drawn as, for reports and id maps: the shape's name,
+    /// and for a mesh the file as the scene names it (`mesh chair.obj`).
+    pub fn describe(self, file: Option<&str>) -> String {
+        match (self, file) {
+            (Shape::Mesh, Some(file)) => format!("mesh {file}"),
+            (shape, _) => shape.name().to_owned(),
+        }
+    }
+}
+
 /// `scale = 2` or `scale = [1, 2, 1]` (read by hand in `fixed.rs`, as `WallsSpec`).
 #[derive(Debug, Clone, Copy)]
 pub enum ScaleSpec {

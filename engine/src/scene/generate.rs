@@ -57,6 +57,8 @@ impl SplitMix64 {
 pub(super) struct ShapeChoice {
     /// Index into [`super::Scene::meshes`].
     pub mesh: usize,
+    /// What it is drawn as ([`super::Object::shape`]).
+    pub name: String,
     /// Object scale per metre of drawn size (1 for the unit built-in shapes; 1 / largest
     /// bounding-box side for a mesh file).
     pub scale_per_size: f32,
@@ -223,6 +225,7 @@ pub(super) fn expand(p: &Params, env: &Surroundings) -> Result<Vec<Object>, Plac
             name: format!("{}[{k}]", p.name),
             mesh: shape.mesh,
             material,
+            shape: shape.name.clone(),
             position,
             rotation,
             scale: Vec3::splat(size * shape.scale_per_size),
@@ -275,6 +278,7 @@ mod tests {
             seed: 3,
             shapes: vec![ShapeChoice {
                 mesh: 0,
+                name: "box".into(),
                 scale_per_size: 1.0,
                 reach_per_size: 1.0,
             }],

@@ -198,6 +198,9 @@ pub struct Object {
     pub mesh: usize,
     /// Index into [`Scene::materials`].
     pub material: usize,
+    /// What it is drawn as: `box`, `sphere`, `cylinder`, or `mesh FILE` (the file as the
+    /// scene names it), for reports and the sensor's id map.
+    pub shape: String,
     /// Position of the object's origin at time 0 (world, metres).
     pub position: Vec3,
     /// Orientation (object to world).

@@ -23,6 +23,8 @@ pub const NO_ID: u32 = u32::MAX;
 pub const RAYS_FILE: &str = "sensor.rays.exr";
 pub const RANGE_FILE: &str = "sensor.range.exr";
 pub const ID_FILE: &str = "sensor.id.exr";
+/// What each id of [`ID_FILE`] is: [`IdMap`] as JSON.
+pub const ID_MAP_FILE: &str = "sensor.id.json";
 pub const CAMERA_FILE: &str = "camera.json";
 /// Channels of [`RAYS_FILE`] (world space, metres; `mask` 1 where the pixel sees the mirror).
 pub const RAY_CHANNELS: [&str; 7] = [
@@ -54,6 +56,8 @@ pub struct SensorOutputs {
     /// +X, -X, +Y, -Y, +Z, -Z, objects 6 + i), [`NO_ID`] for none.
     pub ids: Vec<u32>,
     pub id_model: &'static str,
+    /// What each id names.
+    pub id_map: IdMap,
     /// The sensor's colour image the panoramas unwrap.
     pub image: RgbaImage,
     /// The cube map's faces (mip 0), for the panoramas straight from the cube; None for the
@@ -97,6 +101,7 @@ impl SensorOutputs {
             range_model: "exact: the distance to the first scene surface the reflected ray meets",
             ids,
             id_model: "exact: the drawable that surface belongs to",
+            id_map: IdMap::of(scene),
             image: images.color.clone(),
             cube: None,
         }
@@ -158,6 +163,7 @@ impl SensorOutputs {
             id_model: "id cube: the drawable the cube fill drew at the texel (nearest, never \
                        filtered) where the reflected ray meets the depth cube's surface; the \
                        wall the ray leaves the room box through where the search finds no hit",
+            id_map: IdMap::of(scene),
             image,
             cube,
         }
@@ -205,6 +211,7 @@ impl SensorOutputs {
         write_channels(out, &dir.join(RANGE_FILE), (w, h), range)?;
         let ids = vec![("id", Samples::U32(self.ids.clone()))];
         write_channels(out, &dir.join(ID_FILE), (w, h), ids)?;
+        out.write_json(&dir.join(ID_MAP_FILE), &self.id_map)?;
         let mut panoramas = Vec::new();
         for (name, layout, image) in self.panoramas() {
             out.write_exr(&dir.join(format!("{name}.exr")), &image)?;
@@ -256,6 +263,7 @@ impl SensorOutputs {
                 range_model: self.range_model,
                 ids: ID_FILE,
                 id_model: self.id_model,
+                id_map: ID_MAP_FILE,
                 no_id: NO_ID,
                 panoramas,
             },
@@ -319,8 +327,69 @@ pub struct FilesRecord {
     pub range_model: &'static str,
     pub ids: &'static str,
     pub id_model: &'static str,
+    pub id_map: &'static str,
     pub no_id: u32,
     pub panoramas: Vec<PanoramaRecord>,
+}
+
+/// What each id of the sensor's id layer names: the room's six walls (ids 0..6, in the cube
+/// faces' order) and the scene's objects (6 + their index), with their names as the scene file
+/// gives them, their materials and shapes. Ids are the scene's, the same in every frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct IdMap {
+    /// The id of a pixel that sees no drawable (or not the mirror).
+    pub no_id: u32,
+    pub drawables: Vec<Drawable>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Drawable {
+    pub id: u32,
+    /// "wall" or "object".
+    pub kind: &'static str,
+    pub name: String,
+    pub material: String,
+    /// `wall`, `box`, `sphere`, `cylinder` or `mesh FILE`.
+    pub shape: String,
+}
+
+/// The walls' names, in the cube faces' order.
+const WALL_NAMES: [&str; 6] = [
+    "+X wall",
+    "-X wall",
+    "ceiling (+Y)",
+    "floor (-Y)",
+    "+Z wall",
+    "-Z wall",
+];
+
+impl IdMap {
+    pub fn of(scene: &Scene) -> Self {
+        let material = |m: usize| scene.materials[m].name.clone();
+        let walls = (WALL_NAMES.iter().zip(scene.room.wall_materials))
+            .map(|(name, m)| (name.to_string(), "wall", material(m), "wall".to_owned()));
+        let objects = (scene.objects.iter()).map(|o| {
+            (
+                o.name.clone(),
+                "object",
+                material(o.material),
+                o.shape.clone(),
+            )
+        });
+        let drawables = (walls.chain(objects).enumerate())
+            .map(|(id, (name, kind, material, shape))| Drawable {
+                id: id as u32,
+                kind,
+                name,
+                material,
+                shape,
+            })
+            .collect();
+        Self {
+            no_id: NO_ID,
+            drawables,
+        }
+    }
 }
 
 #[derive(Debug, Serialize)]

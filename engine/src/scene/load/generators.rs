@@ -161,6 +161,7 @@ impl Ctx<'_> {
                 // Unit-size shapes (size 1 m) scaled per object.
                 Some((key, build)) => ShapeChoice {
                     mesh: self.cached_mesh(&f("shapes"), None, key, build, store)?,
+                    name: shape.name().to_owned(),
                     scale_per_size: 1.0,
                     reach_per_size: 1.0,
                 },
@@ -194,6 +195,7 @@ impl Ctx<'_> {
             .fold(0.0f32, f32::max);
         Ok(ShapeChoice {
             mesh: index,
+            name: Shape::Mesh.describe(Some(file)),
             scale_per_size: 1.0 / side,
             reach_per_size: (farthest / side).max(1.0),
         })

@@ -132,6 +132,7 @@ impl Ctx<'_> {
             name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
             mesh,
             material,
+            shape: o.shape.describe(o.file.as_deref()),
             position,
             rotation,
             scale,
