@@ -37,6 +37,7 @@ Mitsuba images from specchio's (the same pixels, so the work is the same).
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -179,6 +180,8 @@ def main():
     p.add_argument("--threads", type=int, default=2)
     p.add_argument("--runs", type=int, default=5)
     a = p.parse_args()
+    if a.runs < 1 or a.size < 1 or a.spp < 1 or a.threads < 1:
+        p.error("--runs, --size, --spp and --threads must be at least 1")
     dr.set_thread_count(a.threads)
     os.environ.setdefault("RAYON_NUM_THREADS", str(a.threads))
     mi.register_integrator("specchio_minimal", lambda props: Minimal(props))
@@ -207,8 +210,9 @@ def main():
         if name in theirs:
             # Per round: Mitsuba's time over specchio's in the same round (> 1: specchio faster).
             ratios = sorted(t / o for t, o in zip(secs, times["specchio reference"]))
+            median = statistics.median(ratios)
             diff = float(np.abs(images[name][:, :, :3] - ours).mean())
-            line += (f"  specchio/mitsuba speed median {ratios[len(ratios) // 2]:.2f}x "
+            line += (f"  specchio/mitsuba speed median {median:.2f}x "
                      f"(rounds {ratios[0]:.2f}-{ratios[-1]:.2f}x); mean |difference| {diff:.4f}")
         print(line)
 

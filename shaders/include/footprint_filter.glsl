@@ -27,29 +27,34 @@
 
 vec3 filter_footprint(samplerCube environment, vec3 lookup, vec3 d_dx, vec3 d_dy,
                       float max_taps) {
-    vec3 axis = normalize(lookup);
-    float scale = 1.0 / length(lookup);
-    // Each gradient's part across the lookup direction, as an angle (radians).
-    vec3 across_x = (d_dx - dot(d_dx, axis) * axis) * scale;
-    vec3 across_y = (d_dy - dot(d_dy, axis) * axis) * scale;
+    float len = length(lookup);
+    if (!(len > 0.0)) {
+        return textureGrad(environment, lookup, d_dx, d_dy).rgb; // no direction: as ever
+    }
+    vec3 axis = lookup / len;
+    // Each gradient's part across the lookup direction, as an angle (radians): the part along
+    // it only changes the vector's length, which a cube lookup ignores.
+    vec3 across_x = (d_dx - dot(d_dx, axis) * axis) / len;
+    vec3 across_y = (d_dy - dot(d_dy, axis) * axis) / len;
     bool x_longer = dot(across_x, across_x) >= dot(across_y, across_y);
-    vec3 long_side = x_longer ? d_dx : d_dy;
-    vec3 other_side = x_longer ? d_dy : d_dx;
-    float long_angle = length(x_longer ? across_x : across_y);
-    float short_angle = length(cross(across_x, across_y)) / max(long_angle, 1e-30);
-    float taps = min(ceil(long_angle / max(short_angle, 1e-30)), max_taps);
+    vec3 long_side = x_longer ? across_x : across_y;
+    vec3 other_side = x_longer ? across_y : across_x;
+    // The short side: the other gradient without its part along the long side.
+    vec3 short_side =
+        other_side - dot(other_side, long_side) / max(dot(long_side, long_side), 1e-30) * long_side;
+    float taps = clamp(ceil(length(long_side) / max(length(short_side), 1e-30)), 1.0, max_taps);
     if (!(taps > 1.0)) {
         // Isotropic (or max_taps 1, or a degenerate footprint): the sampler's own filter.
         return textureGrad(environment, lookup, d_dx, d_dy).rgb;
     }
-    // The short side as a vector: the other gradient without its part along the long side.
-    vec3 short_side = other_side - dot(other_side, long_side) / dot(long_side, long_side) * long_side;
-    vec3 step_along = long_side / taps;
+    // Back at the lookup vector's scale, which textureGrad reads its gradients against.
+    vec3 step_along = long_side * (len / taps);
+    vec3 across = short_side * len;
     vec3 sum = vec3(0.0);
     for (float k = 0.0; k < taps; k += 1.0) {
         // Sample centres at (k + 1/2) / N of the long side, centred on the pixel's lookup.
-        vec3 at = lookup + ((k + 0.5) / taps - 0.5) * long_side;
-        sum += textureGrad(environment, at, step_along, short_side).rgb;
+        vec3 at = lookup + ((k + 0.5) - 0.5 * taps) * step_along;
+        sum += textureGrad(environment, at, step_along, across).rgb;
     }
     return sum / taps;
 }

@@ -357,8 +357,8 @@ fn frames_drawn(stdout: &str) -> usize {
 }
 
 /// The viewer draws on demand: a paused scene is drawn after each change and then waits for
-/// events. Paused for 2 s, turned once with a key, idle again for 1 s: the first frame, the
-/// turn's frame, and at most a few for the window's own events (exposure, focus). Drawing
+/// events. Paused for 2 s, one key (`x`, the next lookup), idle again for 1 s: the first frame,
+/// the key's frame, and at most a few for the window's own events (exposure, focus). Drawing
 /// every turn of the loop, as it did, made a frame per display refresh (an idle paused window
 /// used 88-93 % of a core).
 #[test]
@@ -372,7 +372,7 @@ fn a_paused_window_draws_only_when_something_changes() {
     let id = viewer_window(&x);
     xdotool(&x, &["windowfocus", "--sync", &id]);
     std::thread::sleep(std::time::Duration::from_secs(2));
-    xdotool(&x, &["key", "Left"]);
+    xdotool(&x, &["key", "x"]);
     std::thread::sleep(std::time::Duration::from_secs(1));
     xdotool(&x, &["key", "q"]);
     let frames = frames_drawn(&viewer.finish());

@@ -170,6 +170,37 @@ fn on_change_skips_updates_when_nothing_moves() {
     gpu.finish();
 }
 
+/// `Renderer::cube_shows_scene_at` (what a viewer drawing on demand asks before it stops):
+/// under `every-4`, a moved mirror leaves the cube behind until the next fourth frame, and the
+/// renderer says so until then.
+#[test]
+fn the_cube_says_whether_it_shows_the_scene() {
+    let gpu = Gpu::new();
+    let mut s = scene("scenes/test/six-colour-room.toml");
+    s.refresh = specchio::scene::RefreshPolicy::EveryN(4);
+    let options = RenderOptions {
+        cube_size: Some(32),
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&gpu.device, s, &options).unwrap();
+    assert!(!r.cube_shows_scene_at(0.0), "nothing filled yet");
+    r.render_frame(0, 0.0, Readback::default()).unwrap();
+    assert!(r.cube_shows_scene_at(0.0));
+    r.scene.mirror.center += Vec3::new(0.5, 0.0, 0.0);
+    for frame in 1..4 {
+        assert!(
+            !r.cube_shows_scene_at(0.0),
+            "frame {frame}: the cube is behind"
+        );
+        r.render_frame(frame, 0.0, Readback::default()).unwrap();
+    }
+    assert!(!r.cube_shows_scene_at(0.0));
+    r.render_frame(4, 0.0, Readback::default()).unwrap();
+    assert!(r.cube_shows_scene_at(0.0), "the fourth frame updated it");
+    drop(r);
+    gpu.finish();
+}
+
 /// Per-face culling draws fewer objects into a face than the scene holds (a wall behind a
 /// face is never drawn into it), and the counters say so.
 #[test]

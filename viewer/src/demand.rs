@@ -119,17 +119,17 @@ impl Demand {
                 NextFrame::At(t)
             }
         };
+        if !scripted && self.minimised {
+            return NextFrame::At(self.asked_at.unwrap_or(now) + MINIMISED_POLL);
+        }
+        if !scripted && self.hidden {
+            return NextFrame::OnEvent;
+        }
         if let Some(t) = self.retry_at {
             return due(t);
         }
         if scripted {
             return NextFrame::Now;
-        }
-        if self.minimised {
-            return NextFrame::At(self.asked_at.unwrap_or(now) + MINIMISED_POLL);
-        }
-        if self.hidden {
-            return NextFrame::OnEvent;
         }
         if self.redraw || moving {
             return NextFrame::Now;
@@ -182,6 +182,16 @@ mod tests {
         assert!(d.watching(false, false));
         // A script draws every frame it was asked for, whatever the window does.
         assert_eq!(d.next(true, false, now), NextFrame::Now);
+    }
+
+    /// A skipped frame is not retried while the window is hidden or minimised.
+    #[test]
+    fn a_skipped_frame_waits_while_the_window_is_hidden() {
+        let now = Instant::now();
+        let mut d = Demand::first_frame();
+        d.skipped(now);
+        d.occluded(true);
+        assert_eq!(d.next(false, true, now), NextFrame::OnEvent);
     }
 
     #[test]

@@ -218,24 +218,18 @@ pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8), steps: f32) -> Re
     let r = scene.mirror.radius_m;
     let inside = (to - Vec3::splat(r)).cmpge(lo).all() && (to + Vec3::splat(r)).cmple(hi).all();
     let sensor_y = to.y - scene.sensor.offset_m;
-    // Messages speak the file's coordinates: the scene keeps positions relative to its origin.
-    let file = |p: Vec3| scene.origin + p.as_dvec3();
-    let short = |v: f64| (v * 1e6).round() / 1e6;
     if !inside {
-        let w = file(to);
         return Err(format!(
-            "the sphere would leave the room at [{}, {}, {}]",
-            short(w.x),
-            short(w.y),
-            short(w.z)
+            "the sphere would leave the room at {}",
+            file_point(scene, to)
         ));
     }
     if sensor_y <= lo.y {
-        let (sensor, floor) = (file(Vec3::Y * sensor_y).y, file(Vec3::Y * lo.y).y);
+        let height = |y: f32| short(scene.origin.y + f64::from(y));
         return Err(format!(
             "the sensor would go below the floor (y = {}, the floor is at y = {})",
-            short(sensor),
-            short(floor)
+            height(sensor_y),
+            height(lo.y)
         ));
     }
     scene.mirror.center = to;
@@ -245,20 +239,27 @@ pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8), steps: f32) -> Re
 /// Where the observer and the sphere are, in the file's coordinates (the scene keeps positions
 /// relative to its origin): `observer [x, y, z] yaw Y pitch P, sphere [x, y, z]`.
 pub fn pose(scene: &Scene) -> String {
-    let file = |p: Vec3| {
-        let w = scene.origin + p.as_dvec3();
-        let short = |v: f64| (v * 1e4).round() / 1e4;
-        format!("[{}, {}, {}]", short(w.x), short(w.y), short(w.z))
-    };
     let o = &scene.observer;
     let angle = |a: f32| (a * 100.0).round() / 100.0;
     format!(
         "observer {} yaw {} pitch {}, sphere {}",
-        file(o.position),
+        file_point(scene, o.position),
         angle(o.yaw_deg),
         angle(o.pitch_deg),
-        file(scene.mirror.center)
+        file_point(scene, scene.mirror.center)
     )
+}
+
+/// A scene position in the file's coordinates (the scene keeps positions relative to its
+/// origin), as messages give it: `[x, y, z]`, to the micrometre.
+fn file_point(scene: &Scene, p: Vec3) -> String {
+    let w = scene.origin + p.as_dvec3();
+    format!("[{}, {}, {}]", short(w.x), short(w.y), short(w.z))
+}
+
+/// A coordinate to the micrometre, without the float's noise (4.25, not 4.2500000001).
+fn short(v: f64) -> f64 {
+    (v * 1e6).round() / 1e6
 }
 
 #[cfg(test)]

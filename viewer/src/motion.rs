@@ -79,6 +79,14 @@ impl Motion {
         refusals
     }
 
+    /// Every held key released at `now` (the window lost the focus: no release will come);
+    /// the sphere's refusals met.
+    pub fn release_all(&mut self, now: Instant, scene: &mut Scene) -> Vec<String> {
+        let refusals = self.advance(now, scene);
+        self.held.clear();
+        refusals
+    }
+
     /// Whether something moves while no event comes (a key is held).
     pub fn moving(&self) -> bool {
         !self.held.is_empty()

@@ -81,12 +81,6 @@ impl Presenter {
         self.stale = true;
     }
 
-    /// Whether a screenshot can be taken: the swapchain's images can be read back (the
-    /// surface offers them as transfer sources). True before the first swapchain exists.
-    pub fn can_read_back(&self) -> bool {
-        self.swapchain.as_ref().is_none_or(|s| s.readable)
-    }
-
     /// Shows `source` in the window (scaled to fit, aspect kept, centred on black when the
     /// sizes differ; copied 1:1 when they match). With `screenshot`, the presented image is
     /// also read back (the call then waits for the frame).
@@ -109,9 +103,8 @@ impl Presenter {
         let Some(swapchain) = &self.swapchain else {
             return Ok((Shown::Skipped, None));
         };
-        if screenshot && !swapchain.readable {
-            bail!("--screenshot: this window's swapchain images cannot be read back");
-        }
+        // A swapchain whose images cannot be read back gives no screenshot (the caller says so).
+        let screenshot = screenshot && swapchain.readable;
         // Textures first: an upload waits for the queue, so it goes before this frame's
         // submission rather than inside its recording.
         if let (Some(p), Some(overlay)) = (paint.as_deref_mut(), &mut self.overlay) {

@@ -9,72 +9,116 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use super::{sys, OutputError};
+use super::{stage, sys, OutputError};
 
-/// The most numbers tried: a folder already holding this many is refused, not searched on.
+/// The highest number: a folder whose numbers up to it are all taken is refused.
 const MAX_NUMBER: u32 = 9999;
 
-/// Writes `bytes` as the first free `PREFIX-NNNN.EXT` in `folder` and returns its path.
+/// Writes `bytes` as the first free `PREFIX-NNNN.EXT` in `folder` (after the highest number
+/// already there, else the lowest free one) and returns its path. Errors name that path (or
+/// the first one tried), never the hidden one.
 pub fn write_numbered(
     folder: &Path,
     prefix: &str,
     ext: &str,
     bytes: &[u8],
 ) -> Result<PathBuf, OutputError> {
-    let hidden = folder.join(format!(".{prefix}-{}.partial", std::process::id()));
-    let io_error = |path: &Path| {
-        let path = path.to_owned();
-        move |source| OutputError::Io { path, source }
-    };
-    let written = sys::create_new(&hidden)
-        .and_then(|mut file| file.write_all(bytes).and_then(|()| file.sync_all()))
-        .map_err(io_error(&hidden));
     let first = first_candidate(folder, prefix, ext);
-    let named = written.and_then(|()| link_first_free(&hidden, folder, (prefix, ext), first));
-    // The hidden name goes whatever happened (the number, if one was taken, keeps the data).
+    let numbered = |n: u32| folder.join(format!("{prefix}-{n:04}.{ext}"));
+    let io_error = |source| OutputError::Io {
+        path: numbered(first),
+        source,
+    };
+    // A name of this call's own: 128 random bits, so that no other writer's file (another
+    // viewer, another PID namespace on a shared folder) can have it.
+    let hidden = folder.join(format!(
+        ".{prefix}-{}.partial",
+        stage::random_hex().map_err(io_error)?
+    ));
+    let mut file = sys::create_new(&hidden).map_err(io_error)?;
+    let written = file.write_all(bytes).and_then(|()| file.sync_all());
+    let placed = match written {
+        Ok(()) => place(&hidden, bytes, first, &numbered),
+        Err(source) => Err(io_error(source)),
+    };
+    // The hidden name is this call's own (created above): it goes, whatever happened.
     let _ = std::fs::remove_file(&hidden);
-    named
+    placed
 }
 
-/// Links `from` as the first number from `first` on that is not taken; the path it got.
-fn link_first_free(
+/// Gives the written file `from` the first number not taken, from `first` up and then from 1:
+/// a link that fails where the name exists. Where the file system has no links (vfat, some
+/// network file systems), the number is created exclusively and the bytes written into it.
+fn place(
     from: &Path,
-    folder: &Path,
-    (prefix, ext): (&str, &str),
+    bytes: &[u8],
     first: u32,
+    numbered: &dyn Fn(u32) -> PathBuf,
 ) -> Result<PathBuf, OutputError> {
-    for n in first..=MAX_NUMBER {
-        let to = folder.join(format!("{prefix}-{n:04}.{ext}"));
-        match std::fs::hard_link(from, &to) {
+    let mut links = true;
+    for n in (first..=MAX_NUMBER).chain(1..first) {
+        let to = numbered(n);
+        let made = if links {
+            match std::fs::hard_link(from, &to) {
+                Err(e) if e.kind() != io::ErrorKind::AlreadyExists && !exists(&to) => {
+                    links = false;
+                    write_new(&to, bytes)
+                }
+                made => made,
+            }
+        } else {
+            write_new(&to, bytes)
+        };
+        match made {
             Ok(()) => return Ok(to),
             Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
             Err(source) => return Err(OutputError::Io { path: to, source }),
         }
     }
     Err(OutputError::Io {
-        path: folder.join(format!("{prefix}-{MAX_NUMBER:04}.{ext}")),
-        source: io::Error::other(format!(
-            "every number up to {MAX_NUMBER} is taken in this folder"
-        )),
+        path: numbered(first),
+        source: io::Error::other(format!("every number from 1 to {MAX_NUMBER} is taken")),
     })
 }
 
-/// One past the highest number already in the folder (1 in an empty or unreadable one), so
-/// that a new file sorts after the earlier ones even when some were deleted.
+/// Whether anything (a link included) is at `path`.
+fn exists(path: &Path) -> bool {
+    path.symlink_metadata().is_ok()
+}
+
+/// The bytes as a new file at `to` (never an existing one); a failed write removes the file
+/// this call made.
+fn write_new(to: &Path, bytes: &[u8]) -> io::Result<()> {
+    let mut file = sys::create_new(to)?;
+    let written = file.write_all(bytes).and_then(|()| file.sync_all());
+    if written.is_err() {
+        let _ = std::fs::remove_file(to);
+    }
+    written
+}
+
+/// One past the highest number in 1..=MAX_NUMBER already in the folder (1 in an empty or
+/// unreadable one), so that a new file sorts after the earlier ones even when some were
+/// deleted; names with larger numbers (a date, say) are not numbers of this series.
 fn first_candidate(folder: &Path, prefix: &str, ext: &str) -> u32 {
     let Ok(entries) = std::fs::read_dir(folder) else {
         return 1;
     };
     let head = format!("{prefix}-");
     let tail = format!(".{ext}");
-    entries
+    let highest = entries
         .filter_map(|e| e.ok()?.file_name().into_string().ok())
         .filter_map(|name| {
             let number = name.strip_prefix(&head)?.strip_suffix(&tail)?;
-            number.parse::<u32>().ok()
+            number.parse::<u32>().ok().filter(|&n| n <= MAX_NUMBER)
         })
         .max()
-        .map_or(1, |highest| highest.saturating_add(1).min(MAX_NUMBER))
+        .unwrap_or(0);
+    if highest < MAX_NUMBER {
+        highest + 1
+    } else {
+        1
+    }
 }
 
 #[cfg(test)]
@@ -118,19 +162,44 @@ mod tests {
         std::os::unix::fs::symlink(dir.join("nowhere"), dir.join("shot-0002.png")).unwrap();
         let source = dir.join("source");
         std::fs::write(&source, b"new").unwrap();
-        let got = link_first_free(&source, &dir, ("shot", "png"), 1).unwrap();
+        let numbered = |n: u32| dir.join(format!("shot-{n:04}.png"));
+        let got = place(&source, b"new", 1, &numbered).unwrap();
         assert_eq!(got, dir.join("shot-0003.png"));
         assert_eq!(std::fs::read(dir.join("shot-0001.png")).unwrap(), b"old");
         assert!(!dir.join("nowhere").exists(), "written through the link");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// The error names the file the user would have got, never the hidden one.
     #[test]
     fn a_missing_folder_is_an_error_naming_it() {
         let dir = folder("missing").join("not-there");
         let e = write_numbered(&dir, "shot", "png", b"x")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("not-there"), "{e}");
+        assert!(e.contains("not-there/shot-0001.png"), "{e}");
+        assert!(!e.contains(".partial"), "{e}");
+    }
+
+    /// A name with a larger number (a date) is not part of the series, and a file at the last
+    /// number sends the next one back to the lowest free number instead of refusing.
+    #[test]
+    fn large_numbers_block_nothing() {
+        let dir = folder("large");
+        std::fs::write(dir.join("shot-20240101.png"), b"dated").unwrap();
+        assert_eq!(
+            write_numbered(&dir, "shot", "png", b"a").unwrap(),
+            dir.join("shot-0001.png")
+        );
+        std::fs::write(dir.join(format!("shot-{MAX_NUMBER}.png")), b"last").unwrap();
+        assert_eq!(
+            write_numbered(&dir, "shot", "png", b"b").unwrap(),
+            dir.join("shot-0002.png")
+        );
+        assert_eq!(
+            std::fs::read(dir.join("shot-20240101.png")).unwrap(),
+            b"dated"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -204,7 +204,7 @@ fn is_hex(s: &str) -> bool {
 }
 
 /// 128 bits from the operating system's random source, as hex.
-fn random_hex() -> io::Result<String> {
+pub(super) fn random_hex() -> io::Result<String> {
     let mut bytes = [0u8; HEX_DIGITS / 2];
     getrandom::fill(&mut bytes).map_err(|e| io::Error::other(e.to_string()))?;
     Ok(bytes.iter().map(|b| format!("{b:02x}")).collect())

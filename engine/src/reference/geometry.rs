@@ -389,6 +389,15 @@ mod tests {
     /// it; the furnished room (17 objects) shows it is off where the BVH's root does the same.
     #[test]
     fn testing_the_object_boxes_first_changes_no_hit() {
+        let on_object = |hit: Option<Hit>| {
+            matches!(
+                hit,
+                Some(Hit {
+                    surface: Surface::Triangle { .. },
+                    ..
+                })
+            )
+        };
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
         for (rel, culled) in [
             ("scenes/hard/pole-and-box.toml", true),
@@ -423,13 +432,7 @@ mod tests {
                     let culled = with_boxes.closest_hit(origin, d, 0.0, f32::INFINITY);
                     assert_eq!(culled, without.closest_hit(origin, d, 0.0, f32::INFINITY));
                     rays += 1;
-                    hits += usize::from(matches!(
-                        culled,
-                        Some(Hit {
-                            surface: Surface::Triangle { .. },
-                            ..
-                        })
-                    ));
+                    hits += usize::from(on_object(culled));
                 }
             }
             for _ in 0..20_000 {
@@ -441,13 +444,7 @@ mod tests {
                     without.closest_hit(on_mirror, d, 1e-4, f32::INFINITY)
                 );
                 rays += 1;
-                hits += usize::from(matches!(
-                    culled,
-                    Some(Hit {
-                        surface: Surface::Triangle { .. },
-                        ..
-                    })
-                ));
+                hits += usize::from(on_object(culled));
             }
             eprintln!(
                 "{rel}: {rays} rays, {hits} object hits, the same with and without the boxes"

@@ -10,7 +10,8 @@
 
 use ash::vk;
 
-use super::{FrameReport, Readback, Renderer};
+use super::{lookups, FrameReport, Readback, Renderer};
+use crate::scene::state::SceneState;
 use crate::vk::GpuError;
 
 /// Which of the renderer's views a window shows.
@@ -58,6 +59,14 @@ impl Renderer {
         let finished = self.finished_frames()?;
         let reports = finished.into_iter().map(|(report, _)| report).collect();
         Ok((reports, self.display_image(view)))
+    }
+
+    /// Whether the cube map, once the frames submitted so far have run, shows the scene as it
+    /// is at `t_s` (a viewer that draws on demand goes on drawing until it does: an `every-n`
+    /// policy updates the cube only every n frames). True for a lookup that reads no cube.
+    pub fn cube_shows_scene_at(&self, t_s: f64) -> bool {
+        !lookups::plugin(self.mirror.lookup()).uses_cube()
+            || self.refresh.shows_state(&SceneState::at(&self.scene, t_s))
     }
 
     /// The image `view` is drawn into (valid as described at [`DisplayImage`] only after a

@@ -24,6 +24,14 @@ impl Refresh {
         }
     }
 
+    /// Whether the cube shows what the scene holds in `state` (a policy that updates every n
+    /// frames may show an older state until its next update).
+    pub fn shows_state(&self, state: &SceneState) -> bool {
+        self.shown
+            .as_ref()
+            .is_some_and(|shown| !shown.cube_differs(state))
+    }
+
     /// Whether the cube has never been filled (its old contents are then undefined).
     pub fn first_fill(&self) -> bool {
         self.shown.is_none()

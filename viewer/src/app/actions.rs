@@ -8,17 +8,94 @@ use anyhow::Result;
 use specchio::render::methods::Method;
 use specchio::render::{lookups, Renderer};
 use specchio::scene::{Lookup, RefreshPolicy, Scene};
+use winit::dpi::PhysicalPosition;
 use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Fullscreen;
 
-use super::{natural_size, viewer_overrides, App, SCREENSHOT_PREFIX};
+use super::{key_name, natural_size, viewer_overrides, App, SCREENSHOT_PREFIX};
 use crate::clock::Clock;
 use crate::input::{self, Action};
+use crate::motion;
 use crate::present::Screenshot;
 use crate::SCRIPTED_FPS;
 
 impl App<'_> {
+    /// A key went down or up. A move key moves at a speed while held, until released (a
+    /// synthetic release, on losing the focus, stops it too); any other acts once per press,
+    /// the single step once per repeat. A synthetic press is winit's report of a key already
+    /// held when the window got the focus, not a press: it acts on nothing.
+    pub(super) fn key(&mut self, event_loop: &ActiveEventLoop, event: &KeyEvent, synthetic: bool) {
+        let Some(action) = key_name(&event.logical_key).and_then(|k| input::action(&k)) else {
+            return;
+        };
+        let pressed = event.state == ElementState::Pressed;
+        if motion::is_move(action) {
+            if pressed && !synthetic {
+                self.motion.press(action, Instant::now());
+                self.demand.changed();
+            } else if !pressed {
+                self.release(action);
+            }
+        } else if pressed && !synthetic && (!event.repeat || action.repeats()) {
+            self.act(event_loop, action);
+        }
+    }
+
+    /// The pointer moved: while dragging, the observer turns with it.
+    pub(super) fn pointer(&mut self, to: PhysicalPosition<f64>) {
+        if let Some(v) = &mut self.viewer {
+            if self.motion.pointer(to, &mut v.renderer.scene) {
+                self.demand.changed();
+            }
+        }
+    }
+
+    /// The wheel walks the observer.
+    pub(super) fn wheel(&mut self, delta: MouseScrollDelta) {
+        let notches = match delta {
+            MouseScrollDelta::LineDelta(_, y) => y,
+            // Touchpads: one notch per 40 pixels, about a line of text.
+            MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+        };
+        if let Some(v) = &mut self.viewer {
+            self.motion.wheel(notches, &mut v.renderer.scene);
+            self.demand.changed();
+            self.say_pose_when_settled();
+        }
+    }
+
+    /// Ends what a lost focus or a released button ends, before egui may keep the event: the
+    /// drag, and (on losing the focus) every held key, moved up to now.
+    pub(super) fn end_moves_on(&mut self, event: &WindowEvent) {
+        let released = matches!(
+            event,
+            WindowEvent::MouseInput {
+                state: ElementState::Released,
+                button: MouseButton::Left,
+                ..
+            }
+        );
+        let unfocused = matches!(event, WindowEvent::Focused(false));
+        if released || unfocused {
+            self.motion.button(false);
+        }
+        if unfocused {
+            if let Some(v) = &mut self.viewer {
+                let refusals = self
+                    .motion
+                    .release_all(Instant::now(), &mut v.renderer.scene);
+                for why in refusals {
+                    specchio::say!("sphere not moved: {why}");
+                }
+            }
+        }
+        if released || unfocused {
+            self.say_pose_when_settled();
+        }
+    }
+
     /// A held move key went up: it moves for the rest of the time it was held.
     pub(super) fn release(&mut self, action: Action) {
         let Some(v) = &mut self.viewer else { return };
@@ -118,10 +195,7 @@ impl App<'_> {
                     ..self.clock
                 };
             }
-            Action::Screenshot => match viewer.presenter.can_read_back() {
-                true => self.shot_asked = true,
-                false => specchio::say!("screenshot: this window's images cannot be read back"),
-            },
+            Action::Screenshot => self.shot_asked = true,
             Action::Menu => viewer.menu.open = !viewer.menu.open,
             Action::Help => viewer.menu.help = !viewer.menu.help,
             Action::Quit => self.quit(event_loop),
@@ -148,10 +222,7 @@ impl App<'_> {
     }
 
     /// Switches to `method` if the device can run it (`false`, with the reason printed, if
-    /// not). The old renderer is retired through the deletion queue when a frame in flight may
-    /// still copy from its view image, and freed at once when no frame has shown it (a script
-    /// of many switches before a frame, `--keys m,m,m,...`, so holds at most three renderers,
-    /// not one per switch).
+    /// not), through [`Self::replace_renderer`].
     pub(super) fn set_method(&mut self, method: Method) -> Result<bool> {
         let viewer = self.viewer.as_mut().expect("keys act on a viewer");
         if let Err(why) = specchio::process::probe::usable(method, &self.device.info) {
@@ -164,10 +235,11 @@ impl App<'_> {
         Ok(true)
     }
 
-    /// A new renderer for `scene`. The old one is retired through the deletion queue when a
-    /// frame in flight may still copy from its view image, and freed at once when no frame
-    /// has shown it (a script of many switches before a frame, `--keys m,m,m,...`, so holds
-    /// at most three renderers, not one per switch).
+    /// A new renderer for `scene`; the old one stays when the new one cannot be made. The old
+    /// one is retired through the deletion queue when a frame in flight may still copy from
+    /// its view image, and freed at once when no frame has shown it (a script of many switches
+    /// before a frame, `--keys m,m,m,...`, so holds at most three renderers, not one per
+    /// switch).
     fn replace_renderer(&mut self, scene: Scene, method: Method) -> Result<()> {
         let renderer = self.new_renderer(scene, method)?;
         let viewer = self.viewer.as_mut().expect("keys act on a viewer");
@@ -193,6 +265,8 @@ impl App<'_> {
             }
         };
         viewer_overrides(&mut scene, &self.settings);
+        // What `0` resets to from now on: the file as it is now.
+        let initial = scene.clone();
         let viewer = self.viewer.as_ref().expect("keys act on a viewer");
         let old = &viewer.renderer.scene;
         // Positions are relative to each scene's own origin: carried over through the file's
@@ -204,9 +278,14 @@ impl App<'_> {
         scene.mirror.lookup = old.mirror.lookup;
         scene.refresh = old.refresh;
         let method = viewer.renderer.method;
-        self.initial = scene.clone();
-        self.replace_renderer(scene, method)?;
-        let pose = input::pose(&self.initial);
+        let pose = input::pose(&scene);
+        // A scene the device cannot render (a cube too large, memory) is reported like a file
+        // that does not load: the scene shown stays.
+        if let Err(e) = self.replace_renderer(scene, method) {
+            specchio::say!("scene not reloaded: {}: {e:#}", path.display());
+            return Ok(());
+        }
+        self.initial = initial;
         specchio::say!("scene reloaded: {} ({pose})", path.display());
         Ok(())
     }

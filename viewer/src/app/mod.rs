@@ -16,7 +16,7 @@ use specchio::vk::surface::Surface;
 use specchio::vk::swapchain::PresentPreference;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
-use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event::{ElementState, MouseButton, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
@@ -29,7 +29,7 @@ use super::demand::{Demand, NextFrame};
 use super::failures::{run_catching_window_panics, surface_lost};
 use super::input::{self, Action};
 use super::menu::{Menu, Status};
-use super::motion::{self, Motion};
+use super::motion::Motion;
 use super::present::{Presenter, Screenshot, Shown};
 
 /// What `view::run` decided before the loop.
@@ -168,7 +168,7 @@ impl ApplicationHandler for App<'_> {
                 self.viewer = Some(viewer);
                 self.demand = Demand::first_frame();
             }
-            Err(e) => self.fail(event_loop, e),
+            Err(e) => return self.fail(event_loop, e),
         }
         let keys = std::mem::take(&mut self.settings.keys);
         for action in keys {
@@ -177,6 +177,9 @@ impl ApplicationHandler for App<'_> {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        // The end of a drag or of the focus is the viewer's whatever egui does with it: a
+        // button released over the menu must not leave the view turning with the pointer.
+        self.end_moves_on(&event);
         // egui sees every event first; one it used (a click on the menu) goes no further.
         if let Some(v) = &mut self.viewer {
             let response = v.menu.on_event(&v.window, &event);
@@ -215,54 +218,14 @@ impl ApplicationHandler for App<'_> {
                 event,
                 is_synthetic,
                 ..
-            } => {
-                let Some(action) = key_name(&event.logical_key).and_then(|k| input::action(&k))
-                else {
-                    return;
-                };
-                let pressed = event.state == ElementState::Pressed;
-                if motion::is_move(action) {
-                    // Held, a move key moves at a speed until it is released (a synthetic
-                    // release, on losing the focus, stops it too).
-                    if pressed && !is_synthetic {
-                        self.motion.press(action, Instant::now());
-                        self.demand.changed();
-                    } else if !pressed {
-                        self.release(action);
-                    }
-                } else if pressed && !is_synthetic && (!event.repeat || action.repeats()) {
-                    // A synthetic press is winit's report of a key already held when the
-                    // window got the focus, not a press: it acts on nothing.
-                    self.act(event_loop, action);
-                }
-            }
+            } => self.key(event_loop, &event, is_synthetic),
             WindowEvent::MouseInput {
-                state,
+                state: ElementState::Pressed,
                 button: MouseButton::Left,
                 ..
-            } => {
-                self.motion.button(state == ElementState::Pressed);
-                self.say_pose_when_settled();
-            }
-            WindowEvent::CursorMoved { position, .. } => {
-                if let Some(v) = &mut self.viewer {
-                    if self.motion.pointer(position, &mut v.renderer.scene) {
-                        self.demand.changed();
-                    }
-                }
-            }
-            WindowEvent::MouseWheel { delta, .. } => {
-                let notches = match delta {
-                    MouseScrollDelta::LineDelta(_, y) => y,
-                    // Touchpads: one notch per 40 pixels, about a line of text.
-                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
-                };
-                if let Some(v) = &mut self.viewer {
-                    self.motion.wheel(notches, &mut v.renderer.scene);
-                    self.demand.changed();
-                    self.say_pose_when_settled();
-                }
-            }
+            } => self.motion.button(true),
+            WindowEvent::CursorMoved { position, .. } => self.pointer(position),
+            WindowEvent::MouseWheel { delta, .. } => self.wheel(delta),
             _ => {}
         }
     }
@@ -434,10 +397,16 @@ impl App<'_> {
         {
             viewer.window.set_title(&title);
         }
-        if let (true, Some(shot)) = (std::mem::take(&mut self.shot_asked), &screenshot) {
-            actions::save_screenshot(shot);
+        if std::mem::take(&mut self.shot_asked) {
+            match &screenshot {
+                Some(shot) => actions::save_screenshot(shot),
+                None => specchio::say!("screenshot: this window's images cannot be read back"),
+            }
         }
         if last {
+            if self.settings.screenshot && screenshot.is_none() {
+                anyhow::bail!("--screenshot: this window's swapchain images cannot be read back");
+            }
             self.outcome.screenshot = screenshot.filter(|_| self.settings.screenshot);
             event_loop.exit();
         }
@@ -452,7 +421,11 @@ impl App<'_> {
         let Some(viewer) = &self.viewer else {
             return NextFrame::OnEvent;
         };
-        let moving = (!self.clock.paused && viewer.renderer.scene.moves()) || self.motion.moving();
+        // Moving: the scene's own motion, a held key, or a cube map that does not show the
+        // scene yet (an `every-n` policy updates it only every n frames).
+        let moving = (!self.clock.paused && viewer.renderer.scene.moves())
+            || self.motion.moving()
+            || !viewer.renderer.cube_shows_scene_at(self.clock.time_s);
         if self.demand.watching(scripted, moving) {
             self.demand.watch_minimised(&viewer.window, now);
         }
