@@ -26,55 +26,126 @@ impl Ctx<'_> {
     /// came from).
     pub(super) fn objects_clear_of_mirror(&self, scene: &Scene, origins: &[Origin]) -> R<()> {
         let r = scene.mirror.radius_m;
+        let mirror = |t: f64| position_at(scene.mirror.animation.as_ref(), scene.mirror.center, t);
         for (o, origin) in scene.objects.iter().zip(origins) {
             let mut times = sample_times_n(o.animation.as_ref(), SAMPLES);
             times.extend(sample_times_n(scene.mirror.animation.as_ref(), SAMPLES));
-            for t in times {
-                let centre = position_at(scene.mirror.animation.as_ref(), scene.mirror.center, t);
-                // Render space: the mirror's centre at the origin.
-                let model = Mat4::from_scale_rotation_translation(
-                    o.scale,
-                    o.rotation,
-                    position_at(o.animation.as_ref(), o.position, t) - centre,
-                );
-                let Some(why) = reaches_into(&scene.meshes[o.mesh], model, r) else {
-                    continue;
-                };
-                let field = match (origin, t == 0.0) {
-                    (Origin::Listed(k), true) => format!("objects[{k}].position"),
-                    (Origin::Listed(k), false) => format!("objects[{k}].animation"),
-                    (Origin::Generated(g), _) => format!("generate[{g}]"),
-                };
-                let when = if t == 0.0 {
-                    "at time 0".to_owned()
-                } else {
-                    format!("at t = {} s", time_text(t))
-                };
-                return Err(self.invalid(
-                    &field,
-                    format!(
-                        "object \"{}\" {why} the mirror (centre {}, radius {}) {when}; an object \
-                         must stay outside the sphere",
-                        o.name,
-                        self.fmt_point(centre),
-                        num_text(r)
-                    ),
-                ));
-            }
+            times.sort_by(f64::total_cmp);
+            times.dedup();
+            let path = Sweep {
+                mesh: &scene.meshes[o.mesh],
+                object: &|t| position_at(o.animation.as_ref(), o.position, t),
+                mirror: &mirror,
+                model: &|offset| Mat4::from_scale_rotation_translation(o.scale, o.rotation, offset),
+                r,
+            };
+            let Some((t, why)) = path.first_contact(&times) else {
+                continue;
+            };
+            let field = match (origin, t == 0.0) {
+                (Origin::Listed(k), true) => format!("objects[{k}].position"),
+                (Origin::Listed(k), false) => format!("objects[{k}].animation"),
+                (Origin::Generated(g), _) => format!("generate[{g}]"),
+            };
+            let when = if t == 0.0 {
+                "at time 0".to_owned()
+            } else {
+                format!("at t = {} s", time_text(t))
+            };
+            return Err(self.invalid(
+                &field,
+                format!(
+                    "object \"{}\" {why} the mirror (centre {}, radius {}) {when}; an object \
+                     must stay outside the sphere",
+                    o.name,
+                    self.fmt_point(mirror(t)),
+                    num_text(r)
+                ),
+            ));
         }
         Ok(())
     }
 }
 
-/// Times an object and the mirror are checked at: more than the cameras' 64 per cycle, since
-/// an object's far end sweeps faster than its centre (a 1.5 m arrow orbiting at 3 m every 10 s
-/// moves 0.04 m between two of these times).
+/// Times an object and the mirror are sampled at: more than the cameras' 64 per cycle (an
+/// object's far end sweeps faster than its centre). Between two samples the check is not
+/// left to chance: see [`Sweep::first_contact`].
 const SAMPLES: usize = 1024;
 
-/// How the mesh, placed by `model` (the sphere at the origin), reaches into a sphere of
-/// radius `r`: "reaches into" when a triangle comes closer than `r` to the centre, "encloses"
-/// when a closed mesh holds the centre; `None` when it stays outside.
-fn reaches_into(mesh: &Mesh, model: Mat4, r: f32) -> Option<&'static str> {
+/// How far a path between two samples may be longer than the straight line between its ends:
+/// 1 for straight pieces (linear motion and keyframes, whose corners are samples), and for an
+/// orbit's arc of at most 1/1024 of a turn, 1 + 1.6e-6: 1e-3 covers both with room to spare.
+const PATH_SLACK: f32 = 1.0 + 1e-3;
+
+/// How many times an interval between two samples may be halved.
+const MAX_HALVINGS: u32 = 40;
+
+/// An object moving against the moving mirror.
+struct Sweep<'a> {
+    mesh: &'a Mesh,
+    /// Where the object and the mirror's centre are at time t.
+    object: &'a dyn Fn(f64) -> Vec3,
+    mirror: &'a dyn Fn(f64) -> Vec3,
+    /// The object's model matrix with its origin at this offset from the mirror's centre.
+    model: &'a dyn Fn(Vec3) -> Mat4,
+    r: f32,
+}
+
+impl Sweep<'_> {
+    fn offset(&self, t: f64) -> Vec3 {
+        (self.object)(t) - (self.mirror)(t)
+    }
+
+    /// The first time (and how) the object reaches into the sphere: at a sample, or between
+    /// two. Between samples a rigid object moving by a path of length L gets no closer than
+    /// its clearance at either end minus L, so an interval whose two clearances leave
+    /// `(c_a + c_b - L) / 2 > 0` is clear; any other is halved until it is, or until the
+    /// object is found inside, or until its path is below a micrometre per metre of radius
+    /// (a touch within rounding).
+    fn first_contact(&self, times: &[f64]) -> Option<(f64, &'static str)> {
+        let mut last: Option<(f64, f32)> = None;
+        for &t in times {
+            let c = match clearance(self.mesh, (self.model)(self.offset(t)), self.r) {
+                Ok(c) => c,
+                Err(why) => return Some((t, why)),
+            };
+            if let Some((ta, ca)) = last {
+                if let Some(hit) = self.between((ta, ca), (t, c), 0) {
+                    return Some(hit);
+                }
+            }
+            last = Some((t, c));
+        }
+        None
+    }
+
+    fn between(
+        &self,
+        (ta, ca): (f64, f32),
+        (tb, cb): (f64, f32),
+        depth: u32,
+    ) -> Option<(f64, &'static str)> {
+        let moved = (self.object)(tb) - (self.object)(ta);
+        let carried = (self.mirror)(tb) - (self.mirror)(ta);
+        let path = (moved.length() + carried.length()) * PATH_SLACK;
+        if (ca + cb - path) / 2.0 > 0.0 || path <= 1e-6 * self.r || depth == MAX_HALVINGS {
+            return None;
+        }
+        let tm = 0.5 * (ta + tb);
+        let cm = match clearance(self.mesh, (self.model)(self.offset(tm)), self.r) {
+            Ok(c) => c,
+            Err(why) => return Some((tm, why)),
+        };
+        self.between((ta, ca), (tm, cm), depth + 1)
+            .or_else(|| self.between((tm, cm), (tb, cb), depth + 1))
+    }
+}
+
+/// How far the mesh, placed by `model` (the sphere at the origin), stays outside a sphere of
+/// radius `r` (a lower bound: from its bounding box when that is clear of the sphere), or how
+/// it reaches in: "reaches into" when a triangle comes closer than `r` to the centre,
+/// "encloses" when a closed mesh holds the centre.
+fn clearance(mesh: &Mesh, model: Mat4, r: f32) -> Result<f32, &'static str> {
     // The transformed bounds first: most objects are nowhere near.
     let corners = (0..8).map(|c| {
         let pick = |bit: u32, lo: f32, hi: f32| if c & bit == 0 { lo } else { hi };
@@ -88,26 +159,39 @@ fn reaches_into(mesh: &Mesh, model: Mat4, r: f32) -> Option<&'static str> {
     let (lo, hi) = corners.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
         (lo.min(p), hi.max(p))
     });
-    if Vec3::ZERO.clamp(lo, hi).length() >= r {
-        return None;
+    let box_distance = Vec3::ZERO.clamp(lo, hi).length();
+    if box_distance >= r {
+        return Ok(box_distance - r);
     }
     let triangles = mesh
         .indices
         .chunks_exact(3)
         .map(|t| [0, 1, 2].map(|k| model.transform_point3(mesh.positions[t[k] as usize])));
     let mut crossings = [0u32; 3];
+    let mut nearest = f32::INFINITY;
     for [a, b, c] in triangles {
-        if closest_to_origin(a, b, c).length() < r {
-            return Some("reaches into");
+        let d = closest_to_origin(a, b, c).length();
+        if d < r {
+            return Err("reaches into");
         }
-        for (n, &d) in crossings.iter_mut().zip(&PROBES) {
-            *n += u32::from(crosses(d, a, b, c));
+        nearest = nearest.min(d);
+        for (n, &dir) in crossings.iter_mut().zip(&PROBES) {
+            *n += u32::from(crosses(dir, a, b, c));
         }
     }
     // A ray through an edge or a vertex counts two triangles or none: the majority of three
     // rays in unrelated directions decides.
     let odd = crossings.iter().filter(|&&n| n % 2 == 1).count();
-    (mesh.closed && odd >= 2).then_some("encloses")
+    if mesh.closed && odd >= 2 {
+        return Err("encloses");
+    }
+    Ok(nearest - r)
+}
+
+/// How the mesh reaches into the sphere, if it does (the tests' view of [`clearance`]).
+#[cfg(test)]
+fn reaches_into(mesh: &Mesh, model: Mat4, r: f32) -> Option<&'static str> {
+    clearance(mesh, model, r).err()
 }
 
 /// Directions of the rays that count a closed mesh's crossings: unrelated to the axes and to
