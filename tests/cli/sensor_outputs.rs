@@ -4,7 +4,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-use common::{root, specchio, temp_dir};
+use common::{root, specchio, temp_dir, Scratch};
 use specchio::sensor::files::{f32_channel, read_channels, read_u32_channel};
 use specchio::sensor::outputs::{NO_ID, RAY_CHANNELS};
 
@@ -13,13 +13,15 @@ fn run_ok(args: &[&str]) {
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
 }
 
-/// `render` and `reference` with `--sensor-outputs` write the same ray map (to float
-/// rounding), the camera description, and panoramas whose known column shows its wall.
-#[test]
-fn both_commands_write_the_sensor_outputs() {
-    let scene_path = root().join("scenes/test/six-colour-room.toml");
+/// `render --sensor-outputs` (a 64² cube) and `reference --sensor-outputs` of the scene at
+/// `rel`, into folders named after `name`: (the GPU's, the reference's).
+fn both_sensor_outputs(rel: &str, name: &str) -> (Scratch, Scratch) {
+    let scene_path = root().join(rel);
     let scene_path = scene_path.to_str().unwrap();
-    let (gpu_dir, cpu_dir) = (temp_dir("sensor-gpu"), temp_dir("sensor-cpu"));
+    let (gpu_dir, cpu_dir) = (
+        temp_dir(&format!("{name}-gpu")),
+        temp_dir(&format!("{name}-cpu")),
+    );
     let (g, c) = (gpu_dir.to_str().unwrap(), cpu_dir.to_str().unwrap());
     run_ok(&[
         "render",
@@ -31,6 +33,14 @@ fn both_commands_write_the_sensor_outputs() {
         "64",
     ]);
     run_ok(&["reference", scene_path, "--out", c, "--sensor-outputs"]);
+    (gpu_dir, cpu_dir)
+}
+
+/// `render` and `reference` with `--sensor-outputs` write the same ray map (to float
+/// rounding), the camera description, and panoramas whose known column shows its wall.
+#[test]
+fn both_commands_write_the_sensor_outputs() {
+    let (gpu_dir, cpu_dir) = both_sensor_outputs("scenes/test/six-colour-room.toml", "sensor");
     let (a, b) = (
         read_channels(&gpu_dir.join("sensor.rays.exr")).unwrap(),
         read_channels(&cpu_dir.join("sensor.rays.exr")).unwrap(),
@@ -121,20 +131,7 @@ fn sensor_outputs_refuse_the_ray_query_lookup() {
 /// every id in the layer is in it.
 #[test]
 fn the_id_map_names_every_id_of_the_layer() {
-    let scene_path = root().join("scenes/hard/pole-and-box.toml");
-    let scene_path = scene_path.to_str().unwrap();
-    let (gpu_dir, cpu_dir) = (temp_dir("id-map-gpu"), temp_dir("id-map-cpu"));
-    let (g, c) = (gpu_dir.to_str().unwrap(), cpu_dir.to_str().unwrap());
-    run_ok(&[
-        "render",
-        scene_path,
-        "--out",
-        g,
-        "--sensor-outputs",
-        "--cube-size",
-        "64",
-    ]);
-    run_ok(&["reference", scene_path, "--out", c, "--sensor-outputs"]);
+    let (gpu_dir, cpu_dir) = both_sensor_outputs("scenes/hard/pole-and-box.toml", "id-map");
     let read = |dir: &std::path::Path, file: &str| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(dir.join(file)).unwrap()).unwrap()
     };

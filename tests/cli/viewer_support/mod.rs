@@ -464,6 +464,19 @@ impl Running {
     }
 }
 
+/// `specchio view ARGS` on `x` (in `folder` when given), once its window has a swapchain,
+/// with the window focused for typed keys: the running viewer and the window's id.
+pub fn focused_viewer(x: &Xvfb, args: &[&str], folder: Option<&Path>) -> (Running, String) {
+    let viewer = match folder {
+        Some(folder) => Running::spawn_in(x, args, folder),
+        None => Running::spawn(x, args),
+    };
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(x);
+    xdotool(x, &["windowfocus", "--sync", &id]);
+    (viewer, id)
+}
+
 /// `xdotool ARGS` on `x`'s display, required to succeed; its stdout.
 pub fn xdotool(x: &Xvfb, args: &[&str]) -> String {
     let out = Command::new("xdotool")
