@@ -178,10 +178,7 @@ fn the_sensor_follows_the_sphere() {
 
 #[test]
 fn resizing_recreates_the_swapchain_and_quitting_is_clean() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--frames", "100000"]);
     // Presenting at the window's first size, then resized from outside, as a user would.
     viewer.wait_for("swapchain: 1200x450");
@@ -269,10 +266,7 @@ fn many_switches_before_a_frame_hold_few_renderers() {
 /// size. Run several times: which one notices first is a race.
 #[test]
 fn a_window_destroyed_from_outside_ends_the_viewer_cleanly() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     for attempt in 0..3 {
         let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--frames", "100000"]);
         viewer.wait_for("swapchain: ");
@@ -299,10 +293,7 @@ fn a_window_destroyed_from_outside_ends_the_viewer_cleanly() {
 /// display that is gone; the process's exit frees it all).
 #[test]
 fn a_killed_display_connection_ends_the_viewer_with_a_message() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--frames", "100000"]);
     viewer.wait_for("swapchain: ");
     let id = viewer_window(&x);

@@ -18,10 +18,7 @@ use viewer_support::*;
 /// `e` used to switch the refresh policy 23 times and `m` to rebuild the renderer as often.
 #[test]
 fn a_held_toggle_key_acts_once() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     let (viewer, _) = focused_viewer(
         &x,
         &[thesis_room().to_str().unwrap(), "--frames", "100000"],
@@ -58,10 +55,7 @@ fn frames_drawn(stdout: &str) -> usize {
 /// used 88-93 % of a core).
 #[test]
 fn a_paused_window_draws_only_when_something_changes() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     let (viewer, _) = focused_viewer(
         &x,
         &[thesis_room().to_str().unwrap(), "--keys", "space"],
@@ -97,10 +91,7 @@ fn frame_of(line: &str) -> u64 {
 /// which the viewer reads while it draws, since X sends no event for it.)
 #[test]
 fn a_minimised_window_is_not_drawn() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     let Some(_manager) = Openbox::start(&x) else {
         return;
     };
@@ -126,10 +117,7 @@ fn a_minimised_window_is_not_drawn() {
 /// core, docs/viewer.md); now it must be under 5 % of it.
 #[test]
 fn an_idle_window_costs_a_small_fraction_of_a_moving_one() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     let (viewer, _) = focused_viewer(
         &x,
         &[thesis_room().to_str().unwrap(), "--keys", "space"],
@@ -178,10 +166,7 @@ fn observer_pose(line: &str) -> ([f64; 3], f64) {
 /// coordinates.
 #[test]
 fn held_keys_move_at_a_speed_and_the_mouse_looks_around() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     // Paused: the ball's orbit does not matter here.
     let (viewer, id) = focused_viewer(
         &x,
@@ -224,10 +209,7 @@ fn held_keys_move_at_a_speed_and_the_mouse_looks_around() {
 /// presses write 0002 and 0003, each the size of the window, and 0001 keeps its bytes.
 #[test]
 fn the_screenshot_key_writes_numbered_pngs_beside_the_users_files() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     let folder = temp_dir("viewer-screenshot-key");
     std::fs::create_dir_all(&folder).unwrap();
     std::fs::write(folder.join("specchio-view-0001.png"), b"mine").unwrap();
@@ -263,10 +245,7 @@ fn the_screenshot_key_writes_numbered_pngs_beside_the_users_files() {
 /// shown stays.
 #[test]
 fn the_reload_key_shows_the_edited_file_and_keeps_the_pose() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     let folder = temp_dir("viewer-reload-key");
     std::fs::create_dir_all(&folder).unwrap();
     let original =
@@ -317,10 +296,7 @@ fn the_reload_key_shows_the_edited_file_and_keeps_the_pose() {
 /// screen and the swapchain follows; pressed again, it returns to the view's size.
 #[test]
 fn the_fullscreen_key_fills_the_screen_and_returns() {
-    let Some(x) = Xvfb::start() else { return };
-    if !has_xdotool() {
-        return;
-    }
+    let Some(x) = xvfb_with_xdotool() else { return };
     let Some(_manager) = Openbox::start(&x) else {
         return;
     };

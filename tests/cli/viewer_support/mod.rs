@@ -464,6 +464,12 @@ impl Running {
     }
 }
 
+/// An Xvfb to drive with xdotool: `None` (the reason printed) when either is missing.
+pub fn xvfb_with_xdotool() -> Option<Xvfb> {
+    let x = Xvfb::start()?;
+    has_xdotool().then_some(x)
+}
+
 /// `specchio view ARGS` on `x` (in `folder` when given), once its window has a swapchain,
 /// with the window focused for typed keys: the running viewer and the window's id.
 pub fn focused_viewer(x: &Xvfb, args: &[&str], folder: Option<&Path>) -> (Running, String) {
