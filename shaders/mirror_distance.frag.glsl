@@ -31,7 +31,7 @@ void main() {
     if (!mirror_hit(view, frame, dir, hit, n)) {
         discard;
     }
-    vec3 box = lookup_at(frame, dir, n);
+    vec3 box = lookup_at(frame, dir, hit, n);
     vec3 found = distance_lookup(frame, hit, reflect(dir, n), box);
 #ifdef OUTPUT_COLOUR
     vec3 d_dx, d_dy;

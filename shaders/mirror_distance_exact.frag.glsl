@@ -50,7 +50,7 @@ void main() {
 #ifdef OUTPUT_COLOUR
     if (resolved) {
         // As mirror_distance.frag: the box lookup's footprint, at the found direction.
-        vec3 box = lookup_at(frame, dir, n);
+        vec3 box = lookup_at(frame, dir, hit, n);
         vec3 d_dx, d_dy;
         lookup_gradients(view, frame, box, d_dx, d_dy);
         vec3 lookup = normalize(found) * length(box);

@@ -26,6 +26,7 @@ pub mod files;
 pub mod image;
 pub mod memory;
 pub mod metrics;
+pub mod mirror;
 pub mod output;
 pub mod process;
 pub mod random;

@@ -6,6 +6,7 @@
 
 #include "shared.glsl"
 #include "sphere.glsl"
+#include "quadric.glsl"
 
 // Where the ray from the mirror point p along r leaves the room box (p is inside it).
 vec3 room_exit(vec3 p, vec3 r, FrameData f) {
@@ -30,16 +31,19 @@ vec3 view_ray(ViewData view, vec2 ndc) {
     return normalize(view.ray_forward.xyz + ndc.x * view.ray_right.xyz + ndc.y * view.ray_down.xyz);
 }
 
-// The cube-map lookup of the ray `dir` reflected at the sphere's unit normal `n`: the plain
-// reflected direction, or (box lookup) the direction from the cube's centre to where the
-// reflected ray leaves the room. The distance lookup starts from the box direction: it gives
-// the footprint of its filtered lookup and its answer where the search finds no surface.
-vec3 lookup_at(FrameData f, vec3 dir, vec3 n) {
-    vec3 centre = f.mirror.xyz;
-    vec3 hit = centre + f.mirror.w * n;
+// The cube-map lookup of the ray `dir` reflected at the mirror point `hit` with unit normal
+// `n`: the plain reflected direction, or (box lookup) the direction from the cube's centre to
+// where the reflected ray leaves the room. The distance lookup starts from the box direction:
+// it gives the footprint of its filtered lookup and its answer where the search finds no
+// surface.
+vec3 lookup_at(FrameData f, vec3 dir, vec3 hit, vec3 n) {
     vec3 r = reflect(dir, n); // R = I - 2 (N.I) N
     bool box = f.flags.y == LOOKUP_FROM_ROOM_BOX;
-    return box ? room_exit(hit, r, f) - centre : r;
+    return box ? room_exit(hit, r, f) - f.mirror.xyz : r;
+}
+
+Quadric frame_quadric(FrameData f) {
+    return Quadric(f.mirror_quadric.xyz, f.mirror_quadric.w, f.mirror_extent.y);
 }
 
 // The pixel centre's viewport coordinates in [-1, 1].
@@ -49,12 +53,19 @@ vec2 pixel_ndc(ViewData view) {
 }
 
 // False when this pixel's ray misses the mirror. Otherwise the ray's direction, the hit point
-// on the sphere and the sphere's unit normal there; every lookup starts from these.
+// on the mirror and the mirror's unit normal there; every lookup starts from these.
 bool mirror_hit(ViewData view, FrameData f, out vec3 dir, out vec3 hit, out vec3 n) {
     dir = view_ray(view, pixel_ndc(view));
     vec3 centre = f.mirror.xyz;
-    float radius = f.mirror.w;
     float t;
+    if (f.mirror_shape.x == MIRROR_QUADRIC) {
+        if (!intersect_quadric(frame_quadric(f), view.eye.xyz - centre, dir, t, n)) {
+            return false;
+        }
+        hit = view.eye.xyz + t * dir;
+        return true;
+    }
+    float radius = f.mirror.w;
     if (!intersect_sphere(view.eye.xyz, dir, centre, radius, t)) {
         return false;
     }
@@ -64,32 +75,41 @@ bool mirror_hit(ViewData view, FrameData f, out vec3 dir, out vec3 hit, out vec3
     return true;
 }
 
-// False when this pixel's ray misses the mirror. Otherwise the hit point on the sphere and
+// False when this pixel's ray misses the mirror. Otherwise the hit point on the mirror and
 // the direction to look up in the cube map (world space, no texture-matrix rotation).
 bool mirror_pixel(ViewData view, FrameData f, out vec3 hit, out vec3 lookup) {
     vec3 dir, n;
     if (!mirror_hit(view, f, dir, hit, n)) {
         return false;
     }
-    lookup = lookup_at(f, dir, n);
+    lookup = lookup_at(f, dir, hit, n);
     return true;
 }
 
 // The lookup of the ray through `ndc`, defined for every ray: one that misses the sphere is
-// reflected where it passes closest to it (its grazing continuation), so a pixel on the
-// silhouette still has a neighbour to difference against.
-vec3 lookup_through(ViewData view, FrameData f, vec2 ndc) {
+// reflected where it passes closest to it (its grazing continuation), one that misses a
+// central mirror's rim where it meets the surface continued past the rim, so a pixel on the
+// silhouette still has a neighbour to difference against. (`own`: this pixel's lookup, the
+// answer where even the continued surface is missed, which leaves that side's footprint 0.)
+vec3 lookup_through(ViewData view, FrameData f, vec2 ndc, vec3 own) {
     vec3 dir = view_ray(view, ndc);
     vec3 centre = f.mirror.xyz;
+    vec3 o = view.eye.xyz - centre;
     float t;
     vec3 n;
+    if (f.mirror_shape.x == MIRROR_QUADRIC) {
+        Quadric q = frame_quadric(f);
+        if (intersect_quadric(q, o, dir, t, n) || quadric_surface_normal(q, o, dir, t, n)) {
+            return lookup_at(f, dir, view.eye.xyz + t * dir, n);
+        }
+        return own;
+    }
     if (intersect_sphere(view.eye.xyz, dir, centre, f.mirror.w, t)) {
         n = normalize(view.eye.xyz + t * dir - centre);
     } else {
-        vec3 o = view.eye.xyz - centre;
         n = normalize(o - dot(o, dir) * dir); // closest approach, perpendicular to dir
     }
-    return lookup_at(f, dir, n);
+    return lookup_at(f, dir, centre + f.mirror.w * n, n);
 }
 
 // How the lookup changes from this pixel to its right and lower neighbours, computed here
@@ -101,11 +121,11 @@ vec3 lookup_through(ViewData view, FrameData f, vec2 ndc) {
 void lookup_gradients(ViewData view, FrameData f, vec3 lookup, out vec3 d_dx, out vec3 d_dy) {
     vec2 ndc = pixel_ndc(view);
     vec2 step_ndc = 2.0 / view.viewport.zw; // one pixel in viewport coordinates
-    d_dx = lookup_through(view, f, ndc + vec2(step_ndc.x, 0.0)) - lookup;
-    d_dy = lookup_through(view, f, ndc + vec2(0.0, step_ndc.y)) - lookup;
+    d_dx = lookup_through(view, f, ndc + vec2(step_ndc.x, 0.0), lookup) - lookup;
+    d_dy = lookup_through(view, f, ndc + vec2(0.0, step_ndc.y), lookup) - lookup;
 }
 
-// The depth of the sphere's hit point, so that the mirror occludes and is occluded exactly.
+// The depth of the mirror's hit point, so that the mirror occludes and is occluded exactly.
 float mirror_depth(ViewData view, vec3 hit) {
     vec4 clip = view.world_to_clip * vec4(hit, 1.0);
     return clip.z / clip.w;

@@ -22,7 +22,8 @@
 // Per-frame constants.
 struct FrameData {
     vec4 light_dir_ambient; // xyz: unit vector towards the light; w: ambient fraction
-    vec4 mirror;            // xyz: mirror centre (render space, normally 0); w: radius (m)
+    vec4 mirror;            // xyz: the mirror's viewpoint, the cube's centre (render space,
+                            // normally 0); w: the radius about it that holds the mirror (m)
     uvec4 flags;            // x: 1 when the directional light is on; y: LOOKUP_FROM_*;
                             // z, w: the distance lookup's linear and secant steps
     vec4 room_min;          // xyz: the room box's low corner (render space)
@@ -31,7 +32,16 @@ struct FrameData {
                             // reverse-Z depth back into distances (distance_search.glsl);
                             // z: the most samples a pixel's footprint filter takes along its
                             // long side, >= 1 ([cube] anisotropy, footprint_filter.glsl)
+    uvec4 mirror_shape;     // x: MIRROR_SPHERE or MIRROR_QUADRIC (engine/src/mirror)
+    vec4 mirror_quadric;    // MIRROR_QUADRIC about the viewpoint (mirror.xyz), axis +Y: the
+                            // surface x^2 + z^2 + a y^2 + b y + c = 0 with x, y, z: a, b, c;
+                            // w: the rim's height, where a flat disc closes the mirror
+    vec4 mirror_extent;     // x: the rim's radius; y: the lowest height of the mirror's body
 };
+
+// FrameData.mirror_shape.x: how mirror_hit finds the mirror (quadric.glsl, sphere.glsl).
+#define MIRROR_SPHERE 0u  // a sphere of radius mirror.w about mirror.xyz
+#define MIRROR_QUADRIC 1u // a quadric of revolution cut at its rim: the central mirrors
 
 // FrameData.flags.y: the cube-map direction a lookup starts from (mirror.glsl lookup_at). Each
 // lookup's own technique is its shader (render/lookups: a lookup's `start`); only this choice

@@ -2,6 +2,8 @@
 
 use glam::{Vec3, Vec3A};
 
+use crate::mirror::MirrorShape;
+
 /// Nearest t > 0 with |o + t d - c| = r for unit `d`, or None (also when `o` is inside).
 ///
 /// The same algorithm as `shaders/include/sphere.glsl` (Haines et al., Ray Tracing Gems ch. 7):
@@ -21,30 +23,41 @@ pub fn ray_sphere(o: Vec3, d: Vec3, c: Vec3, r: f32) -> Option<f32> {
     (t > 0.0).then_some(t)
 }
 
-/// Where a camera ray meets the mirror sphere (centred at the origin) and where it goes next.
+/// Where a camera ray meets the mirror (its viewpoint at the origin) and where it goes next.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MirrorReflection {
-    /// Distance along the (unit) camera ray to the sphere.
+    /// Distance along the (unit) camera ray to the mirror.
     pub t: f32,
     /// Outward unit normal at the hit.
     pub normal: Vec3,
-    /// The hit, put back on the sphere (`normal * radius`).
+    /// The hit (for the sphere put back on it: `normal * radius`).
     pub point: Vec3,
     /// The reflected unit direction.
     pub direction: Vec3,
 }
 
-/// The reflection of the unit ray `eye + t d` on the sphere of `radius` at the origin, or None
-/// when the ray misses it (or starts inside it). The normal comes from the sphere equation at
-/// the hit, and the hit is put back on the sphere, as `shaders/include/mirror.glsl` does.
-pub fn mirror_reflection(eye: Vec3, d: Vec3, radius: f32) -> Option<MirrorReflection> {
-    let t = ray_sphere(eye, d, Vec3::ZERO, radius)?;
-    Some(mirror_reflection_at(eye, d, t, radius))
+/// The reflection of the unit ray `eye + t d` on the mirror, or None when the ray misses it
+/// (or starts inside it). The sphere: in f32, the normal from the sphere equation at the hit
+/// and the hit put back on the sphere, as `shaders/include/mirror.glsl` does. The other
+/// shapes: in f64 (`MirrorShape::hit`), rounded to f32 at the end.
+pub fn mirror_reflection(eye: Vec3, d: Vec3, shape: &MirrorShape) -> Option<MirrorReflection> {
+    if let MirrorShape::Sphere { radius_m } = *shape {
+        let t = ray_sphere(eye, d, Vec3::ZERO, radius_m)?;
+        return Some(sphere_reflection_at(eye, d, t, radius_m));
+    }
+    let (o, d64) = (eye.as_dvec3(), d.as_dvec3());
+    let hit = shape.hit(o, d64)?;
+    let n = hit.normal;
+    Some(MirrorReflection {
+        t: hit.t as f32,
+        normal: n.as_vec3(),
+        point: (o + hit.t * d64).as_vec3(),
+        direction: (d64 - 2.0 * d64.dot(n) * n).normalize().as_vec3(),
+    })
 }
 
-/// [`mirror_reflection`] for a ray already known to meet the sphere at `t` (from
-/// [`ray_sphere`]): the same numbers without solving the quadratic twice.
-pub fn mirror_reflection_at(eye: Vec3, d: Vec3, t: f32, radius: f32) -> MirrorReflection {
+/// The sphere's reflection of a ray already known to meet it at `t` (from [`ray_sphere`]).
+fn sphere_reflection_at(eye: Vec3, d: Vec3, t: f32, radius: f32) -> MirrorReflection {
     let normal = (eye + t * d).normalize();
     MirrorReflection {
         t,
@@ -271,10 +284,12 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
 mod tests {
     use super::*;
 
+    const SPHERE: MirrorShape = MirrorShape::Sphere { radius_m: 1.0 };
+
     /// Straight up into the sphere's lowest point: reflected straight back down.
     #[test]
     fn the_central_ray_comes_straight_back() {
-        let m = mirror_reflection(Vec3::new(0.0, -3.0, 0.0), Vec3::Y, 1.0).unwrap();
+        let m = mirror_reflection(Vec3::new(0.0, -3.0, 0.0), Vec3::Y, &SPHERE).unwrap();
         assert_eq!(m.t, 2.0);
         assert_eq!(m.point, Vec3::NEG_Y);
         assert_eq!(m.direction, Vec3::NEG_Y);
@@ -285,7 +300,7 @@ mod tests {
     fn a_45_degree_hit_turns_the_ray_by_90_degrees() {
         let h = std::f32::consts::FRAC_1_SQRT_2;
         // Aimed at the point (-h, -h, 0) of the unit sphere, travelling +Y.
-        let m = mirror_reflection(Vec3::new(-h, -5.0, 0.0), Vec3::Y, 1.0).unwrap();
+        let m = mirror_reflection(Vec3::new(-h, -5.0, 0.0), Vec3::Y, &SPHERE).unwrap();
         assert!((m.point - Vec3::new(-h, -h, 0.0)).length() < 1e-6);
         assert!(
             (m.direction - Vec3::NEG_X).length() < 1e-6,
@@ -296,8 +311,8 @@ mod tests {
 
     #[test]
     fn misses_and_inside_starts_are_none() {
-        assert!(mirror_reflection(Vec3::new(2.0, -5.0, 0.0), Vec3::Y, 1.0).is_none());
-        assert!(mirror_reflection(Vec3::ZERO, Vec3::Y, 1.0).is_none());
+        assert!(mirror_reflection(Vec3::new(2.0, -5.0, 0.0), Vec3::Y, &SPHERE).is_none());
+        assert!(mirror_reflection(Vec3::ZERO, Vec3::Y, &SPHERE).is_none());
     }
 
     #[test]

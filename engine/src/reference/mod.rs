@@ -29,7 +29,7 @@ use crate::scene::state::SceneState;
 use crate::scene::{MaterialKind, Scene};
 use camera_rays::CameraRays;
 use geometry::SceneGeometry;
-use intersect::{mirror_reflection_at, offset_ray_origin, ray_sphere};
+use intersect::{mirror_reflection, offset_ray_origin};
 
 /// Largest samples-per-pixel accepted (a 64 x 64 stratified grid).
 pub const MAX_SPP: u32 = 4096;
@@ -214,8 +214,8 @@ impl<'a> Reference<'a> {
     /// Traces one camera ray (unit `d` from `eye`). `clear`: [`Self::nothing_before_mirror`]
     /// for this eye.
     fn trace(&self, eye: Vec3, d: Vec3, clear: bool) -> Sample {
-        let radius = self.scene.mirror.radius_m;
-        let mirror_t = ray_sphere(eye, d, Vec3::ZERO, radius);
+        let mirror = mirror_reflection(eye, d, &self.scene.mirror.shape);
+        let mirror_t = mirror.map(|m| m.t);
         let mut s = Sample {
             object: -1.0,
             rays: 1,
@@ -227,7 +227,7 @@ impl<'a> Reference<'a> {
             Some(limit) => self.geometry.closest_hit(eye_bvh, d, 0.0, limit),
             None => self.geometry.closest_hit(eye_bvh, d, 0.0, f32::INFINITY),
         };
-        match (first, mirror_t) {
+        match (first, mirror) {
             // A scene surface in front of the mirror.
             (Some(hit), _) => {
                 let (color, t, object) = self.shade_hit(eye, d, &hit);
@@ -237,9 +237,8 @@ impl<'a> Reference<'a> {
             }
             // Neither the mirror nor anything else: out of the room.
             (None, None) => s.missed = true,
-            (None, Some(t)) => {
+            (None, Some(m)) => {
                 // The mirror: the same reflection as the sensor's ray map.
-                let m = mirror_reflection_at(eye, d, t, radius);
                 let (n, p, r) = (m.normal, m.point, m.direction);
                 s.primary_t = m.t;
                 s.via_mirror = true;

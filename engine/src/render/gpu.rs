@@ -21,6 +21,9 @@ pub struct FrameData {
     pub room_min: Vec4,
     pub room_max: Vec4,
     pub cube: Vec4,
+    pub mirror_shape: UVec4,
+    pub mirror_quadric: Vec4,
+    pub mirror_extent: Vec4,
 }
 
 #[repr(C)]
@@ -91,7 +94,7 @@ pub struct Vertex {
 
 // std430 array strides must equal the Rust sizes; build.rs reads member offsets only, so the
 // sizes are pinned here by hand (each is a multiple of 16, as std430 arrays of these need).
-const _: () = assert!(std::mem::size_of::<FrameData>() == 96);
+const _: () = assert!(std::mem::size_of::<FrameData>() == 144);
 const _: () = assert!(std::mem::size_of::<ViewData>() == 144);
 const _: () = assert!(std::mem::size_of::<ObjectData>() == 144);
 const _: () = assert!(std::mem::size_of::<MaterialData>() == 64);
@@ -116,6 +119,21 @@ mod tests {
             ("FrameData", "room_min", offset_of!(FrameData, room_min)),
             ("FrameData", "room_max", offset_of!(FrameData, room_max)),
             ("FrameData", "cube", offset_of!(FrameData, cube)),
+            (
+                "FrameData",
+                "mirror_shape",
+                offset_of!(FrameData, mirror_shape),
+            ),
+            (
+                "FrameData",
+                "mirror_quadric",
+                offset_of!(FrameData, mirror_quadric),
+            ),
+            (
+                "FrameData",
+                "mirror_extent",
+                offset_of!(FrameData, mirror_extent),
+            ),
             (
                 "ViewData",
                 "world_to_clip",

@@ -344,6 +344,7 @@ impl Renderer {
     fn write_frame_buffers(&mut self, state: &SceneState) -> Result<Vec<ViewBasis>, GpuError> {
         let scene = &self.scene;
         let light = scene.light.as_ref();
+        let shape = scene.mirror.shape.gpu();
         let frame = FrameData {
             light_dir_ambient: light.map_or(Vec4::ZERO, |l| l.direction.extend(l.ambient)),
             // Render space is centred on the mirror.
@@ -364,6 +365,9 @@ impl Renderer {
                 scene.cube.anisotropy as f32,
                 0.0,
             ),
+            mirror_shape: UVec4::new(shape.code, 0, 0, 0),
+            mirror_quadric: shape.quadric,
+            mirror_extent: shape.extent,
         };
         let uploads = &mut self.frames.current_mut().uploads;
         uploads.write(&self.resources.frame, &[frame])?;

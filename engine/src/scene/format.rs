@@ -75,14 +75,31 @@ pub struct EachWall {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MirrorSpec {
+    /// The surface; the sphere when left out.
+    pub shape: Option<MirrorShapeSpec>,
     #[serde(deserialize_with = "fixed::exact")]
     pub center: V3,
-    pub radius: f64,
+    /// The sphere's radius.
+    pub radius: Option<f64>,
+    /// A hyperboloid's distance between its foci (d).
+    pub focal_distance: Option<f64>,
+    /// A hyperboloid's latus rectum (4p).
+    pub latus_rectum: Option<f64>,
+    /// A central mirror's rim radius.
+    pub rim_radius: Option<f64>,
     pub animation: Option<AnimationSpec>,
     /// Read as the scene's own lookup names (`Lookup`'s serde names, one list).
     pub lookup: Option<super::Lookup>,
     pub distance_steps: Option<i64>,
     pub secant_steps: Option<i64>,
+}
+
+/// `mirror.shape`: one word per shape of `crate::mirror` (the names of `SHAPE_NAMES`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MirrorShapeSpec {
+    Sphere,
+    Hyperboloid,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -13,6 +13,8 @@ use std::path::PathBuf;
 
 use glam::{DVec3, Quat, Vec2, Vec3};
 
+use crate::mirror::MirrorShape;
+
 mod anim;
 mod asset;
 pub mod camera;
@@ -101,10 +103,14 @@ pub struct Room {
 /// The spherical mirror. It is analytic everywhere: never tessellated, never in the cube map.
 #[derive(Debug, Clone)]
 pub struct Mirror {
-    /// Centre at time 0 (world, metres).
+    /// The viewpoint at time 0 (world, metres): the sphere's centre, a central mirror's
+    /// inner focus. The cube map is rendered from here.
     pub center: Vec3,
-    /// Radius (metres), > 0.
+    /// The radius of the sphere about `center` that holds the whole mirror (metres, > 0;
+    /// the sphere's own radius): objects and cameras stay outside it.
     pub radius_m: f32,
+    /// The surface (`mirror.shape`).
+    pub shape: MirrorShape,
     /// Moves the centre over time; `None` keeps it still.
     pub animation: Option<Animation>,
     /// How the reflected direction looks up the cube map.

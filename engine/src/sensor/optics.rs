@@ -13,7 +13,9 @@
 //! [0, 2 pi), 0 along world +X, 90 degrees along +Z: clockwise seen from above (+Y), so that a
 //! panorama's columns run the way a person standing at the mirror turns to the right.
 
-use glam::{DVec2, Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
+
+use crate::mirror::MirrorShape;
 
 use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
@@ -26,8 +28,10 @@ pub struct SensorOptics {
     pub view: ViewBasis,
     pub width: u32,
     pub height: u32,
+    /// The radius about the viewpoint that holds the mirror (the sphere's radius).
     pub radius_m: f32,
-    /// The mirror's centre in world space.
+    pub shape: MirrorShape,
+    /// The mirror's viewpoint (the sphere's centre) in world space.
     pub mirror_center: Vec3,
 }
 
@@ -40,6 +44,7 @@ impl SensorOptics {
             width,
             height,
             radius_m: scene.mirror.radius_m,
+            shape: scene.mirror.shape,
             mirror_center: state.mirror_center,
         }
     }
@@ -49,15 +54,23 @@ impl SensorOptics {
         f64::from(self.view.eye.length())
     }
 
-    /// Half-angle of the tangent cone from the eye to the sphere (radians): the disc's rim.
+    /// The angle of the mirror's rim from the axis, seen from the eye (radians): the tangent
+    /// cone's half-angle for the sphere, the rim's edge for a central mirror.
     pub fn rim_angle(&self) -> f64 {
-        (f64::from(self.radius_m) / self.eye_distance()).asin()
+        match self.shape.rim() {
+            None => (f64::from(self.radius_m) / self.eye_distance()).asin(),
+            Some((rim_r, rim_y)) => rim_r.atan2(rim_y + self.eye_distance()),
+        }
     }
 
-    /// The highest elevation the mirror shows (radians): a grazing ray goes on along the
-    /// tangent cone, `90 degrees - rim angle` above the horizon. The lowest is -90 degrees.
+    /// The highest elevation the mirror shows (radians): for the sphere a grazing ray goes on
+    /// along the tangent cone, `90 degrees - rim angle` above the horizon; a central mirror
+    /// shows up to its rim's reflection. The lowest is -90 degrees.
     pub fn max_elevation(&self) -> f64 {
-        std::f64::consts::FRAC_PI_2 - self.rim_angle()
+        match self.shape {
+            MirrorShape::Sphere { .. } => std::f64::consts::FRAC_PI_2 - self.rim_angle(),
+            _ => self.reflected_elevation(self.rim_angle()),
+        }
     }
 
     /// Where the world direction `d` (from the eye, render space) lands in the image, in pixels
@@ -105,17 +118,28 @@ impl SensorOptics {
     }
 
     /// Elevation (radians) of the reflection of the camera ray at angle `theta` from the
-    /// axis, `theta` in [0, rim angle]. Exact 2-D geometry in f64 in the plane through the
-    /// axis: eye at distance D below the centre, ray (sin t, cos t), sphere of radius R.
+    /// axis, `theta` in [0, rim angle]. Exact geometry in f64 in the plane through the axis:
+    /// the eye at distance D below the viewpoint, the ray (sin t, cos t).
     pub fn reflected_elevation(&self, theta: f64) -> f64 {
-        let (d, r) = (self.eye_distance(), f64::from(self.radius_m));
-        let dir = DVec2::new(theta.sin(), theta.cos());
-        let eye = DVec2::new(0.0, -d);
-        // Nearest root of |eye + t dir| = R, clamped at the rim where the discriminant is 0.
-        let half_b = -eye.dot(dir);
-        let disc = (r * r - (eye + half_b * dir).length_squared()).max(0.0);
-        let t = half_b - disc.sqrt();
-        let n = (eye + t * dir) / r;
+        let dir = DVec3::new(theta.sin(), theta.cos(), 0.0);
+        let eye = DVec3::new(0.0, -self.eye_distance(), 0.0);
+        let n = match self.shape {
+            MirrorShape::Sphere { radius_m } => {
+                // Nearest root of |eye + t dir| = R, clamped at the rim where the discriminant
+                // is 0.
+                let r = f64::from(radius_m);
+                let half_b = -eye.dot(dir);
+                let disc = (r * r - (eye + half_b * dir).length_squared()).max(0.0);
+                (eye + (half_b - disc.sqrt()) * dir) / r
+            }
+            // At the rim's edge itself the ray grazes the disc: the surface continued there.
+            shape => {
+                shape
+                    .surface_hit(eye, dir)
+                    .expect("a ray inside the rim angle meets the mirror")
+                    .normal
+            }
+        };
         let reflected = dir - 2.0 * dir.dot(n) * n;
         reflected.y.clamp(-1.0, 1.0).asin()
     }
@@ -223,7 +247,7 @@ mod tests {
             let (e, a) = (f64::to_radians(elev_deg), f64::to_radians(az_deg));
             let p = o.pixel_seeing(e, a).unwrap();
             let d = crate::sensor::ray_map::pixel_ray(&o.view, p, o.width, o.height);
-            let m = crate::reference::intersect::mirror_reflection(o.view.eye, d, o.radius_m)
+            let m = crate::reference::intersect::mirror_reflection(o.view.eye, d, &o.shape)
                 .expect("on the mirror");
             let want = direction(e, a);
             assert!(

@@ -34,13 +34,13 @@ impl RayMap {
         let state = SceneState::at(scene, t_s);
         let [width, height] = scene.sensor.resolution;
         let view = state.sensor_view(scene, width as f32 / height as f32);
-        let radius = scene.mirror.radius_m;
+        let shape = &scene.mirror.shape;
         let rays = (0..height)
             .flat_map(|y| (0..width).map(move |x| (x, y)))
             .map(|(x, y)| {
                 let pixel = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
                 let d = pixel_ray(&view, pixel, width, height);
-                mirror_reflection(view.eye, d, radius).map(|m| PixelRay {
+                mirror_reflection(view.eye, d, shape).map(|m| PixelRay {
                     // Render space is the scene frame minus the mirror's centre now.
                     origin: m.point + state.mirror_center,
                     direction: m.direction,

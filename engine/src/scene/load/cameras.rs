@@ -111,7 +111,22 @@ impl Ctx<'_> {
             up: None,
         };
         let s = spec.unwrap_or(&empty);
-        let offset_m = self.positive("sensor.offset", s.offset.unwrap_or(2.5))?;
+        let offset_m = match mirror.shape.camera_distance_m() {
+            // A central mirror's camera sits at its focus: the shape says where.
+            Some(focus) if s.offset.is_some() => {
+                return Err(self.unused(
+                    "sensor.offset",
+                    &format!(
+                        "a {} mirror's camera sits at its outer focus, focal_distance ({} m) \
+                         below the viewpoint",
+                        mirror.shape.name(),
+                        num_text(focus)
+                    ),
+                ))
+            }
+            Some(focus) => focus as f32,
+            None => self.positive("sensor.offset", s.offset.unwrap_or(2.5))?,
+        };
         if offset_m <= mirror.radius_m {
             return Err(self.invalid(
                 "sensor.offset",
@@ -146,11 +161,53 @@ impl Ctx<'_> {
                 ));
             }
         }
+        let resolution = self.resolution("sensor.resolution", s.resolution, [512, 512])?;
+        let aspect = resolution[0] as f32 / resolution[1] as f32;
+        let fov_y_deg = match (s.fov_y, rim_tangent(mirror, offset_m)) {
+            (Some(v), rim) => {
+                let fov = self.ranged("sensor.fov_y", v, FOV_Y_DEG)?;
+                self.rim_in_view(fov, aspect, rim)?;
+                fov
+            }
+            (None, None) => 60.0,
+            // A central mirror fills the image's shorter side, with a 5 % margin.
+            (None, Some(tan)) => 2.0 * (1.05 * tan / aspect.min(1.0)).atan().to_degrees(),
+        };
         Ok(SensorCamera {
             offset_m,
-            fov_y_deg: self.ranged("sensor.fov_y", s.fov_y.unwrap_or(60.0), FOV_Y_DEG)?,
-            resolution: self.resolution("sensor.resolution", s.resolution, [512, 512])?,
+            fov_y_deg,
+            resolution,
             up,
         })
     }
+
+    /// Refuses a field of view that does not hold a central mirror's rim: the image would
+    /// cut off its widest view (`rim`: the tangent of the rim's angle from the axis).
+    fn rim_in_view(&self, fov_y_deg: f32, aspect: f32, rim: Option<f32>) -> R<()> {
+        let Some(rim) = rim else { return Ok(()) };
+        let half_y = (0.5 * fov_y_deg.to_radians()).tan();
+        let shorter = half_y * aspect.min(1.0);
+        if shorter < rim {
+            let need = 2.0 * (rim / aspect.min(1.0)).atan().to_degrees();
+            return Err(self.invalid(
+                "sensor.fov_y",
+                format!(
+                    "cuts off the mirror: its rim is {} degrees from the camera's axis, so the \
+                     image's shorter side needs {} degrees; fov_y must be at least {} \
+                     (leave it out to fit the rim)",
+                    num_text(rim.atan().to_degrees()),
+                    num_text(2.0 * rim.atan().to_degrees()),
+                    num_text(need)
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The tangent of a central mirror's rim angle from its camera's axis, `offset` below the
+/// viewpoint; None for the sphere, whose image the field of view may crop.
+fn rim_tangent(mirror: &Mirror, offset_m: f32) -> Option<f32> {
+    let (rim_r, rim_y) = mirror.shape.rim()?;
+    Some((rim_r / (rim_y + f64::from(offset_m))) as f32)
 }

@@ -15,6 +15,7 @@ mod cube;
 mod generators;
 mod locate;
 mod materials;
+mod mirror_shape;
 mod numbers;
 mod objects;
 mod room;

@@ -1,4 +1,5 @@
-//! `[room]` and `[mirror]`: the box and the sphere that every scene has.
+//! `[room]` and `[mirror]`: the box and the mirror that every scene has (the mirror's shape:
+//! `mirror_shape.rs`).
 
 use super::numbers::{num_text, time_text};
 use super::{position_at, sample_times, Ctx, R};
@@ -59,7 +60,8 @@ impl Ctx<'_> {
 
     pub(super) fn mirror(&self, spec: &MirrorSpec, room: &Room) -> R<Mirror> {
         let center = self.point("mirror.center", spec.center)?;
-        let radius_m = self.positive("mirror.radius", spec.radius)?;
+        let shape = self.mirror_shape(spec)?;
+        let radius_m = shape.bounding_radius_m();
         let animation = match &spec.animation {
             Some(a) => Some(self.animation("mirror.animation", a, center)?),
             None => None,
@@ -79,7 +81,7 @@ impl Ctx<'_> {
                 return Err(self.invalid(
                     field,
                     format!(
-                        "the mirror (radius {}) centred at {} {} is not entirely inside the room (from {} to {})",
+                        "the mirror (reaching {} m from {}) {} is not entirely inside the room (from {} to {})",
                         num_text(radius_m),
                         self.fmt_point(c),
                         if t == 0.0 { "at time 0".to_string() } else { format!("at t = {} s", time_text(t)) },
@@ -92,6 +94,7 @@ impl Ctx<'_> {
         Ok(Mirror {
             center,
             radius_m,
+            shape,
             animation,
             lookup: spec.lookup.unwrap_or_default(),
             // Accepted whatever the lookup: `--lookup distance` may pick it for any scene.

@@ -1,0 +1,162 @@
+//! The mirror's shape: a plug-in with one home per shape (this folder), used by the scene
+//! loader, the reference, the sensor's optics and, through [`GpuShape`], the shaders.
+//!
+//! - `sphere`: the thesis's mirror (non-central: the reflected rays do not pass through one
+//!   point, so a cube lookup from its centre has a parallax error);
+//! - `hyperboloid`: a central mirror (Baker and Nayar) seen by a perspective camera at its
+//!   outer focus; every reflected ray's line passes through the inner focus, the viewpoint.
+//!
+//! Every shape lives in the mirror's frame: its viewpoint (the sphere's centre, a central
+//! mirror's inner focus) at the origin, its axis along +Y. The cube map is rendered from that
+//! point, and the sensor camera sits on the axis below it.
+
+mod hyperboloid;
+mod quadric;
+
+pub use hyperboloid::Hyperboloid;
+pub use quadric::{Quadric, ShapeHit};
+
+use glam::{DVec3, Vec4};
+
+use crate::shaders::shared::{MIRROR_QUADRIC, MIRROR_SPHERE};
+
+/// The mirror's surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MirrorShape {
+    /// A sphere of this radius (m) about the viewpoint.
+    Sphere {
+        radius_m: f32,
+    },
+    Hyperboloid(Hyperboloid),
+}
+
+/// The names the scene file's `mirror.shape` accepts, in the order the docs list them.
+pub const SHAPE_NAMES: [&str; 2] = ["sphere", "hyperboloid"];
+
+/// What the shaders read of a shape (FrameData's `mirror_shape` and `mirror_quadric`,
+/// shaders/include/shared.glsl).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GpuShape {
+    /// MIRROR_SPHERE or MIRROR_QUADRIC.
+    pub code: u32,
+    /// x, y, z: the quadric's a, b, c; w: the rim's height.
+    pub quadric: Vec4,
+    /// x: the rim's radius; y: the body's lowest height (see [`Quadric::low_y`]).
+    pub extent: Vec4,
+}
+
+impl MirrorShape {
+    /// The name the scene file uses.
+    pub fn name(&self) -> &'static str {
+        match self {
+            MirrorShape::Sphere { .. } => "sphere",
+            MirrorShape::Hyperboloid(_) => "hyperboloid",
+        }
+    }
+
+    /// The radius of the sphere about the viewpoint that holds the whole mirror (m): what
+    /// the loader keeps objects and cameras out of, and the shaders' bounding box.
+    pub fn bounding_radius_m(&self) -> f32 {
+        match self {
+            MirrorShape::Sphere { radius_m } => *radius_m,
+            MirrorShape::Hyperboloid(h) => h.bounding_radius_m() as f32,
+        }
+    }
+
+    /// Where the unit ray `o + t d` (mirror frame) first meets the mirror from outside, in
+    /// f64. The sphere's f32 form, which the sensor's ray map and the shaders share, is
+    /// `reference::intersect::ray_sphere`.
+    pub fn hit(&self, o: DVec3, d: DVec3) -> Option<ShapeHit> {
+        match self {
+            MirrorShape::Sphere { radius_m } => sphere_hit(o, d, f64::from(*radius_m)),
+            MirrorShape::Hyperboloid(h) => h.quadric().hit(o, d),
+        }
+    }
+
+    /// [`Self::hit`] on the surface continued past a central mirror's rim (no disc on top),
+    /// for a ray that grazes the rim's edge.
+    pub fn surface_hit(&self, o: DVec3, d: DVec3) -> Option<ShapeHit> {
+        match self {
+            MirrorShape::Sphere { .. } => self.hit(o, d),
+            MirrorShape::Hyperboloid(h) => Quadric {
+                rim_y: f64::INFINITY,
+                ..h.quadric()
+            }
+            .hit(o, d),
+        }
+    }
+
+    /// The distance below the viewpoint at which the shape's own camera sits (m): the outer
+    /// focus of a hyperboloid; None where the scene chooses it (the sphere's `sensor.offset`).
+    pub fn camera_distance_m(&self) -> Option<f64> {
+        match self {
+            MirrorShape::Sphere { .. } => None,
+            MirrorShape::Hyperboloid(h) => Some(h.focal_distance_m),
+        }
+    }
+
+    /// The unified (Mei) model's xi of a central shape with its camera at its focus; None
+    /// for a non-central one.
+    pub fn xi(&self) -> Option<f64> {
+        match self {
+            MirrorShape::Sphere { .. } => None,
+            MirrorShape::Hyperboloid(h) => Some(h.xi()),
+        }
+    }
+
+    /// The rim: its radius from the axis and its height above the viewpoint (m); None for
+    /// the closed sphere.
+    pub fn rim(&self) -> Option<(f64, f64)> {
+        match self {
+            MirrorShape::Sphere { .. } => None,
+            MirrorShape::Hyperboloid(h) => {
+                let q = h.quadric();
+                Some((q.rim_r, q.rim_y))
+            }
+        }
+    }
+
+    pub fn gpu(&self) -> GpuShape {
+        match self {
+            MirrorShape::Sphere { .. } => GpuShape {
+                code: MIRROR_SPHERE,
+                quadric: Vec4::ZERO,
+                extent: Vec4::ZERO,
+            },
+            MirrorShape::Hyperboloid(h) => quadric_gpu(&h.quadric()),
+        }
+    }
+}
+
+fn quadric_gpu(q: &Quadric) -> GpuShape {
+    GpuShape {
+        code: MIRROR_QUADRIC,
+        quadric: Vec4::new(q.a as f32, q.b as f32, q.c as f32, q.rim_y as f32),
+        extent: Vec4::new(
+            q.rim_r as f32,
+            q.low_y.max(-f64::from(f32::MAX)) as f32,
+            0.0,
+            0.0,
+        ),
+    }
+}
+
+/// The sphere in f64 (the same careful form as the f32 one).
+fn sphere_hit(o: DVec3, d: DVec3, r: f64) -> Option<ShapeHit> {
+    let b = -o.dot(d);
+    let l = o + b * d;
+    let disc = r * r - l.dot(l);
+    let cc = o.dot(o) - r * r;
+    if disc < 0.0 || cc <= 0.0 || b <= 0.0 {
+        return None;
+    }
+    let q = b + disc.sqrt();
+    let t = (cc / q).min(q);
+    Some(ShapeHit {
+        t,
+        normal: (o + t * d).normalize(),
+    })
+}
+
+#[cfg(test)]
+mod tests;

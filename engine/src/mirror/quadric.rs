@@ -1,0 +1,133 @@
+//! The central mirrors' surfaces: quadrics of revolution about the vertical axis through the
+//! viewpoint, cut at a rim and closed there by a flat disc, in f64.
+//!
+//! Every shape but the sphere is written as one implicit function in the mirror's frame (the
+//! viewpoint at the origin, the axis along +Y):
+//!
+//! ```text
+//! F(p) = x² + z² + a y² + b y + c        the surface is F = 0, the mirror's inside F < 0
+//! ```
+//!
+//! and the body is `F < 0` between two heights: the rim's (`rim_y`, where a flat disc closes
+//! the body on top) and `low_y` (the hyperboloid's centre, which cuts off the second sheet;
+//! minus infinity for the paraboloid). That body is convex, so a ray meets it in one
+//! interval, and a reflected ray never meets the mirror again. `shaders/include/quadric.glsl`
+//! is the same algorithm in f32.
+
+use glam::DVec3;
+
+/// Where a ray enters a mirror and the outward unit normal there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShapeHit {
+    /// Distance along the (unit) ray.
+    pub t: f64,
+    pub normal: DVec3,
+}
+
+/// A quadric of revolution about +Y, cut at the rim (see the module's comment).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Quadric {
+    pub a: f64,
+    pub b: f64,
+    pub c: f64,
+    /// The rim's height above the viewpoint (m) and its radius from the axis (m).
+    pub rim_y: f64,
+    pub rim_r: f64,
+    /// The lowest height the body reaches down to (m): the hyperboloid's centre, below which
+    /// lies the sheet that is not the mirror; `-inf` where there is none.
+    pub low_y: f64,
+}
+
+/// The parameter interval `(lo, hi)` of a ray inside a region (either end may be infinite).
+type Span = (f64, f64);
+
+impl Quadric {
+    /// F at `p`: negative inside the mirror's surface.
+    pub fn value(&self, p: DVec3) -> f64 {
+        p.x * p.x + p.z * p.z + self.a * p.y * p.y + self.b * p.y + self.c
+    }
+
+    /// The outward unit normal of the surface at `p` (the gradient of F).
+    pub fn normal(&self, p: DVec3) -> DVec3 {
+        DVec3::new(p.x, self.a * p.y + 0.5 * self.b, p.z).normalize()
+    }
+
+    /// Where the unit ray `o + t d` (t > 0) enters the body, or None when it misses it or
+    /// starts inside it.
+    pub fn hit(&self, o: DVec3, d: DVec3) -> Option<ShapeHit> {
+        // Solved from the ray's point nearest the viewpoint: for an eye far from a small
+        // mirror the coefficients then stay of the mirror's size (no cancellation).
+        let t0 = -o.dot(d);
+        let o0 = o + t0 * d;
+        let slab = self.slab(o0, d)?;
+        // The body is convex, so at most one of F's inside intervals meets the slab.
+        let (lo, from_cap) = self
+            .inside_spans(o0, d)
+            .into_iter()
+            .flatten()
+            .map(|span| (span.0.max(slab.0), span.1.min(slab.1), slab.0 > span.0))
+            .find(|&(lo, hi, _)| lo < hi)
+            .map(|(lo, _, cap)| (lo, cap))?;
+        let t = t0 + lo;
+        if !(t > 0.0 && t.is_finite()) {
+            return None; // starts inside, or the body lies behind the ray
+        }
+        // Entered through a cutting plane: the rim's disc (F is positive all over the
+        // hyperboloid's centre plane, so no ray enters through that one).
+        let normal = if from_cap {
+            DVec3::Y
+        } else {
+            self.normal(o + t * d)
+        };
+        Some(ShapeHit { t, normal })
+    }
+
+    /// The interval of the ray (from `o`) between the two cutting heights.
+    fn slab(&self, o: DVec3, d: DVec3) -> Option<Span> {
+        if d.y == 0.0 {
+            let inside = o.y < self.rim_y && o.y > self.low_y;
+            return inside.then_some((f64::NEG_INFINITY, f64::INFINITY));
+        }
+        let (t_rim, t_low) = ((self.rim_y - o.y) / d.y, (self.low_y - o.y) / d.y);
+        Some((t_rim.min(t_low), t_rim.max(t_low)))
+    }
+
+    /// The (at most two) intervals of the ray from `o` where F < 0, in order.
+    fn inside_spans(&self, o: DVec3, d: DVec3) -> [Option<Span>; 2] {
+        // F(o + t d) = qa t² + 2 hb t + qc.
+        let qa = d.x * d.x + d.z * d.z + self.a * d.y * d.y;
+        let hb = o.x * d.x + o.z * d.z + self.a * o.y * d.y + 0.5 * self.b * d.y;
+        let qc = self.value(o);
+        let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
+        if qa == 0.0 {
+            // Linear: a ray along the paraboloid's axis, or parallel to an asymptote.
+            let root = -qc / (2.0 * hb);
+            return if hb < 0.0 {
+                [Some((root, inf)), None]
+            } else if hb > 0.0 {
+                [Some((ninf, root)), None]
+            } else {
+                [(qc < 0.0).then_some((ninf, inf)), None]
+            };
+        }
+        let disc = hb * hb - qa * qc;
+        if disc < 0.0 {
+            // No crossing: inside everywhere or nowhere, as the leading term's sign says.
+            return [(qa < 0.0).then_some((ninf, inf)), None];
+        }
+        // The two roots without subtracting nearly equal numbers: q / qa and qc / q (q is 0
+        // only when both roots are).
+        let q = -(hb + hb.signum() * disc.sqrt());
+        let (r1, r2) = if q == 0.0 {
+            (0.0, 0.0)
+        } else {
+            (q / qa, qc / q)
+        };
+        let (lo, hi) = (r1.min(r2), r1.max(r2));
+        if qa > 0.0 {
+            [Some((lo, hi)), None]
+        } else {
+            [Some((ninf, lo)), Some((hi, inf))]
+        }
+    }
+}

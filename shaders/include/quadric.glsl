@@ -1,0 +1,114 @@
+// quadric.glsl - ray / central-mirror intersection: the hyperboloid (and every shape written
+// as a quadric of revolution about the viewpoint's vertical axis), cut at its rim and closed
+// there by a flat disc. engine/src/mirror/quadric.rs is the same algorithm in f64.
+//
+// In the mirror's frame (the viewpoint at the origin, the axis +Y) the surface is
+//     F(p) = x^2 + z^2 + a y^2 + b y + c = 0,  the mirror's inside F < 0,
+// and the body is F < 0 between the height low_y (a hyperboloid's centre: below it lies the
+// other sheet) and the rim's height. That body is convex, so a ray meets it in one interval.
+#ifndef QUADRIC_GLSL
+#define QUADRIC_GLSL
+
+// Beyond every room (their corners are at most 1e12 m away): an interval's open end.
+const float INF = 3.0e38;
+
+struct Quadric {
+    vec3 abc;    // a, b, c
+    float rim_y; // the rim's height
+    float low_y; // the body's lowest height
+};
+
+float quadric_value(Quadric q, vec3 p) {
+    return dot(p.xz, p.xz) + (q.abc.x * p.y + q.abc.y) * p.y + q.abc.z;
+}
+
+// The outward unit normal at p: F's gradient.
+vec3 quadric_normal(Quadric q, vec3 p) {
+    return normalize(vec3(p.x, q.abc.x * p.y + 0.5 * q.abc.y, p.z));
+}
+
+// The ray's interval (from o) between the two cutting heights; false when it runs level
+// outside them.
+bool quadric_slab(Quadric q, vec3 o, vec3 d, out vec2 span) {
+    if (d.y == 0.0) {
+        span = vec2(-INF, INF);
+        return o.y < q.rim_y && o.y > q.low_y;
+    }
+    float t_rim = (q.rim_y - o.y) / d.y;
+    float t_low = (q.low_y - o.y) / d.y;
+    span = vec2(min(t_rim, t_low), max(t_rim, t_low));
+    return true;
+}
+
+// The intervals of the ray from o where F < 0: `count` of them (0, 1 or 2), in order.
+int quadric_inside(Quadric q, vec3 o, vec3 d, out vec2 first, out vec2 second) {
+    float qa = dot(d.xz, d.xz) + q.abc.x * d.y * d.y;       // F(o + t d) = qa t^2 + 2 hb t + qc
+    float hb = dot(o.xz, d.xz) + (q.abc.x * o.y + 0.5 * q.abc.y) * d.y;
+    float qc = quadric_value(q, o);
+    first = vec2(-INF, INF);
+    second = first;
+    // Linear (a ray parallel to an asymptote): one root. Where qa is merely tiny, q / qa
+    // below is a large root and qc / q the accurate small one.
+    if (qa == 0.0) {
+        if (hb == 0.0) {
+            return qc < 0.0 ? 1 : 0;
+        }
+        float root = -qc / (2.0 * hb);
+        first = hb < 0.0 ? vec2(root, INF) : vec2(-INF, root);
+        return 1;
+    }
+    float disc = hb * hb - qa * qc;
+    if (disc < 0.0) {
+        return qa < 0.0 ? 1 : 0; // no crossing: inside everywhere or nowhere
+    }
+    // The roots without subtracting nearly equal numbers: q / qa and qc / q.
+    float s = -(hb + (hb < 0.0 ? -1.0 : 1.0) * sqrt(disc));
+    float r1 = s / qa;
+    float r2 = s == 0.0 ? 0.0 : qc / s;
+    vec2 roots = vec2(min(r1, r2), max(r1, r2));
+    if (qa > 0.0) {
+        first = roots;
+        return 1;
+    }
+    first = vec2(-INF, roots.x);
+    second = vec2(roots.y, INF);
+    return 2;
+}
+
+// Nearest t > 0 where the unit ray o + t d (mirror frame) enters the body, and the outward
+// normal there; false on a miss or when o is inside. Solved from the ray's point nearest the
+// viewpoint, so that an eye far from a small mirror keeps the coefficients of its size.
+bool intersect_quadric(Quadric q, vec3 o, vec3 d, out float t, out vec3 n) {
+    float t0 = -dot(o, d);
+    vec3 o0 = o + t0 * d;
+    vec2 slab;
+    if (!quadric_slab(q, o0, d, slab)) {
+        return false;
+    }
+    vec2 spans[2];
+    int count = quadric_inside(q, o0, d, spans[0], spans[1]);
+    for (int i = 0; i < count; i++) {
+        float lo = max(spans[i].x, slab.x);
+        float hi = min(spans[i].y, slab.y);
+        if (lo < hi) {
+            t = t0 + lo;
+            if (!(t > 0.0) || t >= INF) {
+                return false; // starts inside, or the body lies behind the ray
+            }
+            // Entered through the rim's disc where its plane bounds the interval.
+            n = slab.x > spans[i].x ? vec3(0.0, 1.0, 0.0) : quadric_normal(q, o + t * d);
+            return true;
+        }
+    }
+    return false;
+}
+
+// Where the ray meets the surface continued past the rim (no disc on top): for the footprint
+// of a pixel whose neighbour passes beside the rim. False where it misses that too.
+bool quadric_surface_normal(Quadric q, vec3 o, vec3 d, out float t, out vec3 n) {
+    Quadric open_q = q;
+    open_q.rim_y = INF;
+    return intersect_quadric(open_q, o, d, t, n);
+}
+
+#endif
