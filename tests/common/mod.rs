@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use specchio::reference::{Reference, ReferenceImages};
 use specchio::render::methods::Method;
-use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
+use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer, RgbaImage};
 use specchio::scene::camera::ViewBasis;
 use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::{Device, DeviceDesc, OptionalFeatures};
@@ -434,4 +434,32 @@ pub fn lookup_directions(gpu: &Gpu, s: &Scene, lookup: Lookup) -> [DirectionPair
 
 pub fn close(a: [f32; 4], b: [f32; 3], tol: f32) -> bool {
     (0..3).all(|i| (a[i] - b[i]).abs() <= tol)
+}
+
+/// Whether pixel (x, y) of `mask` differs from one of its eight neighbours (the silhouette's
+/// rim, where a pixel-centre sample may fall either side of the true edge).
+pub fn on_rim(mask: &[bool], w: u32, h: u32, x: u32, y: u32) -> bool {
+    let at = |x: u32, y: u32| mask[(y * w + x) as usize];
+    (-1i64..=1).any(|dy| {
+        (-1i64..=1).any(|dx| {
+            let (xx, yy) = (i64::from(x) + dx, i64::from(y) + dy);
+            (0..i64::from(w)).contains(&xx)
+                && (0..i64::from(h)).contains(&yy)
+                && at(xx as u32, yy as u32) != at(x, y)
+        })
+    })
+}
+
+/// Pixels off the rim where the rasterized view's mirror (direction alpha 1) and the
+/// reference's disagree, and the reference's mirror pixels.
+pub fn mirror_mask_disagreements(raster: &RgbaImage, exact: &RgbaImage) -> (usize, usize) {
+    let (w, h) = (exact.width, exact.height);
+    let mask: Vec<bool> = exact.pixels.iter().map(|p| p[3] == 1.0).collect();
+    let off_rim = (0..w * h)
+        .filter(|&i| {
+            let (x, y) = (i % w, i / w);
+            (raster.pixels[i as usize][3] == 1.0) != mask[i as usize] && !on_rim(&mask, w, h, x, y)
+        })
+        .count();
+    (off_rim, mask.iter().filter(|&&m| m).count())
 }

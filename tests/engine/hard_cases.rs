@@ -4,39 +4,11 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-use common::{lookup_directions, scene, Gpu};
+use common::{lookup_directions, mirror_mask_disagreements, on_rim, scene, Gpu};
 use specchio::render::lookups;
 use specchio::render::RgbaImage;
 use specchio::scene::Lookup;
 use specchio::vk::device::OptionalFeatures;
-
-/// Whether pixel (x, y) of `mask` differs from one of its eight neighbours (the silhouette's
-/// rim, where a pixel-centre sample may fall either side of the true edge).
-fn on_rim(mask: &[bool], w: u32, h: u32, x: u32, y: u32) -> bool {
-    let at = |x: u32, y: u32| mask[(y * w + x) as usize];
-    (-1i64..=1).any(|dy| {
-        (-1i64..=1).any(|dx| {
-            let (xx, yy) = (i64::from(x) + dx, i64::from(y) + dy);
-            (0..i64::from(w)).contains(&xx)
-                && (0..i64::from(h)).contains(&yy)
-                && at(xx as u32, yy as u32) != at(x, y)
-        })
-    })
-}
-
-/// Pixels off the rim where the rasterized view's mirror (direction alpha 1) and the
-/// reference's disagree, and the reference's mirror pixels.
-fn mirror_mask_disagreements(raster: &RgbaImage, exact: &RgbaImage) -> (usize, usize) {
-    let (w, h) = (exact.width, exact.height);
-    let mask: Vec<bool> = exact.pixels.iter().map(|p| p[3] == 1.0).collect();
-    let off_rim = (0..w * h)
-        .filter(|&i| {
-            let (x, y) = (i % w, i / w);
-            (raster.pixels[i as usize][3] == 1.0) != mask[i as usize] && !on_rim(&mask, w, h, x, y)
-        })
-        .count();
-    (off_rim, mask.iter().filter(|&&m| m).count())
-}
 
 /// A 1 cm mirror with the sensor 2 cm and the observer 2.5 cm from its surface: both
 /// cameras show the whole mirror under every lookup the device has (a near plane fixed at

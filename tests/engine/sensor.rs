@@ -69,7 +69,17 @@ fn gpu_outputs_with(
 /// Measured maxima are printed.
 #[test]
 fn the_gpu_ray_map_is_the_exact_one_on_every_device() {
-    let s = scene("scenes/test/six-colour-room.toml");
+    // The sphere, and a central mirror (the hyperboloid's quadric in f32 against f64).
+    for rel in [
+        "scenes/test/six-colour-room.toml",
+        "scenes/hyperbolic-room.toml",
+    ] {
+        gpu_ray_map_is_exact(rel);
+    }
+}
+
+fn gpu_ray_map_is_exact(rel: &str) {
+    let s = scene(rel);
     let exact = RayMap::exact(&s, 0.0);
     let optics = SensorOptics::at(&s, 0.0);
     let (centre, radius) = (optics.disc_centre_px(), optics.disc_radius_px());
@@ -97,7 +107,7 @@ fn the_gpu_ray_map_is_the_exact_one_on_every_device() {
             }
         }
         eprintln!(
-            "{device}: {} mirror pixels, mask differs at {mask_differs}; inside: origins \
+            "{rel}, {device}: {} mirror pixels, mask differs at {mask_differs}; inside: origins \
              within {:e} m, directions within {:e} rad; rim: {:e} m, {:e} rad",
             exact.mirror_pixels(),
             worst[0].0,

@@ -12,6 +12,7 @@ use super::optics::SensorOptics;
 use super::panorama::{PanoramaKind, PanoramaLayout};
 use super::ray_map::{PixelRay, RayMap};
 use crate::image::RgbaImage;
+use crate::mirror::MirrorShape;
 use crate::output::{OutputError, Transaction};
 use crate::reference::ReferenceImages;
 use crate::scene::Scene;
@@ -247,8 +248,10 @@ impl SensorOutputs {
                 principal_point_px: [0.5 * w, 0.5 * h],
             },
             mirror: MirrorRecord {
+                shape: o.shape.name(),
                 centre_m: o.mirror_center.to_array(),
                 radius_m: o.radius_m,
+                central: CentralRecord::of(&o.shape),
             },
             disc: DiscRecord {
                 centre_px: o.disc_centre_px().to_array(),
@@ -304,13 +307,41 @@ pub struct SensorRecord {
     pub principal_point_px: [f32; 2],
 }
 
+/// The mirror: `centre_m` is its viewpoint (the sphere's centre, a central mirror's inner
+/// focus), where the cube map is rendered; `radius_m` the radius about it that holds it.
 #[derive(Debug, Serialize)]
 pub struct MirrorRecord {
+    pub shape: &'static str,
     pub centre_m: [f32; 3],
     pub radius_m: f32,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub central: Option<CentralRecord>,
 }
 
-/// The mirror's image (`optics`): a disc, derived from the pose and the sphere.
+/// A central mirror's geometry: the unified model's xi its camera at its focus makes, and
+/// its rim (radius, and height above the viewpoint).
+#[derive(Debug, Serialize)]
+pub struct CentralRecord {
+    pub xi: f64,
+    pub rim_radius_m: f64,
+    pub rim_height_m: f64,
+    /// The camera's distance below the viewpoint (the outer focus).
+    pub camera_distance_m: f64,
+}
+
+impl CentralRecord {
+    fn of(shape: &MirrorShape) -> Option<Self> {
+        let (rim_radius_m, rim_height_m) = shape.rim()?;
+        Some(Self {
+            xi: shape.xi()?,
+            rim_radius_m,
+            rim_height_m,
+            camera_distance_m: shape.camera_distance_m()?,
+        })
+    }
+}
+
+/// The mirror's image (`optics`): a disc, derived from the pose and the mirror's shape.
 #[derive(Debug, Serialize)]
 pub struct DiscRecord {
     pub centre_px: [f32; 2],

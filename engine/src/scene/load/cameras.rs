@@ -147,11 +147,16 @@ impl Ctx<'_> {
                 )
             })?;
         let floor = room.center.y - 0.5 * room.size_m.y;
+        // What put the camera where it is: the scene's offset, or a central mirror's focus.
+        let offset_field = match mirror.shape.camera_distance_m() {
+            Some(_) => "mirror.focal_distance",
+            None => "sensor.offset",
+        };
         for t in sample_times(mirror.animation.as_ref()) {
             let y = position_at(mirror.animation.as_ref(), mirror.center, t).y - offset_m;
             if y < floor {
                 return Err(self.invalid(
-                    "sensor.offset",
+                    offset_field,
                     format!(
                         "puts the sensor at y = {} (t = {} s), below the floor at y = {}",
                         num_text((self.origin.y + f64::from(y)) as f32),

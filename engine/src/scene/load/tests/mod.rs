@@ -9,6 +9,7 @@ use super::*;
 use crate::scene::{CubeFormat, RefreshPolicy};
 
 mod bad_files;
+mod mirror_shapes;
 mod rules;
 mod scenes;
 

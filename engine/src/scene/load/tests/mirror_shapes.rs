@@ -1,0 +1,89 @@
+//! `mirror.shape` and its fields: every bad value refused with its field and line, the
+//! hyperboloid's camera and field of view derived from its geometry.
+
+use std::path::Path;
+
+use crate::mirror::MirrorShape;
+use crate::scene::load_str;
+
+/// A room with a hyperboloid: `mirror` replaces the [mirror] table's body.
+fn with_mirror(mirror: &str, extra: &str) -> String {
+    format!(
+        "[room]\ncenter = [0, 3, 0]\nsize = [10, 6, 10]\nwalls = \"w\"\n\
+         [mirror]\ncenter = [0, 3, 0]\n{mirror}\n\
+         [[materials]]\nname = \"w\"\ntype = \"color\"\ncolor = [0.5, 0.5, 0.5]\n{extra}"
+    )
+}
+
+const HYPERBOLOID: &str =
+    "shape = \"hyperboloid\"\nfocal_distance = 2\nlatus_rectum = 2\nrim_radius = 1.3";
+
+#[test]
+fn a_hyperboloid_puts_its_camera_at_the_outer_focus_and_fits_the_rim() {
+    let s = load_str(&with_mirror(HYPERBOLOID, ""), Path::new("h.toml")).unwrap();
+    let MirrorShape::Hyperboloid(h) = s.mirror.shape else {
+        panic!("{:?}", s.mirror.shape)
+    };
+    assert_eq!(s.sensor.offset_m, 2.0);
+    assert_eq!(
+        f64::from(s.mirror.radius_m),
+        h.bounding_radius_m() as f32 as f64
+    );
+    // The default field of view holds the rim with a 5 % margin on the shorter side.
+    let (rim_r, rim_y) = s.mirror.shape.rim().unwrap();
+    let rim_tan = rim_r / (rim_y + 2.0);
+    let half = (f64::from(s.sensor.fov_y_deg).to_radians() / 2.0).tan();
+    assert!(
+        (half - 1.05 * rim_tan).abs() < 1e-5,
+        "{half} against {rim_tan}"
+    );
+    // The sphere is still the default shape.
+    let sphere = load_str(&with_mirror("radius = 1", ""), Path::new("s.toml")).unwrap();
+    assert_eq!(sphere.mirror.shape, MirrorShape::Sphere { radius_m: 1.0 });
+}
+
+#[test]
+fn bad_mirror_shapes_are_refused_naming_the_field() {
+    let cases: &[(&str, &str, &str)] = &[
+        ("shape = \"ellipsoid\"\nradius = 1", "", "mirror.shape"),
+        ("shape = \"sphere\"", "", "mirror.radius: required field is missing"),
+        ("radius = 1\nrim_radius = 0.5", "", "mirror.rim_radius: not allowed here: a sphere mirror reads only mirror.radius"),
+        (&format!("{HYPERBOLOID}\nradius = 1"), "", "mirror.radius: not allowed here: a hyperboloid mirror reads only"),
+        ("shape = \"hyperboloid\"\nfocal_distance = 2\nrim_radius = 1", "", "mirror.latus_rectum: required field is missing"),
+        ("shape = \"hyperboloid\"\nfocal_distance = 0\nlatus_rectum = 2\nrim_radius = 1", "", "mirror.focal_distance: must be positive"),
+        ("shape = \"hyperboloid\"\nfocal_distance = 2\nlatus_rectum = -1\nrim_radius = 1", "", "mirror.latus_rectum: must be positive"),
+        // Degenerate: a hyperboloid 10^4 times flatter than its focal distance.
+        ("shape = \"hyperboloid\"\nfocal_distance = 0.001\nlatus_rectum = 10\nrim_radius = 0.0005", "", "mirror.latus_rectum: is 10000 times the focal distance"),
+        // A rim wider than the camera's distance: the camera would be inside the mirror's reach.
+        ("shape = \"hyperboloid\"\nfocal_distance = 2\nlatus_rectum = 2\nrim_radius = 2.5", "", "mirror.rim_radius: makes the mirror reach"),
+        // The camera at the outer focus below the floor.
+        ("shape = \"hyperboloid\"\nfocal_distance = 3.5\nlatus_rectum = 2\nrim_radius = 1", "", "mirror.focal_distance: puts the sensor at y = -0.5"),
+        (HYPERBOLOID, "[sensor]\noffset = 2\n", "sensor.offset: not allowed here: a hyperboloid mirror's camera sits at its outer focus"),
+        // A field of view that cuts off the rim (it is 30.6 degrees from the axis).
+        (HYPERBOLOID, "[sensor]\nfov_y = 50\n", "sensor.fov_y: cuts off the mirror"),
+        (HYPERBOLOID, "[sensor]\nfov_y = 80\nresolution = [200, 400]\n", "sensor.fov_y: cuts off the mirror"),
+    ];
+    for (mirror, extra, needle) in cases {
+        let text = with_mirror(mirror, extra);
+        let err = load_str(&text, Path::new("case.toml")).expect_err(mirror);
+        let msg = err.to_string();
+        assert!(
+            msg.contains(needle),
+            "{mirror:?} {extra:?}: expected {needle:?} in {msg}"
+        );
+        assert!(msg.starts_with("case.toml:"), "{msg}");
+        assert!(err.line().is_some(), "{msg}");
+    }
+    // Through the ceiling: the room is 6 m high, the viewpoint at 5.5 m.
+    let high = with_mirror(HYPERBOLOID, "").replace(
+        "[mirror]\ncenter = [0, 3, 0]",
+        "[mirror]\ncenter = [0, 5.5, 0]",
+    );
+    let msg = load_str(&high, Path::new("case.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("mirror.center: the mirror (reaching 1.31"),
+        "{msg}"
+    );
+}
