@@ -192,6 +192,7 @@ fn cpu_modules_reach_no_vulkan() {
     let graph = graph();
     for module in [
         "scene",
+        "mirror",
         "image",
         "files",
         "memory",
@@ -208,6 +209,7 @@ fn cpu_modules_reach_no_vulkan() {
     for (path, module) in modules(&src) {
         let cpu = [
             "scene",
+            "mirror",
             "reference",
             "metrics",
             "sensor",

@@ -134,3 +134,38 @@ fn every_method_fills_the_same_cube_for_a_central_mirror() {
     }
     gpu.finish();
 }
+
+/// The hyperbolic room with its sensor misaligned: `[sensor]` keys added.
+fn misaligned(sensor: &str) -> Scene {
+    let path = common::root().join("scenes/hyperbolic-room.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let text = text.replacen("[sensor]\n", &format!("[sensor]\n{sensor}\n"), 1);
+    specchio::scene::load_str(&text, &path).expect("the misaligned scene loads")
+}
+
+/// The largest distance (m) of the exact rays' lines from the mirror's viewpoint, and how
+/// many pixels see the mirror: a central camera's rays all pass through it.
+fn rays_off_viewpoint(s: &Scene) -> (f32, usize) {
+    let map = specchio::sensor::RayMap::exact(s, 0.0);
+    let viewpoint = s.mirror.center;
+    let rays: Vec<_> = map.rays.iter().flatten().collect();
+    let off = rays
+        .iter()
+        .map(|r| (viewpoint - r.origin).cross(r.direction).length())
+        .fold(0.0f32, f32::max);
+    (off, rays.len())
+}
+
+/// Centrality needs the pinhole at the focus, not the axis along the mirror's: a tilted
+/// camera's rays still pass through the viewpoint, a shifted one's miss it by up to about
+/// half the shift (measured 5.0e-3 m for 1 cm; docs/sensor-models.md has the table).
+#[test]
+fn a_shifted_camera_breaks_centrality_and_a_tilted_one_does_not() {
+    let (aligned, pixels) = rays_off_viewpoint(&scene("scenes/hyperbolic-room.toml"));
+    assert!(pixels > 100_000);
+    assert!(aligned < 1e-5, "aligned: {aligned} m");
+    let (tilted, _) = rays_off_viewpoint(&misaligned("tilt = 1"));
+    assert!(tilted < 1e-5, "tilted: {tilted} m");
+    let (shifted, _) = rays_off_viewpoint(&misaligned("shift = [0.01, 0, 0]"));
+    assert!((3e-3..1e-2).contains(&shifted), "shifted 1 cm: {shifted} m");
+}

@@ -186,11 +186,5 @@ fn gpu_image(
 fn sensor_view(body: &Body, heading: f64) -> ViewBasis {
     let s = &body.scene.sensor;
     let [w, h] = s.resolution;
-    ViewBasis::look(
-        Vec3::new(0.0, -s.offset_m, 0.0),
-        Vec3::Y,
-        body.turned_up(heading),
-        s.fov_y_deg,
-        w as f32 / h as f32,
-    )
+    s.view(body.turned_up(heading), w as f32 / h as f32)
 }

@@ -1,5 +1,6 @@
 //! The mirror's shape: a plug-in with one home per shape (this folder), used by the scene
-//! loader, the reference, the sensor's optics and, through [`GpuShape`], the shaders.
+//! loader, the reference, the sensor's optics and, through the renderer's `FrameData`, the
+//! shaders.
 //!
 //! - `sphere`: the thesis's mirror (non-central: the reflected rays do not pass through one
 //!   point, so a cube lookup from its centre has a parallax error);
@@ -16,9 +17,7 @@ mod quadric;
 pub use hyperboloid::Hyperboloid;
 pub use quadric::{Quadric, ShapeHit};
 
-use glam::{DVec3, Vec4};
-
-use crate::shaders::shared::{MIRROR_QUADRIC, MIRROR_SPHERE};
+use glam::DVec3;
 
 /// The mirror's surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,18 +31,6 @@ pub enum MirrorShape {
 
 /// The names the scene file's `mirror.shape` accepts, in the order the docs list them.
 pub const SHAPE_NAMES: [&str; 2] = ["sphere", "hyperboloid"];
-
-/// What the shaders read of a shape (FrameData's `mirror_shape` and `mirror_quadric`,
-/// shaders/include/shared.glsl).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GpuShape {
-    /// MIRROR_SPHERE or MIRROR_QUADRIC.
-    pub code: u32,
-    /// x, y, z: the quadric's a, b, c; w: the rim's height.
-    pub quadric: Vec4,
-    /// x: the rim's radius; y: the body's lowest height (see [`Quadric::low_y`]).
-    pub extent: Vec4,
-}
 
 impl MirrorShape {
     /// The name the scene file uses.
@@ -116,28 +103,13 @@ impl MirrorShape {
         }
     }
 
-    pub fn gpu(&self) -> GpuShape {
+    /// The implicit quadric of a central shape (what `shaders/include/quadric.glsl`
+    /// intersects); None for the sphere, which the shaders intersect in its own careful form.
+    pub fn quadric(&self) -> Option<Quadric> {
         match self {
-            MirrorShape::Sphere { .. } => GpuShape {
-                code: MIRROR_SPHERE,
-                quadric: Vec4::ZERO,
-                extent: Vec4::ZERO,
-            },
-            MirrorShape::Hyperboloid(h) => quadric_gpu(&h.quadric()),
+            MirrorShape::Sphere { .. } => None,
+            MirrorShape::Hyperboloid(h) => Some(h.quadric()),
         }
-    }
-}
-
-fn quadric_gpu(q: &Quadric) -> GpuShape {
-    GpuShape {
-        code: MIRROR_QUADRIC,
-        quadric: Vec4::new(q.a as f32, q.b as f32, q.c as f32, q.rim_y as f32),
-        extent: Vec4::new(
-            q.rim_r as f32,
-            q.low_y.max(-f64::from(f32::MAX)) as f32,
-            0.0,
-            0.0,
-        ),
     }
 }
 

@@ -10,7 +10,10 @@ use glam::{Mat4, UVec4, Vec4};
 pub use crate::shaders::shared::{
     INSTANCE_FACE_BITS, LOOKUP_FROM_REFLECTION, LOOKUP_FROM_ROOM_BOX, MATERIAL_CHECKER,
     MATERIAL_COLOR, MATERIAL_DIRECTION, MATERIAL_GRID, MATERIAL_TEXTURE, MAX_TEXTURES,
+    MIRROR_QUADRIC, MIRROR_SPHERE,
 };
+
+use crate::mirror::MirrorShape;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -100,6 +103,39 @@ const _: () = assert!(std::mem::size_of::<ObjectData>() == 144);
 const _: () = assert!(std::mem::size_of::<MaterialData>() == 64);
 const _: () = assert!(std::mem::size_of::<Push>() == 16);
 const _: () = assert!(std::mem::size_of::<Vertex>() == 32);
+
+/// What the shaders read of the mirror's shape: FrameData's `mirror_shape`, `mirror_quadric`
+/// and `mirror_extent` (shaders/include/shared.glsl).
+pub struct MirrorShapeData {
+    /// x: MIRROR_SPHERE or MIRROR_QUADRIC.
+    pub code: UVec4,
+    /// x, y, z: the quadric's a, b, c; w: the rim's height.
+    pub quadric: Vec4,
+    /// x: the rim's radius; y: the body's lowest height (finite: f32's lowest for none).
+    pub extent: Vec4,
+}
+
+impl MirrorShapeData {
+    pub fn of(shape: &MirrorShape) -> Self {
+        match shape.quadric() {
+            None => Self {
+                code: UVec4::new(MIRROR_SPHERE, 0, 0, 0),
+                quadric: Vec4::ZERO,
+                extent: Vec4::ZERO,
+            },
+            Some(q) => Self {
+                code: UVec4::new(MIRROR_QUADRIC, 0, 0, 0),
+                quadric: Vec4::new(q.a as f32, q.b as f32, q.c as f32, q.rim_y as f32),
+                extent: Vec4::new(
+                    q.rim_r as f32,
+                    q.low_y.max(-f64::from(f32::MAX)) as f32,
+                    0.0,
+                    0.0,
+                ),
+            },
+        }
+    }
+}
 
 #[cfg(test)]
 mod tests {

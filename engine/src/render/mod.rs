@@ -344,7 +344,7 @@ impl Renderer {
     fn write_frame_buffers(&mut self, state: &SceneState) -> Result<Vec<ViewBasis>, GpuError> {
         let scene = &self.scene;
         let light = scene.light.as_ref();
-        let shape = scene.mirror.shape.gpu();
+        let shape = gpu::MirrorShapeData::of(&scene.mirror.shape);
         let frame = FrameData {
             light_dir_ambient: light.map_or(Vec4::ZERO, |l| l.direction.extend(l.ambient)),
             // Render space is centred on the mirror.
@@ -365,7 +365,7 @@ impl Renderer {
                 scene.cube.anisotropy as f32,
                 0.0,
             ),
-            mirror_shape: UVec4::new(shape.code, 0, 0, 0),
+            mirror_shape: shape.code,
             mirror_quadric: shape.quadric,
             mirror_extent: shape.extent,
         };

@@ -266,6 +266,9 @@ pub struct ObserverSpec {
 #[serde(deny_unknown_fields)]
 pub struct SensorSpec {
     pub offset: Option<f64>,
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
+    pub shift: Option<V3>,
+    pub tilt: Option<f64>,
     pub fov_y: Option<f64>,
     #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub resolution: Option<[i64; 2]>,

@@ -279,6 +279,22 @@ pub struct SensorCamera {
     pub resolution: [u32; 2],
     /// The image's up direction in world space (must not be parallel to +Y); default -Z.
     pub up: Vec3,
+    /// The camera moved off where the mirror puts it (metres, world axes): an assembly's
+    /// misalignment (`sensor.shift`); zero by default.
+    pub shift_m: Vec3,
+    /// The camera's axis turned this far (degrees) about the world X axis, from +Y towards
+    /// +Z (`sensor.tilt`); 0 by default.
+    pub tilt_deg: f32,
+}
+
+impl SensorCamera {
+    /// The camera in render space (the mirror's viewpoint at the origin), its image's up
+    /// direction `up` (world), for an image of aspect `aspect` (width / height).
+    pub fn view(&self, up: Vec3, aspect: f32) -> camera::ViewBasis {
+        let eye = Vec3::new(0.0, -self.offset_m, 0.0) + self.shift_m;
+        let forward = Quat::from_rotation_x(self.tilt_deg.to_radians()) * Vec3::Y;
+        camera::ViewBasis::look(eye, forward, up, self.fov_y_deg, aspect)
+    }
 }
 
 /// How the cube map is made.

@@ -61,16 +61,10 @@ impl SceneState {
         ViewBasis::yaw_pitch(eye, o.yaw_deg, o.pitch_deg, o.fov_y_deg, aspect)
     }
 
-    /// The sensor camera in render space: `offset_m` below the mirror centre, looking up (+Y).
+    /// The sensor camera in render space: `offset_m` below the mirror centre, looking up (+Y),
+    /// moved and turned by its misalignment.
     pub fn sensor_view(&self, scene: &Scene, aspect: f32) -> ViewBasis {
-        let s = &scene.sensor;
-        ViewBasis::look(
-            Vec3::new(0.0, -s.offset_m, 0.0),
-            Vec3::Y,
-            s.up,
-            s.fov_y_deg,
-            aspect,
-        )
+        scene.sensor.view(scene.sensor.up, aspect)
     }
 
     /// Walls are meshes in world space; they only need the shift to render space.

@@ -17,6 +17,10 @@ const PITCH_DEG: Range = Range::open(-90.0, 90.0);
 /// f32 rounding of 90 degrees), so the image would not have the field of view asked for.
 pub(crate) const FOV_Y_DEG: Range = Range::closed(0.1, 179.99);
 
+/// The sensor's tilt (a misalignment): up to 45 degrees, beyond which the camera no longer
+/// looks up at the mirror.
+const TILT_DEG: Range = Range::closed(0.0, 45.0);
+
 impl Ctx<'_> {
     pub(super) fn observer(
         &self,
@@ -106,6 +110,8 @@ impl Ctx<'_> {
     ) -> R<SensorCamera> {
         let empty = SensorSpec {
             offset: None,
+            shift: None,
+            tilt: None,
             fov_y: None,
             resolution: None,
             up: None,
@@ -146,6 +152,18 @@ impl Ctx<'_> {
                     "must be non-zero and not parallel to the Y axis",
                 )
             })?;
+        let shift_m = self.vec3("sensor.shift", s.shift.unwrap_or([0.0; 3]))?;
+        let eye = Vec3::new(0.0, -offset_m, 0.0) + shift_m;
+        if s.shift.is_some() && eye.length() <= mirror.radius_m {
+            return Err(self.invalid(
+                "sensor.shift",
+                format!(
+                    "moves the sensor to {} m from the mirror's viewpoint, inside its reach ({} m)",
+                    num_text(eye.length()),
+                    num_text(mirror.radius_m)
+                ),
+            ));
+        }
         let floor = room.center.y - 0.5 * room.size_m.y;
         // What put the camera where it is: the scene's offset, or a central mirror's focus.
         let offset_field = match mirror.shape.camera_distance_m() {
@@ -153,7 +171,7 @@ impl Ctx<'_> {
             None => "sensor.offset",
         };
         for t in sample_times(mirror.animation.as_ref()) {
-            let y = position_at(mirror.animation.as_ref(), mirror.center, t).y - offset_m;
+            let y = position_at(mirror.animation.as_ref(), mirror.center, t).y + eye.y;
             if y < floor {
                 return Err(self.invalid(
                     offset_field,
@@ -183,6 +201,8 @@ impl Ctx<'_> {
             fov_y_deg,
             resolution,
             up,
+            shift_m,
+            tilt_deg: self.ranged("sensor.tilt", s.tilt.unwrap_or(0.0), TILT_DEG)?,
         })
     }
 

@@ -37,6 +37,14 @@ fn a_hyperboloid_puts_its_camera_at_the_outer_focus_and_fits_the_rim() {
         (half - 1.05 * rim_tan).abs() < 1e-5,
         "{half} against {rim_tan}"
     );
+    // A misaligned camera: moved and turned as the file says.
+    let text = with_mirror(HYPERBOLOID, "[sensor]\nshift = [0.001, 0, 0]\ntilt = 1\n");
+    let m = load_str(&text, Path::new("m.toml")).unwrap();
+    assert_eq!(m.sensor.shift_m, glam::Vec3::new(0.001, 0.0, 0.0));
+    let view = m.sensor.view(m.sensor.up, 1.0);
+    assert_eq!(view.eye, glam::Vec3::new(0.001, -2.0, 0.0));
+    assert!((view.forward.z.atan2(view.forward.y).to_degrees() - 1.0).abs() < 1e-4);
+    assert!(view.forward.z > 0.0, "tilted towards +Z");
     // The sphere is still the default shape.
     let sphere = load_str(&with_mirror("radius = 1", ""), Path::new("s.toml")).unwrap();
     assert_eq!(sphere.mirror.shape, MirrorShape::Sphere { radius_m: 1.0 });
@@ -62,6 +70,11 @@ fn bad_mirror_shapes_are_refused_naming_the_field() {
         // A field of view that cuts off the rim (it is 30.6 degrees from the axis).
         (HYPERBOLOID, "[sensor]\nfov_y = 50\n", "sensor.fov_y: cuts off the mirror"),
         (HYPERBOLOID, "[sensor]\nfov_y = 80\nresolution = [200, 400]\n", "sensor.fov_y: cuts off the mirror"),
+        // Misalignment: a tilt past 45 degrees, a shift into the mirror's reach.
+        (HYPERBOLOID, "[sensor]\ntilt = 50\n", "sensor.tilt: must be in [0, 45]"),
+        (HYPERBOLOID, "[sensor]\ntilt = -1\n", "sensor.tilt"),
+        (HYPERBOLOID, "[sensor]\nshift = [0, 1.5, 0]\n", "sensor.shift: moves the sensor to 0.5 m from the mirror's viewpoint"),
+        (HYPERBOLOID, "[sensor]\nshift = [0, 0]\n", "sensor.shift"),
     ];
     for (mirror, extra, needle) in cases {
         let text = with_mirror(mirror, extra);
