@@ -8,10 +8,17 @@
 #include "sphere.glsl"
 #include "quadric.glsl"
 
+// How far the ray from p (inside the room box) along r runs to each axis's bounding wall. An
+// axis r does not move along never bounds it: its division by (signed) zero is replaced, not
+// trusted (a paraboloid's ray up its axis reflects with components exactly 0).
+vec3 room_wall_distances(vec3 p, vec3 r, FrameData f) {
+    vec3 bound = mix(f.room_min.xyz, f.room_max.xyz, greaterThan(r, vec3(0.0)));
+    return mix((bound - p) / r, vec3(3.0e38), equal(r, vec3(0.0)));
+}
+
 // Where the ray from the mirror point p along r leaves the room box (p is inside it).
 vec3 room_exit(vec3 p, vec3 r, FrameData f) {
-    vec3 bound = mix(f.room_min.xyz, f.room_max.xyz, greaterThan(r, vec3(0.0)));
-    vec3 t = (bound - p) / r; // +inf on an axis r does not move along
+    vec3 t = room_wall_distances(p, r, f);
     return p + min(t.x, min(t.y, t.z)) * r;
 }
 
@@ -19,16 +26,20 @@ vec3 room_exit(vec3 p, vec3 r, FrameData f) {
 // through, in cube-face order (+X, -X, +Y, -Y, +Z, -Z: the walls' drawable ids). The sensor's
 // ray map reports these as the cube path's range and object id (mirror_ray_*.frag).
 float room_exit_distance(vec3 p, vec3 r, FrameData f, out uint wall) {
-    vec3 bound = mix(f.room_min.xyz, f.room_max.xyz, greaterThan(r, vec3(0.0)));
-    vec3 t = (bound - p) / r; // +inf on an axis r does not move along
+    vec3 t = room_wall_distances(p, r, f);
     uint axis = (t.x <= t.y && t.x <= t.z) ? 0u : (t.y <= t.z ? 1u : 2u);
     wall = 2u * axis + (r[axis] > 0.0 ? 0u : 1u);
     return t[axis];
 }
 
-// The world-space ray through `ndc` (the viewport's [-1, 1] coordinates).
+// The world-space ray through `ndc` (the viewport's [-1, 1] coordinates)...
 vec3 view_ray(ViewData view, vec2 ndc) {
     return normalize(view.ray_forward.xyz + ndc.x * view.ray_right.xyz + ndc.y * view.ray_down.xyz);
+}
+
+// ...and where it starts: the eye of a pinhole, a point of an orthographic view's image plane.
+vec3 view_origin(ViewData view, vec2 ndc) {
+    return view.eye.xyz + ndc.x * view.origin_right.xyz + ndc.y * view.origin_down.xyz;
 }
 
 // The cube-map lookup of the ray `dir` reflected at the mirror point `hit` with unit normal
@@ -55,22 +66,24 @@ vec2 pixel_ndc(ViewData view) {
 // False when this pixel's ray misses the mirror. Otherwise the ray's direction, the hit point
 // on the mirror and the mirror's unit normal there; every lookup starts from these.
 bool mirror_hit(ViewData view, FrameData f, out vec3 dir, out vec3 hit, out vec3 n) {
-    dir = view_ray(view, pixel_ndc(view));
+    vec2 ndc = pixel_ndc(view);
+    dir = view_ray(view, ndc);
+    vec3 o = view_origin(view, ndc);
     vec3 centre = f.mirror.xyz;
     float t;
     if (f.mirror_shape.x == MIRROR_QUADRIC) {
-        if (!intersect_quadric(frame_quadric(f), view.eye.xyz - centre, dir, t, n)) {
+        if (!intersect_quadric(frame_quadric(f), o - centre, dir, t, n)) {
             return false;
         }
-        hit = view.eye.xyz + t * dir;
+        hit = o + t * dir;
         return true;
     }
     float radius = f.mirror.w;
-    if (!intersect_sphere(view.eye.xyz, dir, centre, radius, t)) {
+    if (!intersect_sphere(o, dir, centre, radius, t)) {
         return false;
     }
     // Normal from the sphere equation; the hit point is put back on the surface.
-    n = normalize(view.eye.xyz + t * dir - centre);
+    n = normalize(o + t * dir - centre);
     hit = centre + radius * n;
     return true;
 }
@@ -93,19 +106,20 @@ bool mirror_pixel(ViewData view, FrameData f, out vec3 hit, out vec3 lookup) {
 // answer where even the continued surface is missed, which leaves that side's footprint 0.)
 vec3 lookup_through(ViewData view, FrameData f, vec2 ndc, vec3 own) {
     vec3 dir = view_ray(view, ndc);
+    vec3 from = view_origin(view, ndc);
     vec3 centre = f.mirror.xyz;
-    vec3 o = view.eye.xyz - centre;
+    vec3 o = from - centre;
     float t;
     vec3 n;
     if (f.mirror_shape.x == MIRROR_QUADRIC) {
         Quadric q = frame_quadric(f);
         if (intersect_quadric(q, o, dir, t, n) || quadric_surface_normal(q, o, dir, t, n)) {
-            return lookup_at(f, dir, view.eye.xyz + t * dir, n);
+            return lookup_at(f, dir, from + t * dir, n);
         }
         return own;
     }
-    if (intersect_sphere(view.eye.xyz, dir, centre, f.mirror.w, t)) {
-        n = normalize(view.eye.xyz + t * dir - centre);
+    if (intersect_sphere(from, dir, centre, f.mirror.w, t)) {
+        n = normalize(from + t * dir - centre);
     } else {
         n = normalize(o - dot(o, dir) * dir); // closest approach, perpendicular to dir
     }

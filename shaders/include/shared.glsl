@@ -55,14 +55,19 @@ struct FrameData {
 #define TALLY_PASS_COLOUR 0u
 #define TALLY_PASS_DIRECTION 1u
 
-// One camera: a cube face or a view. dir(ndc) = ray_forward + ndc.x*ray_right + ndc.y*ray_down.
+// One camera: a cube face or a view. dir(ndc) = ray_forward + ndc.x*ray_right + ndc.y*ray_down,
+// from origin(ndc) = eye + ndc.x*origin_right + ndc.y*origin_down (mirror.glsl view_ray and
+// view_origin): a pinhole has origin_* 0, an orthographic view (a paraboloid's telecentric
+// sensor) ray_right and ray_down 0.
 struct ViewData {
-    mat4 world_to_clip;  // reverse-Z perspective: near -> depth 1, far -> 0
+    mat4 world_to_clip;  // reverse-Z perspective or orthographic: near -> depth 1, far -> 0
     vec4 eye;            // xyz: camera position (render space)
     vec4 ray_right;      // xyz: right * tan(half fov x)
     vec4 ray_down;       // xyz: down * tan(half fov y)
     vec4 ray_forward;    // xyz: unit forward
     vec4 viewport;       // x, y, width, height in framebuffer pixels
+    vec4 origin_right;   // xyz: right * half the orthographic image's width (m)
+    vec4 origin_down;    // xyz: down * half its height (m)
 };
 
 // One drawable object.

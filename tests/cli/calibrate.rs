@@ -173,7 +173,11 @@ fn opencv_projects_the_export_as_our_model_does() {
         return;
     }
     // The sphere (non-central, distortion fitted) and the hyperboloid (central, exact).
-    for scene in ["scenes/thesis-room.toml", "scenes/hyperbolic-room.toml"] {
+    for scene in [
+        "scenes/thesis-room.toml",
+        "scenes/hyperbolic-room.toml",
+        "scenes/parabolic-room.toml",
+    ] {
         let out = temp_dir("calibrate-opencv");
         calibrate_scene(scene, &out);
         let check = Command::new(&python)
@@ -247,4 +251,41 @@ fn bad_input_is_refused_without_output() {
     assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no-such-scene.toml"));
     assert!(!out.exists());
+}
+
+/// A paraboloid seen by an orthographic camera is the unified model with xi = 1 and the
+/// focal length 2p times the camera's pixels per metre (Mei and Rives 2007, table 1), no
+/// distortion. Measured: xi off by 7e-10, the focal length by 2e-6 px.
+#[test]
+fn a_paraboloid_calibrates_to_xi_one() {
+    let scene = common::scene("scenes/parabolic-room.toml");
+    let specchio::mirror::MirrorShape::Paraboloid(p) = scene.mirror.shape else {
+        panic!("the scene's mirror is a paraboloid");
+    };
+    let out = temp_dir("calibrate-paraboloid");
+    let record = calibrate_scene("scenes/parabolic-room.toml", &out);
+    let m = &record.omnidir.model;
+    assert!((m.xi - 1.0).abs() < 1e-6, "xi {}", m.xi);
+    assert_eq!(
+        [m.k1, m.k2, m.p1, m.p2],
+        [0.0; 4],
+        "no distortion is fitted"
+    );
+    let per_m =
+        f64::from(scene.sensor.resolution[1]) / 2.0 / f64::from(scene.sensor.orthographic_half_m);
+    let gamma = 2.0 * p.focal_length_m() * per_m;
+    for f in [m.fx, m.fy] {
+        assert!(
+            (f - gamma).abs() < 1e-5 * gamma,
+            "focal {f} against {gamma}"
+        );
+    }
+    assert!(
+        record.omnidir.residual_deg.max < 1e-4,
+        "{:?}",
+        record.omnidir.residual_deg
+    );
+    let viewpoint = glam::DVec3::from(record.viewpoint_world);
+    assert!((viewpoint - (scene.origin + scene.mirror.center.as_dvec3())).length() < 1e-6);
+    std::fs::remove_dir_all(&out).unwrap();
 }

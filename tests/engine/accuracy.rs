@@ -380,6 +380,8 @@ fn translated_scenes_render_as_the_untranslated_ones() {
         ("scenes/thesis-room.toml", 2.7),
         // A central mirror 3 cm across: its quadric is solved about the viewpoint.
         ("scenes/hard/hyperboloid-robot.toml", 0.0),
+        // And a paraboloid's, its orthographic rays starting across the image plane.
+        ("scenes/hard/paraboloid-axis.toml", 0.0),
     ];
     for (rel, t) in cases {
         let base = scene(rel);

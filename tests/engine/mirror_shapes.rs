@@ -13,14 +13,17 @@ use specchio::render::{lookups, Readback, RenderOptions, Renderer, RgbaImage};
 use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::OptionalFeatures;
 
-/// The central-mirror scenes: the cluttered furnished room, and the hard cases (a robot's
-/// 3 cm mirror in a 30 m hall, a nearly parabolic one grazed by the observer, a flat one
-/// filling a 114-degree sensor).
-const CENTRAL: [&str; 4] = [
+/// The central-mirror scenes: the cluttered furnished room with each central shape, and the
+/// hard cases (a robot's 3 cm hyperboloid in a 30 m hall, a nearly parabolic one grazed by the
+/// observer, a flat one filling a 114-degree sensor, a robot's paraboloid with a ray up its
+/// axis).
+const CENTRAL: [&str; 6] = [
     "scenes/hyperbolic-room.toml",
+    "scenes/parabolic-room.toml",
     "scenes/hard/hyperboloid-robot.toml",
     "scenes/hard/hyperboloid-near-parabolic.toml",
     "scenes/hard/hyperboloid-flat.toml",
+    "scenes/hard/paraboloid-axis.toml",
 ];
 
 /// The sensor's angular lookup error for `lookup` against the reference, and the mirror
@@ -28,8 +31,17 @@ const CENTRAL: [&str; 4] = [
 /// disagree, for the observer and the sensor.
 fn sensor_error(gpu: &Gpu, s: &Scene, lookup: Lookup) -> (AngularError, [usize; 2]) {
     let [observer, sensor] = lookup_directions(gpu, s, lookup);
-    for image in [&observer.gpu, &sensor.gpu] {
-        assert!(finite(image), "{lookup}: NaN or Inf");
+    for image in [
+        &observer.gpu,
+        &sensor.gpu,
+        &observer.exact.direction,
+        &sensor.exact.direction,
+    ] {
+        assert!(
+            finite(image),
+            "{}, {lookup}: NaN or Inf",
+            s.source.display()
+        );
     }
     let angles = angles_deg(&sensor.gpu, &sensor.exact.direction, |_, _| true);
     let outline =
@@ -41,30 +53,58 @@ fn finite(img: &RgbaImage) -> bool {
     img.pixels.iter().all(|p| p.iter().all(|c| c.is_finite()))
 }
 
-/// The known answer, on every device: on the furnished room the hyperboloid's plain
-/// lookup is within 0.02 texel at p99 (measured 0.0007 on lavapipe), the sphere's is off by
-/// more than a degree (measured 13 degrees at p99).
+/// The known answer, on every device: on the furnished room the hyperboloid's and
+/// the paraboloid's plain lookups are within 0.02 texel at p99 (measured 0.0007 and 0.0006 on
+/// lavapipe), the sphere's is off by more than a degree (measured 13 degrees at p99).
 #[test]
 fn the_plain_lookup_is_exact_at_a_central_mirrors_viewpoint() {
     for device in devices() {
         let gpu = Gpu::on(&device, OptionalFeatures::default());
-        let (central, outline) =
-            sensor_error(&gpu, &scene("scenes/hyperbolic-room.toml"), Lookup::Plain);
+        for rel in ["scenes/hyperbolic-room.toml", "scenes/parabolic-room.toml"] {
+            let (central, outline) = sensor_error(&gpu, &scene(rel), Lookup::Plain);
+            eprintln!("{device}: {rel} {central:?}");
+            assert!(
+                central.pixels > 100_000,
+                "{device}: the mirror fills the sensor"
+            );
+            assert!(
+                central.p99_texels <= 0.02,
+                "{device}, {rel}: plain lookup {central:?}"
+            );
+            assert_eq!(outline, [0, 0], "{device}, {rel}: the mirror's outline");
+        }
         let (sphere, _) = sensor_error(&gpu, &scene("scenes/furnished-room.toml"), Lookup::Plain);
         gpu.finish();
-        eprintln!("{device}: hyperboloid {central:?}\n{device}: sphere {sphere:?}");
-        assert!(
-            central.pixels > 100_000,
-            "{device}: the mirror fills the sensor"
-        );
-        assert!(
-            central.p99_texels <= 0.02,
-            "{device}: the hyperboloid's plain lookup {central:?}"
-        );
-        assert_eq!(outline, [0, 0], "{device}: the mirror's outline");
+        eprintln!("{device}: sphere {sphere:?}");
         assert!(
             sphere.p99_deg > 1.0,
             "{device}: the sphere's plain lookup {sphere:?}"
+        );
+    }
+}
+
+/// The paraboloid's orthographic pixel exactly on the axis (the odd image's centre), where
+/// the intersection's quadratic loses its leading term: it sees straight down, on the GPU as
+/// in the reference.
+#[test]
+fn the_ray_up_a_paraboloids_axis_sees_straight_down() {
+    let s = scene("scenes/hard/paraboloid-axis.toml");
+    let [w, h] = s.sensor.resolution;
+    assert_eq!(
+        (w % 2, h % 2),
+        (1, 1),
+        "an odd image has a pixel on the axis"
+    );
+    let gpu = Gpu::new();
+    let [_, sensor] = lookup_directions(&gpu, &s, Lookup::Plain);
+    gpu.finish();
+    for image in [&sensor.gpu, &sensor.exact.direction] {
+        let p = image.pixel(w / 2, h / 2);
+        let d = glam::Vec3::new(p[0], p[1], p[2]);
+        assert_eq!(p[3], 1.0, "the axis pixel sees the mirror");
+        assert!(
+            d.angle_between(glam::Vec3::NEG_Y) < 1e-3,
+            "the axis pixel sees {d}"
         );
     }
 }
@@ -104,33 +144,32 @@ fn every_lookup_is_exact_on_every_central_mirror() {
 }
 
 /// The cube does not depend on the mirror's shape, only on its viewpoint: every fill method
-/// gives the hyperbolic sensor the image six-pass gives it, bit for bit.
+/// gives the hyperbolic and the parabolic sensor the image six-pass gives it, bit for bit.
 #[test]
 fn every_method_fills_the_same_cube_for_a_central_mirror() {
     let (gpu, methods) = Gpu::with_all_methods();
-    let s = scene("scenes/hyperbolic-room.toml");
-    let sensor = |method| {
-        let options = RenderOptions {
-            cube_size: Some(64),
-            method,
-            ..Default::default()
+    for rel in ["scenes/hyperbolic-room.toml", "scenes/parabolic-room.toml"] {
+        let s = scene(rel);
+        let sensor = |method| {
+            let options = RenderOptions {
+                cube_size: Some(64),
+                method,
+                ..Default::default()
+            };
+            let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+            let views = Readback {
+                views: true,
+                ..Default::default()
+            };
+            let (_, images) = r.render_frame(0, 0.5, views).expect("frame");
+            images.sensor.expect("the sensor's image")
         };
-        let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
-        let views = Readback {
-            views: true,
-            ..Default::default()
-        };
-        let (_, images) = r.render_frame(0, 0.5, views).expect("frame");
-        images.sensor.expect("the sensor's image")
-    };
-    let first = sensor(methods[0]);
-    assert!(finite(&first));
-    for &method in &methods[1..] {
-        assert!(
-            sensor(method).pixels == first.pixels,
-            "{method} differs from {}",
-            methods[0]
-        );
+        let first = sensor(methods[0]);
+        assert!(finite(&first));
+        for &method in &methods[1..] {
+            let same = sensor(method).pixels == first.pixels;
+            assert!(same, "{rel}: {method} differs from {}", methods[0]);
+        }
     }
     gpu.finish();
 }

@@ -69,10 +69,12 @@ fn gpu_outputs_with(
 /// Measured maxima are printed.
 #[test]
 fn the_gpu_ray_map_is_the_exact_one_on_every_device() {
-    // The sphere, and a central mirror (the hyperboloid's quadric in f32 against f64).
+    // The sphere, and the central mirrors (their quadric in f32 against f64; the paraboloid's
+    // camera orthographic).
     for rel in [
         "scenes/test/six-colour-room.toml",
         "scenes/hyperbolic-room.toml",
+        "scenes/parabolic-room.toml",
     ] {
         gpu_ray_map_is_exact(rel);
     }

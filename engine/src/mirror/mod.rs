@@ -5,16 +5,20 @@
 //! - `sphere`: the thesis's mirror (non-central: the reflected rays do not pass through one
 //!   point, so a cube lookup from its centre has a parallax error);
 //! - `hyperboloid`: a central mirror (Baker and Nayar) seen by a perspective camera at its
-//!   outer focus; every reflected ray's line passes through the inner focus, the viewpoint.
+//!   outer focus; every reflected ray's line passes through the inner focus, the viewpoint;
+//! - `paraboloid`: a central mirror seen by an orthographic camera looking up its axis; every
+//!   reflected ray's line passes through its focus.
 //!
 //! Every shape lives in the mirror's frame: its viewpoint (the sphere's centre, a central
 //! mirror's inner focus) at the origin, its axis along +Y. The cube map is rendered from that
 //! point, and the sensor camera sits on the axis below it.
 
 mod hyperboloid;
+mod paraboloid;
 mod quadric;
 
 pub use hyperboloid::Hyperboloid;
+pub use paraboloid::Paraboloid;
 pub use quadric::{Quadric, ShapeHit};
 
 use glam::DVec3;
@@ -27,10 +31,11 @@ pub enum MirrorShape {
         radius_m: f32,
     },
     Hyperboloid(Hyperboloid),
+    Paraboloid(Paraboloid),
 }
 
 /// The names the scene file's `mirror.shape` accepts, in the order the docs list them.
-pub const SHAPE_NAMES: [&str; 2] = ["sphere", "hyperboloid"];
+pub const SHAPE_NAMES: [&str; 3] = ["sphere", "hyperboloid", "paraboloid"];
 
 impl MirrorShape {
     /// The name the scene file uses.
@@ -38,6 +43,7 @@ impl MirrorShape {
         match self {
             MirrorShape::Sphere { .. } => "sphere",
             MirrorShape::Hyperboloid(_) => "hyperboloid",
+            MirrorShape::Paraboloid(_) => "paraboloid",
         }
     }
 
@@ -47,6 +53,7 @@ impl MirrorShape {
         match self {
             MirrorShape::Sphere { radius_m } => *radius_m,
             MirrorShape::Hyperboloid(h) => h.bounding_radius_m() as f32,
+            MirrorShape::Paraboloid(p) => p.bounding_radius_m() as f32,
         }
     }
 
@@ -56,7 +63,10 @@ impl MirrorShape {
     pub fn hit(&self, o: DVec3, d: DVec3) -> Option<ShapeHit> {
         match self {
             MirrorShape::Sphere { radius_m } => sphere_hit(o, d, f64::from(*radius_m)),
-            MirrorShape::Hyperboloid(h) => h.quadric().hit(o, d),
+            _ => self
+                .quadric()
+                .expect("every other shape is a quadric")
+                .hit(o, d),
         }
     }
 
@@ -65,21 +75,27 @@ impl MirrorShape {
     pub fn surface_hit(&self, o: DVec3, d: DVec3) -> Option<ShapeHit> {
         match self {
             MirrorShape::Sphere { .. } => self.hit(o, d),
-            MirrorShape::Hyperboloid(h) => Quadric {
+            _ => Quadric {
                 rim_y: f64::INFINITY,
-                ..h.quadric()
+                ..self.quadric().expect("every other shape is a quadric")
             }
             .hit(o, d),
         }
     }
 
     /// The distance below the viewpoint at which the shape's own camera sits (m): the outer
-    /// focus of a hyperboloid; None where the scene chooses it (the sphere's `sensor.offset`).
+    /// focus of a hyperboloid; None where the scene chooses it (`sensor.offset`: the sphere's
+    /// pinhole, the paraboloid's orthographic image plane).
     pub fn camera_distance_m(&self) -> Option<f64> {
         match self {
-            MirrorShape::Sphere { .. } => None,
             MirrorShape::Hyperboloid(h) => Some(h.focal_distance_m),
+            _ => None,
         }
+    }
+
+    /// Whether the shape's camera is orthographic (looking up the axis with parallel rays).
+    pub fn orthographic_camera(&self) -> bool {
+        matches!(self, MirrorShape::Paraboloid(_))
     }
 
     /// The unified (Mei) model's xi of a central shape with its camera at its focus; None
@@ -88,19 +104,14 @@ impl MirrorShape {
         match self {
             MirrorShape::Sphere { .. } => None,
             MirrorShape::Hyperboloid(h) => Some(h.xi()),
+            MirrorShape::Paraboloid(_) => Some(1.0),
         }
     }
 
     /// The rim: its radius from the axis and its height above the viewpoint (m); None for
     /// the closed sphere.
     pub fn rim(&self) -> Option<(f64, f64)> {
-        match self {
-            MirrorShape::Sphere { .. } => None,
-            MirrorShape::Hyperboloid(h) => {
-                let q = h.quadric();
-                Some((q.rim_r, q.rim_y))
-            }
-        }
+        self.quadric().map(|q| (q.rim_r, q.rim_y))
     }
 
     /// The implicit quadric of a central shape (what `shaders/include/quadric.glsl`
@@ -109,6 +120,7 @@ impl MirrorShape {
         match self {
             MirrorShape::Sphere { .. } => None,
             MirrorShape::Hyperboloid(h) => Some(h.quadric()),
+            MirrorShape::Paraboloid(p) => Some(p.quadric()),
         }
     }
 }

@@ -127,3 +127,50 @@ fn xi_is_d_over_the_hypotenuse_and_the_semi_axes_make_the_foci() {
     // d = 0.1, 4p = 0.04: p = 0.01, 4p² = 0.0004.
     assert!((h.xi() - 0.1 / (0.01f64 + 0.0004).sqrt()).abs() < 1e-15);
 }
+
+#[test]
+fn a_ray_aimed_at_a_paraboloids_focus_reflects_along_its_axis() {
+    use super::Paraboloid;
+    for p in [
+        Paraboloid {
+            latus_rectum_m: 2.0,
+            rim_radius_m: 1.2,
+        },
+        Paraboloid {
+            latus_rectum_m: 0.02,
+            rim_radius_m: 0.03,
+        },
+    ] {
+        let shape = MirrorShape::Paraboloid(p);
+        let q = p.quadric();
+        assert!(
+            (q.rim_y - (p.rim_radius_m.powi(2) / p.latus_rectum_m - p.latus_rectum_m / 4.0)).abs()
+                < 1e-12
+        );
+        let rim_elevation = q.rim_y.atan2(q.rim_r);
+        let mut hits = 0;
+        for d in towards_viewpoint(rim_elevation - 1e-3) {
+            let from = -d * 100.0 * p.latus_rectum_m;
+            let hit = shape
+                .hit(from, d)
+                .expect("aimed at the focus inside the mirror");
+            let r = reflect(d, hit.normal);
+            assert!(
+                (r - DVec3::NEG_Y).length() < 1e-9,
+                "{p:?}: {d} reflects to {r}"
+            );
+            // On the surface: as far from the focus as from the directrix y = -2p.
+            let at = from + hit.t * d;
+            let gap = at.length() - (at.y + 0.5 * p.latus_rectum_m);
+            assert!(gap.abs() < 1e-12 * 100.0, "{gap}");
+            hits += 1;
+        }
+        assert_eq!(hits, 24 * 36);
+        // Straight up the axis (the quadratic's leading term is 0): the vertex, facing down.
+        let up = shape
+            .hit(DVec3::new(0.0, -5.0, 0.0), DVec3::Y)
+            .expect("the vertex");
+        assert!((up.t - (5.0 - 0.25 * p.latus_rectum_m)).abs() < 1e-12);
+        assert_eq!(up.normal, DVec3::NEG_Y);
+    }
+}

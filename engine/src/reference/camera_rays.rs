@@ -15,6 +15,8 @@ use crate::scene::camera::ViewBasis;
 pub struct CameraRays {
     /// `forward + x_term` for column `x` and distinct x offset `j`: `columns[x * xs + j]`.
     columns: Vec<Vec3>,
+    /// The distinct x offsets themselves (an orthographic view's origins need them).
+    distinct: Vec<f32>,
     /// Distinct x offsets in the pattern (a few per row of cells, not one per sample).
     xs: usize,
     /// For each sample of the pattern: its index among the distinct x offsets, and its y offset.
@@ -56,6 +58,7 @@ impl CameraRays {
         Self {
             columns,
             xs: distinct.len(),
+            distinct,
             samples,
             view: *view,
             width: width as f32,
@@ -77,6 +80,24 @@ impl CameraRays {
     pub fn ray(&self, x: u32, k: usize, row_terms: &[Vec3]) -> Vec3 {
         let j = self.samples[k].0;
         (self.columns[x as usize * self.xs + j] + row_terms[k]).normalize()
+    }
+
+    /// Where sample `k` of pixel (x, y) starts: the eye of a pinhole; on an orthographic
+    /// view's image plane, where its NDC point lies.
+    pub fn origin(&self, x: u32, y: u32, k: usize) -> Vec3 {
+        let (j, oy) = self.samples[k];
+        self.view.origin(
+            ndc(x as f32 + self.distinct[j], self.width),
+            ndc(y as f32 + oy, self.height),
+        )
+    }
+
+    /// [`Self::origin`] of the centre of pixel (x, y).
+    pub fn centre_origin(&self, x: u32, y: u32) -> Vec3 {
+        self.view.origin(
+            ndc(x as f32 + 0.5, self.width),
+            ndc(y as f32 + 0.5, self.height),
+        )
     }
 
     /// The unit ray through the centre of pixel (x, y), computed directly (for a pixel whose

@@ -285,7 +285,8 @@ impl<'a> Reference<'a> {
         let offsets = sample_offsets(spp);
         let centre_index = offsets.iter().position(|o| *o == Vec2::splat(0.5));
         let start = Instant::now();
-        let clear = self.nothing_before_mirror(view.eye);
+        // An orthographic view's rays start all over its image plane: no one box to test.
+        let clear = !view.is_orthographic() && self.nothing_before_mirror(view.eye);
         let camera = CameraRays::new(view, width, height, &offsets);
         let rows: Vec<Vec<Pixel>> = (0..height)
             .into_par_iter()
@@ -296,7 +297,8 @@ impl<'a> Reference<'a> {
                         let (mut sum, mut rays, mut misses) = (Vec3::ZERO, 0u32, 0u32);
                         let mut centre = None;
                         for k in 0..offsets.len() {
-                            let s = self.trace(view.eye, camera.ray(x, k, &row_terms), clear);
+                            let from = camera.origin(x, y, k);
+                            let s = self.trace(from, camera.ray(x, k, &row_terms), clear);
                             sum += s.color;
                             rays += s.rays;
                             misses += u32::from(s.missed);
@@ -307,7 +309,8 @@ impl<'a> Reference<'a> {
                         // Not one of the samples: traced for the layers only (not a colour
                         // sample, so it is counted apart from the camera paths).
                         let centre = centre.unwrap_or_else(|| {
-                            let c = self.trace(view.eye, camera.centre(x, y), clear);
+                            let c =
+                                self.trace(camera.centre_origin(x, y), camera.centre(x, y), clear);
                             rays += c.rays;
                             c
                         });

@@ -301,6 +301,21 @@ impl Renderer {
     /// eye (`ViewBasis::near_plane_for`).
     pub(super) fn view_facing(&self, view: &crate::scene::camera::ViewBasis) -> Facing {
         let reach = super::camera_clearance(view.eye, self.scene.mirror.radius_m);
+        if view.is_orthographic() {
+            // The near plane spans the whole image: a drawable within reach of that plane,
+            // anywhere across it, may be cut open there.
+            let f = view.forward;
+            let cull = (self.resources.drawables.iter().zip(&self.drawn.bounds))
+                .map(|(d, &(lo, hi))| {
+                    let nearest = Vec3::select(f.cmpge(Vec3::ZERO), lo, hi);
+                    d.cull_back && f.dot(nearest - view.eye) > reach
+                })
+                .collect();
+            return Facing {
+                front: VIEW_FRONT,
+                cull,
+            };
+        }
         self.facing(VIEW_FRONT, view.eye, reach)
     }
 

@@ -38,6 +38,8 @@ pub struct ViewData {
     pub ray_down: Vec4,
     pub ray_forward: Vec4,
     pub viewport: Vec4,
+    pub origin_right: Vec4,
+    pub origin_down: Vec4,
 }
 
 #[repr(C)]
@@ -98,7 +100,7 @@ pub struct Vertex {
 // std430 array strides must equal the Rust sizes; build.rs reads member offsets only, so the
 // sizes are pinned here by hand (each is a multiple of 16, as std430 arrays of these need).
 const _: () = assert!(std::mem::size_of::<FrameData>() == 144);
-const _: () = assert!(std::mem::size_of::<ViewData>() == 144);
+const _: () = assert!(std::mem::size_of::<ViewData>() == 176);
 const _: () = assert!(std::mem::size_of::<ObjectData>() == 144);
 const _: () = assert!(std::mem::size_of::<MaterialData>() == 64);
 const _: () = assert!(std::mem::size_of::<Push>() == 16);
@@ -180,6 +182,12 @@ mod tests {
             ("ViewData", "ray_down", offset_of!(ViewData, ray_down)),
             ("ViewData", "ray_forward", offset_of!(ViewData, ray_forward)),
             ("ViewData", "viewport", offset_of!(ViewData, viewport)),
+            (
+                "ViewData",
+                "origin_right",
+                offset_of!(ViewData, origin_right),
+            ),
+            ("ViewData", "origin_down", offset_of!(ViewData, origin_down)),
             (
                 "ObjectData",
                 "model_to_world",

@@ -80,6 +80,17 @@ pub fn camera_clearance(eye: Vec3, mirror_radius_m: f32) -> f32 {
         .max(1e-6)
 }
 
+/// A camera view's far plane: none for a pinhole (reverse-Z keeps its precision to infinity);
+/// an orthographic view's depth is linear, so it ends past the room's farthest corner from
+/// the mirror, seen from the eye.
+fn view_far(view: &ViewBasis, scene: &Scene) -> f32 {
+    if view.is_orthographic() {
+        scene.cube.far_m + view.eye.length()
+    } else {
+        f32::INFINITY
+    }
+}
+
 struct Pipelines {
     view_scene: Pipeline,
     /// Direction pass: scene depth only, then the mirror's lookup directions.
@@ -404,7 +415,7 @@ impl Renderer {
                 } else {
                     (
                         b.near_plane_for(camera_clearance(b.eye, scene.mirror.radius_m)),
-                        f32::INFINITY,
+                        view_far(b, scene),
                         viewports[i - 6],
                     )
                 };
@@ -415,6 +426,8 @@ impl Renderer {
                     ray_down: (b.down * b.tan_y).extend(0.0),
                     ray_forward: b.forward.extend(0.0),
                     viewport: Vec4::from_array(vp),
+                    origin_right: (b.right * b.half_x).extend(0.0),
+                    origin_down: (b.down * b.half_y).extend(0.0),
                 }
             })
             .collect();

@@ -29,6 +29,14 @@ pub(super) struct Copies {
     pub(super) items: Vec<(Slot, u64)>,
 }
 
+/// Where a view's copy into the readback buffer may start, at or after `offset`: a multiple of
+/// 16 bytes, the largest texel here and a multiple of every other (Vulkan wants a copy's
+/// buffer offset to be a multiple of its format's texel size; an odd-sized 8-byte image before
+/// a 16-byte one would break that).
+pub(super) fn copy_offset(offset: u64) -> u64 {
+    offset.next_multiple_of(16)
+}
+
 /// Bytes per texel of a view target's colour format.
 pub(super) fn texel_bytes(slot: Slot) -> u64 {
     match slot {
@@ -160,6 +168,7 @@ impl Renderer {
             if display.is_some() {
                 continue;
             }
+            offset = copy_offset(offset);
             copies.items.push((slot, offset));
             offset += u64::from(target.width) * u64::from(target.height) * texel_bytes(slot);
         }

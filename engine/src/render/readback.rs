@@ -5,7 +5,7 @@
 use ash::vk;
 
 use super::draw::{barrier, COPY_READ, SAMPLED};
-use super::passes::{texel_bytes, Copies, Slot};
+use super::passes::{copy_offset, texel_bytes, Copies, Slot};
 use super::*;
 use crate::vk::commands::host_read_barrier;
 
@@ -25,7 +25,8 @@ impl Renderer {
     pub(super) fn readback_size(&self, readback: Readback) -> u64 {
         let mut bytes = self.cube_readback_bytes(readback);
         for (slot, t) in self.view_slots(readback) {
-            bytes += u64::from(t.width) * u64::from(t.height) * texel_bytes(slot);
+            bytes =
+                copy_offset(bytes) + u64::from(t.width) * u64::from(t.height) * texel_bytes(slot);
         }
         bytes
     }

@@ -3,21 +3,26 @@
 //! View space is x right, y down, z forward: the axes of Vulkan's framebuffer and NDC, so a
 //! view is fully described by three world-space unit vectors and two tangents. The ray through
 //! NDC point (x, y) is `forward + x * tan_x * right + y * tan_y * down`, the same formula the
-//! mirror shader uses, so rasterizer and ray agree on every pixel centre.
+//! mirror shader uses, so rasterizer and ray agree on every pixel centre. An orthographic view
+//! (a paraboloid's telecentric sensor) has both tangents 0 and its rays start across the image
+//! instead: from `eye + x * half_x * right + y * half_y * down`, all along `forward`.
 
 use glam::{Mat4, Vec3, Vec4};
 
-/// A pinhole camera in render space.
+/// A pinhole (or orthographic) camera in render space.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ViewBasis {
     pub eye: Vec3,
     pub right: Vec3,
     pub down: Vec3,
     pub forward: Vec3,
-    /// tan(half horizontal field of view).
+    /// tan(half horizontal field of view); 0 for an orthographic view.
     pub tan_x: f32,
-    /// tan(half vertical field of view).
+    /// tan(half vertical field of view); 0 for an orthographic view.
     pub tan_y: f32,
+    /// An orthographic view's half width and half height (m); 0 for a pinhole.
+    pub half_x: f32,
+    pub half_y: f32,
 }
 
 /// The six cube faces in Vulkan's layer order: +X, -X, +Y, -Y, +Z, -Z.
@@ -46,7 +51,34 @@ impl ViewBasis {
             forward,
             tan_x: 1.0,
             tan_y: 1.0,
+            half_x: 0.0,
+            half_y: 0.0,
         }
+    }
+
+    /// An orthographic camera at `eye` looking along `forward`, image up along `up`, its image
+    /// `2 half_y` metres high.
+    pub fn orthographic(eye: Vec3, forward: Vec3, up: Vec3, half_y: f32, aspect: f32) -> Self {
+        Self {
+            tan_x: 0.0,
+            tan_y: 0.0,
+            half_x: half_y * aspect,
+            half_y,
+            ..Self::look(eye, forward, up, 90.0, aspect)
+        }
+    }
+
+    pub fn is_orthographic(&self) -> bool {
+        self.half_y > 0.0
+    }
+
+    /// Where the ray through NDC point (x, y) starts: the eye for a pinhole, a point of the
+    /// image plane for an orthographic view.
+    pub fn origin(&self, ndc_x: f32, ndc_y: f32) -> Vec3 {
+        if !self.is_orthographic() {
+            return self.eye;
+        }
+        self.eye + ndc_x * self.half_x * self.right + ndc_y * self.half_y * self.down
     }
 
     /// A camera at `eye` looking along `forward` with the image's up along `up` (not parallel).
@@ -62,6 +94,8 @@ impl ViewBasis {
             forward,
             tan_x: tan_y * aspect,
             tan_y,
+            half_x: 0.0,
+            half_y: 0.0,
         }
     }
 
@@ -97,6 +131,9 @@ impl ViewBasis {
     /// Reverse-Z perspective: depth 1 at `near`, 0 at `far` (`far = inf` allowed), so that
     /// float depth keeps its precision far away. Depth compare is GREATER.
     pub fn view_to_clip(&self, near: f32, far: f32) -> Mat4 {
+        if self.is_orthographic() {
+            return self.orthographic_to_clip(near, far);
+        }
         let (a, b) = if far.is_finite() {
             (-near / (far - near), near * far / (far - near))
         } else {
@@ -107,6 +144,18 @@ impl ViewBasis {
             Vec4::new(0.0, 1.0 / self.tan_y, 0.0, 0.0),
             Vec4::new(0.0, 0.0, a, 1.0),
             Vec4::new(0.0, 0.0, b, 0.0),
+        )
+    }
+
+    /// Reverse-Z orthographic: depth (far - z) / (far - near), 1 at `near`, 0 at `far` (which
+    /// must be finite here: the depth is linear in z).
+    fn orthographic_to_clip(&self, near: f32, far: f32) -> Mat4 {
+        let span = far - near;
+        Mat4::from_cols(
+            Vec4::new(1.0 / self.half_x, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, 1.0 / self.half_y, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, -1.0 / span, 0.0),
+            Vec4::new(0.0, 0.0, far / span, 1.0),
         )
     }
 
@@ -128,13 +177,15 @@ pub struct Frustum {
 
 impl Frustum {
     pub fn new(v: &ViewBasis, near: f32, far: f32) -> Self {
-        let side = |n: Vec3| (n, -n.dot(v.eye));
+        // A side plane leans out by the tangent (pinhole) or stands `half` off the axis
+        // (orthographic): inside, x <= z tan + half in view coordinates.
+        let side = |n: Vec3, half: f32| (n, half - n.dot(v.eye));
         let f = v.forward;
         let mut planes = [
-            side(f * v.tan_x - v.right),
-            side(f * v.tan_x + v.right),
-            side(f * v.tan_y - v.down),
-            side(f * v.tan_y + v.down),
+            side(f * v.tan_x - v.right, v.half_x),
+            side(f * v.tan_x + v.right, v.half_x),
+            side(f * v.tan_y - v.down, v.half_y),
+            side(f * v.tan_y + v.down, v.half_y),
             (f, -f.dot(v.eye) - near),
             (-f, f.dot(v.eye) + far),
         ];

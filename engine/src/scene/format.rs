@@ -83,7 +83,7 @@ pub struct MirrorSpec {
     pub radius: Option<f64>,
     /// A hyperboloid's distance between its foci (d).
     pub focal_distance: Option<f64>,
-    /// A hyperboloid's latus rectum (4p).
+    /// A hyperboloid's or paraboloid's latus rectum (4p).
     pub latus_rectum: Option<f64>,
     /// A central mirror's rim radius.
     pub rim_radius: Option<f64>,
@@ -100,6 +100,7 @@ pub struct MirrorSpec {
 pub enum MirrorShapeSpec {
     Sphere,
     Hyperboloid,
+    Paraboloid,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

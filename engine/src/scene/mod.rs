@@ -285,6 +285,9 @@ pub struct SensorCamera {
     /// The camera's axis turned this far (degrees) about the world X axis, from +Y towards
     /// +Z (`sensor.tilt`); 0 by default.
     pub tilt_deg: f32,
+    /// Half the height (m) of an orthographic camera's image (a paraboloid's); 0 for a
+    /// pinhole, whose vertical field of view is `fov_y_deg`.
+    pub orthographic_half_m: f32,
 }
 
 impl SensorCamera {
@@ -293,6 +296,15 @@ impl SensorCamera {
     pub fn view(&self, up: Vec3, aspect: f32) -> camera::ViewBasis {
         let eye = Vec3::new(0.0, -self.offset_m, 0.0) + self.shift_m;
         let forward = Quat::from_rotation_x(self.tilt_deg.to_radians()) * Vec3::Y;
+        if self.orthographic_half_m > 0.0 {
+            return camera::ViewBasis::orthographic(
+                eye,
+                forward,
+                up,
+                self.orthographic_half_m,
+                aspect,
+            );
+        }
         camera::ViewBasis::look(eye, forward, up, self.fov_y_deg, aspect)
     }
 }

@@ -55,11 +55,26 @@ impl SensorOptics {
     }
 
     /// The angle of the mirror's rim from the axis, seen from the eye (radians): the tangent
-    /// cone's half-angle for the sphere, the rim's edge for a central mirror.
-    pub fn rim_angle(&self) -> f64 {
-        match self.shape.rim() {
+    /// cone's half-angle for the sphere, the rim's edge for a central mirror; None for an
+    /// orthographic camera, whose rays all run along the axis.
+    pub fn rim_angle(&self) -> Option<f64> {
+        if self.view.is_orthographic() {
+            return None;
+        }
+        Some(match self.shape.rim() {
             None => (f64::from(self.radius_m) / self.eye_distance()).asin(),
             Some((rim_r, rim_y)) => rim_r.atan2(rim_y + self.eye_distance()),
+        })
+    }
+
+    /// How far out the mirror's camera rays reach, in the camera's radial parameter: the rim's
+    /// angle from the axis (radians) for a pinhole, the rim's radius (m) for an orthographic
+    /// camera.
+    pub fn rim_parameter(&self) -> f64 {
+        match (self.rim_angle(), self.shape.rim()) {
+            (Some(angle), _) => angle,
+            (None, Some((rim_r, _))) => rim_r,
+            (None, None) => f64::from(self.radius_m),
         }
     }
 
@@ -67,15 +82,15 @@ impl SensorOptics {
     /// along the tangent cone, `90 degrees - rim angle` above the horizon; a central mirror
     /// shows up to its rim's reflection. The lowest is -90 degrees.
     pub fn max_elevation(&self) -> f64 {
-        match self.shape {
-            MirrorShape::Sphere { .. } => std::f64::consts::FRAC_PI_2 - self.rim_angle(),
-            _ => self.reflected_elevation(self.rim_angle()),
+        match (self.shape, self.rim_angle()) {
+            (MirrorShape::Sphere { .. }, Some(rim)) => std::f64::consts::FRAC_PI_2 - rim,
+            _ => self.reflected_elevation(self.rim_parameter()),
         }
     }
 
-    /// Where the world direction `d` (from the eye, render space) lands in the image, in pixels
-    /// ((0, 0) the top-left corner, pixel centres at +0.5); None behind the camera. The
-    /// inverse of `ray_map::pixel_ray`.
+    /// Where the world direction `d` (from the eye, render space) lands in a pinhole's image,
+    /// in pixels ((0, 0) the top-left corner, pixel centres at +0.5); None behind the camera.
+    /// The inverse of `ray_map::pixel_ray`.
     pub fn project(&self, d: Vec3) -> Option<Vec2> {
         let v = &self.view;
         let z = d.dot(v.forward);
@@ -86,43 +101,75 @@ impl SensorOptics {
             d.dot(v.right) / (z * v.tan_x),
             d.dot(v.down) / (z * v.tan_y),
         );
-        let size = Vec2::new(self.width as f32, self.height as f32);
-        Some((ndc + Vec2::ONE) * 0.5 * size)
+        Some(self.ndc_to_pixel(ndc))
     }
 
-    /// The image of the mirror's centre: the centre of the mirror's disc (pixels).
+    fn ndc_to_pixel(&self, ndc: Vec2) -> Vec2 {
+        let size = Vec2::new(self.width as f32, self.height as f32);
+        (ndc + Vec2::ONE) * 0.5 * size
+    }
+
+    /// The image of the mirror's axis: the centre of the mirror's disc (pixels).
     pub fn disc_centre_px(&self) -> Vec2 {
-        self.project(-self.view.eye)
+        self.pixel_at(0.0, 0.0)
             .expect("the sensor looks at the mirror's centre")
     }
 
-    /// The disc's radius in pixels: the image of the tangent cone (a circle, since the camera
-    /// looks along the axis and its pixels are square: `tan_x / tan_y` is the aspect).
+    /// The disc's radius in pixels: the image of the rim (a circle, since the camera looks
+    /// along the axis and its pixels are square).
     pub fn disc_radius_px(&self) -> f32 {
-        let rim = self.camera_ray(self.rim_angle(), 0.0);
         let at = self
-            .project(rim)
+            .pixel_at(self.rim_parameter(), 0.0)
             .expect("the rim is in front of the camera");
         (at - self.disc_centre_px()).length()
     }
 
-    /// The unit camera ray at angle `theta` from the axis, at azimuth `phi` (radians).
+    /// The axis and the horizontal unit vectors along azimuth 0 (+X) and 90 degrees (+Z),
+    /// square to it.
+    fn axes(&self) -> (DVec3, DVec3, DVec3) {
+        let axis = if self.view.is_orthographic() {
+            self.view.forward.as_dvec3()
+        } else {
+            (-self.view.eye).normalize().as_dvec3()
+        };
+        let e1 = (DVec3::X - axis * axis.x).normalize();
+        (axis, e1, e1.cross(axis))
+    }
+
+    /// The unit camera ray at angle `theta` from the axis, at azimuth `phi` (radians), of a
+    /// pinhole.
     pub fn camera_ray(&self, theta: f64, phi: f64) -> Vec3 {
         let (st, ct) = theta.sin_cos();
         let (sp, cp) = phi.sin_cos();
-        let axis = (-self.view.eye).normalize().as_dvec3();
-        // Horizontal unit vectors along azimuth 0 (+X) and 90 degrees (+Z), square to the axis.
-        let e1 = (glam::DVec3::X - axis * axis.x).normalize();
-        let e2 = e1.cross(axis);
+        let (axis, e1, e2) = self.axes();
         (axis * ct + (e1 * cp + e2 * sp) * st).as_vec3()
     }
 
-    /// Elevation (radians) of the reflection of the camera ray at angle `theta` from the
-    /// axis, `theta` in [0, rim angle]. Exact geometry in f64 in the plane through the axis:
-    /// the eye at distance D below the viewpoint, the ray (sin t, cos t).
-    pub fn reflected_elevation(&self, theta: f64) -> f64 {
-        let dir = DVec3::new(theta.sin(), theta.cos(), 0.0);
-        let eye = DVec3::new(0.0, -self.eye_distance(), 0.0);
+    /// The image point (pixels) of the camera ray at radial parameter `s` ([`Self::rim_parameter`]'s
+    /// units) and azimuth `phi` (radians).
+    pub fn pixel_at(&self, s: f64, phi: f64) -> Option<Vec2> {
+        if !self.view.is_orthographic() {
+            return self.project(self.camera_ray(s, phi));
+        }
+        let (_, e1, e2) = self.axes();
+        let (sp, cp) = phi.sin_cos();
+        let off = ((e1 * cp + e2 * sp) * s).as_vec3();
+        let v = &self.view;
+        let ndc = Vec2::new(off.dot(v.right) / v.half_x, off.dot(v.down) / v.half_y);
+        Some(self.ndc_to_pixel(ndc))
+    }
+
+    /// Elevation (radians) of the reflection of the camera ray at radial parameter `s` (the
+    /// angle from the axis of a pinhole's ray, the distance from the axis of an orthographic
+    /// one), `s` in [0, rim parameter]. Exact geometry in f64 in the plane through the axis:
+    /// the eye at distance D below the viewpoint.
+    pub fn reflected_elevation(&self, s: f64) -> f64 {
+        let below = DVec3::new(0.0, -self.eye_distance(), 0.0);
+        let (eye, dir) = if self.view.is_orthographic() {
+            (below + DVec3::new(s, 0.0, 0.0), DVec3::Y)
+        } else {
+            (below, DVec3::new(s.sin(), s.cos(), 0.0))
+        };
         let n = match self.shape {
             MirrorShape::Sphere { radius_m } => {
                 // Nearest root of |eye + t dir| = R, clamped at the rim where the discriminant
@@ -136,7 +183,7 @@ impl SensorOptics {
             shape => {
                 shape
                     .surface_hit(eye, dir)
-                    .expect("a ray inside the rim angle meets the mirror")
+                    .expect("a ray inside the rim meets the mirror")
                     .normal
             }
         };
@@ -148,7 +195,7 @@ impl SensorOptics {
     /// (radians), by bisection on the monotonic [`Self::reflected_elevation`]; None outside
     /// [-90 degrees, max elevation].
     pub fn theta_for_elevation(&self, elevation: f64) -> Option<f64> {
-        let (mut lo, mut hi) = (0.0, self.rim_angle());
+        let (mut lo, mut hi) = (0.0, self.rim_parameter());
         if !(-std::f64::consts::FRAC_PI_2..=self.max_elevation()).contains(&elevation) {
             return None;
         }
@@ -168,7 +215,7 @@ impl SensorOptics {
     /// `elevation` and azimuth `azimuth` (radians); None beyond what the mirror shows.
     pub fn pixel_seeing(&self, elevation: f64, azimuth: f64) -> Option<Vec2> {
         let theta = self.theta_for_elevation(elevation)?;
-        self.project(self.camera_ray(theta, azimuth))
+        self.pixel_at(theta, azimuth)
     }
 }
 
@@ -205,7 +252,7 @@ mod tests {
     #[test]
     fn the_disc_follows_from_the_pose_and_the_sphere() {
         let o = SensorOptics::at(&six_colour(), 0.0);
-        assert!((o.rim_angle() - 0.4f64.asin()).abs() < 1e-6);
+        assert!((o.rim_angle().unwrap() - 0.4f64.asin()).abs() < 1e-6);
         assert!(
             (o.max_elevation().to_degrees() - (90.0 - 0.4f64.asin().to_degrees())).abs() < 1e-4
         );

@@ -227,6 +227,7 @@ impl SensorOutputs {
         let v = &o.view;
         let rotation = Mat3::from_cols(v.right, v.down, v.forward);
         let (w, h) = (o.width as f32, o.height as f32);
+        let ortho = v.is_orthographic();
         CameraRecord {
             source: self.source.clone(),
             time_s: self.time_s,
@@ -242,9 +243,11 @@ impl SensorOutputs {
                 down: v.down.to_array(),
                 forward: v.forward.to_array(),
                 image_size: [o.width, o.height],
-                fov_x_deg: 2.0 * v.tan_x.atan().to_degrees(),
-                fov_y_deg: 2.0 * v.tan_y.atan().to_degrees(),
-                focal_px: [0.5 * w / v.tan_x, 0.5 * h / v.tan_y],
+                projection: if ortho { "orthographic" } else { "perspective" },
+                fov_x_deg: (!ortho).then(|| 2.0 * v.tan_x.atan().to_degrees()),
+                fov_y_deg: (!ortho).then(|| 2.0 * v.tan_y.atan().to_degrees()),
+                focal_px: (!ortho).then(|| [0.5 * w / v.tan_x, 0.5 * h / v.tan_y]),
+                pixels_per_m: ortho.then(|| [0.5 * w / v.half_x, 0.5 * h / v.half_y]),
                 principal_point_px: [0.5 * w, 0.5 * h],
             },
             mirror: MirrorRecord {
@@ -256,7 +259,7 @@ impl SensorOutputs {
             disc: DiscRecord {
                 centre_px: o.disc_centre_px().to_array(),
                 radius_px: o.disc_radius_px(),
-                rim_angle_deg: o.rim_angle().to_degrees(),
+                rim_angle_deg: o.rim_angle().map(f64::to_degrees),
                 max_elevation_deg: o.max_elevation().to_degrees(),
             },
             files: FilesRecord {
@@ -299,11 +302,20 @@ pub struct SensorRecord {
     pub down: [f32; 3],
     pub forward: [f32; 3],
     pub image_size: [u32; 2],
-    pub fov_x_deg: f32,
-    pub fov_y_deg: f32,
+    /// "perspective" (a pinhole), or "orthographic" (a paraboloid's telecentric camera: its
+    /// rays run along `forward` from the image plane through `position_m`).
+    pub projection: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fov_x_deg: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fov_y_deg: Option<f32>,
     /// Pinhole intrinsics in pixels: fx, fy, and the principal point (cx, cy), with pixel
     /// (0, 0)'s top-left corner at the origin (its centre at 0.5, 0.5).
-    pub focal_px: [f32; 2],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub focal_px: Option<[f32; 2]>,
+    /// An orthographic camera's scale: image pixels per metre across and down.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pixels_per_m: Option<[f32; 2]>,
     pub principal_point_px: [f32; 2],
 }
 
@@ -325,8 +337,10 @@ pub struct CentralRecord {
     pub xi: f64,
     pub rim_radius_m: f64,
     pub rim_height_m: f64,
-    /// The camera's distance below the viewpoint (the outer focus).
-    pub camera_distance_m: f64,
+    /// The camera's distance below the viewpoint where the shape fixes it (a hyperboloid's
+    /// outer focus); none for the paraboloid's orthographic camera.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub camera_distance_m: Option<f64>,
 }
 
 impl CentralRecord {
@@ -336,7 +350,7 @@ impl CentralRecord {
             xi: shape.xi()?,
             rim_radius_m,
             rim_height_m,
-            camera_distance_m: shape.camera_distance_m()?,
+            camera_distance_m: shape.camera_distance_m(),
         })
     }
 }
@@ -346,7 +360,9 @@ impl CentralRecord {
 pub struct DiscRecord {
     pub centre_px: [f32; 2],
     pub radius_px: f32,
-    pub rim_angle_deg: f64,
+    /// The rim's angle from a pinhole's axis; none for an orthographic camera.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rim_angle_deg: Option<f64>,
     pub max_elevation_deg: f64,
 }
 

@@ -152,12 +152,12 @@ impl PanoramaLayout {
         let thetas: Vec<Option<f64>> = (0..self.height)
             .map(|i| optics.theta_for_elevation(self.elevation(f64::from(i) + 0.5)))
             .collect();
-        self.fill(|i, _, a| {
-            match thetas[i as usize].and_then(|theta| optics.project(optics.camera_ray(theta, a))) {
+        self.fill(
+            |i, _, a| match thetas[i as usize].and_then(|theta| optics.pixel_at(theta, a)) {
                 Some(p) => bilinear(image, p),
                 None => [0.0; 4],
-            }
-        })
+            },
+        )
     }
 
     /// The same panorama looked up in the cube map `faces` (layer order +X, -X, +Y, -Y, +Z,

@@ -39,8 +39,8 @@ impl RayMap {
             .flat_map(|y| (0..width).map(move |x| (x, y)))
             .map(|(x, y)| {
                 let pixel = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-                let d = pixel_ray(&view, pixel, width, height);
-                mirror_reflection(view.eye, d, shape).map(|m| PixelRay {
+                let (from, d) = pixel_ray_from(&view, pixel, width, height);
+                mirror_reflection(from, d, shape).map(|m| PixelRay {
                     // Render space is the scene frame minus the mirror's centre now.
                     origin: m.point + state.mirror_center,
                     direction: m.direction,
@@ -67,9 +67,18 @@ impl RayMap {
 
 /// The unit camera ray through image point `pixel` (in pixels, (0, 0) the top-left corner).
 pub fn pixel_ray(view: &ViewBasis, pixel: Vec2, width: u32, height: u32) -> Vec3 {
+    pixel_ray_from(view, pixel, width, height).1
+}
+
+/// Where the camera ray through image point `pixel` starts (the eye of a pinhole, a point of
+/// an orthographic view's image plane) and its unit direction.
+pub fn pixel_ray_from(view: &ViewBasis, pixel: Vec2, width: u32, height: u32) -> (Vec3, Vec3) {
     let ndc_x = 2.0 * pixel.x / width as f32 - 1.0;
     let ndc_y = 2.0 * pixel.y / height as f32 - 1.0;
-    view.ray(ndc_x, ndc_y).normalize()
+    (
+        view.origin(ndc_x, ndc_y),
+        view.ray(ndc_x, ndc_y).normalize(),
+    )
 }
 
 #[cfg(test)]

@@ -131,6 +131,12 @@ impl Ctx<'_> {
                 ))
             }
             Some(focus) => focus as f32,
+            // An orthographic camera's distance changes nothing in its image: by default its
+            // image plane is as far below the viewpoint as the mirror reaches, again.
+            None if mirror.shape.orthographic_camera() => {
+                let default = f64::from(2.0 * mirror.radius_m);
+                self.positive("sensor.offset", s.offset.unwrap_or(default))?
+            }
             None => self.positive("sensor.offset", s.offset.unwrap_or(2.5))?,
         };
         if offset_m <= mirror.radius_m {
@@ -186,6 +192,26 @@ impl Ctx<'_> {
         }
         let resolution = self.resolution("sensor.resolution", s.resolution, [512, 512])?;
         let aspect = resolution[0] as f32 / resolution[1] as f32;
+        if mirror.shape.orthographic_camera() {
+            if s.fov_y.is_some() {
+                return Err(self.unused(
+                    "sensor.fov_y",
+                    "a paraboloid's camera is orthographic: it has no field of view, and its \
+                     image fits the rim",
+                ));
+            }
+            let (rim_r, _) = mirror.shape.rim().expect("a paraboloid has a rim");
+            return Ok(SensorCamera {
+                offset_m,
+                fov_y_deg: 0.0,
+                resolution,
+                up,
+                shift_m,
+                tilt_deg: self.ranged("sensor.tilt", s.tilt.unwrap_or(0.0), TILT_DEG)?,
+                // The rim fills the image's shorter side, with a 5 % margin.
+                orthographic_half_m: 1.05 * rim_r as f32 / aspect.min(1.0),
+            });
+        }
         let fov_y_deg = match (s.fov_y, rim_tangent(mirror, offset_m)) {
             (Some(v), rim) => {
                 let fov = self.ranged("sensor.fov_y", v, FOV_Y_DEG)?;
@@ -203,6 +229,7 @@ impl Ctx<'_> {
             up,
             shift_m,
             tilt_deg: self.ranged("sensor.tilt", s.tilt.unwrap_or(0.0), TILT_DEG)?,
+            orthographic_half_m: 0.0,
         })
     }
 

@@ -1,10 +1,11 @@
 //! `mirror.shape` and the fields each shape reads: a sphere's `radius`; a hyperboloid's
-//! `focal_distance`, `latus_rectum` and `rim_radius`. A field another shape reads is refused,
+//! `focal_distance`, `latus_rectum` and `rim_radius`; a paraboloid's `latus_rectum` and
+//! `rim_radius`. A field another shape reads is refused,
 //! so a scene never carries a number that does nothing.
 
 use super::numbers::num_text;
 use super::{Ctx, R};
-use crate::mirror::{Hyperboloid, MirrorShape};
+use crate::mirror::{Hyperboloid, MirrorShape, Paraboloid};
 use crate::scene::format::{MirrorShapeSpec, MirrorSpec};
 
 /// The smallest ratio between a hyperboloid's lengths (d, 4p, rim radius) that single
@@ -28,10 +29,12 @@ impl Ctx<'_> {
                 "mirror.latus_rectum",
                 "mirror.rim_radius",
             ],
+            MirrorShapeSpec::Paraboloid => &["mirror.latus_rectum", "mirror.rim_radius"],
         };
         let name = match shape {
             MirrorShapeSpec::Sphere => "sphere",
             MirrorShapeSpec::Hyperboloid => "hyperboloid",
+            MirrorShapeSpec::Paraboloid => "paraboloid",
         };
         for (field, value) in fields {
             match (reads.contains(&field), value) {
@@ -66,6 +69,20 @@ impl Ctx<'_> {
                 self.hyperboloid_fits(&h)?;
                 Ok(MirrorShape::Hyperboloid(h))
             }
+            MirrorShapeSpec::Paraboloid => {
+                let p = Paraboloid {
+                    latus_rectum_m: length("mirror.latus_rectum")?,
+                    rim_radius_m: length("mirror.rim_radius")?,
+                };
+                let ratio = p.rim_radius_m / p.latus_rectum_m;
+                self.lengths_resolved(
+                    "mirror.rim_radius",
+                    ratio,
+                    "the latus rectum",
+                    p.latus_rectum_m,
+                )?;
+                Ok(MirrorShape::Paraboloid(p))
+            }
         }
     }
 
@@ -74,20 +91,7 @@ impl Ctx<'_> {
     fn hyperboloid_fits(&self, h: &Hyperboloid) -> R<()> {
         let (d, l, r) = (h.focal_distance_m, h.latus_rectum_m, h.rim_radius_m);
         for (field, v) in [("mirror.latus_rectum", l), ("mirror.rim_radius", r)] {
-            let ratio = v / d;
-            if !(MIN_LENGTH_RATIO..=1.0 / MIN_LENGTH_RATIO).contains(&ratio) {
-                return Err(self.invalid(
-                    field,
-                    format!(
-                        "is {} times the focal distance {} m; between {} and {} times is \
-                         allowed (single precision resolves the mirror's shape within that)",
-                        num_text(ratio),
-                        num_text(d),
-                        num_text(MIN_LENGTH_RATIO),
-                        num_text(1.0 / MIN_LENGTH_RATIO)
-                    ),
-                ));
-            }
+            self.lengths_resolved(field, v / d, "the focal distance", d)?;
         }
         let reach = h.bounding_radius_m();
         if reach >= d {
@@ -103,5 +107,24 @@ impl Ctx<'_> {
             ));
         }
         Ok(())
+    }
+
+    /// Refuses a length `ratio` times another (`other`, `other_m` long) beyond what single
+    /// precision resolves in the quadric's coefficients.
+    fn lengths_resolved(&self, field: &str, ratio: f64, other: &str, other_m: f64) -> R<()> {
+        if (MIN_LENGTH_RATIO..=1.0 / MIN_LENGTH_RATIO).contains(&ratio) {
+            return Ok(());
+        }
+        Err(self.invalid(
+            field,
+            format!(
+                "is {} times {other} {} m; between {} and {} times is allowed (single \
+                 precision resolves the mirror's shape within that)",
+                num_text(ratio),
+                num_text(other_m),
+                num_text(MIN_LENGTH_RATIO),
+                num_text(1.0 / MIN_LENGTH_RATIO)
+            ),
+        ))
     }
 }

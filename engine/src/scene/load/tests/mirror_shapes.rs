@@ -45,6 +45,14 @@ fn a_hyperboloid_puts_its_camera_at_the_outer_focus_and_fits_the_rim() {
     assert_eq!(view.eye, glam::Vec3::new(0.001, -2.0, 0.0));
     assert!((view.forward.z.atan2(view.forward.y).to_degrees() - 1.0).abs() < 1e-4);
     assert!(view.forward.z > 0.0, "tilted towards +Z");
+    // A paraboloid: an orthographic camera that fits the rim, twice the mirror's reach below.
+    let para = "shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2";
+    let p = load_str(&with_mirror(para, ""), Path::new("p.toml")).unwrap();
+    assert_eq!(p.mirror.radius_m, 1.22);
+    assert_eq!(p.sensor.offset_m, 2.0 * 1.22);
+    assert!((p.sensor.orthographic_half_m - 1.05 * 1.2).abs() < 1e-6);
+    let view = p.sensor.view(p.sensor.up, 1.0);
+    assert!(view.is_orthographic() && view.tan_y == 0.0);
     // The sphere is still the default shape.
     let sphere = load_str(&with_mirror("radius = 1", ""), Path::new("s.toml")).unwrap();
     assert_eq!(sphere.mirror.shape, MirrorShape::Sphere { radius_m: 1.0 });
@@ -75,6 +83,12 @@ fn bad_mirror_shapes_are_refused_naming_the_field() {
         (HYPERBOLOID, "[sensor]\ntilt = -1\n", "sensor.tilt"),
         (HYPERBOLOID, "[sensor]\nshift = [0, 1.5, 0]\n", "sensor.shift: moves the sensor to 0.5 m from the mirror's viewpoint"),
         (HYPERBOLOID, "[sensor]\nshift = [0, 0]\n", "sensor.shift"),
+        // The paraboloid: its own fields, an orthographic camera without a field of view.
+        ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2\nfocal_distance = 2", "", "mirror.focal_distance: not allowed here: a paraboloid mirror reads only mirror.latus_rectum, mirror.rim_radius"),
+        ("shape = \"paraboloid\"\nlatus_rectum = 2", "", "mirror.rim_radius: required field is missing"),
+        ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2", "[sensor]\nfov_y = 60\n", "sensor.fov_y: not allowed here: a paraboloid's camera is orthographic"),
+        ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 2500", "", "mirror.rim_radius: is 1250 times the latus rectum"),
+        ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2", "[sensor]\noffset = 1\n", "sensor.offset: must be greater than the mirror radius"),
     ];
     for (mirror, extra, needle) in cases {
         let text = with_mirror(mirror, extra);
