@@ -141,7 +141,24 @@ fn gpu_ray_map_is_exact(rel: &str) {
 /// remain).
 #[test]
 fn range_and_ids_are_exact_in_an_empty_room() {
-    let s = scene("scenes/test/six-colour-room.toml");
+    // The sphere, and the room with each central mirror instead (its camera where the shape
+    // puts it).
+    let path = common::root().join("scenes/test/six-colour-room.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let sphere = "center = [0, 0, 0]\nradius = 1.0\n";
+    let central = [
+        "center = [0, 0, 0]\nshape = \"hyperboloid\"\nfocal_distance = 2.5\nlatus_rectum = 2\nrim_radius = 1.2\n",
+        "center = [0, 0, 0]\nshape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2\n",
+    ];
+    assert!(text.contains(sphere));
+    range_and_ids_exact(scene("scenes/test/six-colour-room.toml"));
+    for mirror in central {
+        let text = text.replace(sphere, mirror).replace("[sensor]\noffset = 2.5\n", "[sensor]\n");
+        range_and_ids_exact(specchio::scene::load_str(&text, &path).expect("the variant loads"));
+    }
+}
+
+fn range_and_ids_exact(s: specchio::scene::Scene) {
     let reference = Reference::new(&s, 0.0);
     let [w, h] = s.sensor.resolution;
     let (images, _) = reference.render(&reference.sensor_view(), w, h, 1);
@@ -163,6 +180,7 @@ fn range_and_ids_are_exact_in_an_empty_room() {
             assert_eq!(out.ids[i], exact.ids[i], "pixel {i}: {end}");
         }
     }
-    eprintln!("depth-cube range against the reference's: within {worst:e} m");
-    assert!(worst < 1e-4, "ranges differ by {worst} m");
+    let shape = s.mirror.shape.name();
+    eprintln!("{shape}: depth-cube range against the reference's: within {worst:e} m");
+    assert!(worst < 1e-4, "{shape}: ranges differ by {worst} m");
 }

@@ -239,13 +239,22 @@ mod tests {
     use super::*;
     use crate::sensor::RayMap;
 
-    fn six_colour() -> Scene {
-        crate::scene::load(std::path::Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../scenes/test/six-colour-room.toml"
-        )))
-        .unwrap()
+    fn scene(rel: &str) -> Scene {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        crate::scene::load(&root.join(rel)).unwrap()
     }
+
+    fn six_colour() -> Scene {
+        scene("scenes/test/six-colour-room.toml")
+    }
+
+    /// The sphere, and the two central mirrors (a pinhole at a hyperboloid's outer focus, an
+    /// orthographic camera under a paraboloid).
+    const EVERY_SHAPE: [&str; 3] = [
+        "scenes/test/six-colour-room.toml",
+        "scenes/hyperbolic-room.toml",
+        "scenes/parabolic-room.toml",
+    ];
 
     /// The six-colour room's sensor is 2.5 m below a 1 m sphere: the rim is asin(0.4) from
     /// the axis, the highest elevation 90 degrees minus that, and the disc is centred.
@@ -268,9 +277,14 @@ mod tests {
     /// it, and every pixel centre a pixel inside the rim sees the mirror.
     #[test]
     fn the_disc_matches_the_ray_maps_mask() {
-        let scene = six_colour();
-        let o = SensorOptics::at(&scene, 0.0);
-        let map = RayMap::exact(&scene, 0.0);
+        for rel in EVERY_SHAPE {
+            disc_matches_the_mask(&scene(rel));
+        }
+    }
+
+    fn disc_matches_the_mask(scene: &Scene) {
+        let o = SensorOptics::at(scene, 0.0);
+        let map = RayMap::exact(scene, 0.0);
         let (c, r) = (o.disc_centre_px(), o.disc_radius_px());
         for y in 0..map.height {
             for x in 0..map.width {
@@ -288,13 +302,19 @@ mod tests {
     /// The inverse map lands on pixels whose exact rays have the asked-for direction.
     #[test]
     fn pixel_seeing_inverts_the_ray_map() {
-        let scene = six_colour();
-        let o = SensorOptics::at(&scene, 0.0);
-        for (elev_deg, az_deg) in [(-60.0, 10.0), (0.0, 90.0), (30.0, 200.0), (-10.0, 300.0)] {
+        for rel in EVERY_SHAPE {
+            pixel_seeing_inverts(&scene(rel));
+        }
+    }
+
+    fn pixel_seeing_inverts(scene: &Scene) {
+        let o = SensorOptics::at(scene, 0.0);
+        // Up to 5 degrees: the central mirrors here show up to 8.5 and 10.4.
+        for (elev_deg, az_deg) in [(-60.0, 10.0), (0.0, 90.0), (5.0, 200.0), (-10.0, 300.0)] {
             let (e, a) = (f64::to_radians(elev_deg), f64::to_radians(az_deg));
             let p = o.pixel_seeing(e, a).unwrap();
-            let d = crate::sensor::ray_map::pixel_ray(&o.view, p, o.width, o.height);
-            let m = crate::reference::intersect::mirror_reflection(o.view.eye, d, &o.shape)
+            let (from, d) = crate::sensor::ray_map::pixel_ray_from(&o.view, p, o.width, o.height);
+            let m = crate::reference::intersect::mirror_reflection(from, d, &o.shape)
                 .expect("on the mirror");
             let want = direction(e, a);
             assert!(
