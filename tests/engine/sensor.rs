@@ -153,7 +153,9 @@ fn range_and_ids_are_exact_in_an_empty_room() {
     assert!(text.contains(sphere));
     range_and_ids_exact(scene("scenes/test/six-colour-room.toml"));
     for mirror in central {
-        let text = text.replace(sphere, mirror).replace("[sensor]\noffset = 2.5\n", "[sensor]\n");
+        let text = text
+            .replace(sphere, mirror)
+            .replace("[sensor]\noffset = 2.5\n", "[sensor]\n");
         range_and_ids_exact(specchio::scene::load_str(&text, &path).expect("the variant loads"));
     }
 }
