@@ -100,24 +100,27 @@ fn swiftshader_is_refused_with_a_reason_not_a_crash() {
 #[test]
 fn both_views_show_what_render_writes() {
     let Some(x) = Xvfb::start() else { return };
-    let shot = temp_dir("view-both.png");
-    // Three frames: scene time 2/30 s, the cube filled once and then updated incrementally
-    // (the orbiting ball moves), as `render --frame 2` is from scratch.
-    let out = x.view(&[
-        thesis_room().to_str().unwrap(),
-        "--frames",
-        "3",
-        "--screenshot",
-        shot.to_str().unwrap(),
-    ]);
-    ok(&out, "specchio view");
-    assert!(
-        text(&out.stdout).contains("swapchain: 1200x450"),
-        "{}",
-        text(&out.stdout)
-    );
-    let rendered = render(&thesis_room(), 2, "view-both-render");
-    assert_same_image(&shot, &rendered.join("views.png"));
+    // The thesis's sphere, and a paraboloid with its orthographic sensor camera.
+    for scene in [thesis_room(), common::root().join("scenes/parabolic-room.toml")] {
+        let shot = temp_dir("view-both.png");
+        // Three frames: scene time 2/30 s, the cube filled once and then updated
+        // incrementally (objects move), as `render --frame 2` is from scratch.
+        let out = x.view(&[
+            scene.to_str().unwrap(),
+            "--frames",
+            "3",
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ]);
+        ok(&out, "specchio view");
+        assert!(
+            text(&out.stdout).contains("swapchain: 1200x450"),
+            "{}",
+            text(&out.stdout)
+        );
+        let rendered = render(&scene, 2, "view-both-render");
+        assert_same_image(&shot, &rendered.join("views.png"));
+    }
 }
 
 #[test]
