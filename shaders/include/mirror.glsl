@@ -53,8 +53,15 @@ vec3 lookup_at(FrameData f, vec3 dir, vec3 hit, vec3 n) {
     return box ? room_exit(hit, r, f) - f.mirror.xyz : r;
 }
 
+// The frame's central mirror, its heights measured from its vertex (quadric.glsl's frame).
 Quadric frame_quadric(FrameData f) {
-    return Quadric(f.mirror_quadric.xyz, f.mirror_quadric.w, f.mirror_extent.y);
+    float vertex_y = f.mirror_quadric.z;
+    return Quadric(f.mirror_quadric.xy, f.mirror_quadric.w - vertex_y, f.mirror_extent.y - vertex_y);
+}
+
+// A point of render space in the central mirror's vertex frame.
+vec3 from_vertex(FrameData f, vec3 p) {
+    return p - f.mirror.xyz - vec3(0.0, f.mirror_quadric.z, 0.0);
 }
 
 // The pixel centre's viewport coordinates in [-1, 1].
@@ -72,7 +79,7 @@ bool mirror_hit(ViewData view, FrameData f, out vec3 dir, out vec3 hit, out vec3
     vec3 centre = f.mirror.xyz;
     float t;
     if (f.mirror_shape.x == MIRROR_QUADRIC) {
-        if (!intersect_quadric(frame_quadric(f), o - centre, dir, t, n)) {
+        if (!intersect_quadric(frame_quadric(f), from_vertex(f, o), dir, t, n)) {
             return false;
         }
         hit = o + t * dir;
@@ -113,6 +120,7 @@ vec3 lookup_through(ViewData view, FrameData f, vec2 ndc, vec3 own) {
     vec3 n;
     if (f.mirror_shape.x == MIRROR_QUADRIC) {
         Quadric q = frame_quadric(f);
+        o = from_vertex(f, from);
         if (intersect_quadric(q, o, dir, t, n) || quadric_surface_normal(q, o, dir, t, n)) {
             return lookup_at(f, dir, from + t * dir, n);
         }

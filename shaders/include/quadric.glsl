@@ -1,30 +1,35 @@
-// quadric.glsl - ray / central-mirror intersection: the hyperboloid (and every shape written
-// as a quadric of revolution about the viewpoint's vertical axis), cut at its rim and closed
-// there by a flat disc. engine/src/mirror/quadric.rs is the same algorithm in f64.
+// quadric.glsl - ray / central-mirror intersection: the hyperboloid and the paraboloid (and
+// every shape written as a quadric of revolution about the viewpoint's vertical axis), cut at
+// its rim and closed there by a flat disc. engine/src/mirror/quadric.rs is the same algorithm
+// in f64.
 //
-// In the mirror's frame (the viewpoint at the origin, the axis +Y) the surface is
-//     F(p) = x^2 + z^2 + a y^2 + b y + c = 0,  the mirror's inside F < 0,
-// and the body is F < 0 between the height low_y (a hyperboloid's centre: below it lies the
-// other sheet) and the rim's height. That body is convex, so a ray meets it in one interval.
+// About its vertex (s the height above it, the axis +Y) the surface is
+//     F(p) = x^2 + z^2 + a s^2 + b s = 0,  the mirror's inside F < 0,
+// with no constant term: about the viewpoint, a flat hyperboloid's constant and s^2 terms are
+// huge and nearly cancel at the mirror, beyond what f32 holds. The body is F < 0 between the
+// height low_y (a hyperboloid's centre: below it lies the other sheet) and the rim's height.
+// It is convex, so a ray meets it in one interval.
 #ifndef QUADRIC_GLSL
 #define QUADRIC_GLSL
 
 // Beyond every room (their corners are at most 1e12 m away): an interval's open end.
 const float INF = 3.0e38;
 
+// Heights are the vertex's frame's: above the vertex.
 struct Quadric {
-    vec3 abc;    // a, b, c
+    vec2 ab;     // a, b
     float rim_y; // the rim's height
     float low_y; // the body's lowest height
 };
 
-float quadric_value(Quadric q, vec3 p) {
-    return dot(p.xz, p.xz) + (q.abc.x * p.y + q.abc.y) * p.y + q.abc.z;
+// F at v (the vertex's frame).
+float quadric_value(Quadric q, vec3 v) {
+    return dot(v.xz, v.xz) + (q.ab.x * v.y + q.ab.y) * v.y;
 }
 
-// The outward unit normal at p: F's gradient.
-vec3 quadric_normal(Quadric q, vec3 p) {
-    return normalize(vec3(p.x, q.abc.x * p.y + 0.5 * q.abc.y, p.z));
+// The outward unit normal at v (the vertex's frame): F's gradient.
+vec3 quadric_normal(Quadric q, vec3 v) {
+    return normalize(vec3(v.x, q.ab.x * v.y + 0.5 * q.ab.y, v.z));
 }
 
 // The ray's interval (from o) between the two cutting heights; false when it runs level
@@ -42,8 +47,8 @@ bool quadric_slab(Quadric q, vec3 o, vec3 d, out vec2 span) {
 
 // The intervals of the ray from o where F < 0: `count` of them (0, 1 or 2), in order.
 int quadric_inside(Quadric q, vec3 o, vec3 d, out vec2 first, out vec2 second) {
-    float qa = dot(d.xz, d.xz) + q.abc.x * d.y * d.y;       // F(o + t d) = qa t^2 + 2 hb t + qc
-    float hb = dot(o.xz, d.xz) + (q.abc.x * o.y + 0.5 * q.abc.y) * d.y;
+    float qa = dot(d.xz, d.xz) + q.ab.x * d.y * d.y;       // F(o + t d) = qa t^2 + 2 hb t + qc
+    float hb = dot(o.xz, d.xz) + (q.ab.x * o.y + 0.5 * q.ab.y) * d.y;
     float qc = quadric_value(q, o);
     first = vec2(-INF, INF);
     second = first;
@@ -75,9 +80,10 @@ int quadric_inside(Quadric q, vec3 o, vec3 d, out vec2 first, out vec2 second) {
     return 2;
 }
 
-// Nearest t > 0 where the unit ray o + t d (mirror frame) enters the body, and the outward
-// normal there; false on a miss or when o is inside. Solved from the ray's point nearest the
-// viewpoint, so that an eye far from a small mirror keeps the coefficients of its size.
+// Nearest t > 0 where the unit ray o + t d (the vertex's frame) enters the body, and the
+// outward normal there; false on a miss or when o is inside. Solved from the ray's point
+// nearest the vertex, so that an eye far from a small mirror keeps the coefficients of its
+// size.
 bool intersect_quadric(Quadric q, vec3 o, vec3 d, out float t, out vec3 n) {
     float t0 = -dot(o, d);
     vec3 o0 = o + t0 * d;
@@ -96,7 +102,7 @@ bool intersect_quadric(Quadric q, vec3 o, vec3 d, out float t, out vec3 n) {
                 return false; // starts inside, or the body lies behind the ray
             }
             // Entered through the rim's disc where its plane bounds the interval.
-            n = slab.x > spans[i].x ? vec3(0.0, 1.0, 0.0) : quadric_normal(q, o + t * d);
+            n = slab.x > spans[i].x ? vec3(0.0, 1.0, 0.0) : quadric_normal(q, o0 + lo * d);
             return true;
         }
     }

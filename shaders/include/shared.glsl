@@ -33,8 +33,9 @@ struct FrameData {
                             // z: the most samples a pixel's footprint filter takes along its
                             // long side, >= 1 ([cube] anisotropy, footprint_filter.glsl)
     uvec4 mirror_shape;     // x: MIRROR_SPHERE or MIRROR_QUADRIC (engine/src/mirror)
-    vec4 mirror_quadric;    // MIRROR_QUADRIC about the viewpoint (mirror.xyz), axis +Y: the
-                            // surface x^2 + z^2 + a y^2 + b y + c = 0 with x, y, z: a, b, c;
+    vec4 mirror_quadric;    // MIRROR_QUADRIC, axis +Y through the viewpoint (mirror.xyz): the
+                            // surface x^2 + z^2 + a s^2 + b s = 0, s the height above the
+                            // vertex; x, y: a, b; z: the vertex's height above the viewpoint;
                             // w: the rim's height, where a flat disc closes the mirror
     vec4 mirror_extent;     // x: the rim's radius; y: the lowest height of the mirror's body
 };

@@ -101,7 +101,10 @@ fn swiftshader_is_refused_with_a_reason_not_a_crash() {
 fn both_views_show_what_render_writes() {
     let Some(x) = Xvfb::start() else { return };
     // The thesis's sphere, and a paraboloid with its orthographic sensor camera.
-    for scene in [thesis_room(), common::root().join("scenes/parabolic-room.toml")] {
+    for scene in [
+        thesis_room(),
+        common::root().join("scenes/parabolic-room.toml"),
+    ] {
         let shot = temp_dir("view-both.png");
         // Three frames: scene time 2/30 s, the cube filled once and then updated
         // incrementally (objects move), as `render --frame 2` is from scratch.

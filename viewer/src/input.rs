@@ -217,7 +217,7 @@ pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8), steps: f32) -> Re
     let hi = scene.room.center + 0.5 * scene.room.size_m;
     let r = scene.mirror.radius_m;
     let inside = (to - Vec3::splat(r)).cmpge(lo).all() && (to + Vec3::splat(r)).cmple(hi).all();
-    let sensor_y = to.y - scene.sensor.offset_m;
+    let sensor_y = to.y + scene.sensor.eye().y;
     if !inside {
         return Err(format!(
             "the sphere would leave the room at {}",

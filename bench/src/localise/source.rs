@@ -5,12 +5,12 @@
 use std::sync::Arc;
 
 use anyhow::{bail, Result};
-use glam::{Quat, Vec3};
+use glam::Vec3;
 use specchio::image::RgbaImage;
 use specchio::reference::Reference;
 use specchio::render::{Readback, RenderOptions, Renderer};
 use specchio::scene::camera::ViewBasis;
-use specchio::scene::{Lookup, RefreshPolicy, Scene};
+use specchio::scene::{Lookup, RefreshPolicy, Scene, SensorCamera};
 use specchio::sensor::localise::{Descriptor, Signature};
 use specchio::sensor::panorama::PanoramaLayout;
 use specchio::sensor::SensorOptics;
@@ -60,9 +60,13 @@ pub struct Body {
 }
 
 impl Body {
-    /// The sensor's `up` turned by `heading`: the camera turns with the robot.
-    fn turned_up(&self, heading: f64) -> Vec3 {
-        Quat::from_rotation_y(heading as f32) * self.scene.sensor.up
+    /// The sensor turned by `heading`: the camera, its misalignment included, turns with
+    /// the robot.
+    fn turned_sensor(&self, heading: f64) -> SensorCamera {
+        SensorCamera {
+            heading_rad: heading as f32,
+            ..self.scene.sensor.clone()
+        }
     }
 }
 
@@ -168,7 +172,7 @@ fn gpu_image(
     t_s: f64,
 ) -> Result<RgbaImage> {
     renderer.scene.mirror.center = position;
-    renderer.scene.sensor.up = body.turned_up(heading);
+    renderer.scene.sensor = body.turned_sensor(heading);
     let readback = Readback {
         views: true,
         ..Default::default()
@@ -182,9 +186,9 @@ fn gpu_image(
 }
 
 /// The reference's sensor camera (render space: below the mirror, looking up) turned by
-/// `heading`, as the GPU renderer builds it from the turned `up`.
+/// `heading`, as the GPU renderer builds it from the turned sensor.
 fn sensor_view(body: &Body, heading: f64) -> ViewBasis {
-    let s = &body.scene.sensor;
+    let s = body.turned_sensor(heading);
     let [w, h] = s.resolution;
-    s.view(body.turned_up(heading), w as f32 / h as f32)
+    s.view(s.up, w as f32 / h as f32)
 }

@@ -37,8 +37,9 @@ impl Hyperboloid {
         (a, (2.0 * a * p).sqrt())
     }
 
-    /// The surface as the implicit quadric of `quadric.rs`: with k = b²/a² and centre y0 = -d/2,
-    /// F = r² - k (y - y0)² + b².
+    /// The surface as the implicit quadric of `quadric.rs`, about the vertex (the centre y0 =
+    /// -d/2 plus a): with s the height above the vertex, (a + s)²/a² − r²/b² = 1 is
+    /// r² = (b²/a²) s² + (2b²/a) s = k s² + 4p s.
     pub fn quadric(&self) -> Quadric {
         let (a, b) = self.semi_axes();
         let k = (b * b) / (a * a);
@@ -46,8 +47,8 @@ impl Hyperboloid {
         let r = self.rim_radius_m;
         Quadric {
             a: -k,
-            b: 2.0 * k * y0,
-            c: b * b - k * y0 * y0,
+            b: -self.latus_rectum_m,
+            vertex_y: y0 + a,
             rim_y: y0 + a * (1.0 + (r * r) / (b * b)).sqrt(),
             rim_r: r,
             low_y: y0,

@@ -24,14 +24,14 @@ impl Paraboloid {
         0.25 * self.latus_rectum_m
     }
 
-    /// F = r² − 4p y − 4p², the paraboloid's points where F = 0, no lower cut.
+    /// F = r² − 4p s about the vertex (s the height above it), no lower cut.
     pub fn quadric(&self) -> Quadric {
         let p = self.focal_length_m();
         let r = self.rim_radius_m;
         Quadric {
             a: 0.0,
             b: -4.0 * p,
-            c: -4.0 * p * p,
+            vertex_y: -p,
             rim_y: r * r / (4.0 * p) - p,
             rim_r: r,
             low_y: f64::NEG_INFINITY,

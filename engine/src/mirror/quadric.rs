@@ -1,18 +1,21 @@
 //! The central mirrors' surfaces: quadrics of revolution about the vertical axis through the
 //! viewpoint, cut at a rim and closed there by a flat disc, in f64.
 //!
-//! Every shape but the sphere is written as one implicit function in the mirror's frame (the
-//! viewpoint at the origin, the axis along +Y):
+//! Every shape but the sphere is written as one implicit function about its vertex (the axis
+//! along +Y, the vertex `vertex_y` above the viewpoint, s = y − vertex_y the height above it):
 //!
 //! ```text
-//! F(p) = x² + z² + a y² + b y + c        the surface is F = 0, the mirror's inside F < 0
+//! F(p) = x² + z² + a s² + b s        the surface is F = 0, the mirror's inside F < 0
 //! ```
 //!
-//! and the body is `F < 0` between two heights: the rim's (`rim_y`, where a flat disc closes
-//! the body on top) and `low_y` (the hyperboloid's centre, which cuts off the second sheet;
-//! minus infinity for the paraboloid). That body is convex, so a ray meets it in one
-//! interval, and a reflected ray never meets the mirror again. `shaders/include/quadric.glsl`
-//! is the same algorithm in f32.
+//! (a hyperboloid: a = −b²/a², b = −4p; a paraboloid: a = 0, b = −4p). About the vertex there is
+//! no constant term: written about the viewpoint, a flat hyperboloid's constant and its s²
+//! term are huge and nearly cancel at the mirror, which f32 cannot hold (a latus rectum 10³
+//! times the focal distance drew noise). The body is `F < 0` between two heights: the rim's
+//! (`rim_y`, where a flat disc closes the body on top) and `low_y` (the hyperboloid's centre,
+//! which cuts off the second sheet; minus infinity for the paraboloid). That body is convex,
+//! so a ray meets it in one interval, and a reflected ray never meets the mirror again.
+//! `shaders/include/quadric.glsl` is the same algorithm in f32.
 
 use glam::DVec3;
 
@@ -24,13 +27,15 @@ pub struct ShapeHit {
     pub normal: DVec3,
 }
 
-/// A quadric of revolution about +Y, cut at the rim (see the module's comment).
+/// A quadric of revolution about +Y, cut at the rim (see the module's comment). Heights are
+/// above the viewpoint (m).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Quadric {
     pub a: f64,
     pub b: f64,
-    pub c: f64,
-    /// The rim's height above the viewpoint (m) and its radius from the axis (m).
+    /// The vertex's height, where F's frame has its origin.
+    pub vertex_y: f64,
+    /// The rim's height and its radius from the axis (m).
     pub rim_y: f64,
     pub rim_r: f64,
     /// The lowest height the body reaches down to (m): the hyperboloid's centre, below which
@@ -42,23 +47,36 @@ pub struct Quadric {
 type Span = (f64, f64);
 
 impl Quadric {
-    /// F at `p`: negative inside the mirror's surface.
+    /// F at `p` (the viewpoint's frame): negative inside the mirror's surface.
     pub fn value(&self, p: DVec3) -> f64 {
-        p.x * p.x + p.z * p.z + self.a * p.y * p.y + self.b * p.y + self.c
+        self.value_about_vertex(p - self.vertex())
     }
 
-    /// The outward unit normal of the surface at `p` (the gradient of F).
+    /// The outward unit normal of the surface at `p` (the viewpoint's frame): F's gradient.
     pub fn normal(&self, p: DVec3) -> DVec3 {
-        DVec3::new(p.x, self.a * p.y + 0.5 * self.b, p.z).normalize()
+        self.normal_about_vertex(p - self.vertex())
     }
 
-    /// Where the unit ray `o + t d` (t > 0) enters the body, or None when it misses it or
-    /// starts inside it.
+    fn vertex(&self) -> DVec3 {
+        DVec3::new(0.0, self.vertex_y, 0.0)
+    }
+
+    fn value_about_vertex(&self, v: DVec3) -> f64 {
+        v.x * v.x + v.z * v.z + (self.a * v.y + self.b) * v.y
+    }
+
+    fn normal_about_vertex(&self, v: DVec3) -> DVec3 {
+        DVec3::new(v.x, self.a * v.y + 0.5 * self.b, v.z).normalize()
+    }
+
+    /// Where the unit ray `o + t d` (t > 0, the viewpoint's frame) enters the body, or None
+    /// when it misses it or starts inside it.
     pub fn hit(&self, o: DVec3, d: DVec3) -> Option<ShapeHit> {
-        // Solved from the ray's point nearest the viewpoint: for an eye far from a small
+        // Solved about the vertex, from the ray's point nearest it: for an eye far from a small
         // mirror the coefficients then stay of the mirror's size (no cancellation).
-        let t0 = -o.dot(d);
-        let o0 = o + t0 * d;
+        let from_vertex = o - self.vertex();
+        let t0 = -from_vertex.dot(d);
+        let o0 = from_vertex + t0 * d;
         let slab = self.slab(o0, d)?;
         // The body is convex, so at most one of F's inside intervals meets the slab.
         let (lo, from_cap) = self
@@ -77,27 +95,29 @@ impl Quadric {
         let normal = if from_cap {
             DVec3::Y
         } else {
-            self.normal(o + t * d)
+            self.normal_about_vertex(o0 + lo * d)
         };
         Some(ShapeHit { t, normal })
     }
 
-    /// The interval of the ray (from `o`) between the two cutting heights.
+    /// The interval of the ray (from `o`, about the vertex) between the two cutting heights.
     fn slab(&self, o: DVec3, d: DVec3) -> Option<Span> {
+        let (rim, low) = (self.rim_y - self.vertex_y, self.low_y - self.vertex_y);
         if d.y == 0.0 {
-            let inside = o.y < self.rim_y && o.y > self.low_y;
+            let inside = o.y < rim && o.y > low;
             return inside.then_some((f64::NEG_INFINITY, f64::INFINITY));
         }
-        let (t_rim, t_low) = ((self.rim_y - o.y) / d.y, (self.low_y - o.y) / d.y);
+        let (t_rim, t_low) = ((rim - o.y) / d.y, (low - o.y) / d.y);
         Some((t_rim.min(t_low), t_rim.max(t_low)))
     }
 
-    /// The (at most two) intervals of the ray from `o` where F < 0, in order.
+    /// The (at most two) intervals of the ray from `o` (about the vertex) where F < 0, in
+    /// order.
     fn inside_spans(&self, o: DVec3, d: DVec3) -> [Option<Span>; 2] {
         // F(o + t d) = qa t² + 2 hb t + qc.
         let qa = d.x * d.x + d.z * d.z + self.a * d.y * d.y;
         let hb = o.x * d.x + o.z * d.z + self.a * o.y * d.y + 0.5 * self.b * d.y;
-        let qc = self.value(o);
+        let qc = self.value_about_vertex(o);
         let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
         if qa == 0.0 {
             // Linear: a ray along the paraboloid's axis, or parallel to an asymptote.

@@ -4,8 +4,9 @@ use glam::DVec3;
 
 use super::{Hyperboloid, MirrorShape};
 
-/// A hyperboloid of the kind a robot carries (d = 10 cm), and the large one of the scenes.
-fn hyperboloids() -> [Hyperboloid; 3] {
+/// A hyperboloid of the kind a robot carries (d = 10 cm), the large one of the scenes, a flat
+/// one and a nearly parabolic one.
+fn hyperboloids() -> [Hyperboloid; 4] {
     [
         Hyperboloid {
             focal_distance_m: 0.1,
@@ -17,11 +18,17 @@ fn hyperboloids() -> [Hyperboloid; 3] {
             latus_rectum_m: 2.0,
             rim_radius_m: 1.3,
         },
-        // Nearly a paraboloid (p far above d: eccentricity close to 1).
+        // Flat (p far above d: eccentricity about 400, nearly a cone).
         Hyperboloid {
             focal_distance_m: 0.01,
             latus_rectum_m: 4.0,
             rim_radius_m: 1.0,
+        },
+        // Nearly a paraboloid (p far below d: eccentricity 1.025).
+        Hyperboloid {
+            focal_distance_m: 4.0,
+            latus_rectum_m: 0.2,
+            rim_radius_m: 0.5,
         },
     ]
 }

@@ -111,7 +111,7 @@ const _: () = assert!(std::mem::size_of::<Vertex>() == 32);
 pub struct MirrorShapeData {
     /// x: MIRROR_SPHERE or MIRROR_QUADRIC.
     pub code: UVec4,
-    /// x, y, z: the quadric's a, b, c; w: the rim's height.
+    /// x, y: the quadric's a, b; z: its vertex's height; w: the rim's height.
     pub quadric: Vec4,
     /// x: the rim's radius; y: the body's lowest height (finite: f32's lowest for none).
     pub extent: Vec4,
@@ -127,7 +127,7 @@ impl MirrorShapeData {
             },
             Some(q) => Self {
                 code: UVec4::new(MIRROR_QUADRIC, 0, 0, 0),
-                quadric: Vec4::new(q.a as f32, q.b as f32, q.c as f32, q.rim_y as f32),
+                quadric: Vec4::new(q.a as f32, q.b as f32, q.vertex_y as f32, q.rim_y as f32),
                 extent: Vec4::new(
                     q.rim_r as f32,
                     q.low_y.max(-f64::from(f32::MAX)) as f32,

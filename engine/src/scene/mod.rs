@@ -288,14 +288,25 @@ pub struct SensorCamera {
     /// Half the height (m) of an orthographic camera's image (a paraboloid's); 0 for a
     /// pinhole, whose vertical field of view is `fov_y_deg`.
     pub orthographic_half_m: f32,
+    /// The robot's heading (radians about +Y): turns the image's up, the shift and the tilt
+    /// with it. 0 from the scene file; the localisation turns the robot.
+    pub heading_rad: f32,
 }
 
 impl SensorCamera {
+    /// Where the camera is relative to the mirror's viewpoint (m): `offset_m` below it, moved
+    /// by the (turned) shift.
+    pub fn eye(&self) -> Vec3 {
+        Vec3::new(0.0, -self.offset_m, 0.0) + Quat::from_rotation_y(self.heading_rad) * self.shift_m
+    }
+
     /// The camera in render space (the mirror's viewpoint at the origin), its image's up
     /// direction `up` (world), for an image of aspect `aspect` (width / height).
     pub fn view(&self, up: Vec3, aspect: f32) -> camera::ViewBasis {
-        let eye = Vec3::new(0.0, -self.offset_m, 0.0) + self.shift_m;
-        let forward = Quat::from_rotation_x(self.tilt_deg.to_radians()) * Vec3::Y;
+        let turn = Quat::from_rotation_y(self.heading_rad);
+        let eye = self.eye();
+        let forward = turn * (Quat::from_rotation_x(self.tilt_deg.to_radians()) * Vec3::Y);
+        let up = turn * up;
         if self.orthographic_half_m > 0.0 {
             return camera::ViewBasis::orthographic(
                 eye,

@@ -62,7 +62,7 @@ impl SceneState {
     }
 
     /// The sensor camera in render space: `offset_m` below the mirror centre, looking up (+Y),
-    /// moved and turned by its misalignment.
+    /// moved and turned by its misalignment and turned with the robot's heading.
     pub fn sensor_view(&self, scene: &Scene, aspect: f32) -> ViewBasis {
         scene.sensor.view(scene.sensor.up, aspect)
     }

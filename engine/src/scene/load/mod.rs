@@ -19,6 +19,7 @@ mod mirror_shape;
 mod numbers;
 mod objects;
 mod room;
+mod sensor;
 mod source;
 #[cfg(test)]
 mod tests;

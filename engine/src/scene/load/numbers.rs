@@ -94,7 +94,7 @@ impl Range {
             hi_open: false,
         }
     }
-    fn contains(&self, x: f32) -> bool {
+    pub(super) fn contains(&self, x: f32) -> bool {
         let above = if self.lo_open {
             x > self.lo
         } else {
@@ -108,7 +108,7 @@ impl Range {
         above && below
     }
     /// "in [a, b]", or ">= a" for a range with no upper end.
-    fn text_with_in(&self) -> String {
+    pub(super) fn text_with_in(&self) -> String {
         let t = self.text();
         if t.starts_with('>') {
             t

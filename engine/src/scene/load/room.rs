@@ -152,10 +152,15 @@ impl Ctx<'_> {
         }
         let min_radius = far.reach_m * MIN_RADIUS_PER_EXTENT;
         if mirror.radius_m < min_radius {
+            // The sphere's own radius, or the central mirror's size that sets its reach.
+            let (field, what) = match mirror.shape {
+                crate::mirror::MirrorShape::Sphere { .. } => ("mirror.radius", "the radius"),
+                _ => ("mirror.rim_radius", "the mirror's reach (about its rim)"),
+            };
             return Err(self.invalid(
-                "mirror.radius",
+                field,
                 format!(
-                    "is too small for the room: a room corner is {} m from the mirror's centre, and single precision resolves only about 1e-7 of that; the radius must be at least {} of it ({} m), got {}",
+                    "is too small for the room: a room corner is {} m from the mirror's centre, and single precision resolves only about 1e-7 of that; {what} must be at least {} of it ({} m), got {}",
                     num_text(far.reach_m),
                     num_text(MIN_RADIUS_PER_EXTENT),
                     num_text(min_radius),

@@ -46,7 +46,7 @@ pub struct Sample {
 /// Why a central model could not be fitted.
 #[derive(Debug, thiserror::Error)]
 pub enum FitError {
-    #[error("only {0} pixels see the mirror; a central model needs at least 9")]
+    #[error("only {0} pixels see the mirror; a central model needs at least 9 (is the sensor turned or moved off the mirror by sensor.tilt or sensor.shift?)")]
     TooFewPixels(usize),
     #[error("no starting point for the fit: {0}")]
     NoStart(&'static str),
@@ -159,6 +159,10 @@ impl Calibration {
 
     /// Fits both models to `map`, whose sensor has the axes `axes` (local origin at the world's).
     pub fn fit(map: &RayMap, axes: SensorAxes) -> Result<Self, FitError> {
+        // Before the viewpoint's fit, which would call too few rays "parallel".
+        if map.mirror_pixels() < 9 {
+            return Err(FitError::TooFewPixels(map.mirror_pixels()));
+        }
         let (viewpoint, ray_distance_m) = nearest_point(map)?;
         // Pixel centres: OpenCV's (x, y) and OCamCalib's (row, col) are both 0-based there.
         let pixels = mirror_pixels(map);

@@ -26,7 +26,7 @@ pub fn floor_extent(scene: &Scene) -> Result<(Vec2, Vec2), LocaliseError> {
     let room = &scene.room;
     let half = 0.5 * room.size_m;
     let r = scene.mirror.radius_m;
-    let sensor_y = scene.mirror.center.y - scene.sensor.offset_m;
+    let sensor_y = scene.mirror.center.y + scene.sensor.eye().y;
     let (floor, ceiling) = (room.center.y - half.y, room.center.y + half.y);
     if sensor_y <= floor || scene.mirror.center.y + r > ceiling {
         return Err(LocaliseError::SensorOutsideRoom {
@@ -63,7 +63,7 @@ pub fn object_spheres(scene: &Scene, state: &SceneState) -> Vec<(Vec3, f32)> {
 /// True when the robot at `p` (the mirror's centre) keeps clear of every sphere in `objects`
 /// ([`object_spheres`]).
 pub fn is_clear(scene: &Scene, objects: &[(Vec3, f32)], p: Vec3) -> bool {
-    let bottom = p.y - scene.sensor.offset_m;
+    let bottom = p.y + scene.sensor.eye().y;
     objects.iter().all(|&(centre, reach)| {
         // Distance from the sphere's centre to the vertical segment from the sensor up to
         // the mirror's centre.

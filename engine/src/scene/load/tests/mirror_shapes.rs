@@ -45,11 +45,30 @@ fn a_hyperboloid_puts_its_camera_at_the_outer_focus_and_fits_the_rim() {
     assert_eq!(view.eye, glam::Vec3::new(0.001, -2.0, 0.0));
     assert!((view.forward.z.atan2(view.forward.y).to_degrees() - 1.0).abs() < 1e-4);
     assert!(view.forward.z > 0.0, "tilted towards +Z");
-    // A paraboloid: an orthographic camera that fits the rim, twice the mirror's reach below.
+    // The robot's heading turns the whole camera, its misalignment with it: the view at a
+    // heading is the view at 0 turned about +Y.
+    let mut turned = m.sensor.clone();
+    turned.heading_rad = 1.0;
+    let (v0, v1) = (view, turned.view(turned.up, 1.0));
+    let turn = glam::Quat::from_rotation_y(1.0);
+    for (a, b) in [
+        (v0.eye, v1.eye),
+        (v0.forward, v1.forward),
+        (v0.right, v1.right),
+        (v0.down, v1.down),
+    ] {
+        assert!((turn * a - b).length() < 1e-6, "{a} turned is not {b}");
+    }
+    // A paraboloid: an orthographic camera that fits the rim, as far again below the mirror as
+    // it reaches, or halfway from its reach to the floor where that is nearer (here: the
+    // viewpoint 3 m above the floor, (1.22 + 3) / 2 = 2.11 < 2.44).
     let para = "shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2";
     let p = load_str(&with_mirror(para, ""), Path::new("p.toml")).unwrap();
     assert_eq!(p.mirror.radius_m, 1.22);
-    assert_eq!(p.sensor.offset_m, 2.0 * 1.22);
+    assert!((p.sensor.offset_m - 0.5 * (1.22 + 3.0)).abs() < 1e-6);
+    let high = with_mirror(para, "").replace("size = [10, 6, 10]", "size = [10, 16, 10]");
+    let p_high = load_str(&high, Path::new("p.toml")).unwrap();
+    assert_eq!(p_high.sensor.offset_m, 2.0 * 1.22);
     assert!((p.sensor.orthographic_half_m - 1.05 * 1.2).abs() < 1e-6);
     let view = p.sensor.view(p.sensor.up, 1.0);
     assert!(view.is_orthographic() && view.tan_y == 0.0);
@@ -78,6 +97,17 @@ fn bad_mirror_shapes_are_refused_naming_the_field() {
         // A field of view that cuts off the rim (it is 30.6 degrees from the axis).
         (HYPERBOLOID, "[sensor]\nfov_y = 50\n", "sensor.fov_y: cuts off the mirror"),
         (HYPERBOLOID, "[sensor]\nfov_y = 80\nresolution = [200, 400]\n", "sensor.fov_y: cuts off the mirror"),
+        // An up direction along the tilted axis leaves the camera no right direction (NaN).
+        (HYPERBOLOID, "[sensor]\ntilt = 30\nup = [0, 0.8660254, 0.5]\n", "sensor.up: must be non-zero and not parallel to the camera's axis"),
+        // A tilt or a shift that takes the rim out of the image, or the camera out of the room.
+        (HYPERBOLOID, "[sensor]\ntilt = 45\n", "sensor.tilt: turns or moves the camera so that the hyperboloid mirror's rim leaves the image"),
+        (HYPERBOLOID, "[sensor]\nshift = [0.5, 0, 0]\n", "sensor.shift: turns or moves the camera"),
+        (HYPERBOLOID, "[sensor]\nshift = [20, 0, 0]\n", "sensor.shift: puts the sensor at [20, 1, 0] (t = 0.000 s), outside the room"),
+        (HYPERBOLOID, "[sensor]\nshift = [0, -1.5, 0]\n", "sensor.shift: puts the sensor at y = -0.5"),
+        // A derived field of view beyond 179.99 degrees: the image too narrow for the rim.
+        ("shape = \"hyperboloid\"\nfocal_distance = 0.5\nlatus_rectum = 10\nrim_radius = 0.4", "[sensor]\nresolution = [1, 8192]\n", "sensor.resolution: is too narrow for the mirror"),
+        // A room too large for the mirror's reach names the shape's own size field.
+        ("shape = \"hyperboloid\"\nfocal_distance = 0.000001\nlatus_rectum = 0.000001\nrim_radius = 0.0000005", "", "mirror.rim_radius: is too small for the room"),
         // Misalignment: a tilt past 45 degrees, a shift into the mirror's reach.
         (HYPERBOLOID, "[sensor]\ntilt = 50\n", "sensor.tilt: must be in [0, 45]"),
         (HYPERBOLOID, "[sensor]\ntilt = -1\n", "sensor.tilt"),
