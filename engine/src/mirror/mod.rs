@@ -34,9 +34,6 @@ pub enum MirrorShape {
     Paraboloid(Paraboloid),
 }
 
-/// The names the scene file's `mirror.shape` accepts, in the order the docs list them.
-pub const SHAPE_NAMES: [&str; 3] = ["sphere", "hyperboloid", "paraboloid"];
-
 impl MirrorShape {
     /// The name the scene file uses.
     pub fn name(&self) -> &'static str {

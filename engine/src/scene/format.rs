@@ -94,7 +94,7 @@ pub struct MirrorSpec {
     pub secant_steps: Option<i64>,
 }
 
-/// `mirror.shape`: one word per shape of `crate::mirror` (the names of `SHAPE_NAMES`).
+/// `mirror.shape`: one word per shape of `crate::mirror` (`MirrorShape::name`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum MirrorShapeSpec {

@@ -90,7 +90,7 @@ impl SensorOptics {
 
     /// Where the world direction `d` (from the eye, render space) lands in a pinhole's image,
     /// in pixels ((0, 0) the top-left corner, pixel centres at +0.5); None behind the camera.
-    /// The inverse of `ray_map::pixel_ray`.
+    /// The inverse of `ray_map::pixel_ray_from`.
     pub fn project(&self, d: Vec3) -> Option<Vec2> {
         let v = &self.view;
         let z = d.dot(v.forward);

@@ -65,13 +65,9 @@ impl RayMap {
     }
 }
 
-/// The unit camera ray through image point `pixel` (in pixels, (0, 0) the top-left corner).
-pub fn pixel_ray(view: &ViewBasis, pixel: Vec2, width: u32, height: u32) -> Vec3 {
-    pixel_ray_from(view, pixel, width, height).1
-}
-
-/// Where the camera ray through image point `pixel` starts (the eye of a pinhole, a point of
-/// an orthographic view's image plane) and its unit direction.
+/// Where the camera ray through image point `pixel` (in pixels, (0, 0) the top-left corner)
+/// starts (the eye of a pinhole, a point of an orthographic view's image plane) and its unit
+/// direction.
 pub fn pixel_ray_from(view: &ViewBasis, pixel: Vec2, width: u32, height: u32) -> (Vec3, Vec3) {
     let ndc_x = 2.0 * pixel.x / width as f32 - 1.0;
     let ndc_y = 2.0 * pixel.y / height as f32 - 1.0;
