@@ -204,36 +204,35 @@ fn opencv_projects_the_export_as_our_model_does() {
 /// Measured: xi off by 1e-8, residual below 1e-5 degrees.
 #[test]
 fn a_hyperboloid_calibrates_to_its_analytic_xi() {
-    let scene = common::scene("scenes/hyperbolic-room.toml");
+    let rel = "scenes/hyperbolic-room.toml";
+    let scene = common::scene(rel);
     let specchio::mirror::MirrorShape::Hyperboloid(h) = scene.mirror.shape else {
         panic!("the scene's mirror is a hyperboloid");
     };
-    let out = temp_dir("calibrate-hyperboloid");
-    let record = calibrate_scene("scenes/hyperbolic-room.toml", &out);
-    let m = &record.omnidir.model;
     let (d, p) = (h.focal_distance_m, h.latus_rectum_m / 4.0);
-    let xi = d / (d * d + 4.0 * p * p).sqrt();
-    assert!((m.xi - xi).abs() < 1e-6, "xi {} against {xi}", m.xi);
-    assert_eq!(
-        [m.k1, m.k2, m.p1, m.p2],
-        [0.0; 4],
-        "no distortion is fitted"
-    );
     let tan_y = (f64::from(scene.sensor.fov_y_deg).to_radians() / 2.0).tan();
     let f_px = f64::from(scene.sensor.resolution[1]) / 2.0 / tan_y;
-    let gamma = f_px * 2.0 * p / (d * d + 4.0 * p * p).sqrt();
+    let hypot = (d * d + 4.0 * p * p).sqrt();
+    calibrates_to(rel, d / hypot, f_px * 2.0 * p / hypot);
+}
+
+/// Calibrates `rel` and checks the unified model against its analytic `xi` and focal length
+/// `gamma` (px): no distortion fitted, the residual below 1e-4 degrees, and the viewpoint at
+/// the mirror's (every ray passes through its focus).
+fn calibrates_to(rel: &str, xi: f64, gamma: f64) {
+    let scene = common::scene(rel);
+    let out = temp_dir("calibrate-central");
+    let record = calibrate_scene(rel, &out);
+    let m = &record.omnidir.model;
+    assert!((m.xi - xi).abs() < 1e-6, "{rel}: xi {} against {xi}", m.xi);
+    let distortion = [m.k1, m.k2, m.p1, m.p2];
+    assert_eq!(distortion, [0.0; 4], "{rel}: no distortion is fitted");
     for f in [m.fx, m.fy] {
-        assert!(
-            (f - gamma).abs() < 1e-5 * gamma,
-            "focal {f} against {gamma}"
-        );
+        let close = (f - gamma).abs() < 1e-5 * gamma;
+        assert!(close, "{rel}: focal {f} against {gamma}");
     }
-    assert!(
-        record.omnidir.residual_deg.max < 1e-4,
-        "{:?}",
-        record.omnidir.residual_deg
-    );
-    // Every ray passes through the inner focus: the calibration finds it there.
+    let residual = record.omnidir.residual_deg;
+    assert!(residual.max < 1e-4, "{rel}: {residual:?}");
     let viewpoint = glam::DVec3::from(record.viewpoint_world);
     assert!((viewpoint - (scene.origin + scene.mirror.center.as_dvec3())).length() < 1e-6);
     std::fs::remove_dir_all(&out).unwrap();
@@ -258,34 +257,12 @@ fn bad_input_is_refused_without_output() {
 /// distortion. Measured: xi off by 7e-10, the focal length by 2e-6 px.
 #[test]
 fn a_paraboloid_calibrates_to_xi_one() {
-    let scene = common::scene("scenes/parabolic-room.toml");
+    let rel = "scenes/parabolic-room.toml";
+    let scene = common::scene(rel);
     let specchio::mirror::MirrorShape::Paraboloid(p) = scene.mirror.shape else {
         panic!("the scene's mirror is a paraboloid");
     };
-    let out = temp_dir("calibrate-paraboloid");
-    let record = calibrate_scene("scenes/parabolic-room.toml", &out);
-    let m = &record.omnidir.model;
-    assert!((m.xi - 1.0).abs() < 1e-6, "xi {}", m.xi);
-    assert_eq!(
-        [m.k1, m.k2, m.p1, m.p2],
-        [0.0; 4],
-        "no distortion is fitted"
-    );
     let per_m =
         f64::from(scene.sensor.resolution[1]) / 2.0 / f64::from(scene.sensor.orthographic_half_m);
-    let gamma = 2.0 * p.focal_length_m() * per_m;
-    for f in [m.fx, m.fy] {
-        assert!(
-            (f - gamma).abs() < 1e-5 * gamma,
-            "focal {f} against {gamma}"
-        );
-    }
-    assert!(
-        record.omnidir.residual_deg.max < 1e-4,
-        "{:?}",
-        record.omnidir.residual_deg
-    );
-    let viewpoint = glam::DVec3::from(record.viewpoint_world);
-    assert!((viewpoint - (scene.origin + scene.mirror.center.as_dvec3())).length() < 1e-6);
-    std::fs::remove_dir_all(&out).unwrap();
+    calibrates_to(rel, 1.0, 2.0 * p.focal_length_m() * per_m);
 }
