@@ -334,6 +334,26 @@ impl Gpu {
         (Self::create(device, features), methods)
     }
 
+    /// The default device with the features of every lookup it can run enabled, and those
+    /// lookups in `Lookup::ALL`'s order (the others counted as not applicable).
+    pub fn with_all_lookups() -> (Self, Vec<Lookup>) {
+        let probe = Self::new();
+        let info = probe.device.info.clone();
+        probe.finish();
+        let mut runnable = Vec::new();
+        for lookup in Lookup::ALL {
+            match specchio::render::lookups::missing_features(lookup, &info) {
+                None => runnable.push(lookup),
+                Some(why) => not_applicable(&format!("{lookup} on {}", info.name), &why),
+            }
+        }
+        let features = (runnable
+            .iter()
+            .map(|&l| specchio::render::lookups::features(l)))
+        .fold(OptionalFeatures::default(), |f, g| f.union(g));
+        (Self::with_features(features), runnable)
+    }
+
     /// Drops the device (the layer reports leaks then) and fails on any validation message.
     pub fn finish(self) {
         let messages = self.finish_with_messages();

@@ -5,10 +5,8 @@
 mod common;
 
 use common::{lookup_directions, mirror_mask_disagreements, on_rim, scene, Gpu};
-use specchio::render::lookups;
 use specchio::render::RgbaImage;
 use specchio::scene::Lookup;
-use specchio::vk::device::OptionalFeatures;
 
 /// A 1 cm mirror with the sensor 2 cm and the observer 2.5 cm from its surface: both
 /// cameras show the whole mirror under every lookup the device has (a near plane fixed at
@@ -16,19 +14,7 @@ use specchio::vk::device::OptionalFeatures;
 #[test]
 fn close_cameras_show_the_whole_mirror() {
     let s = scene("scenes/hard/close-sensor.toml");
-    let probe = Gpu::new();
-    let info = probe.device.info.clone();
-    probe.finish();
-    let mut runnable = Vec::new();
-    for lookup in Lookup::ALL {
-        match lookups::missing_features(lookup, &info) {
-            None => runnable.push(lookup),
-            Some(why) => common::not_applicable(&format!("{lookup} on {}", info.name), &why),
-        }
-    }
-    let features = (runnable.iter().map(|&l| lookups::features(l)))
-        .fold(OptionalFeatures::default(), |f, g| f.union(g));
-    let gpu = Gpu::with_features(features);
+    let (gpu, runnable) = Gpu::with_all_lookups();
     for lookup in runnable {
         for (camera, pair) in ["observer", "sensor"]
             .into_iter()

@@ -9,7 +9,7 @@ mod common;
 
 use common::{devices, lookup_directions, mirror_mask_disagreements, scene, Gpu};
 use specchio::reference::angular::{angles_deg, summarize, AngularError};
-use specchio::render::{lookups, Readback, RenderOptions, Renderer, RgbaImage};
+use specchio::render::{Readback, RenderOptions, Renderer, RgbaImage};
 use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::OptionalFeatures;
 
@@ -115,19 +115,7 @@ fn the_ray_up_a_paraboloids_axis_sees_straight_down() {
 /// mirror's outline the reference's, grazing observer included.
 #[test]
 fn every_lookup_is_exact_on_every_central_mirror() {
-    let probe = Gpu::new();
-    let info = probe.device.info.clone();
-    probe.finish();
-    let mut runnable = Vec::new();
-    for lookup in Lookup::ALL {
-        match lookups::missing_features(lookup, &info) {
-            None => runnable.push(lookup),
-            Some(why) => common::not_applicable(&format!("{lookup} on {}", info.name), &why),
-        }
-    }
-    let features = (runnable.iter().map(|&l| lookups::features(l)))
-        .fold(OptionalFeatures::default(), |f, g| f.union(g));
-    let gpu = Gpu::with_features(features);
+    let (gpu, runnable) = Gpu::with_all_lookups();
     for rel in CENTRAL {
         let s = scene(rel);
         for &lookup in &runnable {
