@@ -35,6 +35,7 @@ pub mod render;
 pub mod scene;
 pub mod sensor;
 pub mod shaders;
+pub mod text;
 pub mod vk;
 
 /// The module arrows of docs/architecture.md, checked on the source.

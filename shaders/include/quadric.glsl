@@ -1,13 +1,14 @@
-// quadric.glsl - ray / central-mirror intersection: the hyperboloid and the paraboloid (and
-// every shape written as a quadric of revolution about the viewpoint's vertical axis), cut at
-// its rim and closed there by a flat disc. engine/src/mirror/quadric.rs is the same algorithm
-// in f64.
+// quadric.glsl - ray / mirror intersection for every shape but the sphere: the hyperboloid,
+// the paraboloid and the cone (each a quadric of revolution about the viewpoint's vertical
+// axis), cut at its rim and closed there by a flat disc. engine/src/mirror/quadric.rs is the
+// same algorithm in f64.
 //
 // About its vertex (s the height above it, the axis +Y) the surface is
 //     F(p) = x^2 + z^2 + a s^2 + b s = 0,  the mirror's inside F < 0,
 // with no constant term: about the viewpoint, a flat hyperboloid's constant and s^2 terms are
 // huge and nearly cancel at the mirror, beyond what f32 holds. The body is F < 0 between the
-// height low_y (a hyperboloid's centre: below it lies the other sheet) and the rim's height.
+// height low_y (a hyperboloid's centre or a cone's apex: below it lies the other sheet or
+// nappe) and the rim's height.
 // It is convex, so a ray meets it in one interval.
 #ifndef QUADRIC_GLSL
 #define QUADRIC_GLSL
@@ -29,7 +30,10 @@ float quadric_value(Quadric q, vec3 v) {
 
 // The outward unit normal at v (the vertex's frame): F's gradient.
 vec3 quadric_normal(Quadric q, vec3 v) {
-    return normalize(vec3(v.x, q.ab.x * v.y + 0.5 * q.ab.y, v.z));
+    vec3 g = vec3(v.x, q.ab.x * v.y + 0.5 * q.ab.y, v.z);
+    // The gradient vanishes only at a cone's apex (b = 0), which has no tangent plane: it
+    // faces straight down the axis, at the camera.
+    return dot(g, g) > 0.0 ? normalize(g) : vec3(0.0, -1.0, 0.0);
 }
 
 // The ray's interval (from o) between the two cutting heights; false when it runs level

@@ -206,10 +206,10 @@ fn opencv_projects_the_export_as_our_model_does() {
 fn a_hyperboloid_calibrates_to_its_analytic_xi() {
     let rel = "scenes/hyperbolic-room.toml";
     let scene = common::scene(rel);
-    let specchio::mirror::MirrorShape::Hyperboloid(h) = scene.mirror.shape else {
-        panic!("the scene's mirror is a hyperboloid");
-    };
-    let (d, p) = (h.focal_distance_m, h.latus_rectum_m / 4.0);
+    let shape = scene.mirror.shape;
+    assert_eq!(shape.name(), "hyperboloid");
+    let field = |name| shape.field(name).expect("a hyperboloid's field");
+    let (d, p) = (field("focal_distance"), field("latus_rectum") / 4.0);
     let tan_y = (f64::from(scene.sensor.fov_y_deg).to_radians() / 2.0).tan();
     let f_px = f64::from(scene.sensor.resolution[1]) / 2.0 / tan_y;
     let hypot = (d * d + 4.0 * p * p).sqrt();
@@ -259,10 +259,13 @@ fn bad_input_is_refused_without_output() {
 fn a_paraboloid_calibrates_to_xi_one() {
     let rel = "scenes/parabolic-room.toml";
     let scene = common::scene(rel);
-    let specchio::mirror::MirrorShape::Paraboloid(p) = scene.mirror.shape else {
-        panic!("the scene's mirror is a paraboloid");
-    };
+    let shape = scene.mirror.shape;
+    assert_eq!(shape.name(), "paraboloid");
+    let p = shape
+        .field("latus_rectum")
+        .expect("a paraboloid's latus rectum")
+        / 4.0;
     let per_m =
         f64::from(scene.sensor.resolution[1]) / 2.0 / f64::from(scene.sensor.orthographic_half_m);
-    calibrates_to(rel, 1.0, 2.0 * p.focal_length_m() * per_m);
+    calibrates_to(rel, 1.0, 2.0 * p * per_m);
 }

@@ -69,12 +69,13 @@ fn gpu_outputs_with(
 /// Measured maxima are printed.
 #[test]
 fn the_gpu_ray_map_is_the_exact_one_on_every_device() {
-    // The sphere, and the central mirrors (their quadric in f32 against f64; the paraboloid's
-    // camera orthographic).
+    // The sphere, the central mirrors (their quadric in f32 against f64; the paraboloid's
+    // camera orthographic) and the cone (a quadric with an apex).
     for rel in [
         "scenes/test/six-colour-room.toml",
         "scenes/hyperbolic-room.toml",
         "scenes/parabolic-room.toml",
+        "scenes/conical-room.toml",
     ] {
         gpu_ray_map_is_exact(rel);
     }

@@ -15,6 +15,65 @@
 //! (p itself, not 4p, squared).
 
 use super::quadric::Quadric;
+use super::{
+    lengths_resolved, number, FieldUnit, MirrorShape, ShapeCamera, ShapeError, ShapeField,
+    ShapeKind, Surface,
+};
+
+pub(super) static KIND: ShapeKind = ShapeKind {
+    name: "hyperboloid",
+    summary: "central: a perspective camera at the outer focus, the viewpoint at the inner one",
+    fields: &[
+        ShapeField {
+            name: "focal_distance",
+            unit: FieldUnit::Metres,
+            doc: "d, the distance between the foci (the camera sits d below the viewpoint)",
+        },
+        ShapeField {
+            name: "latus_rectum",
+            unit: FieldUnit::Metres,
+            doc: "4p, the chord through a focus square to the axis",
+        },
+        ShapeField {
+            name: "rim_radius",
+            unit: FieldUnit::Metres,
+            doc: "the rim's distance from the axis",
+        },
+    ],
+    build,
+};
+
+/// Refuses a hyperboloid the renderer cannot draw faithfully: lengths too different for
+/// single precision, or a mirror that reaches past its own camera.
+fn build(v: &[f64]) -> Result<MirrorShape, ShapeError> {
+    let h = Hyperboloid {
+        focal_distance_m: v[0],
+        latus_rectum_m: v[1],
+        rim_radius_m: v[2],
+    };
+    let d = h.focal_distance_m;
+    lengths_resolved(
+        "latus_rectum",
+        h.latus_rectum_m / d,
+        "the focal distance",
+        d,
+    )?;
+    lengths_resolved("rim_radius", h.rim_radius_m / d, "the focal distance", d)?;
+    let reach = h.bounding_radius_m();
+    if reach >= d {
+        return Err(ShapeError {
+            field: "rim_radius",
+            message: format!(
+                "makes the mirror reach {} m from its viewpoint, as far as its camera at the \
+                 outer focus ({} m below it): the camera would be inside the mirror's reach; a \
+                 smaller rim or a larger focal_distance keeps it outside",
+                number(reach),
+                number(d)
+            ),
+        });
+    }
+    Ok(h.shape())
+}
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hyperboloid {
@@ -27,6 +86,25 @@ pub struct Hyperboloid {
 }
 
 impl Hyperboloid {
+    /// The mirror as its consumers see it.
+    pub fn shape(&self) -> MirrorShape {
+        MirrorShape {
+            kind: &KIND,
+            surface: Surface::Quadric(self.quadric()),
+            camera: ShapeCamera::Pinhole {
+                distance_m: Some(self.focal_distance_m),
+            },
+            reach_m: self.bounding_radius_m(),
+            xi: Some(self.xi()),
+            values: [
+                self.focal_distance_m,
+                self.latus_rectum_m,
+                self.rim_radius_m,
+                0.0,
+            ],
+        }
+    }
+
     /// The semi-axes (a along the axis, b across it), from d and 4p: b² = 2ap and
     /// a² + b² = d²/4 give a² + 2pa - d²/4 = 0, whose positive root is written without
     /// cancelling `-p + sqrt(p² + d²/4)` for a flat (p much larger than d) hyperboloid.

@@ -9,6 +9,38 @@
 //! (Mei and Rives 2007, table 1).
 
 use super::quadric::Quadric;
+use super::{
+    lengths_resolved, FieldUnit, MirrorShape, ShapeCamera, ShapeError, ShapeField, ShapeKind,
+    Surface,
+};
+
+pub(super) static KIND: ShapeKind = ShapeKind {
+    name: "paraboloid",
+    summary: "central: an orthographic camera looking up the axis, the viewpoint at the focus",
+    fields: &[
+        ShapeField {
+            name: "latus_rectum",
+            unit: FieldUnit::Metres,
+            doc: "4p, the chord through the focus square to the axis",
+        },
+        ShapeField {
+            name: "rim_radius",
+            unit: FieldUnit::Metres,
+            doc: "the rim's distance from the axis",
+        },
+    ],
+    build,
+};
+
+fn build(v: &[f64]) -> Result<MirrorShape, ShapeError> {
+    let p = Paraboloid {
+        latus_rectum_m: v[0],
+        rim_radius_m: v[1],
+    };
+    let ratio = p.rim_radius_m / p.latus_rectum_m;
+    lengths_resolved("rim_radius", ratio, "the latus rectum", p.latus_rectum_m)?;
+    Ok(p.shape())
+}
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Paraboloid {
@@ -19,6 +51,18 @@ pub struct Paraboloid {
 }
 
 impl Paraboloid {
+    /// The mirror as its consumers see it.
+    pub fn shape(&self) -> MirrorShape {
+        MirrorShape {
+            kind: &KIND,
+            surface: Surface::Quadric(self.quadric()),
+            camera: ShapeCamera::Orthographic,
+            reach_m: self.bounding_radius_m(),
+            xi: Some(1.0),
+            values: [self.latus_rectum_m, self.rim_radius_m, 0.0, 0.0],
+        }
+    }
+
     /// p: the focal length, the vertex's distance below the focus (m).
     pub fn focal_length_m(&self) -> f64 {
         0.25 * self.latus_rectum_m

@@ -8,12 +8,14 @@
 //! F(p) = x² + z² + a s² + b s        the surface is F = 0, the mirror's inside F < 0
 //! ```
 //!
-//! (a hyperboloid: a = −b²/a², b = −4p; a paraboloid: a = 0, b = −4p). About the vertex there is
+//! (a hyperboloid: a = −b²/a², b = −4p; a paraboloid: a = 0, b = −4p; a cone: a = −tan²α,
+//! b = 0). About the vertex there is
 //! no constant term: written about the viewpoint, a flat hyperboloid's constant and its s²
 //! term are huge and nearly cancel at the mirror, which f32 cannot hold (a latus rectum 10³
 //! times the focal distance drew noise). The body is `F < 0` between two heights: the rim's
 //! (`rim_y`, where a flat disc closes the body on top) and `low_y` (the hyperboloid's centre,
-//! which cuts off the second sheet; minus infinity for the paraboloid). That body is convex,
+//! which cuts off the second sheet; a cone's apex, below which lies its other nappe; minus
+//! infinity for the paraboloid). That body is convex,
 //! so a ray meets it in one interval, and a reflected ray never meets the mirror again.
 //! `shaders/include/quadric.glsl` is the same algorithm in f32.
 
@@ -66,7 +68,11 @@ impl Quadric {
     }
 
     fn normal_about_vertex(&self, v: DVec3) -> DVec3 {
-        DVec3::new(v.x, self.a * v.y + 0.5 * self.b, v.z).normalize()
+        // F's gradient vanishes only at a cone's apex (b = 0), where the surface has no
+        // tangent plane: the apex faces straight down the axis, at the camera.
+        DVec3::new(v.x, self.a * v.y + 0.5 * self.b, v.z)
+            .try_normalize()
+            .unwrap_or(DVec3::NEG_Y)
     }
 
     /// Where the unit ray `o + t d` (t > 0, the viewpoint's frame) enters the body, or None

@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use super::{Hyperboloid, MirrorShape};
+use super::Hyperboloid;
 
 /// A hyperboloid of the kind a robot carries (d = 10 cm), the large one of the scenes, a flat
 /// one and a nearly parabolic one.
@@ -53,7 +53,7 @@ fn towards_viewpoint(max_elevation: f64) -> impl Iterator<Item = DVec3> {
 #[test]
 fn a_ray_aimed_at_the_inner_focus_reflects_through_the_outer_one() {
     for h in hyperboloids() {
-        let shape = MirrorShape::Hyperboloid(h);
+        let shape = h.shape();
         let q = h.quadric();
         let rim_elevation = q.rim_y.atan2(q.rim_r);
         let camera = DVec3::new(0.0, -h.focal_distance_m, 0.0);
@@ -82,7 +82,7 @@ fn a_ray_aimed_at_the_inner_focus_reflects_through_the_outer_one() {
 #[test]
 fn rays_above_the_rim_or_from_inside_miss_and_the_cap_faces_up() {
     let h = hyperboloids()[1];
-    let shape = MirrorShape::Hyperboloid(h);
+    let shape = h.shape();
     let q = h.quadric();
     // Aimed at the viewpoint from above the rim's elevation: over the rim, into the cap.
     let down = DVec3::new(0.0, -1.0, 0.0);
@@ -101,7 +101,7 @@ fn rays_above_the_rim_or_from_inside_miss_and_the_cap_faces_up() {
 
 #[test]
 fn the_sphere_in_f64_agrees_with_the_references_f32_sphere() {
-    let shape = MirrorShape::Sphere { radius_m: 1.0 };
+    let shape = super::sphere(1.0);
     for i in 0..200 {
         let a = f64::from(i) * 0.1;
         let o = DVec3::new(3.0 * a.cos(), -2.0 + 0.01 * f64::from(i), 3.0 * a.sin());
@@ -148,7 +148,7 @@ fn a_ray_aimed_at_a_paraboloids_focus_reflects_along_its_axis() {
             rim_radius_m: 0.03,
         },
     ] {
-        let shape = MirrorShape::Paraboloid(p);
+        let shape = p.shape();
         let q = p.quadric();
         assert!(
             (q.rim_y - (p.rim_radius_m.powi(2) / p.latus_rectum_m - p.latus_rectum_m / 4.0)).abs()
@@ -179,5 +179,112 @@ fn a_ray_aimed_at_a_paraboloids_focus_reflects_along_its_axis() {
             .expect("the vertex");
         assert!((up.t - (5.0 - 0.25 * p.latus_rectum_m)).abs() < 1e-12);
         assert_eq!(up.normal, DVec3::NEG_Y);
+    }
+}
+
+/// Every registered shape: a unique kebab-case name, at most [`super::MAX_FIELDS`] fields with
+/// unique names, and built from values in range it keeps them, in its kind's order, and holds
+/// itself (its rim, its reach) in its reach.
+#[test]
+fn every_registered_shape_builds_from_its_fields_and_keeps_them() {
+    let mut names = std::collections::BTreeSet::new();
+    for kind in super::kinds() {
+        assert!(names.insert(kind.name), "{} registered twice", kind.name);
+        assert!(kind
+            .name
+            .chars()
+            .all(|c| c.is_ascii_lowercase() || c == '-'));
+        assert!(kind.fields.len() <= super::MAX_FIELDS, "{}", kind.name);
+        assert_eq!(super::kind(kind.name), Some(kind));
+        // Values a robot's mirror might have: decreasing lengths, a mid-range angle.
+        let values: Vec<f64> = (kind.fields.iter().enumerate())
+            .map(|(i, f)| match f.unit {
+                super::FieldUnit::Metres => 0.1 / (1.0 + i as f64),
+                super::FieldUnit::Degrees { above, below } => 0.5 * (above + below) - 3.0,
+            })
+            .collect();
+        let shape = (kind.build)(&values).unwrap_or_else(|e| panic!("{}: {e:?}", kind.name));
+        assert_eq!(shape.kind, kind);
+        for (f, v) in kind.fields.iter().zip(&values) {
+            assert_eq!(shape.field(f.name), Some(*v), "{}.{}", kind.name, f.name);
+            assert!(super::is_shape_field(f.name));
+        }
+        assert_eq!(shape.fields().count(), kind.fields.len());
+        assert!(shape.reach_m > 0.0 && shape.reach_m.is_finite());
+        if let Some((r, y)) = shape.rim() {
+            assert!(r.hypot(y) <= shape.reach_m * (1.0 + 1e-12), "{}", kind.name);
+        }
+    }
+    assert_eq!(super::kind("ellipsoid"), None);
+    assert!(!super::is_shape_field("center"));
+}
+
+/// A cone of half-angle α turns a ray at θ from its axis to the elevation 90° − 2α + θ
+/// (reflection across a flank that stands at 90° − α); the ray up the axis meets the apex,
+/// which faces straight down.
+#[test]
+fn a_cone_reflects_each_ray_by_its_flank() {
+    for (alpha, rim) in [(45.0, 1.0), (55.0, 1.0), (30.0, 0.02), (80.0, 0.5)] {
+        let cone = super::Cone {
+            half_angle_deg: alpha,
+            rim_radius_m: rim,
+        };
+        let shape = cone.shape();
+        let q = cone.quadric();
+        assert!((q.rim_y - q.vertex_y - cone.height_m()).abs() < 1e-12);
+        // The viewpoint is within the body (on the rim's disc for a wide cone).
+        assert!(q.value(DVec3::ZERO) < 0.0 && q.vertex_y < 0.0 && q.rim_y >= 0.0);
+        let camera = DVec3::new(0.0, q.vertex_y - 3.0 * rim, 0.0);
+        let rim_angle = rim.atan2(q.rim_y - camera.y);
+        for i in 1..50 {
+            let theta = rim_angle * f64::from(i) / 50.0;
+            let d = DVec3::new(theta.sin(), theta.cos(), 0.0);
+            let hit = shape.hit(camera, d).expect("inside the rim's angle");
+            let p = camera + hit.t * d;
+            // On the flank: its radius is its height above the apex times tan α.
+            let s = p.y - q.vertex_y;
+            assert!((p.x - s * alpha.to_radians().tan()).abs() < 1e-12 * rim.max(1.0));
+            let r = reflect(d, hit.normal);
+            let elevation = r.y.asin().to_degrees();
+            let want = 90.0 - 2.0 * alpha + theta.to_degrees();
+            assert!(
+                (elevation - want).abs() < 1e-9,
+                "α {alpha}: {elevation} != {want}"
+            );
+        }
+        let apex = shape.hit(camera, DVec3::Y).expect("the apex");
+        assert_eq!(apex.normal, DVec3::NEG_Y);
+        assert!((camera.y + apex.t - q.vertex_y).abs() < 1e-12);
+        // Beyond the rim's angle, nothing.
+        let past = rim_angle * 1.01;
+        assert!(shape
+            .hit(camera, DVec3::new(past.sin(), past.cos(), 0.0))
+            .is_none());
+    }
+}
+
+/// docs/scene-format.md's `[mirror]` table lists every registered shape and a row for each
+/// of its fields.
+#[test]
+fn the_scene_format_doc_covers_every_shape_and_field() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let doc = std::fs::read_to_string(root.join("docs/scene-format.md")).unwrap();
+    let shape_row = doc
+        .lines()
+        .find(|l| l.starts_with("| `shape` | string |"))
+        .expect("the shape row");
+    for kind in super::kinds() {
+        assert!(
+            shape_row.contains(&format!("`{}`", kind.name)),
+            "{}",
+            kind.name
+        );
+        for f in kind.fields {
+            let row = doc
+                .lines()
+                .find(|l| l.starts_with(&format!("| `{}` |", f.name)))
+                .unwrap_or_else(|| panic!("no row for mirror.{}", f.name));
+            assert!(row.contains(&format!("`{}`", kind.name)), "{row}");
+        }
     }
 }

@@ -2,7 +2,7 @@
 
 use glam::{Vec3, Vec3A};
 
-use crate::mirror::MirrorShape;
+use crate::mirror::{MirrorShape, Surface};
 
 /// Nearest t > 0 with |o + t d - c| = r for unit `d`, or None (also when `o` is inside).
 ///
@@ -41,7 +41,7 @@ pub struct MirrorReflection {
 /// and the hit put back on the sphere, as `shaders/include/mirror.glsl` does. The other
 /// shapes: in f64 (`MirrorShape::hit`), rounded to f32 at the end.
 pub fn mirror_reflection(eye: Vec3, d: Vec3, shape: &MirrorShape) -> Option<MirrorReflection> {
-    if let MirrorShape::Sphere { radius_m } = *shape {
+    if let Surface::Sphere { radius_m } = shape.surface {
         let t = ray_sphere(eye, d, Vec3::ZERO, radius_m)?;
         return Some(sphere_reflection_at(eye, d, t, radius_m));
     }
@@ -284,7 +284,7 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
 mod tests {
     use super::*;
 
-    const SPHERE: MirrorShape = MirrorShape::Sphere { radius_m: 1.0 };
+    const SPHERE: MirrorShape = crate::mirror::sphere(1.0);
 
     /// Straight up into the sphere's lowest point: reflected straight back down.
     #[test]

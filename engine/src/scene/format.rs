@@ -72,35 +72,22 @@ pub struct EachWall {
     pub nz: String,
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// `[mirror]`. Its shape's fields are whatever the shape registered in `crate::mirror`
+/// reads, so the table is read by hand ([`MirrorSpec::deserialize`]): the common fields typed,
+/// every other key kept, with its value, for the loader to check against the shape.
+#[derive(Debug)]
 pub struct MirrorSpec {
-    /// The surface; the sphere when left out.
-    pub shape: Option<MirrorShapeSpec>,
-    #[serde(deserialize_with = "fixed::exact")]
+    /// `mirror.shape`: a name from `crate::mirror`'s registry; the sphere when left out.
+    pub shape: Option<String>,
     pub center: V3,
-    /// The sphere's radius.
-    pub radius: Option<f64>,
-    /// A hyperboloid's distance between its foci (d).
-    pub focal_distance: Option<f64>,
-    /// A hyperboloid's or paraboloid's latus rectum (4p).
-    pub latus_rectum: Option<f64>,
-    /// A central mirror's rim radius.
-    pub rim_radius: Option<f64>,
     pub animation: Option<AnimationSpec>,
     /// Read as the scene's own lookup names (`Lookup`'s serde names, one list).
     pub lookup: Option<super::Lookup>,
     pub distance_steps: Option<i64>,
     pub secant_steps: Option<i64>,
-}
-
-/// `mirror.shape`: one word per shape of `crate::mirror` (`MirrorShape::name`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum MirrorShapeSpec {
-    Sphere,
-    Hyperboloid,
-    Paraboloid,
+    /// Every other key, in file order: a shape's fields (`radius`, `focal_distance`, ...) or
+    /// a mistake, which the loader names with its line.
+    pub shape_fields: Vec<(String, toml::Value)>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -366,5 +353,58 @@ impl<'de> Deserialize<'de> for ScaleSpec {
             }
         }
         d.deserialize_any(Scale)
+    }
+}
+
+/// The common keys of `[mirror]`; any other is a shape's field or a mistake.
+pub const MIRROR_KEYS: [&str; 6] = [
+    "shape",
+    "center",
+    "animation",
+    "lookup",
+    "distance_steps",
+    "secant_steps",
+];
+
+impl<'de> Deserialize<'de> for MirrorSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        /// `center`, read strictly (exactly three numbers).
+        #[derive(Deserialize)]
+        #[serde(transparent)]
+        struct Center(#[serde(deserialize_with = "fixed::exact")] V3);
+
+        struct Mirror;
+        impl<'de> Visitor<'de> for Mirror {
+            type Value = MirrorSpec;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a [mirror] table")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<MirrorSpec, A::Error> {
+                let mut center = None;
+                let mut m = MirrorSpec {
+                    shape: None,
+                    center: [0.0; 3],
+                    animation: None,
+                    lookup: None,
+                    distance_steps: None,
+                    secant_steps: None,
+                    shape_fields: Vec::new(),
+                };
+                while let Some(key) = map.next_key::<String>()? {
+                    match key.as_str() {
+                        "shape" => m.shape = Some(map.next_value()?),
+                        "center" => center = Some(map.next_value::<Center>()?.0),
+                        "animation" => m.animation = Some(map.next_value()?),
+                        "lookup" => m.lookup = Some(map.next_value()?),
+                        "distance_steps" => m.distance_steps = Some(map.next_value()?),
+                        "secant_steps" => m.secant_steps = Some(map.next_value()?),
+                        _ => m.shape_fields.push((key, map.next_value()?)),
+                    }
+                }
+                m.center = center.ok_or_else(|| de::Error::missing_field("center"))?;
+                Ok(m)
+            }
+        }
+        d.deserialize_map(Mirror)
     }
 }

@@ -15,7 +15,7 @@
 
 use glam::{DVec3, Vec2, Vec3};
 
-use crate::mirror::MirrorShape;
+use crate::mirror::{MirrorShape, Surface};
 
 use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
@@ -79,12 +79,26 @@ impl SensorOptics {
     }
 
     /// The highest elevation the mirror shows (radians): for the sphere a grazing ray goes on
-    /// along the tangent cone, `90 degrees - rim angle` above the horizon; a central mirror
-    /// shows up to its rim's reflection. The lowest is -90 degrees.
+    /// along the tangent cone, `90 degrees - rim angle` above the horizon; a mirror with a rim
+    /// shows up to its rim's reflection.
     pub fn max_elevation(&self) -> f64 {
-        match (self.shape, self.rim_angle()) {
-            (MirrorShape::Sphere { .. }, Some(rim)) => std::f64::consts::FRAC_PI_2 - rim,
+        match (self.shape.surface, self.rim_angle()) {
+            (Surface::Sphere { .. }, Some(rim)) => std::f64::consts::FRAC_PI_2 - rim,
             _ => self.reflected_elevation(self.rim_parameter()),
+        }
+    }
+
+    /// The lowest elevation the mirror shows (radians): straight down where the mirror is
+    /// smooth on its axis (the ray up the axis comes straight back); a cone's apex is not, and
+    /// the rays beside it reflect only as low as its flank turns them.
+    pub fn min_elevation(&self) -> f64 {
+        const BESIDE_AXIS: f64 = 1e-9; // of the rim's parameter: far below a pixel
+        let e = self.reflected_elevation(BESIDE_AXIS * self.rim_parameter());
+        // A smooth mirror reflects the ray beside the axis within ~1e-9 rad of straight down.
+        if e < -std::f64::consts::FRAC_PI_2 + 1e-6 {
+            -std::f64::consts::FRAC_PI_2
+        } else {
+            e
         }
     }
 
@@ -170,8 +184,8 @@ impl SensorOptics {
         } else {
             (below, DVec3::new(s.sin(), s.cos(), 0.0))
         };
-        let n = match self.shape {
-            MirrorShape::Sphere { radius_m } => {
+        let n = match self.shape.surface {
+            Surface::Sphere { radius_m } => {
                 // Nearest root of |eye + t dir| = R, clamped at the rim where the discriminant
                 // is 0.
                 let r = f64::from(radius_m);
@@ -180,8 +194,8 @@ impl SensorOptics {
                 (eye + (half_b - disc.sqrt()) * dir) / r
             }
             // At the rim's edge itself the ray grazes the disc: the surface continued there.
-            shape => {
-                shape
+            Surface::Quadric(_) => {
+                self.shape
                     .surface_hit(eye, dir)
                     .expect("a ray inside the rim meets the mirror")
                     .normal
@@ -193,10 +207,10 @@ impl SensorOptics {
 
     /// The camera-ray angle from the axis whose reflection has elevation `elevation`
     /// (radians), by bisection on the monotonic [`Self::reflected_elevation`]; None outside
-    /// [-90 degrees, max elevation].
+    /// [min elevation, max elevation].
     pub fn theta_for_elevation(&self, elevation: f64) -> Option<f64> {
         let (mut lo, mut hi) = (0.0, self.rim_parameter());
-        if !(-std::f64::consts::FRAC_PI_2..=self.max_elevation()).contains(&elevation) {
+        if !(self.min_elevation()..=self.max_elevation()).contains(&elevation) {
             return None;
         }
         // 60 halvings take the bracket below f64 resolution of any angle here.
@@ -248,12 +262,13 @@ mod tests {
         scene("scenes/test/six-colour-room.toml")
     }
 
-    /// The sphere, and the two central mirrors (a pinhole at a hyperboloid's outer focus, an
-    /// orthographic camera under a paraboloid).
-    const EVERY_SHAPE: [&str; 3] = [
+    /// The sphere, the two central mirrors (a pinhole at a hyperboloid's outer focus, an
+    /// orthographic camera under a paraboloid) and the cone (a pinhole below its apex).
+    const EVERY_SHAPE: [&str; 4] = [
         "scenes/test/six-colour-room.toml",
         "scenes/hyperbolic-room.toml",
         "scenes/parabolic-room.toml",
+        "scenes/conical-room.toml",
     ];
 
     /// The six-colour room's sensor is 2.5 m below a 1 m sphere: the rim is asin(0.4) from
@@ -309,9 +324,12 @@ mod tests {
 
     fn pixel_seeing_inverts(scene: &Scene) {
         let o = SensorOptics::at(scene, 0.0);
-        // Up to 5 degrees: the central mirrors here show up to 8.5 and 10.4.
-        for (elev_deg, az_deg) in [(-60.0, 10.0), (0.0, 90.0), (5.0, 200.0), (-10.0, 300.0)] {
-            let (e, a) = (f64::to_radians(elev_deg), f64::to_radians(az_deg));
+        // Across what the mirror shows (the sphere from -90 to 66 degrees, the cone from -20
+        // to 1.8).
+        let (low, high) = (o.min_elevation(), o.max_elevation());
+        for (share, az_deg) in [(0.2, 10.0), (0.55, 90.0), (0.9, 200.0), (0.5, 300.0)] {
+            let e = low + share * (high - low);
+            let (elev_deg, a) = (e.to_degrees(), f64::to_radians(az_deg));
             let p = o.pixel_seeing(e, a).unwrap();
             let (from, d) = crate::sensor::ray_map::pixel_ray_from(&o.view, p, o.width, o.height);
             let m = crate::reference::intersect::mirror_reflection(from, d, &o.shape)
@@ -325,6 +343,19 @@ mod tests {
             let (e2, a2) = elevation_azimuth(m.direction);
             assert!((e2 - e).abs() < 1e-4 && (a2 - a).abs() < 1e-4);
         }
-        assert!(o.pixel_seeing(o.max_elevation() + 1e-3, 0.0).is_none());
+        assert!(o.pixel_seeing(high + 1e-3, 0.0).is_none());
+        assert!(o.pixel_seeing(low - 1e-3, 0.0).is_none());
+    }
+
+    /// The cone's flank at 55 degrees turns the rays beside its axis to 90 - 2 x 55 = -20
+    /// degrees: the lowest it shows; the smooth mirrors show straight down.
+    #[test]
+    fn a_cone_shows_no_lower_than_its_flank_turns_the_axis() {
+        let cone = SensorOptics::at(&scene("scenes/conical-room.toml"), 0.0);
+        assert!((cone.min_elevation().to_degrees() + 20.0).abs() < 1e-6);
+        for rel in &EVERY_SHAPE[..3] {
+            let o = SensorOptics::at(&scene(rel), 0.0);
+            assert_eq!(o.min_elevation(), -std::f64::consts::FRAC_PI_2, "{rel}");
+        }
     }
 }

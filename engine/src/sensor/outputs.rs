@@ -252,6 +252,7 @@ impl SensorOutputs {
             },
             mirror: MirrorRecord {
                 shape: o.shape.name(),
+                fields: o.shape.fields().collect(),
                 centre_m: o.mirror_center.to_array(),
                 radius_m: o.radius_m,
                 central: CentralRecord::of(&o.shape),
@@ -324,6 +325,9 @@ pub struct SensorRecord {
 #[derive(Debug, Serialize)]
 pub struct MirrorRecord {
     pub shape: &'static str,
+    /// The shape's own fields as the scene gave them (`[mirror]`: metres, or degrees for a
+    /// cone's `half_angle`).
+    pub fields: std::collections::BTreeMap<&'static str, f64>,
     pub centre_m: [f32; 3],
     pub radius_m: f32,
     #[serde(skip_serializing_if = "Option::is_none")]

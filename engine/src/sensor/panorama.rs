@@ -22,7 +22,7 @@
 //! points of the sphere. From the cube map, the same direction is looked up from the cube's
 //! centre (bilinear within the face), as a central camera at the mirror's centre would see.
 
-use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, TAU};
+use std::f64::consts::{FRAC_PI_4, TAU};
 
 use glam::{Vec2, Vec3};
 
@@ -70,8 +70,10 @@ impl PanoramaLayout {
         let width = ((TAU * rim / 4.0).round() as u32 * 4).clamp(4, MAX_WIDTH);
         let top = optics.max_elevation();
         let (top, bottom) = match kind {
-            PanoramaKind::LonLat => (top, -FRAC_PI_2),
-            PanoramaKind::Cylindrical => (top.min(FRAC_PI_4), -FRAC_PI_4),
+            PanoramaKind::LonLat => (top, optics.min_elevation()),
+            PanoramaKind::Cylindrical => {
+                (top.min(FRAC_PI_4), optics.min_elevation().max(-FRAC_PI_4))
+            }
         };
         let span = match kind {
             PanoramaKind::LonLat => (top - bottom) / TAU,

@@ -1,130 +1,100 @@
-//! `mirror.shape` and the fields each shape reads: a sphere's `radius`; a hyperboloid's
-//! `focal_distance`, `latus_rectum` and `rim_radius`; a paraboloid's `latus_rectum` and
-//! `rim_radius`. A field another shape reads is refused,
-//! so a scene never carries a number that does nothing.
+//! `mirror.shape` and the fields each shape reads, from the shapes' registry
+//! (`crate::mirror`): every field a shape names is required and checked against its unit; a
+//! field only another shape reads is refused, so a scene never carries a number that does
+//! nothing; a key no shape reads is an unknown field.
 
-use super::numbers::num_text;
+use super::numbers::Range;
 use super::{Ctx, R};
-use crate::mirror::{Hyperboloid, MirrorShape, Paraboloid};
-use crate::scene::format::{MirrorShapeSpec, MirrorSpec};
-
-/// The smallest ratio between a hyperboloid's lengths (d, 4p, rim radius) that single
-/// precision still resolves in the shaders' quadric: its coefficients are ratios of squares
-/// of these lengths, and f32 keeps about 7 digits.
-const MIN_LENGTH_RATIO: f64 = 1e-3;
+use crate::mirror::{self, FieldUnit, MirrorShape, ShapeKind};
+use crate::scene::error::SceneError;
+use crate::scene::format::{MirrorSpec, MIRROR_KEYS};
 
 impl Ctx<'_> {
     pub(super) fn mirror_shape(&self, spec: &MirrorSpec) -> R<MirrorShape> {
-        let shape = spec.shape.unwrap_or(MirrorShapeSpec::Sphere);
-        let fields = [
-            ("mirror.radius", spec.radius),
-            ("mirror.focal_distance", spec.focal_distance),
-            ("mirror.latus_rectum", spec.latus_rectum),
-            ("mirror.rim_radius", spec.rim_radius),
-        ];
-        let reads: &[&str] = match shape {
-            MirrorShapeSpec::Sphere => &["mirror.radius"],
-            MirrorShapeSpec::Hyperboloid => &[
-                "mirror.focal_distance",
-                "mirror.latus_rectum",
-                "mirror.rim_radius",
-            ],
-            MirrorShapeSpec::Paraboloid => &["mirror.latus_rectum", "mirror.rim_radius"],
+        let kind = match spec.shape.as_deref() {
+            None => mirror::kind("sphere").expect("the sphere is registered"),
+            Some(name) => mirror::kind(name).ok_or_else(|| {
+                self.invalid(
+                    "mirror.shape",
+                    format!("unknown mirror shape \"{name}\" (known: {})", shape_names()),
+                )
+            })?,
         };
-        let name = match shape {
-            MirrorShapeSpec::Sphere => "sphere",
-            MirrorShapeSpec::Hyperboloid => "hyperboloid",
-            MirrorShapeSpec::Paraboloid => "paraboloid",
-        };
-        for (field, value) in fields {
-            match (reads.contains(&field), value) {
-                (true, None) => {
-                    return Err(self.missing(field, &format!("a {name} mirror needs it")));
-                }
-                (false, Some(_)) => {
-                    return Err(self.unused(
-                        field,
-                        &format!("a {name} mirror reads only {}", reads.join(", ")),
-                    ));
-                }
-                _ => {}
+        let reads: Vec<String> = kind
+            .fields
+            .iter()
+            .map(|f| format!("mirror.{}", f.name))
+            .collect();
+        for (key, _) in &spec.shape_fields {
+            let field = format!("mirror.{key}");
+            if !mirror::is_shape_field(key) {
+                return Err(self.unknown_mirror_field(key));
+            }
+            if !reads.contains(&field) {
+                let why = format!("a {} mirror reads only {}", kind.name, reads.join(", "));
+                return Err(self.unused(&field, &why));
             }
         }
-        let value = |field: &str| fields.iter().find(|f| f.0 == field).and_then(|f| f.1);
-        let length = |field: &str| -> R<f64> {
-            let v = value(field).expect("checked above");
-            self.positive(field, v)?; // finite, and positive in single precision too
-            Ok(v)
-        };
-        match shape {
-            MirrorShapeSpec::Sphere => Ok(MirrorShape::Sphere {
-                radius_m: self.positive("mirror.radius", value("mirror.radius").unwrap())?,
+        let mut values = Vec::with_capacity(kind.fields.len());
+        for f in kind.fields {
+            let field = format!("mirror.{}", f.name);
+            let value = spec.shape_fields.iter().find(|(k, _)| k == f.name);
+            let Some((_, value)) = value else {
+                let why = format!("a {} mirror needs it", kind.name);
+                return Err(self.missing(&field, &why));
+            };
+            let v = self.shape_number(&field, value)?;
+            match f.unit {
+                // Finite, and positive in single precision too.
+                FieldUnit::Metres => self.positive(&field, v)?,
+                FieldUnit::Degrees { above, below } => {
+                    self.ranged(&field, v, Range::open(above as f32, below as f32))?
+                }
+            };
+            values.push(v);
+        }
+        (kind.build)(&values).map_err(|e| self.invalid(&format!("mirror.{}", e.field), e.message))
+    }
+
+    /// A shape's field's value: a number (an integer reads as one).
+    fn shape_number(&self, field: &str, value: &toml::Value) -> R<f64> {
+        match value {
+            toml::Value::Float(v) => Ok(*v),
+            toml::Value::Integer(v) => Ok(*v as f64),
+            other => Err(SceneError::WrongType {
+                location: self.loc.location(field),
+                field: field.to_string(),
+                message: format!("invalid type: {}, expected a number", other.type_str()),
             }),
-            MirrorShapeSpec::Hyperboloid => {
-                let h = Hyperboloid {
-                    focal_distance_m: length("mirror.focal_distance")?,
-                    latus_rectum_m: length("mirror.latus_rectum")?,
-                    rim_radius_m: length("mirror.rim_radius")?,
-                };
-                self.hyperboloid_fits(&h)?;
-                Ok(MirrorShape::Hyperboloid(h))
-            }
-            MirrorShapeSpec::Paraboloid => {
-                let p = Paraboloid {
-                    latus_rectum_m: length("mirror.latus_rectum")?,
-                    rim_radius_m: length("mirror.rim_radius")?,
-                };
-                let ratio = p.rim_radius_m / p.latus_rectum_m;
-                self.lengths_resolved(
-                    "mirror.rim_radius",
-                    ratio,
-                    "the latus rectum",
-                    p.latus_rectum_m,
-                )?;
-                Ok(MirrorShape::Paraboloid(p))
-            }
         }
     }
 
-    /// Refuses a hyperboloid the renderer cannot draw faithfully: lengths too different for
-    /// single precision, or a mirror that reaches past its own camera.
-    fn hyperboloid_fits(&self, h: &Hyperboloid) -> R<()> {
-        let (d, l, r) = (h.focal_distance_m, h.latus_rectum_m, h.rim_radius_m);
-        for (field, v) in [("mirror.latus_rectum", l), ("mirror.rim_radius", r)] {
-            self.lengths_resolved(field, v / d, "the focal distance", d)?;
-        }
-        let reach = h.bounding_radius_m();
-        if reach >= d {
-            return Err(self.invalid(
-                "mirror.rim_radius",
-                format!(
-                    "makes the mirror reach {} m from its viewpoint, as far as its camera at \
-                     the outer focus ({} m below it): the camera would be inside the mirror's \
-                     reach; a smaller rim or a larger focal_distance keeps it outside",
-                    num_text(reach),
-                    num_text(d)
-                ),
-            ));
-        }
-        Ok(())
-    }
-
-    /// Refuses a length `ratio` times another (`other`, `other_m` long) beyond what single
-    /// precision resolves in the quadric's coefficients.
-    fn lengths_resolved(&self, field: &str, ratio: f64, other: &str, other_m: f64) -> R<()> {
-        if (MIN_LENGTH_RATIO..=1.0 / MIN_LENGTH_RATIO).contains(&ratio) {
-            return Ok(());
-        }
-        Err(self.invalid(
-            field,
-            format!(
-                "is {} times {other} {} m; between {} and {} times is allowed (single \
-                 precision resolves the mirror's shape within that)",
-                num_text(ratio),
-                num_text(other_m),
-                num_text(MIN_LENGTH_RATIO),
-                num_text(1.0 / MIN_LENGTH_RATIO)
+    /// A key of `[mirror]` that neither the table nor any shape reads (a typo, most often).
+    fn unknown_mirror_field(&self, key: &str) -> SceneError {
+        let field = format!("mirror.{key}");
+        let mut shape_fields: Vec<&str> = mirror::kinds()
+            .flat_map(|k: &ShapeKind| k.fields.iter().map(|f| f.name))
+            .collect();
+        shape_fields.sort_unstable();
+        shape_fields.dedup();
+        let quoted = |names: &[&str]| {
+            let q: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
+            q.join(", ")
+        };
+        SceneError::UnknownField {
+            location: self.loc.location(&field),
+            message: format!(
+                "unknown field `{key}`, expected one of {}, or a shape's field ({})",
+                quoted(&MIRROR_KEYS),
+                quoted(&shape_fields)
             ),
-        ))
+            field,
+        }
     }
+}
+
+/// The registered shapes' names, comma-separated.
+fn shape_names() -> String {
+    let names: Vec<&str> = mirror::kinds().map(|k| k.name).collect();
+    names.join(", ")
 }

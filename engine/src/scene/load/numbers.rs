@@ -10,6 +10,7 @@ use glam::{DVec3, Vec3};
 use super::{Ctx, R};
 use crate::scene::format::V3;
 use crate::scene::MAX_IMAGE_SIZE_PX;
+pub(crate) use crate::text::{num_text, time_text};
 
 /// `v` as a unit vector, normalised in f64 so that components near f32's limit (whose squared
 /// length overflows f32) still give their direction; `None` for the zero vector.
@@ -18,43 +19,6 @@ pub(crate) fn unit(v: Vec3) -> Option<Vec3> {
         .try_normalize()
         .map(DVec3::as_vec3)
         .filter(|u| u.is_finite() && u.length_squared() > 0.0)
-}
-
-/// A number for a message: plain digits in the everyday range, scientific notation outside it
-/// (`1e-310`, not a 0 followed by 300 digits; `3.4028235e38`, not 39 digits). f32 values print
-/// as f32 (shortest digits that read back to the same f32).
-pub(crate) fn num_text<T: NumText>(v: T) -> String {
-    v.text()
-}
-
-pub(crate) trait NumText {
-    fn text(self) -> String;
-}
-
-macro_rules! num_text_for {
-    ($t:ty) => {
-        impl NumText for $t {
-            fn text(self) -> String {
-                if self == 0.0 || !self.is_finite() || (1e-4..1e9).contains(&self.abs()) {
-                    format!("{self}")
-                } else {
-                    format!("{self:e}")
-                }
-            }
-        }
-    };
-}
-num_text_for!(f32);
-num_text_for!(f64);
-
-/// A time in seconds for a message: milliseconds in the everyday range, scientific notation
-/// outside it.
-pub(crate) fn time_text(t: f64) -> String {
-    if t == 0.0 || (1e-3..1e9).contains(&t.abs()) {
-        format!("{t:.3}")
-    } else {
-        format!("{t:.3e}")
-    }
 }
 
 /// The interval a ranged number must lie in, for checks and messages.

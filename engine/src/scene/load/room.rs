@@ -153,8 +153,8 @@ impl Ctx<'_> {
         let min_radius = far.reach_m * MIN_RADIUS_PER_EXTENT;
         if mirror.radius_m < min_radius {
             // The sphere's own radius, or the central mirror's size that sets its reach.
-            let (field, what) = match mirror.shape {
-                crate::mirror::MirrorShape::Sphere { .. } => ("mirror.radius", "the radius"),
+            let (field, what) = match mirror.shape.surface {
+                crate::mirror::Surface::Sphere { .. } => ("mirror.radius", "the radius"),
                 _ => ("mirror.rim_radius", "the mirror's reach (about its rim)"),
             };
             return Err(self.invalid(

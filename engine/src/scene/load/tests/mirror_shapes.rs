@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::mirror::MirrorShape;
+use crate::mirror::Hyperboloid;
 use crate::scene::load_str;
 
 /// A room with a hyperboloid: `mirror` replaces the [mirror] table's body.
@@ -21,9 +21,12 @@ const HYPERBOLOID: &str =
 #[test]
 fn a_hyperboloid_puts_its_camera_at_the_outer_focus_and_fits_the_rim() {
     let s = load_str(&with_mirror(HYPERBOLOID, ""), Path::new("h.toml")).unwrap();
-    let MirrorShape::Hyperboloid(h) = s.mirror.shape else {
-        panic!("{:?}", s.mirror.shape)
+    let h = Hyperboloid {
+        focal_distance_m: 2.0,
+        latus_rectum_m: 2.0,
+        rim_radius_m: 1.3,
     };
+    assert_eq!(s.mirror.shape, h.shape());
     assert_eq!(s.sensor.offset_m, 2.0);
     assert_eq!(
         f64::from(s.mirror.radius_m),
@@ -74,7 +77,7 @@ fn a_hyperboloid_puts_its_camera_at_the_outer_focus_and_fits_the_rim() {
     assert!(view.is_orthographic() && view.tan_y == 0.0);
     // The sphere is still the default shape.
     let sphere = load_str(&with_mirror("radius = 1", ""), Path::new("s.toml")).unwrap();
-    assert_eq!(sphere.mirror.shape, MirrorShape::Sphere { radius_m: 1.0 });
+    assert_eq!(sphere.mirror.shape, crate::mirror::sphere(1.0));
 }
 
 #[test]
@@ -119,6 +122,14 @@ fn bad_mirror_shapes_are_refused_naming_the_field() {
         ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2", "[sensor]\nfov_y = 60\n", "sensor.fov_y: not allowed here: a paraboloid's camera is orthographic"),
         ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 2500", "", "mirror.rim_radius: is 1250 times the latus rectum"),
         ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2", "[sensor]\noffset = 1\n", "sensor.offset: must be greater than the mirror radius"),
+        // The cone, and what every shape's fields get from the registry.
+        ("shape = \"cone\"\nhalf_angle = 90\nrim_radius = 1", "", "mirror.half_angle: must be in (0.1, 89.9)"),
+        ("shape = \"cone\"\nhalf_angle = 0.05\nrim_radius = 1", "", "mirror.half_angle: must be in (0.1, 89.9)"),
+        ("shape = \"cone\"\nhalf_angle = \"45\"\nrim_radius = 1", "", "mirror.half_angle: invalid type: string, expected a number"),
+        ("shape = \"cone\"\nhalf_angle = 45\nrim_radius = 1\nradius = 1", "", "mirror.radius: not allowed here: a cone mirror reads only mirror.half_angle, mirror.rim_radius"),
+        ("shape = \"cone\"\nrim_radius = 1", "", "mirror.half_angle: required field is missing (a cone mirror needs it)"),
+        ("radius = 1\nraduis = 1", "", "mirror.raduis: unknown field `raduis`, expected one of `shape`, `center`"),
+        ("shape = \"ellipsoid\"\nradius = 1", "", "unknown mirror shape \"ellipsoid\" (known: sphere, hyperboloid, paraboloid, cone)"),
     ];
     for (mirror, extra, needle) in cases {
         let text = with_mirror(mirror, extra);
@@ -143,4 +154,34 @@ fn bad_mirror_shapes_are_refused_naming_the_field() {
         msg.contains("mirror.center: the mirror (reaching 1.31"),
         "{msg}"
     );
+}
+
+/// A cone: a pinhole `sensor.offset` below its viewpoint, the field of view fitted to its
+/// rim; a field's error points at the field's own line.
+#[test]
+fn a_cone_loads_with_its_pinhole_and_errors_point_at_the_field() {
+    let cone = "shape = \"cone\"\nhalf_angle = 55\nrim_radius = 1";
+    let s = load_str(&with_mirror(cone, ""), Path::new("c.toml")).unwrap();
+    let want = crate::mirror::Cone {
+        half_angle_deg: 55.0,
+        rim_radius_m: 1.0,
+    };
+    assert_eq!(s.mirror.shape, want.shape());
+    assert_eq!(s.sensor.offset_m, 2.5);
+    assert_eq!(s.mirror.shape.xi(), None);
+    let (rim_r, rim_y) = s.mirror.shape.rim().unwrap();
+    let half = (f64::from(s.sensor.fov_y_deg).to_radians() / 2.0).tan();
+    assert!((half - 1.05 * rim_r / (rim_y + 2.5)).abs() < 1e-5);
+    for (mirror, key) in [
+        ("radius = 1\nraduis = 1", "raduis"),
+        (
+            "shape = \"cone\"\nhalf_angle = 95\nrim_radius = 1",
+            "half_angle",
+        ),
+    ] {
+        let text = with_mirror(mirror, "");
+        let line = text.lines().position(|l| l.starts_with(key)).unwrap() as u32 + 1;
+        let err = load_str(&text, Path::new("c.toml")).unwrap_err();
+        assert_eq!(err.line(), Some(line), "{err}");
+    }
 }
