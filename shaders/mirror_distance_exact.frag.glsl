@@ -64,7 +64,7 @@ void main() {
         d = normalize(found);
     } else {
         Reflection reflection = trace_reflection(frame, dir, hit, n);
-        d = reflection.found ? normalize(reflection.point - frame.mirror.xyz) : vec3(0.0);
+        d = reflection.found ? normalize(reflection.point - frame.cube_centre.xyz) : vec3(0.0);
     }
     out_value = vec4(d, 1.0);
 #endif

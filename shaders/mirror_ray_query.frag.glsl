@@ -4,7 +4,7 @@
 //
 // One technique, two outputs (engine/build.rs builds both from this file):
 // - OUTPUT_COLOUR: the colour of the surface the ray meets, shaded as the reference does;
-// - OUTPUT_DIRECTION: the direction from the mirror's centre (the cube's centre) to the point
+// - OUTPUT_DIRECTION: the direction from the cube's centre (frame.cube_centre) to the point
 //   the ray meets, as the reference's direction layer; zero where it meets nothing. The
 //   angular error against the reference is then float rounding only.
 // build: mirror_ray_query=OUTPUT_COLOUR mirror_ray_query_direction=OUTPUT_DIRECTION
@@ -30,7 +30,7 @@ void main() {
 #ifdef OUTPUT_COLOUR
     out_value = vec4(reflection.colour, 1.0);
 #else
-    vec3 d = reflection.found ? normalize(reflection.point - frame.mirror.xyz) : vec3(0.0);
+    vec3 d = reflection.found ? normalize(reflection.point - frame.cube_centre.xyz) : vec3(0.0);
     out_value = vec4(d, 1.0);
 #endif
     gl_FragDepth = mirror_depth(view, hit);

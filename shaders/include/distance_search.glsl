@@ -170,7 +170,7 @@ bool clipped_between(float d0, float d1, vec3 q1_h, float w1) {
 // q = p + s a / (1 - a) r, it is s a / (1 - a) (the sensor's range, sensor_ray.glsl).
 uint distance_search_range(FrameData f, vec3 p, vec3 r, bool stop_at_jump, out vec3 found,
                            out float range) {
-    vec3 p0 = p - f.mirror.xyz;
+    vec3 p0 = p - f.cube_centre.xyz; // the cube stores distances from its centre
     float s = length(room_exit(p, r, f) - p) / 3.0;
     vec3 far_end = s * r;
     uint steps = max(f.flags.z, 1u);

@@ -50,7 +50,7 @@ vec3 view_origin(ViewData view, vec2 ndc) {
 vec3 lookup_at(FrameData f, vec3 dir, vec3 hit, vec3 n) {
     vec3 r = reflect(dir, n); // R = I - 2 (N.I) N
     bool box = f.flags.y == LOOKUP_FROM_ROOM_BOX;
-    return box ? room_exit(hit, r, f) - f.mirror.xyz : r;
+    return box ? room_exit(hit, r, f) - f.cube_centre.xyz : r;
 }
 
 // The frame's central mirror, its heights measured from its vertex (quadric.glsl's frame).

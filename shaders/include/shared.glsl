@@ -22,8 +22,8 @@
 // Per-frame constants.
 struct FrameData {
     vec4 light_dir_ambient; // xyz: unit vector towards the light; w: ambient fraction
-    vec4 mirror;            // xyz: the mirror's viewpoint, the cube's centre (render space,
-                            // normally 0); w: the radius about it that holds the mirror (m)
+    vec4 mirror;            // xyz: the mirror's viewpoint (render space: 0, render space is
+                            // centred on it); w: the radius about it that holds the mirror (m)
     uvec4 flags;            // x: 1 when the directional light is on; y: LOOKUP_FROM_*;
                             // z, w: the distance lookup's linear and secant steps
     vec4 room_min;          // xyz: the room box's low corner (render space)
@@ -38,6 +38,9 @@ struct FrameData {
                             // vertex; x, y: a, b; z: the vertex's height above the viewpoint;
                             // w: the rim's height, where a flat disc closes the mirror
     vec4 mirror_extent;     // x: the rim's radius; y: the lowest height of the mirror's body
+    vec4 cube_centre;       // xyz: where the cube map is rendered from (render space: the
+                            // scene's cube.offset from the viewpoint, 0 by default); every
+                            // lookup's direction is from here
 };
 
 // FrameData.mirror_shape.x: how mirror_hit finds the mirror (quadric.glsl, sphere.glsl).

@@ -64,15 +64,16 @@ pub fn sample_offsets(n: u32) -> Vec<Vec2> {
 pub struct ReferenceImages {
     /// Linear RGB, the average over the pixel's samples; alpha 1.
     pub color: RgbaImage,
-    /// For mirror pixels: the exact unit direction from the mirror centre (the cube's centre) to
-    /// the surface the reflected pixel-centre ray really hits, in rgb; alpha 1. Elsewhere 0.
+    /// For mirror pixels: the exact unit direction from the cube's centre (the mirror's
+    /// viewpoint unless `cube.offset` moves it) to the surface the reflected pixel-centre ray
+    /// really hits, in rgb; alpha 1. Elsewhere 0.
     pub direction: RgbaImage,
     /// r: distance along the reflected ray to its hit (mirror pixels), g: distance along the
     /// camera ray to the first surface (the mirror or a scene surface). 0 where none.
     pub distance: RgbaImage,
     /// r: drawable index of the surface finally seen (walls 0..6, objects 6 + i), -1 for none;
     /// g: 1 when seen in the mirror; b (mirror pixels): how many surfaces hide that surface
-    /// from the mirror's centre (0: a cube map rendered there stores it).
+    /// from the cube's centre (0: a cube map rendered there stores it).
     pub object: RgbaImage,
 }
 
@@ -258,16 +259,17 @@ impl<'a> Reference<'a> {
         s
     }
 
-    /// How many surfaces stand between the mirror's centre (where a cube map is rendered) and
+    /// How many surfaces stand between the cube's centre (where a cube map is rendered) and
     /// the surface a mirror sample's reflected ray really meets: what no single-layer cube
     /// lookup can see, however exact its search. 0 for a sample off the mirror.
     fn hidden_from_centre(&self, sample: &Sample) -> u32 {
         if !sample.via_mirror {
             return 0;
         }
-        // The centre is the render space's origin; the BVH's space is shifted from it.
+        // Render space is the mirror's; the BVH's space is shifted from it.
+        let centre = self.scene.cube.offset_m + self.shift;
         let to = sample.reflected_hit + self.shift;
-        self.geometry.surfaces_between(self.shift, to)
+        self.geometry.surfaces_between(centre, to)
     }
 
     /// Renders a camera at `width` x `height` with `spp` samples per pixel at the cell centres
@@ -343,7 +345,12 @@ impl<'a> Reference<'a> {
         let images = ReferenceImages {
             color: image(&|p, _| [p.color.x, p.color.y, p.color.z, 1.0]),
             direction: image(&|p, _| {
-                let d = p.centre.reflected_hit.normalize_or_zero();
+                let from_cube = p.centre.reflected_hit - self.scene.cube.offset_m;
+                let d = if p.centre.via_mirror {
+                    from_cube.normalize_or_zero()
+                } else {
+                    Vec3::ZERO
+                };
                 [d.x, d.y, d.z, if p.centre.via_mirror { 1.0 } else { 0.0 }]
             }),
             distance: image(&|p, _| [p.centre.reflected_t, p.centre.primary_t, 0.0, 1.0]),

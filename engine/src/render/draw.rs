@@ -128,19 +128,19 @@ pub(super) struct DrawOrder {
 
 impl DrawOrder {
     /// The order for `bounds`: objects by the distance of their bounds from the cube's centre
-    /// (the render origin), nearest first, then the six walls. Every cube face looks out from
+    /// (`centre`, render space), nearest first, then the six walls. Every cube face looks out from
     /// that one point, so this one order is front to back for all six faces at once: the
     /// depth test then rejects hidden fragments before they are shaded (early depth), instead
     /// of shading every wall texel and painting objects over it. Ties go by index, so the order
     /// is deterministic and every method uses the same one (equal depths resolve alike).
-    pub fn of(bounds: Vec<(Vec3, Vec3)>) -> Self {
+    pub fn of(bounds: Vec<(Vec3, Vec3)>, centre: Vec3) -> Self {
         let walls = 6;
         let mut objects: Vec<(f32, u32)> = (walls..bounds.len())
             .map(|i| {
                 let (lo, hi) = bounds[i];
-                // Distance from the origin to the nearest point of the box (0 inside it).
-                let nearest = Vec3::ZERO.clamp(lo, hi);
-                (nearest.length_squared(), i as u32)
+                // Distance from the centre to the nearest point of the box (0 inside it).
+                let nearest = centre.clamp(lo, hi);
+                (nearest.distance_squared(centre), i as u32)
             })
             .collect();
         objects.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -294,7 +294,7 @@ impl Renderer {
     /// `cube.near` with corners `near * sqrt(3)` away (90-degree faces).
     pub(super) fn cube_facing(&self) -> Facing {
         let reach = self.scene.cube.near_m * 3f32.sqrt();
-        self.facing(CUBE_FRONT, Vec3::ZERO, reach)
+        self.facing(CUBE_FRONT, self.scene.cube.offset_m, reach)
     }
 
     /// The facing of a camera view: its near plane's corners are `camera_clearance` from the

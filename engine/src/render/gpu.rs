@@ -27,6 +27,7 @@ pub struct FrameData {
     pub mirror_shape: UVec4,
     pub mirror_quadric: Vec4,
     pub mirror_extent: Vec4,
+    pub cube_centre: Vec4,
 }
 
 #[repr(C)]
@@ -99,7 +100,7 @@ pub struct Vertex {
 
 // std430 array strides must equal the Rust sizes; build.rs reads member offsets only, so the
 // sizes are pinned here by hand (each is a multiple of 16, as std430 arrays of these need).
-const _: () = assert!(std::mem::size_of::<FrameData>() == 144);
+const _: () = assert!(std::mem::size_of::<FrameData>() == 160);
 const _: () = assert!(std::mem::size_of::<ViewData>() == 176);
 const _: () = assert!(std::mem::size_of::<ObjectData>() == 144);
 const _: () = assert!(std::mem::size_of::<MaterialData>() == 64);
@@ -171,6 +172,11 @@ mod tests {
                 "FrameData",
                 "mirror_extent",
                 offset_of!(FrameData, mirror_extent),
+            ),
+            (
+                "FrameData",
+                "cube_centre",
+                offset_of!(FrameData, cube_centre),
             ),
             (
                 "ViewData",

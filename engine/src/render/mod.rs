@@ -82,10 +82,10 @@ pub fn camera_clearance(eye: Vec3, mirror_radius_m: f32) -> f32 {
 
 /// A camera view's far plane: none for a pinhole (reverse-Z keeps its precision to infinity);
 /// an orthographic view's depth is linear, so it ends past the room's farthest corner from
-/// the mirror, seen from the eye.
+/// the cube's centre (`cube.far`), seen from the eye.
 fn view_far(view: &ViewBasis, scene: &Scene) -> f32 {
     if view.is_orthographic() {
-        scene.cube.far_m + view.eye.length()
+        scene.cube.far_m + view.eye.distance(scene.cube.offset_m)
     } else {
         f32::INFINITY
     }
@@ -358,7 +358,7 @@ impl Renderer {
         let shape = gpu::MirrorShapeData::of(&scene.mirror.shape);
         let frame = FrameData {
             light_dir_ambient: light.map_or(Vec4::ZERO, |l| l.direction.extend(l.ambient)),
-            // Render space is centred on the mirror.
+            // Render space is centred on the mirror's viewpoint.
             mirror: Vec4::new(0.0, 0.0, 0.0, scene.mirror.radius_m),
             flags: UVec4::new(
                 u32::from(light.is_some()),
@@ -379,12 +379,13 @@ impl Renderer {
             mirror_shape: shape.code,
             mirror_quadric: shape.quadric,
             mirror_extent: shape.extent,
+            cube_centre: scene.cube.offset_m.extend(1.0),
         };
         let uploads = &mut self.frames.current_mut().uploads;
         uploads.write(&self.resources.frame, &[frame])?;
 
         let mut bases: Vec<ViewBasis> = (0..6)
-            .map(|f| ViewBasis::cube_face(Vec3::ZERO, f))
+            .map(|f| ViewBasis::cube_face(scene.cube.offset_m, f))
             .collect();
         let o = &scene.observer;
         let aspect = |w: u32, h: u32| w as f32 / h as f32;
@@ -446,7 +447,7 @@ impl Renderer {
         let bounds = (objects.iter().zip(&self.resources.drawables))
             .map(|(o, d)| camera::transform_aabb(&o.model_to_world, d.bounds_min, d.bounds_max))
             .collect();
-        self.drawn = draw::DrawOrder::of(bounds);
+        self.drawn = draw::DrawOrder::of(bounds, scene.cube.offset_m);
         self.mirror
             .pass
             .prepare(uploads, &objects, &self.drawn.bounds)?;

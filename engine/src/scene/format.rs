@@ -276,6 +276,9 @@ pub enum CubeFormatSpec {
 #[serde(deny_unknown_fields)]
 pub struct CubeSpec {
     pub face_size: Option<i64>,
+    /// Where the cube is rendered from, relative to the mirror's viewpoint.
+    #[serde(default, deserialize_with = "fixed::exact_opt")]
+    pub offset: Option<V3>,
     pub format: Option<CubeFormatSpec>,
     pub near: Option<f64>,
     pub far: Option<f64>,

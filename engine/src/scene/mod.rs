@@ -327,9 +327,13 @@ pub struct CubeSettings {
     pub face_size_px: u32,
     /// Texel format of the colour faces.
     pub format: CubeFormat,
+    /// Where the cube is rendered from, relative to the mirror's viewpoint (metres; it moves
+    /// with the mirror): zero by default, inside the mirror's reach.
+    pub offset_m: Vec3,
     /// Near and far planes of the six 90-degree projections (metres): by default half the
-    /// mirror's radius and 1.01 x the farthest room corner's distance from the mirror's centre;
-    /// never clipping what the mirror shows (near <= radius / sqrt 3, far >= that distance).
+    /// clearance from the cube's centre to the mirror's reach, and 1.01 x the farthest room
+    /// corner's distance from the cube's centre; never clipping what the mirror shows (the
+    /// near plane's corners inside the reach, far >= that distance).
     pub near_m: f32,
     pub far_m: f32,
     /// Build a full mip chain after each fill (trilinear lookups).

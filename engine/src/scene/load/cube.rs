@@ -3,16 +3,18 @@
 use super::numbers::{num_text, time_text, unit, Range};
 use super::room::Extent;
 use super::{Ctx, R};
-use crate::scene::format::{CubeFormatSpec, CubeSpec, LightSpec, PolicySpec, RefreshSpec};
+use crate::scene::format::{CubeFormatSpec, CubeSpec, LightSpec, PolicySpec, RefreshSpec, V3};
 use crate::scene::Mirror;
 use crate::scene::{
     CubeFormat, CubeSettings, DirectionalLight, RefreshPolicy, MAX_ANISOTROPY, MAX_FACE_SIZE_PX,
 };
+use glam::Vec3;
 
-/// The default near plane as a fraction of the mirror's radius. The cube is rendered from the
-/// mirror's centre, and reflected rays start on the mirror's surface, so nothing inside the
-/// sphere is ever looked up: a near plane whose corners (near x sqrt 3 away, 90-degree faces)
-/// stay inside the sphere clips nothing that can be seen. 0.5 puts them at 0.87 radii.
+/// The default near plane as a fraction of the clearance from the cube's centre to the sphere
+/// that holds the mirror (its reach). Reflected rays start on the mirror's surface and nothing
+/// else lies inside that sphere, so nothing inside it is ever looked up: a near plane whose
+/// corners (near x sqrt 3 away, 90-degree faces) stay inside it clips nothing that can be
+/// seen. 0.5 puts them at 0.87 of the clearance (of the radius, for a cube at the viewpoint).
 const NEAR_PER_RADIUS: f32 = 0.5;
 /// The default far plane, as a multiple of the farthest room corner's distance (a margin so
 /// that rounding never clips the corner itself). Nothing outside the room can be seen.
@@ -28,6 +30,7 @@ impl Ctx<'_> {
     ) -> R<CubeSettings> {
         let empty = CubeSpec {
             face_size: None,
+            offset: None,
             format: None,
             near: None,
             far: None,
@@ -35,13 +38,17 @@ impl Ctx<'_> {
             anisotropy: None,
         };
         let c = spec.unwrap_or(&empty);
+        let offset_m = self.cube_offset(c.offset, mirror)?;
+        // From the cube's centre: how far the mirror's reach is, and the room's corners can be.
+        let clearance = mirror.radius_m - offset_m.length();
+        let reach_m = extent.reach_m + offset_m.length();
         let near_m = match c.near {
             Some(n) => self.positive("cube.near", n)?,
-            None => NEAR_PER_RADIUS * mirror.radius_m,
+            None => NEAR_PER_RADIUS * clearance,
         };
         let far_m = match c.far {
             Some(f) => self.positive("cube.far", f)?,
-            None => extent.reach_m * FAR_MARGIN,
+            None => reach_m * FAR_MARGIN,
         };
         if near_m >= far_m {
             // Blame whichever the file sets (far if both or neither... far is the usual typo).
@@ -59,7 +66,12 @@ impl Ctx<'_> {
                 ),
             ));
         }
-        self.near_far_clip_nothing(mirror, extent, near_m, far_m)?;
+        let planes = Planes {
+            clearance,
+            reach_m,
+            at: extent.t,
+        };
+        self.near_far_clip_nothing(&planes, near_m, far_m)?;
         let anisotropy = self.count(
             "cube.anisotropy",
             c.anisotropy.unwrap_or(16),
@@ -75,6 +87,7 @@ impl Ctx<'_> {
                 CubeFormatSpec::Rgba16f => CubeFormat::Rgba16Float,
                 CubeFormatSpec::Rgba8 => CubeFormat::Rgba8Unorm,
             },
+            offset_m,
             near_m,
             far_m,
             mipmaps: c.mipmaps.unwrap_or(true),
@@ -117,28 +130,52 @@ impl Ctx<'_> {
         Ok(Some(DirectionalLight { direction, ambient }))
     }
 
+    /// `cube.offset`: inside the mirror's reach, so that the near plane has room and no object
+    /// (they all keep out of the reach) comes nearer than the reach's edge.
+    fn cube_offset(&self, offset: Option<V3>, mirror: &Mirror) -> R<Vec3> {
+        let Some(v) = offset else {
+            return Ok(Vec3::ZERO);
+        };
+        let o = self.vec3("cube.offset", v)?;
+        if o.length() >= mirror.radius_m {
+            return Err(self.invalid(
+                "cube.offset",
+                format!(
+                    "puts the cube's centre {} m from the mirror's viewpoint, outside the \
+                     mirror's reach ({} m, the sphere about the viewpoint that holds the mirror \
+                     and that objects keep out of); it must be less than that",
+                    num_text(o.length()),
+                    num_text(mirror.radius_m)
+                ),
+            ));
+        }
+        Ok(o)
+    }
+
     /// Refuses planes set in the file that would clip what the mirror shows: a near plane
-    /// reaching out of the mirror sphere, a far plane short of the farthest room corner.
-    fn near_far_clip_nothing(&self, mirror: &Mirror, extent: Extent, near: f32, far: f32) -> R<()> {
-        let max_near = mirror.radius_m / 3f32.sqrt();
+    /// reaching out of the mirror's reach, a far plane short of the farthest room corner (both
+    /// from the cube's centre).
+    fn near_far_clip_nothing(&self, planes: &Planes, near: f32, far: f32) -> R<()> {
+        let max_near = planes.clearance / 3f32.sqrt();
         if near > max_near {
             return Err(self.invalid(
                 "cube.near",
                 format!(
-                    "clips reflections: the near plane's corners are near x sqrt(3) = {} m from the mirror's centre, outside the mirror (radius {}); at most radius / sqrt(3) = {} m is allowed (leave near out for 0.5 x radius)",
+                    "clips reflections: the near plane's corners are near x sqrt(3) = {} m from the cube's centre, outside the mirror's reach ({} m from there); at most {} / sqrt(3) = {} m is allowed (leave near out for half of it)",
                     num_text(near * 3f32.sqrt()),
-                    num_text(mirror.radius_m),
+                    num_text(planes.clearance),
+                    num_text(planes.clearance),
                     num_text(max_near)
                 ),
             ));
         }
-        if far < extent.reach_m {
+        if far < planes.reach_m {
             return Err(self.invalid(
                 "cube.far",
                 format!(
-                    "clips the room: a room corner is {} m from the mirror's centre (at t = {} s), so far must be at least that, got {} (leave far out for {} x that distance)",
-                    num_text(extent.reach_m),
-                    time_text(extent.t),
+                    "clips the room: a room corner can be {} m from the cube's centre (at t = {} s), so far must be at least that, got {} (leave far out for {} x that distance)",
+                    num_text(planes.reach_m),
+                    time_text(planes.at),
                     num_text(far),
                     num_text(FAR_MARGIN)
                 ),
@@ -146,4 +183,12 @@ impl Ctx<'_> {
         }
         Ok(())
     }
+}
+
+/// What the cube's planes must respect, seen from its centre: the clearance to the mirror's
+/// reach, and the farthest the room's corners can be (at time `at`).
+struct Planes {
+    clearance: f32,
+    reach_m: f32,
+    at: f64,
 }

@@ -154,7 +154,12 @@ fn values_are_checked_as_used_and_planes_fit_the_scene() {
         ("[cube]\nanisotropy = 0\n", "cube.anisotropy: must be in 1..=16, got 0"),
         // The cube's planes set by hand must not clip what the mirror shows.
         ("[cube]\nnear = 0.6\n", "cube.near: clips reflections"),
-        ("[cube]\nfar = 7\n", "cube.far: clips the room: a room corner is 7.6811457 m"),
+        ("[cube]\nfar = 7\n", "cube.far: clips the room: a room corner can be 7.6811457 m"),
+        // A cube moved off the viewpoint: inside the mirror's reach, its planes from there.
+        ("[cube]\noffset = [0, 1, 0]\n", "cube.offset: puts the cube's centre 1 m from the mirror's viewpoint, outside the mirror's reach (1 m"),
+        ("[cube]\noffset = [0, 0.5]\n", "cube.offset"),
+        ("[cube]\noffset = [0, 0.5, 0]\nnear = 0.3\n", "cube.near: clips reflections: the near plane's corners are near x sqrt(3) = 0.51961523 m from the cube's centre, outside the mirror's reach (0.5 m from there)"),
+        ("[cube]\noffset = [0, 0.5, 0]\nfar = 8\n", "cube.far: clips the room: a room corner can be 8.181146 m"),
     ];
     for (extra, needle) in cases {
         let text = format!("{MINIMAL}{extra}");
@@ -166,6 +171,16 @@ fn values_are_checked_as_used_and_planes_fit_the_scene() {
         );
         assert!(err.line().is_some(), "{msg}");
     }
+    // A cube half a radius above the viewpoint: half the clearance left for its near plane,
+    // its far plane past the corners as seen from there.
+    let moved = load_str(
+        &format!("{MINIMAL}[cube]\noffset = [0, 0.5, 0]\n"),
+        Path::new("moved.toml"),
+    )
+    .unwrap();
+    assert_eq!(moved.cube.offset_m, glam::Vec3::new(0.0, 0.5, 0.0));
+    assert_eq!(moved.cube.near_m, 0.25);
+    assert!((moved.cube.far_m - 1.01 * (7.6811457 + 0.5)).abs() < 1e-4);
     // A room f32 cannot hold, and a mirror too small for its room.
     let scaled = |room: &str, radius: &str| {
         MINIMAL
