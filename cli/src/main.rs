@@ -48,7 +48,7 @@ enum Command {
     /// optional mask and FLIP heatmap.
     Compare(compare::Args),
     /// The live viewer: a window with the observer and the sensor side by side, keyboard
-    /// control of the observer, the sphere, time, method, lookup and refresh (docs/viewer.md).
+    /// control of the observer, the mirror, time, method, lookup and refresh (docs/viewer.md).
     View(view::Args),
     /// (internal) Compare a cube method with six-pass on a tiny scene; run in a child process
     /// because a broken driver may crash.

@@ -70,6 +70,15 @@ fn both_commands_write_the_sensor_outputs() {
                 .unwrap();
         assert_eq!(camera["files"]["rays"], "sensor.rays.exr");
         assert_eq!(camera["mirror"]["radius_m"], 1.0);
+        // The sphere's own field, and the cube at its centre.
+        assert_eq!(
+            camera["mirror"]["fields"],
+            serde_json::json!({"radius": 1.0})
+        );
+        assert_eq!(
+            camera["mirror"]["cube_centre_m"],
+            camera["mirror"]["centre_m"]
+        );
         assert_eq!(
             camera["sensor"]["position_m"],
             serde_json::json!([0.0, -2.5, 0.0])

@@ -7,7 +7,7 @@ use specchio::render::display::DisplayView;
 use specchio::render::methods::Method;
 use specchio::scene::{Lookup, RefreshPolicy, Scene};
 
-/// How far one key press moves the observer or the sphere (metres). A multiple of a power of
+/// How far one key press moves the observer or the mirror (metres). A multiple of a power of
 /// two, so scripted moves land on positions a scene file states exactly (4.5 - 0.25 = 4.25).
 pub const MOVE_STEP_M: f32 = 0.25;
 /// How far one key press turns the observer (degrees).
@@ -30,8 +30,8 @@ pub enum Action {
         yaw: i8,
         pitch: i8,
     },
-    /// The sphere (the sensor follows it), in world axes, in units of `MOVE_STEP_M`.
-    MoveSphere {
+    /// The mirror (the sensor follows it), in world axes, in units of `MOVE_STEP_M`.
+    MoveMirror {
         x: i8,
         y: i8,
         z: i8,
@@ -96,12 +96,12 @@ pub const KEYS: &[(&str, Action, &str)] = &[
         Action::Turn { yaw: 0, pitch: -1 },
         "observer looks down",
     ),
-    ("j", sphere(-1, 0, 0), "sphere -X"),
-    ("l", sphere(1, 0, 0), "sphere +X"),
-    ("i", sphere(0, 0, -1), "sphere -Z"),
-    ("k", sphere(0, 0, 1), "sphere +Z"),
-    ("t", sphere(0, 1, 0), "sphere up"),
-    ("g", sphere(0, -1, 0), "sphere down"),
+    ("j", mirror(-1, 0, 0), "mirror -X"),
+    ("l", mirror(1, 0, 0), "mirror +X"),
+    ("i", mirror(0, 0, -1), "mirror -Z"),
+    ("k", mirror(0, 0, 1), "mirror +Z"),
+    ("t", mirror(0, 1, 0), "mirror up"),
+    ("g", mirror(0, -1, 0), "mirror down"),
     ("space", Action::PauseResume, "pause / resume the animation"),
     (".", Action::Step, "pause and step one frame (1/30 s)"),
     (
@@ -136,8 +136,8 @@ const fn walk(forward: i8, right: i8, up: i8) -> Action {
     Action::Walk { forward, right, up }
 }
 
-const fn sphere(x: i8, y: i8, z: i8) -> Action {
-    Action::MoveSphere { x, y, z }
+const fn mirror(x: i8, y: i8, z: i8) -> Action {
+    Action::MoveMirror { x, y, z }
 }
 
 /// The action of key `name` (case-insensitive), if any.
@@ -208,9 +208,9 @@ pub fn turn_observer(scene: &mut Scene, yaw: f32, pitch: f32) {
     o.pitch_deg = (o.pitch_deg + pitch).clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
 }
 
-/// Moves the sphere by `steps` of [`MOVE_STEP_M`] per unit of (x, y, z) unless that takes it
+/// Moves the mirror by `steps` of [`MOVE_STEP_M`] per unit of (x, y, z) unless that takes it
 /// (or the sensor below it) out of the room, in which case it stays and the reason is returned.
-pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8), steps: f32) -> Result<(), String> {
+pub fn move_mirror(scene: &mut Scene, (x, y, z): (i8, i8, i8), steps: f32) -> Result<(), String> {
     let step = Vec3::new(f32::from(x), f32::from(y), f32::from(z)) * (MOVE_STEP_M * steps);
     let to = scene.mirror.center + step;
     let lo = scene.room.center - 0.5 * scene.room.size_m;
@@ -220,7 +220,7 @@ pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8), steps: f32) -> Re
     let sensor_y = to.y + scene.sensor.eye().y;
     if !inside {
         return Err(format!(
-            "the sphere would leave the room at {}",
+            "the mirror would leave the room at {}",
             file_point(scene, to)
         ));
     }
@@ -236,13 +236,13 @@ pub fn move_sphere(scene: &mut Scene, (x, y, z): (i8, i8, i8), steps: f32) -> Re
     Ok(())
 }
 
-/// Where the observer and the sphere are, in the file's coordinates (the scene keeps positions
-/// relative to its origin): `observer [x, y, z] yaw Y pitch P, sphere [x, y, z]`.
+/// Where the observer and the mirror are, in the file's coordinates (the scene keeps positions
+/// relative to its origin): `observer [x, y, z] yaw Y pitch P, mirror [x, y, z]`.
 pub fn pose(scene: &Scene) -> String {
     let o = &scene.observer;
     let angle = |a: f32| (a * 100.0).round() / 100.0;
     format!(
-        "observer {} yaw {} pitch {}, sphere {}",
+        "observer {} yaw {} pitch {}, mirror {}",
         file_point(scene, o.position),
         angle(o.yaw_deg),
         angle(o.pitch_deg),
@@ -314,23 +314,23 @@ mod tests {
     }
 
     #[test]
-    fn the_sphere_moves_by_steps_and_stays_in_the_room() {
+    fn the_mirror_moves_by_steps_and_stays_in_the_room() {
         let mut s = scene();
         let at = |s: &Scene| world(s, s.mirror.center);
-        move_sphere(&mut s, (1, 0, 0), 1.0).unwrap();
+        move_mirror(&mut s, (1, 0, 0), 1.0).unwrap();
         assert_eq!(at(&s), Vec3::new(0.25, 3.0, 0.0));
         // The room's +X wall is at x = 5, the radius 1: x = 4 is the last position.
         for _ in 0..15 {
-            move_sphere(&mut s, (1, 0, 0), 1.0).unwrap();
+            move_mirror(&mut s, (1, 0, 0), 1.0).unwrap();
         }
         assert_eq!(at(&s).x, 4.0);
         // Refused, named in the file's coordinates (thesis-room's mirror is at y = 3).
-        let e = move_sphere(&mut s, (1, 0, 0), 1.0).unwrap_err();
+        let e = move_mirror(&mut s, (1, 0, 0), 1.0).unwrap_err();
         assert!(e.contains("at [4.25, 3, 0]"), "{e}");
         assert_eq!(at(&s).x, 4.0);
         // The sensor hangs 2.5 m below: the centre cannot go below y = 2.5.
         let e = (0..3)
-            .map(|_| move_sphere(&mut s, (0, -1, 0), 1.0))
+            .map(|_| move_mirror(&mut s, (0, -1, 0), 1.0))
             .last()
             .unwrap();
         // 2.5 - 2.5 = 0: the file's floor, not the scene's internal y = -3.

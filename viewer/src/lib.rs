@@ -1,6 +1,6 @@
 //! `specchio view`: the thesis's interactive program on today's renderer. A window shows the
 //! observer and the sensor side by side (1200x450), or one of them alone; the keyboard moves
-//! the observer and the sphere, pauses and steps time, and switches the fill method, the
+//! the observer and the mirror, pauses and steps time, and switches the fill method, the
 //! lookup and the refresh policy (docs/viewer.md).
 //!
 //! The renderer draws one view image per frame exactly as `specchio render` does (no

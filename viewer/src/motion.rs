@@ -1,4 +1,4 @@
-//! Moving as a person expects: a held key moves the observer or the sphere at a speed for as
+//! Moving as a person expects: a held key moves the observer or the mirror at a speed for as
 //! long as it is held, whatever the frame rate (the distance is the speed times the time held,
 //! to the release); dragging with the left mouse button looks around; the wheel walks.
 //!
@@ -21,7 +21,7 @@ pub const LOOK_DEG_PER_PX: f32 = 0.2;
 /// The wheel: metres forward per notch (one line of scroll).
 pub const WHEEL_STEP_M: f32 = MOVE_STEP_M;
 
-/// One held key: what it does, up to when it has been applied, and whether the sphere refused
+/// One held key: what it does, up to when it has been applied, and whether the mirror refused
 /// to go on (said once per press, not per frame).
 struct HeldKey {
     action: Action,
@@ -45,7 +45,7 @@ pub struct Motion {
 pub fn is_move(action: Action) -> bool {
     matches!(
         action,
-        Action::Walk { .. } | Action::Turn { .. } | Action::MoveSphere { .. }
+        Action::Walk { .. } | Action::Turn { .. } | Action::MoveMirror { .. }
     )
 }
 
@@ -62,14 +62,14 @@ impl Motion {
     }
 
     /// A move key went up at `now`: it moves for the time it was held up to then, and stops.
-    /// The sphere's refusal, if it met one.
+    /// The mirror's refusal, if it met one.
     pub fn release(&mut self, action: Action, now: Instant, scene: &mut Scene) -> Option<String> {
         let at = self.held.iter().position(|h| h.action == action)?;
         let mut key = self.held.remove(at);
         self.apply(&mut key, now, scene)
     }
 
-    /// Every held key moved up to `now`; the sphere's refusals met meanwhile.
+    /// Every held key moved up to `now`; the mirror's refusals met meanwhile.
     pub fn advance(&mut self, now: Instant, scene: &mut Scene) -> Vec<String> {
         let mut held = std::mem::take(&mut self.held);
         let refusals = (held.iter_mut())
@@ -80,7 +80,7 @@ impl Motion {
     }
 
     /// Every held key released at `now` (the window lost the focus: no release will come);
-    /// the sphere's refusals met.
+    /// the mirror's refusals met.
     pub fn release_all(&mut self, now: Instant, scene: &mut Scene) -> Vec<String> {
         let refusals = self.advance(now, scene);
         self.held.clear();
@@ -123,7 +123,7 @@ impl Motion {
     }
 
     /// True once after a move ended (every key released, the button up, a wheel turn): the
-    /// moment to say where the observer and the sphere are.
+    /// moment to say where the observer and the mirror are.
     pub fn settled(&mut self) -> bool {
         let settled = self.moved && self.held.is_empty() && !self.dragging;
         if settled {
@@ -144,9 +144,9 @@ impl Motion {
                 let steps = TURN_SPEED_DEG_S * seconds / TURN_STEP_DEG;
                 input::move_observer(scene, key.action, steps);
             }
-            Action::MoveSphere { x, y, z } => {
+            Action::MoveMirror { x, y, z } => {
                 let steps = SPHERE_SPEED_M_S * seconds / MOVE_STEP_M;
-                match input::move_sphere(scene, (x, y, z), steps) {
+                match input::move_mirror(scene, (x, y, z), steps) {
                     Ok(()) => key.refused = false,
                     Err(why) if !key.refused => {
                         key.refused = true;
@@ -230,10 +230,10 @@ mod tests {
     }
 
     #[test]
-    fn a_held_sphere_key_stops_at_the_wall_and_says_so_once() {
+    fn a_held_mirror_key_stops_at_the_wall_and_says_so_once() {
         let mut s = scene();
         let mut m = Motion::default();
-        let right = Action::MoveSphere { x: 1, y: 0, z: 0 };
+        let right = Action::MoveMirror { x: 1, y: 0, z: 0 };
         let t0 = Instant::now();
         m.press(right, t0);
         let mut refusals = 0;

@@ -33,6 +33,8 @@ pub struct SensorOptics {
     pub shape: MirrorShape,
     /// The mirror's viewpoint (the sphere's centre) in world space.
     pub mirror_center: Vec3,
+    /// Where the cube map is rendered from, relative to the viewpoint (`cube.offset`).
+    pub cube_offset: Vec3,
 }
 
 impl SensorOptics {
@@ -46,6 +48,7 @@ impl SensorOptics {
             radius_m: scene.mirror.radius_m,
             shape: scene.mirror.shape,
             mirror_center: state.mirror_center,
+            cube_offset: scene.cube.offset_m,
         }
     }
 

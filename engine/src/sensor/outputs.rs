@@ -254,6 +254,7 @@ impl SensorOutputs {
                 shape: o.shape.name(),
                 fields: o.shape.fields().collect(),
                 centre_m: o.mirror_center.to_array(),
+                cube_centre_m: (o.mirror_center + o.cube_offset).to_array(),
                 radius_m: o.radius_m,
                 central: CentralRecord::of(&o.shape),
             },
@@ -321,7 +322,7 @@ pub struct SensorRecord {
 }
 
 /// The mirror: `centre_m` is its viewpoint (the sphere's centre, a central mirror's inner
-/// focus), where the cube map is rendered; `radius_m` the radius about it that holds it.
+/// focus, a cone's bounding sphere's centre); `radius_m` the radius about it that holds it.
 #[derive(Debug, Serialize)]
 pub struct MirrorRecord {
     pub shape: &'static str,
@@ -329,6 +330,9 @@ pub struct MirrorRecord {
     /// cone's `half_angle`).
     pub fields: std::collections::BTreeMap<&'static str, f64>,
     pub centre_m: [f32; 3],
+    /// Where the cube map is rendered from: `centre_m` unless the scene's `cube.offset`
+    /// moves it.
+    pub cube_centre_m: [f32; 3],
     pub radius_m: f32,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub central: Option<CentralRecord>,

@@ -87,7 +87,7 @@ impl App<'_> {
                     .motion
                     .release_all(Instant::now(), &mut v.renderer.scene);
                 for why in refusals {
-                    specchio::say!("sphere not moved: {why}");
+                    specchio::say!("mirror not moved: {why}");
                 }
             }
         }
@@ -103,14 +103,14 @@ impl App<'_> {
             .motion
             .release(action, Instant::now(), &mut v.renderer.scene)
         {
-            specchio::say!("sphere not moved: {why}");
+            specchio::say!("mirror not moved: {why}");
         }
         self.demand.changed();
         self.say_pose_when_settled();
     }
 
     /// Once a move ends (keys released, the button up, a wheel turn): where the observer and
-    /// the sphere are, in the file's coordinates, to put into a scene file.
+    /// the mirror are, in the file's coordinates, to put into a scene file.
     pub(super) fn say_pose_when_settled(&mut self) {
         let Some(v) = &self.viewer else { return };
         if self.motion.settled() {
@@ -136,9 +136,9 @@ impl App<'_> {
         let scene = &mut viewer.renderer.scene;
         match action {
             Action::Walk { .. } | Action::Turn { .. } => input::move_observer(scene, action, 1.0),
-            Action::MoveSphere { x, y, z } => {
-                if let Err(why) = input::move_sphere(scene, (x, y, z), 1.0) {
-                    specchio::say!("sphere not moved: {why}");
+            Action::MoveMirror { x, y, z } => {
+                if let Err(why) = input::move_mirror(scene, (x, y, z), 1.0) {
+                    specchio::say!("mirror not moved: {why}");
                 }
             }
             Action::PauseResume => self.clock.paused = !self.clock.paused,

@@ -335,7 +335,7 @@ impl App<'_> {
             .motion
             .advance(Instant::now(), &mut viewer.renderer.scene)
         {
-            specchio::say!("sphere not moved: {why}");
+            specchio::say!("mirror not moved: {why}");
         }
         let t_s = self.clock.tick();
         let start = Instant::now();
