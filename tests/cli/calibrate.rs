@@ -249,6 +249,15 @@ fn bad_input_is_refused_without_output() {
     let missing = specchio(&["calibrate", "no-such-scene.toml", "--out", dir]);
     assert_eq!(missing.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no-such-scene.toml"));
+    // A cone's apex: no central model has a ray for the image's centre.
+    let cone = root().join("scenes/conical-room.toml");
+    let apex = specchio(&["calibrate", cone.to_str().unwrap(), "--out", dir]);
+    assert_eq!(apex.status.code(), Some(1));
+    let said = String::from_utf8_lossy(&apex.stderr);
+    assert!(
+        said.contains("the cone mirror shows nothing straight down its axis: the rays beside its apex leave at -20.0 degrees"),
+        "{said}"
+    );
     assert!(!out.exists());
 }
 

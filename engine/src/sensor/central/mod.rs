@@ -56,6 +56,11 @@ pub enum FitError {
     Invpol(usize),
     #[error("the pixels' rays have no single nearest point (they are all parallel)")]
     NoViewpoint,
+    #[error("the {shape} mirror shows nothing straight down its axis: the rays beside its apex leave at {lowest_deg:.1} degrees elevation, so its image has no centre ray, which every central model (Mei's, Scaramuzza's) is built about; calibrate a mirror that is smooth on its axis (sphere, hyperboloid, paraboloid)")]
+    NoAxisRay {
+        shape: &'static str,
+        lowest_deg: f64,
+    },
 }
 
 /// The sensor camera's axes in world space (unit, right-handed: right x down = forward).
@@ -149,6 +154,13 @@ pub struct Calibration {
 impl Calibration {
     /// Fits both models to the exact ray map of the scene's sensor at time `t_s`.
     pub fn of_scene(scene: &Scene, t_s: f64) -> Result<(Self, RayMap), FitError> {
+        let lowest = crate::sensor::SensorOptics::at(scene, t_s).min_elevation();
+        if lowest > -std::f64::consts::FRAC_PI_2 {
+            return Err(FitError::NoAxisRay {
+                shape: scene.mirror.shape.name(),
+                lowest_deg: lowest.to_degrees(),
+            });
+        }
         let map = RayMap::exact(scene, t_s);
         let state = SceneState::at(scene, t_s);
         let view = state.sensor_view(scene, map.width as f32 / map.height as f32);
