@@ -73,9 +73,11 @@ pub struct Args {
     /// (`observer.direction.exr`, `sensor.direction.exr`), to compare with `specchio reference`.
     #[arg(long)]
     directions: bool,
-    /// Also write the sensor outputs from the cube path: ray map, range and ids (the room
-    /// box's), panoramas from the sensor image and from the cube, camera.json (docs/sensor.md).
-    /// Needs a lookup that reads the cube map (not ray-query).
+    /// Also write the sensor outputs: ray map, range and ids, the id map, panoramas from the
+    /// sensor image (and from the cube where there is one), camera.json (docs/sensor.md). On a
+    /// device with ray queries, without --lookup, the colour, range and ids are all traced
+    /// along one light path (the ray-query lookup); otherwise range and ids come through the
+    /// cube, with a warning and camera.json's `ground_truth` saying so.
     #[arg(long)]
     sensor_outputs: bool,
     /// Under `on-change`, re-render all six faces on any change instead of only the faces a
@@ -112,7 +114,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let validation = instance.validation;
     let chosen = device::choose(&instance, args.device.as_deref())?;
     let (methods, refused) = pick_methods(&args.method, &chosen)?;
-    let lookup = args.lookup.unwrap_or(scene.mirror.lookup);
+    let lookup = chosen_lookup(args, &scene, &chosen);
     if let Some(why) = lookups::missing_features(lookup, &chosen) {
         bail!("lookup {lookup} cannot run on {}: {why}", chosen.name);
     }
@@ -122,7 +124,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
 
     // 3. Frames, per method (`--method all`: each into DIR/<method>/).
     let runs = (methods.iter())
-        .map(|&method| render_method(args, &device, &scene, method, start_s, &out))
+        .map(|&method| render_method(args, (&device, lookup), &scene, method, start_s, &out))
         .collect::<Result<Vec<_>>>()?;
 
     // 4. The record, once the device is gone (the layer's leak report comes then).
@@ -154,7 +156,6 @@ fn load_scene(args: &Args) -> Result<Scene> {
     if let Some(n) = args.secant_steps {
         scene.mirror.secant_steps = n;
     }
-    check_sensor_outputs(args, args.lookup.unwrap_or(scene.mirror.lookup))?;
     let face_size_px = args.cube_size.unwrap_or(scene.cube.face_size_px);
     specchio::memory::estimates::render(&scene, face_size_px, args.directions, args.sensor_outputs)
         .with_context(|| args.scene.display().to_string())?;
@@ -164,7 +165,7 @@ fn load_scene(args: &Args) -> Result<Scene> {
 /// One method's frames, written into its folder, and its summary printed.
 fn render_method(
     args: &Args,
-    device: &Arc<Device>,
+    (device, lookup): (&Arc<Device>, Lookup),
     scene: &Scene,
     method: Method,
     start_s: f64,
@@ -179,13 +180,19 @@ fn render_method(
         cube_size: args.cube_size,
         method,
         full_updates: args.full_updates,
-        lookup: args.lookup,
+        lookup: Some(lookup),
         // Range and ids through the cube: only when asked for, so timings never pay.
         id_cube: args.sensor_outputs,
         trace_order: args.trace_order,
         ..Default::default()
     };
     let mut renderer = Renderer::new(device, scene.clone(), &options)?;
+    if let (true, Some(warning)) = (
+        args.sensor_outputs,
+        renderer.sensor_ground_truth().warning(),
+    ) {
+        eprintln!("warning: sensor outputs ({lookup} lookup): {warning}");
+    }
     let reports = render_frames(args, &mut renderer, start_s, out, &dir)?;
     let summary = summarize(&reports);
     let lookup = renderer.scene.mirror.lookup;
@@ -360,17 +367,19 @@ fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()
     Ok(())
 }
 
-/// `--sensor-outputs` reads the cube path's rays and the cube itself: a lookup without a cube
-/// (ray-query) has neither; the exact outputs come from `specchio reference --sensor-outputs`.
-fn check_sensor_outputs(args: &Args, lookup: Lookup) -> Result<()> {
-    if args.sensor_outputs && !lookups::plugin(lookup).uses_cube() {
-        bail!(
-            "--sensor-outputs: the lookup {lookup} reads no cube map; use a cube lookup \
-             (plain, box, distance, distance-exact), or `specchio reference --sensor-outputs` for the exact \
-             outputs"
-        );
+/// The lookup the frames use: `--lookup`; else, for `--sensor-outputs` on a device with ray
+/// queries, `ray-query`, so that the colour, the range and the ids are traced along one light
+/// path; else the scene's.
+fn chosen_lookup(args: &Args, scene: &Scene, device: &DeviceInfo) -> Lookup {
+    match args.lookup {
+        Some(l) => l,
+        None if args.sensor_outputs
+            && lookups::missing_features(Lookup::RayQuery, device).is_none() =>
+        {
+            Lookup::RayQuery
+        }
+        None => scene.mirror.lookup,
     }
-    Ok(())
 }
 
 /// The sensor outputs of one frame from its ray-map images (`Readback::rays`).
@@ -389,7 +398,7 @@ fn write_sensor_outputs(
     let outputs = SensorOutputs::from_gpu(
         &renderer.scene,
         t_s,
-        &lookup,
+        (&lookup, renderer.sensor_ground_truth()),
         sensor,
         (origin, direction),
         images.cube,

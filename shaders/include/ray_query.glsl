@@ -63,6 +63,8 @@ struct Reflection {
     bool found;   // false: the ray left the scene (black, as the reference's miss)
     vec3 point;   // where it meets a surface (render space)
     vec3 colour;  // that surface's shaded colour
+    float range;  // how far along the ray from its offset origin (the reference's reflected t)
+    uint id;      // the drawable met (walls 0..5, objects 6 + i); OBJECT_NONE for none
 };
 
 // The reflected ray from the sphere point `hit` (unit normal n) for the view ray `dir`.
@@ -70,6 +72,8 @@ Reflection trace_reflection(FrameData f, vec3 dir, vec3 hit, vec3 n) {
     Reflection result;
     result.found = false;
     result.colour = vec3(0.0);
+    result.range = 0.0;
+    result.id = OBJECT_NONE;
     // The reference's R = d - 2 (d.n) n, without fusing.
     precise vec3 r = dir - 2.0 * dot(dir, n) * n;
     vec3 origin = offset_ray_origin(hit, n);
@@ -101,6 +105,8 @@ Reflection trace_reflection(FrameData f, vec3 dir, vec3 hit, vec3 n) {
     }
     result.found = true;
     result.point = origin + t * r;
+    result.range = t;
+    result.id = d;
     MaterialData m = materials[object.material.x];
     result.colour = shade(material_albedo(m, result.point, uv), normal, f);
     return result;

@@ -50,10 +50,11 @@ fn gpu_outputs_with(
         .sensor_ray_direction
         .expect("ray directions read back");
     let sensor = images.sensor.expect("sensor read back");
+    let truth = r.sensor_ground_truth();
     SensorOutputs::from_gpu(
         &r.scene,
         0.0,
-        "plain",
+        (&r.scene.mirror.lookup.to_string(), truth),
         sensor,
         (&origin, &direction),
         images.cube,

@@ -46,8 +46,15 @@ fn gpu_frames(
             let direction = images.sensor_ray_direction.expect("directions read back");
             let sensor = images.sensor.expect("sensor read back");
             let lookup = r.scene.mirror.lookup.to_string();
-            let outputs =
-                SensorOutputs::from_gpu(&r.scene, t, &lookup, sensor, (&origin, &direction), None);
+            let truth = r.sensor_ground_truth();
+            let outputs = SensorOutputs::from_gpu(
+                &r.scene,
+                t,
+                (&lookup, truth),
+                sensor,
+                (&origin, &direction),
+                None,
+            );
             (report.face_mask, outputs)
         })
         .collect()

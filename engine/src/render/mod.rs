@@ -253,10 +253,12 @@ impl Renderer {
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
         // A lookup that does not read the cube (ray-query) skips its fill, unless the cube
-        // itself or the sensor's ray map (which reads its depth and ids) is read back; the
-        // cube then keeps what it last showed.
+        // itself or a ray map that reads its depth and ids is read back; the cube then keeps
+        // what it last showed.
+        let rays_read_cube =
+            readback.rays && self.sensor_ground_truth() == crate::sensor::GroundTruth::Cube;
         let fill_cube =
-            lookups::plugin(self.mirror.lookup()).uses_cube() || readback.cube || readback.rays;
+            lookups::plugin(self.mirror.lookup()).uses_cube() || readback.cube || rays_read_cube;
         if readback.rays {
             self.prepare_sensor_rays()?;
         }

@@ -1,10 +1,18 @@
 //! The sensor's ray map on the GPU: two passes over the sensor view that write, per mirror
-//! pixel, the sphere hit with the range (`mirror_ray.frag.glsl` built as `mirror_ray_origin`) and the reflected
-//! direction with the id of what the ray meets (built as `mirror_ray_direction`). Range and
-//! id come through the cube (`shaders/include/sensor_ray.glsl`): the distance lookup's search
-//! along the reflected ray through the cube's depth, and the id cube's texel where it lands.
-//! They depend on no lookup (the ray is the same whatever the cube lookup does with it), so
-//! the renderer owns them rather than a lookup plug-in, and makes them on first use.
+//! pixel, the mirror point with the range (`MIRROR_RAY_*ORIGIN_FRAG`) and the reflected
+//! direction with the id of what the ray meets (`MIRROR_RAY_*DIRECTION_FRAG`). The ray itself
+//! is every lookup's (`mirror_hit`, `reflect`); what it meets comes from one of two places
+//! ([`GroundTruth`]):
+//!
+//! - traced (`mirror_ray_traced.frag.glsl`), when the lookup is `ray-query`: through the
+//!   lookup's own acceleration structure and set, exactly as the colour pass's trace, so the
+//!   colour, the range and the ids of a frame come from one light path;
+//! - through the cube (`mirror_ray.frag.glsl`, `shaders/include/sensor_ray.glsl`) otherwise:
+//!   the distance lookup's search along the reflected ray through the cube's depth, and the id
+//!   cube's texel where it lands. That is exact only where the cube's centre saw what the ray
+//!   meets, and the colour's lookup may look elsewhere: the outputs' JSON says which it was.
+//!
+//! The renderer owns the passes rather than a lookup plug-in and makes them on first use.
 //! `sensor::SensorOutputs::from_gpu` turns the two images into the ray map, range and ids.
 
 use std::sync::Arc;
@@ -14,6 +22,7 @@ use ash::vk;
 use super::pipelines::mirror_pipeline;
 use super::targets::{CubeTarget, ViewTarget, DIRECTION_FORMAT};
 use super::Renderer;
+use crate::sensor::GroundTruth;
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::Device;
 use crate::vk::image::Sampler;
@@ -33,22 +42,50 @@ pub(super) enum MirrorOutput {
     RayDirection,
 }
 
-/// The two ray-map pipelines (origin, direction) and their set 1: the cube's depth
-/// (binding 1) and the id cube (binding 2), both read texel by texel. Field order is drop
-/// order.
+/// The two ray-map pipelines (origin, direction) and the set they read at set 1: the lookup's
+/// trace set, or a set of their own with the cube's depth (binding 1) and the id cube (binding
+/// 2), both read texel by texel. Field order is drop order.
 pub(super) struct SensorRays {
     pub origin: Pipeline,
     pub direction: Pipeline,
     pub layout: PipelineLayout,
-    _pool: DescriptorPool,
     pub set: vk::DescriptorSet,
-    _set_layout: DescriptorSetLayout,
+    /// The cube path's own set and what it holds (None when the set is the lookup's).
+    _cube_set: Option<CubeSet>,
+}
+
+/// The cube path's set 1 and what it reads. Field order is drop order.
+struct CubeSet {
+    _pool: DescriptorPool,
+    _layout: DescriptorSetLayout,
     _nearest: Sampler,
 }
 
 impl SensorRays {
-    /// The passes over `cube`, which must have an id cube (`RenderOptions::id_cube`).
-    fn create(
+    /// The traced passes, reading the lookup's trace set (`LookupPass::trace_set`).
+    fn traced(
+        device: &Arc<Device>,
+        scene_set_layout: vk::DescriptorSetLayout,
+        (trace_layout, trace_set): (vk::DescriptorSetLayout, vk::DescriptorSet),
+        push_size: u32,
+    ) -> Result<Self, GpuError> {
+        let shaders = [
+            crate::shaders::MIRROR_RAY_TRACED_ORIGIN_FRAG,
+            crate::shaders::MIRROR_RAY_TRACED_DIRECTION_FRAG,
+        ];
+        let layouts = [scene_set_layout, trace_layout];
+        let (origin, direction, layout) = Self::pipelines(device, &layouts, shaders, push_size)?;
+        Ok(Self {
+            origin,
+            direction,
+            layout,
+            set: trace_set,
+            _cube_set: None,
+        })
+    }
+
+    /// The passes through `cube`, which must have an id cube (`RenderOptions::id_cube`).
+    fn through_cube(
         device: &Arc<Device>,
         scene_set_layout: vk::DescriptorSetLayout,
         cube: &CubeTarget,
@@ -77,51 +114,54 @@ impl SensorRays {
         let nearest = Sampler::nearest(device, "sensor ray sampler")?;
         descriptors::write_images(device, set, 1, &[(cube.depth_layers_view.raw, nearest.raw)]);
         descriptors::write_images(device, set, 2, &[(ids.layers_view.raw, nearest.raw)]);
-        let layout = PipelineLayout::create(
-            device,
-            &[scene_set_layout, set_layout.raw],
-            push_size,
-            "sensor ray layout",
-        )?;
-        let origin = mirror_pipeline(
-            device,
-            &layout,
+        let shaders = [
             crate::shaders::MIRROR_RAY_ORIGIN_FRAG,
-            DIRECTION_FORMAT,
-            "sensor ray origin pipeline",
-        )?;
-        let direction = mirror_pipeline(
-            device,
-            &layout,
             crate::shaders::MIRROR_RAY_DIRECTION_FRAG,
-            DIRECTION_FORMAT,
-            "sensor ray direction pipeline",
-        )?;
+        ];
+        let layouts = [scene_set_layout, set_layout.raw];
+        let (origin, direction, layout) = Self::pipelines(device, &layouts, shaders, push_size)?;
         Ok(Self {
             origin,
             direction,
             layout,
-            _pool: pool,
             set,
-            _set_layout: set_layout,
-            _nearest: nearest,
+            _cube_set: Some(CubeSet {
+                _pool: pool,
+                _layout: set_layout,
+                _nearest: nearest,
+            }),
         })
+    }
+
+    /// The origin and direction pipelines of `shaders` over sets `layouts`.
+    fn pipelines(
+        device: &Arc<Device>,
+        layouts: &[vk::DescriptorSetLayout; 2],
+        [origin, direction]: [&[u32]; 2],
+        push_size: u32,
+    ) -> Result<(Pipeline, Pipeline, PipelineLayout), GpuError> {
+        let layout = PipelineLayout::create(device, layouts, push_size, "sensor ray layout")?;
+        let make = |spirv, name| mirror_pipeline(device, &layout, spirv, DIRECTION_FORMAT, name);
+        let origin = make(origin, "sensor ray origin pipeline")?;
+        let direction = make(direction, "sensor ray direction pipeline")?;
+        Ok((origin, direction, layout))
     }
 }
 
 impl Renderer {
     /// The ray map's passes and two full-float targets at the sensor's resolution, made on
-    /// the first frame that reads the ray map back.
+    /// the first frame that reads the ray map back: traced where the lookup traces, else
+    /// through the cube.
     pub(super) fn prepare_sensor_rays(&mut self) -> Result<(), GpuError> {
         if self.sensor_rays.is_some() {
             return Ok(());
         }
-        let passes = SensorRays::create(
-            &self.device,
-            self.resources.scene_set_layout.raw,
-            &self.cube,
-            std::mem::size_of::<super::gpu::Push>() as u32,
-        )?;
+        let scene_layout = self.resources.scene_set_layout.raw;
+        let push_size = std::mem::size_of::<super::gpu::Push>() as u32;
+        let passes = match self.mirror.pass.trace_set() {
+            Some(trace) => SensorRays::traced(&self.device, scene_layout, trace, push_size)?,
+            None => SensorRays::through_cube(&self.device, scene_layout, &self.cube, push_size)?,
+        };
         let [w, h] = self.scene.sensor.resolution;
         let targets = [
             ViewTarget::create(&self.device, DIRECTION_FORMAT, w, h, "sensor ray origins")?,
@@ -135,5 +175,14 @@ impl Renderer {
         ];
         self.sensor_rays = Some((passes, targets));
         Ok(())
+    }
+
+    /// Where this renderer's sensor range and ids come from (its lookup decides).
+    pub fn sensor_ground_truth(&self) -> GroundTruth {
+        if self.mirror.pass.trace_set().is_some() {
+            GroundTruth::Traced
+        } else {
+            GroundTruth::Cube
+        }
     }
 }

@@ -9,6 +9,7 @@
 
 pub mod central;
 pub mod files;
+pub mod ground_truth;
 pub mod localise;
 pub mod optics;
 pub mod outputs;
@@ -16,6 +17,7 @@ pub mod panorama;
 pub mod ray_map;
 pub mod solve;
 
+pub use ground_truth::GroundTruth;
 pub use optics::SensorOptics;
 pub use outputs::SensorOutputs;
 pub use ray_map::{PixelRay, RayMap};

@@ -8,6 +8,7 @@ use glam::{Mat3, Quat, Vec3};
 use serde::Serialize;
 
 use super::files::{write_channels, Samples};
+use super::ground_truth::{GroundTruth, GroundTruthRecord};
 use super::optics::SensorOptics;
 use super::panorama::{PanoramaKind, PanoramaLayout};
 use super::ray_map::{PixelRay, RayMap};
@@ -43,6 +44,8 @@ pub const RAY_CHANNELS: [&str; 7] = [
 pub struct SensorOutputs {
     /// "reference" or "cube (plain lookup)", ... : where the layers come from.
     pub source: String,
+    /// Where range and ids come from, and whether the colour image agrees with them.
+    pub ground_truth: GroundTruthRecord,
     pub time_s: f64,
     /// The scene's local origin in the file's (world) coordinates: every position written is
     /// local (world = this + local), as the renderer and the reference work in f32 about it.
@@ -94,30 +97,32 @@ impl SensorOutputs {
             .collect();
         Self {
             source: "reference".into(),
+            ground_truth: GroundTruthRecord::new(GroundTruth::Reference, "reference"),
             time_s: t_s,
             scene_origin: scene.origin,
             optics: SensorOptics::at(scene, t_s),
             rays,
             range,
-            range_model: "exact: the distance to the first scene surface the reflected ray meets",
+            range_model: GroundTruth::Reference.range_model(),
             ids,
-            id_model: "exact: the drawable that surface belongs to",
+            id_model: GroundTruth::Reference.id_model(),
             id_map: IdMap::of(scene),
             image: images.color.clone(),
             cube: None,
         }
     }
 
-    /// From the GPU's sensor ray passes (`shaders/mirror_ray_*.frag.glsl`): `origin_range` holds
+    /// From the GPU's sensor ray passes (`shaders/mirror_ray*.frag.glsl`): `origin_range` holds
     /// the mirror hit in render space (rgb) and the distance along the reflected ray to what
-    /// it meets through the cube's depth (a); `direction_wall` the reflected direction (rgb)
-    /// and 1 + the id the id cube holds there (a; 0, the clear value, off the mirror). Where
-    /// the search through the depth finds no hit, both are the room box's (its range and the
-    /// wall the ray leaves through): `shaders/include/sensor_ray.glsl`.
+    /// it meets (a); `direction_wall` the reflected direction (rgb) and 1 + the id of what it
+    /// meets (a; 0, the clear value, off the mirror). `truth` says how they found it: traced,
+    /// or through the cube's depth and id cube (where that search finds no hit, the room box's
+    /// range and the wall the ray leaves through: `shaders/include/sensor_ray.glsl`); `lookup`
+    /// made the colour `image`.
     pub fn from_gpu(
         scene: &Scene,
         t_s: f64,
-        lookup: &str,
+        (lookup, truth): (&str, GroundTruth),
         image: RgbaImage,
         (origin_range, direction_wall): (&RgbaImage, &RgbaImage),
         cube: Option<Vec<RgbaImage>>,
@@ -135,8 +140,13 @@ impl SensorOutputs {
             })
             .collect();
         let seen = |d: &[f32; 4]| d[3] > 0.0;
+        let source = match truth {
+            GroundTruth::Traced => format!("traced ({lookup} lookup)"),
+            _ => format!("cube ({lookup} lookup)"),
+        };
         Self {
-            source: format!("cube ({lookup} lookup)"),
+            source,
+            ground_truth: GroundTruthRecord::new(truth, lookup),
             time_s: t_s,
             scene_origin: scene.origin,
             optics,
@@ -151,19 +161,13 @@ impl SensorOutputs {
                 .zip(&direction_wall.pixels)
                 .map(|(o, d)| if seen(d) { o[3] } else { 0.0 })
                 .collect(),
-            range_model: "depth cube: the distance along the reflected ray to where it meets \
-                          the surface the cube's depth stored (the distance lookup's search), \
-                          an approximation where the mirror sees what the cube's centre does \
-                          not (disocclusion) and at silhouettes; the room box's distance \
-                          where the search finds no hit",
+            range_model: truth.range_model(),
             ids: direction_wall
                 .pixels
                 .iter()
                 .map(|d| if seen(d) { d[3] as u32 - 1 } else { NO_ID })
                 .collect(),
-            id_model: "id cube: the drawable the cube fill drew at the texel (nearest, never \
-                       filtered) where the reflected ray meets the depth cube's surface; the \
-                       wall the ray leaves the room box through where the search finds no hit",
+            id_model: truth.id_model(),
             id_map: IdMap::of(scene),
             image,
             cube,
@@ -230,6 +234,7 @@ impl SensorOutputs {
         let ortho = v.is_orthographic();
         CameraRecord {
             source: self.source.clone(),
+            ground_truth: self.ground_truth.clone(),
             time_s: self.time_s,
             frame: "the scene frame: world minus scene_origin_m (the mirror's centre at time 0 in \
                     the scene file's coordinates), metres; the camera's axes x right, y down, \
@@ -283,6 +288,7 @@ impl SensorOutputs {
 #[derive(Debug, Serialize)]
 pub struct CameraRecord {
     pub source: String,
+    pub ground_truth: GroundTruthRecord,
     pub time_s: f64,
     pub frame: &'static str,
     /// World (the scene file's coordinates) = this + every position here and in the files.

@@ -161,6 +161,12 @@ pub trait LookupPass {
     }
     /// The descriptor set the pipelines read at set 1.
     fn set(&self) -> vk::DescriptorSet;
+    /// A lookup that traces the scene with nothing else at set 1 (`ray_query.glsl`'s bindings
+    /// from 0): that set's layout and the set, which the sensor's ray map then traces through
+    /// too, so its range and ids come from the colour's own light path.
+    fn trace_set(&self) -> Option<(vk::DescriptorSetLayout, vk::DescriptorSet)> {
+        None
+    }
     /// Before the frame is recorded: per-frame data of the lookup's own, from this frame's
     /// drawables (walls first) and their render-space bounds, written to its device buffers
     /// through the frame's `uploads`. Most lookups have none.

@@ -62,7 +62,7 @@ struct RayQueryPass {
     pipelines: MirrorPipelines,
     _pool: DescriptorPool,
     set: vk::DescriptorSet,
-    _set_layout: DescriptorSetLayout,
+    set_layout: DescriptorSetLayout,
     trace: SceneTrace,
 }
 
@@ -89,7 +89,7 @@ impl RayQueryPass {
             pipelines,
             _pool: pool,
             set,
-            _set_layout: set_layout,
+            set_layout,
             trace,
         })
     }
@@ -102,6 +102,10 @@ impl LookupPass for RayQueryPass {
 
     fn set(&self) -> vk::DescriptorSet {
         self.set
+    }
+
+    fn trace_set(&self) -> Option<(vk::DescriptorSetLayout, vk::DescriptorSet)> {
+        Some((self.set_layout.raw, self.set))
     }
 
     fn prepare(
