@@ -5,6 +5,7 @@
 
 mod calibrate;
 mod compare;
+mod dataset;
 mod info;
 mod probe;
 mod records;
@@ -41,6 +42,9 @@ enum Command {
     /// Fit the central models robotics tools calibrate (OpenCV omnidir, Kalibr omni,
     /// OCamCalib) to the sensor's exact rays; export them with their residuals.
     Calibrate(calibrate::Args),
+    /// The robot moved along a trajectory: per pose the sensor's image and ground-truth layers,
+    /// its pose in the scene's frame and ROS REP-103's, a point cloud; an index for loaders.
+    Dataset(dataset::Args),
     /// Appearance-based localisation: landmarks on a floor grid, random queries matched to
     /// them by a descriptor of the sensor's panorama; recall, position and heading errors.
     Localise(localise::Args),
@@ -95,6 +99,7 @@ fn main() -> ExitCode {
         Command::Calibrate(args) => calibrate::run(&args),
         Command::View(args) => view::run(&args),
         Command::Localise(args) => localise::run(&args),
+        Command::Dataset(args) => dataset::run(&args),
     };
     // A failed write to stdout (not the reader leaving) is the command's failure too.
     let result = result.and_then(|code| Ok(stdout::verdict().map(|()| code)?));

@@ -8,6 +8,7 @@
 //! frame's layers from the reference or the GPU and writes them ([`files`]: EXR channels).
 
 pub mod central;
+pub mod dataset;
 pub mod files;
 pub mod ground_truth;
 pub mod localise;

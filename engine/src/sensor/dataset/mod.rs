@@ -1,0 +1,188 @@
+//! Datasets: the robot moved along a trajectory through the scene, one frame of sensor
+//! outputs per pose, a pose record per frame in the scene's frame and in ROS REP-103's, and an
+//! index a data loader reads (`specchio dataset`, docs/sensor.md "Datasets").
+//!
+//! This module holds what does not need a GPU: the trajectory ([`trajectory`]), the frames'
+//! transform ([`rep103`]), the point clouds ([`ply`]), the check that a pose can be rendered
+//! ([`pose_fits`]) and the records. The command in `cli/src/dataset.rs` renders the frames.
+
+pub mod ply;
+pub mod rep103;
+pub mod trajectory;
+
+use glam::{DMat3, Vec3};
+use serde::Serialize;
+
+use super::localise::poses::{is_clear, object_spheres};
+use super::SensorOutputs;
+use crate::scene::state::SceneState;
+use crate::scene::Scene;
+use trajectory::Pose;
+
+/// Why the robot cannot stand at a pose: the field of the pose and a sentence.
+pub fn pose_fits(scene: &Scene, pose: &Pose) -> Result<(), (&'static str, String)> {
+    let local = (pose.position - scene.origin).as_vec3();
+    let room = &scene.room;
+    let (lo, hi) = (
+        room.center - 0.5 * room.size_m,
+        room.center + 0.5 * room.size_m,
+    );
+    let r = scene.mirror.radius_m;
+    let file = |p: Vec3| {
+        let w = scene.origin + p.as_dvec3();
+        format!("[{}, {}, {}]", w.x, w.y, w.z)
+    };
+    if (local - Vec3::splat(r)).cmplt(lo).any() || (local + Vec3::splat(r)).cmpgt(hi).any() {
+        let why = format!(
+            "the mirror (reaching {r} m) at {} is not entirely inside the room",
+            file(local)
+        );
+        return Err(("position", why));
+    }
+    let sensor_y = local.y + scene.sensor.eye().y;
+    if sensor_y <= lo.y {
+        let why = format!(
+            "puts the sensor at y = {}, below the floor at y = {}",
+            scene.origin.y + f64::from(sensor_y),
+            scene.origin.y + f64::from(lo.y)
+        );
+        return Err(("position", why));
+    }
+    let state = SceneState::at(scene, pose.time_s);
+    let objects = object_spheres(scene, &state);
+    if !is_clear(scene, &objects, local) {
+        let why = format!(
+            "the mirror at {} (or the sensor's line of sight up to it) meets an object at t = {} s",
+            file(local),
+            pose.time_s
+        );
+        return Err(("position", why));
+    }
+    Ok(())
+}
+
+/// One frame's pose: the robot in the scene's frame and in ROS's, and its sensor camera.
+#[derive(Debug, Clone, Serialize)]
+pub struct PoseRecord {
+    pub frame: usize,
+    pub time_s: f64,
+    /// The scene file's coordinates (+Y up): the mirror's viewpoint and the heading about +Y.
+    pub scene: ScenePose,
+    /// ROS REP-103 (`map`, +Z up, x forward): `base_link` at the mirror's viewpoint, and the
+    /// sensor camera's optical frame (x right, y down, z forward).
+    pub ros: RosPose,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ScenePose {
+    pub position_m: [f64; 3],
+    pub heading_deg: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct RosPose {
+    pub base_link_position_m: [f64; 3],
+    pub base_link_quaternion_xyzw: [f64; 4],
+    pub camera_optical_position_m: [f64; 3],
+    pub camera_optical_quaternion_xyzw: [f64; 4],
+}
+
+impl PoseRecord {
+    /// The record of frame `frame` at `pose`, whose sensor outputs are `outputs`.
+    pub fn new(frame: usize, pose: &Pose, outputs: &SensorOutputs) -> Self {
+        let v = &outputs.optics.view;
+        let camera = outputs.scene_origin + (v.eye + outputs.optics.mirror_center).as_dvec3();
+        let axes = DMat3::from_cols(
+            v.right.as_dvec3().normalize(),
+            v.down.as_dvec3().normalize(),
+            v.forward.as_dvec3().normalize(),
+        );
+        Self {
+            frame,
+            time_s: pose.time_s,
+            scene: ScenePose {
+                position_m: pose.position.to_array(),
+                heading_deg: pose.heading_deg,
+            },
+            ros: RosPose {
+                base_link_position_m: rep103::point(pose.position).to_array(),
+                base_link_quaternion_xyzw: rep103::robot_orientation(pose.heading_deg).to_array(),
+                camera_optical_position_m: rep103::point(camera).to_array(),
+                camera_optical_quaternion_xyzw: rep103::optical_orientation(axes).to_array(),
+            },
+        }
+    }
+}
+
+/// Where each mirror pixel's reflected ray ends (scene frame, local: world minus the scene's
+/// origin, as the ray map) and the id of what it met.
+pub fn points(outputs: &SensorOutputs) -> Vec<(Vec3, u32)> {
+    (outputs
+        .rays
+        .rays
+        .iter()
+        .zip(&outputs.range)
+        .zip(&outputs.ids))
+    .filter_map(|((ray, &range), &id)| ray.map(|r| (r.origin + range * r.direction, id)))
+    .collect()
+}
+
+/// The dataset's summary (`dataset.json`): what made it and how to read it.
+#[derive(Debug, Clone, Serialize)]
+pub struct DatasetRecord {
+    pub scene: String,
+    pub trajectory: String,
+    pub frames: usize,
+    /// The colour image's lookup, and where range and ids come from.
+    pub lookup: String,
+    pub ground_truth: super::GroundTruth,
+    pub index: &'static str,
+    /// The scene frame's origin in the file's coordinates; the ray maps and point clouds are
+    /// local to it.
+    pub scene_origin_m: [f64; 3],
+    /// Rows: ROS's x, y, z axes in scene coordinates (ROS = this x scene).
+    pub scene_to_ros: [[f64; 3]; 3],
+    pub frame_files: [&'static str; 10],
+}
+
+/// What every frame folder holds.
+pub const FRAME_FILES: [&str; 10] = [
+    "sensor.exr",
+    "sensor.png",
+    super::outputs::RAYS_FILE,
+    super::outputs::RANGE_FILE,
+    super::outputs::ID_FILE,
+    super::outputs::ID_MAP_FILE,
+    super::outputs::CAMERA_FILE,
+    "pose.json",
+    "points.ply",
+    "sensor.panorama.*",
+];
+
+/// The rows of [`rep103::SCENE_TO_ROS`].
+pub fn scene_to_ros_rows() -> [[f64; 3]; 3] {
+    let m = rep103::SCENE_TO_ROS.transpose();
+    [
+        m.x_axis.to_array(),
+        m.y_axis.to_array(),
+        m.z_axis.to_array(),
+    ]
+}
+
+/// One line of the index (`index.jsonl`): the frame's pose and its folder.
+#[derive(Debug, Clone, Serialize)]
+pub struct IndexLine<'a> {
+    pub folder: String,
+    #[serde(flatten)]
+    pub pose: &'a PoseRecord,
+}
+
+/// The frame folder's name: six digits, so that names sort as frames do.
+pub fn frame_folder(frame: usize) -> String {
+    format!("frames/{frame:06}")
+}
+
+/// The position of pose `pose` in the scene's local frame, as the renderer holds the mirror.
+pub fn local_position(scene: &Scene, pose: &Pose) -> Vec3 {
+    (pose.position - scene.origin).as_vec3()
+}

@@ -1,0 +1,339 @@
+//! A robot's trajectory: when it is where, facing which way.
+//!
+//! - CSV: a header naming the columns `time,x,y,z,heading` (in any order, each once), then
+//!   one pose per line; blank lines and lines starting with `#` are skipped.
+//! - JSON: `[{"time": 0.0, "position": [x, y, z], "heading": 0.0}, ...]`.
+//!
+//! `time` in seconds (≥ 0, never decreasing: the scene's objects are where they are at that
+//! time; equal times make a pose grid), the position of the mirror's viewpoint (the robot) in
+//! the scene file's coordinates (metres, +Y up), `heading` in degrees about +Y, counter-
+//! clockwise seen from above (the robot turned from the scene's own sensor: 0 is the file's).
+//! Every mistake names the file, the line (CSV) or the entry (JSON) and the field.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::files::{read_regular_file, FileError};
+
+/// The most poses a trajectory may hold (each is a frame of images on disk).
+pub const MAX_POSES: usize = 100_000;
+/// The largest trajectory file read (about 40 bytes a pose, with room to spare).
+pub const MAX_TRAJECTORY_BYTES: u64 = 64 << 20;
+
+/// One pose of the robot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pose {
+    /// Where the file says it: a CSV line or a JSON entry.
+    pub at: Place,
+    pub time_s: f64,
+    /// The mirror's viewpoint in the scene file's coordinates (metres).
+    pub position: DVec3,
+    pub heading_deg: f64,
+}
+
+/// Where in the file a pose is written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Place {
+    /// A CSV line (1-based).
+    Line(usize),
+    /// A JSON entry (0-based).
+    Entry(usize),
+}
+
+/// A trajectory the dataset cannot use, named by file, place and field.
+#[derive(Debug, thiserror::Error)]
+pub enum TrajectoryError {
+    #[error(transparent)]
+    File(#[from] FileError),
+    #[error("{}{}: {field}: {message}", file.display(), place_text(*place))]
+    Invalid {
+        file: PathBuf,
+        place: Option<Place>,
+        field: String,
+        message: String,
+    },
+}
+
+fn place_text(place: Option<Place>) -> String {
+    match place {
+        Some(Place::Line(n)) => format!(":{n}"),
+        Some(Place::Entry(i)) => format!(": poses[{i}]"),
+        None => String::new(),
+    }
+}
+
+impl TrajectoryError {
+    pub fn invalid(file: &Path, place: Option<Place>, field: &str, message: String) -> Self {
+        TrajectoryError::Invalid {
+            file: file.to_path_buf(),
+            place,
+            field: field.to_owned(),
+            message,
+        }
+    }
+}
+
+/// The poses of the trajectory file `path`: JSON when its name ends in `.json`, else CSV.
+pub fn read(path: &Path) -> Result<Vec<Pose>, TrajectoryError> {
+    let bytes = read_regular_file(path, MAX_TRAJECTORY_BYTES)?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        TrajectoryError::invalid(path, None, "(file)", format!("not UTF-8 text (byte {at})"))
+    })?;
+    let json = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    let poses = if json {
+        parse_json(path, &text)?
+    } else {
+        parse_csv(path, &text)?
+    };
+    check(path, &poses)?;
+    Ok(poses)
+}
+
+/// The columns a CSV header must name.
+const COLUMNS: [&str; 5] = ["time", "x", "y", "z", "heading"];
+
+/// Parses CSV text (see the module's comment).
+pub fn parse_csv(file: &Path, text: &str) -> Result<Vec<Pose>, TrajectoryError> {
+    let mut rows = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let Some((header_line, header)) = rows.next() else {
+        let why = format!(
+            "no header; the first line names the columns {}",
+            COLUMNS.join(",")
+        );
+        return Err(TrajectoryError::invalid(file, None, "(header)", why));
+    };
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let at = Some(Place::Line(header_line));
+    let mut index = [0usize; 5];
+    for (k, column) in COLUMNS.iter().enumerate() {
+        let found: Vec<usize> = (0..names.len()).filter(|&i| names[i] == *column).collect();
+        match found[..] {
+            [i] => index[k] = i,
+            [] => {
+                let why = format!(
+                    "the header names no `{column}` column (it needs {})",
+                    COLUMNS.join(",")
+                );
+                return Err(TrajectoryError::invalid(file, at, column, why));
+            }
+            _ => {
+                let why = "the header names it more than once".to_owned();
+                return Err(TrajectoryError::invalid(file, at, column, why));
+            }
+        }
+    }
+    if let Some(extra) = names.iter().find(|n| !COLUMNS.contains(n)) {
+        let why = format!("unknown column (the columns are {})", COLUMNS.join(","));
+        return Err(TrajectoryError::invalid(file, at, extra, why));
+    }
+    let mut poses = Vec::new();
+    for (line, row) in rows {
+        if poses.len() == MAX_POSES {
+            let why = format!("more than {MAX_POSES} poses; split the trajectory");
+            return Err(TrajectoryError::invalid(
+                file,
+                Some(Place::Line(line)),
+                "(file)",
+                why,
+            ));
+        }
+        let cells: Vec<&str> = row.split(',').map(str::trim).collect();
+        let at = Some(Place::Line(line));
+        if cells.len() != names.len() {
+            let why = format!("{} values, the header names {}", cells.len(), names.len());
+            return Err(TrajectoryError::invalid(file, at, "(row)", why));
+        }
+        let value = |k: usize| -> Result<f64, TrajectoryError> {
+            let cell = cells[index[k]];
+            cell.parse::<f64>().map_err(|_| {
+                TrajectoryError::invalid(file, at, COLUMNS[k], format!("`{cell}` is not a number"))
+            })
+        };
+        poses.push(Pose {
+            at: Place::Line(line),
+            time_s: value(0)?,
+            position: DVec3::new(value(1)?, value(2)?, value(3)?),
+            heading_deg: value(4)?,
+        });
+    }
+    Ok(poses)
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JsonPose {
+    time: f64,
+    position: [f64; 3],
+    heading: f64,
+}
+
+/// Parses JSON text (see the module's comment).
+pub fn parse_json(file: &Path, text: &str) -> Result<Vec<Pose>, TrajectoryError> {
+    let entries: Vec<JsonPose> = serde_json::from_str(text).map_err(|e| {
+        let line = Some(Place::Line(e.line()));
+        TrajectoryError::invalid(file, line, "(json)", e.to_string())
+    })?;
+    if entries.len() > MAX_POSES {
+        let why = format!(
+            "{} poses, more than {MAX_POSES}; split the trajectory",
+            entries.len()
+        );
+        return Err(TrajectoryError::invalid(file, None, "(file)", why));
+    }
+    Ok((entries.into_iter().enumerate())
+        .map(|(i, p)| Pose {
+            at: Place::Entry(i),
+            time_s: p.time,
+            position: DVec3::from(p.position),
+            heading_deg: p.heading,
+        })
+        .collect())
+}
+
+/// Refuses what no dataset can render: no pose, a number that is not finite, a negative
+/// time, time running backwards.
+fn check(file: &Path, poses: &[Pose]) -> Result<(), TrajectoryError> {
+    if poses.is_empty() {
+        return Err(TrajectoryError::invalid(
+            file,
+            None,
+            "(file)",
+            "no poses".into(),
+        ));
+    }
+    let mut last = 0.0;
+    for p in poses {
+        let at = Some(p.at);
+        let fields = [
+            ("time", p.time_s),
+            ("x", p.position.x),
+            ("y", p.position.y),
+            ("z", p.position.z),
+            ("heading", p.heading_deg),
+        ];
+        for (field, v) in fields {
+            if !v.is_finite() {
+                return Err(TrajectoryError::invalid(
+                    file,
+                    at,
+                    field,
+                    format!("{v} is not finite"),
+                ));
+            }
+        }
+        if p.time_s < 0.0 {
+            let why = format!("{} s: must be >= 0", p.time_s);
+            return Err(TrajectoryError::invalid(file, at, "time", why));
+        }
+        if p.time_s < last {
+            let why = format!(
+                "{} s is before the pose above ({last} s): time never runs backwards",
+                p.time_s
+            );
+            return Err(TrajectoryError::invalid(file, at, "time", why));
+        }
+        last = p.time_s;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn csv(text: &str) -> Result<Vec<Pose>, TrajectoryError> {
+        let file = Path::new("t.csv");
+        let poses = parse_csv(file, text)?;
+        check(file, &poses)?;
+        Ok(poses)
+    }
+
+    #[test]
+    fn csv_columns_in_any_order_comments_and_blank_lines() {
+        let poses = csv("# a robot\nheading, time, x, y, z\n\n0, 0, 1, 3, 2\n90, 0.5, 1.5, 3, 2\n")
+            .unwrap();
+        assert_eq!(poses.len(), 2);
+        assert_eq!(poses[1].at, Place::Line(5));
+        assert_eq!(poses[1].time_s, 0.5);
+        assert_eq!(poses[1].position, DVec3::new(1.5, 3.0, 2.0));
+        assert_eq!(poses[1].heading_deg, 90.0);
+    }
+
+    #[test]
+    fn json_poses_keep_their_entries() {
+        let text = r#"[{"time": 0, "position": [1, 3, 2], "heading": 45}, {"time": 1, "position": [2, 3, 2], "heading": 0}]"#;
+        let poses = parse_json(Path::new("t.json"), text).unwrap();
+        assert_eq!(poses[1].at, Place::Entry(1));
+        assert_eq!(poses[0].heading_deg, 45.0);
+    }
+
+    #[test]
+    fn every_mistake_names_file_place_and_field() {
+        let cases = [
+            ("", "t.csv: (header): no header"),
+            (
+                "time,x,y,heading\n",
+                "t.csv:1: z: the header names no `z` column",
+            ),
+            (
+                "time,x,y,z,heading,speed\n",
+                "t.csv:1: speed: unknown column",
+            ),
+            (
+                "time,x,y,z,heading,x\n",
+                "t.csv:1: x: the header names it more than once",
+            ),
+            ("time,x,y,z,heading\n", "t.csv: (file): no poses"),
+            (
+                "time,x,y,z,heading\n0,1,2,3\n",
+                "t.csv:2: (row): 4 values, the header names 5",
+            ),
+            (
+                "time,x,y,z,heading\n0,1,two,3,0\n",
+                "t.csv:2: y: `two` is not a number",
+            ),
+            (
+                "time,x,y,z,heading\n0,1,2,3,NaN\n",
+                "t.csv:2: heading: NaN is not finite",
+            ),
+            (
+                "time,x,y,z,heading\n1,1,2,3,0\n0.5,1,2,3,0\n",
+                "t.csv:3: time: 0.5 s is before the pose above",
+            ),
+            (
+                "time,x,y,z,heading\n-1,1,2,3,0\n",
+                "t.csv:2: time: -1 s: must be >= 0",
+            ),
+        ];
+        for (text, want) in cases {
+            let got = csv(text).unwrap_err().to_string();
+            assert!(got.starts_with(want), "{text:?}: {got}");
+        }
+        let err = parse_json(
+            Path::new("t.json"),
+            "[{\"time\": 0, \"position\": [1, 2], \"heading\": 0}]",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.starts_with("t.json:1: (json): invalid length 2"),
+            "{err}"
+        );
+        let err = parse_json(
+            Path::new("t.json"),
+            "[{\"time\": 0, \"position\": [1, 2, 3], \"heading\": 0, \"speed\": 1}]",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("unknown field `speed`"), "{err}");
+    }
+}

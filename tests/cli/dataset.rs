@@ -1,0 +1,167 @@
+//! `specchio dataset`: a trajectory in, one folder of sensor outputs per pose, an index and
+//! the poses in the scene's frame and ROS REP-103's out; a pose the robot cannot take refused
+//! before anything is written.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use common::{root, specchio, temp_dir};
+use specchio::sensor::files::{read_channels, read_u32_channel};
+use specchio::sensor::outputs::NO_ID;
+
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Three poses through the thesis room: every frame's files, an index line each, the poses
+/// in both frames (a known point: the scene's [1, 3, 0.5] is ROS's [1, -0.5, 3]; heading 45
+/// degrees is a yaw of 45 degrees about ROS's +Z), a point per mirror pixel; and the frame at
+/// the scene's own pose is `render --sensor-outputs`'s, id for id.
+#[test]
+fn a_trajectory_makes_a_frame_per_pose_with_poses_in_both_frames() {
+    let scene = root().join("scenes/thesis-room.toml");
+    let dir = temp_dir("dataset");
+    std::fs::create_dir_all(&*dir).unwrap();
+    let trajectory = dir.join("robot.csv");
+    std::fs::write(
+        &trajectory,
+        "# the robot's path\ntime,x,y,z,heading\n0,0,3,0,0\n0.5,1,3,0.5,45\n1,1.5,3,1,90\n",
+    )
+    .unwrap();
+    let out = dir.join("set");
+    let render = dir.join("render");
+    let (s, t, o, r) = (
+        scene.to_str().unwrap(),
+        trajectory.to_str().unwrap(),
+        out.to_str().unwrap(),
+        render.to_str().unwrap(),
+    );
+    let run = specchio(&["dataset", s, "--trajectory", t, "--out", o]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let record = json(&out.join("dataset.json"));
+    assert_eq!(record["frames"], 3);
+    let index = std::fs::read_to_string(out.join("index.jsonl")).unwrap();
+    let lines: Vec<serde_json::Value> = index
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3);
+    for (i, line) in lines.iter().enumerate() {
+        let folder = out.join(line["folder"].as_str().unwrap());
+        assert_eq!(line["frame"], i);
+        for file in [
+            "sensor.png",
+            "sensor.rays.exr",
+            "sensor.range.exr",
+            "sensor.id.exr",
+            "camera.json",
+            "pose.json",
+            "points.ply",
+        ] {
+            assert!(folder.join(file).is_file(), "{}: {file}", folder.display());
+        }
+        assert_eq!(
+            &json(&folder.join("pose.json")),
+            line.as_object()
+                .map(|m| {
+                    let mut m = m.clone();
+                    m.remove("folder");
+                    serde_json::Value::Object(m)
+                })
+                .as_ref()
+                .unwrap()
+        );
+        // A point per mirror pixel.
+        let ids = read_channels(&folder.join("sensor.id.exr")).unwrap();
+        let seen = read_u32_channel(&ids, "id")
+            .unwrap()
+            .iter()
+            .filter(|&&id| id != NO_ID)
+            .count();
+        let ply = std::fs::read(folder.join("points.ply")).unwrap();
+        let header = String::from_utf8_lossy(
+            &ply[..ply.windows(10).position(|w| w == b"end_header").unwrap()],
+        )
+        .into_owned();
+        assert!(
+            header.contains(&format!("element vertex {seen}\n")),
+            "{header}"
+        );
+    }
+    let ros = &lines[1]["ros"];
+    assert_eq!(
+        ros["base_link_position_m"],
+        serde_json::json!([1.0, -0.5, 3.0])
+    );
+    let q: Vec<f64> = (0..4)
+        .map(|k| ros["base_link_quaternion_xyzw"][k].as_f64().unwrap())
+        .collect();
+    let half = 22.5f64.to_radians();
+    assert!(
+        (q[2] - half.sin()).abs() < 1e-12 && (q[3] - half.cos()).abs() < 1e-12,
+        "{q:?}"
+    );
+    assert_eq!(
+        lines[1]["scene"]["position_m"],
+        serde_json::json!([1.0, 3.0, 0.5])
+    );
+
+    // The first pose is the scene's own: the same ids as a render of the scene.
+    let run = specchio(&[
+        "render",
+        s,
+        "--out",
+        r,
+        "--sensor-outputs",
+        "--lookup",
+        record["lookup"].as_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let ids = |p: &std::path::Path| {
+        let c = read_channels(&p.join("sensor.id.exr")).unwrap();
+        read_u32_channel(&c, "id").unwrap().to_vec()
+    };
+    assert!(
+        ids(&out.join("frames/000000")) == ids(&render),
+        "frame 0 differs from the render"
+    );
+}
+
+/// A pose outside the room, a pose in an object and a broken trajectory are refused naming
+/// the file, line and field, with exit 1 and no output folder.
+#[test]
+fn a_pose_the_robot_cannot_take_is_refused_before_anything_is_written() {
+    let scene = root().join("scenes/thesis-room.toml");
+    let dir = temp_dir("dataset-bad");
+    std::fs::create_dir_all(&*dir).unwrap();
+    let cases = [
+        ("time,x,y,z,heading\n0,0,3,0,0\n1,9,3,0,0\n", "robot.csv:3: position: the mirror (reaching 1 m) at [9, 3, 0] is not entirely inside the room"),
+        ("time,x,y,z,heading\n0,0,3,0,0\n1,0,3,zero,0\n", "robot.csv:3: z: `zero` is not a number"),
+        ("time,x,y,heading\n", "robot.csv:1: z: the header names no `z` column"),
+    ];
+    for (text, want) in cases {
+        let trajectory = dir.join("robot.csv");
+        std::fs::write(&trajectory, text).unwrap();
+        let out = dir.join("set");
+        let run = specchio(&[
+            "dataset",
+            scene.to_str().unwrap(),
+            "--trajectory",
+            trajectory.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(run.status.code(), Some(1), "{text:?}");
+        let said = String::from_utf8_lossy(&run.stderr);
+        assert!(said.contains(want), "{text:?}: {said}");
+        assert!(!out.exists());
+    }
+}
