@@ -60,6 +60,8 @@ pub struct RenderSettings {
 pub struct CubeSettings {
     pub face_size_px: u32,
     pub format: &'static str,
+    /// Where the cube is rendered from, relative to the mirror's viewpoint (`cube.offset`).
+    pub offset_m: [f32; 3],
     pub near_m: f32,
     pub far_m: f32,
     pub mipmaps: bool,

@@ -234,6 +234,7 @@ fn render_record(
             cube: CubeSettings {
                 face_size_px: args.cube_size.unwrap_or(cube.face_size_px),
                 format: format_name(cube.format),
+                offset_m: cube.offset_m.to_array(),
                 near_m: cube.near_m,
                 far_m: cube.far_m,
                 mipmaps: cube.mipmaps,

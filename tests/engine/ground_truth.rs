@@ -220,3 +220,49 @@ fn the_cube_path_says_its_colour_may_disagree() {
     }
     gpu.finish();
 }
+
+/// A renderer whose lookup changes remakes its ray map's passes for the new one: from the
+/// cube path to the trace and back, each frame's outputs are those of a renderer made with
+/// that lookup (the traced passes read the lookup's own set, which the switch replaces).
+#[test]
+fn switching_the_lookup_remakes_the_ray_map() {
+    let gpu = Gpu::with_features(specchio::render::lookups::features(Lookup::RayQuery));
+    let s = labelled(scene("scenes/thesis-room.toml"));
+    let options = RenderOptions {
+        lookup: Some(Lookup::Plain),
+        id_cube: true,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+    let readback = Readback {
+        views: true,
+        rays: true,
+        ..Default::default()
+    };
+    for (frame, lookup) in [Lookup::Plain, Lookup::RayQuery, Lookup::Plain]
+        .into_iter()
+        .enumerate()
+    {
+        r.scene.mirror.lookup = lookup;
+        let (_, images) = r.render_frame(frame as u64, 0.0, readback).expect("frame");
+        let ids: Vec<f32> = (images.sensor_ray_direction.expect("ids").pixels.iter())
+            .map(|p| p[3])
+            .collect();
+        let fresh = gpu_outputs(&gpu, &s, lookup);
+        let want = match lookup {
+            Lookup::RayQuery => GroundTruth::Traced,
+            _ => GroundTruth::Cube,
+        };
+        assert_eq!(r.sensor_ground_truth(), want);
+        assert_eq!(fresh.ground_truth.layers, want);
+        let fresh_ids: Vec<f32> = (fresh.ids.iter())
+            .map(|&id| if id == NO_ID { 0.0 } else { (id + 1) as f32 })
+            .collect();
+        assert!(
+            ids == fresh_ids,
+            "frame {frame} ({lookup}): the ids differ from a fresh renderer's"
+        );
+    }
+    drop(r);
+    gpu.finish();
+}

@@ -7,8 +7,8 @@
 //! As a quadric about its apex (s the height above it, α the half-angle between the axis and
 //! the flank): x² + z² − tan²α s² = 0, a = −tan²α, b = 0, the body cut at the apex (below it
 //! lies the other nappe) and at the rim. The viewpoint, where the cube map is rendered by
-//! default, is the centre of the smallest sphere that holds the mirror: inside the body, so
-//! the cube sees the room all around.
+//! default, is the centre of the smallest sphere that holds the mirror: inside the body (on
+//! the rim's disc, its boundary, for a cone no taller than its rim radius: α ≥ 45°).
 
 use super::quadric::Quadric;
 use super::{FieldUnit, MirrorShape, ShapeCamera, ShapeError, ShapeField, ShapeKind, Surface};

@@ -263,7 +263,7 @@ impl<'a> Reference<'a> {
     /// the surface a mirror sample's reflected ray really meets: what no single-layer cube
     /// lookup can see, however exact its search. 0 for a sample off the mirror.
     fn hidden_from_centre(&self, sample: &Sample) -> u32 {
-        if !sample.via_mirror {
+        if !sample.via_mirror || sample.missed {
             return 0;
         }
         // Render space is the mirror's; the BVH's space is shifted from it.
@@ -346,7 +346,8 @@ impl<'a> Reference<'a> {
             color: image(&|p, _| [p.color.x, p.color.y, p.color.z, 1.0]),
             direction: image(&|p, _| {
                 let from_cube = p.centre.reflected_hit - self.scene.cube.offset_m;
-                let d = if p.centre.via_mirror {
+                // A reflected ray that met nothing has no point to look at: 0, as the GPU's.
+                let d = if p.centre.via_mirror && !p.centre.missed {
                     from_cube.normalize_or_zero()
                 } else {
                     Vec3::ZERO

@@ -245,6 +245,9 @@ impl Renderer {
         if self.mirror.lookup() != self.scene.mirror.lookup {
             // The old lookup's pass may still be in use by the frames in flight.
             self.drain()?;
+            // The ray map's passes were chosen for the old lookup (and, traced, read its set):
+            // made again for the new one on the next frame that reads them.
+            self.sensor_rays = None;
         }
         self.mirror.follow(
             (&self.device, &self.resources, &self.cube, &self.submitter),

@@ -6,7 +6,9 @@
 //! bounded by the tangent cone from the eye (half-angle `asin(R / offset)`), and a camera ray
 //! at angle `theta` from the axis and azimuth `phi` reflects into a ray of the same azimuth
 //! whose elevation grows monotonically with `theta`, from -90 degrees (straight back down at
-//! the disc's centre) to `90 - asin(R / offset)` degrees (grazing, at the rim). Inverting that
+//! the disc's centre; a cone's rays beside its apex start at 90 degrees minus twice its
+//! half-angle) to `90 - asin(R / offset)` degrees (the sphere's grazing ray at its rim; a
+//! mirror with a rim: the rim's reflection). Inverting that
 //! one-dimensional map is all an unwrap needs; nothing about the disc is guessed.
 //!
 //! Angles: elevation `asin(d.y)` above the horizontal plane; azimuth `atan2(d.z, d.x)` in
@@ -92,16 +94,16 @@ impl SensorOptics {
     }
 
     /// The lowest elevation the mirror shows (radians): straight down where the mirror is
-    /// smooth on its axis (the ray up the axis comes straight back); a cone's apex is not, and
-    /// the rays beside it reflect only as low as its flank turns them.
+    /// smooth on its axis (the ray up the axis comes straight back); a quadric whose gradient
+    /// vanishes on the axis (b = 0: a cone's apex) is not, and the rays beside it reflect only
+    /// as low as its flank turns them: the limit, taken just beside the axis.
     pub fn min_elevation(&self) -> f64 {
-        const BESIDE_AXIS: f64 = 1e-9; // of the rim's parameter: far below a pixel
-        let e = self.reflected_elevation(BESIDE_AXIS * self.rim_parameter());
-        // A smooth mirror reflects the ray beside the axis within ~1e-9 rad of straight down.
-        if e < -std::f64::consts::FRAC_PI_2 + 1e-6 {
-            -std::f64::consts::FRAC_PI_2
-        } else {
-            e
+        match self.shape.quadric() {
+            Some(q) if q.b == 0.0 => {
+                const BESIDE_AXIS: f64 = 1e-9; // of the rim's parameter: far below a pixel
+                self.reflected_elevation(BESIDE_AXIS * self.rim_parameter())
+            }
+            _ => -std::f64::consts::FRAC_PI_2,
         }
     }
 
@@ -360,5 +362,14 @@ mod tests {
             let o = SensorOptics::at(&scene(rel), 0.0);
             assert_eq!(o.min_elevation(), -std::f64::consts::FRAC_PI_2, "{rel}");
         }
+        // Decided by the shape, not by how far a ray beside the axis turns: a paraboloid whose
+        // rim is 500 times its latus rectum (the loader allows 1000) is smooth there too.
+        let mut wide = SensorOptics::at(&scene(EVERY_SHAPE[2]), 0.0);
+        wide.shape = crate::mirror::Paraboloid {
+            latus_rectum_m: 0.002,
+            rim_radius_m: 1.0,
+        }
+        .shape();
+        assert_eq!(wide.min_elevation(), -std::f64::consts::FRAC_PI_2);
     }
 }

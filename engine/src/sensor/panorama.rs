@@ -5,11 +5,13 @@
 //! (`optics` module: 0 along +X, 90 along +Z). Row `i` (of `H`, row 0 at the top) is, at its
 //! centre,
 //! - longitude–latitude: elevation `e_top - (i + 0.5) / H * (e_top - e_bottom)`, linear in
-//!   the angle, over everything the mirror shows (`e_top` = 90 degrees minus the rim angle,
-//!   `e_bottom` = -90);
+//!   the angle, over everything the mirror shows (`e_top` its highest elevation, for the
+//!   sphere 90 degrees minus the rim angle; `e_bottom` its lowest: -90, or for a cone
+//!   90 - 2 x its half-angle, what the rays beside its apex show);
 //! - cylindrical: `tan(elevation) = tan(e_top) - (i + 0.5) / H * (tan(e_top) - tan(e_bottom))`,
 //!   the projection onto a vertical cylinder around the axis, over
-//!   [-45, min(45, highest shown)] degrees.
+//!   [max(-45, lowest shown), min(45, highest shown)] degrees (a cone's band that lies wholly
+//!   beyond 45 degrees: the band itself).
 //!
 //! Sizes: `W` is the disc's circumference in pixels rounded to a multiple of 4 (a column per
 //! pixel at the rim), and `H` keeps the columns' angular scale (lon–lat: `W * (e_top -
@@ -20,7 +22,8 @@
 //! `SensorOptics::pixel_seeing` gives for its direction (bilinear). That direction is a ray's
 //! direction, not a viewpoint: the mirror has none, and each column's rays leave different
 //! points of the sphere. From the cube map, the same direction is looked up from the cube's
-//! centre (bilinear within the face), as a central camera at the mirror's centre would see.
+//! centre (bilinear within the face), as a central camera there would see (the mirror's
+//! viewpoint, unless `cube.offset` moves the cube).
 
 use std::f64::consts::{FRAC_PI_4, TAU};
 
@@ -68,11 +71,17 @@ impl PanoramaLayout {
     pub fn for_sensor(optics: &SensorOptics, kind: PanoramaKind) -> Self {
         let rim = f64::from(optics.disc_radius_px());
         let width = ((TAU * rim / 4.0).round() as u32 * 4).clamp(4, MAX_WIDTH);
-        let top = optics.max_elevation();
+        let (top, lowest) = (optics.max_elevation(), optics.min_elevation());
         let (top, bottom) = match kind {
-            PanoramaKind::LonLat => (top, optics.min_elevation()),
+            PanoramaKind::LonLat => (top, lowest),
             PanoramaKind::Cylindrical => {
-                (top.min(FRAC_PI_4), optics.min_elevation().max(-FRAC_PI_4))
+                let (high, low) = (top.min(FRAC_PI_4), lowest.max(-FRAC_PI_4));
+                // A cone's band may lie wholly beyond 45 degrees: then the band itself.
+                if high > low {
+                    (high, low)
+                } else {
+                    (top, lowest)
+                }
             }
         };
         let span = match kind {
@@ -208,6 +217,39 @@ pub fn sample_cube(faces: &[RgbaImage], d: Vec3) -> [f32; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Cones whose band lies wholly above or below 45 degrees (half-angles 20 and 80: from
+    /// 50 degrees up, and from -70 to -48): both panoramas span the band, every row of them
+    /// inside it, so every row shows something.
+    #[test]
+    fn a_cones_band_beyond_45_degrees_is_the_cylinders_span() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let path = root.join("scenes/test/six-colour-room.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        for alpha in [20, 80] {
+            let cone = format!("shape = \"cone\"\nhalf_angle = {alpha}\nrim_radius = 1");
+            let text = text.replace("radius = 1.0", &cone);
+            let scene = crate::scene::load_str(&text, &path).unwrap();
+            let optics = SensorOptics::at(&scene, 0.0);
+            let (low, high) = (optics.min_elevation(), optics.max_elevation());
+            assert!(
+                low > FRAC_PI_4 || high < -FRAC_PI_4,
+                "α {alpha}: the band is beyond 45"
+            );
+            for kind in PanoramaKind::ALL {
+                let l = PanoramaLayout::for_sensor(&optics, kind);
+                assert!(l.height > 1, "α {alpha}, {kind:?}: {l:?}");
+                for row in 0..l.height {
+                    let e = l.elevation(f64::from(row) + 0.5);
+                    assert!(
+                        (low..=high).contains(&e) && optics.theta_for_elevation(e).is_some(),
+                        "α {alpha}, {kind:?}: row {row} at {} degrees",
+                        e.to_degrees()
+                    );
+                }
+            }
+        }
+    }
 
     /// A cube whose faces are each one flat colour returns that colour in the direction of
     /// the face's centre (the orientation comes from the face table, checked elsewhere).
