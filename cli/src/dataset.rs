@@ -43,8 +43,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Every input checked before the output folder exists.
     let scene = specchio::scene::load(&args.scene)?;
     let poses = trajectory::read(&args.trajectory)?;
+    let objects = dataset::ObjectBounds::of(&scene);
     for pose in &poses {
-        dataset::pose_fits(&scene, pose).map_err(|(field, why)| {
+        dataset::pose_fits(&scene, &objects, pose).map_err(|(field, why)| {
             TrajectoryError::invalid(&args.trajectory, Some(pose.at), field, why)
         })?;
     }
@@ -75,9 +76,12 @@ pub fn run(args: &Args) -> Result<ExitCode> {
                                    // The cube follows the mirror on every move: a policy that skips frames would show the
                                    // room from where the robot was.
     robot.refresh = RefreshPolicy::OnChange;
+    // Its far plane reaches the farthest room corner from every pose, not just the scene's.
+    robot.cube.far_m = dataset::far_plane(&scene, &poses);
     let options = RenderOptions {
         lookup: Some(lookup),
-        id_cube: true,
+        // The traced ray map needs no id cube.
+        id_cube: lookup != Lookup::RayQuery,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&device, robot, &options)?;
@@ -140,8 +144,7 @@ fn frame(
     (i, pose): (usize, &Pose),
 ) -> Result<SensorOutputs> {
     renderer.scene.mirror.center = dataset::local_position(scene, pose);
-    renderer.scene.sensor.heading_rad =
-        scene.sensor.heading_rad + pose.heading_deg.to_radians() as f32;
+    renderer.scene.sensor = dataset::turned_sensor(scene, pose);
     let readback = Readback {
         views: true,
         rays: true,

@@ -181,8 +181,9 @@ fn render_method(
         method,
         full_updates: args.full_updates,
         lookup: Some(lookup),
-        // Range and ids through the cube: only when asked for, so timings never pay.
-        id_cube: args.sensor_outputs,
+        // Range and ids through the cube: only when asked for, so timings never pay (the
+        // traced ray map of ray-query needs none).
+        id_cube: args.sensor_outputs && lookup != Lookup::RayQuery,
         trace_order: args.trace_order,
         ..Default::default()
     };

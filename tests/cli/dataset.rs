@@ -135,8 +135,9 @@ fn a_trajectory_makes_a_frame_per_pose_with_poses_in_both_frames() {
     );
 }
 
-/// A pose outside the room, a pose in an object and a broken trajectory are refused naming
-/// the file, line and field, with exit 1 and no output folder.
+/// A pose outside the room, a pose in an object (at the pose's own time: the orbiting ball
+/// reaches [0, 3, -3] at 2 s) and broken trajectories are refused naming the file, line or
+/// entry and field, with exit 1 and no output folder.
 #[test]
 fn a_pose_the_robot_cannot_take_is_refused_before_anything_is_written() {
     let scene = root().join("scenes/thesis-room.toml");
@@ -146,9 +147,16 @@ fn a_pose_the_robot_cannot_take_is_refused_before_anything_is_written() {
         ("time,x,y,z,heading\n0,0,3,0,0\n1,9,3,0,0\n", "robot.csv:3: position: the mirror (reaching 1 m) at [9, 3, 0] is not entirely inside the room"),
         ("time,x,y,z,heading\n0,0,3,0,0\n1,0,3,zero,0\n", "robot.csv:3: z: `zero` is not a number"),
         ("time,x,y,heading\n", "robot.csv:1: z: the header names no `z` column"),
+        ("[{\"time\": 0, \"position\": [0, 3, -3], \"heading\": 0}, {\"time\": 2, \"position\": [0, 3, -3], \"heading\": 0}]", "robot.json: poses[1]: position: the mirror at [0, 3, -3] (or the sensor's line of sight up to it) meets an object at t = 2 s"),
+        ("[{\"time\": 0, \"position\": [0, 3], \"heading\": 0}]", "robot.json: poses[0]: position: must be an array of 3 numbers"),
     ];
     for (text, want) in cases {
-        let trajectory = dir.join("robot.csv");
+        let name = if text.starts_with('[') {
+            "robot.json"
+        } else {
+            "robot.csv"
+        };
+        let trajectory = dir.join(name);
         std::fs::write(&trajectory, text).unwrap();
         let out = dir.join("set");
         let run = specchio(&[
@@ -164,4 +172,79 @@ fn a_pose_the_robot_cannot_take_is_refused_before_anything_is_written() {
         assert!(said.contains(want), "{text:?}: {said}");
         assert!(!out.exists());
     }
+}
+
+/// The heading turns the sensor about its axis, which points straight up: its image turns by
+/// the same angle about the image's centre (the mirror and the room stay), and the optical
+/// frame's orientation in ROS is the yaw composed with the unturned one.
+#[test]
+fn the_heading_turns_the_image_and_the_optical_frame() {
+    let scene = root().join("scenes/thesis-room.toml");
+    let dir = temp_dir("dataset-heading");
+    std::fs::create_dir_all(&*dir).unwrap();
+    let trajectory = dir.join("turn.json");
+    std::fs::write(
+        &trajectory,
+        r#"[{"time": 0, "position": [0, 3, 0], "heading": 0},
+            {"time": 0, "position": [0, 3, 0], "heading": 90}]"#,
+    )
+    .unwrap();
+    let out = dir.join("set");
+    let run = specchio(&[
+        "dataset",
+        scene.to_str().unwrap(),
+        "--trajectory",
+        trajectory.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let ids = |frame: &str| {
+        let c = read_channels(&out.join(frame).join("sensor.id.exr")).unwrap();
+        read_u32_channel(&c, "id").unwrap().to_vec()
+    };
+    let (a, b) = (ids("frames/000000"), ids("frames/000001"));
+    let n = (a.len() as f64).sqrt() as usize;
+    assert_eq!(n * n, a.len(), "a square image");
+    // The pixel (x, y) of the turned image against the unturned one turned either way.
+    let turned = |clockwise: bool| {
+        (0..n * n)
+            .filter(|&i| {
+                let (x, y) = (i % n, i / n);
+                let j = if clockwise {
+                    (n - 1 - x) * n + y
+                } else {
+                    x * n + (n - 1 - y)
+                };
+                b[i] == a[j]
+            })
+            .count() as f64
+            / (n * n) as f64
+    };
+    let best = turned(true).max(turned(false));
+    assert!(
+        best > 0.999,
+        "the turned image matches the unturned one turned on {best}"
+    );
+    assert!(a != b, "the heading changes the image");
+    let pose = |frame: &str| json(&out.join(frame).join("pose.json"));
+    let q = |frame: &str| {
+        let v = &pose(frame)["ros"]["camera_optical_quaternion_xyzw"];
+        glam::DQuat::from_xyzw(
+            v[0].as_f64().unwrap(),
+            v[1].as_f64().unwrap(),
+            v[2].as_f64().unwrap(),
+            v[3].as_f64().unwrap(),
+        )
+    };
+    let yaw = glam::DQuat::from_rotation_z(90f64.to_radians());
+    let (q0, q1) = (q("frames/000000"), q("frames/000001"));
+    assert!(
+        (yaw * q0).angle_between(q1) < 1e-6,
+        "{q0} turned is not {q1}"
+    );
 }

@@ -13,15 +13,49 @@ pub mod trajectory;
 use glam::{DMat3, Vec3};
 use serde::Serialize;
 
-use super::localise::poses::{is_clear, object_spheres};
+use super::localise::poses::object_spheres;
 use super::SensorOutputs;
 use crate::scene::state::SceneState;
 use crate::scene::Scene;
 use trajectory::Pose;
 
-/// Why the robot cannot stand at a pose: the field of the pose and a sentence.
-pub fn pose_fits(scene: &Scene, pose: &Pose) -> Result<(), (&'static str, String)> {
-    let local = (pose.position - scene.origin).as_vec3();
+/// Every object's bounding sphere about its own origin: its centre's offset (model space
+/// scaled, not yet rotated) and its radius, walked once over the mesh's vertices.
+pub struct ObjectBounds(Vec<(Vec3, f32)>);
+
+impl ObjectBounds {
+    pub fn of(scene: &Scene) -> Self {
+        let state = SceneState::at(scene, 0.0);
+        let at_zero = object_spheres(scene, &state);
+        // object_spheres gives position + rotation x centre: keep the centre relative to the
+        // object's origin, which is all a later time moves.
+        Self(
+            (at_zero.iter().zip(&state.object_positions))
+                .map(|(&(centre, reach), &position)| (centre - position, reach))
+                .collect(),
+        )
+    }
+
+    /// The spheres at time `t_s`.
+    fn at(&self, scene: &Scene, t_s: f64) -> Vec<(Vec3, f32)> {
+        let state = SceneState::at(scene, t_s);
+        (self.0.iter().zip(&state.object_positions))
+            .map(|(&(offset, reach), &position)| (position + offset, reach))
+            .collect()
+    }
+}
+
+/// Why the robot cannot stand at a pose: the field of the pose and a sentence. The robot is
+/// the mirror (its reach inside the room) with its sensor camera where the scene puts it below,
+/// turned by the heading (shift and all: above the floor, inside the room), and the capsule of
+/// the mirror's reach from the camera up to the mirror clear of every object at the pose's
+/// time (the localisation's rule, along the real line of sight).
+pub fn pose_fits(
+    scene: &Scene,
+    objects: &ObjectBounds,
+    pose: &Pose,
+) -> Result<(), (&'static str, String)> {
+    let local = local_position(scene, pose);
     let room = &scene.room;
     let (lo, hi) = (
         room.center - 0.5 * room.size_m,
@@ -39,26 +73,49 @@ pub fn pose_fits(scene: &Scene, pose: &Pose) -> Result<(), (&'static str, String
         );
         return Err(("position", why));
     }
-    let sensor_y = local.y + scene.sensor.eye().y;
-    if sensor_y <= lo.y {
-        let why = format!(
-            "puts the sensor at y = {}, below the floor at y = {}",
-            scene.origin.y + f64::from(sensor_y),
-            scene.origin.y + f64::from(lo.y)
-        );
+    let eye = local + turned_sensor(scene, pose).eye();
+    if eye.cmple(lo).any() || eye.cmpge(hi).any() {
+        let why = format!("puts the sensor at {}, outside the room", file(eye));
         return Err(("position", why));
     }
-    let state = SceneState::at(scene, pose.time_s);
-    let objects = object_spheres(scene, &state);
-    if !is_clear(scene, &objects, local) {
-        let why = format!(
-            "the mirror at {} (or the sensor's line of sight up to it) meets an object at t = {} s",
-            file(local),
-            pose.time_s
-        );
-        return Err(("position", why));
+    for (centre, reach) in objects.at(scene, pose.time_s) {
+        // Distance from the sphere's centre to the segment from the camera to the mirror.
+        let axis = local - eye;
+        let t = ((centre - eye).dot(axis) / axis.length_squared()).clamp(0.0, 1.0);
+        if (centre - (eye + t * axis)).length() <= r + reach {
+            let why = format!(
+                "the mirror at {} (or the sensor's line of sight up to it) meets an object at \
+                 t = {} s",
+                file(local),
+                pose.time_s
+            );
+            return Err(("position", why));
+        }
     }
     Ok(())
+}
+
+/// The scene's sensor turned by the pose's heading (on top of the scene's own).
+pub fn turned_sensor(scene: &Scene, pose: &Pose) -> crate::scene::SensorCamera {
+    let mut s = scene.sensor.clone();
+    s.heading_rad += pose.heading_deg.to_radians() as f32;
+    s
+}
+
+/// The cube's far plane that clips no room corner from any pose: the farthest corner from
+/// the cube's centre over the trajectory, with the loader's margin, and never nearer than the
+/// scene's own (moving the robot moves the cube; the scene's plane was set for its poses).
+pub fn far_plane(scene: &Scene, poses: &[Pose]) -> f32 {
+    const FAR_MARGIN: f64 = 1.01;
+    let half = scene.room.size_m.as_dvec3() * 0.5;
+    let room = scene.room.center.as_dvec3();
+    let farthest = (poses.iter())
+        .map(|p| {
+            let centre = (local_position(scene, p) + scene.cube.offset_m).as_dvec3();
+            ((room - centre).abs() + half).length()
+        })
+        .fold(0.0, f64::max);
+    scene.cube.far_m.max((farthest * FAR_MARGIN) as f32)
 }
 
 /// One frame's pose: the robot in the scene's frame and in ROS's, and its sensor camera.

@@ -13,7 +13,6 @@
 use std::path::{Path, PathBuf};
 
 use glam::DVec3;
-use serde::Deserialize;
 
 use crate::files::{read_regular_file, FileError};
 
@@ -82,15 +81,21 @@ pub fn read(path: &Path) -> Result<Vec<Pose>, TrajectoryError> {
         let at = e.utf8_error().valid_up_to();
         TrajectoryError::invalid(path, None, "(file)", format!("not UTF-8 text (byte {at})"))
     })?;
+    // A byte-order mark (spreadsheets write one) is not part of the first field.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let json = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("json"));
-    let poses = if json {
-        parse_json(path, &text)?
+    let mut poses = if json {
+        parse_json(path, text)?
     } else {
-        parse_csv(path, &text)?
+        parse_csv(path, text)?
     };
     check(path, &poses)?;
+    // One turn is enough: a heading of 1e6 degrees would lose its digits in single precision.
+    for p in &mut poses {
+        p.heading_deg = p.heading_deg.rem_euclid(360.0);
+    }
     Ok(poses)
 }
 
@@ -168,19 +173,13 @@ pub fn parse_csv(file: &Path, text: &str) -> Result<Vec<Pose>, TrajectoryError> 
     Ok(poses)
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct JsonPose {
-    time: f64,
-    position: [f64; 3],
-    heading: f64,
-}
-
 /// Parses JSON text (see the module's comment).
 pub fn parse_json(file: &Path, text: &str) -> Result<Vec<Pose>, TrajectoryError> {
-    let entries: Vec<JsonPose> = serde_json::from_str(text).map_err(|e| {
+    // The array first, then each entry: a mistake in an entry names it, on one line or many.
+    let entries: Vec<serde_json::Value> = serde_json::from_str(text).map_err(|e| {
         let line = Some(Place::Line(e.line()));
-        TrajectoryError::invalid(file, line, "(json)", e.to_string())
+        let why = format!("{e} (a trajectory is an array of poses)");
+        TrajectoryError::invalid(file, line, "(json)", why)
     })?;
     if entries.len() > MAX_POSES {
         let why = format!(
@@ -189,14 +188,51 @@ pub fn parse_json(file: &Path, text: &str) -> Result<Vec<Pose>, TrajectoryError>
         );
         return Err(TrajectoryError::invalid(file, None, "(file)", why));
     }
-    Ok((entries.into_iter().enumerate())
-        .map(|(i, p)| Pose {
-            at: Place::Entry(i),
-            time_s: p.time,
-            position: DVec3::from(p.position),
-            heading_deg: p.heading,
-        })
-        .collect())
+    (entries.iter().enumerate())
+        .map(|(i, entry)| json_pose(file, i, entry))
+        .collect()
+}
+
+/// One JSON entry: `{"time": s, "position": [x, y, z], "heading": deg}`, every field named
+/// where it is wrong.
+fn json_pose(file: &Path, i: usize, entry: &serde_json::Value) -> Result<Pose, TrajectoryError> {
+    let at = Some(Place::Entry(i));
+    let wrong = |field: &str, why: &str| TrajectoryError::invalid(file, at, field, why.into());
+    let fields = entry
+        .as_object()
+        .ok_or_else(|| wrong("(entry)", "must be an object {time, position, heading}"))?;
+    if let Some(extra) = fields
+        .keys()
+        .find(|k| !["time", "position", "heading"].contains(&k.as_str()))
+    {
+        return Err(wrong(
+            extra,
+            "unknown field (a pose has time, position, heading)",
+        ));
+    }
+    let number = |key: &str| -> Result<f64, TrajectoryError> {
+        match fields.get(key) {
+            None => Err(wrong(key, "required field is missing")),
+            Some(v) => v.as_f64().ok_or_else(|| wrong(key, "must be a number")),
+        }
+    };
+    let position = match fields.get("position").and_then(|v| v.as_array()) {
+        None if !fields.contains_key("position") => {
+            Err(wrong("position", "required field is missing"))
+        }
+        Some(a) if a.len() == 3 && a.iter().all(|c| c.as_f64().is_some()) => Ok(DVec3::new(
+            a[0].as_f64().unwrap(),
+            a[1].as_f64().unwrap(),
+            a[2].as_f64().unwrap(),
+        )),
+        _ => Err(wrong("position", "must be an array of 3 numbers [x, y, z]")),
+    }?;
+    Ok(Pose {
+        at: Place::Entry(i),
+        time_s: number("time")?,
+        position,
+        heading_deg: number("heading")?,
+    })
 }
 
 /// Refuses what no dataset can render: no pose, a number that is not finite, a negative
@@ -268,6 +304,24 @@ mod tests {
         assert_eq!(poses[1].heading_deg, 90.0);
     }
 
+    /// A byte-order mark before the header (spreadsheets write one) and headings of many
+    /// turns, read as the same turn.
+    #[test]
+    fn a_bom_is_skipped_and_headings_are_one_turn() {
+        let dir = std::env::temp_dir().join(format!("specchio-trajectory-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("bom.csv");
+        std::fs::write(
+            &path,
+            "\u{feff}time,x,y,z,heading\n0,1,3,2,-90\n1,1,3,2,1e6\n",
+        )
+        .unwrap();
+        let poses = read(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(poses[0].heading_deg, 270.0);
+        assert_eq!(poses[1].heading_deg, 1e6 % 360.0);
+    }
+
     #[test]
     fn json_poses_keep_their_entries() {
         let text = r#"[{"time": 0, "position": [1, 3, 2], "heading": 45}, {"time": 1, "position": [2, 3, 2], "heading": 0}]"#;
@@ -318,22 +372,18 @@ mod tests {
             let got = csv(text).unwrap_err().to_string();
             assert!(got.starts_with(want), "{text:?}: {got}");
         }
-        let err = parse_json(
-            Path::new("t.json"),
-            "[{\"time\": 0, \"position\": [1, 2], \"heading\": 0}]",
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(
-            err.starts_with("t.json:1: (json): invalid length 2"),
-            "{err}"
-        );
-        let err = parse_json(
-            Path::new("t.json"),
-            "[{\"time\": 0, \"position\": [1, 2, 3], \"heading\": 0, \"speed\": 1}]",
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(err.contains("unknown field `speed`"), "{err}");
+        let json = [
+            ("{}", "t.json:1: (json): invalid type: map"),
+            ("[{\"time\": 0, \"position\": [1, 2], \"heading\": 0}]", "t.json: poses[0]: position: must be an array of 3 numbers"),
+            ("[{\"time\": 0, \"position\": [1, 2, 3], \"heading\": 0, \"speed\": 1}]", "t.json: poses[0]: speed: unknown field"),
+            ("[{\"time\": 0, \"position\": [1, 2, 3], \"heading\": 0}, {\"time\": 1, \"position\": [1, 2, 3]}]", "t.json: poses[1]: heading: required field is missing"),
+            ("[{\"time\": \"0\", \"position\": [1, 2, 3], \"heading\": 0}]", "t.json: poses[0]: time: must be a number"),
+        ];
+        for (text, want) in json {
+            let got = parse_json(Path::new("t.json"), text)
+                .unwrap_err()
+                .to_string();
+            assert!(got.starts_with(want), "{text:?}: {got}");
+        }
     }
 }
