@@ -9,6 +9,29 @@ use common::{root, specchio, temp_dir};
 use specchio::sensor::files::{read_channels, read_u32_channel};
 use specchio::sensor::outputs::NO_ID;
 
+/// `specchio dataset` of the thesis room along `trajectory` (written into the scratch folder
+/// `dir` as `name`), into `dir/set`: the run and the output folder.
+fn dataset(
+    dir: &std::path::Path,
+    name: &str,
+    trajectory: &str,
+) -> (std::process::Output, std::path::PathBuf) {
+    let scene = root().join("scenes/thesis-room.toml");
+    std::fs::create_dir_all(dir).unwrap();
+    let file = dir.join(name);
+    std::fs::write(&file, trajectory).unwrap();
+    let out = dir.join("set");
+    let (s, t, o) = (
+        scene.to_str().unwrap(),
+        file.to_str().unwrap(),
+        out.to_str().unwrap(),
+    );
+    (
+        specchio(&["dataset", s, "--trajectory", t, "--out", o]),
+        out,
+    )
+}
+
 fn json(path: &std::path::Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
@@ -19,29 +42,20 @@ fn json(path: &std::path::Path) -> serde_json::Value {
 /// the scene's own pose is `render --sensor-outputs`'s, id for id.
 #[test]
 fn a_trajectory_makes_a_frame_per_pose_with_poses_in_both_frames() {
-    let scene = root().join("scenes/thesis-room.toml");
     let dir = temp_dir("dataset");
-    std::fs::create_dir_all(&*dir).unwrap();
-    let trajectory = dir.join("robot.csv");
-    std::fs::write(
-        &trajectory,
+    let (run, out) = dataset(
+        &dir,
+        "robot.csv",
         "# the robot's path\ntime,x,y,z,heading\n0,0,3,0,0\n0.5,1,3,0.5,45\n1,1.5,3,1,90\n",
-    )
-    .unwrap();
-    let out = dir.join("set");
-    let render = dir.join("render");
-    let (s, t, o, r) = (
-        scene.to_str().unwrap(),
-        trajectory.to_str().unwrap(),
-        out.to_str().unwrap(),
-        render.to_str().unwrap(),
     );
-    let run = specchio(&["dataset", s, "--trajectory", t, "--out", o]);
     assert!(
         run.status.success(),
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
+    let scene = root().join("scenes/thesis-room.toml");
+    let render = dir.join("render");
+    let (s, r) = (scene.to_str().unwrap(), render.to_str().unwrap());
     let record = json(&out.join("dataset.json"));
     assert_eq!(record["frames"], 3);
     let index = std::fs::read_to_string(out.join("index.jsonl")).unwrap();
@@ -140,9 +154,7 @@ fn a_trajectory_makes_a_frame_per_pose_with_poses_in_both_frames() {
 /// entry and field, with exit 1 and no output folder.
 #[test]
 fn a_pose_the_robot_cannot_take_is_refused_before_anything_is_written() {
-    let scene = root().join("scenes/thesis-room.toml");
     let dir = temp_dir("dataset-bad");
-    std::fs::create_dir_all(&*dir).unwrap();
     let cases = [
         ("time,x,y,z,heading\n0,0,3,0,0\n1,9,3,0,0\n", "robot.csv:3: position: the mirror (reaching 1 m) at [9, 3, 0] is not entirely inside the room"),
         ("time,x,y,z,heading\n0,0,3,0,0\n1,0,3,zero,0\n", "robot.csv:3: z: `zero` is not a number"),
@@ -156,17 +168,7 @@ fn a_pose_the_robot_cannot_take_is_refused_before_anything_is_written() {
         } else {
             "robot.csv"
         };
-        let trajectory = dir.join(name);
-        std::fs::write(&trajectory, text).unwrap();
-        let out = dir.join("set");
-        let run = specchio(&[
-            "dataset",
-            scene.to_str().unwrap(),
-            "--trajectory",
-            trajectory.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let (run, out) = dataset(&dir, name, text);
         assert_eq!(run.status.code(), Some(1), "{text:?}");
         let said = String::from_utf8_lossy(&run.stderr);
         assert!(said.contains(want), "{text:?}: {said}");
@@ -179,25 +181,13 @@ fn a_pose_the_robot_cannot_take_is_refused_before_anything_is_written() {
 /// frame's orientation in ROS is the yaw composed with the unturned one.
 #[test]
 fn the_heading_turns_the_image_and_the_optical_frame() {
-    let scene = root().join("scenes/thesis-room.toml");
     let dir = temp_dir("dataset-heading");
-    std::fs::create_dir_all(&*dir).unwrap();
-    let trajectory = dir.join("turn.json");
-    std::fs::write(
-        &trajectory,
+    let (run, out) = dataset(
+        &dir,
+        "turn.json",
         r#"[{"time": 0, "position": [0, 3, 0], "heading": 0},
             {"time": 0, "position": [0, 3, 0], "heading": 90}]"#,
-    )
-    .unwrap();
-    let out = dir.join("set");
-    let run = specchio(&[
-        "dataset",
-        scene.to_str().unwrap(),
-        "--trajectory",
-        trajectory.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    );
     assert!(
         run.status.success(),
         "{}",

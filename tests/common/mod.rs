@@ -483,3 +483,48 @@ pub fn mirror_mask_disagreements(raster: &RgbaImage, exact: &RgbaImage) -> (usiz
         .count();
     (off_rim, mask.iter().filter(|&&m| m).count())
 }
+
+/// The GPU's sensor outputs of `s` at time 0 with `options` (frame 0; the renderer's lookup
+/// names the colour, its ray map says where range and ids came from).
+pub fn gpu_sensor_outputs(
+    gpu: &Gpu,
+    s: &Scene,
+    options: &RenderOptions,
+) -> specchio::sensor::SensorOutputs {
+    let mut r = Renderer::new(&gpu.device, s.clone(), options).expect("renderer");
+    let readback = Readback {
+        views: true,
+        rays: true,
+        ..Default::default()
+    };
+    let (_, images) = r.render_frame(0, 0.0, readback).expect("frame");
+    let truth = r.sensor_ground_truth();
+    let lookup = r.scene.mirror.lookup.to_string();
+    specchio::sensor::SensorOutputs::from_gpu(
+        s,
+        0.0,
+        (&lookup, truth),
+        images.sensor.expect("the sensor's image"),
+        (
+            &images.sensor_ray_origin.expect("ray origins"),
+            &images.sensor_ray_direction.expect("ray directions"),
+        ),
+        None,
+    )
+}
+
+/// The sensor's image of `s` at 0.5 s, its cube `cube_size`² filled by `method`.
+pub fn sensor_image(gpu: &Gpu, s: &Scene, method: Method, cube_size: u32) -> RgbaImage {
+    let options = RenderOptions {
+        cube_size: Some(cube_size),
+        method,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+    let views = Readback {
+        views: true,
+        ..Default::default()
+    };
+    let (_, images) = r.render_frame(0, 0.5, views).expect("frame");
+    images.sensor.expect("the sensor's image")
+}

@@ -122,26 +122,7 @@ fn the_cube_paths_range_and_ids_hold_from_a_moved_centre() {
         id_cube: true,
         ..Default::default()
     };
-    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
-    let readback = Readback {
-        views: true,
-        rays: true,
-        ..Default::default()
-    };
-    let (_, images) = r.render_frame(0, 0.0, readback).expect("frame");
-    let truth = r.sensor_ground_truth();
-    let out = SensorOutputs::from_gpu(
-        &s,
-        0.0,
-        ("plain", truth),
-        images.sensor.expect("sensor"),
-        (
-            &images.sensor_ray_origin.expect("origins"),
-            &images.sensor_ray_direction.expect("ids"),
-        ),
-        None,
-    );
-    drop(r);
+    let out = common::gpu_sensor_outputs(&gpu, &s, &options);
     gpu.finish();
     let reference = Reference::new(&s, 0.0);
     let [w, h] = s.sensor.resolution;
@@ -185,20 +166,7 @@ fn the_cube_paths_range_and_ids_hold_from_a_moved_centre() {
 fn every_method_fills_the_same_moved_cube() {
     let (gpu, methods) = Gpu::with_all_methods();
     let s = moved("scenes/furnished-room.toml", [0.2, -0.3, 0.25]);
-    let sensor = |method| {
-        let options = RenderOptions {
-            cube_size: Some(64),
-            method,
-            ..Default::default()
-        };
-        let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
-        let views = Readback {
-            views: true,
-            ..Default::default()
-        };
-        let (_, images) = r.render_frame(0, 0.5, views).expect("frame");
-        images.sensor.expect("the sensor's image").pixels
-    };
+    let sensor = |method| common::sensor_image(&gpu, &s, method, 64).pixels;
     let first = sensor(methods[0]);
     for &method in &methods[1..] {
         assert!(

@@ -68,21 +68,7 @@ fn gpu_outputs(gpu: &Gpu, s: &Scene, lookup: Lookup) -> SensorOutputs {
         id_cube: true,
         ..Default::default()
     };
-    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
-    let readback = Readback {
-        views: true,
-        rays: true,
-        ..Default::default()
-    };
-    let (_, images) = r.render_frame(0, 0.0, readback).expect("frame");
-    let truth = r.sensor_ground_truth();
-    let (origin, direction) = (
-        images.sensor_ray_origin.expect("ray origins"),
-        images.sensor_ray_direction.expect("ray directions"),
-    );
-    let sensor = images.sensor.expect("the sensor's image");
-    let name = lookup.to_string();
-    SensorOutputs::from_gpu(s, 0.0, (&name, truth), sensor, (&origin, &direction), None)
+    common::gpu_sensor_outputs(gpu, s, &options)
 }
 
 /// Per label of `truth` over more than [`MIN_PIXELS`] pixels, the IoU of `labels`' region

@@ -9,7 +9,7 @@ mod common;
 
 use common::{devices, lookup_directions, mirror_mask_disagreements, scene, Gpu};
 use specchio::reference::angular::{angles_deg, summarize, AngularError};
-use specchio::render::{Readback, RenderOptions, Renderer, RgbaImage};
+use specchio::render::RgbaImage;
 use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::OptionalFeatures;
 
@@ -177,20 +177,7 @@ fn every_method_fills_the_same_cube_for_every_mirror_shape() {
         "scenes/conical-room.toml",
     ] {
         let s = scene(rel);
-        let sensor = |method| {
-            let options = RenderOptions {
-                cube_size: Some(64),
-                method,
-                ..Default::default()
-            };
-            let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
-            let views = Readback {
-                views: true,
-                ..Default::default()
-            };
-            let (_, images) = r.render_frame(0, 0.5, views).expect("frame");
-            images.sensor.expect("the sensor's image")
-        };
+        let sensor = |method| common::sensor_image(&gpu, &s, method, 64);
         let first = sensor(methods[0]);
         assert!(finite(&first));
         for &method in &methods[1..] {
