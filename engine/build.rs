@@ -43,34 +43,37 @@ fn stage_of(name: &str) -> Option<ShaderStage> {
     })
 }
 
-/// One module built from a source file: its name (None: the file's own) and its define.
-type Build = (Option<String>, Option<String>);
+/// One module built from a source file: its name (None: the file's own) and its defines.
+type Build = (Option<String>, Vec<String>);
 
 /// What one source file is built into: its `// build: MODULE=DEFINE ...` line, where a shader
 /// that is one technique with several outputs (a lookup's colour and its direction) names each
-/// module it makes and the define that selects its output; the file itself (no define)
-/// without such a line. A module `mirror_direction` of `mirror.frag.glsl` becomes the
+/// module it makes and the define that selects its output (`MODULE=A+B`: several defines, an
+/// output and a variant of how it is found); the file itself (no define) without such a line. A module `mirror_direction` of `mirror.frag.glsl` becomes the
 /// constant `MIRROR_DIRECTION_FRAG`.
 fn variants(text: &str) -> Result<Vec<Build>, String> {
     let Some(line) = text
         .lines()
         .find_map(|l| l.trim().strip_prefix("// build:"))
     else {
-        return Ok(vec![(None, None)]);
+        return Ok(vec![(None, Vec::new())]);
     };
     let mut builds = Vec::new();
     for item in line.split_whitespace() {
-        let (module, define) = item
+        let (module, defines) = item
             .split_once('=')
             .ok_or_else(|| format!("`{item}` in its `// build:` line is not MODULE=DEFINE"))?;
         let word =
             |w: &str| !w.is_empty() && w.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-        if !word(module) || !word(define) {
+        // MODULE=A+B: several defines (one technique's output and a variant of its inputs).
+        let defines: Vec<&str> = defines.split('+').collect();
+        if !word(module) || !defines.iter().all(|d| word(d)) {
             return Err(format!(
                 "`{item}` in its `// build:` line: letters, digits and _ only"
             ));
         }
-        builds.push((Some(module.to_owned()), Some(define.to_owned())));
+        let defines = defines.iter().map(|d| d.to_string()).collect();
+        builds.push((Some(module.to_owned()), defines));
     }
     if builds.is_empty() {
         return Err("its `// build:` line names no module".into());
@@ -133,24 +136,25 @@ fn main() {
         };
         let source = ShaderSource::from(text);
         for (module, define) in builds {
+            let pairs: Vec<(&str, Option<&str>)> =
+                define.iter().map(|d| (d.as_str(), None)).collect();
             let mut includes = Includes {
                 dir: include_dir.clone(),
             };
-            let defines = define.as_deref().map(|d| [(d, None::<&str>)]);
             let compiled = ShaderInput::new(
                 &source,
                 stage,
                 &options,
-                defines.as_ref().map(|d| &d[..]),
+                (!pairs.is_empty()).then_some(&pairs[..]),
                 Some(&mut includes),
             )
             .and_then(|input| compiler.create_shader(input))
             .and_then(|shader| shader.compile());
             let base = name.split('.').next().unwrap_or(&name);
             let module = module.unwrap_or_else(|| base.to_owned());
-            let built = match &define {
-                Some(d) => format!("`shaders/{name}` with `{d}` defined"),
-                None => format!("`shaders/{name}`"),
+            let built = match define.is_empty() {
+                false => format!("`shaders/{name}` with `{}` defined", define.join("`, `")),
+                true => format!("`shaders/{name}`"),
             };
             match compiled {
                 Ok(words) => {

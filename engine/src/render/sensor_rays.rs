@@ -4,7 +4,7 @@
 //! is every lookup's (`mirror_hit`, `reflect`); what it meets comes from one of two places
 //! ([`GroundTruth`]):
 //!
-//! - traced (`mirror_ray_traced.frag.glsl`), when the lookup is `ray-query`: through the
+//! - traced (`mirror_ray.frag.glsl` built with `TRACED`), when the lookup is `ray-query`: through the
 //!   lookup's own acceleration structure and set, exactly as the colour pass's trace, so the
 //!   colour, the range and the ids of a frame come from one light path;
 //! - through the cube (`mirror_ray.frag.glsl`, `shaders/include/sensor_ray.glsl`) otherwise:

@@ -351,6 +351,11 @@ pub enum CubeFormat {
     Rgba8Unorm,
 }
 
+/// The default far plane, as a multiple of the farthest room corner's distance from the cube's
+/// centre (a margin so that rounding never clips the corner itself). Nothing outside the room
+/// can be seen.
+pub const FAR_MARGIN: f32 = 1.01;
+
 /// When the cube map is re-rendered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RefreshPolicy {

@@ -10,7 +10,7 @@ pub enum GroundTruth {
     /// The CPU reference: every layer from the exact paths the colour samples too.
     Reference,
     /// Traced on the GPU along the colour pass's own reflected ray (the `ray-query` lookup,
-    /// `shaders/mirror_ray_traced.frag.glsl`): exact, and the colour shows what the ids say.
+    /// `shaders/mirror_ray.frag.glsl` built with `TRACED`): exact, and the colour shows what the ids say.
     Traced,
     /// Searched through the cube's depth and read from the id cube (every other lookup,
     /// `shaders/include/sensor_ray.glsl`): exact only where the cube's centre saw what the

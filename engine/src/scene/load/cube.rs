@@ -16,9 +16,7 @@ use glam::Vec3;
 /// corners (near x sqrt 3 away, 90-degree faces) stay inside it clips nothing that can be
 /// seen. 0.5 puts them at 0.87 of the clearance (of the radius, for a cube at the viewpoint).
 const NEAR_PER_RADIUS: f32 = 0.5;
-/// The default far plane, as a multiple of the farthest room corner's distance (a margin so
-/// that rounding never clips the corner itself). Nothing outside the room can be seen.
-const FAR_MARGIN: f32 = 1.01;
+use crate::scene::FAR_MARGIN;
 
 impl Ctx<'_> {
     /// `extent` is how far the room reaches from the mirror (see `room.rs`).

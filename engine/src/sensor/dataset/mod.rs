@@ -106,7 +106,6 @@ pub fn turned_sensor(scene: &Scene, pose: &Pose) -> crate::scene::SensorCamera {
 /// the cube's centre over the trajectory, with the loader's margin, and never nearer than the
 /// scene's own (moving the robot moves the cube; the scene's plane was set for its poses).
 pub fn far_plane(scene: &Scene, poses: &[Pose]) -> f32 {
-    const FAR_MARGIN: f64 = 1.01;
     let half = scene.room.size_m.as_dvec3() * 0.5;
     let room = scene.room.center.as_dvec3();
     let farthest = (poses.iter())
@@ -115,7 +114,8 @@ pub fn far_plane(scene: &Scene, poses: &[Pose]) -> f32 {
             ((room - centre).abs() + half).length()
         })
         .fold(0.0, f64::max);
-    scene.cube.far_m.max((farthest * FAR_MARGIN) as f32)
+    let margin = f64::from(crate::scene::FAR_MARGIN);
+    scene.cube.far_m.max((farthest * margin) as f32)
 }
 
 /// One frame's pose: the robot in the scene's frame and in ROS's, and its sensor camera.
