@@ -30,7 +30,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
-use specchio::output::Transaction;
+use specchio::output::{Sink, Transaction};
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 use crate::gate::Baseline;

@@ -6,7 +6,7 @@ use std::process::Command;
 
 use anyhow::Result;
 use serde::Serialize;
-use specchio::output::Transaction;
+use specchio::output::{Sink, Transaction};
 
 use super::record::{Accuracy, Git, MethodRow, Record, RungRow, Stats};
 

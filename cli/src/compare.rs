@@ -11,7 +11,7 @@ use specchio::metrics::{
     self, Comparison, FLIP_PERCENTILE, FLIP_PIXELS_PER_DEGREE, MASK_THRESHOLD, PSNR_PEAK,
     REL_MSE_EPSILON,
 };
-use specchio::output::Transaction;
+use specchio::output::{Sink, Transaction};
 use specchio::reference::angular;
 
 #[derive(clap::Args)]

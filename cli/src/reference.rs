@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
-use specchio::output::Transaction;
+use specchio::output::{Sink, Transaction};
 use specchio::reference::{Reference, ReferenceImages, ReferenceStats, MAX_SPP};
 use specchio::sensor::SensorOutputs;
 

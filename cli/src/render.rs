@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
-use specchio::output::Transaction;
+use specchio::output::{Sink, Transaction};
 use specchio::render::lookups::{self, TraceOrder};
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};

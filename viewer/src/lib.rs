@@ -21,7 +21,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
-use specchio::output::Transaction;
+use specchio::output::{Sink, Transaction};
 use specchio::render::lookups;
 use specchio::render::methods::Method;
 use specchio::scene::Lookup;

@@ -18,7 +18,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
 use specchio::files::{read_regular_file, MAX_SCENE_BYTES};
-use specchio::output::Transaction;
+use specchio::output::{Sink, Transaction};
 use specchio::render::lookups;
 use specchio::render::methods::Method;
 use specchio::render::RenderOptions;

@@ -8,16 +8,18 @@
 mod dir;
 mod numbered;
 mod replace;
+mod sink;
 mod stage;
 mod staged;
 mod sys;
 mod transaction;
 
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::image::{exr, png, RgbaImage};
 
+pub use sink::{json_text, MemoryFiles, Sink};
 pub use staged::MANIFEST;
 pub use transaction::Transaction;
 
@@ -119,7 +121,7 @@ pub(crate) fn exr_error(path: &Path, e: exr::Error) -> OutputError {
     }
 }
 
-fn png_error(path: &Path, e: png::EncodingError) -> OutputError {
+pub(crate) fn png_error(path: &Path, e: png::EncodingError) -> OutputError {
     match e {
         png::EncodingError::IoError(source) => OutputError::Io {
             path: path.to_owned(),
@@ -132,46 +134,8 @@ fn png_error(path: &Path, e: png::EncodingError) -> OutputError {
     }
 }
 
-impl Transaction {
-    /// Linear RGBA, 32-bit float, as OpenEXR at `path` (staged in this transaction).
-    pub fn write_exr(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
-        let file = self.create(path)?;
-        exr::encode_rgba(BufWriter::new(file), image).map_err(|e| exr_error(path, e))
-    }
-
-    /// An 8-bit sRGB RGB preview of a linear image.
-    pub fn write_png(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
-        self.write_png_rgb8(path, image.width, image.height, &png::srgb8_rgb(image))
-    }
-
-    /// An 8-bit sRGB RGB PNG from bytes already encoded (3 per pixel, rows top to bottom),
-    /// e.g. a colour-mapped error heatmap.
-    pub fn write_png_rgb8(
-        &self,
-        path: &Path,
-        width: u32,
-        height: u32,
-        rgb8: &[u8],
-    ) -> Result<(), OutputError> {
-        let file = self.create(path)?;
-        png::encode_rgb8(BufWriter::new(file), width, height, rgb8).map_err(|e| png_error(path, e))
-    }
-
-    /// JSON of any serialisable record, pretty-printed, with a final newline.
-    pub fn write_json<T: serde::Serialize + ?Sized>(
-        &self,
-        path: &Path,
-        value: &T,
-    ) -> Result<(), OutputError> {
-        let text = serde_json::to_string_pretty(value).map_err(|e| OutputError::Encode {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })?;
-        self.write_bytes(path, (text + "\n").as_bytes())
-    }
-
-    /// Bytes as they are (CSV, SVG, ...).
-    pub fn write_bytes(&self, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+impl Sink for Transaction {
+    fn write_bytes(&self, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         let mut file = self.create(path)?;
         file.write_all(bytes)
             .and_then(|()| file.flush())

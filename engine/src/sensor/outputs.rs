@@ -7,14 +7,14 @@ use std::path::Path;
 use glam::{Mat3, Quat, Vec3};
 use serde::Serialize;
 
-use super::files::{write_channels, Samples};
+use super::files::Samples;
 use super::ground_truth::{GroundTruth, GroundTruthRecord};
 use super::optics::SensorOptics;
 use super::panorama::{PanoramaKind, PanoramaLayout};
 use super::ray_map::{PixelRay, RayMap};
 use crate::image::RgbaImage;
 use crate::mirror::MirrorShape;
-use crate::output::{OutputError, Transaction};
+use crate::output::{OutputError, Sink};
 use crate::reference::ReferenceImages;
 use crate::scene::Scene;
 
@@ -191,7 +191,7 @@ impl SensorOutputs {
 
     /// Writes every output into `dir` (staged in `out`): the ray map, range, ids, panoramas
     /// (EXR and PNG) and `camera.json`.
-    pub fn write(&self, out: &Transaction, dir: &Path) -> Result<(), OutputError> {
+    pub fn write(&self, out: &impl Sink, dir: &Path) -> Result<(), OutputError> {
         let (w, h) = (self.rays.width, self.rays.height);
         let ray_channels = RAY_CHANNELS
             .iter()
@@ -211,11 +211,11 @@ impl SensorOutputs {
                 (*name, Samples::F32(v))
             })
             .collect();
-        write_channels(out, &dir.join(RAYS_FILE), (w, h), ray_channels)?;
+        out.write_channels(&dir.join(RAYS_FILE), (w, h), ray_channels)?;
         let range = vec![("range", Samples::F32(self.range.clone()))];
-        write_channels(out, &dir.join(RANGE_FILE), (w, h), range)?;
+        out.write_channels(&dir.join(RANGE_FILE), (w, h), range)?;
         let ids = vec![("id", Samples::U32(self.ids.clone()))];
-        write_channels(out, &dir.join(ID_FILE), (w, h), ids)?;
+        out.write_channels(&dir.join(ID_FILE), (w, h), ids)?;
         out.write_json(&dir.join(ID_MAP_FILE), &self.id_map)?;
         let mut panoramas = Vec::new();
         for (name, layout, image) in self.panoramas() {

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use crate::image::RgbaImage;
-use crate::output::{OutputError, Transaction};
+use crate::output::{OutputError, Sink, Transaction};
 use crate::sensor::RayMap;
 
 use super::record::{CalibrationRecord, CheckPoints, FrameRecord, ModelRecord};

@@ -4,11 +4,13 @@
 //!
 //! This module holds what does not need a GPU: the trajectory ([`trajectory`]), the frames'
 //! transform ([`rep103`]), the point clouds ([`ply`]), the check that a pose can be rendered
-//! ([`pose_fits`]) and the records. The command in `cli/src/dataset.rs` renders the frames.
+//! ([`pose_fits`]) and the records;
+//! [`writer`] renders the frames, for the command and for the Python package.
 
 pub mod ply;
 pub mod rep103;
 pub mod trajectory;
+pub mod writer;
 
 use glam::{DMat3, Vec3};
 use serde::Serialize;
@@ -102,20 +104,14 @@ pub fn turned_sensor(scene: &Scene, pose: &Pose) -> crate::scene::SensorCamera {
     s
 }
 
-/// The cube's far plane that clips no room corner from any pose: the farthest corner from
-/// the cube's centre over the trajectory, with the loader's margin, and never nearer than the
-/// scene's own (moving the robot moves the cube; the scene's plane was set for its poses).
-pub fn far_plane(scene: &Scene, poses: &[Pose]) -> f32 {
-    let half = scene.room.size_m.as_dvec3() * 0.5;
-    let room = scene.room.center.as_dvec3();
-    let farthest = (poses.iter())
-        .map(|p| {
-            let centre = (local_position(scene, p) + scene.cube.offset_m).as_dvec3();
-            ((room - centre).abs() + half).length()
-        })
-        .fold(0.0, f64::max);
-    let margin = f64::from(crate::scene::FAR_MARGIN);
-    scene.cube.far_m.max((farthest * margin) as f32)
+/// The cube's far plane that clips no room corner from anywhere the robot can stand: the
+/// mirror stands inside the room ([`pose_fits`]), so no corner is farther from the cube's
+/// centre than the room's diagonal plus the cube's offset; with the loader's margin, and never
+/// nearer than the scene's own. One plane for every pose, so that a frame is the same however
+/// the poses around it are chosen (a dataset's shards, the Python renderer's batches).
+pub fn far_plane(scene: &Scene) -> f32 {
+    let reach = scene.room.size_m.length() + scene.cube.offset_m.length();
+    scene.cube.far_m.max(reach * crate::scene::FAR_MARGIN)
 }
 
 /// One frame's pose: the robot in the scene's frame and in ROS's, and its sensor camera.

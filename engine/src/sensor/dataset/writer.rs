@@ -1,0 +1,291 @@
+//! Rendering a dataset, in parts that two drivers put together:
+//! - [`Plan`]: the scene and the trajectory, every pose checked before anything is rendered;
+//! - [`FrameWriter`]: a renderer whose mirror (the robot) stands at each pose in turn, giving a
+//!   frame's files in memory ([`Frame`]);
+//! - [`finish`]: the index and the summary, written last.
+//!
+//! `specchio dataset` runs them in one process; the Python package's Ray driver runs one
+//! `FrameWriter` per worker over shards of the poses and writes what they return. A frame's
+//! bytes depend only on the plan, the lookup, the device and the frame's index and pose (never
+//! on which frames a writer rendered before it), so both give the same files, byte for byte.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use super::trajectory::{self, Pose, TrajectoryError};
+use super::{DatasetRecord, IndexLine, PoseRecord};
+use crate::memory::MemoryError;
+use crate::output::{MemoryFiles, OutputError, Sink, Transaction};
+use crate::process::interrupt::Interrupted;
+use crate::render::{lookups, Readback, RenderOptions, Renderer};
+use crate::scene::{Lookup, RefreshPolicy, Scene, SceneError};
+use crate::sensor::{GroundTruth, SensorOutputs};
+use crate::vk::device::Device;
+use crate::vk::physical::DeviceInfo;
+use crate::vk::GpuError;
+
+/// Why a dataset could not be made. Each names its file (and line and field, where the input
+/// has them) or the device.
+#[derive(Debug, thiserror::Error)]
+pub enum DatasetError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error(transparent)]
+    Trajectory(#[from] TrajectoryError),
+    #[error("{path}: {source}")]
+    Memory { path: PathBuf, source: MemoryError },
+    #[error("lookup {lookup} cannot run on {device}: {why}")]
+    Lookup {
+        lookup: Lookup,
+        device: String,
+        why: String,
+    },
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    #[error(transparent)]
+    Interrupted(#[from] Interrupted),
+    #[error("frame {frame}: its sensor layers were not read back (a bug)")]
+    NotReadBack { frame: usize },
+}
+
+/// A dataset to render: the scene, its path and the trajectory's, and the poses, each checked.
+pub struct Plan {
+    pub scene: Scene,
+    pub scene_path: PathBuf,
+    pub trajectory_path: PathBuf,
+    pub poses: Vec<Pose>,
+}
+
+impl Plan {
+    /// Reads the scene and the trajectory and checks that the robot can stand at every pose
+    /// and that the renderer fits in memory: every input is checked before any output exists.
+    pub fn read(scene_path: &Path, trajectory_path: &Path) -> Result<Plan, DatasetError> {
+        let scene = crate::scene::load(scene_path)?;
+        let poses = trajectory::read(trajectory_path)?;
+        let objects = super::ObjectBounds::of(&scene);
+        for pose in &poses {
+            super::pose_fits(&scene, &objects, pose).map_err(|(field, why)| {
+                TrajectoryError::invalid(trajectory_path, Some(pose.at), field, why)
+            })?;
+        }
+        crate::memory::estimates::render(&scene, scene.cube.face_size_px, false, true).map_err(
+            |source| DatasetError::Memory {
+                path: scene_path.to_owned(),
+                source,
+            },
+        )?;
+        Ok(Plan {
+            scene,
+            scene_path: scene_path.to_owned(),
+            trajectory_path: trajectory_path.to_owned(),
+            poses,
+        })
+    }
+
+    /// The summary of this dataset rendered with `lookup`, whose range and ids come from
+    /// `truth`.
+    pub fn record(&self, lookup: Lookup, truth: GroundTruth) -> DatasetRecord {
+        DatasetRecord {
+            scene: self.scene_path.display().to_string(),
+            trajectory: self.trajectory_path.display().to_string(),
+            frames: self.poses.len(),
+            lookup: lookup.to_string(),
+            ground_truth: truth,
+            index: INDEX_FILE,
+            scene_origin_m: self.scene.origin.to_array(),
+            scene_to_ros: super::scene_to_ros_rows(),
+            frame_files: super::FRAME_FILES,
+        }
+    }
+}
+
+/// The index a data loader reads: one JSON line per frame.
+pub const INDEX_FILE: &str = "index.jsonl";
+/// The dataset's summary, written last; also the mark of an earlier dataset folder.
+pub const SUMMARY_FILE: &str = "dataset.json";
+
+/// The colour image's lookup: the one asked for, else ray-query where the device has it (so
+/// that colour, range and ids follow one light path), else the scene's. A lookup the device
+/// cannot run is an error naming what it lacks.
+pub fn choose_lookup(
+    asked: Option<Lookup>,
+    scene: &Scene,
+    device: &DeviceInfo,
+) -> Result<Lookup, DatasetError> {
+    let lookup = match asked {
+        Some(l) => l,
+        None if lookups::missing_features(Lookup::RayQuery, device).is_none() => Lookup::RayQuery,
+        None => scene.mirror.lookup,
+    };
+    match lookups::missing_features(lookup, device) {
+        Some(why) => Err(DatasetError::Lookup {
+            lookup,
+            device: device.name.clone(),
+            why,
+        }),
+        None => Ok(lookup),
+    }
+}
+
+/// The scene as the robot's renderer holds it: the mirror still (poses move it), the cube
+/// refreshed on every move (a policy that skips frames would show the room from where the
+/// robot was), and a far plane that clips no room corner from anywhere the cube can be.
+pub fn robot_scene(scene: &Scene) -> Scene {
+    let mut robot = scene.clone();
+    robot.mirror.animation = None;
+    robot.refresh = RefreshPolicy::OnChange;
+    robot.cube.far_m = super::far_plane(scene);
+    robot
+}
+
+/// One frame of a dataset: its files (paths relative to the dataset folder) and its index
+/// line (without the newline).
+pub struct Frame {
+    pub files: Vec<(PathBuf, Vec<u8>)>,
+    pub index_line: String,
+}
+
+/// A renderer whose mirror stands at a pose: the robot's sensor, frame by frame.
+pub struct FrameWriter {
+    renderer: Renderer,
+    /// The scene as loaded: poses are placed relative to it.
+    scene: Scene,
+    lookup: Lookup,
+    truth: GroundTruth,
+}
+
+impl FrameWriter {
+    /// A renderer of `scene`'s robot on `device` with `lookup` (see [`choose_lookup`]).
+    pub fn new(device: &Arc<Device>, scene: &Scene, lookup: Lookup) -> Result<Self, GpuError> {
+        let options = RenderOptions {
+            lookup: Some(lookup),
+            // The traced ray map needs no id cube.
+            id_cube: lookup != Lookup::RayQuery,
+            ..Default::default()
+        };
+        let renderer = Renderer::new(device, robot_scene(scene), &options)?;
+        let truth = renderer.sensor_ground_truth();
+        Ok(FrameWriter {
+            renderer,
+            scene: scene.clone(),
+            lookup,
+            truth,
+        })
+    }
+
+    pub fn lookup(&self) -> Lookup {
+        self.lookup
+    }
+
+    /// Where range and ids come from on this device with this lookup.
+    pub fn ground_truth(&self) -> GroundTruth {
+        self.truth
+    }
+
+    /// The sensor outputs of frame `frame`: the mirror moved and turned to `pose`, rendered at
+    /// its time. The observer's view, rendered beside it, is returned too.
+    pub fn outputs(
+        &mut self,
+        frame: usize,
+        pose: &Pose,
+    ) -> Result<(SensorOutputs, crate::image::RgbaImage), DatasetError> {
+        let r = &mut self.renderer;
+        r.scene.mirror.center = super::local_position(&self.scene, pose);
+        r.scene.sensor = super::turned_sensor(&self.scene, pose);
+        let readback = Readback {
+            views: true,
+            rays: true,
+            ..Default::default()
+        };
+        let (_, images) = r.render_frame(frame as u64, pose.time_s, readback)?;
+        let missing = || DatasetError::NotReadBack { frame };
+        let origin = images.sensor_ray_origin.as_ref().ok_or_else(missing)?;
+        let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;
+        let sensor = images.sensor.ok_or_else(missing)?;
+        let observer = images.observer.ok_or_else(missing)?;
+        let name = self.lookup.to_string();
+        let outputs = SensorOutputs::from_gpu(
+            &r.scene,
+            pose.time_s,
+            (&name, self.truth),
+            sensor,
+            (origin, direction),
+            None,
+        );
+        Ok((outputs, observer))
+    }
+
+    /// Frame `frame` of a dataset, at `pose`: its files, in memory.
+    pub fn frame(&mut self, frame: usize, pose: &Pose) -> Result<Frame, DatasetError> {
+        let (outputs, _) = self.outputs(frame, pose)?;
+        let folder = super::frame_folder(frame);
+        let record = PoseRecord::new(frame, pose, &outputs);
+        let root = Path::new("");
+        let files = MemoryFiles::new(root);
+        write_frame(&files, &root.join(&folder), &outputs, &record)?;
+        let line = IndexLine {
+            folder,
+            pose: &record,
+        };
+        let index_line = serde_json::to_string(&line).map_err(|e| OutputError::Encode {
+            path: PathBuf::from(INDEX_FILE),
+            message: e.to_string(),
+        })?;
+        Ok(Frame {
+            files: files.into_files(),
+            index_line,
+        })
+    }
+}
+
+/// A frame's folder: the sensor image, its outputs, the pose and the point cloud.
+fn write_frame(
+    out: &impl Sink,
+    dir: &Path,
+    o: &SensorOutputs,
+    pose: &PoseRecord,
+) -> Result<(), OutputError> {
+    out.write_exr(&dir.join("sensor.exr"), &o.image)?;
+    out.write_png(&dir.join("sensor.png"), &o.image)?;
+    o.write(out, dir)?;
+    out.write_json(&dir.join("pose.json"), pose)?;
+    let origin = o.scene_origin;
+    let comments = [
+        format!(
+            "frame: the scene's, local (world = [{}, {}, {}] + point), metres, +Y up",
+            origin.x, origin.y, origin.z
+        ),
+        "id: the drawable the ray met (sensor.id.json)".to_owned(),
+    ];
+    let points = super::points(o);
+    out.write_bytes(
+        &dir.join("points.ply"),
+        &super::ply::ply(&points, &comments),
+    )
+}
+
+/// Writes `frame`'s files into the dataset folder `root`, staged in `out`.
+pub fn place_frame(out: &Transaction, root: &Path, frame: &Frame) -> Result<(), OutputError> {
+    for (path, bytes) in &frame.files {
+        out.write_bytes(&root.join(path), bytes)?;
+    }
+    Ok(())
+}
+
+/// The index (the frames' lines in order) and the summary, into the dataset folder `root`.
+pub fn finish(
+    out: &Transaction,
+    root: &Path,
+    index_lines: &[String],
+    record: &DatasetRecord,
+) -> Result<(), OutputError> {
+    let mut index = String::new();
+    for line in index_lines {
+        index.push_str(line);
+        index.push('\n');
+    }
+    out.write_bytes(&root.join(INDEX_FILE), index.as_bytes())?;
+    out.write_json(&root.join(SUMMARY_FILE), record)
+}
