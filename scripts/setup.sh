@@ -8,7 +8,9 @@
 #   - weston, whose headless backend is the Wayland compositor of the viewer's Wayland test,
 #   - openbox, a window manager, for the viewer's test of a minimised window,
 #   - Google's SwiftShader Vulkan driver, the second CPU driver, unpacked project-locally into
-#     .drivers/swiftshader/ from Debian's chromium-common package (Chromium is not installed).
+#     .drivers/swiftshader/ from Debian's chromium-common package (Chromium is not installed),
+#   - the Python side: a project-local venv, .venv/, with maturin (builds the `specchio`
+#     Python package, python/), numpy, pytest and Ray (docs/python.md).
 # On other distributions it installs nothing and says what to install when something is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -76,6 +78,11 @@ provide_swiftshader() {
     rm -rf "$tmp"
 }
 
+provide_python() {
+    scripts/python-venv.sh .venv "import maturin, numpy, pytest, ray" \
+        "maturin>=1.9,<2" "numpy>=2" "pytest>=7" "ray>=2.9"
+}
+
 codename=$( . /etc/os-release 2>/dev/null && echo "${VERSION_CODENAME:-}" )
 if [ "$codename" != "bookworm" ]; then
     if [ ! -e "$swiftshader_dir/vk_swiftshader_icd.json" ]; then
@@ -85,6 +92,7 @@ if [ "$codename" != "bookworm" ]; then
        ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
         log "not Debian 12: install Mesa >= 24 lavapipe, the Vulkan loader and the Khronos validation layers with your package manager"
     fi
+    provide_python
     exit 0
 fi
 
@@ -123,5 +131,7 @@ SRC
     fi
 fi
 provide_swiftshader
+provide_python
+log "ready: Python venv .venv ($(.venv/bin/python -c 'import sys, numpy, ray; print(f"Python {sys.version.split()[0]}, numpy {numpy.__version__}, Ray {ray.__version__}")'))"
 log "ready: SwiftShader $(cut -d' ' -f2 "$swiftshader_dir/SOURCE" 2>/dev/null || echo 'not provided')"
 log "ready: mesa-vulkan-drivers $(dpkg-query -W -f='${Version}' mesa-vulkan-drivers), vulkan-validationlayers $(dpkg-query -W -f='${Version}' vulkan-validationlayers)"

@@ -5,22 +5,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 # The central-model exports are checked against OpenCV itself (tests/cli/calibrate.rs runs
-# scripts/check-omnidir.py): a project-local venv with OpenCV's contrib wheel, made once and
-# moved into place only whole (a failed pip install must not look like a ready venv).
-if [ ! -x .venv-check/bin/python ] || ! .venv-check/bin/python -c "import cv2" 2>/dev/null; then
-    if ! python3 -m venv --help >/dev/null 2>&1 || ! python3 -c "import ensurepip" 2>/dev/null; then
-        echo "test: installing python3-venv (for the OpenCV check's venv)" >&2
-        if [ "$(id -u)" -eq 0 ]; then apt-get update -qq && apt-get install -y -qq python3-venv
-        else sudo apt-get update -qq && sudo apt-get install -y -qq python3-venv
-        fi
-    fi
-    rm -rf .venv-check .venv-check.new
-    python3 -m venv .venv-check.new
-    .venv-check.new/bin/pip install --quiet opencv-contrib-python-headless
-    # The venv's scripts name their folder: made as .new, it is rebuilt in place.
-    mv .venv-check.new .venv-check
-    python3 -m venv --upgrade .venv-check >/dev/null
-fi
+# scripts/check-omnidir.py): a project-local venv with OpenCV's contrib wheel.
+scripts/python-venv.sh .venv-check "import cv2" opencv-contrib-python-headless
 # Every check must run here: a test that cannot make one (a missing tool or driver) fails
 # instead of passing without checking (tests/common: `skip`). Checks that do not apply to a
 # device (it lacks a feature) are allowed; both kinds are logged and counted below.
@@ -31,6 +17,16 @@ mkdir -p target
 rm -f "$SPECCHIO_SKIP_LOG"
 status=0
 cargo test --locked --workspace || status=$?
+# The Python package (python/): its wheel built by maturin with the tests' profile (the engine
+# is built already), installed into .venv, and its tests (python/tests/) run by pytest, on
+# the same devices and with the same validation layer. They compare with the command's own
+# output (SPECCHIO_BIN, built by `cargo test` for its tests).
+rm -rf target/wheels
+.venv/bin/python -m maturin build --quiet --locked --profile dev -m python/Cargo.toml -o target/wheels
+.venv/bin/python -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps target/wheels/specchio-*.whl
+# (cargo adds the project-local SwiftShader for its tests, .cargo/config.toml; pytest too.)
+VK_ADD_DRIVER_FILES="${VK_ADD_DRIVER_FILES:-$PWD/.drivers/swiftshader/vk_swiftshader_icd.json}" \
+SPECCHIO_BIN="$PWD/target/debug/specchio" .venv/bin/python -m pytest -q -p no:cacheprovider python/tests || status=$?
 skipped=0
 not_applicable=0
 if [ -f "$SPECCHIO_SKIP_LOG" ]; then

@@ -25,19 +25,10 @@ pub struct Args {
     time: f64,
 }
 
-/// The most sensor pixels a calibration fits (4096²): the fits hold about 200 bytes per
-/// pixel, so 8192² would need some 14 GB.
-const MAX_PIXELS: u64 = 4096 * 4096;
-
 pub fn run(args: &Args) -> Result<ExitCode> {
     let scene = specchio::scene::load(&args.scene)?;
-    let [w, h] = scene.sensor.resolution;
-    if u64::from(w) * u64::from(h) > MAX_PIXELS {
-        bail!(
-            "{}: sensor.resolution {w}x{h} is more than the {MAX_PIXELS} pixels (4096x4096) a \
-             calibration fits; the models do not need more",
-            args.scene.display()
-        );
+    if let Some(why) = Calibration::too_large(&scene) {
+        bail!("{}: {why}", args.scene.display());
     }
     specchio::memory::estimates::calibrate(&scene)
         .with_context(|| args.scene.display().to_string())?;

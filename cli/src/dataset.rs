@@ -11,7 +11,6 @@ use anyhow::Result;
 use specchio::output::Transaction;
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::writer::{self, FrameWriter, Plan, SUMMARY_FILE};
-use specchio::vk::device;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 #[derive(clap::Args)]
@@ -46,11 +45,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // 2. The GPU and a renderer whose mirror follows the trajectory.
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
     let log = instance.validation_log();
-    let chosen = device::choose(&instance, args.device.as_deref())?;
-    let lookup = writer::choose_lookup(args.lookup, &plan.scene, &chosen)?;
-    let features = specchio::render::lookups::features(lookup);
-    let device =
-        specchio::process::probe::device_for(&instance, args.device.as_deref(), &[], features)?;
+    let (device, _, lookup) =
+        writer::open(&instance, args.device.as_deref(), args.lookup, &plan.scene)?;
     drop(instance);
     let mut frames = FrameWriter::new(&device, &plan.scene, lookup)?;
     let truth = frames.ground_truth();
@@ -59,16 +55,14 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     }
 
     // 3. The frames, then the index and the summary.
-    let mut index = Vec::with_capacity(plan.poses.len());
     let progress = indicatif::ProgressBar::new(plan.poses.len() as u64);
-    for (i, pose) in plan.poses.iter().enumerate() {
-        let done = format!("after {i} of {} frames", plan.poses.len());
-        specchio::process::interrupt::check(&done)?;
-        let frame = frames.frame(i, pose)?;
-        writer::place_frame(&out, &args.out, &frame)?;
-        index.push(frame.index_line);
-        progress.inc(1);
-    }
+    let n = plan.poses.len();
+    let index = writer::write_frames(&out, &args.out, &plan, &mut frames, &mut |i| {
+        progress.set_position(i as u64);
+        Ok(specchio::process::interrupt::check(&format!(
+            "after {i} of {n} frames"
+        ))?)
+    })?;
     progress.finish_and_clear();
     drop(frames);
     drop(device);

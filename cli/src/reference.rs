@@ -31,28 +31,11 @@ pub struct Args {
     sensor_outputs: bool,
 }
 
-/// The most camera paths (pixels x samples) one camera traces: 2^32, about two minutes at the
-/// 35 M paths/s of a simple room on 2 cores and a quarter of an hour in a crowd (5 M/s);
-/// each bound alone (8192² pixels, --spp up to MAX_SPP) would allow days.
-const MAX_CAMERA_PATHS: u64 = 1 << 32;
-
 pub fn run(args: &Args) -> Result<ExitCode> {
     // --time and --spp were range-checked by clap (`specchio::process::args`).
     let scene = specchio::scene::load(&args.scene)?;
-    for (name, [w, h]) in [
-        ("observer", scene.observer.resolution),
-        ("sensor", scene.sensor.resolution),
-    ] {
-        let paths = u64::from(w) * u64::from(h) * u64::from(args.spp);
-        if paths > MAX_CAMERA_PATHS {
-            bail!(
-                "{}: --spp {} at the {name}'s {w}x{h} pixels is {paths} camera paths, more than \
-                 the {MAX_CAMERA_PATHS} one camera may trace (minutes to hours on a CPU): fewer \
-                 samples or a smaller {name}.resolution",
-                args.scene.display(),
-                args.spp
-            );
-        }
+    if let Some(why) = specchio::reference::too_many_paths(&scene, args.spp) {
+        bail!("{}: --{why}", args.scene.display());
     }
     specchio::memory::estimates::reference(&scene, args.sensor_outputs)
         .with_context(|| args.scene.display().to_string())?;

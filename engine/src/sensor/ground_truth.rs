@@ -1,10 +1,10 @@
 //! Where a sensor frame's range and ids come from, and whether its colour image shows what
 //! they say: a segmentation or depth dataset is only as good as that agreement.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// The source of a frame's range and id layers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum GroundTruth {
     /// The CPU reference: every layer from the exact paths the colour samples too.

@@ -141,8 +141,9 @@ pub struct LookupContext<'a> {
     pub frames_in_flight: usize,
 }
 
-/// A lookup's per-renderer state: the pipelines that draw the mirror.
-pub trait LookupPass {
+/// A lookup's per-renderer state: the pipelines that draw the mirror. `Send`: a renderer may
+/// move to another thread (the Python package renders with the GIL released).
+pub trait LookupPass: Send {
     /// The lookup's two mirror pipelines and their layout.
     fn pipelines(&self) -> &MirrorPipelines;
     /// The colour pipeline (`directions` false) or the one writing the direction each mirror

@@ -55,8 +55,9 @@ pub trait FillMethod: Sync {
     fn create(&self, ctx: &MethodContext<'_>) -> Result<Box<dyn FillPass>, GpuError>;
 }
 
-/// A method's per-renderer state: its pipeline(s) and buffers.
-pub trait FillPass {
+/// A method's per-renderer state: its pipeline(s) and buffers. `Send`: a renderer may move
+/// to another thread (the Python package renders with the GIL released).
+pub trait FillPass: Send {
     /// Before recording a cube update: per-update data of the method's own (indirect
     /// commands, say). Most methods need none.
     fn prepare(&mut self, _plan: &CubePlan, _ctx: &mut Prepare<'_>) -> Result<(), GpuError> {

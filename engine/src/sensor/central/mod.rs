@@ -151,7 +151,23 @@ pub struct Calibration {
     pub mirror_pixels: usize,
 }
 
+/// The most sensor pixels a calibration fits (4096²): the fits hold about 200 bytes per
+/// pixel, so 8192² would need some 14 GB.
+pub const MAX_CALIBRATION_PIXELS: u64 = 4096 * 4096;
+
 impl Calibration {
+    /// Why the scene's sensor is too large to calibrate (a sentence naming the field), if
+    /// it is.
+    pub fn too_large(scene: &Scene) -> Option<String> {
+        let [w, h] = scene.sensor.resolution;
+        (u64::from(w) * u64::from(h) > MAX_CALIBRATION_PIXELS).then(|| {
+            format!(
+                "sensor.resolution {w}x{h} is more than the {MAX_CALIBRATION_PIXELS} pixels \
+                 (4096x4096) a calibration fits; the models do not need more"
+            )
+        })
+    }
+
     /// Fits both models to the exact ray map of the scene's sensor at time `t_s`.
     pub fn of_scene(scene: &Scene, t_s: f64) -> Result<(Self, RayMap), FitError> {
         let lowest = crate::sensor::SensorOptics::at(scene, t_s).min_elevation();

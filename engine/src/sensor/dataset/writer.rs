@@ -21,6 +21,7 @@ use crate::render::{lookups, Readback, RenderOptions, Renderer};
 use crate::scene::{Lookup, RefreshPolicy, Scene, SceneError};
 use crate::sensor::{GroundTruth, SensorOutputs};
 use crate::vk::device::Device;
+use crate::vk::instance::Instance;
 use crate::vk::physical::DeviceInfo;
 use crate::vk::GpuError;
 
@@ -46,6 +47,9 @@ pub enum DatasetError {
     Output(#[from] OutputError),
     #[error(transparent)]
     Interrupted(#[from] Interrupted),
+    /// The caller stopped the run (Python's KeyboardInterrupt between frames).
+    #[error("stopped {0}: nothing was written")]
+    Stopped(String),
     #[error("frame {frame}: its sensor layers were not read back (a bug)")]
     NotReadBack { frame: usize },
 }
@@ -129,6 +133,22 @@ pub fn choose_lookup(
     }
 }
 
+/// A device for the dataset of `scene` on the device `selector` names (see `specchio info`),
+/// with the lookup [`choose_lookup`] gives for `asked`: the device made with what that lookup
+/// needs, its description, and the lookup.
+pub fn open(
+    instance: &Arc<Instance>,
+    selector: Option<&str>,
+    asked: Option<Lookup>,
+    scene: &Scene,
+) -> Result<(Arc<Device>, DeviceInfo, Lookup), DatasetError> {
+    let chosen = crate::vk::device::choose(instance, selector)?;
+    let lookup = choose_lookup(asked, scene, &chosen)?;
+    let features = lookups::features(lookup);
+    let device = crate::process::probe::device_for(instance, selector, &[], features)?;
+    Ok((device, chosen, lookup))
+}
+
 /// The scene as the robot's renderer holds it: the mirror still (poses move it), the cube
 /// refreshed on every move (a policy that skips frames would show the room from where the
 /// robot was), and a far plane that clips no room corner from anywhere the cube can be.
@@ -138,6 +158,13 @@ pub fn robot_scene(scene: &Scene) -> Scene {
     robot.refresh = RefreshPolicy::OnChange;
     robot.cube.far_m = super::far_plane(scene);
     robot
+}
+
+/// Stands the robot (`robot_scene(scene)`) at `pose`: its mirror moved there, its sensor
+/// turned by the pose's heading.
+pub fn place_robot(robot: &mut Scene, scene: &Scene, pose: &Pose) {
+    robot.mirror.center = super::local_position(scene, pose);
+    robot.sensor = super::turned_sensor(scene, pose);
 }
 
 /// One frame of a dataset: its files (paths relative to the dataset folder) and its index
@@ -192,8 +219,7 @@ impl FrameWriter {
         pose: &Pose,
     ) -> Result<(SensorOutputs, crate::image::RgbaImage), DatasetError> {
         let r = &mut self.renderer;
-        r.scene.mirror.center = super::local_position(&self.scene, pose);
-        r.scene.sensor = super::turned_sensor(&self.scene, pose);
+        place_robot(&mut r.scene, &self.scene, pose);
         let readback = Readback {
             views: true,
             rays: true,
@@ -272,6 +298,26 @@ pub fn place_frame(out: &Transaction, root: &Path, frame: &Frame) -> Result<(), 
         out.write_bytes(&root.join(path), bytes)?;
     }
     Ok(())
+}
+
+/// Renders every pose of `plan` with `frames` into the dataset folder `root`, staged in
+/// `out`; `between(i)` runs before frame `i` (an interruption check, progress) and stops the
+/// run with its error. The frames' index lines, in order.
+pub fn write_frames(
+    out: &Transaction,
+    root: &Path,
+    plan: &Plan,
+    frames: &mut FrameWriter,
+    between: &mut dyn FnMut(usize) -> Result<(), DatasetError>,
+) -> Result<Vec<String>, DatasetError> {
+    let mut index = Vec::with_capacity(plan.poses.len());
+    for (i, pose) in plan.poses.iter().enumerate() {
+        between(i)?;
+        let frame = frames.frame(i, pose)?;
+        place_frame(out, root, &frame)?;
+        index.push(frame.index_line);
+    }
+    Ok(index)
 }
 
 /// The index (the frames' lines in order) and the summary, into the dataset folder `root`.

@@ -1,0 +1,104 @@
+"""specchio: an omnidirectional catadioptric camera (a camera looking at a mirror) simulated
+on Vulkan, with exact ground truth, calibration and datasets as numpy arrays.
+
+    import specchio
+    scene = specchio.Scene("scenes/thesis-room.toml")
+    with specchio.Renderer(scene) as r:
+        frame = r.render(pose=(0.0, 1.5, 0.0, 90.0))   # x, y, z (m), heading (deg)
+        frame["sensor"]   # (H, W, 3) float32, linear RGB
+
+See docs/python.md for the whole package: batches, the exact reference, calibration and
+datasets, in one process or on Ray.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Callable, Optional, Union
+
+from ._specchio import (
+    DatasetFrames,
+    DatasetOutput,
+    Renderer,
+    Scene,
+    SpecchioError,
+    __version__,
+    calibrate,
+    devices,
+    read_trajectory,
+    reference,
+)
+from ._specchio import dataset as _dataset_here
+
+__all__ = [
+    "DatasetFrames",
+    "DatasetOutput",
+    "Renderer",
+    "Scene",
+    "SpecchioError",
+    "__version__",
+    "calibrate",
+    "dataset",
+    "devices",
+    "read_trajectory",
+    "reference",
+]
+
+Path = Union[str, "os.PathLike[str]"]
+
+
+def dataset(
+    scene: Path,
+    trajectory: Path,
+    out: Path,
+    *,
+    lookup: Optional[str] = None,
+    device: Optional[str] = None,
+    validate: bool = False,
+    progress: Optional[Callable[[int, int], None]] = None,
+    ray: bool = False,
+    workers: Optional[int] = None,
+    shard_size: int = 8,
+    worker_env: Optional[dict] = None,
+) -> dict[str, Any]:
+    """Renders the dataset of ``scene`` along ``trajectory`` (CSV or JSON, docs/sensor.md)
+    into the folder ``out``, as ``specchio dataset`` does: per pose a folder of the sensor
+    image, ray map, range, ids, panoramas, camera.json, pose.json (scene frame and ROS
+    REP-103) and a point cloud; ``index.jsonl``; ``dataset.json``. All or nothing: every
+    pose is checked first, and the folder appears only when every frame is written.
+
+    ``ray=True`` renders on Ray (``specchio.ray.dataset``): ``workers`` actors (default: the
+    cluster's CPUs) each hold a renderer and take shards of ``shard_size`` poses; the files
+    are the same, byte for byte. Ray is started locally unless it is running already or
+    ``RAY_ADDRESS`` names a cluster. ``worker_env``: environment variables of the workers
+    (e.g. ``{"LP_NUM_THREADS": "1"}`` for lavapipe with one thread each).
+
+    ``progress(done, total)`` is called as frames are written. Returns the summary
+    (``dataset.json``) as a dict.
+    """
+    if ray:
+        from . import ray as _ray
+
+        return _ray.dataset(
+            scene,
+            trajectory,
+            out,
+            lookup=lookup,
+            device=device,
+            validate=validate,
+            progress=progress,
+            workers=workers,
+            shard_size=shard_size,
+            worker_env=worker_env,
+        )
+    if workers is not None or worker_env is not None:
+        raise SpecchioError("workers and worker_env are for ray=True")
+    return _dataset_here(
+        os.fspath(scene),
+        os.fspath(trajectory),
+        os.fspath(out),
+        lookup=lookup,
+        device=device,
+        validate=validate,
+        progress=progress,
+    )

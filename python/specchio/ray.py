@@ -1,0 +1,119 @@
+"""Datasets rendered by a pool of Ray workers (``specchio.dataset(..., ray=True)``).
+
+One actor per worker holds a renderer of the robot (``DatasetFrames``); the poses are cut
+into shards, and each shard is a task on whichever actor is free. A frame's files come back
+to the driver as bytes (so the workers need no shared file system, only the scene, its
+assets and the trajectory at the same paths), and the driver alone writes the output folder,
+all or nothing (``DatasetOutput``). A frame's bytes depend only on the plan, the lookup, the
+device and the frame's pose, never on which worker rendered it or what it rendered before,
+so the folder is the same, byte for byte, as a single process's.
+
+A worker that dies (its process killed, its node lost) is restarted and its shard retried
+(``max_restarts``, ``max_task_retries``); an error of the engine (a scene it cannot render)
+is raised at once, since a retry would fail the same way.
+
+Ray starts locally (the embedded default) unless it is running already, or ``RAY_ADDRESS``
+names a cluster to join (``ray start --head`` on one machine, ``ray start --address=HEAD:6379``
+on the others; docs/python.md).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import Any, Callable, Optional
+
+from ._specchio import DatasetFrames, DatasetOutput, SpecchioError
+
+#: How often Ray restarts a dead worker, and retries the shard it held.
+RETRIES = 2
+
+
+class _Worker:
+    """A Ray actor: one renderer of the dataset's robot."""
+
+    def __init__(self, scene: str, trajectory: str, lookup, device, validate: bool):
+        self.frames = DatasetFrames(
+            scene, trajectory, lookup=lookup, device=device, validate=validate
+        )
+
+    def describe(self) -> tuple[str, str]:
+        return (self.frames.lookup, self.frames.ground_truth)
+
+    def render(self, indices: list[int]):
+        return indices, self.frames.frames(indices)
+
+
+def dataset(
+    scene,
+    trajectory,
+    out,
+    *,
+    lookup: Optional[str] = None,
+    device: Optional[str] = None,
+    validate: bool = False,
+    progress: Optional[Callable[[int, int], None]] = None,
+    workers: Optional[int] = None,
+    shard_size: int = 8,
+    worker_env: Optional[dict] = None,
+) -> dict[str, Any]:
+    """``specchio.dataset`` on Ray; see its documentation."""
+    import ray
+    from ray.util import ActorPool
+
+    if shard_size < 1:
+        raise SpecchioError(f"shard_size: {shard_size}; must be at least 1")
+    if workers is not None and workers < 1:
+        raise SpecchioError(f"workers: {workers}; must be at least 1")
+    scene, trajectory, out = (os.fspath(p) for p in (scene, trajectory, out))
+    # Every input is checked, and the output staged, before any worker starts.
+    output = DatasetOutput(scene, trajectory, out)
+    n = len(output)
+    started = not ray.is_initialized()
+    if started:
+        ray.init(address=os.environ.get("RAY_ADDRESS") or None, log_to_driver=False)
+    actors = []
+    try:
+        count = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
+        count = min(count, math.ceil(n / shard_size))
+        options: dict[str, Any] = {
+            "num_cpus": 1,
+            "max_restarts": RETRIES,
+            "max_task_retries": RETRIES,
+        }
+        if worker_env:
+            options["runtime_env"] = {"env_vars": {k: str(v) for k, v in worker_env.items()}}
+        worker = ray.remote(**options)(_Worker)
+        # The workers read the files themselves: absolute paths, whatever their directory.
+        paths = (os.path.abspath(scene), os.path.abspath(trajectory))
+        actors = [worker.remote(*paths, lookup, device, validate) for _ in range(count)]
+        described = set(ray.get([a.describe.remote() for a in actors]))
+        if len(described) != 1:
+            raise SpecchioError(
+                f"the workers' devices differ: lookups and ground truths {sorted(described)}; "
+                "name one device (device=...) that every worker has"
+            )
+        (chosen_lookup, truth) = described.pop()
+        shards = [list(range(i, min(i + shard_size, n))) for i in range(0, n, shard_size)]
+        index: list[Optional[str]] = [None] * n
+        done = 0
+        pool = ActorPool(actors)
+        for indices, frames in pool.map_unordered(lambda a, s: a.render.remote(s), shards):
+            for i, (files, line) in zip(indices, frames):
+                output.place(files)
+                index[i] = line
+            done += len(indices)
+            if progress is not None:
+                progress(done, n)
+        return output.finish(index, chosen_lookup, truth)
+    except ray.exceptions.RayTaskError as e:
+        # The engine's own error, raised in a worker: the same exception here.
+        cause = e.as_instanceof_cause()
+        if isinstance(cause, SpecchioError):
+            raise SpecchioError(str(cause).splitlines()[-1]) from None
+        raise
+    finally:
+        for a in actors:
+            ray.kill(a)
+        if started:
+            ray.shutdown()

@@ -1,0 +1,176 @@
+//! A frame's images and layers as numpy arrays: one frame as (H, W, C) arrays, a batch as
+//! (B, H, W, C), written into the caller's arrays where `out=` gives them.
+//!
+//! | key | shape | dtype | what |
+//! |---|---|---|---|
+//! | `sensor` | (H, W, 3) | float32 | the sensor camera's linear RGB |
+//! | `observer` | (Ho, Wo, 3) | float32 | the observer camera's linear RGB |
+//! | `ray_origin` | (H, W, 3) | float32 | where each pixel's ray leaves the mirror (scene frame, m) |
+//! | `ray_direction` | (H, W, 3) | float32 | its unit direction (0 off the mirror) |
+//! | `mask` | (H, W) | bool | the pixel sees the mirror |
+//! | `range` | (H, W) | float32 | metres along the ray to what it meets (0 off the mirror) |
+//! | `ids` | (H, W) | uint32 | what it meets: walls 0..5, object i at 6 + i, 2³² − 1 none |
+
+use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use specchio::image::RgbaImage;
+use specchio::sensor::SensorOutputs;
+
+use crate::errors;
+
+/// One layer's samples, row-major, channels last.
+pub enum Data {
+    F32(Vec<f32>),
+    U32(Vec<u32>),
+    Bool(Vec<bool>),
+}
+
+/// One frame's layers: (key, samples, (height, width, channels); channels 0 for a plane).
+pub struct Layers(pub Vec<(&'static str, Data, [usize; 3])>);
+
+fn rgb(image: &RgbaImage) -> Vec<f32> {
+    image
+        .pixels
+        .iter()
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect()
+}
+
+impl Layers {
+    pub fn new(o: SensorOutputs, observer: &RgbaImage) -> Self {
+        let (w, h) = (o.rays.width as usize, o.rays.height as usize);
+        let (ow, oh) = (observer.width as usize, observer.height as usize);
+        let rays = &o.rays.rays;
+        let origin = rays
+            .iter()
+            .flat_map(|r| r.map_or([0.0; 3], |r| r.origin.to_array()))
+            .collect();
+        let direction = rays
+            .iter()
+            .flat_map(|r| r.map_or([0.0; 3], |r| r.direction.to_array()))
+            .collect();
+        let mask = rays.iter().map(Option::is_some).collect();
+        Layers(vec![
+            ("sensor", Data::F32(rgb(&o.image)), [h, w, 3]),
+            ("observer", Data::F32(rgb(observer)), [oh, ow, 3]),
+            ("ray_origin", Data::F32(origin), [h, w, 3]),
+            ("ray_direction", Data::F32(direction), [h, w, 3]),
+            ("mask", Data::Bool(mask), [h, w, 0]),
+            ("range", Data::F32(o.range), [h, w, 0]),
+            ("ids", Data::U32(o.ids), [h, w, 0]),
+        ])
+    }
+}
+
+/// The array shape of a layer of `dims`, after the `batch` dimension if any.
+fn shape(batch: Option<usize>, [h, w, c]: [usize; 3]) -> Vec<usize> {
+    let mut s: Vec<usize> = batch.into_iter().collect();
+    s.extend([h, w]);
+    if c > 0 {
+        s.push(c);
+    }
+    s
+}
+
+/// One frame as a dict of arrays; each array takes over its samples without a copy.
+pub fn frame_dict<'py>(py: Python<'py>, layers: Layers) -> PyResult<Bound<'py, PyDict>> {
+    let dict = PyDict::new(py);
+    for (key, data, dims) in layers.0 {
+        let s = shape(None, dims);
+        let array = match data {
+            Data::F32(v) => PyArray1::from_vec(py, v).reshape(s)?.into_any(),
+            Data::U32(v) => PyArray1::from_vec(py, v).reshape(s)?.into_any(),
+            Data::Bool(v) => PyArray1::from_vec(py, v).reshape(s)?.into_any(),
+        };
+        dict.set_item(key, array)?;
+    }
+    Ok(dict)
+}
+
+/// The arrays of a batch of `batch` frames shaped as `first`: the caller's from `out` where
+/// it has the key (checked: shape, dtype, C-contiguous, writeable), new ones for the rest.
+pub fn batch_dict<'py>(
+    py: Python<'py>,
+    batch: usize,
+    first: &Layers,
+    out: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let dict = PyDict::new(py);
+    for (key, data, dims) in &first.0 {
+        let s = shape(Some(batch), *dims);
+        let given = match out {
+            Some(out) => out.get_item(key)?,
+            None => None,
+        };
+        let array = match (given, data) {
+            (Some(a), Data::F32(_)) => checked::<f32>(key, a, &s, "float32")?,
+            (Some(a), Data::U32(_)) => checked::<u32>(key, a, &s, "uint32")?,
+            (Some(a), Data::Bool(_)) => checked::<bool>(key, a, &s, "bool")?,
+            (None, Data::F32(_)) => PyArrayDyn::<f32>::zeros(py, s, false).into_any(),
+            (None, Data::U32(_)) => PyArrayDyn::<u32>::zeros(py, s, false).into_any(),
+            (None, Data::Bool(_)) => PyArrayDyn::<bool>::zeros(py, s, false).into_any(),
+        };
+        dict.set_item(key, array)?;
+    }
+    Ok(dict)
+}
+
+/// `array` if it is a C-contiguous, writeable `dtype` array of `shape`; else an error naming
+/// `out[key]` and what it should be.
+fn checked<'py, T: Element>(
+    key: &str,
+    array: Bound<'py, PyAny>,
+    shape: &[usize],
+    dtype: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let dims: Vec<String> = shape.iter().map(usize::to_string).collect();
+    let wrong = || {
+        errors::error(format!(
+            "out[{key:?}]: must be a C-contiguous, writeable numpy array of dtype {dtype} and \
+             shape ({})",
+            dims.join(", ")
+        ))
+    };
+    let typed = array.cast::<PyArrayDyn<T>>().map_err(|_| wrong())?;
+    if typed.shape() != shape || !typed.is_c_contiguous() || typed.try_readwrite().is_err() {
+        return Err(wrong());
+    }
+    Ok(array)
+}
+
+/// Copies frame `b`'s layers into the batch's arrays.
+pub fn fill(dict: &Bound<'_, PyDict>, b: usize, layers: Layers) -> PyResult<()> {
+    for (key, data, _) in layers.0 {
+        let array = dict
+            .get_item(key)?
+            .ok_or_else(|| errors::error(format!("the batch has no {key:?} array (a bug)")))?;
+        match data {
+            Data::F32(v) => copy_into(&array, b, &v)?,
+            Data::U32(v) => copy_into(&array, b, &v)?,
+            Data::Bool(v) => copy_into(&array, b, &v)?,
+        }
+    }
+    Ok(())
+}
+
+fn copy_into<T: Element + Copy>(array: &Bound<'_, PyAny>, b: usize, v: &[T]) -> PyResult<()> {
+    let typed = array
+        .cast::<PyArrayDyn<T>>()
+        .map_err(|e| errors::error(e.to_string()))?;
+    let mut rw = typed
+        .try_readwrite()
+        .map_err(|e| errors::error(e.to_string()))?;
+    let all = rw
+        .as_slice_mut()
+        .map_err(|e| errors::error(e.to_string()))?;
+    let frame = all.len() / typed.shape()[0];
+    if frame != v.len() {
+        return Err(errors::error(format!(
+            "a frame of {} samples for {frame} (the scene changed size?)",
+            v.len()
+        )));
+    }
+    all[b * frame..(b + 1) * frame].copy_from_slice(v);
+    Ok(())
+}

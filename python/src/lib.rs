@@ -1,0 +1,45 @@
+//! The native half of the `specchio` Python package: the engine's scenes, renderers, exact
+//! reference, calibration and dataset writer, with images and layers handed to Python as
+//! numpy arrays (docs/python.md). The Python half (python/specchio/) adds the Ray driver and
+//! re-exports these under their public names.
+//!
+//! Every engine error arrives as `specchio.SpecchioError` carrying the engine's message (file,
+//! line and field for an input), its causes joined by ": " as the command line prints them.
+//! Long work (rendering, tracing, fitting) runs with the GIL released, so that other Python
+//! threads (a Ray worker's heartbeat, a data loader) go on meanwhile.
+
+mod arrays;
+mod dataset;
+mod errors;
+mod poses;
+mod reference;
+mod renderer;
+mod scene;
+
+use pyo3::prelude::*;
+
+pub use errors::SpecchioError;
+
+/// The Vulkan devices the engine can use, best first: each a dict of `index`, `name`,
+/// `short_name` (what `device=` accepts), `driver` and the optional features it has.
+#[pyfunction]
+fn devices(py: Python<'_>) -> PyResult<Vec<Py<PyAny>>> {
+    let infos = py.detach(renderer::device_infos).map_err(errors::to_py)?;
+    infos.iter().map(|i| errors::json_to_py(py, i)).collect()
+}
+
+#[pymodule]
+fn _specchio(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("SpecchioError", m.py().get_type::<SpecchioError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<scene::Scene>()?;
+    m.add_class::<renderer::Renderer>()?;
+    m.add_class::<dataset::DatasetFrames>()?;
+    m.add_class::<dataset::DatasetOutput>()?;
+    m.add_function(wrap_pyfunction!(devices, m)?)?;
+    m.add_function(wrap_pyfunction!(poses::read_trajectory, m)?)?;
+    m.add_function(wrap_pyfunction!(reference::reference, m)?)?;
+    m.add_function(wrap_pyfunction!(reference::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset::dataset, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,71 @@
+//! Poses from Python: the robot's position (the mirror's viewpoint, in the scene file's
+//! coordinates) and heading, as a trajectory file gives them (docs/sensor.md, "Datasets").
+
+use std::path::PathBuf;
+
+use glam::DVec3;
+use numpy::ndarray::ArrayView2;
+use pyo3::prelude::*;
+use specchio::sensor::dataset::trajectory::{self, Place, Pose};
+
+use crate::errors;
+
+/// The poses of a trajectory file (CSV or JSON, docs/sensor.md): a list of dicts with
+/// `time` (s), `position` ([x, y, z], m, the file's coordinates) and `heading` (degrees about
+/// +Y). A mistake raises `SpecchioError` naming the file, line or entry, and field.
+#[pyfunction]
+pub fn read_trajectory(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny>>> {
+    let poses = py
+        .detach(|| trajectory::read(&path))
+        .map_err(errors::to_py)?;
+    poses
+        .iter()
+        .map(|p| {
+            let d = pyo3::types::PyDict::new(py);
+            d.set_item("time", p.time_s)?;
+            d.set_item("position", p.position.to_array().to_vec())?;
+            d.set_item("heading", p.heading_deg)?;
+            Ok(d.into_any().unbind())
+        })
+        .collect()
+}
+
+/// The poses of a (B, 4) array of `x, y, z, heading` rows at `times` (one per row, or one
+/// for all), each named `poses[i]` in errors.
+pub fn from_array(rows: ArrayView2<'_, f64>, times: Option<Vec<f64>>) -> PyResult<Vec<Pose>> {
+    if rows.ncols() != 4 {
+        return Err(errors::error(format!(
+            "poses: {} columns; each row is x, y, z, heading (4)",
+            rows.ncols()
+        )));
+    }
+    let n = rows.nrows();
+    let times = match times {
+        None => vec![0.0; n],
+        Some(t) if t.len() == 1 => vec![t[0]; n],
+        Some(t) if t.len() == n => t,
+        Some(t) => {
+            return Err(errors::error(format!(
+                "times: {} values for {n} poses; give one per pose or one for all",
+                t.len()
+            )))
+        }
+    };
+    let mut out = Vec::with_capacity(n);
+    for (i, (row, &time_s)) in rows.outer_iter().zip(&times).enumerate() {
+        let named = |field: &str, why: &str| errors::error(format!("poses[{i}]: {field}: {why}"));
+        if !row.iter().all(|v| v.is_finite()) {
+            return Err(named("position", "every value must be a finite number"));
+        }
+        if !(time_s.is_finite() && time_s >= 0.0) {
+            return Err(named("time", "must be a finite number of seconds >= 0"));
+        }
+        out.push(Pose {
+            at: Place::Entry(i),
+            time_s,
+            position: DVec3::new(row[0], row[1], row[2]),
+            heading_deg: row[3].rem_euclid(360.0),
+        });
+    }
+    Ok(out)
+}

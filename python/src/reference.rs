@@ -1,0 +1,106 @@
+//! The exact CPU reference and the calibration, from Python.
+
+use std::path::PathBuf;
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use specchio::output::Transaction;
+use specchio::reference::Reference;
+use specchio::sensor::central::{folder, Calibration};
+use specchio::sensor::dataset::trajectory::{Place, Pose};
+use specchio::sensor::dataset::{self, writer};
+use specchio::sensor::SensorOutputs;
+
+use crate::arrays::{self, Layers};
+use crate::errors;
+use crate::scene::Scene;
+
+/// The exact reference of the sensor and observer views (CPU ray tracing, no GPU): the same
+/// dict of arrays as `Renderer.render`, every layer exact. `pose` (x, y, z, heading) stands
+/// the robot there as `Renderer.render` does; without it the scene is traced as written at
+/// `time`. `spp`: samples per pixel of the colour images (1 traces pixel centres).
+#[pyfunction]
+#[pyo3(signature = (scene, pose=None, time=0.0, spp=1))]
+pub fn reference<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    pose: Option<[f64; 4]>,
+    time: f64,
+    spp: u32,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !(time.is_finite() && time >= 0.0) {
+        return Err(errors::error(
+            "time: must be a finite number of seconds >= 0",
+        ));
+    }
+    if let Some(why) = specchio::reference::too_many_paths(&scene.scene, spp) {
+        return Err(scene.error(why));
+    }
+    specchio::memory::estimates::reference(&scene.scene, true)
+        .map_err(|e| scene.error(errors::message(&e)))?;
+    let traced = match pose {
+        None => scene.scene.clone(),
+        Some([x, y, z, heading]) => {
+            let pose = Pose {
+                at: Place::Entry(0),
+                time_s: time,
+                position: glam::DVec3::new(x, y, z),
+                heading_deg: heading.rem_euclid(360.0),
+            };
+            let objects = dataset::ObjectBounds::of(&scene.scene);
+            dataset::pose_fits(&scene.scene, &objects, &pose)
+                .map_err(|(field, why)| errors::error(format!("pose: {field}: {why}")))?;
+            let mut robot = writer::robot_scene(&scene.scene);
+            writer::place_robot(&mut robot, &scene.scene, &pose);
+            robot
+        }
+    };
+    let layers = py.detach(|| {
+        let reference = Reference::new(&traced, time);
+        let [ow, oh] = traced.observer.resolution;
+        let (observer, _) = reference.render(&reference.observer_view(), ow, oh, spp);
+        let [sw, sh] = traced.sensor.resolution;
+        let (sensor, _) = reference.render(&reference.sensor_view(), sw, sh, spp);
+        let outputs = SensorOutputs::from_reference(&traced, time, &sensor);
+        Layers::new(outputs, &observer.color)
+    });
+    arrays::frame_dict(py, layers)
+}
+
+/// Fits the central models robotics tools calibrate (OpenCV omnidir, Kalibr omni, OCamCalib)
+/// to the sensor's exact ray map at `time` and writes their exports into the folder `out`
+/// (as `specchio calibrate`, docs/sensor-models.md), all or nothing. Returns the summary
+/// (`calibration.json`) as a dict.
+#[pyfunction]
+#[pyo3(signature = (scene, out, time=0.0))]
+pub fn calibrate(py: Python<'_>, scene: &Scene, out: PathBuf, time: f64) -> PyResult<Py<PyAny>> {
+    if !(time.is_finite() && time >= 0.0) {
+        return Err(errors::error(
+            "time: must be a finite number of seconds >= 0",
+        ));
+    }
+    if let Some(why) = Calibration::too_large(&scene.scene) {
+        return Err(scene.error(why));
+    }
+    specchio::memory::estimates::calibrate(&scene.scene)
+        .map_err(|e| scene.error(errors::message(&e)))?;
+    let record = py.detach(|| -> Result<_, String> {
+        let mut staged = Transaction::new();
+        staged
+            .folder(&out, folder::RECORD)
+            .map_err(|e| errors::message(&e))?;
+        let (cal, map) = Calibration::of_scene(&scene.scene, time).map_err(|e| {
+            format!(
+                "{}: cannot fit the central models: {}",
+                scene.path.display(),
+                errors::message(&e)
+            )
+        })?;
+        let record = folder::write(&staged, &out, (&cal, &map), &scene.path, time)
+            .map_err(|e| errors::message(&e))?;
+        staged.commit().map_err(|e| errors::message(&e))?;
+        Ok(record)
+    });
+    let record = record.map_err(errors::error)?;
+    errors::json_to_py(py, &record)
+}

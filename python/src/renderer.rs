@@ -1,0 +1,267 @@
+//! `specchio.Renderer`: the robot's sensor on a Vulkan device, rendered at poses.
+
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use numpy::PyReadonlyArray2;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use specchio::scene::Lookup;
+use specchio::sensor::dataset::trajectory::{Place, Pose};
+use specchio::sensor::dataset::writer::{self, FrameWriter};
+use specchio::sensor::dataset::{self, ObjectBounds};
+use specchio::vk::device::{self, Device, DeviceInfo};
+use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
+
+use crate::arrays::{self, Layers};
+use crate::scene::Scene;
+use crate::{errors, poses};
+
+/// Every device the engine sees (usable or not, with why not).
+pub fn device_infos() -> Result<Vec<serde_json::Value>, specchio::vk::GpuError> {
+    let instance = Instance::create(&InstanceDesc::from_env(false))?;
+    let default = device::choose(&instance, None).ok().map(|d| d.index);
+    let candidates = device::enumerate(&instance)?;
+    Ok(candidates
+        .into_iter()
+        .map(|c| {
+            let mut v = serde_json::to_value(&c.info).unwrap_or_default();
+            v["usable"] = serde_json::Value::Bool(c.rejected.is_none());
+            v["default"] = serde_json::Value::Bool(default == Some(c.info.index));
+            v["rejected_because"] = c.rejected.map_or(serde_json::Value::Null, Into::into);
+            v
+        })
+        .collect())
+}
+
+/// A device opened for `lookup` (or the dataset's default lookup for `scene`): the device,
+/// its description, the lookup chosen and the validation log.
+pub fn open(
+    scene: &specchio::scene::Scene,
+    lookup: Option<&str>,
+    selector: Option<&str>,
+    validate: bool,
+) -> PyResult<(Arc<Device>, DeviceInfo, Lookup, Arc<ValidationLog>)> {
+    let lookup: Option<Lookup> = lookup
+        .map(|l| {
+            specchio::process::args::lookup(l).map_err(|e| errors::error(format!("lookup: {e}")))
+        })
+        .transpose()?;
+    let instance = Instance::create(&InstanceDesc::from_env(validate)).map_err(errors::to_py)?;
+    let log = instance.validation_log();
+    let (device, chosen, lookup) =
+        writer::open(&instance, selector, lookup, scene).map_err(errors::to_py)?;
+    Ok((device, chosen, lookup, log))
+}
+
+/// Raises the validation layer's first message, if it said anything.
+pub fn check_validation(log: &ValidationLog) -> PyResult<()> {
+    specchio::process::validation::verdict(&log.messages()).map_err(errors::to_py)
+}
+
+/// The robot's sensor: a renderer of `scene` whose mirror stands at each pose it is given.
+///
+/// `lookup`: the mirror lookup of the colour image (`plain`, `box`, `distance`, `ray-query`,
+/// `distance-exact`); by default ray-query where the device has it, so that colour, range and
+/// ids follow one light path, else the scene's. `device`: an index or part of a name (see
+/// `specchio.devices()`). `validate`: the Khronos validation layer on; any message raises.
+#[pyclass(module = "specchio")]
+pub struct Renderer {
+    /// None once closed. Behind a lock: Python objects may be shared between threads.
+    inner: Mutex<Option<Inner>>,
+}
+
+struct Inner {
+    frames: FrameWriter,
+    scene: specchio::scene::Scene,
+    objects: ObjectBounds,
+    device_name: String,
+    log: Arc<ValidationLog>,
+    next_frame: usize,
+    // Last: the device outlives the renderer made on it.
+    _device: Arc<Device>,
+}
+
+#[pymethods]
+impl Renderer {
+    #[new]
+    #[pyo3(signature = (scene, lookup=None, device=None, validate=false))]
+    fn new(
+        py: Python<'_>,
+        scene: &Scene,
+        lookup: Option<&str>,
+        device: Option<&str>,
+        validate: bool,
+    ) -> PyResult<Self> {
+        let scene = scene.scene.clone();
+        let inner = py.detach(|| -> PyResult<Inner> {
+            let (dev, info, lookup, log) = open(&scene, lookup, device, validate)?;
+            let frames = FrameWriter::new(&dev, &scene, lookup).map_err(errors::to_py)?;
+            check_validation(&log)?;
+            Ok(Inner {
+                frames,
+                objects: ObjectBounds::of(&scene),
+                scene,
+                device_name: info.name,
+                log,
+                next_frame: 0,
+                _device: dev,
+            })
+        })?;
+        Ok(Renderer {
+            inner: Mutex::new(Some(inner)),
+        })
+    }
+
+    /// The device it renders on.
+    #[getter]
+    fn device(&self) -> PyResult<String> {
+        self.with(|i| i.device_name.clone())
+    }
+
+    /// The colour image's mirror lookup.
+    #[getter]
+    fn lookup(&self) -> PyResult<String> {
+        self.with(|i| i.frames.lookup().to_string())
+    }
+
+    /// Where range and ids come from: `traced` (exact, the colour's light path), or `cube`
+    /// (the cube path's search; see docs/sensor.md "Ground truth").
+    #[getter]
+    fn ground_truth(&self) -> PyResult<String> {
+        let truth = self.with(|i| i.frames.ground_truth())?;
+        Ok(serde_json::to_value(truth)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_owned))
+            .unwrap_or_default())
+    }
+
+    /// One frame at `pose` (x, y, z, heading: the mirror's viewpoint in the scene file's
+    /// coordinates, metres, and the heading in degrees about +Y; default: the mirror where the
+    /// scene puts it at `time`, heading 0) and `time` (s): a dict of numpy arrays (see the
+    /// module's docs: `sensor`, `observer`, `ray_origin`, `ray_direction`, `mask`, `range`,
+    /// `ids`).
+    #[pyo3(signature = (pose=None, time=0.0))]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        pose: Option<[f64; 4]>,
+        time: f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let mut guard = self.lock()?;
+        let inner = open_inner(&mut guard)?;
+        let pose = match pose {
+            Some([x, y, z, heading]) => {
+                let array = numpy::ndarray::arr2(&[[x, y, z, heading]]);
+                poses::from_array(array.view(), Some(vec![time]))?.remove(0)
+            }
+            None => inner.scene_pose(time)?,
+        };
+        let layers = py.detach(|| inner.layers(&pose))?;
+        arrays::frame_dict(py, layers)
+    }
+
+    /// A batch of frames: `poses` a (B, 4) array of x, y, z, heading rows (as `render`), at
+    /// `times` (one per pose, or one for all). A dict of (B, H, W, C) arrays; with `out` (a
+    /// dict of arrays of those shapes and dtypes, e.g. the last call's result), the frames
+    /// are written into its arrays instead of new ones.
+    #[pyo3(signature = (poses, times=None, out=None))]
+    fn render_batch<'py>(
+        &self,
+        py: Python<'py>,
+        poses: PyReadonlyArray2<'py, f64>,
+        times: Option<Vec<f64>>,
+        out: Option<Bound<'py, PyDict>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let poses = poses::from_array(poses.as_array(), times)?;
+        if poses.is_empty() {
+            return Err(errors::error(
+                "poses: an empty batch (give at least one pose)",
+            ));
+        }
+        let mut guard = self.lock()?;
+        let inner = open_inner(&mut guard)?;
+        let mut batch = None;
+        for (b, pose) in poses.iter().enumerate() {
+            let layers = py.detach(|| inner.layers(pose))?;
+            let dict = match &batch {
+                Some(d) => d,
+                None => batch.insert(arrays::batch_dict(py, poses.len(), &layers, out.as_ref())?),
+            };
+            arrays::fill(dict, b, layers)?;
+        }
+        Ok(batch.expect("at least one pose"))
+    }
+
+    /// Releases the device now (also done when the renderer is garbage-collected).
+    fn close(&self) -> PyResult<()> {
+        *self.lock()? = None;
+        Ok(())
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    fn __exit__(
+        &self,
+        _kind: Option<Bound<'_, PyAny>>,
+        _value: Option<Bound<'_, PyAny>>,
+        _traceback: Option<Bound<'_, PyAny>>,
+    ) -> PyResult<bool> {
+        self.close()?;
+        Ok(false)
+    }
+}
+
+impl Renderer {
+    fn lock(&self) -> PyResult<MutexGuard<'_, Option<Inner>>> {
+        self.inner
+            .lock()
+            .map_err(|_| errors::error("the renderer failed in another thread; make a new one"))
+    }
+
+    fn with<T>(&self, f: impl FnOnce(&Inner) -> T) -> PyResult<T> {
+        let mut guard = self.lock()?;
+        Ok(f(open_inner(&mut guard)?))
+    }
+}
+
+fn open_inner<'a>(guard: &'a mut MutexGuard<'_, Option<Inner>>) -> PyResult<&'a mut Inner> {
+    guard
+        .as_mut()
+        .ok_or_else(|| errors::error("the renderer was closed"))
+}
+
+impl Inner {
+    /// The scene's own mirror at `time`, heading 0.
+    fn scene_pose(&self, time: f64) -> PyResult<Pose> {
+        if !(time.is_finite() && time >= 0.0) {
+            return Err(errors::error(
+                "time: must be a finite number of seconds >= 0",
+            ));
+        }
+        let state = specchio::scene::state::SceneState::at(&self.scene, time);
+        Ok(Pose {
+            at: Place::Entry(0),
+            time_s: time,
+            position: self.scene.origin + state.mirror_center.as_dvec3(),
+            heading_deg: 0.0,
+        })
+    }
+
+    /// The layers of the next frame, at `pose` (checked as a dataset's poses are).
+    fn layers(&mut self, pose: &Pose) -> PyResult<Layers> {
+        dataset::pose_fits(&self.scene, &self.objects, pose).map_err(|(field, why)| {
+            let at = match pose.at {
+                Place::Entry(i) => format!("poses[{i}]"),
+                Place::Line(n) => format!("line {n}"),
+            };
+            errors::error(format!("{at}: {field}: {why}"))
+        })?;
+        let frame = self.next_frame;
+        self.next_frame += 1;
+        let (outputs, observer) = self.frames.outputs(frame, pose).map_err(errors::to_py)?;
+        check_validation(&self.log)?;
+        Ok(Layers::new(outputs, &observer))
+    }
+}

@@ -1,0 +1,92 @@
+//! `specchio.Scene`: a scene file, loaded and checked.
+
+use std::path::PathBuf;
+
+use pyo3::prelude::*;
+
+use crate::errors;
+
+/// A scene loaded from its TOML file (docs/scene-format.md). Loading checks everything: a
+/// mistake raises `SpecchioError` naming the file, line and field.
+#[pyclass(module = "specchio", frozen)]
+pub struct Scene {
+    pub scene: specchio::scene::Scene,
+    pub path: PathBuf,
+}
+
+#[pymethods]
+impl Scene {
+    #[new]
+    fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let scene = py
+            .detach(|| specchio::scene::load(&path))
+            .map_err(errors::to_py)?;
+        Ok(Scene { scene, path })
+    }
+
+    /// The file it was loaded from.
+    #[getter]
+    fn path(&self) -> PathBuf {
+        self.path.clone()
+    }
+
+    /// The sensor camera's image size: (width, height) in pixels.
+    #[getter]
+    fn sensor_size(&self) -> (u32, u32) {
+        let [w, h] = self.scene.sensor.resolution;
+        (w, h)
+    }
+
+    /// The observer camera's image size: (width, height) in pixels.
+    #[getter]
+    fn observer_size(&self) -> (u32, u32) {
+        let [w, h] = self.scene.observer.resolution;
+        (w, h)
+    }
+
+    /// The mirror's shape (`sphere`, `hyperboloid`, `paraboloid`, `cone`).
+    #[getter]
+    fn mirror_shape(&self) -> &'static str {
+        self.scene.mirror.shape.kind.name
+    }
+
+    /// The mirror's viewpoint at time 0 in the file's coordinates (metres, +Y up).
+    #[getter]
+    fn mirror_position(&self) -> (f64, f64, f64) {
+        let p = self.scene.origin + self.scene.mirror.center.as_dvec3();
+        (p.x, p.y, p.z)
+    }
+
+    /// The scene frame's origin in the file's coordinates: ray origins and point positions
+    /// the renderer returns are relative to it (file = origin + local), as in the files.
+    #[getter]
+    fn origin(&self) -> (f64, f64, f64) {
+        let o = self.scene.origin;
+        (o.x, o.y, o.z)
+    }
+
+    /// The objects' names, in id order: object `i` has id `6 + i` in the `ids` layer (ids 0
+    /// to 5 are the walls +X, -X, +Y, -Y, +Z, -Z).
+    #[getter]
+    fn objects(&self) -> Vec<String> {
+        self.scene.objects.iter().map(|o| o.name.clone()).collect()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Scene({:?}: {} mirror, {} objects, sensor {}x{})",
+            self.path.display().to_string(),
+            self.scene.mirror.shape.kind.name,
+            self.scene.objects.len(),
+            self.scene.sensor.resolution[0],
+            self.scene.sensor.resolution[1]
+        )
+    }
+}
+
+impl Scene {
+    /// `errors::error` with the scene's file named first.
+    pub fn error(&self, text: impl std::fmt::Display) -> PyErr {
+        errors::error(format!("{}: {text}", self.path.display()))
+    }
+}

@@ -1,0 +1,105 @@
+"""specchio.dataset: in one process and on Ray, the same files as `specchio dataset`, byte
+for byte; all or nothing."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+import specchio
+from conftest import ROBOT_CSV, cli, scene_path, tree
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory):
+    """The command's dataset of the thesis room along ROBOT_CSV, and the folder it ran in."""
+    work = tmp_path_factory.mktemp("dataset")
+    (work / "robot.csv").write_text(ROBOT_CSV)
+    scene = str(scene_path("thesis-room"))
+    run = cli("dataset", scene, "--trajectory", "robot.csv", "--out", "cli", cwd=work)
+    assert run.returncode == 0, run.stderr
+    return work, scene
+
+
+def test_python_writes_what_the_command_writes(made, monkeypatch):
+    work, scene = made
+    monkeypatch.chdir(work)
+    seen = []
+    record = specchio.dataset(scene, "robot.csv", "py", progress=lambda d, n: seen.append((d, n)))
+    assert seen[-1] == (5, 5) and [d for d, _ in seen] == sorted(d for d, _ in seen)
+    want = tree(work / "cli")
+    assert len(want) >= 5 * 9 + 2
+    assert tree(work / "py") == want
+    assert json.loads((work / "py" / "dataset.json").read_text()) == record
+    assert record["frames"] == 5
+
+
+def test_ray_with_two_workers_writes_the_same_bytes(made, monkeypatch):
+    work, scene = made
+    monkeypatch.chdir(work)
+    seen = []
+    record = specchio.dataset(
+        scene,
+        "robot.csv",
+        "ray",
+        ray=True,
+        workers=2,
+        shard_size=2,
+        worker_env={"LP_NUM_THREADS": "1"},
+        progress=lambda d, n: seen.append(d),
+    )
+    assert seen[-1] == 5 and len(seen) == 3  # shards of 2, 2 and 1 poses
+    assert tree(work / "ray") == tree(work / "cli")
+    assert record["frames"] == 5
+
+
+def test_a_bad_trajectory_writes_nothing_and_names_line_and_field(made, monkeypatch):
+    work, scene = made
+    monkeypatch.chdir(work)
+    (work / "bad.csv").write_text("time,x,y,z,heading\n0,0,3,0,0\n1,9,3,0,0\n")
+    for ray in (False, True):
+        with pytest.raises(specchio.SpecchioError, match=r"bad.csv:3: position: the mirror"):
+            specchio.dataset(scene, "bad.csv", "bad", ray=ray)
+        assert not (work / "bad").exists()
+    with pytest.raises(specchio.SpecchioError, match="shard_size"):
+        specchio.dataset(scene, "robot.csv", "bad", ray=True, shard_size=0)
+    with pytest.raises(specchio.SpecchioError, match="ray=True"):
+        specchio.dataset(scene, "robot.csv", "bad", workers=2)
+    assert not (work / "bad").exists()
+
+
+def test_an_interrupted_run_writes_nothing(made, monkeypatch):
+    work, scene = made
+    monkeypatch.chdir(work)
+
+    def stop(done, total):
+        if done == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        specchio.dataset(scene, "robot.csv", "stopped", progress=stop)
+    assert not (work / "stopped").exists()
+    assert not [p for p in work.iterdir() if "stopped" in p.name]
+
+
+def test_the_output_takes_only_its_frames_files(made, monkeypatch):
+    work, scene = made
+    monkeypatch.chdir(work)
+    out = specchio.DatasetOutput(scene, "robot.csv", "parts")
+    for path in ["../escape.txt", "frames/000009/x.exr", "frames/000001/../../x", "/abs", "index.jsonl"]:
+        with pytest.raises(specchio.SpecchioError, match="frame folders"):
+            out.place([(path, b"x")])
+    with pytest.raises(specchio.SpecchioError, match="4 index lines for 5 frames"):
+        out.finish(["{}"] * 4, "plain", "cube")
+    del out
+    assert not (work / "parts").exists()
+
+
+def test_trajectories_read_as_python(made):
+    work, _ = made
+    poses = specchio.read_trajectory(work / "robot.csv")
+    assert poses[1] == {"time": 0.5, "position": [1.0, 3.0, 0.5], "heading": 45.0}
+    (work / "broken.csv").write_text("time,x,y,z,heading\n0,0,3,zero,0\n")
+    with pytest.raises(specchio.SpecchioError, match=r"broken.csv:2: z: `zero` is not a number"):
+        specchio.read_trajectory(work / "broken.csv")

@@ -1,0 +1,121 @@
+"""specchio.Renderer: a frame and a batch as numpy arrays, the caller's buffers, and errors
+that name what is wrong."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import specchio
+from conftest import scene_path, usable_devices
+
+SHAPES = {
+    "sensor": ((512, 512, 3), np.float32),
+    "observer": ((600, 800, 3), np.float32),
+    "ray_origin": ((512, 512, 3), np.float32),
+    "ray_direction": ((512, 512, 3), np.float32),
+    "mask": ((512, 512), np.bool_),
+    "range": ((512, 512), np.float32),
+    "ids": ((512, 512), np.uint32),
+}
+
+
+def test_a_frame_is_a_dict_of_arrays_of_known_shapes(renderer):
+    frame = renderer.render()
+    assert set(frame) == set(SHAPES)
+    for key, (shape, dtype) in SHAPES.items():
+        assert frame[key].shape == shape, key
+        assert frame[key].dtype == dtype, key
+    # The arrays take over the engine's samples: no copy is kept elsewhere.
+    assert frame["range"].base is not None and frame["range"].flags.c_contiguous
+
+
+def test_the_layers_say_the_same_as_the_geometry(renderer, thesis):
+    frame = renderer.render()
+    mask = frame["mask"]
+    # The thesis's sphere fills the middle of the sensor image, and only mirror pixels have rays.
+    assert 0.3 < mask.mean() < 0.6
+    assert not frame["ray_direction"][~mask].any() and not frame["range"][~mask].any()
+    lengths = np.linalg.norm(frame["ray_direction"][mask], axis=-1)
+    np.testing.assert_allclose(lengths, 1.0, atol=1e-5)
+    # Every ray leaves the sphere's surface: 1 m from its centre (the scene frame's origin is
+    # the mirror's centre here).
+    assert thesis.origin == thesis.mirror_position
+    radii = np.linalg.norm(frame["ray_origin"][mask], axis=-1)
+    np.testing.assert_allclose(radii, 1.0, atol=1e-4)
+    # A ray reaches what its id names: the room (ids 0..5) or the orbiter (6).
+    assert set(np.unique(frame["ids"][mask])) <= set(range(7))
+    assert (frame["ids"][~mask] == 2**32 - 1).all()
+
+
+def test_a_batch_is_the_frames_one_by_one_and_fills_given_buffers(renderer):
+    poses = np.array([[0.0, 3.0, 0.0, 0.0], [1.0, 3.0, 0.5, 45.0]])
+    singles = [renderer.render(pose=tuple(p), time=0.25) for p in poses]
+    batch = renderer.render_batch(poses, times=[0.25])
+    for key, (shape, dtype) in SHAPES.items():
+        assert batch[key].shape == (2, *shape) and batch[key].dtype == dtype, key
+        for b in range(2):
+            assert np.array_equal(batch[key][b], singles[b][key]), key
+    # The frames differ: the robot moved and turned.
+    assert not np.array_equal(batch["sensor"][0], batch["sensor"][1])
+    # out=: the same arrays, written again (the poses swapped).
+    again = renderer.render_batch(poses[::-1].copy(), times=[0.25, 0.25], out=batch)
+    for key in SHAPES:
+        assert again[key] is batch[key]
+        assert np.array_equal(batch[key][0], singles[1][key]), key
+
+
+def test_wrong_buffers_and_poses_are_named(renderer):
+    poses = np.array([[0.0, 3.0, 0.0, 0.0]])
+    out = renderer.render_batch(poses)
+    out["range"] = np.zeros((1, 512, 512), dtype=np.float64)
+    with pytest.raises(specchio.SpecchioError, match=r'out\["range"\].*float32'):
+        renderer.render_batch(poses, out=out)
+    out["range"] = np.zeros((2, 512, 512), dtype=np.float32)
+    with pytest.raises(specchio.SpecchioError, match=r'out\["range"\].*\(1, 512, 512\)'):
+        renderer.render_batch(poses, out=out)
+    with pytest.raises(specchio.SpecchioError, match=r"poses\[1\]: position: the mirror .* not entirely inside the room"):
+        renderer.render_batch(np.array([[0.0, 3.0, 0.0, 0.0], [9.0, 3.0, 0.0, 0.0]]))
+    with pytest.raises(specchio.SpecchioError, match=r"poses: 3 columns"):
+        renderer.render_batch(np.zeros((1, 3)))
+    with pytest.raises(specchio.SpecchioError, match=r"times: 3 values for 1 poses"):
+        renderer.render_batch(poses, times=[0.0, 1.0, 2.0])
+    with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: time"):
+        renderer.render_batch(poses, times=[-1.0])
+    with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: position: every value"):
+        renderer.render_batch(np.array([[np.nan, 3.0, 0.0, 0.0]]))
+
+
+def test_a_scene_error_names_file_line_and_field(tmp_path):
+    text = scene_path("thesis-room").read_text().replace("radius = 1.0", "radius = -1.0", 1)
+    assert "radius = -1.0" in text
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text)
+    # The scene's textures, where it names them.
+    (tmp_path / "textures").symlink_to(scene_path("thesis-room").parent / "textures")
+    with pytest.raises(specchio.SpecchioError) as e:
+        specchio.Scene(bad)
+    line = next(i for i, l in enumerate(text.splitlines(), 1) if "radius = -1.0" in l)
+    assert f"bad.toml:{line}" in str(e.value) and "radius" in str(e.value)
+    with pytest.raises(specchio.SpecchioError, match="missing.toml"):
+        specchio.Scene(tmp_path / "missing.toml")
+
+
+def test_lookups_and_devices_are_checked(thesis):
+    with pytest.raises(specchio.SpecchioError, match="`mirror` is not a lookup"):
+        specchio.Renderer(thesis, lookup="mirror")
+    with pytest.raises(specchio.SpecchioError, match="no-such-device"):
+        specchio.Renderer(thesis, device="no-such-device")
+    r = specchio.Renderer(thesis, lookup="plain")
+    r.close()
+    with pytest.raises(specchio.SpecchioError, match="closed"):
+        r.render()
+
+
+@pytest.mark.parametrize("device", usable_devices())
+def test_every_device_renders_and_says_where_its_labels_come_from(thesis, device):
+    with specchio.Renderer(thesis, device=device) as r:
+        frame = r.render(pose=(0.5, 3.0, 0.0, 30.0))
+        # Ray queries give traced labels; a device without them falls back to the cube's.
+        assert (r.lookup, r.ground_truth) in {("ray-query", "traced"), ("plain", "cube")}
+        assert frame["mask"].any() and np.isfinite(frame["sensor"]).all()
