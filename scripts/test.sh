@@ -25,8 +25,16 @@ rm -rf target/wheels
 .venv/bin/python -m maturin build --quiet --locked --profile dev -m python/Cargo.toml -o target/wheels
 .venv/bin/python -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps target/wheels/specchio-*.whl
 # (cargo adds the project-local SwiftShader for its tests, .cargo/config.toml; pytest too.)
+# The Ray tests start a local Ray, whose processes talk over the machine's network address:
+# where we may (root), they run in a network namespace of their own with only the loopback
+# interface, so that no test traffic leaves it.
+offline=()
+if unshare --net true 2>/dev/null && command -v ip >/dev/null; then
+    offline=(unshare --net sh -c 'ip link set lo up && exec "$@"' sh)
+fi
 VK_ADD_DRIVER_FILES="${VK_ADD_DRIVER_FILES:-$PWD/.drivers/swiftshader/vk_swiftshader_icd.json}" \
-SPECCHIO_BIN="$PWD/target/debug/specchio" .venv/bin/python -m pytest -q -p no:cacheprovider python/tests || status=$?
+SPECCHIO_BIN="$PWD/target/debug/specchio" \
+    "${offline[@]}" .venv/bin/python -m pytest -q -p no:cacheprovider python/tests || status=$?
 skipped=0
 not_applicable=0
 if [ -f "$SPECCHIO_SKIP_LOG" ]; then

@@ -2,15 +2,16 @@
 //! pose (the image, ray map, range, ids and their map, panoramas, camera.json, the pose in the
 //! scene's frame and ROS REP-103's, a point cloud), and `index.jsonl`, one line per frame, for
 //! a data loader (docs/sensor.md, "Datasets"). All or nothing, like every output. The frames
-//! are the engine's `sensor::dataset::writer`'s, as the Python package's.
+//! are the engine's `render::dataset`'s, as the Python package's.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
 use specchio::output::Transaction;
+use specchio::process::probe;
+use specchio::render::dataset::{self as writer, DatasetError, FrameWriter, Plan, SUMMARY_FILE};
 use specchio::scene::Lookup;
-use specchio::sensor::dataset::writer::{self, FrameWriter, Plan, SUMMARY_FILE};
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 #[derive(clap::Args)]
@@ -46,7 +47,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;
     let log = instance.validation_log();
     let (device, _, lookup) =
-        writer::open(&instance, args.device.as_deref(), args.lookup, &plan.scene)?;
+        probe::device_for_sensor(&instance, args.device.as_deref(), args.lookup, &plan.scene)?;
     drop(instance);
     let mut frames = FrameWriter::new(&device, &plan.scene, lookup)?;
     let truth = frames.ground_truth();
@@ -59,9 +60,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let n = plan.poses.len();
     let index = writer::write_frames(&out, &args.out, &plan, &mut frames, &mut |i| {
         progress.set_position(i as u64);
-        Ok(specchio::process::interrupt::check(&format!(
-            "after {i} of {n} frames"
-        ))?)
+        let done = format!("after {i} of {n} frames");
+        specchio::process::interrupt::check(&done).map_err(|e| DatasetError::Stopped(e.to_string()))
     })?;
     progress.finish_and_clear();
     drop(frames);

@@ -288,11 +288,12 @@ fn nothing_below_imports_the_process_module() {
 }
 
 /// The workspace's crates, by folder, with the workspace crates each may depend on.
-const CRATE_ARROWS: [(&str, &[&str]); 4] = [
+const CRATE_ARROWS: [(&str, &[&str]); 5] = [
     ("engine", &[]),
     ("bench", &["engine"]),
     ("viewer", &["engine"]),
     ("cli", &["engine", "bench", "viewer"]),
+    ("python", &["engine"]),
 ];
 
 /// The workspace crates (by folder) that the manifest in `folder` depends on, in any of its

@@ -25,6 +25,7 @@ from ._specchio import (
     __version__,
     calibrate,
     devices,
+    read_exr,
     read_trajectory,
     reference,
 )
@@ -40,6 +41,7 @@ __all__ = [
     "calibrate",
     "dataset",
     "devices",
+    "read_exr",
     "read_trajectory",
     "reference",
 ]

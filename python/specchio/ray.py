@@ -44,6 +44,12 @@ class _Worker:
         return indices, self.frames.frames(indices)
 
 
+def init_options() -> dict[str, Any]:
+    """How ``dataset`` starts Ray when it is not running: joining ``RAY_ADDRESS``'s cluster,
+    or a local one (``address=None``), its workers' output kept out of the driver's."""
+    return {"address": os.environ.get("RAY_ADDRESS") or None, "log_to_driver": False}
+
+
 def dataset(
     scene,
     trajectory,
@@ -71,7 +77,7 @@ def dataset(
     n = len(output)
     started = not ray.is_initialized()
     if started:
-        ray.init(address=os.environ.get("RAY_ADDRESS") or None, log_to_driver=False)
+        ray.init(**init_options())
     actors = []
     try:
         count = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))

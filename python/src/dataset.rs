@@ -1,7 +1,7 @@
 //! Datasets from Python: in one process (`dataset`), or in parts for a pool of workers
 //! (`DatasetFrames` renders shards of poses where a worker runs, `DatasetOutput` writes what
 //! they return where the driver runs: specchio/ray.py). Both are the engine's
-//! `sensor::dataset::writer`, so both write the same bytes as `specchio dataset`.
+//! `render::dataset`, so both write the same bytes as `specchio dataset`.
 
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
@@ -9,8 +9,8 @@ use std::sync::{Mutex, MutexGuard};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use specchio::output::Transaction;
+use specchio::render::dataset::{self as writer, DatasetError, Frame, FrameWriter, Plan};
 use specchio::scene::Lookup;
-use specchio::sensor::dataset::writer::{self, DatasetError, Frame, FrameWriter, Plan};
 use specchio::sensor::GroundTruth;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
@@ -58,7 +58,8 @@ pub fn dataset(
         staged.folder(&out, writer::SUMMARY_FILE)?;
         let instance = Instance::create(&InstanceDesc::from_env(validate))?;
         let log = instance.validation_log();
-        let (dev, _, lookup) = writer::open(&instance, device, asked, &plan.scene)?;
+        let (dev, _, lookup) =
+            specchio::process::probe::device_for_sensor(&instance, device, asked, &plan.scene)?;
         drop(instance);
         let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
         let truth = frames.ground_truth();
@@ -74,7 +75,9 @@ pub fn dataset(
             })
             .map_err(|e| {
                 stopped = Some(e);
-                DatasetError::Stopped(format!("after {i} of {n} frames"))
+                DatasetError::Stopped(format!(
+                    "stopped after {i} of {n} frames: nothing was written"
+                ))
             })
         })?;
         drop(frames);
@@ -124,7 +127,8 @@ impl DatasetFrames {
             let plan = Plan::read(&scene, &trajectory)?;
             let instance = Instance::create(&InstanceDesc::from_env(validate))?;
             let log = instance.validation_log();
-            let (dev, _, lookup) = writer::open(&instance, device, asked, &plan.scene)?;
+            let (dev, _, lookup) =
+                specchio::process::probe::device_for_sensor(&instance, device, asked, &plan.scene)?;
             let frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
             Ok(DatasetFrames {
                 plan,

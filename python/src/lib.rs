@@ -11,6 +11,7 @@
 mod arrays;
 mod dataset;
 mod errors;
+mod files;
 mod poses;
 mod reference;
 mod renderer;
@@ -41,5 +42,6 @@ fn _specchio(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(reference::reference, m)?)?;
     m.add_function(wrap_pyfunction!(reference::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(dataset::dataset, m)?)?;
+    m.add_function(wrap_pyfunction!(files::read_exr, m)?)?;
     Ok(())
 }

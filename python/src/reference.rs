@@ -6,9 +6,10 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use specchio::output::Transaction;
 use specchio::reference::Reference;
+use specchio::render::dataset as writer;
 use specchio::sensor::central::{folder, Calibration};
+use specchio::sensor::dataset;
 use specchio::sensor::dataset::trajectory::{Place, Pose};
-use specchio::sensor::dataset::{self, writer};
 use specchio::sensor::SensorOutputs;
 
 use crate::arrays::{self, Layers};

@@ -5,9 +5,9 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use specchio::render::dataset::FrameWriter;
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::trajectory::{Place, Pose};
-use specchio::sensor::dataset::writer::{self, FrameWriter};
 use specchio::sensor::dataset::{self, ObjectBounds};
 use specchio::vk::device::{self, Device, DeviceInfo};
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
@@ -49,7 +49,8 @@ pub fn open(
     let instance = Instance::create(&InstanceDesc::from_env(validate)).map_err(errors::to_py)?;
     let log = instance.validation_log();
     let (device, chosen, lookup) =
-        writer::open(&instance, selector, lookup, scene).map_err(errors::to_py)?;
+        specchio::process::probe::device_for_sensor(&instance, selector, lookup, scene)
+            .map_err(errors::to_py)?;
     Ok((device, chosen, lookup, log))
 }
 

@@ -4,7 +4,11 @@ for byte; all or nothing."""
 from __future__ import annotations
 
 import json
+import os
+import signal
+import subprocess
 
+import numpy as np
 import pytest
 
 import specchio
@@ -52,6 +56,30 @@ def test_ray_with_two_workers_writes_the_same_bytes(made, monkeypatch):
     assert seen[-1] == 5 and len(seen) == 3  # shards of 2, 2 and 1 poses
     assert tree(work / "ray") == tree(work / "cli")
     assert record["frames"] == 5
+
+
+def test_a_killed_worker_is_restarted_and_its_shard_retried(made, monkeypatch):
+    work, scene = made
+    monkeypatch.chdir(work)
+    killed = []
+
+    def kill_a_worker(done, total):
+        # After the first shard, while the other worker renders: SIGKILL one worker process.
+        if killed:
+            return
+        ps = subprocess.run(["pgrep", "-af", "ray::"], capture_output=True, text=True)
+        workers = [
+            int(line.split()[0])
+            for line in ps.stdout.splitlines()
+            if line.split(None, 1)[1].startswith("ray::_Worker")
+        ]
+        assert workers, ps.stdout
+        os.kill(workers[0], signal.SIGKILL)
+        killed.append(workers[0])
+
+    specchio.dataset(scene, "robot.csv", "killed", ray=True, workers=2, shard_size=1, progress=kill_a_worker)
+    assert killed
+    assert tree(work / "killed") == tree(work / "cli")
 
 
 def test_a_bad_trajectory_writes_nothing_and_names_line_and_field(made, monkeypatch):
@@ -103,3 +131,38 @@ def test_trajectories_read_as_python(made):
     (work / "broken.csv").write_text("time,x,y,z,heading\n0,0,3,zero,0\n")
     with pytest.raises(specchio.SpecchioError, match=r"broken.csv:2: z: `zero` is not a number"):
         specchio.read_trajectory(work / "broken.csv")
+
+
+def test_the_renderer_gives_the_dataset_frames_layers(made):
+    """A batch at the trajectory's poses is the dataset, layer for layer (read back with
+    specchio.read_exr): one far plane and one renderer set-up for both."""
+    work, scene = made
+    poses = specchio.read_trajectory(work / "robot.csv")
+    array = np.array([[*p["position"], p["heading"]] for p in poses])
+    with specchio.Renderer(specchio.Scene(scene)) as r:
+        batch = r.render_batch(array, times=[p["time"] for p in poses])
+    for i in range(len(poses)):
+        folder = work / "cli" / "frames" / f"{i:06d}"
+        colour = specchio.read_exr(folder / "sensor.exr")
+        assert np.array_equal(np.stack([colour[c] for c in "RGB"], -1), batch["sensor"][i])
+        rays = specchio.read_exr(folder / "sensor.rays.exr")
+        origin = np.stack([rays[f"origin.{c}"] for c in "XYZ"], -1)
+        direction = np.stack([rays[f"direction.{c}"] for c in "XYZ"], -1)
+        assert np.array_equal(origin, batch["ray_origin"][i])
+        assert np.array_equal(direction, batch["ray_direction"][i])
+        assert np.array_equal(rays["mask"] == 1.0, batch["mask"][i])
+        assert np.array_equal(specchio.read_exr(folder / "sensor.range.exr")["range"], batch["range"][i])
+        ids = specchio.read_exr(folder / "sensor.id.exr")["id"]
+        assert ids.dtype == np.uint32 and np.array_equal(ids, batch["ids"][i])
+
+
+def test_read_exr_refuses_what_is_not_an_exr(made):
+    work, _ = made
+    with pytest.raises(specchio.SpecchioError, match="robot.csv: not an OpenEXR image"):
+        specchio.read_exr(work / "robot.csv")
+    with pytest.raises(specchio.SpecchioError, match="nothing.exr"):
+        specchio.read_exr(work / "nothing.exr")
+    truncated = work / "truncated.exr"
+    truncated.write_bytes((work / "cli" / "frames" / "000000" / "sensor.exr").read_bytes()[:5000])
+    with pytest.raises(specchio.SpecchioError, match="truncated.exr"):
+        specchio.read_exr(truncated)

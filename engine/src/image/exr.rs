@@ -75,6 +75,42 @@ pub fn layer_sizes(bytes: &[u8]) -> Result<Vec<(usize, usize)>, Error> {
         .collect())
 }
 
+/// The most channels a layer may have for [`decode_channels`] (the sensor's ray map has 7).
+pub const MAX_CHANNELS: usize = 64;
+
+/// The first layer's size and every channel of it by name, from bytes whose header was
+/// checked ([`layer_sizes`]); a layer of more than [`MAX_CHANNELS`] channels is refused from
+/// the header, before any pixel memory is allocated.
+pub fn decode_channels(bytes: &[u8]) -> Result<((usize, usize), Vec<(String, Channel)>), Error> {
+    let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)?;
+    if let Some(h) = meta
+        .headers
+        .iter()
+        .find(|h| h.channels.list.len() > MAX_CHANNELS)
+    {
+        return Err(Error::Invalid(
+            format!(
+                "{} channels; at most {MAX_CHANNELS} are read",
+                h.channels.list.len()
+            )
+            .into(),
+        ));
+    }
+    use ::exr::prelude::{ReadChannels as _, ReadLayers as _};
+    let image = ::exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))?;
+    let size = (image.layer_data.size.0, image.layer_data.size.1);
+    let channels = (image.layer_data.channel_data.list.into_iter())
+        .map(|c| (c.name.to_string(), c.sample_data))
+        .collect();
+    Ok((size, channels))
+}
+
 /// The first RGBA layer as 32-bit float (alpha 1 when the file has none).
 pub fn decode_rgba(bytes: &[u8]) -> Result<RgbaImage, Error> {
     use ::exr::prelude::{ReadChannels as _, ReadLayers as _};

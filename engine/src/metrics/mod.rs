@@ -134,8 +134,24 @@ impl Comparison {
 
 /// The first RGBA layer of an OpenEXR file, as 32-bit float (alpha 1 when the file has none).
 pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
-    // One read, through the loaders' regular-file reader (a FIFO would block, a folder fail
-    // late); the header check and the decoding both work on these bytes.
+    let bytes = read_checked_exr(path)?;
+    exr::decode_rgba(&bytes).map_err(|e| exr_error(path, e))
+}
+
+/// Every channel of the first layer of an OpenEXR file by name, with the layer's size
+/// (width, height), read with the same limits as [`read_exr`] (the Python package's
+/// `read_exr`: the sensor's layers by channel name).
+pub fn read_exr_channels(
+    path: &Path,
+) -> Result<((usize, usize), Vec<(String, exr::Channel)>), MetricsError> {
+    let bytes = read_checked_exr(path)?;
+    exr::decode_channels(&bytes).map_err(|e| exr_error(path, e))
+}
+
+/// An OpenEXR file's bytes, in one read through the loaders' regular-file reader (a FIFO
+/// would block, a folder fail late), its header checked against the limits; the decoding
+/// works on these bytes.
+fn read_checked_exr(path: &Path) -> Result<Vec<u8>, MetricsError> {
     let bytes = read_regular_file(path, MAX_INPUT_FILE_BYTES).map_err(|e| match e {
         FileError::NotFound { .. } => MetricsError::Missing {
             path: path.to_owned(),
@@ -146,7 +162,7 @@ pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
         },
     })?;
     check_exr_size(path, &bytes)?;
-    exr::decode_rgba(&bytes).map_err(|e| exr_error(path, e))
+    Ok(bytes)
 }
 
 /// The largest image side the metrics read: twice the largest view specchio writes (8192 px),

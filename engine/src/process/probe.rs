@@ -17,7 +17,9 @@ use std::process::{Command, Stdio};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use crate::render::dataset::{choose_lookup, DatasetError};
 use crate::render::methods::Method;
+use crate::scene::{Lookup, Scene};
 use crate::vk::device::{Device, DeviceDesc, DeviceInfo, OptionalFeatures};
 use crate::vk::instance::Instance;
 use crate::vk::GpuError;
@@ -98,6 +100,22 @@ pub fn device_for(
         features,
     };
     Device::create(instance, &desc)
+}
+
+/// The device `selector` names (see `specchio info`) for the robot's sensor of `scene` (a
+/// dataset, the Python renderer), with the lookup `render::dataset::choose_lookup` gives for
+/// `asked`: the device made with what that lookup needs, its description, and the lookup.
+pub fn device_for_sensor(
+    instance: &Arc<Instance>,
+    selector: Option<&str>,
+    asked: Option<Lookup>,
+    scene: &Scene,
+) -> Result<(Arc<Device>, DeviceInfo, Lookup), DatasetError> {
+    let chosen = crate::vk::device::choose(instance, selector)?;
+    let lookup = choose_lookup(asked, scene, &chosen)?;
+    let features = crate::render::lookups::features(lookup);
+    let device = device_for(instance, selector, &[], features)?;
+    Ok((device, chosen, lookup))
 }
 
 /// Splits `methods` into those that can run on the device and those that cannot, with why.

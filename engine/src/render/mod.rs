@@ -14,6 +14,7 @@
 
 pub mod budget;
 pub mod cube_fill;
+pub mod dataset;
 pub mod display;
 mod draw;
 pub mod floors;

@@ -5,12 +5,11 @@
 //! This module holds what does not need a GPU: the trajectory ([`trajectory`]), the frames'
 //! transform ([`rep103`]), the point clouds ([`ply`]), the check that a pose can be rendered
 //! ([`pose_fits`]) and the records;
-//! [`writer`] renders the frames, for the command and for the Python package.
+//! `render::dataset` renders the frames, for the command and for the Python package.
 
 pub mod ply;
 pub mod rep103;
 pub mod trajectory;
-pub mod writer;
 
 use glam::{DMat3, Vec3};
 use serde::Serialize;

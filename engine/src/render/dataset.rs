@@ -12,16 +12,14 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use super::trajectory::{self, Pose, TrajectoryError};
-use super::{DatasetRecord, IndexLine, PoseRecord};
+use super::{lookups, Readback, RenderOptions, Renderer};
 use crate::memory::MemoryError;
 use crate::output::{MemoryFiles, OutputError, Sink, Transaction};
-use crate::process::interrupt::Interrupted;
-use crate::render::{lookups, Readback, RenderOptions, Renderer};
 use crate::scene::{Lookup, RefreshPolicy, Scene, SceneError};
+use crate::sensor::dataset::trajectory::{self, Pose, TrajectoryError};
+use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
 use crate::sensor::{GroundTruth, SensorOutputs};
 use crate::vk::device::Device;
-use crate::vk::instance::Instance;
 use crate::vk::physical::DeviceInfo;
 use crate::vk::GpuError;
 
@@ -45,10 +43,9 @@ pub enum DatasetError {
     Gpu(#[from] GpuError),
     #[error(transparent)]
     Output(#[from] OutputError),
-    #[error(transparent)]
-    Interrupted(#[from] Interrupted),
-    /// The caller stopped the run (Python's KeyboardInterrupt between frames).
-    #[error("stopped {0}: nothing was written")]
+    /// The run was stopped between frames (a signal, Python's KeyboardInterrupt); the text
+    /// says how far it got.
+    #[error("{0}")]
     Stopped(String),
     #[error("frame {frame}: its sensor layers were not read back (a bug)")]
     NotReadBack { frame: usize },
@@ -68,9 +65,9 @@ impl Plan {
     pub fn read(scene_path: &Path, trajectory_path: &Path) -> Result<Plan, DatasetError> {
         let scene = crate::scene::load(scene_path)?;
         let poses = trajectory::read(trajectory_path)?;
-        let objects = super::ObjectBounds::of(&scene);
+        let objects = sensor_dataset::ObjectBounds::of(&scene);
         for pose in &poses {
-            super::pose_fits(&scene, &objects, pose).map_err(|(field, why)| {
+            sensor_dataset::pose_fits(&scene, &objects, pose).map_err(|(field, why)| {
                 TrajectoryError::invalid(trajectory_path, Some(pose.at), field, why)
             })?;
         }
@@ -99,8 +96,8 @@ impl Plan {
             ground_truth: truth,
             index: INDEX_FILE,
             scene_origin_m: self.scene.origin.to_array(),
-            scene_to_ros: super::scene_to_ros_rows(),
-            frame_files: super::FRAME_FILES,
+            scene_to_ros: sensor_dataset::scene_to_ros_rows(),
+            frame_files: sensor_dataset::FRAME_FILES,
         }
     }
 }
@@ -133,22 +130,6 @@ pub fn choose_lookup(
     }
 }
 
-/// A device for the dataset of `scene` on the device `selector` names (see `specchio info`),
-/// with the lookup [`choose_lookup`] gives for `asked`: the device made with what that lookup
-/// needs, its description, and the lookup.
-pub fn open(
-    instance: &Arc<Instance>,
-    selector: Option<&str>,
-    asked: Option<Lookup>,
-    scene: &Scene,
-) -> Result<(Arc<Device>, DeviceInfo, Lookup), DatasetError> {
-    let chosen = crate::vk::device::choose(instance, selector)?;
-    let lookup = choose_lookup(asked, scene, &chosen)?;
-    let features = lookups::features(lookup);
-    let device = crate::process::probe::device_for(instance, selector, &[], features)?;
-    Ok((device, chosen, lookup))
-}
-
 /// The scene as the robot's renderer holds it: the mirror still (poses move it), the cube
 /// refreshed on every move (a policy that skips frames would show the room from where the
 /// robot was), and a far plane that clips no room corner from anywhere the cube can be.
@@ -156,15 +137,15 @@ pub fn robot_scene(scene: &Scene) -> Scene {
     let mut robot = scene.clone();
     robot.mirror.animation = None;
     robot.refresh = RefreshPolicy::OnChange;
-    robot.cube.far_m = super::far_plane(scene);
+    robot.cube.far_m = sensor_dataset::far_plane(scene);
     robot
 }
 
 /// Stands the robot (`robot_scene(scene)`) at `pose`: its mirror moved there, its sensor
 /// turned by the pose's heading.
 pub fn place_robot(robot: &mut Scene, scene: &Scene, pose: &Pose) {
-    robot.mirror.center = super::local_position(scene, pose);
-    robot.sensor = super::turned_sensor(scene, pose);
+    robot.mirror.center = sensor_dataset::local_position(scene, pose);
+    robot.sensor = sensor_dataset::turned_sensor(scene, pose);
 }
 
 /// One frame of a dataset: its files (paths relative to the dataset folder) and its index
@@ -246,7 +227,7 @@ impl FrameWriter {
     /// Frame `frame` of a dataset, at `pose`: its files, in memory.
     pub fn frame(&mut self, frame: usize, pose: &Pose) -> Result<Frame, DatasetError> {
         let (outputs, _) = self.outputs(frame, pose)?;
-        let folder = super::frame_folder(frame);
+        let folder = sensor_dataset::frame_folder(frame);
         let record = PoseRecord::new(frame, pose, &outputs);
         let root = Path::new("");
         let files = MemoryFiles::new(root);
@@ -285,10 +266,10 @@ fn write_frame(
         ),
         "id: the drawable the ray met (sensor.id.json)".to_owned(),
     ];
-    let points = super::points(o);
+    let points = sensor_dataset::points(o);
     out.write_bytes(
         &dir.join("points.ply"),
-        &super::ply::ply(&points, &comments),
+        &sensor_dataset::ply::ply(&points, &comments),
     )
 }
 
