@@ -15,7 +15,10 @@ use crate::errors;
 /// The file is read with the same limits as `specchio compare`'s inputs (16384 px a side).
 #[pyfunction]
 pub fn read_exr<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
-    let ((w, h), channels) = py
+    let specchio::image::exr::Layer {
+        size: (w, h),
+        channels,
+    } = py
         .detach(|| specchio::metrics::read_exr_channels(&path))
         .map_err(errors::to_py)?;
     let dict = PyDict::new(py);

@@ -78,10 +78,17 @@ pub fn layer_sizes(bytes: &[u8]) -> Result<Vec<(usize, usize)>, Error> {
 /// The most channels a layer may have for [`decode_channels`] (the sensor's ray map has 7).
 pub const MAX_CHANNELS: usize = 64;
 
-/// The first layer's size and every channel of it by name, from bytes whose header was
-/// checked ([`layer_sizes`]); a layer of more than [`MAX_CHANNELS`] channels is refused from
-/// the header, before any pixel memory is allocated.
-pub fn decode_channels(bytes: &[u8]) -> Result<((usize, usize), Vec<(String, Channel)>), Error> {
+/// One layer of an EXR file: its size (width, height) and its channels by name, each of
+/// width × height samples, rows from the top.
+pub struct Layer {
+    pub size: (usize, usize),
+    pub channels: Vec<(String, Channel)>,
+}
+
+/// The first layer, every channel of it, from bytes whose header was checked
+/// ([`layer_sizes`]); a layer of more than [`MAX_CHANNELS`] channels is refused from the
+/// header, before any pixel memory is allocated.
+pub fn decode_channels(bytes: &[u8]) -> Result<Layer, Error> {
     let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)?;
     if let Some(h) = meta
         .headers
@@ -108,7 +115,7 @@ pub fn decode_channels(bytes: &[u8]) -> Result<((usize, usize), Vec<(String, Cha
     let channels = (image.layer_data.channel_data.list.into_iter())
         .map(|c| (c.name.to_string(), c.sample_data))
         .collect();
-    Ok((size, channels))
+    Ok(Layer { size, channels })
 }
 
 /// The first RGBA layer as 32-bit float (alpha 1 when the file has none).

@@ -141,9 +141,7 @@ pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
 /// Every channel of the first layer of an OpenEXR file by name, with the layer's size
 /// (width, height), read with the same limits as [`read_exr`] (the Python package's
 /// `read_exr`: the sensor's layers by channel name).
-pub fn read_exr_channels(
-    path: &Path,
-) -> Result<((usize, usize), Vec<(String, exr::Channel)>), MetricsError> {
+pub fn read_exr_channels(path: &Path) -> Result<exr::Layer, MetricsError> {
     let bytes = read_checked_exr(path)?;
     exr::decode_channels(&bytes).map_err(|e| exr_error(path, e))
 }
