@@ -9,8 +9,8 @@
 //! - [`crate::process`], what the programs on top share, is imported by nothing below it.
 //!
 //! And one rule for the crates of the workspace, read from their manifests: the engine
-//! depends on none of them, the benchmark and the viewer on the engine only, the CLI on
-//! those three.
+//! depends on none of them, the benchmark, the viewer and the Python package on the engine only,
+//! the CLI on the engine, the benchmark and the viewer.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
