@@ -9,9 +9,13 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use specchio::output::Transaction;
+use specchio::process::args::{real, whole};
 use specchio::process::probe;
-use specchio::render::dataset::{self as writer, DatasetError, FrameWriter, Plan, SUMMARY_FILE};
+use specchio::render::dataset::{
+    self as writer, DatasetError, FrameWriter, Plan, Poses, SUMMARY_FILE,
+};
 use specchio::scene::Lookup;
+use specchio::sensor::dataset::grid;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 #[derive(clap::Args)]
@@ -19,8 +23,20 @@ pub struct Args {
     /// The scene file (TOML; see docs/scene-format.md).
     scene: PathBuf,
     /// The robot's trajectory: CSV (`time,x,y,z,heading`) or JSON (docs/sensor.md).
-    #[arg(long)]
-    trajectory: PathBuf,
+    #[arg(long, required_unless_present = "grid", conflicts_with = "grid")]
+    trajectory: Option<PathBuf>,
+    /// Instead of a trajectory, a pose grid: the robot at every place of a square grid of
+    /// this spacing (metres) over the floor where it fits, at the mirror's height.
+    #[arg(long, allow_negative_numbers = true, value_parser = real(0.0, true, f64::INFINITY))]
+    grid: Option<f64>,
+    /// With --grid: headings per grid place, evenly spaced from 0 degrees, 1..=360 (default 1).
+    #[arg(long, requires = "grid", conflicts_with = "trajectory", allow_negative_numbers = true,
+          value_parser = whole(1..=grid::MAX_HEADINGS))]
+    headings: Option<u32>,
+    /// With --grid: the scene time of every pose in seconds (finite, >= 0; default 0).
+    #[arg(long, requires = "grid", conflicts_with = "trajectory", allow_negative_numbers = true,
+          value_parser = real(0.0, false, f64::INFINITY))]
+    time: Option<f64>,
     /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
@@ -38,7 +54,16 @@ pub struct Args {
 
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Every input checked before the output folder exists.
-    let plan = Plan::read(&args.scene, &args.trajectory)?;
+    let poses = match (&args.trajectory, args.grid) {
+        (Some(path), _) => Poses::Trajectory(path),
+        (None, Some(spacing_m)) => Poses::Grid {
+            spacing_m,
+            headings: args.headings.unwrap_or(1),
+            time_s: args.time.unwrap_or(0.0),
+        },
+        (None, None) => anyhow::bail!("give the poses: --trajectory FILE or --grid SPACING"),
+    };
+    let plan = Plan::new(&args.scene, poses)?;
     let mut out = Transaction::new();
     out.folder(&args.out, SUMMARY_FILE)?;
     specchio::process::interrupt::catch();
@@ -73,7 +98,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         "{} frame(s) of {} along {} ({lookup} lookup, {} ground truth) into {}",
         plan.poses.len(),
         args.scene.display(),
-        args.trajectory.display(),
+        plan.trajectory,
         serde_json::to_value(truth)?.as_str().unwrap_or("?"),
         args.out.display()
     );

@@ -39,6 +39,7 @@ fn _specchio(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<dataset::DatasetOutput>()?;
     m.add_function(wrap_pyfunction!(devices, m)?)?;
     m.add_function(wrap_pyfunction!(poses::read_trajectory, m)?)?;
+    m.add_function(wrap_pyfunction!(poses::pose_grid, m)?)?;
     m.add_function(wrap_pyfunction!(reference::reference, m)?)?;
     m.add_function(wrap_pyfunction!(reference::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(dataset::dataset, m)?)?;

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use glam::DVec3;
 use numpy::ndarray::ArrayView2;
+use numpy::PyArrayMethods;
 use pyo3::prelude::*;
 use specchio::sensor::dataset::trajectory::{self, Place, Pose};
 
@@ -28,6 +29,29 @@ pub fn read_trajectory(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny>>
             Ok(d.into_any().unbind())
         })
         .collect()
+}
+
+/// The pose grid of `specchio dataset --grid`: the robot at every place of a square grid of
+/// `spacing` metres over the floor where it fits (at the mirror's height in the file), each
+/// turned to `headings` evenly spaced headings from 0 degrees, at `time`. A (B, 4) float64
+/// array of x, y, z, heading rows (the scene file's coordinates, degrees), in grid order: what
+/// `Renderer.render_batch` takes, or a trajectory's rows (`time,x,y,z,heading` with the time).
+#[pyfunction]
+#[pyo3(signature = (scene, spacing, headings=1, time=0.0))]
+pub fn pose_grid<'py>(
+    py: Python<'py>,
+    scene: &crate::scene::Scene,
+    spacing: f64,
+    headings: u32,
+    time: f64,
+) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    let poses = specchio::sensor::dataset::grid::grid(&scene.scene, spacing, headings, time)
+        .map_err(|e| scene.error(e))?;
+    let rows: Vec<f64> = poses
+        .iter()
+        .flat_map(|p| [p.position.x, p.position.y, p.position.z, p.heading_deg])
+        .collect();
+    numpy::PyArray1::from_vec(py, rows).reshape([poses.len(), 4])
 }
 
 /// The poses of a (B, 4) array of `x, y, z, heading` rows at `times` (one per row, or one

@@ -166,3 +166,18 @@ def test_read_exr_refuses_what_is_not_an_exr(made):
     truncated.write_bytes((work / "cli" / "frames" / "000000" / "sensor.exr").read_bytes()[:5000])
     with pytest.raises(specchio.SpecchioError, match="truncated.exr"):
         specchio.read_exr(truncated)
+
+
+def test_the_pose_grid_is_the_commands(tmp_path):
+    scene = str(scene_path("thesis-room"))
+    run = cli("dataset", scene, "--grid", "4", "--out", "grid", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    lines = [json.loads(l) for l in (tmp_path / "grid" / "index.jsonl").read_text().splitlines()]
+    want = np.array([[*l["scene"]["position_m"], l["scene"]["heading_deg"]] for l in lines])
+    grid = specchio.pose_grid(specchio.Scene(scene), 4.0)
+    assert grid.shape == (8, 4) and grid.dtype == np.float64
+    assert np.array_equal(grid, want)
+    turned = specchio.pose_grid(specchio.Scene(scene), 4.0, headings=4, time=0.0)
+    assert turned.shape == (32, 4) and list(turned[:4, 3]) == [0.0, 90.0, 180.0, 270.0]
+    with pytest.raises(specchio.SpecchioError, match=r"thesis-room.toml: --headings"):
+        specchio.pose_grid(specchio.Scene(scene), 4.0, headings=0)

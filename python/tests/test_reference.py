@@ -51,3 +51,23 @@ def test_calibrate_writes_what_the_command_writes(tmp_path):
     assert json.loads((tmp_path / "py" / "calibration.json").read_text()) == record
     # The hyperboloid is central: the unified model fits it to a small fraction of a degree.
     assert record["omnidir"]["residual_deg"]["p99"] < 0.05
+
+
+def test_the_calibrations_ros_frames_are_the_datasets(tmp_path):
+    """The hyperbolic room's omnidir TF frame (calibration.json `ros`) is the camera's optical
+    frame of the dataset's pose.json moved to the viewpoint, where base_link is."""
+    scene = specchio.Scene(scene_path("hyperbolic-room"))
+    cal = specchio.calibrate(scene, tmp_path / "cal")["ros"]
+    x, y, z = scene.mirror_position
+    (tmp_path / "t.csv").write_text(f"time,x,y,z,heading\n0,{x!r},{y!r},{z!r},0\n")
+    specchio.dataset(scene.path, tmp_path / "t.csv", tmp_path / "ds")
+    pose = json.loads((tmp_path / "ds" / "frames" / "000000" / "pose.json").read_text())["ros"]
+    np.testing.assert_allclose(cal["viewpoint_m"], pose["base_link_position_m"], atol=1e-6)
+    q_cal = np.array(cal["omnidir"]["quaternion_xyzw"])
+    q_camera = np.array(pose["camera_optical_quaternion_xyzw"])
+    assert min(np.linalg.norm(q_cal - q_camera), np.linalg.norm(q_cal + q_camera)) < 1e-6
+    # The TF frames are rotations: their rows orthonormal with determinant +1.
+    for model in ("omnidir", "ocamcalib"):
+        rows = np.array(cal[model]["rows"])
+        np.testing.assert_allclose(rows @ rows.T, np.eye(3), atol=1e-12)
+        assert abs(np.linalg.det(rows) - 1.0) < 1e-12

@@ -162,6 +162,33 @@ fn a_pose_the_robot_cannot_take_is_refused_before_anything_is_written() {
         ("[{\"time\": 0, \"position\": [0, 3, -3], \"heading\": 0}, {\"time\": 2, \"position\": [0, 3, -3], \"heading\": 0}]", "robot.json: poses[1]: position: the mirror at [0, 3, -3] (or the sensor's line of sight up to it) meets an object at t = 2 s"),
         ("[{\"time\": 0, \"position\": [0, 3], \"heading\": 0}]", "robot.json: poses[0]: position: must be an array of 3 numbers"),
     ];
+    // A trajectory that is not there, or not a file, is named.
+    std::fs::create_dir_all(&*dir).unwrap();
+    let scene = root().join("scenes/thesis-room.toml");
+    let (scene, missing) = (scene.to_str().unwrap(), dir.join("missing.csv"));
+    let out = dir.join("set");
+    for (trajectory, want) in [
+        (
+            missing.clone(),
+            "missing.csv: cannot read the trajectory: file not found",
+        ),
+        (
+            dir.to_path_buf(),
+            "cannot read the trajectory: is a directory",
+        ),
+    ] {
+        let args = [
+            "dataset",
+            scene,
+            "--trajectory",
+            trajectory.to_str().unwrap(),
+        ];
+        let run = specchio(&[&args[..], &["--out", out.to_str().unwrap()]].concat());
+        assert_eq!(run.status.code(), Some(1));
+        let said = String::from_utf8_lossy(&run.stderr);
+        assert!(said.contains(want), "{said}");
+        assert!(!out.exists());
+    }
     for (text, want) in cases {
         let name = if text.starts_with('[') {
             "robot.json"
@@ -237,4 +264,79 @@ fn the_heading_turns_the_image_and_the_optical_frame() {
         (yaw * q0).angle_between(q1) < 1e-6,
         "{q0} turned is not {q1}"
     );
+}
+
+/// A pose grid instead of a trajectory: at 4 m the thesis room holds a 3 x 3 grid less the
+/// place the orbiting ball takes at t = 0, each turned two ways, in grid order; the summary
+/// says it was a grid. Its options go only with --grid, and a grid too fine is refused.
+#[test]
+fn a_pose_grid_makes_a_frame_per_place_and_heading() {
+    let dir = temp_dir("dataset-grid");
+    let scene = root().join("scenes/thesis-room.toml");
+    let (scene, out) = (scene.to_str().unwrap(), dir.join("grid"));
+    let o = out.to_str().unwrap();
+    let run = specchio(&[
+        "dataset",
+        scene,
+        "--grid",
+        "4",
+        "--headings",
+        "2",
+        "--out",
+        o,
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let index = std::fs::read_to_string(out.join("index.jsonl")).unwrap();
+    let lines: Vec<serde_json::Value> = index
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 8 * 2);
+    let pose = |i: usize| {
+        let s = &lines[i]["scene"];
+        (s["position_m"].clone(), s["heading_deg"].as_f64().unwrap())
+    };
+    assert_eq!(pose(0), (serde_json::json!([-4.0, 3.0, -4.0]), 0.0));
+    assert_eq!(pose(1), (serde_json::json!([-4.0, 3.0, -4.0]), 180.0));
+    assert!(lines.iter().all(|l| l["time_s"] == 0.0));
+    assert!(!lines
+        .iter()
+        .any(|l| l["scene"]["position_m"] == serde_json::json!([4.0, 3.0, 0.0])));
+    let summary = json(&out.join("dataset.json"));
+    assert_eq!(
+        summary["trajectory"],
+        "grid: spacing 4 m, 2 heading(s), t = 0 s"
+    );
+    assert_eq!(summary["frames"], 16);
+    for (args, want) in [
+        (vec!["--grid", "0.001"], "positions, more than the 20000"),
+        (vec!["--grid", "-1"], "--grid"),
+        (vec!["--grid", "4", "--headings", "0"], "--headings"),
+        (
+            vec!["--trajectory", "t.csv", "--time", "1"],
+            "cannot be used with",
+        ),
+        (
+            vec!["--trajectory", "t.csv", "--grid", "4"],
+            "cannot be used with",
+        ),
+    ] {
+        let bad = dir.join("bad");
+        let run = specchio(
+            &[
+                &["dataset", scene][..],
+                &args,
+                &["--out", bad.to_str().unwrap()],
+            ]
+            .concat(),
+        );
+        assert!(!run.status.success(), "{args:?}");
+        let said = String::from_utf8_lossy(&run.stderr);
+        assert!(said.contains(want), "{args:?}: {said}");
+        assert!(!bad.exists());
+    }
 }

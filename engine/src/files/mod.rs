@@ -209,6 +209,7 @@ mod tests {
     #[cfg(target_os = "linux")]
     #[test]
     fn fifos_and_link_loops_are_refused_without_blocking() {
+        let _serial = crate::output::serial_with_children();
         let d = temp("special");
         let fifo = d.join("pipe");
         let made = std::process::Command::new("mkfifo").arg(&fifo).status();

@@ -207,6 +207,17 @@ pub fn write_json<T: serde::Serialize + ?Sized>(path: &Path, value: &T) -> Resul
     one_file(path, |out| out.write_json(path, value))
 }
 
+/// Held by the tests that start a child process and by those that need a dead run's lock to be
+/// free: a child shares the parent's open files from its fork to its exec, a staging folder's
+/// locked token included, so a child started by another test thread at that moment keeps a
+/// just-abandoned stage looking alive (a race of the tests, not of the protocol: a run's lock
+/// held by anyone means a live run).
+#[cfg(test)]
+pub(crate) fn serial_with_children() -> std::sync::MutexGuard<'static, ()> {
+    static CHILDREN: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    CHILDREN.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 #[cfg(test)]
 mod protocol_tests;
 #[cfg(test)]

@@ -196,6 +196,7 @@ fn inputs_are_known_by_identity_not_by_spelling() {
 #[cfg(target_os = "linux")]
 #[test]
 fn a_run_in_another_process_is_alive_while_it_holds_its_lock() {
+    let _serial = crate::output::serial_with_children();
     let dir = scratch("alive");
     let orphan = Stage::create(&dir, "out").unwrap();
     let orphan_dir = orphan.dir().to_owned();
@@ -250,6 +251,7 @@ fn long_names_are_written_and_names_that_are_not_utf8_refused() {
 #[cfg(target_os = "linux")]
 #[test]
 fn a_write_over_the_file_size_limit_fails_and_leaves_nothing() {
+    let _serial = crate::output::serial_with_children();
     const CHILD: &str = "SPECCHIO_TEST_FILE_SIZE_CHILD";
     const NAME: &str =
         "output::protocol_tests::a_write_over_the_file_size_limit_fails_and_leaves_nothing";
@@ -286,6 +288,7 @@ fn a_write_over_the_file_size_limit_fails_and_leaves_nothing() {
 #[cfg(unix)]
 #[test]
 fn a_file_output_replaces_only_a_regular_file() {
+    let _serial = crate::output::serial_with_children();
     let dir = scratch("targets");
     let fifo = dir.join("pipe.json");
     assert!(Command::new("mkfifo")
@@ -357,6 +360,7 @@ fn a_link_at_a_listed_name_makes_the_folder_the_users() {
 #[cfg(unix)]
 #[test]
 fn fifos_where_the_protocol_reads_do_not_block_it() {
+    let _serial = crate::output::serial_with_children();
     let dir = scratch("protocol-fifos");
     let out = dir.join("out");
     render(&out, "a.txt", None).unwrap();
@@ -385,6 +389,7 @@ fn fifos_where_the_protocol_reads_do_not_block_it() {
 /// earlier output's manifest lists and moves the rest beside the target, never deletes it.
 #[test]
 fn a_run_killed_after_its_swap_loses_none_of_the_users_files() {
+    let _serial = crate::output::serial_with_children();
     let dir = scratch("killed-after-swap");
     let out = dir.join("out");
     let mut stage = Stage::create(&dir, "out").unwrap();

@@ -226,6 +226,7 @@ mod tests {
     #[cfg(target_os = "linux")]
     #[test]
     fn only_a_dead_runs_own_stage_is_swept() {
+        let _serial = crate::output::serial_with_children();
         let d = scratch("sweep");
         let live = Stage::create(&d, "out").unwrap();
         let dead = Stage::create(&d, "out").unwrap();

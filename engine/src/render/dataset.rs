@@ -16,6 +16,7 @@ use super::{lookups, Readback, RenderOptions, Renderer};
 use crate::memory::MemoryError;
 use crate::output::{MemoryFiles, OutputError, Sink, Transaction};
 use crate::scene::{Lookup, RefreshPolicy, Scene, SceneError};
+use crate::sensor::dataset::grid::{self, GridError};
 use crate::sensor::dataset::trajectory::{self, Pose, TrajectoryError};
 use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
 use crate::sensor::{GroundTruth, SensorOutputs};
@@ -33,6 +34,8 @@ pub enum DatasetError {
     Trajectory(#[from] TrajectoryError),
     #[error("{path}: {source}")]
     Memory { path: PathBuf, source: MemoryError },
+    #[error("{path}: {source}")]
+    Grid { path: PathBuf, source: GridError },
     #[error("lookup {lookup} cannot run on {device}: {why}")]
     Lookup {
         lookup: Lookup,
@@ -51,26 +54,64 @@ pub enum DatasetError {
     NotReadBack { frame: usize },
 }
 
-/// A dataset to render: the scene, its path and the trajectory's, and the poses, each checked.
+/// A dataset to render: the scene and its path, where the poses came from, and the poses,
+/// each checked.
 pub struct Plan {
     pub scene: Scene,
     pub scene_path: PathBuf,
-    pub trajectory_path: PathBuf,
+    /// The trajectory file's path as given, or the grid's description.
+    pub trajectory: String,
     pub poses: Vec<Pose>,
+}
+
+/// Where a dataset's poses come from.
+pub enum Poses<'a> {
+    /// A trajectory file (CSV or JSON).
+    Trajectory(&'a Path),
+    /// A pose grid (`sensor::dataset::grid`).
+    Grid {
+        spacing_m: f64,
+        headings: u32,
+        time_s: f64,
+    },
 }
 
 impl Plan {
     /// Reads the scene and the trajectory and checks that the robot can stand at every pose
     /// and that the renderer fits in memory: every input is checked before any output exists.
     pub fn read(scene_path: &Path, trajectory_path: &Path) -> Result<Plan, DatasetError> {
+        Self::new(scene_path, Poses::Trajectory(trajectory_path))
+    }
+
+    /// [`Plan::read`] with the poses from `poses`.
+    pub fn new(scene_path: &Path, poses: Poses<'_>) -> Result<Plan, DatasetError> {
         let scene = crate::scene::load(scene_path)?;
-        let poses = trajectory::read(trajectory_path)?;
-        let objects = sensor_dataset::ObjectBounds::of(&scene);
-        for pose in &poses {
-            sensor_dataset::pose_fits(&scene, &objects, pose).map_err(|(field, why)| {
-                TrajectoryError::invalid(trajectory_path, Some(pose.at), field, why)
-            })?;
-        }
+        let (poses, trajectory) = match poses {
+            Poses::Trajectory(path) => {
+                let poses = trajectory::read(path)?;
+                let objects = sensor_dataset::ObjectBounds::of(&scene);
+                for pose in &poses {
+                    sensor_dataset::pose_fits(&scene, &objects, pose).map_err(|(field, why)| {
+                        TrajectoryError::invalid(path, Some(pose.at), field, why)
+                    })?;
+                }
+                (poses, path.display().to_string())
+            }
+            // The grid holds only poses that fit.
+            Poses::Grid {
+                spacing_m,
+                headings,
+                time_s,
+            } => (
+                grid::grid(&scene, spacing_m, headings, time_s).map_err(|e| {
+                    DatasetError::Grid {
+                        path: scene_path.to_owned(),
+                        source: e,
+                    }
+                })?,
+                format!("grid: spacing {spacing_m} m, {headings} heading(s), t = {time_s} s"),
+            ),
+        };
         crate::memory::estimates::render(&scene, scene.cube.face_size_px, false, true).map_err(
             |source| DatasetError::Memory {
                 path: scene_path.to_owned(),
@@ -80,7 +121,7 @@ impl Plan {
         Ok(Plan {
             scene,
             scene_path: scene_path.to_owned(),
-            trajectory_path: trajectory_path.to_owned(),
+            trajectory,
             poses,
         })
     }
@@ -90,7 +131,7 @@ impl Plan {
     pub fn record(&self, lookup: Lookup, truth: GroundTruth) -> DatasetRecord {
         DatasetRecord {
             scene: self.scene_path.display().to_string(),
-            trajectory: self.trajectory_path.display().to_string(),
+            trajectory: self.trajectory.clone(),
             frames: self.poses.len(),
             lookup: lookup.to_string(),
             ground_truth: truth,

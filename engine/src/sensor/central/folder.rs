@@ -122,6 +122,11 @@ fn record(cal: &Calibration, scene: &Path, time_s: f64) -> CalibrationRecord {
             // Three residuals (a unit vector's difference) per pixel.
             fit_rms: rms(cal.ocam_fit.final_cost, 3 * cal.mirror_pixels),
         },
+        ros: super::ros::calibration(
+            cal.axes.omnidir_rows(),
+            cal.axes.ocamcalib_rows(),
+            cal.origin + cal.viewpoint,
+        ),
         files: [
             OPENCV,
             KALIBR,

@@ -21,6 +21,7 @@ pub mod export;
 pub mod folder;
 pub mod mei;
 pub mod record;
+pub mod ros;
 pub mod scaramuzza;
 
 use glam::{DVec2, DVec3};

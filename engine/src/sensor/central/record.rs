@@ -28,6 +28,8 @@ pub struct CalibrationRecord {
     pub ray_distance_to_viewpoint_m: Summary,
     pub omnidir: ModelRecord<MeiModel>,
     pub ocamcalib: ModelRecord<OcamModel>,
+    /// The models' frames as right-handed TF frames in ROS REP-103's `map`.
+    pub ros: super::ros::RosCalibration,
     /// The files written beside this one.
     pub files: Vec<String>,
 }

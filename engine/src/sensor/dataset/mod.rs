@@ -7,6 +7,7 @@
 //! ([`pose_fits`]) and the records;
 //! `render::dataset` renders the frames, for the command and for the Python package.
 
+pub mod grid;
 pub mod ply;
 pub mod rep103;
 pub mod trajectory;

@@ -44,8 +44,9 @@ pub enum Place {
 /// A trajectory the dataset cannot use, named by file, place and field.
 #[derive(Debug, thiserror::Error)]
 pub enum TrajectoryError {
-    #[error(transparent)]
-    File(#[from] FileError),
+    /// The file could not be read (its message names no path: the path is said here).
+    #[error("{}: cannot read the trajectory: {source}", path.display())]
+    File { path: PathBuf, source: FileError },
     #[error("{}{}: {field}: {message}", file.display(), place_text(*place))]
     Invalid {
         file: PathBuf,
@@ -76,7 +77,11 @@ impl TrajectoryError {
 
 /// The poses of the trajectory file `path`: JSON when its name ends in `.json`, else CSV.
 pub fn read(path: &Path) -> Result<Vec<Pose>, TrajectoryError> {
-    let bytes = read_regular_file(path, MAX_TRAJECTORY_BYTES)?;
+    let bytes =
+        read_regular_file(path, MAX_TRAJECTORY_BYTES).map_err(|source| TrajectoryError::File {
+            path: path.to_owned(),
+            source,
+        })?;
     let text = String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         TrajectoryError::invalid(path, None, "(file)", format!("not UTF-8 text (byte {at})"))
