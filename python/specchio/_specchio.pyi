@@ -1,6 +1,7 @@
 """Typed stubs of the native module (python/src/); the documentation is on the objects."""
 
 from os import PathLike
+from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, Union
 
 import numpy as np
@@ -17,7 +18,7 @@ class SpecchioError(Exception): ...
 class Scene:
     def __init__(self, path: _Path) -> None: ...
     @property
-    def path(self) -> str: ...
+    def path(self) -> Path: ...
     @property
     def sensor_size(self) -> tuple[int, int]: ...
     @property

@@ -33,12 +33,20 @@ class _Worker:
     """A Ray actor: one renderer of the dataset's robot."""
 
     def __init__(self, scene: str, trajectory: str, lookup, device, validate: bool):
-        self.frames = DatasetFrames(
-            scene, trajectory, lookup=lookup, device=device, validate=validate
-        )
+        # An engine error here is kept and said by `describe`: raised, it would reach the
+        # driver as Ray's "actor died", its message buried in a traceback.
+        self.frames, self.error = None, None
+        try:
+            self.frames = DatasetFrames(
+                scene, trajectory, lookup=lookup, device=device, validate=validate
+            )
+        except SpecchioError as e:
+            self.error = str(e)
 
-    def describe(self) -> tuple[str, str]:
-        return (self.frames.lookup, self.frames.ground_truth)
+    def describe(self) -> tuple[Optional[str], str, str]:
+        if self.frames is None:
+            return (self.error, "", "")
+        return (None, self.frames.lookup, self.frames.ground_truth)
 
     def render(self, indices: list[int]):
         return indices, self.frames.frames(indices)
@@ -94,6 +102,10 @@ def dataset(
         paths = (os.path.abspath(scene), os.path.abspath(trajectory))
         actors = [worker.remote(*paths, lookup, device, validate) for _ in range(count)]
         described = set(ray.get([a.describe.remote() for a in actors]))
+        failed = sorted(error for error, _, _ in described if error is not None)
+        if failed:
+            raise SpecchioError(failed[0])
+        described = {(lookup, truth) for _, lookup, truth in described}
         if len(described) != 1:
             raise SpecchioError(
                 f"the workers' devices differ: lookups and ground truths {sorted(described)}; "
@@ -113,10 +125,9 @@ def dataset(
                 progress(done, n)
         return output.finish(index, chosen_lookup, truth)
     except ray.exceptions.RayTaskError as e:
-        # The engine's own error, raised in a worker: the same exception here.
-        cause = e.as_instanceof_cause()
-        if isinstance(cause, SpecchioError):
-            raise SpecchioError(str(cause).splitlines()[-1]) from None
+        # The engine's own error, raised in a worker: the same exception, the same message.
+        if isinstance(e.cause, SpecchioError):
+            raise SpecchioError(*e.cause.args) from None
         raise
     finally:
         for a in actors:

@@ -26,6 +26,23 @@ pub enum Data {
     Bool(Vec<bool>),
 }
 
+impl Data {
+    fn dtype(&self) -> &'static str {
+        match self {
+            Data::F32(_) => "float32",
+            Data::U32(_) => "uint32",
+            Data::Bool(_) => "bool",
+        }
+    }
+
+    fn sample_bytes(&self) -> usize {
+        match self {
+            Data::F32(_) | Data::U32(_) => 4,
+            Data::Bool(_) => 1,
+        }
+    }
+}
+
 /// One frame's layers: (key, samples, (height, width, channels); channels 0 for a plane).
 pub struct Layers(pub Vec<(&'static str, Data, [usize; 3])>);
 
@@ -96,6 +113,8 @@ pub fn batch_dict<'py>(
     first: &Layers,
     out: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    check_batch_memory(batch, first, out)?;
+    let numpy = py.import("numpy")?;
     let dict = PyDict::new(py);
     for (key, data, dims) in &first.0 {
         let s = shape(Some(batch), *dims);
@@ -107,13 +126,40 @@ pub fn batch_dict<'py>(
             (Some(a), Data::F32(_)) => checked::<f32>(key, a, &s, "float32")?,
             (Some(a), Data::U32(_)) => checked::<u32>(key, a, &s, "uint32")?,
             (Some(a), Data::Bool(_)) => checked::<bool>(key, a, &s, "bool")?,
-            (None, Data::F32(_)) => PyArrayDyn::<f32>::zeros(py, s, false).into_any(),
-            (None, Data::U32(_)) => PyArrayDyn::<u32>::zeros(py, s, false).into_any(),
-            (None, Data::Bool(_)) => PyArrayDyn::<bool>::zeros(py, s, false).into_any(),
+            // Through numpy itself: an allocation it cannot make is its MemoryError.
+            (None, data) => numpy.call_method1("zeros", (s, data.dtype()))?,
         };
+        for (other, array_b) in dict.iter() {
+            if array_b.is(&array) {
+                return Err(errors::error(format!(
+                    "out[{key:?}]: the same array as out[{other}]; each layer needs its own"
+                )));
+            }
+        }
         dict.set_item(key, array)?;
     }
     Ok(dict)
+}
+
+/// Refuses a batch whose new arrays would not fit the memory budget (as every command's
+/// estimate does: `SPECCHIO_MEMORY_BUDGET`, else 3/4 of the machine's memory), naming it.
+fn check_batch_memory(
+    batch: usize,
+    first: &Layers,
+    out: Option<&Bound<'_, PyDict>>,
+) -> PyResult<()> {
+    let mut estimate = specchio::memory::Estimate::new();
+    for (key, data, [h, w, c]) in &first.0 {
+        let given = out.map(|o| o.contains(key)).transpose()?.unwrap_or(false);
+        if !given {
+            let bytes = (h * w * c.max(&1) * data.sample_bytes()) as u64;
+            estimate.add_many(format!("the batch's {key:?} arrays"), batch as u64, bytes);
+        }
+    }
+    let budget = specchio::memory::Budget::from_env().map_err(errors::to_py)?;
+    estimate
+        .check(&budget, "fewer poses per batch, or out= arrays made once")
+        .map_err(|e| errors::error(format!("poses: {} poses: {}", batch, errors::message(&e))))
 }
 
 /// `array` if it is a C-contiguous, writeable `dtype` array of `shape`; else an error naming

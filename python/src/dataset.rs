@@ -53,6 +53,8 @@ pub fn dataset(
     let asked = parse_lookup(lookup)?;
     let mut stopped: Option<PyErr> = None;
     let result = py.detach(|| -> Result<_, DatasetError> {
+        // What this call may not replace is what it reads (docs/python.md).
+        specchio::files::identity::forget();
         let plan = Plan::read(&scene, &trajectory)?;
         let mut staged = Transaction::new();
         staged.folder(&out, writer::SUMMARY_FILE)?;
@@ -91,11 +93,14 @@ pub fn dataset(
     }
     let (staged, record, log) = result.map_err(errors::to_py)?;
     check_validation(&log)?;
-    py.detach(|| staged.commit()).map_err(errors::to_py)?;
+    // Everything that can fail runs before the folder is placed: nothing after it.
     if let Some(f) = &progress {
         f.call1(py, (record.frames, record.frames))?;
     }
-    errors::json_to_py(py, &record)
+    py.check_signals()?;
+    let summary = errors::json_to_py(py, &record)?;
+    py.detach(|| staged.commit()).map_err(errors::to_py)?;
+    Ok(summary)
 }
 
 /// A worker's half of a dataset: a renderer of the plan's robot that renders the frames it
@@ -104,8 +109,10 @@ pub fn dataset(
 #[pyclass(module = "specchio")]
 pub struct DatasetFrames {
     plan: Plan,
-    /// Behind a lock: Python objects may be shared between threads.
+    /// Behind a lock, always taken with the GIL released (see `Renderer`).
     frames: Mutex<FrameWriter>,
+    lookup: String,
+    ground_truth: String,
     log: std::sync::Arc<specchio::vk::instance::ValidationLog>,
     _device: std::sync::Arc<specchio::vk::device::Device>,
 }
@@ -132,6 +139,8 @@ impl DatasetFrames {
             let frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
             Ok(DatasetFrames {
                 plan,
+                lookup: lookup.to_string(),
+                ground_truth: name_of(frames.ground_truth()),
                 frames: Mutex::new(frames),
                 log,
                 _device: dev,
@@ -145,13 +154,13 @@ impl DatasetFrames {
     }
 
     #[getter]
-    fn lookup(&self) -> PyResult<String> {
-        Ok(self.writer()?.lookup().to_string())
+    fn lookup(&self) -> String {
+        self.lookup.clone()
     }
 
     #[getter]
-    fn ground_truth(&self) -> PyResult<String> {
-        Ok(name_of(self.writer()?.ground_truth()))
+    fn ground_truth(&self) -> String {
+        self.ground_truth.clone()
     }
 
     /// The frames `indices` (into the trajectory's poses): for each, its files as a list of
@@ -165,13 +174,14 @@ impl DatasetFrames {
         }
         let mut out = Vec::with_capacity(indices.len());
         for i in indices {
-            let plan = &self.plan;
-            let mut writer = self.writer()?;
-            let frames = &mut *writer;
-            let frame: Frame = py
-                .detach(|| frames.frame(i, &plan.poses[i]))
-                .map_err(errors::to_py)?;
-            check_validation(&self.log)?;
+            let frame: Frame = py.detach(|| -> PyResult<Frame> {
+                let mut writer = self.writer()?;
+                let frame = writer
+                    .frame(i, &self.plan.poses[i])
+                    .map_err(errors::to_py)?;
+                check_validation(&self.log)?;
+                Ok(frame)
+            })?;
             let files = frame
                 .files
                 .into_iter()
@@ -188,6 +198,7 @@ impl DatasetFrames {
 type FrameFiles<'py> = (Vec<(String, Bound<'py, PyBytes>)>, String);
 
 impl DatasetFrames {
+    /// The lock: call it with the GIL released.
     fn writer(&self) -> PyResult<MutexGuard<'_, FrameWriter>> {
         self.frames
             .lock()
@@ -203,6 +214,8 @@ pub struct DatasetOutput {
     plan: Plan,
     out: PathBuf,
     staged: Option<Transaction>,
+    /// Which frames were placed: each once, and all of them before `finish`.
+    placed: Vec<bool>,
 }
 
 #[pymethods]
@@ -210,10 +223,12 @@ impl DatasetOutput {
     #[new]
     fn new(py: Python<'_>, scene: PathBuf, trajectory: PathBuf, out: PathBuf) -> PyResult<Self> {
         py.detach(|| -> Result<Self, DatasetError> {
+            specchio::files::identity::forget();
             let plan = Plan::read(&scene, &trajectory)?;
             let mut staged = Transaction::new();
             staged.folder(&out, writer::SUMMARY_FILE)?;
             Ok(DatasetOutput {
+                placed: vec![false; plan.poses.len()],
                 plan,
                 out,
                 staged: Some(staged),
@@ -226,22 +241,25 @@ impl DatasetOutput {
         self.plan.poses.len()
     }
 
-    /// Places one frame's files (as `DatasetFrames.frames` gives them): each path must lie
-    /// in a frame folder (`frames/NNNNNN/...`) of this dataset.
-    fn place(&self, py: Python<'_>, files: Vec<(String, Vec<u8>)>) -> PyResult<()> {
-        let staged = self.staged()?;
-        for (path, _) in &files {
-            frame_file_path(path, self.plan.poses.len())?;
+    /// Places one frame's files (as `DatasetFrames.frames` gives them): every file of one
+    /// frame folder (`frames/NNNNNN/NAME`) of this dataset, each frame once.
+    fn place(&mut self, py: Python<'_>, files: Vec<(String, Vec<u8>)>) -> PyResult<()> {
+        let frame = one_frame(&files, self.plan.poses.len())?;
+        if self.placed[frame] {
+            return Err(errors::error(format!("frame {frame} was placed already")));
         }
-        let frame = Frame {
+        let staged = self.staged()?;
+        let frame_files = Frame {
             files: files
                 .into_iter()
                 .map(|(p, b)| (PathBuf::from(p), b))
                 .collect(),
             index_line: String::new(),
         };
-        py.detach(|| writer::place_frame(staged, &self.out, &frame))
-            .map_err(errors::to_py)
+        py.detach(|| writer::place_frame(staged, &self.out, &frame_files))
+            .map_err(errors::to_py)?;
+        self.placed[frame] = true;
+        Ok(())
     }
 
     /// Writes the index (`index_lines`, one per frame, in frame order) and the summary of a
@@ -261,6 +279,12 @@ impl DatasetOutput {
                 index_lines.len()
             )));
         }
+        if let Some(missing) = self.placed.iter().position(|p| !p) {
+            return Err(errors::error(format!("frame {missing} was never placed")));
+        }
+        for (i, line) in index_lines.iter().enumerate() {
+            check_index_line(i, line)?;
+        }
         let lookup: Lookup = specchio::process::args::lookup(lookup)
             .map_err(|e| errors::error(format!("lookup: {e}")))?;
         let truth: GroundTruth = serde_json::from_value(ground_truth.into())
@@ -270,12 +294,13 @@ impl DatasetOutput {
             .take()
             .ok_or_else(|| errors::error("the dataset was already finished"))?;
         let record = self.plan.record(lookup, truth);
+        let summary = errors::json_to_py(py, &record)?;
         py.detach(|| -> Result<(), specchio::output::OutputError> {
             writer::finish(&staged, &self.out, &index_lines, &record)?;
             staged.commit()
         })
         .map_err(errors::to_py)?;
-        errors::json_to_py(py, &record)
+        Ok(summary)
     }
 }
 
@@ -287,9 +312,43 @@ impl DatasetOutput {
     }
 }
 
-/// Checks that `path` names a file in the folder of one of the `n` frames: relative, plain
-/// components only (no `..`, no root), `frames/NNNNNN/NAME`.
-fn frame_file_path(path: &str, n: usize) -> PyResult<()> {
+/// The frame whose folder holds every one of `files`: each path relative with plain
+/// components only (no `..`, no root), `frames/NNNNNN/NAME` of one of the `n` frames, one
+/// frame's files together, no name twice, every file a frame has.
+fn one_frame(files: &[(String, Vec<u8>)], n: usize) -> PyResult<usize> {
+    let mut frames = files.iter().map(|(path, _)| frame_of(path, n));
+    let first = frames
+        .next()
+        .ok_or_else(|| errors::error("no files: a frame has files"))??;
+    for other in frames {
+        let other = other?;
+        if other != first {
+            return Err(errors::error(format!(
+                "files of frames {first} and {other} in one call: place one frame at a time"
+            )));
+        }
+    }
+    let mut names: Vec<&str> = files
+        .iter()
+        .filter_map(|(p, _)| p.rsplit('/').next())
+        .collect();
+    names.sort_unstable();
+    if let Some(twice) = names.windows(2).find(|w| w[0] == w[1]) {
+        return Err(errors::error(format!("frame {first}: {} twice", twice[0])));
+    }
+    let required = specchio::sensor::dataset::FRAME_FILES
+        .iter()
+        .filter(|name| !name.contains('*'));
+    for name in required {
+        if !names.contains(name) {
+            return Err(errors::error(format!("frame {first}: no {name}")));
+        }
+    }
+    Ok(first)
+}
+
+/// The frame of `path`, a file in one of the `n` frame folders.
+fn frame_of(path: &str, n: usize) -> PyResult<usize> {
     let p = Path::new(path);
     let parts: Vec<_> = p.components().collect();
     let plain = parts.iter().all(|c| matches!(c, Component::Normal(_)));
@@ -299,14 +358,27 @@ fn frame_file_path(path: &str, n: usize) -> PyResult<()> {
         }
         _ => None,
     };
+    let folder = |f: usize| Path::new(&specchio::sensor::dataset::frame_folder(f)).to_owned();
     match frame {
-        Some(f) if plain && f < n && writer_folder_matches(p, f) => Ok(()),
+        Some(f) if plain && f < n && p.parent() == Some(folder(f).as_path()) => Ok(f),
         _ => Err(errors::error(format!(
             "{path:?}: not a file of one of this dataset's {n} frame folders (frames/NNNNNN/NAME)"
         ))),
     }
 }
 
-fn writer_folder_matches(p: &Path, frame: usize) -> bool {
-    p.parent() == Some(Path::new(&specchio::sensor::dataset::frame_folder(frame)))
+/// Index line `i` must be one JSON object on one line, for frame `i` in its folder.
+fn check_index_line(i: usize, line: &str) -> PyResult<()> {
+    let value: serde_json::Value = (!line.contains('\n'))
+        .then(|| serde_json::from_str(line).ok())
+        .flatten()
+        .unwrap_or_default();
+    let folder = specchio::sensor::dataset::frame_folder(i);
+    if value["frame"] == i && value["folder"] == folder.as_str() {
+        return Ok(());
+    }
+    Err(errors::error(format!(
+        "index line {i}: not frame {i}'s line (one JSON object with \"frame\": {i} and \
+         \"folder\": \"{folder}\")"
+    )))
 }

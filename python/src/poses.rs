@@ -78,8 +78,11 @@ pub fn from_array(rows: ArrayView2<'_, f64>, times: Option<Vec<f64>>) -> PyResul
     let mut out = Vec::with_capacity(n);
     for (i, (row, &time_s)) in rows.outer_iter().zip(&times).enumerate() {
         let named = |field: &str, why: &str| errors::error(format!("poses[{i}]: {field}: {why}"));
-        if !row.iter().all(|v| v.is_finite()) {
+        if !row.iter().take(3).all(|v| v.is_finite()) {
             return Err(named("position", "every value must be a finite number"));
+        }
+        if !row[3].is_finite() {
+            return Err(named("heading", "must be a finite number of degrees"));
         }
         if !(time_s.is_finite() && time_s >= 0.0) {
             return Err(named("time", "must be a finite number of seconds >= 0"));

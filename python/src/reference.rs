@@ -9,7 +9,6 @@ use specchio::reference::Reference;
 use specchio::render::dataset as writer;
 use specchio::sensor::central::{folder, Calibration};
 use specchio::sensor::dataset;
-use specchio::sensor::dataset::trajectory::{Place, Pose};
 use specchio::sensor::SensorOutputs;
 
 use crate::arrays::{self, Layers};
@@ -42,12 +41,8 @@ pub fn reference<'py>(
     let traced = match pose {
         None => scene.scene.clone(),
         Some([x, y, z, heading]) => {
-            let pose = Pose {
-                at: Place::Entry(0),
-                time_s: time,
-                position: glam::DVec3::new(x, y, z),
-                heading_deg: heading.rem_euclid(360.0),
-            };
+            let array = numpy::ndarray::arr2(&[[x, y, z, heading]]);
+            let pose = crate::poses::from_array(array.view(), Some(vec![time]))?.remove(0);
             let objects = dataset::ObjectBounds::of(&scene.scene);
             dataset::pose_fits(&scene.scene, &objects, &pose)
                 .map_err(|(field, why)| errors::error(format!("pose: {field}: {why}")))?;
@@ -86,6 +81,8 @@ pub fn calibrate(py: Python<'_>, scene: &Scene, out: PathBuf, time: f64) -> PyRe
     specchio::memory::estimates::calibrate(&scene.scene)
         .map_err(|e| scene.error(errors::message(&e)))?;
     let record = py.detach(|| -> Result<_, String> {
+        // What this call may not replace is what it reads (docs/python.md).
+        specchio::files::identity::forget();
         let mut staged = Transaction::new();
         staged
             .folder(&out, folder::RECORD)

@@ -67,15 +67,19 @@ pub fn check_validation(log: &ValidationLog) -> PyResult<()> {
 /// `specchio.devices()`). `validate`: the Khronos validation layer on; any message raises.
 #[pyclass(module = "specchio")]
 pub struct Renderer {
-    /// None once closed. Behind a lock: Python objects may be shared between threads.
+    /// None once closed. Behind a lock, always taken with the GIL released (a thread that
+    /// waited for it holding the GIL would keep the thread that holds it from ever returning).
     inner: Mutex<Option<Inner>>,
+    /// What never changes, read without the lock.
+    scene: specchio::scene::Scene,
+    objects: ObjectBounds,
+    device_name: String,
+    lookup: String,
+    ground_truth: String,
 }
 
 struct Inner {
     frames: FrameWriter,
-    scene: specchio::scene::Scene,
-    objects: ObjectBounds,
-    device_name: String,
     log: Arc<ValidationLog>,
     next_frame: usize,
     // Last: the device outlives the renderer made on it.
@@ -93,47 +97,52 @@ impl Renderer {
         device: Option<&str>,
         validate: bool,
     ) -> PyResult<Self> {
+        let path = scene.path.clone();
         let scene = scene.scene.clone();
-        let inner = py.detach(|| -> PyResult<Inner> {
+        specchio::memory::estimates::render(&scene, scene.cube.face_size_px, false, true)
+            .map_err(|e| errors::error(format!("{}: {}", path.display(), errors::message(&e))))?;
+        let (inner, device_name) = py.detach(|| -> PyResult<(Inner, String)> {
             let (dev, info, lookup, log) = open(&scene, lookup, device, validate)?;
             let frames = FrameWriter::new(&dev, &scene, lookup).map_err(errors::to_py)?;
             check_validation(&log)?;
-            Ok(Inner {
+            let inner = Inner {
                 frames,
-                objects: ObjectBounds::of(&scene),
-                scene,
-                device_name: info.name,
                 log,
                 next_frame: 0,
                 _device: dev,
-            })
+            };
+            Ok((inner, info.name))
         })?;
         Ok(Renderer {
+            lookup: inner.frames.lookup().to_string(),
+            ground_truth: serde_json::to_value(inner.frames.ground_truth())
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_owned))
+                .unwrap_or_default(),
             inner: Mutex::new(Some(inner)),
+            objects: ObjectBounds::of(&scene),
+            scene,
+            device_name,
         })
     }
 
     /// The device it renders on.
     #[getter]
-    fn device(&self) -> PyResult<String> {
-        self.with(|i| i.device_name.clone())
+    fn device(&self) -> String {
+        self.device_name.clone()
     }
 
     /// The colour image's mirror lookup.
     #[getter]
-    fn lookup(&self) -> PyResult<String> {
-        self.with(|i| i.frames.lookup().to_string())
+    fn lookup(&self) -> String {
+        self.lookup.clone()
     }
 
     /// Where range and ids come from: `traced` (exact, the colour's light path), or `cube`
     /// (the cube path's search; see docs/sensor.md "Ground truth").
     #[getter]
-    fn ground_truth(&self) -> PyResult<String> {
-        let truth = self.with(|i| i.frames.ground_truth())?;
-        Ok(serde_json::to_value(truth)
-            .ok()
-            .and_then(|v| v.as_str().map(str::to_owned))
-            .unwrap_or_default())
+    fn ground_truth(&self) -> String {
+        self.ground_truth.clone()
     }
 
     /// One frame at `pose` (x, y, z, heading: the mirror's viewpoint in the scene file's
@@ -148,16 +157,14 @@ impl Renderer {
         pose: Option<[f64; 4]>,
         time: f64,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let mut guard = self.lock()?;
-        let inner = open_inner(&mut guard)?;
         let pose = match pose {
             Some([x, y, z, heading]) => {
                 let array = numpy::ndarray::arr2(&[[x, y, z, heading]]);
                 poses::from_array(array.view(), Some(vec![time]))?.remove(0)
             }
-            None => inner.scene_pose(time)?,
+            None => self.scene_pose(time)?,
         };
-        let layers = py.detach(|| inner.layers(&pose))?;
+        let layers = py.detach(|| self.layers(&pose))?;
         arrays::frame_dict(py, layers)
     }
 
@@ -174,29 +181,33 @@ impl Renderer {
         out: Option<Bound<'py, PyDict>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let poses = poses::from_array(poses.as_array(), times)?;
-        if poses.is_empty() {
+        let Some(first) = poses.first() else {
             return Err(errors::error(
                 "poses: an empty batch (give at least one pose)",
             ));
+        };
+        // Every pose checked before the first is rendered.
+        for pose in &poses {
+            self.check(pose)?;
         }
-        let mut guard = self.lock()?;
-        let inner = open_inner(&mut guard)?;
-        let mut batch = None;
-        for (b, pose) in poses.iter().enumerate() {
-            let layers = py.detach(|| inner.layers(pose))?;
-            let dict = match &batch {
-                Some(d) => d,
-                None => batch.insert(arrays::batch_dict(py, poses.len(), &layers, out.as_ref())?),
-            };
-            arrays::fill(dict, b, layers)?;
+        let layers = py.detach(|| self.layers(first))?;
+        let batch = arrays::batch_dict(py, poses.len(), &layers, out.as_ref())?;
+        arrays::fill(&batch, 0, layers)?;
+        for (b, pose) in poses.iter().enumerate().skip(1) {
+            // Ctrl-C between frames.
+            py.check_signals()?;
+            let layers = py.detach(|| self.layers(pose))?;
+            arrays::fill(&batch, b, layers)?;
         }
-        Ok(batch.expect("at least one pose"))
+        Ok(batch)
     }
 
     /// Releases the device now (also done when the renderer is garbage-collected).
-    fn close(&self) -> PyResult<()> {
-        *self.lock()? = None;
-        Ok(())
+    fn close(&self, py: Python<'_>) -> PyResult<()> {
+        py.detach(|| {
+            *self.lock()? = None;
+            Ok(())
+        })
     }
 
     fn __enter__(slf: Py<Self>) -> Py<Self> {
@@ -205,35 +216,24 @@ impl Renderer {
 
     fn __exit__(
         &self,
+        py: Python<'_>,
         _kind: Option<Bound<'_, PyAny>>,
         _value: Option<Bound<'_, PyAny>>,
         _traceback: Option<Bound<'_, PyAny>>,
     ) -> PyResult<bool> {
-        self.close()?;
+        self.close(py)?;
         Ok(false)
     }
 }
 
 impl Renderer {
+    /// The lock: call it with the GIL released.
     fn lock(&self) -> PyResult<MutexGuard<'_, Option<Inner>>> {
-        self.inner
-            .lock()
-            .map_err(|_| errors::error("the renderer failed in another thread; make a new one"))
+        self.inner.lock().map_err(|_| {
+            errors::error("a render of this renderer failed unexpectedly; make a new renderer")
+        })
     }
 
-    fn with<T>(&self, f: impl FnOnce(&Inner) -> T) -> PyResult<T> {
-        let mut guard = self.lock()?;
-        Ok(f(open_inner(&mut guard)?))
-    }
-}
-
-fn open_inner<'a>(guard: &'a mut MutexGuard<'_, Option<Inner>>) -> PyResult<&'a mut Inner> {
-    guard
-        .as_mut()
-        .ok_or_else(|| errors::error("the renderer was closed"))
-}
-
-impl Inner {
     /// The scene's own mirror at `time`, heading 0.
     fn scene_pose(&self, time: f64) -> PyResult<Pose> {
         if !(time.is_finite() && time >= 0.0) {
@@ -250,19 +250,28 @@ impl Inner {
         })
     }
 
-    /// The layers of the next frame, at `pose` (checked as a dataset's poses are).
-    fn layers(&mut self, pose: &Pose) -> PyResult<Layers> {
+    /// Whether the robot can stand at `pose`, as a dataset's poses are checked.
+    fn check(&self, pose: &Pose) -> PyResult<()> {
         dataset::pose_fits(&self.scene, &self.objects, pose).map_err(|(field, why)| {
             let at = match pose.at {
                 Place::Entry(i) => format!("poses[{i}]"),
                 Place::Line(n) => format!("line {n}"),
             };
             errors::error(format!("{at}: {field}: {why}"))
-        })?;
-        let frame = self.next_frame;
-        self.next_frame += 1;
-        let (outputs, observer) = self.frames.outputs(frame, pose).map_err(errors::to_py)?;
-        check_validation(&self.log)?;
+        })
+    }
+
+    /// The layers of the next frame, at `pose` (checked first). Called with the GIL released.
+    fn layers(&self, pose: &Pose) -> PyResult<Layers> {
+        self.check(pose)?;
+        let mut guard = self.lock()?;
+        let inner = guard
+            .as_mut()
+            .ok_or_else(|| errors::error("the renderer was closed"))?;
+        let frame = inner.next_frame;
+        inner.next_frame += 1;
+        let (outputs, observer) = inner.frames.outputs(frame, pose).map_err(errors::to_py)?;
+        check_validation(&inner.log)?;
         Ok(Layers::new(outputs, &observer))
     }
 }

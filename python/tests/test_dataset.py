@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import pathlib
 import signal
 import subprocess
 
@@ -58,6 +59,22 @@ def test_ray_with_two_workers_writes_the_same_bytes(made, monkeypatch):
     assert record["frames"] == 5
 
 
+def ours(pid: int) -> bool:
+    """Whether process `pid` descends from this one (a worker of our local Ray, not another
+    run's on the same machine)."""
+    for _ in range(8):
+        try:
+            stat = pathlib.Path(f"/proc/{pid}/stat").read_text()
+        except OSError:
+            return False
+        pid = int(stat.rsplit(")", 1)[1].split()[1])
+        if pid == os.getpid():
+            return True
+        if pid <= 1:
+            return False
+    return False
+
+
 def test_a_killed_worker_is_restarted_and_its_shard_retried(made, monkeypatch):
     work, scene = made
     monkeypatch.chdir(work)
@@ -71,7 +88,7 @@ def test_a_killed_worker_is_restarted_and_its_shard_retried(made, monkeypatch):
         workers = [
             int(line.split()[0])
             for line in ps.stdout.splitlines()
-            if line.split(None, 1)[1].startswith("ray::_Worker")
+            if line.split(None, 1)[1].startswith("ray::_Worker") and ours(int(line.split()[0]))
         ]
         assert workers, ps.stdout
         os.kill(workers[0], signal.SIGKILL)
@@ -90,6 +107,8 @@ def test_a_bad_trajectory_writes_nothing_and_names_line_and_field(made, monkeypa
         with pytest.raises(specchio.SpecchioError, match=r"bad.csv:3: position: the mirror"):
             specchio.dataset(scene, "bad.csv", "bad", ray=ray)
         assert not (work / "bad").exists()
+    with pytest.raises(specchio.SpecchioError, match="no-such-device"):
+        specchio.dataset(scene, "robot.csv", "bad", ray=True, workers=1, device="no-such-device")
     with pytest.raises(specchio.SpecchioError, match="shard_size"):
         specchio.dataset(scene, "robot.csv", "bad", ray=True, shard_size=0)
     with pytest.raises(specchio.SpecchioError, match="ray=True"):
@@ -111,6 +130,12 @@ def test_an_interrupted_run_writes_nothing(made, monkeypatch):
     assert not [p for p in work.iterdir() if "stopped" in p.name]
 
 
+FILES = [
+    "sensor.exr", "sensor.png", "sensor.rays.exr", "sensor.range.exr", "sensor.id.exr",
+    "sensor.id.json", "camera.json", "pose.json", "points.ply",
+]
+
+
 def test_the_output_takes_only_its_frames_files(made, monkeypatch):
     work, scene = made
     monkeypatch.chdir(work)
@@ -118,8 +143,27 @@ def test_the_output_takes_only_its_frames_files(made, monkeypatch):
     for path in ["../escape.txt", "frames/000009/x.exr", "frames/000001/../../x", "/abs", "index.jsonl"]:
         with pytest.raises(specchio.SpecchioError, match="frame folders"):
             out.place([(path, b"x")])
+    frame = lambda n: [(f"frames/{n:06d}/{name}", b"x") for name in FILES]
+    with pytest.raises(specchio.SpecchioError, match="frame 0: no sensor.exr"):
+        out.place(frame(0)[1:])
+    with pytest.raises(specchio.SpecchioError, match="frame 0: pose.json twice"):
+        out.place(frame(0) + [("frames/000000/pose.json", b"y")])
+    with pytest.raises(specchio.SpecchioError, match="frames 0 and 1 in one call"):
+        out.place(frame(0) + frame(1))
+    out.place(frame(0))
+    with pytest.raises(specchio.SpecchioError, match="frame 0 was placed already"):
+        out.place(frame(0))
     with pytest.raises(specchio.SpecchioError, match="4 index lines for 5 frames"):
         out.finish(["{}"] * 4, "plain", "cube")
+    with pytest.raises(specchio.SpecchioError, match="frame 1 was never placed"):
+        out.finish(["{}"] * 5, "plain", "cube")
+    for n in range(1, 5):
+        out.place(frame(n))
+    lines = [json.dumps({"folder": f"frames/{n:06d}", "frame": n}) for n in range(5)]
+    with pytest.raises(specchio.SpecchioError, match="index line 2: not frame 2's line"):
+        out.finish(lines[:2] + [lines[3]] + lines[3:], "plain", "cube")
+    with pytest.raises(specchio.SpecchioError, match="index line 0"):
+        out.finish([lines[0] + "\n" + lines[1]] + lines[1:], "plain", "cube")
     del out
     assert not (work / "parts").exists()
 

@@ -40,6 +40,10 @@ def test_reference_errors_are_named(thesis):
         specchio.reference(thesis, spp=0)
     with pytest.raises(specchio.SpecchioError, match="pose: position"):
         specchio.reference(thesis, pose=(20.0, 3.0, 0.0, 0.0))
+    with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: position: every value"):
+        specchio.reference(thesis, pose=(float("nan"), 3.0, 0.0, 0.0))
+    with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: heading"):
+        specchio.reference(thesis, pose=(0.0, 3.0, 0.0, float("inf")))
 
 
 def test_calibrate_writes_what_the_command_writes(tmp_path):

@@ -3,6 +3,9 @@ that name what is wrong."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -84,6 +87,15 @@ def test_wrong_buffers_and_poses_are_named(renderer):
         renderer.render_batch(poses, times=[-1.0])
     with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: position: every value"):
         renderer.render_batch(np.array([[np.nan, 3.0, 0.0, 0.0]]))
+    with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: heading"):
+        renderer.render_batch(np.array([[0.0, 3.0, 0.0, np.inf]]))
+    # The same array for two layers would be written over by both.
+    shared = np.zeros((1, 512, 512, 3), dtype=np.float32)
+    with pytest.raises(specchio.SpecchioError, match=r'the same array as out\[sensor\]'):
+        renderer.render_batch(poses, out={"sensor": shared, "ray_origin": shared})
+    # A batch whose arrays would not fit the memory budget is refused, naming it.
+    with pytest.raises(specchio.SpecchioError, match=r"poses: 100000 poses: .*fewer poses per batch"):
+        renderer.render_batch(np.tile(poses, (100000, 1)))
 
 
 def test_a_scene_error_names_file_line_and_field(tmp_path):
@@ -119,3 +131,44 @@ def test_every_device_renders_and_says_where_its_labels_come_from(thesis, device
         # Ray queries give traced labels; a device without them falls back to the cube's.
         assert (r.lookup, r.ground_truth) in {("ray-query", "traced"), ("plain", "cube")}
         assert frame["mask"].any() and np.isfinite(frame["sensor"]).all()
+
+
+THREADS = """
+import sys, threading
+import numpy as np
+import specchio
+
+renderer = specchio.Renderer(specchio.Scene(sys.argv[1]))
+poses = [(0.0, 3.0, 0.0, 0.0), (1.0, 3.0, 0.5, 45.0)]
+alone = [renderer.render(pose=p)["sensor"] for p in poses]
+results = {}
+
+def render(k):
+    results[k] = [renderer.render(pose=poses[k])["sensor"] for _ in range(2)]
+
+def read():
+    results["read"] = [(renderer.device, renderer.lookup) for _ in range(1000)]
+
+threads = [threading.Thread(target=f, args=a) for f, a in [(render, (0,)), (render, (1,)), (read, ())]]
+for t in threads:
+    t.start()
+for t in threads:
+    t.join()
+assert all(np.array_equal(f, alone[k]) for k in (0, 1) for f in results[k])
+assert len(results["read"]) == 1000
+print("done")
+"""
+
+
+def test_threads_share_a_renderer_without_deadlock(tmp_path):
+    """Renders run with the GIL released and take the renderer's lock only then: two threads
+    rendering on one renderer while a third reads its properties all finish (a lock waited
+    for while holding the GIL would hang the process: hence a child with a time limit), and
+    each frame is the one its pose gives alone."""
+    script = tmp_path / "threads.py"
+    script.write_text(THREADS)
+    run = subprocess.run(
+        [sys.executable, str(script), str(scene_path("thesis-room"))],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert run.returncode == 0 and run.stdout.strip() == "done", run.stderr

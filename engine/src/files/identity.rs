@@ -46,6 +46,13 @@ impl FileId {
 /// Every file this process has read through [`super::read_regular_file`], once per path.
 static READ: Mutex<Vec<(FileId, PathBuf)>> = Mutex::new(Vec::new());
 
+/// Forgets every file read so far: for a process that runs many commands (the Python
+/// package), at the start of each one that writes, so that what it may not replace is what
+/// that command read (it reads its inputs again), and the list stays bounded.
+pub fn forget() {
+    READ.lock().unwrap_or_else(|e| e.into_inner()).clear();
+}
+
 /// Records that `path`, whose open handle has `meta`, was read.
 pub(super) fn record(path: &Path, meta: &Metadata) {
     let Some(id) = FileId::of(meta) else {

@@ -77,6 +77,9 @@ pub fn layer_sizes(bytes: &[u8]) -> Result<Vec<(usize, usize)>, Error> {
 
 /// The most channels a layer may have for [`decode_channels`] (the sensor's ray map has 7).
 pub const MAX_CHANNELS: usize = 64;
+/// The most bytes [`decode_channels`] decodes a layer to: an RGBA float image of 16384 px a
+/// side, as the metrics read (a small compressed file may declare far more).
+pub const MAX_DECODED_BYTES: u64 = 16384 * 16384 * 16;
 
 /// One layer of an EXR file: its size (width, height) and its channels by name, each of
 /// width × height samples, rows from the top.
@@ -90,18 +93,21 @@ pub struct Layer {
 /// header, before any pixel memory is allocated.
 pub fn decode_channels(bytes: &[u8]) -> Result<Layer, Error> {
     let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)?;
-    if let Some(h) = meta
-        .headers
-        .iter()
-        .find(|h| h.channels.list.len() > MAX_CHANNELS)
-    {
-        return Err(Error::Invalid(
-            format!(
-                "{} channels; at most {MAX_CHANNELS} are read",
-                h.channels.list.len()
-            )
-            .into(),
-        ));
+    for h in &meta.headers {
+        let channels = h.channels.list.len();
+        let samples = (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64);
+        // Decoded as 4 bytes a sample, whatever the file's compression.
+        let decoded = samples.saturating_mul(channels as u64).saturating_mul(4);
+        if channels > MAX_CHANNELS || decoded > MAX_DECODED_BYTES {
+            return Err(Error::Invalid(
+                format!(
+                    "{channels} channels of {}x{} decode to {decoded} bytes; at most \
+                     {MAX_CHANNELS} channels and {MAX_DECODED_BYTES} bytes are read",
+                    h.layer_size.0, h.layer_size.1
+                )
+                .into(),
+            ));
+        }
     }
     use ::exr::prelude::{ReadChannels as _, ReadLayers as _};
     let image = ::exr::prelude::read()

@@ -57,6 +57,16 @@ pub fn pose_fits(
     objects: &ObjectBounds,
     pose: &Pose,
 ) -> Result<(), (&'static str, String)> {
+    // Every later check compares; NaN compares false and would pass them all.
+    if !pose.position.is_finite() {
+        return Err(("position", "every value must be a finite number".into()));
+    }
+    if !pose.heading_deg.is_finite() {
+        return Err(("heading", "must be a finite number of degrees".into()));
+    }
+    if !(pose.time_s.is_finite() && pose.time_s >= 0.0) {
+        return Err(("time", "must be a finite number of seconds >= 0".into()));
+    }
     let local = local_position(scene, pose);
     let room = &scene.room;
     let (lo, hi) = (
