@@ -99,7 +99,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         plan.poses.len(),
         args.scene.display(),
         plan.trajectory,
-        serde_json::to_value(truth)?.as_str().unwrap_or("?"),
+        truth.name(),
         args.out.display()
     );
     specchio::process::validation::verdict(&log.messages())?;

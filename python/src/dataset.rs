@@ -25,13 +25,6 @@ fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
         .transpose()
 }
 
-fn name_of<T: serde::Serialize>(value: T) -> String {
-    serde_json::to_value(value)
-        .ok()
-        .and_then(|v| v.as_str().map(str::to_owned))
-        .unwrap_or_default()
-}
-
 /// Renders the dataset of `scene` along `trajectory` into the folder `out` in this process
 /// (what `specchio dataset` does), all or nothing: every pose is checked before anything is
 /// rendered, and the folder appears only when every frame is written. Ctrl-C between frames
@@ -140,7 +133,7 @@ impl DatasetFrames {
             Ok(DatasetFrames {
                 plan,
                 lookup: lookup.to_string(),
-                ground_truth: name_of(frames.ground_truth()),
+                ground_truth: frames.ground_truth().name().to_owned(),
                 frames: Mutex::new(frames),
                 log,
                 _device: dev,

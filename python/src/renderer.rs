@@ -115,10 +115,7 @@ impl Renderer {
         })?;
         Ok(Renderer {
             lookup: inner.frames.lookup().to_string(),
-            ground_truth: serde_json::to_value(inner.frames.ground_truth())
-                .ok()
-                .and_then(|v| v.as_str().map(str::to_owned))
-                .unwrap_or_default(),
+            ground_truth: inner.frames.ground_truth().name().to_owned(),
             inner: Mutex::new(Some(inner)),
             objects: ObjectBounds::of(&scene),
             scene,

@@ -19,6 +19,15 @@ pub enum GroundTruth {
 }
 
 impl GroundTruth {
+    /// Its name, as the JSON records write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            GroundTruth::Reference => "reference",
+            GroundTruth::Traced => "traced",
+            GroundTruth::Cube => "cube",
+        }
+    }
+
     /// What the range layer measures.
     pub fn range_model(self) -> &'static str {
         match self {
@@ -84,6 +93,23 @@ impl GroundTruthRecord {
             colour: colour.to_owned(),
             colour_agrees: layers.colour_agrees(),
             warning: layers.warning(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod name_tests {
+    use super::GroundTruth;
+
+    /// The name is the one the records' JSON carries.
+    #[test]
+    fn the_name_is_the_records() {
+        for truth in [
+            GroundTruth::Reference,
+            GroundTruth::Traced,
+            GroundTruth::Cube,
+        ] {
+            assert_eq!(serde_json::to_value(truth).unwrap(), truth.name());
         }
     }
 }
