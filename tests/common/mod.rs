@@ -354,6 +354,29 @@ impl Gpu {
         (Self::with_features(features), runnable)
     }
 
+    /// The default device with `lookup`'s features enabled, or `None` (counted as not
+    /// applicable) where it lacks them: a conforming GPU may have no ray queries (the H200 has
+    /// none). Lavapipe 25, the default device of every CI run, has them all, so there a missing
+    /// feature fails the test rather than turning it into a silent pass.
+    pub fn for_lookup(lookup: Lookup) -> Option<Self> {
+        let probe = Self::new();
+        let info = probe.device.info.clone();
+        probe.finish();
+        match specchio::render::lookups::missing_features(lookup, &info) {
+            None => Some(Self::with_features(specchio::render::lookups::features(
+                lookup,
+            ))),
+            Some(why) => {
+                assert_ne!(
+                    info.short_name, "lavapipe",
+                    "lavapipe 25 has every lookup's features, but {lookup}: {why}"
+                );
+                not_applicable(&format!("{lookup} on {}", info.name), &why);
+                None
+            }
+        }
+    }
+
     /// Drops the device (the layer reports leaks then) and fails on any validation message.
     pub fn finish(self) {
         let messages = self.finish_with_messages();

@@ -119,8 +119,8 @@ impl Instance {
         desc: &InstanceDesc,
         extra: &[&'static CStr],
     ) -> Result<Arc<Self>, GpuError> {
-        // SAFETY: loading libvulkan runs its initialisers; nothing else is loaded concurrently.
-        let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loader(e.to_string()))?;
+        // The process's one loader, its drivers (and the layer) held open: see `loader`.
+        let entry = super::loader::entry(desc.validation.then_some(VALIDATION_LAYER))?.clone();
 
         // SAFETY: plain enumeration calls on a loaded entry.
         let layers = unsafe { entry.enumerate_instance_layer_properties() }

@@ -8,6 +8,11 @@
 //! last submission that used them (see `commands::Submitter`), so no deletion queue is needed
 //! for an offline renderer that waits on every frame. The live viewer keeps frames in flight:
 //! it hands what the GPU may still use to `frames::FrameRing::defer`, the deletion queue.
+//!
+//! One thing outlives every handle on purpose: the loader ([`loader`]), loaded once per
+//! process with an instance that is never destroyed, so that no driver's library is closed
+//! while a thread that used it still has per-thread state in it (a crash at that thread's
+//! exit, measured on NVIDIA's driver).
 
 pub mod acceleration;
 pub mod commands;
@@ -17,6 +22,7 @@ pub mod features;
 pub mod frames;
 pub mod image;
 pub mod instance;
+pub mod loader;
 pub mod memory;
 pub mod physical;
 pub mod pipeline;
