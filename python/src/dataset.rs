@@ -165,23 +165,40 @@ impl DatasetFrames {
                 "frame {bad}: the trajectory has {n} poses"
             )));
         }
-        let mut out = Vec::with_capacity(indices.len());
-        for i in indices {
-            let frame: Frame = py.detach(|| -> PyResult<Frame> {
-                let mut writer = self.writer()?;
-                let frame = writer
-                    .frame(i, &self.plan.poses[i])
-                    .map_err(errors::to_py)?;
-                check_validation(&self.log)?;
-                Ok(frame)
-            })?;
-            let files = frame
-                .files
-                .into_iter()
-                .map(|(path, bytes)| (path.display().to_string(), PyBytes::new(py, &bytes)))
-                .collect();
-            out.push((files, frame.index_line));
+        // Rendered in order, each frame encoded while the next renders; Python's signals
+        // (Ctrl-C) are checked between frames.
+        let mut stopped: Option<PyErr> = None;
+        let rendered = py.detach(|| -> PyResult<Vec<Frame>> {
+            let mut writer = self.writer()?;
+            let mut frames = Vec::with_capacity(indices.len());
+            let poses = indices.iter().map(|&i| (i, &self.plan.poses[i]));
+            let mut between = |i: usize| {
+                Python::attach(|py| py.check_signals()).map_err(|e| {
+                    stopped = Some(e);
+                    DatasetError::Stopped(format!("stopped before frame {i}"))
+                })
+            };
+            let mut take = |frame| {
+                frames.push(frame);
+                Ok(())
+            };
+            let done = writer.frames(poses, &mut between, &mut take);
+            done.map_err(errors::to_py)?;
+            check_validation(&self.log)?;
+            Ok(frames)
+        });
+        if let Some(e) = stopped {
+            return Err(e);
         }
+        let out = rendered?
+            .into_iter()
+            .map(|frame| {
+                let files = (frame.files.into_iter())
+                    .map(|(path, bytes)| (path.display().to_string(), PyBytes::new(py, &bytes)))
+                    .collect();
+                (files, frame.index_line)
+            })
+            .collect();
         Ok(out)
     }
 }

@@ -92,13 +92,31 @@ fn pixels([w, h]: [u32; 2]) -> u64 {
     u64::from(w) * u64::from(h)
 }
 
-/// `specchio render`, with cube faces of `face_size_px`.
+/// `specchio render` (`directions`: `--directions`; `sensor_outputs`: `--sensor-outputs`).
 pub fn render(
     scene: &Scene,
     face_size_px: u32,
     directions: bool,
     sensor_outputs: bool,
 ) -> Result<(), MemoryError> {
+    let frames = u64::from(sensor_outputs);
+    render_estimate(scene, face_size_px, directions, frames).check(&Budget::from_env()?, HINT)
+}
+
+/// `specchio dataset` and the Python package's datasets, with `frames_held` frames' outputs
+/// in memory at once: the one rendering and one per encoder (`render/dataset/frames.rs`; the
+/// H200 measured 315 MB with one encoder, 563 MB with four, 83 MB a frame of a 512² sensor,
+/// which the sensor outputs' 330 bytes a pixel bound).
+pub fn dataset(scene: &Scene, frames_held: u64) -> Result<(), MemoryError> {
+    let face = scene.cube.face_size_px;
+    render_estimate(scene, face, false, frames_held).check(&Budget::from_env()?, HINT)
+}
+
+const HINT: &str =
+    "lower observer.resolution, sensor.resolution or the cube's face size (--cube-size)";
+
+/// A renderer of `scene` with `frames` frames' sensor outputs in memory.
+fn render_estimate(scene: &Scene, face_size_px: u32, directions: bool, frames: u64) -> Estimate {
     let views = pixels(scene.observer.resolution) + pixels(scene.sensor.resolution);
     let face = u64::from(face_size_px);
     let mut e = Estimate::new();
@@ -109,22 +127,19 @@ pub fn render(
     if directions {
         e.add_many("the direction images", views, RENDER_DIRECTION_PIXEL_BYTES);
     }
-    if sensor_outputs {
+    if frames > 0 {
         let sensor = pixels(scene.sensor.resolution);
-        e.add_many(
-            "the sensor outputs",
-            sensor,
-            RENDER_SENSOR_OUTPUT_PIXEL_BYTES,
-        )
-        .add(
-            "the sensor outputs' fixed part",
-            RENDER_SENSOR_OUTPUT_BASE_BYTES,
-        );
+        let what = match frames {
+            1 => "the sensor outputs".to_owned(),
+            n => format!("{n} frames' sensor outputs"),
+        };
+        e.add_many(what, frames * sensor, RENDER_SENSOR_OUTPUT_PIXEL_BYTES)
+            .add(
+                "the sensor outputs' fixed part",
+                RENDER_SENSOR_OUTPUT_BASE_BYTES,
+            );
     }
-    e.check(
-        &Budget::from_env()?,
-        "lower observer.resolution, sensor.resolution or the cube's face size (--cube-size)",
-    )
+    e
 }
 
 /// `specchio reference`.

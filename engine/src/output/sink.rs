@@ -10,8 +10,8 @@
 //! end it goes to, which is what makes a dataset written by Ray workers byte-identical to one
 //! written by a single process.
 
-use std::cell::RefCell;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use super::{exr_error, png_error, OutputError};
 use crate::image::exr::{self, Samples};
@@ -87,10 +87,11 @@ pub fn json_text<T: serde::Serialize + ?Sized>(
         })
 }
 
-/// Files kept in memory, in the order written, each under its path relative to `root`.
+/// Files kept in memory, each under its path relative to `root`. Writers on several threads
+/// may share it (a dataset frame's files are encoded at the same time).
 pub struct MemoryFiles {
     root: PathBuf,
-    files: RefCell<Vec<(PathBuf, Vec<u8>)>>,
+    files: Mutex<Vec<(PathBuf, Vec<u8>)>>,
 }
 
 impl MemoryFiles {
@@ -99,13 +100,17 @@ impl MemoryFiles {
     pub fn new(root: &Path) -> Self {
         MemoryFiles {
             root: root.to_owned(),
-            files: RefCell::new(Vec::new()),
+            files: Mutex::new(Vec::new()),
         }
     }
 
-    /// The files written, in order: (path relative to the root, bytes).
+    /// The files written: (path relative to the root, bytes), sorted by path, whichever
+    /// thread finished first.
     pub fn into_files(self) -> Vec<(PathBuf, Vec<u8>)> {
-        self.files.into_inner()
+        // A writer that panicked left no half-pushed entry: `push` is the only change.
+        let mut files = self.files.into_inner().unwrap_or_else(|e| e.into_inner());
+        files.sort_by(|a, b| a.0.cmp(&b.0));
+        files
     }
 }
 
@@ -116,7 +121,7 @@ impl Sink for MemoryFiles {
             .map_err(|_| OutputError::NotStaged {
                 path: path.to_owned(),
             })?;
-        let mut files = self.files.borrow_mut();
+        let mut files = self.files.lock().unwrap_or_else(|e| e.into_inner());
         // A file is written once, as in a transaction (whose `create` is exclusive).
         if files.iter().any(|(p, _)| p == relative) {
             return Err(OutputError::Io {

@@ -190,8 +190,26 @@ impl SensorOutputs {
     }
 
     /// Writes every output into `dir` (staged in `out`): the ray map, range, ids, panoramas
-    /// (EXR and PNG) and `camera.json`.
-    pub fn write(&self, out: &impl Sink, dir: &Path) -> Result<(), OutputError> {
+    /// (EXR and PNG) and `camera.json`. The layers and the panoramas are encoded at the same
+    /// time, and the panoramas each beside the other.
+    pub fn write(&self, out: &(impl Sink + Sync), dir: &Path) -> Result<(), OutputError> {
+        use rayon::prelude::*;
+        let panoramas = || -> Result<Vec<PanoramaRecord>, OutputError> {
+            (self.panoramas().into_par_iter())
+                .map(|(name, layout, image)| {
+                    out.write_exr(&dir.join(format!("{name}.exr")), &image)?;
+                    out.write_png(&dir.join(format!("{name}.png")), &image)?;
+                    Ok(PanoramaRecord::new(format!("{name}.exr"), &layout))
+                })
+                .collect()
+        };
+        let (layers, panoramas) = rayon::join(|| self.write_layers(out, dir), panoramas);
+        layers?;
+        out.write_json(&dir.join(CAMERA_FILE), &self.camera_record(panoramas?))
+    }
+
+    /// The ray map, range, ids and the id map.
+    fn write_layers(&self, out: &impl Sink, dir: &Path) -> Result<(), OutputError> {
         let (w, h) = (self.rays.width, self.rays.height);
         let ray_channels = RAY_CHANNELS
             .iter()
@@ -216,14 +234,7 @@ impl SensorOutputs {
         out.write_channels(&dir.join(RANGE_FILE), (w, h), range)?;
         let ids = vec![("id", Samples::U32(self.ids.clone()))];
         out.write_channels(&dir.join(ID_FILE), (w, h), ids)?;
-        out.write_json(&dir.join(ID_MAP_FILE), &self.id_map)?;
-        let mut panoramas = Vec::new();
-        for (name, layout, image) in self.panoramas() {
-            out.write_exr(&dir.join(format!("{name}.exr")), &image)?;
-            out.write_png(&dir.join(format!("{name}.png")), &image)?;
-            panoramas.push(PanoramaRecord::new(format!("{name}.exr"), &layout));
-        }
-        out.write_json(&dir.join(CAMERA_FILE), &self.camera_record(panoramas))
+        out.write_json(&dir.join(ID_MAP_FILE), &self.id_map)
     }
 
     pub(crate) fn camera_record(&self, panoramas: Vec<PanoramaRecord>) -> CameraRecord {

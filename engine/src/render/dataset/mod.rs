@@ -1,7 +1,7 @@
 //! Rendering a dataset, in parts that two drivers put together:
 //! - [`Plan`]: the scene and the trajectory, every pose checked before anything is rendered;
 //! - [`FrameWriter`]: a renderer whose mirror (the robot) stands at each pose in turn, giving a
-//!   frame's files in memory ([`Frame`]);
+//!   frame's files in memory ([`Frame`]), encoded beside the next frame's render (`frames.rs`);
 //! - [`finish`]: the index and the summary, written last.
 //!
 //! `specchio dataset` runs them in one process; the Python package's Ray driver runs one
@@ -9,20 +9,22 @@
 //! bytes depend only on the plan, the lookup, the device and the frame's index and pose (never
 //! on which frames a writer rendered before it), so both give the same files, byte for byte.
 
-use std::path::{Path, PathBuf};
-use std::sync::Arc;
+mod frames;
 
-use super::{lookups, Readback, RenderOptions, Renderer};
+use std::path::{Path, PathBuf};
+
+use super::lookups;
 use crate::memory::MemoryError;
-use crate::output::{MemoryFiles, OutputError, Sink, Transaction};
+use crate::output::{OutputError, Sink, Transaction};
 use crate::scene::{Lookup, RefreshPolicy, Scene, SceneError};
 use crate::sensor::dataset::grid::{self, GridError};
 use crate::sensor::dataset::trajectory::{self, Pose, TrajectoryError};
-use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
-use crate::sensor::{GroundTruth, SensorOutputs};
-use crate::vk::device::Device;
+use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord};
+use crate::sensor::GroundTruth;
 use crate::vk::physical::DeviceInfo;
 use crate::vk::GpuError;
+
+pub use frames::{Frame, FrameWriter, Rendered};
 
 /// Why a dataset could not be made. Each names its file (and line and field, where the input
 /// has them) or the device.
@@ -112,12 +114,11 @@ impl Plan {
                 format!("grid: spacing {spacing_m} m, {headings} heading(s), t = {time_s} s"),
             ),
         };
-        crate::memory::estimates::render(&scene, scene.cube.face_size_px, false, true).map_err(
-            |source| DatasetError::Memory {
-                path: scene_path.to_owned(),
-                source,
-            },
-        )?;
+        // The least a run holds: the frame rendering and the one encoding (frames.rs).
+        crate::memory::estimates::dataset(&scene, 2).map_err(|source| DatasetError::Memory {
+            path: scene_path.to_owned(),
+            source,
+        })?;
         Ok(Plan {
             scene,
             scene_path: scene_path.to_owned(),
@@ -189,131 +190,6 @@ pub fn place_robot(robot: &mut Scene, scene: &Scene, pose: &Pose) {
     robot.sensor = sensor_dataset::turned_sensor(scene, pose);
 }
 
-/// One frame of a dataset: its files (paths relative to the dataset folder) and its index
-/// line (without the newline).
-pub struct Frame {
-    pub files: Vec<(PathBuf, Vec<u8>)>,
-    pub index_line: String,
-}
-
-/// A renderer whose mirror stands at a pose: the robot's sensor, frame by frame.
-pub struct FrameWriter {
-    renderer: Renderer,
-    /// The scene as loaded: poses are placed relative to it.
-    scene: Scene,
-    lookup: Lookup,
-    truth: GroundTruth,
-}
-
-impl FrameWriter {
-    /// A renderer of `scene`'s robot on `device` with `lookup` (see [`choose_lookup`]).
-    pub fn new(device: &Arc<Device>, scene: &Scene, lookup: Lookup) -> Result<Self, GpuError> {
-        let options = RenderOptions {
-            lookup: Some(lookup),
-            // The traced ray map needs no id cube.
-            id_cube: lookup != Lookup::RayQuery,
-            ..Default::default()
-        };
-        let renderer = Renderer::new(device, robot_scene(scene), &options)?;
-        let truth = renderer.sensor_ground_truth();
-        Ok(FrameWriter {
-            renderer,
-            scene: scene.clone(),
-            lookup,
-            truth,
-        })
-    }
-
-    pub fn lookup(&self) -> Lookup {
-        self.lookup
-    }
-
-    /// Where range and ids come from on this device with this lookup.
-    pub fn ground_truth(&self) -> GroundTruth {
-        self.truth
-    }
-
-    /// The sensor outputs of frame `frame`: the mirror moved and turned to `pose`, rendered at
-    /// its time. The observer's view, rendered beside it, is returned too.
-    pub fn outputs(
-        &mut self,
-        frame: usize,
-        pose: &Pose,
-    ) -> Result<(SensorOutputs, crate::image::RgbaImage), DatasetError> {
-        let r = &mut self.renderer;
-        place_robot(&mut r.scene, &self.scene, pose);
-        let readback = Readback {
-            views: true,
-            rays: true,
-            ..Default::default()
-        };
-        let (_, images) = r.render_frame(frame as u64, pose.time_s, readback)?;
-        let missing = || DatasetError::NotReadBack { frame };
-        let origin = images.sensor_ray_origin.as_ref().ok_or_else(missing)?;
-        let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;
-        let sensor = images.sensor.ok_or_else(missing)?;
-        let observer = images.observer.ok_or_else(missing)?;
-        let name = self.lookup.to_string();
-        let outputs = SensorOutputs::from_gpu(
-            &r.scene,
-            pose.time_s,
-            (&name, self.truth),
-            sensor,
-            (origin, direction),
-            None,
-        );
-        Ok((outputs, observer))
-    }
-
-    /// Frame `frame` of a dataset, at `pose`: its files, in memory.
-    pub fn frame(&mut self, frame: usize, pose: &Pose) -> Result<Frame, DatasetError> {
-        let (outputs, _) = self.outputs(frame, pose)?;
-        let folder = sensor_dataset::frame_folder(frame);
-        let record = PoseRecord::new(frame, pose, &outputs);
-        let root = Path::new("");
-        let files = MemoryFiles::new(root);
-        write_frame(&files, &root.join(&folder), &outputs, &record)?;
-        let line = IndexLine {
-            folder,
-            pose: &record,
-        };
-        let index_line = serde_json::to_string(&line).map_err(|e| OutputError::Encode {
-            path: PathBuf::from(INDEX_FILE),
-            message: e.to_string(),
-        })?;
-        Ok(Frame {
-            files: files.into_files(),
-            index_line,
-        })
-    }
-}
-
-/// A frame's folder: the sensor image, its outputs, the pose and the point cloud.
-fn write_frame(
-    out: &impl Sink,
-    dir: &Path,
-    o: &SensorOutputs,
-    pose: &PoseRecord,
-) -> Result<(), OutputError> {
-    out.write_exr(&dir.join("sensor.exr"), &o.image)?;
-    out.write_png(&dir.join("sensor.png"), &o.image)?;
-    o.write(out, dir)?;
-    out.write_json(&dir.join("pose.json"), pose)?;
-    let origin = o.scene_origin;
-    let comments = [
-        format!(
-            "frame: the scene's, local (world = [{}, {}, {}] + point), metres, +Y up",
-            origin.x, origin.y, origin.z
-        ),
-        "id: the drawable the ray met (sensor.id.json)".to_owned(),
-    ];
-    let points = sensor_dataset::points(o);
-    out.write_bytes(
-        &dir.join("points.ply"),
-        &sensor_dataset::ply::ply(&points, &comments),
-    )
-}
-
 /// Writes `frame`'s files into the dataset folder `root`, staged in `out`.
 pub fn place_frame(out: &Transaction, root: &Path, frame: &Frame) -> Result<(), OutputError> {
     for (path, bytes) in &frame.files {
@@ -333,12 +209,11 @@ pub fn write_frames(
     between: &mut dyn FnMut(usize) -> Result<(), DatasetError>,
 ) -> Result<Vec<String>, DatasetError> {
     let mut index = Vec::with_capacity(plan.poses.len());
-    for (i, pose) in plan.poses.iter().enumerate() {
-        between(i)?;
-        let frame = frames.frame(i, pose)?;
+    frames.frames(plan.poses.iter().enumerate(), between, &mut |frame| {
         place_frame(out, root, &frame)?;
         index.push(frame.index_line);
-    }
+        Ok(())
+    })?;
     Ok(index)
 }
 

@@ -1,0 +1,326 @@
+//! A dataset's frames: the robot's renderer ([`FrameWriter`]), what one render leaves to
+//! encode ([`Rendered`]), and the pipeline that encodes frames' files on encoder threads
+//! while the GPU renders the next ([`FrameWriter::frames`]).
+//!
+//! Why a pipeline: a frame's files (about 25 MB at 512²: EXR layers, two panoramas resampled
+//! and encoded twice, PNG previews, a point cloud) cost the CPU more than the render costs
+//! the device. On lavapipe a frame rendered in about 100 ms and encoded in about 270 ms; on
+//! an NVIDIA H200 the whole frame took 400 ms, as long as on two CPU cores (docs/gpu.md).
+//! Encoding beside the render, and each frame's independent files at the same time, takes
+//! the encoding off the render's path.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{sync_channel, Receiver};
+use std::sync::{Arc, Mutex};
+
+use super::{place_robot, robot_scene, DatasetError, INDEX_FILE};
+use crate::output::{MemoryFiles, OutputError, Sink};
+use crate::render::{Readback, RenderOptions, Renderer};
+use crate::scene::{Lookup, Scene};
+use crate::sensor::dataset::trajectory::Pose;
+use crate::sensor::dataset::{self as sensor_dataset, IndexLine, PoseRecord};
+use crate::sensor::{GroundTruth, SensorOutputs};
+use crate::vk::device::Device;
+use crate::vk::GpuError;
+
+/// One frame of a dataset: its files (paths relative to the dataset folder, sorted) and its
+/// index line (without the newline).
+pub struct Frame {
+    pub files: Vec<(PathBuf, Vec<u8>)>,
+    pub index_line: String,
+}
+
+/// A frame rendered and read back: everything its files are made from, no device in it.
+pub struct Rendered {
+    frame: usize,
+    outputs: SensorOutputs,
+    record: PoseRecord,
+}
+
+impl Rendered {
+    /// The frame's files, encoded in memory, the independent ones at the same time.
+    pub fn encode(self) -> Result<Frame, DatasetError> {
+        let folder = sensor_dataset::frame_folder(self.frame);
+        let root = Path::new("");
+        let files = MemoryFiles::new(root);
+        write_frame(&files, &root.join(&folder), &self.outputs, &self.record)?;
+        let line = IndexLine {
+            folder,
+            pose: &self.record,
+        };
+        let index_line = serde_json::to_string(&line).map_err(|e| OutputError::Encode {
+            path: PathBuf::from(INDEX_FILE),
+            message: e.to_string(),
+        })?;
+        Ok(Frame {
+            files: files.into_files(),
+            index_line,
+        })
+    }
+}
+
+/// A renderer whose mirror stands at a pose: the robot's sensor, frame by frame.
+pub struct FrameWriter {
+    renderer: Renderer,
+    /// The scene as loaded: poses are placed relative to it.
+    scene: Scene,
+    lookup: Lookup,
+    truth: GroundTruth,
+    /// Frames encoded at the same time by [`FrameWriter::frames`].
+    encoders: usize,
+}
+
+impl FrameWriter {
+    /// A renderer of `scene`'s robot on `device` with `lookup` (see
+    /// [`choose_lookup`](super::choose_lookup)).
+    pub fn new(device: &Arc<Device>, scene: &Scene, lookup: Lookup) -> Result<Self, GpuError> {
+        let options = RenderOptions {
+            lookup: Some(lookup),
+            // The traced ray map needs no id cube.
+            id_cube: lookup != Lookup::RayQuery,
+            ..Default::default()
+        };
+        let renderer = Renderer::new(device, robot_scene(scene), &options)?;
+        let truth = renderer.sensor_ground_truth();
+        Ok(FrameWriter {
+            renderer,
+            scene: scene.clone(),
+            lookup,
+            truth,
+            encoders: encoders_for(scene),
+        })
+    }
+
+    pub fn lookup(&self) -> Lookup {
+        self.lookup
+    }
+
+    /// Where range and ids come from on this device with this lookup.
+    pub fn ground_truth(&self) -> GroundTruth {
+        self.truth
+    }
+
+    /// The sensor outputs of frame `frame`: the mirror moved and turned to `pose`, rendered at
+    /// its time. The observer's view, rendered beside it, is returned too.
+    pub fn outputs(
+        &mut self,
+        frame: usize,
+        pose: &Pose,
+    ) -> Result<(SensorOutputs, crate::image::RgbaImage), DatasetError> {
+        let r = &mut self.renderer;
+        place_robot(&mut r.scene, &self.scene, pose);
+        let readback = Readback {
+            views: true,
+            rays: true,
+            ..Default::default()
+        };
+        let (_, images) = r.render_frame(frame as u64, pose.time_s, readback)?;
+        let missing = || DatasetError::NotReadBack { frame };
+        let origin = images.sensor_ray_origin.as_ref().ok_or_else(missing)?;
+        let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;
+        let sensor = images.sensor.ok_or_else(missing)?;
+        let observer = images.observer.ok_or_else(missing)?;
+        let name = self.lookup.to_string();
+        let outputs = SensorOutputs::from_gpu(
+            &r.scene,
+            pose.time_s,
+            (&name, self.truth),
+            sensor,
+            (origin, direction),
+            None,
+        );
+        Ok((outputs, observer))
+    }
+
+    /// Frame `frame` at `pose`, rendered; its files still to encode.
+    pub fn render(&mut self, frame: usize, pose: &Pose) -> Result<Rendered, DatasetError> {
+        let (outputs, _) = self.outputs(frame, pose)?;
+        let record = PoseRecord::new(frame, pose, &outputs);
+        Ok(Rendered {
+            frame,
+            outputs,
+            record,
+        })
+    }
+
+    /// Frame `frame` of a dataset, at `pose`: its files, in memory.
+    pub fn frame(&mut self, frame: usize, pose: &Pose) -> Result<Frame, DatasetError> {
+        self.render(frame, pose)?.encode()
+    }
+
+    /// How many frames may encode at the same time (at least 1).
+    pub fn set_encoders(&mut self, encoders: usize) {
+        self.encoders = encoders.max(1);
+    }
+
+    /// The frames `poses` (index, pose) in order, each given to `take` on this thread.
+    /// Frames are encoded on encoder threads while the next ones render; `between(i)` runs
+    /// before frame `i` renders, and an error from it, `take` or a frame stops the run (the
+    /// frames already given stay given). Besides the frame rendering, at most one frame per
+    /// encoder is held (encoding, or encoded and waiting for an earlier one).
+    pub fn frames<'p>(
+        &mut self,
+        poses: impl IntoIterator<Item = (usize, &'p Pose)>,
+        between: &mut dyn FnMut(usize) -> Result<(), DatasetError>,
+        take: &mut dyn FnMut(Frame) -> Result<(), DatasetError>,
+    ) -> Result<(), DatasetError> {
+        let encoders = self.encoders;
+        // A rendezvous: a frame is handed over only to an encoder that is free.
+        let (to_encode, rendered) = sync_channel::<(usize, Rendered)>(0);
+        let rendered = Mutex::new(rendered);
+        std::thread::scope(|s| {
+            // Room for every encoder's result, so that no encoder waits on the caller.
+            let (to_take, encoded) = sync_channel(encoders);
+            for _ in 0..encoders {
+                let (rendered, to_take) = (&rendered, to_take.clone());
+                s.spawn(move || loop {
+                    let job = rendered.lock().map(|r| r.recv());
+                    let Ok(Ok((seq, job))) = job else {
+                        return; // the caller is done, or stopped
+                    };
+                    if to_take.send((seq, job.encode())).is_err() {
+                        return;
+                    }
+                });
+            }
+            drop(to_take);
+            // Owns the caller's ends of the channels: however it returns, they close, and
+            // each encoder ends after the frame it is on.
+            let run = move || {
+                let mut order = InOrder::default();
+                for (i, pose) in poses {
+                    between(i)?;
+                    let job = self.render(i, pose)?;
+                    // Frames come back as they finish; wait for one while every encoder is busy.
+                    while order.sent - order.received == encoders {
+                        order.receive(&encoded)?;
+                    }
+                    to_encode.send((order.sent, job)).map_err(|_| gone())?;
+                    order.sent += 1;
+                    order.take_ready(take)?;
+                }
+                drop(to_encode);
+                while order.received < order.sent {
+                    order.receive(&encoded)?;
+                    order.take_ready(take)?;
+                }
+                Ok(())
+            };
+            run()
+        })
+    }
+}
+
+/// The frames handed out and back, and the ones back early: encoders finish out of order,
+/// and frames are taken in order.
+#[derive(Default)]
+struct InOrder {
+    sent: usize,
+    received: usize,
+    taken: usize,
+    early: BTreeMap<usize, Frame>,
+}
+
+impl InOrder {
+    /// Waits for the next frame an encoder finishes.
+    fn receive(
+        &mut self,
+        encoded: &Receiver<(usize, Result<Frame, DatasetError>)>,
+    ) -> Result<(), DatasetError> {
+        let (seq, frame) = encoded.recv().map_err(|_| gone())?;
+        self.received += 1;
+        self.early.insert(seq, frame?);
+        Ok(())
+    }
+
+    /// Gives `take` every frame that is next in order.
+    fn take_ready(
+        &mut self,
+        take: &mut dyn FnMut(Frame) -> Result<(), DatasetError>,
+    ) -> Result<(), DatasetError> {
+        while let Some(frame) = self.early.remove(&self.taken) {
+            self.taken += 1;
+            take(frame)?;
+        }
+        Ok(())
+    }
+}
+
+/// An encoder ended without its frame: it panicked (the scope then panics with its message).
+fn gone() -> DatasetError {
+    DatasetError::Stopped("a frame encoder stopped".into())
+}
+
+/// Encoders for this machine and `scene`: a quarter of the cores, 1 to 4, and no more than the
+/// memory budget holds frames for (each holds one frame's outputs and files: about 83 MB at a
+/// 512² sensor). Each frame's encoding is parallel already (its files at once, EXR chunks and
+/// panorama rows on rayon's pool); more encoders fill the stretches that are not (a PNG's
+/// deflate, the point cloud).
+fn encoders_for(scene: &Scene) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    encoders_within(cores, |held| {
+        crate::memory::estimates::dataset(scene, held).is_ok()
+    })
+}
+
+/// [`encoders_for`] on `cores` cores, where `fits(n)` says whether `n` frames fit in memory.
+fn encoders_within(cores: usize, fits: impl Fn(u64) -> bool) -> usize {
+    let mut encoders = (cores / 4).clamp(1, 4);
+    // The frame rendering, and one per encoder.
+    while encoders > 1 && !fits(encoders as u64 + 1) {
+        encoders -= 1;
+    }
+    encoders
+}
+
+/// A frame's folder: the sensor image, its outputs, the pose and the point cloud, the three
+/// groups encoded at the same time.
+fn write_frame(
+    out: &(impl Sink + Sync),
+    dir: &Path,
+    o: &SensorOutputs,
+    pose: &PoseRecord,
+) -> Result<(), OutputError> {
+    let image = || -> Result<(), OutputError> {
+        out.write_exr(&dir.join("sensor.exr"), &o.image)?;
+        out.write_png(&dir.join("sensor.png"), &o.image)
+    };
+    let cloud = || -> Result<(), OutputError> {
+        out.write_json(&dir.join("pose.json"), pose)?;
+        let origin = o.scene_origin;
+        let comments = [
+            format!(
+                "frame: the scene's, local (world = [{}, {}, {}] + point), metres, +Y up",
+                origin.x, origin.y, origin.z
+            ),
+            "id: the drawable the ray met (sensor.id.json)".to_owned(),
+        ];
+        let points = sensor_dataset::points(o);
+        out.write_bytes(
+            &dir.join("points.ply"),
+            &sensor_dataset::ply::ply(&points, &comments),
+        )
+    };
+    let ((a, b), c) = rayon::join(|| rayon::join(image, cloud), || o.write(out, dir));
+    a.and(b).and(c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::encoders_within;
+
+    #[test]
+    fn encoders_are_a_quarter_of_the_cores_within_memory() {
+        let any = |_| true;
+        assert_eq!(encoders_within(1, any), 1);
+        assert_eq!(encoders_within(2, any), 1);
+        assert_eq!(encoders_within(8, any), 2);
+        assert_eq!(encoders_within(16, any), 4);
+        assert_eq!(encoders_within(128, any), 4);
+        // Memory for three frames: the one rendering and two encoding.
+        assert_eq!(encoders_within(16, |held| held <= 3), 2);
+        // For none beyond the least: one encoder still (the plan checked that much).
+        assert_eq!(encoders_within(16, |_| false), 1);
+    }
+}

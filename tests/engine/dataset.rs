@@ -1,0 +1,130 @@
+//! The dataset's frame pipeline (`engine/src/render/dataset/frames.rs`): frames encoded on a
+//! second thread while the next renders are byte for byte the frames rendered and encoded one
+//! at a time, in order; a stop from either end ends the run without a hang. (The command's
+//! datasets: tests/cli/dataset.rs; Python's and Ray's: python/tests/test_dataset.py.)
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use common::{root, Gpu};
+use specchio::render::dataset::{choose_lookup, DatasetError, Frame, FrameWriter, Plan, Poses};
+
+/// Thesis-room's textured walls, a pose grid of four places with two headings each.
+fn plan() -> Plan {
+    let poses = Poses::Grid {
+        spacing_m: 4.0,
+        headings: 2,
+        time_s: 0.5,
+    };
+    Plan::new(&root().join("scenes/thesis-room.toml"), poses).expect("the plan")
+}
+
+fn writer(gpu: &Gpu, plan: &Plan) -> FrameWriter {
+    let lookup = choose_lookup(None, &plan.scene, &gpu.device.info).expect("a lookup");
+    FrameWriter::new(&gpu.device, &plan.scene, lookup).expect("a frame writer")
+}
+
+#[test]
+fn pipelined_frames_are_the_frames_made_one_at_a_time() {
+    let (gpu, _) = Gpu::with_all_lookups();
+    let plan = plan();
+    assert!(plan.poses.len() >= 4, "{} poses", plan.poses.len());
+    let one_by_one: Vec<Frame> = {
+        let mut w = writer(&gpu, &plan);
+        (plan.poses.iter().enumerate())
+            .map(|(i, pose)| w.frame(i, pose).expect("a frame"))
+            .collect()
+    };
+    // One encoder, and three (frames then finish out of order and must be put back in it).
+    for encoders in [1, 3] {
+        let pipelined = pipelined(&gpu, &plan, encoders);
+        assert_same(&one_by_one, &pipelined);
+    }
+    gpu.finish();
+}
+
+/// Every frame of `plan`, through the pipeline with `encoders` encoders.
+fn pipelined(gpu: &Gpu, plan: &Plan, encoders: usize) -> Vec<Frame> {
+    let mut frames = Vec::new();
+    let mut before = Vec::new();
+    let mut w = writer(gpu, plan);
+    w.set_encoders(encoders);
+    w.frames(
+        plan.poses.iter().enumerate(),
+        &mut |i| {
+            before.push(i);
+            Ok(())
+        },
+        &mut |f| {
+            frames.push(f);
+            Ok(())
+        },
+    )
+    .expect("the pipeline");
+    let n = plan.poses.len();
+    assert_eq!(before, (0..n).collect::<Vec<_>>());
+    assert_eq!(frames.len(), n);
+    frames
+}
+
+fn assert_same(one_by_one: &[Frame], pipelined: &[Frame]) {
+    for (i, (a, b)) in one_by_one.iter().zip(pipelined).enumerate() {
+        assert_eq!(a.index_line, b.index_line, "frame {i}'s index line");
+        let names = |f: &Frame| f.files.iter().map(|(p, _)| p.clone()).collect::<Vec<_>>();
+        assert_eq!(names(a), names(b), "frame {i}'s files");
+        let mut sorted = names(b);
+        sorted.sort();
+        assert_eq!(names(b), sorted, "frame {i}'s files are sorted by path");
+        for ((path, x), (_, y)) in a.files.iter().zip(&b.files) {
+            assert!(x == y, "frame {i}: {} differs", path.display());
+        }
+    }
+    // Different poses give different images: the comparison above can fail.
+    assert_ne!(pipelined[0].files, pipelined[1].files);
+}
+
+#[test]
+fn a_stop_from_either_end_ends_the_run() {
+    let (gpu, _) = Gpu::with_all_lookups();
+    let plan = plan();
+    let mut w = writer(&gpu, &plan);
+    w.set_encoders(1);
+    // The caller's check before frame 2 stops it: frames 0 and 1 rendered, frame 0 taken
+    // (frame 1 was still encoding), and no hang.
+    let mut taken = Vec::new();
+    let stopped = w.frames(
+        plan.poses.iter().enumerate(),
+        &mut |i| match i {
+            2 => Err(DatasetError::Stopped("asked to stop".into())),
+            _ => Ok(()),
+        },
+        &mut |f| {
+            taken.push(f.index_line);
+            Ok(())
+        },
+    );
+    assert!(matches!(stopped, Err(DatasetError::Stopped(m)) if m == "asked to stop"));
+    assert_eq!(taken.len(), 1);
+    // The taker's error on the first frame it gets ends the run with that error.
+    let mut calls = 0;
+    let refused = w.frames(plan.poses.iter().enumerate(), &mut |_| Ok(()), &mut |_| {
+        calls += 1;
+        Err(DatasetError::Stopped("the disk is full".into()))
+    });
+    assert!(matches!(refused, Err(DatasetError::Stopped(m)) if m == "the disk is full"));
+    assert_eq!(calls, 1);
+    // With three encoders too.
+    w.set_encoders(3);
+    let mut calls = 0;
+    let refused = w.frames(plan.poses.iter().enumerate(), &mut |_| Ok(()), &mut |_| {
+        calls += 1;
+        Err(DatasetError::Stopped("the disk is full".into()))
+    });
+    assert!(matches!(refused, Err(DatasetError::Stopped(m)) if m == "the disk is full"));
+    assert_eq!(calls, 1);
+    // The writer still works after both.
+    let pose = &plan.poses[0];
+    assert!(w.frame(0, pose).is_ok());
+    drop(w);
+    gpu.finish();
+}
