@@ -83,11 +83,22 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // 3. The frames, then the index and the summary.
     let progress = indicatif::ProgressBar::new(plan.poses.len() as u64);
     let n = plan.poses.len();
-    let index = writer::write_frames(&out, &args.out, &plan, &mut frames, &mut |i| {
-        progress.set_position(i as u64);
-        let done = format!("after {i} of {n} frames");
-        specchio::process::interrupt::check(&done).map_err(|e| DatasetError::Stopped(e.to_string()))
-    })?;
+    let mut between = |i: usize| {
+        let at = format!("before frame {i} of {n}");
+        specchio::process::interrupt::check(&at).map_err(|e| DatasetError::Stopped(e.to_string()))
+    };
+    let mut written = |done: usize| {
+        progress.set_position(done as u64);
+        Ok(())
+    };
+    let index = writer::write_frames(
+        &out,
+        &args.out,
+        &plan,
+        &mut frames,
+        &mut between,
+        &mut written,
+    )?;
     progress.finish_and_clear();
     drop(frames);
     drop(device);

@@ -304,6 +304,7 @@ fn render_frames(
                 views: true,
                 directions: args.directions,
                 rays: args.sensor_outputs,
+                ..Default::default()
             },
         )?;
         let frame_dir = if args.frames > 1 {

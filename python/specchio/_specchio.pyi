@@ -65,6 +65,7 @@ class DatasetFrames:
         lookup: Optional[str] = None,
         device: Optional[str] = None,
         validate: bool = False,
+        encoders: Optional[int] = None,
     ) -> None: ...
     def __len__(self) -> int: ...
     @property

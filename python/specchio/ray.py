@@ -37,8 +37,10 @@ class _Worker:
         # driver as Ray's "actor died", its message buried in a traceback.
         self.frames, self.error = None, None
         try:
+            # One encoder: a worker shares its machine with as many others as it has CPUs,
+            # and each encoder holds a frame in memory.
             self.frames = DatasetFrames(
-                scene, trajectory, lookup=lookup, device=device, validate=validate
+                scene, trajectory, lookup=lookup, device=device, validate=validate, encoders=1
             )
         except SpecchioError as e:
             self.error = str(e)

@@ -44,7 +44,7 @@ pub fn dataset(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Py<PyAny>> {
     let asked = parse_lookup(lookup)?;
-    let mut stopped: Option<PyErr> = None;
+    let stopped: Mutex<Option<PyErr>> = Mutex::new(None);
     let result = py.detach(|| -> Result<_, DatasetError> {
         // What this call may not replace is what it reads (docs/python.md).
         specchio::files::identity::forget();
@@ -59,29 +59,43 @@ pub fn dataset(
         let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
         let truth = frames.ground_truth();
         let n = plan.poses.len();
-        let index = writer::write_frames(&staged, &out, &plan, &mut frames, &mut |i| {
-            // Between frames: Python's signals (Ctrl-C) and the caller's progress.
-            Python::attach(|py| {
-                let called = match (&progress, i) {
-                    (Some(f), i) if i > 0 => f.call1(py, (i, n)).map(drop),
-                    _ => Ok(()),
-                };
-                called.and_then(|()| py.check_signals())
-            })
-            .map_err(|e| {
-                stopped = Some(e);
+        // Before each frame, Python's signals (Ctrl-C); after each frame written but the
+        // last (which the caller hears of once the folder is placed), the caller's progress.
+        let keep = |e: PyErr| {
+            *stopped.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+        };
+        let mut between = |i: usize| {
+            Python::attach(|py| py.check_signals()).map_err(|e| {
+                keep(e);
                 DatasetError::Stopped(format!(
-                    "stopped after {i} of {n} frames: nothing was written"
+                    "stopped before frame {i} of {n}: nothing was written"
                 ))
             })
-        })?;
+        };
+        let mut written = |done: usize| match (&progress, done < n) {
+            (Some(f), true) => Python::attach(|py| f.call1(py, (done, n)).map(drop)).map_err(|e| {
+                keep(e);
+                DatasetError::Stopped(format!(
+                    "stopped after {done} of {n} frames: nothing was written"
+                ))
+            }),
+            _ => Ok(()),
+        };
+        let index = writer::write_frames(
+            &staged,
+            &out,
+            &plan,
+            &mut frames,
+            &mut between,
+            &mut written,
+        )?;
         drop(frames);
         drop(dev);
         let record = plan.record(lookup, truth);
         writer::finish(&staged, &out, &index, &record)?;
         Ok((staged, record, log))
     });
-    if let Some(e) = stopped {
+    if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
         return Err(e);
     }
     let (staged, record, log) = result.map_err(errors::to_py)?;
@@ -95,6 +109,9 @@ pub fn dataset(
     py.detach(|| staged.commit()).map_err(errors::to_py)?;
     Ok(summary)
 }
+
+/// The most encoders a caller may ask for.
+const MAX_ENCODERS: usize = 16;
 
 /// A worker's half of a dataset: a renderer of the plan's robot that renders the frames it
 /// is asked for and returns their files (it writes nothing). Every worker of one dataset
@@ -112,8 +129,11 @@ pub struct DatasetFrames {
 
 #[pymethods]
 impl DatasetFrames {
+    /// `encoders`: frames encoded at the same time while the next render (default: a
+    /// quarter of the machine's cores, 1 to 4, within the memory budget; 0: none). A Ray
+    /// worker, one of many on its machine, passes 1.
     #[new]
-    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false))]
+    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None))]
     fn new(
         py: Python<'_>,
         scene: PathBuf,
@@ -121,7 +141,13 @@ impl DatasetFrames {
         lookup: Option<&str>,
         device: Option<&str>,
         validate: bool,
+        encoders: Option<usize>,
     ) -> PyResult<Self> {
+        if let Some(n) = encoders.filter(|&n| n > MAX_ENCODERS) {
+            return Err(errors::error(format!(
+                "encoders = {n}: at most {MAX_ENCODERS} (each holds a frame in memory)"
+            )));
+        }
         let asked = parse_lookup(lookup)?;
         py.detach(|| -> Result<Self, DatasetError> {
             let plan = Plan::read(&scene, &trajectory)?;
@@ -129,7 +155,10 @@ impl DatasetFrames {
             let log = instance.validation_log();
             let (dev, _, lookup) =
                 specchio::process::probe::device_for_sensor(&instance, device, asked, &plan.scene)?;
-            let frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
+            let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
+            if let Some(n) = encoders {
+                frames.set_encoders(n);
+            }
             Ok(DatasetFrames {
                 plan,
                 lookup: lookup.to_string(),

@@ -32,12 +32,27 @@ def test_python_writes_what_the_command_writes(made, monkeypatch):
     monkeypatch.chdir(work)
     seen = []
     record = specchio.dataset(scene, "robot.csv", "py", progress=lambda d, n: seen.append((d, n)))
-    assert seen[-1] == (5, 5) and [d for d, _ in seen] == sorted(d for d, _ in seen)
+    # Once per frame written, in order, the last once the folder is placed.
+    assert seen == [(d, 5) for d in range(1, 6)]
     want = tree(work / "cli")
     assert len(want) >= 5 * 9 + 2
     assert tree(work / "py") == want
     assert json.loads((work / "py" / "dataset.json").read_text()) == record
     assert record["frames"] == 5
+
+
+def test_a_workers_frames_are_the_same_with_any_number_of_encoders(made, monkeypatch):
+    work, scene = made
+    monkeypatch.chdir(work)
+    want = tree(work / "cli")
+    for encoders in [0, 1, 3]:
+        frames = specchio.DatasetFrames(scene, "robot.csv", encoders=encoders)
+        got = {path: data for files, _ in frames.frames([4, 0, 2]) for path, data in files}
+        asked = tuple(f"frames/{n:06d}/" for n in [4, 0, 2])
+        assert sorted(got) == sorted(p for p in want if p.startswith(asked))
+        assert all(got[p] == want[p] for p in got), encoders
+    with pytest.raises(specchio.SpecchioError, match="encoders = 17: at most 16"):
+        specchio.DatasetFrames(scene, "robot.csv", encoders=17)
 
 
 def test_ray_with_two_workers_writes_the_same_bytes(made, monkeypatch):

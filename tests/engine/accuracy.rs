@@ -161,7 +161,7 @@ fn no_nan_or_inf_for_any_method_or_lookup() {
                     cube: true,
                     views: true,
                     directions: true,
-                    rays: false,
+                    ..Default::default()
                 };
                 let (_, i) = r.render_frame(0, 0.5, all).expect("frame");
                 let mut images: Vec<&RgbaImage> = i.cube.iter().flatten().collect();

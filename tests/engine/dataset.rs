@@ -35,8 +35,9 @@ fn pipelined_frames_are_the_frames_made_one_at_a_time() {
             .map(|(i, pose)| w.frame(i, pose).expect("a frame"))
             .collect()
     };
-    // One encoder, and three (frames then finish out of order and must be put back in it).
-    for encoders in [1, 3] {
+    // No pipeline, one encoder, and three (frames then finish out of order and are put back
+    // in it).
+    for encoders in [0, 1, 3] {
         let pipelined = pipelined(&gpu, &plan, encoders);
         assert_same(&one_by_one, &pipelined);
     }

@@ -125,7 +125,7 @@ fn run(gpu: &Gpu, s: &Scene, method: Method, lookup: Lookup, in_flight: usize) -
         cube: true,
         views: true,
         directions: true,
-        rays: false,
+        ..Default::default()
     };
     let mut out = Vec::new();
     for i in 0..FRAMES {

@@ -104,9 +104,9 @@ pub fn render(
 }
 
 /// `specchio dataset` and the Python package's datasets, with `frames_held` frames' outputs
-/// in memory at once: the one rendering and one per encoder (`render/dataset/frames.rs`; the
-/// H200 measured 315 MB with one encoder, 563 MB with four, 83 MB a frame of a 512² sensor,
-/// which the sensor outputs' 330 bytes a pixel bound).
+/// in memory at once: the one rendering and those held by the encoders
+/// (`render/dataset/frames.rs`; the H200 measured 315 MB with one encoder, 563 MB with four:
+/// 83 MB a frame of a 512² sensor, which the sensor outputs' 330 bytes a pixel bound).
 pub fn dataset(scene: &Scene, frames_held: u64) -> Result<(), MemoryError> {
     let face = scene.cube.face_size_px;
     render_estimate(scene, face, false, frames_held).check(&Budget::from_env()?, HINT)

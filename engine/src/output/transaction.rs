@@ -29,9 +29,11 @@ use super::staged::{io, Kind, Staged};
 use super::{sys, OutputError};
 use crate::files::identity::{self, FileId};
 
-/// A test's hook into [`Transaction::commit`], run at the named point with the staged item.
+/// A test's hook into [`Transaction::commit`], run at the named point with the staged item
+/// (`Send + Sync`, so that a transaction is `Sync` in tests too: files are written into it from
+/// several threads).
 #[cfg(test)]
-pub(super) type Hook = Box<dyn Fn(replace::Point, &Path)>;
+pub(super) type Hook = Box<dyn Fn(replace::Point, &Path) + Send + Sync>;
 #[cfg(not(test))]
 type Hook = std::convert::Infallible;
 
@@ -324,7 +326,7 @@ fn check_not_an_input(
 /// The hook as `place` takes it.
 #[cfg(test)]
 fn hook(h: &Option<Hook>) -> replace::Hook<'_> {
-    h.as_deref()
+    h.as_deref().map(|f| f as &dyn Fn(replace::Point, &Path))
 }
 #[cfg(not(test))]
 fn hook(_: &Option<Hook>) -> replace::Hook<'_> {

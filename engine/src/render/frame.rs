@@ -41,7 +41,11 @@ pub struct RenderOptions {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Readback {
     pub cube: bool,
+    /// Observer, sensor and the side-by-side pair, each drawn and read back.
     pub views: bool,
+    /// The sensor's view alone (implied by `views`): a dataset's frame, where drawing the
+    /// observer and the pair only to drop them cost a third of the frame's GPU work.
+    pub sensor: bool,
     /// The lookup direction of every observer and sensor mirror pixel (for the angular
     /// error against the exact reference).
     pub directions: bool,

@@ -57,6 +57,8 @@ impl Renderer {
             slots.push((Slot::Observer, &self.targets.observer));
             slots.push((Slot::Sensor, &self.targets.sensor));
             slots.push((Slot::Pair, &self.targets.pair));
+        } else if readback.sensor {
+            slots.push((Slot::Sensor, &self.targets.sensor));
         }
         if readback.directions {
             slots.push((Slot::ObserverDirection, &self.targets.observer_directions));

@@ -5,9 +5,8 @@ use std::sync::{Arc, Mutex};
 
 use ash::vk;
 
+use super::loader::VALIDATION_LAYER;
 use super::{GpuError, VkContext};
-
-const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
 /// The `pMessageIdName` the Vulkan loader gives the messages it sends itself (e.g. "env var
 /// 'VK_INSTANCE_LAYERS' defined"): they describe the user's environment, not our API usage,
@@ -94,7 +93,8 @@ impl MessageSource {
 
 /// Owns the loader entry, the instance and (with validation) the debug messenger.
 pub struct Instance {
-    /// Kept alive because every function pointer below was loaded through it.
+    /// The process's loader (`loader::entry`, never unloaded): the surface and debug-utils
+    /// functions are loaded through it.
     pub entry: ash::Entry,
     pub raw: ash::Instance,
     /// `VK_EXT_debug_utils` at instance level: the messenger. `None` when the extension is absent.
@@ -120,7 +120,7 @@ impl Instance {
         extra: &[&'static CStr],
     ) -> Result<Arc<Self>, GpuError> {
         // The process's one loader, its drivers (and the layer) held open: see `loader`.
-        let entry = super::loader::entry(desc.validation.then_some(VALIDATION_LAYER))?.clone();
+        let entry = super::loader::entry(desc.validation)?.clone();
 
         // SAFETY: plain enumeration calls on a loaded entry.
         let layers = unsafe { entry.enumerate_instance_layer_properties() }

@@ -11,7 +11,7 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::mpsc::{sync_channel, Receiver};
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::{Arc, Mutex};
 
 use super::{place_robot, robot_scene, DatasetError, INDEX_FILE};
@@ -108,10 +108,24 @@ impl FrameWriter {
         frame: usize,
         pose: &Pose,
     ) -> Result<(SensorOutputs, crate::image::RgbaImage), DatasetError> {
+        let (outputs, observer) = self.render_outputs(frame, pose, true)?;
+        let observer = observer.ok_or(DatasetError::NotReadBack { frame })?;
+        Ok((outputs, observer))
+    }
+
+    /// [`Self::outputs`], with the observer's view drawn and read back only when `observer`
+    /// (a dataset's frame has no use for it: the sensor's view alone is drawn).
+    fn render_outputs(
+        &mut self,
+        frame: usize,
+        pose: &Pose,
+        observer: bool,
+    ) -> Result<(SensorOutputs, Option<crate::image::RgbaImage>), DatasetError> {
         let r = &mut self.renderer;
         place_robot(&mut r.scene, &self.scene, pose);
         let readback = Readback {
-            views: true,
+            views: observer,
+            sensor: true,
             rays: true,
             ..Default::default()
         };
@@ -120,7 +134,6 @@ impl FrameWriter {
         let origin = images.sensor_ray_origin.as_ref().ok_or_else(missing)?;
         let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;
         let sensor = images.sensor.ok_or_else(missing)?;
-        let observer = images.observer.ok_or_else(missing)?;
         let name = self.lookup.to_string();
         let outputs = SensorOutputs::from_gpu(
             &r.scene,
@@ -130,12 +143,12 @@ impl FrameWriter {
             (origin, direction),
             None,
         );
-        Ok((outputs, observer))
+        Ok((outputs, images.observer))
     }
 
     /// Frame `frame` at `pose`, rendered; its files still to encode.
     pub fn render(&mut self, frame: usize, pose: &Pose) -> Result<Rendered, DatasetError> {
-        let (outputs, _) = self.outputs(frame, pose)?;
+        let (outputs, _) = self.render_outputs(frame, pose, false)?;
         let record = PoseRecord::new(frame, pose, &outputs);
         Ok(Rendered {
             frame,
@@ -149,16 +162,18 @@ impl FrameWriter {
         self.render(frame, pose)?.encode()
     }
 
-    /// How many frames may encode at the same time (at least 1).
+    /// How many frames may encode at the same time; 0 encodes each frame on the calling
+    /// thread after it renders (no pipeline: the least memory).
     pub fn set_encoders(&mut self, encoders: usize) {
-        self.encoders = encoders.max(1);
+        self.encoders = encoders;
     }
 
     /// The frames `poses` (index, pose) in order, each given to `take` on this thread.
     /// Frames are encoded on encoder threads while the next ones render; `between(i)` runs
     /// before frame `i` renders, and an error from it, `take` or a frame stops the run (the
-    /// frames already given stay given). Besides the frame rendering, at most one frame per
-    /// encoder is held (encoding, or encoded and waiting for an earlier one).
+    /// frames already given stay given; a frame's error is reported in the frames' order).
+    /// Besides the frame rendering, at most one more frame than there are encoders is held:
+    /// encoding, encoded and waiting for an earlier one, or being taken.
     pub fn frames<'p>(
         &mut self,
         poses: impl IntoIterator<Item = (usize, &'p Pose)>,
@@ -166,44 +181,50 @@ impl FrameWriter {
         take: &mut dyn FnMut(Frame) -> Result<(), DatasetError>,
     ) -> Result<(), DatasetError> {
         let encoders = self.encoders;
+        if encoders == 0 {
+            for (i, pose) in poses {
+                between(i)?;
+                take(self.frame(i, pose)?)?;
+            }
+            return Ok(());
+        }
         // A rendezvous: a frame is handed over only to an encoder that is free.
         let (to_encode, rendered) = sync_channel::<(usize, Rendered)>(0);
         let rendered = Mutex::new(rendered);
         std::thread::scope(|s| {
             // Room for every encoder's result, so that no encoder waits on the caller.
             let (to_take, encoded) = sync_channel(encoders);
-            for _ in 0..encoders {
+            for n in 0..encoders {
                 let (rendered, to_take) = (&rendered, to_take.clone());
-                s.spawn(move || loop {
-                    let job = rendered.lock().map(|r| r.recv());
-                    let Ok(Ok((seq, job))) = job else {
-                        return; // the caller is done, or stopped
-                    };
-                    if to_take.send((seq, job.encode())).is_err() {
-                        return;
-                    }
-                });
+                let encoder = move || encode_until_closed(rendered, to_take);
+                (std::thread::Builder::new().name(format!("specchio-encoder-{n}")))
+                    .spawn_scoped(s, encoder)
+                    .map_err(|e| {
+                        DatasetError::Stopped(format!("cannot start a frame encoder: {e}"))
+                    })?;
             }
             drop(to_take);
             // Owns the caller's ends of the channels: however it returns, they close, and
             // each encoder ends after the frame it is on.
             let run = move || {
-                let mut order = InOrder::default();
+                let mut order = InOrder::new(encoders);
                 for (i, pose) in poses {
                     between(i)?;
                     let job = self.render(i, pose)?;
-                    // Frames come back as they finish; wait for one while every encoder is busy.
-                    while order.sent - order.received == encoders {
-                        order.receive(&encoded)?;
-                    }
+                    order.make_room(&encoded, take)?;
                     to_encode.send((order.sent, job)).map_err(|_| gone())?;
                     order.sent += 1;
-                    order.take_ready(take)?;
+                    // The earlier frames ready, taken while this one encodes.
+                    while order.next_ready() {
+                        order.take_next(take)?;
+                    }
                 }
                 drop(to_encode);
-                while order.received < order.sent {
-                    order.receive(&encoded)?;
-                    order.take_ready(take)?;
+                while order.taken < order.sent {
+                    match order.next_ready() {
+                        true => order.take_next(take)?,
+                        false => order.receive(&encoded)?,
+                    }
                 }
                 Ok(())
             };
@@ -212,17 +233,76 @@ impl FrameWriter {
     }
 }
 
+/// An encoder: takes rendered frames until the caller closes its end, and sends back each
+/// one's files or error. A panic while encoding becomes that frame's error, so that every
+/// frame handed out comes back and the caller never waits for a lost one.
+fn encode_until_closed(
+    rendered: &Mutex<Receiver<(usize, Rendered)>>,
+    to_take: SyncSender<(usize, Result<Frame, DatasetError>)>,
+) {
+    loop {
+        let job = rendered.lock().map(|r| r.recv());
+        let Ok(Ok((seq, job))) = job else {
+            return; // the caller is done, or stopped
+        };
+        let frame = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| job.encode()))
+            .unwrap_or_else(|panic| {
+                let why = (panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                Err(DatasetError::Stopped(format!(
+                    "a frame encoder failed (a bug): {why}"
+                )))
+            });
+        if to_take.send((seq, frame)).is_err() {
+            return;
+        }
+    }
+}
+
 /// The frames handed out and back, and the ones back early: encoders finish out of order,
-/// and frames are taken in order.
-#[derive(Default)]
+/// and frames (or their errors) are taken in order.
 struct InOrder {
+    encoders: usize,
     sent: usize,
     received: usize,
     taken: usize,
-    early: BTreeMap<usize, Frame>,
+    early: BTreeMap<usize, Result<Frame, DatasetError>>,
 }
 
 impl InOrder {
+    fn new(encoders: usize) -> Self {
+        InOrder {
+            encoders,
+            sent: 0,
+            received: 0,
+            taken: 0,
+            early: BTreeMap::new(),
+        }
+    }
+
+    /// Waits until an encoder is free and at most `encoders` frames are held, taking the
+    /// frames next in order while that is what holds the room.
+    fn make_room(
+        &mut self,
+        encoded: &Receiver<(usize, Result<Frame, DatasetError>)>,
+        take: &mut dyn FnMut(Frame) -> Result<(), DatasetError>,
+    ) -> Result<(), DatasetError> {
+        loop {
+            let free = self.sent - self.received < self.encoders;
+            let room = self.sent - self.taken <= self.encoders;
+            if free && room {
+                return Ok(());
+            }
+            // Without room the next frame in order is ready or still encoding; without a
+            // free encoder one is encoding. Either way the wait ends.
+            match !room && self.next_ready() {
+                true => self.take_next(take)?,
+                false => self.receive(encoded)?,
+            }
+        }
+    }
+
     /// Waits for the next frame an encoder finishes.
     fn receive(
         &mut self,
@@ -230,31 +310,34 @@ impl InOrder {
     ) -> Result<(), DatasetError> {
         let (seq, frame) = encoded.recv().map_err(|_| gone())?;
         self.received += 1;
-        self.early.insert(seq, frame?);
+        self.early.insert(seq, frame);
         Ok(())
     }
 
-    /// Gives `take` every frame that is next in order.
-    fn take_ready(
+    fn next_ready(&self) -> bool {
+        self.early.contains_key(&self.taken)
+    }
+
+    /// Gives `take` the next frame in order (ready), or returns its error.
+    fn take_next(
         &mut self,
         take: &mut dyn FnMut(Frame) -> Result<(), DatasetError>,
     ) -> Result<(), DatasetError> {
-        while let Some(frame) = self.early.remove(&self.taken) {
-            self.taken += 1;
-            take(frame)?;
-        }
-        Ok(())
+        let frame = self.early.remove(&self.taken).ok_or_else(gone)?;
+        self.taken += 1;
+        take(frame?)
     }
 }
 
-/// An encoder ended without its frame: it panicked (the scope then panics with its message).
+/// The encoders ended with frames still out: they cannot, each frame comes back (a panic as
+/// its error), so this is a bug made visible instead of a hang.
 fn gone() -> DatasetError {
-    DatasetError::Stopped("a frame encoder stopped".into())
+    DatasetError::Stopped("a frame encoder stopped without its frame".into())
 }
 
 /// Encoders for this machine and `scene`: a quarter of the cores, 1 to 4, and no more than the
-/// memory budget holds frames for (each holds one frame's outputs and files: about 83 MB at a
-/// 512² sensor). Each frame's encoding is parallel already (its files at once, EXR chunks and
+/// memory budget holds frames for (a held frame is its outputs and files: about 83 MB at a
+/// 512² sensor); 0 (no pipeline) where it holds only the frame rendering. Each frame's encoding is parallel already (its files at once, EXR chunks and
 /// panorama rows on rayon's pool); more encoders fill the stretches that are not (a PNG's
 /// deflate, the point cloud).
 fn encoders_for(scene: &Scene) -> usize {
@@ -267,8 +350,8 @@ fn encoders_for(scene: &Scene) -> usize {
 /// [`encoders_for`] on `cores` cores, where `fits(n)` says whether `n` frames fit in memory.
 fn encoders_within(cores: usize, fits: impl Fn(u64) -> bool) -> usize {
     let mut encoders = (cores / 4).clamp(1, 4);
-    // The frame rendering, and one per encoder.
-    while encoders > 1 && !fits(encoders as u64 + 1) {
+    // The frame rendering, and at most one more held than there are encoders.
+    while encoders > 0 && !fits(encoders as u64 + 2) {
         encoders -= 1;
     }
     encoders
@@ -318,9 +401,10 @@ mod tests {
         assert_eq!(encoders_within(8, any), 2);
         assert_eq!(encoders_within(16, any), 4);
         assert_eq!(encoders_within(128, any), 4);
-        // Memory for three frames: the one rendering and two encoding.
-        assert_eq!(encoders_within(16, |held| held <= 3), 2);
-        // For none beyond the least: one encoder still (the plan checked that much).
-        assert_eq!(encoders_within(16, |_| false), 1);
+        // Memory for four frames: the one rendering and three held for two encoders.
+        assert_eq!(encoders_within(16, |held| held <= 4), 2);
+        // Memory for two: no pipeline, each frame encoded after it renders.
+        assert_eq!(encoders_within(16, |held| held <= 2), 0);
+        assert_eq!(encoders_within(16, |_| false), 0);
     }
 }

@@ -114,8 +114,9 @@ impl Plan {
                 format!("grid: spacing {spacing_m} m, {headings} heading(s), t = {time_s} s"),
             ),
         };
-        // The least a run holds: the frame rendering and the one encoding (frames.rs).
-        crate::memory::estimates::dataset(&scene, 2).map_err(|source| DatasetError::Memory {
+        // The least a run holds: one frame, rendered then encoded (frames.rs: the pipeline's
+        // encoders are as many as the budget holds frames for, none where it holds one).
+        crate::memory::estimates::dataset(&scene, 1).map_err(|source| DatasetError::Memory {
             path: scene_path.to_owned(),
             source,
         })?;
@@ -199,20 +200,22 @@ pub fn place_frame(out: &Transaction, root: &Path, frame: &Frame) -> Result<(), 
 }
 
 /// Renders every pose of `plan` with `frames` into the dataset folder `root`, staged in
-/// `out`; `between(i)` runs before frame `i` (an interruption check, progress) and stops the
-/// run with its error. The frames' index lines, in order.
+/// `out`. `between(i)` runs before frame `i` renders (an interruption check), `written(n)`
+/// after the `n`-th frame is written (progress); an error from either stops the run. The
+/// frames' index lines, in order.
 pub fn write_frames(
     out: &Transaction,
     root: &Path,
     plan: &Plan,
     frames: &mut FrameWriter,
     between: &mut dyn FnMut(usize) -> Result<(), DatasetError>,
+    written: &mut dyn FnMut(usize) -> Result<(), DatasetError>,
 ) -> Result<Vec<String>, DatasetError> {
     let mut index = Vec::with_capacity(plan.poses.len());
     frames.frames(plan.poses.iter().enumerate(), between, &mut |frame| {
         place_frame(out, root, &frame)?;
         index.push(frame.index_line);
-        Ok(())
+        written(index.len())
     })?;
     Ok(index)
 }
