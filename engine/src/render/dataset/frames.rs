@@ -197,11 +197,15 @@ impl FrameWriter {
             for n in 0..encoders {
                 let (rendered, to_take) = (&rendered, to_take.clone());
                 let encoder = move || encode_until_closed(rendered, to_take);
-                (std::thread::Builder::new().name(format!("specchio-encoder-{n}")))
-                    .spawn_scoped(s, encoder)
-                    .map_err(|e| {
-                        DatasetError::Stopped(format!("cannot start a frame encoder: {e}"))
-                    })?;
+                let started = (std::thread::Builder::new().name(format!("specchio-encoder-{n}")))
+                    .spawn_scoped(s, encoder);
+                if let Err(e) = started {
+                    // The encoders started wait for frames: closing the channel ends them,
+                    // or the scope would wait for them forever.
+                    drop(to_encode);
+                    let why = format!("cannot start a frame encoder: {e}");
+                    return Err(DatasetError::Stopped(why));
+                }
             }
             drop(to_take);
             // Owns the caller's ends of the channels: however it returns, they close, and
