@@ -1,18 +1,19 @@
 //! `specchio dataset`: the robot moved along a trajectory, one folder of sensor outputs per
 //! pose (the image, ray map, range, ids and their map, panoramas, camera.json, the pose in the
 //! scene's frame and ROS REP-103's, a point cloud), and `index.jsonl`, one line per frame, for
-//! a data loader (docs/sensor.md, "Datasets"). All or nothing, like every output. The frames
-//! are the engine's `render::dataset`'s, as the Python package's.
+//! a data loader (docs/sensor.md, "Datasets"). All or nothing, like every output; with
+//! `--resume`, the finished frames are kept across runs in a work folder beside the output
+//! (`render::dataset::resume`). The frames are the engine's `render::dataset`'s, as the Python
+//! package's.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Result;
-use specchio::output::Transaction;
 use specchio::process::args::{real, whole};
 use specchio::process::probe;
 use specchio::render::dataset::{
-    self as writer, DatasetError, FrameWriter, Plan, Poses, SUMMARY_FILE,
+    self as writer, resume, DatasetError, Folder, FrameWriter, Plan, Poses,
 };
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::grid;
@@ -50,6 +51,11 @@ pub struct Args {
     /// Vulkan device: index or part of its name (see `specchio info`).
     #[arg(long)]
     device: Option<String>,
+    /// Keep each finished frame in OUT.partial beside the output, and go on from the frames
+    /// it holds when the same dataset was stopped before (a crash, Ctrl-C, a full disk).
+    /// Refused when the inputs, the lookup or the device differ from that run's.
+    #[arg(long)]
+    resume: bool,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
@@ -64,8 +70,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         (None, None) => anyhow::bail!("give the poses: --trajectory FILE or --grid SPACING"),
     };
     let plan = Plan::new(&args.scene, poses)?;
-    let mut out = Transaction::new();
-    out.folder(&args.out, SUMMARY_FILE)?;
+    let n = plan.poses.len();
+    let mut folder = Folder::stage(&args.out, n)?;
     specchio::process::interrupt::catch();
 
     // 2. The GPU and a renderer whose mirror follows the trajectory.
@@ -79,32 +85,60 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if let Some(warning) = truth.warning() {
         eprintln!("warning: dataset ({lookup} lookup): {warning}");
     }
+    if args.resume {
+        let key = plan.run_key(lookup, truth, &resume::device_key(&device.info));
+        let done = folder.resume(&key)?;
+        if done > 0 {
+            let work = resume::work_path(&args.out);
+            specchio::say!(
+                "resuming: {done} of {n} frame(s) done in {}",
+                work.display()
+            );
+        }
+    } else if resume::work_path(&args.out).exists() {
+        let work = resume::work_path(&args.out).display().to_string();
+        eprintln!("note: {work} holds a stopped run; --resume goes on from it");
+    }
 
     // 3. The frames, then the index and the summary.
-    let progress = indicatif::ProgressBar::new(plan.poses.len() as u64);
-    let n = plan.poses.len();
-    let mut between = |i: usize| {
-        let at = format!("before frame {i} of {n}");
-        specchio::process::interrupt::check(&at).map_err(|e| DatasetError::Stopped(e.to_string()))
+    let progress = indicatif::ProgressBar::new(n as u64);
+    progress.set_position(folder.done() as u64);
+    let resumable = args.resume;
+    let stop = |at: &str| {
+        specchio::process::interrupt::check(at).map_err(|e| match resumable {
+            // The finished frames are kept: not "nothing was written".
+            true => DatasetError::Stopped(format!("interrupted {at}")),
+            false => DatasetError::Stopped(e.to_string()),
+        })
     };
+    let mut between = |i: usize| stop(&format!("before frame {i} of {n}"));
     let mut written = |done: usize| {
         progress.set_position(done as u64);
         Ok(())
     };
-    let index = writer::write_frames(
-        &out,
-        &args.out,
-        &plan,
-        &mut frames,
-        &mut between,
-        &mut written,
-    )?;
+    let wrote = writer::write_frames(&mut folder, &plan, &mut frames, &mut between, &mut written);
     progress.finish_and_clear();
     drop(frames);
     drop(device);
-    writer::finish(&out, &args.out, &index, &plan.record(lookup, truth))?;
-    specchio::process::interrupt::check("before placing the output")?;
-    out.commit()?;
+    let (done, work) = (folder.done(), folder.work_folder().map(Path::to_owned));
+    let placed = wrote.and_then(|()| {
+        let ready = folder.finish(&plan.record(lookup, truth))?;
+        stop("before placing the output")?;
+        Ok(ready.commit()?)
+    });
+    let left = placed.map_err(|e| match &work {
+        // What was done is kept: say where, and how to go on.
+        Some(work) => anyhow::anyhow!(
+            "{:#}\n{done} of {n} frame(s) are kept in {}: the same command with --resume goes on \
+             from there",
+            anyhow::Error::from(e),
+            work.display()
+        ),
+        None => e.into(),
+    })?;
+    for left in left {
+        eprintln!("warning: the work folder is not removed entirely: {left}");
+    }
     specchio::say!(
         "{} frame(s) of {} along {} ({lookup} lookup, {} ground truth) into {}",
         plan.poses.len(),

@@ -60,6 +60,7 @@ def dataset(
     device: Optional[str] = None,
     validate: bool = False,
     progress: Optional[Callable[[int, int], None]] = None,
+    resume: bool = False,
     ray: bool = False,
     workers: Optional[int] = None,
     shard_size: int = 8,
@@ -70,6 +71,11 @@ def dataset(
     image, ray map, range, ids, panoramas, camera.json, pose.json (scene frame and ROS
     REP-103) and a point cloud; ``index.jsonl``; ``dataset.json``. All or nothing: every
     pose is checked first, and the folder appears only when every frame is written.
+
+    ``resume=True`` keeps each finished frame in ``out.partial`` beside the output, and goes
+    on from the frames it holds when the same dataset was stopped before (Ctrl-C, a crash, a
+    lost Ray cluster), in this process or on Ray alike; refused when the inputs, the lookup
+    or the device differ from that run's (``specchio dataset --resume``, docs/sensor.md).
 
     ``ray=True`` renders on Ray (``specchio.ray.dataset``): ``workers`` actors (default: the
     cluster's CPUs) each hold a renderer and take shards of ``shard_size`` poses; the files
@@ -91,6 +97,7 @@ def dataset(
             device=device,
             validate=validate,
             progress=progress,
+            resume=resume,
             workers=workers,
             shard_size=shard_size,
             worker_env=worker_env,
@@ -105,4 +112,5 @@ def dataset(
         device=device,
         validate=validate,
         progress=progress,
+        resume=resume,
     )

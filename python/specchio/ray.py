@@ -45,10 +45,10 @@ class _Worker:
         except SpecchioError as e:
             self.error = str(e)
 
-    def describe(self) -> tuple[Optional[str], str, str]:
+    def describe(self) -> tuple[Optional[str], str, str, str]:
         if self.frames is None:
-            return (self.error, "", "")
-        return (None, self.frames.lookup, self.frames.ground_truth)
+            return (self.error, "", "", "")
+        return (None, self.frames.lookup, self.frames.ground_truth, self.frames.device)
 
     def render(self, indices: list[int]):
         return indices, self.frames.frames(indices)
@@ -69,6 +69,7 @@ def dataset(
     device: Optional[str] = None,
     validate: bool = False,
     progress: Optional[Callable[[int, int], None]] = None,
+    resume: bool = False,
     workers: Optional[int] = None,
     shard_size: int = 8,
     worker_env: Optional[dict] = None,
@@ -83,7 +84,7 @@ def dataset(
         raise SpecchioError(f"workers: {workers}; must be at least 1")
     scene, trajectory, out = (os.fspath(p) for p in (scene, trajectory, out))
     # Every input is checked, and the output staged, before any worker starts.
-    output = DatasetOutput(scene, trajectory, out)
+    output = DatasetOutput(scene, trajectory, out, resume=resume)
     n = len(output)
     started = not ray.is_initialized()
     if started:
@@ -91,7 +92,8 @@ def dataset(
     actors = []
     try:
         count = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
-        count = min(count, math.ceil(n / shard_size))
+        # At least one, even when a resumed run has nothing left: it names the device.
+        count = max(1, min(count, math.ceil(n / shard_size)))
         options: dict[str, Any] = {
             "num_cpus": 1,
             "max_restarts": RETRIES,
@@ -104,28 +106,29 @@ def dataset(
         paths = (os.path.abspath(scene), os.path.abspath(trajectory))
         actors = [worker.remote(*paths, lookup, device, validate) for _ in range(count)]
         described = set(ray.get([a.describe.remote() for a in actors]))
-        failed = sorted(error for error, _, _ in described if error is not None)
+        failed = sorted(error for error, _, _, _ in described if error is not None)
         if failed:
             raise SpecchioError(failed[0])
-        described = {(lookup, truth) for _, lookup, truth in described}
-        if len(described) != 1:
+        runs = {(lookup, truth) for _, lookup, truth, _ in described}
+        devices = sorted({device for _, _, _, device in described})
+        if len(runs) != 1 or (resume and len(devices) != 1):
             raise SpecchioError(
-                f"the workers' devices differ: lookups and ground truths {sorted(described)}; "
-                "name one device (device=...) that every worker has"
+                f"the workers' devices differ: lookups and ground truths {sorted(runs)}, "
+                f"devices {devices}; name one device (device=...) that every worker has"
             )
-        (chosen_lookup, truth) = described.pop()
-        shards = [list(range(i, min(i + shard_size, n))) for i in range(0, n, shard_size)]
-        index: list[Optional[str]] = [None] * n
-        done = 0
+        (chosen_lookup, truth) = runs.pop()
+        # The frames a resumed run still lacks (all of them otherwise).
+        todo = output.begin(chosen_lookup, truth, devices[0])
+        shards = [todo[i : i + shard_size] for i in range(0, len(todo), shard_size)]
+        done = n - len(todo)
         pool = ActorPool(actors)
         for indices, frames in pool.map_unordered(lambda a, s: a.render.remote(s), shards):
-            for i, (files, line) in zip(indices, frames):
-                output.place(files)
-                index[i] = line
+            for files, line in frames:
+                output.place(files, line)
             done += len(indices)
             if progress is not None:
                 progress(done, n)
-        return output.finish(index, chosen_lookup, truth)
+        return output.finish(chosen_lookup, truth)
     except ray.exceptions.RayTaskError as e:
         # The engine's own error, raised in a worker: the same exception, the same message.
         if isinstance(e.cause, SpecchioError):

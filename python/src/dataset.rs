@@ -8,8 +8,9 @@ use std::sync::{Mutex, MutexGuard};
 
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
-use specchio::output::Transaction;
-use specchio::render::dataset::{self as writer, DatasetError, Frame, FrameWriter, Plan};
+use specchio::render::dataset::{
+    self as writer, resume, DatasetError, Folder, Frame, FrameWriter, Plan,
+};
 use specchio::scene::Lookup;
 use specchio::sensor::GroundTruth;
 use specchio::vk::instance::{Instance, InstanceDesc};
@@ -28,10 +29,11 @@ fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
 /// Renders the dataset of `scene` along `trajectory` into the folder `out` in this process
 /// (what `specchio dataset` does), all or nothing: every pose is checked before anything is
 /// rendered, and the folder appears only when every frame is written. Ctrl-C between frames
-/// stops it with nothing written. `progress(done, total)` is called after each frame. Returns
-/// the summary (`dataset.json`) as a dict.
+/// stops it with nothing written. `progress(done, total)` is called after each frame. With
+/// `resume`, finished frames are kept in `out.partial` and a stopped run goes on from them
+/// (`specchio dataset --resume`). Returns the summary (`dataset.json`) as a dict.
 #[pyfunction]
-#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None))]
+#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn dataset(
     py: Python<'_>,
@@ -42,6 +44,7 @@ pub fn dataset(
     device: Option<&str>,
     validate: bool,
     progress: Option<Py<PyAny>>,
+    resume: bool,
 ) -> PyResult<Py<PyAny>> {
     let asked = parse_lookup(lookup)?;
     let stopped: Mutex<Option<PyErr>> = Mutex::new(None);
@@ -49,8 +52,8 @@ pub fn dataset(
         // What this call may not replace is what it reads (docs/python.md).
         specchio::files::identity::forget();
         let plan = Plan::read(&scene, &trajectory)?;
-        let mut staged = Transaction::new();
-        staged.folder(&out, writer::SUMMARY_FILE)?;
+        let n = plan.poses.len();
+        let mut folder = Folder::stage(&out, n)?;
         let instance = Instance::create(&InstanceDesc::from_env(validate))?;
         let log = instance.validation_log();
         let (dev, _, lookup) =
@@ -58,7 +61,13 @@ pub fn dataset(
         drop(instance);
         let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
         let truth = frames.ground_truth();
-        let n = plan.poses.len();
+        if resume {
+            folder.resume(&plan.run_key(lookup, truth, &resume::device_key(&dev.info)))?;
+        }
+        let kept = |done: usize| match folder_work(&out, resume) {
+            Some(work) => format!("{done} of {n} frames are kept in {work} (resume=True goes on)"),
+            None => "nothing was written".to_owned(),
+        };
         // Before each frame, Python's signals (Ctrl-C); after each frame written but the
         // last (which the caller hears of once the folder is placed), the caller's progress.
         let keep = |e: PyErr| {
@@ -67,38 +76,30 @@ pub fn dataset(
         let mut between = |i: usize| {
             Python::attach(|py| py.check_signals()).map_err(|e| {
                 keep(e);
-                DatasetError::Stopped(format!(
-                    "stopped before frame {i} of {n}: nothing was written"
-                ))
+                DatasetError::Stopped(format!("stopped before frame {i} of {n}: {}", kept(i)))
             })
         };
         let mut written = |done: usize| match (&progress, done < n) {
             (Some(f), true) => Python::attach(|py| f.call1(py, (done, n)).map(drop)).map_err(|e| {
                 keep(e);
                 DatasetError::Stopped(format!(
-                    "stopped after {done} of {n} frames: nothing was written"
+                    "stopped after {done} of {n} frames: {}",
+                    kept(done)
                 ))
             }),
             _ => Ok(()),
         };
-        let index = writer::write_frames(
-            &staged,
-            &out,
-            &plan,
-            &mut frames,
-            &mut between,
-            &mut written,
-        )?;
+        writer::write_frames(&mut folder, &plan, &mut frames, &mut between, &mut written)?;
         drop(frames);
         drop(dev);
         let record = plan.record(lookup, truth);
-        writer::finish(&staged, &out, &index, &record)?;
-        Ok((staged, record, log))
+        let ready = folder.finish(&record)?;
+        Ok((ready, record, log))
     });
     if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
         return Err(e);
     }
-    let (staged, record, log) = result.map_err(errors::to_py)?;
+    let (ready, record, log) = result.map_err(errors::to_py)?;
     check_validation(&log)?;
     // Everything that can fail runs before the folder is placed: nothing after it.
     if let Some(f) = &progress {
@@ -106,8 +107,32 @@ pub fn dataset(
     }
     py.check_signals()?;
     let summary = errors::json_to_py(py, &record)?;
-    py.detach(|| staged.commit()).map_err(errors::to_py)?;
+    commit(py, ready)?;
     Ok(summary)
+}
+
+/// The work folder of `out` in a resumable run, for messages.
+fn folder_work(out: &Path, resume: bool) -> Option<String> {
+    resume.then(|| resume::work_path(out).display().to_string())
+}
+
+/// Places a finished dataset; what of its work folder could not be removed is a warning.
+fn commit(py: Python<'_>, ready: writer::Ready) -> PyResult<()> {
+    let left = py.detach(|| ready.commit()).map_err(errors::to_py)?;
+    if !left.is_empty() {
+        let text = format!(
+            "the work folder is not removed entirely: {}",
+            left.join("; ")
+        );
+        let warning = py.get_type::<pyo3::exceptions::PyUserWarning>();
+        PyErr::warn(
+            py,
+            &warning,
+            &std::ffi::CString::new(text).unwrap_or_default(),
+            1,
+        )?;
+    }
+    Ok(())
 }
 
 /// The most encoders a caller may ask for.
@@ -185,6 +210,13 @@ impl DatasetFrames {
         self.ground_truth.clone()
     }
 
+    /// The device and its driver, as a resumable dataset's key names them: every worker of
+    /// a resumable dataset must have the same.
+    #[getter]
+    fn device(&self) -> String {
+        resume::device_key(&self._device.info)
+    }
+
     /// The frames `indices` (into the trajectory's poses): for each, its files as a list of
     /// (path relative to the dataset folder, bytes) and its index line.
     fn frames<'py>(&self, py: Python<'py>, indices: Vec<usize>) -> PyResult<Vec<FrameFiles<'py>>> {
@@ -247,30 +279,35 @@ impl DatasetFrames {
 
 /// The driver's half of a dataset: the output folder, staged; frames' files placed as they
 /// arrive, the index and summary at `finish`, which places the folder. Dropped unfinished,
-/// nothing is written.
+/// nothing is written (but the frames a resumable one kept in its work folder).
 #[pyclass(module = "specchio")]
 pub struct DatasetOutput {
     plan: Plan,
     out: PathBuf,
-    staged: Option<Transaction>,
-    /// Which frames were placed: each once, and all of them before `finish`.
-    placed: Vec<bool>,
+    resume: bool,
+    folder: Option<Folder>,
 }
 
 #[pymethods]
 impl DatasetOutput {
     #[new]
-    fn new(py: Python<'_>, scene: PathBuf, trajectory: PathBuf, out: PathBuf) -> PyResult<Self> {
+    #[pyo3(signature = (scene, trajectory, out, resume=false))]
+    fn new(
+        py: Python<'_>,
+        scene: PathBuf,
+        trajectory: PathBuf,
+        out: PathBuf,
+        resume: bool,
+    ) -> PyResult<Self> {
         py.detach(|| -> Result<Self, DatasetError> {
             specchio::files::identity::forget();
             let plan = Plan::read(&scene, &trajectory)?;
-            let mut staged = Transaction::new();
-            staged.folder(&out, writer::SUMMARY_FILE)?;
+            let folder = Folder::stage(&out, plan.poses.len())?;
             Ok(DatasetOutput {
-                placed: vec![false; plan.poses.len()],
                 plan,
                 out,
-                staged: Some(staged),
+                resume,
+                folder: Some(folder),
             })
         })
         .map_err(errors::to_py)
@@ -280,75 +317,90 @@ impl DatasetOutput {
         self.plan.poses.len()
     }
 
-    /// Places one frame's files (as `DatasetFrames.frames` gives them): every file of one
-    /// frame folder (`frames/NNNNNN/NAME`) of this dataset, each frame once.
-    fn place(&mut self, py: Python<'_>, files: Vec<(String, Vec<u8>)>) -> PyResult<()> {
-        let frame = one_frame(&files, self.plan.poses.len())?;
-        if self.placed[frame] {
-            return Err(errors::error(format!("frame {frame} was placed already")));
+    /// Binds the dataset to the workers' `lookup`, `ground_truth` and `device` (as
+    /// `DatasetFrames` names them); in a resumable run, takes the work folder of an earlier
+    /// run with the same inputs, lookup and device. Returns the frames still to render.
+    fn begin(
+        &mut self,
+        py: Python<'_>,
+        lookup: &str,
+        ground_truth: &str,
+        device: &str,
+    ) -> PyResult<Vec<usize>> {
+        let (lookup, truth) = parse_run(lookup, ground_truth)?;
+        let key = self.plan.run_key(lookup, truth, device);
+        let resume = self.resume;
+        let folder = self.folder_mut()?;
+        if resume {
+            py.detach(|| folder.resume(&key)).map_err(errors::to_py)?;
         }
-        let staged = self.staged()?;
-        let frame_files = Frame {
+        Ok(folder.todo())
+    }
+
+    /// The work folder of a resumable run (where the finished frames are kept), else None.
+    #[getter]
+    fn work_folder(&self) -> Option<String> {
+        folder_work(&self.out, self.resume)
+    }
+
+    /// Places one frame's files (as `DatasetFrames.frames` gives them: every file of one frame
+    /// folder `frames/NNNNNN/NAME` of this dataset) and its index line; each frame once.
+    fn place(
+        &mut self,
+        py: Python<'_>,
+        files: Vec<(String, Vec<u8>)>,
+        index_line: String,
+    ) -> PyResult<()> {
+        let frame = one_frame(&files, self.plan.poses.len())?;
+        check_index_line(frame, &index_line)?;
+        let frame = Frame {
+            frame,
             files: files
                 .into_iter()
                 .map(|(p, b)| (PathBuf::from(p), b))
                 .collect(),
-            index_line: String::new(),
+            index_line,
         };
-        py.detach(|| writer::place_frame(staged, &self.out, &frame_files))
-            .map_err(errors::to_py)?;
-        self.placed[frame] = true;
-        Ok(())
+        let folder = self.folder_mut()?;
+        py.detach(|| folder.place(&frame)).map_err(errors::to_py)
     }
 
-    /// Writes the index (`index_lines`, one per frame, in frame order) and the summary of a
-    /// dataset rendered with `lookup` and `ground_truth`, and places the folder. Returns the
-    /// summary as a dict.
-    fn finish(
-        &mut self,
-        py: Python<'_>,
-        index_lines: Vec<String>,
-        lookup: &str,
-        ground_truth: &str,
-    ) -> PyResult<Py<PyAny>> {
-        let n = self.plan.poses.len();
-        if index_lines.len() != n {
-            return Err(errors::error(format!(
-                "{} index lines for {n} frames",
-                index_lines.len()
-            )));
-        }
-        if let Some(missing) = self.placed.iter().position(|p| !p) {
+    /// Writes the index and the summary of a dataset rendered with `lookup` and
+    /// `ground_truth`, and places the folder. Returns the summary as a dict.
+    fn finish(&mut self, py: Python<'_>, lookup: &str, ground_truth: &str) -> PyResult<Py<PyAny>> {
+        let (lookup, truth) = parse_run(lookup, ground_truth)?;
+        if let Some(missing) = self.folder_mut()?.todo().first() {
             return Err(errors::error(format!("frame {missing} was never placed")));
         }
-        for (i, line) in index_lines.iter().enumerate() {
-            check_index_line(i, line)?;
-        }
-        let lookup: Lookup = specchio::process::args::lookup(lookup)
-            .map_err(|e| errors::error(format!("lookup: {e}")))?;
-        let truth: GroundTruth = serde_json::from_value(ground_truth.into())
-            .map_err(|_| errors::error(format!("ground_truth: {ground_truth:?} is not one")))?;
-        let staged = self
-            .staged
+        let folder = self
+            .folder
             .take()
             .ok_or_else(|| errors::error("the dataset was already finished"))?;
         let record = self.plan.record(lookup, truth);
         let summary = errors::json_to_py(py, &record)?;
-        py.detach(|| -> Result<(), specchio::output::OutputError> {
-            writer::finish(&staged, &self.out, &index_lines, &record)?;
-            staged.commit()
-        })
-        .map_err(errors::to_py)?;
+        let ready = py
+            .detach(|| folder.finish(&record))
+            .map_err(errors::to_py)?;
+        commit(py, ready)?;
         Ok(summary)
     }
 }
 
 impl DatasetOutput {
-    fn staged(&self) -> PyResult<&Transaction> {
-        self.staged
-            .as_ref()
+    fn folder_mut(&mut self) -> PyResult<&mut Folder> {
+        self.folder
+            .as_mut()
             .ok_or_else(|| errors::error("the dataset was already finished"))
     }
+}
+
+/// A lookup and a ground truth, as the workers name them.
+fn parse_run(lookup: &str, ground_truth: &str) -> PyResult<(Lookup, GroundTruth)> {
+    let lookup: Lookup = specchio::process::args::lookup(lookup)
+        .map_err(|e| errors::error(format!("lookup: {e}")))?;
+    let truth: GroundTruth = serde_json::from_value(ground_truth.into())
+        .map_err(|_| errors::error(format!("ground_truth: {ground_truth:?} is not one")))?;
+    Ok((lookup, truth))
 }
 
 /// The frame whose folder holds every one of `files`: each path relative with plain

@@ -155,32 +155,65 @@ def test_the_output_takes_only_its_frames_files(made, monkeypatch):
     work, scene = made
     monkeypatch.chdir(work)
     out = specchio.DatasetOutput(scene, "robot.csv", "parts")
+    line = lambda n: json.dumps({"folder": f"frames/{n:06d}", "frame": n})
     for path in ["../escape.txt", "frames/000009/x.exr", "frames/000001/../../x", "/abs", "index.jsonl"]:
         with pytest.raises(specchio.SpecchioError, match="frame folders"):
-            out.place([(path, b"x")])
+            out.place([(path, b"x")], line(0))
     frame = lambda n: [(f"frames/{n:06d}/{name}", b"x") for name in FILES]
     with pytest.raises(specchio.SpecchioError, match="frame 0: no sensor.exr"):
-        out.place(frame(0)[1:])
+        out.place(frame(0)[1:], line(0))
     with pytest.raises(specchio.SpecchioError, match="frame 0: pose.json twice"):
-        out.place(frame(0) + [("frames/000000/pose.json", b"y")])
+        out.place(frame(0) + [("frames/000000/pose.json", b"y")], line(0))
     with pytest.raises(specchio.SpecchioError, match="frames 0 and 1 in one call"):
-        out.place(frame(0) + frame(1))
-    out.place(frame(0))
-    with pytest.raises(specchio.SpecchioError, match="frame 0 was placed already"):
-        out.place(frame(0))
-    with pytest.raises(specchio.SpecchioError, match="4 index lines for 5 frames"):
-        out.finish(["{}"] * 4, "plain", "cube")
-    with pytest.raises(specchio.SpecchioError, match="frame 1 was never placed"):
-        out.finish(["{}"] * 5, "plain", "cube")
-    for n in range(1, 5):
-        out.place(frame(n))
-    lines = [json.dumps({"folder": f"frames/{n:06d}", "frame": n}) for n in range(5)]
-    with pytest.raises(specchio.SpecchioError, match="index line 2: not frame 2's line"):
-        out.finish(lines[:2] + [lines[3]] + lines[3:], "plain", "cube")
+        out.place(frame(0) + frame(1), line(0))
+    with pytest.raises(specchio.SpecchioError, match="index line 0: not frame 0's line"):
+        out.place(frame(0), line(1))
     with pytest.raises(specchio.SpecchioError, match="index line 0"):
-        out.finish([lines[0] + "\n" + lines[1]] + lines[1:], "plain", "cube")
+        out.place(frame(0), line(0) + "\n" + line(1))
+    out.place(frame(0), line(0))
+    with pytest.raises(specchio.SpecchioError, match="frame 0 was placed already"):
+        out.place(frame(0), line(0))
+    with pytest.raises(specchio.SpecchioError, match="frame 1 was never placed"):
+        out.finish("plain", "cube")
+    for n in range(1, 5):
+        out.place(frame(n), line(n))
     del out
     assert not (work / "parts").exists()
+
+
+def test_a_stopped_run_goes_on_from_its_frames_on_ray_to_the_same_bytes(made, monkeypatch):
+    work, scene = made
+    monkeypatch.chdir(work)
+
+    def stop(done, total):
+        if done == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        specchio.dataset(scene, "robot.csv", "resumed", progress=stop, resume=True)
+    assert not (work / "resumed").exists()
+    journal = (work / "resumed.partial" / "journal.jsonl").read_text().splitlines()
+    assert [json.loads(l)["frame"]["frame"] for l in journal[1:]] == [0, 1]
+    # Another lookup is another dataset: refused, the kept frames left as they are.
+    with pytest.raises(specchio.SpecchioError, match="resumed.partial was made by another run"):
+        specchio.dataset(scene, "robot.csv", "resumed", lookup="plain", resume=True)
+    assert len((work / "resumed.partial" / "journal.jsonl").read_text().splitlines()) == 3
+    # Resumed by the other driver: Ray renders the three frames left.
+    seen = []
+    specchio.dataset(
+        scene,
+        "robot.csv",
+        "resumed",
+        resume=True,
+        ray=True,
+        workers=2,
+        shard_size=1,
+        worker_env={"LP_NUM_THREADS": "1"},
+        progress=lambda d, n: seen.append(d),
+    )
+    assert seen == [3, 4, 5]
+    assert tree(work / "resumed") == tree(work / "cli")
+    assert not (work / "resumed.partial").exists()
 
 
 def test_trajectories_read_as_python(made):

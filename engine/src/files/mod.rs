@@ -7,6 +7,7 @@
 //! refusal says what the path is and what is allowed. And every file read is recorded by
 //! identity ([`identity`]): no output of the command may replace it.
 
+pub mod digest;
 pub mod identity;
 
 use std::fs::{File, Metadata};
@@ -96,6 +97,7 @@ pub fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> 
             limit,
         });
     }
+    digest::note(&bytes);
     Ok(bytes)
 }
 

@@ -21,6 +21,7 @@ use crate::image::{exr, png, RgbaImage};
 
 pub use sink::{json_text, MemoryFiles, Sink};
 pub use staged::MANIFEST;
+pub use sys::{create_new, try_lock};
 pub use transaction::Transaction;
 
 /// Why an output could not be written. Each names the user's path; an I/O cause is the

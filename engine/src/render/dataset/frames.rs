@@ -27,6 +27,8 @@ use crate::vk::GpuError;
 /// One frame of a dataset: its files (paths relative to the dataset folder, sorted) and its
 /// index line (without the newline).
 pub struct Frame {
+    /// Its index in the trajectory.
+    pub frame: usize,
     pub files: Vec<(PathBuf, Vec<u8>)>,
     pub index_line: String,
 }
@@ -54,6 +56,7 @@ impl Rendered {
             message: e.to_string(),
         })?;
         Ok(Frame {
+            frame: self.frame,
             files: files.into_files(),
             index_line,
         })

@@ -2,20 +2,24 @@
 //! - [`Plan`]: the scene and the trajectory, every pose checked before anything is rendered;
 //! - [`FrameWriter`]: a renderer whose mirror (the robot) stands at each pose in turn, giving a
 //!   frame's files in memory ([`Frame`]), encoded beside the next frame's render (`frames.rs`);
-//! - [`finish`]: the index and the summary, written last.
+//! - [`Folder`]: the output folder, staged, the frames placed in it as they come (or kept in
+//!   a work folder across runs: `resume.rs`), the index and the summary written last.
 //!
 //! `specchio dataset` runs them in one process; the Python package's Ray driver runs one
 //! `FrameWriter` per worker over shards of the poses and writes what they return. A frame's
 //! bytes depend only on the plan, the lookup, the device and the frame's index and pose (never
 //! on which frames a writer rendered before it), so both give the same files, byte for byte.
 
+mod folder;
 mod frames;
+pub mod resume;
 
 use std::path::{Path, PathBuf};
 
 use super::lookups;
+use crate::files::digest::{self, Digest};
 use crate::memory::MemoryError;
-use crate::output::{OutputError, Sink, Transaction};
+use crate::output::OutputError;
 use crate::scene::{Lookup, RefreshPolicy, Scene, SceneError};
 use crate::sensor::dataset::grid::{self, GridError};
 use crate::sensor::dataset::trajectory::{self, Pose, TrajectoryError};
@@ -24,7 +28,9 @@ use crate::sensor::GroundTruth;
 use crate::vk::physical::DeviceInfo;
 use crate::vk::GpuError;
 
+pub use folder::{Folder, Ready};
 pub use frames::{Frame, FrameWriter, Rendered};
+pub use resume::RunKey;
 
 /// Why a dataset could not be made. Each names its file (and line and field, where the input
 /// has them) or the device.
@@ -52,6 +58,9 @@ pub enum DatasetError {
     /// says how far it got.
     #[error("{0}")]
     Stopped(String),
+    /// A resumable run's work folder cannot be taken: not a folder, not ours, another run's.
+    #[error("{path} {why}")]
+    Resume { path: PathBuf, why: String },
     #[error("frame {frame}: its sensor layers were not read back (a bug)")]
     NotReadBack { frame: usize },
 }
@@ -64,6 +73,9 @@ pub struct Plan {
     /// The trajectory file's path as given, or the grid's description.
     pub trajectory: String,
     pub poses: Vec<Pose>,
+    /// The files the scene and the poses were read from, by content (a resumed run checks
+    /// them: `resume.rs`).
+    pub inputs: Vec<Digest>,
 }
 
 /// Where a dataset's poses come from.
@@ -87,6 +99,28 @@ impl Plan {
 
     /// [`Plan::read`] with the poses from `poses`.
     pub fn new(scene_path: &Path, poses: Poses<'_>) -> Result<Plan, DatasetError> {
+        let (read, inputs) = digest::while_reading(|| Self::read_inputs(scene_path, poses));
+        let (scene, poses, trajectory) = read?;
+        // The least a run holds: one frame, rendered then encoded (frames.rs: the pipeline's
+        // encoders are as many as the budget holds frames for, none where it holds one).
+        crate::memory::estimates::dataset(&scene, 1).map_err(|source| DatasetError::Memory {
+            path: scene_path.to_owned(),
+            source,
+        })?;
+        Ok(Plan {
+            scene,
+            scene_path: scene_path.to_owned(),
+            trajectory,
+            poses,
+            inputs,
+        })
+    }
+
+    /// The scene, the poses (each checked) and where they came from, in words.
+    fn read_inputs(
+        scene_path: &Path,
+        poses: Poses<'_>,
+    ) -> Result<(Scene, Vec<Pose>, String), DatasetError> {
         let scene = crate::scene::load(scene_path)?;
         let (poses, trajectory) = match poses {
             Poses::Trajectory(path) => {
@@ -114,18 +148,22 @@ impl Plan {
                 format!("grid: spacing {spacing_m} m, {headings} heading(s), t = {time_s} s"),
             ),
         };
-        // The least a run holds: one frame, rendered then encoded (frames.rs: the pipeline's
-        // encoders are as many as the budget holds frames for, none where it holds one).
-        crate::memory::estimates::dataset(&scene, 1).map_err(|source| DatasetError::Memory {
-            path: scene_path.to_owned(),
-            source,
-        })?;
-        Ok(Plan {
-            scene,
-            scene_path: scene_path.to_owned(),
-            trajectory,
-            poses,
-        })
+        Ok((scene, poses, trajectory))
+    }
+
+    /// What this plan's frames' bytes depend on, rendered with `lookup` (`truth` its ground
+    /// truth) on the device `device` ([`resume::device_key`]): a resumable run continues only
+    /// a work folder with the same key.
+    pub fn run_key(&self, lookup: Lookup, truth: GroundTruth, device: &str) -> RunKey {
+        RunKey {
+            specchio: env!("CARGO_PKG_VERSION").to_owned(),
+            inputs: self.inputs.iter().map(Digest::to_string).collect(),
+            poses: Digest::of(format!("{:?}", self.poses).as_bytes()).to_string(),
+            frames: self.poses.len(),
+            lookup: lookup.to_string(),
+            ground_truth: truth.name().to_owned(),
+            device: device.to_owned(),
+        }
     }
 
     /// The summary of this dataset rendered with `lookup`, whose range and ids come from
@@ -191,47 +229,21 @@ pub fn place_robot(robot: &mut Scene, scene: &Scene, pose: &Pose) {
     robot.sensor = sensor_dataset::turned_sensor(scene, pose);
 }
 
-/// Writes `frame`'s files into the dataset folder `root`, staged in `out`.
-pub fn place_frame(out: &Transaction, root: &Path, frame: &Frame) -> Result<(), OutputError> {
-    for (path, bytes) in &frame.files {
-        out.write_bytes(&root.join(path), bytes)?;
-    }
-    Ok(())
-}
-
-/// Renders every pose of `plan` with `frames` into the dataset folder `root`, staged in
-/// `out`. `between(i)` runs before frame `i` renders (an interruption check), `written(n)`
-/// after the `n`-th frame is written (progress); an error from either stops the run. The
-/// frames' index lines, in order.
+/// Renders every pose of `plan` that `folder` does not hold yet with `frames`, placing each
+/// as it is done. `between(i)` runs before frame `i` renders (an interruption check),
+/// `written(n)` after a frame is placed, `n` the frames placed in all (progress); an error
+/// from either stops the run.
 pub fn write_frames(
-    out: &Transaction,
-    root: &Path,
+    folder: &mut Folder,
     plan: &Plan,
     frames: &mut FrameWriter,
     between: &mut dyn FnMut(usize) -> Result<(), DatasetError>,
     written: &mut dyn FnMut(usize) -> Result<(), DatasetError>,
-) -> Result<Vec<String>, DatasetError> {
-    let mut index = Vec::with_capacity(plan.poses.len());
-    frames.frames(plan.poses.iter().enumerate(), between, &mut |frame| {
-        place_frame(out, root, &frame)?;
-        index.push(frame.index_line);
-        written(index.len())
-    })?;
-    Ok(index)
-}
-
-/// The index (the frames' lines in order) and the summary, into the dataset folder `root`.
-pub fn finish(
-    out: &Transaction,
-    root: &Path,
-    index_lines: &[String],
-    record: &DatasetRecord,
-) -> Result<(), OutputError> {
-    let mut index = String::new();
-    for line in index_lines {
-        index.push_str(line);
-        index.push('\n');
-    }
-    out.write_bytes(&root.join(INDEX_FILE), index.as_bytes())?;
-    out.write_json(&root.join(SUMMARY_FILE), record)
+) -> Result<(), DatasetError> {
+    let todo = folder.todo();
+    let poses = todo.iter().map(|&i| (i, &plan.poses[i]));
+    frames.frames(poses, between, &mut |frame| {
+        folder.place(&frame)?;
+        written(folder.done())
+    })
 }

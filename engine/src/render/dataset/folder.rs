@@ -1,0 +1,130 @@
+//! A dataset's output folder as a run fills it: staged, all or nothing, like every output;
+//! the frames placed straight into it, or, in a resumable run, kept in its work folder
+//! (`resume.rs`) until the last one is done. The CLI, the Python package and its Ray driver
+//! all fill it through here, so the folders they make are the same.
+
+use std::path::{Path, PathBuf};
+
+use super::resume::{RunKey, WorkFolder};
+use super::{DatasetError, Frame, INDEX_FILE, SUMMARY_FILE};
+use crate::output::{OutputError, Sink, Transaction};
+use crate::sensor::dataset::DatasetRecord;
+
+/// The output folder of a dataset of `index.len()` frames, being filled.
+pub struct Folder {
+    staged: Transaction,
+    root: PathBuf,
+    work: Option<WorkFolder>,
+    /// Each frame's index line, once it is placed.
+    index: Vec<Option<String>>,
+}
+
+impl Folder {
+    /// Stages the folder `root` for `frames` frames; fails now, before any work, where `root`
+    /// cannot become this output (docs/architecture.md, "Output files").
+    pub fn stage(root: &Path, frames: usize) -> Result<Folder, DatasetError> {
+        let mut staged = Transaction::new();
+        staged.folder(root, SUMMARY_FILE)?;
+        Ok(Folder {
+            staged,
+            root: root.to_owned(),
+            work: None,
+            index: vec![None; frames],
+        })
+    }
+
+    /// Makes the run resumable: frames are kept in the work folder as they finish, and the
+    /// frames it holds from an earlier run with the same `key` are done. Returns how many.
+    pub fn resume(&mut self, key: &RunKey) -> Result<usize, DatasetError> {
+        let work = WorkFolder::open(&self.root, key)?;
+        for (i, line) in work.done() {
+            self.index[i] = Some(line.to_owned());
+        }
+        self.work = Some(work);
+        Ok(self.done())
+    }
+
+    /// The frames still to render, in order.
+    pub fn todo(&self) -> Vec<usize> {
+        (self.index.iter().enumerate())
+            .filter_map(|(i, line)| line.is_none().then_some(i))
+            .collect()
+    }
+
+    /// How many frames are placed.
+    pub fn done(&self) -> usize {
+        self.index.iter().filter(|l| l.is_some()).count()
+    }
+
+    /// Frame `i`'s index line, once placed.
+    pub fn index_line(&self, i: usize) -> Option<&str> {
+        self.index.get(i).and_then(|l| l.as_deref())
+    }
+
+    /// The work folder, in a resumable run.
+    pub fn work_folder(&self) -> Option<&Path> {
+        self.work.as_ref().map(|w| w.path())
+    }
+
+    /// Places one frame; each frame once.
+    pub fn place(&mut self, frame: &Frame) -> Result<(), DatasetError> {
+        let n = self.index.len();
+        let slot = self.index.get(frame.frame).ok_or_else(|| {
+            DatasetError::Stopped(format!("frame {}: the dataset has {n} frames", frame.frame))
+        })?;
+        if slot.is_some() {
+            let why = format!("frame {} was placed already", frame.frame);
+            return Err(DatasetError::Stopped(why));
+        }
+        match &mut self.work {
+            Some(work) => work.write(frame)?,
+            None => {
+                for (path, bytes) in &frame.files {
+                    self.staged.write_bytes(&self.root.join(path), bytes)?;
+                }
+            }
+        }
+        self.index[frame.frame] = Some(frame.index_line.clone());
+        Ok(())
+    }
+
+    /// With every frame placed: the frames (from the work folder, in a resumable run), the
+    /// index and the summary `record`, staged; [`Ready::commit`] places them.
+    pub fn finish(self, record: &DatasetRecord) -> Result<Ready, DatasetError> {
+        if let Some(missing) = self.index.iter().position(|l| l.is_none()) {
+            return Err(DatasetError::Stopped(format!(
+                "frame {missing} was never placed"
+            )));
+        }
+        if let Some(work) = &self.work {
+            work.link_into(&self.staged, &self.root)?;
+        }
+        let mut index = String::new();
+        for line in self.index.iter().flatten() {
+            index.push_str(line);
+            index.push('\n');
+        }
+        let staged = self.staged;
+        staged.write_bytes(&self.root.join(INDEX_FILE), index.as_bytes())?;
+        staged.write_json(&self.root.join(SUMMARY_FILE), record)?;
+        Ok(Ready {
+            staged,
+            work: self.work,
+        })
+    }
+}
+
+/// A finished dataset, staged.
+pub struct Ready {
+    staged: Transaction,
+    work: Option<WorkFolder>,
+}
+
+impl Ready {
+    /// Places the dataset folder, then removes the work folder of a resumable run. Returns
+    /// what of the work folder could not be removed (the dataset is in place all the same).
+    pub fn commit(self) -> Result<Vec<String>, OutputError> {
+        self.staged.commit()?;
+        Ok(self.work.map(WorkFolder::remove).unwrap_or_default())
+    }
+}

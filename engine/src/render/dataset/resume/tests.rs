@@ -1,0 +1,272 @@
+//! The work folder against what can happen to it between two runs: a crash mid-frame or
+//! mid-line, another run's inputs, a user's file, a link, a second run at the same time.
+
+use std::path::{Path, PathBuf};
+
+use super::*;
+use crate::render::dataset::{Folder, INDEX_FILE};
+use crate::sensor::dataset::DatasetRecord;
+use crate::sensor::GroundTruth;
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("specchio-resume-{name}-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&d);
+    fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn key(frames: usize) -> RunKey {
+    RunKey {
+        specchio: "test".into(),
+        inputs: vec!["4:0badf00d".into()],
+        poses: "0:00000000".into(),
+        frames,
+        lookup: "ray-query".into(),
+        ground_truth: "traced".into(),
+        device: "a device".into(),
+    }
+}
+
+/// A frame whose files say which frame they are.
+fn frame(i: usize) -> Frame {
+    let folder = frame_folder(i);
+    let files = ["pose.json", "sensor.png", "sensor.panorama.png"]
+        .iter()
+        .map(|n| {
+            (
+                Path::new(&folder).join(n),
+                format!("{n} of {i}").into_bytes(),
+            )
+        })
+        .collect();
+    Frame {
+        frame: i,
+        files,
+        index_line: format!("{{\"frame\":{i},\"folder\":\"{folder}\"}}"),
+    }
+}
+
+fn record(frames: usize) -> DatasetRecord {
+    DatasetRecord {
+        scene: "s".into(),
+        trajectory: "t".into(),
+        frames,
+        lookup: "ray-query".into(),
+        ground_truth: GroundTruth::Traced,
+        index: INDEX_FILE,
+        scene_origin_m: [0.0; 3],
+        scene_to_ros: [[0.0; 3]; 3],
+        frame_files: FRAME_FILES,
+    }
+}
+
+/// Every file under `dir`, with its bytes, by relative path.
+fn tree(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_owned()];
+    while let Some(d) = stack.pop() {
+        for e in fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            let rel = p.strip_prefix(dir).unwrap().display().to_string();
+            match fs::symlink_metadata(&p).unwrap().is_dir() {
+                true => stack.push(p),
+                false => out.push((rel, fs::read(&p).unwrap_or_default())),
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+fn message(e: DatasetError) -> String {
+    e.to_string()
+}
+
+#[test]
+fn a_run_stopped_after_two_frames_goes_on_from_the_third_and_gives_the_same_folder() {
+    let dir = scratch("same");
+    // Without a work folder, all at once: the folder to compare with.
+    let whole = dir.join("whole");
+    let mut folder = Folder::stage(&whole, 4).unwrap();
+    for i in 0..4 {
+        folder.place(&frame(i)).unwrap();
+    }
+    folder.finish(&record(4)).unwrap().commit().unwrap();
+
+    let out = dir.join("out");
+    let mut first = Folder::stage(&out, 4).unwrap();
+    assert_eq!(first.resume(&key(4)).unwrap(), 0);
+    first.place(&frame(0)).unwrap();
+    first.place(&frame(1)).unwrap();
+    drop(first); // stopped: the output is not placed, the work folder stays
+    assert!(!out.exists());
+    assert!(work_path(&out).join(JOURNAL).is_file());
+
+    let mut second = Folder::stage(&out, 4).unwrap();
+    assert_eq!(second.resume(&key(4)).unwrap(), 2);
+    assert_eq!(second.todo(), vec![2, 3]);
+    assert_eq!(second.index_line(1), Some(frame(1).index_line.as_str()));
+    assert!(second.place(&frame(1)).is_err(), "frame 1 is done");
+    second.place(&frame(3)).unwrap();
+    second.place(&frame(2)).unwrap();
+    let left = second.finish(&record(4)).unwrap().commit().unwrap();
+    assert!(left.is_empty(), "{left:?}");
+    assert_eq!(tree(&out), tree(&whole));
+    assert!(!work_path(&out).exists(), "the work folder is removed");
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_frame_or_a_line_cut_short_by_a_crash_is_done_again() {
+    let dir = scratch("crash");
+    let out = dir.join("out");
+    let mut work = WorkFolder::open(&out, &key(3)).unwrap();
+    work.write(&frame(0)).unwrap();
+    work.write(&frame(1)).unwrap();
+    drop(work);
+    let w = work_path(&out);
+    // Frame 2 cut short before its line; frame 1's file shortened after (a lost write);
+    // the journal's last line cut in the middle.
+    fs::create_dir(w.join("frames/000002")).unwrap();
+    fs::write(w.join("frames/000002/sensor.png"), b"half").unwrap();
+    fs::write(w.join("frames/000001/pose.json"), b"short").unwrap();
+    let mut journal = OpenOptions::new()
+        .append(true)
+        .open(w.join(JOURNAL))
+        .unwrap();
+    journal.write_all(b"{\"frame\":{\"frame\":2,\"fi").unwrap();
+    drop(journal);
+
+    let mut work = WorkFolder::open(&out, &key(3)).unwrap();
+    assert_eq!(work.done().map(|(i, _)| i).collect::<Vec<_>>(), vec![0]);
+    work.write(&frame(2)).unwrap();
+    work.write(&frame(1)).unwrap();
+    drop(work);
+    let work = WorkFolder::open(&out, &key(3)).unwrap();
+    assert_eq!(work.done().count(), 3);
+    let text = fs::read_to_string(w.join(JOURNAL)).unwrap();
+    assert!(text.ends_with('\n') && !text.contains("\"fi{"), "{text}");
+    assert_eq!(
+        fs::read(w.join("frames/000002/sensor.png")).unwrap(),
+        b"sensor.png of 2"
+    );
+    assert_eq!(
+        fs::read(w.join("frames/000001/pose.json")).unwrap(),
+        b"pose.json of 1"
+    );
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn another_runs_folder_or_a_users_is_refused_and_left_as_it_was() {
+    let dir = scratch("refuse");
+    let out = dir.join("out");
+    let mut work = WorkFolder::open(&out, &key(3)).unwrap();
+    work.write(&frame(0)).unwrap();
+    // A second run at the same time.
+    let e = message(WorkFolder::open(&out, &key(3)).err().unwrap());
+    assert!(e.contains("in use by another run"), "{e}");
+    drop(work);
+    let w = work_path(&out);
+    let before = tree(&dir);
+
+    let mut other = key(3);
+    other.inputs = vec!["5:12345678".into()];
+    let e = message(WorkFolder::open(&out, &other).err().unwrap());
+    assert!(
+        e.contains(&w.display().to_string()) && e.contains("scene"),
+        "{e}"
+    );
+    let mut other = key(3);
+    other.device = "another device".into();
+    let e = message(WorkFolder::open(&out, &other).err().unwrap());
+    assert!(e.contains("another device"), "{e}");
+    let e = message(WorkFolder::open(&out, &key(4)).err().unwrap());
+    assert!(e.contains("3 frames against 4"), "{e}");
+    assert_eq!(tree(&dir), before);
+
+    // Someone else's entries, anywhere in it.
+    for (at, what) in [
+        ("notes.txt", "notes.txt"),
+        ("frames/thesis.pdf", "thesis.pdf"),
+        ("frames/000007", "000007"),
+        ("frames/000000/mine.txt", "mine.txt"),
+    ] {
+        let p = w.join(at);
+        match at.ends_with("000007") {
+            true => fs::create_dir(&p).unwrap(),
+            false => fs::write(&p, b"mine").unwrap(),
+        }
+        let e = message(WorkFolder::open(&out, &key(3)).err().unwrap());
+        assert!(
+            e.contains(what) && e.contains("no dataset run wrote"),
+            "{at}: {e}"
+        );
+        assert!(p.exists());
+        match at.ends_with("000007") {
+            true => fs::remove_dir(&p).unwrap(),
+            false => fs::remove_file(&p).unwrap(),
+        }
+    }
+    // A line in the middle that is not a journal line.
+    let journal = w.join(JOURNAL);
+    let text = fs::read_to_string(&journal).unwrap();
+    fs::write(&journal, format!("{text}garbage\n{{}}\n")).unwrap();
+    let e = message(WorkFolder::open(&out, &key(3)).err().unwrap());
+    assert!(e.contains("line 3") && e.contains(JOURNAL), "{e}");
+    fs::write(&journal, text).unwrap();
+    assert_eq!(tree(&dir), before);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+#[cfg(unix)]
+#[test]
+fn a_link_is_never_taken_for_the_work_folder_or_a_frame_file() {
+    let dir = scratch("links");
+    let elsewhere = dir.join("elsewhere");
+    fs::create_dir(&elsewhere).unwrap();
+    let out = dir.join("out");
+    std::os::unix::fs::symlink(&elsewhere, work_path(&out)).unwrap();
+    let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
+    assert!(e.contains("not a folder"), "{e}");
+    fs::remove_file(work_path(&out)).unwrap();
+
+    let mut work = WorkFolder::open(&out, &key(2)).unwrap();
+    work.write(&frame(0)).unwrap();
+    drop(work);
+    let png = work_path(&out).join("frames/000000/sensor.png");
+    fs::remove_file(&png).unwrap();
+    std::os::unix::fs::symlink(dir.join("elsewhere"), &png).unwrap();
+    let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
+    assert!(e.contains("sensor.png"), "{e}");
+    assert!(elsewhere.is_dir());
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_folder_without_a_journal_is_no_work_folder() {
+    let dir = scratch("nojournal");
+    let out = dir.join("out");
+    fs::create_dir(work_path(&out)).unwrap();
+    fs::write(work_path(&out).join("data.csv"), b"1,2").unwrap();
+    let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
+    assert!(e.contains(JOURNAL) && e.contains("no work folder"), "{e}");
+    assert!(work_path(&out).join("data.csv").exists());
+    assert_eq!(work_path(Path::new("a/b")), Path::new("a/b.partial"));
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn frame_file_names_are_the_frame_folders_own() {
+    for name in [
+        "sensor.exr",
+        "pose.json",
+        "sensor.panorama.exr",
+        "points.ply",
+    ] {
+        assert!(allowed(name), "{name}");
+    }
+    for name in ["sensor.panorama.", "notes.txt", "..", "sensor.exr.bak"] {
+        assert!(!allowed(name), "{name}");
+    }
+}

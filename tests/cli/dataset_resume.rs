@@ -1,0 +1,179 @@
+//! `specchio dataset --resume`: a long run stopped by Ctrl-C or killed outright goes on from
+//! the frames it finished, and gives the folder an uninterrupted run gives, byte for byte; a
+//! run with other inputs never takes over the work folder.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use common::{root, specchio, temp_dir};
+
+/// Eight poses along the thesis room.
+const TRAJECTORY: &str = "time,x,y,z,heading\n0,0,3,0,0\n0.5,0.5,3,0,20\n1,1,3,0.5,40\n\
+    1.5,1.5,3,0.5,60\n2,1.5,3,1,80\n2.5,1,3,1,100\n3,0.5,3,1.5,120\n3.5,0,3,1.5,140\n";
+
+fn args<'a>(trajectory: &'a str, out: &'a str) -> Vec<&'a str> {
+    let scene = Box::leak(
+        root()
+            .join("scenes/thesis-room.toml")
+            .to_str()
+            .unwrap()
+            .to_owned()
+            .into_boxed_str(),
+    );
+    vec!["dataset", scene, "--trajectory", trajectory, "--out", out]
+}
+
+/// Every file under `dir` with its bytes.
+fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_owned()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            match p.is_dir() {
+                true => stack.push(p),
+                false => out.push((
+                    p.strip_prefix(dir).unwrap().to_owned(),
+                    std::fs::read(&p).unwrap(),
+                )),
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Frames journaled so far in the work folder `work`.
+fn journaled(work: &Path) -> usize {
+    let text = std::fs::read_to_string(work.join("journal.jsonl")).unwrap_or_default();
+    text.lines().count().saturating_sub(1)
+}
+
+/// Starts a resumable run and sends it `signal` once at least `frames` frames are journaled.
+fn stop_after(a: &[&str], work: &Path, frames: usize, signal: libc::c_int) -> std::process::Output {
+    let child = Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(a)
+        .arg("--resume")
+        .env("SPECCHIO_VALIDATE", "1")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while journaled(work) < frames {
+        assert!(
+            started.elapsed().as_secs() < 300,
+            "no {frames} frames after 300 s"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // SAFETY: signals our own child process.
+    unsafe { libc::kill(child.id() as i32, signal) };
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn a_stopped_then_killed_run_resumes_to_the_same_bytes() {
+    let dir = temp_dir("dataset-resume");
+    std::fs::create_dir_all(&dir).unwrap();
+    let trajectory = dir.join("robot.csv");
+    std::fs::write(&trajectory, TRAJECTORY).unwrap();
+    let t = trajectory.to_str().unwrap();
+    let (whole, out) = (dir.join("whole"), dir.join("set"));
+    let (w, o) = (whole.to_str().unwrap(), out.to_str().unwrap());
+    let plain = specchio(&args(t, w));
+    assert!(
+        plain.status.success(),
+        "{}",
+        String::from_utf8_lossy(&plain.stderr)
+    );
+    let work = dir.join("set.partial");
+
+    // Ctrl-C: a clean stop that says what it kept and how to go on.
+    let stopped = stop_after(&args(t, o), &work, 1, libc::SIGINT);
+    let stderr = String::from_utf8_lossy(&stopped.stderr);
+    assert_eq!(stopped.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("interrupted before frame") && stderr.contains("--resume"),
+        "{stderr}"
+    );
+    assert!(stderr.contains(work.to_str().unwrap()), "{stderr}");
+    assert!(!out.exists(), "no output before every frame is done");
+    let kept = journaled(&work);
+    assert!((1..8).contains(&kept), "{kept}");
+
+    // Killed outright, with a frame half written at any moment.
+    let killed = stop_after(&args(t, o), &work, kept + 2, libc::SIGKILL);
+    assert_eq!(killed.status.code(), None);
+    assert!(!out.exists());
+
+    // Other poses at the same path: refused, the work folder left as it was.
+    let before = files(&work);
+    let fewer: String = TRAJECTORY
+        .lines()
+        .take(5)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&trajectory, fewer).unwrap();
+    let mut a = args(t, o);
+    a.push("--resume");
+    let other = specchio(&a);
+    let stderr = String::from_utf8_lossy(&other.stderr);
+    assert_eq!(other.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("another run") && stderr.contains("8 frames against 4"),
+        "{stderr}"
+    );
+    assert_eq!(files(&work), before);
+    std::fs::write(&trajectory, TRAJECTORY).unwrap();
+
+    // The same inputs again: it goes on from the frames kept.
+    let resumed = specchio(&a);
+    let stdout = String::from_utf8_lossy(&resumed.stdout);
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    assert!(
+        stdout.contains("resuming:") && stdout.contains("of 8 frame(s) done"),
+        "{stdout}"
+    );
+    assert_eq!(
+        files(&out),
+        files(&whole),
+        "a resumed dataset is the uninterrupted one"
+    );
+    assert!(
+        !work.exists(),
+        "the work folder goes once the dataset is placed"
+    );
+}
+
+/// A folder of someone else's at `OUT.partial` is never taken, written or removed.
+#[test]
+fn a_users_folder_where_the_work_folder_goes_is_left_alone() {
+    let dir = temp_dir("dataset-resume-foreign");
+    std::fs::create_dir_all(dir.join("set.partial")).unwrap();
+    std::fs::write(dir.join("set.partial/thesis.tex"), b"mine").unwrap();
+    let trajectory = dir.join("robot.csv");
+    std::fs::write(&trajectory, "time,x,y,z,heading\n0,0,3,0,0\n").unwrap();
+    let out = dir.join("set");
+    let mut a = args(trajectory.to_str().unwrap(), out.to_str().unwrap());
+    a.push("--resume");
+    let run = specchio(&a);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("set.partial") && stderr.contains("journal.jsonl"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read(dir.join("set.partial/thesis.tex")).unwrap(),
+        b"mine"
+    );
+    assert!(!out.exists());
+}
