@@ -53,9 +53,12 @@ Path = Union[str, "os.PathLike[str]"]
 
 def dataset(
     scene: Path,
-    trajectory: Path,
-    out: Path,
+    trajectory: Optional[Path] = None,
+    out: Optional[Path] = None,
     *,
+    grid: Optional[float] = None,
+    headings: Optional[int] = None,
+    time: Optional[float] = None,
     lookup: Optional[str] = None,
     device: Optional[str] = None,
     validate: bool = False,
@@ -72,6 +75,11 @@ def dataset(
     REP-103) and a point cloud; ``index.jsonl``; ``dataset.json``. All or nothing: every
     pose is checked first, and the folder appears only when every frame is written.
 
+    Instead of a trajectory, ``grid=SPACING`` (metres) stands the robot at every place of a
+    square grid over the floor where it fits, turned to ``headings`` headings (default 1) at
+    the scene time ``time`` (default 0): ``specchio dataset --grid``, the same poses as
+    ``pose_grid``. For example ``specchio.dataset(scene, out="grid", grid=1.0, headings=8)``.
+
     ``resume=True`` keeps each finished frame in ``out.partial`` beside the output, and goes
     on from the frames it holds when the same dataset was stopped before (Ctrl-C, a crash, a
     lost Ray cluster), in this process or on Ray alike; refused when the inputs, the lookup
@@ -86,6 +94,8 @@ def dataset(
     ``progress(done, total)`` is called as frames are written. Returns the summary
     (``dataset.json``) as a dict.
     """
+    if out is None:
+        raise SpecchioError("out: the dataset's folder is required")
     if ray:
         from . import ray as _ray
 
@@ -93,6 +103,9 @@ def dataset(
             scene,
             trajectory,
             out,
+            grid=grid,
+            headings=headings,
+            time=time,
             lookup=lookup,
             device=device,
             validate=validate,
@@ -106,11 +119,15 @@ def dataset(
         raise SpecchioError("workers and worker_env are for ray=True")
     return _dataset_here(
         os.fspath(scene),
-        os.fspath(trajectory),
+        None if trajectory is None else os.fspath(trajectory),
         os.fspath(out),
+        grid=grid,
+        headings=headings,
+        time=time,
         lookup=lookup,
         device=device,
         validate=validate,
         progress=progress,
         resume=resume,
     )
+

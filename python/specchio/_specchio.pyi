@@ -61,11 +61,14 @@ class DatasetFrames:
     def __init__(
         self,
         scene: _Path,
-        trajectory: _Path,
+        trajectory: Optional[_Path],
         lookup: Optional[str] = None,
         device: Optional[str] = None,
         validate: bool = False,
         encoders: Optional[int] = None,
+        grid: Optional[float] = None,
+        headings: Optional[int] = None,
+        time: Optional[float] = None,
     ) -> None: ...
     def __len__(self) -> int: ...
     @property
@@ -78,7 +81,14 @@ class DatasetFrames:
 
 class DatasetOutput:
     def __init__(
-        self, scene: _Path, trajectory: _Path, out: _Path, resume: bool = False
+        self,
+        scene: _Path,
+        trajectory: Optional[_Path],
+        out: _Path,
+        resume: bool = False,
+        grid: Optional[float] = None,
+        headings: Optional[int] = None,
+        time: Optional[float] = None,
     ) -> None: ...
     def __len__(self) -> int: ...
     @property
@@ -99,11 +109,14 @@ def reference(
 def calibrate(scene: Scene, out: _Path, time: float = 0.0) -> dict[str, Any]: ...
 def dataset(
     scene: _Path,
-    trajectory: _Path,
+    trajectory: Optional[_Path],
     out: _Path,
     lookup: Optional[str] = None,
     device: Optional[str] = None,
     validate: bool = False,
     progress: Optional[Callable[[int, int], None]] = None,
     resume: bool = False,
+    grid: Optional[float] = None,
+    headings: Optional[int] = None,
+    time: Optional[float] = None,
 ) -> dict[str, Any]: ...

@@ -32,7 +32,7 @@ RETRIES = 2
 class _Worker:
     """A Ray actor: one renderer of the dataset's robot."""
 
-    def __init__(self, scene: str, trajectory: str, lookup, device, validate: bool):
+    def __init__(self, scene: str, trajectory: Optional[str], poses: dict, lookup, device, validate: bool):
         # An engine error here is kept and said by `describe`: raised, it would reach the
         # driver as Ray's "actor died", its message buried in a traceback.
         self.frames, self.error = None, None
@@ -40,7 +40,7 @@ class _Worker:
             # One encoder: a worker shares its machine with as many others as it has CPUs,
             # and each encoder holds a frame in memory.
             self.frames = DatasetFrames(
-                scene, trajectory, lookup=lookup, device=device, validate=validate, encoders=1
+                scene, trajectory, lookup=lookup, device=device, validate=validate, encoders=1, **poses
             )
         except SpecchioError as e:
             self.error = str(e)
@@ -65,6 +65,9 @@ def dataset(
     trajectory,
     out,
     *,
+    grid: Optional[float] = None,
+    headings: Optional[int] = None,
+    time: Optional[float] = None,
     lookup: Optional[str] = None,
     device: Optional[str] = None,
     validate: bool = False,
@@ -82,9 +85,11 @@ def dataset(
         raise SpecchioError(f"shard_size: {shard_size}; must be at least 1")
     if workers is not None and workers < 1:
         raise SpecchioError(f"workers: {workers}; must be at least 1")
-    scene, trajectory, out = (os.fspath(p) for p in (scene, trajectory, out))
+    scene, out = os.fspath(scene), os.fspath(out)
+    trajectory = None if trajectory is None else os.fspath(trajectory)
+    poses = {"grid": grid, "headings": headings, "time": time}
     # Every input is checked, and the output staged, before any worker starts.
-    output = DatasetOutput(scene, trajectory, out, resume=resume)
+    output = DatasetOutput(scene, trajectory, out, resume=resume, **poses)
     n = len(output)
     started = not ray.is_initialized()
     if started:
@@ -103,8 +108,8 @@ def dataset(
             options["runtime_env"] = {"env_vars": {k: str(v) for k, v in worker_env.items()}}
         worker = ray.remote(**options)(_Worker)
         # The workers read the files themselves: absolute paths, whatever their directory.
-        paths = (os.path.abspath(scene), os.path.abspath(trajectory))
-        actors = [worker.remote(*paths, lookup, device, validate) for _ in range(count)]
+        paths = (os.path.abspath(scene), trajectory and os.path.abspath(trajectory))
+        actors = [worker.remote(*paths, poses, lookup, device, validate) for _ in range(count)]
         described = set(ray.get([a.describe.remote() for a in actors]))
         failed = sorted(error for error, _, _, _ in described if error is not None)
         if failed:

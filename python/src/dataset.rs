@@ -9,7 +9,7 @@ use std::sync::{Mutex, MutexGuard};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use specchio::render::dataset::{
-    self as writer, resume, DatasetError, Folder, Frame, FrameWriter, Plan,
+    self as writer, resume, DatasetError, Folder, Frame, FrameWriter, Plan, Poses,
 };
 use specchio::scene::Lookup;
 use specchio::sensor::GroundTruth;
@@ -17,6 +17,62 @@ use specchio::vk::instance::{Instance, InstanceDesc};
 
 use crate::errors;
 use crate::renderer::check_validation;
+
+/// Where a dataset's poses come from, as Python names them: a trajectory file, or a grid
+/// (`specchio dataset --grid SPACING --headings N --time T`).
+pub enum PoseSource {
+    File(PathBuf),
+    Grid {
+        spacing_m: f64,
+        headings: u32,
+        time_s: f64,
+    },
+}
+
+impl PoseSource {
+    /// Exactly one of `trajectory` and `grid`; `headings` and `time` only with a grid.
+    pub fn new(
+        trajectory: Option<PathBuf>,
+        grid: Option<f64>,
+        headings: Option<u32>,
+        time: Option<f64>,
+    ) -> PyResult<Self> {
+        match (trajectory, grid) {
+            (Some(_), Some(_)) => Err(errors::error(
+                "trajectory and grid: give one of them, not both",
+            )),
+            (None, None) => Err(errors::error(
+                "give the poses: a trajectory file, or grid=SPACING (metres)",
+            )),
+            (Some(_), None) if headings.is_some() || time.is_some() => Err(errors::error(
+                "headings and time are a grid's (grid=SPACING); a trajectory has its own",
+            )),
+            (Some(path), None) => Ok(PoseSource::File(path)),
+            (None, Some(spacing_m)) => Ok(PoseSource::Grid {
+                spacing_m,
+                headings: headings.unwrap_or(1),
+                time_s: time.unwrap_or(0.0),
+            }),
+        }
+    }
+
+    /// The plan of `scene` with these poses, every one checked.
+    fn plan(&self, scene: &Path) -> Result<Plan, DatasetError> {
+        let poses = match self {
+            PoseSource::File(path) => Poses::Trajectory(path),
+            &PoseSource::Grid {
+                spacing_m,
+                headings,
+                time_s,
+            } => Poses::Grid {
+                spacing_m,
+                headings,
+                time_s,
+            },
+        };
+        Plan::new(scene, poses)
+    }
+}
 
 fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
     lookup
@@ -33,25 +89,29 @@ fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
 /// `resume`, finished frames are kept in `out.partial` and a stopped run goes on from them
 /// (`specchio dataset --resume`). Returns the summary (`dataset.json`) as a dict.
 #[pyfunction]
-#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false))]
+#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false, grid=None, headings=None, time=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn dataset(
     py: Python<'_>,
     scene: PathBuf,
-    trajectory: PathBuf,
+    trajectory: Option<PathBuf>,
     out: PathBuf,
     lookup: Option<&str>,
     device: Option<&str>,
     validate: bool,
     progress: Option<Py<PyAny>>,
     resume: bool,
+    grid: Option<f64>,
+    headings: Option<u32>,
+    time: Option<f64>,
 ) -> PyResult<Py<PyAny>> {
     let asked = parse_lookup(lookup)?;
+    let source = PoseSource::new(trajectory, grid, headings, time)?;
     let stopped: Mutex<Option<PyErr>> = Mutex::new(None);
     let result = py.detach(|| -> Result<_, DatasetError> {
         // What this call may not replace is what it reads (docs/python.md).
         specchio::files::identity::forget();
-        let plan = Plan::read(&scene, &trajectory)?;
+        let plan = source.plan(&scene)?;
         let n = plan.poses.len();
         let mut folder = Folder::stage(&out, n)?;
         let instance = Instance::create(&InstanceDesc::from_env(validate))?;
@@ -158,16 +218,21 @@ impl DatasetFrames {
     /// quarter of the machine's cores, 1 to 4, within the memory budget; 0: none). A Ray
     /// worker, one of many on its machine, passes 1.
     #[new]
-    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None))]
+    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None, grid=None, headings=None, time=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         scene: PathBuf,
-        trajectory: PathBuf,
+        trajectory: Option<PathBuf>,
         lookup: Option<&str>,
         device: Option<&str>,
         validate: bool,
         encoders: Option<usize>,
+        grid: Option<f64>,
+        headings: Option<u32>,
+        time: Option<f64>,
     ) -> PyResult<Self> {
+        let source = PoseSource::new(trajectory, grid, headings, time)?;
         if let Some(n) = encoders.filter(|&n| n > MAX_ENCODERS) {
             return Err(errors::error(format!(
                 "encoders = {n}: at most {MAX_ENCODERS} (each holds a frame in memory)"
@@ -175,7 +240,7 @@ impl DatasetFrames {
         }
         let asked = parse_lookup(lookup)?;
         py.detach(|| -> Result<Self, DatasetError> {
-            let plan = Plan::read(&scene, &trajectory)?;
+            let plan = source.plan(&scene)?;
             let instance = Instance::create(&InstanceDesc::from_env(validate))?;
             let log = instance.validation_log();
             let (dev, _, lookup) =
@@ -291,17 +356,22 @@ pub struct DatasetOutput {
 #[pymethods]
 impl DatasetOutput {
     #[new]
-    #[pyo3(signature = (scene, trajectory, out, resume=false))]
+    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         scene: PathBuf,
-        trajectory: PathBuf,
+        trajectory: Option<PathBuf>,
         out: PathBuf,
         resume: bool,
+        grid: Option<f64>,
+        headings: Option<u32>,
+        time: Option<f64>,
     ) -> PyResult<Self> {
+        let source = PoseSource::new(trajectory, grid, headings, time)?;
         py.detach(|| -> Result<Self, DatasetError> {
             specchio::files::identity::forget();
-            let plan = Plan::read(&scene, &trajectory)?;
+            let plan = source.plan(&scene)?;
             let folder = Folder::stage(&out, plan.poses.len())?;
             Ok(DatasetOutput {
                 plan,

@@ -273,3 +273,27 @@ def test_the_pose_grid_is_the_commands(tmp_path):
     assert turned.shape == (32, 4) and list(turned[:4, 3]) == [0.0, 90.0, 180.0, 270.0]
     with pytest.raises(specchio.SpecchioError, match=r"thesis-room.toml: --headings"):
         specchio.pose_grid(specchio.Scene(scene), 4.0, headings=0)
+
+
+
+def test_a_grid_dataset_from_python_is_the_commands(tmp_path, monkeypatch):
+    """`specchio.dataset(..., grid=)` in one process and on Ray: the folder `--grid` writes."""
+    monkeypatch.chdir(tmp_path)
+    scene = str(scene_path("thesis-room"))
+    run = cli("dataset", scene, "--grid", "4", "--out", "cli", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    record = specchio.dataset(scene, out="py", grid=4.0)
+    assert record["trajectory"] == "grid: spacing 4 m, 1 heading(s), t = 0 s"
+    specchio.dataset(scene, out="ray", grid=4.0, ray=True, workers=2, worker_env={"LP_NUM_THREADS": "1"})
+    assert tree(tmp_path / "py") == tree(tmp_path / "cli")
+    assert tree(tmp_path / "ray") == tree(tmp_path / "cli")
+    for bad, message in [
+        ({"out": "x"}, "give the poses"),
+        ({"out": "x", "trajectory": "t.csv", "grid": 4.0}, "not both"),
+        ({"out": "x", "trajectory": "t.csv", "headings": 2}, "a grid's"),
+        ({"grid": 4.0}, "out: the dataset's folder is required"),
+        ({"out": "x", "grid": 4.0, "headings": 0}, "--headings: must be 1 to"),
+    ]:
+        with pytest.raises(specchio.SpecchioError, match=message):
+            specchio.dataset(scene, **bad)
+    assert not (tmp_path / "x").exists()
