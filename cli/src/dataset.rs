@@ -121,12 +121,14 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     drop(frames);
     drop(device);
     let (done, work) = (folder.done(), folder.work_folder().map(Path::to_owned));
+    // Gone when the output was placed with an earlier one kept aside: done with.
+    let kept = work.filter(|w| done > 0 && w.join(resume::JOURNAL).exists());
     let placed = wrote.and_then(|()| {
         let ready = folder.finish(&plan.record(lookup, truth))?;
         stop("before placing the output")?;
         Ok(ready.commit()?)
     });
-    let left = placed.map_err(|e| match &work {
+    let left = placed.map_err(|e| match &kept {
         // What was done is kept: say where, and how to go on.
         Some(work) => anyhow::anyhow!(
             "{:#}\n{done} of {n} frame(s) are kept in {}: the same command with --resume goes on \

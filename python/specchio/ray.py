@@ -51,7 +51,8 @@ class _Worker:
         return (None, self.frames.lookup, self.frames.ground_truth, self.frames.device)
 
     def render(self, indices: list[int]):
-        return indices, self.frames.frames(indices)
+        # The device with the frames: a worker restarted elsewhere may have another one.
+        return indices, self.frames.frames(indices), self.frames.device
 
 
 def init_options() -> dict[str, Any]:
@@ -122,22 +123,40 @@ def dataset(
                 f"devices {devices}; name one device (device=...) that every worker has"
             )
         (chosen_lookup, truth) = runs.pop()
-        # The frames a resumed run still lacks (all of them otherwise).
+        # The frames a resumed run still lacks (all of them otherwise), and no more workers
+        # than their shards.
         todo = output.begin(chosen_lookup, truth, devices[0])
         shards = [todo[i : i + shard_size] for i in range(0, len(todo), shard_size)]
+        for a in actors[max(1, len(shards)) :]:
+            ray.kill(a)
+        actors = actors[: max(1, len(shards))]
         done = n - len(todo)
         pool = ActorPool(actors)
-        for indices, frames in pool.map_unordered(lambda a, s: a.render.remote(s), shards):
+        for indices, frames, used in pool.map_unordered(lambda a, s: a.render.remote(s), shards):
+            if resume and used != devices[0]:
+                raise SpecchioError(
+                    f"a restarted worker has device {used}, not the run's {devices[0]}: "
+                    "name one device (device=...) that every worker has"
+                )
             for files, line in frames:
                 output.place(files, line)
             done += len(indices)
             if progress is not None:
                 progress(done, n)
+        if not shards and progress is not None:
+            progress(n, n)
         return output.finish(chosen_lookup, truth)
     except ray.exceptions.RayTaskError as e:
         # The engine's own error, raised in a worker: the same exception, the same message.
         if isinstance(e.cause, SpecchioError):
-            raise SpecchioError(*e.cause.args) from None
+            error = SpecchioError(*e.cause.args)
+            output.note_kept(error)
+            raise error from None
+        output.note_kept(e)
+        raise
+    except BaseException as e:
+        # Whatever stopped the run (Ctrl-C, a lost cluster): say what a resumable run kept.
+        output.note_kept(e)
         raise
     finally:
         for a in actors:

@@ -108,6 +108,8 @@ pub fn dataset(
     let asked = parse_lookup(lookup)?;
     let source = PoseSource::new(trajectory, grid, headings, time)?;
     let stopped: Mutex<Option<PyErr>> = Mutex::new(None);
+    // The frames placed when the run stopped (a resumable run keeps them).
+    let placed = std::sync::atomic::AtomicUsize::new(0);
     let result = py.detach(|| -> Result<_, DatasetError> {
         // What this call may not replace is what it reads (docs/python.md).
         specchio::files::identity::forget();
@@ -124,10 +126,7 @@ pub fn dataset(
         if resume {
             folder.resume(&plan.run_key(lookup, truth, &resume::device_key(&dev.info)))?;
         }
-        let kept = |done: usize| match folder_work(&out, resume) {
-            Some(work) => format!("{done} of {n} frames are kept in {work} (resume=True goes on)"),
-            None => "nothing was written".to_owned(),
-        };
+        let nothing = if resume { "" } else { ": nothing was written" };
         // Before each frame, Python's signals (Ctrl-C); after each frame written but the
         // last (which the caller hears of once the folder is placed), the caller's progress.
         let keep = |e: PyErr| {
@@ -136,44 +135,58 @@ pub fn dataset(
         let mut between = |i: usize| {
             Python::attach(|py| py.check_signals()).map_err(|e| {
                 keep(e);
-                DatasetError::Stopped(format!("stopped before frame {i} of {n}: {}", kept(i)))
+                DatasetError::Stopped(format!("stopped before frame {i} of {n}{nothing}"))
             })
         };
         let mut written = |done: usize| match (&progress, done < n) {
             (Some(f), true) => Python::attach(|py| f.call1(py, (done, n)).map(drop)).map_err(|e| {
                 keep(e);
-                DatasetError::Stopped(format!(
-                    "stopped after {done} of {n} frames: {}",
-                    kept(done)
-                ))
+                DatasetError::Stopped(format!("stopped after {done} of {n} frames{nothing}"))
             }),
             _ => Ok(()),
         };
-        writer::write_frames(&mut folder, &plan, &mut frames, &mut between, &mut written)?;
+        let wrote =
+            writer::write_frames(&mut folder, &plan, &mut frames, &mut between, &mut written);
+        placed.store(folder.done(), std::sync::atomic::Ordering::Relaxed);
+        wrote?;
         drop(frames);
         drop(dev);
         let record = plan.record(lookup, truth);
         let ready = folder.finish(&record)?;
         Ok((ready, record, log))
     });
-    if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
-        return Err(e);
-    }
-    let (ready, record, log) = result.map_err(errors::to_py)?;
-    check_validation(&log)?;
-    // Everything that can fail runs before the folder is placed: nothing after it.
-    if let Some(f) = &progress {
-        f.call1(py, (record.frames, record.frames))?;
-    }
-    py.check_signals()?;
-    let summary = errors::json_to_py(py, &record)?;
-    commit(py, ready)?;
-    Ok(summary)
+    let placing = || -> PyResult<Py<PyAny>> {
+        if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
+            return Err(e);
+        }
+        let (ready, record, log) = result.map_err(errors::to_py)?;
+        check_validation(&log)?;
+        // Everything that can fail runs before the folder is placed: nothing after it.
+        if let Some(f) = &progress {
+            f.call1(py, (record.frames, record.frames))?;
+        }
+        py.check_signals()?;
+        let summary = errors::json_to_py(py, &record)?;
+        commit(py, ready)?;
+        Ok(summary)
+    };
+    let placed = placed.load(std::sync::atomic::Ordering::Relaxed);
+    placing().map_err(|e| with_kept_note(py, e, &out, resume, placed))
 }
 
-/// The work folder of `out` in a resumable run, for messages.
-fn folder_work(out: &Path, resume: bool) -> Option<String> {
-    resume.then(|| resume::work_path(out).display().to_string())
+/// `e`, with a note of the frames a resumable run kept and how to go on (where it kept any:
+/// none when the output was placed, or was never begun).
+fn with_kept_note(py: Python<'_>, e: PyErr, out: &Path, resume: bool, placed: usize) -> PyErr {
+    let work = resume::work_path(out);
+    if resume && placed > 0 && work.join(resume::JOURNAL).exists() {
+        let note = format!(
+            "{placed} frame(s) are kept in {}: the same call with resume=True goes on from there",
+            work.display()
+        );
+        // Python 3.11 and later show notes under the message; earlier ones have none.
+        let _ = e.value(py).call_method1("add_note", (note,));
+    }
+    e
 }
 
 /// Places a finished dataset; what of its work folder could not be removed is a warning.
@@ -350,6 +363,8 @@ pub struct DatasetOutput {
     plan: Plan,
     out: PathBuf,
     resume: bool,
+    /// Whether `begin` was called: a resumable output places nothing before.
+    begun: bool,
     folder: Option<Folder>,
 }
 
@@ -377,6 +392,7 @@ impl DatasetOutput {
                 plan,
                 out,
                 resume,
+                begun: false,
                 folder: Some(folder),
             })
         })
@@ -398,19 +414,33 @@ impl DatasetOutput {
         device: &str,
     ) -> PyResult<Vec<usize>> {
         let (lookup, truth) = parse_run(lookup, ground_truth)?;
+        if self.begun {
+            return Err(errors::error("the dataset was begun already"));
+        }
         let key = self.plan.run_key(lookup, truth, device);
         let resume = self.resume;
         let folder = self.folder_mut()?;
         if resume {
             py.detach(|| folder.resume(&key)).map_err(errors::to_py)?;
         }
-        Ok(folder.todo())
+        self.begun = true;
+        Ok(self.folder_mut()?.todo())
     }
 
     /// The work folder of a resumable run (where the finished frames are kept), else None.
     #[getter]
     fn work_folder(&self) -> Option<String> {
-        folder_work(&self.out, self.resume)
+        (self.resume).then(|| resume::work_path(&self.out).display().to_string())
+    }
+
+    /// Adds to `error` a note of the frames this resumable output kept, if it kept any: what
+    /// a driver raises when its run stops.
+    fn note_kept(&self, py: Python<'_>, error: Bound<'_, PyAny>) -> PyResult<()> {
+        let placed = self.folder.as_ref().map_or(0, Folder::done);
+        let e = PyErr::from_value(error);
+        let noted = with_kept_note(py, e, &self.out, self.resume, placed);
+        drop(noted);
+        Ok(())
     }
 
     /// Places one frame's files (as `DatasetFrames.frames` gives them: every file of one frame
@@ -421,8 +451,12 @@ impl DatasetOutput {
         files: Vec<(String, Vec<u8>)>,
         index_line: String,
     ) -> PyResult<()> {
+        if self.resume && !self.begun {
+            return Err(errors::error(
+                "a resumable dataset places frames after begin()",
+            ));
+        }
         let frame = one_frame(&files, self.plan.poses.len())?;
-        check_index_line(frame, &index_line)?;
         let frame = Frame {
             frame,
             files: files
@@ -475,7 +509,7 @@ fn parse_run(lookup: &str, ground_truth: &str) -> PyResult<(Lookup, GroundTruth)
 
 /// The frame whose folder holds every one of `files`: each path relative with plain
 /// components only (no `..`, no root), `frames/NNNNNN/NAME` of one of the `n` frames, one
-/// frame's files together, no name twice, every file a frame has.
+/// frame's files together (`Folder::place` checks the names and the index line).
 fn one_frame(files: &[(String, Vec<u8>)], n: usize) -> PyResult<usize> {
     let mut frames = files.iter().map(|(path, _)| frame_of(path, n));
     let first = frames
@@ -487,22 +521,6 @@ fn one_frame(files: &[(String, Vec<u8>)], n: usize) -> PyResult<usize> {
             return Err(errors::error(format!(
                 "files of frames {first} and {other} in one call: place one frame at a time"
             )));
-        }
-    }
-    let mut names: Vec<&str> = files
-        .iter()
-        .filter_map(|(p, _)| p.rsplit('/').next())
-        .collect();
-    names.sort_unstable();
-    if let Some(twice) = names.windows(2).find(|w| w[0] == w[1]) {
-        return Err(errors::error(format!("frame {first}: {} twice", twice[0])));
-    }
-    let required = specchio::sensor::dataset::FRAME_FILES
-        .iter()
-        .filter(|name| !name.contains('*'));
-    for name in required {
-        if !names.contains(name) {
-            return Err(errors::error(format!("frame {first}: no {name}")));
         }
     }
     Ok(first)
@@ -526,20 +544,4 @@ fn frame_of(path: &str, n: usize) -> PyResult<usize> {
             "{path:?}: not a file of one of this dataset's {n} frame folders (frames/NNNNNN/NAME)"
         ))),
     }
-}
-
-/// Index line `i` must be one JSON object on one line, for frame `i` in its folder.
-fn check_index_line(i: usize, line: &str) -> PyResult<()> {
-    let value: serde_json::Value = (!line.contains('\n'))
-        .then(|| serde_json::from_str(line).ok())
-        .flatten()
-        .unwrap_or_default();
-    let folder = specchio::sensor::dataset::frame_folder(i);
-    if value["frame"] == i && value["folder"] == folder.as_str() {
-        return Ok(());
-    }
-    Err(errors::error(format!(
-        "index line {i}: not frame {i}'s line (one JSON object with \"frame\": {i} and \
-         \"folder\": \"{folder}\")"
-    )))
 }

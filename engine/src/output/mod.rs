@@ -19,9 +19,10 @@ use std::path::{Path, PathBuf};
 
 use crate::image::{exr, png, RgbaImage};
 
+pub(crate) use dir::{Dir, Entry};
 pub use sink::{json_text, MemoryFiles, Sink};
 pub use staged::MANIFEST;
-pub use sys::{create_new, try_lock};
+pub use sys::{create_new, open_no_follow, try_lock};
 pub use transaction::Transaction;
 
 /// Why an output could not be written. Each names the user's path; an I/O cause is the

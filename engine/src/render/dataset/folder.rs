@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::check::check_frame;
 use super::resume::{RunKey, WorkFolder};
 use super::{DatasetError, Frame, INDEX_FILE, SUMMARY_FILE};
 use crate::output::{OutputError, Sink, Transaction};
@@ -70,12 +71,13 @@ impl Folder {
     pub fn place(&mut self, frame: &Frame) -> Result<(), DatasetError> {
         let n = self.index.len();
         let slot = self.index.get(frame.frame).ok_or_else(|| {
-            DatasetError::Stopped(format!("frame {}: the dataset has {n} frames", frame.frame))
+            DatasetError::Invalid(format!("frame {}: the dataset has {n} frames", frame.frame))
         })?;
         if slot.is_some() {
             let why = format!("frame {} was placed already", frame.frame);
-            return Err(DatasetError::Stopped(why));
+            return Err(DatasetError::Invalid(why));
         }
+        check_frame(frame).map_err(DatasetError::Invalid)?;
         match &mut self.work {
             Some(work) => work.write(frame)?,
             None => {
@@ -92,7 +94,7 @@ impl Folder {
     /// index and the summary `record`, staged; [`Ready::commit`] places them.
     pub fn finish(self, record: &DatasetRecord) -> Result<Ready, DatasetError> {
         if let Some(missing) = self.index.iter().position(|l| l.is_none()) {
-            return Err(DatasetError::Stopped(format!(
+            return Err(DatasetError::Invalid(format!(
                 "frame {missing} was never placed"
             )));
         }
@@ -124,7 +126,15 @@ impl Ready {
     /// Places the dataset folder, then removes the work folder of a resumable run. Returns
     /// what of the work folder could not be removed (the dataset is in place all the same).
     pub fn commit(self) -> Result<Vec<String>, OutputError> {
-        self.staged.commit()?;
-        Ok(self.work.map(WorkFolder::remove).unwrap_or_default())
+        match self.staged.commit() {
+            Ok(()) => Ok(self.work.map(WorkFolder::remove).unwrap_or_default()),
+            // Placed, but the earlier output held something its manifest did not list, kept
+            // aside: the dataset is in place all the same, and its work folder done with.
+            Err(e @ OutputError::KeptAside { .. }) => {
+                self.work.map(WorkFolder::remove);
+                Err(e)
+            }
+            Err(e) => Err(e),
+        }
     }
 }

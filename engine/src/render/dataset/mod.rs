@@ -10,6 +10,7 @@
 //! bytes depend only on the plan, the lookup, the device and the frame's index and pose (never
 //! on which frames a writer rendered before it), so both give the same files, byte for byte.
 
+mod check;
 mod folder;
 mod frames;
 pub mod resume;
@@ -28,6 +29,7 @@ use crate::sensor::GroundTruth;
 use crate::vk::physical::DeviceInfo;
 use crate::vk::GpuError;
 
+pub use check::{check_frame, check_index_line};
 pub use folder::{Folder, Ready};
 pub use frames::{Frame, FrameWriter, Rendered};
 pub use resume::RunKey;
@@ -58,6 +60,9 @@ pub enum DatasetError {
     /// says how far it got.
     #[error("{0}")]
     Stopped(String),
+    /// A frame or an index line that is not what a frame folder holds.
+    #[error("{0}")]
+    Invalid(String),
     /// A resumable run's work folder cannot be taken: not a folder, not ours, another run's.
     #[error("{path} {why}")]
     Resume { path: PathBuf, why: String },
@@ -156,7 +161,11 @@ impl Plan {
     /// a work folder with the same key.
     pub fn run_key(&self, lookup: Lookup, truth: GroundTruth, device: &str) -> RunKey {
         RunKey {
-            specchio: env!("CARGO_PKG_VERSION").to_owned(),
+            specchio: format!(
+                "{} (build {})",
+                env!("CARGO_PKG_VERSION"),
+                env!("SPECCHIO_BUILD_ID")
+            ),
             inputs: self.inputs.iter().map(Digest::to_string).collect(),
             poses: Digest::of(format!("{:?}", self.poses).as_bytes()).to_string(),
             frames: self.poses.len(),

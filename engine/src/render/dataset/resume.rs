@@ -19,32 +19,38 @@
 //! journal names.
 
 use std::collections::BTreeMap;
+use std::ffi::OsStr;
 use std::fs::{self, File, OpenOptions};
-use std::io::{Read, Seek, SeekFrom, Write};
+use std::io::{BufRead, BufReader, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::check::{check_frame_names, check_index_line, is_frame_file};
 use super::{DatasetError, Frame};
-use crate::output::{OutputError, Transaction};
-use crate::sensor::dataset::{frame_folder, FRAME_FILES};
+use crate::output::{Dir, Entry, OutputError, Transaction};
+use crate::sensor::dataset::frame_folder;
 
 /// The work folder's name is the output's with this added.
 pub const WORK_SUFFIX: &str = ".partial";
 /// The journal, inside the work folder.
 pub const JOURNAL: &str = "journal.jsonl";
+/// The folder of the frame folders, inside the work folder.
+const FRAMES: &str = "frames";
 /// The journal's format; a journal of another format is refused.
 const FORMAT: u32 = 1;
 /// Longest journal line read back: a frame's line is a few hundred bytes.
-const MAX_LINE: usize = 64 << 10;
+const MAX_LINE: u64 = 64 << 10;
 
 /// What a dataset's bytes depend on: a run resumes only a work folder whose key is its own.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RunKey {
-    /// This program's version.
+    /// This program's version and build (a digest of the engine's sources, shaders and
+    /// dependencies: engine/build.rs).
     pub specchio: String,
     /// The scene's files (the scene, its meshes and textures) and the trajectory file, by
-    /// length and CRC-32 (`files::digest`), sorted.
+    /// length and CRC-32 (`files::digest`), in the order they were read.
     pub inputs: Vec<String>,
     /// The poses as checked, by CRC-32 of their exact values (a grid has no file).
     pub poses: String,
@@ -63,18 +69,20 @@ enum Line {
     Frame(Journaled),
 }
 
-/// A finished frame: its files (name in its folder, size) and its index line.
+/// A finished frame: its files (name in its folder, size, CRC-32) and its index line.
 #[derive(Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct Journaled {
     frame: usize,
-    files: Vec<(String, u64)>,
+    files: Vec<(String, u64, u32)>,
     index: String,
 }
 
-/// A dataset's work folder, opened by this run (and locked while it is open).
+/// A dataset's work folder, opened by this run (and locked while it is open). Removals go
+/// through the folder handles (`output::Dir`), never by a path a link could redirect.
 pub struct WorkFolder {
     path: PathBuf,
+    dir: Dir,
     journal: File,
     done: BTreeMap<usize, Journaled>,
     frames: usize,
@@ -118,35 +126,59 @@ impl WorkFolder {
 
     fn create(path: PathBuf, key: &RunKey) -> Result<WorkFolder, DatasetError> {
         fs::create_dir(&path).map_err(io(&path))?;
+        // The folder's own entry, so that a crash cannot take the whole work folder back.
+        sync_folder(&parent_of(&path))?;
+        let dir = Dir::open(&path).map_err(io(&path))?;
         let at = path.join(JOURNAL);
         let journal = crate::output::create_new(&at).map_err(io(&at))?;
         lock(&journal, &path)?;
+        Self::start(path, dir, journal, key)
+    }
+
+    /// A work folder with an empty journal: the key line written first, and on disk.
+    fn start(path: PathBuf, dir: Dir, journal: File, key: &RunKey) -> Result<Self, DatasetError> {
         let mut work = WorkFolder {
             path,
+            dir,
             journal,
             done: BTreeMap::new(),
             frames: key.frames,
         };
         let format = FORMAT;
-        work.append(&Line::Run {
-            format,
-            key: key.clone(),
-        })?;
+        let key = key.clone();
+        work.append(&Line::Run { format, key })?;
         sync_folder(&work.path)?;
         Ok(work)
     }
 
     fn take(path: PathBuf, key: &RunKey) -> Result<WorkFolder, DatasetError> {
+        // Opened without following a link: what is checked below is what is then used.
+        let dir = Dir::open(&path).map_err(io(&path))?;
         let at = path.join(JOURNAL);
         let mut journal = open_journal(&at).map_err(|e| match e.kind() {
-            std::io::ErrorKind::NotFound => refuse(&path, &format!("holds no {JOURNAL}: it is no work folder of a dataset; choose another --out, or move it away")),
+            std::io::ErrorKind::NotFound => refuse(
+                &path,
+                &format!("holds no {JOURNAL}: it is no work folder of a dataset; choose another --out, or move it away"),
+            ),
             _ => io(&at)(e),
         })?;
         lock(&journal, &path)?;
-        let (lines, complete) = read_lines(&mut journal, &at)?;
-        let mut lines = lines.into_iter().enumerate();
-        let theirs = match lines.next() {
-            Some((_, Line::Run { format, key })) if format == FORMAT => key,
+        let read = read_journal(&mut journal, &at, key.frames)?;
+        let mut lines = read.lines.into_iter();
+        let Some((_, first)) = lines.next() else {
+            // Made, but stopped before its key line was on disk: it holds nothing else.
+            if names(&path)? != [JOURNAL] {
+                return Err(refuse(
+                    &at,
+                    "holds no run key: it is no dataset run's journal",
+                ));
+            }
+            journal.set_len(0).map_err(io(&at))?;
+            journal.seek(SeekFrom::Start(0)).map_err(io(&at))?;
+            return Self::start(path, dir, journal, key);
+        };
+        let theirs = match first {
+            Line::Run { format, key } if format == FORMAT => key,
             _ => return Err(refuse(&at, "line 1: not a dataset run of this version")),
         };
         if let Some(why) = differs(&theirs, key) {
@@ -157,27 +189,36 @@ impl WorkFolder {
         }
         let mut done = BTreeMap::new();
         for (n, line) in lines {
-            match line {
-                Line::Frame(f) if f.frame < key.frames => {
-                    done.insert(f.frame, f);
+            let f = match line {
+                Line::Frame(f) => f,
+                Line::Run { .. } => {
+                    return Err(refuse(&at, &format!("line {n}: a second run key")))
                 }
-                _ => {
-                    let why = format!("line {}: not a frame of this dataset", n + 1);
-                    return Err(refuse(&at, &why));
-                }
-            }
+            };
+            check_journaled(&f, key.frames)
+                .map_err(|why| refuse(&at, &format!("line {n}: {why}")))?;
+            // A frame done again (its files were lost) has a later line: the last one holds.
+            done.insert(f.frame, f);
         }
-        // A line cut short by a crash is dropped; the frame it would name is done again.
-        journal.set_len(complete).map_err(io(&at))?;
-        journal.seek(SeekFrom::End(0)).map_err(io(&at))?;
         let mut work = WorkFolder {
             path,
+            dir,
             journal,
             done,
             frames: key.frames,
         };
         work.check_entries()?;
-        work.done.retain(|_, f| on_disk(&work.path, f));
+        // Only now, the folder known to be this run's: a line cut short by a crash is dropped
+        // (the frame it would name is done again).
+        work.journal.set_len(read.complete).map_err(io(&at))?;
+        work.journal.seek(SeekFrom::End(0)).map_err(io(&at))?;
+        let lost: Vec<usize> = (work.done.values())
+            .filter(|f| !work.on_disk(f))
+            .map(|f| f.frame)
+            .collect();
+        for frame in lost {
+            work.done.remove(&frame);
+        }
         Ok(work)
     }
 
@@ -191,30 +232,29 @@ impl WorkFolder {
         self.done.iter().map(|(&i, f)| (i, f.index.as_str()))
     }
 
-    /// Writes `frame` into the work folder and journals it once it is on disk.
+    /// Writes `frame` (checked by the caller: `folder::check_frame`) into the work folder, and
+    /// journals it once it is on disk.
     pub fn write(&mut self, frame: &Frame) -> Result<(), DatasetError> {
-        let folder_name = frame_folder(frame.frame);
-        let folder = self.path.join(&folder_name);
-        self.clear_cut_short(&folder)?;
-        let frames = self.path.join("frames");
-        if !frames.exists() {
-            fs::create_dir(&frames).map_err(io(&frames))?;
-            sync_folder(&self.path)?;
-        }
+        let name = frame_folder(frame.frame);
+        let leaf = OsStr::new(name.rsplit('/').next().unwrap_or(&name));
+        let frames = self.frames_dir()?;
+        self.clear_cut_short(&frames, leaf)?;
+        let folder = self.path.join(&name);
         fs::create_dir(&folder).map_err(io(&folder))?;
         let mut files = Vec::with_capacity(frame.files.len());
         for (rel, bytes) in &frame.files {
-            let name = (rel.strip_prefix(&folder_name).ok())
-                .and_then(|n| n.to_str())
-                .filter(|n| allowed(n))
-                .ok_or_else(|| refuse(rel, "is not a file of a frame folder (a bug)"))?;
-            let at = folder.join(name);
+            let file_name = rel.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+            let at = folder.join(file_name);
             let mut file = crate::output::create_new(&at).map_err(io(&at))?;
             (file.write_all(bytes).and_then(|()| file.sync_all())).map_err(io(&at))?;
-            files.push((name.to_owned(), bytes.len() as u64));
+            files.push((
+                file_name.to_owned(),
+                bytes.len() as u64,
+                crc32fast::hash(bytes),
+            ));
         }
         sync_folder(&folder)?;
-        sync_folder(&frames)?;
+        sync_folder(&self.path.join(FRAMES))?;
         let journaled = Journaled {
             frame: frame.frame,
             files,
@@ -230,19 +270,32 @@ impl WorkFolder {
     pub fn link_into(&self, out: &Transaction, root: &Path) -> Result<(), DatasetError> {
         for f in self.done.values() {
             let folder = frame_folder(f.frame);
-            for (name, _) in &f.files {
+            for (name, size, _) in &f.files {
                 let from = self.path.join(&folder).join(name);
-                let to = out.path_for(&root.join(&folder).join(name))?;
-                if fs::hard_link(&from, &to).is_err() {
-                    fs::copy(&from, &to).map_err(io(&from))?;
+                let to_user = root.join(&folder).join(name);
+                let to = out.path_for(&to_user)?;
+                match fs::hard_link(&from, &to) {
+                    // The link is to whatever was there: it must still be the frame's file.
+                    Ok(())
+                        if fs::symlink_metadata(&to)
+                            .is_ok_and(|m| m.is_file() && m.len() == *size) => {}
+                    Ok(()) => {
+                        let _ = fs::remove_file(&to);
+                        return Err(refuse(
+                            &from,
+                            "changed since it was written: remove the work folder to start again",
+                        ));
+                    }
+                    Err(e) if no_links_here(&e) => copy_file(&from, *size, out, &to_user)?,
+                    Err(e) => return Err(io(&from)(e)),
                 }
             }
         }
         Ok(())
     }
 
-    /// Removes the work folder, as far as the journal names it (after the output is placed).
-    /// What could not be removed is returned, to be said.
+    /// Removes the work folder, as far as the journal names it (after the output is placed),
+    /// through the folder handles. What could not be removed is returned, to be said.
     pub fn remove(self) -> Vec<String> {
         let mut left = Vec::new();
         let mut gone = |r: std::io::Result<()>, p: &Path| {
@@ -250,75 +303,207 @@ impl WorkFolder {
                 left.push(format!("{}: {e}", p.display()));
             }
         };
-        for f in self.done.values() {
-            let folder = self.path.join(frame_folder(f.frame));
-            for (name, _) in &f.files {
-                gone(fs::remove_file(folder.join(name)), &folder.join(name));
+        let frames_path = self.path.join(FRAMES);
+        if let Ok(frames) = self.dir.open_dir(OsStr::new(FRAMES)) {
+            for f in self.done.values() {
+                let name = frame_folder(f.frame);
+                let leaf = OsStr::new(name.rsplit('/').next().unwrap_or(&name));
+                let at = self.path.join(&name);
+                match frames.open_dir(leaf) {
+                    Ok(folder) => {
+                        for (file, _, _) in &f.files {
+                            gone(folder.remove(OsStr::new(file), false), &at.join(file));
+                        }
+                        gone(frames.remove(leaf, true), &at);
+                    }
+                    Err(e) => gone(Err(e), &at),
+                }
             }
-            gone(fs::remove_dir(&folder), &folder);
-        }
-        let frames = self.path.join("frames");
-        if frames.exists() {
-            gone(fs::remove_dir(&frames), &frames);
+            gone(self.dir.remove(OsStr::new(FRAMES), true), &frames_path);
         }
         let journal = self.path.join(JOURNAL);
-        gone(fs::remove_file(&journal), &journal);
+        gone(self.dir.remove(OsStr::new(JOURNAL), false), &journal);
         gone(fs::remove_dir(&self.path), &self.path);
         left
     }
 
+    /// Appends a line and makes it durable; a line that fails half-written is cut off again,
+    /// so that the journal never holds a broken line in its middle.
     fn append(&mut self, line: &Line) -> Result<(), DatasetError> {
         let at = self.path.join(JOURNAL);
         let mut text = serde_json::to_string(line).map_err(|e| refuse(&at, &e.to_string()))?;
         text.push('\n');
-        (self.journal.write_all(text.as_bytes())).map_err(io(&at))?;
-        self.journal.sync_data().map_err(io(&at))
+        let before = self.journal.stream_position().map_err(io(&at))?;
+        let written =
+            (self.journal.write_all(text.as_bytes())).and_then(|()| self.journal.sync_data());
+        if let Err(e) = written {
+            let _ = self.journal.set_len(before);
+            let _ = self.journal.seek(SeekFrom::Start(before));
+            return Err(io(&at)(e));
+        }
+        Ok(())
+    }
+
+    /// The frames folder, made on first use; never a link.
+    fn frames_dir(&self) -> Result<Dir, DatasetError> {
+        let at = self.path.join(FRAMES);
+        if let Err(e) = self.dir.entry(OsStr::new(FRAMES)) {
+            if e.kind() != std::io::ErrorKind::NotFound {
+                return Err(io(&at)(e));
+            }
+            fs::create_dir(&at).map_err(io(&at))?;
+            sync_folder(&self.path)?;
+        }
+        self.dir.open_dir(OsStr::new(FRAMES)).map_err(io(&at))
     }
 
     /// Every entry is the journal, `frames`, or a frame folder of this dataset holding frame
-    /// files: anything else is someone else's, and the folder is not taken.
+    /// files, none of them a link: anything else is someone else's, and the folder is not
+    /// taken.
     fn check_entries(&self) -> Result<(), DatasetError> {
         for name in names(&self.path)? {
-            if name != JOURNAL && name != "frames" {
+            let kind = self.dir.entry(OsStr::new(&name)).map_err(io(&self.path))?;
+            let ours = match name.as_str() {
+                JOURNAL => matches!(kind, Entry::Other),
+                FRAMES => matches!(kind, Entry::Folder),
+                _ => false,
+            };
+            if !ours {
                 return Err(foreign(&self.path, &name));
             }
         }
-        let frames = self.path.join("frames");
-        if !frames.exists() {
-            return Ok(());
-        }
-        for name in names(&frames)? {
+        let Ok(frames) = self.dir.open_dir(OsStr::new(FRAMES)) else {
+            return Ok(()); // none yet (checked above: not a link)
+        };
+        let frames_path = self.path.join(FRAMES);
+        for name in names(&frames_path)? {
             let ours = (name.len() == 6 && name.bytes().all(|b| b.is_ascii_digit()))
                 .then(|| name.parse::<usize>().ok())
                 .flatten()
                 .is_some_and(|i| i < self.frames);
-            let folder = frames.join(&name);
-            if !ours || !is_real_folder(&folder) {
-                return Err(foreign(&frames, &name));
+            let leaf = OsStr::new(&name);
+            if !ours || !matches!(frames.entry(leaf), Ok(Entry::Folder)) {
+                return Err(foreign(&frames_path, &name));
             }
-            for file in names(&folder)? {
-                if !allowed(&file) || !is_regular(&folder.join(&file)) {
-                    return Err(foreign(&folder, &file));
+            let folder = frames.open_dir(leaf).map_err(io(&frames_path))?;
+            for file in names(&frames_path.join(&name))? {
+                if !is_frame_file(&file)
+                    || !matches!(folder.entry(OsStr::new(&file)), Ok(Entry::Other))
+                {
+                    return Err(foreign(&frames_path.join(&name), &file));
                 }
             }
         }
         Ok(())
     }
 
-    /// Removes what a frame cut short left in `folder` (only frame files: `check_entries`).
-    fn clear_cut_short(&mut self, folder: &Path) -> Result<(), DatasetError> {
-        if !folder.exists() {
-            return Ok(());
+    /// Removes what a frame cut short left in `frames/leaf` (frame files only: a folder that
+    /// holds anything else is refused), through the handles.
+    fn clear_cut_short(&self, frames: &Dir, leaf: &OsStr) -> Result<(), DatasetError> {
+        let at = self.path.join(FRAMES).join(leaf);
+        match frames.entry(leaf) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+            Err(e) => return Err(io(&at)(e)),
+            Ok(Entry::Folder) => {}
+            Ok(_) => return Err(foreign(&self.path.join(FRAMES), &leaf.to_string_lossy())),
         }
-        for file in names(folder)? {
-            let at = folder.join(&file);
-            if !allowed(&file) || !is_regular(&at) {
-                return Err(foreign(folder, &file));
+        let folder = frames.open_dir(leaf).map_err(io(&at))?;
+        for file in names(&at)? {
+            let ok =
+                is_frame_file(&file) && matches!(folder.entry(OsStr::new(&file)), Ok(Entry::Other));
+            if !ok {
+                return Err(foreign(&at, &file));
             }
-            fs::remove_file(&at).map_err(io(&at))?;
+            folder
+                .remove(OsStr::new(&file), false)
+                .map_err(io(&at.join(&file)))?;
         }
-        fs::remove_dir(folder).map_err(io(folder))
+        frames.remove(leaf, true).map_err(io(&at))
     }
+
+    /// Whether the journaled frame's files are there, regular, with their sizes and CRC-32s.
+    fn on_disk(&self, f: &Journaled) -> bool {
+        let folder = self.path.join(frame_folder(f.frame));
+        f.files.iter().all(|(name, size, crc)| {
+            let Ok(mut file) = crate::output::open_no_follow(&folder.join(name)) else {
+                return false;
+            };
+            if !file
+                .metadata()
+                .is_ok_and(|m| m.is_file() && m.len() == *size)
+            {
+                return false;
+            }
+            let mut hasher = crc32fast::Hasher::new();
+            let mut buf = vec![0u8; 1 << 20];
+            loop {
+                match file.read(&mut buf) {
+                    Ok(0) => break hasher.finalize() == *crc,
+                    Ok(n) => hasher.update(&buf[..n]),
+                    Err(_) => break false,
+                }
+            }
+        })
+    }
+}
+
+/// A journaled frame as the run writes it: of this dataset, its names a frame folder's,
+/// its index line its own.
+fn check_journaled(f: &Journaled, frames: usize) -> Result<(), String> {
+    if f.frame >= frames {
+        return Err(format!(
+            "frame {}: the dataset has {frames} frames",
+            f.frame
+        ));
+    }
+    let names: Vec<&str> = f.files.iter().map(|(n, _, _)| n.as_str()).collect();
+    check_frame_names(f.frame, &names)?;
+    check_index_line(f.frame, &f.index)
+}
+
+/// The journal's whole lines (numbered from 1) and their length; a last line without its
+/// newline was cut short by a crash and is left out.
+struct Journal {
+    lines: Vec<(usize, Line)>,
+    complete: u64,
+}
+
+/// Reads the journal line by line, each line and the line count bounded: a run of `frames`
+/// frames writes its key and a line per frame done (again, where a frame was lost).
+fn read_journal(journal: &mut File, at: &Path, frames: usize) -> Result<Journal, DatasetError> {
+    let most = 1 + 4 * frames + 64;
+    let mut reader = BufReader::new(journal);
+    let mut read = Journal {
+        lines: Vec::new(),
+        complete: 0,
+    };
+    let mut line = Vec::new();
+    for n in 1.. {
+        line.clear();
+        let got = (reader.by_ref().take(MAX_LINE + 1))
+            .read_until(b'\n', &mut line)
+            .map_err(io(at))?;
+        if got == 0 {
+            break;
+        }
+        if line.last() != Some(&b'\n') {
+            if got as u64 > MAX_LINE {
+                return Err(refuse(at, &format!("line {n}: longer than a journal line")));
+            }
+            break; // cut short at the end
+        }
+        if n > most {
+            return Err(refuse(
+                at,
+                &format!("has more lines than a run of {frames} frames writes"),
+            ));
+        }
+        let parsed = serde_json::from_slice(&line[..line.len() - 1])
+            .map_err(|_| refuse(at, &format!("line {n}: not a journal line")))?;
+        read.lines.push((n, parsed));
+        read.complete += got as u64;
+    }
+    Ok(read)
 }
 
 /// The first field in which two keys differ, said for a person.
@@ -345,43 +530,36 @@ fn differs(theirs: &RunKey, ours: &RunKey) -> Option<String> {
     Some(field)
 }
 
-/// A frame file's name: one of [`FRAME_FILES`] (`*` standing for any plain suffix).
-fn allowed(name: &str) -> bool {
-    FRAME_FILES.iter().any(|f| match f.split_once('*') {
-        None => *f == name,
-        Some((head, _)) => {
-            name.len() > head.len() && name.starts_with(head) && !name.contains(['/', '\\'])
-        }
-    })
+/// A hard link cannot be made here, but a copy can: another file system under the same name
+/// (a bind mount), or one without hard links (vfat, some network and FUSE file systems).
+fn no_links_here(e: &std::io::Error) -> bool {
+    let codes = [
+        libc::EXDEV,
+        libc::EPERM,
+        libc::EMLINK,
+        libc::EOPNOTSUPP,
+        libc::ENOSYS,
+    ];
+    e.raw_os_error().is_some_and(|c| codes.contains(&c))
+        || e.kind() == std::io::ErrorKind::Unsupported
 }
 
-/// Whether the journaled frame's files are there, regular, with their sizes.
-fn on_disk(work: &Path, f: &Journaled) -> bool {
-    let folder = work.join(frame_folder(f.frame));
-    f.files.iter().all(|(name, size)| {
-        fs::symlink_metadata(folder.join(name)).is_ok_and(|m| m.is_file() && m.len() == *size)
-    })
-}
-
-/// The journal's lines, and the length of its whole lines (a last line without its newline
-/// was cut short).
-fn read_lines(journal: &mut File, at: &Path) -> Result<(Vec<Line>, u64), DatasetError> {
-    let mut text = Vec::new();
-    let limit = (crate::sensor::dataset::trajectory::MAX_POSES as u64 + 1) * MAX_LINE as u64;
-    (journal.take(limit).read_to_end(&mut text)).map_err(io(at))?;
-    let complete = text.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
-    let mut lines = Vec::new();
-    for (n, line) in text[..complete].split(|&b| b == b'\n').enumerate() {
-        if line.is_empty() && n > 0 {
-            continue;
-        }
-        let parsed = (line.len() <= MAX_LINE)
-            .then(|| serde_json::from_slice(line).ok())
-            .flatten()
-            .ok_or_else(|| refuse(at, &format!("line {}: not a journal line", n + 1)))?;
-        lines.push(parsed);
+/// Copies the kept file `from` (a regular file of `size` bytes, never through a link) to a
+/// new file of the staged output.
+fn copy_file(from: &Path, size: u64, out: &Transaction, to: &Path) -> Result<(), DatasetError> {
+    let mut source = crate::output::open_no_follow(from).map_err(io(from))?;
+    if !source
+        .metadata()
+        .is_ok_and(|m| m.is_file() && m.len() == size)
+    {
+        return Err(refuse(
+            from,
+            "changed since it was written: remove the work folder to start again",
+        ));
     }
-    Ok((lines, complete as u64))
+    let mut target = out.create(to)?;
+    std::io::copy(&mut Read::by_ref(&mut source).take(size), &mut target).map_err(io(to))?;
+    Ok(())
 }
 
 fn open_journal(at: &Path) -> std::io::Result<File> {
@@ -418,12 +596,12 @@ fn names(dir: &Path) -> Result<Vec<String>, DatasetError> {
     Ok(names)
 }
 
-fn is_real_folder(p: &Path) -> bool {
-    fs::symlink_metadata(p).is_ok_and(|m| m.is_dir())
-}
-
-fn is_regular(p: &Path) -> bool {
-    fs::symlink_metadata(p).is_ok_and(|m| m.is_file())
+/// The folder holding `path` (`.` for a bare name).
+fn parent_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
+        _ => PathBuf::from("."),
+    }
 }
 
 /// Makes a folder's new entries durable (where the file system can).

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use super::*;
 use crate::render::dataset::{Folder, INDEX_FILE};
 use crate::sensor::dataset::DatasetRecord;
+use crate::sensor::dataset::FRAME_FILES;
 use crate::sensor::GroundTruth;
 
 fn scratch(name: &str) -> PathBuf {
@@ -27,11 +28,11 @@ fn key(frames: usize) -> RunKey {
     }
 }
 
-/// A frame whose files say which frame they are.
+/// A frame whose files say which frame they are: every fixed frame file and a panorama.
 fn frame(i: usize) -> Frame {
     let folder = frame_folder(i);
-    let files = ["pose.json", "sensor.png", "sensor.panorama.png"]
-        .iter()
+    let fixed = FRAME_FILES.into_iter().filter(|n| !n.contains('*'));
+    let files = (fixed.chain(["sensor.panorama.png"]))
         .map(|n| {
             (
                 Path::new(&folder).join(n),
@@ -235,11 +236,26 @@ fn a_link_is_never_taken_for_the_work_folder_or_a_frame_file() {
     work.write(&frame(0)).unwrap();
     drop(work);
     let png = work_path(&out).join("frames/000000/sensor.png");
+    let kept = fs::read(&png).unwrap();
     fs::remove_file(&png).unwrap();
     std::os::unix::fs::symlink(dir.join("elsewhere"), &png).unwrap();
     let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
     assert!(e.contains("sensor.png"), "{e}");
     assert!(elsewhere.is_dir());
+    fs::remove_file(&png).unwrap();
+    fs::write(&png, kept).unwrap();
+
+    // frames/ itself a link to a folder of the user's that looks like a frame folder.
+    let frames = work_path(&out).join("frames");
+    fs::rename(&frames, elsewhere.join("frames")).unwrap();
+    std::os::unix::fs::symlink(elsewhere.join("frames"), &frames).unwrap();
+    let before = tree(&elsewhere);
+    let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
+    assert!(
+        e.contains("frames") && e.contains("no dataset run wrote"),
+        "{e}"
+    );
+    assert_eq!(tree(&elsewhere), before);
     fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -264,9 +280,112 @@ fn frame_file_names_are_the_frame_folders_own() {
         "sensor.panorama.exr",
         "points.ply",
     ] {
-        assert!(allowed(name), "{name}");
+        assert!(is_frame_file(name), "{name}");
     }
-    for name in ["sensor.panorama.", "notes.txt", "..", "sensor.exr.bak"] {
-        assert!(!allowed(name), "{name}");
+    for name in [
+        "sensor.panorama.",
+        "notes.txt",
+        "..",
+        "sensor.exr.bak",
+        "sensor.panorama./x",
+    ] {
+        assert!(!is_frame_file(name), "{name}");
     }
+}
+
+/// Appends `text` to the journal of `out`'s work folder.
+fn append(out: &Path, text: &str) {
+    let mut journal = OpenOptions::new()
+        .append(true)
+        .open(work_path(out).join(JOURNAL))
+        .unwrap();
+    journal.write_all(text.as_bytes()).unwrap();
+}
+
+/// A journal is taken only as the run writes it: names of its own frame folder's files, each
+/// once, every fixed one, its own index line; a line of someone's making is refused and
+/// nothing it names is touched.
+#[test]
+fn a_journal_line_naming_anything_else_is_refused_and_nothing_is_removed() {
+    let dir = scratch("names");
+    let out = dir.join("out");
+    let victim = dir.join("victim.txt");
+    fs::write(&victim, b"the user's").unwrap();
+    let mut work = WorkFolder::open(&out, &key(3)).unwrap();
+    work.write(&frame(0)).unwrap();
+    drop(work);
+    let journal = fs::read_to_string(work_path(&out).join(JOURNAL)).unwrap();
+    let good: serde_json::Value = serde_json::from_str(journal.lines().nth(1).unwrap()).unwrap();
+    let with_files = |files: serde_json::Value, index: &str| {
+        let mut line = good.clone();
+        line["frame"]["frame"] = 1.into();
+        line["frame"]["files"] = files;
+        line["frame"]["index"] = index.into();
+        format!("{line}\n")
+    };
+    let index1 = frame(1).index_line;
+    let mut listed = good["frame"]["files"].clone();
+    listed[0][0] = "../../../victim.txt".into();
+    let mut twice = good["frame"]["files"].clone();
+    twice[1][0] = twice[0][0].clone();
+    let files = good["frame"]["files"].clone();
+    let cases = [
+        (
+            with_files(listed, &index1),
+            "victim.txt is not a frame file",
+        ),
+        (with_files(twice, &index1), "twice"),
+        (with_files(serde_json::json!([]), &index1), "no sensor.exr"),
+        (with_files(files.clone(), "x\ny"), "index line 1"),
+        (with_files(files, &frame(0).index_line), "index line 1"),
+        ("\n".to_owned(), "line 3: not a journal line"),
+        (
+            format!("{}\n", "x".repeat(70_000)),
+            "line 3: longer than a journal line",
+        ),
+    ];
+    for (line, says) in cases {
+        append(&out, &line);
+        let e = message(WorkFolder::open(&out, &key(3)).err().unwrap());
+        assert!(e.contains(says) && e.contains(JOURNAL), "{says}: {e}");
+        fs::write(work_path(&out).join(JOURNAL), &journal).unwrap();
+    }
+    assert_eq!(fs::read(&victim).unwrap(), b"the user's");
+    let work = WorkFolder::open(&out, &key(3)).unwrap();
+    assert_eq!(work.done().count(), 1);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A kept file changed in place, same length: its frame is done again, not linked as it is.
+#[test]
+fn a_kept_file_changed_in_place_makes_its_frame_done_again() {
+    let dir = scratch("changed");
+    let out = dir.join("out");
+    let mut work = WorkFolder::open(&out, &key(2)).unwrap();
+    work.write(&frame(0)).unwrap();
+    work.write(&frame(1)).unwrap();
+    drop(work);
+    let png = work_path(&out).join("frames/000001/sensor.png");
+    let mut bytes = fs::read(&png).unwrap();
+    bytes[0] ^= 1;
+    fs::write(&png, &bytes).unwrap();
+    let work = WorkFolder::open(&out, &key(2)).unwrap();
+    assert_eq!(work.done().map(|(i, _)| i).collect::<Vec<_>>(), vec![0]);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A crash between making the work folder and writing its key leaves a journal without a
+/// whole line: the next run starts it afresh instead of refusing it forever.
+#[test]
+fn a_work_folder_cut_short_before_its_key_starts_afresh() {
+    let dir = scratch("nokey");
+    let out = dir.join("out");
+    fs::create_dir(work_path(&out)).unwrap();
+    fs::write(work_path(&out).join(JOURNAL), b"{\"run\":{\"form").unwrap();
+    let mut work = WorkFolder::open(&out, &key(2)).unwrap();
+    work.write(&frame(1)).unwrap();
+    drop(work);
+    let work = WorkFolder::open(&out, &key(2)).unwrap();
+    assert_eq!(work.done().count(), 1);
+    fs::remove_dir_all(&dir).unwrap();
 }
