@@ -315,3 +315,26 @@ fn a_killed_display_connection_ends_the_viewer_with_a_message() {
         "{stderr}"
     );
 }
+
+/// The device lost mid-run (provoked: `SPECCHIO_FAULT_DEVICE_LOST`, engine/src/vk/fault.rs,
+/// since no CPU driver loses its device on demand) ends the viewer with a message saying so
+/// and exit status 1: no panic, and no validation message from the teardown.
+#[test]
+fn a_lost_device_ends_the_viewer_with_a_message() {
+    let Some(x) = Xvfb::start() else { return };
+    for after in ["0", "5"] {
+        let out = x
+            .command(&[thesis_room().to_str().unwrap(), "--frames", "100"])
+            .env(specchio::vk::fault::DEVICE_LOST_VAR, after)
+            .output()
+            .expect("specchio view runs");
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "after {after} waits: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(
+            stderr.contains("the GPU device was lost") && stderr.contains("vkWaitForFences failed"),
+            "after {after} waits: {stderr}"
+        );
+        assert!(!stderr.contains("Validation"), "{stderr}");
+    }
+}

@@ -61,13 +61,22 @@ pub(super) fn run_catching_window_panics<A: ApplicationHandler>(
 
 /// Whether `e` says the window's surface is gone (`VK_ERROR_SURFACE_LOST_KHR`).
 pub(super) fn surface_lost(e: &anyhow::Error) -> bool {
+    says(e, ash::vk::Result::ERROR_SURFACE_LOST_KHR)
+}
+
+/// Whether `e` says the device is lost (`VK_ERROR_DEVICE_LOST`): nothing more can be drawn,
+/// and the viewer ends with a message (the teardown only destroys, which a lost device
+/// allows).
+pub(super) fn device_lost(e: &anyhow::Error) -> bool {
+    says(e, ash::vk::Result::ERROR_DEVICE_LOST)
+}
+
+/// Whether one of `e`'s causes is a Vulkan call that answered `result`.
+fn says(e: &anyhow::Error, result: ash::vk::Result) -> bool {
     e.chain().any(|cause| {
         matches!(
             cause.downcast_ref::<specchio::vk::GpuError>(),
-            Some(specchio::vk::GpuError::Vk {
-                result: ash::vk::Result::ERROR_SURFACE_LOST_KHR,
-                ..
-            })
+            Some(specchio::vk::GpuError::Vk { result: r, .. }) if *r == result
         )
     })
 }

@@ -106,7 +106,8 @@ impl Submitter {
         let d = &self.device.raw;
         // SAFETY: the fence belongs to this device; u64::MAX: a CPU driver may be slow, and a
         // lost device returns an error rather than hanging.
-        unsafe { d.wait_for_fences(&[self.fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+        let waited = unsafe { d.wait_for_fences(&[self.fence], true, u64::MAX) };
+        super::fault::fence_wait(waited).vk("vkWaitForFences")?;
         // SAFETY: the fence is signalled and not in use.
         unsafe { d.reset_fences(&[self.fence]) }.vk("vkResetFences")?;
         self.in_flight.set(false);

@@ -167,12 +167,12 @@ impl FrameRing {
     fn wait_slot(&mut self, s: usize) -> Result<(), GpuError> {
         let slot = &self.slots[s];
         // SAFETY: the fence is live; it was submitted with its slot or created signalled.
-        unsafe {
+        let waited = unsafe {
             self.device
                 .raw
                 .wait_for_fences(&[slot.fence], true, u64::MAX)
-        }
-        .vk("vkWaitForFences")?;
+        };
+        super::fault::fence_wait(waited).vk("vkWaitForFences")?;
         self.slots[s].finished = self.slots[s].submitted;
         Ok(())
     }

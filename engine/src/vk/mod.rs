@@ -18,6 +18,7 @@ pub mod acceleration;
 pub mod commands;
 pub mod descriptors;
 pub mod device;
+pub mod fault;
 pub mod features;
 pub mod frames;
 pub mod image;

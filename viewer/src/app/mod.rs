@@ -26,7 +26,7 @@ mod actions;
 
 use super::clock::{Clock, Figures};
 use super::demand::{Demand, NextFrame};
-use super::failures::{run_catching_window_panics, surface_lost};
+use super::failures::{device_lost, run_catching_window_panics, surface_lost};
 use super::input::{self, Action};
 use super::menu::{Menu, Status};
 use super::motion::Motion;
@@ -152,7 +152,14 @@ pub fn run(
         ran => ran?,
     }
     if let Some(e) = app.error {
-        return Err(e);
+        // Said plainly: the driver's word for it is a code name.
+        return Err(match device_lost(&e) {
+            true => e.context(
+                "the GPU device was lost (a driver reset or crash, or the device removed): \
+                 the viewer cannot go on; start it again",
+            ),
+            false => e,
+        });
     }
     app.figures.print_summary();
     Ok(app.outcome)
