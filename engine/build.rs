@@ -110,6 +110,7 @@ fn main() {
     let manifest = Path::new(&manifest);
     let sources = [
         manifest.join("src"),
+        manifest.join("build.rs"),
         manifest.join("Cargo.toml"),
         manifest.join("../Cargo.lock"),
     ];
@@ -123,13 +124,17 @@ fn main() {
         digest(manifest, &all)
     );
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
-    let shaders = format!("{:08x}", digest(manifest, std::slice::from_ref(&root)));
+    // The shaders and this script, which compiles them.
+    let compiled_from = [root.clone(), manifest.join("build.rs")];
+    let shaders = format!("{:08x}", digest(manifest, &compiled_from));
     let done = out_dir.join("shaders.digest");
     if out_dir.join("shaders.rs").is_file()
         && std::fs::read_to_string(&done).ok() == Some(shaders.clone())
     {
         return;
     }
+    // A build stopped while compiling must not leave the digest of shaders it did not write.
+    let _ = std::fs::remove_file(&done);
     compile(&files, &include_dir, &out_dir.join("shaders.rs"));
     std::fs::write(done, shaders).expect("OUT_DIR writable");
 }

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Result;
+use specchio::output::OutputError;
 use specchio::process::args::{real, whole};
 use specchio::process::probe;
 use specchio::render::dataset::{
@@ -122,13 +123,18 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     drop(device);
     let (done, work) = (folder.done(), folder.work_folder().map(Path::to_owned));
     // Gone when the output was placed with an earlier one kept aside: done with.
-    let kept = work.filter(|w| done > 0 && w.join(resume::JOURNAL).exists());
+    // Asked once the run has ended: gone when the output was placed (with an earlier one
+    // kept aside), and then nothing is kept.
+    let kept = |e: &DatasetError| {
+        let placed = matches!(e, DatasetError::Output(OutputError::KeptAside { .. }));
+        (work.as_deref()).filter(|w| !placed && done > 0 && w.join(resume::JOURNAL).exists())
+    };
     let placed = wrote.and_then(|()| {
         let ready = folder.finish(&plan.record(lookup, truth))?;
         stop("before placing the output")?;
         Ok(ready.commit()?)
     });
-    let left = placed.map_err(|e| match &kept {
+    let left = placed.map_err(|e| match kept(&e) {
         // What was done is kept: say where, and how to go on.
         Some(work) => anyhow::anyhow!(
             "{:#}\n{done} of {n} frame(s) are kept in {}: the same command with --resume goes on \

@@ -51,8 +51,12 @@ class _Worker:
         return (None, self.frames.lookup, self.frames.ground_truth, self.frames.device)
 
     def render(self, indices: list[int]):
-        # The device with the frames: a worker restarted elsewhere may have another one.
-        return indices, self.frames.frames(indices), self.frames.device
+        # A worker restarted where its renderer cannot be made: the engine's own error.
+        if self.frames is None:
+            raise SpecchioError(self.error)
+        # What rendered the frames: a worker restarted elsewhere may have another device.
+        f = self.frames
+        return indices, f.frames(indices), (f.lookup, f.ground_truth, f.device)
 
 
 def init_options() -> dict[str, Any]:
@@ -133,10 +137,11 @@ def dataset(
         done = n - len(todo)
         pool = ActorPool(actors)
         for indices, frames, used in pool.map_unordered(lambda a, s: a.render.remote(s), shards):
-            if resume and used != devices[0]:
+            if used[:2] != (chosen_lookup, truth) or (resume and used[2] != devices[0]):
                 raise SpecchioError(
-                    f"a restarted worker has device {used}, not the run's {devices[0]}: "
-                    "name one device (device=...) that every worker has"
+                    f"a restarted worker renders with {used}, not the run's "
+                    f"{(chosen_lookup, truth, devices[0])}: name one device (device=...) that "
+                    "every worker has"
                 )
             for files, line in frames:
                 output.place(files, line)

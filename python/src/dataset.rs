@@ -365,6 +365,8 @@ pub struct DatasetOutput {
     resume: bool,
     /// Whether `begin` was called: a resumable output places nothing before.
     begun: bool,
+    /// The frames placed, kept once `finish` takes the folder (for `note_kept`).
+    placed: usize,
     folder: Option<Folder>,
 }
 
@@ -393,6 +395,7 @@ impl DatasetOutput {
                 out,
                 resume,
                 begun: false,
+                placed: 0,
                 folder: Some(folder),
             })
         })
@@ -436,7 +439,7 @@ impl DatasetOutput {
     /// Adds to `error` a note of the frames this resumable output kept, if it kept any: what
     /// a driver raises when its run stops.
     fn note_kept(&self, py: Python<'_>, error: Bound<'_, PyAny>) -> PyResult<()> {
-        let placed = self.folder.as_ref().map_or(0, Folder::done);
+        let placed = self.folder.as_ref().map_or(self.placed, Folder::done);
         let e = PyErr::from_value(error);
         let noted = with_kept_note(py, e, &self.out, self.resume, placed);
         drop(noted);
@@ -476,6 +479,7 @@ impl DatasetOutput {
         if let Some(missing) = self.folder_mut()?.todo().first() {
             return Err(errors::error(format!("frame {missing} was never placed")));
         }
+        self.placed = self.folder_mut()?.done();
         let folder = self
             .folder
             .take()

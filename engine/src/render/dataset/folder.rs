@@ -131,7 +131,9 @@ impl Ready {
             // Placed, but the earlier output held something its manifest did not list, kept
             // aside: the dataset is in place all the same, and its work folder done with.
             Err(e @ OutputError::KeptAside { .. }) => {
-                self.work.map(WorkFolder::remove);
+                for left in self.work.map(WorkFolder::remove).unwrap_or_default() {
+                    eprintln!("warning: the work folder is not removed entirely: {left}");
+                }
                 Err(e)
             }
             Err(e) => Err(e),

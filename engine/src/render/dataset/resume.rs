@@ -166,8 +166,10 @@ impl WorkFolder {
         let read = read_journal(&mut journal, &at, key.frames)?;
         let mut lines = read.lines.into_iter();
         let Some((_, first)) = lines.next() else {
-            // Made, but stopped before its key line was on disk: it holds nothing else.
-            if names(&path)? != [JOURNAL] {
+            // Made, but stopped before its key line was on disk: it holds nothing else, and
+            // the journal nothing but the start of a key line.
+            let a_key = read.tail.is_empty() || read.tail.starts_with(b"{\"run\"");
+            if !a_key || names(&path)? != [JOURNAL] {
                 return Err(refuse(
                     &at,
                     "holds no run key: it is no dataset run's journal",
@@ -283,7 +285,7 @@ impl WorkFolder {
                         let _ = fs::remove_file(&to);
                         return Err(refuse(
                             &from,
-                            "changed since it was written: remove the work folder to start again",
+                            "changed since it was written: --resume renders its frame again",
                         ));
                     }
                     Err(e) if no_links_here(&e) => copy_file(&from, *size, out, &to_user)?,
@@ -298,6 +300,12 @@ impl WorkFolder {
     /// through the folder handles. What could not be removed is returned, to be said.
     pub fn remove(self) -> Vec<String> {
         let mut left = Vec::new();
+        // The placed output on disk first: the work folder is its only other copy.
+        if let Err(e) = sync_file_system(&self.path) {
+            let why = format!("{e} (kept: the output may not be on disk yet)");
+            left.push(format!("{}: {why}", self.path.display()));
+            return left;
+        }
         let mut gone = |r: std::io::Result<()>, p: &Path| {
             if let Err(e) = r {
                 left.push(format!("{}: {e}", p.display()));
@@ -466,6 +474,8 @@ fn check_journaled(f: &Journaled, frames: usize) -> Result<(), String> {
 struct Journal {
     lines: Vec<(usize, Line)>,
     complete: u64,
+    /// The line cut short at the end, if any.
+    tail: Vec<u8>,
 }
 
 /// Reads the journal line by line, each line and the line count bounded: a run of `frames`
@@ -476,6 +486,7 @@ fn read_journal(journal: &mut File, at: &Path, frames: usize) -> Result<Journal,
     let mut read = Journal {
         lines: Vec::new(),
         complete: 0,
+        tail: Vec::new(),
     };
     let mut line = Vec::new();
     for n in 1.. {
@@ -490,6 +501,7 @@ fn read_journal(journal: &mut File, at: &Path, frames: usize) -> Result<Journal,
             if got as u64 > MAX_LINE {
                 return Err(refuse(at, &format!("line {n}: longer than a journal line")));
             }
+            read.tail = line;
             break; // cut short at the end
         }
         if n > most {
@@ -554,7 +566,7 @@ fn copy_file(from: &Path, size: u64, out: &Transaction, to: &Path) -> Result<(),
     {
         return Err(refuse(
             from,
-            "changed since it was written: remove the work folder to start again",
+            "changed since it was written: --resume renders its frame again",
         ));
     }
     let mut target = out.create(to)?;
@@ -602,6 +614,23 @@ fn parent_of(path: &Path) -> PathBuf {
         Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
         _ => PathBuf::from("."),
     }
+}
+
+/// Writes everything of the file system holding `path` to disk (`syncfs`): the placed
+/// output, its copies and its rename, before the work folder that could redo them goes.
+fn sync_file_system(path: &Path) -> std::io::Result<()> {
+    let folder = File::open(path)?;
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        // SAFETY: syncfs on a descriptor this `File` owns for the duration of the call.
+        if unsafe { libc::syncfs(folder.as_raw_fd()) } != 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    folder.sync_all()?;
+    Ok(())
 }
 
 /// Makes a folder's new entries durable (where the file system can).

@@ -381,6 +381,14 @@ fn a_work_folder_cut_short_before_its_key_starts_afresh() {
     let dir = scratch("nokey");
     let out = dir.join("out");
     fs::create_dir(work_path(&out)).unwrap();
+    // A file of someone's by that name, without a newline: not a key cut short.
+    fs::write(work_path(&out).join(JOURNAL), b"my notes").unwrap();
+    let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
+    assert!(e.contains("holds no run key"), "{e}");
+    assert_eq!(
+        fs::read(work_path(&out).join(JOURNAL)).unwrap(),
+        b"my notes"
+    );
     fs::write(work_path(&out).join(JOURNAL), b"{\"run\":{\"form").unwrap();
     let mut work = WorkFolder::open(&out, &key(2)).unwrap();
     work.write(&frame(1)).unwrap();
