@@ -20,16 +20,19 @@
 
 use std::collections::BTreeMap;
 use std::ffi::OsStr;
-use std::fs::{self, File, OpenOptions};
-use std::io::{BufRead, BufReader, Read, Seek, SeekFrom, Write};
+use std::fs::{self, File};
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
-
-use super::check::{check_frame_names, check_index_line, is_frame_file};
+use super::check::is_frame_file;
 use super::{DatasetError, Frame};
 use crate::output::{Dir, Entry, OutputError, Transaction};
 use crate::sensor::dataset::frame_folder;
+
+mod journal;
+
+pub use journal::RunKey;
+use journal::{check_journaled, differs, open_journal, read_journal, Journaled, Line, FORMAT};
 
 /// The work folder's name is the output's with this added.
 pub const WORK_SUFFIX: &str = ".partial";
@@ -37,47 +40,6 @@ pub const WORK_SUFFIX: &str = ".partial";
 pub const JOURNAL: &str = "journal.jsonl";
 /// The folder of the frame folders, inside the work folder.
 const FRAMES: &str = "frames";
-/// The journal's format; a journal of another format is refused.
-const FORMAT: u32 = 1;
-/// Longest journal line read back: a frame's line is a few hundred bytes.
-const MAX_LINE: u64 = 64 << 10;
-
-/// What a dataset's bytes depend on: a run resumes only a work folder whose key is its own.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RunKey {
-    /// This program's version and build (a digest of the engine's sources, shaders and
-    /// dependencies: engine/build.rs).
-    pub specchio: String,
-    /// The scene's files (the scene, its meshes and textures) and the trajectory file, by
-    /// length and CRC-32 (`files::digest`), in the order they were read.
-    pub inputs: Vec<String>,
-    /// The poses as checked, by CRC-32 of their exact values (a grid has no file).
-    pub poses: String,
-    pub frames: usize,
-    pub lookup: String,
-    pub ground_truth: String,
-    /// The device's name and driver: another device may round differently.
-    pub device: String,
-}
-
-/// One journal line.
-#[derive(Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
-enum Line {
-    Run { format: u32, key: RunKey },
-    Frame(Journaled),
-}
-
-/// A finished frame: its files (name in its folder, size, CRC-32) and its index line.
-#[derive(Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Journaled {
-    frame: usize,
-    files: Vec<(String, u64, u32)>,
-    index: String,
-}
-
 /// A dataset's work folder, opened by this run (and locked while it is open). Removals go
 /// through the folder handles (`output::Dir`), never by a path a link could redirect.
 pub struct WorkFolder {
@@ -163,7 +125,10 @@ impl WorkFolder {
             _ => io(&at)(e),
         })?;
         lock(&journal, &path)?;
-        let read = read_journal(&mut journal, &at, key.frames)?;
+        let read = read_journal(&mut journal, key.frames).map_err(|e| match e {
+            journal::JournalError::Io(e) => io(&at)(e),
+            journal::JournalError::Bad(why) => refuse(&at, &why),
+        })?;
         let mut lines = read.lines.into_iter();
         let Some((_, first)) = lines.next() else {
             // Made, but stopped before its key line was on disk: it holds nothing else, and
@@ -455,93 +420,6 @@ impl WorkFolder {
     }
 }
 
-/// A journaled frame as the run writes it: of this dataset, its names a frame folder's,
-/// its index line its own.
-fn check_journaled(f: &Journaled, frames: usize) -> Result<(), String> {
-    if f.frame >= frames {
-        return Err(format!(
-            "frame {}: the dataset has {frames} frames",
-            f.frame
-        ));
-    }
-    let names: Vec<&str> = f.files.iter().map(|(n, _, _)| n.as_str()).collect();
-    check_frame_names(f.frame, &names)?;
-    check_index_line(f.frame, &f.index)
-}
-
-/// The journal's whole lines (numbered from 1) and their length; a last line without its
-/// newline was cut short by a crash and is left out.
-struct Journal {
-    lines: Vec<(usize, Line)>,
-    complete: u64,
-    /// The line cut short at the end, if any.
-    tail: Vec<u8>,
-}
-
-/// Reads the journal line by line, each line and the line count bounded: a run of `frames`
-/// frames writes its key and a line per frame done (again, where a frame was lost).
-fn read_journal(journal: &mut File, at: &Path, frames: usize) -> Result<Journal, DatasetError> {
-    let most = 1 + 4 * frames + 64;
-    let mut reader = BufReader::new(journal);
-    let mut read = Journal {
-        lines: Vec::new(),
-        complete: 0,
-        tail: Vec::new(),
-    };
-    let mut line = Vec::new();
-    for n in 1.. {
-        line.clear();
-        let got = (reader.by_ref().take(MAX_LINE + 1))
-            .read_until(b'\n', &mut line)
-            .map_err(io(at))?;
-        if got == 0 {
-            break;
-        }
-        if line.last() != Some(&b'\n') {
-            if got as u64 > MAX_LINE {
-                return Err(refuse(at, &format!("line {n}: longer than a journal line")));
-            }
-            read.tail = line;
-            break; // cut short at the end
-        }
-        if n > most {
-            return Err(refuse(
-                at,
-                &format!("has more lines than a run of {frames} frames writes"),
-            ));
-        }
-        let parsed = serde_json::from_slice(&line[..line.len() - 1])
-            .map_err(|_| refuse(at, &format!("line {n}: not a journal line")))?;
-        read.lines.push((n, parsed));
-        read.complete += got as u64;
-    }
-    Ok(read)
-}
-
-/// The first field in which two keys differ, said for a person.
-fn differs(theirs: &RunKey, ours: &RunKey) -> Option<String> {
-    let field = if theirs.specchio != ours.specchio {
-        format!("specchio {} against {}", theirs.specchio, ours.specchio)
-    } else if theirs.frames != ours.frames {
-        format!(
-            "other poses: {} frames against {}",
-            theirs.frames, ours.frames
-        )
-    } else if theirs.inputs != ours.inputs || theirs.poses != ours.poses {
-        "the scene, its assets or the poses changed since".to_owned()
-    } else if theirs.lookup != ours.lookup || theirs.ground_truth != ours.ground_truth {
-        format!(
-            "the {} lookup with {} ground truth, against {} with {}",
-            theirs.lookup, theirs.ground_truth, ours.lookup, ours.ground_truth
-        )
-    } else if theirs.device != ours.device {
-        format!("device {} against {}", theirs.device, ours.device)
-    } else {
-        return None;
-    };
-    Some(field)
-}
-
 /// A hard link cannot be made here, but a copy can: another file system under the same name
 /// (a bind mount), or one without hard links (vfat, some network and FUSE file systems).
 fn no_links_here(e: &std::io::Error) -> bool {
@@ -572,21 +450,6 @@ fn copy_file(from: &Path, size: u64, out: &Transaction, to: &Path) -> Result<(),
     let mut target = out.create(to)?;
     std::io::copy(&mut Read::by_ref(&mut source).take(size), &mut target).map_err(io(to))?;
     Ok(())
-}
-
-fn open_journal(at: &Path) -> std::io::Result<File> {
-    let mut options = OpenOptions::new();
-    options.read(true).write(true);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::OpenOptionsExt;
-        options.custom_flags(libc::O_NOFOLLOW);
-    }
-    let file = options.open(at)?;
-    match file.metadata()?.is_file() {
-        true => Ok(file),
-        false => Err(std::io::Error::other("not a regular file")),
-    }
 }
 
 fn lock(journal: &File, work: &Path) -> Result<(), DatasetError> {

@@ -8,6 +8,7 @@ use crate::render::dataset::{Folder, INDEX_FILE};
 use crate::sensor::dataset::DatasetRecord;
 use crate::sensor::dataset::FRAME_FILES;
 use crate::sensor::GroundTruth;
+use std::fs::OpenOptions;
 
 fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("specchio-resume-{name}-{}", std::process::id()));
