@@ -200,6 +200,11 @@ impl Dir {
         imp::open(imp::CWD, path.as_os_str(), path.to_owned())
     }
 
+    /// Makes this folder's entries durable (`fsync` on the folder).
+    pub fn sync(&self) -> io::Result<()> {
+        self.file.sync_all()
+    }
+
     /// Opens the folder `name` inside this one, refusing a link in its place.
     pub fn open_dir(&self, name: &OsStr) -> io::Result<Dir> {
         #[cfg(target_os = "linux")]

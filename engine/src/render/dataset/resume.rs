@@ -92,7 +92,9 @@ impl WorkFolder {
         sync_folder(&parent_of(&path))?;
         let dir = Dir::open(&path).map_err(io(&path))?;
         let at = path.join(JOURNAL);
-        let journal = crate::output::create_new(&at).map_err(io(&at))?;
+        // Through the folder's handle (`Dir::path`), like every write here: whatever is put
+        // at the work folder's path meanwhile, a link included, is never written through.
+        let journal = crate::output::create_new(&dir.path().join(JOURNAL)).map_err(io(&at))?;
         lock(&journal, &path)?;
         Self::start(path, dir, journal, key)
     }
@@ -109,7 +111,7 @@ impl WorkFolder {
         let format = FORMAT;
         let key = key.clone();
         work.append(&Line::Run { format, key })?;
-        sync_folder(&work.path)?;
+        sync_dir(&work.dir, &work.path)?;
         Ok(work)
     }
 
@@ -117,7 +119,7 @@ impl WorkFolder {
         // Opened without following a link: what is checked below is what is then used.
         let dir = Dir::open(&path).map_err(io(&path))?;
         let at = path.join(JOURNAL);
-        let mut journal = open_journal(&at).map_err(|e| match e.kind() {
+        let mut journal = open_journal(&dir.path().join(JOURNAL)).map_err(|e| match e.kind() {
             std::io::ErrorKind::NotFound => refuse(
                 &path,
                 &format!("holds no {JOURNAL}: it is no work folder of a dataset; choose another --out, or move it away"),
@@ -207,12 +209,14 @@ impl WorkFolder {
         let frames = self.frames_dir()?;
         self.clear_cut_short(&frames, leaf)?;
         let folder = self.path.join(&name);
-        fs::create_dir(&folder).map_err(io(&folder))?;
+        fs::create_dir(frames.path().join(leaf)).map_err(io(&folder))?;
+        let dir = frames.open_dir(leaf).map_err(io(&folder))?;
         let mut files = Vec::with_capacity(frame.files.len());
         for (rel, bytes) in &frame.files {
             let file_name = rel.file_name().and_then(|n| n.to_str()).unwrap_or_default();
             let at = folder.join(file_name);
-            let mut file = crate::output::create_new(&at).map_err(io(&at))?;
+            let mut file =
+                crate::output::create_new(&dir.path().join(file_name)).map_err(io(&at))?;
             (file.write_all(bytes).and_then(|()| file.sync_all())).map_err(io(&at))?;
             files.push((
                 file_name.to_owned(),
@@ -220,8 +224,8 @@ impl WorkFolder {
                 crc32fast::hash(bytes),
             ));
         }
-        sync_folder(&folder)?;
-        sync_folder(&self.path.join(FRAMES))?;
+        sync_dir(&dir, &folder)?;
+        sync_dir(&frames, &self.path.join(FRAMES))?;
         let journaled = Journaled {
             frame: frame.frame,
             files,
@@ -237,11 +241,16 @@ impl WorkFolder {
     pub fn link_into(&self, out: &Transaction, root: &Path) -> Result<(), DatasetError> {
         for f in self.done.values() {
             let folder = frame_folder(f.frame);
+            let dir = self
+                .frame_dir(f.frame)
+                .map_err(io(&self.path.join(&folder)))?;
             for (name, size, _) in &f.files {
                 let from = self.path.join(&folder).join(name);
                 let to_user = root.join(&folder).join(name);
                 let to = out.path_for(&to_user)?;
-                match fs::hard_link(&from, &to) {
+                // Through the frame folder's handle; a link there is linked as a link, and
+                // then refused below.
+                match fs::hard_link(dir.path().join(name), &to) {
                     // The link is to whatever was there: it must still be the frame's file.
                     Ok(())
                         if fs::symlink_metadata(&to)
@@ -253,7 +262,9 @@ impl WorkFolder {
                             "changed since it was written: --resume renders its frame again",
                         ));
                     }
-                    Err(e) if no_links_here(&e) => copy_file(&from, *size, out, &to_user)?,
+                    Err(e) if no_links_here(&e) => {
+                        copy_file((&dir.path().join(name), &from), *size, out, &to_user)?
+                    }
                     Err(e) => return Err(io(&from)(e)),
                 }
             }
@@ -324,10 +335,17 @@ impl WorkFolder {
             if e.kind() != std::io::ErrorKind::NotFound {
                 return Err(io(&at)(e));
             }
-            fs::create_dir(&at).map_err(io(&at))?;
-            sync_folder(&self.path)?;
+            fs::create_dir(self.dir.path().join(FRAMES)).map_err(io(&at))?;
+            sync_dir(&self.dir, &self.path)?;
         }
         self.dir.open_dir(OsStr::new(FRAMES)).map_err(io(&at))
+    }
+
+    /// Frame `frame`'s folder, through the handles (never a link).
+    fn frame_dir(&self, frame: usize) -> std::io::Result<Dir> {
+        let name = frame_folder(frame);
+        let leaf = OsStr::new(name.rsplit('/').next().unwrap_or(&name));
+        self.dir.open_dir(OsStr::new(FRAMES))?.open_dir(leaf)
     }
 
     /// Every entry is the journal, `frames`, or a frame folder of this dataset holding frame
@@ -396,9 +414,11 @@ impl WorkFolder {
 
     /// Whether the journaled frame's files are there, regular, with their sizes and CRC-32s.
     fn on_disk(&self, f: &Journaled) -> bool {
-        let folder = self.path.join(frame_folder(f.frame));
+        let Ok(folder) = self.frame_dir(f.frame) else {
+            return false;
+        };
         f.files.iter().all(|(name, size, crc)| {
-            let Ok(mut file) = crate::output::open_no_follow(&folder.join(name)) else {
+            let Ok(mut file) = crate::output::open_no_follow(&folder.path().join(name)) else {
                 return false;
             };
             if !file
@@ -434,16 +454,22 @@ fn no_links_here(e: &std::io::Error) -> bool {
         || e.kind() == std::io::ErrorKind::Unsupported
 }
 
-/// Copies the kept file `from` (a regular file of `size` bytes, never through a link) to a
-/// new file of the staged output.
-fn copy_file(from: &Path, size: u64, out: &Transaction, to: &Path) -> Result<(), DatasetError> {
-    let mut source = crate::output::open_no_follow(from).map_err(io(from))?;
+/// Copies the kept file `from` (its path through the folder's handle, and its path for
+/// messages: a regular file of `size` bytes, never through a link) to a new file of the
+/// staged output.
+fn copy_file(
+    (from, shown): (&Path, &Path),
+    size: u64,
+    out: &Transaction,
+    to: &Path,
+) -> Result<(), DatasetError> {
+    let mut source = crate::output::open_no_follow(from).map_err(io(shown))?;
     if !source
         .metadata()
         .is_ok_and(|m| m.is_file() && m.len() == size)
     {
         return Err(refuse(
-            from,
+            shown,
             "changed since it was written: --resume renders its frame again",
         ));
     }
@@ -494,6 +520,16 @@ fn sync_file_system(path: &Path) -> std::io::Result<()> {
     #[cfg(not(target_os = "linux"))]
     folder.sync_all()?;
     Ok(())
+}
+
+/// Makes the entries of the folder `dir` (at `shown`, for messages) durable, where the file
+/// system can.
+fn sync_dir(dir: &Dir, shown: &Path) -> Result<(), DatasetError> {
+    match dir.sync() {
+        // Some file systems cannot sync a folder; the journal still comes after the files.
+        Err(e) if e.kind() == std::io::ErrorKind::InvalidInput => Ok(()),
+        r => r.map_err(io(shown)),
+    }
 }
 
 /// Makes a folder's new entries durable (where the file system can).

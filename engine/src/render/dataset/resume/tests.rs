@@ -257,6 +257,17 @@ fn a_link_is_never_taken_for_the_work_folder_or_a_frame_file() {
         "{e}"
     );
     assert_eq!(tree(&elsewhere), before);
+    fs::remove_file(&frames).unwrap();
+    fs::rename(elsewhere.join("frames"), &frames).unwrap();
+
+    // frames/ swapped for a link while a run holds the folder: nothing is written behind it.
+    let mut work = WorkFolder::open(&out, &key(2)).unwrap();
+    let target = dir.join("target");
+    fs::create_dir(&target).unwrap();
+    fs::rename(&frames, dir.join("moved")).unwrap();
+    std::os::unix::fs::symlink(&target, &frames).unwrap();
+    assert!(work.write(&frame(1)).is_err());
+    assert_eq!(tree(&target), Vec::new());
     fs::remove_dir_all(&dir).unwrap();
 }
 
