@@ -62,17 +62,8 @@ fn stop_after(a: &[&str], work: &Path, frames: usize, signal: libc::c_int) -> st
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let started = std::time::Instant::now();
-    while journaled(work) < frames {
-        assert!(
-            started.elapsed().as_secs() < 300,
-            "no {frames} frames after 300 s"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    // SAFETY: signals our own child process.
-    unsafe { libc::kill(child.id() as i32, signal) };
-    child.wait_with_output().unwrap()
+    let what = format!("{frames} frames");
+    common::signal_when(child, signal, &what, || journaled(work) >= frames)
 }
 
 #[test]

@@ -8,7 +8,7 @@ use std::process::Command;
 #[path = "../common/mod.rs"]
 mod common;
 
-use common::{render_six_colour, root, specchio, temp_dir, Scratch};
+use common::{render_six_colour, root, signal_when, specchio, temp_dir, Scratch};
 
 /// Every entry under `dir`, as paths relative to it, sorted (empty when `dir` is missing).
 fn tree(dir: &Path) -> Vec<String> {
@@ -47,28 +47,6 @@ fn scratch(name: &str) -> Scratch {
     let d = temp_dir(name);
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-/// Waits (for a condition, not a duration: at most 300 s) until `ready` holds while `child`
-/// still runs, then sends it `signal` and collects its output.
-fn signal_when(
-    mut child: std::process::Child,
-    signal: libc::c_int,
-    what: &str,
-    ready: impl Fn() -> bool,
-) -> std::process::Output {
-    let started = std::time::Instant::now();
-    while !ready() {
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "the run ended before {what}"
-        );
-        assert!(started.elapsed().as_secs() < 300, "no {what} after 300 s");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    // SAFETY: signals our own child process.
-    unsafe { libc::kill(child.id() as i32, signal) };
-    child.wait_with_output().unwrap()
 }
 
 /// Real failures at every stage of `specchio render`, each leaving the disk as it was: no

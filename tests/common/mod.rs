@@ -551,3 +551,25 @@ pub fn sensor_image(gpu: &Gpu, s: &Scene, method: Method, cube_size: u32) -> Rgb
     let (_, images) = r.render_frame(0, 0.5, views).expect("frame");
     images.sensor.expect("the sensor's image")
 }
+
+/// Waits (for a condition, not a duration: at most 300 s) until `ready` holds while `child`
+/// still runs, then sends it `signal` and collects its output.
+pub fn signal_when(
+    mut child: std::process::Child,
+    signal: libc::c_int,
+    what: &str,
+    ready: impl Fn() -> bool,
+) -> std::process::Output {
+    let started = std::time::Instant::now();
+    while !ready() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before {what}"
+        );
+        assert!(started.elapsed().as_secs() < 300, "no {what} after 300 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // SAFETY: signals our own child process.
+    unsafe { libc::kill(child.id() as i32, signal) };
+    child.wait_with_output().unwrap()
+}
