@@ -316,6 +316,50 @@ fn a_killed_display_connection_ends_the_viewer_with_a_message() {
     );
 }
 
+/// A slow frame holds nothing but itself. The third frame is held on the GPU
+/// (`SPECCHIO_FAULT_HOLD_FRAME`, engine/src/vk/fault.rs: its submission waits for a semaphore
+/// the viewer signals only once its loop has ended), and meanwhile keys are answered: `e`
+/// (the refresh policy), `x` (the lookup), `m` (a method switch, which makes a renderer: put
+/// off until the GPU is free, which it never is before the loop ends) and `q`. Before the present thread, the loop waited in
+/// `vkQueuePresentKHR` for that frame, so nothing was answered until the hold's time limit
+/// let the frame go: the test then fails on the order of the lines.
+#[test]
+fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
+    let Some(x) = xvfb_with_xdotool() else { return };
+    let scene = thesis_room();
+    let hold = (specchio::vk::fault::HOLD_FRAME_VAR, "3");
+    let viewer = Running::spawn_with_var(&x, &[scene.to_str().unwrap(), "--frames", "1000"], hold);
+    viewer.wait_for("fault: frame 3 held until let go");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    for key in ["e", "x", "m", "q"] {
+        xdotool(&x, &["key", key]);
+    }
+    let (out, stdout) = viewer.exit();
+    let stderr = text(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("Validation"), "{stderr}");
+    let at = |what: &str| {
+        (stdout.lines().position(|l| l.starts_with(what)))
+            .unwrap_or_else(|| panic!("no `{what}` line:\n{stdout}"))
+    };
+    let let_go = at("fault: frame 3 let go");
+    assert!(
+        at("refresh: ") < let_go && at("lookup: ") < let_go,
+        "keys were answered only once the held frame went on:\n{stdout}"
+    );
+    assert!(!stdout.contains("by its time limit"), "{stdout}");
+    // The method switch waited for a free GPU, which came only after the loop had ended.
+    assert!(!stdout.contains("method: "), "{stdout}");
+    // The loop drew no more while the third frame was held: three frames, or four where a
+    // present does not wait for the frame before it (a GPU's), whose next one then waits
+    // for the held frame's slot.
+    let frames: u32 = (stdout.lines())
+        .find_map(|l| l.strip_prefix("frames: ")?.split(',').next()?.parse().ok())
+        .unwrap_or_else(|| panic!("no frame summary:\n{stdout}"));
+    assert!((3..=4).contains(&frames), "{frames} frames:\n{stdout}");
+}
+
 /// The device lost mid-run (provoked: `SPECCHIO_FAULT_DEVICE_LOST`, engine/src/vk/fault.rs,
 /// since no CPU driver loses its device on demand) ends the viewer with a message saying so
 /// and exit status 1: no panic, and no validation message from the teardown.

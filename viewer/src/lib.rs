@@ -16,6 +16,7 @@ mod menu;
 mod motion;
 mod overlay;
 mod present;
+mod present_thread;
 
 use std::path::PathBuf;
 use std::process::ExitCode;

@@ -168,8 +168,10 @@ impl Overlay {
     }
 
     fn upload(&self, id: TextureId, image: &ImageDelta) -> Result<()> {
+        // egui-ash submits the upload and waits for it: the queue is held meanwhile.
+        let queue = self.device.queue();
         lock(&self.renderer)
-            .set_texture(self.device.queue, self.upload_pool.raw, id, image)
+            .set_texture(*queue, self.upload_pool.raw, id, image)
             .context("uploading a menu texture")
     }
 

@@ -20,6 +20,7 @@ use specchio::vk::surface::Surface;
 use specchio::vk::swapchain::{Acquired, PresentPreference, Swapchain, SwapchainDesc};
 
 use super::overlay::{Overlay, Paint, Textures};
+use super::present_thread::PresentThread;
 
 /// What became of one frame.
 pub enum Shown {
@@ -45,7 +46,10 @@ pub struct Presenter {
     overlay: Option<Overlay>,
     /// Every texture egui holds, for a menu renderer made later.
     textures: Textures,
-    swapchain: Option<Swapchain>,
+    /// Shared with the present thread while a present of it runs.
+    swapchain: Option<Arc<Swapchain>>,
+    /// The presents, made on a thread of their own (`present_thread`).
+    presents: PresentThread,
     /// The swapchain no longer matches the window: recreate before the next frame.
     stale: bool,
     pub surface: Arc<Surface>,
@@ -68,12 +72,29 @@ impl Presenter {
             overlay: None,
             textures: Textures::default(),
             swapchain: None,
+            presents: PresentThread::start(),
             stale: true,
             surface: Arc::new(surface),
             present,
             renew_overlay: false,
             device: Arc::clone(device),
         })
+    }
+
+    /// Whether the last frame's present has returned: until it has, the loop draws nothing
+    /// (the present thread uses the queue and the swapchain), and never waits for it.
+    pub fn present_returned(&mut self) -> bool {
+        self.presents.returned()
+    }
+
+    /// The last present's outcome once it has returned (never waits): a swapchain to
+    /// recreate is noted, a failure (the surface or the device lost) is returned now rather
+    /// than at the next frame, which an idle window may never draw.
+    pub fn poll_present(&mut self) -> Result<()> {
+        if self.presents.returned() {
+            self.stale |= self.presents.take()?;
+        }
+        Ok(())
     }
 
     /// The window changed size: the swapchain is recreated before the next frame.
@@ -91,6 +112,8 @@ impl Presenter {
         mut paint: Option<&mut Paint>,
         screenshot: bool,
     ) -> Result<(Shown, Option<Screenshot>)> {
+        // The last present's outcome (the caller waited for it to return: no wait here).
+        self.stale |= self.presents.take()?;
         if self.stale && !self.recreate(window_size)? {
             return Ok((Shown::Skipped, None));
         }
@@ -98,7 +121,7 @@ impl Presenter {
             if let Some(old) = self.overlay.take() {
                 self.ring.defer(old);
             }
-            self.replace_overlay(overlay_format(self.swapchain.as_ref()))?;
+            self.replace_overlay(overlay_format(self.swapchain.as_deref()))?;
         }
         let Some(swapchain) = &self.swapchain else {
             return Ok((Shown::Skipped, None));
@@ -153,7 +176,7 @@ impl Presenter {
         // acquisition; the menu pass after them is ordered by barriers.
         let wait_stage = vk::PipelineStageFlags2::BLIT | vk::PipelineStageFlags2::CLEAR;
         self.ring.submit((slot_semaphore, wait_stage), drawn)?;
-        self.stale |= swapchain.present(index)?;
+        self.presents.present(swapchain, index)?;
         let shot = match readback {
             Some(buffer) => {
                 self.ring.wait_all()?;
@@ -171,7 +194,8 @@ impl Presenter {
             window_size,
             present: self.present,
         };
-        let new = Swapchain::create(&self.device, &self.surface, &desc, self.swapchain.as_ref())?;
+        let old = self.swapchain.as_deref();
+        let new = Swapchain::create(&self.device, &self.surface, &desc, old)?.map(Arc::new);
         if let Some(old) = self.swapchain.take() {
             // A frame's fence says its drawing finished, not that its present did, and the
             // old swapchain's "drawn" semaphores may still be waited on by one. Only an idle
@@ -190,7 +214,7 @@ impl Presenter {
                 s.present_mode
             );
         }
-        self.replace_overlay(overlay_format(new.as_ref()))?;
+        self.replace_overlay(overlay_format(new.as_deref()))?;
         self.swapchain = new;
         self.stale = self.swapchain.is_none();
         Ok(self.swapchain.is_some())
@@ -199,9 +223,11 @@ impl Presenter {
 
 impl Drop for Presenter {
     fn drop(&mut self) {
-        // The last frame's present may still wait on its image's "drawn" semaphore, which
-        // the swapchain destroys, and no fence covers a present: wait for the idle queue
-        // first (the ring's own drop then finds its fences signalled).
+        // The last frame's present may still run on its thread, and then still wait on its
+        // image's "drawn" semaphore, which the swapchain destroys, and no fence covers a
+        // present: wait for it to return, then for the idle queue (the ring's own drop then
+        // finds its fences signalled).
+        let _ = self.presents.take();
         let _ = self.device.wait_idle();
     }
 }

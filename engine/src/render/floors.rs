@@ -16,6 +16,7 @@ use ash::vk;
 use super::cube_fill::Fill;
 use super::gpu::Push;
 use super::methods::{CubePlan, CubeRecorder};
+use super::queries::StatsRead;
 use super::targets::DEPTH_FORMAT;
 use super::{FrameReport, Readback, Renderer};
 use crate::scene::state::SceneState;
@@ -81,12 +82,17 @@ impl Renderer {
         self.record_cube_fill(cmd, &plan, first, &mut report, fill);
         // Keeps the remaining timestamp slots answered (no view is drawn).
         self.record_views(cmd, &views, Readback::default(), None);
-        self.end_frame(cmd, record_start, &mut report);
+        // The floor's statistics are query 0's, whatever the method (read below).
+        let stats = StatsRead {
+            fill: 1,
+            views: false,
+        };
+        self.end_frame(cmd, record_start, &mut report, stats);
         let wait_start = Instant::now();
         let slot = self.submit_slot_and_wait()?;
         report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
         let queries = self.slot_queries(slot);
-        self.read_queries(queries, &mut report, false, false)?;
+        self.read_queries(queries, &mut report, StatsRead::default())?;
         report.gpu_face_ms = None;
         if let Some(q) = &queries.statistics {
             report.fill_stats = Some(q.statistics(0, 1)?[0]);

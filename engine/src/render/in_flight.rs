@@ -18,10 +18,11 @@ use std::collections::VecDeque;
 use std::time::Instant;
 
 use super::passes::Copies;
-use super::queries::FrameQueries;
+use super::queries::{FrameQueries, StatsRead};
 use super::{FrameImages, FrameReport, Readback, Renderer};
 use crate::vk::commands::Submitter;
 use crate::vk::device::Device;
+use crate::vk::fault::Hold;
 use crate::vk::memory::Buffer;
 use crate::vk::uploads::FrameUploads;
 use crate::vk::GpuError;
@@ -46,8 +47,8 @@ pub(super) struct Pending {
     pub report: FrameReport,
     pub readback: Readback,
     pub copies: Copies,
-    /// The cube was re-rendered (its statistics queries have results).
-    pub updated: bool,
+    /// The statistics queries the frame reads (copied at its end).
+    pub stats: StatsRead,
     pub submitted: Instant,
 }
 
@@ -59,6 +60,20 @@ pub(super) struct InFlight {
     order: VecDeque<usize>,
     /// Frames finished (to free their slot, or by `drain`) and not yet taken, oldest first.
     done: VecDeque<(FrameReport, FrameImages)>,
+    /// Frames submitted so far.
+    submitted: u64,
+    /// A frame held on the GPU for a test (`fault::HOLD_FRAME_VAR`). Declared after the
+    /// slots: dropped once their frames finished.
+    hold: Option<Hold>,
+}
+
+impl Drop for InFlight {
+    fn drop(&mut self) {
+        // Let a held frame go before the slots wait for their frames.
+        if let Some(hold) = &mut self.hold {
+            hold.release();
+        }
+    }
 }
 
 impl InFlight {
@@ -79,6 +94,8 @@ impl InFlight {
             current: 0,
             order: VecDeque::new(),
             done: VecDeque::new(),
+            submitted: 0,
+            hold: Hold::asked(device)?,
         })
     }
 
@@ -144,6 +161,17 @@ impl Renderer {
         Ok(slot.pending.is_none() || slot.submitter.is_finished()?)
     }
 
+    /// Whether every submitted frame has finished (no wait): the GPU holds nothing of this
+    /// renderer's, so work queued now starts at once.
+    pub fn frames_finished(&self) -> Result<bool, GpuError> {
+        for &s in &self.frames.order {
+            if !self.frames.slots[s].submitter.is_finished()? {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
     /// Makes the current slot free to record: its previous frame finished (waited for).
     pub(super) fn acquire_slot(&mut self) -> Result<(), GpuError> {
         let current = self.frames.current;
@@ -171,8 +199,11 @@ impl Renderer {
     /// Submits the current slot's recorded frame and moves to the next slot.
     pub(super) fn submit_slot(&mut self, pending: Pending) -> Result<(), GpuError> {
         let current = self.frames.current;
+        self.frames.submitted += 1;
+        let frame = self.frames.submitted;
+        let held = (self.frames.hold.as_ref()).and_then(|h| h.wait_for(frame));
         let slot = &mut self.frames.slots[current];
-        slot.submitter.submit()?;
+        slot.submitter.submit_waiting(held.as_slice())?;
         slot.pending = Some(pending);
         self.frames.order.push_back(current);
         self.frames.current = (current + 1) % self.frames.slots.len();
@@ -208,12 +239,7 @@ impl Renderer {
         pending.report.submit_wait_ms = pending.submitted.elapsed().as_secs_f64() * 1e3;
         let slot = &self.frames.slots[s];
         let mut report = pending.report;
-        self.read_queries(
-            &slot.queries,
-            &mut report,
-            pending.updated,
-            pending.readback.views,
-        )?;
+        self.read_queries(&slot.queries, &mut report, pending.stats)?;
         report.traced_rays = self.mirror.pass.tally(s)?;
         let images = self.read_images(slot.readback.as_ref(), pending.readback, &pending.copies)?;
         self.frames.done.push_back((report, images));

@@ -318,7 +318,8 @@ impl Renderer {
             .pass
             .record_after_views(cmd, self.frames.current_index());
         self.record_readback(cmd, readback, &copies);
-        self.end_frame(cmd, record_start, &mut report);
+        let stats = self.stats_read(dirty != 0, u32::from(report.face_mask), readback.views);
+        self.end_frame(cmd, record_start, &mut report, stats);
         // The cube shows `state` once this frame has run (later frames run after it), except
         // after an `every-n` frame that skipped the update.
         if dirty != 0 || (fill_cube && self.scene.refresh == RefreshPolicy::OnChange) {
@@ -328,7 +329,7 @@ impl Renderer {
             report,
             readback,
             copies,
-            updated: dirty != 0,
+            stats,
             submitted: Instant::now(),
         })
     }
@@ -348,12 +349,21 @@ impl Renderer {
         Ok(cmd)
     }
 
-    /// Ends a frame begun by [`Self::begin_frame`] with its last timestamp; the CPU recording
-    /// time (since `record_start`) goes in `report`.
-    fn end_frame(&self, cmd: vk::CommandBuffer, record_start: Instant, report: &mut FrameReport) {
-        if let Some(q) = &self.queries().timestamps {
+    /// Ends a frame begun by [`Self::begin_frame`] with its last timestamp and the copy of
+    /// the query results it reads (`stats`); the CPU recording time (since `record_start`)
+    /// goes in `report`.
+    fn end_frame(
+        &self,
+        cmd: vk::CommandBuffer,
+        record_start: Instant,
+        report: &mut FrameReport,
+        stats: StatsRead,
+    ) {
+        let queries = self.queries();
+        if let Some(q) = &queries.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_READBACK);
         }
+        queries.copy_results(cmd, stats, &self.device);
         report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
     }
 

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use crate::vk::commands::host_read_barrier;
 use crate::vk::device::Device;
 use crate::vk::queries::QueryPool;
 use crate::vk::GpuError;
@@ -23,6 +24,16 @@ pub(super) const TS_READBACK: u32 = 12;
 pub(super) const TS_COUNT: u32 = 13;
 /// Statistics slots: six faces, then the three views.
 pub(super) const STATS_COUNT: u32 = 9;
+
+/// The statistics queries a frame reads back (only queries begun in the frame have
+/// results): decided when it is recorded, since their results are copied at its end.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct StatsRead {
+    /// Bit f: statistics query f (a face of six-pass, or slot 0 for a one-pass fill).
+    pub fill: u32,
+    /// The three views' queries.
+    pub views: bool,
+}
 
 /// The two pools, each `None` where the device lacks its kind of query.
 pub(super) struct FrameQueries {
@@ -54,5 +65,23 @@ impl FrameQueries {
         if let Some(q) = &self.statistics {
             q.reset(cmd);
         }
+    }
+
+    /// At the end of a frame's commands, after its last timestamp: the results it will read
+    /// (every timestamp, the statistics in `read`) copied for the host.
+    pub fn copy_results(&self, cmd: vk::CommandBuffer, read: StatsRead, device: &Device) {
+        if let Some(q) = &self.timestamps {
+            q.copy_results(cmd, 0, TS_COUNT);
+        }
+        if let Some(q) = &self.statistics {
+            for f in (0..6).filter(|f| read.fill & (1 << f) != 0) {
+                q.copy_results(cmd, f, 1);
+            }
+            if read.views {
+                q.copy_results(cmd, 6, 3);
+            }
+        }
+        let copy = vk::PipelineStageFlags2::COPY;
+        host_read_barrier(device, cmd, copy, vk::AccessFlags2::TRANSFER_WRITE);
     }
 }

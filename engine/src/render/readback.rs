@@ -154,13 +154,24 @@ impl Renderer {
         Ok(images)
     }
 
-    /// A finished frame's timestamps and statistics from its slot's `queries`.
+    /// The statistics queries a frame reads: after a cube update, the faces six-pass
+    /// rendered (a query each) or the one-pass fill's query 0; the views' when asked.
+    pub(super) fn stats_read(&self, update: bool, face_mask: u32, views: bool) -> StatsRead {
+        let fill = match (update, self.per_face_marks()) {
+            (false, _) => 0,
+            (true, true) => face_mask & 0x3F,
+            (true, false) => 1,
+        };
+        StatsRead { fill, views }
+    }
+
+    /// A finished frame's timestamps and the statistics in `stats`, from the copies its
+    /// commands ended with.
     pub(super) fn read_queries(
         &self,
         queries: &FrameQueries,
         report: &mut FrameReport,
-        update: bool,
-        views: bool,
+        stats: StatsRead,
     ) -> Result<(), GpuError> {
         if let Some(q) = &queries.timestamps {
             let t = q.timestamps_ns(TS_COUNT)?;
@@ -178,23 +189,21 @@ impl Renderer {
             report.gpu_pair_ms = Some(ms(TS_SENSOR, TS_PAIR));
         }
         if let Some(q) = &queries.statistics {
-            // Only queries begun this frame have results. Six-pass uses slots 0..6 (one per
-            // dirty face), the one-pass methods slot 0.
-            if update && self.per_face_marks() {
+            if stats.fill != 0 && self.per_face_marks() {
                 let mut faces = [PipelineStats::default(); 6];
                 let mut total = PipelineStats::default();
                 for f in 0..6u32 {
-                    if report.face_mask & (1 << f) != 0 {
+                    if stats.fill & (1 << f) != 0 {
                         faces[f as usize] = q.statistics(f, 1)?[0];
                         total += faces[f as usize];
                     }
                 }
                 report.face_stats = Some(faces);
                 report.fill_stats = Some(total);
-            } else if update {
+            } else if stats.fill != 0 {
                 report.fill_stats = Some(q.statistics(0, 1)?[0]);
             }
-            if views {
+            if stats.views {
                 let s = q.statistics(6, 3)?;
                 report.view_stats = Some(std::array::from_fn(|v| s[v]));
             }

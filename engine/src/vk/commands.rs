@@ -87,13 +87,23 @@ impl Submitter {
 
     /// Ends recording and submits; the fence signals when the GPU has finished.
     pub fn submit(&self) -> Result<(), GpuError> {
+        self.submit_waiting(&[])
+    }
+
+    /// [`Self::submit`], the work waiting for `waits` first (a frame held by a test's
+    /// `fault::Hold`).
+    pub fn submit_waiting(&self, waits: &[vk::SemaphoreSubmitInfo<'_>]) -> Result<(), GpuError> {
         let d = &self.device.raw;
         // SAFETY: the buffer is recording (begin was called).
         unsafe { d.end_command_buffer(self.cmd) }.vk("vkEndCommandBuffer")?;
         let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.cmd)];
-        let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cmds)];
-        // SAFETY: the fence is unsignalled (reset after every wait), the buffer is executable.
-        unsafe { d.queue_submit2(self.device.queue, &submit, self.fence) }.vk("vkQueueSubmit2")?;
+        let submit = [vk::SubmitInfo2::default()
+            .command_buffer_infos(&cmds)
+            .wait_semaphore_infos(waits)];
+        let queue = self.device.queue();
+        // SAFETY: the fence is unsignalled (reset after every wait), the buffer is executable,
+        // the queue is held.
+        unsafe { d.queue_submit2(*queue, &submit, self.fence) }.vk("vkQueueSubmit2")?;
         self.in_flight.set(true);
         Ok(())
     }

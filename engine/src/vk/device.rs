@@ -71,8 +71,10 @@ pub struct Device {
     pub info: DeviceInfo,
     /// The optional features this device was created with.
     pub enabled: OptionalFeatures,
-    /// The one queue used for everything: a graphics queue (also does transfers).
-    pub queue: vk::Queue,
+    /// The one queue used for everything: a graphics queue (also does transfers). Locked:
+    /// Vulkan wants every use of a queue (a submission, a present, a wait for the idle
+    /// device) externally synchronized, and the viewer presents from a thread of its own.
+    queue: Mutex<vk::Queue>,
     pub queue_family: u32,
     /// Object names and command labels for captures; `None` without `VK_EXT_debug_utils`.
     debug_utils: Option<ash::ext::debug_utils::Device>,
@@ -188,13 +190,13 @@ impl Device {
             physical,
             info,
             enabled: want,
-            queue,
+            queue: Mutex::new(queue),
             queue_family,
             debug_utils,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             instance: Arc::clone(instance),
         });
-        device.set_name(device.queue, "main queue");
+        device.set_name(queue, "main queue");
         Ok(device)
     }
 
@@ -208,6 +210,12 @@ impl Device {
             stages |= vk::ShaderStageFlags::TASK_EXT | vk::ShaderStageFlags::MESH_EXT;
         }
         stages
+    }
+
+    /// The queue, locked for one submission or present (see the field). Poisoning only
+    /// follows a panic elsewhere; the handle is still good.
+    pub fn queue(&self) -> MutexGuard<'_, vk::Queue> {
+        self.queue.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     /// The allocator, locked. Poisoning only follows a panic elsewhere; recover the data.
@@ -244,8 +252,12 @@ impl Device {
         }
     }
 
+    /// Waits until the device has finished everything submitted. It holds the queue's lock
+    /// meanwhile (Vulkan asks that every queue be left alone during the wait), so it also
+    /// waits for a present in progress on another thread.
     pub fn wait_idle(&self) -> Result<(), GpuError> {
-        // SAFETY: no other thread submits to this device.
+        let _queue = self.queue();
+        // SAFETY: the device is live; its one queue is held.
         unsafe { self.raw.device_wait_idle() }.vk("vkDeviceWaitIdle")
     }
 }
@@ -274,7 +286,9 @@ fn core_enables(offered: &super::physical::DeviceFeatures) -> Enables {
             .shader_sampled_image_array_dynamic_indexing(true),
         // ... an index that may vary within a draw (materials.glsl, nonuniformEXT).
         v12: vk::PhysicalDeviceVulkan12Features::default()
-            .shader_sampled_image_array_non_uniform_indexing(true),
+            .shader_sampled_image_array_non_uniform_indexing(true)
+            // Mandatory since Vulkan 1.2; a frame held for a test waits on one (`fault`).
+            .timeline_semaphore(true),
         v13: vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true)

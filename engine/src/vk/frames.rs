@@ -99,6 +99,17 @@ impl FrameRing {
         unsafe { self.device.raw.get_fence_status(slot.fence) }.vk("vkGetFenceStatus")
     }
 
+    /// Whether every slot's last frame has finished (no wait).
+    pub fn all_finished(&self) -> Result<bool, GpuError> {
+        for slot in &self.slots {
+            // SAFETY: the fence is live.
+            if !unsafe { self.device.raw.get_fence_status(slot.fence) }.vk("vkGetFenceStatus")? {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
     /// The slot [`Self::begin`] started.
     pub fn slot(&self) -> &FrameSlot {
         &self.slots[self.current]
@@ -131,8 +142,9 @@ impl FrameRing {
         // the fence signalled, so the next wait on it cannot hang.
         // SAFETY: the fence was waited in `begin`, so no submission uses it.
         unsafe { d.reset_fences(&[slot.fence]) }.vk("vkResetFences")?;
-        // SAFETY: every handle in `submit` is live; the fence is unsignalled.
-        unsafe { d.queue_submit2(self.device.queue, &submit, slot.fence) }.vk("vkQueueSubmit2")?;
+        let queue = self.device.queue();
+        // SAFETY: every handle in `submit` is live; the fence is unsignalled; the queue is held.
+        unsafe { d.queue_submit2(*queue, &submit, slot.fence) }.vk("vkQueueSubmit2")?;
         self.serial += 1;
         self.slots[self.current].submitted = self.serial;
         self.current = (self.current + 1) % self.slots.len();

@@ -1,10 +1,19 @@
 //! Timestamp and pipeline-statistics query pools.
+//!
+//! Results reach the host through a buffer, not `vkGetQueryPoolResults`: a frame's command
+//! buffer ends by copying the results it will read ([`QueryPool::copy_results`]) into its
+//! pool's host-visible buffer, which the host reads after the frame's fence. That is how a
+//! GPU with frames in flight is asked anyway, and on lavapipe it is the only way that does
+//! not wait: its `vkGetQueryPoolResults` begins by waiting for the idle device, so reading
+//! one finished frame's timestamps waited for the next frame in flight too (a whole slow
+//! frame in the viewer's loop, measured).
 
 use std::sync::Arc;
 
 use ash::vk;
 
 use super::device::Device;
+use super::memory::{Buffer, BufferDesc};
 use super::{GpuError, VkContext};
 
 /// The pipeline statistics every pool records, in the bit order Vulkan writes them.
@@ -70,6 +79,10 @@ pub struct QueryPool {
     kind: vk::QueryType,
     /// Statistics pools: whether task and mesh invocations are counted too.
     mesh_counted: bool,
+    /// Bytes of one query's results (64-bit values).
+    stride: u64,
+    /// Where [`Self::copy_results`] puts them for the host (query i at `i * stride`).
+    results: Buffer,
     device: Arc<Device>,
 }
 
@@ -106,14 +119,25 @@ impl QueryPool {
             };
             info = info.pipeline_statistics(PIPELINE_STATISTICS | mesh);
         }
+        let values = match kind {
+            vk::QueryType::PIPELINE_STATISTICS if mesh_counted => 6,
+            vk::QueryType::PIPELINE_STATISTICS => 4,
+            _ => 1,
+        };
+        let stride = 8 * values;
+        let count = count.max(1);
+        let desc = BufferDesc::new_readback(stride * u64::from(count));
+        let results = Buffer::create(device, &desc, &format!("{name} results"))?;
         // SAFETY: valid create info; the feature was enabled when the type needs one.
         let raw = unsafe { device.raw.create_query_pool(&info, None) }.vk("vkCreateQueryPool")?;
         device.set_name(raw, name);
         Ok(Self {
             raw,
-            count: count.max(1),
+            count,
             kind,
             mesh_counted,
+            stride,
+            results,
             device: Arc::clone(device),
         })
     }
@@ -158,27 +182,43 @@ impl QueryPool {
         unsafe { self.device.raw.cmd_end_query(cmd, self.raw, index) };
     }
 
-    /// Results of queries `first..first + n`, each a `T` of 64-bit values, read after the
-    /// fence of their frame. Asked without WAIT first: they are available then, and lavapipe
-    /// answers a WAIT by waiting for its whole queue, later frames in flight included (seen
-    /// blocking the viewer for a whole slow frame). WAIT only if the driver says not yet.
-    fn results<T: Copy + Default>(&self, first: u32, n: u32) -> Result<Vec<T>, GpuError> {
-        let mut data = vec![T::default(); n as usize];
-        let mut read = Err(vk::Result::NOT_READY);
-        for flags in [
-            vk::QueryResultFlags::TYPE_64,
-            vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-        ] {
-            // SAFETY: data holds n results of size_of::<T>() bytes, the stride passed by ash.
-            read = unsafe {
-                (self.device.raw).get_query_pool_results(self.raw, first, &mut data, flags)
-            };
-            if read != Err(vk::Result::NOT_READY) {
-                break;
-            }
-        }
-        read.vk("vkGetQueryPoolResults")?;
-        Ok(data)
+    /// Records the copy of queries `first..first + n`'s results into the pool's buffer, once
+    /// the GPU has them (`WAIT`: each must have been written or ended in this frame). The
+    /// caller makes the copies visible to the host ([`super::commands::host_read_barrier`]
+    /// at `COPY`).
+    pub fn copy_results(&self, cmd: vk::CommandBuffer, first: u32, n: u32) {
+        debug_assert!(first + n <= self.count);
+        let flags = vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT;
+        let offset = u64::from(first) * self.stride;
+        // SAFETY: the range lies in the pool and its results fit the buffer at `offset`; cmd
+        // is recording outside a render pass.
+        unsafe {
+            self.device.raw.cmd_copy_query_pool_results(
+                cmd,
+                self.raw,
+                first,
+                n,
+                self.results.raw,
+                offset,
+                self.stride,
+                flags,
+            )
+        };
+    }
+
+    /// Results of queries `first..first + n`, each a `T` of 64-bit values, as
+    /// [`Self::copy_results`] left them: read after the fence of the frame that copied them.
+    fn results<T: bytemuck::Pod>(&self, first: u32, n: u32) -> Result<Vec<T>, GpuError> {
+        debug_assert_eq!(std::mem::size_of::<T>() as u64, self.stride);
+        let bytes = self.results.mapped()?;
+        let at = |i: u32| (u64::from(i) * self.stride) as usize;
+        let range = bytes.get(at(first)..at(first + n)).ok_or_else(|| {
+            GpuError::Unsupported(format!("queries {first}..{} out of the pool", first + n))
+        })?;
+        Ok(range
+            .chunks_exact(self.stride as usize)
+            .map(bytemuck::pod_read_unaligned)
+            .collect())
     }
 
     /// Whether each of queries `0..n` holds a result, without waiting (a query that was

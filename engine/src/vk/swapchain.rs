@@ -200,7 +200,9 @@ impl Swapchain {
         }
     }
 
-    /// Presents image `index` once its `render_done` semaphore is signalled. `Ok(true)`: the
+    /// Presents image `index` once its `render_done` semaphore is signalled. On a CPU driver
+    /// this returns only after every submission before it has run (Mesa's software present
+    /// copies the finished image), so the viewer calls it from a thread of its own. `Ok(true)`: the
     /// swapchain no longer matches the surface and must be recreated.
     pub fn present(&self, index: u32) -> Result<bool, GpuError> {
         let swapchains = [self.raw];
@@ -210,8 +212,11 @@ impl Swapchain {
             .wait_semaphores(&wait)
             .swapchains(&swapchains)
             .image_indices(&indices);
-        // SAFETY: the image was acquired and its drawing submitted with `wait[0]` to signal.
-        match unsafe { self.loader.queue_present(self.device.queue, &info) } {
+        let queue = self.device.queue();
+        // SAFETY: the image was acquired and its drawing submitted with `wait[0]` to signal;
+        // the queue is held. (The caller keeps the swapchain itself to one thread at a time:
+        // the viewer acquires only after the last present returned.)
+        match unsafe { self.loader.queue_present(*queue, &info) } {
             Ok(suboptimal) => Ok(suboptimal),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(true),
             Err(result) => Err(GpuError::Vk {

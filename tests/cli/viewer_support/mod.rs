@@ -381,6 +381,13 @@ impl Running {
         Self::spawn_command(display.command(args))
     }
 
+    /// [`Running::spawn`] with a variable set (a fault to inject).
+    pub fn spawn_with_var(display: &impl Display, args: &[&str], var: (&str, &str)) -> Self {
+        let mut command = display.command(args);
+        command.env(var.0, var.1);
+        Self::spawn_command(command)
+    }
+
     /// [`Running::spawn`] with `folder` as the viewer's current folder.
     pub fn spawn_in(display: &impl Display, args: &[&str], folder: &Path) -> Self {
         let mut command = display.command(args);

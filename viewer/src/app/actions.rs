@@ -121,6 +121,18 @@ impl App<'_> {
     /// Applies one key's action.
     pub(super) fn act(&mut self, event_loop: &ActiveEventLoop, action: Action) {
         self.demand.changed();
+        let makes_renderer = matches!(
+            action,
+            Action::NextMethod | Action::SetMethod(_) | Action::Reload
+        );
+        // A new renderer's uploads would wait on the queue behind a slow frame: it is made
+        // before a later frame instead, once the GPU is free, and the actions after it wait
+        // their turn (`F5` then `0` resets to the new file). Quitting never waits.
+        let busy = makes_renderer && !self.viewer.as_mut().is_none_or(super::gpu_free);
+        if action != Action::Quit && (busy || !self.deferred.is_empty()) {
+            self.deferred.push(action);
+            return;
+        }
         let switched = match action {
             Action::NextMethod => self.next_method(),
             Action::SetMethod(method) => self.set_method(method).map(|_| ()),

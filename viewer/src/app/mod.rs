@@ -108,6 +108,12 @@ struct App<'a> {
     motion: Motion,
     /// The screenshot key was pressed: the next frame shown is saved.
     shot_asked: bool,
+    /// When the frame being waited for became due (the frame time counts from there: the
+    /// loop's own work plus its wait for the GPU, never the idle time before it was asked).
+    due: Option<Instant>,
+    /// Actions that make a renderer (method switch, reload), asked while the GPU was busy:
+    /// done before the next frame, so that no key waits for a slow frame.
+    deferred: Vec<Action>,
 }
 
 pub fn run(
@@ -139,9 +145,14 @@ pub fn run(
         demand: Demand::default(),
         motion: Motion::default(),
         shot_asked: false,
+        due: None,
+        deferred: Vec::new(),
     };
     specchio::say_part!("{}", input::help());
     let ran = run_catching_window_panics(event_loop, &mut app, |app| &mut app.window_gone);
+    // A frame held by a test (`fault::HOLD_FRAME_VAR`) goes on now that the loop is over:
+    // everything before this line happened while it was still running.
+    specchio::vk::fault::release_held_frames();
     // The viewer goes first (its presenter waits for the frames in flight).
     app.viewer = None;
     match ran {
@@ -242,10 +253,14 @@ impl ApplicationHandler for App<'_> {
         {
             return;
         }
-        let drawn = match self.next_frame() {
+        let presented = match &mut self.viewer {
+            Some(viewer) => viewer.presenter.poll_present(),
+            None => Ok(()),
+        };
+        let drawn = presented.and_then(|()| match self.next_frame() {
             NextFrame::Now => self.frame(event_loop),
             NextFrame::At(_) | NextFrame::OnEvent => Ok(()),
-        };
+        });
         event_loop.set_control_flow(match self.next_frame() {
             NextFrame::Now => ControlFlow::Poll,
             NextFrame::At(t) => ControlFlow::WaitUntil(t),
@@ -335,6 +350,14 @@ impl App<'_> {
                 viewer.size_asked = None;
             }
         }
+        // Switches asked while the GPU was busy, and the actions after them: it is free now
+        // (`next_frame`).
+        for action in std::mem::take(&mut self.deferred) {
+            self.act(event_loop, action);
+        }
+        let Some(viewer) = self.viewer.as_mut() else {
+            return Ok(());
+        };
         // What asked for this frame is answered by it; what comes during it (an action the
         // menu takes below) asks for the next.
         self.demand.drawing();
@@ -390,6 +413,7 @@ impl App<'_> {
             self.act(event_loop, action);
         }
         let viewer = self.viewer.as_mut().expect("frame() runs with a viewer");
+        let due = self.due.take().unwrap_or(start);
         if let Shown::Skipped = shown {
             // Minimised or out of date: no frame counted; wait for a resize instead of
             // spinning when there is nothing to present to.
@@ -397,7 +421,7 @@ impl App<'_> {
             return Ok(());
         }
         self.clock.frame += 1;
-        self.figures.add(start.elapsed().as_secs_f64() * 1e3);
+        self.figures.add(due.elapsed().as_secs_f64() * 1e3);
         if let Some(title) = self
             .figures
             .title(&viewer.renderer, &self.settings.scene_name)
@@ -425,7 +449,7 @@ impl App<'_> {
     fn next_frame(&mut self) -> NextFrame {
         let now = Instant::now();
         let scripted = self.clock.scripted;
-        let Some(viewer) = &self.viewer else {
+        let Some(viewer) = &mut self.viewer else {
             return NextFrame::OnEvent;
         };
         // Moving: the scene's own motion, a held key, or a cube map that does not show the
@@ -443,10 +467,31 @@ impl App<'_> {
             None => {}
         }
         let next = self.demand.next(scripted, moving, now);
+        // A frame due now (perhaps waiting for the GPU below) counts its time from now; one
+        // no longer due (the window was hidden meanwhile) counts nothing.
+        match next {
+            NextFrame::Now => _ = self.due.get_or_insert(now),
+            NextFrame::At(_) | NextFrame::OnEvent => self.due = None,
+        }
         // The loop never waits for the GPU: while the frame slots the next frame would use
-        // still run, it looks again shortly and handles events meanwhile.
-        if next == NextFrame::Now && !gpu_ready(viewer) {
+        // still run, or the last present has not returned, it looks again shortly and
+        // handles events meanwhile. A renderer switch put off (`deferred`) waits for every
+        // frame to finish, so no new frame starts before it.
+        let free = |viewer: &mut Viewer| match self.deferred.is_empty() {
+            true => gpu_ready(viewer),
+            false => gpu_free(viewer),
+        };
+        if next == NextFrame::Now && !free(viewer) {
             return NextFrame::At(now + GPU_POLL);
+        }
+        // A present on its way is looked at shortly even by an idle loop, so that its
+        // outcome (a lost surface, say) is heard at once (`Presenter::poll_present`).
+        if !viewer.presenter.present_returned() {
+            let soon = now + GPU_POLL;
+            return match next {
+                NextFrame::At(t) => NextFrame::At(t.min(soon)),
+                NextFrame::Now | NextFrame::OnEvent => NextFrame::At(soon),
+            };
         }
         next
     }
@@ -466,13 +511,23 @@ impl App<'_> {
     }
 }
 
+/// Whether the GPU has nothing of the viewer's left to run: every frame finished, the last
+/// present returned. What makes a new renderer waits for this (its uploads would otherwise
+/// queue behind a slow frame).
+fn gpu_free(viewer: &mut Viewer) -> bool {
+    viewer.presenter.present_returned()
+        && viewer.renderer.frames_finished().unwrap_or(true)
+        && viewer.presenter.ring.all_finished().unwrap_or(true)
+}
+
 /// How often a loop that waits for a frame slot looks again.
 const GPU_POLL: Duration = Duration::from_millis(2);
 
 /// Whether the renderer and the presenter can each start a frame without waiting for the GPU
-/// (an error here is reported by the frame itself).
-fn gpu_ready(viewer: &Viewer) -> bool {
-    viewer.renderer.ready_for_frame().unwrap_or(true)
+/// or for the present thread (an error here is reported by the frame itself).
+fn gpu_ready(viewer: &mut Viewer) -> bool {
+    viewer.presenter.present_returned()
+        && viewer.renderer.ready_for_frame().unwrap_or(true)
         && viewer.presenter.ring.ready().unwrap_or(true)
 }
 
