@@ -111,6 +111,42 @@ fn a_minimised_window_is_not_drawn() {
     assert!(frames as u64 > restored, "no frame after the restore");
 }
 
+/// A window unmapped without a window manager (`xdotool windowunmap` on a bare Xvfb, which
+/// tells winit nothing) is not drawn: the frame counter stands still and the viewer's CPU time
+/// over 2 s unmapped is under 5 % of 2 s of the same run drawing again once mapped. It used
+/// to be drawn on at full speed (182 % of a core, docs/viewer.md).
+#[test]
+fn an_unmapped_window_is_not_drawn() {
+    let Some(x) = xvfb_with_xdotool() else { return };
+    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap()]);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    let stretch = || {
+        let start = viewer.cpu_ticks();
+        std::thread::sleep(std::time::Duration::from_secs(2));
+        viewer.cpu_ticks() - start
+    };
+    xdotool(&x, &["windowunmap", "--sync", &id]);
+    let hidden = frame_of(&viewer.wait_for("window hidden"));
+    let unmapped = stretch();
+    xdotool(&x, &["windowmap", "--sync", &id]);
+    let shown = frame_of(&viewer.wait_for("window shown"));
+    let drawing = stretch();
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    xdotool(&x, &["key", "q"]);
+    let frames = frames_drawn(&viewer.finish());
+    eprintln!("unmapped after frame {hidden}, mapped after {shown}, {frames} in all; CPU ticks over 2 s: unmapped {unmapped}, drawing {drawing}");
+    assert_eq!(hidden, shown, "frames drawn while unmapped");
+    assert!(
+        frames as u64 > shown,
+        "no frame after the window was mapped again"
+    );
+    assert!(
+        (unmapped as f64) < 0.05 * drawing as f64,
+        "unmapped {unmapped} ticks against {drawing} drawing"
+    );
+}
+
 /// An idle window costs next to nothing beside a moving one: the viewer's CPU time over 2 s
 /// paused, against 2 s of the same run moving (thesis-room's orbiting ball, `space` to resume).
 /// Drawing every turn of the loop, paused cost as much as moving (183.7 % and 180.5 % of a

@@ -10,6 +10,8 @@ use std::time::{Duration, Instant};
 
 use winit::window::Window;
 
+use super::mapped::MapWatch;
+
 /// A frame that could not be presented (minimised, swapchain out of date) is tried again
 /// after this long rather than at once.
 const RETRY_SKIPPED: Duration = Duration::from_millis(50);
@@ -84,16 +86,17 @@ impl Demand {
         self.retry_at = Some(now + RETRY_SKIPPED);
     }
 
-    /// Asks the window whether it is minimised, at most every [`MINIMISED_POLL`]. On restore
-    /// the window is drawn again.
-    pub fn watch_minimised(&mut self, window: &Window, now: Instant) {
+    /// Asks the window whether it is minimised (or, on X11, unmapped: `map`), at most every
+    /// [`MINIMISED_POLL`]. On restore the window is drawn again.
+    pub fn watch_minimised(&mut self, window: &Window, map: Option<&MapWatch>, now: Instant) {
         if self.asked_at.is_some_and(|t| now < t + MINIMISED_POLL) {
             return;
         }
         self.asked_at = Some(now);
         // None where the platform cannot tell (Wayland, whose compositor throttles a hidden
         // surface's frames itself). A window gone under the viewer reads as not minimised.
-        let minimised = window.is_minimized().unwrap_or(false);
+        let minimised =
+            window.is_minimized().unwrap_or(false) || map.is_some_and(MapWatch::unmapped);
         self.redraw |= self.minimised && !minimised;
         self.minimised = minimised;
     }

@@ -12,6 +12,7 @@ mod demand;
 mod failures;
 mod history;
 pub mod input;
+mod mapped;
 mod menu;
 mod motion;
 mod overlay;

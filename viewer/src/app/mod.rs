@@ -28,6 +28,7 @@ use super::clock::{Clock, Figures};
 use super::demand::{Demand, NextFrame};
 use super::failures::{device_lost, run_catching_window_panics, surface_lost};
 use super::input::{self, Action};
+use super::mapped::MapWatch;
 use super::menu::{Menu, Status};
 use super::motion::Motion;
 use super::present::{Presenter, Screenshot, Shown};
@@ -75,6 +76,8 @@ struct Viewer {
     /// the deletion queue, else freed at once).
     renderer_shown: bool,
     window: Arc<Window>,
+    /// The window's map state on X11 (an unmapped window is not drawn); `None` elsewhere.
+    map: Option<MapWatch>,
     view: DisplayView,
     /// The window's size, from its creation and its `Resized` events: asking the window each
     /// frame would ask a window that may have been destroyed under it.
@@ -318,6 +321,7 @@ impl App<'_> {
             presenter,
             renderer,
             renderer_shown: false,
+            map: MapWatch::of(&window),
             window,
             view,
             size_asked: None,
@@ -458,7 +462,7 @@ impl App<'_> {
             || self.motion.moving()
             || !viewer.renderer.cube_shows_scene_at(self.clock.time_s);
         if self.demand.watching(scripted, moving) {
-            self.demand.watch_minimised(&viewer.window, now);
+            (self.demand).watch_minimised(&viewer.window, viewer.map.as_ref(), now);
         }
         let frame = self.clock.frame;
         match self.demand.visibility_change() {
