@@ -42,19 +42,6 @@ impl Renderer {
         plan
     }
 
-    /// Writes the per-face timestamp slots `faces` (six-pass: after each face).
-    pub(super) fn face_timestamps(&self, cmd: vk::CommandBuffer, faces: std::ops::Range<u32>) {
-        if let Some(q) = &self.queries().timestamps {
-            for f in faces {
-                q.write_timestamp(
-                    cmd,
-                    vk::PipelineStageFlags2::ALL_GRAPHICS,
-                    super::queries::TS_FACE0 + f,
-                );
-            }
-        }
-    }
-
     /// Whether the renderer's method brackets each face with its own statistics query and
     /// timestamp (a per-face layout); the one-pass methods and the floors get one query for
     /// the whole fill.
@@ -132,18 +119,20 @@ impl Renderer {
         }
         if !per_face_marks {
             // Per-face timestamps exist only for per-face methods; keep every slot answered.
-            self.face_timestamps(cmd, 0..6);
+            self.queries().face_timestamps(cmd, 0..6);
         }
         match fill {
             Fill::Method => {
                 let ids = self.cube.ids.is_some();
-                let rec = CubeRecorder::new(self, cmd, self.method.layout(), per_face_marks, ids);
+                let parts = self.fill_parts();
+                let rec = CubeRecorder::new(parts, cmd, self.method.layout(), per_face_marks, ids);
                 self.fill.record(&rec, plan);
             }
             Fill::Other { record, .. } => {
                 // Other fills write no ids: the id cube keeps what it had (the floors are
                 // benchmark passes, which never read ids).
-                let rec = CubeRecorder::new(self, cmd, CubeLayout::PerFace, false, false);
+                let rec =
+                    CubeRecorder::new(self.fill_parts(), cmd, CubeLayout::PerFace, false, false);
                 record(&rec, plan);
             }
         }

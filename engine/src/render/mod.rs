@@ -32,6 +32,7 @@ mod queries;
 mod readback;
 mod refresh;
 pub mod resources;
+mod scene_draw;
 mod sensor_rays;
 pub mod targets;
 

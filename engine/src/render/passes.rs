@@ -212,7 +212,7 @@ impl Renderer {
         if let (Some(q), Some(slot)) = (&self.queries().statistics, stats_slot) {
             q.begin(cmd, slot);
         }
-        self.begin_rendering(
+        self.scene_draw().begin_rendering(
             cmd,
             &Attachments {
                 color: target.color_view.raw,
@@ -232,7 +232,8 @@ impl Renderer {
                 VIEW_PAIR_RIGHT => [half, 0.0, half, PAIR_SIZE[1] as f32],
                 _ => [0.0, 0.0, target.width as f32, target.height as f32],
             };
-            self.set_viewport(cmd, vp[0], vp[1], vp[2], vp[3]);
+            self.scene_draw()
+                .set_viewport(cmd, vp[0], vp[1], vp[2], vp[3]);
             let view = &views[v as usize];
             let clearance = camera_clearance(view.eye, self.scene.mirror.radius_m);
             let frustum = Frustum::new(view, view.near_plane_for(clearance), f32::INFINITY);
@@ -242,10 +243,11 @@ impl Renderer {
                 ..Push::default()
             };
             let facing = self.view_facing(&views[v as usize]);
-            self.draw_objects(cmd, scene_pipeline, push, &visible, &facing);
+            self.scene_draw()
+                .draw_objects(cmd, scene_pipeline, push, &visible, &facing);
             self.draw_mirror(cmd, output, v);
         }
-        self.end_rendering(cmd);
+        self.scene_draw().end_rendering(cmd);
         if let (Some(q), Some(slot)) = (&self.queries().statistics, stats_slot) {
             q.end(cmd, slot);
         }

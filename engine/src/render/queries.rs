@@ -67,6 +67,15 @@ impl FrameQueries {
         }
     }
 
+    /// Writes the per-face timestamp slots `faces` (six-pass: after each face).
+    pub fn face_timestamps(&self, cmd: vk::CommandBuffer, faces: std::ops::Range<u32>) {
+        if let Some(q) = &self.timestamps {
+            for f in faces {
+                q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, TS_FACE0 + f);
+            }
+        }
+    }
+
     /// At the end of a frame's commands, after its last timestamp: the results it will read
     /// (every timestamp, the statistics in `read`) copied for the host.
     pub fn copy_results(&self, cmd: vk::CommandBuffer, read: StatsRead, device: &Device) {

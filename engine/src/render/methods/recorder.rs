@@ -8,7 +8,10 @@ use ash::vk;
 use super::CubeLayout;
 use crate::render::draw::{Attachments, Facing, CUBE_FRONT};
 use crate::render::gpu::Push;
+use crate::render::queries::FrameQueries;
 use crate::render::resources::Drawable;
+use crate::render::scene_draw::SceneDraw;
+use crate::render::targets::CubeTarget;
 use crate::render::Renderer;
 use crate::scene::Scene;
 use crate::vk::commands::Submitter;
@@ -126,7 +129,7 @@ pub struct Prepare<'a> {
 /// per-face marks (statistics queries, timestamps) of per-face methods. A method records
 /// through this and through `device()` / `cmd()` for draw calls of its own.
 pub struct CubeRecorder<'a> {
-    r: &'a Renderer,
+    parts: FillParts<'a>,
     cmd: vk::CommandBuffer,
     layout: CubeLayout,
     /// Per-face statistics queries and timestamps (six-pass); off for one-pass methods and
@@ -135,24 +138,43 @@ pub struct CubeRecorder<'a> {
     /// The fill writes the id cube (the method's pipelines were made with it); the
     /// benchmark's floors never do.
     ids: bool,
-    facing: Facing,
+}
+
+/// The parts of the renderer a cube fill records into ([`Renderer::fill_parts`]): the
+/// scene's draws, the cube, this frame's queries, and how the cube's faces see each drawable.
+pub(in crate::render) struct FillParts<'a> {
+    pub draw: SceneDraw<'a>,
+    pub cube: &'a CubeTarget,
+    pub queries: &'a FrameQueries,
+    pub facing: Facing,
+}
+
+impl Renderer {
+    /// What a cube fill records into this frame.
+    pub(in crate::render) fn fill_parts(&self) -> FillParts<'_> {
+        FillParts {
+            draw: self.scene_draw(),
+            cube: &self.cube,
+            queries: self.queries(),
+            facing: self.cube_facing(),
+        }
+    }
 }
 
 impl<'a> CubeRecorder<'a> {
     pub(in crate::render) fn new(
-        r: &'a Renderer,
+        parts: FillParts<'a>,
         cmd: vk::CommandBuffer,
         layout: CubeLayout,
         per_face_marks: bool,
         ids: bool,
     ) -> Self {
         Self {
-            r,
+            parts,
             cmd,
             layout,
             per_face_marks,
             ids,
-            facing: r.cube_facing(),
         }
     }
 
@@ -161,11 +183,11 @@ impl<'a> CubeRecorder<'a> {
         &self,
         pick: impl Fn(&crate::render::targets::IdCube) -> vk::ImageView,
     ) -> Option<vk::ImageView> {
-        self.r.cube.ids.as_ref().filter(|_| self.ids).map(pick)
+        self.parts.cube.ids.as_ref().filter(|_| self.ids).map(pick)
     }
 
     pub fn device(&self) -> &Device {
-        &self.r.device
+        self.parts.draw.device
     }
 
     pub fn cmd(&self) -> vk::CommandBuffer {
@@ -173,7 +195,7 @@ impl<'a> CubeRecorder<'a> {
     }
 
     pub fn face_size(&self) -> u32 {
-        self.r.cube.size
+        self.parts.cube.size
     }
 
     /// Opens a rendering scope on face `face` alone, cleared, with its viewport (and, for a
@@ -182,16 +204,16 @@ impl<'a> CubeRecorder<'a> {
         let dev = self.device();
         let name = crate::scene::camera::FACE_NAMES[face as usize];
         dev.begin_label(self.cmd, &format!("face {name}"));
-        if let (Some(q), true) = (&self.r.queries().statistics, self.per_face_marks) {
+        if let (Some(q), true) = (&self.parts.queries.statistics, self.per_face_marks) {
             q.begin(self.cmd, face);
         }
         let size = self.face_size();
-        self.r.begin_rendering(
+        self.parts.draw.begin_rendering(
             self.cmd,
             &Attachments {
-                color: self.r.cube.face_views[face as usize].raw,
+                color: self.parts.cube.face_views[face as usize].raw,
                 ids: self.id_view(|ids| ids.face_views[face as usize].raw),
-                depth: self.r.cube.depth_views[face as usize].raw,
+                depth: self.parts.cube.depth_views[face as usize].raw,
                 size: [size, size],
                 layers: 1,
                 view_mask: 0,
@@ -199,14 +221,15 @@ impl<'a> CubeRecorder<'a> {
                 store_depth: true,
             },
         );
-        self.r
+        self.parts
+            .draw
             .set_viewport(self.cmd, 0.0, 0.0, size as f32, size as f32);
     }
 
     /// Closes the scope opened by [`Self::begin_face`].
     pub fn end_face(&self, face: u32) {
-        self.r.end_rendering(self.cmd);
-        if let (Some(q), true) = (&self.r.queries().statistics, self.per_face_marks) {
+        self.parts.draw.end_rendering(self.cmd);
+        if let (Some(q), true) = (&self.parts.queries.statistics, self.per_face_marks) {
             q.end(self.cmd, face);
         }
         self.device().end_label(self.cmd);
@@ -216,7 +239,7 @@ impl<'a> CubeRecorder<'a> {
     /// or not (a clean face's time is then zero).
     pub fn face_timestamp(&self, face: u32) {
         if self.per_face_marks {
-            self.r.face_timestamps(self.cmd, face..face + 1);
+            self.parts.queries.face_timestamps(self.cmd, face..face + 1);
         }
     }
 
@@ -226,12 +249,12 @@ impl<'a> CubeRecorder<'a> {
         let size = self.face_size();
         let view_mask = self.layout.view_mask();
         let all = view_mask != 0 || dirty == 0x3F;
-        self.r.begin_rendering(
+        self.parts.draw.begin_rendering(
             self.cmd,
             &Attachments {
-                color: self.r.cube.layers_view.raw,
+                color: self.parts.cube.layers_view.raw,
                 ids: self.id_view(|ids| ids.layers_view.raw),
-                depth: self.r.cube.depth_layers_view.raw,
+                depth: self.parts.cube.depth_layers_view.raw,
                 size: [size, size],
                 layers: if view_mask != 0 { 0 } else { 6 },
                 view_mask,
@@ -240,39 +263,38 @@ impl<'a> CubeRecorder<'a> {
             },
         );
         if !all {
-            self.r.clear_faces(self.cmd, dirty, size, self.ids);
+            self.parts.draw.clear_faces(self.cmd, dirty, size, self.ids);
         }
-        self.r
+        self.parts
+            .draw
             .set_viewport(self.cmd, 0.0, 0.0, size as f32, size as f32);
     }
 
     /// Closes the scope opened by [`Self::begin_cube`].
     pub fn end_cube(&self) {
-        self.r.end_rendering(self.cmd);
+        self.parts.draw.end_rendering(self.cmd);
     }
 
     /// Binds `pipeline` with the scene's set 0, vertex and index buffers, and the cube's
     /// front-face winding (cube faces see the world mirrored).
     pub fn bind(&self, pipeline: &Pipeline) {
-        self.r.bind_scene(self.cmd, pipeline);
-        self.r.set_front_face(self.cmd, CUBE_FRONT);
+        self.parts.draw.bind_scene(self.cmd, pipeline);
+        self.parts.draw.set_front_face(self.cmd, CUBE_FRONT);
     }
 
     /// Binds `pipeline` and draws `objects` in order, one indexed draw each, with push
     /// constants `base` whose object index is set per draw, back faces culled where allowed.
     pub fn draw_objects(&self, pipeline: &Pipeline, base: Push, objects: &[u32]) {
-        self.r
-            .draw_objects(self.cmd, pipeline, base, objects, &self.facing);
+        (self.parts.draw).draw_objects(self.cmd, pipeline, base, objects, &self.parts.facing);
     }
 
     /// Sets the push constants of the draws that follow.
     pub fn push(&self, push: Push) {
-        self.r
-            .push(self.cmd, self.r.pipelines.scene_layout.raw, push);
+        (self.parts.draw).push(self.cmd, self.parts.draw.layout.raw, push);
     }
 
     /// Back faces culled (`true`) or drawn for the draws that follow.
     pub fn set_cull_back(&self, cull: bool) {
-        self.r.set_cull_back(self.cmd, cull);
+        self.parts.draw.set_cull_back(self.cmd, cull);
     }
 }
