@@ -118,46 +118,77 @@ impl App<'_> {
         }
     }
 
-    /// Applies one key's action.
+    /// Applies one key's action (or puts it off while the GPU is busy: [`Self::put_off`]).
     pub(super) fn act(&mut self, event_loop: &ActiveEventLoop, action: Action) {
         self.demand.changed();
-        let makes_renderer = matches!(
-            action,
-            Action::NextMethod | Action::SetMethod(_) | Action::Reload
-        );
-        // A new renderer's uploads would wait on the queue behind a slow frame: it is made
-        // before a later frame instead, once the GPU is free, and the actions after it wait
-        // their turn (`F5` then `0` resets to the new file). Quitting never waits.
-        let busy = makes_renderer && !self.viewer.as_mut().is_none_or(super::gpu_free);
-        if action != Action::Quit && (busy || !self.deferred.is_empty()) {
-            self.deferred.push(action);
+        if self.put_off(action) {
             return;
         }
         let switched = match action {
             Action::NextMethod => self.next_method(),
             Action::SetMethod(method) => self.set_method(method).map(|_| ()),
             Action::Reload => self.reload(),
-            _ => Ok(()),
+            Action::Quit => {
+                self.quit(event_loop);
+                Ok(())
+            }
+            Action::PauseResume | Action::Step => {
+                self.act_on_clock(action);
+                Ok(())
+            }
+            Action::Show(_) | Action::Fullscreen | Action::Menu | Action::Help => {
+                self.act_on_window(action);
+                Ok(())
+            }
+            Action::Screenshot => {
+                self.shot_asked = true;
+                Ok(())
+            }
+            _ => {
+                self.act_on_scene(action);
+                Ok(())
+            }
         };
         if let Err(e) = switched {
             self.fail(event_loop, e);
         }
-        let Some(viewer) = self.viewer.as_mut() else {
-            return;
-        };
-        let scene = &mut viewer.renderer.scene;
+    }
+
+    /// Whether `action` waits: a new renderer's uploads would wait on the queue behind a slow
+    /// frame, so it is made before a later frame instead, once the GPU is free, and the
+    /// actions after it wait their turn (`F5` then `0` resets to the new file). Quitting
+    /// never waits.
+    fn put_off(&mut self, action: Action) -> bool {
+        let makes_renderer = matches!(
+            action,
+            Action::NextMethod | Action::SetMethod(_) | Action::Reload
+        );
+        let busy = makes_renderer && !self.viewer.as_mut().is_none_or(super::gpu_free);
+        let wait = action != Action::Quit && (busy || !self.deferred.is_empty());
+        if wait {
+            self.deferred.push(action);
+        }
+        wait
+    }
+
+    /// Pause, resume, one step.
+    fn act_on_clock(&mut self, action: Action) {
         match action {
-            Action::Walk { .. } | Action::Turn { .. } => input::move_observer(scene, action, 1.0),
-            Action::MoveMirror { x, y, z } => {
-                if let Err(why) = input::move_mirror(scene, (x, y, z), 1.0) {
-                    specchio::say!("mirror not moved: {why}");
-                }
-            }
             Action::PauseResume => self.clock.paused = !self.clock.paused,
             Action::Step => {
                 self.clock.paused = true;
                 self.clock.time_s += 1.0 / SCRIPTED_FPS;
             }
+            _ => {}
+        }
+    }
+
+    /// The view shown, fullscreen, the menu and the help.
+    fn act_on_window(&mut self, action: Action) {
+        let Some(viewer) = self.viewer.as_mut() else {
+            return;
+        };
+        match action {
             Action::Show(view) => {
                 viewer.view = view;
                 let [w, h] = natural_size(&viewer.renderer.scene, view);
@@ -169,18 +200,35 @@ impl App<'_> {
                     }
                 }
             }
-            Action::NextMethod | Action::SetMethod(_) | Action::Reload => {} // above
             Action::Fullscreen => {
                 viewer.fullscreen = !viewer.fullscreen;
                 let mode = viewer.fullscreen.then_some(Fullscreen::Borderless(None));
                 viewer.window.set_fullscreen(mode);
             }
-            Action::NextLookup => next_lookup(&mut viewer.renderer),
-            Action::SetLookup(lookup) => {
-                if viewer.lookups.contains(&lookup) {
-                    scene.mirror.lookup = lookup;
-                    specchio::say!("lookup: {lookup}");
+            Action::Menu => viewer.menu.open = !viewer.menu.open,
+            Action::Help => viewer.menu.help = !viewer.menu.help,
+            _ => {}
+        }
+    }
+
+    /// Moves, the lookup, the refresh policy, and the reset to the file's poses and time.
+    fn act_on_scene(&mut self, action: Action) {
+        let Some(viewer) = self.viewer.as_mut() else {
+            return;
+        };
+        let scene = &mut viewer.renderer.scene;
+        match action {
+            Action::Walk { .. } | Action::Turn { .. } => input::move_observer(scene, action, 1.0),
+            Action::MoveMirror { x, y, z } => {
+                if let Err(why) = input::move_mirror(scene, (x, y, z), 1.0) {
+                    specchio::say!("mirror not moved: {why}");
                 }
+            }
+            Action::NextLookup => next_lookup(&mut viewer.renderer),
+            // The menu offers only the lookups this device runs.
+            Action::SetLookup(lookup) if viewer.lookups.contains(&lookup) => {
+                scene.mirror.lookup = lookup;
+                specchio::say!("lookup: {lookup}");
             }
             Action::SetRefresh(refresh) => {
                 scene.refresh = refresh;
@@ -207,10 +255,7 @@ impl App<'_> {
                     ..self.clock
                 };
             }
-            Action::Screenshot => self.shot_asked = true,
-            Action::Menu => viewer.menu.open = !viewer.menu.open,
-            Action::Help => viewer.menu.help = !viewer.menu.help,
-            Action::Quit => self.quit(event_loop),
+            _ => {}
         }
     }
 

@@ -23,15 +23,16 @@ use winit::raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::window::{Window, WindowId};
 
 mod actions;
+mod frame;
 
 use super::clock::{Clock, Figures};
 use super::demand::{Demand, NextFrame};
 use super::failures::{device_lost, run_catching_window_panics, surface_lost};
 use super::input::{self, Action};
 use super::mapped::MapWatch;
-use super::menu::{Menu, Status};
+use super::menu::Menu;
 use super::motion::Motion;
-use super::present::{Presenter, Screenshot, Shown};
+use super::present::{Presenter, Screenshot};
 
 /// What `view::run` decided before the loop.
 pub struct Settings {
@@ -338,114 +339,6 @@ impl App<'_> {
             ..Default::default()
         };
         Ok(Renderer::new(self.device, scene, &options)?)
-    }
-
-    /// One frame: advance the clock, draw the view, show it; quit after `--frames`.
-    fn frame(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
-        let frames = self.settings.frames;
-        let last = frames.is_some_and(|n| self.clock.frame + 1 >= u64::from(n));
-        let viewer = self.viewer.as_mut().expect("frame() runs with a viewer");
-        if last {
-            if let Some((_, asked)) = viewer.size_asked {
-                // Let the window reach the size its view asked for before the final image.
-                if asked.elapsed() < RESIZE_WAIT {
-                    return Ok(());
-                }
-                viewer.size_asked = None;
-            }
-        }
-        // Switches asked while the GPU was busy, and the actions after them: it is free now
-        // (`next_frame`).
-        for action in std::mem::take(&mut self.deferred) {
-            self.act(event_loop, action);
-        }
-        let Some(viewer) = self.viewer.as_mut() else {
-            return Ok(());
-        };
-        // What asked for this frame is answered by it; what comes during it (an action the
-        // menu takes below) asks for the next.
-        self.demand.drawing();
-        for why in self
-            .motion
-            .advance(Instant::now(), &mut viewer.renderer.scene)
-        {
-            specchio::say!("mirror not moved: {why}");
-        }
-        let t_s = self.clock.tick();
-        let start = Instant::now();
-        let (reports, image) =
-            viewer
-                .renderer
-                .render_display_frame(self.clock.frame, t_s, viewer.view)?;
-        for report in &reports {
-            self.figures.finished(report);
-        }
-        let size = viewer.size;
-        let shot = (last && self.settings.screenshot) || self.shot_asked;
-        let status = Status {
-            view: viewer.view,
-            method: viewer.renderer.method,
-            methods: &viewer.methods,
-            lookup: viewer.renderer.scene.mirror.lookup,
-            lookups: &viewer.lookups,
-            refresh: viewer.renderer.scene.refresh,
-            paused: self.clock.paused,
-            frame_ms: self.figures.frame_ms.last().copied(),
-            cube_ms: self.figures.cube_ms,
-            faces: self.figures.faces,
-            history: &self.figures.history,
-            driver: &self.device.info.name,
-        };
-        let mut menu = viewer
-            .menu
-            .frame(&viewer.window, [size.width, size.height], &status);
-        let (shown, screenshot) = viewer.presenter.show(
-            [size.width, size.height],
-            &image,
-            Some(&mut menu.paint),
-            shot,
-        )?;
-        viewer.renderer_shown = true;
-        viewer.menu.unapplied(&mut menu.paint);
-        // egui's own repaints (its first frames' layout passes, its animations) matter only
-        // while it shows something.
-        let menu_shown = viewer.menu.open || viewer.menu.help;
-        self.demand
-            .menu_repaint(menu.repaint_after.filter(|_| menu_shown), start);
-        // The menu's choices act from the next frame on, as a key pressed now would.
-        for action in menu.actions {
-            self.act(event_loop, action);
-        }
-        let viewer = self.viewer.as_mut().expect("frame() runs with a viewer");
-        let due = self.due.take().unwrap_or(start);
-        if let Shown::Skipped = shown {
-            // Minimised or out of date: no frame counted; wait for a resize instead of
-            // spinning when there is nothing to present to.
-            self.demand.skipped(Instant::now());
-            return Ok(());
-        }
-        self.clock.frame += 1;
-        self.figures.add(due.elapsed().as_secs_f64() * 1e3);
-        if let Some(title) = self
-            .figures
-            .title(&viewer.renderer, &self.settings.scene_name)
-        {
-            viewer.window.set_title(&title);
-        }
-        if std::mem::take(&mut self.shot_asked) {
-            match &screenshot {
-                Some(shot) => actions::save_screenshot(shot),
-                None => specchio::say!("screenshot: this window's images cannot be read back"),
-            }
-        }
-        if last {
-            if self.settings.screenshot && screenshot.is_none() {
-                anyhow::bail!("--screenshot: this window's swapchain images cannot be read back");
-            }
-            self.outcome.screenshot = screenshot.filter(|_| self.settings.screenshot);
-            event_loop.exit();
-        }
-        Ok(())
     }
 
     /// When the next frame is due ([`Demand::next`]), the window asked whether it is
