@@ -244,81 +244,28 @@ impl Renderer {
     ) -> Result<(), GpuError> {
         let record_start = Instant::now();
         self.acquire_slot()?;
-        if self.mirror.lookup() != self.scene.mirror.lookup {
-            // The old lookup's pass may still be in use by the frames in flight.
-            self.drain()?;
-            // The ray map's passes were chosen for the old lookup (and, traced, read its set):
-            // made again for the new one on the next frame that reads them.
-            self.sensor_rays = None;
-        }
-        self.mirror.follow(
-            (&self.device, &self.resources, &self.cube, &self.submitter),
-            self.scene.mirror.lookup,
-        )?;
+        self.follow_lookup()?;
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
-        // A lookup that does not read the cube (ray-query) skips its fill, unless the cube
-        // itself or a ray map that reads its depth and ids is read back; the cube then keeps
-        // what it last showed.
-        let rays_read_cube =
-            readback.rays && self.sensor_ground_truth() == crate::sensor::GroundTruth::Cube;
-        let fill_cube =
-            lookups::plugin(self.mirror.lookup()).uses_cube() || readback.cube || rays_read_cube;
+        let fill_cube = self.fills_cube(readback);
         if readback.rays {
             self.prepare_sensor_rays()?;
         }
-        let mut dirty = if fill_cube {
-            self.refresh.dirty_faces(
-                &self.scene,
-                &self.resources.drawables,
-                frame,
-                &state,
-                &views,
-            )
-        } else {
-            0
+        let dirty = match fill_cube {
+            true => self.faces_to_fill(frame, &state, &views),
+            false => 0,
         };
-        if self.method.layout() == methods::CubeLayout::Multiview && dirty != 0 {
-            // A multiview pass clears and draws all six views: cull for all six, or objects
-            // seen only in a clean face would vanish from it.
-            dirty = 0x3F;
-        }
-        self.refresh.count(dirty);
         let plan = self.plan_cube(&views, dirty);
-        if dirty != 0 {
-            let cull_back = self.cube_facing().cull;
-            let mut prepare = methods::Prepare {
-                device: &self.device,
-                drawables: &self.resources.drawables,
-                cull_back: &cull_back,
-                uploads: &mut self.frames.current_mut().uploads,
-            };
-            self.fill.prepare(&plan, &mut prepare)?;
-        }
+        self.prepare_fill(&plan)?;
         self.grow_readback(readback)?;
-
-        let cmd = self.begin_frame()?;
         let mut report = FrameReport {
             frame,
             time_s: t_s,
             cube_updated: dirty != 0,
             ..Default::default()
         };
-        // The lookup's own work (the ray-query TLAS build) comes first: without a cube update
-        // it is all that lies between the start and fill timestamps (`gpu_fill_ms`).
-        self.mirror.pass.record(cmd);
-        if dirty != 0 {
-            self.record_cube(cmd, &plan, self.refresh.first_fill(), &mut report);
-        } else if let Some(q) = &self.queries().timestamps {
-            for ts in TS_FACE0..=TS_MIPS {
-                q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
-            }
-        }
-        let copies = self.record_views(cmd, &views, readback, display);
-        self.mirror
-            .pass
-            .record_after_views(cmd, self.frames.current_index());
-        self.record_readback(cmd, readback, &copies);
+        let cmd = self.begin_frame()?;
+        let copies = self.record_frame(cmd, &plan, &views, (readback, display), &mut report);
         let stats = self.stats_read(dirty != 0, u32::from(report.face_mask), readback.views);
         self.end_frame(cmd, record_start, &mut report, stats);
         // The cube shows `state` once this frame has run (later frames run after it), except
@@ -333,6 +280,84 @@ impl Renderer {
             stats,
             submitted: Instant::now(),
         })
+    }
+
+    /// The mirror's pass follows the scene's lookup, switched in place: the frames in flight
+    /// that may still use the old pass are finished first.
+    fn follow_lookup(&mut self) -> Result<(), GpuError> {
+        if self.mirror.lookup() != self.scene.mirror.lookup {
+            self.drain()?;
+            // The ray map's passes were chosen for the old lookup (and, traced, read its set):
+            // made again for the new one on the next frame that reads them.
+            self.sensor_rays = None;
+        }
+        self.mirror.follow(
+            (&self.device, &self.resources, &self.cube, &self.submitter),
+            self.scene.mirror.lookup,
+        )
+    }
+
+    /// Whether this frame fills the cube. A lookup that does not read it (ray-query) skips
+    /// its fill, unless the cube itself or a ray map that reads its depth and ids is read
+    /// back; the cube then keeps what it last showed.
+    fn fills_cube(&self, readback: Readback) -> bool {
+        let rays_read_cube =
+            readback.rays && self.sensor_ground_truth() == crate::sensor::GroundTruth::Cube;
+        lookups::plugin(self.mirror.lookup()).uses_cube() || readback.cube || rays_read_cube
+    }
+
+    /// The faces this frame re-renders (the refresh policy's choice), counted.
+    fn faces_to_fill(&mut self, frame: u64, state: &SceneState, views: &[ViewBasis]) -> u8 {
+        let drawables = &self.resources.drawables;
+        let mut dirty = (self.refresh).dirty_faces(&self.scene, drawables, frame, state, views);
+        if self.method.layout() == methods::CubeLayout::Multiview && dirty != 0 {
+            // A multiview pass clears and draws all six views: cull for all six, or objects
+            // seen only in a clean face would vanish from it.
+            dirty = 0x3F;
+        }
+        self.refresh.count(dirty);
+        dirty
+    }
+
+    /// The method's per-update data for `plan` (nothing without an update).
+    fn prepare_fill(&mut self, plan: &methods::CubePlan) -> Result<(), GpuError> {
+        if plan.dirty == 0 {
+            return Ok(());
+        }
+        let cull_back = self.cube_facing().cull;
+        let mut prepare = methods::Prepare {
+            device: &self.device,
+            drawables: &self.resources.drawables,
+            cull_back: &cull_back,
+            uploads: &mut self.frames.current_mut().uploads,
+        };
+        self.fill.prepare(plan, &mut prepare)
+    }
+
+    /// Records the frame's work between its start and its end: the lookup's own, the cube
+    /// update (or its timestamps alone), the views, the readback copies.
+    fn record_frame(
+        &self,
+        cmd: vk::CommandBuffer,
+        plan: &methods::CubePlan,
+        views: &[ViewBasis],
+        (readback, display): (Readback, Option<display::DisplayView>),
+        report: &mut FrameReport,
+    ) -> passes::Copies {
+        // The lookup's own work (the ray-query TLAS build) comes first: without a cube update
+        // it is all that lies between the start and fill timestamps (`gpu_fill_ms`).
+        self.mirror.pass.record(cmd);
+        if plan.dirty != 0 {
+            self.record_cube(cmd, plan, self.refresh.first_fill(), report);
+        } else if let Some(q) = &self.queries().timestamps {
+            for ts in TS_FACE0..=TS_MIPS {
+                q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
+            }
+        }
+        let copies = self.record_views(cmd, views, readback, display);
+        (self.mirror.pass).record_after_views(cmd, self.frames.current_index());
+        self.record_readback(cmd, readback, &copies);
+        copies
     }
 
     /// The current frame's queries (per frame in flight: a slot's are read after its fence).
