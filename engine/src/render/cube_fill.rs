@@ -69,51 +69,13 @@ impl Renderer {
         report: &mut FrameReport,
         fill: Fill,
     ) {
-        let dev = &self.device;
-        let cube = &self.cube;
-        let mip0 = vk::ImageSubresourceRange {
-            level_count: 1,
-            ..cube.color.full_range()
-        };
         let name = match fill {
             Fill::Method => self.method.name(),
             Fill::Other { name, .. } => name,
         };
-        dev.begin_label(cmd, &format!("cube fill ({name})"));
+        self.device.begin_label(cmd, &format!("cube fill ({name})"));
         let per_face_marks = matches!(fill, Fill::Method) && self.per_face_marks();
-        // Clean faces keep their pixels, colour and depth (the `distance` lookup's distance
-        // map), so the old layout is named (UNDEFINED only before the first fill); the last
-        // readers were the mirror's fragment shaders.
-        let old = if first_fill {
-            vk::ImageLayout::UNDEFINED
-        } else {
-            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
-        };
-        // The id cube, where there is one, goes the same way as the depth: kept for the clean
-        // faces, read by the sensor ray passes' fragment shaders.
-        let mut to_fill = vec![
-            barrier(
-                cube.color.raw,
-                mip0,
-                (old, SAMPLED),
-                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-            ),
-            barrier(
-                cube.depth.raw,
-                cube.depth.full_range(),
-                (old, SAMPLED),
-                (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
-            ),
-        ];
-        to_fill.extend(cube.ids.as_ref().map(|ids| {
-            barrier(
-                ids.image.raw,
-                ids.image.full_range(),
-                (old, SAMPLED),
-                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-            )
-        }));
-        image_barriers(dev, cmd, &to_fill);
+        self.cube_to_fill(cmd, first_fill);
         if let (Some(q), false) = (&self.queries().statistics, per_face_marks) {
             q.begin(cmd, 0);
         }
@@ -147,8 +109,60 @@ impl Renderer {
         if let Some(q) = &self.queries().timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, TS_FILL);
         }
-        // The depth the fill wrote, for the mirror's fragment shaders (distance lookup, sensor
-        // ray passes), and the ids it wrote (sensor ray passes).
+        self.cube_to_read(cmd);
+        super::mips::record(&self.device, cmd, &self.cube, plan.dirty);
+        if let Some(q) = &self.queries().timestamps {
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);
+        }
+        self.device.end_label(cmd);
+    }
+
+    /// The cube's mip 0, depth and ids made ready to render into. Clean faces keep their
+    /// pixels, colour and depth (the `distance` lookup's distance map), so the old layout is
+    /// named (UNDEFINED only before the first fill); the last readers were the mirror's
+    /// fragment shaders. The id cube, where there is one, goes the same way as the depth:
+    /// kept for the clean faces, read by the sensor ray passes' fragment shaders.
+    fn cube_to_fill(&self, cmd: vk::CommandBuffer, first_fill: bool) {
+        let cube = &self.cube;
+        let mip0 = vk::ImageSubresourceRange {
+            level_count: 1,
+            ..cube.color.full_range()
+        };
+        let old = if first_fill {
+            vk::ImageLayout::UNDEFINED
+        } else {
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
+        };
+        let mut to_fill = vec![
+            barrier(
+                cube.color.raw,
+                mip0,
+                (old, SAMPLED),
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
+            ),
+            barrier(
+                cube.depth.raw,
+                cube.depth.full_range(),
+                (old, SAMPLED),
+                (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
+            ),
+        ];
+        to_fill.extend(cube.ids.as_ref().map(|ids| {
+            barrier(
+                ids.image.raw,
+                ids.image.full_range(),
+                (old, SAMPLED),
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
+            )
+        }));
+        image_barriers(&self.device, cmd, &to_fill);
+    }
+
+    /// The depth the fill wrote, for the mirror's fragment shaders (distance lookup, sensor
+    /// ray passes), and the ids it wrote (sensor ray passes), made ready to sample. (The
+    /// colour goes on to the mip chain.)
+    fn cube_to_read(&self, cmd: vk::CommandBuffer) {
+        let cube = &self.cube;
         let mut to_read = vec![barrier(
             cube.depth.raw,
             cube.depth.full_range(),
@@ -163,11 +177,6 @@ impl Renderer {
                 (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
             )
         }));
-        image_barriers(dev, cmd, &to_read);
-        super::mips::record(&self.device, cmd, &self.cube, plan.dirty);
-        if let Some(q) = &self.queries().timestamps {
-            q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);
-        }
-        dev.end_label(cmd);
+        image_barriers(&self.device, cmd, &to_read);
     }
 }

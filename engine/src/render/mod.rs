@@ -19,6 +19,7 @@ pub mod display;
 mod draw;
 pub mod floors;
 mod frame;
+mod frame_data;
 pub mod gpu;
 mod in_flight;
 pub mod lookups;
@@ -40,14 +41,13 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use ash::vk;
-use glam::{Mat4, UVec4, Vec3, Vec4};
+use glam::Vec3;
 
-use gpu::{FrameData, ObjectData, ViewData};
-use resources::{SceneResources, VIEW_COUNT};
+use resources::SceneResources;
 use targets::{CubeTarget, ViewTarget, ViewTargets};
 
 pub use crate::image::RgbaImage;
-use crate::scene::camera::{self, ViewBasis};
+use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
 use crate::scene::{RefreshPolicy, Scene};
 use crate::vk::commands::{image_barriers, Submitter};
@@ -80,17 +80,6 @@ pub fn camera_clearance(eye: Vec3, mirror_radius_m: f32) -> f32 {
     CAMERA_NEAR_M
         .min(0.5 * (eye.length() - mirror_radius_m))
         .max(1e-6)
-}
-
-/// A camera view's far plane: none for a pinhole (reverse-Z keeps its precision to infinity);
-/// an orthographic view's depth is linear, so it ends past the room's farthest corner from
-/// the cube's centre (`cube.far`), seen from the eye.
-fn view_far(view: &ViewBasis, scene: &Scene) -> f32 {
-    if view.is_orthographic() {
-        scene.cube.far_m + view.eye.distance(scene.cube.offset_m)
-    } else {
-        f32::INFINITY
-    }
 }
 
 struct Pipelines {
@@ -391,116 +380,5 @@ impl Renderer {
         }
         queries.copy_results(cmd, stats, &self.device);
         report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
-    }
-
-    /// Writes frame data, views and object transforms; returns the views (render space).
-    fn write_frame_buffers(&mut self, state: &SceneState) -> Result<Vec<ViewBasis>, GpuError> {
-        let scene = &self.scene;
-        let light = scene.light.as_ref();
-        let shape = gpu::MirrorShapeData::of(&scene.mirror.shape);
-        let frame = FrameData {
-            light_dir_ambient: light.map_or(Vec4::ZERO, |l| l.direction.extend(l.ambient)),
-            // Render space is centred on the mirror's viewpoint.
-            mirror: Vec4::new(0.0, 0.0, 0.0, scene.mirror.radius_m),
-            flags: UVec4::new(
-                u32::from(light.is_some()),
-                lookups::plugin(scene.mirror.lookup).start().code(),
-                scene.mirror.distance_steps,
-                scene.mirror.secant_steps,
-            ),
-            room_min: (scene.room.center - 0.5 * scene.room.size_m - state.mirror_center)
-                .extend(1.0),
-            room_max: (scene.room.center + 0.5 * scene.room.size_m - state.mirror_center)
-                .extend(1.0),
-            cube: Vec4::new(
-                scene.cube.near_m,
-                scene.cube.far_m,
-                scene.cube.anisotropy as f32,
-                0.0,
-            ),
-            mirror_shape: shape.code,
-            mirror_quadric: shape.quadric,
-            mirror_extent: shape.extent,
-            cube_centre: scene.cube.offset_m.extend(1.0),
-        };
-        let uploads = &mut self.frames.current_mut().uploads;
-        uploads.write(&self.resources.frame, &[frame])?;
-
-        let mut bases: Vec<ViewBasis> = (0..6)
-            .map(|f| ViewBasis::cube_face(scene.cube.offset_m, f))
-            .collect();
-        let o = &scene.observer;
-        let aspect = |w: u32, h: u32| w as f32 / h as f32;
-        let observer = |a| state.observer_view(scene, a);
-        let sensor = |a| state.sensor_view(scene, a);
-        let [ow, oh] = o.resolution;
-        let [sw, sh] = scene.sensor.resolution;
-        let half_pair = aspect(PAIR_SIZE[0] / 2, PAIR_SIZE[1]);
-        bases.push(observer(aspect(ow, oh)));
-        bases.push(sensor(aspect(sw, sh)));
-        bases.push(observer(half_pair));
-        bases.push(sensor(half_pair));
-
-        let half_w = (PAIR_SIZE[0] / 2) as f32;
-        let viewports = [
-            [0.0, 0.0, ow as f32, oh as f32],
-            [0.0, 0.0, sw as f32, sh as f32],
-            [0.0, 0.0, half_w, PAIR_SIZE[1] as f32],
-            [half_w, 0.0, half_w, PAIR_SIZE[1] as f32],
-        ];
-        let size = self.cube.size as f32;
-        let view_data: Vec<ViewData> = bases
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                let (near, far, vp) = if i < 6 {
-                    (scene.cube.near_m, scene.cube.far_m, [0.0, 0.0, size, size])
-                } else {
-                    (
-                        b.near_plane_for(camera_clearance(b.eye, scene.mirror.radius_m)),
-                        view_far(b, scene),
-                        viewports[i - 6],
-                    )
-                };
-                ViewData {
-                    world_to_clip: b.world_to_clip(near, far),
-                    eye: b.eye.extend(1.0),
-                    ray_right: (b.right * b.tan_x).extend(0.0),
-                    ray_down: (b.down * b.tan_y).extend(0.0),
-                    ray_forward: b.forward.extend(0.0),
-                    viewport: Vec4::from_array(vp),
-                    origin_right: (b.right * b.half_x).extend(0.0),
-                    origin_down: (b.down * b.half_y).extend(0.0),
-                }
-            })
-            .collect();
-        debug_assert_eq!(view_data.len(), VIEW_COUNT);
-        uploads.write(&self.resources.views, &view_data)?;
-
-        let walls = state.world_to_render();
-        let mut objects: Vec<ObjectData> = (0..6)
-            .map(|f| object_data(walls, scene.room.wall_materials[f]))
-            .collect();
-        objects.extend(
-            (0..scene.objects.len())
-                .map(|i| object_data(state.object_to_render(scene, i), scene.objects[i].material)),
-        );
-        uploads.write(&self.resources.objects, &objects)?;
-        let bounds = (objects.iter().zip(&self.resources.drawables))
-            .map(|(o, d)| camera::transform_aabb(&o.model_to_world, d.bounds_min, d.bounds_max))
-            .collect();
-        self.drawn = draw::DrawOrder::of(bounds, scene.cube.offset_m);
-        self.mirror
-            .pass
-            .prepare(uploads, &objects, &self.drawn.bounds)?;
-        Ok(bases)
-    }
-}
-
-fn object_data(model: Mat4, material: usize) -> ObjectData {
-    ObjectData {
-        model_to_world: model,
-        normal_to_world: model.inverse().transpose(),
-        material: UVec4::new(material as u32, 0, 0, 0),
     }
 }
