@@ -85,86 +85,21 @@ impl Renderer {
             Some(view) => vec![self.display_slot(view)],
             None => self.view_slots(readback),
         };
-        // A colour view that is not drawn still gets its timestamp, so every query has a
-        // result: those before the first drawn view in slot order are written first, the
-        // others after the drawn views, so the drawn view's time is its own.
-        let colour = [
-            (Slot::Observer, TS_OBSERVER),
-            (Slot::Sensor, TS_SENSOR),
-            (Slot::Pair, TS_PAIR),
-        ];
-        let drawn = |s: Slot| slots.iter().any(|&(d, _)| d == s);
-        let first = colour
-            .iter()
-            .position(|&(s, _)| drawn(s))
-            .unwrap_or(colour.len());
-        let undrawn = |range: std::ops::Range<usize>| {
-            colour[range]
-                .iter()
-                .filter(|&&(s, _)| !drawn(s))
-                .map(|&(_, ts)| ts)
-                .collect::<Vec<u32>>()
-        };
-        let (before, after) = (undrawn(0..first), undrawn(first..colour.len()));
-        let mark = |stamps: &[u32]| {
-            if let Some(q) = &self.queries().timestamps {
-                for &ts in stamps {
-                    q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
-                }
-            }
-        };
-        mark(&before);
+        let (before, after) = undrawn_timestamps(&slots);
+        self.mark(cmd, &before);
         let p = &self.pipelines;
         let mut copies = Copies::default();
         let mut offset = self.cube_readback_bytes(readback);
         for (slot, target) in slots {
-            use MirrorOutput::*;
-            let (ids, ts, stats, output, name): (&[u32], _, _, _, _) = match slot {
-                Slot::Observer => (
-                    &[VIEW_OBSERVER],
-                    Some(TS_OBSERVER),
-                    Some(6),
-                    Colour,
-                    "observer",
-                ),
-                Slot::Sensor => (&[VIEW_SENSOR], Some(TS_SENSOR), Some(7), Colour, "sensor"),
-                Slot::Pair => (
-                    &[VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT],
-                    Some(TS_PAIR),
-                    Some(8),
-                    Colour,
-                    "views",
-                ),
-                Slot::ObserverDirection => (
-                    &[VIEW_OBSERVER],
-                    None,
-                    None,
-                    LookupDirection,
-                    "observer directions",
-                ),
-                Slot::SensorDirection => (
-                    &[VIEW_SENSOR],
-                    None,
-                    None,
-                    LookupDirection,
-                    "sensor directions",
-                ),
-                Slot::SensorRayOrigin => (&[VIEW_SENSOR], None, None, RayOrigin, "sensor rays"),
-                Slot::SensorRayDirection => (
-                    &[VIEW_SENSOR],
-                    None,
-                    None,
-                    RayDirection,
-                    "sensor ray directions",
-                ),
+            let pass = pass_of(slot);
+            let scene = match pass.output {
+                MirrorOutput::Colour => &p.view_scene,
+                _ => &p.depth_only,
             };
-            let scene = if output == Colour {
-                &p.view_scene
-            } else {
-                &p.depth_only
-            };
-            self.record_view(cmd, target, ids, views, (scene, output), stats, name);
-            if let (Some(q), Some(ts)) = (&self.queries().timestamps, ts) {
+            let stats = pass.statistics;
+            let (ids, output) = (pass.views, pass.output);
+            self.record_view(cmd, target, ids, views, (scene, output), stats, pass.name);
+            if let (Some(q), Some(ts)) = (&self.queries().timestamps, pass.timestamp) {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
             if display.is_some() {
@@ -174,8 +109,17 @@ impl Renderer {
             copies.items.push((slot, offset));
             offset += u64::from(target.width) * u64::from(target.height) * texel_bytes(slot);
         }
-        mark(&after);
+        self.mark(cmd, &after);
         copies
+    }
+
+    /// Writes the timestamps `stamps` of views not drawn.
+    fn mark(&self, cmd: vk::CommandBuffer, stamps: &[u32]) {
+        if let Some(q) = &self.queries().timestamps {
+            for &ts in stamps {
+                q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
+            }
+        }
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -272,5 +216,81 @@ impl Renderer {
             DisplayView::Observer => (Slot::Observer, &self.targets.observer),
             DisplayView::Sensor => (Slot::Sensor, &self.targets.sensor),
         }
+    }
+}
+
+/// A colour view that is not drawn still gets its timestamp, so every query has a result:
+/// those before the first drawn view in slot order are written first, the others after the
+/// drawn views, so the drawn view's time is its own. The two lists, in that order.
+fn undrawn_timestamps(slots: &[(Slot, &ViewTarget)]) -> (Vec<u32>, Vec<u32>) {
+    let colour = [
+        (Slot::Observer, TS_OBSERVER),
+        (Slot::Sensor, TS_SENSOR),
+        (Slot::Pair, TS_PAIR),
+    ];
+    let drawn = |s: Slot| slots.iter().any(|&(d, _)| d == s);
+    let first = (colour.iter().position(|&(s, _)| drawn(s))).unwrap_or(colour.len());
+    let undrawn = |range: std::ops::Range<usize>| {
+        (colour[range].iter())
+            .filter(|&&(s, _)| !drawn(s))
+            .map(|&(_, ts)| ts)
+            .collect::<Vec<u32>>()
+    };
+    (undrawn(0..first), undrawn(first..colour.len()))
+}
+
+/// How one view image is drawn: the views it covers, its timestamp and statistics query
+/// (colour views only), what the mirror writes, and its label.
+struct ViewPass {
+    views: &'static [u32],
+    timestamp: Option<u32>,
+    statistics: Option<u32>,
+    output: MirrorOutput,
+    name: &'static str,
+}
+
+/// The table of the view images.
+fn pass_of(slot: Slot) -> ViewPass {
+    use MirrorOutput::*;
+    let pass = |views, timestamp, statistics, output, name| ViewPass {
+        views,
+        timestamp,
+        statistics,
+        output,
+        name,
+    };
+    let pair: &'static [u32] = &[VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT];
+    match slot {
+        Slot::Observer => pass(
+            &[VIEW_OBSERVER],
+            Some(TS_OBSERVER),
+            Some(6),
+            Colour,
+            "observer",
+        ),
+        Slot::Sensor => pass(&[VIEW_SENSOR], Some(TS_SENSOR), Some(7), Colour, "sensor"),
+        Slot::Pair => pass(pair, Some(TS_PAIR), Some(8), Colour, "views"),
+        Slot::ObserverDirection => pass(
+            &[VIEW_OBSERVER],
+            None,
+            None,
+            LookupDirection,
+            "observer directions",
+        ),
+        Slot::SensorDirection => pass(
+            &[VIEW_SENSOR],
+            None,
+            None,
+            LookupDirection,
+            "sensor directions",
+        ),
+        Slot::SensorRayOrigin => pass(&[VIEW_SENSOR], None, None, RayOrigin, "sensor rays"),
+        Slot::SensorRayDirection => pass(
+            &[VIEW_SENSOR],
+            None,
+            None,
+            RayDirection,
+            "sensor ray directions",
+        ),
     }
 }
