@@ -13,6 +13,7 @@ use super::Renderer;
 use crate::scene::state::SceneState;
 use crate::vk::commands::host_read_barrier;
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
+use crate::vk::device::Device;
 use crate::vk::memory::{Buffer, BufferDesc};
 use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
@@ -41,27 +42,53 @@ impl Renderer {
         // reaches the device through a frame slot's uploads, recorded before the dispatches.
         self.acquire_slot()?;
         self.write_frame_buffers(&SceneState::at(&self.scene, 0.0))?;
-
         // One dispatch per material, so the texture index is dynamically uniform.
         let mut order: Vec<usize> = (0..points.len()).collect();
         order.sort_by_key(|&i| points[i].0);
         let sorted: Vec<MaterialSample> = order.iter().map(|&i| points[i].1).collect();
         let device = &Arc::clone(&self.device);
-        let sample_bytes = std::mem::size_of_val(sorted.as_slice()) as u64;
+        let pass = CheckPass::create(device, self.resources.scene_set_layout.raw, &sorted)?;
+        let cmd = self.begin_frame()?;
+        pass.record(cmd, self.resources.scene_set, points, &order);
+        self.submit_slot_and_wait()?;
+        pass.results(&order)
+    }
+}
+
+/// The check's compute pass: the samples in material order, the results, the pipeline and
+/// its sets. Field order is drop order: the pipeline before its layout, the pool before the
+/// set layout.
+struct CheckPass {
+    pipeline: Pipeline,
+    layout: PipelineLayout,
+    set: vk::DescriptorSet,
+    _pool: DescriptorPool,
+    _set_layout: DescriptorSetLayout,
+    results: Buffer,
+    _samples: Buffer,
+    device: Arc<Device>,
+}
+
+impl CheckPass {
+    fn create(
+        device: &Arc<Device>,
+        scene_set_layout: vk::DescriptorSetLayout,
+        sorted: &[MaterialSample],
+    ) -> Result<Self, GpuError> {
+        let sample_bytes = std::mem::size_of_val(sorted) as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let mut samples = Buffer::create(
             device,
             &BufferDesc::new_cpu_to_gpu(sample_bytes, storage),
             "material samples",
         )?;
-        samples.write(&sorted)?;
+        samples.write(sorted)?;
         let results_desc = BufferDesc {
-            size: 16 * points.len() as u64,
+            size: 16 * sorted.len() as u64,
             usage: storage,
             location: MemoryLocation::GpuToCpu,
         };
         let results = Buffer::create(device, &results_desc, "material results")?;
-
         let storage_binding = |b| {
             let kind = vk::DescriptorType::STORAGE_BUFFER;
             descriptors::binding(b, kind, 1, vk::ShaderStageFlags::COMPUTE)
@@ -77,23 +104,13 @@ impl Renderer {
         }];
         let pool = DescriptorPool::create(device, 1, &sizes, "check descriptors")?;
         let set = pool.allocate(&set_layout, "check set")?;
-        descriptors::write_buffer(
-            device,
-            set,
-            0,
-            vk::DescriptorType::STORAGE_BUFFER,
-            samples.raw,
-        );
-        descriptors::write_buffer(
-            device,
-            set,
-            1,
-            vk::DescriptorType::STORAGE_BUFFER,
-            results.raw,
-        );
+        for (binding, buffer) in [(0, &samples), (1, &results)] {
+            let kind = vk::DescriptorType::STORAGE_BUFFER;
+            descriptors::write_buffer(device, set, binding, kind, buffer.raw);
+        }
         let layout = PipelineLayout::create_compute(
             device,
-            &[self.resources.scene_set_layout.raw, set_layout.raw],
+            &[scene_set_layout, set_layout.raw],
             std::mem::size_of::<CheckPush>() as u32,
             "check layout",
         )?;
@@ -103,19 +120,38 @@ impl Renderer {
             crate::shaders::MATERIALS_CHECK_COMP,
             "materials check",
         )?;
+        Ok(Self {
+            pipeline,
+            layout,
+            set,
+            _pool: pool,
+            _set_layout: set_layout,
+            results,
+            _samples: samples,
+            device: Arc::clone(device),
+        })
+    }
 
-        let cmd = self.begin_frame()?;
-        let d = &device.raw;
+    /// One dispatch per run of samples of one material (in `order`), the results then made
+    /// visible to the host.
+    fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        scene_set: vk::DescriptorSet,
+        points: &[(usize, MaterialSample)],
+        order: &[usize],
+    ) {
+        let d = &self.device.raw;
         // SAFETY (whole block): cmd is recording; the pipeline, sets and buffers are live
-        // until after the slot is waited for below; the push range matches the layout.
+        // until after the slot is waited for; the push range matches the layout.
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline.raw);
             d.cmd_bind_descriptor_sets(
                 cmd,
                 vk::PipelineBindPoint::COMPUTE,
-                layout.raw,
+                self.layout.raw,
                 0,
-                &[self.resources.scene_set, set],
+                &[scene_set, self.set],
                 &[],
             );
             let mut first = 0;
@@ -133,7 +169,7 @@ impl Renderer {
                 };
                 d.cmd_push_constants(
                     cmd,
-                    layout.raw,
+                    self.layout.raw,
                     vk::ShaderStageFlags::COMPUTE,
                     0,
                     bytemuck::bytes_of(&push),
@@ -142,16 +178,19 @@ impl Renderer {
                 first += n;
             }
         }
+        let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
         host_read_barrier(
-            device,
+            &self.device,
             cmd,
-            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            stage,
             vk::AccessFlags2::SHADER_STORAGE_WRITE,
         );
-        self.submit_slot_and_wait()?;
+    }
 
-        let bytes = results.mapped()?;
-        let mut out = vec![Vec3::ZERO; points.len()];
+    /// The results (after the frame's fence), back in input order.
+    fn results(&self, order: &[usize]) -> Result<Vec<Vec3>, GpuError> {
+        let bytes = self.results.mapped()?;
+        let mut out = vec![Vec3::ZERO; order.len()];
         for (k, &i) in order.iter().enumerate() {
             let texel = &bytes[16 * k..16 * k + 12];
             let c: [f32; 3] = std::array::from_fn(|j| {
