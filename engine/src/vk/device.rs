@@ -107,80 +107,18 @@ impl Device {
                 missing.join(", ")
             )));
         }
-
-        let priorities = [1.0f32];
-        let queue_infos = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)];
-        // The core set, then what the optional features wanted add (`features.rs`).
-        let mut enables = want.enables(core_enables(&info.features));
-        if let Some(mesh) = &mut enables.mesh {
-            // Mesh and task invocations are counted by the statistics query only with this.
-            *mesh = mesh.mesh_shader_queries(info.features.mesh_shader_queries);
-        }
-        // SAFETY: physical comes from this instance.
-        let offered = unsafe { instance.raw.enumerate_device_extension_properties(physical) }
-            .vk("vkEnumerateDeviceExtensionProperties")?;
-        if let Some(absent) = extra.iter().find(|&&name| {
-            !offered
-                .iter()
-                .any(|e| e.extension_name_as_c_str() == Ok(name))
-        }) {
-            return Err(GpuError::Unsupported(format!(
-                "{} offers no device extension {}",
-                info.name,
-                absent.to_string_lossy()
-            )));
-        }
-        let extensions: Vec<*const std::ffi::c_char> = (extra.iter().chain(&enables.extensions))
-            .map(|name| name.as_ptr())
-            .collect();
-        let Enables {
-            core,
-            v11,
-            v12,
-            v13,
-            mesh,
-            acceleration,
-            ray_query,
-            ..
-        } = &mut enables;
-        let mut create_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_infos)
-            .enabled_features(core)
-            .push_next(v11)
-            .push_next(v12)
-            .push_next(v13);
-        if let Some(m) = mesh {
-            create_info = create_info.push_next(m);
-        }
-        if let Some(a) = acceleration {
-            create_info = create_info.push_next(a);
-        }
-        if let Some(r) = ray_query {
-            create_info = create_info.push_next(r);
-        }
-        let create_info = create_info.enabled_extension_names(&extensions);
-        // SAFETY: physical comes from this instance; create_info points at live locals.
-        let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
-            .vk("vkCreateDevice")?;
-        // SAFETY: family and index 0 were requested above.
+        check_extensions(instance, physical, &info, extra)?;
+        let raw = create_raw(instance, (physical, &info, queue_family), want, extra)?;
+        // SAFETY: family and index 0 were requested at creation.
         let queue = unsafe { raw.get_device_queue(queue_family, 0) };
-
-        let allocator = Allocator::new(&AllocatorCreateDesc {
-            instance: instance.raw.clone(),
-            device: raw.clone(),
-            physical_device: physical,
-            debug_settings: Default::default(),
-            // Buffers read by address (acceleration-structure inputs) need their memory
-            // allocated with the device-address flag.
-            buffer_device_address: want.ray_query,
-            allocation_sizes: Default::default(),
-        })
-        .map_err(|source| GpuError::Alloc {
-            name: "allocator".into(),
-            source,
-        })?;
+        let allocator = match allocator(instance, &raw, physical, want.ray_query) {
+            Ok(allocator) => allocator,
+            Err(e) => {
+                // SAFETY: nothing was made on the device yet.
+                unsafe { raw.destroy_device(None) };
+                return Err(e);
+            }
+        };
         let debug_utils = instance
             .debug_utils
             .as_ref()
@@ -272,6 +210,99 @@ impl Drop for Device {
             self.raw.destroy_device(None);
         }
     }
+}
+
+/// Refuses a device that lacks one of the `extra` extensions, by name.
+fn check_extensions(
+    instance: &Instance,
+    physical: vk::PhysicalDevice,
+    info: &DeviceInfo,
+    extra: &[&'static CStr],
+) -> Result<(), GpuError> {
+    // SAFETY: physical comes from this instance.
+    let offered = unsafe { instance.raw.enumerate_device_extension_properties(physical) }
+        .vk("vkEnumerateDeviceExtensionProperties")?;
+    let has = |name: &CStr| (offered.iter()).any(|e| e.extension_name_as_c_str() == Ok(name));
+    match extra.iter().find(|&&name| !has(name)) {
+        Some(absent) => Err(GpuError::Unsupported(format!(
+            "{} offers no device extension {}",
+            info.name,
+            absent.to_string_lossy()
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// `vkCreateDevice` with one queue of `queue_family`, the core features plus what `want`
+/// adds (`features.rs`), and the extensions both need plus `extra`.
+fn create_raw(
+    instance: &Instance,
+    (physical, info, queue_family): (vk::PhysicalDevice, &DeviceInfo, u32),
+    want: OptionalFeatures,
+    extra: &[&'static CStr],
+) -> Result<ash::Device, GpuError> {
+    let priorities = [1.0f32];
+    let queue_infos = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(queue_family)
+        .queue_priorities(&priorities)];
+    let mut enables = want.enables(core_enables(&info.features));
+    if let Some(mesh) = &mut enables.mesh {
+        // Mesh and task invocations are counted by the statistics query only with this.
+        *mesh = mesh.mesh_shader_queries(info.features.mesh_shader_queries);
+    }
+    let extensions: Vec<*const std::ffi::c_char> = (extra.iter().chain(&enables.extensions))
+        .map(|name| name.as_ptr())
+        .collect();
+    let Enables {
+        core,
+        v11,
+        v12,
+        v13,
+        mesh,
+        acceleration,
+        ray_query,
+        ..
+    } = &mut enables;
+    let mut create_info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queue_infos)
+        .enabled_features(core)
+        .push_next(v11)
+        .push_next(v12)
+        .push_next(v13);
+    if let Some(m) = mesh {
+        create_info = create_info.push_next(m);
+    }
+    if let Some(a) = acceleration {
+        create_info = create_info.push_next(a);
+    }
+    if let Some(r) = ray_query {
+        create_info = create_info.push_next(r);
+    }
+    let create_info = create_info.enabled_extension_names(&extensions);
+    // SAFETY: physical comes from this instance; create_info points at live locals.
+    unsafe { instance.raw.create_device(physical, &create_info, None) }.vk("vkCreateDevice")
+}
+
+/// The memory allocator of a new device. Buffers read by address (acceleration-structure
+/// inputs) need their memory allocated with the device-address flag.
+fn allocator(
+    instance: &Instance,
+    raw: &ash::Device,
+    physical: vk::PhysicalDevice,
+    device_address: bool,
+) -> Result<Allocator, GpuError> {
+    Allocator::new(&AllocatorCreateDesc {
+        instance: instance.raw.clone(),
+        device: raw.clone(),
+        physical_device: physical,
+        debug_settings: Default::default(),
+        buffer_device_address: device_address,
+        allocation_sizes: Default::default(),
+    })
+    .map_err(|source| GpuError::Alloc {
+        name: "allocator".into(),
+        source,
+    })
 }
 
 /// The features every device is created with, whatever the renderer asks for: dynamic
