@@ -121,91 +121,12 @@ impl Instance {
     ) -> Result<Arc<Self>, GpuError> {
         // The process's one loader, its drivers (and the layer) held open: see `loader`.
         let entry = super::loader::entry(desc.validation)?.clone();
-
-        // SAFETY: plain enumeration calls on a loaded entry.
-        let layers = unsafe { entry.enumerate_instance_layer_properties() }
-            .vk("vkEnumerateInstanceLayerProperties")?;
-        let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
-            .vk("vkEnumerateInstanceExtensionProperties")?;
-        let has_layer = layers
-            .iter()
-            .any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER));
-        if desc.validation && !has_layer {
-            return Err(GpuError::NoValidationLayer);
-        }
-        // The layer provides VK_EXT_validation_features, which turns its synchronization
-        // checks on (off by default: hazards such as two unordered writes pass silently).
-        let has_validation_features = desc.validation && {
-            // SAFETY: plain enumeration call for a layer the loader listed.
-            let layer_extensions =
-                unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
-                    .vk("vkEnumerateInstanceExtensionProperties")?;
-            layer_extensions
-                .iter()
-                .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::validation_features::NAME))
-        };
-        if desc.validation && !has_validation_features {
-            return Err(GpuError::NoSynchronizationValidation);
-        }
-        if let Some(absent) = extra.iter().find(|&&name| {
-            !extensions
-                .iter()
-                .any(|e| e.extension_name_as_c_str() == Ok(name))
-        }) {
-            return Err(GpuError::Unsupported(format!(
-                "the Vulkan loader offers no instance extension {}",
-                absent.to_string_lossy()
-            )));
-        }
-        // debug_utils gives object names and labels (RenderDoc) and the messenger.
-        let has_debug_utils = extensions
-            .iter()
-            .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::debug_utils::NAME));
-
-        let app_info = vk::ApplicationInfo::default()
-            .application_name(c"specchio")
-            .application_version(vk::make_api_version(0, 0, 1, 0))
-            .engine_name(c"specchio")
-            // The core renderer needs Vulkan 1.3 (dynamic rendering, synchronization2).
-            .api_version(vk::API_VERSION_1_3);
-        let layer_names: Vec<*const i8> = if desc.validation {
-            vec![VALIDATION_LAYER.as_ptr()]
-        } else {
-            vec![]
-        };
-        let mut extension_names: Vec<*const i8> = Vec::new();
-        if has_debug_utils {
-            extension_names.push(ash::ext::debug_utils::NAME.as_ptr());
-        }
-        if has_validation_features {
-            extension_names.push(ash::ext::validation_features::NAME.as_ptr());
-        }
-        extension_names.extend(extra.iter().map(|name| name.as_ptr()));
-        let enabled_checks = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-        let mut validation_features =
-            vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_checks);
+        let offered = Offered::check(&entry, desc.validation, extra)?;
         let log: Arc<ValidationLog> = Arc::default();
-        // One messenger description for the chain of vkCreateInstance (messages from the call
-        // itself) and one for the messenger proper: a chained struct gets a pNext, which
-        // vkCreateDebugUtilsMessengerEXT must not see.
-        let mut messenger_for_create = messenger_info(&log);
-        let mut create_info = vk::InstanceCreateInfo::default()
-            .application_info(&app_info)
-            .enabled_layer_names(&layer_names)
-            .enabled_extension_names(&extension_names);
-        if has_validation_features {
-            create_info = create_info.push_next(&mut validation_features);
-        }
-        let use_messenger = desc.validation && has_debug_utils;
-        if use_messenger {
-            // Chained so that messages from vkCreateInstance itself are caught too.
-            create_info = create_info.push_next(&mut messenger_for_create);
-        }
-        // SAFETY: every pointer in create_info points at locals that outlive the call.
-        let raw = unsafe { entry.create_instance(&create_info, None) }.vk("vkCreateInstance")?;
-
+        let use_messenger = desc.validation && offered.debug_utils;
+        let raw = create_raw(&entry, desc.validation, extra, offered, &log)?;
         let debug_utils =
-            has_debug_utils.then(|| ash::ext::debug_utils::Instance::new(&entry, &raw));
+            (offered.debug_utils).then(|| ash::ext::debug_utils::Instance::new(&entry, &raw));
         let mut messenger = vk::DebugUtilsMessengerEXT::null();
         if let (true, Some(du)) = (use_messenger, &debug_utils) {
             // SAFETY: user data points into `log`'s allocation, dropped after the messenger.
@@ -248,6 +169,109 @@ impl Drop for Instance {
         // SAFETY: every child object holds an Arc<Instance>, so none is alive any more.
         unsafe { self.raw.destroy_instance(None) };
     }
+}
+
+/// What the loader offers of what the instance may enable.
+#[derive(Clone, Copy)]
+struct Offered {
+    /// `VK_EXT_debug_utils`: object names and labels (RenderDoc) and the messenger.
+    debug_utils: bool,
+    /// `VK_EXT_validation_features` (from the layer), which turns its synchronization checks
+    /// on (off by default: hazards such as two unordered writes pass silently).
+    validation_features: bool,
+}
+
+impl Offered {
+    /// Asks the loader; refuses validation without the layer or its synchronization checks,
+    /// and an `extra` extension the loader lacks, by name.
+    fn check(
+        entry: &ash::Entry,
+        validation: bool,
+        extra: &[&'static CStr],
+    ) -> Result<Self, GpuError> {
+        // SAFETY: plain enumeration calls on a loaded entry.
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }
+            .vk("vkEnumerateInstanceLayerProperties")?;
+        let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .vk("vkEnumerateInstanceExtensionProperties")?;
+        let has_layer = (layers.iter()).any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER));
+        if validation && !has_layer {
+            return Err(GpuError::NoValidationLayer);
+        }
+        let validation_features = validation && {
+            // SAFETY: plain enumeration call for a layer the loader listed.
+            let layer_extensions =
+                unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
+                    .vk("vkEnumerateInstanceExtensionProperties")?;
+            (layer_extensions.iter())
+                .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::validation_features::NAME))
+        };
+        if validation && !validation_features {
+            return Err(GpuError::NoSynchronizationValidation);
+        }
+        let has =
+            |name: &CStr| (extensions.iter()).any(|e| e.extension_name_as_c_str() == Ok(name));
+        if let Some(absent) = extra.iter().find(|&&name| !has(name)) {
+            return Err(GpuError::Unsupported(format!(
+                "the Vulkan loader offers no instance extension {}",
+                absent.to_string_lossy()
+            )));
+        }
+        Ok(Self {
+            debug_utils: has(ash::ext::debug_utils::NAME),
+            validation_features,
+        })
+    }
+}
+
+/// `vkCreateInstance` for Vulkan 1.3 with the layer when validating, debug utils where
+/// offered, the synchronization checks on, and `extra`; messages from the call itself go to
+/// `log`.
+fn create_raw(
+    entry: &ash::Entry,
+    validation: bool,
+    extra: &[&'static CStr],
+    offered: Offered,
+    log: &Arc<ValidationLog>,
+) -> Result<ash::Instance, GpuError> {
+    let app_info = vk::ApplicationInfo::default()
+        .application_name(c"specchio")
+        .application_version(vk::make_api_version(0, 0, 1, 0))
+        .engine_name(c"specchio")
+        // The core renderer needs Vulkan 1.3 (dynamic rendering, synchronization2).
+        .api_version(vk::API_VERSION_1_3);
+    let layer_names: Vec<*const i8> = match validation {
+        true => vec![VALIDATION_LAYER.as_ptr()],
+        false => vec![],
+    };
+    let mut extension_names: Vec<*const i8> = Vec::new();
+    if offered.debug_utils {
+        extension_names.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
+    if offered.validation_features {
+        extension_names.push(ash::ext::validation_features::NAME.as_ptr());
+    }
+    extension_names.extend(extra.iter().map(|name| name.as_ptr()));
+    let enabled_checks = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut validation_features =
+        vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_checks);
+    // One messenger description for the chain of vkCreateInstance (messages from the call
+    // itself) and one for the messenger proper: a chained struct gets a pNext, which
+    // vkCreateDebugUtilsMessengerEXT must not see.
+    let mut messenger_for_create = messenger_info(log);
+    let mut create_info = vk::InstanceCreateInfo::default()
+        .application_info(&app_info)
+        .enabled_layer_names(&layer_names)
+        .enabled_extension_names(&extension_names);
+    if offered.validation_features {
+        create_info = create_info.push_next(&mut validation_features);
+    }
+    if validation && offered.debug_utils {
+        // Chained so that messages from vkCreateInstance itself are caught too.
+        create_info = create_info.push_next(&mut messenger_for_create);
+    }
+    // SAFETY: every pointer in create_info points at locals that outlive the call.
+    unsafe { entry.create_instance(&create_info, None) }.vk("vkCreateInstance")
 }
 
 /// The messenger: warnings and errors of every type, into `log`.
