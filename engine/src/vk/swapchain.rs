@@ -93,46 +93,10 @@ impl Swapchain {
         };
         let format = choose_format(&support.formats, blittable)?;
         let present_mode = choose_present_mode(&support.present_modes, desc.present);
-        // The viewer blits into the images (TRANSFER_DST) and reads one back for screenshots.
-        if !caps
-            .supported_usage_flags
-            .contains(vk::ImageUsageFlags::TRANSFER_DST)
-        {
-            return Err(GpuError::Unsupported(
-                "the window's swapchain images cannot be transfer destinations".into(),
-            ));
-        }
-        let readable = caps
-            .supported_usage_flags
-            .contains(vk::ImageUsageFlags::TRANSFER_SRC);
-        let drawable = caps
-            .supported_usage_flags
-            .contains(vk::ImageUsageFlags::COLOR_ATTACHMENT);
-        let mut usage = vk::ImageUsageFlags::TRANSFER_DST;
-        if readable {
-            usage |= vk::ImageUsageFlags::TRANSFER_SRC;
-        }
-        if drawable {
-            usage |= vk::ImageUsageFlags::COLOR_ATTACHMENT;
-        }
-        // One more than the minimum, so acquiring never waits for the presentation engine to
-        // release an image while we could be drawing (0 means no maximum).
-        let mut count = caps.min_image_count + 1;
-        if caps.max_image_count > 0 {
-            count = count.min(caps.max_image_count);
-        }
-        let alpha = [
-            vk::CompositeAlphaFlagsKHR::OPAQUE,
-            vk::CompositeAlphaFlagsKHR::INHERIT,
-            vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
-            vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
-        ]
-        .into_iter()
-        .find(|&a| caps.supported_composite_alpha.contains(a))
-        .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE);
+        let usage = choose_usage(caps.supported_usage_flags)?;
         let info = vk::SwapchainCreateInfoKHR::default()
             .surface(surface.raw)
-            .min_image_count(count)
+            .min_image_count(image_count(&caps))
             .image_format(format.format)
             .image_color_space(format.color_space)
             .image_extent(extent)
@@ -140,7 +104,7 @@ impl Swapchain {
             .image_usage(usage)
             .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
             .pre_transform(caps.current_transform)
-            .composite_alpha(alpha)
+            .composite_alpha(choose_alpha(caps.supported_composite_alpha))
             .present_mode(present_mode)
             .clipped(true)
             .old_swapchain(old.map_or(vk::SwapchainKHR::null(), |o| o.raw));
@@ -154,16 +118,24 @@ impl Swapchain {
             format,
             extent,
             present_mode,
-            readable,
+            readable: usage.contains(vk::ImageUsageFlags::TRANSFER_SRC),
             views: Vec::new(),
             loader,
             _surface: Arc::clone(surface),
             device: Arc::clone(device),
         };
-        // SAFETY: raw was just created.
-        swapchain.images =
-            unsafe { swapchain.loader.get_swapchain_images(raw) }.vk("vkGetSwapchainImagesKHR")?;
-        for i in 0..swapchain.images.len() {
+        swapchain.per_image(usage.contains(vk::ImageUsageFlags::COLOR_ATTACHMENT))?;
+        Ok(Some(swapchain))
+    }
+
+    /// The images, and per image its "drawn" semaphore and (where it can be drawn into,
+    /// `drawable`) its colour view. Anything made is destroyed with the swapchain.
+    fn per_image(&mut self, drawable: bool) -> Result<(), GpuError> {
+        let device = &self.device;
+        // SAFETY: the swapchain was just created.
+        self.images =
+            unsafe { self.loader.get_swapchain_images(self.raw) }.vk("vkGetSwapchainImagesKHR")?;
+        for (i, &image) in self.images.iter().enumerate() {
             // SAFETY: valid create info on a live device.
             let s = unsafe {
                 device
@@ -171,15 +143,15 @@ impl Swapchain {
                     .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
             }
             .vk("vkCreateSemaphore")?;
-            swapchain.render_done.push(s);
+            self.render_done.push(s);
             device.set_name(s, &format!("swapchain image {i} drawn"));
-            device.set_name(swapchain.images[i], &format!("swapchain image {i}"));
+            device.set_name(image, &format!("swapchain image {i}"));
             if drawable {
-                let view = color_view(device, swapchain.images[i], format.format)?;
-                swapchain.views.push(view);
+                self.views
+                    .push(color_view(device, image, self.format.format)?);
             }
         }
-        Ok(Some(swapchain))
+        Ok(())
     }
 
     /// Acquires the next image; `image_available` is signalled when it may be written.
@@ -283,6 +255,42 @@ fn choose_extent(caps: &vk::SurfaceCapabilitiesKHR, window: [u32; 2]) -> Option<
         }
     };
     (extent.width > 0 && extent.height > 0).then_some(extent)
+}
+
+/// The images' usage: the viewer blits into them (TRANSFER_DST, required), reads one back
+/// for screenshots (TRANSFER_SRC) and draws the menu into them (COLOR_ATTACHMENT) where the
+/// surface allows.
+fn choose_usage(supported: vk::ImageUsageFlags) -> Result<vk::ImageUsageFlags, GpuError> {
+    if !supported.contains(vk::ImageUsageFlags::TRANSFER_DST) {
+        return Err(GpuError::Unsupported(
+            "the window's swapchain images cannot be transfer destinations".into(),
+        ));
+    }
+    let optional = vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::COLOR_ATTACHMENT;
+    Ok(vk::ImageUsageFlags::TRANSFER_DST | (supported & optional))
+}
+
+/// One more than the minimum, so acquiring never waits for the presentation engine to
+/// release an image while we could be drawing (a maximum of 0 means none).
+fn image_count(caps: &vk::SurfaceCapabilitiesKHR) -> u32 {
+    let count = caps.min_image_count + 1;
+    match caps.max_image_count {
+        0 => count,
+        max => count.min(max),
+    }
+}
+
+/// Opaque where the surface allows it, else the first mode it offers.
+fn choose_alpha(supported: vk::CompositeAlphaFlagsKHR) -> vk::CompositeAlphaFlagsKHR {
+    [
+        vk::CompositeAlphaFlagsKHR::OPAQUE,
+        vk::CompositeAlphaFlagsKHR::INHERIT,
+        vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
+        vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
+    ]
+    .into_iter()
+    .find(|&a| supported.contains(a))
+    .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE)
 }
 
 fn is_srgb(format: vk::Format) -> bool {
