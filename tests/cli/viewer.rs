@@ -294,26 +294,35 @@ fn a_window_destroyed_from_outside_ends_the_viewer_cleanly() {
 }
 
 /// The display connection killed under the viewer (`xdotool windowkill`: the X server drops
-/// the client) ends it with Xlib's message and exit status 1, not a panic: Xlib's handler of
-/// a lost connection ends the process itself (nothing can be drawn or torn down through a
-/// display that is gone; the process's exit frees it all).
+/// the client) ends it with a message and exit status 1, not a panic or a crash: Xlib's
+/// handler of a lost connection ends the process itself (nothing can be drawn or torn down
+/// through a display that is gone), and the viewer's handler does it with `_exit`. Xlib's
+/// default handler called `exit`, whose exit handlers tore the driver down under the present
+/// thread: SIGSEGV in 3 of 8 runs of this file, 0 of 8 since. Run several times.
 #[test]
 fn a_killed_display_connection_ends_the_viewer_with_a_message() {
     let Some(x) = xvfb_with_xdotool() else { return };
-    let viewer = Running::spawn(&x, &[thesis_room().to_str().unwrap(), "--frames", "100000"]);
-    viewer.wait_for("swapchain: ");
-    let id = viewer_window(&x);
-    xdotool(&x, &["windowkill", &id]);
-    let (out, _) = viewer.exit();
-    let stderr = text(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    // Xlib's own words, which vary with where it noticed: "X connection to :N broken" or
-    // "XIO: fatal IO error".
-    assert!(
-        stderr.contains("X connection") || stderr.contains("XIO:"),
-        "{stderr}"
-    );
+    let scene = thesis_room();
+    for attempt in 0..3 {
+        let viewer = Running::spawn(&x, &[scene.to_str().unwrap(), "--frames", "100000"]);
+        viewer.wait_for("swapchain: ");
+        let id = viewer_window(&x);
+        xdotool(&x, &["windowkill", &id]);
+        let (out, _) = viewer.exit();
+        let stderr = text(&out.stderr);
+        let status = out.status;
+        assert_eq!(
+            status.code(),
+            Some(1),
+            "attempt {attempt}: {status:?}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        let said = format!("X connection to {} broken", x.display);
+        assert!(
+            stderr.contains(&said) && stderr.contains("the viewer cannot go on"),
+            "attempt {attempt}: {stderr}"
+        );
+    }
 }
 
 /// A slow frame holds nothing but itself. The third frame is held on the GPU

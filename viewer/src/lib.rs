@@ -138,6 +138,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         display,
         RawDisplayHandle::Xlib(_) | RawDisplayHandle::Xcb(_)
     );
+    if on_x11 {
+        failures::end_cleanly_when_the_display_breaks();
+    }
     if chosen.short_name == "swiftshader" && on_x11 {
         // Measured: Chromium's SwiftShader build (the one scripts/setup.sh unpacks) crashes
         // inside vkGetPhysicalDeviceSurfaceCapabilitiesKHR on an X11 window; refused here
