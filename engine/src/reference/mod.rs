@@ -15,19 +15,16 @@ mod camera_rays;
 pub mod geometry;
 pub mod intersect;
 pub mod materials;
+mod render;
 mod room;
 
-use std::time::Instant;
-
 use glam::{Vec2, Vec3};
-use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::image::RgbaImage;
 use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
 use crate::scene::{MaterialKind, Scene};
-use camera_rays::CameraRays;
 use geometry::SceneGeometry;
 use intersect::{mirror_reflection, offset_ray_origin};
 
@@ -147,16 +144,6 @@ struct Sample {
     via_mirror: bool,
     rays: u32,
     missed: bool,
-}
-
-/// One pixel: its centre sample (for the per-pixel layers), the averaged colour, the rays it
-/// took and how many met nothing.
-#[derive(Debug, Clone, Copy)]
-struct Pixel {
-    centre: Sample,
-    color: Vec3,
-    rays: u32,
-    misses: u32,
 }
 
 /// The scene prepared for tracing at one instant.
@@ -298,131 +285,6 @@ impl<'a> Reference<'a> {
         let centre = self.scene.cube.offset_m + self.shift;
         let to = sample.reflected_hit + self.shift;
         self.geometry.surfaces_between(centre, to)
-    }
-
-    /// Renders a camera at `width` x `height` with `spp` samples per pixel at the cell centres
-    /// of [`sample_offsets`] (spp = 1 traces the pixel centre, exactly the rasterizer's sample
-    /// point). The per-pixel layers (direction, distance, object) are those of the pixel centre:
-    /// one of the samples when the pattern has it, else one more path per pixel.
-    pub fn render(
-        &self,
-        view: &ViewBasis,
-        width: u32,
-        height: u32,
-        spp: u32,
-    ) -> (ReferenceImages, ReferenceStats) {
-        let spp = spp.clamp(1, MAX_SPP);
-        let offsets = sample_offsets(spp);
-        let centre_index = offsets.iter().position(|o| *o == Vec2::splat(0.5));
-        let start = Instant::now();
-        // An orthographic view's rays start all over its image plane: no one box to test.
-        let clear = !view.is_orthographic() && self.nothing_before_mirror(view.eye);
-        let camera = CameraRays::new(view, width, height, &offsets);
-        let rows: Vec<Vec<Pixel>> = (0..height)
-            .into_par_iter()
-            .map(|y| {
-                let row_terms = camera.row_terms(y);
-                (0..width)
-                    .map(|x| {
-                        let (mut sum, mut rays, mut misses) = (Vec3::ZERO, 0u32, 0u32);
-                        let mut centre = None;
-                        for k in 0..offsets.len() {
-                            let from = camera.origin(x, y, k);
-                            let s = self.trace(from, camera.ray(x, k, &row_terms), clear);
-                            sum += s.color;
-                            rays += s.rays;
-                            misses += u32::from(s.missed);
-                            if Some(k) == centre_index {
-                                centre = Some(s);
-                            }
-                        }
-                        // Not one of the samples: traced for the layers only (not a colour
-                        // sample, so it is counted apart from the camera paths).
-                        let centre = centre.unwrap_or_else(|| {
-                            let c =
-                                self.trace(camera.centre_origin(x, y), camera.centre(x, y), clear);
-                            rays += c.rays;
-                            c
-                        });
-                        Pixel {
-                            centre,
-                            color: sum / spp as f32,
-                            rays,
-                            misses,
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
-        let trace = start.elapsed();
-        // After the timing: a segment query per mirror pixel, not part of the camera paths.
-        let hidden: Vec<u32> = rows
-            .par_iter()
-            .flat_map_iter(|row| row.iter().map(|p| self.hidden_from_centre(&p.centre)))
-            .collect();
-        let image = |f: &dyn Fn(&Pixel, u32) -> [f32; 4]| RgbaImage {
-            width,
-            height,
-            pixels: rows
-                .iter()
-                .flatten()
-                .zip(&hidden)
-                .map(|(p, &h)| f(p, h))
-                .collect(),
-        };
-        let images = ReferenceImages {
-            color: image(&|p, _| [p.color.x, p.color.y, p.color.z, 1.0]),
-            direction: image(&|p, _| {
-                let from_cube = p.centre.reflected_hit - self.scene.cube.offset_m;
-                // A reflected ray that met nothing has no point to look at: 0, as the GPU's.
-                let d = if p.centre.via_mirror && !p.centre.missed {
-                    from_cube.normalize_or_zero()
-                } else {
-                    Vec3::ZERO
-                };
-                [d.x, d.y, d.z, if p.centre.via_mirror { 1.0 } else { 0.0 }]
-            }),
-            distance: image(&|p, _| [p.centre.reflected_t, p.centre.primary_t, 0.0, 1.0]),
-            object: image(&|p, hidden| {
-                [
-                    p.centre.object,
-                    if p.centre.via_mirror { 1.0 } else { 0.0 },
-                    hidden as f32,
-                    1.0,
-                ]
-            }),
-        };
-        let rays: u64 = rows.iter().flatten().map(|p| u64::from(p.rays)).sum();
-        let mut hidden_layers = [0u64; 8];
-        for (p, &h) in rows.iter().flatten().zip(&hidden) {
-            if p.centre.via_mirror {
-                hidden_layers[(h as usize).min(7)] += 1;
-            }
-        }
-        let stats = ReferenceStats {
-            triangles: self.geometry.triangle_count(),
-            bvh_build_core_ms: self.geometry.build_core.as_secs_f64() * 1e3,
-            bvh_build_total_ms: self.geometry.build_total.as_secs_f64() * 1e3,
-            rays,
-            trace_ms: trace.as_secs_f64() * 1e3,
-            rays_per_second: rays as f64 / trace.as_secs_f64().max(1e-9),
-            mirror_pixels: rows
-                .iter()
-                .flatten()
-                .filter(|p| p.centre.via_mirror)
-                .count() as u64,
-            misses: rows.iter().flatten().map(|p| u64::from(p.misses)).sum(),
-            camera_paths: u64::from(width) * u64::from(height) * u64::from(spp),
-            centre_paths: if centre_index.is_some() {
-                0
-            } else {
-                u64::from(width) * u64::from(height)
-            },
-            hidden_layers,
-            spp,
-            threads: rayon::current_num_threads(),
-        };
-        (images, stats)
     }
 }
 
