@@ -7,6 +7,7 @@
 //! readback); `present.rs` blits it into the swapchain image. `app.rs` is the event loop.
 
 mod app;
+mod blit;
 mod clock;
 mod demand;
 mod failures;

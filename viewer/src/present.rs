@@ -12,13 +12,14 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 use ash::vk;
 use specchio::render::display::DisplayImage;
-use specchio::vk::commands::{image_barriers, ImageBarrier};
+
 use specchio::vk::device::Device;
 use specchio::vk::frames::{FrameRing, FRAMES_IN_FLIGHT};
 use specchio::vk::memory::{Buffer, BufferDesc};
 use specchio::vk::surface::Surface;
 use specchio::vk::swapchain::{Acquired, PresentPreference, Swapchain, SwapchainDesc};
 
+use super::blit::{record_blit, record_finish};
 use super::overlay::{Overlay, Paint, Textures};
 use super::present_thread::PresentThread;
 
@@ -263,188 +264,6 @@ fn overlay_format(swapchain: Option<&Swapchain>) -> Option<(vk::Format, bool)> {
         .map(|s| (s.format.format, s.is_srgb()))
 }
 
-/// Records: source COPY -> BLIT; target UNDEFINED -> TRANSFER_DST; a clear where the blit
-/// leaves bars; the blit; source BLIT -> COPY (for the renderer's next frame, see
-/// `DisplayImage`). The target is left in TRANSFER_DST, written at BLIT (and CLEAR).
-fn record_blit(
-    device: &Device,
-    cmd: vk::CommandBuffer,
-    source: &DisplayImage,
-    target: vk::Image,
-    extent: vk::Extent2D,
-) {
-    use vk::AccessFlags2 as A;
-    use vk::ImageLayout as L;
-    use vk::PipelineStageFlags2 as S;
-    let whole = COLOR_RANGE;
-    let src_layout = L::TRANSFER_SRC_OPTIMAL;
-    let dst = |from: (L, S, A), to: (L, S, A)| ImageBarrier {
-        image: target,
-        range: whole,
-        from,
-        to,
-    };
-    let write_stages = S::BLIT | S::CLEAR;
-    image_barriers(
-        device,
-        cmd,
-        &[
-            // The renderer made its writes visible to COPY; chain on to the blit's reads.
-            ImageBarrier {
-                image: source.image,
-                range: source.range,
-                from: (src_layout, S::COPY, A::NONE),
-                to: (src_layout, S::BLIT, A::TRANSFER_READ),
-            },
-            // First scope = the stages that waited on the acquire semaphore (chaining).
-            dst(
-                (L::UNDEFINED, write_stages, A::NONE),
-                (L::TRANSFER_DST_OPTIMAL, write_stages, A::TRANSFER_WRITE),
-            ),
-        ],
-    );
-    let (rect, covers) = fit(source.width, source.height, extent);
-    let d = &device.raw;
-    if !covers {
-        let black = vk::ClearColorValue {
-            float32: [0.0, 0.0, 0.0, 1.0],
-        };
-        // SAFETY: the image is in TRANSFER_DST layout; the range is its only subresource.
-        unsafe { d.cmd_clear_color_image(cmd, target, L::TRANSFER_DST_OPTIMAL, &black, &[whole]) };
-        image_barriers(
-            device,
-            cmd,
-            &[dst(
-                (L::TRANSFER_DST_OPTIMAL, S::CLEAR, A::TRANSFER_WRITE),
-                (L::TRANSFER_DST_OPTIMAL, S::BLIT, A::TRANSFER_WRITE),
-            )],
-        );
-    }
-    let layers = COLOR_LAYER;
-    let corner = |x: u32, y: u32| vk::Offset3D {
-        x: x as i32,
-        y: y as i32,
-        z: 1,
-    };
-    let region = vk::ImageBlit {
-        src_subresource: layers,
-        src_offsets: [vk::Offset3D::default(), corner(source.width, source.height)],
-        dst_subresource: layers,
-        dst_offsets: [
-            vk::Offset3D {
-                x: rect[0] as i32,
-                y: rect[1] as i32,
-                z: 0,
-            },
-            corner(rect[0] + rect[2], rect[1] + rect[3]),
-        ],
-    };
-    // 1:1 copies every texel exactly; a scaled view is filtered.
-    let filter = if [rect[2], rect[3]] == [source.width, source.height] {
-        vk::Filter::NEAREST
-    } else {
-        vk::Filter::LINEAR
-    };
-    // SAFETY: both images are in the layouts named, the regions lie inside them.
-    unsafe {
-        d.cmd_blit_image(
-            cmd,
-            source.image,
-            src_layout,
-            target,
-            L::TRANSFER_DST_OPTIMAL,
-            &[region],
-            filter,
-        )
-    };
-    // The view image is free for the renderer's next frame (see `DisplayImage`).
-    let source_done = ImageBarrier {
-        image: source.image,
-        range: source.range,
-        from: (src_layout, S::BLIT, A::NONE),
-        to: (src_layout, S::COPY, A::NONE),
-    };
-    image_barriers(device, cmd, &[source_done]);
-}
-
-/// Records the end of a frame: `target` from `last` (the blit's or the menu's writes) to
-/// PRESENT_SRC, or via TRANSFER_SRC and a copy into `readback` (the screenshot).
-fn record_finish(
-    device: &Device,
-    cmd: vk::CommandBuffer,
-    target: vk::Image,
-    extent: vk::Extent2D,
-    last: (vk::ImageLayout, vk::PipelineStageFlags2, vk::AccessFlags2),
-    readback: Option<&Buffer>,
-) {
-    use vk::AccessFlags2 as A;
-    use vk::ImageLayout as L;
-    use vk::PipelineStageFlags2 as S;
-    let dst = |from, to| ImageBarrier {
-        image: target,
-        range: COLOR_RANGE,
-        from,
-        to,
-    };
-    let present = (L::PRESENT_SRC_KHR, S::NONE, A::NONE);
-    let Some(buffer) = readback else {
-        image_barriers(device, cmd, &[dst(last, present)]);
-        return;
-    };
-    let readable = (L::TRANSFER_SRC_OPTIMAL, S::COPY, A::TRANSFER_READ);
-    image_barriers(device, cmd, &[dst(last, readable)]);
-    let copy = vk::BufferImageCopy::default()
-        .image_subresource(COLOR_LAYER)
-        .image_extent(vk::Extent3D {
-            width: extent.width,
-            height: extent.height,
-            depth: 1,
-        });
-    // SAFETY: the image is in TRANSFER_SRC layout; the buffer holds width x height x 4 bytes.
-    unsafe {
-        device.raw.cmd_copy_image_to_buffer(
-            cmd,
-            target,
-            L::TRANSFER_SRC_OPTIMAL,
-            buffer.raw,
-            &[copy],
-        )
-    };
-    specchio::vk::commands::host_read_barrier(device, cmd, S::COPY, A::TRANSFER_WRITE);
-    image_barriers(device, cmd, &[dst(readable, present)]);
-}
-
-/// The one colour subresource of a swapchain image.
-const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
-    aspect_mask: vk::ImageAspectFlags::COLOR,
-    base_mip_level: 0,
-    level_count: 1,
-    base_array_layer: 0,
-    layer_count: 1,
-};
-const COLOR_LAYER: vk::ImageSubresourceLayers = vk::ImageSubresourceLayers {
-    aspect_mask: vk::ImageAspectFlags::COLOR,
-    mip_level: 0,
-    base_array_layer: 0,
-    layer_count: 1,
-};
-
-/// Where a `w` x `h` image goes in `extent`: [x, y, width, height], as large as fits with its
-/// aspect ratio kept, centred; and whether it covers the whole extent.
-pub fn fit(w: u32, h: u32, extent: vk::Extent2D) -> ([u32; 4], bool) {
-    let (ew, eh) = (u64::from(extent.width), u64::from(extent.height));
-    let (w64, h64) = (u64::from(w), u64::from(h));
-    // Width-limited when ew / eh <= w / h (compared in integers: no rounding).
-    let (fw, fh) = if ew * h64 <= eh * w64 {
-        (ew, (ew * h64 / w64).max(1))
-    } else {
-        ((eh * w64 / h64).max(1), eh)
-    };
-    let (x, y) = ((ew - fw) / 2, (eh - fh) / 2);
-    let rect = [x as u32, y as u32, fw as u32, fh as u32];
-    (rect, fw == ew && fh == eh)
-}
-
 /// The read-back swapchain image as RGB8 (the swapchain's byte order undone).
 fn read_screenshot(
     buffer: &Buffer,
@@ -473,23 +292,4 @@ fn read_screenshot(
         height: extent.height,
         rgb8,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn e(width: u32, height: u32) -> vk::Extent2D {
-        vk::Extent2D { width, height }
-    }
-
-    #[test]
-    fn an_image_fits_its_window_with_its_aspect_kept() {
-        assert_eq!(fit(1200, 450, e(1200, 450)), ([0, 0, 1200, 450], true));
-        // Twice as tall a window: bars above and below.
-        assert_eq!(fit(1200, 450, e(1200, 900)), ([0, 225, 1200, 450], false));
-        // A wider window: bars left and right.
-        assert_eq!(fit(800, 600, e(1000, 600)), ([100, 0, 800, 600], false));
-        assert_eq!(fit(800, 600, e(400, 300)), ([0, 0, 400, 300], true));
-    }
 }
