@@ -325,6 +325,32 @@ fn a_killed_display_connection_ends_the_viewer_with_a_message() {
     }
 }
 
+/// The window's surface lost mid-run (provoked: `SPECCHIO_FAULT_SURFACE_LOST`, presents after
+/// the first N answer `VK_ERROR_SURFACE_LOST_KHR`) ends the viewer cleanly, saying so: exit 0
+/// (the window is gone, as when it is destroyed), no panic, no validation message.
+#[test]
+fn a_lost_surface_ends_the_viewer_cleanly() {
+    let Some(x) = Xvfb::start() else { return };
+    for after in ["0", "5"] {
+        let out = x
+            .command(&[thesis_room().to_str().unwrap(), "--frames", "100"])
+            .env(specchio::vk::fault::SURFACE_LOST_VAR, after)
+            .output()
+            .expect("specchio view runs");
+        let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+        assert!(out.status.success(), "after {after} presents: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(!stderr.contains("Validation"), "{stderr}");
+        assert!(
+            stdout.contains("the window's surface was lost")
+                && stdout.contains("ERROR_SURFACE_LOST_KHR"),
+            "after {after} presents: {stdout}"
+        );
+        // It ended there: not the 100 frames asked for.
+        assert!(!stdout.contains("frames: 100,"), "{stdout}");
+    }
+}
+
 /// A slow frame holds nothing but itself. The third frame is held on the GPU
 /// (`SPECCHIO_FAULT_HOLD_FRAME`, engine/src/vk/fault.rs: its submission waits for a semaphore
 /// the viewer signals only once its loop has ended), and meanwhile keys are answered: `e`

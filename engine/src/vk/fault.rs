@@ -1,4 +1,4 @@
-//! Faults on demand for tests: a lost device, and a frame held on the GPU.
+//! Faults on demand for tests: a lost device, a lost surface, and a frame held on the GPU.
 //!
 //! A lost device on demand, for the tests of what no CPU driver does when asked: lose its
 //! device (a GPU reset, a driver crash, an unplugged eGPU). With
@@ -34,6 +34,27 @@ pub fn fence_wait(result: Result<(), vk::Result>) -> Result<(), vk::Result> {
     match after() {
         Some(n) if WAITS.fetch_add(1, Ordering::SeqCst) >= n => {
             result.and(Err(vk::Result::ERROR_DEVICE_LOST))
+        }
+        _ => result,
+    }
+}
+
+/// The variable that loses the surface: with `SPECCHIO_FAULT_SURFACE_LOST=N`, every present
+/// after the first N answers `VK_ERROR_SURFACE_LOST_KHR` (after the real present), as when the
+/// window system takes the surface away; no CPU driver's surface can be lost on demand.
+pub const SURFACE_LOST_VAR: &str = "SPECCHIO_FAULT_SURFACE_LOST";
+
+/// The presents answered so far.
+static PRESENTS: AtomicU64 = AtomicU64::new(0);
+
+/// A present's result as the surface gives it, or `ERROR_SURFACE_LOST_KHR` once the fault is
+/// due.
+pub fn present(result: Result<bool, vk::Result>) -> Result<bool, vk::Result> {
+    static AFTER: OnceLock<Option<u64>> = OnceLock::new();
+    let after = *AFTER.get_or_init(|| std::env::var(SURFACE_LOST_VAR).ok()?.trim().parse().ok());
+    match after {
+        Some(n) if PRESENTS.fetch_add(1, Ordering::SeqCst) >= n => {
+            result.and(Err(vk::Result::ERROR_SURFACE_LOST_KHR))
         }
         _ => result,
     }

@@ -188,7 +188,8 @@ impl Swapchain {
         // SAFETY: the image was acquired and its drawing submitted with `wait[0]` to signal;
         // the queue is held. (The caller keeps the swapchain itself to one thread at a time:
         // the viewer acquires only after the last present returned.)
-        match unsafe { self.loader.queue_present(*queue, &info) } {
+        let presented = unsafe { self.loader.queue_present(*queue, &info) };
+        match super::fault::present(presented) {
             Ok(suboptimal) => Ok(suboptimal),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(true),
             Err(result) => Err(GpuError::Vk {
