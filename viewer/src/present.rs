@@ -147,14 +147,42 @@ impl Presenter {
                 return Ok((Shown::Skipped, None));
             }
         };
-        let target = swapchain.images[index as usize];
-        let cmd = self.ring.slot().cmd;
         let readback = screenshot
             .then(|| {
                 let bytes = u64::from(extent.width) * u64::from(extent.height) * 4;
                 Buffer::create(&self.device, &BufferDesc::new_readback(bytes), "screenshot")
             })
             .transpose()?;
+        let cmd = self.ring.slot().cmd;
+        self.record_image(cmd, swapchain, index, (source, paint), readback.as_ref())?;
+        let drawn = swapchain.render_done[index as usize];
+        // The blit (and the clear before it) write the image first: they wait for its
+        // acquisition; the menu pass after them is ordered by barriers.
+        let wait_stage = vk::PipelineStageFlags2::BLIT | vk::PipelineStageFlags2::CLEAR;
+        self.ring.submit((slot_semaphore, wait_stage), drawn)?;
+        self.presents.present(swapchain, index)?;
+        let shot = match readback {
+            Some(buffer) => {
+                self.ring.wait_all()?;
+                Some(read_screenshot(&buffer, extent, format)?)
+            }
+            None => None,
+        };
+        Ok((Shown::Presented, shot))
+    }
+
+    /// Records swapchain image `index`'s frame: the view blitted in, the menu drawn over it
+    /// (when it paints anything), then the image made ready to present (and copied into
+    /// `readback` for a screenshot).
+    fn record_image(
+        &self,
+        cmd: vk::CommandBuffer,
+        swapchain: &Swapchain,
+        index: u32,
+        (source, paint): (&DisplayImage, Option<&mut Paint>),
+        readback: Option<&Buffer>,
+    ) -> Result<()> {
+        let (target, extent) = (swapchain.images[index as usize], swapchain.extent);
         record_blit(&self.device, cmd, source, target, extent);
         let mut last = (
             vk::ImageLayout::TRANSFER_DST_OPTIMAL,
@@ -171,21 +199,8 @@ impl Presenter {
                 vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
             );
         }
-        record_finish(&self.device, cmd, target, extent, last, readback.as_ref());
-        let drawn = swapchain.render_done[index as usize];
-        // The blit (and the clear before it) write the image first: they wait for its
-        // acquisition; the menu pass after them is ordered by barriers.
-        let wait_stage = vk::PipelineStageFlags2::BLIT | vk::PipelineStageFlags2::CLEAR;
-        self.ring.submit((slot_semaphore, wait_stage), drawn)?;
-        self.presents.present(swapchain, index)?;
-        let shot = match readback {
-            Some(buffer) => {
-                self.ring.wait_all()?;
-                Some(read_screenshot(&buffer, extent, format)?)
-            }
-            None => None,
-        };
-        Ok((Shown::Presented, shot))
+        record_finish(&self.device, cmd, target, extent, last, readback);
+        Ok(())
     }
 
     /// Replaces the swapchain for the window's current size; `false` when the window has no
