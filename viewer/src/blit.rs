@@ -174,7 +174,7 @@ const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
     base_array_layer: 0,
     layer_count: 1,
 };
-pub(super) const COLOR_LAYER: vk::ImageSubresourceLayers = vk::ImageSubresourceLayers {
+const COLOR_LAYER: vk::ImageSubresourceLayers = vk::ImageSubresourceLayers {
     aspect_mask: vk::ImageAspectFlags::COLOR,
     mip_level: 0,
     base_array_layer: 0,

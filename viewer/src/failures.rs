@@ -99,8 +99,11 @@ pub(super) fn end_cleanly_when_the_display_breaks() {
 
 /// Xlib's IO error handler (see [`end_cleanly_when_the_display_breaks`]).
 unsafe extern "C" fn display_broken(_: *mut x11_dl::xlib::Display) -> std::os::raw::c_int {
+    use std::io::Write;
     let display = std::env::var("DISPLAY").unwrap_or_default();
-    eprintln!(
+    // Not eprintln!: a closed stderr would panic it, and a panic cannot leave this function.
+    let _ = writeln!(
+        std::io::stderr(),
         "X connection to {display} broken (the X server or this client's connection is gone): \
          the viewer cannot go on"
     );

@@ -4,7 +4,8 @@
 //! lookup and the refresh policy (docs/viewer.md).
 //!
 //! The renderer draws one view image per frame exactly as `specchio render` does (no
-//! readback); `present.rs` blits it into the swapchain image. `app.rs` is the event loop.
+//! readback); `present.rs` hands it to `blit.rs`, which blits it into the swapchain image, and
+//! `present_thread.rs` presents it. `app/` is the event loop.
 
 mod app;
 mod blit;
