@@ -23,12 +23,13 @@ mod present_thread;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use specchio::output::{Sink, Transaction};
 use specchio::render::lookups;
 use specchio::render::methods::Method;
-use specchio::scene::Lookup;
+use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::{Device, DeviceDesc, OptionalFeatures};
 use specchio::vk::instance::{Instance, InstanceDesc};
 use specchio::vk::surface::Surface;
@@ -120,22 +121,6 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         "cannot connect to the display; `specchio render` renders without one (headless)",
     )?;
     let display = event_loop.display_handle()?.as_raw();
-    let extensions = Surface::required_extensions(display)?;
-    let instance =
-        Instance::create_with_extensions(&InstanceDesc::from_env(args.validate), &extensions)?;
-    let log = instance.validation_log();
-    let chosen = specchio::vk::device::choose(&instance, args.device.as_deref())?;
-    if let Some(why) = args.method.missing_features(&chosen) {
-        bail!(
-            "method {} cannot run on {}: {why}",
-            args.method,
-            chosen.name
-        );
-    }
-    let lookup_used = args.lookup.unwrap_or(scene.mirror.lookup);
-    if let Some(why) = lookups::missing_features(lookup_used, &chosen) {
-        bail!("lookup {lookup_used} cannot run on {}: {why}", chosen.name);
-    }
     let on_x11 = matches!(
         display,
         RawDisplayHandle::Xlib(_) | RawDisplayHandle::Xcb(_)
@@ -143,43 +128,14 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if on_x11 {
         failures::end_cleanly_when_the_display_breaks();
     }
-    if chosen.short_name == "swiftshader" && on_x11 {
-        // Measured: Chromium's SwiftShader build (the one scripts/setup.sh unpacks) crashes
-        // inside vkGetPhysicalDeviceSurfaceCapabilitiesKHR on an X11 window; refused here
-        // rather than crashing. On Wayland it presents (tested; docs/viewer.md).
-        bail!(
-            "--device swiftshader cannot present to an X11 window (its build crashes querying \
-             the window's surface); run the viewer on Wayland, use lavapipe, or `specchio \
-             render --device swiftshader` without a window"
-        );
-    }
-    let features = switchable_features(&chosen);
-    let desc = DeviceDesc {
-        selector: args.device.clone(),
-        features,
-    };
-    let device = Device::create_with_extensions(&instance, &desc, &[ash::khr::swapchain::NAME])?;
+    let extensions = Surface::required_extensions(display)?;
+    let instance =
+        Instance::create_with_extensions(&InstanceDesc::from_env(args.validate), &extensions)?;
+    let log = instance.validation_log();
+    let device = open_device(args, &instance, &scene, on_x11)?;
 
     // 3. The event loop until the window closes (or --frames are done).
-    let settings = app::Settings {
-        method: args.method,
-        lookup: args.lookup,
-        cube_size: args.cube_size,
-        size: args.size,
-        keys,
-        frames: args.frames,
-        screenshot: args.screenshot.is_some(),
-        present: if args.mailbox {
-            PresentPreference::Mailbox
-        } else {
-            PresentPreference::Fifo
-        },
-        scene_name: args.scene.display().to_string(),
-        scene_path: args.scene.clone(),
-        widgets: args.widgets,
-        renew_menu_renderer: args.renew_menu_renderer,
-    };
-    let outcome = app::run(event_loop, &instance, &device, scene, settings);
+    let outcome = app::run(event_loop, &instance, &device, scene, settings(args, keys));
     drop(device);
     drop(instance);
     let outcome = specchio::process::validation::checked(&log, outcome)?;
@@ -196,6 +152,70 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The device the viewer draws with (`--device`, or the default): refused when it cannot
+/// run the method or the lookup asked for, or present to this window; created with every
+/// feature a method or lookup it may switch to needs, and the swapchain extension.
+fn open_device(
+    args: &Args,
+    instance: &Arc<Instance>,
+    scene: &Scene,
+    on_x11: bool,
+) -> Result<Arc<Device>> {
+    let chosen = specchio::vk::device::choose(instance, args.device.as_deref())?;
+    if let Some(why) = args.method.missing_features(&chosen) {
+        bail!(
+            "method {} cannot run on {}: {why}",
+            args.method,
+            chosen.name
+        );
+    }
+    let lookup_used = args.lookup.unwrap_or(scene.mirror.lookup);
+    if let Some(why) = lookups::missing_features(lookup_used, &chosen) {
+        bail!("lookup {lookup_used} cannot run on {}: {why}", chosen.name);
+    }
+    if chosen.short_name == "swiftshader" && on_x11 {
+        // Measured: Chromium's SwiftShader build (the one scripts/setup.sh unpacks) crashes
+        // inside vkGetPhysicalDeviceSurfaceCapabilitiesKHR on an X11 window; refused here
+        // rather than crashing. On Wayland it presents (tested; docs/viewer.md).
+        bail!(
+            "--device swiftshader cannot present to an X11 window (its build crashes querying \
+             the window's surface); run the viewer on Wayland, use lavapipe, or `specchio \
+             render --device swiftshader` without a window"
+        );
+    }
+    let desc = DeviceDesc {
+        selector: args.device.clone(),
+        features: switchable_features(&chosen),
+    };
+    Ok(Device::create_with_extensions(
+        instance,
+        &desc,
+        &[ash::khr::swapchain::NAME],
+    )?)
+}
+
+/// What the event loop is told of the command line.
+fn settings(args: &Args, keys: Vec<input::Action>) -> app::Settings {
+    app::Settings {
+        method: args.method,
+        lookup: args.lookup,
+        cube_size: args.cube_size,
+        size: args.size,
+        keys,
+        frames: args.frames,
+        screenshot: args.screenshot.is_some(),
+        present: if args.mailbox {
+            PresentPreference::Mailbox
+        } else {
+            PresentPreference::Fifo
+        },
+        scene_name: args.scene.display().to_string(),
+        scene_path: args.scene.clone(),
+        widgets: args.widgets,
+        renew_menu_renderer: args.renew_menu_renderer,
+    }
 }
 
 /// Without a display server there is no window: say so, and what to run instead.
