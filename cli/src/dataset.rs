@@ -61,16 +61,7 @@ pub struct Args {
 
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Every input checked before the output folder exists.
-    let poses = match (&args.trajectory, args.grid) {
-        (Some(path), _) => Poses::Trajectory(path),
-        (None, Some(spacing_m)) => Poses::Grid {
-            spacing_m,
-            headings: args.headings.unwrap_or(1),
-            time_s: args.time.unwrap_or(0.0),
-        },
-        (None, None) => anyhow::bail!("give the poses: --trajectory FILE or --grid SPACING"),
-    };
-    let plan = Plan::new(&args.scene, poses)?;
+    let plan = Plan::new(&args.scene, poses(args)?)?;
     let n = plan.poses.len();
     let mut folder = Folder::stage(&args.out, n)?;
     specchio::process::interrupt::catch();
@@ -86,32 +77,13 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if let Some(warning) = truth.warning() {
         eprintln!("warning: dataset ({lookup} lookup): {warning}");
     }
-    if args.resume {
-        let key = plan.run_key(lookup, truth, &resume::device_key(&device.info));
-        let done = folder.resume(&key)?;
-        if done > 0 {
-            let work = resume::work_path(&args.out);
-            specchio::say!(
-                "resuming: {done} of {n} frame(s) done in {}",
-                work.display()
-            );
-        }
-    } else if resume::work_path(&args.out).exists() {
-        let work = resume::work_path(&args.out).display().to_string();
-        eprintln!("note: {work} holds a stopped run; --resume goes on from it");
-    }
+    let key = || plan.run_key(lookup, truth, &resume::device_key(&device.info));
+    take_up(args, &mut folder, key, n)?;
 
     // 3. The frames, then the index and the summary.
     let progress = indicatif::ProgressBar::new(n as u64);
     progress.set_position(folder.done() as u64);
-    let resumable = args.resume;
-    let stop = |at: &str| {
-        specchio::process::interrupt::check(at).map_err(|e| match resumable {
-            // The finished frames are kept: not "nothing was written".
-            true => DatasetError::Stopped(format!("interrupted {at}")),
-            false => DatasetError::Stopped(e.to_string()),
-        })
-    };
+    let stop = |at: &str| stopped(args.resume, at);
     let mut between = |i: usize| stop(&format!("before frame {i} of {n}"));
     let mut written = |done: usize| {
         progress.set_position(done as u64);
@@ -122,28 +94,12 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     drop(frames);
     drop(device);
     let (done, work) = (folder.done(), folder.work_folder().map(Path::to_owned));
-    // Gone when the output was placed with an earlier one kept aside: done with.
-    // Asked once the run has ended: gone when the output was placed (with an earlier one
-    // kept aside), and then nothing is kept.
-    let kept = |e: &DatasetError| {
-        let placed = matches!(e, DatasetError::Output(OutputError::KeptAside { .. }));
-        (work.as_deref()).filter(|w| !placed && done > 0 && w.join(resume::JOURNAL).exists())
-    };
     let placed = wrote.and_then(|()| {
         let ready = folder.finish(&plan.record(lookup, truth))?;
         stop("before placing the output")?;
         Ok(ready.commit()?)
     });
-    let left = placed.map_err(|e| match kept(&e) {
-        // What was done is kept: say where, and how to go on.
-        Some(work) => anyhow::anyhow!(
-            "{:#}\n{done} of {n} frame(s) are kept in {}: the same command with --resume goes on \
-             from there",
-            anyhow::Error::from(e),
-            work.display()
-        ),
-        None => e.into(),
-    })?;
+    let left = placed.map_err(|e| say_what_is_kept(e, work.as_deref(), done, n))?;
     for left in left {
         eprintln!("warning: the work folder is not removed entirely: {left}");
     }
@@ -157,4 +113,67 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     );
     specchio::process::validation::verdict(&log.messages())?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The poses the command line gives: a trajectory file, or a grid over the room.
+fn poses(args: &Args) -> Result<Poses<'_>> {
+    Ok(match (&args.trajectory, args.grid) {
+        (Some(path), _) => Poses::Trajectory(path),
+        (None, Some(spacing_m)) => Poses::Grid {
+            spacing_m,
+            headings: args.headings.unwrap_or(1),
+            time_s: args.time.unwrap_or(0.0),
+        },
+        (None, None) => anyhow::bail!("give the poses: --trajectory FILE or --grid SPACING"),
+    })
+}
+
+/// With `--resume`: the frames a stopped run (whose `key` must be this one's) kept are taken
+/// up, and said. Without: a stopped run's work folder is pointed out, and left alone.
+fn take_up(
+    args: &Args,
+    folder: &mut Folder,
+    key: impl FnOnce() -> resume::RunKey,
+    n: usize,
+) -> Result<()> {
+    let work = resume::work_path(&args.out);
+    if args.resume {
+        let done = folder.resume(&key())?;
+        if done > 0 {
+            specchio::say!(
+                "resuming: {done} of {n} frame(s) done in {}",
+                work.display()
+            );
+        }
+    } else if work.exists() {
+        let work = work.display();
+        eprintln!("note: {work} holds a stopped run; --resume goes on from it");
+    }
+    Ok(())
+}
+
+/// A stop asked for (Ctrl-C, a signal) at `at`; with `--resume` the finished frames are kept,
+/// so it does not say that nothing was written.
+fn stopped(resumable: bool, at: &str) -> Result<(), DatasetError> {
+    specchio::process::interrupt::check(at).map_err(|e| match resumable {
+        true => DatasetError::Stopped(format!("interrupted {at}")),
+        false => DatasetError::Stopped(e.to_string()),
+    })
+}
+
+/// The run's failure, with where its `done` finished frames are kept (in the work folder
+/// `work`) and how to go on, when some are. Asked once the run has ended: when the output was
+/// placed (with an earlier one kept aside), nothing is kept.
+fn say_what_is_kept(e: DatasetError, work: Option<&Path>, done: usize, n: usize) -> anyhow::Error {
+    let placed = matches!(e, DatasetError::Output(OutputError::KeptAside { .. }));
+    let kept = work.filter(|w| !placed && done > 0 && w.join(resume::JOURNAL).exists());
+    match kept {
+        Some(work) => anyhow::anyhow!(
+            "{:#}\n{done} of {n} frame(s) are kept in {}: the same command with --resume goes on \
+             from there",
+            anyhow::Error::from(e),
+            work.display()
+        ),
+        None => e.into(),
+    }
 }
