@@ -29,96 +29,112 @@ impl Ctx<'_> {
                     format!("duplicate material name \"{}\"", m.name),
                 ));
             }
-            // Which optional fields each type takes; any other present field is an error.
-            let allowed: &[&str] = match m.kind {
-                MaterialType::Color => &["color"],
-                MaterialType::Checker => &["a", "b", "tiles"],
-                MaterialType::Grid => &["background", "line", "tiles", "line_width"],
-                MaterialType::Texture => &["file", "tint", "tiles"],
-                MaterialType::Direction => &[],
-            };
-            let present = [
-                ("color", m.color.is_some()),
-                ("a", m.a.is_some()),
-                ("b", m.b.is_some()),
-                ("tiles", m.tiles.is_some()),
-                ("background", m.background.is_some()),
-                ("line", m.line.is_some()),
-                ("line_width", m.line_width.is_some()),
-                ("file", m.file.is_some()),
-                ("tint", m.tint.is_some()),
-            ];
-            for (name, is_set) in present {
-                if is_set && !allowed.contains(&name) {
-                    return Err(self.unused(
-                        &f(name),
-                        &format!("a material of type {:?} takes only {:?}", m.kind, allowed),
-                    ));
-                }
-            }
-            let need = |v: Option<V3>, name: &str| -> R<Vec3> {
-                match v {
-                    Some(v) => self.color(&f(name), v),
-                    None => Err(self.missing(&f(name), &format!("{:?} materials need it", m.kind))),
-                }
-            };
-            let tiles =
-                |default: f64| -> R<f32> { self.positive(&f("tiles"), m.tiles.unwrap_or(default)) };
-            let kind = match m.kind {
-                MaterialType::Color => MaterialKind::Color {
-                    color: need(m.color, "color")?,
-                },
-                MaterialType::Checker => MaterialKind::Checker {
-                    a: need(m.a, "a")?,
-                    b: need(m.b, "b")?,
-                    tiles: tiles(8.0)?,
-                },
-                MaterialType::Grid => MaterialKind::Grid {
-                    background: need(m.background, "background")?,
-                    line: need(m.line, "line")?,
-                    tiles: tiles(8.0)?,
-                    line_width: match m.line_width {
-                        Some(w) => self.ranged(&f("line_width"), w, Range::above(0.0, 0.5))?,
-                        None => 0.05,
-                    },
-                },
-                MaterialType::Texture => {
-                    let Some(file) = &m.file else {
-                        return Err(self.missing(&f("file"), "texture materials need a PNG file"));
-                    };
-                    let path = self.dir.join(file);
-                    let index = match textures.iter().position(|t| t.path == path) {
-                        Some(index) => index,
-                        None => {
-                            let t = TextureData::from_png(&path).map_err(|message| {
-                                SceneError::Asset {
-                                    location: self.loc.location(&f("file")),
-                                    field: f("file"),
-                                    asset: path.clone(),
-                                    message,
-                                }
-                            })?;
-                            textures.push(t);
-                            self.texture_budget(&f("file"), textures)?;
-                            textures.len() - 1
-                        }
-                    };
-                    MaterialKind::Texture {
-                        texture: index,
-                        tint: match m.tint {
-                            Some(t) => self.color(&f("tint"), t)?,
-                            None => Vec3::ONE,
-                        },
-                        tiles: tiles(1.0)?,
-                    }
-                }
-                MaterialType::Direction => MaterialKind::Direction,
-            };
+            self.only_its_fields(i, m)?;
             out.push(Material {
                 name: m.name.clone(),
-                kind,
+                kind: self.material_kind(i, m, textures)?,
             });
         }
         Ok(out)
+    }
+
+    /// Refuses a field that material `i`'s type does not take.
+    fn only_its_fields(&self, i: usize, m: &MaterialSpec) -> R<()> {
+        let allowed: &[&str] = match m.kind {
+            MaterialType::Color => &["color"],
+            MaterialType::Checker => &["a", "b", "tiles"],
+            MaterialType::Grid => &["background", "line", "tiles", "line_width"],
+            MaterialType::Texture => &["file", "tint", "tiles"],
+            MaterialType::Direction => &[],
+        };
+        let present = [
+            ("color", m.color.is_some()),
+            ("a", m.a.is_some()),
+            ("b", m.b.is_some()),
+            ("tiles", m.tiles.is_some()),
+            ("background", m.background.is_some()),
+            ("line", m.line.is_some()),
+            ("line_width", m.line_width.is_some()),
+            ("file", m.file.is_some()),
+            ("tint", m.tint.is_some()),
+        ];
+        match present
+            .into_iter()
+            .find(|&(name, set)| set && !allowed.contains(&name))
+        {
+            Some((name, _)) => Err(self.unused(
+                &format!("materials[{i}].{name}"),
+                &format!("a material of type {:?} takes only {:?}", m.kind, allowed),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// Material `i`'s type with its values checked (a texture's file read once).
+    fn material_kind(
+        &self,
+        i: usize,
+        m: &MaterialSpec,
+        textures: &mut Vec<TextureData>,
+    ) -> R<MaterialKind> {
+        let f = |name: &str| format!("materials[{i}].{name}");
+        let need = |v: Option<V3>, name: &str| -> R<Vec3> {
+            match v {
+                Some(v) => self.color(&f(name), v),
+                None => Err(self.missing(&f(name), &format!("{:?} materials need it", m.kind))),
+            }
+        };
+        let tiles =
+            |default: f64| -> R<f32> { self.positive(&f("tiles"), m.tiles.unwrap_or(default)) };
+        Ok(match m.kind {
+            MaterialType::Color => MaterialKind::Color {
+                color: need(m.color, "color")?,
+            },
+            MaterialType::Checker => MaterialKind::Checker {
+                a: need(m.a, "a")?,
+                b: need(m.b, "b")?,
+                tiles: tiles(8.0)?,
+            },
+            MaterialType::Grid => MaterialKind::Grid {
+                background: need(m.background, "background")?,
+                line: need(m.line, "line")?,
+                tiles: tiles(8.0)?,
+                line_width: match m.line_width {
+                    Some(w) => self.ranged(&f("line_width"), w, Range::above(0.0, 0.5))?,
+                    None => 0.05,
+                },
+            },
+            MaterialType::Texture => MaterialKind::Texture {
+                texture: self.texture(i, m, textures)?,
+                tint: match m.tint {
+                    Some(t) => self.color(&f("tint"), t)?,
+                    None => Vec3::ONE,
+                },
+                tiles: tiles(1.0)?,
+            },
+            MaterialType::Direction => MaterialKind::Direction,
+        })
+    }
+
+    /// Texture material `i`'s image: an index into `textures`, read from its PNG the first
+    /// time a material names the file.
+    fn texture(&self, i: usize, m: &MaterialSpec, textures: &mut Vec<TextureData>) -> R<usize> {
+        let f = |name: &str| format!("materials[{i}].{name}");
+        let Some(file) = &m.file else {
+            return Err(self.missing(&f("file"), "texture materials need a PNG file"));
+        };
+        let path = self.dir.join(file);
+        if let Some(index) = textures.iter().position(|t| t.path == path) {
+            return Ok(index);
+        }
+        let t = TextureData::from_png(&path).map_err(|message| SceneError::Asset {
+            location: self.loc.location(&f("file")),
+            field: f("file"),
+            asset: path.clone(),
+            message,
+        })?;
+        textures.push(t);
+        self.texture_budget(&f("file"), textures)?;
+        Ok(textures.len() - 1)
     }
 }
