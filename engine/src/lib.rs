@@ -12,6 +12,8 @@
 //! - [`vk`]: the Vulkan layer, one module per concept (instance, device, memory, image,
 //!   descriptors, pipeline, commands, queries), each owning its handles;
 //! - [`shaders`]: SPIR-V compiled from `shaders/` at build time;
+//! - [`lookup_registry`]: the mirror lookups, one entry each, which the scene and the
+//!   renderer both read;
 //! - [`render`]: the renderer: GPU structs, the cube fill methods (plug-ins, see
 //!   [`render::methods`]) and the observer / sensor views with the analytic mirror;
 //! - [`reference`]: the exact CPU ray-traced mirror (BVH, watertight triangles, analytic sphere);
@@ -24,6 +26,7 @@
 
 pub mod files;
 pub mod image;
+pub mod lookup_registry;
 pub mod memory;
 pub mod metrics;
 pub mod mirror;

@@ -71,6 +71,7 @@ fn create_pass(
         return Err(GpuError::Unsupported(format!("lookup {lookup}: {why}")));
     }
     lookups::plugin(lookup).create(&lookups::LookupContext {
+        lookup,
         device,
         resources,
         cube,

@@ -131,54 +131,42 @@ pub const DEFAULT_SECANT_STEPS: u32 = 2;
 pub const MAX_DISTANCE_STEPS: u32 = 256;
 pub const MAX_SECANT_STEPS: u32 = 32;
 
-/// How the mirror turns a reflected ray into a cube-map lookup direction.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Lookup {
-    /// The thesis: look up the reflected direction R itself (exact only for an environment
-    /// infinitely far away).
-    #[default]
-    Plain,
-    /// Parallax-corrected: intersect the reflected ray from the mirror point with the room's
-    /// box and look up the direction from the cube's centre to that point (exact for an empty
-    /// box room, up to texel sampling).
-    Box,
-    /// Exact: the reflected ray is traced through the scene on the GPU (ray queries); no
-    /// cube map.
-    RayQuery,
-    /// Distance-searched: the reflected ray is marched through the cube's own depth (each
-    /// texel's distance from the cube's centre) and the colour is looked up where it meets
-    /// it (Szirmay-Kalos et al. 2005). Exact for surfaces the cube's centre sees.
-    Distance,
-    /// Distance-searched, with the exact ray for the rays the search cannot resolve: where
-    /// it crossed a jump in the stored distance that was not a hit (the ray passed behind an
-    /// occluder, as seen from the cube's centre) or found nothing, the reflected ray is traced
-    /// (ray queries). Exact wherever it falls back; `distance` elsewhere.
-    DistanceExact,
+/// Makes [`Lookup`] from the registry's entries (`crate::lookup_registry`): the variants with
+/// their docs, their names (serde's too), and `ALL` in the registry's order.
+macro_rules! lookup_enum {
+    ($( $(#[$doc:meta])* $variant:ident = $name:literal => $plugin:path; )*) => {
+        /// How the mirror turns a reflected ray into a cube-map lookup direction. The
+        /// variants are the registry's (`crate::lookup_registry`); what each needs and does
+        /// lives in its plug-in (`render::lookups`): the scene only names it.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+        pub enum Lookup {
+            $( $(#[$doc])* #[serde(rename = $name)] $variant, )*
+        }
+
+        impl Lookup {
+            /// Every lookup, in the order the CLI, `specchio info` and the docs list them.
+            pub const ALL: [Lookup; [$($name),*].len()] = [$(Lookup::$variant),*];
+
+            /// The name in scene files, on the command line and in every report (kebab-case).
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Lookup::$variant => $name,)*
+                }
+            }
+        }
+    };
+}
+
+crate::lookup_registry::with_lookups!(lookup_enum);
+
+/// The registry's first: the thesis's lookup.
+impl Default for Lookup {
+    fn default() -> Self {
+        Lookup::ALL[0]
+    }
 }
 
 impl Lookup {
-    /// Every lookup, in the order the CLI, `specchio info` and the docs list them. What each
-    /// needs and does lives in its plug-in (`render::lookups`); the scene only names it.
-    pub const ALL: [Lookup; 5] = [
-        Lookup::Plain,
-        Lookup::Box,
-        Lookup::RayQuery,
-        Lookup::Distance,
-        Lookup::DistanceExact,
-    ];
-
-    /// The name in scene files, on the command line and in every report (kebab-case).
-    pub fn name(self) -> &'static str {
-        match self {
-            Lookup::Plain => "plain",
-            Lookup::Box => "box",
-            Lookup::RayQuery => "ray-query",
-            Lookup::Distance => "distance",
-            Lookup::DistanceExact => "distance-exact",
-        }
-    }
-
     pub fn parse(name: &str) -> Option<Lookup> {
         Self::ALL.into_iter().find(|l| l.name() == name)
     }

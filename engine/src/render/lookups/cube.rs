@@ -12,14 +12,12 @@ use crate::vk::GpuError;
 
 /// A lookup into the cube map.
 pub struct CubeLookup {
-    lookup: Lookup,
     start: Start,
     summary: &'static str,
     rungs: &'static [Rung],
 }
 
 pub static PLAIN: CubeLookup = CubeLookup {
-    lookup: Lookup::Plain,
     start: Start::Reflection,
     summary: "the cube map in the reflected direction (the thesis; exact only for an \
               environment infinitely far away)",
@@ -32,7 +30,6 @@ pub static PLAIN: CubeLookup = CubeLookup {
 };
 
 pub static BOX: CubeLookup = CubeLookup {
-    lookup: Lookup::Box,
     start: Start::RoomBox,
     summary: "the cube map towards where the reflected ray leaves the room's box \
               (parallax-corrected; exact for an empty box room up to texel sampling)",
@@ -45,10 +42,6 @@ pub static BOX: CubeLookup = CubeLookup {
 };
 
 impl MirrorLookup for CubeLookup {
-    fn lookup(&self) -> Lookup {
-        self.lookup
-    }
-
     fn summary(&self) -> &'static str {
         self.summary
     }

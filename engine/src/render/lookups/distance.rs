@@ -23,10 +23,6 @@ use crate::vk::GpuError;
 pub struct Distance;
 
 impl MirrorLookup for Distance {
-    fn lookup(&self) -> Lookup {
-        Lookup::Distance
-    }
-
     fn summary(&self) -> &'static str {
         "the reflected ray searched through the cube's depth, looked up where it meets it \
          (exact for surfaces the cube's centre sees, up to the search's steps)"

@@ -43,10 +43,6 @@ const TALLY_BINDING: u32 = TRACE_BINDING + 4;
 pub struct DistanceExact;
 
 impl MirrorLookup for DistanceExact {
-    fn lookup(&self) -> Lookup {
-        Lookup::DistanceExact
-    }
-
     fn summary(&self) -> &'static str {
         "the distance search, with the rays it cannot resolve (behind an occluder as the \
          cube's centre sees it) traced exactly (VK_KHR_ray_query)"
@@ -75,7 +71,7 @@ impl MirrorLookup for DistanceExact {
     }
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
-        SceneTrace::require(ctx, self.lookup().name())?;
+        SceneTrace::require(ctx, ctx.lookup.name())?;
         Ok(Box::new(DistanceExactPass::create(ctx)?))
     }
 }

@@ -5,12 +5,12 @@
 //! ([`LookupPass`]: its mirror pipelines, the descriptor set they read at set 1, and any
 //! per-frame work of its own).
 //!
-//! The scene file names a lookup ([`Lookup`]; the scene module has no Vulkan, so the name lives
-//! there); everything else about it lives in its module here: what it needs, the direction its
-//! shader starts from ([`Start`], the one choice the shared shader code makes), its shaders,
-//! its pass and its rungs in the benchmark's ladder ([`Rung`]). Adding a lookup is a variant
-//! of `Lookup`, its module and shaders, and one line in [`REGISTRY`]; nothing in
-//! `shared.glsl`, the benchmark or the CLI.
+//! The scene file names a lookup ([`Lookup`]); everything else about it lives in its module
+//! here: what it needs, the direction its shader starts from ([`Start`], the one choice the
+//! shared shader code makes), its shaders, its pass and its rungs in the benchmark's ladder
+//! ([`Rung`]). Adding a lookup is its module and shaders and one entry in the registry
+//! ([`crate::lookup_registry`]), which makes both the scene's `Lookup` and [`REGISTRY`];
+//! nothing in the scene, `shared.glsl`, the benchmark or the CLI.
 
 /// The order the tracing lookups hand their acceleration-structure builds their leaves in.
 pub mod build_order;
@@ -41,19 +41,18 @@ use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::uploads::FrameUploads;
 use crate::vk::GpuError;
 
-/// Every lookup's plug-in, in [`Lookup::ALL`]'s order (a test checks it).
-static REGISTRY: &[&dyn MirrorLookup] = &[
-    &cube::PLAIN,
-    &cube::BOX,
-    &ray_query::RayQuery,
-    &distance::Distance,
-    &distance_exact::DistanceExact,
-];
+/// Makes [`REGISTRY`] from the registry's entries: each lookup with its plug-in.
+macro_rules! plugin_table {
+    ($( $(#[$doc:meta])* $variant:ident = $name:literal => $plugin:path; )*) => {
+        /// Every lookup's plug-in, in [`Lookup::ALL`]'s order.
+        static REGISTRY: &[(Lookup, &dyn MirrorLookup)] = &[$((Lookup::$variant, &$plugin)),*];
+    };
+}
+
+crate::lookup_registry::with_lookups!(plugin_table);
 
 /// One mirror lookup: what it is, what it needs, and how it makes its per-renderer pass.
 pub trait MirrorLookup: Sync {
-    /// The lookup this plug-in implements (its name comes from there).
-    fn lookup(&self) -> Lookup;
     /// One line saying what the mirror shows and when it is exact (CLI help, `info`, docs).
     fn summary(&self) -> &'static str;
     /// What the device must have.
@@ -112,7 +111,7 @@ pub fn as_is(_: &mut crate::scene::Scene) {}
 
 /// The ladder: every lookup's rungs, in their order.
 pub fn ladder() -> Vec<&'static Rung> {
-    let mut all: Vec<&'static Rung> = REGISTRY.iter().flat_map(|l| l.rungs()).collect();
+    let mut all: Vec<&'static Rung> = REGISTRY.iter().flat_map(|(_, l)| l.rungs()).collect();
     all.sort_by_key(|r| r.order);
     all
 }
@@ -126,6 +125,8 @@ pub struct LookupNeeds {
 
 /// What a lookup's pass is built from.
 pub struct LookupContext<'a> {
+    /// The lookup being built (for its messages).
+    pub lookup: Lookup,
     pub device: &'a Arc<Device>,
     pub resources: &'a SceneResources,
     /// The cube map (colour and depth) the cube lookups read.
@@ -247,10 +248,8 @@ impl MirrorPipelines {
 
 /// The plug-in of `lookup`.
 pub fn plugin(lookup: Lookup) -> &'static dyn MirrorLookup {
-    *REGISTRY
-        .iter()
-        .find(|p| p.lookup() == lookup)
-        .expect("every Lookup has a plug-in (tested)")
+    // The registry makes both, in one order.
+    REGISTRY[lookup as usize].1
 }
 
 /// Why the device cannot run `lookup` (None: it can).
@@ -269,18 +268,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn registry_matches_the_scene_lookups_one_to_one_in_order() {
-        let ids: Vec<Lookup> = REGISTRY.iter().map(|p| p.lookup()).collect();
-        assert_eq!(ids, Lookup::ALL);
-        for l in Lookup::ALL {
-            assert_eq!(Lookup::parse(l.name()), Some(l));
+    fn the_registry_makes_one_lookup_per_plugin_in_order() {
+        assert_eq!(REGISTRY.len(), Lookup::ALL.len());
+        for (i, ((l, _), all)) in REGISTRY.iter().zip(Lookup::ALL).enumerate() {
+            assert_eq!(*l, all);
+            assert_eq!(*l as usize, i, "plugin() indexes the table by the variant");
+            assert_eq!(Lookup::parse(l.name()), Some(*l));
             assert!(l
                 .name()
                 .chars()
                 .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-'));
-            // Reports write the lookup through serde: the same name.
+            // Reports write the lookup through serde: the same name, and it reads back.
             assert_eq!(serde_json::to_value(l).unwrap(), l.name());
+            let back: Lookup = serde_json::from_value(serde_json::json!(l.name())).unwrap();
+            assert_eq!(back, *l);
         }
+        assert_eq!(
+            Lookup::default(),
+            Lookup::Plain,
+            "the thesis's lookup is the default"
+        );
     }
 
     /// Every registered lookup is accepted by the scene format under its own name.

@@ -22,10 +22,6 @@ use crate::vk::GpuError;
 pub struct RayQuery;
 
 impl MirrorLookup for RayQuery {
-    fn lookup(&self) -> Lookup {
-        Lookup::RayQuery
-    }
-
     fn summary(&self) -> &'static str {
         "the reflected ray traced through the scene (VK_KHR_ray_query): exact, no cube map"
     }
@@ -52,7 +48,7 @@ impl MirrorLookup for RayQuery {
     }
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
-        SceneTrace::require(ctx, self.lookup().name())?;
+        SceneTrace::require(ctx, ctx.lookup.name())?;
         Ok(Box::new(RayQueryPass::create(ctx)?))
     }
 }
