@@ -9,7 +9,8 @@
 //! - **Times are compared within a run.** A drifting or shared machine slows every method alike,
 //!   so each method's median wall time is divided by six-pass's median in the same run, and that
 //!   ratio is compared with the baseline's ratio: it fails when it grew by more than
-//!   `--max-regression` percent. Without that option times are reported, not gated.
+//!   `--max-regression` percent. Without that option times are reported, not gated. The time
+//!   per frame with frames in flight is gated the same way, where both runs measured it.
 //! - **The trade-off's rungs are gated on their counters only** (faces the fill drew, its
 //!   vertex and fragment invocations, the sensor view's fragment invocations): exact like the
 //!   methods'. Their frame costs and errors are reported, not gated.
@@ -19,7 +20,7 @@ use std::path::Path;
 use anyhow::Result;
 use specchio::render::methods::Method;
 
-use crate::record::{self, MethodRow, RungRow};
+use crate::record::{self, MethodRow, RungRow, Stats};
 
 /// An earlier `specchio bench --json` file: its results and the driver that measured them.
 pub struct Baseline {
@@ -73,12 +74,22 @@ pub fn same_driver(
     Ok(())
 }
 
-/// Median wall time over six-pass's in the same run, for the row's scene and face size.
-fn ratio(rows: &[MethodRow], r: &MethodRow) -> Option<f64> {
+/// A gated time of a row: its name in messages and where the row keeps it.
+type Time = (&'static str, fn(&MethodRow) -> Option<Stats>);
+
+/// The times the gate compares as ratios to six-pass: a frame alone, and a frame among
+/// others in flight.
+const TIMES: [Time; 2] = [
+    ("time", |r| r.wall_ms),
+    ("time with frames in flight", |r| r.in_flight_ms),
+];
+
+/// The median of `time` over six-pass's in the same run, for the row's scene and face size.
+fn ratio(rows: &[MethodRow], r: &MethodRow, time: fn(&MethodRow) -> Option<Stats>) -> Option<f64> {
     let six = rows.iter().find(|o| {
         o.scene == r.scene && o.cube_size == r.cube_size && o.method == Method::SIX_PASS
     })?;
-    Some(r.wall_ms?.median / six.wall_ms?.median)
+    Some(time(r)?.median / time(six)?.median)
 }
 
 /// Every way `results` is worse than `baseline`, one line each (empty: the gate passes).
@@ -99,15 +110,17 @@ pub fn check(
         if !counters_match(&r.case(), "updates", updates, &counters, &mut failures) {
             continue;
         }
-        if let (Some(limit), Some(new), Some(old)) =
-            (max_regression, ratio(results, r), ratio(baseline, b))
-        {
+        let Some(limit) = max_regression else {
+            continue;
+        };
+        for (what, time) in TIMES {
+            let (Some(new), Some(old)) = (ratio(results, r, time), ratio(baseline, b, time)) else {
+                continue; // not measured in one of the runs: reported, not gated
+            };
             if new > old * (1.0 + limit / 100.0) {
                 failures.push(format!(
-                    "{}: {:.3}x six-pass time (baseline {:.3}x), more than {limit}% worse",
+                    "{}: {new:.3}x six-pass {what} (baseline {old:.3}x), more than {limit}% worse",
                     r.case(),
-                    new,
-                    old
                 ));
             }
         }
@@ -185,7 +198,7 @@ fn unmeasured(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::record::{Efficiency, RungWork, Stats, Work};
+    use crate::record::{Efficiency, RungWork, Work};
 
     fn row(method: &str, wall: f64, vertices: u64) -> MethodRow {
         MethodRow {
@@ -199,6 +212,7 @@ mod tests {
                 p90: wall,
             }),
             run_medians_ms: vec![wall],
+            in_flight_ms: None,
             cpu_record_ms: None,
             gpu_fill_ms: None,
             gpu_fill_and_mips_ms: None,
@@ -252,6 +266,39 @@ mod tests {
         assert!(check(&base, &worse, Some(25.0)).is_empty());
         // Without --max-regression times are not gated.
         assert!(check(&base, &worse, None).is_empty());
+    }
+
+    /// `row` with a time per frame in flight.
+    fn in_flight(mut r: MethodRow, ms: f64) -> MethodRow {
+        r.in_flight_ms = Some(Stats {
+            median: ms,
+            p10: ms,
+            p90: ms,
+        });
+        r
+    }
+
+    #[test]
+    fn the_time_in_flight_is_gated_like_the_time_alone_where_both_runs_have_it() {
+        let base = vec![
+            in_flight(row("six-pass", 10.0, 100), 6.0),
+            in_flight(row("instanced", 11.0, 100), 6.0),
+        ];
+        // Instanced's frame alone unchanged, but 50 % slower among frames in flight.
+        let worse = vec![
+            in_flight(row("six-pass", 10.0, 100), 6.0),
+            in_flight(row("instanced", 11.0, 100), 9.0),
+        ];
+        let f = check(&base, &worse, Some(10.0));
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert!(
+            f[0].contains("instanced")
+                && f[0].contains("1.500x six-pass time with frames in flight (baseline 1.000x)"),
+            "{f:?}"
+        );
+        // A baseline from before the time in flight was measured: that time is not gated.
+        let old = vec![row("six-pass", 10.0, 100), row("instanced", 11.0, 100)];
+        assert!(check(&old, &worse, Some(10.0)).is_empty());
     }
 
     fn rung(label: &str, sensor_fragments: u64) -> RungRow {

@@ -45,6 +45,8 @@ pub struct Plan {
     pub warmup: u32,
     pub runs: u32,
     pub floors: bool,
+    /// Frames each method keeps in flight in its throughput timing (`--frames-in-flight`).
+    pub frames_in_flight: u32,
     /// The order the tracing rungs hand their acceleration-structure builds.
     pub trace_order: specchio::render::lookups::TraceOrder,
 }

@@ -48,6 +48,7 @@ pub(crate) fn measure(
         warmup: settled.warmup,
         runs: settled.runs,
         floors: !args.no_floors,
+        frames_in_flight: args.frames_in_flight,
         trace_order: args.trace_order,
     };
     let progress = Progress::new(rounds(settled, scenes, &work, &plan));
@@ -166,9 +167,12 @@ fn rounds(settled: &Settled, scenes: &[Scene], work: &Work, plan: &Plan) -> u64 
     let per_loop = u64::from(plan.warmup + plan.frames);
     let sizes = settled.sizes.len() as u64;
     let timing = sizes * u64::from(plan.runs) * per_loop;
+    // The methods' throughput timing ticks once per run.
+    let in_flight = sizes * u64::from(plan.runs);
     (scenes.iter())
         .map(|s| {
             timing
+                + in_flight
                 + u64::from(!work.rungs.is_empty()) * timing
                 + u64::from(!settled.args.no_dynamic && dynamic::animated(s)) * per_loop
         })
@@ -267,6 +271,7 @@ fn new_record(
             frames: plan.frames,
             warmup: plan.warmup,
             runs: plan.runs,
+            frames_in_flight: Some(plan.frames_in_flight),
             quick: args.quick,
             full: args.full,
             trace_order: args.trace_order.name().to_owned(),

@@ -74,6 +74,10 @@ pub struct Settings {
     pub frames: u32,
     pub warmup: u32,
     pub runs: u32,
+    /// Frames each method kept in flight in its throughput timing (`results[].in_flight_ms`);
+    /// absent in records from before it was measured.
+    #[serde(default)]
+    pub frames_in_flight: Option<u32>,
     pub quick: bool,
     /// `--full`'s defaults.
     pub full: bool,
@@ -122,6 +126,12 @@ pub struct MethodRow {
     pub updates: usize,
     pub wall_ms: Option<Stats>,
     pub run_medians_ms: Vec<f64>,
+    /// Wall time per frame with `settings.frames_in_flight` frames in flight: the frames
+    /// submitted back to back, from the first submission to the last frame finished, one
+    /// value per run (its throughput, where `wall_ms` times each frame alone). Absent in
+    /// records from before it was measured.
+    #[serde(default)]
+    pub in_flight_ms: Option<Stats>,
     pub cpu_record_ms: Option<Stats>,
     pub gpu_fill_ms: Option<Stats>,
     pub gpu_fill_and_mips_ms: Option<Stats>,

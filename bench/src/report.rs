@@ -162,6 +162,7 @@ struct CsvRow {
     wall_median_ms: Option<Real>,
     wall_p10_ms: Option<Real>,
     wall_p90_ms: Option<Real>,
+    in_flight_median_ms: Option<Real>,
     gpu_fill_median_ms: Option<Real>,
     vertex_invocations: Option<u64>,
     fragment_invocations: Option<u64>,
@@ -235,6 +236,7 @@ fn method_row(r: &MethodRow, a: &Accuracy) -> CsvRow {
         wall_median_ms: real(r.wall_ms.map(|w| w.median)),
         wall_p10_ms: real(r.wall_ms.map(|w| w.p10)),
         wall_p90_ms: real(r.wall_ms.map(|w| w.p90)),
+        in_flight_median_ms: real(r.in_flight_ms.map(|w| w.median)),
         gpu_fill_median_ms: real(r.gpu_fill_ms.map(|g| g.median)),
         vertex_invocations: w.vertex_invocations,
         fragment_invocations: w.fragment_invocations,
@@ -327,8 +329,8 @@ mod tests {
         let text = String::from_utf8(csv_bytes(&record).unwrap()).unwrap();
         assert_eq!(text.lines().count(), 1, "{text}");
         let header: Vec<&str> = text.trim_end().split(',').collect();
-        assert_eq!(header.len(), 32);
-        assert_eq!((header[0], header[31]), ("row", "sensor_traced_fraction"));
+        assert_eq!(header.len(), 33);
+        assert_eq!((header[0], header[32]), ("row", "sensor_traced_fraction"));
     }
 
     #[test]
@@ -343,7 +345,7 @@ mod tests {
         let mut reader = csv::Reader::from_reader(bytes.as_slice());
         let header = reader.headers().unwrap().clone();
         let column = |name: &str| header.iter().position(|h| h == name).unwrap();
-        assert_eq!(header.len(), 32);
+        assert_eq!(header.len(), 33);
         let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.unwrap()).collect();
         assert_eq!(
             rows.len(),
@@ -354,7 +356,7 @@ mod tests {
             .skip(record.speed_vs_error.len())
             .zip(&record.tradeoff)
         {
-            assert_eq!(row.len(), 32);
+            assert_eq!(row.len(), 33);
             assert_eq!(&row[column("scene")], odd);
             assert_eq!(&row[column("row")], "rung");
             assert_eq!(&row[column("rung")], r.rung);

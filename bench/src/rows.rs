@@ -48,6 +48,7 @@ pub fn method_row(
         updates: reports.len(),
         wall_ms: wall,
         run_medians_ms: timed.run_medians_ms.clone(),
+        in_flight_ms: Stats::of(timed.in_flight_ms.clone()),
         cpu_record_ms: Stats::of(reports.iter().map(|r| r.cpu_record_ms).collect()),
         gpu_fill_ms: Stats::of(reports.iter().filter_map(|r| r.gpu_fill_ms).collect()),
         gpu_fill_and_mips_ms: Stats::of(reports.iter().filter_map(|r| r.gpu_cube_ms).collect()),
@@ -100,11 +101,12 @@ pub fn floor_row(scene_name: &str, floor: Floor, size: u32, timed: &Timed) -> Fl
 /// The table's header for [`table_row`].
 pub fn table_header() -> String {
     format!(
-        "  {:<16} {:>9} {:>9} {:>9} {:>11} {:>12} {:>14} {:>9}",
+        "  {:<16} {:>9} {:>9} {:>9} {:>10} {:>11} {:>12} {:>14} {:>9}",
         "method",
         "median ms",
         "p10",
         "p90",
+        "in flight",
         "GPU fill ms",
         "vertex inv.",
         "fragment inv.",
@@ -115,7 +117,7 @@ pub fn table_header() -> String {
 /// One line of the table: a method's or a floor's times, counters and efficiency.
 pub fn table_row(
     label: &str,
-    wall: Option<Stats>,
+    (wall, in_flight): (Option<Stats>, Option<Stats>),
     gpu_fill: Option<Stats>,
     stats: Option<PipelineStats>,
     vs_floors: Option<f64>,
@@ -132,11 +134,12 @@ pub fn table_row(
         _ => count(stats.map(|s| s.vertex_invocations)),
     };
     format!(
-        "  {:<16} {:>9} {:>9} {:>9} {:>11} {:>12} {:>14} {:>9}",
+        "  {:<16} {:>9} {:>9} {:>9} {:>10} {:>11} {:>12} {:>14} {:>9}",
         label,
         f(wall.map(|w| w.median)),
         f(wall.map(|w| w.p10)),
         f(wall.map(|w| w.p90)),
+        in_flight.map_or(String::new(), |w| format!("{:.2}", w.median)),
         f(gpu_fill.map(|g| g.median)),
         vertices,
         count(stats.map(|s| s.fragment_invocations)),

@@ -56,14 +56,18 @@ fn methods(record: &Record, scene: &str, size: u32, out: &mut Vec<String>) {
     }
     let s = &record.settings;
     out.push(format!(
-        "{scene}: {size}² faces, {} timed updates x {} run(s), interleaved",
-        s.frames, s.runs
+        "{scene}: {size}² faces, {} timed updates x {} run(s), interleaved{}",
+        s.frames,
+        s.runs,
+        s.frames_in_flight.map_or(String::new(), |n| format!(
+            "; in flight: ms per update with {n} in flight"
+        ))
     ));
     out.push(rows::table_header());
     for row in rows_here {
         out.push(rows::table_row(
             row.method.name(),
-            row.wall_ms,
+            (row.wall_ms, row.in_flight_ms),
             row.gpu_fill_ms,
             row.fill_stats,
             row.efficiency.vs_geometry_plus_fill,
@@ -76,7 +80,7 @@ fn methods(record: &Record, scene: &str, size: u32, out: &mut Vec<String>) {
     {
         out.push(rows::table_row(
             &format!("floor: {}", row.floor.name()),
-            row.wall_ms,
+            (row.wall_ms, None),
             row.gpu_fill_ms,
             row.fill_stats,
             None,

@@ -1,5 +1,10 @@
 //! Timing: every method and floor of one scene at one face size, interleaved within each
-//! round (A B C floors, A B C floors, ...) so that a drifting machine slows all alike.
+//! round (A B C floors, A B C floors, ...) so that a drifting machine slows all alike. Each
+//! frame of a round is submitted and waited for alone: its latency. After each run's rounds,
+//! each method renders as many frames again with several in flight (as the viewer draws):
+//! its throughput.
+
+use std::time::Instant;
 
 use anyhow::Result;
 use specchio::render::floors::Floor;
@@ -10,11 +15,13 @@ use specchio::vk::device::Device;
 
 use super::Plan;
 
-/// The timed updates of one method or floor, and each run's median wall time.
+/// The timed updates of one method or floor, each run's median wall time, and (methods
+/// only) each run's wall time per frame with frames in flight.
 #[derive(Default)]
 pub struct Timed {
     pub reports: Vec<FrameReport>,
     pub run_medians_ms: Vec<f64>,
+    pub in_flight_ms: Vec<f64>,
 }
 
 /// What one scene at one face size measured, with the renderers kept for the accuracy frames.
@@ -45,6 +52,7 @@ pub fn time_size(
         let options = RenderOptions {
             cube_size: Some(size),
             method,
+            frames_in_flight: plan.frames_in_flight as usize,
             refresh: Some(RefreshPolicy::EveryFrame),
             ..Default::default()
         };
@@ -97,6 +105,12 @@ pub fn time_size(
         for (t, mut v) in timed.iter_mut().zip(run_m) {
             t.run_medians_ms.push(quantile(&mut v, 0.5));
         }
+        // The scene goes on where the rounds left it.
+        let first = plan.warmup + plan.frames;
+        for (t, r) in timed.iter_mut().zip(&mut renderers) {
+            t.in_flight_ms.push(in_flight_ms(r, first, plan.frames)?);
+        }
+        tick()?;
         for ((_, t), mut v) in floors.iter_mut().zip(run_f) {
             t.run_medians_ms.push(quantile(&mut v, 0.5));
         }
@@ -106,4 +120,20 @@ pub fn time_size(
         methods: timed,
         floors,
     })
+}
+
+/// Renders `frames` frames from round `first` on, submitted back to back with up to the
+/// renderer's frames in flight at once: the wall time per frame from the first submission
+/// to the last frame finished. A submission waits only for the frame whose slot it reuses,
+/// so recording a frame overlaps the GPU work of the ones before it.
+fn in_flight_ms(renderer: &mut Renderer, first: u32, frames: u32) -> Result<f64> {
+    let none = Readback::default();
+    let start = Instant::now();
+    for round in first..first + frames {
+        renderer.submit_frame(u64::from(round), f64::from(round) / 30.0, none)?;
+        // Only the time counts: the results of the frames finished so far are let go.
+        renderer.finished_frames()?;
+    }
+    while renderer.finish_frame()?.is_some() {}
+    Ok(start.elapsed().as_secs_f64() * 1e3 / f64::from(frames))
 }
