@@ -393,6 +393,16 @@ fn quick_checks_and_honours_explicit_values() {
         (&["--frames", "0"][..], "--frames", "1..=100000"),
         (&["--runs", "0"][..], "--runs", "1..=1000"),
         (&["--warmup", "20000"][..], "--warmup", "0..=10000"),
+        (
+            &["--frames-in-flight", "0"][..],
+            "--frames-in-flight",
+            "1..=3",
+        ),
+        (
+            &["--frames-in-flight", "4"][..],
+            "--frames-in-flight",
+            "1..=3",
+        ),
     ] {
         let out = lean_quick(args);
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -412,6 +422,10 @@ fn quick_checks_and_honours_explicit_values() {
         "0",
         "--runs",
         "2",
+        // The most frames in flight: under the validation layer (CI), with its
+        // synchronization checks, the overlapping frames must draw no message.
+        "--frames-in-flight",
+        "3",
         "--json",
         json.to_str().unwrap(),
     ]));
@@ -431,7 +445,13 @@ fn quick_checks_and_honours_explicit_values() {
         // 3 timed updates in each of 2 runs.
         assert_eq!(row["updates"], 6);
         assert_eq!(row["run_medians_ms"].as_array().unwrap().len(), 2);
+        // One time in flight per run; by nearest rank the median of two is the smaller,
+        // p90 the larger.
+        let t = &row["in_flight_ms"];
+        let (median, p10, p90) = (t["median"].as_f64(), t["p10"].as_f64(), t["p90"].as_f64());
+        assert!(median.is_some() && median == p10 && p10 <= p90, "{t}");
     }
+    assert_eq!(settings["frames_in_flight"], 3);
     std::fs::remove_file(&json).unwrap();
 }
 
