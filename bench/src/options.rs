@@ -193,16 +193,7 @@ pub fn settle(args: &Args) -> Result<Settled> {
         None => Method::listed().collect(),
         Some(list) => list.clone(),
     };
-    if let Some(list) = &args.cube_sizes {
-        no_repeats("--cube-sizes", list)?;
-    }
-    if let Some(list) = &args.methods {
-        no_repeats("--methods", list)?;
-    }
-    no_repeats("--lookups", &args.lookups)?;
-    if let Some(list) = &args.rungs {
-        no_repeats("--rungs", list)?;
-    }
+    no_list_repeats(args)?;
     if args.max_regression.is_some() {
         anyhow::ensure!(
             methods.contains(&Method::SIX_PASS),
@@ -210,49 +201,10 @@ pub fn settle(args: &Args) -> Result<Settled> {
              include six-pass in --methods"
         );
     }
-    // Output folders must exist before the run, not after minutes of it.
-    for (option, path) in [
-        ("--json", &args.json),
-        ("--csv", &args.csv),
-        ("--plot", &args.plot),
-        ("--bmf", &args.bmf),
-    ] {
-        if let Some(path) = path {
-            let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
-            if let Some(dir) = dir.filter(|d| !d.is_dir()) {
-                anyhow::bail!(
-                    "{option} {}: the folder {} does not exist",
-                    path.display(),
-                    dir.display()
-                );
-            }
-        }
-    }
-    let preset: &[&str] = match (args.quick, args.full) {
-        (true, _) => &QUICK_SCENES,
-        (_, true) => &FULL_SCENES,
-        _ => &DEFAULT_SCENES,
-    };
-    let scenes = match &args.scenes[..] {
-        [] => preset.iter().map(PathBuf::from).collect(),
-        given => given.to_vec(),
-    };
+    report_folders_exist(args)?;
+    let scenes = scenes_of(args);
     if args.bmf.is_some() || args.format == Format::Bmf {
-        // BMF names a benchmark by the scene's file stem: two scenes with one stem would
-        // collide after the whole run.
-        for (i, a) in scenes.iter().enumerate() {
-            if let Some(b) = scenes[..i].iter().find(|b| {
-                super::bmf::scene_slug(&b.display().to_string())
-                    == super::bmf::scene_slug(&a.display().to_string())
-            }) {
-                anyhow::bail!(
-                    "Bencher Metric Format names benchmarks by the scene's file name: {} and {} \
-                     would share one; rename one of them",
-                    b.display(),
-                    a.display()
-                );
-            }
-        }
+        bmf_names_unique(&scenes)?;
     }
     Ok(Settled {
         args: args.clone(),
@@ -270,4 +222,73 @@ pub fn settle(args: &Args) -> Result<Settled> {
         warmup: args.warmup.unwrap_or(warmup),
         runs: args.runs.unwrap_or(runs),
     })
+}
+
+/// No list option names one thing twice.
+fn no_list_repeats(args: &Args) -> Result<()> {
+    if let Some(list) = &args.cube_sizes {
+        no_repeats("--cube-sizes", list)?;
+    }
+    if let Some(list) = &args.methods {
+        no_repeats("--methods", list)?;
+    }
+    no_repeats("--lookups", &args.lookups)?;
+    if let Some(list) = &args.rungs {
+        no_repeats("--rungs", list)?;
+    }
+    Ok(())
+}
+
+/// Output folders must exist before the run, not after minutes of it.
+fn report_folders_exist(args: &Args) -> Result<()> {
+    for (option, path) in [
+        ("--json", &args.json),
+        ("--csv", &args.csv),
+        ("--plot", &args.plot),
+        ("--bmf", &args.bmf),
+    ] {
+        if let Some(path) = path {
+            let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+            if let Some(dir) = dir.filter(|d| !d.is_dir()) {
+                anyhow::bail!(
+                    "{option} {}: the folder {} does not exist",
+                    path.display(),
+                    dir.display()
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The scenes given, or the preset's (`--quick`'s, `--full`'s or the default set).
+fn scenes_of(args: &Args) -> Vec<PathBuf> {
+    let preset: &[&str] = match (args.quick, args.full) {
+        (true, _) => &QUICK_SCENES,
+        (_, true) => &FULL_SCENES,
+        _ => &DEFAULT_SCENES,
+    };
+    match &args.scenes[..] {
+        [] => preset.iter().map(PathBuf::from).collect(),
+        given => given.to_vec(),
+    }
+}
+
+/// BMF names a benchmark by the scene's file stem: two scenes with one stem would collide
+/// after the whole run.
+fn bmf_names_unique(scenes: &[PathBuf]) -> Result<()> {
+    for (i, a) in scenes.iter().enumerate() {
+        if let Some(b) = scenes[..i].iter().find(|b| {
+            super::bmf::scene_slug(&b.display().to_string())
+                == super::bmf::scene_slug(&a.display().to_string())
+        }) {
+            anyhow::bail!(
+                "Bencher Metric Format names benchmarks by the scene's file name: {} and {} \
+                 would share one; rename one of them",
+                b.display(),
+                a.display()
+            );
+        }
+    }
+    Ok(())
 }

@@ -38,8 +38,8 @@ pub fn quantile(v: &mut [f64], p: f64) -> f64 {
 }
 
 /// Times `methods` and the floors on `scene` at `size`: `plan.runs` runs of `plan.warmup`
-/// untimed then `plan.frames` timed rounds. Floors run on the six-pass renderer (or an extra
-/// one when six-pass is not among the methods).
+/// untimed then `plan.frames` timed rounds, then each method's updates in flight. Floors run
+/// on the six-pass renderer (or an extra one when six-pass is not among the methods).
 pub fn time_size(
     device: &std::sync::Arc<Device>,
     scene: &Scene,
@@ -48,6 +48,38 @@ pub fn time_size(
     plan: &Plan,
     tick: &dyn Fn() -> Result<()>,
 ) -> Result<SizeTiming> {
+    let (mut renderers, floor_host) = make_renderers(device, scene, methods, size, plan)?;
+    let mut timed: Vec<Timed> = methods.iter().map(|_| Timed::default()).collect();
+    let mut floors: Vec<(Floor, Timed)> = match plan.floors {
+        true => Floor::ALL.iter().map(|&f| (f, Timed::default())).collect(),
+        false => Vec::new(),
+    };
+    for _ in 0..plan.runs {
+        let hosts = (&mut renderers[..], floor_host);
+        time_rounds(hosts, (&mut timed, &mut floors), plan, tick)?;
+        // The scene goes on where the rounds left it.
+        let first = plan.warmup + plan.frames;
+        for (t, r) in timed.iter_mut().zip(&mut renderers) {
+            t.in_flight_ms.push(in_flight_ms(r, first, plan.frames)?);
+        }
+        tick()?;
+    }
+    Ok(SizeTiming {
+        renderers,
+        methods: timed,
+        floors,
+    })
+}
+
+/// A renderer per method, and the index of the one the floors run on (six-pass's, or an
+/// extra six-pass renderer at the end), with every pipeline built before anything is timed.
+fn make_renderers(
+    device: &std::sync::Arc<Device>,
+    scene: &Scene,
+    methods: &[Method],
+    size: u32,
+    plan: &Plan,
+) -> Result<(Vec<Renderer>, usize)> {
     let make = |method| {
         let options = RenderOptions {
             cube_size: Some(size),
@@ -73,53 +105,45 @@ pub fn time_size(
         // Pipelines are built before anything is timed, the floors' too.
         renderers[floor_host].prepare_floors()?;
     }
-    let mut timed: Vec<Timed> = methods.iter().map(|_| Timed::default()).collect();
-    let mut floors: Vec<(Floor, Timed)> = if plan.floors {
-        Floor::ALL.iter().map(|&f| (f, Timed::default())).collect()
-    } else {
-        Vec::new()
-    };
+    Ok((renderers, floor_host))
+}
+
+/// One run's rounds: `plan.warmup` untimed, then `plan.frames` timed, each rendering one
+/// update with every method (the first `methods.len()` renderers) and every floor (on
+/// renderer `floor_host`) in turn; each timed update is kept, and the run's median.
+fn time_rounds(
+    (renderers, floor_host): (&mut [Renderer], usize),
+    (methods, floors): (&mut [Timed], &mut [(Floor, Timed)]),
+    plan: &Plan,
+    tick: &dyn Fn() -> Result<()>,
+) -> Result<()> {
     let none = Readback::default();
-    for _ in 0..plan.runs {
-        let mut run_m: Vec<Vec<f64>> = vec![Vec::new(); methods.len()];
-        let mut run_f: Vec<Vec<f64>> = vec![Vec::new(); floors.len()];
-        for round in 0..plan.warmup + plan.frames {
-            let t = f64::from(round) / 30.0;
-            let frame = u64::from(round);
-            for (i, r) in renderers.iter_mut().take(methods.len()).enumerate() {
-                let (report, _) = r.render_frame(frame, t, none)?;
-                if round >= plan.warmup {
-                    run_m[i].push(report.submit_wait_ms);
-                    timed[i].reports.push(report);
-                }
+    for round in 0..plan.warmup + plan.frames {
+        let t = f64::from(round) / 30.0;
+        let frame = u64::from(round);
+        let timed = round >= plan.warmup;
+        for (r, t_m) in renderers.iter_mut().zip(methods.iter_mut()) {
+            let (report, _) = r.render_frame(frame, t, none)?;
+            if timed {
+                t_m.reports.push(report);
             }
-            for (k, (floor, t_f)) in floors.iter_mut().enumerate() {
-                let report = renderers[floor_host].render_floor(*floor, frame, t)?;
-                if round >= plan.warmup {
-                    run_f[k].push(report.submit_wait_ms);
-                    t_f.reports.push(report);
-                }
+        }
+        for (floor, t_f) in floors.iter_mut() {
+            let report = renderers[floor_host].render_floor(*floor, frame, t)?;
+            if timed {
+                t_f.reports.push(report);
             }
-            tick()?;
-        }
-        for (t, mut v) in timed.iter_mut().zip(run_m) {
-            t.run_medians_ms.push(quantile(&mut v, 0.5));
-        }
-        // The scene goes on where the rounds left it.
-        let first = plan.warmup + plan.frames;
-        for (t, r) in timed.iter_mut().zip(&mut renderers) {
-            t.in_flight_ms.push(in_flight_ms(r, first, plan.frames)?);
         }
         tick()?;
-        for ((_, t), mut v) in floors.iter_mut().zip(run_f) {
-            t.run_medians_ms.push(quantile(&mut v, 0.5));
-        }
     }
-    Ok(SizeTiming {
-        renderers,
-        methods: timed,
-        floors,
-    })
+    let all = methods.iter_mut().chain(floors.iter_mut().map(|(_, t)| t));
+    for t in all {
+        // This run's updates are the last `plan.frames` kept.
+        let run = &t.reports[t.reports.len() - plan.frames as usize..];
+        let mut walls: Vec<f64> = run.iter().map(|r| r.submit_wait_ms).collect();
+        t.run_medians_ms.push(quantile(&mut walls, 0.5));
+    }
+    Ok(())
 }
 
 /// Renders `frames` frames from round `first` on, submitted back to back with up to the
