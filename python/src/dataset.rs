@@ -4,7 +4,8 @@
 //! `render::dataset`, so both write the same bytes as `specchio dataset`.
 
 use std::path::{Component, Path, PathBuf};
-use std::sync::{Mutex, MutexGuard};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
 
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
@@ -12,8 +13,10 @@ use specchio::render::dataset::{
     self as writer, resume, DatasetError, Folder, Frame, FrameWriter, Plan, Poses,
 };
 use specchio::scene::Lookup;
+use specchio::sensor::dataset::DatasetRecord;
 use specchio::sensor::GroundTruth;
-use specchio::vk::instance::{Instance, InstanceDesc};
+use specchio::vk::device::Device;
+use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
 use crate::errors;
 use crate::renderer::check_validation;
@@ -105,73 +108,160 @@ pub fn dataset(
     headings: Option<u32>,
     time: Option<f64>,
 ) -> PyResult<Py<PyAny>> {
-    let asked = parse_lookup(lookup)?;
-    let source = PoseSource::new(trajectory, grid, headings, time)?;
+    let job = Job {
+        asked: parse_lookup(lookup)?,
+        source: PoseSource::new(trajectory, grid, headings, time)?,
+        scene: &scene,
+        out: &out,
+        device,
+        validate,
+        resume,
+        progress: progress.as_ref(),
+    };
     let stopped: Mutex<Option<PyErr>> = Mutex::new(None);
     // The frames placed when the run stopped (a resumable run keeps them).
-    let placed = std::sync::atomic::AtomicUsize::new(0);
-    let result = py.detach(|| -> Result<_, DatasetError> {
-        // What this call may not replace is what it reads (docs/python.md).
-        specchio::files::identity::forget();
-        let plan = source.plan(&scene)?;
-        let n = plan.poses.len();
-        let mut folder = Folder::stage(&out, n)?;
-        let instance = Instance::create(&InstanceDesc::from_env(validate))?;
-        let log = instance.validation_log();
-        let (dev, _, lookup) =
-            specchio::process::probe::device_for_sensor(&instance, device, asked, &plan.scene)?;
-        drop(instance);
-        let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
-        let truth = frames.ground_truth();
-        if resume {
-            folder.resume(&plan.run_key(lookup, truth, &resume::device_key(&dev.info)))?;
-        }
-        let nothing = if resume { "" } else { ": nothing was written" };
-        // Before each frame, Python's signals (Ctrl-C); after each frame written but the
-        // last (which the caller hears of once the folder is placed), the caller's progress.
-        let keep = |e: PyErr| {
-            *stopped.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
-        };
-        let mut between = |i: usize| {
-            Python::attach(|py| py.check_signals()).map_err(|e| {
-                keep(e);
-                DatasetError::Stopped(format!("stopped before frame {i} of {n}{nothing}"))
-            })
-        };
-        let mut written = |done: usize| match (&progress, done < n) {
+    let placed = AtomicUsize::new(0);
+    let result = py.detach(|| render(&job, &stopped, &placed));
+    let placed = placed.load(Ordering::Relaxed);
+    place_finished(py, result, stopped, job.progress)
+        .map_err(|e| with_kept_note(py, e, &out, resume, placed))
+}
+
+/// What `dataset` renders: its arguments, checked.
+struct Job<'a> {
+    asked: Option<Lookup>,
+    source: PoseSource,
+    scene: &'a Path,
+    out: &'a Path,
+    device: Option<&'a str>,
+    validate: bool,
+    resume: bool,
+    progress: Option<&'a Py<PyAny>>,
+}
+
+/// A dataset rendered, not placed yet: the folder ready to place, its summary, and the
+/// validation log.
+type Finished = (writer::Ready, DatasetRecord, Arc<ValidationLog>);
+
+/// Renders `job`'s frames into its staged folder (with the GIL released), keeping the error
+/// from Python that stopped it in `stopped` and the frames placed in `placed`.
+fn render(
+    job: &Job,
+    stopped: &Mutex<Option<PyErr>>,
+    placed: &AtomicUsize,
+) -> Result<Finished, DatasetError> {
+    // What this call may not replace is what it reads (docs/python.md).
+    specchio::files::identity::forget();
+    let plan = job.source.plan(job.scene)?;
+    let n = plan.poses.len();
+    let mut folder = Folder::stage(job.out, n)?;
+    let (log, dev, lookup) = open_device(job, &plan)?;
+    let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
+    let truth = frames.ground_truth();
+    if job.resume {
+        folder.resume(&plan.run_key(lookup, truth, &resume::device_key(&dev.info)))?;
+    }
+    let hooks = Hooks {
+        stopped,
+        progress: job.progress,
+        n,
+        nothing: if job.resume {
+            ""
+        } else {
+            ": nothing was written"
+        },
+    };
+    let wrote = writer::write_frames(
+        &mut folder,
+        &plan,
+        &mut frames,
+        &mut |i| hooks.between(i),
+        &mut |done| hooks.written(done),
+    );
+    placed.store(folder.done(), Ordering::Relaxed);
+    wrote?;
+    drop(frames);
+    drop(dev);
+    let record = plan.record(lookup, truth);
+    let ready = folder.finish(&record)?;
+    Ok((ready, record, log))
+}
+
+/// The validation log, the device `job` asks for that can render `plan`'s scene, and the
+/// lookup it runs (the instance is let go once the device is made).
+fn open_device(
+    job: &Job,
+    plan: &Plan,
+) -> Result<(Arc<ValidationLog>, Arc<Device>, Lookup), DatasetError> {
+    let instance = Instance::create(&InstanceDesc::from_env(job.validate))?;
+    let log = instance.validation_log();
+    let (dev, _, lookup) =
+        specchio::process::probe::device_for_sensor(&instance, job.device, job.asked, &plan.scene)?;
+    drop(instance);
+    Ok((log, dev, lookup))
+}
+
+/// Before each frame, Python's signals (Ctrl-C); after each frame written but the last
+/// (which the caller hears of once the folder is placed), the caller's progress. What
+/// Python raised is kept in `stopped`.
+struct Hooks<'a> {
+    stopped: &'a Mutex<Option<PyErr>>,
+    progress: Option<&'a Py<PyAny>>,
+    /// The frames in all.
+    n: usize,
+    /// The end of a stop's message: `": nothing was written"` unless the run is resumable.
+    nothing: &'static str,
+}
+
+impl Hooks<'_> {
+    /// Keeps `e`, the error Python raised, for the caller.
+    fn keep(&self, e: PyErr) {
+        *self.stopped.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+    }
+
+    /// Before frame `i`: stops on Python's signals (Ctrl-C).
+    fn between(&self, i: usize) -> Result<(), DatasetError> {
+        let (n, nothing) = (self.n, self.nothing);
+        Python::attach(|py| py.check_signals()).map_err(|e| {
+            self.keep(e);
+            DatasetError::Stopped(format!("stopped before frame {i} of {n}{nothing}"))
+        })
+    }
+
+    /// After `done` frames: the caller's progress, but after the last.
+    fn written(&self, done: usize) -> Result<(), DatasetError> {
+        let (n, nothing) = (self.n, self.nothing);
+        match (self.progress, done < n) {
             (Some(f), true) => Python::attach(|py| f.call1(py, (done, n)).map(drop)).map_err(|e| {
-                keep(e);
+                self.keep(e);
                 DatasetError::Stopped(format!("stopped after {done} of {n} frames{nothing}"))
             }),
             _ => Ok(()),
-        };
-        let wrote =
-            writer::write_frames(&mut folder, &plan, &mut frames, &mut between, &mut written);
-        placed.store(folder.done(), std::sync::atomic::Ordering::Relaxed);
-        wrote?;
-        drop(frames);
-        drop(dev);
-        let record = plan.record(lookup, truth);
-        let ready = folder.finish(&record)?;
-        Ok((ready, record, log))
-    });
-    let placing = || -> PyResult<Py<PyAny>> {
-        if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
-            return Err(e);
         }
-        let (ready, record, log) = result.map_err(errors::to_py)?;
-        check_validation(&log)?;
-        // Everything that can fail runs before the folder is placed: nothing after it.
-        if let Some(f) = &progress {
-            f.call1(py, (record.frames, record.frames))?;
-        }
-        py.check_signals()?;
-        let summary = errors::json_to_py(py, &record)?;
-        commit(py, ready)?;
-        Ok(summary)
-    };
-    let placed = placed.load(std::sync::atomic::Ordering::Relaxed);
-    placing().map_err(|e| with_kept_note(py, e, &out, resume, placed))
+    }
+}
+
+/// Places the rendered dataset (with the GIL held) and returns its summary as a dict; the
+/// error Python raised, if one stopped the run, comes first.
+fn place_finished(
+    py: Python<'_>,
+    result: Result<Finished, DatasetError>,
+    stopped: Mutex<Option<PyErr>>,
+    progress: Option<&Py<PyAny>>,
+) -> PyResult<Py<PyAny>> {
+    if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        return Err(e);
+    }
+    let (ready, record, log) = result.map_err(errors::to_py)?;
+    check_validation(&log)?;
+    // Everything that can fail runs before the folder is placed: nothing after it.
+    if let Some(f) = progress {
+        f.call1(py, (record.frames, record.frames))?;
+    }
+    py.check_signals()?;
+    let summary = errors::json_to_py(py, &record)?;
+    commit(py, ready)?;
+    Ok(summary)
 }
 
 /// `e`, with a note of the frames a resumable run kept and how to go on (where it kept any:

@@ -276,78 +276,102 @@ fn menu_window(
         .resizable(false)
         .collapsible(false);
     let shown = window.show(ctx, |ui| {
-        ui.label("View");
-        ui.horizontal(|ui| {
-            for (view, name, id) in [
-                (DisplayView::Pair, "both (1)", "both"),
-                (DisplayView::Observer, "observer (2)", "observer"),
-                (DisplayView::Sensor, "sensor (3)", "sensor"),
-            ] {
-                let radio = ui.radio(s.view == view, name);
-                if widgets.clicked(ui, format!("view={id}"), radio) && s.view != view {
-                    actions.push(Action::Show(view));
-                }
-            }
-        });
-        let combo = egui::ComboBox::from_label("fill method (m)")
-            .selected_text(s.method.to_string())
-            .show_ui(ui, |ui| {
-                for &m in s.methods {
-                    let label = ui.selectable_label(s.method == m, m.to_string());
-                    if widgets.clicked(ui, format!("method={m}"), label) && s.method != m {
-                        actions.push(Action::SetMethod(m));
-                    }
-                }
-            });
-        // The combo box's button opens the list of methods (listed while it is open).
-        widgets.clicked(ui, "method".into(), combo.response);
-        ui.horizontal(|ui| {
-            ui.label("lookup (x)");
-            for &l in s.lookups {
-                let radio = ui.radio(s.lookup == l, l.to_string());
-                if widgets.clicked(ui, format!("lookup={l}"), radio) && s.lookup != l {
-                    actions.push(Action::SetLookup(l));
-                }
-            }
-        });
-        ui.horizontal(|ui| {
-            ui.label("refresh (e)");
-            for r in [
-                RefreshPolicy::OnChange,
-                RefreshPolicy::EveryFrame,
-                RefreshPolicy::EveryN(4),
-            ] {
-                let radio = ui.radio(s.refresh == r, refresh_name(r));
-                if widgets.clicked(ui, format!("refresh={}", refresh_name(r)), radio)
-                    && s.refresh != r
-                {
-                    actions.push(Action::SetRefresh(r));
-                }
-            }
-        });
-        ui.horizontal(|ui| {
-            let pause = if s.paused {
-                "resume (space)"
-            } else {
-                "pause (space)"
-            };
-            let button = ui.button(pause);
-            if widgets.clicked(ui, "pause".into(), button) {
-                actions.push(Action::PauseResume);
-            }
-            let button = ui.button("step (.)");
-            if widgets.clicked(ui, "step".into(), button) {
-                actions.push(Action::Step);
-            }
-            let button = ui.button("reset (0)");
-            if widgets.clicked(ui, "reset".into(), button) {
-                actions.push(Action::Reset);
-            }
-        });
+        view_choice(ui, s, actions, widgets);
+        method_choice(ui, s, actions, widgets);
+        lookup_choice(ui, s, actions, widgets);
+        refresh_choice(ui, s, actions, widgets);
+        run_buttons(ui, s, actions, widgets);
         ui.separator();
         figures(ui, s);
     });
     shown.map(|inner| inner.response.rect)
+}
+
+/// The view's radio buttons (both, observer, sensor).
+fn view_choice(ui: &mut egui::Ui, s: &Status, actions: &mut Vec<Action>, widgets: &mut Widgets) {
+    ui.label("View");
+    ui.horizontal(|ui| {
+        for (view, name, id) in [
+            (DisplayView::Pair, "both (1)", "both"),
+            (DisplayView::Observer, "observer (2)", "observer"),
+            (DisplayView::Sensor, "sensor (3)", "sensor"),
+        ] {
+            let radio = ui.radio(s.view == view, name);
+            if widgets.clicked(ui, format!("view={id}"), radio) && s.view != view {
+                actions.push(Action::Show(view));
+            }
+        }
+    });
+}
+
+/// The fill method's combo box, listing the methods the device can run.
+fn method_choice(ui: &mut egui::Ui, s: &Status, actions: &mut Vec<Action>, widgets: &mut Widgets) {
+    let combo = egui::ComboBox::from_label("fill method (m)")
+        .selected_text(s.method.to_string())
+        .show_ui(ui, |ui| {
+            for &m in s.methods {
+                let label = ui.selectable_label(s.method == m, m.to_string());
+                if widgets.clicked(ui, format!("method={m}"), label) && s.method != m {
+                    actions.push(Action::SetMethod(m));
+                }
+            }
+        });
+    // The combo box's button opens the list of methods (listed while it is open).
+    widgets.clicked(ui, "method".into(), combo.response);
+}
+
+/// The lookup's radio buttons, one per lookup the device can run.
+fn lookup_choice(ui: &mut egui::Ui, s: &Status, actions: &mut Vec<Action>, widgets: &mut Widgets) {
+    ui.horizontal(|ui| {
+        ui.label("lookup (x)");
+        for &l in s.lookups {
+            let radio = ui.radio(s.lookup == l, l.to_string());
+            if widgets.clicked(ui, format!("lookup={l}"), radio) && s.lookup != l {
+                actions.push(Action::SetLookup(l));
+            }
+        }
+    });
+}
+
+/// The refresh policy's radio buttons.
+fn refresh_choice(ui: &mut egui::Ui, s: &Status, actions: &mut Vec<Action>, widgets: &mut Widgets) {
+    ui.horizontal(|ui| {
+        ui.label("refresh (e)");
+        for r in [
+            RefreshPolicy::OnChange,
+            RefreshPolicy::EveryFrame,
+            RefreshPolicy::EveryN(4),
+        ] {
+            let radio = ui.radio(s.refresh == r, refresh_name(r));
+            if widgets.clicked(ui, format!("refresh={}", refresh_name(r)), radio) && s.refresh != r
+            {
+                actions.push(Action::SetRefresh(r));
+            }
+        }
+    });
+}
+
+/// The pause (or resume), step and reset buttons.
+fn run_buttons(ui: &mut egui::Ui, s: &Status, actions: &mut Vec<Action>, widgets: &mut Widgets) {
+    ui.horizontal(|ui| {
+        let pause = if s.paused {
+            "resume (space)"
+        } else {
+            "pause (space)"
+        };
+        let button = ui.button(pause);
+        if widgets.clicked(ui, "pause".into(), button) {
+            actions.push(Action::PauseResume);
+        }
+        let button = ui.button("step (.)");
+        if widgets.clicked(ui, "step".into(), button) {
+            actions.push(Action::Step);
+        }
+        let button = ui.button("reset (0)");
+        if widgets.clicked(ui, "reset".into(), button) {
+            actions.push(Action::Reset);
+        }
+    });
 }
 
 /// The live figures, as the window title shows them.

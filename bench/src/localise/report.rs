@@ -163,6 +163,22 @@ fn summarize(results: &[QueryResult], landmarks: usize, column_deg: f64) -> Summ
 
 /// The printed table: one line per row, then the sweeps.
 pub fn print_table(r: &Report, out: &std::path::Path) {
+    print_title(r);
+    print_column_heads();
+    for row in &r.rows {
+        print_row(row);
+    }
+    for s in &r.sources {
+        print_sweep(s);
+    }
+    specchio::say!(
+        "  files: localise.json, localise.svg and the landmark files in {}",
+        out.display()
+    );
+}
+
+/// The table's title line: the scene and the experiment's settings.
+fn print_title(r: &Report) {
     specchio::say!(
         "localisation in {} (grid {} m, {} k={}, {}² sensor, {}² cube, a panorama column {:.3}°)",
         r.scene,
@@ -175,6 +191,10 @@ pub fn print_table(r: &Report, out: &std::path::Path) {
             .first()
             .map_or(f64::NAN, |row| row.summary.column_deg)
     );
+}
+
+/// The table's two heading lines: the columns' names, then their units.
+fn print_column_heads() {
     specchio::say!(
         "  {:<14} {:<14} {:>6} {:>9} {:>8} {:>8} {:>12} {:>10} {:>12} {:>10} {:>10} {:>9}",
         "landmarks",
@@ -205,42 +225,42 @@ pub fn print_table(r: &Report, out: &std::path::Path) {
         "median",
         "images/s"
     );
-    for row in &r.rows {
-        let s = &row.summary;
-        specchio::say!(
-            "  {:<14} {:<14} {:>6} {:>9} {:>8.1} {:>8.1} {:>12.3} {:>10.3} {:>12.3} {:>10.3} {:>10.2} {:>9}",
-            row.landmarks_from,
-            row.queries_from,
-            row.query_time_s,
-            s.landmarks,
-            100.0 * s.recall_at_1,
-            100.0 * s.recall_at_3,
-            s.median_position_error_m,
-            s.p90_position_error_m,
-            s.median_fitted_position_error_m,
-            s.p90_fitted_position_error_m,
-            s.median_heading_error_deg,
-            row.landmark_images_per_s
-                .map_or("loaded".to_owned(), |r| format!("{r:.2}"))
-        );
-    }
-    for s in &r.sources {
-        match s.sweep_images_per_s {
-            Some(rate) => specchio::say!(
-                "  {} landmark sweep: {rate:.2} sensor images/s ({:.2} s) -> {}",
-                s.source,
-                s.sweep_seconds.unwrap_or(f64::NAN),
-                s.landmarks_file
-            ),
-            None => specchio::say!(
-                "  {} landmarks loaded (no sweep) -> {}",
-                s.source,
-                s.landmarks_file
-            ),
-        }
-    }
+}
+
+/// One row's line of the table: its sources, query time and summary.
+fn print_row(row: &Row) {
+    let s = &row.summary;
     specchio::say!(
-        "  files: localise.json, localise.svg and the landmark files in {}",
-        out.display()
+        "  {:<14} {:<14} {:>6} {:>9} {:>8.1} {:>8.1} {:>12.3} {:>10.3} {:>12.3} {:>10.3} {:>10.2} {:>9}",
+        row.landmarks_from,
+        row.queries_from,
+        row.query_time_s,
+        s.landmarks,
+        100.0 * s.recall_at_1,
+        100.0 * s.recall_at_3,
+        s.median_position_error_m,
+        s.p90_position_error_m,
+        s.median_fitted_position_error_m,
+        s.p90_fitted_position_error_m,
+        s.median_heading_error_deg,
+        row.landmark_images_per_s
+            .map_or("loaded".to_owned(), |r| format!("{r:.2}"))
     );
+}
+
+/// One source's landmark sweep line: its speed, or that its landmarks were loaded.
+fn print_sweep(s: &SourceRun) {
+    match s.sweep_images_per_s {
+        Some(rate) => specchio::say!(
+            "  {} landmark sweep: {rate:.2} sensor images/s ({:.2} s) -> {}",
+            s.source,
+            s.sweep_seconds.unwrap_or(f64::NAN),
+            s.landmarks_file
+        ),
+        None => specchio::say!(
+            "  {} landmarks loaded (no sweep) -> {}",
+            s.source,
+            s.landmarks_file
+        ),
+    }
 }
