@@ -94,72 +94,24 @@ pub fn levenberg_marquardt(
     settings: LmSettings,
     residuals: impl Fn(&[f64], &mut Vec<f64>),
 ) -> LmReport {
-    let n = params.len();
     let mut r = Vec::new();
     residuals(params, &mut r);
     let mut cost = sum_sq(&r);
     let initial_cost = cost;
     let mut lambda = 1e-3;
     let mut iterations = 0;
-    let (mut plus, mut minus) = (Vec::new(), Vec::new());
+    let mut scratch = Differences::default();
     while iterations < settings.max_iterations {
         iterations += 1;
-        // The Jacobian, column by column, by central differences.
-        let mut jac: Vec<Vec<f64>> = Vec::with_capacity(n);
-        for i in 0..n {
-            let h = 1e-6 * params[i].abs().max(scales[i]);
-            let mut p = params.to_vec();
-            p[i] = params[i] + h;
-            residuals(&p, &mut plus);
-            p[i] = params[i] - h;
-            residuals(&p, &mut minus);
-            jac.push(
-                plus.iter()
-                    .zip(&minus)
-                    .map(|(a, b)| (a - b) / (2.0 * h))
-                    .collect(),
-            );
-        }
-        let mut jtj = vec![0.0; n * n];
-        let mut jtr = vec![0.0; n];
-        for i in 0..n {
-            jtr[i] = dot(&jac[i], &r);
-            for j in 0..=i {
-                let v = dot(&jac[i], &jac[j]);
-                jtj[i * n + j] = v;
-                jtj[j * n + i] = v;
-            }
-        }
-        // Damped trial steps until one lowers the cost (or the damping says we are done).
-        let mut improved = None;
-        while lambda < 1e12 {
-            let mut damped = jtj.clone();
-            for i in 0..n {
-                damped[i * n + i] += lambda * jtj[i * n + i].max(1e-30);
-            }
-            let neg: Vec<f64> = jtr.iter().map(|v| -v).collect();
-            let Some(step) = solve_square(&damped, &neg) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let trial: Vec<f64> = params.iter().zip(&step).map(|(p, s)| p + s).collect();
-            let mut tr = Vec::new();
-            residuals(&trial, &mut tr);
-            let trial_cost = sum_sq(&tr);
-            if trial_cost.is_finite() && trial_cost < cost {
-                lambda = (lambda / 10.0).max(1e-12);
-                improved = Some((trial, tr, trial_cost));
-                break;
-            }
-            lambda *= 10.0;
-        }
-        let Some((trial, tr, trial_cost)) = improved else {
+        let jac = jacobian(params, scales, &residuals, &mut scratch);
+        let (jtj, jtr) = normal_equations(&jac, &r);
+        let Some(accepted) = damped_step(params, &jtj, &jtr, cost, &mut lambda, &residuals) else {
             break;
         };
-        let gain = (cost - trial_cost) / cost.max(f64::MIN_POSITIVE);
-        params.copy_from_slice(&trial);
-        r = tr;
-        cost = trial_cost;
+        let gain = (cost - accepted.cost) / cost.max(f64::MIN_POSITIVE);
+        params.copy_from_slice(&accepted.params);
+        r = accepted.residuals;
+        cost = accepted.cost;
         if gain < settings.relative_tolerance || cost == 0.0 {
             break;
         }
@@ -169,6 +121,102 @@ pub fn levenberg_marquardt(
         initial_cost,
         final_cost: cost,
     }
+}
+
+/// Residual buffers for the two sides of a central difference, kept across iterations.
+#[derive(Default)]
+struct Differences {
+    plus: Vec<f64>,
+    minus: Vec<f64>,
+}
+
+/// The Jacobian, column by column, by central differences.
+fn jacobian(
+    params: &[f64],
+    scales: &[f64],
+    residuals: &impl Fn(&[f64], &mut Vec<f64>),
+    scratch: &mut Differences,
+) -> Vec<Vec<f64>> {
+    let n = params.len();
+    let mut jac: Vec<Vec<f64>> = Vec::with_capacity(n);
+    for i in 0..n {
+        let h = 1e-6 * params[i].abs().max(scales[i]);
+        let mut p = params.to_vec();
+        p[i] = params[i] + h;
+        residuals(&p, &mut scratch.plus);
+        p[i] = params[i] - h;
+        residuals(&p, &mut scratch.minus);
+        jac.push(
+            scratch
+                .plus
+                .iter()
+                .zip(&scratch.minus)
+                .map(|(a, b)| (a - b) / (2.0 * h))
+                .collect(),
+        );
+    }
+    jac
+}
+
+/// `J^T J` (row-major, `n x n`) and `J^T r` from the Jacobian's columns `jac`.
+fn normal_equations(jac: &[Vec<f64>], r: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = jac.len();
+    let mut jtj = vec![0.0; n * n];
+    let mut jtr = vec![0.0; n];
+    for i in 0..n {
+        jtr[i] = dot(&jac[i], r);
+        for j in 0..=i {
+            let v = dot(&jac[i], &jac[j]);
+            jtj[i * n + j] = v;
+            jtj[j * n + i] = v;
+        }
+    }
+    (jtj, jtr)
+}
+
+/// A trial point that lowered the cost, with its residuals and cost.
+struct Accepted {
+    params: Vec<f64>,
+    residuals: Vec<f64>,
+    cost: f64,
+}
+
+/// Damped trial steps until one lowers the cost (or the damping says we are done), adjusting
+/// `lambda` as Marquardt does; None when no step within the damping limit helps.
+fn damped_step(
+    params: &[f64],
+    jtj: &[f64],
+    jtr: &[f64],
+    cost: f64,
+    lambda: &mut f64,
+    residuals: &impl Fn(&[f64], &mut Vec<f64>),
+) -> Option<Accepted> {
+    let n = params.len();
+    while *lambda < 1e12 {
+        let mut damped = jtj.to_vec();
+        for i in 0..n {
+            damped[i * n + i] += *lambda * jtj[i * n + i].max(1e-30);
+        }
+        let neg: Vec<f64> = jtr.iter().map(|v| -v).collect();
+        let Some(step) = solve_square(&damped, &neg) else {
+            *lambda *= 10.0;
+            continue;
+        };
+        let trial: Vec<f64> = params.iter().zip(&step).map(|(p, s)| p + s).collect();
+        let mut tr = Vec::new();
+        residuals(&trial, &mut tr);
+        let trial_cost = sum_sq(&tr);
+        if trial_cost.is_finite() && trial_cost < cost {
+            *lambda = (*lambda / 10.0).max(1e-12);
+            return Some(Accepted {
+                params: trial,
+                residuals: tr,
+                cost: trial_cost,
+            });
+        }
+        *lambda *= 10.0;
+    }
+    None
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

@@ -24,6 +24,7 @@ mod source;
 #[cfg(test)]
 mod tests;
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
@@ -34,7 +35,7 @@ use super::error::SceneError;
 use super::format::*;
 use super::generate::Surroundings;
 use super::mesh::Mesh;
-use super::Scene;
+use super::{Camera, Material, Mirror, Object, Room, Scene, SensorCamera};
 use crate::files::{read_regular_file, MAX_SCENE_BYTES};
 use locate::Locator;
 use objects::MeshStore;
@@ -120,66 +121,35 @@ impl Ctx<'_> {
         self.invalid(field, format!("not allowed here: {why}"))
     }
 
+    /// The validated scene, built in the order its parts depend on each other.
     fn scene(&self, spec: SceneFile) -> R<Scene> {
-        let Some(room_spec) = &spec.room else {
-            return Err(self.invalid("room", "missing [room] table (every scene needs a room)"));
-        };
-        let Some(mirror_spec) = &spec.mirror else {
-            return Err(self.invalid("mirror", "missing [mirror] table (every scene needs one)"));
-        };
+        let (room_spec, mirror_spec) = self.required_tables(&spec)?;
 
         let mut textures = Vec::new();
         let materials = self.materials(&spec.materials, &mut textures)?;
-        // A map, not a scan per object: scenes may hold many materials and many objects.
-        let by_name: std::collections::HashMap<&str, usize> = materials
-            .iter()
-            .enumerate()
-            .map(|(i, m)| (m.name.as_str(), i))
-            .collect();
-        let material_index = |field: &str, name: &str| -> R<usize> {
-            by_name.get(name).copied().ok_or_else(|| {
-                self.invalid(
-                    field,
-                    format!(
-                        "unknown material \"{name}\" (defined: {})",
-                        some_names(&materials)
-                    ),
-                )
-            })
-        };
+        let by_name = material_indices(&materials);
+        let material_index =
+            |field: &str, name: &str| self.material_index(&by_name, &materials, field, name);
 
         let room = self.room(room_spec, &material_index)?;
         let mirror = self.mirror(mirror_spec, &room)?;
         // Before any mesh is built: a room f32 cannot hold fails here.
         let extent = self.extent(&room, &mirror)?;
 
-        // Counted before any object is made; triangles summed as objects are resolved, and a
-        // generator's before it is expanded.
-        self.object_budget(&spec)?;
         let mut store = MeshStore::default();
-        let mut objects = Vec::with_capacity(spec.objects.len());
-        for (i, o) in spec.objects.iter().enumerate() {
-            objects.push(self.object(i, o, &material_index, &mut store)?);
-        }
-
+        let mut objects = self.listed_objects(&spec, &material_index, &mut store)?;
         let observer = self.observer(spec.observer.as_ref(), &room, &mirror)?;
         let sensor = self.sensor(spec.sensor.as_ref(), &room, &mirror)?;
         // Generated objects come after the file's own, and keep clear of the cameras.
-        let surroundings = Surroundings {
-            room_center: room.center,
-            room_size: room.size_m,
-            mirror_center: mirror.center,
-            mirror_radius: mirror.radius_m,
-            sensor_offset: sensor.offset_m,
-            observer: observer.position,
-        };
-        let mut origins: Vec<clearance::Origin> =
-            (0..objects.len()).map(clearance::Origin::Listed).collect();
-        for (i, g) in spec.generate.iter().enumerate() {
-            let made = self.generated(i, g, &material_index, &room, &surroundings, &mut store)?;
-            origins.extend(made.iter().map(|_| clearance::Origin::Generated(i)));
-            objects.extend(made);
-        }
+        let surroundings = surroundings(&room, &mirror, &sensor, &observer);
+        let origins = self.generated_objects(
+            &spec,
+            &material_index,
+            &room,
+            &surroundings,
+            &mut store,
+            &mut objects,
+        )?;
         let cube = self.cube(spec.cube.as_ref(), &mirror, extent)?;
         let refresh = self.refresh(spec.refresh.as_ref())?;
         let light = self.light(spec.light.as_ref())?;
@@ -202,6 +172,101 @@ impl Ctx<'_> {
         };
         self.objects_clear_of_mirror(&scene, &origins)?;
         Ok(scene)
+    }
+
+    /// The [room] and [mirror] tables, which every scene must have.
+    fn required_tables<'s>(&self, spec: &'s SceneFile) -> R<(&'s RoomSpec, &'s MirrorSpec)> {
+        let Some(room_spec) = &spec.room else {
+            return Err(self.invalid("room", "missing [room] table (every scene needs a room)"));
+        };
+        let Some(mirror_spec) = &spec.mirror else {
+            return Err(self.invalid("mirror", "missing [mirror] table (every scene needs one)"));
+        };
+        Ok((room_spec, mirror_spec))
+    }
+
+    /// The index of the material called `name`, referred to at `field`.
+    fn material_index(
+        &self,
+        by_name: &HashMap<&str, usize>,
+        materials: &[Material],
+        field: &str,
+        name: &str,
+    ) -> R<usize> {
+        by_name.get(name).copied().ok_or_else(|| {
+            self.invalid(
+                field,
+                format!(
+                    "unknown material \"{name}\" (defined: {})",
+                    some_names(materials)
+                ),
+            )
+        })
+    }
+
+    /// The file's own [[objects]], after the scene's object budget is checked.
+    fn listed_objects(
+        &self,
+        spec: &SceneFile,
+        material_index: &dyn Fn(&str, &str) -> R<usize>,
+        store: &mut MeshStore,
+    ) -> R<Vec<Object>> {
+        // Counted before any object is made; triangles summed as objects are resolved, and a
+        // generator's before it is expanded.
+        self.object_budget(spec)?;
+        let mut objects = Vec::with_capacity(spec.objects.len());
+        for (i, o) in spec.objects.iter().enumerate() {
+            objects.push(self.object(i, o, material_index, store)?);
+        }
+        Ok(objects)
+    }
+
+    /// Expands each [[generate]] table onto the end of `objects`; returns where every object
+    /// came from, listed ones included.
+    fn generated_objects(
+        &self,
+        spec: &SceneFile,
+        material_index: &dyn Fn(&str, &str) -> R<usize>,
+        room: &Room,
+        surroundings: &Surroundings,
+        store: &mut MeshStore,
+        objects: &mut Vec<Object>,
+    ) -> R<Vec<clearance::Origin>> {
+        let mut origins: Vec<clearance::Origin> =
+            (0..objects.len()).map(clearance::Origin::Listed).collect();
+        for (i, g) in spec.generate.iter().enumerate() {
+            let made = self.generated(i, g, material_index, room, surroundings, store)?;
+            origins.extend(made.iter().map(|_| clearance::Origin::Generated(i)));
+            objects.extend(made);
+        }
+        Ok(origins)
+    }
+}
+
+/// Material indices by name: a map, not a scan per object, since scenes may hold many
+/// materials and many objects.
+fn material_indices(materials: &[Material]) -> HashMap<&str, usize> {
+    materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| (m.name.as_str(), i))
+        .collect()
+}
+
+/// What generators keep clear of: the room, the mirror and the two cameras.
+fn surroundings(
+    room: &Room,
+    mirror: &Mirror,
+    sensor: &SensorCamera,
+    observer: &Camera,
+) -> Surroundings {
+    Surroundings {
+        room_center: room.center,
+        room_size: room.size_m,
+        mirror_center: mirror.center,
+        mirror_radius: mirror.radius_m,
+        sensor_offset: sensor.offset_m,
+        observer: observer.position,
     }
 }
 

@@ -2,7 +2,7 @@
 //! against the document and the buffers before a byte is read, and each refusal names the
 //! JSON path of the value at fault.
 
-use gltf::json::accessor::{ComponentType, Type};
+use gltf::json::accessor::{Accessor, ComponentType, Type};
 use gltf::json::validation::Checked;
 use gltf::json::Root;
 
@@ -75,10 +75,37 @@ pub(super) fn layout<'b>(
             ),
         ));
     };
-    let at = |field: &str| format!("accessors[{index}]{field}");
+    let (component, components) = element_type(a, index, user, want)?;
+    if a.sparse.is_some() {
+        return Err(AssetError::gltf(
+            format!("accessors[{index}].sparse"),
+            "sparse accessors are not supported",
+        ));
+    }
+    let count = element_count(a, index)?;
+    let unplaced = Layout {
+        data: None,
+        count,
+        stride: component.size() * components,
+        component,
+        components,
+    };
+    match a.buffer_view {
+        None => Ok(unplaced),
+        Some(view_index) => placed(root, buffers, a, index, view_index.value(), unplaced),
+    }
+}
+
+/// The accessor's component type and components per element, checked to suit `want`.
+fn element_type(
+    a: &Accessor,
+    index: usize,
+    user: &str,
+    want: Want,
+) -> Result<(ComponentType, usize), AssetError> {
     let wrong = || {
         AssetError::gltf(
-            at(""),
+            format!("accessors[{index}]"),
             format!("used as {user}, which must be {}", want.allowed()),
         )
     };
@@ -89,54 +116,51 @@ pub(super) fn layout<'b>(
     if *ty != want.ty() || !want.allows(component, a.normalized) {
         return Err(wrong());
     }
-    if a.sparse.is_some() {
-        return Err(AssetError::gltf(
-            at(".sparse"),
-            "sparse accessors are not supported",
-        ));
-    }
-    let count = usize::try_from(a.count.0).unwrap_or(usize::MAX);
-    if count == 0 {
-        return Err(AssetError::gltf(
-            at(".count"),
-            "is 0; an accessor holds at least 1 element",
-        ));
-    }
     let components = match ty {
         Type::Vec3 => 3,
         Type::Vec2 => 2,
         _ => 1,
     };
-    let element = component.size() * components;
-    let Some(view_index) = a.buffer_view else {
-        return Ok(Layout {
-            data: None,
-            count,
-            stride: element,
-            component,
-            components,
-        });
-    };
-    let view_index = view_index.value();
-    let view_bytes = view(root, buffers, view_index, &at(".bufferView"))?;
-    let vat = |field: &str| format!("bufferViews[{view_index}]{field}");
-    let view = &root.buffer_views[view_index];
-    let stride = match view.byte_stride {
-        None => element,
-        Some(s) if (4..=252).contains(&s.0) && s.0 % 4 == 0 && s.0 >= element => s.0,
-        Some(s) => {
-            return Err(AssetError::gltf(
-                vat(".byteStride"),
-                format!("is {}; must be a multiple of 4 in 4..=252 and at least the {element}-byte element of accessors[{index}]", s.0),
-            ))
-        }
-    };
+    Ok((component, components))
+}
+
+/// The accessor's element count, required to be at least 1.
+fn element_count(a: &Accessor, index: usize) -> Result<usize, AssetError> {
+    let count = usize::try_from(a.count.0).unwrap_or(usize::MAX);
+    if count == 0 {
+        return Err(AssetError::gltf(
+            format!("accessors[{index}].count"),
+            "is 0; an accessor holds at least 1 element",
+        ));
+    }
+    Ok(count)
+}
+
+/// `unplaced` (a layout with tightly packed elements and no data) placed in buffer view
+/// `view_index`: its stride and byte range checked, and its data the view's bytes.
+fn placed<'b>(
+    root: &Root,
+    buffers: &'b [Vec<u8>],
+    a: &Accessor,
+    index: usize,
+    view_index: usize,
+    unplaced: Layout<'b>,
+) -> Result<Layout<'b>, AssetError> {
+    let element = unplaced.component.size() * unplaced.components;
+    let view_bytes = view(
+        root,
+        buffers,
+        view_index,
+        &format!("accessors[{index}].bufferView"),
+    )?;
+    let stride = view_stride(root, view_index, element, index)?;
+    let count = unplaced.count;
     let offset = a.byte_offset.map_or(0, |o| o.0);
     // First byte past the last element, in u128 so no count or offset can overflow.
     let end = u128::from(offset) + (count as u128 - 1) * stride as u128 + element as u128;
     if end > view_bytes.len() as u128 {
         return Err(AssetError::gltf(
-            at(".count"),
+            format!("accessors[{index}].count"),
             format!(
                 "{count} elements of {element} bytes, {stride} apart, from byte {offset} need {end} bytes, \
                  but bufferViews[{view_index}] holds {} (an accessor must lie inside its buffer view)",
@@ -146,11 +170,27 @@ pub(super) fn layout<'b>(
     }
     Ok(Layout {
         data: Some(&view_bytes[offset as usize..]),
-        count,
         stride,
-        component,
-        components,
+        ..unplaced
     })
+}
+
+/// The distance between elements in buffer view `view_index`, checked against glTF's rules
+/// and the `element` size of accessor `index`.
+fn view_stride(
+    root: &Root,
+    view_index: usize,
+    element: usize,
+    index: usize,
+) -> Result<usize, AssetError> {
+    match root.buffer_views[view_index].byte_stride {
+        None => Ok(element),
+        Some(s) if (4..=252).contains(&s.0) && s.0 % 4 == 0 && s.0 >= element => Ok(s.0),
+        Some(s) => Err(AssetError::gltf(
+            format!("bufferViews[{view_index}].byteStride"),
+            format!("is {}; must be a multiple of 4 in 4..=252 and at least the {element}-byte element of accessors[{index}]", s.0),
+        )),
+    }
 }
 
 /// The bytes of buffer view `index` (referred to at `user`), checked to lie in its buffer.

@@ -195,6 +195,7 @@ impl Reader<'_> {
         Ok(())
     }
 
+    /// Adds one primitive as a part; one that glTF does not draw as triangles is skipped.
     fn primitive(
         &mut self,
         prim: &gltf::json::mesh::Primitive,
@@ -202,18 +203,10 @@ impl Reader<'_> {
         transform: Mat4,
     ) -> Result<(), AssetError> {
         self.check_references(prim, at)?;
-        match prim.mode {
-            Checked::Valid(Mode::Triangles) => {}
-            Checked::Valid(_) => return Ok(()), // points, lines, strips, fans: not drawn
-            Checked::Invalid => {
-                return Err(AssetError::gltf(
-                    format!("{at}.mode"),
-                    "must be one of 0..=6 (4: triangles)",
-                ))
-            }
+        if !draws_triangles(prim, at)? {
+            return Ok(());
         }
-        let attribute = |s: Semantic| prim.attributes.get(&Checked::Valid(s)).map(|i| i.value());
-        let Some(pos) = attribute(Semantic::Positions) else {
+        let Some(pos) = attribute(prim, Semantic::Positions) else {
             return Ok(()); // glTF: a primitive without positions is not rendered
         };
         let pos = layout(
@@ -224,60 +217,19 @@ impl Reader<'_> {
             Want::Vec3F32,
         )?;
         let n = pos.count;
-        let index_layout = match prim.indices {
-            Some(i) => Some(layout(
-                self.root,
-                self.buffers,
-                i.value(),
-                &format!("{at}.indices"),
-                Want::Index,
-            )?),
-            None => None,
-        };
+        let index_layout = self.index_layout(prim, at)?;
         let index_count = index_layout.as_ref().map_or(n, |l| l.count);
-        if index_count % 3 != 0 {
-            return Err(AssetError::gltf(
-                prim.indices
-                    .map_or(format!("{at}.attributes.POSITION"), |i| {
-                        format!("accessors[{}].count", i.value())
-                    }),
-                format!(
-                    "{index_count} vertices of a triangle list is not a whole number of triangles"
-                ),
-            ));
-        }
+        check_whole_triangles(prim, at, index_count)?;
         // Before any allocation: the counts were only checked against the data so far.
         check_budget(self.indices, index_count, self.vertices, n)?;
         let positions = self.positions(&pos, prim, transform)?;
-        let normal_matrix = Mat3::from_mat4(transform).inverse().transpose();
-        let normals = match attribute(Semantic::Normals) {
-            Some(i) => self
-                .matching(i, at, "NORMAL", n, Want::Vec3F32)?
-                .vec3s()
-                .into_iter()
-                .map(|v| normal_matrix * Vec3::from(v))
-                .collect(),
-            None => Vec::new(),
-        };
-        let uvs = match attribute(Semantic::TexCoords(0)) {
-            Some(i) => self
-                .matching(i, at, "TEXCOORD_0", n, Want::Vec2Uv)?
-                .vec2s()
-                .into_iter()
-                .map(Vec2::from)
-                .collect(),
-            None => Vec::new(),
-        };
+        let normals = self.normals(prim, at, n, transform)?;
+        let uvs = self.uvs(prim, at, n)?;
         let mut indices = match (&index_layout, prim.indices) {
             (Some(l), Some(i)) => checked_indices(l, i.value(), n)?,
             _ => (0..n as u32).collect(),
         };
-        // A mirroring transform turns counter-clockwise into clockwise: undo it.
-        if Mat3::from_mat4(transform).determinant() < 0.0 {
-            for tri in indices.chunks_exact_mut(3) {
-                tri.swap(1, 2);
-            }
-        }
+        keep_counter_clockwise(&mut indices, transform);
         self.indices += indices.len();
         self.vertices += n;
         self.parts.push(Part {
@@ -287,6 +239,62 @@ impl Reader<'_> {
             indices,
         });
         Ok(())
+    }
+
+    /// The layout of the primitive's index accessor, if it has one.
+    fn index_layout(
+        &self,
+        prim: &gltf::json::mesh::Primitive,
+        at: &str,
+    ) -> Result<Option<accessor::Layout<'_>>, AssetError> {
+        match prim.indices {
+            Some(i) => Ok(Some(layout(
+                self.root,
+                self.buffers,
+                i.value(),
+                &format!("{at}.indices"),
+                Want::Index,
+            )?)),
+            None => Ok(None),
+        }
+    }
+
+    /// Normals, one per vertex, turned by the transform's normal matrix; empty without NORMAL.
+    fn normals(
+        &self,
+        prim: &gltf::json::mesh::Primitive,
+        at: &str,
+        vertices: usize,
+        transform: Mat4,
+    ) -> Result<Vec<Vec3>, AssetError> {
+        let normal_matrix = Mat3::from_mat4(transform).inverse().transpose();
+        Ok(match attribute(prim, Semantic::Normals) {
+            Some(i) => self
+                .matching(i, at, "NORMAL", vertices, Want::Vec3F32)?
+                .vec3s()
+                .into_iter()
+                .map(|v| normal_matrix * Vec3::from(v))
+                .collect(),
+            None => Vec::new(),
+        })
+    }
+
+    /// Texture coordinates, one per vertex; empty without TEXCOORD_0.
+    fn uvs(
+        &self,
+        prim: &gltf::json::mesh::Primitive,
+        at: &str,
+        vertices: usize,
+    ) -> Result<Vec<Vec2>, AssetError> {
+        Ok(match attribute(prim, Semantic::TexCoords(0)) {
+            Some(i) => self
+                .matching(i, at, "TEXCOORD_0", vertices, Want::Vec2Uv)?
+                .vec2s()
+                .into_iter()
+                .map(Vec2::from)
+                .collect(),
+            None => Vec::new(),
+        })
     }
 
     /// Every accessor and material the primitive names must exist, used or not.
@@ -370,6 +378,50 @@ impl Reader<'_> {
             ));
         }
         Ok(l)
+    }
+}
+
+/// Whether the primitive is a triangle list, the only mode drawn; an invalid mode is refused.
+fn draws_triangles(prim: &gltf::json::mesh::Primitive, at: &str) -> Result<bool, AssetError> {
+    match prim.mode {
+        Checked::Valid(Mode::Triangles) => Ok(true),
+        Checked::Valid(_) => Ok(false), // points, lines, strips, fans: not drawn
+        Checked::Invalid => Err(AssetError::gltf(
+            format!("{at}.mode"),
+            "must be one of 0..=6 (4: triangles)",
+        )),
+    }
+}
+
+/// The accessor index of the primitive's attribute `s`, if it has one.
+fn attribute(prim: &gltf::json::mesh::Primitive, s: Semantic) -> Option<usize> {
+    prim.attributes.get(&Checked::Valid(s)).map(|i| i.value())
+}
+
+/// Refuses a triangle list whose `index_count` vertices do not make whole triangles.
+fn check_whole_triangles(
+    prim: &gltf::json::mesh::Primitive,
+    at: &str,
+    index_count: usize,
+) -> Result<(), AssetError> {
+    if index_count % 3 != 0 {
+        return Err(AssetError::gltf(
+            prim.indices
+                .map_or(format!("{at}.attributes.POSITION"), |i| {
+                    format!("accessors[{}].count", i.value())
+                }),
+            format!("{index_count} vertices of a triangle list is not a whole number of triangles"),
+        ));
+    }
+    Ok(())
+}
+
+/// A mirroring transform turns counter-clockwise into clockwise: undo it.
+fn keep_counter_clockwise(indices: &mut [u32], transform: Mat4) {
+    if Mat3::from_mat4(transform).determinant() < 0.0 {
+        for tri in indices.chunks_exact_mut(3) {
+            tri.swap(1, 2);
+        }
     }
 }
 
