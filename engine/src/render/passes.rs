@@ -10,6 +10,7 @@ use super::sensor_rays::MirrorOutput;
 use super::targets::ViewTarget;
 use super::*;
 use crate::scene::camera::{Frustum, ViewBasis};
+use crate::vk::commands::ImageBarrier;
 
 /// The view images a frame can read back.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -135,77 +136,48 @@ impl Renderer {
     ) {
         let dev = &self.device;
         dev.begin_label(cmd, name);
-        image_barriers(
-            dev,
-            cmd,
-            &[
-                barrier(
-                    target.color.raw,
-                    target.color.full_range(),
-                    (vk::ImageLayout::UNDEFINED, COPY_READ),
-                    (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-                ),
-                barrier(
-                    target.depth.raw,
-                    target.depth.full_range(),
-                    (vk::ImageLayout::UNDEFINED, DEPTH_RW),
-                    (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
-                ),
-            ],
-        );
+        image_barriers(dev, cmd, &to_attachments(target));
         if let (Some(q), Some(slot)) = (&self.queries().statistics, stats_slot) {
             q.begin(cmd, slot);
         }
-        self.scene_draw().begin_rendering(
-            cmd,
-            &Attachments {
-                color: target.color_view.raw,
-                ids: None,
-                depth: target.depth_view.raw,
-                size: [target.width, target.height],
-                layers: 1,
-                view_mask: 0,
-                clear: true,
-                store_depth: false,
-            },
-        );
+        self.scene_draw()
+            .begin_rendering(cmd, &view_attachments(target));
         for &v in view_ids {
-            let half = (PAIR_SIZE[0] / 2) as f32;
-            let vp = match v {
-                VIEW_PAIR_LEFT => [0.0, 0.0, half, PAIR_SIZE[1] as f32],
-                VIEW_PAIR_RIGHT => [half, 0.0, half, PAIR_SIZE[1] as f32],
-                _ => [0.0, 0.0, target.width as f32, target.height as f32],
-            };
-            self.scene_draw()
-                .set_viewport(cmd, vp[0], vp[1], vp[2], vp[3]);
-            let view = &views[v as usize];
-            let clearance = camera_clearance(view.eye, self.scene.mirror.radius_m);
-            let frustum = Frustum::new(view, view.near_plane_for(clearance), f32::INFINITY);
-            let visible = self.visible(&frustum);
-            let push = Push {
-                view_index: v,
-                ..Push::default()
-            };
-            let facing = self.view_facing(&views[v as usize]);
-            self.scene_draw()
-                .draw_objects(cmd, scene_pipeline, push, &visible, &facing);
-            self.draw_mirror(cmd, output, v);
+            self.draw_view(cmd, target, v, views, (scene_pipeline, output));
         }
         self.scene_draw().end_rendering(cmd);
         if let (Some(q), Some(slot)) = (&self.queries().statistics, stats_slot) {
             q.end(cmd, slot);
         }
-        image_barriers(
-            dev,
-            cmd,
-            &[barrier(
-                target.color.raw,
-                target.color.full_range(),
-                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-                (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, COPY_READ),
-            )],
-        );
+        image_barriers(dev, cmd, &[to_copy_source(target)]);
         dev.end_label(cmd);
+    }
+
+    /// Draws view `v` into its viewport of `target`: the scene objects its frustum sees,
+    /// then the mirror.
+    fn draw_view(
+        &self,
+        cmd: vk::CommandBuffer,
+        target: &ViewTarget,
+        v: u32,
+        views: &[ViewBasis],
+        (scene_pipeline, output): (&Pipeline, MirrorOutput),
+    ) {
+        let vp = viewport(target, v);
+        self.scene_draw()
+            .set_viewport(cmd, vp[0], vp[1], vp[2], vp[3]);
+        let view = &views[v as usize];
+        let clearance = camera_clearance(view.eye, self.scene.mirror.radius_m);
+        let frustum = Frustum::new(view, view.near_plane_for(clearance), f32::INFINITY);
+        let visible = self.visible(&frustum);
+        let push = Push {
+            view_index: v,
+            ..Push::default()
+        };
+        let facing = self.view_facing(&views[v as usize]);
+        self.scene_draw()
+            .draw_objects(cmd, scene_pipeline, push, &visible, &facing);
+        self.draw_mirror(cmd, output, v);
     }
 
     /// The slot and target of a view drawn for a window.
@@ -216,6 +188,59 @@ impl Renderer {
             DisplayView::Observer => (Slot::Observer, &self.targets.observer),
             DisplayView::Sensor => (Slot::Sensor, &self.targets.sensor),
         }
+    }
+}
+
+/// `target`'s colour and depth, from undefined (the pass clears them) to attachments.
+fn to_attachments(target: &ViewTarget) -> [ImageBarrier; 2] {
+    [
+        barrier(
+            target.color.raw,
+            target.color.full_range(),
+            (vk::ImageLayout::UNDEFINED, COPY_READ),
+            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
+        ),
+        barrier(
+            target.depth.raw,
+            target.depth.full_range(),
+            (vk::ImageLayout::UNDEFINED, DEPTH_RW),
+            (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
+        ),
+    ]
+}
+
+/// `target`'s colour, from attachment to the source of its copy into the readback buffer.
+fn to_copy_source(target: &ViewTarget) -> ImageBarrier {
+    barrier(
+        target.color.raw,
+        target.color.full_range(),
+        (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
+        (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, COPY_READ),
+    )
+}
+
+/// `target`'s colour and depth as one cleared layer; the depth is not kept.
+fn view_attachments(target: &ViewTarget) -> Attachments {
+    Attachments {
+        color: target.color_view.raw,
+        ids: None,
+        depth: target.depth_view.raw,
+        size: [target.width, target.height],
+        layers: 1,
+        view_mask: 0,
+        clear: true,
+        store_depth: false,
+    }
+}
+
+/// View `v`'s viewport in `target` (x, y, width, height): its half of the pair image, or
+/// all of its own image.
+fn viewport(target: &ViewTarget, v: u32) -> [f32; 4] {
+    let half = (PAIR_SIZE[0] / 2) as f32;
+    match v {
+        VIEW_PAIR_LEFT => [0.0, 0.0, half, PAIR_SIZE[1] as f32],
+        VIEW_PAIR_RIGHT => [half, 0.0, half, PAIR_SIZE[1] as f32],
+        _ => [0.0, 0.0, target.width as f32, target.height as f32],
     }
 }
 

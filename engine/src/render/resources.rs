@@ -10,7 +10,7 @@ use super::draw::{barrier, COPY_WRITE, NOTHING, SAMPLED};
 use super::gpu::{self, MaterialData, ObjectData, Vertex, ViewData};
 use crate::render::lookups::build_order::triangles_in_split_order;
 use crate::scene::state::room_meshes;
-use crate::scene::{MaterialKind, Mesh, Scene};
+use crate::scene::{MaterialKind, Mesh, Scene, TextureData};
 use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::Device;
@@ -409,20 +409,9 @@ fn upload_textures(
     scene: &Scene,
     submitter: &Submitter,
 ) -> Result<(Vec<Image>, Vec<ImageView>), GpuError> {
-    if scene.textures.len() > gpu::MAX_TEXTURES as usize {
-        return Err(GpuError::Unsupported(format!(
-            "{} textures; at most {} are supported",
-            scene.textures.len(),
-            gpu::MAX_TEXTURES
-        )));
-    }
-    let white = crate::scene::TextureData {
-        path: "white".into(),
-        width: 1,
-        height: 1,
-        rgba8: vec![255; 4],
-    };
-    let list: Vec<&crate::scene::TextureData> = if scene.textures.is_empty() {
+    check_texture_count(scene)?;
+    let white = white_texel();
+    let list: Vec<&TextureData> = if scene.textures.is_empty() {
         vec![&white]
     } else {
         scene.textures.iter().collect()
@@ -433,59 +422,9 @@ fn upload_textures(
     let cmd = submitter.begin()?;
     for (i, t) in list.iter().enumerate() {
         let name = format!("texture {i} ({})", t.path.display());
-        let mut buf = Buffer::create(
-            device,
-            &BufferDesc::new_cpu_to_gpu(t.rgba8.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC),
-            &format!("{name} staging"),
-        )?;
-        buf.write(&t.rgba8)?;
-        let image = Image::create(
-            device,
-            &ImageDesc::new_2d(
-                vk::Format::R8G8B8A8_SRGB,
-                t.width,
-                t.height,
-                vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-            ),
-            &name,
-        )?;
-        let range = image.full_range();
-        let to_dst = barrier(
-            image.raw,
-            range,
-            (vk::ImageLayout::UNDEFINED, NOTHING),
-            (vk::ImageLayout::TRANSFER_DST_OPTIMAL, COPY_WRITE),
-        );
-        image_barriers(device, cmd, &[to_dst]);
-        let region = vk::BufferImageCopy::default()
-            .image_subresource(vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: 1,
-            })
-            .image_extent(vk::Extent3D {
-                width: t.width,
-                height: t.height,
-                depth: 1,
-            });
-        // SAFETY: buffer and image are live; the image is in TRANSFER_DST layout.
-        unsafe {
-            device.raw.cmd_copy_buffer_to_image(
-                cmd,
-                buf.raw,
-                image.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[region],
-            )
-        };
-        let to_sampled = barrier(
-            image.raw,
-            range,
-            (vk::ImageLayout::TRANSFER_DST_OPTIMAL, COPY_WRITE),
-            (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
-        );
-        image_barriers(device, cmd, &[to_sampled]);
+        let buf = staging_buffer(device, t, &name)?;
+        let image = texture_image(device, t, &name)?;
+        record_texture_copy(device, cmd, &buf, &image, t);
         views.push(image.view(vk::ImageViewType::TYPE_2D, 0, 1, 0, 1, &name)?);
         images.push(image);
         staging.push(buf);
@@ -493,4 +432,104 @@ fn upload_textures(
     submitter.submit_and_wait()?;
     drop(staging);
     Ok((images, views))
+}
+
+/// Fails when the scene has more textures than the scene set has slots for.
+fn check_texture_count(scene: &Scene) -> Result<(), GpuError> {
+    if scene.textures.len() > gpu::MAX_TEXTURES as usize {
+        return Err(GpuError::Unsupported(format!(
+            "{} textures; at most {} are supported",
+            scene.textures.len(),
+            gpu::MAX_TEXTURES
+        )));
+    }
+    Ok(())
+}
+
+/// The texture of a scene without textures: one white texel.
+fn white_texel() -> TextureData {
+    TextureData {
+        path: "white".into(),
+        width: 1,
+        height: 1,
+        rgba8: vec![255; 4],
+    }
+}
+
+/// A host-visible copy of `t`'s texels, the source of its upload.
+fn staging_buffer(device: &Arc<Device>, t: &TextureData, name: &str) -> Result<Buffer, GpuError> {
+    let mut buf = Buffer::create(
+        device,
+        &BufferDesc::new_cpu_to_gpu(t.rgba8.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC),
+        &format!("{name} staging"),
+    )?;
+    buf.write(&t.rgba8)?;
+    Ok(buf)
+}
+
+/// The sRGB image `t` is copied into and sampled from.
+fn texture_image(device: &Arc<Device>, t: &TextureData, name: &str) -> Result<Image, GpuError> {
+    Image::create(
+        device,
+        &ImageDesc::new_2d(
+            vk::Format::R8G8B8A8_SRGB,
+            t.width,
+            t.height,
+            vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        ),
+        name,
+    )
+}
+
+/// Records `buf`'s copy into `image`, moving the image to transfer-destination layout and
+/// then to shader-read layout.
+fn record_texture_copy(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    buf: &Buffer,
+    image: &Image,
+    t: &TextureData,
+) {
+    let range = image.full_range();
+    let to_dst = barrier(
+        image.raw,
+        range,
+        (vk::ImageLayout::UNDEFINED, NOTHING),
+        (vk::ImageLayout::TRANSFER_DST_OPTIMAL, COPY_WRITE),
+    );
+    image_barriers(device, cmd, &[to_dst]);
+    let region = texture_region(t);
+    // SAFETY: buffer and image are live; the image is in TRANSFER_DST layout.
+    unsafe {
+        device.raw.cmd_copy_buffer_to_image(
+            cmd,
+            buf.raw,
+            image.raw,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            &[region],
+        )
+    };
+    let to_sampled = barrier(
+        image.raw,
+        range,
+        (vk::ImageLayout::TRANSFER_DST_OPTIMAL, COPY_WRITE),
+        (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
+    );
+    image_barriers(device, cmd, &[to_sampled]);
+}
+
+/// The copy of all of `t`'s texels into mip 0 of its image.
+fn texture_region(t: &TextureData) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        })
+        .image_extent(vk::Extent3D {
+            width: t.width,
+            height: t.height,
+            depth: 1,
+        })
 }

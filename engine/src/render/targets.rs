@@ -127,12 +127,7 @@ impl CubeTarget {
         ids: bool,
     ) -> Result<Self, GpuError> {
         let size = settings.face_size_px;
-        if size > device.info.limits.max_image_dimension_cube {
-            return Err(GpuError::Unsupported(format!(
-                "cube face size {size} exceeds the device's maxImageDimensionCube {}",
-                device.info.limits.max_image_dimension_cube
-            )));
-        }
+        check_face_size(device, size)?;
         let color_desc = Self::color_desc(settings);
         let (format, mips) = (color_desc.format, color_desc.mip_levels);
         if mips > 1 {
@@ -140,63 +135,12 @@ impl CubeTarget {
         }
         let color = Image::create(device, &color_desc, "cube colour")?;
         let depth = Image::create(device, &Self::depth_desc(settings), "cube depth")?;
-        let names = crate::scene::camera::FACE_NAMES;
-        let face_views = (0..6)
-            .map(|f| {
-                color.view(
-                    vk::ImageViewType::TYPE_2D,
-                    f,
-                    1,
-                    0,
-                    1,
-                    &format!("cube face {}", names[f as usize]),
-                )
-            })
-            .collect::<Result<_, _>>()?;
-        let depth_views = (0..6)
-            .map(|f| {
-                depth.view(
-                    vk::ImageViewType::TYPE_2D,
-                    f,
-                    1,
-                    0,
-                    1,
-                    &format!("cube depth {}", names[f as usize]),
-                )
-            })
-            .collect::<Result<_, _>>()?;
-        let layers_view = color.view(
-            vk::ImageViewType::TYPE_2D_ARRAY,
-            0,
-            6,
-            0,
-            1,
-            "cube faces (layered)",
-        )?;
-        let depth_layers_view = depth.view(
-            vk::ImageViewType::TYPE_2D_ARRAY,
-            0,
-            6,
-            0,
-            1,
-            "cube depth (layered)",
-        )?;
+        let face_views = per_face_views(&color, "cube face")?;
+        let depth_views = per_face_views(&depth, "cube depth")?;
+        let layers_view = six_layer_view(&color, "cube faces (layered)")?;
+        let depth_layers_view = six_layer_view(&depth, "cube depth (layered)")?;
         let cube_view = color.view(vk::ImageViewType::CUBE, 0, 6, 0, mips, "cube (sampled)")?;
-        // Trilinear; Vulkan filters across cube seams always. Anisotropic filtering is the
-        // mirror shaders' own (footprint_filter.glsl), so that every device filters alike:
-        // the sampler's would come on top of it, differently per device.
-        let sampler = Sampler::create(
-            device,
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::LINEAR)
-                .min_filter(vk::Filter::LINEAR)
-                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
-                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .max_lod(vk::LOD_CLAMP_NONE),
-            "cube sampler",
-        )?;
+        let sampler = cube_sampler(device)?;
         let ids = ids.then(|| IdCube::create(device, settings)).transpose()?;
         Ok(Self {
             ids,
@@ -224,6 +168,58 @@ pub fn cube_format(format: CubeFormat) -> vk::Format {
         CubeFormat::Rgba16Float => vk::Format::R16G16B16A16_SFLOAT,
         CubeFormat::Rgba8Unorm => vk::Format::R8G8B8A8_UNORM,
     }
+}
+
+/// Fails when a cube face of `size` texels is larger than the device allows.
+fn check_face_size(device: &Device, size: u32) -> Result<(), GpuError> {
+    if size > device.info.limits.max_image_dimension_cube {
+        return Err(GpuError::Unsupported(format!(
+            "cube face size {size} exceeds the device's maxImageDimensionCube {}",
+            device.info.limits.max_image_dimension_cube
+        )));
+    }
+    Ok(())
+}
+
+/// One 2D view of mip 0 per face of `image`, named `"{what} {face}"`.
+fn per_face_views(image: &Image, what: &str) -> Result<Vec<ImageView>, GpuError> {
+    let names = crate::scene::camera::FACE_NAMES;
+    (0..6)
+        .map(|f| {
+            image.view(
+                vk::ImageViewType::TYPE_2D,
+                f,
+                1,
+                0,
+                1,
+                &format!("{what} {}", names[f as usize]),
+            )
+        })
+        .collect()
+}
+
+/// Mip 0 of all six layers of `image` as one 2D array view.
+fn six_layer_view(image: &Image, name: &str) -> Result<ImageView, GpuError> {
+    image.view(vk::ImageViewType::TYPE_2D_ARRAY, 0, 6, 0, 1, name)
+}
+
+/// The sampler the mirror reads the cube with.
+fn cube_sampler(device: &Arc<Device>) -> Result<Sampler, GpuError> {
+    // Trilinear; Vulkan filters across cube seams always. Anisotropic filtering is the
+    // mirror shaders' own (footprint_filter.glsl), so that every device filters alike:
+    // the sampler's would come on top of it, differently per device.
+    Sampler::create(
+        device,
+        &vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .max_lod(vk::LOD_CLAMP_NONE),
+        "cube sampler",
+    )
 }
 
 fn check_blit_support(device: &Device, format: vk::Format) -> Result<(), GpuError> {

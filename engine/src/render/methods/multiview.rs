@@ -22,7 +22,7 @@ use super::{CubeLayout, CubePlan, CubeRecorder, FillMethod, FillPass, MethodCont
 use crate::render::gpu::Push;
 use crate::vk::commands::{image_barriers, ImageBarrier, Submitter};
 use crate::vk::device::{Device, Limit, OptionalFeatures};
-use crate::vk::image::{Image, ImageDesc};
+use crate::vk::image::{Image, ImageDesc, ImageView};
 use crate::vk::pipeline::Pipeline;
 use crate::vk::queries::QueryPool;
 use crate::vk::GpuError;
@@ -116,16 +116,7 @@ pub struct ViewMaskLeak {
 pub fn view_mask_leak(device: &Arc<Device>, reset: bool) -> Result<ViewMaskLeak, GpuError> {
     const SLOTS: u32 = 16;
     const WRITTEN: u32 = 2;
-    let desc = ImageDesc {
-        layers: 6,
-        ..ImageDesc::new_2d(
-            vk::Format::R8G8B8A8_UNORM,
-            4,
-            4,
-            vk::ImageUsageFlags::COLOR_ATTACHMENT,
-        )
-    };
-    let image = Image::create(device, &desc, "view mask probe")?;
+    let image = Image::create(device, &probe_desc(), "view mask probe")?;
     let view = image.view(
         vk::ImageViewType::TYPE_2D_ARRAY,
         0,
@@ -138,24 +129,54 @@ pub fn view_mask_leak(device: &Arc<Device>, reset: bool) -> Result<ViewMaskLeak,
     let submitter = Submitter::create(device, "view mask probe")?;
     let cmd = submitter.begin()?;
     queries.reset(cmd);
-    image_barriers(
-        device,
-        cmd,
-        &[ImageBarrier {
-            image: image.raw,
-            range: image.full_range(),
-            from: (
-                vk::ImageLayout::UNDEFINED,
-                vk::PipelineStageFlags2::NONE,
-                vk::AccessFlags2::NONE,
-            ),
-            to: (
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
-            ),
-        }],
-    );
+    image_barriers(device, cmd, &[to_attachment(&image)]);
+    record_empty_multiview_scope(device, cmd, &view);
+    if reset {
+        reset_view_mask(device, cmd);
+    }
+    queries.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, WRITTEN);
+    submitter.submit_and_wait()?;
+    let available = available_slots(&queries, SLOTS)?;
+    Ok(ViewMaskLeak {
+        reset,
+        written: WRITTEN,
+        available,
+    })
+}
+
+/// The probe's image: 4 x 4 texels, six layers, one per view of the mask.
+fn probe_desc() -> ImageDesc {
+    ImageDesc {
+        layers: 6,
+        ..ImageDesc::new_2d(
+            vk::Format::R8G8B8A8_UNORM,
+            4,
+            4,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT,
+        )
+    }
+}
+
+/// The probe image, from undefined to colour attachment.
+fn to_attachment(image: &Image) -> ImageBarrier {
+    ImageBarrier {
+        image: image.raw,
+        range: image.full_range(),
+        from: (
+            vk::ImageLayout::UNDEFINED,
+            vk::PipelineStageFlags2::NONE,
+            vk::AccessFlags2::NONE,
+        ),
+        to: (
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+        ),
+    }
+}
+
+/// Records a rendering scope with view mask 0x3F over the probe's six layers, and no draws.
+fn record_empty_multiview_scope(device: &Device, cmd: vk::CommandBuffer, view: &ImageView) {
     let color = [vk::RenderingAttachmentInfo::default()
         .image_view(view.raw)
         .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
@@ -177,20 +198,14 @@ pub fn view_mask_leak(device: &Arc<Device>, reset: bool) -> Result<ViewMaskLeak,
         device.raw.cmd_begin_rendering(cmd, &info);
         device.raw.cmd_end_rendering(cmd);
     }
-    if reset {
-        reset_view_mask(device, cmd);
-    }
-    queries.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, WRITTEN);
-    submitter.submit_and_wait()?;
-    let available = queries
-        .availability(SLOTS)?
+}
+
+/// The slots of the first `slots` of `queries` that hold a result.
+fn available_slots(queries: &QueryPool, slots: u32) -> Result<Vec<u32>, GpuError> {
+    Ok(queries
+        .availability(slots)?
         .into_iter()
         .enumerate()
         .filter_map(|(i, a)| a.then_some(i as u32))
-        .collect();
-    Ok(ViewMaskLeak {
-        reset,
-        written: WRITTEN,
-        available,
-    })
+        .collect())
 }

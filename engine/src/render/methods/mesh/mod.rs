@@ -21,6 +21,8 @@ mod gpu;
 mod library;
 mod meshlets;
 
+use std::sync::Arc;
+
 use ash::vk;
 
 use super::{
@@ -146,12 +148,7 @@ impl MeshFill {
         let device = ctx.device;
         let library = MeshletLibrary::build(ctx.scene, ctx.drawables)?;
         let meshlets = MeshletBuffers::upload(ctx, &library)?;
-        let draws_size = (library.most_draws().max(1) * std::mem::size_of::<MeshletDraw>()) as u64;
-        let draws = Buffer::create(
-            device,
-            &BufferDesc::new_device_local(draws_size, vk::BufferUsageFlags::STORAGE_BUFFER),
-            "meshlet draws",
-        )?;
+        let draws = draws_buffer(device, &library)?;
 
         // Set 1, binding i: buffers[i] (cube_mesh.glsl's MESHLET_BINDINGS).
         let buffers = [
@@ -161,24 +158,11 @@ impl MeshFill {
             &draws,
             ctx.vertices,
         ];
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let stages = vk::ShaderStageFlags::TASK_EXT | vk::ShaderStageFlags::MESH_EXT;
-        let bindings: Vec<_> = (0..buffers.len() as u32)
-            .map(|b| descriptors::binding(b, storage, 1, stages))
-            .collect();
-        let set_layout = DescriptorSetLayout::create(device, &bindings, "meshlet set layout")?;
-        let pool = DescriptorPool::create(
-            device,
-            1,
-            &[vk::DescriptorPoolSize {
-                ty: storage,
-                descriptor_count: buffers.len() as u32,
-            }],
-            "meshlet descriptors",
-        )?;
+        let set_layout = meshlet_set_layout(device, buffers.len() as u32)?;
+        let pool = meshlet_pool(device, buffers.len() as u32)?;
         let set = pool.allocate(&set_layout, "meshlet set")?;
         for (binding, buffer) in buffers.iter().enumerate() {
-            descriptors::write_buffer(device, set, binding as u32, storage, buffer.raw);
+            descriptors::write_buffer(device, set, binding as u32, STORAGE, buffer.raw);
         }
         let layout = PipelineLayout::create(
             device,
@@ -186,31 +170,7 @@ impl MeshFill {
             std::mem::size_of::<MeshPush>() as u32,
             "mesh layout",
         )?;
-        let mesh = if narrow {
-            crate::shaders::CUBE_MESH_NARROW_MESH
-        } else {
-            crate::shaders::CUBE_MESH_MESH
-        };
-        // The mesh shader culls back faces with a margin of the rasterizer's snapping, whose
-        // step only the device knows.
-        let sub_pixel_bits = [SpecConstant {
-            id: SPEC_SUB_PIXEL_BITS,
-            value: device.info.limits.sub_pixel_precision_bits,
-        }];
-        let pipeline = ctx.pipeline_of(
-            &layout,
-            &[
-                ShaderStage::new(
-                    vk::ShaderStageFlags::TASK_EXT,
-                    crate::shaders::CUBE_MESH_TASK,
-                ),
-                ShaderStage {
-                    constants: &sub_pixel_bits,
-                    ..ShaderStage::new(vk::ShaderStageFlags::MESH_EXT, mesh)
-                },
-            ],
-            "cube pipeline (mesh)",
-        )?;
+        let pipeline = mesh_pipeline(ctx, &layout, narrow)?;
         Ok(Self {
             pipeline,
             layout,
@@ -290,6 +250,74 @@ impl FillPass for MeshFill {
         }
         rec.end_cube();
     }
+}
+
+/// Every binding of set 1 is a storage buffer.
+const STORAGE: vk::DescriptorType = vk::DescriptorType::STORAGE_BUFFER;
+
+/// The buffer of an update's meshlet draws, sized for the most any update can have.
+fn draws_buffer(device: &Arc<Device>, library: &MeshletLibrary) -> Result<Buffer, GpuError> {
+    let draws_size = (library.most_draws().max(1) * std::mem::size_of::<MeshletDraw>()) as u64;
+    Buffer::create(
+        device,
+        &BufferDesc::new_device_local(draws_size, vk::BufferUsageFlags::STORAGE_BUFFER),
+        "meshlet draws",
+    )
+}
+
+/// Set 1's layout: `count` storage buffers, read by the task and mesh shaders.
+fn meshlet_set_layout(device: &Arc<Device>, count: u32) -> Result<DescriptorSetLayout, GpuError> {
+    let stages = vk::ShaderStageFlags::TASK_EXT | vk::ShaderStageFlags::MESH_EXT;
+    let bindings: Vec<_> = (0..count)
+        .map(|b| descriptors::binding(b, STORAGE, 1, stages))
+        .collect();
+    DescriptorSetLayout::create(device, &bindings, "meshlet set layout")
+}
+
+/// The pool of set 1 alone: `count` storage buffers.
+fn meshlet_pool(device: &Arc<Device>, count: u32) -> Result<DescriptorPool, GpuError> {
+    DescriptorPool::create(
+        device,
+        1,
+        &[vk::DescriptorPoolSize {
+            ty: STORAGE,
+            descriptor_count: count,
+        }],
+        "meshlet descriptors",
+    )
+}
+
+/// The task and mesh pipeline, with the narrow or the wide mesh shader.
+fn mesh_pipeline(
+    ctx: &MethodContext<'_>,
+    layout: &PipelineLayout,
+    narrow: bool,
+) -> Result<Pipeline, GpuError> {
+    let mesh = if narrow {
+        crate::shaders::CUBE_MESH_NARROW_MESH
+    } else {
+        crate::shaders::CUBE_MESH_MESH
+    };
+    // The mesh shader culls back faces with a margin of the rasterizer's snapping, whose
+    // step only the device knows.
+    let sub_pixel_bits = [SpecConstant {
+        id: SPEC_SUB_PIXEL_BITS,
+        value: ctx.device.info.limits.sub_pixel_precision_bits,
+    }];
+    ctx.pipeline_of(
+        layout,
+        &[
+            ShaderStage::new(
+                vk::ShaderStageFlags::TASK_EXT,
+                crate::shaders::CUBE_MESH_TASK,
+            ),
+            ShaderStage {
+                constants: &sub_pixel_bits,
+                ..ShaderStage::new(vk::ShaderStageFlags::MESH_EXT, mesh)
+            },
+        ],
+        "cube pipeline (mesh)",
+    )
 }
 
 /// The device's subgroup size (core in Vulkan 1.1).
