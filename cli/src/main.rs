@@ -15,7 +15,8 @@ mod render;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use specchio::process::{allocator, stdout, validation};
+use specchio::process::{allocator, validation};
+use specchio::stdout;
 use specchio_bench::localise;
 use specchio_viewer as view;
 

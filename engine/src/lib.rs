@@ -21,7 +21,8 @@
 //!   from it;
 //! - [`metrics`]: image-error metrics (RMSE, PSNR, relMSE, FLIP) and the FLIP heatmap;
 //! - [`output`]: EXR, PNG and JSON files, written atomically;
-//! - [`process`]: what the programs on top share (stdout, signals, the validation verdict);
+//! - [`process`]: what the programs on top share (signals, the validation verdict);
+//! - [`stdout`]: standard output that never panics (`say!`), below everything;
 //! - [`random`]: the one seeded random sequence (SplitMix64).
 
 pub mod files;
@@ -38,6 +39,7 @@ pub mod render;
 pub mod scene;
 pub mod sensor;
 pub mod shaders;
+pub mod stdout;
 pub mod text;
 pub mod vk;
 

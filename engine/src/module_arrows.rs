@@ -1,11 +1,13 @@
 //! The module arrows of docs/architecture.md, checked on the source as the compiler reads it:
 //! every file is parsed (`syn`), and every path it names (`use` trees with their `{..}` groups,
-//! paths in code, `super::super::...`) is resolved to the module it reaches. Two rules:
+//! paths in code, `super::super::...`, and the crate's exported macros, `say!` and
+//! `crate::say!`, as the module that defines them) is resolved to the module it reaches. The
+//! rules:
 //!
 //! - the Vulkan layer knows nothing of the renderer or the scene, and the CPU-only modules
 //!   (scene, image, files, memory, reference, metrics, output, sensor) reach no Vulkan;
-//! - no two modules import each other (a parent and its own child modules aside: a folder's
-//!   `mod.rs` and its files are one module split up). Longer loops are not looked for yet;
+//! - no modules import each other round a loop of any length (a parent and its own child
+//!   modules aside: a folder's `mod.rs` and its files are one module split up);
 //! - [`crate::process`], what the programs on top share, is imported by nothing below it.
 //!
 //! And one rule for the crates of the workspace, read from their manifests: the engine
@@ -55,6 +57,8 @@ fn modules(src: &Path) -> Vec<(PathBuf, Module)> {
 /// The modules a file's paths reach, resolved from `here` (the file's own module).
 struct Paths<'a> {
     here: &'a Module,
+    /// The crate's `#[macro_export]` macros by name, with the module defining each.
+    macros: &'a BTreeMap<String, Module>,
     /// The inline modules (`mod tests { .. }`) being visited, inside `here`.
     inline: Vec<String>,
     reached: BTreeSet<Module>,
@@ -123,11 +127,47 @@ impl<'ast> Visit<'ast> for Paths<'_> {
         self.tree(&mut Vec::new(), &u.tree);
     }
 
+    /// A macro's own module: `say!(..)`, `crate::say!(..)` and `$crate::say!(..)` reach the
+    /// module that defines `say` (an exported macro lives at the crate's root by name, so its
+    /// path alone names no module). Its arguments are tokens, which are not read.
+    fn visit_macro(&mut self, m: &'ast syn::Macro) {
+        let segments: Vec<String> = m
+            .path
+            .segments
+            .iter()
+            .map(|s| s.ident.to_string())
+            .collect();
+        let name = match &segments[..] {
+            [name] => Some(name),
+            [root, name] if root == "crate" => Some(name),
+            _ => None,
+        };
+        if let Some(module) = name.and_then(|n| self.macros.get(n)) {
+            self.reached.insert(module.clone());
+        }
+        syn::visit::visit_macro(self, m);
+    }
+
     fn visit_path(&mut self, p: &'ast syn::Path) {
         let segments: Vec<String> = p.segments.iter().map(|s| s.ident.to_string()).collect();
         self.add(&segments);
         syn::visit::visit_path(self, p);
     }
+}
+
+/// The crate's `#[macro_export]` macros by name, with the module that defines each.
+fn exported_macros(parsed: &[(&Module, syn::File)]) -> BTreeMap<String, Module> {
+    let mut found = BTreeMap::new();
+    for (module, file) in parsed {
+        for item in &file.items {
+            let syn::Item::Macro(m) = item else { continue };
+            let exported = m.attrs.iter().any(|a| a.path().is_ident("macro_export"));
+            if let (true, Some(name)) = (exported, &m.ident) {
+                found.insert(name.to_string(), (*module).clone());
+            }
+        }
+    }
+    found
 }
 
 /// Each module's reached modules, cut to the depth of modules that exist (a path to an item
@@ -136,22 +176,29 @@ fn graph() -> BTreeMap<Module, BTreeSet<Module>> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let files = modules(&src);
     let known: BTreeSet<Module> = files.iter().map(|(_, m)| m.clone()).collect();
+    let parsed: Vec<(&Module, syn::File)> = (files.iter())
+        .map(|(path, module)| {
+            let text = std::fs::read_to_string(path).expect("source file");
+            let file = syn::parse_file(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            (module, file)
+        })
+        .collect();
+    let macros = exported_macros(&parsed);
     let mut graph: BTreeMap<Module, BTreeSet<Module>> = BTreeMap::new();
-    for (path, module) in &files {
-        let text = std::fs::read_to_string(path).expect("source file");
-        let file = syn::parse_file(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    for (module, file) in &parsed {
         let mut paths = Paths {
             here: module,
+            macros: &macros,
             inline: Vec::new(),
             reached: BTreeSet::new(),
         };
-        paths.visit_file(&file);
-        let edges = graph.entry(module.clone()).or_default();
+        paths.visit_file(file);
+        let edges = graph.entry((*module).clone()).or_default();
         for mut target in paths.reached {
             while !target.is_empty() && !known.contains(&target) {
                 target.pop();
             }
-            if !target.is_empty() && target != *module {
+            if !target.is_empty() && target != **module {
                 edges.insert(target);
             }
         }
@@ -233,37 +280,92 @@ fn related(a: &Module, b: &Module) -> bool {
         || starts_with(b, &a.iter().map(String::as_str).collect::<Vec<_>>())
 }
 
-#[test]
-fn no_two_modules_import_each_other() {
-    let graph = graph();
-    let mut cycles = Vec::new();
-    for (a, reached) in &graph {
-        for b in reached {
-            if a < b && !related(a, b) && graph.get(b).is_some_and(|r| r.contains(a)) {
-                cycles.push(format!("{} <-> {}", a.join("::"), b.join("::")));
+/// The modules `from` reaches along the graph's arrows, not counting arrows between a module
+/// and its own descendants.
+fn reachable(graph: &BTreeMap<Module, BTreeSet<Module>>, from: &Module) -> BTreeSet<Module> {
+    let mut seen = BTreeSet::new();
+    let mut stack = vec![from.clone()];
+    while let Some(m) = stack.pop() {
+        for next in graph.get(&m).into_iter().flatten() {
+            if !related(&m, next) && seen.insert(next.clone()) {
+                stack.push(next.clone());
             }
         }
     }
-    assert!(cycles.is_empty(), "import cycles: {cycles:#?}");
+    seen
 }
 
-/// The guard sees what the old text search missed: a `{..}` group and `super::super`.
+/// The loops of the graph: each set of two or more modules that all reach each other (its
+/// strongly connected components), as `a -> b -> ...` names, sorted.
+fn loops(graph: &BTreeMap<Module, BTreeSet<Module>>) -> Vec<Vec<String>> {
+    let reach: BTreeMap<&Module, BTreeSet<Module>> =
+        graph.keys().map(|m| (m, reachable(graph, m))).collect();
+    let mut found: BTreeSet<Vec<String>> = BTreeSet::new();
+    for (m, from_m) in &reach {
+        let together: Vec<String> = (from_m.iter())
+            .filter(|o| *o != *m && reach.get(o).is_some_and(|r| r.contains(*m)))
+            .chain([*m])
+            .map(|o| o.join("::"))
+            .collect();
+        if together.len() > 1 {
+            let mut together = together;
+            together.sort();
+            found.insert(together);
+        }
+    }
+    found.into_iter().collect()
+}
+
+#[test]
+fn no_modules_import_each_other_round_a_loop() {
+    let cycles = loops(&graph());
+    assert!(cycles.is_empty(), "import loops: {cycles:#?}");
+}
+
+/// The loop search finds a loop of three, and not a parent with its own child.
+#[test]
+fn the_loop_search_finds_longer_loops() {
+    let m = |s: &str| -> Module { s.split("::").map(str::to_owned).collect() };
+    let graph: BTreeMap<Module, BTreeSet<Module>> = [
+        ("output::stage", vec!["output::replace"]),
+        ("output::replace", vec!["output::staged"]),
+        ("output::staged", vec!["output::stage"]),
+        ("render", vec!["render::floors"]),
+        ("render::floors", vec!["render"]),
+    ]
+    .into_iter()
+    .map(|(a, to)| (m(a), to.into_iter().map(m).collect()))
+    .collect();
+    assert_eq!(
+        loops(&graph),
+        [vec!["output::replace", "output::stage", "output::staged"]]
+    );
+}
+
+/// The guard sees what the old text search missed: a `{..}` group, `super::super` and an
+/// exported macro.
 #[test]
 fn the_guard_reads_groups_and_super_paths() {
     let here: Module = vec!["render".into(), "lookups".into()];
     let file = syn::parse_file(
         "use crate::{scene::camera, vk::{device::Device}};\n\
-         fn f() { super::super::metrics::compare(); }",
+         fn f() { super::super::metrics::compare(); crate::say!(\"x\"); }",
     )
     .unwrap();
     let mut paths = Paths {
         here: &here,
+        macros: &BTreeMap::from([("say".to_owned(), vec!["stdout".to_owned()])]),
         inline: Vec::new(),
         reached: BTreeSet::new(),
     };
     paths.visit_file(&file);
     let reached: Vec<String> = paths.reached.iter().map(|m| m.join("::")).collect();
-    for expected in ["scene::camera", "vk::device::Device", "metrics::compare"] {
+    for expected in [
+        "scene::camera",
+        "vk::device::Device",
+        "metrics::compare",
+        "stdout",
+    ] {
         assert!(reached.contains(&expected.to_owned()), "{reached:?}");
     }
 }

@@ -6,6 +6,7 @@
 //! user's path, never the hidden temporary one.
 
 mod dir;
+mod manifest;
 mod numbered;
 mod replace;
 mod sink;
@@ -20,8 +21,8 @@ use std::path::{Path, PathBuf};
 use crate::image::{exr, png, RgbaImage};
 
 pub(crate) use dir::{Dir, Entry};
+pub use manifest::MANIFEST;
 pub use sink::{json_text, MemoryFiles, Sink};
-pub use staged::MANIFEST;
 pub use sys::{create_new, open_no_follow, try_lock};
 pub use transaction::Transaction;
 

@@ -13,7 +13,7 @@
 //! the folder may now hold that earlier output. A run killed after that point leaves a folder
 //! that may hold the user's files written into the old output, so the sweep does not simply
 //! remove it: it removes what the earlier output's manifest lists and moves anything else to
-//! `NAME.kept-N`, as a run that lives does (`replace::recover`).
+//! `NAME.kept-N`, as a run that lives does (`manifest::recover`).
 //!
 //! Not `tempfile::TempDir`: it would give the random name and the exclusive `mkdir`, but its
 //! drop removes the folder by path, recursively, whatever is in it; here a folder is removed
@@ -148,7 +148,7 @@ pub fn sweep_dead(parent: &Path, name: &str) {
         // Handled while we hold the dead run's lock, so two sweepers cannot both start.
         if may_hold_output {
             let recovered = Dir::open(&dir)
-                .map(|d| super::replace::recover(&d, name, &parent.join(name)))
+                .map(|d| super::manifest::recover(&d, name, &parent.join(name)))
                 .unwrap_or(false);
             if !recovered {
                 // What could not be moved aside stays, token removed: it is the user's now.

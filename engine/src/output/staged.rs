@@ -5,10 +5,6 @@ use std::path::{Path, PathBuf};
 use super::stage::Stage;
 use super::OutputError;
 
-/// The file in every output folder that lists, one relative path a line, what the output
-/// wrote there: what a later run may replace.
-pub const MANIFEST: &str = ".specchio-files";
-
 #[derive(Debug)]
 pub enum Kind {
     File,

@@ -1,13 +1,13 @@
 //! What every program that runs the engine from a command line shares, whichever crate it is
-//! in (the `specchio` binary, the benchmark, the viewer): standard output that never panics
-//! ([`stdout`], the `say!` macros), signals that stop a run before it places its output
-//! ([`interrupt`]), the validation layer's verdict ([`validation`]), the allocator setting
+//! in (the `specchio` binary, the benchmark, the viewer): signals that stop a run before it
+//! places its output ([`interrupt`]), the validation layer's verdict ([`validation`]), the allocator setting
 //! every timed run records ([`allocator`]), and the range checks of command-line values
-//! ([`args`]). Nothing in the renderer imports this module: it sits on top.
+//! ([`args`]). Nothing in the renderer imports this module: it sits on top. Standard output
+//! that never panics ([`crate::stdout`], the `say!` macros) is below everything instead: the
+//! Vulkan layer's test faults say what they do through it.
 
 pub mod allocator;
 pub mod args;
 pub mod interrupt;
 pub mod probe;
-pub mod stdout;
 pub mod validation;

@@ -42,10 +42,10 @@ pub struct StdoutFailed(#[source] io::Error);
 #[macro_export]
 macro_rules! say {
     () => {
-        $crate::process::stdout::write(format_args!("\n"))
+        $crate::stdout::write(format_args!("\n"))
     };
     ($($arg:tt)*) => {
-        $crate::process::stdout::write(format_args!("{}\n", format_args!($($arg)*)))
+        $crate::stdout::write(format_args!("{}\n", format_args!($($arg)*)))
     };
 }
 
@@ -53,6 +53,6 @@ macro_rules! say {
 #[macro_export]
 macro_rules! say_part {
     ($($arg:tt)*) => {
-        $crate::process::stdout::write(format_args!($($arg)*))
+        $crate::stdout::write(format_args!($($arg)*))
     };
 }
