@@ -447,3 +447,65 @@ fn crates_depend_one_way() {
         }
     }
 }
+
+/// docs/architecture.md is the map a newcomer reads: every source file of the workspace is on
+/// it, by its file name (`stage.rs`), its bare name in backticks (`` `objects` ``, the scene
+/// loader's sections), or for a folder's `mod.rs` the folder (`load/`). A file added without
+/// its line fails here, naming it.
+#[test]
+fn the_architecture_doc_names_every_source_file() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let doc = std::fs::read_to_string(root.join("docs/architecture.md")).expect("the doc");
+    let folders = [
+        "engine/src",
+        "bench/src",
+        "bench/examples",
+        "viewer/src",
+        "cli/src",
+        "python/src",
+        "tests/engine",
+        "tests/cli",
+        "tests/common",
+    ];
+    let mut missing = Vec::new();
+    for folder in folders {
+        let mut stack = vec![root.join(folder)];
+        while let Some(dir) = stack.pop() {
+            for entry in std::fs::read_dir(&dir).expect("a source folder") {
+                let path = entry.expect("an entry").path();
+                if path.is_dir() {
+                    stack.push(path);
+                    continue;
+                }
+                let name = path
+                    .file_name()
+                    .expect("a name")
+                    .to_string_lossy()
+                    .into_owned();
+                let Some(stem) = name.strip_suffix(".rs") else {
+                    continue;
+                };
+                let named = match stem {
+                    "mod" | "lib" | "main" => {
+                        let parent = dir.file_name().expect("a folder").to_string_lossy();
+                        doc.contains(&format!("{parent}/"))
+                    }
+                    _ => doc.contains(&name) || doc.contains(&format!("`{stem}`")),
+                };
+                if !named {
+                    missing.push(
+                        path.strip_prefix(&root)
+                            .unwrap_or(&path)
+                            .display()
+                            .to_string(),
+                    );
+                }
+            }
+        }
+    }
+    missing.sort();
+    assert!(
+        missing.is_empty(),
+        "docs/architecture.md does not name: {missing:#?}"
+    );
+}
