@@ -183,7 +183,7 @@ fn render_method(
         lookup: Some(lookup),
         // Range and ids through the cube: only when asked for, so timings never pay (the
         // traced ray map of ray-query needs none).
-        id_cube: args.sensor_outputs && lookup != Lookup::RayQuery,
+        id_cube: args.sensor_outputs && !lookups::traces_ray_map(lookup),
         trace_order: args.trace_order,
         ..Default::default()
     };
@@ -374,15 +374,8 @@ fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()
 /// queries, `ray-query`, so that the colour, the range and the ids are traced along one light
 /// path; else the scene's.
 fn chosen_lookup(args: &Args, scene: &Scene, device: &DeviceInfo) -> Lookup {
-    match args.lookup {
-        Some(l) => l,
-        None if args.sensor_outputs
-            && lookups::missing_features(Lookup::RayQuery, device).is_none() =>
-        {
-            Lookup::RayQuery
-        }
-        None => scene.mirror.lookup,
-    }
+    let traced = || lookups::one_light_path(device).filter(|_| args.sensor_outputs);
+    args.lookup.or_else(traced).unwrap_or(scene.mirror.lookup)
 }
 
 /// The sensor outputs of one frame from its ray-map images (`Readback::rays`).

@@ -70,7 +70,8 @@ fn create_pass(
     if let Some(why) = lookups::missing_features(lookup, &device.info) {
         return Err(GpuError::Unsupported(format!("lookup {lookup}: {why}")));
     }
-    lookups::plugin(lookup).create(&lookups::LookupContext {
+    let plugin = lookups::plugin(lookup);
+    let pass = plugin.create(&lookups::LookupContext {
         lookup,
         device,
         resources,
@@ -79,5 +80,12 @@ fn create_pass(
         push_size: std::mem::size_of::<gpu::Push>() as u32,
         trace_order,
         frames_in_flight,
-    })
+    })?;
+    // What the plug-in says decides the renderer's id cube before the pass exists.
+    assert_eq!(
+        pass.trace_set().is_some(),
+        plugin.traces_ray_map(),
+        "lookup {lookup}: its pass and its plug-in disagree on tracing the ray map"
+    );
+    Ok(pass)
 }

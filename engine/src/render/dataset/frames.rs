@@ -16,7 +16,7 @@ use std::sync::{Arc, Mutex};
 
 use super::{place_robot, robot_scene, DatasetError, INDEX_FILE};
 use crate::output::{MemoryFiles, OutputError, Sink};
-use crate::render::{Readback, RenderOptions, Renderer};
+use crate::render::{lookups, Readback, RenderOptions, Renderer};
 use crate::scene::{Lookup, Scene};
 use crate::sensor::dataset::trajectory::Pose;
 use crate::sensor::dataset::{self as sensor_dataset, IndexLine, PoseRecord};
@@ -81,7 +81,7 @@ impl FrameWriter {
         let options = RenderOptions {
             lookup: Some(lookup),
             // The traced ray map needs no id cube.
-            id_cube: lookup != Lookup::RayQuery,
+            id_cube: !lookups::traces_ray_map(lookup),
             ..Default::default()
         };
         let renderer = Renderer::new(device, robot_scene(scene), &options)?;

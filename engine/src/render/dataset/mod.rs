@@ -205,11 +205,9 @@ pub fn choose_lookup(
     scene: &Scene,
     device: &DeviceInfo,
 ) -> Result<Lookup, DatasetError> {
-    let lookup = match asked {
-        Some(l) => l,
-        None if lookups::missing_features(Lookup::RayQuery, device).is_none() => Lookup::RayQuery,
-        None => scene.mirror.lookup,
-    };
+    let lookup = asked
+        .or_else(|| lookups::one_light_path(device))
+        .unwrap_or(scene.mirror.lookup);
     match lookups::missing_features(lookup, device) {
         Some(why) => Err(DatasetError::Lookup {
             lookup,

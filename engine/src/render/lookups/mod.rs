@@ -62,6 +62,12 @@ pub trait MirrorLookup: Sync {
     /// Whether the mirror samples the cube map. When not, the renderer skips the cube fill
     /// (unless the cube itself is read back).
     fn uses_cube(&self) -> bool;
+    /// Whether its pass traces the sensor's ray map through its own set
+    /// ([`LookupPass::trace_set`]): the range and ids then follow the colour's own light path,
+    /// and the renderer needs no id cube for them. The renderer checks that the pass agrees.
+    fn traces_ray_map(&self) -> bool {
+        false
+    }
     /// The cube-map direction its shader starts from (`FrameData.flags.y`).
     fn start(&self) -> Start;
     /// Its rungs in the benchmark's ladder: the settings it is measured at.
@@ -250,6 +256,18 @@ impl MirrorPipelines {
 pub fn plugin(lookup: Lookup) -> &'static dyn MirrorLookup {
     // The registry makes both, in one order.
     REGISTRY[lookup as usize].1
+}
+
+/// Whether `lookup` traces the sensor's ray map itself ([`MirrorLookup::traces_ray_map`]):
+/// a renderer for it needs no id cube.
+pub fn traces_ray_map(lookup: Lookup) -> bool {
+    plugin(lookup).traces_ray_map()
+}
+
+/// The first lookup, in the registry's order, that the device runs and that traces colour,
+/// range and ids along one light path (the sensor outputs' and datasets' default).
+pub fn one_light_path(info: &DeviceInfo) -> Option<Lookup> {
+    (Lookup::ALL.into_iter()).find(|&l| traces_ray_map(l) && missing_features(l, info).is_none())
 }
 
 /// Why the device cannot run `lookup` (None: it can).

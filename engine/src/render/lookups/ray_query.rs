@@ -34,6 +34,10 @@ impl MirrorLookup for RayQuery {
         false
     }
 
+    fn traces_ray_map(&self) -> bool {
+        true
+    }
+
     fn start(&self) -> Start {
         Start::Reflection
     }
