@@ -175,13 +175,9 @@ fn cpu_materials_match_the_gpu_in_f32() {
     let gpu = Gpu::new();
     let bits = gpu.device.info.limits.sub_texel_precision_bits;
     let mut r = Renderer::new(&gpu.device, s.clone(), &RenderOptions::default()).unwrap();
-    let mut seed = 12345u64;
-    let mut next = move |lo: f32, hi: f32| {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        lo + (hi - lo) * ((seed >> 40) as f32 / (1u64 << 24) as f32)
-    };
+    // The random points: the project's one seeded sequence, so a failure replays.
+    let mut rng = specchio::random::SplitMix64::new(12345);
+    let mut next = move |lo: f32, hi: f32| lo + (hi - lo) * rng.unit() as f32;
     let mut points = Vec::new();
     for (m, material) in s.materials.iter().enumerate() {
         let tiles = match material.kind {

@@ -13,6 +13,9 @@ use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+// The mutations draw from the project's one seeded sequence (`specchio::random`): a run with a
+// given `--seed` replays on every platform.
+use specchio::random::SplitMix64;
 use specchio::scene::{load_str, Mesh, TextureData};
 
 // The readers of the bench baseline and the landmarks file.
@@ -132,27 +135,6 @@ pub fn execute(target: Target, input: &[u8], seed_path: &Path) -> bool {
     }
 }
 
-/// xorshift64*: small, fast, and the same sequence on every platform.
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-
-    pub fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    /// Uniform in 0..n (n > 0).
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
-
 /// Numbers that sit on edges: zero, signs, powers of two and their neighbours, limits of the
 /// integer and float types, non-finite values.
 const INTERESTING: &[&str] = &[
@@ -195,7 +177,7 @@ const INTERESTING: &[&str] = &[
     "99999999",
 ];
 
-pub fn mutate(rng: &mut Rng, input: &[u8], other: &[u8], target: Target) -> Vec<u8> {
+pub fn mutate(rng: &mut SplitMix64, input: &[u8], other: &[u8], target: Target) -> Vec<u8> {
     let mut data = input.to_vec();
     let rounds = 1 + rng.below(4);
     for _ in 0..rounds {
@@ -214,7 +196,7 @@ pub fn mutate(rng: &mut Rng, input: &[u8], other: &[u8], target: Target) -> Vec<
     data
 }
 
-fn flip_bit(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
+fn flip_bit(rng: &mut SplitMix64, mut d: Vec<u8>) -> Vec<u8> {
     if !d.is_empty() {
         let i = rng.below(d.len());
         d[i] ^= 1 << rng.below(8);
@@ -222,7 +204,7 @@ fn flip_bit(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
     d
 }
 
-fn set_byte(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
+fn set_byte(rng: &mut SplitMix64, mut d: Vec<u8>) -> Vec<u8> {
     if !d.is_empty() {
         let i = rng.below(d.len());
         let special = [
@@ -231,21 +213,21 @@ fn set_byte(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
         d[i] = if rng.below(2) == 0 {
             special[rng.below(special.len())]
         } else {
-            rng.next() as u8
+            rng.next_u64() as u8
         };
     }
     d
 }
 
-fn insert_bytes(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
+fn insert_bytes(rng: &mut SplitMix64, mut d: Vec<u8>) -> Vec<u8> {
     let at = rng.below(d.len() + 1);
     let n = 1 + rng.below(8);
-    let bytes: Vec<u8> = (0..n).map(|_| rng.next() as u8).collect();
+    let bytes: Vec<u8> = (0..n).map(|_| rng.next_u64() as u8).collect();
     d.splice(at..at, bytes);
     d
 }
 
-fn delete_range(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
+fn delete_range(rng: &mut SplitMix64, mut d: Vec<u8>) -> Vec<u8> {
     if !d.is_empty() {
         let at = rng.below(d.len());
         let n = 1 + rng.below((d.len() - at).min(64));
@@ -254,7 +236,7 @@ fn delete_range(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
     d
 }
 
-fn duplicate_range(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
+fn duplicate_range(rng: &mut SplitMix64, mut d: Vec<u8>) -> Vec<u8> {
     if !d.is_empty() {
         let at = rng.below(d.len());
         let n = 1 + rng.below((d.len() - at).min(256));
@@ -266,7 +248,7 @@ fn duplicate_range(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
 }
 
 /// The start of one input joined to the end of another.
-fn splice(rng: &mut Rng, d: Vec<u8>, other: &[u8]) -> Vec<u8> {
+fn splice(rng: &mut SplitMix64, d: Vec<u8>, other: &[u8]) -> Vec<u8> {
     let cut = rng.below(d.len() + 1);
     let from = rng.below(other.len() + 1);
     let mut out = d[..cut].to_vec();
@@ -276,7 +258,7 @@ fn splice(rng: &mut Rng, d: Vec<u8>, other: &[u8]) -> Vec<u8> {
 
 /// Overwrites 1, 2 or 4 bytes with an edge-case integer (little- or big-endian): lengths,
 /// counts and offsets in GLB and PNG headers.
-fn binary_number(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
+fn binary_number(rng: &mut SplitMix64, mut d: Vec<u8>) -> Vec<u8> {
     let values: [u32; 9] = [
         0,
         1,
@@ -303,7 +285,7 @@ fn binary_number(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
 }
 
 /// Replaces one run of digits in the text with an interesting number.
-fn text_number(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
+fn text_number(rng: &mut SplitMix64, mut d: Vec<u8>) -> Vec<u8> {
     let starts: Vec<usize> = (0..d.len())
         .filter(|&i| d[i].is_ascii_digit() && (i == 0 || !d[i - 1].is_ascii_digit()))
         .collect();
@@ -321,7 +303,7 @@ fn text_number(rng: &mut Rng, mut d: Vec<u8>) -> Vec<u8> {
 
 /// Edits one value of a JSON (glTF) or TOML (scene) document and writes it back, so the input
 /// stays parseable and reaches the checks behind the parser.
-fn structured(rng: &mut Rng, d: Vec<u8>, target: Target) -> Vec<u8> {
+fn structured(rng: &mut SplitMix64, d: Vec<u8>, target: Target) -> Vec<u8> {
     match target {
         Target::Gltf | Target::Baseline | Target::Landmarks => {
             match serde_json::from_slice::<serde_json::Value>(&d) {
@@ -346,7 +328,7 @@ fn structured(rng: &mut Rng, d: Vec<u8>, target: Target) -> Vec<u8> {
     }
 }
 
-fn edit_json(rng: &mut Rng, v: &mut serde_json::Value) {
+fn edit_json(rng: &mut SplitMix64, v: &mut serde_json::Value) {
     use serde_json::{json, Value};
     let children = match v {
         Value::Array(a) => a.len(),
@@ -384,7 +366,7 @@ fn edit_json(rng: &mut Rng, v: &mut serde_json::Value) {
     };
 }
 
-fn edit_toml(rng: &mut Rng, t: &mut toml::Table) {
+fn edit_toml(rng: &mut SplitMix64, t: &mut toml::Table) {
     if t.is_empty() {
         return;
     }
@@ -394,7 +376,7 @@ fn edit_toml(rng: &mut Rng, t: &mut toml::Table) {
     }
 }
 
-fn edit_toml_value(rng: &mut Rng, v: &mut toml::Value) {
+fn edit_toml_value(rng: &mut SplitMix64, v: &mut toml::Value) {
     use toml::Value;
     // Go deeper most of the time; otherwise replace this value.
     match v {
@@ -504,7 +486,7 @@ pub fn run(root: &Path, config: &Config, mut progress: impl FnMut(&Report)) -> R
         }
     }));
     let mut worker = Worker::start(config.target, last_panic.clone());
-    let mut rng = Rng::new(config.seed);
+    let mut rng = SplitMix64::new(config.seed);
     // Inputs that loaded cleanly, mutated further to reach deeper checks (bounded pool).
     let mut pool: Vec<Seed> = Vec::new();
     let mut report = Report::default();
