@@ -2,14 +2,23 @@
 //! folder, for outputs a person asks for one at a time (the viewer's screenshot key).
 //!
 //! The file is written whole under a hidden name of its own (an exclusive create), synced, and
-//! then given its number with a link that fails if the name exists: a file that appeared
+//! then given its number by `tempfile`'s `persist_noclobber`: a rename that never replaces
+//! (`renameat2` with `RENAME_NOREPLACE`) or, where the file system lacks that, a link that
+//! fails if the name exists followed by an unlink of the hidden name. A file that appeared
 //! under that number meanwhile (another viewer, a user's copy) is never replaced, the next
 //! number is tried instead; and a reader never sees a half-written file under a numbered name.
+//!
+//! Only the hidden name and its removal are `tempfile`'s: the file is created by
+//! [`sys::create_new`] (the permissions of any new file, not `tempfile`'s 0600; no final link
+//! followed), and errors are this module's, naming the numbered path.
 
+use std::fs::File;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use super::{stage, sys, OutputError};
+use tempfile::NamedTempFile;
+
+use super::{sys, OutputError};
 
 /// The highest number: a folder whose numbers up to it are all taken is refused.
 const MAX_NUMBER: u32 = 9999;
@@ -29,45 +38,46 @@ pub fn write_numbered(
         path: numbered(first),
         source,
     };
-    // A name of this call's own: 128 random bits, so that no other writer's file (another
-    // viewer, another PID namespace on a shared folder) can have it.
-    let hidden = folder.join(format!(
-        ".{prefix}-{}.partial",
-        stage::random_hex().map_err(io_error)?
-    ));
-    let mut file = sys::create_new(&hidden).map_err(io_error)?;
-    let written = file.write_all(bytes).and_then(|()| file.sync_all());
-    let placed = match written {
-        Ok(()) => place(&hidden, bytes, first, &numbered),
-        Err(source) => Err(io_error(source)),
-    };
-    // The hidden name is this call's own (created above): it goes, whatever happened.
-    let _ = std::fs::remove_file(&hidden);
-    placed
+    // `.PREFIX-RANDOM.partial`, created exclusively: a name that exists (another writer's, a
+    // planted link) is never taken over, another is drawn. Dropped on any path below, the
+    // hidden file is removed unless it was given its number.
+    let hidden_prefix = format!(".{prefix}-");
+    let mut hidden = tempfile::Builder::new()
+        .prefix(&hidden_prefix)
+        .suffix(".partial")
+        .rand_bytes(16)
+        .make_in(folder, sys::create_new)
+        .map_err(io_error)?;
+    let file = hidden.as_file_mut();
+    (file.write_all(bytes).and_then(|()| file.sync_all())).map_err(io_error)?;
+    place(hidden, bytes, first, &numbered)
 }
 
-/// Gives the written file `from` the first number not taken, from `first` up and then from 1:
-/// a link that fails where the name exists. Where the file system has no links (vfat, some
-/// network file systems), the number is created exclusively and the bytes written into it.
+/// Gives the written file `hidden` the first number not taken, from `first` up and then from
+/// 1 (a rename or link that fails where the name exists). Where the file system has neither
+/// (vfat on an old kernel, some network file systems), the hidden file goes and the number is
+/// created exclusively and the bytes written into it.
 fn place(
-    from: &Path,
+    hidden: NamedTempFile<File>,
     bytes: &[u8],
     first: u32,
     numbered: &dyn Fn(u32) -> PathBuf,
 ) -> Result<PathBuf, OutputError> {
-    let mut links = true;
+    // None once the file system was found to have no way to place it.
+    let mut hidden = Some(hidden);
     for n in (first..=MAX_NUMBER).chain(1..first) {
         let to = numbered(n);
-        let made = if links {
-            match std::fs::hard_link(from, &to) {
-                Err(e) if e.kind() != io::ErrorKind::AlreadyExists && !exists(&to) => {
-                    links = false;
-                    write_new(&to, bytes)
-                }
-                made => made,
+        let made = match hidden.take().map(|h| h.persist_noclobber(&to)) {
+            Some(Ok(_)) => Ok(()),
+            Some(Err(e)) if e.error.kind() != io::ErrorKind::AlreadyExists && !exists(&to) => {
+                drop(e.file);
+                write_new(&to, bytes)
             }
-        } else {
-            write_new(&to, bytes)
+            Some(Err(e)) => {
+                hidden = Some(e.file);
+                Err(e.error)
+            }
+            None => write_new(&to, bytes),
         };
         match made {
             Ok(()) => return Ok(to),
@@ -160,13 +170,29 @@ mod tests {
         let dir = folder("race");
         std::fs::write(dir.join("shot-0001.png"), b"old").unwrap();
         std::os::unix::fs::symlink(dir.join("nowhere"), dir.join("shot-0002.png")).unwrap();
-        let source = dir.join("source");
-        std::fs::write(&source, b"new").unwrap();
+        let mut source = NamedTempFile::new_in(&dir).unwrap();
+        source.write_all(b"new").unwrap();
+        let hidden = source.path().to_owned();
         let numbered = |n: u32| dir.join(format!("shot-{n:04}.png"));
-        let got = place(&source, b"new", 1, &numbered).unwrap();
+        let got = place(source, b"new", 1, &numbered).unwrap();
         assert_eq!(got, dir.join("shot-0003.png"));
+        assert_eq!(std::fs::read(&got).unwrap(), b"new");
         assert_eq!(std::fs::read(dir.join("shot-0001.png")).unwrap(), b"old");
         assert!(!dir.join("nowhere").exists(), "written through the link");
+        assert!(!hidden.exists(), "the hidden name stays");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The numbered file has the permissions of any new file (the umask's), not the 0600 of
+    /// a temporary one.
+    #[test]
+    fn the_file_has_a_new_files_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = folder("mode");
+        let got = write_numbered(&dir, "shot", "png", b"x").unwrap();
+        drop(sys::create_new(&dir.join("plain")).unwrap());
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode();
+        assert_eq!(mode(&got), mode(&dir.join("plain")));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -5,8 +5,13 @@
 use ash::vk;
 use serde::{Deserialize, Serialize};
 
+use super::features::{Queried, MESH_EXTENSIONS, RAY_EXTENSIONS};
 use super::instance::Instance;
 use super::{GpuError, VkContext};
+
+// What a device offers is read from the queried structs by the feature table (`features.rs`);
+// re-exported here, beside the rest of what `specchio info` prints.
+pub use super::features::DeviceFeatures;
 
 /// Oldest Mesa whose lavapipe we trust (older ones miss fixes later methods rely on).
 pub const MIN_MESA_MAJOR: u32 = 24;
@@ -60,29 +65,6 @@ pub struct DeviceLimits {
     pub device_local_heap_bytes: u64,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DeviceFeatures {
-    pub dynamic_rendering: bool,
-    pub synchronization2: bool,
-    pub multiview: bool,
-    pub geometry_shader: bool,
-    /// `shaderOutputLayer`: `gl_Layer` written from the vertex shader.
-    pub shader_output_layer: bool,
-    pub mesh_shader: bool,
-    pub task_shader: bool,
-    /// Task and mesh shader invocations are counted by pipeline-statistics queries.
-    pub mesh_shader_queries: bool,
-    /// `rayQuery`, `accelerationStructure` and `bufferDeviceAddress` together: what tracing
-    /// a ray from a fragment shader needs.
-    pub ray_query: bool,
-    pub timestamps: bool,
-    pub pipeline_statistics: bool,
-    pub sampler_anisotropy: bool,
-    pub multi_draw_indirect: bool,
-    pub draw_indirect_first_instance: bool,
-}
-
 /// One physical device with what we know about it, or why it cannot be used.
 pub struct Candidate {
     pub physical: vk::PhysicalDevice,
@@ -123,7 +105,7 @@ fn describe(instance: &Instance, index: usize, physical: vk::PhysicalDevice) -> 
     let extensions = extensions(inst, physical);
     let has = |n: &std::ffi::CStr| extensions.iter().any(|e| e.as_bytes() == n.to_bytes());
     let p = Properties::query(inst, physical, &has);
-    let f = Features::query(inst, physical, &has, p.core.api_version);
+    let f = query_features(inst, physical, &has, p.core.api_version);
     let (queue_family, timestamp_bits) = graphics_queue(inst, physical);
     let timestamps = timestamp_bits && p.core.limits.timestamp_period > 0.0;
     let text = |c: Result<&std::ffi::CStr, _>| c.map(|s| s.to_string_lossy().into_owned());
@@ -206,7 +188,7 @@ impl Properties {
             .push_next(&mut maintenance3);
         // Chained only where the extension exists: SwiftShader warns on stderr about structs
         // it does not know.
-        if has(ash::ext::mesh_shader::NAME) {
+        if MESH_EXTENSIONS.iter().all(|&n| has(n)) {
             props2 = props2.push_next(&mut mesh);
         }
         // SAFETY: the chained structs are core 1.2+ or belong to a supported extension.
@@ -235,7 +217,7 @@ impl Properties {
         }
     }
 
-    fn limits(&self, f: &Features, device_local_heap_bytes: u64) -> DeviceLimits {
+    fn limits(&self, f: &Queried, device_local_heap_bytes: u64) -> DeviceLimits {
         let l = &self.core.limits;
         DeviceLimits {
             sub_texel_precision_bits: l.sub_texel_precision_bits,
@@ -261,110 +243,71 @@ impl Properties {
 }
 
 /// The features queried: core, the 1.1 to 1.3 sets, and the extensions' where offered.
-struct Features {
-    base: vk::PhysicalDeviceFeatures,
-    f11: vk::PhysicalDeviceVulkan11Features<'static>,
-    f12: vk::PhysicalDeviceVulkan12Features<'static>,
-    f13: vk::PhysicalDeviceVulkan13Features<'static>,
-    mesh: vk::PhysicalDeviceMeshShaderFeaturesEXT<'static>,
-    ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR<'static>,
-    acceleration: vk::PhysicalDeviceAccelerationStructureFeaturesKHR<'static>,
-}
-
-impl Features {
-    fn query(
-        inst: &ash::Instance,
-        physical: vk::PhysicalDevice,
-        has: &dyn Fn(&std::ffi::CStr) -> bool,
-        api_version: u32,
-    ) -> Self {
-        let mut f11 = vk::PhysicalDeviceVulkan11Features::default();
-        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
-        let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default();
-        let mut ray_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
-        let mut acceleration = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
-        let mut features2 = vk::PhysicalDeviceFeatures2::default()
-            .push_next(&mut f11)
-            .push_next(&mut f12);
-        if api_version >= vk::API_VERSION_1_3 {
-            features2 = features2.push_next(&mut f13);
-        }
-        if has(ash::ext::mesh_shader::NAME) {
-            features2 = features2.push_next(&mut mesh);
-        }
-        let ray_extensions = has(ash::khr::ray_query::NAME)
-            && has(ash::khr::acceleration_structure::NAME)
-            && has(ash::khr::deferred_host_operations::NAME);
-        if ray_extensions {
-            features2 = features2
-                .push_next(&mut ray_query)
-                .push_next(&mut acceleration);
-        }
-        // SAFETY: only structs the device understands (by version or extension) are chained.
-        unsafe { inst.get_physical_device_features2(physical, &mut features2) };
-        let base = features2.features;
-        // The chain's pointers are not followed again: each struct is kept for its values.
-        let null = std::ptr::null_mut();
-        Self {
-            base,
-            f11: vk::PhysicalDeviceVulkan11Features {
-                p_next: null,
-                ..f11
-            },
-            f12: vk::PhysicalDeviceVulkan12Features {
-                p_next: null,
-                ..f12
-            },
-            f13: vk::PhysicalDeviceVulkan13Features {
-                p_next: null,
-                ..f13
-            },
-            mesh: vk::PhysicalDeviceMeshShaderFeaturesEXT {
-                p_next: null,
-                ..mesh
-            },
-            ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR {
-                p_next: null,
-                ..ray_query
-            },
-            acceleration: vk::PhysicalDeviceAccelerationStructureFeaturesKHR {
-                p_next: null,
-                ..acceleration
-            },
-        }
+fn query_features(
+    inst: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    has: &dyn Fn(&std::ffi::CStr) -> bool,
+    api_version: u32,
+) -> Queried {
+    let offers = |names: &[&std::ffi::CStr]| names.iter().all(|&n| has(n));
+    let mut f11 = vk::PhysicalDeviceVulkan11Features::default();
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut mesh = vk::PhysicalDeviceMeshShaderFeaturesEXT::default();
+    let mut ray_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+    let mut acceleration = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+    let mut features2 = vk::PhysicalDeviceFeatures2::default()
+        .push_next(&mut f11)
+        .push_next(&mut f12);
+    if api_version >= vk::API_VERSION_1_3 {
+        features2 = features2.push_next(&mut f13);
     }
-
-    /// What the device offers, as the project names it.
-    fn offered(&self, timestamps: bool) -> DeviceFeatures {
-        let on = |b: vk::Bool32| b == vk::TRUE;
-        let base = &self.base;
-        DeviceFeatures {
-            dynamic_rendering: on(self.f13.dynamic_rendering),
-            synchronization2: on(self.f13.synchronization2),
-            multiview: on(self.f11.multiview),
-            geometry_shader: on(base.geometry_shader),
-            shader_output_layer: on(self.f12.shader_output_layer),
-            mesh_shader: on(self.mesh.mesh_shader),
-            task_shader: on(self.mesh.task_shader),
-            mesh_shader_queries: on(self.mesh.mesh_shader_queries)
-                && on(base.pipeline_statistics_query),
-            ray_query: on(self.ray_query.ray_query)
-                && on(self.acceleration.acceleration_structure)
-                && on(self.f12.buffer_device_address),
-            timestamps,
-            pipeline_statistics: on(base.pipeline_statistics_query),
-            sampler_anisotropy: on(base.sampler_anisotropy),
-            multi_draw_indirect: on(base.multi_draw_indirect),
-            draw_indirect_first_instance: on(base.draw_indirect_first_instance),
-        }
+    if offers(MESH_EXTENSIONS) {
+        features2 = features2.push_next(&mut mesh);
+    }
+    if offers(RAY_EXTENSIONS) {
+        features2 = features2
+            .push_next(&mut ray_query)
+            .push_next(&mut acceleration);
+    }
+    // SAFETY: only structs the device understands (by version or extension) are chained.
+    unsafe { inst.get_physical_device_features2(physical, &mut features2) };
+    let base = features2.features;
+    // The chain's pointers are not followed again: each struct is kept for its values.
+    let null = std::ptr::null_mut();
+    Queried {
+        base,
+        f11: vk::PhysicalDeviceVulkan11Features {
+            p_next: null,
+            ..f11
+        },
+        f12: vk::PhysicalDeviceVulkan12Features {
+            p_next: null,
+            ..f12
+        },
+        f13: vk::PhysicalDeviceVulkan13Features {
+            p_next: null,
+            ..f13
+        },
+        mesh: vk::PhysicalDeviceMeshShaderFeaturesEXT {
+            p_next: null,
+            ..mesh
+        },
+        ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR {
+            p_next: null,
+            ..ray_query
+        },
+        acceleration: vk::PhysicalDeviceAccelerationStructureFeaturesKHR {
+            p_next: null,
+            ..acceleration
+        },
     }
 }
 
 /// Why the device cannot be used at all (None: it can).
 fn rejection(
     info: &DeviceInfo,
-    f: &Features,
+    f: &Queried,
     api_version: u32,
     queue_family: Option<u32>,
 ) -> Option<String> {
