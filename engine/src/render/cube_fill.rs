@@ -37,7 +37,7 @@ impl Renderer {
                 self.scene.cube.near_m,
                 self.scene.cube.far_m,
             );
-            plan.visible[f as usize] = self.visible(&frustum);
+            plan.visible[f as usize] = self.drawn.visible(&frustum);
         }
         plan
     }

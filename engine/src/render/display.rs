@@ -73,9 +73,9 @@ impl Renderer {
     /// `render_display_frame` of that view).
     pub fn display_image(&self, view: DisplayView) -> DisplayImage {
         let target = match view {
-            DisplayView::Pair => &self.targets.pair,
-            DisplayView::Observer => &self.targets.observer,
-            DisplayView::Sensor => &self.targets.sensor,
+            DisplayView::Pair => &self.views.targets.pair,
+            DisplayView::Observer => &self.views.targets.observer,
+            DisplayView::Sensor => &self.views.targets.sensor,
         };
         DisplayImage {
             image: target.color.raw,

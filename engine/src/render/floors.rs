@@ -81,7 +81,8 @@ impl Renderer {
         };
         self.record_cube_fill(cmd, &plan, first, &mut report, fill);
         // Keeps the remaining timestamp slots answered (no view is drawn).
-        self.record_views(cmd, &views, Readback::default(), None);
+        let frame = self.frame_parts();
+        (self.views).record(&frame, cmd, &views, (Readback::default(), None), 0);
         // The floor's statistics are query 0's, whatever the method (read below).
         let stats = StatsRead {
             fill: 1,
@@ -140,7 +141,7 @@ impl Renderer {
     }
 
     fn create_floor_pipelines(&self) -> Result<FloorPipelines, GpuError> {
-        let layout = &self.pipelines.scene_layout;
+        let layout = &self.scene_layout;
         let vertex = |spirv| ShaderStage::new(vk::ShaderStageFlags::VERTEX, spirv);
         let fragment = ShaderStage::new(vk::ShaderStageFlags::FRAGMENT, crate::shaders::SCENE_FRAG);
         let (bindings, attributes) = super::pipelines::vertex_layout();

@@ -20,6 +20,7 @@ mod draw;
 pub mod floors;
 mod frame;
 mod frame_data;
+mod frame_parts;
 pub mod gpu;
 mod in_flight;
 pub mod lookups;
@@ -44,7 +45,7 @@ use ash::vk;
 use glam::Vec3;
 
 use resources::SceneResources;
-use targets::{CubeTarget, ViewTarget, ViewTargets};
+use targets::{CubeTarget, ViewTargets};
 
 pub use crate::image::RgbaImage;
 use crate::scene::camera::ViewBasis;
@@ -82,13 +83,6 @@ pub fn camera_clearance(eye: Vec3, mirror_radius_m: f32) -> f32 {
         .max(1e-6)
 }
 
-struct Pipelines {
-    view_scene: Pipeline,
-    /// Direction pass: scene depth only, then the mirror's lookup directions.
-    depth_only: Pipeline,
-    scene_layout: PipelineLayout,
-}
-
 /// Draws one scene. Field order is teardown order (everything holds an `Arc<Device>`).
 pub struct Renderer {
     /// The frames in flight: first, so that dropping the renderer waits for them before
@@ -101,11 +95,10 @@ pub struct Renderer {
     /// The mirror lookup's pipelines and per-renderer state, and the lookup it is for (the
     /// pass is rebuilt when `scene.mirror.lookup` is switched in place).
     mirror: mirror::Mirror,
-    pipelines: Pipelines,
-    /// The view passes' targets (observer, sensor, pair, the two direction images).
-    targets: ViewTargets,
-    /// The sensor ray map's passes and two targets (origin, direction), made on first use.
-    sensor_rays: Option<(sensor_rays::SensorRays, [ViewTarget; 2])>,
+    /// The view passes: their targets, pipelines and the sensor ray map's passes.
+    views: passes::ViewPasses,
+    /// Set 0 (the scene) and the push constants: every scene pipeline's layout, after them.
+    scene_layout: PipelineLayout,
     cube: CubeTarget,
     resources: SceneResources,
     /// One-off work: uploads at creation, acceleration-structure builds, the material check.
@@ -155,7 +148,7 @@ impl Renderer {
                 options.method
             )));
         }
-        let pipelines = pipelines::create_pipelines(device, &resources)?;
+        let (scene_layout, view_pipelines) = pipelines::create_pipelines(device, &resources)?;
         let mirror = mirror::Mirror::create(
             (device, &resources, &cube, &submitter),
             scene.mirror.lookup,
@@ -169,7 +162,7 @@ impl Renderer {
             vertices: &resources.vertices,
             indices: &resources.indices,
             scene_set_layout: resources.scene_set_layout.raw,
-            scene_layout: &pipelines.scene_layout,
+            scene_layout: &scene_layout,
             cube_format: cube.format,
             ids: options.id_cube,
             layout: options.method.layout(),
@@ -186,9 +179,8 @@ impl Renderer {
             floor_pipelines: None,
             fill,
             mirror,
-            pipelines,
-            targets,
-            sensor_rays: None,
+            views: passes::ViewPasses::new(targets, view_pipelines),
+            scene_layout,
             cube,
             resources,
             submitter,
@@ -278,7 +270,7 @@ impl Renderer {
             self.drain()?;
             // The ray map's passes were chosen for the old lookup (and, traced, read its set):
             // made again for the new one on the next frame that reads them.
-            self.sensor_rays = None;
+            self.views.sensor_rays = None;
         }
         self.mirror.follow(
             (&self.device, &self.resources, &self.cube, &self.submitter),
@@ -313,7 +305,7 @@ impl Renderer {
         if plan.dirty == 0 {
             return Ok(());
         }
-        let cull_back = self.cube_facing().cull;
+        let cull_back = self.frame_parts().cube_facing().cull;
         let mut prepare = methods::Prepare {
             device: &self.device,
             drawables: &self.resources.drawables,
@@ -343,7 +335,9 @@ impl Renderer {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
             }
         }
-        let copies = self.record_views(cmd, views, readback, display);
+        let first_copy = self.cube_readback_bytes(readback);
+        let frame = self.frame_parts();
+        let copies = (self.views).record(&frame, cmd, views, (readback, display), first_copy);
         (self.mirror.pass).record_after_views(cmd, self.frames.current_index());
         self.record_readback(cmd, readback, &copies);
         copies

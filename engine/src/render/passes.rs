@@ -4,9 +4,11 @@
 use ash::vk;
 
 use super::draw::{barrier, Attachments, COLOR_OUT, COPY_READ, DEPTH_RW};
+use super::frame_parts::FrameParts;
 use super::gpu::Push;
+use super::pipelines::ViewPipelines;
 use super::resources::{VIEW_OBSERVER, VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT, VIEW_SENSOR};
-use super::sensor_rays::MirrorOutput;
+use super::sensor_rays::{MirrorOutput, SensorRays};
 use super::targets::ViewTarget;
 use super::*;
 use crate::scene::camera::{Frustum, ViewBasis};
@@ -49,10 +51,29 @@ pub(super) fn texel_bytes(slot: Slot) -> u64 {
     }
 }
 
-impl Renderer {
+/// The view passes, a part of the renderer: the view targets, the scene pipelines that draw
+/// into them, and the sensor ray map's passes. They record with the frame's context
+/// ([`FrameParts`]) and own nothing else.
+pub(super) struct ViewPasses {
+    /// The sensor ray map's passes and two targets (origin, direction), made on first use.
+    pub sensor_rays: Option<(SensorRays, [ViewTarget; 2])>,
+    pipelines: ViewPipelines,
+    /// Observer, sensor, pair, and the two direction images.
+    pub targets: ViewTargets,
+}
+
+impl ViewPasses {
+    pub fn new(targets: ViewTargets, pipelines: ViewPipelines) -> Self {
+        Self {
+            sensor_rays: None,
+            pipelines,
+            targets,
+        }
+    }
+
     /// Observer, sensor and the side-by-side pair, each: culled scene draws, then the mirror.
     /// The view targets `readback` asks for, in readback order.
-    pub(super) fn view_slots(&self, readback: Readback) -> Vec<(Slot, &ViewTarget)> {
+    pub fn slots(&self, readback: Readback) -> Vec<(Slot, &ViewTarget)> {
         let mut slots = Vec::new();
         if readback.views {
             slots.push((Slot::Observer, &self.targets.observer));
@@ -75,32 +96,43 @@ impl Renderer {
     /// Observer, sensor and the side-by-side pair (culled scene draws, then the mirror), and
     /// with `readback.directions` the lookup-direction passes of observer and sensor.
     /// With `display`, only that view is drawn and nothing is copied (the viewer's frame).
-    pub(super) fn record_views(
+    /// The copies into the readback buffer start at or after `first_copy` (after the cube's).
+    pub fn record(
         &self,
+        f: &FrameParts,
         cmd: vk::CommandBuffer,
         views: &[ViewBasis],
-        readback: Readback,
-        display: Option<super::display::DisplayView>,
+        (readback, display): (Readback, Option<super::display::DisplayView>),
+        first_copy: u64,
     ) -> Copies {
         let slots = match display {
             Some(view) => vec![self.display_slot(view)],
-            None => self.view_slots(readback),
+            None => self.slots(readback),
         };
         let (before, after) = undrawn_timestamps(&slots);
-        self.mark(cmd, &before);
+        mark(f, cmd, &before);
         let p = &self.pipelines;
         let mut copies = Copies::default();
-        let mut offset = self.cube_readback_bytes(readback);
+        let mut offset = first_copy;
         for (slot, target) in slots {
             let pass = pass_of(slot);
             let scene = match pass.output {
-                MirrorOutput::Colour => &p.view_scene,
+                MirrorOutput::Colour => &p.colour,
                 _ => &p.depth_only,
             };
             let stats = pass.statistics;
             let (ids, output) = (pass.views, pass.output);
-            self.record_view(cmd, target, ids, views, (scene, output), stats, pass.name);
-            if let (Some(q), Some(ts)) = (&self.queries().timestamps, pass.timestamp) {
+            self.record_view(
+                f,
+                cmd,
+                target,
+                ids,
+                views,
+                (scene, output),
+                stats,
+                pass.name,
+            );
+            if let (Some(q), Some(ts)) = (&f.queries.timestamps, pass.timestamp) {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
             if display.is_some() {
@@ -110,22 +142,14 @@ impl Renderer {
             copies.items.push((slot, offset));
             offset += u64::from(target.width) * u64::from(target.height) * texel_bytes(slot);
         }
-        self.mark(cmd, &after);
+        mark(f, cmd, &after);
         copies
-    }
-
-    /// Writes the timestamps `stamps` of views not drawn.
-    fn mark(&self, cmd: vk::CommandBuffer, stamps: &[u32]) {
-        if let Some(q) = &self.queries().timestamps {
-            for &ts in stamps {
-                q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
-            }
-        }
     }
 
     #[allow(clippy::too_many_arguments)]
     fn record_view(
         &self,
+        f: &FrameParts,
         cmd: vk::CommandBuffer,
         target: &ViewTarget,
         view_ids: &[u32],
@@ -134,19 +158,18 @@ impl Renderer {
         stats_slot: Option<u32>,
         name: &str,
     ) {
-        let dev = &self.device;
+        let dev = f.draw.device;
         dev.begin_label(cmd, name);
         image_barriers(dev, cmd, &to_attachments(target));
-        if let (Some(q), Some(slot)) = (&self.queries().statistics, stats_slot) {
+        if let (Some(q), Some(slot)) = (&f.queries.statistics, stats_slot) {
             q.begin(cmd, slot);
         }
-        self.scene_draw()
-            .begin_rendering(cmd, &view_attachments(target));
+        f.draw.begin_rendering(cmd, &view_attachments(target));
         for &v in view_ids {
-            self.draw_view(cmd, target, v, views, (scene_pipeline, output));
+            self.draw_view(f, cmd, target, v, views, (scene_pipeline, output));
         }
-        self.scene_draw().end_rendering(cmd);
-        if let (Some(q), Some(slot)) = (&self.queries().statistics, stats_slot) {
+        f.draw.end_rendering(cmd);
+        if let (Some(q), Some(slot)) = (&f.queries.statistics, stats_slot) {
             q.end(cmd, slot);
         }
         image_barriers(dev, cmd, &[to_copy_source(target)]);
@@ -157,6 +180,7 @@ impl Renderer {
     /// then the mirror.
     fn draw_view(
         &self,
+        f: &FrameParts,
         cmd: vk::CommandBuffer,
         target: &ViewTarget,
         v: u32,
@@ -164,29 +188,84 @@ impl Renderer {
         (scene_pipeline, output): (&Pipeline, MirrorOutput),
     ) {
         let vp = viewport(target, v);
-        self.scene_draw()
-            .set_viewport(cmd, vp[0], vp[1], vp[2], vp[3]);
+        f.draw.set_viewport(cmd, vp[0], vp[1], vp[2], vp[3]);
         let view = &views[v as usize];
-        let clearance = camera_clearance(view.eye, self.scene.mirror.radius_m);
+        let clearance = camera_clearance(view.eye, f.scene.mirror.radius_m);
         let frustum = Frustum::new(view, view.near_plane_for(clearance), f32::INFINITY);
-        let visible = self.visible(&frustum);
+        let visible = f.visible(&frustum);
         let push = Push {
             view_index: v,
             ..Push::default()
         };
-        let facing = self.view_facing(&views[v as usize]);
-        self.scene_draw()
+        let facing = f.view_facing(view);
+        f.draw
             .draw_objects(cmd, scene_pipeline, push, &visible, &facing);
-        self.draw_mirror(cmd, output, v);
+        self.draw_mirror(f, cmd, output, v);
+    }
+
+    /// Draws the mirror's bounding cube with the lookup's colour or direction pipeline, or
+    /// one of the sensor ray map's (which read the cube's depth and ids).
+    fn draw_mirror(&self, f: &FrameParts, cmd: vk::CommandBuffer, output: MirrorOutput, view: u32) {
+        let d = &f.draw.device.raw;
+        let lookup = f.lookup;
+        let (pipeline, layout, sets) = match output {
+            MirrorOutput::Colour | MirrorOutput::LookupDirection => (
+                lookup.pipeline(output == MirrorOutput::LookupDirection).raw,
+                lookup.layout().raw,
+                vec![f.draw.resources.scene_set, lookup.set()],
+            ),
+            MirrorOutput::RayOrigin | MirrorOutput::RayDirection => {
+                let (rays, _) = self
+                    .sensor_rays
+                    .as_ref()
+                    .expect("the ray map's passes are made before a frame that draws them");
+                let pipeline = if output == MirrorOutput::RayOrigin {
+                    &rays.origin
+                } else {
+                    &rays.direction
+                };
+                (
+                    pipeline.raw,
+                    rays.layout.raw,
+                    vec![f.draw.resources.scene_set, rays.set],
+                )
+            }
+        };
+        // SAFETY: recording inside a view pass; what set 1 holds is ready for reading (the
+        // cube's colour, depth and ids in SHADER_READ_ONLY layout, or the lookup's own data
+        // after its barrier).
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, layout, 0, &sets, &[]);
+        }
+        f.draw.push(
+            cmd,
+            layout,
+            Push {
+                view_index: view,
+                ..Push::default()
+            },
+        );
+        // SAFETY: as above; 36 vertices generated by mirror.vert.
+        unsafe { d.cmd_draw(cmd, 36, 1, 0, 0) };
     }
 
     /// The slot and target of a view drawn for a window.
-    fn display_slot(&self, view: super::display::DisplayView) -> (Slot, &ViewTarget) {
+    pub fn display_slot(&self, view: super::display::DisplayView) -> (Slot, &ViewTarget) {
         use super::display::DisplayView;
         match view {
             DisplayView::Pair => (Slot::Pair, &self.targets.pair),
             DisplayView::Observer => (Slot::Observer, &self.targets.observer),
             DisplayView::Sensor => (Slot::Sensor, &self.targets.sensor),
+        }
+    }
+}
+
+/// Writes the timestamps `stamps` of views not drawn.
+fn mark(f: &FrameParts, cmd: vk::CommandBuffer, stamps: &[u32]) {
+    if let Some(q) = &f.queries.timestamps {
+        for &ts in stamps {
+            q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
         }
     }
 }

@@ -130,12 +130,20 @@ pub(crate) fn mirror_pipeline(
     )
 }
 
-/// The view and depth-only pipelines (reverse-Z depth everywhere); the cube's pipeline
-/// belongs to its method, the mirror's to its lookup.
+/// The scene pipelines of the views (on the renderer's scene layout, which outlives them).
+pub(super) struct ViewPipelines {
+    /// The views' colour pass.
+    pub colour: Pipeline,
+    /// Direction pass: scene depth only, then the mirror's lookup directions.
+    pub depth_only: Pipeline,
+}
+
+/// The scene's pipeline layout, and the view and depth-only pipelines on it (reverse-Z depth
+/// everywhere); the cube's pipeline belongs to its method, the mirror's to its lookup.
 pub(super) fn create_pipelines(
     device: &Arc<Device>,
     res: &SceneResources,
-) -> Result<Pipelines, GpuError> {
+) -> Result<(PipelineLayout, ViewPipelines), GpuError> {
     let push = std::mem::size_of::<Push>() as u32;
     let scene_layout =
         PipelineLayout::create(device, &[res.scene_set_layout.raw], push, "scene layout")?;
@@ -165,9 +173,9 @@ pub(super) fn create_pipelines(
         false,
         "depth-only pipeline (directions)",
     )?;
-    Ok(Pipelines {
-        view_scene,
+    let views = ViewPipelines {
+        colour: view_scene,
         depth_only,
-        scene_layout,
-    })
+    };
+    Ok((scene_layout, views))
 }

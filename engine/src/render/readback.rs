@@ -24,7 +24,7 @@ impl Renderer {
 
     pub(super) fn readback_size(&self, readback: Readback) -> u64 {
         let mut bytes = self.cube_readback_bytes(readback);
-        for (slot, t) in self.view_slots(readback) {
+        for (slot, t) in self.views.slots(readback) {
             bytes =
                 copy_offset(bytes) + u64::from(t.width) * u64::from(t.height) * texel_bytes(slot);
         }
@@ -96,7 +96,7 @@ impl Renderer {
             copy(cube.color.raw, 6, cube.size, cube.size, 0);
             transition(source, sampled);
         }
-        for ((_, t), &(_, at)) in self.view_slots(readback).into_iter().zip(&copies.items) {
+        for ((_, t), &(_, at)) in self.views.slots(readback).into_iter().zip(&copies.items) {
             copy(t.color.raw, 1, t.width, t.height, at);
         }
         // The host reads the buffer after the fence (read_images).
@@ -137,7 +137,7 @@ impl Renderer {
                     .collect(),
             );
         }
-        for ((slot, t), &(_, at)) in self.view_slots(readback).into_iter().zip(&copies.items) {
+        for ((slot, t), &(_, at)) in self.views.slots(readback).into_iter().zip(&copies.items) {
             let n = u64::from(t.width) * u64::from(t.height) * texel_bytes(slot);
             let b = &bytes[at as usize..(at + n) as usize];
             let (w, h) = (t.width, t.height);

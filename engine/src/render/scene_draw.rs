@@ -27,7 +27,7 @@ impl Renderer {
     pub(super) fn scene_draw(&self) -> SceneDraw<'_> {
         SceneDraw {
             device: &self.device,
-            layout: &self.pipelines.scene_layout,
+            layout: &self.scene_layout,
             resources: &self.resources,
         }
     }

@@ -153,7 +153,7 @@ impl Renderer {
     /// the first frame that reads the ray map back: traced where the lookup traces, else
     /// through the cube.
     pub(super) fn prepare_sensor_rays(&mut self) -> Result<(), GpuError> {
-        if self.sensor_rays.is_some() {
+        if self.views.sensor_rays.is_some() {
             return Ok(());
         }
         let scene_layout = self.resources.scene_set_layout.raw;
@@ -173,7 +173,7 @@ impl Renderer {
                 "sensor ray directions",
             )?,
         ];
-        self.sensor_rays = Some((passes, targets));
+        self.views.sensor_rays = Some((passes, targets));
         Ok(())
     }
 

@@ -152,11 +152,12 @@ pub(in crate::render) struct FillParts<'a> {
 impl Renderer {
     /// What a cube fill records into this frame.
     pub(in crate::render) fn fill_parts(&self) -> FillParts<'_> {
+        let frame = self.frame_parts();
         FillParts {
-            draw: self.scene_draw(),
+            draw: frame.draw,
             cube: &self.cube,
-            queries: self.queries(),
-            facing: self.cube_facing(),
+            queries: frame.queries,
+            facing: frame.cube_facing(),
         }
     }
 }
