@@ -124,13 +124,14 @@ pub fn table_row(
 ) -> String {
     let f = |v: Option<f64>| v.map_or("n/a".into(), |x| format!("{x:.2}"));
     let count = |c: Option<u64>| c.map_or("n/a".into(), |c| c.to_string());
-    // A mesh pipeline has no vertex shader: its vertex work is its mesh invocations.
+    // A mesh pipeline has no vertex shader: its vertex work is its mesh invocations (a pass
+    // that ran neither, the clear floor, shows its 0 vertices).
     let vertices = match stats {
         Some(PipelineStats {
             vertex_invocations: 0,
             mesh_invocations: Some(m),
             ..
-        }) => format!("{m} mesh"),
+        }) if m > 0 => format!("{m} mesh"),
         _ => count(stats.map(|s| s.vertex_invocations)),
     };
     format!(

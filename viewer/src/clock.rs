@@ -83,7 +83,7 @@ impl Figures {
             .map_or("-".to_owned(), |ms| format!("{ms:.1} ms"));
         Some(format!(
             "specchio view: {scene} | {}, {}, {:?} | {fps:.1} frames/s, last cube update {cube}, {} faces this frame | {}",
-            renderer.method,
+            renderer.method(),
             renderer.scene.mirror.lookup,
             renderer.scene.refresh,
             self.faces,

@@ -65,7 +65,7 @@ impl Renderer {
         self.acquire_slot()?;
         let state = SceneState::at(&self.scene, t_s);
         let views = self.write_frame_buffers(&state)?;
-        let plan = self.plan_cube(&views, 0x3F);
+        let plan = self.frame_parts().plan_cube(&views, 0x3F);
         let cmd = self.begin_frame()?;
         let mut report = FrameReport {
             frame,
@@ -79,9 +79,9 @@ impl Renderer {
             name: floor.name(),
             record: &record,
         };
-        self.record_cube_fill(cmd, &plan, first, &mut report, fill);
-        // Keeps the remaining timestamp slots answered (no view is drawn).
         let frame = self.frame_parts();
+        (self.cube_fill).record(&frame, cmd, &plan, first, &mut report, fill);
+        // Keeps the remaining timestamp slots answered (no view is drawn).
         (self.views).record(&frame, cmd, &views, (Readback::default(), None), 0);
         // The floor's statistics are query 0's, whatever the method (read below).
         let stats = StatsRead {

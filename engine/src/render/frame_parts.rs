@@ -9,10 +9,12 @@ use glam::Vec3;
 
 use super::draw::{DrawOrder, Facing, CUBE_FRONT, VIEW_FRONT};
 use super::lookups::LookupPass;
+use super::methods::{CubePlan, FillParts};
 use super::queries::FrameQueries;
 use super::scene_draw::SceneDraw;
+use super::targets::CubeTarget;
 use super::Renderer;
-use crate::scene::camera::Frustum;
+use crate::scene::camera::{Frustum, ViewBasis};
 use crate::scene::Scene;
 
 /// What one frame's passes record with.
@@ -25,6 +27,8 @@ pub(super) struct FrameParts<'a> {
     pub lookup: &'a dyn LookupPass,
     /// This frame's queries (its slot's: read after its fence).
     pub queries: &'a FrameQueries,
+    /// The cube map: filled by the cube fill, sampled by the mirror, copied by the readback.
+    pub cube: &'a CubeTarget,
 }
 
 impl Renderer {
@@ -36,11 +40,41 @@ impl Renderer {
             drawn: &self.drawn,
             lookup: self.mirror.pass.as_ref(),
             queries: self.queries(),
+            cube: &self.cube,
         }
     }
 }
 
-impl FrameParts<'_> {
+impl<'a> FrameParts<'a> {
+    /// Culls every dirty face against its frustum.
+    pub fn plan_cube(&self, views: &[ViewBasis], dirty: u8) -> CubePlan {
+        let mut plan = CubePlan {
+            dirty,
+            order: self.drawn.order.clone(),
+            ..Default::default()
+        };
+        for f in plan.faces().collect::<Vec<_>>() {
+            let frustum = Frustum::new(
+                &views[f as usize],
+                self.scene.cube.near_m,
+                self.scene.cube.far_m,
+            );
+            plan.visible[f as usize] = self.drawn.visible(&frustum);
+        }
+        plan
+    }
+
+    /// What a cube fill records into: the scene's draws, the cube, the queries, and how the
+    /// cube's faces see each drawable.
+    pub fn fill_parts(&self) -> FillParts<'a> {
+        FillParts {
+            draw: self.draw,
+            cube: self.cube,
+            queries: self.queries,
+            facing: self.cube_facing(),
+        }
+    }
+
     /// Indices of the drawables whose render-space bounds meet `frustum`, in draw order.
     pub fn visible(&self, frustum: &Frustum) -> Vec<u32> {
         self.drawn.visible(frustum)

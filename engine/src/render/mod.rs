@@ -90,8 +90,8 @@ pub struct Renderer {
     frames: in_flight::InFlight,
     /// The benchmark's floor pipelines (made on first `render_floor`).
     floor_pipelines: Option<floors::FloorPipelines>,
-    /// The method's pipeline and per-renderer state.
-    fill: Box<dyn methods::FillPass>,
+    /// The cube fill: the method and its pass (pipeline and per-renderer state).
+    cube_fill: cube_fill::CubeFill,
     /// The mirror lookup's pipelines and per-renderer state, and the lookup it is for (the
     /// pass is rebuilt when `scene.mirror.lookup` is switched in place).
     mirror: mirror::Mirror,
@@ -107,7 +107,6 @@ pub struct Renderer {
     refresh: refresh::Refresh,
     /// This frame's drawables: their render-space bounds and their draw order.
     drawn: draw::DrawOrder,
-    pub method: methods::Method,
     pub scene: Scene,
     pub device: Arc<Device>,
 }
@@ -177,7 +176,7 @@ impl Renderer {
         Ok(Self {
             frames: in_flight::InFlight::create(device, frames_in_flight)?,
             floor_pipelines: None,
-            fill,
+            cube_fill: cube_fill::CubeFill::new(options.method, fill),
             mirror,
             views: passes::ViewPasses::new(targets, view_pipelines),
             scene_layout,
@@ -186,10 +185,14 @@ impl Renderer {
             submitter,
             refresh: refresh::Refresh::new(options.full_updates),
             drawn: draw::DrawOrder::default(),
-            method: options.method,
             scene,
             device: Arc::clone(device),
         })
+    }
+
+    /// The method that fills the cube.
+    pub fn method(&self) -> methods::Method {
+        self.cube_fill.method()
     }
 
     /// How many frames updated the cube, skipped it, and the faces rendered, so far.
@@ -236,7 +239,7 @@ impl Renderer {
             true => self.faces_to_fill(frame, &state, &views),
             false => 0,
         };
-        let plan = self.plan_cube(&views, dirty);
+        let plan = self.frame_parts().plan_cube(&views, dirty);
         self.prepare_fill(&plan)?;
         self.grow_readback(readback)?;
         let mut report = FrameReport {
@@ -291,7 +294,7 @@ impl Renderer {
     fn faces_to_fill(&mut self, frame: u64, state: &SceneState, views: &[ViewBasis]) -> u8 {
         let drawables = &self.resources.drawables;
         let mut dirty = (self.refresh).dirty_faces(&self.scene, drawables, frame, state, views);
-        if self.method.layout() == methods::CubeLayout::Multiview && dirty != 0 {
+        if self.method().layout() == methods::CubeLayout::Multiview && dirty != 0 {
             // A multiview pass clears and draws all six views: cull for all six, or objects
             // seen only in a clean face would vanish from it.
             dirty = 0x3F;
@@ -312,7 +315,7 @@ impl Renderer {
             cull_back: &cull_back,
             uploads: &mut self.frames.current_mut().uploads,
         };
-        self.fill.prepare(plan, &mut prepare)
+        self.cube_fill.prepare(plan, &mut prepare)
     }
 
     /// Records the frame's work between its start and its end: the lookup's own, the cube
@@ -325,18 +328,19 @@ impl Renderer {
         (readback, display): (Readback, Option<display::DisplayView>),
         report: &mut FrameReport,
     ) -> passes::Copies {
+        let frame = self.frame_parts();
         // The lookup's own work (the ray-query TLAS build) comes first: without a cube update
         // it is all that lies between the start and fill timestamps (`gpu_fill_ms`).
-        self.mirror.pass.record(cmd);
+        frame.lookup.record(cmd);
         if plan.dirty != 0 {
-            self.record_cube(cmd, plan, self.refresh.first_fill(), report);
-        } else if let Some(q) = &self.queries().timestamps {
+            let first = self.refresh.first_fill();
+            (self.cube_fill).record(&frame, cmd, plan, first, report, cube_fill::Fill::Method);
+        } else if let Some(q) = &frame.queries.timestamps {
             for ts in TS_FACE0..=TS_MIPS {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
             }
         }
         let first_copy = self.cube_readback_bytes(readback);
-        let frame = self.frame_parts();
         let copies = (self.views).record(&frame, cmd, views, (readback, display), first_copy);
         (self.mirror.pass).record_after_views(cmd, self.frames.current_index());
         self.record_readback(cmd, readback, &copies);

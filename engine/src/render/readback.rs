@@ -157,7 +157,7 @@ impl Renderer {
     /// The statistics queries a frame reads: after a cube update, the faces six-pass
     /// rendered (a query each) or the one-pass fill's query 0; the views' when asked.
     pub(super) fn stats_read(&self, update: bool, face_mask: u32, views: bool) -> StatsRead {
-        let fill = match (update, self.per_face_marks()) {
+        let fill = match (update, self.cube_fill.per_face_marks()) {
             (false, _) => 0,
             (true, true) => face_mask & 0x3F,
             (true, false) => 1,
@@ -176,7 +176,7 @@ impl Renderer {
         if let Some(q) = &queries.timestamps {
             let t = q.timestamps_ns(TS_COUNT)?;
             let ms = |a: u32, b: u32| (t[b as usize] - t[a as usize]) / 1e6;
-            if self.per_face_marks() {
+            if self.cube_fill.per_face_marks() {
                 report.gpu_face_ms = Some(std::array::from_fn(|f| {
                     ms(TS_FACE0 + f as u32 - 1, TS_FACE0 + f as u32)
                 }));
@@ -189,7 +189,7 @@ impl Renderer {
             report.gpu_pair_ms = Some(ms(TS_SENSOR, TS_PAIR));
         }
         if let Some(q) = &queries.statistics {
-            if stats.fill != 0 && self.per_face_marks() {
+            if stats.fill != 0 && self.cube_fill.per_face_marks() {
                 let mut faces = [PipelineStats::default(); 6];
                 let mut total = PipelineStats::default();
                 for f in 0..6u32 {

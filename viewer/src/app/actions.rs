@@ -266,7 +266,7 @@ impl App<'_> {
             .as_ref()
             .expect("keys act on a viewer")
             .renderer
-            .method;
+            .method();
         let all: Vec<Method> = Method::listed().collect();
         let start = all.iter().position(|&m| m == current).map_or(0, |i| i + 1);
         for k in 0..all.len() {
@@ -334,7 +334,7 @@ impl App<'_> {
         scene.observer.pitch_deg = old.observer.pitch_deg;
         scene.mirror.lookup = old.mirror.lookup;
         scene.refresh = old.refresh;
-        let method = viewer.renderer.method;
+        let method = viewer.renderer.method();
         let pose = input::pose(&scene);
         // A scene the device cannot render (a cube too large, memory) is reported like a file
         // that does not load: the scene shown stays.

@@ -90,7 +90,7 @@ impl App<'_> {
         let shot = (last && self.settings.screenshot) || self.shot_asked;
         let status = Status {
             view: viewer.view,
-            method: viewer.renderer.method,
+            method: viewer.renderer.method(),
             methods: &viewer.methods,
             lookup: viewer.renderer.scene.mirror.lookup,
             lookups: &viewer.lookups,

@@ -22,6 +22,7 @@ use crate::vk::GpuError;
 
 pub use multiview::{view_mask_leak, ViewMaskLeak};
 pub use plan::CubePlan;
+pub(in crate::render) use recorder::FillParts;
 pub use recorder::{CubeRecorder, MethodContext, Prepare};
 
 /// Every cube fill method, in the order the CLI, `specchio info`, the docs and the benchmark

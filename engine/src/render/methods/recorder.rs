@@ -12,7 +12,6 @@ use crate::render::queries::FrameQueries;
 use crate::render::resources::Drawable;
 use crate::render::scene_draw::SceneDraw;
 use crate::render::targets::CubeTarget;
-use crate::render::Renderer;
 use crate::scene::Scene;
 use crate::vk::commands::Submitter;
 use crate::vk::device::Device;
@@ -140,26 +139,13 @@ pub struct CubeRecorder<'a> {
     ids: bool,
 }
 
-/// The parts of the renderer a cube fill records into ([`Renderer::fill_parts`]): the
+/// The parts of the renderer a cube fill records into (`FrameParts::fill_parts`): the
 /// scene's draws, the cube, this frame's queries, and how the cube's faces see each drawable.
 pub(in crate::render) struct FillParts<'a> {
     pub draw: SceneDraw<'a>,
     pub cube: &'a CubeTarget,
     pub queries: &'a FrameQueries,
     pub facing: Facing,
-}
-
-impl Renderer {
-    /// What a cube fill records into this frame.
-    pub(in crate::render) fn fill_parts(&self) -> FillParts<'_> {
-        let frame = self.frame_parts();
-        FillParts {
-            draw: frame.draw,
-            cube: &self.cube,
-            queries: frame.queries,
-            facing: frame.cube_facing(),
-        }
-    }
 }
 
 impl<'a> CubeRecorder<'a> {
