@@ -82,7 +82,7 @@ impl Renderer {
         let frame = self.frame_parts();
         (self.cube_fill).record(&frame, cmd, &plan, first, &mut report, fill);
         // Keeps the remaining timestamp slots answered (no view is drawn).
-        (self.views).record(&frame, cmd, &views, (Readback::default(), None), 0);
+        (self.views).record(&frame, cmd, &views, (Readback::default(), None));
         // The floor's statistics are query 0's, whatever the method (read below).
         let stats = StatsRead {
             fill: 1,
@@ -93,7 +93,11 @@ impl Renderer {
         let slot = self.submit_slot_and_wait()?;
         report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
         let queries = self.slot_queries(slot);
-        self.read_queries(queries, &mut report, StatsRead::default())?;
+        queries.read(
+            &mut report,
+            StatsRead::default(),
+            self.cube_fill.per_face_marks(),
+        )?;
         report.gpu_face_ms = None;
         if let Some(q) = &queries.statistics {
             report.fill_stats = Some(q.statistics(0, 1)?[0]);

@@ -17,8 +17,8 @@
 use std::collections::VecDeque;
 use std::time::Instant;
 
-use super::passes::Copies;
 use super::queries::{FrameQueries, StatsRead};
+use super::readback::Copies;
 use super::{FrameImages, FrameReport, Readback, Renderer};
 use crate::vk::commands::Submitter;
 use crate::vk::device::Device;
@@ -45,7 +45,7 @@ pub(super) struct FrameSlot {
 /// What finishing a submitted frame needs, kept from its recording.
 pub(super) struct Pending {
     pub report: FrameReport,
-    pub readback: Readback,
+    /// Where its images sit in the slot's readback buffer.
     pub copies: Copies,
     /// The statistics queries the frame reads (copied at its end).
     pub stats: StatsRead,
@@ -239,9 +239,9 @@ impl Renderer {
         pending.report.submit_wait_ms = pending.submitted.elapsed().as_secs_f64() * 1e3;
         let slot = &self.frames.slots[s];
         let mut report = pending.report;
-        self.read_queries(&slot.queries, &mut report, pending.stats)?;
+        (slot.queries).read(&mut report, pending.stats, self.cube_fill.per_face_marks())?;
         report.traced_rays = self.mirror.pass.tally(s)?;
-        let images = self.read_images(slot.readback.as_ref(), pending.readback, &pending.copies)?;
+        let images = pending.copies.decode(slot.readback.as_ref())?;
         self.frames.done.push_back((report, images));
         Ok(())
     }

@@ -55,7 +55,6 @@ use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::device::Device;
 use crate::vk::memory::{Buffer, BufferDesc};
 use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, PipelineLayout, ShaderStage};
-use crate::vk::queries::PipelineStats;
 use crate::vk::GpuError;
 pub use frame::{FrameImages, FrameReport, Readback, RefreshCounters, RenderOptions};
 pub use in_flight::MAX_FRAMES_IN_FLIGHT;
@@ -241,7 +240,8 @@ impl Renderer {
         };
         let plan = self.frame_parts().plan_cube(&views, dirty);
         self.prepare_fill(&plan)?;
-        self.grow_readback(readback)?;
+        let copies = self.plan_copies(readback);
+        self.grow_readback(&copies)?;
         let mut report = FrameReport {
             frame,
             time_s: t_s,
@@ -249,8 +249,21 @@ impl Renderer {
             ..Default::default()
         };
         let cmd = self.begin_frame()?;
-        let copies = self.record_frame(cmd, &plan, &views, (readback, display), &mut report);
-        let stats = self.stats_read(dirty != 0, u32::from(report.face_mask), readback.views);
+        self.record_frame(
+            cmd,
+            &plan,
+            &views,
+            (readback, display),
+            &copies,
+            &mut report,
+        );
+        let per_face = self.cube_fill.per_face_marks();
+        let stats = StatsRead::of(
+            dirty != 0,
+            per_face,
+            u32::from(report.face_mask),
+            readback.views,
+        );
         self.end_frame(cmd, record_start, &mut report, stats);
         // The cube shows `state` once this frame has run (later frames run after it), except
         // after an `every-n` frame that skipped the update.
@@ -259,7 +272,6 @@ impl Renderer {
         }
         self.submit_slot(in_flight::Pending {
             report,
-            readback,
             copies,
             stats,
             submitted: Instant::now(),
@@ -319,15 +331,16 @@ impl Renderer {
     }
 
     /// Records the frame's work between its start and its end: the lookup's own, the cube
-    /// update (or its timestamps alone), the views, the readback copies.
+    /// update (or its timestamps alone), the views, the readback `copies`.
     fn record_frame(
         &self,
         cmd: vk::CommandBuffer,
         plan: &methods::CubePlan,
         views: &[ViewBasis],
         (readback, display): (Readback, Option<display::DisplayView>),
+        copies: &readback::Copies,
         report: &mut FrameReport,
-    ) -> passes::Copies {
+    ) {
         let frame = self.frame_parts();
         // The lookup's own work (the ray-query TLAS build) comes first: without a cube update
         // it is all that lies between the start and fill timestamps (`gpu_fill_ms`).
@@ -340,11 +353,9 @@ impl Renderer {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
             }
         }
-        let first_copy = self.cube_readback_bytes(readback);
-        let copies = (self.views).record(&frame, cmd, views, (readback, display), first_copy);
-        (self.mirror.pass).record_after_views(cmd, self.frames.current_index());
-        self.record_readback(cmd, readback, &copies);
-        copies
+        (self.views).record(&frame, cmd, views, (readback, display));
+        (frame.lookup).record_after_views(cmd, self.frames.current_index());
+        self.record_readback(cmd, copies);
     }
 
     /// The current frame's queries (per frame in flight: a slot's are read after its fence).

@@ -26,12 +26,6 @@ pub(super) enum Slot {
     SensorRayDirection,
 }
 
-/// Where each read-back view image sits in the readback buffer (after the cube faces).
-#[derive(Debug, Default, Clone)]
-pub(super) struct Copies {
-    pub(super) items: Vec<(Slot, u64)>,
-}
-
 /// Where a view's copy into the readback buffer may start, at or after `offset`: a multiple of
 /// 16 bytes, the largest texel here and a multiple of every other (Vulkan wants a copy's
 /// buffer offset to be a multiple of its format's texel size; an odd-sized 8-byte image before
@@ -95,16 +89,15 @@ impl ViewPasses {
 
     /// Observer, sensor and the side-by-side pair (culled scene draws, then the mirror), and
     /// with `readback.directions` the lookup-direction passes of observer and sensor.
-    /// With `display`, only that view is drawn and nothing is copied (the viewer's frame).
-    /// The copies into the readback buffer start at or after `first_copy` (after the cube's).
+    /// With `display`, only that view is drawn (the viewer's frame). What is read back of
+    /// them is the readback's (`readback.rs`, `Copies`).
     pub fn record(
         &self,
         f: &FrameParts,
         cmd: vk::CommandBuffer,
         views: &[ViewBasis],
         (readback, display): (Readback, Option<super::display::DisplayView>),
-        first_copy: u64,
-    ) -> Copies {
+    ) {
         let slots = match display {
             Some(view) => vec![self.display_slot(view)],
             None => self.slots(readback),
@@ -112,8 +105,6 @@ impl ViewPasses {
         let (before, after) = undrawn_timestamps(&slots);
         mark(f, cmd, &before);
         let p = &self.pipelines;
-        let mut copies = Copies::default();
-        let mut offset = first_copy;
         for (slot, target) in slots {
             let pass = pass_of(slot);
             let scene = match pass.output {
@@ -135,15 +126,8 @@ impl ViewPasses {
             if let (Some(q), Some(ts)) = (&f.queries.timestamps, pass.timestamp) {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
-            if display.is_some() {
-                continue;
-            }
-            offset = copy_offset(offset);
-            copies.items.push((slot, offset));
-            offset += u64::from(target.width) * u64::from(target.height) * texel_bytes(slot);
         }
         mark(f, cmd, &after);
-        copies
     }
 
     #[allow(clippy::too_many_arguments)]

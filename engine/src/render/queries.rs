@@ -6,9 +6,10 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use super::FrameReport;
 use crate::vk::commands::host_read_barrier;
 use crate::vk::device::Device;
-use crate::vk::queries::QueryPool;
+use crate::vk::queries::{PipelineStats, QueryPool};
 use crate::vk::GpuError;
 
 /// Timestamp slots: start, after each face (six-pass), after the fill, after the mips, after
@@ -35,6 +36,20 @@ pub(super) struct StatsRead {
     pub views: bool,
 }
 
+impl StatsRead {
+    /// The statistics queries a frame reads: after a cube update, the faces a per-face
+    /// method (`per_face`) rendered (a query each) or the one-pass fill's query 0; the views'
+    /// when asked.
+    pub fn of(update: bool, per_face: bool, face_mask: u32, views: bool) -> StatsRead {
+        let fill = match (update, per_face) {
+            (false, _) => 0,
+            (true, true) => face_mask & 0x3F,
+            (true, false) => 1,
+        };
+        StatsRead { fill, views }
+    }
+}
+
 /// The two pools, each `None` where the device lacks its kind of query.
 pub(super) struct FrameQueries {
     pub timestamps: Option<QueryPool>,
@@ -42,6 +57,52 @@ pub(super) struct FrameQueries {
 }
 
 impl FrameQueries {
+    /// A finished frame's timestamps and the statistics in `stats`, from the copies its
+    /// commands ended with, into `report` (per face where the fill was `per_face`).
+    pub fn read(
+        &self,
+        report: &mut FrameReport,
+        stats: StatsRead,
+        per_face: bool,
+    ) -> Result<(), GpuError> {
+        if let Some(q) = &self.timestamps {
+            let t = q.timestamps_ns(TS_COUNT)?;
+            let ms = |a: u32, b: u32| (t[b as usize] - t[a as usize]) / 1e6;
+            if per_face {
+                report.gpu_face_ms = Some(std::array::from_fn(|f| {
+                    ms(TS_FACE0 + f as u32 - 1, TS_FACE0 + f as u32)
+                }));
+            }
+            report.gpu_fill_ms = Some(ms(TS_START, TS_FILL));
+            report.gpu_cube_ms = Some(ms(TS_START, TS_MIPS));
+            report.gpu_mips_ms = Some(ms(TS_FILL, TS_MIPS));
+            report.gpu_observer_ms = Some(ms(TS_MIPS, TS_OBSERVER));
+            report.gpu_sensor_ms = Some(ms(TS_OBSERVER, TS_SENSOR));
+            report.gpu_pair_ms = Some(ms(TS_SENSOR, TS_PAIR));
+        }
+        if let Some(q) = &self.statistics {
+            if stats.fill != 0 && per_face {
+                let mut faces = [PipelineStats::default(); 6];
+                let mut total = PipelineStats::default();
+                for f in 0..6u32 {
+                    if stats.fill & (1 << f) != 0 {
+                        faces[f as usize] = q.statistics(f, 1)?[0];
+                        total += faces[f as usize];
+                    }
+                }
+                report.face_stats = Some(faces);
+                report.fill_stats = Some(total);
+            } else if stats.fill != 0 {
+                report.fill_stats = Some(q.statistics(0, 1)?[0]);
+            }
+            if stats.views {
+                let s = q.statistics(6, 3)?;
+                report.view_stats = Some(std::array::from_fn(|v| s[v]));
+            }
+        }
+        Ok(())
+    }
+
     pub fn create(device: &Arc<Device>) -> Result<Self, GpuError> {
         let features = &device.info.features;
         let timestamps = (features.timestamps)

@@ -1,105 +1,107 @@
 //! What comes back from the GPU after a frame: the readback buffer's layout (cube faces, then
-//! the view images in slot order), the copies into it, the decoding of its texels, and the
-//! timestamp and statistics queries.
+//! the view images in slot order), planned once per frame as [`Copies`], which records the
+//! copies into it and decodes its texels; and the timestamp and statistics queries.
 
 use ash::vk;
 
 use super::draw::{barrier, COPY_READ, SAMPLED};
-use super::passes::{copy_offset, texel_bytes, Copies, Slot};
+use super::passes::{copy_offset, texel_bytes, Slot};
+use super::targets::{CubeTarget, ViewTarget};
 use super::*;
 use crate::vk::commands::host_read_barrier;
 
-impl Renderer {
-    pub(super) fn cube_readback_bytes(&self, readback: Readback) -> u64 {
-        if !readback.cube {
-            return 0;
-        }
-        let texel = if self.cube.format == vk::Format::R8G8B8A8_UNORM {
-            4
-        } else {
-            8
-        };
-        6 * u64::from(self.cube.size) * u64::from(self.cube.size) * texel
-    }
+/// Where one frame's images sit in its slot's readback buffer: planned before the frame is
+/// recorded (the buffer is grown to [`Copies::bytes`]), then used to record the copies and,
+/// after the frame's fence, to decode them. The cube's six faces come first, at 0, then the
+/// view images in slot order, each at a 16-byte boundary ([`copy_offset`]).
+#[derive(Debug, Default, Clone)]
+pub(super) struct Copies {
+    cube: Option<CubeCopy>,
+    views: Vec<ViewCopy>,
+    bytes: u64,
+}
 
-    pub(super) fn readback_size(&self, readback: Readback) -> u64 {
-        let mut bytes = self.cube_readback_bytes(readback);
-        for (slot, t) in self.views.slots(readback) {
-            bytes =
-                copy_offset(bytes) + u64::from(t.width) * u64::from(t.height) * texel_bytes(slot);
-        }
-        bytes
-    }
+/// Mip 0 of the cube's six faces.
+#[derive(Debug, Clone)]
+struct CubeCopy {
+    image: vk::Image,
+    mip0: vk::ImageSubresourceRange,
+    size: u32,
+    /// RGBA8 unorm (a `--full`-size cube's format), else RGBA16F.
+    unorm: bool,
+}
 
-    /// Makes the current slot's readback buffer large enough for `readback` (replacing it is
-    /// safe: the slot's previous frame has finished).
-    pub(super) fn grow_readback(&mut self, readback: Readback) -> Result<(), GpuError> {
-        let bytes = self.readback_size(readback);
-        let slot = self.frames.current();
-        if bytes == 0 || slot.readback.as_ref().is_some_and(|b| b.size >= bytes) {
-            return Ok(());
-        }
-        budget::check_buffer(&self.device, "this frame's readback", bytes)?;
-        let buffer = Buffer::create(&self.device, &BufferDesc::new_readback(bytes), "readback")?;
-        self.frames.current_mut().readback = Some(buffer);
-        Ok(())
-    }
+/// One view image.
+#[derive(Debug, Clone)]
+struct ViewCopy {
+    slot: Slot,
+    image: vk::Image,
+    width: u32,
+    height: u32,
+    offset: u64,
+}
 
-    /// Copies mip 0 of the cube faces and the view images into the readback buffer.
-    pub(super) fn record_readback(
-        &self,
-        cmd: vk::CommandBuffer,
-        readback: Readback,
-        copies: &Copies,
-    ) {
-        let Some(buffer) = &self.frames.current().readback else {
-            return;
-        };
-        let dev = &self.device;
-        let copy = |image: vk::Image, layers: u32, w: u32, h: u32, offset: u64| {
-            let region = vk::BufferImageCopy::default()
-                .buffer_offset(offset)
-                .image_subresource(vk::ImageSubresourceLayers {
-                    aspect_mask: vk::ImageAspectFlags::COLOR,
-                    mip_level: 0,
-                    base_array_layer: 0,
-                    layer_count: layers,
-                })
-                .image_extent(vk::Extent3D {
-                    width: w,
-                    height: h,
-                    depth: 1,
-                });
-            // SAFETY: the image is in TRANSFER_SRC layout and the buffer has room (readback_size).
-            unsafe {
-                dev.raw.cmd_copy_image_to_buffer(
-                    cmd,
-                    image,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    buffer.raw,
-                    &[region],
-                )
-            };
-        };
+impl Copies {
+    /// The copies `readback` asks for: the cube's faces when asked, and the view targets
+    /// `slots` names (the view passes', in their order).
+    pub fn plan(readback: Readback, cube: &CubeTarget, slots: Vec<(Slot, &ViewTarget)>) -> Self {
+        let mut copies = Copies::default();
         if readback.cube {
-            let cube = &self.cube;
-            let mip0 = vk::ImageSubresourceRange {
-                level_count: 1,
-                ..cube.color.full_range()
-            };
+            let unorm = cube.format == vk::Format::R8G8B8A8_UNORM;
+            let texel = if unorm { 4 } else { 8 };
+            copies.bytes = 6 * u64::from(cube.size) * u64::from(cube.size) * texel;
+            copies.cube = Some(CubeCopy {
+                image: cube.color.raw,
+                mip0: vk::ImageSubresourceRange {
+                    level_count: 1,
+                    ..cube.color.full_range()
+                },
+                size: cube.size,
+                unorm,
+            });
+        }
+        for (slot, t) in slots {
+            let offset = copy_offset(copies.bytes);
+            copies.views.push(ViewCopy {
+                slot,
+                image: t.color.raw,
+                width: t.width,
+                height: t.height,
+                offset,
+            });
+            copies.bytes = offset + u64::from(t.width) * u64::from(t.height) * texel_bytes(slot);
+        }
+        copies
+    }
+
+    /// The readback buffer's size for them (0: nothing is read back).
+    pub fn bytes(&self) -> u64 {
+        self.bytes
+    }
+
+    /// Copies mip 0 of the cube faces and the view images into `buffer`, for the host.
+    pub fn record(&self, dev: &Device, cmd: vk::CommandBuffer, buffer: &Buffer) {
+        if let Some(cube) = &self.cube {
             // Out of sampling for the copy and back: the cube stays valid for the next frame.
             let sampled = (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED);
             let source = (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, COPY_READ);
             let transition =
-                |from, to| image_barriers(dev, cmd, &[barrier(cube.color.raw, mip0, from, to)]);
+                |from, to| image_barriers(dev, cmd, &[barrier(cube.image, cube.mip0, from, to)]);
             transition(sampled, source);
-            copy(cube.color.raw, 6, cube.size, cube.size, 0);
+            copy_to_buffer(dev, cmd, buffer, (cube.image, 6), [cube.size; 2], 0);
             transition(source, sampled);
         }
-        for ((_, t), &(_, at)) in self.views.slots(readback).into_iter().zip(&copies.items) {
-            copy(t.color.raw, 1, t.width, t.height, at);
+        for v in &self.views {
+            copy_to_buffer(
+                dev,
+                cmd,
+                buffer,
+                (v.image, 1),
+                [v.width, v.height],
+                v.offset,
+            );
         }
-        // The host reads the buffer after the fence (read_images).
+        // The host reads the buffer after the fence (`decode`).
         host_read_barrier(
             dev,
             cmd,
@@ -108,40 +110,30 @@ impl Renderer {
         );
     }
 
-    /// Decodes a finished frame's pixels from its slot's readback `buffer`.
-    pub(super) fn read_images(
-        &self,
-        buffer: Option<&Buffer>,
-        readback: Readback,
-        copies: &Copies,
-    ) -> Result<FrameImages, GpuError> {
+    /// A finished frame's pixels, decoded from its slot's readback `buffer`.
+    pub fn decode(&self, buffer: Option<&Buffer>) -> Result<FrameImages, GpuError> {
         let mut images = FrameImages::default();
         let Some(buffer) = buffer else {
             return Ok(images);
         };
         let bytes = buffer.mapped()?;
-        if readback.cube {
-            let s = self.cube.size;
-            let unorm = self.cube.format == vk::Format::R8G8B8A8_UNORM;
-            let face_bytes = (s * s) as usize * if unorm { 4 } else { 8 };
-            images.cube = Some(
-                (0..6)
-                    .map(|f| {
-                        let b = &bytes[f * face_bytes..(f + 1) * face_bytes];
-                        if unorm {
-                            decode_unorm8(b, s, s)
-                        } else {
-                            decode_f16(b, s, s)
-                        }
-                    })
-                    .collect(),
-            );
+        if let Some(cube) = &self.cube {
+            let s = cube.size;
+            let face_bytes = (s * s) as usize * if cube.unorm { 4 } else { 8 };
+            let face = |f: usize| {
+                let b = &bytes[f * face_bytes..(f + 1) * face_bytes];
+                match cube.unorm {
+                    true => decode_unorm8(b, s, s),
+                    false => decode_f16(b, s, s),
+                }
+            };
+            images.cube = Some((0..6).map(face).collect());
         }
-        for ((slot, t), &(_, at)) in self.views.slots(readback).into_iter().zip(&copies.items) {
-            let n = u64::from(t.width) * u64::from(t.height) * texel_bytes(slot);
-            let b = &bytes[at as usize..(at + n) as usize];
-            let (w, h) = (t.width, t.height);
-            match slot {
+        for v in &self.views {
+            let n = u64::from(v.width) * u64::from(v.height) * texel_bytes(v.slot);
+            let b = &bytes[v.offset as usize..(v.offset + n) as usize];
+            let (w, h) = (v.width, v.height);
+            match v.slot {
                 Slot::Observer => images.observer = Some(decode_f16(b, w, h)),
                 Slot::Sensor => images.sensor = Some(decode_f16(b, w, h)),
                 Slot::Pair => images.pair = Some(decode_f16(b, w, h)),
@@ -153,62 +145,68 @@ impl Renderer {
         }
         Ok(images)
     }
+}
 
-    /// The statistics queries a frame reads: after a cube update, the faces six-pass
-    /// rendered (a query each) or the one-pass fill's query 0; the views' when asked.
-    pub(super) fn stats_read(&self, update: bool, face_mask: u32, views: bool) -> StatsRead {
-        let fill = match (update, self.cube_fill.per_face_marks()) {
-            (false, _) => 0,
-            (true, true) => face_mask & 0x3F,
-            (true, false) => 1,
-        };
-        StatsRead { fill, views }
+/// Records the copy of `layers` layers of mip 0 of `image` (in `TRANSFER_SRC_OPTIMAL`),
+/// `size` texels each, into `buffer` at `offset`.
+fn copy_to_buffer(
+    dev: &Device,
+    cmd: vk::CommandBuffer,
+    buffer: &Buffer,
+    (image, layers): (vk::Image, u32),
+    [width, height]: [u32; 2],
+    offset: u64,
+) {
+    let region = vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: layers,
+        })
+        .image_extent(vk::Extent3D {
+            width,
+            height,
+            depth: 1,
+        });
+    // SAFETY: the image is in TRANSFER_SRC layout and the buffer has room (`Copies::bytes`).
+    unsafe {
+        dev.raw.cmd_copy_image_to_buffer(
+            cmd,
+            image,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            buffer.raw,
+            &[region],
+        )
+    };
+}
+
+impl Renderer {
+    /// Where this frame's images will sit in its readback buffer.
+    pub(super) fn plan_copies(&self, readback: Readback) -> Copies {
+        Copies::plan(readback, &self.cube, self.views.slots(readback))
     }
 
-    /// A finished frame's timestamps and the statistics in `stats`, from the copies its
-    /// commands ended with.
-    pub(super) fn read_queries(
-        &self,
-        queries: &FrameQueries,
-        report: &mut FrameReport,
-        stats: StatsRead,
-    ) -> Result<(), GpuError> {
-        if let Some(q) = &queries.timestamps {
-            let t = q.timestamps_ns(TS_COUNT)?;
-            let ms = |a: u32, b: u32| (t[b as usize] - t[a as usize]) / 1e6;
-            if self.cube_fill.per_face_marks() {
-                report.gpu_face_ms = Some(std::array::from_fn(|f| {
-                    ms(TS_FACE0 + f as u32 - 1, TS_FACE0 + f as u32)
-                }));
-            }
-            report.gpu_fill_ms = Some(ms(TS_START, TS_FILL));
-            report.gpu_cube_ms = Some(ms(TS_START, TS_MIPS));
-            report.gpu_mips_ms = Some(ms(TS_FILL, TS_MIPS));
-            report.gpu_observer_ms = Some(ms(TS_MIPS, TS_OBSERVER));
-            report.gpu_sensor_ms = Some(ms(TS_OBSERVER, TS_SENSOR));
-            report.gpu_pair_ms = Some(ms(TS_SENSOR, TS_PAIR));
+    /// Makes the current slot's readback buffer large enough for `copies` (replacing it is
+    /// safe: the slot's previous frame has finished).
+    pub(super) fn grow_readback(&mut self, copies: &Copies) -> Result<(), GpuError> {
+        let bytes = copies.bytes();
+        let slot = self.frames.current();
+        if bytes == 0 || slot.readback.as_ref().is_some_and(|b| b.size >= bytes) {
+            return Ok(());
         }
-        if let Some(q) = &queries.statistics {
-            if stats.fill != 0 && self.cube_fill.per_face_marks() {
-                let mut faces = [PipelineStats::default(); 6];
-                let mut total = PipelineStats::default();
-                for f in 0..6u32 {
-                    if stats.fill & (1 << f) != 0 {
-                        faces[f as usize] = q.statistics(f, 1)?[0];
-                        total += faces[f as usize];
-                    }
-                }
-                report.face_stats = Some(faces);
-                report.fill_stats = Some(total);
-            } else if stats.fill != 0 {
-                report.fill_stats = Some(q.statistics(0, 1)?[0]);
-            }
-            if stats.views {
-                let s = q.statistics(6, 3)?;
-                report.view_stats = Some(std::array::from_fn(|v| s[v]));
-            }
-        }
+        budget::check_buffer(&self.device, "this frame's readback", bytes)?;
+        let buffer = Buffer::create(&self.device, &BufferDesc::new_readback(bytes), "readback")?;
+        self.frames.current_mut().readback = Some(buffer);
         Ok(())
+    }
+
+    /// Records `copies` into the current slot's readback buffer (none: nothing is read back).
+    pub(super) fn record_readback(&self, cmd: vk::CommandBuffer, copies: &Copies) {
+        if let Some(buffer) = &self.frames.current().readback {
+            copies.record(&self.device, cmd, buffer);
+        }
     }
 }
 
