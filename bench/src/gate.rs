@@ -32,6 +32,8 @@ pub struct Baseline {
     pub driver_name: String,
     /// The driver's version string, for a warning when it differs.
     pub driver_info: String,
+    /// The frames in flight of its times in flight (`settings.frames_in_flight`).
+    pub frames_in_flight: Option<u32>,
 }
 
 /// Reads the baseline through the record's own types: a key that is misspelt, missing or of
@@ -43,7 +45,32 @@ pub fn read_baseline(path: &Path) -> Result<Baseline> {
         tradeoff: record.tradeoff,
         driver_name: record.device.driver_name,
         driver_info: record.device.driver_info,
+        frames_in_flight: record.settings.frames_in_flight,
     })
+}
+
+/// The baseline's rows a run that kept `frames_in_flight` frames in flight is gated against:
+/// its times in flight only where the baseline kept as many (a ratio at 2 in flight says
+/// nothing of one at 3), else without them, and a line saying so.
+pub fn rows_for(
+    baseline: &Baseline,
+    frames_in_flight: Option<u32>,
+) -> (Vec<MethodRow>, Option<String>) {
+    let mut rows = baseline.results.clone();
+    if baseline.frames_in_flight == frames_in_flight {
+        return (rows, None);
+    }
+    for r in &mut rows {
+        r.in_flight_ms = None;
+    }
+    let said = |n: Option<u32>| n.map_or("none".to_owned(), |n| n.to_string());
+    let note = format!(
+        "the baseline kept {} frame(s) in flight and this run {}: the times in flight are \
+         reported, not gated",
+        said(baseline.frames_in_flight),
+        said(frames_in_flight)
+    );
+    (rows, Some(note))
 }
 
 /// Whether a run on `device` may be compared with `baseline`: the same driver, or an error
@@ -299,6 +326,20 @@ mod tests {
         // A baseline from before the time in flight was measured: that time is not gated.
         let old = vec![row("six-pass", 10.0, 100), row("instanced", 11.0, 100)];
         assert!(check(&old, &worse, Some(10.0)).is_empty());
+        // Nor one that kept another number of frames in flight.
+        let baseline = Baseline {
+            results: base,
+            tradeoff: Vec::new(),
+            driver_name: "llvmpipe".into(),
+            driver_info: String::new(),
+            frames_in_flight: Some(2),
+        };
+        let (rows, note) = rows_for(&baseline, Some(3));
+        assert!(check(&rows, &worse, Some(10.0)).is_empty());
+        assert!(note.is_some_and(|n| n.contains("kept 2") && n.contains("this run 3")));
+        let (rows, note) = rows_for(&baseline, Some(2));
+        assert_eq!(check(&rows, &worse, Some(10.0)).len(), 1);
+        assert!(note.is_none());
     }
 
     fn rung(label: &str, sensor_fragments: u64) -> RungRow {

@@ -162,7 +162,11 @@ fn write_outputs(args: &Args, out: Transaction, record: &Record) -> Result<()> {
 
 /// The regression gate's verdict on the record's methods and rungs, printed on stderr.
 fn gate(args: &Args, baseline: &Baseline, record: &Record) -> ExitCode {
-    let mut failures = crate::gate::check(&baseline.results, &record.results, args.max_regression);
+    let (rows, note) = crate::gate::rows_for(baseline, record.settings.frames_in_flight);
+    if let Some(note) = note {
+        eprintln!("regression gate: {note}");
+    }
+    let mut failures = crate::gate::check(&rows, &record.results, args.max_regression);
     failures.extend(crate::gate::check_rungs(
         &baseline.tradeoff,
         &record.tradeoff,

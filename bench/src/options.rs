@@ -77,7 +77,8 @@ pub struct Args {
     /// Frames each method keeps in flight in its second timing, 1..=3 [default: 2]: frames
     /// submitted back to back, as the viewer draws, timed per frame from the first submission
     /// to the last frame finished (its throughput; the interleaved rounds time each frame
-    /// alone).
+    /// alone). Every timed renderer keeps that many frame slots (their host buffers and
+    /// queries); the gate compares times in flight only with a baseline that kept as many.
     #[arg(long, allow_negative_numbers = true, value_parser = whole(1u32..=specchio::render::MAX_FRAMES_IN_FLIGHT as u32), default_value_t = 2)]
     pub frames_in_flight: u32,
     /// Rasterizer threads, 1..=1024: sets LP_NUM_THREADS for lavapipe (other drivers ignore it).

@@ -54,13 +54,16 @@ pub fn time_size(
         true => Floor::ALL.iter().map(|&f| (f, Timed::default())).collect(),
         false => Vec::new(),
     };
-    for _ in 0..plan.runs {
+    for run in 0..plan.runs {
         let hosts = (&mut renderers[..], floor_host);
         time_rounds(hosts, (&mut timed, &mut floors), plan, tick)?;
-        // The scene goes on where the rounds left it.
+        // The scene goes on where the rounds left it. The methods take turns, each run
+        // starting from the next one, so that over runs a drifting machine meets them alike.
         let first = plan.warmup + plan.frames;
-        for (t, r) in timed.iter_mut().zip(&mut renderers) {
-            t.in_flight_ms.push(in_flight_ms(r, first, plan.frames)?);
+        for k in 0..methods.len() {
+            let i = (k + run as usize) % methods.len();
+            let ms = in_flight_ms(&mut renderers[i], first, plan.frames)?;
+            timed[i].in_flight_ms.push(ms);
         }
         tick()?;
     }

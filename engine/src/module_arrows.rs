@@ -448,16 +448,67 @@ fn crates_depend_one_way() {
     }
 }
 
+/// Whether `doc` names `name` as a whole word: not as the end of a longer name
+/// (`draw.rs` inside `scene_draw.rs`).
+fn names(doc: &str, name: &str) -> bool {
+    doc.match_indices(name).any(|(at, _)| {
+        let before = doc[..at].chars().next_back();
+        !before.is_some_and(|c| c.is_alphanumeric() || c == '_')
+    })
+}
+
+/// The `.rs` files at or under `path` (a folder, or one file).
+fn rust_files(path: &Path) -> Vec<PathBuf> {
+    if !path.is_dir() {
+        return vec![path.to_path_buf()];
+    }
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(path).expect("a source folder") {
+        let p = entry.expect("an entry").path();
+        match p.is_dir() {
+            true => found.extend(rust_files(&p)),
+            false if p.extension().is_some_and(|e| e == "rs") => found.push(p),
+            false => {}
+        }
+    }
+    found
+}
+
+/// How docs/architecture.md must name `path`: its file name (`stage.rs`) or bare name in
+/// backticks (`` `objects` ``, the scene loader's sections); for a folder's `mod.rs` the
+/// folder (`load/`), for a crate's `lib.rs` or `main.rs` the crate's folder (`cli/`).
+fn named_in(doc: &str, path: &Path) -> bool {
+    let name = |p: &Path| {
+        p.file_name()
+            .expect("a name")
+            .to_string_lossy()
+            .into_owned()
+    };
+    let file = name(path);
+    let stem = file.trim_end_matches(".rs");
+    let parent = path.parent().expect("a folder");
+    match stem {
+        "mod" | "lib" | "main" => {
+            // A crate's `src/` names nothing: its folder does.
+            let folder = match name(parent).as_str() {
+                "src" => name(parent.parent().expect("a crate folder")),
+                other => other.to_owned(),
+            };
+            names(doc, &format!("{folder}/"))
+        }
+        _ => names(doc, &file) || doc.contains(&format!("`{stem}`")),
+    }
+}
+
 /// docs/architecture.md is the map a newcomer reads: every source file of the workspace is on
-/// it, by its file name (`stage.rs`), its bare name in backticks (`` `objects` ``, the scene
-/// loader's sections), or for a folder's `mod.rs` the folder (`load/`). A file added without
-/// its line fails here, naming it.
+/// it, by a whole word ([`named_in`]). A file added without its line fails here, naming it.
 #[test]
 fn the_architecture_doc_names_every_source_file() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let doc = std::fs::read_to_string(root.join("docs/architecture.md")).expect("the doc");
-    let folders = [
+    let places = [
         "engine/src",
+        "engine/build.rs",
         "bench/src",
         "bench/examples",
         "viewer/src",
@@ -466,43 +517,18 @@ fn the_architecture_doc_names_every_source_file() {
         "tests/engine",
         "tests/cli",
         "tests/common",
+        "tests/bench",
     ];
-    let mut missing = Vec::new();
-    for folder in folders {
-        let mut stack = vec![root.join(folder)];
-        while let Some(dir) = stack.pop() {
-            for entry in std::fs::read_dir(&dir).expect("a source folder") {
-                let path = entry.expect("an entry").path();
-                if path.is_dir() {
-                    stack.push(path);
-                    continue;
-                }
-                let name = path
-                    .file_name()
-                    .expect("a name")
-                    .to_string_lossy()
-                    .into_owned();
-                let Some(stem) = name.strip_suffix(".rs") else {
-                    continue;
-                };
-                let named = match stem {
-                    "mod" | "lib" | "main" => {
-                        let parent = dir.file_name().expect("a folder").to_string_lossy();
-                        doc.contains(&format!("{parent}/"))
-                    }
-                    _ => doc.contains(&name) || doc.contains(&format!("`{stem}`")),
-                };
-                if !named {
-                    missing.push(
-                        path.strip_prefix(&root)
-                            .unwrap_or(&path)
-                            .display()
-                            .to_string(),
-                    );
-                }
-            }
-        }
-    }
+    let mut missing: Vec<String> = (places.iter())
+        .flat_map(|p| rust_files(&root.join(p)))
+        .filter(|path| !named_in(&doc, path))
+        .map(|path| {
+            path.strip_prefix(&root)
+                .unwrap_or(&path)
+                .display()
+                .to_string()
+        })
+        .collect();
     missing.sort();
     assert!(
         missing.is_empty(),

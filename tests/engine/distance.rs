@@ -61,19 +61,19 @@ fn empty_rooms_agree_with_the_reference_to_the_depth_rounding() {
 
 /// The rounding of the stored depth, as a fraction of a texel's angle, on a rasterizer with
 /// `sub_pixel_precision_bits` of sub-pixel precision (the device's
-/// `VkPhysicalDeviceLimits::subPixelPrecisionBits`, read by the test, not assumed). The
-/// rasterizer snaps vertices to a grid of 2^-bits of a texel and interpolates depth in f32,
-/// which moves a wall seen at a slant by a few hundredths of a texel; the box lookup, analytic,
-/// has none of it. A snap moves a vertex, and with it the depth, in proportion to the grid's
-/// step, so a finer grid than lavapipe's 8 bits tightens the bound: 0.02 texel at 8 bits,
-/// halved per bit beyond. A coarser grid is held to the 8-bit bound all the same: it is what
-/// was measured to hold there too (SwiftShader reports 4 bits and measured 0.010 texel at p99
-/// on face-edges), and a bound loosened by the grid alone would let a real fault through.
+/// `VkPhysicalDeviceLimits::subPixelPrecisionBits`, read by the test and printed). The
+/// rasterizer snaps vertices to its sub-pixel grid and interpolates depth in f32, which moves
+/// a wall seen at a slant by about a hundredth of a texel; the box lookup, analytic, has none
+/// of it. A coarser grid rounds more, so the bound is set by the coarsest grid Vulkan allows,
+/// 4 bits (1/16 of a texel; `subPixelPrecisionBits` is at least 4 on every conforming device),
+/// which SwiftShader has: measured there at p99 on face-edges, 0.010 texel (lavapipe's 8-bit
+/// grid: 0.0015). Every device, at 4 bits or finer, is held to the same 0.02.
 fn rounding_texels(sub_pixel_precision_bits: u32) -> f64 {
-    /// The bound on an 8-bit grid (lavapipe's).
-    const AT_8_BITS: f64 = 0.02;
-    let finer = sub_pixel_precision_bits.saturating_sub(8).min(52);
-    AT_8_BITS / f64::from(finer).exp2()
+    assert!(
+        sub_pixel_precision_bits >= 4,
+        "{sub_pixel_precision_bits} sub-pixel bits: Vulkan requires at least 4"
+    );
+    0.02
 }
 
 /// Beyond this (a tenth of a texel) a pixel is a tie: its ray meets a room corner, where the
