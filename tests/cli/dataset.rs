@@ -53,60 +53,82 @@ fn a_trajectory_makes_a_frame_per_pose_with_poses_in_both_frames() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let scene = root().join("scenes/thesis-room.toml");
-    let render = dir.join("render");
-    let (s, r) = (scene.to_str().unwrap(), render.to_str().unwrap());
     let record = json(&out.join("dataset.json"));
     assert_eq!(record["frames"], 3);
-    let index = std::fs::read_to_string(out.join("index.jsonl")).unwrap();
-    let lines: Vec<serde_json::Value> = index
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines = index_lines(&out);
     assert_eq!(lines.len(), 3);
     for (i, line) in lines.iter().enumerate() {
-        let folder = out.join(line["folder"].as_str().unwrap());
-        assert_eq!(line["frame"], i);
-        for file in [
-            "sensor.png",
-            "sensor.rays.exr",
-            "sensor.range.exr",
-            "sensor.id.exr",
-            "camera.json",
-            "pose.json",
-            "points.ply",
-        ] {
-            assert!(folder.join(file).is_file(), "{}: {file}", folder.display());
-        }
-        assert_eq!(
-            &json(&folder.join("pose.json")),
-            line.as_object()
-                .map(|m| {
-                    let mut m = m.clone();
-                    m.remove("folder");
-                    serde_json::Value::Object(m)
-                })
-                .as_ref()
-                .unwrap()
-        );
-        // A point per mirror pixel.
-        let ids = read_channels(&folder.join("sensor.id.exr")).unwrap();
-        let seen = read_u32_channel(&ids, "id")
-            .unwrap()
-            .iter()
-            .filter(|&&id| id != NO_ID)
-            .count();
-        let ply = std::fs::read(folder.join("points.ply")).unwrap();
-        let header = String::from_utf8_lossy(
-            &ply[..ply.windows(10).position(|w| w == b"end_header").unwrap()],
-        )
-        .into_owned();
-        assert!(
-            header.contains(&format!("element vertex {seen}\n")),
-            "{header}"
-        );
+        assert_frame_is_its_index_line(&out, i, line);
     }
-    let ros = &lines[1]["ros"];
+    assert_pose_in_both_frames(&lines[1]);
+
+    // The first pose is the scene's own: the same ids as a render of the scene.
+    let render = render_sensor_outputs(&dir, record["lookup"].as_str().unwrap());
+    assert!(
+        sensor_ids(&out.join("frames/000000")) == sensor_ids(&render),
+        "frame 0 differs from the render"
+    );
+}
+
+/// The lines of the dataset's `index.jsonl` in `out`, parsed.
+fn index_lines(out: &std::path::Path) -> Vec<serde_json::Value> {
+    let index = std::fs::read_to_string(out.join("index.jsonl")).unwrap();
+    index
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+/// Asserts frame `i`'s index line, files, pose.json (the line less its folder) and a point
+/// per mirror pixel.
+fn assert_frame_is_its_index_line(out: &std::path::Path, i: usize, line: &serde_json::Value) {
+    let folder = out.join(line["folder"].as_str().unwrap());
+    assert_eq!(line["frame"], i);
+    for file in [
+        "sensor.png",
+        "sensor.rays.exr",
+        "sensor.range.exr",
+        "sensor.id.exr",
+        "camera.json",
+        "pose.json",
+        "points.ply",
+    ] {
+        assert!(folder.join(file).is_file(), "{}: {file}", folder.display());
+    }
+    assert_eq!(
+        &json(&folder.join("pose.json")),
+        line.as_object()
+            .map(|m| {
+                let mut m = m.clone();
+                m.remove("folder");
+                serde_json::Value::Object(m)
+            })
+            .as_ref()
+            .unwrap()
+    );
+    // A point per mirror pixel.
+    let seen = sensor_ids(&folder)
+        .iter()
+        .filter(|&&id| id != NO_ID)
+        .count();
+    let header = ply_header(&folder.join("points.ply"));
+    assert!(
+        header.contains(&format!("element vertex {seen}\n")),
+        "{header}"
+    );
+}
+
+/// The PLY file's header, up to `end_header`.
+fn ply_header(path: &std::path::Path) -> String {
+    let ply = std::fs::read(path).unwrap();
+    String::from_utf8_lossy(&ply[..ply.windows(10).position(|w| w == b"end_header").unwrap()])
+        .into_owned()
+}
+
+/// Asserts the second pose's known answers: the scene's [1, 3, 0.5] at heading 45 degrees is
+/// ROS's [1, -0.5, 3] with a yaw of 45 degrees.
+fn assert_pose_in_both_frames(line: &serde_json::Value) {
+    let ros = &line["ros"];
     assert_eq!(
         ros["base_link_position_m"],
         serde_json::json!([1.0, -0.5, 3.0])
@@ -120,11 +142,16 @@ fn a_trajectory_makes_a_frame_per_pose_with_poses_in_both_frames() {
         "{q:?}"
     );
     assert_eq!(
-        lines[1]["scene"]["position_m"],
+        line["scene"]["position_m"],
         serde_json::json!([1.0, 3.0, 0.5])
     );
+}
 
-    // The first pose is the scene's own: the same ids as a render of the scene.
+/// `render --sensor-outputs` of the thesis room with `lookup`, into `dir/render`.
+fn render_sensor_outputs(dir: &std::path::Path, lookup: &str) -> std::path::PathBuf {
+    let scene = root().join("scenes/thesis-room.toml");
+    let render = dir.join("render");
+    let (s, r) = (scene.to_str().unwrap(), render.to_str().unwrap());
     let run = specchio(&[
         "render",
         s,
@@ -132,21 +159,20 @@ fn a_trajectory_makes_a_frame_per_pose_with_poses_in_both_frames() {
         r,
         "--sensor-outputs",
         "--lookup",
-        record["lookup"].as_str().unwrap(),
+        lookup,
     ]);
     assert!(
         run.status.success(),
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let ids = |p: &std::path::Path| {
-        let c = read_channels(&p.join("sensor.id.exr")).unwrap();
-        read_u32_channel(&c, "id").unwrap().to_vec()
-    };
-    assert!(
-        ids(&out.join("frames/000000")) == ids(&render),
-        "frame 0 differs from the render"
-    );
+    render
+}
+
+/// The id layer of the sensor outputs in `folder`.
+fn sensor_ids(folder: &std::path::Path) -> Vec<u32> {
+    let c = read_channels(&folder.join("sensor.id.exr")).unwrap();
+    read_u32_channel(&c, "id").unwrap().to_vec()
 }
 
 /// A pose outside the room, a pose in an object (at the pose's own time: the orbiting ball

@@ -133,37 +133,69 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
         reference.to_str().unwrap(),
         "--sensor-outputs",
     ]);
-    let camera = |dir: &Path| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(dir.join("camera.json")).unwrap()).unwrap()
-    };
-    let render = |name: &str, lookup: Option<&str>| {
-        let out = temp_dir(name);
-        let mut args = vec![
-            "render",
-            scene_path,
-            "--out",
-            out.to_str().unwrap(),
-            "--sensor-outputs",
-            "--device",
-            "lavapipe",
-        ];
-        if let Some(l) = lookup {
-            args.extend(["--lookup", l]);
-        }
-        let run = specchio(&args);
-        assert!(
-            run.status.success(),
-            "{}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        (out, String::from_utf8_lossy(&run.stderr).into_owned())
-    };
+    let render = |name: &str, lookup: Option<&str>| render_on_lavapipe(scene_path, name, lookup);
     let (traced, said) = render("sensor-truth-traced", Some("ray-query"));
     assert!(!said.contains("warning"), "{said}");
-    let truth = &camera(&traced)["ground_truth"];
+    let truth = &camera_json(&traced)["ground_truth"];
     assert_eq!(truth["layers"], "traced");
     assert_eq!(truth["colour"], "ray-query");
     assert_eq!(truth["colour_agrees"], true);
+    assert_traced_layers_are_the_references(&traced, &reference);
+
+    let has_ray_queries = default_device_has_ray_queries();
+    let (default, _) = render("sensor-truth-default", None);
+    let want = if has_ray_queries { "traced" } else { "cube" };
+    assert_eq!(camera_json(&default)["ground_truth"]["layers"], want);
+
+    let (cube, said) = render("sensor-truth-cube", Some("plain"));
+    assert!(
+        said.contains(
+            "warning: sensor outputs (plain lookup): range and ids come through the cube"
+        ),
+        "{said}"
+    );
+    let truth = &camera_json(&cube)["ground_truth"];
+    assert_eq!(truth["layers"], "cube");
+    assert_eq!(truth["colour_agrees"], false);
+    assert!(truth["warning"].as_str().unwrap().contains("not traced"));
+    for d in [reference, traced, default, cube] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+/// The camera.json in `dir`, parsed.
+fn camera_json(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("camera.json")).unwrap()).unwrap()
+}
+
+/// `render --sensor-outputs` of `scene_path` on lavapipe, with `--lookup` when given, into a
+/// scratch folder `name`, asserted to succeed: (the folder, what it said on stderr).
+fn render_on_lavapipe(scene_path: &str, name: &str, lookup: Option<&str>) -> (Scratch, String) {
+    let out = temp_dir(name);
+    let mut args = vec![
+        "render",
+        scene_path,
+        "--out",
+        out.to_str().unwrap(),
+        "--sensor-outputs",
+        "--device",
+        "lavapipe",
+    ];
+    if let Some(l) = lookup {
+        args.extend(["--lookup", l]);
+    }
+    let run = specchio(&args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    (out, String::from_utf8_lossy(&run.stderr).into_owned())
+}
+
+/// Asserts the traced ids are the reference's on 99.9 % of its mirror pixels, and the ranges
+/// within 1e-4 relative.
+fn assert_traced_layers_are_the_references(traced: &Path, reference: &Path) {
     let ids = |dir: &Path| {
         let c = read_channels(&dir.join("sensor.id.exr")).unwrap();
         read_u32_channel(&c, "id").unwrap().to_vec()
@@ -172,7 +204,7 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
         let c = read_channels(&dir.join("sensor.range.exr")).unwrap();
         f32_channel(&c, "range").unwrap().to_vec()
     };
-    let (a, b) = (ids(&traced), ids(&reference));
+    let (a, b) = (ids(traced), ids(reference));
     let seen = b.iter().filter(|&&id| id != NO_ID).count();
     let same = a
         .iter()
@@ -185,35 +217,21 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
         seen > 1000 && same as f64 >= 0.999 * seen as f64,
         "{same} of {seen} ids agree"
     );
-    let (ra, rb) = (range(&traced), range(&reference));
+    let (ra, rb) = (range(traced), range(reference));
     let worst = (ra.iter().zip(&rb))
         .filter(|(_, &r)| r > 0.0)
         .map(|(x, y)| (x - y).abs() / y)
         .fold(0.0f32, f32::max);
     assert!(worst < 1e-4, "range relative error {worst}");
+}
 
+/// Whether the default device offers the ray-query lookup.
+fn default_device_has_ray_queries() -> bool {
     let gpu = common::Gpu::new();
     let has_ray_queries =
         specchio::render::lookups::missing_features(Lookup::RayQuery, &gpu.device.info).is_none();
     gpu.finish();
-    let (default, _) = render("sensor-truth-default", None);
-    let want = if has_ray_queries { "traced" } else { "cube" };
-    assert_eq!(camera(&default)["ground_truth"]["layers"], want);
-
-    let (cube, said) = render("sensor-truth-cube", Some("plain"));
-    assert!(
-        said.contains(
-            "warning: sensor outputs (plain lookup): range and ids come through the cube"
-        ),
-        "{said}"
-    );
-    let truth = &camera(&cube)["ground_truth"];
-    assert_eq!(truth["layers"], "cube");
-    assert_eq!(truth["colour_agrees"], false);
-    assert!(truth["warning"].as_str().unwrap().contains("not traced"));
-    for d in [reference, traced, default, cube] {
-        std::fs::remove_dir_all(d).unwrap();
-    }
+    has_ray_queries
 }
 
 /// Beside the id layer, `sensor.id.json` says what each id is: the six walls (0..6, named,

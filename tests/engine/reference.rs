@@ -129,9 +129,32 @@ fn cpu_materials_match_the_gpu_cube_texels() {
 /// `subTexelPrecisionBits` bits, 8 on lavapipe), which is 2 * 2^-bits of the texel range.
 #[test]
 fn cpu_materials_match_the_gpu_in_f32() {
-    use specchio::reference::materials::{material_albedo, shade};
-    use specchio::render::gpu::MaterialSample;
     use specchio::render::{RenderOptions, Renderer};
+    let s = material_check_scene();
+    let gpu = Gpu::new();
+    let bits = gpu.device.info.limits.sub_texel_precision_bits;
+    let mut r = Renderer::new(&gpu.device, s.clone(), &RenderOptions::default()).unwrap();
+    let points = random_material_points(&s);
+    let gpu_rgb = r.evaluate_materials(&points).expect("materials check");
+    drop(r);
+    for (m, material) in s.materials.iter().enumerate() {
+        let (worst, exact, count) = cpu_against_gpu(&s, m, &points, &gpu_rgb);
+        eprintln!(
+            "{}: {} of {} points bit-identical; worst difference {worst:e}",
+            material.name, exact, count
+        );
+        let tolerance = material_tolerance(&material.name, bits);
+        assert!(
+            worst <= tolerance,
+            "{}: worst {worst:e} > {tolerance:e}",
+            material.name
+        );
+    }
+    gpu.finish();
+}
+
+/// The material check's scene: a room and a sphere, lit, with one material of every kind.
+fn material_check_scene() -> specchio::scene::Scene {
     let text = r#"
         [room]
         center = [0, 0, 0]
@@ -171,10 +194,14 @@ fn cpu_materials_match_the_gpu_in_f32() {
         type = "direction"
     "#;
     let path = common::root().join("scenes/material-check.toml");
-    let s = specchio::scene::load_str(text, &path).expect("scene");
-    let gpu = Gpu::new();
-    let bits = gpu.device.info.limits.sub_texel_precision_bits;
-    let mut r = Renderer::new(&gpu.device, s.clone(), &RenderOptions::default()).unwrap();
+    specchio::scene::load_str(text, &path).expect("scene")
+}
+
+/// 4,096 seeded random points per material of `s`, every fourth with u on a cell border.
+fn random_material_points(
+    s: &specchio::scene::Scene,
+) -> Vec<(usize, specchio::render::gpu::MaterialSample)> {
+    use specchio::render::gpu::MaterialSample;
     // The random points: the project's one seeded sequence, so a failure replays.
     let mut rng = specchio::random::SplitMix64::new(12345);
     let mut next = move |lo: f32, hi: f32| lo + (hi - lo) * rng.unit() as f32;
@@ -199,47 +226,49 @@ fn cpu_materials_match_the_gpu_in_f32() {
             points.push((m, sample));
         }
     }
-    let gpu_rgb = r.evaluate_materials(&points).expect("materials check");
-    drop(r);
-    for (m, material) in s.materials.iter().enumerate() {
-        let (mut worst, mut exact) = (0.0f32, 0);
-        let mine: Vec<usize> = (0..points.len()).filter(|&i| points[i].0 == m).collect();
-        for &i in &mine {
-            let p = &points[i].1;
-            let albedo = material_albedo(
-                material,
-                p.position.truncate(),
-                p.uv.truncate().truncate(),
-                &s.textures,
-            );
-            let cpu = shade(albedo, p.normal.truncate(), s.light.as_ref());
-            let g = gpu_rgb[i];
-            for c in 0..3 {
-                let err = (g[c] - cpu[c]).abs();
-                worst = worst.max(err);
-            }
-            exact += usize::from(g == cpu);
+    points
+}
+
+/// Material `m`'s points, CPU twin against GPU: (worst component difference, bit-identical
+/// points, points).
+fn cpu_against_gpu(
+    s: &specchio::scene::Scene,
+    m: usize,
+    points: &[(usize, specchio::render::gpu::MaterialSample)],
+    gpu_rgb: &[Vec3],
+) -> (f32, usize, usize) {
+    use specchio::reference::materials::{material_albedo, shade};
+    let material = &s.materials[m];
+    let (mut worst, mut exact) = (0.0f32, 0);
+    let mine: Vec<usize> = (0..points.len()).filter(|&i| points[i].0 == m).collect();
+    for &i in &mine {
+        let p = &points[i].1;
+        let albedo = material_albedo(
+            material,
+            p.position.truncate(),
+            p.uv.truncate().truncate(),
+            &s.textures,
+        );
+        let cpu = shade(albedo, p.normal.truncate(), s.light.as_ref());
+        let g = gpu_rgb[i];
+        for c in 0..3 {
+            let err = (g[c] - cpu[c]).abs();
+            worst = worst.max(err);
         }
-        eprintln!(
-            "{}: {} of {} points bit-identical; worst difference {worst:e}",
-            material.name,
-            exact,
-            mine.len()
-        );
-        let tolerance = if material.name == "texture" {
-            2.0 * (-(bits as f32)).exp2() + 1e-6
-        } else {
-            // Absolute, for values in [0, 1]: 4 ulps at 1 (more below, where ulps are finer);
-            // the GPU may fuse or reorder a multiply-add.
-            4.0 * f32::EPSILON
-        };
-        assert!(
-            worst <= tolerance,
-            "{}: worst {worst:e} > {tolerance:e}",
-            material.name
-        );
+        exact += usize::from(g == cpu);
     }
-    gpu.finish();
+    (worst, exact, mine.len())
+}
+
+/// The allowed CPU–GPU difference for material `name` on a sampler with `bits` sub-texel bits.
+fn material_tolerance(name: &str, bits: u32) -> f32 {
+    if name == "texture" {
+        2.0 * (-(bits as f32)).exp2() + 1e-6
+    } else {
+        // Absolute, for values in [0, 1]: 4 ulps at 1 (more below, where ulps are finer);
+        // the GPU may fuse or reorder a multiply-add.
+        4.0 * f32::EPSILON
+    }
 }
 
 /// The per-pixel layers are the pixel centre's at every sample count: from the centre sample

@@ -145,94 +145,64 @@ mod tests {
     use super::*;
     use std::mem::offset_of;
 
+    /// One mirrored member: (struct, member, its offset in the Rust struct).
+    macro_rules! member {
+        ($s:ident, $m:ident) => {
+            (stringify!($s), stringify!($m), offset_of!($s, $m))
+        };
+    }
+
     #[test]
     fn rust_mirrors_match_spirv_offsets() {
-        let rust: &[(&str, &str, usize)] = &[
-            (
-                "FrameData",
-                "light_dir_ambient",
-                offset_of!(FrameData, light_dir_ambient),
-            ),
-            ("FrameData", "mirror", offset_of!(FrameData, mirror)),
-            ("FrameData", "flags", offset_of!(FrameData, flags)),
-            ("FrameData", "room_min", offset_of!(FrameData, room_min)),
-            ("FrameData", "room_max", offset_of!(FrameData, room_max)),
-            ("FrameData", "cube", offset_of!(FrameData, cube)),
-            (
-                "FrameData",
-                "mirror_shape",
-                offset_of!(FrameData, mirror_shape),
-            ),
-            (
-                "FrameData",
-                "mirror_quadric",
-                offset_of!(FrameData, mirror_quadric),
-            ),
-            (
-                "FrameData",
-                "mirror_extent",
-                offset_of!(FrameData, mirror_extent),
-            ),
-            (
-                "FrameData",
-                "cube_centre",
-                offset_of!(FrameData, cube_centre),
-            ),
-            (
-                "ViewData",
-                "world_to_clip",
-                offset_of!(ViewData, world_to_clip),
-            ),
-            ("ViewData", "eye", offset_of!(ViewData, eye)),
-            ("ViewData", "ray_right", offset_of!(ViewData, ray_right)),
-            ("ViewData", "ray_down", offset_of!(ViewData, ray_down)),
-            ("ViewData", "ray_forward", offset_of!(ViewData, ray_forward)),
-            ("ViewData", "viewport", offset_of!(ViewData, viewport)),
-            (
-                "ViewData",
-                "origin_right",
-                offset_of!(ViewData, origin_right),
-            ),
-            ("ViewData", "origin_down", offset_of!(ViewData, origin_down)),
-            (
-                "ObjectData",
-                "model_to_world",
-                offset_of!(ObjectData, model_to_world),
-            ),
-            (
-                "ObjectData",
-                "normal_to_world",
-                offset_of!(ObjectData, normal_to_world),
-            ),
-            ("ObjectData", "material", offset_of!(ObjectData, material)),
-            (
-                "MaterialData",
-                "kind_texture",
-                offset_of!(MaterialData, kind_texture),
-            ),
-            ("MaterialData", "color_a", offset_of!(MaterialData, color_a)),
-            ("MaterialData", "color_b", offset_of!(MaterialData, color_b)),
-            ("MaterialData", "params", offset_of!(MaterialData, params)),
-            ("Push", "view_index", offset_of!(Push, view_index)),
-            ("Push", "object_index", offset_of!(Push, object_index)),
-            ("Push", "face_mask", offset_of!(Push, face_mask)),
-            ("Push", "pad", offset_of!(Push, pad)),
-            (
-                "MaterialSample",
-                "position",
-                offset_of!(MaterialSample, position),
-            ),
-            (
-                "MaterialSample",
-                "normal",
-                offset_of!(MaterialSample, normal),
-            ),
-            ("MaterialSample", "uv", offset_of!(MaterialSample, uv)),
-            ("CheckPush", "first", offset_of!(CheckPush, first)),
-            ("CheckPush", "count", offset_of!(CheckPush, count)),
-            ("CheckPush", "material", offset_of!(CheckPush, material)),
-            ("CheckPush", "pad", offset_of!(CheckPush, pad)),
-        ];
+        let rust = rust_mirrors();
+        assert_rust_offsets_are_spirvs(&rust);
+        assert_every_spirv_member_is_mirrored(&rust);
+    }
+
+    /// Every member of the Rust structs that mirror shader blocks, with its offset.
+    fn rust_mirrors() -> Vec<(&'static str, &'static str, usize)> {
+        vec![
+            member!(FrameData, light_dir_ambient),
+            member!(FrameData, mirror),
+            member!(FrameData, flags),
+            member!(FrameData, room_min),
+            member!(FrameData, room_max),
+            member!(FrameData, cube),
+            member!(FrameData, mirror_shape),
+            member!(FrameData, mirror_quadric),
+            member!(FrameData, mirror_extent),
+            member!(FrameData, cube_centre),
+            member!(ViewData, world_to_clip),
+            member!(ViewData, eye),
+            member!(ViewData, ray_right),
+            member!(ViewData, ray_down),
+            member!(ViewData, ray_forward),
+            member!(ViewData, viewport),
+            member!(ViewData, origin_right),
+            member!(ViewData, origin_down),
+            member!(ObjectData, model_to_world),
+            member!(ObjectData, normal_to_world),
+            member!(ObjectData, material),
+            member!(MaterialData, kind_texture),
+            member!(MaterialData, color_a),
+            member!(MaterialData, color_b),
+            member!(MaterialData, params),
+            member!(Push, view_index),
+            member!(Push, object_index),
+            member!(Push, face_mask),
+            member!(Push, pad),
+            member!(MaterialSample, position),
+            member!(MaterialSample, normal),
+            member!(MaterialSample, uv),
+            member!(CheckPush, first),
+            member!(CheckPush, count),
+            member!(CheckPush, material),
+            member!(CheckPush, pad),
+        ]
+    }
+
+    /// Asserts each mirrored member is in a shader's SPIR-V at the Rust offset.
+    fn assert_rust_offsets_are_spirvs(rust: &[(&str, &str, usize)]) {
         for &(s, m, offset) in rust {
             let spirv = crate::shaders::SPIRV_MEMBER_OFFSETS
                 .iter()
@@ -240,7 +210,10 @@ mod tests {
                 .unwrap_or_else(|| panic!("{s}.{m} is not in any shader's SPIR-V"));
             assert_eq!(spirv.2 as usize, offset, "{s}.{m}");
         }
-        // And every member glslang knows of a mirrored struct is mirrored.
+    }
+
+    /// Asserts every member glslang knows of a mirrored struct is mirrored.
+    fn assert_every_spirv_member_is_mirrored(rust: &[(&str, &str, usize)]) {
         for (s, m, _) in crate::shaders::SPIRV_MEMBER_OFFSETS {
             if rust.iter().any(|(s2, _, _)| s2 == s) {
                 assert!(

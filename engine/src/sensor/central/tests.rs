@@ -218,36 +218,19 @@ fn the_residuals_are_the_angles_between_the_models_rays_and_the_exact_rays() {
     let sensor = Sensor::thesis();
     let (w, h) = (sensor.width, sensor.height);
     assert_eq!((cal.width, cal.height), (w, h));
-    // The mirror pixels: those whose ray passes the centre closer than the radius. A ray
-    // within 1e-5 of the radius of grazing may round either way in f32 (the engine's
-    // discriminant carries ~1e-6 of rounding): those are the only ones allowed to differ. The
-    // band is 0.005 px wide around a rim of 1,200 px, so it holds a handful of pixel centres;
-    // counted, so that the exemption stays that small.
-    let mut ambiguous = 0;
-    for y in 0..h {
-        for x in 0..w {
-            let margin = sensor.miss_margin(x, y);
-            if margin.abs() < 1e-5 {
-                ambiguous += 1;
-            } else {
-                assert_eq!(map.get(x, y).is_some(), margin < 0.0, "pixel ({x}, {y})");
-            }
-        }
-    }
-    let exact: Vec<(u32, u32, ExactRay)> = (0..h)
-        .flat_map(|y| (0..w).map(move |x| (x, y)))
-        .filter(|&(x, y)| map.get(x, y).is_some())
-        .map(|(x, y)| (x, y, sensor.exact(x, y, true).unwrap()))
-        .collect();
+    let ambiguous = assert_mirror_pixels_are_the_spheres(&sensor, &map);
+    let exact = exact_rays_of_mirror_pixels(&sensor, &map);
     assert!(ambiguous < 100, "{ambiguous} pixels graze the sphere");
     assert_eq!(cal.mirror_pixels, exact.len());
-    let tolerance = |e: &ExactRay| 1e-5 + 1e-4 / e.cos_incidence;
     let worst_tolerance = exact
         .iter()
-        .map(|(_, _, e)| tolerance(e))
+        .map(|(_, _, e)| residual_tolerance(e))
         .fold(0.0, f64::max);
-    let mean_tolerance =
-        exact.iter().map(|(_, _, e)| tolerance(e)).sum::<f64>() / exact.len() as f64;
+    let mean_tolerance = exact
+        .iter()
+        .map(|(_, _, e)| residual_tolerance(e))
+        .sum::<f64>()
+        / exact.len() as f64;
 
     // Mei / omnidir: frame (right, down, -forward). Our route leaves the tangential terms
     // out, which holds while they are this small (`mei_ray`); a pixel has no ray exactly
@@ -257,16 +240,75 @@ fn the_residuals_are_the_angles_between_the_models_rays_and_the_exact_rays() {
         "{:?}",
         cal.mei
     );
+    let (mei, mei_without) = recomputed_mei_residuals(&cal, &exact);
+    assert_eq!(cal.mei_residual.without_ray, mei_without);
+
+    // OCamCalib: frame (down, right, forward); its polynomial gives every pixel a ray.
+    let ocam = recomputed_ocam_residuals(&cal, &exact);
+    assert_eq!(cal.ocam_residual.without_ray, 0);
+
+    for (name, stats, values) in [
+        ("omnidir", cal.mei_residual.stats, mei),
+        ("OCamCalib", cal.ocam_residual.stats, ocam),
+    ] {
+        assert_summary_recomputed(name, stats, values, mean_tolerance, worst_tolerance);
+    }
+    assert_symmetric_about_the_axis(&cal);
+}
+
+/// Asserts that the map's mirror pixels are those whose ray meets the sphere, except within
+/// 1e-5 of grazing; returns how many pixels are that close.
+fn assert_mirror_pixels_are_the_spheres(sensor: &Sensor, map: &RayMap) -> usize {
+    // The mirror pixels: those whose ray passes the centre closer than the radius. A ray
+    // within 1e-5 of the radius of grazing may round either way in f32 (the engine's
+    // discriminant carries ~1e-6 of rounding): those are the only ones allowed to differ. The
+    // band is 0.005 px wide around a rim of 1,200 px, so it holds a handful of pixel centres;
+    // counted, so that the exemption stays that small.
+    let mut ambiguous = 0;
+    for y in 0..sensor.height {
+        for x in 0..sensor.width {
+            let margin = sensor.miss_margin(x, y);
+            if margin.abs() < 1e-5 {
+                ambiguous += 1;
+            } else {
+                assert_eq!(map.get(x, y).is_some(), margin < 0.0, "pixel ({x}, {y})");
+            }
+        }
+    }
+    ambiguous
+}
+
+/// The exact f64 reflected ray of every pixel the map has a ray for, with its (x, y).
+fn exact_rays_of_mirror_pixels(sensor: &Sensor, map: &RayMap) -> Vec<(u32, u32, ExactRay)> {
+    (0..sensor.height)
+        .flat_map(|y| (0..sensor.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| map.get(x, y).is_some())
+        .map(|(x, y)| (x, y, sensor.exact(x, y, true).unwrap()))
+        .collect()
+}
+
+/// How far (degrees) the engine's f32 residual may be from ours at a pixel (see the test).
+fn residual_tolerance(e: &ExactRay) -> f64 {
+    1e-5 + 1e-4 / e.cos_incidence
+}
+
+/// Mei's residuals recomputed at every exact ray, each asserted against the engine's: (the
+/// residuals where the model has a ray, the pixels where it has none).
+fn recomputed_mei_residuals(
+    cal: &Calibration,
+    exact: &[(u32, u32, ExactRay)],
+) -> (Vec<f64>, usize) {
+    let w = cal.width;
     let omnidir = |d: DVec3| DVec3::new(d.x, d.y, -d.z);
     let (mut mei, mut mei_without) = (Vec::new(), 0);
-    for (x, y, e) in &exact {
+    for (x, y, e) in exact {
         let i = (y * w + x) as usize;
         let engine = cal.mei_residual.degrees[i].expect("a mirror pixel");
         match mei_ray(&cal.mei, DVec2::new(f64::from(*x), f64::from(*y))) {
             Some(ray) => {
                 let deg = chord_angle_deg(ray, omnidir(e.direction));
                 assert!(
-                    (engine - deg).abs() <= tolerance(e),
+                    (engine - deg).abs() <= residual_tolerance(e),
                     "omnidir ({x}, {y}): {engine} against {deg}"
                 );
                 mei.push(deg);
@@ -277,12 +319,15 @@ fn the_residuals_are_the_angles_between_the_models_rays_and_the_exact_rays() {
             }
         }
     }
-    assert_eq!(cal.mei_residual.without_ray, mei_without);
+    (mei, mei_without)
+}
 
-    // OCamCalib: frame (down, right, forward); its polynomial gives every pixel a ray.
+/// OCamCalib's residuals recomputed at every exact ray, each asserted against the engine's.
+fn recomputed_ocam_residuals(cal: &Calibration, exact: &[(u32, u32, ExactRay)]) -> Vec<f64> {
+    let w = cal.width;
     let ocamcalib = |d: DVec3| DVec3::new(d.y, d.x, d.z);
     let mut ocam = Vec::new();
-    for (x, y, e) in &exact {
+    for (x, y, e) in exact {
         let i = (y * w + x) as usize;
         let engine = cal.ocam_residual.degrees[i].expect("a mirror pixel");
         let deg = chord_angle_deg(
@@ -290,29 +335,37 @@ fn the_residuals_are_the_angles_between_the_models_rays_and_the_exact_rays() {
             ocamcalib(e.direction),
         );
         assert!(
-            (engine - deg).abs() <= tolerance(e),
+            (engine - deg).abs() <= residual_tolerance(e),
             "OCamCalib ({x}, {y}): {engine} against {deg}"
         );
         ocam.push(deg);
     }
-    assert_eq!(cal.ocam_residual.without_ray, 0);
+    ocam
+}
 
-    for (name, stats, values) in [
-        ("omnidir", cal.mei_residual.stats, mei),
-        ("OCamCalib", cal.ocam_residual.stats, ocam),
+/// Asserts the engine's mean, p99 and max of model `name` against ours from `values`.
+fn assert_summary_recomputed(
+    name: &str,
+    stats: record::Summary,
+    values: Vec<f64>,
+    mean_tolerance: f64,
+    worst_tolerance: f64,
+) {
+    let (mean, p99, max) = summary(values);
+    for (what, got, want, tolerance) in [
+        ("mean", stats.mean, mean, mean_tolerance),
+        ("p99", stats.p99, p99, worst_tolerance),
+        ("max", stats.max, max, worst_tolerance),
     ] {
-        let (mean, p99, max) = summary(values);
-        for (what, got, want, tolerance) in [
-            ("mean", stats.mean, mean, mean_tolerance),
-            ("p99", stats.p99, p99, worst_tolerance),
-            ("max", stats.max, max, worst_tolerance),
-        ] {
-            assert!(
-                (got - want).abs() <= tolerance,
-                "{name} {what}: {got} against {want} recomputed"
-            );
-        }
+        assert!(
+            (got - want).abs() <= tolerance,
+            "{name} {what}: {got} against {want} recomputed"
+        );
     }
+}
+
+/// Asserts both fits' centres on the image's centre and Mei's pixels square.
+fn assert_symmetric_about_the_axis(cal: &Calibration) {
     // The set-up is symmetric about the sensor's axis: centred, square, no tangential terms.
     let centre = (cal.width as f64 - 1.0) / 2.0;
     assert!((cal.mei.cx - centre).abs() < 1e-3 && (cal.mei.cy - centre).abs() < 1e-3);
@@ -336,10 +389,51 @@ type OcamStep = Box<dyn Fn(&mut OcamModel, f64)>;
 #[test]
 fn each_fit_is_the_minimum_of_its_objective() {
     let (cal, map) = thesis();
+    let exact = exact_directions_in_camera_frame(&cal, &map);
+    let best = mei_cost(&exact, &cal.mei);
+    assert!(
+        agrees_to_1e9(best, cal.mei_fit.final_cost),
+        "{best} {:?}",
+        cal.mei_fit
+    );
+    for (name, field, step) in mei_steps(&cal.mei) {
+        for sign in [-1.0, 1.0] {
+            let mut m = cal.mei;
+            *field(&mut m) += sign * step;
+            let cost = mei_cost(&exact, &m);
+            assert!(
+                cost > best,
+                "omnidir {name} {:+e}: {cost} <= {best}",
+                sign * step
+            );
+        }
+    }
+
+    let best = ocam_cost(&exact, &cal.ocam);
+    assert!(
+        agrees_to_1e9(best, cal.ocam_fit.final_cost),
+        "{best} {:?}",
+        cal.ocam_fit
+    );
+    for (name, apply, step) in &ocam_steps(&cal.ocam) {
+        for sign in [-1.0, 1.0] {
+            let mut m = cal.ocam.clone();
+            apply(&mut m, sign * step);
+            let cost = ocam_cost(&exact, &m);
+            assert!(
+                cost > best,
+                "OCamCalib {name} {:+e}: {cost} <= {best}",
+                sign * step
+            );
+        }
+    }
+}
+
+/// Pixel centre (OpenCV's 0-based x, y) and exact direction in the camera frame (right,
+/// down, forward) of every pixel of `map` with a ray.
+fn exact_directions_in_camera_frame(cal: &Calibration, map: &RayMap) -> Vec<(DVec2, DVec3)> {
     let axes = cal.axes;
-    // Pixel centre (OpenCV's 0-based x, y) and exact direction in the camera frame (right,
-    // down, forward).
-    let exact: Vec<(DVec2, DVec3)> = (0..map.height)
+    (0..map.height)
         .flat_map(|y| (0..map.width).map(move |x| (x, y)))
         .filter_map(|(x, y)| {
             let d = map.get(x, y)?.direction.as_dvec3().normalize();
@@ -348,34 +442,40 @@ fn each_fit_is_the_minimum_of_its_objective() {
                 DVec3::new(d.dot(axes.right), d.dot(axes.down), d.dot(axes.forward)),
             ))
         })
-        .collect();
+        .collect()
+}
+
+/// Mei's objective: the squared reprojection errors in pixels, summed over `exact`.
+fn mei_cost(exact: &[(DVec2, DVec3)], m: &MeiModel) -> f64 {
     // Lost points cost 1e4 px in the fit, as in `MeiModel::fit`.
-    let mei_cost = |m: &MeiModel| -> f64 {
-        exact
-            .iter()
-            .map(|&(px, d)| {
-                let p = mei_pixel(m, DVec3::new(d.x, d.y, -d.z));
-                p.map_or(2.0 * 1e8, |p| (p - px).length_squared())
-            })
-            .sum()
-    };
-    let ocam_cost = |m: &OcamModel| -> f64 {
-        exact
-            .iter()
-            .map(|&(px, d)| (ocam_ray(m, px.y, px.x) - DVec3::new(d.y, d.x, d.z)).length_squared())
-            .sum()
-    };
-    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b;
-    let best = mei_cost(&cal.mei);
-    assert!(
-        close(best, cal.mei_fit.final_cost),
-        "{best} {:?}",
-        cal.mei_fit
-    );
+    exact
+        .iter()
+        .map(|&(px, d)| {
+            let p = mei_pixel(m, DVec3::new(d.x, d.y, -d.z));
+            p.map_or(2.0 * 1e8, |p| (p - px).length_squared())
+        })
+        .sum()
+}
+
+/// OCamCalib's objective: the squared chords between model and exact rays, summed.
+fn ocam_cost(exact: &[(DVec2, DVec3)], m: &OcamModel) -> f64 {
+    exact
+        .iter()
+        .map(|&(px, d)| (ocam_ray(m, px.y, px.x) - DVec3::new(d.y, d.x, d.z)).length_squared())
+        .sum()
+}
+
+/// Whether the cost `a` is the reported `b` to 1e-9 relative.
+fn agrees_to_1e9(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * b
+}
+
+/// Each of Mei's nine parameters with the step to move it by.
+fn mei_steps(mei: &MeiModel) -> [(&'static str, MeiField, f64); 9] {
     // Steps well above the noise of a sum over 117,652 pixels and well inside the minimum's
     // basin: 1e-4 of a focal length, 0.01 px, 1e-4 in xi and k, 1e-5 in p.
-    let f = cal.mei.fx;
-    let steps: [(&str, MeiField, f64); 9] = [
+    let f = mei.fx;
+    [
         ("fx", |m| &mut m.fx, 1e-4 * f),
         ("fy", |m| &mut m.fy, 1e-4 * f),
         ("cx", |m| &mut m.cx, 0.01),
@@ -385,26 +485,11 @@ fn each_fit_is_the_minimum_of_its_objective() {
         ("k2", |m| &mut m.k2, 1e-4),
         ("p1", |m| &mut m.p1, 1e-5),
         ("p2", |m| &mut m.p2, 1e-5),
-    ];
-    for (name, field, step) in steps {
-        for sign in [-1.0, 1.0] {
-            let mut m = cal.mei;
-            *field(&mut m) += sign * step;
-            let cost = mei_cost(&m);
-            assert!(
-                cost > best,
-                "omnidir {name} {:+e}: {cost} <= {best}",
-                sign * step
-            );
-        }
-    }
+    ]
+}
 
-    let best = ocam_cost(&cal.ocam);
-    assert!(
-        close(best, cal.ocam_fit.final_cost),
-        "{best} {:?}",
-        cal.ocam_fit
-    );
+/// Each of OCamCalib's fitted parameters with a step of it and its size.
+fn ocam_steps(ocam: &OcamModel) -> Vec<(String, OcamStep, f64)> {
     // 0.01 px for the centre, 1e-5 for the affine part, 1e-4 of each coefficient.
     let mut steps: Vec<(String, OcamStep, f64)> = vec![
         ("xc".into(), Box::new(|m, s| m.xc += s), 0.01),
@@ -414,21 +499,10 @@ fn each_fit_is_the_minimum_of_its_objective() {
         ("e".into(), Box::new(|m, s| m.e += s), 1e-5),
     ];
     for k in [0, 2, 3, 4] {
-        let step = 1e-4 * cal.ocam.ss[k].abs();
+        let step = 1e-4 * ocam.ss[k].abs();
         steps.push((format!("ss{k}"), Box::new(move |m, s| m.ss[k] += s), step));
     }
-    for (name, apply, step) in &steps {
-        for sign in [-1.0, 1.0] {
-            let mut m = cal.ocam.clone();
-            apply(&mut m, sign * step);
-            let cost = ocam_cost(&m);
-            assert!(
-                cost > best,
-                "OCamCalib {name} {:+e}: {cost} <= {best}",
-                sign * step
-            );
-        }
-    }
+    steps
 }
 
 /// Every reflected ray lies in a plane through the sensor's axis, so the point nearest to all
