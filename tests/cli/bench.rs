@@ -55,7 +55,25 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     let json = common::temp_dir("base.json");
     let csv = common::temp_dir("base.csv");
     let svg = common::temp_dir("plot.svg");
-    // Run with its peak memory measured from outside (wait4), to check the record's own.
+    let run = measured_run_with_reports(&json, &csv, &svg);
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    check_reports(&json, &csv, &svg, run.peak_bytes);
+
+    // The same run against itself: counters are deterministic.
+    assert_ok(&gate_run(&json, &[]));
+
+    let worse = common::temp_dir("worse.json");
+    check_less_work_fails_naming_the_case(&json, &worse);
+    check_a_changed_rung_counter_fails_naming_it(&json, &worse);
+    check_a_missing_baseline_is_named();
+    for f in [json, csv, worse, svg] {
+        let _ = std::fs::remove_file(f);
+    }
+}
+
+/// Runs the lavapipe quick bench writing all three reports, its peak memory measured from outside.
+fn measured_run_with_reports(json: &Path, csv: &Path, svg: &Path) -> common::Measured {
+    // Measured by wait4, to check the record's own.
     let mut command = Command::new(env!("CARGO_BIN_EXE_specchio"));
     command
         .args([
@@ -74,28 +92,30 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
             svg.to_str().unwrap(),
         ])
         .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."));
-    let run = common::run_measured(command);
-    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    common::run_measured(command)
+}
+
+/// The CSV has its rows and rungs; the plot and the JSON record hold what they must.
+fn check_reports(json: &Path, csv: &Path, svg: &Path, peak_bytes: u64) {
     // The header, two scenes x two methods x two lookups, and two scenes x seven rungs.
-    let text = std::fs::read_to_string(&csv).unwrap();
+    let text = std::fs::read_to_string(csv).unwrap();
     assert_eq!(text.lines().count(), 1 + 8 + 14);
     assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 14);
-    check_plot(&std::fs::read_to_string(&svg).unwrap());
-    check_record(&read_json(&json), run.peak_bytes);
+    check_plot(&std::fs::read_to_string(svg).unwrap());
+    check_record(&read_json(json), peak_bytes);
+}
 
-    // The same run against itself: counters are deterministic.
-    let same = specchio(&[
-        "bench",
-        "--quick",
-        "--methods",
-        "six-pass,instanced",
-        "--baseline",
-        json.to_str().unwrap(),
-    ]);
-    assert_ok(&same);
+/// Runs the quick bench of six-pass and instanced with `extra`, gated on `baseline`.
+fn gate_run(baseline: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["bench", "--quick", "--methods", "six-pass,instanced"];
+    args.extend_from_slice(extra);
+    args.extend_from_slice(&["--baseline", baseline.to_str().unwrap()]);
+    specchio(&args)
+}
 
-    // A baseline that claims less work: the run "got worse" and the gate names the case.
-    let mut base = read_json(&json);
+/// A baseline that claims less work: the run "got worse" and the gate names the case.
+fn check_less_work_fails_naming_the_case(json: &Path, worse: &Path) {
+    let mut base = read_json(json);
     let first = &mut base["results"][0];
     let case = format!(
         "{} / {}",
@@ -104,25 +124,19 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     );
     let v = first["work"]["fragment_invocations"].as_u64().unwrap();
     first["work"]["fragment_invocations"] = serde_json::json!(v - 1);
-    let worse = common::temp_dir("worse.json");
-    std::fs::write(&worse, base.to_string()).unwrap();
-    let fail = specchio(&[
-        "bench",
-        "--quick",
-        "--methods",
-        "six-pass,instanced",
-        "--baseline",
-        worse.to_str().unwrap(),
-    ]);
+    std::fs::write(worse, base.to_string()).unwrap();
+    let fail = gate_run(worse, &[]);
     let stderr = String::from_utf8_lossy(&fail.stderr);
     assert_eq!(fail.status.code(), Some(1), "{stderr}");
     assert!(
         stderr.contains(&case) && stderr.contains("fragment_invocations"),
         "{stderr}"
     );
+}
 
-    // A rung's counter changed: the gate names the rung's case and the counter.
-    let mut base = read_json(&json);
+/// A rung's counter changed: the gate names the rung's case and the counter.
+fn check_a_changed_rung_counter_fails_naming_it(json: &Path, worse: &Path) {
+    let mut base = read_json(json);
     let rung = &mut base["tradeoff"][1];
     let case = format!(
         "{} / rung {} / 64²",
@@ -133,30 +147,21 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
         .as_u64()
         .unwrap();
     rung["work"]["sensor_fragment_invocations"] = serde_json::json!(v + 1);
-    std::fs::write(&worse, base.to_string()).unwrap();
-    let fail = specchio(&[
-        "bench",
-        "--quick",
-        "--methods",
-        "six-pass,instanced",
-        "--no-accuracy",
-        "--baseline",
-        worse.to_str().unwrap(),
-    ]);
+    std::fs::write(worse, base.to_string()).unwrap();
+    let fail = gate_run(worse, &["--no-accuracy"]);
     let stderr = String::from_utf8_lossy(&fail.stderr);
     assert_eq!(fail.status.code(), Some(1), "{stderr}");
     assert!(
         stderr.contains(&format!("{case}: sensor_fragment_invocations {v}")),
         "{stderr}"
     );
+}
 
-    // A missing baseline is an error that names it, before any run.
+/// A missing baseline is an error that names it, before any run.
+fn check_a_missing_baseline_is_named() {
     let missing = specchio(&["bench", "--quick", "--baseline", "no/such/baseline.json"]);
     assert!(!missing.status.success());
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no/such/baseline.json"));
-    for f in [json, csv, worse, svg] {
-        let _ = std::fs::remove_file(f);
-    }
 }
 
 /// The committed CI baseline still matches this tree's work counters (a counter change must
@@ -210,8 +215,12 @@ fn bmf_format_and_file_carry_the_same_benchmarks() {
     let names: Vec<&str> = benchmarks.keys().map(String::as_str).collect();
     assert_eq!(names.len(), 4, "{names:?}");
     for (case, measures) in [
-        ("six-pass", &["cube-update-ms"][..]),
-        ("multiview", &["cube-update-ms"]),
+        // BMF keys are sorted: the time in flight comes first.
+        (
+            "six-pass",
+            &["cube-update-in-flight-ms", "cube-update-ms"][..],
+        ),
+        ("multiview", &["cube-update-in-flight-ms", "cube-update-ms"]),
         ("rung-plain", &["frame-cost-ms", "sensor-flip-mean"]),
         ("rung-box", &["frame-cost-ms", "sensor-flip-mean"]),
     ] {
@@ -261,6 +270,13 @@ fn bmf_format_and_file_carry_the_same_benchmarks() {
 /// bad options fail before running, naming the option, and write nothing.
 #[test]
 fn github_format_and_bad_options() {
+    check_github_format();
+    check_threads_are_recorded();
+    check_bad_options_write_nothing();
+}
+
+/// `--format github` prints one entry per scene: its median update as the run's record has it.
+fn check_github_format() {
     let record_file = common::temp_dir("github.json");
     let run = lean_quick(&[
         "--format",
@@ -286,8 +302,10 @@ fn github_format_and_bad_options() {
         assert_eq!(entry["value"], row["wall_ms"]["median"], "{name}");
     }
     assert!(String::from_utf8_lossy(&run.stderr).contains("median ms"));
+}
 
-    // --threads reaches lavapipe through LP_NUM_THREADS and is recorded.
+/// --threads reaches lavapipe through LP_NUM_THREADS and is recorded.
+fn check_threads_are_recorded() {
     let json = common::temp_dir("threads.json");
     assert_ok(&lean_quick(&[
         "--threads",
@@ -298,80 +316,86 @@ fn github_format_and_bad_options() {
     let record = read_json(&json);
     assert_eq!(record["environment"]["lp_num_threads"], "1");
     std::fs::remove_file(&json).unwrap();
+}
 
+/// Bad `bench` arguments, what their refusal says, and its code (clap's 2, the run's own 1).
+const BAD_OPTIONS: [(&[&str], &str, i32); 16] = [
+    (
+        &["--cube-sizes", "0"],
+        "'--cube-sizes <CUBE_SIZES>': `0` is not a face size: a whole number in 1..=8192",
+        2,
+    ),
+    (
+        &["--cube-sizes", "64,x"],
+        "'--cube-sizes <CUBE_SIZES>': `x`",
+        2,
+    ),
+    (
+        &["--cube-sizes", "64,64"],
+        "--cube-sizes: 64 is given twice",
+        1,
+    ),
+    (
+        &["--lookups", "sphere"],
+        "'--lookups <LOOKUPS>': `sphere` is not a lookup: one of plain, box, ray-query",
+        2,
+    ),
+    (
+        &["--threads", "0"],
+        "'--threads <THREADS>': must be a whole number in 1..=1024",
+        2,
+    ),
+    (
+        &["--runs", "0"],
+        "'--runs <RUNS>': must be a whole number in 1..=1000",
+        2,
+    ),
+    (
+        &["--frames", "0"],
+        "'--frames <FRAMES>': must be a whole number in 1..=100000",
+        2,
+    ),
+    (&["--warmup", "-1"], "--warmup", 2),
+    (
+        &["--max-regression", "-5"],
+        "'--max-regression <MAX_REGRESSION>': must be a number in [0, 10000]",
+        2,
+    ),
+    (
+        &["--methods", "nine-pass"],
+        "'--methods <METHODS>': `nine-pass` is not a method: one of six-pass",
+        2,
+    ),
+    (&["--plot", "no/such/folder/p.svg"], "no/such/folder", 1),
+    (
+        &["--methods", "instanced", "--max-regression", "10"],
+        "include six-pass",
+        1,
+    ),
+    (&["no/such/scene.toml"], "no/such/scene.toml", 1),
+    (
+        &["--rungs", "box,sphere"],
+        "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, distance-8, distance-16, distance-32, distance-exact, ray-query",
+        2,
+    ),
+    (
+        &["--rungs", "box,box"],
+        "--rungs: \"box\" is given twice",
+        1,
+    ),
+    (
+        &["--rungs", "box", "--no-tradeoff"],
+        "cannot be used with '--no-tradeoff'",
+        2,
+    ),
+];
+
+/// Each of [`BAD_OPTIONS`] is refused before anything runs, naming the option, writing nothing.
+fn check_bad_options_write_nothing() {
     // Values clap refuses (exit 2) and combinations the run refuses (exit 1), each before
     // anything runs, naming the option (and the allowed values), writing nothing.
     let json = common::temp_dir("bad.json");
-    for (args, message, code) in [
-        (
-            &["--cube-sizes", "0"][..],
-            "'--cube-sizes <CUBE_SIZES>': `0` is not a face size: a whole number in 1..=8192",
-            2,
-        ),
-        (
-            &["--cube-sizes", "64,x"][..],
-            "'--cube-sizes <CUBE_SIZES>': `x`",
-            2,
-        ),
-        (
-            &["--cube-sizes", "64,64"][..],
-            "--cube-sizes: 64 is given twice",
-            1,
-        ),
-        (
-            &["--lookups", "sphere"][..],
-            "'--lookups <LOOKUPS>': `sphere` is not a lookup: one of plain, box, ray-query",
-            2,
-        ),
-        (
-            &["--threads", "0"][..],
-            "'--threads <THREADS>': must be a whole number in 1..=1024",
-            2,
-        ),
-        (
-            &["--runs", "0"][..],
-            "'--runs <RUNS>': must be a whole number in 1..=1000",
-            2,
-        ),
-        (
-            &["--frames", "0"][..],
-            "'--frames <FRAMES>': must be a whole number in 1..=100000",
-            2,
-        ),
-        (&["--warmup", "-1"][..], "--warmup", 2),
-        (
-            &["--max-regression", "-5"][..],
-            "'--max-regression <MAX_REGRESSION>': must be a number in [0, 10000]",
-            2,
-        ),
-        (
-            &["--methods", "nine-pass"][..],
-            "'--methods <METHODS>': `nine-pass` is not a method: one of six-pass",
-            2,
-        ),
-        (&["--plot", "no/such/folder/p.svg"][..], "no/such/folder", 1),
-        (
-            &["--methods", "instanced", "--max-regression", "10"][..],
-            "include six-pass",
-            1,
-        ),
-        (&["no/such/scene.toml"][..], "no/such/scene.toml", 1),
-        (
-            &["--rungs", "box,sphere"][..],
-            "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, distance-8, distance-16, distance-32, distance-exact, ray-query",
-            2,
-        ),
-        (
-            &["--rungs", "box,box"][..],
-            "--rungs: \"box\" is given twice",
-            1,
-        ),
-        (
-            &["--rungs", "box", "--no-tradeoff"][..],
-            "cannot be used with '--no-tradeoff'",
-            2,
-        ),
-    ] {
+    for (args, message, code) in BAD_OPTIONS {
         let mut all = vec!["bench", "--json", json.to_str().unwrap()];
         all.extend_from_slice(args);
         let out = specchio(&all);

@@ -23,6 +23,19 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
     }
     let json = common::temp_dir("swiftshader.json");
     let csv = common::temp_dir("swiftshader.csv");
+    let record = record_on_swiftshader(&json, &csv);
+    check_rungs_without_ray_queries(&record);
+    check_ray_query_rung_refused();
+    check_counters_absent_from_the_record(&record);
+    check_counters_absent_from_the_csv(&csv);
+    check_lavapipe_baseline_refused();
+    for f in [json, csv] {
+        let _ = std::fs::remove_file(f);
+    }
+}
+
+/// Runs the lean quick bench with the trade-off on SwiftShader and returns its JSON record.
+fn record_on_swiftshader(json: &Path, csv: &Path) -> serde_json::Value {
     // With the trade-off's rungs (their cost only): distance-exact and ray-query cannot run
     // there.
     let out = specchio(&[
@@ -41,7 +54,11 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
         csv.to_str().unwrap(),
     ]);
     assert_ok(&out);
-    let record = read_json(&json);
+    read_json(json)
+}
+
+/// The rungs needing ray queries are recorded as not run, and the others have no counters.
+fn check_rungs_without_ray_queries(record: &serde_json::Value) {
     let not_run = &record["rungs_not_run"];
     assert_eq!(not_run.as_array().unwrap().len(), 2, "{not_run}");
     assert_eq!(not_run[0]["rung"], "distance-exact");
@@ -57,6 +74,10 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
         assert!(t["work"]["sensor_fragment_invocations"].is_null(), "{t}");
         assert!(t["sensor"].is_null() && t["pareto"].is_null());
     }
+}
+
+/// Asking SwiftShader for the ray-query rung is refused, saying the device lacks it.
+fn check_ray_query_rung_refused() {
     let refused = specchio(&[
         "bench",
         "--quick",
@@ -72,6 +93,10 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
         said.contains("--rungs ray-query: the device lacks"),
         "{said}"
     );
+}
+
+/// The timing rows have no invocation counters or fill stats, but do count the faces.
+fn check_counters_absent_from_the_record(record: &serde_json::Value) {
     for r in record["results"].as_array().expect("results") {
         for counter in ["vertex_invocations", "fragment_invocations"] {
             assert!(r["work"][counter].is_null(), "{counter}: {}", r["work"]);
@@ -83,7 +108,11 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
             6 * r["updates"].as_u64().unwrap()
         );
     }
-    let text = std::fs::read_to_string(&csv).unwrap();
+}
+
+/// The CSV's vertex_invocations column is empty on every row.
+fn check_counters_absent_from_the_csv(csv: &Path) {
+    let text = std::fs::read_to_string(csv).unwrap();
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
     let column = header
         .iter()
@@ -92,6 +121,10 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
     for line in text.lines().skip(1) {
         assert_eq!(line.split(',').nth(column), Some(""), "{line}");
     }
+}
+
+/// The committed lavapipe baseline is refused on SwiftShader before timing, naming both drivers.
+fn check_lavapipe_baseline_refused() {
     let refused = lean_quick(&[
         "--device",
         "swiftshader",
@@ -104,7 +137,4 @@ fn counters_a_driver_lacks_are_absent_and_baselines_stay_on_their_driver() {
         said.contains("llvmpipe") && said.contains("SwiftShader") && !said.contains("timed"),
         "{said}"
     );
-    for f in [json, csv] {
-        let _ = std::fs::remove_file(f);
-    }
 }

@@ -5,17 +5,29 @@ use crate::bench_tradeoff::check_tradeoff;
 /// What one quick run's JSON must hold besides the gate's rows (issue: speed against error);
 /// `peak_bytes` is the run's peak resident memory as its parent measured it.
 pub fn check_record(r: &serde_json::Value, peak_bytes: u64) {
-    let rows = |k: &str| {
-        r[k].as_array()
-            .unwrap_or_else(|| panic!("`{k}` array"))
-            .clone()
-    };
+    check_timing_rows(r);
+    check_efficiency(r);
+    check_accuracy(r);
+    check_dynamic(r);
+    check_tradeoff(r);
+    check_provenance(r, peak_bytes);
+}
+
+/// The record's array `k`, which must be there.
+fn rows(r: &serde_json::Value, k: &str) -> Vec<serde_json::Value> {
+    r[k].as_array()
+        .unwrap_or_else(|| panic!("`{k}` array"))
+        .clone()
+}
+
+/// The timing and floor rows: their counts, updates and run medians, and the fill floor's work.
+fn check_timing_rows(r: &serde_json::Value) {
     // Timing rows: 2 scenes x 2 methods; floors: 2 scenes x 3.
-    assert_eq!(rows("results").len(), 4);
-    assert_eq!(rows("floors").len(), 6);
+    assert_eq!(rows(r, "results").len(), 4);
+    assert_eq!(rows(r, "floors").len(), 6);
     // --quick times 5 updates in one run, so each row has 5 updates and one run median, which
     // is the median of those same 5 (one nearest-rank definition for both).
-    for row in rows("floors").iter().chain(&rows("results")) {
+    for row in rows(r, "floors").iter().chain(&rows(r, "results")) {
         assert_eq!(row["updates"], 5, "{row}");
         assert_eq!(
             row["run_medians_ms"],
@@ -24,22 +36,26 @@ pub fn check_record(r: &serde_json::Value, peak_bytes: u64) {
         );
     }
     // The fill floor shades every texel once: 6 faces x 64² in an update.
-    let fill = rows("floors")
+    let fill = rows(r, "floors")
         .into_iter()
         .find(|f| f["floor"] == "fill")
         .unwrap();
     assert_eq!(fill["fill_stats"]["fragment_invocations"], 6 * 64 * 64);
+}
+
+/// Each timing row's efficiencies are its median over its scene's floors' medians.
+fn check_efficiency(r: &serde_json::Value) {
     // Efficiency is the method's median update over its scene's floors' medians: recomputed
     // from the rows (1e-12: the JSON's shortest decimals read back within an ulp or two).
     let floor = |scene: &serde_json::Value, name: &str| {
-        rows("floors")
+        rows(r, "floors")
             .into_iter()
             .find(|f| f["scene"] == *scene && f["floor"] == name)
             .unwrap()["wall_ms"]["median"]
             .as_f64()
             .unwrap()
     };
-    for row in rows("results") {
+    for row in rows(r, "results") {
         let median = row["wall_ms"]["median"].as_f64().unwrap();
         let scene = &row["scene"];
         for (key, want) in [
@@ -53,8 +69,12 @@ pub fn check_record(r: &serde_json::Value, peak_bytes: u64) {
             assert!((got - want).abs() <= 1e-12 * want, "{key}: {got} != {want}");
         }
     }
+}
+
+/// The accuracy rows (methods agree, box beats plain) and the speed-against-error rows' count.
+fn check_accuracy(r: &serde_json::Value) {
     // Accuracy: per scene and lookup; the methods agree; box is better than plain.
-    let acc = rows("accuracy");
+    let acc = rows(r, "accuracy");
     assert_eq!(acc.len(), 4);
     for a in &acc {
         assert_eq!(a["methods_identical"], true);
@@ -68,9 +88,13 @@ pub fn check_record(r: &serde_json::Value, peak_bytes: u64) {
             .unwrap()
     };
     assert!(flip("box") < flip("plain"));
-    assert_eq!(rows("speed_vs_error").len(), 8);
+    assert_eq!(rows(r, "speed_vs_error").len(), 8);
+}
+
+/// The dynamic rows: in the thesis room an incremental update renders one face, a full one six.
+fn check_dynamic(r: &serde_json::Value) {
     // Both quick scenes move: incremental against full, frame by frame.
-    let dynamic = rows("dynamic");
+    let dynamic = rows(r, "dynamic");
     assert_eq!(dynamic.len(), 2);
     let thesis = &dynamic[0];
     assert_eq!(thesis["scene"], "scenes/thesis-room.toml");
@@ -91,7 +115,10 @@ pub fn check_record(r: &serde_json::Value, peak_bytes: u64) {
         );
     }
     assert_eq!(thesis["faces_incremental_median"], 1.0);
-    check_tradeoff(r);
+}
+
+/// Provenance: the recorded peak memory against the measured one, the command, driver, sizes.
+fn check_provenance(r: &serde_json::Value, peak_bytes: u64) {
     // Provenance. The record's peak memory is the process's own high-water mark read after
     // all the rendering and tracing, so it is at most the lifetime peak its parent measured
     // (the same kernel counter), and what runs after the reading, writing a few report files,

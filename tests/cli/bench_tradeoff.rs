@@ -26,79 +26,96 @@ pub fn check_tradeoff(r: &serde_json::Value) {
         let labels: Vec<&str> = here.iter().map(|t| t["rung"].as_str().unwrap()).collect();
         assert_eq!(labels, RUNGS, "{scene}");
         let geometry = MirrorGeometry::of(scene);
-        let mut points = Vec::new();
-        for t in &here {
-            let rung = t["rung"].as_str().unwrap();
-            assert_eq!(t["frames"], 5, "{scene} {rung}");
-            check_cost_is_the_sum_of_its_parts(t, 5);
-            // The cube lookups fill all six faces every frame; ray-query fills none.
-            let faces = if rung == "ray-query" { 0 } else { 30 };
-            assert_eq!(t["work"]["faces_rendered"], faces, "{scene} {rung}");
-            // The sensor's eye is inside the room's closed box, so every one of its pixels is
-            // covered and shaded at least once a frame (a pixel's colour is a fragment
-            // shader's output); overdraw and helper invocations, which the driver decides,
-            // only add.
-            let [w, h] = geometry.sensor.1;
-            let shaded = t["work"]["sensor_fragment_invocations"].as_u64().unwrap();
-            assert!(
-                shaded >= 5 * u64::from(w) * u64::from(h),
-                "{scene} {rung}: {shaded} fragment invocations in 5 frames of {w}x{h}"
-            );
-            for (view, (basis, size)) in
-                [("sensor", geometry.sensor), ("observer", geometry.observer)]
-            {
-                assert_eq!(t[view]["non_finite_pixels"], 0, "{scene} {rung} {view}");
-                // The angular error covers the pixels that see the mirror in both the raster
-                // and the exact image: at t = 0 nothing stands between either camera and the
-                // mirror in these scenes, so those are the pixel centres whose ray meets the
-                // sphere, counted here in f64, give or take the few that graze it.
-                let (hits, grazing) = geometry.mirror_pixels(&basis, size);
-                let pixels = t[view]["angular"]["pixels"].as_u64().unwrap();
-                assert!(
-                    pixels.abs_diff(hits) <= grazing,
-                    "{scene} {rung} {view}: {pixels} pixels, the sphere covers {hits} \
-                     ({grazing} graze it)"
-                );
-            }
-            // Only distance-exact keeps a tally of the rays it traced: a share, not all.
-            let traced = t["sensor_traced_fraction"].as_f64();
-            if rung == "distance-exact" {
-                let f = traced.expect("distance-exact's traced fraction");
-                assert!((0.0..1.0).contains(&f), "{scene}: traced {f}");
-            } else {
-                assert_eq!(traced, None, "{scene} {rung}");
-            }
-            points.push((
-                t["frame_cost_ms"]["median"].as_f64().unwrap(),
-                t["sensor"]["flip_mean"].as_f64().unwrap(),
-            ));
-        }
-        // Each rung nearer the exact answer than the one before it, in both views.
-        for view in ["sensor", "observer"] {
-            let flip: Vec<f64> = here
-                .iter()
-                .map(|t| t[view]["flip_mean"].as_f64().unwrap())
-                .collect();
-            let (plain, boxed, exact) = (flip[0], flip[1], flip[RUNGS.len() - 1]);
-            assert!(plain > boxed && boxed > exact, "{scene} {view}: {flip:?}");
-            // The distance search: better than the plain lookup, not as good as tracing.
-            for f in &flip[2..RUNGS.len() - 1] {
-                assert!(plain > *f && *f > exact, "{scene} {view}: {flip:?}");
-            }
-        }
-        // The flags are the front of these very points: on it when nothing is at most as
-        // dear and at most as wrong, and better in one.
-        for (t, &(c, e)) in here.iter().zip(&points) {
-            let dominated = points
-                .iter()
-                .any(|&(c2, e2)| c2 <= c && e2 <= e && (c2 < c || e2 < e));
-            assert_eq!(t["pareto"], !dominated, "{scene} {}", t["rung"]);
-        }
-        // The least wrong point is always on the front.
-        assert!(here
+        let points: Vec<(f64, f64)> = here
             .iter()
-            .any(|t| t["rung"] == "ray-query" && t["pareto"] == true));
+            .map(|t| check_rung(t, scene, &geometry))
+            .collect();
+        check_each_rung_nearer_than_the_last(&here, scene);
+        check_pareto_flags(&here, &points, scene);
     }
+}
+
+/// One rung's row on `scene`: frames, costs, counters, errors; returns its (cost, error) point.
+fn check_rung(t: &serde_json::Value, scene: &str, geometry: &MirrorGeometry) -> (f64, f64) {
+    let rung = t["rung"].as_str().unwrap();
+    assert_eq!(t["frames"], 5, "{scene} {rung}");
+    check_cost_is_the_sum_of_its_parts(t, 5);
+    // The cube lookups fill all six faces every frame; ray-query fills none.
+    let faces = if rung == "ray-query" { 0 } else { 30 };
+    assert_eq!(t["work"]["faces_rendered"], faces, "{scene} {rung}");
+    // The sensor's eye is inside the room's closed box, so every one of its pixels is
+    // covered and shaded at least once a frame (a pixel's colour is a fragment
+    // shader's output); overdraw and helper invocations, which the driver decides,
+    // only add.
+    let [w, h] = geometry.sensor.1;
+    let shaded = t["work"]["sensor_fragment_invocations"].as_u64().unwrap();
+    assert!(
+        shaded >= 5 * u64::from(w) * u64::from(h),
+        "{scene} {rung}: {shaded} fragment invocations in 5 frames of {w}x{h}"
+    );
+    check_view_errors(t, scene, rung, geometry);
+    // Only distance-exact keeps a tally of the rays it traced: a share, not all.
+    let traced = t["sensor_traced_fraction"].as_f64();
+    if rung == "distance-exact" {
+        let f = traced.expect("distance-exact's traced fraction");
+        assert!((0.0..1.0).contains(&f), "{scene}: traced {f}");
+    } else {
+        assert_eq!(traced, None, "{scene} {rung}");
+    }
+    (
+        t["frame_cost_ms"]["median"].as_f64().unwrap(),
+        t["sensor"]["flip_mean"].as_f64().unwrap(),
+    )
+}
+
+/// Both views of a rung are finite and measure their error over the pixels that see the mirror.
+fn check_view_errors(t: &serde_json::Value, scene: &str, rung: &str, geometry: &MirrorGeometry) {
+    for (view, (basis, size)) in [("sensor", geometry.sensor), ("observer", geometry.observer)] {
+        assert_eq!(t[view]["non_finite_pixels"], 0, "{scene} {rung} {view}");
+        // The angular error covers the pixels that see the mirror in both the raster
+        // and the exact image: at t = 0 nothing stands between either camera and the
+        // mirror in these scenes, so those are the pixel centres whose ray meets the
+        // sphere, counted here in f64, give or take the few that graze it.
+        let (hits, grazing) = geometry.mirror_pixels(&basis, size);
+        let pixels = t[view]["angular"]["pixels"].as_u64().unwrap();
+        assert!(
+            pixels.abs_diff(hits) <= grazing,
+            "{scene} {rung} {view}: {pixels} pixels, the sphere covers {hits} \
+             ({grazing} graze it)"
+        );
+    }
+}
+
+/// Each rung is nearer the exact answer than the one before it, in both views.
+fn check_each_rung_nearer_than_the_last(here: &[&serde_json::Value], scene: &str) {
+    for view in ["sensor", "observer"] {
+        let flip: Vec<f64> = here
+            .iter()
+            .map(|t| t[view]["flip_mean"].as_f64().unwrap())
+            .collect();
+        let (plain, boxed, exact) = (flip[0], flip[1], flip[RUNGS.len() - 1]);
+        assert!(plain > boxed && boxed > exact, "{scene} {view}: {flip:?}");
+        // The distance search: better than the plain lookup, not as good as tracing.
+        for f in &flip[2..RUNGS.len() - 1] {
+            assert!(plain > *f && *f > exact, "{scene} {view}: {flip:?}");
+        }
+    }
+}
+
+/// The rows' Pareto flags are the front of their (cost, error) `points`, ray-query always on it.
+fn check_pareto_flags(here: &[&serde_json::Value], points: &[(f64, f64)], scene: &str) {
+    // The flags are the front of these very points: on it when nothing is at most as
+    // dear and at most as wrong, and better in one.
+    for (t, &(c, e)) in here.iter().zip(points) {
+        let dominated = points
+            .iter()
+            .any(|&(c2, e2)| c2 <= c && e2 <= e && (c2 < c || e2 < e));
+        assert_eq!(t["pareto"], !dominated, "{scene} {}", t["rung"]);
+    }
+    // The least wrong point is always on the front.
+    assert!(here
+        .iter()
+        .any(|t| t["rung"] == "ray-query" && t["pareto"] == true));
 }
 
 /// A rung's frame cost is, frame by frame, its cube update plus its sensor view, and its three

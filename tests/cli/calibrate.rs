@@ -41,7 +41,20 @@ fn the_exports_parse_back_to_the_recorded_models() {
     for file in &record.files {
         assert!(out.join(file).is_file(), "{file} is missing");
     }
-    let read = |name: &str| std::fs::read_to_string(out.join(name)).unwrap();
+    check_exports_hold_the_recorded_models(&out, &record);
+    let mirror = check_residual_images(&out, &record);
+    check_the_check_points(&out, record.image, &mirror);
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// The text of the export `name` in the calibration folder `out`.
+fn read_export(out: &Path, name: &str) -> String {
+    std::fs::read_to_string(out.join(name)).unwrap()
+}
+
+/// The OpenCV, Kalibr and OCamCalib exports parse back to calibration.json's models and size.
+fn check_exports_hold_the_recorded_models(out: &Path, record: &CalibrationRecord) {
+    let read = |name: &str| read_export(out, name);
     let size = record.image;
     // The two YAML files hold the same numbers to the last bit; calibration.json agrees to
     // serde_json's float parsing, which may differ in the last digit (it does not promise
@@ -88,6 +101,11 @@ fn the_exports_parse_back_to_the_recorded_models() {
         (json.ss.len(), json.invpol.len())
     );
     assert_eq!([ocam.width, ocam.height], size);
+}
+
+/// Each residual image agrees with its recorded summary; returns the last one's mirror mask.
+fn check_residual_images(out: &Path, record: &CalibrationRecord) -> Vec<bool> {
+    let size = record.image;
     // Each residual image holds the per-pixel angles its summary was taken from: the summary
     // and the pixel counts recomputed from the image (A = 1 on the mirror, G = 1 where the
     // model has no ray, R the angle) agree with calibration.json. The image stores the angles
@@ -111,16 +129,7 @@ fn the_exports_parse_back_to_the_recorded_models() {
         let on_mirror: Vec<&[f32; 4]> = image.pixels.iter().filter(|p| p[3] == 1.0).collect();
         assert_eq!(on_mirror.len(), record.mirror_pixels, "{file}");
         let without = on_mirror.iter().filter(|p| p[1] == 1.0).count();
-        let mut degrees: Vec<f64> = on_mirror
-            .iter()
-            .filter(|p| p[1] != 1.0)
-            .map(|p| f64::from(p[0]))
-            .collect();
-        degrees.sort_by(f64::total_cmp);
-        let n = degrees.len();
-        let mean = degrees.iter().sum::<f64>() / n as f64;
-        let p99 = degrees[(0.99 * n as f64).ceil() as usize - 1];
-        let max = degrees[n - 1];
+        let (mean, p99, max) = angle_summary(&on_mirror);
         for (what, recorded, from_image) in [
             ("mean", model.mean, mean),
             ("p99", model.p99, p99),
@@ -134,6 +143,26 @@ fn the_exports_parse_back_to_the_recorded_models() {
         assert_eq!(without, recorded_without, "{file}");
         mirror = image.pixels.iter().map(|p| p[3] == 1.0).collect();
     }
+    mirror
+}
+
+/// The mean, nearest-rank p99 and max angle (R) of the mirror pixels that have a ray (G != 1).
+fn angle_summary(on_mirror: &[&[f32; 4]]) -> (f64, f64, f64) {
+    let mut degrees: Vec<f64> = on_mirror
+        .iter()
+        .filter(|p| p[1] != 1.0)
+        .map(|p| f64::from(p[0]))
+        .collect();
+    degrees.sort_by(f64::total_cmp);
+    let n = degrees.len();
+    let mean = degrees.iter().sum::<f64>() / n as f64;
+    let p99 = degrees[(0.99 * n as f64).ceil() as usize - 1];
+    let max = degrees[n - 1];
+    (mean, p99, max)
+}
+
+/// check_points.json holds one point per check distance at each strided pixel on the `mirror`.
+fn check_the_check_points(out: &Path, size: [u32; 2], mirror: &[bool]) {
     // The check points: for every CHECK_STRIDE-th pixel in rows and columns (from half a
     // stride) that the residual images mark as mirror, one point at each distance, in order.
     let stride = folder::CHECK_STRIDE;
@@ -147,14 +176,13 @@ fn the_exports_parse_back_to_the_recorded_models() {
         .filter(|&[x, y]| mirror[(y * size[0] + x) as usize])
         .flat_map(|pixel| folder::CHECK_DISTANCES_M.map(|d| (pixel, d)))
         .collect();
-    let points: CheckPoints = serde_json::from_str(&read("check_points.json")).unwrap();
+    let points: CheckPoints = serde_json::from_str(&read_export(out, "check_points.json")).unwrap();
     let got: Vec<([u32; 2], f64)> = points
         .points
         .iter()
         .map(|p| (p.pixel, p.distance_m))
         .collect();
     assert_eq!(got, expected);
-    std::fs::remove_dir_all(&out).unwrap();
 }
 
 /// scripts/check-omnidir.py: OpenCV's own omnidir projection (and a port of OCamCalib's
