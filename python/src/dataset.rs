@@ -1,20 +1,17 @@
-//! Datasets from Python: in one process (`dataset`), or in parts for a pool of workers
-//! (`DatasetFrames` renders shards of poses where a worker runs, `DatasetOutput` writes what
-//! they return where the driver runs: specchio/ray.py). Both are the engine's
-//! `render::dataset`, so both write the same bytes as `specchio dataset`.
+//! Datasets from Python in one process (`dataset`); in parts for a pool of workers, see
+//! `shards.rs`. Both are the engine's `render::dataset`, so both write the same bytes as
+//! `specchio dataset`.
 
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::{Arc, Mutex};
 
 use pyo3::prelude::*;
-use pyo3::types::PyBytes;
 use specchio::render::dataset::{
-    self as writer, resume, DatasetError, Folder, Frame, FrameWriter, Plan, Poses,
+    self as writer, resume, DatasetError, Folder, FrameWriter, Plan, Poses,
 };
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::DatasetRecord;
-use specchio::sensor::GroundTruth;
 use specchio::vk::device::Device;
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
@@ -60,7 +57,7 @@ impl PoseSource {
     }
 
     /// The plan of `scene` with these poses, every one checked.
-    fn plan(&self, scene: &Path) -> Result<Plan, DatasetError> {
+    pub(crate) fn plan(&self, scene: &Path) -> Result<Plan, DatasetError> {
         let poses = match self {
             PoseSource::File(path) => Poses::Trajectory(path),
             &PoseSource::Grid {
@@ -77,7 +74,7 @@ impl PoseSource {
     }
 }
 
-fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
+pub(crate) fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
     lookup
         .map(|l| {
             specchio::process::args::lookup(l).map_err(|e| errors::error(format!("lookup: {e}")))
@@ -266,7 +263,13 @@ fn place_finished(
 
 /// `e`, with a note of the frames a resumable run kept and how to go on (where it kept any:
 /// none when the output was placed, or was never begun).
-fn with_kept_note(py: Python<'_>, e: PyErr, out: &Path, resume: bool, placed: usize) -> PyErr {
+pub(crate) fn with_kept_note(
+    py: Python<'_>,
+    e: PyErr,
+    out: &Path,
+    resume: bool,
+    placed: usize,
+) -> PyErr {
     let work = resume::work_path(out);
     if resume && placed > 0 && work.join(resume::JOURNAL).exists() {
         let note = format!(
@@ -280,7 +283,7 @@ fn with_kept_note(py: Python<'_>, e: PyErr, out: &Path, resume: bool, placed: us
 }
 
 /// Places a finished dataset; what of its work folder could not be removed is a warning.
-fn commit(py: Python<'_>, ready: writer::Ready) -> PyResult<()> {
+pub(crate) fn commit(py: Python<'_>, ready: writer::Ready) -> PyResult<()> {
     let left = py.detach(|| ready.commit()).map_err(errors::to_py)?;
     if !left.is_empty() {
         let text = format!(
@@ -296,346 +299,4 @@ fn commit(py: Python<'_>, ready: writer::Ready) -> PyResult<()> {
         )?;
     }
     Ok(())
-}
-
-/// The most encoders a caller may ask for.
-const MAX_ENCODERS: usize = 16;
-
-/// A worker's half of a dataset: a renderer of the plan's robot that renders the frames it
-/// is asked for and returns their files (it writes nothing). Every worker of one dataset
-/// must give the same `lookup` and `ground_truth`.
-#[pyclass(module = "specchio")]
-pub struct DatasetFrames {
-    plan: Plan,
-    /// Behind a lock, always taken with the GIL released (see `Renderer`).
-    frames: Mutex<FrameWriter>,
-    lookup: String,
-    ground_truth: String,
-    log: std::sync::Arc<specchio::vk::instance::ValidationLog>,
-    _device: std::sync::Arc<specchio::vk::device::Device>,
-}
-
-#[pymethods]
-impl DatasetFrames {
-    /// `encoders`: frames encoded at the same time while the next render (default: a
-    /// quarter of the machine's cores, 1 to 4, within the memory budget; 0: none). A Ray
-    /// worker, one of many on its machine, passes 1.
-    #[new]
-    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None, grid=None, headings=None, time=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        py: Python<'_>,
-        scene: PathBuf,
-        trajectory: Option<PathBuf>,
-        lookup: Option<&str>,
-        device: Option<&str>,
-        validate: bool,
-        encoders: Option<usize>,
-        grid: Option<f64>,
-        headings: Option<u32>,
-        time: Option<f64>,
-    ) -> PyResult<Self> {
-        let source = PoseSource::new(trajectory, grid, headings, time)?;
-        if let Some(n) = encoders.filter(|&n| n > MAX_ENCODERS) {
-            return Err(errors::error(format!(
-                "encoders = {n}: at most {MAX_ENCODERS} (each holds a frame in memory)"
-            )));
-        }
-        let asked = parse_lookup(lookup)?;
-        py.detach(|| -> Result<Self, DatasetError> {
-            let plan = source.plan(&scene)?;
-            let instance = Instance::create(&InstanceDesc::from_env(validate))?;
-            let log = instance.validation_log();
-            let (dev, _, lookup) =
-                specchio::process::probe::device_for_sensor(&instance, device, asked, &plan.scene)?;
-            let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
-            if let Some(n) = encoders {
-                frames.set_encoders(n);
-            }
-            Ok(DatasetFrames {
-                plan,
-                lookup: lookup.to_string(),
-                ground_truth: frames.ground_truth().name().to_owned(),
-                frames: Mutex::new(frames),
-                log,
-                _device: dev,
-            })
-        })
-        .map_err(errors::to_py)
-    }
-
-    fn __len__(&self) -> usize {
-        self.plan.poses.len()
-    }
-
-    #[getter]
-    fn lookup(&self) -> String {
-        self.lookup.clone()
-    }
-
-    #[getter]
-    fn ground_truth(&self) -> String {
-        self.ground_truth.clone()
-    }
-
-    /// The device and its driver, as a resumable dataset's key names them: every worker of
-    /// a resumable dataset must have the same.
-    #[getter]
-    fn device(&self) -> String {
-        resume::device_key(&self._device.info)
-    }
-
-    /// The frames `indices` (into the trajectory's poses): for each, its files as a list of
-    /// (path relative to the dataset folder, bytes) and its index line.
-    fn frames<'py>(&self, py: Python<'py>, indices: Vec<usize>) -> PyResult<Vec<FrameFiles<'py>>> {
-        let n = self.plan.poses.len();
-        if let Some(bad) = indices.iter().find(|&&i| i >= n) {
-            return Err(errors::error(format!(
-                "frame {bad}: the trajectory has {n} poses"
-            )));
-        }
-        // Rendered in order, each frame encoded while the next renders; Python's signals
-        // (Ctrl-C) are checked between frames.
-        let mut stopped: Option<PyErr> = None;
-        let rendered = py.detach(|| -> PyResult<Vec<Frame>> {
-            let mut writer = self.writer()?;
-            let mut frames = Vec::with_capacity(indices.len());
-            let poses = indices.iter().map(|&i| (i, &self.plan.poses[i]));
-            let mut between = |i: usize| {
-                Python::attach(|py| py.check_signals()).map_err(|e| {
-                    stopped = Some(e);
-                    DatasetError::Stopped(format!("stopped before frame {i}"))
-                })
-            };
-            let mut take = |frame| {
-                frames.push(frame);
-                Ok(())
-            };
-            let done = writer.frames(poses, &mut between, &mut take);
-            done.map_err(errors::to_py)?;
-            check_validation(&self.log)?;
-            Ok(frames)
-        });
-        if let Some(e) = stopped {
-            return Err(e);
-        }
-        let out = rendered?
-            .into_iter()
-            .map(|frame| {
-                let files = (frame.files.into_iter())
-                    .map(|(path, bytes)| (path.display().to_string(), PyBytes::new(py, &bytes)))
-                    .collect();
-                (files, frame.index_line)
-            })
-            .collect();
-        Ok(out)
-    }
-}
-
-/// One frame for Python: its files (path relative to the dataset folder, bytes) and its
-/// index line.
-type FrameFiles<'py> = (Vec<(String, Bound<'py, PyBytes>)>, String);
-
-impl DatasetFrames {
-    /// The lock: call it with the GIL released.
-    fn writer(&self) -> PyResult<MutexGuard<'_, FrameWriter>> {
-        self.frames
-            .lock()
-            .map_err(|_| errors::error("the dataset's renderer failed in another thread"))
-    }
-}
-
-/// The driver's half of a dataset: the output folder, staged; frames' files placed as they
-/// arrive, the index and summary at `finish`, which places the folder. Dropped unfinished,
-/// nothing is written (but the frames a resumable one kept in its work folder).
-#[pyclass(module = "specchio")]
-pub struct DatasetOutput {
-    plan: Plan,
-    out: PathBuf,
-    resume: bool,
-    /// Whether `begin` was called: a resumable output places nothing before.
-    begun: bool,
-    /// The frames placed, kept once `finish` takes the folder (for `note_kept`).
-    placed: usize,
-    folder: Option<Folder>,
-}
-
-#[pymethods]
-impl DatasetOutput {
-    #[new]
-    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        py: Python<'_>,
-        scene: PathBuf,
-        trajectory: Option<PathBuf>,
-        out: PathBuf,
-        resume: bool,
-        grid: Option<f64>,
-        headings: Option<u32>,
-        time: Option<f64>,
-    ) -> PyResult<Self> {
-        let source = PoseSource::new(trajectory, grid, headings, time)?;
-        py.detach(|| -> Result<Self, DatasetError> {
-            specchio::files::identity::forget();
-            let plan = source.plan(&scene)?;
-            let folder = Folder::stage(&out, plan.poses.len())?;
-            Ok(DatasetOutput {
-                plan,
-                out,
-                resume,
-                begun: false,
-                placed: 0,
-                folder: Some(folder),
-            })
-        })
-        .map_err(errors::to_py)
-    }
-
-    fn __len__(&self) -> usize {
-        self.plan.poses.len()
-    }
-
-    /// Binds the dataset to the workers' `lookup`, `ground_truth` and `device` (as
-    /// `DatasetFrames` names them); in a resumable run, takes the work folder of an earlier
-    /// run with the same inputs, lookup and device. Returns the frames still to render.
-    fn begin(
-        &mut self,
-        py: Python<'_>,
-        lookup: &str,
-        ground_truth: &str,
-        device: &str,
-    ) -> PyResult<Vec<usize>> {
-        let (lookup, truth) = parse_run(lookup, ground_truth)?;
-        if self.begun {
-            return Err(errors::error("the dataset was begun already"));
-        }
-        let key = self.plan.run_key(lookup, truth, device);
-        let resume = self.resume;
-        let folder = self.folder_mut()?;
-        if resume {
-            py.detach(|| folder.resume(&key)).map_err(errors::to_py)?;
-        }
-        self.begun = true;
-        Ok(self.folder_mut()?.todo())
-    }
-
-    /// The work folder of a resumable run (where the finished frames are kept), else None.
-    #[getter]
-    fn work_folder(&self) -> Option<String> {
-        (self.resume).then(|| resume::work_path(&self.out).display().to_string())
-    }
-
-    /// Adds to `error` a note of the frames this resumable output kept, if it kept any: what
-    /// a driver raises when its run stops.
-    fn note_kept(&self, py: Python<'_>, error: Bound<'_, PyAny>) -> PyResult<()> {
-        let placed = self.folder.as_ref().map_or(self.placed, Folder::done);
-        let e = PyErr::from_value(error);
-        let noted = with_kept_note(py, e, &self.out, self.resume, placed);
-        drop(noted);
-        Ok(())
-    }
-
-    /// Places one frame's files (as `DatasetFrames.frames` gives them: every file of one frame
-    /// folder `frames/NNNNNN/NAME` of this dataset) and its index line; each frame once.
-    fn place(
-        &mut self,
-        py: Python<'_>,
-        files: Vec<(String, Vec<u8>)>,
-        index_line: String,
-    ) -> PyResult<()> {
-        if self.resume && !self.begun {
-            return Err(errors::error(
-                "a resumable dataset places frames after begin()",
-            ));
-        }
-        let frame = one_frame(&files, self.plan.poses.len())?;
-        let frame = Frame {
-            frame,
-            files: files
-                .into_iter()
-                .map(|(p, b)| (PathBuf::from(p), b))
-                .collect(),
-            index_line,
-        };
-        let folder = self.folder_mut()?;
-        py.detach(|| folder.place(&frame)).map_err(errors::to_py)
-    }
-
-    /// Writes the index and the summary of a dataset rendered with `lookup` and
-    /// `ground_truth`, and places the folder. Returns the summary as a dict.
-    fn finish(&mut self, py: Python<'_>, lookup: &str, ground_truth: &str) -> PyResult<Py<PyAny>> {
-        let (lookup, truth) = parse_run(lookup, ground_truth)?;
-        if let Some(missing) = self.folder_mut()?.todo().first() {
-            return Err(errors::error(format!("frame {missing} was never placed")));
-        }
-        self.placed = self.folder_mut()?.done();
-        let folder = self
-            .folder
-            .take()
-            .ok_or_else(|| errors::error("the dataset was already finished"))?;
-        let record = self.plan.record(lookup, truth);
-        let summary = errors::json_to_py(py, &record)?;
-        let ready = py
-            .detach(|| folder.finish(&record))
-            .map_err(errors::to_py)?;
-        commit(py, ready)?;
-        Ok(summary)
-    }
-}
-
-impl DatasetOutput {
-    fn folder_mut(&mut self) -> PyResult<&mut Folder> {
-        self.folder
-            .as_mut()
-            .ok_or_else(|| errors::error("the dataset was already finished"))
-    }
-}
-
-/// A lookup and a ground truth, as the workers name them.
-fn parse_run(lookup: &str, ground_truth: &str) -> PyResult<(Lookup, GroundTruth)> {
-    let lookup: Lookup = specchio::process::args::lookup(lookup)
-        .map_err(|e| errors::error(format!("lookup: {e}")))?;
-    let truth: GroundTruth = serde_json::from_value(ground_truth.into())
-        .map_err(|_| errors::error(format!("ground_truth: {ground_truth:?} is not one")))?;
-    Ok((lookup, truth))
-}
-
-/// The frame whose folder holds every one of `files`: each path relative with plain
-/// components only (no `..`, no root), `frames/NNNNNN/NAME` of one of the `n` frames, one
-/// frame's files together (`Folder::place` checks the names and the index line).
-fn one_frame(files: &[(String, Vec<u8>)], n: usize) -> PyResult<usize> {
-    let mut frames = files.iter().map(|(path, _)| frame_of(path, n));
-    let first = frames
-        .next()
-        .ok_or_else(|| errors::error("no files: a frame has files"))??;
-    for other in frames {
-        let other = other?;
-        if other != first {
-            return Err(errors::error(format!(
-                "files of frames {first} and {other} in one call: place one frame at a time"
-            )));
-        }
-    }
-    Ok(first)
-}
-
-/// The frame of `path`, a file in one of the `n` frame folders.
-fn frame_of(path: &str, n: usize) -> PyResult<usize> {
-    let p = Path::new(path);
-    let parts: Vec<_> = p.components().collect();
-    let plain = parts.iter().all(|c| matches!(c, Component::Normal(_)));
-    let frame = match parts.as_slice() {
-        [Component::Normal(a), Component::Normal(b), Component::Normal(_)] if *a == "frames" => {
-            b.to_str().and_then(|b| b.parse::<usize>().ok())
-        }
-        _ => None,
-    };
-    let folder = |f: usize| Path::new(&specchio::sensor::dataset::frame_folder(f)).to_owned();
-    match frame {
-        Some(f) if plain && f < n && p.parent() == Some(folder(f).as_path()) => Ok(f),
-        _ => Err(errors::error(format!(
-            "{path:?}: not a file of one of this dataset's {n} frame folders (frames/NNNNNN/NAME)"
-        ))),
-    }
 }

@@ -16,6 +16,7 @@ mod poses;
 mod reference;
 mod renderer;
 mod scene;
+mod shards;
 
 use pyo3::prelude::*;
 
@@ -35,8 +36,8 @@ fn _specchio(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<renderer::Renderer>()?;
-    m.add_class::<dataset::DatasetFrames>()?;
-    m.add_class::<dataset::DatasetOutput>()?;
+    m.add_class::<shards::DatasetFrames>()?;
+    m.add_class::<shards::DatasetOutput>()?;
     m.add_function(wrap_pyfunction!(devices, m)?)?;
     m.add_function(wrap_pyfunction!(poses::read_trajectory, m)?)?;
     m.add_function(wrap_pyfunction!(poses::pose_grid, m)?)?;
