@@ -389,6 +389,82 @@ fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
     assert!((3..=4).contains(&frames), "{frames} frames:\n{stdout}");
 }
 
+/// The window is drawn while the renderer's frame is held on its device: the window has a
+/// device and a queue of its own (`viewer/src/shown.rs`), so the menu that F1 opens shows in
+/// the window's pixels, and a resize gets its swapchain and its view scaled to it, all before
+/// the held frame is let go. The pixels are the X server's, what a person would see.
+#[test]
+fn the_window_is_drawn_while_a_frame_is_held_on_the_gpu() {
+    let Some(x) = xvfb_with_xdotool() else { return };
+    let scene = thesis_room();
+    let hold = (specchio::vk::fault::HOLD_FRAME_VAR, "3");
+    let viewer = Running::spawn_with_var(&x, &[scene.to_str().unwrap(), "--frames", "1000"], hold);
+    viewer.wait_for("fault: frame 3 held until let go");
+    let id = viewer_window(&x);
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    // The views of the frames before the held one reach the window, and then no other.
+    let shown = eventually("the view in the window", || {
+        let before = window_pixels(&x, &id);
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        let pixels = window_pixels(&x, &id);
+        let settled = changed(&before.2, &pixels.2) == 0;
+        (settled && lit(&pixels.2) > pixels.2.len() / 6).then_some(pixels)
+    });
+    xdotool(&x, &["key", "F1"]);
+    eventually("the menu in the window", || {
+        let pixels = window_pixels(&x, &id);
+        (changed(&shown.2, &pixels.2) > 2000).then_some(())
+    });
+    xdotool(&x, &["windowsize", &id, "600", "225"]);
+    viewer.wait_for("swapchain: 600x225");
+    eventually("the view scaled to the resized window", || {
+        let (w, h, rgb) = window_pixels(&x, &id);
+        ([w, h] == [600, 225] && lit(&rgb) > rgb.len() / 6).then_some(())
+    });
+    xdotool(&x, &["key", "q"]);
+    let (out, stdout) = viewer.exit();
+    let stderr = text(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("Validation"), "{stderr}");
+    let at = |what: &str| {
+        (stdout.lines().position(|l| l.starts_with(what)))
+            .unwrap_or_else(|| panic!("no `{what}` line:\n{stdout}"))
+    };
+    assert!(
+        at("swapchain: 600x225") < at("fault: frame 3 let go"),
+        "the resize waited for the held frame:\n{stdout}"
+    );
+    assert!(!stdout.contains("by its time limit"), "{stdout}");
+}
+
+/// Asks `found` every 50 ms until it finds something, for at most 30 s (the held frame
+/// lasts 60 s): what it found, or a failure naming `what`.
+fn eventually<T>(what: &str, mut found: impl FnMut() -> Option<T>) -> T {
+    let start = std::time::Instant::now();
+    while start.elapsed() < std::time::Duration::from_secs(30) {
+        if let Some(t) = found() {
+            return t;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    panic!("never saw {what} while the frame was held");
+}
+
+/// Channels (of RGB pixels) above 16 of 255: the window is not black.
+fn lit(rgb: &[u8]) -> usize {
+    rgb.iter().filter(|&&c| c > 16).count()
+}
+
+/// Pixels that differ by more than 8 in some channel between two images of one size.
+fn changed(a: &[u8], b: &[u8]) -> usize {
+    if a.len() != b.len() {
+        return a.len().max(b.len()) / 3;
+    }
+    (a.chunks_exact(3).zip(b.chunks_exact(3)))
+        .filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.abs_diff(*y) > 8))
+        .count()
+}
+
 /// The device lost mid-run (provoked: `SPECCHIO_FAULT_DEVICE_LOST`, engine/src/vk/fault.rs,
 /// since no CPU driver loses its device on demand) ends the viewer with a message saying so
 /// and exit status 1: no panic, and no validation message from the teardown.

@@ -2,45 +2,37 @@
 //! black), and the end of a frame (to PRESENT_SRC, or through a copy for the screenshot).
 
 use ash::vk;
-use specchio::render::display::DisplayImage;
 use specchio::vk::commands::{image_barriers, ImageBarrier};
 use specchio::vk::device::Device;
 use specchio::vk::memory::Buffer;
+
+use super::shown::ShownImage;
 use vk::AccessFlags2 as A;
 use vk::ImageLayout as L;
 use vk::PipelineStageFlags2 as S;
 
-/// Records: source COPY -> BLIT; target UNDEFINED -> TRANSFER_DST; a clear where the blit
-/// leaves bars; the blit; source BLIT -> COPY (for the renderer's next frame, see
-/// `DisplayImage`). The target is left in TRANSFER_DST, written at BLIT (and CLEAR).
+/// Records: target UNDEFINED -> TRANSFER_DST; a clear where the blit leaves bars (all of it
+/// before the first view came); the blit from `source` (ready for `BLIT` reads, see
+/// `shown.rs`). The target is left in TRANSFER_DST, written at BLIT (and CLEAR).
 pub(super) fn record_blit(
     device: &Device,
     cmd: vk::CommandBuffer,
-    source: &DisplayImage,
+    source: Option<&ShownImage>,
     target: vk::Image,
     extent: vk::Extent2D,
 ) {
-    let src_layout = L::TRANSFER_SRC_OPTIMAL;
     let write_stages = S::BLIT | S::CLEAR;
-    image_barriers(
-        device,
-        cmd,
-        &[
-            // The renderer made its writes visible to COPY; chain on to the blit's reads.
-            ImageBarrier {
-                image: source.image,
-                range: source.range,
-                from: (src_layout, S::COPY, A::NONE),
-                to: (src_layout, S::BLIT, A::TRANSFER_READ),
-            },
-            // First scope = the stages that waited on the acquire semaphore (chaining).
-            target_barrier(
-                target,
-                (L::UNDEFINED, write_stages, A::NONE),
-                (L::TRANSFER_DST_OPTIMAL, write_stages, A::TRANSFER_WRITE),
-            ),
-        ],
+    // First scope = the stages that waited on the acquire semaphore (chaining).
+    let acquired = target_barrier(
+        target,
+        (L::UNDEFINED, write_stages, A::NONE),
+        (L::TRANSFER_DST_OPTIMAL, write_stages, A::TRANSFER_WRITE),
     );
+    image_barriers(device, cmd, &[acquired]);
+    let Some(source) = source else {
+        clear_bars(device, cmd, target);
+        return;
+    };
     let (rect, covers) = fit(source.width, source.height, extent);
     if !covers {
         clear_bars(device, cmd, target);
@@ -57,21 +49,13 @@ pub(super) fn record_blit(
         device.raw.cmd_blit_image(
             cmd,
             source.image,
-            src_layout,
+            L::TRANSFER_SRC_OPTIMAL,
             target,
             L::TRANSFER_DST_OPTIMAL,
             &[region],
             filter,
         )
     };
-    // The view image is free for the renderer's next frame (see `DisplayImage`).
-    let source_done = ImageBarrier {
-        image: source.image,
-        range: source.range,
-        from: (src_layout, S::BLIT, A::NONE),
-        to: (src_layout, S::COPY, A::NONE),
-    };
-    image_barriers(device, cmd, &[source_done]);
 }
 
 /// A barrier on the swapchain image's one subresource.
@@ -106,7 +90,7 @@ fn clear_bars(device: &Device, cmd: vk::CommandBuffer, target: vk::Image) {
 }
 
 /// The whole view onto `rect` ([x, y, width, height]) of the swapchain image.
-fn blit_region(source: &DisplayImage, rect: [u32; 4]) -> vk::ImageBlit {
+fn blit_region(source: &ShownImage, rect: [u32; 4]) -> vk::ImageBlit {
     let corner = |x: u32, y: u32| vk::Offset3D {
         x: x as i32,
         y: y as i32,

@@ -31,11 +31,17 @@ pub enum NextFrame {
     OnEvent,
 }
 
-/// What asks for a frame besides a moving scene, and what forbids one.
+/// What asks for a frame besides a moving scene, and what forbids one. A frame has two
+/// halves (`app/frame.rs`): the scene's, rendered, and the window's, which shows the last
+/// view rendered with the menu over it. A change to the scene asks for both; one to the
+/// window alone (a resize, an exposed window, the menu's own repaints, a view come back from
+/// the renderer) only for the window's.
 #[derive(Debug, Default)]
 pub struct Demand {
-    /// Something changed since the last frame.
+    /// The scene changed since its last frame.
     redraw: bool,
+    /// The window must be drawn again.
+    window: bool,
     /// The window is fully covered (winit's `Occluded`).
     hidden: bool,
     /// The window manager minimised it (`Window::is_minimized`), and when that was last asked.
@@ -54,26 +60,52 @@ impl Demand {
     pub fn first_frame() -> Self {
         Self {
             redraw: true,
+            window: true,
             ..Self::default()
         }
     }
 
-    /// Something the frame shows changed (a key's action, a resize, an exposed window).
+    /// Something the scene shows changed (a key's action): both halves are drawn again.
     pub fn changed(&mut self) {
         self.redraw = true;
+        self.window = true;
+    }
+
+    /// The window must be drawn again, the scene need not (a resize, an exposed window, a
+    /// finished view, the menu's input).
+    pub fn show(&mut self) {
+        self.window = true;
     }
 
     /// winit's `Occluded`: fully covered or not. Uncovered, it is drawn again.
     pub fn occluded(&mut self, hidden: bool) {
         self.hidden = hidden;
-        self.redraw |= !hidden;
+        self.window |= !hidden;
     }
 
-    /// A frame starts: what asked for it is answered by it; what comes during it (an action
-    /// the menu takes) asks for the next.
-    pub fn drawing(&mut self) {
+    /// The scene's frame starts: what asked for it is answered by it; what comes during it
+    /// asks for the next.
+    pub fn scene_drawn(&mut self) {
         self.redraw = false;
+    }
+
+    /// The window's frame starts: likewise.
+    pub fn window_drawn(&mut self) {
+        self.window = false;
         self.retry_at = None;
+    }
+
+    /// Whether the scene's half is wanted (when [`Self::next`] says a turn is due): a
+    /// script renders every frame, a moving scene every turn, a still one after a change.
+    pub fn wants_scene(&self, scripted: bool, moving: bool) -> bool {
+        scripted || moving || self.redraw
+    }
+
+    /// Whether the window's half is wanted at `now`: after a change, or when the menu or a
+    /// skipped frame asked to be drawn by now.
+    pub fn wants_window(&self, now: Instant) -> bool {
+        let by_now = |t: Option<Instant>| t.is_some_and(|t| t <= now);
+        self.window || by_now(self.menu_at) || by_now(self.retry_at)
     }
 
     /// The frame drawn at `start` showed the menu and egui wants another after `after`.
@@ -97,7 +129,7 @@ impl Demand {
         // surface's frames itself). A window gone under the viewer reads as not minimised.
         let minimised =
             window.is_minimized().unwrap_or(false) || map.is_some_and(MapWatch::unmapped);
-        self.redraw |= self.minimised && !minimised;
+        self.window |= self.minimised && !minimised;
         self.minimised = minimised;
     }
 
@@ -134,7 +166,7 @@ impl Demand {
         if scripted {
             return NextFrame::Now;
         }
-        if self.redraw || moving {
+        if self.redraw || self.window || moving {
             return NextFrame::Now;
         }
         self.menu_at.map_or(NextFrame::OnEvent, due)
@@ -156,11 +188,13 @@ mod tests {
         let now = Instant::now();
         let mut d = Demand::first_frame();
         assert_eq!(d.next(false, false, now), NextFrame::Now);
-        d.drawing();
+        d.scene_drawn();
+        d.window_drawn();
         assert_eq!(d.next(false, false, now), NextFrame::OnEvent);
         d.changed();
         assert_eq!(d.next(false, false, now), NextFrame::Now);
-        d.drawing();
+        d.scene_drawn();
+        d.window_drawn();
         assert_eq!(d.next(false, false, now), NextFrame::OnEvent);
         // A moving scene, or a script, draws every turn.
         assert_eq!(d.next(false, true, now), NextFrame::Now);
@@ -175,7 +209,8 @@ mod tests {
         assert_eq!(d.next(false, true, now), NextFrame::OnEvent);
         d.occluded(false);
         assert_eq!(d.next(false, false, now), NextFrame::Now);
-        d.drawing();
+        d.scene_drawn();
+        d.window_drawn();
         d.minimised = true;
         d.asked_at = Some(now);
         assert_eq!(
@@ -213,7 +248,36 @@ mod tests {
         d.menu_repaint(None, now);
         d.skipped(now);
         assert_eq!(d.next(true, true, now), NextFrame::At(now + RETRY_SKIPPED));
-        d.drawing();
+        d.scene_drawn();
+        d.window_drawn();
         assert_eq!(d.next(false, false, now), NextFrame::OnEvent);
+    }
+
+    /// What changes only the window (a resize, a finished view, the menu's repaint) asks for
+    /// the window's half alone; a key's change asks for both, and each half's frame answers
+    /// only its own.
+    #[test]
+    fn the_window_alone_is_drawn_for_what_changes_only_the_window() {
+        let now = Instant::now();
+        let mut d = Demand::first_frame();
+        d.scene_drawn();
+        d.window_drawn();
+        d.show();
+        assert_eq!(d.next(false, false, now), NextFrame::Now);
+        assert!(d.wants_window(now));
+        assert!(!d.wants_scene(false, false));
+        d.window_drawn();
+        assert_eq!(d.next(false, false, now), NextFrame::OnEvent);
+        d.changed();
+        assert!(d.wants_scene(false, false) && d.wants_window(now));
+        // The window drawn while the scene's frame waits for its device: the scene is still
+        // wanted.
+        d.window_drawn();
+        assert!(d.wants_scene(false, false) && !d.wants_window(now));
+        assert_eq!(d.next(false, false, now), NextFrame::Now);
+        d.scene_drawn();
+        assert_eq!(d.next(false, false, now), NextFrame::OnEvent);
+        d.menu_repaint(Some(Duration::ZERO), now);
+        assert!(d.wants_window(now) && !d.wants_scene(false, false));
     }
 }

@@ -20,6 +20,7 @@ mod motion;
 mod overlay;
 mod present;
 mod present_thread;
+mod shown;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -115,8 +116,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     }
     check_display()?;
 
-    // 2. The window system, then a Vulkan instance with its surface extensions and a device
-    //    that can run every method and lookup the viewer may switch to.
+    // 2. The window system, then a Vulkan instance with its surface extensions, a device
+    //    that can run every method and lookup the viewer may switch to, and one on the same
+    //    GPU for the window (its own queue: a slow frame never holds the window's frames,
+    //    `shown.rs`).
     let event_loop = EventLoop::new().context(
         "cannot connect to the display; `specchio render` renders without one (headless)",
     )?;
@@ -133,9 +136,17 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         Instance::create_with_extensions(&InstanceDesc::from_env(args.validate), &extensions)?;
     let log = instance.validation_log();
     let device = open_device(args, &instance, &scene, on_x11)?;
+    let window_desc = DeviceDesc {
+        selector: args.device.clone(),
+        features: OptionalFeatures::default(),
+    };
+    let swapchain = [ash::khr::swapchain::NAME];
+    let window_device = Device::create_with_extensions(&instance, &window_desc, &swapchain)?;
 
     // 3. The event loop until the window closes (or --frames are done).
-    let outcome = app::run(event_loop, &instance, &device, scene, settings(args, keys));
+    let devices = (&device, &window_device);
+    let outcome = app::run(event_loop, &instance, devices, scene, settings(args, keys));
+    drop(window_device);
     drop(device);
     drop(instance);
     let outcome = specchio::process::validation::checked(&log, outcome)?;
@@ -154,9 +165,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The device the viewer draws with (`--device`, or the default): refused when it cannot
+/// The device the viewer renders with (`--device`, or the default): refused when it cannot
 /// run the method or the lookup asked for, or present to this window; created with every
-/// feature a method or lookup it may switch to needs, and the swapchain extension.
+/// feature a method or lookup it may switch to needs.
 fn open_device(
     args: &Args,
     instance: &Arc<Instance>,
@@ -189,11 +200,7 @@ fn open_device(
         selector: args.device.clone(),
         features: switchable_features(&chosen),
     };
-    Ok(Device::create_with_extensions(
-        instance,
-        &desc,
-        &[ash::khr::swapchain::NAME],
-    )?)
+    Ok(Device::create(instance, &desc)?)
 }
 
 /// What the event loop is told of the command line.

@@ -1,8 +1,9 @@
 //! Getting a drawn view onto the window: the swapchain, the frames in flight, and the blit.
 //!
 //! Each frame: wait for the frame slot's previous use (its fence), acquire a swapchain image,
-//! record a blit from the renderer's view image (linear HDR) into it (an sRGB image: the blit
-//! encodes), transition it for presentation, submit waiting on "image available" and
+//! record the upload of a view the renderer finished since the last frame (`shown.rs`) and
+//! a blit from the window's copy of the view (linear HDR) into the swapchain image (an sRGB
+//! image: the blit encodes), the menu over it, transition it for presentation, submit waiting on "image available" and
 //! signalling the image's "drawn" semaphore, present. Swapchain recreation (resize, out of
 //! date) waits for the idle queue before destroying the old swapchain: a present has no
 //! fence. A menu renderer replaced meanwhile goes through the ring's deletion queue.
@@ -11,7 +12,7 @@ use std::sync::Arc;
 
 use anyhow::{bail, Result};
 use ash::vk;
-use specchio::render::display::DisplayImage;
+use specchio::render::display::DisplayPixels;
 
 use specchio::vk::device::Device;
 use specchio::vk::frames::{FrameRing, FRAMES_IN_FLIGHT};
@@ -22,6 +23,7 @@ use specchio::vk::swapchain::{Acquired, PresentPreference, Swapchain, SwapchainD
 use super::blit::{record_blit, record_finish};
 use super::overlay::{Overlay, Paint, Textures};
 use super::present_thread::PresentThread;
+use super::shown::{ShownImage, ShownView};
 
 /// What became of one frame.
 pub enum Shown {
@@ -47,6 +49,8 @@ pub struct Presenter {
     overlay: Option<Overlay>,
     /// Every texture egui holds, for a menu renderer made later.
     textures: Textures,
+    /// The view shown: the renderer's last finished one, copied onto this device.
+    shown: ShownView,
     /// Shared with the present thread while a present of it runs.
     swapchain: Option<Arc<Swapchain>>,
     /// The presents, made on a thread of their own (`present_thread`).
@@ -72,6 +76,7 @@ impl Presenter {
             ring: FrameRing::create(device, FRAMES_IN_FLIGHT)?,
             overlay: None,
             textures: Textures::default(),
+            shown: ShownView::new(device),
             swapchain: None,
             presents: PresentThread::start(),
             stale: true,
@@ -98,18 +103,23 @@ impl Presenter {
         Ok(())
     }
 
+    /// A view the renderer finished: the window shows it from its next frame on.
+    pub fn set_view(&mut self, pixels: DisplayPixels) {
+        self.shown.set(pixels);
+    }
+
     /// The window changed size: the swapchain is recreated before the next frame.
     pub fn resized(&mut self) {
         self.stale = true;
     }
 
-    /// Shows `source` in the window (scaled to fit, aspect kept, centred on black when the
-    /// sizes differ; copied 1:1 when they match). With `screenshot`, the presented image is
-    /// also read back (the call then waits for the frame).
+    /// Shows the last view the renderer finished in the window (scaled to fit, aspect kept,
+    /// centred on black when the sizes differ; copied 1:1 when they match; black before the
+    /// first), the menu's `paint` over it. With `screenshot`, the presented image is also
+    /// read back (the call then waits for this device's frame, never the renderer's).
     pub fn show(
         &mut self,
         window_size: [u32; 2],
-        source: &DisplayImage,
         mut paint: Option<&mut Paint>,
         screenshot: bool,
     ) -> Result<(Shown, Option<Screenshot>)> {
@@ -154,12 +164,16 @@ impl Presenter {
             })
             .transpose()?;
         let cmd = self.ring.slot().cmd;
+        let source = self.shown.record(&mut self.ring, cmd)?;
+        let swapchain = self.swapchain.as_deref().expect("acquired from it above");
         self.record_image(cmd, swapchain, index, (source, paint), readback.as_ref())?;
         let drawn = swapchain.render_done[index as usize];
         // The blit (and the clear before it) write the image first: they wait for its
         // acquisition; the menu pass after them is ordered by barriers.
         let wait_stage = vk::PipelineStageFlags2::BLIT | vk::PipelineStageFlags2::CLEAR;
         self.ring.submit((slot_semaphore, wait_stage), drawn)?;
+        self.shown.submitted(&mut self.ring);
+        let swapchain = self.swapchain.as_ref().expect("acquired from it above");
         self.presents.present(swapchain, index)?;
         let shot = match readback {
             Some(buffer) => {
@@ -179,11 +193,11 @@ impl Presenter {
         cmd: vk::CommandBuffer,
         swapchain: &Swapchain,
         index: u32,
-        (source, paint): (&DisplayImage, Option<&mut Paint>),
+        (source, paint): (Option<ShownImage>, Option<&mut Paint>),
         readback: Option<&Buffer>,
     ) -> Result<()> {
         let (target, extent) = (swapchain.images[index as usize], swapchain.extent);
-        record_blit(&self.device, cmd, source, target, extent);
+        record_blit(&self.device, cmd, source.as_ref(), target, extent);
         let mut last = (
             vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             vk::PipelineStageFlags2::BLIT,

@@ -1,16 +1,16 @@
-//! Frames for a window (the live viewer): one view drawn, nothing read back.
+//! Frames for a window (the live viewer): one view drawn, and copied out for the host.
 //!
-//! The viewer does not read pixels back to the CPU. It asks for one of the renderer's own
-//! view targets (the 1200x450 pair, the observer or the sensor), drawn exactly as for
-//! `specchio render`, and copies that image into its swapchain image in its own submission
-//! (`viewer/src/`). The renderer does not wait for its frame (it keeps its frames in flight,
-//! `in_flight.rs`): the copy is submitted to the same queue after the frame and before the
-//! next one, whose first barrier on the target chains after the copy's closing barrier (see
-//! [`DisplayImage`]), so the target is never overwritten while the copy may read it.
+//! The viewer asks for one of the renderer's own view targets (the 1200x450 pair, the
+//! observer or the sensor), drawn exactly as for `specchio render`, and gets its texels back
+//! as they are ([`DisplayPixels`]), not decoded. The window is drawn by a device of its own
+//! (`viewer/src/shown.rs`): a slow frame here, however long it runs on this device's queue,
+//! never holds the window's frames (the menu, a resize) behind it. The renderer does not wait
+//! for its frame (it keeps its frames in flight, `in_flight.rs`); the copy out is the frame's
+//! last command, the same copy `specchio render` reads its views with (`readback.rs`).
 
 use ash::vk;
 
-use super::{lookups, FrameReport, Readback, Renderer};
+use super::{lookups, Readback, Renderer};
 use crate::scene::state::SceneState;
 use crate::vk::GpuError;
 
@@ -26,39 +26,33 @@ pub enum DisplayView {
     Sensor,
 }
 
-/// A drawn view image, ready to be copied by the caller.
-///
-/// State after [`Renderer::render_display_frame`] returned: layout `TRANSFER_SRC_OPTIMAL`,
-/// its colour writes available and visible to `COPY`-stage transfer reads. A caller that
-/// reads it at another stage (a blit: `BLIT`) first records a barrier from `COPY` to its
-/// stage, and after reading, a barrier from its stage to `COPY`: the renderer's next frame
-/// starts with a layout transition whose first scope is `COPY` (the readback copies'
-/// stage), so that chain orders the caller's read before the next overwrite.
-#[derive(Debug, Clone, Copy)]
-pub struct DisplayImage {
-    pub image: vk::Image,
-    pub range: vk::ImageSubresourceRange,
+/// A window's view as the renderer drew it: `width` x `height` texels of
+/// `targets::VIEW_FORMAT` (linear RGBA16F, 8 bytes each), rows top to bottom, exactly the
+/// target's contents (nothing converted: the window's own device uploads and blits them).
+#[derive(Debug, Clone, Default)]
+pub struct DisplayPixels {
     pub width: u32,
     pub height: u32,
-    /// Linear HDR (`targets::VIEW_FORMAT`): a blit into an sRGB image encodes it.
-    pub format: vk::Format,
+    pub rgba16f: Vec<u8>,
+}
+
+impl DisplayPixels {
+    /// The format of the texels, for the image they are uploaded into.
+    pub const FORMAT: vk::Format = super::targets::VIEW_FORMAT;
 }
 
 impl Renderer {
-    /// Submits frame `frame` at scene time `t_s` with only `view` drawn (no readback, no cube
-    /// or direction copies) and returns its image, which the caller copies in a submission
-    /// of its own after this one; and the reports of the frames finished by now, oldest first
-    /// (the frame just submitted is usually not among them: it is still running).
+    /// Submits frame `frame` at scene time `t_s` with only `view` drawn and copied out for
+    /// the host (no cube, direction or other view copies). It does not wait: the frame's
+    /// report and [`DisplayPixels`] (`FrameImages::display`) come from
+    /// [`Renderer::finished_frames`] once it has run.
     pub fn render_display_frame(
         &mut self,
         frame: u64,
         t_s: f64,
         view: DisplayView,
-    ) -> Result<(Vec<FrameReport>, DisplayImage), GpuError> {
-        self.submit_frame_views(frame, t_s, Readback::default(), Some(view))?;
-        let finished = self.finished_frames()?;
-        let reports = finished.into_iter().map(|(report, _)| report).collect();
-        Ok((reports, self.display_image(view)))
+    ) -> Result<(), GpuError> {
+        self.submit_frame_views(frame, t_s, Readback::default(), Some(view))
     }
 
     /// Whether the cube map, once the frames submitted so far have run, shows the scene as it
@@ -67,22 +61,5 @@ impl Renderer {
     pub fn cube_shows_scene_at(&self, t_s: f64) -> bool {
         !lookups::plugin(self.mirror.lookup()).uses_cube()
             || self.refresh.shows_state(&SceneState::at(&self.scene, t_s))
-    }
-
-    /// The image `view` is drawn into (valid as described at [`DisplayImage`] only after a
-    /// `render_display_frame` of that view).
-    pub fn display_image(&self, view: DisplayView) -> DisplayImage {
-        let target = match view {
-            DisplayView::Pair => &self.views.targets.pair,
-            DisplayView::Observer => &self.views.targets.observer,
-            DisplayView::Sensor => &self.views.targets.sensor,
-        };
-        DisplayImage {
-            image: target.color.raw,
-            range: target.color.full_range(),
-            width: target.width,
-            height: target.height,
-            format: super::targets::VIEW_FORMAT,
-        }
     }
 }

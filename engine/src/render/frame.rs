@@ -69,6 +69,8 @@ pub struct FrameImages {
     /// The sensor's ray map: hit and range, direction and wall (`sensor_rays.rs`).
     pub sensor_ray_origin: Option<RgbaImage>,
     pub sensor_ray_direction: Option<RgbaImage>,
+    /// A window's view as drawn, texel for texel (a display frame's, `display.rs`).
+    pub display: Option<super::display::DisplayPixels>,
 }
 
 /// Timings (milliseconds) and counters of one frame.

@@ -240,7 +240,7 @@ impl Renderer {
         };
         let plan = self.frame_parts().plan_cube(&views, dirty);
         self.prepare_fill(&plan)?;
-        let copies = self.plan_copies(readback);
+        let copies = self.plan_copies(readback, display);
         self.grow_readback(&copies)?;
         let mut report = FrameReport {
             frame,

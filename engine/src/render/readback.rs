@@ -4,6 +4,7 @@
 
 use ash::vk;
 
+use super::display::{DisplayPixels, DisplayView};
 use super::draw::{barrier, COPY_READ, SAMPLED};
 use super::passes::{copy_offset, texel_bytes, Slot};
 use super::targets::{CubeTarget, ViewTarget};
@@ -19,6 +20,8 @@ pub(super) struct Copies {
     cube: Option<CubeCopy>,
     views: Vec<ViewCopy>,
     bytes: u64,
+    /// The one view is a window's: handed over as it is, not decoded.
+    display: bool,
 }
 
 /// Mip 0 of the cube's six faces.
@@ -74,6 +77,25 @@ impl Copies {
         copies
     }
 
+    /// The copy of a window's view (a display frame's only readback): its texels as the
+    /// target holds them (`targets::VIEW_FORMAT`), for a window on another device.
+    pub fn display((slot, target): (Slot, &ViewTarget)) -> Self {
+        let (width, height) = (target.width, target.height);
+        let view = ViewCopy {
+            slot,
+            image: target.color.raw,
+            width,
+            height,
+            offset: 0,
+        };
+        Self {
+            cube: None,
+            views: vec![view],
+            bytes: u64::from(width) * u64::from(height) * texel_bytes(slot),
+            display: true,
+        }
+    }
+
     /// The readback buffer's size for them (0: nothing is read back).
     pub fn bytes(&self) -> u64 {
         self.bytes
@@ -117,6 +139,14 @@ impl Copies {
             return Ok(images);
         };
         let bytes = buffer.mapped()?;
+        if let (true, [v]) = (self.display, &self.views[..]) {
+            images.display = Some(DisplayPixels {
+                width: v.width,
+                height: v.height,
+                rgba16f: bytes[..self.bytes as usize].to_vec(),
+            });
+            return Ok(images);
+        }
         if let Some(cube) = &self.cube {
             let s = cube.size;
             let face_bytes = (s * s) as usize * if cube.unorm { 4 } else { 8 };
@@ -184,8 +214,11 @@ fn copy_to_buffer(
 
 impl Renderer {
     /// Where this frame's images will sit in its readback buffer.
-    pub(super) fn plan_copies(&self, readback: Readback) -> Copies {
-        Copies::plan(readback, &self.cube, self.views.slots(readback))
+    pub(super) fn plan_copies(&self, readback: Readback, display: Option<DisplayView>) -> Copies {
+        match display {
+            Some(view) => Copies::display(self.views.display_slot(view)),
+            None => Copies::plan(readback, &self.cube, self.views.slots(readback)),
+        }
     }
 
     /// Makes the current slot's readback buffer large enough for `copies` (replacing it is

@@ -141,7 +141,8 @@ impl App<'_> {
                 Ok(())
             }
             Action::Screenshot => {
-                self.shot_asked = true;
+                // Saved from the first view rendered from now on (this key asks for one).
+                self.shot_asked = Some(self.clock.frame);
                 Ok(())
             }
             _ => {
@@ -163,7 +164,8 @@ impl App<'_> {
             action,
             Action::NextMethod | Action::SetMethod(_) | Action::Reload
         );
-        let busy = makes_renderer && !self.viewer.as_mut().is_none_or(super::gpu_free);
+        let busy = makes_renderer
+            && !(self.viewer.as_ref()).is_none_or(|v| super::renderer_ready(v, false));
         let wait = action != Action::Quit && (busy || !self.deferred.is_empty());
         if wait {
             self.deferred.push(action);
@@ -292,20 +294,13 @@ impl App<'_> {
         Ok(true)
     }
 
-    /// A new renderer for `scene`; the old one stays when the new one cannot be made. The old
-    /// one is retired through the deletion queue when a frame in flight may still copy from
-    /// its view image, and freed at once when no frame has shown it (a script of many switches
-    /// before a frame, `--keys m,m,m,...`, so holds at most three renderers, not one per
-    /// switch).
+    /// A new renderer for `scene`; the old one stays when the new one cannot be made.
     fn replace_renderer(&mut self, scene: Scene, method: Method) -> Result<()> {
         let renderer = self.new_renderer(scene, method)?;
         let viewer = self.viewer.as_mut().expect("keys act on a viewer");
-        let old = std::mem::replace(&mut viewer.renderer, renderer);
-        if std::mem::take(&mut viewer.renderer_shown) {
-            viewer.presenter.ring.defer(old);
-        } else {
-            drop(old);
-        }
+        // Nothing of the window's reads the old renderer's images (the window shows its own
+        // copy of the view); it waits for its own frames in flight as it goes.
+        drop(std::mem::replace(&mut viewer.renderer, renderer));
         Ok(())
     }
 

@@ -1,5 +1,8 @@
-//! One turn of the loop that draws: the switches put off, the view rendered, the menu laid
-//! out, both handed to the presenter, the frame counted.
+//! One turn of the loop that draws. Its two halves run on two devices and never wait for
+//! each other: the scene's frame (the renderer's, submitted when its slot is free: the
+//! switches put off, held keys moved, the view rendered and copied out) and the window's
+//! frame (the last finished view uploaded, the menu laid out over it, presented), drawn
+//! whenever the window needs one, however long the renderer's frame runs.
 
 use std::time::Instant;
 
@@ -11,9 +14,30 @@ use crate::input::Action;
 use crate::menu::Status;
 use crate::present::{Screenshot, Shown};
 
+/// Which halves a turn of the loop runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Turn {
+    pub scene: bool,
+    pub window: bool,
+}
+
 impl App<'_> {
-    /// One frame: advance the clock, draw the view, show it; quit after `--frames`.
-    pub(super) fn frame(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+    /// One turn: the scene's frame and the window's, as `turn` says (`next_frame` decided
+    /// which are due and can start without waiting).
+    pub(super) fn frame(&mut self, event_loop: &ActiveEventLoop, turn: Turn) -> Result<()> {
+        if turn.scene {
+            self.scene_frame(event_loop)?;
+        }
+        if turn.window || self.closing {
+            self.window_frame(event_loop)?;
+        }
+        Ok(())
+    }
+
+    /// The renderer's frame: submitted, not waited for (its view comes back through
+    /// [`Self::collect_views`]); a script's last one is waited for, and the window's frame
+    /// that shows it ends the script.
+    fn scene_frame(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         let frames = self.settings.frames;
         let last = frames.is_some_and(|n| self.clock.frame + 1 >= u64::from(n));
         if last && self.waiting_for_size() {
@@ -24,32 +48,48 @@ impl App<'_> {
         for action in std::mem::take(&mut self.deferred) {
             self.act(event_loop, action);
         }
-        if self.viewer.is_none() {
+        let Some(viewer) = self.viewer.as_mut() else {
             return Ok(());
+        };
+        // What asked for this frame is answered by it; what comes during it asks for the next.
+        self.demand.scene_drawn();
+        for why in (self.motion).advance(Instant::now(), &mut viewer.renderer.scene) {
+            specchio::say!("mirror not moved: {why}");
         }
-        // What asked for this frame is answered by it; what comes during it (an action the
-        // menu takes below) asks for the next.
-        self.demand.drawing();
-        let start = Instant::now();
-        let (shown, screenshot, actions) = self.draw(last, start)?;
-        // The menu's choices act from the next frame on, as a key pressed now would.
-        for action in actions {
-            self.act(event_loop, action);
-        }
-        let due = self.due.take().unwrap_or(start);
-        if let Shown::Skipped = shown {
-            // Minimised or out of date: no frame counted; wait for a resize instead of
-            // spinning when there is nothing to present to.
-            self.demand.skipped(Instant::now());
-            return Ok(());
-        }
-        self.shown(due, screenshot.as_ref());
+        let t_s = self.clock.tick();
+        (viewer.renderer).render_display_frame(self.clock.frame, t_s, viewer.view)?;
+        self.clock.frame += 1;
+        let due = self.due.take().unwrap_or_else(Instant::now);
+        self.figures.add(due.elapsed().as_secs_f64() * 1e3);
         if last {
-            if self.settings.screenshot && screenshot.is_none() {
-                anyhow::bail!("--screenshot: this window's swapchain images cannot be read back");
+            // The script's final image is this frame's: waited for, then shown.
+            self.closing = true;
+            self.collect_views(true)?;
+        }
+        Ok(())
+    }
+
+    /// The views the renderer finished (all of them, waiting, with `wait`): their figures
+    /// counted, the newest handed to the window, which is then drawn again.
+    pub(super) fn collect_views(&mut self, wait: bool) -> Result<()> {
+        let Some(viewer) = self.viewer.as_mut() else {
+            return Ok(());
+        };
+        let mut finished = viewer.renderer.finished_frames()?;
+        if wait {
+            while let Some(frame) = viewer.renderer.finish_frame()? {
+                finished.push(frame);
             }
-            self.outcome.screenshot = screenshot.filter(|_| self.settings.screenshot);
-            event_loop.exit();
+        }
+        let mut newest = None;
+        for (report, images) in finished {
+            self.figures.finished(&report);
+            newest = images.display.map(|p| (report.frame, p)).or(newest);
+        }
+        if let Some((frame, pixels)) = newest {
+            viewer.presenter.set_view(pixels);
+            self.view_frame = Some(frame);
+            self.demand.show();
         }
         Ok(())
     }
@@ -69,25 +109,47 @@ impl App<'_> {
         }
     }
 
-    /// Moves what held keys move, renders the view, lays out the menu and hands both to the
-    /// presenter: what became of the frame, its screenshot, and the menu's actions.
+    /// The window's frame: the last view with the menu over it; the menu's actions taken;
+    /// a script ended once its last view is shown.
+    fn window_frame(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        if self.viewer.is_none() {
+            return Ok(());
+        }
+        self.demand.window_drawn();
+        let start = Instant::now();
+        let closing = self.closing;
+        let (shown, screenshot, actions) = self.draw(closing, start)?;
+        // The menu's choices act from the next frame on, as a key pressed now would.
+        for action in actions {
+            self.act(event_loop, action);
+        }
+        if let Shown::Skipped = shown {
+            // Minimised or out of date: wait for a resize instead of spinning when there is
+            // nothing to present to.
+            self.demand.skipped(Instant::now());
+            return Ok(());
+        }
+        self.shown(screenshot.as_ref());
+        if closing {
+            if self.settings.screenshot && screenshot.is_none() {
+                anyhow::bail!("--screenshot: this window's swapchain images cannot be read back");
+            }
+            self.outcome.screenshot = screenshot.filter(|_| self.settings.screenshot);
+            event_loop.exit();
+        }
+        Ok(())
+    }
+
+    /// Lays out the menu and hands it to the presenter with the last view: what became of the
+    /// frame, its screenshot, and the menu's actions.
     fn draw(
         &mut self,
         last: bool,
         start: Instant,
     ) -> Result<(Shown, Option<Screenshot>, Vec<Action>)> {
+        let shot = (last && self.settings.screenshot) || self.shot_due();
         let viewer = self.viewer.as_mut().expect("draw() runs with a viewer");
-        for why in (self.motion).advance(Instant::now(), &mut viewer.renderer.scene) {
-            specchio::say!("mirror not moved: {why}");
-        }
-        let t_s = self.clock.tick();
-        let (reports, image) =
-            (viewer.renderer).render_display_frame(self.clock.frame, t_s, viewer.view)?;
-        for report in &reports {
-            self.figures.finished(report);
-        }
         let size = [viewer.size.width, viewer.size.height];
-        let shot = (last && self.settings.screenshot) || self.shot_asked;
         let status = Status {
             view: viewer.view,
             method: viewer.renderer.method(),
@@ -103,9 +165,7 @@ impl App<'_> {
             driver: &self.device.info.name,
         };
         let mut menu = viewer.menu.frame(&viewer.window, size, &status);
-        let (shown, screenshot) =
-            (viewer.presenter).show(size, &image, Some(&mut menu.paint), shot)?;
-        viewer.renderer_shown = true;
+        let (shown, screenshot) = (viewer.presenter).show(size, Some(&mut menu.paint), shot)?;
         viewer.menu.unapplied(&mut menu.paint);
         // egui's own repaints (its first frames' layout passes, its animations) matter only
         // while it shows something.
@@ -114,18 +174,23 @@ impl App<'_> {
         Ok((shown, screenshot, menu.actions))
     }
 
-    /// A frame was shown: counted (its time from `due`), the title's figures, the screenshot
-    /// the key asked for.
-    fn shown(&mut self, due: Instant, screenshot: Option<&Screenshot>) {
-        self.clock.frame += 1;
-        self.figures.add(due.elapsed().as_secs_f64() * 1e3);
+    /// Whether the screenshot key's image is this window frame's: the first to show a view
+    /// rendered after the key (what the keys before it did is then in it).
+    fn shot_due(&self) -> bool {
+        self.shot_asked
+            .is_some_and(|asked| self.view_frame.is_some_and(|shown| shown >= asked))
+    }
+
+    /// A window frame was shown: the title's figures, the screenshot the key asked for.
+    fn shown(&mut self, screenshot: Option<&Screenshot>) {
         let Some(viewer) = self.viewer.as_mut() else {
             return;
         };
         if let Some(title) = (self.figures).title(&viewer.renderer, &self.settings.scene_name) {
             viewer.window.set_title(&title);
         }
-        if std::mem::take(&mut self.shot_asked) {
+        if self.shot_due() {
+            self.shot_asked = None;
             match screenshot {
                 Some(shot) => actions::save_screenshot(shot),
                 None => specchio::say!("screenshot: this window's images cannot be read back"),

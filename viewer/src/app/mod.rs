@@ -25,6 +25,8 @@ use winit::window::{Window, WindowId};
 mod actions;
 mod frame;
 
+use frame::Turn;
+
 use super::clock::{Clock, Figures};
 use super::demand::{Demand, NextFrame};
 use super::failures::{device_lost, run_catching_window_panics, surface_lost};
@@ -73,9 +75,6 @@ pub const SINGLE_VIEW_SIZE: [u32; 2] = [800, 600];
 struct Viewer {
     presenter: Presenter,
     renderer: Renderer,
-    /// Whether a submitted frame has read `renderer`'s view image (then it is retired through
-    /// the deletion queue, else freed at once).
-    renderer_shown: bool,
     window: Arc<Window>,
     /// The window's map state on X11 (an unmapped window is not drawn); `None` elsewhere.
     map: Option<MapWatch>,
@@ -96,7 +95,10 @@ struct Viewer {
 struct App<'a> {
     settings: Settings,
     instance: &'a Arc<Instance>,
+    /// The renderer's device.
     device: &'a Arc<Device>,
+    /// The window's device: the same GPU, a queue of its own (`shown.rs` says why).
+    window_device: &'a Arc<Device>,
     /// The scene as loaded (with the command line's overrides): what `0` resets to.
     initial: Scene,
     viewer: Option<Viewer>,
@@ -110,8 +112,13 @@ struct App<'a> {
     demand: Demand,
     /// Keys held and the mouse's drag.
     motion: Motion,
-    /// The screenshot key was pressed: the next frame shown is saved.
-    shot_asked: bool,
+    /// The screenshot key was pressed when the renderer's next frame was this one: the first
+    /// window frame that shows it (or a later one) is saved.
+    shot_asked: Option<u64>,
+    /// The renderer's frame whose view the window shows (`collect_views`).
+    view_frame: Option<u64>,
+    /// A script's last frame was rendered: the window's next frame shows it and ends the loop.
+    closing: bool,
     /// When the frame being waited for became due (the frame time counts from there: the
     /// loop's own work plus its wait for the GPU, never the idle time before it was asked).
     due: Option<Instant>,
@@ -123,7 +130,7 @@ struct App<'a> {
 pub fn run(
     event_loop: EventLoop<()>,
     instance: &Arc<Instance>,
-    device: &Arc<Device>,
+    (device, window_device): (&Arc<Device>, &Arc<Device>),
     mut scene: Scene,
     settings: Settings,
 ) -> Result<Outcome> {
@@ -133,6 +140,7 @@ pub fn run(
         settings,
         instance,
         device,
+        window_device,
         initial: scene,
         viewer: None,
         clock: Clock {
@@ -148,7 +156,9 @@ pub fn run(
         window_gone: false,
         demand: Demand::default(),
         motion: Motion::default(),
-        shot_asked: false,
+        shot_asked: None,
+        view_frame: None,
+        closing: false,
         due: None,
         deferred: Vec::new(),
     };
@@ -206,7 +216,7 @@ impl ApplicationHandler for App<'_> {
         if let Some(v) = &mut self.viewer {
             let response = v.menu.on_event(&v.window, &event);
             if response.repaint {
-                self.demand.changed();
+                self.demand.show();
             }
             if response.consumed {
                 return;
@@ -224,10 +234,10 @@ impl ApplicationHandler for App<'_> {
                 event_loop.exit();
             }
             // The window shows again what it showed (exposed, uncovered): draw it.
-            WindowEvent::RedrawRequested => self.demand.changed(),
+            WindowEvent::RedrawRequested => self.demand.show(),
             WindowEvent::Occluded(hidden) => self.demand.occluded(hidden),
             WindowEvent::Resized(size) => {
-                self.demand.changed();
+                self.demand.show();
                 if let Some(v) = &mut self.viewer {
                     v.size = size;
                     v.presenter.resized();
@@ -257,15 +267,11 @@ impl ApplicationHandler for App<'_> {
         {
             return;
         }
-        let presented = match &mut self.viewer {
-            Some(viewer) => viewer.presenter.poll_present(),
-            None => Ok(()),
-        };
-        let drawn = presented.and_then(|()| match self.next_frame() {
-            NextFrame::Now => self.frame(event_loop),
-            NextFrame::At(_) | NextFrame::OnEvent => Ok(()),
+        let drawn = self.poll_gpu().and_then(|()| match self.next_frame() {
+            (NextFrame::Now, Some(turn)) => self.frame(event_loop, turn),
+            _ => Ok(()),
         });
-        event_loop.set_control_flow(match self.next_frame() {
+        event_loop.set_control_flow(match self.next_frame().0 {
             NextFrame::Now => ControlFlow::Poll,
             NextFrame::At(t) => ControlFlow::WaitUntil(t),
             NextFrame::OnEvent => ControlFlow::Wait,
@@ -301,7 +307,8 @@ impl App<'_> {
             window.display_handle()?.as_raw(),
             window.window_handle()?.as_raw(),
         )?;
-        let mut presenter = Presenter::create(self.device, surface, self.settings.present)?;
+        let present = self.settings.present;
+        let mut presenter = Presenter::create(self.window_device, surface, present)?;
         presenter.renew_overlay = self.settings.renew_menu_renderer;
         let renderer = self.new_renderer(self.initial.clone(), self.settings.method)?;
         event_loop.set_control_flow(ControlFlow::Poll);
@@ -321,7 +328,6 @@ impl App<'_> {
             menu,
             presenter,
             renderer,
-            renderer_shown: false,
             map: MapWatch::of(&window),
             window,
             view,
@@ -341,13 +347,23 @@ impl App<'_> {
         Ok(Renderer::new(self.device, scene, &options)?)
     }
 
-    /// When the next frame is due ([`Demand::next`]), the window asked whether it is
-    /// minimised first where that matters.
-    fn next_frame(&mut self) -> NextFrame {
+    /// What the GPU finished since the last turn, without waiting: the last present's
+    /// outcome, the views the renderer finished (handed to the window).
+    fn poll_gpu(&mut self) -> Result<()> {
+        if let Some(viewer) = &mut self.viewer {
+            viewer.presenter.poll_present()?;
+        }
+        self.collect_views(false)
+    }
+
+    /// When the next turn is due ([`Demand::next`]; the window asked whether it is minimised
+    /// first where that matters) and, when it is due now, which of its halves run: those
+    /// wanted that can start without waiting for their device.
+    fn next_frame(&mut self) -> (NextFrame, Option<Turn>) {
         let now = Instant::now();
         let scripted = self.clock.scripted;
         let Some(viewer) = &mut self.viewer else {
-            return NextFrame::OnEvent;
+            return (NextFrame::OnEvent, None);
         };
         // Moving: the scene's own motion, a held key, or a cube map that does not show the
         // scene yet (an `every-n` policy updates it only every n frames).
@@ -364,33 +380,39 @@ impl App<'_> {
             None => {}
         }
         let next = self.demand.next(scripted, moving, now);
-        // A frame due now (perhaps waiting for the GPU below) counts its time from now; one
-        // no longer due (the window was hidden meanwhile) counts nothing.
+        let scene = !self.closing && self.demand.wants_scene(scripted, moving);
+        // A scene frame due now (perhaps waiting for the GPU below) counts its time from
+        // now; one no longer due (the window was hidden meanwhile) counts nothing.
         match next {
-            NextFrame::Now => _ = self.due.get_or_insert(now),
+            NextFrame::Now if scene => _ = self.due.get_or_insert(now),
+            NextFrame::Now => {}
             NextFrame::At(_) | NextFrame::OnEvent => self.due = None,
         }
-        // The loop never waits for the GPU: while the frame slots the next frame would use
-        // still run, or the last present has not returned, it looks again shortly and
-        // handles events meanwhile. A renderer switch put off (`deferred`) waits for every
-        // frame to finish, so no new frame starts before it.
-        let free = |viewer: &mut Viewer| match self.deferred.is_empty() {
-            true => gpu_ready(viewer),
-            false => gpu_free(viewer),
+        // The loop never waits for the GPU: a half whose device is busy waits for the next
+        // turn, looked at shortly, with events handled meanwhile. A renderer switch put off
+        // (`deferred`) waits for every frame to finish, so no new frame starts before it. A
+        // script's last window frame may wait (`closing`).
+        let turn = Turn {
+            scene: scene && renderer_ready(viewer, self.deferred.is_empty()),
+            window: self.closing || (self.demand.wants_window(now) && window_ready(viewer)),
         };
-        if next == NextFrame::Now && !free(viewer) {
-            return NextFrame::At(now + GPU_POLL);
-        }
-        // A present on its way is looked at shortly even by an idle loop, so that its
-        // outcome (a lost surface, say) is heard at once (`Presenter::poll_present`).
-        if !viewer.presenter.present_returned() {
-            let soon = now + GPU_POLL;
-            return match next {
-                NextFrame::At(t) => NextFrame::At(t.min(soon)),
-                NextFrame::Now | NextFrame::OnEvent => NextFrame::At(soon),
+        let soon = now + GPU_POLL;
+        if next == NextFrame::Now {
+            return match turn.scene || turn.window {
+                true => (NextFrame::Now, Some(turn)),
+                false => (NextFrame::At(soon), None),
             };
         }
-        next
+        // A frame or a present on its way is looked at shortly even by an idle loop, so that
+        // its view is shown and its outcome (a lost surface, say) heard at once.
+        let busy = !viewer.presenter.present_returned()
+            || !viewer.renderer.frames_finished().unwrap_or(true);
+        let next = match (busy, next) {
+            (false, next) => next,
+            (true, NextFrame::At(t)) => NextFrame::At(t.min(soon)),
+            (true, _) => NextFrame::At(soon),
+        };
+        (next, None)
     }
 
     /// Quits: the window goes at once (the GPU may still be finishing a slow frame, which the
@@ -408,24 +430,24 @@ impl App<'_> {
     }
 }
 
-/// Whether the GPU has nothing of the viewer's left to run: every frame finished, the last
-/// present returned. What makes a new renderer waits for this (its uploads would otherwise
-/// queue behind a slow frame).
-fn gpu_free(viewer: &mut Viewer) -> bool {
-    viewer.presenter.present_returned()
-        && viewer.renderer.frames_finished().unwrap_or(true)
-        && viewer.presenter.ring.all_finished().unwrap_or(true)
-}
-
-/// How often a loop that waits for a frame slot looks again.
+/// How often a loop that waits for a device looks again.
 const GPU_POLL: Duration = Duration::from_millis(2);
 
-/// Whether the renderer and the presenter can each start a frame without waiting for the GPU
-/// or for the present thread (an error here is reported by the frame itself).
-fn gpu_ready(viewer: &mut Viewer) -> bool {
-    viewer.presenter.present_returned()
-        && viewer.renderer.ready_for_frame().unwrap_or(true)
-        && viewer.presenter.ring.ready().unwrap_or(true)
+/// Whether the renderer can start a frame without waiting for its device: its next slot is
+/// free, or, for a switch put off (not `nothing_put_off`), every frame has finished (a new
+/// renderer's uploads would otherwise queue behind a slow frame). An error here is reported
+/// by the frame itself.
+fn renderer_ready(viewer: &Viewer, nothing_put_off: bool) -> bool {
+    match nothing_put_off {
+        true => viewer.renderer.ready_for_frame().unwrap_or(true),
+        false => viewer.renderer.frames_finished().unwrap_or(true),
+    }
+}
+
+/// Whether the window can draw a frame without waiting: the last present has returned (the
+/// present thread uses the window's queue and the swapchain) and the frame slot is free.
+fn window_ready(viewer: &mut Viewer) -> bool {
+    viewer.presenter.present_returned() && viewer.presenter.ring.ready().unwrap_or(true)
 }
 
 /// What the viewer changes in a scene it loads: the thesis's single viewport for either camera
