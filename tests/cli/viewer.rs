@@ -403,13 +403,7 @@ fn the_window_is_drawn_while_a_frame_is_held_on_the_gpu() {
     let id = viewer_window(&x);
     xdotool(&x, &["windowfocus", "--sync", &id]);
     // The views of the frames before the held one reach the window, and then no other.
-    let shown = eventually("the view in the window", || {
-        let before = window_pixels(&x, &id);
-        std::thread::sleep(std::time::Duration::from_millis(500));
-        let pixels = window_pixels(&x, &id);
-        let settled = changed(&before.2, &pixels.2) == 0;
-        (settled && lit(&pixels.2) > pixels.2.len() / 6).then_some(pixels)
-    });
+    let shown = settled_view(&x, &id);
     xdotool(&x, &["key", "F1"]);
     eventually("the menu in the window", || {
         let pixels = window_pixels(&x, &id);
@@ -435,34 +429,6 @@ fn the_window_is_drawn_while_a_frame_is_held_on_the_gpu() {
         "the resize waited for the held frame:\n{stdout}"
     );
     assert!(!stdout.contains("by its time limit"), "{stdout}");
-}
-
-/// Asks `found` every 50 ms until it finds something, for at most 30 s (the held frame
-/// lasts 60 s): what it found, or a failure naming `what`.
-fn eventually<T>(what: &str, mut found: impl FnMut() -> Option<T>) -> T {
-    let start = std::time::Instant::now();
-    while start.elapsed() < std::time::Duration::from_secs(30) {
-        if let Some(t) = found() {
-            return t;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    panic!("never saw {what} while the frame was held");
-}
-
-/// Channels (of RGB pixels) above 16 of 255: the window is not black.
-fn lit(rgb: &[u8]) -> usize {
-    rgb.iter().filter(|&&c| c > 16).count()
-}
-
-/// Pixels that differ by more than 8 in some channel between two images of one size.
-fn changed(a: &[u8], b: &[u8]) -> usize {
-    if a.len() != b.len() {
-        return a.len().max(b.len()) / 3;
-    }
-    (a.chunks_exact(3).zip(b.chunks_exact(3)))
-        .filter(|(p, q)| p.iter().zip(q.iter()).any(|(x, y)| x.abs_diff(*y) > 8))
-        .count()
 }
 
 /// The device lost mid-run (provoked: `SPECCHIO_FAULT_DEVICE_LOST`, engine/src/vk/fault.rs,

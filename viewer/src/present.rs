@@ -172,7 +172,6 @@ impl Presenter {
         // acquisition; the menu pass after them is ordered by barriers.
         let wait_stage = vk::PipelineStageFlags2::BLIT | vk::PipelineStageFlags2::CLEAR;
         self.ring.submit((slot_semaphore, wait_stage), drawn)?;
-        self.shown.submitted(&mut self.ring);
         let swapchain = self.swapchain.as_ref().expect("acquired from it above");
         self.presents.present(swapchain, index)?;
         let shot = match readback {

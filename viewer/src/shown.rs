@@ -14,8 +14,9 @@
 //! Synchronisation of the image, all on the window's queue: between frames it is in
 //! `TRANSFER_SRC_OPTIMAL`, last read by a blit (`BLIT`) or written by an upload made visible
 //! to the blit. An upload waits for every earlier blit (its barrier's first scope is `BLIT`;
-//! read-after-read between blits needs none). The staging buffer of an upload and an image
-//! replaced by one of another size are retired through the frame ring's deletion queue.
+//! read-after-read between blits needs none). Each frame slot has its staging buffer, reused
+//! once the slot's frame before has finished; an image replaced by one of another size is
+//! retired through the frame ring's deletion queue.
 
 use std::sync::Arc;
 
@@ -24,7 +25,7 @@ use ash::vk;
 use specchio::render::display::DisplayPixels;
 use specchio::vk::commands::{image_barriers, ImageBarrier};
 use specchio::vk::device::Device;
-use specchio::vk::frames::FrameRing;
+use specchio::vk::frames::{FrameRing, FRAMES_IN_FLIGHT};
 use specchio::vk::image::{Image, ImageDesc};
 use specchio::vk::memory::{Buffer, BufferDesc};
 use vk::AccessFlags2 as A;
@@ -44,8 +45,10 @@ pub struct ShownImage {
 pub struct ShownView {
     pending: Option<DisplayPixels>,
     image: Option<Image>,
-    /// The staging buffer of the upload recorded into the frame not yet submitted.
-    staging: Option<Buffer>,
+    /// One staging buffer per frame slot of the window's ring, reused: the slot's frame
+    /// before has finished once `FrameRing::begin` returned (a new 4.3 MB buffer a frame
+    /// cost its page faults every frame).
+    staging: Vec<Option<Buffer>>,
     device: Arc<Device>,
 }
 
@@ -62,7 +65,7 @@ impl ShownView {
         Self {
             pending: None,
             image: None,
-            staging: None,
+            staging: (0..FRAMES_IN_FLIGHT).map(|_| None).collect(),
             device: Arc::clone(device),
         }
     }
@@ -88,15 +91,6 @@ impl ShownView {
             width: image.desc.width,
             height: image.desc.height,
         }))
-    }
-
-    /// The frame [`Self::record`] recorded into was submitted: its staging buffer is kept
-    /// until that frame has run (a deferral made before the submission would not wait for
-    /// it).
-    pub fn submitted(&mut self, ring: &mut FrameRing) {
-        if let Some(staging) = self.staging.take() {
-            ring.defer(staging);
-        }
     }
 
     fn upload(
@@ -125,13 +119,9 @@ impl ShownView {
             }
             before = L::UNDEFINED;
         }
-        let usage = vk::BufferUsageFlags::TRANSFER_SRC;
-        let mut staging = Buffer::create(
-            &self.device,
-            &BufferDesc::new_cpu_to_gpu(bytes, usage),
-            "the window's view upload",
-        )?;
+        let staging = self.staging_for(ring.current_index(), bytes)?;
         staging.write(&pixels.rgba16f)?;
+        let staging = staging.raw;
         let image = self.image.as_ref().expect("made above").raw;
         let barrier = |from, to| ImageBarrier {
             image,
@@ -143,13 +133,25 @@ impl ShownView {
         // After every earlier blit from it (write-after-read: an execution dependency).
         let after_blits = barrier((before, S::BLIT, A::NONE), write);
         image_barriers(&self.device, cmd, &[after_blits]);
-        copy(&self.device, cmd, &staging, image, [w, h]);
+        copy(&self.device, cmd, staging, image, [w, h]);
         let for_blits = (L::TRANSFER_SRC_OPTIMAL, S::BLIT, A::TRANSFER_READ);
         image_barriers(&self.device, cmd, &[barrier(write, for_blits)]);
-        // A frame abandoned after recording (never submitted) leaves one here: its buffer
-        // was used by no submission, so it is dropped at once.
-        self.staging = Some(staging);
         Ok(())
+    }
+
+    /// Slot `slot`'s staging buffer, at least `bytes` large (one too small is replaced: the
+    /// slot's last frame, the only one that used it, has finished).
+    fn staging_for(&mut self, slot: usize, bytes: u64) -> Result<&mut Buffer> {
+        let kept = &mut self.staging[slot];
+        if kept.as_ref().is_none_or(|b| b.size < bytes) {
+            let desc = BufferDesc::new_cpu_to_gpu(bytes, vk::BufferUsageFlags::TRANSFER_SRC);
+            *kept = Some(Buffer::create(
+                &self.device,
+                &desc,
+                "the window's view upload",
+            )?);
+        }
+        Ok(kept.as_mut().expect("made above"))
     }
 }
 
@@ -157,7 +159,7 @@ impl ShownView {
 fn copy(
     device: &Device,
     cmd: vk::CommandBuffer,
-    staging: &Buffer,
+    staging: vk::Buffer,
     image: vk::Image,
     [width, height]: [u32; 2],
 ) {
@@ -176,12 +178,8 @@ fn copy(
     // SAFETY: the image is in TRANSFER_DST layout and as large as the region; the buffer
     // holds width x height texels (checked by `upload`).
     unsafe {
-        device.raw.cmd_copy_buffer_to_image(
-            cmd,
-            staging.raw,
-            image,
-            L::TRANSFER_DST_OPTIMAL,
-            &[region],
-        )
+        device
+            .raw
+            .cmd_copy_buffer_to_image(cmd, staging, image, L::TRANSFER_DST_OPTIMAL, &[region])
     };
 }

@@ -155,8 +155,14 @@ impl Renderer {
     }
 
     /// Whether a frame can be submitted now without waiting: the slot it would use has no
-    /// frame still running (a loop that must not wait for the GPU asks this first).
+    /// frame still running (a loop that must not wait for the GPU asks this first), and,
+    /// when the scene's lookup was switched since the last frame, no frame at all: the next
+    /// frame replaces the lookup's resources in place once every frame has finished
+    /// (`follow_lookup`).
     pub fn ready_for_frame(&self) -> Result<bool, GpuError> {
+        if self.mirror.lookup() != self.scene.mirror.lookup {
+            return self.frames_finished();
+        }
         let slot = &self.frames.slots[self.frames.current];
         Ok(slot.pending.is_none() || slot.submitter.is_finished()?)
     }

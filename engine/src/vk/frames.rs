@@ -110,6 +110,12 @@ impl FrameRing {
         Ok(true)
     }
 
+    /// The index of the slot [`Self::begin`] started (for state kept per slot elsewhere: it
+    /// is free to reuse once `begin` returned).
+    pub fn current_index(&self) -> usize {
+        self.current
+    }
+
     /// The slot [`Self::begin`] started.
     pub fn slot(&self) -> &FrameSlot {
         &self.slots[self.current]

@@ -9,6 +9,9 @@ use std::time::{Duration, Instant};
 
 use crate::common::{self, root, temp_dir, Scratch};
 
+mod pixels;
+pub use pixels::*;
+
 /// A private X server on a free display number, stopped on drop.
 pub struct Xvfb {
     child: Child,
@@ -507,27 +510,4 @@ pub fn viewer_window(x: &Xvfb) -> String {
     let id = found.lines().next().unwrap_or("").to_owned();
     assert!(!id.is_empty(), "no viewer window");
     id
-}
-
-/// The pixels window `id` shows on `x`, as the X server holds them (RGB, rows top to
-/// bottom): what a person sees, whatever the viewer's own screenshot would say.
-pub fn window_pixels(x: &Xvfb, id: &str) -> (u32, u32, Vec<u8>) {
-    use x11rb::connection::Connection;
-    use x11rb::protocol::xproto::{ConnectionExt, ImageFormat};
-    let (connection, _) = x11rb::connect(Some(&x.display)).expect("the X server answers");
-    let window: u32 = id.trim().parse().expect("a window id");
-    let geometry = (connection.get_geometry(window).unwrap().reply()).expect("the window's size");
-    let (w, h) = (geometry.width, geometry.height);
-    let image = connection
-        .get_image(ImageFormat::Z_PIXMAP, window, 0, 0, w, h, !0)
-        .unwrap()
-        .reply()
-        .expect("the window's pixels");
-    // Xvfb's 24-bit screen: 32 bits a pixel, blue first (the root visual's masks).
-    let bits = connection.setup().roots[0].root_depth;
-    assert_eq!((image.depth, bits), (24, 24), "a 24-bit screen");
-    let rgb = (image.data.chunks_exact(4))
-        .flat_map(|p| [p[2], p[1], p[0]])
-        .collect();
-    (u32::from(w), u32::from(h), rgb)
 }

@@ -120,7 +120,10 @@ impl App<'_> {
 
     /// Applies one key's action (or puts it off while the GPU is busy: [`Self::put_off`]).
     pub(super) fn act(&mut self, event_loop: &ActiveEventLoop, action: Action) {
-        self.demand.changed();
+        match window_only(action) {
+            true => self.demand.show(),
+            false => self.demand.changed(),
+        }
         if self.put_off(action) {
             return;
         }
@@ -157,8 +160,8 @@ impl App<'_> {
 
     /// Whether `action` waits: a new renderer's uploads would wait on the queue behind a slow
     /// frame, so it is made before a later frame instead, once the GPU is free, and the
-    /// actions after it wait their turn (`F5` then `0` resets to the new file). Quitting
-    /// never waits.
+    /// actions after it wait their turn (`F5` then `0` resets to the new file). What changes
+    /// only the window (quitting, the menu) never waits.
     fn put_off(&mut self, action: Action) -> bool {
         let makes_renderer = matches!(
             action,
@@ -166,7 +169,7 @@ impl App<'_> {
         );
         let busy = makes_renderer
             && !(self.viewer.as_ref()).is_none_or(|v| super::renderer_ready(v, false));
-        let wait = action != Action::Quit && (busy || !self.deferred.is_empty());
+        let wait = !window_only(action) && (busy || !self.deferred.is_empty());
         if wait {
             self.deferred.push(action);
         }
@@ -377,4 +380,13 @@ fn next_lookup(renderer: &mut Renderer) {
             Some(why) => specchio::say!("lookup {lookup} skipped: {why}"),
         }
     }
+}
+
+/// Whether `action` changes only the window (the menu, the help, fullscreen, quitting): the
+/// window's frame answers it, with the view it has, and no scene frame is asked for.
+fn window_only(action: Action) -> bool {
+    matches!(
+        action,
+        Action::Menu | Action::Help | Action::Fullscreen | Action::Quit
+    )
 }
