@@ -10,6 +10,8 @@ use std::time::{Duration, Instant};
 use crate::common::{self, root, temp_dir, Scratch};
 
 mod pixels;
+// Not every test binary reads the window's pixels.
+#[allow(unused_imports)]
 pub use pixels::*;
 
 /// A private X server on a free display number, stopped on drop.
