@@ -101,10 +101,11 @@ impl ShownView {
     ) -> Result<()> {
         let (w, h) = (pixels.width, pixels.height);
         let bytes = u64::from(w) * u64::from(h) * 8;
+        let texels = pixels.rgba16f()?;
         ensure!(
-            pixels.rgba16f.len() as u64 == bytes,
+            texels.len() as u64 == bytes,
             "a {w}x{h} view came with {} bytes, not {bytes}",
-            pixels.rgba16f.len()
+            texels.len()
         );
         // The image before this upload: its contents are replaced whole, so a new one
         // starts from UNDEFINED.
@@ -120,7 +121,7 @@ impl ShownView {
             before = L::UNDEFINED;
         }
         let staging = self.staging_for(ring.current_index(), bytes)?;
-        staging.write(&pixels.rgba16f)?;
+        staging.write(texels)?;
         let staging = staging.raw;
         let image = self.image.as_ref().expect("made above").raw;
         let barrier = |from, to| ImageBarrier {

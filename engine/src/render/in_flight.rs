@@ -15,6 +15,7 @@
 //! tally and pixels read) and its results wait in `done` for [`Renderer::finish_frame`].
 
 use std::collections::VecDeque;
+use std::sync::Arc;
 use std::time::Instant;
 
 use super::queries::{FrameQueries, StatsRead};
@@ -36,8 +37,9 @@ pub(super) struct FrameSlot {
     pub submitter: Submitter,
     pub uploads: FrameUploads,
     pub queries: FrameQueries,
-    /// Grown when a frame reads back more (safe: the slot's previous frame has finished).
-    pub readback: Option<Buffer>,
+    /// Grown when a frame reads back more (safe: the slot's previous frame has finished), and
+    /// replaced while a window still holds a view in it (`DisplayPixels`).
+    pub readback: Option<Arc<Buffer>>,
     /// The submitted frame, until it is finished.
     pending: Option<Pending>,
 }

@@ -4,6 +4,8 @@
 
 use ash::vk;
 
+use std::sync::Arc;
+
 use super::display::{DisplayPixels, DisplayView};
 use super::draw::{barrier, COPY_READ, SAMPLED};
 use super::passes::{copy_offset, texel_bytes, Slot};
@@ -133,20 +135,23 @@ impl Copies {
     }
 
     /// A finished frame's pixels, decoded from its slot's readback `buffer`.
-    pub fn decode(&self, buffer: Option<&Buffer>) -> Result<FrameImages, GpuError> {
+    pub fn decode(&self, buffer: Option<&Arc<Buffer>>) -> Result<FrameImages, GpuError> {
         let mut images = FrameImages::default();
         let Some(buffer) = buffer else {
             return Ok(images);
         };
-        let bytes = buffer.mapped()?;
         if let (true, [v]) = (self.display, &self.views[..]) {
-            images.display = Some(DisplayPixels {
-                width: v.width,
-                height: v.height,
-                rgba16f: bytes[..self.bytes as usize].to_vec(),
-            });
+            // Not copied: the window reads the buffer itself, which this renderer then
+            // leaves to it (`grow_readback`).
+            let bytes = self.bytes as usize;
+            images.display = Some(DisplayPixels::new(
+                [v.width, v.height],
+                Arc::clone(buffer),
+                bytes,
+            ));
             return Ok(images);
         }
+        let bytes = buffer.mapped()?;
         if let Some(cube) = &self.cube {
             let s = cube.size;
             let face_bytes = (s * s) as usize * if cube.unorm { 4 } else { 8 };
@@ -222,16 +227,18 @@ impl Renderer {
     }
 
     /// Makes the current slot's readback buffer large enough for `copies` (replacing it is
-    /// safe: the slot's previous frame has finished).
+    /// safe: the slot's previous frame has finished). One a window still reads a view from
+    /// (a [`DisplayPixels`] kept) is left to it, and a new one made.
     pub(super) fn grow_readback(&mut self, copies: &Copies) -> Result<(), GpuError> {
         let bytes = copies.bytes();
         let slot = self.frames.current();
-        if bytes == 0 || slot.readback.as_ref().is_some_and(|b| b.size >= bytes) {
+        let fits = |b: &Arc<Buffer>| b.size >= bytes && Arc::strong_count(b) == 1;
+        if bytes == 0 || slot.readback.as_ref().is_some_and(fits) {
             return Ok(());
         }
         budget::check_buffer(&self.device, "this frame's readback", bytes)?;
         let buffer = Buffer::create(&self.device, &BufferDesc::new_readback(bytes), "readback")?;
-        self.frames.current_mut().readback = Some(buffer);
+        self.frames.current_mut().readback = Some(Arc::new(buffer));
         Ok(())
     }
 
