@@ -38,8 +38,11 @@ pub(super) struct FrameSlot {
     pub uploads: FrameUploads,
     pub queries: FrameQueries,
     /// Grown when a frame reads back more (safe: the slot's previous frame has finished), and
-    /// replaced while a window still holds a view in it (`DisplayPixels`).
+    /// swapped for `spare` while a window still holds a view in it (`DisplayPixels`).
     pub readback: Option<Arc<Buffer>>,
+    /// The buffer a window held when the slot came round, kept for the next time it does
+    /// (so a window that holds each view a little longer costs no buffer a frame).
+    pub spare: Option<Arc<Buffer>>,
     /// The submitted frame, until it is finished.
     pending: Option<Pending>,
 }
@@ -87,6 +90,7 @@ impl InFlight {
                     uploads: FrameUploads::new(device, &format!("frame {i} uploads")),
                     queries: FrameQueries::create(device)?,
                     readback: None,
+                    spare: None,
                     pending: None,
                 })
             })

@@ -228,17 +228,33 @@ impl Renderer {
 
     /// Makes the current slot's readback buffer large enough for `copies` (replacing it is
     /// safe: the slot's previous frame has finished). One a window still reads a view from
-    /// (a [`DisplayPixels`] kept) is left to it, and a new one made.
+    /// (a [`DisplayPixels`] kept) is left to it: the slot takes its spare, or a new one, and
+    /// keeps the held one as its spare.
     pub(super) fn grow_readback(&mut self, copies: &Copies) -> Result<(), GpuError> {
         let bytes = copies.bytes();
-        let slot = self.frames.current();
-        let fits = |b: &Arc<Buffer>| b.size >= bytes && Arc::strong_count(b) == 1;
-        if bytes == 0 || slot.readback.as_ref().is_some_and(fits) {
+        let slot = self.frames.current_mut();
+        let free = |b: &Option<Arc<Buffer>>| {
+            b.as_ref()
+                .is_some_and(|b| b.size >= bytes && Arc::strong_count(b) == 1)
+        };
+        if bytes == 0 || free(&slot.readback) {
+            return Ok(());
+        }
+        let held = slot
+            .readback
+            .as_ref()
+            .is_some_and(|b| Arc::strong_count(b) > 1);
+        if held && free(&slot.spare) {
+            std::mem::swap(&mut slot.readback, &mut slot.spare);
             return Ok(());
         }
         budget::check_buffer(&self.device, "this frame's readback", bytes)?;
         let buffer = Buffer::create(&self.device, &BufferDesc::new_readback(bytes), "readback")?;
-        self.frames.current_mut().readback = Some(Arc::new(buffer));
+        let slot = self.frames.current_mut();
+        let old = slot.readback.replace(Arc::new(buffer));
+        if held {
+            slot.spare = old;
+        }
         Ok(())
     }
 

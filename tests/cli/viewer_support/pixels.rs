@@ -8,7 +8,7 @@ use super::Xvfb;
 /// bottom): what a person sees, whatever the viewer's own screenshot would say.
 pub fn window_pixels(x: &Xvfb, id: &str) -> (u32, u32, Vec<u8>) {
     use x11rb::connection::Connection;
-    use x11rb::protocol::xproto::{ConnectionExt, ImageFormat};
+    use x11rb::protocol::xproto::{ConnectionExt, ImageFormat, ImageOrder};
     let (connection, _) = x11rb::connect(Some(&x.display)).expect("the X server answers");
     let window: u32 = id.trim().parse().expect("a window id");
     let geometry = (connection.get_geometry(window).unwrap().reply()).expect("the window's size");
@@ -18,9 +18,25 @@ pub fn window_pixels(x: &Xvfb, id: &str) -> (u32, u32, Vec<u8>) {
         .unwrap()
         .reply()
         .expect("the window's pixels");
-    // Xvfb's 24-bit screen: 32 bits a pixel, blue first (the root visual's masks).
-    let bits = connection.setup().roots[0].root_depth;
-    assert_eq!((image.depth, bits), (24, 24), "a 24-bit screen");
+    // Xvfb's 24-bit screen: 32 bits a pixel, least significant byte first, blue in the low
+    // byte (the root visual's masks); rows unpadded at 32 bits a pixel.
+    let setup = connection.setup();
+    let screen = &setup.roots[0];
+    let bits = (setup.pixmap_formats.iter())
+        .find(|f| f.depth == image.depth)
+        .map(|f| f.bits_per_pixel);
+    let visual = (screen.allowed_depths.iter())
+        .flat_map(|d| &d.visuals)
+        .find(|v| v.visual_id == screen.root_visual)
+        .expect("the root visual");
+    assert_eq!(
+        (image.depth, bits),
+        (24, Some(32)),
+        "a 24-bit screen, 32 bits a pixel"
+    );
+    assert_eq!(setup.image_byte_order, ImageOrder::LSB_FIRST, "byte order");
+    assert_eq!(visual.blue_mask, 0xff, "blue in the low byte");
+    assert_eq!(visual.red_mask, 0xff_0000, "red in the third byte");
     let rgb = (image.data.chunks_exact(4))
         .flat_map(|p| [p[2], p[1], p[0]])
         .collect();
@@ -65,4 +81,13 @@ pub fn settled_view(x: &Xvfb, id: &str) -> (u32, u32, Vec<u8>) {
         let settled = changed(&before.2, &pixels.2) == 0;
         (settled && lit(&pixels.2) > pixels.2.len() / 6).then_some(pixels)
     })
+}
+
+/// The top-left `size` pixels of `pixels` (RGB rows), as an image of that size.
+pub fn crop(pixels: &(u32, u32, Vec<u8>), [w, h]: [u32; 2]) -> Vec<u8> {
+    let row = pixels.0 as usize * 3;
+    (pixels.2.chunks_exact(row).take(h as usize))
+        .flat_map(|r| &r[..w as usize * 3])
+        .copied()
+        .collect()
 }

@@ -300,6 +300,10 @@ impl App<'_> {
     /// A new renderer for `scene`; the old one stays when the new one cannot be made.
     fn replace_renderer(&mut self, scene: Scene, method: Method) -> Result<()> {
         let renderer = self.new_renderer(scene, method)?;
+        // The old renderer's frames have finished (a switch waits for that): their views and
+        // figures are taken before it goes, or a screenshot asked for one of them would show
+        // a later frame.
+        self.collect_views(false)?;
         let viewer = self.viewer.as_mut().expect("keys act on a viewer");
         // Nothing of the window's reads the old renderer's images (the window shows its own
         // copy of the view); it waits for its own frames in flight as it goes.

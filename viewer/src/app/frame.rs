@@ -24,11 +24,22 @@ pub(super) struct Turn {
 impl App<'_> {
     /// One turn: the scene's frame and the window's, as `turn` says (`next_frame` decided
     /// which are due and can start without waiting).
+    ///
+    /// The window's half goes first: it uploads the view collected for it, which then no
+    /// longer holds the renderer's readback buffer that the scene's frame may reuse. A script
+    /// (`--frames`) draws one window frame after each scene frame instead, as many as it
+    /// renders (what `--frames 1` shows of the menu is its first frame), the last one
+    /// showing the last frame's view, waited for.
     pub(super) fn frame(&mut self, event_loop: &ActiveEventLoop, turn: Turn) -> Result<()> {
-        if turn.scene {
+        let scripted = self.clock.scripted;
+        if turn.window && !scripted {
+            self.window_frame(event_loop)?;
+        }
+        if turn.scene && !event_loop.exiting() {
             self.scene_frame(event_loop)?;
         }
-        if turn.window || self.closing {
+        let scripted_turn = scripted && (turn.scene || turn.window);
+        if (scripted_turn || self.closing) && !event_loop.exiting() {
             self.window_frame(event_loop)?;
         }
         Ok(())

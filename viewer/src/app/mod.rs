@@ -391,10 +391,13 @@ impl App<'_> {
         // The loop never waits for the GPU: a half whose device is busy waits for the next
         // turn, looked at shortly, with events handled meanwhile. A renderer switch put off
         // (`deferred`) waits for every frame to finish, so no new frame starts before it. A
-        // script's last window frame may wait (`closing`).
+        // script's last window frame may wait (`closing`). The scene's frames are paced by
+        // the window's (its last present returned, its slot free: never slow), so that a
+        // moving scene is rendered as fast as the window takes frames, not faster.
+        let window_free = window_ready(viewer);
         let turn = Turn {
-            scene: scene && renderer_ready(viewer, self.deferred.is_empty()),
-            window: self.closing || (self.demand.wants_window(now) && window_ready(viewer)),
+            scene: scene && window_free && renderer_ready(viewer, self.deferred.is_empty()),
+            window: self.closing || (self.demand.wants_window(now) && window_free),
         };
         let soon = now + GPU_POLL;
         if next == NextFrame::Now {
