@@ -355,12 +355,7 @@ fn a_lost_surface_ends_the_viewer_cleanly() {
 #[test]
 fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
     let Some(x) = xvfb_with_xdotool() else { return };
-    let scene = thesis_room();
-    let hold = (specchio::vk::fault::HOLD_FRAME_VAR, "3");
-    let viewer = Running::spawn_with_var(&x, &[scene.to_str().unwrap(), "--frames", "1000"], hold);
-    viewer.wait_for("fault: frame 3 held until let go");
-    let id = viewer_window(&x);
-    xdotool(&x, &["windowfocus", "--sync", &id]);
+    let (viewer, _) = with_frame_3_held(&x);
     for key in ["e", "x", "m", "q"] {
         xdotool(&x, &["key", key]);
     }
@@ -389,6 +384,18 @@ fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
     assert!((3..=4).contains(&frames), "{frames} frames:\n{stdout}");
 }
 
+/// thesis-room running, its third frame held on the renderer's device (until the loop ends,
+/// or 60 s), the window focused: the viewer and the window's id.
+fn with_frame_3_held(x: &Xvfb) -> (Running, String) {
+    let scene = thesis_room();
+    let hold = (specchio::vk::fault::HOLD_FRAME_VAR, "3");
+    let viewer = Running::spawn_with_var(x, &[scene.to_str().unwrap(), "--frames", "1000"], hold);
+    viewer.wait_for("fault: frame 3 held until let go");
+    let id = viewer_window(x);
+    xdotool(x, &["windowfocus", "--sync", &id]);
+    (viewer, id)
+}
+
 /// The window is drawn while the renderer's frame is held on its device: the window has a
 /// device and a queue of its own (`viewer/src/shown.rs`), so the menu that F1 opens shows in
 /// the window's pixels and goes again with a second F1, and a resize gets its swapchain and
@@ -396,12 +403,7 @@ fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
 #[test]
 fn the_window_is_drawn_while_a_frame_is_held_on_the_gpu() {
     let Some(x) = xvfb_with_xdotool() else { return };
-    let scene = thesis_room();
-    let hold = (specchio::vk::fault::HOLD_FRAME_VAR, "3");
-    let viewer = Running::spawn_with_var(&x, &[scene.to_str().unwrap(), "--frames", "1000"], hold);
-    viewer.wait_for("fault: frame 3 held until let go");
-    let id = viewer_window(&x);
-    xdotool(&x, &["windowfocus", "--sync", &id]);
+    let (viewer, id) = with_frame_3_held(&x);
     // The views of the frames before the held one reach the window, and then no other.
     let shown = settled_view(&x, &id);
     xdotool(&x, &["key", "F1"]);

@@ -26,7 +26,7 @@ use specchio::render::display::DisplayPixels;
 use specchio::vk::commands::{image_barriers, ImageBarrier};
 use specchio::vk::device::Device;
 use specchio::vk::frames::{FrameRing, FRAMES_IN_FLIGHT};
-use specchio::vk::image::{Image, ImageDesc};
+use specchio::vk::image::{color_copy_region, Image, ImageDesc};
 use specchio::vk::memory::{Buffer, BufferDesc};
 use vk::AccessFlags2 as A;
 use vk::ImageLayout as L;
@@ -51,14 +51,6 @@ pub struct ShownView {
     staging: Vec<Option<Buffer>>,
     device: Arc<Device>,
 }
-
-const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
-    aspect_mask: vk::ImageAspectFlags::COLOR,
-    base_mip_level: 0,
-    level_count: 1,
-    base_array_layer: 0,
-    layer_count: 1,
-};
 
 impl ShownView {
     pub fn new(device: &Arc<Device>) -> Self {
@@ -123,10 +115,11 @@ impl ShownView {
         let staging = self.staging_for(ring.current_index(), bytes)?;
         staging.write(texels)?;
         let staging = staging.raw;
-        let image = self.image.as_ref().expect("made above").raw;
+        let image = self.image.as_ref().expect("made above");
+        let (range, image) = (image.full_range(), image.raw);
         let barrier = |from, to| ImageBarrier {
             image,
-            range: COLOR_RANGE,
+            range,
             from,
             to,
         };
@@ -164,18 +157,7 @@ fn copy(
     image: vk::Image,
     [width, height]: [u32; 2],
 ) {
-    let region = vk::BufferImageCopy::default()
-        .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        })
-        .image_extent(vk::Extent3D {
-            width,
-            height,
-            depth: 1,
-        });
+    let region = color_copy_region(0, 1, [width, height]);
     // SAFETY: the image is in TRANSFER_DST layout and as large as the region; the buffer
     // holds width x height texels (checked by `upload`).
     unsafe {

@@ -12,6 +12,7 @@ use super::passes::{copy_offset, texel_bytes, Slot};
 use super::targets::{CubeTarget, ViewTarget};
 use super::*;
 use crate::vk::commands::host_read_barrier;
+use crate::vk::image::color_copy_region;
 
 /// Where one frame's images sit in its slot's readback buffer: planned before the frame is
 /// recorded (the buffer is grown to [`Copies::bytes`]), then used to record the copies and,
@@ -192,19 +193,7 @@ fn copy_to_buffer(
     [width, height]: [u32; 2],
     offset: u64,
 ) {
-    let region = vk::BufferImageCopy::default()
-        .buffer_offset(offset)
-        .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: layers,
-        })
-        .image_extent(vk::Extent3D {
-            width,
-            height,
-            depth: 1,
-        });
+    let region = color_copy_region(offset, layers, [width, height]);
     // SAFETY: the image is in TRANSFER_SRC layout and the buffer has room (`Copies::bytes`).
     unsafe {
         dev.raw.cmd_copy_image_to_buffer(

@@ -14,7 +14,7 @@ use crate::scene::{MaterialKind, Mesh, Scene, TextureData};
 use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::Device;
-use crate::vk::image::{Image, ImageDesc, ImageView, Sampler};
+use crate::vk::image::{color_copy_region, Image, ImageDesc, ImageView, Sampler};
 use crate::vk::memory::{Buffer, BufferDesc, Upload};
 use crate::vk::GpuError;
 
@@ -498,7 +498,7 @@ fn record_texture_copy(
         (vk::ImageLayout::TRANSFER_DST_OPTIMAL, COPY_WRITE),
     );
     image_barriers(device, cmd, &[to_dst]);
-    let region = texture_region(t);
+    let region = color_copy_region(0, 1, [t.width, t.height]);
     // SAFETY: buffer and image are live; the image is in TRANSFER_DST layout.
     unsafe {
         device.raw.cmd_copy_buffer_to_image(
@@ -516,20 +516,4 @@ fn record_texture_copy(
         (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
     );
     image_barriers(device, cmd, &[to_sampled]);
-}
-
-/// The copy of all of `t`'s texels into mip 0 of its image.
-fn texture_region(t: &TextureData) -> vk::BufferImageCopy {
-    vk::BufferImageCopy::default()
-        .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        })
-        .image_extent(vk::Extent3D {
-            width: t.width,
-            height: t.height,
-            depth: 1,
-        })
 }

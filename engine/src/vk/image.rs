@@ -102,6 +102,28 @@ impl ImageDesc {
 }
 
 /// The number of levels in a full mip chain for a `size`-texel side.
+/// The copy between a tightly packed buffer, from `offset`, and mip 0 of a colour image's
+/// first `layers` layers, `[width, height]` texels each (uploads, readbacks).
+pub fn color_copy_region(
+    offset: u64,
+    layers: u32,
+    [width, height]: [u32; 2],
+) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: layers,
+        })
+        .image_extent(vk::Extent3D {
+            width,
+            height,
+            depth: 1,
+        })
+}
+
 pub fn full_mip_count(size: u32) -> u32 {
     32 - size.max(1).leading_zeros()
 }
