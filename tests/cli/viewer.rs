@@ -359,14 +359,8 @@ fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
     for key in ["e", "x", "m", "q"] {
         xdotool(&x, &["key", key]);
     }
-    let (out, stdout) = viewer.exit();
-    let stderr = text(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
-    assert!(!stderr.contains("Validation"), "{stderr}");
-    let at = |what: &str| {
-        (stdout.lines().position(|l| l.starts_with(what)))
-            .unwrap_or_else(|| panic!("no `{what}` line:\n{stdout}"))
-    };
+    let stdout = ended_cleanly(viewer);
+    let at = |what: &str| line_of(&stdout, what);
     let let_go = at("fault: frame 3 let go");
     assert!(
         at("refresh: ") < let_go && at("lookup: ") < let_go,
@@ -382,6 +376,21 @@ fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
         .find_map(|l| l.strip_prefix("frames: ")?.split(',').next()?.parse().ok())
         .unwrap_or_else(|| panic!("no frame summary:\n{stdout}"));
     assert!((3..=4).contains(&frames), "{frames} frames:\n{stdout}");
+}
+
+/// The viewer's stdout once it has ended with success and no validation message.
+fn ended_cleanly(viewer: Running) -> String {
+    let (out, stdout) = viewer.exit();
+    let stderr = text(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("Validation"), "{stderr}");
+    stdout
+}
+
+/// The index of the first line of `stdout` that starts with `what` (required).
+fn line_of(stdout: &str, what: &str) -> usize {
+    (stdout.lines().position(|l| l.starts_with(what)))
+        .unwrap_or_else(|| panic!("no `{what}` line:\n{stdout}"))
 }
 
 /// thesis-room running, its third frame held on the renderer's device (until the loop ends,
@@ -426,14 +435,8 @@ fn the_window_is_drawn_while_a_frame_is_held_on_the_gpu() {
         ([w, h] == [600, 225] && drawn).then_some(())
     });
     xdotool(&x, &["key", "q"]);
-    let (out, stdout) = viewer.exit();
-    let stderr = text(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
-    assert!(!stderr.contains("Validation"), "{stderr}");
-    let at = |what: &str| {
-        (stdout.lines().position(|l| l.starts_with(what)))
-            .unwrap_or_else(|| panic!("no `{what}` line:\n{stdout}"))
-    };
+    let stdout = ended_cleanly(viewer);
+    let at = |what: &str| line_of(&stdout, what);
     assert!(
         at("swapchain: 600x225") < at("fault: frame 3 let go"),
         "the resize waited for the held frame:\n{stdout}"
