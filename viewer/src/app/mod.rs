@@ -395,8 +395,18 @@ impl App<'_> {
         // the window's (its last present returned, its slot free: never slow), so that a
         // moving scene is rendered as fast as the window takes frames, not faster.
         let window_free = window_ready(viewer);
+        // A script's last frame waits for the size its view asked of the window (looked at
+        // every poll, not in a spinning loop).
+        let last = (self.settings.frames).is_some_and(|n| self.clock.frame + 1 >= u64::from(n));
+        let sizing = last
+            && viewer
+                .size_asked
+                .is_some_and(|(_, t)| t.elapsed() < RESIZE_WAIT);
         let turn = Turn {
-            scene: scene && window_free && renderer_ready(viewer, self.deferred.is_empty()),
+            scene: scene
+                && !sizing
+                && window_free
+                && renderer_ready(viewer, self.deferred.is_empty()),
             window: self.closing || (self.demand.wants_window(now) && window_free),
         };
         let soon = now + GPU_POLL;
