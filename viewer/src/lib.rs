@@ -7,6 +7,7 @@
 //! readback); `present.rs` hands it to `blit.rs`, which blits it into the swapchain image, and
 //! `present_thread.rs` presents it. `app/` is the event loop.
 
+mod answers;
 mod app;
 mod blit;
 mod clock;

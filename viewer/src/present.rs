@@ -93,6 +93,11 @@ impl Presenter {
         self.presents.returned()
     }
 
+    /// When the last present returned (`None` before the first).
+    pub fn present_returned_at(&self) -> Option<std::time::Instant> {
+        self.presents.returned_at()
+    }
+
     /// The last present's outcome once it has returned (never waits): a swapchain to
     /// recreate is noted, a failure (the surface or the device lost) is returned now rather
     /// than at the next frame, which an idle window may never draw.

@@ -11,6 +11,7 @@
 use std::sync::mpsc::{channel, Receiver, Sender, TryRecvError};
 use std::sync::Arc;
 use std::thread::JoinHandle;
+use std::time::Instant;
 
 use specchio::vk::swapchain::Swapchain;
 use specchio::vk::GpuError;
@@ -27,11 +28,14 @@ type Outcome = Result<bool, GpuError>;
 /// The present thread and the one present it may be running.
 pub struct PresentThread {
     jobs: Option<Sender<Job>>,
-    outcomes: Receiver<Outcome>,
+    /// Each present's outcome and when it returned.
+    outcomes: Receiver<(Outcome, Instant)>,
     /// A present was handed over and its outcome not yet received.
     pending: bool,
     /// An outcome received by [`Self::returned`] and not yet taken.
     arrived: Option<Outcome>,
+    /// When the last present returned.
+    returned_at: Option<Instant>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -44,10 +48,11 @@ impl PresentThread {
             .spawn(move || {
                 for job in inbox {
                     let outcome = job.swapchain.present(job.index);
+                    let returned = Instant::now();
                     // The job's swapchain goes before the outcome does: once the loop has
                     // the outcome, it holds the only reference again.
                     drop(job);
-                    if outbox.send(outcome).is_err() {
+                    if outbox.send((outcome, returned)).is_err() {
                         break;
                     }
                 }
@@ -58,6 +63,7 @@ impl PresentThread {
             outcomes,
             pending: false,
             arrived: None,
+            returned_at: None,
             thread,
         }
     }
@@ -72,7 +78,7 @@ impl PresentThread {
         };
         match self.thread.is_some() {
             // The thread could not be started: present here, as before.
-            false => self.arrived = Some(job.swapchain.present(job.index)),
+            false => self.receive((job.swapchain.present(job.index), Instant::now())),
             true => {
                 let sent = self.jobs.as_ref().map(|jobs| jobs.send(job));
                 if !matches!(sent, Some(Ok(()))) {
@@ -90,7 +96,7 @@ impl PresentThread {
             match self.outcomes.try_recv() {
                 Ok(outcome) => self.receive(outcome),
                 Err(TryRecvError::Empty) => {}
-                Err(TryRecvError::Disconnected) => self.receive(Err(gone())),
+                Err(TryRecvError::Disconnected) => self.receive((Err(gone()), Instant::now())),
             }
         }
         !self.pending
@@ -100,15 +106,22 @@ impl PresentThread {
     /// there is none.
     pub fn take(&mut self) -> Outcome {
         if self.pending {
-            let outcome = self.outcomes.recv().unwrap_or_else(|_| Err(gone()));
+            let outcome = (self.outcomes.recv()).unwrap_or_else(|_| (Err(gone()), Instant::now()));
             self.receive(outcome);
         }
         self.arrived.take().unwrap_or(Ok(false))
     }
 
-    fn receive(&mut self, outcome: Outcome) {
+    /// When the last present returned (`None` before the first): what a key waited for
+    /// (`answers.rs`).
+    pub fn returned_at(&self) -> Option<Instant> {
+        self.returned_at
+    }
+
+    fn receive(&mut self, (outcome, at): (Outcome, Instant)) {
         self.pending = false;
         self.arrived = Some(outcome);
+        self.returned_at = Some(at);
     }
 }
 

@@ -129,6 +129,10 @@ impl App<'_> {
         self.demand.window_drawn();
         let start = Instant::now();
         let closing = self.closing;
+        if let Some(viewer) = &self.viewer {
+            // The present before this one has returned (the loop draws only then).
+            (self.answers).settle(viewer.presenter.present_returned_at());
+        }
         let (shown, screenshot, actions) = self.draw(closing, start)?;
         // The menu's choices act from the next frame on, as a key pressed now would.
         for action in actions {
@@ -140,6 +144,8 @@ impl App<'_> {
             self.demand.skipped(Instant::now());
             return Ok(());
         }
+        // Handed over during `draw`: after `start`, which no earlier present's return is.
+        self.answers.presented(start);
         self.shown(screenshot.as_ref());
         if closing {
             if self.settings.screenshot && screenshot.is_none() {

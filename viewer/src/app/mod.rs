@@ -27,6 +27,7 @@ mod frame;
 
 use frame::Turn;
 
+use super::answers::Answers;
 use super::clock::{Clock, Figures};
 use super::demand::{Demand, NextFrame};
 use super::failures::{device_lost, run_catching_window_panics, surface_lost};
@@ -104,6 +105,8 @@ struct App<'a> {
     viewer: Option<Viewer>,
     clock: Clock,
     figures: Figures,
+    /// How long the window-only keys waited for their frame.
+    answers: Answers,
     outcome: Outcome,
     error: Option<anyhow::Error>,
     /// The window was destroyed from outside: no more frames.
@@ -151,6 +154,7 @@ pub fn run(
             scripted,
         },
         figures: Figures::default(),
+        answers: Answers::default(),
         outcome: Outcome::default(),
         error: None,
         window_gone: false,
@@ -187,6 +191,9 @@ pub fn run(
         });
     }
     app.figures.print_summary();
+    if let Some(line) = app.answers.summary() {
+        specchio::say!("{line}");
+    }
     Ok(app.outcome)
 }
 
@@ -352,6 +359,7 @@ impl App<'_> {
     fn poll_gpu(&mut self) -> Result<()> {
         if let Some(viewer) = &mut self.viewer {
             viewer.presenter.poll_present()?;
+            (self.answers).settle(viewer.presenter.present_returned_at());
         }
         self.collect_views(false)
     }
