@@ -439,6 +439,37 @@ impl Running {
         fields[11].parse::<u64>().unwrap() + fields[12].parse::<u64>().unwrap()
     }
 
+    /// The viewer's threads, one a line: name, state (R running, S sleeping, D in the
+    /// kernel), CPU ticks used (user and system) and the kernel function it waits in: what a
+    /// failure reports to tell a stuck viewer from a slow one.
+    pub fn threads(&self) -> String {
+        let tasks = format!("/proc/{}/task", self.child.id());
+        let Ok(entries) = std::fs::read_dir(&tasks) else {
+            return format!("{tasks}: gone");
+        };
+        let mut lines: Vec<String> = entries
+            .filter_map(Result::ok)
+            .map(|e| {
+                let stat = std::fs::read_to_string(e.path().join("stat")).unwrap_or_default();
+                let wchan = std::fs::read_to_string(e.path().join("wchan")).unwrap_or_default();
+                let name = stat.find('(').zip(stat.rfind(')'));
+                let Some((open, close)) = name else {
+                    return format!("{:?}: no stat", e.file_name());
+                };
+                let fields: Vec<&str> = stat[close + 2..].split_whitespace().collect();
+                let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<u64>().ok());
+                format!(
+                    "{} {} ticks {} in {wchan}",
+                    &stat[open + 1..close],
+                    fields.first().unwrap_or(&"?"),
+                    ticks(11).unwrap_or(0) + ticks(12).unwrap_or(0)
+                )
+            })
+            .collect();
+        lines.sort();
+        lines.join("\n")
+    }
+
     /// Waits (at most two minutes) for a line starting with `what`, and returns it.
     pub fn wait_for(&self, what: &str) -> String {
         let start = Instant::now();

@@ -45,15 +45,25 @@ pub fn window_pixels(x: &Xvfb, id: &str) -> (u32, u32, Vec<u8>) {
 
 /// Asks `found` every 50 ms until it finds something, for at most 30 s (a held frame lasts
 /// 60 s): what it found, or a failure naming `what`.
-pub fn eventually<T>(what: &str, mut found: impl FnMut() -> Option<T>) -> T {
+pub fn eventually<T>(what: &str, found: impl FnMut() -> Option<T>) -> T {
+    eventually_within(what, Duration::from_secs(30), found)
+}
+
+/// [`eventually`] for at most `budget`: a guard against a hang, not a time asked of the
+/// viewer (tests time nothing).
+pub fn eventually_within<T>(
+    what: &str,
+    budget: Duration,
+    mut found: impl FnMut() -> Option<T>,
+) -> T {
     let start = Instant::now();
-    while start.elapsed() < Duration::from_secs(30) {
+    while start.elapsed() < budget {
         if let Some(t) = found() {
             return t;
         }
         std::thread::sleep(Duration::from_millis(50));
     }
-    panic!("never saw {what} (30 s)");
+    panic!("never saw {what} ({} s)", budget.as_secs());
 }
 
 /// Channels (of RGB pixels) above 16 of 255: the window is not black.
@@ -74,7 +84,12 @@ pub fn changed(a: &[u8], b: &[u8]) -> usize {
 /// The window's pixels once they are lit (not black) and settled (the same twice, 500 ms
 /// apart): the view the window shows while nothing new comes.
 pub fn settled_view(x: &Xvfb, id: &str) -> (u32, u32, Vec<u8>) {
-    eventually("a settled view in the window", || {
+    settled_view_within(x, id, Duration::from_secs(30))
+}
+
+/// [`settled_view`], looked for at most `budget`.
+pub fn settled_view_within(x: &Xvfb, id: &str, budget: Duration) -> (u32, u32, Vec<u8>) {
+    eventually_within("a settled view in the window", budget, || {
         let before = window_pixels(x, id);
         std::thread::sleep(Duration::from_millis(500));
         let pixels = window_pixels(x, id);
