@@ -152,6 +152,32 @@ fn an_unmapped_window_is_not_drawn() {
     );
 }
 
+/// A frame that finishes while the loop decides whether to sleep is still shown. The test
+/// hook `SPECCHIO_FAULT_SLOW_TURN_MS` widens that gap to 40 ms every turn; paused, with no
+/// event after the window's first ones, the first view must still reach the window, and a
+/// step (`.`, one key event) must bring the next. The loop used to ask whether the frames had
+/// finished rather than whether they were collected: a frame that finished in the gap was
+/// "finished", the loop slept until the next event, and the window kept its old view (with
+/// the hook, no view at all reached it: checked).
+#[test]
+fn a_frame_finished_while_the_loop_decides_is_still_shown() {
+    let Some(x) = xvfb_with_xdotool() else { return };
+    let scene = thesis_room();
+    let args = [scene.to_str().unwrap(), "--keys", "space"];
+    let slow_turn = (specchio_viewer::SLOW_TURN_VAR, "40");
+    let viewer = Running::spawn_with_var(&x, &args, slow_turn);
+    viewer.wait_for("swapchain: ");
+    let id = viewer_window(&x);
+    let first = settled_view(&x, &id);
+    xdotool(&x, &["windowfocus", "--sync", &id]);
+    xdotool(&x, &["key", "period"]);
+    eventually("the stepped view", || {
+        (changed(&first.2, &window_pixels(&x, &id).2) > 0).then_some(())
+    });
+    xdotool(&x, &["key", "q"]);
+    viewer.finish();
+}
+
 /// An idle window costs next to nothing beside a moving one: the viewer's CPU time over 2 s
 /// paused, against 2 s of the same run moving (thesis-room's orbiting ball, `space` to resume).
 /// Drawing every turn of the loop, paused cost as much as moving (183.7 % and 180.5 % of a

@@ -103,6 +103,12 @@ fn window_size(text: &str) -> Result<[u32; 2], String> {
 /// default of `specchio render --fps`.
 pub const SCRIPTED_FPS: f64 = 30.0;
 
+/// A test hook: the event loop sleeps this many milliseconds each turn between collecting
+/// the renderer's finished frames and deciding when to run next, widening the gap in which a
+/// frame can finish uncollected (`tests/cli/viewer.rs`). Unset, as always outside tests, it
+/// changes nothing.
+pub const SLOW_TURN_VAR: &str = "SPECCHIO_FAULT_SLOW_TURN_MS";
+
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Input and outputs first: nothing is opened before they are known good.
     let keys = match &args.keys {

@@ -93,6 +93,12 @@ impl Presenter {
         self.presents.returned()
     }
 
+    /// Whether the last present's outcome has yet to be taken (it is running, or it returned
+    /// and [`Self::poll_present`] has not read it): the loop must not sleep until then.
+    pub fn present_outstanding(&self) -> bool {
+        self.presents.outstanding()
+    }
+
     /// When the last present returned (`None` before the first).
     pub fn present_returned_at(&self) -> Option<std::time::Instant> {
         self.presents.returned_at()

@@ -102,6 +102,12 @@ impl PresentThread {
         !self.pending
     }
 
+    /// Whether a present was handed over and its outcome not yet taken ([`Self::take`]):
+    /// running, or returned and unread.
+    pub fn outstanding(&self) -> bool {
+        self.pending || self.arrived.is_some()
+    }
+
     /// The last present's outcome, waiting for it if it has not returned; `Ok(false)` when
     /// there is none.
     pub fn take(&mut self) -> Outcome {

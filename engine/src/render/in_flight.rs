@@ -184,6 +184,15 @@ impl Renderer {
         Ok(true)
     }
 
+    /// Whether a submitted frame's results have yet to be taken ([`Self::finished_frames`]):
+    /// it is running, or it finished and nobody collected it. A loop deciding whether it may
+    /// sleep until the next event asks this, not [`Self::frames_finished`]: a frame that
+    /// finished after the loop last collected is "finished" and still uncollected, and a
+    /// loop that slept then would keep its view until some event woke it.
+    pub fn frames_uncollected(&self) -> bool {
+        !self.frames.order.is_empty() || !self.frames.done.is_empty()
+    }
+
     /// Makes the current slot free to record: its previous frame finished (waited for).
     pub(super) fn acquire_slot(&mut self) -> Result<(), GpuError> {
         let current = self.frames.current;

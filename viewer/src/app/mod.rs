@@ -128,6 +128,8 @@ struct App<'a> {
     /// Actions that make a renderer (method switch, reload), asked while the GPU was busy:
     /// done before the next frame, so that no key waits for a slow frame.
     deferred: Vec<Action>,
+    /// The test hook [`crate::SLOW_TURN_VAR`]'s sleep.
+    slow_turn: Option<Duration>,
 }
 
 pub fn run(
@@ -165,6 +167,10 @@ pub fn run(
         closing: false,
         due: None,
         deferred: Vec::new(),
+        slow_turn: std::env::var(crate::SLOW_TURN_VAR)
+            .ok()
+            .and_then(|ms| ms.parse().ok())
+            .map(Duration::from_millis),
     };
     specchio::say_part!("{}", input::help());
     let ran = run_catching_window_panics(event_loop, &mut app, |app| &mut app.window_gone);
@@ -274,9 +280,14 @@ impl ApplicationHandler for App<'_> {
         {
             return;
         }
-        let drawn = self.poll_gpu().and_then(|()| match self.next_frame() {
-            (NextFrame::Now, Some(turn)) => self.frame(event_loop, turn),
-            _ => Ok(()),
+        let drawn = self.poll_gpu().and_then(|()| {
+            if let Some(pause) = self.slow_turn {
+                std::thread::sleep(pause);
+            }
+            match self.next_frame() {
+                (NextFrame::Now, Some(turn)) => self.frame(event_loop, turn),
+                _ => Ok(()),
+            }
         });
         event_loop.set_control_flow(match self.next_frame().0 {
             NextFrame::Now => ControlFlow::Poll,
@@ -425,9 +436,12 @@ impl App<'_> {
             };
         }
         // A frame or a present on its way is looked at shortly even by an idle loop, so that
-        // its view is shown and its outcome (a lost surface, say) heard at once.
-        let busy = !viewer.presenter.present_returned()
-            || !viewer.renderer.frames_finished().unwrap_or(true);
+        // its view is shown and its outcome (a lost surface, say) heard at once. "On its
+        // way" lasts until the loop has collected it: one that finished since `poll_gpu`
+        // looked is still to be collected, and a loop that slept on it (as it once did, when
+        // this asked whether the frames had finished) kept a paused window on its old view
+        // until some event came.
+        let busy = viewer.presenter.present_outstanding() || viewer.renderer.frames_uncollected();
         let next = match (busy, next) {
             (false, next) => next,
             (true, NextFrame::At(t)) => NextFrame::At(t.min(soon)),
