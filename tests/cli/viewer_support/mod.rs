@@ -374,11 +374,14 @@ fn xdotool_may_fail(x: &Xvfb, args: &[&str]) -> String {
     text(&out.stdout)
 }
 
-/// A viewer left running while a test drives it, its stdout read line by line as it comes.
+/// A viewer left running while a test drives it, its stdout read line by line as it comes
+/// and its stderr read as it comes too (a pipe nobody reads fills up, and the viewer's next
+/// message would then block it for good).
 pub struct Running {
     child: Child,
     lines: std::sync::mpsc::Receiver<String>,
     reader: std::thread::JoinHandle<String>,
+    errors: std::thread::JoinHandle<Vec<u8>>,
 }
 
 impl Running {
@@ -407,6 +410,12 @@ impl Running {
             .spawn()
             .unwrap();
         let (sender, lines) = std::sync::mpsc::channel();
+        let mut stderr = child.stderr.take().unwrap();
+        let errors = std::thread::spawn(move || {
+            let mut all = Vec::new();
+            let _ = std::io::Read::read_to_end(&mut stderr, &mut all);
+            all
+        });
         let stdout = child.stdout.take().unwrap();
         let reader = std::thread::spawn(move || {
             use std::io::BufRead;
@@ -425,6 +434,7 @@ impl Running {
             child,
             lines,
             reader,
+            errors,
         }
     }
 
@@ -492,18 +502,33 @@ impl Running {
     }
 
     /// Waits (at most a minute) for the viewer to exit by itself, however it ends: its exit
-    /// status and stderr, and all it printed on stdout.
+    /// status and stderr, and all it printed on stdout. One that does not is killed, and the
+    /// failure says what it printed.
     pub fn exit(mut self) -> (Output, String) {
         let start = Instant::now();
+        let mut quit = true;
         while self.child.try_wait().unwrap().is_none() {
             if start.elapsed() > Duration::from_secs(60) {
                 let _ = self.child.kill();
-                panic!("the viewer did not quit");
+                quit = false;
+                break;
             }
             std::thread::sleep(Duration::from_millis(100));
         }
-        let out = self.child.wait_with_output().unwrap();
-        (out, self.reader.join().unwrap())
+        let status = self.child.wait().unwrap();
+        let stdout = self.reader.join().unwrap();
+        let stderr = self.errors.join().unwrap();
+        assert!(
+            quit,
+            "the viewer did not quit in 60 s (killed)\nstdout:\n{stdout}\nstderr:\n{}",
+            text(&stderr)
+        );
+        let out = Output {
+            status,
+            stdout: stdout.clone().into_bytes(),
+            stderr,
+        };
+        (out, stdout)
     }
 }
 
