@@ -1,12 +1,13 @@
 //! How long the window takes to answer a key that changes only the window (F1's menu, `h`'s
 //! help): from the loop hearing the key to the return of the present of the first window
-//! frame drawn after it. On a CPU driver a present returns once its image is in the window
-//! (Mesa's software present copies it there), so this is the viewer's share of "a key is
-//! answered within one display refresh"; the X server's delivery of the key before it and
-//! the compositor's refresh after it are not in it.
+//! frame drawn after it. On a CPU driver a present returns once that frame has been drawn
+//! (Mesa's software present waits for it); the copy into the window may follow on the
+//! driver's own thread (lavapipe's X11 present has one). So this is the viewer's share of "a
+//! key is answered within one display refresh": the X server's delivery of the key before
+//! it and the driver's copy and the display's refresh after it are not in it.
 //!
-//! A key that changes the scene is answered by the scene's frame instead: its time is the
-//! frame time, printed beside this.
+//! A key that changes the scene is answered by the scene's next view instead, rendered and
+//! then shown by a window frame like this one.
 
 use std::time::Instant;
 

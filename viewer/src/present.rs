@@ -99,9 +99,19 @@ impl Presenter {
         self.presents.outstanding()
     }
 
-    /// When the last present returned (`None` before the first).
+    /// When the last present was handed over, and when the last one returned (`None`
+    /// before the first).
+    pub fn present_handed_at(&self) -> Option<std::time::Instant> {
+        self.presents.handed_at()
+    }
+
     pub fn present_returned_at(&self) -> Option<std::time::Instant> {
         self.presents.returned_at()
+    }
+
+    /// Waits for the last present to return (the loop is over; what it answered is counted).
+    pub fn finish_present(&mut self) {
+        let _ = self.presents.take();
     }
 
     /// The last present's outcome once it has returned (never waits): a swapchain to

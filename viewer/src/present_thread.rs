@@ -34,7 +34,8 @@ pub struct PresentThread {
     pending: bool,
     /// An outcome received by [`Self::returned`] and not yet taken.
     arrived: Option<Outcome>,
-    /// When the last present returned.
+    /// When the last present was handed over, and when the last one returned.
+    handed_at: Option<Instant>,
     returned_at: Option<Instant>,
     thread: Option<JoinHandle<()>>,
 }
@@ -63,6 +64,7 @@ impl PresentThread {
             outcomes,
             pending: false,
             arrived: None,
+            handed_at: None,
             returned_at: None,
             thread,
         }
@@ -76,6 +78,7 @@ impl PresentThread {
             swapchain: Arc::clone(swapchain),
             index,
         };
+        self.handed_at = Some(Instant::now());
         match self.thread.is_some() {
             // The thread could not be started: present here, as before.
             false => self.receive((job.swapchain.present(job.index), Instant::now())),
@@ -118,8 +121,14 @@ impl PresentThread {
         self.arrived.take().unwrap_or(Ok(false))
     }
 
-    /// When the last present returned (`None` before the first): what a key waited for
-    /// (`answers.rs`).
+    /// When the last present was handed over and when the last one returned (`None`
+    /// before the first): what a key waited for (`answers.rs`). The one before is always
+    /// taken before a present is handed over, so a return is never earlier than its
+    /// hand-over and never later than the next one's.
+    pub fn handed_at(&self) -> Option<Instant> {
+        self.handed_at
+    }
+
     pub fn returned_at(&self) -> Option<Instant> {
         self.returned_at
     }

@@ -30,7 +30,6 @@ impl App<'_> {
         let Some(action) = key_name(&event.logical_key).and_then(|k| input::action(&k)) else {
             return;
         };
-        let heard = Instant::now();
         let pressed = event.state == ElementState::Pressed;
         if motion::is_move(action) {
             if pressed && !synthetic {
@@ -41,7 +40,7 @@ impl App<'_> {
             }
         } else if pressed && !synthetic && (!event.repeat || action.repeats()) {
             if matches!(action, Action::Menu | Action::Help) {
-                self.answers.key(heard);
+                self.answers.key(Instant::now());
             }
             self.act(event_loop, action);
         }

@@ -130,7 +130,8 @@ impl App<'_> {
         let start = Instant::now();
         let closing = self.closing;
         if let Some(viewer) = &self.viewer {
-            // The present before this one has returned (the loop draws only then).
+            // The last present may have returned since `poll_gpu` settled (`next_frame`'s
+            // check received it): the keys it answered are counted before new ones wait.
             (self.answers).settle(viewer.presenter.present_returned_at());
         }
         let (shown, screenshot, actions) = self.draw(closing, start)?;
@@ -144,8 +145,13 @@ impl App<'_> {
             self.demand.skipped(Instant::now());
             return Ok(());
         }
-        // Handed over during `draw`: after `start`, which no earlier present's return is.
-        self.answers.presented(start);
+        if let Some(at) = self
+            .viewer
+            .as_ref()
+            .and_then(|v| v.presenter.present_handed_at())
+        {
+            self.answers.presented(at);
+        }
         self.shown(screenshot.as_ref());
         if closing {
             if self.settings.screenshot && screenshot.is_none() {

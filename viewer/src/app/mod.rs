@@ -177,6 +177,11 @@ pub fn run(
     // A frame held by a test (`fault::HOLD_FRAME_VAR`) goes on now that the loop is over:
     // everything before this line happened while it was still running.
     specchio::vk::fault::release_held_frames();
+    // The last present's return counts for the keys it answered (F1 and `q` at once).
+    if let Some(v) = &mut app.viewer {
+        v.presenter.finish_present();
+        app.answers.settle(v.presenter.present_returned_at());
+    }
     // The viewer goes first (its presenter waits for the frames in flight).
     app.viewer = None;
     match ran {
