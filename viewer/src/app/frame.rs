@@ -9,7 +9,7 @@ use std::time::Instant;
 use anyhow::Result;
 use winit::event_loop::ActiveEventLoop;
 
-use super::{actions, App, RESIZE_WAIT};
+use super::{actions, last_frame_waits_for_size, App};
 use crate::input::Action;
 use crate::menu::Status;
 use crate::present::{Screenshot, Shown};
@@ -51,7 +51,11 @@ impl App<'_> {
     fn scene_frame(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         let frames = self.settings.frames;
         let last = frames.is_some_and(|n| self.clock.frame + 1 >= u64::from(n));
-        if last && self.waiting_for_size() {
+        // `next_frame` asked this too; a menu action of this turn's window frame (a view
+        // switch) may have asked for a size since.
+        let sizing = (self.viewer.as_ref())
+            .is_some_and(|v| last_frame_waits_for_size(&self.settings, &self.clock, v));
+        if sizing {
             return Ok(());
         }
         // Switches asked while the GPU was busy, and the actions after them: it is free now
@@ -103,21 +107,6 @@ impl App<'_> {
             self.demand.show();
         }
         Ok(())
-    }
-
-    /// Before a script's last frame: whether the window has yet to reach the size its view
-    /// asked for (the final image is taken at that size, or after [`RESIZE_WAIT`]).
-    fn waiting_for_size(&mut self) -> bool {
-        let Some(viewer) = self.viewer.as_mut() else {
-            return false;
-        };
-        match viewer.size_asked {
-            Some((_, asked)) if asked.elapsed() < RESIZE_WAIT => true,
-            _ => {
-                viewer.size_asked = None;
-                false
-            }
-        }
     }
 
     /// The window's frame: the last view with the menu over it; the menu's actions taken;

@@ -421,11 +421,7 @@ impl App<'_> {
         let window_free = window_ready(viewer);
         // A script's last frame waits for the size its view asked of the window (looked at
         // every poll, not in a spinning loop).
-        let last = (self.settings.frames).is_some_and(|n| self.clock.frame + 1 >= u64::from(n));
-        let sizing = last
-            && viewer
-                .size_asked
-                .is_some_and(|(_, t)| t.elapsed() < RESIZE_WAIT);
+        let sizing = last_frame_waits_for_size(&self.settings, &self.clock, viewer);
         let turn = Turn {
             scene: scene
                 && !sizing
@@ -472,6 +468,14 @@ impl App<'_> {
 
 /// How often a loop that waits for a device looks again.
 const GPU_POLL: Duration = Duration::from_millis(2);
+
+/// Whether the next frame is a script's last and the window has yet to reach the size its
+/// view asked for: the final image is taken at that size, or after [`RESIZE_WAIT`].
+fn last_frame_waits_for_size(settings: &Settings, clock: &Clock, viewer: &Viewer) -> bool {
+    let last = (settings.frames).is_some_and(|n| clock.frame + 1 >= u64::from(n));
+    let asked = viewer.size_asked.map(|(_, at)| at);
+    last && asked.is_some_and(|at| at.elapsed() < RESIZE_WAIT)
+}
 
 /// Whether the renderer can start a frame without waiting for its device: its next slot is
 /// free, or, for a switch put off (not `nothing_put_off`), every frame has finished (a new
