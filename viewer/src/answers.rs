@@ -7,7 +7,9 @@
 //! it and the driver's copy and the display's refresh after it are not in it.
 //!
 //! A key that changes the scene is answered by the scene's next view instead, rendered and
-//! then shown by a window frame like this one.
+//! then shown by a window frame like this one. A key heard while the window is hidden or
+//! minimised waits for the window to be shown again, and that wait counts: it is what the key
+//! waited for.
 
 use std::time::Instant;
 
