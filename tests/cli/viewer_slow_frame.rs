@@ -90,19 +90,21 @@ fn menu_then_view(x: &Xvfb, id: &str) {
 
 /// What the viewer and the machine are doing: the viewer's threads (where each waits, the CPU
 /// it used), the load, and the busiest processes now (`top`, not `ps`: `ps` ranks by each
-/// process's lifetime average). For a failure to tell a stuck viewer from a slow machine.
+/// process's lifetime average; and top's second screen, over half a second, since its first
+/// one has no interval to measure over). For a failure to tell a stuck viewer from a slow
+/// machine.
 fn machine_state(viewer: &Running) -> String {
     let top = std::process::Command::new("top")
-        .args(["-b", "-n", "1", "-w", "200", "-o", "%CPU"])
+        .args(["-b", "-n", "2", "-d", "0.5", "-w", "200", "-o", "%CPU"])
         .output();
     let top = top.map_or_else(
         |e| format!("top: {e}"),
         |o| {
-            text(&o.stdout)
-                .lines()
-                .take(20)
-                .collect::<Vec<_>>()
-                .join("\n")
+            let screens = text(&o.stdout);
+            let last = screens
+                .rfind("top - ")
+                .map_or(&screens[..], |i| &screens[i..]);
+            last.lines().take(20).collect::<Vec<_>>().join("\n")
         },
     );
     format!(

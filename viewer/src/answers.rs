@@ -33,6 +33,10 @@ impl Answers {
     /// A window frame was handed to the present thread `at`: it answers the keys waiting. The
     /// one before it has returned (the loop draws only then), and was settled first.
     pub fn presented(&mut self, at: Instant) {
+        debug_assert!(
+            self.presenting.is_none(),
+            "the last present was not settled"
+        );
         if let Some(key) = self.waiting.take() {
             self.presenting = Some((key, at));
         }

@@ -105,7 +105,7 @@ pub const SCRIPTED_FPS: f64 = 30.0;
 
 /// A test hook: the event loop sleeps this many milliseconds each turn between collecting
 /// the renderer's finished frames and deciding when to run next, widening the gap in which a
-/// frame can finish uncollected (`tests/cli/viewer.rs`). Unset, as always outside tests, it
+/// frame can finish uncollected (`tests/cli/viewer_interaction.rs`). Unset, as always outside tests, it
 /// changes nothing.
 pub const SLOW_TURN_VAR: &str = "SPECCHIO_FAULT_SLOW_TURN_MS";
 
