@@ -443,10 +443,8 @@ impl Running {
     pub fn cpu_ticks(&self) -> u64 {
         let stat = std::fs::read_to_string(format!("/proc/{}/stat", self.child.id()))
             .expect("the viewer's /proc stat");
-        // The command name (field 2) is in parentheses and may hold spaces: count after it.
-        let after = &stat[stat.rfind(')').expect("a stat line") + 2..];
-        let fields: Vec<&str> = after.split_whitespace().collect();
-        fields[11].parse::<u64>().unwrap() + fields[12].parse::<u64>().unwrap()
+        let (_, state, ticks) = parse_stat(&stat).expect("a stat line");
+        ticks.unwrap_or_else(|| panic!("CPU ticks in the viewer's stat ({state}): {stat}"))
     }
 
     /// The viewer's threads, one a line: name, state (R running, S sleeping, D in the
@@ -462,18 +460,10 @@ impl Running {
             .map(|e| {
                 let stat = std::fs::read_to_string(e.path().join("stat")).unwrap_or_default();
                 let wchan = std::fs::read_to_string(e.path().join("wchan")).unwrap_or_default();
-                let name = stat.find('(').zip(stat.rfind(')'));
-                let Some((open, close)) = name else {
+                let Some((name, state, ticks)) = parse_stat(&stat) else {
                     return format!("{:?}: no stat", e.file_name());
                 };
-                let fields: Vec<&str> = stat[close + 2..].split_whitespace().collect();
-                let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<u64>().ok());
-                format!(
-                    "{} {} ticks {} in {wchan}",
-                    &stat[open + 1..close],
-                    fields.first().unwrap_or(&"?"),
-                    ticks(11).unwrap_or(0) + ticks(12).unwrap_or(0)
-                )
+                format!("{name} {state} ticks {} in {wchan}", ticks.unwrap_or(0))
             })
             .collect();
         lines.sort();
@@ -530,6 +520,17 @@ impl Running {
         };
         (out, stdout)
     }
+}
+
+/// A `/proc/.../stat` line's command name, state and CPU ticks (user and system, fields 14
+/// and 15). The name (field 2) is in parentheses and may hold spaces: fields are counted
+/// after its closing one.
+fn parse_stat(stat: &str) -> Option<(&str, &str, Option<u64>)> {
+    let (open, close) = stat.find('(').zip(stat.rfind(')'))?;
+    let fields: Vec<&str> = stat.get(close + 2..)?.split_whitespace().collect();
+    let tick = |i: usize| fields.get(i).and_then(|f| f.parse::<u64>().ok());
+    let ticks = tick(11).zip(tick(12)).map(|(user, system)| user + system);
+    Some((&stat[open + 1..close], fields.first().copied()?, ticks))
 }
 
 /// An Xvfb to drive with xdotool: `None` (the reason printed) when either is missing.
