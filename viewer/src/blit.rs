@@ -1,5 +1,6 @@
-//! The view into the swapchain image: the blit (scaled to fit, aspect kept, centred on
-//! black), and the end of a frame (to PRESENT_SRC, or through a copy for the screenshot).
+//! The view into an image of the window's size (`backdrop.rs`): the blit (scaled to fit,
+//! aspect kept, centred on black); that image into the swapchain image, a copy; and the end
+//! of a frame (to PRESENT_SRC, or through a copy for the screenshot).
 
 use ash::vk;
 use specchio::vk::commands::{image_barriers, ImageBarrier};
@@ -11,24 +12,16 @@ use vk::AccessFlags2 as A;
 use vk::ImageLayout as L;
 use vk::PipelineStageFlags2 as S;
 
-/// Records: target UNDEFINED -> TRANSFER_DST; a clear where the blit leaves bars (all of it
-/// before the first view came); the blit from `source` (ready for `BLIT` reads, see
-/// `shown.rs`). The target is left in TRANSFER_DST, written at BLIT (and CLEAR).
-pub(super) fn record_blit(
+/// Records into `target` (in TRANSFER_DST, `extent` large): a clear where the blit leaves
+/// bars (all of it before the first view came), then the blit from `source` (ready for
+/// `BLIT` reads, see `shown.rs`). Written at BLIT (and CLEAR).
+pub(super) fn compose(
     device: &Device,
     cmd: vk::CommandBuffer,
     source: Option<&ShownImage>,
     target: vk::Image,
     extent: vk::Extent2D,
 ) {
-    let write_stages = S::BLIT | S::CLEAR;
-    // First scope = the stages that waited on the acquire semaphore (chaining).
-    let acquired = target_barrier(
-        target,
-        (L::UNDEFINED, write_stages, A::NONE),
-        (L::TRANSFER_DST_OPTIMAL, write_stages, A::TRANSFER_WRITE),
-    );
-    image_barriers(device, cmd, &[acquired]);
     let Some(source) = source else {
         clear_bars(device, cmd, target);
         return;
@@ -58,7 +51,48 @@ pub(super) fn record_blit(
     };
 }
 
-/// A barrier on the swapchain image's one subresource.
+/// Records the copy of `composed` (TRANSFER_SRC, visible to COPY, the swapchain's format and
+/// `extent`) into the swapchain image `target`: UNDEFINED -> TRANSFER_DST first, its first
+/// scope the COPY stage that waited on the acquire semaphore. `target` is left in
+/// TRANSFER_DST, written at COPY.
+pub(super) fn record_copy(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    composed: vk::Image,
+    target: vk::Image,
+    extent: vk::Extent2D,
+) {
+    let acquired = target_barrier(
+        target,
+        (L::UNDEFINED, S::COPY, A::NONE),
+        (L::TRANSFER_DST_OPTIMAL, S::COPY, A::TRANSFER_WRITE),
+    );
+    image_barriers(device, cmd, &[acquired]);
+    let region = vk::ImageCopy {
+        src_subresource: COLOR_LAYER,
+        src_offset: vk::Offset3D::default(),
+        dst_subresource: COLOR_LAYER,
+        dst_offset: vk::Offset3D::default(),
+        extent: vk::Extent3D {
+            width: extent.width,
+            height: extent.height,
+            depth: 1,
+        },
+    };
+    // SAFETY: both images are `extent` large, of one format, in the layouts named.
+    unsafe {
+        device.raw.cmd_copy_image(
+            cmd,
+            composed,
+            L::TRANSFER_SRC_OPTIMAL,
+            target,
+            L::TRANSFER_DST_OPTIMAL,
+            &[region],
+        )
+    };
+}
+
+/// A barrier on a window-sized image's one subresource.
 fn target_barrier(target: vk::Image, from: (L, S, A), to: (L, S, A)) -> ImageBarrier {
     ImageBarrier {
         image: target,
@@ -89,7 +123,7 @@ fn clear_bars(device: &Device, cmd: vk::CommandBuffer, target: vk::Image) {
     image_barriers(device, cmd, &[target_barrier(target, written, blit_writes)]);
 }
 
-/// The whole view onto `rect` ([x, y, width, height]) of the swapchain image.
+/// The whole view onto `rect` ([x, y, width, height]) of the window-sized image.
 fn blit_region(source: &ShownImage, rect: [u32; 4]) -> vk::ImageBlit {
     let corner = |x: u32, y: u32| vk::Offset3D {
         x: x as i32,
@@ -111,7 +145,7 @@ fn blit_region(source: &ShownImage, rect: [u32; 4]) -> vk::ImageBlit {
     }
 }
 
-/// Records the end of a frame: `target` from `last` (the blit's or the menu's writes) to
+/// Records the end of a frame: `target` from `last` (the copy's or the menu's writes) to
 /// PRESENT_SRC, or via TRANSFER_SRC and a copy into `readback` (the screenshot).
 pub(super) fn record_finish(
     device: &Device,
@@ -150,7 +184,7 @@ pub(super) fn record_finish(
     image_barriers(device, cmd, &[dst(readable, present)]);
 }
 
-/// The one colour subresource of a swapchain image.
+/// The one colour subresource of a window-sized image.
 const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
     aspect_mask: vk::ImageAspectFlags::COLOR,
     base_mip_level: 0,

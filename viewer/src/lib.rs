@@ -9,6 +9,7 @@
 
 mod answers;
 mod app;
+mod backdrop;
 mod blit;
 mod clock;
 mod demand;

@@ -2,8 +2,8 @@
 //!
 //! egui hands over triangles (`ClippedPrimitive`s) and texture changes (`TexturesDelta`);
 //! `egui-ash-renderer` turns them into one graphics pipeline's draws. This module owns that
-//! renderer and records its pass: the swapchain image goes from the blit's TRANSFER_DST to
-//! COLOR_ATTACHMENT_OPTIMAL, a dynamic-rendering pass LOADs what the blit wrote (the views
+//! renderer and records its pass: the swapchain image goes from the copy's TRANSFER_DST to
+//! COLOR_ATTACHMENT_OPTIMAL, a dynamic-rendering pass LOADs what the copy wrote (the views
 //! stay under the menu) and egui's triangles are blended over it.
 //!
 //! Lifetimes: egui frees a texture (a glyph atlas page that was replaced) in the delta of a
@@ -175,7 +175,7 @@ impl Overlay {
             .context("uploading a menu texture")
     }
 
-    /// Records the menu pass over `target` (written by the blit, in TRANSFER_DST_OPTIMAL);
+    /// Records the menu pass over `target` (written by the copy, in TRANSFER_DST_OPTIMAL);
     /// leaves it in COLOR_ATTACHMENT_OPTIMAL, written at COLOR_ATTACHMENT_OUTPUT.
     pub fn record(
         &self,
@@ -195,7 +195,7 @@ impl Overlay {
             base_array_layer: 0,
             layer_count: 1,
         };
-        // The blit's (and the clear's) writes, then the pass LOADs and blends over them.
+        // The copy's writes, then the pass LOADs and blends over them.
         let attachment = A::COLOR_ATTACHMENT_READ | A::COLOR_ATTACHMENT_WRITE;
         image_barriers(
             &self.device,
@@ -203,11 +203,7 @@ impl Overlay {
             &[ImageBarrier {
                 image: target,
                 range,
-                from: (
-                    L::TRANSFER_DST_OPTIMAL,
-                    S::BLIT | S::CLEAR,
-                    A::TRANSFER_WRITE,
-                ),
+                from: (L::TRANSFER_DST_OPTIMAL, S::COPY, A::TRANSFER_WRITE),
                 to: (
                     L::COLOR_ATTACHMENT_OPTIMAL,
                     S::COLOR_ATTACHMENT_OUTPUT,

@@ -1,10 +1,12 @@
-//! Getting a drawn view onto the window: the swapchain, the frames in flight, and the blit.
+//! Getting a drawn view onto the window: the swapchain, the frames in flight, the copy.
 //!
 //! Each frame: wait for the frame slot's previous use (its fence), acquire a swapchain image,
-//! record the upload of a view the renderer finished since the last frame (`shown.rs`) and
-//! a blit from the window's copy of the view (linear HDR) into the swapchain image (an sRGB
-//! image: the blit encodes), the menu over it, transition it for presentation, submit waiting on "image available" and
-//! signalling the image's "drawn" semaphore, present. Swapchain recreation (resize, out of
+//! record the upload of a view the renderer finished since the last frame (`shown.rs`); when
+//! the view, the size or the format changed, the blit from the window's copy of the view
+//! (linear HDR) into the composed view (`backdrop.rs`, an sRGB image: the blit encodes); the
+//! copy of the composed view into the swapchain image, the menu over it; the transition for
+//! presentation; the submit, waiting on "image available" and signalling the image's "drawn"
+//! semaphore; the present (on its thread). Swapchain recreation (resize, out of
 //! date) waits for the idle queue before destroying the old swapchain: a present has no
 //! fence. A menu renderer replaced meanwhile goes through the ring's deletion queue.
 
@@ -20,10 +22,11 @@ use specchio::vk::memory::{Buffer, BufferDesc};
 use specchio::vk::surface::Surface;
 use specchio::vk::swapchain::{Acquired, PresentPreference, Swapchain, SwapchainDesc};
 
-use super::blit::{record_blit, record_finish};
+use super::backdrop::Backdrop;
+use super::blit::{record_copy, record_finish};
 use super::overlay::{Overlay, Paint, Textures};
 use super::present_thread::PresentThread;
-use super::shown::{ShownImage, ShownView};
+use super::shown::ShownView;
 
 /// What became of one frame.
 pub enum Shown {
@@ -51,6 +54,8 @@ pub struct Presenter {
     textures: Textures,
     /// The view shown: the renderer's last finished one, copied onto this device.
     shown: ShownView,
+    /// The view as the window shows it, composed when it changes, copied every frame.
+    backdrop: Backdrop,
     /// Shared with the present thread while a present of it runs.
     swapchain: Option<Arc<Swapchain>>,
     /// The presents, made on a thread of their own (`present_thread`).
@@ -77,6 +82,7 @@ impl Presenter {
             overlay: None,
             textures: Textures::default(),
             shown: ShownView::new(device),
+            backdrop: Backdrop::new(device),
             swapchain: None,
             presents: PresentThread::start(),
             stale: true,
@@ -186,12 +192,14 @@ impl Presenter {
             .transpose()?;
         let cmd = self.ring.slot().cmd;
         let source = self.shown.record(&mut self.ring, cmd)?;
+        let composed =
+            (self.backdrop).record(&mut self.ring, cmd, source.as_ref(), format, extent)?;
         let swapchain = self.swapchain.as_deref().expect("acquired from it above");
-        self.record_image(cmd, swapchain, index, (source, paint), readback.as_ref())?;
+        self.record_image(cmd, swapchain, index, (composed, paint), readback.as_ref())?;
         let drawn = swapchain.render_done[index as usize];
-        // The blit (and the clear before it) write the image first: they wait for its
-        // acquisition; the menu pass after them is ordered by barriers.
-        let wait_stage = vk::PipelineStageFlags2::BLIT | vk::PipelineStageFlags2::CLEAR;
+        // The copy writes the image first: it waits for its acquisition; the menu pass after
+        // it is ordered by barriers.
+        let wait_stage = vk::PipelineStageFlags2::COPY;
         self.ring.submit((slot_semaphore, wait_stage), drawn)?;
         let swapchain = self.swapchain.as_ref().expect("acquired from it above");
         self.presents.present(swapchain, index)?;
@@ -205,22 +213,22 @@ impl Presenter {
         Ok((Shown::Presented, shot))
     }
 
-    /// Records swapchain image `index`'s frame: the view blitted in, the menu drawn over it
-    /// (when it paints anything), then the image made ready to present (and copied into
-    /// `readback` for a screenshot).
+    /// Records swapchain image `index`'s frame: the composed view copied in, the menu drawn
+    /// over it (when it paints anything), then the image made ready to present (and copied
+    /// into `readback` for a screenshot).
     fn record_image(
         &self,
         cmd: vk::CommandBuffer,
         swapchain: &Swapchain,
         index: u32,
-        (source, paint): (Option<ShownImage>, Option<&mut Paint>),
+        (composed, paint): (vk::Image, Option<&mut Paint>),
         readback: Option<&Buffer>,
     ) -> Result<()> {
         let (target, extent) = (swapchain.images[index as usize], swapchain.extent);
-        record_blit(&self.device, cmd, source.as_ref(), target, extent);
+        record_copy(&self.device, cmd, composed, target, extent);
         let mut last = (
             vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            vk::PipelineStageFlags2::BLIT,
+            vk::PipelineStageFlags2::COPY,
             vk::AccessFlags2::TRANSFER_WRITE,
         );
         let paint = paint.filter(|p| !p.primitives.is_empty());

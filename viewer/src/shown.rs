@@ -6,8 +6,9 @@
 //! menu opened with F1 or a resized window would show only after it. The renderer therefore
 //! runs on one logical device and the window on another, each with its own queue: the
 //! renderer copies each finished view out for the host (`DisplayPixels`), and the window's
-//! device uploads it here and blits it into the swapchain image as often as the window needs
-//! a frame (the menu, a resize, an exposed window), whatever the renderer's queue is doing.
+//! device uploads it here and blits it into the window's composed view (`backdrop.rs`), which
+//! every window frame (the menu, a resize, an exposed window) then shows, whatever the
+//! renderer's queue is doing.
 //! The cost is one copy of the view through host memory per renderer frame (the 1200x450
 //! pair is 4.3 MB of RGBA16F).
 //!
@@ -32,12 +33,15 @@ use vk::AccessFlags2 as A;
 use vk::ImageLayout as L;
 use vk::PipelineStageFlags2 as S;
 
-/// The image a window frame blits from: in `TRANSFER_SRC_OPTIMAL`, ready for `BLIT` reads.
+/// The image the window's view is composed from: in `TRANSFER_SRC_OPTIMAL`, ready for
+/// `BLIT` reads.
 #[derive(Debug, Clone, Copy)]
 pub struct ShownImage {
     pub image: vk::Image,
     pub width: u32,
     pub height: u32,
+    /// Which upload it holds (1 for the first): a new one asks for a new composition.
+    pub generation: u64,
 }
 
 /// The view the window shows: the newest pixels not yet uploaded, and the image holding the
@@ -49,6 +53,8 @@ pub struct ShownView {
     /// before has finished once `FrameRing::begin` returned (a new 4.3 MB buffer a frame
     /// cost its page faults every frame).
     staging: Vec<Option<Buffer>>,
+    /// Uploads recorded so far.
+    generation: u64,
     device: Arc<Device>,
 }
 
@@ -58,6 +64,7 @@ impl ShownView {
             pending: None,
             image: None,
             staging: (0..FRAMES_IN_FLIGHT).map(|_| None).collect(),
+            generation: 0,
             device: Arc::clone(device),
         }
     }
@@ -77,11 +84,13 @@ impl ShownView {
     ) -> Result<Option<ShownImage>> {
         if let Some(pixels) = self.pending.take() {
             self.upload(ring, cmd, &pixels)?;
+            self.generation += 1;
         }
         Ok(self.image.as_ref().map(|image| ShownImage {
             image: image.raw,
             width: image.desc.width,
             height: image.desc.height,
+            generation: self.generation,
         }))
     }
 
