@@ -3,9 +3,10 @@
 //! the observer and the mirror, pauses and steps time, and switches the fill method, the
 //! lookup and the refresh policy (docs/viewer.md).
 //!
-//! The renderer draws one view image per frame exactly as `specchio render` does (no
-//! readback); `present.rs` hands it to `blit.rs`, which blits it into the swapchain image, and
-//! `present_thread.rs` presents it. `app/` is the event loop.
+//! The renderer draws the view exactly as `specchio render` does and copies it out for the
+//! host; `shown.rs` uploads it onto the window's own device, `backdrop.rs` composes it at the
+//! window's size (the blit is `blit.rs`'s), `present.rs` copies that into the swapchain image
+//! with the menu over it, and `present_thread.rs` presents it. `app/` is the event loop.
 
 mod answers;
 mod app;
@@ -216,7 +217,7 @@ fn open_device(
 
 /// The window's own instance (with the surface `extensions`) and device on the GPU
 /// `--device` names, with the swapchain extension and no optional feature: it uploads,
-/// blits, draws the menu and presents.
+/// composes, copies, draws the menu and presents.
 ///
 /// Why an instance of its own, not a second device on the renderer's: measured on lavapipe
 /// (`many-objects --lookup distance-exact --cube-size 2048`, F1 pressed 100 ms into a cube

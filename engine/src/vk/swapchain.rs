@@ -82,7 +82,8 @@ impl Swapchain {
         let Some(extent) = choose_extent(&caps, desc.window_size) else {
             return Ok(None);
         };
-        // The viewer blits into the images, so their format must take a blit destination
+        // The viewer blits its view into an image of this format (optimal tiling; copied
+        // into these images each frame), so the format must take a blit destination
         // (optional for swapchain formats in general; sRGB ones lack it on some GPUs).
         let blittable = |format| {
             // SAFETY: a query on the device's own physical device; no handles are created.
@@ -258,7 +259,7 @@ fn choose_extent(caps: &vk::SurfaceCapabilitiesKHR, window: [u32; 2]) -> Option<
     (extent.width > 0 && extent.height > 0).then_some(extent)
 }
 
-/// The images' usage: the viewer blits into them (TRANSFER_DST, required), reads one back
+/// The images' usage: the viewer copies into them (TRANSFER_DST, required), reads one back
 /// for screenshots (TRANSFER_SRC) and draws the menu into them (COLOR_ATTACHMENT) where the
 /// surface allows.
 fn choose_usage(supported: vk::ImageUsageFlags) -> Result<vk::ImageUsageFlags, GpuError> {
