@@ -4,7 +4,8 @@
 //! display it says what to run instead.
 //!
 //! Tolerance: the viewer's pixels come from the GPU's blit of the linear half-float view
-//! into an 8-bit sRGB swapchain image, the PNG's from the CPU's `linear_to_srgb` and
+//! into an 8-bit sRGB image (the window's composed view, copied unchanged into the swapchain
+//! image), the PNG's from the CPU's `linear_to_srgb` and
 //! rounding; both encode the same linear value, and the two encoders may round a value lying
 //! near the middle between two 8-bit codes differently. So a channel may differ by 1 (of 255)
 //! and by no more; the images are otherwise identical (the count of such channels is

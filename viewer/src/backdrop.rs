@@ -1,15 +1,18 @@
-//! The view as the window shows it (scaled to fit, black bars, 8-bit sRGB), composed once
-//! per view rather than once per window frame.
+//! The view as the window shows it (scaled to fit, black bars, in the swapchain's format),
+//! composed once per view rather than once per window frame.
 //!
-//! Why: the blit from the window's copy of the view (linear RGBA16F) into an 8-bit sRGB image
-//! scales, filters and encodes every pixel. On a CPU driver that is the window frame's largest
+//! Why: the blit from the window's copy of the view (linear RGBA16F) into the swapchain's
+//! format (8-bit sRGB where offered) scales, filters and encodes every pixel. On a CPU driver that is the window frame's largest
 //! cost (lavapipe, 1200x450: its blit's JIT code took about two thirds of the window's
 //! rasteriser samples in a profile of F1 presses), and a frame that changes only the menu
 //! (F1, `h`, the frame-time graph, an exposed window) would pay it for the same pixels. So
 //! the blit writes this image, at the swapchain's size and in its format, when the view, the
 //! size or the format changed; every window frame copies it into the swapchain image (texels
-//! of one format copied as they are: a memcpy on a CPU driver, a copy engine's job on a GPU)
-//! and draws the menu over that. The price is one more window-sized image.
+//! of one format copied as they are: a memcpy on a CPU driver, a plain transfer on a GPU)
+//! and draws the menu over that. The price: one more window-sized image, and while the scene
+//! moves (a new view for nearly every window frame) a copy on top of the blit each frame
+//! (on lavapipe 0.2 to 0.4 ms at 1200x450; thesis-room's frame rate moved within its noise,
+//! docs/viewer.md).
 //!
 //! Synchronisation, all on the window's queue: between frames the image is in
 //! `TRANSFER_SRC_OPTIMAL`, last read by a copy (`COPY`). A recompose waits for every earlier
@@ -17,6 +20,10 @@
 //! writes visible to the copies after it. An image replaced by one of another size or format
 //! is retired through the frame ring's deletion queue: a frame in flight may still copy from
 //! it.
+//!
+//! What the image holds is noted when its composition is recorded, not when it is submitted:
+//! the caller submits every frame it records, and a failure in between ends the viewer (a
+//! frame recorded and then dropped would leave the note claiming pixels never drawn).
 
 use std::sync::Arc;
 
@@ -104,7 +111,6 @@ impl Backdrop {
                 if let Some(old) = self.image.replace(new) {
                     ring.defer(old);
                 }
-                self.holds = None;
                 // Its contents are written whole: a new image starts from UNDEFINED.
                 L::UNDEFINED
             }
@@ -124,10 +130,15 @@ impl Backdrop {
                 A::TRANSFER_WRITE,
             );
             let for_copies = (L::TRANSFER_SRC_OPTIMAL, S::COPY, A::TRANSFER_READ);
+            // After every earlier copy from it; a new image has none to wait for.
+            let first = match before {
+                L::UNDEFINED => S::NONE,
+                _ => S::COPY,
+            };
             image_barriers(
                 &self.device,
                 cmd,
-                &[barrier((before, S::COPY, A::NONE), writes)],
+                &[barrier((before, first, A::NONE), writes)],
             );
             compose(&self.device, cmd, source, raw, extent);
             image_barriers(&self.device, cmd, &[barrier(writes, for_copies)]);

@@ -1,4 +1,4 @@
-//! Drawing egui's output (the menu, the help) into the swapchain image, after the blit.
+//! Drawing egui's output (the menu, the help) into the swapchain image, over the view copied in.
 //!
 //! egui hands over triangles (`ClippedPrimitive`s) and texture changes (`TexturesDelta`);
 //! `egui-ash-renderer` turns them into one graphics pipeline's draws. This module owns that

@@ -198,7 +198,9 @@ impl Presenter {
         self.record_image(cmd, swapchain, index, (composed, paint), readback.as_ref())?;
         let drawn = swapchain.render_done[index as usize];
         // The copy writes the image first: it waits for its acquisition; the menu pass after
-        // it is ordered by barriers.
+        // it is ordered by barriers. The view's upload is a COPY as well and so waits too; a
+        // batch of its own would let it overlap a FIFO wait on a GPU (not done: measured
+        // only on CPU drivers here).
         let wait_stage = vk::PipelineStageFlags2::COPY;
         self.ring.submit((slot_semaphore, wait_stage), drawn)?;
         let swapchain = self.swapchain.as_ref().expect("acquired from it above");

@@ -83,14 +83,18 @@ impl Swapchain {
             return Ok(None);
         };
         // The viewer blits its view into an image of this format (optimal tiling; copied
-        // into these images each frame), so the format must take a blit destination
-        // (optional for swapchain formats in general; sRGB ones lack it on some GPUs).
+        // into these images each frame), so the format must take a blit destination and
+        // transfers (optional for swapchain formats in general; sRGB ones lack BLIT_DST on
+        // some GPUs).
         let blittable = |format| {
             // SAFETY: a query on the device's own physical device; no handles are created.
             let props = unsafe {
                 (device.instance.raw).get_physical_device_format_properties(device.physical, format)
             };
-            (props.optimal_tiling_features).contains(vk::FormatFeatureFlags::BLIT_DST)
+            let needed = vk::FormatFeatureFlags::BLIT_DST
+                | vk::FormatFeatureFlags::TRANSFER_SRC
+                | vk::FormatFeatureFlags::TRANSFER_DST;
+            (props.optimal_tiling_features).contains(needed)
         };
         let format = choose_format(&support.formats, blittable)?;
         let present_mode = choose_present_mode(&support.present_modes, desc.present);
