@@ -40,11 +40,11 @@ use vk::PipelineStageFlags2 as S;
 use super::blit::compose;
 use super::shown::ShownImage;
 
-/// The composed view, and what it holds.
+/// The composed view, and which view it holds.
 pub struct Backdrop {
     image: Option<Image>,
-    /// What `image` holds; `None` when it holds nothing yet.
-    holds: Option<Held>,
+    /// The generation of the view `image` holds; `None` while it holds nothing yet.
+    generation: Option<u64>,
     device: Arc<Device>,
 }
 
@@ -80,7 +80,7 @@ impl Backdrop {
     pub fn new(device: &Arc<Device>) -> Self {
         Self {
             image: None,
-            holds: None,
+            generation: None,
             device: Arc::clone(device),
         }
     }
@@ -101,7 +101,7 @@ impl Backdrop {
             extent: [extent.width, extent.height],
             format,
         };
-        let plan = plan(self.holds, wanted);
+        let plan = plan(self.held(), wanted);
         let before = match plan {
             Plan::Keep | Plan::Compose => L::TRANSFER_SRC_OPTIMAL,
             Plan::Replace => {
@@ -142,9 +142,19 @@ impl Backdrop {
             );
             compose(&self.device, cmd, source, raw, extent);
             image_barriers(&self.device, cmd, &[barrier(writes, for_copies)]);
-            self.holds = Some(wanted);
+            self.generation = Some(wanted.generation);
         }
         Ok(raw)
+    }
+
+    /// What the image holds: its size and format are its own, the view is noted.
+    fn held(&self) -> Option<Held> {
+        let (image, generation) = self.image.as_ref().zip(self.generation)?;
+        Some(Held {
+            generation,
+            extent: [image.desc.width, image.desc.height],
+            format: image.desc.format,
+        })
     }
 }
 

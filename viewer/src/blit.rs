@@ -5,6 +5,7 @@
 use ash::vk;
 use specchio::vk::commands::{image_barriers, ImageBarrier};
 use specchio::vk::device::Device;
+use specchio::vk::image::color_copy_region;
 use specchio::vk::memory::Buffer;
 
 use super::shown::ShownImage;
@@ -163,13 +164,7 @@ pub(super) fn record_finish(
     };
     let readable = (L::TRANSFER_SRC_OPTIMAL, S::COPY, A::TRANSFER_READ);
     image_barriers(device, cmd, &[dst(last, readable)]);
-    let copy = vk::BufferImageCopy::default()
-        .image_subresource(COLOR_LAYER)
-        .image_extent(vk::Extent3D {
-            width: extent.width,
-            height: extent.height,
-            depth: 1,
-        });
+    let copy = color_copy_region(0, 1, [extent.width, extent.height]);
     // SAFETY: the image is in TRANSFER_SRC layout; the buffer holds width x height x 4 bytes.
     unsafe {
         device.raw.cmd_copy_image_to_buffer(
