@@ -10,12 +10,12 @@
 //   mirror, so a is also the mask; ids are integers far below 2^24, exact in a float.
 // What the reflected ray meets is found one of two ways (engine/src/render/sensor_rays.rs):
 // - through the cube (sensor_ray.glsl): the depth search and the id cube, with any lookup;
-// - TRACED, with the ray-query lookup: ray_query.glsl's trace, exactly as the colour pass's
-//   and the reference's, so that colour, range and ids come from one light path. The range
-//   is then measured from the ray's offset origin, as the reference measures it; a ray that
-//   meets nothing (it cannot, inside a closed room) gets the room box's answer, as the cube
-//   path's does.
-// build: mirror_ray_origin=OUTPUT_ORIGIN_RANGE mirror_ray_direction=OUTPUT_DIRECTION_ID mirror_ray_traced_origin=OUTPUT_ORIGIN_RANGE+TRACED mirror_ray_traced_direction=OUTPUT_DIRECTION_ID+TRACED
+// - TRACED, with a lookup that traces (ray-query, or bvh with BVH defined): its trace
+//   (ray_query.glsl or bvh.glsl), exactly as the colour pass's and the reference's, so that
+//   colour, range and ids come from one light path. The range is then measured from the ray's
+//   offset origin, as the reference measures it; a ray that meets nothing (it cannot, inside
+//   a closed room) gets the room box's answer, as the cube path's does.
+// build: mirror_ray_origin=OUTPUT_ORIGIN_RANGE mirror_ray_direction=OUTPUT_DIRECTION_ID mirror_ray_traced_origin=OUTPUT_ORIGIN_RANGE+TRACED mirror_ray_traced_direction=OUTPUT_DIRECTION_ID+TRACED mirror_ray_bvh_origin=OUTPUT_ORIGIN_RANGE+TRACED+BVH mirror_ray_bvh_direction=OUTPUT_DIRECTION_ID+TRACED+BVH
 #extension GL_GOOGLE_include_directive : require
 #ifdef TRACED
 #extension GL_EXT_nonuniform_qualifier : require
@@ -26,7 +26,10 @@ SCENE_BINDINGS;
 PUSH_CONSTANTS;
 
 #include "mirror.glsl"
-#ifdef TRACED
+#if defined(TRACED) && defined(BVH)
+#include "materials.glsl"
+#include "bvh.glsl"
+#elif defined(TRACED)
 #include "materials.glsl"
 #include "ray_query.glsl"
 #else

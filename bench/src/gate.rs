@@ -352,6 +352,7 @@ mod tests {
             frame_cost_ms: None,
             gpu_cube_ms: None,
             gpu_sensor_ms: None,
+            cpu_lookup_ms: None,
             wall_ms: None,
             work: RungWork {
                 faces_rendered: 30,

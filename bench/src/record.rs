@@ -256,11 +256,15 @@ pub struct RungRow {
     pub frames: usize,
     /// Per frame, the GPU time of the cube's update (six-pass fill of all six faces plus
     /// mips; for ray-query, the top-level acceleration structure's rebuild) plus the sensor
-    /// view (scene and mirror): what the sensor frame costs. None without timestamps.
+    /// view (scene and mirror), plus the host time of the lookup's own per-frame work (the
+    /// bvh lookup's top-level rebuild): what the sensor frame costs. None without timestamps.
     pub frame_cost_ms: Option<Stats>,
-    /// Its two parts.
+    /// Its parts.
     pub gpu_cube_ms: Option<Stats>,
     pub gpu_sensor_ms: Option<Stats>,
+    /// (Absent from records written before it was measured.)
+    #[serde(default)]
+    pub cpu_lookup_ms: Option<Stats>,
     /// Submit to fence of the whole frame (observer, sensor, the pair and readback included).
     pub wall_ms: Option<Stats>,
     pub work: RungWork,

@@ -7,11 +7,13 @@
 //! rungs are timed interleaved (one frame of each per round, so a drifting machine slows all
 //! alike), every frame at t = 0, the instant whose error is then measured on one more frame
 //! of each rung against the exact reference's sensor and observer images (1 sample per
-//! pixel). The frame cost is the GPU's own time for the cube update plus the sensor view
-//! (`gpu_cube_ms + gpu_sensor_ms`): the cube fill and its mips for the cube lookups, the
-//! acceleration structure's rebuild for ray-query, which skips the fill. The observer, the
-//! side-by-side pair and the readback copies are left out: they do not belong to the sensor
-//! frame.
+//! pixel). The frame cost is the GPU's own time for the cube update plus the sensor view,
+//! plus the host time of the lookup's own per-frame work (`gpu_cube_ms + gpu_sensor_ms +
+//! cpu_lookup_ms`): the cube fill and its mips for the cube lookups, the acceleration
+//! structure's rebuild for ray-query, which skips the fill, the top level's rebuild on the
+//! host for bvh (every frame, as the cube is refilled every frame: the ladder measures a
+//! frame in which something moved). The observer, the side-by-side pair and the readback
+//! copies are left out: they do not belong to the sensor frame.
 
 use std::sync::Arc;
 
@@ -106,11 +108,12 @@ pub fn measure(
             frame_cost_ms: Stats::of(
                 timed
                     .iter()
-                    .filter_map(|r| Some(r.gpu_cube_ms? + r.gpu_sensor_ms?))
+                    .filter_map(|r| Some(r.gpu_cube_ms? + r.gpu_sensor_ms? + r.cpu_lookup_ms))
                     .collect(),
             ),
             gpu_cube_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_cube_ms).collect()),
             gpu_sensor_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_sensor_ms).collect()),
+            cpu_lookup_ms: Stats::of(timed.iter().map(|r| r.cpu_lookup_ms).collect()),
             wall_ms: Stats::of(timed.iter().map(|r| r.submit_wait_ms).collect()),
             work: work(timed, stats),
             sensor_traced_fraction: traced_fraction(timed),

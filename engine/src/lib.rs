@@ -17,6 +17,8 @@
 //! - [`render`]: the renderer: GPU structs, the cube fill methods (plug-ins, see
 //!   [`render::methods`]) and the observer / sensor views with the analytic mirror;
 //! - [`reference`]: the exact CPU ray-traced mirror (BVH, watertight triangles, analytic sphere);
+//! - [`bvh`]: the scene's two-level BVH in the layout the `bvh` lookup's shader traverses, and
+//!   the same traversal on the CPU (no Vulkan);
 //! - [`sensor`]: the sensor's exact ray map (the non-central ground truth) and what derives
 //!   from it;
 //! - [`metrics`]: image-error metrics (RMSE, PSNR, relMSE, FLIP) and the FLIP heatmap;
@@ -25,6 +27,7 @@
 //! - [`stdout`]: standard output that never panics (`say!`), below everything;
 //! - [`random`]: the one seeded random sequence (SplitMix64).
 
+pub mod bvh;
 pub mod files;
 pub mod image;
 pub mod lookup_registry;

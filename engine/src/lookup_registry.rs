@@ -40,6 +40,9 @@ macro_rules! with_lookups {
             /// the reflected ray is traced (ray queries). Exact wherever it falls back;
             /// `distance` elsewhere.
             DistanceExact = "distance-exact" => distance_exact::DistanceExact;
+            /// Exact on any device: the reflected ray is traced through a BVH of our own in
+            /// the mirror's shader (storage buffers, no extension); no cube map.
+            Bvh = "bvh" => bvh::Bvh;
         }
     };
 }

@@ -14,7 +14,7 @@ from conftest import cli, scene_path, tree
 
 def test_the_traced_labels_match_the_exact_reference(thesis, renderer):
     if renderer.ground_truth != "traced":
-        raise AssertionError(f"the default device has no ray queries ({renderer.device})")
+        raise AssertionError(f"the default device gave no traced labels ({renderer.device})")
     pose = (0.8, 3.0, -0.4, 120.0)
     gpu = renderer.render(pose=pose, time=0.5)
     exact = specchio.reference(thesis, pose=pose, time=0.5)

@@ -128,8 +128,8 @@ def test_lookups_and_devices_are_checked(thesis):
 def test_every_device_renders_and_says_where_its_labels_come_from(thesis, device):
     with specchio.Renderer(thesis, device=device) as r:
         frame = r.render(pose=(0.5, 3.0, 0.0, 30.0))
-        # Ray queries give traced labels; a device without them falls back to the cube's.
-        assert (r.lookup, r.ground_truth) in {("ray-query", "traced"), ("plain", "cube")}
+        # Traced labels on every device: ray queries where it has them, our own BVH else.
+        assert (r.lookup, r.ground_truth) in {("ray-query", "traced"), ("bvh", "traced")}
         assert frame["mask"].any() and np.isfinite(frame["sensor"]).all()
 
 

@@ -119,7 +119,8 @@ fn both_commands_write_the_sensor_outputs() {
 /// With the ray-query lookup the outputs are traced along the colour's own light path: no
 /// warning, `ground_truth` says so, and the ids and ranges are the reference's (six-colour
 /// room: 99.9 % of the mirror pixels' ids; ranges within 1e-4 relative). Without `--lookup`, a device
-/// with ray queries picks it; the plain lookup's cube path warns and says so in camera.json.
+/// with ray queries picks it, any other the bvh lookup; the plain lookup's cube path warns
+/// and says so in camera.json.
 /// On lavapipe, which has ray queries (a GPU may lack them: the H200 does).
 #[test]
 fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
@@ -142,10 +143,16 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
     assert_eq!(truth["colour_agrees"], true);
     assert_traced_layers_are_the_references(&traced, &reference);
 
-    let has_ray_queries = default_device_has_ray_queries();
-    let (default, _) = render("sensor-truth-default", None);
-    let want = if has_ray_queries { "traced" } else { "cube" };
-    assert_eq!(camera_json(&default)["ground_truth"]["layers"], want);
+    // Every device traces them by default: ray-query where it has ray queries, bvh else.
+    let want = if default_device_has_ray_queries() {
+        "ray-query"
+    } else {
+        "bvh"
+    };
+    let (default, said) = render("sensor-truth-default", None);
+    assert!(!said.contains("warning"), "{said}");
+    assert_eq!(camera_json(&default)["ground_truth"]["layers"], "traced");
+    assert_eq!(camera_json(&default)["ground_truth"]["colour"], want);
 
     let (cube, said) = render("sensor-truth-cube", Some("plain"));
     assert!(

@@ -13,6 +13,9 @@ use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::{Device, DeviceDesc, OptionalFeatures};
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
+/// The traced lookups' images against the reference's.
+pub mod traced;
+
 /// The `specchio` binary: only the CLI crate's tests (tests/cli/) have it, so the engine's
 /// tests, which share this module, compile without it and never call this.
 fn binary() -> &'static str {

@@ -62,12 +62,18 @@ const BOX_PAD_RELATIVE: f32 = 64.0 * f32::EPSILON;
 impl Boundable for PaddedTriangle {
     fn aabb(&self) -> Aabb {
         let [a, b, c] = self.0;
-        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
-        let pad = BOX_PAD_RELATIVE * lo.abs().max(hi.abs()).max_element().max(1.0);
-        Aabb {
-            min: Vec3A::from(lo - pad),
-            max: Vec3A::from(hi + pad),
-        }
+        padded_box(a.min(b).min(c), a.max(b).max(c))
+    }
+}
+
+/// The box `lo..hi` padded as every box a traversal tests must be (see [`PaddedTriangle`]):
+/// by [`BOX_PAD_RELATIVE`] of its largest coordinate magnitude, at least 1. The `bvh`
+/// lookup's trees pad theirs the same way (`crate::bvh`).
+pub fn padded_box(lo: Vec3, hi: Vec3) -> Aabb {
+    let pad = BOX_PAD_RELATIVE * lo.abs().max(hi.abs()).max_element().max(1.0);
+    Aabb {
+        min: Vec3A::from(lo - pad),
+        max: Vec3A::from(hi + pad),
     }
 }
 

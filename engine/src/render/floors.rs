@@ -64,7 +64,7 @@ impl Renderer {
         let record_start = Instant::now();
         self.acquire_slot()?;
         let state = SceneState::at(&self.scene, t_s);
-        let views = self.write_frame_buffers(&state)?;
+        let (views, _) = self.write_frame_buffers(&state)?;
         let plan = self.frame_parts().plan_cube(&views, 0x3F);
         let cmd = self.begin_frame()?;
         let mut report = FrameReport {

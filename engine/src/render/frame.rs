@@ -85,6 +85,9 @@ pub struct FrameReport {
     /// Objects (walls included) drawn into each face; 0 for a face not re-rendered.
     pub draws_per_face: [u32; 6],
     pub cpu_record_ms: f64,
+    /// Host time of the lookup's own per-frame work before recording (the bvh lookup's
+    /// top-level rebuild; part of `cpu_record_ms`).
+    pub cpu_lookup_ms: f64,
     /// Submit to fence signalled (the whole frame's GPU work, readback copies included).
     pub submit_wait_ms: f64,
     /// GPU time per cube face (six-pass only), the fill, the fill plus mips, the mips, and

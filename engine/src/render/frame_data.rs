@@ -10,15 +10,16 @@ use super::resources::VIEW_COUNT;
 use super::{camera_clearance, draw, lookups, Renderer, PAIR_SIZE};
 use crate::scene::camera::{self, ViewBasis};
 use crate::scene::state::SceneState;
-use crate::scene::Scene;
+use crate::scene::{RefreshPolicy, Scene};
 use crate::vk::GpuError;
 
 impl Renderer {
-    /// Writes frame data, views and object transforms; returns the views (render space).
+    /// Writes frame data, views and object transforms, and has the lookup prepare its own;
+    /// returns the views (render space) and the lookup's host time (ms).
     pub(super) fn write_frame_buffers(
         &mut self,
         state: &SceneState,
-    ) -> Result<Vec<ViewBasis>, GpuError> {
+    ) -> Result<(Vec<ViewBasis>, f64), GpuError> {
         let scene = &self.scene;
         let uploads = &mut self.frames.current_mut().uploads;
         uploads.write(&self.resources.frame, &[frame_data(scene, state)])?;
@@ -32,8 +33,15 @@ impl Renderer {
             .map(|(o, d)| camera::transform_aabb(&o.model_to_world, d.bounds_min, d.bounds_max))
             .collect();
         self.drawn = draw::DrawOrder::of(bounds, scene.cube.offset_m);
-        (self.mirror.pass).prepare(uploads, &objects, &self.drawn.bounds)?;
-        Ok(bases)
+        let lookup_start = std::time::Instant::now();
+        let frame = lookups::FrameObjects {
+            objects: &objects,
+            bounds: &self.drawn.bounds,
+            every_frame: scene.refresh == RefreshPolicy::EveryFrame,
+        };
+        (self.mirror.pass).prepare(uploads, &frame)?;
+        let lookup_ms = lookup_start.elapsed().as_secs_f64() * 1e3;
+        Ok((bases, lookup_ms))
     }
 }
 

@@ -7,13 +7,15 @@ use super::gpu;
 use super::lookups::{self, LookupPass, TraceOrder};
 use super::resources::SceneResources;
 use super::targets::CubeTarget;
-use crate::scene::Lookup;
+use crate::scene::{Lookup, Scene};
 use crate::vk::commands::Submitter;
 use crate::vk::device::Device;
 use crate::vk::GpuError;
 
-/// What a lookup's pass is built from: the device, the scene on it, the cube, the submitter.
+/// What a lookup's pass is built from: the scene, the device, the scene on it, the cube, the
+/// submitter.
 pub(super) type Inputs<'a> = (
+    &'a Scene,
     &'a Arc<Device>,
     &'a SceneResources,
     &'a CubeTarget,
@@ -62,7 +64,7 @@ impl Mirror {
 
 /// The pass of `lookup`, refused with the reason when the device cannot run it.
 fn create_pass(
-    (device, resources, cube, submitter): Inputs<'_>,
+    (scene, device, resources, cube, submitter): Inputs<'_>,
     lookup: Lookup,
     trace_order: TraceOrder,
     frames_in_flight: usize,
@@ -73,6 +75,7 @@ fn create_pass(
     let plugin = lookups::plugin(lookup);
     let pass = plugin.create(&lookups::LookupContext {
         lookup,
+        scene,
         device,
         resources,
         cube,

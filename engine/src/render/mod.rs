@@ -148,7 +148,7 @@ impl Renderer {
         }
         let (scene_layout, view_pipelines) = pipelines::create_pipelines(device, &resources)?;
         let mirror = mirror::Mirror::create(
-            (device, &resources, &cube, &submitter),
+            (&scene, device, &resources, &cube, &submitter),
             scene.mirror.lookup,
             options.trace_order,
             frames_in_flight,
@@ -229,7 +229,7 @@ impl Renderer {
         self.acquire_slot()?;
         self.follow_lookup()?;
         let state = SceneState::at(&self.scene, t_s);
-        let views = self.write_frame_buffers(&state)?;
+        let (views, cpu_lookup_ms) = self.write_frame_buffers(&state)?;
         let fill_cube = self.fills_cube(readback);
         if readback.rays {
             self.prepare_sensor_rays()?;
@@ -246,6 +246,7 @@ impl Renderer {
             frame,
             time_s: t_s,
             cube_updated: dirty != 0,
+            cpu_lookup_ms,
             ..Default::default()
         };
         let cmd = self.begin_frame()?;
@@ -288,7 +289,13 @@ impl Renderer {
             self.views.sensor_rays = None;
         }
         self.mirror.follow(
-            (&self.device, &self.resources, &self.cube, &self.submitter),
+            (
+                &self.scene,
+                &self.device,
+                &self.resources,
+                &self.cube,
+                &self.submitter,
+            ),
             self.scene.mirror.lookup,
         )
     }

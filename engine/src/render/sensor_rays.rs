@@ -4,9 +4,9 @@
 //! is every lookup's (`mirror_hit`, `reflect`); what it meets comes from one of two places
 //! ([`GroundTruth`]):
 //!
-//! - traced (`mirror_ray.frag.glsl` built with `TRACED`), when the lookup is `ray-query`: through the
-//!   lookup's own acceleration structure and set, exactly as the colour pass's trace, so the
-//!   colour, the range and the ids of a frame come from one light path;
+//! - traced (`mirror_ray.frag.glsl` built with `TRACED` and the lookup's tracer), when the lookup
+//!   traces (`ray-query`, `bvh`): through the lookup's own set, exactly as the colour pass's
+//!   trace, so the colour, the range and the ids of a frame come from one light path;
 //! - through the cube (`mirror_ray.frag.glsl`, `shaders/include/sensor_ray.glsl`) otherwise:
 //!   the distance lookup's search along the reflected ray through the cube's depth, and the id
 //!   cube's texel where it lands. That is exact only where the cube's centre saw what the ray
@@ -19,6 +19,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use super::lookups::TraceSet;
 use super::pipelines::mirror_pipeline;
 use super::targets::{CubeTarget, ViewTarget, DIRECTION_FORMAT};
 use super::Renderer;
@@ -62,24 +63,22 @@ struct CubeSet {
 }
 
 impl SensorRays {
-    /// The traced passes, reading the lookup's trace set (`LookupPass::trace_set`).
+    /// The traced passes: the lookup's ray-map shaders, reading its trace set
+    /// (`LookupPass::trace_set`).
     fn traced(
         device: &Arc<Device>,
         scene_set_layout: vk::DescriptorSetLayout,
-        (trace_layout, trace_set): (vk::DescriptorSetLayout, vk::DescriptorSet),
+        trace: TraceSet,
         push_size: u32,
     ) -> Result<Self, GpuError> {
-        let shaders = [
-            crate::shaders::MIRROR_RAY_TRACED_ORIGIN_FRAG,
-            crate::shaders::MIRROR_RAY_TRACED_DIRECTION_FRAG,
-        ];
-        let layouts = [scene_set_layout, trace_layout];
-        let (origin, direction, layout) = Self::pipelines(device, &layouts, shaders, push_size)?;
+        let layouts = [scene_set_layout, trace.layout];
+        let (origin, direction, layout) =
+            Self::pipelines(device, &layouts, trace.ray_map, push_size)?;
         Ok(Self {
             origin,
             direction,
             layout,
-            set: trace_set,
+            set: trace.set,
             _cube_set: None,
         })
     }

@@ -19,16 +19,14 @@
 //! ([`super::tally`]), reported per frame.
 
 use ash::vk;
-use glam::Vec3;
 
 use super::distance::{cube_bindings, cube_pool_size, depth_sampler, write_cube};
 use super::tally::{FrameTally, TraceTally};
 use super::tracing::SceneTrace;
 use super::{
-    LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders, Rung,
-    Start,
+    FrameObjects, LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines,
+    MirrorShaders, Rung, Start,
 };
-use crate::render::gpu::ObjectData;
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
 use crate::vk::image::Sampler;
@@ -142,10 +140,9 @@ impl LookupPass for DistanceExactPass {
     fn prepare(
         &mut self,
         uploads: &mut FrameUploads,
-        objects: &[ObjectData],
-        bounds: &[(Vec3, Vec3)],
+        frame: &FrameObjects<'_>,
     ) -> Result<(), GpuError> {
-        self.trace.prepare(uploads, objects, bounds)
+        self.trace.prepare(uploads, frame.objects, frame.bounds)
     }
 
     fn record(&self, cmd: vk::CommandBuffer) {

@@ -14,6 +14,7 @@
 
 /// The order the tracing lookups hand their acceleration-structure builds their leaves in.
 pub mod build_order;
+mod bvh;
 mod cube;
 mod distance;
 mod distance_exact;
@@ -133,6 +134,8 @@ pub struct LookupNeeds {
 pub struct LookupContext<'a> {
     /// The lookup being built (for its messages).
     pub lookup: Lookup,
+    /// The scene being rendered (its meshes and room, for a lookup that builds from them).
+    pub scene: &'a crate::scene::Scene,
     pub device: &'a Arc<Device>,
     pub resources: &'a SceneResources,
     /// The cube map (colour and depth) the cube lookups read.
@@ -169,20 +172,19 @@ pub trait LookupPass: Send {
     }
     /// The descriptor set the pipelines read at set 1.
     fn set(&self) -> vk::DescriptorSet;
-    /// A lookup that traces the scene with nothing else at set 1 (`ray_query.glsl`'s bindings
-    /// from 0): that set's layout and the set, which the sensor's ray map then traces through
-    /// too, so its range and ids come from the colour's own light path.
-    fn trace_set(&self) -> Option<(vk::DescriptorSetLayout, vk::DescriptorSet)> {
+    /// A lookup that traces the scene with nothing else at set 1: that set and the ray-map
+    /// shaders that trace through it, so that the sensor's range and ids come from the
+    /// colour's own light path.
+    fn trace_set(&self) -> Option<TraceSet> {
         None
     }
     /// Before the frame is recorded: per-frame data of the lookup's own, from this frame's
-    /// drawables (walls first) and their render-space bounds, written to its device buffers
-    /// through the frame's `uploads`. Most lookups have none.
+    /// drawables, written to its device buffers through the frame's `uploads`. Most lookups
+    /// have none. Its host time is the frame's `cpu_lookup_ms`.
     fn prepare(
         &mut self,
         _uploads: &mut FrameUploads,
-        _objects: &[ObjectData],
-        _bounds: &[(Vec3, Vec3)],
+        _frame: &FrameObjects<'_>,
     ) -> Result<(), GpuError> {
         Ok(())
     }
@@ -197,6 +199,28 @@ pub trait LookupPass: Send {
     fn tally(&self, _slot: usize) -> Result<Option<FrameTally>, GpuError> {
         Ok(None)
     }
+}
+
+/// A frame's drawables as a lookup's [`LookupPass::prepare`] reads them.
+pub struct FrameObjects<'a> {
+    /// Their transforms and materials at the frame's time, walls first.
+    pub objects: &'a [ObjectData],
+    /// Their render-space bounds.
+    pub bounds: &'a [(Vec3, Vec3)],
+    /// The scene's refresh policy renews everything every frame (`every-frame`, as the
+    /// benchmark's ladder measures a frame in which something moved): a lookup that keeps
+    /// per-frame work for frames where something moved does it now too.
+    pub every_frame: bool,
+}
+
+/// A tracing lookup's set 1, which the sensor's ray-map passes bind too, and those passes'
+/// shaders (`mirror_ray.frag.glsl` built with `TRACED` and the lookup's tracer).
+#[derive(Debug, Clone, Copy)]
+pub struct TraceSet {
+    pub layout: vk::DescriptorSetLayout,
+    pub set: vk::DescriptorSet,
+    /// The origin-and-range pass, then the direction-and-id pass.
+    pub ray_map: [&'static [u32]; 2],
 }
 
 /// The two pipelines every lookup draws the mirror with: one writing colour, one writing the

@@ -6,14 +6,12 @@
 //! [`super::tracing`], which `distance-exact` shares.
 
 use ash::vk;
-use glam::Vec3;
 
 use super::tracing::SceneTrace;
 use super::{
-    as_is, LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders,
-    Rung, Start,
+    as_is, FrameObjects, LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines,
+    MirrorShaders, Rung, Start, TraceSet,
 };
-use crate::render::gpu::ObjectData;
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
 use crate::vk::uploads::FrameUploads;
@@ -104,17 +102,23 @@ impl LookupPass for RayQueryPass {
         self.set
     }
 
-    fn trace_set(&self) -> Option<(vk::DescriptorSetLayout, vk::DescriptorSet)> {
-        Some((self.set_layout.raw, self.set))
+    fn trace_set(&self) -> Option<TraceSet> {
+        Some(TraceSet {
+            layout: self.set_layout.raw,
+            set: self.set,
+            ray_map: [
+                crate::shaders::MIRROR_RAY_TRACED_ORIGIN_FRAG,
+                crate::shaders::MIRROR_RAY_TRACED_DIRECTION_FRAG,
+            ],
+        })
     }
 
     fn prepare(
         &mut self,
         uploads: &mut FrameUploads,
-        objects: &[ObjectData],
-        bounds: &[(Vec3, Vec3)],
+        frame: &FrameObjects<'_>,
     ) -> Result<(), GpuError> {
-        self.trace.prepare(uploads, objects, bounds)
+        self.trace.prepare(uploads, frame.objects, frame.bounds)
     }
 
     fn record(&self, cmd: vk::CommandBuffer) {

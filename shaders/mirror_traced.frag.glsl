@@ -1,13 +1,18 @@
 #version 460
-// mirror_ray_query.frag - the ray-query lookup's mirror: the reflected pixel-centre ray is
-// traced through the scene (ray_query.glsl); no cube map.
+// mirror_traced.frag - the traced lookups' mirror: the reflected pixel-centre ray is traced
+// through the scene; no cube map. Two tracers, one each lookup, the same shading
+// (traced_surface.glsl):
+// - RAY_QUERY (the ray-query lookup): VK_KHR_ray_query through the driver's acceleration
+//   structures (ray_query.glsl);
+// - BVH (the bvh lookup): our own two-level BVH in storage buffers, walked by this shader
+//   (bvh.glsl), on any device.
 //
-// One technique, two outputs (engine/build.rs builds both from this file):
+// One technique, two outputs (engine/build.rs builds each from this file):
 // - OUTPUT_COLOUR: the colour of the surface the ray meets, shaded as the reference does;
 // - OUTPUT_DIRECTION: the direction from the cube's centre (frame.cube_centre) to the point
 //   the ray meets, as the reference's direction layer; zero where it meets nothing. The
 //   angular error against the reference is then float rounding only.
-// build: mirror_ray_query=OUTPUT_COLOUR mirror_ray_query_direction=OUTPUT_DIRECTION
+// build: mirror_ray_query=OUTPUT_COLOUR+RAY_QUERY mirror_ray_query_direction=OUTPUT_DIRECTION+RAY_QUERY mirror_bvh=OUTPUT_COLOUR+BVH mirror_bvh_direction=OUTPUT_DIRECTION+BVH
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_nonuniform_qualifier : require
 #include "shared.glsl"
@@ -16,7 +21,11 @@ SCENE_BINDINGS;
 PUSH_CONSTANTS;
 
 #include "materials.glsl"
+#ifdef RAY_QUERY
 #include "ray_query.glsl"
+#else
+#include "bvh.glsl"
+#endif
 
 layout(location = 0) out vec4 out_value;
 

@@ -1,0 +1,308 @@
+//! The trees against what they must hold (every triangle once, inside its boxes) and against
+//! the CPU reference: traced on the CPU as the shader traces them, they meet what the
+//! reference meets, up to ties (two surfaces at the same distance).
+
+use std::path::Path;
+
+use glam::{Mat4, Vec3};
+
+use super::layout::{BvhChild, BvhNode, BVH_INNER};
+use super::*;
+use crate::reference::geometry::{SceneGeometry, Surface};
+use crate::scene::Mesh;
+
+fn scene(rel: &str) -> Scene {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    crate::scene::load(&root.join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+/// Every child box of the tree at `node` holds everything below it; returns the items of its
+/// leaves (first, count) in the order met.
+fn leaves_below(nodes: &[BvhNode], node: u32, within: Option<&BvhChild>) -> Vec<(u32, u32)> {
+    let mut found = Vec::new();
+    for c in &nodes[node as usize].child {
+        if let Some(outer) = within {
+            if c.count != 0 {
+                assert!(outer.lo.cmple(c.lo).all() && c.hi.cmple(outer.hi).all());
+            }
+        }
+        if c.count == BVH_INNER {
+            found.extend(leaves_below(nodes, c.index, Some(c)));
+        } else if c.count > 0 {
+            found.push((c.index, c.count));
+        }
+    }
+    found
+}
+
+/// Every triangle of every mesh is in exactly one leaf of its mesh's tree, inside that leaf's
+/// box (and so inside every box above it).
+#[test]
+fn every_triangle_is_in_one_leaf_inside_its_boxes() {
+    for rel in ["scenes/many-objects.toml", "scenes/furnished-room.toml"] {
+        let s = scene(rel);
+        let bvhs = MeshBvhs::build(&s.meshes).unwrap();
+        for (m, (mesh, root)) in s.meshes.iter().zip(&bvhs.roots).enumerate() {
+            let mut seen = vec![0u32; mesh.indices.len() / 3];
+            for (first, count) in leaves_below(&bvhs.nodes, root.node, None) {
+                for tri in &bvhs.triangles[first as usize..(first + count) as usize] {
+                    seen[tri.primitive as usize] += 1;
+                    let at = 3 * tri.primitive as usize;
+                    let corners = [0, 1, 2].map(|k| mesh.positions[mesh.indices[at + k] as usize]);
+                    assert_eq!([tri.v0, tri.v1, tri.v2], corners, "{rel} mesh {m}");
+                    for v in corners {
+                        assert!(root.lo.cmple(v).all() && v.cmple(root.hi).all());
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&n| n == 1), "{rel} mesh {m}: {seen:?}");
+        }
+    }
+}
+
+/// A mesh of one triangle and a room without objects make trees too: one leaf and an empty
+/// child; nothing to meet in the empty room.
+#[test]
+fn the_smallest_trees() {
+    let one = Mesh {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+        normals: vec![Vec3::Z; 3],
+        uvs: vec![glam::Vec2::ZERO; 3],
+        indices: vec![0, 1, 2],
+        bounds_min: Vec3::ZERO,
+        bounds_max: Vec3::new(1.0, 1.0, 0.0),
+        closed: false,
+    };
+    let bvhs = MeshBvhs::build(std::slice::from_ref(&one)).unwrap();
+    assert_eq!(bvhs.nodes.len(), 1);
+    assert_eq!(bvhs.nodes[0].child[1], BvhChild::EMPTY);
+    let placed = Placed {
+        mesh: 0,
+        model_to_world: Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)),
+        drawable: 6,
+    };
+    let top = TopLevel::build(&bvhs, &[placed]).unwrap();
+    let mut work = Work::default();
+    let ray = (Vec3::new(0.25, 0.25, 0.0), Vec3::NEG_Z);
+    let hit = closest_hit(&top, &bvhs, ray, (0.0, f32::INFINITY), &mut work).unwrap();
+    assert_eq!((hit.t, hit.drawable, hit.primitive), (2.0, 6, 0));
+    let empty = TopLevel::build(&bvhs, &[]).unwrap();
+    assert_eq!(empty.nodes.len(), 1);
+    assert!(closest_hit(&empty, &bvhs, ray, (0.0, f32::INFINITY), &mut work).is_none());
+}
+
+/// A transform without a finite inverse is refused with the drawable it belongs to.
+#[test]
+fn a_singular_transform_is_refused() {
+    let s = scene("scenes/thesis-room.toml");
+    let bvhs = MeshBvhs::build(&s.meshes).unwrap();
+    let flat = Placed {
+        mesh: 0,
+        model_to_world: Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0)),
+        drawable: 9,
+    };
+    let err = TopLevel::build(&bvhs, &[flat]).unwrap_err();
+    assert!(err.to_string().contains("drawable 9"), "{err}");
+}
+
+/// What one ray meets, found as the `bvh` lookup finds it: the room's wall, then the objects
+/// up to just past it (the next float: an object on the wall's plane wins).
+fn bvh_hit(
+    g: &SceneGeometry,
+    (top, meshes): (&TopLevel, &MeshBvhs),
+    (o, d): (Vec3, Vec3),
+    t_min: f32,
+    work: &mut Work,
+) -> Option<(u32, f32)> {
+    let wall = g.wall_hit(o, d, t_min, f32::INFINITY);
+    let limit = wall.map_or(f32::INFINITY, |w| f32::from_bits(w.t.to_bits() + 1));
+    match closest_hit(top, meshes, (o, d), (t_min, limit), work) {
+        Some(h) => Some((h.drawable, h.t)),
+        None => wall.map(|w| (g.drawable(&w).0, w.t)),
+    }
+}
+
+/// Rays from the mirror's surface in random directions, as the reference traces reflected
+/// rays, and rays aimed at object triangles' corners and edge midpoints (where boxes and
+/// triangle tests round hardest). The drawable met is the reference's but for ties: two
+/// surfaces within 1e-5 (relative) of each other along the ray, or a silhouette grazed, which
+/// a rounding step puts on either side (the CPU reference traces an object's triangles in
+/// render space, this walk in the object's model space): the nearer of the two answers is an
+/// object the ray leaves again within 1e-3 of the distance (a sliver of its surface), or, for
+/// an aimed ray, the aimed point itself. Where both meet the same drawable, the range agrees
+/// to 1e-5 (relative) at p99 (a ray grazing a surface magnifies the rounding of where it
+/// meets it). Moving objects are placed at t = 1.3 s. Prints the counts and the work per ray.
+#[test]
+fn the_trees_meet_what_the_reference_meets() {
+    for rel in [
+        "scenes/thesis-room.toml",
+        "scenes/moving-objects.toml",
+        "scenes/many-objects.toml",
+        "scenes/hard/pole-and-box.toml",
+    ] {
+        let s = scene(rel);
+        let state = crate::scene::state::SceneState::at(&s, 1.3);
+        let g = SceneGeometry::build(&s, &state);
+        let meshes = MeshBvhs::build(&s.meshes).unwrap();
+        let top = TopLevel::build(&meshes, &placed_objects(&s, &state)).unwrap();
+        let mut random = crate::random::SplitMix64::new(11);
+        let mut unit = || random.unit() as f32;
+        let mut on_mirror = || {
+            let d = Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize();
+            d * s.mirror.radius_m * 1.0001
+        };
+        // (origin, direction, the point aimed at)
+        // Random rays leave the mirror on its outer side.
+        let mut rays: Vec<(Vec3, Vec3, Option<Vec3>)> = (0..20_000)
+            .map(|_| {
+                let (o, d) = (on_mirror(), on_mirror().normalize());
+                (o, if d.dot(o) < 0.0 { -d } else { d }, None)
+            })
+            .collect();
+        let random_rays = rays.len();
+        for tri in g.triangles.iter().step_by(7).take(3_000) {
+            let [a, b, c] = *tri;
+            for target in [a, (a + b) / 2.0, (b + c) / 2.0] {
+                let o = on_mirror();
+                rays.push((o, (target - o).normalize(), Some(target)));
+            }
+        }
+        let (mut ties, mut grazes, mut objects) = (0, 0, 0);
+        let mut errors = Vec::with_capacity(rays.len());
+        let mut work = Work::default();
+        for &(o, d, aimed) in &rays {
+            let expected = g.closest_hit(o, d, 0.0, f32::INFINITY).map(|h| {
+                objects += usize::from(matches!(h.surface, Surface::Triangle { .. }));
+                (g.drawable(&h).0, h.t)
+            });
+            let found = bvh_hit(&g, (&top, &meshes), (o, d), 0.0, &mut work);
+            let (Some((id, t)), Some((id_ref, t_ref))) = (found, expected) else {
+                panic!("{rel}: a ray from the mirror met nothing: {found:?} {expected:?}");
+            };
+            if id == id_ref {
+                errors.push((t - t_ref).abs() / t_ref);
+                continue;
+            }
+            let close = (t - t_ref).abs() <= 1e-5 * t_ref.max(1.0);
+            let at_aim = |t: f32| aimed.is_some_and(|p| (o + t * d).distance(p) <= 1e-4 * t);
+            // The nearer answer's object, left again within 1e-3 of the distance.
+            let sliver = if t < t_ref {
+                let next = bvh_hit(&g, (&top, &meshes), (o, d), t, &mut Work::default());
+                next.is_some_and(|(n, t2)| n == id && t2 - t <= 1e-3 * t)
+            } else {
+                let next = g.closest_hit(o, d, t_ref, f32::INFINITY);
+                next.is_some_and(|h| g.drawable(&h).0 == id_ref && h.t - t_ref <= 1e-3 * t_ref)
+            };
+            if close {
+                ties += usize::from(id != id_ref);
+            } else if sliver || at_aim(t.min(t_ref)) {
+                grazes += 1;
+            } else {
+                panic!("{rel}: t {t} (drawable {id}) against the reference's {t_ref} ({id_ref}), ray {o} {d}");
+            }
+        }
+        errors.sort_by(f32::total_cmp);
+        let p99 = errors[errors.len() * 99 / 100];
+        eprintln!(
+            "{rel}: {} rays ({objects} on objects), {ties} ties, {grazes} grazed silhouettes; \
+             range error p99 {p99:.1e}, max {:.1e}; per ray {:.1} nodes, {:.2} objects, {:.1} triangles",
+            rays.len(),
+            errors.last().unwrap(),
+            work.nodes_per_ray().unwrap(),
+            work.instances as f64 / work.rays as f64,
+            work.triangles_per_ray().unwrap()
+        );
+        assert!(
+            objects > 100,
+            "{rel}: too few object hits ({objects}) to tell"
+        );
+        assert!(ties * 1000 <= rays.len(), "{rel}: {ties} ties");
+        assert!(p99 <= 1e-5, "{rel}: relative range error {p99} at p99");
+        // Every aimed ray is aimed at a corner or an edge, many of them on a silhouette.
+        let aimed = rays.len() - random_rays;
+        assert!(
+            grazes * 20 <= aimed,
+            "{rel}: {grazes} grazes ({aimed} aimed rays)"
+        );
+    }
+}
+
+/// A walk deeper than the shader's stack is refused when its trees are built, with what it is
+/// and how deep. Triangles at exponentially growing distances make obvhs nest each pair of
+/// nearest boxes in the next (every merge's best partner is the box holding all the nearer
+/// ones): a chain, one level per triangle until the 64-bit Morton codes run out of bits,
+/// whose walk needs exactly the whole stack. Two objects of it need the top level's entries
+/// besides, which do not fit.
+#[test]
+fn a_walk_too_deep_for_the_stack_is_refused() {
+    let n = 180;
+    let mut mesh = Mesh {
+        positions: Vec::new(),
+        normals: Vec::new(),
+        uvs: Vec::new(),
+        indices: Vec::new(),
+        bounds_min: Vec3::ZERO,
+        bounds_max: Vec3::ZERO,
+        closed: false,
+    };
+    for i in 0..n {
+        let at = 1.5f32.powi(i);
+        let size = at * 0.01;
+        for p in [Vec3::ZERO, Vec3::X * size, Vec3::Y * size] {
+            mesh.positions.push(Vec3::new(at, 0.0, 0.0) + p);
+            mesh.normals.push(Vec3::Z);
+            mesh.uvs.push(glam::Vec2::ZERO);
+        }
+        let first = 3 * i as u32;
+        mesh.indices.extend([first, first + 1, first + 2]);
+    }
+    let bvhs = MeshBvhs::build(&[mesh]).expect("a walk that fits the stack exactly");
+    assert_eq!(bvhs.roots[0].stack, layout::BVH_STACK_SIZE);
+    let placed = |x: f32, drawable| Placed {
+        mesh: 0,
+        model_to_world: Mat4::from_translation(Vec3::X * x),
+        drawable,
+    };
+    assert!(TopLevel::build(&bvhs, &[placed(0.0, 6)]).is_ok());
+    let err = match TopLevel::build(&bvhs, &[placed(0.0, 6), placed(1.0, 7)]) {
+        Ok(_) => panic!("two objects of a {n}-triangle chain were not refused"),
+        Err(err) => err,
+    };
+    let text = err.to_string();
+    eprintln!("{text}");
+    assert!(
+        matches!(err, BvhError::TooDeep { depth, .. } if depth > 64),
+        "{text}"
+    );
+    assert!(text.contains("the top level (2 objects)"), "{text}");
+}
+
+/// The benchmark scenes' walks fit the shader's stack with room to spare (printed: the
+/// deepest mesh's need and the whole walk's; shared.glsl quotes them).
+#[test]
+fn the_benchmark_scenes_fit_the_stack() {
+    for rel in [
+        "scenes/thesis-room.toml",
+        "scenes/moving-objects.toml",
+        "scenes/many-objects.toml",
+        "scenes/heavy.toml",
+    ] {
+        let s = scene(rel);
+        let meshes = MeshBvhs::build(&s.meshes).unwrap();
+        let state = crate::scene::state::SceneState::at(&s, 0.0);
+        let top = TopLevel::build(&meshes, &placed_objects(&s, &state)).unwrap();
+        let deepest = meshes.roots.iter().map(|r| r.stack).max().unwrap_or(0);
+        eprintln!(
+            "{rel}: {} meshes, {} objects; deepest mesh walk {deepest}, whole walk {} of {}",
+            s.meshes.len(),
+            s.objects.len(),
+            top.stack,
+            layout::BVH_STACK_SIZE
+        );
+        assert!(
+            2 * top.stack <= layout::BVH_STACK_SIZE,
+            "{rel}: {}",
+            top.stack
+        );
+    }
+}

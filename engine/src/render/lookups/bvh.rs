@@ -1,0 +1,304 @@
+//! The `bvh` lookup: the exact mirror on any device. The mirror's fragment shader traces the
+//! reflected pixel-centre ray through a BVH of our own in storage buffers (`shaders/include/
+//! bvh.glsl`, built on the CPU by [`crate::bvh`]) and the room's box, and shades the hit as
+//! the CPU reference does. It needs no extension, so it runs where `ray-query` cannot
+//! (SwiftShader, GPUs without ray-tracing hardware), and it traces the sensor's ray map too,
+//! so the ground-truth layers come from the colour's own light path there.
+//!
+//! Its buffers: every mesh's tree and triangles, written once; the walls' frames and the
+//! drawables' index ranges, once; the top level's nodes and the objects' records, rewritten
+//! through the frame's uploads whenever an object moved (a rebuild on the CPU: see
+//! [`BvhPass::prepare`]).
+
+use std::sync::Arc;
+
+use ash::vk;
+use glam::{Mat4, UVec4};
+use gpu_allocator::MemoryLocation;
+
+use super::{
+    as_is, FrameObjects, LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders,
+    Rung, Start, TraceSet,
+};
+use crate::bvh::layout::{BvhInstance, BvhNode, BvhWall};
+use crate::bvh::{object_drawable, MeshBvhs, Placed, TopLevel};
+use crate::scene::Lookup;
+use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
+use crate::vk::device::Device;
+use crate::vk::memory::{Buffer, BufferDesc, Upload};
+use crate::vk::uploads::FrameUploads;
+use crate::vk::GpuError;
+
+pub struct Bvh;
+
+impl MirrorLookup for Bvh {
+    fn summary(&self) -> &'static str {
+        "the reflected ray traced through a BVH of our own in the shader: exact, no cube map, \
+         no extension (any device)"
+    }
+
+    fn uses_cube(&self) -> bool {
+        false
+    }
+
+    fn traces_ray_map(&self) -> bool {
+        true
+    }
+
+    fn start(&self) -> Start {
+        Start::Reflection
+    }
+
+    fn rungs(&self) -> &'static [Rung] {
+        &[Rung {
+            label: "bvh",
+            lookup: Lookup::Bvh,
+            order: 7,
+            configure: as_is,
+        }]
+    }
+
+    fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
+        Ok(Box::new(BvhPass::create(ctx)?))
+    }
+}
+
+/// The set's bindings, in `bvh.glsl`'s order: mesh nodes, mesh triangles, top-level nodes,
+/// instances, walls, then `traced_surface.glsl`'s vertices, indices and drawable ranges.
+const BINDINGS: u32 = 8;
+
+/// The bvh lookup's per-renderer state. Field order is drop order.
+struct BvhPass {
+    pipelines: MirrorPipelines,
+    _pool: DescriptorPool,
+    set: vk::DescriptorSet,
+    set_layout: DescriptorSetLayout,
+    /// The trees' roots (the nodes and triangles are on the device).
+    meshes: MeshBvhs,
+    /// Each object's mesh, in the scene's order.
+    mesh_of: Vec<usize>,
+    /// The objects' transforms the top level was last built from (None: not yet built).
+    placed_from: Option<Vec<Mat4>>,
+    top: TopBuffers,
+    _fixed: [Buffer; 4],
+}
+
+/// The top level's device buffers, sized for the scene's objects.
+struct TopBuffers {
+    nodes: Buffer,
+    instances: Buffer,
+}
+
+impl BvhPass {
+    fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
+        let device = ctx.device;
+        let scene = ctx.scene;
+        let meshes = MeshBvhs::build(&scene.meshes).map_err(unsupported)?;
+        let fixed = fixed_buffers(ctx, &meshes)?;
+        let top = TopBuffers::create(device, scene.objects.len())?;
+        let stage = vk::ShaderStageFlags::FRAGMENT;
+        let bindings: Vec<_> = (0..BINDINGS)
+            .map(|b| descriptors::binding(b, vk::DescriptorType::STORAGE_BUFFER, 1, stage))
+            .collect();
+        let set_layout = DescriptorSetLayout::create(device, &bindings, "bvh set layout")?;
+        let size = vk::DescriptorPoolSize {
+            ty: vk::DescriptorType::STORAGE_BUFFER,
+            descriptor_count: BINDINGS,
+        };
+        let pool = DescriptorPool::create(device, 1, &[size], "bvh descriptors")?;
+        let set = pool.allocate(&set_layout, "bvh set")?;
+        let res = ctx.resources;
+        let [mesh_nodes, triangles, walls, ranges] = &fixed;
+        let buffers = [
+            mesh_nodes,
+            triangles,
+            &top.nodes,
+            &top.instances,
+            walls,
+            &res.vertices,
+            &res.indices,
+            ranges,
+        ];
+        for (binding, buffer) in (0..).zip(buffers) {
+            let storage = vk::DescriptorType::STORAGE_BUFFER;
+            descriptors::write_buffer(device, set, binding, storage, buffer.raw);
+        }
+        let shaders = MirrorShaders {
+            colour: crate::shaders::MIRROR_BVH_FRAG,
+            directions: crate::shaders::MIRROR_BVH_DIRECTION_FRAG,
+        };
+        let pipelines = MirrorPipelines::create(ctx, set_layout.raw, shaders, "bvh mirror")?;
+        Ok(Self {
+            pipelines,
+            _pool: pool,
+            set,
+            set_layout,
+            meshes,
+            mesh_of: scene.objects.iter().map(|o| o.mesh).collect(),
+            placed_from: None,
+            top,
+            _fixed: fixed,
+        })
+    }
+}
+
+/// What does not change: the meshes' nodes and triangles, the walls' frames and each
+/// drawable's index range (walls first), device-local. Each holds at least one element (a
+/// room without objects has no triangles; a buffer cannot be empty).
+fn fixed_buffers(ctx: &LookupContext<'_>, meshes: &MeshBvhs) -> Result<[Buffer; 4], GpuError> {
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let ranges: Vec<UVec4> = (ctx.resources.drawables.iter())
+        .map(|d| UVec4::new(d.first_index, d.vertex_offset as u32, 0, 0))
+        .collect();
+    let mut upload = Upload::begin(ctx.device, ctx.submitter)?;
+    let buffers = [
+        upload.buffer(&at_least_one(&meshes.nodes), storage, "bvh mesh nodes")?,
+        upload.buffer(
+            &at_least_one(&meshes.triangles),
+            storage,
+            "bvh mesh triangles",
+        )?,
+        upload.buffer(&BvhWall::of_room(&ctx.scene.room), storage, "bvh walls")?,
+        upload.buffer(&ranges, storage, "bvh drawable ranges")?,
+    ];
+    upload.finish()?;
+    Ok(buffers)
+}
+
+impl TopBuffers {
+    /// Room for the top level of `objects` objects: a tree of n leaves has n - 1 nodes, and
+    /// one at least.
+    fn create(device: &Arc<Device>, objects: usize) -> Result<Self, GpuError> {
+        let buffer = |count: usize, size: usize, name: &str| {
+            let desc = BufferDesc {
+                size: (count.max(1) * size) as u64,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuOnly,
+            };
+            Buffer::create(device, &desc, name)
+        };
+        Ok(Self {
+            nodes: buffer(objects, std::mem::size_of::<BvhNode>(), "bvh top nodes")?,
+            instances: buffer(objects, std::mem::size_of::<BvhInstance>(), "bvh instances")?,
+        })
+    }
+}
+
+/// `items`, or one default item where there are none.
+fn at_least_one<T: Clone + Default>(items: &[T]) -> Vec<T> {
+    let mut all = items.to_vec();
+    if all.is_empty() {
+        all.push(T::default());
+    }
+    all
+}
+
+fn unsupported(e: crate::bvh::BvhError) -> GpuError {
+    GpuError::Unsupported(format!("lookup bvh: {e}"))
+}
+
+impl LookupPass for BvhPass {
+    fn pipelines(&self) -> &MirrorPipelines {
+        &self.pipelines
+    }
+
+    fn set(&self) -> vk::DescriptorSet {
+        self.set
+    }
+
+    fn trace_set(&self) -> Option<TraceSet> {
+        Some(TraceSet {
+            layout: self.set_layout.raw,
+            set: self.set,
+            ray_map: [
+                crate::shaders::MIRROR_RAY_BVH_ORIGIN_FRAG,
+                crate::shaders::MIRROR_RAY_BVH_DIRECTION_FRAG,
+            ],
+        })
+    }
+
+    /// The top level, rebuilt on the CPU from this frame's object transforms when any of them
+    /// differs from the last build's (a still scene builds it once) or the refresh policy
+    /// renews everything every frame, and queued for upload. A rebuild, not a refit: the tree
+    /// stays as good wherever the objects go.
+    fn prepare(
+        &mut self,
+        uploads: &mut FrameUploads,
+        frame: &FrameObjects<'_>,
+    ) -> Result<(), GpuError> {
+        let transforms: Vec<Mat4> = (frame.objects[6..].iter())
+            .map(|o| o.model_to_world)
+            .collect();
+        if !frame.every_frame && self.placed_from.as_ref() == Some(&transforms) {
+            return Ok(());
+        }
+        let placed: Vec<Placed> = (transforms.iter().zip(&self.mesh_of).enumerate())
+            .map(|(i, (m, &mesh))| Placed {
+                mesh,
+                model_to_world: *m,
+                drawable: object_drawable(i),
+            })
+            .collect();
+        let top = TopLevel::build(&self.meshes, &placed).map_err(unsupported)?;
+        uploads.write(&self.top.nodes, &top.nodes)?;
+        uploads.write(&self.top.instances, &top.instances)?;
+        self.placed_from = Some(transforms);
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::mem::offset_of;
+
+    use crate::bvh::layout::{BvhChild, BvhTriangle, BVH_INNER, BVH_STACK_SIZE};
+
+    use super::*;
+
+    /// The Rust mirrors of `bvh.glsl`'s structs have the SPIR-V's offsets, every member of
+    /// theirs is mirrored, and the constants the CPU-only `bvh` module keeps are
+    /// `shared.glsl`'s.
+    #[test]
+    fn the_bvh_structs_and_constants_match_the_shaders() {
+        macro_rules! member {
+            ($s:ident, $m:ident) => {
+                (stringify!($s), stringify!($m), offset_of!($s, $m))
+            };
+        }
+        let rust = [
+            member!(BvhChild, lo),
+            member!(BvhChild, index),
+            member!(BvhChild, hi),
+            member!(BvhChild, count),
+            member!(BvhNode, child),
+            member!(BvhTriangle, v0),
+            member!(BvhTriangle, primitive),
+            member!(BvhTriangle, v1),
+            member!(BvhTriangle, pad1),
+            member!(BvhTriangle, v2),
+            member!(BvhTriangle, pad2),
+            member!(BvhInstance, world_to_model),
+            member!(BvhInstance, root),
+            member!(BvhInstance, drawable),
+            member!(BvhInstance, pad0),
+            member!(BvhInstance, pad1),
+            member!(BvhWall, offset),
+            member!(BvhWall, right),
+            member!(BvhWall, up),
+        ];
+        for &(s, m, offset) in &rust {
+            let spirv = (crate::shaders::SPIRV_MEMBER_OFFSETS.iter())
+                .find(|(s2, m2, _)| *s2 == s && *m2 == m)
+                .unwrap_or_else(|| panic!("{s}.{m} is not in any shader's SPIR-V"));
+            assert_eq!(spirv.2 as usize, offset, "{s}.{m}");
+        }
+        for (s, m, _) in crate::shaders::SPIRV_MEMBER_OFFSETS {
+            if rust.iter().any(|(s2, _, _)| s2 == s) {
+                let mirrored = rust.iter().any(|(s2, m2, _)| s2 == s && m2 == m);
+                assert!(mirrored, "{s}.{m} not mirrored");
+            }
+        }
+        assert_eq!(BVH_INNER, crate::shaders::shared::BVH_INNER);
+        assert_eq!(BVH_STACK_SIZE, crate::shaders::shared::BVH_STACK_SIZE);
+    }
+}

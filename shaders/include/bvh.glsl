@@ -1,0 +1,418 @@
+// bvh.glsl - the exact mirror with nothing but storage buffers: the reflected pixel-centre ray
+// traced through a BVH of our own (engine/src/bvh) and the room's walls, and the surface it
+// meets shaded as the CPU reference does. Needs no extension, so it runs on every device,
+// with or without ray-tracing hardware.
+//
+// What the ray meets is found as the reference finds it (engine/src/reference/geometry.rs
+// `closest_hit`): the room's box first (the walls are not triangles here, but the box's
+// planes), then the objects up to just past that wall, so an object lying on a wall's plane
+// wins the tie. The objects are two levels of trees (engine/src/bvh/mod.rs): a top level over
+// the objects' boxes in render space, and one tree per mesh in its model space, entered
+// through the object's inverse transform. One loop walks both (bvh_closest_object); the CPU's
+// engine/src/bvh/traverse.rs is the same walk, step for step.
+#ifndef BVH_GLSL
+#define BVH_GLSL
+
+#include "shared.glsl"
+#include "mirror.glsl"
+
+// A tree's node holds the boxes of its two children (one 64-byte read gives both boxes a ray
+// tests next: Aila and Laine 2009). A child is an inner node (count BVH_INNER, index: the
+// node) or a leaf (count: its triangles, or in the top level its one object; index: the
+// first). Boxes are padded by a few float steps of their coordinates, as the reference's are,
+// so that a ray along a face shared by two boxes cannot be rounded out of both.
+struct BvhChild {
+    vec3 lo;
+    uint index;
+    vec3 hi;
+    uint count;
+};
+struct BvhNode {
+    BvhChild child[2];
+};
+// A mesh's triangle in its model space, in its leaf's order; `primitive` is its index in the
+// mesh (traced_surface.glsl fetches its normals and uv by it).
+struct BvhTriangle {
+    vec3 v0;
+    uint primitive;
+    vec3 v1;
+    uint pad1;
+    vec3 v2;
+    uint pad2;
+};
+// An object in the top level's leaves: render space to its model space (three rows; the
+// direction is not renormalised, so t is the same in both), its mesh's root node, its drawable.
+struct BvhInstance {
+    vec4 world_to_model[3];
+    uint root;
+    uint drawable;
+    uint pad0;
+    uint pad1;
+};
+// A wall of the room, in cube-face order: its centre's offset from the room's centre, and the
+// half-extents its texture's u and v run along (scene::Mesh::room_wall_frame).
+struct BvhWall {
+    vec4 offset;
+    vec4 right;
+    vec4 up;
+};
+
+// Set 1 of the bvh lookup (engine/src/render/lookups/bvh.rs): five bindings from BVH_BINDING,
+// then traced_surface.glsl's three.
+#ifndef BVH_BINDING
+#define BVH_BINDING 0
+#endif
+layout(set = 1, binding = BVH_BINDING, std430) readonly buffer MeshNodeBlock {
+    BvhNode mesh_nodes[];
+};
+layout(set = 1, binding = BVH_BINDING + 1, std430) readonly buffer MeshTriangleBlock {
+    BvhTriangle mesh_triangles[];
+};
+layout(set = 1, binding = BVH_BINDING + 2, std430) readonly buffer TopNodeBlock {
+    BvhNode top_nodes[];
+};
+layout(set = 1, binding = BVH_BINDING + 3, std430) readonly buffer InstanceBlock {
+    BvhInstance instances[];
+};
+layout(set = 1, binding = BVH_BINDING + 4, std430) readonly buffer WallBlock {
+    BvhWall walls[6];
+};
+#define TRACED_SURFACE_BINDING (BVH_BINDING + 5)
+#include "traced_surface.glsl"
+
+const float BVH_INFINITY = 1.0 / 0.0;
+// f32::EPSILON: a direction component this close to 0 gets the reciprocal 1/EPSILON.
+const float BVH_EPSILON = 1.1920929e-7;
+
+// The reciprocal direction the box tests use: obvhs's safe inverse (bvh::safe_inverse),
+// finite for every direction, its sign from the component's sign bit (-0 gives -1/EPSILON).
+vec3 bvh_safe_inverse(vec3 d) {
+    uvec3 sign_bit = floatBitsToUint(d) & 0x80000000u;
+    vec3 big = uintBitsToFloat(sign_bit | floatBitsToUint(1.0 / BVH_EPSILON));
+    return mix(1.0 / d, big, lessThanEqual(abs(d), vec3(BVH_EPSILON)));
+}
+
+// Where the ray (o, reciprocal direction inv) enters child c's box within (t_min, t_max): the
+// entry t, or infinity when it does not (the reference's slab test).
+float bvh_enter(BvhChild c, vec3 o, vec3 inv, float t_min, float t_max) {
+    vec3 t1 = (c.lo - o) * inv;
+    vec3 t2 = (c.hi - o) * inv;
+    vec3 lo = min(t1, t2);
+    vec3 hi = max(t1, t2);
+    float near = max(max(max(lo.x, lo.y), lo.z), t_min);
+    float far = min(min(min(hi.x, hi.y), hi.z), t_max);
+    return near <= far ? near : BVH_INFINITY;
+}
+
+// A ray prepared for the watertight triangle test (Woop, Benthin and Wald, "Watertight
+// Ray/Triangle Intersection", JCGT 2013), as reference::intersect::ShearedRay: the axis where
+// the direction is largest becomes z (kx, ky keep the winding), and the shear (s.x, s.y) with
+// the scale s.z = 1/d[kz] maps the ray onto +z. A shared edge then gives bit-identical edge
+// functions in both triangles, so no ray slips between them.
+struct ShearedRay {
+    vec3 o;
+    uvec3 k; // kx, ky, kz
+    vec3 s;  // sx, sy, sz
+};
+
+ShearedRay shear_ray(vec3 o, vec3 d) {
+    vec3 a = abs(d);
+    // The first largest, as glam's max_position.
+    uint kz = a.y > a.x ? (a.z > a.y ? 2u : 1u) : (a.z > a.x ? 2u : 0u);
+    uint kx = (kz + 1u) % 3u;
+    uint ky = (kx + 1u) % 3u;
+    if (d[kz] < 0.0) {
+        uint swap = kx;
+        kx = ky;
+        ky = swap;
+    }
+    ShearedRay r;
+    r.o = o;
+    r.k = uvec3(kx, ky, kz);
+    precise float sz = 1.0 / d[kz];
+    precise float sx = d[kx] * sz;
+    precise float sy = d[ky] * sz;
+    r.s = vec3(sx, sy, sz);
+    return r;
+}
+
+// The rounding error of a * b, exactly: a * b = p + error with p = fl(a * b) (Dekker's product
+// with Veltkamp's split; `precise` keeps the compiler from fusing or reordering it).
+float product_error(float a, float b, float p) {
+    const float SPLIT = 4097.0; // 2^12 + 1: splits a float's 24 bits into two halves
+    precise float ca = SPLIT * a;
+    precise float a_hi = ca - (ca - a);
+    precise float a_lo = a - a_hi;
+    precise float cb = SPLIT * b;
+    precise float b_hi = cb - (cb - b);
+    precise float b_lo = b - b_hi;
+    precise float e = ((a_hi * b_hi - p) + a_hi * b_lo + a_lo * b_hi) + a_lo * b_lo;
+    return e;
+}
+
+// a * b - c * d from the exact products, rounded once where it matters: the reference
+// computes the edge functions in double precision when one is exactly 0 in float (a ray
+// exactly on an edge), and a shader cannot count on doubles. When fl(a b) = fl(c d), which is
+// what makes an edge function 0, the result is the difference of the two rounding errors,
+// with the exact value's sign.
+float exact_difference(float a, float b, float c, float d) {
+    precise float p = a * b;
+    precise float q = c * d;
+    precise float e = product_error(a, b, p) - product_error(c, d, q);
+    precise float result = (p - q) + e;
+    return result;
+}
+
+// Whether the sheared ray meets the triangle (v0, v1, v2) at t in (t_min, t_max), both faces;
+// t and the barycentric weights of v1 and v2.
+bool hit_triangle(ShearedRay r, vec3 v0, vec3 v1, vec3 v2, float t_min, float t_max,
+                  out float t, out vec2 bary) {
+    precise vec3 a = v0 - r.o;
+    precise vec3 b = v1 - r.o;
+    precise vec3 c = v2 - r.o;
+    precise float ax = a[r.k.x] - r.s.x * a[r.k.z];
+    precise float ay = a[r.k.y] - r.s.y * a[r.k.z];
+    precise float bx = b[r.k.x] - r.s.x * b[r.k.z];
+    precise float by = b[r.k.y] - r.s.y * b[r.k.z];
+    precise float cx = c[r.k.x] - r.s.x * c[r.k.z];
+    precise float cy = c[r.k.y] - r.s.y * c[r.k.z];
+    precise float u = cx * by - cy * bx;
+    precise float v = ax * cy - ay * cx;
+    precise float w = bx * ay - by * ax;
+    if (u == 0.0 || v == 0.0 || w == 0.0) {
+        u = exact_difference(cx, by, cy, bx);
+        v = exact_difference(ax, cy, ay, cx);
+        w = exact_difference(bx, ay, by, ax);
+    }
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
+        return false;
+    }
+    precise float det = u + v + w;
+    if (det == 0.0) {
+        return false;
+    }
+    precise float az = r.s.z * a[r.k.z];
+    precise float bz = r.s.z * b[r.k.z];
+    precise float cz = r.s.z * c[r.k.z];
+    precise float t_scaled = u * az + v * bz + w * cz;
+    precise float inv = 1.0 / det;
+    precise float t_hit = t_scaled * inv;
+    if (!(t_hit > t_min && t_hit < t_max)) {
+        return false;
+    }
+    t = t_hit;
+    bary = vec2(v * inv, w * inv);
+    return true;
+}
+
+// The closest object triangle found so far.
+struct BvhHit {
+    float t;          // t_max until something is found
+    uint drawable;    // OBJECT_NONE until something is found
+    uint primitive;
+    vec2 bary;
+};
+
+// The closest object triangle along o + t d with t in (t_min, t_max).
+//
+// One loop walks both levels with one stack of children still to visit (index and count,
+// and the t where the ray entered the child's box). A node's two children are tested and the
+// hit ones pushed, the farther first, so that the nearer is popped next. A popped top-level
+// leaf enters its object: the ray moves into the object's model space and its mesh's tree is
+// walked on the same stack, above `mesh_floor`; when the stack is back down to it, the ray
+// returns to render space. An entry whose box the ray entered beyond the closest hit found
+// since it was pushed is dropped unvisited. The stack lives in the invocation's registers or
+// private memory; the trees are refused when built if a walk could overflow it.
+BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
+    BvhHit best;
+    best.t = t_max;
+    best.drawable = OBJECT_NONE;
+    best.primitive = 0u;
+    best.bary = vec2(0.0);
+    const uint NO_FLOOR = 0xFFFFFFFFu;
+    vec3 world_inv = bvh_safe_inverse(d);
+    // The ray in the space of the tree being walked; `sheared` and `drawable` in a mesh's.
+    vec3 ray_o = o;
+    vec3 ray_inv = world_inv;
+    bool in_mesh = false;
+    ShearedRay sheared;
+    uint drawable = OBJECT_NONE;
+    uvec2 item[BVH_STACK_SIZE];
+    float entry[BVH_STACK_SIZE];
+    uint height = 0u;
+    uint mesh_floor = NO_FLOOR;
+    uint node = 0u;
+    while (true) {
+        BvhNode n;
+        if (in_mesh) {
+            n = mesh_nodes[node];
+        } else {
+            n = top_nodes[node];
+        }
+        float ta = bvh_enter(n.child[0], ray_o, ray_inv, t_min, best.t);
+        float tb = bvh_enter(n.child[1], ray_o, ray_inv, t_min, best.t);
+        // The farther first, so that the nearer is popped first.
+        uint near = tb < ta ? 1u : 0u;
+        float t_near = min(ta, tb);
+        float t_far = near == 1u ? ta : tb;
+        // An empty leaf (a one-leaf tree's second child) holds nothing to visit.
+        if (t_far < BVH_INFINITY && n.child[1u - near].count != 0u) {
+            BvhChild far_child = n.child[1u - near];
+            item[height] = uvec2(far_child.index, far_child.count);
+            entry[height] = t_far;
+            height++;
+        }
+        if (t_near < BVH_INFINITY && n.child[near].count != 0u) {
+            BvhChild near_child = n.child[near];
+            item[height] = uvec2(near_child.index, near_child.count);
+            entry[height] = t_near;
+            height++;
+        }
+        // Pop until an inner node is next, testing leaves on the way.
+        bool descend = false;
+        while (!descend) {
+            if (height == mesh_floor) {
+                // The object's tree is done: back to render space.
+                ray_o = o;
+                ray_inv = world_inv;
+                in_mesh = false;
+                mesh_floor = NO_FLOOR;
+            }
+            if (height == 0u) {
+                return best;
+            }
+            height--;
+            if (entry[height] >= best.t) {
+                continue;
+            }
+            uvec2 popped = item[height];
+            if (popped.y == BVH_INNER) {
+                node = popped.x;
+                descend = true;
+            } else if (in_mesh) {
+                for (uint k = popped.x; k < popped.x + popped.y; k++) {
+                    BvhTriangle tri = mesh_triangles[k];
+                    float t;
+                    vec2 bary;
+                    if (hit_triangle(sheared, tri.v0, tri.v1, tri.v2, t_min, best.t, t, bary)) {
+                        best.t = t;
+                        best.drawable = drawable;
+                        best.primitive = tri.primitive;
+                        best.bary = bary;
+                    }
+                }
+            } else {
+                // A top-level leaf holds one object: enter its model space.
+                BvhInstance inst = instances[popped.x];
+                vec3 mo = vec3(dot(inst.world_to_model[0], vec4(o, 1.0)),
+                               dot(inst.world_to_model[1], vec4(o, 1.0)),
+                               dot(inst.world_to_model[2], vec4(o, 1.0)));
+                vec3 md = vec3(dot(inst.world_to_model[0], vec4(d, 0.0)),
+                               dot(inst.world_to_model[1], vec4(d, 0.0)),
+                               dot(inst.world_to_model[2], vec4(d, 0.0)));
+                ray_o = mo;
+                ray_inv = bvh_safe_inverse(md);
+                sheared = shear_ray(mo, md);
+                drawable = inst.drawable;
+                in_mesh = true;
+                mesh_floor = height;
+                node = inst.root;
+                descend = true;
+            }
+        }
+    }
+    return best;
+}
+
+// Where o + t d first crosses the room's walls with t in (t_min, t_max), and which wall
+// (cube-face order), as reference::room::RoomBox::first_crossing: where it enters the box
+// (an eye outside it) or else where it leaves.
+bool room_crossing(FrameData f, vec3 o, vec3 d, float t_min, float t_max,
+                   out float t, out uint face) {
+    float near = -BVH_INFINITY;
+    float far = BVH_INFINITY;
+    uint near_face = 0u;
+    uint far_face = 0u;
+    for (uint axis = 0u; axis < 3u; axis++) {
+        float lo = f.room_min[axis];
+        float hi = f.room_max[axis];
+        float oa = o[axis];
+        float da = d[axis];
+        if (da == 0.0) {
+            if (oa < lo || oa > hi) {
+                return false;
+            }
+            continue;
+        }
+        precise float inv = 1.0 / da;
+        precise float t_lo = (lo - oa) * inv;
+        precise float t_hi = (hi - oa) * inv;
+        // Moving up an axis, the ray enters through its low wall (face 2 axis + 1) and leaves
+        // through its high one (face 2 axis).
+        bool up = da > 0.0;
+        float t_in = up ? t_lo : t_hi;
+        float t_out = up ? t_hi : t_lo;
+        if (t_in > near) {
+            near = t_in;
+            near_face = 2u * axis + (up ? 1u : 0u);
+        }
+        if (t_out < far) {
+            far = t_out;
+            far_face = 2u * axis + (up ? 0u : 1u);
+        }
+    }
+    if (near > far) {
+        return false;
+    }
+    if (near > t_min && near < t_max) {
+        t = near;
+        face = near_face;
+        return true;
+    }
+    if (far > t_min && far < t_max) {
+        t = far;
+        face = far_face;
+        return true;
+    }
+    return false;
+}
+
+// The ray from `origin` along r met wall `face` at t: the hit, shaded. Its uv as
+// reference::room::RoomBox::uv, its normal the wall's, facing into the room.
+Reflection shade_wall(FrameData f, vec3 origin, vec3 r, float t, uint face) {
+    BvhWall w = walls[face];
+    Reflection result;
+    result.found = true;
+    result.point = origin + t * r;
+    result.range = t;
+    result.id = face;
+    vec3 centre = 0.5 * (f.room_min.xyz + f.room_max.xyz) + w.offset.xyz;
+    vec3 q = result.point - centre;
+    vec2 uv = vec2(0.5 + 0.5 * dot(q, w.right.xyz) / dot(w.right.xyz, w.right.xyz),
+                   0.5 - 0.5 * dot(q, w.up.xyz) / dot(w.up.xyz, w.up.xyz));
+    vec3 normal = -normalize(w.offset.xyz);
+    MaterialData m = materials[objects[face].material.x];
+    result.colour = shade(material_albedo(m, result.point, uv), normal, f);
+    return result;
+}
+
+Reflection trace_reflection(FrameData f, vec3 dir, vec3 hit, vec3 n) {
+    // The reference's R = d - 2 (d.n) n, without fusing.
+    precise vec3 r = dir - 2.0 * dot(dir, n) * n;
+    vec3 origin = offset_ray_origin(hit, n);
+    float wall_t;
+    uint face;
+    bool wall = room_crossing(f, origin, r, 0.0, BVH_INFINITY, wall_t, face);
+    // Objects up to the next float past the wall: one on the wall's plane wins.
+    float limit = wall ? uintBitsToFloat(floatBitsToUint(wall_t) + 1u) : BVH_INFINITY;
+    BvhHit h = bvh_closest_object(origin, r, 0.0, limit);
+    if (h.drawable != OBJECT_NONE) {
+        return shade_triangle(f, origin, r, h.t, h.drawable, h.primitive, h.bary);
+    }
+    if (wall) {
+        return shade_wall(f, origin, r, wall_t, face);
+    }
+    return no_reflection(origin);
+}
+
+#endif
