@@ -57,27 +57,28 @@ struct BvhWall {
     vec4 up;
 };
 
-// Set 1 of the bvh lookup (engine/src/render/lookups/bvh.rs): five bindings from BVH_BINDING,
+// Set 1 of the bvh lookup (engine/src/render/lookups/bvh.rs): four bindings from BVH_BINDING,
 // then traced_surface.glsl's three.
 #ifndef BVH_BINDING
 #define BVH_BINDING 0
 #endif
-layout(set = 1, binding = BVH_BINDING, std430) readonly buffer MeshNodeBlock {
-    BvhNode mesh_nodes[];
+// Both levels' nodes in one array, the top level's first (its root is node 0), then every
+// mesh's tree: a walk fetches its next node from the same array whichever level it is in
+// (a branch per fetch, taken by some invocations of a group and not others, costs both sides
+// where invocations run in lockstep).
+layout(set = 1, binding = BVH_BINDING, std430) readonly buffer NodeBlock {
+    BvhNode bvh_nodes[];
 };
 layout(set = 1, binding = BVH_BINDING + 1, std430) readonly buffer MeshTriangleBlock {
     BvhTriangle mesh_triangles[];
 };
-layout(set = 1, binding = BVH_BINDING + 2, std430) readonly buffer TopNodeBlock {
-    BvhNode top_nodes[];
-};
-layout(set = 1, binding = BVH_BINDING + 3, std430) readonly buffer InstanceBlock {
+layout(set = 1, binding = BVH_BINDING + 2, std430) readonly buffer InstanceBlock {
     BvhInstance instances[];
 };
-layout(set = 1, binding = BVH_BINDING + 4, std430) readonly buffer WallBlock {
+layout(set = 1, binding = BVH_BINDING + 3, std430) readonly buffer WallBlock {
     BvhWall walls[6];
 };
-#define TRACED_SURFACE_BINDING (BVH_BINDING + 5)
+#define TRACED_SURFACE_BINDING (BVH_BINDING + 4)
 #include "traced_surface.glsl"
 
 const float BVH_INFINITY = 1.0 / 0.0;
@@ -115,13 +116,19 @@ struct ShearedRay {
     vec3 s;  // sx, sy, sz
 };
 
+// Component k of v, by selects: indexing a vector with a per-invocation index may cost a
+// trip through memory where selects cost two instructions.
+float component(vec3 v, uint k) {
+    return k == 0u ? v.x : (k == 1u ? v.y : v.z);
+}
+
 ShearedRay shear_ray(vec3 o, vec3 d) {
     vec3 a = abs(d);
     // The first largest, as glam's max_position.
     uint kz = a.y > a.x ? (a.z > a.y ? 2u : 1u) : (a.z > a.x ? 2u : 0u);
     uint kx = (kz + 1u) % 3u;
     uint ky = (kx + 1u) % 3u;
-    if (d[kz] < 0.0) {
+    if (component(d, kz) < 0.0) {
         uint swap = kx;
         kx = ky;
         ky = swap;
@@ -129,9 +136,9 @@ ShearedRay shear_ray(vec3 o, vec3 d) {
     ShearedRay r;
     r.o = o;
     r.k = uvec3(kx, ky, kz);
-    precise float sz = 1.0 / d[kz];
-    precise float sx = d[kx] * sz;
-    precise float sy = d[ky] * sz;
+    precise float sz = 1.0 / component(d, kz);
+    precise float sx = component(d, kx) * sz;
+    precise float sy = component(d, ky) * sz;
     r.s = vec3(sx, sy, sz);
     return r;
 }
@@ -170,12 +177,12 @@ bool hit_triangle(ShearedRay r, vec3 v0, vec3 v1, vec3 v2, float t_min, float t_
     precise vec3 a = v0 - r.o;
     precise vec3 b = v1 - r.o;
     precise vec3 c = v2 - r.o;
-    precise float ax = a[r.k.x] - r.s.x * a[r.k.z];
-    precise float ay = a[r.k.y] - r.s.y * a[r.k.z];
-    precise float bx = b[r.k.x] - r.s.x * b[r.k.z];
-    precise float by = b[r.k.y] - r.s.y * b[r.k.z];
-    precise float cx = c[r.k.x] - r.s.x * c[r.k.z];
-    precise float cy = c[r.k.y] - r.s.y * c[r.k.z];
+    precise float ax = component(a, r.k.x) - r.s.x * component(a, r.k.z);
+    precise float ay = component(a, r.k.y) - r.s.y * component(a, r.k.z);
+    precise float bx = component(b, r.k.x) - r.s.x * component(b, r.k.z);
+    precise float by = component(b, r.k.y) - r.s.y * component(b, r.k.z);
+    precise float cx = component(c, r.k.x) - r.s.x * component(c, r.k.z);
+    precise float cy = component(c, r.k.y) - r.s.y * component(c, r.k.z);
     precise float u = cx * by - cy * bx;
     precise float v = ax * cy - ay * cx;
     precise float w = bx * ay - by * ax;
@@ -191,9 +198,9 @@ bool hit_triangle(ShearedRay r, vec3 v0, vec3 v1, vec3 v2, float t_min, float t_
     if (det == 0.0) {
         return false;
     }
-    precise float az = r.s.z * a[r.k.z];
-    precise float bz = r.s.z * b[r.k.z];
-    precise float cz = r.s.z * c[r.k.z];
+    precise float az = r.s.z * component(a, r.k.z);
+    precise float bz = r.s.z * component(b, r.k.z);
+    precise float cz = r.s.z * component(c, r.k.z);
     precise float t_scaled = u * az + v * bz + w * cz;
     precise float inv = 1.0 / det;
     precise float t_hit = t_scaled * inv;
@@ -237,34 +244,34 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
     bool in_mesh = false;
     ShearedRay sheared;
     uint drawable = OBJECT_NONE;
-    uvec2 item[BVH_STACK_SIZE];
+    // The stack: each entry's child packed in one word, and the t where the ray entered it.
+    uint item[BVH_STACK_SIZE];
     float entry[BVH_STACK_SIZE];
     uint height = 0u;
     uint mesh_floor = NO_FLOOR;
     uint node = 0u;
     while (true) {
-        BvhNode n;
-        if (in_mesh) {
-            n = mesh_nodes[node];
-        } else {
-            n = top_nodes[node];
-        }
+        BvhNode n = bvh_nodes[node];
         float ta = bvh_enter(n.child[0], ray_o, ray_inv, t_min, best.t);
         float tb = bvh_enter(n.child[1], ray_o, ray_inv, t_min, best.t);
-        // The farther first, so that the nearer is popped first.
-        uint near = tb < ta ? 1u : 0u;
+        // Each child as a stack entry (index and count packed), the farther pushed first,
+        // so that the nearer is popped first. Chosen by selects, not by indexing the node
+        // with a per-invocation index (which a compiler may turn into a trip through memory).
+        uint a = (n.child[0].index << 3u) | min(n.child[0].count, 7u);
+        uint b = (n.child[1].index << 3u) | min(n.child[1].count, 7u);
+        bool b_nearer = tb < ta;
+        uint near_item = b_nearer ? b : a;
+        uint far_item = b_nearer ? a : b;
         float t_near = min(ta, tb);
-        float t_far = near == 1u ? ta : tb;
+        float t_far = max(ta, tb);
         // An empty leaf (a one-leaf tree's second child) holds nothing to visit.
-        if (t_far < BVH_INFINITY && n.child[1u - near].count != 0u) {
-            BvhChild far_child = n.child[1u - near];
-            item[height] = uvec2(far_child.index, far_child.count);
+        if (t_far < BVH_INFINITY && (far_item & 7u) != 0u) {
+            item[height] = far_item;
             entry[height] = t_far;
             height++;
         }
-        if (t_near < BVH_INFINITY && n.child[near].count != 0u) {
-            BvhChild near_child = n.child[near];
-            item[height] = uvec2(near_child.index, near_child.count);
+        if (t_near < BVH_INFINITY && (near_item & 7u) != 0u) {
+            item[height] = near_item;
             entry[height] = t_near;
             height++;
         }
@@ -285,8 +292,11 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
             if (entry[height] >= best.t) {
                 continue;
             }
-            uvec2 popped = item[height];
-            if (popped.y == BVH_INNER) {
+            // (index, count): 7 is an inner node's count (engine/src/bvh/build.rs keeps
+            // leaves under 7 triangles and indices under 2^29).
+            uint packed = item[height];
+            uvec2 popped = uvec2(packed >> 3u, packed & 7u);
+            if (popped.y == 7u) {
                 node = popped.x;
                 descend = true;
             } else if (in_mesh) {

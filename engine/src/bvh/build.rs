@@ -19,6 +19,11 @@ use crate::scene::Mesh;
 /// more levels of boxes cost more than the tests they save.
 pub const MESH_LEAF_TRIANGLES: u32 = 4;
 
+/// The shader packs a stack entry into one word: the index above three bits of count, 7
+/// meaning an inner node (`bvh.glsl`). Leaves hold fewer, and indices fit the 29 bits left.
+const _: () = assert!(MESH_LEAF_TRIANGLES < 7);
+const MAX_INDEX: usize = 1 << 29;
+
 /// Every mesh's tree, in one node array and one triangle array (what the shader binds).
 #[derive(Debug, Clone, Default)]
 pub struct MeshBvhs {
@@ -49,6 +54,21 @@ impl Boundable for MeshTriangle {
 }
 
 impl MeshBvhs {
+    /// These trees with every node index (inner children, roots) moved up by `offset`: as
+    /// they are once `offset` nodes precede them in one node array.
+    pub fn shifted(&self, offset: u32) -> MeshBvhs {
+        let mut moved = self.clone();
+        for c in moved.nodes.iter_mut().flat_map(|n| &mut n.child) {
+            if c.is_inner() {
+                c.index += offset;
+            }
+        }
+        for r in &mut moved.roots {
+            r.node += offset;
+        }
+        moved
+    }
+
     /// The trees of `meshes`, each in its model space.
     pub fn build(meshes: &[Mesh]) -> Result<Self, BvhError> {
         let mut all = Self::default();
@@ -76,6 +96,12 @@ impl MeshBvhs {
                 }));
             };
             let (root, stack) = flatten(bvh.as_ref(), &mut all.nodes, at, &mut leaf);
+            if all.nodes.len() >= MAX_INDEX || all.triangles.len() >= MAX_INDEX {
+                return Err(BvhError::TooLarge {
+                    nodes: all.nodes.len(),
+                    triangles: all.triangles.len(),
+                });
+            }
             check_stack(stack, || {
                 format!("mesh {i} ({} triangles)", triangles.len())
             })?;

@@ -37,6 +37,9 @@ pub enum BvhError {
         layout::BVH_STACK_SIZE
     )]
     TooDeep { what: String, depth: u32 },
+    /// More nodes or triangles than a stack entry can name (2^29).
+    #[error("the meshes' trees have {nodes} nodes and {triangles} triangles; the shader names at most 2^29 of each")]
+    TooLarge { nodes: usize, triangles: usize },
     /// An object's transform has no finite inverse (rays cannot enter its model space).
     #[error("drawable {0}: its model-to-render transform cannot be inverted")]
     Transform(u32),

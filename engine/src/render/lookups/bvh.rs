@@ -5,10 +5,10 @@
 //! (SwiftShader, GPUs without ray-tracing hardware), and it traces the sensor's ray map too,
 //! so the ground-truth layers come from the colour's own light path there.
 //!
-//! Its buffers: every mesh's tree and triangles, written once; the walls' frames and the
-//! drawables' index ranges, once; the top level's nodes and the objects' records, rewritten
-//! through the frame's uploads whenever an object moved (a rebuild on the CPU: see
-//! [`BvhPass::prepare`]).
+//! Its buffers: both levels' nodes in one (the top level's first, every mesh's tree after
+//! them), every mesh's triangles, the walls' frames and the drawables' index ranges, written
+//! once; the top level's nodes and the objects' records rewritten through the frame's uploads
+//! whenever an object moved (a rebuild on the CPU: see [`BvhPass::prepare`]).
 
 use std::sync::Arc;
 
@@ -63,9 +63,9 @@ impl MirrorLookup for Bvh {
     }
 }
 
-/// The set's bindings, in `bvh.glsl`'s order: mesh nodes, mesh triangles, top-level nodes,
+/// The set's bindings, in `bvh.glsl`'s order: nodes (both levels), mesh triangles,
 /// instances, walls, then `traced_surface.glsl`'s vertices, indices and drawable ranges.
-const BINDINGS: u32 = 8;
+const BINDINGS: u32 = 7;
 
 /// The bvh lookup's per-renderer state. Field order is drop order.
 struct BvhPass {
@@ -73,29 +73,30 @@ struct BvhPass {
     _pool: DescriptorPool,
     set: vk::DescriptorSet,
     set_layout: DescriptorSetLayout,
-    /// The trees' roots (the nodes and triangles are on the device).
+    /// The meshes' trees as the node buffer holds them: after the top level's room (the
+    /// nodes and triangles are on the device; the roots are what a top level is built from).
     meshes: MeshBvhs,
     /// Each object's mesh, in the scene's order.
     mesh_of: Vec<usize>,
     /// The objects' transforms the top level was last built from (None: not yet built).
     placed_from: Option<Vec<Mat4>>,
-    top: TopBuffers,
-    _fixed: [Buffer; 4],
-}
-
-/// The top level's device buffers, sized for the scene's objects.
-struct TopBuffers {
+    /// Both levels' nodes: the top level's room (rewritten when it is rebuilt), then the
+    /// meshes' trees.
     nodes: Buffer,
     instances: Buffer,
+    _fixed: [Buffer; 3],
 }
 
 impl BvhPass {
     fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
         let device = ctx.device;
         let scene = ctx.scene;
-        let meshes = MeshBvhs::build(&scene.meshes).map_err(unsupported)?;
-        let fixed = fixed_buffers(ctx, &meshes)?;
-        let top = TopBuffers::create(device, scene.objects.len())?;
+        // A top level of n objects has n - 1 nodes, and one at least.
+        let top_room = scene.objects.len().max(1);
+        let meshes =
+            (MeshBvhs::build(&scene.meshes).map_err(unsupported)?).shifted(top_room as u32);
+        let (nodes, fixed) = fixed_buffers(ctx, &meshes, top_room)?;
+        let instances = instance_buffer(device, scene.objects.len())?;
         let stage = vk::ShaderStageFlags::FRAGMENT;
         let bindings: Vec<_> = (0..BINDINGS)
             .map(|b| descriptors::binding(b, vk::DescriptorType::STORAGE_BUFFER, 1, stage))
@@ -108,12 +109,11 @@ impl BvhPass {
         let pool = DescriptorPool::create(device, 1, &[size], "bvh descriptors")?;
         let set = pool.allocate(&set_layout, "bvh set")?;
         let res = ctx.resources;
-        let [mesh_nodes, triangles, walls, ranges] = &fixed;
+        let [triangles, walls, ranges] = &fixed;
         let buffers = [
-            mesh_nodes,
+            &nodes,
             triangles,
-            &top.nodes,
-            &top.instances,
+            &instances,
             walls,
             &res.vertices,
             &res.indices,
@@ -136,23 +136,32 @@ impl BvhPass {
             meshes,
             mesh_of: scene.objects.iter().map(|o| o.mesh).collect(),
             placed_from: None,
-            top,
+            nodes,
+            instances,
             _fixed: fixed,
         })
     }
 }
 
-/// What does not change: the meshes' nodes and triangles, the walls' frames and each
-/// drawable's index range (walls first), device-local. Each holds at least one element (a
+/// The node buffer, its first `top_room` nodes left for the top level and the meshes' trees
+/// after them, and what does not change: the meshes' triangles, the walls' frames and each
+/// drawable's index range (walls first). Device-local; each holds one element at least (a
 /// room without objects has no triangles; a buffer cannot be empty).
-fn fixed_buffers(ctx: &LookupContext<'_>, meshes: &MeshBvhs) -> Result<[Buffer; 4], GpuError> {
+fn fixed_buffers(
+    ctx: &LookupContext<'_>,
+    meshes: &MeshBvhs,
+    top_room: usize,
+) -> Result<(Buffer, [Buffer; 3]), GpuError> {
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
     let ranges: Vec<UVec4> = (ctx.resources.drawables.iter())
         .map(|d| UVec4::new(d.first_index, d.vertex_offset as u32, 0, 0))
         .collect();
+    let mut nodes = vec![BvhNode::default(); top_room];
+    nodes.extend_from_slice(&meshes.nodes);
     let mut upload = Upload::begin(ctx.device, ctx.submitter)?;
+    let node_usage = storage | vk::BufferUsageFlags::TRANSFER_DST;
+    let node_buffer = upload.buffer(&nodes, node_usage, "bvh nodes")?;
     let buffers = [
-        upload.buffer(&at_least_one(&meshes.nodes), storage, "bvh mesh nodes")?,
         upload.buffer(
             &at_least_one(&meshes.triangles),
             storage,
@@ -162,26 +171,17 @@ fn fixed_buffers(ctx: &LookupContext<'_>, meshes: &MeshBvhs) -> Result<[Buffer; 
         upload.buffer(&ranges, storage, "bvh drawable ranges")?,
     ];
     upload.finish()?;
-    Ok(buffers)
+    Ok((node_buffer, buffers))
 }
 
-impl TopBuffers {
-    /// Room for the top level of `objects` objects: a tree of n leaves has n - 1 nodes, and
-    /// one at least.
-    fn create(device: &Arc<Device>, objects: usize) -> Result<Self, GpuError> {
-        let buffer = |count: usize, size: usize, name: &str| {
-            let desc = BufferDesc {
-                size: (count.max(1) * size) as u64,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                location: MemoryLocation::GpuOnly,
-            };
-            Buffer::create(device, &desc, name)
-        };
-        Ok(Self {
-            nodes: buffer(objects, std::mem::size_of::<BvhNode>(), "bvh top nodes")?,
-            instances: buffer(objects, std::mem::size_of::<BvhInstance>(), "bvh instances")?,
-        })
-    }
+/// The objects' records, rewritten with each top level: one per object, one at least.
+fn instance_buffer(device: &Arc<Device>, objects: usize) -> Result<Buffer, GpuError> {
+    let desc = BufferDesc {
+        size: (objects.max(1) * std::mem::size_of::<BvhInstance>()) as u64,
+        usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuOnly,
+    };
+    Buffer::create(device, &desc, "bvh instances")
 }
 
 /// `items`, or one default item where there are none.
@@ -240,8 +240,9 @@ impl LookupPass for BvhPass {
             })
             .collect();
         let top = TopLevel::build(&self.meshes, &placed).map_err(unsupported)?;
-        uploads.write(&self.top.nodes, &top.nodes)?;
-        uploads.write(&self.top.instances, &top.instances)?;
+        // Into the node buffer's first nodes, its room for them.
+        uploads.write(&self.nodes, &top.nodes)?;
+        uploads.write(&self.instances, &top.instances)?;
         self.placed_from = Some(transforms);
         Ok(())
     }
