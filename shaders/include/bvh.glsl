@@ -16,19 +16,26 @@
 #include "shared.glsl"
 #include "mirror.glsl"
 
-// A tree's node holds the boxes of its two children (one 64-byte read gives both boxes a ray
-// tests next: Aila and Laine 2009). A child is an inner node (count BVH_INNER, index: the
-// node) or a leaf (count: its triangles, or in the top level its one object; index: the
-// first). Boxes are padded by a few float steps of their coordinates, as the reference's are,
-// so that a ray along a face shared by two boxes cannot be rounded out of both.
-struct BvhChild {
-    vec3 lo;
-    uint index;
-    vec3 hi;
-    uint count;
-};
-struct BvhNode {
-    BvhChild child[2];
+// A node of a compressed wide BVH (Ylitie, Karras and Laine, HPG 2017; engine/src/bvh/
+// layout.rs): up to eight children, their boxes quantized to 8 bits a plane on a grid from
+// `origin` with a power-of-two step per axis. Each byte array holds one byte per child slot,
+// little-endian in two words. `meta` per slot: 0 empty; an inner node 0b00111sss (24 + slot,
+// with 0b001 above it); a leaf its first triangle's offset from `primitive_base` (low 5 bits)
+// and its triangle count in unary (high 3 bits). The inner children's nodes follow one another
+// from `child_base`, in slot order; the leaves' triangles from `primitive_base`. The boxes
+// are the padded triangle boxes, rounded outwards onto the grid.
+struct WideNode {
+    vec3 origin;
+    uint exponents_imask; // bytes 0..2: each axis's step as a float's exponent; 3: inner slots
+    uint child_base;
+    uint primitive_base;
+    uvec2 meta;
+    uvec2 lo_x;
+    uvec2 hi_x;
+    uvec2 lo_y;
+    uvec2 hi_y;
+    uvec2 lo_z;
+    uvec2 hi_z;
 };
 // A mesh's triangle in its model space, in its leaf's order; `primitive` is its index in the
 // mesh (traced_surface.glsl fetches its normals and uv by it).
@@ -67,7 +74,7 @@ struct BvhWall {
 // (a branch per fetch, taken by some invocations of a group and not others, costs both sides
 // where invocations run in lockstep).
 layout(set = 1, binding = BVH_BINDING, std430) readonly buffer NodeBlock {
-    BvhNode bvh_nodes[];
+    WideNode bvh_nodes[];
 };
 layout(set = 1, binding = BVH_BINDING + 1, std430) readonly buffer MeshTriangleBlock {
     BvhTriangle mesh_triangles[];
@@ -91,18 +98,6 @@ vec3 bvh_safe_inverse(vec3 d) {
     uvec3 sign_bit = floatBitsToUint(d) & 0x80000000u;
     vec3 big = uintBitsToFloat(sign_bit | floatBitsToUint(1.0 / BVH_EPSILON));
     return mix(1.0 / d, big, lessThanEqual(abs(d), vec3(BVH_EPSILON)));
-}
-
-// Where the ray (o, reciprocal direction inv) enters child c's box within (t_min, t_max): the
-// entry t, or infinity when it does not (the reference's slab test).
-float bvh_enter(BvhChild c, vec3 o, vec3 inv, float t_min, float t_max) {
-    vec3 t1 = (c.lo - o) * inv;
-    vec3 t2 = (c.hi - o) * inv;
-    vec3 lo = min(t1, t2);
-    vec3 hi = max(t1, t2);
-    float near = max(max(max(lo.x, lo.y), lo.z), t_min);
-    float far = min(min(min(hi.x, hi.y), hi.z), t_max);
-    return near <= far ? near : BVH_INFINITY;
 }
 
 // A ray prepared for the watertight triangle test (Woop, Benthin and Wald, "Watertight
@@ -220,16 +215,78 @@ struct BvhHit {
     vec2 bary;
 };
 
+// Byte `slot` of an eight-byte array.
+uint slot_byte(uvec2 array, uint slot) {
+    uint word = slot < 4u ? array.x : array.y;
+    return (word >> (8u * (slot & 3u))) & 0xFFu;
+}
+
+// The ray in the space of the tree being walked, prepared for the node test.
+struct LevelRay {
+    vec3 o;
+    vec3 inv;     // bvh_safe_inverse of the direction
+    bvec3 down;   // per axis, the ray runs down it: a box's high plane is met first
+    uint octant;  // the slot visited first: 4 x up, 2 y up, 1 z up (how obvhs ordered slots)
+};
+
+LevelRay level_ray(vec3 o, vec3 d) {
+    LevelRay r;
+    r.o = o;
+    r.inv = bvh_safe_inverse(d);
+    r.down = lessThan(r.inv, vec3(0.0));
+    r.octant = (d.x < 0.0 ? 0u : 4u) | (d.y < 0.0 ? 0u : 2u) | (d.z < 0.0 ? 0u : 1u);
+    return r;
+}
+
+// The children of node n that the ray meets within (t_min, t_max), as a hit mask: an inner
+// child of slot s sets bit 24 + (s ^ octant), so that the highest bit set is the child to
+// visit first; a leaf sets its triangles' bits, from its offset, in the low 24 bits.
+uint intersect_node(WideNode n, LevelRay ray, float t_min, float t_max) {
+    // The grid in the ray's terms: the plane q steps from the origin is met at q * scale + shift.
+    uvec3 e = (uvec3(n.exponents_imask) >> uvec3(0u, 8u, 16u)) & 0xFFu;
+    vec3 scale = uintBitsToFloat(e << 23u) * ray.inv;
+    vec3 shift = (n.origin - ray.o) * ray.inv;
+    // The planes a ray meets first along each axis, and last.
+    uvec2 first_x = ray.down.x ? n.hi_x : n.lo_x;
+    uvec2 last_x = ray.down.x ? n.lo_x : n.hi_x;
+    uvec2 first_y = ray.down.y ? n.hi_y : n.lo_y;
+    uvec2 last_y = ray.down.y ? n.lo_y : n.hi_y;
+    uvec2 first_z = ray.down.z ? n.hi_z : n.lo_z;
+    uvec2 last_z = ray.down.z ? n.lo_z : n.hi_z;
+    const uvec4 BYTES = uvec4(0u, 8u, 16u, 24u);
+    uint hits = 0u;
+    // Four slots at a time: each word holds one byte per slot.
+    for (uint half_ = 0u; half_ < 2u; half_++) {
+        vec4 near_x = vec4((uvec4(first_x[half_]) >> BYTES) & 0xFFu) * scale.x + shift.x;
+        vec4 near_y = vec4((uvec4(first_y[half_]) >> BYTES) & 0xFFu) * scale.y + shift.y;
+        vec4 near_z = vec4((uvec4(first_z[half_]) >> BYTES) & 0xFFu) * scale.z + shift.z;
+        vec4 far_x = vec4((uvec4(last_x[half_]) >> BYTES) & 0xFFu) * scale.x + shift.x;
+        vec4 far_y = vec4((uvec4(last_y[half_]) >> BYTES) & 0xFFu) * scale.y + shift.y;
+        vec4 far_z = vec4((uvec4(last_z[half_]) >> BYTES) & 0xFFu) * scale.z + shift.z;
+        vec4 near = max(max(max(near_x, near_y), near_z), vec4(t_min));
+        vec4 far = min(min(min(far_x, far_y), far_z), vec4(t_max));
+        uvec4 meta = (uvec4(n.meta[half_]) >> BYTES) & 0xFFu;
+        // Inner children's meta is 24 + slot: the only values with bits 3 and 4 set.
+        bvec4 inner = notEqual(meta & (meta << 1u) & 0x10u, uvec4(0u));
+        uvec4 bit = (meta ^ mix(uvec4(0u), uvec4(ray.octant), inner)) & 0x1Fu;
+        uvec4 set = mix(uvec4(0u), (meta >> 5u) << bit, lessThanEqual(near, far));
+        hits |= set.x | set.y | set.z | set.w;
+    }
+    return hits;
+}
+
 // The closest object triangle along o + t d with t in (t_min, t_max).
 //
-// One loop walks both levels with one stack of children still to visit (index and count,
-// and the t where the ray entered the child's box). A node's two children are tested and the
-// hit ones pushed, the farther first, so that the nearer is popped next. A popped top-level
-// leaf enters its object: the ray moves into the object's model space and its mesh's tree is
-// walked on the same stack, above `mesh_floor`; when the stack is back down to it, the ray
-// returns to render space. An entry whose box the ray entered beyond the closest hit found
-// since it was pushed is dropped unvisited. The stack lives in the invocation's registers or
-// private memory; the trees are refused when built if a walk could overflow it.
+// The walk of Ylitie et al. with two groups: a *node group* (where a node's inner children
+// start, and a bit per child met: bit 24 + rank, the nearest highest) and a *triangle group*
+// (where its leaves' triangles start, and a bit per triangle met). The triangles are tested
+// first; then the next child of the node group is fetched and tested, making the next
+// groups; what remains of a node group is pushed, and popped when both groups run dry.
+// A top-level "triangle" is an object: entering it pushes what remains of both groups, moves
+// the ray into the object's model space and walks its mesh's tree on the same stack, above
+// `mesh_floor`; when the stack is back down to it, the ray returns to render space. The stack
+// lives in the invocation's registers or private memory; the trees are refused when built
+// if a walk could overflow it. engine/src/bvh/traverse.rs is this walk on the CPU.
 BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
     BvhHit best;
     best.t = t_max;
@@ -237,98 +294,91 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
     best.primitive = 0u;
     best.bary = vec2(0.0);
     const uint NO_FLOOR = 0xFFFFFFFFu;
-    vec3 world_inv = bvh_safe_inverse(d);
-    // The ray in the space of the tree being walked; `sheared` and `drawable` in a mesh's.
-    vec3 ray_o = o;
-    vec3 ray_inv = world_inv;
+    const uint NODE_BITS = 0xFF000000u;
+    LevelRay world = level_ray(o, d);
+    LevelRay ray = world;
+    // In a mesh's tree: the ray prepared for the triangle test, and the object's drawable.
     bool in_mesh = false;
     ShearedRay sheared;
     uint drawable = OBJECT_NONE;
-    // The stack: each entry's child packed in one word, and the t where the ray entered it.
-    uint item[BVH_STACK_SIZE];
-    float entry[BVH_STACK_SIZE];
+    uvec2 stack[BVH_STACK_SIZE];
     uint height = 0u;
     uint mesh_floor = NO_FLOOR;
-    uint node = 0u;
+    // The top level's root, as a group of one inner child (any slot: no child ranks below it).
+    uvec2 nodes = uvec2(0u, 0x80000000u);
+    uvec2 triangles = uvec2(0u);
     while (true) {
-        BvhNode n = bvh_nodes[node];
-        float ta = bvh_enter(n.child[0], ray_o, ray_inv, t_min, best.t);
-        float tb = bvh_enter(n.child[1], ray_o, ray_inv, t_min, best.t);
-        // Each child as a stack entry (index and count packed), the farther pushed first,
-        // so that the nearer is popped first. Chosen by selects, not by indexing the node
-        // with a per-invocation index (which a compiler may turn into a trip through memory).
-        uint a = (n.child[0].index << 3u) | min(n.child[0].count, 7u);
-        uint b = (n.child[1].index << 3u) | min(n.child[1].count, 7u);
-        bool b_nearer = tb < ta;
-        uint near_item = b_nearer ? b : a;
-        uint far_item = b_nearer ? a : b;
-        float t_near = min(ta, tb);
-        float t_far = max(ta, tb);
-        // An empty leaf (a one-leaf tree's second child) holds nothing to visit.
-        if (t_far < BVH_INFINITY && (far_item & 7u) != 0u) {
-            item[height] = far_item;
-            entry[height] = t_far;
-            height++;
-        }
-        if (t_near < BVH_INFINITY && (near_item & 7u) != 0u) {
-            item[height] = near_item;
-            entry[height] = t_near;
-            height++;
-        }
-        // Pop until an inner node is next, testing leaves on the way.
-        bool descend = false;
-        while (!descend) {
-            if (height == mesh_floor) {
-                // The object's tree is done: back to render space.
-                ray_o = o;
-                ray_inv = world_inv;
-                in_mesh = false;
-                mesh_floor = NO_FLOOR;
-            }
-            if (height == 0u) {
-                return best;
-            }
-            height--;
-            if (entry[height] >= best.t) {
+        // The triangles (top level: objects) of the leaves just met.
+        while (triangles.y != 0u) {
+            uint k = findMSB(triangles.y);
+            triangles.y &= ~(1u << k);
+            uint id = triangles.x + k;
+            if (in_mesh) {
+                BvhTriangle tri = mesh_triangles[id];
+                float t;
+                vec2 bary;
+                if (hit_triangle(sheared, tri.v0, tri.v1, tri.v2, t_min, best.t, t, bary)) {
+                    best.t = t;
+                    best.drawable = drawable;
+                    best.primitive = tri.primitive;
+                    best.bary = bary;
+                }
                 continue;
             }
-            // (index, count): 7 is an inner node's count (engine/src/bvh/build.rs keeps
-            // leaves under 7 triangles and indices under 2^29).
-            uint packed = item[height];
-            uvec2 popped = uvec2(packed >> 3u, packed & 7u);
-            if (popped.y == 7u) {
-                node = popped.x;
-                descend = true;
-            } else if (in_mesh) {
-                for (uint k = popped.x; k < popped.x + popped.y; k++) {
-                    BvhTriangle tri = mesh_triangles[k];
-                    float t;
-                    vec2 bary;
-                    if (hit_triangle(sheared, tri.v0, tri.v1, tri.v2, t_min, best.t, t, bary)) {
-                        best.t = t;
-                        best.drawable = drawable;
-                        best.primitive = tri.primitive;
-                        best.bary = bary;
-                    }
-                }
-            } else {
-                // A top-level leaf holds one object: enter its model space.
-                BvhInstance inst = instances[popped.x];
-                vec3 mo = vec3(dot(inst.world_to_model[0], vec4(o, 1.0)),
-                               dot(inst.world_to_model[1], vec4(o, 1.0)),
-                               dot(inst.world_to_model[2], vec4(o, 1.0)));
-                vec3 md = vec3(dot(inst.world_to_model[0], vec4(d, 0.0)),
-                               dot(inst.world_to_model[1], vec4(d, 0.0)),
-                               dot(inst.world_to_model[2], vec4(d, 0.0)));
-                ray_o = mo;
-                ray_inv = bvh_safe_inverse(md);
-                sheared = shear_ray(mo, md);
-                drawable = inst.drawable;
-                in_mesh = true;
-                mesh_floor = height;
-                node = inst.root;
-                descend = true;
+            // Enter object `id`.
+            if ((nodes.y & NODE_BITS) != 0u) {
+                stack[height++] = nodes;
             }
+            if (triangles.y != 0u) {
+                stack[height++] = triangles;
+            }
+            BvhInstance inst = instances[id];
+            vec3 mo = vec3(dot(inst.world_to_model[0], vec4(o, 1.0)),
+                           dot(inst.world_to_model[1], vec4(o, 1.0)),
+                           dot(inst.world_to_model[2], vec4(o, 1.0)));
+            vec3 md = vec3(dot(inst.world_to_model[0], vec4(d, 0.0)),
+                           dot(inst.world_to_model[1], vec4(d, 0.0)),
+                           dot(inst.world_to_model[2], vec4(d, 0.0)));
+            ray = level_ray(mo, md);
+            sheared = shear_ray(mo, md);
+            drawable = inst.drawable;
+            in_mesh = true;
+            mesh_floor = height;
+            nodes = uvec2(inst.root, 0x80000000u);
+            triangles = uvec2(0u);
+        }
+        // The next node of the node group.
+        if ((nodes.y & NODE_BITS) != 0u) {
+            uint hits = nodes.y;
+            uint bit = findMSB(hits);
+            nodes.y &= ~(1u << bit);
+            if ((nodes.y & NODE_BITS) != 0u) {
+                stack[height++] = nodes;
+            }
+            // Its slot, and how many inner children precede it (they are stored in order).
+            uint slot = (bit - 24u) ^ ray.octant;
+            uint index = nodes.x + bitCount(hits & ~(0xFFFFFFFFu << slot));
+            WideNode n = bvh_nodes[index];
+            uint met = intersect_node(n, ray, t_min, best.t);
+            nodes = uvec2(n.child_base, (met & NODE_BITS) | (n.exponents_imask >> 24u));
+            triangles = uvec2(n.primitive_base, met & 0x00FFFFFFu);
+            continue;
+        }
+        // Both groups dry: the object's tree is done, or pop.
+        if (height == mesh_floor) {
+            ray = world;
+            in_mesh = false;
+            mesh_floor = NO_FLOOR;
+        }
+        if (height == 0u) {
+            return best;
+        }
+        uvec2 group = stack[--height];
+        if ((group.y & NODE_BITS) != 0u) {
+            nodes = group;
+        } else {
+            nodes = uvec2(0u);
+            triangles = group;
         }
     }
     return best;

@@ -113,16 +113,14 @@ struct MaterialSample {
 // Instanced cube fill: gl_InstanceIndex = object << INSTANCE_FACE_BITS | face.
 #define INSTANCE_FACE_BITS 3u
 
-// The bvh lookup's trees (bvh.glsl, engine/src/bvh): a child whose count is BVH_INNER is an
-// inner node; any other count is a leaf's number of triangles (instances).
-#define BVH_INNER 4294967295u
-// Entries in its traversal stack, which walks both levels: a nearer-child-first walk holds at
-// most one entry per level of a tree plus one, and a mesh's tree is walked above the top
-// level's entries (all but the object's own leaf, popped), so those and the deepest mesh's
-// must fit. Trees that need more are refused when they are built (engine/src/bvh/build.rs);
-// the benchmark scenes' walks need at most 28 (heavy.toml: 13 in its meshes, 15 above them;
-// engine/src/bvh/tests.rs prints them).
-#define BVH_STACK_SIZE 64u
+// Entries in the bvh lookup's walk stack (bvh.glsl, engine/src/bvh), which walks both levels:
+// each node level leaves at most one entry (the rest of the group it came from), entering an
+// object two (the rest of its node and object groups), and a mesh's tree is walked above the
+// top level's entries, so the top level's depth plus the deepest mesh's must fit. Walks that
+// need more are refused when the trees are built (engine/src/bvh/build.rs); the benchmark
+// scenes need at most 11 (heavy.toml: a top level 6 deep, meshes 5; engine/src/bvh/tests.rs
+// prints them).
+#define BVH_STACK_SIZE 32u
 
 // Descriptor set 0: the scene. Set 1: the environment cube (views only).
 #define SCENE_BINDINGS \

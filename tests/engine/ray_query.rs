@@ -97,7 +97,7 @@ fn traced_in_order(gpu: &Gpu, s: &Scene, order: TraceOrder) -> [RgbaImage; 2] {
 }
 
 /// The order the builds are handed their leaves in changes the tree, not what a ray meets: the
-/// images with the split order (`render::lookups::build_order`) equal those with the scene's own order, but
+/// images with the split order (`bvh::build_order`) equal those with the scene's own order, but
 /// for ties, where a ray meets two surfaces at the same distance and the traversal order picks
 /// the side. A tie is a pixel whose new colour a neighbour had before (an object standing on
 /// the floor or against a wall, boxes touching), or a sensor pixel on the image's diagonals

@@ -1,46 +1,45 @@
 //! Building the two levels: each mesh's tree once, in its own model space, and the top level
-//! over the objects every frame an object moves. Both are built by obvhs (PLOC, then
-//! reinsertion) and flattened into [`BvhNode`]s.
+//! over the objects every frame an object moved. Both are built by obvhs (PLOC, then
+//! reinsertion, then the binary tree collapsed into the compressed wide form) and laid out
+//! as [`WideNode`]s in one array per level.
 
 use glam::{Mat4, Vec3};
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::builder::build_bvh2;
+use obvhs::bvh2::node::Bvh2Node;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ploc::PlocBuilder;
 use obvhs::{Boundable, BvhBuildParams};
 
-use super::layout::{BvhChild, BvhInstance, BvhNode, BvhTriangle, BVH_INNER, BVH_STACK_SIZE};
+use super::build_order::midpoint_split_order;
+use super::layout::{BvhInstance, BvhTriangle, WideNode, BVH_STACK_SIZE};
 use super::BvhError;
 use crate::reference::geometry::padded_box;
 use crate::scene::Mesh;
 
-/// How each mesh's tree is built: obvhs's `fast_build` (the reference's own choice), with at
-/// most this many triangles a leaf. Measured on lavapipe (docs/accuracy.md, "The bvh
-/// lookup"): a leaf's triangles are tested one after another by the same fragment, where two
-/// more levels of boxes cost more than the tests they save.
-pub const MESH_LEAF_TRIANGLES: u32 = 4;
-
-/// The shader packs a stack entry into one word: the index above three bits of count, 7
-/// meaning an inner node (`bvh.glsl`). Leaves hold fewer, and indices fit the 29 bits left.
-const _: () = assert!(MESH_LEAF_TRIANGLES < 7);
-const MAX_INDEX: usize = 1 << 29;
+/// At most this many triangles a leaf of a mesh's tree: the most a wide node's child can name
+/// (its count is three bits of unary). obvhs's conversion puts fewer where its cost model says so.
+pub const MESH_LEAF_TRIANGLES: u32 = 3;
 
 /// Every mesh's tree, in one node array and one triangle array (what the shader binds).
 #[derive(Debug, Clone, Default)]
 pub struct MeshBvhs {
-    pub nodes: Vec<BvhNode>,
+    pub nodes: Vec<WideNode>,
     pub triangles: Vec<BvhTriangle>,
     /// Per mesh of the scene, in its order: its tree's root node and its padded box.
     pub roots: Vec<MeshRoot>,
 }
 
-/// Where one mesh's tree starts, the box (model space) that holds all of it, and the stack
-/// its walk needs.
+/// Where one mesh's tree starts, the box (model space) that holds all of it, and its depth
+/// (node levels on its longest path; a walk's stack need follows from it).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MeshRoot {
     pub node: u32,
     pub lo: Vec3,
     pub hi: Vec3,
-    pub stack: u32,
+    pub depth: u32,
 }
 
 /// A triangle of a mesh with its box padded as the reference pads it.
@@ -53,15 +52,118 @@ impl Boundable for MeshTriangle {
     }
 }
 
+/// A tree deeper than this (node levels) is rebuilt balanced: half the walk's stack, so that
+/// a top level and a mesh's tree always fit together.
+const MAX_DEPTH: u32 = BVH_STACK_SIZE / 2;
+
+/// The compressed wide tree over `items` (None for none), at most `leaf` of them a leaf:
+/// obvhs's `fast_build` (the reference's own choice) without its debug-build validation,
+/// which would run on every frame's top level (the tests check the trees instead).
+///
+/// PLOC pairs nearest boxes, which makes a chain of boxes nested in one another (objects
+/// stacked on one spot, triangles at exponentially growing distances) a tree as deep as the
+/// chain is long. Such a tree is rebuilt balanced ([`balanced`]): a worse tree for rays, but
+/// one whose depth is the logarithm of its leaves.
+fn wide_tree<T: Boundable>(items: &[T], leaf: u32) -> Option<CwBvh> {
+    if items.is_empty() {
+        return None;
+    }
+    let p = BvhBuildParams::fast_build();
+    let indices = (0..items.len() as u32).collect();
+    let mut bvh2 = PlocBuilder::with_capacity(items.len()).build(
+        p.ploc_search_distance,
+        items,
+        indices,
+        p.sort_precision,
+        p.search_depth_threshold,
+    );
+    ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
+    let tree = bvh2_to_cwbvh(&bvh2, leaf, true, false);
+    if depth(&tree) <= MAX_DEPTH {
+        return Some(tree);
+    }
+    Some(bvh2_to_cwbvh(&balanced(items), leaf, true, false))
+}
+
+/// The binary tree over `items` that splits every range of leaves at its middle, the leaves
+/// in [`midpoint_split_order`] (each half the nearer half along the range's longest axis): its
+/// depth is ⌈log2 n⌉ + 1, whatever the boxes.
+fn balanced<T: Boundable>(items: &[T]) -> Bvh2 {
+    let boxes: Vec<Aabb> = items.iter().map(Boundable::aabb).collect();
+    let ends: Vec<(Vec3, Vec3)> = boxes.iter().map(|b| (b.min.into(), b.max.into())).collect();
+    let order = midpoint_split_order(&ends);
+    let mut nodes = vec![Bvh2Node::default()];
+    // (node, leaves first..last inclusive), children made before their parent's box is known.
+    fn make(
+        nodes: &mut Vec<Bvh2Node>,
+        boxes: &[Aabb],
+        order: &[u32],
+        at: usize,
+        first: usize,
+        last: usize,
+    ) -> Aabb {
+        if first == last {
+            let b = boxes[order[first] as usize];
+            nodes[at] = Bvh2Node::new(b, 1, first as u32);
+            return b;
+        }
+        let child = nodes.len();
+        nodes.extend([Bvh2Node::default(); 2]);
+        let middle = (first + last) / 2;
+        let left = make(nodes, boxes, order, child, first, middle);
+        let right = make(nodes, boxes, order, child + 1, middle + 1, last);
+        let b = left.union(&right);
+        nodes[at] = Bvh2Node::new(b, 0, child as u32);
+        b
+    }
+    make(&mut nodes, &boxes, &order, 0, 0, items.len() - 1);
+    Bvh2 {
+        nodes,
+        primitive_indices: order,
+        ..Default::default()
+    }
+}
+
+/// Appends `tree` to `nodes`, its node indices moved up by where it starts and its primitive
+/// indices by `primitives`; a missing tree is one node without children. Returns its root.
+fn append(tree: Option<&CwBvh>, nodes: &mut Vec<WideNode>, primitives: u32) -> u32 {
+    let root = nodes.len() as u32;
+    match tree {
+        None => nodes.push(WideNode::default()),
+        Some(t) => nodes.extend(
+            t.nodes
+                .iter()
+                .map(|n| WideNode::from_obvhs(n, root, primitives)),
+        ),
+    }
+    root
+}
+
+/// The node levels on the longest path down `tree` (1 for none): an inner child of slot s is
+/// node `child_base_idx + (inner slots below s)`, so a node's inner children are the
+/// `imask.count_ones()` nodes from its `child_base_idx`.
+fn depth(tree: &CwBvh) -> u32 {
+    let mut deepest = 1;
+    let mut stack = vec![(0u32, 1)];
+    while let Some((index, level)) = stack.pop() {
+        deepest = deepest.max(level);
+        let Some(n) = tree.nodes.get(index as usize) else {
+            continue;
+        };
+        for k in 0..n.imask.count_ones() {
+            stack.push((n.child_base_idx + k, level + 1));
+        }
+    }
+    deepest
+}
+
 impl MeshBvhs {
     /// These trees with every node index (inner children, roots) moved up by `offset`: as
     /// they are once `offset` nodes precede them in one node array.
     pub fn shifted(&self, offset: u32) -> MeshBvhs {
         let mut moved = self.clone();
-        for c in moved.nodes.iter_mut().flat_map(|n| &mut n.child) {
-            if c.is_inner() {
-                c.index += offset;
-            }
+        for n in &mut moved.nodes {
+            n.child_base += offset;
         }
         for r in &mut moved.roots {
             r.node += offset;
@@ -76,41 +178,31 @@ impl MeshBvhs {
             let triangles: Vec<MeshTriangle> = (mesh.indices.chunks_exact(3))
                 .map(|t| MeshTriangle([0, 1, 2].map(|k| mesh.positions[t[k] as usize])))
                 .collect();
-            let params = BvhBuildParams {
-                max_prims_per_leaf: MESH_LEAF_TRIANGLES,
-                ..BvhBuildParams::fast_build()
-            };
-            let bvh = (!triangles.is_empty())
-                .then(|| build_bvh2(&triangles, params, &mut Default::default()));
-            let at = all.triangles.len() as u32;
-            let mut leaf = |items: &[u32]| {
-                all.triangles.extend(items.iter().map(|&p| {
-                    let [v0, v1, v2] = triangles[p as usize].0;
-                    BvhTriangle {
-                        v0,
-                        primitive: p,
-                        v1,
-                        v2,
-                        ..Default::default()
-                    }
-                }));
-            };
-            let (root, stack) = flatten(bvh.as_ref(), &mut all.nodes, at, &mut leaf);
-            if all.nodes.len() >= MAX_INDEX || all.triangles.len() >= MAX_INDEX {
-                return Err(BvhError::TooLarge {
-                    nodes: all.nodes.len(),
-                    triangles: all.triangles.len(),
-                });
-            }
-            check_stack(stack, || {
+            let tree = wide_tree(&triangles, MESH_LEAF_TRIANGLES);
+            let first = all.triangles.len() as u32;
+            let node = append(tree.as_ref(), &mut all.nodes, first);
+            let depth = tree.as_ref().map_or(1, depth);
+            // The triangles in the tree's primitive order, as its leaves name them.
+            let order = tree.as_ref().map_or(&[][..], |t| &t.primitive_indices[..]);
+            all.triangles.extend(order.iter().map(|&p| {
+                let [v0, v1, v2] = triangles[p as usize].0;
+                BvhTriangle {
+                    v0,
+                    primitive: p,
+                    v1,
+                    v2,
+                    ..Default::default()
+                }
+            }));
+            let bounds = tree.as_ref().map(|t| t.total_aabb);
+            check_stack(depth, || {
                 format!("mesh {i} ({} triangles)", triangles.len())
             })?;
-            let (lo, hi) = root_box(&all.nodes[root as usize]);
             all.roots.push(MeshRoot {
-                node: root,
-                lo,
-                hi,
-                stack,
+                node,
+                lo: bounds.map_or(Vec3::ZERO, |b| b.min.into()),
+                hi: bounds.map_or(Vec3::ZERO, |b| b.max.into()),
+                depth,
             });
         }
         Ok(all)
@@ -121,7 +213,7 @@ impl MeshBvhs {
 /// leaves' order.
 #[derive(Debug, Clone, Default)]
 pub struct TopLevel {
-    pub nodes: Vec<BvhNode>,
+    pub nodes: Vec<WideNode>,
     pub instances: Vec<BvhInstance>,
     /// The stack a walk through both levels needs at most.
     pub stack: u32,
@@ -147,11 +239,11 @@ impl Boundable for ObjectBox {
 impl TopLevel {
     /// The top level over `objects`, their meshes' trees in `meshes`. Each object's box holds
     /// the eight corners of its mesh's (padded) box, transformed, and is padded once more for
-    /// the transform's rounding. Each leaf holds one object (the walk enters it when popped).
+    /// the transform's rounding. A leaf holds one object.
     pub fn build(meshes: &MeshBvhs, objects: &[Placed]) -> Result<Self, BvhError> {
         let mut boxes = Vec::with_capacity(objects.len());
         let mut placed = Vec::with_capacity(objects.len());
-        let mut mesh_stack = 0;
+        let mut mesh_depth = 0;
         for o in objects {
             let root = meshes.roots[o.mesh];
             let instance = BvhInstance::new(&o.model_to_world, root.node, o.drawable)
@@ -162,40 +254,30 @@ impl TopLevel {
                 root.hi,
             )));
             placed.push(instance);
-            mesh_stack = mesh_stack.max(root.stack);
+            mesh_depth = mesh_depth.max(root.depth);
         }
-        // Instances are few and each one's own tree follows: a leaf holds one.
-        let params = BvhBuildParams {
-            max_prims_per_leaf: 1,
-            ..BvhBuildParams::fast_build()
-        };
-        let bvh = (!boxes.is_empty()).then(|| build_bvh2(&boxes, params, &mut Default::default()));
+        let tree = wide_tree(&boxes, 1);
         let mut top = Self::default();
-        let mut leaf = |items: &[u32]| {
-            (top.instances).extend(items.iter().map(|&i| placed[i as usize]));
-        };
-        let (_, stack) = flatten(bvh.as_ref(), &mut top.nodes, 0, &mut leaf);
-        // A mesh's tree is walked on the stack above the top level's entries, of which there
-        // are at most `stack - 1` once the object's own leaf was popped.
-        top.stack = stack - 1 + mesh_stack;
+        append(tree.as_ref(), &mut top.nodes, 0);
+        let depth = tree.as_ref().map_or(1, depth);
+        let order = tree.as_ref().map_or(&[][..], |t| &t.primitive_indices[..]);
+        top.instances = order.iter().map(|&i| placed[i as usize]).collect();
+        // A walk holds at most one entry per level it is below (the rest of the group it
+        // came from); entering an object adds the rest of its own group and of its leaves'
+        // group, and the object's tree is walked above them.
+        top.stack = depth + mesh_depth;
         check_stack(top.stack, || {
             format!(
                 "the top level ({} objects) with its deepest mesh",
                 objects.len()
             )
         })?;
-        let one_each =
-            (top.nodes.iter().flat_map(|n| &n.child)).all(|c| c.is_inner() || c.count <= 1);
-        assert!(
-            one_each,
-            "obvhs made a top-level leaf of several objects with max_prims_per_leaf 1"
-        );
         Ok(top)
     }
 }
 
 /// Refuses a walk the shader's stack cannot hold.
-fn check_stack(stack: u32, what: impl Fn() -> String) -> Result<(), BvhError> {
+pub(super) fn check_stack(stack: u32, what: impl Fn() -> String) -> Result<(), BvhError> {
     if stack > BVH_STACK_SIZE {
         return Err(BvhError::TooDeep {
             what: what(),
@@ -203,15 +285,6 @@ fn check_stack(stack: u32, what: impl Fn() -> String) -> Result<(), BvhError> {
         });
     }
     Ok(())
-}
-
-/// The union of a node's two children's boxes.
-fn root_box(node: &BvhNode) -> (Vec3, Vec3) {
-    let [a, b] = &node.child;
-    if b.count == 0 {
-        return (a.lo, a.hi);
-    }
-    (a.lo.min(b.lo), a.hi.max(b.hi))
 }
 
 /// The box of `lo..hi` under `m`: the eight corners transformed, padded.
@@ -228,77 +301,4 @@ fn transformed_box(m: &Mat4, lo_corner: Vec3, hi_corner: Vec3) -> Aabb {
         hi = hi.max(p);
     }
     padded_box(lo, hi)
-}
-
-/// Appends `bvh` to `nodes` in the layout of [`BvhNode`]; each leaf's items (obvhs's
-/// primitive indices) go to `leaf`, which appends them to the item array, whose length before
-/// this tree was `first_item`. Returns the root's index and the stack a walk of it needs
-/// (`bvh::traverse`: the deepest inner node's depth, root 0, plus two, as each node passed
-/// leaves at most one entry and the deepest pushes two; one for a tree that is one leaf). A tree that is one leaf (or none) gets
-/// a root whose second child is [`BvhChild::EMPTY`].
-fn flatten(
-    bvh: Option<&Bvh2>,
-    nodes: &mut Vec<BvhNode>,
-    first_item: u32,
-    leaf: &mut dyn FnMut(&[u32]),
-) -> (u32, u32) {
-    let root = nodes.len() as u32;
-    let mut items = first_item;
-    // obvhs node `index` as a child: a leaf's items are handed to `leaf` now; an inner node
-    // is laid out later, and its index filled in then.
-    let mut child_of = |bvh: &Bvh2, index: usize| {
-        let n = &bvh.nodes[index];
-        let (lo, hi) = (Vec3::from(n.aabb.min), Vec3::from(n.aabb.max));
-        if n.prim_count == 0 {
-            let count = BVH_INNER;
-            return BvhChild {
-                lo,
-                index: u32::MAX,
-                hi,
-                count,
-            };
-        }
-        let first = n.first_index as usize;
-        leaf(&bvh.primitive_indices[first..first + n.prim_count as usize]);
-        let at = items;
-        items += n.prim_count;
-        BvhChild {
-            lo,
-            index: at,
-            hi,
-            count: n.prim_count,
-        }
-    };
-    let mut node = BvhNode {
-        child: [BvhChild::EMPTY; 2],
-    };
-    match bvh {
-        None => {}
-        Some(bvh) if bvh.nodes[0].prim_count > 0 => node.child[0] = child_of(bvh, 0),
-        Some(bvh) => {
-            // (obvhs inner node, its depth, the child slot that points at it): each is
-            // written at the end of `nodes` when popped.
-            let mut stack = vec![(0usize, 0u32, None::<(usize, usize)>)];
-            let mut deepest = 0;
-            while let Some((index, depth, parent)) = stack.pop() {
-                let at = nodes.len();
-                if let Some((p, slot)) = parent {
-                    nodes[p].child[slot].index = at as u32;
-                }
-                deepest = deepest.max(depth);
-                let first = bvh.nodes[index].first_index as usize;
-                let mut node = BvhNode::default();
-                for slot in 0..2 {
-                    node.child[slot] = child_of(bvh, first + slot);
-                    if node.child[slot].is_inner() {
-                        stack.push((first + slot, depth + 1, Some((at, slot))));
-                    }
-                }
-                nodes.push(node);
-            }
-            return (root, deepest + 2);
-        }
-    }
-    nodes.push(node);
-    (root, 1)
 }

@@ -2,57 +2,90 @@
 //! `shaders/include/bvh.glsl` (a test in `render::lookups::bvh` compares every offset with the
 //! SPIR-V).
 //!
-//! The layout is a binary tree whose node holds the boxes of its **two children**, not its own
-//! (Aila and Laine, "Understanding the Efficiency of Ray Traversal on GPUs", 2009): one 64-byte
-//! read gives a ray both boxes it must test next, so a traversal step is one fetch, two slab
-//! tests, and a push of the farther child. A child is an inner node (its index into the node
-//! array) or a leaf (a range of triangles, or of instances in the top level).
+//! The trees are compressed wide BVHs (Ylitie, Karras and Laine, "Efficient Incoherent Ray
+//! Traversal on GPUs Through Compressed Wide BVHs", HPG 2017), as obvhs builds them: a node
+//! holds up to **eight children** in 80 bytes, each child's box quantized to 8 bits per plane
+//! on a grid the node states (an origin and a power-of-two scale per axis). A walk tests eight
+//! boxes per node it fetches and fetches far fewer nodes than a binary tree needs: on lavapipe,
+//! where every word a shader reads from a per-invocation address is a separate load, the bytes
+//! fetched per ray are what a walk costs (docs/accuracy.md, "The exact rung on every device").
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
+use obvhs::cwbvh::node::CwBvhNode;
 
 use crate::scene::{Mesh, Room};
 
-/// A child whose count is this is an inner node (shared.glsl's `BVH_INNER`; a test in
+/// Entries in the walk's stack (shared.glsl's `BVH_STACK_SIZE`, which says why; a test in
 /// `render::lookups::bvh` holds the two equal, as this module reaches no shader).
-pub const BVH_INNER: u32 = u32::MAX;
-/// Entries in each traversal stack (shared.glsl's `BVH_STACK_SIZE`, which says why).
-pub const BVH_STACK_SIZE: u32 = 64;
+pub const BVH_STACK_SIZE: u32 = 32;
 
-/// One child of a [`BvhNode`]: its box, and what it is.
+/// One node of a compressed wide BVH (obvhs's `CwBvhNode`, field for field, the bytes of its
+/// eight-byte arrays packed little-endian into two words each so that the shader can read them).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhChild {
-    /// The box's low corner (padded: see `bvh::build`).
-    pub lo: Vec3,
-    /// An inner node's index in the node array, or a leaf's first triangle (first instance).
-    pub index: u32,
-    /// Its high corner.
-    pub hi: Vec3,
-    /// [`BVH_INNER`] for an inner node; a leaf's triangle (instance) count, possibly 0.
-    pub count: u32,
+pub struct WideNode {
+    /// The quantization grid's origin: the node's box's low corner.
+    pub origin: Vec3,
+    /// Bytes 0..3: each axis's grid step as a float's biased exponent (step = 2^(e - 127));
+    /// byte 3: which children are inner nodes (bit = slot).
+    pub exponents_imask: u32,
+    /// The first of the inner children's nodes, which follow one another in slot order.
+    pub child_base: u32,
+    /// The first triangle (top level: object) of the leaf children, which follow one another.
+    pub primitive_base: u32,
+    /// Per child slot, one byte: 0 for an empty slot; an inner node's 24 + its slot (0b11xxx);
+    /// a leaf's triangle offset from `primitive_base` (low 5 bits) and its triangle count in
+    /// unary (high 3 bits: 0b001 one, 0b011 two, 0b111 three).
+    pub meta: [u32; 2],
+    /// Per child slot, its box's planes on the grid, one byte each (low x, high x, ...).
+    pub lo_x: [u32; 2],
+    pub hi_x: [u32; 2],
+    pub lo_y: [u32; 2],
+    pub hi_y: [u32; 2],
+    pub lo_z: [u32; 2],
+    pub hi_z: [u32; 2],
 }
 
-impl BvhChild {
-    /// A leaf holding nothing (the second child of a tree that is one leaf): a point box at
-    /// the origin, never pushed on a walk's stack (its count is 0).
-    pub const EMPTY: BvhChild = BvhChild {
-        lo: Vec3::ZERO,
-        index: 0,
-        hi: Vec3::ZERO,
-        count: 0,
-    };
+/// Eight bytes as two little-endian words.
+fn words(bytes: [u8; 8]) -> [u32; 2] {
+    let [a, b] = [&bytes[..4], &bytes[4..]].map(|w| u32::from_le_bytes(w.try_into().unwrap()));
+    [a, b]
+}
 
-    pub fn is_inner(&self) -> bool {
-        self.count == BVH_INNER
+impl WideNode {
+    /// obvhs's node, its node and triangle indices moved up by `nodes` and `primitives`.
+    pub fn from_obvhs(n: &CwBvhNode, nodes: u32, primitives: u32) -> Self {
+        Self {
+            origin: n.p,
+            exponents_imask: u32::from_le_bytes([n.e[0], n.e[1], n.e[2], n.imask]),
+            child_base: n.child_base_idx + nodes,
+            primitive_base: n.primitive_base_idx + primitives,
+            meta: words(n.child_meta),
+            lo_x: words(n.child_min_x),
+            hi_x: words(n.child_max_x),
+            lo_y: words(n.child_min_y),
+            hi_y: words(n.child_max_y),
+            lo_z: words(n.child_min_z),
+            hi_z: words(n.child_max_z),
+        }
     }
-}
 
-/// An inner node: the boxes of its two children.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhNode {
-    pub child: [BvhChild; 2],
+    /// Byte `slot` of a child array.
+    pub fn byte(array: [u32; 2], slot: usize) -> u32 {
+        (array[slot / 4] >> (8 * (slot % 4))) & 0xff
+    }
+
+    /// The bit set of slots holding inner nodes.
+    pub fn imask(&self) -> u32 {
+        self.exponents_imask >> 24
+    }
+
+    /// The grid step per axis (a power of two).
+    pub fn step(&self) -> Vec3 {
+        let e = |k: u32| f32::from_bits(((self.exponents_imask >> (8 * k)) & 0xff) << 23);
+        Vec3::new(e(0), e(1), e(2))
+    }
 }
 
 /// One triangle of a mesh, in its leaf's order, in the mesh's own (model) space.
@@ -118,7 +151,7 @@ impl BvhInstance {
 }
 
 // The sizes the shader's arrays stride by.
-const _: () = assert!(std::mem::size_of::<BvhNode>() == 64);
+const _: () = assert!(std::mem::size_of::<WideNode>() == 80);
 const _: () = assert!(std::mem::size_of::<BvhTriangle>() == 48);
 const _: () = assert!(std::mem::size_of::<BvhInstance>() == 64);
 

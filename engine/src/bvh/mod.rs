@@ -14,11 +14,15 @@
 //! up to the wall, an object lying exactly on a wall's plane winning the tie.
 //!
 //! Both levels are built by obvhs (PLOC with reinsertion, Meister and Bittner 2018) and
-//! flattened into [`layout::BvhNode`]s. [`closest_hit`] traverses them on the CPU exactly as
-//! the shader does: the tests check the trees against the reference with it, and the
-//! benchmark counts the work per ray with it.
+//! collapsed into compressed wide BVHs ([`layout::WideNode`]: eight children a node, their
+//! boxes quantized). [`closest_hit`] walks them on the CPU exactly as the shader does: the
+//! tests check the trees against the reference with it, and the benchmark counts the work
+//! per ray with it.
 
 mod build;
+/// Leaf orders whose ranges split at their midpoint make coherent trees (lavapipe's builder,
+/// and the bounded-depth fallback of [`MeshBvhs`] and [`TopLevel`]).
+pub mod build_order;
 pub mod layout;
 mod traverse;
 
@@ -37,9 +41,6 @@ pub enum BvhError {
         layout::BVH_STACK_SIZE
     )]
     TooDeep { what: String, depth: u32 },
-    /// More nodes or triangles than a stack entry can name (2^29).
-    #[error("the meshes' trees have {nodes} nodes and {triangles} triangles; the shader names at most 2^29 of each")]
-    TooLarge { nodes: usize, triangles: usize },
     /// An object's transform has no finite inverse (rays cannot enter its model space).
     #[error("drawable {0}: its model-to-render transform cannot be inverted")]
     Transform(u32),

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use glam::{Mat4, Vec3};
 
-use super::layout::{BvhChild, BvhNode, BVH_INNER};
+use super::layout::WideNode;
 use super::*;
 use crate::reference::geometry::{SceneGeometry, Surface};
 use crate::scene::Mesh;
@@ -16,27 +16,50 @@ fn scene(rel: &str) -> Scene {
     crate::scene::load(&root.join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }
 
-/// Every child box of the tree at `node` holds everything below it; returns the items of its
-/// leaves (first, count) in the order met.
-fn leaves_below(nodes: &[BvhNode], node: u32, within: Option<&BvhChild>) -> Vec<(u32, u32)> {
-    let mut found = Vec::new();
-    for c in &nodes[node as usize].child {
-        if let Some(outer) = within {
-            if c.count != 0 {
-                assert!(outer.lo.cmple(c.lo).all() && c.hi.cmple(outer.hi).all());
+/// The triangles (their index in the tree's order) below `node`, each child's decoded box
+/// checked to hold the corners of every triangle below it: the quantized boxes are
+/// conservative at every level.
+fn triangles_below(bvhs: &MeshBvhs, node: u32) -> Vec<u32> {
+    let n = &bvhs.nodes[node as usize];
+    let (step, base) = (n.step(), n.origin);
+    let mut all = Vec::new();
+    let mut inner = 0;
+    for slot in 0..8 {
+        let meta = WideNode::byte(n.meta, slot);
+        if meta == 0 {
+            continue;
+        }
+        let q = |a| WideNode::byte(a, slot) as f32;
+        let lo = base + step * Vec3::new(q(n.lo_x), q(n.lo_y), q(n.lo_z));
+        let hi = base + step * Vec3::new(q(n.hi_x), q(n.hi_y), q(n.hi_z));
+        let below: Vec<u32> = if meta & (meta << 1) & 0x10 != 0 {
+            inner += 1;
+            // Inner children are stored in slot order from `child_base`.
+            let rank = (n.imask() & ((1 << slot) - 1)).count_ones();
+            triangles_below(bvhs, n.child_base + rank)
+        } else {
+            let count = (meta >> 5).count_ones();
+            (0..count)
+                .map(|k| n.primitive_base + (meta & 0x1f) + k)
+                .collect()
+        };
+        for &t in &below {
+            let tri = &bvhs.triangles[t as usize];
+            for v in [tri.v0, tri.v1, tri.v2] {
+                assert!(
+                    lo.cmple(v).all() && v.cmple(hi).all(),
+                    "{v} outside {lo}..{hi}"
+                );
             }
         }
-        if c.count == BVH_INNER {
-            found.extend(leaves_below(nodes, c.index, Some(c)));
-        } else if c.count > 0 {
-            found.push((c.index, c.count));
-        }
+        all.extend(below);
     }
-    found
+    assert_eq!(inner, n.imask().count_ones(), "imask names the inner slots");
+    all
 }
 
 /// Every triangle of every mesh is in exactly one leaf of its mesh's tree, inside that leaf's
-/// box (and so inside every box above it).
+/// box and every box above it, with the mesh's own corners.
 #[test]
 fn every_triangle_is_in_one_leaf_inside_its_boxes() {
     for rel in ["scenes/many-objects.toml", "scenes/furnished-room.toml"] {
@@ -44,15 +67,14 @@ fn every_triangle_is_in_one_leaf_inside_its_boxes() {
         let bvhs = MeshBvhs::build(&s.meshes).unwrap();
         for (m, (mesh, root)) in s.meshes.iter().zip(&bvhs.roots).enumerate() {
             let mut seen = vec![0u32; mesh.indices.len() / 3];
-            for (first, count) in leaves_below(&bvhs.nodes, root.node, None) {
-                for tri in &bvhs.triangles[first as usize..(first + count) as usize] {
-                    seen[tri.primitive as usize] += 1;
-                    let at = 3 * tri.primitive as usize;
-                    let corners = [0, 1, 2].map(|k| mesh.positions[mesh.indices[at + k] as usize]);
-                    assert_eq!([tri.v0, tri.v1, tri.v2], corners, "{rel} mesh {m}");
-                    for v in corners {
-                        assert!(root.lo.cmple(v).all() && v.cmple(root.hi).all());
-                    }
+            for t in triangles_below(&bvhs, root.node) {
+                let tri = &bvhs.triangles[t as usize];
+                seen[tri.primitive as usize] += 1;
+                let at = 3 * tri.primitive as usize;
+                let corners = [0, 1, 2].map(|k| mesh.positions[mesh.indices[at + k] as usize]);
+                assert_eq!([tri.v0, tri.v1, tri.v2], corners, "{rel} mesh {m}");
+                for v in corners {
+                    assert!(root.lo.cmple(v).all() && v.cmple(root.hi).all());
                 }
             }
             assert!(seen.iter().all(|&n| n == 1), "{rel} mesh {m}: {seen:?}");
@@ -60,8 +82,8 @@ fn every_triangle_is_in_one_leaf_inside_its_boxes() {
     }
 }
 
-/// A mesh of one triangle and a room without objects make trees too: one leaf and an empty
-/// child; nothing to meet in the empty room.
+/// A mesh of one triangle and a room without objects make trees too: one node each; nothing
+/// to meet in the empty room.
 #[test]
 fn the_smallest_trees() {
     let one = Mesh {
@@ -75,7 +97,7 @@ fn the_smallest_trees() {
     };
     let bvhs = MeshBvhs::build(std::slice::from_ref(&one)).unwrap();
     assert_eq!(bvhs.nodes.len(), 1);
-    assert_eq!(bvhs.nodes[0].child[1], BvhChild::EMPTY);
+    assert_eq!(triangles_below(&bvhs, 0), [0]);
     let placed = Placed {
         mesh: 0,
         model_to_world: Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)),
@@ -227,14 +249,15 @@ fn the_trees_meet_what_the_reference_meets() {
     }
 }
 
-/// A walk deeper than the shader's stack is refused when its trees are built, with what it is
-/// and how deep. Triangles at exponentially growing distances make obvhs nest each pair of
-/// nearest boxes in the next (every merge's best partner is the box holding all the nearer
-/// ones): a chain, one level per triangle until the 64-bit Morton codes run out of bits,
-/// whose walk needs exactly the whole stack. Two objects of it need the top level's entries
-/// besides, which do not fit.
+/// A chain that nests each triangle's box in the next (triangles at exponentially growing
+/// distances: every merge's best partner is the box of all the nearer ones) is as deep a
+/// binary tree as obvhs makes (63 levels, where its 64-bit Morton codes run out), and a top
+/// level of 1,000 copies stacked one above the other is another chain. Both are rebuilt
+/// balanced: they fit the walk's stack, and the walk meets every triangle where it is. A walk
+/// deeper than the stack is refused, naming what and how deep.
 #[test]
-fn a_walk_too_deep_for_the_stack_is_refused() {
+fn deep_trees_fit_the_stack_and_deeper_walks_are_refused() {
+    // 1.2^180 is 2e14: the boxes' areas (which obvhs's builders weigh) stay finite.
     let n = 180;
     let mut mesh = Mesh {
         positions: Vec::new(),
@@ -246,7 +269,7 @@ fn a_walk_too_deep_for_the_stack_is_refused() {
         closed: false,
     };
     for i in 0..n {
-        let at = 1.5f32.powi(i);
+        let at = 1.2f32.powi(i);
         let size = at * 0.01;
         for p in [Vec3::ZERO, Vec3::X * size, Vec3::Y * size] {
             mesh.positions.push(Vec3::new(at, 0.0, 0.0) + p);
@@ -256,25 +279,43 @@ fn a_walk_too_deep_for_the_stack_is_refused() {
         let first = 3 * i as u32;
         mesh.indices.extend([first, first + 1, first + 2]);
     }
-    let bvhs = MeshBvhs::build(&[mesh]).expect("a walk that fits the stack exactly");
-    assert_eq!(bvhs.roots[0].stack, layout::BVH_STACK_SIZE);
-    let placed = |x: f32, drawable| Placed {
+    let centres: Vec<Vec3> = (mesh.indices.chunks_exact(3))
+        .map(|t| t.iter().map(|&k| mesh.positions[k as usize]).sum::<Vec3>() / 3.0)
+        .collect();
+    let bvhs = MeshBvhs::build(&[mesh]).expect("a chain's wide tree fits the stack");
+    // Rebuilt balanced: the walk still meets every triangle where it is.
+    let alone = Placed {
         mesh: 0,
-        model_to_world: Mat4::from_translation(Vec3::X * x),
-        drawable,
+        model_to_world: Mat4::IDENTITY,
+        drawable: 6,
     };
-    assert!(TopLevel::build(&bvhs, &[placed(0.0, 6)]).is_ok());
-    let err = match TopLevel::build(&bvhs, &[placed(0.0, 6), placed(1.0, 7)]) {
-        Ok(_) => panic!("two objects of a {n}-triangle chain were not refused"),
-        Err(err) => err,
-    };
-    let text = err.to_string();
-    eprintln!("{text}");
+    let one = TopLevel::build(&bvhs, &[alone]).unwrap();
+    for (i, c) in centres.iter().enumerate() {
+        let ray = (*c + Vec3::Z, Vec3::NEG_Z);
+        let hit = closest_hit(&one, &bvhs, ray, (0.0, f32::INFINITY), &mut Work::default());
+        assert_eq!(hit.map(|h| h.primitive), Some(i as u32), "triangle {i}");
+    }
+    let placed: Vec<Placed> = (0..1000)
+        .map(|i| Placed {
+            mesh: 0,
+            model_to_world: Mat4::from_translation(Vec3::Y * i as f32),
+            drawable: 6 + i,
+        })
+        .collect();
+    let top = TopLevel::build(&bvhs, &placed).expect("1,000 of them");
+    eprintln!(
+        "a {n}-triangle chain: {} levels; with 1,000 of them the walk needs {} of {}",
+        bvhs.roots[0].depth,
+        top.stack,
+        layout::BVH_STACK_SIZE
+    );
+    assert!(top.stack <= layout::BVH_STACK_SIZE);
+    let err = super::build::check_stack(layout::BVH_STACK_SIZE + 1, || "a walk".into());
+    let text = err.unwrap_err().to_string();
     assert!(
-        matches!(err, BvhError::TooDeep { depth, .. } if depth > 64),
+        text.contains("a walk: its tree needs a traversal stack of 33"),
         "{text}"
     );
-    assert!(text.contains("the top level (2 objects)"), "{text}");
 }
 
 /// The benchmark scenes' walks fit the shader's stack with room to spare (printed: the
@@ -291,9 +332,9 @@ fn the_benchmark_scenes_fit_the_stack() {
         let meshes = MeshBvhs::build(&s.meshes).unwrap();
         let state = crate::scene::state::SceneState::at(&s, 0.0);
         let top = TopLevel::build(&meshes, &placed_objects(&s, &state)).unwrap();
-        let deepest = meshes.roots.iter().map(|r| r.stack).max().unwrap_or(0);
+        let deepest = meshes.roots.iter().map(|r| r.depth).max().unwrap_or(0);
         eprintln!(
-            "{rel}: {} meshes, {} objects; deepest mesh walk {deepest}, whole walk {} of {}",
+            "{rel}: {} meshes, {} objects; deepest mesh {deepest} levels, whole walk {} of {}",
             s.meshes.len(),
             s.objects.len(),
             top.stack,

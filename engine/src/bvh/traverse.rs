@@ -1,5 +1,5 @@
 //! The closest object hit through the two levels, on the CPU, step for step as
-//! `shaders/include/bvh.glsl` takes it: the same box test, the same order of children, the
+//! `shaders/include/bvh.glsl` takes it: the same node test, the same order of children, the
 //! same stack, the same watertight triangle test. The tests trace with it to check the trees
 //! against the reference without a device, and the benchmark counts its work with it (nodes
 //! and triangles per ray are a property of the trees and the rays, the same on every device).
@@ -8,7 +8,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::build::{MeshBvhs, TopLevel};
-use super::layout::{BvhChild, BVH_INNER, BVH_STACK_SIZE};
+use super::layout::{WideNode, BVH_STACK_SIZE};
 use crate::reference::intersect::ShearedRay;
 
 /// What traversals did, summed over their rays.
@@ -16,9 +16,9 @@ use crate::reference::intersect::ShearedRay;
 pub struct Work {
     /// Rays traced.
     pub rays: u64,
-    /// Inner nodes fetched (each tests its two children's boxes), both levels.
+    /// Nodes fetched (each tests its up to eight children's boxes), both levels.
     pub nodes: u64,
-    /// Objects entered: their mesh's tree traversed in their model space.
+    /// Objects entered: their mesh's tree walked in their model space.
     pub instances: u64,
     /// Triangles tested.
     pub triangles: u64,
@@ -57,9 +57,9 @@ pub struct ObjectHit {
     pub v: f32,
 }
 
-/// A ray's reciprocal direction for the slab tests: obvhs's safe inverse, finite for every
-/// direction (a component within f32::EPSILON of zero becomes ±1/EPSILON), as the
-/// reference's box tests use it.
+/// A ray's reciprocal direction for the box tests: obvhs's safe inverse, finite for every
+/// direction (a component within f32::EPSILON of zero becomes ±1/EPSILON, its sign the
+/// component's sign bit), as the reference's box tests use it.
 pub fn safe_inverse(d: Vec3) -> Vec3 {
     let inv = |x: f32| {
         if x.abs() <= f32::EPSILON {
@@ -71,47 +71,76 @@ pub fn safe_inverse(d: Vec3) -> Vec3 {
     Vec3::new(inv(d.x), inv(d.y), inv(d.z))
 }
 
-/// Where `ray` enters `c`'s box within (t_min, t_max): the entry t, or infinity when it does
-/// not (the reference's slab test).
-fn enter(c: &BvhChild, ray: &LevelRay, t_min: f32, t_max: f32) -> f32 {
-    let t1 = (c.lo - ray.o) * ray.inv;
-    let t2 = (c.hi - ray.o) * ray.inv;
-    let near = t1.min(t2).max_element().max(t_min);
-    let far = t1.max(t2).min_element().min(t_max);
-    if near <= far {
-        near
-    } else {
-        f32::INFINITY
-    }
-}
-
-/// The ray in the space of the tree being walked: origin, reciprocal direction for the boxes,
-/// and the sheared form for the triangles (None in the top level, which has none).
+/// The ray in the space of the tree being walked.
+#[derive(Clone, Copy)]
 struct LevelRay {
     o: Vec3,
     inv: Vec3,
-    sheared: Option<(ShearedRay, u32)>,
+    /// Per axis, whether the ray runs down it (its reciprocal's sign): the box's planes are
+    /// then met high first.
+    down: [bool; 3],
+    /// Which child slot a walk visits first, per axis one bit (obvhs's builder ordered each
+    /// node's children by the octant of the direction): 4 x up, 2 y up, 1 z up.
+    octant: u32,
 }
 
 impl LevelRay {
     fn new(o: Vec3, d: Vec3) -> Self {
+        let inv = safe_inverse(d);
+        let up = |x: f32, bit: u32| if x < 0.0 { 0 } else { bit };
         Self {
             o,
-            inv: safe_inverse(d),
-            sheared: None,
+            inv,
+            down: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
+            octant: up(d.x, 4) | up(d.y, 2) | up(d.z, 1),
         }
     }
+}
+
+/// The children of `n` the ray meets within (t_min, t_max), as a hit mask: an inner child of
+/// slot s sets bit 24 + (s ^ octant), so that the highest bit set is the child to visit
+/// first; a leaf sets its triangles' bits, from its offset, in the low 24.
+fn intersect(n: &WideNode, ray: &LevelRay, t_min: f32, t_max: f32) -> u32 {
+    // The grid in the ray's terms: a plane q steps from the origin is met at q * scale + shift.
+    let scale = n.step() * ray.inv;
+    let shift = (n.origin - ray.o) * ray.inv;
+    let mut hits = 0;
+    for slot in 0..8 {
+        let q = |a: [u32; 2]| WideNode::byte(a, slot) as f32;
+        let planes = [(n.lo_x, n.hi_x), (n.lo_y, n.hi_y), (n.lo_z, n.hi_z)];
+        let [near3, far3] = [0, 1].map(|end| {
+            Vec3::from_array(std::array::from_fn(|axis| {
+                let (lo, hi) = planes[axis];
+                let first = if ray.down[axis] { hi } else { lo };
+                let last = if ray.down[axis] { lo } else { hi };
+                q(if end == 0 { first } else { last })
+            }))
+        });
+        let near = (near3 * scale + shift).max_element().max(t_min);
+        let far = (far3 * scale + shift).min_element().min(t_max);
+        if near <= far {
+            let meta = WideNode::byte(n.meta, slot);
+            // Inner children's meta is 24 + slot, the only values with bits 3 and 4 both set.
+            let inner = meta & (meta << 1) & 0x10 != 0;
+            let count = meta >> 5;
+            let bit = (meta ^ if inner { ray.octant } else { 0 }) & 0x1f;
+            hits |= count << bit;
+        }
+    }
+    hits
 }
 
 /// The closest object triangle along `o + t d` with t in (t_min, t_max), through the top
 /// level and the meshes' trees; its work is added to `work`.
 ///
-/// One loop walks both levels with one stack of children still to visit (index, count,
-/// entry t): a node's two children are tested and the hit ones pushed, the farther first, so
-/// the nearer is popped next. A popped top-level leaf enters its object: the ray moves into
-/// the object's model space and the object's tree is walked on the same stack, above
-/// `floor`; once the stack is back at `floor`, the ray returns to render space. An entry
-/// whose box the ray entered beyond the closest hit found since it was pushed is dropped.
+/// The walk of Ylitie et al.: a *node group* (the first node of a node's inner children and
+/// a bit per child hit, the nearest highest) and a *triangle group* (the first triangle of a
+/// node's leaves and a bit per triangle hit). The triangles are tested first, then the next
+/// child of the node group is fetched and tested, making the next groups; what remains of a
+/// node group is pushed, and popped when both groups run dry. A top-level "triangle" is an
+/// object: entering it pushes what remains of both groups, moves the ray into the object's
+/// model space and walks its mesh's tree above `floor` on the same stack; once the stack is
+/// back at `floor`, the ray returns to render space.
 pub fn closest_hit(
     top: &TopLevel,
     meshes: &MeshBvhs,
@@ -120,80 +149,90 @@ pub fn closest_hit(
     work: &mut Work,
 ) -> Option<ObjectHit> {
     work.rays += 1;
-    let world = || LevelRay::new(o, d);
-    let mut ray = world();
+    let world = LevelRay::new(o, d);
+    let mut ray = world;
+    // In a mesh's tree: its ray prepared for the triangle test, and the object's drawable.
+    let mut mesh: Option<(ShearedRay, u32)> = None;
     let mut best: Option<ObjectHit> = None;
     let mut limit = t_max;
-    let mut stack = [(0u32, 0u32, 0f32); BVH_STACK_SIZE as usize];
+    let mut stack = [(0u32, 0u32); BVH_STACK_SIZE as usize];
     let (mut height, mut floor) = (0, usize::MAX);
-    let mut node = 0;
+    // The top level's root, as a group of one inner child (any slot: the count below it is 0).
+    let mut nodes = (0u32, 0x8000_0000u32);
+    let mut triangles = (0u32, 0u32);
     loop {
-        work.nodes += 1;
-        let nodes = if ray.sheared.is_some() {
-            &meshes.nodes
-        } else {
-            &top.nodes
-        };
-        let [a, b] = &nodes[node as usize].child;
-        let (ta, tb) = (enter(a, &ray, t_min, limit), enter(b, &ray, t_min, limit));
-        let ((near, t_near), (far, t_far)) = if tb < ta {
-            ((b, tb), (a, ta))
-        } else {
-            ((a, ta), (b, tb))
-        };
-        for (c, t) in [(far, t_far), (near, t_near)] {
-            // An empty leaf (a one-leaf tree's second child) holds nothing to visit.
-            if t < f32::INFINITY && c.count != 0 {
-                stack[height] = (c.index, c.count, t);
-                height += 1;
-            }
-        }
-        // Pop until an inner node is next, testing leaves on the way.
-        loop {
-            if height == floor {
-                (ray, floor) = (world(), usize::MAX);
-            }
-            if height == 0 {
-                return best;
-            }
-            height -= 1;
-            let (index, count, t) = stack[height];
-            if t >= limit {
+        // The triangles (top level: objects) of the leaves just met.
+        while triangles.1 != 0 {
+            let k = 31 - triangles.1.leading_zeros();
+            triangles.1 &= !(1 << k);
+            let id = triangles.0 + k;
+            if let Some((sheared, drawable)) = mesh {
+                work.triangles += 1;
+                let tri = &meshes.triangles[id as usize];
+                if let Some(h) = sheared.hit_triangle(tri.v0, tri.v1, tri.v2, t_min, limit) {
+                    limit = h.t;
+                    best = Some(ObjectHit {
+                        t: h.t,
+                        drawable,
+                        primitive: tri.primitive,
+                        u: h.u,
+                        v: h.v,
+                    });
+                }
                 continue;
             }
-            if count == BVH_INNER {
-                node = index;
-                break;
-            }
-            match ray.sheared {
-                Some((sheared, drawable)) => {
-                    for tri in &meshes.triangles[index as usize..(index + count) as usize] {
-                        work.triangles += 1;
-                        if let Some(h) = sheared.hit_triangle(tri.v0, tri.v1, tri.v2, t_min, limit)
-                        {
-                            limit = h.t;
-                            best = Some(ObjectHit {
-                                t: h.t,
-                                drawable,
-                                primitive: tri.primitive,
-                                u: h.u,
-                                v: h.v,
-                            });
-                        }
-                    }
-                }
-                None => {
-                    // A top-level leaf holds one object (`TopLevel::build`).
-                    work.instances += 1;
-                    let instance = &top.instances[index as usize];
-                    let (mo, md) = (instance.point_to_model(o), instance.direction_to_model(d));
-                    ray = LevelRay::new(mo, md);
-                    ray.sheared = Some((ShearedRay::new(mo, md), instance.drawable));
-                    floor = height;
-                    node = instance.root;
-                    break;
+            // Enter object `id`.
+            work.instances += 1;
+            for (group, left) in [(nodes, nodes.1 & 0xff00_0000), (triangles, triangles.1)] {
+                if left != 0 {
+                    stack[height] = group;
+                    height += 1;
                 }
             }
+            let instance = &top.instances[id as usize];
+            let (mo, md) = (instance.point_to_model(o), instance.direction_to_model(d));
+            ray = LevelRay::new(mo, md);
+            mesh = Some((ShearedRay::new(mo, md), instance.drawable));
+            floor = height;
+            nodes = (instance.root, 0x8000_0000);
+            triangles = (0, 0);
+        }
+        // The next node of the node group.
+        if nodes.1 & 0xff00_0000 != 0 {
+            let hits = nodes.1;
+            let bit = 31 - hits.leading_zeros();
+            nodes.1 &= !(1 << bit);
+            if nodes.1 & 0xff00_0000 != 0 {
+                stack[height] = nodes;
+                height += 1;
+            }
+            // Its slot, and how many inner children precede it (they are stored in order).
+            let slot = (bit - 24) ^ ray.octant;
+            let index = nodes.0 + (hits & !(u32::MAX << slot)).count_ones();
+            work.nodes += 1;
+            let node = if mesh.is_some() {
+                &meshes.nodes[index as usize]
+            } else {
+                &top.nodes[index as usize]
+            };
+            let met = intersect(node, &ray, t_min, limit);
+            nodes = (node.child_base, (met & 0xff00_0000) | node.imask());
+            triangles = (node.primitive_base, met & 0x00ff_ffff);
+            continue;
+        }
+        // Both groups dry: the object's tree is done, or pop.
+        if height == floor {
+            (ray, mesh, floor) = (world, None, usize::MAX);
+        }
+        if height == 0 {
+            return best;
+        }
+        height -= 1;
+        let group = stack[height];
+        if group.1 & 0xff00_0000 != 0 {
+            nodes = group;
+        } else {
+            (nodes, triangles) = ((0, 0), group);
         }
     }
 }

@@ -20,7 +20,7 @@ use super::{
     as_is, FrameObjects, LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders,
     Rung, Start, TraceSet,
 };
-use crate::bvh::layout::{BvhInstance, BvhNode, BvhWall};
+use crate::bvh::layout::{BvhInstance, BvhWall, WideNode};
 use crate::bvh::{object_drawable, MeshBvhs, Placed, TopLevel};
 use crate::scene::Lookup;
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
@@ -78,6 +78,8 @@ struct BvhPass {
     meshes: MeshBvhs,
     /// Each object's mesh, in the scene's order.
     mesh_of: Vec<usize>,
+    /// The top level's room in the node buffer: where the meshes' trees start.
+    mesh_start: u32,
     /// The objects' transforms the top level was last built from (None: not yet built).
     placed_from: Option<Vec<Mat4>>,
     /// Both levels' nodes: the top level's room (rewritten when it is rebuilt), then the
@@ -91,7 +93,8 @@ impl BvhPass {
     fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
         let device = ctx.device;
         let scene = ctx.scene;
-        // A top level of n objects has n - 1 nodes, and one at least.
+        // A top level of n objects has at most n - 1 nodes (each has two children at least),
+        // and one at least.
         let top_room = scene.objects.len().max(1);
         let meshes =
             (MeshBvhs::build(&scene.meshes).map_err(unsupported)?).shifted(top_room as u32);
@@ -135,6 +138,7 @@ impl BvhPass {
             set_layout,
             meshes,
             mesh_of: scene.objects.iter().map(|o| o.mesh).collect(),
+            mesh_start: top_room as u32,
             placed_from: None,
             nodes,
             instances,
@@ -156,7 +160,7 @@ fn fixed_buffers(
     let ranges: Vec<UVec4> = (ctx.resources.drawables.iter())
         .map(|d| UVec4::new(d.first_index, d.vertex_offset as u32, 0, 0))
         .collect();
-    let mut nodes = vec![BvhNode::default(); top_room];
+    let mut nodes = vec![WideNode::default(); top_room];
     nodes.extend_from_slice(&meshes.nodes);
     let mut upload = Upload::begin(ctx.device, ctx.submitter)?;
     let node_usage = storage | vk::BufferUsageFlags::TRANSFER_DST;
@@ -240,6 +244,12 @@ impl LookupPass for BvhPass {
             })
             .collect();
         let top = TopLevel::build(&self.meshes, &placed).map_err(unsupported)?;
+        assert!(
+            top.nodes.len() <= self.mesh_start as usize,
+            "a top level of {} objects has {} nodes",
+            placed.len(),
+            top.nodes.len()
+        );
         // Into the node buffer's first nodes, its room for them.
         uploads.write(&self.nodes, &top.nodes)?;
         uploads.write(&self.instances, &top.instances)?;
@@ -252,7 +262,7 @@ impl LookupPass for BvhPass {
 mod tests {
     use std::mem::offset_of;
 
-    use crate::bvh::layout::{BvhChild, BvhTriangle, BVH_INNER, BVH_STACK_SIZE};
+    use crate::bvh::layout::{BvhTriangle, BVH_STACK_SIZE};
 
     use super::*;
 
@@ -267,11 +277,17 @@ mod tests {
             };
         }
         let rust = [
-            member!(BvhChild, lo),
-            member!(BvhChild, index),
-            member!(BvhChild, hi),
-            member!(BvhChild, count),
-            member!(BvhNode, child),
+            member!(WideNode, origin),
+            member!(WideNode, exponents_imask),
+            member!(WideNode, child_base),
+            member!(WideNode, primitive_base),
+            member!(WideNode, meta),
+            member!(WideNode, lo_x),
+            member!(WideNode, hi_x),
+            member!(WideNode, lo_y),
+            member!(WideNode, hi_y),
+            member!(WideNode, lo_z),
+            member!(WideNode, hi_z),
             member!(BvhTriangle, v0),
             member!(BvhTriangle, primitive),
             member!(BvhTriangle, v1),
@@ -299,7 +315,6 @@ mod tests {
                 assert!(mirrored, "{s}.{m} not mirrored");
             }
         }
-        assert_eq!(BVH_INNER, crate::shaders::shared::BVH_INNER);
         assert_eq!(BVH_STACK_SIZE, crate::shaders::shared::BVH_STACK_SIZE);
     }
 }

@@ -12,8 +12,6 @@
 //! ([`crate::lookup_registry`]), which makes both the scene's `Lookup` and [`REGISTRY`];
 //! nothing in the scene, `shared.glsl`, the benchmark or the CLI.
 
-/// The order the tracing lookups hand their acceleration-structure builds their leaves in.
-pub mod build_order;
 mod bvh;
 mod cube;
 mod distance;
