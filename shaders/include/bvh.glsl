@@ -18,43 +18,39 @@
 
 // A node of a compressed wide BVH (Ylitie, Karras and Laine, HPG 2017; engine/src/bvh/
 // layout.rs): up to eight children, their boxes quantized to 8 bits a plane on a grid from
-// `origin` with a power-of-two step per axis. Each byte array holds one byte per child slot,
-// little-endian in two words. `meta` per slot: 0 empty; an inner node 0b00111sss (24 + slot,
-// with 0b001 above it); a leaf its first triangle's offset from `primitive_base` (low 5 bits)
-// and its triangle count in unary (high 3 bits). The inner children's nodes follow one another
-// from `child_base`, in slot order; the leaves' triangles from `primitive_base`. The boxes
-// are the padded triangle boxes, rounded outwards onto the grid.
+// the node's origin with a power-of-two step per axis. Each byte array holds one byte per
+// child slot, little-endian in two words. A child's `meta` byte: 0 empty; an inner node
+// 0b00111sss (24 + slot, with 0b001 above it); a leaf its first triangle's offset from the
+// primitive base (low 5 bits) and its triangle count in unary (high 3 bits). The inner
+// children's nodes follow one another from the child base, in slot order; the leaves'
+// triangles from the primitive base. The boxes are the padded triangle boxes, rounded
+// outwards onto the grid.
+//
+// Every member is a whole 16-byte word: a shader reads a struct member by member, and on a
+// CPU driver each read from a per-invocation address is a separate load (lavapipe: five
+// uvec4 reads cost 13 % less than the eleven members this node had as named fields).
 struct WideNode {
-    vec3 origin;
-    uint exponents_imask; // bytes 0..2: each axis's step as a float's exponent; 3: inner slots
-    uint child_base;
-    uint primitive_base;
-    uvec2 meta;
-    uvec2 lo_x;
-    uvec2 hi_x;
-    uvec2 lo_y;
-    uvec2 hi_y;
-    uvec2 lo_z;
-    uvec2 hi_z;
+    uvec4 grid;     // xyz: the grid's origin (float bits); w: bytes 0..2 each axis's step as a
+                    // float's biased exponent, byte 3 the inner slots (bit = slot)
+    uvec4 links;    // x: the child base; y: the primitive base; zw: the meta bytes
+    uvec4 x_planes; // xy: the children's low x planes, a byte each; zw: their high x planes
+    uvec4 y_planes;
+    uvec4 z_planes;
 };
-// A mesh's triangle in its model space, in its leaf's order; `primitive` is its index in the
-// mesh (traced_surface.glsl fetches its normals and uv by it).
+// A mesh's triangle in its model space, in its tree's order: three corners, the first's w
+// holding the bits of the triangle's index in its mesh (traced_surface.glsl fetches its
+// normals and uv by it).
 struct BvhTriangle {
-    vec3 v0;
-    uint primitive;
-    vec3 v1;
-    uint pad1;
-    vec3 v2;
-    uint pad2;
+    vec4 v0;
+    vec4 v1;
+    vec4 v2;
 };
 // An object in the top level's leaves: render space to its model space (three rows; the
-// direction is not renormalised, so t is the same in both), its mesh's root node, its drawable.
+// direction is not renormalised, so t is the same in both), and its tree: x the root node of
+// its mesh, y its drawable.
 struct BvhInstance {
     vec4 world_to_model[3];
-    uint root;
-    uint drawable;
-    uint pad0;
-    uint pad1;
+    uvec4 tree;
 };
 // A wall of the room, in cube-face order: its centre's offset from the room's centre, and the
 // half-extents its texture's u and v run along (scene::Mesh::room_wall_frame).
@@ -215,12 +211,6 @@ struct BvhHit {
     vec2 bary;
 };
 
-// Byte `slot` of an eight-byte array.
-uint slot_byte(uvec2 array, uint slot) {
-    uint word = slot < 4u ? array.x : array.y;
-    return (word >> (8u * (slot & 3u))) & 0xFFu;
-}
-
 // The ray in the space of the tree being walked, prepared for the node test.
 struct LevelRay {
     vec3 o;
@@ -243,16 +233,16 @@ LevelRay level_ray(vec3 o, vec3 d) {
 // visit first; a leaf sets its triangles' bits, from its offset, in the low 24 bits.
 uint intersect_node(WideNode n, LevelRay ray, float t_min, float t_max) {
     // The grid in the ray's terms: the plane q steps from the origin is met at q * scale + shift.
-    uvec3 e = (uvec3(n.exponents_imask) >> uvec3(0u, 8u, 16u)) & 0xFFu;
+    uvec3 e = (uvec3(n.grid.w) >> uvec3(0u, 8u, 16u)) & 0xFFu;
     vec3 scale = uintBitsToFloat(e << 23u) * ray.inv;
-    vec3 shift = (n.origin - ray.o) * ray.inv;
+    vec3 shift = (uintBitsToFloat(n.grid.xyz) - ray.o) * ray.inv;
     // The planes a ray meets first along each axis, and last.
-    uvec2 first_x = ray.down.x ? n.hi_x : n.lo_x;
-    uvec2 last_x = ray.down.x ? n.lo_x : n.hi_x;
-    uvec2 first_y = ray.down.y ? n.hi_y : n.lo_y;
-    uvec2 last_y = ray.down.y ? n.lo_y : n.hi_y;
-    uvec2 first_z = ray.down.z ? n.hi_z : n.lo_z;
-    uvec2 last_z = ray.down.z ? n.lo_z : n.hi_z;
+    uvec2 first_x = ray.down.x ? n.x_planes.zw : n.x_planes.xy;
+    uvec2 last_x = ray.down.x ? n.x_planes.xy : n.x_planes.zw;
+    uvec2 first_y = ray.down.y ? n.y_planes.zw : n.y_planes.xy;
+    uvec2 last_y = ray.down.y ? n.y_planes.xy : n.y_planes.zw;
+    uvec2 first_z = ray.down.z ? n.z_planes.zw : n.z_planes.xy;
+    uvec2 last_z = ray.down.z ? n.z_planes.xy : n.z_planes.zw;
     const uvec4 BYTES = uvec4(0u, 8u, 16u, 24u);
     uint hits = 0u;
     // Four slots at a time: each word holds one byte per slot.
@@ -265,7 +255,7 @@ uint intersect_node(WideNode n, LevelRay ray, float t_min, float t_max) {
         vec4 far_z = vec4((uvec4(last_z[half_]) >> BYTES) & 0xFFu) * scale.z + shift.z;
         vec4 near = max(max(max(near_x, near_y), near_z), vec4(t_min));
         vec4 far = min(min(min(far_x, far_y), far_z), vec4(t_max));
-        uvec4 meta = (uvec4(n.meta[half_]) >> BYTES) & 0xFFu;
+        uvec4 meta = (uvec4(n.links[2u + half_]) >> BYTES) & 0xFFu;
         // Inner children's meta is 24 + slot: the only values with bits 3 and 4 set.
         bvec4 inner = notEqual(meta & (meta << 1u) & 0x10u, uvec4(0u));
         uvec4 bit = (meta ^ mix(uvec4(0u), uvec4(ray.octant), inner)) & 0x1Fu;
@@ -317,10 +307,10 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
                 BvhTriangle tri = mesh_triangles[id];
                 float t;
                 vec2 bary;
-                if (hit_triangle(sheared, tri.v0, tri.v1, tri.v2, t_min, best.t, t, bary)) {
+                if (hit_triangle(sheared, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, t_min, best.t, t, bary)) {
                     best.t = t;
                     best.drawable = drawable;
-                    best.primitive = tri.primitive;
+                    best.primitive = floatBitsToUint(tri.v0.w);
                     best.bary = bary;
                 }
                 continue;
@@ -341,10 +331,10 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
                            dot(inst.world_to_model[2], vec4(d, 0.0)));
             ray = level_ray(mo, md);
             sheared = shear_ray(mo, md);
-            drawable = inst.drawable;
+            drawable = inst.tree.y;
             in_mesh = true;
             mesh_floor = height;
-            nodes = uvec2(inst.root, 0x80000000u);
+            nodes = uvec2(inst.tree.x, 0x80000000u);
             triangles = uvec2(0u);
         }
         // The next node of the node group.
@@ -360,8 +350,8 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
             uint index = nodes.x + bitCount(hits & ~(0xFFFFFFFFu << slot));
             WideNode n = bvh_nodes[index];
             uint met = intersect_node(n, ray, t_min, best.t);
-            nodes = uvec2(n.child_base, (met & NODE_BITS) | (n.exponents_imask >> 24u));
-            triangles = uvec2(n.primitive_base, met & 0x00FFFFFFu);
+            nodes = uvec2(n.links.x, (met & NODE_BITS) | (n.grid.w >> 24u));
+            triangles = uvec2(n.links.y, met & 0x00FFFFFFu);
             continue;
         }
         // Both groups dry: the object's tree is done, or pop.

@@ -163,7 +163,7 @@ impl MeshBvhs {
     pub fn shifted(&self, offset: u32) -> MeshBvhs {
         let mut moved = self.clone();
         for n in &mut moved.nodes {
-            n.child_base += offset;
+            n.links[0] += offset;
         }
         for r in &mut moved.roots {
             r.node += offset;

@@ -20,31 +20,27 @@ use crate::scene::{Mesh, Room};
 /// `render::lookups::bvh` holds the two equal, as this module reaches no shader).
 pub const BVH_STACK_SIZE: u32 = 32;
 
-/// One node of a compressed wide BVH (obvhs's `CwBvhNode`, field for field, the bytes of its
-/// eight-byte arrays packed little-endian into two words each so that the shader can read them).
+/// One node of a compressed wide BVH: obvhs's `CwBvhNode`, field for field, in five 16-byte
+/// words (a shader reads a struct member by member, and on a CPU driver each read from a
+/// per-invocation address is a separate load: `bvh.glsl` says what that bought).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct WideNode {
-    /// The quantization grid's origin: the node's box's low corner.
-    pub origin: Vec3,
-    /// Bytes 0..3: each axis's grid step as a float's biased exponent (step = 2^(e - 127));
-    /// byte 3: which children are inner nodes (bit = slot).
-    pub exponents_imask: u32,
-    /// The first of the inner children's nodes, which follow one another in slot order.
-    pub child_base: u32,
-    /// The first triangle (top level: object) of the leaf children, which follow one another.
-    pub primitive_base: u32,
-    /// Per child slot, one byte: 0 for an empty slot; an inner node's 24 + its slot (0b11xxx);
-    /// a leaf's triangle offset from `primitive_base` (low 5 bits) and its triangle count in
-    /// unary (high 3 bits: 0b001 one, 0b011 two, 0b111 three).
-    pub meta: [u32; 2],
-    /// Per child slot, its box's planes on the grid, one byte each (low x, high x, ...).
-    pub lo_x: [u32; 2],
-    pub hi_x: [u32; 2],
-    pub lo_y: [u32; 2],
-    pub hi_y: [u32; 2],
-    pub lo_z: [u32; 2],
-    pub hi_z: [u32; 2],
+    /// 0..3: the quantization grid's origin (the node's box's low corner), as float bits;
+    /// 3: bytes 0..2 each axis's grid step as a float's biased exponent (step = 2^(e - 127)),
+    /// byte 3 which child slots hold inner nodes (bit = slot).
+    pub grid: [u32; 4],
+    /// 0: the first of the inner children's nodes, which follow one another in slot order;
+    /// 1: the first triangle (top level: object) of the leaf children, which follow one
+    /// another; 2..4: per child slot one meta byte: 0 for an empty slot; an inner node's
+    /// 24 + its slot (0b00111sss); a leaf's triangle offset from the first (low 5 bits) and
+    /// its triangle count in unary (high 3 bits: 0b001 one, 0b011 two, 0b111 three).
+    pub links: [u32; 4],
+    /// Per axis, the children's planes on the grid: 0..2 their low planes, 2..4 their high
+    /// planes, a byte per slot.
+    pub x_planes: [u32; 4],
+    pub y_planes: [u32; 4],
+    pub z_planes: [u32; 4],
 }
 
 /// Eight bytes as two little-endian words.
@@ -53,42 +49,88 @@ fn words(bytes: [u8; 8]) -> [u32; 2] {
     [a, b]
 }
 
+/// Two eight-byte arrays as four words.
+fn planes(lo: [u8; 8], hi: [u8; 8]) -> [u32; 4] {
+    let ([a, b], [c, d]) = (words(lo), words(hi));
+    [a, b, c, d]
+}
+
 impl WideNode {
     /// obvhs's node, its node and triangle indices moved up by `nodes` and `primitives`.
     pub fn from_obvhs(n: &CwBvhNode, nodes: u32, primitives: u32) -> Self {
+        let [m0, m1] = words(n.child_meta);
         Self {
-            origin: n.p,
-            exponents_imask: u32::from_le_bytes([n.e[0], n.e[1], n.e[2], n.imask]),
-            child_base: n.child_base_idx + nodes,
-            primitive_base: n.primitive_base_idx + primitives,
-            meta: words(n.child_meta),
-            lo_x: words(n.child_min_x),
-            hi_x: words(n.child_max_x),
-            lo_y: words(n.child_min_y),
-            hi_y: words(n.child_max_y),
-            lo_z: words(n.child_min_z),
-            hi_z: words(n.child_max_z),
+            grid: [
+                n.p.x.to_bits(),
+                n.p.y.to_bits(),
+                n.p.z.to_bits(),
+                u32::from_le_bytes([n.e[0], n.e[1], n.e[2], n.imask]),
+            ],
+            links: [
+                n.child_base_idx + nodes,
+                n.primitive_base_idx + primitives,
+                m0,
+                m1,
+            ],
+            x_planes: planes(n.child_min_x, n.child_max_x),
+            y_planes: planes(n.child_min_y, n.child_max_y),
+            z_planes: planes(n.child_min_z, n.child_max_z),
         }
     }
 
-    /// Byte `slot` of a child array.
-    pub fn byte(array: [u32; 2], slot: usize) -> u32 {
-        (array[slot / 4] >> (8 * (slot % 4))) & 0xff
+    /// Byte `slot` of the eight-byte array in words `at..at + 2` of `words`.
+    fn byte(words: &[u32; 4], at: usize, slot: usize) -> u32 {
+        (words[at + slot / 4] >> (8 * (slot % 4))) & 0xff
     }
 
-    /// The bit set of slots holding inner nodes.
-    pub fn imask(&self) -> u32 {
-        self.exponents_imask >> 24
+    /// The grid's origin.
+    pub fn origin(&self) -> Vec3 {
+        Vec3::from_array(std::array::from_fn(|k| f32::from_bits(self.grid[k])))
     }
 
     /// The grid step per axis (a power of two).
     pub fn step(&self) -> Vec3 {
-        let e = |k: u32| f32::from_bits(((self.exponents_imask >> (8 * k)) & 0xff) << 23);
+        let e = |k: u32| f32::from_bits(((self.grid[3] >> (8 * k)) & 0xff) << 23);
         Vec3::new(e(0), e(1), e(2))
+    }
+
+    /// The bit set of slots holding inner nodes.
+    pub fn imask(&self) -> u32 {
+        self.grid[3] >> 24
+    }
+
+    pub fn child_base(&self) -> u32 {
+        self.links[0]
+    }
+
+    pub fn primitive_base(&self) -> u32 {
+        self.links[1]
+    }
+
+    /// Slot `slot`'s meta byte.
+    pub fn meta(&self, slot: usize) -> u32 {
+        Self::byte(&self.links, 2, slot)
+    }
+
+    /// Slot `slot`'s box on the grid: its low and high planes, in steps from the origin.
+    pub fn planes(&self, slot: usize) -> (Vec3, Vec3) {
+        let axes = [&self.x_planes, &self.y_planes, &self.z_planes];
+        let at = |end: usize| Vec3::from_array(axes.map(|a| Self::byte(a, end, slot) as f32));
+        (at(0), at(2))
+    }
+
+    /// Slot `slot`'s box.
+    pub fn child_box(&self, slot: usize) -> (Vec3, Vec3) {
+        let (lo, hi) = self.planes(slot);
+        (
+            self.origin() + self.step() * lo,
+            self.origin() + self.step() * hi,
+        )
     }
 }
 
-/// One triangle of a mesh, in its leaf's order, in the mesh's own (model) space.
+/// One triangle of a mesh, in its tree's order, in the mesh's own (model) space. The shader
+/// reads three `vec4`s: the corners, the first's w holding the bits of `primitive`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhTriangle {
@@ -111,13 +153,9 @@ pub struct BvhInstance {
     /// object's model-to-render transform): p' = rows · (p, 1), d' = rows · (d, 0). The
     /// direction is not renormalised, so a hit's t is the same in both spaces.
     pub world_to_model: [Vec4; 3],
-    /// The root node of the instance's mesh in the meshes' node array.
-    pub root: u32,
-    /// The drawable it is (6 + the scene's object index): the shader's key to its material,
-    /// normals and triangle ranges.
-    pub drawable: u32,
-    pub pad0: u32,
-    pub pad1: u32,
+    /// 0: the root node of the object's mesh in the node array; 1: the drawable it is (6 +
+    /// the scene's object index: the shader's key to its material, normals and triangles).
+    pub tree: [u32; 4],
 }
 
 impl BvhInstance {
@@ -128,11 +166,16 @@ impl BvhInstance {
         let rows = [inverse.row(0), inverse.row(1), inverse.row(2)];
         rows.iter().all(|r| r.is_finite()).then_some(Self {
             world_to_model: rows,
-            root,
-            drawable,
-            pad0: 0,
-            pad1: 0,
+            tree: [root, drawable, 0, 0],
         })
+    }
+
+    pub fn root(&self) -> u32 {
+        self.tree[0]
+    }
+
+    pub fn drawable(&self) -> u32 {
+        self.tree[1]
     }
 
     /// `p` (a point, w = 1) in the instance's model space.

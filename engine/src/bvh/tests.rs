@@ -21,26 +21,23 @@ fn scene(rel: &str) -> Scene {
 /// conservative at every level.
 fn triangles_below(bvhs: &MeshBvhs, node: u32) -> Vec<u32> {
     let n = &bvhs.nodes[node as usize];
-    let (step, base) = (n.step(), n.origin);
     let mut all = Vec::new();
     let mut inner = 0;
     for slot in 0..8 {
-        let meta = WideNode::byte(n.meta, slot);
+        let meta = n.meta(slot);
         if meta == 0 {
             continue;
         }
-        let q = |a| WideNode::byte(a, slot) as f32;
-        let lo = base + step * Vec3::new(q(n.lo_x), q(n.lo_y), q(n.lo_z));
-        let hi = base + step * Vec3::new(q(n.hi_x), q(n.hi_y), q(n.hi_z));
+        let (lo, hi) = n.child_box(slot);
         let below: Vec<u32> = if meta & (meta << 1) & 0x10 != 0 {
             inner += 1;
-            // Inner children are stored in slot order from `child_base`.
+            // Inner children are stored in slot order from the child base.
             let rank = (n.imask() & ((1 << slot) - 1)).count_ones();
-            triangles_below(bvhs, n.child_base + rank)
+            triangles_below(bvhs, n.child_base() + rank)
         } else {
             let count = (meta >> 5).count_ones();
             (0..count)
-                .map(|k| n.primitive_base + (meta & 0x1f) + k)
+                .map(|k| n.primitive_base() + (meta & 0x1f) + k)
                 .collect()
         };
         for &t in &below {

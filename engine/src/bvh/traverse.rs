@@ -103,23 +103,17 @@ impl LevelRay {
 fn intersect(n: &WideNode, ray: &LevelRay, t_min: f32, t_max: f32) -> u32 {
     // The grid in the ray's terms: a plane q steps from the origin is met at q * scale + shift.
     let scale = n.step() * ray.inv;
-    let shift = (n.origin - ray.o) * ray.inv;
+    let shift = (n.origin() - ray.o) * ray.inv;
+    let down = glam::BVec3::from_array(ray.down);
     let mut hits = 0;
     for slot in 0..8 {
-        let q = |a: [u32; 2]| WideNode::byte(a, slot) as f32;
-        let planes = [(n.lo_x, n.hi_x), (n.lo_y, n.hi_y), (n.lo_z, n.hi_z)];
-        let [near3, far3] = [0, 1].map(|end| {
-            Vec3::from_array(std::array::from_fn(|axis| {
-                let (lo, hi) = planes[axis];
-                let first = if ray.down[axis] { hi } else { lo };
-                let last = if ray.down[axis] { lo } else { hi };
-                q(if end == 0 { first } else { last })
-            }))
-        });
-        let near = (near3 * scale + shift).max_element().max(t_min);
-        let far = (far3 * scale + shift).min_element().min(t_max);
+        let (lo, hi) = n.planes(slot);
+        // The planes the ray meets first along each axis, and last.
+        let (first, last) = (Vec3::select(down, hi, lo), Vec3::select(down, lo, hi));
+        let near = (first * scale + shift).max_element().max(t_min);
+        let far = (last * scale + shift).min_element().min(t_max);
         if near <= far {
-            let meta = WideNode::byte(n.meta, slot);
+            let meta = n.meta(slot);
             // Inner children's meta is 24 + slot, the only values with bits 3 and 4 both set.
             let inner = meta & (meta << 1) & 0x10 != 0;
             let count = meta >> 5;
@@ -192,9 +186,9 @@ pub fn closest_hit(
             let instance = &top.instances[id as usize];
             let (mo, md) = (instance.point_to_model(o), instance.direction_to_model(d));
             ray = LevelRay::new(mo, md);
-            mesh = Some((ShearedRay::new(mo, md), instance.drawable));
+            mesh = Some((ShearedRay::new(mo, md), instance.drawable()));
             floor = height;
-            nodes = (instance.root, 0x8000_0000);
+            nodes = (instance.root(), 0x8000_0000);
             triangles = (0, 0);
         }
         // The next node of the node group.
@@ -216,8 +210,8 @@ pub fn closest_hit(
                 &top.nodes[index as usize]
             };
             let met = intersect(node, &ray, t_min, limit);
-            nodes = (node.child_base, (met & 0xff00_0000) | node.imask());
-            triangles = (node.primitive_base, met & 0x00ff_ffff);
+            nodes = (node.child_base(), (met & 0xff00_0000) | node.imask());
+            triangles = (node.primitive_base(), met & 0x00ff_ffff);
             continue;
         }
         // Both groups dry: the object's tree is done, or pop.
