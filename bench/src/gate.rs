@@ -359,6 +359,7 @@ mod tests {
                 fill_vertex_invocations: Some(100),
                 fill_fragment_invocations: Some(200),
                 sensor_fragment_invocations: Some(sensor_fragments),
+                trace: None,
             },
             sensor_traced_fraction: None,
             sensor: None,
@@ -388,5 +389,25 @@ mod tests {
             f,
             ["s.toml / rung box / 64²: in the baseline but not measured"]
         );
+    }
+
+    /// A traced rung's walk (nodes, objects, triangles) is gated like every counter: the
+    /// trees or the walk changed.
+    #[test]
+    fn a_changed_trace_count_fails() {
+        let traced = |nodes| {
+            let mut r = rung("bvh", 40);
+            r.work.trace = Some(specchio::bvh::Work {
+                rays: 100,
+                nodes,
+                instances: 7,
+                triangles: 30,
+            });
+            r
+        };
+        assert!(check_rungs(&[traced(250)], &[traced(250)]).is_empty());
+        let f = check_rungs(&[traced(250)], &[traced(251)]);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert!(f[0].contains("trace_nodes 251 (baseline 250)"), "{f:?}");
     }
 }

@@ -297,11 +297,18 @@ pub struct RungWork {
     pub fill_fragment_invocations: Option<u64>,
     /// Fragment shader invocations of the sensor view (its scene draws and the mirror).
     pub sensor_fragment_invocations: Option<u64>,
+    /// For a lookup that counts its trace's work (`bvh`): its sensor frame's walk, counted on
+    /// the CPU step for step as the shader walks (exact, the same on every device), summed
+    /// over the timed frames: rays, nodes fetched, objects entered, triangles tested. None
+    /// for the other lookups (and in records written before it was counted).
+    #[serde(default)]
+    pub trace: Option<specchio::bvh::Work>,
 }
 
 impl RungWork {
     /// Every counter with its name (the names only label the gate's messages).
-    pub fn counters(&self) -> [(&'static str, Option<u64>); 4] {
+    pub fn counters(&self) -> [(&'static str, Option<u64>); 8] {
+        let trace = |f: fn(&specchio::bvh::Work) -> u64| self.trace.as_ref().map(f);
         [
             ("faces_rendered", Some(self.faces_rendered)),
             ("fill_vertex_invocations", self.fill_vertex_invocations),
@@ -310,6 +317,10 @@ impl RungWork {
                 "sensor_fragment_invocations",
                 self.sensor_fragment_invocations,
             ),
+            ("trace_rays", trace(|t| t.rays)),
+            ("trace_nodes", trace(|t| t.nodes)),
+            ("trace_instances", trace(|t| t.instances)),
+            ("trace_triangles", trace(|t| t.triangles)),
         ]
     }
 }

@@ -115,7 +115,7 @@ pub fn measure(
             gpu_sensor_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_sensor_ms).collect()),
             cpu_lookup_ms: Stats::of(timed.iter().map(|r| r.cpu_lookup_ms).collect()),
             wall_ms: Stats::of(timed.iter().map(|r| r.submit_wait_ms).collect()),
-            work: work(timed, stats),
+            work: work(timed, stats, trace_work(rung, scene, timed.len())?),
             sensor_traced_fraction: traced_fraction(timed),
             sensor,
             observer,
@@ -166,9 +166,26 @@ fn traced_fraction(timed: &[FrameReport]) -> Option<f64> {
     .fraction()
 }
 
+/// The rung's own count of its trace's work (`MirrorLookup::sensor_work`) at t = 0, the
+/// instant every timed frame renders, times the `frames` timed.
+fn trace_work(rung: &Rung, scene: &Scene, frames: usize) -> Result<Option<specchio::bvh::Work>> {
+    let mut scene = scene.clone();
+    scene.mirror.lookup = rung.lookup;
+    (rung.configure)(&mut scene);
+    let Some(work) = lookups::plugin(rung.lookup).sensor_work(&scene, 0.0) else {
+        return Ok(None);
+    };
+    let one = work.map_err(anyhow::Error::msg).context(rung.label)?;
+    let mut all = specchio::bvh::Work::default();
+    for _ in 0..frames {
+        all.add(&one);
+    }
+    Ok(Some(all))
+}
+
 /// The counters summed over the timed frames; the statistics-based ones None when the driver
-/// has none (a frame without a cube update adds 0 to the fill's).
-fn work(timed: &[FrameReport], has_stats: bool) -> RungWork {
+/// has none (a frame without a cube update adds 0 to the fill's); `trace` the lookup's own.
+fn work(timed: &[FrameReport], has_stats: bool, trace: Option<specchio::bvh::Work>) -> RungWork {
     let sum = |f: &dyn Fn(&FrameReport) -> u64| has_stats.then(|| timed.iter().map(f).sum());
     RungWork {
         faces_rendered: timed.iter().map(|r| u64::from(r.faces_rendered)).sum(),
@@ -177,6 +194,7 @@ fn work(timed: &[FrameReport], has_stats: bool) -> RungWork {
         sensor_fragment_invocations: sum(&|r| {
             r.view_stats.map_or(0, |v| v[1].fragment_invocations)
         }),
+        trace,
     }
 }
 

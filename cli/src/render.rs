@@ -370,9 +370,9 @@ fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()
     Ok(())
 }
 
-/// The lookup the frames use: `--lookup`; else, for `--sensor-outputs` on a device with ray
-/// queries, `ray-query`, so that the colour, the range and the ids are traced along one light
-/// path; else the scene's.
+/// The lookup the frames use: `--lookup`; else, for `--sensor-outputs`, the first that traces
+/// and that the device runs (`ray-query` where it has ray queries, `bvh` on any other), so that
+/// the colour, the range and the ids are traced along one light path; else the scene's.
 fn chosen_lookup(args: &Args, scene: &Scene, device: &DeviceInfo) -> Lookup {
     let traced = || lookups::one_light_path(device).filter(|_| args.sensor_outputs);
     args.lookup.or_else(traced).unwrap_or(scene.mirror.lookup)

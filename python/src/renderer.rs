@@ -62,8 +62,8 @@ pub fn check_validation(log: &ValidationLog) -> PyResult<()> {
 /// The robot's sensor: a renderer of `scene` whose mirror stands at each pose it is given.
 ///
 /// `lookup`: the mirror lookup of the colour image (`plain`, `box`, `distance`, `ray-query`,
-/// `distance-exact`); by default ray-query where the device has it, so that colour, range and
-/// ids follow one light path, else the scene's. `device`: an index or part of a name (see
+/// `distance-exact`, `bvh`); by default one that traces, so that colour, range and ids follow
+/// one light path: ray-query where the device has it, bvh elsewhere. `device`: an index or part of a name (see
 /// `specchio.devices()`). `validate`: the Khronos validation layer on; any message raises.
 #[pyclass(module = "specchio")]
 pub struct Renderer {

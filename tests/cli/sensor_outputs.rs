@@ -118,9 +118,9 @@ fn both_commands_write_the_sensor_outputs() {
 
 /// With the ray-query lookup the outputs are traced along the colour's own light path: no
 /// warning, `ground_truth` says so, and the ids and ranges are the reference's (six-colour
-/// room: 99.9 % of the mirror pixels' ids; ranges within 1e-4 relative). Without `--lookup`, a device
-/// with ray queries picks it, any other the bvh lookup; the plain lookup's cube path warns
-/// and says so in camera.json.
+/// room: 99.9 % of the mirror pixels' ids; ranges within 1e-4 relative). Without `--lookup`, the
+/// outputs are traced too (bvh on a CPU driver, ray-query on a GPU with ray queries); the plain
+/// lookup's cube path warns and says so in camera.json.
 /// On lavapipe, which has ray queries (a GPU may lack them: the H200 does).
 #[test]
 fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
@@ -143,12 +143,9 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
     assert_eq!(truth["colour_agrees"], true);
     assert_traced_layers_are_the_references(&traced, &reference);
 
-    // Every device traces them by default: ray-query where it has ray queries, bvh else.
-    let want = if default_device_has_ray_queries() {
-        "ray-query"
-    } else {
-        "bvh"
-    };
+    // Every device traces them by default: bvh on a CPU driver or where there are no ray
+    // queries, ray-query on a GPU that has them.
+    let want = default_traced_lookup();
     let (default, said) = render("sensor-truth-default", None);
     assert!(!said.contains("warning"), "{said}");
     assert_eq!(camera_json(&default)["ground_truth"]["layers"], "traced");
@@ -232,13 +229,18 @@ fn assert_traced_layers_are_the_references(traced: &Path, reference: &Path) {
     assert!(worst < 1e-4, "range relative error {worst}");
 }
 
-/// Whether the default device offers the ray-query lookup.
-fn default_device_has_ray_queries() -> bool {
+/// The lookup the default device traces the sensor outputs with by default: bvh on a CPU
+/// driver (lavapipe, SwiftShader) or a GPU without ray queries, ray-query on a GPU with them.
+fn default_traced_lookup() -> &'static str {
     let gpu = common::Gpu::new();
-    let has_ray_queries =
-        specchio::render::lookups::missing_features(Lookup::RayQuery, &gpu.device.info).is_none();
+    let info = gpu.device.info.clone();
     gpu.finish();
-    has_ray_queries
+    let ray_queries = specchio::render::lookups::missing_features(Lookup::RayQuery, &info);
+    if info.is_cpu() || ray_queries.is_some() {
+        "bvh"
+    } else {
+        "ray-query"
+    }
 }
 
 /// Beside the id layer, `sensor.id.json` says what each id is: the six walls (0..6, named,

@@ -27,10 +27,15 @@ pub mod layout;
 mod traverse;
 
 pub use build::{MeshBvhs, MeshRoot, Placed, TopLevel, MESH_LEAF_TRIANGLES};
-pub use traverse::{closest_hit, safe_inverse, ObjectHit, Work};
+pub use traverse::{closest_hit, closest_in_room, safe_inverse, ObjectHit, Work};
 
+use glam::Vec2;
+
+use crate::reference::intersect::{mirror_reflection, offset_ray_origin};
+use crate::reference::room::RoomBox;
 use crate::scene::state::SceneState;
 use crate::scene::Scene;
+use crate::sensor::ray_map::pixel_ray_from;
 
 /// Why a tree could not be made for the shader.
 #[derive(Debug, thiserror::Error)]
@@ -60,6 +65,29 @@ pub fn placed_objects(scene: &Scene, state: &SceneState) -> Vec<Placed> {
             drawable: object_drawable(i),
         })
         .collect()
+}
+
+/// The work the `bvh` lookup's walk does for the sensor's frame at `t_s`: the trees built for
+/// the scene then, and every mirror pixel's reflected ray (the pixel centre's, from its
+/// offset origin, as the shader and the reference trace it) walked on the CPU. Exact and the
+/// same on every machine: the benchmark records it beside the times (`specchio bench`).
+pub fn sensor_work(scene: &Scene, t_s: f64) -> Result<Work, BvhError> {
+    let state = SceneState::at(scene, t_s);
+    let meshes = MeshBvhs::build(&scene.meshes)?;
+    let top = TopLevel::build(&meshes, &placed_objects(scene, &state))?;
+    let room = RoomBox::new(&scene.room, state.mirror_center);
+    let [w, h] = scene.sensor.resolution;
+    let view = state.sensor_view(scene, w as f32 / h as f32);
+    let mut work = Work::default();
+    for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
+        let pixel = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+        let (from, d) = pixel_ray_from(&view, pixel, w, h);
+        if let Some(m) = mirror_reflection(from, d, &scene.mirror.shape) {
+            let ray = (offset_ray_origin(m.point, m.normal), m.direction);
+            closest_in_room((&top, &meshes), &room, ray, 0.0, &mut work);
+        }
+    }
+    Ok(work)
 }
 
 #[cfg(test)]

@@ -124,21 +124,17 @@ fn a_singular_transform_is_refused() {
     assert!(err.to_string().contains("drawable 9"), "{err}");
 }
 
-/// What one ray meets, found as the `bvh` lookup finds it: the room's wall, then the objects
-/// up to just past it (the next float: an object on the wall's plane wins).
+/// What one ray meets, found as the `bvh` lookup finds it ([`closest_in_room`]).
 fn bvh_hit(
-    g: &SceneGeometry,
-    (top, meshes): (&TopLevel, &MeshBvhs),
-    (o, d): (Vec3, Vec3),
+    s: &Scene,
+    state: &crate::scene::state::SceneState,
+    trees: (&TopLevel, &MeshBvhs),
+    ray: (Vec3, Vec3),
     t_min: f32,
     work: &mut Work,
 ) -> Option<(u32, f32)> {
-    let wall = g.wall_hit(o, d, t_min, f32::INFINITY);
-    let limit = wall.map_or(f32::INFINITY, |w| f32::from_bits(w.t.to_bits() + 1));
-    match closest_hit(top, meshes, (o, d), (t_min, limit), work) {
-        Some(h) => Some((h.drawable, h.t)),
-        None => wall.map(|w| (g.drawable(&w).0, w.t)),
-    }
+    let room = crate::reference::room::RoomBox::new(&s.room, state.mirror_center);
+    closest_in_room(trees, &room, ray, t_min, work)
 }
 
 /// Rays from the mirror's surface in random directions, as the reference traces reflected
@@ -194,7 +190,7 @@ fn the_trees_meet_what_the_reference_meets() {
                 objects += usize::from(matches!(h.surface, Surface::Triangle { .. }));
                 (g.drawable(&h).0, h.t)
             });
-            let found = bvh_hit(&g, (&top, &meshes), (o, d), 0.0, &mut work);
+            let found = bvh_hit(&s, &state, (&top, &meshes), (o, d), 0.0, &mut work);
             let (Some((id, t)), Some((id_ref, t_ref))) = (found, expected) else {
                 panic!("{rel}: a ray from the mirror met nothing: {found:?} {expected:?}");
             };
@@ -206,7 +202,7 @@ fn the_trees_meet_what_the_reference_meets() {
             let at_aim = |t: f32| aimed.is_some_and(|p| (o + t * d).distance(p) <= 1e-4 * t);
             // The nearer answer's object, left again within 1e-3 of the distance.
             let sliver = if t < t_ref {
-                let next = bvh_hit(&g, (&top, &meshes), (o, d), t, &mut Work::default());
+                let next = bvh_hit(&s, &state, (&top, &meshes), (o, d), t, &mut Work::default());
                 next.is_some_and(|(n, t2)| n == id && t2 - t <= 1e-3 * t)
             } else {
                 let next = g.closest_hit(o, d, t_ref, f32::INFINITY);
@@ -342,5 +338,30 @@ fn the_benchmark_scenes_fit_the_stack() {
             "{rel}: {}",
             top.stack
         );
+    }
+}
+
+/// The sensor's walk counted on the CPU: one ray per mirror pixel (the exact ray map's); in a
+/// room without objects each fetches the top level's one empty node and tests nothing; in
+/// the thesis's room some rays enter its one object and test triangles there.
+#[test]
+fn the_sensors_walk_is_counted_per_mirror_pixel() {
+    for (rel, objects) in [
+        ("scenes/test/six-colour-room.toml", false),
+        ("scenes/thesis-room.toml", true),
+    ] {
+        let s = scene(rel);
+        let work = sensor_work(&s, 0.0).unwrap();
+        let pixels = crate::sensor::ray_map::RayMap::exact(&s, 0.0).mirror_pixels() as u64;
+        eprintln!("{rel}: {work:?}");
+        assert_eq!(work.rays, pixels, "{rel}");
+        if objects {
+            assert!(
+                work.nodes > work.rays && work.triangles > 0,
+                "{rel}: {work:?}"
+            );
+        } else {
+            assert_eq!((work.nodes, work.instances, work.triangles), (pixels, 0, 0));
+        }
     }
 }

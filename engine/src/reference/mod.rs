@@ -16,7 +16,7 @@ pub mod geometry;
 pub mod intersect;
 pub mod materials;
 mod render;
-mod room;
+pub mod room;
 
 use glam::{Vec2, Vec3};
 use serde::Serialize;

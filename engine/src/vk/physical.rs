@@ -386,6 +386,12 @@ pub(super) fn select(
 type Rank = (u32, u32, std::cmp::Reverse<String>);
 
 impl DeviceInfo {
+    /// Whether the device is a CPU driver (lavapipe, SwiftShader): its shaders run on the
+    /// host's cores, and it has no ray-tracing hardware behind its ray queries.
+    pub fn is_cpu(&self) -> bool {
+        self.device_type == "CPU"
+    }
+
     fn rank(&self) -> Rank {
         let kind = match self.device_type.as_str() {
             "DISCRETE_GPU" => 4,

@@ -197,9 +197,10 @@ pub const INDEX_FILE: &str = "index.jsonl";
 /// The dataset's summary, written last; also the mark of an earlier dataset folder.
 pub const SUMMARY_FILE: &str = "dataset.json";
 
-/// The colour image's lookup: the one asked for, else ray-query where the device has it (so
-/// that colour, range and ids follow one light path), else the scene's. A lookup the device
-/// cannot run is an error naming what it lacks.
+/// The colour image's lookup: the one asked for, else the first that traces and that the
+/// device runs (ray-query where it has ray queries, bvh on any other), so that colour, range
+/// and ids follow one light path. A lookup the device cannot run is an error naming what it
+/// lacks.
 pub fn choose_lookup(
     asked: Option<Lookup>,
     scene: &Scene,

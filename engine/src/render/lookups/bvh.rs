@@ -18,13 +18,13 @@ use gpu_allocator::MemoryLocation;
 
 use super::{
     as_is, FrameObjects, LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders,
-    Rung, Start, TraceSet,
+    Rung, Start, TraceSet, Work,
 };
 use crate::bvh::layout::{BvhInstance, BvhWall, WideNode};
 use crate::bvh::{object_drawable, MeshBvhs, Placed, TopLevel};
-use crate::scene::Lookup;
+use crate::scene::{Lookup, Scene};
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
-use crate::vk::device::Device;
+use crate::vk::device::{Device, DeviceInfo};
 use crate::vk::memory::{Buffer, BufferDesc, Upload};
 use crate::vk::uploads::FrameUploads;
 use crate::vk::GpuError;
@@ -45,6 +45,16 @@ impl MirrorLookup for Bvh {
         true
     }
 
+    /// Second to hardware ray queries on a GPU; first on a CPU driver (lavapipe 25, release,
+    /// 512²: 0.61x to 0.85x ray-query's frame on the four benchmark scenes, docs/accuracy.md).
+    fn ground_truth_rank(&self, device: &DeviceInfo) -> u32 {
+        if device.is_cpu() {
+            0
+        } else {
+            1
+        }
+    }
+
     fn start(&self) -> Start {
         Start::Reflection
     }
@@ -60,6 +70,11 @@ impl MirrorLookup for Bvh {
 
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError> {
         Ok(Box::new(BvhPass::create(ctx)?))
+    }
+
+    /// The shader's walk, step for step on the CPU (`bvh::sensor_work`).
+    fn sensor_work(&self, scene: &Scene, t_s: f64) -> Option<Result<Work, String>> {
+        Some(crate::bvh::sensor_work(scene, t_s).map_err(|e| e.to_string()))
     }
 }
 

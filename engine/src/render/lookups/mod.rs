@@ -20,6 +20,7 @@ mod ray_query;
 mod tally;
 mod tracing;
 
+pub use crate::bvh::Work;
 pub use tally::{FrameTally, TracedRays};
 pub use tracing::TraceOrder;
 
@@ -67,12 +68,22 @@ pub trait MirrorLookup: Sync {
     fn traces_ray_map(&self) -> bool {
         false
     }
+    /// For a lookup that traces the ray map: how it ranks as the ground truth's default on
+    /// `device`, lower first ([`one_light_path`]). Each says why from its own measurements.
+    fn ground_truth_rank(&self, _device: &DeviceInfo) -> u32 {
+        u32::MAX
+    }
     /// The cube-map direction its shader starts from (`FrameData.flags.y`).
     fn start(&self) -> Start;
     /// Its rungs in the benchmark's ladder: the settings it is measured at.
     fn rungs(&self) -> &'static [Rung];
     /// Builds the lookup's mirror pipelines and state for one renderer.
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError>;
+    /// The work its sensor frame's trace does at `t_s`, counted on the CPU (exact and the same
+    /// on every device: the benchmark records it). None for a lookup with no count of its own.
+    fn sensor_work(&self, _scene: &crate::scene::Scene, _t_s: f64) -> Option<Result<Work, String>> {
+        None
+    }
 }
 
 /// The cube-map direction a lookup starts from: what `mirror.glsl`'s `lookup_at` returns
@@ -286,10 +297,16 @@ pub fn traces_ray_map(lookup: Lookup) -> bool {
     plugin(lookup).traces_ray_map()
 }
 
-/// The first lookup, in the registry's order, that the device runs and that traces colour,
-/// range and ids along one light path (the sensor outputs' and datasets' default).
+/// The lookup that traces colour, range and ids along one light path on the device, the
+/// sensor outputs' and datasets' default: of those it runs, the best ranked
+/// ([`MirrorLookup::ground_truth_rank`]): `bvh` on a CPU driver, where it measured cheaper
+/// than lavapipe's ray queries on every benchmark scene, and wherever there are no ray
+/// queries; `ray-query` on a GPU that has them (ray-tracing hardware, presumably faster:
+/// not measured here).
 pub fn one_light_path(info: &DeviceInfo) -> Option<Lookup> {
-    (Lookup::ALL.into_iter()).find(|&l| traces_ray_map(l) && missing_features(l, info).is_none())
+    (Lookup::ALL.into_iter())
+        .filter(|&l| traces_ray_map(l) && missing_features(l, info).is_none())
+        .min_by_key(|&l| plugin(l).ground_truth_rank(info))
 }
 
 /// Why the device cannot run `lookup` (None: it can).

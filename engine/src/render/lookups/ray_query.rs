@@ -14,6 +14,7 @@ use super::{
 };
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
+use crate::vk::device::DeviceInfo;
 use crate::vk::uploads::FrameUploads;
 use crate::vk::GpuError;
 
@@ -34,6 +35,16 @@ impl MirrorLookup for RayQuery {
 
     fn traces_ray_map(&self) -> bool {
         true
+    }
+
+    /// First on a GPU, whose ray queries have ray-tracing hardware behind them; after bvh on
+    /// a CPU driver, where bvh measured cheaper (lavapipe: see `bvh.rs`).
+    fn ground_truth_rank(&self, device: &DeviceInfo) -> u32 {
+        if device.is_cpu() {
+            1
+        } else {
+            0
+        }
     }
 
     fn start(&self) -> Start {
