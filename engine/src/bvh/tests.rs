@@ -6,7 +6,6 @@ use std::path::Path;
 
 use glam::{Mat4, Vec3};
 
-use super::layout::WideNode;
 use super::*;
 use crate::reference::geometry::{SceneGeometry, Surface};
 use crate::scene::Mesh;
