@@ -262,8 +262,6 @@ pub struct RungRow {
     /// Its parts.
     pub gpu_cube_ms: Option<Stats>,
     pub gpu_sensor_ms: Option<Stats>,
-    /// (Absent from records written before it was measured.)
-    #[serde(default)]
     pub cpu_lookup_ms: Option<Stats>,
     /// Submit to fence of the whole frame (observer, sensor, the pair and readback included).
     pub wall_ms: Option<Stats>,
@@ -300,8 +298,7 @@ pub struct RungWork {
     /// For a lookup that counts its trace's work (`bvh`): its sensor frame's walk, counted on
     /// the CPU step for step as the shader walks (exact, the same on every device), summed
     /// over the timed frames: rays, nodes fetched, objects entered, triangles tested. None
-    /// for the other lookups (and in records written before it was counted).
-    #[serde(default)]
+    /// for the other lookups.
     pub trace: Option<specchio::bvh::Work>,
 }
 

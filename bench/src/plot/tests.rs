@@ -3,7 +3,7 @@
 use super::*;
 use serde_json::{json, Value};
 
-const RUNGS: [&str; 7] = [
+const RUNGS: [&str; 8] = [
     "plain",
     "box",
     "distance-8",
@@ -11,11 +11,12 @@ const RUNGS: [&str; 7] = [
     "distance-32",
     "distance-exact",
     "ray-query",
+    "bvh",
 ];
 
 /// The committed quick baseline (two scenes, 64² faces) with its trade-off rows given these
 /// costs and errors, in the ladder's order, per scene, and their Pareto flags.
-fn record(points: [[(f64, f64); 7]; 2]) -> Record {
+fn record(points: [[(f64, f64); 8]; 2]) -> Record {
     let mut raw: Value = serde_json::from_str(include_str!("../../baselines/quick.json"))
         .expect("bench/baselines/quick.json is JSON");
     let scenes: Vec<Value> = raw["settings"]["scenes"].as_array().unwrap().clone();
@@ -39,8 +40,8 @@ fn record(points: [[(f64, f64); 7]; 2]) -> Record {
 }
 
 /// A crowded scene: the cube rungs near 10 and 30 ms, the distance rungs nearly on one spot,
-/// tracing at 300 and 1500 ms.
-const CROWDED: [(f64, f64); 7] = [
+/// tracing at 300, 1500 and 150 ms.
+const CROWDED: [(f64, f64); 8] = [
     (10.0, 0.3),
     (11.0, 0.2),
     (30.0, 0.150),
@@ -48,9 +49,10 @@ const CROWDED: [(f64, f64); 7] = [
     (31.0, 0.148),
     (300.0, 0.03),
     (1500.0, 0.001),
+    (150.0, 0.0005),
 ];
 /// A quick scene whose ray-query is exact (FLIP 0, drawn at the floor).
-const QUICK: [(f64, f64); 7] = [
+const QUICK: [(f64, f64); 8] = [
     (6.6, 0.25),
     (7.0, 0.05),
     (17.7, 0.046),
@@ -58,6 +60,7 @@ const QUICK: [(f64, f64); 7] = [
     (31.4, 0.045),
     (23.6, 0.044),
     (9.5, 0.0),
+    (5.0, 0.0002),
 ];
 
 /// A `<text>` of the plot.
@@ -95,7 +98,7 @@ fn every_rung_is_labelled_once_per_scene_and_zero_flip_says_so() {
         assert_eq!(count(&format!("{scene}: {TRADEOFF_TITLE}")), 1, "{scene}");
         assert_eq!(count(&format!("{scene}: cube update per fill method")), 1);
     }
-    for rung in &RUNGS[..6] {
+    for rung in RUNGS.iter().filter(|&&r| r != "ray-query") {
         assert_eq!(count(&format!("{rung} 64²")), 2, "{rung}");
     }
     assert_eq!(count("ray-query 64²"), 1);
@@ -125,7 +128,7 @@ fn labels_overlap_no_label_and_no_marker() {
             Rect(left, top, left + w, top + h)
         })
         .collect();
-    assert_eq!(boxes.len(), 14);
+    assert_eq!(boxes.len(), 16);
     for (i, a) in boxes.iter().enumerate() {
         for b in &boxes[i + 1..] {
             assert!(!a.overlaps(b), "{a:?} on {b:?}");
@@ -140,7 +143,7 @@ fn labels_overlap_no_label_and_no_marker() {
             (at("cx"), at("cy"))
         })
         .collect();
-    assert!(circles.len() >= 14, "{} markers", circles.len());
+    assert!(circles.len() >= 16, "{} markers", circles.len());
     for r in &boxes {
         for &(cx, cy) in &circles {
             // The nearest point of the box to the marker's centre, outside its radius and stroke.
