@@ -21,6 +21,9 @@ use super::overlay::Paint;
 
 /// The menu's and the help's distance from the window's corners (egui points).
 const MARGIN: f32 = 8.0;
+/// The most width (points) the lookups' row takes before it wraps: under the width of the
+/// menu's other rows, so that a new lookup adds a row, not width.
+const MENU_WIDTH: f32 = 400.0;
 
 /// What the menu shows this frame.
 pub struct Status<'a> {
@@ -320,9 +323,12 @@ fn method_choice(ui: &mut egui::Ui, s: &Status, actions: &mut Vec<Action>, widge
     widgets.clicked(ui, "method".into(), combo.response);
 }
 
-/// The lookup's radio buttons, one per lookup the device can run.
+/// The lookup's radio buttons, one per lookup the device can run, wrapped onto as many rows
+/// as the menu's width needs (lavapipe runs six: one row would widen the menu past the room
+/// a small window leaves the help beside it).
 fn lookup_choice(ui: &mut egui::Ui, s: &Status, actions: &mut Vec<Action>, widgets: &mut Widgets) {
-    ui.horizontal(|ui| {
+    ui.horizontal_wrapped(|ui| {
+        ui.set_max_width(MENU_WIDTH);
         ui.label("lookup (x)");
         for &l in s.lookups {
             let radio = ui.radio(s.lookup == l, l.to_string());
