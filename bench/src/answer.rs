@@ -90,7 +90,8 @@ fn floor_ms(record: &Record, scene: &str, size: u32, floor: Floor) -> Option<f64
 
 /// `front plain 6.0 ms FLIP 0.300 → box 7.0 ms 0.200 → ray-query 9.0 ms 3.0e-4; most
 /// accurate: ray-query, 1.29x box's frame cost`, or, when one rung is the whole front, that
-/// it is both the cheapest and the most accurate. Costs are GPU ms per sensor frame.
+/// it is both the cheapest and the most accurate; then what the host's tracer costs against
+/// the device ([`host_clause`]). Costs are ms per sensor frame.
 fn ladder_line(record: &Record, scene: &str, size: u32) -> Option<String> {
     let rungs: Vec<(&RungRow, f64, f64)> = record
         .tradeoff
@@ -98,8 +99,15 @@ fn ladder_line(record: &Record, scene: &str, size: u32) -> Option<String> {
         .filter(|r| r.scene == scene && r.cube_size == size)
         .filter_map(|r| Some((r, r.frame_cost_ms?.median, r.sensor.as_ref()?.flip_mean?)))
         .collect();
-    let mut front: Vec<&(&RungRow, f64, f64)> =
-        rungs.iter().filter(|p| p.0.pareto == Some(true)).collect();
+    // The device's own front: the host's tracer, exact by construction, is weighed against
+    // it apart ([`host_clause`]).
+    let device: Vec<&(&RungRow, f64, f64)> =
+        rungs.iter().filter(|p| p.0.lookup.is_some()).collect();
+    let points: Vec<(f64, f64)> = device.iter().map(|p| (p.1, p.2)).collect();
+    let on_front = crate::tradeoff::pareto_front(&points);
+    let mut front: Vec<&(&RungRow, f64, f64)> = (device.into_iter().zip(on_front))
+        .filter_map(|(p, on)| on.then_some(p))
+        .collect();
     front.sort_by(|a, b| a.1.total_cmp(&b.1));
     if front.is_empty() {
         return None;
@@ -113,12 +121,13 @@ fn ladder_line(record: &Record, scene: &str, size: u32) -> Option<String> {
     // The most accurate rung is the front's last (dearest) point.
     let &&(best, best_ms, best_flip) = front.last()?;
     if front.len() == 1 {
-        return Some(format!(
+        let line = format!(
             "{} is both the cheapest and the most accurate rung: {best_ms:.1} ms, FLIP {}{}",
             best.rung,
             flip_text(best_flip),
             vs_box(best, best_ms)
-        ));
+        );
+        return Some(line + &host_clause(&rungs));
     }
     let steps: Vec<String> = front
         .iter()
@@ -138,7 +147,44 @@ fn ladder_line(record: &Record, scene: &str, size: u32) -> Option<String> {
         best.rung,
         vs_box(best, best_ms)
     );
-    Some(line)
+    Some(line + &host_clause(&rungs))
+}
+
+/// Whether `row` is a device rung that traces every mirror ray (exact as the host's tracer
+/// is, its image differing from the reference only where the device rasterizes the room).
+fn traced_on_device(row: &RungRow) -> bool {
+    (row.lookup).is_some_and(|l| !specchio::render::lookups::plugin(l).uses_cube())
+}
+
+/// `; cpu 120.3 ms, 3.47x bvh, the cheapest exact rung on the device`, or `; cpu 120.3 ms,
+/// 0.41x bvh: the host wins` when the host's tracer (exact by construction) costs less than
+/// every device rung that traces ([`traced_on_device`]); `: the only exact rung here` when
+/// none was measured; empty when the host's tracer was not measured.
+fn host_clause(rungs: &[(&RungRow, f64, f64)]) -> String {
+    let Some(&(_, host_ms, _)) = rungs.iter().find(|p| p.0.lookup.is_none()) else {
+        return String::new();
+    };
+    let exact = (rungs.iter())
+        .filter(|p| traced_on_device(p.0))
+        .min_by(|a, b| a.1.total_cmp(&b.1));
+    match exact {
+        Some(&(device, ms, _)) if host_ms < ms => format!(
+            "; {} {host_ms:.1} ms, {:.2}x {}: the host wins",
+            crate::host::LABEL,
+            host_ms / ms,
+            device.rung
+        ),
+        Some(&(device, ms, _)) => format!(
+            "; {} {host_ms:.1} ms, {:.2}x {}, the cheapest exact rung on the device",
+            crate::host::LABEL,
+            host_ms / ms,
+            device.rung
+        ),
+        None => format!(
+            "; {} {host_ms:.1} ms: the only exact rung here",
+            crate::host::LABEL
+        ),
+    }
 }
 
 /// A FLIP value with the digits it needs (errors span 0.3 to 0.0002).

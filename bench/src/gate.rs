@@ -347,7 +347,7 @@ mod tests {
             scene: "s.toml".into(),
             cube_size: 64,
             rung: label.into(),
-            lookup: specchio::scene::Lookup::Box,
+            lookup: Some(specchio::scene::Lookup::Box),
             frames: 5,
             frame_cost_ms: None,
             gpu_cube_ms: None,

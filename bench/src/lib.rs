@@ -15,6 +15,7 @@ mod answer;
 mod bmf;
 mod dynamic;
 pub mod gate;
+mod host;
 pub mod localise;
 mod measure;
 mod options;

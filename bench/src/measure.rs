@@ -19,7 +19,7 @@ use crate::options::{Format, Settled};
 use crate::record::{
     Environment, NotRun, Record, ReferenceRow, RungNotRun, Settings, SpeedVsError,
 };
-use crate::tradeoff::{self, Rung};
+use crate::tradeoff::{self, Step};
 use crate::{accuracy, dynamic, report, rows, say, timing, wall_median, Plan};
 
 /// Runs every part of the benchmark on the chosen device; the device and every renderer are
@@ -89,7 +89,7 @@ pub(crate) fn measure(
 struct Work {
     methods: Vec<Method>,
     refused: Vec<(Method, String)>,
-    rungs: Vec<&'static Rung>,
+    rungs: Vec<Step>,
     rungs_not_run: Vec<RungNotRun>,
     features: OptionalFeatures,
 }
@@ -121,15 +121,17 @@ impl Work {
         for &rung in &settled.rungs {
             match tradeoff::missing(rung, chosen) {
                 None => rungs.push(rung),
-                Some(why) if settled.rungs_named => anyhow::bail!("--rungs {}: {why}", rung.label),
+                Some(why) if settled.rungs_named => {
+                    anyhow::bail!("--rungs {}: {why}", rung.label())
+                }
                 Some(reason) => rungs_not_run.push(RungNotRun {
-                    rung: rung.label.to_owned(),
+                    rung: rung.label().to_owned(),
                     reason,
                 }),
             }
         }
-        let features =
-            (rungs.iter()).fold(lookup_features, |f, r| f.union(lookups::features(r.lookup)));
+        let features = (rungs.iter().filter_map(|r| r.lookup()))
+            .fold(lookup_features, |f, l| f.union(lookups::features(l)));
         Ok(Self {
             methods,
             refused,
@@ -233,7 +235,7 @@ fn headline(settled: &Settled, scenes: usize, work: &Work) -> String {
         } else {
             format!(
                 ", trade-off rungs {}",
-                names(work.rungs.iter().map(|r| r.label).collect())
+                names(work.rungs.iter().map(|r| r.label()).collect())
             )
         },
     )
@@ -267,7 +269,7 @@ fn new_record(
             methods: work.methods.clone(),
             cube_sizes: settled.sizes.clone(),
             lookups: settled.lookups.clone(),
-            rungs: settled.rungs.iter().map(|r| r.label.to_owned()).collect(),
+            rungs: settled.rungs.iter().map(|r| r.label().to_owned()).collect(),
             frames: plan.frames,
             warmup: plan.warmup,
             runs: plan.runs,
@@ -303,7 +305,7 @@ fn measure_size(
     (methods, lookups, rungs): (
         &[specchio::render::methods::Method],
         &[specchio::scene::Lookup],
-        &[&tradeoff::Rung],
+        &[Step],
     ),
     plan: &Plan,
     exact: Option<&tradeoff::Exact>,

@@ -15,9 +15,8 @@ use anyhow::Result;
 use specchio::render::methods::Method;
 use specchio::scene::Lookup;
 
-use super::tradeoff::{rung, Rung};
+use super::tradeoff::{ladder, rung, Step};
 use specchio::process::args::{face_size, lookup, method, real, whole};
-use specchio::render::lookups::ladder;
 
 /// The default run's scenes: the thesis's room and a crowd (2,000 objects, 10 % moving).
 const DEFAULT_SCENES: [&str; 2] = ["scenes/thesis-room.toml", "scenes/many-objects.toml"];
@@ -145,7 +144,7 @@ pub struct Args {
 /// A rung's label, checked against the ladder.
 fn rung_label(text: &str) -> Result<&'static str, String> {
     super::tradeoff::rung(text.trim())
-        .map(|r| r.label)
+        .map(|r| r.label())
         .ok_or_else(|| {
             format!(
                 "`{text}` is not a rung: one of {}",
@@ -163,7 +162,7 @@ pub struct Settled {
     pub methods: Vec<Method>,
     /// The rungs asked for: explicitly named ones must run; by default those the device
     /// cannot run are listed as not run.
-    pub rungs: Vec<&'static Rung>,
+    pub rungs: Vec<Step>,
     pub rungs_named: bool,
     pub frames: u32,
     pub warmup: u32,

@@ -251,17 +251,21 @@ pub struct RungRow {
     pub cube_size: u32,
     /// The rung's label (`box`, `ray-query`, ...), unique in the ladder.
     pub rung: String,
-    pub lookup: Lookup,
+    /// Its lookup; null for the host's tracer (`cpu`), which draws nothing on the device.
+    pub lookup: Option<Lookup>,
     /// Timed frames (all at t = 0, the frame whose error is measured).
     pub frames: usize,
     /// Per frame, the GPU time of the cube's update (six-pass fill of all six faces plus
     /// mips; for ray-query, the top-level acceleration structure's rebuild) plus the sensor
     /// view (scene and mirror), plus the host time of the lookup's own per-frame work (the
     /// bvh lookup's top-level rebuild): what the sensor frame costs. None without timestamps.
+    /// For the host's tracer (`cpu`): its whole frame's wall time (its BVH built, the sensor
+    /// traced).
     pub frame_cost_ms: Option<Stats>,
-    /// Its parts.
+    /// Its parts (the host's tracer has no GPU parts).
     pub gpu_cube_ms: Option<Stats>,
     pub gpu_sensor_ms: Option<Stats>,
+    /// The host's part: the lookup's per-frame work, or the host tracer's BVH build.
     pub cpu_lookup_ms: Option<Stats>,
     /// Submit to fence of the whole frame (observer, sensor, the pair and readback included).
     pub wall_ms: Option<Stats>,

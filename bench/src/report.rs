@@ -253,7 +253,7 @@ fn method_row(r: &MethodRow, a: &Accuracy) -> CsvRow {
 
 /// One trade-off point's row.
 fn rung_row(r: &RungRow) -> CsvRow {
-    let uses_cube = specchio::render::lookups::plugin(r.lookup).uses_cube();
+    let uses_cube = (r.lookup).is_some_and(|l| specchio::render::lookups::plugin(l).uses_cube());
     let (sensor, observer) = (r.sensor.as_ref(), r.observer.as_ref());
     let stat = |s: Option<Stats>, f: fn(Stats) -> f64| real(s.map(f));
     CsvRow {
@@ -262,7 +262,8 @@ fn rung_row(r: &RungRow) -> CsvRow {
         // The cube lookups fill with six passes; a lookup without a cube map fills nothing.
         method: if uses_cube { "six-pass" } else { "" },
         cube_size: r.cube_size,
-        lookup: lookup_name(r.lookup),
+        // The host's tracer (`cpu`) has no lookup.
+        lookup: r.lookup.map_or("", lookup_name),
         updates: r.frames,
         wall_median_ms: stat(r.wall_ms, |s| s.median),
         wall_p10_ms: stat(r.wall_ms, |s| s.p10),

@@ -26,29 +26,61 @@ use specchio::render::lookups;
 pub use specchio::render::lookups::Rung;
 use specchio::render::methods::Method;
 use specchio::render::{FrameReport, Readback, RenderOptions, Renderer};
-use specchio::scene::{RefreshPolicy, Scene};
+use specchio::scene::{Lookup, RefreshPolicy, Scene};
 use specchio::vk::device::{Device, DeviceInfo};
 
+use super::host;
 use super::record::{RungRow, RungWork, Stats, ViewError};
 use super::Plan;
 
+/// One rung of the benchmark's ladder: a lookup's, drawn on the device, or the host's exact
+/// tracer (`host`).
+#[derive(Clone, Copy)]
+pub enum Step {
+    Lookup(&'static Rung),
+    Host,
+}
+
+impl Step {
+    pub fn label(self) -> &'static str {
+        match self {
+            Step::Lookup(r) => r.label,
+            Step::Host => host::LABEL,
+        }
+    }
+
+    /// Its lookup (the host's tracer has none).
+    pub fn lookup(self) -> Option<Lookup> {
+        match self {
+            Step::Lookup(r) => Some(r.lookup),
+            Step::Host => None,
+        }
+    }
+}
+
+/// The ladder: every lookup's rungs in their order, then the host's tracer.
+pub fn ladder() -> Vec<Step> {
+    let gpu = lookups::ladder().into_iter().map(Step::Lookup);
+    gpu.chain([Step::Host]).collect()
+}
+
 /// The rung labelled `label`.
-pub fn rung(label: &str) -> Option<&'static Rung> {
-    lookups::ladder().into_iter().find(|r| r.label == label)
+pub fn rung(label: &str) -> Option<Step> {
+    ladder().into_iter().find(|r| r.label() == label)
 }
 
 /// Every rung's label, for messages.
 pub fn labels() -> String {
-    lookups::ladder()
-        .iter()
-        .map(|r| r.label)
+    (ladder().iter())
+        .map(|r| r.label())
         .collect::<Vec<_>>()
         .join(", ")
 }
 
-/// Why `device` cannot run `rung` (None: it can).
-pub fn missing(rung: &Rung, device: &DeviceInfo) -> Option<String> {
-    specchio::render::lookups::missing_features(rung.lookup, device)
+/// Why `device` cannot run `step` (None: it can; the host's tracer runs beside any device).
+pub fn missing(step: Step, device: &DeviceInfo) -> Option<String> {
+    let lookup = step.lookup()?;
+    specchio::render::lookups::missing_features(lookup, device)
 }
 
 /// The exact images a rung's views are compared with: the same instant, pixel centres.
@@ -58,22 +90,31 @@ pub struct Exact {
     pub observer: Option<ReferenceImages>,
 }
 
-/// Measures `rungs` on `scene` at face size `size`: interleaved timed frames, then the error
-/// against `exact` where given. Returns one row per rung (Pareto flags not yet set).
+/// Measures `steps` on `scene` at face size `size`: interleaved timed frames (the host's
+/// tracer timed in the same rounds, after the device's rungs), then the error against `exact`
+/// where given. Returns one row per step, in their order, with their Pareto flags.
 pub fn measure(
     device: &Arc<Device>,
     (scene_name, scene): (&str, &Scene),
-    rungs: &[&Rung],
+    steps: &[Step],
     size: u32,
     plan: &Plan,
     exact: Option<&Exact>,
     tick: &dyn Fn() -> Result<()>,
 ) -> Result<Vec<RungRow>> {
+    let rungs: Vec<&Rung> = (steps.iter())
+        .filter_map(|s| match s {
+            Step::Lookup(r) => Some(*r),
+            Step::Host => None,
+        })
+        .collect();
+    let host = steps.iter().any(|s| matches!(s, Step::Host));
     let mut renderers = rungs
         .iter()
         .map(|r| renderer(device, scene, r, size, plan))
         .collect::<Result<Vec<_>>>()?;
     let mut reports: Vec<Vec<FrameReport>> = vec![Vec::new(); rungs.len()];
+    let mut host_frames = Vec::new();
     let views = Readback {
         views: true,
         ..Default::default()
@@ -86,44 +127,76 @@ pub fn measure(
                     timed.push(report);
                 }
             }
+            if host {
+                let (frame, _) = host::frame(scene);
+                if round >= plan.warmup {
+                    host_frames.push(frame);
+                }
+            }
             tick()?;
         }
     }
     let stats = device.info.features.pipeline_statistics;
-    let mut rows = Vec::new();
+    let mut gpu_rows = Vec::new();
     for ((rung, r), timed) in rungs.iter().zip(&mut renderers).zip(&reports) {
-        let (sensor, observer) = match exact {
-            Some(exact) => {
-                let (s, o) = errors(r, exact)?;
-                (Some(s), Some(o))
-            }
-            None => (None, None),
-        };
-        rows.push(RungRow {
-            scene: scene_name.to_owned(),
-            cube_size: size,
-            rung: rung.label.to_owned(),
-            lookup: rung.lookup,
-            frames: timed.len(),
-            frame_cost_ms: Stats::of(
-                timed
-                    .iter()
-                    .filter_map(|r| Some(r.gpu_cube_ms? + r.gpu_sensor_ms? + r.cpu_lookup_ms))
-                    .collect(),
-            ),
-            gpu_cube_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_cube_ms).collect()),
-            gpu_sensor_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_sensor_ms).collect()),
-            cpu_lookup_ms: Stats::of(timed.iter().map(|r| r.cpu_lookup_ms).collect()),
-            wall_ms: Stats::of(timed.iter().map(|r| r.submit_wait_ms).collect()),
-            work: work(timed, stats, trace_work(rung, scene, timed.len())?),
-            sensor_traced_fraction: traced_fraction(timed),
-            sensor,
-            observer,
-            pareto: None,
+        gpu_rows.push(rung_row(
+            (scene_name, scene),
+            rung,
+            size,
+            (r, timed),
+            (stats, exact),
+        )?);
+    }
+    let mut gpu_rows = gpu_rows.into_iter();
+    let mut rows = Vec::new();
+    for step in steps {
+        rows.push(match step {
+            Step::Lookup(_) => gpu_rows.next().expect("a row per device rung"),
+            Step::Host => host::row((scene_name, scene), size, &host_frames, exact)?,
         });
     }
     mark_pareto(&mut rows);
     Ok(rows)
+}
+
+/// One device rung's row: its timed frames' costs and counters, and its error against
+/// `exact` (one more frame) where given.
+fn rung_row(
+    (scene_name, scene): (&str, &Scene),
+    rung: &Rung,
+    size: u32,
+    (r, timed): (&mut Renderer, &[FrameReport]),
+    (stats, exact): (bool, Option<&Exact>),
+) -> Result<RungRow> {
+    let (sensor, observer) = match exact {
+        Some(exact) => {
+            let (s, o) = errors(r, exact)?;
+            (Some(s), Some(o))
+        }
+        None => (None, None),
+    };
+    Ok(RungRow {
+        scene: scene_name.to_owned(),
+        cube_size: size,
+        rung: rung.label.to_owned(),
+        lookup: Some(rung.lookup),
+        frames: timed.len(),
+        frame_cost_ms: Stats::of(
+            timed
+                .iter()
+                .filter_map(|r| Some(r.gpu_cube_ms? + r.gpu_sensor_ms? + r.cpu_lookup_ms))
+                .collect(),
+        ),
+        gpu_cube_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_cube_ms).collect()),
+        gpu_sensor_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_sensor_ms).collect()),
+        cpu_lookup_ms: Stats::of(timed.iter().map(|r| r.cpu_lookup_ms).collect()),
+        wall_ms: Stats::of(timed.iter().map(|r| r.submit_wait_ms).collect()),
+        work: work(timed, stats, trace_work(rung, scene, timed.len())?),
+        sensor_traced_fraction: traced_fraction(timed),
+        sensor,
+        observer,
+        pareto: None,
+    })
 }
 
 /// A six-pass renderer updating the whole cube every frame, with the rung's settings.
@@ -226,7 +299,7 @@ fn errors(r: &mut Renderer, exact: &Exact) -> Result<(ViewError, ViewError)> {
     Ok((sensor, observer))
 }
 
-fn view_error(
+pub fn view_error(
     colour: &RgbaImage,
     directions: &RgbaImage,
     exact: &ReferenceImages,
@@ -354,7 +427,7 @@ mod tests {
                 "{} twice",
                 r.label
             );
-            assert_eq!(rung(r.label).map(|x| x.lookup), Some(r.lookup));
+            assert_eq!(rung(r.label).and_then(|x| x.lookup()), Some(r.lookup));
         }
         for l in Lookup::ALL {
             assert!(
@@ -362,5 +435,11 @@ mod tests {
                 "no rung for the {l} lookup"
             );
         }
+        // The bench's ladder: the lookups' rungs, then the host's tracer, under its own label.
+        let steps = super::ladder();
+        assert_eq!(steps.len(), ladder.len() + 1);
+        assert!(matches!(steps.last(), Some(Step::Host)));
+        assert!(rung(host::LABEL).is_some_and(|s| s.lookup().is_none()));
+        assert!(ladder.iter().all(|r| r.label != host::LABEL));
     }
 }

@@ -79,7 +79,7 @@ fn measured_run_with_reports(json: &Path, csv: &Path, svg: &Path) -> common::Mea
         .args([
             "bench",
             "--quick",
-            // Lavapipe, which runs all eight rungs (a GPU without ray queries runs six).
+            // Lavapipe, which runs all nine rungs (a GPU without ray queries runs seven).
             "--device",
             "lavapipe",
             "--methods",
@@ -97,10 +97,10 @@ fn measured_run_with_reports(json: &Path, csv: &Path, svg: &Path) -> common::Mea
 
 /// The CSV has its rows and rungs; the plot and the JSON record hold what they must.
 fn check_reports(json: &Path, csv: &Path, svg: &Path, peak_bytes: u64) {
-    // The header, two scenes x two methods x two lookups, and two scenes x eight rungs.
+    // The header, two scenes x two methods x two lookups, and two scenes x nine rungs.
     let text = std::fs::read_to_string(csv).unwrap();
-    assert_eq!(text.lines().count(), 1 + 8 + 16);
-    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 16);
+    assert_eq!(text.lines().count(), 1 + 8 + 18);
+    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 18);
     check_plot(&std::fs::read_to_string(svg).unwrap());
     check_record(&read_json(json), peak_bytes);
 }

@@ -68,10 +68,14 @@ fn check_rungs_without_ray_queries(record: &serde_json::Value) {
     }
     let rungs = record["tradeoff"].as_array().expect("tradeoff");
     // Two scenes, every rung but distance-exact and ray-query: bvh, which needs nothing
-    // beyond core Vulkan, included.
-    assert_eq!(rungs.len(), 2 * 6);
+    // beyond core Vulkan, and the host's tracer included.
+    assert_eq!(rungs.len(), 2 * 7);
     for t in rungs {
-        let faces = if t["rung"] == "bvh" { 0 } else { 30 };
+        let faces = if t["rung"] == "bvh" || t["rung"] == "cpu" {
+            0
+        } else {
+            30
+        };
         assert_eq!(t["work"]["faces_rendered"], faces, "{t}");
         assert!(t["work"]["sensor_fragment_invocations"].is_null(), "{t}");
         assert!(t["sensor"].is_null() && t["pareto"].is_null());

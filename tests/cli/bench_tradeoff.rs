@@ -5,7 +5,7 @@ use specchio::scene::camera::ViewBasis;
 use specchio::scene::state::SceneState;
 
 /// The ladder, in its order.
-const RUNGS: [&str; 8] = [
+const RUNGS: [&str; 9] = [
     "plain",
     "box",
     "distance-8",
@@ -14,10 +14,12 @@ const RUNGS: [&str; 8] = [
     "distance-exact",
     "ray-query",
     "bvh",
+    "cpu",
 ];
 
-/// The rungs that trace every mirror ray: exact, and no cube to fill.
-const TRACED: [&str; 2] = ["ray-query", "bvh"];
+/// The rungs that trace every mirror ray: exact, and no cube to fill (the last is the host's
+/// tracer, which draws nothing on the device).
+const TRACED: [&str; 3] = ["ray-query", "bvh", "cpu"];
 
 /// The trade-off rows of a quick run on lavapipe: every rung on every scene, with its costs,
 /// counters and both views' errors, and the Pareto flags of the measured points.
@@ -43,6 +45,9 @@ pub fn check_tradeoff(r: &serde_json::Value) {
 fn check_rung(t: &serde_json::Value, scene: &str, geometry: &MirrorGeometry) -> (f64, f64) {
     let rung = t["rung"].as_str().unwrap();
     assert_eq!(t["frames"], 5, "{scene} {rung}");
+    if rung == "cpu" {
+        return check_host_rung(t, scene, geometry);
+    }
     check_cost_is_the_sum_of_its_parts(t, 5);
     // The cube lookups fill all six faces every frame; the traced ones fill none.
     let faces = if TRACED.contains(&rung) { 0 } else { 30 };
@@ -70,6 +75,34 @@ fn check_rung(t: &serde_json::Value, scene: &str, geometry: &MirrorGeometry) -> 
         t["frame_cost_ms"]["median"].as_f64().unwrap(),
         t["sensor"]["flip_mean"].as_f64().unwrap(),
     )
+}
+
+/// The host's tracer's row: no lookup, nothing drawn on the device, its frame the wall time of
+/// its BVH's build and its trace; it is the reference itself, so both views' error is 0.
+fn check_host_rung(t: &serde_json::Value, scene: &str, geometry: &MirrorGeometry) -> (f64, f64) {
+    assert!(t["lookup"].is_null() && t["gpu_cube_ms"].is_null() && t["gpu_sensor_ms"].is_null());
+    let (frame, build) = (&t["frame_cost_ms"], &t["cpu_lookup_ms"]);
+    for p in ["p10", "median", "p90"] {
+        let (f, b) = (frame[p].as_f64().unwrap(), build[p].as_f64().unwrap());
+        assert!(
+            0.0 < b && b < f,
+            "{scene}: build {b} ms of a {f} ms frame ({p})"
+        );
+    }
+    assert_eq!(t["work"]["faces_rendered"], 0);
+    for counter in [
+        "fill_vertex_invocations",
+        "sensor_fragment_invocations",
+        "trace",
+    ] {
+        assert!(t["work"][counter].is_null(), "{scene}: {counter}");
+    }
+    check_view_errors(t, scene, "cpu", geometry);
+    for view in ["sensor", "observer"] {
+        assert_eq!(t[view]["flip_mean"], 0.0, "{scene} {view}");
+        assert_eq!(t[view]["angular"]["max_deg"], 0.0, "{scene} {view}");
+    }
+    (frame["median"].as_f64().unwrap(), 0.0)
 }
 
 /// Both views of a rung are finite and measure their error over the pixels that see the mirror.
@@ -273,7 +306,16 @@ pub fn check_plot(text: &str) {
             .count(),
         2
     );
+    // Each rung labelled once per scene; an exact point is drawn at the plot's floor, said.
     for rung in RUNGS.map(|r| format!("{r} 64²")) {
-        assert_eq!(texts.iter().filter(|t| **t == rung).count(), 2, "{rung}");
+        let labels = (texts.iter())
+            .filter(|t| **t == rung || **t == format!("{rung} (FLIP 0)"))
+            .count();
+        assert_eq!(labels, 2, "{rung}");
     }
+    assert_eq!(
+        texts.iter().filter(|t| *t == "cpu 64² (FLIP 0)").count(),
+        2,
+        "the host's tracer is the reference: FLIP 0"
+    );
 }

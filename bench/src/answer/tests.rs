@@ -41,7 +41,7 @@ fn error(flip_mean: f64) -> Option<ViewError> {
 }
 
 /// The thesis room's methods at 10, 8, 12, 12, 12 ms and floors of 2 + 3 ms; the ladder with
-/// plain, box and ray-query on the front.
+/// plain, box and ray-query on the device's front, and the host's tracer exact at 30 ms.
 fn known() -> Record {
     let mut r = baseline();
     for row in r.results.iter_mut().filter(|row| row.scene == SCENE) {
@@ -70,6 +70,7 @@ fn known() -> Record {
             "plain" => (6.0, 0.3, true),
             "box" => (7.0, 0.2, true),
             "ray-query" => (9.0, 0.0003, true),
+            "cpu" => (30.0, 0.0, true),
             _ => (20.0, 0.25, false),
         };
         rung.frame_cost_ms = stats(ms);
@@ -95,7 +96,39 @@ fn the_answer_names_the_fastest_method_and_the_front() {
     assert_eq!(
         text[at + 2],
         "    ladder: front plain 6.0 ms FLIP 0.300 → box 7.0 ms 0.200 → ray-query 9.0 ms \
-         3.0e-4; most accurate: ray-query, 1.29x box's frame cost"
+         3.0e-4; most accurate: ray-query, 1.29x box's frame cost; cpu 30.0 ms, 3.33x \
+         ray-query, the cheapest exact rung on the device"
+    );
+}
+
+/// The host's tracer is weighed against the cheapest device rung that traces: cheaper, it
+/// wins; with no such rung measured, it is the only exact one.
+#[test]
+fn the_host_tracer_is_said_to_win_or_to_be_the_only_exact_rung() {
+    let ladder = |r: &Record| {
+        let text = lines(r);
+        let at = (text.iter())
+            .position(|l| l == "  scenes/thesis-room.toml, 64² faces:")
+            .expect("the scene's heading");
+        text[at + 2].clone()
+    };
+    let mut r = known();
+    for rung in r.tradeoff.iter_mut().filter(|row| row.scene == SCENE) {
+        if rung.rung == "cpu" {
+            rung.frame_cost_ms = stats(4.5);
+        }
+    }
+    let line = ladder(&r);
+    assert!(
+        line.ends_with("; cpu 4.5 ms, 0.50x ray-query: the host wins"),
+        "{line}"
+    );
+    r.tradeoff
+        .retain(|row| !["ray-query", "bvh"].contains(&row.rung.as_str()));
+    let line = ladder(&r);
+    assert!(
+        line.ends_with("; cpu 4.5 ms: the only exact rung here"),
+        "{line}"
     );
 }
 
@@ -137,7 +170,8 @@ fn a_front_of_one_rung_is_said_to_be_cheapest_and_most_accurate() {
     assert!(
         text.contains(
             &"    ladder: ray-query is both the cheapest and the most accurate rung: 3.5 ms, \
-              FLIP 3.0e-4, 0.50x box's frame cost"
+              FLIP 3.0e-4, 0.50x box's frame cost; cpu 30.0 ms, 8.57x ray-query, the \
+              cheapest exact rung on the device"
                 .to_owned()
         ),
         "{text:?}"

@@ -3,7 +3,7 @@
 use super::*;
 use serde_json::{json, Value};
 
-const RUNGS: [&str; 8] = [
+const RUNGS: [&str; 9] = [
     "plain",
     "box",
     "distance-8",
@@ -12,11 +12,12 @@ const RUNGS: [&str; 8] = [
     "distance-exact",
     "ray-query",
     "bvh",
+    "cpu",
 ];
 
 /// The committed quick baseline (two scenes, 64² faces) with its trade-off rows given these
 /// costs and errors, in the ladder's order, per scene, and their Pareto flags.
-fn record(points: [[(f64, f64); 8]; 2]) -> Record {
+fn record(points: [[(f64, f64); 9]; 2]) -> Record {
     let mut raw: Value = serde_json::from_str(include_str!("../../baselines/quick.json"))
         .expect("bench/baselines/quick.json is JSON");
     let scenes: Vec<Value> = raw["settings"]["scenes"].as_array().unwrap().clone();
@@ -40,8 +41,8 @@ fn record(points: [[(f64, f64); 8]; 2]) -> Record {
 }
 
 /// A crowded scene: the cube rungs near 10 and 30 ms, the distance rungs nearly on one spot,
-/// tracing at 300, 1500 and 150 ms.
-const CROWDED: [(f64, f64); 8] = [
+/// tracing at 300, 1500 and 150 ms, the host's tracer at 800 ms.
+const CROWDED: [(f64, f64); 9] = [
     (10.0, 0.3),
     (11.0, 0.2),
     (30.0, 0.150),
@@ -50,9 +51,10 @@ const CROWDED: [(f64, f64); 8] = [
     (300.0, 0.03),
     (1500.0, 0.001),
     (150.0, 0.0005),
+    (800.0, 0.0001),
 ];
 /// A quick scene whose ray-query is exact (FLIP 0, drawn at the floor).
-const QUICK: [(f64, f64); 8] = [
+const QUICK: [(f64, f64); 9] = [
     (6.6, 0.25),
     (7.0, 0.05),
     (17.7, 0.046),
@@ -61,6 +63,7 @@ const QUICK: [(f64, f64); 8] = [
     (23.6, 0.044),
     (9.5, 0.0),
     (5.0, 0.0002),
+    (40.0, 0.0001),
 ];
 
 /// A `<text>` of the plot.
@@ -128,7 +131,7 @@ fn labels_overlap_no_label_and_no_marker() {
             Rect(left, top, left + w, top + h)
         })
         .collect();
-    assert_eq!(boxes.len(), 16);
+    assert_eq!(boxes.len(), 18);
     for (i, a) in boxes.iter().enumerate() {
         for b in &boxes[i + 1..] {
             assert!(!a.overlaps(b), "{a:?} on {b:?}");
@@ -143,7 +146,7 @@ fn labels_overlap_no_label_and_no_marker() {
             (at("cx"), at("cy"))
         })
         .collect();
-    assert!(circles.len() >= 16, "{} markers", circles.len());
+    assert!(circles.len() >= 18, "{} markers", circles.len());
     for r in &boxes {
         for &(cx, cy) in &circles {
             // The nearest point of the box to the marker's centre, outside its radius and stroke.
