@@ -34,7 +34,7 @@
 //! |---|---|---|---|---|
 //! | `cube-update-ms` | a fill method's cube update: all six faces and the mips, submit to fence (`results[].wall_ms`) | median | p10, p90 | milliseconds |
 //! | `cube-update-in-flight-ms` | the same updates submitted back to back with `settings.frames_in_flight` in flight: wall time per update (`results[].in_flight_ms`, one value per run) | median | p10, p90 | milliseconds |
-//! | `frame-cost-ms` | a rung's GPU time per sensor frame: cube update plus sensor view (`tradeoff[].frame_cost_ms`) | median | p10, p90 | milliseconds |
+//! | `frame-cost-ms` | a rung's time per sensor frame: cube update plus sensor view on the GPU, plus the lookup's host work; the `cpu` rung's whole frame on the host (`tradeoff[].frame_cost_ms`) | median | p10, p90 | milliseconds |
 //! | `sensor-flip-mean` | a rung's sensor image against the exact reference at t = 0, 1 sample per pixel (`tradeoff[].sensor.flip_mean`) | mean FLIP | - | FLIP, 0 (identical) to 1 |
 //!
 //! Smaller is better for all four. The times stay in milliseconds, not Bencher's built-in
