@@ -246,7 +246,7 @@ fn place_labels(chart: &LogChart, points: &[Point]) -> Vec<Spot> {
 fn draw_tradeoff(area: &Area, mut chart: LogChart, points: &[Point], spots: &[Spot]) -> Result<()> {
     chart
         .configure_mesh()
-        .x_desc("GPU ms per sensor frame (cube update + sensor view)")
+        .x_desc("ms per sensor frame (GPU: cube update + sensor view; cpu: the host)")
         .y_desc("sensor mean FLIP")
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))

@@ -128,8 +128,9 @@ fn ladder(record: &Record, scene: &str, size: u32, out: &mut Vec<String>) {
         return;
     }
     out.push(format!(
-        "  trade-off at {size}²: GPU ms per sensor frame (cube update + sensor view) \
-         against error at t = 0; * on the Pareto front"
+        "  trade-off at {size}²: ms per sensor frame (cube update + sensor view on the GPU, \
+         plus the lookup's host work; cpu: the host's whole frame) against error at t = 0; \
+         * on the Pareto front"
     ));
     out.push(tradeoff::table_header());
     out.extend(here.into_iter().map(tradeoff::table_row));
