@@ -434,6 +434,22 @@ pub fn render_once(
     .expect("frame")
 }
 
+/// One frame of `s` at `t_s` (frame 0) by a renderer with `lookup`, reading back `readback`.
+pub fn render_with_lookup(
+    gpu: &Gpu,
+    s: &Scene,
+    lookup: Lookup,
+    t_s: f64,
+    readback: Readback,
+) -> (FrameReport, FrameImages) {
+    let options = RenderOptions {
+        lookup: Some(lookup),
+        ..Default::default()
+    };
+    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+    r.render_frame(0, t_s, readback).expect("frame")
+}
+
 /// The lookup directions of one camera: the GPU's (`lookup` at frame 0) and the exact
 /// reference's layers at 1 sample per pixel, with the reference's view of that camera.
 pub struct DirectionPair {
@@ -445,16 +461,11 @@ pub struct DirectionPair {
 /// [`DirectionPair`]s of the observer and the sensor (in that order) of `s` rendered with
 /// `lookup`.
 pub fn lookup_directions(gpu: &Gpu, s: &Scene, lookup: Lookup) -> [DirectionPair; 2] {
-    let options = RenderOptions {
-        lookup: Some(lookup),
-        ..Default::default()
-    };
-    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
     let readback = Readback {
         directions: true,
         ..Default::default()
     };
-    let (_, images) = r.render_frame(0, 0.0, readback).expect("frame");
+    let (_, images) = render_with_lookup(gpu, s, lookup, 0.0, readback);
     let reference = Reference::new(s, 0.0);
     let pair = |raster: Option<specchio::render::RgbaImage>, view: ViewBasis, [w, h]: [u32; 2]| {
         let (exact, _) = reference.render(&view, w, h, 1);

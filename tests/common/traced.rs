@@ -5,7 +5,7 @@
 use specchio::image::RgbaImage;
 use specchio::metrics::{compare, Mask};
 use specchio::reference::Reference;
-use specchio::render::{Readback, RenderOptions, Renderer};
+use specchio::render::Readback;
 use specchio::scene::{Lookup, Scene};
 
 use super::Gpu;
@@ -19,16 +19,11 @@ pub fn same(a: [f32; 4], b: [f32; 4]) -> bool {
 
 /// Observer and sensor colour of a renderer with `lookup` at time `t_s` (frame 0).
 pub fn lookup_images(gpu: &Gpu, s: &Scene, lookup: Lookup, t_s: f64) -> [RgbaImage; 2] {
-    let options = RenderOptions {
-        lookup: Some(lookup),
-        ..Default::default()
-    };
-    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
     let readback = Readback {
         views: true,
         ..Default::default()
     };
-    let (report, images) = r.render_frame(0, t_s, readback).expect("frame");
+    let (report, images) = super::render_with_lookup(gpu, s, lookup, t_s, readback);
     assert!(!report.cube_updated, "{lookup} must skip the cube fill");
     [images.observer.unwrap(), images.sensor.unwrap()]
 }
