@@ -55,8 +55,7 @@ vec3 lookup_at(FrameData f, vec3 dir, vec3 hit, vec3 n) {
 
 // The frame's central mirror, its heights measured from its vertex (quadric.glsl's frame).
 Quadric frame_quadric(FrameData f) {
-    float vertex_y = f.mirror_quadric.z;
-    return Quadric(f.mirror_quadric.xy, f.mirror_quadric.w - vertex_y, f.mirror_extent.y - vertex_y);
+    return Quadric(f.mirror_quadric.xy, f.mirror_extent.z, f.mirror_extent.w);
 }
 
 // A point of render space in the central mirror's vertex frame.

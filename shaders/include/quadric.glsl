@@ -49,6 +49,22 @@ bool quadric_slab(Quadric q, vec3 o, vec3 d, out vec2 span) {
     return true;
 }
 
+// The root t of F along the ray o + t d, polished by one Newton step taken at its own point.
+// Solved from o alone, a root carries the rounding of F(o), which for a wide flat mirror is
+// large: its s^2 term (a = -10^6 at a latus rectum 10^3 times the focal distance) makes F of
+// order 10^4 a few decimetres from the vertex, so f32's disc lost the root by micrometres,
+// pixels where the rim plane meets the surface at 0.05 degrees. At the root's own point F is
+// of the rounding of that point alone, and F is so nearly linear over a step that one step
+// is enough.
+float quadric_polish(Quadric q, vec3 o, vec3 d, float t) {
+    if (!(abs(t) < 1.0e15)) {
+        return t; // beyond every room (and F there would overflow): nothing to polish
+    }
+    vec3 p = o + t * d;
+    float slope = 2.0 * dot(vec3(p.x, q.ab.x * p.y + 0.5 * q.ab.y, p.z), d); // dF/dt at p
+    return slope != 0.0 ? t - quadric_value(q, p) / slope : t;
+}
+
 // The intervals of the ray from o where F < 0: `count` of them (0, 1 or 2), in order.
 int quadric_inside(Quadric q, vec3 o, vec3 d, out vec2 first, out vec2 second) {
     float qa = dot(d.xz, d.xz) + q.ab.x * d.y * d.y;       // F(o + t d) = qa t^2 + 2 hb t + qc
@@ -62,7 +78,7 @@ int quadric_inside(Quadric q, vec3 o, vec3 d, out vec2 first, out vec2 second) {
         if (hb == 0.0) {
             return qc < 0.0 ? 1 : 0;
         }
-        float root = -qc / (2.0 * hb);
+        float root = quadric_polish(q, o, d, -qc / (2.0 * hb));
         first = hb < 0.0 ? vec2(root, INF) : vec2(-INF, root);
         return 1;
     }
@@ -72,8 +88,8 @@ int quadric_inside(Quadric q, vec3 o, vec3 d, out vec2 first, out vec2 second) {
     }
     // The roots without subtracting nearly equal numbers: q / qa and qc / q.
     float s = -(hb + (hb < 0.0 ? -1.0 : 1.0) * sqrt(disc));
-    float r1 = s / qa;
-    float r2 = s == 0.0 ? 0.0 : qc / s;
+    float r1 = quadric_polish(q, o, d, s / qa);
+    float r2 = quadric_polish(q, o, d, s == 0.0 ? 0.0 : qc / s);
     vec2 roots = vec2(min(r1, r2), max(r1, r2));
     if (qa > 0.0) {
         first = roots;

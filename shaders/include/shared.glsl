@@ -37,7 +37,9 @@ struct FrameData {
                             // surface x^2 + z^2 + a s^2 + b s = 0, s the height above the
                             // vertex; x, y: a, b; z: the vertex's height above the viewpoint;
                             // w: the rim's height, where a flat disc closes the mirror
-    vec4 mirror_extent;     // x: the rim's radius; y: the lowest height of the mirror's body
+    vec4 mirror_extent;     // x: the rim's radius; y: the lowest height of the mirror's body;
+                            // z, w: the rim's and that lowest height above the vertex
+                            // (subtracted in f64: a flat rim is micrometres above it)
     vec4 cube_centre;       // xyz: where the cube map is rendered from (render space: the
                             // scene's cube.offset from the viewpoint, 0 by default); every
                             // lookup's direction is from here

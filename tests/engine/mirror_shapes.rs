@@ -223,32 +223,62 @@ fn a_shifted_camera_breaks_centrality_and_a_tilted_one_does_not() {
     assert!((3e-3..1e-2).contains(&shifted), "shifted 1 cm: {shifted} m");
 }
 
-/// The hyperboloid's lengths at the loader's limits (10³ apart): one flat (a latus rectum 10³
-/// times the focal distance: a 5 cm mirror 2.5 micrometres deep) and one sharp (10⁻³ times).
-/// Written about the viewpoint, the flat one's quadric lost f32's digits to cancellation and
-/// the GPU drew noise over half its pixels; about its vertex both are exact (measured p99
-/// 0.00004 and 0.0008 texel).
+/// The hyperboloid's lengths at the loader's limits (10³ apart): flat ones (a latus rectum 10³
+/// times the focal distance: a 5 cm mirror 1.25 micrometres deep, and the wide one,
+/// a 0.4 m rim filling a 116-degree sensor, whose rim plane meets the surface at 0.05
+/// degrees) and a sharp one (10⁻³ times), on every device at 512². Written about the
+/// viewpoint, the flat quadric lost f32's digits to cancellation and the GPU drew noise over
+/// half its pixels; solved from the ray's point nearest the vertex alone, the wide one's rim
+/// was ragged by 2.5 pixels (the roots carried F's rounding there, of order 10⁴). Each root
+/// polished at its own point, every limit is exact: p99 within 0.02 texel (measured at most
+/// 0.0008 on both drivers), no pixel off the outline's one-pixel rim, and the rim within a
+/// tenth of a pixel of the reference's (the pixels that disagree at most a tenth of the rim's
+/// length; measured at most 0.005 px; without the polish the wide one was 2.55 px off, with
+/// 2412 pixels off the one-pixel rim).
 #[test]
 fn hyperboloids_at_the_loaders_limits_render_exactly() {
     let path = common::root().join("scenes/hard/hyperboloid-flat.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     let shipped = "focal_distance = 0.5\nlatus_rectum = 10\nrim_radius = 0.4\n";
-    assert!(text.contains(shipped));
-    let gpu = Gpu::new();
-    for limit in [
-        "focal_distance = 1\nlatus_rectum = 1000\nrim_radius = 0.05\n",
-        "focal_distance = 1\nlatus_rectum = 0.001\nrim_radius = 0.01\n",
-    ] {
-        let s = specchio::scene::load_str(&text.replace(shipped, limit), &path)
-            .expect("a hyperboloid at the limits loads");
-        let (error, outline) = sensor_error(&gpu, &s, Lookup::Plain);
-        eprintln!("{limit:?}: {error:?}, outline {outline:?}");
-        assert!(
-            error.pixels > 20_000,
-            "{limit:?}: the mirror fills the sensor"
-        );
-        assert!(error.p99_texels <= 0.02, "{limit:?}: {error:?}");
-        assert_eq!(outline, [0, 0], "{limit:?}: the mirror's outline");
+    let sensor = "[sensor]\nresolution = [192, 192]";
+    assert!(text.contains(shipped) && text.contains(sensor));
+    let text = text.replace(sensor, "[sensor]\nresolution = [512, 512]");
+    for device in devices() {
+        let gpu = Gpu::on(&device, OptionalFeatures::default());
+        for limit in [
+            "focal_distance = 1\nlatus_rectum = 1000\nrim_radius = 0.05\n",
+            "focal_distance = 0.5\nlatus_rectum = 500\nrim_radius = 0.4\n",
+            "focal_distance = 1\nlatus_rectum = 0.001\nrim_radius = 0.01\n",
+        ] {
+            let s = specchio::scene::load_str(&text.replace(shipped, limit), &path)
+                .expect("a hyperboloid at the limits loads");
+            let (error, outline) = sensor_error(&gpu, &s, Lookup::Plain);
+            let band = rim_band_px(&gpu, &s);
+            eprintln!("{device}, {limit:?}: {error:?}, outline {outline:?}, band {band} px");
+            assert!(
+                error.pixels > 150_000,
+                "{limit:?}: the mirror fills the sensor"
+            );
+            assert!(error.p99_texels <= 0.02, "{device}, {limit:?}: {error:?}");
+            assert_eq!(outline, [0, 0], "{device}, {limit:?}: the mirror's outline");
+            assert!(band <= 0.1, "{device}, {limit:?}: the rim is {band} px off");
+        }
+        gpu.finish();
     }
-    gpu.finish();
+}
+
+/// How far the sensor's rim lies from the reference's, on average (pixels): the pixels whose
+/// mirror mask disagrees, rim included, per pixel of the rim's length (a circle of the
+/// mask's area).
+fn rim_band_px(gpu: &Gpu, s: &Scene) -> f64 {
+    let [_, sensor] = lookup_directions(gpu, s, Lookup::Plain);
+    let on = |p: &[f32; 4]| p[3] == 1.0;
+    let (gpu_mask, exact) = (&sensor.gpu.pixels, &sensor.exact.direction.pixels);
+    let differ = gpu_mask
+        .iter()
+        .zip(exact)
+        .filter(|(a, b)| on(a) != on(b))
+        .count();
+    let area = exact.iter().filter(|p| on(p)).count() as f64;
+    differ as f64 / (2.0 * (std::f64::consts::PI * area).sqrt())
 }

@@ -117,6 +117,25 @@ impl Quadric {
         Some((t_rim.min(t_low), t_rim.max(t_low)))
     }
 
+    /// The root `t` of F along the ray `o + t d` (about the vertex), polished by one Newton
+    /// step taken at its own point. Solved from `o` alone, a root carries the rounding of
+    /// F(o), which for a wide flat mirror is large (its s² coefficient is −10⁶ at a latus
+    /// rectum 10³ times the focal distance); at the root's own point F carries only that
+    /// point's rounding. f64 hardly needs it; the shader's f32 lost pixels of the rim without
+    /// it, and the two keep one algorithm.
+    fn polish(&self, o: DVec3, d: DVec3, t: f64) -> f64 {
+        if !t.is_finite() || t.abs() >= 1e15 {
+            return t; // beyond every room: nothing to polish (and the shader's F overflows)
+        }
+        let p = o + t * d;
+        let slope = 2.0 * DVec3::new(p.x, self.a * p.y + 0.5 * self.b, p.z).dot(d);
+        if slope != 0.0 && slope.is_finite() {
+            t - self.value_about_vertex(p) / slope
+        } else {
+            t
+        }
+    }
+
     /// The (at most two) intervals of the ray from `o` (about the vertex) where F < 0, in
     /// order.
     fn inside_spans(&self, o: DVec3, d: DVec3) -> [Option<Span>; 2] {
@@ -127,7 +146,7 @@ impl Quadric {
         let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
         if qa == 0.0 {
             // Linear: a ray along the paraboloid's axis, or parallel to an asymptote.
-            let root = -qc / (2.0 * hb);
+            let root = self.polish(o, d, -qc / (2.0 * hb));
             return if hb < 0.0 {
                 [Some((root, inf)), None]
             } else if hb > 0.0 {
@@ -147,7 +166,7 @@ impl Quadric {
         let (r1, r2) = if q == 0.0 {
             (0.0, 0.0)
         } else {
-            (q / qa, qc / q)
+            (self.polish(o, d, q / qa), self.polish(o, d, qc / q))
         };
         let (lo, hi) = (r1.min(r2), r1.max(r2));
         if qa > 0.0 {

@@ -114,8 +114,16 @@ pub struct MirrorShapeData {
     pub code: UVec4,
     /// x, y: the quadric's a, b; z: its vertex's height; w: the rim's height.
     pub quadric: Vec4,
-    /// x: the rim's radius; y: the body's lowest height (finite: f32's lowest for none).
+    /// x: the rim's radius; y: the body's lowest height (finite: f32's lowest for none); z, w:
+    /// the rim's and the lowest height above the vertex, subtracted here in f64: a flat
+    /// mirror's rim is micrometres above its vertex, which f32 differences of heights near
+    /// the focal distance lose.
     pub extent: Vec4,
+}
+
+/// `v` in f32, minus infinity as f32's lowest (the paraboloid's body has no lowest height).
+fn finite_f32(v: f64) -> f32 {
+    v.max(-f64::from(f32::MAX)) as f32
 }
 
 impl MirrorShapeData {
@@ -131,9 +139,9 @@ impl MirrorShapeData {
                 quadric: Vec4::new(q.a as f32, q.b as f32, q.vertex_y as f32, q.rim_y as f32),
                 extent: Vec4::new(
                     q.rim_r as f32,
-                    q.low_y.max(-f64::from(f32::MAX)) as f32,
-                    0.0,
-                    0.0,
+                    finite_f32(q.low_y),
+                    finite_f32(q.rim_y - q.vertex_y),
+                    finite_f32(q.low_y - q.vertex_y),
                 ),
             },
         }
