@@ -10,8 +10,10 @@
 //!   90 - 2 x its half-angle, what the rays beside its apex show);
 //! - cylindrical: `tan(elevation) = tan(e_top) - (i + 0.5) / H * (tan(e_top) - tan(e_bottom))`,
 //!   the projection onto a vertical cylinder around the axis, over
-//!   [max(-45, lowest shown), min(45, highest shown)] degrees (a cone's band that lies wholly
-//!   beyond 45 degrees: the band itself).
+//!   [max(-45, lowest shown), min(45, highest shown)] degrees; a band that lies wholly beyond
+//!   45 degrees (a cone's; a paraboloid's or hyperboloid's whose rim is seen more than 45
+//!   degrees below the horizon) gives its part nearest the horizon whose tangents span 2, as
+//!   the ±45-degree band's do (the band itself, reaching the nadir, has no finite cylinder).
 //!
 //! Sizes: `W` is the disc's circumference in pixels rounded to a multiple of 4 (a column per
 //! pixel at the rim), and `H` keeps the columns' angular scale (lon–lat: `W * (e_top -
@@ -74,15 +76,7 @@ impl PanoramaLayout {
         let (top, lowest) = (optics.max_elevation(), optics.min_elevation());
         let (top, bottom) = match kind {
             PanoramaKind::LonLat => (top, lowest),
-            PanoramaKind::Cylindrical => {
-                let (high, low) = (top.min(FRAC_PI_4), lowest.max(-FRAC_PI_4));
-                // A cone's band may lie wholly beyond 45 degrees: then the band itself.
-                if high > low {
-                    (high, low)
-                } else {
-                    (top, lowest)
-                }
-            }
+            PanoramaKind::Cylindrical => cylinder_band(top, lowest),
         };
         let span = match kind {
             PanoramaKind::LonLat => (top - bottom) / TAU,
@@ -178,6 +172,24 @@ impl PanoramaLayout {
     }
 }
 
+/// The elevations (top, bottom) the cylindrical panorama spans, of the band [`lowest`, `top`]
+/// the mirror shows: its part within 45 degrees of the horizon; where the band lies wholly
+/// beyond (a cone's, or a paraboloid's or hyperboloid's whose rim is seen more than 45 degrees
+/// below the horizon), its part nearest the horizon whose tangents span 2, as the ±45-degree
+/// band's do. A cylinder reaches the poles only at infinity, so the band itself would have
+/// made a panorama of unbounded height (the nadir's tangent: 10¹⁶ rows): the height is at
+/// most the cylinder's diameter, `W / pi`, either way.
+fn cylinder_band(top: f64, lowest: f64) -> (f64, f64) {
+    let (high, low) = (top.min(FRAC_PI_4), lowest.max(-FRAC_PI_4));
+    if high > low {
+        (high, low)
+    } else if top < -FRAC_PI_4 {
+        (top, (top.tan() - 2.0).atan().max(lowest))
+    } else {
+        ((lowest.tan() + 2.0).atan().min(top), lowest)
+    }
+}
+
 /// Bilinear sample of `image` at `p` (pixels; centres at +0.5), edges clamped.
 pub fn bilinear(image: &RgbaImage, p: Vec2) -> [f32; 4] {
     let (w, h) = (image.width as i64, image.height as i64);
@@ -247,6 +259,51 @@ mod tests {
                         e.to_degrees()
                     );
                 }
+            }
+        }
+    }
+
+    /// Paraboloids whose rim is seen from just above 45 degrees below the horizon to nearly
+    /// straight down (rims 0.21 to 0.001 m at p = 0.25 m: −44.4 to −89.8 degrees; the band
+    /// reaches the nadir, whose tangent is infinite): the cylindrical panorama is at most the
+    /// cylinder's diameter tall (the lon–lat one at most half its width), every row inside the
+    /// band, and the unwrap runs (at −53 degrees it asked for 64 GiB and aborted).
+    #[test]
+    fn a_band_reaching_the_nadir_keeps_the_cylinder_bounded() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let path = root.join("scenes/test/six-colour-room.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        for rim in ["0.21", "0.15", "0.05", "0.001"] {
+            let shape = format!("shape = \"paraboloid\"\nlatus_rectum = 1\nrim_radius = {rim}");
+            let scene = crate::scene::load_str(&text.replace("radius = 1.0", &shape), &path);
+            let optics = SensorOptics::at(&scene.unwrap(), 0.0);
+            let (low, high) = (optics.min_elevation(), optics.max_elevation());
+            for kind in PanoramaKind::ALL {
+                let l = PanoramaLayout::for_sensor(&optics, kind);
+                let top = l.elevation(0.5).to_degrees();
+                eprintln!(
+                    "rim {rim}: {kind:?} {}x{}, top row {top:.1}",
+                    l.width, l.height
+                );
+                let tallest = match kind {
+                    PanoramaKind::Cylindrical => f64::from(l.width) / std::f64::consts::PI,
+                    PanoramaKind::LonLat => f64::from(l.width) / 2.0,
+                };
+                assert!(
+                    f64::from(l.height) <= tallest + 1.0,
+                    "rim {rim}, {kind:?}: {l:?}"
+                );
+                for row in [0, l.height / 2, l.height - 1] {
+                    let e = l.elevation(f64::from(row) + 0.5);
+                    assert!((low..=high).contains(&e), "rim {rim}, {kind:?}: row {row}");
+                }
+                let image = RgbaImage {
+                    width: 64,
+                    height: 64,
+                    pixels: vec![[1.0; 4]; 64 * 64],
+                };
+                let unwrapped = l.unwrap(&optics, &image);
+                assert_eq!(unwrapped.pixels.len() as u32, l.width * l.height);
             }
         }
     }
