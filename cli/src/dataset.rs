@@ -74,7 +74,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     drop(instance);
     let mut frames = FrameWriter::new(&device, &plan.scene, lookup)?;
     let truth = frames.ground_truth();
-    if let Some(warning) = truth.warning() {
+    if let Some(warning) = truth.warning(&plan.scene) {
         eprintln!("warning: dataset ({lookup} lookup): {warning}");
     }
     let key = || plan.run_key(lookup, truth, &resume::device_key(&device.info));

@@ -190,7 +190,7 @@ fn render_method(
     let mut renderer = Renderer::new(device, scene.clone(), &options)?;
     if let (true, Some(warning)) = (
         args.sensor_outputs,
-        renderer.sensor_ground_truth().warning(),
+        renderer.sensor_ground_truth().warning(&renderer.scene),
     ) {
         eprintln!("warning: sensor outputs ({lookup} lookup): {warning}");
     }

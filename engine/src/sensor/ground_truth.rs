@@ -3,6 +3,32 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::scene::Scene;
+
+/// What a user making a dataset must know where the cube path's layers may disagree with the
+/// image.
+const CUBE_WARNING: &str = "range and ids come through the cube (its depth search and id \
+     cube), not traced: they are exact only where the cube's centre saw what the mirror shows, \
+     and the colour image's lookup may show another surface (docs/sensor.md, \"Ground truth\", \
+     has the measured disagreement); a lookup that traces (ray-query or bvh, the default for \
+     --sensor-outputs) traces all three along one path";
+
+/// Why the cube path is exact for a central mirror.
+const CENTRAL_CUBE: &str = "the mirror is central, its camera at its focus and the cube \
+     rendered at its viewpoint: every reflected ray lies on a line through the cube's centre, so \
+     the cube sees what each ray meets, and every lookup reads the cube in that ray's direction; \
+     range, ids and colour agree up to texel sampling";
+
+/// Whether the cube path is exact for `scene`'s sensor: a central mirror (a single viewpoint,
+/// the shape's own camera at its focus, no `sensor.shift`; a tilt keeps the rays through the
+/// viewpoint) and the cube rendered at that viewpoint (no `cube.offset`). Every reflected ray
+/// then lies on a line through the cube's centre, which saw the first surface along it.
+pub fn cube_path_is_exact(scene: &Scene) -> bool {
+    scene.mirror.shape.xi.is_some()
+        && scene.sensor.shift_m == glam::Vec3::ZERO
+        && scene.cube.offset_m == glam::Vec3::ZERO
+}
+
 /// The source of a frame's range and id layers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -28,9 +54,19 @@ impl GroundTruth {
         }
     }
 
-    /// What the range layer measures.
-    pub fn range_model(self) -> &'static str {
+    /// Whether these layers are exact for `scene` (the cube path is where it is central:
+    /// [`cube_path_is_exact`]).
+    pub fn exact_for(self, scene: &Scene) -> bool {
+        self != GroundTruth::Cube || cube_path_is_exact(scene)
+    }
+
+    /// What the range layer measures (`exact`: [`Self::exact_for`]).
+    pub fn range_model(self, exact: bool) -> &'static str {
         match self {
+            GroundTruth::Cube if exact => {
+                "exact (a central mirror's cube): the distance along the reflected ray to the \
+                 first surface the cube's centre saw in its direction"
+            }
             GroundTruth::Reference | GroundTruth::Traced => {
                 "exact: the distance along the reflected ray to the first scene surface it meets"
             }
@@ -43,9 +79,13 @@ impl GroundTruth {
         }
     }
 
-    /// What the id layer names.
-    pub fn id_model(self) -> &'static str {
+    /// What the id layer names (`exact`: [`Self::exact_for`]).
+    pub fn id_model(self, exact: bool) -> &'static str {
         match self {
+            GroundTruth::Cube if exact => {
+                "exact (a central mirror's cube): the drawable the cube fill drew at the texel \
+                 (nearest) in the reflected ray's direction, the first one along it"
+            }
             GroundTruth::Reference | GroundTruth::Traced => {
                 "exact: the drawable the surface the reflected ray meets belongs to"
             }
@@ -57,20 +97,10 @@ impl GroundTruth {
         }
     }
 
-    /// Whether the colour image comes from the same light path as the range and ids.
-    pub fn colour_agrees(self) -> bool {
-        self != GroundTruth::Cube
-    }
-
-    /// What a user making a dataset must know, where the layers may disagree with the image.
-    pub fn warning(self) -> Option<&'static str> {
-        (self == GroundTruth::Cube).then_some(
-            "range and ids come through the cube (its depth search and id cube), not traced: \
-             they are exact only where the cube's centre saw what the mirror shows, and the \
-             colour image's lookup may show another surface (docs/sensor.md, \"Ground truth\", \
-             has the measured disagreement); a device with ray queries and the ray-query \
-             lookup (the default for --sensor-outputs there) traces all three along one path",
-        )
+    /// What a user making a dataset of `scene` must know, where the layers may disagree with
+    /// the image.
+    pub fn warning(self, scene: &Scene) -> Option<&'static str> {
+        (!self.exact_for(scene)).then_some(CUBE_WARNING)
     }
 }
 
@@ -81,18 +111,26 @@ pub struct GroundTruthRecord {
     pub layers: GroundTruth,
     /// The colour image's lookup ("reference" for the reference's own colour).
     pub colour: String,
+    /// Whether the colour image shows what range and ids say: the layers come from the
+    /// colour's own light path, or from a cube that sees what every reflected ray meets.
     pub colour_agrees: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub warning: Option<&'static str>,
+    /// Why cube layers agree, where they do.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exact_because: Option<&'static str>,
 }
 
 impl GroundTruthRecord {
-    pub fn new(layers: GroundTruth, colour: &str) -> Self {
+    /// The record of `layers` for `scene`'s sensor, its colour image made by `colour`.
+    pub fn new(layers: GroundTruth, colour: &str, scene: &Scene) -> Self {
+        let exact = layers.exact_for(scene);
         Self {
             layers,
             colour: colour.to_owned(),
-            colour_agrees: layers.colour_agrees(),
-            warning: layers.warning(),
+            colour_agrees: exact,
+            warning: layers.warning(scene),
+            exact_because: (exact && layers == GroundTruth::Cube).then_some(CENTRAL_CUBE),
         }
     }
 }

@@ -97,15 +97,15 @@ impl SensorOutputs {
             .collect();
         Self {
             source: "reference".into(),
-            ground_truth: GroundTruthRecord::new(GroundTruth::Reference, "reference"),
+            ground_truth: GroundTruthRecord::new(GroundTruth::Reference, "reference", scene),
             time_s: t_s,
             scene_origin: scene.origin,
             optics: SensorOptics::at(scene, t_s),
             rays,
             range,
-            range_model: GroundTruth::Reference.range_model(),
+            range_model: GroundTruth::Reference.range_model(true),
             ids,
-            id_model: GroundTruth::Reference.id_model(),
+            id_model: GroundTruth::Reference.id_model(true),
             id_map: IdMap::of(scene),
             image: images.color.clone(),
             cube: None,
@@ -146,7 +146,7 @@ impl SensorOutputs {
         };
         Self {
             source,
-            ground_truth: GroundTruthRecord::new(truth, lookup),
+            ground_truth: GroundTruthRecord::new(truth, lookup, scene),
             time_s: t_s,
             scene_origin: scene.origin,
             optics,
@@ -161,13 +161,13 @@ impl SensorOutputs {
                 .zip(&direction_wall.pixels)
                 .map(|(o, d)| if seen(d) { o[3] } else { 0.0 })
                 .collect(),
-            range_model: truth.range_model(),
+            range_model: truth.range_model(truth.exact_for(scene)),
             ids: direction_wall
                 .pixels
                 .iter()
                 .map(|d| if seen(d) { d[3] as u32 - 1 } else { NO_ID })
                 .collect(),
-            id_model: truth.id_model(),
+            id_model: truth.id_model(truth.exact_for(scene)),
             id_map: IdMap::of(scene),
             image,
             cube,
