@@ -78,7 +78,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         eprintln!("warning: dataset ({lookup} lookup): {warning}");
     }
     let key = || plan.run_key(lookup, truth, &resume::device_key(&device.info));
-    take_up(args, &mut folder, key, n)?;
+    take_up(args, &mut folder, key, &plan)?;
 
     // 3. The frames, then the index and the summary.
     let progress = indicatif::ProgressBar::new(n as u64);
@@ -134,11 +134,12 @@ fn take_up(
     args: &Args,
     folder: &mut Folder,
     key: impl FnOnce() -> resume::RunKey,
-    n: usize,
+    plan: &Plan,
 ) -> Result<()> {
+    let n = plan.poses.len();
     let work = resume::work_path(&args.out);
     if args.resume {
-        let done = folder.resume(&key())?;
+        let done = folder.resume(&key(), &mut plan.index_lines())?;
         if done > 0 {
             specchio::say!(
                 "resuming: {done} of {n} frame(s) done in {}",

@@ -156,7 +156,8 @@ fn render(
     let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
     let truth = frames.ground_truth();
     if job.resume {
-        folder.resume(&plan.run_key(lookup, truth, &resume::device_key(&dev.info)))?;
+        let key = plan.run_key(lookup, truth, &resume::device_key(&dev.info));
+        folder.resume(&key, &mut plan.index_lines())?;
     }
     let hooks = Hooks {
         stopped,

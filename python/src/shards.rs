@@ -230,10 +230,11 @@ impl DatasetOutput {
             return Err(errors::error("the dataset was begun already"));
         }
         let key = self.plan.run_key(lookup, truth, device);
-        let resume = self.resume;
-        let folder = self.folder_mut()?;
-        if resume {
-            py.detach(|| folder.resume(&key)).map_err(errors::to_py)?;
+        if self.resume {
+            let (plan, folder) = (&self.plan, self.folder.as_mut());
+            let folder = folder.ok_or_else(|| errors::error("the dataset was already finished"))?;
+            py.detach(|| folder.resume(&key, &mut plan.index_lines()))
+                .map_err(errors::to_py)?;
         }
         self.begun = true;
         Ok(self.folder_mut()?.todo())

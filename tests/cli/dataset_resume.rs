@@ -120,6 +120,25 @@ fn a_stopped_then_killed_run_resumes_to_the_same_bytes() {
     );
     assert_eq!(files(&work), before);
     std::fs::write(&trajectory, TRAJECTORY).unwrap();
+    let mut a = args(t, o);
+    a.push("--resume");
+
+    // A forged journal line (frame 0's pose moved to [9, 9, 9], the files as they were):
+    // proven against the plan, refused, nothing touched.
+    let journal = work.join("journal.jsonl");
+    let text = std::fs::read_to_string(&journal).unwrap();
+    let forged = forge_first_pose(&text);
+    std::fs::write(&journal, &forged).unwrap();
+    let before = files(&work);
+    let refused = specchio(&a);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("journal.jsonl") && stderr.contains("index line is not the one"),
+        "{stderr}"
+    );
+    assert_eq!(files(&work), before);
+    std::fs::write(&journal, text).unwrap();
 
     // The same inputs again: it goes on from the frames kept.
     let resumed = specchio(&a);
@@ -142,6 +161,22 @@ fn a_stopped_then_killed_run_resumes_to_the_same_bytes() {
         !work.exists(),
         "the work folder goes once the dataset is placed"
     );
+}
+
+/// `journal` with frame 0's line's pose moved to [9, 9, 9].
+fn forge_first_pose(journal: &str) -> String {
+    let mut lines: Vec<serde_json::Value> = journal
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let line = (lines.iter_mut())
+        .find(|l| l["frame"]["frame"] == 0)
+        .expect("frame 0 journaled");
+    let mut index: serde_json::Value =
+        serde_json::from_str(line["frame"]["index"].as_str().unwrap()).unwrap();
+    index["scene"]["position_m"] = serde_json::json!([9.0, 9.0, 9.0]);
+    line["frame"]["index"] = index.to_string().into();
+    lines.iter().map(|l| format!("{l}\n")).collect()
 }
 
 /// A folder of someone else's at `OUT.partial` is never taken, written or removed.

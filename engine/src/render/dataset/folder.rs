@@ -35,9 +35,16 @@ impl Folder {
     }
 
     /// Makes the run resumable: frames are kept in the work folder as they finish, and the
-    /// frames it holds from an earlier run with the same `key` are done. Returns how many.
-    pub fn resume(&mut self, key: &RunKey) -> Result<usize, DatasetError> {
-        let work = WorkFolder::open(&self.root, key)?;
+    /// frames it holds from an earlier run with the same `key` are done, each proven against
+    /// `index_of`, the index lines this run writes ([`Plan::index_lines`]). Returns how many.
+    ///
+    /// [`Plan::index_lines`]: super::Plan::index_lines
+    pub fn resume(
+        &mut self,
+        key: &RunKey,
+        index_of: &mut dyn FnMut(usize) -> String,
+    ) -> Result<usize, DatasetError> {
+        let work = WorkFolder::open(&self.root, key, index_of)?;
         for (i, line) in work.done() {
             self.index[i] = Some(line.to_owned());
         }

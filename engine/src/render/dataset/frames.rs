@@ -47,11 +47,7 @@ impl Rendered {
         let root = Path::new("");
         let files = MemoryFiles::new(root);
         write_frame(&files, &root.join(&folder), &self.outputs, &self.record)?;
-        let line = IndexLine {
-            folder,
-            pose: &self.record,
-        };
-        let index_line = serde_json::to_string(&line).map_err(|e| OutputError::Encode {
+        let index_line = IndexLine::of(&self.record).map_err(|e| OutputError::Encode {
             path: PathBuf::from(INDEX_FILE),
             message: e.to_string(),
         })?;
@@ -152,7 +148,7 @@ impl FrameWriter {
     /// Frame `frame` at `pose`, rendered; its files still to encode.
     pub fn render(&mut self, frame: usize, pose: &Pose) -> Result<Rendered, DatasetError> {
         let (outputs, _) = self.render_outputs(frame, pose, false)?;
-        let record = PoseRecord::new(frame, pose, &outputs);
+        let record = PoseRecord::new(frame, pose, &outputs.optics, outputs.scene_origin);
         Ok(Rendered {
             frame,
             outputs,

@@ -24,7 +24,7 @@ use crate::output::OutputError;
 use crate::scene::{Lookup, RefreshPolicy, Scene, SceneError};
 use crate::sensor::dataset::grid::{self, GridError};
 use crate::sensor::dataset::trajectory::{self, Pose, TrajectoryError};
-use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord};
+use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
 use crate::sensor::GroundTruth;
 use crate::vk::physical::DeviceInfo;
 use crate::vk::GpuError;
@@ -172,6 +172,21 @@ impl Plan {
             lookup: lookup.to_string(),
             ground_truth: truth.name().to_owned(),
             device: device.to_owned(),
+        }
+    }
+
+    /// The index lines this plan's frames get (frame `i`'s from its pose alone: the sensor's
+    /// optics, no GPU), for a resumed run to prove its journal's against.
+    pub fn index_lines(&self) -> impl FnMut(usize) -> String + '_ {
+        let mut robot = robot_scene(&self.scene);
+        move |frame| {
+            let Some(pose) = self.poses.get(frame) else {
+                return String::new(); // no such frame: a line no journal holds
+            };
+            place_robot(&mut robot, &self.scene, pose);
+            let optics = crate::sensor::SensorOptics::at(&robot, pose.time_s);
+            let record = PoseRecord::new(frame, pose, &optics, robot.origin);
+            IndexLine::of(&record).unwrap_or_default()
         }
     }
 

@@ -11,8 +11,9 @@
 //! A frame is journaled only after its files and their folder are on disk (`fsync`), so the
 //! journal never names a frame that a crash can take back; a frame folder the journal does
 //! not name is a frame cut short, written again. A resumed run takes the folder only when it
-//! is a real folder (not a link), holds nothing but those entries, and its key is this run's;
-//! anything else is refused, naming what differs, and left as it is. Two runs never share it
+//! is a real folder (not a link), holds nothing but those entries, and its key is this run's,
+//! and each journaled frame's index line (and its `pose.json`) is the one this run's plan
+//! gives it; anything else is refused, naming what differs, and left as it is. Two runs never share it
 //! (an advisory lock on the journal). When every frame is done, the frames are linked (or,
 //! where the file system has no hard links, copied) into the staged output, which is placed
 //! as every output is; only then is the work folder removed, entry by entry, as far as the
@@ -40,6 +41,9 @@ pub const WORK_SUFFIX: &str = ".partial";
 pub const JOURNAL: &str = "journal.jsonl";
 /// The folder of the frame folders, inside the work folder.
 const FRAMES: &str = "frames";
+/// A frame's pose file, checked against its index line, and the most of it read.
+const POSE_FILE: &str = "pose.json";
+const MAX_POSE_BYTES: u64 = 64 << 10;
 /// A dataset's work folder, opened by this run (and locked while it is open). Removals go
 /// through the folder handles (`output::Dir`), never by a path a link could redirect.
 pub struct WorkFolder {
@@ -72,8 +76,14 @@ pub fn work_path(out: &Path) -> PathBuf {
 
 impl WorkFolder {
     /// Opens `out`'s work folder for a run keyed `key`: creates it when there is none, else
-    /// takes it when it is this run's, with the frames it holds done.
-    pub fn open(out: &Path, key: &RunKey) -> Result<WorkFolder, DatasetError> {
+    /// takes it when it is this run's, with the frames it holds done. `index_of(i)` is the
+    /// index line this run writes for frame `i` (from its plan, no GPU): a journaled frame is
+    /// taken only when its line and its `pose.json` say what this run would.
+    pub fn open(
+        out: &Path,
+        key: &RunKey,
+        index_of: &mut dyn FnMut(usize) -> String,
+    ) -> Result<WorkFolder, DatasetError> {
         let path = work_path(out);
         match fs::symlink_metadata(&path) {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Self::create(path, key),
@@ -82,7 +92,7 @@ impl WorkFolder {
                 &path,
                 "is not a folder (a file or a link): it is no work folder of a dataset",
             )),
-            Ok(_) => Self::take(path, key),
+            Ok(_) => Self::take(path, key, index_of),
         }
     }
 
@@ -115,7 +125,11 @@ impl WorkFolder {
         Ok(work)
     }
 
-    fn take(path: PathBuf, key: &RunKey) -> Result<WorkFolder, DatasetError> {
+    fn take(
+        path: PathBuf,
+        key: &RunKey,
+        index_of: &mut dyn FnMut(usize) -> String,
+    ) -> Result<WorkFolder, DatasetError> {
         // Opened without following a link: what is checked below is what is then used.
         let dir = Dir::open(&path).map_err(io(&path))?;
         let at = path.join(JOURNAL);
@@ -166,6 +180,10 @@ impl WorkFolder {
             };
             check_journaled(&f, key.frames)
                 .map_err(|why| refuse(&at, &format!("line {n}: {why}")))?;
+            // Proven, not trusted: the line a run of these inputs writes for this frame.
+            if f.index != index_of(f.frame) {
+                return Err(refuse(&at, &format!("line {n}: frame {}'s index line is not the one these inputs give it (the journal was edited, or its frames are not what it says): remove the work folder to start again", f.frame)));
+            }
             // A frame done again (its files were lost) has a later line: the last one holds.
             done.insert(f.frame, f);
         }
@@ -187,6 +205,9 @@ impl WorkFolder {
             .collect();
         for frame in lost {
             work.done.remove(&frame);
+        }
+        for f in work.done.values() {
+            work.check_pose(f)?;
         }
         Ok(work)
     }
@@ -410,6 +431,28 @@ impl WorkFolder {
                 .map_err(io(&at.join(&file)))?;
         }
         frames.remove(leaf, true).map_err(io(&at))
+    }
+
+    /// The journaled frame's `pose.json` says what its (proven) index line does: the files'
+    /// sizes and CRC-32s are the journal's word, so the pose a user reads is checked too.
+    fn check_pose(&self, f: &Journaled) -> Result<(), DatasetError> {
+        let at = self.path.join(frame_folder(f.frame)).join(POSE_FILE);
+        let mut bytes = Vec::new();
+        let folder = self.frame_dir(f.frame).map_err(io(&at))?;
+        let file = crate::output::open_no_follow(&folder.path().join(POSE_FILE));
+        (file.and_then(|file| file.take(MAX_POSE_BYTES).read_to_end(&mut bytes)))
+            .map_err(io(&at))?;
+        let mut index: serde_json::Value = serde_json::from_str(&f.index).unwrap_or_default();
+        if let Some(line) = index.as_object_mut() {
+            line.remove("folder");
+        }
+        match serde_json::from_slice::<serde_json::Value>(&bytes) {
+            Ok(pose) if pose == index => Ok(()),
+            _ => Err(refuse(
+                &at,
+                &format!("is not frame {}'s pose as its index line gives it (the frame was edited): remove the work folder to start again", f.frame),
+            )),
+        }
     }
 
     /// Whether the journaled frame's files are there, regular, with their sizes and CRC-32s.

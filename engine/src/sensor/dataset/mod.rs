@@ -12,11 +12,11 @@ pub mod ply;
 pub mod rep103;
 pub mod trajectory;
 
-use glam::{DMat3, Vec3};
+use glam::{DMat3, DVec3, Vec3};
 use serde::Serialize;
 
 use super::localise::poses::object_spheres;
-use super::SensorOutputs;
+use super::{SensorOptics, SensorOutputs};
 use crate::scene::state::SceneState;
 use crate::scene::Scene;
 use trajectory::Pose;
@@ -151,10 +151,11 @@ pub struct RosPose {
 }
 
 impl PoseRecord {
-    /// The record of frame `frame` at `pose`, whose sensor outputs are `outputs`.
-    pub fn new(frame: usize, pose: &Pose, outputs: &SensorOutputs) -> Self {
-        let v = &outputs.optics.view;
-        let camera = outputs.scene_origin + (v.eye + outputs.optics.mirror_center).as_dvec3();
+    /// The record of frame `frame` at `pose`, whose sensor's optics are `optics` in a scene
+    /// whose local origin is `scene_origin` (the sensor outputs' own: no GPU needed).
+    pub fn new(frame: usize, pose: &Pose, optics: &SensorOptics, scene_origin: DVec3) -> Self {
+        let v = &optics.view;
+        let camera = scene_origin + (v.eye + optics.mirror_center).as_dvec3();
         let axes = DMat3::from_cols(
             v.right.as_dvec3().normalize(),
             v.down.as_dvec3().normalize(),
@@ -238,6 +239,16 @@ pub struct IndexLine<'a> {
     pub folder: String,
     #[serde(flatten)]
     pub pose: &'a PoseRecord,
+}
+
+impl IndexLine<'_> {
+    /// Frame `record.frame`'s line, one JSON object (without the newline).
+    pub fn of(record: &PoseRecord) -> Result<String, serde_json::Error> {
+        serde_json::to_string(&IndexLine {
+            folder: frame_folder(record.frame),
+            pose: record,
+        })
+    }
 }
 
 /// The frame folder's name: six digits, so that names sort as frames do.

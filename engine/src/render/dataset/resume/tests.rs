@@ -29,16 +29,18 @@ fn key(frames: usize) -> RunKey {
     }
 }
 
-/// A frame whose files say which frame they are: every fixed frame file and a panorama.
+/// A frame whose files say which frame they are: every fixed frame file and a panorama, its
+/// pose what its index line says.
 fn frame(i: usize) -> Frame {
     let folder = frame_folder(i);
     let fixed = FRAME_FILES.into_iter().filter(|n| !n.contains('*'));
     let files = (fixed.chain(["sensor.panorama.png"]))
         .map(|n| {
-            (
-                Path::new(&folder).join(n),
-                format!("{n} of {i}").into_bytes(),
-            )
+            let bytes = match n {
+                "pose.json" => format!("{{\"frame\": {i}}}\n"),
+                _ => format!("{n} of {i}"),
+            };
+            (Path::new(&folder).join(n), bytes.into_bytes())
         })
         .collect();
     Frame {
@@ -46,6 +48,11 @@ fn frame(i: usize) -> Frame {
         files,
         index_line: format!("{{\"frame\":{i},\"folder\":\"{folder}\"}}"),
     }
+}
+
+/// The index line a run of these tests writes for frame `i`.
+fn index_of(i: usize) -> String {
+    frame(i).index_line
 }
 
 fn record(frames: usize) -> DatasetRecord {
@@ -97,7 +104,7 @@ fn a_run_stopped_after_two_frames_goes_on_from_the_third_and_gives_the_same_fold
 
     let out = dir.join("out");
     let mut first = Folder::stage(&out, 4).unwrap();
-    assert_eq!(first.resume(&key(4)).unwrap(), 0);
+    assert_eq!(first.resume(&key(4), &mut index_of).unwrap(), 0);
     first.place(&frame(0)).unwrap();
     first.place(&frame(1)).unwrap();
     drop(first); // stopped: the output is not placed, the work folder stays
@@ -105,7 +112,7 @@ fn a_run_stopped_after_two_frames_goes_on_from_the_third_and_gives_the_same_fold
     assert!(work_path(&out).join(JOURNAL).is_file());
 
     let mut second = Folder::stage(&out, 4).unwrap();
-    assert_eq!(second.resume(&key(4)).unwrap(), 2);
+    assert_eq!(second.resume(&key(4), &mut index_of).unwrap(), 2);
     assert_eq!(second.todo(), vec![2, 3]);
     assert_eq!(second.index_line(1), Some(frame(1).index_line.as_str()));
     assert!(second.place(&frame(1)).is_err(), "frame 1 is done");
@@ -122,7 +129,7 @@ fn a_run_stopped_after_two_frames_goes_on_from_the_third_and_gives_the_same_fold
 fn a_frame_or_a_line_cut_short_by_a_crash_is_done_again() {
     let dir = scratch("crash");
     let out = dir.join("out");
-    let mut work = WorkFolder::open(&out, &key(3)).unwrap();
+    let mut work = WorkFolder::open(&out, &key(3), &mut index_of).unwrap();
     work.write(&frame(0)).unwrap();
     work.write(&frame(1)).unwrap();
     drop(work);
@@ -139,12 +146,12 @@ fn a_frame_or_a_line_cut_short_by_a_crash_is_done_again() {
     journal.write_all(b"{\"frame\":{\"frame\":2,\"fi").unwrap();
     drop(journal);
 
-    let mut work = WorkFolder::open(&out, &key(3)).unwrap();
+    let mut work = WorkFolder::open(&out, &key(3), &mut index_of).unwrap();
     assert_eq!(work.done().map(|(i, _)| i).collect::<Vec<_>>(), vec![0]);
     work.write(&frame(2)).unwrap();
     work.write(&frame(1)).unwrap();
     drop(work);
-    let work = WorkFolder::open(&out, &key(3)).unwrap();
+    let work = WorkFolder::open(&out, &key(3), &mut index_of).unwrap();
     assert_eq!(work.done().count(), 3);
     let text = fs::read_to_string(w.join(JOURNAL)).unwrap();
     assert!(text.ends_with('\n') && !text.contains("\"fi{"), "{text}");
@@ -153,8 +160,8 @@ fn a_frame_or_a_line_cut_short_by_a_crash_is_done_again() {
         b"sensor.png of 2"
     );
     assert_eq!(
-        fs::read(w.join("frames/000001/pose.json")).unwrap(),
-        b"pose.json of 1"
+        fs::read(w.join("frames/000001/sensor.exr")).unwrap(),
+        b"sensor.exr of 1"
     );
     fs::remove_dir_all(&dir).unwrap();
 }
@@ -163,10 +170,14 @@ fn a_frame_or_a_line_cut_short_by_a_crash_is_done_again() {
 fn another_runs_folder_or_a_users_is_refused_and_left_as_it_was() {
     let dir = scratch("refuse");
     let out = dir.join("out");
-    let mut work = WorkFolder::open(&out, &key(3)).unwrap();
+    let mut work = WorkFolder::open(&out, &key(3), &mut index_of).unwrap();
     work.write(&frame(0)).unwrap();
     // A second run at the same time.
-    let e = message(WorkFolder::open(&out, &key(3)).err().unwrap());
+    let e = message(
+        WorkFolder::open(&out, &key(3), &mut index_of)
+            .err()
+            .unwrap(),
+    );
     assert!(e.contains("in use by another run"), "{e}");
     drop(work);
     let w = work_path(&out);
@@ -174,16 +185,20 @@ fn another_runs_folder_or_a_users_is_refused_and_left_as_it_was() {
 
     let mut other = key(3);
     other.inputs = vec!["5:12345678".into()];
-    let e = message(WorkFolder::open(&out, &other).err().unwrap());
+    let e = message(WorkFolder::open(&out, &other, &mut index_of).err().unwrap());
     assert!(
         e.contains(&w.display().to_string()) && e.contains("scene"),
         "{e}"
     );
     let mut other = key(3);
     other.device = "another device".into();
-    let e = message(WorkFolder::open(&out, &other).err().unwrap());
+    let e = message(WorkFolder::open(&out, &other, &mut index_of).err().unwrap());
     assert!(e.contains("another device"), "{e}");
-    let e = message(WorkFolder::open(&out, &key(4)).err().unwrap());
+    let e = message(
+        WorkFolder::open(&out, &key(4), &mut index_of)
+            .err()
+            .unwrap(),
+    );
     assert!(e.contains("3 frames against 4"), "{e}");
     assert_eq!(tree(&dir), before);
 
@@ -199,7 +214,11 @@ fn another_runs_folder_or_a_users_is_refused_and_left_as_it_was() {
             true => fs::create_dir(&p).unwrap(),
             false => fs::write(&p, b"mine").unwrap(),
         }
-        let e = message(WorkFolder::open(&out, &key(3)).err().unwrap());
+        let e = message(
+            WorkFolder::open(&out, &key(3), &mut index_of)
+                .err()
+                .unwrap(),
+        );
         assert!(
             e.contains(what) && e.contains("no dataset run wrote"),
             "{at}: {e}"
@@ -214,7 +233,11 @@ fn another_runs_folder_or_a_users_is_refused_and_left_as_it_was() {
     let journal = w.join(JOURNAL);
     let text = fs::read_to_string(&journal).unwrap();
     fs::write(&journal, format!("{text}garbage\n{{}}\n")).unwrap();
-    let e = message(WorkFolder::open(&out, &key(3)).err().unwrap());
+    let e = message(
+        WorkFolder::open(&out, &key(3), &mut index_of)
+            .err()
+            .unwrap(),
+    );
     assert!(e.contains("line 3") && e.contains(JOURNAL), "{e}");
     fs::write(&journal, text).unwrap();
     assert_eq!(tree(&dir), before);
@@ -229,18 +252,26 @@ fn a_link_is_never_taken_for_the_work_folder_or_a_frame_file() {
     fs::create_dir(&elsewhere).unwrap();
     let out = dir.join("out");
     std::os::unix::fs::symlink(&elsewhere, work_path(&out)).unwrap();
-    let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
+    let e = message(
+        WorkFolder::open(&out, &key(2), &mut index_of)
+            .err()
+            .unwrap(),
+    );
     assert!(e.contains("not a folder"), "{e}");
     fs::remove_file(work_path(&out)).unwrap();
 
-    let mut work = WorkFolder::open(&out, &key(2)).unwrap();
+    let mut work = WorkFolder::open(&out, &key(2), &mut index_of).unwrap();
     work.write(&frame(0)).unwrap();
     drop(work);
     let png = work_path(&out).join("frames/000000/sensor.png");
     let kept = fs::read(&png).unwrap();
     fs::remove_file(&png).unwrap();
     std::os::unix::fs::symlink(dir.join("elsewhere"), &png).unwrap();
-    let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
+    let e = message(
+        WorkFolder::open(&out, &key(2), &mut index_of)
+            .err()
+            .unwrap(),
+    );
     assert!(e.contains("sensor.png"), "{e}");
     assert!(elsewhere.is_dir());
     fs::remove_file(&png).unwrap();
@@ -251,7 +282,11 @@ fn a_link_is_never_taken_for_the_work_folder_or_a_frame_file() {
     fs::rename(&frames, elsewhere.join("frames")).unwrap();
     std::os::unix::fs::symlink(elsewhere.join("frames"), &frames).unwrap();
     let before = tree(&elsewhere);
-    let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
+    let e = message(
+        WorkFolder::open(&out, &key(2), &mut index_of)
+            .err()
+            .unwrap(),
+    );
     assert!(
         e.contains("frames") && e.contains("no dataset run wrote"),
         "{e}"
@@ -261,7 +296,7 @@ fn a_link_is_never_taken_for_the_work_folder_or_a_frame_file() {
     fs::rename(elsewhere.join("frames"), &frames).unwrap();
 
     // frames/ swapped for a link while a run holds the folder: nothing is written behind it.
-    let mut work = WorkFolder::open(&out, &key(2)).unwrap();
+    let mut work = WorkFolder::open(&out, &key(2), &mut index_of).unwrap();
     let target = dir.join("target");
     fs::create_dir(&target).unwrap();
     fs::rename(&frames, dir.join("moved")).unwrap();
@@ -277,7 +312,11 @@ fn a_folder_without_a_journal_is_no_work_folder() {
     let out = dir.join("out");
     fs::create_dir(work_path(&out)).unwrap();
     fs::write(work_path(&out).join("data.csv"), b"1,2").unwrap();
-    let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
+    let e = message(
+        WorkFolder::open(&out, &key(2), &mut index_of)
+            .err()
+            .unwrap(),
+    );
     assert!(e.contains(JOURNAL) && e.contains("no work folder"), "{e}");
     assert!(work_path(&out).join("data.csv").exists());
     assert_eq!(work_path(Path::new("a/b")), Path::new("a/b.partial"));
@@ -317,13 +356,75 @@ fn append(out: &Path, text: &str) {
 /// A journal is taken only as the run writes it: names of its own frame folder's files, each
 /// once, every fixed one, its own index line; a line of someone's making is refused and
 /// nothing it names is touched.
+/// A journal line is proven, not trusted: frame 1's pose edited in its index line (after a
+/// kill -9, the files' sizes and CRC-32s left as they were), or in its `pose.json` with the
+/// journal's CRC-32 made to match, is refused, naming the journal or the file, and nothing
+/// is removed; put back, the folder is taken.
+#[test]
+fn a_forged_pose_in_the_journal_or_the_frame_is_refused() {
+    let dir = scratch("forged");
+    let out = dir.join("out");
+    let mut work = WorkFolder::open(&out, &key(3), &mut index_of).unwrap();
+    work.write(&frame(0)).unwrap();
+    work.write(&frame(1)).unwrap();
+    drop(work);
+    let w = work_path(&out);
+    let journal = fs::read_to_string(w.join(JOURNAL)).unwrap();
+    let forged_index = journal.replace(
+        "{\\\"frame\\\":1,",
+        "{\\\"frame\\\":1,\\\"position_m\\\":[9,9,9],",
+    );
+    assert_ne!(forged_index, journal);
+    fs::write(w.join(JOURNAL), &forged_index).unwrap();
+    let e = message(
+        WorkFolder::open(&out, &key(3), &mut index_of)
+            .err()
+            .unwrap(),
+    );
+    assert!(
+        e.contains("line 3: frame 1's index line is not the one these inputs give")
+            && e.contains(JOURNAL),
+        "{e}"
+    );
+
+    let pose = w.join("frames/000001/pose.json");
+    let forged_pose = b"{\"frame\": 1, \"position_m\": [9, 9, 9]}\n";
+    let (old, new) = (frame(1).files, forged_pose.to_vec());
+    let old = &old
+        .iter()
+        .find(|(p, _)| p.ends_with("pose.json"))
+        .unwrap()
+        .1;
+    let crc = |b: &[u8]| format!("[\"pose.json\",{},{}]", b.len(), crc32fast::hash(b));
+    let forged_crc = journal.replace(&crc(old), &crc(&new));
+    assert_ne!(forged_crc, journal);
+    fs::write(w.join(JOURNAL), &forged_crc).unwrap();
+    fs::write(&pose, &new).unwrap();
+    let e = message(
+        WorkFolder::open(&out, &key(3), &mut index_of)
+            .err()
+            .unwrap(),
+    );
+    assert!(
+        e.contains("is not frame 1's pose") && e.contains("pose.json"),
+        "{e}"
+    );
+    assert_eq!(fs::read(&pose).unwrap(), new, "nothing removed");
+
+    fs::write(w.join(JOURNAL), &journal).unwrap();
+    fs::write(&pose, old).unwrap();
+    let work = WorkFolder::open(&out, &key(3), &mut index_of).unwrap();
+    assert_eq!(work.done().count(), 2);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn a_journal_line_naming_anything_else_is_refused_and_nothing_is_removed() {
     let dir = scratch("names");
     let out = dir.join("out");
     let victim = dir.join("victim.txt");
     fs::write(&victim, b"the user's").unwrap();
-    let mut work = WorkFolder::open(&out, &key(3)).unwrap();
+    let mut work = WorkFolder::open(&out, &key(3), &mut index_of).unwrap();
     work.write(&frame(0)).unwrap();
     drop(work);
     let journal = fs::read_to_string(work_path(&out).join(JOURNAL)).unwrap();
@@ -358,12 +459,16 @@ fn a_journal_line_naming_anything_else_is_refused_and_nothing_is_removed() {
     ];
     for (line, says) in cases {
         append(&out, &line);
-        let e = message(WorkFolder::open(&out, &key(3)).err().unwrap());
+        let e = message(
+            WorkFolder::open(&out, &key(3), &mut index_of)
+                .err()
+                .unwrap(),
+        );
         assert!(e.contains(says) && e.contains(JOURNAL), "{says}: {e}");
         fs::write(work_path(&out).join(JOURNAL), &journal).unwrap();
     }
     assert_eq!(fs::read(&victim).unwrap(), b"the user's");
-    let work = WorkFolder::open(&out, &key(3)).unwrap();
+    let work = WorkFolder::open(&out, &key(3), &mut index_of).unwrap();
     assert_eq!(work.done().count(), 1);
     fs::remove_dir_all(&dir).unwrap();
 }
@@ -373,7 +478,7 @@ fn a_journal_line_naming_anything_else_is_refused_and_nothing_is_removed() {
 fn a_kept_file_changed_in_place_makes_its_frame_done_again() {
     let dir = scratch("changed");
     let out = dir.join("out");
-    let mut work = WorkFolder::open(&out, &key(2)).unwrap();
+    let mut work = WorkFolder::open(&out, &key(2), &mut index_of).unwrap();
     work.write(&frame(0)).unwrap();
     work.write(&frame(1)).unwrap();
     drop(work);
@@ -381,7 +486,7 @@ fn a_kept_file_changed_in_place_makes_its_frame_done_again() {
     let mut bytes = fs::read(&png).unwrap();
     bytes[0] ^= 1;
     fs::write(&png, &bytes).unwrap();
-    let work = WorkFolder::open(&out, &key(2)).unwrap();
+    let work = WorkFolder::open(&out, &key(2), &mut index_of).unwrap();
     assert_eq!(work.done().map(|(i, _)| i).collect::<Vec<_>>(), vec![0]);
     fs::remove_dir_all(&dir).unwrap();
 }
@@ -395,17 +500,21 @@ fn a_work_folder_cut_short_before_its_key_starts_afresh() {
     fs::create_dir(work_path(&out)).unwrap();
     // A file of someone's by that name, without a newline: not a key cut short.
     fs::write(work_path(&out).join(JOURNAL), b"my notes").unwrap();
-    let e = message(WorkFolder::open(&out, &key(2)).err().unwrap());
+    let e = message(
+        WorkFolder::open(&out, &key(2), &mut index_of)
+            .err()
+            .unwrap(),
+    );
     assert!(e.contains("holds no run key"), "{e}");
     assert_eq!(
         fs::read(work_path(&out).join(JOURNAL)).unwrap(),
         b"my notes"
     );
     fs::write(work_path(&out).join(JOURNAL), b"{\"run\":{\"form").unwrap();
-    let mut work = WorkFolder::open(&out, &key(2)).unwrap();
+    let mut work = WorkFolder::open(&out, &key(2), &mut index_of).unwrap();
     work.write(&frame(1)).unwrap();
     drop(work);
-    let work = WorkFolder::open(&out, &key(2)).unwrap();
+    let work = WorkFolder::open(&out, &key(2), &mut index_of).unwrap();
     assert_eq!(work.done().count(), 1);
     fs::remove_dir_all(&dir).unwrap();
 }
