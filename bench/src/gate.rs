@@ -40,6 +40,8 @@ pub struct Baseline {
 /// the wrong type is an error naming it, never a silently different verdict.
 pub fn read_baseline(path: &Path) -> Result<Baseline> {
     let record = record::read(path)?;
+    check_baseline(&record.results)
+        .map_err(|why| anyhow::anyhow!("{}: {why}; it cannot gate a run", path.display()))?;
     Ok(Baseline {
         results: record.results,
         tradeoff: record.tradeoff,
@@ -47,6 +49,38 @@ pub fn read_baseline(path: &Path) -> Result<Baseline> {
         driver_info: record.device.driver_info,
         frames_in_flight: record.settings.frames_in_flight,
     })
+}
+
+/// The shortest time a baseline may hold (ms): a nanosecond, far below any frame.
+const MIN_TIME_MS: f64 = 1e-6;
+
+/// A baseline that can gate: some results, and every time the gate divides by a measured one
+/// (finite and at least [`MIN_TIME_MS`]). An empty list compared nothing and passed; a time
+/// of 0 or 5e-324 made every ratio infinite and turned the time gate off; a negative one
+/// made every ratio a nonsense that could pass.
+fn check_baseline(results: &[MethodRow]) -> Result<(), String> {
+    if results.is_empty() {
+        return Err("`results` is empty: there is nothing to compare a run with".to_owned());
+    }
+    for (i, r) in results.iter().enumerate() {
+        for (field, stats) in [("wall_ms", r.wall_ms), ("in_flight_ms", r.in_flight_ms)] {
+            let Some(stats) = stats else { continue };
+            for (name, v) in [
+                ("median", stats.median),
+                ("p10", stats.p10),
+                ("p90", stats.p90),
+            ] {
+                if !(v.is_finite() && v >= MIN_TIME_MS) {
+                    return Err(format!(
+                        "results[{i}].{field}.{name}: {} ms is no measured time (a time is a \
+                         finite number of milliseconds, at least {MIN_TIME_MS})",
+                        specchio::text::num_text(v)
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The baseline's rows a run that kept `frames_in_flight` frames in flight is gated against:
@@ -144,6 +178,17 @@ pub fn check(
             let (Some(new), Some(old)) = (ratio(results, r, time), ratio(baseline, b, time)) else {
                 continue; // not measured in one of the runs: reported, not gated
             };
+            // Never a silent pass: a ratio that is no positive number gates nothing.
+            if let Some((side, bad)) = [("this run", new), ("the baseline", old)]
+                .into_iter()
+                .find(|(_, v)| !(v.is_finite() && *v > 0.0))
+            {
+                failures.push(format!(
+                    "{}: {side}'s {what} is {bad}x six-pass's: no ratio to compare",
+                    r.case()
+                ));
+                continue;
+            }
             if new > old * (1.0 + limit / 100.0) {
                 failures.push(format!(
                     "{}: {new:.3}x six-pass {what} (baseline {old:.3}x), more than {limit}% worse",
@@ -261,6 +306,29 @@ mod tests {
                 vs_clear: None,
             },
         }
+    }
+
+    /// A baseline that would gate nothing, or whose times make every ratio a nonsense, is
+    /// refused on reading, naming the field: an empty `results`, a six-pass time of 0, of
+    /// 5e-324 (every ratio infinite: the time gate off), negative or not a number.
+    #[test]
+    fn a_baseline_that_cannot_gate_is_refused() {
+        let e = check_baseline(&[]).unwrap_err();
+        assert!(e.contains("`results` is empty"), "{e}");
+        for bad in [0.0, 5e-324, -3.0, f64::NAN, f64::INFINITY] {
+            let rows = [row("six-pass", bad, 1), row("instanced", 2.0, 1)];
+            let e = check_baseline(&rows).unwrap_err();
+            assert!(
+                e.contains("results[0].wall_ms.median") && e.contains("no measured time"),
+                "{bad}: {e}"
+            );
+        }
+        assert!(check_baseline(&[row("six-pass", 1e-3, 1)]).is_ok());
+        // A run whose own time makes no ratio fails, never passes unseen.
+        let base = [row("six-pass", 1.0, 1), row("instanced", 2.0, 1)];
+        let run = [row("six-pass", 0.0, 1), row("instanced", 2.0, 1)];
+        let f = check(&base, &run, Some(10.0));
+        assert!(f.iter().any(|l| l.contains("no ratio to compare")), "{f:?}");
     }
 
     #[test]

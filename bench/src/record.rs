@@ -395,11 +395,12 @@ pub fn read(path: &Path) -> Result<Record> {
 
 /// [`read`] on text.
 pub fn parse(text: &str) -> Result<Record> {
-    // serde's message names the key and the line and column.
+    // serde's message names the key and the line and column; a key written twice is refused
+    // first (serde_json would keep the last one).
+    let raw: Value = specchio::files::json::parse_unique_keys(text)?;
     let record: Record = serde_json::from_str(text)?;
     // serde fills a missing `Option` with None; the record writes every key, so a missing
     // one is a damaged or hand-edited file, not an absent value.
-    let raw: Value = serde_json::from_str(text)?;
     if let Some(key) = first_missing(&raw, &serde_json::to_value(&record)?, "") {
         anyhow::bail!("key `{key}` is missing (write `null` for an absent value)");
     }
@@ -450,6 +451,19 @@ mod tests {
         let e = format!("{:#}", parse(&bad).unwrap_err());
         assert!(
             e.contains("unknown field `fragment_invocatons`") && e.contains("line"),
+            "{e}"
+        );
+    }
+
+    /// serde_json keeps the last of two equal keys: a hand-edited baseline with a time
+    /// written twice is refused, naming the key and its line.
+    #[test]
+    fn a_key_written_twice_is_refused_and_named() {
+        let bad = BASELINE.replacen("\"updates\": 5", "\"updates\": 5, \"updates\": 7", 1);
+        assert_ne!(bad, BASELINE);
+        let e = format!("{:#}", parse(&bad).unwrap_err());
+        assert!(
+            e.contains("`updates` is written twice") && e.contains("line"),
             "{e}"
         );
     }

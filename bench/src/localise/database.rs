@@ -81,7 +81,7 @@ pub fn parse(
     let text = std::str::from_utf8(bytes)
         .map_err(|e| anyhow::anyhow!("--landmarks {name}: not UTF-8 text ({e})"))?;
     // Format and version first, so an old or foreign file says so rather than "missing field".
-    let value: serde_json::Value = serde_json::from_str(text)
+    let value = specchio::files::json::parse_unique_keys(text)
         .with_context(|| format!("--landmarks {name}: not a landmarks file (malformed JSON)"))?;
     // What a field holds, as the file spells it.
     let shown = |field: &str| match value.get(field) {

@@ -9,6 +9,7 @@
 
 pub mod digest;
 pub mod identity;
+pub mod json;
 
 use std::fs::{File, Metadata};
 use std::io::{self, Read};

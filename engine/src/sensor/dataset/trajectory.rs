@@ -181,11 +181,16 @@ pub fn parse_csv(file: &Path, text: &str) -> Result<Vec<Pose>, TrajectoryError> 
 /// Parses JSON text (see the module's comment).
 pub fn parse_json(file: &Path, text: &str) -> Result<Vec<Pose>, TrajectoryError> {
     // The array first, then each entry: a mistake in an entry names it, on one line or many.
-    let entries: Vec<serde_json::Value> = serde_json::from_str(text).map_err(|e| {
+    let parsed = crate::files::json::parse_unique_keys(text).map_err(|e| {
         let line = Some(Place::Line(e.line()));
         let why = format!("{e} (a trajectory is an array of poses)");
         TrajectoryError::invalid(file, line, "(json)", why)
     })?;
+    let serde_json::Value::Array(entries) = parsed else {
+        let why =
+            "not an array: a trajectory is an array of poses [{time, position, heading}, ...]";
+        return Err(TrajectoryError::invalid(file, None, "(json)", why.into()));
+    };
     if entries.len() > MAX_POSES {
         let why = format!(
             "{} poses, more than {MAX_POSES}; split the trajectory",
@@ -378,7 +383,8 @@ mod tests {
             assert!(got.starts_with(want), "{text:?}: {got}");
         }
         let json = [
-            ("{}", "t.json:1: (json): invalid type: map"),
+            ("{}", "t.json: (json): not an array"),
+            ("[{\"time\": 0,\n \"time\": 5, \"position\": [1, 2, 3], \"heading\": 0}]", "t.json:2: (json): the key `time` is written twice"),
             ("[{\"time\": 0, \"position\": [1, 2], \"heading\": 0}]", "t.json: poses[0]: position: must be an array of 3 numbers"),
             ("[{\"time\": 0, \"position\": [1, 2, 3], \"heading\": 0, \"speed\": 1}]", "t.json: poses[0]: speed: unknown field"),
             ("[{\"time\": 0, \"position\": [1, 2, 3], \"heading\": 0}, {\"time\": 1, \"position\": [1, 2, 3]}]", "t.json: poses[1]: heading: required field is missing"),

@@ -1,0 +1,114 @@
+//! JSON read from a user's file, every object's keys once. serde_json keeps the last of two
+//! equal keys without a word (`{"time": 0, "time": 5}` is a time of 5), and so does every
+//! type read through a map; a hand-edited trajectory or baseline with a key written twice is a
+//! slip the user should hear of, with the line it is on.
+
+use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde_json::{Map, Value};
+
+/// `text` as a JSON value, refused (with serde_json's line and column) where an object names
+/// a key twice.
+pub fn parse_unique_keys(text: &str) -> Result<Value, serde_json::Error> {
+    let mut de = serde_json::Deserializer::from_str(text);
+    let value = de.deserialize_any(UniqueKeys)?;
+    de.end()?;
+    Ok(value)
+}
+
+/// A [`Value`] built as serde_json builds one, but refusing a key an object already holds.
+struct UniqueKeys;
+
+impl<'de> Visitor<'de> for UniqueKeys {
+    type Value = Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("any JSON value")
+    }
+
+    fn visit_bool<E>(self, v: bool) -> Result<Value, E> {
+        Ok(Value::Bool(v))
+    }
+
+    fn visit_i64<E>(self, v: i64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_u64<E>(self, v: u64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_f64<E>(self, v: f64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_str<E>(self, v: &str) -> Result<Value, E> {
+        Ok(Value::String(v.to_owned()))
+    }
+
+    fn visit_string<E>(self, v: String) -> Result<Value, E> {
+        Ok(Value::String(v))
+    }
+
+    fn visit_unit<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+
+    fn visit_none<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let mut items = Vec::new();
+        while let Some(item) = seq.next_element_seed(Seed)? {
+            items.push(item);
+        }
+        Ok(Value::Array(items))
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
+        let mut object = Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if object.contains_key(&key) {
+                return Err(de::Error::custom(format!(
+                    "the key `{key}` is written twice in one object (JSON keeps one of them \
+                     silently; write it once)"
+                )));
+            }
+            let value = map.next_value_seed(Seed)?;
+            object.insert(key, value);
+        }
+        Ok(Value::Object(object))
+    }
+}
+
+/// [`UniqueKeys`] for the values inside arrays and objects.
+struct Seed;
+
+impl<'de> de::DeserializeSeed<'de> for Seed {
+    type Value = Value;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Value, D::Error> {
+        d.deserialize_any(UniqueKeys)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_unique_keys;
+
+    /// A key twice, at any depth, is refused with its line; the same text without it reads as
+    /// serde_json reads it.
+    #[test]
+    fn a_key_written_twice_is_refused_with_its_line() {
+        let twice = "[\n  {\"time\": 0,\n   \"time\": 5}\n]";
+        let e = parse_unique_keys(twice).unwrap_err();
+        assert!(e.to_string().contains("`time` is written twice"), "{e}");
+        assert_eq!(e.line(), 3, "{e}");
+        let nested = r#"{"a": {"b": [1, {"c": 1, "c": 2}]}}"#;
+        assert!(parse_unique_keys(nested).is_err());
+        let once = r#"{"a": {"b": [1, 2.5, -3, true, null, "x", {"c": 1}]}, "d": {}}"#;
+        let plain: serde_json::Value = serde_json::from_str(once).unwrap();
+        assert_eq!(parse_unique_keys(once).unwrap(), plain);
+        assert!(parse_unique_keys("{} x").is_err(), "trailing text");
+    }
+}
