@@ -153,6 +153,7 @@ def dataset(
         return output.finish(chosen_lookup, truth)
     except ray.exceptions.RayTaskError as e:
         # The engine's own error, raised in a worker: the same exception, the same message.
+        output.close()
         if isinstance(e.cause, SpecchioError):
             error = SpecchioError(*e.cause.args)
             output.note_kept(error)
@@ -160,7 +161,10 @@ def dataset(
         output.note_kept(e)
         raise
     except BaseException as e:
-        # Whatever stopped the run (Ctrl-C, a lost cluster): say what a resumable run kept.
+        # Whatever stopped the run (Ctrl-C, a dead actor, a lost cluster): the staged files
+        # go now, not when Python collects the traceback that holds `output`; then say what a
+        # resumable run kept.
+        output.close()
         output.note_kept(e)
         raise
     finally:

@@ -113,6 +113,9 @@ pub fn batch_dict<'py>(
     first: &Layers,
     out: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    if let Some(out) = out {
+        check_out_keys(out, first)?;
+    }
     check_batch_memory(batch, first, out)?;
     let numpy = py.import("numpy")?;
     let dict = PyDict::new(py);
@@ -139,6 +142,24 @@ pub fn batch_dict<'py>(
         dict.set_item(key, array)?;
     }
     Ok(dict)
+}
+
+/// Refuses a key of `out` that names no layer of the batch: a misspelt one (`"sensors"`) was
+/// ignored, and the array the caller meant to be filled never was.
+fn check_out_keys(out: &Bound<'_, PyDict>, first: &Layers) -> PyResult<()> {
+    let layers: Vec<&str> = first.0.iter().map(|(key, _, _)| *key).collect();
+    for key in out.keys() {
+        let name: Option<String> = key.extract().ok();
+        if !name.as_deref().is_some_and(|n| layers.contains(&n)) {
+            let quoted: Vec<String> = layers.iter().map(|l| format!("{l:?}")).collect();
+            return Err(errors::error(format!(
+                "out[{}]: no such layer; the batch's layers are {}",
+                key.repr()?,
+                quoted.join(", ")
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Refuses a batch whose new arrays would not fit the memory budget (as every command's

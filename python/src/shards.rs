@@ -282,6 +282,16 @@ impl DatasetOutput {
         py.detach(|| folder.place(&frame)).map_err(errors::to_py)
     }
 
+    /// Gives up the output: its staged files are removed now (a resumable run's work folder
+    /// keeps its frames). A driver whose run failed calls it, since the exception's traceback
+    /// keeps this object, and with it the hidden staging folder, alive until Python collects
+    /// it (in a notebook, for as long as the session lasts). Nothing after it but `note_kept`.
+    fn close(&mut self) {
+        if let Some(folder) = self.folder.take() {
+            self.placed = folder.done();
+        }
+    }
+
     /// Writes the index and the summary of a dataset rendered with `lookup` and
     /// `ground_truth`, and places the folder. Returns the summary as a dict.
     fn finish(&mut self, py: Python<'_>, lookup: &str, ground_truth: &str) -> PyResult<Py<PyAny>> {

@@ -93,6 +93,11 @@ def test_wrong_buffers_and_poses_are_named(renderer):
     shared = np.zeros((1, 512, 512, 3), dtype=np.float32)
     with pytest.raises(specchio.SpecchioError, match=r'the same array as out\[sensor\]'):
         renderer.render_batch(poses, out={"sensor": shared, "ray_origin": shared})
+    # A key that names no layer (misspelt) is refused, never left unfilled.
+    with pytest.raises(specchio.SpecchioError, match=r"out\['sensors'\]: no such layer; .*\"sensor\""):
+        renderer.render_batch(poses, out={"sensors": shared})
+    with pytest.raises(specchio.SpecchioError, match=r"out\[0\]: no such layer"):
+        renderer.render_batch(poses, out={0: shared})
     # A batch whose arrays would not fit the memory budget is refused, naming it.
     with pytest.raises(specchio.SpecchioError, match=r"poses: 100000 poses: .*fewer poses per batch"):
         renderer.render_batch(np.tile(poses, (100000, 1)))
