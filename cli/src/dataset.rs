@@ -13,6 +13,7 @@ use anyhow::Result;
 use specchio::output::OutputError;
 use specchio::process::args::{real, whole};
 use specchio::process::probe;
+use specchio::process::progress::Progress;
 use specchio::render::dataset::{
     self as writer, resume, DatasetError, Folder, FrameWriter, Plan, Poses,
 };
@@ -85,8 +86,16 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     progress.set_position(folder.done() as u64);
     let stop = |at: &str| stopped(args.resume, at);
     let mut between = |i: usize| stop(&format!("before frame {i} of {n}"));
+    // Past its first seconds, an estimate of the rest on any stderr (the bar is a terminal's).
+    let todo = n - folder.done();
+    let estimate = Progress::new(
+        format!("dataset {}", args.out.display()),
+        todo as u64,
+        "frames",
+    );
     let mut written = |done: usize| {
         progress.set_position(done as u64);
+        estimate.add(1);
         Ok(())
     };
     let wrote = writer::write_frames(&mut folder, &plan, &mut frames, &mut between, &mut written);

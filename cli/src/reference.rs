@@ -10,6 +10,7 @@ use specchio::sensor::SensorOutputs;
 
 use crate::records::{ReferenceCameras, ReferenceRecord};
 use specchio::process::args::{real, whole};
+use specchio::process::progress::Progress;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -55,7 +56,13 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         ("sensor", reference.sensor_view(), scene.sensor.resolution),
     ]) {
         specchio::process::interrupt::check(&format!("before tracing the {name} camera"))?;
-        let (images, stats) = reference.render(&view, w, h, args.spp);
+        let what = format!("reference: {name} camera, {w}x{h} at {} spp", args.spp);
+        let progress = Progress::new(what, u64::from(h), "rows");
+        let Some((images, stats)) = reference.render_watched(&view, w, h, args.spp, &progress)
+        else {
+            let at = format!("after {} of {h} rows of the {name} camera", progress.done());
+            return Err(specchio::process::interrupt::stopped(&at).into());
+        };
         write_images(&out, &args.out, name, &images)?;
         if name == "sensor" && args.sensor_outputs {
             SensorOutputs::from_reference(&scene, args.time, &images).write(&out, &args.out)?;

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use specchio::output::{Sink, Transaction};
+use specchio::process::progress::Progress;
 use specchio::render::lookups::{self, TraceOrder};
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
@@ -289,8 +290,16 @@ fn render_frames(
     dir: &Path,
 ) -> Result<Vec<FrameReport>> {
     let progress = (args.frames > 1).then(|| indicatif::ProgressBar::new(u64::from(args.frames)));
+    let estimate = Progress::new(
+        format!("render {}", dir.display()),
+        args.frames.into(),
+        "frames",
+    );
     let mut reports = Vec::new();
     for i in 0..args.frames {
+        if i > 0 {
+            estimate.add(1);
+        }
         specchio::process::interrupt::check(&format!("after {i} of {} frame(s)", args.frames))?;
         let t = start_s + f64::from(i) / args.fps;
         // Frame numbers continue from --frame, so `every-n` counts scene frames, not run frames.

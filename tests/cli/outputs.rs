@@ -375,3 +375,60 @@ fn an_interrupted_bench_writes_nothing() {
         );
     }
 }
+
+/// Long work is never silent and stops cleanly: a reference sensor of 4096² pixels at 64 spp
+/// (a billion paths: a minute here) says, once its first seconds are measured, how much of it
+/// is done and about how long the rest will take; Ctrl-C then stops it between rows, saying
+/// how far it got, and nothing is written.
+#[test]
+fn a_long_reference_says_its_estimate_and_stops_cleanly() {
+    use std::io::Read;
+    let dir = scratch("long-reference");
+    let scene = dir.join("big.toml");
+    let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
+    let text = text.replace("[sensor]\n", "[sensor]\nresolution = [4096, 4096]\n");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(["reference", scene.to_str().unwrap(), "--spp", "64", "--out"])
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let said = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
+    let mut stderr = child.stderr.take().unwrap();
+    let reader = {
+        let said = said.clone();
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            while let Ok(n) = stderr.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                said.lock()
+                    .unwrap()
+                    .push_str(&String::from_utf8_lossy(&buf[..n]));
+            }
+        })
+    };
+    let estimate = "reference: sensor camera, 4096x4096 at 64 spp: ";
+    let result = signal_when(child, libc::SIGINT, "the sensor's estimate", || {
+        said.lock().unwrap().contains(estimate)
+    });
+    reader.join().unwrap();
+    let said = said.lock().unwrap().clone();
+    assert_eq!(result.status.code(), Some(1), "{said}");
+    let line = said.lines().find(|l| l.starts_with(estimate)).unwrap();
+    assert!(
+        line.contains("of 4096 rows in") && line.contains("left; Ctrl-C stops it cleanly"),
+        "{line}"
+    );
+    assert!(
+        said.contains("error: interrupted after")
+            && said.contains("of 4096 rows of the sensor camera"),
+        "{said}"
+    );
+    assert_eq!(tree(&dir), ["big.toml"], "nothing written");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -7,6 +7,7 @@ use std::sync::Arc;
 use anyhow::{bail, Result};
 use glam::Vec3;
 use specchio::image::RgbaImage;
+use specchio::process::progress::Progress;
 use specchio::reference::Reference;
 use specchio::render::{Readback, RenderOptions, Renderer};
 use specchio::scene::camera::ViewBasis;
@@ -128,8 +129,13 @@ impl<'a> Robot<'a> {
             indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} images, {elapsed}")
                 .expect("a valid template"),
         );
+        // And, past its first seconds, about how long the rest will take, on any stderr.
+        let progress = Progress::new(format!("localise: {what}"), poses.len() as u64, "images");
         let check = |i: usize| {
             bar.set_position(i as u64);
+            if i > 0 {
+                progress.add(1);
+            }
             specchio::process::interrupt::check(&format!("after {i} of {} {what}", poses.len()))
         };
         let mut out = Vec::with_capacity(poses.len());

@@ -46,9 +46,15 @@ const REFERENCE_TRIANGLE_BYTES: u64 = 340;
 const REFERENCE_SENSOR_OUTPUT_PIXEL_BYTES: u64 = 66;
 const REFERENCE_SENSOR_OUTPUT_BASE_BYTES: u64 = 128 * MIB;
 
-/// A sensor pixel of `calibrate`: the exact ray map and the models' fits over it (222
-/// measured).
-const CALIBRATE_PIXEL_BYTES: u64 = 245;
+/// `calibrate` without its pixels (no device, no BVH of note: 15 MB by the fit below).
+const CALIBRATE_BASE_BYTES: u64 = 24 * MIB;
+/// A sensor pixel of `calibrate`: its exact ray, residuals and images (77 measured, debug
+/// build, thesis-room from 1024² to 4096²: 96 MB to 1.31 GB).
+const CALIBRATE_PIXEL_BYTES: u64 = 88;
+/// A pixel the models are fitted to (at most a 512² sensor's: `sensor::central`): its
+/// samples and the fits' residual and Jacobian columns (512², every pixel fitted: 69.5 MB in
+/// all, some 160 bytes a fitted pixel beyond the ray map).
+const CALIBRATE_FIT_PIXEL_BYTES: u64 = 160;
 
 /// A sensor pixel of `localise` (`--sensor-size` squared): the renderer's targets or the
 /// reference's layers, the read back image and its panorama (66.7 measured with a cube
@@ -170,13 +176,16 @@ pub fn reference(scene: &Scene, sensor_outputs: bool) -> Result<(), MemoryError>
 /// `specchio calibrate`.
 pub fn calibrate(scene: &Scene) -> Result<(), MemoryError> {
     let mut e = Estimate::new();
-    e.add("the program", REFERENCE_BASE_BYTES);
+    e.add("the program", CALIBRATE_BASE_BYTES);
     scene_parts(&mut e, scene, REFERENCE_TRIANGLE_BYTES);
+    let sensor = pixels(scene.sensor.resolution);
     e.add_many(
-        "the sensor's ray map and fits",
-        pixels(scene.sensor.resolution),
+        "the sensor's ray map and residuals",
+        sensor,
         CALIBRATE_PIXEL_BYTES,
     );
+    let fitted = sensor.min(crate::sensor::central::MAX_FIT_PIXELS as u64);
+    e.add_many("the models' fits", fitted, CALIBRATE_FIT_PIXEL_BYTES);
     e.check(&Budget::from_env()?, "lower sensor.resolution")
 }
 

@@ -74,6 +74,12 @@ pub fn check(progress: &str) -> Result<(), Interrupted> {
     Ok(())
 }
 
+/// The error of a command that a signal stopped `progress` (work that saw the signal at its
+/// own check, [`super::progress::Progress::stopped`]).
+pub fn stopped(progress: &str) -> Interrupted {
+    Interrupted(progress.to_owned())
+}
+
 /// A signal stopped the command; the text says how far it got.
 #[derive(Debug, thiserror::Error)]
 #[error("interrupted {0}: nothing was written")]

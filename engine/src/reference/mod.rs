@@ -15,7 +15,7 @@ mod camera_rays;
 pub mod geometry;
 pub mod intersect;
 pub mod materials;
-mod render;
+pub mod render;
 pub mod room;
 
 use glam::{Vec2, Vec3};

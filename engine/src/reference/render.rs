@@ -32,6 +32,24 @@ struct Sampling<'a> {
     clear: bool,
 }
 
+/// What a long render reports to (`process::progress::Progress` for the command): each row
+/// done, and whether to stop before the next one.
+pub trait Watch: Sync {
+    fn row_done(&self);
+    fn stop(&self) -> bool;
+}
+
+/// No one watching: every row is traced.
+struct Unwatched;
+
+impl Watch for Unwatched {
+    fn row_done(&self) {}
+
+    fn stop(&self) -> bool {
+        false
+    }
+}
+
 impl Reference<'_> {
     /// Renders a camera at `width` x `height` with `spp` samples per pixel at the cell centres
     /// of [`sample_offsets`] (spp = 1 traces the pixel centre, exactly the rasterizer's sample
@@ -44,6 +62,20 @@ impl Reference<'_> {
         height: u32,
         spp: u32,
     ) -> (ReferenceImages, ReferenceStats) {
+        self.render_watched(view, width, height, spp, &Unwatched)
+            .expect("an unwatched render is never stopped")
+    }
+
+    /// [`Self::render`], each row reported to `watch` as it is done; None when `watch` said to
+    /// stop (the rows not yet started are left untraced).
+    pub fn render_watched(
+        &self,
+        view: &ViewBasis,
+        width: u32,
+        height: u32,
+        spp: u32,
+        watch: &dyn Watch,
+    ) -> Option<(ReferenceImages, ReferenceStats)> {
         let spp = spp.clamp(1, MAX_SPP);
         let offsets = sample_offsets(spp);
         let start = Instant::now();
@@ -55,10 +87,18 @@ impl Reference<'_> {
             // An orthographic view's rays start all over its image plane: no one box to test.
             clear: !view.is_orthographic() && self.nothing_before_mirror(view.eye),
         };
-        let rows: Vec<Vec<Pixel>> = (0..height)
+        let rows: Vec<Option<Vec<Pixel>>> = (0..height)
             .into_par_iter()
-            .map(|y| self.trace_row(&sampling, y, width))
+            .map(|y| {
+                if watch.stop() {
+                    return None;
+                }
+                let row = self.trace_row(&sampling, y, width);
+                watch.row_done();
+                Some(row)
+            })
             .collect();
+        let rows: Vec<Vec<Pixel>> = rows.into_iter().collect::<Option<_>>()?;
         let trace = start.elapsed();
         // After the timing: a segment query per mirror pixel, not part of the camera paths.
         let hidden: Vec<u32> = rows
@@ -69,7 +109,7 @@ impl Reference<'_> {
         let images = self.images(&pixels, width, height);
         let centre_traced_apart = sampling.centre_index.is_none();
         let stats = self.stats(&pixels, [width, height, spp], centre_traced_apart, trace);
-        (images, stats)
+        Some((images, stats))
     }
 
     /// Row `y`'s pixels: each sample traced, the colours averaged, the centre kept.

@@ -93,6 +93,8 @@ fn record(cal: &Calibration, scene: &Path, time_s: f64) -> CalibrationRecord {
         time_s,
         image: [cal.width, cal.height],
         mirror_pixels: cal.mirror_pixels,
+        fit_stride: cal.fit_stride,
+        fit_pixels: cal.fit_pixels,
         frame: FrameRecord {
             omnidir_rows: rows(cal.axes.omnidir_rows()),
             ocamcalib_rows: rows(cal.axes.ocamcalib_rows()),
@@ -110,8 +112,9 @@ fn record(cal: &Calibration, scene: &Path, time_s: f64) -> CalibrationRecord {
             pixels_without_ray: cal.mei_residual.without_ray,
             residual_image: RESIDUAL_OMNIDIR.to_owned(),
             fit_iterations: cal.mei_fit.iterations,
-            // Two residuals (x, y) per pixel.
-            fit_rms: rms(cal.mei_fit.final_cost, 2 * cal.mirror_pixels),
+            // Two residuals (x, y) per pixel fitted.
+            fit_rms: rms(cal.mei_fit.final_cost, 2 * cal.fit_pixels),
+            inverse_error_px: None,
         },
         ocamcalib: ModelRecord {
             model: cal.ocam.clone(),
@@ -119,8 +122,9 @@ fn record(cal: &Calibration, scene: &Path, time_s: f64) -> CalibrationRecord {
             pixels_without_ray: cal.ocam_residual.without_ray,
             residual_image: RESIDUAL_OCAMCALIB.to_owned(),
             fit_iterations: cal.ocam_fit.iterations,
-            // Three residuals (a unit vector's difference) per pixel.
-            fit_rms: rms(cal.ocam_fit.final_cost, 3 * cal.mirror_pixels),
+            // Three residuals (a unit vector's difference) per pixel fitted.
+            fit_rms: rms(cal.ocam_fit.final_cost, 3 * cal.fit_pixels),
+            inverse_error_px: Some(cal.ocam_invpol_error_px),
         },
         ros: super::ros::calibration(
             cal.axes.omnidir_rows(),

@@ -53,7 +53,7 @@ pub enum FitError {
     NoStart(&'static str),
     #[error("the fitted polynomial's elevation does not grow with the radius, so it has no inverse (invpol)")]
     NotMonotonic,
-    #[error("no invpol of degree up to {0} reproduces the polynomial's inverse within 0.01 px")]
+    #[error("no invpol of degree up to {0} could be fitted (every basis was singular)")]
     Invpol(usize),
     #[error("the pixels' rays have no single nearest point (they are all parallel)")]
     NoViewpoint,
@@ -148,12 +148,19 @@ pub struct Calibration {
     pub mei_residual: Residual,
     pub ocam: OcamModel,
     pub ocam_fit: LmReport,
+    /// How far `ocam.invpol` is from the exact inverse of its polynomial at worst (pixels):
+    /// below OCamCalib's 0.01 px unless no degree up to 30 reaches it.
+    pub ocam_invpol_error_px: f64,
     pub ocam_residual: Residual,
     pub mirror_pixels: usize,
+    /// The fits took every `fit_stride`-th row and column ([`fit_stride`]): `fit_pixels`
+    /// mirror pixels.
+    pub fit_stride: u32,
+    pub fit_pixels: usize,
 }
 
-/// The most sensor pixels a calibration fits (4096²): the fits hold about 200 bytes per
-/// pixel, so 8192² would need some 14 GB.
+/// The most sensor pixels a calibration takes (4096², 7.5 s and 1.3 GB here): the central
+/// models need no more.
 pub const MAX_CALIBRATION_PIXELS: u64 = 4096 * 4096;
 
 impl Calibration {
@@ -188,13 +195,18 @@ impl Calibration {
 
     /// Fits both models to `map`, whose sensor has the axes `axes` (local origin at the world's).
     pub fn fit(map: &RayMap, axes: SensorAxes) -> Result<Self, FitError> {
+        Self::fit_strided(map, axes, fit_stride(map.mirror_pixels()))
+    }
+
+    /// [`Self::fit`] on every `stride`-th row and column of the mirror pixels.
+    fn fit_strided(map: &RayMap, axes: SensorAxes, stride: u32) -> Result<Self, FitError> {
         // Before the viewpoint's fit, which would call too few rays "parallel".
         if map.mirror_pixels() < 9 {
             return Err(FitError::TooFewPixels(map.mirror_pixels()));
         }
         let (viewpoint, ray_distance_m) = nearest_point(map)?;
         // Pixel centres: OpenCV's (x, y) and OCamCalib's (row, col) are both 0-based there.
-        let pixels = mirror_pixels(map);
+        let pixels = mirror_pixels(map, stride);
         let mei_samples: Vec<Sample> = pixels
             .iter()
             .map(|&(px, d)| Sample {
@@ -210,7 +222,18 @@ impl Calibration {
             })
             .collect();
         let (mei, mei_fit) = MeiModel::fit(&mei_samples, map.width, map.height)?;
-        let (ocam, ocam_fit) = OcamModel::fit(&ocam_samples, map.width, map.height)?;
+        // The largest radius of every mirror pixel, not only of the fit's samples.
+        let rho_max = |m: &OcamModel| {
+            use rayon::prelude::*;
+            (0..map.height)
+                .into_par_iter()
+                .flat_map_iter(|y| (0..map.width).map(move |x| (x, y)))
+                .filter(|&(x, y)| map.get(x, y).is_some())
+                .map(|(x, y)| m.radius_of(DVec2::new(f64::from(y), f64::from(x))))
+                .reduce(|| 0.0, f64::max)
+        };
+        let (ocam, ocam_fit, ocam_invpol_error_px) =
+            OcamModel::fit(&ocam_samples, map.width, map.height, rho_max)?;
         let mei_residual = residual(map, |px, d| {
             let ray = mei.unproject(px)?;
             Some(angle_deg(ray, to_frame(&axes.omnidir_rows(), d)))
@@ -231,8 +254,11 @@ impl Calibration {
             mei_residual,
             ocam,
             ocam_fit,
+            ocam_invpol_error_px,
             ocam_residual,
-            mirror_pixels: pixels.len(),
+            mirror_pixels: map.mirror_pixels(),
+            fit_stride: stride,
+            fit_pixels: pixels.len(),
         })
     }
 
@@ -270,10 +296,27 @@ impl Calibration {
     }
 }
 
-/// Each mirror pixel's centre (0-based, OpenCV's convention) and exact direction (world).
-fn mirror_pixels(map: &RayMap) -> Vec<(DVec2, DVec3)> {
+/// The most mirror pixels a model is fitted to (those of a 512² sensor): nine parameters of
+/// smooth models are pinned down long before that, and every pixel of a 2048² sensor took the
+/// two fits most of a minute. Beyond it the fits take every `stride`-th row and column
+/// ([`fit_stride`]); the residuals are still every pixel's.
+pub const MAX_FIT_PIXELS: usize = 512 * 512;
+
+/// The stride in rows and columns that keeps `mirror_pixels` within [`MAX_FIT_PIXELS`].
+pub fn fit_stride(mirror_pixels: usize) -> u32 {
+    let mut stride = 1u32;
+    while mirror_pixels.div_ceil((stride * stride) as usize) > MAX_FIT_PIXELS {
+        stride += 1;
+    }
+    stride
+}
+
+/// The centre (0-based, OpenCV's convention) and exact direction (world) of each mirror pixel
+/// in every `stride`-th row and column.
+fn mirror_pixels(map: &RayMap, stride: u32) -> Vec<(DVec2, DVec3)> {
     (0..map.height)
-        .flat_map(|y| (0..map.width).map(move |x| (x, y)))
+        .step_by(stride as usize)
+        .flat_map(|y| (0..map.width).step_by(stride as usize).map(move |x| (x, y)))
         .filter_map(|(x, y)| {
             let ray = map.get(x, y)?;
             Some((
@@ -286,9 +329,11 @@ fn mirror_pixels(map: &RayMap) -> Vec<(DVec2, DVec3)> {
 
 /// The residual of a model whose ray for pixel (OpenCV coordinates) and exact world
 /// direction `angle` gives, in degrees (None: the model has no ray there).
-fn residual(map: &RayMap, angle: impl Fn(DVec2, DVec3) -> Option<f64>) -> Residual {
+fn residual(map: &RayMap, angle: impl Fn(DVec2, DVec3) -> Option<f64> + Sync) -> Residual {
+    use rayon::prelude::*;
     let degrees = (0..map.height)
-        .flat_map(|y| (0..map.width).map(move |x| (x, y)))
+        .into_par_iter()
+        .flat_map_iter(|y| (0..map.width).map(move |x| (x, y)))
         .map(|(x, y)| {
             let ray = map.get(x, y)?;
             let px = DVec2::new(x as f64, y as f64);

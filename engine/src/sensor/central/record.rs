@@ -21,6 +21,10 @@ pub struct CalibrationRecord {
     /// Sensor image (width, height), pixels.
     pub image: [u32; 2],
     pub mirror_pixels: usize,
+    /// The models were fitted to every `fit_stride`-th row and column of the mirror pixels
+    /// (1 up to a 512² sensor's worth); the residuals are every pixel's.
+    pub fit_stride: u32,
+    pub fit_pixels: usize,
     pub frame: FrameRecord,
     /// The single viewpoint the models assume, world space (metres).
     pub viewpoint_world: [f64; 3],
@@ -58,6 +62,10 @@ pub struct ModelRecord<M> {
     /// Root mean square of the fit's own objective at the end (pixels for omnidir, the chord
     /// between unit directions, about radians, for OCamCalib).
     pub fit_rms: f64,
+    /// OCamCalib's `invpol`: how far it is from its polynomial's exact inverse at worst over
+    /// the image's radii (pixels; OCamCalib's own tolerance is 0.01). None for omnidir, whose
+    /// projection is exact.
+    pub inverse_error_px: Option<f64>,
 }
 
 /// A 3D point on an exact ray and what each exported model predicts for it.

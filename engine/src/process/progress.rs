@@ -1,0 +1,139 @@
+//! Long work said as it goes. A command whose work may run for minutes (a reference camera of
+//! 67 M rays, 100 000 localisation queries) counts it here as it is done, from any thread:
+//! once a first part has taken [`ESTIMATE_AFTER`], it says on stderr what the whole is, how
+//! much is done and about how long the rest will take, so the user can stop it (Ctrl-C stops
+//! it cleanly: [`Progress::stopped`] is checked between parts) before the bulk of it; after
+//! that a line every [`REPEAT_EVERY`] keeps a log alive. Work that ends sooner says nothing,
+//! so short commands print what they always printed.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use super::interrupt;
+
+/// How long the work runs before its estimate is said: long enough to measure a rate, short
+/// enough that the user has not yet waited.
+pub const ESTIMATE_AFTER: Duration = Duration::from_millis(1500);
+/// How often a line follows the estimate while the work goes on.
+pub const REPEAT_EVERY: Duration = Duration::from_secs(30);
+
+/// A piece of long work: `total` units (rays, images) of something named `what`.
+pub struct Progress {
+    what: String,
+    unit: &'static str,
+    total: u64,
+    done: AtomicU64,
+    start: Instant,
+    /// When a line was last said (None: not yet).
+    said: Mutex<Option<Instant>>,
+}
+
+impl Progress {
+    /// Work of `total` `unit`s, said as `what` ("reference: sensor camera, 8192x8192 at 1
+    /// spp"); nothing is printed yet.
+    pub fn new(what: impl Into<String>, total: u64, unit: &'static str) -> Self {
+        Self {
+            what: what.into(),
+            unit,
+            total,
+            done: AtomicU64::new(0),
+            start: Instant::now(),
+            said: Mutex::new(None),
+        }
+    }
+
+    /// `n` more units done; says the estimate, or a line, when it is time.
+    pub fn add(&self, n: u64) {
+        let done = self.done.fetch_add(n, Ordering::Relaxed) + n;
+        let elapsed = self.start.elapsed();
+        if elapsed < ESTIMATE_AFTER || done >= self.total {
+            return;
+        }
+        let Ok(mut said) = self.said.try_lock() else {
+            return; // another thread is saying it
+        };
+        if said.is_some_and(|at| at.elapsed() < REPEAT_EVERY) {
+            return;
+        }
+        eprintln!("{}", self.line(done, elapsed, said.is_none()));
+        *said = Some(Instant::now());
+    }
+
+    /// Whether a stopping signal came: the work should stop at its next part.
+    pub fn stopped(&self) -> bool {
+        interrupt::check("").is_err()
+    }
+
+    /// How many units are done.
+    pub fn done(&self) -> u64 {
+        self.done.load(Ordering::Relaxed)
+    }
+
+    /// The line said: the whole, the part done, the time left at the rate so far.
+    fn line(&self, done: u64, elapsed: Duration, first: bool) -> String {
+        let rate = done as f64 / elapsed.as_secs_f64();
+        let left = Duration::from_secs_f64((self.total - done) as f64 / rate.max(1e-9));
+        let stop = if first {
+            "; Ctrl-C stops it cleanly"
+        } else {
+            ""
+        };
+        format!(
+            "{}: {done} of {} {} in {}, about {} left{stop}",
+            self.what,
+            self.total,
+            self.unit,
+            duration_text(elapsed),
+            duration_text(left)
+        )
+    }
+}
+
+/// A reference render counts its rows here, and stops between rows at a signal.
+impl crate::reference::render::Watch for Progress {
+    fn row_done(&self) {
+        self.add(1);
+    }
+
+    fn stop(&self) -> bool {
+        self.stopped()
+    }
+}
+
+/// A duration for a person: "45 s", "3 min 20 s", "2 h 5 min".
+pub fn duration_text(d: Duration) -> String {
+    let s = d.as_secs_f64().round() as u64;
+    match s {
+        0..60 => format!("{s} s"),
+        60..3600 => format!("{} min {} s", s / 60, s % 60),
+        _ => format!("{} h {} min", s / 3600, (s % 3600) / 60),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_read_as_a_person_says_them() {
+        assert_eq!(duration_text(Duration::from_millis(400)), "0 s");
+        assert_eq!(duration_text(Duration::from_secs(59)), "59 s");
+        assert_eq!(duration_text(Duration::from_secs(200)), "3 min 20 s");
+        assert_eq!(duration_text(Duration::from_secs(7500)), "2 h 5 min");
+    }
+
+    /// The line names the whole and the part, and extrapolates the rate so far.
+    #[test]
+    fn the_estimate_extrapolates_the_rate_so_far() {
+        let p = Progress::new("reference: sensor camera", 1000, "rows");
+        let line = p.line(100, Duration::from_secs(10), true);
+        assert_eq!(
+            line,
+            "reference: sensor camera: 100 of 1000 rows in 10 s, about 1 min 30 s left; \
+             Ctrl-C stops it cleanly"
+        );
+        let line = p.line(500, Duration::from_secs(50), false);
+        assert!(line.ends_with("about 50 s left"), "{line}");
+    }
+}
