@@ -101,7 +101,9 @@ missing=()
 # xvfb, xdotool and the X client libraries winit loads at run time: the viewer tests (tests/cli/viewer.rs)
 # run `specchio view` in a virtual X server; weston (headless) is their Wayland compositor, and
 # brings the Wayland client libraries winit loads; openbox minimises a window as a desktop does.
-for p in libvulkan1 vulkan-validationlayers g++ xvfb xdotool weston openbox libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0; do
+# fusefat, dosfstools and fuse: a vfat mounted through FUSE, where case folds and each spelling
+# has its own inode (tests/cli/case_folding.rs).
+for p in libvulkan1 vulkan-validationlayers g++ xvfb xdotool weston openbox libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 fusefat dosfstools fuse; do
     installed "$p" || missing+=("$p")
 done
 major=$(mesa_major || true)

@@ -198,7 +198,9 @@ fn render_method(
     let reports = render_frames(args, &mut renderer, start_s, out, &dir)?;
     let summary = summarize(&reports);
     let lookup = renderer.scene.mirror.lookup;
+    let files = out.written(&dir)?;
     print_summary(args, (method, lookup), &dir, &reports, &summary);
+    specchio::say!("  files: {}", files_line(&files));
     Ok(RenderRun {
         method,
         out: dir.display().to_string(),
@@ -467,10 +469,48 @@ fn print_summary(
         "  sensor (GPU):       {} median",
         ms(summary.median_gpu_sensor_ms)
     );
-    let cube = if lookups::plugin(lookup).uses_cube() {
-        " cube/{px,nx,py,ny,pz,nz}.exr,"
-    } else {
-        ""
-    };
-    specchio::say!("  files: observer.exr/.png, sensor.exr/.png, views.png,{cube} render.json");
+}
+
+/// The files a run wrote, said from the folder itself (a fixed list left out the sensor
+/// outputs): an EXR and a PNG of one image as `name.exr/.png`; a sequence's frame folders
+/// (`0000/`, ...), which hold the same names, once, with their count. `render.json` is
+/// written after this is said.
+fn files_line(files: &[String]) -> String {
+    fn frame(f: &str) -> Option<(&str, &str)> {
+        f.split_once('/')
+            .filter(|(d, _)| d.len() == 4 && d.bytes().all(|b| b.is_ascii_digit()))
+    }
+    let folders: std::collections::BTreeSet<&str> = files
+        .iter()
+        .filter_map(|f| frame(f).map(|(d, _)| d))
+        .collect();
+    let first = folders.first().copied();
+    let names: Vec<&str> = files
+        .iter()
+        .filter_map(|f| match frame(f) {
+            Some((d, rest)) => (Some(d) == first).then_some(rest),
+            None => Some(f.as_str()),
+        })
+        .collect();
+    let mut said: Vec<String> = Vec::new();
+    for name in &names {
+        match name.strip_suffix(".png") {
+            Some(stem) if names.contains(&format!("{stem}.exr").as_str()) => continue,
+            _ => {}
+        }
+        match name.strip_suffix(".exr") {
+            Some(stem) if names.contains(&format!("{stem}.png").as_str()) => {
+                said.push(format!("{stem}.exr/.png"))
+            }
+            _ => said.push((*name).to_owned()),
+        }
+    }
+    let mut line = said.join(", ");
+    if folders.len() > 1 {
+        line = format!(
+            "in each of {} frame folders (0000/ ...): {line}",
+            folders.len()
+        );
+    }
+    line + ", render.json"
 }

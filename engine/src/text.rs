@@ -8,6 +8,17 @@ pub fn num_text<T: NumText>(v: T) -> String {
     v.text()
 }
 
+/// The length of an f32 vector for a message: summed in f64, so that one of `[1e30, 0, 0]`
+/// does not overflow to "inf", and said as an f32 where it is one (`1e30`, not its f64
+/// expansion).
+pub fn length_text(v: glam::Vec3) -> String {
+    let length = v.as_dvec3().length();
+    match length <= f64::from(f32::MAX) {
+        true => num_text(length as f32),
+        false => num_text(length),
+    }
+}
+
 pub trait NumText {
     fn text(self) -> String;
 }

@@ -60,7 +60,7 @@ def dataset(
     headings: Optional[int] = None,
     time: Optional[float] = None,
     lookup: Optional[str] = None,
-    device: Optional[str] = None,
+    device: Optional[Union[int, str]] = None,
     validate: bool = False,
     progress: Optional[Callable[[int, int], None]] = None,
     resume: bool = False,

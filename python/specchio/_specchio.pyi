@@ -9,6 +9,8 @@ import numpy.typing as npt
 
 _Path = Union[str, PathLike[str]]
 _Pose = tuple[float, float, float, float]
+# A device: its index in specchio.devices(), or part of its name.
+_Device = Union[int, str]
 Frame = dict[str, npt.NDArray[Any]]
 
 __version__: str
@@ -37,7 +39,7 @@ class Renderer:
         self,
         scene: Scene,
         lookup: Optional[str] = None,
-        device: Optional[str] = None,
+        device: Optional[_Device] = None,
         validate: bool = False,
     ) -> None: ...
     @property
@@ -49,7 +51,7 @@ class Renderer:
     def render(self, pose: Optional[_Pose] = None, time: float = 0.0) -> Frame: ...
     def render_batch(
         self,
-        poses: npt.NDArray[np.float64],
+        poses: npt.ArrayLike,
         times: Optional[Sequence[float]] = None,
         out: Optional[Frame] = None,
     ) -> Frame: ...
@@ -63,7 +65,7 @@ class DatasetFrames:
         scene: _Path,
         trajectory: Optional[_Path],
         lookup: Optional[str] = None,
-        device: Optional[str] = None,
+        device: Optional[_Device] = None,
         validate: bool = False,
         encoders: Optional[int] = None,
         grid: Optional[float] = None,
@@ -114,7 +116,7 @@ def dataset(
     trajectory: Optional[_Path],
     out: _Path,
     lookup: Optional[str] = None,
-    device: Optional[str] = None,
+    device: Optional[_Device] = None,
     validate: bool = False,
     progress: Optional[Callable[[int, int], None]] = None,
     resume: bool = False,

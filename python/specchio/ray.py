@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 import os
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Optional, Union
 
 from ._specchio import DatasetFrames, DatasetOutput, SpecchioError
 
@@ -74,7 +74,7 @@ def dataset(
     headings: Optional[int] = None,
     time: Optional[float] = None,
     lookup: Optional[str] = None,
-    device: Optional[str] = None,
+    device: Optional[Union[int, str]] = None,
     validate: bool = False,
     progress: Optional[Callable[[int, int], None]] = None,
     resume: bool = False,

@@ -34,9 +34,11 @@ impl PoseSource {
     pub fn new(
         trajectory: Option<PathBuf>,
         grid: Option<f64>,
-        headings: Option<u32>,
+        headings: Option<i128>,
         time: Option<f64>,
     ) -> PyResult<Self> {
+        let headings =
+            (headings.map(|h| crate::args::count("headings", h, 0, u32::MAX))).transpose()?;
         match (trajectory, grid) {
             (Some(_), Some(_)) => Err(errors::error(
                 "trajectory and grid: give one of them, not both",
@@ -97,20 +99,21 @@ pub fn dataset(
     trajectory: Option<PathBuf>,
     out: PathBuf,
     lookup: Option<&str>,
-    device: Option<&str>,
+    device: Option<Bound<'_, PyAny>>,
     validate: bool,
     progress: Option<Py<PyAny>>,
     resume: bool,
     grid: Option<f64>,
-    headings: Option<u32>,
+    headings: Option<i128>,
     time: Option<f64>,
 ) -> PyResult<Py<PyAny>> {
+    let device = crate::args::device(device.as_ref())?;
     let job = Job {
         asked: parse_lookup(lookup)?,
         source: PoseSource::new(trajectory, grid, headings, time)?,
         scene: &scene,
         out: &out,
-        device,
+        device: device.as_deref(),
         validate,
         resume,
         progress: progress.as_ref(),

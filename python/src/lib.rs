@@ -8,6 +8,7 @@
 //! Long work (rendering, tracing, fitting) runs with the GIL released, so that other Python
 //! threads (a Ray worker's heartbeat, a data loader) go on meanwhile.
 
+mod args;
 mod arrays;
 mod dataset;
 mod errors;

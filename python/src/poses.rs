@@ -42,9 +42,10 @@ pub fn pose_grid<'py>(
     py: Python<'py>,
     scene: &crate::scene::Scene,
     spacing: f64,
-    headings: u32,
+    headings: i128,
     time: f64,
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    let headings = crate::args::count("headings", headings, 0, u32::MAX)?;
     let poses = specchio::sensor::dataset::grid::grid(&scene.scene, spacing, headings, time)
         .map_err(|e| scene.error(e))?;
     let rows: Vec<f64> = poses

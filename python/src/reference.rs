@@ -26,8 +26,9 @@ pub fn reference<'py>(
     scene: &Scene,
     pose: Option<[f64; 4]>,
     time: f64,
-    spp: u32,
+    spp: i128,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let spp = crate::args::count("spp", spp, 1, specchio::reference::MAX_SPP)?;
     if !(time.is_finite() && time >= 0.0) {
         return Err(errors::error(
             "time: must be a finite number of seconds >= 0",

@@ -2,7 +2,6 @@
 
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use specchio::render::dataset::FrameWriter;
@@ -94,15 +93,16 @@ impl Renderer {
         py: Python<'_>,
         scene: &Scene,
         lookup: Option<&str>,
-        device: Option<&str>,
+        device: Option<Bound<'_, PyAny>>,
         validate: bool,
     ) -> PyResult<Self> {
+        let device = crate::args::device(device.as_ref())?;
         let path = scene.path.clone();
         let scene = scene.scene.clone();
         specchio::memory::estimates::render(&scene, scene.cube.face_size_px, false, true)
             .map_err(|e| errors::error(format!("{}: {}", path.display(), errors::message(&e))))?;
         let (inner, device_name) = py.detach(|| -> PyResult<(Inner, String)> {
-            let (dev, info, lookup, log) = open(&scene, lookup, device, validate)?;
+            let (dev, info, lookup, log) = open(&scene, lookup, device.as_deref(), validate)?;
             let frames = FrameWriter::new(&dev, &scene, lookup).map_err(errors::to_py)?;
             check_validation(&log)?;
             let inner = Inner {
@@ -173,10 +173,11 @@ impl Renderer {
     fn render_batch<'py>(
         &self,
         py: Python<'py>,
-        poses: PyReadonlyArray2<'py, f64>,
+        poses: Bound<'py, PyAny>,
         times: Option<Vec<f64>>,
         out: Option<Bound<'py, PyDict>>,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let poses = crate::args::poses(py, &poses)?;
         let poses = poses::from_array(poses.as_array(), times)?;
         let Some(first) = poses.first() else {
             return Err(errors::error(

@@ -47,26 +47,31 @@ impl DatasetFrames {
         scene: PathBuf,
         trajectory: Option<PathBuf>,
         lookup: Option<&str>,
-        device: Option<&str>,
+        device: Option<Bound<'_, PyAny>>,
         validate: bool,
-        encoders: Option<usize>,
+        encoders: Option<i128>,
         grid: Option<f64>,
-        headings: Option<u32>,
+        headings: Option<i128>,
         time: Option<f64>,
     ) -> PyResult<Self> {
         let source = PoseSource::new(trajectory, grid, headings, time)?;
-        if let Some(n) = encoders.filter(|&n| n > MAX_ENCODERS) {
-            return Err(errors::error(format!(
-                "encoders = {n}: at most {MAX_ENCODERS} (each holds a frame in memory)"
-            )));
-        }
+        let device = crate::args::device(device.as_ref())?;
+        // At most MAX_ENCODERS: each holds a frame in memory.
+        let most = MAX_ENCODERS as u32;
+        let encoders = (encoders.map(|n| crate::args::count("encoders", n, 0, most)))
+            .transpose()?
+            .map(|n| n as usize);
         let asked = parse_lookup(lookup)?;
         py.detach(|| -> Result<Self, DatasetError> {
             let plan = source.plan(&scene)?;
             let instance = Instance::create(&InstanceDesc::from_env(validate))?;
             let log = instance.validation_log();
-            let (dev, _, lookup) =
-                specchio::process::probe::device_for_sensor(&instance, device, asked, &plan.scene)?;
+            let (dev, _, lookup) = specchio::process::probe::device_for_sensor(
+                &instance,
+                device.as_deref(),
+                asked,
+                &plan.scene,
+            )?;
             let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
             if let Some(n) = encoders {
                 frames.set_encoders(n);
@@ -191,7 +196,7 @@ impl DatasetOutput {
         out: PathBuf,
         resume: bool,
         grid: Option<f64>,
-        headings: Option<u32>,
+        headings: Option<i128>,
         time: Option<f64>,
     ) -> PyResult<Self> {
         let source = PoseSource::new(trajectory, grid, headings, time)?;

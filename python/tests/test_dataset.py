@@ -51,7 +51,7 @@ def test_a_workers_frames_are_the_same_with_any_number_of_encoders(made, monkeyp
         asked = tuple(f"frames/{n:06d}/" for n in [4, 0, 2])
         assert sorted(got) == sorted(p for p in want if p.startswith(asked))
         assert all(got[p] == want[p] for p in got), encoders
-    with pytest.raises(specchio.SpecchioError, match="encoders = 17: at most 16"):
+    with pytest.raises(specchio.SpecchioError, match="encoders: 17; must be a whole number from 0 to 16"):
         specchio.DatasetFrames(scene, "robot.csv", encoders=17)
 
 

@@ -36,8 +36,10 @@ def test_the_traced_labels_match_the_exact_reference(thesis, renderer):
 
 
 def test_reference_errors_are_named(thesis):
-    with pytest.raises(specchio.SpecchioError, match="spp 0"):
-        specchio.reference(thesis, spp=0)
+    # Named, with the range, whatever the int (not an OverflowError naming nothing).
+    for bad in (0, -1, 2**64, 4097):
+        with pytest.raises(specchio.SpecchioError, match=rf"spp: {bad}; must be a whole number from 1 to 4096"):
+            specchio.reference(thesis, spp=bad)
     with pytest.raises(specchio.SpecchioError, match="pose: position"):
         specchio.reference(thesis, pose=(20.0, 3.0, 0.0, 0.0))
     with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: position: every value"):

@@ -61,6 +61,10 @@ def test_a_batch_is_the_frames_one_by_one_and_fills_given_buffers(renderer):
             assert np.array_equal(batch[key][b], singles[b][key]), key
     # The frames differ: the robot moved and turned.
     assert not np.array_equal(batch["sensor"][0], batch["sensor"][1])
+    # Poses of another numeric type (ints, float32, a list) are the same poses.
+    whole = np.array([[0, 3, 0, 0], [1, 3, 0, 45]], dtype=np.int64)
+    for same in (whole, whole.astype(np.float32), whole.tolist()):
+        np.testing.assert_array_equal(renderer.render_batch(same, times=[0.25])["sensor"][1], renderer.render_batch(whole.astype(np.float64), times=[0.25])["sensor"][1])
     # out=: the same arrays, written again (the poses swapped).
     again = renderer.render_batch(poses[::-1].copy(), times=[0.25, 0.25], out=batch)
     for key in SHAPES:
@@ -123,6 +127,13 @@ def test_lookups_and_devices_are_checked(thesis):
         specchio.Renderer(thesis, lookup="mirror")
     with pytest.raises(specchio.SpecchioError, match="no-such-device"):
         specchio.Renderer(thesis, device="no-such-device")
+    # An index, as the docs say `device` takes: the device specchio.devices() lists there.
+    first = next(d for d in specchio.devices() if d["usable"])
+    with specchio.Renderer(thesis, device=first["index"]) as r:
+        assert r.device == first["name"]
+    for bad, says in [(-1, r"device: -1; must be a whole number"), (1.5, r"device: 1.5; give an index")]:
+        with pytest.raises(specchio.SpecchioError, match=says):
+            specchio.Renderer(thesis, device=bad)
     r = specchio.Renderer(thesis, lookup="plain")
     r.close()
     with pytest.raises(specchio.SpecchioError, match="closed"):

@@ -432,3 +432,54 @@ fn a_long_reference_says_its_estimate_and_stops_cleanly() {
     assert_eq!(tree(&dir), ["big.toml"], "nothing written");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--out DIR/.` names DIR: the render goes there (it used to do all the work, say it was
+/// done, and fail with EBUSY renaming onto `DIR/.`), and its summary names every file it
+/// wrote, the sensor outputs included (a fixed list left out ten of them).
+#[test]
+fn out_dot_is_its_folder_and_the_summary_names_every_file() {
+    let dir = scratch("out-dot");
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let out = dir.join("out");
+    let dotted = format!("{}/.", out.display());
+    let args = [
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        &dotted,
+        "--cube-size",
+        "8",
+        "--sensor-outputs",
+        "--lookup",
+        "plain",
+    ];
+    let run = specchio(&args);
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let files = tree(&out);
+    assert!(files.contains(&"sensor.range.exr".to_owned()), "{files:?}");
+    let line = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("files:"))
+        .unwrap();
+    for f in files
+        .iter()
+        .filter(|f| !f.starts_with('.') && !f.ends_with('/'))
+    {
+        if out.join(f).is_dir() {
+            continue;
+        }
+        let stem = f.rsplit_once('.').map_or(f.as_str(), |(s, _)| s);
+        let said = line.contains(f.as_str()) || line.contains(&format!("{stem}.exr/.png"));
+        assert!(said, "{f} is not in {line:?}");
+    }
+    assert_eq!(
+        tree(&dir).iter().filter(|e| !e.starts_with("out")).count(),
+        0
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

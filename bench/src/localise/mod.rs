@@ -416,7 +416,11 @@ fn describe_all(plan: &Plan, source: Source, robot: &mut Robot) -> Result<Images
     };
     let mut queries = Vec::with_capacity(plan.times.len());
     for (&t, poses) in plan.times.iter().zip(&plan.queries) {
-        let what = format!("{} queries at {t} s", source.name());
+        let what = format!(
+            "{} queries at {} s",
+            source.name(),
+            specchio::text::num_text(t)
+        );
         queries.push(robot.describe(poses, t, d, &what)?);
     }
     Ok(Images {

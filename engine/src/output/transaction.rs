@@ -147,6 +147,18 @@ impl Transaction {
         Ok(to)
     }
 
+    /// The files written so far into the staged folder `folder` (as its target is spelled),
+    /// as relative paths with `/`, sorted: what a command says it wrote, from what it wrote.
+    pub fn written(&self, folder: &Path) -> Result<Vec<String>, OutputError> {
+        let item = self.path_for(folder)?;
+        let mut files = super::manifest::entries(&item).map_err(|source| OutputError::Io {
+            path: folder.to_owned(),
+            source,
+        })?;
+        files.retain(|f| item.join(f).is_file());
+        Ok(files)
+    }
+
     /// Creates the file a write addressed to `path` goes to (see [`Transaction::path_for`]),
     /// exclusively: a file is written once per transaction, and never through a link.
     pub fn create(&self, path: &Path) -> Result<File, OutputError> {
@@ -308,19 +320,57 @@ fn check_not_an_input(
     target: &Path,
     inputs: &[(FileId, PathBuf)],
 ) -> Result<(), OutputError> {
-    let ids = [
-        fs::symlink_metadata(target)
-            .ok()
-            .and_then(|m| FileId::of(&m)),
-        fs::metadata(target).ok().and_then(|m| FileId::of(&m)),
-    ];
-    match inputs.iter().find(|(id, _)| ids.contains(&Some(*id))) {
+    // The target as spelled, and the entry a case-folding file system reaches for it.
+    let reached: Vec<PathBuf> = std::iter::once(target.to_owned())
+        .chain(folded_entry(target))
+        .collect();
+    let ids: Vec<Option<FileId>> = (reached.iter())
+        .flat_map(|p| [fs::symlink_metadata(p), fs::metadata(p)])
+        .map(|m| m.ok().and_then(|m| FileId::of(&m)))
+        .collect();
+    let same = |(id, input): &&(FileId, PathBuf)| {
+        ids.contains(&Some(*id)) || reached.iter().skip(1).any(|p| same_entry(p, input))
+    };
+    match inputs.iter().find(same) {
         Some((_, input)) => Err(OutputError::IsAnInput {
             path: given.to_owned(),
             input: input.clone(),
         }),
         None => Ok(()),
     }
+}
+
+/// The entry a lookup of `path` reaches in its folder where the folder lists no entry spelled
+/// exactly so: the fold of a case-insensitive file system. Identities miss it where the file
+/// system gives each spelling its own inode (vfat through FUSE: `t.EXR` and `T.exr` are one
+/// file and two inodes), so the folder is asked which name it holds. None where the name is
+/// listed as spelled, or nothing is there.
+fn folded_entry(path: &Path) -> Option<PathBuf> {
+    let name = path.file_name()?.to_str()?;
+    fs::symlink_metadata(path).ok()?;
+    let parent = parent_of(path);
+    let folded = name.to_lowercase();
+    let mut found = None;
+    for entry in fs::read_dir(&parent).ok()?.flatten() {
+        let entry = entry.file_name();
+        let Some(entry) = entry.to_str() else {
+            continue;
+        };
+        if entry == name {
+            return None;
+        }
+        if found.is_none() && entry.to_lowercase() == folded {
+            found = Some(parent.join(entry));
+        }
+    }
+    found
+}
+
+/// Whether `a` and `b` name one folder entry, spelled alike: the same folder (by canonical
+/// path) and the same name.
+fn same_entry(a: &Path, b: &Path) -> bool {
+    let folder = |p: &Path| fs::canonicalize(parent_of(p)).ok();
+    a.file_name() == b.file_name() && folder(a).is_some() && folder(a) == folder(b)
 }
 
 /// The hook as `place` takes it.
@@ -339,8 +389,10 @@ fn named(target: &Path) -> Result<(PathBuf, String), OutputError> {
     let no_name = || OutputError::NoName {
         path: target.to_owned(),
     };
+    // `out/.` names `out` (its components drop the `.`): renamed onto as spelled, it did all
+    // the work and then failed with EBUSY. `..` is resolved against the file system instead.
     let resolved = match target.file_name() {
-        Some(_) => target.to_owned(),
+        Some(_) => target.components().collect(),
         None => fs::canonicalize(target).map_err(|_| no_name())?,
     };
     let name = resolved.file_name().ok_or_else(no_name)?;

@@ -150,7 +150,11 @@ impl Plan {
                         source: e,
                     }
                 })?,
-                format!("grid: spacing {spacing_m} m, {headings} heading(s), t = {time_s} s"),
+                format!(
+                    "grid: spacing {} m, {headings} heading(s), t = {} s",
+                    crate::text::num_text(spacing_m),
+                    crate::text::num_text(time_s)
+                ),
             ),
         };
         Ok((scene, poses, trajectory))

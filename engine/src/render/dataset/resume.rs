@@ -65,8 +65,9 @@ pub fn device_key(device: &crate::vk::physical::DeviceInfo) -> String {
 
 /// The work folder of the output `out`: beside it, its name with [`WORK_SUFFIX`].
 pub fn work_path(out: &Path) -> PathBuf {
-    let out = match out.file_name() {
-        Some(_) => out.to_owned(),
+    // As the output's own name (`output::Transaction`): `out/.` is `out`.
+    let out: PathBuf = match out.file_name() {
+        Some(_) => out.components().collect(),
         None => fs::canonicalize(out).unwrap_or_else(|_| out.to_owned()),
     };
     let mut name = out.file_name().unwrap_or_default().to_owned();

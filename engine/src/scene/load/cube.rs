@@ -135,14 +135,16 @@ impl Ctx<'_> {
             return Ok(Vec3::ZERO);
         };
         let o = self.vec3("cube.offset", v)?;
-        if o.length() >= mirror.radius_m {
+        // In f64: an f32 length of [1e30, 0, 0] overflows, and was reported as "inf m".
+        let length = o.as_dvec3().length();
+        if length >= f64::from(mirror.radius_m) {
             return Err(self.invalid(
                 "cube.offset",
                 format!(
                     "puts the cube's centre {} m from the mirror's viewpoint, outside the \
                      mirror's reach ({} m, the sphere about the viewpoint that holds the mirror \
                      and that objects keep out of); it must be less than that",
-                    num_text(o.length()),
+                    crate::text::length_text(o),
                     num_text(mirror.radius_m)
                 ),
             ));

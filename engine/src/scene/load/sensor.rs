@@ -204,12 +204,14 @@ impl Ctx<'_> {
             (false, Some(_)) => "mirror.focal_distance",
             (false, None) => "sensor.offset",
         };
-        if eye.length() <= mirror.radius_m {
+        // In f64, as every length said: an f32 one of a shift of 1e30 overflows.
+        let distance = eye.as_dvec3().length();
+        if distance <= f64::from(mirror.radius_m) {
             return Err(self.invalid(
                 field,
                 format!(
                     "moves the sensor to {} m from the mirror's viewpoint, inside its reach ({} m)",
-                    num_text(eye.length()),
+                    crate::text::length_text(eye),
                     num_text(mirror.radius_m)
                 ),
             ));

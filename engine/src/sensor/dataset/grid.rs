@@ -18,15 +18,16 @@ pub const MAX_HEADINGS: u32 = 360;
 /// A grid the scene cannot give.
 #[derive(Debug, thiserror::Error)]
 pub enum GridError {
-    #[error("--grid: the spacing must be a finite number of metres > 0, not {0}")]
+    #[error("--grid: the spacing must be a finite number of metres > 0, not {}", crate::text::num_text(*.0))]
     Spacing(f64),
     #[error("--headings: must be 1 to {MAX_HEADINGS}, not {0}")]
     Headings(u32),
-    #[error("--time: must be a finite number of seconds >= 0, not {0}")]
+    #[error("--time: must be a finite number of seconds >= 0, not {}", crate::text::num_text(*.0))]
     Time(f64),
     #[error(
-        "--grid: a spacing of {spacing_m} m gives {count} {what}, more than the {max} a \
-         dataset grid may hold: choose a larger spacing or fewer headings"
+        "--grid: a spacing of {} m gives {count} {what}, more than the {max} a \
+         dataset grid may hold: choose a larger spacing or fewer headings",
+        crate::text::num_text(*spacing_m)
     )]
     TooMany {
         spacing_m: f64,
@@ -35,8 +36,10 @@ pub enum GridError {
         max: u64,
     },
     #[error(
-        "--grid: at a spacing of {spacing_m} m no grid pose keeps the mirror and the sensor's \
-         line of sight inside the room and clear of objects at t = {time_s} s"
+        "--grid: at a spacing of {} m no grid pose keeps the mirror and the sensor's \
+         line of sight inside the room and clear of objects at t = {} s",
+        crate::text::num_text(*spacing_m),
+        crate::text::num_text(*time_s)
     )]
     Empty { spacing_m: f64, time_s: f64 },
     #[error("--grid: {0}")]

@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use crate::files::{read_regular_file, FileError};
+use crate::text::num_text;
 
 /// The most poses a trajectory may hold (each is a frame of images on disk).
 pub const MAX_POSES: usize = 100_000;
@@ -75,7 +76,9 @@ impl TrajectoryError {
     }
 }
 
-/// The poses of the trajectory file `path`: JSON when its name ends in `.json`, else CSV.
+/// The poses of the trajectory file `path`: JSON when its name ends in `.json` or its text
+/// starts with `[` or `{` (which no CSV header does: a JSON file named `.txt` was read as CSV
+/// and said "names no `time` column"), else CSV.
 pub fn read(path: &Path) -> Result<Vec<Pose>, TrajectoryError> {
     let bytes =
         read_regular_file(path, MAX_TRAJECTORY_BYTES).map_err(|source| TrajectoryError::File {
@@ -90,7 +93,8 @@ pub fn read(path: &Path) -> Result<Vec<Pose>, TrajectoryError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let json = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        || text.trim_start().starts_with(['[', '{']);
     let mut poses = if json {
         parse_json(path, text)?
     } else {
@@ -121,8 +125,19 @@ pub fn parse_csv(file: &Path, text: &str) -> Result<Vec<Pose>, TrajectoryError> 
         );
         return Err(TrajectoryError::invalid(file, None, "(header)", why));
     };
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
     let at = Some(Place::Line(header_line));
+    if let Some(sep) = [';', '\t', '|']
+        .into_iter()
+        .find(|&c| !header.contains(',') && header.contains(c))
+    {
+        let why = format!(
+            "the columns are separated by {sep:?}; a trajectory's CSV separates them by commas \
+             ({})",
+            COLUMNS.join(",")
+        );
+        return Err(TrajectoryError::invalid(file, at, "(header)", why));
+    }
+    let names = cells(header).map_err(|why| TrajectoryError::invalid(file, at, "(header)", why))?;
     let mut index = [0usize; 5];
     for (k, column) in COLUMNS.iter().enumerate() {
         let found: Vec<usize> = (0..names.len()).filter(|&i| names[i] == *column).collect();
@@ -156,8 +171,8 @@ pub fn parse_csv(file: &Path, text: &str) -> Result<Vec<Pose>, TrajectoryError> 
                 why,
             ));
         }
-        let cells: Vec<&str> = row.split(',').map(str::trim).collect();
         let at = Some(Place::Line(line));
+        let cells = cells(row).map_err(|why| TrajectoryError::invalid(file, at, "(row)", why))?;
         if cells.len() != names.len() {
             let why = format!("{} values, the header names {}", cells.len(), names.len());
             return Err(TrajectoryError::invalid(file, at, "(row)", why));
@@ -176,6 +191,28 @@ pub fn parse_csv(file: &Path, text: &str) -> Result<Vec<Pose>, TrajectoryError> 
         });
     }
     Ok(poses)
+}
+
+/// A CSV line's cells, trimmed, each unquoted where a spreadsheet quoted it (`"time"`); a
+/// quote anywhere else is refused (no field here holds a comma or a quote).
+fn cells(line: &str) -> Result<Vec<&str>, String> {
+    line.split(',')
+        .map(str::trim)
+        .map(|cell| {
+            let quoted = cell.len() >= 2 && cell.starts_with('"') && cell.ends_with('"');
+            let inner = if quoted {
+                &cell[1..cell.len() - 1]
+            } else {
+                cell
+            };
+            match inner.contains('"') {
+                false => Ok(inner.trim()),
+                true => Err(format!(
+                    "`{cell}`: a stray quote (a cell is a name or a number, quoted or not)"
+                )),
+            }
+        })
+        .collect()
 }
 
 /// Parses JSON text (see the module's comment).
@@ -272,18 +309,19 @@ fn check(file: &Path, poses: &[Pose]) -> Result<(), TrajectoryError> {
                     file,
                     at,
                     field,
-                    format!("{v} is not finite"),
+                    format!("{} is not finite", num_text(v)),
                 ));
             }
         }
         if p.time_s < 0.0 {
-            let why = format!("{} s: must be >= 0", p.time_s);
+            let why = format!("{} s: must be >= 0", num_text(p.time_s));
             return Err(TrajectoryError::invalid(file, at, "time", why));
         }
         if p.time_s < last {
             let why = format!(
-                "{} s is before the pose above ({last} s): time never runs backwards",
-                p.time_s
+                "{} s is before the pose above ({} s): time never runs backwards",
+                num_text(p.time_s),
+                num_text(last)
             );
             return Err(TrajectoryError::invalid(file, at, "time", why));
         }
@@ -332,6 +370,25 @@ mod tests {
         assert_eq!(poses[1].heading_deg, 1e6 % 360.0);
     }
 
+    /// A spreadsheet's quoted header and cells read as plain ones; a file whose text is JSON
+    /// is read as JSON whatever its name.
+    #[test]
+    fn quoted_csv_and_json_by_content() {
+        let quoted = csv("\"time\",\"x\",\"y\",\"z\",\"heading\"\n\"0.5\",1,3,2,\"90\"\n").unwrap();
+        assert_eq!((quoted[0].time_s, quoted[0].heading_deg), (0.5, 90.0));
+        let dir = std::env::temp_dir().join(format!("specchio-json-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("robot.txt");
+        std::fs::write(
+            &path,
+            "\n [{\"time\": 0, \"position\": [1, 3, 2], \"heading\": 5}]",
+        )
+        .unwrap();
+        let poses = read(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!((poses[0].at, poses[0].heading_deg), (Place::Entry(0), 5.0));
+    }
+
     #[test]
     fn json_poses_keep_their_entries() {
         let text = r#"[{"time": 0, "position": [1, 3, 2], "heading": 45}, {"time": 1, "position": [2, 3, 2], "heading": 0}]"#;
@@ -355,6 +412,18 @@ mod tests {
             (
                 "time,x,y,z,heading,x\n",
                 "t.csv:1: x: the header names it more than once",
+            ),
+            (
+                "time;x;y;z;heading\n0;1;3;2;0\n",
+                "t.csv:1: (header): the columns are separated by ';'; a trajectory's CSV separates them by commas",
+            ),
+            (
+                "time\tx\ty\tz\theading\n",
+                "t.csv:1: (header): the columns are separated by '\\t'",
+            ),
+            (
+                "time,x,y,z,heading\n0,1,\"3,2,0\n",
+                "t.csv:2: (row): `\"3`: a stray quote",
             ),
             ("time,x,y,z,heading\n", "t.csv: (file): no poses"),
             (

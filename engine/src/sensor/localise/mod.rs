@@ -24,13 +24,18 @@ use crate::image::RgbaImage;
 #[derive(Debug, thiserror::Error)]
 pub enum LocaliseError {
     #[error(
-        "no landmark fits: at spacing {spacing_m} m no grid pose keeps the mirror (radius \
-         {radius_m} m) and the sensor's line of sight inside the room and clear of objects"
+        "no landmark fits: at spacing {} m no grid pose keeps the mirror (radius {} m) and \
+         the sensor's line of sight inside the room and clear of objects",
+        crate::text::num_text(*spacing_m),
+        crate::text::num_text(*radius_m)
     )]
     NoLandmarks { spacing_m: f64, radius_m: f32 },
     #[error(
-        "the sensor camera ({sensor_y_m} m) is outside the room (floor {floor_m} m, ceiling \
-         {ceiling_m} m) at the mirror's height"
+        "the sensor camera ({} m) is outside the room (floor {} m, ceiling {} m) at the \
+         mirror's height",
+        crate::text::num_text(*sensor_y_m),
+        crate::text::num_text(*floor_m),
+        crate::text::num_text(*ceiling_m)
     )]
     SensorOutsideRoom {
         sensor_y_m: f32,
@@ -38,13 +43,15 @@ pub enum LocaliseError {
         ceiling_m: f32,
     },
     #[error(
-        "no free query pose found in {tries} random tries at time {time_s} s: the room's free \
-         floor is (almost) empty"
+        "no free query pose found in {tries} random tries at time {} s: the room's free \
+         floor is (almost) empty",
+        crate::text::num_text(*time_s)
     )]
     NoFreePose { tries: u32, time_s: f64 },
     #[error(
-        "a landmark grid of spacing {spacing_m} m spans {count} poses over this room's floor, \
-         more than the {max} a sweep may render: choose a larger spacing"
+        "a landmark grid of spacing {} m spans {count} poses over this room's floor, more \
+         than the {max} a sweep may render: choose a larger spacing",
+        crate::text::num_text(*spacing_m)
     )]
     TooManyLandmarks {
         spacing_m: f64,

@@ -518,3 +518,12 @@ fn a_work_folder_cut_short_before_its_key_starts_afresh() {
     assert_eq!(work.done().count(), 1);
     fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--out out/.` is `out`: its work folder is `out.partial` beside it, as the output's own
+/// name says (it was `out/.partial`'s advice, which looped).
+#[test]
+fn the_work_folder_of_a_dotted_out_is_beside_the_folder() {
+    assert_eq!(work_path(Path::new("a/out/.")), Path::new("a/out.partial"));
+    assert_eq!(work_path(Path::new("a/./out")), Path::new("a/out.partial"));
+    assert_eq!(work_path(Path::new("out")), Path::new("out.partial"));
+}

@@ -158,6 +158,8 @@ fn values_are_checked_as_used_and_planes_fit_the_scene() {
         // A cube moved off the viewpoint: inside the mirror's reach, its planes from there.
         ("[cube]\noffset = [0, 1, 0]\n", "cube.offset: puts the cube's centre 1 m from the mirror's viewpoint, outside the mirror's reach (1 m"),
         ("[cube]\noffset = [0, 0.5]\n", "cube.offset"),
+        // A length beyond f32 is said as the number it is, not "inf".
+        ("[cube]\noffset = [1e30, 0, 0]\n", "cube.offset: puts the cube's centre 1e30 m from"),
         ("[cube]\noffset = [0, 0.5, 0]\nnear = 0.3\n", "cube.near: clips reflections: the near plane's corners are near x sqrt(3) = 0.51961523 m from the cube's centre, outside the mirror's reach (0.5 m from there)"),
         ("[cube]\noffset = [0, 0.5, 0]\nfar = 8\n", "cube.far: clips the room: a room corner can be 8.181146 m"),
     ];

@@ -1,0 +1,65 @@
+//! Arguments from Python, taken as Python gives them and checked with their names: `spp=-1`
+//! is `SpecchioError("spp: -1; must be a whole number from 1 to 4096")`, not an
+//! `OverflowError` that names nothing (as an unsigned parameter gave); `device=0` is the
+//! first device, as the docs say (an index or part of a name); poses of any numeric dtype
+//! are poses, not a "type mismatch".
+
+use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyInt, PyString};
+
+use crate::errors;
+
+/// The whole number `value` of the argument `name`, within `lo..=hi`, or an error naming the
+/// argument and the range (parameters take any int within 128 bits: -1 and 2**64 are
+/// values to refuse by name, not an OverflowError; a float is PyO3's TypeError, which names
+/// the argument).
+pub fn count(name: &str, value: i128, lo: u32, hi: u32) -> PyResult<u32> {
+    match u32::try_from(value) {
+        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(errors::error(format!(
+            "{name}: {value}; must be a whole number from {lo} to {hi}"
+        ))),
+    }
+}
+
+/// A device as `device=` names it: its index (an int, as `specchio.devices()` numbers them)
+/// or part of its name (a str), in the form the engine's selector takes.
+pub fn device(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
+    let Some(value) = value.filter(|v| !v.is_none()) else {
+        return Ok(None);
+    };
+    if value.is_instance_of::<PyString>() {
+        return Ok(Some(value.extract()?));
+    }
+    if value.is_instance_of::<PyInt>() && !value.is_instance_of::<PyBool>() {
+        let index: i128 = value
+            .extract()
+            .map_err(|_| errors::error("device: an index beyond any device"))?;
+        return Ok(Some(count("device", index, 0, u32::MAX)?.to_string()));
+    }
+    let shown = value.repr().map_or("?".to_owned(), |r| r.to_string());
+    Err(errors::error(format!(
+        "device: {shown}; give an index (int) or part of a name (str), as specchio.devices() \
+         lists them"
+    )))
+}
+
+/// `poses` as a (B, 4) float64 array: any array-like of numbers (ints, float32, lists) is
+/// converted as numpy converts it; anything else is refused, naming `poses`.
+pub fn poses<'py>(
+    py: Python<'py>,
+    poses: &Bound<'py, PyAny>,
+) -> PyResult<PyReadonlyArray2<'py, f64>> {
+    let numpy = py.import("numpy")?;
+    let array = numpy
+        .call_method1("asarray", (poses, "float64"))
+        .map_err(|e| errors::error(format!("poses: not an array of numbers ({e})")))?;
+    let shape: Vec<usize> = array.getattr("shape")?.extract()?;
+    let array = array.cast_into::<PyArray2<f64>>().map_err(|_| {
+        errors::error(format!(
+            "poses: an array of shape {shape:?}; give (B, 4) rows of x, y, z, heading"
+        ))
+    })?;
+    Ok(array.readonly())
+}
