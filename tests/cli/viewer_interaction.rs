@@ -428,3 +428,84 @@ fn the_menu_and_the_help_never_overlap() {
         }
     }
 }
+
+/// With the menu open on a paused scene, the pointer crossing the view (not the menu) draws
+/// nothing: egui asks for a frame on every move, and each one was drawn (60 % of a core while
+/// the mouse moved). The viewer's CPU time over 40 moves across the view, against 40 moves
+/// across the menu (whose hover is drawn): it must be under a fifth of it (both cost alike
+/// before).
+#[test]
+fn the_pointer_over_the_view_draws_nothing_with_the_menu_open() {
+    let Some(x) = xvfb_with_xdotool() else { return };
+    let (viewer, id) = focused_viewer(
+        &x,
+        &[thesis_room().to_str().unwrap(), "--keys", "space"],
+        None,
+    );
+    xdotool(&x, &["key", "F1"]);
+    let menu = viewer.wait_for("menu: ");
+    let [mx, my, mw, mh]: [u32; 4] = menu["menu: ".len()..]
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect::<Vec<_>>()
+        .try_into()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    // 40 moves along a diagonal from (x0, y0), `dx`, `dy` apart; the CPU ticks they cost.
+    let moves = |x0: u32, y0: u32, dx: u32, dy: u32| {
+        let start = viewer.cpu_ticks();
+        for i in 0..40u32 {
+            let (px, py) = ((x0 + dx * i).to_string(), (y0 + dy * i).to_string());
+            xdotool(&x, &["mousemove", "--window", &id, &px, &py]);
+            std::thread::sleep(std::time::Duration::from_millis(25));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        viewer.cpu_ticks() - start
+    };
+    let over_view = moves(mx + mw + 50, my + 20, 5, 3);
+    let over_menu = moves(mx + 5, my + 5, (mw - 10) / 40, (mh - 10) / 40);
+    xdotool(&x, &["key", "q"]);
+    viewer.finish();
+    eprintln!(
+        "CPU ticks for 40 pointer moves: over the view {over_view}, over the menu {over_menu}"
+    );
+    assert!(over_menu > 0, "moves over the menu drew nothing");
+    assert!(
+        (over_view as f64) < 0.2 * over_menu as f64,
+        "{over_view} ticks over the view against {over_menu} over the menu"
+    );
+}
+
+/// Five quick presses of the screenshot key before the next frame shows are accounted for:
+/// every press lands in a file or in the line of the file that holds it ("N more press(es)
+/// before this frame was shown"); it wrote one file and said nothing of the other four.
+#[test]
+fn quick_screenshot_presses_are_all_accounted_for() {
+    let Some(x) = xvfb_with_xdotool() else { return };
+    let folder = temp_dir("viewer-screenshot-presses");
+    std::fs::create_dir_all(&folder).unwrap();
+    let (viewer, _) = focused_viewer(
+        &x,
+        &[thesis_room().to_str().unwrap(), "--keys", "space"],
+        Some(&folder),
+    );
+    xdotool(&x, &["key", "--delay", "1", "p", "p", "p", "p", "p"]);
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    xdotool(&x, &["key", "q"]);
+    let stdout = viewer.finish();
+    let lines: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.starts_with("screenshot: "))
+        .collect();
+    let presses: usize = lines
+        .iter()
+        .map(|l| match l.split_once("; ") {
+            Some((_, more)) => 1 + more.split(' ').next().unwrap().parse::<usize>().unwrap(),
+            None => 1,
+        })
+        .sum();
+    let files = std::fs::read_dir(&folder).unwrap().count();
+    eprintln!("{lines:#?}");
+    assert_eq!(presses, 5, "{lines:?}");
+    assert_eq!(files, lines.len(), "one file per line");
+}

@@ -188,3 +188,35 @@ fn a_new_menu_renderer_draws_the_same_menu() {
     let (_, beyond_menu) = differences_around(&renewed, &usual, [mx, my, mw, mh]);
     assert_eq!(beyond_menu, 0, "pixels outside the menu differ");
 }
+
+/// A compositor that dies under the viewer ends it with one line that says so, naming the
+/// display, and no panic: it said "Broken pipe (os error 32)" twice, which names nothing.
+#[test]
+fn a_compositor_that_dies_ends_the_viewer_with_one_message() {
+    let Some(mut wayland) = Weston::start("view-wayland-dies") else {
+        return;
+    };
+    let child = wayland
+        .command(&[thesis_room().to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_secs(4));
+    wayland.kill();
+    let start = Instant::now();
+    let out = child.wait_with_output().unwrap();
+    let stderr = text(&out.stderr);
+    eprintln!("after {:?}: {:?}\n{stderr}", start.elapsed(), out.status);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        !stderr.contains("panicked") && !stderr.contains("Io error"),
+        "{stderr}"
+    );
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(errors.len(), 1, "{stderr}");
+    assert!(
+        errors[0].contains("Wayland") && errors[0].contains("specchio-view-wayland-dies"),
+        "{stderr}"
+    );
+}

@@ -68,21 +68,26 @@ impl Figures {
         self.faces = report.faces_rendered;
     }
 
-    /// The window title with the figures, every `TITLE_EVERY`.
-    pub fn title(&mut self, renderer: &Renderer, scene: &str) -> Option<String> {
+    /// The window title with the figures, every `TITLE_EVERY`; `paused`: the frames drawn
+    /// are changes, not a rate, and the title says so.
+    pub fn title(&mut self, renderer: &Renderer, scene: &str, paused: bool) -> Option<String> {
         let since = *self.since.get_or_insert_with(Instant::now);
         let elapsed = since.elapsed();
         if elapsed < TITLE_EVERY {
             return None;
         }
         let fps = f64::from(self.frames) / elapsed.as_secs_f64();
+        let rate = match paused {
+            true => "paused".to_owned(),
+            false => format!("{fps:.1} frames/s"),
+        };
         self.since = Some(Instant::now());
         self.frames = 0;
         let cube = self
             .cube_ms
             .map_or("-".to_owned(), |ms| format!("{ms:.1} ms"));
         Some(format!(
-            "specchio view: {scene} | {}, {}, {:?} | {fps:.1} frames/s, last cube update {cube}, {} faces this frame | {}",
+            "specchio view: {scene} | {}, {}, {:?} | {rate}, last cube update {cube}, {} faces this frame | {}",
             renderer.method(),
             renderer.scene.mirror.lookup,
             renderer.scene.refresh,

@@ -40,6 +40,14 @@ pub(super) fn run_catching_window_panics<A: ApplicationHandler>(
     let ran = catch_unwind(AssertUnwindSafe(|| event_loop.run_app(app)));
     set_hook(previous);
     match ran {
+        // winit's only word for a Wayland connection that broke under it (the compositor
+        // gone): an exit code. Said for a person, with the display it was.
+        Ok(Err(winit::error::EventLoopError::ExitFailure(code))) => Err(anyhow::anyhow!(
+            "the display connection broke ({}; the window system's exit code {code}): the \
+             compositor or server is gone, and the window with it; start the viewer again \
+             once it runs",
+            display_name()
+        )),
         Ok(result) => Ok(result?),
         Err(_) => {
             let what =
@@ -79,6 +87,15 @@ fn says(e: &anyhow::Error, result: ash::vk::Result) -> bool {
             Some(specchio::vk::GpuError::Vk { result: r, .. }) if *r == result
         )
     })
+}
+
+/// The display the viewer is on, as the environment names it.
+fn display_name() -> String {
+    match (std::env::var("WAYLAND_DISPLAY"), std::env::var("DISPLAY")) {
+        (Ok(w), _) if !w.is_empty() => format!("the Wayland compositor WAYLAND_DISPLAY={w}"),
+        (_, Ok(d)) if !d.is_empty() => format!("the X server DISPLAY={d}"),
+        _ => "the display".to_owned(),
+    }
 }
 
 /// On X11: a display connection that breaks (the server gone, the client killed with

@@ -173,9 +173,13 @@ pub fn help() -> String {
     text
 }
 
+/// How close the observer comes to a wall (m): beyond its near plane, so that the wall is
+/// seen, not cut.
+pub const OBSERVER_WALL_MARGIN_M: f32 = 0.1;
+
 /// Moves or turns the observer by `steps` of `action` (a `Walk` or `Turn`: one step is
 /// [`MOVE_STEP_M`] or [`TURN_STEP_DEG`]; a held key moves by fractions of a step, see
-/// `motion.rs`); other actions are ignored.
+/// `motion.rs`); other actions are ignored. A walk stops at the room's walls.
 pub fn move_observer(scene: &mut Scene, action: Action, steps: f32) {
     let o = &mut scene.observer;
     match action {
@@ -187,7 +191,17 @@ pub fn move_observer(scene: &mut Scene, action: Action, steps: f32) {
             let side = Vec3::new(cos, 0.0, -sin);
             let step =
                 ahead * f32::from(forward) + side * f32::from(right) + Vec3::Y * f32::from(up);
-            o.position += step * (MOVE_STEP_M * steps);
+            let to = o.position + step * (MOVE_STEP_M * steps);
+            // The walls stop the observer (it walked through them into the black outside);
+            // one the scene put outside the room may still walk in.
+            let (lo, hi) = (
+                scene.room.center - 0.5 * scene.room.size_m,
+                scene.room.center + 0.5 * scene.room.size_m,
+            );
+            let margin = Vec3::splat(OBSERVER_WALL_MARGIN_M).min(0.25 * scene.room.size_m);
+            let (lo, hi) = (lo + margin, hi - margin);
+            let inside = o.position.cmpge(lo).all() && o.position.cmple(hi).all();
+            o.position = if inside { to.clamp(lo, hi) } else { to };
         }
         Action::Turn { yaw, pitch } => {
             turn_observer(

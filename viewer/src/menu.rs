@@ -52,6 +52,8 @@ pub struct Menu {
     pub help: bool,
     /// The pixel rectangles last reported (printed when they change, for scripts and tests).
     reported: [Option<[u32; 4]>; 2],
+    /// The pointer was over one of them at its last move.
+    pointer_over: bool,
     /// Print the menu's widgets' rectangles too (`--widgets`), so that a script can click
     /// them; the last list printed.
     pub print_widgets: bool,
@@ -117,6 +119,7 @@ impl Menu {
             open: false,
             help: false,
             reported: [None, None],
+            pointer_over: false,
             print_widgets: false,
             reported_widgets: Vec::new(),
             pending: egui::TexturesDelta::default(),
@@ -129,9 +132,24 @@ impl Menu {
     pub fn on_event(&mut self, window: &Window, event: &WindowEvent) -> EventResponse {
         let response = self.input.on_window_event(window, event);
         let shown = self.open || self.help;
+        let mut repaint = response.repaint && shown;
+        // egui asks to be drawn on every pointer move; only one over the menu or the help, or
+        // leaving them, can change a hover: elsewhere a paused scene drew a frame per move (60 %
+        // of a core while the mouse crossed it).
+        if let WindowEvent::CursorMoved { position, .. } = event {
+            let over = (self.reported.iter().flatten()).any(|&[x, y, w, h]| {
+                let (px, py) = (position.x, position.y);
+                px >= f64::from(x)
+                    && py >= f64::from(y)
+                    && px < f64::from(x + w)
+                    && py < f64::from(y + h)
+            });
+            repaint &= over || self.pointer_over;
+            self.pointer_over = over;
+        }
         EventResponse {
             consumed: response.consumed && shown,
-            repaint: response.repaint && shown,
+            repaint,
         }
     }
 
@@ -383,13 +401,17 @@ fn run_buttons(ui: &mut egui::Ui, s: &Status, actions: &mut Vec<Action>, widgets
 /// The live figures, as the window title shows them.
 fn figures(ui: &mut egui::Ui, s: &Status) {
     let ms = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.1} ms"));
-    let fps = s
-        .frame_ms
-        .filter(|&v| v > 0.0)
-        .map_or("-".to_owned(), |v| format!("{:.1}", 1e3 / v));
+    // Paused, a frame is drawn only on a change: its time is no rate.
+    let rate = match s.paused {
+        true => "paused".to_owned(),
+        false => s
+            .frame_ms
+            .filter(|&v| v > 0.0)
+            .map_or("-".to_owned(), |v| format!("{:.1} frames/s", 1e3 / v)),
+    };
     egui::Grid::new("figures").num_columns(2).show(ui, |ui| {
         for (name, value) in [
-            ("frame time", format!("{} ({fps} frames/s)", ms(s.frame_ms))),
+            ("frame time", format!("{} ({rate})", ms(s.frame_ms))),
             ("last cube update", ms(s.cube_ms)),
             ("faces this frame", s.faces.to_string()),
             ("method", s.method.to_string()),

@@ -65,15 +65,19 @@ impl Motion {
     /// The mirror's refusal, if it met one.
     pub fn release(&mut self, action: Action, now: Instant, scene: &mut Scene) -> Option<String> {
         let at = self.held.iter().position(|h| h.action == action)?;
-        let mut key = self.held.remove(at);
-        self.apply(&mut key, now, scene)
+        // Every held key moves up to now first: the released one's last stretch was walked
+        // beside the keys held with it, at their shared speed.
+        let refusals = self.advance(now, scene);
+        self.held.remove(at);
+        refusals.into_iter().next()
     }
 
     /// Every held key moved up to `now`; the mirror's refusals met meanwhile.
     pub fn advance(&mut self, now: Instant, scene: &mut Scene) -> Vec<String> {
+        let walk = self.walk_scale();
         let mut held = std::mem::take(&mut self.held);
         let refusals = (held.iter_mut())
-            .filter_map(|key| self.apply(key, now, scene))
+            .filter_map(|key| self.apply(key, now, scene, walk))
             .collect();
         self.held = held;
         refusals
@@ -132,13 +136,37 @@ impl Motion {
         settled
     }
 
-    fn apply(&mut self, key: &mut HeldKey, now: Instant, scene: &mut Scene) -> Option<String> {
+    /// What each held walk key's speed is scaled by so that keys held together walk at
+    /// [`WALK_SPEED_M_S`] along their sum: forward and right held move 1/√2 of each, not √2
+    /// times as fast as either alone.
+    fn walk_scale(&self) -> f32 {
+        let sum: glam::Vec3 = (self.held.iter())
+            .filter_map(|h| match h.action {
+                Action::Walk { forward, right, up } => Some(glam::Vec3::new(
+                    f32::from(forward),
+                    f32::from(right),
+                    f32::from(up),
+                )),
+                _ => None,
+            })
+            .sum();
+        1.0 / sum.length().max(1.0)
+    }
+
+    fn apply(
+        &mut self,
+        key: &mut HeldKey,
+        now: Instant,
+        scene: &mut Scene,
+        walk: f32,
+    ) -> Option<String> {
         let seconds = now.saturating_duration_since(key.applied_to).as_secs_f32();
         key.applied_to = now;
         self.moved = true;
         match key.action {
             Action::Walk { .. } => {
-                input::move_observer(scene, key.action, WALK_SPEED_M_S * seconds / MOVE_STEP_M);
+                let steps = walk * WALK_SPEED_M_S * seconds / MOVE_STEP_M;
+                input::move_observer(scene, key.action, steps);
             }
             Action::Turn { .. } => {
                 let steps = TURN_SPEED_DEG_S * seconds / TURN_STEP_DEG;
@@ -201,6 +229,55 @@ mod tests {
             let walked = start_z - s.observer.position.z;
             assert!((walked - 3.0).abs() < 1e-4, "{frames_per_s}/s: {walked} m");
         }
+    }
+
+    const RIGHT: Action = Action::Walk {
+        forward: 0,
+        right: 1,
+        up: 0,
+    };
+
+    /// Forward and right held together for 1 s walk 2 m (the walking speed) along the
+    /// diagonal, as one key alone does along its axis; it was 2.83 m (√2 too fast).
+    #[test]
+    fn keys_held_together_walk_at_the_walking_speed() {
+        let mut s = scene();
+        let start = s.observer.position;
+        let mut m = Motion::default();
+        let t0 = Instant::now();
+        m.press(FORWARD, t0);
+        m.press(RIGHT, t0);
+        let half = t0 + Duration::from_millis(500);
+        assert!(m.advance(half, &mut s).is_empty());
+        m.release(FORWARD, t0 + Duration::from_secs(1), &mut s);
+        m.release(RIGHT, t0 + Duration::from_secs(1), &mut s);
+        let walked = s.observer.position - start;
+        assert!(
+            (walked.length() - 2.0).abs() < 1e-4,
+            "{walked} ({} m)",
+            walked.length()
+        );
+        assert!(
+            (walked.x - walked.z.abs()).abs() < 1e-4,
+            "along the diagonal: {walked}"
+        );
+    }
+
+    /// A wall stops the observer a hand's width before it (it walked through into the black
+    /// outside): held forward for 10 s toward the -Z wall, it ends 0.1 m inside, seeing it.
+    #[test]
+    fn the_walls_stop_the_observer() {
+        let mut s = scene();
+        let mut m = Motion::default();
+        let t0 = Instant::now();
+        m.press(FORWARD, t0);
+        m.release(FORWARD, t0 + Duration::from_secs(10), &mut s);
+        let wall = s.room.center.z - 0.5 * s.room.size_m.z;
+        let z = s.observer.position.z;
+        assert!(
+            (z - (wall + input::OBSERVER_WALL_MARGIN_M)).abs() < 1e-4,
+            "z {z}, wall {wall}"
+        );
     }
 
     #[test]

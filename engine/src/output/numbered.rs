@@ -20,8 +20,11 @@ use tempfile::NamedTempFile;
 
 use super::{sys, OutputError};
 
-/// The highest number: a folder whose numbers up to it are all taken is refused.
-const MAX_NUMBER: u32 = 9999;
+/// The highest number: five digits once four are used up (after `-9999` comes `-10000`, not
+/// the lowest free number, which sent the 10 000th shot back to `-0002`). Longer numbers (a
+/// date, `-20240101`) are not of the series. Only past it does the series take the lowest
+/// free number, and a folder with every one taken is refused.
+const MAX_NUMBER: u32 = 99_999;
 
 /// Writes `bytes` as the first free `PREFIX-NNNN.EXT` in `folder` (after the highest number
 /// already there, else the lowest free one) and returns its path. Errors name that path (or
@@ -207,8 +210,9 @@ mod tests {
         assert!(!e.contains(".partial"), "{e}");
     }
 
-    /// A name with a larger number (a date) is not part of the series, and a file at the last
-    /// number sends the next one back to the lowest free number instead of refusing.
+    /// A name with a larger number (a date) is not part of the series; after 9999 comes 10000
+    /// (not the lowest free number); a file at the last number sends the next one back to the
+    /// lowest free number instead of refusing.
     #[test]
     fn large_numbers_block_nothing() {
         let dir = folder("large");
@@ -217,9 +221,14 @@ mod tests {
             write_numbered(&dir, "shot", "png", b"a").unwrap(),
             dir.join("shot-0001.png")
         );
-        std::fs::write(dir.join(format!("shot-{MAX_NUMBER}.png")), b"last").unwrap();
+        std::fs::write(dir.join("shot-9999.png"), b"four digits").unwrap();
         assert_eq!(
             write_numbered(&dir, "shot", "png", b"b").unwrap(),
+            dir.join("shot-10000.png")
+        );
+        std::fs::write(dir.join(format!("shot-{MAX_NUMBER}.png")), b"last").unwrap();
+        assert_eq!(
+            write_numbered(&dir, "shot", "png", b"c").unwrap(),
             dir.join("shot-0002.png")
         );
         assert_eq!(

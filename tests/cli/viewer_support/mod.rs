@@ -298,6 +298,14 @@ impl Weston {
     }
 }
 
+impl Weston {
+    /// Stops the compositor now, as a crash would (SIGKILL), under any client it has.
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
 impl Display for Weston {
     fn command(&self, args: &[&str]) -> Command {
         let mut c = Command::new(env!("CARGO_BIN_EXE_specchio"));

@@ -147,8 +147,10 @@ impl App<'_> {
                 Ok(())
             }
             Action::Screenshot => {
-                // Saved from the first view rendered from now on (this key asks for one).
-                self.shot_asked = Some(self.clock.frame);
+                // Saved from the first view rendered from the first press on; presses before
+                // it is shown ask for that same image, and are counted to be said.
+                let (frame, presses) = self.shot_asked.unwrap_or((self.clock.frame, 0));
+                self.shot_asked = Some((frame, presses + 1));
                 Ok(())
             }
             _ => {
@@ -354,15 +356,24 @@ impl App<'_> {
 }
 
 /// Saves the screenshot key's image as the next numbered PNG in the current folder, never
-/// replacing a file, and says where (or why not: the viewer goes on either way).
-pub(super) fn save_screenshot(shot: &Screenshot) {
+/// replacing a file, and says where (or why not: the viewer goes on either way). `presses`:
+/// how many times the key was pressed before this image was shown; one file holds them all,
+/// and the line says so rather than leave the others unaccounted for.
+pub(super) fn save_screenshot(shot: &Screenshot, presses: u32) {
     let folder = Path::new(".");
     let (w, h) = (shot.width, shot.height);
+    let more = match presses {
+        0 | 1 => String::new(),
+        n => format!(
+            "; {} more press(es) before this frame was shown: the same image, saved once",
+            n - 1
+        ),
+    };
     match specchio::output::write_png_rgb8_numbered(folder, SCREENSHOT_PREFIX, w, h, &shot.rgb8) {
         Ok(path) => {
             let name = path.strip_prefix(folder).unwrap_or(&path);
             let shown = std::env::current_dir().map_or(name.to_owned(), |cwd| cwd.join(name));
-            specchio::say!("screenshot: {} ({w}x{h})", shown.display());
+            specchio::say!("screenshot: {} ({w}x{h}){more}", shown.display());
         }
         Err(e) => specchio::say!("screenshot not saved: {e:#}"),
     }

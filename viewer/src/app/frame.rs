@@ -190,7 +190,7 @@ impl App<'_> {
     /// rendered after the key (what the keys before it did is then in it).
     fn shot_due(&self) -> bool {
         self.shot_asked
-            .is_some_and(|asked| self.view_frame.is_some_and(|shown| shown >= asked))
+            .is_some_and(|(asked, _)| self.view_frame.is_some_and(|shown| shown >= asked))
     }
 
     /// A window frame was shown: the title's figures, the screenshot the key asked for.
@@ -198,13 +198,14 @@ impl App<'_> {
         let Some(viewer) = self.viewer.as_mut() else {
             return;
         };
-        if let Some(title) = (self.figures).title(&viewer.renderer, &self.settings.scene_name) {
+        let (name, paused) = (&self.settings.scene_name, self.clock.paused);
+        if let Some(title) = (self.figures).title(&viewer.renderer, name, paused) {
             viewer.window.set_title(&title);
         }
         if self.shot_due() {
-            self.shot_asked = None;
+            let presses = self.shot_asked.take().map_or(1, |(_, n)| n);
             match screenshot {
-                Some(shot) => actions::save_screenshot(shot),
+                Some(shot) => actions::save_screenshot(shot, presses),
                 None => specchio::say!("screenshot: this window's images cannot be read back"),
             }
         }

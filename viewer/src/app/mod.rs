@@ -117,7 +117,7 @@ struct App<'a> {
     motion: Motion,
     /// The screenshot key was pressed when the renderer's next frame was this one: the first
     /// window frame that shows it (or a later one) is saved.
-    shot_asked: Option<u64>,
+    shot_asked: Option<(u64, u32)>,
     /// The renderer's frame whose view the window shows (`collect_views`).
     view_frame: Option<u64>,
     /// A script's last frame was rendered: the window's next frame shows it and ends the loop.
