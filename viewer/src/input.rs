@@ -165,11 +165,15 @@ pub fn parse_script(script: &str) -> Result<Vec<Action>> {
 }
 
 /// The key list the help prints.
+/// The mouse and the modifier, after the keys.
+const MOUSE_HELP: &str = "  shift   held keys four times as fast\n  mouse   left drag: look around; right drag: orbit the mirror; middle drag: pan; wheel: walk\n";
+
 pub fn help() -> String {
     let mut text = String::from("specchio view keys:\n");
     for (key, _, what) in KEYS {
         text.push_str(&format!("  {key:<7} {what}\n"));
     }
+    text.push_str(MOUSE_HELP);
     text
 }
 
@@ -192,16 +196,9 @@ pub fn move_observer(scene: &mut Scene, action: Action, steps: f32) {
             let step =
                 ahead * f32::from(forward) + side * f32::from(right) + Vec3::Y * f32::from(up);
             let to = o.position + step * (MOVE_STEP_M * steps);
-            // The walls stop the observer (it walked through them into the black outside);
-            // one the scene put outside the room may still walk in.
-            let (lo, hi) = (
-                scene.room.center - 0.5 * scene.room.size_m,
-                scene.room.center + 0.5 * scene.room.size_m,
-            );
-            let margin = Vec3::splat(OBSERVER_WALL_MARGIN_M).min(0.25 * scene.room.size_m);
-            let (lo, hi) = (lo + margin, hi - margin);
-            let inside = o.position.cmpge(lo).all() && o.position.cmple(hi).all();
-            o.position = if inside { to.clamp(lo, hi) } else { to };
+            // The walls stop the observer (it walked through them into the black outside).
+            let from = o.position;
+            scene.observer.position = within_walls(scene, from, to);
         }
         Action::Turn { yaw, pitch } => {
             turn_observer(
@@ -211,6 +208,64 @@ pub fn move_observer(scene: &mut Scene, action: Action, steps: f32) {
             );
         }
         _ => {}
+    }
+}
+
+/// Circles the observer around the mirror's centre at its distance by `azimuth` degrees about
+/// the vertical (positive: to its left) and `elevation` degrees up, kept within ±85 of the
+/// horizon, and turns it to look at the centre; the walls stop it as they stop a walk.
+pub fn orbit_observer(scene: &mut Scene, azimuth: f32, elevation: f32) {
+    let centre = scene.mirror.center;
+    let offset = scene.observer.position - centre;
+    let r = offset.length();
+    if r == 0.0 {
+        return;
+    }
+    let az = offset.x.atan2(offset.z) + azimuth.to_radians();
+    let el = ((offset.y / r).clamp(-1.0, 1.0).asin() + elevation.to_radians())
+        .clamp(-MAX_PITCH_DEG.to_radians(), MAX_PITCH_DEG.to_radians());
+    let to = centre + r * Vec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
+    scene.observer.position = within_walls(scene, scene.observer.position, to);
+    look_at(scene, centre);
+}
+
+/// Slides the observer by `right` metres along its view's right (horizontal) and `up` metres
+/// along the vertical, its direction kept; the walls stop it.
+pub fn pan_observer(scene: &mut Scene, right: f32, up: f32) {
+    let o = &scene.observer;
+    let (sin, cos) = o.yaw_deg.to_radians().sin_cos();
+    let to = o.position + Vec3::new(cos, 0.0, -sin) * right + Vec3::Y * up;
+    scene.observer.position = within_walls(scene, scene.observer.position, to);
+}
+
+/// Turns the observer to look at `target` (yaw 0 looks along -Z, 90 along -X).
+fn look_at(scene: &mut Scene, target: Vec3) {
+    let d = target - scene.observer.position;
+    let length = d.length();
+    if length == 0.0 {
+        return;
+    }
+    let o = &mut scene.observer;
+    o.yaw_deg = (-d.x).atan2(-d.z).to_degrees().rem_euclid(360.0);
+    let pitch = (d.y / length).clamp(-1.0, 1.0).asin().to_degrees();
+    o.pitch_deg = pitch.clamp(-MAX_PITCH_DEG, MAX_PITCH_DEG);
+}
+
+/// Where a move from `from` to `to` ends: at `to`, kept [`OBSERVER_WALL_MARGIN_M`] inside the
+/// room's walls, unless `from` was outside them already (a scene may put the observer there,
+/// and it may walk in).
+fn within_walls(scene: &Scene, from: Vec3, to: Vec3) -> Vec3 {
+    let half = 0.5 * scene.room.size_m;
+    let margin = Vec3::splat(OBSERVER_WALL_MARGIN_M).min(0.5 * half);
+    let (lo, hi) = (
+        scene.room.center - half + margin,
+        scene.room.center + half - margin,
+    );
+    let inside = from.cmpge(lo).all() && from.cmple(hi).all();
+    if inside {
+        to.clamp(lo, hi)
+    } else {
+        to
     }
 }
 

@@ -1,6 +1,8 @@
 //! Moving as a person expects: a held key moves the observer or the mirror at a speed for as
 //! long as it is held, whatever the frame rate (the distance is the speed times the time held,
-//! to the release); dragging with the left mouse button looks around; the wheel walks.
+//! to the release), four times as fast with Shift held; dragging with the left mouse button
+//! looks around, with the right one orbits the observer around the mirror (looking at it),
+//! with the middle one pans; the wheel walks.
 //!
 //! A `--keys` script still moves in steps (`input::MOVE_STEP_M`, `input::TURN_STEP_DEG`), so
 //! that a scripted run lands on positions a scene file states exactly.
@@ -16,8 +18,23 @@ use super::input::{self, Action, MOVE_STEP_M, TURN_STEP_DEG};
 pub const WALK_SPEED_M_S: f32 = 2.0;
 pub const TURN_SPEED_DEG_S: f32 = 60.0;
 pub const SPHERE_SPEED_M_S: f32 = 1.0;
-/// Dragging: degrees of yaw or pitch per pixel the pointer moves.
+/// Dragging: degrees of yaw or pitch per pixel the pointer moves (looking, orbiting).
 pub const LOOK_DEG_PER_PX: f32 = 0.2;
+/// Panning: metres per pixel the pointer moves.
+pub const PAN_M_PER_PX: f32 = 0.01;
+/// Held keys' speed with Shift held.
+pub const FAST: f32 = 4.0;
+
+/// What a drag does, by the button held.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Drag {
+    /// Left: the observer turns (right and down look right and down).
+    Look,
+    /// Right: the observer circles the mirror's centre at its distance, looking at it.
+    Orbit,
+    /// Middle: the observer slides in its view's plane (right and up).
+    Pan,
+}
 /// The wheel: metres forward per notch (one line of scroll).
 pub const WHEEL_STEP_M: f32 = MOVE_STEP_M;
 
@@ -35,8 +52,10 @@ pub struct Motion {
     held: Vec<HeldKey>,
     /// Where the pointer was last seen in the window.
     cursor: Option<PhysicalPosition<f64>>,
-    /// The left button is down: the pointer's moves turn the observer.
-    dragging: bool,
+    /// The button held down, if one is: what the pointer's moves do.
+    dragging: Option<Drag>,
+    /// Shift is held: held keys move [`FAST`] times as fast.
+    pub fast: bool,
     /// The pose changed since it was last printed.
     moved: bool,
 }
@@ -96,21 +115,27 @@ impl Motion {
         !self.held.is_empty()
     }
 
-    /// The left mouse button went down or up.
-    pub fn button(&mut self, pressed: bool) {
-        self.moved |= self.dragging && !pressed;
-        self.dragging = pressed;
+    /// A drag's button went down (`Some`) or every one up (`None`).
+    pub fn button(&mut self, drag: Option<Drag>) {
+        self.moved |= self.dragging.is_some() && drag.is_none();
+        self.dragging = drag;
     }
 
-    /// The pointer moved: while dragging, the observer turns with it (right and down look
-    /// right and down). Whether it turned.
+    /// The pointer moved: while dragging, the observer looks, orbits or pans with it.
+    /// Whether it moved.
     pub fn pointer(&mut self, to: PhysicalPosition<f64>, scene: &mut Scene) -> bool {
         let from = self.cursor.replace(to);
-        let (true, Some(from)) = (self.dragging, from) else {
+        let (Some(drag), Some(from)) = (self.dragging, from) else {
             return false;
         };
         let (dx, dy) = ((to.x - from.x) as f32, (to.y - from.y) as f32);
-        input::turn_observer(scene, -dx * LOOK_DEG_PER_PX, -dy * LOOK_DEG_PER_PX);
+        match drag {
+            Drag::Look => input::turn_observer(scene, -dx * LOOK_DEG_PER_PX, -dy * LOOK_DEG_PER_PX),
+            Drag::Orbit => {
+                input::orbit_observer(scene, -dx * LOOK_DEG_PER_PX, dy * LOOK_DEG_PER_PX)
+            }
+            Drag::Pan => input::pan_observer(scene, -dx * PAN_M_PER_PX, dy * PAN_M_PER_PX),
+        }
         dx != 0.0 || dy != 0.0
     }
 
@@ -129,7 +154,7 @@ impl Motion {
     /// True once after a move ended (every key released, the button up, a wheel turn): the
     /// moment to say where the observer and the mirror are.
     pub fn settled(&mut self) -> bool {
-        let settled = self.moved && self.held.is_empty() && !self.dragging;
+        let settled = self.moved && self.held.is_empty() && self.dragging.is_none();
         if settled {
             self.moved = false;
         }
@@ -160,7 +185,8 @@ impl Motion {
         scene: &mut Scene,
         walk: f32,
     ) -> Option<String> {
-        let seconds = now.saturating_duration_since(key.applied_to).as_secs_f32();
+        let seconds = now.saturating_duration_since(key.applied_to).as_secs_f32()
+            * if self.fast { FAST } else { 1.0 };
         key.applied_to = now;
         self.moved = true;
         match key.action {
@@ -280,6 +306,73 @@ mod tests {
         );
     }
 
+    /// The right button orbits the mirror: the observer keeps its distance from the mirror's
+    /// centre, ends looking at it, and 450 px to the left (90 degrees) takes thesis-room's
+    /// observer from +Z of the mirror to +X of it. The middle button pans along the view's
+    /// right and the vertical; Shift makes held keys four times as fast.
+    #[test]
+    fn the_right_button_orbits_the_mirror_and_the_middle_one_pans() {
+        let mut s = scene();
+        let mut m = Motion::default();
+        let at = |x: f64, y: f64| PhysicalPosition::new(x, y);
+        let centre = s.mirror.center;
+        let start = s.observer.position - centre;
+        assert!(start.x.abs() < 1e-6 && start.z > 0.0, "{start}");
+        m.pointer(at(500.0, 100.0), &mut s);
+        m.button(Some(Drag::Orbit));
+        assert!(m.pointer(at(50.0, 100.0), &mut s));
+        m.button(None);
+        let now = s.observer.position - centre;
+        assert!(
+            (now.length() - start.length()).abs() < 1e-4,
+            "{now} against {start}"
+        );
+        let horizontal = |v: glam::Vec3| glam::Vec2::new(v.x, v.z).normalize();
+        let turned = horizontal(now).angle_to(horizontal(start)).to_degrees();
+        assert!(
+            (turned.abs() - 90.0).abs() < 1e-3,
+            "turned {turned} degrees"
+        );
+        // It looks at the centre: its forward is the unit vector towards it.
+        let o = &s.observer;
+        let (yaw, pitch) = (o.yaw_deg.to_radians(), o.pitch_deg.to_radians());
+        let forward = glam::Vec3::new(
+            -yaw.sin() * pitch.cos(),
+            pitch.sin(),
+            -yaw.cos() * pitch.cos(),
+        );
+        assert!(
+            (forward - (-now).normalize()).length() < 1e-4,
+            "{forward} {now}"
+        );
+
+        let before = s.observer.position;
+        let (sin, cos) = s.observer.yaw_deg.to_radians().sin_cos();
+        m.button(Some(Drag::Pan));
+        m.pointer(at(40.0, 90.0), &mut s);
+        m.button(None);
+        let right = glam::Vec3::new(cos, 0.0, -sin);
+        let expected =
+            before + right * (10.0 * PAN_M_PER_PX) + glam::Vec3::Y * (-10.0 * PAN_M_PER_PX);
+        assert!(
+            (s.observer.position - expected).length() < 1e-5,
+            "{} {expected}",
+            s.observer.position
+        );
+
+        let mut fast = scene();
+        let z = fast.observer.position.z;
+        m.fast = true;
+        let t0 = Instant::now();
+        m.press(FORWARD, t0);
+        m.release(FORWARD, t0 + Duration::from_millis(250), &mut fast);
+        assert!(
+            (z - fast.observer.position.z - FAST * 0.5).abs() < 1e-4,
+            "{}",
+            fast.observer.position
+        );
+    }
+
     #[test]
     fn a_drag_turns_the_observer_and_the_wheel_walks() {
         let mut s = scene();
@@ -289,11 +382,11 @@ mod tests {
         // Pointer moves without the button turn nothing.
         assert!(!m.pointer(at(90.0, 100.0), &mut s));
         assert!(!m.pointer(at(100.0, 100.0), &mut s));
-        m.button(true);
+        m.button(Some(Drag::Look));
         let turned = m.pointer(at(150.0, 90.0), &mut s);
         assert!(turned, "turns from where the button went down");
         assert!(!m.settled(), "still dragging");
-        m.button(false);
+        m.button(None);
         assert!(m.settled());
         // 50 px right: 10 degrees to the right (yaw is left-positive); 10 px up: 2 up.
         let yaw = s.observer.yaw_deg;

@@ -76,13 +76,16 @@ impl App<'_> {
             event,
             WindowEvent::MouseInput {
                 state: ElementState::Released,
-                button: MouseButton::Left,
+                button: MouseButton::Left | MouseButton::Right | MouseButton::Middle,
                 ..
             }
         );
         let unfocused = matches!(event, WindowEvent::Focused(false));
         if released || unfocused {
-            self.motion.button(false);
+            self.motion.button(None);
+        }
+        if unfocused {
+            self.motion.fast = false;
         }
         if unfocused {
             if let Some(v) = &mut self.viewer {

@@ -271,9 +271,12 @@ impl ApplicationHandler for App<'_> {
             } => self.key(event_loop, &event, is_synthetic),
             WindowEvent::MouseInput {
                 state: ElementState::Pressed,
-                button: MouseButton::Left,
+                button,
                 ..
-            } => self.motion.button(true),
+            } => self.motion.button(drag_of(button)),
+            WindowEvent::ModifiersChanged(modifiers) => {
+                self.motion.fast = modifiers.state().shift_key();
+            }
             WindowEvent::CursorMoved { position, .. } => self.pointer(position),
             WindowEvent::MouseWheel { delta, .. } => self.wheel(delta),
             _ => {}
@@ -529,6 +532,17 @@ fn key_name(key: &Key) -> Option<String> {
         Key::Named(NamedKey::F1) => Some("f1".into()),
         Key::Named(NamedKey::F5) => Some("f5".into()),
         Key::Named(NamedKey::F11) => Some("f11".into()),
+        _ => None,
+    }
+}
+
+/// What a drag with `button` does: left looks, right orbits the mirror, middle pans.
+fn drag_of(button: MouseButton) -> Option<crate::motion::Drag> {
+    use crate::motion::Drag;
+    match button {
+        MouseButton::Left => Some(Drag::Look),
+        MouseButton::Right => Some(Drag::Orbit),
+        MouseButton::Middle => Some(Drag::Pan),
         _ => None,
     }
 }
