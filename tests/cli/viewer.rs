@@ -363,6 +363,8 @@ fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
     let stdout = ended_cleanly(viewer);
     let at = |what: &str| line_of(&stdout, what);
     let let_go = at("fault: frame 3 let go");
+    // `q` hid the window at once; the wait for the held frame was said, not silent.
+    assert!(at("quitting: the frame in flight") < let_go, "{stdout}");
     assert!(
         at("refresh: ") < let_go && at("lookup: ") < let_go,
         "keys were answered only once the held frame went on:\n{stdout}"

@@ -459,6 +459,15 @@ impl App<'_> {
     fn quit(&mut self, event_loop: &ActiveEventLoop) {
         if let Some(v) = &self.viewer {
             v.window.set_visible(false);
+            // The window goes at once; the process waits for the frame on the GPU (a device
+            // does not drop a frame it has started: seconds for a heavy lookup on a CPU
+            // driver), and says so rather than hold the terminal without a word.
+            if !v.renderer.ready_for_frame().unwrap_or(true) {
+                specchio::say!(
+                    "quitting: the frame in flight on the GPU finishes first (a device does not \
+                     drop a frame it has started)"
+                );
+            }
         }
         event_loop.exit();
     }
