@@ -74,13 +74,15 @@ pub fn pose_fits(
         room.center + 0.5 * room.size_m,
     );
     let r = scene.mirror.radius_m;
+    let n = crate::text::num_text::<f64>;
     let file = |p: Vec3| {
         let w = scene.origin + p.as_dvec3();
-        format!("[{}, {}, {}]", w.x, w.y, w.z)
+        format!("[{}, {}, {}]", n(w.x), n(w.y), n(w.z))
     };
     if (local - Vec3::splat(r)).cmplt(lo).any() || (local + Vec3::splat(r)).cmpgt(hi).any() {
         let why = format!(
-            "the mirror (reaching {r} m) at {} is not entirely inside the room",
+            "the mirror (reaching {} m) at {} is not entirely inside the room",
+            crate::text::num_text(r),
             file(local)
         );
         return Err(("position", why));
