@@ -198,9 +198,13 @@ fn render_method(
     let reports = render_frames(args, &mut renderer, start_s, out, &dir)?;
     let summary = summarize(&reports);
     let lookup = renderer.scene.mirror.lookup;
-    let files = out.written(&dir)?;
+    // Said from the folder; a listing that fails costs the line, never the render.
+    let files = out.written(&dir);
     print_summary(args, (method, lookup), &dir, &reports, &summary);
-    specchio::say!("  files: {}", files_line(&files));
+    match files {
+        Ok(files) => specchio::say!("  files: {}", files_line(&files)),
+        Err(e) => specchio::say!("  files: (cannot list them: {e})"),
+    }
     Ok(RenderRun {
         method,
         out: dir.display().to_string(),
@@ -473,12 +477,13 @@ fn print_summary(
 
 /// The files a run wrote, said from the folder itself (a fixed list left out the sensor
 /// outputs): an EXR and a PNG of one image as `name.exr/.png`; a sequence's frame folders
-/// (`0000/`, ...), which hold the same names, once, with their count. `render.json` is
-/// written after this is said.
+/// (`0000/`, ..., `10000/`, ...), which hold the same names, once, with their count. Linear
+/// in the files (a 100 000-frame sequence has a million). `render.json` is written after this
+/// is said.
 fn files_line(files: &[String]) -> String {
     fn frame(f: &str) -> Option<(&str, &str)> {
         f.split_once('/')
-            .filter(|(d, _)| d.len() == 4 && d.bytes().all(|b| b.is_ascii_digit()))
+            .filter(|(d, _)| d.len() >= 4 && d.bytes().all(|b| b.is_ascii_digit()))
     }
     let folders: std::collections::BTreeSet<&str> = files
         .iter()
@@ -492,14 +497,15 @@ fn files_line(files: &[String]) -> String {
             None => Some(f.as_str()),
         })
         .collect();
+    let set: std::collections::HashSet<&str> = names.iter().copied().collect();
     let mut said: Vec<String> = Vec::new();
     for name in &names {
         match name.strip_suffix(".png") {
-            Some(stem) if names.contains(&format!("{stem}.exr").as_str()) => continue,
+            Some(stem) if set.contains(format!("{stem}.exr").as_str()) => continue,
             _ => {}
         }
         match name.strip_suffix(".exr") {
-            Some(stem) if names.contains(&format!("{stem}.png").as_str()) => {
+            Some(stem) if set.contains(format!("{stem}.png").as_str()) => {
                 said.push(format!("{stem}.exr/.png"))
             }
             _ => said.push((*name).to_owned()),

@@ -46,15 +46,25 @@ pub fn device(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
 }
 
 /// `poses` as a (B, 4) float64 array: any array-like of numbers (ints, float32, lists) is
-/// converted as numpy converts it; anything else is refused, naming `poses`.
+/// converted as numpy converts it; anything else (strings, bools, objects) is refused, naming
+/// `poses`.
 pub fn poses<'py>(
     py: Python<'py>,
     poses: &Bound<'py, PyAny>,
 ) -> PyResult<PyReadonlyArray2<'py, f64>> {
     let numpy = py.import("numpy")?;
-    let array = numpy
-        .call_method1("asarray", (poses, "float64"))
-        .map_err(|e| errors::error(format!("poses: not an array of numbers ({e})")))?;
+    let not_numbers =
+        |why: String| errors::error(format!("poses: not an array of numbers ({why})"));
+    let given = numpy
+        .call_method1("asarray", (poses,))
+        .map_err(|e| not_numbers(e.to_string()))?;
+    // Signed and unsigned ints and floats: numpy's own kinds for numbers (not `b`ool).
+    let kind: String = given.getattr("dtype")?.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "i" | "u" | "f") {
+        let dtype = given.getattr("dtype")?.str()?.to_string();
+        return Err(not_numbers(format!("dtype {dtype}")));
+    }
+    let array = given.call_method1("astype", ("float64",))?;
     let shape: Vec<usize> = array.getattr("shape")?.extract()?;
     let array = array.cast_into::<PyArray2<f64>>().map_err(|_| {
         errors::error(format!(

@@ -63,6 +63,9 @@ def test_a_batch_is_the_frames_one_by_one_and_fills_given_buffers(renderer):
     assert not np.array_equal(batch["sensor"][0], batch["sensor"][1])
     # Poses of another numeric type (ints, float32, a list) are the same poses.
     whole = np.array([[0, 3, 0, 0], [1, 3, 0, 45]], dtype=np.int64)
+    for bad in (whole.astype(str), whole.astype(bool)):
+        with pytest.raises(specchio.SpecchioError, match=r"poses: not an array of numbers \(dtype"):
+            renderer.render_batch(bad)
     for same in (whole, whole.astype(np.float32), whole.tolist()):
         np.testing.assert_array_equal(renderer.render_batch(same, times=[0.25])["sensor"][1], renderer.render_batch(whole.astype(np.float64), times=[0.25])["sensor"][1])
     # out=: the same arrays, written again (the poses swapped).

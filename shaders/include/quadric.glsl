@@ -55,14 +55,17 @@ bool quadric_slab(Quadric q, vec3 o, vec3 d, out vec2 span) {
 // order 10^4 a few decimetres from the vertex, so f32's disc lost the root by micrometres,
 // pixels where the rim plane meets the surface at 0.05 degrees. At the root's own point F is
 // of the rounding of that point alone, and F is so nearly linear over a step that one step
-// is enough.
-float quadric_polish(Quadric q, vec3 o, vec3 d, float t) {
+// is enough. A step longer than `max_step` (half the distance to the other root) is not
+// taken: near a double root (a grazing ray) the slope is itself rounding, and the step
+// could throw the root anywhere.
+float quadric_polish(Quadric q, vec3 o, vec3 d, float t, float max_step) {
     if (!(abs(t) < 1.0e15)) {
         return t; // beyond every room (and F there would overflow): nothing to polish
     }
     vec3 p = o + t * d;
     float slope = 2.0 * dot(vec3(p.x, q.ab.x * p.y + 0.5 * q.ab.y, p.z), d); // dF/dt at p
-    return slope != 0.0 ? t - quadric_value(q, p) / slope : t;
+    float step = slope != 0.0 ? quadric_value(q, p) / slope : 0.0;
+    return abs(step) <= max_step ? t - step : t;
 }
 
 // The intervals of the ray from o where F < 0: `count` of them (0, 1 or 2), in order.
@@ -78,7 +81,7 @@ int quadric_inside(Quadric q, vec3 o, vec3 d, out vec2 first, out vec2 second) {
         if (hb == 0.0) {
             return qc < 0.0 ? 1 : 0;
         }
-        float root = quadric_polish(q, o, d, -qc / (2.0 * hb));
+        float root = -qc / (2.0 * hb);
         first = hb < 0.0 ? vec2(root, INF) : vec2(-INF, root);
         return 1;
     }
@@ -88,8 +91,11 @@ int quadric_inside(Quadric q, vec3 o, vec3 d, out vec2 first, out vec2 second) {
     }
     // The roots without subtracting nearly equal numbers: q / qa and qc / q.
     float s = -(hb + (hb < 0.0 ? -1.0 : 1.0) * sqrt(disc));
-    float r1 = quadric_polish(q, o, d, s / qa);
-    float r2 = quadric_polish(q, o, d, s == 0.0 ? 0.0 : qc / s);
+    float r1 = s / qa;
+    float r2 = s == 0.0 ? 0.0 : qc / s;
+    float max_step = 0.5 * abs(r2 - r1);
+    r1 = quadric_polish(q, o, d, r1, max_step);
+    r2 = quadric_polish(q, o, d, r2, max_step);
     vec2 roots = vec2(min(r1, r2), max(r1, r2));
     if (qa > 0.0) {
         first = roots;

@@ -110,8 +110,14 @@ fn an_output_never_replaces_its_input_through_a_case_fold_on_fuse_vfat() {
     let before = |p: &str| std::fs::read(mnt.join(p)).unwrap();
     let (exr, toml) = (before("T.exr"), before("s.toml"));
 
-    let cases: [&[&str]; 2] = [
+    std::fs::create_dir(mnt.join("Sub")).unwrap();
+    std::fs::write(mnt.join("Sub/T.exr"), &exr).unwrap();
+    let cases: [&[&str]; 4] = [
         &["compare", "T.exr", "r.exr", "--heatmap", "t.EXR"],
+        // The input named by a spelling its folder does not list, the target by the listed one.
+        &["compare", "t.exr", "r.exr", "--heatmap", "T.EXR"],
+        // A parent folder spelled in another case.
+        &["compare", "sub/T.exr", "r.exr", "--heatmap", "SUB/t.exr"],
         &[
             "bench",
             "s.toml",
@@ -130,6 +136,7 @@ fn an_output_never_replaces_its_input_through_a_case_fold_on_fuse_vfat() {
         assert!(stderr.contains("it is the input"), "{args:?}: {stderr}");
     }
     assert_eq!(before("T.exr"), exr, "the input is untouched");
+    assert_eq!(before("Sub/T.exr"), exr, "the input is untouched");
     assert_eq!(before("s.toml"), toml, "the input is untouched");
     // Another name is an output as usual.
     let (code, stderr) = run_in(mnt, &["compare", "T.exr", "r.exr", "--heatmap", "h.exr"]);

@@ -301,7 +301,21 @@ fn a_central_mirrors_cube_path_is_exact_and_says_so() {
     moved.cube.offset_m = Vec3::new(0.0, 0.0, 0.01);
     let mut shifted = central.clone();
     shifted.sensor.shift_m = Vec3::new(0.01, 0.0, 0.0);
-    for (name, s) in [("the cube moved", moved), ("the camera shifted", shifted)] {
+    // A tilted pinhole stays at the focus (exact); a tilted orthographic camera does not.
+    let mut tilted = central.clone();
+    tilted.sensor.tilt_deg = 1.0;
+    let truth = gpu_outputs(&gpu, &tilted, Lookup::Plain).ground_truth;
+    assert!(
+        truth.colour_agrees && truth.warning.is_none(),
+        "a tilted pinhole: {truth:?}"
+    );
+    let mut tilted_parabola = scene("scenes/parabolic-room.toml");
+    tilted_parabola.sensor.tilt_deg = 1.0;
+    for (name, s) in [
+        ("the cube moved", moved),
+        ("the camera shifted", shifted),
+        ("the orthographic camera tilted", tilted_parabola),
+    ] {
         let truth = gpu_outputs(&gpu, &s, Lookup::Plain).ground_truth;
         assert!(
             !truth.colour_agrees && truth.warning.is_some(),

@@ -44,8 +44,8 @@ pub(super) fn run_catching_window_panics<A: ApplicationHandler>(
         // gone): an exit code. Said for a person, with the display it was.
         Ok(Err(winit::error::EventLoopError::ExitFailure(code))) => Err(anyhow::anyhow!(
             "the display connection broke ({}; the window system's exit code {code}): the \
-             compositor or server is gone, and the window with it; start the viewer again \
-             once it runs",
+             compositor or server is gone or ended the connection, and the window with it; \
+             start the viewer again once it runs",
             display_name()
         )),
         Ok(result) => Ok(result?),

@@ -252,21 +252,18 @@ fn look_at(scene: &mut Scene, target: Vec3) {
 }
 
 /// Where a move from `from` to `to` ends: at `to`, kept [`OBSERVER_WALL_MARGIN_M`] inside the
-/// room's walls, unless `from` was outside them already (a scene may put the observer there,
-/// and it may walk in).
+/// room's walls, or, where `from` is nearer a wall than that, no nearer than `from`; unless
+/// `from` was outside the room already (a scene may put the observer there, and it may walk
+/// in).
 fn within_walls(scene: &Scene, from: Vec3, to: Vec3) -> Vec3 {
     let half = 0.5 * scene.room.size_m;
-    let margin = Vec3::splat(OBSERVER_WALL_MARGIN_M).min(0.5 * half);
-    let (lo, hi) = (
-        scene.room.center - half + margin,
-        scene.room.center + half - margin,
-    );
-    let inside = from.cmpge(lo).all() && from.cmple(hi).all();
-    if inside {
-        to.clamp(lo, hi)
-    } else {
-        to
+    let (room_lo, room_hi) = (scene.room.center - half, scene.room.center + half);
+    if !(from.cmpge(room_lo).all() && from.cmple(room_hi).all()) {
+        return to;
     }
+    let margin = Vec3::splat(OBSERVER_WALL_MARGIN_M).min(0.5 * half);
+    let (lo, hi) = (room_lo + margin, room_hi - margin);
+    to.clamp(lo.min(from), hi.max(from))
 }
 
 /// Turns the observer by `yaw` (left positive) and `pitch` (up positive) degrees, the pitch

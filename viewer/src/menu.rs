@@ -144,7 +144,9 @@ impl Menu {
                     && px < f64::from(x + w)
                     && py < f64::from(y + h)
             });
-            repaint &= over || self.pointer_over;
+            // A popup (the method's list) reaches past the menu's rectangle: any move while one
+            // is open may hover it.
+            repaint &= over || self.pointer_over || self.ctx.any_popup_open();
             self.pointer_over = over;
         }
         EventResponse {

@@ -69,8 +69,11 @@ pub fn is_move(action: Action) -> bool {
 }
 
 impl Motion {
-    /// A move key went down (its auto-repeats are not presses: the key is simply held).
-    pub fn press(&mut self, action: Action, now: Instant) {
+    /// A move key went down (its auto-repeats are not presses: the key is simply held). The
+    /// keys held already move up to now first, at the speed they had alone (a second key
+    /// changes the shared walking speed from now on, not before); the mirror's refusals met.
+    pub fn press(&mut self, action: Action, now: Instant, scene: &mut Scene) -> Vec<String> {
+        let refusals = self.advance(now, scene);
         if !self.held.iter().any(|h| h.action == action) {
             self.held.push(HeldKey {
                 action,
@@ -78,17 +81,27 @@ impl Motion {
                 refused: false,
             });
         }
+        refusals
+    }
+
+    /// Shift went down or up at `now`: the held keys move up to now at the speed they had.
+    pub fn set_fast(&mut self, fast: bool, now: Instant, scene: &mut Scene) -> Vec<String> {
+        let refusals = self.advance(now, scene);
+        self.fast = fast;
+        refusals
     }
 
     /// A move key went up at `now`: it moves for the time it was held up to then, and stops.
     /// The mirror's refusal, if it met one.
-    pub fn release(&mut self, action: Action, now: Instant, scene: &mut Scene) -> Option<String> {
-        let at = self.held.iter().position(|h| h.action == action)?;
+    pub fn release(&mut self, action: Action, now: Instant, scene: &mut Scene) -> Vec<String> {
+        let Some(at) = self.held.iter().position(|h| h.action == action) else {
+            return Vec::new();
+        };
         // Every held key moves up to now first: the released one's last stretch was walked
         // beside the keys held with it, at their shared speed.
         let refusals = self.advance(now, scene);
         self.held.remove(at);
-        refusals.into_iter().next()
+        refusals
     }
 
     /// Every held key moved up to `now`; the mirror's refusals met meanwhile.
@@ -240,7 +253,7 @@ mod tests {
             let start_z = s.observer.position.z;
             let mut m = Motion::default();
             let t0 = Instant::now();
-            m.press(FORWARD, t0);
+            m.press(FORWARD, t0, &mut s);
             let held = Duration::from_millis(1500);
             let frame = Duration::from_secs(1) / frames_per_s;
             let mut t = t0;
@@ -271,8 +284,8 @@ mod tests {
         let start = s.observer.position;
         let mut m = Motion::default();
         let t0 = Instant::now();
-        m.press(FORWARD, t0);
-        m.press(RIGHT, t0);
+        m.press(FORWARD, t0, &mut s);
+        m.press(RIGHT, t0, &mut s);
         let half = t0 + Duration::from_millis(500);
         assert!(m.advance(half, &mut s).is_empty());
         m.release(FORWARD, t0 + Duration::from_secs(1), &mut s);
@@ -289,6 +302,37 @@ mod tests {
         );
     }
 
+    /// A second key, or Shift, changes the speed from its own moment on, not for the time
+    /// before it: forward alone for 1 s (2 m), then Shift for 0.5 s (4 m more), all at 3
+    /// frames a second's worth of advances or none.
+    #[test]
+    fn a_change_of_speed_counts_from_its_moment() {
+        let mut s = scene();
+        let z = s.observer.position.z;
+        let mut m = Motion::default();
+        let t0 = Instant::now();
+        m.press(FORWARD, t0, &mut s);
+        assert!(m
+            .set_fast(true, t0 + Duration::from_secs(1), &mut s)
+            .is_empty());
+        m.release(FORWARD, t0 + Duration::from_millis(1500), &mut s);
+        let walked = z - s.observer.position.z;
+        assert!((walked - (2.0 + FAST)).abs() < 1e-4, "{walked} m");
+        // Right pressed 1 s after forward: the first second is forward alone at 2 m/s.
+        let mut s = scene();
+        let start = s.observer.position;
+        let mut m = Motion::default();
+        m.press(FORWARD, t0, &mut s);
+        m.press(RIGHT, t0 + Duration::from_secs(1), &mut s);
+        m.release(FORWARD, t0 + Duration::from_secs(1), &mut s);
+        m.release(RIGHT, t0 + Duration::from_secs(1), &mut s);
+        let walked = s.observer.position - start;
+        assert!(
+            (walked.length() - 2.0).abs() < 1e-4 && walked.x.abs() < 1e-4,
+            "{walked}"
+        );
+    }
+
     /// A wall stops the observer a hand's width before it (it walked through into the black
     /// outside): held forward for 10 s toward the -Z wall, it ends 0.1 m inside, seeing it.
     #[test]
@@ -296,7 +340,7 @@ mod tests {
         let mut s = scene();
         let mut m = Motion::default();
         let t0 = Instant::now();
-        m.press(FORWARD, t0);
+        m.press(FORWARD, t0, &mut s);
         m.release(FORWARD, t0 + Duration::from_secs(10), &mut s);
         let wall = s.room.center.z - 0.5 * s.room.size_m.z;
         let z = s.observer.position.z;
@@ -364,7 +408,7 @@ mod tests {
         let z = fast.observer.position.z;
         m.fast = true;
         let t0 = Instant::now();
-        m.press(FORWARD, t0);
+        m.press(FORWARD, t0, &mut fast);
         m.release(FORWARD, t0 + Duration::from_millis(250), &mut fast);
         assert!(
             (z - fast.observer.position.z - FAST * 0.5).abs() < 1e-4,
@@ -405,7 +449,7 @@ mod tests {
         let mut m = Motion::default();
         let right = Action::MoveMirror { x: 1, y: 0, z: 0 };
         let t0 = Instant::now();
-        m.press(right, t0);
+        m.press(right, t0, &mut s);
         let mut refusals = 0;
         // 20 s at 1 m/s would be 20 m: the room's +X wall stops it.
         for k in 1..=200 {

@@ -122,15 +122,17 @@ impl Quadric {
     /// F(o), which for a wide flat mirror is large (its s² coefficient is −10⁶ at a latus
     /// rectum 10³ times the focal distance); at the root's own point F carries only that
     /// point's rounding. f64 hardly needs it; the shader's f32 lost pixels of the rim without
-    /// it, and the two keep one algorithm.
-    fn polish(&self, o: DVec3, d: DVec3, t: f64) -> f64 {
+    /// it, and the two keep one algorithm. A step longer than `max_step` (half the distance to
+    /// the other root) is not taken: near a double root the slope is rounding itself.
+    fn polish(&self, o: DVec3, d: DVec3, t: f64, max_step: f64) -> f64 {
         if !t.is_finite() || t.abs() >= 1e15 {
             return t; // beyond every room: nothing to polish (and the shader's F overflows)
         }
         let p = o + t * d;
         let slope = 2.0 * DVec3::new(p.x, self.a * p.y + 0.5 * self.b, p.z).dot(d);
-        if slope != 0.0 && slope.is_finite() {
-            t - self.value_about_vertex(p) / slope
+        let step = self.value_about_vertex(p) / slope;
+        if slope != 0.0 && step.abs() <= max_step {
+            t - step
         } else {
             t
         }
@@ -146,7 +148,7 @@ impl Quadric {
         let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
         if qa == 0.0 {
             // Linear: a ray along the paraboloid's axis, or parallel to an asymptote.
-            let root = self.polish(o, d, -qc / (2.0 * hb));
+            let root = -qc / (2.0 * hb);
             return if hb < 0.0 {
                 [Some((root, inf)), None]
             } else if hb > 0.0 {
@@ -166,7 +168,12 @@ impl Quadric {
         let (r1, r2) = if q == 0.0 {
             (0.0, 0.0)
         } else {
-            (self.polish(o, d, q / qa), self.polish(o, d, qc / q))
+            let (r1, r2) = (q / qa, qc / q);
+            let max_step = 0.5 * (r2 - r1).abs();
+            (
+                self.polish(o, d, r1, max_step),
+                self.polish(o, d, r2, max_step),
+            )
         };
         let (lo, hi) = (r1.min(r2), r1.max(r2));
         if qa > 0.0 {

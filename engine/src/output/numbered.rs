@@ -21,9 +21,11 @@ use tempfile::NamedTempFile;
 use super::{sys, OutputError};
 
 /// The highest number: five digits once four are used up (after `-9999` comes `-10000`, not
-/// the lowest free number, which sent the 10 000th shot back to `-0002`). Longer numbers (a
-/// date, `-20240101`) are not of the series. Only past it does the series take the lowest
-/// free number, and a folder with every one taken is refused.
+/// the lowest free number, which sent the 10 000th shot back to `-0002`; a name sort then
+/// puts `-10000` before `-9999`, a natural sort after it). Longer numbers (a date,
+/// `-20240101`) are not of the series; a five-digit one of the user's is, and the series goes
+/// on after it. Only past it does the series take the lowest free number, and a folder with
+/// every one taken is refused.
 const MAX_NUMBER: u32 = 99_999;
 
 /// Writes `bytes` as the first free `PREFIX-NNNN.EXT` in `folder` (after the highest number

@@ -320,16 +320,20 @@ fn check_not_an_input(
     target: &Path,
     inputs: &[(FileId, PathBuf)],
 ) -> Result<(), OutputError> {
-    // The target as spelled, and the entry a case-folding file system reaches for it.
-    let reached: Vec<PathBuf> = std::iter::once(target.to_owned())
-        .chain(folded_entry(target))
-        .collect();
-    let ids: Vec<Option<FileId>> = (reached.iter())
-        .flat_map(|p| [fs::symlink_metadata(p), fs::metadata(p)])
-        .map(|m| m.ok().and_then(|m| FileId::of(&m)))
-        .collect();
+    let ids = [
+        fs::symlink_metadata(target)
+            .ok()
+            .and_then(|m| FileId::of(&m)),
+        fs::metadata(target).ok().and_then(|m| FileId::of(&m)),
+    ];
+    // By identity first; then, for a target that exists, by the path its folders list.
+    let listed = ids
+        .iter()
+        .any(Option::is_some)
+        .then(|| listed_path(target))
+        .flatten();
     let same = |(id, input): &&(FileId, PathBuf)| {
-        ids.contains(&Some(*id)) || reached.iter().skip(1).any(|p| same_entry(p, input))
+        ids.contains(&Some(*id)) || listed.is_some() && listed == listed_path(input)
     };
     match inputs.iter().find(same) {
         Some((_, input)) => Err(OutputError::IsAnInput {
@@ -340,37 +344,40 @@ fn check_not_an_input(
     }
 }
 
-/// The entry a lookup of `path` reaches in its folder where the folder lists no entry spelled
-/// exactly so: the fold of a case-insensitive file system. Identities miss it where the file
-/// system gives each spelling its own inode (vfat through FUSE: `t.EXR` and `T.exr` are one
-/// file and two inodes), so the folder is asked which name it holds. None where the name is
-/// listed as spelled, or nothing is there.
-fn folded_entry(path: &Path) -> Option<PathBuf> {
-    let name = path.file_name()?.to_str()?;
-    fs::symlink_metadata(path).ok()?;
-    let parent = parent_of(path);
-    let folded = name.to_lowercase();
-    let mut found = None;
-    for entry in fs::read_dir(&parent).ok()?.flatten() {
-        let entry = entry.file_name();
-        let Some(entry) = entry.to_str() else {
+/// The path of the existing file `path` as its folders list it: canonical (links and `..`
+/// resolved), then each component spelled as its folder's listing spells it. Identities miss
+/// a case fold where the file system gives each spelling its own inode (vfat through FUSE:
+/// `t.EXR` and `T.exr` are one file and two inodes, `DIR` and `dir` one folder and two), so
+/// the folders are asked which names they hold: a component listed exactly keeps its
+/// spelling (a case-sensitive file system changes nothing), one that is not takes the listed
+/// name it folds to. None where the path cannot be resolved.
+fn listed_path(path: &Path) -> Option<PathBuf> {
+    let canonical = fs::canonicalize(path).ok()?;
+    let mut listed = PathBuf::new();
+    for component in canonical.components() {
+        let std::path::Component::Normal(name) = component else {
+            listed.push(component); // the root
             continue;
         };
-        if entry == name {
-            return None;
+        let name = name.to_str()?;
+        let folded = name.to_lowercase();
+        let mut found = None;
+        for entry in fs::read_dir(&listed).ok()?.flatten() {
+            let entry = entry.file_name();
+            let Some(entry) = entry.to_str() else {
+                continue;
+            };
+            if entry == name {
+                found = Some(entry.to_owned());
+                break;
+            }
+            if found.is_none() && entry.to_lowercase() == folded {
+                found = Some(entry.to_owned());
+            }
         }
-        if found.is_none() && entry.to_lowercase() == folded {
-            found = Some(parent.join(entry));
-        }
+        listed.push(found.unwrap_or_else(|| name.to_owned()));
     }
-    found
-}
-
-/// Whether `a` and `b` name one folder entry, spelled alike: the same folder (by canonical
-/// path) and the same name.
-fn same_entry(a: &Path, b: &Path) -> bool {
-    let folder = |p: &Path| fs::canonicalize(parent_of(p)).ok();
-    a.file_name() == b.file_name() && folder(a).is_some() && folder(a) == folder(b)
+    Some(listed)
 }
 
 /// The hook as `place` takes it.

@@ -20,12 +20,17 @@ const CENTRAL_CUBE: &str = "the mirror is central, its camera at its focus and t
      range, ids and colour agree up to texel sampling";
 
 /// Whether the cube path is exact for `scene`'s sensor: a central mirror (a single viewpoint,
-/// the shape's own camera at its focus, no `sensor.shift`; a tilt keeps the rays through the
-/// viewpoint) and the cube rendered at that viewpoint (no `cube.offset`). Every reflected ray
-/// then lies on a line through the cube's centre, which saw the first surface along it.
+/// the shape's own camera at its focus, no `sensor.shift`) and the cube rendered at that
+/// viewpoint (no `cube.offset`). A tilt keeps a pinhole's rays through the focus (the
+/// hyperboloid's), but not an orthographic camera's (the paraboloid's): it focuses only rays
+/// parallel to its axis. Every reflected ray then lies on a line through the cube's centre,
+/// which saw the first surface along it.
 pub fn cube_path_is_exact(scene: &Scene) -> bool {
+    let s = &scene.sensor;
+    let tilted_orthographic = s.orthographic_half_m > 0.0 && s.tilt_deg != 0.0;
     scene.mirror.shape.xi.is_some()
-        && scene.sensor.shift_m == glam::Vec3::ZERO
+        && s.shift_m == glam::Vec3::ZERO
+        && !tilted_orthographic
         && scene.cube.offset_m == glam::Vec3::ZERO
 }
 

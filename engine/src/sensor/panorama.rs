@@ -183,7 +183,8 @@ fn cylinder_band(top: f64, lowest: f64) -> (f64, f64) {
     let (high, low) = (top.min(FRAC_PI_4), lowest.max(-FRAC_PI_4));
     if high > low {
         (high, low)
-    } else if top < -FRAC_PI_4 {
+    } else if top <= 0.0 {
+        // Wholly below the horizon's ±45° band (its top at -45° exactly included).
         (top, (top.tan() - 2.0).atan().max(lowest))
     } else {
         ((lowest.tan() + 2.0).atan().min(top), lowest)

@@ -33,7 +33,14 @@ impl App<'_> {
         let pressed = event.state == ElementState::Pressed;
         if motion::is_move(action) {
             if pressed && !synthetic {
-                self.motion.press(action, Instant::now());
+                if let Some(v) = &mut self.viewer {
+                    let refusals = self
+                        .motion
+                        .press(action, Instant::now(), &mut v.renderer.scene);
+                    for why in refusals {
+                        specchio::say!("mirror not moved: {why}");
+                    }
+                }
                 self.demand.changed();
             } else if !pressed {
                 self.release(action);
@@ -105,10 +112,10 @@ impl App<'_> {
     /// A held move key went up: it moves for the rest of the time it was held.
     pub(super) fn release(&mut self, action: Action) {
         let Some(v) = &mut self.viewer else { return };
-        if let Some(why) = self
+        let refusals = self
             .motion
-            .release(action, Instant::now(), &mut v.renderer.scene)
-        {
+            .release(action, Instant::now(), &mut v.renderer.scene);
+        for why in refusals {
             specchio::say!("mirror not moved: {why}");
         }
         self.demand.changed();

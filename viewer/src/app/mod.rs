@@ -275,7 +275,13 @@ impl ApplicationHandler for App<'_> {
                 ..
             } => self.motion.button(drag_of(button)),
             WindowEvent::ModifiersChanged(modifiers) => {
-                self.motion.fast = modifiers.state().shift_key();
+                if let Some(v) = &mut self.viewer {
+                    let fast = modifiers.state().shift_key();
+                    let scene = &mut v.renderer.scene;
+                    for why in self.motion.set_fast(fast, Instant::now(), scene) {
+                        specchio::say!("mirror not moved: {why}");
+                    }
+                }
             }
             WindowEvent::CursorMoved { position, .. } => self.pointer(position),
             WindowEvent::MouseWheel { delta, .. } => self.wheel(delta),

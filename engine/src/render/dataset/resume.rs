@@ -182,7 +182,7 @@ impl WorkFolder {
             check_journaled(&f, key.frames)
                 .map_err(|why| refuse(&at, &format!("line {n}: {why}")))?;
             // Proven, not trusted: the line a run of these inputs writes for this frame.
-            if f.index != index_of(f.frame) {
+            if !same_json(&f.index, &index_of(f.frame)) {
                 return Err(refuse(&at, &format!("line {n}: frame {}'s index line is not the one these inputs give it (the journal was edited, or its frames are not what it says): remove the work folder to start again", f.frame)));
             }
             // A frame done again (its files were lost) has a later line: the last one holds.
@@ -196,10 +196,6 @@ impl WorkFolder {
             frames: key.frames,
         };
         work.check_entries()?;
-        // Only now, the folder known to be this run's: a line cut short by a crash is dropped
-        // (the frame it would name is done again).
-        work.journal.set_len(read.complete).map_err(io(&at))?;
-        work.journal.seek(SeekFrom::End(0)).map_err(io(&at))?;
         let lost: Vec<usize> = (work.done.values())
             .filter(|f| !work.on_disk(f))
             .map(|f| f.frame)
@@ -210,6 +206,11 @@ impl WorkFolder {
         for f in work.done.values() {
             work.check_pose(f)?;
         }
+        // Only now, the folder known to be this run's and its frames proven: a line cut short
+        // by a crash is dropped (the frame it would name is done again). A folder refused
+        // above is left as it was, journal included.
+        work.journal.set_len(read.complete).map_err(io(&at))?;
+        work.journal.seek(SeekFrom::End(0)).map_err(io(&at))?;
         Ok(work)
     }
 
@@ -448,7 +449,7 @@ impl WorkFolder {
             line.remove("folder");
         }
         match serde_json::from_slice::<serde_json::Value>(&bytes) {
-            Ok(pose) if pose == index => Ok(()),
+            Ok(pose) if same_value(&pose, &index) => Ok(()),
             _ => Err(refuse(
                 &at,
                 &format!("is not frame {}'s pose as its index line gives it (the frame was edited): remove the work folder to start again", f.frame),
@@ -481,6 +482,37 @@ impl WorkFolder {
                 }
             }
         })
+    }
+}
+
+/// Whether two JSON texts say the same: the same structure and strings, numbers equal to a
+/// millionth (relative; absolute below 1). An index line is the plan's pose through f32
+/// trigonometry, which another machine's libm (a Ray worker elsewhere) may round a last digit
+/// apart; a forged pose is metres apart.
+fn same_json(a: &str, b: &str) -> bool {
+    match (serde_json::from_str(a), serde_json::from_str(b)) {
+        (Ok(a), Ok(b)) => same_value(&a, &b),
+        _ => false,
+    }
+}
+
+/// [`same_json`] on parsed values.
+fn same_value(a: &serde_json::Value, b: &serde_json::Value) -> bool {
+    use serde_json::Value;
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => match (x.as_f64(), y.as_f64()) {
+            (Some(x), Some(y)) => (x - y).abs() <= 1e-6 * x.abs().max(y.abs()).max(1.0),
+            _ => x == y,
+        },
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(x, y)| same_value(x, y))
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            x.len() == y.len()
+                && x.iter()
+                    .all(|(k, v)| y.get(k).is_some_and(|w| same_value(v, w)))
+        }
+        _ => a == b,
     }
 }
 

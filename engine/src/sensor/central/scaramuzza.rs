@@ -192,6 +192,8 @@ fn fit_invpol(ss: &[f64], rho_max: f64) -> Result<(Vec<f64>, f64), FitError> {
         if worst < INVPOL_TOLERANCE_PX {
             return Ok((coeffs, worst));
         }
+        // A degree whose error is not a number is never the best.
+        let worst = if worst.is_nan() { f64::INFINITY } else { worst };
         if best.as_ref().is_none_or(|(_, e)| worst < *e) {
             best = Some((coeffs, worst));
         }
