@@ -1,12 +1,13 @@
 //! No output replaces an input under another spelling, on a case-folding file system whose
 //! inodes differ per spelling: vfat mounted through FUSE (`fusefat`), where `t.EXR` and
 //! `T.exr` are one file with two inode numbers, so the identity guard alone let
-//! `compare T.exr r.exr --heatmap t.EXR` and `bench s.toml --json S.TOML` replace their input
-//! and exit 0. Needs root, /dev/fuse, `fusefat` and `mkfs.vfat` (dosfstools; `scripts/setup.sh`
+//! `compare T.exr r.exr --heatmap t.EXR`, `bench s.toml --json S.TOML` and `view s.toml
+//! --screenshot S.TOML` replace their input and exit 0. Needs root, /dev/fuse, `fusefat` and `mkfs.vfat` (dosfstools; `scripts/setup.sh`
 //! installs both); where they are missing the check is skipped, which CI refuses.
 
 #[path = "../common/mod.rs"]
 mod common;
+mod viewer_support;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -134,6 +135,22 @@ fn an_output_never_replaces_its_input_through_a_case_fold_on_fuse_vfat() {
         let (code, stderr) = run_in(mnt, args);
         assert_eq!(code, Some(1), "{args:?}: {stderr}");
         assert!(stderr.contains("it is the input"), "{args:?}: {stderr}");
+    }
+    // The viewer's screenshot goes through the same guard (under Xvfb, run in the mount).
+    if let Some(x) = viewer_support::Xvfb::start() {
+        use viewer_support::Display;
+        let out = x
+            .command(&["s.toml", "--frames", "2", "--screenshot", "S.TOML"])
+            .current_dir(mnt)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "view --screenshot S.TOML: {stderr}"
+        );
+        assert!(stderr.contains("it is the input"), "{stderr}");
     }
     assert_eq!(before("T.exr"), exr, "the input is untouched");
     assert_eq!(before("Sub/T.exr"), exr, "the input is untouched");
