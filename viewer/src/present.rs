@@ -140,6 +140,16 @@ impl Presenter {
         self.stale = true;
     }
 
+    /// Whether the swapchain's images are `window_size` (or there is none). On X11 the
+    /// swapchain takes the size the surface reports when it is made, which during a window
+    /// manager's resize (leaving fullscreen) can still be the old one: the window then shows
+    /// a crop of a larger image until something draws again.
+    pub fn fits(&self, window_size: [u32; 2]) -> bool {
+        self.swapchain
+            .as_deref()
+            .is_none_or(|s| [s.extent.width, s.extent.height] == window_size)
+    }
+
     /// Shows the last view the renderer finished in the window (scaled to fit, aspect kept,
     /// centred on black when the sizes differ; copied 1:1 when they match; black before the
     /// first), the menu's `paint` over it. With `screenshot`, the presented image is also

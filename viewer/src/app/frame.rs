@@ -179,6 +179,14 @@ impl App<'_> {
         let mut menu = viewer.menu.frame(&viewer.window, size, &status);
         let (shown, screenshot) = (viewer.presenter).show(size, Some(&mut menu.paint), shot)?;
         viewer.menu.unapplied(&mut menu.paint);
+        // A swapchain made while the window system still reported the old size (leaving
+        // fullscreen): made again and drawn a little later, a few times at most, so that a
+        // paused window does not keep a crop of the larger image until the next event.
+        if !viewer.presenter.fits(size) && viewer.misfits < MAX_MISFITS {
+            viewer.misfits += 1;
+            viewer.presenter.resized();
+            self.demand.skipped(Instant::now());
+        }
         // egui's own repaints (its first frames' layout passes, its animations) matter only
         // while it shows something.
         let menu_shown = viewer.menu.open || viewer.menu.help;
@@ -211,3 +219,7 @@ impl App<'_> {
         }
     }
 }
+
+/// How many frames after a resize are drawn again for a swapchain that does not fit the window
+/// (50 ms apart: `Demand::skipped`); a window system that never agrees is then left alone.
+const MAX_MISFITS: u32 = 10;

@@ -88,6 +88,9 @@ struct Viewer {
     menu: Menu,
     /// Fullscreen (the fullscreen key), as the viewer last asked of the window.
     fullscreen: bool,
+    /// Frames drawn since the last resize whose swapchain did not fit the window's size: a
+    /// few more are drawn to catch up with the window system, then it is left alone.
+    misfits: u32,
     /// The methods and lookups this device can run (what the menu offers).
     methods: Vec<Method>,
     lookups: Vec<Lookup>,
@@ -258,6 +261,7 @@ impl ApplicationHandler for App<'_> {
                 self.demand.show();
                 if let Some(v) = &mut self.viewer {
                     v.size = size;
+                    v.misfits = 0;
                     v.presenter.resized();
                     if v.size_asked.is_some_and(|(asked, _)| asked == size) {
                         v.size_asked = None;
@@ -365,6 +369,7 @@ impl App<'_> {
             view,
             size_asked: None,
             fullscreen: false,
+            misfits: 0,
             methods,
             lookups,
         })
