@@ -31,6 +31,7 @@ use crate::output::{Dir, Entry, OutputError, Transaction};
 use crate::sensor::dataset::frame_folder;
 
 mod journal;
+mod proof;
 
 pub use journal::RunKey;
 use journal::{check_journaled, differs, open_journal, read_journal, Journaled, Line, FORMAT};
@@ -182,7 +183,7 @@ impl WorkFolder {
             check_journaled(&f, key.frames)
                 .map_err(|why| refuse(&at, &format!("line {n}: {why}")))?;
             // Proven, not trusted: the line a run of these inputs writes for this frame.
-            if !same_json(&f.index, &index_of(f.frame)) {
+            if !proof::same_json(&f.index, &index_of(f.frame)) {
                 return Err(refuse(&at, &format!("line {n}: frame {}'s index line is not the one these inputs give it (the journal was edited, or its frames are not what it says): remove the work folder to start again", f.frame)));
             }
             // A frame done again (its files were lost) has a later line: the last one holds.
@@ -444,13 +445,9 @@ impl WorkFolder {
         let file = crate::output::open_no_follow(&folder.path().join(POSE_FILE));
         (file.and_then(|file| file.take(MAX_POSE_BYTES).read_to_end(&mut bytes)))
             .map_err(io(&at))?;
-        let mut index: serde_json::Value = serde_json::from_str(&f.index).unwrap_or_default();
-        if let Some(line) = index.as_object_mut() {
-            line.remove("folder");
-        }
-        match serde_json::from_slice::<serde_json::Value>(&bytes) {
-            Ok(pose) if same_value(&pose, &index) => Ok(()),
-            _ => Err(refuse(
+        match proof::pose_is_index(&bytes, &f.index) {
+            true => Ok(()),
+            false => Err(refuse(
                 &at,
                 &format!("is not frame {}'s pose as its index line gives it (the frame was edited): remove the work folder to start again", f.frame),
             )),
@@ -463,56 +460,9 @@ impl WorkFolder {
             return false;
         };
         f.files.iter().all(|(name, size, crc)| {
-            let Ok(mut file) = crate::output::open_no_follow(&folder.path().join(name)) else {
-                return false;
-            };
-            if !file
-                .metadata()
-                .is_ok_and(|m| m.is_file() && m.len() == *size)
-            {
-                return false;
-            }
-            let mut hasher = crc32fast::Hasher::new();
-            let mut buf = vec![0u8; 1 << 20];
-            loop {
-                match file.read(&mut buf) {
-                    Ok(0) => break hasher.finalize() == *crc,
-                    Ok(n) => hasher.update(&buf[..n]),
-                    Err(_) => break false,
-                }
-            }
+            crate::output::open_no_follow(&folder.path().join(name))
+                .is_ok_and(|file| proof::file_is(file, *size, *crc))
         })
-    }
-}
-
-/// Whether two JSON texts say the same: the same structure and strings, numbers equal to a
-/// millionth (relative; absolute below 1). An index line is the plan's pose through f32
-/// trigonometry, which another machine's libm (a Ray worker elsewhere) may round a last digit
-/// apart; a forged pose is metres apart.
-fn same_json(a: &str, b: &str) -> bool {
-    match (serde_json::from_str(a), serde_json::from_str(b)) {
-        (Ok(a), Ok(b)) => same_value(&a, &b),
-        _ => false,
-    }
-}
-
-/// [`same_json`] on parsed values.
-fn same_value(a: &serde_json::Value, b: &serde_json::Value) -> bool {
-    use serde_json::Value;
-    match (a, b) {
-        (Value::Number(x), Value::Number(y)) => match (x.as_f64(), y.as_f64()) {
-            (Some(x), Some(y)) => (x - y).abs() <= 1e-6 * x.abs().max(y.abs()).max(1.0),
-            _ => x == y,
-        },
-        (Value::Array(x), Value::Array(y)) => {
-            x.len() == y.len() && x.iter().zip(y).all(|(x, y)| same_value(x, y))
-        }
-        (Value::Object(x), Value::Object(y)) => {
-            x.len() == y.len()
-                && x.iter()
-                    .all(|(k, v)| y.get(k).is_some_and(|w| same_value(v, w)))
-        }
-        _ => a == b,
     }
 }
 

@@ -382,4 +382,6 @@ fn nearest_point(map: &RayMap) -> Result<(DVec3, record::Summary), FitError> {
 }
 
 #[cfg(test)]
+mod stride_tests;
+#[cfg(test)]
 mod tests;
