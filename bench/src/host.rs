@@ -1,13 +1,16 @@
 //! The ladder's host rung, `cpu`: the exact CPU tracer (the reference, `specchio reference`)
-//! timed as one sensor frame. A frame builds the tracer's BVH over the objects at the frame's
-//! poses (what a frame in which something moved must do) and traces every sensor pixel's
+//! timed as one sensor frame. A frame builds the tracer's top level over the objects at the
+//! frame's poses (what a frame in which something moved must do; the meshes' trees are built
+//! once, before the frames, as the `bvh` rung builds its own) and traces every sensor pixel's
 //! centre ray through the mirror, 1 sample per pixel, on the process's threads. It needs no
 //! GPU, so it stands beside every device's rungs: on a CPU driver it is the honest competitor
 //! of the GPU rungs, which share its cores; on a GPU it says what the GPU buys.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Result;
+use specchio::reference::objects::MeshTrees;
 use specchio::reference::{Reference, ReferenceImages};
 use specchio::scene::Scene;
 
@@ -17,18 +20,18 @@ use super::tradeoff::{view_error, Exact};
 /// The rung's label.
 pub const LABEL: &str = "cpu";
 
-/// One timed frame: the BVH's build and the whole frame (build and trace), in ms.
+/// One timed frame: the top level's build and the whole frame (build and trace), in ms.
 #[derive(Debug, Clone, Copy)]
 pub struct HostFrame {
     pub build_ms: f64,
     pub frame_ms: f64,
 }
 
-/// One frame of `scene` at t = 0 (the instant every rung renders): its times and its sensor
-/// images.
-pub fn frame(scene: &Scene) -> (HostFrame, ReferenceImages) {
+/// One frame of `scene` at t = 0 (the instant every rung renders), its meshes' trees in
+/// `meshes`: its times and its sensor images.
+pub fn frame(scene: &Scene, meshes: &Arc<MeshTrees>) -> (HostFrame, ReferenceImages) {
     let start = Instant::now();
-    let reference = Reference::new(scene, 0.0);
+    let reference = Reference::with_meshes(scene, 0.0, Arc::clone(meshes));
     let build_ms = start.elapsed().as_secs_f64() * 1e3;
     let [w, h] = scene.sensor.resolution;
     let (images, _) = reference.render(&reference.sensor_view(), w, h, 1);
@@ -40,13 +43,13 @@ pub fn frame(scene: &Scene) -> (HostFrame, ReferenceImages) {
 /// more frame (and the observer, traced once, untimed).
 pub fn row(
     (scene_name, scene): (&str, &Scene),
-    cube_size: u32,
+    (cube_size, meshes): (u32, &Arc<MeshTrees>),
     timed: &[HostFrame],
     exact: Option<&Exact>,
 ) -> Result<RungRow> {
     let (sensor, observer) = match exact {
         Some(exact) => {
-            let (_, images) = frame(scene);
+            let (_, images) = frame(scene, meshes);
             let face = cube_size;
             let sensor = view_error(&images.color, &images.direction, &exact.sensor, face)?;
             let observer = match &exact.observer {

@@ -21,6 +21,7 @@ use anyhow::{Context, Result};
 use specchio::image::RgbaImage;
 use specchio::metrics::compare;
 use specchio::reference::angular::{angles_deg, summarize};
+use specchio::reference::objects::MeshTrees;
 use specchio::reference::ReferenceImages;
 use specchio::render::lookups;
 pub use specchio::render::lookups::Rung;
@@ -109,6 +110,8 @@ pub fn measure(
         })
         .collect();
     let host = steps.iter().any(|s| matches!(s, Step::Host));
+    // The host tracer's meshes' trees, built once as the `bvh` rung builds its own.
+    let meshes = Arc::new(MeshTrees::build(&scene.meshes));
     let mut renderers = rungs
         .iter()
         .map(|r| renderer(device, scene, r, size, plan))
@@ -128,7 +131,7 @@ pub fn measure(
                 }
             }
             if host {
-                let (frame, _) = host::frame(scene);
+                let (frame, _) = host::frame(scene, &meshes);
                 if round >= plan.warmup {
                     host_frames.push(frame);
                 }
@@ -152,7 +155,7 @@ pub fn measure(
     for step in steps {
         rows.push(match step {
             Step::Lookup(_) => gpu_rows.next().expect("a row per device rung"),
-            Step::Host => host::row((scene_name, scene), size, &host_frames, exact)?,
+            Step::Host => host::row((scene_name, scene), (size, &meshes), &host_frames, exact)?,
         });
     }
     mark_pareto(&mut rows);

@@ -100,8 +100,9 @@ pub struct ReferenceRecord {
     pub spp: u32,
     pub origin: [f64; 3],
     pub triangles: usize,
-    pub bvh_build_total_ms: f64,
-    pub bvh_build_core_ms: f64,
+    /// The meshes' trees and the top level over the objects, in ms.
+    pub bvh_meshes_ms: f64,
+    pub bvh_top_level_ms: f64,
     pub threads: usize,
     pub cameras: ReferenceCameras,
 }

@@ -44,6 +44,7 @@ pub mod sensor;
 pub mod shaders;
 pub mod stdout;
 pub mod text;
+pub mod trees;
 pub mod vk;
 
 /// The module arrows of docs/architecture.md, checked on the source.

@@ -243,6 +243,7 @@ fn cpu_modules_reach_no_vulkan() {
         "image",
         "files",
         "memory",
+        "trees",
         "reference",
         "bvh",
         "metrics",
@@ -258,6 +259,7 @@ fn cpu_modules_reach_no_vulkan() {
         let cpu = [
             "scene",
             "mirror",
+            "trees",
             "reference",
             "bvh",
             "metrics",

@@ -1,23 +1,21 @@
 //! Building the two levels: each mesh's tree once, in its own model space, and the top level
-//! over the objects every frame an object moved. Both are built by obvhs (PLOC, then
-//! reinsertion, then the binary tree collapsed into the compressed wide form) and laid out
+//! over the objects every frame an object moved. Both are built as the reference's are
+//! (`crate::trees`: obvhs's PLOC, reinsertion and wide collapse, depth bounded) and laid out
 //! as [`WideNode`]s in one array per level.
 
 use glam::{Mat4, Vec3};
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::node::Bvh2Node;
-use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
-use obvhs::bvh2::Bvh2;
-use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::CwBvh;
-use obvhs::ploc::PlocBuilder;
-use obvhs::{Boundable, BvhBuildParams};
+use obvhs::Boundable;
 
-use super::build_order::midpoint_split_order;
 use super::layout::{BvhInstance, BvhTriangle, WideNode, BVH_STACK_SIZE};
 use super::BvhError;
-use crate::reference::geometry::padded_box;
 use crate::scene::Mesh;
+use crate::trees::padded_box;
+use crate::trees::{depth, wide_tree, MAX_DEPTH};
+
+// A top level and a mesh's tree, each at most `MAX_DEPTH` deep, fit the walk's stack together.
+const _: () = assert!(2 * MAX_DEPTH <= BVH_STACK_SIZE);
 
 /// At most this many triangles a leaf of a mesh's tree: the most a wide node's child can name
 /// (its count is three bits of unary). obvhs's conversion puts fewer where its cost model says so.
@@ -52,78 +50,6 @@ impl Boundable for MeshTriangle {
     }
 }
 
-/// A tree deeper than this (node levels) is rebuilt balanced: half the walk's stack, so that
-/// a top level and a mesh's tree always fit together.
-const MAX_DEPTH: u32 = BVH_STACK_SIZE / 2;
-
-/// The compressed wide tree over `items` (None for none), at most `leaf` of them a leaf:
-/// obvhs's `fast_build` (the reference's own choice) without its debug-build validation,
-/// which would run on every frame's top level (the tests check the trees instead).
-///
-/// PLOC pairs nearest boxes, which makes a chain of boxes nested in one another (objects
-/// stacked on one spot, triangles at exponentially growing distances) a tree as deep as the
-/// chain is long. Such a tree is rebuilt balanced ([`balanced`]): a worse tree for rays, but
-/// one whose depth is the logarithm of its leaves.
-fn wide_tree<T: Boundable>(items: &[T], leaf: u32) -> Option<CwBvh> {
-    if items.is_empty() {
-        return None;
-    }
-    let p = BvhBuildParams::fast_build();
-    let indices = (0..items.len() as u32).collect();
-    let mut bvh2 = PlocBuilder::with_capacity(items.len()).build(
-        p.ploc_search_distance,
-        items,
-        indices,
-        p.sort_precision,
-        p.search_depth_threshold,
-    );
-    ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
-    let tree = bvh2_to_cwbvh(&bvh2, leaf, true, false);
-    if depth(&tree) <= MAX_DEPTH {
-        return Some(tree);
-    }
-    Some(bvh2_to_cwbvh(&balanced(items), leaf, true, false))
-}
-
-/// The binary tree over `items` that splits every range of leaves at its middle, the leaves
-/// in [`midpoint_split_order`] (each half the nearer half along the range's longest axis): its
-/// depth is ⌈log2 n⌉ + 1, whatever the boxes.
-fn balanced<T: Boundable>(items: &[T]) -> Bvh2 {
-    let boxes: Vec<Aabb> = items.iter().map(Boundable::aabb).collect();
-    let ends: Vec<(Vec3, Vec3)> = boxes.iter().map(|b| (b.min.into(), b.max.into())).collect();
-    let order = midpoint_split_order(&ends);
-    let mut nodes = vec![Bvh2Node::default()];
-    // (node, leaves first..last inclusive), children made before their parent's box is known.
-    fn make(
-        nodes: &mut Vec<Bvh2Node>,
-        boxes: &[Aabb],
-        order: &[u32],
-        at: usize,
-        first: usize,
-        last: usize,
-    ) -> Aabb {
-        if first == last {
-            let b = boxes[order[first] as usize];
-            nodes[at] = Bvh2Node::new(b, 1, first as u32);
-            return b;
-        }
-        let child = nodes.len();
-        nodes.extend([Bvh2Node::default(); 2]);
-        let middle = (first + last) / 2;
-        let left = make(nodes, boxes, order, child, first, middle);
-        let right = make(nodes, boxes, order, child + 1, middle + 1, last);
-        let b = left.union(&right);
-        nodes[at] = Bvh2Node::new(b, 0, child as u32);
-        b
-    }
-    make(&mut nodes, &boxes, &order, 0, 0, items.len() - 1);
-    Bvh2 {
-        nodes,
-        primitive_indices: order,
-        ..Default::default()
-    }
-}
-
 /// Appends `tree` to `nodes`, its node indices moved up by where it starts and its primitive
 /// indices by `primitives`; a missing tree is one node without children. Returns its root.
 fn append(tree: Option<&CwBvh>, nodes: &mut Vec<WideNode>, primitives: u32) -> u32 {
@@ -137,24 +63,6 @@ fn append(tree: Option<&CwBvh>, nodes: &mut Vec<WideNode>, primitives: u32) -> u
         ),
     }
     root
-}
-
-/// The node levels on the longest path down `tree` (1 for none): an inner child of slot s is
-/// node `child_base_idx + (inner slots below s)`, so a node's inner children are the
-/// `imask.count_ones()` nodes from its `child_base_idx`.
-fn depth(tree: &CwBvh) -> u32 {
-    let mut deepest = 1;
-    let mut stack = vec![(0u32, 1)];
-    while let Some((index, level)) = stack.pop() {
-        deepest = deepest.max(level);
-        let Some(n) = tree.nodes.get(index as usize) else {
-            continue;
-        };
-        for k in 0..n.imask.count_ones() {
-            stack.push((n.child_base_idx + k, level + 1));
-        }
-    }
-    deepest
 }
 
 impl MeshBvhs {

@@ -13,16 +13,13 @@
 //! which every ray meets (`bvh.glsl` and `reference::room`), and the objects are traced only
 //! up to the wall, an object lying exactly on a wall's plane winning the tie.
 //!
-//! Both levels are built by obvhs (PLOC with reinsertion, Meister and Bittner 2018) and
-//! collapsed into compressed wide BVHs ([`layout::WideNode`]: eight children a node, their
+//! Both levels are built as the CPU reference builds its own (`crate::trees`: obvhs's PLOC with
+//! reinsertion, Meister and Bittner 2018) and collapsed into compressed wide BVHs ([`layout::WideNode`]: eight children a node, their
 //! boxes quantized). [`closest_hit`] walks them on the CPU exactly as the shader does: the
 //! tests check the trees against the reference with it, and the benchmark counts the work
 //! per ray with it.
 
 mod build;
-/// Leaf orders whose ranges split at their midpoint make coherent trees (lavapipe's builder,
-/// and the bounded-depth fallback of [`MeshBvhs`] and [`TopLevel`]).
-pub mod build_order;
 pub mod layout;
 mod traverse;
 

@@ -1,119 +1,34 @@
 //! The scene in render space (world minus the mirror centre): the room's walls as an analytic
-//! box, the objects as triangles with a BVH over them.
+//! box, the objects in two levels of trees (`objects.rs`).
 
-use std::time::{Duration, Instant};
+use std::sync::Arc;
+use std::time::Duration;
 
-use glam::{Mat4, Vec2, Vec3, Vec3A};
-use obvhs::aabb::Aabb;
-use obvhs::cwbvh::builder::build_cwbvh;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
-use obvhs::{Boundable, BvhBuildParams};
+use glam::{Vec2, Vec3};
 
-use super::intersect::{AxisVisitor, ShearedRay, TriangleHit};
+use super::objects::{MeshTrees, ObjectHit, Objects};
 use super::room::RoomBox;
 use crate::scene::state::SceneState;
-use crate::scene::{Mesh, Scene};
+use crate::scene::Scene;
 
-/// Per-vertex shading attributes of one object triangle, and what it belongs to.
-#[derive(Debug, Clone, Copy)]
-pub struct TriangleInfo {
-    pub normals: [Vec3; 3],
-    pub uvs: [Vec2; 3],
-    /// Drawable index as on the GPU: 6 + scene object index (0..6 are the room's walls).
-    pub object: u32,
-    pub material: u32,
-}
-
-/// The scene at one instant: the room's box, and the objects' triangles with a BVH for
+/// The scene at one instant: the room's box, and the objects with their trees for
 /// closest-hit queries.
 pub struct SceneGeometry {
     room: RoomBox,
     /// The walls' materials, in the room box's face order.
     wall_materials: [u32; 6],
-    /// The objects' triangles (not the walls').
-    pub triangles: Vec<[Vec3; 3]>,
-    pub info: Vec<TriangleInfo>,
-    /// `None` when no object has a triangle (an empty room).
-    bvh: Option<CwBvh>,
-    /// The triangles again, in the BVH's leaf order and 16-byte aligned: the traversal reads
-    /// them straight, without the BVH's index table, each corner one aligned load.
-    leaf_triangles: Vec<[Vec3A; 3]>,
-    /// Each object's (padded) bounding box when there are at most [`CULL_OBJECTS`] objects,
-    /// else empty: see [`SceneGeometry::closest_hit`].
-    object_boxes: Vec<Aabb>,
-    /// Time spent building the BVH (the core build, as obvhs measures it, and in all).
-    pub build_core: Duration,
-    pub build_total: Duration,
+    objects: Objects,
+    /// The meshes' trees' build (whenever they were made: they serve every instant) and the
+    /// top level's, for this instant.
+    pub mesh_build: Duration,
+    pub top_build: Duration,
 }
 
-/// A triangle whose bounding box is padded by a few float steps of its coordinates.
-///
-/// The triangle test is watertight, but a BVH node test is a slab test in float: a ray that
-/// meets a room edge exactly (where two flat, zero-thickness wall boxes touch) can be rounded
-/// out of both boxes and never reach the triangles. Padding every box makes traversal
-/// conservative (the idea of Ize, "Robust BVH Ray Traversal", JCGT 2013, applied to the boxes
-/// instead of the ray interval); the triangle test still decides every hit exactly.
-struct PaddedTriangle([Vec3; 3]);
-
-/// Box padding relative to the largest coordinate magnitude (about 64 float steps).
-const BOX_PAD_RELATIVE: f32 = 64.0 * f32::EPSILON;
-
-impl Boundable for PaddedTriangle {
-    fn aabb(&self) -> Aabb {
-        let [a, b, c] = self.0;
-        padded_box(a.min(b).min(c), a.max(b).max(c))
-    }
-}
-
-/// The box `lo..hi` padded as every box a traversal tests must be (see [`PaddedTriangle`]):
-/// by [`BOX_PAD_RELATIVE`] of its largest coordinate magnitude, at least 1. The `bvh`
-/// lookup's trees pad theirs the same way (`crate::bvh`).
-pub fn padded_box(lo: Vec3, hi: Vec3) -> Aabb {
-    let pad = BOX_PAD_RELATIVE * lo.abs().max(hi.abs()).max_element().max(1.0);
-    Aabb {
-        min: Vec3A::from(lo - pad),
-        max: Vec3A::from(hi + pad),
-    }
-}
-
-/// Up to this many objects, a ray tests each object's box before it enters the BVH: the width
-/// of one CWBVH node, so never more box tests than the BVH's own root would make.
-const CULL_OBJECTS: usize = 8;
-
-/// The objects' bounding boxes (the union of their triangles' padded boxes), in object
-/// order, or none when there are more than [`CULL_OBJECTS`] objects.
-fn object_boxes(triangles: &[[Vec3; 3]], info: &[TriangleInfo]) -> Vec<Aabb> {
-    let mut boxes: Vec<(u32, Aabb)> = Vec::new();
-    for (&triangle, i) in triangles.iter().zip(info) {
-        let b = PaddedTriangle(triangle).aabb();
-        match boxes.last_mut() {
-            Some((object, union)) if *object == i.object => *union = union.union(&b),
-            _ => boxes.push((i.object, b)),
-        }
-    }
-    if boxes.len() > CULL_OBJECTS {
-        return Vec::new();
-    }
-    boxes.into_iter().map(|(_, b)| b).collect()
-}
-
-/// Whether the ray's interval (tmin, tmax) meets the box: the slab test of obvhs's own
-/// nodes, with its finite inverse direction (an axis-parallel ray gives no NaN).
-#[inline(always)]
-fn ray_meets_box(ray: &Ray, b: &Aabb) -> bool {
-    let t1 = (b.min - ray.origin) * ray.inv_direction;
-    let t2 = (b.max - ray.origin) * ray.inv_direction;
-    let near = t1.min(t2).max_element().max(ray.tmin);
-    let far = t1.max(t2).min_element().min(ray.tmax);
-    near <= far
-}
-
-/// What a ray met: a wall of the room, or an object's triangle at barycentrics (u, v).
+/// What a ray met: a wall of the room, or an object's triangle.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Surface {
     Wall(usize),
-    Triangle { index: u32, u: f32, v: f32 },
+    Object(ObjectHit),
 }
 
 /// A closest hit: its distance along the ray and the surface.
@@ -123,96 +38,23 @@ pub struct Hit {
     pub surface: Surface,
 }
 
-/// One closest-hit search through the BVH, compiled once per axis order of the triangle test
-/// (see [`ShearedRay::with_axes`]).
-struct Traversal<'g> {
-    geometry: &'g SceneGeometry,
-    bvh: &'g CwBvh,
-    ray: Ray,
-}
-
-impl AxisVisitor for Traversal<'_> {
-    type Output = Option<Hit>;
-
-    #[inline(always)]
-    fn visit<const KX: usize, const KY: usize, const KZ: usize>(
-        self,
-        sheared: &ShearedRay,
-    ) -> Option<Hit> {
-        let g = self.geometry;
-        // The best hit so far as (leaf slot, hit): the scene's triangle index is looked up
-        // once, for the final hit.
-        let mut best: Option<(usize, TriangleHit)> = None;
-        let mut ray_hit = RayHit::none();
-        self.bvh.ray_traverse(self.ray, &mut ray_hit, |r, id| {
-            let [v0, v1, v2] = g.leaf_triangles[id];
-            match sheared.hit_triangle_in::<KX, KY, KZ>(v0, v1, v2, r.tmin, r.tmax) {
-                Some(hit) => {
-                    best = Some((id, hit));
-                    hit.t
-                }
-                None => f32::INFINITY,
-            }
-        });
-        best.map(|(id, hit)| Hit {
-            t: hit.t,
-            surface: Surface::Triangle {
-                index: self.bvh.primitive_indices[id],
-                u: hit.u,
-                v: hit.v,
-            },
-        })
-    }
-}
-
 impl SceneGeometry {
+    /// The scene at `state`, its meshes' trees built for it.
     pub fn build(scene: &Scene, state: &SceneState) -> Self {
-        let mut triangles = Vec::new();
-        let mut info = Vec::new();
-        let mut add = |mesh: &Mesh, model: Mat4, object: u32, material: u32| {
-            let normal_model = model.inverse().transpose();
-            for tri in mesh.indices.chunks_exact(3) {
-                let idx = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
-                triangles.push(idx.map(|i| model.transform_point3(mesh.positions[i])));
-                info.push(TriangleInfo {
-                    normals: idx.map(|i| normal_model.transform_vector3(mesh.normals[i])),
-                    uvs: idx.map(|i| mesh.uvs[i]),
-                    object,
-                    material,
-                });
-            }
-        };
-        for (i, o) in scene.objects.iter().enumerate() {
-            add(
-                &scene.meshes[o.mesh],
-                state.object_to_render(scene, i),
-                6 + i as u32,
-                o.material as u32,
-            );
-        }
-        let start = Instant::now();
-        let boxes: Vec<PaddedTriangle> = triangles.iter().map(|&t| PaddedTriangle(t)).collect();
-        let mut build_core = Duration::default();
-        // `fast_build`: about 0.7 s for the heavy scene's 974k triangles on 2 cores, against
-        // 1.0 s for `medium_build`, with no measurable loss in trace speed on our scenes.
-        let bvh = (!boxes.is_empty())
-            .then(|| build_cwbvh(&boxes, BvhBuildParams::fast_build(), &mut build_core));
-        let leaf_triangles = bvh.as_ref().map_or_else(Vec::new, |bvh| {
-            bvh.primitive_indices
-                .iter()
-                .map(|&i| triangles[i as usize].map(Vec3A::from))
-                .collect()
-        });
+        Self::with_meshes(scene, state, Arc::new(MeshTrees::build(&scene.meshes)))
+    }
+
+    /// The scene at `state`, with its meshes' trees built before (for this scene's meshes):
+    /// only the top level is built.
+    pub fn with_meshes(scene: &Scene, state: &SceneState, meshes: Arc<MeshTrees>) -> Self {
+        let mesh_build = meshes.build;
+        let objects = Objects::build(scene, state, meshes);
         Self {
-            object_boxes: object_boxes(&triangles, &info),
             room: RoomBox::new(&scene.room, state.mirror_center),
             wall_materials: scene.room.wall_materials.map(|m| m as u32),
-            triangles,
-            info,
-            bvh,
-            leaf_triangles,
-            build_core,
-            build_total: start.elapsed(),
+            top_build: objects.build,
+            objects,
+            mesh_build,
         }
     }
 
@@ -220,26 +62,13 @@ impl SceneGeometry {
     /// crosses it, unless an object's triangle is nearer. The wall's distance bounds the
     /// objects' traversal; an object exactly on a wall's plane (a picture hung flat on it)
     /// wins the tie, as it is what is meant to be seen there.
-    ///
-    /// In a room with a few objects, a ray that meets none of their boxes before the wall
-    /// does not enter the BVH: setting up a traversal (its stack, the root's eight child
-    /// boxes decoded from their quantised form) costs about as much as the wall itself, and
-    /// most rays in such a room pass beside every object (docs/accuracy.md, "Speed").
     pub fn closest_hit(&self, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Option<Hit> {
         let wall = self.wall_hit(o, d, t_min, t_max);
-        let object = self.bvh.as_ref().and_then(|bvh| {
-            // The next float above the wall's t (positive and finite: bits + 1).
-            let limit = wall.map_or(t_max, |w| f32::from_bits(w.t.to_bits() + 1));
-            let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), t_min, limit);
-            let boxes = &self.object_boxes;
-            if !boxes.is_empty() && !boxes.iter().any(|b| ray_meets_box(&ray, b)) {
-                return None;
-            }
-            ShearedRay::new(o, d).with_axes(Traversal {
-                geometry: self,
-                bvh,
-                ray,
-            })
+        // The next float above the wall's t (positive and finite: bits + 1).
+        let limit = wall.map_or(t_max, |w| f32::from_bits(w.t.to_bits() + 1));
+        let object = self.objects.closest(o, d, t_min, limit).map(|h| Hit {
+            t: h.t,
+            surface: Surface::Object(h),
         });
         object.or(wall)
     }
@@ -251,26 +80,11 @@ impl SceneGeometry {
     /// surfaces hide it (a closed object in between counts twice, in and out). The walls
     /// are never in between: the room is convex.
     pub fn surfaces_between(&self, from: Vec3, to: Vec3) -> u32 {
-        let Some(bvh) = &self.bvh else { return 0 };
         let (d, length) = ((to - from).normalize_or_zero(), from.distance(to));
         if d == Vec3::ZERO {
             return 0;
         }
-        let end = length * (1.0 - 1e-4);
-        let sheared = ShearedRay::new(from, d);
-        let ray = Ray::new(Vec3A::from(from), Vec3A::from(d), 0.0, end);
-        let mut count = 0;
-        let mut ray_hit = RayHit::none();
-        // Every hit is counted and none accepted (the callback answers "no hit"), so the
-        // traversal visits every triangle the segment meets instead of stopping at the first.
-        bvh.ray_traverse(ray, &mut ray_hit, |r, id| {
-            let [v0, v1, v2] = self.leaf_triangles[id].map(Vec3::from);
-            if sheared.hit_triangle(v0, v1, v2, r.tmin, end).is_some() {
-                count += 1;
-            }
-            f32::INFINITY
-        });
-        count
+        self.objects.crossings(from, d, 0.0, length * (1.0 - 1e-4))
     }
 
     /// Where `o + t d` crosses the room's walls with t in (t_min, t_max), objects ignored.
@@ -283,49 +97,42 @@ impl SceneGeometry {
 
     /// The drawable index (walls 0..6, objects 6 + i) and material of a hit's surface.
     pub fn drawable(&self, hit: &Hit) -> (u32, u32) {
-        match hit.surface {
-            Surface::Wall(face) => (face as u32, self.wall_materials[face]),
-            Surface::Triangle { index, .. } => {
-                let i = &self.info[index as usize];
-                (i.object, i.material)
-            }
+        match &hit.surface {
+            Surface::Wall(face) => (*face as u32, self.wall_materials[*face]),
+            Surface::Object(h) => self.objects.drawable(h),
         }
     }
 
     /// Interpolated (unnormalised) shading normal at a hit.
     pub fn normal(&self, hit: &Hit) -> Vec3 {
-        match hit.surface {
-            Surface::Wall(face) => self.room.normal(face),
-            Surface::Triangle { index, u, v } => {
-                let i = &self.info[index as usize];
-                i.normals[0] * (1.0 - u - v) + i.normals[1] * u + i.normals[2] * v
-            }
+        match &hit.surface {
+            Surface::Wall(face) => self.room.normal(*face),
+            Surface::Object(h) => self.objects.normal(h),
         }
     }
 
-    /// Texture coordinates at a hit, which lies at `p` (in the BVH's space).
+    /// Texture coordinates at a hit, which lies at `p` (in the trees' space).
     pub fn uv(&self, hit: &Hit, p: Vec3) -> Vec2 {
-        match hit.surface {
-            Surface::Wall(face) => self.room.uv(face, p),
-            Surface::Triangle { index, u, v } => {
-                let i = &self.info[index as usize];
-                i.uvs[0] * (1.0 - u - v) + i.uvs[1] * u + i.uvs[2] * v
-            }
+        match &hit.surface {
+            Surface::Wall(face) => self.room.uv(*face, p),
+            Surface::Object(h) => self.objects.uv(h),
         }
     }
 
     /// Whether any object triangle reaches into the closed box `lo..=hi` (by its bounding box, so a
     /// "yes" may be a near miss; a "no" is certain: no point of any triangle is in the box).
     pub fn any_triangle_in_box(&self, lo: Vec3, hi: Vec3) -> bool {
-        self.triangles.iter().any(|&[a, b, c]| {
-            let (t_lo, t_hi) = (a.min(b).min(c), a.max(b).max(c));
-            t_lo.cmple(hi).all() && t_hi.cmpge(lo).all()
-        })
+        self.objects.any_triangle_in_box(lo, hi)
     }
 
-    /// The objects' triangles (the walls are not triangles here).
+    /// The objects' triangles, counted once per object (the walls are not triangles here).
     pub fn triangle_count(&self) -> usize {
-        self.triangles.len()
+        self.objects.triangle_count()
+    }
+
+    /// Every object triangle in render space, as the rasterizer places it.
+    pub fn triangles(&self) -> Vec<[Vec3; 3]> {
+        self.objects.render_triangles()
     }
 }
 
@@ -333,15 +140,31 @@ impl SceneGeometry {
 mod tests {
     use std::path::Path;
 
+    use glam::Vec3A;
+    use obvhs::aabb::Aabb;
+    use obvhs::cwbvh::CwBvh;
+    use obvhs::ray::{Ray, RayHit};
     use obvhs::triangle::Triangle;
 
     use super::*;
+    use crate::scene::Mesh;
+    use crate::trees::padded_box;
 
-    /// Closest hit distance through obvhs's Möller–Trumbore test instead of ours, over the
-    /// objects' BVH and the room's wall triangles (render space), the way the reference
-    /// traced before the walls became a box.
+    /// A box-bounded triangle for the flat tree the comparison below walks.
+    struct Flat([Vec3; 3]);
+
+    impl obvhs::Boundable for Flat {
+        fn aabb(&self) -> Aabb {
+            let [a, b, c] = self.0;
+            padded_box(a.min(b).min(c), a.max(b).max(c))
+        }
+    }
+
+    /// Closest hit distance through obvhs's Möller–Trumbore test instead of ours, over one
+    /// flat tree of the objects' triangles in render space and the room's wall triangles,
+    /// the way the reference traced before the walls became a box and the objects two levels.
     fn closest_t_moller(
-        g: &SceneGeometry,
+        (flat, triangles): (&CwBvh, &[[Vec3; 3]]),
         walls: &[[Vec3; 3]],
         o: Vec3,
         d: Vec3,
@@ -365,10 +188,8 @@ mod tests {
             .iter()
             .map(|&w| moller(w, &ray))
             .fold(f32::INFINITY, f32::min);
-        let mut ray_hit = RayHit::none();
-        let bvh = g.bvh.as_ref().unwrap();
-        bvh.ray_traverse(ray, &mut ray_hit, |r, id| {
-            let t = moller(g.triangles[bvh.primitive_indices[id] as usize], r);
+        flat.ray_traverse(ray, &mut RayHit::none(), |r, id| {
+            let t = moller(triangles[flat.primitive_indices[id] as usize], r);
             best = best.min(t);
             t
         });
@@ -399,7 +220,7 @@ mod tests {
             matches!(
                 hit,
                 Some(Hit {
-                    surface: Surface::Triangle { .. },
+                    surface: Surface::Object(_),
                     ..
                 })
             )
@@ -415,22 +236,16 @@ mod tests {
             let state = SceneState::at(&scene, 1.0);
             let with_boxes = SceneGeometry::build(&scene, &state);
             let mut without = SceneGeometry::build(&scene, &state);
-            assert_eq!(!with_boxes.object_boxes.is_empty(), culled, "{rel}");
-            without.object_boxes.clear();
+            assert_eq!(with_boxes.objects.one_by_one(), culled, "{rel}");
+            without.objects.force_top_level();
+            assert!(!without.objects.one_by_one());
             let half = scene.room.size_m / 2.0;
             let (lo, hi) = (scene.room.center - half, scene.room.center + half);
             let mut random = crate::random::SplitMix64::new(7);
             let mut unit = || random.unit() as f32;
             let (mut rays, mut hits) = (0, 0);
-            for [a, b, c] in &with_boxes.triangles {
-                for target in [
-                    *a,
-                    *b,
-                    *c,
-                    (*a + *b) / 2.0,
-                    (*b + *c) / 2.0,
-                    (*c + *a) / 2.0,
-                ] {
+            for [a, b, c] in with_boxes.triangles() {
+                for target in [a, b, c, (a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0] {
                     let origin = state
                         .world_to_render()
                         .transform_point3(lo + (hi - lo) * Vec3::new(unit(), unit(), unit()));
@@ -502,9 +317,12 @@ mod tests {
             let state = SceneState::at(&scene, 0.0);
             let g = SceneGeometry::build(&scene, &state);
             let walls = wall_triangles(&scene, &state);
+            let objects = g.triangles();
+            let flat_items: Vec<Flat> = objects.iter().map(|&t| Flat(t)).collect();
+            let flat = crate::trees::wide_tree(&flat_items, 3).unwrap();
             // Targets on the walls' triangles (as the rasterizer draws them) and the objects'.
             let targets: Vec<([Vec3; 3], bool)> = (walls.iter().map(|&w| (w, true)))
-                .chain(g.triangles.iter().map(|&t| (t, false)))
+                .chain(objects.iter().map(|&t| (t, false)))
                 .collect();
             let r = scene.mirror.radius_m;
             let mut rng = crate::random::SplitMix64::new(0x9E37_79B9_7F4A_7C15);
@@ -527,7 +345,7 @@ mod tests {
                     continue;
                 }
                 let ours = g.closest_hit(o, d, 0.0, f32::INFINITY).map(|h| h.t);
-                let theirs = closest_t_moller(&g, &walls, o, d, 0.0);
+                let theirs = closest_t_moller((&flat, &objects), &walls, o, d, 0.0);
                 match ours {
                     None => ours_missed += 1,
                     Some(t) => {

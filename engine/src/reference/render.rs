@@ -193,8 +193,8 @@ impl Reference<'_> {
         let pixel_count = u64::from(width) * u64::from(height);
         ReferenceStats {
             triangles: self.geometry.triangle_count(),
-            bvh_build_core_ms: self.geometry.build_core.as_secs_f64() * 1e3,
-            bvh_build_total_ms: self.geometry.build_total.as_secs_f64() * 1e3,
+            bvh_meshes_ms: self.geometry.mesh_build.as_secs_f64() * 1e3,
+            bvh_top_level_ms: self.geometry.top_build.as_secs_f64() * 1e3,
             rays,
             trace_ms: trace.as_secs_f64() * 1e3,
             rays_per_second: rays as f64 / trace.as_secs_f64().max(1e-9),

@@ -8,9 +8,9 @@ use glam::{UVec4, Vec3, Vec4};
 
 use super::draw::{barrier, COPY_WRITE, NOTHING, SAMPLED};
 use super::gpu::{self, MaterialData, ObjectData, Vertex, ViewData};
-use crate::bvh::build_order::triangles_in_split_order;
 use crate::scene::state::room_meshes;
 use crate::scene::{MaterialKind, Mesh, Scene, TextureData};
+use crate::trees::split_order::triangles_in_split_order;
 use crate::vk::commands::{image_barriers, Submitter};
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::Device;
@@ -51,7 +51,7 @@ pub struct SceneResources {
     pub vertices: Buffer,
     pub indices: Buffer,
     /// With ray queries: the same triangles, each mesh's in the order its bottom-level build
-    /// wants them (`bvh::build_order`: lavapipe keeps the order it is given), at the same
+    /// wants them (`trees::split_order`: lavapipe keeps the order it is given), at the same
     /// ranges as in `indices`. The draws keep `indices`: their order decides early depth
     /// tests, which the benchmark's counters see.
     pub traced_indices: Option<Buffer>,

@@ -8,7 +8,7 @@
 //! The top-level structure is rebuilt every frame from the drawables' transforms at time t,
 //! not refit: a rebuild's quality does not decay as objects move far from where the structure
 //! was first built (a refit only stretches the old boxes). Its instance records are handed over
-//! in traversal order ([`TraceOrder::Split`], `bvh::build_order`) and each mesh's triangles
+//! in traversal order ([`TraceOrder::Split`], `trees::split_order`) and each mesh's triangles
 //! likewise (`SceneResources::traced_indices`): lavapipe builds its tree from the order it is
 //! given, and the scene's own order (generated crowds are random) made it ~20x slower.
 
@@ -18,8 +18,8 @@ use ash::vk;
 use glam::{UVec4, Vec3};
 
 use super::{LookupContext, LookupNeeds};
-use crate::bvh::build_order::midpoint_split_order;
 use crate::render::gpu::{ObjectData, Vertex};
+use crate::trees::split_order::midpoint_split_order;
 use crate::vk::acceleration::{self, AccelerationStructure, TopLevel, TriangleMesh};
 use crate::vk::descriptors;
 use crate::vk::device::{Device, OptionalFeatures};
@@ -31,7 +31,7 @@ use crate::vk::GpuError;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum TraceOrder {
     /// Instances and each mesh's triangles by a recursive median split of their boxes, the
-    /// ranges a midpoint-splitting builder (lavapipe's) makes coherent (`bvh::build_order`).
+    /// ranges a midpoint-splitting builder (lavapipe's) makes coherent (`trees::split_order`).
     #[default]
     Split,
     /// The scene's own order (drawables as listed, triangles as the mesh has them): what was
