@@ -1,12 +1,16 @@
 //! `specchio`: the command-line tool. `main` reads like a table of contents: parse the
 //! arguments, then run one subcommand. The commands of this crate parse, call the engine and
 //! say what they did; the benchmark and the localisation experiment are `specchio-bench`'s,
-//! the viewer is `specchio-viewer`'s.
+//! the viewer is `specchio-viewer`'s (in a build with the `viewer` feature, the default;
+//! without it `specchio view` says how to get it, `no_viewer.rs`).
 
 mod calibrate;
 mod compare;
 mod dataset;
 mod info;
+// Compiled in every build so that its test runs where the tests run (with the viewer).
+#[cfg_attr(feature = "viewer", allow(dead_code))]
+mod no_viewer;
 mod probe;
 mod records;
 mod reference;
@@ -18,6 +22,9 @@ use clap::{Parser, Subcommand};
 use specchio::process::{allocator, validation};
 use specchio::stdout;
 use specchio_bench::localise;
+#[cfg(not(feature = "viewer"))]
+use no_viewer as view;
+#[cfg(feature = "viewer")]
 use specchio_viewer as view;
 
 /// Simulates a catadioptric camera (a camera looking at a spherical mirror) with dynamic
