@@ -1,5 +1,10 @@
 //! Compiles every `shaders/NAME.STAGE.glsl` to SPIR-V with glslang and embeds the words.
 //!
+//! glslang is run as its own command-line compiler, `glslangValidator` (Debian's
+//! `glslang-tools`, which `scripts/setup.sh` installs; `GLSLANG_VALIDATOR=PATH` names another):
+//! the library crate compiled glslang's C++ from source in every fresh build, 68 s of a
+//! 4-minute release build on 2 cores, for the same compiler.
+//!
 //! Generates `$OUT_DIR/shaders.rs` with one `pub const NAME_STAGE: &[u32]` per shader (or per
 //! module its `// build:` line names, each compiled with its own define), and
 //! `SPIRV_MEMBER_OFFSETS`: (struct, member, byte offset) read back from the SPIR-V, which a
@@ -13,40 +18,17 @@
 //! only when they changed, since a change to any source now runs this script.
 
 use std::collections::BTreeMap;
+use std::ffi::OsString;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
-use glslang::include::{IncludeHandler, IncludeResult, IncludeType};
-use glslang::{
-    Compiler, CompilerOptions, ShaderInput, ShaderSource, ShaderStage, SourceLanguage,
-    SpirvVersion, Target, VulkanVersion,
-};
-
-struct Includes {
-    dir: PathBuf,
-}
-
-impl IncludeHandler for Includes {
-    fn include(&mut self, _: IncludeType, name: &str, _: &str, _: usize) -> Option<IncludeResult> {
-        let path = self.dir.join(name);
-        let data = std::fs::read_to_string(&path).ok()?;
-        Some(IncludeResult {
-            name: format!("shaders/include/{name}"),
-            data,
-        })
-    }
-}
-
-fn stage_of(name: &str) -> Option<ShaderStage> {
-    Some(match name.rsplit('.').nth(1)? {
-        "vert" => ShaderStage::Vertex,
-        "frag" => ShaderStage::Fragment,
-        "geom" => ShaderStage::Geometry,
-        "comp" => ShaderStage::Compute,
-        "mesh" => ShaderStage::Mesh,
-        "task" => ShaderStage::Task,
-        _ => return None,
-    })
+/// The stage of `NAME.STAGE.glsl`, as glslang's `-S` names it.
+fn stage_of(name: &str) -> Option<&str> {
+    let stage = name.strip_suffix(".glsl")?.rsplit('.').next()?;
+    ["vert", "frag", "geom", "comp", "mesh", "task"]
+        .contains(&stage)
+        .then_some(stage)
 }
 
 /// One module built from a source file: its name (None: the file's own) and its defines.
@@ -93,6 +75,7 @@ fn main() {
     let root = Path::new(&manifest).join("../shaders");
     let include_dir = root.join("include");
     println!("cargo:rerun-if-changed={}", root.display());
+    println!("cargo:rerun-if-env-changed=GLSLANG_VALIDATOR");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&root)
         .expect("shaders/ exists next to engine/")
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -124,9 +107,14 @@ fn main() {
         digest(manifest, &all)
     );
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
-    // The shaders and this script, which compiles them.
+    let glslang = Glslang::new(&root, &out_dir).unwrap_or_else(|why| panic!("{why}"));
+    // The shaders, this script, which compiles them, and the compiler's version.
     let compiled_from = [root.clone(), manifest.join("build.rs")];
-    let shaders = format!("{:08x}", digest(manifest, &compiled_from));
+    let shaders = format!(
+        "{:08x} {}",
+        digest(manifest, &compiled_from),
+        glslang.version
+    );
     let done = out_dir.join("shaders.digest");
     if out_dir.join("shaders.rs").is_file()
         && std::fs::read_to_string(&done).ok() == Some(shaders.clone())
@@ -135,7 +123,7 @@ fn main() {
     }
     // A build stopped while compiling must not leave the digest of shaders it did not write.
     let _ = std::fs::remove_file(&done);
-    compile(&files, &include_dir, &out_dir.join("shaders.rs"));
+    compile(&glslang, &files, &include_dir, &out_dir.join("shaders.rs"));
     std::fs::write(done, shaders).expect("OUT_DIR writable");
 }
 
@@ -162,11 +150,10 @@ fn digest(manifest: &Path, paths: &[PathBuf]) -> u32 {
 }
 
 /// Compiles every shader of `files` into the Rust module `dest`.
-fn compile(files: &[PathBuf], include_dir: &Path, dest: &Path) {
-    let glslang = Glslang::new(include_dir);
+fn compile(glslang: &Glslang, files: &[PathBuf], include_dir: &Path, dest: &Path) {
     let mut generated = Generated::new();
     for file in files {
-        generated.compile_file(&glslang, file);
+        generated.compile_file(glslang, file);
     }
     generated.fail_if_any();
     let mut out = generated.out;
@@ -175,53 +162,88 @@ fn compile(files: &[PathBuf], include_dir: &Path, dest: &Path) {
     std::fs::write(dest, out).expect("OUT_DIR writable");
 }
 
-/// glslang, with the options and include folder every shader is compiled with.
-struct Glslang<'a> {
-    compiler: &'static Compiler,
-    options: CompilerOptions,
-    include_dir: &'a Path,
+/// glslang's command-line compiler, with the options every shader is compiled with: Vulkan 1.3
+/// (SPIR-V 1.6), includes from `shaders/include/`, run in `shaders/` so that its messages name
+/// the file as `NAME.STAGE.glsl:LINE`.
+struct Glslang {
+    program: OsString,
+    /// Its `--version` line, kept with the compiled shaders: another glslang compiles them again.
+    version: String,
+    shaders: PathBuf,
+    scratch: PathBuf,
 }
 
-impl<'a> Glslang<'a> {
-    /// Acquires glslang, targeting Vulkan 1.3 and SPIR-V 1.6.
-    fn new(include_dir: &'a Path) -> Self {
-        let compiler = Compiler::acquire().expect("glslang initialises");
-        let options = CompilerOptions {
-            source_language: SourceLanguage::GLSL,
-            target: Target::Vulkan {
-                version: VulkanVersion::Vulkan1_3,
-                spirv_version: SpirvVersion::SPIRV1_6,
-            },
-            version_profile: None,
-            ..Default::default()
+impl Glslang {
+    /// The compiler named by `GLSLANG_VALIDATOR`, else `glslangValidator` on the PATH; an
+    /// error that says how to install it when it does not run.
+    fn new(shaders: &Path, out_dir: &Path) -> Result<Self, String> {
+        let program = std::env::var_os("GLSLANG_VALIDATOR").unwrap_or("glslangValidator".into());
+        let output = Command::new(&program).arg("--version").output();
+        let version = match output {
+            Ok(o) if o.status.success() => String::from_utf8_lossy(&o.stdout)
+                .lines()
+                .next()
+                .unwrap_or("")
+                .trim()
+                .to_owned(),
+            Ok(o) => return Err(format!("{} --version failed: {}", program.to_string_lossy(), o.status)),
+            Err(e) => {
+                return Err(format!(
+                    "cannot run glslang's compiler `{}` ({e}): the shaders are compiled with it; \
+                     install it (Debian: `apt-get install glslang-tools`, which scripts/setup.sh does) \
+                     or name it with GLSLANG_VALIDATOR=PATH",
+                    program.to_string_lossy()
+                ))
+            }
         };
-        Self {
-            compiler,
-            options,
-            include_dir,
-        }
+        let scratch = out_dir.join("spirv");
+        std::fs::create_dir_all(&scratch).map_err(|e| format!("{}: {e}", scratch.display()))?;
+        Ok(Self {
+            program,
+            version,
+            shaders: shaders.to_owned(),
+            scratch,
+        })
     }
 
-    /// Compiles `source` as `stage` with `define` defined; SPIR-V words or glslang's error.
+    /// Compiles `shaders/NAME` as `stage` with `define` defined, into the SPIR-V words of
+    /// `module`; glslang's messages when it fails.
     fn compile(
         &self,
-        source: &ShaderSource,
-        stage: ShaderStage,
+        name: &str,
+        stage: &str,
         define: &[String],
-    ) -> Result<Vec<u32>, glslang::error::GlslangError> {
-        let pairs: Vec<(&str, Option<&str>)> = define.iter().map(|d| (d.as_str(), None)).collect();
-        let mut includes = Includes {
-            dir: self.include_dir.to_owned(),
-        };
-        ShaderInput::new(
-            source,
-            stage,
-            &self.options,
-            (!pairs.is_empty()).then_some(&pairs[..]),
-            Some(&mut includes),
-        )
-        .and_then(|input| self.compiler.create_shader(input))
-        .and_then(|shader| shader.compile())
+        module: &str,
+    ) -> Result<Vec<u32>, String> {
+        let spv = self.scratch.join(format!("{module}.{stage}.spv"));
+        let output = Command::new(&self.program)
+            .current_dir(&self.shaders)
+            .args(["-V", "--target-env", "vulkan1.3", "-S", stage, "-Iinclude"])
+            .args(define.iter().map(|d| format!("-D{d}")))
+            .arg("-o")
+            .arg(&spv)
+            .arg(name)
+            .output()
+            .map_err(|e| format!("cannot run {}: {e}", self.program.to_string_lossy()))?;
+        if !output.status.success() {
+            return Err(format!(
+                "{}{}",
+                String::from_utf8_lossy(&output.stdout),
+                String::from_utf8_lossy(&output.stderr)
+            ));
+        }
+        let bytes = std::fs::read(&spv).map_err(|e| format!("{}: {e}", spv.display()))?;
+        if bytes.len() % 4 != 0 || bytes.is_empty() {
+            return Err(format!(
+                "{}: {} bytes is no SPIR-V",
+                spv.display(),
+                bytes.len()
+            ));
+        }
+        Ok(bytes
+            .chunks_exact(4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+            .collect())
     }
 }
 
@@ -252,11 +274,6 @@ impl Generated {
             return;
         };
         let text = std::fs::read_to_string(file).expect("shader readable");
-        let stage_name = name
-            .trim_end_matches(".glsl")
-            .rsplit('.')
-            .next()
-            .unwrap_or("");
         let builds = match variants(&text) {
             Ok(v) => v,
             Err(why) => {
@@ -264,22 +281,26 @@ impl Generated {
                 return;
             }
         };
-        let source = ShaderSource::from(text);
         for (module, define) in builds {
-            let compiled = glslang.compile(&source, stage, &define);
             let base = name.split('.').next().unwrap_or(&name);
             let module = module.unwrap_or_else(|| base.to_owned());
+            let compiled = glslang.compile(&name, stage, &define, &module);
             let built = match define.is_empty() {
                 false => format!("`shaders/{name}` with `{}` defined", define.join("`, `")),
                 true => format!("`shaders/{name}`"),
             };
             match compiled {
-                Ok(words) => self.add_module(&words, &module, stage_name, &built),
-                // glslang names the top file "0"; put its real path in front of the line number.
-                Err(e) => self.failures.push(
-                    e.to_string()
-                        .replace("ERROR: 0:", &format!("ERROR: shaders/{name} ({built}):")),
-                ),
+                Ok(words) => self.add_module(&words, &module, stage, &built),
+                // glslang names the file as it was given (run in shaders/): give its path and
+                // the defines in front of the line number.
+                Err(e) => {
+                    let place = match define.is_empty() {
+                        true => format!("shaders/{name}"),
+                        false => format!("shaders/{name} (`{}` defined)", define.join("`, `")),
+                    };
+                    let named = e.replace(&format!("ERROR: {name}:"), &format!("ERROR: {place}:"));
+                    self.failures.push(named)
+                }
             }
         }
     }

@@ -3,7 +3,8 @@
 #   - Mesa lavapipe 25 (mesa-vulkan-drivers) from Debian's official bookworm-backports suite
 #     (nothing else is taken from backports but what that package needs),
 #   - the Vulkan loader (libvulkan1) and the Khronos validation layers,
-#   - a C++ compiler for the glslang crate's build,
+#   - glslang's compiler, glslangValidator (glslang-tools), which compiles the shaders,
+#   - a C++ compiler for nv-flip-sys's build (FLIP, the image metric),
 #   - Xvfb, xdotool and the X client libraries winit loads (the viewer's tests),
 #   - weston, whose headless backend is the Wayland compositor of the viewer's Wayland test,
 #   - openbox, a window manager, for the viewer's test of a minimised window,
@@ -103,7 +104,7 @@ missing=()
 # brings the Wayland client libraries winit loads; openbox minimises a window as a desktop does.
 # fusefat, dosfstools and fuse: a vfat mounted through FUSE, where case folds and each spelling
 # has its own inode (tests/cli/case_folding.rs).
-for p in libvulkan1 vulkan-validationlayers g++ xvfb xdotool weston openbox libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 fusefat dosfstools fuse; do
+for p in libvulkan1 vulkan-validationlayers glslang-tools g++ xvfb xdotool weston openbox libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 fusefat dosfstools fuse; do
     installed "$p" || missing+=("$p")
 done
 major=$(mesa_major || true)

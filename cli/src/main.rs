@@ -19,11 +19,11 @@ mod render;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+#[cfg(not(feature = "viewer"))]
+use no_viewer as view;
 use specchio::process::{allocator, validation};
 use specchio::stdout;
 use specchio_bench::localise;
-#[cfg(not(feature = "viewer"))]
-use no_viewer as view;
 #[cfg(feature = "viewer")]
 use specchio_viewer as view;
 

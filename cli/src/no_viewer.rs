@@ -46,14 +46,25 @@ mod tests {
         for line in [
             &["specchio", "view"][..],
             &["specchio", "view", "scenes/thesis-room.toml"],
-            &["specchio", "view", "scenes/thesis-room.toml", "--frames", "3", "--keys", "-,w"],
+            &[
+                "specchio",
+                "view",
+                "scenes/thesis-room.toml",
+                "--frames",
+                "3",
+                "--keys",
+                "-,w",
+            ],
             &["specchio", "view", "--help"],
         ] {
             let Cli {
                 command: Command::View(args),
             } = Cli::try_parse_from(line).unwrap_or_else(|e| panic!("{line:?}: {e}"));
             let err = super::run(&args).unwrap_err().to_string();
-            assert!(err.contains("cargo build --release -p specchio-cli"), "{err}");
+            assert!(
+                err.contains("cargo build --release -p specchio-cli"),
+                "{err}"
+            );
             assert!(err.contains("without the viewer"), "{err}");
         }
     }
