@@ -5,7 +5,8 @@
 #        (default: every scene of the default set; results in out/bench/)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/setup.sh
+# Only what the main job uses (no X, Wayland, FUSE or Python; SwiftShader when asked for).
+scripts/setup.sh --main-job "$@"
 # Without the viewer, which the main job does not run (a third of a fresh build); `cargo build
 # --release -p specchio-cli` adds it (docs/viewer.md).
 cargo build --release --locked -p specchio-cli --no-default-features

@@ -13,8 +13,24 @@
 #   - the Python side: a project-local venv, .venv/, with maturin (builds the `specchio`
 #     Python package, python/), numpy, pytest and Ray (docs/python.md).
 # On other distributions it installs nothing and says what to install when something is missing.
+#
+# `scripts/setup.sh --main-job [BENCH ARGUMENTS...]` (what scripts/run.sh runs) sets up only what
+# the main job uses: the Vulkan loader and layers, lavapipe 25, glslang's compiler and the C++
+# compiler; SwiftShader only when the arguments name it; no X, Wayland, FUSE or Python, which
+# only the tests and the Python package use (on a fresh machine the venv alone fetches Ray).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+main_job=0
+want_swiftshader=1
+if [ "${1:-}" = "--main-job" ]; then
+    main_job=1
+    shift
+    want_swiftshader=0
+    for a in "$@"; do
+        case "$a" in *swiftshader*|*SwiftShader*) want_swiftshader=1 ;; esac
+    done
+fi
 
 log() { printf 'setup: %s\n' "$*" >&2; }
 
@@ -80,6 +96,7 @@ provide_swiftshader() {
 }
 
 provide_python() {
+    [ $main_job -eq 1 ] && return 0
     scripts/python-venv.sh .venv "import maturin, numpy, pytest, ray" \
         "maturin>=1.9,<2" "numpy>=2" "pytest>=7" "ray>=2.9"
 }
@@ -93,6 +110,9 @@ if [ "$codename" != "bookworm" ]; then
        ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
         log "not Debian 12: install Mesa >= 24 lavapipe, the Vulkan loader and the Khronos validation layers with your package manager"
     fi
+    if ! command -v glslangValidator >/dev/null && [ -z "${GLSLANG_VALIDATOR:-}" ]; then
+        log "not Debian 12: install glslang's compiler, glslangValidator (it compiles the shaders), or name it with GLSLANG_VALIDATOR=PATH"
+    fi
     provide_python
     exit 0
 fi
@@ -104,7 +124,11 @@ missing=()
 # brings the Wayland client libraries winit loads; openbox minimises a window as a desktop does.
 # fusefat, dosfstools and fuse: a vfat mounted through FUSE, where case folds and each spelling
 # has its own inode (tests/cli/case_folding.rs).
-for p in libvulkan1 vulkan-validationlayers glslang-tools g++ xvfb xdotool weston openbox libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 fusefat dosfstools fuse; do
+packages=(libvulkan1 vulkan-validationlayers glslang-tools g++)
+if [ $main_job -eq 0 ]; then
+    packages+=(xvfb xdotool weston openbox libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 fusefat dosfstools fuse)
+fi
+for p in "${packages[@]}"; do
     installed "$p" || missing+=("$p")
 done
 major=$(mesa_major || true)
@@ -133,8 +157,10 @@ SRC
         as_root apt-get install -y -qq --no-install-recommends -t bookworm-backports mesa-vulkan-drivers >/dev/null
     fi
 fi
-provide_swiftshader
+[ $want_swiftshader -eq 1 ] && provide_swiftshader
 provide_python
-log "ready: Python venv .venv ($(.venv/bin/python -c 'import sys, numpy, ray; print(f"Python {sys.version.split()[0]}, numpy {numpy.__version__}, Ray {ray.__version__}")'))"
+if [ $main_job -eq 0 ]; then
+    log "ready: Python venv .venv ($(.venv/bin/python -c 'import sys, numpy, ray; print(f"Python {sys.version.split()[0]}, numpy {numpy.__version__}, Ray {ray.__version__}")'))"
+fi
 log "ready: SwiftShader $(cut -d' ' -f2 "$swiftshader_dir/SOURCE" 2>/dev/null || echo 'not provided')"
 log "ready: mesa-vulkan-drivers $(dpkg-query -W -f='${Version}' mesa-vulkan-drivers), vulkan-validationlayers $(dpkg-query -W -f='${Version}' vulkan-validationlayers)"

@@ -23,6 +23,15 @@ layout(triangles, max_vertices = MESHLET_MAX_VERTICES, max_primitives = MESHLET_
 
 taskPayloadSharedEXT MeshTaskPayload payload;
 
+// The per-primitive built-ins written, and only those: redeclaring the block keeps glslang 12.0
+// (Debian 12's) from declaring its every member, gl_PrimitiveShadingRateEXT among them, which
+// brings the FragmentShadingRateKHR capability that no device here has (the validation layer
+// refuses the module).
+perprimitiveEXT out gl_MeshPerPrimitiveEXT {
+    int gl_Layer;
+    bool gl_CullPrimitiveEXT;
+} gl_MeshPrimitivesEXT[];
+
 // What scene.frag reads (as scene_vertex.glsl writes it).
 layout(location = 0) out vec3 out_world_pos[];
 layout(location = 1) out vec3 out_world_normal[];
