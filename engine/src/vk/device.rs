@@ -324,7 +324,10 @@ fn core_enables(offered: &super::physical::DeviceFeatures) -> Enables {
             .dynamic_rendering(true)
             .synchronization2(true)
             // SPIR-V 1.6 turns `discard` into OpDemoteToHelperInvocation (mandatory in 1.3).
-            .shader_demote_to_helper_invocation(true),
+            .shader_demote_to_helper_invocation(true)
+            // glslang may write any stage's workgroup size as LocalSizeId at SPIR-V 1.6 (12.0
+            // does for compute shaders too), which needs maintenance4 (mandatory in 1.3).
+            .maintenance4(true),
         ..Enables::default()
     }
 }

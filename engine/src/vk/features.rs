@@ -135,9 +135,8 @@ const OPTIONAL: [Optional; 6] = [
         },
         offered: |d| d.mesh_shader && d.task_shader,
         enable: |e| {
-            // glslang writes a task or mesh shader's workgroup size as LocalSizeId when it
-            // targets SPIR-V 1.6, which needs maintenance4 (mandatory in 1.3).
-            e.v13.maintenance4 = vk::TRUE;
+            // (A task or mesh shader's workgroup size is LocalSizeId at SPIR-V 1.6, which needs
+            // maintenance4: every device is created with it, `device::core_enables`.)
             e.mesh = Some(
                 vk::PhysicalDeviceMeshShaderFeaturesEXT::default()
                     .mesh_shader(true)
