@@ -164,16 +164,26 @@ pub fn parse_script(script: &str) -> Result<Vec<Action>> {
     Ok(actions)
 }
 
-/// The key list the help prints.
-/// The mouse and the modifier, after the keys.
-const MOUSE_HELP: &str = "  shift   held keys four times as fast\n  mouse   left drag: look around; right drag: orbit the mirror; middle drag: pan; wheel: walk\n";
+/// The modifier and the mouse, which both helps (the terminal's and the window's) list after
+/// the keys: (name, what it does).
+/// (As short as the longest key's text, so that the window's two-column list keeps its width.)
+pub const POINTER_HELP: [(&str, &str); 2] = [
+    ("shift", "held keys four times as fast"),
+    (
+        "mouse",
+        "drag: look, right: orbit, middle: pan, wheel: walk",
+    ),
+];
 
+/// The key list the help prints, then the modifier and the mouse.
 pub fn help() -> String {
     let mut text = String::from("specchio view keys:\n");
     for (key, _, what) in KEYS {
         text.push_str(&format!("  {key:<7} {what}\n"));
     }
-    text.push_str(MOUSE_HELP);
+    for (name, what) in POINTER_HELP {
+        text.push_str(&format!("  {name:<7} {what}\n"));
+    }
     text
 }
 
@@ -331,6 +341,25 @@ fn short(v: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The terminal's help names every key, then Shift and the mouse with each button, and no
+    /// line is wider than the longest key's (the window's two-column list keeps its width).
+    #[test]
+    fn the_help_lists_every_key_then_shift_and_the_mouse() {
+        let text = help();
+        let lines: Vec<&str> = text.lines().skip(1).collect();
+        assert_eq!(lines.len(), KEYS.len() + POINTER_HELP.len());
+        for ((key, _, _), line) in KEYS.iter().zip(&lines) {
+            assert!(line.trim_start().starts_with(key), "{line}");
+        }
+        let tail = &lines[KEYS.len()..];
+        assert!(tail[0].contains("shift") && tail[1].contains("mouse"), "{tail:?}");
+        for button in ["drag", "right", "middle", "wheel"] {
+            assert!(tail[1].contains(button), "{button}: {}", tail[1]);
+        }
+        let longest_key_text = KEYS.iter().map(|k| k.2.len()).max().unwrap();
+        assert!(POINTER_HELP.iter().all(|p| p.1.len() <= longest_key_text + 5));
+    }
 
     #[test]
     fn every_key_name_is_unique_and_parses_back() {

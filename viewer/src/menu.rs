@@ -16,7 +16,7 @@ use winit::event::WindowEvent;
 use winit::window::Window;
 
 use super::history::{self, History};
-use super::input::{Action, KEYS};
+use super::input::{Action, KEYS, POINTER_HELP};
 use super::overlay::Paint;
 
 /// The menu's and the help's distance from the window's corners (egui points).
@@ -428,14 +428,15 @@ fn figures(ui: &mut egui::Ui, s: &Status) {
     history::graph(ui, s.history, std::time::Instant::now());
 }
 
-/// The help: every key and what it does (the same table as the terminal's help). It never
+/// The help: every key and what it does, then Shift and the mouse (the same table as the
+/// terminal's help). It never
 /// covers the menu: beside it when the window is wide enough, else below it, and in any case
 /// within the window, scrolling when the list is longer than the room left.
 fn help_window(ctx: &Context, menu: Option<Rect>) -> Option<Rect> {
     let screen = ctx.content_rect();
     let (origin, room) = help_place(screen, menu);
     // Two keys a row where there is width for it (the whole list then fits the 1200x450
-    // window's height), else one.
+    // window's height), else one a line.
     let columns = if room.x >= TWO_KEYS_A_ROW_WIDTH { 2 } else { 1 };
     let window = egui::Window::new("keys  (h closes)")
         .fixed_pos(origin)
@@ -445,22 +446,36 @@ fn help_window(ctx: &Context, menu: Option<Rect>) -> Option<Rect> {
         .collapsible(false);
     let shown = window.show(ctx, |ui| {
         if columns == 2 {
-            egui::Grid::new("keys").num_columns(4).show(ui, |ui| {
-                for pair in KEYS.chunks(2) {
-                    for (key, _, what) in pair {
-                        ui.monospace(*key);
-                        ui.label(*what);
+            // Rows 1 point apart (egui's default is 3): the keys, Shift and the mouse then fit
+            // the 1200x450 window's height.
+            let spacing = egui::vec2(ui.spacing().item_spacing.x, 1.0);
+            egui::Grid::new("keys")
+                .num_columns(4)
+                .spacing(spacing)
+                .show(ui, |ui| {
+                    for pair in KEYS.chunks(2) {
+                        for (key, _, what) in pair {
+                            ui.monospace(*key);
+                            ui.label(*what);
+                        }
+                        ui.end_row();
+                    }
+                    // Shift and the mouse: one more row.
+                    for (name, what) in POINTER_HELP {
+                        ui.monospace(name);
+                        ui.label(what);
                     }
                     ui.end_row();
-                }
-            });
+                });
         } else {
             // Narrow: one key a line, its text wrapping within the room there is.
             ui.set_max_width(room.x);
-            for (key, _, what) in KEYS {
+            let pointer = POINTER_HELP.iter().map(|&(name, what)| (name, what));
+            let keys = KEYS.iter().map(|&(key, _, what)| (key, what));
+            for (key, what) in keys.chain(pointer) {
                 ui.horizontal_wrapped(|ui| {
                     ui.monospace(format!("{key:<7}"));
-                    ui.label(*what);
+                    ui.label(what);
                 });
             }
         }
