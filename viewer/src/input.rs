@@ -353,12 +353,17 @@ mod tests {
             assert!(line.trim_start().starts_with(key), "{line}");
         }
         let tail = &lines[KEYS.len()..];
-        assert!(tail[0].contains("shift") && tail[1].contains("mouse"), "{tail:?}");
+        assert!(
+            tail[0].contains("shift") && tail[1].contains("mouse"),
+            "{tail:?}"
+        );
         for button in ["drag", "right", "middle", "wheel"] {
             assert!(tail[1].contains(button), "{button}: {}", tail[1]);
         }
         let longest_key_text = KEYS.iter().map(|k| k.2.len()).max().unwrap();
-        assert!(POINTER_HELP.iter().all(|p| p.1.len() <= longest_key_text + 5));
+        assert!(POINTER_HELP
+            .iter()
+            .all(|p| p.1.len() <= longest_key_text + 5));
     }
 
     #[test]
