@@ -39,6 +39,16 @@ macro_rules! num_text_for {
 num_text_for!(f32);
 num_text_for!(f64);
 
+/// A count for a message. One computed with saturating arithmetic (a grid of a spacing near
+/// the smallest float) stops at `u64::MAX`: it says "more than 1.8e19" instead of twenty
+/// digits that are not the count.
+pub fn count_text(n: u64) -> String {
+    match n {
+        u64::MAX => "more than 1.8e19".to_owned(),
+        n => n.to_string(),
+    }
+}
+
 /// A time in seconds for a message: milliseconds in the everyday range, scientific notation
 /// outside it.
 pub fn time_text(t: f64) -> String {

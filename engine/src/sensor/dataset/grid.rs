@@ -25,9 +25,10 @@ pub enum GridError {
     #[error("--time: must be a finite number of seconds >= 0, not {}", crate::text::num_text(*.0))]
     Time(f64),
     #[error(
-        "--grid: a spacing of {} m gives {count} {what}, more than the {max} a \
+        "--grid: a spacing of {} m gives {} {what}, more than the {max} a \
          dataset grid may hold: choose a larger spacing or fewer headings",
-        crate::text::num_text(*spacing_m)
+        crate::text::num_text(*spacing_m),
+        crate::text::count_text(*count)
     )]
     TooMany {
         spacing_m: f64,
@@ -152,5 +153,8 @@ mod tests {
         assert!(text(grid(&scene, 1.0, 1, -1.0)).starts_with("--time"));
         assert!(text(grid(&scene, 0.001, 1, 0.0)).contains("positions, more than the 20000"));
         assert!(text(grid(&scene, 0.1, 360, 0.0)).contains("more than the 100000"));
+        // A spacing near the smallest float: the count saturates, and is said as a bound.
+        let tiny = text(grid(&scene, 1e-300, 1, 0.0));
+        assert!(tiny.contains("gives more than 1.8e19 positions"), "{tiny}");
     }
 }

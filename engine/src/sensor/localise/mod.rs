@@ -49,9 +49,10 @@ pub enum LocaliseError {
     )]
     NoFreePose { tries: u32, time_s: f64 },
     #[error(
-        "a landmark grid of spacing {} m spans {count} poses over this room's floor, more \
+        "a landmark grid of spacing {} m spans {} poses over this room's floor, more \
          than the {max} a sweep may render: choose a larger spacing",
-        crate::text::num_text(*spacing_m)
+        crate::text::num_text(*spacing_m),
+        crate::text::count_text(*count)
     )]
     TooManyLandmarks {
         spacing_m: f64,
