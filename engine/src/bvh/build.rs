@@ -4,15 +4,12 @@
 //! as [`WideNode`]s in one array per level.
 
 use glam::{Mat4, Vec3};
-use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
-use obvhs::Boundable;
 
 use super::layout::{BvhInstance, BvhTriangle, WideNode, BVH_STACK_SIZE};
 use super::BvhError;
 use crate::scene::Mesh;
-use crate::trees::padded_box;
-use crate::trees::{depth, wide_tree, MAX_DEPTH};
+use crate::trees::{depth, transformed_box, wide_tree, BoxLeaf, PaddedTriangle, MAX_DEPTH};
 
 // A top level and a mesh's tree, each at most `MAX_DEPTH` deep, fit the walk's stack together.
 const _: () = assert!(2 * MAX_DEPTH <= BVH_STACK_SIZE);
@@ -38,16 +35,6 @@ pub struct MeshRoot {
     pub lo: Vec3,
     pub hi: Vec3,
     pub depth: u32,
-}
-
-/// A triangle of a mesh with its box padded as the reference pads it.
-struct MeshTriangle([Vec3; 3]);
-
-impl Boundable for MeshTriangle {
-    fn aabb(&self) -> Aabb {
-        let [a, b, c] = self.0;
-        padded_box(a.min(b).min(c), a.max(b).max(c))
-    }
 }
 
 /// Appends `tree` to `nodes`, its node indices moved up by where it starts and its primitive
@@ -83,8 +70,8 @@ impl MeshBvhs {
     pub fn build(meshes: &[Mesh]) -> Result<Self, BvhError> {
         let mut all = Self::default();
         for (i, mesh) in meshes.iter().enumerate() {
-            let triangles: Vec<MeshTriangle> = (mesh.indices.chunks_exact(3))
-                .map(|t| MeshTriangle([0, 1, 2].map(|k| mesh.positions[t[k] as usize])))
+            let triangles: Vec<PaddedTriangle> = (mesh.indices.chunks_exact(3))
+                .map(|t| PaddedTriangle([0, 1, 2].map(|k| mesh.positions[t[k] as usize])))
                 .collect();
             let tree = wide_tree(&triangles, MESH_LEAF_TRIANGLES);
             let first = all.triangles.len() as u32;
@@ -135,15 +122,6 @@ pub struct Placed {
     pub drawable: u32,
 }
 
-/// An object's box in render space, from its mesh's padded box.
-struct ObjectBox(Aabb);
-
-impl Boundable for ObjectBox {
-    fn aabb(&self) -> Aabb {
-        self.0
-    }
-}
-
 impl TopLevel {
     /// The top level over `objects`, their meshes' trees in `meshes`. Each object's box holds
     /// the eight corners of its mesh's (padded) box, transformed, and is padded once more for
@@ -156,7 +134,7 @@ impl TopLevel {
             let root = meshes.roots[o.mesh];
             let instance = BvhInstance::new(&o.model_to_world, root.node, o.drawable)
                 .ok_or(BvhError::Transform(o.drawable))?;
-            boxes.push(ObjectBox(transformed_box(
+            boxes.push(BoxLeaf(transformed_box(
                 &o.model_to_world,
                 root.lo,
                 root.hi,
@@ -193,20 +171,4 @@ pub(super) fn check_stack(stack: u32, what: impl Fn() -> String) -> Result<(), B
         });
     }
     Ok(())
-}
-
-/// The box of `lo..hi` under `m`: the eight corners transformed, padded.
-fn transformed_box(m: &Mat4, lo_corner: Vec3, hi_corner: Vec3) -> Aabb {
-    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-    for k in 0..8 {
-        let corner = Vec3::select(
-            glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
-            hi_corner,
-            lo_corner,
-        );
-        let p = m.transform_point3(corner);
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    padded_box(lo, hi)
 }

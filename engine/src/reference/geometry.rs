@@ -141,24 +141,13 @@ mod tests {
     use std::path::Path;
 
     use glam::Vec3A;
-    use obvhs::aabb::Aabb;
     use obvhs::cwbvh::CwBvh;
     use obvhs::ray::{Ray, RayHit};
     use obvhs::triangle::Triangle;
 
     use super::*;
     use crate::scene::Mesh;
-    use crate::trees::padded_box;
-
-    /// A box-bounded triangle for the flat tree the comparison below walks.
-    struct Flat([Vec3; 3]);
-
-    impl obvhs::Boundable for Flat {
-        fn aabb(&self) -> Aabb {
-            let [a, b, c] = self.0;
-            padded_box(a.min(b).min(c), a.max(b).max(c))
-        }
-    }
+    use crate::trees::PaddedTriangle;
 
     /// Closest hit distance through obvhs's Möller–Trumbore test instead of ours, over one
     /// flat tree of the objects' triangles in render space and the room's wall triangles,
@@ -318,7 +307,8 @@ mod tests {
             let g = SceneGeometry::build(&scene, &state);
             let walls = wall_triangles(&scene, &state);
             let objects = g.triangles();
-            let flat_items: Vec<Flat> = objects.iter().map(|&t| Flat(t)).collect();
+            let flat_items: Vec<PaddedTriangle> =
+                objects.iter().map(|&t| PaddedTriangle(t)).collect();
             let flat = crate::trees::wide_tree(&flat_items, 3).unwrap();
             // Targets on the walls' triangles (as the rasterizer draws them) and the objects'.
             let targets: Vec<([Vec3; 3], bool)> = (walls.iter().map(|&w| (w, true)))

@@ -28,8 +28,7 @@ use obvhs::Boundable;
 use super::intersect::{AxisVisitor, ShearedRay, TriangleHit};
 use crate::scene::state::SceneState;
 use crate::scene::{Mesh, Scene};
-use crate::trees::padded_box;
-use crate::trees::wide_tree;
+use crate::trees::{transformed_box, wide_tree, BoxLeaf, PaddedTriangle};
 
 /// Triangles a leaf of a mesh's tree holds at most (obvhs's `fast_build` choice).
 const LEAF_TRIANGLES: u32 = 3;
@@ -43,31 +42,6 @@ const MAX_INVERSE: f32 = 1e12;
 /// meets, without the top level: the width of one wide node, so never more box tests than
 /// the top level's root would make.
 const CULL_OBJECTS: usize = 8;
-
-/// A triangle whose bounding box is padded by a few float steps of its coordinates.
-///
-/// The triangle test is watertight, but a node test is a slab test in float: a ray that meets
-/// a shared edge exactly can be rounded out of both boxes and never reach the triangles.
-/// Padding every box makes traversal conservative (the idea of Ize, "Robust BVH Ray
-/// Traversal", JCGT 2013, applied to the boxes instead of the ray interval); the triangle test
-/// still decides every hit exactly.
-struct PaddedTriangle([Vec3; 3]);
-
-impl Boundable for PaddedTriangle {
-    fn aabb(&self) -> Aabb {
-        let [a, b, c] = self.0;
-        padded_box(a.min(b).min(c), a.max(b).max(c))
-    }
-}
-
-/// An object's box in render space.
-struct ObjectBox(Aabb);
-
-impl Boundable for ObjectBox {
-    fn aabb(&self) -> Aabb {
-        self.0
-    }
-}
 
 /// One mesh's tree and what its triangles carry, in the mesh's model space.
 pub struct MeshTree {
@@ -309,7 +283,9 @@ impl Objects {
                 TreeOf::Mesh(m) => meshes.trees[m].bounds,
                 TreeOf::Placed(k) => placed[k].bounds,
             };
-            boxes.push(bounds.map_or(Aabb::INVALID, |b| transformed_box(&to_render, b)));
+            boxes.push(bounds.map_or(Aabb::INVALID, |b| {
+                transformed_box(&to_render, b.min.into(), b.max.into())
+            }));
             instances.push(instance);
         }
         // An object without triangles has an empty (inverted) box: no ray meets it, and it is
@@ -317,9 +293,9 @@ impl Objects {
         let top_objects: Vec<u32> = (0..boxes.len() as u32)
             .filter(|&i| boxes[i as usize].valid())
             .collect();
-        let items: Vec<ObjectBox> = top_objects
+        let items: Vec<BoxLeaf> = top_objects
             .iter()
-            .map(|&i| ObjectBox(boxes[i as usize]))
+            .map(|&i| BoxLeaf(boxes[i as usize]))
             .collect();
         let top = (instances.len() > CULL_OBJECTS)
             .then(|| wide_tree(&items, 1))
@@ -466,8 +442,8 @@ impl Objects {
     /// Builds the top level even over a few objects (the tests compare both ways).
     #[cfg(test)]
     pub(super) fn force_top_level(&mut self) {
-        let items: Vec<ObjectBox> = (self.top_objects.iter())
-            .map(|&i| ObjectBox(self.boxes[i as usize]))
+        let items: Vec<BoxLeaf> = (self.top_objects.iter())
+            .map(|&i| BoxLeaf(self.boxes[i as usize]))
             .collect();
         self.top = wide_tree(&items, 1);
     }
@@ -487,23 +463,6 @@ fn ray_meets_box(ray: &Ray, b: &Aabb) -> bool {
     let near = t1.min(t2).max_element().max(ray.tmin);
     let far = t1.max(t2).min_element().min(ray.tmax);
     near <= far
-}
-
-/// The box of `b` under `m`: its eight corners transformed, padded once more for the
-/// transform's rounding.
-fn transformed_box(m: &Mat4, b: Aabb) -> Aabb {
-    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-    for k in 0..8 {
-        let corner = Vec3A::select(
-            glam::BVec3A::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
-            b.max,
-            b.min,
-        );
-        let p = m.transform_point3(corner.into());
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    padded_box(lo, hi)
 }
 
 #[cfg(test)]

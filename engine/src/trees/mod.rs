@@ -5,7 +5,7 @@
 //! traversal (`reference::objects`); the `bvh` lookup lays them out for its shader (`bvh`).
 //! No Vulkan here.
 
-use glam::{Vec3, Vec3A};
+use glam::{Mat4, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
@@ -29,15 +29,57 @@ pub const MAX_DEPTH: u32 = 16;
 /// Box padding relative to the largest coordinate magnitude (about 64 float steps).
 const BOX_PAD_RELATIVE: f32 = 64.0 * f32::EPSILON;
 
-/// The box `lo..hi` padded as every box a traversal tests must be (see the
-/// reference's `objects::PaddedTriangle`): by [`BOX_PAD_RELATIVE`] of its largest coordinate magnitude,
-/// at least 1. The `bvh` lookup's trees pad theirs the same way (`crate::bvh`).
+/// The box `lo..hi` padded as every box a traversal tests must be (see [`PaddedTriangle`]):
+/// by [`BOX_PAD_RELATIVE`] of its largest coordinate magnitude, at least 1. Both tracers' trees
+/// are padded by it.
 pub fn padded_box(lo: Vec3, hi: Vec3) -> Aabb {
     let pad = BOX_PAD_RELATIVE * lo.abs().max(hi.abs()).max_element().max(1.0);
     Aabb {
         min: Vec3A::from(lo - pad),
         max: Vec3A::from(hi + pad),
     }
+}
+
+/// A triangle as a tree's leaf: its bounding box padded by [`padded_box`].
+///
+/// The triangle test is watertight, but a node test is a slab test in float: a ray that meets
+/// a shared edge exactly can be rounded out of both boxes and never reach the triangles.
+/// Padding every box makes traversal conservative (the idea of Ize, "Robust BVH Ray
+/// Traversal", JCGT 2013, applied to the boxes instead of the ray interval); the triangle test
+/// still decides every hit exactly.
+pub struct PaddedTriangle(pub [Vec3; 3]);
+
+impl Boundable for PaddedTriangle {
+    fn aabb(&self) -> Aabb {
+        let [a, b, c] = self.0;
+        padded_box(a.min(b).min(c), a.max(b).max(c))
+    }
+}
+
+/// A box as a tree's leaf (an object's, for a top level).
+pub struct BoxLeaf(pub Aabb);
+
+impl Boundable for BoxLeaf {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+/// The box `lo..hi` under `m`: its eight corners transformed, padded once more for the
+/// transform's rounding.
+pub fn transformed_box(m: &Mat4, lo_corner: Vec3, hi_corner: Vec3) -> Aabb {
+    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    for k in 0..8 {
+        let corner = Vec3::select(
+            glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+            hi_corner,
+            lo_corner,
+        );
+        let p = m.transform_point3(corner);
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    padded_box(lo, hi)
 }
 
 /// The compressed wide tree over `items` (None for none), at most `leaf` (1 to 3) of them a
