@@ -256,6 +256,8 @@ impl Objects {
         for (i, o) in scene.objects.iter().enumerate() {
             let model = state.object_to_render(scene, i);
             let inverse = model.inverse();
+            // The rows `bvh::layout::BvhInstance::new` gives the shader (that module builds on
+            // this one, so the three lines are repeated rather than imported).
             let to_model = [inverse.row(0), inverse.row(1), inverse.row(2)];
             let normal = inverse.transpose();
             let finite = |r: &Vec4| r.is_finite() && r.abs().max_element() <= MAX_INVERSE;
