@@ -91,10 +91,13 @@ fn main() {
         }
     }
     let manifest = Path::new(&manifest);
+    // The core (`core/`) is half of what the library computes: its sources count too.
     let sources = [
         manifest.join("src"),
         manifest.join("build.rs"),
         manifest.join("Cargo.toml"),
+        manifest.join("../core/src"),
+        manifest.join("../core/Cargo.toml"),
         manifest.join("../Cargo.lock"),
     ];
     for path in &sources {

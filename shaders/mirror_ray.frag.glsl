@@ -1,7 +1,7 @@
 #version 460
 // mirror_ray.frag - the sensor's ray map, in two halves (engine/build.rs builds each from
 // this file). The arithmetic is mirror_hit's, the same as every lookup's, so this is the ray
-// the colour pass really looked up; the CPU's exact ray map (engine/src/sensor/ray_map.rs)
+// the colour pass really looked up; the CPU's exact ray map (core/src/sensor/ray_map.rs)
 // must agree to float rounding.
 // - OUTPUT_ORIGIN_RANGE: per mirror pixel, the point where the pixel centre's ray meets the
 //   mirror (render space, rgb) and how far the reflected ray runs to what it meets (a);

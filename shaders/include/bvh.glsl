@@ -1,22 +1,22 @@
 // bvh.glsl - the exact mirror with nothing but storage buffers: the reflected pixel-centre ray
-// traced through a BVH of our own (engine/src/bvh) and the room's walls, and the surface it
+// traced through a BVH of our own (core/src/bvh) and the room's walls, and the surface it
 // meets shaded as the CPU reference does. Needs no extension, so it runs on every device,
 // with or without ray-tracing hardware.
 //
-// What the ray meets is found as the reference finds it (engine/src/reference/geometry.rs
+// What the ray meets is found as the reference finds it (core/src/reference/geometry.rs
 // `closest_hit`): the room's box first (the walls are not triangles here, but the box's
 // planes), then the objects up to just past that wall, so an object lying on a wall's plane
-// wins the tie. The objects are two levels of trees (engine/src/bvh/mod.rs): a top level over
+// wins the tie. The objects are two levels of trees (core/src/bvh/mod.rs): a top level over
 // the objects' boxes in render space, and one tree per mesh in its model space, entered
 // through the object's inverse transform. One loop walks both (bvh_closest_object); the CPU's
-// engine/src/bvh/traverse.rs is the same walk, step for step.
+// core/src/bvh/traverse.rs is the same walk, step for step.
 #ifndef BVH_GLSL
 #define BVH_GLSL
 
 #include "shared.glsl"
 #include "mirror.glsl"
 
-// A node of a compressed wide BVH (Ylitie, Karras and Laine, HPG 2017; engine/src/bvh/
+// A node of a compressed wide BVH (Ylitie, Karras and Laine, HPG 2017; core/src/bvh/
 // layout.rs): up to eight children, their boxes quantized to 8 bits a plane on a grid from
 // the node's origin with a power-of-two step per axis. Each byte array holds one byte per
 // child slot, little-endian in two words. A child's `meta` byte: 0 empty; an inner node
@@ -276,7 +276,7 @@ uint intersect_node(WideNode n, LevelRay ray, float t_min, float t_max) {
 // the ray into the object's model space and walks its mesh's tree on the same stack, above
 // `mesh_floor`; when the stack is back down to it, the ray returns to render space. The stack
 // lives in the invocation's registers or private memory; the trees are refused when built
-// if a walk could overflow it. engine/src/bvh/traverse.rs is this walk on the CPU.
+// if a walk could overflow it. core/src/bvh/traverse.rs is this walk on the CPU.
 BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
     BvhHit best;
     best.t = t_max;

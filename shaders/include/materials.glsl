@@ -1,6 +1,6 @@
 // materials.glsl - albedo and shading. Written with plain float operations so that the CPU
 // reference ray tracer mirrors each function line by line in Rust
-// (engine/src/reference/materials.rs); materials_check.comp runs them for the test that
+// (core/src/reference/materials.rs); materials_check.comp runs them for the test that
 // compares the two.
 #ifndef MATERIALS_GLSL
 #define MATERIALS_GLSL

@@ -1,6 +1,6 @@
 // quadric.glsl - ray / mirror intersection for every shape but the sphere: the hyperboloid,
 // the paraboloid and the cone (each a quadric of revolution about the viewpoint's vertical
-// axis), cut at its rim and closed there by a flat disc. engine/src/mirror/quadric.rs is the
+// axis), cut at its rim and closed there by a flat disc. core/src/mirror/quadric.rs is the
 // same algorithm in f64.
 //
 // About its vertex (s the height above it, the axis +Y) the surface is

@@ -1,6 +1,6 @@
 // ray_query.glsl - the exact mirror: the reflected pixel-centre ray traced through the scene's
 // acceleration structure (VK_KHR_ray_query) and the surface it meets shaded as the CPU
-// reference does (engine/src/reference/mod.rs `trace`): same sphere hit, same reflection, same
+// reference does (core/src/reference/mod.rs `trace`): same sphere hit, same reflection, same
 // origin offset, same attribute interpolation and the same materials.glsl. Shared by the
 // colour pass and the direction pass of the ray-query lookup.
 #ifndef RAY_QUERY_GLSL

@@ -12,7 +12,7 @@
 // Texture slots bound at set 0, binding 4 (unused slots hold a 1x1 white texel).
 #define MAX_TEXTURES 16
 
-// MaterialData.kind values (engine/src/scene MaterialKind).
+// MaterialData.kind values (core/src/scene MaterialKind).
 #define MATERIAL_COLOR 0u
 #define MATERIAL_CHECKER 1u
 #define MATERIAL_GRID 2u
@@ -32,7 +32,7 @@ struct FrameData {
                             // reverse-Z depth back into distances (distance_search.glsl);
                             // z: the most samples a pixel's footprint filter takes along its
                             // long side, >= 1 ([cube] anisotropy, footprint_filter.glsl)
-    uvec4 mirror_shape;     // x: MIRROR_SPHERE or MIRROR_QUADRIC (engine/src/mirror)
+    uvec4 mirror_shape;     // x: MIRROR_SPHERE or MIRROR_QUADRIC (core/src/mirror)
     vec4 mirror_quadric;    // MIRROR_QUADRIC, axis +Y through the viewpoint (mirror.xyz): the
                             // surface x^2 + z^2 + a s^2 + b s = 0, s the height above the
                             // vertex; x, y: a, b; z: the vertex's height above the viewpoint;
@@ -115,12 +115,12 @@ struct MaterialSample {
 // Instanced cube fill: gl_InstanceIndex = object << INSTANCE_FACE_BITS | face.
 #define INSTANCE_FACE_BITS 3u
 
-// Entries in the bvh lookup's walk stack (bvh.glsl, engine/src/bvh), which walks both levels:
+// Entries in the bvh lookup's walk stack (bvh.glsl, core/src/bvh), which walks both levels:
 // each node level leaves at most one entry (the rest of the group it came from), entering an
 // object two (the rest of its node and object groups), and a mesh's tree is walked above the
 // top level's entries, so the top level's depth plus the deepest mesh's must fit. Walks that
-// need more are refused when the trees are built (engine/src/bvh/build.rs); the benchmark
-// scenes need at most 11 (heavy.toml: a top level 6 deep, meshes 5; engine/src/bvh/tests.rs
+// need more are refused when the trees are built (core/src/bvh/build.rs); the benchmark
+// scenes need at most 11 (heavy.toml: a top level 6 deep, meshes 5; core/src/bvh/tests.rs
 // prints them).
 #define BVH_STACK_SIZE 32u
 

@@ -1,6 +1,6 @@
 // traced_surface.glsl - what the lookups that trace share once a reflected ray has met a
 // triangle: the ray's origin moved off the mirror, the scene's triangles fetched by drawable
-// and primitive, and the hit shaded as the CPU reference does (engine/src/reference/mod.rs
+// and primitive, and the hit shaded as the CPU reference does (core/src/reference/mod.rs
 // `shade_hit`): the corners' normals to world and interpolated, the uv interpolated, the same
 // materials.glsl. The tracers (ray_query.glsl, bvh.glsl) differ only in how they find the hit.
 //

@@ -1,5 +1,5 @@
 //! Every command that scales with a user's numbers checks a memory estimate before it starts
-//! (`engine/src/memory/estimates.rs`, `specchio::memory`): refused over the budget with the figures and
+//! (`core/src/memory/estimates.rs`, `specchio::memory`): refused over the budget with the figures and
 //! nothing written, and, where it runs, never using more than it estimated.
 //!
 //! The estimate is read from the refusal under a one-byte budget (`SPECCHIO_MEMORY_BUDGET=1`),

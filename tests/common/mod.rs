@@ -41,7 +41,7 @@ pub fn specchio(args: &[&str]) -> std::process::Output {
 }
 
 /// Whether `text` names a staging folder (`.NAME.specchio-` and 32 hex digits,
-/// engine/src/output/stage.rs): errors must name the user's path, never a staging one.
+/// core/src/output/stage.rs): errors must name the user's path, never a staging one.
 pub fn names_a_staging_folder(text: &str) -> bool {
     text.match_indices(".specchio-").any(|(i, m)| {
         let rest = &text.as_bytes()[i + m.len()..];

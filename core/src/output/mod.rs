@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 
 use crate::image::{exr, png, RgbaImage};
 
-pub(crate) use dir::{Dir, Entry};
+pub use dir::{Dir, Entry};
 pub use manifest::MANIFEST;
 pub use sink::{json_text, MemoryFiles, Sink};
 pub use sys::{create_new, open_no_follow, try_lock};

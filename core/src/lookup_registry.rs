@@ -15,7 +15,10 @@
 //! from `render::lookups`, read only where the renderer expands the registry (a macro's
 //! tokens are resolved where it is expanded, so this module imports nothing).
 
-/// Expands `$then! { entries }` with every lookup's entry, in order.
+/// Expands `$then! { entries }` with every lookup's entry, in order. Exported because the
+/// renderer, which expands it into its plug-in table, is another crate (`specchio`).
+#[doc(hidden)]
+#[macro_export]
 macro_rules! with_lookups {
     ($then:ident) => {
         $then! {
@@ -47,4 +50,4 @@ macro_rules! with_lookups {
     };
 }
 
-pub(crate) use with_lookups;
+pub use crate::with_lookups;
