@@ -1,7 +1,7 @@
 //! The JSON the other commands write, as typed structs (the benchmark's own record is
 //! `bench::record`): `render.json`, `reference.json`, `compare --json`, `info --json` and the
 //! probe's line. Keys are struct fields, so the writer and anything that reads a value back
-//! (the render summary's printout) cannot disagree on a name. docs/architecture.md and
+//! (the render summary's printout) cannot disagree on a name. docs/outputs.md and
 //! docs/accuracy.md list the keys.
 
 use serde::Serialize;

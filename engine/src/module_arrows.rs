@@ -472,7 +472,7 @@ fn rust_files(path: &Path) -> Vec<PathBuf> {
     found
 }
 
-/// How docs/architecture.md must name `path`: its file name (`stage.rs`) or bare name in
+/// How the module map must name `path`: its file name (`stage.rs`) or bare name in
 /// backticks (`` `objects` ``, the scene loader's sections); for a folder's `mod.rs` the
 /// folder (`load/`), for a crate's `lib.rs` or `main.rs` the crate's folder (`cli/`).
 fn named_in(doc: &str, path: &Path) -> bool {
@@ -498,12 +498,16 @@ fn named_in(doc: &str, path: &Path) -> bool {
     }
 }
 
-/// docs/architecture.md is the map a newcomer reads: every source file of the workspace is on
-/// it, by a whole word ([`named_in`]). A file added without its line fails here, naming it.
+/// docs/modules.md and docs/testing.md are the index the map (docs/architecture.md) points
+/// into: every source file of the workspace is on it, by a whole word ([`named_in`]). A file
+/// added without its line fails here, naming it.
 #[test]
-fn the_architecture_doc_names_every_source_file() {
+fn the_module_map_names_every_source_file() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let doc = std::fs::read_to_string(root.join("docs/architecture.md")).expect("the doc");
+    // The source files in modules.md, the test files (and the unit tests' own) in testing.md.
+    let doc = ["docs/modules.md", "docs/testing.md"]
+        .map(|p| std::fs::read_to_string(root.join(p)).expect("the doc"))
+        .concat();
     let places = [
         "core/src",
         "engine/src",
@@ -531,6 +535,6 @@ fn the_architecture_doc_names_every_source_file() {
     missing.sort();
     assert!(
         missing.is_empty(),
-        "docs/architecture.md does not name: {missing:#?}"
+        "docs/modules.md and docs/testing.md do not name: {missing:#?}"
     );
 }

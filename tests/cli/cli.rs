@@ -281,7 +281,7 @@ fn an_unusable_or_unknown_method_is_refused_with_the_reason() {
 /// `specchio info` lists every installed CPU driver with what each can run and why not:
 /// lavapipe runs every method; SwiftShader, where `scripts/setup.sh` provided it, runs
 /// six-pass and multiview and says that it lacks the geometry shader. Exactly one device is
-/// the default, by the documented ranking (docs/architecture.md, "Device selection"): a GPU
+/// the default, by the documented ranking (docs/renderer.md, "Device selection"): a GPU
 /// where the machine has one, else lavapipe, which ranks before SwiftShader.
 #[test]
 fn info_lists_both_cpu_drivers_and_their_methods() {

@@ -1,5 +1,4 @@
-//! The output protocol against what broke its promise before (docs/architecture.md, "Output
-//! files"): writes racing the commit, names that look like a run's temporaries, planted links,
+//! The output protocol against what broke its promise before (docs/outputs.md): writes racing the commit, names that look like a run's temporaries, planted links,
 //! other spellings of an input, and runs that other processes cannot see by PID. Races are
 //! driven deterministically through the commit's hook.
 

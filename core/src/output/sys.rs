@@ -1,7 +1,7 @@
 //! The system calls the output protocol needs beyond `std`, besides the folder handles of
 //! `dir.rs`: an advisory lock that dies with its process, an exclusive create that never
 //! follows a link, and an open that never waits. Linux has them all; elsewhere each says `Unsupported`
-//! and the protocol takes its fallback (docs/architecture.md, "Output files").
+//! and the protocol takes its fallback (docs/outputs.md).
 
 use std::fs::{File, OpenOptions};
 use std::io;

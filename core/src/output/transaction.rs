@@ -7,7 +7,7 @@
 //! Dropped without a commit (an error, a panic that unwinds), it removes its staging folders
 //! and every parent folder it created: the user finds exactly what was there before.
 //!
-//! The protocol, and the invariants it keeps, are in docs/architecture.md ("Output files"):
+//! The protocol, and the invariants it keeps, are in docs/outputs.md:
 //! - a run writes only into staging folders it made itself ([`stage`]): random names,
 //!   exclusive creation, never a link followed, never a name reused;
 //! - an existing folder is replaced only when it is an earlier output of the same command (it

@@ -2,7 +2,7 @@
 //! layered or multiview rendering, instancing or meshlets) and draws the observer, the sensor
 //! and the side-by-side views with the analytic mirror.
 //!
-//! One frame (see `docs/architecture.md`):
+//! One frame (see `docs/architecture.md`, "One frame, as passes", and `docs/renderer.md`):
 //! 1. evaluate the scene at time t ([`SceneState`]) and decide, by the refresh policy,
 //!    whether the cube map must be re-rendered;
 //! 2. write the per-frame buffers (views, object transforms);

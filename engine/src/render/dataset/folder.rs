@@ -22,7 +22,7 @@ pub struct Folder {
 
 impl Folder {
     /// Stages the folder `root` for `frames` frames; fails now, before any work, where `root`
-    /// cannot become this output (docs/architecture.md, "Output files").
+    /// cannot become this output (docs/outputs.md).
     pub fn stage(root: &Path, frames: usize) -> Result<Folder, DatasetError> {
         let mut staged = Transaction::new();
         staged.folder(root, SUMMARY_FILE)?;
