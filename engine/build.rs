@@ -12,9 +12,9 @@
 //! A compile error fails the build and prints glslang's message with file and line.
 //!
 //! Also sets `SPECCHIO_BUILD_ID`: a digest of everything the library's outputs are computed
-//! from (its sources, the shaders, the dependencies' versions in Cargo.lock), which a
-//! resumable dataset keeps in its key (src/render/dataset/resume.rs): two builds that may
-//! write different bytes never finish one dataset together. The shaders are compiled again
+//! from (its sources and the core's, the shaders, the dependencies' versions in Cargo.lock),
+//! which a resumable dataset keeps in its key (`Plan::run_key`, src/render/dataset/mod.rs):
+//! two builds that may write different bytes never finish one dataset together. The shaders are compiled again
 //! only when they changed, since a change to any source now runs this script.
 
 use std::collections::BTreeMap;

@@ -3,7 +3,7 @@
 //! scene's frame and ROS REP-103's, a point cloud), and `index.jsonl`, one line per frame, for
 //! a data loader (docs/sensor.md, "Datasets"). All or nothing, like every output; with
 //! `--resume`, the finished frames are kept across runs in a work folder beside the output
-//! (`render::dataset::resume`). The frames are the engine's `render::dataset`'s, as the Python
+//! (`sensor::dataset::resume`). The frames are the engine's `render::dataset`'s, as the Python
 //! package's.
 
 use std::path::{Path, PathBuf};
@@ -14,11 +14,10 @@ use specchio::output::OutputError;
 use specchio::process::args::{real, whole};
 use specchio::process::probe;
 use specchio::process::progress::Progress;
-use specchio::render::dataset::{
-    self as writer, resume, DatasetError, Folder, FrameWriter, Plan, Poses,
-};
+use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::grid;
+use specchio::sensor::dataset::{resume, DatasetError, Folder};
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 #[derive(clap::Args)]
@@ -78,7 +77,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if let Some(warning) = truth.warning(&plan.scene) {
         eprintln!("warning: dataset ({lookup} lookup): {warning}");
     }
-    let key = || plan.run_key(lookup, truth, &resume::device_key(&device.info));
+    let key = || plan.run_key(lookup, truth, &writer::device_key(&device.info));
     take_up(args, &mut folder, key, &plan)?;
 
     // 3. The frames, then the index and the summary.

@@ -7,11 +7,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use pyo3::prelude::*;
-use specchio::render::dataset::{
-    self as writer, resume, DatasetError, Folder, FrameWriter, Plan, Poses,
-};
+use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::DatasetRecord;
+use specchio::sensor::dataset::{resume, DatasetError, Folder, Ready};
 use specchio::vk::device::Device;
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
@@ -141,7 +140,7 @@ struct Job<'a> {
 
 /// A dataset rendered, not placed yet: the folder ready to place, its summary, and the
 /// validation log.
-type Finished = (writer::Ready, DatasetRecord, Arc<ValidationLog>);
+type Finished = (Ready, DatasetRecord, Arc<ValidationLog>);
 
 /// Renders `job`'s frames into its staged folder (with the GIL released), keeping the error
 /// from Python that stopped it in `stopped` and the frames placed in `placed`.
@@ -159,7 +158,7 @@ fn render(
     let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
     let truth = frames.ground_truth();
     if job.resume {
-        let key = plan.run_key(lookup, truth, &resume::device_key(&dev.info));
+        let key = plan.run_key(lookup, truth, &writer::device_key(&dev.info));
         folder.resume(&key, &mut plan.index_lines())?;
     }
     let hooks = Hooks {
@@ -287,7 +286,7 @@ pub(crate) fn with_kept_note(
 }
 
 /// Places a finished dataset; what of its work folder could not be removed is a warning.
-pub(crate) fn commit(py: Python<'_>, ready: writer::Ready) -> PyResult<()> {
+pub(crate) fn commit(py: Python<'_>, ready: Ready) -> PyResult<()> {
     let left = py.detach(|| ready.commit()).map_err(errors::to_py)?;
     if !left.is_empty() {
         let text = format!(

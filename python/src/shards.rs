@@ -8,8 +8,9 @@ use std::sync::{Mutex, MutexGuard};
 
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
-use specchio::render::dataset::{resume, DatasetError, Folder, Frame, FrameWriter, Plan};
+use specchio::render::dataset::{device_key, FrameWriter, Plan};
 use specchio::scene::Lookup;
+use specchio::sensor::dataset::{resume, DatasetError, Folder, Frame};
 use specchio::sensor::GroundTruth;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
@@ -106,7 +107,7 @@ impl DatasetFrames {
     /// a resumable dataset must have the same.
     #[getter]
     fn device(&self) -> String {
-        resume::device_key(&self._device.info)
+        device_key(&self._device.info)
     }
 
     /// The frames `indices` (into the trajectory's poses): for each, its files as a list of

@@ -7,7 +7,8 @@
 mod common;
 
 use common::{root, Gpu};
-use specchio::render::dataset::{choose_lookup, DatasetError, Frame, FrameWriter, Plan, Poses};
+use specchio::render::dataset::{choose_lookup, FrameWriter, Plan, Poses};
+use specchio::sensor::dataset::{DatasetError, Frame};
 
 /// Thesis-room's textured walls, a pose grid of four places with two headings each.
 fn plan() -> Plan {

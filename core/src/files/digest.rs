@@ -1,6 +1,6 @@
 //! What a computation read, by content: the digests of every file read through
 //! [`super::read_regular_file`] while a closure runs on this thread. A resumable dataset
-//! (render/dataset/resume.rs) keeps them, so that a run resumed after its scene, a mesh, a
+//! (sensor/dataset/resume.rs) keeps them, so that a run resumed after its scene, a mesh, a
 //! texture or its trajectory changed is refused instead of mixing frames of two rooms.
 
 use std::cell::RefCell;

@@ -17,9 +17,10 @@ use std::process::{Command, Stdio};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::render::dataset::{choose_lookup, DatasetError};
+use crate::render::dataset::choose_lookup;
 use crate::render::methods::Method;
 use crate::scene::{Lookup, Scene};
+use crate::sensor::dataset::DatasetError;
 use crate::vk::device::{Device, DeviceDesc, DeviceInfo, OptionalFeatures};
 use crate::vk::instance::Instance;
 use crate::vk::GpuError;

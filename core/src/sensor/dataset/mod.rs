@@ -4,13 +4,24 @@
 //!
 //! This module holds what does not need a GPU: the trajectory ([`trajectory`]), the frames'
 //! transform ([`rep103`]), the point clouds ([`ply`]), the check that a pose can be rendered
-//! ([`pose_fits`]) and the records;
-//! `render::dataset` renders the frames, for the command and for the Python package.
+//! ([`pose_fits`]), the records, and the output folder a run fills ([`Folder`]: staged, all or
+//! nothing, resumable across runs through [`resume`]'s work folder, every frame checked as it
+//! comes: [`check`]). The engine's `render::dataset` renders the frames, for the command and
+//! for the Python package, and hands each here as a [`Frame`].
 
+pub mod check;
+mod error;
+mod folder;
 pub mod grid;
 pub mod ply;
 pub mod rep103;
+pub mod resume;
 pub mod trajectory;
+
+pub use check::{check_frame, check_index_line};
+pub use error::DatasetError;
+pub use folder::{Folder, Ready};
+pub use resume::RunKey;
 
 use glam::{DMat3, DVec3, Vec3};
 use serde::Serialize;
@@ -20,6 +31,20 @@ use super::{SensorOptics, SensorOutputs};
 use crate::scene::state::SceneState;
 use crate::scene::Scene;
 use trajectory::Pose;
+
+/// The index a data loader reads: one JSON line per frame.
+pub const INDEX_FILE: &str = "index.jsonl";
+/// The dataset's summary, written last; also the mark of an earlier dataset folder.
+pub const SUMMARY_FILE: &str = "dataset.json";
+
+/// One frame of a dataset: its files (paths relative to the dataset folder, sorted) and its
+/// index line (without the newline).
+pub struct Frame {
+    /// Its index in the trajectory.
+    pub frame: usize,
+    pub files: Vec<(std::path::PathBuf, Vec<u8>)>,
+    pub index_line: String,
+}
 
 /// Every object's bounding sphere about its own origin: its centre's offset (model space
 /// scaled, not yet rotated) and its radius, walked once over the mesh's vertices.

@@ -14,24 +14,16 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::{Arc, Mutex};
 
-use super::{place_robot, robot_scene, DatasetError, INDEX_FILE};
+use super::{place_robot, robot_scene};
 use crate::output::{MemoryFiles, OutputError, Sink};
 use crate::render::{lookups, Readback, RenderOptions, Renderer};
 use crate::scene::{Lookup, Scene};
 use crate::sensor::dataset::trajectory::Pose;
 use crate::sensor::dataset::{self as sensor_dataset, IndexLine, PoseRecord};
+use crate::sensor::dataset::{DatasetError, Frame, INDEX_FILE};
 use crate::sensor::{GroundTruth, SensorOutputs};
 use crate::vk::device::Device;
 use crate::vk::GpuError;
-
-/// One frame of a dataset: its files (paths relative to the dataset folder, sorted) and its
-/// index line (without the newline).
-pub struct Frame {
-    /// Its index in the trajectory.
-    pub frame: usize,
-    pub files: Vec<(PathBuf, Vec<u8>)>,
-    pub index_line: String,
-}
 
 /// A frame rendered and read back: everything its files are made from, no device in it.
 pub struct Rendered {

@@ -3,72 +3,50 @@
 //! - [`FrameWriter`]: a renderer whose mirror (the robot) stands at each pose in turn, giving a
 //!   frame's files in memory ([`Frame`]), encoded beside the next frame's render (`frames.rs`);
 //! - [`Folder`]: the output folder, staged, the frames placed in it as they come (or kept in
-//!   a work folder across runs: `resume.rs`), the index and the summary written last.
+//!   a work folder across runs), the index and the summary written last. It is crash-safe
+//!   files, no GPU, so it lives with the dataset's format in the core (`sensor::dataset`).
 //!
 //! `specchio dataset` runs them in one process; the Python package's Ray driver runs one
 //! `FrameWriter` per worker over shards of the poses and writes what they return. A frame's
 //! bytes depend only on the plan, the lookup, the device and the frame's index and pose (never
 //! on which frames a writer rendered before it), so both give the same files, byte for byte.
 
-mod check;
-mod folder;
 mod frames;
-pub mod resume;
 
 use std::path::{Path, PathBuf};
 
 use super::lookups;
 use crate::files::digest::{self, Digest};
-use crate::memory::MemoryError;
-use crate::output::OutputError;
-use crate::scene::{Lookup, RefreshPolicy, Scene, SceneError};
-use crate::sensor::dataset::grid::{self, GridError};
+use crate::scene::{Lookup, RefreshPolicy, Scene};
+use crate::sensor::dataset::grid;
+use crate::sensor::dataset::resume::RunKey;
 use crate::sensor::dataset::trajectory::{self, Pose, TrajectoryError};
 use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
+use crate::sensor::dataset::{DatasetError, Folder, INDEX_FILE};
 use crate::sensor::GroundTruth;
 use crate::vk::physical::DeviceInfo;
 use crate::vk::GpuError;
 
-pub use check::{check_frame, check_index_line};
-pub use folder::{Folder, Ready};
-pub use frames::{Frame, FrameWriter, Rendered};
-pub use resume::RunKey;
+#[cfg(doc)]
+use crate::sensor::dataset::Frame;
 
-/// Why a dataset could not be made. Each names its file (and line and field, where the input
-/// has them) or the device.
-#[derive(Debug, thiserror::Error)]
-pub enum DatasetError {
-    #[error(transparent)]
-    Scene(#[from] SceneError),
-    #[error(transparent)]
-    Trajectory(#[from] TrajectoryError),
-    #[error("{path}: {source}")]
-    Memory { path: PathBuf, source: MemoryError },
-    #[error("{path}: {source}")]
-    Grid { path: PathBuf, source: GridError },
-    #[error("lookup {lookup} cannot run on {device}: {why}")]
-    Lookup {
-        lookup: Lookup,
-        device: String,
-        why: String,
-    },
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-    #[error(transparent)]
-    Output(#[from] OutputError),
-    /// The run was stopped between frames (a signal, Python's KeyboardInterrupt); the text
-    /// says how far it got.
-    #[error("{0}")]
-    Stopped(String),
-    /// A frame or an index line that is not what a frame folder holds.
-    #[error("{0}")]
-    Invalid(String),
-    /// A resumable run's work folder cannot be taken: not a folder, not ours, another run's.
-    #[error("{path} {why}")]
-    Resume { path: PathBuf, why: String },
-    #[error("frame {frame}: its sensor layers were not read back (a bug)")]
-    NotReadBack { frame: usize },
+/// A GPU's error, as a dataset's: the core, which holds [`DatasetError`], knows no GPU.
+impl From<GpuError> for DatasetError {
+    fn from(e: GpuError) -> Self {
+        DatasetError::Gpu(Box::new(e))
+    }
 }
+
+/// The device as a run key names it: its name and driver, since another driver may round
+/// differently.
+pub fn device_key(device: &DeviceInfo) -> String {
+    format!(
+        "{} ({} {})",
+        device.name, device.driver_name, device.driver_version
+    )
+}
+
+pub use frames::{FrameWriter, Rendered};
 
 /// A dataset to render: the scene and its path, where the poses came from, and the poses,
 /// each checked.
@@ -161,7 +139,7 @@ impl Plan {
     }
 
     /// What this plan's frames' bytes depend on, rendered with `lookup` (`truth` its ground
-    /// truth) on the device `device` ([`resume::device_key`]): a resumable run continues only
+    /// truth) on the device `device` ([`device_key`]): a resumable run continues only
     /// a work folder with the same key.
     pub fn run_key(&self, lookup: Lookup, truth: GroundTruth, device: &str) -> RunKey {
         RunKey {
@@ -210,11 +188,6 @@ impl Plan {
         }
     }
 }
-
-/// The index a data loader reads: one JSON line per frame.
-pub const INDEX_FILE: &str = "index.jsonl";
-/// The dataset's summary, written last; also the mark of an earlier dataset folder.
-pub const SUMMARY_FILE: &str = "dataset.json";
 
 /// The colour image's lookup: the one asked for, else the first that traces and that the
 /// device runs (ray-query where it has ray queries, bvh on any other), so that colour, range

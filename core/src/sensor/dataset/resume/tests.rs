@@ -4,9 +4,9 @@
 use std::path::{Path, PathBuf};
 
 use super::*;
-use crate::render::dataset::{Folder, INDEX_FILE};
 use crate::sensor::dataset::DatasetRecord;
 use crate::sensor::dataset::FRAME_FILES;
+use crate::sensor::dataset::{Folder, INDEX_FILE};
 use crate::sensor::GroundTruth;
 use std::fs::OpenOptions;
 

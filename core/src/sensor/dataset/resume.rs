@@ -55,15 +55,6 @@ pub struct WorkFolder {
     frames: usize,
 }
 
-/// The device as a run key names it: its name and driver, since another driver may round
-/// differently.
-pub fn device_key(device: &crate::vk::physical::DeviceInfo) -> String {
-    format!(
-        "{} ({} {})",
-        device.name, device.driver_name, device.driver_version
-    )
-}
-
 /// The work folder of the output `out`: beside it, its name with [`WORK_SUFFIX`].
 pub fn work_path(out: &Path) -> PathBuf {
     // As the output's own name (`output::Transaction`): `out/.` is `out`.

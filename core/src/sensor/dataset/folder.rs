@@ -36,9 +36,8 @@ impl Folder {
 
     /// Makes the run resumable: frames are kept in the work folder as they finish, and the
     /// frames it holds from an earlier run with the same `key` are done, each proven against
-    /// `index_of`, the index lines this run writes ([`Plan::index_lines`]). Returns how many.
-    ///
-    /// [`Plan::index_lines`]: super::Plan::index_lines
+    /// `index_of`, the index lines this run writes (the engine's `Plan::index_lines`). Returns
+    /// how many.
     pub fn resume(
         &mut self,
         key: &RunKey,
