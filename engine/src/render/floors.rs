@@ -15,6 +15,7 @@ use ash::vk;
 
 use super::cube_fill::Fill;
 use super::gpu::Push;
+use super::graph;
 use super::methods::{CubePlan, CubeRecorder};
 use super::queries::StatsRead;
 use super::targets::DEPTH_FORMAT;
@@ -82,7 +83,14 @@ impl Renderer {
         let frame = self.frame_parts();
         (self.cube_fill).record(&frame, cmd, &plan, first, &mut report, fill);
         // Keeps the remaining timestamp slots answered (no view is drawn).
-        (self.views).record(&frame, cmd, &views, (Readback::default(), None));
+        let mut graph = self.frame_graph();
+        (self.views).record(
+            (&frame, &mut graph),
+            cmd,
+            &views,
+            (Readback::default(), None),
+        );
+        graph::record(&self.device, cmd, &graph.finish());
         // The floor's statistics are query 0's, whatever the method (read below).
         let stats = StatsRead {
             fill: 1,

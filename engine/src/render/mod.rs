@@ -22,6 +22,7 @@ mod frame;
 mod frame_data;
 mod frame_parts;
 pub mod gpu;
+mod graph;
 mod in_flight;
 pub mod lookups;
 pub mod material_check;
@@ -51,7 +52,7 @@ pub use crate::image::RgbaImage;
 use crate::scene::camera::ViewBasis;
 use crate::scene::state::SceneState;
 use crate::scene::{RefreshPolicy, Scene};
-use crate::vk::commands::{image_barriers, Submitter};
+use crate::vk::commands::Submitter;
 use crate::vk::device::Device;
 use crate::vk::memory::{Buffer, BufferDesc};
 use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, PipelineLayout, ShaderStage};
@@ -360,9 +361,27 @@ impl Renderer {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
             }
         }
-        (self.views).record(&frame, cmd, views, (readback, display));
+        let mut graph = self.frame_graph();
+        (self.views).record((&frame, &mut graph), cmd, views, (readback, display));
         (frame.lookup).record_after_views(cmd, self.frames.current_index());
-        self.record_readback(cmd, copies);
+        self.record_readback(&mut graph, cmd, copies);
+        graph::record(&self.device, cmd, &graph.finish());
+    }
+
+    /// The frame graph of the passes that declare their uses (views, readback), with every
+    /// resource they may use at rest: the view targets, the cube's mip 0 and the slot's
+    /// readback buffer.
+    fn frame_graph(&self) -> graph::FrameGraph {
+        let mut graph = graph::FrameGraph::default();
+        for (resource, rest) in self.views.every_target().flat_map(|t| t.resources()) {
+            graph.import(resource, rest);
+        }
+        let (mip0, rest) = self.cube.mip0();
+        graph.import(mip0, rest);
+        if let Some(buffer) = &self.frames.current().readback {
+            graph.import(graph::Resource::Buffer(buffer.raw), graph::Use::HostRead);
+        }
+        graph
     }
 
     /// The current frame's queries (per frame in flight: a slot's are read after its fence).

@@ -3,16 +3,16 @@
 
 use ash::vk;
 
-use super::draw::{barrier, Attachments, COLOR_OUT, COPY_READ, DEPTH_RW};
+use super::draw::Attachments;
 use super::frame_parts::FrameParts;
 use super::gpu::Push;
+use super::graph::{self, FrameGraph};
 use super::pipelines::ViewPipelines;
 use super::resources::{VIEW_OBSERVER, VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT, VIEW_SENSOR};
 use super::sensor_rays::{MirrorOutput, SensorRays};
 use super::targets::ViewTarget;
 use super::*;
 use crate::scene::camera::{Frustum, ViewBasis};
-use crate::vk::commands::ImageBarrier;
 
 /// The view images a frame can read back.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -87,13 +87,23 @@ impl ViewPasses {
         slots
     }
 
+    /// Every view target there is, for the frame graph to track.
+    pub fn every_target(&self) -> impl Iterator<Item = &ViewTarget> {
+        let t = &self.targets;
+        let rays = self.sensor_rays.iter().flat_map(|(_, targets)| targets);
+        [&t.observer, &t.sensor, &t.pair]
+            .into_iter()
+            .chain([&t.observer_directions, &t.sensor_directions])
+            .chain(rays)
+    }
+
     /// Observer, sensor and the side-by-side pair (culled scene draws, then the mirror), and
     /// with `readback.directions` the lookup-direction passes of observer and sensor.
     /// With `display`, only that view is drawn (the viewer's frame). What is read back of
     /// them is the readback's (`readback.rs`, `Copies`).
     pub fn record(
         &self,
-        f: &FrameParts,
+        (f, graph): (&FrameParts, &mut FrameGraph),
         cmd: vk::CommandBuffer,
         views: &[ViewBasis],
         (readback, display): (Readback, Option<super::display::DisplayView>),
@@ -114,7 +124,7 @@ impl ViewPasses {
             let stats = pass.statistics;
             let (ids, output) = (pass.views, pass.output);
             self.record_view(
-                f,
+                (f, &mut *graph),
                 cmd,
                 target,
                 ids,
@@ -133,7 +143,7 @@ impl ViewPasses {
     #[allow(clippy::too_many_arguments)]
     fn record_view(
         &self,
-        f: &FrameParts,
+        (f, graph): (&FrameParts, &mut FrameGraph),
         cmd: vk::CommandBuffer,
         target: &ViewTarget,
         view_ids: &[u32],
@@ -144,7 +154,7 @@ impl ViewPasses {
     ) {
         let dev = f.draw.device;
         dev.begin_label(cmd, name);
-        image_barriers(dev, cmd, &to_attachments(target));
+        graph::record(dev, cmd, &graph.uses(&target.drawn()));
         if let (Some(q), Some(slot)) = (&f.queries.statistics, stats_slot) {
             q.begin(cmd, slot);
         }
@@ -156,7 +166,6 @@ impl ViewPasses {
         if let (Some(q), Some(slot)) = (&f.queries.statistics, stats_slot) {
             q.end(cmd, slot);
         }
-        image_barriers(dev, cmd, &[to_copy_source(target)]);
         dev.end_label(cmd);
     }
 
@@ -252,34 +261,6 @@ fn mark(f: &FrameParts, cmd: vk::CommandBuffer, stamps: &[u32]) {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
         }
     }
-}
-
-/// `target`'s colour and depth, from undefined (the pass clears them) to attachments.
-fn to_attachments(target: &ViewTarget) -> [ImageBarrier; 2] {
-    [
-        barrier(
-            target.color.raw,
-            target.color.full_range(),
-            (vk::ImageLayout::UNDEFINED, COPY_READ),
-            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-        ),
-        barrier(
-            target.depth.raw,
-            target.depth.full_range(),
-            (vk::ImageLayout::UNDEFINED, DEPTH_RW),
-            (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
-        ),
-    ]
-}
-
-/// `target`'s colour, from attachment to the source of its copy into the readback buffer.
-fn to_copy_source(target: &ViewTarget) -> ImageBarrier {
-    barrier(
-        target.color.raw,
-        target.color.full_range(),
-        (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-        (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, COPY_READ),
-    )
 }
 
 /// `target`'s colour and depth as one cleared layer; the depth is not kept.

@@ -7,11 +7,10 @@ use ash::vk;
 use std::sync::Arc;
 
 use super::display::{DisplayPixels, DisplayView};
-use super::draw::{barrier, COPY_READ, SAMPLED};
+use super::graph::{self, FrameGraph, Resource, Use};
 use super::passes::{copy_offset, texel_bytes, Slot};
 use super::targets::{CubeTarget, ViewTarget};
 use super::*;
-use crate::vk::commands::host_read_barrier;
 use crate::vk::image::color_copy_region;
 
 /// Where one frame's images sit in its slot's readback buffer: planned before the frame is
@@ -31,7 +30,8 @@ pub(super) struct Copies {
 #[derive(Debug, Clone)]
 struct CubeCopy {
     image: vk::Image,
-    mip0: vk::ImageSubresourceRange,
+    /// Mip 0, as the frame graph tracks it.
+    mip0: Resource,
     size: u32,
     /// RGBA8 unorm (a `--full`-size cube's format), else RGBA16F.
     unorm: bool,
@@ -42,6 +42,8 @@ struct CubeCopy {
 struct ViewCopy {
     slot: Slot,
     image: vk::Image,
+    /// Its colour, as the frame graph tracks it.
+    resource: Resource,
     width: u32,
     height: u32,
     offset: u64,
@@ -58,10 +60,7 @@ impl Copies {
             copies.bytes = 6 * u64::from(cube.size) * u64::from(cube.size) * texel;
             copies.cube = Some(CubeCopy {
                 image: cube.color.raw,
-                mip0: vk::ImageSubresourceRange {
-                    level_count: 1,
-                    ..cube.color.full_range()
-                },
+                mip0: cube.mip0().0,
                 size: cube.size,
                 unorm,
             });
@@ -71,6 +70,7 @@ impl Copies {
             copies.views.push(ViewCopy {
                 slot,
                 image: t.color.raw,
+                resource: t.color_resource(),
                 width: t.width,
                 height: t.height,
                 offset,
@@ -87,6 +87,7 @@ impl Copies {
         let view = ViewCopy {
             slot,
             image: target.color.raw,
+            resource: target.color_resource(),
             width,
             height,
             offset: 0,
@@ -104,17 +105,23 @@ impl Copies {
         self.bytes
     }
 
-    /// Copies mip 0 of the cube faces and the view images into `buffer`, for the host.
-    pub fn record(&self, dev: &Device, cmd: vk::CommandBuffer, buffer: &Buffer) {
+    /// Copies mip 0 of the cube faces and the view images into `buffer`, for the host. The
+    /// copies' sources and the buffer are declared to `graph`, whose `finish` gives the cube
+    /// back to the fragment shaders and the buffer to the host.
+    pub fn record(
+        &self,
+        dev: &Device,
+        graph: &mut FrameGraph,
+        cmd: vk::CommandBuffer,
+        buffer: &Buffer,
+    ) {
+        let cube = self.cube.iter().map(|c| (c.mip0, Use::CopySource));
+        let views = self.views.iter().map(|v| (v.resource, Use::CopySource));
+        let into = (Resource::Buffer(buffer.raw), Use::CopyDestination);
+        let uses: Vec<_> = cube.chain(views).chain([into]).collect();
+        graph::record(dev, cmd, &graph.uses(&uses));
         if let Some(cube) = &self.cube {
-            // Out of sampling for the copy and back: the cube stays valid for the next frame.
-            let sampled = (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED);
-            let source = (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, COPY_READ);
-            let transition =
-                |from, to| image_barriers(dev, cmd, &[barrier(cube.image, cube.mip0, from, to)]);
-            transition(sampled, source);
             copy_to_buffer(dev, cmd, buffer, (cube.image, 6), [cube.size; 2], 0);
-            transition(source, sampled);
         }
         for v in &self.views {
             copy_to_buffer(
@@ -126,13 +133,6 @@ impl Copies {
                 v.offset,
             );
         }
-        // The host reads the buffer after the fence (`decode`).
-        host_read_barrier(
-            dev,
-            cmd,
-            vk::PipelineStageFlags2::COPY,
-            vk::AccessFlags2::TRANSFER_WRITE,
-        );
     }
 
     /// A finished frame's pixels, decoded from its slot's readback `buffer`.
@@ -248,9 +248,14 @@ impl Renderer {
     }
 
     /// Records `copies` into the current slot's readback buffer (none: nothing is read back).
-    pub(super) fn record_readback(&self, cmd: vk::CommandBuffer, copies: &Copies) {
+    pub(super) fn record_readback(
+        &self,
+        graph: &mut FrameGraph,
+        cmd: vk::CommandBuffer,
+        copies: &Copies,
+    ) {
         if let Some(buffer) = &self.frames.current().readback {
-            copies.record(&self.device, cmd, buffer);
+            copies.record(&self.device, graph, cmd, buffer);
         }
     }
 }

@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use ash::vk;
 
+use super::graph::{Resource, Use};
 use crate::scene::{CubeFormat, CubeSettings, Scene};
 use crate::vk::device::Device;
 use crate::vk::image::{full_mip_count, Image, ImageDesc, ImageView, Sampler};
@@ -86,6 +87,16 @@ pub struct CubeTarget {
 }
 
 impl CubeTarget {
+    /// Mip 0 of the six faces as the frame graph tracks it (the readback copies it), resting
+    /// as the fill leaves the whole cube between frames: sampled by fragment shaders.
+    pub(super) fn mip0(&self) -> (Resource, Use) {
+        let range = vk::ImageSubresourceRange {
+            level_count: 1,
+            ..self.color.full_range()
+        };
+        (Resource::image(self.color.raw, range), Use::FragmentRead)
+    }
+
     /// The cube's colour image: `settings.face_size_px` per face, six layers, a full mip
     /// chain when mipmaps are on.
     pub fn color_desc(settings: &CubeSettings) -> ImageDesc {
@@ -253,6 +264,28 @@ pub struct ViewTarget {
 }
 
 impl ViewTarget {
+    /// Its colour and depth as the frame graph tracks them, each with how it rests between
+    /// frames: the colour copied out for the readback, the depth as its pass left it.
+    pub(super) fn resources(&self) -> [(Resource, Use); 2] {
+        [
+            (self.color_resource(), Use::CopySource),
+            (
+                Resource::image(self.depth.raw, self.depth.full_range()),
+                Use::DepthTarget,
+            ),
+        ]
+    }
+
+    pub(super) fn color_resource(&self) -> Resource {
+        Resource::image(self.color.raw, self.color.full_range())
+    }
+
+    /// The uses of a pass that draws it: both cleared and drawn into.
+    pub(super) fn drawn(&self) -> [(Resource, Use); 2] {
+        let [(color, _), (depth, _)] = self.resources();
+        [(color, Use::ColorTarget), (depth, Use::DepthTarget)]
+    }
+
     /// Colour (rendered, then copied out) and depth of a `width` x `height` view.
     pub fn descs(format: vk::Format, width: u32, height: u32) -> [ImageDesc; 2] {
         [
