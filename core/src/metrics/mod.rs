@@ -7,7 +7,8 @@
 //!
 //! ```no_run
 //! use std::path::Path;
-//! use specchio::metrics;
+//! // `specchio::metrics` is this module, re-exported by the engine.
+//! use specchio_core::metrics;
 //!
 //! let test = metrics::read_exr(Path::new("a/observer.exr"))?;
 //! let reference = metrics::read_exr(Path::new("b/observer.exr"))?;

@@ -4,11 +4,10 @@
 
 use ash::vk;
 
-use super::draw::{barrier, COLOR_OUT, DEPTH_RW, SAMPLED};
 use super::frame_parts::FrameParts;
+use super::graph::{self, FrameGraph, Use};
 use super::methods::{CubeLayout, CubePlan, CubeRecorder, FillPass, Method, Prepare};
 use super::{FrameReport, TS_FILL, TS_MIPS};
-use crate::vk::commands::image_barriers;
 use crate::vk::GpuError;
 
 /// What fills the dirty faces of a cube update: the renderer's method, or another recording
@@ -54,13 +53,13 @@ impl CubeFill {
     }
 
     /// Re-renders the dirty faces of the frame's cube with `fill` (the method, or a floor),
-    /// then rebuilds the mips.
+    /// then rebuilds the mips. The cube's images are `graph`'s (imported fresh before the
+    /// first fill).
     pub fn record(
         &self,
-        f: &FrameParts,
+        (f, graph): (&FrameParts, &mut FrameGraph),
         cmd: vk::CommandBuffer,
         plan: &CubePlan,
-        first_fill: bool,
         report: &mut FrameReport,
         fill: Fill,
     ) {
@@ -71,7 +70,8 @@ impl CubeFill {
         let device = f.draw.device;
         device.begin_label(cmd, &format!("cube fill ({name})"));
         let per_face_marks = matches!(fill, Fill::Method) && self.per_face_marks();
-        cube_to_fill(f, cmd, first_fill);
+        let ids = matches!(fill, Fill::Method);
+        graph::record(device, cmd, &graph.uses(&fill_uses(f, ids)));
         if let (Some(q), false) = (&f.queries.statistics, per_face_marks) {
             q.begin(cmd, 0);
         }
@@ -104,8 +104,8 @@ impl CubeFill {
         if let Some(q) = &f.queries.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, TS_FILL);
         }
-        cube_to_read(f, cmd);
-        super::mips::record(device, cmd, f.cube, plan.dirty);
+        graph::record(device, cmd, &graph.uses(&read_uses(f, ids)));
+        super::mips::record((device, graph), cmd, f.cube, plan.dirty);
         if let Some(q) = &f.queries.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);
         }
@@ -113,65 +113,26 @@ impl CubeFill {
     }
 }
 
-/// The cube's mip 0, depth and ids made ready to render into. Clean faces keep their
-/// pixels, colour and depth (the `distance` lookup's distance map), so the old layout is
-/// named (UNDEFINED only before the first fill); the last readers were the mirror's
-/// fragment shaders. The id cube, where there is one, goes the same way as the depth:
-/// kept for the clean faces, read by the sensor ray passes' fragment shaders.
-fn cube_to_fill(f: &FrameParts, cmd: vk::CommandBuffer, first_fill: bool) {
-    let cube = f.cube;
-    let mip0 = vk::ImageSubresourceRange {
-        level_count: 1,
-        ..cube.color.full_range()
-    };
-    let old = if first_fill {
-        vk::ImageLayout::UNDEFINED
-    } else {
-        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
-    };
-    let mut to_fill = vec![
-        barrier(
-            cube.color.raw,
-            mip0,
-            (old, SAMPLED),
-            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-        ),
-        barrier(
-            cube.depth.raw,
-            cube.depth.full_range(),
-            (old, SAMPLED),
-            (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
-        ),
+/// The fill's uses: the cube's mip 0 and depth, and with `ids` the id cube, drawn into with
+/// the clean faces kept (their colour, their depth, which is the `distance` lookup's distance
+/// map, and their ids, which the sensor ray passes read). Other fills (the floors) write no
+/// ids: the id cube keeps what it had and is not declared.
+fn fill_uses(f: &FrameParts, ids: bool) -> Vec<(graph::Resource, Use)> {
+    let (depth, id_cube) = f.cube.depth_and_ids();
+    let mut uses = vec![
+        (f.cube.color_levels(0, 1, None), Use::ColorKept),
+        (depth, Use::DepthKept),
     ];
-    to_fill.extend(cube.ids.as_ref().map(|ids| {
-        barrier(
-            ids.image.raw,
-            ids.image.full_range(),
-            (old, SAMPLED),
-            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-        )
-    }));
-    image_barriers(f.draw.device, cmd, &to_fill);
+    uses.extend(id_cube.filter(|_| ids).map(|i| (i, Use::ColorKept)));
+    uses
 }
 
-/// The depth the fill wrote, for the mirror's fragment shaders (distance lookup, sensor
-/// ray passes), and the ids it wrote (sensor ray passes), made ready to sample. (The
-/// colour goes on to the mip chain.)
-fn cube_to_read(f: &FrameParts, cmd: vk::CommandBuffer) {
-    let cube = f.cube;
-    let mut to_read = vec![barrier(
-        cube.depth.raw,
-        cube.depth.full_range(),
-        (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, DEPTH_RW),
-        (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
-    )];
-    to_read.extend(cube.ids.as_ref().map(|ids| {
-        barrier(
-            ids.image.raw,
-            ids.image.full_range(),
-            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
-            (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED),
-        )
-    }));
-    image_barriers(f.draw.device, cmd, &to_read);
+/// The depth the fill wrote, for the mirror's fragment shaders (distance lookup, sensor ray
+/// passes), and the ids it wrote (sensor ray passes), read from here on. (The colour goes on
+/// to the mip chain.)
+fn read_uses(f: &FrameParts, ids: bool) -> Vec<(graph::Resource, Use)> {
+    let (depth, id_cube) = f.cube.depth_and_ids();
+    let mut uses = vec![(depth, Use::FragmentRead)];
+    uses.extend(id_cube.filter(|_| ids).map(|i| (i, Use::FragmentRead)));
+    uses
 }

@@ -74,16 +74,15 @@ impl Renderer {
             cube_updated: true,
             ..Default::default()
         };
-        let first = self.refresh.first_fill();
         let record = |rec: &CubeRecorder<'_>, plan: &CubePlan| self.record_floor(rec, plan, floor);
         let fill = Fill::Other {
             name: floor.name(),
             record: &record,
         };
         let frame = self.frame_parts();
-        (self.cube_fill).record(&frame, cmd, &plan, first, &mut report, fill);
-        // Keeps the remaining timestamp slots answered (no view is drawn).
         let mut graph = self.frame_graph();
+        (self.cube_fill).record((&frame, &mut graph), cmd, &plan, &mut report, fill);
+        // Keeps the remaining timestamp slots answered (no view is drawn).
         (self.views).record(
             (&frame, &mut graph),
             cmd,

@@ -4,42 +4,38 @@
 
 use ash::vk;
 
-use super::draw::{barrier, Sync, COLOR_OUT, SAMPLED};
+use super::graph::{self, FrameGraph, Resource, Use};
 use super::targets::CubeTarget;
-use crate::vk::commands::{image_barriers, ImageBarrier};
 use crate::vk::device::Device;
 
-const BLIT_WRITE: Sync = (
-    vk::PipelineStageFlags2::BLIT,
-    vk::AccessFlags2::TRANSFER_WRITE,
-);
-const BLIT_READ: Sync = (
-    vk::PipelineStageFlags2::BLIT,
-    vk::AccessFlags2::TRANSFER_READ,
-);
-
 /// Records the chain for the faces set in `dirty` (bit f: face f), level 0 coming from the
-/// fill's colour attachment.
-pub(super) fn record(dev: &Device, cmd: vk::CommandBuffer, cube: &CubeTarget, dirty: u8) {
+/// fill's colour attachment. Every use is declared to `graph`, which places the barriers: the
+/// dirty faces' level m is overwritten whole, so its old contents can go, but not before the
+/// last frame's mirror has sampled them (a write after read: with frames in flight that frame
+/// may still be drawing); the graph's source side names those reads.
+pub(super) fn record(
+    (dev, graph): (&Device, &mut FrameGraph),
+    cmd: vk::CommandBuffer,
+    cube: &CubeTarget,
+    dirty: u8,
+) {
     let chain = Chain::of(cube, dirty);
+    let mut declare = |uses: &[(Resource, Use)]| graph::record(dev, cmd, &graph.uses(uses));
     if chain.levels == 1 {
-        image_barriers(dev, cmd, &[chain.level0(COLOR_OUT, SAMPLED)]);
+        declare(&[(cube.color_levels(0, 1, None), Use::FragmentRead)]);
         return;
     }
     dev.begin_label(cmd, "cube mips");
-    image_barriers(dev, cmd, &[chain.level0(COLOR_OUT, BLIT_READ)]);
+    declare(&[(cube.color_levels(0, 1, None), Use::BlitSource)]);
     for m in 1..chain.levels {
-        // The dirty faces' level m is overwritten whole: its old contents can go, but not
-        // before the last frame's mirror has sampled them (a write after read: with frames
-        // in flight that frame may still be drawing).
-        let undefined = (vk::ImageLayout::UNDEFINED, SAMPLED);
-        let dst = (vk::ImageLayout::TRANSFER_DST_OPTIMAL, BLIT_WRITE);
-        let src = (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, BLIT_READ);
-        image_barriers(dev, cmd, &chain.per_face(m, undefined, dst));
+        declare(&chain.per_face(m, Use::BlitDestination));
         chain.blit_down_to(dev, cmd, m);
-        image_barriers(dev, cmd, &chain.per_face(m, dst, src));
+        declare(&chain.per_face(m, Use::BlitSource));
     }
-    image_barriers(dev, cmd, &chain.back_to_sampling());
+    // Everything the blits touched goes back to sampling; clean faces' levels 1.. never
+    // left it (and need no barrier: a read after reads).
+    let all = cube.color_levels(0, chain.levels, None);
+    declare(&[(all, Use::FragmentRead)]);
     dev.end_label(cmd);
 }
 
@@ -59,43 +55,10 @@ impl<'a> Chain<'a> {
         }
     }
 
-    /// Levels `first..first + count` of face `face` (None: all six faces).
-    fn range(&self, first: u32, count: u32, face: Option<u32>) -> vk::ImageSubresourceRange {
-        let all = self.cube.color.full_range();
-        vk::ImageSubresourceRange {
-            base_mip_level: first,
-            level_count: count,
-            base_array_layer: face.unwrap_or(all.base_array_layer),
-            layer_count: if face.is_some() { 1 } else { all.layer_count },
-            ..all
-        }
-    }
-
-    /// Level 0 of every face, from the fill's colour attachment to `to` (sampling, or the
-    /// blits' source).
-    fn level0(&self, from: Sync, to: Sync) -> ImageBarrier {
-        let layout = if to == SAMPLED {
-            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
-        } else {
-            vk::ImageLayout::TRANSFER_SRC_OPTIMAL
-        };
-        barrier(
-            self.cube.color.raw,
-            self.range(0, 1, None),
-            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, from),
-            (layout, to),
-        )
-    }
-
-    /// Level `m` of each dirty face, from `from` to `to`.
-    fn per_face(
-        &self,
-        m: u32,
-        from: (vk::ImageLayout, Sync),
-        to: (vk::ImageLayout, Sync),
-    ) -> Vec<ImageBarrier> {
+    /// Level `m` of each dirty face, used as `how`.
+    fn per_face(&self, m: u32, how: Use) -> Vec<(Resource, Use)> {
         (self.faces.iter())
-            .map(|&f| barrier(self.cube.color.raw, self.range(m, 1, Some(f)), from, to))
+            .map(|&f| (self.cube.color_levels(m, 1, Some(f)), how))
             .collect()
     }
 
@@ -132,17 +95,5 @@ impl<'a> Chain<'a> {
                 vk::Filter::LINEAR,
             )
         };
-    }
-
-    /// Everything the blits touched goes back to sampling (all of level 0, levels 1.. of the
-    /// dirty faces); clean faces' levels 1.. never left it.
-    fn back_to_sampling(&self) -> Vec<ImageBarrier> {
-        let src = (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, BLIT_READ);
-        let sampled = (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED);
-        let image = self.cube.color.raw;
-        let upper = |f| barrier(image, self.range(1, self.levels - 1, Some(f)), src, sampled);
-        let mut back: Vec<ImageBarrier> = self.faces.iter().map(|&f| upper(f)).collect();
-        back.push(barrier(image, self.range(0, 1, None), src, sampled));
-        back
     }
 }

@@ -350,36 +350,39 @@ impl Renderer {
         report: &mut FrameReport,
     ) {
         let frame = self.frame_parts();
+        let mut graph = self.frame_graph();
         // The lookup's own work (the ray-query TLAS build) comes first: without a cube update
         // it is all that lies between the start and fill timestamps (`gpu_fill_ms`).
         frame.lookup.record(cmd);
         if plan.dirty != 0 {
-            let first = self.refresh.first_fill();
-            (self.cube_fill).record(&frame, cmd, plan, first, report, cube_fill::Fill::Method);
+            let fill = cube_fill::Fill::Method;
+            (self.cube_fill).record((&frame, &mut graph), cmd, plan, report, fill);
         } else if let Some(q) = &frame.queries.timestamps {
             for ts in TS_FACE0..=TS_MIPS {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
             }
         }
-        let mut graph = self.frame_graph();
         (self.views).record((&frame, &mut graph), cmd, views, (readback, display));
         (frame.lookup).record_after_views(cmd, self.frames.current_index());
         self.record_readback(&mut graph, cmd, copies);
         graph::record(&self.device, cmd, &graph.finish());
     }
 
-    /// The frame graph of the passes that declare their uses (views, readback), with every
-    /// resource they may use at rest: the view targets, the cube's mip 0 and the slot's
-    /// readback buffer.
+    /// The frame graph of the passes that declare their uses (cube fill, mips, views,
+    /// readback), with every resource they may use at rest: the cube's images (fresh before
+    /// its first fill), the view targets and the slot's readback buffer.
     fn frame_graph(&self) -> graph::FrameGraph {
         let mut graph = graph::FrameGraph::default();
-        for (resource, rest) in self.views.every_target().flat_map(|t| t.resources()) {
-            graph.import(resource, rest);
+        let fresh = self.refresh.first_fill();
+        for (resource, rest) in self.cube.resources() {
+            graph.import(resource, rest, fresh);
         }
-        let (mip0, rest) = self.cube.mip0();
-        graph.import(mip0, rest);
+        for (resource, rest) in self.views.every_target().flat_map(|t| t.resources()) {
+            graph.import(resource, rest, false);
+        }
         if let Some(buffer) = &self.frames.current().readback {
-            graph.import(graph::Resource::Buffer(buffer.raw), graph::Use::HostRead);
+            let buffer = graph::Resource::Buffer(buffer.raw);
+            graph.import(buffer, graph::Use::HostRead, false);
         }
         graph
     }

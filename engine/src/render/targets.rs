@@ -87,14 +87,43 @@ pub struct CubeTarget {
 }
 
 impl CubeTarget {
-    /// Mip 0 of the six faces as the frame graph tracks it (the readback copies it), resting
-    /// as the fill leaves the whole cube between frames: sampled by fragment shaders.
-    pub(super) fn mip0(&self) -> (Resource, Use) {
+    /// The cube's images as the frame graph tracks them (colour, depth, and ids where there
+    /// are), all resting as a fill leaves them between frames: sampled by fragment shaders.
+    pub(super) fn resources(&self) -> Vec<(Resource, Use)> {
+        let ids = self.ids.as_ref().map(|ids| &ids.image);
+        [Some(&self.color), Some(&self.depth), ids]
+            .into_iter()
+            .flatten()
+            .map(|image| {
+                (
+                    Resource::image(image.raw, image.full_range()),
+                    Use::FragmentRead,
+                )
+            })
+            .collect()
+    }
+
+    /// Levels `first..first + count` of face `face` (None: all six faces) of the colour.
+    pub(super) fn color_levels(&self, first: u32, count: u32, face: Option<u32>) -> Resource {
+        let all = self.color.full_range();
         let range = vk::ImageSubresourceRange {
-            level_count: 1,
-            ..self.color.full_range()
+            base_mip_level: first,
+            level_count: count,
+            base_array_layer: face.unwrap_or(all.base_array_layer),
+            layer_count: if face.is_some() { 1 } else { all.layer_count },
+            ..all
         };
-        (Resource::image(self.color.raw, range), Use::FragmentRead)
+        Resource::image(self.color.raw, range)
+    }
+
+    /// The fill's attachments besides the colour's mip 0: the depth, and the ids where there
+    /// are (all layers).
+    pub(super) fn depth_and_ids(&self) -> (Resource, Option<Resource>) {
+        let whole = |image: &Image| Resource::image(image.raw, image.full_range());
+        (
+            whole(&self.depth),
+            self.ids.as_ref().map(|ids| whole(&ids.image)),
+        )
     }
 
     /// The cube's colour image: `settings.face_size_px` per face, six layers, a full mip

@@ -1,33 +1,48 @@
-//! The frame's resources as declared uses: a pass says how it uses each image (and the
-//! readback buffer), and the barriers between passes are derived here, never written by hand.
+//! The frame's resources as declared uses: a pass says how it uses each image's subresources
+//! (and the readback buffer), and the barriers between passes are derived here, never written
+//! by hand.
 //!
 //! Every resource a frame touches outlives the frame, so each is imported with its *resting*
 //! use: how the last frame left it, which is also how this frame must leave it (the next one
-//! imports it the same way). [`FrameGraph::uses`] gives the barriers that make a pass's uses
-//! safe after everything declared before them; [`FrameGraph::finish`] the ones that put every
-//! resource back at rest. A barrier is derived from the state the graph tracks per resource:
-//! its layout, and every access since the last barrier (reads accumulate; a write, or a new
-//! layout, needs a barrier after all of them).
+//! imports it the same way); an image nothing has used yet is imported *fresh* (its contents
+//! undefined). [`FrameGraph::uses`] gives the barriers that make a pass's uses safe after
+//! everything declared before them; [`FrameGraph::finish`] the ones that put every resource
+//! back at rest. A barrier is derived from the state the graph tracks per subresource (each mip
+//! level of each layer): its layout, and every access since its last barrier (reads
+//! accumulate; a write, or a new layout, needs a barrier after all of them). Subresources that
+//! need the same barrier are given one, over their range (`ranges.rs`).
 //!
-//! Which passes are declared this way: the view passes and the readback (`passes.rs`,
-//! `readback.rs`). The lookup's pre-pass, the cube fill and the mips still place their own
-//! (docs/renderer.md, "One frame's flow").
+//! Which passes are declared this way: the cube fill and its mip chain, the views and the
+//! readback. The uploads, the lookups' own passes (acceleration structures, tallies) and the
+//! queries still place their own (docs/renderer.md, "One frame's flow").
+
+mod ranges;
 
 use ash::vk;
 
-use super::draw::{barrier, Sync, COLOR_OUT, COPY_READ, COPY_WRITE, DEPTH_RW, SAMPLED};
+use super::draw::{barrier, Sync, COLOR_OUT, COPY_READ, COPY_WRITE, DEPTH_RW, NOTHING, SAMPLED};
 use crate::vk::commands::{image_barriers, memory_barrier, ImageBarrier};
 use crate::vk::device::Device;
+pub(super) use ranges::Subresources;
 
 /// How a pass uses a resource: a layout (for an image) and the stages and accesses of the use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Use {
     /// Drawn into as a colour attachment, cleared first: earlier contents are not kept.
     ColorTarget,
+    /// Drawn into as a colour attachment, the texels it does not draw kept (a cube's clean
+    /// faces).
+    ColorKept,
     /// Tested and written as a depth attachment, cleared first.
     DepthTarget,
+    /// Tested and written as a depth attachment, the rest kept.
+    DepthKept,
     /// Sampled or fetched by fragment shaders.
     FragmentRead,
+    /// Blitted from.
+    BlitSource,
+    /// Blitted into, whole: earlier contents are not kept.
+    BlitDestination,
     /// Copied from.
     CopySource,
     /// Copied into (a buffer).
@@ -36,23 +51,35 @@ pub(super) enum Use {
     HostRead,
 }
 
+const BLIT_READ: Sync = (
+    vk::PipelineStageFlags2::BLIT,
+    vk::AccessFlags2::TRANSFER_READ,
+);
+const BLIT_WRITE: Sync = (
+    vk::PipelineStageFlags2::BLIT,
+    vk::AccessFlags2::TRANSFER_WRITE,
+);
+
 impl Use {
     /// The image layout of the use (buffers have none: `UNDEFINED`).
     fn layout(self) -> vk::ImageLayout {
         match self {
-            Use::ColorTarget => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-            Use::DepthTarget => vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+            Use::ColorTarget | Use::ColorKept => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            Use::DepthTarget | Use::DepthKept => vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
             Use::FragmentRead => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-            Use::CopySource => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            Use::BlitSource | Use::CopySource => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            Use::BlitDestination => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             Use::CopyDestination | Use::HostRead => vk::ImageLayout::UNDEFINED,
         }
     }
 
     fn sync(self) -> Sync {
         match self {
-            Use::ColorTarget => COLOR_OUT,
-            Use::DepthTarget => DEPTH_RW,
+            Use::ColorTarget | Use::ColorKept => COLOR_OUT,
+            Use::DepthTarget | Use::DepthKept => DEPTH_RW,
             Use::FragmentRead => SAMPLED,
+            Use::BlitSource => BLIT_READ,
+            Use::BlitDestination => BLIT_WRITE,
             Use::CopySource => COPY_READ,
             Use::CopyDestination => COPY_WRITE,
             Use::HostRead => (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
@@ -62,18 +89,26 @@ impl Use {
     fn writes(self) -> bool {
         matches!(
             self,
-            Use::ColorTarget | Use::DepthTarget | Use::CopyDestination
+            Use::ColorTarget
+                | Use::ColorKept
+                | Use::DepthTarget
+                | Use::DepthKept
+                | Use::BlitDestination
+                | Use::CopyDestination
         )
     }
 
     /// Whether the use overwrites every texel before reading any: the contents before it
     /// need not be kept (the barrier's old layout is `UNDEFINED`).
     fn discards(self) -> bool {
-        matches!(self, Use::ColorTarget | Use::DepthTarget)
+        matches!(
+            self,
+            Use::ColorTarget | Use::DepthTarget | Use::BlitDestination
+        )
     }
 }
 
-/// A resource a frame uses: an image's subresources, or a buffer (whole).
+/// A resource a frame uses: subresources of an image, or a buffer (whole).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Resource {
     Image(vk::Image, Subresources),
@@ -81,39 +116,9 @@ pub(super) enum Resource {
 }
 
 impl Resource {
-    /// The subresources `range` of `image`: a resource of its own, whatever else of the
-    /// image is tracked (the graph does not split or merge ranges).
+    /// The subresources `range` of `image`.
     pub fn image(image: vk::Image, range: vk::ImageSubresourceRange) -> Self {
-        Resource::Image(
-            image,
-            Subresources {
-                aspect: range.aspect_mask,
-                mips: [range.base_mip_level, range.level_count],
-                layers: [range.base_array_layer, range.layer_count],
-            },
-        )
-    }
-}
-
-/// An image's subresource range as a value that compares (ash's range does not).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) struct Subresources {
-    aspect: vk::ImageAspectFlags,
-    /// First level and count.
-    mips: [u32; 2],
-    /// First layer and count.
-    layers: [u32; 2],
-}
-
-impl Subresources {
-    fn range(self) -> vk::ImageSubresourceRange {
-        vk::ImageSubresourceRange {
-            aspect_mask: self.aspect,
-            base_mip_level: self.mips[0],
-            level_count: self.mips[1],
-            base_array_layer: self.layers[0],
-            layer_count: self.layers[1],
-        }
+        Resource::Image(image, Subresources::of(range))
     }
 }
 
@@ -130,9 +135,9 @@ pub(super) enum Barrier {
     Memory(Sync, Sync),
 }
 
-/// One resource's state: its layout, every access since its last barrier, and whether one of
-/// them wrote.
-#[derive(Debug, Clone, Copy)]
+/// One subresource's (or a buffer's) state: its layout, every access since its last barrier,
+/// and whether one of them wrote.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct State {
     layout: vk::ImageLayout,
     since: Sync,
@@ -147,12 +152,21 @@ impl State {
             written: rest.writes(),
         }
     }
+
+    /// Nothing has used it: its contents are undefined.
+    const FRESH: State = State {
+        layout: vk::ImageLayout::UNDEFINED,
+        since: NOTHING,
+        written: false,
+    };
 }
 
+/// A tracked resource: what it is (for an image, all of it), how it rests, and a state per
+/// subresource (mip-major: level m of layer l at `m * layers + l`; one for a buffer).
 struct Tracked {
     resource: Resource,
     rest: Use,
-    state: State,
+    states: Vec<State>,
 }
 
 /// The resources of one frame's declared passes and their states.
@@ -162,46 +176,129 @@ pub(super) struct FrameGraph {
 }
 
 impl FrameGraph {
-    /// Tracks `resource`, which rests as `rest` leaves it between frames.
-    pub fn import(&mut self, resource: Resource, rest: Use) {
+    /// Tracks all of `resource`, which rests as `rest` leaves it between frames; `fresh`
+    /// when nothing has used it yet.
+    pub fn import(&mut self, resource: Resource, rest: Use, fresh: bool) {
         debug_assert!(
-            self.tracked.iter().all(|t| t.resource != resource),
+            (self.tracked.iter()).all(|t| t.resource.handle() != resource.handle()),
             "{resource:?} imported twice"
         );
+        let count = match resource {
+            Resource::Image(_, all) => all.count(),
+            Resource::Buffer(_) => 1,
+        };
+        let state = if fresh {
+            State::FRESH
+        } else {
+            State::resting(rest)
+        };
         self.tracked.push(Tracked {
             resource,
             rest,
-            state: State::resting(rest),
+            states: vec![state; count],
         });
     }
 
     /// The barriers that make `uses` safe after every use declared before them; the
-    /// resources are then in these uses' states. A resource never imported is a bug in the
-    /// pass that names it.
+    /// subresources named are then in these uses' states. A resource never imported, or a
+    /// range outside the imported image, is a bug in the pass that names it.
     pub fn uses(&mut self, uses: &[(Resource, Use)]) -> Vec<Barrier> {
-        (uses.iter())
-            .filter_map(|&(resource, to)| {
-                let at = (self.tracked.iter()).position(|t| t.resource == resource);
-                let tracked = &mut self.tracked[at.expect("a declared resource is imported")];
-                transition(tracked, to)
-            })
-            .collect()
+        let mut barriers = Vec::new();
+        for &(resource, to) in uses {
+            let at = (self.tracked.iter()).position(|t| t.resource.handle() == resource.handle());
+            let t = &mut self.tracked[at.expect("a declared resource is imported")];
+            barriers.extend(t.transition(resource, to));
+        }
+        barriers
     }
 
-    /// The barriers that put every resource back at rest, for the next frame: none for one
-    /// whose layout and accesses since its last barrier are its resting use's already (the
-    /// next frame's first barrier waits for exactly those).
+    /// The barriers that put every resource back at rest, for the next frame: none for a
+    /// subresource whose layout and accesses since its last barrier are its resting use's
+    /// already (the next frame's first barrier waits for exactly those), nor for one imported
+    /// fresh and not used.
     pub fn finish(&mut self) -> Vec<Barrier> {
-        (self.tracked.iter_mut())
-            .filter_map(|t| {
-                let rest = t.rest;
-                let at_rest = t.state.layout == rest.layout() && t.state.since == rest.sync();
-                let back = (!at_rest).then(|| transition(t, rest)).flatten();
-                t.state = State::resting(rest);
-                back
-            })
-            .collect()
+        let mut barriers = Vec::new();
+        for t in &mut self.tracked {
+            let rest = State::resting(t.rest);
+            // A subresource still fresh was not used: the next frame imports it fresh too.
+            let moved: Vec<usize> = (0..t.states.len())
+                .filter(|&i| t.states[i] != State::FRESH)
+                .filter(|&i| (t.states[i].layout, t.states[i].since) != (rest.layout, rest.since))
+                .collect();
+            barriers.extend(t.transition_each(&moved, t.rest));
+            t.states.fill(rest);
+        }
+        barriers
     }
+}
+
+impl Resource {
+    /// The Vulkan handle, which identifies what is tracked (a range is a part of it).
+    fn handle(&self) -> u64 {
+        use vk::Handle;
+        match self {
+            Resource::Image(image, _) => image.as_raw(),
+            Resource::Buffer(buffer) => buffer.as_raw(),
+        }
+    }
+}
+
+impl Tracked {
+    /// The barriers before `to` on the part of this resource `used` names.
+    fn transition(&mut self, used: Resource, to: Use) -> Vec<Barrier> {
+        let indices = match (self.resource, used) {
+            (Resource::Image(_, all), Resource::Image(_, part)) => all.indices(part),
+            _ => vec![0],
+        };
+        self.transition_each(&indices, to)
+    }
+
+    /// The barriers before `to` on the subresources `indices`, merged over ranges where
+    /// they are the same.
+    fn transition_each(&mut self, indices: &[usize], to: Use) -> Vec<Barrier> {
+        let mut needed: Vec<(usize, (vk::ImageLayout, Sync))> = Vec::new();
+        for &i in indices {
+            let is_buffer = matches!(self.resource, Resource::Buffer(_));
+            if let Some(from) = step(&mut self.states[i], to, is_buffer) {
+                needed.push((i, from));
+            }
+        }
+        let target = (to.layout(), to.sync());
+        match self.resource {
+            Resource::Buffer(_) => (needed.into_iter())
+                .map(|(_, (_, from))| Barrier::Memory(from, to.sync()))
+                .collect(),
+            Resource::Image(image, all) => (all.merge(needed).into_iter())
+                .map(|(range, from)| Barrier::Image {
+                    image,
+                    range,
+                    from,
+                    to: target,
+                })
+                .collect(),
+        }
+    }
+}
+
+/// One subresource's step to `to`: the barrier's source side (old layout, stages and
+/// accesses) if it needs one, and its state after. Reads in the layout they need after no
+/// write need none; after the host's own use a buffer needs none either (the host used it
+/// before the frame's submission, which orders everything the host did before it); anything
+/// else waits for every access since the last barrier.
+fn step(state: &mut State, to: Use, is_buffer: bool) -> Option<(vk::ImageLayout, Sync)> {
+    let same_layout = state.layout == to.layout();
+    if same_layout && !state.written && !to.writes() {
+        state.since = (state.since.0 | to.sync().0, state.since.1 | to.sync().1);
+        return None;
+    }
+    let by_host = state.since.0 == vk::PipelineStageFlags2::HOST;
+    let from = state.since;
+    let old = match to.discards() {
+        true => vk::ImageLayout::UNDEFINED,
+        false => state.layout,
+    };
+    *state = State::resting(to);
+    (!(by_host && is_buffer)).then_some((old, from))
 }
 
 /// Records `barriers` (the images' in one call).
@@ -225,43 +322,6 @@ pub(super) fn record(device: &Device, cmd: vk::CommandBuffer, barriers: &[Barrie
             memory_barrier(device, cmd, from, to);
         }
     }
-}
-
-/// The barrier (if any) before `to` on `t`, and `t`'s state after it. Reads in the layout
-/// they need after no write need none; after the host's own use none either (the host used
-/// it before the frame's submission, which orders everything the host did before it);
-/// anything else waits for every access since the last barrier.
-fn transition(t: &mut Tracked, to: Use) -> Option<Barrier> {
-    let state = &mut t.state;
-    let same_layout = state.layout == to.layout();
-    if same_layout && !state.written && !to.writes() {
-        state.since = (state.since.0 | to.sync().0, state.since.1 | to.sync().1);
-        return None;
-    }
-    let by_host = state.since.0 == vk::PipelineStageFlags2::HOST;
-    if by_host && matches!(t.resource, Resource::Buffer(_)) {
-        *state = State::resting(to);
-        return None;
-    }
-    let from = state.since;
-    let old = match to.discards() {
-        true => vk::ImageLayout::UNDEFINED,
-        false => state.layout,
-    };
-    *state = State {
-        layout: to.layout(),
-        since: to.sync(),
-        written: to.writes(),
-    };
-    Some(match t.resource {
-        Resource::Image(image, range) => Barrier::Image {
-            image,
-            range,
-            from: (old, from),
-            to: (to.layout(), to.sync()),
-        },
-        Resource::Buffer(_) => Barrier::Memory(from, to.sync()),
-    })
 }
 
 #[cfg(test)]

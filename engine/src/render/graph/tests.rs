@@ -2,14 +2,20 @@
 //! against the rules: reads after reads need none, writes wait for every earlier access).
 
 use super::*;
+use crate::render::draw::NOTHING;
 
 fn image(raw: u64, levels: u32) -> Resource {
+    levels_of(raw, [0, levels], [0, 1])
+}
+
+/// Levels `mips` (first, count) of layers `layers` (first, count) of the colour image `raw`.
+fn levels_of(raw: u64, [mip, mips]: [u32; 2], [layer, layers]: [u32; 2]) -> Resource {
     let range = vk::ImageSubresourceRange {
         aspect_mask: vk::ImageAspectFlags::COLOR,
-        base_mip_level: 0,
-        level_count: levels,
-        base_array_layer: 0,
-        layer_count: 1,
+        base_mip_level: mip,
+        level_count: mips,
+        base_array_layer: layer,
+        layer_count: layers,
     };
     Resource::image(vk::Handle::from_raw(raw), range)
 }
@@ -36,8 +42,8 @@ fn image_barrier(
 fn a_view_drawn_then_copied_gets_the_hand_placed_barriers() {
     let (colour, depth) = (image(1, 1), image(2, 1));
     let mut graph = FrameGraph::default();
-    graph.import(colour, Use::CopySource);
-    graph.import(depth, Use::DepthTarget);
+    graph.import(colour, Use::CopySource, false);
+    graph.import(depth, Use::DepthTarget, false);
     let drawn = graph.uses(&[(colour, Use::ColorTarget), (depth, Use::DepthTarget)]);
     assert_eq!(
         drawn,
@@ -71,7 +77,7 @@ fn a_view_drawn_then_copied_gets_the_hand_placed_barriers() {
 fn a_view_left_as_an_attachment_is_put_back_at_rest() {
     let colour = image(1, 1);
     let mut graph = FrameGraph::default();
-    graph.import(colour, Use::CopySource);
+    graph.import(colour, Use::CopySource, false);
     graph.uses(&[(colour, Use::ColorTarget)]);
     assert_eq!(
         graph.finish(),
@@ -89,7 +95,7 @@ fn a_view_left_as_an_attachment_is_put_back_at_rest() {
 fn the_cube_copied_goes_back_to_sampling() {
     let cube = image(3, 1);
     let mut graph = FrameGraph::default();
-    graph.import(cube, Use::FragmentRead);
+    graph.import(cube, Use::FragmentRead, false);
     assert_eq!(
         graph.uses(&[(cube, Use::CopySource)]),
         [image_barrier(
@@ -113,8 +119,8 @@ fn the_cube_copied_goes_back_to_sampling() {
 fn reads_after_reads_need_no_barrier_and_writes_wait_for_writes() {
     let (cube, depth) = (image(3, 1), image(2, 1));
     let mut graph = FrameGraph::default();
-    graph.import(cube, Use::FragmentRead);
-    graph.import(depth, Use::DepthTarget);
+    graph.import(cube, Use::FragmentRead, false);
+    graph.import(depth, Use::DepthTarget, false);
     assert_eq!(graph.uses(&[(cube, Use::FragmentRead)]), []);
     assert_eq!(graph.uses(&[(cube, Use::FragmentRead)]), []);
     graph.uses(&[(depth, Use::DepthTarget)]);
@@ -135,7 +141,7 @@ fn reads_after_reads_need_no_barrier_and_writes_wait_for_writes() {
 fn the_readback_buffer_needs_only_the_host_barrier() {
     let buffer = Resource::Buffer(vk::Handle::from_raw(4));
     let mut graph = FrameGraph::default();
-    graph.import(buffer, Use::HostRead);
+    graph.import(buffer, Use::HostRead, false);
     assert_eq!(graph.uses(&[(buffer, Use::CopyDestination)]), []);
     assert_eq!(graph.uses(&[(buffer, Use::CopyDestination)]).len(), 1);
     assert_eq!(
@@ -148,4 +154,125 @@ fn the_readback_buffer_needs_only_the_host_barrier() {
 #[should_panic(expected = "a declared resource is imported")]
 fn a_resource_never_imported_is_refused() {
     FrameGraph::default().uses(&[(image(9, 1), Use::CopySource)]);
+}
+
+/// A cube of 6 faces and 3 levels after a fill of faces 0 and 2: the mip chain's barriers,
+/// each subresource's derived on its own and merged back, are the ones `mips.rs` placed by
+/// hand (level 0 of all faces in one barrier, each dirty face's level alone, then back to
+/// sampling: all of level 0, levels 1.. of each dirty face).
+#[test]
+fn the_mip_chain_of_two_dirty_faces_gets_the_hand_placed_barriers() {
+    let cube = 5;
+    let all = levels_of(cube, [0, 3], [0, 6]);
+    let mut graph = FrameGraph::default();
+    graph.import(all, Use::FragmentRead, false);
+    let level0 = levels_of(cube, [0, 1], [0, 6]);
+    let filled = graph.uses(&[(level0, Use::ColorKept)]);
+    let sampled = (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED);
+    let attachment = (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT);
+    assert_eq!(filled, [image_barrier(level0, sampled, attachment)]);
+    let src = (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, BLIT_READ);
+    let dst = (vk::ImageLayout::TRANSFER_DST_OPTIMAL, BLIT_WRITE);
+    let undefined_after_sampling = (vk::ImageLayout::UNDEFINED, SAMPLED);
+    assert_eq!(
+        graph.uses(&[(level0, Use::BlitSource)]),
+        [image_barrier(level0, attachment, src)]
+    );
+    for m in 1..3 {
+        let faces = [0, 2].map(|f| levels_of(cube, [m, 1], [f, 1]));
+        let to_dst = graph.uses(&faces.map(|r| (r, Use::BlitDestination)));
+        let expected = faces.map(|r| image_barrier(r, undefined_after_sampling, dst));
+        assert_eq!(to_dst, expected, "level {m} into a blit destination");
+        let to_src = graph.uses(&faces.map(|r| (r, Use::BlitSource)));
+        assert_eq!(
+            to_src,
+            faces.map(|r| image_barrier(r, dst, src)),
+            "level {m}"
+        );
+    }
+    let back = graph.uses(&[(all, Use::FragmentRead)]);
+    let expected = [
+        image_barrier(level0, src, sampled),
+        image_barrier(levels_of(cube, [1, 2], [0, 1]), src, sampled),
+        image_barrier(levels_of(cube, [1, 2], [2, 1]), src, sampled),
+    ];
+    assert_eq!(
+        back, expected,
+        "clean faces' levels 1.. never left sampling"
+    );
+    assert_eq!(graph.finish(), []);
+}
+
+/// Before its first fill the cube's contents are undefined: the fill's barrier says so, and
+/// a fresh image a frame leaves unused is left as it is.
+#[test]
+fn a_fresh_image_starts_undefined_and_is_left_alone_unused() {
+    let (cube, ids) = (levels_of(6, [0, 1], [0, 6]), levels_of(7, [0, 1], [0, 6]));
+    let mut graph = FrameGraph::default();
+    graph.import(cube, Use::FragmentRead, true);
+    graph.import(ids, Use::FragmentRead, true);
+    assert_eq!(
+        graph.uses(&[(cube, Use::ColorKept)]),
+        [image_barrier(
+            cube,
+            (vk::ImageLayout::UNDEFINED, NOTHING),
+            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT)
+        )]
+    );
+    assert_eq!(
+        graph.finish(),
+        [image_barrier(
+            cube,
+            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT),
+            (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, SAMPLED)
+        )],
+        "the unused id cube is not touched"
+    );
+}
+
+/// Merging covers exactly the subresources given: a gap in the layers or the levels splits
+/// the range, and different sources are never merged.
+#[test]
+fn merged_ranges_cover_exactly_the_subresources_given() {
+    let all = Subresources::of(vk::ImageSubresourceRange {
+        aspect_mask: vk::ImageAspectFlags::COLOR,
+        base_mip_level: 0,
+        level_count: 4,
+        base_array_layer: 0,
+        layer_count: 6,
+    });
+    let a = (vk::ImageLayout::UNDEFINED, NOTHING);
+    let b = (vk::ImageLayout::GENERAL, SAMPLED);
+    // Levels 0-1 of layers 0-1 and 3 from `a`; level 3 of layer 0 from `a` (a gap at level
+    // 2); level 0 of layer 5 from `b`.
+    let at = |m: usize, l: usize| m * 6 + l;
+    let needed = vec![
+        (at(0, 0), a),
+        (at(0, 1), a),
+        (at(0, 3), a),
+        (at(1, 0), a),
+        (at(1, 1), a),
+        (at(1, 3), a),
+        (at(3, 0), a),
+        (at(0, 5), b),
+    ];
+    let merged = all.merge(needed);
+    let range = |mips: [u32; 2], layers: [u32; 2]| {
+        Subresources::of(vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: mips[0],
+            level_count: mips[1],
+            base_array_layer: layers[0],
+            layer_count: layers[1],
+        })
+    };
+    assert_eq!(
+        merged,
+        [
+            (range([0, 2], [0, 2]), a),
+            (range([0, 2], [3, 1]), a),
+            (range([0, 1], [5, 1]), b),
+            (range([3, 1], [0, 1]), a),
+        ]
+    );
 }
