@@ -18,6 +18,7 @@ use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::grid;
 use specchio::sensor::dataset::{resume, DatasetError, Folder};
+use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 #[derive(clap::Args)]
@@ -57,11 +58,18 @@ pub struct Args {
     /// Refused when the inputs, the lookup or the device differ from that run's.
     #[arg(long)]
     resume: bool,
+    /// Whose frame the panoramas' columns are in: `robot` (its forward axis at the left edge,
+    /// as a robot that does not know its heading unwraps, and as `localise` matches) or
+    /// `world` (the scene's +X at the left edge whatever the heading: a label made with the
+    /// true heading).
+    #[arg(long, default_value = "robot")]
+    panorama_frame: PanoramaFrame,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Every input checked before the output folder exists.
-    let plan = Plan::new(&args.scene, poses(args)?)?;
+    let mut plan = Plan::new(&args.scene, poses(args)?)?;
+    plan.panoramas = args.panorama_frame;
     let n = plan.poses.len();
     let mut folder = Folder::stage(&args.out, n)?;
     specchio::process::interrupt::catch();
@@ -73,6 +81,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         probe::device_for_sensor(&instance, args.device.as_deref(), args.lookup, &plan.scene)?;
     drop(instance);
     let mut frames = FrameWriter::new(&device, &plan.scene, lookup)?;
+    frames.set_panoramas(plan.panoramas);
     let truth = frames.ground_truth();
     if let Some(warning) = truth.warning(&plan.scene) {
         eprintln!("warning: dataset ({lookup} lookup): {warning}");

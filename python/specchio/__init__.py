@@ -68,6 +68,7 @@ def dataset(
     workers: Optional[int] = None,
     shard_size: int = 8,
     worker_env: Optional[dict] = None,
+    panorama_frame: str = "robot",
 ) -> dict[str, Any]:
     """Renders the dataset of ``scene`` along ``trajectory`` (CSV or JSON, docs/sensor.md)
     into the folder ``out``, as ``specchio dataset`` does: per pose a folder of the sensor
@@ -90,6 +91,11 @@ def dataset(
     are the same, byte for byte. Ray is started locally unless it is running already or
     ``RAY_ADDRESS`` names a cluster. ``worker_env``: environment variables of the workers
     (e.g. ``{"LP_NUM_THREADS": "1"}`` for lavapipe with one thread each).
+
+    ``panorama_frame``: whose frame the panoramas' columns are in: ``"robot"`` (its forward
+    axis at the left edge; they turn with it, as a real robot's do) or ``"world"`` (the
+    scene's +X at the left edge whatever the heading: made with the true heading, which a
+    robot does not know). ``specchio dataset --panorama-frame``, docs/sensor.md.
 
     ``progress(done, total)`` is called as frames are written. Returns the summary
     (``dataset.json``) as a dict.
@@ -114,6 +120,7 @@ def dataset(
             workers=workers,
             shard_size=shard_size,
             worker_env=worker_env,
+            panorama_frame=panorama_frame,
         )
     if workers is not None or worker_env is not None:
         raise SpecchioError("workers and worker_env are for ray=True")
@@ -129,5 +136,6 @@ def dataset(
         validate=validate,
         progress=progress,
         resume=resume,
+        panorama_frame=panorama_frame,
     )
 

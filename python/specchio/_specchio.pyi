@@ -71,6 +71,7 @@ class DatasetFrames:
         grid: Optional[float] = None,
         headings: Optional[int] = None,
         time: Optional[float] = None,
+        panorama_frame: str = "robot",
     ) -> None: ...
     def __len__(self) -> int: ...
     @property
@@ -91,6 +92,7 @@ class DatasetOutput:
         grid: Optional[float] = None,
         headings: Optional[int] = None,
         time: Optional[float] = None,
+        panorama_frame: str = "robot",
     ) -> None: ...
     def __len__(self) -> int: ...
     @property
@@ -123,4 +125,5 @@ def dataset(
     grid: Optional[float] = None,
     headings: Optional[int] = None,
     time: Optional[float] = None,
+    panorama_frame: str = "robot",
 ) -> dict[str, Any]: ...

@@ -32,7 +32,7 @@ RETRIES = 2
 class _Worker:
     """A Ray actor: one renderer of the dataset's robot."""
 
-    def __init__(self, scene: str, trajectory: Optional[str], poses: dict, lookup, device, validate: bool):
+    def __init__(self, scene: str, trajectory: Optional[str], plan: dict, lookup, device, validate: bool):
         # An engine error here is kept and said by `describe`: raised, it would reach the
         # driver as Ray's "actor died", its message buried in a traceback.
         self.frames, self.error = None, None
@@ -40,7 +40,7 @@ class _Worker:
             # One encoder: a worker shares its machine with as many others as it has CPUs,
             # and each encoder holds a frame in memory.
             self.frames = DatasetFrames(
-                scene, trajectory, lookup=lookup, device=device, validate=validate, encoders=1, **poses
+                scene, trajectory, lookup=lookup, device=device, validate=validate, encoders=1, **plan
             )
         except SpecchioError as e:
             self.error = str(e)
@@ -81,6 +81,7 @@ def dataset(
     workers: Optional[int] = None,
     shard_size: int = 8,
     worker_env: Optional[dict] = None,
+    panorama_frame: str = "robot",
 ) -> dict[str, Any]:
     """``specchio.dataset`` on Ray; see its documentation."""
     import ray
@@ -92,9 +93,11 @@ def dataset(
         raise SpecchioError(f"workers: {workers}; must be at least 1")
     scene, out = os.fspath(scene), os.fspath(out)
     trajectory = None if trajectory is None else os.fspath(trajectory)
-    poses = {"grid": grid, "headings": headings, "time": time}
+    # Where the poses come from and whose frame the panoramas are in: the driver's output and
+    # every worker's renderer make the same plan of them.
+    plan = {"grid": grid, "headings": headings, "time": time, "panorama_frame": panorama_frame}
     # Every input is checked, and the output staged, before any worker starts.
-    output = DatasetOutput(scene, trajectory, out, resume=resume, **poses)
+    output = DatasetOutput(scene, trajectory, out, resume=resume, **plan)
     n = len(output)
     started = not ray.is_initialized()
     if started:
@@ -114,7 +117,7 @@ def dataset(
         worker = ray.remote(**options)(_Worker)
         # The workers read the files themselves: absolute paths, whatever their directory.
         paths = (os.path.abspath(scene), trajectory and os.path.abspath(trajectory))
-        actors = [worker.remote(*paths, poses, lookup, device, validate) for _ in range(count)]
+        actors = [worker.remote(*paths, plan, lookup, device, validate) for _ in range(count)]
         described = set(ray.get([a.describe.remote() for a in actors]))
         failed = sorted(error for error, _, _, _ in described if error is not None)
         if failed:

@@ -11,6 +11,7 @@ use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::DatasetRecord;
 use specchio::sensor::dataset::{resume, DatasetError, Folder, Ready};
+use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::device::Device;
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
@@ -58,7 +59,11 @@ impl PoseSource {
     }
 
     /// The plan of `scene` with these poses, every one checked.
-    pub(crate) fn plan(&self, scene: &Path) -> Result<Plan, DatasetError> {
+    pub(crate) fn plan(
+        &self,
+        scene: &Path,
+        panoramas: PanoramaFrame,
+    ) -> Result<Plan, DatasetError> {
         let poses = match self {
             PoseSource::File(path) => Poses::Trajectory(path),
             &PoseSource::Grid {
@@ -71,8 +76,17 @@ impl PoseSource {
                 time_s,
             },
         };
-        Plan::new(scene, poses)
+        let mut plan = Plan::new(scene, poses)?;
+        plan.panoramas = panoramas;
+        Ok(plan)
     }
+}
+
+/// The panoramas' frame as Python names it: `"robot"` or `"world"`.
+pub(crate) fn parse_panorama_frame(frame: &str) -> PyResult<PanoramaFrame> {
+    frame
+        .parse()
+        .map_err(|e| errors::error(format!("panorama_frame: {e}")))
 }
 
 pub(crate) fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
@@ -90,7 +104,7 @@ pub(crate) fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
 /// `resume`, finished frames are kept in `out.partial` and a stopped run goes on from them
 /// (`specchio dataset --resume`). Returns the summary (`dataset.json`) as a dict.
 #[pyfunction]
-#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false, grid=None, headings=None, time=None))]
+#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false, grid=None, headings=None, time=None, panorama_frame="robot"))]
 #[allow(clippy::too_many_arguments)]
 pub fn dataset(
     py: Python<'_>,
@@ -105,9 +119,11 @@ pub fn dataset(
     grid: Option<f64>,
     headings: Option<i128>,
     time: Option<f64>,
+    panorama_frame: &str,
 ) -> PyResult<Py<PyAny>> {
     let device = crate::args::device(device.as_ref())?;
     let job = Job {
+        panoramas: parse_panorama_frame(panorama_frame)?,
         asked: parse_lookup(lookup)?,
         source: PoseSource::new(trajectory, grid, headings, time)?,
         scene: &scene,
@@ -128,6 +144,7 @@ pub fn dataset(
 
 /// What `dataset` renders: its arguments, checked.
 struct Job<'a> {
+    panoramas: PanoramaFrame,
     asked: Option<Lookup>,
     source: PoseSource,
     scene: &'a Path,
@@ -151,11 +168,12 @@ fn render(
 ) -> Result<Finished, DatasetError> {
     // What this call may not replace is what it reads (docs/python.md).
     specchio::files::identity::forget();
-    let plan = job.source.plan(job.scene)?;
+    let plan = job.source.plan(job.scene, job.panoramas)?;
     let n = plan.poses.len();
     let mut folder = Folder::stage(job.out, n)?;
     let (log, dev, lookup) = open_device(job, &plan)?;
     let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
+    frames.set_panoramas(plan.panoramas);
     let truth = frames.ground_truth();
     if job.resume {
         let key = plan.run_key(lookup, truth, &writer::device_key(&dev.info));

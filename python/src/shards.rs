@@ -14,7 +14,7 @@ use specchio::sensor::dataset::{resume, DatasetError, Folder, Frame};
 use specchio::sensor::GroundTruth;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
-use crate::dataset::{commit, parse_lookup, with_kept_note, PoseSource};
+use crate::dataset::{commit, parse_lookup, parse_panorama_frame, with_kept_note, PoseSource};
 use crate::errors;
 use crate::renderer::check_validation;
 
@@ -41,7 +41,7 @@ impl DatasetFrames {
     /// quarter of the machine's cores, 1 to 4, within the memory budget; 0: none). A Ray
     /// worker, one of many on its machine, passes 1.
     #[new]
-    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None, grid=None, headings=None, time=None))]
+    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None, grid=None, headings=None, time=None, panorama_frame="robot"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -54,8 +54,10 @@ impl DatasetFrames {
         grid: Option<f64>,
         headings: Option<i128>,
         time: Option<f64>,
+        panorama_frame: &str,
     ) -> PyResult<Self> {
         let source = PoseSource::new(trajectory, grid, headings, time)?;
+        let panoramas = parse_panorama_frame(panorama_frame)?;
         let device = crate::args::device(device.as_ref())?;
         // At most MAX_ENCODERS: each holds a frame in memory.
         let most = MAX_ENCODERS as u32;
@@ -64,7 +66,7 @@ impl DatasetFrames {
             .map(|n| n as usize);
         let asked = parse_lookup(lookup)?;
         py.detach(|| -> Result<Self, DatasetError> {
-            let plan = source.plan(&scene)?;
+            let plan = source.plan(&scene, panoramas)?;
             let instance = Instance::create(&InstanceDesc::from_env(validate))?;
             let log = instance.validation_log();
             let (dev, _, lookup) = specchio::process::probe::device_for_sensor(
@@ -74,6 +76,7 @@ impl DatasetFrames {
                 &plan.scene,
             )?;
             let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
+            frames.set_panoramas(plan.panoramas);
             if let Some(n) = encoders {
                 frames.set_encoders(n);
             }
@@ -188,7 +191,7 @@ pub struct DatasetOutput {
 #[pymethods]
 impl DatasetOutput {
     #[new]
-    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None))]
+    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None, panorama_frame="robot"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -199,11 +202,13 @@ impl DatasetOutput {
         grid: Option<f64>,
         headings: Option<i128>,
         time: Option<f64>,
+        panorama_frame: &str,
     ) -> PyResult<Self> {
         let source = PoseSource::new(trajectory, grid, headings, time)?;
+        let panoramas = parse_panorama_frame(panorama_frame)?;
         py.detach(|| -> Result<Self, DatasetError> {
             specchio::files::identity::forget();
-            let plan = source.plan(&scene)?;
+            let plan = source.plan(&scene, panoramas)?;
             let folder = Folder::stage(&out, plan.poses.len())?;
             Ok(DatasetOutput {
                 plan,

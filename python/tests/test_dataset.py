@@ -41,6 +41,35 @@ def test_python_writes_what_the_command_writes(made, monkeypatch):
     assert record["frames"] == 5
 
 
+def test_the_world_frame_is_asked_for_alike_in_python_and_the_command(made, monkeypatch):
+    """Panoramas are in the robot's frame unless the scene's is asked for; only they and
+    their records differ, and Python asks for it as the command does."""
+    work, scene = made
+    monkeypatch.chdir(work)
+    args = ["--trajectory", "robot.csv", "--out", "cli-world", "--panorama-frame", "world"]
+    run = cli("dataset", scene, *args, cwd=work)
+    assert run.returncode == 0, run.stderr
+    robot, world = tree(work / "cli"), tree(work / "cli-world")
+    assert json.loads(robot["dataset.json"])["panorama_frame"] == "robot"
+    assert json.loads(world["dataset.json"])["panorama_frame"] == "world"
+    assert sorted(robot) == sorted(world)
+    differing = {p for p in robot if robot[p] != world[p]}
+    # Frame 0 faces +X (heading 0): both frames put its seam there.
+    assert not any(p.startswith("frames/000000/") for p in differing)
+    assert any(p.startswith("frames/000001/sensor.panorama.") for p in differing)
+    expected = ("sensor.panorama.", "camera.json", "dataset.json")
+    assert all(any(e in p for e in expected) for p in differing), sorted(differing)
+    record = specchio.dataset(scene, "robot.csv", "py-world", panorama_frame="world")
+    assert record["panorama_frame"] == "world"
+    assert tree(work / "py-world") == world
+    frames = specchio.DatasetFrames(scene, "robot.csv", encoders=0, panorama_frame="world")
+    got = {path: data for files, _ in frames.frames([2]) for path, data in files}
+    assert got and all(got[p] == world[p] for p in got)
+    with pytest.raises(specchio.SpecchioError, match="panorama_frame: `sky` is not a panorama frame: robot or world"):
+        specchio.dataset(scene, "robot.csv", "bad", panorama_frame="sky")
+    assert not (work / "bad").exists()
+
+
 def test_a_workers_frames_are_the_same_with_any_number_of_encoders(made, monkeypatch):
     work, scene = made
     monkeypatch.chdir(work)

@@ -7,8 +7,11 @@
 mod common;
 
 use common::{root, Gpu};
+use specchio::image::RgbaImage;
 use specchio::render::dataset::{choose_lookup, FrameWriter, Plan, Poses};
+use specchio::sensor::dataset::trajectory::Pose;
 use specchio::sensor::dataset::{DatasetError, Frame};
+use specchio::sensor::panorama::PanoramaFrame;
 
 /// Thesis-room's textured walls, a pose grid of four places with two headings each.
 fn plan() -> Plan {
@@ -136,6 +139,76 @@ fn a_stop_from_either_end_ends_the_run() {
     // The writer still works after both.
     let pose = &plan.poses[0];
     assert!(w.frame(0, pose).is_ok());
+    drop(w);
+    gpu.finish();
+}
+
+/// A frame's cylindrical sensor panorama at `pose`.
+fn panorama(w: &mut FrameWriter, frame: usize, pose: &Pose) -> RgbaImage {
+    let (outputs, _) = w.outputs(frame, pose).expect("a frame's outputs");
+    (outputs.panoramas().into_iter())
+        .find(|(name, _, _)| name == "sensor.panorama.cylindrical")
+        .expect("a cylindrical panorama")
+        .2
+}
+
+/// The mean absolute colour difference between `a` and `b` with `b`'s columns read `shift`
+/// further along (wrapping), over the pixels both panoramas show (alpha 1).
+fn mean_difference(a: &RgbaImage, b: &RgbaImage, shift: u32) -> f64 {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    let (mut sum, mut n) = (0.0, 0u32);
+    for i in 0..a.height {
+        for j in 0..a.width {
+            let (p, q) = (a.pixel(j, i), b.pixel((j + shift) % a.width, i));
+            if p[3] == 1.0 && q[3] == 1.0 {
+                sum += (0..3).map(|k| f64::from((p[k] - q[k]).abs())).sum::<f64>() / 3.0;
+                n += 1;
+            }
+        }
+    }
+    assert!(n > a.width * a.height / 2, "{n} pixels shown by both");
+    sum / f64::from(n)
+}
+
+/// Panoramas are in the robot's frame: at one place, the robot turned 90 degrees sees the room
+/// a quarter of the columns further along (azimuth grows clockwise seen from above, a heading
+/// counter-clockwise), and its panorama is not the unturned one, so nothing trained on them
+/// can read the heading off them. In the scene's frame, asked for, the two are one picture
+/// (made with the true heading, which a robot does not know).
+#[test]
+fn panoramas_turn_with_the_robot_unless_the_world_frame_is_asked_for() {
+    let poses = Poses::Grid {
+        spacing_m: 4.0,
+        headings: 4,
+        time_s: 0.5,
+    };
+    let plan = Plan::new(&root().join("scenes/thesis-room.toml"), poses).expect("the plan");
+    let (a, b) = (&plan.poses[0], &plan.poses[1]);
+    assert_eq!(
+        (a.position, a.heading_deg, b.heading_deg),
+        (b.position, 0.0, 90.0)
+    );
+    let gpu = gpu_for(&plan);
+    let mut w = writer(&gpu, &plan);
+    let (p0, p90) = (panorama(&mut w, 0, a), panorama(&mut w, 1, b));
+    let quarter = p0.width / 4;
+    let turned = mean_difference(&p0, &p90, quarter);
+    let unturned = mean_difference(&p0, &p90, 0);
+    w.set_panoramas(PanoramaFrame::World);
+    let (q0, q90) = (panorama(&mut w, 0, a), panorama(&mut w, 1, b));
+    let world = mean_difference(&q0, &q90, 0);
+    eprintln!("robot frame: {turned} shifted a quarter, {unturned} not; world frame: {world}");
+    // The sensor image turns exactly (the disc is centred on the pixel grid): the panoramas
+    // agree to the rounding of the sample positions, against a room of different colours.
+    assert!(
+        turned < 1e-4,
+        "the turned robot's panorama, shifted back: {turned}"
+    );
+    assert!(
+        unturned > 0.05,
+        "the turned robot's panorama as it is: {unturned}"
+    );
+    assert!(world < 1e-4, "the scene-frame panoramas: {world}");
     drop(w);
     gpu.finish();
 }

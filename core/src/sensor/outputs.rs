@@ -67,6 +67,10 @@ pub struct SensorOutputs {
     /// The cube map's faces (mip 0), for the panoramas straight from the cube; None for the
     /// reference, which has no cube.
     pub cube: Option<Vec<RgbaImage>>,
+    /// The scene azimuth (radians) the panoramas' left edge points along: 0 (the scene's
+    /// frame) unless a robot's frame puts its forward axis there (a dataset's frames:
+    /// [`PanoramaFrame::seam`](super::panorama::PanoramaFrame::seam)).
+    pub panorama_seam_rad: f64,
 }
 
 impl SensorOutputs {
@@ -109,6 +113,7 @@ impl SensorOutputs {
             id_map: IdMap::of(scene),
             image: images.color.clone(),
             cube: None,
+            panorama_seam_rad: 0.0,
         }
     }
 
@@ -171,6 +176,7 @@ impl SensorOutputs {
             id_map: IdMap::of(scene),
             image,
             cube,
+            panorama_seam_rad: 0.0,
         }
     }
 
@@ -179,6 +185,7 @@ impl SensorOutputs {
         let mut all = Vec::new();
         for kind in PanoramaKind::ALL {
             let layout = PanoramaLayout::for_sensor(&self.optics, kind);
+            let layout = layout.with_seam(self.panorama_seam_rad);
             let name = format!("sensor.panorama.{}", kind.name());
             all.push((name, layout, layout.unwrap(&self.optics, &self.image)));
             if let Some(faces) = &self.cube {
@@ -472,6 +479,8 @@ pub struct PanoramaRecord {
     pub height: u32,
     pub top_elevation_deg: f64,
     pub bottom_elevation_deg: f64,
+    /// The scene azimuth of the left edge (degrees; 0: the scene's +X).
+    pub seam_azimuth_deg: f64,
 }
 
 impl PanoramaRecord {
@@ -483,6 +492,7 @@ impl PanoramaRecord {
             height: l.height,
             top_elevation_deg: l.top_elevation_rad.to_degrees(),
             bottom_elevation_deg: l.bottom_elevation_rad.to_degrees(),
+            seam_azimuth_deg: l.seam_azimuth_rad.to_degrees(),
         }
     }
 }

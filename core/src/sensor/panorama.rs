@@ -1,8 +1,11 @@
 //! Panoramas: the sensor image unwrapped onto a cylinder or a longitude–latitude grid, and the
 //! same panoramas read straight from the cube map.
 //!
-//! Both kinds share the columns: column `j` (of `W`) is azimuth `(j + 0.5) / W * 360` degrees
-//! (`optics` module: 0 along +X, 90 along +Z). Row `i` (of `H`, row 0 at the top) is, at its
+//! Both kinds share the columns: column `j` (of `W`) is azimuth `seam + (j + 0.5) / W * 360`
+//! degrees (`optics` module: 0 along the scene's +X, 90 along +Z), where `seam`, the azimuth
+//! of the left edge, is 0 in the scene's frame and, in a robot's own frame ([`PanoramaFrame`]),
+//! the azimuth its forward axis points along: its panoramas turn with it, as a real robot's
+//! do, and say nothing of its heading. Row `i` (of `H`, row 0 at the top) is, at its
 //! centre,
 //! - longitude–latitude: elevation `e_top - (i + 0.5) / H * (e_top - e_bottom)`, linear in
 //!   the angle, over everything the mirror shows (`e_top` its highest elevation, for the
@@ -58,7 +61,53 @@ impl PanoramaKind {
     }
 }
 
-/// A panorama's size and the elevations of its top and bottom edges (radians).
+/// Whose frame a panorama's columns are in: where its seam (the left edge) points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PanoramaFrame {
+    /// The robot's: its forward axis (the scene's +X turned by its heading) at the seam, the
+    /// azimuth growing as the scene's does (towards its right). What a robot that does not
+    /// know its heading unwraps; what `localise` matches.
+    Robot,
+    /// The scene's: azimuth 0 (+X) at the seam whatever the heading. It needs the true
+    /// heading to make, which a real robot does not have.
+    World,
+}
+
+impl PanoramaFrame {
+    pub const ALL: [Self; 2] = [Self::Robot, Self::World];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Robot => "robot",
+            Self::World => "world",
+        }
+    }
+
+    /// The seam's azimuth (radians, in [0, 2 pi)) for a robot at `heading_rad` (counter-
+    /// clockwise about +Y seen from above, 0 facing +X): its forward axis is at azimuth
+    /// `-heading`, since azimuth grows from +X towards +Z, clockwise seen from above.
+    pub fn seam(self, heading_rad: f64) -> f64 {
+        match self {
+            // Not `-heading`: heading 0 would make the seam -0, written "-0.0".
+            Self::Robot => (TAU - heading_rad.rem_euclid(TAU)).rem_euclid(TAU),
+            Self::World => 0.0,
+        }
+    }
+}
+
+impl std::str::FromStr for PanoramaFrame {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        (Self::ALL.into_iter())
+            .find(|f| f.name() == s)
+            .ok_or_else(|| format!("`{s}` is not a panorama frame: robot or world"))
+    }
+}
+
+/// A panorama's size, the elevations of its top and bottom edges and the azimuth of its left
+/// edge (radians).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct PanoramaLayout {
     pub kind: PanoramaKind,
@@ -66,6 +115,8 @@ pub struct PanoramaLayout {
     pub height: u32,
     pub top_elevation_rad: f64,
     pub bottom_elevation_rad: f64,
+    /// The scene azimuth of the left edge (see the module documentation).
+    pub seam_azimuth_rad: f64,
 }
 
 impl PanoramaLayout {
@@ -88,17 +139,26 @@ impl PanoramaLayout {
             height: ((f64::from(width) * span).round() as u32).max(1),
             top_elevation_rad: top,
             bottom_elevation_rad: bottom,
+            seam_azimuth_rad: 0.0,
+        }
+    }
+
+    /// The same layout with its left edge at azimuth `seam` (radians).
+    pub fn with_seam(self, seam: f64) -> Self {
+        Self {
+            seam_azimuth_rad: seam,
+            ..self
         }
     }
 
     /// Azimuth (radians) at horizontal position `x` (pixels; a column's centre at `j + 0.5`).
     pub fn azimuth(&self, x: f64) -> f64 {
-        x / f64::from(self.width) * TAU
+        self.seam_azimuth_rad + x / f64::from(self.width) * TAU
     }
 
     /// The column (fractional pixels) of azimuth `azimuth`; inverse of [`Self::azimuth`].
     pub fn column(&self, azimuth: f64) -> f64 {
-        azimuth.rem_euclid(TAU) / TAU * f64::from(self.width)
+        (azimuth - self.seam_azimuth_rad).rem_euclid(TAU) / TAU * f64::from(self.width)
     }
 
     /// Elevation (radians) at vertical position `y` (pixels from the top edge).
@@ -326,24 +386,51 @@ mod tests {
         }
     }
 
-    /// Rows and columns invert to the angles they were made from, for both kinds.
+    /// Rows and columns invert to the angles they were made from, for both kinds and any
+    /// seam: a quarter turn past the seam is a quarter of the columns.
     #[test]
     fn rows_and_columns_round_trip() {
-        for kind in PanoramaKind::ALL {
+        for (kind, seam) in PanoramaKind::ALL
+            .into_iter()
+            .flat_map(|k| [(k, 0.0), (k, 5.5)])
+        {
             let l = PanoramaLayout {
                 kind,
                 width: 720,
                 height: 200,
                 top_elevation_rad: 0.7,
                 bottom_elevation_rad: -0.6,
+                seam_azimuth_rad: seam,
             };
             for y in [0.0, 13.5, 100.0, 199.5] {
                 assert!((l.row(l.elevation(y)) - y).abs() < 1e-9, "{kind:?} {y}");
             }
             assert!((l.elevation(0.0) - 0.7).abs() < 1e-12);
             assert!((l.elevation(200.0) + 0.6).abs() < 1e-12);
-            assert!((l.column(std::f64::consts::FRAC_PI_2) - 180.0).abs() < 1e-9);
-            assert!((l.azimuth(l.column(5.0)) - 5.0).abs() < 1e-9);
+            let quarter = l.column(seam + std::f64::consts::FRAC_PI_2);
+            assert!((quarter - 180.0).abs() < 1e-9, "{kind:?} {seam}: {quarter}");
+            let a = l.azimuth(l.column(5.0));
+            assert!((a - 5.0).rem_euclid(TAU).min((5.0 - a).rem_euclid(TAU)) < 1e-9);
         }
+    }
+
+    /// A robot's seam is its forward axis: the scene's +X turned by its heading
+    /// (counter-clockwise about +Y seen from above) has azimuth `-heading`; the world's is 0.
+    #[test]
+    fn a_robots_seam_is_its_forward_axis() {
+        for deg in [0.0, 30.0, 90.0, -120.0, 400.0] {
+            let heading = f64::to_radians(deg);
+            let forward = glam::DMat3::from_rotation_y(heading) * glam::DVec3::X;
+            let azimuth = forward.z.atan2(forward.x).rem_euclid(TAU);
+            let seam = PanoramaFrame::Robot.seam(heading);
+            let off = (seam - azimuth).rem_euclid(TAU);
+            assert!(
+                off.min(TAU - off) < 1e-12,
+                "{deg}: seam {seam}, forward {azimuth}"
+            );
+            assert_eq!(PanoramaFrame::World.seam(heading), 0.0);
+        }
+        // Facing +X, the seam is +0, not -0 (the records write the sign).
+        assert!(PanoramaFrame::Robot.seam(0.0).is_sign_positive());
     }
 }

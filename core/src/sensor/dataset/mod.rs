@@ -233,6 +233,9 @@ pub struct DatasetRecord {
     pub scene_origin_m: [f64; 3],
     /// Rows: ROS's x, y, z axes in scene coordinates (ROS = this x scene).
     pub scene_to_ros: [[f64; 3]; 3],
+    /// Whose frame the panoramas' columns are in: the robot's (its forward axis at the left
+    /// edge) or the scene's (`camera.json` gives each panorama's seam azimuth).
+    pub panorama_frame: super::panorama::PanoramaFrame,
     pub frame_files: [&'static str; 10],
 }
 

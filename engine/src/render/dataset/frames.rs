@@ -21,6 +21,7 @@ use crate::scene::{Lookup, Scene};
 use crate::sensor::dataset::trajectory::Pose;
 use crate::sensor::dataset::{self as sensor_dataset, IndexLine, PoseRecord};
 use crate::sensor::dataset::{DatasetError, Frame, INDEX_FILE};
+use crate::sensor::panorama::PanoramaFrame;
 use crate::sensor::{GroundTruth, SensorOutputs};
 use crate::vk::device::Device;
 use crate::vk::GpuError;
@@ -60,6 +61,8 @@ pub struct FrameWriter {
     truth: GroundTruth,
     /// Frames encoded at the same time by [`FrameWriter::frames`].
     encoders: usize,
+    /// Whose frame the panoramas are in (the robot's unless set: [`Self::set_panoramas`]).
+    panoramas: PanoramaFrame,
 }
 
 impl FrameWriter {
@@ -80,6 +83,7 @@ impl FrameWriter {
             lookup,
             truth,
             encoders: encoders_for(scene),
+            panoramas: PanoramaFrame::Robot,
         })
     }
 
@@ -126,7 +130,7 @@ impl FrameWriter {
         let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;
         let sensor = images.sensor.ok_or_else(missing)?;
         let name = self.lookup.to_string();
-        let outputs = SensorOutputs::from_gpu(
+        let mut outputs = SensorOutputs::from_gpu(
             &r.scene,
             pose.time_s,
             (&name, self.truth),
@@ -134,6 +138,7 @@ impl FrameWriter {
             (origin, direction),
             None,
         );
+        outputs.panorama_seam_rad = self.panoramas.seam(pose.heading_deg.to_radians());
         Ok((outputs, images.observer))
     }
 
@@ -157,6 +162,11 @@ impl FrameWriter {
     /// thread after it renders (no pipeline: the least memory).
     pub fn set_encoders(&mut self, encoders: usize) {
         self.encoders = encoders;
+    }
+
+    /// Unwraps the panoramas in `frame`'s frame (a dataset's `Plan::panoramas`).
+    pub fn set_panoramas(&mut self, frame: PanoramaFrame) {
+        self.panoramas = frame;
     }
 
     /// The frames `poses` (index, pose) in order, each given to `take` on this thread.

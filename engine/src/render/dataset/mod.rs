@@ -23,6 +23,7 @@ use crate::sensor::dataset::resume::RunKey;
 use crate::sensor::dataset::trajectory::{self, Pose, TrajectoryError};
 use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
 use crate::sensor::dataset::{DatasetError, Folder, INDEX_FILE};
+use crate::sensor::panorama::PanoramaFrame;
 use crate::sensor::GroundTruth;
 use crate::vk::physical::DeviceInfo;
 use crate::vk::GpuError;
@@ -59,6 +60,8 @@ pub struct Plan {
     /// The files the scene and the poses were read from, by content (a resumed run checks
     /// them: `resume.rs`).
     pub inputs: Vec<Digest>,
+    /// Whose frame the panoramas are in: the robot's unless asked ([`PanoramaFrame`]).
+    pub panoramas: PanoramaFrame,
 }
 
 /// Where a dataset's poses come from.
@@ -96,6 +99,7 @@ impl Plan {
             trajectory,
             poses,
             inputs,
+            panoramas: PanoramaFrame::Robot,
         })
     }
 
@@ -154,6 +158,7 @@ impl Plan {
             lookup: lookup.to_string(),
             ground_truth: truth.name().to_owned(),
             device: device.to_owned(),
+            panoramas: self.panoramas.name().to_owned(),
         }
     }
 
@@ -184,6 +189,7 @@ impl Plan {
             index: INDEX_FILE,
             scene_origin_m: self.scene.origin.to_array(),
             scene_to_ros: sensor_dataset::scene_to_ros_rows(),
+            panorama_frame: self.panoramas,
             frame_files: sensor_dataset::FRAME_FILES,
         }
     }

@@ -31,6 +31,10 @@ pub struct RunKey {
     pub ground_truth: String,
     /// The device's name and driver: another device may round differently.
     pub device: String,
+    /// Whose frame the panoramas are in (`robot`, `world`). A journal from before this field
+    /// reads as `""`, which no run asks for.
+    #[serde(default)]
+    pub panoramas: String,
 }
 
 /// One journal line.

@@ -26,6 +26,7 @@ fn key(frames: usize) -> RunKey {
         lookup: "ray-query".into(),
         ground_truth: "traced".into(),
         device: "a device".into(),
+        panoramas: "robot".into(),
     }
 }
 
@@ -65,6 +66,7 @@ fn record(frames: usize) -> DatasetRecord {
         index: INDEX_FILE,
         scene_origin_m: [0.0; 3],
         scene_to_ros: [[0.0; 3]; 3],
+        panorama_frame: crate::sensor::panorama::PanoramaFrame::Robot,
         frame_files: FRAME_FILES,
     }
 }
