@@ -10,6 +10,7 @@
 //! | `mask` | (H, W) | bool | the pixel sees the mirror |
 //! | `range` | (H, W) | float32 | metres along the ray to what it meets (0 off the mirror) |
 //! | `ids` | (H, W) | uint32 | what it meets: walls 0..5, object i at 6 + i, 2³² − 1 none |
+//! | `classes` | (H, W) | uint32 | the class of what it meets (`sensor.id.json`'s `classes`), 2³² − 1 none |
 
 use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -68,6 +69,7 @@ impl Layers {
             .flat_map(|r| r.map_or([0.0; 3], |r| r.direction.to_array()))
             .collect();
         let mask = rays.iter().map(Option::is_some).collect();
+        let classes = o.class_ids();
         Layers(vec![
             ("sensor", Data::F32(rgb(&o.image)), [h, w, 3]),
             ("observer", Data::F32(rgb(observer)), [oh, ow, 3]),
@@ -76,6 +78,7 @@ impl Layers {
             ("mask", Data::Bool(mask), [h, w, 0]),
             ("range", Data::F32(o.range), [h, w, 0]),
             ("ids", Data::U32(o.ids), [h, w, 0]),
+            ("classes", Data::U32(classes), [h, w, 0]),
         ])
     }
 }

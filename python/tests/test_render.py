@@ -20,6 +20,7 @@ SHAPES = {
     "mask": ((512, 512), np.bool_),
     "range": ((512, 512), np.float32),
     "ids": ((512, 512), np.uint32),
+    "classes": ((512, 512), np.uint32),
 }
 
 
@@ -49,6 +50,11 @@ def test_the_layers_say_the_same_as_the_geometry(renderer, thesis):
     # A ray reaches what its id names: the room (ids 0..5) or the orbiter (6).
     assert set(np.unique(frame["ids"][mask])) <= set(range(7))
     assert (frame["ids"][~mask] == 2**32 - 1).all()
+    # Each pixel's class is its id's: walls "wall" (0), the ceiling 1, the floor 2, and the
+    # orbiter, which the scene gives no class, "object" (3).
+    class_of = np.array([0, 0, 1, 2, 0, 0, 3], dtype=np.uint32)
+    np.testing.assert_array_equal(frame["classes"][mask], class_of[frame["ids"][mask]])
+    assert (frame["classes"][~mask] == 2**32 - 1).all()
 
 
 def test_a_batch_is_the_frames_one_by_one_and_fills_given_buffers(renderer):

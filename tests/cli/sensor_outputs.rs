@@ -273,8 +273,8 @@ fn the_id_map_names_every_id_of_the_layer() {
             read(dir, "camera.json")["files"]["id_map"],
             "sensor.id.json"
         );
-        let ids = read_channels(&dir.join("sensor.id.exr")).unwrap();
-        let ids = read_u32_channel(&ids, "id").expect("ids as u32");
+        let layers = read_channels(&dir.join("sensor.id.exr")).unwrap();
+        let ids = read_u32_channel(&layers, "id").expect("ids as u32");
         assert!(
             ids.contains(&6) && ids.contains(&7),
             "both objects are seen"
@@ -282,5 +282,29 @@ fn the_id_map_names_every_id_of_the_layer() {
         assert!(ids
             .iter()
             .all(|&id| id == NO_ID || (id as usize) < drawables.len()));
+        // The class layer beside the ids: each pixel's class is its drawable's.
+        let classes = read_u32_channel(&layers, "class").expect("classes as u32");
+        let class_of = |id: u32| match id {
+            NO_ID => NO_ID,
+            id => drawables[id as usize]["class_id"].as_u64().unwrap() as u32,
+        };
+        assert!(ids
+            .iter()
+            .zip(classes.iter())
+            .all(|(&i, &c)| c == class_of(i)));
     }
+    // Neither object has a class in its scene file: both are "object", after the walls'.
+    assert_eq!(
+        map["classes"],
+        serde_json::json!(["wall", "ceiling", "floor", "object"])
+    );
+    let class = |id: usize| [&drawables[id]["class"], &drawables[id]["class_id"]];
+    assert_eq!(
+        class(3),
+        [&serde_json::json!("floor"), &serde_json::json!(2)]
+    );
+    assert_eq!(
+        class(7),
+        [&serde_json::json!("object"), &serde_json::json!(3)]
+    );
 }

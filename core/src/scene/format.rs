@@ -164,6 +164,8 @@ pub enum ScaleSpec {
 #[serde(deny_unknown_fields)]
 pub struct ObjectSpec {
     pub name: Option<String>,
+    /// What kind of thing it is (`chair`), the label of its pixels in the class layer.
+    pub class: Option<String>,
     pub shape: Shape,
     #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub size: Option<V3>,
@@ -184,6 +186,8 @@ pub struct ObjectSpec {
 #[serde(deny_unknown_fields)]
 pub struct GenerateSpec {
     pub name: Option<String>,
+    /// The class of every object it makes.
+    pub class: Option<String>,
     pub count: i64,
     pub seed: Option<i64>,
     pub shapes: Vec<Shape>,

@@ -72,6 +72,8 @@ pub(super) struct ShapeChoice {
 pub(super) struct Params {
     /// Objects are named `name[k]`.
     pub name: String,
+    /// Every object's class.
+    pub class: String,
     pub count: u32,
     pub seed: u64,
     pub shapes: Vec<ShapeChoice>,
@@ -223,6 +225,7 @@ pub(super) fn expand(p: &Params, env: &Surroundings) -> Result<Vec<Object>, Plac
         };
         out.push(Object {
             name: format!("{}[{k}]", p.name),
+            class: p.class.clone(),
             mesh: shape.mesh,
             material,
             shape: shape.name.clone(),
@@ -274,6 +277,7 @@ mod tests {
     fn params(count: u32, moving: f32) -> Params {
         Params {
             name: "g".into(),
+            class: "object".into(),
             count,
             seed: 3,
             shapes: vec![ShapeChoice {

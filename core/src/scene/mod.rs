@@ -183,11 +183,19 @@ impl std::fmt::Display for Lookup {
     }
 }
 
+/// The class of an object whose scene file gives none.
+pub const DEFAULT_CLASS: &str = "object";
+/// The longest class name a scene file may give (bytes).
+pub const MAX_CLASS_LEN: usize = 64;
+
 /// One drawable object: a mesh instance with a material and a rigid transform.
 #[derive(Debug, Clone)]
 pub struct Object {
     /// Name from the file (or `objects[i]`), for reports and debug labels.
     pub name: String,
+    /// What kind of thing it is (`chair`; [`DEFAULT_CLASS`] when the file does not say): the
+    /// label of its pixels in the sensor's class layer.
+    pub class: String,
     /// Index into [`Scene::meshes`].
     pub mesh: usize,
     /// Index into [`Scene::materials`].

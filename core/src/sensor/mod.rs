@@ -11,6 +11,7 @@ pub mod central;
 pub mod dataset;
 pub mod files;
 pub mod ground_truth;
+pub mod id_map;
 pub mod localise;
 pub mod optics;
 pub mod outputs;

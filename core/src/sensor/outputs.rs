@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use super::files::Samples;
 use super::ground_truth::{GroundTruth, GroundTruthRecord};
+pub use super::id_map::{IdMap, NO_ID};
 use super::optics::SensorOptics;
 use super::panorama::{PanoramaKind, PanoramaLayout};
 use super::ray_map::{PixelRay, RayMap};
@@ -17,9 +18,6 @@ use crate::mirror::MirrorShape;
 use crate::output::{OutputError, Sink};
 use crate::reference::ReferenceImages;
 use crate::scene::Scene;
-
-/// The id of a pixel that sees no object through the mirror (or not the mirror at all).
-pub const NO_ID: u32 = u32::MAX;
 
 /// File names inside the output folder.
 pub const RAYS_FILE: &str = "sensor.rays.exr";
@@ -180,6 +178,12 @@ impl SensorOutputs {
         }
     }
 
+    /// Per pixel, the class of what it meets ([`IdMap::classes`]), [`NO_ID`] for none: the
+    /// class layer beside the ids.
+    pub fn class_ids(&self) -> Vec<u32> {
+        self.id_map.classes_of(&self.ids)
+    }
+
     /// The panoramas from the sensor image, and from the cube where there is one.
     pub fn panoramas(&self) -> Vec<(String, PanoramaLayout, RgbaImage)> {
         let mut all = Vec::new();
@@ -239,7 +243,10 @@ impl SensorOutputs {
         out.write_channels(&dir.join(RAYS_FILE), (w, h), ray_channels)?;
         let range = vec![("range", Samples::F32(self.range.clone()))];
         out.write_channels(&dir.join(RANGE_FILE), (w, h), range)?;
-        let ids = vec![("id", Samples::U32(self.ids.clone()))];
+        let ids = vec![
+            ("id", Samples::U32(self.ids.clone())),
+            ("class", Samples::U32(self.class_ids())),
+        ];
         out.write_channels(&dir.join(ID_FILE), (w, h), ids)?;
         out.write_json(&dir.join(ID_MAP_FILE), &self.id_map)
     }
@@ -409,66 +416,6 @@ pub struct FilesRecord {
     pub id_map: &'static str,
     pub no_id: u32,
     pub panoramas: Vec<PanoramaRecord>,
-}
-
-/// What each id of the sensor's id layer names: the room's six walls (ids 0..6, in the cube
-/// faces' order) and the scene's objects (6 + their index), with their names as the scene file
-/// gives them, their materials and shapes. Ids are the scene's, the same in every frame.
-#[derive(Debug, Clone, Serialize)]
-pub struct IdMap {
-    /// The id of a pixel that sees no drawable (or not the mirror).
-    pub no_id: u32,
-    pub drawables: Vec<Drawable>,
-}
-
-#[derive(Debug, Clone, Serialize)]
-pub struct Drawable {
-    pub id: u32,
-    /// "wall" or "object".
-    pub kind: &'static str,
-    pub name: String,
-    pub material: String,
-    /// `wall`, `box`, `sphere`, `cylinder` or `mesh FILE`.
-    pub shape: String,
-}
-
-/// The walls' names, in the cube faces' order.
-const WALL_NAMES: [&str; 6] = [
-    "+X wall",
-    "-X wall",
-    "ceiling (+Y)",
-    "floor (-Y)",
-    "+Z wall",
-    "-Z wall",
-];
-
-impl IdMap {
-    pub fn of(scene: &Scene) -> Self {
-        let material = |m: usize| scene.materials[m].name.clone();
-        let walls = (WALL_NAMES.iter().zip(scene.room.wall_materials))
-            .map(|(name, m)| (name.to_string(), "wall", material(m), "wall".to_owned()));
-        let objects = (scene.objects.iter()).map(|o| {
-            (
-                o.name.clone(),
-                "object",
-                material(o.material),
-                o.shape.clone(),
-            )
-        });
-        let drawables = (walls.chain(objects).enumerate())
-            .map(|(id, (name, kind, material, shape))| Drawable {
-                id: id as u32,
-                kind,
-                name,
-                material,
-                shape,
-            })
-            .collect();
-        Self {
-            no_id: NO_ID,
-            drawables,
-        }
-    }
 }
 
 #[derive(Debug, Serialize)]

@@ -76,6 +76,7 @@ impl Ctx<'_> {
             Some(n) => n.clone(),
             None => format!("generate[{i}]"),
         };
+        let class = self.class(&f("class"), g.class.as_deref())?;
         let count = self.count(&f("count"), g.count, MAX_COUNT)?;
         let seed = match g.seed {
             None => 0,
@@ -104,6 +105,7 @@ impl Ctx<'_> {
         let period = self.interval(&f("period"), g.period.unwrap_or([8.0, 20.0]))?;
         Ok(Params {
             name,
+            class,
             count,
             seed,
             shapes,

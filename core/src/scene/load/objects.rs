@@ -8,7 +8,7 @@ use super::{Ctx, MeshBuilder, CYLINDER_SEGMENTS, R, SPHERE_SEGMENTS};
 use crate::scene::error::SceneError;
 use crate::scene::format::{AnimationSpec, AnimationType, ObjectSpec, ScaleSpec, Shape};
 use crate::scene::mesh::Mesh;
-use crate::scene::Object;
+use crate::scene::{Object, DEFAULT_CLASS, MAX_CLASS_LEN};
 
 /// The cache key and builder of a built-in shape at unit size (1 m across: a cube with edges 1,
 /// a sphere of diameter 1 with `segments` around and max(2, segments / 2) rings, a cylinder of
@@ -130,6 +130,7 @@ impl Ctx<'_> {
         };
         Ok(Object {
             name: o.name.clone().unwrap_or_else(|| format!("objects[{i}]")),
+            class: self.class(&f("class"), o.class.as_deref())?,
             mesh,
             material,
             shape: o.shape.describe(o.file.as_deref()),
@@ -138,6 +139,24 @@ impl Ctx<'_> {
             scale,
             animation,
         })
+    }
+
+    /// An object's class as the file gives it (`field`), or [`DEFAULT_CLASS`]: 1 to
+    /// [`MAX_CLASS_LEN`] letters, digits, `_` or `-`, so that it is one word in any tool's
+    /// label file.
+    pub(super) fn class(&self, field: &str, class: Option<&str>) -> R<String> {
+        let Some(class) = class else {
+            return Ok(DEFAULT_CLASS.to_owned());
+        };
+        let word = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
+        if class.is_empty() || class.len() > MAX_CLASS_LEN || !class.chars().all(word) {
+            let why = format!(
+                "must be 1 to {MAX_CLASS_LEN} letters, digits, `_` or `-` (a class such as \
+                 \"chair\"), got {class:?}"
+            );
+            return Err(self.invalid(field, why));
+        }
+        Ok(class.to_owned())
     }
 
     /// Refuses a key that the object's shape does not take.

@@ -47,6 +47,9 @@ fn more_rules_with_their_fields() {
         ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"orbit\", center = [0, 0, 0], period = 0 }\n", "objects[0].animation.period: must be positive"),
         ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"linear\", to = [0, 0, 0], duration = 1, period = 2 }\n", "objects[0].animation.period: not allowed"),
         ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"keyframes\", times = [0, 1], positions = [[1, 1, 1], [2, 2, 2]] }\n", "objects[0].animation.positions[0]: the first keyframe"),
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nclass = \"\"\n", "objects[0].class: must be 1 to 64 letters, digits, `_` or `-`"),
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nclass = \"office chair\"\n", "objects[0].class: must be 1 to 64 letters, digits, `_` or `-` (a class such as \"chair\"), got \"office chair\""),
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nclass = 3\n", "objects[0].class"),
         ("[[materials]]\nname = \"w\"\ntype = \"color\"\ncolor = [1, 1, 1]\n", "materials[1].name: duplicate"),
         ("[[materials]]\nname = \"g\"\ntype = \"grid\"\nbackground = [1, 1, 1]\nline = [0, 0, 0]\nline_width = 0.7\n", "materials[1].line_width"),
     ];
@@ -70,6 +73,17 @@ fn generator_rules_with_their_fields() {
     let ok = load_str(&format!("{MINIMAL}{gen}"), Path::new("g.toml")).unwrap();
     assert_eq!(ok.objects.len(), 10);
     assert_eq!(ok.objects[3].name, "generate[0][3]");
+    assert!(ok
+        .objects
+        .iter()
+        .all(|o| o.class == crate::scene::DEFAULT_CLASS));
+    let long = format!("{MINIMAL}{gen}class = \"{}\"\n", "a".repeat(65));
+    let err = load_str(&long, Path::new("g.toml")).expect_err("a class of 65 letters");
+    assert!(
+        err.to_string()
+            .contains("generate[0].class: must be 1 to 64"),
+        "{err}"
+    );
     assert!(ok.objects.iter().all(|o| o.animation.is_none()));
     let cases: &[(&str, &str)] = &[
         ("count = 10", "count = 0"),
@@ -92,6 +106,7 @@ fn generator_rules_with_their_fields() {
         ("count = 10", "count = 10\nmoving = 1\nperiod = [20, 8]"),
         ("count = 10", "count = 10\nname = \" \""),
         ("count = 10", "count = 10\ncolour = 3"),
+        ("count = 10", "count = 10\nclass = \"chäir\""),
         // The region lies inside the mirror's keep-clear zone: nowhere to put anything.
         (
             "region_min = [-4, 1, -4]\nregion_max = [4, 5, 4]",
@@ -124,6 +139,7 @@ fn generator_rules_with_their_fields() {
         "generate[0].period[1]: must be >=",
         "generate[0].name: must not be empty",
         "generate[0].colour: unknown field",
+        "generate[0].class: must be 1 to 64 letters",
         "generate[0].keep_clear: cannot place generate[0][0]",
         "generate[0].moving: cannot place generate[0][0]",
     ];
