@@ -387,8 +387,9 @@ fn nothing_below_imports_the_process_module() {
 }
 
 /// The workspace's crates, by folder, with the workspace crates each may depend on.
-const CRATE_ARROWS: [(&str, &[&str]); 6] = [
-    ("core", &[]),
+const CRATE_ARROWS: [(&str, &[&str]); 7] = [
+    ("workspace-hack", &[]),
+    ("core", &["workspace-hack"]),
     ("engine", &["core"]),
     ("bench", &["engine"]),
     ("viewer", &["engine"]),
@@ -509,6 +510,7 @@ fn the_module_map_names_every_source_file() {
         .map(|p| std::fs::read_to_string(root.join(p)).expect("the doc"))
         .concat();
     let places = [
+        "workspace-hack/src",
         "core/src",
         "engine/src",
         "engine/build.rs",
@@ -536,5 +538,63 @@ fn the_module_map_names_every_source_file() {
     assert!(
         missing.is_empty(),
         "docs/modules.md and docs/testing.md do not name: {missing:#?}"
+    );
+}
+
+/// Every package the CLI's build and the Python wheel's build share, with the features each
+/// compiles it with (`name version` to its feature lists, one per way it is built).
+fn shared_features(package: &[&str]) -> BTreeMap<String, BTreeSet<String>> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let out = std::process::Command::new(cargo)
+        .current_dir(&root)
+        .args([
+            "tree",
+            "--locked",
+            "--offline",
+            "-e",
+            "normal,build",
+            "--prefix",
+            "none",
+        ])
+        .args(["-f", "{p}|{f}"])
+        .args(package)
+        .output()
+        .expect("cargo tree runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut found: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let line = line.trim_end_matches(" (*)");
+        if let Some((package, features)) = line.split_once('|') {
+            let id = package.split(" (").next().unwrap_or(package).to_owned();
+            found.entry(id).or_default().insert(features.to_owned());
+        }
+    }
+    found
+}
+
+/// The main job builds the CLI without the viewer; the wheel is built on its own. Cargo reuses
+/// the engine between them only where every shared dependency has the same features in both:
+/// `workspace-hack/` asks for the union. A dependency that adds a feature to one build alone
+/// fails here, naming it.
+#[test]
+fn the_wheel_build_shares_the_engines_features() {
+    let cli = shared_features(&["-p", "specchio-cli", "--no-default-features"]);
+    let wheel = shared_features(&["-p", "specchio-python"]);
+    assert!(cli.contains_key("specchio-core v0.1.0") && wheel.contains_key("specchio v0.1.0"));
+    let differing: Vec<String> = (cli.iter())
+        .filter_map(|(id, features)| {
+            let other = wheel.get(id)?;
+            (features != other).then(|| format!("{id}: {features:?} against {other:?}"))
+        })
+        .collect();
+    assert!(
+        differing.is_empty(),
+        "features the CLI's build and the wheel's differ on (workspace-hack/Cargo.toml): \
+         {differing:#?}"
     );
 }
