@@ -25,3 +25,7 @@ pub mod vk;
 /// The module arrows of docs/architecture.md, checked on the source.
 #[cfg(test)]
 mod module_arrows;
+
+/// The crates' arrows and shared features, checked on their manifests.
+#[cfg(test)]
+mod crate_arrows;
