@@ -91,13 +91,16 @@ fn main() {
         }
     }
     let manifest = Path::new(&manifest);
-    // The core (`core/`) is half of what the library computes: its sources count too.
+    // The core (`core/`) and the Vulkan layer (`vk/`) are part of what the library computes:
+    // their sources count too.
     let sources = [
         manifest.join("src"),
         manifest.join("build.rs"),
         manifest.join("Cargo.toml"),
         manifest.join("../core/src"),
         manifest.join("../core/Cargo.toml"),
+        manifest.join("../vk/src"),
+        manifest.join("../vk/Cargo.toml"),
         manifest.join("../Cargo.lock"),
     ];
     for path in &sources {

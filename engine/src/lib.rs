@@ -5,7 +5,8 @@
 //! the one name users and the renderer write. This crate adds what needs a GPU. Module map
 //! (details in `docs/architecture.md`):
 //! - [`vk`]: the Vulkan layer, one module per concept (instance, device, memory, image,
-//!   descriptors, pipeline, commands, queries), each owning its handles;
+//!   descriptors, pipeline, commands, queries), each owning its handles: the crate
+//!   `specchio-vk` (`vk/`), which knows nothing of the scene or the renderer;
 //! - [`shaders`]: SPIR-V compiled from `shaders/` at build time;
 //! - [`render`]: the renderer: GPU structs, the cube fill methods (plug-ins, see
 //!   [`render::methods`]) and the observer / sensor views with the analytic mirror;
@@ -16,11 +17,11 @@ pub use specchio_core::{
     sensor, stdout, text, trees,
 };
 pub use specchio_core::{say, say_part};
+pub use specchio_vk as vk;
 
 pub mod process;
 pub mod render;
 pub mod shaders;
-pub mod vk;
 
 /// The module arrows of docs/architecture.md, checked on the source.
 #[cfg(test)]

@@ -171,17 +171,31 @@ fn exported_macros(parsed: &[(&Module, syn::File)]) -> BTreeMap<String, Module> 
     found
 }
 
-/// The source folders read as one tree of modules: the core's, which the engine re-exports
-/// at its root under the same names, and the engine's own.
-fn source_folders() -> [PathBuf; 2] {
+/// The source folders read as one tree of modules, as the engine's users see them: the core's,
+/// which the engine re-exports at its root under the same names, the Vulkan layer's, which it
+/// re-exports as `vk`, and the engine's own.
+fn source_folders() -> [(PathBuf, &'static str); 3] {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-    [manifest.join("../core/src"), manifest.join("src")]
+    [
+        (manifest.join("../core/src"), ""),
+        (manifest.join("../vk/src"), "vk"),
+        (manifest.join("src"), ""),
+    ]
 }
 
 /// Each module's reached modules, cut to the depth of modules that exist (a path to an item
 /// `render::floors::Floor` reaches the module `render::floors`).
 fn graph() -> BTreeMap<Module, BTreeSet<Module>> {
-    let files: Vec<(PathBuf, Module)> = source_folders().iter().flat_map(|s| modules(s)).collect();
+    let files: Vec<(PathBuf, Module)> = (source_folders().iter())
+        .flat_map(|(src, under)| {
+            modules(src).into_iter().map(move |(path, mut module)| {
+                if !under.is_empty() {
+                    module.insert(0, (*under).to_owned());
+                }
+                (path, module)
+            })
+        })
+        .collect();
     let known: BTreeSet<Module> = files.iter().map(|(_, m)| m.clone()).collect();
     let parsed: Vec<(&Module, syn::File)> = (files.iter())
         .map(|(path, module)| {
@@ -422,6 +436,7 @@ fn the_module_map_names_every_source_file() {
     let places = [
         "workspace-hack/src",
         "core/src",
+        "vk/src",
         "engine/src",
         "engine/build.rs",
         "bench/src",

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use pyo3::prelude::*;
-use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
+use specchio::render::dataset::{self as writer, gpu_failed, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::DatasetRecord;
 use specchio::sensor::dataset::{resume, DatasetError, Folder, Ready};
@@ -172,7 +172,7 @@ fn render(
     let n = plan.poses.len();
     let mut folder = Folder::stage(job.out, n)?;
     let (log, dev, lookup) = open_device(job, &plan)?;
-    let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
+    let mut frames = FrameWriter::new(&dev, &plan.scene, lookup).map_err(gpu_failed)?;
     frames.set_panoramas(plan.panoramas);
     let truth = frames.ground_truth();
     if job.resume {
@@ -211,7 +211,7 @@ fn open_device(
     job: &Job,
     plan: &Plan,
 ) -> Result<(Arc<ValidationLog>, Arc<Device>, Lookup), DatasetError> {
-    let instance = Instance::create(&InstanceDesc::from_env(job.validate))?;
+    let instance = Instance::create(&InstanceDesc::from_env(job.validate)).map_err(gpu_failed)?;
     let log = instance.validation_log();
     let (dev, _, lookup) =
         specchio::process::probe::device_for_sensor(&instance, job.device, job.asked, &plan.scene)?;

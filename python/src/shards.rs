@@ -8,7 +8,7 @@ use std::sync::{Mutex, MutexGuard};
 
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
-use specchio::render::dataset::{device_key, FrameWriter, Plan};
+use specchio::render::dataset::{device_key, gpu_failed, FrameWriter, Plan};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::{resume, DatasetError, Folder, Frame};
 use specchio::sensor::GroundTruth;
@@ -67,7 +67,8 @@ impl DatasetFrames {
         let asked = parse_lookup(lookup)?;
         py.detach(|| -> Result<Self, DatasetError> {
             let plan = source.plan(&scene, panoramas)?;
-            let instance = Instance::create(&InstanceDesc::from_env(validate))?;
+            let instance =
+                Instance::create(&InstanceDesc::from_env(validate)).map_err(gpu_failed)?;
             let log = instance.validation_log();
             let (dev, _, lookup) = specchio::process::probe::device_for_sensor(
                 &instance,
@@ -75,7 +76,7 @@ impl DatasetFrames {
                 asked,
                 &plan.scene,
             )?;
-            let mut frames = FrameWriter::new(&dev, &plan.scene, lookup)?;
+            let mut frames = FrameWriter::new(&dev, &plan.scene, lookup).map_err(gpu_failed)?;
             frames.set_panoramas(plan.panoramas);
             if let Some(n) = encoders {
                 frames.set_encoders(n);

@@ -347,7 +347,7 @@ fn a_lost_surface_ends_the_viewer_cleanly() {
 }
 
 /// A slow frame holds nothing but itself. The third frame is held on the GPU
-/// (`SPECCHIO_FAULT_HOLD_FRAME`, engine/src/vk/fault.rs: its submission waits for a semaphore
+/// (`SPECCHIO_FAULT_HOLD_FRAME`, vk/src/fault.rs: its submission waits for a semaphore
 /// the viewer signals only once its loop has ended), and meanwhile keys are answered: `e`
 /// (the refresh policy), `x` (the lookup), `m` (a method switch, which makes a renderer: put
 /// off until the GPU is free, which it never is before the loop ends) and `q`. Before the present thread, the loop waited in
@@ -453,7 +453,7 @@ fn the_window_is_drawn_while_a_frame_is_held_on_the_gpu() {
     );
 }
 
-/// The device lost mid-run (provoked: `SPECCHIO_FAULT_DEVICE_LOST`, engine/src/vk/fault.rs,
+/// The device lost mid-run (provoked: `SPECCHIO_FAULT_DEVICE_LOST`, vk/src/fault.rs,
 /// since no CPU driver loses its device on demand) ends the viewer with a message saying so
 /// and exit status 1: no panic, and no validation message from the teardown.
 #[test]

@@ -17,7 +17,7 @@ use std::process::{Command, Stdio};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::render::dataset::choose_lookup;
+use crate::render::dataset::{choose_lookup, gpu_failed};
 use crate::render::methods::Method;
 use crate::scene::{Lookup, Scene};
 use crate::sensor::dataset::DatasetError;
@@ -112,10 +112,10 @@ pub fn device_for_sensor(
     asked: Option<Lookup>,
     scene: &Scene,
 ) -> Result<(Arc<Device>, DeviceInfo, Lookup), DatasetError> {
-    let chosen = crate::vk::device::choose(instance, selector)?;
+    let chosen = crate::vk::device::choose(instance, selector).map_err(gpu_failed)?;
     let lookup = choose_lookup(asked, scene, &chosen)?;
     let features = crate::render::lookups::features(lookup);
-    let device = device_for(instance, selector, &[], features)?;
+    let device = device_for(instance, selector, &[], features).map_err(gpu_failed)?;
     Ok((device, chosen, lookup))
 }
 

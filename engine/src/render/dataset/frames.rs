@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::{Arc, Mutex};
 
-use super::{place_robot, robot_scene};
+use super::{gpu_failed, place_robot, robot_scene};
 use crate::output::{MemoryFiles, OutputError, Sink};
 use crate::render::{lookups, Readback, RenderOptions, Renderer};
 use crate::scene::{Lookup, Scene};
@@ -124,7 +124,8 @@ impl FrameWriter {
             rays: true,
             ..Default::default()
         };
-        let (_, images) = r.render_frame(frame as u64, pose.time_s, readback)?;
+        let (_, images) =
+            (r.render_frame(frame as u64, pose.time_s, readback)).map_err(gpu_failed)?;
         let missing = || DatasetError::NotReadBack { frame };
         let origin = images.sensor_ray_origin.as_ref().ok_or_else(missing)?;
         let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;

@@ -31,11 +31,10 @@ use crate::vk::GpuError;
 #[cfg(doc)]
 use crate::sensor::dataset::Frame;
 
-/// A GPU's error, as a dataset's: the core, which holds [`DatasetError`], knows no GPU.
-impl From<GpuError> for DatasetError {
-    fn from(e: GpuError) -> Self {
-        DatasetError::Gpu(Box::new(e))
-    }
+/// A GPU's error, as a dataset's: the core, which holds [`DatasetError`], knows no GPU, and
+/// the Vulkan layer, which holds [`GpuError`], knows no dataset (`.map_err(gpu_failed)`).
+pub fn gpu_failed(e: GpuError) -> DatasetError {
+    DatasetError::Gpu(Box::new(e))
 }
 
 /// The device as a run key names it: its name and driver, since another driver may round
