@@ -136,12 +136,14 @@ pub(super) enum Barrier {
 }
 
 /// One subresource's (or a buffer's) state: its layout, every access since its last barrier,
-/// and whether one of them wrote.
+/// whether one of them wrote, and what that barrier made visible (its destination: a layout
+/// transition is a write, seen only by the stages and accesses it was made for).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct State {
     layout: vk::ImageLayout,
     since: Sync,
     written: bool,
+    visible: Sync,
 }
 
 impl State {
@@ -150,15 +152,31 @@ impl State {
             layout: rest.layout(),
             since: rest.sync(),
             written: rest.writes(),
+            visible: rest.sync(),
         }
     }
 
-    /// Nothing has used it: its contents are undefined.
-    const FRESH: State = State {
-        layout: vk::ImageLayout::UNDEFINED,
-        since: NOTHING,
-        written: false,
-    };
+    /// Nothing this renderer drew is in it: its contents are undefined (before the cube's
+    /// first fill). Its first barrier still waits for the resting use's stages, in case an
+    /// earlier frame used it that way (a cube whose contents were given up, after a floor).
+    fn fresh(rest: Use) -> Self {
+        Self {
+            layout: vk::ImageLayout::UNDEFINED,
+            since: rest.sync(),
+            written: false,
+            visible: NOTHING,
+        }
+    }
+
+    /// Still as imported fresh: not used this frame.
+    fn is_fresh(&self) -> bool {
+        self.layout == vk::ImageLayout::UNDEFINED && self.visible == NOTHING
+    }
+}
+
+/// Whether every stage and access of `of` is in `within`.
+fn covered(of: Sync, within: Sync) -> bool {
+    within.0.contains(of.0) && within.1.contains(of.1)
 }
 
 /// A tracked resource: what it is (for an image, all of it), how it rests, and a state per
@@ -188,7 +206,7 @@ impl FrameGraph {
             Resource::Buffer(_) => 1,
         };
         let state = if fresh {
-            State::FRESH
+            State::fresh(rest)
         } else {
             State::resting(rest)
         };
@@ -222,7 +240,7 @@ impl FrameGraph {
             let rest = State::resting(t.rest);
             // A subresource still fresh was not used: the next frame imports it fresh too.
             let moved: Vec<usize> = (0..t.states.len())
-                .filter(|&i| t.states[i] != State::FRESH)
+                .filter(|&i| !t.states[i].is_fresh())
                 .filter(|&i| (t.states[i].layout, t.states[i].since) != (rest.layout, rest.since))
                 .collect();
             barriers.extend(t.transition_each(&moved, t.rest));
@@ -282,12 +300,15 @@ impl Tracked {
 
 /// One subresource's step to `to`: the barrier's source side (old layout, stages and
 /// accesses) if it needs one, and its state after. Reads in the layout they need after no
-/// write need none; after the host's own use a buffer needs none either (the host used it
+/// write need none, if the last barrier made the subresource visible to them (a read at
+/// another stage than the layout transition was made for needs one: a blit source then a copy
+/// source); after the host's own use a buffer needs none either (the host used it
 /// before the frame's submission, which orders everything the host did before it); anything
 /// else waits for every access since the last barrier.
 fn step(state: &mut State, to: Use, is_buffer: bool) -> Option<(vk::ImageLayout, Sync)> {
     let same_layout = state.layout == to.layout();
-    if same_layout && !state.written && !to.writes() {
+    let seen = covered(to.sync(), state.visible);
+    if same_layout && !state.written && !to.writes() && seen {
         state.since = (state.since.0 | to.sync().0, state.since.1 | to.sync().1);
         return None;
     }

@@ -203,8 +203,9 @@ fn the_mip_chain_of_two_dirty_faces_gets_the_hand_placed_barriers() {
     assert_eq!(graph.finish(), []);
 }
 
-/// Before its first fill the cube's contents are undefined: the fill's barrier says so, and
-/// a fresh image a frame leaves unused is left as it is.
+/// Before its first fill the cube's contents are undefined: the fill's barrier says so (and
+/// still waits for the fragment shaders' reads, as a cube given up after a floor was sampled
+/// by earlier frames), and a fresh image a frame leaves unused is left as it is.
 #[test]
 fn a_fresh_image_starts_undefined_and_is_left_alone_unused() {
     let (cube, ids) = (levels_of(6, [0, 1], [0, 6]), levels_of(7, [0, 1], [0, 6]));
@@ -215,7 +216,7 @@ fn a_fresh_image_starts_undefined_and_is_left_alone_unused() {
         graph.uses(&[(cube, Use::ColorKept)]),
         [image_barrier(
             cube,
-            (vk::ImageLayout::UNDEFINED, NOTHING),
+            (vk::ImageLayout::UNDEFINED, SAMPLED),
             (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, COLOR_OUT)
         )]
     );
@@ -275,4 +276,23 @@ fn merged_ranges_cover_exactly_the_subresources_given() {
             (range([3, 1], [0, 1]), a),
         ]
     );
+}
+
+/// A layout transition is made visible to the stages it was made for only: a copy after a
+/// blit source, in the same layout, still needs a barrier (as does putting it back at rest),
+/// where a second read at the same stage needs none.
+#[test]
+fn a_read_at_another_stage_waits_for_the_layout_transition() {
+    let level = levels_of(8, [0, 1], [0, 1]);
+    let mut graph = FrameGraph::default();
+    graph.import(level, Use::FragmentRead, false);
+    let src = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+    assert_eq!(graph.uses(&[(level, Use::BlitSource)]).len(), 1);
+    assert_eq!(graph.uses(&[(level, Use::BlitSource)]), []);
+    assert_eq!(
+        graph.uses(&[(level, Use::CopySource)]),
+        [image_barrier(level, (src, BLIT_READ), (src, COPY_READ))]
+    );
+    assert_eq!(graph.uses(&[(level, Use::CopySource)]), []);
+    assert_eq!(graph.finish().len(), 1, "back to sampling");
 }
