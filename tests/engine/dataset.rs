@@ -200,6 +200,9 @@ fn panoramas_turn_with_the_robot_unless_the_world_frame_is_asked_for() {
     eprintln!("robot frame: {turned} shifted a quarter, {unturned} not; world frame: {world}");
     // The sensor image turns exactly (the disc is centred on the pixel grid): the panoramas
     // agree to the rounding of the sample positions, against a room of different colours.
+    // Measured 1.9e-7 over 470,592 pixels on lavapipe, this test's default device; on another
+    // device the turned camera's rounding may move a few mirror-edge pixels, which the bound
+    // allows (about 90 of them, each off by 0.5).
     assert!(
         turned < 1e-4,
         "the turned robot's panorama, shifted back: {turned}"
