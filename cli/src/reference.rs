@@ -65,7 +65,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         };
         write_images(&out, &args.out, name, &images)?;
         if name == "sensor" && args.sensor_outputs {
-            SensorOutputs::from_reference(&scene, args.time, &images).write(&out, &args.out)?;
+            let mut outputs = SensorOutputs::from_reference(&scene, args.time, &images);
+            outputs.expose(&scene, 0);
+            outputs.write(&out, &args.out)?;
         }
         specchio::say!(
             "{name}: {w}x{h}, {} spp, {} rays in {:.0} ms ({:.2} M rays/s), {} mirror pixels, {} misses",

@@ -329,7 +329,7 @@ fn render_frames(
         };
         write_frame(out, &frame_dir, &images)?;
         if args.sensor_outputs {
-            write_sensor_outputs(out, &frame_dir, renderer, t, images)?;
+            write_sensor_outputs(out, &frame_dir, renderer, (i as u64, t), images)?;
         }
         reports.push(report);
         if let Some(p) = &progress {
@@ -398,7 +398,7 @@ fn write_sensor_outputs(
     out: &Transaction,
     dir: &Path,
     renderer: &Renderer,
-    t_s: f64,
+    (frame, t_s): (u64, f64),
     images: FrameImages,
 ) -> Result<()> {
     let missing = || anyhow::anyhow!("the frame's sensor ray map was not read back (a bug)");
@@ -406,7 +406,7 @@ fn write_sensor_outputs(
     let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;
     let sensor = images.sensor.clone().ok_or_else(missing)?;
     let lookup = renderer.scene.mirror.lookup.to_string();
-    let outputs = SensorOutputs::from_gpu(
+    let mut outputs = SensorOutputs::from_gpu(
         &renderer.scene,
         t_s,
         (&lookup, renderer.sensor_ground_truth()),
@@ -414,6 +414,7 @@ fn write_sensor_outputs(
         (origin, direction),
         images.cube,
     );
+    outputs.expose(&renderer.scene, frame);
     outputs.write(out, dir)?;
     Ok(())
 }

@@ -11,6 +11,7 @@
 //! | `range` | (H, W) | float32 | metres along the ray to what it meets (0 off the mirror) |
 //! | `ids` | (H, W) | uint32 | what it meets: walls 0..5, object i at 6 + i, 2³² − 1 none |
 //! | `classes` | (H, W) | uint32 | the class of what it meets (`sensor.id.json`'s `classes`), 2³² − 1 none |
+//! | `camera` | (H, W, 3) | uint16 | only where the scene has `[sensor.imaging]`: the camera's codes (0..2^bit_depth), noise and all |
 
 use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -24,6 +25,7 @@ use crate::errors;
 pub enum Data {
     F32(Vec<f32>),
     U32(Vec<u32>),
+    U16(Vec<u16>),
     Bool(Vec<bool>),
 }
 
@@ -32,6 +34,7 @@ impl Data {
         match self {
             Data::F32(_) => "float32",
             Data::U32(_) => "uint32",
+            Data::U16(_) => "uint16",
             Data::Bool(_) => "bool",
         }
     }
@@ -39,6 +42,7 @@ impl Data {
     fn sample_bytes(&self) -> usize {
         match self {
             Data::F32(_) | Data::U32(_) => 4,
+            Data::U16(_) => 2,
             Data::Bool(_) => 1,
         }
     }
@@ -70,7 +74,8 @@ impl Layers {
             .collect();
         let mask = rays.iter().map(Option::is_some).collect();
         let classes = o.class_ids();
-        Layers(vec![
+        let camera = (o.camera).map(|c| ("camera", Data::U16(c.dn), [h, w, 3]));
+        let mut layers = vec![
             ("sensor", Data::F32(rgb(&o.image)), [h, w, 3]),
             ("observer", Data::F32(rgb(observer)), [oh, ow, 3]),
             ("ray_origin", Data::F32(origin), [h, w, 3]),
@@ -79,7 +84,9 @@ impl Layers {
             ("range", Data::F32(o.range), [h, w, 0]),
             ("ids", Data::U32(o.ids), [h, w, 0]),
             ("classes", Data::U32(classes), [h, w, 0]),
-        ])
+        ];
+        layers.extend(camera);
+        Layers(layers)
     }
 }
 
@@ -101,6 +108,7 @@ pub fn frame_dict<'py>(py: Python<'py>, layers: Layers) -> PyResult<Bound<'py, P
         let array = match data {
             Data::F32(v) => PyArray1::from_vec(py, v).reshape(s)?.into_any(),
             Data::U32(v) => PyArray1::from_vec(py, v).reshape(s)?.into_any(),
+            Data::U16(v) => PyArray1::from_vec(py, v).reshape(s)?.into_any(),
             Data::Bool(v) => PyArray1::from_vec(py, v).reshape(s)?.into_any(),
         };
         dict.set_item(key, array)?;
@@ -131,6 +139,7 @@ pub fn batch_dict<'py>(
         let array = match (given, data) {
             (Some(a), Data::F32(_)) => checked::<f32>(key, a, &s, "float32")?,
             (Some(a), Data::U32(_)) => checked::<u32>(key, a, &s, "uint32")?,
+            (Some(a), Data::U16(_)) => checked::<u16>(key, a, &s, "uint16")?,
             (Some(a), Data::Bool(_)) => checked::<bool>(key, a, &s, "bool")?,
             // Through numpy itself: an allocation it cannot make is its MemoryError.
             (None, data) => numpy.call_method1("zeros", (s, data.dtype()))?,
@@ -218,6 +227,7 @@ pub fn fill(dict: &Bound<'_, PyDict>, b: usize, layers: Layers) -> PyResult<()> 
         match data {
             Data::F32(v) => copy_into(&array, b, &v)?,
             Data::U32(v) => copy_into(&array, b, &v)?,
+            Data::U16(v) => copy_into(&array, b, &v)?,
             Data::Bool(v) => copy_into(&array, b, &v)?,
         }
     }

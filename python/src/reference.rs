@@ -58,7 +58,8 @@ pub fn reference<'py>(
         let (observer, _) = reference.render(&reference.observer_view(), ow, oh, spp);
         let [sw, sh] = traced.sensor.resolution;
         let (sensor, _) = reference.render(&reference.sensor_view(), sw, sh, spp);
-        let outputs = SensorOutputs::from_reference(&traced, time, &sensor);
+        let mut outputs = SensorOutputs::from_reference(&traced, time, &sensor);
+        outputs.expose(&traced, 0);
         Layers::new(outputs, &observer.color)
     });
     arrays::frame_dict(py, layers)

@@ -41,6 +41,29 @@ pub fn encode_rgb8(
     writer.finish()
 }
 
+/// An RGB PNG of a camera's codes: `samples` 8- or 16-bit (big-endian, 3 per pixel, rows top
+/// to bottom), of which the top `significant` bits carry the code (an `sBIT` chunk says so,
+/// so that a reader can shift them back). No colour space is claimed: the codes are the
+/// camera's, through whatever response curve it has.
+pub fn encode_rgb_samples(
+    to: impl Write,
+    (width, height): (u32, u32),
+    samples: &[u8],
+    (sample_bits, significant): (u8, u8),
+) -> Result<(), EncodingError> {
+    let mut encoder = ::png::Encoder::new(to, width, height);
+    encoder.set_color(::png::ColorType::Rgb);
+    encoder.set_depth(match sample_bits {
+        8 => ::png::BitDepth::Eight,
+        _ => ::png::BitDepth::Sixteen,
+    });
+    let mut writer = encoder.write_header()?;
+    // sBIT comes before the image data (PNG 1.2, 4.2.6): one byte per colour channel.
+    writer.write_chunk(::png::chunk::sBIT, &[significant; 3])?;
+    writer.write_image_data(samples)?;
+    writer.finish()
+}
+
 /// A PNG of any colour type and bit depth decoded to 8-bit RGBA, rows top to bottom, colour as
 /// stored (sRGB-encoded): palette and grayscale expanded, 16-bit channels reduced to 8 bits,
 /// missing alpha 255. Each side must be in 1..=`max_side`, checked from the header before any

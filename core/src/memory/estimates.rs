@@ -30,6 +30,10 @@ const RENDER_CUBE_TEXEL_BYTES: u64 = 44;
 /// panoramas (294 measured), and their fixed part.
 const RENDER_SENSOR_OUTPUT_PIXEL_BYTES: u64 = 330;
 const RENDER_SENSOR_OUTPUT_BASE_BYTES: u64 = 32 * MIB;
+/// A sensor pixel's camera image (`[sensor.imaging]`), counted from the code rather than
+/// measured: the light, three f32 (two copies while the blur runs), the codes, three u16,
+/// and the PNG's samples and bytes, six each at most: 36 at the peak.
+const CAMERA_IMAGE_PIXEL_BYTES: u64 = 36;
 /// A triangle of one pass over the scene: vertex and index buffers, meshlets, per-object
 /// data (heavy: about 188 measured).
 const RENDER_TRIANGLE_BYTES: u64 = 210;
@@ -144,8 +148,21 @@ fn render_estimate(scene: &Scene, face_size_px: u32, directions: bool, frames: u
                 "the sensor outputs' fixed part",
                 RENDER_SENSOR_OUTPUT_BASE_BYTES,
             );
+        camera_image(&mut e, scene, frames);
     }
     e
+}
+
+/// `frames` frames' camera images, where the scene has an imaging chain.
+fn camera_image(e: &mut Estimate, scene: &Scene, frames: u64) {
+    if scene.sensor.imaging.is_some() {
+        let sensor = pixels(scene.sensor.resolution);
+        e.add_many(
+            "the camera image",
+            frames * sensor,
+            CAMERA_IMAGE_PIXEL_BYTES,
+        );
+    }
 }
 
 /// `specchio reference`.
@@ -166,6 +183,7 @@ pub fn reference(scene: &Scene, sensor_outputs: bool) -> Result<(), MemoryError>
             "the sensor outputs' fixed part",
             REFERENCE_SENSOR_OUTPUT_BASE_BYTES,
         );
+        camera_image(&mut e, scene, 1);
     }
     e.check(
         &Budget::from_env()?,

@@ -266,6 +266,27 @@ pub struct SensorSpec {
     pub resolution: Option<[i64; 2]>,
     #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub up: Option<V3>,
+    pub imaging: Option<ImagingSpec>,
+}
+
+/// `[sensor.imaging]`: every field optional (the default camera's value).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ImagingSpec {
+    pub exposure_s: Option<f64>,
+    pub gain_db: Option<f64>,
+    pub unit_flux_e_per_s: Option<f64>,
+    pub full_well_e: Option<f64>,
+    pub read_noise_e: Option<f64>,
+    pub dark_current_e_per_s: Option<f64>,
+    pub system_gain_dn_per_e: Option<f64>,
+    pub bit_depth: Option<i64>,
+    pub response: Option<String>,
+    pub gamma: Option<f64>,
+    pub response_table: Option<Vec<f64>>,
+    pub vignetting: Option<f64>,
+    pub blur_px: Option<f64>,
+    pub seed: Option<i64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -22,6 +22,7 @@ mod error;
 mod fixed;
 mod format;
 pub(crate) mod generate;
+pub mod imaging;
 mod load;
 mod mesh;
 pub mod state;
@@ -287,6 +288,9 @@ pub struct SensorCamera {
     /// The robot's heading (radians about +Y): turns the image's up, the shift and the tilt
     /// with it. 0 from the scene file; the localisation turns the robot.
     pub heading_rad: f32,
+    /// The camera's imaging chain (`[sensor.imaging]`): where the scene gives one, a noisy
+    /// camera image is made beside the clean one.
+    pub imaging: Option<imaging::Imaging>,
 }
 
 impl SensorCamera {

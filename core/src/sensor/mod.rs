@@ -12,6 +12,7 @@ pub mod dataset;
 pub mod files;
 pub mod ground_truth;
 pub mod id_map;
+pub mod imaging;
 pub mod localise;
 pub mod optics;
 pub mod outputs;

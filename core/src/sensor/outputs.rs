@@ -10,6 +10,7 @@ use serde::Serialize;
 use super::files::Samples;
 use super::ground_truth::{GroundTruth, GroundTruthRecord};
 pub use super::id_map::{IdMap, NO_ID};
+use super::imaging::{self, CameraImage, ImagingRecord, CAMERA_IMAGE_FILE};
 use super::optics::SensorOptics;
 use super::panorama::{PanoramaKind, PanoramaLayout};
 use super::ray_map::{PixelRay, RayMap};
@@ -69,6 +70,10 @@ pub struct SensorOutputs {
     /// frame) unless a robot's frame puts its forward axis there (a dataset's frames:
     /// [`PanoramaFrame::seam`](super::panorama::PanoramaFrame::seam)).
     pub panorama_seam_rad: f64,
+    /// The image as the scene's camera reports it (`[sensor.imaging]`: noise, exposure,
+    /// response, lens), beside the clean `image`; None until [`Self::expose`], and where the
+    /// scene has no imaging chain.
+    pub camera: Option<CameraImage>,
 }
 
 impl SensorOutputs {
@@ -112,6 +117,7 @@ impl SensorOutputs {
             image: images.color.clone(),
             cube: None,
             panorama_seam_rad: 0.0,
+            camera: None,
         }
     }
 
@@ -175,6 +181,7 @@ impl SensorOutputs {
             image,
             cube,
             panorama_seam_rad: 0.0,
+            camera: None,
         }
     }
 
@@ -182,6 +189,13 @@ impl SensorOutputs {
     /// class layer beside the ids.
     pub fn class_ids(&self) -> Vec<u32> {
         self.id_map.classes_of(&self.ids)
+    }
+
+    /// Makes the camera image of the scene's `[sensor.imaging]` as frame `frame` (its noise
+    /// drawn from the scene's seed and this number); nothing where the scene has none.
+    pub fn expose(&mut self, scene: &Scene, frame: u64) {
+        self.camera = (scene.sensor.imaging.as_ref())
+            .map(|chain| imaging::expose(chain, &self.image, &self.optics, frame));
     }
 
     /// The panoramas from the sensor image, and from the cube where there is one.
@@ -248,6 +262,13 @@ impl SensorOutputs {
             ("class", Samples::U32(self.class_ids())),
         ];
         out.write_channels(&dir.join(ID_FILE), (w, h), ids)?;
+        if let Some(camera) = &self.camera {
+            let path = dir.join(CAMERA_IMAGE_FILE);
+            let png = camera
+                .png()
+                .map_err(|e| crate::output::png_error(&path, e))?;
+            out.write_bytes(&path, &png)?;
+        }
         out.write_json(&dir.join(ID_MAP_FILE), &self.id_map)
     }
 
@@ -294,6 +315,7 @@ impl SensorOutputs {
                 rim_angle_deg: o.rim_angle().map(f64::to_degrees),
                 max_elevation_deg: o.max_elevation().to_degrees(),
             },
+            imaging: self.camera.as_ref().map(CameraImage::record),
             files: FilesRecord {
                 rays: RAYS_FILE,
                 ray_channels: RAY_CHANNELS,
@@ -321,6 +343,9 @@ pub struct CameraRecord {
     pub sensor: SensorRecord,
     pub mirror: MirrorRecord,
     pub disc: DiscRecord,
+    /// The camera image's file and the chain that made it; absent without one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub imaging: Option<ImagingRecord>,
     pub files: FilesRecord,
 }
 

@@ -13,6 +13,7 @@ mod cameras;
 mod clearance;
 mod cube;
 mod generators;
+mod imaging;
 mod locate;
 mod materials;
 mod mirror_shape;

@@ -24,6 +24,7 @@ const EMPTY: SensorSpec = SensorSpec {
     fov_y: None,
     resolution: None,
     up: None,
+    imaging: None,
 };
 
 impl Ctx<'_> {
@@ -49,6 +50,7 @@ impl Ctx<'_> {
             tilt_deg,
             orthographic_half_m,
             heading_rad: 0.0,
+            imaging: s.imaging.as_ref().map(|i| self.imaging(i)).transpose()?,
         };
         self.sensor_placed(&camera, s, room, mirror)?;
         self.rim_stays_in_image(&camera, s, mirror)?;

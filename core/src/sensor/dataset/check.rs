@@ -2,7 +2,7 @@
 //! worker through the Python driver, from a resumed run's journal.
 
 use super::Frame;
-use crate::sensor::dataset::{frame_folder, FRAME_FILES};
+use crate::sensor::dataset::{frame_folder, FRAME_FILES, OPTIONAL_FRAME_FILES};
 
 /// A frame as a frame folder holds it: every file in its own folder, with a frame file's
 /// name, none twice, every fixed one there; its index line its own.
@@ -26,13 +26,14 @@ pub fn check_frame(frame: &Frame) -> Result<(), String> {
     check_index_line(frame.frame, &frame.index_line)
 }
 
-/// Frame `frame`'s file names: each a frame file's ([`FRAME_FILES`]), none twice, every
-/// fixed one there.
+/// Frame `frame`'s file names: each a frame file's ([`FRAME_FILES`], or one of
+/// [`OPTIONAL_FRAME_FILES`]), none twice, every fixed one of [`FRAME_FILES`] there.
 pub fn check_frame_names(frame: usize, names: &[&str]) -> Result<(), String> {
     if let Some(odd) = names.iter().find(|n| !is_frame_file(n)) {
         return Err(format!(
-            "frame {frame}: {odd} is not a frame file ({})",
-            FRAME_FILES.join(", ")
+            "frame {frame}: {odd} is not a frame file ({}, and where the scene asks for it {})",
+            FRAME_FILES.join(", "),
+            OPTIONAL_FRAME_FILES.join(", ")
         ));
     }
     let mut sorted = names.to_vec();
@@ -47,18 +48,20 @@ pub fn check_frame_names(frame: usize, names: &[&str]) -> Result<(), String> {
     }
 }
 
-/// A frame file's name: one of [`FRAME_FILES`] (`*` standing for any plain suffix).
+/// A frame file's name: one of [`FRAME_FILES`] (`*` standing for any plain suffix) or of
+/// [`OPTIONAL_FRAME_FILES`].
 pub fn is_frame_file(name: &str) -> bool {
-    FRAME_FILES.iter().any(|f| match f.split_once('*') {
-        None => *f == name,
-        Some((head, _)) => {
-            name.len() > head.len()
-                && name.starts_with(head)
-                && !name.contains(['/', '\\'])
-                && name != "."
-                && name != ".."
-        }
-    })
+    OPTIONAL_FRAME_FILES.contains(&name)
+        || FRAME_FILES.iter().any(|f| match f.split_once('*') {
+            None => *f == name,
+            Some((head, _)) => {
+                name.len() > head.len()
+                    && name.starts_with(head)
+                    && !name.contains(['/', '\\'])
+                    && name != "."
+                    && name != ".."
+            }
+        })
 }
 
 /// Frame `frame`'s index line: one JSON object on one line, naming the frame and its folder.

@@ -236,7 +236,9 @@ pub struct DatasetRecord {
     /// Whose frame the panoramas' columns are in: the robot's (its forward axis at the left
     /// edge) or the scene's (`camera.json` gives each panorama's seam azimuth).
     pub panorama_frame: super::panorama::PanoramaFrame,
-    pub frame_files: [&'static str; 10],
+    /// What every frame folder holds: [`FRAME_FILES`], and [`OPTIONAL_FRAME_FILES`]' camera
+    /// image where the scene has `[sensor.imaging]`.
+    pub frame_files: Vec<&'static str>,
 }
 
 /// What every frame folder holds.
@@ -252,6 +254,16 @@ pub const FRAME_FILES: [&str; 10] = [
     "points.ply",
     "sensor.panorama.*",
 ];
+
+/// What a frame folder holds besides [`FRAME_FILES`] where the scene asks for it: the
+/// camera image of its `[sensor.imaging]`.
+pub const OPTIONAL_FRAME_FILES: [&str; 1] = [super::imaging::CAMERA_IMAGE_FILE];
+
+/// The files of every frame of a dataset whose scene has (`imaging`) an imaging chain or not.
+pub fn frame_files(imaging: bool) -> Vec<&'static str> {
+    let optional = OPTIONAL_FRAME_FILES.into_iter().filter(|_| imaging);
+    FRAME_FILES.into_iter().chain(optional).collect()
+}
 
 /// The rows of [`rep103::SCENE_TO_ROS`].
 pub fn scene_to_ros_rows() -> [[f64; 3]; 3] {

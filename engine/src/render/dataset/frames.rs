@@ -140,6 +140,7 @@ impl FrameWriter {
             None,
         );
         outputs.panorama_seam_rad = self.panoramas.seam(pose.heading_deg.to_radians());
+        outputs.expose(&r.scene, frame as u64);
         Ok((outputs, images.observer))
     }
 

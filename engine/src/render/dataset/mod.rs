@@ -189,7 +189,7 @@ impl Plan {
             scene_origin_m: self.scene.origin.to_array(),
             scene_to_ros: sensor_dataset::scene_to_ros_rows(),
             panorama_frame: self.panoramas,
-            frame_files: sensor_dataset::FRAME_FILES,
+            frame_files: sensor_dataset::frame_files(self.scene.sensor.imaging.is_some()),
         }
     }
 }

@@ -9,6 +9,7 @@ use super::*;
 use crate::scene::{CubeFormat, RefreshPolicy};
 
 mod bad_files;
+mod imaging;
 mod mirror_shapes;
 mod rules;
 mod scenes;

@@ -67,7 +67,7 @@ fn record(frames: usize) -> DatasetRecord {
         scene_origin_m: [0.0; 3],
         scene_to_ros: [[0.0; 3]; 3],
         panorama_frame: crate::sensor::panorama::PanoramaFrame::Robot,
-        frame_files: FRAME_FILES,
+        frame_files: FRAME_FILES.to_vec(),
     }
 }
 

@@ -1,0 +1,220 @@
+//! The sensor camera's image as a real camera reports it: the clean rendered image (linear,
+//! relative units) through a lens (blur, vignetting) onto a pixel that collects charge with
+//! shot noise, adds dark current and read noise, saturates at its full well, and is digitised
+//! through a response curve at the ADC's bit depth (EMVA 1288's linear camera model, per
+//! colour channel: a three-chip camera, no mosaic). The scene's `[sensor.imaging]` sets the
+//! numbers ([`Imaging`]); the ground-truth layers stay clean.
+//!
+//! Every draw of a frame comes from the seed and the frame's number, one stream per row, so a
+//! frame is the same bytes on any machine and with any number of threads.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::optics::SensorOptics;
+use crate::image::RgbaImage;
+use crate::random::SplitMix64;
+pub use crate::scene::imaging::{Imaging, Response};
+
+pub mod draw;
+mod lens;
+#[cfg(test)]
+mod tests;
+
+/// The camera image's file: RGB PNG, 8-bit for a bit depth of 8, 16-bit above, each code
+/// shifted to the top of its sample (`sBIT` says how many bits are significant).
+pub const CAMERA_IMAGE_FILE: &str = "sensor.camera.png";
+
+/// The charge a pixel's mean is capped at before its shot noise is drawn (e⁻): a hundred
+/// times the largest full well the loader accepts, so a capped pixel saturates whatever it
+/// draws, and an unbounded rendered value (an HDR highlight) costs no more than any other.
+const MEAN_CAP_E: f64 = 1e9;
+
+/// A frame's image as the camera reports it: digital numbers, RGB, rows top to bottom.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraImage {
+    pub width: u32,
+    pub height: u32,
+    /// 3 per pixel, each in 0..2^bit_depth.
+    pub dn: Vec<u16>,
+    /// The chain that made it.
+    pub imaging: Imaging,
+    /// The frame number its draws came from (with the seed).
+    pub frame: u64,
+}
+
+/// What `camera.json` says of the camera image: its file, the chain's numbers and the draws.
+#[derive(Debug, Clone, Serialize)]
+pub struct ImagingRecord {
+    pub file: &'static str,
+    /// How a sample of the file becomes the camera's code.
+    pub code: String,
+    pub exposure_s: f32,
+    pub gain_db: f32,
+    pub unit_flux_e_per_s: f32,
+    pub full_well_e: f32,
+    pub read_noise_e: f32,
+    pub dark_current_e_per_s: f32,
+    pub system_gain_dn_per_e: f32,
+    pub bit_depth: u32,
+    pub response: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gamma: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub response_table: Option<Vec<f32>>,
+    pub vignetting: f32,
+    pub blur_px: f32,
+    pub seed: u64,
+    pub frame: u64,
+}
+
+impl CameraImage {
+    /// The PNG's samples: each code shifted to the top of its 8- or 16-bit sample.
+    pub fn samples(&self) -> (Vec<u8>, u8) {
+        let (sample_bits, shift) = match self.imaging.bit_depth {
+            8 => (8, 0),
+            b => (16, 16 - b),
+        };
+        let bytes = match sample_bits {
+            8 => self.dn.iter().map(|&d| d as u8).collect(),
+            _ => (self.dn.iter())
+                .flat_map(|&d| (d << shift).to_be_bytes())
+                .collect(),
+        };
+        (bytes, sample_bits)
+    }
+
+    /// The image as [`CAMERA_IMAGE_FILE`]'s PNG.
+    pub fn png(&self) -> Result<Vec<u8>, crate::image::png::EncodingError> {
+        let (samples, bits) = self.samples();
+        let mut bytes = Vec::new();
+        let size = (self.width, self.height);
+        let depth = (bits, self.imaging.bit_depth as u8);
+        crate::image::png::encode_rgb_samples(&mut bytes, size, &samples, depth)?;
+        Ok(bytes)
+    }
+
+    pub fn record(&self) -> ImagingRecord {
+        let imaging = &self.imaging;
+        let shift = match imaging.bit_depth {
+            8 => 0,
+            b => 16 - b,
+        };
+        ImagingRecord {
+            file: CAMERA_IMAGE_FILE,
+            code: match shift {
+                0 => "the sample itself".into(),
+                s => format!("the 16-bit sample shifted right by {s} bits"),
+            },
+            exposure_s: imaging.exposure_s,
+            gain_db: imaging.gain_db,
+            unit_flux_e_per_s: imaging.unit_flux_e_per_s,
+            full_well_e: imaging.full_well_e,
+            read_noise_e: imaging.read_noise_e,
+            dark_current_e_per_s: imaging.dark_current_e_per_s,
+            system_gain_dn_per_e: imaging.system_gain_dn_per_e,
+            bit_depth: imaging.bit_depth,
+            response: imaging.response.name(),
+            gamma: match imaging.response {
+                Response::Gamma(g) => Some(g),
+                _ => None,
+            },
+            response_table: match &imaging.response {
+                Response::Table(t) => Some(t.clone()),
+                _ => None,
+            },
+            vignetting: imaging.vignetting,
+            blur_px: imaging.blur_px,
+            seed: imaging.seed,
+            frame: self.frame,
+        }
+    }
+}
+
+/// The clean linear `image` of a sensor with `optics`, exposed, as frame `frame` reports it.
+pub fn expose(
+    imaging: &Imaging,
+    image: &RgbaImage,
+    optics: &SensorOptics,
+    frame: u64,
+) -> CameraImage {
+    let light = lens::light(imaging, image);
+    let fall_off = lens::fall_off(optics, f64::from(imaging.vignetting));
+    let w = image.width as usize;
+    let chain = Chain::new(imaging);
+    let mut dn = vec![0u16; light.len()];
+    (dn.par_chunks_mut(w * 3).enumerate()).for_each(|(y, row)| {
+        let mut rng = row_stream(imaging.seed, frame, y as u64);
+        let light = &light[y * w * 3..(y + 1) * w * 3];
+        let means = lens::mean_electrons(imaging, &fall_off, y, light);
+        for (out, mean) in row.iter_mut().zip(means) {
+            *out = chain.digitise(&mut rng, mean);
+        }
+    });
+    CameraImage {
+        width: image.width,
+        height: image.height,
+        dn,
+        imaging: imaging.clone(),
+        frame,
+    }
+}
+
+/// Row `row`'s random stream of frame `frame`: the three numbers hashed in turn, so no two
+/// (seed, frame, row) share a stream start.
+fn row_stream(seed: u64, frame: u64, row: u64) -> SplitMix64 {
+    let mut h = SplitMix64::new(seed).next_u64();
+    h = SplitMix64::new(h ^ frame).next_u64();
+    h = SplitMix64::new(h ^ row).next_u64();
+    SplitMix64::new(h)
+}
+
+/// The chain from a pixel's mean photo-charge to its code, its constants worked out once.
+struct Chain<'a> {
+    dark_e: f64,
+    read_noise_e: f64,
+    full_well_e: f64,
+    /// Digital numbers per electron, the analogue gain included.
+    gain: f64,
+    top: f64,
+    response: &'a Response,
+}
+
+impl<'a> Chain<'a> {
+    fn new(i: &'a Imaging) -> Self {
+        let gain_db = f64::from(i.gain_db);
+        Self {
+            dark_e: f64::from(i.dark_current_e_per_s) * f64::from(i.exposure_s),
+            read_noise_e: f64::from(i.read_noise_e),
+            full_well_e: f64::from(i.full_well_e),
+            gain: f64::from(i.system_gain_dn_per_e) * 10f64.powf(gain_db / 20.0),
+            top: f64::from((1u32 << i.bit_depth) - 1),
+            response: &i.response,
+        }
+    }
+
+    /// One sample: shot noise of the photo and dark charge, read noise, the full well, the
+    /// gain, the response, the nearest code.
+    fn digitise(&self, rng: &mut SplitMix64, photo_e: f64) -> u16 {
+        let mean = (photo_e + self.dark_e).min(MEAN_CAP_E);
+        let charge = draw::poisson(rng, mean) + self.read_noise_e * draw::normal(rng);
+        let charge = charge.clamp(0.0, self.full_well_e);
+        let x = (charge * self.gain / self.top).min(1.0);
+        (respond(self.response, x) * self.top).round() as u16
+    }
+}
+
+/// The response curve at `x` in [0, 1].
+fn respond(response: &Response, x: f64) -> f64 {
+    match response {
+        Response::Linear => x,
+        Response::Srgb => f64::from(crate::image::png::linear_to_srgb(x as f32)),
+        Response::Gamma(g) => x.powf(1.0 / f64::from(*g)),
+        Response::Table(t) => {
+            let at = x * (t.len() - 1) as f64;
+            let i = (at.floor() as usize).min(t.len() - 2);
+            let f = at - i as f64;
+            f64::from(t[i]) * (1.0 - f) + f64::from(t[i + 1]) * f
+        }
+    }
+}

@@ -1,0 +1,203 @@
+//! The camera model against its own definition: a flat field's mean and variance per level
+//! (the photon transfer curve), the lens's fall-off and blur, saturation, the response
+//! curves, and frames that are the same bytes however they are computed.
+
+use super::lens::{blur, fall_off};
+use super::*;
+use crate::scene::Scene;
+
+fn scene() -> Scene {
+    crate::scene::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/test/six-colour-room.toml"
+    )))
+    .unwrap()
+}
+
+fn optics(scene: &Scene) -> SensorOptics {
+    SensorOptics::at(scene, 0.0)
+}
+
+/// A flat field of linear value `v` the size of the scene's sensor image.
+fn flat(scene: &Scene, v: f32) -> RgbaImage {
+    let [width, height] = scene.sensor.resolution;
+    RgbaImage {
+        width,
+        height,
+        pixels: vec![[v, v, v, 1.0]; (width * height) as usize],
+    }
+}
+
+/// The camera without its lens: no vignetting, no blur.
+fn bare() -> Imaging {
+    Imaging {
+        vignetting: 0.0,
+        ..Imaging::default()
+    }
+}
+
+fn moments(dn: &[u16]) -> (f64, f64) {
+    let n = dn.len() as f64;
+    let mean = dn.iter().map(|&d| f64::from(d)).sum::<f64>() / n;
+    let var = dn
+        .iter()
+        .map(|&d| (f64::from(d) - mean).powi(2))
+        .sum::<f64>()
+        / (n - 1.0);
+    (mean, var)
+}
+
+#[test]
+fn a_flat_fields_mean_and_variance_follow_the_photon_transfer_curve() {
+    // EMVA 1288's linear model: mean μ = K (μe + μd), variance K² (μe + μd + σr²) + 1/12 (the
+    // quantisation's). Both within 5 standard errors of the sample (the mean's σ/√n, the
+    // variance's σ²·√(2/n)), at levels from 2 % of the full well to 90 %, with dark current
+    // and a gain to make them count.
+    let s = scene();
+    let o = optics(&s);
+    let imaging = Imaging {
+        dark_current_e_per_s: 2000.0,
+        gain_db: 6.0,
+        ..bare()
+    };
+    let k = f64::from(imaging.system_gain_dn_per_e) * 10f64.powf(6.0 / 20.0);
+    let t = f64::from(imaging.exposure_s);
+    let sigma_r = f64::from(imaging.read_noise_e);
+    for (i, level) in [0.02, 0.1, 0.25, 0.45].iter().enumerate() {
+        let image = flat(&s, *level as f32);
+        let got = expose(&imaging, &image, &o, i as u64);
+        let charge = level * f64::from(imaging.unit_flux_e_per_s) * t + 2000.0 * t;
+        let mean = k * charge;
+        let var = k * k * (charge + sigma_r * sigma_r) + 1.0 / 12.0;
+        let (m, v) = moments(&got.dn);
+        let n = got.dn.len() as f64;
+        assert!(
+            (m - mean).abs() < 5.0 * (var / n).sqrt(),
+            "level {level}: mean {m}, model {mean}"
+        );
+        assert!(
+            (v - var).abs() < 5.0 * var * (2.0 / n).sqrt(),
+            "level {level}: variance {v}, model {var}"
+        );
+    }
+}
+
+#[test]
+fn the_full_well_saturates_at_the_top_code_whatever_the_light() {
+    let s = scene();
+    for v in [2.0, 1e6, f32::INFINITY] {
+        let got = expose(&bare(), &flat(&s, v), &optics(&s), 0);
+        assert!(got.dn.iter().all(|&d| d == 4095), "{v}");
+    }
+    // Darkness, NaN included, is read noise about 0 (clipped there): small codes only.
+    let got = expose(&bare(), &flat(&s, f32::NAN), &optics(&s), 0);
+    assert!(got.dn.iter().all(|&d| d <= 6), "{:?}", got.dn.iter().max());
+}
+
+#[test]
+fn a_frame_is_the_same_bytes_for_its_seed_and_number_and_differs_for_others() {
+    let s = scene();
+    let (image, o) = (flat(&s, 0.3), optics(&s));
+    let a = expose(&bare(), &image, &o, 5);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let one_thread = pool.install(|| expose(&bare(), &image, &o, 5));
+    assert_eq!(a, one_thread);
+    assert_ne!(a.dn, expose(&bare(), &image, &o, 6).dn);
+    let seeded = Imaging { seed: 1, ..bare() };
+    assert_ne!(a.dn, expose(&seeded, &image, &o, 5).dn);
+}
+
+#[test]
+fn natural_vignetting_is_cos4_of_the_pixels_angle() {
+    let s = scene();
+    let o = optics(&s);
+    let (w, h) = (o.width as usize, o.height as usize);
+    let f = fall_off(&o, 1.0);
+    // The corner pixel's centre ray, from the field of view.
+    let u = (1.0 - 1.0 / w as f64) * f64::from(o.view.tan_x);
+    let t = (1.0 - 1.0 / h as f64) * f64::from(o.view.tan_y);
+    let theta = (u * u + t * t).sqrt().atan();
+    assert!((f(w - 1, h - 1) - theta.cos().powi(4)).abs() < 1e-12);
+    assert!(f(w / 2, h / 2) > 0.9999);
+    let half = fall_off(&o, 0.5);
+    assert!((half(0, 0) - (1.0 - 0.5 * (1.0 - theta.cos().powi(4)))).abs() < 1e-12);
+    assert_eq!(fall_off(&o, 0.0)(0, 0), 1.0);
+}
+
+#[test]
+fn the_lens_blur_keeps_the_light_and_spreads_a_point_by_its_sigma() {
+    let (w, h) = (41, 41);
+    let mut v = vec![0.0f32; w * h * 3];
+    v[(20 * w + 20) * 3 + 1] = 1.0;
+    let out = blur(v.clone(), (w, h), 2.0);
+    let green: Vec<f64> = (out.iter().skip(1).step_by(3))
+        .map(|&g| f64::from(g))
+        .collect();
+    let total: f64 = green.iter().sum();
+    assert!((total - 1.0).abs() < 1e-6);
+    // The second moment along x of a Gaussian truncated at 3σ: σ² less 1.1 %.
+    let var_x: f64 = (green.iter().enumerate())
+        .map(|(i, g)| g * ((i % w) as f64 - 20.0).powi(2))
+        .sum();
+    assert!((var_x - 4.0).abs() < 0.05 * 4.0, "{var_x}");
+    assert!(out.iter().step_by(3).all(|&r| r == 0.0));
+    assert_eq!(blur(v.clone(), (w, h), 0.0), v);
+}
+
+#[test]
+fn response_curves_map_their_ends_and_their_middle() {
+    let table = Response::Table(vec![0.0, 0.8, 1.0]);
+    // Halfway between the first two points (0.8 as stored, in f32).
+    assert_eq!(respond(&table, 0.25), 0.5 * f64::from(0.8f32));
+    assert_eq!(respond(&table, 1.0), 1.0);
+    assert!((respond(&Response::Gamma(2.0), 0.25) - 0.5).abs() < 1e-12);
+    assert!((respond(&Response::Srgb, 0.5) - 0.735_356_9).abs() < 1e-6);
+    assert_eq!(respond(&Response::Linear, 0.3), 0.3);
+}
+
+#[test]
+fn the_png_samples_carry_the_code_at_the_top_of_their_bits() {
+    let image = CameraImage {
+        width: 1,
+        height: 1,
+        dn: vec![4095, 1, 0],
+        imaging: Imaging::default(),
+        frame: 0,
+    };
+    let (bytes, bits) = image.samples();
+    assert_eq!(bits, 16);
+    assert_eq!(bytes, [0xFF, 0xF0, 0x00, 0x10, 0x00, 0x00]);
+    let eight = CameraImage {
+        imaging: Imaging {
+            bit_depth: 8,
+            ..Imaging::default()
+        },
+        dn: vec![255, 1, 0],
+        ..image
+    };
+    assert_eq!(eight.samples(), (vec![255, 1, 0], 8));
+}
+
+#[test]
+fn the_png_holds_the_codes_and_says_how_many_bits_count() {
+    let image = CameraImage {
+        width: 2,
+        height: 1,
+        dn: vec![4095, 1, 0, 7, 8, 2048],
+        imaging: Imaging::default(),
+        frame: 0,
+    };
+    let bytes = image.png().unwrap();
+    let decoder = ::png::Decoder::new(std::io::Cursor::new(bytes));
+    let mut reader = decoder.read_info().unwrap();
+    assert_eq!(reader.info().sbit.as_deref(), Some(&[12u8, 12, 12][..]));
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    reader.next_frame(&mut buf).unwrap();
+    let codes: Vec<u16> = (buf.chunks(2))
+        .map(|b| u16::from_be_bytes([b[0], b[1]]) >> 4)
+        .collect();
+    assert_eq!(codes, image.dn);
+}

@@ -1,0 +1,57 @@
+"""The camera image of a scene's [sensor.imaging] from Python: a `camera` layer of codes
+beside the clean `sensor` one, its noise what the camera model says (checked here from the
+model's definition, on pixels whose light is known), and new noise each frame."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import specchio
+from conftest import SCENES
+
+CAMERA = """
+[sensor.imaging]
+exposure_s = 0.005
+vignetting = 0
+seed = 3
+"""
+
+
+def camera_scene(tmp_path) -> specchio.Scene:
+    text = (SCENES / "test" / "six-colour-room.toml").read_text()
+    path = tmp_path / "camera-room.toml"
+    path.write_text(text + CAMERA)
+    return specchio.Scene(path)
+
+
+def test_the_camera_layer_is_the_models_noise_on_known_light(tmp_path):
+    with specchio.Renderer(camera_scene(tmp_path)) as r:
+        first, second = r.render(), r.render()
+        batch = r.render_batch(np.array([[0.0, 0.0, 0.0, 0.0]]), out={"camera": np.zeros((1, 512, 512, 3), np.uint16)})
+    camera = first["camera"]
+    assert camera.shape == (512, 512, 3) and camera.dtype == np.uint16
+    assert camera.max() <= 4095
+    # The same pose twice: the same clean image, new noise.
+    np.testing.assert_array_equal(first["sensor"], second["sensor"])
+    assert (first["camera"] != second["camera"]).mean() > 0.5
+    assert batch["camera"].any()
+    # Off the mirror the sensor camera sees the green ceiling of an unlit room: linear
+    # (0, 1, 0) exactly. Its green codes are the photon transfer curve's at one level:
+    # mean K (Φt + Dt), variance K² (Φt + Dt + σr²) + 1/12 (EMVA 1288's linear model, the
+    # datasheet camera's numbers); red and blue see only the dark current and read noise.
+    ceiling = ~first["mask"] & (first["sensor"][..., 1] == 1.0) & (first["sensor"][..., 0] == 0.0)
+    assert ceiling.sum() > 50_000
+    full_well, read_noise, dark = 32359.0, 7.24, 1.5
+    k = 4095.0 / full_well
+    charge = 3.0e6 * 0.005 + dark * 0.005
+    green = camera[..., 1][ceiling].astype(np.float64)
+    n = green.size
+    mean, var = k * charge, k * k * (charge + read_noise**2) + 1.0 / 12.0
+    assert abs(green.mean() - mean) < 5.0 * np.sqrt(var / n), (green.mean(), mean)
+    assert abs(green.var(ddof=1) - var) < 5.0 * var * np.sqrt(2.0 / n), (green.var(ddof=1), var)
+    red = camera[..., 0][ceiling].astype(np.float64)
+    assert red.mean() < 3.0
+
+
+def test_a_scene_without_imaging_has_no_camera_layer(renderer):
+    assert "camera" not in renderer.render()
