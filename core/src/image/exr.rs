@@ -14,13 +14,16 @@ use super::RgbaImage;
 pub use ::exr::error::Error;
 pub use ::exr::prelude::FlatSamples as Channel;
 
-/// The layout: the crate's default (RLE in 64x64 tiles), with the chunks in increasing order.
-/// With its default unspecified order the crate writes chunks as its parallel compressors
-/// finish, so the same image gave different bytes from run to run; a fixed order makes the
-/// files byte-identical, so checksums can compare them.
+/// The layout: ZIP in blocks of 16 scan lines, the chunks in increasing order. ZIP, not the
+/// crate's default RLE: a dataset frame of the thesis room at 512² is 7.6 MB with it and 25 MB
+/// with RLE (the panoramas 1.1 MB each instead of 6.6 and 9.0; the colour 0.12 MB instead of
+/// 3.7), and every OpenEXR reader reads it. The increasing order, because with the crate's
+/// unspecified one it writes chunks as its parallel compressors finish, so the same image gave
+/// different bytes from run to run; a fixed order makes the files byte-identical, so checksums
+/// can compare them.
 pub const ENCODING: Encoding = Encoding {
     line_order: LineOrder::Increasing,
-    ..Encoding::FAST_LOSSLESS
+    ..Encoding::SMALL_LOSSLESS
 };
 
 /// Linear RGBA, 32-bit float.
