@@ -18,6 +18,7 @@ use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::grid;
 use specchio::sensor::dataset::{resume, DatasetError, Folder};
+use specchio::sensor::layers::Layers;
 use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
@@ -64,14 +65,20 @@ pub struct Args {
     /// true heading).
     #[arg(long, default_value = "robot")]
     panorama_frame: PanoramaFrame,
+    /// The layers each frame holds, comma-separated: image (sensor.exr, .png), camera
+    /// (sensor.camera.png, with the scene's [sensor.imaging]), rays, range, ids (and the id
+    /// map), panoramas, points (points.ply); or all. camera.json and pose.json always.
+    #[arg(long, default_value = "all", value_name = "LAYERS")]
+    outputs: Layers,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Every input checked before the output folder exists.
     let mut plan = Plan::new(&args.scene, poses(args)?)?;
     plan.panoramas = args.panorama_frame;
+    plan.choose(args.outputs)?;
     let n = plan.poses.len();
-    let mut folder = Folder::stage(&args.out, n)?;
+    let mut folder = Folder::stage(&args.out, n, plan.frame_files())?;
     specchio::process::interrupt::catch();
 
     // 2. The GPU and a renderer whose mirror follows the trajectory.
@@ -82,6 +89,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     drop(instance);
     let mut frames = FrameWriter::new(&device, &plan.scene, lookup)?;
     frames.set_panoramas(plan.panoramas);
+    frames.set_layers(plan.outputs());
     let truth = frames.ground_truth();
     if let Some(warning) = truth.warning(&plan.scene) {
         eprintln!("warning: dataset ({lookup} lookup): {warning}");

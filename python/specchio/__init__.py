@@ -69,6 +69,7 @@ def dataset(
     shard_size: int = 8,
     worker_env: Optional[dict] = None,
     panorama_frame: str = "robot",
+    outputs: Optional[Union[str, list[str]]] = None,
 ) -> dict[str, Any]:
     """Renders the dataset of ``scene`` along ``trajectory`` (CSV or JSON, docs/sensor.md)
     into the folder ``out``, as ``specchio dataset`` does: per pose a folder of the sensor
@@ -97,6 +98,12 @@ def dataset(
     scene's +X at the left edge whatever the heading: made with the true heading, which a
     robot does not know). ``specchio dataset --panorama-frame``, docs/sensor.md.
 
+    ``outputs``: the layers each frame holds, as a list (``["image", "range", "ids"]``) or a
+    comma-separated string: ``image``, ``camera`` (with the scene's ``[sensor.imaging]``),
+    ``rays``, ``range``, ``ids``, ``panoramas``, ``points``, or ``"all"`` (the default: every
+    layer the scene has). ``camera.json`` and ``pose.json`` always. ``specchio dataset
+    --outputs``, docs/sensor.md.
+
     ``progress(done, total)`` is called as frames are written. Returns the summary
     (``dataset.json``) as a dict.
     """
@@ -121,6 +128,7 @@ def dataset(
             shard_size=shard_size,
             worker_env=worker_env,
             panorama_frame=panorama_frame,
+            outputs=outputs,
         )
     if workers is not None or worker_env is not None:
         raise SpecchioError("workers and worker_env are for ray=True")
@@ -137,5 +145,6 @@ def dataset(
         progress=progress,
         resume=resume,
         panorama_frame=panorama_frame,
+        outputs=outputs,
     )
 

@@ -72,6 +72,7 @@ class DatasetFrames:
         headings: Optional[int] = None,
         time: Optional[float] = None,
         panorama_frame: str = "robot",
+        outputs: Optional[Union[str, list[str]]] = None,
     ) -> None: ...
     def __len__(self) -> int: ...
     @property
@@ -93,6 +94,7 @@ class DatasetOutput:
         headings: Optional[int] = None,
         time: Optional[float] = None,
         panorama_frame: str = "robot",
+        outputs: Optional[Union[str, list[str]]] = None,
     ) -> None: ...
     def __len__(self) -> int: ...
     @property
@@ -126,4 +128,5 @@ def dataset(
     headings: Optional[int] = None,
     time: Optional[float] = None,
     panorama_frame: str = "robot",
+    outputs: Optional[Union[str, list[str]]] = None,
 ) -> dict[str, Any]: ...

@@ -82,6 +82,7 @@ def dataset(
     shard_size: int = 8,
     worker_env: Optional[dict] = None,
     panorama_frame: str = "robot",
+    outputs: Optional[Union[str, list[str]]] = None,
 ) -> dict[str, Any]:
     """``specchio.dataset`` on Ray; see its documentation."""
     import ray
@@ -93,9 +94,15 @@ def dataset(
         raise SpecchioError(f"workers: {workers}; must be at least 1")
     scene, out = os.fspath(scene), os.fspath(out)
     trajectory = None if trajectory is None else os.fspath(trajectory)
-    # Where the poses come from and whose frame the panoramas are in: the driver's output and
-    # every worker's renderer make the same plan of them.
-    plan = {"grid": grid, "headings": headings, "time": time, "panorama_frame": panorama_frame}
+    # Where the poses come from, whose frame the panoramas are in and which layers the frames
+    # hold: the driver's output and every worker's renderer make the same plan of them.
+    plan = {
+        "grid": grid,
+        "headings": headings,
+        "time": time,
+        "panorama_frame": panorama_frame,
+        "outputs": outputs,
+    }
     # Every input is checked, and the output staged, before any worker starts.
     output = DatasetOutput(scene, trajectory, out, resume=resume, **plan)
     n = len(output)

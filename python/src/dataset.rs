@@ -11,6 +11,7 @@ use specchio::render::dataset::{self as writer, gpu_failed, FrameWriter, Plan, P
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::DatasetRecord;
 use specchio::sensor::dataset::{resume, DatasetError, Folder, Ready};
+use specchio::sensor::layers::Layers;
 use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::device::Device;
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
@@ -62,7 +63,7 @@ impl PoseSource {
     pub(crate) fn plan(
         &self,
         scene: &Path,
-        panoramas: PanoramaFrame,
+        (panoramas, outputs): (PanoramaFrame, Option<Layers>),
     ) -> Result<Plan, DatasetError> {
         let poses = match self {
             PoseSource::File(path) => Poses::Trajectory(path),
@@ -78,6 +79,9 @@ impl PoseSource {
         };
         let mut plan = Plan::new(scene, poses)?;
         plan.panoramas = panoramas;
+        if let Some(chosen) = outputs {
+            plan.choose(chosen)?;
+        }
         Ok(plan)
     }
 }
@@ -87,6 +91,25 @@ pub(crate) fn parse_panorama_frame(frame: &str) -> PyResult<PanoramaFrame> {
     frame
         .parse()
         .map_err(|e| errors::error(format!("panorama_frame: {e}")))
+}
+
+/// The layers as Python names them: `"all"`, `"image,range"` or `["image", "range"]`;
+/// None (every layer the scene has) when not given.
+pub(crate) fn parse_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Layers>> {
+    let Some(given) = outputs else {
+        return Ok(None);
+    };
+    let text = match given.extract::<String>() {
+        Ok(text) => text,
+        Err(_) => (given.extract::<Vec<String>>())
+            .map_err(|_| {
+                errors::error("outputs: a string (\"image,range\") or a list of layer names")
+            })?
+            .join(","),
+    };
+    text.parse()
+        .map(Some)
+        .map_err(|e| errors::error(format!("outputs: {e}")))
 }
 
 pub(crate) fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
@@ -104,7 +127,7 @@ pub(crate) fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
 /// `resume`, finished frames are kept in `out.partial` and a stopped run goes on from them
 /// (`specchio dataset --resume`). Returns the summary (`dataset.json`) as a dict.
 #[pyfunction]
-#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false, grid=None, headings=None, time=None, panorama_frame="robot"))]
+#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn dataset(
     py: Python<'_>,
@@ -120,10 +143,12 @@ pub fn dataset(
     headings: Option<i128>,
     time: Option<f64>,
     panorama_frame: &str,
+    outputs: Option<Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyAny>> {
     let device = crate::args::device(device.as_ref())?;
     let job = Job {
         panoramas: parse_panorama_frame(panorama_frame)?,
+        outputs: parse_outputs(outputs.as_ref())?,
         asked: parse_lookup(lookup)?,
         source: PoseSource::new(trajectory, grid, headings, time)?,
         scene: &scene,
@@ -145,6 +170,7 @@ pub fn dataset(
 /// What `dataset` renders: its arguments, checked.
 struct Job<'a> {
     panoramas: PanoramaFrame,
+    outputs: Option<Layers>,
     asked: Option<Lookup>,
     source: PoseSource,
     scene: &'a Path,
@@ -168,12 +194,13 @@ fn render(
 ) -> Result<Finished, DatasetError> {
     // What this call may not replace is what it reads (docs/python.md).
     specchio::files::identity::forget();
-    let plan = job.source.plan(job.scene, job.panoramas)?;
+    let plan = job.source.plan(job.scene, (job.panoramas, job.outputs))?;
     let n = plan.poses.len();
-    let mut folder = Folder::stage(job.out, n)?;
+    let mut folder = Folder::stage(job.out, n, plan.frame_files())?;
     let (log, dev, lookup) = open_device(job, &plan)?;
     let mut frames = FrameWriter::new(&dev, &plan.scene, lookup).map_err(gpu_failed)?;
     frames.set_panoramas(plan.panoramas);
+    frames.set_layers(plan.outputs());
     let truth = frames.ground_truth();
     if job.resume {
         let key = plan.run_key(lookup, truth, &writer::device_key(&dev.info));

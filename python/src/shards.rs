@@ -14,7 +14,9 @@ use specchio::sensor::dataset::{resume, DatasetError, Folder, Frame};
 use specchio::sensor::GroundTruth;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
-use crate::dataset::{commit, parse_lookup, parse_panorama_frame, with_kept_note, PoseSource};
+use crate::dataset::{
+    commit, parse_lookup, parse_outputs, parse_panorama_frame, with_kept_note, PoseSource,
+};
 use crate::errors;
 use crate::renderer::check_validation;
 
@@ -41,7 +43,7 @@ impl DatasetFrames {
     /// quarter of the machine's cores, 1 to 4, within the memory budget; 0: none). A Ray
     /// worker, one of many on its machine, passes 1.
     #[new]
-    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None, grid=None, headings=None, time=None, panorama_frame="robot"))]
+    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -55,9 +57,13 @@ impl DatasetFrames {
         headings: Option<i128>,
         time: Option<f64>,
         panorama_frame: &str,
+        outputs: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let source = PoseSource::new(trajectory, grid, headings, time)?;
-        let panoramas = parse_panorama_frame(panorama_frame)?;
+        let choices = (
+            parse_panorama_frame(panorama_frame)?,
+            parse_outputs(outputs.as_ref())?,
+        );
         let device = crate::args::device(device.as_ref())?;
         // At most MAX_ENCODERS: each holds a frame in memory.
         let most = MAX_ENCODERS as u32;
@@ -66,7 +72,7 @@ impl DatasetFrames {
             .map(|n| n as usize);
         let asked = parse_lookup(lookup)?;
         py.detach(|| -> Result<Self, DatasetError> {
-            let plan = source.plan(&scene, panoramas)?;
+            let plan = source.plan(&scene, choices)?;
             let instance =
                 Instance::create(&InstanceDesc::from_env(validate)).map_err(gpu_failed)?;
             let log = instance.validation_log();
@@ -78,6 +84,7 @@ impl DatasetFrames {
             )?;
             let mut frames = FrameWriter::new(&dev, &plan.scene, lookup).map_err(gpu_failed)?;
             frames.set_panoramas(plan.panoramas);
+            frames.set_layers(plan.outputs());
             if let Some(n) = encoders {
                 frames.set_encoders(n);
             }
@@ -192,7 +199,7 @@ pub struct DatasetOutput {
 #[pymethods]
 impl DatasetOutput {
     #[new]
-    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None, panorama_frame="robot"))]
+    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -204,13 +211,17 @@ impl DatasetOutput {
         headings: Option<i128>,
         time: Option<f64>,
         panorama_frame: &str,
+        outputs: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let source = PoseSource::new(trajectory, grid, headings, time)?;
-        let panoramas = parse_panorama_frame(panorama_frame)?;
+        let choices = (
+            parse_panorama_frame(panorama_frame)?,
+            parse_outputs(outputs.as_ref())?,
+        );
         py.detach(|| -> Result<Self, DatasetError> {
             specchio::files::identity::forget();
-            let plan = source.plan(&scene, panoramas)?;
-            let folder = Folder::stage(&out, plan.poses.len())?;
+            let plan = source.plan(&scene, choices)?;
+            let folder = Folder::stage(&out, plan.poses.len(), plan.frame_files())?;
             Ok(DatasetOutput {
                 plan,
                 out,

@@ -13,6 +13,7 @@ pub mod files;
 pub mod ground_truth;
 pub mod id_map;
 pub mod imaging;
+pub mod layers;
 pub mod localise;
 pub mod optics;
 pub mod outputs;

@@ -11,6 +11,7 @@ use super::files::Samples;
 use super::ground_truth::{GroundTruth, GroundTruthRecord};
 pub use super::id_map::{IdMap, NO_ID};
 use super::imaging::{self, CameraImage, ImagingRecord, CAMERA_IMAGE_FILE};
+use super::layers::{Layer, Layers};
 use super::optics::SensorOptics;
 use super::panorama::{PanoramaKind, PanoramaLayout};
 use super::ray_map::{PixelRay, RayMap};
@@ -20,13 +21,7 @@ use crate::output::{OutputError, Sink};
 use crate::reference::ReferenceImages;
 use crate::scene::Scene;
 
-/// File names inside the output folder.
-pub const RAYS_FILE: &str = "sensor.rays.exr";
-pub const RANGE_FILE: &str = "sensor.range.exr";
-pub const ID_FILE: &str = "sensor.id.exr";
-/// What each id of [`ID_FILE`] is: [`IdMap`] as JSON.
-pub const ID_MAP_FILE: &str = "sensor.id.json";
-pub const CAMERA_FILE: &str = "camera.json";
+pub use super::layers::{CAMERA_FILE, ID_FILE, ID_MAP_FILE, RANGE_FILE, RAYS_FILE};
 /// Channels of [`RAYS_FILE`] (world space, metres; `mask` 1 where the pixel sees the mirror).
 pub const RAY_CHANNELS: [&str; 7] = [
     "origin.X",
@@ -215,12 +210,27 @@ impl SensorOutputs {
     }
 
     /// Writes every output into `dir` (staged in `out`): the ray map, range, ids, panoramas
-    /// (EXR and PNG) and `camera.json`. The layers and the panoramas are encoded at the same
-    /// time, and the panoramas each beside the other.
+    /// (EXR and PNG), the camera image where there is one, and `camera.json`.
     pub fn write(&self, out: &(impl Sink + Sync), dir: &Path) -> Result<(), OutputError> {
+        self.write_chosen(out, dir, Layers::all())
+    }
+
+    /// [`Self::write`] of the `chosen` layers only (the clean image and the point cloud are
+    /// not these outputs' to write), and `camera.json`. The layers and the panoramas are
+    /// encoded at the same time, and the panoramas each beside the other.
+    pub fn write_chosen(
+        &self,
+        out: &(impl Sink + Sync),
+        dir: &Path,
+        chosen: Layers,
+    ) -> Result<(), OutputError> {
         use rayon::prelude::*;
         let panoramas = || -> Result<Vec<PanoramaRecord>, OutputError> {
-            (self.panoramas().into_par_iter())
+            let all = match chosen.has(Layer::Panoramas) {
+                true => self.panoramas(),
+                false => Vec::new(),
+            };
+            (all.into_par_iter())
                 .map(|(name, layout, image)| {
                     out.write_exr(&dir.join(format!("{name}.exr")), &image)?;
                     out.write_png(&dir.join(format!("{name}.png")), &image)?;
@@ -228,22 +238,46 @@ impl SensorOutputs {
                 })
                 .collect()
         };
-        let (layers, panoramas) = rayon::join(|| self.write_layers(out, dir), panoramas);
+        let (layers, panoramas) = rayon::join(|| self.write_layers(out, dir, chosen), panoramas);
         layers?;
         out.write_json(&dir.join(CAMERA_FILE), &self.camera_record(panoramas?))
     }
 
-    /// The ray map, range, ids and the id map.
-    fn write_layers(&self, out: &impl Sink, dir: &Path) -> Result<(), OutputError> {
+    /// The chosen of: the ray map, range, ids and the id map, the camera image.
+    fn write_layers(&self, out: &impl Sink, dir: &Path, chosen: Layers) -> Result<(), OutputError> {
         let (w, h) = (self.rays.width, self.rays.height);
-        let ray_channels = RAY_CHANNELS
-            .iter()
-            .enumerate()
+        if chosen.has(Layer::Rays) {
+            out.write_channels(&dir.join(RAYS_FILE), (w, h), self.ray_channels())?;
+        }
+        if chosen.has(Layer::Range) {
+            let range = vec![("range", Samples::F32(self.range.clone()))];
+            out.write_channels(&dir.join(RANGE_FILE), (w, h), range)?;
+        }
+        if chosen.has(Layer::Ids) {
+            let ids = vec![
+                ("id", Samples::U32(self.ids.clone())),
+                ("class", Samples::U32(self.class_ids())),
+            ];
+            out.write_channels(&dir.join(ID_FILE), (w, h), ids)?;
+            out.write_json(&dir.join(ID_MAP_FILE), &self.id_map)?;
+        }
+        match &self.camera {
+            Some(camera) if chosen.has(Layer::Camera) => {
+                let path = dir.join(CAMERA_IMAGE_FILE);
+                let png = camera
+                    .png()
+                    .map_err(|e| crate::output::png_error(&path, e))?;
+                out.write_bytes(&path, &png)
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// The ray map's channels ([`RAY_CHANNELS`]): 0 off the mirror.
+    fn ray_channels(&self) -> Vec<(&'static str, Samples)> {
+        (RAY_CHANNELS.iter().enumerate())
             .map(|(c, name)| {
-                let v = self
-                    .rays
-                    .rays
-                    .iter()
+                let v = (self.rays.rays.iter())
                     .map(|r| match r {
                         Some(r) if c < 3 => r.origin[c],
                         Some(r) if c < 6 => r.direction[c - 3],
@@ -253,23 +287,7 @@ impl SensorOutputs {
                     .collect();
                 (*name, Samples::F32(v))
             })
-            .collect();
-        out.write_channels(&dir.join(RAYS_FILE), (w, h), ray_channels)?;
-        let range = vec![("range", Samples::F32(self.range.clone()))];
-        out.write_channels(&dir.join(RANGE_FILE), (w, h), range)?;
-        let ids = vec![
-            ("id", Samples::U32(self.ids.clone())),
-            ("class", Samples::U32(self.class_ids())),
-        ];
-        out.write_channels(&dir.join(ID_FILE), (w, h), ids)?;
-        if let Some(camera) = &self.camera {
-            let path = dir.join(CAMERA_IMAGE_FILE);
-            let png = camera
-                .png()
-                .map_err(|e| crate::output::png_error(&path, e))?;
-            out.write_bytes(&path, &png)?;
-        }
-        out.write_json(&dir.join(ID_MAP_FILE), &self.id_map)
+            .collect()
     }
 
     pub(crate) fn camera_record(&self, panoramas: Vec<PanoramaRecord>) -> CameraRecord {

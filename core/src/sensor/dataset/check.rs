@@ -1,12 +1,12 @@
 //! What a frame folder holds, checked wherever frames come in: from a renderer, from a Ray
 //! worker through the Python driver, from a resumed run's journal.
 
-use super::Frame;
-use crate::sensor::dataset::{frame_folder, FRAME_FILES, OPTIONAL_FRAME_FILES};
+use super::{any_frame_files, Frame};
+use crate::sensor::dataset::frame_folder;
 
-/// A frame as a frame folder holds it: every file in its own folder, with a frame file's
-/// name, none twice, every fixed one there; its index line its own.
-pub fn check_frame(frame: &Frame) -> Result<(), String> {
+/// A frame as a frame folder of a run whose frames hold `files` holds it: every file in its
+/// own folder, one of `files`, none twice, every fixed one there; its index line its own.
+pub fn check_frame(frame: &Frame, files: &[&str]) -> Result<(), String> {
     let folder = frame_folder(frame.frame);
     let mut names = Vec::with_capacity(frame.files.len());
     for (path, _) in &frame.files {
@@ -22,18 +22,17 @@ pub fn check_frame(frame: &Frame) -> Result<(), String> {
             })?;
         names.push(name);
     }
-    check_frame_names(frame.frame, &names)?;
+    check_frame_names(frame.frame, &names, files)?;
     check_index_line(frame.frame, &frame.index_line)
 }
 
-/// Frame `frame`'s file names: each a frame file's ([`FRAME_FILES`], or one of
-/// [`OPTIONAL_FRAME_FILES`]), none twice, every fixed one of [`FRAME_FILES`] there.
-pub fn check_frame_names(frame: usize, names: &[&str]) -> Result<(), String> {
-    if let Some(odd) = names.iter().find(|n| !is_frame_file(n)) {
+/// Frame `frame`'s file names: each one of `files` (`*` standing for any plain suffix), none
+/// twice, every fixed one of `files` there.
+pub fn check_frame_names(frame: usize, names: &[&str], files: &[&str]) -> Result<(), String> {
+    if let Some(odd) = names.iter().find(|n| !named_in(files, n)) {
         return Err(format!(
-            "frame {frame}: {odd} is not a frame file ({}, and where the scene asks for it {})",
-            FRAME_FILES.join(", "),
-            OPTIONAL_FRAME_FILES.join(", ")
+            "frame {frame}: {odd} is not a file of this run's frames ({})",
+            files.join(", ")
         ));
     }
     let mut sorted = names.to_vec();
@@ -41,27 +40,30 @@ pub fn check_frame_names(frame: usize, names: &[&str]) -> Result<(), String> {
     if let Some(twice) = sorted.windows(2).find(|w| w[0] == w[1]) {
         return Err(format!("frame {frame}: {} twice", twice[0]));
     }
-    let fixed = FRAME_FILES.iter().filter(|name| !name.contains('*'));
+    let fixed = files.iter().filter(|name| !name.contains('*'));
     match fixed.into_iter().find(|f| !names.contains(f)) {
         Some(missing) => Err(format!("frame {frame}: no {missing}")),
         None => Ok(()),
     }
 }
 
-/// A frame file's name: one of [`FRAME_FILES`] (`*` standing for any plain suffix) or of
-/// [`OPTIONAL_FRAME_FILES`].
+/// A frame file's name, of any run: one a frame of every layer holds.
 pub fn is_frame_file(name: &str) -> bool {
-    OPTIONAL_FRAME_FILES.contains(&name)
-        || FRAME_FILES.iter().any(|f| match f.split_once('*') {
-            None => *f == name,
-            Some((head, _)) => {
-                name.len() > head.len()
-                    && name.starts_with(head)
-                    && !name.contains(['/', '\\'])
-                    && name != "."
-                    && name != ".."
-            }
-        })
+    named_in(&any_frame_files(), name)
+}
+
+/// Whether `name` is one of `files` (`*` standing for any plain suffix).
+fn named_in(files: &[&str], name: &str) -> bool {
+    files.iter().any(|f| match f.split_once('*') {
+        None => *f == name,
+        Some((head, _)) => {
+            name.len() > head.len()
+                && name.starts_with(head)
+                && !name.contains(['/', '\\'])
+                && name != "."
+                && name != ".."
+        }
+    })
 }
 
 /// Frame `frame`'s index line: one JSON object on one line, naming the frame and its folder.

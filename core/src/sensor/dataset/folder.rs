@@ -18,12 +18,18 @@ pub struct Folder {
     work: Option<WorkFolder>,
     /// Each frame's index line, once it is placed.
     index: Vec<Option<String>>,
+    /// The files each frame holds (`super::frame_files` of the run's layers).
+    files: Vec<&'static str>,
 }
 
 impl Folder {
-    /// Stages the folder `root` for `frames` frames; fails now, before any work, where `root`
-    /// cannot become this output (docs/outputs.md).
-    pub fn stage(root: &Path, frames: usize) -> Result<Folder, DatasetError> {
+    /// Stages the folder `root` for `frames` frames, each of which holds `files`; fails now,
+    /// before any work, where `root` cannot become this output (docs/outputs.md).
+    pub fn stage(
+        root: &Path,
+        frames: usize,
+        files: Vec<&'static str>,
+    ) -> Result<Folder, DatasetError> {
         let mut staged = Transaction::new();
         staged.folder(root, SUMMARY_FILE)?;
         Ok(Folder {
@@ -31,6 +37,7 @@ impl Folder {
             root: root.to_owned(),
             work: None,
             index: vec![None; frames],
+            files,
         })
     }
 
@@ -83,7 +90,7 @@ impl Folder {
             let why = format!("frame {} was placed already", frame.frame);
             return Err(DatasetError::Invalid(why));
         }
-        check_frame(frame).map_err(DatasetError::Invalid)?;
+        check_frame(frame, &self.files).map_err(DatasetError::Invalid)?;
         match &mut self.work {
             Some(work) => work.write(frame)?,
             None => {

@@ -26,6 +26,7 @@ pub use resume::RunKey;
 use glam::{DMat3, DVec3, Vec3};
 use serde::Serialize;
 
+use super::layers::Layers;
 use super::localise::poses::object_spheres;
 use super::{SensorOptics, SensorOutputs};
 use crate::scene::state::SceneState;
@@ -236,33 +237,25 @@ pub struct DatasetRecord {
     /// Whose frame the panoramas' columns are in: the robot's (its forward axis at the left
     /// edge) or the scene's (`camera.json` gives each panorama's seam azimuth).
     pub panorama_frame: super::panorama::PanoramaFrame,
-    /// What every frame folder holds: [`FRAME_FILES`], and [`OPTIONAL_FRAME_FILES`]' camera
-    /// image where the scene has `[sensor.imaging]`.
+    /// The layers chosen (`--outputs`), and the files every frame folder holds for them.
+    pub outputs: Layers,
     pub frame_files: Vec<&'static str>,
 }
 
-/// What every frame folder holds.
-pub const FRAME_FILES: [&str; 10] = [
-    "sensor.exr",
-    "sensor.png",
-    super::outputs::RAYS_FILE,
-    super::outputs::RANGE_FILE,
-    super::outputs::ID_FILE,
-    super::outputs::ID_MAP_FILE,
-    super::outputs::CAMERA_FILE,
-    "pose.json",
-    "points.ply",
-    "sensor.panorama.*",
-];
+/// The file every frame folder holds whatever its layers: its pose.
+pub const POSE_FILE: &str = "pose.json";
 
-/// What a frame folder holds besides [`FRAME_FILES`] where the scene asks for it: the
-/// camera image of its `[sensor.imaging]`.
-pub const OPTIONAL_FRAME_FILES: [&str; 1] = [super::imaging::CAMERA_IMAGE_FILE];
+/// The files of a frame of the `layers` chosen: `camera.json`, the layers' and the pose.
+pub fn frame_files(layers: Layers) -> Vec<&'static str> {
+    let mut files = layers.files();
+    files.push(POSE_FILE);
+    files
+}
 
-/// The files of every frame of a dataset whose scene has (`imaging`) an imaging chain or not.
-pub fn frame_files(imaging: bool) -> Vec<&'static str> {
-    let optional = OPTIONAL_FRAME_FILES.into_iter().filter(|_| imaging);
-    FRAME_FILES.into_iter().chain(optional).collect()
+/// Every name a frame file can have, whatever was chosen (a folder's leftovers are checked
+/// against these).
+pub fn any_frame_files() -> Vec<&'static str> {
+    frame_files(Layers::all())
 }
 
 /// The rows of [`rep103::SCENE_TO_ROS`].

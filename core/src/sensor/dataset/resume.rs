@@ -171,8 +171,7 @@ impl WorkFolder {
                     return Err(refuse(&at, &format!("line {n}: a second run key")))
                 }
             };
-            check_journaled(&f, key.frames)
-                .map_err(|why| refuse(&at, &format!("line {n}: {why}")))?;
+            check_journaled(&f, key).map_err(|why| refuse(&at, &format!("line {n}: {why}")))?;
             // Proven, not trusted: the line a run of these inputs writes for this frame.
             if !proof::same_json(&f.index, &index_of(f.frame)) {
                 return Err(refuse(&at, &format!("line {n}: frame {}'s index line is not the one these inputs give it (the journal was edited, or its frames are not what it says): remove the work folder to start again", f.frame)));

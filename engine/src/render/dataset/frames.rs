@@ -21,6 +21,7 @@ use crate::scene::{Lookup, Scene};
 use crate::sensor::dataset::trajectory::Pose;
 use crate::sensor::dataset::{self as sensor_dataset, IndexLine, PoseRecord};
 use crate::sensor::dataset::{DatasetError, Frame, INDEX_FILE};
+use crate::sensor::layers::{Layer, Layers, IMAGE_FILES, POINTS_FILE};
 use crate::sensor::panorama::PanoramaFrame;
 use crate::sensor::{GroundTruth, SensorOutputs};
 use crate::vk::device::Device;
@@ -31,6 +32,8 @@ pub struct Rendered {
     frame: usize,
     outputs: SensorOutputs,
     record: PoseRecord,
+    /// The layers its files hold.
+    layers: Layers,
 }
 
 impl Rendered {
@@ -39,7 +42,8 @@ impl Rendered {
         let folder = sensor_dataset::frame_folder(self.frame);
         let root = Path::new("");
         let files = MemoryFiles::new(root);
-        write_frame(&files, &root.join(&folder), &self.outputs, &self.record)?;
+        let dir = root.join(&folder);
+        write_frame(&files, &dir, &self.outputs, &self.record, self.layers)?;
         let index_line = IndexLine::of(&self.record).map_err(|e| OutputError::Encode {
             path: PathBuf::from(INDEX_FILE),
             message: e.to_string(),
@@ -63,6 +67,8 @@ pub struct FrameWriter {
     encoders: usize,
     /// Whose frame the panoramas are in (the robot's unless set: [`Self::set_panoramas`]).
     panoramas: PanoramaFrame,
+    /// The layers a frame's files hold (all the scene has unless set: [`Self::set_layers`]).
+    layers: Layers,
 }
 
 impl FrameWriter {
@@ -84,6 +90,7 @@ impl FrameWriter {
             truth,
             encoders: encoders_for(scene),
             panoramas: PanoramaFrame::Robot,
+            layers: Layers::all().for_scene(scene.sensor.imaging.is_some()),
         })
     }
 
@@ -152,6 +159,7 @@ impl FrameWriter {
             frame,
             outputs,
             record,
+            layers: self.layers,
         })
     }
 
@@ -169,6 +177,11 @@ impl FrameWriter {
     /// Unwraps the panoramas in `frame`'s frame (a dataset's `Plan::panoramas`).
     pub fn set_panoramas(&mut self, frame: PanoramaFrame) {
         self.panoramas = frame;
+    }
+
+    /// Writes only the `layers` chosen into a frame's files (a dataset's `Plan::outputs`).
+    pub fn set_layers(&mut self, layers: Layers) {
+        self.layers = layers;
     }
 
     /// The frames `poses` (index, pose) in order, each given to `take` on this thread.
@@ -364,20 +377,28 @@ fn encoders_within(cores: usize, fits: impl Fn(u64) -> bool) -> usize {
     encoders
 }
 
-/// A frame's folder: the sensor image, its outputs, the pose and the point cloud, the three
-/// groups encoded at the same time.
+/// A frame's folder: of the `layers` chosen, the sensor image, its outputs and the point
+/// cloud, and the pose, the three groups encoded at the same time.
 fn write_frame(
     out: &(impl Sink + Sync),
     dir: &Path,
     o: &SensorOutputs,
     pose: &PoseRecord,
+    layers: Layers,
 ) -> Result<(), OutputError> {
     let image = || -> Result<(), OutputError> {
-        out.write_exr(&dir.join("sensor.exr"), &o.image)?;
-        out.write_png(&dir.join("sensor.png"), &o.image)
+        if !layers.has(Layer::Image) {
+            return Ok(());
+        }
+        let [exr, png] = IMAGE_FILES;
+        out.write_exr(&dir.join(exr), &o.image)?;
+        out.write_png(&dir.join(png), &o.image)
     };
     let cloud = || -> Result<(), OutputError> {
-        out.write_json(&dir.join("pose.json"), pose)?;
+        out.write_json(&dir.join(sensor_dataset::POSE_FILE), pose)?;
+        if !layers.has(Layer::Points) {
+            return Ok(());
+        }
         let origin = o.scene_origin;
         let comments = [
             format!(
@@ -388,11 +409,12 @@ fn write_frame(
         ];
         let points = sensor_dataset::points(o);
         out.write_bytes(
-            &dir.join("points.ply"),
+            &dir.join(POINTS_FILE),
             &sensor_dataset::ply::ply(&points, &comments),
         )
     };
-    let ((a, b), c) = rayon::join(|| rayon::join(image, cloud), || o.write(out, dir));
+    let outputs = || o.write_chosen(out, dir, layers);
+    let ((a, b), c) = rayon::join(|| rayon::join(image, cloud), outputs);
     a.and(b).and(c)
 }
 

@@ -23,6 +23,7 @@ use crate::sensor::dataset::resume::RunKey;
 use crate::sensor::dataset::trajectory::{self, Pose, TrajectoryError};
 use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
 use crate::sensor::dataset::{DatasetError, Folder, INDEX_FILE};
+use crate::sensor::layers::{Layer, Layers};
 use crate::sensor::panorama::PanoramaFrame;
 use crate::sensor::GroundTruth;
 use crate::vk::physical::DeviceInfo;
@@ -61,6 +62,8 @@ pub struct Plan {
     pub inputs: Vec<Digest>,
     /// Whose frame the panoramas are in: the robot's unless asked ([`PanoramaFrame`]).
     pub panoramas: PanoramaFrame,
+    /// The layers each frame holds: all the scene has unless chosen ([`Plan::choose`]).
+    outputs: Layers,
 }
 
 /// Where a dataset's poses come from.
@@ -92,6 +95,7 @@ impl Plan {
             path: scene_path.to_owned(),
             source,
         })?;
+        let outputs = Layers::all().for_scene(scene.sensor.imaging.is_some());
         Ok(Plan {
             scene,
             scene_path: scene_path.to_owned(),
@@ -99,7 +103,33 @@ impl Plan {
             poses,
             inputs,
             panoramas: PanoramaFrame::Robot,
+            outputs,
         })
+    }
+
+    /// Writes only the `chosen` layers (`--outputs`): every one, as `all` asks, is every one
+    /// the scene has; a camera image named alone needs the scene's `[sensor.imaging]`.
+    pub fn choose(&mut self, chosen: Layers) -> Result<(), DatasetError> {
+        let imaging = self.scene.sensor.imaging.is_some();
+        if chosen != Layers::all() && chosen.has(Layer::Camera) && !imaging {
+            return Err(DatasetError::Invalid(format!(
+                "outputs: camera needs a camera model, and {} has no [sensor.imaging] \
+                 (docs/scene-format.md)",
+                self.scene_path.display()
+            )));
+        }
+        self.outputs = chosen.for_scene(imaging);
+        Ok(())
+    }
+
+    /// The layers each frame holds.
+    pub fn outputs(&self) -> Layers {
+        self.outputs
+    }
+
+    /// The files each frame holds.
+    pub fn frame_files(&self) -> Vec<&'static str> {
+        sensor_dataset::frame_files(self.outputs)
     }
 
     /// The scene, the poses (each checked) and where they came from, in words.
@@ -158,6 +188,7 @@ impl Plan {
             ground_truth: truth.name().to_owned(),
             device: device.to_owned(),
             panoramas: self.panoramas.name().to_owned(),
+            outputs: self.outputs.to_string(),
         }
     }
 
@@ -189,7 +220,8 @@ impl Plan {
             scene_origin_m: self.scene.origin.to_array(),
             scene_to_ros: sensor_dataset::scene_to_ros_rows(),
             panorama_frame: self.panoramas,
-            frame_files: sensor_dataset::frame_files(self.scene.sensor.imaging.is_some()),
+            outputs: self.outputs,
+            frame_files: self.frame_files(),
         }
     }
 }

@@ -8,6 +8,8 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::super::check::{check_frame_names, check_index_line};
+use super::super::frame_files;
+use crate::sensor::layers::Layers;
 
 /// The journal's format; a journal of another format is refused.
 pub(super) const FORMAT: u32 = 1;
@@ -35,6 +37,10 @@ pub struct RunKey {
     /// reads as `""`, which no run asks for.
     #[serde(default)]
     pub panoramas: String,
+    /// The layers each frame holds (`image,range,...`: `Layers`' text). A journal from before
+    /// this field reads as `""`, which no run asks for.
+    #[serde(default)]
+    pub outputs: String,
 }
 
 /// One journal line.
@@ -56,7 +62,8 @@ pub(super) struct Journaled {
 
 /// A journaled frame as the run writes it: of this dataset, its names a frame folder's,
 /// its index line its own.
-pub(super) fn check_journaled(f: &Journaled, frames: usize) -> Result<(), String> {
+pub(super) fn check_journaled(f: &Journaled, key: &RunKey) -> Result<(), String> {
+    let frames = key.frames;
     if f.frame >= frames {
         return Err(format!(
             "frame {}: the dataset has {frames} frames",
@@ -64,7 +71,8 @@ pub(super) fn check_journaled(f: &Journaled, frames: usize) -> Result<(), String
         ));
     }
     let names: Vec<&str> = f.files.iter().map(|(n, _, _)| n.as_str()).collect();
-    check_frame_names(f.frame, &names)?;
+    let layers: Layers = (key.outputs.parse()).map_err(|e| format!("the run's outputs: {e}"))?;
+    check_frame_names(f.frame, &names, &frame_files(layers))?;
     check_index_line(f.frame, &f.index)
 }
 
@@ -135,10 +143,33 @@ pub(super) fn differs(theirs: &RunKey, ours: &RunKey) -> Option<String> {
         )
     } else if theirs.device != ours.device {
         format!("device {} against {}", theirs.device, ours.device)
+    } else if theirs.panoramas != ours.panoramas {
+        format!(
+            "panoramas in the {} frame against the {}",
+            or_none(&theirs.panoramas),
+            ours.panoramas
+        )
+    } else if theirs.outputs != ours.outputs {
+        format!(
+            "the outputs {} against {}",
+            or_none(&theirs.outputs),
+            ours.outputs
+        )
+    } else if theirs != ours {
+        // A field added to the key and not named above still refuses the journal.
+        "another run key".to_owned()
     } else {
         return None;
     };
     Some(field)
+}
+
+/// A key field as the message says it: `(none)` for a journal from before the field.
+fn or_none(field: &str) -> &str {
+    match field {
+        "" => "(none)",
+        f => f,
+    }
 }
 
 pub(super) fn open_journal(at: &Path) -> std::io::Result<File> {

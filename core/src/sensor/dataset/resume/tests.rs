@@ -5,8 +5,9 @@ use std::path::{Path, PathBuf};
 
 use super::*;
 use crate::sensor::dataset::DatasetRecord;
-use crate::sensor::dataset::FRAME_FILES;
+use crate::sensor::dataset::{any_frame_files, frame_files};
 use crate::sensor::dataset::{Folder, INDEX_FILE};
+use crate::sensor::layers::Layers;
 use crate::sensor::GroundTruth;
 use std::fs::OpenOptions;
 
@@ -27,6 +28,7 @@ fn key(frames: usize) -> RunKey {
         ground_truth: "traced".into(),
         device: "a device".into(),
         panoramas: "robot".into(),
+        outputs: Layers::all().to_string(),
     }
 }
 
@@ -34,7 +36,7 @@ fn key(frames: usize) -> RunKey {
 /// pose what its index line says.
 fn frame(i: usize) -> Frame {
     let folder = frame_folder(i);
-    let fixed = FRAME_FILES.into_iter().filter(|n| !n.contains('*'));
+    let fixed = any_frame_files().into_iter().filter(|n| !n.contains('*'));
     let files = (fixed.chain(["sensor.panorama.png"]))
         .map(|n| {
             let bytes = match n {
@@ -67,7 +69,8 @@ fn record(frames: usize) -> DatasetRecord {
         scene_origin_m: [0.0; 3],
         scene_to_ros: [[0.0; 3]; 3],
         panorama_frame: crate::sensor::panorama::PanoramaFrame::Robot,
-        frame_files: FRAME_FILES.to_vec(),
+        outputs: Layers::all(),
+        frame_files: any_frame_files(),
     }
 }
 
@@ -98,14 +101,14 @@ fn a_run_stopped_after_two_frames_goes_on_from_the_third_and_gives_the_same_fold
     let dir = scratch("same");
     // Without a work folder, all at once: the folder to compare with.
     let whole = dir.join("whole");
-    let mut folder = Folder::stage(&whole, 4).unwrap();
+    let mut folder = Folder::stage(&whole, 4, frame_files(Layers::all())).unwrap();
     for i in 0..4 {
         folder.place(&frame(i)).unwrap();
     }
     folder.finish(&record(4)).unwrap().commit().unwrap();
 
     let out = dir.join("out");
-    let mut first = Folder::stage(&out, 4).unwrap();
+    let mut first = Folder::stage(&out, 4, frame_files(Layers::all())).unwrap();
     assert_eq!(first.resume(&key(4), &mut index_of).unwrap(), 0);
     first.place(&frame(0)).unwrap();
     first.place(&frame(1)).unwrap();
@@ -113,7 +116,7 @@ fn a_run_stopped_after_two_frames_goes_on_from_the_third_and_gives_the_same_fold
     assert!(!out.exists());
     assert!(work_path(&out).join(JOURNAL).is_file());
 
-    let mut second = Folder::stage(&out, 4).unwrap();
+    let mut second = Folder::stage(&out, 4, frame_files(Layers::all())).unwrap();
     assert_eq!(second.resume(&key(4), &mut index_of).unwrap(), 2);
     assert_eq!(second.todo(), vec![2, 3]);
     assert_eq!(second.index_line(1), Some(frame(1).index_line.as_str()));
@@ -196,6 +199,19 @@ fn another_runs_folder_or_a_users_is_refused_and_left_as_it_was() {
     other.device = "another device".into();
     let e = message(WorkFolder::open(&out, &other, &mut index_of).err().unwrap());
     assert!(e.contains("another device"), "{e}");
+    // The panoramas' frame and the layers change the frames' files too.
+    let mut other = key(3);
+    other.panoramas = "world".into();
+    let e = message(WorkFolder::open(&out, &other, &mut index_of).err().unwrap());
+    assert!(
+        e.contains("panoramas in the robot frame against the world"),
+        "{e}"
+    );
+    let mut other = key(3);
+    other.outputs = "image,range".into();
+    let e = message(WorkFolder::open(&out, &other, &mut index_of).err().unwrap());
+    assert!(e.contains("the outputs image,camera,rays"), "{e}");
+    assert!(e.contains("against image,range"), "{e}");
     let e = message(
         WorkFolder::open(&out, &key(4), &mut index_of)
             .err()
@@ -447,10 +463,10 @@ fn a_journal_line_naming_anything_else_is_refused_and_nothing_is_removed() {
     let cases = [
         (
             with_files(listed, &index1),
-            "victim.txt is not a frame file",
+            "victim.txt is not a file of this run's frames",
         ),
         (with_files(twice, &index1), "twice"),
-        (with_files(serde_json::json!([]), &index1), "no sensor.exr"),
+        (with_files(serde_json::json!([]), &index1), "no camera.json"),
         (with_files(files.clone(), "x\ny"), "index line 1"),
         (with_files(files, &frame(0).index_line), "index line 1"),
         ("\n".to_owned(), "line 3: not a journal line"),
