@@ -90,6 +90,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let mut frames = FrameWriter::new(&device, &plan.scene, lookup)?;
     frames.set_panoramas(plan.panoramas);
     frames.set_layers(plan.outputs());
+    frames.set_path(&plan.poses);
     let truth = frames.ground_truth();
     if let Some(warning) = truth.warning(&plan.scene) {
         eprintln!("warning: dataset ({lookup} lookup): {warning}");

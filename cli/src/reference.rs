@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Context, Result};
 use specchio::output::{Sink, Transaction};
 use specchio::reference::{Reference, ReferenceImages, ReferenceStats, MAX_SPP};
-use specchio::sensor::SensorOutputs;
+use specchio::sensor::{imaging, SensorOutputs};
 
 use crate::records::{ReferenceCameras, ReferenceRecord};
 use specchio::process::args::{real, whole};
@@ -66,7 +66,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         write_images(&out, &args.out, name, &images)?;
         if name == "sensor" && args.sensor_outputs {
             let mut outputs = SensorOutputs::from_reference(&scene, args.time, &images);
-            outputs.expose(&scene, 0);
+            let light = imaging::traced_exposure(&scene, args.time, args.spp, [w, h]);
+            outputs.expose(&scene, 0, light.as_ref());
             outputs.write(&out, &args.out)?;
         }
         specchio::say!(

@@ -329,7 +329,7 @@ fn render_frames(
         };
         write_frame(out, &frame_dir, &images)?;
         if args.sensor_outputs {
-            write_sensor_outputs(out, &frame_dir, renderer, (i as u64, t), images)?;
+            write_sensor_outputs(out, &frame_dir, renderer, (frame_index, t), images)?;
         }
         reports.push(report);
         if let Some(p) = &progress {
@@ -397,7 +397,7 @@ fn chosen_lookup(args: &Args, scene: &Scene, device: &DeviceInfo) -> Lookup {
 fn write_sensor_outputs(
     out: &Transaction,
     dir: &Path,
-    renderer: &Renderer,
+    renderer: &mut Renderer,
     (frame, t_s): (u64, f64),
     images: FrameImages,
 ) -> Result<()> {
@@ -414,7 +414,21 @@ fn write_sensor_outputs(
         (origin, direction),
         images.cube,
     );
-    outputs.expose(&renderer.scene, frame);
+    // The camera image of the whole exposure: the sensor's view at each of its instants (the
+    // scene's animations, the mirror's included, at each).
+    let light = match renderer.scene.sensor.imaging.clone() {
+        Some(imaging) => specchio::sensor::imaging::integrate(&imaging, t_s, |t| {
+            let readback = Readback {
+                sensor: true,
+                ..Default::default()
+            };
+            let (_, images) = renderer.render_frame(frame, t, readback)?;
+            (images.sensor)
+                .ok_or_else(|| anyhow::anyhow!("the sensor's view was not read back (a bug)"))
+        })?,
+        None => None,
+    };
+    outputs.expose(&renderer.scene, frame, light.as_ref());
     outputs.write(out, dir)?;
     Ok(())
 }

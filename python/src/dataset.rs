@@ -201,6 +201,7 @@ fn render(
     let mut frames = FrameWriter::new(&dev, &plan.scene, lookup).map_err(gpu_failed)?;
     frames.set_panoramas(plan.panoramas);
     frames.set_layers(plan.outputs());
+    frames.set_path(&plan.poses);
     let truth = frames.ground_truth();
     if job.resume {
         let key = plan.run_key(lookup, truth, &writer::device_key(&dev.info));

@@ -59,7 +59,8 @@ pub fn reference<'py>(
         let [sw, sh] = traced.sensor.resolution;
         let (sensor, _) = reference.render(&reference.sensor_view(), sw, sh, spp);
         let mut outputs = SensorOutputs::from_reference(&traced, time, &sensor);
-        outputs.expose(&traced, 0);
+        let light = specchio::sensor::imaging::traced_exposure(&traced, time, spp, [sw, sh]);
+        outputs.expose(&traced, 0, light.as_ref());
         Layers::new(outputs, &observer.color)
     });
     arrays::frame_dict(py, layers)

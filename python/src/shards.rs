@@ -85,6 +85,7 @@ impl DatasetFrames {
             let mut frames = FrameWriter::new(&dev, &plan.scene, lookup).map_err(gpu_failed)?;
             frames.set_panoramas(plan.panoramas);
             frames.set_layers(plan.outputs());
+            frames.set_path(&plan.poses);
             if let Some(n) = encoders {
                 frames.set_encoders(n);
             }

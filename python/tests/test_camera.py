@@ -55,3 +55,21 @@ def test_the_camera_layer_is_the_models_noise_on_known_light(tmp_path):
 
 def test_a_scene_without_imaging_has_no_camera_layer(renderer):
     assert "camera" not in renderer.render()
+
+
+def test_the_dataset_frames_blur_along_the_trajectory_as_the_command_does(tmp_path):
+    """DatasetFrames (what each Ray worker runs) moves the robot along the trajectory during
+    the exposure, as `specchio dataset` does: the same camera images, byte for byte."""
+    from conftest import cli
+
+    text = (SCENES / "test" / "six-colour-room.toml").read_text()
+    blurred = "\n[sensor.imaging]\nexposure_s = 0.1\nmotion_blur_samples = 4\n"
+    (tmp_path / "turning.toml").write_text(text + blurred)
+    (tmp_path / "turn.csv").write_text("time,x,y,z,heading\n0,0,0,0,0\n0.5,0,0,0,45\n1,0,0,0,90\n")
+    args = ["--trajectory", "turn.csv", "--out", "cli", "--outputs", "camera"]
+    run = cli("dataset", "turning.toml", *args, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    frames = specchio.DatasetFrames(tmp_path / "turning.toml", tmp_path / "turn.csv", encoders=0, outputs="camera")
+    files = dict(frames.frames([1])[0][0])
+    want = (tmp_path / "cli" / "frames" / "000001" / "sensor.camera.png").read_bytes()
+    assert files["frames/000001/sensor.camera.png"] == want

@@ -122,3 +122,117 @@ fn a_datasets_frames_each_draw_their_own_noise() {
     );
     assert_eq!(json(&frame(1).join("camera.json"))["imaging"]["frame"], 1);
 }
+
+/// The robot turning at 90°/s through a 0.1 s exposure sweeps the image 9° about the disc's
+/// centre (the camera looks up the turning axis): the red/blue wall corner, a radial line in
+/// the image, becomes a ramp 9° wide, less the last of the 16 instants' share: 9° (1 − 1/16²).
+/// The width is measured as 6 ∫ x (1 − x) dφ of the red share x = R / (R + B) along the
+/// azimuth, which is the width of a linear ramp (and of this staircase, exactly so).
+#[test]
+fn the_robots_turn_during_the_exposure_blurs_an_edge_by_its_analytic_sweep() {
+    let dir = temp_dir("motion-blur");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
+    // A camera bright and clean enough that the noise does not blur the edge: a 10^7 e- well
+    // filled to 90 %, no read noise or dark current, 16 bits, no vignetting.
+    let camera = "\n[sensor.imaging]\nexposure_s = 0.1\nunit_flux_e_per_s = 9e7\n\
+                  full_well_e = 1e7\nread_noise_e = 0\ndark_current_e_per_s = 0\n\
+                  bit_depth = 16\nvignetting = 0\nmotion_blur_samples = 16\n";
+    let scene_path = dir.join("turning.toml");
+    std::fs::write(&scene_path, format!("{text}{camera}")).unwrap();
+    let trajectory = dir.join("turn.csv");
+    std::fs::write(
+        &trajectory,
+        "time,x,y,z,heading\n0,0,0,0,0\n0.5,0,0,0,45\n1,0,0,0,90\n",
+    )
+    .unwrap();
+    let out = dir.join("set");
+    run_ok(&[
+        "dataset",
+        scene_path.to_str().unwrap(),
+        "--trajectory",
+        trajectory.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--outputs",
+        "image,camera",
+    ]);
+    let frame = out.join("frames/000001");
+    let centre = &json(&frame.join("camera.json"))["disc"]["centre_px"];
+    let centre = [centre[0].as_f64().unwrap(), centre[1].as_f64().unwrap()];
+    let (dn, sbit) = codes(&frame.join(CAMERA_IMAGE_FILE));
+    assert_eq!(sbit, [16, 16, 16]);
+    let blurred: Vec<[f64; 3]> = (dn.chunks(3))
+        .map(|c| [0, 1, 2].map(|k| f64::from(c[k]) / 65535.0))
+        .collect();
+    let clean = clean(&frame);
+    let sharp: Vec<[f64; 3]> = (clean.pixels.iter())
+        .map(|p| [0, 1, 2].map(|k| f64::from(p[k])))
+        .collect();
+    let w = clean.width as usize;
+    let (swept, swept_at) = edge_deg(&blurred, w, centre);
+    let (edge, edge_at) = edge_deg(&sharp, w, centre);
+    let expected = 9.0 * (1.0 - 1.0 / 256.0);
+    assert!(edge < 1.5, "the clean edge is {edge}° wide");
+    assert!(
+        (swept - expected).abs() < edge + 0.3,
+        "the swept edge is {swept}° wide, the sweep {expected}° (the clean edge {edge}°)"
+    );
+    // The exposure is centred on the frame's time: the swept edge's middle is where the
+    // clean image, taken at that time, has the edge.
+    assert!(
+        (swept_at - edge_at).abs() < 0.2,
+        "{swept_at}° against {edge_at}°"
+    );
+}
+
+/// The red/blue edge's width and middle (degrees of azimuth about `centre`), from the red
+/// share x of the pixels that see only the red and the blue walls (green dark, red + blue one
+/// colour's worth), in 0.25° bins within 15° of where x crosses a half: the width
+/// 6 ∫ x (1 − x) dφ, the middle where ∫ x dφ from the window's red end puts it.
+fn edge_deg(rgb: &[[f64; 3]], width: usize, centre: [f64; 2]) -> (f64, f64) {
+    const BIN: f64 = 0.25;
+    let mut bins = vec![(0.0, 0usize); (360.0 / BIN) as usize];
+    let full = rgb.iter().map(|p| p[0].max(p[2])).fold(0.0, f64::max);
+    for (i, p) in rgb.iter().enumerate() {
+        let sum = p[0] + p[2];
+        if p[1] > 0.02 * full || (sum - full).abs() > 0.05 * full {
+            continue;
+        }
+        let (x, y) = (
+            (i % width) as f64 + 0.5 - centre[0],
+            (i / width) as f64 + 0.5 - centre[1],
+        );
+        let phi = y.atan2(x).to_degrees().rem_euclid(360.0);
+        let last = bins.len() - 1;
+        let bin = &mut bins[((phi / BIN) as usize).min(last)];
+        bin.0 += p[0] / sum;
+        bin.1 += 1;
+    }
+    let share: Vec<Option<f64>> = (bins.iter())
+        .map(|&(s, n)| (n > 0).then(|| s / n as f64))
+        .collect();
+    // The red-to-blue crossing: a bin at or above a half next to one below.
+    let n = share.len();
+    let cross = (0..n)
+        .find(|&b| matches!((share[b], share[(b + 1) % n]), (Some(a), Some(c)) if (a - 0.5) * (c - 0.5) <= 0.0))
+        .expect("no red/blue edge in the image");
+    let reach = (15.0 / BIN) as isize;
+    let window: Vec<f64> = (-reach..=reach)
+        .map(|d| share[(cross as isize + d).rem_euclid(n as isize) as usize].unwrap_or(f64::NAN))
+        .collect();
+    assert!(
+        window.iter().all(|x| x.is_finite()),
+        "an empty bin near the edge"
+    );
+    let width = window.iter().map(|x| 6.0 * x * (1.0 - x) * BIN).sum();
+    // How far the red reaches into the window from its red end (before the crossing or after).
+    let red_first = window[0] > 0.5;
+    let red: f64 = window.iter().sum::<f64>() * BIN;
+    let start = (cross as f64 - reach as f64) * BIN;
+    let middle = match red_first {
+        true => start + red,
+        false => start + window.len() as f64 * BIN - red,
+    };
+    (width, middle)
+}

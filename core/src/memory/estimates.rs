@@ -34,6 +34,9 @@ const RENDER_SENSOR_OUTPUT_BASE_BYTES: u64 = 32 * MIB;
 /// measured: the light, three f32 (two copies while the blur runs), the codes, three u16,
 /// and the PNG's samples and bytes, six each at most: 36 at the peak.
 const CAMERA_IMAGE_PIXEL_BYTES: u64 = 36;
+/// With motion blur, the exposure's sum (four f64) and the instant read back (four f32),
+/// counted from the code: 48.
+const MOTION_BLUR_PIXEL_BYTES: u64 = 48;
 /// A triangle of one pass over the scene: vertex and index buffers, meshlets, per-object
 /// data (heavy: about 188 measured).
 const RENDER_TRIANGLE_BYTES: u64 = 210;
@@ -155,13 +158,16 @@ fn render_estimate(scene: &Scene, face_size_px: u32, directions: bool, frames: u
 
 /// `frames` frames' camera images, where the scene has an imaging chain.
 fn camera_image(e: &mut Estimate, scene: &Scene, frames: u64) {
-    if scene.sensor.imaging.is_some() {
+    if let Some(imaging) = &scene.sensor.imaging {
         let sensor = pixels(scene.sensor.resolution);
         e.add_many(
             "the camera image",
             frames * sensor,
             CAMERA_IMAGE_PIXEL_BYTES,
         );
+        if imaging.motion_blur_samples > 1 {
+            e.add_many("the exposure's sum", sensor, MOTION_BLUR_PIXEL_BYTES);
+        }
     }
 }
 

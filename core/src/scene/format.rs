@@ -287,6 +287,7 @@ pub struct ImagingSpec {
     pub vignetting: Option<f64>,
     pub blur_px: Option<f64>,
     pub seed: Option<i64>,
+    pub motion_blur_samples: Option<i64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -80,11 +80,16 @@ pub struct Imaging {
     pub blur_px: f32,
     /// Every random draw of a frame comes from this and the frame's number.
     pub seed: u64,
+    /// Instants the exposure is integrated over, evenly spread across it and centred on the
+    /// frame's time: the robot's motion along its trajectory and the scene's animations blur
+    /// the camera image. 1: the image of the frame's instant alone (no motion blur).
+    pub motion_blur_samples: u32,
 }
 
 impl Default for Imaging {
     /// The IMX249 camera of the module's notes, linear, with no lens blur (a lens is not in a
-    /// sensor's datasheet), natural vignetting and seed 0.
+    /// sensor's datasheet), natural vignetting, seed 0, and no motion blur (each instant
+    /// integrated costs a render).
     fn default() -> Self {
         let top = ((1u32 << IMX249_BIT_DEPTH) - 1) as f32;
         Self {
@@ -100,6 +105,7 @@ impl Default for Imaging {
             vignetting: 1.0,
             blur_px: 0.0,
             seed: 0,
+            motion_blur_samples: 1,
         }
     }
 }

@@ -187,10 +187,13 @@ impl SensorOutputs {
     }
 
     /// Makes the camera image of the scene's `[sensor.imaging]` as frame `frame` (its noise
-    /// drawn from the scene's seed and this number); nothing where the scene has none.
-    pub fn expose(&mut self, scene: &Scene, frame: u64) {
+    /// drawn from the scene's seed and this number) from `light`, the image of the whole
+    /// exposure (`imaging::integrate`), or the clean image of the frame's instant where it is
+    /// None; nothing where the scene has no imaging chain.
+    pub fn expose(&mut self, scene: &Scene, frame: u64, light: Option<&RgbaImage>) {
+        let light = light.unwrap_or(&self.image);
         self.camera = (scene.sensor.imaging.as_ref())
-            .map(|chain| imaging::expose(chain, &self.image, &self.optics, frame));
+            .map(|chain| imaging::expose(chain, light, &self.optics, frame));
     }
 
     /// The panoramas from the sensor image, and from the cube where there is one.

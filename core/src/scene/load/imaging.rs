@@ -20,6 +20,8 @@ const GAMMA: Range = Range::closed(0.1, 10.0);
 const UNIT: Range = Range::closed(0.0, 1.0);
 /// The lens blur's standard deviation (px): its kernel reaches 3σ, at most 60 pixels.
 const BLUR_PX: Range = Range::closed(0.0, 20.0);
+/// The most instants an exposure is integrated over: each is a render of the sensor's view.
+const MOTION_SAMPLES: u32 = 64;
 /// The ADC's bits: 8 (one byte per sample) to 16 (two).
 const BIT_DEPTH: std::ops::RangeInclusive<i64> = 8..=16;
 /// A measured response curve's points.
@@ -55,6 +57,10 @@ impl Ctx<'_> {
             vignetting: f("vignetting", s.vignetting, d.vignetting, UNIT)?,
             blur_px: f("blur_px", s.blur_px, d.blur_px, BLUR_PX)?,
             seed: self.seed(s)?,
+            motion_blur_samples: match s.motion_blur_samples {
+                None => d.motion_blur_samples,
+                Some(n) => self.count("sensor.imaging.motion_blur_samples", n, MOTION_SAMPLES)?,
+            },
         })
     }
 

@@ -13,6 +13,7 @@ pub mod check;
 mod error;
 mod folder;
 pub mod grid;
+pub mod motion;
 pub mod ply;
 pub mod rep103;
 pub mod resume;

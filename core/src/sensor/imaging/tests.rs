@@ -201,3 +201,31 @@ fn the_png_holds_the_codes_and_says_how_many_bits_count() {
         .collect();
     assert_eq!(codes, image.dn);
 }
+
+#[test]
+fn the_exposure_is_centred_on_the_frame_and_its_instants_share_it_evenly() {
+    let imaging = Imaging {
+        exposure_s: 0.1,
+        motion_blur_samples: 4,
+        ..Imaging::default()
+    };
+    let times = exposure_times(&imaging, 2.0);
+    let want = [1.9625, 1.9875, 2.0125, 2.0375];
+    // To the f32 exposure's rounding (0.1 is 0.10000000149 in f32).
+    assert!(
+        times.iter().zip(want).all(|(t, w)| (t - w).abs() < 1e-8),
+        "{times:?}"
+    );
+    assert_eq!(exposure_times(&Imaging::default(), 2.0), [2.0]);
+    // The mean of the images at those instants; one instant is no integration at all.
+    let image_at = |t: f64| -> Result<RgbaImage, ()> {
+        Ok(RgbaImage {
+            width: 1,
+            height: 1,
+            pixels: vec![[t as f32, 1.0, 0.0, 1.0]],
+        })
+    };
+    let light = integrate(&imaging, 2.0, image_at).unwrap().unwrap();
+    assert!((light.pixels[0][0] - 2.0).abs() < 1e-6 && light.pixels[0][1] == 1.0);
+    assert_eq!(integrate(&Imaging::default(), 2.0, image_at), Ok(None));
+}

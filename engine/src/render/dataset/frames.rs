@@ -15,12 +15,15 @@ use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::{Arc, Mutex};
 
 use super::{gpu_failed, place_robot, robot_scene};
+use crate::image::RgbaImage;
 use crate::output::{MemoryFiles, OutputError, Sink};
 use crate::render::{lookups, Readback, RenderOptions, Renderer};
 use crate::scene::{Lookup, Scene};
+use crate::sensor::dataset::motion;
 use crate::sensor::dataset::trajectory::Pose;
 use crate::sensor::dataset::{self as sensor_dataset, IndexLine, PoseRecord};
 use crate::sensor::dataset::{DatasetError, Frame, INDEX_FILE};
+use crate::sensor::imaging;
 use crate::sensor::layers::{Layer, Layers, IMAGE_FILES, POINTS_FILE};
 use crate::sensor::panorama::PanoramaFrame;
 use crate::sensor::{GroundTruth, SensorOutputs};
@@ -69,6 +72,9 @@ pub struct FrameWriter {
     panoramas: PanoramaFrame,
     /// The layers a frame's files hold (all the scene has unless set: [`Self::set_layers`]).
     layers: Layers,
+    /// The trajectory the frames are poses of, by frame number, for the robot's motion during
+    /// an exposure ([`Self::set_path`]); without it the robot stands still in each.
+    path: Option<Arc<[Pose]>>,
 }
 
 impl FrameWriter {
@@ -91,6 +97,7 @@ impl FrameWriter {
             encoders: encoders_for(scene),
             panoramas: PanoramaFrame::Robot,
             layers: Layers::all().for_scene(scene.sensor.imaging.is_some()),
+            path: None,
         })
     }
 
@@ -123,6 +130,7 @@ impl FrameWriter {
         pose: &Pose,
         observer: bool,
     ) -> Result<(SensorOutputs, Option<crate::image::RgbaImage>), DatasetError> {
+        let light = self.exposure(frame, pose)?;
         let r = &mut self.renderer;
         place_robot(&mut r.scene, &self.scene, pose);
         let readback = Readback {
@@ -147,8 +155,35 @@ impl FrameWriter {
             None,
         );
         outputs.panorama_seam_rad = self.panoramas.seam(pose.heading_deg.to_radians());
-        outputs.expose(&r.scene, frame as u64);
+        outputs.expose(&r.scene, frame as u64, light.as_ref());
         Ok((outputs, images.observer))
+    }
+
+    /// The light of frame `frame`'s whole exposure at `pose` (`imaging::integrate`): the
+    /// sensor's view at each of its instants, the robot where its path puts it then, the
+    /// scene's animations where they are; None for an exposure of one instant.
+    fn exposure(&mut self, frame: usize, pose: &Pose) -> Result<Option<RgbaImage>, DatasetError> {
+        let Some(imaging) = self.scene.sensor.imaging.clone() else {
+            return Ok(None);
+        };
+        let (r, scene) = (&mut self.renderer, &self.scene);
+        let path = self.path.as_deref().filter(|p| frame < p.len());
+        imaging::integrate(&imaging, pose.time_s, |t| {
+            let at = match path {
+                Some(path) => motion::pose_at(path, frame, t),
+                None => Pose {
+                    time_s: t,
+                    ..pose.clone()
+                },
+            };
+            place_robot(&mut r.scene, scene, &at);
+            let readback = Readback {
+                sensor: true,
+                ..Default::default()
+            };
+            let (_, images) = (r.render_frame(frame as u64, t, readback)).map_err(gpu_failed)?;
+            images.sensor.ok_or(DatasetError::NotReadBack { frame })
+        })
     }
 
     /// Frame `frame` at `pose`, rendered; its files still to encode.
@@ -177,6 +212,12 @@ impl FrameWriter {
     /// Unwraps the panoramas in `frame`'s frame (a dataset's `Plan::panoramas`).
     pub fn set_panoramas(&mut self, frame: PanoramaFrame) {
         self.panoramas = frame;
+    }
+
+    /// The robot follows `path` (a dataset's poses, by frame number) during each frame's
+    /// exposure, for the camera image's motion blur.
+    pub fn set_path(&mut self, path: &[Pose]) {
+        self.path = Some(path.into());
     }
 
     /// Writes only the `layers` chosen into a frame's files (a dataset's `Plan::outputs`).
