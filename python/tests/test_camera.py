@@ -37,20 +37,23 @@ def test_the_camera_layer_is_the_models_noise_on_known_light(tmp_path):
     assert batch["camera"].any()
     # Off the mirror the sensor camera sees the green ceiling of an unlit room: linear
     # (0, 1, 0) exactly. Its green codes are the photon transfer curve's at one level:
-    # mean K (Φt + Dt), variance K² (Φt + Dt + σr²) + 1/12 (EMVA 1288's linear model, the
-    # datasheet camera's numbers); red and blue see only the dark current and read noise.
+    # mean b + K (Φt + Dt), variance K² (Φt + Dt + σr²) + 1/12 (EMVA 1288's linear model, the
+    # datasheet camera's numbers, b the black level); red and blue see only the dark current
+    # and the read noise, about the black level.
     ceiling = ~first["mask"] & (first["sensor"][..., 1] == 1.0) & (first["sensor"][..., 0] == 0.0)
     assert ceiling.sum() > 50_000
-    full_well, read_noise, dark = 32359.0, 7.24, 1.5
+    full_well, read_noise, dark, black = 32359.0, 7.24, 1.5, 4.0
     k = 4095.0 / full_well
     charge = 3.0e6 * 0.005 + dark * 0.005
     green = camera[..., 1][ceiling].astype(np.float64)
     n = green.size
-    mean, var = k * charge, k * k * (charge + read_noise**2) + 1.0 / 12.0
+    mean, var = black + k * charge, k * k * (charge + read_noise**2) + 1.0 / 12.0
     assert abs(green.mean() - mean) < 5.0 * np.sqrt(var / n), (green.mean(), mean)
     assert abs(green.var(ddof=1) - var) < 5.0 * var * np.sqrt(2.0 / n), (green.var(ddof=1), var)
     red = camera[..., 0][ceiling].astype(np.float64)
-    assert red.mean() < 3.0
+    dark_mean = black + k * dark * 0.005
+    dark_var = k * k * (dark * 0.005 + read_noise**2) + 1.0 / 12.0
+    assert abs(red.mean() - dark_mean) < 5.0 * np.sqrt(dark_var / n), (red.mean(), dark_mean)
 
 
 def test_a_scene_without_imaging_has_no_camera_layer(renderer):

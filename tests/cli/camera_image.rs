@@ -85,6 +85,23 @@ fn render_and_reference_write_the_chains_codes_of_their_clean_image() {
             ("srgb".into(), 9.into())
         );
     }
+    // A render's frame number is its scene frame's (`--frame`): its draws are that frame's.
+    let out = dir.join("frame-3");
+    let o = out.to_str().unwrap();
+    run_ok(&[
+        "render",
+        s,
+        "--out",
+        o,
+        "--sensor-outputs",
+        "--cube-size",
+        "64",
+        "--frame",
+        "3",
+    ]);
+    assert_eq!(json(&out.join("camera.json"))["imaging"]["frame"], 3);
+    let expected = imaging::expose(&chain, &clean(&out), &optics, 3);
+    assert_eq!(codes(&out.join(CAMERA_IMAGE_FILE)).0, expected.dn);
 }
 
 #[test]

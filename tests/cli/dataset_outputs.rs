@@ -86,6 +86,20 @@ fn a_frame_holds_the_chosen_layers_only_each_with_the_full_runs_bytes() {
         }
         assert!(full.contains_key("sensor.rays.exr") && full.contains_key("points.ply"));
     }
+    // camera.json names only the files written.
+    let camera: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("some/frames/000000/camera.json")).unwrap())
+            .unwrap();
+    let files = camera["files"].as_object().unwrap();
+    assert!(
+        files.contains_key("range") && files.contains_key("ids"),
+        "{files:?}"
+    );
+    assert!(
+        !files.contains_key("rays") && !files.contains_key("ray_channels"),
+        "{files:?}"
+    );
+    assert_eq!(camera["files"]["panoramas"], serde_json::json!([]));
     let record: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("some/dataset.json")).unwrap()).unwrap();
     assert_eq!(

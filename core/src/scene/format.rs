@@ -281,6 +281,7 @@ pub struct ImagingSpec {
     pub dark_current_e_per_s: Option<f64>,
     pub system_gain_dn_per_e: Option<f64>,
     pub bit_depth: Option<i64>,
+    pub black_level_dn: Option<f64>,
     pub response: Option<String>,
     pub gamma: Option<f64>,
     pub response_table: Option<Vec<f64>>,

@@ -18,6 +18,11 @@ pub const IMX249_READ_NOISE_E: f32 = 7.24;
 pub const IMX249_DARK_CURRENT_E_PER_S: f32 = 1.5;
 /// Its ADC's bits.
 pub const IMX249_BIT_DEPTH: u32 = 12;
+/// The default black level (DN): the code of no light, above zero by four times the default
+/// camera's dark noise (7.24 e⁻ × 4095 / 32,359 = 0.92 DN), so that the read noise's
+/// negative half is kept rather than clipped at code 0, as a machine-vision camera's black
+/// level (offset) setting is for; a dark frame's mean is then this plus the dark charge.
+pub const DEFAULT_BLACK_LEVEL_DN: f32 = 4.0;
 /// The default exposure time (s): 10 ms, short enough that a robot moving at 1 m/s moves
 /// 1 cm in it.
 pub const DEFAULT_EXPOSURE_S: f32 = 0.01;
@@ -73,6 +78,8 @@ pub struct Imaging {
     pub system_gain_dn_per_e: f32,
     /// The ADC's bits (8 to 16).
     pub bit_depth: u32,
+    /// The code of no light (DN), below the top code.
+    pub black_level_dn: f32,
     pub response: Response,
     /// How much of the lens's natural cos⁴ fall-off the image shows: 0 none, 1 all of it.
     pub vignetting: f32,
@@ -101,6 +108,7 @@ impl Default for Imaging {
             dark_current_e_per_s: IMX249_DARK_CURRENT_E_PER_S,
             system_gain_dn_per_e: top / IMX249_FULL_WELL_E,
             bit_depth: IMX249_BIT_DEPTH,
+            black_level_dn: DEFAULT_BLACK_LEVEL_DN,
             response: Response::Linear,
             vignetting: 1.0,
             blur_px: 0.0,

@@ -243,7 +243,10 @@ impl SensorOutputs {
         };
         let (layers, panoramas) = rayon::join(|| self.write_layers(out, dir, chosen), panoramas);
         layers?;
-        out.write_json(&dir.join(CAMERA_FILE), &self.camera_record(panoramas?))
+        out.write_json(
+            &dir.join(CAMERA_FILE),
+            &self.camera_record(panoramas?, chosen),
+        )
     }
 
     /// The chosen of: the ray map, range, ids and the id map, the camera image.
@@ -293,7 +296,13 @@ impl SensorOutputs {
             .collect()
     }
 
-    pub(crate) fn camera_record(&self, panoramas: Vec<PanoramaRecord>) -> CameraRecord {
+    /// `camera.json`: the camera, and the files of the `chosen` layers written beside it
+    /// (`panoramas` those written).
+    pub(crate) fn camera_record(
+        &self,
+        panoramas: Vec<PanoramaRecord>,
+        chosen: Layers,
+    ) -> CameraRecord {
         let o = &self.optics;
         let v = &o.view;
         let rotation = Mat3::from_cols(v.right, v.down, v.forward);
@@ -336,16 +345,24 @@ impl SensorOutputs {
                 rim_angle_deg: o.rim_angle().map(f64::to_degrees),
                 max_elevation_deg: o.max_elevation().to_degrees(),
             },
-            imaging: self.camera.as_ref().map(CameraImage::record),
+            imaging: (self.camera.as_ref())
+                .filter(|_| chosen.has(Layer::Camera))
+                .map(CameraImage::record),
             files: FilesRecord {
-                rays: RAYS_FILE,
-                ray_channels: RAY_CHANNELS,
-                range: RANGE_FILE,
-                range_model: self.range_model,
-                ids: ID_FILE,
-                id_model: self.id_model,
-                id_map: ID_MAP_FILE,
-                no_id: NO_ID,
+                rays: chosen.has(Layer::Rays).then_some(RaysRecord {
+                    rays: RAYS_FILE,
+                    ray_channels: RAY_CHANNELS,
+                }),
+                range: chosen.has(Layer::Range).then_some(RangeRecord {
+                    range: RANGE_FILE,
+                    range_model: self.range_model,
+                }),
+                ids: chosen.has(Layer::Ids).then_some(IdsRecord {
+                    ids: ID_FILE,
+                    id_model: self.id_model,
+                    id_map: ID_MAP_FILE,
+                    no_id: NO_ID,
+                }),
                 panoramas,
             },
         }
@@ -451,17 +468,36 @@ pub struct DiscRecord {
     pub max_elevation_deg: f64,
 }
 
+/// The files written beside `camera.json`, each group only where its layer is.
 #[derive(Debug, Serialize)]
 pub struct FilesRecord {
+    #[serde(flatten)]
+    pub rays: Option<RaysRecord>,
+    #[serde(flatten)]
+    pub range: Option<RangeRecord>,
+    #[serde(flatten)]
+    pub ids: Option<IdsRecord>,
+    pub panoramas: Vec<PanoramaRecord>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct RaysRecord {
     pub rays: &'static str,
     pub ray_channels: [&'static str; 7],
+}
+
+#[derive(Debug, Serialize)]
+pub struct RangeRecord {
     pub range: &'static str,
     pub range_model: &'static str,
+}
+
+#[derive(Debug, Serialize)]
+pub struct IdsRecord {
     pub ids: &'static str,
     pub id_model: &'static str,
     pub id_map: &'static str,
     pub no_id: u32,
-    pub panoramas: Vec<PanoramaRecord>,
 }
 
 #[derive(Debug, Serialize)]

@@ -53,6 +53,7 @@ impl Ctx<'_> {
             )?,
             system_gain_dn_per_e: self.system_gain(s)?,
             bit_depth: self.bit_depth(s)?,
+            black_level_dn: self.black_level(s)?,
             response: self.response(s)?,
             vignetting: f("vignetting", s.vignetting, d.vignetting, UNIT)?,
             blur_px: f("blur_px", s.blur_px, d.blur_px, BLUR_PX)?,
@@ -90,6 +91,19 @@ impl Ctx<'_> {
                 ),
             )),
         }
+    }
+
+    /// The black level: a code below the top one.
+    fn black_level(&self, s: &ImagingSpec) -> R<f32> {
+        let Some(v) = s.black_level_dn else {
+            return Ok(Imaging::default().black_level_dn);
+        };
+        let top = ((1u32 << self.bit_depth(s)?) - 1) as f32;
+        let range = Range {
+            hi_open: true,
+            ..Range::closed(0.0, top)
+        };
+        self.ranged("sensor.imaging.black_level_dn", v, range)
     }
 
     fn seed(&self, s: &ImagingSpec) -> R<u64> {

@@ -1,6 +1,7 @@
 //! The random draws of a camera's noise: Poisson (photon and dark-current shot noise) and
-//! Gaussian (read noise), both from the project's SplitMix64 so that a seed gives the same
-//! frame on every machine and with any dependency's update.
+//! Gaussian (read noise), both from the project's SplitMix64, their logarithms and cosines
+//! `libm`'s, so that a seed gives the same frame on every machine and with any dependency's
+//! update.
 
 use crate::random::SplitMix64;
 
@@ -22,7 +23,7 @@ pub fn poisson(rng: &mut SplitMix64, lambda: f64) -> f64 {
 /// Sequential search from 0: P(0) = e^-λ, P(k) = P(k - 1) λ / k. Cheap for a small mean; the
 /// search stops after 1000 steps, where the remaining mass is below f64's reach.
 fn inversion(rng: &mut SplitMix64, lambda: f64) -> f64 {
-    let mut p = (-lambda).exp();
+    let mut p = libm::exp(-lambda);
     let mut cumulative = p;
     let u = rng.unit();
     let mut k = 0.0;
@@ -40,7 +41,7 @@ fn inversion(rng: &mut SplitMix64, lambda: f64) -> f64 {
 /// and otherwise checked against the exact probability.
 fn ptrs(rng: &mut SplitMix64, lambda: f64) -> f64 {
     let slam = lambda.sqrt();
-    let loglam = lambda.ln();
+    let loglam = libm::log(lambda);
     let b = 0.931 + 2.53 * slam;
     let a = -0.059 + 0.024_83 * b;
     let inv_alpha = 1.1239 + 1.1328 / (b - 3.4);
@@ -56,7 +57,7 @@ fn ptrs(rng: &mut SplitMix64, lambda: f64) -> f64 {
         if k < 0.0 || (us < 0.013 && v > us) {
             continue;
         }
-        let lhs = v.ln() + inv_alpha.ln() - (a / (us * us) + b).ln();
+        let lhs = libm::log(v) + libm::log(inv_alpha) - libm::log(a / (us * us) + b);
         if lhs <= -lambda + k * loglam - ln_factorial(k) {
             return k;
         }
@@ -81,8 +82,8 @@ fn ln_factorial(k: f64) -> f64 {
         return SMALL[k as usize];
     }
     let k2 = k * k;
-    (k + 0.5) * k.ln() - k
-        + 0.5 * (2.0 * std::f64::consts::PI).ln()
+    (k + 0.5) * libm::log(k) - k
+        + 0.5 * libm::log(2.0 * std::f64::consts::PI)
         + (1.0 / 12.0 - (1.0 / 360.0 - 1.0 / (1260.0 * k2)) / k2) / k
 }
 
@@ -91,7 +92,7 @@ fn ln_factorial(k: f64) -> f64 {
 pub fn normal(rng: &mut SplitMix64) -> f64 {
     let u1 = 1.0 - rng.unit(); // in (0, 1]: ln stays finite
     let u2 = rng.unit();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    (-2.0 * libm::log(u1)).sqrt() * libm::cos(std::f64::consts::TAU * u2)
 }
 
 #[cfg(test)]

@@ -3,6 +3,8 @@
 //! from the axis (the obliquity of the pupil and the pixel, and the distance; a telecentric,
 //! orthographic camera has none). Then the exposure turns light into mean photo-charge.
 
+use rayon::prelude::*;
+
 use super::Imaging;
 use crate::image::RgbaImage;
 use crate::sensor::optics::SensorOptics;
@@ -50,17 +52,20 @@ pub fn fall_off(optics: &SensorOptics, strength: f64) -> impl Fn(usize, usize) -
 }
 
 /// A separable Gaussian of standard deviation `sigma` pixels over 3 interleaved channels,
-/// reaching 3σ, the edge pixels repeated beyond the image (no light lost or gained at the
-/// border); `sigma` 0 leaves the image as it is.
+/// reaching 3σ, the edge pixels repeated beyond the image (a flat field stays flat to the
+/// border; a bright pixel within 3σ of it counts more than once, as if the scene went on
+/// beyond the image as its edge shows it); `sigma` 0 leaves the image as it is.
 pub fn blur(v: Vec<f32>, (w, h): (usize, usize), sigma: f64) -> Vec<f32> {
-    if sigma <= 0.0 {
+    if sigma <= 0.0 || v.is_empty() {
         return v;
     }
     let kernel = gaussian(sigma);
     let r = (kernel.len() / 2) as isize;
+    // One output row at a time, on every core: each sample is the same sum in the same order
+    // however the rows are shared out.
     let pass = |src: Vec<f32>, along_x: bool| -> Vec<f32> {
         let mut out = vec![0.0; src.len()];
-        for y in 0..h {
+        out.par_chunks_mut(w * 3).enumerate().for_each(|(y, row)| {
             for x in 0..w {
                 for c in 0..3 {
                     let mut sum = 0.0;
@@ -72,10 +77,10 @@ pub fn blur(v: Vec<f32>, (w, h): (usize, usize), sigma: f64) -> Vec<f32> {
                         };
                         sum += weight * f64::from(src[(sy * w + sx) * 3 + c]);
                     }
-                    out[(y * w + x) * 3 + c] = sum as f32;
+                    row[x * 3 + c] = sum as f32;
                 }
             }
-        }
+        });
         out
     };
     pass(pass(v, true), false)
@@ -85,7 +90,7 @@ pub fn blur(v: Vec<f32>, (w, h): (usize, usize), sigma: f64) -> Vec<f32> {
 fn gaussian(sigma: f64) -> Vec<f64> {
     let r = (3.0 * sigma).ceil() as isize;
     let raw: Vec<f64> = (-r..=r)
-        .map(|d| (-(d * d) as f64 / (2.0 * sigma * sigma)).exp())
+        .map(|d| libm::exp(-(d * d) as f64 / (2.0 * sigma * sigma)))
         .collect();
     let total: f64 = raw.iter().sum();
     raw.iter().map(|w| w / total).collect()

@@ -18,6 +18,7 @@ use crate::reference::Reference;
 pub use crate::scene::imaging::{Imaging, Response};
 use crate::scene::Scene;
 
+mod chain;
 pub mod draw;
 mod lens;
 #[cfg(test)]
@@ -26,11 +27,6 @@ mod tests;
 /// The camera image's file: RGB PNG, 8-bit for a bit depth of 8, 16-bit above, each code
 /// shifted to the top of its sample (`sBIT` says how many bits are significant).
 pub const CAMERA_IMAGE_FILE: &str = "sensor.camera.png";
-
-/// The charge a pixel's mean is capped at before its shot noise is drawn (e⁻): a hundred
-/// times the largest full well the loader accepts, so a capped pixel saturates whatever it
-/// draws, and an unbounded rendered value (an HDR highlight) costs no more than any other.
-const MEAN_CAP_E: f64 = 1e9;
 
 /// A frame's image as the camera reports it: digital numbers, RGB, rows top to bottom.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,6 +55,7 @@ pub struct ImagingRecord {
     pub dark_current_e_per_s: f32,
     pub system_gain_dn_per_e: f32,
     pub bit_depth: u32,
+    pub black_level_dn: f32,
     pub response: &'static str,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gamma: Option<f32>,
@@ -67,6 +64,7 @@ pub struct ImagingRecord {
     pub vignetting: f32,
     pub blur_px: f32,
     pub seed: u64,
+    pub motion_blur_samples: u32,
     pub frame: u64,
 }
 
@@ -116,6 +114,7 @@ impl CameraImage {
             dark_current_e_per_s: imaging.dark_current_e_per_s,
             system_gain_dn_per_e: imaging.system_gain_dn_per_e,
             bit_depth: imaging.bit_depth,
+            black_level_dn: imaging.black_level_dn,
             response: imaging.response.name(),
             gamma: match imaging.response {
                 Response::Gamma(g) => Some(g),
@@ -128,6 +127,7 @@ impl CameraImage {
             vignetting: imaging.vignetting,
             blur_px: imaging.blur_px,
             seed: imaging.seed,
+            motion_blur_samples: imaging.motion_blur_samples,
             frame: self.frame,
         }
     }
@@ -143,7 +143,7 @@ pub fn expose(
     let light = lens::light(imaging, image);
     let fall_off = lens::fall_off(optics, f64::from(imaging.vignetting));
     let w = image.width as usize;
-    let chain = Chain::new(imaging);
+    let chain = chain::Chain::new(imaging);
     let mut dn = vec![0u16; light.len()];
     (dn.par_chunks_mut(w * 3).enumerate()).for_each(|(y, row)| {
         let mut rng = row_stream(imaging.seed, frame, y as u64);
@@ -230,54 +230,4 @@ fn row_stream(seed: u64, frame: u64, row: u64) -> SplitMix64 {
     h = SplitMix64::new(h ^ frame).next_u64();
     h = SplitMix64::new(h ^ row).next_u64();
     SplitMix64::new(h)
-}
-
-/// The chain from a pixel's mean photo-charge to its code, its constants worked out once.
-struct Chain<'a> {
-    dark_e: f64,
-    read_noise_e: f64,
-    full_well_e: f64,
-    /// Digital numbers per electron, the analogue gain included.
-    gain: f64,
-    top: f64,
-    response: &'a Response,
-}
-
-impl<'a> Chain<'a> {
-    fn new(i: &'a Imaging) -> Self {
-        let gain_db = f64::from(i.gain_db);
-        Self {
-            dark_e: f64::from(i.dark_current_e_per_s) * f64::from(i.exposure_s),
-            read_noise_e: f64::from(i.read_noise_e),
-            full_well_e: f64::from(i.full_well_e),
-            gain: f64::from(i.system_gain_dn_per_e) * 10f64.powf(gain_db / 20.0),
-            top: f64::from((1u32 << i.bit_depth) - 1),
-            response: &i.response,
-        }
-    }
-
-    /// One sample: shot noise of the photo and dark charge, read noise, the full well, the
-    /// gain, the response, the nearest code.
-    fn digitise(&self, rng: &mut SplitMix64, photo_e: f64) -> u16 {
-        let mean = (photo_e + self.dark_e).min(MEAN_CAP_E);
-        let charge = draw::poisson(rng, mean) + self.read_noise_e * draw::normal(rng);
-        let charge = charge.clamp(0.0, self.full_well_e);
-        let x = (charge * self.gain / self.top).min(1.0);
-        (respond(self.response, x) * self.top).round() as u16
-    }
-}
-
-/// The response curve at `x` in [0, 1].
-fn respond(response: &Response, x: f64) -> f64 {
-    match response {
-        Response::Linear => x,
-        Response::Srgb => f64::from(crate::image::png::linear_to_srgb(x as f32)),
-        Response::Gamma(g) => x.powf(1.0 / f64::from(*g)),
-        Response::Table(t) => {
-            let at = x * (t.len() - 1) as f64;
-            let i = (at.floor() as usize).min(t.len() - 2);
-            let f = at - i as f64;
-            f64::from(t[i]) * (1.0 - f) + f64::from(t[i + 1]) * f
-        }
-    }
 }

@@ -2,6 +2,7 @@
 //! (the photon transfer curve), the lens's fall-off and blur, saturation, the response
 //! curves, and frames that are the same bytes however they are computed.
 
+use super::chain::respond;
 use super::lens::{blur, fall_off};
 use super::*;
 use crate::scene::Scene;
@@ -49,10 +50,10 @@ fn moments(dn: &[u16]) -> (f64, f64) {
 
 #[test]
 fn a_flat_fields_mean_and_variance_follow_the_photon_transfer_curve() {
-    // EMVA 1288's linear model: mean μ = K (μe + μd), variance K² (μe + μd + σr²) + 1/12 (the
-    // quantisation's). Both within 5 standard errors of the sample (the mean's σ/√n, the
-    // variance's σ²·√(2/n)), at levels from 2 % of the full well to 90 %, with dark current
-    // and a gain to make them count.
+    // EMVA 1288's linear model: mean μ = b + K (μe + μd), b the black level, variance
+    // K² (μe + μd + σr²) + 1/12 (the quantisation's). Both within 5 standard errors of the
+    // sample (the mean's σ/√n, the variance's σ²·√(2/n)), from no light to 45 % of the full
+    // well, with dark current and a gain to make them count.
     let s = scene();
     let o = optics(&s);
     let imaging = Imaging {
@@ -63,11 +64,12 @@ fn a_flat_fields_mean_and_variance_follow_the_photon_transfer_curve() {
     let k = f64::from(imaging.system_gain_dn_per_e) * 10f64.powf(6.0 / 20.0);
     let t = f64::from(imaging.exposure_s);
     let sigma_r = f64::from(imaging.read_noise_e);
-    for (i, level) in [0.02, 0.1, 0.25, 0.45].iter().enumerate() {
+    let black = f64::from(imaging.black_level_dn);
+    for (i, level) in [0.0, 0.02, 0.1, 0.25, 0.45].iter().enumerate() {
         let image = flat(&s, *level as f32);
         let got = expose(&imaging, &image, &o, i as u64);
         let charge = level * f64::from(imaging.unit_flux_e_per_s) * t + 2000.0 * t;
-        let mean = k * charge;
+        let mean = black + k * charge;
         let var = k * k * (charge + sigma_r * sigma_r) + 1.0 / 12.0;
         let (m, v) = moments(&got.dn);
         let n = got.dn.len() as f64;
@@ -85,13 +87,35 @@ fn a_flat_fields_mean_and_variance_follow_the_photon_transfer_curve() {
 #[test]
 fn the_full_well_saturates_at_the_top_code_whatever_the_light() {
     let s = scene();
+    // The full well is the top code less the black level: with the black level and the read
+    // noise above it, the ADC's top code (a sample below it is a 5σ draw of the read noise).
     for v in [2.0, 1e6, f32::INFINITY] {
         let got = expose(&bare(), &flat(&s, v), &optics(&s), 0);
-        assert!(got.dn.iter().all(|&d| d == 4095), "{v}");
+        let top = got.dn.iter().filter(|&&d| d == 4095).count();
+        assert!(top as f64 > 0.9999 * got.dn.len() as f64, "{v}: {top}");
+        assert!(got.dn.iter().all(|&d| d >= 4094), "{v}");
     }
-    // Darkness, NaN included, is read noise about 0 (clipped there): small codes only.
-    let got = expose(&bare(), &flat(&s, f32::NAN), &optics(&s), 0);
-    assert!(got.dn.iter().all(|&d| d <= 6), "{:?}", got.dn.iter().max());
+    // Darkness, NaN included, is the black level and the read noise about it, both halves of
+    // it kept: a mean of b + K μd and a variance of K² (μd + σr²) + 1/12.
+    let imaging = bare();
+    let got = expose(&imaging, &flat(&s, f32::NAN), &optics(&s), 0);
+    let k = f64::from(imaging.system_gain_dn_per_e);
+    let dark = f64::from(imaging.dark_current_e_per_s * imaging.exposure_s);
+    let sigma_r = f64::from(imaging.read_noise_e);
+    let (mean, var) = (
+        f64::from(imaging.black_level_dn) + k * dark,
+        k * k * (dark + sigma_r * sigma_r) + 1.0 / 12.0,
+    );
+    let (m, v) = moments(&got.dn);
+    let n = got.dn.len() as f64;
+    assert!(
+        (m - mean).abs() < 5.0 * (var / n).sqrt(),
+        "dark mean {m}, model {mean}"
+    );
+    assert!(
+        (v - var).abs() < 5.0 * var * (2.0 / n).sqrt(),
+        "dark variance {v}, model {var}"
+    );
 }
 
 #[test]

@@ -130,7 +130,12 @@ impl FrameWriter {
         pose: &Pose,
         observer: bool,
     ) -> Result<(SensorOutputs, Option<crate::image::RgbaImage>), DatasetError> {
-        let light = self.exposure(frame, pose)?;
+        // The camera image, and its exposure's renders, only where a frame holds it.
+        let camera = self.layers.has(Layer::Camera);
+        let light = match camera {
+            true => self.exposure(frame, pose)?,
+            false => None,
+        };
         let r = &mut self.renderer;
         place_robot(&mut r.scene, &self.scene, pose);
         let readback = Readback {
@@ -155,7 +160,9 @@ impl FrameWriter {
             None,
         );
         outputs.panorama_seam_rad = self.panoramas.seam(pose.heading_deg.to_radians());
-        outputs.expose(&r.scene, frame as u64, light.as_ref());
+        if camera {
+            outputs.expose(&r.scene, frame as u64, light.as_ref());
+        }
         Ok((outputs, images.observer))
     }
 
