@@ -289,6 +289,8 @@ pub struct ImagingSpec {
     pub blur_px: Option<f64>,
     pub seed: Option<i64>,
     pub motion_blur_samples: Option<i64>,
+    pub prnu_percent: Option<f64>,
+    pub dsnu_e: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -91,12 +91,18 @@ pub struct Imaging {
     /// frame's time: the robot's motion along its trajectory and the scene's animations blur
     /// the camera image. 1: the image of the frame's instant alone (no motion blur).
     pub motion_blur_samples: u32,
+    /// Photo-response non-uniformity: the standard deviation of the pixels' sensitivities
+    /// about their mean, percent (EMVA 1288's PRNU); a fixed pattern of the camera.
+    pub prnu_percent: f32,
+    /// Dark-signal non-uniformity: the standard deviation of the pixels' dark offsets (e⁻,
+    /// EMVA 1288's DSNU); a fixed pattern of the camera.
+    pub dsnu_e: f32,
 }
 
 impl Default for Imaging {
     /// The IMX249 camera of the module's notes, linear, with no lens blur (a lens is not in a
-    /// sensor's datasheet), natural vignetting, seed 0, and no motion blur (each instant
-    /// integrated costs a render).
+    /// sensor's datasheet), natural vignetting, seed 0, no motion blur (each instant
+    /// integrated costs a render) and uniform pixels (the table gives no PRNU or DSNU).
     fn default() -> Self {
         let top = ((1u32 << IMX249_BIT_DEPTH) - 1) as f32;
         Self {
@@ -114,6 +120,8 @@ impl Default for Imaging {
             blur_px: 0.0,
             seed: 0,
             motion_blur_samples: 1,
+            prnu_percent: 0.0,
+            dsnu_e: 0.0,
         }
     }
 }

@@ -17,6 +17,9 @@ const READ_NOISE_E: Range = Range::closed(0.0, 1e4);
 const DARK_CURRENT: Range = Range::closed(0.0, 1e6);
 const SYSTEM_GAIN: Range = Range::above(0.0, 1e4);
 const GAMMA: Range = Range::closed(0.1, 10.0);
+/// Non-uniformities: a PRNU of 50 % is a broken sensor; a DSNU of 10⁴ e⁻ one as bad.
+const PRNU_PERCENT: Range = Range::closed(0.0, 50.0);
+const DSNU_E: Range = Range::closed(0.0, 1e4);
 const UNIT: Range = Range::closed(0.0, 1.0);
 /// The lens blur's standard deviation (px): its kernel reaches 3σ, at most 60 pixels.
 const BLUR_PX: Range = Range::closed(0.0, 20.0);
@@ -62,6 +65,8 @@ impl Ctx<'_> {
                 None => d.motion_blur_samples,
                 Some(n) => self.count("sensor.imaging.motion_blur_samples", n, MOTION_SAMPLES)?,
             },
+            prnu_percent: f("prnu_percent", s.prnu_percent, d.prnu_percent, PRNU_PERCENT)?,
+            dsnu_e: f("dsnu_e", s.dsnu_e, d.dsnu_e, DSNU_E)?,
         })
     }
 

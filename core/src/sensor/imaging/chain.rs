@@ -41,9 +41,10 @@ impl<'a> Chain<'a> {
     /// read noise added (it may take the signal below zero, which the black level keeps in
     /// range), times the gain; then the response over the codes above the black level, the
     /// black level, and the nearest code the ADC has.
-    pub(super) fn digitise(&self, rng: &mut SplitMix64, photo_e: f64) -> u16 {
-        let mean = (photo_e + self.dark_e).min(MEAN_CAP_E);
-        let charge = draw::poisson(rng, mean).min(self.full_well_e);
+    /// `pixel` is the pixel's own sensitivity and dark offset (e⁻): its fixed pattern.
+    pub(super) fn digitise(&self, rng: &mut SplitMix64, photo_e: f64, pixel: Pixel) -> u16 {
+        let mean = (photo_e * pixel.sensitivity + self.dark_e).min(MEAN_CAP_E);
+        let charge = draw::poisson(rng, mean).min(self.full_well_e) + pixel.dark_offset_e;
         let signal = (charge + self.read_noise_e * draw::normal(rng)) * self.gain;
         let span = self.top - self.black;
         let code = match self.response {
@@ -52,6 +53,29 @@ impl<'a> Chain<'a> {
             curve => self.black + span * respond(curve, (signal / span).clamp(0.0, 1.0)),
         };
         code.round().clamp(0.0, self.top) as u16
+    }
+}
+
+/// A pixel's fixed pattern: its sensitivity relative to the mean pixel's and its dark offset.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Pixel {
+    pub sensitivity: f64,
+    pub dark_offset_e: f64,
+}
+
+impl Pixel {
+    pub const UNIFORM: Pixel = Pixel {
+        sensitivity: 1.0,
+        dark_offset_e: 0.0,
+    };
+
+    /// A pixel of a camera whose sensitivities spread by `prnu` (a fraction) and dark offsets
+    /// by `dsnu_e` (e⁻), both normal, drawn from `rng` (never below no sensitivity).
+    pub fn drawn(rng: &mut SplitMix64, prnu: f64, dsnu_e: f64) -> Pixel {
+        Pixel {
+            sensitivity: (1.0 + prnu * draw::normal(rng)).max(0.0),
+            dark_offset_e: dsnu_e * draw::normal(rng),
+        }
     }
 }
 

@@ -65,6 +65,8 @@ pub struct ImagingRecord {
     pub blur_px: f32,
     pub seed: u64,
     pub motion_blur_samples: u32,
+    pub prnu_percent: f32,
+    pub dsnu_e: f32,
     pub frame: u64,
 }
 
@@ -128,6 +130,8 @@ impl CameraImage {
             blur_px: imaging.blur_px,
             seed: imaging.seed,
             motion_blur_samples: imaging.motion_blur_samples,
+            prnu_percent: imaging.prnu_percent,
+            dsnu_e: imaging.dsnu_e,
             frame: self.frame,
         }
     }
@@ -144,13 +148,24 @@ pub fn expose(
     let fall_off = lens::fall_off(optics, f64::from(imaging.vignetting));
     let w = image.width as usize;
     let chain = chain::Chain::new(imaging);
+    let (prnu, dsnu) = (
+        f64::from(imaging.prnu_percent) / 100.0,
+        f64::from(imaging.dsnu_e),
+    );
     let mut dn = vec![0u16; light.len()];
     (dn.par_chunks_mut(w * 3).enumerate()).for_each(|(y, row)| {
         let mut rng = row_stream(imaging.seed, frame, y as u64);
+        // The camera's fixed pattern: the same for every frame, drawn only where it has one.
+        let mut pattern = pattern_stream(imaging.seed, y as u64);
+        let uniform = prnu == 0.0 && dsnu == 0.0;
         let light = &light[y * w * 3..(y + 1) * w * 3];
         let means = lens::mean_electrons(imaging, &fall_off, y, light);
         for (out, mean) in row.iter_mut().zip(means) {
-            *out = chain.digitise(&mut rng, mean);
+            let pixel = match uniform {
+                true => chain::Pixel::UNIFORM,
+                false => chain::Pixel::drawn(&mut pattern, prnu, dsnu),
+            };
+            *out = chain.digitise(&mut rng, mean, pixel);
         }
     });
     CameraImage {
@@ -221,6 +236,14 @@ pub fn traced_exposure(scene: &Scene, t_s: f64, spp: u32, [w, h]: [u32; 2]) -> O
         Ok(light) => light,
         Err(never) => match never {},
     }
+}
+
+/// Row `row`'s stream of the camera's fixed pattern (PRNU, DSNU): of the seed, not of a frame
+/// (the salt keeps it apart from every frame's stream).
+fn pattern_stream(seed: u64, row: u64) -> SplitMix64 {
+    const SALT: u64 = 0x5EED_F1CE_D0FF_5E75;
+    let h = SplitMix64::new(SplitMix64::new(seed ^ SALT).next_u64() ^ row).next_u64();
+    SplitMix64::new(h)
 }
 
 /// Row `row`'s random stream of frame `frame`: the three numbers hashed in turn, so no two

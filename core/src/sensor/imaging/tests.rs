@@ -253,3 +253,70 @@ fn the_exposure_is_centred_on_the_frame_and_its_instants_share_it_evenly() {
     assert!((light.pixels[0][0] - 2.0).abs() < 1e-6 && light.pixels[0][1] == 1.0);
     assert_eq!(integrate(&Imaging::default(), 2.0, image_at), Ok(None));
 }
+
+#[test]
+fn the_fixed_pattern_stays_from_frame_to_frame_and_spreads_as_its_prnu_and_dsnu_say() {
+    // EMVA 1288's split of a flat field's noise: over L frames, each pixel's mean keeps the
+    // fixed pattern, whose spatial variance is K² ((μe PRNU)² + DSNU²), plus the temporal
+    // variance over L; the temporal variance is each pixel's spread across the frames. Within
+    // 5 standard errors (the variance's σ²·√(2/n)).
+    let s = scene();
+    let o = optics(&s);
+    let imaging = Imaging {
+        prnu_percent: 2.0,
+        dsnu_e: 30.0,
+        ..bare()
+    };
+    let (w, h, frames) = (64usize, 64usize, 16usize);
+    let image = RgbaImage {
+        width: w as u32,
+        height: h as u32,
+        pixels: vec![[0.3, 0.3, 0.3, 1.0]; w * h],
+    };
+    let shots: Vec<Vec<u16>> = (0..frames)
+        .map(|f| expose(&imaging, &image, &o, f as u64).dn)
+        .collect();
+    let samples = w * h * 3;
+    let per_pixel = |i: usize| shots.iter().map(|s| f64::from(s[i])).collect::<Vec<f64>>();
+    let (mut means, mut temporal) = (Vec::with_capacity(samples), 0.0);
+    for i in 0..samples {
+        let v = per_pixel(i);
+        let m = v.iter().sum::<f64>() / frames as f64;
+        temporal += v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (frames - 1) as f64;
+        means.push(m);
+    }
+    temporal /= samples as f64;
+    let k = f64::from(imaging.system_gain_dn_per_e);
+    let mu_e = 0.3 * f64::from(imaging.unit_flux_e_per_s * imaging.exposure_s);
+    let dark = f64::from(imaging.dark_current_e_per_s * imaging.exposure_s);
+    let sigma_r = f64::from(imaging.read_noise_e);
+    let want_temporal = k * k * (mu_e + dark + sigma_r * sigma_r) + 1.0 / 12.0;
+    let n = samples as f64;
+    let se = want_temporal * (2.0 / (n * (frames - 1) as f64)).sqrt();
+    assert!(
+        (temporal - want_temporal).abs() < 5.0 * se,
+        "temporal {temporal}, model {want_temporal}"
+    );
+    let mean = means.iter().sum::<f64>() / n;
+    let spatial = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    let pattern = k * k * ((mu_e * 0.02).powi(2) + 30.0 * 30.0);
+    let want_spatial = pattern + want_temporal / frames as f64;
+    assert!(
+        (spatial - want_spatial).abs() < 5.0 * want_spatial * (2.0 / n).sqrt(),
+        "spatial {spatial}, model {want_spatial}"
+    );
+    // Without a pattern, the frames' means spread only by the temporal noise over L.
+    let uniform: Vec<Vec<u16>> = (0..frames)
+        .map(|f| expose(&bare(), &image, &o, f as u64).dn)
+        .collect();
+    let means: Vec<f64> = (0..samples)
+        .map(|i| uniform.iter().map(|s| f64::from(s[i])).sum::<f64>() / frames as f64)
+        .collect();
+    let mean = means.iter().sum::<f64>() / n;
+    let spatial = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    let want = want_temporal / frames as f64;
+    assert!(
+        (spatial - want).abs() < 5.0 * want * (2.0 / n).sqrt(),
+        "uniform {spatial}, {want}"
+    );
+}
