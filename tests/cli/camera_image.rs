@@ -147,48 +147,14 @@ fn a_datasets_frames_each_draw_their_own_noise() {
 /// azimuth, which is the width of a linear ramp (and of this staircase, exactly so).
 #[test]
 fn the_robots_turn_during_the_exposure_blurs_an_edge_by_its_analytic_sweep() {
-    let dir = temp_dir("motion-blur");
-    std::fs::create_dir_all(&dir).unwrap();
-    let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
-    // A camera bright and clean enough that the noise does not blur the edge: a 10^7 e- well
-    // filled to 90 %, no read noise or dark current, 16 bits, no vignetting.
-    let camera = "\n[sensor.imaging]\nexposure_s = 0.1\nunit_flux_e_per_s = 9e7\n\
-                  full_well_e = 1e7\nread_noise_e = 0\ndark_current_e_per_s = 0\n\
-                  bit_depth = 16\nvignetting = 0\nmotion_blur_samples = 16\n";
-    let scene_path = dir.join("turning.toml");
-    std::fs::write(&scene_path, format!("{text}{camera}")).unwrap();
-    let trajectory = dir.join("turn.csv");
-    std::fs::write(
-        &trajectory,
-        "time,x,y,z,heading\n0,0,0,0,0\n0.5,0,0,0,45\n1,0,0,0,90\n",
-    )
-    .unwrap();
-    let out = dir.join("set");
-    run_ok(&[
-        "dataset",
-        scene_path.to_str().unwrap(),
-        "--trajectory",
-        trajectory.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--outputs",
-        "image,camera",
-    ]);
-    let frame = out.join("frames/000001");
-    let centre = &json(&frame.join("camera.json"))["disc"]["centre_px"];
-    let centre = [centre[0].as_f64().unwrap(), centre[1].as_f64().unwrap()];
-    let (dn, sbit) = codes(&frame.join(CAMERA_IMAGE_FILE));
-    assert_eq!(sbit, [16, 16, 16]);
-    let blurred: Vec<[f64; 3]> = (dn.chunks(3))
-        .map(|c| [0, 1, 2].map(|k| f64::from(c[k]) / 65535.0))
-        .collect();
-    let clean = clean(&frame);
-    let sharp: Vec<[f64; 3]> = (clean.pixels.iter())
-        .map(|p| [0, 1, 2].map(|k| f64::from(p[k])))
-        .collect();
-    let w = clean.width as usize;
-    let (swept, swept_at) = edge_deg(&blurred, w, centre);
-    let (edge, edge_at) = edge_deg(&sharp, w, centre);
+    let turned = turning_frame(
+        "motion-blur",
+        "exposure_s = 0.1\nunit_flux_e_per_s = 9e7\nmotion_blur_samples = 16\n",
+    );
+    let (blurred, sharp, centre) = (&turned.camera, &turned.clean, turned.centre);
+    let w = turned.width;
+    let (swept, swept_at) = edge_deg(blurred, w, centre);
+    let (edge, edge_at) = edge_deg(sharp, w, centre);
     let expected = 9.0 * (1.0 - 1.0 / 256.0);
     assert!(edge < 1.5, "the clean edge is {edge}° wide");
     assert!(
@@ -252,4 +218,118 @@ fn edge_deg(rgb: &[[f64; 3]], width: usize, centre: [f64; 2]) -> (f64, f64) {
         false => start + window.len() as f64 * BIN - red,
     };
     (width, middle)
+}
+
+/// A rolling shutter reads row after row while the robot turns at 90°/s: row y is seen
+/// R ((y + ½)/h − ½) after the frame's time (R = 0.1 s), turned by 90°/s times that, so the
+/// radial red/blue corner, a vertical line below the disc's centre at the frame's heading,
+/// leans over by (y − cy) tan Δ(y) pixels at row y. The exposure (4 ms, one instant) spaces
+/// the rows' instants 4 ms apart, which moves a row by at most ±0.18° from its own time: the
+/// bound below allows a pixel.
+#[test]
+fn a_rolling_shutter_leans_a_radial_edge_as_the_rows_turn() {
+    let turned = turning_frame(
+        "rolling-shutter",
+        "exposure_s = 0.004\nunit_flux_e_per_s = 2.25e9\nrolling_shutter_s = 0.1\n",
+    );
+    let (rolled, sharp, [cx, cy]) = (&turned.camera, &turned.clean, turned.centre);
+    let (w, h) = (turned.width, turned.clean.len() / turned.width);
+    let mut rows = 0;
+    let mut signs = std::collections::BTreeSet::new();
+    for y in (cy as usize + 40)..h {
+        let (Some(at), Some(sharp_at)) = (edge_x(rolled, w, y, cx), edge_x(sharp, w, y, cx)) else {
+            continue;
+        };
+        let turn = (90.0 * 0.1 * ((y as f64 + 0.5) / h as f64 - 0.5)).to_radians();
+        let lean = (y as f64 + 0.5 - cy) * turn.tan();
+        let moved = at - sharp_at;
+        assert!(
+            (moved.abs() - lean.abs()).abs() < 1.0,
+            "row {y}: the edge moved {moved} px, the rows' turn leans it {lean} px"
+        );
+        signs.insert(moved > 0.0);
+        rows += 1;
+    }
+    assert!(rows > 50, "{rows} rows with the edge");
+    assert_eq!(signs.len(), 1, "the edge leans one way");
+}
+
+/// Where along row `y` the red wall gives way to the blue one within 20 pixels of `cx`:
+/// the window's left edge plus its red share (red on the left) or its right edge less it;
+/// None where the window is not all red or blue (green dark, red + blue one colour's worth)
+/// or holds no edge.
+fn edge_x(rgb: &[[f64; 3]], width: usize, y: usize, cx: f64) -> Option<f64> {
+    let (left, right) = (cx as usize - 20, cx as usize + 20);
+    let full = rgb.iter().map(|p| p[0].max(p[2])).fold(0.0, f64::max);
+    let mut red = Vec::new();
+    for x in left..right {
+        let p = rgb[y * width + x];
+        let sum = p[0] + p[2];
+        if p[1] > 0.02 * full || (sum - full).abs() > 0.05 * full {
+            return None;
+        }
+        red.push(p[0] / sum);
+    }
+    let (first, last) = (red[0], red[red.len() - 1]);
+    if (first - last).abs() < 0.9 {
+        return None;
+    }
+    let share: f64 = red.iter().sum();
+    Some(match first > last {
+        true => left as f64 + share,
+        false => right as f64 - share,
+    })
+}
+
+/// Frame 1 of a dataset of the six-colour room with a camera of `imaging` (TOML lines) bright
+/// and clean enough that noise does not move an edge (a 10⁷ e⁻ well, no read noise or dark
+/// current, 16 bits, no vignetting), the robot turning at 90°/s through heading 45° at its
+/// time, 0.5 s: its camera image and clean image (RGB, each in 0..1) and the disc's centre.
+struct Turned {
+    camera: Vec<[f64; 3]>,
+    clean: Vec<[f64; 3]>,
+    width: usize,
+    centre: [f64; 2],
+}
+
+fn turning_frame(name: &str, imaging: &str) -> Turned {
+    let dir = temp_dir(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
+    let camera = format!(
+        "\n[sensor.imaging]\nfull_well_e = 1e7\nread_noise_e = 0\ndark_current_e_per_s = 0\n\
+         bit_depth = 16\nvignetting = 0\n{imaging}"
+    );
+    let scene_path = dir.join("turning.toml");
+    std::fs::write(&scene_path, format!("{text}{camera}")).unwrap();
+    let trajectory = dir.join("turn.csv");
+    let turn = "time,x,y,z,heading\n0,0,0,0,0\n0.5,0,0,0,45\n1,0,0,0,90\n";
+    std::fs::write(&trajectory, turn).unwrap();
+    let out = dir.join("set");
+    let [s, t, o] = [&scene_path, &trajectory, &out].map(|p| p.to_str().unwrap());
+    run_ok(&[
+        "dataset",
+        s,
+        "--trajectory",
+        t,
+        "--out",
+        o,
+        "--outputs",
+        "image,camera",
+    ]);
+    let frame = out.join("frames/000001");
+    let c = &json(&frame.join("camera.json"))["disc"]["centre_px"];
+    let (dn, sbit) = codes(&frame.join(CAMERA_IMAGE_FILE));
+    assert_eq!(sbit, [16, 16, 16]);
+    let clean = clean(&frame);
+    Turned {
+        camera: (dn.chunks(3))
+            .map(|c| [0, 1, 2].map(|k| f64::from(c[k]) / 65535.0))
+            .collect(),
+        clean: (clean.pixels.iter())
+            .map(|p| [0, 1, 2].map(|k| f64::from(p[k])))
+            .collect(),
+        width: clean.width as usize,
+        centre: [c[0].as_f64().unwrap(), c[1].as_f64().unwrap()],
+    }
 }

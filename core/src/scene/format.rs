@@ -289,6 +289,7 @@ pub struct ImagingSpec {
     pub blur_px: Option<f64>,
     pub seed: Option<i64>,
     pub motion_blur_samples: Option<i64>,
+    pub rolling_shutter_s: Option<f64>,
     pub prnu_percent: Option<f64>,
     pub dsnu_e: Option<f64>,
 }

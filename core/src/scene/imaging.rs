@@ -91,6 +91,9 @@ pub struct Imaging {
     /// frame's time: the robot's motion along its trajectory and the scene's animations blur
     /// the camera image. 1: the image of the frame's instant alone (no motion blur).
     pub motion_blur_samples: u32,
+    /// A rolling shutter's readout (s): the last row's exposure starts this much after the
+    /// first's; 0, a global shutter (the IMX249's), every row exposed at once.
+    pub rolling_shutter_s: f32,
     /// Photo-response non-uniformity: the standard deviation of the pixels' sensitivities
     /// about their mean, percent (EMVA 1288's PRNU); a fixed pattern of the camera.
     pub prnu_percent: f32,
@@ -120,6 +123,7 @@ impl Default for Imaging {
             blur_px: 0.0,
             seed: 0,
             motion_blur_samples: 1,
+            rolling_shutter_s: 0.0,
             prnu_percent: 0.0,
             dsnu_e: 0.0,
         }

@@ -25,6 +25,10 @@ const UNIT: Range = Range::closed(0.0, 1.0);
 const BLUR_PX: Range = Range::closed(0.0, 20.0);
 /// The most instants an exposure is integrated over: each is a render of the sensor's view.
 const MOTION_SAMPLES: u32 = 64;
+/// A rolling shutter's readout (s): a CMOS sensor reads out in milliseconds; 1 s bounds it.
+const READOUT_S: Range = Range::closed(0.0, 1.0);
+/// The most instants a frame's rows see in all, a rolling shutter's included.
+const MAX_INSTANTS: u32 = 1024;
 /// The ADC's bits: 8 (one byte per sample) to 16 (two).
 const BIT_DEPTH: std::ops::RangeInclusive<i64> = 8..=16;
 /// A measured response curve's points.
@@ -65,6 +69,7 @@ impl Ctx<'_> {
                 None => d.motion_blur_samples,
                 Some(n) => self.count("sensor.imaging.motion_blur_samples", n, MOTION_SAMPLES)?,
             },
+            rolling_shutter_s: self.rolling_shutter(s)?,
             prnu_percent: f("prnu_percent", s.prnu_percent, d.prnu_percent, PRNU_PERCENT)?,
             dsnu_e: f("dsnu_e", s.dsnu_e, d.dsnu_e, DSNU_E)?,
         })
@@ -96,6 +101,36 @@ impl Ctx<'_> {
                 ),
             )),
         }
+    }
+
+    /// A rolling shutter's readout, whose exposure's instants (a render each) stay bounded.
+    fn rolling_shutter(&self, s: &ImagingSpec) -> R<f32> {
+        let field = "sensor.imaging.rolling_shutter_s";
+        let Some(v) = s.rolling_shutter_s else {
+            return Ok(0.0);
+        };
+        let readout = self.ranged(field, v, READOUT_S)?;
+        let exposure = match s.exposure_s {
+            Some(e) => self.ranged("sensor.imaging.exposure_s", e, EXPOSURE_S)?,
+            None => Imaging::default().exposure_s,
+        };
+        let samples = match s.motion_blur_samples {
+            Some(n) => self.count("sensor.imaging.motion_blur_samples", n, MOTION_SAMPLES)?,
+            None => 1,
+        };
+        let instants = f64::from(samples) * (1.0 + f64::from(readout) / f64::from(exposure));
+        if instants.ceil() > f64::from(MAX_INSTANTS) {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "asks for {} instants a frame (motion_blur_samples × (1 + \
+                     rolling_shutter_s / exposure_s), a render each); at most {MAX_INSTANTS}: \
+                     a shorter readout, a longer exposure or fewer samples",
+                    instants.ceil()
+                ),
+            ));
+        }
+        Ok(readout)
     }
 
     /// The black level: a code below the top one.

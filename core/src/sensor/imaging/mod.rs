@@ -17,9 +17,11 @@ use crate::random::SplitMix64;
 use crate::reference::Reference;
 pub use crate::scene::imaging::{Imaging, Response};
 use crate::scene::Scene;
+pub use exposure::{integrate, Schedule};
 
 mod chain;
 pub mod draw;
+mod exposure;
 mod lens;
 #[cfg(test)]
 mod tests;
@@ -65,6 +67,7 @@ pub struct ImagingRecord {
     pub blur_px: f32,
     pub seed: u64,
     pub motion_blur_samples: u32,
+    pub rolling_shutter_s: f32,
     pub prnu_percent: f32,
     pub dsnu_e: f32,
     pub frame: u64,
@@ -130,6 +133,7 @@ impl CameraImage {
             blur_px: imaging.blur_px,
             seed: imaging.seed,
             motion_blur_samples: imaging.motion_blur_samples,
+            rolling_shutter_s: imaging.rolling_shutter_s,
             prnu_percent: imaging.prnu_percent,
             dsnu_e: imaging.dsnu_e,
             frame: self.frame,
@@ -177,53 +181,8 @@ pub fn expose(
     }
 }
 
-/// The instants a frame at `t_s` integrates over: [`Imaging::motion_blur_samples`] of them,
-/// each at the middle of its equal share of the exposure, the exposure centred on `t_s`
-/// (so the clean image and the ground truth, taken at `t_s`, sit at the blur's centre).
-pub fn exposure_times(imaging: &Imaging, t_s: f64) -> Vec<f64> {
-    let n = imaging.motion_blur_samples.max(1);
-    let exposure = f64::from(imaging.exposure_s);
-    (0..n)
-        .map(|k| t_s + exposure * ((f64::from(k) + 0.5) / f64::from(n) - 0.5))
-        .collect()
-}
-
-/// The light of the whole exposure of a frame at `t_s`: the mean of the images
-/// `render_at(t)` gives at every [`exposure_times`] instant; None (the frame's own image is
-/// the light) where the exposure is one instant.
-pub fn integrate<E>(
-    imaging: &Imaging,
-    t_s: f64,
-    mut render_at: impl FnMut(f64) -> Result<RgbaImage, E>,
-) -> Result<Option<RgbaImage>, E> {
-    let times = exposure_times(imaging, t_s);
-    if times.len() < 2 {
-        return Ok(None);
-    }
-    let mut sum: Vec<[f64; 4]> = Vec::new();
-    let mut size = (0, 0);
-    for t in &times {
-        let image = render_at(*t)?;
-        if sum.is_empty() {
-            size = (image.width, image.height);
-            sum = vec![[0.0; 4]; image.pixels.len()];
-        }
-        for (s, p) in sum.iter_mut().zip(&image.pixels) {
-            for c in 0..4 {
-                s[c] += f64::from(p[c]);
-            }
-        }
-    }
-    let n = times.len() as f64;
-    Ok(Some(RgbaImage {
-        width: size.0,
-        height: size.1,
-        pixels: (sum.iter()).map(|s| s.map(|v| (v / n) as f32)).collect(),
-    }))
-}
-
 /// The light of the sensor camera's whole exposure at `t_s` from the exact reference: the
-/// scene traced at each instant of [`exposure_times`], `spp` samples a pixel, `w`x`h`; None
+/// scene traced at each instant of its [`Schedule`], `spp` samples a pixel, `w`x`h`; None
 /// for an exposure of one instant or a scene without an imaging chain.
 pub fn traced_exposure(scene: &Scene, t_s: f64, spp: u32, [w, h]: [u32; 2]) -> Option<RgbaImage> {
     let imaging = scene.sensor.imaging.as_ref()?;

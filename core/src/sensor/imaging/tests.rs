@@ -233,14 +233,14 @@ fn the_exposure_is_centred_on_the_frame_and_its_instants_share_it_evenly() {
         motion_blur_samples: 4,
         ..Imaging::default()
     };
-    let times = exposure_times(&imaging, 2.0);
+    let times = Schedule::of(&imaging, 2.0).times();
     let want = [1.9625, 1.9875, 2.0125, 2.0375];
     // To the f32 exposure's rounding (0.1 is 0.10000000149 in f32).
     assert!(
         times.iter().zip(want).all(|(t, w)| (t - w).abs() < 1e-8),
         "{times:?}"
     );
-    assert_eq!(exposure_times(&Imaging::default(), 2.0), [2.0]);
+    assert_eq!(Schedule::of(&Imaging::default(), 2.0).times(), [2.0]);
     // The mean of the images at those instants; one instant is no integration at all.
     let image_at = |t: f64| -> Result<RgbaImage, ()> {
         Ok(RgbaImage {
@@ -252,6 +252,38 @@ fn the_exposure_is_centred_on_the_frame_and_its_instants_share_it_evenly() {
     let light = integrate(&imaging, 2.0, image_at).unwrap().unwrap();
     assert!((light.pixels[0][0] - 2.0).abs() < 1e-6 && light.pixels[0][1] == 1.0);
     assert_eq!(integrate(&Imaging::default(), 2.0, image_at), Ok(None));
+}
+
+#[test]
+fn a_rolling_shutters_rows_see_their_own_stretch_of_the_exposure() {
+    // 4 rows read out over 0.08 s, each exposed 0.02 s in 2 instants (a step of 0.01 s): row
+    // y's exposure is centred 0.08 (y + 1/2) / 4 - 0.04 s after the frame's time, so each row
+    // sees the mean time of its own centre, the middle rows' straddling the frame's.
+    let imaging = Imaging {
+        exposure_s: 0.02,
+        motion_blur_samples: 2,
+        rolling_shutter_s: 0.08,
+        ..Imaging::default()
+    };
+    let schedule = Schedule::of(&imaging, 1.0);
+    assert_eq!(schedule.times().len(), 2 + 8);
+    let image_at = |t: f64| -> Result<RgbaImage, ()> {
+        Ok(RgbaImage {
+            width: 2,
+            height: 4,
+            pixels: vec![[t as f32, 0.0, 0.0, 1.0]; 8],
+        })
+    };
+    let light = integrate(&imaging, 1.0, image_at).unwrap().unwrap();
+    for y in 0..4 {
+        let centre = 1.0 + 0.08 * ((y as f64 + 0.5) / 4.0 - 0.5);
+        let seen = f64::from(light.pixels[y * 2][0]);
+        assert!(
+            (seen - centre).abs() < 1e-6,
+            "row {y}: {seen} against {centre}"
+        );
+        assert_eq!(light.pixels[y * 2], light.pixels[y * 2 + 1]);
+    }
 }
 
 #[test]

@@ -61,6 +61,11 @@ fn bad_numbers_and_words_name_their_field_and_line() {
         ("vignetting = 1.5\n", "sensor.imaging.vignetting: must be in [0, 1]"),
         ("blur_px = 21\n", "sensor.imaging.blur_px: must be in [0, 20]"),
         ("prnu_percent = -1\n", "sensor.imaging.prnu_percent: must be in [0, 50]"),
+        ("rolling_shutter_s = 2\n", "sensor.imaging.rolling_shutter_s: must be in [0, 1]"),
+        (
+            "exposure_s = 0.0625\nmotion_blur_samples = 64\nrolling_shutter_s = 1\n",
+            "sensor.imaging.rolling_shutter_s: asks for 1088 instants a frame",
+        ),
         ("dsnu_e = inf\n", "sensor.imaging.dsnu_e: must be a finite number"),
         ("motion_blur_samples = 65\n", "sensor.imaging.motion_blur_samples: must be in 1..=64, got 65"),
         ("black_level_dn = 4095\n", "sensor.imaging.black_level_dn: must be in [0, 4095), got 4095"),
