@@ -27,7 +27,8 @@ pub fn check_frame(frame: &Frame, files: &[&str]) -> Result<(), String> {
 }
 
 /// Frame `frame`'s file names: each one of `files` (`*` standing for any plain suffix), none
-/// twice, every fixed one of `files` there.
+/// twice, every one of `files` there (a `*` name by at least one file: a layer chosen is a
+/// layer written).
 pub fn check_frame_names(frame: usize, names: &[&str], files: &[&str]) -> Result<(), String> {
     if let Some(odd) = names.iter().find(|n| !named_in(files, n)) {
         return Err(format!(
@@ -40,8 +41,7 @@ pub fn check_frame_names(frame: usize, names: &[&str], files: &[&str]) -> Result
     if let Some(twice) = sorted.windows(2).find(|w| w[0] == w[1]) {
         return Err(format!("frame {frame}: {} twice", twice[0]));
     }
-    let fixed = files.iter().filter(|name| !name.contains('*'));
-    match fixed.into_iter().find(|f| !names.contains(f)) {
+    match (files.iter()).find(|f| !names.iter().any(|n| named_in(&[**f], n))) {
         Some(missing) => Err(format!("frame {frame}: no {missing}")),
         None => Ok(()),
     }

@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use super::*;
+use crate::sensor::dataset::check::check_frame_names;
 use crate::sensor::dataset::DatasetRecord;
 use crate::sensor::dataset::{any_frame_files, frame_files};
 use crate::sensor::dataset::{Folder, INDEX_FILE};
@@ -360,6 +361,28 @@ fn frame_file_names_are_the_frame_folders_own() {
     ] {
         assert!(!is_frame_file(name), "{name}");
     }
+    // A run's frame holds every file of its layers, a panorama among them where it has that
+    // layer.
+    let files = frame_files(Layers::all());
+    let whole: Vec<&str> = (files.iter())
+        .map(|f| {
+            if *f == "sensor.panorama.*" {
+                "sensor.panorama.lonlat.exr"
+            } else {
+                f
+            }
+        })
+        .collect();
+    assert_eq!(check_frame_names(0, &whole, &files), Ok(()));
+    let no_panorama: Vec<&str> = whole
+        .iter()
+        .copied()
+        .filter(|n| !n.starts_with("sensor.panorama."))
+        .collect();
+    assert_eq!(
+        check_frame_names(0, &no_panorama, &files),
+        Err("frame 0: no sensor.panorama.*".to_owned())
+    );
 }
 
 /// Appends `text` to the journal of `out`'s work folder.
