@@ -178,9 +178,11 @@ def test_an_interrupted_run_writes_nothing(made, monkeypatch):
         assert not [p for p in work.iterdir() if "stopped" in p.name], on_ray
 
 
+# A whole frame of a run of every layer (the thesis room has no camera model): a panorama among
+# its files, as the panoramas layer asks.
 FILES = [
     "sensor.exr", "sensor.png", "sensor.rays.exr", "sensor.range.exr", "sensor.id.exr",
-    "sensor.id.json", "camera.json", "pose.json", "points.ply",
+    "sensor.id.json", "camera.json", "pose.json", "points.ply", "sensor.panorama.lonlat.png",
 ]
 
 
@@ -195,6 +197,9 @@ def test_the_output_takes_only_its_frames_files(made, monkeypatch):
     frame = lambda n: [(f"frames/{n:06d}/{name}", b"x") for name in FILES]
     with pytest.raises(specchio.SpecchioError, match="frame 0: no sensor.exr"):
         out.place(frame(0)[1:], line(0))
+    no_panorama = [(p, b) for p, b in frame(0) if "panorama" not in p]
+    with pytest.raises(specchio.SpecchioError, match=r"frame 0: no sensor\.panorama\.\*"):
+        out.place(no_panorama, line(0))
     with pytest.raises(specchio.SpecchioError, match="frame 0: pose.json twice"):
         out.place(frame(0) + [("frames/000000/pose.json", b"y")], line(0))
     with pytest.raises(specchio.SpecchioError, match="frames 0 and 1 in one call"):
