@@ -97,8 +97,9 @@ provide_swiftshader() {
 
 provide_python() {
     [ $main_job -eq 1 ] && return 0
-    scripts/python-venv.sh .venv "import maturin, numpy, pytest, ray" \
-        "maturin>=1.9,<2" "numpy>=2" "pytest>=7" "ray>=2.9"
+    # rosbags and mcap: the independent readers of the ROS 2 bags (python/tests/test_bag.py).
+    scripts/python-venv.sh .venv "import maturin, numpy, pytest, ray, rosbags, mcap" \
+        "maturin>=1.9,<2" "numpy>=2" "pytest>=7" "ray>=2.9" "rosbags>=0.10,<1" "mcap>=1.2,<2"
 }
 
 codename=$( . /etc/os-release 2>/dev/null && echo "${VERSION_CODENAME:-}" )

@@ -17,7 +17,7 @@ use specchio::process::progress::Progress;
 use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::grid;
-use specchio::sensor::dataset::{resume, DatasetError, Folder};
+use specchio::sensor::dataset::{resume, DatasetError, Folder, Format};
 use specchio::sensor::layers::Layers;
 use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::instance::{Instance, InstanceDesc};
@@ -70,12 +70,18 @@ pub struct Args {
     /// map), panoramas, points (points.ply); or all. camera.json and pose.json always.
     #[arg(long, default_value = "all", value_name = "LAYERS")]
     outputs: Layers,
+    /// How the dataset is written: files (a folder per frame, and index.jsonl), mcap (a ROS 2
+    /// bag in OUT/bag: metadata.yaml and bag_0.mcap, made from the frames, which are then not
+    /// kept), or files,mcap.
+    #[arg(long, default_value = "files", value_name = "FORMATS")]
+    format: Format,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Every input checked before the output folder exists.
     let mut plan = Plan::new(&args.scene, poses(args)?)?;
     plan.panoramas = args.panorama_frame;
+    plan.set_format(args.format)?;
     plan.choose(args.outputs)?;
     let n = plan.poses.len();
     let mut folder = Folder::stage(&args.out, n, plan.frame_files())?;

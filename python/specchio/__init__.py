@@ -70,6 +70,7 @@ def dataset(
     worker_env: Optional[dict] = None,
     panorama_frame: str = "robot",
     outputs: Optional[Union[str, list[str]]] = None,
+    format: Optional[Union[str, list[str]]] = None,
 ) -> dict[str, Any]:
     """Renders the dataset of ``scene`` along ``trajectory`` (CSV or JSON, docs/sensor.md)
     into the folder ``out``, as ``specchio dataset`` does: per pose a folder of the sensor
@@ -104,6 +105,11 @@ def dataset(
     layer the scene has). ``camera.json`` and ``pose.json`` always. ``specchio dataset
     --outputs``, docs/sensor.md.
 
+    ``format``: ``"files"`` (the default: the frame folders and ``index.jsonl``), ``"mcap"``
+    (a ROS 2 bag in ``out/bag``, ``metadata.yaml`` and ``bag_0.mcap``, made from the frames,
+    which are then not kept) or ``"files,mcap"`` (or a list). ``specchio dataset --format``,
+    docs/sensor.md "ROS 2 bags".
+
     ``progress(done, total)`` is called as frames are written. Returns the summary
     (``dataset.json``) as a dict.
     """
@@ -129,6 +135,7 @@ def dataset(
             worker_env=worker_env,
             panorama_frame=panorama_frame,
             outputs=outputs,
+            format=format,
         )
     if workers is not None or worker_env is not None:
         raise SpecchioError("workers and worker_env are for ray=True")
@@ -146,5 +153,6 @@ def dataset(
         resume=resume,
         panorama_frame=panorama_frame,
         outputs=outputs,
+        format=format,
     )
 

@@ -95,6 +95,7 @@ class DatasetOutput:
         time: Optional[float] = None,
         panorama_frame: str = "robot",
         outputs: Optional[Union[str, list[str]]] = None,
+        format: Optional[Union[str, list[str]]] = None,
     ) -> None: ...
     def __len__(self) -> int: ...
     @property
@@ -129,4 +130,5 @@ def dataset(
     time: Optional[float] = None,
     panorama_frame: str = "robot",
     outputs: Optional[Union[str, list[str]]] = None,
+    format: Optional[Union[str, list[str]]] = None,
 ) -> dict[str, Any]: ...

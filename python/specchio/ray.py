@@ -83,6 +83,7 @@ def dataset(
     worker_env: Optional[dict] = None,
     panorama_frame: str = "robot",
     outputs: Optional[Union[str, list[str]]] = None,
+    format: Optional[Union[str, list[str]]] = None,
 ) -> dict[str, Any]:
     """``specchio.dataset`` on Ray; see its documentation."""
     import ray
@@ -104,7 +105,8 @@ def dataset(
         "outputs": outputs,
     }
     # Every input is checked, and the output staged, before any worker starts.
-    output = DatasetOutput(scene, trajectory, out, resume=resume, **plan)
+    # The bag is made by the driver, from the frames the workers rendered.
+    output = DatasetOutput(scene, trajectory, out, resume=resume, format=format, **plan)
     n = len(output)
     started = not ray.is_initialized()
     if started:

@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use specchio::render::dataset::{self as writer, gpu_failed, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::DatasetRecord;
-use specchio::sensor::dataset::{resume, DatasetError, Folder, Ready};
+use specchio::sensor::dataset::{resume, DatasetError, Folder, Format, Ready};
 use specchio::sensor::layers::Layers;
 use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::device::Device;
@@ -63,7 +63,7 @@ impl PoseSource {
     pub(crate) fn plan(
         &self,
         scene: &Path,
-        (panoramas, outputs): (PanoramaFrame, Option<Layers>),
+        (panoramas, outputs, format): (PanoramaFrame, Option<Layers>, Format),
     ) -> Result<Plan, DatasetError> {
         let poses = match self {
             PoseSource::File(path) => Poses::Trajectory(path),
@@ -82,6 +82,7 @@ impl PoseSource {
         if let Some(chosen) = outputs {
             plan.choose(chosen)?;
         }
+        plan.set_format(format)?;
         Ok(plan)
     }
 }
@@ -112,6 +113,18 @@ pub(crate) fn parse_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Opti
         .map_err(|e| errors::error(format!("outputs: {e}")))
 }
 
+/// The dataset's form as Python names it: `"files"`, `"mcap"` or `"files,mcap"`, or a list.
+pub(crate) fn parse_format(format: &Bound<'_, PyAny>) -> PyResult<Format> {
+    let text = match format.extract::<String>() {
+        Ok(text) => text,
+        Err(_) => (format.extract::<Vec<String>>())
+            .map_err(|_| errors::error("format: a string (\"files,mcap\") or a list of names"))?
+            .join(","),
+    };
+    text.parse()
+        .map_err(|e| errors::error(format!("format: {e}")))
+}
+
 pub(crate) fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
     lookup
         .map(|l| {
@@ -127,7 +140,7 @@ pub(crate) fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
 /// `resume`, finished frames are kept in `out.partial` and a stopped run goes on from them
 /// (`specchio dataset --resume`). Returns the summary (`dataset.json`) as a dict.
 #[pyfunction]
-#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None))]
+#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None, format=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn dataset(
     py: Python<'_>,
@@ -144,9 +157,15 @@ pub fn dataset(
     time: Option<f64>,
     panorama_frame: &str,
     outputs: Option<Bound<'_, PyAny>>,
+    format: Option<Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyAny>> {
     let device = crate::args::device(device.as_ref())?;
     let job = Job {
+        format: format
+            .as_ref()
+            .map(parse_format)
+            .transpose()?
+            .unwrap_or_default(),
         panoramas: parse_panorama_frame(panorama_frame)?,
         outputs: parse_outputs(outputs.as_ref())?,
         asked: parse_lookup(lookup)?,
@@ -169,6 +188,7 @@ pub fn dataset(
 
 /// What `dataset` renders: its arguments, checked.
 struct Job<'a> {
+    format: Format,
     panoramas: PanoramaFrame,
     outputs: Option<Layers>,
     asked: Option<Lookup>,
@@ -194,7 +214,7 @@ fn render(
 ) -> Result<Finished, DatasetError> {
     // What this call may not replace is what it reads (docs/python.md).
     specchio::files::identity::forget();
-    let plan = job.source.plan(job.scene, (job.panoramas, job.outputs))?;
+    let plan = (job.source).plan(job.scene, (job.panoramas, job.outputs, job.format))?;
     let n = plan.poses.len();
     let mut folder = Folder::stage(job.out, n, plan.frame_files())?;
     let (log, dev, lookup) = open_device(job, &plan)?;

@@ -10,12 +10,13 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use specchio::render::dataset::{device_key, gpu_failed, FrameWriter, Plan};
 use specchio::scene::Lookup;
-use specchio::sensor::dataset::{resume, DatasetError, Folder, Frame};
+use specchio::sensor::dataset::{resume, DatasetError, Folder, Format, Frame};
 use specchio::sensor::GroundTruth;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 use crate::dataset::{
-    commit, parse_lookup, parse_outputs, parse_panorama_frame, with_kept_note, PoseSource,
+    commit, parse_format, parse_lookup, parse_outputs, parse_panorama_frame, with_kept_note,
+    PoseSource,
 };
 use crate::errors;
 use crate::renderer::check_validation;
@@ -63,6 +64,7 @@ impl DatasetFrames {
         let choices = (
             parse_panorama_frame(panorama_frame)?,
             parse_outputs(outputs.as_ref())?,
+            Format::default(),
         );
         let device = crate::args::device(device.as_ref())?;
         // At most MAX_ENCODERS: each holds a frame in memory.
@@ -200,7 +202,7 @@ pub struct DatasetOutput {
 #[pymethods]
 impl DatasetOutput {
     #[new]
-    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None))]
+    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None, format=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -213,11 +215,17 @@ impl DatasetOutput {
         time: Option<f64>,
         panorama_frame: &str,
         outputs: Option<Bound<'_, PyAny>>,
+        format: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let source = PoseSource::new(trajectory, grid, headings, time)?;
         let choices = (
             parse_panorama_frame(panorama_frame)?,
             parse_outputs(outputs.as_ref())?,
+            format
+                .as_ref()
+                .map(parse_format)
+                .transpose()?
+                .unwrap_or_default(),
         );
         py.detach(|| -> Result<Self, DatasetError> {
             specchio::files::identity::forget();

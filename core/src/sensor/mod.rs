@@ -7,6 +7,7 @@
 //! the sensor image (and reads the same panoramas from a cube map), and [`outputs`] gathers one
 //! frame's layers from the reference or the GPU and writes them ([`files`]: EXR channels).
 
+pub mod bag;
 pub mod central;
 pub mod dataset;
 pub mod files;

@@ -33,6 +33,9 @@ pub enum DatasetError {
     Gpu(Box<dyn std::error::Error + Send + Sync>),
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// The ROS 2 bag could not be made from the frames.
+    #[error(transparent)]
+    Bag(#[from] crate::sensor::bag::BagError),
     /// The run was stopped between frames (a signal, Python's KeyboardInterrupt); the text
     /// says how far it got.
     #[error("{0}")]

@@ -6,9 +6,11 @@
 use std::path::{Path, PathBuf};
 
 use super::check::check_frame;
+use super::frame_folder;
 use super::resume::{RunKey, WorkFolder};
 use super::{DatasetError, Frame, INDEX_FILE, SUMMARY_FILE};
 use crate::output::{OutputError, Sink, Transaction};
+use crate::sensor::bag::{self, BagError};
 use crate::sensor::dataset::DatasetRecord;
 
 /// The output folder of a dataset of `index.len()` frames, being filled.
@@ -21,6 +23,9 @@ pub struct Folder {
     /// The files each frame holds (`super::frame_files` of the run's layers).
     files: Vec<&'static str>,
 }
+
+/// The folder every frame folder is in.
+const FRAMES: &str = "frames";
 
 impl Folder {
     /// Stages the folder `root` for `frames` frames, each of which holds `files`; fails now,
@@ -114,19 +119,55 @@ impl Folder {
         if let Some(work) = &self.work {
             work.link_into(&self.staged, &self.root)?;
         }
-        let mut index = String::new();
-        for line in self.index.iter().flatten() {
-            index.push_str(line);
-            index.push('\n');
-        }
         let staged = self.staged;
-        staged.write_bytes(&self.root.join(INDEX_FILE), index.as_bytes())?;
+        let format = record.format;
+        if format.mcap {
+            let origin = glam::DVec3::from_array(record.scene_origin_m);
+            write_bag(&staged, &self.root, self.index.len(), origin)?;
+        }
+        if format.files {
+            let mut index = String::new();
+            for line in self.index.iter().flatten() {
+                index.push_str(line);
+                index.push('\n');
+            }
+            staged.write_bytes(&self.root.join(INDEX_FILE), index.as_bytes())?;
+        } else {
+            // The bag holds them: rendered only to make it.
+            let frames = staged.path_for(&self.root.join(FRAMES))?;
+            std::fs::remove_dir_all(&frames).map_err(|source| OutputError::Io {
+                path: self.root.join(FRAMES),
+                source,
+            })?;
+        }
         staged.write_json(&self.root.join(SUMMARY_FILE), record)?;
         Ok(Ready {
             staged,
             work: self.work,
         })
     }
+}
+
+/// The ROS 2 bag of the `frames` frames staged in `root`'s transaction, in `root/bag/`.
+fn write_bag(
+    staged: &Transaction,
+    root: &Path,
+    frames: usize,
+    origin: glam::DVec3,
+) -> Result<(), DatasetError> {
+    let dir = root.join(bag::BAG_FOLDER);
+    let mcap = dir.join(bag::BAG_FILE);
+    let read = |i: usize, name: &str| -> Result<Option<Vec<u8>>, BagError> {
+        let path = root.join(frame_folder(i)).join(name);
+        match std::fs::read(staged.path_for(&path)?) {
+            Ok(bytes) => Ok(Some(bytes)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(source) => Err(BagError::Io { path, source }),
+        }
+    };
+    let metadata = bag::write(staged.create(&mcap)?, &mcap, frames, &read, origin)?;
+    staged.write_bytes(&dir.join(bag::METADATA_FILE), metadata.as_bytes())?;
+    Ok(())
 }
 
 /// A finished dataset, staged.

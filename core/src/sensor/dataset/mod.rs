@@ -12,6 +12,7 @@
 pub mod check;
 mod error;
 mod folder;
+mod format;
 pub mod grid;
 pub mod motion;
 pub mod ply;
@@ -22,10 +23,11 @@ pub mod trajectory;
 pub use check::{check_frame, check_index_line};
 pub use error::DatasetError;
 pub use folder::{Folder, Ready};
+pub use format::Format;
 pub use resume::RunKey;
 
 use glam::{DMat3, DVec3, Vec3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::layers::Layers;
 use super::localise::poses::object_spheres;
@@ -154,7 +156,7 @@ pub fn far_plane(scene: &Scene) -> f32 {
 }
 
 /// One frame's pose: the robot in the scene's frame and in ROS's, and its sensor camera.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct PoseRecord {
     pub frame: usize,
     pub time_s: f64,
@@ -165,13 +167,13 @@ pub struct PoseRecord {
     pub ros: RosPose,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ScenePose {
     pub position_m: [f64; 3],
     pub heading_deg: f64,
 }
 
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RosPose {
     pub base_link_position_m: [f64; 3],
     pub base_link_quaternion_xyzw: [f64; 4],
@@ -229,7 +231,8 @@ pub struct DatasetRecord {
     /// The colour image's lookup, and where range and ids come from.
     pub lookup: String,
     pub ground_truth: super::GroundTruth,
-    pub index: &'static str,
+    /// The index a data loader reads, where the frame folders are written.
+    pub index: Option<&'static str>,
     /// The scene frame's origin in the file's coordinates; the ray maps and point clouds are
     /// local to it.
     pub scene_origin_m: [f64; 3],
@@ -241,6 +244,8 @@ pub struct DatasetRecord {
     /// The layers chosen (`--outputs`), and the files every frame folder holds for them.
     pub outputs: Layers,
     pub frame_files: Vec<&'static str>,
+    /// The frame folders (`files`), the ROS 2 bag in `bag/` (`mcap`), or both.
+    pub format: Format,
 }
 
 /// The file every frame folder holds whatever its layers: its pose.

@@ -20,9 +20,9 @@ use crate::files::digest::{self, Digest};
 use crate::scene::{Lookup, RefreshPolicy, Scene};
 use crate::sensor::dataset::grid;
 use crate::sensor::dataset::resume::RunKey;
-use crate::sensor::dataset::trajectory::{self, Pose, TrajectoryError};
+use crate::sensor::dataset::trajectory::{self, Place, Pose, TrajectoryError};
 use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
-use crate::sensor::dataset::{DatasetError, Folder, INDEX_FILE};
+use crate::sensor::dataset::{DatasetError, Folder, Format, INDEX_FILE};
 use crate::sensor::layers::{Layer, Layers};
 use crate::sensor::panorama::PanoramaFrame;
 use crate::sensor::GroundTruth;
@@ -64,7 +64,12 @@ pub struct Plan {
     pub panoramas: PanoramaFrame,
     /// The layers each frame holds: all the scene has unless chosen ([`Plan::choose`]).
     outputs: Layers,
+    /// The frame folders, the ROS 2 bag, or both ([`Plan::set_format`]).
+    format: Format,
 }
+
+/// How a grid's description (a plan's `trajectory`) begins.
+const GRID: &str = "grid:";
 
 /// Where a dataset's poses come from.
 pub enum Poses<'a> {
@@ -103,6 +108,7 @@ impl Plan {
             poses,
             inputs,
             panoramas: PanoramaFrame::Robot,
+            format: Format::default(),
             outputs,
         })
     }
@@ -162,7 +168,7 @@ impl Plan {
                     }
                 })?,
                 format!(
-                    "grid: spacing {} m, {headings} heading(s), t = {} s",
+                    "{GRID} spacing {} m, {headings} heading(s), t = {} s",
                     crate::text::num_text(spacing_m),
                     crate::text::num_text(time_s)
                 ),
@@ -207,6 +213,22 @@ impl Plan {
         }
     }
 
+    /// Writes the dataset in `format`: refused where a bag cannot hold every pose's time.
+    pub fn set_format(&mut self, format: Format) -> Result<(), DatasetError> {
+        if format.mcap {
+            let grid = self.trajectory.starts_with(GRID);
+            let at = |p: &Pose| match (grid, p.at) {
+                (true, _) => "--time".to_owned(),
+                (false, Place::Line(n)) => format!("{}:{n}: time", self.trajectory),
+                (false, Place::Entry(i)) => format!("{}: poses[{i}]: time", self.trajectory),
+            };
+            let times = self.poses.iter().map(|p| (p.time_s, at(p)));
+            crate::sensor::bag::check_times(times).map_err(DatasetError::Invalid)?;
+        }
+        self.format = format;
+        Ok(())
+    }
+
     /// The summary of this dataset rendered with `lookup`, whose range and ids come from
     /// `truth`.
     pub fn record(&self, lookup: Lookup, truth: GroundTruth) -> DatasetRecord {
@@ -216,12 +238,13 @@ impl Plan {
             frames: self.poses.len(),
             lookup: lookup.to_string(),
             ground_truth: truth,
-            index: INDEX_FILE,
+            index: self.format.files.then_some(INDEX_FILE),
             scene_origin_m: self.scene.origin.to_array(),
             scene_to_ros: sensor_dataset::scene_to_ros_rows(),
             panorama_frame: self.panoramas,
             outputs: self.outputs,
             frame_files: self.frame_files(),
+            format: self.format,
         }
     }
 }

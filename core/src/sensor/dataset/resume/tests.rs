@@ -66,12 +66,13 @@ fn record(frames: usize) -> DatasetRecord {
         frames,
         lookup: "ray-query".into(),
         ground_truth: GroundTruth::Traced,
-        index: INDEX_FILE,
+        index: Some(INDEX_FILE),
         scene_origin_m: [0.0; 3],
         scene_to_ros: [[0.0; 3]; 3],
         panorama_frame: crate::sensor::panorama::PanoramaFrame::Robot,
         outputs: Layers::all(),
         frame_files: any_frame_files(),
+        format: Default::default(),
     }
 }
 

@@ -1,0 +1,148 @@
+//! A dataset as a ROS 2 bag in MCAP storage (`specchio dataset --format mcap`,
+//! docs/sensor.md "ROS 2 bags"): the folder `bag/` of the dataset, holding `metadata.yaml`
+//! (rosbag2's) and `bag_0.mcap`, made from the frame folders the run wrote, so that the bag
+//! and the files say the same.
+//!
+//! Frames (REP-103 and REP-105): `map`, `odom` (equal to `map`: the poses are ground truth,
+//! without drift), `base_link` (the robot at the mirror's viewpoint: x forward, z up) and
+//! `camera_optical` (the sensor camera: x right, y down, z forward). Each frame at its pose's
+//! time: `/tf` (odom → base_link), `/odom`, the camera's `camera_info`, its images, and the
+//! point cloud; `/tf_static` once (map → odom, and base_link → camera_optical where the camera
+//! sits still on the robot, which is on `/tf` otherwise).
+
+mod cdr;
+pub mod frame;
+pub mod msgs;
+mod rosbag2;
+mod topics;
+
+use std::collections::BTreeMap;
+use std::io::{BufWriter, Seek, Write};
+use std::path::PathBuf;
+
+use glam::{DQuat, DVec3};
+
+use frame::{FramePose, Placed, ReadFile};
+pub use topics::{Topic, TOPICS};
+
+/// The bag's folder in the dataset folder, and its files.
+pub const BAG_FOLDER: &str = "bag";
+pub const BAG_FILE: &str = "bag_0.mcap";
+pub const METADATA_FILE: &str = "metadata.yaml";
+
+/// The TF frames.
+pub const MAP: &str = "map";
+pub const ODOM: &str = "odom";
+pub const BASE_LINK: &str = "base_link";
+pub const CAMERA_OPTICAL: &str = "camera_optical";
+
+/// Why a bag could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum BagError {
+    #[error("frame {frame}: {file}: {why}")]
+    Frame {
+        frame: usize,
+        file: &'static str,
+        why: String,
+    },
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
+    #[error("{path}: {source}")]
+    Mcap {
+        path: PathBuf,
+        source: mcap::McapError,
+    },
+}
+
+/// How far apart two poses of the camera on the robot may be and still be one static
+/// transform: well below what a float32 of the scene file holds.
+const STATIC_TOLERANCE: f64 = 1e-6;
+
+/// Writes the bag of `frames` frames, whose files `read` gives, into `to` (the MCAP file,
+/// named `path` in errors); `scene_origin` is the scene frame's origin in the file's
+/// coordinates (the point clouds are local to it). Returns rosbag2's `metadata.yaml`.
+pub fn write<W: Write + Seek>(
+    to: W,
+    path: &std::path::Path,
+    frames: usize,
+    read: &ReadFile,
+    scene_origin: DVec3,
+) -> Result<String, BagError> {
+    let poses = (0..frames)
+        .map(|i| FramePose::read(read, i))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mount = still_mount(&poses);
+    let mut bag = topics::Writer::new(BufWriter::new(to), path)?;
+    let start = poses.iter().map(FramePose::stamp_ns).min().unwrap_or(0);
+    let mut statics = vec![msgs::Transform {
+        stamp_ns: start,
+        parent: MAP,
+        child: ODOM,
+        translation: DVec3::ZERO,
+        rotation: DQuat::IDENTITY,
+    }];
+    if let Some(m) = mount {
+        statics.push(transform(start, BASE_LINK, CAMERA_OPTICAL, &m));
+    }
+    bag.publish(&topics::TF_STATIC, start, &msgs::tf(&statics))?;
+    for i in 0..frames {
+        topics::frame(&mut bag, read, i, (&poses, mount.is_none()), scene_origin)?;
+    }
+    let summary = bag.finish()?;
+    Ok(rosbag2::metadata(&summary))
+}
+
+/// The latest time a bag holds: ROS's `builtin_interfaces/Time` counts seconds in an int32.
+pub const MAX_TIME_S: f64 = i32::MAX as f64;
+
+/// Refuses a time a bag cannot hold: the first pose (`times`: its time and where it is given)
+/// past [`MAX_TIME_S`].
+pub fn check_times(mut times: impl Iterator<Item = (f64, String)>) -> Result<(), String> {
+    match times.find(|(t, _)| *t > MAX_TIME_S) {
+        Some((t, at)) => Err(format!(
+            "{at}: {t} s is past the {MAX_TIME_S} s a ROS 2 bag's time stamps hold \
+             (--format mcap)"
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The camera's pose on the robot where it is the same in every frame.
+fn still_mount(poses: &[FramePose]) -> Option<Placed> {
+    let mounts: Vec<Placed> = poses
+        .iter()
+        .map(|p| p.base_link.to_local(&p.camera))
+        .collect();
+    let first = *mounts.first()?;
+    let same = |m: &Placed| {
+        (m.position - first.position).length() < STATIC_TOLERANCE
+            && m.rotation.angle_between(first.rotation) < STATIC_TOLERANCE
+    };
+    mounts.iter().all(same).then_some(first)
+}
+
+fn transform<'a>(
+    stamp_ns: u64,
+    parent: &'a str,
+    child: &'a str,
+    p: &Placed,
+) -> msgs::Transform<'a> {
+    msgs::Transform {
+        stamp_ns,
+        parent,
+        child,
+        translation: p.position,
+        rotation: p.rotation,
+    }
+}
+
+/// Per topic: its type, its message count, and whether it is latched (`/tf_static`).
+pub type Counts = BTreeMap<&'static str, (&'static str, u64, bool)>;
+
+#[cfg(test)]
+mod tests;

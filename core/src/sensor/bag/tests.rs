@@ -1,0 +1,296 @@
+//! A bag made from two hand-written frames, read back with the `mcap` crate's reader and a
+//! CDR reader written from the message definitions: every topic where it belongs, with the
+//! frames' numbers. (python/tests/test_bag.py reads bags of real runs with `rosbags`.)
+
+use std::collections::BTreeMap;
+use std::f64::consts::FRAC_PI_2;
+use std::io::Cursor;
+
+use glam::{DQuat, DVec3, Vec3};
+
+use super::frame::FramePose;
+use super::*;
+use crate::image::exr::{encode_channels, Samples};
+use crate::sensor::dataset::{rep103, PoseRecord, RosPose, ScenePose};
+
+/// Where the camera sits on the robot in the test frames.
+fn mount() -> Placed {
+    Placed {
+        position: DVec3::new(0.1, 0.0, -0.5),
+        rotation: DQuat::from_rotation_x(0.3),
+    }
+}
+
+fn pose_json(frame: usize, time_s: f64, scene: DVec3, heading_deg: f64) -> Vec<u8> {
+    let base = Placed {
+        position: rep103::point(scene),
+        rotation: rep103::robot_orientation(heading_deg),
+    };
+    let m = mount();
+    let camera_position = base.position + base.rotation * m.position;
+    let record = PoseRecord {
+        frame,
+        time_s,
+        scene: ScenePose {
+            position_m: scene.to_array(),
+            heading_deg,
+        },
+        ros: RosPose {
+            base_link_position_m: base.position.to_array(),
+            base_link_quaternion_xyzw: base.rotation.to_array(),
+            camera_optical_position_m: camera_position.to_array(),
+            camera_optical_quaternion_xyzw: (base.rotation * m.rotation).to_array(),
+        },
+    };
+    serde_json::to_vec(&record).unwrap()
+}
+
+const CAMERA_JSON: &str = r#"{"sensor": {"image_size": [4, 2], "projection": "perspective",
+    "focal_px": [3.5, 3.25], "principal_point_px": [2.0, 1.0]}}"#;
+
+/// 16-bit samples 0, 1000, 2000, ... (big-endian, as the PNG holds them).
+fn camera_samples() -> Vec<u8> {
+    (0..24u16).flat_map(|i| (i * 1000).to_be_bytes()).collect()
+}
+
+/// Two frames: at rest, then 2 s later 2 m on and turned a quarter left.
+fn files() -> BTreeMap<(usize, &'static str), Vec<u8>> {
+    let mut f = BTreeMap::new();
+    let poses = [
+        (0.0, DVec3::new(0.0, 1.0, 0.0), 0.0),
+        (2.0, DVec3::new(2.0, 1.0, -1.0), 90.0),
+    ];
+    for (i, (t, p, h)) in poses.into_iter().enumerate() {
+        f.insert((i, "pose.json"), pose_json(i, t, p, h));
+        f.insert((i, "camera.json"), CAMERA_JSON.as_bytes().to_vec());
+        let mut png = Vec::new();
+        let samples = camera_samples();
+        crate::image::png::encode_rgb_samples(&mut png, (4, 2), &samples, (16, 12)).unwrap();
+        f.insert((i, "sensor.camera.png"), png);
+        let mut exr = Cursor::new(Vec::new());
+        let ids = vec![7, u32::MAX, 0, 1, 2, 3, 4, 5];
+        let channels = vec![
+            ("id", Samples::U32(ids.clone())),
+            ("class", Samples::U32(ids)),
+        ];
+        encode_channels(&mut exr, (4, 2), channels).unwrap();
+        f.insert((i, "sensor.id.exr"), exr.into_inner());
+        let point = [(Vec3::new(1.0, 2.0, 3.0), 7)];
+        f.insert(
+            (i, "points.ply"),
+            crate::sensor::dataset::ply::ply(&point, &[]),
+        );
+    }
+    f
+}
+
+/// A reader of what [`cdr::Cdr`] writes, from the same rules.
+struct Read<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Read<'a> {
+    fn new(b: &'a [u8]) -> Self {
+        assert_eq!(&b[..4], &[0, 1, 0, 0], "CDR little-endian");
+        Self { b, at: 4 }
+    }
+    fn take(&mut self, n: usize) -> &'a [u8] {
+        let align = n.min(8);
+        self.at += (align - (self.at - 4) % align) % align;
+        self.at += n;
+        &self.b[self.at - n..self.at]
+    }
+    fn u32(&mut self) -> u32 {
+        u32::from_le_bytes(self.take(4).try_into().unwrap())
+    }
+    fn f64(&mut self) -> f64 {
+        f64::from_le_bytes(self.take(8).try_into().unwrap())
+    }
+    fn string(&mut self) -> String {
+        let n = self.u32() as usize;
+        let s = &self.b[self.at..self.at + n];
+        self.at += n;
+        assert_eq!(s[n - 1], 0, "NUL-terminated");
+        String::from_utf8(s[..n - 1].to_vec()).unwrap()
+    }
+    fn bytes(&mut self) -> &'a [u8] {
+        let n = self.u32() as usize;
+        self.at += n;
+        &self.b[self.at - n..self.at]
+    }
+    /// Header: (stamp in ns, frame id).
+    fn header(&mut self) -> (u64, String) {
+        let sec = self.u32() as u64;
+        let ns = self.u32() as u64;
+        (sec * 1_000_000_000 + ns, self.string())
+    }
+    fn vec3(&mut self) -> DVec3 {
+        DVec3::new(self.f64(), self.f64(), self.f64())
+    }
+    fn quat(&mut self) -> DQuat {
+        DQuat::from_xyzw(self.f64(), self.f64(), self.f64(), self.f64())
+    }
+}
+
+/// Each topic's messages: (time, data).
+type Topics = BTreeMap<String, Vec<(u64, Vec<u8>)>>;
+
+/// The bag of [`files`]: its messages, and its metadata.yaml.
+fn bag() -> (Topics, String) {
+    let files = files();
+    let read = |i: usize, name: &str| -> Result<Option<Vec<u8>>, BagError> {
+        Ok(files.get(&(i, name)).cloned().or_else(|| {
+            let known = files.keys().any(|(_, n)| *n == name);
+            assert!(!known, "frame {i} lacks {name}");
+            None
+        }))
+    };
+    let mut out = Cursor::new(Vec::new());
+    let path = std::path::Path::new("test.mcap");
+    let yaml = write(&mut out, path, 2, &read, DVec3::new(10.0, 0.0, 0.0)).unwrap();
+    let bytes = out.into_inner();
+    let mut topics = Topics::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        assert_eq!(m.channel.message_encoding, "cdr");
+        let schema = m.channel.schema.as_ref().unwrap();
+        assert_eq!(schema.encoding, "ros2msg");
+        (topics.entry(m.channel.topic.clone()).or_default()).push((m.log_time, m.data.to_vec()));
+    }
+    (topics, yaml)
+}
+
+#[test]
+fn each_frame_publishes_at_its_pose_time_and_the_still_camera_once() {
+    let (topics, yaml) = bag();
+    let names: Vec<&str> = topics.keys().map(String::as_str).collect();
+    assert_eq!(
+        names,
+        [
+            "/camera/camera_info",
+            "/camera/classes",
+            "/camera/ids",
+            "/camera/image_raw",
+            "/camera/points",
+            "/odom",
+            "/tf",
+            "/tf_static"
+        ],
+        "no clean image nor range: the frames have none"
+    );
+    for (topic, messages) in &topics {
+        let times: Vec<u64> = messages.iter().map(|m| m.0).collect();
+        let want: &[u64] = match topic.as_str() {
+            "/tf_static" => &[0],
+            _ => &[0, 2_000_000_000],
+        };
+        assert_eq!(times, want, "{topic}");
+    }
+    let mut r = Read::new(&topics["/tf_static"][0].1);
+    assert_eq!(r.u32(), 2);
+    assert_eq!(r.header(), (0, "map".into()));
+    assert_eq!(r.string(), "odom");
+    assert_eq!((r.vec3(), r.quat()), (DVec3::ZERO, DQuat::IDENTITY));
+    assert_eq!(r.header(), (0, "base_link".into()));
+    assert_eq!(r.string(), "camera_optical");
+    assert!((r.vec3() - mount().position).length() < 1e-12);
+    assert!(r.quat().angle_between(mount().rotation) < 1e-9);
+    assert!(yaml.contains("message_count: 15\n"), "{yaml}");
+    assert!(yaml.contains("name: \"/tf_static\""), "{yaml}");
+}
+
+#[test]
+fn the_odometry_is_the_segments_velocity_in_the_robots_axes() {
+    let (topics, _) = bag();
+    // 2 m along the scene's x and 1 m towards its -z in 2 s: ROS (1, 0.5, 0) m/s; a quarter
+    // turn left in 2 s.
+    let want = [DVec3::new(1.0, 0.5, 0.0), DVec3::new(0.5, -1.0, 0.0)];
+    for (i, (_, data)) in topics["/odom"].iter().enumerate() {
+        let mut r = Read::new(data);
+        assert_eq!(r.header().1, "odom");
+        assert_eq!(r.string(), "base_link");
+        let position = r.vec3();
+        let _orientation = r.quat();
+        assert_eq!(
+            position,
+            [DVec3::new(0.0, 0.0, 1.0), DVec3::new(2.0, 1.0, 1.0)][i]
+        );
+        (0..36).for_each(|_| assert_eq!(r.f64(), 0.0));
+        assert!((r.vec3() - want[i]).length() < 1e-12, "frame {i}");
+        assert!((r.vec3() - DVec3::new(0.0, 0.0, FRAC_PI_2 / 2.0)).length() < 1e-12);
+    }
+}
+
+#[test]
+fn images_carry_the_files_samples_and_the_cloud_is_in_the_camera() {
+    let (topics, _) = bag();
+    let mut r = Read::new(&topics["/camera/image_raw"][1].1);
+    assert_eq!(r.header(), (2_000_000_000, "camera_optical".into()));
+    assert_eq!((r.u32(), r.u32()), (2, 4), "height, width");
+    assert_eq!(r.string(), "rgb16");
+    assert_eq!(r.take(1), [0], "little-endian");
+    assert_eq!(r.u32(), 24, "step");
+    let le: Vec<u8> = (0..24u16).flat_map(|i| (i * 1000).to_le_bytes()).collect();
+    assert_eq!(r.bytes(), le);
+
+    let mut r = Read::new(&topics["/camera/ids"][0].1);
+    r.header();
+    assert_eq!((r.u32(), r.u32(), r.string()), (2, 4, "32SC1".into()));
+    r.take(1);
+    assert_eq!(r.u32(), 16);
+    assert_eq!(
+        &r.bytes()[..8],
+        [7, 0, 0, 0, 255, 255, 255, 255],
+        "none is -1"
+    );
+
+    let mut r = Read::new(&topics["/camera/camera_info"][0].1);
+    r.header();
+    assert_eq!((r.u32(), r.u32(), r.string()), (2, 4, "plumb_bob".into()));
+    let d = r.u32();
+    (0..d).for_each(|_| assert_eq!(r.f64(), 0.0));
+    let k: Vec<f64> = (0..9).map(|_| r.f64()).collect();
+    assert_eq!(k, [3.5, 0.0, 2.0, 0.0, 3.25, 1.0, 0.0, 0.0, 1.0]);
+
+    // The point (1, 2, 3) local to an origin at x = 10, seen from frame 1's camera.
+    let files = files();
+    let read = |i: usize, n: &str| Ok(files.get(&(i, n)).cloned());
+    let camera = FramePose::read(&read, 1).unwrap().camera;
+    let mut r = Read::new(&topics["/camera/points"][1].1);
+    r.header();
+    assert_eq!((r.u32(), r.u32()), (1, 1), "one unordered point");
+    let fields: Vec<(String, u32, u8, u32)> = (0..r.u32())
+        .map(|_| (r.string(), r.u32(), r.take(1)[0], r.u32()))
+        .collect();
+    assert_eq!(fields[3], ("id".into(), 12, 6, 1));
+    assert_eq!((r.take(1)[0], r.u32(), r.u32()), (0, 16, 16));
+    let p = r.bytes();
+    let f = |i: usize| f64::from(f32::from_le_bytes(p[i..i + 4].try_into().unwrap()));
+    let in_map = camera.position + camera.rotation * DVec3::new(f(0), f(4), f(8));
+    assert!((in_map - rep103::point(DVec3::new(11.0, 2.0, 3.0))).length() < 1e-5);
+    assert_eq!(&p[12..], 7u32.to_le_bytes());
+}
+
+#[test]
+fn a_camera_that_moves_on_the_robot_is_on_tf_and_a_missing_pose_is_named() {
+    let mut files = files();
+    let moved = Placed {
+        position: DVec3::new(0.3, 0.0, -0.5),
+        rotation: DQuat::IDENTITY,
+    };
+    let mut record: PoseRecord = serde_json::from_slice(&files[&(1, "pose.json")]).unwrap();
+    record.ros.camera_optical_position_m = (DVec3::from_array(record.ros.base_link_position_m)
+        + DQuat::from_array(record.ros.base_link_quaternion_xyzw) * moved.position)
+        .to_array();
+    files.insert((1, "pose.json"), serde_json::to_vec(&record).unwrap());
+    let poses: Vec<FramePose> = (0..2)
+        .map(|i| FramePose::read(&|f, n| Ok(files.get(&(f, n)).cloned()), i).unwrap())
+        .collect();
+    assert!(still_mount(&poses).is_none());
+    files.remove(&(1, "pose.json"));
+    let read = |i: usize, n: &str| Ok(files.get(&(i, n)).cloned());
+    let path = std::path::Path::new("x.mcap");
+    let e = write(Cursor::new(Vec::new()), path, 2, &read, DVec3::ZERO).unwrap_err();
+    assert_eq!(e.to_string(), "frame 1: pose.json: missing");
+}

@@ -1,0 +1,118 @@
+//! `specchio dataset --format`: the ROS 2 bag in `OUT/bag` beside the frames or alone, the same
+//! bag however it is made (from frames kept by `--resume` too), holding the frames' own
+//! samples; a format, or a time, a bag cannot take is refused before anything is written.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use std::path::Path;
+
+use common::{root, specchio, temp_dir};
+
+const TRAJECTORY: &str = "time,x,y,z,heading\n0,0,3,0,0\n0.5,1,3,0.5,45\n";
+
+/// The six-colour room with a camera model, and a trajectory through it, in `dir`.
+fn inputs(dir: &Path, trajectory: &str) -> (String, String) {
+    std::fs::create_dir_all(dir).unwrap();
+    let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
+    let scene = dir.join("room.toml");
+    std::fs::write(&scene, format!("{text}\n[sensor.imaging]\nseed = 4\n")).unwrap();
+    let robot = dir.join("robot.csv");
+    std::fs::write(&robot, trajectory.replace(",3,", ",0,")).unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    (s(&scene), s(&robot))
+}
+
+fn dataset(dir: &Path, out: &str, extra: &[&str]) -> std::process::Output {
+    let (scene, robot) = (dir.join("room.toml"), dir.join("robot.csv"));
+    let out = dir.join(out);
+    let args = [
+        "dataset",
+        scene.to_str().unwrap(),
+        "--trajectory",
+        robot.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    specchio(&[&args[..], extra].concat())
+}
+
+fn ok(r: std::process::Output) {
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+}
+
+/// The PNG's 16-bit samples, little-endian: what `/camera/image_raw` carries.
+fn png_samples_le(path: &Path) -> Vec<u8> {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    reader.next_frame(&mut buf).unwrap();
+    buf.chunks(2).flat_map(|b| [b[1], b[0]]).collect()
+}
+
+#[test]
+fn the_bag_is_the_same_beside_the_frames_alone_or_resumed_and_holds_their_samples() {
+    let dir = temp_dir("dataset-bag");
+    inputs(&dir, TRAJECTORY);
+    ok(dataset(&dir, "both", &["--format", "files,mcap"]));
+    ok(dataset(&dir, "alone", &["--format", "mcap", "--resume"]));
+    let names = |out: &str| {
+        let mut n: Vec<String> = (std::fs::read_dir(dir.join(out)).unwrap())
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        n.sort();
+        n
+    };
+    assert_eq!(names("alone"), [".specchio-files", "bag", "dataset.json"]);
+    assert!(names("both").contains(&"frames".to_owned()));
+    assert!(
+        !dir.join("alone.partial").exists(),
+        "the work folder is gone"
+    );
+    for file in ["bag/bag_0.mcap", "bag/metadata.yaml"] {
+        let (a, b) = (dir.join("both").join(file), dir.join("alone").join(file));
+        assert!(
+            std::fs::read(a).unwrap() == std::fs::read(b).unwrap(),
+            "{file}"
+        );
+    }
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("alone/dataset.json")).unwrap()).unwrap();
+    assert_eq!(summary["format"], serde_json::json!(["mcap"]));
+    assert_eq!(summary["index"], serde_json::Value::Null);
+
+    // Frame 1's camera image, in the bag as in its PNG.
+    let bytes = std::fs::read(dir.join("both/bag/bag_0.mcap")).unwrap();
+    let images: Vec<(u64, Vec<u8>)> = (mcap::MessageStream::new(&bytes).unwrap())
+        .map(|m| m.unwrap())
+        .filter(|m| m.channel.topic == "/camera/image_raw")
+        .map(|m| (m.log_time, m.data.into_owned()))
+        .collect();
+    assert_eq!(images.len(), 2);
+    assert_eq!(images[1].0, 500_000_000, "the pose's time");
+    let want = png_samples_le(&dir.join("both/frames/000001/sensor.camera.png"));
+    assert!(
+        images[1].1.ends_with(&want),
+        "the PNG's samples, last in the message"
+    );
+    let yaml = std::fs::read_to_string(dir.join("both/bag/metadata.yaml")).unwrap();
+    assert!(yaml.contains("storage_identifier: mcap") && yaml.contains("message_count: 19"));
+}
+
+#[test]
+fn a_format_or_a_time_a_bag_cannot_take_is_refused_before_anything_is_written() {
+    let dir = temp_dir("dataset-bag-refused");
+    inputs(&dir, TRAJECTORY);
+    let r = dataset(&dir, "out", &["--format", "files,bag"]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success());
+    assert!(err.contains("`bag` is not a format: files, mcap"), "{err}");
+    let (_, robot) = inputs(&dir, "time,x,y,z,heading\n0,0,3,0,0\n3e9,1,3,0.5,45\n");
+    ok(dataset(&dir, "files", &[]));
+    let r = dataset(&dir, "out", &["--format", "mcap"]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success());
+    let want = format!("{robot}:3: time: 3000000000 s is past the 2147483647 s");
+    assert!(err.contains(&want), "{err}");
+    assert!(!dir.join("out").exists());
+}
