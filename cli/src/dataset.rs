@@ -16,6 +16,7 @@ use specchio::process::probe;
 use specchio::process::progress::Progress;
 use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
+use specchio::sensor::central::Calibration;
 use specchio::sensor::dataset::grid;
 use specchio::sensor::dataset::{resume, DatasetError, Folder, Format};
 use specchio::sensor::layers::Layers;
@@ -82,6 +83,12 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let mut plan = Plan::new(&args.scene, poses(args)?)?;
     plan.panoramas = args.panorama_frame;
     plan.set_format(args.format)?;
+    if let Some(why) = (args.format.mcap && plan.scene.mirror.shape.xi().is_some())
+        .then(|| Calibration::too_large(&plan.scene))
+        .flatten()
+    {
+        eprintln!("warning: the bag carries no unified model (/omni/camera_info): {why}");
+    }
     plan.choose(args.outputs)?;
     let n = plan.poses.len();
     let mut folder = Folder::stage(&args.out, n, plan.frame_files())?;
@@ -127,7 +134,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     drop(device);
     let (done, work) = (folder.done(), folder.work_folder().map(Path::to_owned));
     let placed = wrote.and_then(|()| {
-        let ready = folder.finish(&plan.record(lookup, truth))?;
+        let ready = folder.finish(&plan.record(lookup, truth), plan.omni())?;
         stop("before placing the output")?;
         Ok(ready.commit()?)
     });

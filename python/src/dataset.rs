@@ -249,7 +249,7 @@ fn render(
     drop(frames);
     drop(dev);
     let record = plan.record(lookup, truth);
-    let ready = folder.finish(&record)?;
+    let ready = folder.finish(&record, plan.omni())?;
     Ok((ready, record, log))
 }
 

@@ -339,7 +339,7 @@ impl DatasetOutput {
         let record = self.plan.record(lookup, truth);
         let summary = errors::json_to_py(py, &record)?;
         let ready = py
-            .detach(|| folder.finish(&record))
+            .detach(|| folder.finish(&record, self.plan.omni()))
             .map_err(errors::to_py)?;
         commit(py, ready)?;
         Ok(summary)

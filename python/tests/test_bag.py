@@ -95,7 +95,9 @@ def test_the_bag_holds_what_the_frames_hold(tmp_path, monkeypatch):
         rng = at["/camera/range"]
         assert (rng.encoding, rng.height, rng.width, rng.step) == ("32FC1", 512, 512, 2048)
         got = rng.data.view("<f4").reshape(512, 512)
-        assert np.array_equal(got, exr_range, equal_nan=True)
+        # NaN for no return (REP-117), where the file says 0.
+        assert np.array_equal(got, np.where(exr_range == 0, np.nan, exr_range), equal_nan=True)
+        assert np.isnan(got).any() and not np.isnan(exr_range).any()
         ids = specchio.read_exr(frame / "sensor.id.exr")
         for topic, channel in (("/camera/ids", "id"), ("/camera/classes", "class")):
             got = at[topic].data.view("<i4").reshape(512, 512)
@@ -109,7 +111,9 @@ def test_the_bag_holds_what_the_frames_hold(tmp_path, monkeypatch):
         info = at["/camera/camera_info"]
         sensor = json.loads((frame / "camera.json").read_text())["sensor"]
         assert info.k[0] == pytest.approx(sensor["focal_px"][0])
-        assert info.k[2] == pytest.approx(sensor["principal_point_px"][0])
+        # camera.json counts from pixel (0, 0)'s corner, ROS from its centre.
+        assert info.k[2] == pytest.approx(sensor["principal_point_px"][0] - 0.5)
+        assert info.k[5] == pytest.approx(sensor["principal_point_px"][1] - 0.5)
         assert info.header.frame_id == "camera_optical"
 
         # The cloud, taken back to map through the camera's pose, is the PLY's.
@@ -169,3 +173,53 @@ def test_a_bad_format_writes_nothing_and_says_why(tmp_path, monkeypatch):
         with pytest.raises(specchio.SpecchioError, match=says):
             specchio.dataset(scene, "robot.csv", "bad", format=fmt)
         assert not (tmp_path / "bad").exists()
+
+
+def mei_project(p: np.ndarray, d: list[float], k: list[float]) -> np.ndarray:
+    """Mei's unified model as OpenCV's omnidir.projectPoints defines it, from the bag's
+    `d = [xi, k1, k2, p1, p2]` and K."""
+    xi, k1, k2, p1, p2 = d
+    s = p / np.linalg.norm(p, axis=1, keepdims=True)
+    x, y = s[:, 0] / (s[:, 2] + xi), s[:, 1] / (s[:, 2] + xi)
+    r2 = x * x + y * y
+    radial = 1 + k1 * r2 + k2 * r2 * r2
+    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+    yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+    return np.stack([k[0] * xd + k[1] * yd + k[2], k[4] * yd + k[5]], axis=1)
+
+
+def test_a_central_mirrors_bag_carries_its_unified_model(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "robot.csv").write_text("time,x,y,z,heading\n0,0,3,0,0\n1,0.5,3,0.3,40\n")
+    scene = str(scene_path("hyperbolic-room"))
+    specchio.dataset(scene, "robot.csv", "out", format="files,mcap", outputs="range,points")
+    # The rays' mask says which pixels the cloud's points come from, in pixel order.
+    out = tmp_path / "out"
+    topics, _ = messages(out / "bag")
+    static = {t.child_frame_id: t for t in topics["/tf_static"][0][1].transforms}
+    camera, omni = static["camera_optical"].transform, static["omni"].transform
+    assert static["omni"].header.frame_id == "camera_optical"
+    # The viewpoint is the inner focus, d = 2 m up the camera's axis: base_link's origin.
+    view = [omni.translation.x, omni.translation.y, omni.translation.z]
+    assert np.allclose(view, [0, 0, 2], atol=1e-6)
+    assert camera.translation.z + omni.translation.z == pytest.approx(0, abs=1e-6)
+    for i in range(2):
+        info = topics["/omni/camera_info"][i][1]
+        assert (info.distortion_model, info.header.frame_id) == ("mei", "omni")
+        assert info.d[0] == pytest.approx(2 / np.sqrt(5), abs=1e-6), "xi = d / sqrt(d² + 4p²)"
+        # Each mirror pixel's point, moved to omni and into the model's left-handed frame,
+        # projects back onto that pixel.
+        frame = out / f"frames/{i:06d}"
+        rng = topics["/camera/range"][i][1].data.view("<f4").reshape(512, 512)
+        rows, cols = np.nonzero(~np.isnan(rng))
+        cloud = topics["/camera/points"][i][1]
+        pts = cloud.data.view(np.dtype([("p", "<f4", 3), ("id", "<u4")]))["p"].astype(float)
+        assert len(pts) == len(rows)
+        model = pts - view
+        model[:, 2] *= -1
+        pixels = mei_project(model[::101], list(info.d), list(info.k))
+        want = np.stack([cols[::101], rows[::101]], axis=1)
+        assert np.abs(pixels - want).max() < 0.01, np.abs(pixels - want).max()
+    with open(out / "bag" / "bag_0.mcap", "rb") as f:
+        names = sorted(a.name for a in make_reader(f).iter_attachments())
+    assert names == ["kalibr_camchain.yaml", "ocamcalib_calib_results.txt", "opencv_omnidir.yaml"]

@@ -73,6 +73,8 @@ impl FramePose {
 pub struct CameraRecord {
     pub width: u32,
     pub height: u32,
+    /// fx, fy, cx, cy in ROS's (OpenCV's) pixel coordinates, where pixel (0, 0)'s centre is
+    /// the origin; `camera.json` puts its top-left corner there, half a pixel away.
     pub pinhole: Option<[f64; 4]>,
 }
 
@@ -102,8 +104,8 @@ impl CameraRecord {
             Some("perspective") => Some([
                 num("/sensor/focal_px/0")?,
                 num("/sensor/focal_px/1")?,
-                num("/sensor/principal_point_px/0")?,
-                num("/sensor/principal_point_px/1")?,
+                num("/sensor/principal_point_px/0")? - 0.5,
+                num("/sensor/principal_point_px/1")? - 0.5,
             ]),
             _ => None,
         };
@@ -186,8 +188,9 @@ pub fn clean_image(read: &ReadFile, frame: usize) -> Result<Option<RawImage>, Ba
     }))
 }
 
-/// The range (`32FC1`, metres along the reflected ray; NaN where no ray leaves the mirror),
-/// and the ids and classes (`32SC1`, -1 for none).
+/// The range (`32FC1`, metres along the reflected ray; NaN off the mirror, as REP-117 asks of
+/// a float range with no return, where the file says 0), and the ids and classes (`32SC1`, -1
+/// for none).
 pub fn range_and_ids(
     read: &ReadFile,
     frame: usize,
@@ -219,7 +222,12 @@ pub fn range_and_ids(
     if let Some(layer) = channels(RANGE_FILE)? {
         let range = crate::image::exr::f32_channel(&layer.channels, "range")
             .ok_or_else(|| missing(RANGE_FILE, "range"))?;
-        let data = range.iter().flat_map(|v| v.to_le_bytes()).collect();
+        // No surface meets a ray at distance 0: a 0 is a pixel without a ray.
+        let no_return = |v: f32| if v == 0.0 { f32::NAN } else { v };
+        let data = range
+            .iter()
+            .flat_map(|&v| no_return(v).to_le_bytes())
+            .collect();
         out.push(("range", image(layer.size, "32FC1", data)));
     }
     if let Some(layer) = channels(ID_FILE)? {

@@ -13,6 +13,7 @@
 mod cdr;
 pub mod frame;
 pub mod msgs;
+pub mod omni;
 mod rosbag2;
 mod topics;
 
@@ -23,6 +24,7 @@ use std::path::PathBuf;
 use glam::{DQuat, DVec3};
 
 use frame::{FramePose, Placed, ReadFile};
+pub use omni::Omni;
 pub use topics::{Topic, TOPICS};
 
 /// The bag's folder in the dataset folder, and its files.
@@ -63,15 +65,23 @@ pub enum BagError {
 /// transform: well below what a float32 of the scene file holds.
 const STATIC_TOLERANCE: f64 = 1e-6;
 
+/// What a bag is made of besides the frames' files.
+#[derive(Default)]
+pub struct Extras<'a> {
+    /// The scene frame's origin in the file's coordinates (the point clouds are local to it).
+    pub scene_origin: DVec3,
+    /// A central mirror's unified model.
+    pub omni: Option<&'a Omni>,
+}
+
 /// Writes the bag of `frames` frames, whose files `read` gives, into `to` (the MCAP file,
-/// named `path` in errors); `scene_origin` is the scene frame's origin in the file's
-/// coordinates (the point clouds are local to it). Returns rosbag2's `metadata.yaml`.
+/// named `path` in errors). Returns rosbag2's `metadata.yaml`.
 pub fn write<W: Write + Seek>(
     to: W,
     path: &std::path::Path,
     frames: usize,
     read: &ReadFile,
-    scene_origin: DVec3,
+    extras: &Extras,
 ) -> Result<String, BagError> {
     let poses = (0..frames)
         .map(|i| FramePose::read(read, i))
@@ -89,9 +99,17 @@ pub fn write<W: Write + Seek>(
     if let Some(m) = mount {
         statics.push(transform(start, BASE_LINK, CAMERA_OPTICAL, &m));
     }
+    if let Some(omni) = extras.omni {
+        let viewpoint = Placed {
+            position: omni.viewpoint_in_camera,
+            rotation: DQuat::IDENTITY,
+        };
+        statics.push(transform(start, CAMERA_OPTICAL, omni::OMNI, &viewpoint));
+        bag.attach(start, &omni.attachments)?;
+    }
     bag.publish(&topics::TF_STATIC, start, &msgs::tf(&statics))?;
     for i in 0..frames {
-        topics::frame(&mut bag, read, i, (&poses, mount.is_none()), scene_origin)?;
+        topics::frame(&mut bag, read, i, (&poses, mount.is_none()), extras)?;
     }
     let summary = bag.finish()?;
     Ok(rosbag2::metadata(&summary))

@@ -148,7 +148,11 @@ fn bag() -> (Topics, String) {
     };
     let mut out = Cursor::new(Vec::new());
     let path = std::path::Path::new("test.mcap");
-    let yaml = write(&mut out, path, 2, &read, DVec3::new(10.0, 0.0, 0.0)).unwrap();
+    let extras = Extras {
+        scene_origin: DVec3::new(10.0, 0.0, 0.0),
+        omni: None,
+    };
+    let yaml = write(&mut out, path, 2, &read, &extras).unwrap();
     let bytes = out.into_inner();
     let mut topics = Topics::new();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
@@ -251,7 +255,8 @@ fn images_carry_the_files_samples_and_the_cloud_is_in_the_camera() {
     let d = r.u32();
     (0..d).for_each(|_| assert_eq!(r.f64(), 0.0));
     let k: Vec<f64> = (0..9).map(|_| r.f64()).collect();
-    assert_eq!(k, [3.5, 0.0, 2.0, 0.0, 3.25, 1.0, 0.0, 0.0, 1.0]);
+    // camera.json's principal point (2, 1) is pixel corners'; ROS's counts pixel centres.
+    assert_eq!(k, [3.5, 0.0, 1.5, 0.0, 3.25, 0.5, 0.0, 0.0, 1.0]);
 
     // The point (1, 2, 3) local to an origin at x = 10, seen from frame 1's camera.
     let files = files();
@@ -291,6 +296,32 @@ fn a_camera_that_moves_on_the_robot_is_on_tf_and_a_missing_pose_is_named() {
     files.remove(&(1, "pose.json"));
     let read = |i: usize, n: &str| Ok(files.get(&(i, n)).cloned());
     let path = std::path::Path::new("x.mcap");
-    let e = write(Cursor::new(Vec::new()), path, 2, &read, DVec3::ZERO).unwrap_err();
+    let e = write(Cursor::new(Vec::new()), path, 2, &read, &Extras::default()).unwrap_err();
     assert_eq!(e.to_string(), "frame 1: pose.json: missing");
+}
+
+#[test]
+fn a_central_mirrors_model_sits_at_its_focus_and_a_sphere_has_none() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+    let hyperbolic = crate::scene::load(&root.join("hyperbolic-room.toml")).unwrap();
+    let omni = Omni::of_scene(&hyperbolic).unwrap().unwrap();
+    // d = 2 m, 4p = 2 m: the camera at the outer focus looks up at the inner one; xi = 2/sqrt(5).
+    assert!((omni.viewpoint_in_camera - DVec3::new(0.0, 0.0, 2.0)).length() < 1e-6);
+    let info = omni.intrinsics();
+    assert_eq!(info.distortion_model, "mei");
+    assert!((info.d[0] - 2.0 / 5f64.sqrt()).abs() < 1e-6, "{:?}", info.d);
+    let names: Vec<&str> = omni.attachments.iter().map(|a| a.0).collect();
+    assert_eq!(
+        names,
+        [
+            "opencv_omnidir.yaml",
+            "kalibr_camchain.yaml",
+            "ocamcalib_calib_results.txt"
+        ]
+    );
+    let sphere = crate::scene::load(&root.join("thesis-room.toml")).unwrap();
+    assert!(
+        Omni::of_scene(&sphere).unwrap().is_none(),
+        "no single viewpoint"
+    );
 }

@@ -45,6 +45,12 @@ pub const CAMERA_INFO: Topic = Topic {
     latched: false,
     about: "the sensor camera's pinhole intrinsics (a perspective camera only)",
 };
+pub const OMNI_INFO: Topic = Topic {
+    name: "/omni/camera_info",
+    msg: msgs::camera_info_type,
+    latched: false,
+    about: "a central mirror's unified model (distortion_model mei, d = [xi, k1, k2, p1, p2])",
+};
 pub const IMAGE_RAW: Topic = Topic {
     name: "/camera/image_raw",
     msg: msgs::image_type,
@@ -83,11 +89,12 @@ pub const POINTS: Topic = Topic {
 };
 
 /// Every topic a bag can hold.
-pub const TOPICS: [&Topic; 10] = [
+pub const TOPICS: [&Topic; 11] = [
     &TF_STATIC,
     &TF,
     &ODOMETRY,
     &CAMERA_INFO,
+    &OMNI_INFO,
     &IMAGE_RAW,
     &IMAGE_CLEAN,
     &RANGE,
@@ -139,6 +146,27 @@ impl<W: Write + Seek> Writer<W> {
         Ok(())
     }
 
+    /// Attaches `files` (name, media type, bytes), stamped `stamp_ns`.
+    pub fn attach(
+        &mut self,
+        stamp_ns: u64,
+        files: &[(&'static str, &'static str, Vec<u8>)],
+    ) -> Result<(), BagError> {
+        for (name, media_type, data) in files {
+            let attachment = mcap::Attachment {
+                log_time: stamp_ns,
+                create_time: stamp_ns,
+                name: (*name).to_owned(),
+                media_type: (*media_type).to_owned(),
+                data: std::borrow::Cow::Borrowed(data),
+            };
+            self.mcap
+                .attach(&attachment)
+                .map_err(mcap_error(&self.path))?;
+        }
+        Ok(())
+    }
+
     fn add_channel(&mut self, topic: &Topic) -> Result<u16, BagError> {
         let msg = (topic.msg)();
         let schema = (self
@@ -186,7 +214,7 @@ pub fn frame<W: Write + Seek>(
     read: &ReadFile,
     i: usize,
     (poses, mount_moves): (&[FramePose], bool),
-    scene_origin: DVec3,
+    extras: &super::Extras,
 ) -> Result<(), BagError> {
     let pose = &poses[i];
     let stamp = pose.stamp_ns();
@@ -221,6 +249,10 @@ pub fn frame<W: Write + Seek>(
             &msgs::camera_info(stamp, CAMERA_OPTICAL, &intrinsics),
         )?;
     }
+    if let Some(omni) = extras.omni {
+        let info = msgs::camera_info(stamp, super::omni::OMNI, &omni.intrinsics());
+        bag.publish(&OMNI_INFO, stamp, &info)?;
+    }
     let mut images: Vec<(&Topic, RawImage)> = Vec::new();
     images.extend(frame::camera_image(read, i)?.map(|im| (&IMAGE_RAW, im)));
     images.extend(frame::clean_image(read, i)?.map(|im| (&IMAGE_CLEAN, im)));
@@ -244,7 +276,7 @@ pub fn frame<W: Write + Seek>(
         bag.publish(topic, stamp, &msgs::image(stamp, CAMERA_OPTICAL, &image))?;
     }
     if let Some(points) = frame::points(read, i)? {
-        let data = cloud_in_camera(&points, &pose.camera, scene_origin);
+        let data = cloud_in_camera(&points, &pose.camera, extras.scene_origin);
         let cloud = msgs::Cloud {
             fields: &[
                 ("x", 0, msgs::FLOAT32),

@@ -10,7 +10,7 @@ use super::frame_folder;
 use super::resume::{RunKey, WorkFolder};
 use super::{DatasetError, Frame, INDEX_FILE, SUMMARY_FILE};
 use crate::output::{OutputError, Sink, Transaction};
-use crate::sensor::bag::{self, BagError};
+use crate::sensor::bag::{self, BagError, Omni};
 use crate::sensor::dataset::DatasetRecord;
 
 /// The output folder of a dataset of `index.len()` frames, being filled.
@@ -110,7 +110,12 @@ impl Folder {
 
     /// With every frame placed: the frames (from the work folder, in a resumable run), the
     /// index and the summary `record`, staged; [`Ready::commit`] places them.
-    pub fn finish(self, record: &DatasetRecord) -> Result<Ready, DatasetError> {
+    /// A bag (`record.format`) carries `omni`, a central mirror's unified model.
+    pub fn finish(
+        self,
+        record: &DatasetRecord,
+        omni: Option<&Omni>,
+    ) -> Result<Ready, DatasetError> {
         if let Some(missing) = self.index.iter().position(|l| l.is_none()) {
             return Err(DatasetError::Invalid(format!(
                 "frame {missing} was never placed"
@@ -122,8 +127,11 @@ impl Folder {
         let staged = self.staged;
         let format = record.format;
         if format.mcap {
-            let origin = glam::DVec3::from_array(record.scene_origin_m);
-            write_bag(&staged, &self.root, self.index.len(), origin)?;
+            let extras = bag::Extras {
+                scene_origin: glam::DVec3::from_array(record.scene_origin_m),
+                omni,
+            };
+            write_bag(&staged, &self.root, self.index.len(), &extras)?;
         }
         if format.files {
             let mut index = String::new();
@@ -153,7 +161,7 @@ fn write_bag(
     staged: &Transaction,
     root: &Path,
     frames: usize,
-    origin: glam::DVec3,
+    extras: &bag::Extras,
 ) -> Result<(), DatasetError> {
     let dir = root.join(bag::BAG_FOLDER);
     let mcap = dir.join(bag::BAG_FILE);
@@ -165,7 +173,7 @@ fn write_bag(
             Err(source) => Err(BagError::Io { path, source }),
         }
     };
-    let metadata = bag::write(staged.create(&mcap)?, &mcap, frames, &read, origin)?;
+    let metadata = bag::write(staged.create(&mcap)?, &mcap, frames, &read, extras)?;
     staged.write_bytes(&dir.join(bag::METADATA_FILE), metadata.as_bytes())?;
     Ok(())
 }

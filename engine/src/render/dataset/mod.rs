@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 use super::lookups;
 use crate::files::digest::{self, Digest};
 use crate::scene::{Lookup, RefreshPolicy, Scene};
+use crate::sensor::bag::Omni;
 use crate::sensor::dataset::grid;
 use crate::sensor::dataset::resume::RunKey;
 use crate::sensor::dataset::trajectory::{self, Place, Pose, TrajectoryError};
@@ -66,6 +67,8 @@ pub struct Plan {
     outputs: Layers,
     /// The frame folders, the ROS 2 bag, or both ([`Plan::set_format`]).
     format: Format,
+    /// A bag's unified model, where the mirror is central.
+    omni: Option<Omni>,
 }
 
 /// How a grid's description (a plan's `trajectory`) begins.
@@ -109,6 +112,7 @@ impl Plan {
             inputs,
             panoramas: PanoramaFrame::Robot,
             format: Format::default(),
+            omni: None,
             outputs,
         })
     }
@@ -224,9 +228,18 @@ impl Plan {
             };
             let times = self.poses.iter().map(|p| (p.time_s, at(p)));
             crate::sensor::bag::check_times(times).map_err(DatasetError::Invalid)?;
+            self.omni = Omni::of_scene(&self.scene).map_err(|e| {
+                let scene = self.scene_path.display();
+                DatasetError::Invalid(format!("{scene}: the bag's unified model: {e}"))
+            })?;
         }
         self.format = format;
         Ok(())
+    }
+
+    /// What the bag carries of a central mirror's unified model (with `--format mcap`).
+    pub fn omni(&self) -> Option<&Omni> {
+        self.omni.as_ref()
     }
 
     /// The summary of this dataset rendered with `lookup`, whose range and ids come from

@@ -107,7 +107,7 @@ fn a_run_stopped_after_two_frames_goes_on_from_the_third_and_gives_the_same_fold
     for i in 0..4 {
         folder.place(&frame(i)).unwrap();
     }
-    folder.finish(&record(4)).unwrap().commit().unwrap();
+    folder.finish(&record(4), None).unwrap().commit().unwrap();
 
     let out = dir.join("out");
     let mut first = Folder::stage(&out, 4, frame_files(Layers::all())).unwrap();
@@ -125,7 +125,7 @@ fn a_run_stopped_after_two_frames_goes_on_from_the_third_and_gives_the_same_fold
     assert!(second.place(&frame(1)).is_err(), "frame 1 is done");
     second.place(&frame(3)).unwrap();
     second.place(&frame(2)).unwrap();
-    let left = second.finish(&record(4)).unwrap().commit().unwrap();
+    let left = second.finish(&record(4), None).unwrap().commit().unwrap();
     assert!(left.is_empty(), "{left:?}");
     assert_eq!(tree(&out), tree(&whole));
     assert!(!work_path(&out).exists(), "the work folder is removed");

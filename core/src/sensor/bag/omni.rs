@@ -1,0 +1,92 @@
+//! The catadioptric model a bag of a central mirror carries (`/omni/camera_info`, the `omni`
+//! TF frame and the calibration files as attachments): Mei's unified model as `specchio
+//! calibrate` fits it to the exact ray map.
+//!
+//! `CameraInfo` has no field for the unified model's ξ, and ROS has no distortion model for
+//! it; the bag says `distortion_model: "mei"` with `d = [xi, k1, k2, p1, p2]`, the order of
+//! camodocal's MEI camera (which VINS and its kin read), and `k` is OpenCV omnidir's K. The
+//! `omni` frame sits at the single viewpoint with the sensor camera's axes: the model's frame
+//! with its z reversed, since the mirror makes the model's frame left-handed and a TF frame
+//! cannot be; a point (x, y, z) in `omni` is the model's (x, y, -z)
+//! (`sensor::central::ros`).
+
+use glam::DVec3;
+
+use super::msgs::Intrinsics;
+use crate::scene::Scene;
+use crate::sensor::central::{export, Calibration, FitError, MeiModel};
+use crate::sensor::SensorOptics;
+
+/// The TF frame of the unified model.
+pub const OMNI: &str = "omni";
+
+/// A central mirror's unified model, where the bag puts it.
+pub struct Omni {
+    pub model: MeiModel,
+    pub width: u32,
+    pub height: u32,
+    /// The single viewpoint in the sensor camera's optical frame (m).
+    pub viewpoint_in_camera: DVec3,
+    /// The files `specchio calibrate` writes for the tools, attached to the bag: (name, media
+    /// type, bytes).
+    pub attachments: Vec<(&'static str, &'static str, Vec<u8>)>,
+}
+
+impl Omni {
+    /// The model of `scene`'s sensor (at time 0: the mount and the optics do not change along
+    /// a trajectory), where its mirror is central and small enough to calibrate.
+    pub fn of_scene(scene: &Scene) -> Result<Option<Self>, FitError> {
+        if scene.mirror.shape.xi().is_none() || Calibration::too_large(scene).is_some() {
+            return Ok(None);
+        }
+        let (cal, _) = Calibration::of_scene(scene, 0.0)?;
+        let optics = SensorOptics::at(scene, 0.0);
+        let view = &optics.view;
+        let camera = (view.eye + optics.mirror_center).as_dvec3();
+        let v = cal.viewpoint - camera;
+        let axis = |a: glam::Vec3| a.as_dvec3().normalize();
+        let viewpoint_in_camera = DVec3::new(
+            v.dot(axis(view.right)),
+            v.dot(axis(view.down)),
+            v.dot(axis(view.forward)),
+        );
+        let (m, w, h) = (cal.mei, cal.width, cal.height);
+        let yaml = "application/yaml";
+        let attachments = vec![
+            (
+                "opencv_omnidir.yaml",
+                yaml,
+                export::opencv_yaml(&m, w, h).into_bytes(),
+            ),
+            (
+                "kalibr_camchain.yaml",
+                yaml,
+                export::kalibr_yaml(&m, w, h).into_bytes(),
+            ),
+            (
+                "ocamcalib_calib_results.txt",
+                "text/plain",
+                export::ocamcalib_txt(&cal.ocam).into_bytes(),
+            ),
+        ];
+        Ok(Some(Self {
+            model: m,
+            width: w,
+            height: h,
+            viewpoint_in_camera,
+            attachments,
+        }))
+    }
+
+    /// `/omni/camera_info`'s numbers.
+    pub fn intrinsics(&self) -> Intrinsics {
+        let m = &self.model;
+        Intrinsics {
+            width: self.width,
+            height: self.height,
+            distortion_model: "mei".into(),
+            d: vec![m.xi, m.k1, m.k2, m.p1, m.p2],
+            k: [m.fx, m.skew, m.cx, 0.0, m.fy, m.cy, 0.0, 0.0, 1.0],
+        }
+    }
+}
