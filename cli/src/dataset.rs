@@ -18,7 +18,7 @@ use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::central::Calibration;
 use specchio::sensor::dataset::grid;
-use specchio::sensor::dataset::{resume, DatasetError, Folder, Format};
+use specchio::sensor::dataset::{resume, DatasetError, Folder, Format, GeometryFrame};
 use specchio::sensor::layers::Layers;
 use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::instance::{Instance, InstanceDesc};
@@ -66,6 +66,11 @@ pub struct Args {
     /// true heading).
     #[arg(long, default_value = "robot")]
     panorama_frame: PanoramaFrame,
+    /// The frame the ray map (sensor.rays.exr) and point cloud (points.ply) are in: scene
+    /// (local, +Y up, as every other output), map (ROS REP-103's world) or base_link (the
+    /// robot's REP-103 frame, where a rigid sensor's ray map is the same at every pose).
+    #[arg(long, default_value = "scene", value_name = "FRAME")]
+    geometry_frame: GeometryFrame,
     /// The layers each frame holds, comma-separated: image (sensor.exr, .png), camera
     /// (sensor.camera.png, with the scene's [sensor.imaging]), rays, range, ids (and the id
     /// map), panoramas, points (points.ply); or all. camera.json and pose.json always.
@@ -82,6 +87,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Every input checked before the output folder exists.
     let mut plan = Plan::new(&args.scene, poses(args)?)?;
     plan.panoramas = args.panorama_frame;
+    plan.geometry = args.geometry_frame;
     plan.set_format(args.format)?;
     if let Some(why) = (args.format.mcap && plan.scene.mirror.shape.xi().is_some())
         .then(|| Calibration::too_large(&plan.scene))
@@ -102,6 +108,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     drop(instance);
     let mut frames = FrameWriter::new(&device, &plan.scene, lookup)?;
     frames.set_panoramas(plan.panoramas);
+    frames.set_geometry_frame(plan.geometry);
     frames.set_layers(plan.outputs());
     frames.set_path(&plan.poses);
     let truth = frames.ground_truth();

@@ -71,6 +71,7 @@ def dataset(
     panorama_frame: str = "robot",
     outputs: Optional[Union[str, list[str]]] = None,
     format: Optional[Union[str, list[str]]] = None,
+    geometry_frame: str = "scene",
 ) -> dict[str, Any]:
     """Renders the dataset of ``scene`` along ``trajectory`` (CSV or JSON, docs/sensor.md)
     into the folder ``out``, as ``specchio dataset`` does: per pose a folder of the sensor
@@ -110,6 +111,11 @@ def dataset(
     which are then not kept) or ``"files,mcap"`` (or a list). ``specchio dataset --format``,
     docs/sensor.md "ROS 2 bags".
 
+    ``geometry_frame``: the frame of the ray map and the point cloud: ``"scene"`` (local, +Y up,
+    as every other output), ``"map"`` (ROS REP-103's world) or ``"base_link"`` (the robot's
+    REP-103 frame, where a rigid sensor's ray map is the same at every pose). ``specchio
+    dataset --geometry-frame``, docs/sensor.md.
+
     ``progress(done, total)`` is called as frames are written. Returns the summary
     (``dataset.json``) as a dict.
     """
@@ -136,6 +142,7 @@ def dataset(
             panorama_frame=panorama_frame,
             outputs=outputs,
             format=format,
+            geometry_frame=geometry_frame,
         )
     if workers is not None or worker_env is not None:
         raise SpecchioError("workers and worker_env are for ray=True")
@@ -154,5 +161,6 @@ def dataset(
         panorama_frame=panorama_frame,
         outputs=outputs,
         format=format,
+        geometry_frame=geometry_frame,
     )
 

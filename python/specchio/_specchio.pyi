@@ -73,6 +73,7 @@ class DatasetFrames:
         time: Optional[float] = None,
         panorama_frame: str = "robot",
         outputs: Optional[Union[str, list[str]]] = None,
+        geometry_frame: str = "scene",
     ) -> None: ...
     def __len__(self) -> int: ...
     @property
@@ -96,6 +97,7 @@ class DatasetOutput:
         panorama_frame: str = "robot",
         outputs: Optional[Union[str, list[str]]] = None,
         format: Optional[Union[str, list[str]]] = None,
+        geometry_frame: str = "scene",
     ) -> None: ...
     def __len__(self) -> int: ...
     @property
@@ -131,4 +133,5 @@ def dataset(
     panorama_frame: str = "robot",
     outputs: Optional[Union[str, list[str]]] = None,
     format: Optional[Union[str, list[str]]] = None,
+    geometry_frame: str = "scene",
 ) -> dict[str, Any]: ...

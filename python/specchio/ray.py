@@ -84,6 +84,7 @@ def dataset(
     panorama_frame: str = "robot",
     outputs: Optional[Union[str, list[str]]] = None,
     format: Optional[Union[str, list[str]]] = None,
+    geometry_frame: str = "scene",
 ) -> dict[str, Any]:
     """``specchio.dataset`` on Ray; see its documentation."""
     import ray
@@ -103,6 +104,7 @@ def dataset(
         "time": time,
         "panorama_frame": panorama_frame,
         "outputs": outputs,
+        "geometry_frame": geometry_frame,
     }
     # Every input is checked, and the output staged, before any worker starts.
     # The bag is made by the driver, from the frames the workers rendered.

@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use specchio::render::dataset::{self as writer, gpu_failed, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::DatasetRecord;
-use specchio::sensor::dataset::{resume, DatasetError, Folder, Format, Ready};
+use specchio::sensor::dataset::{resume, DatasetError, Folder, Format, GeometryFrame, Ready};
 use specchio::sensor::layers::Layers;
 use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::device::Device;
@@ -60,11 +60,7 @@ impl PoseSource {
     }
 
     /// The plan of `scene` with these poses, every one checked.
-    pub(crate) fn plan(
-        &self,
-        scene: &Path,
-        (panoramas, outputs, format): (PanoramaFrame, Option<Layers>, Format),
-    ) -> Result<Plan, DatasetError> {
+    pub(crate) fn plan(&self, scene: &Path, choices: &Choices) -> Result<Plan, DatasetError> {
         let poses = match self {
             PoseSource::File(path) => Poses::Trajectory(path),
             &PoseSource::Grid {
@@ -78,12 +74,39 @@ impl PoseSource {
             },
         };
         let mut plan = Plan::new(scene, poses)?;
-        plan.panoramas = panoramas;
-        if let Some(chosen) = outputs {
+        plan.panoramas = choices.panoramas;
+        plan.geometry = choices.geometry;
+        if let Some(chosen) = choices.outputs {
             plan.choose(chosen)?;
         }
-        plan.set_format(format)?;
+        plan.set_format(choices.format)?;
         Ok(plan)
+    }
+}
+
+/// What a dataset's caller chose beside its poses (`dataset`'s arguments of those names).
+pub(crate) struct Choices {
+    pub panoramas: PanoramaFrame,
+    pub geometry: GeometryFrame,
+    pub outputs: Option<Layers>,
+    pub format: Format,
+}
+
+impl Choices {
+    /// Python's `panorama_frame`, `geometry_frame`, `outputs` and `format`, checked.
+    pub(crate) fn parse(
+        panorama_frame: &str,
+        geometry_frame: &str,
+        outputs: Option<&Bound<'_, PyAny>>,
+        format: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        Ok(Choices {
+            panoramas: parse_panorama_frame(panorama_frame)?,
+            geometry: (geometry_frame.parse())
+                .map_err(|e| errors::error(format!("geometry_frame: {e}")))?,
+            outputs: parse_outputs(outputs)?,
+            format: format.map(parse_format).transpose()?.unwrap_or_default(),
+        })
     }
 }
 
@@ -140,7 +163,7 @@ pub(crate) fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
 /// `resume`, finished frames are kept in `out.partial` and a stopped run goes on from them
 /// (`specchio dataset --resume`). Returns the summary (`dataset.json`) as a dict.
 #[pyfunction]
-#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None, format=None))]
+#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None, format=None, geometry_frame="scene"))]
 #[allow(clippy::too_many_arguments)]
 pub fn dataset(
     py: Python<'_>,
@@ -158,16 +181,16 @@ pub fn dataset(
     panorama_frame: &str,
     outputs: Option<Bound<'_, PyAny>>,
     format: Option<Bound<'_, PyAny>>,
+    geometry_frame: &str,
 ) -> PyResult<Py<PyAny>> {
     let device = crate::args::device(device.as_ref())?;
     let job = Job {
-        format: format
-            .as_ref()
-            .map(parse_format)
-            .transpose()?
-            .unwrap_or_default(),
-        panoramas: parse_panorama_frame(panorama_frame)?,
-        outputs: parse_outputs(outputs.as_ref())?,
+        choices: Choices::parse(
+            panorama_frame,
+            geometry_frame,
+            outputs.as_ref(),
+            format.as_ref(),
+        )?,
         asked: parse_lookup(lookup)?,
         source: PoseSource::new(trajectory, grid, headings, time)?,
         scene: &scene,
@@ -188,9 +211,7 @@ pub fn dataset(
 
 /// What `dataset` renders: its arguments, checked.
 struct Job<'a> {
-    format: Format,
-    panoramas: PanoramaFrame,
-    outputs: Option<Layers>,
+    choices: Choices,
     asked: Option<Lookup>,
     source: PoseSource,
     scene: &'a Path,
@@ -214,12 +235,13 @@ fn render(
 ) -> Result<Finished, DatasetError> {
     // What this call may not replace is what it reads (docs/python.md).
     specchio::files::identity::forget();
-    let plan = (job.source).plan(job.scene, (job.panoramas, job.outputs, job.format))?;
+    let plan = (job.source).plan(job.scene, &job.choices)?;
     let n = plan.poses.len();
     let mut folder = Folder::stage(job.out, n, plan.frame_files())?;
     let (log, dev, lookup) = open_device(job, &plan)?;
     let mut frames = FrameWriter::new(&dev, &plan.scene, lookup).map_err(gpu_failed)?;
     frames.set_panoramas(plan.panoramas);
+    frames.set_geometry_frame(plan.geometry);
     frames.set_layers(plan.outputs());
     frames.set_path(&plan.poses);
     let truth = frames.ground_truth();

@@ -10,14 +10,11 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use specchio::render::dataset::{device_key, gpu_failed, FrameWriter, Plan};
 use specchio::scene::Lookup;
-use specchio::sensor::dataset::{resume, DatasetError, Folder, Format, Frame};
+use specchio::sensor::dataset::{resume, DatasetError, Folder, Frame};
 use specchio::sensor::GroundTruth;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
-use crate::dataset::{
-    commit, parse_format, parse_lookup, parse_outputs, parse_panorama_frame, with_kept_note,
-    PoseSource,
-};
+use crate::dataset::{commit, parse_lookup, with_kept_note, Choices, PoseSource};
 use crate::errors;
 use crate::renderer::check_validation;
 
@@ -44,7 +41,7 @@ impl DatasetFrames {
     /// quarter of the machine's cores, 1 to 4, within the memory budget; 0: none). A Ray
     /// worker, one of many on its machine, passes 1.
     #[new]
-    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None))]
+    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None, geometry_frame="scene"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -59,13 +56,11 @@ impl DatasetFrames {
         time: Option<f64>,
         panorama_frame: &str,
         outputs: Option<Bound<'_, PyAny>>,
+        geometry_frame: &str,
     ) -> PyResult<Self> {
         let source = PoseSource::new(trajectory, grid, headings, time)?;
-        let choices = (
-            parse_panorama_frame(panorama_frame)?,
-            parse_outputs(outputs.as_ref())?,
-            Format::default(),
-        );
+        // The workers render frames; the bag, if any, is the driver's (`DatasetOutput`).
+        let choices = Choices::parse(panorama_frame, geometry_frame, outputs.as_ref(), None)?;
         let device = crate::args::device(device.as_ref())?;
         // At most MAX_ENCODERS: each holds a frame in memory.
         let most = MAX_ENCODERS as u32;
@@ -74,7 +69,7 @@ impl DatasetFrames {
             .map(|n| n as usize);
         let asked = parse_lookup(lookup)?;
         py.detach(|| -> Result<Self, DatasetError> {
-            let plan = source.plan(&scene, choices)?;
+            let plan = source.plan(&scene, &choices)?;
             let instance =
                 Instance::create(&InstanceDesc::from_env(validate)).map_err(gpu_failed)?;
             let log = instance.validation_log();
@@ -86,6 +81,7 @@ impl DatasetFrames {
             )?;
             let mut frames = FrameWriter::new(&dev, &plan.scene, lookup).map_err(gpu_failed)?;
             frames.set_panoramas(plan.panoramas);
+            frames.set_geometry_frame(plan.geometry);
             frames.set_layers(plan.outputs());
             frames.set_path(&plan.poses);
             if let Some(n) = encoders {
@@ -202,7 +198,7 @@ pub struct DatasetOutput {
 #[pymethods]
 impl DatasetOutput {
     #[new]
-    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None, format=None))]
+    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None, format=None, geometry_frame="scene"))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -216,20 +212,18 @@ impl DatasetOutput {
         panorama_frame: &str,
         outputs: Option<Bound<'_, PyAny>>,
         format: Option<Bound<'_, PyAny>>,
+        geometry_frame: &str,
     ) -> PyResult<Self> {
         let source = PoseSource::new(trajectory, grid, headings, time)?;
-        let choices = (
-            parse_panorama_frame(panorama_frame)?,
-            parse_outputs(outputs.as_ref())?,
-            format
-                .as_ref()
-                .map(parse_format)
-                .transpose()?
-                .unwrap_or_default(),
-        );
+        let choices = Choices::parse(
+            panorama_frame,
+            geometry_frame,
+            outputs.as_ref(),
+            format.as_ref(),
+        )?;
         py.detach(|| -> Result<Self, DatasetError> {
             specchio::files::identity::forget();
-            let plan = source.plan(&scene, choices)?;
+            let plan = source.plan(&scene, &choices)?;
             let folder = Folder::stage(&out, plan.poses.len(), plan.frame_files())?;
             Ok(DatasetOutput {
                 plan,

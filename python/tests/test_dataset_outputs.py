@@ -47,3 +47,25 @@ def test_a_bad_choice_writes_nothing_and_says_why(tmp_path, monkeypatch):
         with pytest.raises(specchio.SpecchioError, match=says):
             specchio.dataset(scene, "robot.csv", "bad", outputs=outputs)
         assert not (tmp_path / "bad").exists()
+
+
+def test_geometry_frame_from_python_and_ray_is_the_commands(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "robot.csv").write_text(ROBOT_CSV)
+    scene = str(scene_path("thesis-room"))
+    args = ("--outputs", "rays,points", "--geometry-frame", "base_link")
+    run = cli("dataset", scene, "--trajectory", "robot.csv", "--out", "cli", *args, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    want = tree(tmp_path / "cli")
+    assert b"comment frame: ROS REP-103 base_link" in want["frames/000002/points.ply"]
+    record = specchio.dataset(scene, "robot.csv", "py", outputs="rays,points", geometry_frame="base_link")
+    assert record["geometry_frame"] == "base_link"
+    assert tree(tmp_path / "py") == want
+    specchio.dataset(
+        scene, "robot.csv", "ray", outputs="rays,points", geometry_frame="base_link", ray=True,
+        workers=1, shard_size=3, worker_env={"LP_NUM_THREADS": "1"},
+    )
+    assert tree(tmp_path / "ray") == want
+    with pytest.raises(specchio.SpecchioError, match="geometry_frame: `world` is not a geometry frame"):
+        specchio.dataset(scene, "robot.csv", "bad", geometry_frame="world")
+    assert not (tmp_path / "bad").exists()

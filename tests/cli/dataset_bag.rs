@@ -82,12 +82,7 @@ fn the_bag_is_the_same_beside_the_frames_alone_or_resumed_and_holds_their_sample
     assert_eq!(summary["index"], serde_json::Value::Null);
 
     // Frame 1's camera image, in the bag as in its PNG.
-    let bytes = std::fs::read(dir.join("both/bag/bag_0.mcap")).unwrap();
-    let images: Vec<(u64, Vec<u8>)> = (mcap::MessageStream::new(&bytes).unwrap())
-        .map(|m| m.unwrap())
-        .filter(|m| m.channel.topic == "/camera/image_raw")
-        .map(|m| (m.log_time, m.data.into_owned()))
-        .collect();
+    let images = messages(&dir.join("both"), "/camera/image_raw");
     assert_eq!(images.len(), 2);
     assert_eq!(images[1].0, 500_000_000, "the pose's time");
     let want = png_samples_le(&dir.join("both/frames/000001/sensor.camera.png"));
@@ -97,6 +92,48 @@ fn the_bag_is_the_same_beside_the_frames_alone_or_resumed_and_holds_their_sample
     );
     let yaml = std::fs::read_to_string(dir.join("both/bag/metadata.yaml")).unwrap();
     assert!(yaml.contains("storage_identifier: mcap") && yaml.contains("message_count: 19"));
+
+    // The cloud is the camera's whichever frame the PLY files are in.
+    ok(dataset(
+        &dir,
+        "based",
+        &["--format", "mcap", "--geometry-frame", "base_link"],
+    ));
+    let (a, b) = (
+        messages(&dir.join("both"), "/camera/points"),
+        messages(&dir.join("based"), "/camera/points"),
+    );
+    let floats = |m: &[u8]| -> Vec<f32> {
+        m.chunks(16)
+            .flat_map(|p| {
+                (0..3).map(|k| f32::from_le_bytes(p[4 * k..4 * k + 4].try_into().unwrap()))
+            })
+            .collect()
+    };
+    // The cloud's points are the message's last bytes but its is_dense flag: as many as the
+    // PLY's.
+    let ply = std::fs::read(dir.join("both/frames/000001/points.ply")).unwrap();
+    let body = ply.len() - ply.windows(11).position(|w| w == b"end_header\n").unwrap() - 11;
+    let points = |m: &[u8]| floats(&m[m.len() - 1 - body..m.len() - 1]);
+    let (fa, fb) = (points(&a[1].1), points(&b[1].1));
+    assert_eq!(a[1].1.len(), b[1].1.len());
+    assert_eq!(fa.len(), fb.len());
+    let worst = fa
+        .iter()
+        .zip(&fb)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max);
+    assert!(worst < 1e-4, "{worst}");
+}
+
+/// The messages of `topic` in the bag of the dataset `out`: (time, data).
+fn messages(out: &Path, topic: &str) -> Vec<(u64, Vec<u8>)> {
+    let bytes = std::fs::read(out.join("bag/bag_0.mcap")).unwrap();
+    (mcap::MessageStream::new(&bytes).unwrap())
+        .map(|m| m.unwrap())
+        .filter(|m| m.channel.topic == topic)
+        .map(|m| (m.log_time, m.data.into_owned()))
+        .collect()
 }
 
 #[test]

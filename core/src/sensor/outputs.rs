@@ -7,6 +7,7 @@ use std::path::Path;
 use glam::{Mat3, Quat, Vec3};
 use serde::Serialize;
 
+use super::dataset::geometry::{GeometryFrame, Rigid};
 use super::files::Samples;
 use super::ground_truth::{GroundTruth, GroundTruthRecord};
 pub use super::id_map::{IdMap, NO_ID};
@@ -65,6 +66,9 @@ pub struct SensorOutputs {
     /// frame) unless a robot's frame puts its forward axis there (a dataset's frames:
     /// [`PanoramaFrame::seam`](super::panorama::PanoramaFrame::seam)).
     pub panorama_seam_rad: f64,
+    /// The frame the ray map (and a dataset's point cloud) is written in, and the map to it
+    /// from the scene-local frame: the scene's unless a dataset asks (`--geometry-frame`).
+    pub geometry: (GeometryFrame, Rigid),
     /// The image as the scene's camera reports it (`[sensor.imaging]`: noise, exposure,
     /// response, lens), beside the clean `image`; None until [`Self::expose`], and where the
     /// scene has no imaging chain.
@@ -112,6 +116,7 @@ impl SensorOutputs {
             image: images.color.clone(),
             cube: None,
             panorama_seam_rad: 0.0,
+            geometry: (GeometryFrame::Scene, Rigid::IDENTITY),
             camera: None,
         }
     }
@@ -176,6 +181,7 @@ impl SensorOutputs {
             image,
             cube,
             panorama_seam_rad: 0.0,
+            geometry: (GeometryFrame::Scene, Rigid::IDENTITY),
             camera: None,
         }
     }
@@ -283,10 +289,11 @@ impl SensorOutputs {
     fn ray_channels(&self) -> Vec<(&'static str, Samples)> {
         (RAY_CHANNELS.iter().enumerate())
             .map(|(c, name)| {
+                let to = &self.geometry.1;
                 let v = (self.rays.rays.iter())
                     .map(|r| match r {
-                        Some(r) if c < 3 => r.origin[c],
-                        Some(r) if c < 6 => r.direction[c - 3],
+                        Some(r) if c < 3 => to.point(r.origin)[c],
+                        Some(r) if c < 6 => to.vector(r.direction)[c - 3],
                         Some(_) => 1.0,
                         None => 0.0,
                     })
@@ -352,6 +359,8 @@ impl SensorOutputs {
                 rays: chosen.has(Layer::Rays).then_some(RaysRecord {
                     rays: RAYS_FILE,
                     ray_channels: RAY_CHANNELS,
+                    ray_frame: (self.geometry.0 != GeometryFrame::Scene)
+                        .then(|| self.geometry.0.says()),
                 }),
                 range: chosen.has(Layer::Range).then_some(RangeRecord {
                     range: RANGE_FILE,
@@ -484,6 +493,9 @@ pub struct FilesRecord {
 pub struct RaysRecord {
     pub rays: &'static str,
     pub ray_channels: [&'static str; 7],
+    /// The frame the rays are in where it is not `frame`'s (a dataset's `--geometry-frame`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ray_frame: Option<&'static str>,
 }
 
 #[derive(Debug, Serialize)]

@@ -68,8 +68,11 @@ const STATIC_TOLERANCE: f64 = 1e-6;
 /// What a bag is made of besides the frames' files.
 #[derive(Default)]
 pub struct Extras<'a> {
-    /// The scene frame's origin in the file's coordinates (the point clouds are local to it).
+    /// The scene frame's origin in the file's coordinates (a point cloud in the scene's frame
+    /// is local to it).
     pub scene_origin: DVec3,
+    /// The frame the frames' point clouds are in (`--geometry-frame`).
+    pub geometry: crate::sensor::dataset::GeometryFrame,
     /// A central mirror's unified model.
     pub omni: Option<&'a Omni>,
 }

@@ -150,7 +150,7 @@ fn bag() -> (Topics, String) {
     let path = std::path::Path::new("test.mcap");
     let extras = Extras {
         scene_origin: DVec3::new(10.0, 0.0, 0.0),
-        omni: None,
+        ..Extras::default()
     };
     let yaml = write(&mut out, path, 2, &read, &extras).unwrap();
     let bytes = out.into_inner();

@@ -10,6 +10,7 @@ use super::frame::{self, CameraRecord, FramePose, RawImage, ReadFile};
 use super::msgs::{self, MsgType};
 use super::rosbag2::{self, Summary};
 use super::{BagError, Counts, BASE_LINK, CAMERA_OPTICAL, ODOM};
+use crate::sensor::dataset::{rep103, GeometryFrame};
 
 /// A topic: its name, its type, and whether a late subscriber still gets it (`/tf_static`'s
 /// transient-local durability).
@@ -276,7 +277,7 @@ pub fn frame<W: Write + Seek>(
         bag.publish(topic, stamp, &msgs::image(stamp, CAMERA_OPTICAL, &image))?;
     }
     if let Some(points) = frame::points(read, i)? {
-        let data = cloud_in_camera(&points, &pose.camera, extras.scene_origin);
+        let data = cloud_in_camera(&points, pose, extras);
         let cloud = msgs::Cloud {
             fields: &[
                 ("x", 0, msgs::FLOAT32),
@@ -298,12 +299,19 @@ pub fn frame<W: Write + Seek>(
 }
 
 /// Scene-local points as the camera's optical frame sees them, packed 16 bytes a point.
-fn cloud_in_camera(points: &[frame::Point], camera: &frame::Placed, origin: DVec3) -> Vec<u8> {
+/// The PLY's points (in the dataset's geometry frame) as the camera's optical frame sees them,
+/// packed 16 bytes a point.
+fn cloud_in_camera(points: &[frame::Point], pose: &FramePose, extras: &super::Extras) -> Vec<u8> {
+    let (camera, base) = (&pose.camera, &pose.base_link);
     let to_camera = camera.rotation.inverse();
+    let in_map = |p: DVec3| match extras.geometry {
+        GeometryFrame::Scene => rep103::point(extras.scene_origin + p),
+        GeometryFrame::Map => p,
+        GeometryFrame::BaseLink => base.rotation * p + base.position,
+    };
     let mut data = Vec::with_capacity(points.len() * 16);
     for &(p, id) in points {
-        let map =
-            crate::sensor::dataset::rep103::point(origin + DVec3::from_array(p.map(f64::from)));
+        let map = in_map(DVec3::from_array(p.map(f64::from)));
         let c = to_camera * (map - camera.position);
         for v in [c.x as f32, c.y as f32, c.z as f32] {
             data.extend_from_slice(&v.to_le_bytes());

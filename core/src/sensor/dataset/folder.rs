@@ -129,6 +129,7 @@ impl Folder {
         if format.mcap {
             let extras = bag::Extras {
                 scene_origin: glam::DVec3::from_array(record.scene_origin_m),
+                geometry: record.geometry_frame,
                 omni,
             };
             write_bag(&staged, &self.root, self.index.len(), &extras)?;

@@ -13,6 +13,7 @@ pub mod check;
 mod error;
 mod folder;
 mod format;
+pub mod geometry;
 pub mod grid;
 pub mod motion;
 pub mod ply;
@@ -24,6 +25,7 @@ pub use check::{check_frame, check_index_line};
 pub use error::DatasetError;
 pub use folder::{Folder, Ready};
 pub use format::Format;
+pub use geometry::GeometryFrame;
 pub use resume::RunKey;
 
 use glam::{DMat3, DVec3, Vec3};
@@ -241,6 +243,8 @@ pub struct DatasetRecord {
     /// Whose frame the panoramas' columns are in: the robot's (its forward axis at the left
     /// edge) or the scene's (`camera.json` gives each panorama's seam azimuth).
     pub panorama_frame: super::panorama::PanoramaFrame,
+    /// The frame of the ray maps and point clouds (`--geometry-frame`).
+    pub geometry_frame: GeometryFrame,
     /// The layers chosen (`--outputs`), and the files every frame folder holds for them.
     pub outputs: Layers,
     pub frame_files: Vec<&'static str>,

@@ -22,7 +22,7 @@ use crate::scene::{Lookup, Scene};
 use crate::sensor::dataset::motion;
 use crate::sensor::dataset::trajectory::Pose;
 use crate::sensor::dataset::{self as sensor_dataset, IndexLine, PoseRecord};
-use crate::sensor::dataset::{DatasetError, Frame, INDEX_FILE};
+use crate::sensor::dataset::{rep103, DatasetError, Frame, GeometryFrame, INDEX_FILE};
 use crate::sensor::imaging;
 use crate::sensor::layers::{Layer, Layers, IMAGE_FILES, POINTS_FILE};
 use crate::sensor::panorama::PanoramaFrame;
@@ -70,6 +70,8 @@ pub struct FrameWriter {
     encoders: usize,
     /// Whose frame the panoramas are in (the robot's unless set: [`Self::set_panoramas`]).
     panoramas: PanoramaFrame,
+    /// The frame the ray map and point cloud are in ([`Self::set_geometry_frame`]).
+    geometry: GeometryFrame,
     /// The layers a frame's files hold (all the scene has unless set: [`Self::set_layers`]).
     layers: Layers,
     /// The trajectory the frames are poses of, by frame number, for the robot's motion during
@@ -96,6 +98,7 @@ impl FrameWriter {
             truth,
             encoders: encoders_for(scene),
             panoramas: PanoramaFrame::Robot,
+            geometry: GeometryFrame::Scene,
             layers: Layers::all().for_scene(scene.sensor.imaging.is_some()),
             path: None,
         })
@@ -160,6 +163,13 @@ impl FrameWriter {
             None,
         );
         outputs.panorama_seam_rad = self.panoramas.seam(pose.heading_deg.to_radians());
+        // base_link as pose.json places it (`PoseRecord::new`).
+        let base = (
+            rep103::point(pose.position),
+            rep103::robot_orientation(pose.heading_deg),
+        );
+        let to = self.geometry.from_scene(outputs.scene_origin, base);
+        outputs.geometry = (self.geometry, to);
         if camera {
             outputs.expose(&r.scene, frame as u64, light.as_ref());
         }
@@ -219,6 +229,11 @@ impl FrameWriter {
     /// Unwraps the panoramas in `frame`'s frame (a dataset's `Plan::panoramas`).
     pub fn set_panoramas(&mut self, frame: PanoramaFrame) {
         self.panoramas = frame;
+    }
+
+    /// Writes the ray map and the point cloud in `frame` (a dataset's `Plan::geometry`).
+    pub fn set_geometry_frame(&mut self, frame: GeometryFrame) {
+        self.geometry = frame;
     }
 
     /// The robot follows `path` (a dataset's poses, by frame number) during each frame's
@@ -448,14 +463,21 @@ fn write_frame(
             return Ok(());
         }
         let origin = o.scene_origin;
+        let (frame, to) = &o.geometry;
         let comments = [
-            format!(
-                "frame: the scene's, local (world = [{}, {}, {}] + point), metres, +Y up",
-                origin.x, origin.y, origin.z
-            ),
+            match frame {
+                GeometryFrame::Scene => format!(
+                    "frame: the scene's, local (world = [{}, {}, {}] + point), metres, +Y up",
+                    origin.x, origin.y, origin.z
+                ),
+                other => format!("frame: {}, metres", other.says()),
+            },
             "id: the drawable the ray met (sensor.id.json)".to_owned(),
         ];
-        let points = sensor_dataset::points(o);
+        let mut points = sensor_dataset::points(o);
+        for (p, _) in &mut points {
+            *p = to.point(*p);
+        }
         out.write_bytes(
             &dir.join(POINTS_FILE),
             &sensor_dataset::ply::ply(&points, &comments),

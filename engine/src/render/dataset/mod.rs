@@ -23,7 +23,7 @@ use crate::sensor::dataset::grid;
 use crate::sensor::dataset::resume::RunKey;
 use crate::sensor::dataset::trajectory::{self, Place, Pose, TrajectoryError};
 use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
-use crate::sensor::dataset::{DatasetError, Folder, Format, INDEX_FILE};
+use crate::sensor::dataset::{DatasetError, Folder, Format, GeometryFrame, INDEX_FILE};
 use crate::sensor::layers::{Layer, Layers};
 use crate::sensor::panorama::PanoramaFrame;
 use crate::sensor::GroundTruth;
@@ -63,6 +63,8 @@ pub struct Plan {
     pub inputs: Vec<Digest>,
     /// Whose frame the panoramas are in: the robot's unless asked ([`PanoramaFrame`]).
     pub panoramas: PanoramaFrame,
+    /// The frame the ray map and the point cloud are in: the scene's unless asked.
+    pub geometry: GeometryFrame,
     /// The layers each frame holds: all the scene has unless chosen ([`Plan::choose`]).
     outputs: Layers,
     /// The frame folders, the ROS 2 bag, or both ([`Plan::set_format`]).
@@ -111,6 +113,7 @@ impl Plan {
             poses,
             inputs,
             panoramas: PanoramaFrame::Robot,
+            geometry: GeometryFrame::Scene,
             format: Format::default(),
             omni: None,
             outputs,
@@ -199,6 +202,7 @@ impl Plan {
             device: device.to_owned(),
             panoramas: self.panoramas.name().to_owned(),
             outputs: self.outputs.to_string(),
+            geometry: self.geometry.name().to_owned(),
         }
     }
 
@@ -255,6 +259,7 @@ impl Plan {
             scene_origin_m: self.scene.origin.to_array(),
             scene_to_ros: sensor_dataset::scene_to_ros_rows(),
             panorama_frame: self.panoramas,
+            geometry_frame: self.geometry,
             outputs: self.outputs,
             frame_files: self.frame_files(),
             format: self.format,

@@ -41,6 +41,10 @@ pub struct RunKey {
     /// this field reads as `""`, which no run asks for.
     #[serde(default)]
     pub outputs: String,
+    /// The frame of the ray map and the point cloud (`scene`, `map`, `base_link`). A journal
+    /// from before this field reads as `""`, which no run asks for.
+    #[serde(default)]
+    pub geometry: String,
 }
 
 /// One journal line.
@@ -154,6 +158,12 @@ pub(super) fn differs(theirs: &RunKey, ours: &RunKey) -> Option<String> {
             "the outputs {} against {}",
             or_none(&theirs.outputs),
             ours.outputs
+        )
+    } else if theirs.geometry != ours.geometry {
+        format!(
+            "the ray map and cloud in the {} frame against the {}",
+            or_none(&theirs.geometry),
+            ours.geometry
         )
     } else if theirs != ours {
         // A field added to the key and not named above still refuses the journal.

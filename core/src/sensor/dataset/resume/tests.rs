@@ -29,6 +29,7 @@ fn key(frames: usize) -> RunKey {
         ground_truth: "traced".into(),
         device: "a device".into(),
         panoramas: "robot".into(),
+        geometry: "scene".into(),
         outputs: Layers::all().to_string(),
     }
 }
@@ -70,6 +71,7 @@ fn record(frames: usize) -> DatasetRecord {
         scene_origin_m: [0.0; 3],
         scene_to_ros: [[0.0; 3]; 3],
         panorama_frame: crate::sensor::panorama::PanoramaFrame::Robot,
+        geometry_frame: Default::default(),
         outputs: Layers::all(),
         frame_files: any_frame_files(),
         format: Default::default(),
