@@ -72,7 +72,8 @@ pub struct Args {
     #[arg(long, default_value = "scene", value_name = "FRAME")]
     geometry_frame: GeometryFrame,
     /// The layers each frame holds, comma-separated: image (sensor.exr, .png), camera
-    /// (sensor.camera.png, with the scene's [sensor.imaging]), rays, range, ids (and the id
+    /// (sensor.camera.png, with the scene's [sensor.imaging]), rays, range, range16 (the range
+    /// as 16-bit millimetres, sensor.range.png; not in all), ids (and the id
     /// map), panoramas, points (points.ply); or all. camera.json and pose.json always.
     #[arg(long, default_value = "all", value_name = "LAYERS")]
     outputs: Layers,

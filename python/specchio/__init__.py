@@ -102,7 +102,8 @@ def dataset(
 
     ``outputs``: the layers each frame holds, as a list (``["image", "range", "ids"]``) or a
     comma-separated string: ``image``, ``camera`` (with the scene's ``[sensor.imaging]``),
-    ``rays``, ``range``, ``ids``, ``panoramas``, ``points``, or ``"all"`` (the default: every
+    ``rays``, ``range``, ``range16`` (the range as 16-bit millimetres, ``sensor.range.png``;
+    named only, not in ``"all"``), ``ids``, ``panoramas``, ``points``, or ``"all"`` (the default: every
     layer the scene has). ``camera.json`` and ``pose.json`` always. ``specchio dataset
     --outputs``, docs/sensor.md.
 

@@ -146,9 +146,9 @@ def test_a_bag_alone_on_ray_is_the_same_bag(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "robot.csv").write_text(ROBOT_CSV)
     scene = str(scene_path("thesis-room"))
-    specchio.dataset(scene, "robot.csv", "here", format="mcap", outputs="image,range")
+    specchio.dataset(scene, "robot.csv", "here", format="mcap", outputs="image,range,range16")
     record = specchio.dataset(
-        scene, "robot.csv", "ray", format=["mcap"], outputs="image,range", ray=True, workers=1,
+        scene, "robot.csv", "ray", format=["mcap"], outputs="image,range,range16", ray=True, workers=1,
         shard_size=3, worker_env={"LP_NUM_THREADS": "1"},
     )
     assert (record["format"], record["index"]) == (["mcap"], None)
@@ -162,7 +162,15 @@ def test_a_bag_alone_on_ray_is_the_same_bag(tmp_path, monkeypatch):
         ).read_bytes(), name
     topics, _ = messages(tmp_path / "here" / "bag")
     assert set(topics) == {"/tf_static", "/tf", "/odom", "/camera/camera_info",
-                           "/camera/image_clean", "/camera/range"}
+                           "/camera/image_clean", "/camera/range", "/camera/range_mm"}
+    # The millimetres are the metres rounded, 0 for no return (REP-117's integer convention).
+    for (_, metres), (_, mm) in zip(topics["/camera/range"], topics["/camera/range_mm"]):
+        assert (mm.encoding, mm.step) == ("16UC1", 512 * 2)
+        m = metres.data.view("<f4")
+        # Halves round up (numpy's round would take them to even).
+        want = np.where(np.isnan(m), 0, np.floor(m.astype(np.float64) * 1000 + 0.5)).astype(np.uint16)
+        assert np.array_equal(mm.data.view("<u2"), want)
+        assert (want > 0).mean() > 0.4
 
 
 def test_a_bad_format_writes_nothing_and_says_why(tmp_path, monkeypatch):

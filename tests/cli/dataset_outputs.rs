@@ -122,7 +122,8 @@ fn a_layer_the_scene_cannot_have_or_none_at_all_is_refused_before_anything_is_wr
         ("camera", "outputs: camera needs a camera model"),
         (
             "image,depth",
-            "`depth` is not a layer: image, camera, rays, range, ids, panoramas, points, or all",
+            "`depth` is not a layer: image, camera, rays, range, range16, ids, panoramas, points, \
+             or all",
         ),
         ("", "an empty layer name"),
         ("range,range", "`range` is named twice"),
@@ -269,4 +270,39 @@ fn the_geometry_layers_in_map_and_base_link_are_the_scenes_moved_and_a_rigid_sen
     let r = dataset(&dir, "bad", &["--geometry-frame", "world"]);
     assert!(String::from_utf8_lossy(&r.stderr).contains("`world` is not a geometry frame"));
     assert!(!r.status.success() && !dir.join("bad").exists());
+}
+
+#[test]
+fn range16_is_the_float_ranges_millimetres_and_not_in_all() {
+    let dir = temp_dir("dataset-range16");
+    let r = dataset(&dir, "mm", &["--outputs", "range,range16"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let frame = dir.join("mm/frames/000001");
+    let channels = specchio::image::exr::read_channels(&frame.join("sensor.range.exr")).unwrap();
+    let metres = specchio::image::exr::f32_channel(&channels, "range").unwrap();
+    let png = std::fs::read(frame.join("sensor.range.png")).unwrap();
+    let mut reader = png::Decoder::new(std::io::Cursor::new(png))
+        .read_info()
+        .unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(
+        (info.color_type, info.bit_depth),
+        (png::ColorType::Grayscale, png::BitDepth::Sixteen)
+    );
+    let mm: Vec<u16> = buf
+        .chunks(2)
+        .map(|b| u16::from_be_bytes([b[0], b[1]]))
+        .collect();
+    assert_eq!(mm, specchio::sensor::files::range_mm(metres));
+    // Known values: no return off the mirror, and the millimetres of a pixel that has one.
+    let k = metres.iter().position(|&m| m > 1.0).unwrap();
+    assert_eq!(mm[k], (f64::from(metres[k]) * 1000.0).round() as u16);
+    assert_eq!(mm[0], 0, "the corner is off the mirror");
+    let camera: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(frame.join("camera.json")).unwrap()).unwrap();
+    assert_eq!(camera["files"]["range16"]["file"], "sensor.range.png");
+    let all = dataset(&dir, "all", &["--outputs", "all"]);
+    assert!(all.status.success());
+    assert!(!dir.join("all/frames/000000/sensor.range.png").exists());
 }

@@ -41,6 +41,22 @@ pub fn encode_rgb8(
     writer.finish()
 }
 
+/// A 16-bit greyscale PNG of `values` (rows top to bottom): integers a reader takes back
+/// exactly, such as millimetres of range.
+pub fn encode_gray16(
+    to: impl Write,
+    (width, height): (u32, u32),
+    values: &[u16],
+) -> Result<(), EncodingError> {
+    let mut encoder = ::png::Encoder::new(to, width, height);
+    encoder.set_color(::png::ColorType::Grayscale);
+    encoder.set_depth(::png::BitDepth::Sixteen);
+    let mut writer = encoder.write_header()?;
+    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_be_bytes()).collect();
+    writer.write_image_data(&bytes)?;
+    writer.finish()
+}
+
 /// An RGB PNG of a camera's codes: `samples` 8- or 16-bit (big-endian, 3 per pixel, rows top
 /// to bottom), of which the top `significant` bits carry the code (an `sBIT` chunk says so,
 /// so that a reader can shift them back). No colour space is claimed: the codes are the

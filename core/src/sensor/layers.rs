@@ -9,6 +9,8 @@ use super::imaging::CAMERA_IMAGE_FILE;
 pub const IMAGE_FILES: [&str; 2] = ["sensor.exr", "sensor.png"];
 pub const RAYS_FILE: &str = "sensor.rays.exr";
 pub const RANGE_FILE: &str = "sensor.range.exr";
+/// The range as 16-bit millimetres (layer `range16`).
+pub const RANGE16_FILE: &str = "sensor.range.png";
 pub const ID_FILE: &str = "sensor.id.exr";
 /// What each id of [`ID_FILE`] is: the id map as JSON.
 pub const ID_MAP_FILE: &str = "sensor.id.json";
@@ -28,6 +30,9 @@ pub enum Layer {
     /// The ray map.
     Rays,
     Range,
+    /// The range as a 16-bit PNG of whole millimetres (ROS's `16UC1` depth convention): chosen
+    /// by name, not by `all`, which has the float range.
+    Range16,
     /// The ids and classes, and the id map.
     Ids,
     Panoramas,
@@ -36,11 +41,12 @@ pub enum Layer {
 }
 
 impl Layer {
-    pub const ALL: [Layer; 7] = [
+    pub const ALL: [Layer; 8] = [
         Layer::Image,
         Layer::Camera,
         Layer::Rays,
         Layer::Range,
+        Layer::Range16,
         Layer::Ids,
         Layer::Panoramas,
         Layer::Points,
@@ -52,6 +58,7 @@ impl Layer {
             Layer::Camera => "camera",
             Layer::Rays => "rays",
             Layer::Range => "range",
+            Layer::Range16 => "range16",
             Layer::Ids => "ids",
             Layer::Panoramas => "panoramas",
             Layer::Points => "points",
@@ -65,6 +72,7 @@ impl Layer {
             Layer::Camera => &[CAMERA_IMAGE_FILE],
             Layer::Rays => &[RAYS_FILE],
             Layer::Range => &[RANGE_FILE],
+            Layer::Range16 => &[RANGE16_FILE],
             Layer::Ids => &[ID_FILE, ID_MAP_FILE],
             Layer::Panoramas => &[PANORAMA_FILES],
             Layer::Points => &[POINTS_FILE],
@@ -81,9 +89,11 @@ impl Layer {
 pub struct Layers(u8);
 
 impl Layers {
-    /// Every layer (the camera image only where there is an imaging chain to make it).
+    /// Every layer (the camera image only where there is an imaging chain to make it), the
+    /// range once: as floats, not again as `range16`'s millimetres.
     pub fn all() -> Self {
-        Layers(Layer::ALL.iter().fold(0, |bits, l| bits | l.bit()))
+        let bits = Layer::ALL.iter().fold(0, |bits, l| bits | l.bit());
+        Layers(bits).without(Layer::Range16)
     }
 
     pub fn has(self, layer: Layer) -> bool {
@@ -187,7 +197,8 @@ mod tests {
         let e = "image,depth".parse::<Layers>().unwrap_err();
         assert_eq!(
             e,
-            "`depth` is not a layer: image, camera, rays, range, ids, panoramas, points, or all"
+            "`depth` is not a layer: image, camera, rays, range, range16, ids, panoramas, points, \
+             or all"
         );
         assert!("image,,range"
             .parse::<Layers>()
@@ -198,5 +209,11 @@ mod tests {
             "`ids` is named twice"
         );
         assert!(!Layers::all().for_scene(false).has(Layer::Camera));
+        assert!(
+            !Layers::all().has(Layer::Range16),
+            "all has the range once, as floats"
+        );
+        let mm: Layers = "range16".parse().unwrap();
+        assert_eq!(mm.files(), ["camera.json", RANGE16_FILE]);
     }
 }

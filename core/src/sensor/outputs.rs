@@ -22,7 +22,7 @@ use crate::output::{OutputError, Sink};
 use crate::reference::ReferenceImages;
 use crate::scene::Scene;
 
-pub use super::layers::{CAMERA_FILE, ID_FILE, ID_MAP_FILE, RANGE_FILE, RAYS_FILE};
+pub use super::layers::{CAMERA_FILE, ID_FILE, ID_MAP_FILE, RANGE16_FILE, RANGE_FILE, RAYS_FILE};
 /// Channels of [`RAYS_FILE`] (world space, metres; `mask` 1 where the pixel sees the mirror).
 pub const RAY_CHANNELS: [&str; 7] = [
     "origin.X",
@@ -265,6 +265,17 @@ impl SensorOutputs {
             let range = vec![("range", Samples::F32(self.range.clone()))];
             out.write_channels(&dir.join(RANGE_FILE), (w, h), range)?;
         }
+        if chosen.has(Layer::Range16) {
+            let path = dir.join(RANGE16_FILE);
+            let mut png = Vec::new();
+            crate::image::png::encode_gray16(
+                &mut png,
+                (w, h),
+                &super::files::range_mm(&self.range),
+            )
+            .map_err(|e| crate::output::png_error(&path, e))?;
+            out.write_bytes(&path, &png)?;
+        }
         if chosen.has(Layer::Ids) {
             let ids = vec![
                 ("id", Samples::U32(self.ids.clone())),
@@ -365,6 +376,11 @@ impl SensorOutputs {
                 range: chosen.has(Layer::Range).then_some(RangeRecord {
                     range: RANGE_FILE,
                     range_model: self.range_model,
+                }),
+                range16: chosen.has(Layer::Range16).then_some(Range16Record {
+                    file: RANGE16_FILE,
+                    unit: super::files::RANGE16_UNIT,
+                    model: self.range_model,
                 }),
                 ids: chosen.has(Layer::Ids).then_some(IdsRecord {
                     ids: ID_FILE,
@@ -484,6 +500,9 @@ pub struct FilesRecord {
     pub rays: Option<RaysRecord>,
     #[serde(flatten)]
     pub range: Option<RangeRecord>,
+    /// The range as millimetres (layer `range16`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub range16: Option<Range16Record>,
     #[serde(flatten)]
     pub ids: Option<IdsRecord>,
     pub panoramas: Vec<PanoramaRecord>,
@@ -496,6 +515,13 @@ pub struct RaysRecord {
     /// The frame the rays are in where it is not `frame`'s (a dataset's `--geometry-frame`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ray_frame: Option<&'static str>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Range16Record {
+    pub file: &'static str,
+    pub unit: &'static str,
+    pub model: &'static str,
 }
 
 #[derive(Debug, Serialize)]

@@ -156,3 +156,12 @@ fn camera_positions_are_local_with_the_scene_origin_beside_them() {
     assert!((world(record.mirror.centre_m) - glam::DVec3::new(0.0, 3.0, 0.0)).length() < 1e-6);
     assert!((world(record.sensor.position_m) - glam::DVec3::new(0.0, 0.5, 0.0)).length() < 1e-6);
 }
+
+#[test]
+fn range16_is_whole_millimetres_and_zero_for_no_return() {
+    let metres = [2.0, 1.2344, 0.0, 0.0004, 65.535, 65.6, f32::NAN, 3.0006];
+    assert_eq!(
+        super::files::range_mm(&metres),
+        [2000, 1234, 0, 0, 65535, 0, 0, 3001]
+    );
+}

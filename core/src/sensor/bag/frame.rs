@@ -6,7 +6,8 @@ use glam::{DQuat, DVec3};
 use super::BagError;
 use crate::sensor::dataset::{PoseRecord, POSE_FILE};
 use crate::sensor::imaging::CAMERA_IMAGE_FILE;
-use crate::sensor::layers::{CAMERA_FILE, ID_FILE, IMAGE_FILES, POINTS_FILE, RANGE_FILE};
+use crate::sensor::layers::{CAMERA_FILE, ID_FILE, IMAGE_FILES, POINTS_FILE};
+use crate::sensor::layers::{RANGE16_FILE, RANGE_FILE};
 
 /// Reads file `name` of frame `frame`: `None` where the frame has no such file (a layer not
 /// chosen).
@@ -189,8 +190,8 @@ pub fn clean_image(read: &ReadFile, frame: usize) -> Result<Option<RawImage>, Ba
 }
 
 /// The range (`32FC1`, metres along the reflected ray; NaN off the mirror, as REP-117 asks of
-/// a float range with no return, where the file says 0), and the ids and classes (`32SC1`, -1
-/// for none).
+/// a float range with no return, where the file says 0), the range in millimetres (`16UC1`, 0
+/// for no return, as its PNG), and the ids and classes (`32SC1`, -1 for none).
 pub fn range_and_ids(
     read: &ReadFile,
     frame: usize,
@@ -229,6 +230,42 @@ pub fn range_and_ids(
             .flat_map(|&v| no_return(v).to_le_bytes())
             .collect();
         out.push(("range", image(layer.size, "32FC1", data)));
+    }
+    if let Some(bytes) = read(frame, RANGE16_FILE)? {
+        let bad = |why: String| BagError::Frame {
+            frame,
+            file: RANGE16_FILE,
+            why,
+        };
+        let decoder = ::png::Decoder::new(std::io::Cursor::new(&bytes));
+        let mut reader = decoder.read_info().map_err(|e| bad(e.to_string()))?;
+        let size = reader
+            .output_buffer_size()
+            .ok_or_else(|| bad("too large".into()))?;
+        let mut buf = vec![0; size];
+        let info = reader
+            .next_frame(&mut buf)
+            .map_err(|e| bad(e.to_string()))?;
+        if (info.color_type, info.bit_depth)
+            != (::png::ColorType::Grayscale, ::png::BitDepth::Sixteen)
+        {
+            return Err(bad(format!(
+                "{:?} {:?}, not 16-bit grey",
+                info.color_type, info.bit_depth
+            )));
+        }
+        buf.truncate(info.buffer_size());
+        for pair in buf.chunks_exact_mut(2) {
+            pair.swap(0, 1);
+        }
+        let size = (info.width as usize, info.height as usize);
+        out.push((
+            "range_mm",
+            RawImage {
+                bytes_per_pixel: 2,
+                ..image(size, "16UC1", buf)
+            },
+        ));
     }
     if let Some(layer) = channels(ID_FILE)? {
         for name in ["id", "class"] {

@@ -70,6 +70,12 @@ pub const RANGE: Topic = Topic {
     latched: false,
     about: "range along each pixel's reflected ray (layer range), 32FC1 metres",
 };
+pub const RANGE_MM: Topic = Topic {
+    name: "/camera/range_mm",
+    msg: msgs::image_type,
+    latched: false,
+    about: "the range in millimetres (layer range16), 16UC1, 0 for no return",
+};
 pub const IDS: Topic = Topic {
     name: "/camera/ids",
     msg: msgs::image_type,
@@ -90,7 +96,7 @@ pub const POINTS: Topic = Topic {
 };
 
 /// Every topic a bag can hold.
-pub const TOPICS: [&Topic; 11] = [
+pub const TOPICS: [&Topic; 12] = [
     &TF_STATIC,
     &TF,
     &ODOMETRY,
@@ -99,6 +105,7 @@ pub const TOPICS: [&Topic; 11] = [
     &IMAGE_RAW,
     &IMAGE_CLEAN,
     &RANGE,
+    &RANGE_MM,
     &IDS,
     &CLASSES,
     &POINTS,
@@ -260,6 +267,7 @@ pub fn frame<W: Write + Seek>(
     for (name, im) in frame::range_and_ids(read, i)? {
         let topic = match name {
             "range" => &RANGE,
+            "range_mm" => &RANGE_MM,
             "id" => &IDS,
             _ => &CLASSES,
         };
