@@ -142,6 +142,13 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     drop(device);
     let (done, work) = (folder.done(), folder.work_folder().map(Path::to_owned));
     let placed = wrote.and_then(|()| {
+        if args.format.mcap {
+            // Read back from every frame's files: a step of its own after the last frame.
+            eprintln!(
+                "writing the ROS 2 bag of {n} frame(s) into {}",
+                args.out.join("bag").display()
+            );
+        }
         let ready = folder.finish(&plan.record(lookup, truth), plan.omni())?;
         stop("before placing the output")?;
         Ok(ready.commit()?)
