@@ -20,7 +20,7 @@ from conftest import ROBOT_CSV, SCENES, scene_path
 CAMERA = "\n[sensor.imaging]\nexposure_s = 0.004\nseed = 5\n"
 TOPICS = {
     "/tf_static", "/tf", "/odom", "/camera/camera_info", "/camera/image_raw",
-    "/camera/image_clean", "/camera/range", "/camera/ids", "/camera/classes", "/camera/points",
+    "/camera/image_clean", "/sensor/range", "/camera/ids", "/camera/classes", "/camera/points",
 }
 
 
@@ -76,7 +76,7 @@ def test_the_bag_holds_what_the_frames_hold(tmp_path, monkeypatch):
     for i, line in enumerate(lines):
         frame = out / line["folder"]
         ros = line["ros"]
-        t_ns = round(line["time_s"] * 1e9)
+        t_ns = round(line["time_s"] * 1e9) + 10**9  # a second on: ROS reads 0 as "latest"
         at = {topic: msgs[i][1] for topic, msgs in topics.items() if topic != "/tf_static"}
         assert all(msgs[i][0] == t_ns for topic, msgs in topics.items() if topic != "/tf_static")
         (base,) = at["/tf"].transforms
@@ -92,7 +92,7 @@ def test_the_bag_holds_what_the_frames_hold(tmp_path, monkeypatch):
         assert np.allclose(camera, ros["camera_optical_position_m"], atol=1e-9)
 
         exr_range = specchio.read_exr(frame / "sensor.range.exr")["range"]
-        rng = at["/camera/range"]
+        rng = at["/sensor/range"]
         assert (rng.encoding, rng.height, rng.width, rng.step) == ("32FC1", 512, 512, 2048)
         got = rng.data.view("<f4").reshape(512, 512)
         # NaN for no return (REP-117), where the file says 0.
@@ -162,9 +162,9 @@ def test_a_bag_alone_on_ray_is_the_same_bag(tmp_path, monkeypatch):
         ).read_bytes(), name
     topics, _ = messages(tmp_path / "here" / "bag")
     assert set(topics) == {"/tf_static", "/tf", "/odom", "/camera/camera_info",
-                           "/camera/image_clean", "/camera/range", "/camera/range_mm"}
+                           "/camera/image_clean", "/sensor/range", "/sensor/range_mm"}
     # The millimetres are the metres rounded, 0 for no return (REP-117's integer convention).
-    for (_, metres), (_, mm) in zip(topics["/camera/range"], topics["/camera/range_mm"]):
+    for (_, metres), (_, mm) in zip(topics["/sensor/range"], topics["/sensor/range_mm"]):
         assert (mm.encoding, mm.step) == ("16UC1", 512 * 2)
         m = metres.data.view("<f4")
         # Halves round up (numpy's round would take them to even).
@@ -218,7 +218,7 @@ def test_a_central_mirrors_bag_carries_its_unified_model(tmp_path, monkeypatch):
         # Each mirror pixel's point, moved to omni and into the model's left-handed frame,
         # projects back onto that pixel.
         frame = out / f"frames/{i:06d}"
-        rng = topics["/camera/range"][i][1].data.view("<f4").reshape(512, 512)
+        rng = topics["/sensor/range"][i][1].data.view("<f4").reshape(512, 512)
         rows, cols = np.nonzero(~np.isnan(rng))
         cloud = topics["/camera/points"][i][1]
         pts = cloud.data.view(np.dtype([("p", "<f4", 3), ("id", "<u4")]))["p"].astype(float)
@@ -227,7 +227,8 @@ def test_a_central_mirrors_bag_carries_its_unified_model(tmp_path, monkeypatch):
         model[:, 2] *= -1
         pixels = mei_project(model[::101], list(info.d), list(info.k))
         want = np.stack([cols[::101], rows[::101]], axis=1)
-        assert np.abs(pixels - want).max() < 0.01, np.abs(pixels - want).max()
+        # 9e-5 px measured: the cloud's float32 points.
+        assert np.abs(pixels - want).max() < 1e-3, np.abs(pixels - want).max()
     with open(out / "bag" / "bag_0.mcap", "rb") as f:
         names = sorted(a.name for a in make_reader(f).iter_attachments())
     assert names == ["kalibr_camchain.yaml", "ocamcalib_calib_results.txt", "opencv_omnidir.yaml"]

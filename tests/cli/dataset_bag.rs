@@ -84,7 +84,7 @@ fn the_bag_is_the_same_beside_the_frames_alone_or_resumed_and_holds_their_sample
     // Frame 1's camera image, in the bag as in its PNG.
     let images = messages(&dir.join("both"), "/camera/image_raw");
     assert_eq!(images.len(), 2);
-    assert_eq!(images[1].0, 500_000_000, "the pose's time");
+    assert_eq!(images[1].0, 1_500_000_000, "the pose's time, a second on");
     let want = png_samples_le(&dir.join("both/frames/000001/sensor.camera.png"));
     assert!(
         images[1].1.ends_with(&want),
@@ -149,7 +149,26 @@ fn a_format_or_a_time_a_bag_cannot_take_is_refused_before_anything_is_written() 
     let r = dataset(&dir, "out", &["--format", "mcap"]);
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(!r.status.success());
-    let want = format!("{robot}:3: time: 3000000000 s is past the 2147483647 s");
+    let want = format!("{robot}:3: time: 3000000000 s is past the 2147483646 s");
     assert!(err.contains(&want), "{err}");
+    assert!(!dir.join("out").exists());
+    // A pose grid is all one time, which tf would read as one pose.
+    let scene = dir.join("room.toml");
+    let grid = [
+        "dataset",
+        scene.to_str().unwrap(),
+        "--grid",
+        "3",
+        "--format",
+        "mcap",
+        "--out",
+    ];
+    let r = specchio(&[&grid[..], &[dir.join("out").to_str().unwrap()]].concat());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success());
+    assert!(
+        err.contains("--time: 0 s is not later than the pose before it"),
+        "{err}"
+    );
     assert!(!dir.join("out").exists());
 }

@@ -79,14 +79,14 @@ impl Layer {
         }
     }
 
-    fn bit(self) -> u8 {
+    fn bit(self) -> u16 {
         1 << (self as u8)
     }
 }
 
 /// A choice of layers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Layers(u8);
+pub struct Layers(u16);
 
 impl Layers {
     /// Every layer (the camera image only where there is an imaging chain to make it), the
@@ -136,7 +136,7 @@ impl std::str::FromStr for Layers {
             let all: Vec<&str> = Layer::ALL.iter().map(|l| l.name()).collect();
             all.join(", ")
         };
-        let mut bits = 0u8;
+        let mut bits = 0u16;
         for word in text.split(',').map(str::trim) {
             let layer = (Layer::ALL.into_iter().find(|l| l.name() == word)).ok_or_else(|| {
                 match word.is_empty() {

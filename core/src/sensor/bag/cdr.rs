@@ -92,8 +92,8 @@ impl Cdr {
 
     /// A sequence's element count.
     pub fn len(&mut self, n: usize) -> &mut Self {
-        // A message's sequences are an image's rows or a cloud's points: far below 2^32, which
-        // `Bag` checks for the image as a whole before it gets here.
+        // A message's sequences are an image's bytes, a cloud's points or a few numbers; the
+        // topics check the first two against 2^32 before they get here (`topics::frame`).
         self.u32(u32::try_from(n).expect("a sequence of fewer than 2^32 elements"))
     }
 }

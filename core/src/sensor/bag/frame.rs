@@ -4,7 +4,7 @@
 use glam::{DQuat, DVec3};
 
 use super::BagError;
-use crate::sensor::dataset::{PoseRecord, POSE_FILE};
+use crate::sensor::dataset::{GeometryFrame, PoseRecord, POSE_FILE};
 use crate::sensor::imaging::CAMERA_IMAGE_FILE;
 use crate::sensor::layers::{CAMERA_FILE, ID_FILE, IMAGE_FILES, POINTS_FILE};
 use crate::sensor::layers::{RANGE16_FILE, RANGE_FILE};
@@ -63,9 +63,9 @@ impl FramePose {
         })
     }
 
-    /// The bag's time stamp: the pose's time in nanoseconds.
+    /// The bag's time stamp: the pose's time in nanoseconds, plus the bag's offset.
     pub fn stamp_ns(&self) -> u64 {
-        (self.time_s * 1e9).round() as u64
+        (self.time_s * 1e9).round() as u64 + super::BAG_TIME_OFFSET_S * 1_000_000_000
     }
 }
 
@@ -282,8 +282,13 @@ pub fn range_and_ids(
 /// A point of a cloud: its scene-local position and the id of what it is on.
 pub type Point = ([f32; 3], u32);
 
-/// The point cloud (`points.ply`).
-pub fn points(read: &ReadFile, frame: usize) -> Result<Option<Vec<Point>>, BagError> {
+/// The point cloud (`points.ply`), whose header must say it is in `geometry` (a frame
+/// rendered for another dataset's choice is refused, not moved by the wrong transform).
+pub fn points(
+    read: &ReadFile,
+    frame: usize,
+    geometry: GeometryFrame,
+) -> Result<Option<Vec<Point>>, BagError> {
     let Some(bytes) = read(frame, POINTS_FILE)? else {
         return Ok(None);
     };
@@ -293,9 +298,25 @@ pub fn points(read: &ReadFile, frame: usize) -> Result<Option<Vec<Point>>, BagEr
         why: why.to_owned(),
     };
     let end = b"end_header\n";
-    let body = (bytes.windows(end.len()).position(|w| w == end))
-        .map(|at| &bytes[at + end.len()..])
+    let at = (bytes.windows(end.len()).position(|w| w == end))
         .ok_or_else(|| bad("no end_header line"))?;
+    let (header, body) = (
+        String::from_utf8_lossy(&bytes[..at]),
+        &bytes[at + end.len()..],
+    );
+    let said = (header.lines()).find_map(|l| l.strip_prefix("comment frame: "));
+    let want = match geometry {
+        GeometryFrame::Scene => "the scene's",
+        GeometryFrame::Map => "ROS REP-103 map",
+        GeometryFrame::BaseLink => "ROS REP-103 base_link",
+    };
+    if !said.is_some_and(|s| s.starts_with(want)) {
+        let why = format!(
+            "its header says the frame is `{}`, not the dataset's {geometry} frame",
+            said.unwrap_or("(none)")
+        );
+        return Err(bad(&why));
+    }
     if body.len() % 16 != 0 {
         return Err(bad("its body is not whole points of 16 bytes"));
     }

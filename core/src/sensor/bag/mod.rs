@@ -52,6 +52,12 @@ pub enum BagError {
         path: PathBuf,
         source: std::io::Error,
     },
+    #[error("frame {frame}: {topic}: {why}")]
+    TooLarge {
+        frame: usize,
+        topic: &'static str,
+        why: String,
+    },
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
     #[error("{path}: {source}")]
@@ -118,19 +124,37 @@ pub fn write<W: Write + Seek>(
     Ok(rosbag2::metadata(&summary))
 }
 
-/// The latest time a bag holds: ROS's `builtin_interfaces/Time` counts seconds in an int32.
-pub const MAX_TIME_S: f64 = i32::MAX as f64;
+/// A bag's time is the trajectory's plus this: ROS reads a time stamp of 0 as "the latest"
+/// (tf2) or "no clock yet" (simulated time), and a trajectory starts at 0.
+pub const BAG_TIME_OFFSET_S: u64 = 1;
 
-/// Refuses a time a bag cannot hold: the first pose (`times`: its time and where it is given)
-/// past [`MAX_TIME_S`].
-pub fn check_times(mut times: impl Iterator<Item = (f64, String)>) -> Result<(), String> {
-    match times.find(|(t, _)| *t > MAX_TIME_S) {
-        Some((t, at)) => Err(format!(
-            "{at}: {t} s is past the {MAX_TIME_S} s a ROS 2 bag's time stamps hold \
-             (--format mcap)"
-        )),
-        None => Ok(()),
+/// The latest pose time a bag holds: ROS's `builtin_interfaces/Time` counts seconds in an
+/// int32, from which the offset is taken.
+pub const MAX_TIME_S: f64 = (i32::MAX as u64 - BAG_TIME_OFFSET_S) as f64;
+
+/// Refuses poses a bag cannot hold (`times`: each pose's time and where it is given): a time
+/// past [`MAX_TIME_S`], or one not later than the pose before it: tf keeps one transform of a
+/// frame at each time, so two poses at one time would be read as one (a pose grid is all
+/// one time).
+pub fn check_times(times: impl Iterator<Item = (f64, String)>) -> Result<(), String> {
+    let mut before: Option<f64> = None;
+    for (t, at) in times {
+        if t > MAX_TIME_S {
+            return Err(format!(
+                "{at}: {t} s is past the {MAX_TIME_S} s a ROS 2 bag's time stamps hold \
+                 (--format mcap)"
+            ));
+        }
+        if before.is_some_and(|b| t <= b) {
+            return Err(format!(
+                "{at}: {t} s is not later than the pose before it; a ROS 2 bag (--format mcap) \
+                 needs one time per pose, since tf keeps one transform of a frame at each time: \
+                 give the poses increasing times, or write the frames as files"
+            ));
+        }
+        before = Some(t);
     }
+    Ok(())
 }
 
 /// The camera's pose on the robot where it is the same in every frame.
@@ -140,8 +164,19 @@ fn still_mount(poses: &[FramePose]) -> Option<Placed> {
         .map(|p| p.base_link.to_local(&p.camera))
         .collect();
     let first = *mounts.first()?;
+    // pose.json's camera is the scene's f32 positions added up: allow their rounding, which
+    // grows with the distance from the scene's origin.
+    let reach = (poses.iter())
+        .map(|p| {
+            p.camera
+                .position
+                .length()
+                .max(p.base_link.position.length())
+        })
+        .fold(1.0, f64::max);
+    let position_tolerance = STATIC_TOLERANCE + 16.0 * f64::from(f32::EPSILON) * reach;
     let same = |m: &Placed| {
-        (m.position - first.position).length() < STATIC_TOLERANCE
+        (m.position - first.position).length() < position_tolerance
             && m.rotation.angle_between(first.rotation) < STATIC_TOLERANCE
     };
     mounts.iter().all(same).then_some(first)

@@ -76,9 +76,10 @@ fn files() -> BTreeMap<(usize, &'static str), Vec<u8>> {
         encode_channels(&mut exr, (4, 2), channels).unwrap();
         f.insert((i, "sensor.id.exr"), exr.into_inner());
         let point = [(Vec3::new(1.0, 2.0, 3.0), 7)];
+        let frame = ["frame: the scene's, local (world = [10, 0, 0] + point)".to_owned()];
         f.insert(
             (i, "points.ply"),
-            crate::sensor::dataset::ply::ply(&point, &[]),
+            crate::sensor::dataset::ply::ply(&point, &frame),
         );
     }
     f
@@ -185,18 +186,19 @@ fn each_frame_publishes_at_its_pose_time_and_the_still_camera_once() {
     );
     for (topic, messages) in &topics {
         let times: Vec<u64> = messages.iter().map(|m| m.0).collect();
+        // The trajectory's 0 s and 2 s, a second on: ROS reads a stamp of 0 as "latest".
         let want: &[u64] = match topic.as_str() {
-            "/tf_static" => &[0],
-            _ => &[0, 2_000_000_000],
+            "/tf_static" => &[1_000_000_000],
+            _ => &[1_000_000_000, 3_000_000_000],
         };
         assert_eq!(times, want, "{topic}");
     }
     let mut r = Read::new(&topics["/tf_static"][0].1);
     assert_eq!(r.u32(), 2);
-    assert_eq!(r.header(), (0, "map".into()));
+    assert_eq!(r.header(), (1_000_000_000, "map".into()));
     assert_eq!(r.string(), "odom");
     assert_eq!((r.vec3(), r.quat()), (DVec3::ZERO, DQuat::IDENTITY));
-    assert_eq!(r.header(), (0, "base_link".into()));
+    assert_eq!(r.header(), (1_000_000_000, "base_link".into()));
     assert_eq!(r.string(), "camera_optical");
     assert!((r.vec3() - mount().position).length() < 1e-12);
     assert!(r.quat().angle_between(mount().rotation) < 1e-9);
@@ -230,7 +232,7 @@ fn the_odometry_is_the_segments_velocity_in_the_robots_axes() {
 fn images_carry_the_files_samples_and_the_cloud_is_in_the_camera() {
     let (topics, _) = bag();
     let mut r = Read::new(&topics["/camera/image_raw"][1].1);
-    assert_eq!(r.header(), (2_000_000_000, "camera_optical".into()));
+    assert_eq!(r.header(), (3_000_000_000, "camera_optical".into()));
     assert_eq!((r.u32(), r.u32()), (2, 4), "height, width");
     assert_eq!(r.string(), "rgb16");
     assert_eq!(r.take(1), [0], "little-endian");
@@ -293,11 +295,78 @@ fn a_camera_that_moves_on_the_robot_is_on_tf_and_a_missing_pose_is_named() {
         .map(|i| FramePose::read(&|f, n| Ok(files.get(&(f, n)).cloned()), i).unwrap())
         .collect();
     assert!(still_mount(&poses).is_none());
+    let topics = messages_of(&files, &Extras::default());
+    // Only map -> odom is static; each /tf carries the camera where that frame has it.
+    assert_eq!(Read::new(&topics["/tf_static"][0].1).u32(), 1);
+    for (i, (_, data)) in topics["/tf"].iter().enumerate() {
+        let mut r = Read::new(data);
+        assert_eq!(r.u32(), 2);
+        // Past odom -> base_link.
+        r.header();
+        r.string();
+        r.vec3();
+        r.quat();
+        assert_eq!(
+            (r.header().1, r.string()),
+            ("base_link".into(), "camera_optical".into())
+        );
+        let want = [mount().position, moved.position][i];
+        assert!((r.vec3() - want).length() < 1e-12, "frame {i}");
+    }
     files.remove(&(1, "pose.json"));
     let read = |i: usize, n: &str| Ok(files.get(&(i, n)).cloned());
     let path = std::path::Path::new("x.mcap");
     let e = write(Cursor::new(Vec::new()), path, 2, &read, &Extras::default()).unwrap_err();
     assert_eq!(e.to_string(), "frame 1: pose.json: missing");
+}
+
+/// The messages of a bag of `files`, by topic.
+fn messages_of(files: &BTreeMap<(usize, &'static str), Vec<u8>>, extras: &Extras) -> Topics {
+    let read = |i: usize, n: &str| Ok(files.get(&(i, n)).cloned());
+    let mut out = Cursor::new(Vec::new());
+    write(&mut out, std::path::Path::new("t.mcap"), 2, &read, extras).unwrap();
+    let bytes = out.into_inner();
+    let mut topics = Topics::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        (topics.entry(m.channel.topic.clone()).or_default()).push((m.log_time, m.data.to_vec()));
+    }
+    topics
+}
+
+#[test]
+fn a_cloud_in_another_frame_than_the_datasets_is_refused() {
+    let read = |i: usize, n: &str| Ok(files().get(&(i, n)).cloned());
+    let extras = Extras {
+        geometry: crate::sensor::dataset::GeometryFrame::BaseLink,
+        ..Extras::default()
+    };
+    let path = std::path::Path::new("x.mcap");
+    let e = write(Cursor::new(Vec::new()), path, 2, &read, &extras).unwrap_err();
+    assert!(
+        e.to_string().starts_with(
+            "frame 0: points.ply: its header says the frame is `the \
+         scene's, local"
+        ),
+        "{e}"
+    );
+    assert!(
+        e.to_string().ends_with("not the dataset's base_link frame"),
+        "{e}"
+    );
+}
+
+#[test]
+fn poses_a_bag_cannot_stamp_apart_are_refused() {
+    let at = |t: f64, line: usize| (t, format!("robot.csv:{line}: time"));
+    assert!(check_times([at(0.0, 2), at(0.5, 3)].into_iter()).is_ok());
+    let e = check_times([at(0.0, 2), at(0.5, 3), at(0.5, 4)].into_iter()).unwrap_err();
+    assert!(
+        e.starts_with("robot.csv:4: time: 0.5 s is not later than the pose before it"),
+        "{e}"
+    );
+    let e = check_times([at(3e9, 2)].into_iter()).unwrap_err();
+    assert!(e.contains("is past the 2147483646 s"), "{e}");
 }
 
 #[test]

@@ -64,14 +64,16 @@ pub const IMAGE_CLEAN: Topic = Topic {
     latched: false,
     about: "the clean image (layer image), sRGB rgb8",
 };
+// The range topics are not under /camera: their values run along each pixel's reflected ray,
+// which a depth tool beside /camera/camera_info would take for a pinhole's z-depth.
 pub const RANGE: Topic = Topic {
-    name: "/camera/range",
+    name: "/sensor/range",
     msg: msgs::image_type,
     latched: false,
     about: "range along each pixel's reflected ray (layer range), 32FC1 metres",
 };
 pub const RANGE_MM: Topic = Topic {
-    name: "/camera/range_mm",
+    name: "/sensor/range_mm",
     msg: msgs::image_type,
     latched: false,
     about: "the range in millimetres (layer range16), 16UC1, 0 for no return",
@@ -274,7 +276,9 @@ pub fn frame<W: Write + Seek>(
         images.push((topic, im));
     }
     for (topic, im) in images {
-        let step = im.width * im.bytes_per_pixel;
+        let step = (im.width.checked_mul(im.bytes_per_pixel))
+            .filter(|_| u32::try_from(im.data.len()).is_ok())
+            .ok_or_else(|| too_large(i, topic, "an image of more than 2^32 bytes"))?;
         let image = msgs::Image {
             width: im.width,
             height: im.height,
@@ -284,7 +288,7 @@ pub fn frame<W: Write + Seek>(
         };
         bag.publish(topic, stamp, &msgs::image(stamp, CAMERA_OPTICAL, &image))?;
     }
-    if let Some(points) = frame::points(read, i)? {
+    if let Some(points) = frame::points(read, i, extras.geometry)? {
         let data = cloud_in_camera(&points, pose, extras);
         let cloud = msgs::Cloud {
             fields: &[
@@ -294,7 +298,9 @@ pub fn frame<W: Write + Seek>(
                 ("id", 12, msgs::UINT32),
             ],
             step: 16,
-            points: points.len() as u32,
+            points: (u32::try_from(points.len()).ok())
+                .filter(|n| n.checked_mul(16).is_some())
+                .ok_or_else(|| too_large(i, &POINTS, "more than 2^28 points"))?,
             data: &data,
         };
         bag.publish(
@@ -304,6 +310,14 @@ pub fn frame<W: Write + Seek>(
         )?;
     }
     Ok(())
+}
+
+fn too_large(frame: usize, topic: &Topic, what: &str) -> BagError {
+    BagError::TooLarge {
+        frame,
+        topic: topic.name,
+        why: format!("{what}, which a ROS message's 32-bit sizes cannot hold"),
+    }
 }
 
 /// Scene-local points as the camera's optical frame sees them, packed 16 bytes a point.
