@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use specchio::render::dataset::{device_key, gpu_failed, FrameWriter, Plan};
 use specchio::scene::Lookup;
-use specchio::sensor::dataset::{resume, DatasetError, Folder, Frame};
+use specchio::sensor::dataset::{check_frame, resume, DatasetError, Folder, Frame};
 use specchio::sensor::GroundTruth;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
@@ -304,6 +304,12 @@ impl DatasetOutput {
                 .collect(),
             index_line,
         };
+        // A worker's frame is proven this dataset's, once its files are the run's: another
+        // plan's is refused, not placed.
+        let plan = &self.plan;
+        check_frame(&frame, &plan.frame_files()).map_err(errors::error)?;
+        py.detach(|| plan.prove(&frame, &mut plan.index_lines()))
+            .map_err(errors::to_py)?;
         let folder = self.folder_mut()?;
         py.detach(|| folder.place(&frame)).map_err(errors::to_py)
     }

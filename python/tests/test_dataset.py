@@ -208,13 +208,27 @@ def test_the_output_takes_only_its_frames_files(made, monkeypatch):
         out.place(frame(0), line(1))
     with pytest.raises(specchio.SpecchioError, match="index line 0"):
         out.place(frame(0), line(0) + "\n" + line(1))
-    out.place(frame(0), line(0))
-    with pytest.raises(specchio.SpecchioError, match="frame 0 was placed already"):
+    # The right names are not enough: a frame must be this dataset's.
+    with pytest.raises(specchio.SpecchioError, match="frame 0: its index line is not the one"):
         out.place(frame(0), line(0))
+    cli = work / "cli"
+    index = (cli / "index.jsonl").read_text().splitlines()
+    real = lambda n: [(str(p.relative_to(cli)), p.read_bytes()) for p in sorted((cli / f"frames/{n:06d}").iterdir())]
+    based = specchio.DatasetFrames(scene, "robot.csv", encoders=0, geometry_frame="base_link")
+    ((files, line1),) = based.frames([1])
+    with pytest.raises(specchio.SpecchioError, match="frame 1: its ray map is not in the dataset's scene frame"):
+        out.place(files, line1)
+    world = specchio.DatasetFrames(scene, "robot.csv", encoders=0, panorama_frame="world")
+    ((files, line1),) = world.frames([1])
+    with pytest.raises(specchio.SpecchioError, match="frame 1: its panoramas are not in the dataset's robot frame"):
+        out.place(files, line1)
+    out.place(real(0), index[0])
+    with pytest.raises(specchio.SpecchioError, match="frame 0 was placed already"):
+        out.place(real(0), index[0])
     with pytest.raises(specchio.SpecchioError, match="frame 1 was never placed"):
         out.finish("plain", "cube")
     for n in range(1, 5):
-        out.place(frame(n), line(n))
+        out.place(real(n), index[n])
     del out
     assert not (work / "parts").exists()
 

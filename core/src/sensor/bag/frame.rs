@@ -305,12 +305,7 @@ pub fn points(
         &bytes[at + end.len()..],
     );
     let said = (header.lines()).find_map(|l| l.strip_prefix("comment frame: "));
-    let want = match geometry {
-        GeometryFrame::Scene => "the scene's",
-        GeometryFrame::Map => "ROS REP-103 map",
-        GeometryFrame::BaseLink => "ROS REP-103 base_link",
-    };
-    if !said.is_some_and(|s| s.starts_with(want)) {
+    if said.and_then(GeometryFrame::of_ply_comment) != Some(geometry) {
         let why = format!(
             "its header says the frame is `{}`, not the dataset's {geometry} frame",
             said.unwrap_or("(none)")

@@ -42,6 +42,17 @@ impl GeometryFrame {
         }
     }
 
+    /// The frame a PLY header's `comment frame: ...` line says its points are in.
+    pub fn of_ply_comment(comment: &str) -> Option<GeometryFrame> {
+        [
+            (GeometryFrame::Scene, "the scene's"),
+            (GeometryFrame::Map, "ROS REP-103 map"),
+            (GeometryFrame::BaseLink, "ROS REP-103 base_link"),
+        ]
+        .into_iter()
+        .find_map(|(frame, start)| comment.starts_with(start).then_some(frame))
+    }
+
     /// The rigid map from scene-local coordinates to this frame, for a robot whose
     /// `base_link` is at `base` (position, orientation in `map`) in a scene whose local
     /// origin is `origin` (the file's coordinates).

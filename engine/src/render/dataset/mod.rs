@@ -12,6 +12,7 @@
 //! on which frames a writer rendered before it), so both give the same files, byte for byte.
 
 mod frames;
+mod prove;
 
 use std::path::{Path, PathBuf};
 
