@@ -8,8 +8,9 @@ use std::sync::{Mutex, MutexGuard};
 
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
-use specchio::render::dataset::{device_key, gpu_failed, FrameWriter, Plan};
+use specchio::render::dataset::{device_key, gpu_failed, robot_scene, FrameWriter, Plan};
 use specchio::scene::Lookup;
+use specchio::scene::Scene;
 use specchio::sensor::dataset::{check_frame, resume, DatasetError, Folder, Frame};
 use specchio::sensor::GroundTruth;
 use specchio::vk::instance::{Instance, InstanceDesc};
@@ -193,6 +194,8 @@ pub struct DatasetOutput {
     /// The frames placed, kept once `finish` takes the folder (for `note_kept`).
     placed: usize,
     folder: Option<Folder>,
+    /// The plan's robot, made once, which proving each frame's index line places.
+    robot: Scene,
 }
 
 #[pymethods]
@@ -226,6 +229,7 @@ impl DatasetOutput {
             let plan = source.plan(&scene, &choices)?;
             let folder = Folder::stage(&out, plan.poses.len(), plan.frame_files())?;
             Ok(DatasetOutput {
+                robot: robot_scene(&plan.scene),
                 plan,
                 out,
                 resume,
@@ -306,9 +310,9 @@ impl DatasetOutput {
         };
         // A worker's frame is proven this dataset's, once its files are the run's: another
         // plan's is refused, not placed.
-        let plan = &self.plan;
+        let (plan, robot) = (&self.plan, &mut self.robot);
         check_frame(&frame, &plan.frame_files()).map_err(errors::error)?;
-        py.detach(|| plan.prove(&frame, &mut plan.index_lines()))
+        py.detach(|| plan.prove(&frame, &mut |i| plan.index_line(robot, i)))
             .map_err(errors::to_py)?;
         let folder = self.folder_mut()?;
         py.detach(|| folder.place(&frame)).map_err(errors::to_py)

@@ -23,7 +23,8 @@ use crate::reference::ReferenceImages;
 use crate::scene::Scene;
 
 pub use super::layers::{CAMERA_FILE, ID_FILE, ID_MAP_FILE, RANGE16_FILE, RANGE_FILE, RAYS_FILE};
-/// Channels of [`RAYS_FILE`] (world space, metres; `mask` 1 where the pixel sees the mirror).
+/// Channels of [`RAYS_FILE`] (metres, in the scene's local frame unless `camera.json`'s
+/// `files.ray_frame` names another; `mask` 1 where the pixel sees the mirror).
 pub const RAY_CHANNELS: [&str; 7] = [
     "origin.X",
     "origin.Y",

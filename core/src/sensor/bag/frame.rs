@@ -138,25 +138,10 @@ pub fn camera_image(read: &ReadFile, frame: usize) -> Result<Option<RawImage>, B
         file: CAMERA_IMAGE_FILE,
         why,
     };
-    let decoder = ::png::Decoder::new(std::io::Cursor::new(&bytes));
-    let mut reader = decoder.read_info().map_err(|e| bad(e.to_string()))?;
-    let size = reader
-        .output_buffer_size()
-        .ok_or_else(|| bad("too large".into()))?;
-    let mut buf = vec![0; size];
-    let info = reader
-        .next_frame(&mut buf)
-        .map_err(|e| bad(e.to_string()))?;
-    buf.truncate(info.buffer_size());
+    let (info, buf) = decode_png(&bytes).map_err(bad)?;
     let (encoding, bytes_per_pixel) = match (info.color_type, info.bit_depth) {
         (::png::ColorType::Rgb, ::png::BitDepth::Eight) => ("rgb8", 3),
-        (::png::ColorType::Rgb, ::png::BitDepth::Sixteen) => {
-            // PNG stores samples big-endian; the message says little-endian.
-            for pair in buf.chunks_exact_mut(2) {
-                pair.swap(0, 1);
-            }
-            ("rgb16", 6)
-        }
+        (::png::ColorType::Rgb, ::png::BitDepth::Sixteen) => ("rgb16", 6),
         (colour, depth) => return Err(bad(format!("{colour:?} {depth:?}, not RGB 8 or 16"))),
     };
     Ok(Some(RawImage {
@@ -237,15 +222,7 @@ pub fn range_and_ids(
             file: RANGE16_FILE,
             why,
         };
-        let decoder = ::png::Decoder::new(std::io::Cursor::new(&bytes));
-        let mut reader = decoder.read_info().map_err(|e| bad(e.to_string()))?;
-        let size = reader
-            .output_buffer_size()
-            .ok_or_else(|| bad("too large".into()))?;
-        let mut buf = vec![0; size];
-        let info = reader
-            .next_frame(&mut buf)
-            .map_err(|e| bad(e.to_string()))?;
+        let (info, buf) = decode_png(&bytes).map_err(bad)?;
         if (info.color_type, info.bit_depth)
             != (::png::ColorType::Grayscale, ::png::BitDepth::Sixteen)
         {
@@ -253,10 +230,6 @@ pub fn range_and_ids(
                 "{:?} {:?}, not 16-bit grey",
                 info.color_type, info.bit_depth
             )));
-        }
-        buf.truncate(info.buffer_size());
-        for pair in buf.chunks_exact_mut(2) {
-            pair.swap(0, 1);
         }
         let size = (info.width as usize, info.height as usize);
         out.push((
@@ -324,6 +297,23 @@ pub fn points(
             })
             .collect(),
     ))
+}
+
+/// A PNG's header and samples as stored, but 16-bit samples little-endian, as a message holds
+/// them (PNG stores them big-endian); the error is a message for the caller to place.
+fn decode_png(bytes: &[u8]) -> Result<(::png::OutputInfo, Vec<u8>), String> {
+    let decoder = ::png::Decoder::new(std::io::Cursor::new(bytes));
+    let mut reader = decoder.read_info().map_err(|e| e.to_string())?;
+    let size = reader.output_buffer_size().ok_or("too large")?;
+    let mut buf = vec![0; size];
+    let info = reader.next_frame(&mut buf).map_err(|e| e.to_string())?;
+    buf.truncate(info.buffer_size());
+    if info.bit_depth == ::png::BitDepth::Sixteen {
+        for pair in buf.chunks_exact_mut(2) {
+            pair.swap(0, 1);
+        }
+    }
+    Ok((info, buf))
 }
 
 fn need(read: &ReadFile, frame: usize, file: &'static str) -> Result<Vec<u8>, BagError> {

@@ -172,6 +172,7 @@ pub fn camera_info(stamp_ns: u64, frame_id: &str, i: &Intrinsics) -> Vec<u8> {
 
 /// One transform: `child` in `parent`'s frame (the child's origin and the rotation taking its
 /// axes to the parent's).
+#[derive(Clone, Copy)]
 pub struct Transform<'a> {
     pub stamp_ns: u64,
     pub parent: &'a str,

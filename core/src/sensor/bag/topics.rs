@@ -236,7 +236,6 @@ pub fn frame<W: Write + Seek>(
     }
     bag.publish(&TF, stamp, &msgs::tf(&tf))?;
     let (linear, angular) = velocity(poses, i);
-    let base = super::transform(stamp, ODOM, BASE_LINK, &pose.base_link);
     let odometry = msgs::Odometry {
         pose: base,
         linear,

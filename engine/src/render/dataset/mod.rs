@@ -211,15 +211,19 @@ impl Plan {
     /// optics, no GPU), for a resumed run to prove its journal's against.
     pub fn index_lines(&self) -> impl FnMut(usize) -> String + '_ {
         let mut robot = robot_scene(&self.scene);
-        move |frame| {
-            let Some(pose) = self.poses.get(frame) else {
-                return String::new(); // no such frame: a line no journal holds
-            };
-            place_robot(&mut robot, &self.scene, pose);
-            let optics = crate::sensor::SensorOptics::at(&robot, pose.time_s);
-            let record = PoseRecord::new(frame, pose, &optics, robot.origin);
-            IndexLine::of(&record).unwrap_or_default()
-        }
+        move |frame| self.index_line(&mut robot, frame)
+    }
+
+    /// Frame `frame`'s index line, placing `robot` (a `robot_scene` of this plan's scene,
+    /// kept by a caller that asks for many: it is the whole scene, meshes and all).
+    pub fn index_line(&self, robot: &mut Scene, frame: usize) -> String {
+        let Some(pose) = self.poses.get(frame) else {
+            return String::new(); // no such frame: a line no journal holds
+        };
+        place_robot(robot, &self.scene, pose);
+        let optics = crate::sensor::SensorOptics::at(robot, pose.time_s);
+        let record = PoseRecord::new(frame, pose, &optics, robot.origin);
+        IndexLine::of(&record).unwrap_or_default()
     }
 
     /// Writes the dataset in `format`: refused where a bag cannot hold every pose's time.
