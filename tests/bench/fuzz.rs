@@ -42,3 +42,22 @@ fn no_loader_panics_or_hangs_on_mutated_inputs() {
     assert!(problems.is_empty(), "{}", problems.join("\n"));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// The record targets mutate their seeds from an accepted start: a seed the reader refuses
+/// (a landmarks file of an older version, say) would leave the target fuzzing only its
+/// first check.
+#[test]
+fn the_record_targets_accept_their_seeds() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    for target in [Target::Baseline, Target::Landmarks] {
+        let seeds = harness::seeds(&root, target);
+        assert!(!seeds.is_empty(), "{target:?}: no seed");
+        for s in seeds {
+            assert!(
+                harness::execute(target, &s.bytes, &s.path),
+                "{target:?}: {} is refused",
+                s.path.display()
+            );
+        }
+    }
+}

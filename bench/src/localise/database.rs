@@ -8,7 +8,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use specchio::files::read_regular_file;
-use specchio::sensor::localise::Signature;
+use specchio::sensor::localise::{DescriptorKind, Signature};
 
 /// Largest landmarks file read (bytes): the largest database a run makes, 20,000 landmarks
 /// (`MAX_LANDMARKS`) of 256 coefficients (`MAX_COEFFICIENTS`) at about 20 characters a JSON
@@ -18,8 +18,10 @@ pub const MAX_LANDMARKS_FILE_BYTES: u64 = 256 << 20;
 /// The file's `format` value.
 pub const FORMAT: &str = "specchio-landmarks";
 /// Version 2 added the source, grid, scene hash and cube size (version 1 had none of them and
-/// cannot be checked, so it is refused).
-pub const VERSION: u32 = 2;
+/// cannot be checked, so it is refused). Version 3: the column-shift descriptor keeps 16
+/// columns per `k`, not 8, so a version 2 column-shift signature would be compared with
+/// queries of twice its width.
+pub const VERSION: u32 = 3;
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -105,7 +107,7 @@ pub fn parse(
     let expected =
         expected_for(&db.source).map_err(|e| anyhow::anyhow!("--landmarks {name}: {e}"))?;
     check_matches(&db, &expected).map_err(|e| anyhow::anyhow!("--landmarks {name}: {e}"))?;
-    check_signatures(&db).map_err(|e| anyhow::anyhow!("--landmarks {name}: {e}"))?;
+    check_signatures(&db, &expected).map_err(|e| anyhow::anyhow!("--landmarks {name}: {e}"))?;
     Ok(db)
 }
 
@@ -172,31 +174,28 @@ fn check_matches(db: &Database, run: &Database) -> Result<(), String> {
     Ok(())
 }
 
-/// Every signature must be as long as the first and finite, and there must be one.
-fn check_signatures(db: &Database) -> Result<(), String> {
-    let Some(first) = db.landmarks.first() else {
+/// Every signature must have the shape this run's descriptor gives the saved panorama
+/// (columns and values), be finite and describe an image; and there must be one. The run's
+/// settings are already known to equal the file's (`check_matches`).
+fn check_signatures(db: &Database, run: &Database) -> Result<(), String> {
+    if db.landmarks.is_empty() {
         return Err("field `landmarks` is empty".to_owned());
-    };
-    let width = db.panorama.get("width").and_then(|w| w.as_u64());
-    // The length most landmarks have (a single damaged one, even the first, is then named).
-    let mut lengths = std::collections::BTreeMap::<usize, usize>::new();
-    for l in &db.landmarks {
-        *lengths.entry(l.signature.values.len()).or_default() += 1;
     }
-    let usual = lengths
-        .iter()
-        .max_by_key(|&(&len, &n)| (n, std::cmp::Reverse(len)))
-        .map_or(first.signature.values.len(), |(&len, _)| len);
+    let (columns, values) = expected_shape(run)?;
     for (i, l) in db.landmarks.iter().enumerate() {
         let s = &l.signature;
-        let problem = if s.values.len() != usual {
+        let problem = if s.values.len() != values {
             format!(
-                "{} signature values, where the others have {usual}",
-                s.values.len()
+                "{} signature values, where {} k={} makes {values} of this panorama",
+                s.values.len(),
+                run.descriptor,
+                run.coefficients
             )
-        } else if Some(u64::from(s.columns)) != width {
-            let width = width.map_or("no width".to_owned(), |w| format!("{w}"));
-            format!("{} columns, where the panorama has {width}", s.columns)
+        } else if s.columns != columns {
+            format!(
+                "{} columns, where {} k={} makes {columns} of this panorama",
+                s.columns, run.descriptor, run.coefficients
+            )
         } else if !s.values.iter().all(|v| v.is_finite()) {
             "a non-finite signature value".to_owned()
         } else if !l.position_m.iter().all(|v| v.is_finite()) {
@@ -210,6 +209,22 @@ fn check_signatures(db: &Database) -> Result<(), String> {
         return Err(format!("field `landmarks[{i}]`: {problem}"));
     }
     Ok(())
+}
+
+/// The signature shape (columns, values) `run`'s descriptor makes of its panorama.
+fn expected_shape(run: &Database) -> Result<(u32, usize), String> {
+    let size = |field: &str| {
+        run.panorama
+            .get(field)
+            .and_then(|v| v.as_u64())
+            .and_then(|v| u32::try_from(v).ok())
+            .ok_or_else(|| format!("field `panorama.{field}` is not a panorama size"))
+    };
+    let kind = DescriptorKind::parse(&run.descriptor)
+        .ok_or_else(|| format!("field `descriptor` {} is not a descriptor", run.descriptor))?;
+    Ok(kind
+        .build(run.coefficients)
+        .shape(size("width")?, size("height")?))
 }
 
 #[cfg(test)]

@@ -54,7 +54,7 @@ pub struct Args {
           value_parser = real(0.0, true, 100.0))]
     grid: f64,
     /// Descriptor size, 1..=256 (fourier: the first k DFT terms per panorama row;
-    /// column-shift: 8k columns).
+    /// column-shift: 16k columns).
     #[arg(long, default_value_t = 8, allow_negative_numbers = true,
           value_parser = whole(1..=MAX_COEFFICIENTS))]
     k: u32,
@@ -87,8 +87,8 @@ pub struct Args {
     /// whose every match must be exact.
     #[arg(long)]
     queries_at_landmarks: bool,
-    /// Descriptor (fourier, column-shift; docs/sensor.md).
-    #[arg(long, default_value = "fourier", value_parser = descriptor_name)]
+    /// Descriptor (column-shift, fourier; docs/sensor.md).
+    #[arg(long, default_value = "column-shift", value_parser = descriptor_name)]
     descriptor: String,
     /// Sensor image side in pixels (square), 16..=8192.
     #[arg(long, default_value_t = 256, allow_negative_numbers = true,
@@ -170,7 +170,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let messages = log.map(|l| l.messages()).unwrap_or_default();
 
     // 4. The rows, the report, the floor map and the landmark files, all or nothing.
-    let report = report(args, &plan, &images, device_name, messages.len());
+    let report = report(args, &plan, &images, device_name, messages.len())?;
     let first = &report.rows[0];
     let map = plot::svg(
         &plan.body.scene,
@@ -331,8 +331,10 @@ fn check_work(args: &Args, plan: &Plan) -> Result<()> {
 /// The memory the run will hold at once (one renderer, the sensor, every source's landmark
 /// signatures), against the budget.
 fn check_memory(args: &Args, plan: &Plan) -> Result<()> {
-    // A signature is at most 8k values a panorama row (column-shift; fourier keeps 2k).
-    let values = u64::from(plan.body.layout.height) * 8 * u64::from(args.k);
+    // A signature is at most 16k values a panorama row (column-shift; fourier keeps 2k).
+    let values = u64::from(plan.body.layout.height)
+        * u64::from(specchio::sensor::localise::shift::COLUMNS_PER_K)
+        * u64::from(args.k);
     let landmarks = plan.landmark_poses.len() as u64 * plan.sources.len() as u64;
     specchio::memory::estimates::localise(&plan.body.scene, args.sensor_size, landmarks, values)
         .with_context(|| args.scene.display().to_string())
@@ -441,7 +443,7 @@ fn report(
     images: &[Images],
     device: Option<String>,
     validation_messages: usize,
-) -> Report {
+) -> Result<Report> {
     let d = plan.descriptor.as_ref();
     let column_deg = 360.0 / f64::from(plan.body.layout.width);
     let reference = images.iter().find(|im| im.source == Source::Reference);
@@ -463,12 +465,12 @@ fn report(
                 (q.source.name(), &q.queries[ti], &plan.queries[ti]),
                 t,
                 (column_deg, args.grid),
-            );
+            )?;
             row.landmark_images_per_s = rate(db, plan);
             rows.push(row);
         }
     }
-    Report {
+    Ok(Report {
         scene: args.scene.display().to_string(),
         descriptor: d.name(),
         coefficients: args.k,
@@ -492,7 +494,7 @@ fn report(
             .collect(),
         rows,
         validation_messages,
-    }
+    })
 }
 
 /// Sensor images per second of a source's landmark sweep (none when loaded).

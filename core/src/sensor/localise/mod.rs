@@ -84,6 +84,10 @@ pub trait Descriptor: Sync {
     /// The turn (radians, in [0, 2 pi)) that maps `landmark`'s panorama onto `query`'s: the
     /// query's column at azimuth `a` shows what the landmark's shows at `a - turn`.
     fn turn(&self, landmark: &Signature, query: &Signature) -> f64;
+    /// The shape of [`Descriptor::describe`]'s signature of a `width` x `height` panorama: its
+    /// `columns` and its number of values. A saved signature of another shape was made with
+    /// other settings (or is damaged) and cannot be compared with this run's.
+    fn shape(&self, width: u32, height: u32) -> (u32, usize);
 }
 
 /// The registered descriptors.

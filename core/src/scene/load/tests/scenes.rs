@@ -16,6 +16,7 @@ fn shipped_scenes_load() {
     for rel in [
         "scenes/thesis-room.toml",
         "scenes/furnished-room.toml",
+        "scenes/held-out-room.toml",
         "scenes/moving-objects.toml",
         "scenes/many-objects.toml",
         "scenes/test/six-colour-room.toml",
