@@ -19,8 +19,10 @@ from typing import Any, Callable, Optional, Union
 from ._specchio import (
     DatasetFrames,
     DatasetOutput,
+    Descriptor,
     Renderer,
     Scene,
+    Signature,
     SpecchioError,
     __version__,
     calibrate,
@@ -35,8 +37,10 @@ from ._specchio import dataset as _dataset_here
 __all__ = [
     "DatasetFrames",
     "DatasetOutput",
+    "Descriptor",
     "Renderer",
     "Scene",
+    "Signature",
     "SpecchioError",
     "__version__",
     "calibrate",

@@ -1,5 +1,5 @@
 //! The native half of the `specchio` Python package: the engine's scenes, renderers, exact
-//! reference, calibration and dataset writer, with images and layers handed to Python as
+//! reference, calibration, dataset writer and localisation descriptors, with images and layers handed to Python as
 //! numpy arrays (docs/python.md). The Python half (python/specchio/) adds the Ray driver and
 //! re-exports these under their public names.
 //!
@@ -13,6 +13,7 @@ mod arrays;
 mod dataset;
 mod errors;
 mod files;
+mod localise;
 mod poses;
 mod reference;
 mod renderer;
@@ -39,6 +40,8 @@ fn _specchio(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<renderer::Renderer>()?;
     m.add_class::<shards::DatasetFrames>()?;
     m.add_class::<shards::DatasetOutput>()?;
+    m.add_class::<localise::Descriptor>()?;
+    m.add_class::<localise::Signature>()?;
     m.add_function(wrap_pyfunction!(devices, m)?)?;
     m.add_function(wrap_pyfunction!(poses::read_trajectory, m)?)?;
     m.add_function(wrap_pyfunction!(poses::pose_grid, m)?)?;

@@ -1,0 +1,134 @@
+"""Localisation's descriptors from Python: known answers on made-up panoramas, an independent
+numpy version of the column-shift distance, and refusals that name the argument."""
+
+import math
+
+import numpy as np
+import pytest
+
+import specchio
+
+W, H = 512, 64  # 128 column-shift columns of 4 pixels, 16 rows of 4
+
+
+def place(seed, w=W, h=H):
+    """A panorama of smooth random structure: a few harmonics per row band, in [0, 1]."""
+    rng = np.random.default_rng(seed)
+    az = (np.arange(w) + 0.5) / w * 2 * math.pi
+    rows = []
+    for r in range(h):
+        band = r // 8
+        phases = rng.uniform(0, 2 * math.pi, 4) if r % 8 == 0 else phases
+        v = sum(np.cos((n + 1) * az + phases[n]) / (n + 1) for n in range(4)) + 0.3 * band
+        rows.append(v)
+    grey = np.array(rows)
+    grey = (grey - grey.min()) / (grey.max() - grey.min())
+    return np.stack([grey, 0.8 * grey, 1.0 - grey], axis=-1).astype(np.float32)
+
+
+def grey(p):
+    return 0.2126 * p[..., 0] + 0.7152 * p[..., 1] + 0.0722 * p[..., 2]
+
+
+def column_shift_distance(a, b, columns=128):
+    """The column-shift distance written from its definition (docs/sensor.md): grey levels
+    box-filtered to `columns` columns and as many rows as keep the aspect ratio, compared as
+    the root-mean-square difference at the best circular column shift."""
+    h, w = a.shape[:2]
+    rows = max(1, round(h * columns / w))
+
+    def low(p):
+        g = grey(p.astype(np.float64))
+        return g.reshape(rows, h // rows, columns, w // columns).mean(axis=(1, 3))
+
+    la, lb = low(a), low(b)
+    return math.sqrt(min(np.mean((lb - np.roll(la, s, axis=1)) ** 2) for s in range(columns)))
+
+
+def angle_error(a, b):
+    return abs((a - b + math.pi) % (2 * math.pi) - math.pi)
+
+
+def test_a_turned_robot_sees_the_same_place_and_its_turn_comes_back():
+    d = specchio.Descriptor()
+    assert (d.name, d.k) == ("column-shift", 8)
+    base = d.describe(place(1))
+    assert base.columns == 128 and base.values.shape == (16 * 128,)
+    for cells in [0, 1, 37, 127]:
+        turned = d.describe(np.roll(place(1), 4 * cells, axis=1))
+        assert d.distance(base, turned) < 1e-6
+        assert angle_error(d.turn(base, turned), cells / 128 * 2 * math.pi) < 1e-9
+    assert d.distance(base, d.describe(place(2))) > 0.05
+
+
+def test_the_fourier_signature_forgets_the_heading_and_its_phases_give_it_back():
+    d = specchio.Descriptor("fourier", k=8)
+    base = d.describe(place(3))
+    assert base.columns == W and base.values.shape == (H * 8 * 2,)
+    for pixels in [5, 200, 511]:
+        turned = d.describe(np.roll(place(3), pixels, axis=1))
+        assert d.distance(base, turned) < 1e-3
+        assert angle_error(d.turn(base, turned), pixels / W * 2 * math.pi) < 0.1 * 2 * math.pi / W
+
+
+def test_the_column_shift_distance_is_its_definition():
+    d = specchio.Descriptor()
+    a, b = place(4), np.roll(place(5), 9, axis=1)
+    want = column_shift_distance(a, b)
+    got = d.distance(d.describe(a), d.describe(b))
+    assert want > 0.05
+    assert abs(got - want) <= 1e-5 * want
+
+
+def test_distances_rank_a_database():
+    d = specchio.Descriptor()
+    database = [d.describe(place(s)) for s in range(6)]
+    query = d.describe(np.roll(place(4), 40, axis=1))
+    got = d.distances(database, query)
+    assert got.dtype == np.float64 and got.shape == (6,)
+    assert list(got) == [d.distance(s, query) for s in database]
+    assert int(np.argmin(got)) == 4
+
+
+def test_integers_and_rgba_are_panoramas_too():
+    d = specchio.Descriptor()
+    p = place(6)
+    rgba = np.concatenate([p, np.ones((H, W, 1), np.float32)], axis=-1)
+    assert d.distance(d.describe(p), d.describe(rgba)) == 0.0
+    ints = (p * 1000).astype(np.int32)
+    assert d.describe(ints).columns == 128
+
+
+@pytest.mark.parametrize(
+    "make, needle",
+    [
+        (lambda: specchio.Descriptor("sift"), "name: \"sift\" is not a descriptor"),
+        (lambda: specchio.Descriptor(k=0), "k: 0; must be a whole number from 1 to 256"),
+        (lambda: specchio.Descriptor(k=257), "k: 257"),
+        (lambda: specchio.Descriptor().describe(np.zeros((4, 8))), "panorama: an array of shape [4, 8]"),
+        (lambda: specchio.Descriptor().describe(np.zeros((0, 8, 3))), "panorama: an array of shape [0, 8, 3]"),
+        (lambda: specchio.Descriptor().describe([["a"]]), "panorama: not an array of numbers"),
+        (
+            lambda: specchio.Descriptor().describe(np.full((2, 3, 3), np.nan)),
+            "panorama: [0, 0, 0] is NaN",
+        ),
+    ],
+)
+def test_bad_arguments_are_refused_by_name(make, needle):
+    with pytest.raises(specchio.SpecchioError, match=None) as e:
+        make()
+    assert needle in str(e.value)
+
+
+def test_signatures_of_another_descriptor_or_size_are_refused():
+    shift, fourier = specchio.Descriptor(), specchio.Descriptor("fourier")
+    a = shift.describe(place(7))
+    with pytest.raises(specchio.SpecchioError) as e:
+        shift.distance(a, fourier.describe(place(7)))
+    assert "b: a fourier k=8 signature, given to column-shift k=8" in str(e.value)
+    with pytest.raises(specchio.SpecchioError) as e:
+        shift.turn(a, shift.describe(place(7, w=256)))
+    assert "panoramas of different sizes" in str(e.value)
+    with pytest.raises(specchio.SpecchioError) as e:
+        shift.distances([a, specchio.Descriptor(k=4).describe(place(7))], a)
+    assert "database[1]: a column-shift k=4 signature, given to column-shift k=8" in str(e.value)
