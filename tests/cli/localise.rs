@@ -197,7 +197,7 @@ fn bad_options_are_refused() {
     let scene = root().join("scenes/thesis-room.toml");
     let out = temp_dir("localise-bad");
     let many_times = vec!["0"; 200].join(",");
-    let cases: [(&[&str], &str); 12] = [
+    let cases: [(&[&str], &str); 13] = [
         (&["--grid", "0"], "--grid"),
         (&["--grid", "nan"], "--grid"),
         (&["--k", "0"], "--k"),
@@ -213,6 +213,12 @@ fn bad_options_are_refused() {
         (
             &["--queries", "100000", "--times", &many_times],
             "more than the 200000 one run may",
+        ),
+        // Within the images' bound, but matching 10,000 landmarks against 100,000 queries
+        // at 128 columns is days of work.
+        (
+            &["--grid", "0.08", "--queries", "100000"],
+            "(about a day on 2 cores) one run may",
         ),
     ];
     for (extra, needle) in cases {

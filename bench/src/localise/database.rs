@@ -10,17 +10,18 @@ use serde::{Deserialize, Serialize};
 use specchio::files::read_regular_file;
 use specchio::sensor::localise::{DescriptorKind, Signature};
 
-/// Largest landmarks file read (bytes): the largest database a run makes, 20,000 landmarks
-/// (`MAX_LANDMARKS`) of 256 coefficients (`MAX_COEFFICIENTS`) at about 20 characters a JSON
-/// number, is about 100 MiB.
+/// Largest landmarks file read (bytes), so that reading one stays within memory. At the
+/// default settings (a 256² sensor, column-shift k=8: 5,248 values of about 22 bytes each) it
+/// holds about 2,300 landmarks; a run that would write a larger file says so before its sweep
+/// (`warn_if_unreadable` in `mod.rs`).
 pub const MAX_LANDMARKS_FILE_BYTES: u64 = 256 << 20;
 
 /// The file's `format` value.
 pub const FORMAT: &str = "specchio-landmarks";
 /// Version 2 added the source, grid, scene hash and cube size (version 1 had none of them and
 /// cannot be checked, so it is refused). Version 3: the column-shift descriptor keeps 16
-/// columns per `k`, not 8, so a version 2 column-shift signature would be compared with
-/// queries of twice its width.
+/// columns per `k`, not 8, so the same settings now mean another signature; the version
+/// says so in the refusal rather than a count of columns.
 pub const VERSION: u32 = 3;
 
 #[derive(Debug, Clone, Serialize, Deserialize)]

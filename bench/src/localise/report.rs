@@ -19,8 +19,8 @@ pub struct QueryResult {
     pub nearest_landmark_distance_m: f64,
     /// Whether the query stands on the map: within half a grid cell's diagonal of a landmark,
     /// as every pose inside a cell of four landmarks is. A query off the map stands where
-    /// the landmarks could not (an object stood there when they were taken, and has moved
-    /// since), so its right answer is a landmark a metre or more away.
+    /// landmarks could not be taken (beside an object at time 0, or where one stood then and
+    /// has moved since), so its right answer is a landmark farther than that.
     pub on_map: bool,
     /// The three best matches, best first.
     pub matches: Vec<usize>,

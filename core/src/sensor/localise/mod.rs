@@ -68,7 +68,8 @@ pub const MAX_LANDMARKS: u64 = 20_000;
 /// A descriptor of one panorama, as numbers a [`Descriptor`] made and reads.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Signature {
-    /// The panorama's width in columns (a heading is a column shift of this many).
+    /// The signature's columns: a heading is a circular shift of this many (the panorama's
+    /// width for the Fourier signature, its low-resolution width for the column shift).
     pub columns: u32,
     pub values: Vec<f32>,
 }
@@ -88,6 +89,9 @@ pub trait Descriptor: Sync {
     /// `columns` and its number of values. A saved signature of another shape was made with
     /// other settings (or is damaged) and cannot be compared with this run's.
     fn shape(&self, width: u32, height: u32) -> (u32, usize);
+    /// The cells [`Descriptor::distance`] compares for one pair of signatures of a `width` x
+    /// `height` panorama: the unit matching's work is counted in before a run commits to it.
+    fn pair_cost(&self, width: u32, height: u32) -> u64;
 }
 
 /// The registered descriptors.
@@ -116,8 +120,8 @@ impl DescriptorKind {
         Self::ALL.map(Self::name).join(", ")
     }
 
-    /// The descriptor, with `coefficients` its size parameter (Fourier: per row; column
-    /// shift: 8 columns each).
+    /// The descriptor, with `coefficients` its size parameter `k` (Fourier: coefficients per
+    /// row; column shift: `16 k` columns).
     pub fn build(self, coefficients: u32) -> Box<dyn Descriptor> {
         match self {
             Self::Fourier => Box::new(fourier::FourierSignature { coefficients }),
@@ -169,5 +173,30 @@ pub(crate) fn test_panorama(width: u32, rows: u32, f: impl Fn(u32, f64) -> f32) 
         width,
         height: rows,
         pixels,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shape a saved signature is checked against is the one `describe` makes, for every
+    /// descriptor, for narrow, wide, tall and flat panoramas and for k below and beyond what
+    /// they hold; and comparing two costs at least one cell per value.
+    #[test]
+    fn shape_is_what_describe_makes() {
+        for kind in DescriptorKind::ALL {
+            for (w, h) in [(3u32, 2u32), (76, 24), (152, 49), (608, 194), (1000, 3)] {
+                for k in [1u32, 4, 8, 40, 256] {
+                    let d = kind.build(k);
+                    let s = d.describe(&test_panorama(w, h, |r, az| {
+                        (az + f64::from(r)).sin() as f32
+                    }));
+                    let what = format!("{} {w}x{h} k={k}", kind.name());
+                    assert_eq!(d.shape(w, h), (s.columns, s.values.len()), "{what}");
+                    assert!(d.pair_cost(w, h) as usize * 2 >= s.values.len(), "{what}");
+                }
+            }
+        }
     }
 }
