@@ -16,7 +16,6 @@ use specchio::process::probe;
 use specchio::process::progress::Progress;
 use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
-use specchio::sensor::central::Calibration;
 use specchio::sensor::dataset::grid;
 use specchio::sensor::dataset::{resume, DatasetError, Folder, Format, GeometryFrame};
 use specchio::sensor::layers::Layers;
@@ -90,11 +89,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     plan.panoramas = args.panorama_frame;
     plan.geometry = args.geometry_frame;
     plan.set_format(args.format)?;
-    if let Some(why) = (args.format.mcap && plan.scene.mirror.shape.xi().is_some())
-        .then(|| Calibration::too_large(&plan.scene))
-        .flatten()
-    {
-        eprintln!("warning: the bag carries no unified model (/omni/camera_info): {why}");
+    if let Some(why) = plan.omni_missing() {
+        eprintln!("warning: {why}");
     }
     plan.choose(args.outputs)?;
     let n = plan.poses.len();

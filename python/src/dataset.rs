@@ -224,7 +224,7 @@ struct Job<'a> {
 
 /// A dataset rendered, not placed yet: the folder ready to place, its summary, and the
 /// validation log.
-type Finished = (Ready, DatasetRecord, Arc<ValidationLog>);
+type Finished = (Ready, DatasetRecord, Arc<ValidationLog>, Option<String>);
 
 /// Renders `job`'s frames into its staged folder (with the GIL released), keeping the error
 /// from Python that stopped it in `stopped` and the frames placed in `placed`.
@@ -272,7 +272,7 @@ fn render(
     drop(dev);
     let record = plan.record(lookup, truth);
     let ready = folder.finish(&record, plan.omni())?;
-    Ok((ready, record, log))
+    Ok((ready, record, log, plan.omni_missing()))
 }
 
 /// The validation log, the device `job` asks for that can render `plan`'s scene, and the
@@ -340,8 +340,12 @@ fn place_finished(
     if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
         return Err(e);
     }
-    let (ready, record, log) = result.map_err(errors::to_py)?;
+    let (ready, record, log, omni_missing) = result.map_err(errors::to_py)?;
     check_validation(&log)?;
+    // Said before the folder is placed, so that warnings made errors place nothing.
+    if let Some(text) = omni_missing {
+        warn(py, text)?;
+    }
     // Everything that can fail runs before the folder is placed: nothing after it.
     if let Some(f) = progress {
         f.call1(py, (record.frames, record.frames))?;
@@ -381,13 +385,18 @@ pub(crate) fn commit(py: Python<'_>, ready: Ready) -> PyResult<()> {
             "the work folder is not removed entirely: {}",
             left.join("; ")
         );
-        let warning = py.get_type::<pyo3::exceptions::PyUserWarning>();
-        PyErr::warn(
-            py,
-            &warning,
-            &std::ffi::CString::new(text).unwrap_or_default(),
-            1,
-        )?;
+        warn(py, text)?;
     }
     Ok(())
+}
+
+/// A `UserWarning` with `text` (an error where the caller's warning filters say so).
+pub(crate) fn warn(py: Python<'_>, text: String) -> PyResult<()> {
+    let warning = py.get_type::<pyo3::exceptions::PyUserWarning>();
+    PyErr::warn(
+        py,
+        &warning,
+        &std::ffi::CString::new(text).unwrap_or_default(),
+        1,
+    )
 }

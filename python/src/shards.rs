@@ -224,21 +224,26 @@ impl DatasetOutput {
             outputs.as_ref(),
             format.as_ref(),
         )?;
-        py.detach(|| -> Result<Self, DatasetError> {
-            specchio::files::identity::forget();
-            let plan = source.plan(&scene, &choices)?;
-            let folder = Folder::stage(&out, plan.poses.len(), plan.frame_files())?;
-            Ok(DatasetOutput {
-                robot: robot_scene(&plan.scene),
-                plan,
-                out,
-                resume,
-                begun: false,
-                placed: 0,
-                folder: Some(folder),
+        let output = py
+            .detach(|| -> Result<Self, DatasetError> {
+                specchio::files::identity::forget();
+                let plan = source.plan(&scene, &choices)?;
+                let folder = Folder::stage(&out, plan.poses.len(), plan.frame_files())?;
+                Ok(DatasetOutput {
+                    robot: robot_scene(&plan.scene),
+                    plan,
+                    out,
+                    resume,
+                    begun: false,
+                    placed: 0,
+                    folder: Some(folder),
+                })
             })
-        })
-        .map_err(errors::to_py)
+            .map_err(errors::to_py)?;
+        if let Some(text) = output.plan.omni_missing() {
+            crate::dataset::warn(py, text)?;
+        }
+        Ok(output)
     }
 
     fn __len__(&self) -> usize {

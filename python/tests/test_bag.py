@@ -232,3 +232,26 @@ def test_a_central_mirrors_bag_carries_its_unified_model(tmp_path, monkeypatch):
     with open(out / "bag" / "bag_0.mcap", "rb") as f:
         names = sorted(a.name for a in make_reader(f).iter_attachments())
     assert names == ["kalibr_camchain.yaml", "ocamcalib_calib_results.txt", "opencv_omnidir.yaml"]
+
+
+def test_a_bag_without_the_unified_model_says_so(tmp_path, monkeypatch):
+    """A central mirror whose sensor is too large to calibrate gets no /omni/camera_info: the
+    Ray driver's half says so when it is made (before any frame), as the command does."""
+    monkeypatch.chdir(tmp_path)
+    text = scene_path("hyperbolic-room").read_text()
+    big = text.replace("resolution = [512, 512]", "resolution = [4100, 4100]")
+    # Its assets, from the shipped scene's folder.
+    big = big.replace('"textures/', f'"{SCENES}/textures/').replace('"meshes/', f'"{SCENES}/meshes/')
+    assert big != text
+    scene = tmp_path / "big.toml"
+    scene.write_text(big)
+    (tmp_path / "robot.csv").write_text("time,x,y,z,heading\n0,0,3,0,0\n")
+    with pytest.warns(UserWarning, match=r"no unified model \(/omni/camera_info\): sensor.resolution 4100x4100"):
+        output = specchio.DatasetOutput(str(scene), "robot.csv", "out", format="mcap")
+    del output
+    # Without a bag there is nothing to miss, and nothing is said.
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        specchio.DatasetOutput(str(scene), "robot.csv", "out2", format="files")

@@ -33,10 +33,21 @@ pub struct Omni {
 }
 
 impl Omni {
+    /// Why a central mirror's bag goes without its unified model (its sensor is too large to
+    /// calibrate), said by the command and by Python alike; none for a mirror that is not
+    /// central, which has no such model to miss.
+    pub fn missing(scene: &Scene) -> Option<String> {
+        scene
+            .mirror
+            .shape
+            .xi()
+            .and_then(|_| Calibration::too_large(scene))
+    }
+
     /// The model of `scene`'s sensor (at time 0: the mount and the optics do not change along
     /// a trajectory), where its mirror is central and small enough to calibrate.
     pub fn of_scene(scene: &Scene) -> Result<Option<Self>, FitError> {
-        if scene.mirror.shape.xi().is_none() || Calibration::too_large(scene).is_some() {
+        if scene.mirror.shape.xi().is_none() || Self::missing(scene).is_some() {
             return Ok(None);
         }
         let (cal, _) = Calibration::of_scene(scene, 0.0)?;

@@ -251,6 +251,20 @@ impl Plan {
         self.omni.as_ref()
     }
 
+    /// The warning, in the command's and Python's words alike, when this dataset's bag goes
+    /// without a central mirror's unified model: none when no bag is written or nothing is
+    /// missing.
+    pub fn omni_missing(&self) -> Option<String> {
+        let why = self
+            .format
+            .mcap
+            .then(|| Omni::missing(&self.scene))
+            .flatten()?;
+        Some(format!(
+            "the bag carries no unified model (/omni/camera_info): {why}"
+        ))
+    }
+
     /// The summary of this dataset rendered with `lookup`, whose range and ids come from
     /// `truth`.
     pub fn record(&self, lookup: Lookup, truth: GroundTruth) -> DatasetRecord {
