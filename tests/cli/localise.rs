@@ -328,10 +328,16 @@ fn the_floor_map_has_one_marker_per_query() {
     );
     assert_eq!(svg.matches("<polygon").count(), 6);
     assert_eq!(svg.matches("<circle").count(), 8);
-    let recall = json(&out.join("localise.json"))["rows"][0]["summary"]["recall_at_1"]
-        .as_f64()
-        .unwrap();
+    let summary = &json(&out.join("localise.json"))["rows"][0]["summary"];
+    let recall = summary["recall_at_1"].as_f64().unwrap();
     assert!(svg.contains(&format!("recall@1 {:.1} %", 100.0 * recall)));
+    let on_map = summary["recall_at_1_on_map"].as_f64().unwrap();
+    let stated = format!(
+        "({:.1} % of {} on the map)",
+        100.0 * on_map,
+        summary["on_map_queries"]
+    );
+    assert!(svg.contains(&stated), "{stated}");
     std::fs::remove_dir_all(&out).unwrap();
 }
 

@@ -113,11 +113,15 @@ pub fn svg(scene: &Scene, landmarks: &[Vec3], row: &Row, title: &str) -> Result<
 pub fn title(scene: &str, row: &Row) -> String {
     let s = &row.summary;
     format!(
-        "{scene}: landmarks {}, queries {} at {} s: recall@1 {:.1} %, median {:.3} m, {:.2}°",
+        "{scene}: landmarks {}, queries {} at {} s: recall@1 {:.1} % ({}), median {:.3} m, {:.2}°",
         row.landmarks_from,
         row.queries_from,
         row.query_time_s,
         100.0 * s.recall_at_1,
+        s.recall_at_1_on_map.map_or_else(
+            || "no query on the map".to_owned(),
+            |r| format!("{:.1} % of {} on the map", 100.0 * r, s.on_map_queries)
+        ),
         s.median_position_error_m,
         s.median_heading_error_deg
     )
