@@ -52,24 +52,35 @@ pub fn poses<'py>(
     py: Python<'py>,
     poses: &Bound<'py, PyAny>,
 ) -> PyResult<PyReadonlyArray2<'py, f64>> {
-    let numpy = py.import("numpy")?;
-    let not_numbers =
-        |why: String| errors::error(format!("poses: not an array of numbers ({why})"));
-    let given = numpy
-        .call_method1("asarray", (poses,))
-        .map_err(|e| not_numbers(e.to_string()))?;
-    // Signed and unsigned ints and floats: numpy's own kinds for numbers (not `b`ool).
-    let kind: String = given.getattr("dtype")?.getattr("kind")?.extract()?;
-    if !matches!(kind.as_str(), "i" | "u" | "f") {
-        let dtype = given.getattr("dtype")?.str()?.to_string();
-        return Err(not_numbers(format!("dtype {dtype}")));
-    }
-    let array = given.call_method1("astype", ("float64",))?;
-    let shape: Vec<usize> = array.getattr("shape")?.extract()?;
+    let (array, shape) = numbers(py, "poses", poses, "float64")?;
     let array = array.cast_into::<PyArray2<f64>>().map_err(|_| {
         errors::error(format!(
             "poses: an array of shape {shape:?}; give (B, 4) rows of x, y, z, heading"
         ))
     })?;
     Ok(array.readonly())
+}
+
+/// `value` as a numpy array of `dtype` and its shape: any array-like of numbers (signed and
+/// unsigned ints, floats: numpy's kinds for numbers, not `b`ool) converted as numpy converts
+/// it; anything else refused, naming the argument `name`.
+pub fn numbers<'py>(
+    py: Python<'py>,
+    name: &str,
+    value: &Bound<'py, PyAny>,
+    dtype: &str,
+) -> PyResult<(Bound<'py, PyAny>, Vec<usize>)> {
+    let not_numbers =
+        |why: String| errors::error(format!("{name}: not an array of numbers ({why})"));
+    let given = py
+        .import("numpy")?
+        .call_method1("asarray", (value,))
+        .map_err(|e| not_numbers(e.to_string()))?;
+    let kind: String = given.getattr("dtype")?.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "i" | "u" | "f") {
+        let dtype = given.getattr("dtype")?.str()?.to_string();
+        return Err(not_numbers(format!("dtype {dtype}")));
+    }
+    let shape: Vec<usize> = given.getattr("shape")?.extract()?;
+    Ok((given.call_method1("astype", (dtype,))?, shape))
 }

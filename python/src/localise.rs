@@ -179,18 +179,8 @@ impl Descriptor {
 /// converted as numpy converts it; anything else is refused naming `panorama`.
 fn panorama_image(py: Python<'_>, panorama: &Bound<'_, PyAny>) -> PyResult<RgbaImage> {
     let refuse = |why: String| errors::error(format!("panorama: {why}"));
-    let given = py
-        .import("numpy")?
-        .call_method1("asarray", (panorama,))
-        .map_err(|e| refuse(format!("not an array of numbers ({e})")))?;
-    let kind: String = given.getattr("dtype")?.getattr("kind")?.extract()?;
-    if !matches!(kind.as_str(), "i" | "u" | "f") {
-        let dtype = given.getattr("dtype")?.str()?.to_string();
-        return Err(refuse(format!("not an array of numbers (dtype {dtype})")));
-    }
-    let shape: Vec<usize> = given.getattr("shape")?.extract()?;
-    let array = given
-        .call_method1("astype", ("float32",))?
+    let (array, shape) = crate::args::numbers(py, "panorama", panorama, "float32")?;
+    let array = array
         .cast_into::<PyArray3<f32>>()
         .ok()
         .filter(|a| matches!(a.shape(), [h, w, 3 | 4] if *h > 0 && *w > 0))
