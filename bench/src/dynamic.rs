@@ -1,6 +1,7 @@
-//! Dynamic scenes: per frame of the animation, the incremental update (only the faces a moved
-//! object touches, old or new bounds) against a full one, on two six-pass renderers fed the
-//! same frames in alternating order.
+//! Dynamic scenes: per frame of the animation, the incremental updates against a full one, on
+//! three six-pass renderers fed the same frames in rotating order: one re-renders only the
+//! dirty rectangles (the pixels a moved object's old or new bounds project to), one the faces
+//! they lie on, whole, one all six faces.
 
 use anyhow::Result;
 use specchio::render::{Readback, RenderOptions, Renderer};
@@ -18,63 +19,95 @@ pub fn animated(scene: &Scene) -> bool {
     scene.mirror.animation.is_some() || scene.objects.iter().any(|o| o.animation.is_some())
 }
 
+/// The three updates measured, in the order of a frame's first round.
+const UPDATES: [Update; 3] = [Update::Rects, Update::WholeFaces, Update::Full];
+
+#[derive(Clone, Copy)]
+enum Update {
+    /// The dirty faces' dirty rectangles.
+    Rects,
+    /// The dirty faces, whole.
+    WholeFaces,
+    /// All six faces on any change.
+    Full,
+}
+
 pub fn measure(
     device: &std::sync::Arc<Device>,
     name: &str,
     scene: &Scene,
-    size: u32,
+    (size, from_s): (u32, f64),
     plan: &Plan,
     tick: &dyn Fn() -> Result<()>,
 ) -> Result<Dynamic> {
-    let make = |full_updates| {
+    let make = |update| {
         let options = RenderOptions {
             cube_size: Some(size),
             refresh: Some(RefreshPolicy::OnChange),
-            full_updates,
+            full_updates: matches!(update, Update::Full),
+            whole_faces: matches!(update, Update::WholeFaces),
             ..Default::default()
         };
         Renderer::new(device, scene.clone(), &options)
     };
-    let (mut incremental, mut full) = (make(false)?, make(true)?);
+    let mut renderers = UPDATES
+        .map(make)
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
     let none = Readback::default();
     let mut frames = Vec::new();
     for i in 0..plan.warmup + plan.frames {
-        let t = f64::from(i) / 30.0;
-        // Alternate which goes first, so neither always runs on a warmer cache.
-        let (a, b) = if i % 2 == 0 {
-            let a = incremental.render_frame(u64::from(i), t, none)?.0;
-            (a, full.render_frame(u64::from(i), t, none)?.0)
-        } else {
-            let b = full.render_frame(u64::from(i), t, none)?.0;
-            (incremental.render_frame(u64::from(i), t, none)?.0, b)
-        };
-        // The first frame fills the whole cube in both: it is a warm-up whatever --warmup says.
+        let t = from_s + f64::from(i) / 30.0;
+        // Rotate which goes first, so none always runs on a warmer cache.
+        let mut reports = [None, None, None];
+        for k in 0..3 {
+            let u = (i as usize + k) % 3;
+            reports[u] = Some(renderers[u].render_frame(u64::from(i), t, none)?.0);
+        }
+        let [r, w, f] = reports.map(Option::unwrap);
+        // The first frame fills the whole cube in all: it is a warm-up whatever --warmup says.
         if i >= plan.warmup.max(1) {
             frames.push(DynamicFrame {
                 time_s: t,
-                faces_incremental: a.faces_rendered,
-                faces_full: b.faces_rendered,
-                incremental_ms: a.submit_wait_ms,
-                full_ms: b.submit_wait_ms,
+                faces_incremental: r.faces_rendered,
+                faces_full: f.faces_rendered,
+                texels_rects: r.texels_rendered,
+                texels_full: f.texels_rendered,
+                rects_ms: r.submit_wait_ms,
+                whole_faces_ms: w.submit_wait_ms,
+                full_ms: f.submit_wait_ms,
             });
         }
         tick()?;
     }
+    Ok(summary(name, size, frames))
+}
+
+/// The medians over the frames in which something moved, and their ratios.
+fn summary(name: &str, size: u32, frames: Vec<DynamicFrame>) -> Dynamic {
     let changed: Vec<&DynamicFrame> = frames.iter().filter(|f| f.faces_full > 0).collect();
     let col = |f: fn(&DynamicFrame) -> f64| {
         let mut v: Vec<f64> = changed.iter().map(|x| f(x)).collect();
         quantile(&mut v, 0.5)
     };
-    let (inc, fu) = (col(|f| f.incremental_ms), col(|f| f.full_ms));
-    Ok(Dynamic {
+    let full = col(|f| f.full_ms);
+    let texels_full = col(|f| f.texels_full as f64);
+    let over = |x: f64, of: f64| (!changed.is_empty() && of > 0.0).then(|| x / of);
+    let (rects, whole) = (col(|f| f.rects_ms), col(|f| f.whole_faces_ms));
+    let texels = col(|f| f.texels_rects as f64);
+    Dynamic {
         scene: name.to_string(),
         method: Method::SIX_PASS,
         cube_size: size,
         changed_frames: changed.len(),
         faces_incremental_median: col(|f| f64::from(f.faces_incremental)),
-        incremental_ms_median: inc,
-        full_ms_median: fu,
-        ratio: (!changed.is_empty() && fu > 0.0).then(|| inc / fu),
+        texels_rects_median: texels,
+        rects_ms_median: rects,
+        whole_faces_ms_median: whole,
+        full_ms_median: full,
+        ratio: over(rects, full),
+        whole_faces_ratio: over(whole, full),
+        texels_ratio: over(texels, texels_full),
         frames,
-    })
+    }
 }

@@ -74,7 +74,8 @@ pub(crate) fn measure(
             )?;
         }
         if !args.no_dynamic && dynamic::animated(scene) {
-            let d = dynamic::measure(&device, &name, scene, dynamic_size, &plan, &tick)?;
+            let at = (dynamic_size, args.dynamic_from);
+            let d = dynamic::measure(&device, &name, scene, at, &plan, &tick)?;
             record.dynamic.push(d);
         }
     }
@@ -278,6 +279,7 @@ fn new_record(
             full: args.full,
             trace_order: args.trace_order.name().to_owned(),
             dynamic_cube_size,
+            dynamic_from_s: args.dynamic_from,
             refresh: "every-frame (timing); on-change (dynamic)".to_owned(),
         },
         peak_rss_bytes: None,

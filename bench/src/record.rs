@@ -84,6 +84,10 @@ pub struct Settings {
     /// The tracing rungs' build order (`--trace-order`: split or given).
     pub trace_order: String,
     pub dynamic_cube_size: u32,
+    /// Scene time of the dynamic measurement's first frame (`--dynamic-from`); absent in
+    /// records from before it could be chosen (0).
+    #[serde(default)]
+    pub dynamic_from_s: f64,
     pub refresh: String,
 }
 
@@ -346,18 +350,25 @@ pub struct RungNotRun {
     pub reason: String,
 }
 
-/// One frame of an animated scene: faces re-rendered and submit-to-fence times of both updates.
+/// One frame of an animated scene under the three updates: faces and texels re-rendered and
+/// submit-to-fence times.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DynamicFrame {
     pub time_s: f64,
+    /// Faces the incremental updates re-render (the same for rectangles and whole faces).
     pub faces_incremental: u32,
     pub faces_full: u32,
-    pub incremental_ms: f64,
+    /// Texels the dirty rectangles re-render (a full update: six faces' worth).
+    pub texels_rects: u64,
+    pub texels_full: u64,
+    pub rects_ms: f64,
+    pub whole_faces_ms: f64,
     pub full_ms: f64,
 }
 
-/// Incremental against full updates of one animated scene.
+/// Incremental against full updates of one animated scene: only the dirty rectangles of the
+/// dirty faces, the dirty faces whole, all six faces.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Dynamic {
@@ -365,13 +376,20 @@ pub struct Dynamic {
     pub method: Method,
     pub cube_size: u32,
     pub frames: Vec<DynamicFrame>,
-    /// Over the frames where something moved (full update ran): medians and the ratio of the
-    /// medians, incremental over full.
+    /// Over the frames where something moved (full update ran): medians, and the ratios of
+    /// the medians to the full update's.
     pub changed_frames: usize,
     pub faces_incremental_median: f64,
-    pub incremental_ms_median: f64,
+    pub texels_rects_median: f64,
+    pub rects_ms_median: f64,
+    pub whole_faces_ms_median: f64,
     pub full_ms_median: f64,
+    /// Rectangles over full (time).
     pub ratio: Option<f64>,
+    /// Whole dirty faces over full (time).
+    pub whole_faces_ratio: Option<f64>,
+    /// Rectangles' texels over full's.
+    pub texels_ratio: Option<f64>,
 }
 
 /// Largest `--baseline` record read (bytes): the full sweep's record is well under 1 MiB.

@@ -18,14 +18,18 @@ pub fn lines(record: &Record) -> Vec<String> {
             ladder(record, scene, size, &mut out);
         }
         for d in record.dynamic.iter().filter(|d| &d.scene == scene) {
+            let ratio = |r: Option<f64>| r.map_or("n/a".into(), |r| format!("{r:.2}x"));
             out.push(format!(
-                "  dynamic (six-pass, {}², {} frames with motion): incremental {:.2} ms ({} faces median) vs full {:.2} ms = {}",
+                "  dynamic (six-pass, {}², {} frames with motion): dirty rectangles {:.2} ms = {} ({} texels), whole dirty faces {:.2} ms = {} ({} faces), full {:.2} ms (medians)",
                 d.cube_size,
                 d.changed_frames,
-                d.incremental_ms_median,
+                d.rects_ms_median,
+                ratio(d.ratio),
+                d.texels_rects_median,
+                d.whole_faces_ms_median,
+                ratio(d.whole_faces_ratio),
                 d.faces_incremental_median,
                 d.full_ms_median,
-                d.ratio.map_or("n/a".into(), |r| format!("{r:.2}x"))
             ));
         }
     }

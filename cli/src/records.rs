@@ -40,6 +40,7 @@ pub struct RenderSettings {
     pub frames: u32,
     pub methods: Vec<Method>,
     pub full_updates: bool,
+    pub whole_faces: bool,
     pub lookup: Lookup,
     /// The order the tracing lookups handed their acceleration-structure builds (`split` or
     /// `given`; only they read it).

@@ -85,6 +85,10 @@ pub struct Args {
     /// moved object touches.
     #[arg(long)]
     full_updates: bool,
+    /// Under `on-change`, re-render a dirty face whole instead of only its dirty rectangles
+    /// (the pixels a moved object's old or new bounds project to; six-pass only).
+    #[arg(long)]
+    whole_faces: bool,
     /// The order the tracing lookups (ray-query, distance-exact) hand their acceleration-
     /// structure builds: `split` (spatially coherent, the default) or `given` (the scene's own,
     /// to measure what the order is worth on a driver that keeps it: docs/accuracy.md).
@@ -181,6 +185,7 @@ fn render_method(
         cube_size: args.cube_size,
         method,
         full_updates: args.full_updates,
+        whole_faces: args.whole_faces,
         lookup: Some(lookup),
         // Range and ids through the cube: only when asked for, so timings never pay (the
         // traced ray map of ray-query needs none).
@@ -235,6 +240,7 @@ fn render_record(
             frames: args.frames,
             methods,
             full_updates: args.full_updates,
+            whole_faces: args.whole_faces,
             lookup: args.lookup.unwrap_or(scene.mirror.lookup),
             trace_order: args.trace_order.name(),
             distance_steps: scene.mirror.distance_steps,

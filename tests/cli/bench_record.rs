@@ -107,12 +107,18 @@ fn check_dynamic(r: &serde_json::Value) {
     // 2 pi / 8 * 1/6 = 0.13 rad of +X, so its bounding box (x >= 2.67 m, |y| <= 0.3 m,
     // |z| <= 0.69 m) lies in the +X face's frustum alone (|y|, |z| < x) at both its old and
     // its new place: an incremental update renders one face where a full one renders six.
+    // On that 64² face the box spans |ndc y| <= 0.3 / 2.67 and |ndc x| <= 0.69 / 2.67: with
+    // the one-pixel margin and rounding out, at most 11 rows by 21 columns; the ball itself
+    // (0.6 m wide, at most 3.3 m away) spans at least 5 by 5.
     for f in frames {
         assert_eq!(
             (&f["faces_incremental"], &f["faces_full"]),
             (&1.into(), &6.into()),
             "{f}"
         );
+        let texels = f["texels_rects"].as_u64().unwrap();
+        assert!((25..=11 * 21).contains(&texels), "{f}");
+        assert_eq!(f["texels_full"], 6 * 64 * 64);
     }
     assert_eq!(thesis["faces_incremental_median"], 1.0);
 }

@@ -226,6 +226,54 @@ fn a_frame_sequence_is_numbered() {
     std::fs::remove_dir_all(&out).unwrap();
 }
 
+/// `render.json` says what each update re-rendered: on thesis-room (on-change; the ball
+/// orbits 3 m off on +X, 0.6 m wide) a frame after the first re-renders one 64² face, and of
+/// it only the ball's old and new places, at least 5 × 5 and at most 11 × 21 texels (the
+/// bounds `check_dynamic` derives); with `--whole-faces`, the whole face.
+#[test]
+fn render_reports_the_dirty_rectangles_it_re_renders() {
+    let scene = root().join("scenes/thesis-room.toml");
+    for (flag, whole) in [(None, false), (Some("--whole-faces"), true)] {
+        let out = temp_dir("rects");
+        let mut args = vec!["render", scene.to_str().unwrap(), "--out"];
+        args.push(out.to_str().unwrap());
+        args.extend([
+            "--cube-size",
+            "64",
+            "--frames",
+            "3",
+            "--fps",
+            "30",
+            "--validate",
+        ]);
+        args.extend(flag);
+        let result = specchio(&args);
+        assert!(
+            result.status.success(),
+            "{}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+        let text = std::fs::read_to_string(out.join("render.json")).unwrap();
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(json["settings"]["whole_faces"], whole);
+        let frames = json["runs"][0]["frames"].as_array().unwrap();
+        assert_eq!(
+            frames[0]["texels_rendered"],
+            6 * 64 * 64,
+            "the first fill is whole"
+        );
+        for f in &frames[1..] {
+            assert_eq!(f["faces_rendered"], 1, "{f}");
+            let texels = f["texels_rendered"].as_u64().unwrap();
+            match whole {
+                true => assert_eq!(texels, 64 * 64),
+                false => assert!((25..=11 * 21).contains(&texels), "{texels}"),
+            }
+        }
+        std::fs::remove_dir_all(&out).unwrap();
+    }
+}
+
 #[test]
 fn method_all_writes_each_usable_method_and_explains_the_others() {
     let (out, json) = render_six_colour("all", &["--cube-size", "8", "--method", "all"]);

@@ -171,9 +171,10 @@ fn every_method_writes_six_pass_ids() {
     }
 }
 
-/// Under `on-change`, re-rendering only the faces a moved object touches keeps the id cube
-/// (and the depth cube) consistent with a full update, frame after frame: the ids and ranges
-/// equal those of full updates exactly (thesis-room, whose ball orbits, with every method).
+/// Under `on-change`, re-rendering only the faces a moved object touches (six-pass: only their
+/// dirty rectangles) keeps the id cube (and the depth cube) consistent with a full update,
+/// frame after frame: the ids and ranges equal those of full updates exactly (thesis-room,
+/// whose ball orbits, with every method).
 #[test]
 fn incremental_updates_keep_the_id_cube_exact() {
     let mut s = scene("scenes/thesis-room.toml");

@@ -195,6 +195,19 @@ impl Frustum {
         Self { planes }
     }
 
+    /// The frustum through NDC rectangle `a..b` (left-top, right-bottom) of pinhole view `v`:
+    /// inside, `a.x <= x / (z tan_x) <= b.x` and likewise in y, between the near and far planes.
+    pub fn sub(v: &ViewBasis, near: f32, far: f32, a: glam::Vec2, b: glam::Vec2) -> Self {
+        let mut planes = Frustum::new(v, near, far).planes;
+        let side = |n: Vec3| (n, -n.dot(v.eye));
+        let f = v.forward;
+        planes[0] = side(v.right - f * (a.x * v.tan_x));
+        planes[1] = side(f * (b.x * v.tan_x) - v.right);
+        planes[2] = side(v.down - f * (a.y * v.tan_y));
+        planes[3] = side(f * (b.y * v.tan_y) - v.down);
+        Self { planes }
+    }
+
     /// False only when the box is certainly outside (a plane has all eight corners behind it).
     pub fn intersects_aabb(&self, min: Vec3, max: Vec3) -> bool {
         self.planes.iter().all(|&(n, d)| {

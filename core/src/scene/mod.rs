@@ -25,6 +25,7 @@ pub(crate) mod generate;
 pub mod imaging;
 mod load;
 mod mesh;
+pub mod pixel_rect;
 pub mod state;
 mod texture;
 

@@ -97,15 +97,19 @@ impl CubeFill {
             q.end(cmd, 0);
         }
         for f in 0..6 {
-            report.draws_per_face[f] = plan.visible[f].len() as u32;
+            report.draws_per_face[f] = match &plan.patches[f][..] {
+                [] => plan.visible[f].len(),
+                patches => patches.iter().map(|p| p.visible.len()).sum(),
+            } as u32;
         }
+        report.texels_rendered = plan.texels(f.cube.size);
         report.faces_rendered = plan.dirty.count_ones();
         report.face_mask = plan.dirty;
         if let Some(q) = &f.queries.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, TS_FILL);
         }
         graph::record(device, cmd, &graph.uses(&read_uses(f, ids)));
-        super::mips::record((device, graph), cmd, f.cube, plan.dirty);
+        super::mips::record((device, graph), cmd, f.cube, plan);
         if let Some(q) = &f.queries.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);
         }

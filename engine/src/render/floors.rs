@@ -66,7 +66,9 @@ impl Renderer {
         self.acquire_slot()?;
         let state = SceneState::at(&self.scene, t_s);
         let (views, _) = self.write_frame_buffers(&state)?;
-        let plan = self.frame_parts().plan_cube(&views, 0x3F);
+        let plan = self
+            .frame_parts()
+            .plan_cube(&views, super::refresh::Dirty::faces(0x3F));
         let cmd = self.begin_frame()?;
         let mut report = FrameReport {
             frame,
@@ -125,7 +127,7 @@ impl Renderer {
     pub(super) fn record_floor(&self, rec: &CubeRecorder<'_>, plan: &CubePlan, floor: Floor) {
         let pipelines = self.floor_pipelines.as_ref().expect("made by render_floor");
         for face in plan.faces() {
-            rec.begin_face(face);
+            rec.begin_face(face, &[]);
             let push = Push {
                 view_index: face,
                 ..Push::default()

@@ -20,6 +20,13 @@ pub struct RenderOptions {
     /// Off: any change re-renders all six (the reference the incremental update is tested
     /// against).
     pub full_updates: bool,
+    /// A dirty face re-renders whole instead of only its dirty rectangles (the pixels a
+    /// moved object's old or new bounds project to). Multiview always re-renders whole
+    /// faces (all six).
+    pub whole_faces: bool,
+    /// How six-pass draws a face's dirty rectangles: the cheaper way by default (the
+    /// one-scope methods draw them under one box).
+    pub patching: methods::Patching,
     /// Replaces the scene's refresh policy (benchmarks force `every-frame`).
     pub refresh: Option<RefreshPolicy>,
     /// Replaces the mirror's lookup mode (`--lookup`).
@@ -82,6 +89,9 @@ pub struct FrameReport {
     pub faces_rendered: u32,
     /// Bit f set: face f was re-rendered this frame.
     pub face_mask: u8,
+    /// Texels re-rendered: the dirty faces' area, or their dirty rectangles' where the update
+    /// had them.
+    pub texels_rendered: u64,
     /// Objects (walls included) drawn into each face; 0 for a face not re-rendered.
     pub draws_per_face: [u32; 6],
     pub cpu_record_ms: f64,

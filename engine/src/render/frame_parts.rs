@@ -9,8 +9,9 @@ use glam::Vec3;
 
 use super::draw::{DrawOrder, Facing, CUBE_FRONT, VIEW_FRONT};
 use super::lookups::LookupPass;
-use super::methods::{CubePlan, FillParts};
+use super::methods::{CubePlan, FillParts, Patch};
 use super::queries::FrameQueries;
+use super::refresh::Dirty;
 use super::scene_draw::SceneDraw;
 use super::targets::CubeTarget;
 use super::Renderer;
@@ -46,20 +47,38 @@ impl Renderer {
 }
 
 impl<'a> FrameParts<'a> {
-    /// Culls every dirty face against its frustum.
-    pub fn plan_cube(&self, views: &[ViewBasis], dirty: u8) -> CubePlan {
+    /// Culls every dirty face against its frustum, and each of its dirty rectangles against
+    /// the rectangle's: a face's `visible` is then what meets some rectangle, the patches say
+    /// what meets which.
+    pub fn plan_cube(&self, views: &[ViewBasis], dirty: Dirty) -> CubePlan {
         let mut plan = CubePlan {
-            dirty,
+            dirty: dirty.mask,
             order: self.drawn.order.clone(),
             ..Default::default()
         };
+        let (near, far) = (self.scene.cube.near_m, self.scene.cube.far_m);
         for f in plan.faces().collect::<Vec<_>>() {
-            let frustum = Frustum::new(
-                &views[f as usize],
-                self.scene.cube.near_m,
-                self.scene.cube.far_m,
-            );
-            plan.visible[f as usize] = self.drawn.visible(&frustum);
+            let f = f as usize;
+            let visible = self.drawn.visible(&Frustum::new(&views[f], near, far));
+            let frusta: Vec<Frustum> = (dirty.rects[f].iter())
+                .map(|r| Frustum::of_rect(&views[f], near, far, self.cube.size, r))
+                .collect();
+            let meets = |k: usize, i: u32| {
+                let (lo, hi) = self.drawn.bounds[i as usize];
+                frusta[k].intersects_aabb(lo, hi)
+            };
+            plan.patches[f] = Patch::cover(&dirty.rects[f], &visible, meets, dirty.patching);
+            plan.visible[f] = match &plan.patches[f][..] {
+                [] => visible,
+                // What the patches draw: the drawables that meet some dirty rectangle.
+                patches => {
+                    let drawn: std::collections::HashSet<u32> = patches
+                        .iter()
+                        .flat_map(|p| p.visible.iter().copied())
+                        .collect();
+                    visible.into_iter().filter(|i| drawn.contains(i)).collect()
+                }
+            };
         }
         plan
     }

@@ -45,6 +45,7 @@ use std::time::Instant;
 use ash::vk;
 use glam::Vec3;
 
+use refresh::Dirty;
 use resources::SceneResources;
 use targets::{CubeTarget, ViewTargets};
 
@@ -183,7 +184,11 @@ impl Renderer {
             cube,
             resources,
             submitter,
-            refresh: refresh::Refresh::new(options.full_updates),
+            refresh: refresh::Refresh::new(
+                options.full_updates,
+                options.whole_faces,
+                options.patching,
+            ),
             drawn: draw::DrawOrder::default(),
             scene,
             device: Arc::clone(device),
@@ -237,9 +242,10 @@ impl Renderer {
         }
         let dirty = match fill_cube {
             true => self.faces_to_fill(frame, &state, &views),
-            false => 0,
+            false => Dirty::default(),
         };
         let plan = self.frame_parts().plan_cube(&views, dirty);
+        let dirty = plan.dirty;
         self.prepare_fill(&plan)?;
         let copies = self.plan_copies(readback, display);
         self.grow_readback(&copies)?;
@@ -310,16 +316,21 @@ impl Renderer {
         lookups::plugin(self.mirror.lookup()).uses_cube() || readback.cube || rays_read_cube
     }
 
-    /// The faces this frame re-renders (the refresh policy's choice), counted.
-    fn faces_to_fill(&mut self, frame: u64, state: &SceneState, views: &[ViewBasis]) -> u8 {
+    /// What this frame re-renders (the refresh policy's choice), counted.
+    fn faces_to_fill(&mut self, frame: u64, state: &SceneState, views: &[ViewBasis]) -> Dirty {
         let drawables = &self.resources.drawables;
-        let mut dirty = (self.refresh).dirty_faces(&self.scene, drawables, frame, state, views);
-        if self.method().layout() == methods::CubeLayout::Multiview && dirty != 0 {
+        let at = (frame, self.cube.size);
+        let mut dirty = (self.refresh).dirty(&self.scene, drawables, at, state, views);
+        match self.method().layout() {
             // A multiview pass clears and draws all six views: cull for all six, or objects
             // seen only in a clean face would vanish from it.
-            dirty = 0x3F;
+            methods::CubeLayout::Multiview if dirty.mask != 0 => dirty = Dirty::faces(0x3F),
+            methods::CubeLayout::Multiview => dirty = Dirty::faces(dirty.mask),
+            // One scope over six layers has one scissor for every face: one box a face.
+            methods::CubeLayout::Layered => dirty.patching = methods::Patching::OneBox,
+            methods::CubeLayout::PerFace => {}
         }
-        self.refresh.count(dirty);
+        self.refresh.count(dirty.mask);
         dirty
     }
 

@@ -1,9 +1,11 @@
 //! The cube's refresh, one part of the renderer: what the cube map shows, which faces a
 //! frame must re-render by the scene's refresh policy, and the counts of updates and skips.
 
+use super::methods::Patching;
 use super::resources::Drawable;
 use super::RefreshCounters;
 use crate::scene::camera::{self, ViewBasis};
+use crate::scene::pixel_rect::{self, PixelRect};
 use crate::scene::state::SceneState;
 use crate::scene::{RefreshPolicy, Scene};
 
@@ -13,14 +15,46 @@ pub(super) struct Refresh {
     pub counters: RefreshCounters,
     /// Every update re-renders all six faces (the benchmark's full updates).
     full_updates: bool,
+    /// A dirty face re-renders whole, not only its dirty rectangles.
+    whole_faces: bool,
+    /// How a per-face method draws dirty rectangles.
+    patching: Patching,
 }
 
+/// What an update re-renders: the dirty faces and, per face, the disjoint rectangles of
+/// pixels that may have changed (empty: the whole face).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Dirty {
+    /// Bit f set: face f is re-rendered.
+    pub mask: u8,
+    pub rects: [Vec<PixelRect>; 6],
+    /// How the rectangles are drawn.
+    pub patching: Patching,
+}
+
+impl Dirty {
+    /// Faces `mask`, each whole.
+    pub fn faces(mask: u8) -> Self {
+        Self {
+            mask,
+            ..Self::default()
+        }
+    }
+}
+
+/// Above this many rectangles a face re-renders their bounding box instead: each rectangle
+/// costs a scissored pass over what its frustum holds, and past a few dozen the passes cost
+/// more than the pixels they save.
+const MAX_RECTS_PER_FACE: usize = 32;
+
 impl Refresh {
-    pub fn new(full_updates: bool) -> Self {
+    pub fn new(full_updates: bool, whole_faces: bool, patching: Patching) -> Self {
         Self {
             shown: None,
             counters: RefreshCounters::default(),
             full_updates,
+            whole_faces,
+            patching,
         }
     }
 
@@ -53,66 +87,97 @@ impl Refresh {
         }
     }
 
-    /// Which faces must be re-rendered this frame (bit f: face f), by the refresh policy.
-    pub fn dirty_faces(
+    /// What must be re-rendered this frame, by the refresh policy: faces, and within them
+    /// the rectangles of `size` × `size` pixels that may have changed.
+    pub fn dirty(
         &self,
         scene: &Scene,
         drawables: &[Drawable],
-        frame: u64,
+        (frame, size): (u64, u32),
         state: &SceneState,
         views: &[ViewBasis],
-    ) -> u8 {
+    ) -> Dirty {
         const ALL: u8 = 0x3F;
         let Some(old) = &self.shown else {
-            return ALL;
+            return Dirty::faces(ALL);
         };
         match scene.refresh {
-            RefreshPolicy::EveryFrame => ALL,
-            RefreshPolicy::EveryN(n) => {
-                if frame % u64::from(n.max(1)) == 0 {
-                    ALL
-                } else {
-                    0
-                }
-            }
-            RefreshPolicy::OnChange if !state.cube_differs(old) => 0,
+            RefreshPolicy::EveryFrame => Dirty::faces(ALL),
+            RefreshPolicy::EveryN(n) => match frame % u64::from(n.max(1)) {
+                0 => Dirty::faces(ALL),
+                _ => Dirty::default(),
+            },
+            RefreshPolicy::OnChange if !state.cube_differs(old) => Dirty::default(),
             // The mirror moved: every direction changed.
             RefreshPolicy::OnChange
                 if self.full_updates || old.mirror_center != state.mirror_center =>
             {
-                ALL
+                Dirty::faces(ALL)
             }
             RefreshPolicy::OnChange => {
-                // Only objects moved: the faces that see where a moved object was or now is.
-                let frusta: Vec<camera::Frustum> = views[..6]
-                    .iter()
-                    .map(|v| camera::Frustum::new(v, scene.cube.near_m, scene.cube.far_m))
-                    .collect();
-                let mut mask = 0u8;
-                for (i, (a, b)) in old
-                    .object_positions
-                    .iter()
-                    .zip(&state.object_positions)
-                    .enumerate()
-                {
-                    if a == b {
-                        continue;
-                    }
-                    let d = &drawables[6 + i];
-                    for m in [
-                        old.object_to_render(scene, i),
-                        state.object_to_render(scene, i),
-                    ] {
-                        let (lo, hi) = camera::transform_aabb(&m, d.bounds_min, d.bounds_max);
-                        for (f, fr) in frusta.iter().enumerate() {
-                            if fr.intersects_aabb(lo, hi) {
-                                mask |= 1 << f;
-                            }
-                        }
-                    }
+                let moved = moved_bounds(scene, drawables, old, state);
+                let mut dirty = dirty_rects(scene, views, size, &moved);
+                dirty.patching = self.patching;
+                if self.whole_faces {
+                    dirty.rects = Default::default();
                 }
-                mask
+                dirty
             }
         }
     }
+}
+
+/// The render-space bounds of every object that moved from `old` to `new`, where it was and
+/// where it is.
+fn moved_bounds(
+    scene: &Scene,
+    drawables: &[Drawable],
+    old: &SceneState,
+    new: &SceneState,
+) -> Vec<(glam::Vec3, glam::Vec3)> {
+    let moved = (old.object_positions.iter().zip(&new.object_positions))
+        .enumerate()
+        .filter(|(_, (a, b))| a != b);
+    moved
+        .flat_map(|(i, _)| {
+            let d = &drawables[6 + i];
+            [old, new].map(|s| {
+                let m = s.object_to_render(scene, i);
+                camera::transform_aabb(&m, d.bounds_min, d.bounds_max)
+            })
+        })
+        .collect()
+}
+
+/// Only objects moved: the faces that see where one was or now is, and in each the pixels
+/// those bounds project to, merged into disjoint rectangles (a face with more than
+/// [`MAX_RECTS_PER_FACE`] gets their bounding box; one whose rectangles cover it whole gets
+/// no rectangles).
+fn dirty_rects(
+    scene: &Scene,
+    views: &[ViewBasis],
+    size: u32,
+    moved: &[(glam::Vec3, glam::Vec3)],
+) -> Dirty {
+    let (near, far) = (scene.cube.near_m, scene.cube.far_m);
+    let mut dirty = Dirty::default();
+    for (f, view) in views[..6].iter().enumerate() {
+        let frustum = camera::Frustum::new(view, near, far);
+        let rects: Vec<PixelRect> = (moved.iter())
+            .filter(|&&(lo, hi)| frustum.intersects_aabb(lo, hi))
+            .filter_map(|&(lo, hi)| pixel_rect::box_rect(view, near, size, lo, hi))
+            .collect();
+        if rects.is_empty() {
+            continue;
+        }
+        dirty.mask |= 1 << f;
+        let mut rects = pixel_rect::merge(rects);
+        if rects.len() > MAX_RECTS_PER_FACE {
+            rects = vec![rects.iter().fold(rects[0], |a, b| a.union(b))];
+        }
+        if rects != [PixelRect::whole(size)] {
+            dirty.rects[f] = rects;
+        }
+    }
+    dirty
 }

@@ -10,6 +10,7 @@ use super::draw::{Attachments, Facing, CLEAR_COLOR, CLEAR_DEPTH, CLEAR_ID};
 use super::gpu::Push;
 use super::resources::SceneResources;
 use super::Renderer;
+use crate::scene::pixel_rect::PixelRect;
 use crate::vk::device::Device;
 use crate::vk::pipeline::{Pipeline, PipelineLayout};
 
@@ -178,9 +179,9 @@ impl SceneDraw<'_> {
         unsafe { self.device.raw.cmd_end_rendering(cmd) };
     }
 
-    /// Inside a layered rendering scope: clears colour and depth of the faces in `mask`, and
-    /// with `ids` the id cube (attachment 1) too.
-    pub fn clear_faces(&self, cmd: vk::CommandBuffer, mask: u8, size: u32, ids: bool) {
+    /// Inside a rendering scope: clears colour and depth of each (layer, rectangle), and with
+    /// `ids` the id cube (attachment 1) too.
+    pub fn clear_rects(&self, cmd: vk::CommandBuffer, rects: &[(u32, PixelRect)], ids: bool) {
         let all = [
             vk::ClearAttachment {
                 aspect_mask: vk::ImageAspectFlags::COLOR,
@@ -199,26 +200,25 @@ impl SceneDraw<'_> {
             },
         ];
         let attachments = &all[..if ids { 3 } else { 2 }];
-        let rects: Vec<vk::ClearRect> = (0..6u32)
-            .filter(|f| mask & (1 << f) != 0)
-            .map(|f| vk::ClearRect {
-                rect: vk::Rect2D {
-                    offset: vk::Offset2D::default(),
-                    extent: vk::Extent2D {
-                        width: size,
-                        height: size,
-                    },
-                },
-                base_array_layer: f,
+        let rects: Vec<vk::ClearRect> = (rects.iter())
+            .map(|&(layer, r)| vk::ClearRect {
+                rect: rect2d(&r),
+                base_array_layer: layer,
                 layer_count: 1,
             })
             .collect();
-        // SAFETY: inside a rendering scope with 6 layers; the rects lie within it.
+        // SAFETY: inside a rendering scope holding the layers; the rects lie within it.
         unsafe {
             self.device
                 .raw
                 .cmd_clear_attachments(cmd, attachments, &rects)
         };
+    }
+
+    /// Draws that follow touch only the pixels of `r`.
+    pub fn set_scissor(&self, cmd: vk::CommandBuffer, r: &PixelRect) {
+        // SAFETY: recording; the scissor is dynamic in every pipeline.
+        unsafe { self.device.raw.cmd_set_scissor(cmd, 0, &[rect2d(r)]) };
     }
 
     pub fn set_viewport(&self, cmd: vk::CommandBuffer, x: f32, y: f32, w: f32, h: f32) {
@@ -245,5 +245,19 @@ impl SceneDraw<'_> {
             self.device.raw.cmd_set_viewport(cmd, 0, &[vp]);
             self.device.raw.cmd_set_scissor(cmd, 0, &[scissor]);
         }
+    }
+}
+
+/// `r` as Vulkan's rectangle.
+fn rect2d(r: &PixelRect) -> vk::Rect2D {
+    vk::Rect2D {
+        offset: vk::Offset2D {
+            x: r.x0 as i32,
+            y: r.y0 as i32,
+        },
+        extent: vk::Extent2D {
+            width: r.width(),
+            height: r.height(),
+        },
     }
 }

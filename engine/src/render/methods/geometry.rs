@@ -106,7 +106,7 @@ struct GeometryFill {
 
 impl FillPass for GeometryFill {
     fn record(&self, rec: &CubeRecorder<'_>, plan: &CubePlan) {
-        rec.begin_cube(plan.dirty);
+        rec.begin_cube(plan);
         let push = Push {
             face_mask: u32::from(plan.dirty),
             ..Push::default()

@@ -87,7 +87,7 @@ impl FillPass for InstancedFill {
     }
 
     fn record(&self, rec: &CubeRecorder<'_>, plan: &CubePlan) {
-        rec.begin_cube(plan.dirty);
+        rec.begin_cube(plan);
         if !self.runs.is_empty() {
             let buffer = &self.indirect;
             rec.bind(&self.pipeline);

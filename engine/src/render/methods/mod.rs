@@ -21,7 +21,7 @@ use crate::vk::device::{DeviceInfo, Limit, OptionalFeatures};
 use crate::vk::GpuError;
 
 pub use multiview::{view_mask_leak, ViewMaskLeak};
-pub use plan::CubePlan;
+pub use plan::{CubePlan, Patch, Patching};
 pub(in crate::render) use recorder::FillParts;
 pub use recorder::{CubeRecorder, MethodContext, Prepare};
 
@@ -88,7 +88,8 @@ pub enum CubeLayout {
     /// its own statistics query and timestamp.
     PerFace,
     /// One rendering scope over a six-layer view; the shaders pick each primitive's face
-    /// (`gl_Layer`). A partial update clears only the dirty layers.
+    /// (`gl_Layer`). A partial update clears only the dirty layers' dirty rectangles and
+    /// draws under one scissor, their union over the faces.
     Layered,
     /// One multiview scope with view mask `0x3F`; the driver replays each draw per view. A
     /// pipeline's view mask is fixed, so every update re-renders all six faces.

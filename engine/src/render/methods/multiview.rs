@@ -69,7 +69,7 @@ struct MultiviewFill {
 
 impl FillPass for MultiviewFill {
     fn record(&self, rec: &CubeRecorder<'_>, plan: &CubePlan) {
-        rec.begin_cube(0x3F);
+        rec.begin_cube(plan);
         rec.draw_objects(&self.pipeline, Push::default(), &plan.union());
         rec.end_cube();
         reset_view_mask(rec.device(), rec.cmd());

@@ -5,13 +5,14 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::CubeLayout;
+use super::{CubeLayout, CubePlan, Patch};
 use crate::render::draw::{Attachments, Facing, CUBE_FRONT};
 use crate::render::gpu::Push;
 use crate::render::queries::FrameQueries;
 use crate::render::resources::Drawable;
 use crate::render::scene_draw::SceneDraw;
 use crate::render::targets::CubeTarget;
+use crate::scene::pixel_rect::PixelRect;
 use crate::scene::Scene;
 use crate::vk::commands::Submitter;
 use crate::vk::device::Device;
@@ -170,7 +171,17 @@ impl<'a> CubeRecorder<'a> {
         &self,
         pick: impl Fn(&crate::render::targets::IdCube) -> vk::ImageView,
     ) -> Option<vk::ImageView> {
-        self.parts.cube.ids.as_ref().filter(|_| self.ids).map(pick)
+        self.parts
+            .cube
+            .ids
+            .as_ref()
+            .filter(|_| self.writes_ids())
+            .map(pick)
+    }
+
+    /// Whether this fill writes the id cube.
+    fn writes_ids(&self) -> bool {
+        self.ids && self.parts.cube.ids.is_some()
     }
 
     pub fn device(&self) -> &Device {
@@ -185,9 +196,10 @@ impl<'a> CubeRecorder<'a> {
         self.parts.cube.size
     }
 
-    /// Opens a rendering scope on face `face` alone, cleared, with its viewport (and, for a
-    /// per-face method, its statistics query).
-    pub fn begin_face(&self, face: u32) {
+    /// Opens a rendering scope on face `face` alone with its viewport (and, for a per-face
+    /// method, its statistics query), and clears what it re-renders: the whole face, or with
+    /// `patches` only their rectangles, the rest of the face kept as it was.
+    pub fn begin_face(&self, face: u32, patches: &[Patch]) {
         let dev = self.device();
         let name = crate::scene::camera::FACE_NAMES[face as usize];
         dev.begin_label(self.cmd, &format!("face {name}"));
@@ -204,13 +216,26 @@ impl<'a> CubeRecorder<'a> {
                 size: [size, size],
                 layers: 1,
                 view_mask: 0,
-                clear: true,
+                clear: patches.is_empty(),
                 store_depth: true,
             },
         );
+        if !patches.is_empty() {
+            let rects: Vec<_> = patches
+                .iter()
+                .flat_map(|p| &p.rects)
+                .map(|&r| (0, r))
+                .collect();
+            (self.parts.draw).clear_rects(self.cmd, &rects, self.writes_ids());
+        }
         self.parts
             .draw
             .set_viewport(self.cmd, 0.0, 0.0, size as f32, size as f32);
+    }
+
+    /// Draws that follow touch only `patch`'s scissor.
+    pub fn scissor(&self, patch: &Patch) {
+        self.parts.draw.set_scissor(self.cmd, &patch.scissor);
     }
 
     /// Closes the scope opened by [`Self::begin_face`].
@@ -230,12 +255,16 @@ impl<'a> CubeRecorder<'a> {
         }
     }
 
-    /// Opens the one rendering scope of a one-pass method over all six faces and clears the
-    /// faces in `dirty` (a multiview scope clears all six: it re-renders them all).
-    pub fn begin_cube(&self, dirty: u8) {
+    /// Opens the one rendering scope of a one-pass method over all six faces and clears what
+    /// `plan` re-renders: its dirty faces, or their dirty rectangles, the draws then scissored
+    /// to their union (a multiview scope clears all six: it re-renders them all).
+    pub fn begin_cube(&self, plan: &CubePlan) {
         let size = self.face_size();
         let view_mask = self.layout.view_mask();
-        let all = view_mask != 0 || dirty == 0x3F;
+        let scissor = plan.scissor().filter(|_| view_mask == 0);
+        // Cleared whole by the scope's load op only when every face is re-rendered whole.
+        let whole = plan.faces().all(|f| plan.patches[f as usize].is_empty());
+        let all = view_mask != 0 || (plan.dirty == 0x3F && whole);
         self.parts.draw.begin_rendering(
             self.cmd,
             &Attachments {
@@ -250,11 +279,20 @@ impl<'a> CubeRecorder<'a> {
             },
         );
         if !all {
-            self.parts.draw.clear_faces(self.cmd, dirty, size, self.ids);
+            let rects: Vec<(u32, PixelRect)> = (plan.faces())
+                .flat_map(|f| match plan.dirty_rects(f as usize)[..] {
+                    [] => vec![(f, PixelRect::whole(size))],
+                    ref rects => rects.iter().map(|&r| (f, r)).collect(),
+                })
+                .collect();
+            (self.parts.draw).clear_rects(self.cmd, &rects, self.writes_ids());
         }
         self.parts
             .draw
             .set_viewport(self.cmd, 0.0, 0.0, size as f32, size as f32);
+        if let Some(s) = scissor {
+            self.parts.draw.set_scissor(self.cmd, &s);
+        }
     }
 
     /// Closes the scope opened by [`Self::begin_cube`].

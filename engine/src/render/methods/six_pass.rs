@@ -1,5 +1,6 @@
 //! Six-pass: one rendering scope per dirty face, drawing what that face's frustum holds (the
-//! thesis's method, and the reference every other method must match bit for bit).
+//! thesis's method, and the reference every other method must match bit for bit); on an
+//! incremental update, only the face's dirty rectangles, each what its own frustum holds.
 
 use ash::vk;
 
@@ -42,12 +43,20 @@ impl FillPass for SixPassFill {
     fn record(&self, rec: &CubeRecorder<'_>, plan: &CubePlan) {
         for face in 0..6u32 {
             if plan.dirty & (1 << face) != 0 {
-                rec.begin_face(face);
+                let patches = &plan.patches[face as usize];
+                rec.begin_face(face, patches);
                 let push = Push {
                     view_index: face,
                     ..Push::default()
                 };
-                rec.draw_objects(&self.pipeline, push, &plan.visible[face as usize]);
+                if patches.is_empty() {
+                    rec.draw_objects(&self.pipeline, push, &plan.visible[face as usize]);
+                }
+                // Each dirty rectangle: what its frustum holds, scissored to it.
+                for patch in patches {
+                    rec.scissor(patch);
+                    rec.draw_objects(&self.pipeline, push, &patch.visible);
+                }
                 rec.end_face(face);
             }
             rec.face_timestamp(face);

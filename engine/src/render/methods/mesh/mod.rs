@@ -227,7 +227,7 @@ impl FillPass for MeshFill {
     }
 
     fn record(&self, rec: &CubeRecorder<'_>, plan: &CubePlan) {
-        rec.begin_cube(plan.dirty);
+        rec.begin_cube(plan);
         if !self.runs.is_empty() {
             rec.bind(&self.pipeline);
             let (dev, cmd) = (rec.device(), rec.cmd());
@@ -407,6 +407,7 @@ mod tests {
             dirty: 0b1_0001,
             visible: [vec![2], vec![], vec![], vec![], vec![2, 0], vec![]],
             order: vec![2, 0, 1],
+            ..Default::default()
         };
         let (draws, runs) = meshlet_draws(&drawables(), &plan, &[false, true, true]);
         let want = |meshlet, object, face_mask, cull_back| MeshletDraw {
@@ -441,6 +442,7 @@ mod tests {
             dirty: 0b100,
             visible: [vec![], vec![], vec![1], vec![], vec![], vec![]],
             order: vec![0, 1, 2],
+            ..Default::default()
         };
         let (draws, runs) = meshlet_draws(&drawables(), &plan, &[false, false, true]);
         assert_eq!(
