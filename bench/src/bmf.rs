@@ -19,7 +19,10 @@
 //! - a fill method: `{scene}/{method}/{size}/{device}`, e.g. `many-objects/six-pass/512/llvmpipe`;
 //! - a trade-off rung: `{scene}/rung-{label}/{size}/{device}`, e.g.
 //!   `many-objects/rung-ray-query/512/llvmpipe` (`rung-`, as the gate says `rung ray-query`, keeps
-//!   a rung apart from a method: a rung's cost is a whole sensor frame, not a fill).
+//!   a rung apart from a method: a rung's cost is a whole sensor frame, not a fill);
+//! - an animated scene's on-change updates (`dynamic`): `{scene}/update-{kind}/{size}/{device}`,
+//!   `kind` one of `rects` (dirty rectangles), `whole-faces`, `full`, e.g.
+//!   `many-objects/update-rects/512/llvmpipe`.
 //!
 //! `{scene}` is the scene file's stem (`scenes/many-objects.toml` -> `many-objects`); `{size}` the
 //! face size in pixels; `{device}` the Vulkan device name up to its first ` (`, where drivers put
@@ -36,8 +39,10 @@
 //! | `cube-update-in-flight-ms` | the same updates submitted back to back with `settings.frames_in_flight` in flight: wall time per update (`results[].in_flight_ms`, one value per run) | median | p10, p90 | milliseconds |
 //! | `frame-cost-ms` | a rung's time per sensor frame: cube update plus sensor view on the GPU, plus the lookup's host work; the `cpu` rung's whole frame on the host (`tradeoff[].frame_cost_ms`) | median | p10, p90 | milliseconds |
 //! | `sensor-flip-mean` | a rung's sensor image against the exact reference at t = 0, 1 sample per pixel (`tradeoff[].sensor.flip_mean`) | mean FLIP | - | FLIP, 0 (identical) to 1 |
+//! | `update-ms` | an animated scene's on-change update of that kind, submit to fence, over the frames with motion (`dynamic[].frames[].rects_ms`, `whole_faces_ms`, `full_ms`) | median | p10, p90 | milliseconds |
+//! | `texels-rendered` | the texels that update re-rendered (`texels_rects`, `texels_full`; whole faces: faces × size²) | median | p10, p90 | texels |
 //!
-//! Smaller is better for all four. The times stay in milliseconds, not Bencher's built-in
+//! Smaller is better for all six. The times stay in milliseconds, not Bencher's built-in
 //! `latency` (nanoseconds): the record and every other output are in milliseconds, and the two
 //! times are different quantities (a wall time of the fill alone; GPU timestamps of a whole
 //! sensor frame) that should not share one measure, one plot axis and one threshold.
@@ -62,7 +67,7 @@ use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 use specchio::vk::device::DeviceInfo;
 
-use super::record::{Record, Stats};
+use super::record::{Dynamic, DynamicFrame, Record, Stats};
 
 #[cfg(test)]
 mod tests;
@@ -78,16 +83,22 @@ pub enum Measure {
     FrameCostMs,
     /// A rung's sensor mean FLIP against the exact reference (0 to 1).
     SensorFlipMean,
+    /// An animated scene's on-change update, milliseconds.
+    UpdateMs,
+    /// The texels that update re-rendered.
+    TexelsRendered,
 }
 
 impl Measure {
     /// Every measure (the tests check the documentation's table against it).
     #[cfg(test)]
-    pub const ALL: [Measure; 4] = [
+    pub const ALL: [Measure; 6] = [
         Measure::CubeUpdateMs,
         Measure::CubeUpdateInFlightMs,
         Measure::FrameCostMs,
         Measure::SensorFlipMean,
+        Measure::UpdateMs,
+        Measure::TexelsRendered,
     ];
 
     /// The key under a benchmark, and the measure's slug in Bencher.
@@ -97,6 +108,8 @@ impl Measure {
             Measure::CubeUpdateInFlightMs => "cube-update-in-flight-ms",
             Measure::FrameCostMs => "frame-cost-ms",
             Measure::SensorFlipMean => "sensor-flip-mean",
+            Measure::UpdateMs => "update-ms",
+            Measure::TexelsRendered => "texels-rendered",
         }
     }
 }
@@ -177,9 +190,35 @@ pub fn bmf(record: &Record) -> Result<Bmf> {
             flip.and_then(Metric::single),
         );
     }
+    for d in &record.dynamic {
+        dynamic(&mut out, d, &device)?;
+    }
     let mut bmf = out.bmf;
     bmf.0.retain(|_, measures| !measures.is_empty());
     Ok(bmf)
+}
+
+/// An animated scene's three kinds of update: each one's time and texels per frame with motion.
+fn dynamic(out: &mut Builder, d: &Dynamic, device: &str) -> Result<()> {
+    let moved: Vec<&DynamicFrame> = d.frames.iter().filter(|f| f.faces_full > 0).collect();
+    let face = f64::from(d.cube_size) * f64::from(d.cube_size);
+    type Of = fn(&DynamicFrame, f64) -> (f64, f64);
+    let kinds: [(&str, Of); 3] = [
+        ("rects", |f, _| (f.rects_ms, f.texels_rects as f64)),
+        ("whole-faces", |f, face| {
+            (f.whole_faces_ms, f64::from(f.faces_incremental) * face)
+        }),
+        ("full", |f, _| (f.full_ms, f.texels_full as f64)),
+    ];
+    for (kind, of) in kinds {
+        let name = benchmark_name(&d.scene, &format!("update-{kind}"), d.cube_size, device);
+        let measures = out.claim(name, format!("{} update-{kind}", d.scene))?;
+        let (ms, texels): (Vec<f64>, Vec<f64>) = moved.iter().map(|f| of(f, face)).unzip();
+        let spread = |v: Vec<f64>| Stats::of(v).and_then(Metric::spread);
+        put(measures, Measure::UpdateMs, spread(ms));
+        put(measures, Measure::TexelsRendered, spread(texels));
+    }
+    Ok(())
 }
 
 /// The BMF text: pretty-printed with a final newline, as `--json` writes the record.

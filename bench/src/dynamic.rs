@@ -80,11 +80,11 @@ pub fn measure(
         }
         tick()?;
     }
-    Ok(summary(name, size, frames))
+    Ok(summary(name, (size, from_s), frames))
 }
 
 /// The medians over the frames in which something moved, and their ratios.
-fn summary(name: &str, size: u32, frames: Vec<DynamicFrame>) -> Dynamic {
+fn summary(name: &str, (size, from_s): (u32, f64), frames: Vec<DynamicFrame>) -> Dynamic {
     let changed: Vec<&DynamicFrame> = frames.iter().filter(|f| f.faces_full > 0).collect();
     let col = |f: fn(&DynamicFrame) -> f64| {
         let mut v: Vec<f64> = changed.iter().map(|x| f(x)).collect();
@@ -99,6 +99,7 @@ fn summary(name: &str, size: u32, frames: Vec<DynamicFrame>) -> Dynamic {
         scene: name.to_string(),
         method: Method::SIX_PASS,
         cube_size: size,
+        from_s,
         changed_frames: changed.len(),
         faces_incremental_median: col(|f| f64::from(f.faces_incremental)),
         texels_rects_median: texels,

@@ -14,19 +14,25 @@
 //! - **The trade-off's rungs are gated on their counters only** (faces the fill drew, its
 //!   vertex and fragment invocations, the sensor view's fragment invocations): exact like the
 //!   methods'. Their frame costs and errors are reported, not gated.
+//! - **An animated scene's updates are gated on their counters only** (faces and texels the
+//!   dirty rectangles and the full updates re-rendered, summed over its frames), where both
+//!   runs measured the scene from the same time: a baseline without them (`--no-dynamic`)
+//!   gates none.
 
 use std::path::Path;
 
 use anyhow::Result;
 use specchio::render::methods::Method;
 
-use crate::record::{self, MethodRow, RungRow, Stats};
+use crate::record::{self, Dynamic, MethodRow, RungRow, Stats};
 
 /// An earlier `specchio bench --json` file: its results and the driver that measured them.
 pub struct Baseline {
     pub results: Vec<MethodRow>,
     /// The trade-off's rungs.
     pub tradeoff: Vec<RungRow>,
+    /// The animated scenes' updates.
+    pub dynamic: Vec<Dynamic>,
     /// The driver's name (`llvmpipe`, `SwiftShader driver`, ...): counters compare only on
     /// the same driver.
     pub driver_name: String,
@@ -45,6 +51,7 @@ pub fn read_baseline(path: &Path) -> Result<Baseline> {
     Ok(Baseline {
         results: record.results,
         tradeoff: record.tradeoff,
+        dynamic: record.dynamic,
         driver_name: record.device.driver_name,
         driver_info: record.device.driver_info,
         frames_in_flight: record.settings.frames_in_flight,
@@ -218,6 +225,23 @@ pub fn check_rungs(baseline: &[RungRow], results: &[RungRow]) -> Vec<String> {
         baseline.iter().map(|b| b.case()),
         results.iter().map(|r| r.case()),
     ));
+    failures
+}
+
+/// Every way the animated scenes' update counters of `results` differ from `baseline`'s, one
+/// line each; a scene only one of them measured is not compared.
+pub fn check_dynamic(baseline: &[Dynamic], results: &[Dynamic]) -> Vec<String> {
+    let mut failures = Vec::new();
+    for r in results {
+        let Some(b) = baseline.iter().find(|b| b.case() == r.case()) else {
+            continue;
+        };
+        let (frames, counters) = (
+            (r.frames.len(), b.frames.len()),
+            (r.counters(), b.counters()),
+        );
+        counters_match(&r.case(), "frames", frames, &counters, &mut failures);
+    }
     failures
 }
 
@@ -398,6 +422,7 @@ mod tests {
         let baseline = Baseline {
             results: base,
             tradeoff: Vec::new(),
+            dynamic: Vec::new(),
             driver_name: "llvmpipe".into(),
             driver_info: String::new(),
             frames_in_flight: Some(2),
@@ -477,5 +502,44 @@ mod tests {
         let f = check_rungs(&[traced(250)], &[traced(251)]);
         assert_eq!(f.len(), 1, "{f:?}");
         assert!(f[0].contains("trace_nodes 251 (baseline 250)"), "{f:?}");
+    }
+
+    /// An animated scene's update counters are gated where both runs measured it from the
+    /// same time; one only the run (or only the baseline) has is not compared.
+    #[test]
+    fn dynamic_counters_fail_when_changed_and_only_where_both_measured() {
+        let dynamic = |from_s: f64, texels: u64| crate::record::Dynamic {
+            scene: "s.toml".into(),
+            method: Method::SIX_PASS,
+            cube_size: 64,
+            from_s,
+            frames: vec![crate::record::DynamicFrame {
+                time_s: from_s,
+                faces_incremental: 1,
+                faces_full: 6,
+                texels_rects: texels,
+                texels_full: 6 * 64 * 64,
+                rects_ms: 1.0,
+                whole_faces_ms: 2.0,
+                full_ms: 3.0,
+            }],
+            changed_frames: 1,
+            faces_incremental_median: 1.0,
+            texels_rects_median: texels as f64,
+            rects_ms_median: 1.0,
+            whole_faces_ms_median: 2.0,
+            full_ms_median: 3.0,
+            ratio: None,
+            whole_faces_ratio: None,
+            texels_ratio: None,
+        };
+        assert!(check_dynamic(&[dynamic(0.0, 90)], &[dynamic(0.0, 90)]).is_empty());
+        let f = check_dynamic(&[dynamic(0.0, 90)], &[dynamic(0.0, 91)]);
+        assert_eq!(
+            f,
+            ["s.toml / dynamic 64² from 0 s: texels_rects 91 (baseline 90)"]
+        );
+        assert!(check_dynamic(&[dynamic(0.0, 90)], &[dynamic(4.2, 91)]).is_empty());
+        assert!(check_dynamic(&[], &[dynamic(0.0, 91)]).is_empty());
     }
 }

@@ -161,7 +161,8 @@ fn write_outputs(args: &Args, out: Transaction, record: &Record) -> Result<()> {
     Ok(())
 }
 
-/// The regression gate's verdict on the record's methods and rungs, printed on stderr.
+/// The regression gate's verdict on the record's methods, rungs and animated scenes, printed
+/// on stderr.
 fn gate(args: &Args, baseline: &Baseline, record: &Record) -> ExitCode {
     let (rows, note) = crate::gate::rows_for(baseline, record.settings.frames_in_flight);
     if let Some(note) = note {
@@ -171,6 +172,10 @@ fn gate(args: &Args, baseline: &Baseline, record: &Record) -> ExitCode {
     failures.extend(crate::gate::check_rungs(
         &baseline.tradeoff,
         &record.tradeoff,
+    ));
+    failures.extend(crate::gate::check_dynamic(
+        &baseline.dynamic,
+        &record.dynamic,
     ));
     if !failures.is_empty() {
         eprintln!(

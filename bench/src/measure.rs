@@ -279,7 +279,6 @@ fn new_record(
             full: args.full,
             trace_order: args.trace_order.name().to_owned(),
             dynamic_cube_size,
-            dynamic_from_s: args.dynamic_from,
             refresh: "every-frame (timing); on-change (dynamic)".to_owned(),
         },
         peak_rss_bytes: None,

@@ -84,10 +84,6 @@ pub struct Settings {
     /// The tracing rungs' build order (`--trace-order`: split or given).
     pub trace_order: String,
     pub dynamic_cube_size: u32,
-    /// Scene time of the dynamic measurement's first frame (`--dynamic-from`); absent in
-    /// records from before it could be chosen (0).
-    #[serde(default)]
-    pub dynamic_from_s: f64,
     pub refresh: String,
 }
 
@@ -375,6 +371,8 @@ pub struct Dynamic {
     pub scene: String,
     pub method: Method,
     pub cube_size: u32,
+    /// Scene time of the measurement's first frame, a warm-up (`--dynamic-from`).
+    pub from_s: f64,
     pub frames: Vec<DynamicFrame>,
     /// Over the frames where something moved (full update ran): medians, and the ratios of
     /// the medians to the full update's.
@@ -390,6 +388,26 @@ pub struct Dynamic {
     pub whole_faces_ratio: Option<f64>,
     /// Rectangles' texels over full's.
     pub texels_ratio: Option<f64>,
+}
+
+impl Dynamic {
+    /// The row as the gate names it.
+    pub fn case(&self) -> String {
+        let from = specchio::text::num_text(self.from_s);
+        format!("{} / dynamic {}² from {from} s", self.scene, self.cube_size)
+    }
+
+    /// The work counters summed over the frames: faces and texels of the incremental and the
+    /// full updates (the dirty rectangles' and the whole faces' faces are the same).
+    pub fn counters(&self) -> [(&'static str, Option<u64>); 4] {
+        let sum = |f: fn(&DynamicFrame) -> u64| Some(self.frames.iter().map(f).sum());
+        [
+            ("faces_incremental", sum(|f| u64::from(f.faces_incremental))),
+            ("faces_full", sum(|f| u64::from(f.faces_full))),
+            ("texels_rects", sum(|f| f.texels_rects)),
+            ("texels_full", sum(|f| f.texels_full)),
+        ]
+    }
 }
 
 /// Largest `--baseline` record read (bytes): the full sweep's record is well under 1 MiB.

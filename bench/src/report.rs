@@ -65,8 +65,9 @@ pub struct GithubEntry {
 }
 
 /// The `customSmallerIsBetter` array of github-action-benchmark: every case's median cube
-/// update time, each floor's, each accuracy row's mean FLIP and angular error, and each
-/// trade-off rung's frame cost and sensor mean FLIP.
+/// update time, each floor's, each accuracy row's mean FLIP and angular error, each
+/// trade-off rung's frame cost and sensor mean FLIP, and each animated scene's three kinds of
+/// on-change update and the dirty rectangles' texels.
 pub fn github(record: &Record) -> Vec<GithubEntry> {
     let mut out = Vec::new();
     for r in &record.results {
@@ -119,6 +120,25 @@ pub fn github(record: &Record) -> Vec<GithubEntry> {
                 name: format!("{} / sensor mean FLIP", r.case()),
                 unit: "FLIP",
                 value: Some(flip),
+                range: None,
+            });
+        }
+    }
+    for d in &record.dynamic {
+        // Medians over the frames with motion: none without any.
+        let moved = d.changed_frames > 0;
+        let case = format!("{} / {}² on-change update", d.scene, d.cube_size);
+        let figures = [
+            ("dirty rectangles", "ms", d.rects_ms_median),
+            ("whole dirty faces", "ms", d.whole_faces_ms_median),
+            ("full", "ms", d.full_ms_median),
+            ("dirty rectangles' texels", "texels", d.texels_rects_median),
+        ];
+        for (kind, unit, value) in figures {
+            out.push(GithubEntry {
+                name: format!("{case}, {kind}"),
+                unit,
+                value: moved.then_some(value),
                 range: None,
             });
         }
@@ -309,8 +329,11 @@ mod tests {
     fn github_array_names_every_case() {
         let record: Record = serde_json::from_str(include_str!("../baselines/quick.json")).unwrap();
         let g = github(&record);
-        // The baseline has timing rows and rungs without error (no floors, no accuracy).
-        assert_eq!(g.len(), record.results.len() + record.tradeoff.len());
+        // The baseline has timing rows, rungs without error (no floors, no accuracy) and the
+        // animated scenes' four figures each.
+        let rows = record.results.len() + record.tradeoff.len();
+        assert_eq!(g.len(), rows + 4 * record.dynamic.len());
+        assert!(!record.dynamic.is_empty());
         assert_eq!(
             g[0].name,
             "scenes/thesis-room.toml / six-pass / 64² cube update"

@@ -134,7 +134,7 @@ fn check_less_work_fails_naming_the_case(json: &Path, worse: &Path) {
     );
 }
 
-/// A rung's counter changed: the gate names the rung's case and the counter.
+/// A rung's counter and an animated scene's changed: the gate names each case and counter.
 fn check_a_changed_rung_counter_fails_naming_it(json: &Path, worse: &Path) {
     let mut base = read_json(json);
     let rung = &mut base["tradeoff"][1];
@@ -147,12 +147,27 @@ fn check_a_changed_rung_counter_fails_naming_it(json: &Path, worse: &Path) {
         .as_u64()
         .unwrap();
     rung["work"]["sensor_fragment_invocations"] = serde_json::json!(v + 1);
+    // And an animated scene's dirty rectangles, gated in the same run.
+    let frame = &mut base["dynamic"][0]["frames"][0];
+    let texels = frame["texels_rects"].as_u64().unwrap();
+    frame["texels_rects"] = serde_json::json!(texels + 1);
+    let total: u64 = (base["dynamic"][0]["frames"].as_array().unwrap().iter())
+        .map(|f| f["texels_rects"].as_u64().unwrap())
+        .sum();
     std::fs::write(worse, base.to_string()).unwrap();
     let fail = gate_run(worse, &["--no-accuracy"]);
     let stderr = String::from_utf8_lossy(&fail.stderr);
     assert_eq!(fail.status.code(), Some(1), "{stderr}");
     assert!(
         stderr.contains(&format!("{case}: sensor_fragment_invocations {v}")),
+        "{stderr}"
+    );
+    let dynamic = "scenes/thesis-room.toml / dynamic 64² from 0 s";
+    assert!(
+        stderr.contains(&format!(
+            "{dynamic}: texels_rects {} (baseline {total})",
+            total - 1
+        )),
         "{stderr}"
     );
 }

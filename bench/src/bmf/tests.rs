@@ -5,7 +5,7 @@ use specchio::reference::angular::AngularError;
 use specchio::render::methods::Method;
 
 use super::*;
-use crate::record::{MethodRow, RungRow, ViewError};
+use crate::record::{Dynamic, DynamicFrame, MethodRow, RungRow, ViewError};
 use specchio::render::lookups::ladder;
 
 /// The committed baseline, for the parts of a record these tests do not care about (settings,
@@ -22,11 +22,13 @@ fn stats(p10: f64, median: f64, p90: f64) -> Option<Stats> {
     Some(Stats { median, p10, p90 })
 }
 
-/// A template's record with its rows replaced by `results` and `tradeoff`.
+/// A template's record with its rows replaced by `results` and `tradeoff` (and no animated
+/// scenes).
 fn record(results: Vec<MethodRow>, tradeoff: Vec<RungRow>) -> Record {
     let mut r = template();
     r.results = results;
     r.tradeoff = tradeoff;
+    r.dynamic = Vec::new();
     r
 }
 
@@ -508,4 +510,75 @@ fn the_written_documents_follow_every_rule() {
             }
         }
     }
+}
+
+/// An animated scene's frames: 64² faces; frame 0 without motion (left out), then three
+/// frames whose rectangles, whole faces and full updates took known times and texels.
+fn dynamic_row() -> Dynamic {
+    let frame = |moved: bool, k: f64, texels_rects: u64| DynamicFrame {
+        time_s: k,
+        faces_incremental: u32::from(moved),
+        faces_full: if moved { 6 } else { 0 },
+        texels_rects,
+        texels_full: if moved { 6 * 64 * 64 } else { 0 },
+        rects_ms: k,
+        whole_faces_ms: 10.0 * k,
+        full_ms: 100.0 * k,
+    };
+    Dynamic {
+        scene: "scenes/moving-objects.toml".into(),
+        method: Method::SIX_PASS,
+        cube_size: 64,
+        from_s: 0.0,
+        frames: vec![
+            frame(false, 9.0, 0),
+            frame(true, 1.0, 100),
+            frame(true, 2.0, 300),
+            frame(true, 3.0, 200),
+        ],
+        changed_frames: 3,
+        faces_incremental_median: 1.0,
+        texels_rects_median: 200.0,
+        rects_ms_median: 2.0,
+        whole_faces_ms_median: 20.0,
+        full_ms_median: 200.0,
+        ratio: Some(0.01),
+        whole_faces_ratio: Some(0.1),
+        texels_ratio: None,
+    }
+}
+
+/// Each kind of update is a benchmark of its own with its times and texels over the frames
+/// with motion (nearest rank: of three values p10 is the least, p90 the greatest).
+#[test]
+fn an_animated_scenes_updates_are_three_benchmarks() {
+    let mut r = record(vec![], vec![]);
+    r.dynamic = vec![dynamic_row()];
+    let full = (6 * 64 * 64) as f64;
+    let expected = document(&[
+        (
+            "moving-objects/update-full/64/llvmpipe",
+            &[
+                (Measure::UpdateMs, spread(100.0, 200.0, 300.0)),
+                (Measure::TexelsRendered, spread(full, full, full)),
+            ],
+        ),
+        (
+            "moving-objects/update-rects/64/llvmpipe",
+            &[
+                (Measure::UpdateMs, spread(1.0, 2.0, 3.0)),
+                (Measure::TexelsRendered, spread(100.0, 200.0, 300.0)),
+            ],
+        ),
+        (
+            "moving-objects/update-whole-faces/64/llvmpipe",
+            &[
+                (Measure::UpdateMs, spread(10.0, 20.0, 30.0)),
+                (Measure::TexelsRendered, spread(4096.0, 4096.0, 4096.0)),
+            ],
+        ),
+    ]);
+    let doc = bmf(&r).unwrap();
+    assert_eq!(doc, expected);
+    assert_eq!(violations(&json(&doc).unwrap()), Vec::<String>::new());
 }
