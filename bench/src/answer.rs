@@ -1,15 +1,16 @@
 //! The benchmark's answer, printed before its tables: per scene and face size, which fill
 //! method was fastest and by how much against six-pass and the floors (the thesis's question:
 //! six passes or one), and the trade-off ladder's Pareto front in one line with what the most
-//! accurate rung costs against `box` (the design's other question: cost against error).
+//! accurate rung costs against `box` (the design's other question: cost against error), and
+//! for an animated scene what its dirty rectangles cost against a full update.
 //! Everything comes from the record; nothing here measures.
 
 use super::record::{FloorRow, MethodRow, Record, RungRow};
 use specchio::render::floors::Floor;
 use specchio::render::methods::Method;
 
-/// The answer's lines: a heading, then per scene and face size a fill line and a ladder line
-/// (each left out when its part did not run).
+/// The answer's lines: a heading, then per scene and face size a fill line, a ladder line and
+/// an updates line (each left out when its part did not run).
 pub fn lines(record: &Record) -> Vec<String> {
     let d = &record.device;
     let mut out = vec![format!(
@@ -21,18 +22,36 @@ pub fn lines(record: &Record) -> Vec<String> {
             .map_or(String::new(), |v| format!(" {v}")),
     )];
     for scene in &record.settings.scenes {
+        // The dynamic face size is always among the run's sizes.
         for &size in &record.settings.cube_sizes {
             let fill = fill_line(record, scene, size);
             let ladder = ladder_line(record, scene, size);
-            if fill.is_none() && ladder.is_none() {
+            let updates = updates_line(record, scene, size);
+            if fill.is_none() && ladder.is_none() && updates.is_none() {
                 continue;
             }
             out.push(format!("  {scene}, {size}² faces:"));
-            out.extend(fill.map(|l| format!("    fill:   {l}")));
-            out.extend(ladder.map(|l| format!("    ladder: {l}")));
+            out.extend(fill.map(|l| format!("    fill:    {l}")));
+            out.extend(ladder.map(|l| format!("    ladder:  {l}")));
+            out.extend(updates.map(|l| format!("    updates: {l}")));
         }
     }
     out
+}
+
+/// `dirty rectangles 1.3 ms, 0.11x a full update (12.3 ms), 0.3% of its texels; whole dirty
+/// faces 0.21x`: what the animated scene's on-change updates cost (six-pass), from the frames
+/// with motion.
+fn updates_line(record: &Record, scene: &str, size: u32) -> Option<String> {
+    let d = (record.dynamic.iter()).find(|d| d.scene == scene && d.cube_size == size)?;
+    let (ratio, whole, texels) = (d.ratio?, d.whole_faces_ratio?, d.texels_ratio?);
+    Some(format!(
+        "dirty rectangles {:.1} ms, {ratio:.2}x a full update ({:.1} ms), {:.1}% of its \
+         texels; whole dirty faces {whole:.2}x",
+        d.rects_ms_median,
+        d.full_ms_median,
+        100.0 * texels
+    ))
 }
 
 /// `multiview is fastest: 41.2 ms a cube update, 0.78x six-pass (52.8 ms), 1.9x the floors`.

@@ -90,12 +90,12 @@ fn the_answer_names_the_fastest_method_and_the_front() {
         .expect("the scene's heading");
     assert_eq!(
         text[at + 1],
-        "    fill:   multiview is fastest: 8.0 ms a cube update, 0.80x six-pass (10.0 ms), \
+        "    fill:    multiview is fastest: 8.0 ms a cube update, 0.80x six-pass (10.0 ms), \
          1.60x the floors (geometry + fill 5.0 ms)"
     );
     assert_eq!(
         text[at + 2],
-        "    ladder: front plain 6.0 ms FLIP 0.300 → box 7.0 ms 0.200 → ray-query 9.0 ms \
+        "    ladder:  front plain 6.0 ms FLIP 0.300 → box 7.0 ms 0.200 → ray-query 9.0 ms \
          3.0e-4; most accurate: ray-query, 1.29x box's frame cost; cpu 30.0 ms, 3.33x \
          ray-query, the cheapest exact rung on the device"
     );
@@ -152,7 +152,7 @@ fn six_pass_fastest_and_parts_not_run_are_said_as_such() {
         .expect("the scene's heading");
     assert_eq!(
         text[at + 1],
-        "    fill:   six-pass is fastest: 4.0 ms a cube update (every one-pass method is slower)"
+        "    fill:    six-pass is fastest: 4.0 ms a cube update (every one-pass method is slower)"
     );
     assert!(!text.iter().any(|l| l.contains("ladder:")), "{text:?}");
 }
@@ -169,11 +169,37 @@ fn a_front_of_one_rung_is_said_to_be_cheapest_and_most_accurate() {
     let text = lines(&r);
     assert!(
         text.contains(
-            &"    ladder: ray-query is both the cheapest and the most accurate rung: 3.5 ms, \
+            &"    ladder:  ray-query is both the cheapest and the most accurate rung: 3.5 ms, \
               FLIP 3.0e-4, 0.50x box's frame cost; cpu 30.0 ms, 8.57x ray-query, the \
               cheapest exact rung on the device"
                 .to_owned()
         ),
         "{text:?}"
     );
+}
+
+/// An animated scene's updates: the dirty rectangles' time and share of the texels against
+/// a full update's, and the whole faces' ratio, under the scene's heading.
+#[test]
+fn the_dirty_rectangles_are_weighed_against_a_full_update() {
+    let mut r = known();
+    let d = (r.dynamic.iter_mut())
+        .find(|d| d.scene == SCENE)
+        .expect("the quick baseline measures the thesis room's updates");
+    (d.rects_ms_median, d.full_ms_median) = (1.5, 12.0);
+    (d.ratio, d.whole_faces_ratio, d.texels_ratio) = (Some(0.125), Some(0.25), Some(0.004));
+    let text = lines(&r);
+    let at = (text.iter())
+        .position(|l| l == "  scenes/thesis-room.toml, 64² faces:")
+        .expect("the scene's heading");
+    assert_eq!(
+        text[at + 3],
+        "    updates: dirty rectangles 1.5 ms, 0.12x a full update (12.0 ms), 0.4% of its \
+         texels; whole dirty faces 0.25x"
+    );
+    // Without motion (no ratio) there is no line.
+    for d in &mut r.dynamic {
+        d.ratio = None;
+    }
+    assert!(!lines(&r).iter().any(|l| l.contains("updates:")));
 }
