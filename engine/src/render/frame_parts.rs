@@ -71,13 +71,7 @@ impl<'a> FrameParts<'a> {
             plan.visible[f] = match &plan.patches[f][..] {
                 [] => visible,
                 // What the patches draw: the drawables that meet some dirty rectangle.
-                patches => {
-                    let drawn: std::collections::HashSet<u32> = patches
-                        .iter()
-                        .flat_map(|p| p.visible.iter().copied())
-                        .collect();
-                    visible.into_iter().filter(|i| drawn.contains(i)).collect()
-                }
+                patches => Patch::drawn(patches, &visible),
             };
         }
         plan

@@ -89,7 +89,7 @@ impl<'a> Chain<'a> {
     }
 
     /// Level `m` of each dirty face, used as `how`; `None`: as a blit destination, whole
-    /// (old contents dropped) or in rectangles (the rest kept).
+    /// (old contents dropped) or in its box (the rest kept).
     fn per_face(&self, m: u32, how: Option<Use>) -> Vec<(Resource, Use)> {
         (self.faces.iter())
             .map(|&(f, rect)| {

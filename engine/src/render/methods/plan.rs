@@ -118,6 +118,19 @@ pub enum Patching {
 }
 
 impl Patch {
+    /// The drawables of `visible` (in its order) that some patch of `patches` draws.
+    pub fn drawn(patches: &[Patch], visible: &[u32]) -> Vec<u32> {
+        let drawn: std::collections::HashSet<u32> = patches
+            .iter()
+            .flat_map(|p| p.visible.iter().copied())
+            .collect();
+        visible
+            .iter()
+            .copied()
+            .filter(|i| drawn.contains(i))
+            .collect()
+    }
+
     /// The patches that re-render a face's dirty rectangles `rects` (disjoint), as `how`
     /// says: one per rectangle, each drawing what meets its own frustum, or one for all
     /// under their bounding box, each drawable drawn once. `visible` is the face's visible
@@ -139,16 +152,10 @@ impl Patch {
         let Some(first) = rects.first() else {
             return each;
         };
-        let mut drawn = std::collections::HashSet::new();
-        drawn.extend(each.iter().flat_map(|p| p.visible.iter().copied()));
         let one = Patch {
             rects: rects.to_vec(),
             scissor: rects.iter().fold(*first, |a, b| a.union(b)),
-            visible: visible
-                .iter()
-                .copied()
-                .filter(|i| drawn.contains(i))
-                .collect(),
+            visible: Patch::drawn(&each, visible),
         };
         let cost = |p: &Patch| DRAW_COST_TEXELS * p.visible.len() as u64 + p.scissor.area();
         match how {
