@@ -1,6 +1,10 @@
-//! What `tests/cli/bench.rs` checks of one quick run's JSON record besides the gate's rows.
+//! What `tests/cli/bench.rs` checks of one quick run's JSON record besides the gate's rows,
+//! and the gate's verdict on a record with changed counters.
+
+use std::path::Path;
 
 use crate::bench_tradeoff::check_tradeoff;
+use crate::{gate_run, read_json};
 
 /// What one quick run's JSON must hold besides the gate's rows (issue: speed against error);
 /// `peak_bytes` is the run's peak resident memory as its parent measured it.
@@ -137,4 +141,42 @@ fn check_provenance(r: &serde_json::Value, peak_bytes: u64) {
     assert!(r["command"].as_str().unwrap().contains("bench"));
     assert!(r["device"]["driver_info"].is_string());
     assert!(r["settings"]["cube_sizes"] == serde_json::json!([64]));
+}
+
+/// A rung's counter and an animated scene's changed: the gate names each case and counter.
+pub fn check_a_changed_rung_counter_fails_naming_it(json: &Path, worse: &Path) {
+    let mut base = read_json(json);
+    let rung = &mut base["tradeoff"][1];
+    let case = format!(
+        "{} / rung {} / 64²",
+        rung["scene"].as_str().unwrap(),
+        rung["rung"].as_str().unwrap()
+    );
+    let v = rung["work"]["sensor_fragment_invocations"]
+        .as_u64()
+        .unwrap();
+    rung["work"]["sensor_fragment_invocations"] = serde_json::json!(v + 1);
+    // And an animated scene's dirty rectangles, gated in the same run.
+    let frame = &mut base["dynamic"][0]["frames"][0];
+    let texels = frame["texels_rects"].as_u64().unwrap();
+    frame["texels_rects"] = serde_json::json!(texels + 1);
+    let total: u64 = (base["dynamic"][0]["frames"].as_array().unwrap().iter())
+        .map(|f| f["texels_rects"].as_u64().unwrap())
+        .sum();
+    std::fs::write(worse, base.to_string()).unwrap();
+    let fail = gate_run(worse, &["--no-accuracy"]);
+    let stderr = String::from_utf8_lossy(&fail.stderr);
+    assert_eq!(fail.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!("{case}: sensor_fragment_invocations {v}")),
+        "{stderr}"
+    );
+    let dynamic = "scenes/thesis-room.toml / dynamic 64² from 0 s";
+    assert!(
+        stderr.contains(&format!(
+            "{dynamic}: texels_rects {} (baseline {total})",
+            total - 1
+        )),
+        "{stderr}"
+    );
 }
