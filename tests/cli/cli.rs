@@ -232,12 +232,8 @@ fn a_frame_sequence_is_numbered() {
 /// bounds `check_dynamic` derives); with `--whole-faces`, the whole face.
 #[test]
 fn render_reports_the_dirty_rectangles_it_re_renders() {
-    let scene = root().join("scenes/thesis-room.toml");
     for (flag, whole) in [(None, false), (Some("--whole-faces"), true)] {
-        let out = temp_dir("rects");
-        let mut args = vec!["render", scene.to_str().unwrap(), "--out"];
-        args.push(out.to_str().unwrap());
-        args.extend([
+        let mut extra = vec![
             "--cube-size",
             "64",
             "--frames",
@@ -245,16 +241,9 @@ fn render_reports_the_dirty_rectangles_it_re_renders() {
             "--fps",
             "30",
             "--validate",
-        ]);
-        args.extend(flag);
-        let result = specchio(&args);
-        assert!(
-            result.status.success(),
-            "{}",
-            String::from_utf8_lossy(&result.stderr)
-        );
-        let text = std::fs::read_to_string(out.join("render.json")).unwrap();
-        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        ];
+        extra.extend(flag);
+        let (out, json) = common::render_scene("rects", "scenes/thesis-room.toml", &extra);
         assert_eq!(json["settings"]["whole_faces"], whole);
         let frames = json["runs"][0]["frames"].as_array().unwrap();
         assert_eq!(

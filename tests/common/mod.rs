@@ -174,8 +174,14 @@ fn remove(path: &Path) {
 /// Renders the six-colour room into a fresh folder with `extra` arguments, requires success,
 /// and returns the folder and its render.json.
 pub fn render_six_colour(name: &str, extra: &[&str]) -> (Scratch, serde_json::Value) {
+    render_scene(name, "scenes/test/six-colour-room.toml", extra)
+}
+
+/// Renders scene `rel` (from the project's root) into a fresh folder with `extra` arguments,
+/// requires success, and returns the folder and its render.json.
+pub fn render_scene(name: &str, rel: &str, extra: &[&str]) -> (Scratch, serde_json::Value) {
     let out = temp_dir(name);
-    let scene = root().join("scenes/test/six-colour-room.toml");
+    let scene = root().join(rel);
     let mut args = vec![
         "render",
         scene.to_str().unwrap(),

@@ -6,7 +6,7 @@ use ash::vk;
 
 use super::frame_parts::FrameParts;
 use super::graph::{self, FrameGraph, Use};
-use super::methods::{CubeLayout, CubePlan, CubeRecorder, FillPass, Method, Prepare};
+use super::methods::{CubeLayout, CubePlan, CubeRecorder, FillPass, Method, Patching, Prepare};
 use super::{FrameReport, TS_FILL, TS_MIPS};
 use crate::vk::GpuError;
 
@@ -28,11 +28,28 @@ pub(super) enum Fill<'a> {
 pub(super) struct CubeFill {
     pass: Box<dyn FillPass>,
     method: Method,
+    /// How the method draws a face's dirty rectangles.
+    patching: Patching,
 }
 
 impl CubeFill {
-    pub fn new(method: Method, pass: Box<dyn FillPass>) -> Self {
-        Self { pass, method }
+    /// `patching` is the caller's choice for a per-face method; a layered scope has one
+    /// scissor for every face, so its rectangles always go under one box a face.
+    pub fn new(method: Method, pass: Box<dyn FillPass>, patching: Patching) -> Self {
+        let patching = match method.layout() {
+            CubeLayout::Layered => Patching::OneBox,
+            CubeLayout::PerFace | CubeLayout::Multiview => patching,
+        };
+        Self {
+            pass,
+            method,
+            patching,
+        }
+    }
+
+    /// How the method draws a face's dirty rectangles.
+    pub fn patching(&self) -> Patching {
+        self.patching
     }
 
     /// The method that fills the cube.

@@ -66,9 +66,11 @@ impl Renderer {
         self.acquire_slot()?;
         let state = SceneState::at(&self.scene, t_s);
         let (views, _) = self.write_frame_buffers(&state)?;
-        let plan = self
-            .frame_parts()
-            .plan_cube(&views, super::refresh::Dirty::faces(0x3F));
+        let plan = self.frame_parts().plan_cube(
+            &views,
+            super::refresh::Dirty::faces(0x3F),
+            Default::default(),
+        );
         let cmd = self.begin_frame()?;
         let mut report = FrameReport {
             frame,

@@ -9,7 +9,7 @@ use glam::Vec3;
 
 use super::draw::{DrawOrder, Facing, CUBE_FRONT, VIEW_FRONT};
 use super::lookups::LookupPass;
-use super::methods::{CubePlan, FillParts, Patch};
+use super::methods::{CubePlan, FillParts, Patch, Patching};
 use super::queries::FrameQueries;
 use super::refresh::Dirty;
 use super::scene_draw::SceneDraw;
@@ -49,8 +49,8 @@ impl Renderer {
 impl<'a> FrameParts<'a> {
     /// Culls every dirty face against its frustum, and each of its dirty rectangles against
     /// the rectangle's: a face's `visible` is then what meets some rectangle, the patches say
-    /// what meets which.
-    pub fn plan_cube(&self, views: &[ViewBasis], dirty: Dirty) -> CubePlan {
+    /// what meets which, drawn as `how` says.
+    pub fn plan_cube(&self, views: &[ViewBasis], dirty: Dirty, how: Patching) -> CubePlan {
         let mut plan = CubePlan {
             dirty: dirty.mask,
             order: self.drawn.order.clone(),
@@ -67,7 +67,7 @@ impl<'a> FrameParts<'a> {
                 let (lo, hi) = self.drawn.bounds[i as usize];
                 frusta[k].intersects_aabb(lo, hi)
             };
-            plan.patches[f] = Patch::cover(&dirty.rects[f], &visible, meets, dirty.patching);
+            plan.patches[f] = Patch::cover(&dirty.rects[f], &visible, meets, how);
             plan.visible[f] = match &plan.patches[f][..] {
                 [] => visible,
                 // What the patches draw: the drawables that meet some dirty rectangle.

@@ -177,18 +177,14 @@ impl Renderer {
         Ok(Self {
             frames: in_flight::InFlight::create(device, frames_in_flight)?,
             floor_pipelines: None,
-            cube_fill: cube_fill::CubeFill::new(options.method, fill),
+            cube_fill: cube_fill::CubeFill::new(options.method, fill, options.patching),
             mirror,
             views: passes::ViewPasses::new(targets, view_pipelines),
             scene_layout,
             cube,
             resources,
             submitter,
-            refresh: refresh::Refresh::new(
-                options.full_updates,
-                options.whole_faces,
-                options.patching,
-            ),
+            refresh: refresh::Refresh::new(options.full_updates, options.whole_faces),
             drawn: draw::DrawOrder::default(),
             scene,
             device: Arc::clone(device),
@@ -244,7 +240,7 @@ impl Renderer {
             true => self.faces_to_fill(frame, &state, &views),
             false => Dirty::default(),
         };
-        let plan = self.frame_parts().plan_cube(&views, dirty);
+        let plan = (self.frame_parts()).plan_cube(&views, dirty, self.cube_fill.patching());
         let dirty = plan.dirty;
         self.prepare_fill(&plan)?;
         let copies = self.plan_copies(readback, display);
@@ -321,14 +317,10 @@ impl Renderer {
         let drawables = &self.resources.drawables;
         let at = (frame, self.cube.size);
         let mut dirty = (self.refresh).dirty(&self.scene, drawables, at, state, views);
-        match self.method().layout() {
-            // A multiview pass clears and draws all six views: cull for all six, or objects
-            // seen only in a clean face would vanish from it.
-            methods::CubeLayout::Multiview if dirty.mask != 0 => dirty = Dirty::faces(0x3F),
-            methods::CubeLayout::Multiview => dirty = Dirty::faces(dirty.mask),
-            // One scope over six layers has one scissor for every face: one box a face.
-            methods::CubeLayout::Layered => dirty.patching = methods::Patching::OneBox,
-            methods::CubeLayout::PerFace => {}
+        if self.method().layout() == methods::CubeLayout::Multiview && dirty.mask != 0 {
+            // A multiview pass clears and draws all six views whole: cull for all six, or
+            // objects seen only in a clean face would vanish from it.
+            dirty = Dirty::faces(0x3F);
         }
         self.refresh.count(dirty.mask);
         dirty

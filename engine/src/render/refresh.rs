@@ -1,7 +1,6 @@
 //! The cube's refresh, one part of the renderer: what the cube map shows, which faces a
 //! frame must re-render by the scene's refresh policy, and the counts of updates and skips.
 
-use super::methods::Patching;
 use super::resources::Drawable;
 use super::RefreshCounters;
 use crate::scene::camera::{self, ViewBasis};
@@ -17,8 +16,6 @@ pub(super) struct Refresh {
     full_updates: bool,
     /// A dirty face re-renders whole, not only its dirty rectangles.
     whole_faces: bool,
-    /// How a per-face method draws dirty rectangles.
-    patching: Patching,
 }
 
 /// What an update re-renders: the dirty faces and, per face, the disjoint rectangles of
@@ -28,8 +25,6 @@ pub struct Dirty {
     /// Bit f set: face f is re-rendered.
     pub mask: u8,
     pub rects: [Vec<PixelRect>; 6],
-    /// How the rectangles are drawn.
-    pub patching: Patching,
 }
 
 impl Dirty {
@@ -49,13 +44,12 @@ impl Dirty {
 const MAX_RECTS_PER_FACE: usize = 32;
 
 impl Refresh {
-    pub fn new(full_updates: bool, whole_faces: bool, patching: Patching) -> Self {
+    pub fn new(full_updates: bool, whole_faces: bool) -> Self {
         Self {
             shown: None,
             counters: RefreshCounters::default(),
             full_updates,
             whole_faces,
-            patching,
         }
     }
 
@@ -118,7 +112,6 @@ impl Refresh {
             RefreshPolicy::OnChange => {
                 let moved = moved_bounds(scene, drawables, old, state);
                 let mut dirty = dirty_rects(scene, views, size, &moved);
-                dirty.patching = self.patching;
                 if self.whole_faces {
                     dirty.rects = Default::default();
                 }
