@@ -172,6 +172,8 @@ pub struct ObjectSpec {
     pub radius: Option<f64>,
     pub height: Option<f64>,
     pub file: Option<String>,
+    /// Whose frame `position` and `rotation` are in (default: the scene's).
+    pub frame: Option<FrameSpec>,
     #[serde(default, deserialize_with = "fixed::exact_opt")]
     pub position: Option<V3>,
     #[serde(default, deserialize_with = "fixed::exact_opt")]
@@ -179,6 +181,14 @@ pub struct ObjectSpec {
     pub scale: Option<ScaleSpec>,
     pub material: String,
     pub animation: Option<AnimationSpec>,
+}
+
+/// `objects[i].frame`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FrameSpec {
+    World,
+    Sensor,
 }
 
 /// `[[generate]]`: many objects placed by a seeded PRNG (see `generate.rs`).

@@ -17,7 +17,7 @@
 
 use glam::{Quat, Vec3};
 
-use super::{Animation, Object};
+use super::{Animation, Object, ObjectFrame};
 use crate::random::SplitMix64;
 
 /// Most objects one generator may make.
@@ -229,6 +229,7 @@ pub(super) fn expand(p: &Params, env: &Surroundings) -> Result<Vec<Object>, Plac
             mesh: shape.mesh,
             material,
             shape: shape.name.clone(),
+            frame: ObjectFrame::World,
             position,
             rotation,
             scale: Vec3::splat(size * shape.scale_per_size),

@@ -205,14 +205,53 @@ pub struct Object {
     /// What it is drawn as: `box`, `sphere`, `cylinder`, or `mesh FILE` (the file as the
     /// scene names it), for reports and the sensor's id map.
     pub shape: String,
-    /// Position of the object's origin at time 0 (world, metres).
+    /// Whose frame `position` and `rotation` are in: the scene's, or the sensor camera's
+    /// (a part of the robot: the camera's body, its lens barrel, a mount).
+    pub frame: ObjectFrame,
+    /// Position of the object's origin at time 0 (scene space, metres), or, in the sensor's
+    /// frame, its offset from the camera's eye along the camera's axes.
     pub position: Vec3,
-    /// Orientation (object to world).
+    /// Orientation (object to world, or to the camera's axes in the sensor's frame).
     pub rotation: Quat,
     /// Per-axis scale, all > 0.
     pub scale: Vec3,
     /// Moves the position over time; `None` keeps it still.
     pub animation: Option<Animation>,
+}
+
+/// Whose frame an object is placed in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ObjectFrame {
+    /// The scene's: it stays where the file puts it unless its animation moves it.
+    World,
+    /// The sensor camera's (docs/conventions.md "View space": origin at the eye, x right,
+    /// y down, z forward towards the mirror): it moves and turns with the camera, so with the
+    /// mirror's animation and with every pose a dataset or the localisation stands the robot
+    /// at. It has no animation of its own.
+    Sensor,
+}
+
+impl Object {
+    /// Where the object is and how it is turned (scene space) when the mirror's viewpoint is at
+    /// `mirror_center` and `t_s` is the time its own animation is evaluated at.
+    pub fn placement(&self, sensor: &SensorCamera, mirror_center: Vec3, t_s: f64) -> (Vec3, Quat) {
+        match self.frame {
+            ObjectFrame::World => {
+                let position = match &self.animation {
+                    Some(a) => a.position_at(self.position, t_s),
+                    None => self.position,
+                };
+                (position, self.rotation)
+            }
+            ObjectFrame::Sensor => {
+                let (eye, axes) = sensor.frame();
+                (
+                    mirror_center + eye + axes * self.position,
+                    axes * self.rotation,
+                )
+            }
+        }
+    }
 }
 
 /// A material: an albedo function of the surface point. Evaluated identically by
@@ -299,6 +338,15 @@ impl SensorCamera {
     /// by the (turned) shift.
     pub fn eye(&self) -> Vec3 {
         Vec3::new(0.0, -self.offset_m, 0.0) + Quat::from_rotation_y(self.heading_rad) * self.shift_m
+    }
+
+    /// The camera's eye relative to the mirror's viewpoint and the rotation from its axes
+    /// (x right, y down, z forward) to the world's: the frame of the objects placed in it
+    /// ([`ObjectFrame::Sensor`]).
+    pub fn frame(&self) -> (Vec3, Quat) {
+        let v = self.view(self.up, 1.0);
+        let axes = glam::Mat3::from_cols(v.right, v.down, v.forward);
+        (v.eye, Quat::from_mat3(&axes).normalize())
     }
 
     /// The camera in render space (the mirror's viewpoint at the origin), its image's up

@@ -3,7 +3,7 @@
 //! Evaluated once per frame. Comparing two states tells exactly what moved, which is all the
 //! `on-change` refresh policy needs.
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Quat, Vec3};
 
 use super::camera::ViewBasis;
 use crate::scene::Mesh;
@@ -17,6 +17,9 @@ pub struct SceneState {
     pub mirror_center: Vec3,
     /// Object origin positions in world space, in scene order.
     pub object_positions: Vec<Vec3>,
+    /// Object orientations (object to world), in scene order: constant but for the objects
+    /// in the sensor's frame, which turn with the robot.
+    pub object_rotations: Vec<Quat>,
     pub observer_position: Vec3,
 }
 
@@ -26,14 +29,15 @@ impl SceneState {
             Some(a) => a.position_at(base, t_s),
             None => base,
         };
+        let mirror_center = pos(scene.mirror.center, &scene.mirror.animation);
+        let (object_positions, object_rotations) = (scene.objects.iter())
+            .map(|o| o.placement(&scene.sensor, mirror_center, t_s))
+            .unzip();
         Self {
             time_s: t_s,
-            mirror_center: pos(scene.mirror.center, &scene.mirror.animation),
-            object_positions: scene
-                .objects
-                .iter()
-                .map(|o| pos(o.position, &o.animation))
-                .collect(),
+            mirror_center,
+            object_positions,
+            object_rotations,
             observer_position: pos(scene.observer.position, &scene.observer.animation),
         }
     }
@@ -41,7 +45,15 @@ impl SceneState {
     /// True when anything the cube map sees differs (cameras do not count: the cube map is
     /// view-independent).
     pub fn cube_differs(&self, other: &Self) -> bool {
-        self.mirror_center != other.mirror_center || self.object_positions != other.object_positions
+        self.mirror_center != other.mirror_center
+            || self.object_positions != other.object_positions
+            || self.object_rotations != other.object_rotations
+    }
+
+    /// Whether object `i` is placed differently in `other`.
+    pub fn object_moved(&self, other: &Self, i: usize) -> bool {
+        self.object_positions[i] != other.object_positions[i]
+            || self.object_rotations[i] != other.object_rotations[i]
     }
 
     /// Model-to-render-space matrix of object `i` (render space: world minus the mirror centre).
@@ -49,7 +61,7 @@ impl SceneState {
         let o = &scene.objects[i];
         Mat4::from_scale_rotation_translation(
             o.scale,
-            o.rotation,
+            self.object_rotations[i],
             self.object_positions[i] - self.mirror_center,
         )
     }

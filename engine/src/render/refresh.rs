@@ -129,11 +129,9 @@ fn moved_bounds(
     old: &SceneState,
     new: &SceneState,
 ) -> Vec<(glam::Vec3, glam::Vec3)> {
-    let moved = (old.object_positions.iter().zip(&new.object_positions))
-        .enumerate()
-        .filter(|(_, (a, b))| a != b);
+    let moved = (0..scene.objects.len()).filter(|&i| old.object_moved(new, i));
     moved
-        .flat_map(|(i, _)| {
+        .flat_map(|i| {
             let d = &drawables[6 + i];
             [old, new].map(|s| {
                 let m = s.object_to_render(scene, i);

@@ -32,11 +32,13 @@ impl Ctx<'_> {
             times.extend(sample_times_n(scene.mirror.animation.as_ref(), SAMPLES));
             times.sort_by(f64::total_cmp);
             times.dedup();
+            // An object in the sensor's frame turns with it: the same at every time.
+            let rotation = o.placement(&scene.sensor, mirror(0.0), 0.0).1;
             let path = Sweep {
                 mesh: &scene.meshes[o.mesh],
-                object: &|t| position_at(o.animation.as_ref(), o.position, t),
+                object: &|t| o.placement(&scene.sensor, mirror(t), t).0,
                 mirror: &mirror,
-                model: &|offset| Mat4::from_scale_rotation_translation(o.scale, o.rotation, offset),
+                model: &|offset| Mat4::from_scale_rotation_translation(o.scale, rotation, offset),
                 r,
             };
             let Some((t, why)) = path.first_contact(&times) else {

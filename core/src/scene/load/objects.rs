@@ -4,11 +4,16 @@ use std::collections::HashMap;
 
 use glam::{Quat, Vec3};
 
+use super::numbers::num_text;
 use super::{Ctx, MeshBuilder, CYLINDER_SEGMENTS, R, SPHERE_SEGMENTS};
 use crate::scene::error::SceneError;
-use crate::scene::format::{AnimationSpec, AnimationType, ObjectSpec, ScaleSpec, Shape};
+use crate::scene::format::{AnimationSpec, AnimationType, FrameSpec, ObjectSpec, ScaleSpec, Shape};
 use crate::scene::mesh::Mesh;
-use crate::scene::{Object, DEFAULT_CLASS, MAX_CLASS_LEN};
+use crate::scene::{Object, ObjectFrame, DEFAULT_CLASS, MAX_CLASS_LEN};
+
+/// How far from the sensor camera's eye an object in its frame may be (m): the robot's own
+/// parts (a camera body, a lens barrel, a mount down to the floor) are within a few metres.
+pub const MAX_SENSOR_OFFSET_M: f32 = 10.0;
 
 /// The cache key and builder of a built-in shape at unit size (1 m across: a cube with edges 1,
 /// a sphere of diameter 1 with `segments` around and max(2, segments / 2) rings, a cylinder of
@@ -123,7 +128,11 @@ impl Ctx<'_> {
             None => Quat::IDENTITY,
         };
         let scale = self.object_scale(&f, o, size)?;
-        let position = self.object_position(i, &f, o)?;
+        let frame = self.object_frame(&f, o)?;
+        let position = match frame {
+            ObjectFrame::World => self.object_position(i, &f, o)?,
+            ObjectFrame::Sensor => self.offset_from_sensor(&f("position"), o)?,
+        };
         let animation = match &o.animation {
             Some(a) => Some(self.animation(&f("animation"), a, position)?),
             None => None,
@@ -134,6 +143,7 @@ impl Ctx<'_> {
             mesh,
             material,
             shape: o.shape.describe(o.file.as_deref()),
+            frame,
             position,
             rotation,
             scale,
@@ -250,6 +260,41 @@ impl Ctx<'_> {
             ));
         }
         Ok(scale)
+    }
+
+    /// Whose frame the object is placed in. One in the sensor's moves with the camera and
+    /// takes no animation of its own.
+    fn object_frame(&self, f: &dyn Fn(&str) -> String, o: &ObjectSpec) -> R<ObjectFrame> {
+        match o.frame {
+            None | Some(FrameSpec::World) => Ok(ObjectFrame::World),
+            Some(FrameSpec::Sensor) if o.animation.is_some() => Err(self.unused(
+                &f("animation"),
+                "an object in the sensor's frame moves with the sensor camera (the robot); \
+                 it takes no animation of its own",
+            )),
+            Some(FrameSpec::Sensor) => Ok(ObjectFrame::Sensor),
+        }
+    }
+
+    /// An object's offset from the sensor camera's eye (metres, along the camera's axes: x
+    /// right, y down, z forward); within [`MAX_SENSOR_OFFSET_M`], since a part of the robot
+    /// stays near its camera.
+    fn offset_from_sensor(&self, field: &str, o: &ObjectSpec) -> R<Vec3> {
+        let p = o
+            .position
+            .ok_or_else(|| self.missing(field, "the offset from the sensor camera's eye"))?;
+        let v = self.vec3(field, p)?;
+        if v.length() > MAX_SENSOR_OFFSET_M {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "an offset of {} m from the sensor camera; a part of the robot placed in \
+                     the sensor's frame stays within {MAX_SENSOR_OFFSET_M} m of it",
+                    num_text(v.length())
+                ),
+            ));
+        }
+        Ok(v)
     }
 
     /// Where the object is: its `position`, or, for a keyframed object that leaves it out,

@@ -35,7 +35,7 @@ use super::layers::Layers;
 use super::localise::poses::object_spheres;
 use super::{SensorOptics, SensorOutputs};
 use crate::scene::state::SceneState;
-use crate::scene::Scene;
+use crate::scene::{ObjectFrame, Scene};
 use trajectory::Pose;
 
 /// The index a data loader reads: one JSON line per frame.
@@ -52,19 +52,21 @@ pub struct Frame {
     pub index_line: String,
 }
 
-/// Every object's bounding sphere about its own origin: its centre's offset (model space
-/// scaled, not yet rotated) and its radius, walked once over the mesh's vertices.
-pub struct ObjectBounds(Vec<(Vec3, f32)>);
+/// Every obstacle's bounding sphere about its own origin ([`object_spheres`]: the objects in
+/// the scene's frame): its index, its centre's offset (model space scaled and turned, which a
+/// later time does not change) and its radius, walked once over the mesh's vertices.
+pub struct ObjectBounds(Vec<(usize, Vec3, f32)>);
 
 impl ObjectBounds {
     pub fn of(scene: &Scene) -> Self {
         let state = SceneState::at(scene, 0.0);
-        let at_zero = object_spheres(scene, &state);
+        let obstacles =
+            (0..scene.objects.len()).filter(|&i| scene.objects[i].frame == ObjectFrame::World);
         // object_spheres gives position + rotation x centre: keep the centre relative to the
         // object's origin, which is all a later time moves.
         Self(
-            (at_zero.iter().zip(&state.object_positions))
-                .map(|(&(centre, reach), &position)| (centre - position, reach))
+            (obstacles.zip(object_spheres(scene, &state)))
+                .map(|(i, (centre, reach))| (i, centre - state.object_positions[i], reach))
                 .collect(),
         )
     }
@@ -72,8 +74,8 @@ impl ObjectBounds {
     /// The spheres at time `t_s`.
     fn at(&self, scene: &Scene, t_s: f64) -> Vec<(Vec3, f32)> {
         let state = SceneState::at(scene, t_s);
-        (self.0.iter().zip(&state.object_positions))
-            .map(|(&(offset, reach), &position)| (position + offset, reach))
+        (self.0.iter())
+            .map(|&(i, offset, reach)| (state.object_positions[i] + offset, reach))
             .collect()
     }
 }

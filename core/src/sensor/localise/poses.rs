@@ -15,7 +15,7 @@ use glam::{Vec2, Vec3};
 use super::LocaliseError;
 use crate::random::SplitMix64;
 use crate::scene::state::SceneState;
-use crate::scene::Scene;
+use crate::scene::{ObjectFrame, Scene};
 
 /// Random tries for one free query pose before giving up.
 pub const QUERY_TRIES: u32 = 10_000;
@@ -40,13 +40,12 @@ pub fn floor_extent(scene: &Scene) -> Result<(Vec2, Vec2), LocaliseError> {
     Ok((c - h, c + h))
 }
 
-/// Every object's bounding sphere (centre, radius) at the state's time: the sphere about its
-/// box's centre through its farthest vertex, so rotation does not change it.
+/// Every obstacle's bounding sphere (centre, radius) at the state's time: the sphere about its
+/// box's centre through its farthest vertex, so rotation does not change it. The obstacles
+/// are the objects in the scene's frame; those in the sensor's are the robot's own parts.
 pub fn object_spheres(scene: &Scene, state: &SceneState) -> Vec<(Vec3, f32)> {
-    scene
-        .objects
-        .iter()
-        .zip(&state.object_positions)
+    (scene.objects.iter().zip(&state.object_positions))
+        .filter(|(o, _)| o.frame == ObjectFrame::World)
         .map(|(o, &position)| {
             let mesh = &scene.meshes[o.mesh];
             let centre = 0.5 * (mesh.bounds_min + mesh.bounds_max);

@@ -12,6 +12,27 @@ const BAD: &[(&str, Option<u32>, &str)] = &[
         Some(16),
         "objects[0].position: object \"rod\" reaches into the mirror (centre [0, 3, 0], radius 1)",
     ),
+    (
+        "sensor-frame-animated.toml",
+        Some(20),
+        "objects[0].animation: not allowed here: an object in the sensor's frame moves with the \
+         sensor camera",
+    ),
+    (
+        "sensor-frame-far.toml",
+        Some(17),
+        "objects[0].position: an offset of 12 m from the sensor camera",
+    ),
+    (
+        "sensor-frame-in-mirror.toml",
+        Some(21),
+        "objects[0].position: object \"rod\" reaches into the mirror",
+    ),
+    (
+        "sensor-frame-unknown.toml",
+        Some(14),
+        "objects[0].frame: unknown variant `robot`, expected `world` or `sensor`",
+    ),
     ("syntax-error.toml", Some(4), "TOML syntax error"),
     ("unknown-field.toml", Some(4), "mirror.radus"),
     (

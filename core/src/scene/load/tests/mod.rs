@@ -59,3 +59,54 @@ fn defaults_are_applied() {
     assert!(s.light.is_none());
     assert!(s.objects.is_empty());
 }
+
+/// An object in the sensor's frame sits at the camera's eye plus its offset along the
+/// camera's axes (x right, y down, z forward: with the default up -Z and the camera looking
+/// up, right is -X and down is +Z), follows the mirror's animation, and turns with the
+/// robot's heading; a turn alone is a change the cube map must see.
+#[test]
+fn objects_in_the_sensor_frame_move_and_turn_with_the_camera() {
+    use crate::scene::state::SceneState;
+    use crate::scene::ObjectFrame;
+    let text = "[room]\ncenter = [0, 3, 0]\nsize = [10, 6, 10]\nwalls = \"w\"\n\
+        [mirror]\ncenter = [0, 3, 0]\nradius = 1\n\
+        animation = { type = \"linear\", to = [1, 3, 0], duration = 4 }\n\
+        [[materials]]\nname = \"w\"\ntype = \"color\"\ncolor = [0.5, 0.5, 0.5]\n\
+        [[objects]]\nframe = \"sensor\"\nshape = \"box\"\nsize = [0.1, 0.1, 0.1]\n\
+        position = [0.2, 0, -0.1]\nrotation = [90, 0, 0]\nmaterial = \"w\"\n";
+    let mut s = load_str(text, Path::new("body.toml")).unwrap();
+    assert_eq!(s.objects[0].frame, ObjectFrame::Sensor);
+    let near = |a: Vec3, b: Vec3| (a - b).length() < 1e-6;
+    let at = |s: &Scene, t: f64| SceneState::at(s, t);
+    // The camera is 2.5 m below the mirror's centre (the scene's origin at time 0).
+    let zero = at(&s, 0.0);
+    assert!(
+        near(zero.object_positions[0], Vec3::new(-0.2, -2.6, 0.0)),
+        "{zero:?}"
+    );
+    // The object's y axis (turned onto the camera's z by its rotation) is the camera's
+    // forward, +Y in the world.
+    assert!(near(zero.object_rotations[0] * Vec3::Y, Vec3::Y));
+    let later = at(&s, 2.0);
+    assert!(
+        near(later.object_positions[0], Vec3::new(0.3, -2.6, 0.0)),
+        "{later:?}"
+    );
+    // Turned 90 degrees: the camera's right, -X, becomes +Z.
+    s.sensor.heading_rad = std::f32::consts::FRAC_PI_2;
+    let turned = at(&s, 0.0);
+    assert!(
+        near(turned.object_positions[0], Vec3::new(0.0, -2.6, 0.2)),
+        "{turned:?}"
+    );
+    assert!(turned.cube_differs(&zero) && turned.object_moved(&zero, 0));
+    // On the camera's axis a turn leaves the position but not the orientation.
+    s.objects[0].position = Vec3::new(0.0, 0.0, -0.1);
+    let (a, b) = (at(&s, 0.0), {
+        s.sensor.heading_rad = 0.0;
+        at(&s, 0.0)
+    });
+    assert!(near(a.object_positions[0], b.object_positions[0]));
+    assert!(a.object_rotations[0].dot(b.object_rotations[0]).abs() < 0.9);
+    assert!(a.cube_differs(&b), "the turn alone must refill the cube");
+}
