@@ -73,8 +73,9 @@ pub struct Args {
     /// The layers each frame holds, comma-separated: image (sensor.exr, .png), camera
     /// (sensor.camera.png, with the scene's [sensor.imaging]), rays, range, range16 (the range
     /// as 16-bit millimetres, sensor.range.png; not in all), ids (and the id
-    /// map), panoramas, points (points.ply); or all. camera.json and pose.json always.
-    #[arg(long, default_value = "all", value_name = "LAYERS")]
+    /// map), panoramas, points (points.ply); or all; or default: all but rays and points,
+    /// which the pose and one frame's ray map give again. camera.json and pose.json always.
+    #[arg(long, default_value = "default", value_name = "LAYERS")]
     outputs: Layers,
     /// How the dataset is written: files (a folder per frame, and index.jsonl), mcap (a ROS 2
     /// bag in OUT/bag: metadata.yaml and bag_0.mcap, made from the frames, which are then not

@@ -107,9 +107,10 @@ def dataset(
     ``outputs``: the layers each frame holds, as a list (``["image", "range", "ids"]``) or a
     comma-separated string: ``image``, ``camera`` (with the scene's ``[sensor.imaging]``),
     ``rays``, ``range``, ``range16`` (the range as 16-bit millimetres, ``sensor.range.png``;
-    named only, not in ``"all"``), ``ids``, ``panoramas``, ``points``, or ``"all"`` (the default: every
-    layer the scene has). ``camera.json`` and ``pose.json`` always. ``specchio dataset
-    --outputs``, docs/sensor.md.
+    named only, not in ``"all"``), ``ids``, ``panoramas``, ``points``; or ``"all"`` (every
+    layer the scene has); or ``"default"`` (what ``None`` gives: every layer but ``rays`` and
+    ``points``, which the pose and one frame's ray map give again). ``camera.json`` and
+    ``pose.json`` always. ``specchio dataset --outputs``, docs/sensor.md.
 
     ``format``: ``"files"`` (the default: the frame folders and ``index.jsonl``), ``"mcap"``
     (a ROS 2 bag in ``out/bag``, ``metadata.yaml`` and ``bag_0.mcap``, made from the frames,

@@ -178,11 +178,12 @@ def test_an_interrupted_run_writes_nothing(made, monkeypatch):
         assert not [p for p in work.iterdir() if "stopped" in p.name], on_ray
 
 
-# A whole frame of a run of every layer (the thesis room has no camera model): a panorama among
-# its files, as the panoramas layer asks.
+# A whole frame of a run of the default layers (every layer but the ray map and the point
+# cloud; the thesis room has no camera model): a panorama among its files, as the panoramas
+# layer asks.
 FILES = [
-    "sensor.exr", "sensor.png", "sensor.rays.exr", "sensor.range.exr", "sensor.id.exr",
-    "sensor.id.json", "camera.json", "pose.json", "points.ply", "sensor.panorama.lonlat.png",
+    "sensor.exr", "sensor.png", "sensor.range.exr", "sensor.id.exr", "sensor.id.json",
+    "camera.json", "pose.json", "sensor.panorama.lonlat.png",
 ]
 
 
@@ -214,10 +215,14 @@ def test_the_output_takes_only_its_frames_files(made, monkeypatch):
     cli = work / "cli"
     index = (cli / "index.jsonl").read_text().splitlines()
     real = lambda n: [(str(p.relative_to(cli)), p.read_bytes()) for p in sorted((cli / f"frames/{n:06d}").iterdir())]
-    based = specchio.DatasetFrames(scene, "robot.csv", encoders=0, geometry_frame="base_link")
+    # A ray map in another frame: only a run that writes one can tell (the default does not).
+    every = specchio.DatasetOutput(scene, "robot.csv", "parts-all", outputs="all")
+    based = specchio.DatasetFrames(scene, "robot.csv", encoders=0, geometry_frame="base_link", outputs="all")
     ((files, line1),) = based.frames([1])
     with pytest.raises(specchio.SpecchioError, match="frame 1: its ray map is not in the dataset's scene frame"):
-        out.place(files, line1)
+        every.place(files, line1)
+    del every
+    assert not (work / "parts-all").exists()
     world = specchio.DatasetFrames(scene, "robot.csv", encoders=0, panorama_frame="world")
     ((files, line1),) = world.frames([1])
     with pytest.raises(specchio.SpecchioError, match="frame 1: its panoramas are not in the dataset's robot frame"):
@@ -284,12 +289,15 @@ def test_the_renderer_gives_the_dataset_frames_layers(made):
     """A batch at the trajectory's poses is the dataset, layer for layer (read back with
     specchio.read_exr): one far plane and one renderer set-up for both."""
     work, scene = made
+    # The ray map, which the default leaves out.
+    run = cli("dataset", scene, "--trajectory", "robot.csv", "--out", "cli-rays", "--outputs", "image,rays,range,ids", cwd=work)
+    assert run.returncode == 0, run.stderr
     poses = specchio.read_trajectory(work / "robot.csv")
     array = np.array([[*p["position"], p["heading"]] for p in poses])
     with specchio.Renderer(specchio.Scene(scene)) as r:
         batch = r.render_batch(array, times=[p["time"] for p in poses])
     for i in range(len(poses)):
-        folder = work / "cli" / "frames" / f"{i:06d}"
+        folder = work / "cli-rays" / "frames" / f"{i:06d}"
         colour = specchio.read_exr(folder / "sensor.exr")
         assert np.array_equal(np.stack([colour[c] for c in "RGB"], -1), batch["sensor"][i])
         rays = specchio.read_exr(folder / "sensor.rays.exr")

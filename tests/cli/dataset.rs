@@ -15,6 +15,7 @@ fn dataset(
     dir: &std::path::Path,
     name: &str,
     trajectory: &str,
+    extra: &[&str],
 ) -> (std::process::Output, std::path::PathBuf) {
     let scene = root().join("scenes/thesis-room.toml");
     std::fs::create_dir_all(dir).unwrap();
@@ -26,10 +27,9 @@ fn dataset(
         file.to_str().unwrap(),
         out.to_str().unwrap(),
     );
-    (
-        specchio(&["dataset", s, "--trajectory", t, "--out", o]),
-        out,
-    )
+    let mut args = vec!["dataset", s, "--trajectory", t, "--out", o];
+    args.extend(extra);
+    (specchio(&args), out)
 }
 
 fn json(path: &std::path::Path) -> serde_json::Value {
@@ -39,7 +39,8 @@ fn json(path: &std::path::Path) -> serde_json::Value {
 /// Three poses through the thesis room: every frame's files, an index line each, the poses
 /// in both frames (a known point: the scene's [1, 3, 0.5] is ROS's [1, -0.5, 3]; heading 45
 /// degrees is a yaw of 45 degrees about ROS's +Z), a point per mirror pixel; and the frame at
-/// the scene's own pose is `render --sensor-outputs`'s, id for id.
+/// the scene's own pose is `render --sensor-outputs`'s, id for id. Every layer (`--outputs
+/// all`), for the ray map and the point cloud the default leaves out.
 #[test]
 fn a_trajectory_makes_a_frame_per_pose_with_poses_in_both_frames() {
     let dir = temp_dir("dataset");
@@ -47,6 +48,7 @@ fn a_trajectory_makes_a_frame_per_pose_with_poses_in_both_frames() {
         &dir,
         "robot.csv",
         "# the robot's path\ntime,x,y,z,heading\n0,0,3,0,0\n0.5,1,3,0.5,45\n1,1.5,3,1,90\n",
+        &["--outputs", "all"],
     );
     assert!(
         run.status.success(),
@@ -221,7 +223,7 @@ fn a_pose_the_robot_cannot_take_is_refused_before_anything_is_written() {
         } else {
             "robot.csv"
         };
-        let (run, out) = dataset(&dir, name, text);
+        let (run, out) = dataset(&dir, name, text, &[]);
         assert_eq!(run.status.code(), Some(1), "{text:?}");
         let said = String::from_utf8_lossy(&run.stderr);
         assert!(said.contains(want), "{text:?}: {said}");
@@ -240,6 +242,7 @@ fn the_heading_turns_the_image_and_the_optical_frame() {
         "turn.json",
         r#"[{"time": 0, "position": [0, 3, 0], "heading": 0},
             {"time": 0, "position": [0, 3, 0], "heading": 90}]"#,
+        &[],
     );
     assert!(
         run.status.success(),

@@ -45,43 +45,50 @@ fn frame_files(out: &Path, i: usize) -> BTreeMap<String, Vec<u8>> {
         .collect()
 }
 
+/// The default (no `--outputs`) and a list each hold their layers only, with the bytes the
+/// run of every layer (`--outputs all`) gives each file; the default leaves out the ray map
+/// and the point cloud.
 #[test]
 fn a_frame_holds_the_chosen_layers_only_each_with_the_full_runs_bytes() {
     let dir = temp_dir("dataset-outputs");
-    let all = dataset(&dir, "all", &[]);
-    assert!(
-        all.status.success(),
-        "{}",
-        String::from_utf8_lossy(&all.stderr)
-    );
-    let some = dataset(&dir, "some", &["--outputs", "image,range,ids"]);
-    assert!(
-        some.status.success(),
-        "{}",
-        String::from_utf8_lossy(&some.stderr)
-    );
+    for (name, extra) in [
+        ("all", &["--outputs", "all"][..]),
+        ("default", &[]),
+        ("some", &["--outputs", "image,range,ids"]),
+    ] {
+        let run = dataset(&dir, name, extra);
+        assert!(
+            run.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    }
+    let chosen_only = ["camera.json", "pose.json", "sensor.exr", "sensor.id.exr"]
+        .into_iter()
+        .chain(["sensor.id.json", "sensor.png", "sensor.range.exr"]);
+    let panoramas = ["cylindrical", "lonlat"]
+        .into_iter()
+        .flat_map(|k| ["exr", "png"].map(|e| format!("sensor.panorama.{k}.{e}")));
+    let mut standard: Vec<String> = chosen_only.clone().map(String::from).collect();
+    standard.extend(panoramas);
+    standard.sort();
     for i in 0..2 {
-        let (full, chosen) = (
-            frame_files(&dir.join("all"), i),
-            frame_files(&dir.join("some"), i),
-        );
-        let names: Vec<&str> = chosen.keys().map(String::as_str).collect();
-        assert_eq!(
-            names,
-            [
-                "camera.json",
-                "pose.json",
-                "sensor.exr",
-                "sensor.id.exr",
-                "sensor.id.json",
-                "sensor.png",
-                "sensor.range.exr"
-            ]
-        );
-        for (name, bytes) in &chosen {
-            // camera.json lists the panoramas written, none here.
-            if name != "camera.json" {
-                assert!(full[name] == *bytes, "frame {i}: {name} differs");
+        let full = frame_files(&dir.join("all"), i);
+        for (set, want) in [
+            (
+                "some",
+                chosen_only.clone().map(String::from).collect::<Vec<_>>(),
+            ),
+            ("default", standard.clone()),
+        ] {
+            let chosen = frame_files(&dir.join(set), i);
+            let names: Vec<&String> = chosen.keys().collect();
+            assert_eq!(names, want.iter().collect::<Vec<_>>(), "{set}");
+            for (name, bytes) in &chosen {
+                // camera.json lists the files written.
+                if name != "camera.json" {
+                    assert!(full[name] == *bytes, "frame {i}: {set}'s {name} differs");
+                }
             }
         }
         assert!(full.contains_key("sensor.rays.exr") && full.contains_key("points.ply"));
@@ -112,6 +119,12 @@ fn a_frame_holds_the_chosen_layers_only_each_with_the_full_runs_bytes() {
     assert_eq!(
         full["outputs"],
         serde_json::json!(["image", "rays", "range", "ids", "panoramas", "points"])
+    );
+    let standard: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("default/dataset.json")).unwrap()).unwrap();
+    assert_eq!(
+        standard["outputs"],
+        serde_json::json!(["image", "range", "ids", "panoramas"])
     );
 }
 

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use common::{root, specchio, temp_dir, Scratch};
 use specchio::scene::Lookup;
-use specchio::sensor::files::{f32_channel, read_channels, read_u32_channel};
+use specchio::sensor::files::{f32_channel, float_channel, read_channels, read_u32_channel};
 use specchio::sensor::outputs::{NO_ID, RAY_CHANNELS};
 
 fn run_ok(args: &[&str]) {
@@ -107,7 +107,7 @@ fn both_commands_write_the_sensor_outputs() {
                 (t / (t - b) * h as f64) as u64
             };
             let at = (row * w + 2) as usize; // column 2: azimuth (2.5 / w) * 360 degrees
-            let rgb = ["R", "G", "B"].map(|n| f32_channel(&channels, n).unwrap()[at]);
+            let rgb = ["R", "G", "B"].map(|n| float_channel(&channels, n).unwrap()[at]);
             assert_eq!(rgb, [1.0, 0.0, 0.0], "{}", file.display());
         }
     }

@@ -38,6 +38,26 @@ pub fn encode_rgba(to: impl Write + Seek, image: &RgbaImage) -> Result<(), Error
         .to_buffered(to)
 }
 
+/// Linear RGBA, 16-bit ("half") float: for an image resampled from one the GPU renders in
+/// half floats (the views are RGBA16F), where 32 bits would store rounding noise at twice the
+/// size. Half floats keep 11 significant bits (3 decimal digits) up to 65504.
+pub fn encode_rgba_half(to: impl Write + Seek, image: &RgbaImage) -> Result<(), Error> {
+    use ::exr::prelude::f16;
+    let w = image.width as usize;
+    let channels = SpecificChannels::rgba(|Vec2(x, y)| {
+        let p: [f32; 4] = image.pixels[y * w + x];
+        (
+            f16::from_f32(p[0]),
+            f16::from_f32(p[1]),
+            f16::from_f32(p[2]),
+            f16::from_f32(p[3]),
+        )
+    });
+    Image::from_encoded_channels((w, image.height as usize), ENCODING, channels)
+        .write()
+        .to_buffered(to)
+}
+
 /// One channel's samples, row 0 at the top.
 pub enum Samples {
     F32(Vec<f32>),
@@ -165,6 +185,16 @@ pub fn read_channels(path: &Path) -> Result<Vec<(String, Channel)>, Error> {
 pub fn f32_channel<'a>(channels: &'a [(String, Channel)], name: &str) -> Option<&'a [f32]> {
     channels.iter().find_map(|(n, s)| match s {
         FlatSamples::F32(v) if n == name => Some(v.as_slice()),
+        _ => None,
+    })
+}
+
+/// The samples of channel `name` as f32, if it is a float channel of either width (a
+/// panorama's are half floats).
+pub fn float_channel(channels: &[(String, Channel)], name: &str) -> Option<Vec<f32>> {
+    channels.iter().find_map(|(n, s)| match s {
+        FlatSamples::F32(v) if n == name => Some(v.clone()),
+        FlatSamples::F16(v) if n == name => Some(v.iter().map(|h| h.to_f32()).collect()),
         _ => None,
     })
 }

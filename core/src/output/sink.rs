@@ -28,6 +28,13 @@ pub trait Sink {
         self.write_bytes(path, bytes.get_ref())
     }
 
+    /// [`Self::write_exr`] in half floats ([`exr::encode_rgba_half`]).
+    fn write_exr_half(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        exr::encode_rgba_half(&mut bytes, image).map_err(|e| exr_error(path, e))?;
+        self.write_bytes(path, bytes.get_ref())
+    }
+
     /// `channels` (name, samples of `width * height`) as one EXR layer; the file lists the
     /// channels alphabetically, as EXR requires.
     fn write_channels(

@@ -4,7 +4,9 @@
 //! readers are re-exported here for the tools and tests that check the files. And the range
 //! as integers (layer `range16`), for tools that take a 16-bit depth image.
 
-pub use crate::image::exr::{f32_channel, read_channels, u32_channel as read_u32_channel, Samples};
+pub use crate::image::exr::{
+    f32_channel, float_channel, read_channels, u32_channel as read_u32_channel, Samples,
+};
 
 /// What a `range16` sample is.
 pub const RANGE16_UNIT: &str = "whole millimetres (16-bit greyscale), rounded to nearest; 0 for \

@@ -96,6 +96,20 @@ impl Layers {
         Layers(bits).without(Layer::Range16)
     }
 
+    /// What a dataset writes unless asked otherwise (`default`): every layer of [`Self::all`]
+    /// but the ray map and the point cloud, which the pose and one frame's ray map give again
+    /// (the sensor is rigid on the robot) and which are most of a frame's bytes (2.7 and
+    /// 1.9 MB of a thesis-room frame at 512²: docs/sensor.md).
+    pub fn standard() -> Self {
+        Self::all().without(Layer::Rays).without(Layer::Points)
+    }
+
+    /// Whether these are what a keyword (`all`, `default`) names rather than a list: a keyword
+    /// takes the camera image only where the scene has one, a list names it on purpose.
+    pub fn is_keyword(self) -> bool {
+        self == Self::all() || self == Self::standard()
+    }
+
     pub fn has(self, layer: Layer) -> bool {
         self.0 & layer.bit() != 0
     }
@@ -127,10 +141,12 @@ impl Layers {
 impl std::str::FromStr for Layers {
     type Err = String;
 
-    /// `all`, or layer names separated by commas (`image,range,ids`), each once.
+    /// `all`, `default`, or layer names separated by commas (`image,range,ids`), each once.
     fn from_str(text: &str) -> Result<Self, String> {
-        if text.trim() == "all" {
-            return Ok(Layers::all());
+        match text.trim() {
+            "all" => return Ok(Layers::all()),
+            "default" => return Ok(Layers::standard()),
+            _ => {}
         }
         let names = || {
             let all: Vec<&str> = Layer::ALL.iter().map(|l| l.name()).collect();
@@ -141,10 +157,10 @@ impl std::str::FromStr for Layers {
             let layer = (Layer::ALL.into_iter().find(|l| l.name() == word)).ok_or_else(|| {
                 match word.is_empty() {
                     true => format!(
-                        "`{text}`: an empty layer name; the layers: {}, or all",
+                        "`{text}`: an empty layer name; the layers: {}, or all, or default",
                         names()
                     ),
-                    false => format!("`{word}` is not a layer: {}, or all", names()),
+                    false => format!("`{word}` is not a layer: {}, or all, or default", names()),
                 }
             })?;
             if bits & layer.bit() != 0 {
@@ -198,8 +214,12 @@ mod tests {
         assert_eq!(
             e,
             "`depth` is not a layer: image, camera, rays, range, range16, ids, panoramas, points, \
-             or all"
+             or all, or default"
         );
+        let standard: Layers = "default".parse().unwrap();
+        assert_eq!(standard, Layers::standard());
+        assert_eq!(standard.to_string(), "image,camera,range,ids,panoramas");
+        assert!(standard.is_keyword() && Layers::all().is_keyword() && !l.is_keyword());
         assert!("image,,range"
             .parse::<Layers>()
             .unwrap_err()

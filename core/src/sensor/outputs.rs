@@ -242,7 +242,9 @@ impl SensorOutputs {
             };
             (all.into_par_iter())
                 .map(|(name, layout, image)| {
-                    out.write_exr(&dir.join(format!("{name}.exr")), &image)?;
+                    // Half floats: resampled from the sensor's image, which the GPU renders
+                    // in half floats; a panorama is then half the bytes (docs/sensor.md).
+                    out.write_exr_half(&dir.join(format!("{name}.exr")), &image)?;
                     out.write_png(&dir.join(format!("{name}.png")), &image)?;
                     Ok(PanoramaRecord::new(format!("{name}.exr"), &layout))
                 })

@@ -99,7 +99,7 @@ impl FrameWriter {
             encoders: encoders_for(scene),
             panoramas: PanoramaFrame::Robot,
             geometry: GeometryFrame::Scene,
-            layers: Layers::all().for_scene(scene.sensor.imaging.is_some()),
+            layers: Layers::standard().for_scene(scene.sensor.imaging.is_some()),
             path: None,
         })
     }

@@ -106,7 +106,7 @@ impl Plan {
             path: scene_path.to_owned(),
             source,
         })?;
-        let outputs = Layers::all().for_scene(scene.sensor.imaging.is_some());
+        let outputs = Layers::standard().for_scene(scene.sensor.imaging.is_some());
         Ok(Plan {
             scene,
             scene_path: scene_path.to_owned(),
@@ -121,11 +121,12 @@ impl Plan {
         })
     }
 
-    /// Writes only the `chosen` layers (`--outputs`): every one, as `all` asks, is every one
-    /// the scene has; a camera image named alone needs the scene's `[sensor.imaging]`.
+    /// Writes only the `chosen` layers (`--outputs`): a keyword's (`all`, `default`) are the
+    /// ones the scene has; a camera image named in a list needs the scene's
+    /// `[sensor.imaging]`.
     pub fn choose(&mut self, chosen: Layers) -> Result<(), DatasetError> {
         let imaging = self.scene.sensor.imaging.is_some();
-        if chosen != Layers::all() && chosen.has(Layer::Camera) && !imaging {
+        if !chosen.is_keyword() && chosen.has(Layer::Camera) && !imaging {
             return Err(DatasetError::Invalid(format!(
                 "outputs: camera needs a camera model, and {} has no [sensor.imaging] \
                  (docs/scene-format.md)",
