@@ -1,7 +1,8 @@
 //! The crates' arrows, read from their manifests (docs/architecture.md, "Where each part
 //! lives"): the core depends on no workspace crate but `workspace-hack/` and on no Vulkan
-//! crate, the engine on the core only, the benchmark, the viewer and the Python package on the
-//! engine only, the CLI on the engine, the benchmark and the viewer; and the CLI's build and
+//! crate, the engine on the core only, the benchmark and the viewer on the engine only, the
+//! Python package on the engine and the benchmark (whose localisation experiment
+//! `specchio.localise` runs), the CLI on the engine, the benchmark and the viewer; and the CLI's build and
 //! the Python wheel's ask the same features of what they share, so the wheel reuses the
 //! engine the main job compiled.
 
@@ -44,7 +45,9 @@ const CRATE_ARROWS: [(&str, &[&str]); 8] = [
     ("bench", &["engine"]),
     ("viewer", &["engine"]),
     ("cli", &["engine", "bench", "viewer"]),
-    ("python", &["engine"]),
+    // The benchmark for its localisation experiment (`specchio.localise`), run as the command
+    // runs it.
+    ("python", &["engine", "bench"]),
 ];
 
 /// The workspace crates (by folder) that the manifest in `folder` depends on, in any of its

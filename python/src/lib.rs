@@ -12,6 +12,7 @@ mod args;
 mod arrays;
 mod dataset;
 mod errors;
+mod experiment;
 mod files;
 mod localise;
 mod poses;
@@ -48,6 +49,7 @@ fn _specchio(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(reference::reference, m)?)?;
     m.add_function(wrap_pyfunction!(reference::calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(dataset::dataset, m)?)?;
+    m.add_function(wrap_pyfunction!(experiment::localise, m)?)?;
     m.add_function(wrap_pyfunction!(files::read_exr, m)?)?;
     Ok(())
 }

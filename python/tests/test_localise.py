@@ -1,12 +1,18 @@
 """Localisation's descriptors from Python: known answers on made-up panoramas, an independent
 numpy version of the column-shift distance, and refusals that name the argument."""
 
+import json
 import math
+import os
+import re
+import signal
+import threading
 
 import numpy as np
 import pytest
 
 import specchio
+from conftest import cli, scene_path
 
 W, H = 512, 64  # 128 column-shift columns of 4 pixels, 16 rows of 4
 
@@ -132,3 +138,60 @@ def test_signatures_of_another_descriptor_or_size_are_refused():
     with pytest.raises(specchio.SpecchioError) as e:
         shift.distances([a, specchio.Descriptor(k=4).describe(place(7))], a)
     assert "database[1]: a column-shift k=4 signature, given to column-shift k=8" in str(e.value)
+
+
+def _untimed(report):
+    """A localise report without what depends on the clock (the sweeps' seconds and rates)."""
+    report = json.loads(json.dumps(report))
+    for source in report["sources"]:
+        source.pop("sweep_seconds")
+        source.pop("sweep_images_per_s")
+    for row in report["rows"]:
+        row.pop("landmark_images_per_s")
+    return report
+
+
+def test_localise_runs_the_commands_experiment(tmp_path):
+    """specchio.localise is `specchio localise`: with the same options the same report (but
+    for the times the sweep took) and the same landmarks file; queries at the landmarks all
+    find their own. Options are checked as the command checks them, with nothing written."""
+    scene = str(scene_path("thesis-room"))
+    options = {"grid": 4, "queries": 8, "queries_at_landmarks": True, "seed": 5,
+               "sensor_size": 64, "cube_size": 32, "times": [0], "validate": False}
+    report = specchio.localise(scene, tmp_path / "py", **options)
+    flags = ["--grid", "4", "--queries", "8", "--queries-at-landmarks", "--seed", "5",
+             "--sensor-size", "64", "--cube-size", "32", "--times", "0"]
+    run = cli("localise", scene, "--out", "cli", *flags, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    written = json.loads((tmp_path / "py" / "localise.json").read_text())
+    assert report == written
+    want = json.loads((tmp_path / "cli" / "localise.json").read_text())
+    assert _untimed(report) == _untimed(want)
+    assert sorted(p.name for p in (tmp_path / "py").iterdir()) == sorted(
+        p.name for p in (tmp_path / "cli").iterdir()
+    )
+    assert (tmp_path / "py" / "landmarks.json").read_bytes() == (
+        tmp_path / "cli" / "landmarks.json"
+    ).read_bytes()
+    (row,) = report["rows"]
+    assert row["summary"]["queries"] == 8 and row["summary"]["recall_at_1"] == 1.0
+    for bad, says in [({"queries": 0}, "--queries"), ({"bogus": 1}, "--bogus"),
+                      ({"descriptor": "sift"}, "`sift` is not a descriptor")]:
+        with pytest.raises(specchio.SpecchioError, match=re.escape(says)):
+            specchio.localise(scene, tmp_path / "bad", **{**options, **bad})
+        assert not (tmp_path / "bad").exists()
+
+
+def test_localise_stops_at_ctrl_c_with_nothing_written(tmp_path):
+    """Ctrl-C (a SIGINT a quarter second in, while the landmarks are swept: some 1,300 of
+    them at 0.25 m) raises KeyboardInterrupt and leaves no output."""
+    scene = str(scene_path("thesis-room"))
+    timer = threading.Timer(0.25, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            specchio.localise(scene, tmp_path / "stopped", grid=0.25, sensor_size=64, cube_size=32)
+    finally:
+        timer.cancel()
+    assert not (tmp_path / "stopped").exists()
+    assert not [p for p in tmp_path.iterdir() if "stopped" in p.name]

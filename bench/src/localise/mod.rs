@@ -31,7 +31,8 @@ use specchio::vk::device::{Device, OptionalFeatures};
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
 use database::{Database, Landmark};
-use report::{Report, SourceRun};
+pub use report::Report;
+use report::SourceRun;
 use source::{Body, Pose, Robot, Source};
 use specchio::process::args::{face_size, method, real, whole};
 
@@ -132,12 +133,41 @@ struct Images {
     queries: Vec<Vec<Signature>>,
 }
 
+/// How a run learns that it must stop, asked between images, between queries and before the
+/// output is placed with where the run got: the command's signals
+/// (`process::interrupt`), or a library caller's own check (Python's pending
+/// KeyboardInterrupt). An error stops the run with nothing written.
+pub type Stop<'a> = &'a (dyn Fn(&str) -> Result<()> + Sync);
+
+/// `specchio localise`: the experiment, its table printed, stopped by the process's signals.
 pub fn run(args: &Args) -> Result<ExitCode> {
+    specchio::process::interrupt::catch();
+    let signals = |at: &str| Ok(specchio::process::interrupt::check(at)?);
+    let (report, messages) = localise(args, &signals)?;
+    report::print_table(&report, &args.out);
+    specchio::process::validation::verdict(&messages)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The command's arguments from `argv` (its first item the program's name), checked as the
+/// command checks them: how a library caller states an experiment.
+pub fn parse(argv: &[String]) -> std::result::Result<Args, clap::Error> {
+    #[derive(clap::Parser)]
+    #[command(name = "localise")]
+    struct Command {
+        #[command(flatten)]
+        args: Args,
+    }
+    <Command as clap::Parser>::try_parse_from(argv).map(|c| c.args)
+}
+
+/// The experiment of `args`, written into `args.out` all at once or not at all (`stop` asked
+/// as it goes): its report (`localise.json`) and the validation layer's messages.
+pub fn localise(args: &Args, stop: Stop) -> Result<(Report, Vec<String>)> {
     // 1. Input, poses, saved landmarks and the output folder, before any GPU work.
     let plan = plan(args)?;
     let mut out = Transaction::new();
     out.folder(&args.out, "localise.json")?;
-    specchio::process::interrupt::catch();
 
     // 2. One device for every lookup's robot (none when only the reference runs).
     let lookups_used: Vec<Lookup> = plan
@@ -165,14 +195,14 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let mut images = Vec::with_capacity(plan.sources.len());
     for &source in &plan.sources {
         let mut robot = Robot::new(&plan.body, source, device.as_ref(), &options)?;
-        images.push(describe_all(&plan, source, &mut robot)?);
+        images.push(describe_all(&plan, source, &mut robot, stop)?);
     }
     let device_name = device.as_ref().map(|d| d.info.name.clone());
     drop(device);
     let messages = log.map(|l| l.messages()).unwrap_or_default();
 
     // 4. The rows, the report, the floor map and the landmark files, all or nothing.
-    let report = report(args, &plan, &images, device_name, messages.len())?;
+    let report = report(args, &plan, &images, (device_name, messages.len()), stop)?;
     let first = &report.rows[0];
     let map = plot::svg(
         &plan.body.scene,
@@ -191,12 +221,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     }
     out.write_bytes(&args.out.join("localise.svg"), map.as_bytes())?;
     out.write_json(&args.out.join("localise.json"), &report)?;
-    // A signal that came after the last check still stops the run: nothing is placed.
-    specchio::process::interrupt::check("before placing the output")?;
+    // A stop that came after the last check still stops the run: nothing is placed.
+    stop("before placing the output")?;
     out.commit()?;
-    report::print_table(&report, &args.out);
-    specchio::process::validation::verdict(&messages)?;
-    Ok(ExitCode::SUCCESS)
+    Ok((report, messages))
 }
 
 /// Step 1: the descriptor, the robot's body, the sources and times, the poses and any saved
@@ -361,7 +389,7 @@ fn open_device(args: &Args, used: &[Lookup]) -> Result<(Arc<Device>, Arc<Validat
 
 /// Step 3 for one source: its landmarks (loaded when `--landmarks` holds its source, else
 /// swept and timed) and its queries at every time.
-fn describe_all(plan: &Plan, source: Source, robot: &mut Robot) -> Result<Images> {
+fn describe_all(plan: &Plan, source: Source, robot: &mut Robot, stop: Stop) -> Result<Images> {
     let d = plan.descriptor.as_ref();
     let saved = plan.saved.as_ref().filter(|db| db.source == source.name());
     let (landmarks, sweep_seconds) = match saved {
@@ -373,7 +401,7 @@ fn describe_all(plan: &Plan, source: Source, robot: &mut Robot) -> Result<Images
             let poses: Vec<Pose> = plan.landmark_poses.iter().map(|&p| (p, 0.0)).collect();
             let start = Instant::now();
             let what = format!("{} landmarks", source.name());
-            let landmarks = robot.describe(&poses, 0.0, d, &what)?;
+            let landmarks = robot.describe(&poses, 0.0, d, (&what, stop))?;
             (landmarks, Some(start.elapsed().as_secs_f64()))
         }
     };
@@ -384,7 +412,7 @@ fn describe_all(plan: &Plan, source: Source, robot: &mut Robot) -> Result<Images
             source.name(),
             specchio::text::num_text(t)
         );
-        queries.push(robot.describe(poses, t, d, &what)?);
+        queries.push(robot.describe(poses, t, d, (&what, stop))?);
     }
     Ok(Images {
         source,
@@ -402,8 +430,8 @@ fn report(
     args: &Args,
     plan: &Plan,
     images: &[Images],
-    device: Option<String>,
-    validation_messages: usize,
+    (device, validation_messages): (Option<String>, usize),
+    stop: Stop,
 ) -> Result<Report> {
     let d = plan.descriptor.as_ref();
     let column_deg = 360.0 / f64::from(plan.body.layout.width);
@@ -426,6 +454,7 @@ fn report(
                 (q.source.name(), &q.queries[ti], &plan.queries[ti]),
                 t,
                 (column_deg, args.grid),
+                stop,
             )?;
             row.landmark_images_per_s = rate(db, plan);
             rows.push(row);

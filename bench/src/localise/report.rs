@@ -108,6 +108,7 @@ pub fn row(
     (queries_from, queries, truth): (&'static str, &[Signature], &[(Vec3, f64)]),
     query_time_s: f64,
     (column_deg, grid_m): (f64, f64),
+    stop: super::Stop,
 ) -> anyhow::Result<Row> {
     let progress = Progress::new(
         format!(
@@ -123,7 +124,7 @@ pub fn row(
         .par_iter()
         .zip(truth)
         .map(|(q, &t)| {
-            specchio::process::interrupt::check("while matching queries")?;
+            stop("while matching queries")?;
             let judged = judge(descriptor, (database, positions, grid_m), q, t);
             progress.add(1);
             Ok(judged)

@@ -113,13 +113,13 @@ impl<'a> Robot<'a> {
     }
 
     /// The descriptor of the image at every pose, at scene time `t_s`; `what` names the
-    /// poses in an interruption message.
+    /// poses in the progress lines and to `stop`, asked before each image.
     pub fn describe(
         &mut self,
         poses: &[Pose],
         t_s: f64,
         descriptor: &dyn Descriptor,
-        what: &str,
+        (what, stop): (&str, super::Stop),
     ) -> Result<Vec<Signature>> {
         // Said first, so that a long loop is never silent; the bar (on a terminal only)
         // counts its images.
@@ -136,7 +136,7 @@ impl<'a> Robot<'a> {
             if i > 0 {
                 progress.add(1);
             }
-            specchio::process::interrupt::check(&format!("after {i} of {} {what}", poses.len()))
+            stop(&format!("after {i} of {} {what}", poses.len()))
         };
         let mut out = Vec::with_capacity(poses.len());
         match self {

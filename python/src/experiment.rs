@@ -1,0 +1,94 @@
+//! `specchio localise` from Python: the localisation experiment (landmarks on a floor grid,
+//! random queries matched to them, the report) run in this process with the command's own
+//! options and checks, stopped by Ctrl-C (docs/python.md, docs/sensor.md "Localisation").
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyList, PyTuple};
+
+use crate::errors;
+
+/// Runs `specchio localise SCENE --out OUT` with `options` as its options: each keyword is
+/// the option of the same name (`queries=600` is `--queries 600`, `cube_size=128` is
+/// `--cube-size 128`), a list or tuple its comma list (`times=[0, 3]`, `sources=["bvh",
+/// "reference"]`), `True` a flag (`validate=True`), and `None` or `False` leaves it out; they
+/// are checked as the command checks them. The output folder appears whole or not at all;
+/// progress goes to stderr as the command's. Ctrl-C stops the run with nothing written:
+/// between images at once, while the queries are matched when the matching ends. Returns the
+/// report (`localise.json`) as a dict.
+#[pyfunction]
+#[pyo3(signature = (scene, out, **options))]
+pub fn localise(
+    py: Python<'_>,
+    scene: PathBuf,
+    out: PathBuf,
+    options: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Py<PyAny>> {
+    let mut argv: Vec<String> = vec!["localise".into(), path_text(&scene)?];
+    argv.extend(["--out".into(), path_text(&out)?]);
+    for (key, value) in options.into_iter().flat_map(|d| d.iter()) {
+        argv.extend(option(&key.extract::<String>()?, &value)?);
+    }
+    let args =
+        specchio_bench::localise::parse(&argv).map_err(|e| errors::error(clap_message(&e)))?;
+    let stopped: Mutex<Option<PyErr>> = Mutex::new(None);
+    // Python's pending signals (Ctrl-C), seen on the thread that called: elsewhere Python
+    // runs no signal handler, so a check there finds none.
+    let stop = |at: &str| -> anyhow::Result<()> {
+        Python::attach(|py| py.check_signals()).map_err(|e| {
+            *stopped.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+            anyhow::anyhow!("stopped {at}: nothing was written")
+        })
+    };
+    let run = py.detach(|| {
+        // What this call may not replace is what it reads (docs/python.md).
+        specchio::files::identity::forget();
+        let (report, messages) = specchio_bench::localise::localise(&args, &stop)?;
+        specchio::process::validation::verdict(&messages)?;
+        anyhow::Ok(report)
+    });
+    if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        return Err(e);
+    }
+    let report = run.map_err(|e| errors::error(format!("{e:#}")))?;
+    errors::json_to_py(py, &report)
+}
+
+/// A path as the command line would take it (not UTF-8: refused, naming it).
+fn path_text(path: &std::path::Path) -> PyResult<String> {
+    (path.to_str().map(str::to_owned))
+        .ok_or_else(|| errors::error(format!("{}: not a UTF-8 path", path.display())))
+}
+
+/// The command-line words of keyword `key` = `value`.
+fn option(key: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
+    let flag = format!("--{}", key.replace('_', "-"));
+    if value.is_none() {
+        return Ok(vec![]);
+    }
+    if value.is_instance_of::<PyBool>() {
+        return Ok(match value.extract::<bool>()? {
+            true => vec![flag],
+            false => vec![],
+        });
+    }
+    let text = if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        let items: PyResult<Vec<String>> = (value.try_iter()?)
+            .map(|item| Ok(item?.str()?.to_string()))
+            .collect();
+        items?.join(",")
+    } else {
+        value.str()?.to_string()
+    };
+    Ok(vec![flag, text])
+}
+
+/// Clap's error without its usage lines, the option named as the command names it.
+fn clap_message(e: &clap::Error) -> String {
+    let text = e.to_string();
+    let first = text.split("\n\n").next().unwrap_or(&text);
+    let first = first.trim().trim_start_matches("error: ");
+    format!("localise: {first} (keyword arguments are the command's options: queries=600 is --queries 600)")
+}
