@@ -16,11 +16,22 @@ pub struct Scene {
 
 #[pymethods]
 impl Scene {
+    /// `imaging`, a dict of `[sensor.imaging]`'s keys (`{"exposure_s": 0.004, "gain_db": 6}`;
+    /// docs/scene-format.md), replaces the file's camera, checked as the file's would be; `{}`
+    /// is the datasheet camera.
     #[new]
-    fn new(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        let scene = py
+    #[pyo3(signature = (path, imaging=None))]
+    fn new(
+        py: Python<'_>,
+        path: PathBuf,
+        imaging: Option<&Bound<'_, pyo3::types::PyDict>>,
+    ) -> PyResult<Self> {
+        let mut scene = py
             .detach(|| specchio::scene::load(&path))
             .map_err(errors::to_py)?;
+        if let Some(table) = imaging {
+            scene.sensor.imaging = Some(camera(py, &path, table)?);
+        }
         Ok(Scene { scene, path })
     }
 
@@ -82,6 +93,40 @@ impl Scene {
             self.scene.sensor.resolution[1]
         )
     }
+}
+
+/// The imaging chain `table` (Python's values, as `json` writes them) states, checked as a
+/// scene file's `[sensor.imaging]`; an error names `imaging` and the key.
+fn camera(
+    py: Python<'_>,
+    path: &std::path::Path,
+    table: &Bound<'_, pyo3::types::PyDict>,
+) -> PyResult<specchio::scene::imaging::Imaging> {
+    let said = |why: String| errors::error(format!("{}: imaging: {why}", path.display()));
+    let json: String = (py.import("json")?)
+        .call_method1("dumps", (table,))
+        .map_err(|e| said(format!("not JSON-like values ({e})")))?
+        .extract()?;
+    let values: toml::Value =
+        serde_json::from_str(&json).map_err(|e| said(format!("not TOML-like values ({e})")))?;
+    let mut sensor = toml::Table::new();
+    sensor.insert("imaging".into(), values);
+    let mut root = toml::Table::new();
+    root.insert("sensor".into(), toml::Value::Table(sensor));
+    let text = toml::to_string(&root).map_err(|e| said(e.to_string()))?;
+    specchio::scene::imaging_str(&text, std::path::Path::new("imaging")).map_err(|e| {
+        // The generated text's lines mean nothing to the caller: the field and the message.
+        let full = e.to_string();
+        match e.field() {
+            Some(field) => said(
+                full.split_once(&format!("{field}: "))
+                    .map_or(full.clone(), |(_, m)| {
+                        format!("{}: {m}", field.trim_start_matches("sensor.imaging."))
+                    }),
+            ),
+            None => said(full.trim_start_matches("imaging: ").to_owned()),
+        }
+    })
 }
 
 impl Scene {

@@ -4,7 +4,10 @@ model's definition, on pixels whose light is known), and new noise each frame.""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
+import pytest
 
 import specchio
 from conftest import SCENES
@@ -76,3 +79,23 @@ def test_the_dataset_frames_blur_along_the_trajectory_as_the_command_does(tmp_pa
     files = dict(frames.frames([1])[0][0])
     want = (tmp_path / "cli" / "frames" / "000001" / "sensor.camera.png").read_bytes()
     assert files["frames/000001/sensor.camera.png"] == want
+
+
+def test_a_camera_given_in_python_is_the_scene_files(tmp_path):
+    """`Scene(path, imaging={...})` states the camera as `[sensor.imaging]` would: the same
+    camera image, code for code, as the file with that table; its mistakes are refused naming
+    `imaging` and the key."""
+    plain = SCENES / "test" / "six-colour-room.toml"
+    given = specchio.Scene(plain, imaging={"exposure_s": 0.005, "vignetting": 0, "seed": 3})
+    with specchio.Renderer(given) as r:
+        ours = r.render()
+    with specchio.Renderer(camera_scene(tmp_path)) as r:
+        theirs = r.render()
+    np.testing.assert_array_equal(ours["camera"], theirs["camera"])
+    with specchio.Renderer(specchio.Scene(plain, imaging={})) as r:
+        assert r.render()["camera"].dtype == np.uint16, "{} is the datasheet camera"
+    for bad, says in [({"exposure_s": 20}, "imaging: exposure_s: must be"),
+                      ({"exposur": 1}, "unknown field `exposur`"),
+                      ({"exposure_s": None}, "imaging:")]:
+        with pytest.raises(specchio.SpecchioError, match=re.escape(says)):
+            specchio.Scene(plain, imaging=bad)

@@ -92,6 +92,13 @@ fn a_frame_holds_the_chosen_layers_only_each_with_the_full_runs_bytes() {
             }
         }
         assert!(full.contains_key("sensor.rays.exr") && full.contains_key("points.ply"));
+        // The target (#44): a default frame of at most 3 MB at 512² (measured 1.86
+        // and 2.15 MB here; every layer, 6.5 and 6.8 MB).
+        let bytes: usize = frame_files(&dir.join("default"), i)
+            .values()
+            .map(Vec::len)
+            .sum();
+        assert!(bytes <= 3_000_000, "frame {i}: {bytes} bytes");
     }
     // camera.json names only the files written.
     let camera: serde_json::Value =

@@ -36,7 +36,7 @@ pub use crate::files::{
 pub use anim::{Animation, Repeat};
 pub use asset::AssetError;
 pub use error::{Location, SceneError};
-pub use load::{load, load_str};
+pub use load::{imaging_str, load, load_str};
 pub use mesh::{Mesh, MAX_MESH_INDICES, MAX_MESH_VERTICES};
 pub use texture::{TextureData, MAX_TEXTURE_SIZE_PX};
 

@@ -95,6 +95,35 @@ pub fn load_str(text: &str, path: &Path) -> Result<Scene, SceneError> {
     }
     .scene(spec)
 }
+/// A camera's imaging chain alone: `text` holds a `[sensor.imaging]` table and nothing else,
+/// checked as a scene file's is, `name` naming it in messages. How a caller outside a scene
+/// file states a camera (Python's `Scene(path, imaging={...})`).
+pub fn imaging_str(text: &str, name: &Path) -> Result<super::imaging::Imaging, SceneError> {
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Only {
+        sensor: OnlySensor,
+    }
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct OnlySensor {
+        imaging: ImagingSpec,
+    }
+    let doc = DeTable::parse(text).map_err(|e| source::syntax_error(name, text, &e))?;
+    let loc = Locator {
+        file: name,
+        text,
+        root: doc,
+    };
+    let spec: Only = toml::from_str(text).map_err(|e| loc.serde_error(&e))?;
+    let ctx = Ctx {
+        loc,
+        dir: PathBuf::new(),
+        origin: DVec3::ZERO,
+    };
+    ctx.imaging(&spec.sensor.imaging)
+}
+
 // ---------------------------------------------------------------------------------------------
 // Validation.
 

@@ -91,3 +91,19 @@ fn bad_numbers_and_words_name_their_field_and_line() {
         assert!(err.line().is_some(), "{msg}");
     }
 }
+
+/// A `[sensor.imaging]` table alone (Python's `imaging=`) is checked as a scene file's is:
+/// the same camera from the same keys, and a value out of range named by its field.
+#[test]
+fn an_imaging_table_alone_is_checked_as_in_a_scene() {
+    let table = "[sensor.imaging]\nexposure_s = 0.002\ngain_db = 6\nseed = 9\n";
+    let alone = crate::scene::imaging_str(table, Path::new("imaging=")).unwrap();
+    let scene = load_str(&format!("{MINIMAL}{table}"), Path::new("s.toml")).unwrap();
+    assert_eq!(Some(alone), scene.sensor.imaging);
+    let e = crate::scene::imaging_str("[sensor.imaging]\nexposure_s = 20\n", Path::new("imaging="))
+        .unwrap_err();
+    assert_eq!(e.field(), Some("sensor.imaging.exposure_s"), "{e}");
+    let e = crate::scene::imaging_str("[sensor.imaging]\nexposur = 1\n", Path::new("imaging="))
+        .unwrap_err();
+    assert!(e.to_string().contains("unknown field `exposur`"), "{e}");
+}
