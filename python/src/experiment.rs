@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyList, PyTuple};
+use pyo3::types::{PyBool, PyDict, PyString};
 
 use crate::errors;
 
@@ -34,9 +34,14 @@ pub fn localise(
     let args =
         specchio_bench::localise::parse(&argv).map_err(|e| errors::error(clap_message(&e)))?;
     let stopped: Mutex<Option<PyErr>> = Mutex::new(None);
-    // Python's pending signals (Ctrl-C), seen on the thread that called: elsewhere Python
-    // runs no signal handler, so a check there finds none.
+    // Python's pending signals (Ctrl-C), seen on the thread that called only: Python runs
+    // its signal handlers there, so a check on a worker (the matching's) would find none,
+    // and only contend for the GIL.
+    let caller = std::thread::current().id();
     let stop = |at: &str| -> anyhow::Result<()> {
+        if std::thread::current().id() != caller {
+            return Ok(());
+        }
         Python::attach(|py| py.check_signals()).map_err(|e| {
             *stopped.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
             anyhow::anyhow!("stopped {at}: nothing was written")
@@ -62,19 +67,25 @@ fn path_text(path: &std::path::Path) -> PyResult<String> {
         .ok_or_else(|| errors::error(format!("{}: not a UTF-8 path", path.display())))
 }
 
-/// The command-line words of keyword `key` = `value`.
+/// The command-line word of keyword `key` = `value`: `--key=value`, one word, so that a
+/// value beginning with `-` is read as the option's value, not as an option.
 fn option(key: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
     let flag = format!("--{}", key.replace('_', "-"));
     if value.is_none() {
         return Ok(vec![]);
     }
-    if value.is_instance_of::<PyBool>() {
+    // Python's and numpy's booleans (`np.True_` is no `bool`: its type is numpy's `bool`, or
+    // `bool_` before numpy 2; it extracts as one).
+    let kind = value.get_type().name()?.to_string();
+    if value.is_instance_of::<PyBool>() || kind == "bool" || kind == "bool_" {
         return Ok(match value.extract::<bool>()? {
             true => vec![flag],
             false => vec![],
         });
     }
-    let text = if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+    let listed = !value.is_instance_of::<PyString>() && value.try_iter().is_ok();
+    let text = if listed {
+        // A list, tuple, numpy array or any iterable but a string: the comma list.
         let items: PyResult<Vec<String>> = (value.try_iter()?)
             .map(|item| Ok(item?.str()?.to_string()))
             .collect();
@@ -82,7 +93,7 @@ fn option(key: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
     } else {
         value.str()?.to_string()
     };
-    Ok(vec![flag, text])
+    Ok(vec![format!("{flag}={text}")])
 }
 
 /// Clap's error without its usage lines, the option named as the command names it.

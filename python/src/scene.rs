@@ -30,7 +30,7 @@ impl Scene {
             .detach(|| specchio::scene::load(&path))
             .map_err(errors::to_py)?;
         if let Some(table) = imaging {
-            scene.sensor.imaging = Some(camera(py, &path, table)?);
+            scene.sensor.imaging = Some(camera(&path, table)?);
         }
         Ok(Scene { scene, path })
     }
@@ -95,27 +95,31 @@ impl Scene {
     }
 }
 
-/// The imaging chain `table` (Python's values, as `json` writes them) states, checked as a
-/// scene file's `[sensor.imaging]`; an error names `imaging` and the key.
+/// The imaging chain `table` states (its keys `[sensor.imaging]`'s), checked as a scene
+/// file's table is; an error names `imaging` and the key.
 fn camera(
-    py: Python<'_>,
     path: &std::path::Path,
     table: &Bound<'_, pyo3::types::PyDict>,
 ) -> PyResult<specchio::scene::imaging::Imaging> {
     let said = |why: String| errors::error(format!("{}: imaging: {why}", path.display()));
-    let json: String = (py.import("json")?)
-        .call_method1("dumps", (table,))
-        .map_err(|e| said(format!("not JSON-like values ({e})")))?
-        .extract()?;
-    let values: toml::Value =
-        serde_json::from_str(&json).map_err(|e| said(format!("not TOML-like values ({e})")))?;
+    let mut imaging = toml::Table::new();
+    for (key, value) in table.iter() {
+        let key: String = (key.extract()).map_err(|_| {
+            said(format!(
+                "{}: a key must be a str",
+                key.repr().map_or("?".into(), |r| r.to_string())
+            ))
+        })?;
+        let value = toml_value(&value).map_err(|why| said(format!("{key}: {why}")))?;
+        imaging.insert(key, value);
+    }
     let mut sensor = toml::Table::new();
-    sensor.insert("imaging".into(), values);
+    sensor.insert("imaging".into(), toml::Value::Table(imaging));
     let mut root = toml::Table::new();
     root.insert("sensor".into(), toml::Value::Table(sensor));
     let text = toml::to_string(&root).map_err(|e| said(e.to_string()))?;
     specchio::scene::imaging_str(&text, std::path::Path::new("imaging")).map_err(|e| {
-        // The generated text's lines mean nothing to the caller: the field and the message.
+        // The generated text's lines mean nothing to the caller: the key and the message.
         let full = e.to_string();
         match e.field() {
             Some(field) => said(
@@ -127,6 +131,53 @@ fn camera(
             None => said(full.trim_start_matches("imaging: ").to_owned()),
         }
     })
+}
+
+/// A Python value as the TOML value a scene file would hold: a bool, an int, a finite float,
+/// a str, or a list of them; numpy's scalars and arrays as their Python values (`tolist`).
+fn toml_value(value: &Bound<'_, PyAny>) -> Result<toml::Value, String> {
+    use pyo3::types::{PyBool, PyFloat, PyInt, PyList, PyString, PyTuple};
+    let shown = || value.repr().map_or("?".to_owned(), |r| r.to_string());
+    if value.is_instance_of::<PyBool>() {
+        let b = value.extract::<bool>().map_err(|e| e.to_string())?;
+        return Ok(toml::Value::Boolean(b));
+    }
+    if value.is_instance_of::<PyInt>() {
+        let n: i64 =
+            (value.extract()).map_err(|_| format!("{} is beyond a 64-bit integer", shown()))?;
+        return Ok(toml::Value::Integer(n));
+    }
+    if value.is_instance_of::<PyFloat>() {
+        let x = value.extract::<f64>().map_err(|e| e.to_string())?;
+        return match x.is_finite() {
+            true => Ok(toml::Value::Float(x)),
+            false => Err(format!("must be a finite number, got {}", shown())),
+        };
+    }
+    if value.is_instance_of::<PyString>() {
+        let text = value.extract::<String>().map_err(|e| e.to_string())?;
+        return Ok(toml::Value::String(text));
+    }
+    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        let items: Result<Vec<toml::Value>, String> =
+            (value.try_iter().map_err(|e| e.to_string())?)
+                .map(|item| toml_value(&item.map_err(|e| e.to_string())?))
+                .collect();
+        return Ok(toml::Value::Array(items?));
+    }
+    // numpy's scalars and arrays (and anything else with `tolist`) as Python values: once,
+    // so a `tolist` that gives back its own kind is refused, not followed for ever.
+    if let Ok(plain) = value.call_method0("tolist") {
+        let builtin = plain.is_instance_of::<PyBool>()
+            || plain.is_instance_of::<PyInt>()
+            || plain.is_instance_of::<PyFloat>()
+            || plain.is_instance_of::<PyString>()
+            || plain.is_instance_of::<PyList>();
+        if builtin {
+            return toml_value(&plain);
+        }
+    }
+    Err(format!("{} is not a number, a str or a list", shown()))
 }
 
 impl Scene {

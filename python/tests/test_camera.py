@@ -94,8 +94,13 @@ def test_a_camera_given_in_python_is_the_scene_files(tmp_path):
     np.testing.assert_array_equal(ours["camera"], theirs["camera"])
     with specchio.Renderer(specchio.Scene(plain, imaging={})) as r:
         assert r.render()["camera"].dtype == np.uint16, "{} is the datasheet camera"
+    # numpy's scalars as Python's numbers.
+    with specchio.Renderer(specchio.Scene(plain, imaging={"exposure_s": np.float64(0.005), "vignetting": np.int64(0),
+                                                          "seed": np.uint8(3)})) as r:
+        np.testing.assert_array_equal(r.render()["camera"], theirs["camera"])
     for bad, says in [({"exposure_s": 20}, "imaging: exposure_s: must be"),
                       ({"exposur": 1}, "unknown field `exposur`"),
-                      ({"exposure_s": None}, "imaging:")]:
+                      ({"exposure_s": float("nan")}, "imaging: exposure_s: must be a finite number, got nan"),
+                      ({"exposure_s": None}, "imaging: exposure_s: None is not a number")]:
         with pytest.raises(specchio.SpecchioError, match=re.escape(says)):
             specchio.Scene(plain, imaging=bad)

@@ -175,8 +175,13 @@ def test_localise_runs_the_commands_experiment(tmp_path):
     ).read_bytes()
     (row,) = report["rows"]
     assert row["summary"]["queries"] == 8 and row["summary"]["recall_at_1"] == 1.0
+    # numpy's values read as Python's: the same report from an array of times and a numpy bool.
+    again = specchio.localise(scene, tmp_path / "numpy", **{**options, "times": np.array([0]),
+                                                             "queries_at_landmarks": np.True_})
+    assert _untimed(again) == _untimed(report)
     for bad, says in [({"queries": 0}, "--queries"), ({"bogus": 1}, "--bogus"),
-                      ({"descriptor": "sift"}, "`sift` is not a descriptor")]:
+                      ({"descriptor": "sift"}, "`sift` is not a descriptor"),
+                      ({"seed": -1}, "'-1' for '--seed"), ({"descriptor": "--help"}, "--help")]:
         with pytest.raises(specchio.SpecchioError, match=re.escape(says)):
             specchio.localise(scene, tmp_path / "bad", **{**options, **bad})
         assert not (tmp_path / "bad").exists()

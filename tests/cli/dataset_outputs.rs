@@ -140,10 +140,15 @@ fn a_layer_the_scene_cannot_have_or_none_at_all_is_refused_before_anything_is_wr
     let dir = temp_dir("dataset-outputs-bad");
     let cases = [
         ("camera", "outputs: camera needs a camera model"),
+        // Named in a list, even one that lists what `default` takes: not dropped in silence.
+        (
+            "image,camera,range,ids,panoramas",
+            "outputs: camera needs a camera model",
+        ),
         (
             "image,depth",
             "`depth` is not a layer: image, camera, rays, range, range16, ids, panoramas, points, \
-             or all",
+             or all, or default",
         ),
         ("", "an empty layer name"),
         ("range,range", "`range` is named twice"),

@@ -8,10 +8,12 @@ use anyhow::{bail, Result};
 use glam::Vec3;
 use specchio::image::RgbaImage;
 use specchio::process::progress::Progress;
+use specchio::reference::objects::MeshTrees;
 use specchio::reference::Reference;
 use specchio::render::{Readback, RenderOptions, Renderer};
 use specchio::scene::camera::ViewBasis;
-use specchio::scene::{Lookup, RefreshPolicy, Scene, SensorCamera};
+use specchio::scene::state::SceneState;
+use specchio::scene::{Lookup, ObjectFrame, RefreshPolicy, Scene, SensorCamera};
 use specchio::sensor::localise::{Descriptor, Signature};
 use specchio::sensor::panorama::PanoramaLayout;
 use specchio::sensor::SensorOptics;
@@ -152,14 +154,30 @@ impl<'a> Robot<'a> {
                 }
             }
             Self::Reference { body } => {
-                let mut reference = Reference::new(&body.scene, t_s);
                 let [w, h] = body.scene.sensor.resolution;
+                let meshes = Arc::new(MeshTrees::build(&body.scene.meshes));
+                // The mirror moved through one BVH per scene time, unless the robot carries
+                // parts of its own (objects in the sensor's frame), which move and turn with
+                // it: then the objects' top level is built again at every pose.
+                let carried = (body.scene.objects.iter()).any(|o| o.frame == ObjectFrame::Sensor);
+                let mut still =
+                    (!carried).then(|| Reference::with_meshes(&body.scene, t_s, meshes.clone()));
                 for (i, &(p, heading)) in poses.iter().enumerate() {
                     check(i)?;
-                    reference.move_mirror(p);
                     let view = sensor_view(body, heading);
                     // One sample at the pixel centre: the rasterizer's sample point.
-                    let (images, _) = reference.render(&view, w, h, 1);
+                    let (images, _) = match &mut still {
+                        Some(reference) => {
+                            reference.move_mirror(p);
+                            reference.render(&view, w, h, 1)
+                        }
+                        None => {
+                            let sensor = body.turned_sensor(heading);
+                            let state = SceneState::at_pose(&body.scene, t_s, (p, &sensor));
+                            let posed = Reference::with_state(&body.scene, state, meshes.clone());
+                            posed.render(&view, w, h, 1)
+                        }
+                    };
                     out.push(descriptor.describe(&body.layout.unwrap(&body.optics, &images.color)));
                 }
             }

@@ -174,7 +174,12 @@ impl<'a> Reference<'a> {
     /// The scene at `t_s`, its meshes' trees built before (for `scene`'s meshes): what a
     /// frame of a moving scene builds is the top level over its objects alone.
     pub fn with_meshes(scene: &'a Scene, t_s: f64, meshes: Arc<MeshTrees>) -> Self {
-        let state = SceneState::at(scene, t_s);
+        Self::with_state(scene, SceneState::at(scene, t_s), meshes)
+    }
+
+    /// The scene as `state` places it (the robot stood at a pose: [`SceneState::at_pose`]),
+    /// its meshes' trees built before.
+    pub fn with_state(scene: &'a Scene, state: SceneState, meshes: Arc<MeshTrees>) -> Self {
         let geometry = SceneGeometry::with_meshes(scene, &state, meshes);
         Self {
             scene,
@@ -186,7 +191,9 @@ impl<'a> Reference<'a> {
 
     /// Puts the mirror's centre at `center` (world) without rebuilding the BVH: the mirror
     /// (and the sensor with it) moves through a fixed scene, so the rays are shifted into the
-    /// BVH's space instead (a robot sweeping poses traces many images per build).
+    /// BVH's space instead (a robot sweeping poses traces many images per build). Only for a
+    /// scene without objects in the sensor's frame, which move with the robot: stand it with
+    /// [`SceneState::at_pose`] and [`Self::with_state`] instead.
     pub fn move_mirror(&mut self, center: Vec3) {
         self.shift += center - self.state.mirror_center;
         self.state.mirror_center = center;
@@ -438,5 +445,45 @@ mod tests {
         let home = Reference::new(&scene, 0.0);
         let (c, _) = home.render(&home.sensor_view(), 48, 48, 1);
         assert_ne!(a.color.pixels, c.color.pixels);
+    }
+
+    /// A robot that carries parts of its own (hyperbolic-room's lens barrel, camera body and
+    /// mast, in the sensor's frame), stood at a pose through [`SceneState::at_pose`], is the
+    /// scene built with the mirror there and the sensor turned, pixel for pixel: its parts came
+    /// along and turned with it (the localisation's reference robot stands this way). Moving
+    /// the mirror through the built scene instead leaves them behind: the centre pixel differs.
+    #[test]
+    fn a_robot_stood_at_a_pose_carries_its_parts() {
+        use super::objects::MeshTrees;
+        use super::Reference;
+        use crate::scene::state::SceneState;
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../scenes/hyperbolic-room.toml"
+        );
+        let mut scene = crate::scene::load(std::path::Path::new(path)).unwrap();
+        scene.sensor.resolution = [48, 48];
+        let target = scene.mirror.center + glam::Vec3::new(1.0, 0.0, -0.5);
+        let mut turned = scene.sensor.clone();
+        turned.heading_rad = 1.0;
+        let meshes = std::sync::Arc::new(MeshTrees::build(&scene.meshes));
+        let state = SceneState::at_pose(&scene, 0.0, (target, &turned));
+        let stood = Reference::with_state(&scene, state, meshes);
+        let mut there = scene.clone();
+        there.mirror.center = target;
+        there.sensor = turned.clone();
+        let built = Reference::new(&there, 0.0);
+        let view = built.sensor_view();
+        let (a, _) = stood.render(&view, 48, 48, 1);
+        let (b, _) = built.render(&view, 48, 48, 1);
+        assert_eq!(a.color.pixels, b.color.pixels);
+        let mut moved = Reference::new(&scene, 0.0);
+        moved.move_mirror(target);
+        let (c, _) = moved.render(&view, 48, 48, 1);
+        let centre = 24 * 48 + 24;
+        assert_ne!(
+            c.color.pixels[centre], b.color.pixels[centre],
+            "the parts left behind"
+        );
     }
 }

@@ -7,7 +7,7 @@ use glam::{Mat4, Quat, Vec3};
 
 use super::camera::ViewBasis;
 use crate::scene::Mesh;
-use crate::scene::{Room, Scene};
+use crate::scene::{Room, Scene, SensorCamera};
 
 /// Positions at time `t_s`; everything else about the scene is constant.
 #[derive(Debug, Clone, PartialEq)]
@@ -21,17 +21,34 @@ pub struct SceneState {
     /// in the sensor's frame, which turn with the robot.
     pub object_rotations: Vec<Quat>,
     pub observer_position: Vec3,
+    /// The sensor camera's eye (render space) and axes the objects in its frame were placed
+    /// by ([`crate::scene::SensorCamera::frame`]).
+    pub sensor_frame: (Vec3, Quat),
 }
 
 impl SceneState {
     pub fn at(scene: &Scene, t_s: f64) -> Self {
+        let mirror_center = match &scene.mirror.animation {
+            Some(a) => a.position_at(scene.mirror.center, t_s),
+            None => scene.mirror.center,
+        };
+        Self::at_pose(scene, t_s, (mirror_center, &scene.sensor))
+    }
+
+    /// The scene at `t_s` with the robot stood elsewhere: its mirror's viewpoint at
+    /// `mirror_center` and its sensor camera `sensor` (turned by a heading), which carry the
+    /// objects in the sensor's frame with them.
+    pub fn at_pose(
+        scene: &Scene,
+        t_s: f64,
+        (mirror_center, sensor): (Vec3, &SensorCamera),
+    ) -> Self {
         let pos = |base: Vec3, a: &Option<crate::scene::Animation>| match a {
             Some(a) => a.position_at(base, t_s),
             None => base,
         };
-        let mirror_center = pos(scene.mirror.center, &scene.mirror.animation);
         let (object_positions, object_rotations) = (scene.objects.iter())
-            .map(|o| o.placement(&scene.sensor, mirror_center, t_s))
+            .map(|o| o.placement(sensor, mirror_center, t_s))
             .unzip();
         Self {
             time_s: t_s,
@@ -39,6 +56,7 @@ impl SceneState {
             object_positions,
             object_rotations,
             observer_position: pos(scene.observer.position, &scene.observer.animation),
+            sensor_frame: sensor.frame(),
         }
     }
 
@@ -59,11 +77,16 @@ impl SceneState {
     /// Model-to-render-space matrix of object `i` (render space: world minus the mirror centre).
     pub fn object_to_render(&self, scene: &Scene, i: usize) -> Mat4 {
         let o = &scene.objects[i];
-        Mat4::from_scale_rotation_translation(
-            o.scale,
-            self.object_rotations[i],
-            self.object_positions[i] - self.mirror_center,
-        )
+        let offset = match o.frame {
+            crate::scene::ObjectFrame::World => self.object_positions[i] - self.mirror_center,
+            // Straight from the camera's frame, not through the scene position and back: a
+            // part of the robot stays put in render space however far the robot has gone.
+            crate::scene::ObjectFrame::Sensor => {
+                let (eye, axes) = self.sensor_frame;
+                eye + axes * o.position
+            }
+        };
+        Mat4::from_scale_rotation_translation(o.scale, self.object_rotations[i], offset)
     }
 
     /// The observer camera in render space for an image of aspect `aspect` (width / height).

@@ -84,15 +84,18 @@ impl Layer {
     }
 }
 
-/// A choice of layers.
+/// A choice of layers, and whether a keyword (`all`, `default`) made it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Layers(u16);
+
+/// The bit of [`Layers`] that says a keyword chose them, above every layer's.
+const KEYWORD: u16 = 1 << 15;
 
 impl Layers {
     /// Every layer (the camera image only where there is an imaging chain to make it), the
     /// range once: as floats, not again as `range16`'s millimetres.
     pub fn all() -> Self {
-        let bits = Layer::ALL.iter().fold(0, |bits, l| bits | l.bit());
+        let bits = Layer::ALL.iter().fold(KEYWORD, |bits, l| bits | l.bit());
         Layers(bits).without(Layer::Range16)
     }
 
@@ -104,10 +107,11 @@ impl Layers {
         Self::all().without(Layer::Rays).without(Layer::Points)
     }
 
-    /// Whether these are what a keyword (`all`, `default`) names rather than a list: a keyword
-    /// takes the camera image only where the scene has one, a list names it on purpose.
+    /// Whether a keyword (`all`, `default`) chose these rather than a list: a keyword takes
+    /// the camera image only where the scene has one; a list names it on purpose, even one
+    /// that names what a keyword would.
     pub fn is_keyword(self) -> bool {
-        self == Self::all() || self == Self::standard()
+        self.0 & KEYWORD != 0
     }
 
     pub fn has(self, layer: Layer) -> bool {
@@ -206,10 +210,12 @@ mod tests {
             ]
         );
         assert_eq!("all".parse::<Layers>().unwrap(), Layers::all());
-        assert_eq!(
-            Layers::all().to_string().parse::<Layers>().unwrap(),
-            Layers::all()
-        );
+        // Written out, a keyword's layers read back as the same layers (as a list).
+        let again = Layers::all().to_string().parse::<Layers>().unwrap();
+        assert_eq!(again.to_string(), Layers::all().to_string());
+        assert!(Layer::ALL
+            .iter()
+            .all(|&l| again.has(l) == Layers::all().has(l)));
         let e = "image,depth".parse::<Layers>().unwrap_err();
         assert_eq!(
             e,
@@ -220,6 +226,8 @@ mod tests {
         assert_eq!(standard, Layers::standard());
         assert_eq!(standard.to_string(), "image,camera,range,ids,panoramas");
         assert!(standard.is_keyword() && Layers::all().is_keyword() && !l.is_keyword());
+        let listed: Layers = "image,camera,range,ids,panoramas".parse().unwrap();
+        assert!(!listed.is_keyword() && listed.to_string() == standard.to_string());
         assert!("image,,range"
             .parse::<Layers>()
             .unwrap_err()

@@ -242,8 +242,10 @@ impl SensorOutputs {
             };
             (all.into_par_iter())
                 .map(|(name, layout, image)| {
-                    // Half floats: resampled from the sensor's image, which the GPU renders
-                    // in half floats; a panorama is then half the bytes (docs/sensor.md).
+                    // Half floats (11 significant bits): a panorama is a resampled view of
+                    // the image, which `sensor.exr` keeps in f32 (the GPU renders it in half
+                    // floats anyway, the reference in f32); half the bytes (docs/sensor.md).
+                    // The renderer's linear values stay far below half's 65504.
                     out.write_exr_half(&dir.join(format!("{name}.exr")), &image)?;
                     out.write_png(&dir.join(format!("{name}.png")), &image)?;
                     Ok(PanoramaRecord::new(format!("{name}.exr"), &layout))

@@ -44,7 +44,9 @@ impl Ctx<'_> {
             let Some((t, why)) = path.first_contact(&times) else {
                 continue;
             };
-            let field = match (origin, t == 0.0) {
+            // An object in the sensor's frame has no animation: its offset is what it is.
+            let carried = o.frame == crate::scene::ObjectFrame::Sensor;
+            let field = match (origin, t == 0.0 || carried) {
                 (Origin::Listed(k), true) => format!("objects[{k}].position"),
                 (Origin::Listed(k), false) => format!("objects[{k}].animation"),
                 (Origin::Generated(g), _) => format!("generate[{g}]"),
