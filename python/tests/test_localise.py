@@ -191,6 +191,9 @@ def test_localise_stops_at_ctrl_c_with_nothing_written(tmp_path):
     """Ctrl-C (a SIGINT a quarter second in, while the landmarks are swept: some 1,300 of
     them at 0.25 m) raises KeyboardInterrupt and leaves no output."""
     scene = str(scene_path("thesis-room"))
+    # Python's own Ctrl-C handler, whatever this process inherited: a job started in the
+    # background of a script ignores SIGINT, and Python then keeps ignoring it.
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.25, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
     try:
@@ -198,5 +201,6 @@ def test_localise_stops_at_ctrl_c_with_nothing_written(tmp_path):
             specchio.localise(scene, tmp_path / "stopped", grid=0.25, sensor_size=64, cube_size=32)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, before)
     assert not (tmp_path / "stopped").exists()
     assert not [p for p in tmp_path.iterdir() if "stopped" in p.name]
