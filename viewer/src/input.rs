@@ -285,7 +285,8 @@ pub fn turn_observer(scene: &mut Scene, yaw: f32, pitch: f32) {
 }
 
 /// Moves the mirror by `steps` of [`MOVE_STEP_M`] per unit of (x, y, z) unless that takes it
-/// (or the sensor below it) out of the room, in which case it stays and the reason is returned.
+/// (or the sensor below it, or a part the robot carries) out of the room, in which case it
+/// stays and the reason is returned.
 pub fn move_mirror(scene: &mut Scene, (x, y, z): (i8, i8, i8), steps: f32) -> Result<(), String> {
     let step = Vec3::new(f32::from(x), f32::from(y), f32::from(z)) * (MOVE_STEP_M * steps);
     let to = scene.mirror.center + step;
@@ -306,6 +307,13 @@ pub fn move_mirror(scene: &mut Scene, (x, y, z): (i8, i8, i8), steps: f32) -> Re
             "the sensor would go below the floor (y = {}, the floor is at y = {})",
             height(sensor_y),
             height(lo.y)
+        ));
+    }
+    if let Some((part, out)) = scene.robot_part_outside_room(to, &scene.sensor) {
+        return Err(format!(
+            "the robot's \"{}\" would go {} m out of the room",
+            part.name,
+            short(f64::from(out))
         ));
     }
     scene.mirror.center = to;
@@ -437,5 +445,21 @@ mod tests {
         let e = e.unwrap_err();
         assert!(e.contains("(y = 0, the floor is at y = 0)"), "{e}");
         assert_eq!(at(&s).y, 2.75);
+    }
+
+    /// A part the robot carries stops it too: hyperbolic-room's mast ends 1 cm above the
+    /// floor, so the first step down would put 0.24 m of it through the floor.
+    #[test]
+    fn the_robots_parts_keep_the_mirror_from_going_down() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let mut s = specchio::scene::load(&root.join("scenes/hyperbolic-room.toml")).unwrap();
+        let before = s.mirror.center;
+        let e = move_mirror(&mut s, (0, -1, 0), 1.0).unwrap_err();
+        assert!(
+            e.contains("the robot's \"mast\" would go 0.24 m out of the room"),
+            "{e}"
+        );
+        assert_eq!(s.mirror.center, before);
+        move_mirror(&mut s, (0, 1, 0), 1.0).unwrap();
     }
 }

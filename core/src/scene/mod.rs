@@ -82,6 +82,36 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The one of the robot's own parts (objects in the sensor's frame) that would reach farthest
+    /// out of the room with the mirror's viewpoint at `mirror_center` and the sensor camera
+    /// `sensor`, and how far (m, to the millimetre, at least 1 mm): every vertex of every part is
+    /// placed and tested, so a mast that ends just above the floor passes and one lowered
+    /// through it does not.
+    pub fn robot_part_outside_room(
+        &self,
+        mirror_center: Vec3,
+        sensor: &SensorCamera,
+    ) -> Option<(&Object, f32)> {
+        let lo = self.room.center - 0.5 * self.room.size_m;
+        let hi = self.room.center + 0.5 * self.room.size_m;
+        let carried = self
+            .objects
+            .iter()
+            .filter(|o| o.frame == ObjectFrame::Sensor);
+        carried
+            .map(|o| {
+                let (at, turn) = o.placement(sensor, mirror_center, 0.0);
+                let out = (self.meshes[o.mesh].positions.iter())
+                    .map(|&v| at + turn * (o.scale * v))
+                    .map(|p| (lo - p).max(p - hi).max_element())
+                    .fold(0.0f32, f32::max);
+                (o, out)
+            })
+            .filter(|&(_, out)| out > 0.0)
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(o, out)| (o, ((out * 1000.0).round() / 1000.0).max(0.001)))
+    }
+
     /// Whether anything in the scene moves with time (an animated object, mirror or observer):
     /// a still scene looks the same at every time, so a viewer need not draw it again.
     pub fn moves(&self) -> bool {

@@ -71,6 +71,35 @@ impl Ctx<'_> {
     }
 }
 
+impl Ctx<'_> {
+    /// Refuses a scene whose robot carries a part (an object in the sensor's frame) out of the
+    /// room, at time 0 or at the sampled times of the mirror's animation.
+    pub(super) fn robot_inside_room(&self, scene: &Scene) -> R<()> {
+        let animation = scene.mirror.animation.as_ref();
+        for t in super::sample_times(animation) {
+            let at = position_at(animation, scene.mirror.center, t);
+            let Some((part, out)) = scene.robot_part_outside_room(at, &scene.sensor) else {
+                continue;
+            };
+            let k = (scene.objects.iter()).position(|o| std::ptr::eq(o, part));
+            let when = match t == 0.0 {
+                true => "at time 0".to_owned(),
+                false => format!("at t = {} s, as the mirror moves", time_text(t)),
+            };
+            return Err(self.invalid(
+                &format!("objects[{}].position", k.unwrap_or_default()),
+                format!(
+                    "the robot's part \"{}\" reaches {} m out of the room {when}; a part the \
+                     sensor carries must stay inside it",
+                    part.name,
+                    num_text(out)
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Times an object and the mirror are sampled at: more than the cameras' 64 per cycle (an
 /// object's far end sweeps faster than its centre). Between two samples the check is not
 /// left to chance: see [`Sweep::first_contact`].

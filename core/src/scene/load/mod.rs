@@ -201,6 +201,7 @@ impl Ctx<'_> {
             light,
         };
         self.objects_clear_of_mirror(&scene, &origins)?;
+        self.robot_inside_room(&scene)?;
         Ok(scene)
     }
 

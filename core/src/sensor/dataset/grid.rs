@@ -142,6 +142,30 @@ mod tests {
             .all(|(i, p)| p.at == Place::Entry(i)));
     }
 
+    /// A pose that lowers hyperbolic-room's robot by 0.5 m would put its mast (ending 1 cm
+    /// above the floor) 0.49 m through the floor: refused, naming the part; at the scene's
+    /// own height the same place and heading fit.
+    #[test]
+    fn a_pose_that_sinks_a_carried_part_is_refused() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/hyperbolic-room.toml");
+        let scene = crate::scene::load(&path).expect("hyperbolic-room loads");
+        let objects = ObjectBounds::of(&scene);
+        let pose = |y: f64| Pose {
+            at: Place::Line(2),
+            time_s: 0.0,
+            position: DVec3::new(0.0, y, 0.0),
+            heading_deg: 30.0,
+        };
+        assert!(pose_fits(&scene, &objects, &pose(3.0)).is_ok());
+        let (field, why) = pose_fits(&scene, &objects, &pose(2.5)).expect_err("sunk");
+        assert_eq!(field, "position");
+        assert!(
+            why.contains("puts the robot's \"mast\" 0.49 m out of the room"),
+            "{why}"
+        );
+    }
+
     #[test]
     fn bad_grids_are_named() {
         let scene = thesis();

@@ -120,9 +120,18 @@ pub fn pose_fits(
         );
         return Err(("position", why));
     }
-    let eye = local + turned_sensor(scene, pose).eye();
+    let sensor = turned_sensor(scene, pose);
+    let eye = local + sensor.eye();
     if eye.cmple(lo).any() || eye.cmpge(hi).any() {
         let why = format!("puts the sensor at {}, outside the room", file(eye));
+        return Err(("position", why));
+    }
+    if let Some((part, out)) = scene.robot_part_outside_room(local, &sensor) {
+        let why = format!(
+            "puts the robot's \"{}\" {} m out of the room (through its floor, ceiling or a wall)",
+            part.name,
+            crate::text::num_text(out)
+        );
         return Err(("position", why));
     }
     for (centre, reach) in objects.at(scene, pose.time_s) {

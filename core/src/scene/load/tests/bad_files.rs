@@ -29,6 +29,11 @@ const BAD: &[(&str, Option<u32>, &str)] = &[
         "objects[0].position: object \"rod\" reaches into the mirror",
     ),
     (
+        "sensor-frame-through-floor.toml",
+        Some(22),
+        "objects[0].position: the robot's part \"mast\" reaches 0.6 m out of the room at time 0",
+    ),
+    (
         "sensor-frame-unknown.toml",
         Some(14),
         "objects[0].frame: unknown variant `robot`, expected `world` or `sensor`",
