@@ -94,13 +94,14 @@ impl Scene {
     ) -> Option<(&Object, f32)> {
         let lo = self.room.center - 0.5 * self.room.size_m;
         let hi = self.room.center + 0.5 * self.room.size_m;
+        let frame = sensor.frame();
         let carried = self
             .objects
             .iter()
             .filter(|o| o.frame == ObjectFrame::Sensor);
         carried
             .map(|o| {
-                let (at, turn) = o.placement(sensor, mirror_center, 0.0);
+                let (at, turn) = o.placement(frame, mirror_center, 0.0);
                 let out = (self.meshes[o.mesh].positions.iter())
                     .map(|&v| at + turn * (o.scale * v))
                     .map(|p| (lo - p).max(p - hi).max_element())
@@ -263,8 +264,15 @@ pub enum ObjectFrame {
 
 impl Object {
     /// Where the object is and how it is turned (scene space) when the mirror's viewpoint is at
-    /// `mirror_center` and `t_s` is the time its own animation is evaluated at.
-    pub fn placement(&self, sensor: &SensorCamera, mirror_center: Vec3, t_s: f64) -> (Vec3, Quat) {
+    /// `mirror_center`, the sensor camera's frame is `sensor_frame` ([`SensorCamera::frame`],
+    /// found once by the caller for every object) and `t_s` is the time its own animation is
+    /// evaluated at.
+    pub fn placement(
+        &self,
+        sensor_frame: (Vec3, Quat),
+        mirror_center: Vec3,
+        t_s: f64,
+    ) -> (Vec3, Quat) {
         match self.frame {
             ObjectFrame::World => {
                 let position = match &self.animation {
@@ -274,7 +282,7 @@ impl Object {
                 (position, self.rotation)
             }
             ObjectFrame::Sensor => {
-                let (eye, axes) = sensor.frame();
+                let (eye, axes) = sensor_frame;
                 (
                     mirror_center + eye + axes * self.position,
                     axes * self.rotation,

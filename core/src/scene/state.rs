@@ -47,8 +47,9 @@ impl SceneState {
             Some(a) => a.position_at(base, t_s),
             None => base,
         };
+        let sensor_frame = sensor.frame();
         let (object_positions, object_rotations) = (scene.objects.iter())
-            .map(|o| o.placement(sensor, mirror_center, t_s))
+            .map(|o| o.placement(sensor_frame, mirror_center, t_s))
             .unzip();
         Self {
             time_s: t_s,
@@ -56,7 +57,7 @@ impl SceneState {
             object_positions,
             object_rotations,
             observer_position: pos(scene.observer.position, &scene.observer.animation),
-            sensor_frame: sensor.frame(),
+            sensor_frame,
         }
     }
 

@@ -27,16 +27,17 @@ impl Ctx<'_> {
     pub(super) fn objects_clear_of_mirror(&self, scene: &Scene, origins: &[Origin]) -> R<()> {
         let r = scene.mirror.radius_m;
         let mirror = |t: f64| position_at(scene.mirror.animation.as_ref(), scene.mirror.center, t);
+        let frame = scene.sensor.frame();
         for (o, origin) in scene.objects.iter().zip(origins) {
             let mut times = sample_times_n(o.animation.as_ref(), SAMPLES);
             times.extend(sample_times_n(scene.mirror.animation.as_ref(), SAMPLES));
             times.sort_by(f64::total_cmp);
             times.dedup();
             // An object in the sensor's frame turns with it: the same at every time.
-            let rotation = o.placement(&scene.sensor, mirror(0.0), 0.0).1;
+            let rotation = o.placement(frame, mirror(0.0), 0.0).1;
             let path = Sweep {
                 mesh: &scene.meshes[o.mesh],
-                object: &|t| o.placement(&scene.sensor, mirror(t), t).0,
+                object: &|t| o.placement(frame, mirror(t), t).0,
                 mirror: &mirror,
                 model: &|offset| Mat4::from_scale_rotation_translation(o.scale, rotation, offset),
                 r,
