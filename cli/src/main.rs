@@ -21,8 +21,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 #[cfg(not(feature = "viewer"))]
 use no_viewer as view;
-use specchio::process::{allocator, validation};
-use specchio::stdout;
+use specchio::process::{allocator, ending};
 use specchio_bench::localise;
 #[cfg(feature = "viewer")]
 use specchio_viewer as view;
@@ -109,88 +108,5 @@ fn main() -> ExitCode {
         Command::Localise(args) => localise::run(&args),
         Command::Dataset(args) => dataset::run(&args),
     };
-    // A failed write to stdout (not the reader leaving) is the command's failure too.
-    let result = result.and_then(|code| Ok(stdout::verdict().map(|()| code)?));
-    match result {
-        Ok(code) => code,
-        Err(e) => {
-            eprintln!("error: {}", error_text(&e));
-            exit_code(&e)
-        }
-    }
-}
-
-/// The exit status for an error: [`validation::EXIT_VALIDATION`] when the validation layer
-/// reported messages (whether or not the work failed too), else 1.
-fn exit_code(e: &anyhow::Error) -> ExitCode {
-    if e.downcast_ref::<validation::ValidationFailed>().is_some() {
-        ExitCode::from(validation::EXIT_VALIDATION)
-    } else {
-        ExitCode::FAILURE
-    }
-}
-
-/// The error and its causes on one line, each cause once: many errors already say their
-/// cause in their own message (`cannot read x: No such file`), and printing the chain as well
-/// (`{:#}`) would repeat it.
-fn error_text(e: &anyhow::Error) -> String {
-    let mut text = e.to_string();
-    for cause in e.chain().skip(1) {
-        let cause = cause.to_string();
-        if !text.contains(&cause) {
-            text = format!("{text}: {cause}");
-        }
-    }
-    text
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{error_text, exit_code};
-    use anyhow::Context;
-    use specchio::process::validation::{checked, ValidationFailed};
-    use specchio::vk::instance::ValidationLog;
-    use std::process::ExitCode;
-
-    fn failed(work: Option<&str>) -> anyhow::Error {
-        ValidationFailed {
-            count: 2,
-            first: "[vulkan ERROR] VUID-x".into(),
-            work: work.map(|w| anyhow::anyhow!("{w}").into()),
-        }
-        .into()
-    }
-
-    #[test]
-    fn validation_messages_exit_3_and_keep_the_work_error() {
-        let e = failed(None);
-        assert_eq!(exit_code(&e), ExitCode::from(3));
-        assert!(
-            error_text(&e).contains("2 message(s)"),
-            "{}",
-            error_text(&e)
-        );
-        let e = failed(Some("device lost"));
-        assert_eq!(exit_code(&e), ExitCode::from(3));
-        let text = error_text(&e);
-        assert!(
-            text.contains("2 message(s)") && text.contains("device lost"),
-            "{text}"
-        );
-        // No messages: the work's own error, exit 1.
-        let plain: anyhow::Result<()> =
-            checked(&ValidationLog::default(), Err(anyhow::anyhow!("bad scene")));
-        assert_eq!(exit_code(&plain.unwrap_err()), ExitCode::FAILURE);
-    }
-
-    #[test]
-    fn each_cause_is_said_once() {
-        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "No such file");
-        // A cause that its error's message already includes is not repeated...
-        let e = anyhow::Error::new(io).context("cannot read x.toml: No such file");
-        assert_eq!(error_text(&e), "cannot read x.toml: No such file");
-        // ...one it does not include is appended.
-        let e: anyhow::Result<()> = Err(anyhow::anyhow!("disk full")).context("cannot write y");
-        assert_eq!(error_text(&e.unwrap_err()), "cannot write y: disk full");
-    }
+    ending::report(result)
 }

@@ -348,11 +348,14 @@ fn a_lost_surface_ends_the_viewer_cleanly() {
 
 /// A slow frame holds nothing but itself. The third frame is held on the GPU
 /// (`SPECCHIO_FAULT_HOLD_FRAME`, vk/src/fault.rs: its submission waits for a semaphore
-/// the viewer signals only once its loop has ended), and meanwhile keys are answered: `e`
-/// (the refresh policy), `x` (the lookup), `m` (a method switch, which makes a renderer: put
-/// off until the GPU is free, which it never is before the loop ends) and `q`. Before the present thread, the loop waited in
-/// `vkQueuePresentKHR` for that frame, so nothing was answered until the hold's time limit
-/// let the frame go: the test then fails on the order of the lines.
+/// the viewer signals only once its loop has ended, or never), and meanwhile keys are
+/// answered: `e` (the refresh policy), `x` (the lookup), `m` (a method switch, which makes a
+/// renderer: put off until the GPU is free, which it never is before the loop ends) and `q`,
+/// which ends the process with the frame still held rather than wait for it. Before the
+/// present thread, the loop waited in `vkQueuePresentKHR` for that frame, so nothing was
+/// answered until the hold's time limit let the frame go; before `q` left the frame
+/// running, the process waited for it (the line `fault: frame 3 let go` came, after the
+/// loop had ended). Either fails this test.
 #[test]
 fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
     let Some(x) = xvfb_with_xdotool() else { return };
@@ -362,15 +365,14 @@ fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
     }
     let stdout = ended_cleanly(viewer);
     let at = |what: &str| line_of(&stdout, what);
-    let let_go = at("fault: frame 3 let go");
-    // `q` hid the window at once; the wait for the held frame was said, not silent.
-    assert!(at("quitting: the frame in flight") < let_go, "{stdout}");
+    // `q` hid the window at once and said that the frame is left running.
+    let quit = at("quitting: the frame in flight on the GPU is left");
     assert!(
-        at("refresh: ") < let_go && at("lookup: ") < let_go,
+        at("refresh: ") < quit && at("lookup: ") < quit,
         "keys were answered only once the held frame went on:\n{stdout}"
     );
-    assert!(!stdout.contains("by its time limit"), "{stdout}");
-    // The method switch waited for a free GPU, which came only after the loop had ended.
+    ended_with_the_frame_held(&stdout);
+    // The method switch waited for a free GPU, which never came.
     assert!(!stdout.contains("method: "), "{stdout}");
     // The loop drew no more while the third frame was held: three frames, or four where a
     // present does not wait for the frame before it (a GPU's), whose next one then waits
@@ -379,6 +381,17 @@ fn keys_and_quit_are_answered_while_a_frame_is_held_on_the_gpu() {
         .find_map(|l| l.strip_prefix("frames: ")?.split(',').next()?.parse().ok())
         .unwrap_or_else(|| panic!("no frame summary:\n{stdout}"));
     assert!((3..=4).contains(&frames), "{frames} frames:\n{stdout}");
+}
+
+/// The process ended while the third frame was still held on the GPU: it was never let go,
+/// neither by the viewer (which lets a held frame go once its loop is over, unless it quit
+/// during that frame) nor by the hold's time limit; and it said how it went before it ended.
+fn ended_with_the_frame_held(stdout: &str) {
+    assert!(!stdout.contains("fault: frame 3 let go"), "{stdout}");
+    assert!(
+        stdout.lines().any(|l| l.starts_with("frames: ")),
+        "{stdout}"
+    );
 }
 
 /// The viewer's stdout once it has ended with success and no validation message.
@@ -439,12 +452,9 @@ fn the_window_is_drawn_while_a_frame_is_held_on_the_gpu() {
     });
     xdotool(&x, &["key", "q"]);
     let stdout = ended_cleanly(viewer);
-    let at = |what: &str| line_of(&stdout, what);
-    assert!(
-        at("swapchain: 600x225") < at("fault: frame 3 let go"),
-        "the resize waited for the held frame:\n{stdout}"
-    );
-    assert!(!stdout.contains("by its time limit"), "{stdout}");
+    // Everything above happened while the frame was held: it was never let go.
+    line_of(&stdout, "swapchain: 600x225");
+    ended_with_the_frame_held(&stdout);
     // Both F1s counted among the keys the window answered (how long each took is a
     // measurement, docs/viewer.md, not asked here).
     assert!(

@@ -156,14 +156,24 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         scene,
         settings(args, keys),
     );
-    drop(window_device);
-    drop(window_instance);
-    drop(device);
-    drop(instance);
+    // Quit during a frame: the devices are left to the process's end with the rest (their
+    // teardown would wait for the frame), and the layer's verdict is on what it said so far.
+    let left_running = matches!(&outcome, Ok(o) if o.left_running);
+    match left_running {
+        true => std::mem::forget((window_device, window_instance, device, instance)),
+        false => drop((window_device, window_instance, device, instance)),
+    }
     let outcome = specchio::process::validation::checked(&log, outcome);
-    let outcome = specchio::process::validation::checked(&window_log, outcome)?;
+    let outcome = specchio::process::validation::checked(&window_log, outcome);
+    if left_running {
+        let saved = outcome.and_then(|outcome| save_screenshot(args, out, outcome));
+        specchio::process::ending::end_without_teardown(saved);
+    }
+    save_screenshot(args, out, outcome?)
+}
 
-    // 4. The screenshot, all or nothing.
+/// 4. The screenshot a script asked for, all or nothing.
+fn save_screenshot(args: &Args, out: Transaction, outcome: app::Outcome) -> Result<ExitCode> {
     if let (Some(path), Some(shot)) = (&args.screenshot, outcome.screenshot) {
         out.write_png_rgb8(path, shot.width, shot.height, &shot.rgb8)?;
         out.commit()?;

@@ -60,6 +60,10 @@ pub struct Settings {
 #[derive(Default)]
 pub struct Outcome {
     pub screenshot: Option<Screenshot>,
+    /// Quit while the renderer's device still ran a frame, which was left running: the
+    /// viewer and its devices were not torn down (that waits for the frame), and the process
+    /// must end without teardown (`process::ending::end_without_teardown`).
+    pub left_running: bool,
 }
 
 /// The screenshot key's files: `specchio-view-0001.png`, ...
@@ -177,16 +181,24 @@ pub fn run(
     };
     specchio::say_part!("{}", input::help());
     let ran = run_catching_window_panics(event_loop, &mut app, |app| &mut app.window_gone);
-    // A frame held by a test (`fault::HOLD_FRAME_VAR`) goes on now that the loop is over:
-    // everything before this line happened while it was still running.
-    specchio::vk::fault::release_held_frames();
+    let left_running = app.outcome.left_running && app.error.is_none();
+    // A frame held by a test (`fault::HOLD_FRAME_VAR`) goes on now that the loop is over
+    // (everything before this line happened while it was still running), unless the viewer
+    // quit without waiting for it: then the process ends with the frame still held.
+    if !left_running {
+        specchio::vk::fault::release_held_frames();
+    }
     // The last present's return counts for the keys it answered (F1 and `q` at once).
     if let Some(v) = &mut app.viewer {
         v.presenter.finish_present();
         app.answers.settle(v.presenter.present_returned_at());
     }
-    // The viewer goes first (its presenter waits for the frames in flight).
-    app.viewer = None;
+    // The viewer goes first (its presenter waits for the frames in flight), or, quitting
+    // during a frame, is left as it is for the process's end to free (`quit`).
+    match left_running {
+        true => std::mem::forget(app.viewer.take()),
+        false => app.viewer = None,
+    }
     match ran {
         // Once the window is gone, the display reports errors for what was still on its way
         // to it (a presented image for a window that no longer exists): that is how it went,
@@ -465,19 +477,18 @@ impl App<'_> {
         (next, None)
     }
 
-    /// Quits: the window goes at once (the GPU may still be finishing a slow frame, which the
-    /// teardown waits for), then the loop ends.
+    /// Quits: the window goes at once, then the loop ends. A frame still running on the
+    /// renderer's device (seconds for a heavy lookup on a CPU driver) is not waited for: a
+    /// device does not drop a frame it has started, so the teardown would hold the terminal
+    /// until it ends. The process ends without teardown instead ([`Outcome::left_running`]).
     fn quit(&mut self, event_loop: &ActiveEventLoop) {
         if let Some(v) = &self.viewer {
             v.window.set_visible(false);
-            // The window goes at once; the process waits for the frame on the GPU (a device
-            // does not drop a frame it has started: seconds for a heavy lookup on a CPU
-            // driver), and says so rather than hold the terminal without a word.
             if !v.renderer.ready_for_frame().unwrap_or(true) {
                 specchio::say!(
-                    "quitting: the frame in flight on the GPU finishes first (a device does not \
-                     drop a frame it has started)"
+                    "quitting: the frame in flight on the GPU is left to end with the process"
                 );
+                self.outcome.left_running = true;
             }
         }
         event_loop.exit();
