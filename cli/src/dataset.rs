@@ -18,7 +18,7 @@ use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::grid;
 use specchio::sensor::dataset::{resume, DatasetError, Folder, Format, GeometryFrame};
-use specchio::sensor::layers::Layers;
+use specchio::sensor::layers::{self, Layers};
 use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
@@ -70,12 +70,8 @@ pub struct Args {
     /// robot's REP-103 frame, where a rigid sensor's ray map is the same at every pose).
     #[arg(long, default_value = "scene", value_name = "FRAME")]
     geometry_frame: GeometryFrame,
-    /// The layers each frame holds, comma-separated: image (sensor.exr, .png), camera
-    /// (sensor.camera.png, with the scene's [sensor.imaging]), rays, range, range16 (the range
-    /// as 16-bit millimetres, sensor.range.png; not in all), ids (and the id
-    /// map), panoramas, points (points.ply); or all; or default: all but rays and points,
-    /// which the pose and one frame's ray map give again. camera.json and pose.json always.
-    #[arg(long, default_value = "default", value_name = "LAYERS")]
+    /// The layers each frame holds (the list is the registry's, `sensor::layers::help`).
+    #[arg(long, default_value = "default", value_name = "LAYERS", help = layers::help())]
     outputs: Layers,
     /// How the dataset is written: files (a folder per frame, and index.jsonl), mcap (a ROS 2
     /// bag in OUT/bag: metadata.yaml and bag_0.mcap, made from the frames, which are then not

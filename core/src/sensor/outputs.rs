@@ -8,11 +8,10 @@ use glam::{Mat3, Quat, Vec3};
 use serde::Serialize;
 
 use super::dataset::geometry::{GeometryFrame, Rigid};
-use super::files::Samples;
 use super::ground_truth::{GroundTruth, GroundTruthRecord};
 pub use super::id_map::{IdMap, NO_ID};
-use super::imaging::{self, CameraImage, ImagingRecord, CAMERA_IMAGE_FILE};
-use super::layers::{Layer, Layers};
+use super::imaging::{self, CameraImage};
+use super::layers::{self, Entries, Layer, Layers};
 use super::optics::SensorOptics;
 use super::panorama::{PanoramaKind, PanoramaLayout};
 use super::ray_map::{PixelRay, RayMap};
@@ -22,18 +21,9 @@ use crate::output::{OutputError, Sink};
 use crate::reference::ReferenceImages;
 use crate::scene::Scene;
 
-pub use super::layers::{CAMERA_FILE, ID_FILE, ID_MAP_FILE, RANGE16_FILE, RANGE_FILE, RAYS_FILE};
-/// Channels of [`RAYS_FILE`] (metres, in the scene's local frame unless `camera.json`'s
-/// `files.ray_frame` names another; `mask` 1 where the pixel sees the mirror).
-pub const RAY_CHANNELS: [&str; 7] = [
-    "origin.X",
-    "origin.Y",
-    "origin.Z",
-    "direction.X",
-    "direction.Y",
-    "direction.Z",
-    "mask",
-];
+pub use super::layers::{
+    CAMERA_FILE, ID_FILE, ID_MAP_FILE, RANGE16_FILE, RANGE_FILE, RAYS_FILE, RAY_CHANNELS,
+};
 
 /// One frame's sensor outputs.
 #[derive(Debug, Clone)]
@@ -219,113 +209,29 @@ impl SensorOutputs {
         all
     }
 
-    /// Writes every output into `dir` (staged in `out`): the ray map, range, ids, panoramas
-    /// (EXR and PNG), the camera image where there is one, and `camera.json`.
+    /// Writes the outputs of a single render into `dir` (staged in `out`): every layer of
+    /// `all` but the image and the point cloud, which are not these outputs' to write (the
+    /// commands write the image as their view), and `camera.json`.
     pub fn write(&self, out: &(impl Sink + Sync), dir: &Path) -> Result<(), OutputError> {
-        self.write_chosen(out, dir, Layers::all())
+        let chosen = Layers::all().without(Layer::IMAGE).without(Layer::POINTS);
+        self.write_chosen(out, dir, chosen)
     }
 
-    /// [`Self::write`] of the `chosen` layers only (the clean image and the point cloud are
-    /// not these outputs' to write), and `camera.json`. The layers and the panoramas are
-    /// encoded at the same time, and the panoramas each beside the other.
+    /// The `chosen` layers (each a plug-in, `layers/`: written beside each other) and
+    /// `camera.json`, which says what each wrote.
     pub fn write_chosen(
         &self,
         out: &(impl Sink + Sync),
         dir: &Path,
         chosen: Layers,
     ) -> Result<(), OutputError> {
-        use rayon::prelude::*;
-        let panoramas = || -> Result<Vec<PanoramaRecord>, OutputError> {
-            let all = match chosen.has(Layer::Panoramas) {
-                true => self.panoramas(),
-                false => Vec::new(),
-            };
-            (all.into_par_iter())
-                .map(|(name, layout, image)| {
-                    // Half floats (11 significant bits): a panorama is a resampled view of
-                    // the image, which `sensor.exr` keeps in f32 (the GPU renders it in half
-                    // floats anyway, the reference in f32); half the bytes (docs/sensor.md).
-                    // The renderer's linear values stay far below half's 65504.
-                    out.write_exr_half(&dir.join(format!("{name}.exr")), &image)?;
-                    out.write_png(&dir.join(format!("{name}.png")), &image)?;
-                    Ok(PanoramaRecord::new(format!("{name}.exr"), &layout))
-                })
-                .collect()
-        };
-        let (layers, panoramas) = rayon::join(|| self.write_layers(out, dir, chosen), panoramas);
-        layers?;
-        out.write_json(
-            &dir.join(CAMERA_FILE),
-            &self.camera_record(panoramas?, chosen),
-        )
+        let told = layers::write(&layers::Writing { frame: self, out }, dir, chosen)?;
+        out.write_json(&dir.join(CAMERA_FILE), &self.camera_record(told))
     }
 
-    /// The chosen of: the ray map, range, ids and the id map, the camera image.
-    fn write_layers(&self, out: &impl Sink, dir: &Path, chosen: Layers) -> Result<(), OutputError> {
-        let (w, h) = (self.rays.width, self.rays.height);
-        if chosen.has(Layer::Rays) {
-            out.write_channels(&dir.join(RAYS_FILE), (w, h), self.ray_channels())?;
-        }
-        if chosen.has(Layer::Range) {
-            let range = vec![("range", Samples::F32(self.range.clone()))];
-            out.write_channels(&dir.join(RANGE_FILE), (w, h), range)?;
-        }
-        if chosen.has(Layer::Range16) {
-            let path = dir.join(RANGE16_FILE);
-            let mut png = Vec::new();
-            crate::image::png::encode_gray16(
-                &mut png,
-                (w, h),
-                &super::files::range_mm(&self.range),
-            )
-            .map_err(|e| crate::output::png_error(&path, e))?;
-            out.write_bytes(&path, &png)?;
-        }
-        if chosen.has(Layer::Ids) {
-            let ids = vec![
-                ("id", Samples::U32(self.ids.clone())),
-                ("class", Samples::U32(self.class_ids())),
-            ];
-            out.write_channels(&dir.join(ID_FILE), (w, h), ids)?;
-            out.write_json(&dir.join(ID_MAP_FILE), &self.id_map)?;
-        }
-        match &self.camera {
-            Some(camera) if chosen.has(Layer::Camera) => {
-                let path = dir.join(CAMERA_IMAGE_FILE);
-                let png = camera
-                    .png()
-                    .map_err(|e| crate::output::png_error(&path, e))?;
-                out.write_bytes(&path, &png)
-            }
-            _ => Ok(()),
-        }
-    }
-
-    /// The ray map's channels ([`RAY_CHANNELS`]): 0 off the mirror.
-    fn ray_channels(&self) -> Vec<(&'static str, Samples)> {
-        (RAY_CHANNELS.iter().enumerate())
-            .map(|(c, name)| {
-                let to = &self.geometry.1;
-                let v = (self.rays.rays.iter())
-                    .map(|r| match r {
-                        Some(r) if c < 3 => to.point(r.origin)[c],
-                        Some(r) if c < 6 => to.vector(r.direction)[c - 3],
-                        Some(_) => 1.0,
-                        None => 0.0,
-                    })
-                    .collect();
-                (*name, Samples::F32(v))
-            })
-            .collect()
-    }
-
-    /// `camera.json`: the camera, and the files of the `chosen` layers written beside it
-    /// (`panoramas` those written).
-    pub(crate) fn camera_record(
-        &self,
-        panoramas: Vec<PanoramaRecord>,
-        chosen: Layers,
-    ) -> CameraRecord {
+    /// `camera.json`: the camera, and what the layers `told` of the files they wrote beside
+    /// it.
+    pub(crate) fn camera_record(&self, told: layers::Told) -> CameraRecord {
         let o = &self.optics;
         let v = &o.view;
         let rotation = Mat3::from_cols(v.right, v.down, v.forward);
@@ -368,33 +274,8 @@ impl SensorOutputs {
                 rim_angle_deg: o.rim_angle().map(f64::to_degrees),
                 max_elevation_deg: o.max_elevation().to_degrees(),
             },
-            imaging: (self.camera.as_ref())
-                .filter(|_| chosen.has(Layer::Camera))
-                .map(CameraImage::record),
-            files: FilesRecord {
-                rays: chosen.has(Layer::Rays).then_some(RaysRecord {
-                    rays: RAYS_FILE,
-                    ray_channels: RAY_CHANNELS,
-                    ray_frame: (self.geometry.0 != GeometryFrame::Scene)
-                        .then(|| self.geometry.0.says()),
-                }),
-                range: chosen.has(Layer::Range).then_some(RangeRecord {
-                    range: RANGE_FILE,
-                    range_model: self.range_model,
-                }),
-                range16: chosen.has(Layer::Range16).then_some(Range16Record {
-                    file: RANGE16_FILE,
-                    unit: super::files::RANGE16_UNIT,
-                    model: self.range_model,
-                }),
-                ids: chosen.has(Layer::Ids).then_some(IdsRecord {
-                    ids: ID_FILE,
-                    id_model: self.id_model,
-                    id_map: ID_MAP_FILE,
-                    no_id: NO_ID,
-                }),
-                panoramas,
-            },
+            layers: Entries(told.camera),
+            files: Entries(told.files),
         }
     }
 }
@@ -411,10 +292,12 @@ pub struct CameraRecord {
     pub sensor: SensorRecord,
     pub mirror: MirrorRecord,
     pub disc: DiscRecord,
-    /// The camera image's file and the chain that made it; absent without one.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub imaging: Option<ImagingRecord>,
-    pub files: FilesRecord,
+    /// What the layers record beside `files`: the camera image's chain (`imaging`), where
+    /// that layer was written.
+    #[serde(flatten)]
+    pub layers: Entries,
+    /// The files written beside `camera.json`, as each layer records them.
+    pub files: Entries,
 }
 
 #[derive(Debug, Serialize)]
@@ -496,75 +379,4 @@ pub struct DiscRecord {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rim_angle_deg: Option<f64>,
     pub max_elevation_deg: f64,
-}
-
-/// The files written beside `camera.json`, each group only where its layer is.
-#[derive(Debug, Serialize)]
-pub struct FilesRecord {
-    #[serde(flatten)]
-    pub rays: Option<RaysRecord>,
-    #[serde(flatten)]
-    pub range: Option<RangeRecord>,
-    /// The range as millimetres (layer `range16`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub range16: Option<Range16Record>,
-    #[serde(flatten)]
-    pub ids: Option<IdsRecord>,
-    pub panoramas: Vec<PanoramaRecord>,
-}
-
-#[derive(Debug, Serialize)]
-pub struct RaysRecord {
-    pub rays: &'static str,
-    pub ray_channels: [&'static str; 7],
-    /// The frame the rays are in where it is not `frame`'s (a dataset's `--geometry-frame`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub ray_frame: Option<&'static str>,
-}
-
-#[derive(Debug, Serialize)]
-pub struct Range16Record {
-    pub file: &'static str,
-    pub unit: &'static str,
-    pub model: &'static str,
-}
-
-#[derive(Debug, Serialize)]
-pub struct RangeRecord {
-    pub range: &'static str,
-    pub range_model: &'static str,
-}
-
-#[derive(Debug, Serialize)]
-pub struct IdsRecord {
-    pub ids: &'static str,
-    pub id_model: &'static str,
-    pub id_map: &'static str,
-    pub no_id: u32,
-}
-
-#[derive(Debug, Serialize)]
-pub struct PanoramaRecord {
-    pub file: String,
-    pub kind: PanoramaKind,
-    pub width: u32,
-    pub height: u32,
-    pub top_elevation_deg: f64,
-    pub bottom_elevation_deg: f64,
-    /// The scene azimuth of the left edge (degrees; 0: the scene's +X).
-    pub seam_azimuth_deg: f64,
-}
-
-impl PanoramaRecord {
-    fn new(file: String, l: &PanoramaLayout) -> Self {
-        Self {
-            file,
-            kind: l.kind,
-            width: l.width,
-            height: l.height,
-            top_elevation_deg: l.top_elevation_rad.to_degrees(),
-            bottom_elevation_deg: l.bottom_elevation_rad.to_degrees(),
-            seam_azimuth_deg: l.seam_azimuth_rad.to_degrees(),
-        }
-    }
 }

@@ -146,8 +146,7 @@ fn camera_positions_are_local_with_the_scene_origin_beside_them() {
     .unwrap();
     let mut small = scene.clone();
     small.sensor.resolution = [32, 32];
-    let record =
-        reference_outputs(&small).camera_record(Vec::new(), crate::sensor::layers::Layers::all());
+    let record = reference_outputs(&small).camera_record(Default::default());
     assert_eq!(record.scene_origin_m, [0.0, 3.0, 0.0]);
     assert!(record.frame.contains("scene_origin_m"));
     let world = |local: [f32; 3]| {

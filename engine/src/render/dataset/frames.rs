@@ -24,7 +24,7 @@ use crate::sensor::dataset::trajectory::Pose;
 use crate::sensor::dataset::{self as sensor_dataset, IndexLine, PoseRecord};
 use crate::sensor::dataset::{rep103, DatasetError, Frame, GeometryFrame, INDEX_FILE};
 use crate::sensor::imaging;
-use crate::sensor::layers::{Layer, Layers, IMAGE_FILES, POINTS_FILE};
+use crate::sensor::layers::{Layer, Layers};
 use crate::sensor::panorama::PanoramaFrame;
 use crate::sensor::{GroundTruth, SensorOutputs};
 use crate::vk::device::Device;
@@ -134,7 +134,7 @@ impl FrameWriter {
         observer: bool,
     ) -> Result<(SensorOutputs, Option<crate::image::RgbaImage>), DatasetError> {
         // The camera image, and its exposure's renders, only where a frame holds it.
-        let camera = self.layers.has(Layer::Camera);
+        let camera = self.layers.has(Layer::CAMERA);
         let light = match camera {
             true => self.exposure(frame, pose)?,
             false => None,
@@ -440,8 +440,7 @@ fn encoders_within(cores: usize, fits: impl Fn(u64) -> bool) -> usize {
     encoders
 }
 
-/// A frame's folder: of the `layers` chosen, the sensor image, its outputs and the point
-/// cloud, and the pose, the three groups encoded at the same time.
+/// A frame's folder: the pose, and the `layers` chosen (each written beside the others).
 fn write_frame(
     out: &(impl Sink + Sync),
     dir: &Path,
@@ -449,43 +448,8 @@ fn write_frame(
     pose: &PoseRecord,
     layers: Layers,
 ) -> Result<(), OutputError> {
-    let image = || -> Result<(), OutputError> {
-        if !layers.has(Layer::Image) {
-            return Ok(());
-        }
-        let [exr, png] = IMAGE_FILES;
-        out.write_exr(&dir.join(exr), &o.image)?;
-        out.write_png(&dir.join(png), &o.image)
-    };
-    let cloud = || -> Result<(), OutputError> {
-        out.write_json(&dir.join(sensor_dataset::POSE_FILE), pose)?;
-        if !layers.has(Layer::Points) {
-            return Ok(());
-        }
-        let origin = o.scene_origin;
-        let (frame, to) = &o.geometry;
-        let comments = [
-            match frame {
-                GeometryFrame::Scene => format!(
-                    "frame: the scene's, local (world = [{}, {}, {}] + point), metres, +Y up",
-                    origin.x, origin.y, origin.z
-                ),
-                other => format!("frame: {}, metres", other.says()),
-            },
-            "id: the drawable the ray met (sensor.id.json)".to_owned(),
-        ];
-        let mut points = sensor_dataset::points(o);
-        for (p, _) in &mut points {
-            *p = to.point(*p);
-        }
-        out.write_bytes(
-            &dir.join(POINTS_FILE),
-            &sensor_dataset::ply::ply(&points, &comments),
-        )
-    };
-    let outputs = || o.write_chosen(out, dir, layers);
-    let ((a, b), c) = rayon::join(|| rayon::join(image, cloud), outputs);
-    a.and(b).and(c)
+    out.write_json(&dir.join(sensor_dataset::POSE_FILE), pose)?;
+    o.write_chosen(out, dir, layers)
 }
 
 #[cfg(test)]

@@ -25,7 +25,7 @@ use crate::sensor::dataset::resume::RunKey;
 use crate::sensor::dataset::trajectory::{self, Place, Pose, TrajectoryError};
 use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
 use crate::sensor::dataset::{DatasetError, Folder, Format, GeometryFrame, INDEX_FILE};
-use crate::sensor::layers::{Layer, Layers};
+use crate::sensor::layers::Layers;
 use crate::sensor::panorama::PanoramaFrame;
 use crate::sensor::GroundTruth;
 use crate::vk::physical::DeviceInfo;
@@ -126,10 +126,12 @@ impl Plan {
     /// `[sensor.imaging]`.
     pub fn choose(&mut self, chosen: Layers) -> Result<(), DatasetError> {
         let imaging = self.scene.sensor.imaging.is_some();
-        if !chosen.is_keyword() && chosen.has(Layer::Camera) && !imaging {
+        let needing = chosen.needing_camera_model().next();
+        if let Some(layer) = needing.filter(|_| !chosen.is_keyword() && !imaging) {
             return Err(DatasetError::Invalid(format!(
-                "outputs: camera needs a camera model, and {} has no [sensor.imaging] \
+                "outputs: {} needs a camera model, and {} has no [sensor.imaging] \
                  (docs/scene-format.md)",
+                layer.name(),
                 self.scene_path.display()
             )));
         }

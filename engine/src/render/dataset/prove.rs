@@ -41,7 +41,7 @@ impl Plan {
         let camera: serde_json::Value = (file(CAMERA_FILE))
             .and_then(|b| serde_json::from_slice(b).ok())
             .ok_or_else(|| refuse(format!("{CAMERA_FILE} is missing or not JSON")))?;
-        if self.outputs.has(Layer::Rays) {
+        if self.outputs.has(Layer::RAYS) {
             let said = camera.pointer("/files/ray_frame").and_then(|v| v.as_str());
             let want = (self.geometry != GeometryFrame::Scene).then(|| self.geometry.says());
             if said != want {
@@ -51,7 +51,7 @@ impl Plan {
                 )));
             }
         }
-        if let Some(ply) = file(POINTS_FILE).filter(|_| self.outputs.has(Layer::Points)) {
+        if let Some(ply) = file(POINTS_FILE).filter(|_| self.outputs.has(Layer::POINTS)) {
             let header = String::from_utf8_lossy(&ply[..ply.len().min(4096)]);
             let said = (header.lines()).find_map(|l| l.strip_prefix("comment frame: "));
             if said.and_then(GeometryFrame::of_ply_comment) != Some(self.geometry) {

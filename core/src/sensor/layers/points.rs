@@ -1,0 +1,54 @@
+//! Layer `points`: the point cloud, where each mirror pixel's reflected ray ends, with the id
+//! of what it meets, as a binary PLY whose comments say its frame. Not in `default`: the ray
+//! map and the range give it again.
+
+use std::path::Path;
+
+use super::{SensorLayer, Told, Writing};
+use crate::output::OutputError;
+use crate::sensor::dataset::{self as sensor_dataset, GeometryFrame};
+
+pub const POINTS_FILE: &str = "points.ply";
+
+pub struct Points;
+
+impl SensorLayer for Points {
+    fn name(&self) -> &'static str {
+        "points"
+    }
+
+    fn about(&self) -> &'static str {
+        "points.ply, where each mirror pixel's reflected ray ends, with its id"
+    }
+
+    fn files(&self) -> &'static [&'static str] {
+        &[POINTS_FILE]
+    }
+
+    fn in_default(&self) -> bool {
+        false
+    }
+
+    fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {
+        let o = w.frame;
+        let origin = o.scene_origin;
+        let (frame, to) = &o.geometry;
+        let comments = [
+            match frame {
+                GeometryFrame::Scene => format!(
+                    "frame: the scene's, local (world = [{}, {}, {}] + point), metres, +Y up",
+                    origin.x, origin.y, origin.z
+                ),
+                other => format!("frame: {}, metres", other.says()),
+            },
+            "id: the drawable the ray met (sensor.id.json)".to_owned(),
+        ];
+        let mut points = sensor_dataset::points(o);
+        for (p, _) in &mut points {
+            *p = to.point(*p);
+        }
+        let ply = sensor_dataset::ply::ply(&points, &comments);
+        w.out.write_bytes(&dir.join(POINTS_FILE), &ply)?;
+        Ok(Told::default())
+    }
+}

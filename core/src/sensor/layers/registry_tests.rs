@@ -1,0 +1,119 @@
+//! What every layer of the registry must do, checked by iterating it: a new layer meets these
+//! without a test of its own.
+
+use std::path::Path;
+
+use super::*;
+use crate::output::MemoryFiles;
+
+/// thesis-room's sensor at 32², from the reference, exposed through a camera model (so that
+/// the `camera` layer has an image to write).
+fn small_frame() -> SensorOutputs {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut scene = crate::scene::load(&root.join("scenes/thesis-room.toml")).unwrap();
+    scene.sensor.resolution = [32, 32];
+    let imaging = "[sensor.imaging]\nexposure_s = 0.01\n";
+    scene.sensor.imaging = Some(crate::scene::imaging_str(imaging, Path::new("test")).unwrap());
+    let reference = crate::reference::Reference::new(&scene, 0.0);
+    let (images, _) = reference.render(&reference.sensor_view(), 32, 32, 1);
+    let mut frame = SensorOutputs::from_reference(&scene, 0.0, &images);
+    frame.expose(&scene, 0, None);
+    frame
+}
+
+/// Whether `file` is one that `pattern` names (`*`: any plain suffix).
+fn named(pattern: &str, file: &str) -> bool {
+    match pattern.strip_suffix('*') {
+        Some(stem) => file.starts_with(stem) && !file[stem.len()..].contains('/'),
+        None => file == pattern,
+    }
+}
+
+/// Each layer, written alone, writes files and only the files it says it holds (each of its
+/// names at least once), and says in `camera.json` what the others do not see: its entries
+/// are not another layer's.
+#[test]
+fn each_layer_writes_exactly_the_files_it_names() {
+    let frame = small_frame();
+    let mut keys: Vec<&str> = Vec::new();
+    for layer in Layer::ALL {
+        let out = MemoryFiles::new(Path::new("/frame"));
+        let w = Writing {
+            frame: &frame,
+            out: &out,
+        };
+        let told = layer.0.write(&w, Path::new("/frame")).unwrap();
+        let files: Vec<String> = (out.into_files().into_iter())
+            .map(|(path, _)| path.to_string_lossy().into_owned())
+            .collect();
+        assert!(!files.is_empty(), "{}: wrote nothing", layer.name());
+        for f in &files {
+            assert!(
+                layer.files().iter().any(|p| named(p, f)),
+                "{}: wrote {f}, which it does not name",
+                layer.name()
+            );
+        }
+        for p in layer.files() {
+            assert!(
+                files.iter().any(|f| named(p, f)),
+                "{}: names {p} and did not write it",
+                layer.name()
+            );
+        }
+        for (key, _) in told.files.iter().chain(&told.camera) {
+            assert!(!keys.contains(key), "{}: `{key}` twice", layer.name());
+            keys.push(key);
+        }
+    }
+}
+
+/// Names are unique and not a keyword; `default` takes only what `all` takes; no two layers
+/// name the same file.
+#[test]
+fn names_and_files_are_each_one_layers() {
+    let mut names: Vec<&str> = Layer::ALL.iter().map(|l| l.name()).collect();
+    names.sort();
+    names.dedup();
+    assert_eq!(names.len(), Layer::ALL.len(), "a name twice");
+    assert!(!names.contains(&"all") && !names.contains(&"default"));
+    assert!(Layers::standard().iter().all(|l| Layers::all().has(l)));
+    let mut files: Vec<&str> = (Layer::ALL.iter())
+        .flat_map(|l| l.files().to_vec())
+        .collect();
+    files.push(CAMERA_FILE);
+    let count = files.len();
+    files.sort();
+    files.dedup();
+    assert_eq!(files.len(), count, "a file named by two layers");
+}
+
+/// Every layer is where a user reads the choice: docs/sensor.md's "Choosing the layers" and
+/// Python's `dataset` docs name it (the command's help is made from the registry, [`help`]).
+#[test]
+fn every_layer_is_documented() {
+    let sensor_md = include_str!("../../../../docs/sensor.md");
+    let choosing = sensor_md
+        .split("**Choosing the layers.**")
+        .nth(1)
+        .and_then(|rest| rest.split("\n\n").next())
+        .expect("docs/sensor.md has a paragraph \"Choosing the layers\"");
+    let python = include_str!("../../../../python/specchio/__init__.py");
+    let python = python
+        .split("``outputs``:")
+        .nth(1)
+        .and_then(|rest| rest.split("\n\n").next())
+        .expect("Python's dataset docs say `outputs`");
+    for layer in Layer::ALL {
+        let name = layer.name();
+        assert!(
+            choosing.contains(&format!("`{name}`")),
+            "docs/sensor.md does not name layer {name}"
+        );
+        assert!(
+            python.contains(&format!("``{name}``")),
+            "Python's dataset docs do not name layer {name}"
+        );
+        assert!(help().contains(&format!("{name} (")), "{name}: {}", help());
+    }
+}
