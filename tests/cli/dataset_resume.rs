@@ -203,3 +203,37 @@ fn a_users_folder_where_the_work_folder_goes_is_left_alone() {
     );
     assert!(!out.exists());
 }
+
+/// A run of every layer the scene can have, `range16` among them (which `all` leaves out),
+/// stopped after a frame, resumes to the bytes of an uninterrupted run: a kept frame's files
+/// are each a file some layer writes. (Before, the leftover check knew only `all`'s files and
+/// refused `sensor.range.png` as a file of somebody else's.)
+#[test]
+fn a_run_of_every_layer_resumes_to_the_same_bytes() {
+    let dir = temp_dir("dataset-resume-every");
+    std::fs::create_dir_all(&dir).unwrap();
+    let trajectory = dir.join("robot.csv");
+    std::fs::write(&trajectory, TRAJECTORY).unwrap();
+    let t = trajectory.to_str().unwrap();
+    let (whole, out) = (dir.join("whole"), dir.join("set"));
+    let (w, o) = (whole.to_str().unwrap(), out.to_str().unwrap());
+    let every = ["--outputs", "image,rays,range,range16,ids,panoramas,points"];
+    let plain = specchio(&[&args(t, w)[..], &every].concat());
+    assert!(
+        plain.status.success(),
+        "{}",
+        String::from_utf8_lossy(&plain.stderr)
+    );
+    let a = [&args(t, o)[..], &every].concat();
+    let work = dir.join("set.partial");
+    let stopped = stop_after(&a, &work, 1, libc::SIGINT);
+    assert_eq!(stopped.status.code(), Some(1));
+    assert!(journaled(&work) >= 1);
+    let resumed = specchio(&[&a[..], &["--resume"]].concat());
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    assert_eq!(files(&out), files(&whole));
+}

@@ -111,6 +111,9 @@ pub const SCRIPTED_FPS: f64 = 30.0;
 /// changes nothing.
 pub const SLOW_TURN_VAR: &str = "SPECCHIO_FAULT_SLOW_TURN_MS";
 
+/// Runs the viewer until its window closes. A quit while the renderer's device still runs a
+/// frame does not return: the process ends there, without teardown, once the summary and any
+/// screenshot are out (`process::ending::end_without_teardown`; docs/viewer.md says why).
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Input and outputs first: nothing is opened before they are known good.
     let keys = match &args.keys {

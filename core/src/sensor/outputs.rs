@@ -11,7 +11,7 @@ use super::dataset::geometry::{GeometryFrame, Rigid};
 use super::ground_truth::{GroundTruth, GroundTruthRecord};
 pub use super::id_map::{IdMap, NO_ID};
 use super::imaging::{self, CameraImage};
-use super::layers::{self, Entries, Layer, Layers};
+use super::layers::{self, Entries, Layers};
 use super::optics::SensorOptics;
 use super::panorama::{PanoramaKind, PanoramaLayout};
 use super::ray_map::{PixelRay, RayMap};
@@ -209,12 +209,11 @@ impl SensorOutputs {
         all
     }
 
-    /// Writes the outputs of a single render into `dir` (staged in `out`): every layer of
-    /// `all` but the image and the point cloud, which are not these outputs' to write (the
-    /// commands write the image as their view), and `camera.json`.
+    /// Writes the outputs of a single render into `dir` (staged in `out`): the layers of
+    /// [`Layers::single_render`] (not the image, which the commands write as their view, nor
+    /// the point cloud), and `camera.json`.
     pub fn write(&self, out: &(impl Sink + Sync), dir: &Path) -> Result<(), OutputError> {
-        let chosen = Layers::all().without(Layer::IMAGE).without(Layer::POINTS);
-        self.write_chosen(out, dir, chosen)
+        self.write_chosen(out, dir, Layers::single_render())
     }
 
     /// The `chosen` layers (each a plug-in, `layers/`: written beside each other) and

@@ -80,7 +80,10 @@ impl Renderer {
         t_s: f64,
         view: DisplayView,
     ) -> Result<(), GpuError> {
-        self.submit_frame_views(frame, t_s, Readback::default(), Some(view))
+        self.submit(super::FrameAsk {
+            display: Some(view),
+            ..super::FrameAsk::new(frame, t_s, Readback::default())
+        })
     }
 
     /// Whether the cube map, once the frames submitted so far have run, shows the scene as it

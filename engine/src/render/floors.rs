@@ -9,18 +9,12 @@
 //!
 //! A method cannot beat clear; a perfect one would cost about geometry + fill − clear.
 
-use std::time::Instant;
-
 use ash::vk;
 
-use super::cube_fill::Fill;
 use super::gpu::Push;
-use super::graph;
 use super::methods::{CubePlan, CubeRecorder};
-use super::queries::StatsRead;
 use super::targets::DEPTH_FORMAT;
 use super::{FrameReport, Readback, Renderer};
-use crate::scene::state::SceneState;
 use crate::vk::pipeline::{GraphicsPipelineDesc, Pipeline, ShaderStage};
 use crate::vk::GpuError;
 
@@ -53,8 +47,9 @@ pub(super) struct FloorPipelines {
 
 impl Renderer {
     /// One full cube update with `floor` in place of the method's draws, at time `t_s`, timed
-    /// like [`Renderer::render_frame`] (nothing is read back). The cube's contents are not a
-    /// picture afterwards: the next real frame re-renders every face.
+    /// like [`Renderer::render_frame`] (nothing is read back): a frame like every other,
+    /// asked with its cube filled by the floor. The cube's contents are not a picture
+    /// afterwards: the next real frame re-renders every face.
     pub fn render_floor(
         &mut self,
         floor: Floor,
@@ -62,58 +57,11 @@ impl Renderer {
         t_s: f64,
     ) -> Result<FrameReport, GpuError> {
         self.prepare_floors()?;
-        let record_start = Instant::now();
-        self.acquire_slot()?;
-        let state = SceneState::at(&self.scene, t_s);
-        let (views, _) = self.write_frame_buffers(&state)?;
-        let plan = self.frame_parts().plan_cube(
-            &views,
-            super::refresh::Dirty::faces(0x3F),
-            Default::default(),
-        );
-        let cmd = self.begin_frame()?;
-        let mut report = FrameReport {
-            frame,
-            time_s: t_s,
-            cube_updated: true,
-            ..Default::default()
+        let ask = super::FrameAsk {
+            cube: super::CubeWork::Floor(floor),
+            ..super::FrameAsk::new(frame, t_s, Readback::default())
         };
-        let record = |rec: &CubeRecorder<'_>, plan: &CubePlan| self.record_floor(rec, plan, floor);
-        let fill = Fill::Other {
-            name: floor.name(),
-            record: &record,
-        };
-        let frame = self.frame_parts();
-        let mut graph = self.frame_graph();
-        (self.cube_fill).record((&frame, &mut graph), cmd, &plan, &mut report, fill);
-        // Keeps the remaining timestamp slots answered (no view is drawn).
-        (self.views).record(
-            (&frame, &mut graph),
-            cmd,
-            &views,
-            (Readback::default(), None),
-        );
-        graph::record(&self.device, cmd, &graph.finish());
-        // The floor's statistics are query 0's, whatever the method (read below).
-        let stats = StatsRead {
-            fill: 1,
-            views: false,
-        };
-        self.end_frame(cmd, record_start, &mut report, stats);
-        let wait_start = Instant::now();
-        let slot = self.submit_slot_and_wait()?;
-        report.submit_wait_ms = wait_start.elapsed().as_secs_f64() * 1e3;
-        let queries = self.slot_queries(slot);
-        queries.read(
-            &mut report,
-            StatsRead::default(),
-            self.cube_fill.per_face_marks(),
-        )?;
-        report.gpu_face_ms = None;
-        if let Some(q) = &queries.statistics {
-            report.fill_stats = Some(q.statistics(0, 1)?[0]);
-        }
-        self.refresh.shows(None);
+        let (report, _) = self.render_asked(ask)?;
         Ok(report)
     }
 

@@ -54,6 +54,12 @@ pub(super) struct Pending {
     pub copies: Copies,
     /// The statistics queries the frame reads (copied at its end).
     pub stats: StatsRead,
+    /// Whether its timestamps and statistics are per face (a per-face method's update; not
+    /// a floor's, whose fill is one query).
+    pub per_face: bool,
+    /// Whether the lookup's own passes ran (not in a floor's frame): its tally is this
+    /// frame's.
+    pub traced: bool,
     pub submitted: Instant,
 }
 
@@ -135,7 +141,7 @@ impl Renderer {
         t_s: f64,
         readback: Readback,
     ) -> Result<(), GpuError> {
-        self.submit_frame_views(frame, t_s, readback, None)
+        self.submit(super::FrameAsk::new(frame, t_s, readback))
     }
 
     /// The oldest submitted frame's report and pixels, waiting for it if it is still running;
@@ -231,17 +237,13 @@ impl Renderer {
         Ok(())
     }
 
-    /// Submits the current slot's recorded work (a floor's) and waits for it, outside the
-    /// frames' queue; the caller reads its queries with [`Self::slot_queries`].
-    pub(super) fn submit_slot_and_wait(&mut self) -> Result<usize, GpuError> {
+    /// Submits the current slot's recorded work (a check's, not a frame) and waits for it,
+    /// outside the frames' queue.
+    pub(super) fn submit_slot_and_wait(&mut self) -> Result<(), GpuError> {
         let current = self.frames.current;
         self.frames.slots[current].submitter.submit_and_wait()?;
         self.frames.current = (current + 1) % self.frames.slots.len();
-        Ok(current)
-    }
-
-    pub(super) fn slot_queries(&self, slot: usize) -> &FrameQueries {
-        &self.frames.slots[slot].queries
+        Ok(())
     }
 
     /// Waits for slot `s`'s frame and turns it into results in `done`.
@@ -260,8 +262,10 @@ impl Renderer {
         pending.report.submit_wait_ms = pending.submitted.elapsed().as_secs_f64() * 1e3;
         let slot = &self.frames.slots[s];
         let mut report = pending.report;
-        (slot.queries).read(&mut report, pending.stats, self.cube_fill.per_face_marks())?;
-        report.traced_rays = self.mirror.pass.tally(s)?;
+        (slot.queries).read(&mut report, pending.stats, pending.per_face)?;
+        if pending.traced {
+            report.traced_rays = self.mirror.pass.tally(s)?;
+        }
         let images = pending.copies.decode(slot.readback.as_ref())?;
         self.frames.done.push_back((report, images));
         Ok(())

@@ -210,7 +210,12 @@ impl Renderer {
         t_s: f64,
         readback: Readback,
     ) -> Result<(FrameReport, FrameImages), GpuError> {
-        self.submit_frame_views(frame, t_s, readback, None)?;
+        self.render_asked(FrameAsk::new(frame, t_s, readback))
+    }
+
+    /// Submits the frame `ask` asks for and waits for it (and every frame before it).
+    fn render_asked(&mut self, ask: FrameAsk) -> Result<(FrameReport, FrameImages), GpuError> {
+        self.submit(ask)?;
         self.drain()?;
         Ok(self
             .frames
@@ -218,66 +223,70 @@ impl Renderer {
             .expect("the frame just submitted was finished by drain"))
     }
 
-    /// [`Self::submit_frame`]; with `display`, only that view is drawn (for a window, see
-    /// `display.rs`) and `readback` must ask for nothing.
-    fn submit_frame_views(
-        &mut self,
-        frame: u64,
-        t_s: f64,
-        readback: Readback,
-        display: Option<display::DisplayView>,
-    ) -> Result<(), GpuError> {
+    /// Records and submits the frame `ask` asks for: the one entry point of every frame the
+    /// renderer renders (a frame read back, a window's view, a benchmark's floor). It does
+    /// not wait for the GPU; its results come from the frames' queue.
+    fn submit(&mut self, ask: FrameAsk) -> Result<(), GpuError> {
         let record_start = Instant::now();
         self.acquire_slot()?;
         self.follow_lookup()?;
-        let state = SceneState::at(&self.scene, t_s);
+        let state = SceneState::at(&self.scene, ask.t_s);
         let (views, cpu_lookup_ms) = self.write_frame_buffers(&state)?;
-        let fill_cube = self.fills_cube(readback);
-        if readback.rays {
+        let floor = ask.floor();
+        let fill_cube = floor.is_some() || self.fills_cube(ask.readback);
+        if ask.readback.rays {
             self.prepare_sensor_rays()?;
         }
-        let dirty = match fill_cube {
-            true => self.faces_to_fill(frame, &state, &views),
-            false => Dirty::default(),
+        let (dirty, patching) = match (floor, fill_cube) {
+            // A floor stands in for a full update: every face, whole.
+            (Some(_), _) => (Dirty::faces(0x3F), Default::default()),
+            (None, true) => (
+                self.faces_to_fill(ask.frame, &state, &views),
+                self.cube_fill.patching(),
+            ),
+            (None, false) => (Dirty::default(), self.cube_fill.patching()),
         };
-        let plan = (self.frame_parts()).plan_cube(&views, dirty, self.cube_fill.patching());
+        let plan = (self.frame_parts()).plan_cube(&views, dirty, patching);
         let dirty = plan.dirty;
-        self.prepare_fill(&plan)?;
-        let copies = self.plan_copies(readback, display);
+        if floor.is_none() {
+            self.prepare_fill(&plan)?;
+        }
+        let copies = self.plan_copies(ask.readback, ask.display);
         self.grow_readback(&copies)?;
         let mut report = FrameReport {
-            frame,
-            time_s: t_s,
+            frame: ask.frame,
+            time_s: ask.t_s,
             cube_updated: dirty != 0,
-            cpu_lookup_ms,
+            // A floor's frame times the fill alone: the lookup's host work is not its.
+            cpu_lookup_ms: if floor.is_some() { 0.0 } else { cpu_lookup_ms },
             ..Default::default()
         };
         let cmd = self.begin_frame()?;
-        self.record_frame(
-            cmd,
-            &plan,
-            &views,
-            (readback, display),
-            &copies,
-            &mut report,
-        );
-        let per_face = self.cube_fill.per_face_marks();
+        self.record_frame(cmd, &plan, &views, &ask, &copies, &mut report);
+        // A floor's statistics are its one query's, whatever the method.
+        let per_face = floor.is_none() && self.cube_fill.per_face_marks();
+        let views_read = ask.readback.views;
         let stats = StatsRead::of(
             dirty != 0,
             per_face,
             u32::from(report.face_mask),
-            readback.views,
+            views_read,
         );
         self.end_frame(cmd, record_start, &mut report, stats);
         // The cube shows `state` once this frame has run (later frames run after it), except
-        // after an `every-n` frame that skipped the update.
-        if dirty != 0 || (fill_cube && self.scene.refresh == RefreshPolicy::OnChange) {
+        // after an `every-n` frame that skipped the update, and after a floor, which leaves
+        // no picture in it.
+        if floor.is_some() {
+            self.refresh.shows(None);
+        } else if dirty != 0 || (fill_cube && self.scene.refresh == RefreshPolicy::OnChange) {
             self.refresh.shows(Some(state));
         }
         self.submit_slot(in_flight::Pending {
             report,
             copies,
             stats,
+            per_face,
+            traced: floor.is_none(),
             submitted: Instant::now(),
         })
     }
@@ -348,25 +357,45 @@ impl Renderer {
         cmd: vk::CommandBuffer,
         plan: &methods::CubePlan,
         views: &[ViewBasis],
-        (readback, display): (Readback, Option<display::DisplayView>),
+        ask: &FrameAsk,
         copies: &readback::Copies,
         report: &mut FrameReport,
     ) {
         let frame = self.frame_parts();
         let mut graph = self.frame_graph();
+        let floor = ask.floor();
         // The lookup's own work (the ray-query TLAS build) comes first: without a cube update
-        // it is all that lies between the start and fill timestamps (`gpu_fill_ms`).
-        frame.lookup.record(cmd);
+        // it is all that lies between the start and fill timestamps (`gpu_fill_ms`). A
+        // floor's frame has none: it times the fill alone.
+        if floor.is_none() {
+            frame.lookup.record(cmd);
+        }
         if plan.dirty != 0 {
-            let fill = cube_fill::Fill::Method;
-            (self.cube_fill).record((&frame, &mut graph), cmd, plan, report, fill);
+            let graph = (&frame, &mut graph);
+            match floor {
+                None => (self.cube_fill).record(graph, cmd, plan, report, cube_fill::Fill::Method),
+                Some(f) => {
+                    let record = |rec: &methods::CubeRecorder<'_>, plan: &methods::CubePlan| {
+                        self.record_floor(rec, plan, f)
+                    };
+                    let fill = cube_fill::Fill::Other {
+                        name: f.name(),
+                        record: &record,
+                    };
+                    (self.cube_fill).record(graph, cmd, plan, report, fill);
+                }
+            }
         } else if let Some(q) = &frame.queries.timestamps {
             for ts in TS_FACE0..=TS_MIPS {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts);
             }
         }
-        (self.views).record((&frame, &mut graph), cmd, views, (readback, display));
-        (frame.lookup).record_after_views(cmd, self.frames.current_index());
+        // With nothing asked of them (a floor's), the views keep the timestamps answered.
+        let shown = (ask.readback, ask.display);
+        (self.views).record((&frame, &mut graph), cmd, views, shown);
+        if floor.is_none() {
+            (frame.lookup).record_after_views(cmd, self.frames.current_index());
+        }
         self.record_readback(&mut graph, cmd, copies);
         graph::record(&self.device, cmd, &graph.finish());
     }
@@ -421,5 +450,44 @@ impl Renderer {
         }
         queries.copy_results(cmd, stats, &self.device);
         report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
+    }
+}
+
+/// What one frame is asked for: its number and scene time, what it reads back, the one view
+/// a window shows (then nothing else is drawn or read back), and what fills its cube.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct FrameAsk {
+    pub frame: u64,
+    pub t_s: f64,
+    pub readback: Readback,
+    pub display: Option<display::DisplayView>,
+    pub cube: CubeWork,
+}
+
+/// What fills a frame's cube: the method, as the refresh policy asks; or a floor of its cost
+/// in its place over every face (`render_floor`).
+#[derive(Debug, Clone, Copy)]
+pub(super) enum CubeWork {
+    Method,
+    Floor(floors::Floor),
+}
+
+impl FrameAsk {
+    /// A frame filled by the method, no view shown in a window.
+    pub fn new(frame: u64, t_s: f64, readback: Readback) -> Self {
+        Self {
+            frame,
+            t_s,
+            readback,
+            display: None,
+            cube: CubeWork::Method,
+        }
+    }
+
+    fn floor(&self) -> Option<floors::Floor> {
+        match self.cube {
+            CubeWork::Method => None,
+            CubeWork::Floor(f) => Some(f),
+        }
     }
 }

@@ -181,7 +181,10 @@ pub fn run(
     };
     specchio::say_part!("{}", input::help());
     let ran = run_catching_window_panics(event_loop, &mut app, |app| &mut app.window_gone);
-    let left_running = app.outcome.left_running && app.error.is_none();
+    // Left running only by a quit that ends well: a run that failed tears down as always
+    // (waiting for the frame), so that its error is said by the caller as every error is.
+    let ended_well = app.error.is_none() && (ran.is_ok() || app.window_gone);
+    let left_running = app.outcome.left_running && ended_well;
     // A frame held by a test (`fault::HOLD_FRAME_VAR`) goes on now that the loop is over
     // (everything before this line happened while it was still running), unless the viewer
     // quit without waiting for it: then the process ends with the frame still held.

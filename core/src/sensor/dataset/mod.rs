@@ -274,9 +274,9 @@ pub fn frame_files(layers: Layers) -> Vec<&'static str> {
 }
 
 /// Every name a frame file can have, whatever was chosen (a folder's leftovers are checked
-/// against these).
+/// against these): of every layer, those `all` leaves out (`range16`) too.
 pub fn any_frame_files() -> Vec<&'static str> {
-    frame_files(Layers::all())
+    frame_files(Layers::every())
 }
 
 /// The rows of [`rep103::SCENE_TO_ROS`].

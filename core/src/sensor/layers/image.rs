@@ -23,6 +23,11 @@ impl SensorLayer for Image {
         &IMAGE_FILES
     }
 
+    /// Not in a single render's outputs: the commands write the image as their own view.
+    fn in_single_render(&self) -> bool {
+        false
+    }
+
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {
         let [exr, png] = IMAGE_FILES;
         w.out.write_exr(&dir.join(exr), &w.frame.image)?;

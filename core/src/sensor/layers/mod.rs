@@ -49,6 +49,12 @@ pub trait SensorLayer: Sync {
     fn in_default(&self) -> bool {
         self.in_all()
     }
+    /// Whether a single render's sensor outputs (`render` and `reference --sensor-outputs`)
+    /// hold it, where `all` takes it: not the image, which those commands write as their own
+    /// view, nor a dataset's point cloud.
+    fn in_single_render(&self) -> bool {
+        true
+    }
     /// Whether only a scene with a camera model (`[sensor.imaging]`) has it: a keyword then
     /// takes it only there, and a list that names it elsewhere is refused.
     fn needs_camera_model(&self) -> bool {
@@ -198,6 +204,11 @@ impl Layers {
         Layers(taken.fold(KEYWORD, |bits, l| bits | l.bit()))
     }
 
+    /// Every layer there is, chosen by no keyword: what any frame's files may be.
+    pub fn every() -> Self {
+        Layers(Layer::ALL.iter().fold(0, |bits, l| bits | l.bit()))
+    }
+
     /// `all`: every layer that says so (the camera image only where there is an imaging
     /// chain to make it, [`Self::for_scene`]); the range once, as floats, not again as
     /// `range16`'s millimetres.
@@ -211,6 +222,12 @@ impl Layers {
     /// 1.9 MB of a thesis-room frame at 512²: docs/sensor.md).
     pub fn standard() -> Self {
         Self::keyword(|l| l.in_all() && l.in_default())
+    }
+
+    /// What a single render's sensor outputs hold (`SensorOutputs::write`): the layers of
+    /// `all` that say so.
+    pub fn single_render() -> Self {
+        Self::keyword(|l| l.in_all() && l.in_single_render())
     }
 
     /// Whether a keyword (`all`, `default`) chose these rather than a list: a keyword takes
@@ -268,13 +285,12 @@ pub fn help() -> String {
             .collect();
         out.join(" and ")
     };
-    let every = Layers(Layer::ALL.iter().fold(0, |bits, l| bits | l.bit()));
     format!(
         "The layers each frame holds, comma-separated: {}; or all: every layer the scene has but \
-         {}; or default: all but {}, which the pose and one frame's ray map give again. \
-         camera.json and pose.json always",
+         {}; or default (what a dataset writes unless asked): all but {}. camera.json and \
+         pose.json always",
         layers.join(", "),
-        left_out(Layers::all(), every),
+        left_out(Layers::all(), Layers::every()),
         left_out(Layers::standard(), Layers::all()),
     )
 }

@@ -29,6 +29,11 @@ impl SensorLayer for Points {
         false
     }
 
+    /// Not in a single render's outputs: a dataset's, not a single render's.
+    fn in_single_render(&self) -> bool {
+        false
+    }
+
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {
         let o = w.frame;
         let origin = o.scene_origin;

@@ -7,7 +7,9 @@ use super::*;
 use crate::output::MemoryFiles;
 
 /// thesis-room's sensor at 32², from the reference, exposed through a camera model (so that
-/// the `camera` layer has an image to write).
+/// the `camera` layer has an image to write). A reference frame has no cube: a GPU frame's
+/// panoramas layer also writes `cube.panorama.*` (`render --sensor-outputs`), which no
+/// dataset frame holds and its `files()` does not name.
 fn small_frame() -> SensorOutputs {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut scene = crate::scene::load(&root.join("scenes/thesis-room.toml")).unwrap();

@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use super::*;
 use crate::sensor::dataset::check::check_frame_names;
+use crate::sensor::dataset::frame_files;
 use crate::sensor::dataset::DatasetRecord;
-use crate::sensor::dataset::{any_frame_files, frame_files};
 use crate::sensor::dataset::{Folder, INDEX_FILE};
 use crate::sensor::layers::Layers;
 use crate::sensor::GroundTruth;
@@ -38,7 +38,9 @@ fn key(frames: usize) -> RunKey {
 /// pose what its index line says.
 fn frame(i: usize) -> Frame {
     let folder = frame_folder(i);
-    let fixed = any_frame_files().into_iter().filter(|n| !n.contains('*'));
+    let fixed = frame_files(Layers::all())
+        .into_iter()
+        .filter(|n| !n.contains('*'));
     let files = (fixed.chain(["sensor.panorama.png"]))
         .map(|n| {
             let bytes = match n {
@@ -73,7 +75,7 @@ fn record(frames: usize) -> DatasetRecord {
         panorama_frame: crate::sensor::panorama::PanoramaFrame::Robot,
         geometry_frame: Default::default(),
         outputs: Layers::all(),
-        frame_files: any_frame_files(),
+        frame_files: frame_files(Layers::all()),
         format: Default::default(),
     }
 }
@@ -352,6 +354,9 @@ fn frame_file_names_are_the_frame_folders_own() {
         "pose.json",
         "sensor.panorama.exr",
         "points.ply",
+        // Layers `all` leaves out are a frame's files too (`--outputs range16`).
+        "sensor.range.png",
+        "sensor.camera.png",
     ] {
         assert!(is_frame_file(name), "{name}");
     }
