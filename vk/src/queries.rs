@@ -182,10 +182,15 @@ impl QueryPool {
         unsafe { self.device.raw.cmd_end_query(cmd, self.raw, index) };
     }
 
+    /// The buffer [`Self::copy_results`] copies into, which the host reads.
+    pub fn results_buffer(&self) -> vk::Buffer {
+        self.results.raw
+    }
+
     /// Records the copy of queries `first..first + n`'s results into the pool's buffer, once
     /// the GPU has them (`WAIT`: each must have been written or ended in this frame). The
-    /// caller makes the copies visible to the host ([`super::commands::host_read_barrier`]
-    /// at `COPY`).
+    /// caller makes the copies visible to the host (a barrier from `COPY` to the host's
+    /// reads).
     pub fn copy_results(&self, cmd: vk::CommandBuffer, first: u32, n: u32) {
         debug_assert!(first + n <= self.count);
         let flags = vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT;

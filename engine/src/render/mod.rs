@@ -262,7 +262,7 @@ impl Renderer {
             ..Default::default()
         };
         let cmd = self.begin_frame()?;
-        self.record_frame(cmd, &plan, &views, &ask, &copies, &mut report);
+        let graph = self.record_frame(cmd, &plan, &views, &ask, &copies, &mut report);
         // A floor's statistics are its one query's, whatever the method.
         let per_face = floor.is_none() && self.cube_fill.per_face_marks();
         let views_read = ask.readback.views;
@@ -272,7 +272,7 @@ impl Renderer {
             u32::from(report.face_mask),
             views_read,
         );
-        self.end_frame(cmd, record_start, &mut report, stats);
+        self.end_frame((cmd, graph), record_start, &mut report, stats);
         // The cube shows `state` once this frame has run (later frames run after it), except
         // after an `every-n` frame that skipped the update, and after a floor, which leaves
         // no picture in it.
@@ -360,7 +360,7 @@ impl Renderer {
         ask: &FrameAsk,
         copies: &readback::Copies,
         report: &mut FrameReport,
-    ) {
+    ) -> graph::FrameGraph {
         let frame = self.frame_parts();
         let mut graph = self.frame_graph();
         let floor = ask.floor();
@@ -397,12 +397,13 @@ impl Renderer {
             (frame.lookup).record_after_views(cmd, self.frames.current_index());
         }
         self.record_readback(&mut graph, cmd, copies);
-        graph::record(&self.device, cmd, &graph.finish());
+        graph
     }
 
     /// The frame graph of the passes that declare their uses (cube fill, mips, views,
-    /// readback), with every resource they may use at rest: the cube's images (fresh before
-    /// its first fill), the view targets and the slot's readback buffer.
+    /// readback, the queries' results), with every resource they may use at rest: the cube's
+    /// images (fresh before its first fill), the view targets, the slot's readback buffer and
+    /// its queries' result buffers.
     fn frame_graph(&self) -> graph::FrameGraph {
         let mut graph = graph::FrameGraph::default();
         let fresh = self.refresh.first_fill();
@@ -415,6 +416,9 @@ impl Renderer {
         if let Some(buffer) = &self.frames.current().readback {
             let buffer = graph::Resource::Buffer(buffer.raw);
             graph.import(buffer, graph::Use::HostRead, false);
+        }
+        for buffer in self.queries().result_buffers() {
+            graph.import(graph::Resource::Buffer(buffer), graph::Use::HostRead, false);
         }
         graph
     }
@@ -435,11 +439,12 @@ impl Renderer {
     }
 
     /// Ends a frame begun by [`Self::begin_frame`] with its last timestamp and the copy of
-    /// the query results it reads (`stats`); the CPU recording time (since `record_start`)
-    /// goes in `report`.
+    /// the query results it reads (`stats`), then the barriers that leave every resource of
+    /// its `graph` at rest (the results visible to the host among them); the CPU recording
+    /// time (since `record_start`) goes in `report`.
     fn end_frame(
         &self,
-        cmd: vk::CommandBuffer,
+        (cmd, mut graph): (vk::CommandBuffer, graph::FrameGraph),
         record_start: Instant,
         report: &mut FrameReport,
         stats: StatsRead,
@@ -448,7 +453,11 @@ impl Renderer {
         if let Some(q) = &queries.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_READBACK);
         }
-        queries.copy_results(cmd, stats, &self.device);
+        let results = queries.result_buffers().map(graph::Resource::Buffer);
+        let uses: Vec<_> = results.map(|r| (r, graph::Use::CopyDestination)).collect();
+        graph::record(&self.device, cmd, &graph.uses(&uses));
+        queries.copy_results(cmd, stats);
+        graph::record(&self.device, cmd, &graph.finish());
         report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
     }
 }

@@ -7,7 +7,6 @@ use std::sync::Arc;
 use ash::vk;
 
 use super::FrameReport;
-use crate::vk::commands::host_read_barrier;
 use crate::vk::device::Device;
 use crate::vk::queries::{PipelineStats, QueryPool};
 use crate::vk::GpuError;
@@ -137,9 +136,16 @@ impl FrameQueries {
         }
     }
 
+    /// The buffers the results are copied into, for the host: declared to the frame graph,
+    /// which makes the copies visible to the host once they are recorded.
+    pub fn result_buffers(&self) -> impl Iterator<Item = vk::Buffer> + '_ {
+        let pools = [&self.timestamps, &self.statistics];
+        pools.into_iter().flatten().map(|q| q.results_buffer())
+    }
+
     /// At the end of a frame's commands, after its last timestamp: the results it will read
     /// (every timestamp, the statistics in `read`) copied for the host.
-    pub fn copy_results(&self, cmd: vk::CommandBuffer, read: StatsRead, device: &Device) {
+    pub fn copy_results(&self, cmd: vk::CommandBuffer, read: StatsRead) {
         if let Some(q) = &self.timestamps {
             q.copy_results(cmd, 0, TS_COUNT);
         }
@@ -151,7 +157,5 @@ impl FrameQueries {
                 q.copy_results(cmd, 6, 3);
             }
         }
-        let copy = vk::PipelineStageFlags2::COPY;
-        host_read_barrier(device, cmd, copy, vk::AccessFlags2::TRANSFER_WRITE);
     }
 }

@@ -12,9 +12,10 @@
 //! accumulate; a write, or a new layout, needs a barrier after all of them). Subresources that
 //! need the same barrier are given one, over their range (`ranges.rs`).
 //!
-//! Which passes are declared this way: the cube fill and its mip chain, the views and the
-//! readback. The uploads, the lookups' own passes (acceleration structures, tallies) and the
-//! queries still place their own (docs/renderer.md, "One frame's flow").
+//! Which passes are declared this way: the cube fill and its mip chain, the views, the
+//! readback and the copy of the queries' results. The uploads and the lookups' own passes
+//! (acceleration structures, tallies) still place their own (docs/renderer.md, "One frame's
+//! flow").
 
 mod ranges;
 
@@ -325,7 +326,9 @@ fn step(state: &mut State, to: Use, is_buffer: bool) -> Option<(vk::ImageLayout,
     (!(by_host && is_buffer)).then_some((old, from))
 }
 
-/// Records `barriers` (the images' in one call).
+/// Records `barriers` (the images' in one call; a memory barrier that another before it
+/// already is, once: buffers are made visible by global memory barriers, so two buffers left
+/// by the same use need one).
 pub(super) fn record(device: &Device, cmd: vk::CommandBuffer, barriers: &[Barrier]) {
     let images: Vec<ImageBarrier> = (barriers.iter())
         .filter_map(|b| match *b {
@@ -341,9 +344,11 @@ pub(super) fn record(device: &Device, cmd: vk::CommandBuffer, barriers: &[Barrie
     if !images.is_empty() {
         image_barriers(device, cmd, &images);
     }
-    for b in barriers {
+    for (i, b) in barriers.iter().enumerate() {
         if let Barrier::Memory(from, to) = *b {
-            memory_barrier(device, cmd, from, to);
+            if !barriers[..i].contains(b) {
+                memory_barrier(device, cmd, from, to);
+            }
         }
     }
 }
