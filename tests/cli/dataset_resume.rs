@@ -8,7 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use common::{root, specchio, temp_dir};
+use common::{root, specchio, temp_dir, Scratch};
 
 /// Eight poses along the thesis room.
 const TRAJECTORY: &str = "time,x,y,z,heading\n0,0,3,0,0\n0.5,0.5,3,0,20\n1,1,3,0.5,40\n\
@@ -66,14 +66,21 @@ fn stop_after(a: &[&str], work: &Path, frames: usize, signal: libc::c_int) -> st
     common::signal_when(child, signal, &what, || journaled(work) >= frames)
 }
 
-#[test]
-fn a_stopped_then_killed_run_resumes_to_the_same_bytes() {
-    let dir = temp_dir("dataset-resume");
+/// A test's folder `name` with the trajectory written in it, and where the uninterrupted run
+/// (`whole`) and the resumed one (`set`) go: (folder, trajectory, whole, set).
+fn folders(name: &str) -> (Scratch, PathBuf, PathBuf, PathBuf) {
+    let dir = temp_dir(name);
     std::fs::create_dir_all(&dir).unwrap();
     let trajectory = dir.join("robot.csv");
     std::fs::write(&trajectory, TRAJECTORY).unwrap();
-    let t = trajectory.to_str().unwrap();
     let (whole, out) = (dir.join("whole"), dir.join("set"));
+    (dir, trajectory, whole, out)
+}
+
+#[test]
+fn a_stopped_then_killed_run_resumes_to_the_same_bytes() {
+    let (dir, trajectory, whole, out) = folders("dataset-resume");
+    let t = trajectory.to_str().unwrap();
     let (w, o) = (whole.to_str().unwrap(), out.to_str().unwrap());
     let plain = specchio(&args(t, w));
     assert!(
@@ -210,12 +217,8 @@ fn a_users_folder_where_the_work_folder_goes_is_left_alone() {
 /// refused `sensor.range.png` as a file of somebody else's.)
 #[test]
 fn a_run_of_every_layer_resumes_to_the_same_bytes() {
-    let dir = temp_dir("dataset-resume-every");
-    std::fs::create_dir_all(&dir).unwrap();
-    let trajectory = dir.join("robot.csv");
-    std::fs::write(&trajectory, TRAJECTORY).unwrap();
+    let (dir, trajectory, whole, out) = folders("dataset-resume-every");
     let t = trajectory.to_str().unwrap();
-    let (whole, out) = (dir.join("whole"), dir.join("set"));
     let (w, o) = (whole.to_str().unwrap(), out.to_str().unwrap());
     let every = ["--outputs", "image,rays,range,range16,ids,panoramas,points"];
     let plain = specchio(&[&args(t, w)[..], &every].concat());
