@@ -198,11 +198,14 @@ fn frames_in_flight_change_nothing_but_the_overlap() {
     }
 }
 
-/// Switching the lookup in place (the viewer's menu) and dropping the renderer with frames
-/// still running wait for what those frames use: the validation layer would report an object
-/// destroyed while in use. The frames before the switch still come back, in order.
+/// Switching the lookup in place (the viewer's menu) with frames still running waits for
+/// nothing: the old lookup's pass and the ray map's passes made for it are kept until the
+/// frames that use them have finished (the validation layer would report an object destroyed
+/// while in use). Every frame comes back, in order, with its own lookup's results: the ray
+/// map, and the tally of `distance-exact`'s frames, read from the pass they were recorded
+/// with. Dropping the renderer with frames running waits for them.
 #[test]
-fn a_lookup_switch_and_a_drop_wait_for_the_frames_in_flight() {
+fn a_lookup_switch_keeps_what_frames_in_flight_use_and_a_drop_waits() {
     checks_between_submissions();
     for device in devices() {
         switch_and_drop_on(&device);
@@ -215,24 +218,39 @@ fn switch_and_drop_on(device: &str) {
     let options = RenderOptions {
         cube_size: Some(32),
         frames_in_flight: 3,
+        id_cube: true,
         ..Default::default()
     };
     let mut r = Renderer::new(&gpu.device, s, &options).expect("renderer");
-    let mut frame = 0;
+    let readback = Readback {
+        rays: true,
+        ..Default::default()
+    };
+    let mut asked = Vec::new();
     for &lookup in tested.iter().chain([&Lookup::Box]) {
         r.scene.mirror.lookup = lookup;
         for _ in 0..2 {
-            let t = frame as f64 * 0.3;
-            r.submit_frame(frame, t, Readback::default())
+            let frame = asked.len() as u64;
+            r.submit_frame(frame, frame as f64 * 0.3, readback)
                 .expect("submit");
-            frame += 1;
+            asked.push(lookup);
         }
     }
-    let (first, _) = r.finish_frame().expect("finish").expect("a frame");
-    assert_eq!(first.frame, 0, "frames come back oldest first");
-    let (second, _) = r.finish_frame().expect("finish").expect("a frame");
-    assert_eq!(second.frame, 1);
-    // The rest are still pending (or finished and queued): the drop must wait for them.
+    for (frame, &lookup) in asked.iter().enumerate().take(asked.len() - 2) {
+        let (report, images) = r.finish_frame().expect("finish").expect("a frame");
+        assert_eq!(report.frame, frame as u64, "frames come back oldest first");
+        assert!(
+            images.sensor_ray_direction.is_some(),
+            "frame {frame}: its ray map"
+        );
+        let tallied = lookup == Lookup::DistanceExact;
+        assert_eq!(
+            report.traced_rays.is_some(),
+            tallied,
+            "frame {frame} ({lookup}): the tally is its own pass's"
+        );
+    }
+    // The last two are still pending (or finished and queued): the drop must wait for them.
     drop(r);
     gpu.finish();
 }

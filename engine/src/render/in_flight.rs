@@ -20,6 +20,7 @@ use std::time::Instant;
 
 use super::queries::{FrameQueries, StatsRead};
 use super::readback::Copies;
+use super::retired::Retired;
 use super::{FrameImages, FrameReport, Readback, Renderer};
 use crate::vk::commands::Submitter;
 use crate::vk::device::Device;
@@ -61,6 +62,8 @@ pub(super) struct Pending {
     /// frame's.
     pub traced: bool,
     pub submitted: Instant,
+    /// Its number in submission order (set when submitted).
+    pub number: u64,
 }
 
 /// The slots, the one being recorded, and the frames submitted and finished.
@@ -76,6 +79,10 @@ pub(super) struct InFlight {
     /// A frame held on the GPU for a test (`fault::HOLD_FRAME_VAR`). Declared after the
     /// slots: dropped once their frames finished.
     hold: Option<Hold>,
+    /// What the renderer let go of while frames in flight may still use it (the ray map's
+    /// passes of a lookup switched away from). Declared after the slots, whose drop waits
+    /// for their frames.
+    retired: Retired<Box<dyn std::any::Any + Send>>,
 }
 
 impl Drop for InFlight {
@@ -108,6 +115,7 @@ impl InFlight {
             done: VecDeque::new(),
             submitted: 0,
             hold: Hold::asked(device)?,
+            retired: Retired::default(),
         })
     }
 
@@ -123,6 +131,19 @@ impl InFlight {
     /// The current slot's index, for the parts that keep per-slot state of their own.
     pub fn current_index(&self) -> usize {
         self.current
+    }
+
+    /// The number of the last frame submitted, if it may still be running (`None`: every
+    /// submitted frame has been waited for).
+    pub fn last_in_flight(&self) -> Option<u64> {
+        (!self.order.is_empty()).then_some(self.submitted)
+    }
+
+    /// Keeps `object` until every frame submitted so far has finished (dropped now when none
+    /// is in flight).
+    pub fn retire(&mut self, object: Box<dyn std::any::Any + Send>) {
+        let last = self.last_in_flight();
+        self.retired.keep(last, object);
     }
 
     /// The newest finished frame's results (the one `render_frame` just waited for).
@@ -168,9 +189,10 @@ impl Renderer {
 
     /// Whether a frame can be submitted now without waiting: the slot it would use has no
     /// frame still running (a loop that must not wait for the GPU asks this first), and,
-    /// when the scene's lookup was switched since the last frame, no frame at all: the next
-    /// frame replaces the lookup's resources in place once every frame has finished
-    /// (`follow_lookup`).
+    /// when the scene's lookup was switched since the last frame, no frame at all. The old
+    /// pass needs no wait (it is retired), but the new one uploads its buffers through the
+    /// one queue, and on a driver that runs the queue in order that upload would wait
+    /// behind the frames in flight inside the loop.
     pub fn ready_for_frame(&self) -> Result<bool, GpuError> {
         if self.mirror.lookup() != self.scene.mirror.lookup {
             return self.frames_finished();
@@ -231,7 +253,10 @@ impl Renderer {
         let held = (self.frames.hold.as_ref()).and_then(|h| h.wait_for(frame));
         let slot = &mut self.frames.slots[current];
         slot.submitter.submit_waiting(held.as_slice())?;
-        slot.pending = Some(pending);
+        slot.pending = Some(Pending {
+            number: frame,
+            ..pending
+        });
         self.frames.order.push_back(current);
         self.frames.current = (current + 1) % self.frames.slots.len();
         Ok(())
@@ -264,8 +289,11 @@ impl Renderer {
         let mut report = pending.report;
         (slot.queries).read(&mut report, pending.stats, pending.per_face)?;
         if pending.traced {
-            report.traced_rays = self.mirror.pass.tally(s)?;
+            report.traced_rays = self.mirror.pass_of(pending.number).tally(s)?;
         }
+        // Nothing after this frame uses what was let go before it.
+        self.mirror.release_through(pending.number);
+        self.frames.retired.release_through(pending.number);
         let images = pending.copies.decode(slot.readback.as_ref())?;
         self.frames.done.push_back((report, images));
         Ok(())

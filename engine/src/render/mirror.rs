@@ -1,11 +1,13 @@
 //! The mirror part of the renderer: the lookup's pass it holds (its pipelines, its set 1, its
-//! per-frame work), rebuilt when the scene's lookup is switched in place (the viewer's menu).
+//! per-frame work), rebuilt when the scene's lookup is switched in place (the viewer's menu);
+//! the pass it replaces is kept for the frames in flight that still use it (`retired.rs`).
 
 use std::sync::Arc;
 
 use super::gpu;
 use super::lookups::{self, LookupPass, TraceOrder};
 use super::resources::SceneResources;
+use super::retired::Retired;
 use super::targets::CubeTarget;
 use crate::scene::{Lookup, Scene};
 use crate::vk::commands::Submitter;
@@ -24,6 +26,8 @@ pub(super) type Inputs<'a> = (
 
 pub(super) struct Mirror {
     pub pass: Box<dyn LookupPass>,
+    /// Passes switched away from while frames in flight still used them.
+    retired: Retired<Box<dyn LookupPass>>,
     lookup: Lookup,
     /// The order the tracing lookups hand their builds (kept for a lookup switched in place).
     trace_order: TraceOrder,
@@ -40,6 +44,7 @@ impl Mirror {
     ) -> Result<Self, GpuError> {
         Ok(Self {
             pass: create_pass(inputs, lookup, trace_order, frames_in_flight)?,
+            retired: Retired::default(),
             lookup,
             trace_order,
             frames_in_flight,
@@ -51,14 +56,32 @@ impl Mirror {
         self.lookup
     }
 
-    /// Rebuilds the pass when the scene's lookup is no longer the one it was made for (the
-    /// caller has waited for the frames that used the old one).
-    pub fn follow(&mut self, inputs: Inputs<'_>, lookup: Lookup) -> Result<(), GpuError> {
+    /// Rebuilds the pass when the scene's lookup is no longer the one it was made for. The
+    /// old pass is kept until frame `in_flight` (the last submitted, if one may still run)
+    /// has finished: no frame waits for the switch.
+    pub fn follow(
+        &mut self,
+        inputs: Inputs<'_>,
+        lookup: Lookup,
+        in_flight: Option<u64>,
+    ) -> Result<(), GpuError> {
         if lookup != self.lookup {
-            self.pass = create_pass(inputs, lookup, self.trace_order, self.frames_in_flight)?;
+            let new = create_pass(inputs, lookup, self.trace_order, self.frames_in_flight)?;
+            let old = std::mem::replace(&mut self.pass, new);
+            self.retired.keep(in_flight, old);
             self.lookup = lookup;
         }
         Ok(())
+    }
+
+    /// The pass frame `frame` was recorded with (its tally is that pass's).
+    pub fn pass_of(&self, frame: u64) -> &dyn LookupPass {
+        self.retired.used_by(frame).unwrap_or(&self.pass).as_ref()
+    }
+
+    /// Frame `frame` has finished: the passes no later frame used are destroyed.
+    pub fn release_through(&mut self, frame: u64) {
+        self.retired.release_through(frame);
     }
 }
 

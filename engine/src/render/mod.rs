@@ -35,6 +35,7 @@ mod queries;
 mod readback;
 mod refresh;
 pub mod resources;
+mod retired;
 mod scene_draw;
 mod sensor_rays;
 pub mod targets;
@@ -288,17 +289,21 @@ impl Renderer {
             per_face,
             traced: floor.is_none(),
             submitted: Instant::now(),
+            number: 0,
         })
     }
 
-    /// The mirror's pass follows the scene's lookup, switched in place: the frames in flight
-    /// that may still use the old pass are finished first.
+    /// The mirror's pass follows the scene's lookup, switched in place. Nothing waits: the old
+    /// pass, and the ray map's passes made for it, are kept until the frames in flight that
+    /// may use them have finished (`retired.rs`).
     fn follow_lookup(&mut self) -> Result<(), GpuError> {
+        let in_flight = self.frames.last_in_flight();
         if self.mirror.lookup() != self.scene.mirror.lookup {
-            self.drain()?;
             // The ray map's passes were chosen for the old lookup (and, traced, read its set):
             // made again for the new one on the next frame that reads them.
-            self.views.sensor_rays = None;
+            if let Some(rays) = self.views.sensor_rays.take() {
+                self.frames.retire(Box::new(rays));
+            }
         }
         self.mirror.follow(
             (
@@ -309,6 +314,7 @@ impl Renderer {
                 &self.submitter,
             ),
             self.scene.mirror.lookup,
+            in_flight,
         )
     }
 
