@@ -83,6 +83,12 @@ impl AccelerationStructure {
             buffer: Some(buffer),
         })
     }
+
+    /// The buffer holding the structure: what a frame graph tracks its builds and reads by
+    /// (their barriers are memory barriers).
+    pub fn storage(&self) -> vk::Buffer {
+        self.buffer.as_ref().map_or(vk::Buffer::null(), |b| b.raw)
+    }
 }
 
 impl Drop for AccelerationStructure {
@@ -315,12 +321,11 @@ pub struct TopLevel {
     instances: Buffer,
     instances_address: vk::DeviceAddress,
     /// Held for the builds (read through `scratch_address`).
-    _scratch: Buffer,
+    scratch: Buffer,
     scratch_address: vk::DeviceAddress,
     count: u32,
     capacity: u32,
     ext: Ext,
-    device: Arc<Device>,
 }
 
 impl TopLevel {
@@ -357,12 +362,11 @@ impl TopLevel {
             structure,
             instances,
             instances_address,
-            _scratch: scratch,
+            scratch,
             scratch_address,
             count: 0,
             capacity,
             ext,
-            device: Arc::clone(device),
         })
     }
 
@@ -404,10 +408,16 @@ impl TopLevel {
         Ok(())
     }
 
-    /// Records the rebuild, ordered after the previous frame's use and visible to the
-    /// fragment shaders that follow.
+    /// The buffers a rebuild writes: the structure's storage and the build's scratch. The
+    /// caller orders the build with them (the renderer's frame graph: after the last frame's
+    /// build and ray queries, before this frame's ray queries); the instances are an upload,
+    /// read by any later command.
+    pub fn written_by_build(&self) -> [vk::Buffer; 2] {
+        [self.structure.storage(), self.scratch.raw]
+    }
+
+    /// Records the rebuild (ordered by the caller: [`Self::written_by_build`]).
     pub fn record_build(&self, cmd: vk::CommandBuffer) {
-        build_barrier(&self.device, cmd, true);
         let geometry = [Self::geometry(self.instances_address)];
         let info = [vk::AccelerationStructureBuildGeometryInfoKHR::default()
             .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
@@ -428,6 +438,5 @@ impl TopLevel {
             self.ext
                 .cmd_build_acceleration_structures(cmd, &info, &[range.as_slice()])
         };
-        build_barrier(&self.device, cmd, false);
     }
 }

@@ -6,8 +6,8 @@
 //! flight, and every descriptor set, indirect draw and device address that names it would have
 //! to follow the frame. Instead each frame in flight owns a staging buffer ([`FrameUploads`]):
 //! the host writes there, and the frame's own commands copy it into the single device buffer
-//! the shaders read, after the previous frames' reads of that buffer (one barrier) and before
-//! this frame's (another). The device buffers then live in the GPU's fastest memory, and
+//! the shaders read, after the previous frames' reads of that buffer and before this frame's
+//! (the barriers are the caller's: the renderer declares the copies to its frame graph). The device buffers then live in the GPU's fastest memory, and
 //! nothing that names them changes per frame. Vulkan guide: "Synchronization examples",
 //! upload then read.
 
@@ -15,7 +15,6 @@ use std::sync::Arc;
 
 use ash::vk;
 
-use super::commands::memory_barrier;
 use super::device::Device;
 use super::memory::{Buffer, BufferDesc};
 use super::GpuError;
@@ -80,15 +79,24 @@ impl FrameUploads {
         Ok(())
     }
 
-    /// Records the queued copies at the start of a frame (before anything reads the
-    /// destinations) and empties the queue.
-    ///
-    /// Before: the copies wait for every earlier command on the queue (the frames still in
-    /// flight read these buffers: a write after read, for which an execution dependency is
-    /// enough). After: the copies' writes are made visible to every later read, whatever
-    /// stage reads them (uniforms, storage, indirect commands, acceleration-structure builds).
-    /// `ALL_COMMANDS` names those stages without listing ones a device may not have enabled.
-    pub fn record(&mut self, cmd: vk::CommandBuffer) -> Result<(), GpuError> {
+    /// The buffers the queued copies write, each once, in the order first queued.
+    pub fn destinations(&self) -> Vec<vk::Buffer> {
+        let mut seen = Vec::new();
+        for q in &self.queued {
+            if !seen.contains(&q.dst) {
+                seen.push(q.dst);
+            }
+        }
+        seen
+    }
+
+    /// Records the queued copies at the start of a frame and empties the queue. The caller
+    /// orders them (the renderer's frame graph): after every earlier command's reads of
+    /// [`Self::destinations`] (the frames still in flight read these buffers: a write after
+    /// read, for which an execution dependency is enough), and their writes made visible to
+    /// every later read, whatever stage reads them (uniforms, storage, indirect commands,
+    /// acceleration-structure builds).
+    pub fn record_copies(&mut self, cmd: vk::CommandBuffer) -> Result<(), GpuError> {
         if self.queued.is_empty() {
             return Ok(());
         }
@@ -100,18 +108,6 @@ impl FrameUploads {
         let staging = self.staging.as_mut().expect("made above");
         staging.write(&self.data)?;
         let d = &self.device.raw;
-        memory_barrier(
-            &self.device,
-            cmd,
-            (
-                vk::PipelineStageFlags2::ALL_COMMANDS,
-                vk::AccessFlags2::NONE,
-            ),
-            (
-                vk::PipelineStageFlags2::COPY,
-                vk::AccessFlags2::TRANSFER_WRITE,
-            ),
-        );
         for q in &self.queued {
             let region = [vk::BufferCopy {
                 src_offset: q.at,
@@ -122,18 +118,6 @@ impl FrameUploads {
             // `write`, and the staging buffer holds all of `data`).
             unsafe { d.cmd_copy_buffer(cmd, staging.raw, q.dst, &region) };
         }
-        memory_barrier(
-            &self.device,
-            cmd,
-            (
-                vk::PipelineStageFlags2::COPY,
-                vk::AccessFlags2::TRANSFER_WRITE,
-            ),
-            (
-                vk::PipelineStageFlags2::ALL_COMMANDS,
-                vk::AccessFlags2::MEMORY_READ,
-            ),
-        );
         self.queued.clear();
         self.data.clear();
         Ok(())

@@ -48,7 +48,9 @@ impl Renderer {
         let sorted: Vec<MaterialSample> = order.iter().map(|&i| points[i].1).collect();
         let device = &Arc::clone(&self.device);
         let pass = CheckPass::create(device, self.resources.scene_set_layout.raw, &sorted)?;
-        let cmd = self.begin_frame()?;
+        // The frame graph orders the uploads (what the dispatches read, the frame block, rests
+        // as read by any command once copied); the check's own results place their barrier.
+        let cmd = self.begin_frame(&mut self.frame_graph())?;
         pass.record(cmd, self.resources.scene_set, points, &order);
         self.submit_slot_and_wait()?;
         pass.results(&order)

@@ -22,7 +22,7 @@ mod frame;
 mod frame_data;
 mod frame_parts;
 pub mod gpu;
-mod graph;
+pub mod graph;
 mod in_flight;
 pub mod lookups;
 pub mod material_check;
@@ -262,8 +262,9 @@ impl Renderer {
             cpu_lookup_ms: if floor.is_some() { 0.0 } else { cpu_lookup_ms },
             ..Default::default()
         };
-        let cmd = self.begin_frame()?;
-        let graph = self.record_frame(cmd, &plan, &views, &ask, &copies, &mut report);
+        let mut graph = self.frame_graph();
+        let cmd = self.begin_frame(&mut graph)?;
+        let graph = self.record_frame((cmd, graph), &plan, &views, &ask, &copies, &mut report);
         // A floor's statistics are its one query's, whatever the method.
         let per_face = floor.is_none() && self.cube_fill.per_face_marks();
         let views_read = ask.readback.views;
@@ -360,7 +361,7 @@ impl Renderer {
     /// update (or its timestamps alone), the views, the readback `copies`.
     fn record_frame(
         &self,
-        cmd: vk::CommandBuffer,
+        (cmd, mut graph): (vk::CommandBuffer, graph::FrameGraph),
         plan: &methods::CubePlan,
         views: &[ViewBasis],
         ask: &FrameAsk,
@@ -368,13 +369,14 @@ impl Renderer {
         report: &mut FrameReport,
     ) -> graph::FrameGraph {
         let frame = self.frame_parts();
-        let mut graph = self.frame_graph();
         let floor = ask.floor();
         // The lookup's own work (the ray-query TLAS build) comes first: without a cube update
         // it is all that lies between the start and fill timestamps (`gpu_fill_ms`). A
         // floor's frame has none: it times the fill alone.
         if floor.is_none() {
-            frame.lookup.record(cmd);
+            frame
+                .lookup
+                .record(&mut graph::PassRecorder::new(&self.device, cmd, &mut graph));
         }
         if plan.dirty != 0 {
             let graph = (&frame, &mut graph);
@@ -400,18 +402,29 @@ impl Renderer {
         let shown = (ask.readback, ask.display);
         (self.views).record((&frame, &mut graph), cmd, views, shown);
         if floor.is_none() {
-            (frame.lookup).record_after_views(cmd, self.frames.current_index());
+            let mut pass = graph::PassRecorder::new(&self.device, cmd, &mut graph);
+            (frame.lookup).record_after_views(&mut pass, self.frames.current_index());
         }
         self.record_readback(&mut graph, cmd, copies);
         graph
     }
 
-    /// The frame graph of the passes that declare their uses (cube fill, mips, views,
-    /// readback, the queries' results), with every resource they may use at rest: the cube's
-    /// images (fresh before its first fill), the view targets, the slot's readback buffer and
-    /// its queries' result buffers.
+    /// The frame graph, with every resource the frame's passes may use at rest: the
+    /// uploads' destinations, the lookup's own buffers, the cube's images (fresh before its
+    /// first fill), the view targets, the slot's readback buffer and its queries' result
+    /// buffers.
     fn frame_graph(&self) -> graph::FrameGraph {
         let mut graph = graph::FrameGraph::default();
+        for buffer in self.frames.current().uploads.destinations() {
+            graph.import(
+                graph::Resource::Buffer(buffer),
+                graph::Use::ReadAnywhere,
+                false,
+            );
+        }
+        for (resource, rest) in self.mirror.pass.resources(self.frames.current_index()) {
+            graph.import(resource, rest, false);
+        }
         let fresh = self.refresh.first_fill();
         for (resource, rest) in self.cube.resources() {
             graph.import(resource, rest, fresh);
@@ -435,11 +448,26 @@ impl Renderer {
     }
 
     /// Starts recording a frame in the current slot (acquired: its last frame finished): the
-    /// frame's uploads copied, queries reset, the start timestamp written.
-    fn begin_frame(&mut self) -> Result<vk::CommandBuffer, GpuError> {
+    /// frame's uploads copied (after the last frame's reads of their buffers, before any of
+    /// this frame's, whatever reads them), queries reset, the start timestamp written.
+    fn begin_frame(
+        &mut self,
+        graph: &mut graph::FrameGraph,
+    ) -> Result<vk::CommandBuffer, GpuError> {
+        let device = Arc::clone(&self.device);
         let slot = self.frames.current_mut();
         let cmd = slot.submitter.begin()?;
-        slot.uploads.record(cmd)?;
+        let copied: Vec<_> = (slot.uploads.destinations().into_iter())
+            .map(graph::Resource::Buffer)
+            .collect();
+        let uses = |how| copied.iter().map(|&b| (b, how)).collect::<Vec<_>>();
+        graph::record(
+            &device,
+            cmd,
+            &graph.uses(&uses(graph::Use::CopyDestination)),
+        );
+        slot.uploads.record_copies(cmd)?;
+        graph::record(&device, cmd, &graph.uses(&uses(graph::Use::ReadAnywhere)));
         slot.queries.begin_frame(cmd);
         Ok(cmd)
     }

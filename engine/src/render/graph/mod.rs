@@ -12,10 +12,11 @@
 //! accumulate; a write, or a new layout, needs a barrier after all of them). Subresources that
 //! need the same barrier are given one, over their range (`ranges.rs`).
 //!
-//! Which passes are declared this way: the cube fill and its mip chain, the views, the
-//! readback and the copy of the queries' results. The uploads and the lookups' own passes
-//! (acceleration structures, tallies) still place their own (docs/renderer.md, "One frame's
-//! flow").
+//! Every pass of a frame is declared this way: the uploads, the lookups' own passes (the
+//! top-level acceleration structure's build, the traced rays' tally, through
+//! [`PassRecorder`]), the cube fill and its mip chain, the views, the readback and the copy of
+//! the queries' results (docs/renderer.md, "One frame's flow"). Only one-off work outside the
+//! frames (uploads at creation, bottom-level builds, the material check) places its own.
 
 mod ranges;
 
@@ -24,11 +25,11 @@ use ash::vk;
 use super::draw::{barrier, Sync, COLOR_OUT, COPY_READ, COPY_WRITE, DEPTH_RW, NOTHING, SAMPLED};
 use crate::vk::commands::{image_barriers, memory_barrier, ImageBarrier};
 use crate::vk::device::Device;
-pub(super) use ranges::Subresources;
+pub use ranges::Subresources;
 
 /// How a pass uses a resource: a layout (for an image) and the stages and accesses of the use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Use {
+pub enum Use {
     /// Drawn into as a colour attachment, cleared first: earlier contents are not kept.
     ColorTarget,
     /// Drawn into as a colour attachment, the texels it does not draw kept (a cube's clean
@@ -52,6 +53,17 @@ pub(super) enum Use {
     CopyDestination,
     /// Read by the host after the frame's fence (a buffer).
     HostRead,
+    /// Filled by a transfer command (`vkCmdFillBuffer`: a counter zeroed).
+    Filled,
+    /// Read by any later command, whatever its stage: what the frame's uploads fill
+    /// (uniforms, storage, indirect commands, acceleration-structure instances).
+    ReadAnywhere,
+    /// Read and written by fragment shaders' storage accesses (atomic counters).
+    FragmentStorage,
+    /// Built into: an acceleration structure, or its build's scratch memory.
+    AccelerationBuild,
+    /// Traced through by fragment shaders' ray queries.
+    AccelerationTraced,
 }
 
 const BLIT_READ: Sync = (
@@ -61,6 +73,32 @@ const BLIT_READ: Sync = (
 const BLIT_WRITE: Sync = (
     vk::PipelineStageFlags2::BLIT,
     vk::AccessFlags2::TRANSFER_WRITE,
+);
+const FILL_WRITE: Sync = (
+    vk::PipelineStageFlags2::ALL_TRANSFER,
+    vk::AccessFlags2::TRANSFER_WRITE,
+);
+const ANY_READ: Sync = (
+    vk::PipelineStageFlags2::ALL_COMMANDS,
+    vk::AccessFlags2::MEMORY_READ,
+);
+const STORAGE_RW: Sync = (
+    vk::PipelineStageFlags2::FRAGMENT_SHADER,
+    vk::AccessFlags2::from_raw(
+        vk::AccessFlags2::SHADER_STORAGE_READ.as_raw()
+            | vk::AccessFlags2::SHADER_STORAGE_WRITE.as_raw(),
+    ),
+);
+const BUILD_RW: Sync = (
+    vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
+    vk::AccessFlags2::from_raw(
+        vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw()
+            | vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw(),
+    ),
+);
+const TRACED: Sync = (
+    vk::PipelineStageFlags2::FRAGMENT_SHADER,
+    vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
 );
 
 impl Use {
@@ -72,7 +110,13 @@ impl Use {
             Use::FragmentRead => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Use::BlitSource | Use::CopySource => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
             Use::BlitDestination | Use::BlitKept => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            Use::CopyDestination | Use::HostRead => vk::ImageLayout::UNDEFINED,
+            Use::CopyDestination
+            | Use::HostRead
+            | Use::Filled
+            | Use::ReadAnywhere
+            | Use::FragmentStorage
+            | Use::AccelerationBuild
+            | Use::AccelerationTraced => vk::ImageLayout::UNDEFINED,
         }
     }
 
@@ -86,6 +130,11 @@ impl Use {
             Use::CopySource => COPY_READ,
             Use::CopyDestination => COPY_WRITE,
             Use::HostRead => (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+            Use::Filled => FILL_WRITE,
+            Use::ReadAnywhere => ANY_READ,
+            Use::FragmentStorage => STORAGE_RW,
+            Use::AccelerationBuild => BUILD_RW,
+            Use::AccelerationTraced => TRACED,
         }
     }
 
@@ -99,6 +148,9 @@ impl Use {
                 | Use::BlitDestination
                 | Use::BlitKept
                 | Use::CopyDestination
+                | Use::Filled
+                | Use::FragmentStorage
+                | Use::AccelerationBuild
         )
     }
 
@@ -114,7 +166,7 @@ impl Use {
 
 /// A resource a frame uses: subresources of an image, or a buffer (whole).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Resource {
+pub enum Resource {
     Image(vk::Image, Subresources),
     Buffer(vk::Buffer),
 }
@@ -129,7 +181,7 @@ impl Resource {
 /// A derived barrier: an image's, with its layout transition (from, to: layout, stages and
 /// accesses), or a memory barrier for a buffer (from, to: stages and accesses).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Barrier {
+pub(crate) enum Barrier {
     Image {
         image: vk::Image,
         range: Subresources,
@@ -193,14 +245,14 @@ struct Tracked {
 
 /// The resources of one frame's declared passes and their states.
 #[derive(Default)]
-pub(super) struct FrameGraph {
+pub struct FrameGraph {
     tracked: Vec<Tracked>,
 }
 
 impl FrameGraph {
     /// Tracks all of `resource`, which rests as `rest` leaves it between frames; `fresh`
     /// when nothing has used it yet.
-    pub fn import(&mut self, resource: Resource, rest: Use, fresh: bool) {
+    pub(crate) fn import(&mut self, resource: Resource, rest: Use, fresh: bool) {
         debug_assert!(
             (self.tracked.iter()).all(|t| t.resource.handle() != resource.handle()),
             "{resource:?} imported twice"
@@ -224,7 +276,7 @@ impl FrameGraph {
     /// The barriers that make `uses` safe after every use declared before them; the
     /// subresources named are then in these uses' states. A resource never imported, or a
     /// range outside the imported image, is a bug in the pass that names it.
-    pub fn uses(&mut self, uses: &[(Resource, Use)]) -> Vec<Barrier> {
+    pub(crate) fn uses(&mut self, uses: &[(Resource, Use)]) -> Vec<Barrier> {
         let mut barriers = Vec::new();
         for &(resource, to) in uses {
             let at = (self.tracked.iter()).position(|t| t.resource.handle() == resource.handle());
@@ -238,7 +290,7 @@ impl FrameGraph {
     /// subresource whose layout and accesses since its last barrier are its resting use's
     /// already (the next frame's first barrier waits for exactly those), nor for one imported
     /// fresh and not used.
-    pub fn finish(&mut self) -> Vec<Barrier> {
+    pub(crate) fn finish(&mut self) -> Vec<Barrier> {
         let mut barriers = Vec::new();
         for t in &mut self.tracked {
             let rest = State::resting(t.rest);
@@ -350,6 +402,39 @@ pub(super) fn record(device: &Device, cmd: vk::CommandBuffer, barriers: &[Barrie
                 memory_barrier(device, cmd, from, to);
             }
         }
+    }
+}
+
+/// What a pass outside the renderer's own parts (a lookup's) records through: the frame's
+/// command buffer, and the frame graph its uses are declared to before each command that
+/// needs them (the graph records the barriers).
+pub struct PassRecorder<'a> {
+    device: &'a Device,
+    cmd: vk::CommandBuffer,
+    graph: &'a mut FrameGraph,
+}
+
+impl<'a> PassRecorder<'a> {
+    pub(super) fn new(
+        device: &'a Device,
+        cmd: vk::CommandBuffer,
+        graph: &'a mut FrameGraph,
+    ) -> Self {
+        Self { device, cmd, graph }
+    }
+
+    pub fn device(&self) -> &Device {
+        self.device
+    }
+
+    pub fn cmd(&self) -> vk::CommandBuffer {
+        self.cmd
+    }
+
+    /// The commands that follow use `uses`: the barriers they need after everything declared
+    /// before are recorded now.
+    pub fn declare(&mut self, uses: &[(Resource, Use)]) {
+        record(self.device, self.cmd, &self.graph.uses(uses));
     }
 }
 

@@ -10,7 +10,7 @@ use super::Sync;
 
 /// An image's subresource range as a value that compares (ash's range does not).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(in crate::render) struct Subresources {
+pub struct Subresources {
     aspect: vk::ImageAspectFlags,
     /// First level and count.
     mips: [u32; 2],

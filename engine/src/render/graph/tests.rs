@@ -296,3 +296,79 @@ fn a_read_at_another_stage_waits_for_the_layout_transition() {
     assert_eq!(graph.uses(&[(level, Use::CopySource)]), []);
     assert_eq!(graph.finish().len(), 1, "back to sampling");
 }
+
+fn buffer(raw: u64) -> Resource {
+    Resource::Buffer(vk::Handle::from_raw(raw))
+}
+
+/// An upload's destination: the copy waits for every earlier command's reads of it (the
+/// frames still in flight), and the copy's writes are made visible to any later read, as
+/// `vk::uploads` placed them by hand (with `MEMORY_READ` named on the source side, where the
+/// hand-placed barrier named no access: an execution dependency either way).
+#[test]
+fn an_upload_waits_for_earlier_reads_and_is_read_anywhere_after() {
+    let (views, objects) = (buffer(1), buffer(2));
+    let mut graph = FrameGraph::default();
+    graph.import(views, Use::ReadAnywhere, false);
+    graph.import(objects, Use::ReadAnywhere, false);
+    let copy = graph.uses(&[
+        (views, Use::CopyDestination),
+        (objects, Use::CopyDestination),
+    ]);
+    assert_eq!(copy, [Barrier::Memory(ANY_READ, COPY_WRITE); 2]);
+    let read = graph.uses(&[(views, Use::ReadAnywhere), (objects, Use::ReadAnywhere)]);
+    assert_eq!(read, [Barrier::Memory(COPY_WRITE, ANY_READ); 2]);
+    assert_eq!(graph.finish(), [], "both rest as read anywhere");
+}
+
+/// The top level's rebuild: after the last frame's ray queries read the structure and its
+/// build wrote the scratch, and visible to this frame's ray queries after, as
+/// `vk::acceleration` placed it by hand.
+#[test]
+fn a_top_level_rebuild_waits_for_the_last_traces_and_precedes_the_next() {
+    let (structure, scratch) = (buffer(1), buffer(2));
+    let mut graph = FrameGraph::default();
+    graph.import(structure, Use::AccelerationTraced, false);
+    graph.import(scratch, Use::AccelerationBuild, false);
+    let build = graph.uses(&[
+        (structure, Use::AccelerationBuild),
+        (scratch, Use::AccelerationBuild),
+    ]);
+    assert_eq!(
+        build,
+        [
+            Barrier::Memory(TRACED, BUILD_RW),
+            Barrier::Memory(BUILD_RW, BUILD_RW)
+        ]
+    );
+    let traced = graph.uses(&[(structure, Use::AccelerationTraced)]);
+    assert_eq!(traced, [Barrier::Memory(BUILD_RW, TRACED)]);
+    assert_eq!(graph.finish(), []);
+}
+
+/// The traced rays' tally: zeroed after the last frame's copy read it, counted into by the
+/// fragment shaders, copied for the host; the host copy needs no barrier before the copy
+/// (only the host used it, before the submission) and one for the host after.
+#[test]
+fn a_tally_is_zeroed_counted_and_copied_for_the_host() {
+    let (tally, host) = (buffer(1), buffer(2));
+    let mut graph = FrameGraph::default();
+    graph.import(tally, Use::CopySource, false);
+    graph.import(host, Use::HostRead, false);
+    assert_eq!(
+        graph.uses(&[(tally, Use::Filled)]),
+        [Barrier::Memory(COPY_READ, FILL_WRITE)]
+    );
+    assert_eq!(
+        graph.uses(&[(tally, Use::FragmentStorage)]),
+        [Barrier::Memory(FILL_WRITE, STORAGE_RW)]
+    );
+    let copy = graph.uses(&[(tally, Use::CopySource), (host, Use::CopyDestination)]);
+    assert_eq!(copy, [Barrier::Memory(STORAGE_RW, COPY_READ)]);
+    let host_read = (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ);
+    assert_eq!(
+        graph.uses(&[(host, Use::HostRead)]),
+        [Barrier::Memory(COPY_WRITE, host_read)]
+    );
+    assert_eq!(graph.finish(), []);
+}

@@ -27,6 +27,7 @@ use super::{
     FrameObjects, LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines,
     MirrorShaders, Rung, Start,
 };
+use crate::render::graph::{PassRecorder, Resource, Use};
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
 use crate::vk::image::Sampler;
@@ -145,13 +146,19 @@ impl LookupPass for DistanceExactPass {
         self.trace.prepare(uploads, frame.objects, frame.bounds)
     }
 
-    fn record(&self, cmd: vk::CommandBuffer) {
-        self.tally.record_reset(cmd);
-        self.trace.record(cmd);
+    fn resources(&self, slot: usize) -> Vec<(Resource, Use)> {
+        let mut all = self.tally.resources(slot);
+        all.extend(self.trace.resources());
+        all
     }
 
-    fn record_after_views(&self, cmd: vk::CommandBuffer, slot: usize) {
-        self.tally.record_to_host(cmd, slot);
+    fn record(&self, pass: &mut PassRecorder<'_>) {
+        self.tally.record_reset(pass);
+        self.trace.record(pass);
+    }
+
+    fn record_after_views(&self, pass: &mut PassRecorder<'_>, slot: usize) {
+        self.tally.record_to_host(pass, slot);
     }
 
     fn tally(&self, slot: usize) -> Result<Option<FrameTally>, GpuError> {

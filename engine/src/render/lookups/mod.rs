@@ -30,6 +30,7 @@ use ash::vk;
 use glam::Vec3;
 
 use super::gpu::ObjectData;
+use super::graph::{PassRecorder, Resource, Use};
 use super::resources::SceneResources;
 use super::targets::CubeTarget;
 use crate::render::pipelines::mirror_pipeline;
@@ -197,12 +198,19 @@ pub trait LookupPass: Send {
     ) -> Result<(), GpuError> {
         Ok(())
     }
-    /// Records the lookup's per-frame GPU work before the views (made visible to the
-    /// fragment shaders that read it). Most lookups have none.
-    fn record(&self, _cmd: vk::CommandBuffer) {}
+    /// The buffers the lookup's own passes use ([`LookupPass::record`],
+    /// [`LookupPass::record_after_views`]) when frame slot `slot` is recorded, and how each
+    /// rests between frames: the frame graph tracks them from the frame's start.
+    fn resources(&self, _slot: usize) -> Vec<(Resource, Use)> {
+        Vec::new()
+    }
+    /// Records the lookup's per-frame GPU work before the views, each command after the
+    /// uses it needs are declared to `pass` (the graph makes it visible to the fragment
+    /// shaders that declare nothing: declare the shaders' use last). Most lookups have none.
+    fn record(&self, _pass: &mut PassRecorder<'_>) {}
     /// Records what follows the frame's views: results copied for the host into the copy of
     /// frame slot `slot` (one of `LookupContext::frames_in_flight`).
-    fn record_after_views(&self, _cmd: vk::CommandBuffer, _slot: usize) {}
+    fn record_after_views(&self, _pass: &mut PassRecorder<'_>, _slot: usize) {}
     /// After the fence of slot `slot`'s frame: how many mirror rays the lookup traced (None:
     /// it traces all or none, so there is nothing to count).
     fn tally(&self, _slot: usize) -> Result<Option<FrameTally>, GpuError> {

@@ -12,6 +12,7 @@ use super::{
     as_is, FrameObjects, LookupContext, LookupNeeds, LookupPass, MirrorLookup, MirrorPipelines,
     MirrorShaders, Rung, Start, TraceSet,
 };
+use crate::render::graph::{PassRecorder, Resource, Use};
 use crate::scene::Lookup;
 use crate::vk::descriptors::{DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::DeviceInfo;
@@ -132,7 +133,11 @@ impl LookupPass for RayQueryPass {
         self.trace.prepare(uploads, frame.objects, frame.bounds)
     }
 
-    fn record(&self, cmd: vk::CommandBuffer) {
-        self.trace.record(cmd);
+    fn resources(&self, _slot: usize) -> Vec<(Resource, Use)> {
+        self.trace.resources()
+    }
+
+    fn record(&self, pass: &mut PassRecorder<'_>) {
+        self.trace.record(pass);
     }
 }

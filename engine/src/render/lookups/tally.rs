@@ -5,7 +5,8 @@
 //!
 //! One `uvec2` (fragments, traced) per view and pass (colour or directions): every mirror draw
 //! of a frame adds to its own slot, so no two draws write the same bytes and they need no
-//! barrier between them. Zeroed at the start of each frame, copied for the host at its end.
+//! barrier between them. Zeroed at the start of each frame, copied for the host at its end
+//! (the barriers derived by the frame graph from the uses declared).
 //! Helper invocations (the 2x2 quads' fill-ins) do not count: their atomics have no effect.
 
 use std::sync::Arc;
@@ -14,9 +15,9 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 use serde::Serialize;
 
+use crate::render::graph::{PassRecorder, Resource, Use};
 use crate::render::resources::{VIEW_COUNT, VIEW_OBSERVER, VIEW_SENSOR};
 use crate::shaders::shared::{TALLY_PASSES, TALLY_PASS_COLOUR};
-use crate::vk::commands::{host_read_barrier, memory_barrier};
 use crate::vk::descriptors;
 use crate::vk::device::Device;
 use crate::vk::memory::{Buffer, BufferDesc};
@@ -93,42 +94,36 @@ impl TraceTally {
         descriptors::write_buffer(&self.device, set, binding, storage, self.buffer.raw);
     }
 
-    /// Zeroes the tally before the frame's mirror draws: after the last frame's draws
-    /// counted into it and its copy for the host read it; made visible to this frame's
-    /// atomics.
-    pub fn record_reset(&self, cmd: vk::CommandBuffer) {
-        let storage =
-            vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE;
-        let transfer = (
-            vk::PipelineStageFlags2::ALL_TRANSFER,
-            vk::AccessFlags2::TRANSFER_WRITE,
-        );
-        let last_uses = (
-            vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COPY,
-            vk::AccessFlags2::SHADER_STORAGE_WRITE,
-        );
-        memory_barrier(&self.device, cmd, last_uses, transfer);
+    /// The device buffer, resting as copied for the host, and slot `slot`'s host copy,
+    /// resting as read by the host.
+    pub fn resources(&self, slot: usize) -> Vec<(Resource, Use)> {
+        vec![
+            (Resource::Buffer(self.buffer.raw), Use::CopySource),
+            (Resource::Buffer(self.host[slot].raw), Use::HostRead),
+        ]
+    }
+
+    /// Zeroes the tally before the frame's mirror draws, which then count into it: after the
+    /// last frame's copy for the host read it.
+    pub fn record_reset(&self, pass: &mut PassRecorder<'_>) {
+        let tally = Resource::Buffer(self.buffer.raw);
+        pass.declare(&[(tally, Use::Filled)]);
         // SAFETY: cmd is recording; the buffer lives as long as the lookup pass, which the
         // renderer keeps until its frames in flight have finished.
         unsafe {
-            (self.device.raw).cmd_fill_buffer(cmd, self.buffer.raw, 0, vk::WHOLE_SIZE, 0);
+            (self.device.raw).cmd_fill_buffer(pass.cmd(), self.buffer.raw, 0, vk::WHOLE_SIZE, 0);
         }
-        let shaders = (vk::PipelineStageFlags2::FRAGMENT_SHADER, storage);
-        memory_barrier(&self.device, cmd, transfer, shaders);
+        pass.declare(&[(tally, Use::FragmentStorage)]);
     }
 
-    /// After the frame's mirror draws: their counts copied into slot `slot`'s host copy and
-    /// made visible to the host.
-    pub fn record_to_host(&self, cmd: vk::CommandBuffer, slot: usize) {
-        let written = (
-            vk::PipelineStageFlags2::FRAGMENT_SHADER,
-            vk::AccessFlags2::SHADER_STORAGE_WRITE,
-        );
-        let read = (
-            vk::PipelineStageFlags2::COPY,
-            vk::AccessFlags2::TRANSFER_READ,
-        );
-        memory_barrier(&self.device, cmd, written, read);
+    /// After the frame's mirror draws: their counts copied into slot `slot`'s host copy, for
+    /// the host after the frame's fence.
+    pub fn record_to_host(&self, pass: &mut PassRecorder<'_>, slot: usize) {
+        let (tally, host) = (self.buffer.raw, self.host[slot].raw);
+        pass.declare(&[
+            (Resource::Buffer(tally), Use::CopySource),
+            (Resource::Buffer(host), Use::CopyDestination),
+        ]);
         let region = [vk::BufferCopy {
             src_offset: 0,
             dst_offset: 0,
@@ -136,15 +131,8 @@ impl TraceTally {
         }];
         // SAFETY: cmd is recording; both buffers hold TALLY_BYTES; the slot's host copy is not
         // read before this frame's fence.
-        unsafe {
-            (self.device.raw).cmd_copy_buffer(cmd, self.buffer.raw, self.host[slot].raw, &region);
-        }
-        host_read_barrier(
-            &self.device,
-            cmd,
-            vk::PipelineStageFlags2::COPY,
-            vk::AccessFlags2::TRANSFER_WRITE,
-        );
+        unsafe { (self.device.raw).cmd_copy_buffer(pass.cmd(), tally, host, &region) };
+        pass.declare(&[(Resource::Buffer(host), Use::HostRead)]);
     }
 
     /// The counts of slot `slot`'s frame (call after its fence).

@@ -19,6 +19,7 @@ use glam::{UVec4, Vec3};
 
 use super::{LookupContext, LookupNeeds};
 use crate::render::gpu::{ObjectData, Vertex};
+use crate::render::graph::{PassRecorder, Resource, Use};
 use crate::trees::split_order::midpoint_split_order;
 use crate::vk::acceleration::{self, AccelerationStructure, TopLevel, TriangleMesh};
 use crate::vk::descriptors;
@@ -196,9 +197,26 @@ impl SceneTrace {
         self.top.write_instances(uploads, &self.records)
     }
 
-    /// Records the top level's rebuild.
-    pub fn record(&self, cmd: vk::CommandBuffer) {
-        self.top.record_build(cmd);
+    /// What the top level's rebuild writes (its structure, its scratch), resting as the last
+    /// frame left them: the structure traced by the fragment shaders, the scratch built with.
+    pub fn resources(&self) -> Vec<(Resource, Use)> {
+        let [structure, scratch] = self.top.written_by_build();
+        vec![
+            (Resource::Buffer(structure), Use::AccelerationTraced),
+            (Resource::Buffer(scratch), Use::AccelerationBuild),
+        ]
+    }
+
+    /// Records the top level's rebuild: after the last frame's build and ray queries (its
+    /// instances are this frame's uploads, read anywhere once copied), before this frame's.
+    pub fn record(&self, pass: &mut PassRecorder<'_>) {
+        let [structure, scratch] = self.top.written_by_build().map(Resource::Buffer);
+        pass.declare(&[
+            (structure, Use::AccelerationBuild),
+            (scratch, Use::AccelerationBuild),
+        ]);
+        self.top.record_build(pass.cmd());
+        pass.declare(&[(structure, Use::AccelerationTraced)]);
     }
 }
 
