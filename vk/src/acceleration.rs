@@ -94,7 +94,8 @@ impl AccelerationStructure {
 impl Drop for AccelerationStructure {
     fn drop(&mut self) {
         // SAFETY: owners keep the structure alive until the GPU work that reads it has
-        // completed (every frame waits on its fence); the buffer is freed after the handle.
+        // completed (the renderer retires a replaced pass until its frames' fences); the
+        // buffer is freed after the handle.
         unsafe { self.ext.destroy_acceleration_structure(self.raw, None) };
         self.buffer.take();
     }

@@ -4,10 +4,10 @@
 //! [`pipeline::Pipeline`], ...) holds an `Arc<device::Device>`, so the device (and the
 //! allocator inside it) outlives everything created from it, and the device holds an
 //! `Arc<instance::Instance>`. Dropping the last handle destroys the object; nothing is
-//! destroyed by hand. The renderer only drops GPU objects after waiting on the fence of the
-//! last submission that used them (see `commands::Submitter`), so no deletion queue is needed
-//! for an offline renderer that waits on every frame. The live viewer keeps frames in flight:
-//! it hands what the GPU may still use to `frames::FrameRing::defer`, the deletion queue.
+//! destroyed by hand. What the GPU may still use is dropped only after the fence of the last
+//! submission that used it (see `commands::Submitter`): the renderer keeps what it replaces
+//! while frames are in flight until they finish (its `render/retired.rs`), and the live
+//! viewer hands such objects to `frames::FrameRing::defer`, the deletion queue.
 //!
 //! One thing outlives every handle on purpose: the loader ([`loader`]), loaded once per
 //! process with an instance that is never destroyed, so that no driver's library is closed

@@ -7,8 +7,9 @@
 //! to follow the frame. Instead each frame in flight owns a staging buffer ([`FrameUploads`]):
 //! the host writes there, and the frame's own commands copy it into the single device buffer
 //! the shaders read, after the previous frames' reads of that buffer and before this frame's
-//! (the barriers are the caller's: the renderer declares the copies to its frame graph). The device buffers then live in the GPU's fastest memory, and
-//! nothing that names them changes per frame. Vulkan guide: "Synchronization examples",
+//! (the barriers are the caller's: the renderer declares the copies to its frame graph). The
+//! device buffers then live in the GPU's fastest memory, and nothing that names them changes
+//! per frame. Vulkan guide: "Synchronization examples",
 //! upload then read.
 
 use std::sync::Arc;
@@ -77,6 +78,13 @@ impl FrameUploads {
             size: bytes.len() as u64,
         });
         Ok(())
+    }
+
+    /// Forgets what is queued (the frame it was queued for was never recorded: its
+    /// recording failed before the copies), so that the slot's next frame starts empty.
+    pub fn clear(&mut self) {
+        self.queued.clear();
+        self.data.clear();
     }
 
     /// The buffers the queued copies write, each once, in the order first queued.

@@ -221,7 +221,9 @@ impl Renderer {
         !self.frames.order.is_empty() || !self.frames.done.is_empty()
     }
 
-    /// Makes the current slot free to record: its previous frame finished (waited for).
+    /// Makes the current slot free to record: its previous frame finished (waited for), and
+    /// nothing left queued in its uploads by a recording that failed before its copies (they
+    /// could name a buffer retired since, and would run twice).
     pub(super) fn acquire_slot(&mut self) -> Result<(), GpuError> {
         let current = self.frames.current;
         if self.frames.slots[current].pending.is_some() {
@@ -233,11 +235,12 @@ impl Renderer {
                 }
             }
         }
+        self.frames.slots[current].uploads.clear();
         Ok(())
     }
 
-    /// Waits for every submitted frame and finishes it (before replacing anything the GPU
-    /// may still use, such as a lookup switched in place).
+    /// Waits for every submitted frame and finishes it (a frame rendered and read back at
+    /// once: `render_frame`).
     pub(super) fn drain(&mut self) -> Result<(), GpuError> {
         while let Some(&oldest) = self.frames.order.front() {
             self.finish_slot(oldest)?;
@@ -289,11 +292,12 @@ impl Renderer {
         let mut report = pending.report;
         (slot.queries).read(&mut report, pending.stats, pending.per_face)?;
         if pending.traced {
-            report.traced_rays = self.mirror.pass_of(pending.number).tally(s)?;
+            report.traced_rays = (self.mirror.pass_recorded_for(pending.number)).tally(s)?;
         }
-        // Nothing after this frame uses what was let go before it.
-        self.mirror.release_through(pending.number);
+        // Nothing after this frame uses what was let go before it: the ray map's passes first,
+        // then the lookup pass whose set and layout they were made with.
         self.frames.retired.release_through(pending.number);
+        self.mirror.release_through(pending.number);
         let images = pending.copies.decode(slot.readback.as_ref())?;
         self.frames.done.push_back((report, images));
         Ok(())

@@ -75,7 +75,7 @@ impl Mirror {
     }
 
     /// The pass frame `frame` was recorded with (its tally is that pass's).
-    pub fn pass_of(&self, frame: u64) -> &dyn LookupPass {
+    pub fn pass_recorded_for(&self, frame: u64) -> &dyn LookupPass {
         self.retired.used_by(frame).unwrap_or(&self.pass).as_ref()
     }
 

@@ -409,19 +409,12 @@ impl Renderer {
         graph
     }
 
-    /// The frame graph, with every resource the frame's passes may use at rest: the
-    /// uploads' destinations, the lookup's own buffers, the cube's images (fresh before its
-    /// first fill), the view targets, the slot's readback buffer and its queries' result
+    /// The frame graph, with every resource the frame's passes may use at rest (the uploads'
+    /// destinations are imported by `begin_frame`): the lookup's own buffers, the cube's
+    /// images (fresh before its first fill), the view targets, the slot's readback buffer and its queries' result
     /// buffers.
     fn frame_graph(&self) -> graph::FrameGraph {
         let mut graph = graph::FrameGraph::default();
-        for buffer in self.frames.current().uploads.destinations() {
-            graph.import(
-                graph::Resource::Buffer(buffer),
-                graph::Use::ReadAnywhere,
-                false,
-            );
-        }
         for (resource, rest) in self.mirror.pass.resources(self.frames.current_index()) {
             graph.import(resource, rest, false);
         }
@@ -460,12 +453,13 @@ impl Renderer {
         let copied: Vec<_> = (slot.uploads.destinations().into_iter())
             .map(graph::Resource::Buffer)
             .collect();
+        for &buffer in &copied {
+            // At rest between frames as read by any command.
+            graph.import(buffer, graph::Use::ReadAnywhere, false);
+        }
         let uses = |how| copied.iter().map(|&b| (b, how)).collect::<Vec<_>>();
-        graph::record(
-            &device,
-            cmd,
-            &graph.uses(&uses(graph::Use::CopyDestination)),
-        );
+        let copy = graph.uses(&uses(graph::Use::CopyDestination));
+        graph::record(&device, cmd, &copy);
         slot.uploads.record_copies(cmd)?;
         graph::record(&device, cmd, &graph.uses(&uses(graph::Use::ReadAnywhere)));
         slot.queries.begin_frame(cmd);

@@ -1,6 +1,5 @@
 //! The frame's resources as declared uses: a pass says how it uses each image's subresources
-//! (and the readback buffer), and the barriers between passes are derived here, never written
-//! by hand.
+//! and each buffer, and the barriers between passes are derived here, never written by hand.
 //!
 //! Every resource a frame touches outlives the frame, so each is imported with its *resting*
 //! use: how the last frame left it, which is also how this frame must leave it (the next one
@@ -16,7 +15,8 @@
 //! top-level acceleration structure's build, the traced rays' tally, through
 //! [`PassRecorder`]), the cube fill and its mip chain, the views, the readback and the copy of
 //! the queries' results (docs/renderer.md, "One frame's flow"). Only one-off work outside the
-//! frames (uploads at creation, bottom-level builds, the material check) places its own.
+//! frames (uploads at creation, bottom-level builds, the material check's results) places
+//! its own.
 
 mod ranges;
 
@@ -200,6 +200,9 @@ struct State {
     since: Sync,
     written: bool,
     visible: Sync,
+    /// Still as imported: its last use came before this frame's submission (an earlier
+    /// frame's, or the host's own, which the submission orders).
+    imported: bool,
 }
 
 impl State {
@@ -209,6 +212,15 @@ impl State {
             since: rest.sync(),
             written: rest.writes(),
             visible: rest.sync(),
+            imported: false,
+        }
+    }
+
+    /// At rest, as a frame finds it.
+    fn imported(rest: Use) -> Self {
+        Self {
+            imported: true,
+            ..Self::resting(rest)
         }
     }
 
@@ -221,6 +233,7 @@ impl State {
             since: rest.sync(),
             written: false,
             visible: NOTHING,
+            imported: true,
         }
     }
 
@@ -264,7 +277,7 @@ impl FrameGraph {
         let state = if fresh {
             State::fresh(rest)
         } else {
-            State::resting(rest)
+            State::imported(rest)
         };
         self.tracked.push(Tracked {
             resource,
@@ -358,9 +371,11 @@ impl Tracked {
 /// accesses) if it needs one, and its state after. Reads in the layout they need after no
 /// write need none, if the last barrier made the subresource visible to them (a read at
 /// another stage than the layout transition was made for needs one: a blit source then a copy
-/// source); after the host's own use a buffer needs none either (the host used it
-/// before the frame's submission, which orders everything the host did before it); anything
-/// else waits for every access since the last barrier.
+/// source); a buffer the host used last before the frame was submitted needs none either (the
+/// submission orders everything the host did before it; a host read declared within the
+/// frame is the host's use after the fence, and what follows it in the frame waits for the
+/// device's accesses before it like any other); anything else waits for every access since
+/// the last barrier.
 fn step(state: &mut State, to: Use, is_buffer: bool) -> Option<(vk::ImageLayout, Sync)> {
     let same_layout = state.layout == to.layout();
     let seen = covered(to.sync(), state.visible);
@@ -368,7 +383,7 @@ fn step(state: &mut State, to: Use, is_buffer: bool) -> Option<(vk::ImageLayout,
         state.since = (state.since.0 | to.sync().0, state.since.1 | to.sync().1);
         return None;
     }
-    let by_host = state.since.0 == vk::PipelineStageFlags2::HOST;
+    let by_host = state.imported && state.since.0 == vk::PipelineStageFlags2::HOST;
     let from = state.since;
     let old = match to.discards() {
         true => vk::ImageLayout::UNDEFINED,
@@ -421,10 +436,6 @@ impl<'a> PassRecorder<'a> {
         graph: &'a mut FrameGraph,
     ) -> Self {
         Self { device, cmd, graph }
-    }
-
-    pub fn device(&self) -> &Device {
-        self.device
     }
 
     pub fn cmd(&self) -> vk::CommandBuffer {

@@ -372,3 +372,23 @@ fn a_tally_is_zeroed_counted_and_copied_for_the_host() {
     );
     assert_eq!(graph.finish(), []);
 }
+
+/// A host read declared within the frame is the host's use after the fence: a device write
+/// after it in the same frame still waits for the device's writes before it (only the host's
+/// use before the submission, as the buffer was imported, needs no barrier).
+#[test]
+fn a_host_read_within_the_frame_does_not_excuse_a_later_write() {
+    let host = buffer(1);
+    let host_read = (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ);
+    let mut graph = FrameGraph::default();
+    graph.import(host, Use::HostRead, false);
+    assert_eq!(graph.uses(&[(host, Use::CopyDestination)]), []);
+    assert_eq!(
+        graph.uses(&[(host, Use::HostRead)]),
+        [Barrier::Memory(COPY_WRITE, host_read)]
+    );
+    assert_eq!(
+        graph.uses(&[(host, Use::CopyDestination)]),
+        [Barrier::Memory(host_read, COPY_WRITE)]
+    );
+}

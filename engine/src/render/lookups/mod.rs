@@ -207,6 +207,9 @@ pub trait LookupPass: Send {
     /// Records the lookup's per-frame GPU work before the views, each command after the
     /// uses it needs are declared to `pass` (the graph makes it visible to the fragment
     /// shaders that declare nothing: declare the shaders' use last). Most lookups have none.
+    /// A frame that records this records [`LookupPass::record_after_views`] too (both are
+    /// skipped together, in a floor's frame): what the views' shaders wrote is declared read
+    /// there, and the next frame's barriers start from that.
     fn record(&self, _pass: &mut PassRecorder<'_>) {}
     /// Records what follows the frame's views: results copied for the host into the copy of
     /// frame slot `slot` (one of `LookupContext::frames_in_flight`).
