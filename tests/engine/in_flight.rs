@@ -255,6 +255,38 @@ fn switch_and_drop_on(device: &str) {
     gpu.finish();
 }
 
+/// A frame whose recording fails after its data was queued for upload (here a ray map asked
+/// of a renderer with no id cube to read it through, under a lookup that does not trace)
+/// leaves nothing behind in its slot: the next frame in that slot copies its own uploads
+/// once, and renders with the layer silent (the failed frame's copies left queued would be
+/// a second, unordered write of the same buffers, which the layer reports).
+#[test]
+fn a_frame_that_failed_to_record_leaves_its_slot_clean() {
+    checks_between_submissions();
+    for device in devices() {
+        let gpu = Gpu::on(&device, Default::default());
+        let mut s = scene("scenes/moving-objects.toml");
+        s.mirror.lookup = Lookup::Box;
+        let options = RenderOptions {
+            cube_size: Some(32),
+            frames_in_flight: 1,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu.device, s, &options).expect("renderer");
+        let rays = Readback {
+            rays: true,
+            ..Default::default()
+        };
+        let err = r.render_frame(0, 0.0, rays).err().expect("refused");
+        assert!(err.to_string().contains("id cube"), "{device}: {err}");
+        let (report, images) = (r.render_frame(1, 0.3, Readback::default()))
+            .unwrap_or_else(|e| panic!("{device}: the next frame: {e}"));
+        assert_eq!(report.frame, 1);
+        drop((r, images));
+        gpu.finish();
+    }
+}
+
 #[test]
 fn more_frames_in_flight_than_the_renderer_keeps_are_refused() {
     checks_between_submissions();
