@@ -411,8 +411,8 @@ impl Renderer {
 
     /// The frame graph, with every resource the frame's passes may use at rest (the uploads'
     /// destinations are imported by `begin_frame`): the lookup's own buffers, the cube's
-    /// images (fresh before its first fill), the view targets, the slot's readback buffer and its queries' result
-    /// buffers.
+    /// images (fresh before its first fill), the view targets, the slot's readback buffer and
+    /// its queries' result buffers.
     fn frame_graph(&self) -> graph::FrameGraph {
         let mut graph = graph::FrameGraph::default();
         for (resource, rest) in self.mirror.pass.resources(self.frames.current_index()) {
