@@ -277,7 +277,7 @@ fn a_frame_that_failed_to_record_leaves_its_slot_clean() {
             rays: true,
             ..Default::default()
         };
-        let err = r.render_frame(0, 0.0, rays).err().expect("refused");
+        let err = r.render_frame(0, 0.0, rays).expect_err("refused");
         assert!(err.to_string().contains("id cube"), "{device}: {err}");
         let (report, images) = (r.render_frame(1, 0.3, Readback::default()))
             .unwrap_or_else(|e| panic!("{device}: the next frame: {e}"));
