@@ -121,10 +121,15 @@ pub fn run_measured(mut command: std::process::Command) -> Measured {
     }
 }
 
-/// A fresh, absent path in the temporary directory, unique to this test process, removed
-/// when the test is done with it (see [`Scratch`]).
+/// A fresh, absent path in the temporary directory, unique to this call, removed when the
+/// test is done with it (see [`Scratch`]). The process id and a count, not the name alone:
+/// tests run at once in one process, and two that asked for the same name (the paraboloid's
+/// and the hyperboloid's calibration) wrote one folder and read each other's results.
 pub fn temp_dir(name: &str) -> Scratch {
-    let d = std::env::temp_dir().join(format!("specchio-cli-{}-{name}", std::process::id()));
+    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let pid = std::process::id();
+    let d = std::env::temp_dir().join(format!("specchio-cli-{pid}-{call}-{name}"));
     remove(&d);
     Scratch(d)
 }
