@@ -8,7 +8,9 @@
 //! Generates `$OUT_DIR/shaders.rs` with one `pub const NAME_STAGE: &[u32]` per shader (or per
 //! module its `// build:` line names, each compiled with its own define), and
 //! `SPIRV_MEMBER_OFFSETS`: (struct, member, byte offset) read back from the SPIR-V, which a
-//! test compares with the `#[repr(C)]` Rust mirrors of `shaders/include/shared.glsl`.
+//! test compares with the `#[repr(C)]` Rust mirrors of `shaders/include/shared.glsl`; and from
+//! `shaders/include/quantities/` the ray map's include and `SENSOR_QUANTITIES`
+//! (`build/quantities.rs`).
 //! A compile error fails the build and prints glslang's message with file and line.
 //!
 //! Also sets `SPECCHIO_BUILD_ID`: a digest of everything the library's outputs are computed
@@ -22,6 +24,9 @@ use std::ffi::OsString;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+#[path = "build/quantities.rs"]
+mod quantities;
 
 /// The stage of `NAME.STAGE.glsl`, as glslang's `-S` names it.
 fn stage_of(name: &str) -> Option<&str> {
@@ -82,7 +87,8 @@ fn main() {
         .filter(|p| p.extension().is_some_and(|e| e == "glsl"))
         .collect();
     files.sort();
-    for dir in [&root, &include_dir] {
+    let quantities_dir = include_dir.join("quantities");
+    for dir in [&root, &include_dir, &quantities_dir] {
         for e in std::fs::read_dir(dir)
             .expect("shader folder readable")
             .flatten()
@@ -96,6 +102,7 @@ fn main() {
     let sources = [
         manifest.join("src"),
         manifest.join("build.rs"),
+        manifest.join("build"),
         manifest.join("Cargo.toml"),
         manifest.join("../core/src"),
         manifest.join("../core/Cargo.toml"),
@@ -115,7 +122,11 @@ fn main() {
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     let glslang = Glslang::new(&root, &out_dir).unwrap_or_else(|why| panic!("{why}"));
     // The shaders, this script, which compiles them, and the compiler's version.
-    let compiled_from = [root.clone(), manifest.join("build.rs")];
+    let compiled_from = [
+        root.clone(),
+        manifest.join("build.rs"),
+        manifest.join("build"),
+    ];
     let shaders = format!(
         "{:08x} {}",
         digest(manifest, &compiled_from),
@@ -129,7 +140,12 @@ fn main() {
     }
     // A build stopped while compiling must not leave the digest of shaders it did not write.
     let _ = std::fs::remove_file(&done);
-    compile(&glslang, &files, &include_dir, &out_dir.join("shaders.rs"));
+    let names = quantities::find(&quantities_dir).unwrap_or_else(|why| panic!("{why}"));
+    let generated = glslang.generated.join("sensor_quantities.glsl");
+    std::fs::write(&generated, quantities::glsl(&names)).expect("OUT_DIR writable");
+    let mut rust = compile(&glslang, &files, &include_dir);
+    rust.push_str(&quantities::rust(&names));
+    std::fs::write(out_dir.join("shaders.rs"), rust).expect("OUT_DIR writable");
     std::fs::write(done, shaders).expect("OUT_DIR writable");
 }
 
@@ -155,8 +171,8 @@ fn digest(manifest: &Path, paths: &[PathBuf]) -> u32 {
     hasher.finalize()
 }
 
-/// Compiles every shader of `files` into the Rust module `dest`.
-fn compile(glslang: &Glslang, files: &[PathBuf], include_dir: &Path, dest: &Path) {
+/// Compiles every shader of `files` into the Rust module's text.
+fn compile(glslang: &Glslang, files: &[PathBuf], include_dir: &Path) -> String {
     let mut generated = Generated::new();
     for file in files {
         generated.compile_file(glslang, file);
@@ -165,18 +181,20 @@ fn compile(glslang: &Glslang, files: &[PathBuf], include_dir: &Path, dest: &Path
     let mut out = generated.out;
     out.push_str(&shared_constants(&include_dir.join("shared.glsl")));
     out.push_str(&member_offsets(&generated.offsets));
-    std::fs::write(dest, out).expect("OUT_DIR writable");
+    out
 }
 
 /// glslang's command-line compiler, with the options every shader is compiled with: Vulkan 1.3
-/// (SPIR-V 1.6), includes from `shaders/include/`, run in `shaders/` so that its messages name
-/// the file as `NAME.STAGE.glsl:LINE`.
+/// (SPIR-V 1.6), includes from `shaders/include/` and the generated ones, run in `shaders/` so
+/// that its messages name the file as `NAME.STAGE.glsl:LINE`.
 struct Glslang {
     program: OsString,
     /// Its `--version` line, kept with the compiled shaders: another glslang compiles them again.
     version: String,
     shaders: PathBuf,
     scratch: PathBuf,
+    /// Where the generated includes are written (`sensor_quantities.glsl`).
+    generated: PathBuf,
 }
 
 impl Glslang {
@@ -203,12 +221,16 @@ impl Glslang {
             }
         };
         let scratch = out_dir.join("spirv");
-        std::fs::create_dir_all(&scratch).map_err(|e| format!("{}: {e}", scratch.display()))?;
+        let generated = out_dir.join("glsl");
+        for dir in [&scratch, &generated] {
+            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        }
         Ok(Self {
             program,
             version,
             shaders: shaders.to_owned(),
             scratch,
+            generated,
         })
     }
 
@@ -225,6 +247,7 @@ impl Glslang {
         let output = Command::new(&self.program)
             .current_dir(&self.shaders)
             .args(["-V", "--target-env", "vulkan1.3", "-S", stage, "-Iinclude"])
+            .arg(format!("-I{}", self.generated.display()))
             .args(define.iter().map(|d| format!("-D{d}")))
             .arg("-o")
             .arg(&spv)

@@ -408,8 +408,7 @@ fn write_sensor_outputs(
     images: FrameImages,
 ) -> Result<()> {
     let missing = || anyhow::anyhow!("the frame's sensor ray map was not read back (a bug)");
-    let origin = images.sensor_ray_origin.as_ref().ok_or_else(missing)?;
-    let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;
+    let quantities = images.sensor_quantities.ok_or_else(missing)?;
     let sensor = images.sensor.clone().ok_or_else(missing)?;
     let lookup = renderer.scene.mirror.lookup.to_string();
     let mut outputs = SensorOutputs::from_gpu(
@@ -417,7 +416,7 @@ fn write_sensor_outputs(
         t_s,
         (&lookup, renderer.sensor_ground_truth()),
         sensor,
-        (origin, direction),
+        quantities,
         images.cube,
     );
     // The camera image of the whole exposure: the sensor's view at each of its instants (the

@@ -553,10 +553,7 @@ pub fn gpu_sensor_outputs(
         0.0,
         (&lookup, truth),
         images.sensor.expect("the sensor's image"),
-        (
-            &images.sensor_ray_origin.expect("ray origins"),
-            &images.sensor_ray_direction.expect("ray directions"),
-        ),
+        images.sensor_quantities.expect("the ray map's quantities"),
         None,
     )
 }

@@ -240,7 +240,7 @@ fn switch_and_drop_on(device: &str) {
         let (report, images) = r.finish_frame().expect("finish").expect("a frame");
         assert_eq!(report.frame, frame as u64, "frames come back oldest first");
         assert!(
-            images.sensor_ray_direction.is_some(),
+            images.sensor_quantities.is_some(),
             "frame {frame}: its ray map"
         );
         let tallied = lookup == Lookup::DistanceExact;

@@ -45,10 +45,7 @@ fn gpu_outputs_with(
         ..Default::default()
     };
     let (_, images) = r.render_frame(0, 0.0, readback).expect("frame");
-    let origin = images.sensor_ray_origin.expect("ray origins read back");
-    let direction = images
-        .sensor_ray_direction
-        .expect("ray directions read back");
+    let quantities = images.sensor_quantities.expect("the ray map read back");
     let sensor = images.sensor.expect("sensor read back");
     let truth = r.sensor_ground_truth();
     SensorOutputs::from_gpu(
@@ -56,7 +53,7 @@ fn gpu_outputs_with(
         0.0,
         (&r.scene.mirror.lookup.to_string(), truth),
         sensor,
-        (&origin, &direction),
+        quantities,
         images.cube,
     )
 }

@@ -42,19 +42,12 @@ fn gpu_frames(
         .enumerate()
         .map(|(i, &t)| {
             let (report, images) = r.render_frame(i as u64, t, readback).expect("frame");
-            let origin = images.sensor_ray_origin.expect("ray origins read back");
-            let direction = images.sensor_ray_direction.expect("directions read back");
+            let quantities = images.sensor_quantities.expect("the ray map read back");
             let sensor = images.sensor.expect("sensor read back");
             let lookup = r.scene.mirror.lookup.to_string();
             let truth = r.sensor_ground_truth();
-            let outputs = SensorOutputs::from_gpu(
-                &r.scene,
-                t,
-                (&lookup, truth),
-                sensor,
-                (&origin, &direction),
-                None,
-            );
+            let outputs =
+                SensorOutputs::from_gpu(&r.scene, t, (&lookup, truth), sensor, quantities, None);
             (report.face_mask, outputs)
         })
         .collect()

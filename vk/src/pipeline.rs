@@ -105,9 +105,9 @@ pub struct GraphicsPipelineDesc<'a> {
     /// Vertex buffer layout; empty for shaders that generate their vertices.
     pub vertex_bindings: &'a [vk::VertexInputBindingDescription],
     pub vertex_attributes: &'a [vk::VertexInputAttributeDescription],
-    pub color_format: vk::Format,
-    /// A second colour attachment (the cube fill's id cube), written whole, never blended.
-    pub id_format: Option<vk::Format>,
+    /// Every colour attachment's format, each written whole, never blended: one, or with the
+    /// cube fill's id cube two, or the sensor's ray map's one per quantity.
+    pub color_formats: &'a [vk::Format],
     pub depth_format: vk::Format,
     /// Ignored when `dynamic_culling` is set.
     pub cull_mode: vk::CullModeFlags,
@@ -309,9 +309,8 @@ impl Constants {
 /// The fixed-function state of `desc`, with the arrays the create infos point into.
 struct FixedFunction<'a> {
     desc: &'a GraphicsPipelineDesc<'a>,
-    attachments: [vk::PipelineColorBlendAttachmentState; 2],
+    attachments: Vec<vk::PipelineColorBlendAttachmentState>,
     dynamic: Vec<vk::DynamicState>,
-    color_formats: Vec<vk::Format>,
 }
 
 impl<'a> FixedFunction<'a> {
@@ -329,12 +328,8 @@ impl<'a> FixedFunction<'a> {
         }
         Self {
             desc,
-            attachments: [attachment; 2],
+            attachments: vec![attachment; desc.color_formats.len()],
             dynamic,
-            color_formats: [desc.color_format]
-                .into_iter()
-                .chain(desc.id_format)
-                .collect(),
         }
     }
 
@@ -376,15 +371,14 @@ impl<'a> FixedFunction<'a> {
     /// One attachment's state per colour attachment (the id cube's too): written whole,
     /// never blended.
     fn blend(&self) -> vk::PipelineColorBlendStateCreateInfo<'_> {
-        let count = self.color_formats.len();
-        vk::PipelineColorBlendStateCreateInfo::default().attachments(&self.attachments[..count])
+        vk::PipelineColorBlendStateCreateInfo::default().attachments(&self.attachments)
     }
 
     /// Dynamic rendering into the colour (and id) and depth formats, with the view mask.
     fn rendering(&self) -> vk::PipelineRenderingCreateInfo<'_> {
         vk::PipelineRenderingCreateInfo::default()
             .view_mask(self.desc.view_mask)
-            .color_attachment_formats(&self.color_formats)
+            .color_attachment_formats(self.desc.color_formats)
             .depth_attachment_format(self.desc.depth_format)
     }
 }

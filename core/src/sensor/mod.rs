@@ -19,6 +19,7 @@ pub mod localise;
 pub mod optics;
 pub mod outputs;
 pub mod panorama;
+pub mod quantities;
 pub mod ray_map;
 pub mod solve;
 

@@ -14,6 +14,7 @@ use super::imaging::{self, CameraImage};
 use super::layers::{self, Entries, Layers};
 use super::optics::SensorOptics;
 use super::panorama::{PanoramaKind, PanoramaLayout};
+use super::quantities::{PixelHit, Quantity, QuantityImages, DIRECTION_ID, ORIGIN_RANGE};
 use super::ray_map::{PixelRay, RayMap};
 use crate::image::RgbaImage;
 use crate::mirror::MirrorShape;
@@ -48,6 +49,9 @@ pub struct SensorOutputs {
     pub id_model: &'static str,
     /// What each id names.
     pub id_map: IdMap,
+    /// Every per-pixel quantity of the ray map (`sensor::quantities`), by name: what `rays`,
+    /// `range` and `ids` are read from on the GPU, and what a layer of a new quantity reads.
+    pub quantities: QuantityImages,
     /// The sensor's colour image the panoramas unwrap.
     pub image: RgbaImage,
     /// The cube map's faces (mip 0), for the panoramas straight from the cube; None for the
@@ -78,32 +82,37 @@ impl SensorOutputs {
                 *ray = None;
             }
         }
-        let range = images
-            .distance
-            .pixels
-            .iter()
-            .zip(&seen)
+        let range: Vec<f32> = (images.distance.pixels.iter().zip(&seen))
             .map(|(d, &s)| if s { d[0] } else { 0.0 })
             .collect();
-        let ids = images
-            .object
-            .pixels
-            .iter()
-            .zip(&seen)
+        let ids: Vec<u32> = (images.object.pixels.iter().zip(&seen))
             .map(|(o, &s)| if s && o[0] >= 0.0 { o[0] as u32 } else { NO_ID })
             .collect();
+        let optics = SensorOptics::at(scene, t_s);
+        let hits: Vec<Option<PixelHit>> = (rays.rays.iter().zip(&range).zip(&ids))
+            .map(|((ray, &range), &id)| {
+                ray.map(|r| PixelHit {
+                    mirror_point: r.origin - optics.mirror_center,
+                    reflected: r.direction,
+                    range,
+                    id,
+                })
+            })
+            .collect();
+        let quantities = QuantityImages::of_hits(&hits, rays.width, rays.height);
         Self {
             source: "reference".into(),
             ground_truth: GroundTruthRecord::new(GroundTruth::Reference, "reference", scene),
             time_s: t_s,
             scene_origin: scene.origin,
-            optics: SensorOptics::at(scene, t_s),
+            optics,
             rays,
             range,
             range_model: GroundTruth::Reference.range_model(true),
             ids,
             id_model: GroundTruth::Reference.id_model(true),
             id_map: IdMap::of(scene),
+            quantities,
             image: images.color.clone(),
             cube: None,
             panorama_seam_rad: 0.0,
@@ -112,38 +121,49 @@ impl SensorOutputs {
         }
     }
 
-    /// From the GPU's sensor ray passes (`shaders/mirror_ray*.frag.glsl`): `origin_range` holds
-    /// the mirror hit in render space (rgb) and the distance along the reflected ray to what
-    /// it meets (a); `direction_wall` the reflected direction (rgb) and 1 + the id of what it
-    /// meets (a; 0, the clear value, off the mirror). `truth` says how they found it: traced,
-    /// or through the cube's depth and id cube (where that search finds no hit, the room box's
-    /// range and the wall the ray leaves through: `shaders/include/sensor_ray.glsl`); `lookup`
-    /// made the colour `image`.
+    /// From the GPU's ray-map pass (`shaders/mirror_ray.frag.glsl`): its `quantities`, of which
+    /// [`ORIGIN_RANGE`] gives each mirror pixel's ray origin (render space) and range, and
+    /// [`DIRECTION_ID`] the reflected direction and 1 + the id of what it meets (0, the clear
+    /// value, off the mirror). `truth` says how they found it: traced, or through the cube's
+    /// depth and id cube (where that search finds no hit, the room box's range and the wall
+    /// the ray leaves through: `shaders/include/sensor_ray.glsl`); `lookup` made the colour
+    /// `image`. The quantities come from the registry, so both are there: the engine's test
+    /// holds its shaders' list to it.
     pub fn from_gpu(
         scene: &Scene,
         t_s: f64,
         (lookup, truth): (&str, GroundTruth),
         image: RgbaImage,
-        (origin_range, direction_wall): (&RgbaImage, &RgbaImage),
+        quantities: QuantityImages,
         cube: Option<Vec<RgbaImage>>,
     ) -> Self {
+        let registered = |q: &dyn Quantity| {
+            let name = q.name();
+            (quantities.get(name))
+                .unwrap_or_else(|| panic!("the ray map's pass writes every quantity: {name}"))
+        };
+        let (origin_range, direction_id) = (registered(&ORIGIN_RANGE), registered(&DIRECTION_ID));
         let optics = SensorOptics::at(scene, t_s);
-        let rays = origin_range
-            .pixels
-            .iter()
-            .zip(&direction_wall.pixels)
+        let seen = |d: &[f32; 4]| d[3] > 0.0;
+        let pixels = || origin_range.pixels.iter().zip(&direction_id.pixels);
+        let rays = pixels()
             .map(|(o, d)| {
-                (d[3] > 0.0).then(|| PixelRay {
+                seen(d).then(|| PixelRay {
                     origin: Vec3::new(o[0], o[1], o[2]) + optics.mirror_center,
                     direction: Vec3::new(d[0], d[1], d[2]),
                 })
             })
             .collect();
-        let seen = |d: &[f32; 4]| d[3] > 0.0;
         let source = match truth {
             GroundTruth::Traced => format!("traced ({lookup} lookup)"),
             _ => format!("cube ({lookup} lookup)"),
         };
+        let range = pixels()
+            .map(|(o, d)| if seen(d) { o[3] } else { 0.0 })
+            .collect();
+        let ids = (direction_id.pixels.iter())
+            .map(|d| if seen(d) { d[3] as u32 - 1 } else { NO_ID })
+            .collect();
         Self {
             source,
             ground_truth: GroundTruthRecord::new(truth, lookup, scene),
@@ -155,20 +175,12 @@ impl SensorOutputs {
                 height: origin_range.height,
                 rays,
             },
-            range: origin_range
-                .pixels
-                .iter()
-                .zip(&direction_wall.pixels)
-                .map(|(o, d)| if seen(d) { o[3] } else { 0.0 })
-                .collect(),
+            range,
             range_model: truth.range_model(truth.exact_for(scene)),
-            ids: direction_wall
-                .pixels
-                .iter()
-                .map(|d| if seen(d) { d[3] as u32 - 1 } else { NO_ID })
-                .collect(),
+            ids,
             id_model: truth.id_model(truth.exact_for(scene)),
             id_map: IdMap::of(scene),
+            quantities,
             image,
             cube,
             panorama_seam_rad: 0.0,

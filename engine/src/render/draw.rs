@@ -62,6 +62,8 @@ pub(super) struct Attachments {
     pub color: vk::ImageView,
     /// The id cube's view, attachment 1 of a cube fill that writes ids.
     pub ids: Option<vk::ImageView>,
+    /// Colour attachments after the first, cleared as it is (the ray map's quantities).
+    pub more_colors: Vec<vk::ImageView>,
     pub depth: vk::ImageView,
     pub size: [u32; 2],
     /// Layers rendered (layered cube fills: 6); ignored when `view_mask` is set.

@@ -115,8 +115,7 @@ impl Renderer {
                 stages: &stages,
                 vertex_bindings: if with_vertices { &bindings } else { &[] },
                 vertex_attributes: if with_vertices { &attributes } else { &[] },
-                color_format: self.cube.format,
-                id_format: None,
+                color_formats: &[self.cube.format],
                 depth_format: DEPTH_FORMAT,
                 cull_mode: vk::CullModeFlags::NONE,
                 // Every cube pipeline sets its culling per draw.

@@ -56,8 +56,8 @@ pub struct Readback {
     /// The lookup direction of every observer and sensor mirror pixel (for the angular
     /// error against the exact reference).
     pub directions: bool,
-    /// The sensor's ray map with range and ids through the cube (`sensor_rays.rs`; needs
-    /// `RenderOptions::id_cube`).
+    /// The sensor's ray map: every per-pixel quantity, traced where the lookup traces, else
+    /// through the cube (`sensor_rays.rs`; which needs `RenderOptions::id_cube`).
     pub rays: bool,
 }
 
@@ -73,9 +73,9 @@ pub struct FrameImages {
     /// all zero elsewhere.
     pub observer_direction: Option<RgbaImage>,
     pub sensor_direction: Option<RgbaImage>,
-    /// The sensor's ray map: hit and range, direction and wall (`sensor_rays.rs`).
-    pub sensor_ray_origin: Option<RgbaImage>,
-    pub sensor_ray_direction: Option<RgbaImage>,
+    /// The sensor's ray map: every per-pixel quantity (`sensor::quantities`, `sensor_rays.rs`),
+    /// of which `SensorOutputs::from_gpu` makes the ray map, range and ids.
+    pub sensor_quantities: Option<crate::sensor::quantities::QuantityImages>,
     /// A window's view as drawn, texel for texel (a display frame's, `display.rs`).
     pub display: Option<super::display::DisplayPixels>,
 }

@@ -422,7 +422,7 @@ impl Renderer {
         for (resource, rest) in self.cube.resources() {
             graph.import(resource, rest, fresh);
         }
-        for (resource, rest) in self.views.every_target().flat_map(|t| t.resources()) {
+        for (resource, rest) in self.views.every_resource() {
             graph.import(resource, rest, false);
         }
         if let Some(buffer) = &self.frames.current().readback {

@@ -6,10 +6,10 @@ use ash::vk;
 use super::draw::Attachments;
 use super::frame_parts::FrameParts;
 use super::gpu::Push;
-use super::graph::{self, FrameGraph};
+use super::graph::{self, FrameGraph, Resource, Use};
 use super::pipelines::ViewPipelines;
 use super::resources::{VIEW_OBSERVER, VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT, VIEW_SENSOR};
-use super::sensor_rays::{MirrorOutput, SensorRays};
+use super::sensor_rays::{MirrorOutput, RayMapTargets, SensorRays};
 use super::targets::ViewTarget;
 use super::*;
 use crate::scene::camera::{Frustum, ViewBasis};
@@ -22,8 +22,6 @@ pub(super) enum Slot {
     Pair,
     ObserverDirection,
     SensorDirection,
-    SensorRayOrigin,
-    SensorRayDirection,
 }
 
 /// Where a view's copy into the readback buffer may start, at or after `offset`: a multiple of
@@ -37,10 +35,7 @@ pub(super) fn copy_offset(offset: u64) -> u64 {
 /// Bytes per texel of a view target's colour format.
 pub(super) fn texel_bytes(slot: Slot) -> u64 {
     match slot {
-        Slot::ObserverDirection
-        | Slot::SensorDirection
-        | Slot::SensorRayOrigin
-        | Slot::SensorRayDirection => 16,
+        Slot::ObserverDirection | Slot::SensorDirection => 16,
         _ => 8,
     }
 }
@@ -49,8 +44,8 @@ pub(super) fn texel_bytes(slot: Slot) -> u64 {
 /// into them, and the sensor ray map's passes. They record with the frame's context
 /// ([`FrameParts`]) and own nothing else.
 pub(super) struct ViewPasses {
-    /// The sensor ray map's passes and two targets (origin, direction), made on first use.
-    pub sensor_rays: Option<(SensorRays, [ViewTarget; 2])>,
+    /// The sensor ray map's pass and its targets (a quantity each), made on first use.
+    pub sensor_rays: Option<(SensorRays, RayMapTargets)>,
     pipelines: ViewPipelines,
     /// Observer, sensor, pair, and the two direction images.
     pub targets: ViewTargets,
@@ -80,27 +75,31 @@ impl ViewPasses {
             slots.push((Slot::ObserverDirection, &self.targets.observer_directions));
             slots.push((Slot::SensorDirection, &self.targets.sensor_directions));
         }
-        if let (true, Some((_, [origin, direction]))) = (readback.rays, &self.sensor_rays) {
-            slots.push((Slot::SensorRayOrigin, origin));
-            slots.push((Slot::SensorRayDirection, direction));
-        }
         slots
     }
 
-    /// Every view target there is, for the frame graph to track.
-    pub fn every_target(&self) -> impl Iterator<Item = &ViewTarget> {
-        let t = &self.targets;
-        let rays = self.sensor_rays.iter().flat_map(|(_, targets)| targets);
-        [&t.observer, &t.sensor, &t.pair]
-            .into_iter()
-            .chain([&t.observer_directions, &t.sensor_directions])
-            .chain(rays)
+    /// The ray map's targets, when `readback` asks for the ray map.
+    pub fn ray_map(&self, readback: Readback) -> Option<&RayMapTargets> {
+        (self.sensor_rays.as_ref())
+            .filter(|_| readback.rays)
+            .map(|(_, targets)| targets)
     }
 
-    /// Observer, sensor and the side-by-side pair (culled scene draws, then the mirror), and
-    /// with `readback.directions` the lookup-direction passes of observer and sensor.
-    /// With `display`, only that view is drawn (the viewer's frame). What is read back of
-    /// them is the readback's (`readback.rs`, `Copies`).
+    /// Every view target's images there are, with how each rests between frames, for the
+    /// frame graph to track.
+    pub fn every_resource(&self) -> Vec<(Resource, Use)> {
+        let t = &self.targets;
+        let views = [&t.observer, &t.sensor, &t.pair]
+            .into_iter()
+            .chain([&t.observer_directions, &t.sensor_directions]);
+        let rays = self.sensor_rays.iter().flat_map(|(_, t)| t.resources());
+        views.flat_map(|t| t.resources()).chain(rays).collect()
+    }
+
+    /// Observer, sensor and the side-by-side pair (culled scene draws, then the mirror), with
+    /// `readback.directions` the lookup-direction passes of observer and sensor, and with
+    /// `readback.rays` the ray map's. With `display`, only that view is drawn (the viewer's
+    /// frame). What is read back of them is the readback's (`readback.rs`, `Copies`).
     pub fn record(
         &self,
         (f, graph): (&FrameParts, &mut FrameGraph),
@@ -121,15 +120,16 @@ impl ViewPasses {
                 MirrorOutput::Colour => &p.colour,
                 _ => &p.depth_only,
             };
+            let drawn = (target.drawn().to_vec(), view_attachments(target));
             let stats = pass.statistics;
-            let (ids, output) = (pass.views, pass.output);
+            let pass_views = (pass.views, views);
+            let how = (scene, pass.output);
             self.record_view(
                 (f, &mut *graph),
                 cmd,
-                target,
-                ids,
-                views,
-                (scene, output),
+                drawn,
+                pass_views,
+                how,
                 stats,
                 pass.name,
             );
@@ -137,30 +137,49 @@ impl ViewPasses {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
         }
+        if let (Some((rays, targets)), None) = (self.sensor_rays.as_ref(), display) {
+            if readback.rays {
+                let drawn = (targets.drawn(), targets.attachments());
+                let how = (&rays.scene_depth, MirrorOutput::RayMap);
+                let pass_views = (&[VIEW_SENSOR][..], views);
+                self.record_view(
+                    (f, &mut *graph),
+                    cmd,
+                    drawn,
+                    pass_views,
+                    how,
+                    None,
+                    "ray map",
+                );
+            }
+        }
         mark(f, cmd, &after);
     }
 
+    /// Records one view pass: the barriers its `uses` need, then into `attachments` each of
+    /// `view_ids`' views drawn (culled scene draws, then the mirror), inside `stats_slot`'s
+    /// statistics query.
     #[allow(clippy::too_many_arguments)]
     fn record_view(
         &self,
         (f, graph): (&FrameParts, &mut FrameGraph),
         cmd: vk::CommandBuffer,
-        target: &ViewTarget,
-        view_ids: &[u32],
-        views: &[ViewBasis],
+        (uses, attachments): (Vec<(Resource, Use)>, Attachments),
+        (view_ids, views): (&[u32], &[ViewBasis]),
         (scene_pipeline, output): (&Pipeline, MirrorOutput),
         stats_slot: Option<u32>,
         name: &str,
     ) {
         let dev = f.draw.device;
         dev.begin_label(cmd, name);
-        graph::record(dev, cmd, &graph.uses(&target.drawn()));
+        graph::record(dev, cmd, &graph.uses(&uses));
         if let (Some(q), Some(slot)) = (&f.queries.statistics, stats_slot) {
             q.begin(cmd, slot);
         }
-        f.draw.begin_rendering(cmd, &view_attachments(target));
+        f.draw.begin_rendering(cmd, &attachments);
         for &v in view_ids {
-            self.draw_view(f, cmd, target, v, views, (scene_pipeline, output));
+            let size = attachments.size;
+            self.draw_view(f, cmd, size, v, views, (scene_pipeline, output));
         }
         f.draw.end_rendering(cmd);
         if let (Some(q), Some(slot)) = (&f.queries.statistics, stats_slot) {
@@ -169,18 +188,18 @@ impl ViewPasses {
         dev.end_label(cmd);
     }
 
-    /// Draws view `v` into its viewport of `target`: the scene objects its frustum sees,
-    /// then the mirror.
+    /// Draws view `v` into its viewport of a target of `size`: the scene objects its frustum
+    /// sees, then the mirror.
     fn draw_view(
         &self,
         f: &FrameParts,
         cmd: vk::CommandBuffer,
-        target: &ViewTarget,
+        size: [u32; 2],
         v: u32,
         views: &[ViewBasis],
         (scene_pipeline, output): (&Pipeline, MirrorOutput),
     ) {
-        let vp = viewport(target, v);
+        let vp = viewport(size, v);
         f.draw.set_viewport(cmd, vp[0], vp[1], vp[2], vp[3]);
         let view = &views[v as usize];
         let clearance = camera_clearance(view.eye, f.scene.mirror.radius_m);
@@ -197,7 +216,7 @@ impl ViewPasses {
     }
 
     /// Draws the mirror's bounding cube with the lookup's colour or direction pipeline, or
-    /// one of the sensor ray map's (which read the cube's depth and ids).
+    /// the sensor ray map's (which traces, or reads the cube's depth and ids).
     fn draw_mirror(&self, f: &FrameParts, cmd: vk::CommandBuffer, output: MirrorOutput, view: u32) {
         let d = &f.draw.device.raw;
         let lookup = f.lookup;
@@ -207,18 +226,13 @@ impl ViewPasses {
                 lookup.layout().raw,
                 vec![f.draw.resources.scene_set, lookup.set()],
             ),
-            MirrorOutput::RayOrigin | MirrorOutput::RayDirection => {
+            MirrorOutput::RayMap => {
                 let (rays, _) = self
                     .sensor_rays
                     .as_ref()
-                    .expect("the ray map's passes are made before a frame that draws them");
-                let pipeline = if output == MirrorOutput::RayOrigin {
-                    &rays.origin
-                } else {
-                    &rays.direction
-                };
+                    .expect("the ray map's pass is drawn only when it was made");
                 (
-                    pipeline.raw,
+                    rays.pipeline.raw,
                     rays.layout.raw,
                     vec![f.draw.resources.scene_set, rays.set],
                 )
@@ -268,6 +282,7 @@ fn view_attachments(target: &ViewTarget) -> Attachments {
     Attachments {
         color: target.color_view.raw,
         ids: None,
+        more_colors: Vec::new(),
         depth: target.depth_view.raw,
         size: [target.width, target.height],
         layers: 1,
@@ -277,14 +292,14 @@ fn view_attachments(target: &ViewTarget) -> Attachments {
     }
 }
 
-/// View `v`'s viewport in `target` (x, y, width, height): its half of the pair image, or
-/// all of its own image.
-fn viewport(target: &ViewTarget, v: u32) -> [f32; 4] {
+/// View `v`'s viewport in a target of `size` (x, y, width, height): its half of the pair
+/// image, or all of its own image.
+fn viewport([width, height]: [u32; 2], v: u32) -> [f32; 4] {
     let half = (PAIR_SIZE[0] / 2) as f32;
     match v {
         VIEW_PAIR_LEFT => [0.0, 0.0, half, PAIR_SIZE[1] as f32],
         VIEW_PAIR_RIGHT => [half, 0.0, half, PAIR_SIZE[1] as f32],
-        _ => [0.0, 0.0, target.width as f32, target.height as f32],
+        _ => [0.0, 0.0, width as f32, height as f32],
     }
 }
 
@@ -352,14 +367,6 @@ fn pass_of(slot: Slot) -> ViewPass {
             None,
             LookupDirection,
             "sensor directions",
-        ),
-        Slot::SensorRayOrigin => pass(&[VIEW_SENSOR], None, None, RayOrigin, "sensor rays"),
-        Slot::SensorRayDirection => pass(
-            &[VIEW_SENSOR],
-            None,
-            None,
-            RayDirection,
-            "sensor ray directions",
         ),
     }
 }

@@ -33,10 +33,10 @@ pub(super) fn vertex_layout() -> (
 
 /// The attachments a scene pipeline renders to.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct SceneTargets {
-    pub color_format: vk::Format,
-    /// The id cube's format when the fill writes ids too (`scene_id.frag`).
-    pub id_format: Option<vk::Format>,
+pub(super) struct SceneTargets<'a> {
+    /// The colour attachments' formats: the image's, then the id cube's when the fill writes
+    /// ids too (`scene_id.frag`), or the ray map's quantities' (colour writes off).
+    pub color_formats: &'a [vk::Format],
     /// Multiview view mask (0: none).
     pub view_mask: u32,
 }
@@ -48,7 +48,7 @@ pub(super) fn scene_pipeline(
     device: &Arc<Device>,
     layout: &PipelineLayout,
     stages: &[ShaderStage<'_>],
-    targets: SceneTargets,
+    targets: SceneTargets<'_>,
     name: &str,
 ) -> Result<Pipeline, GpuError> {
     scene_pipeline_with_writes(device, layout, stages, targets, true, name)
@@ -58,13 +58,12 @@ fn scene_pipeline_with_writes(
     device: &Arc<Device>,
     layout: &PipelineLayout,
     stages: &[ShaderStage<'_>],
-    targets: SceneTargets,
+    targets: SceneTargets<'_>,
     color_writes: bool,
     name: &str,
 ) -> Result<Pipeline, GpuError> {
     let SceneTargets {
-        color_format,
-        id_format,
+        color_formats,
         view_mask,
     } = targets;
     let (bindings, attributes) = vertex_layout();
@@ -78,8 +77,7 @@ fn scene_pipeline_with_writes(
             stages,
             vertex_bindings: if mesh { &[] } else { &bindings },
             vertex_attributes: if mesh { &[] } else { &attributes },
-            color_format,
-            id_format,
+            color_formats,
             depth_format: DEPTH_FORMAT,
             // Set per draw: room walls are seen from inside and meshes may be open.
             cull_mode: vk::CullModeFlags::NONE,
@@ -101,7 +99,7 @@ pub(crate) fn mirror_pipeline(
     device: &Arc<Device>,
     layout: &PipelineLayout,
     fragment: &[u32],
-    color_format: vk::Format,
+    color_formats: &[vk::Format],
     name: &str,
 ) -> Result<Pipeline, GpuError> {
     Pipeline::create_graphics(
@@ -114,8 +112,7 @@ pub(crate) fn mirror_pipeline(
             ],
             vertex_bindings: &[],
             vertex_attributes: &[],
-            color_format,
-            id_format: None,
+            color_formats,
             depth_format: DEPTH_FORMAT,
             // Back faces of the bounding cube: still on screen when the camera is inside it.
             cull_mode: vk::CullModeFlags::FRONT,
@@ -153,24 +150,21 @@ pub(super) fn create_pipelines(
         ShaderStage::new(vk::ShaderStageFlags::VERTEX, crate::shaders::SCENE_VERT),
         ShaderStage::new(vk::ShaderStageFlags::FRAGMENT, crate::shaders::SCENE_FRAG),
     ];
-    let view = |color_format| SceneTargets {
-        color_format,
-        id_format: None,
+    let view = |color_formats| SceneTargets {
+        color_formats,
         view_mask: 0,
     };
     let view_scene = scene_pipeline(
         device,
         &scene_layout,
         &scene_stages,
-        view(VIEW_FORMAT),
+        view(&[VIEW_FORMAT]),
         "scene pipeline (views)",
     )?;
-    let depth_only = scene_pipeline_with_writes(
+    let depth_only = depth_only_pipeline(
         device,
         &scene_layout,
-        &scene_stages,
-        view(DIRECTION_FORMAT),
-        false,
+        &[DIRECTION_FORMAT],
         "depth-only pipeline (directions)",
     )?;
     let views = ViewPipelines {
@@ -178,4 +172,23 @@ pub(super) fn create_pipelines(
         depth_only,
     };
     Ok((scene_layout, views))
+}
+
+/// A view's scene pipeline that lays down depth only, for a pass whose colour attachments
+/// (`color_formats`) only the mirror writes: the lookup directions, the ray map's quantities.
+pub(super) fn depth_only_pipeline(
+    device: &Arc<Device>,
+    scene_layout: &PipelineLayout,
+    color_formats: &[vk::Format],
+    name: &str,
+) -> Result<Pipeline, GpuError> {
+    let scene_stages = [
+        ShaderStage::new(vk::ShaderStageFlags::VERTEX, crate::shaders::SCENE_VERT),
+        ShaderStage::new(vk::ShaderStageFlags::FRAGMENT, crate::shaders::SCENE_FRAG),
+    ];
+    let targets = SceneTargets {
+        color_formats,
+        view_mask: 0,
+    };
+    scene_pipeline_with_writes(device, scene_layout, &scene_stages, targets, false, name)
 }

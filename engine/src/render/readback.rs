@@ -9,8 +9,10 @@ use std::sync::Arc;
 use super::display::{DisplayPixels, DisplayView};
 use super::graph::{self, FrameGraph, Resource, Use};
 use super::passes::{copy_offset, texel_bytes, Slot};
+use super::sensor_rays::{colour, RayMapTargets};
 use super::targets::{CubeTarget, ViewTarget};
 use super::*;
+use crate::sensor::quantities::QuantityImages;
 use crate::vk::image::color_copy_region;
 
 /// Where one frame's images sit in its slot's readback buffer: planned before the frame is
@@ -37,10 +39,10 @@ struct CubeCopy {
     unorm: bool,
 }
 
-/// One view image.
+/// One view image: a view pass's, or one of the ray map's quantities.
 #[derive(Debug, Clone)]
 struct ViewCopy {
-    slot: Slot,
+    of: Copied,
     image: vk::Image,
     /// Its colour, as the frame graph tracks it.
     resource: Resource,
@@ -49,10 +51,33 @@ struct ViewCopy {
     offset: u64,
 }
 
+/// Whose image a view copy is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Copied {
+    View(Slot),
+    /// The ray map's quantity at this location (`shaders::SENSOR_QUANTITIES`).
+    Quantity(usize),
+}
+
+impl Copied {
+    /// Bytes per texel of its image's format.
+    fn texel_bytes(self) -> u64 {
+        match self {
+            Copied::View(slot) => texel_bytes(slot),
+            Copied::Quantity(_) => 16,
+        }
+    }
+}
+
 impl Copies {
-    /// The copies `readback` asks for: the cube's faces when asked, and the view targets
-    /// `slots` names (the view passes', in their order).
-    pub fn plan(readback: Readback, cube: &CubeTarget, slots: Vec<(Slot, &ViewTarget)>) -> Self {
+    /// The copies `readback` asks for: the cube's faces when asked, the view targets `slots`
+    /// names (the view passes', in their order), and the ray map's quantities.
+    pub fn plan(
+        readback: Readback,
+        cube: &CubeTarget,
+        slots: Vec<(Slot, &ViewTarget)>,
+        ray_map: Option<&RayMapTargets>,
+    ) -> Self {
         let mut copies = Copies::default();
         if readback.cube {
             let unorm = cube.format == vk::Format::R8G8B8A8_UNORM;
@@ -65,17 +90,23 @@ impl Copies {
                 unorm,
             });
         }
-        for (slot, t) in slots {
+        let views =
+            (slots.into_iter()).map(|(slot, t)| (Copied::View(slot), &t.color, t.width, t.height));
+        let quantities = (ray_map.iter()).flat_map(|t| {
+            (t.quantities.iter().enumerate())
+                .map(|(i, (_, image))| (Copied::Quantity(i), image, t.width, t.height))
+        });
+        for (of, image, width, height) in views.chain(quantities) {
             let offset = copy_offset(copies.bytes);
             copies.views.push(ViewCopy {
-                slot,
-                image: t.color.raw,
-                resource: t.color_resource(),
-                width: t.width,
-                height: t.height,
+                of,
+                image: image.raw,
+                resource: colour(image),
+                width,
+                height,
                 offset,
             });
-            copies.bytes = offset + u64::from(t.width) * u64::from(t.height) * texel_bytes(slot);
+            copies.bytes = offset + u64::from(width) * u64::from(height) * of.texel_bytes();
         }
         copies
     }
@@ -85,7 +116,7 @@ impl Copies {
     pub fn display((slot, target): (Slot, &ViewTarget)) -> Self {
         let (width, height) = (target.width, target.height);
         let view = ViewCopy {
-            slot,
+            of: Copied::View(slot),
             image: target.color.raw,
             resource: target.color_resource(),
             width,
@@ -165,19 +196,30 @@ impl Copies {
             };
             images.cube = Some((0..6).map(face).collect());
         }
+        let mut quantities = Vec::new();
         for v in &self.views {
-            let n = u64::from(v.width) * u64::from(v.height) * texel_bytes(v.slot);
+            let n = u64::from(v.width) * u64::from(v.height) * v.of.texel_bytes();
             let b = &bytes[v.offset as usize..(v.offset + n) as usize];
             let (w, h) = (v.width, v.height);
-            match v.slot {
+            let Copied::View(slot) = v.of else {
+                quantities.push(decode_f32(b, w, h));
+                continue;
+            };
+            match slot {
                 Slot::Observer => images.observer = Some(decode_f16(b, w, h)),
                 Slot::Sensor => images.sensor = Some(decode_f16(b, w, h)),
                 Slot::Pair => images.pair = Some(decode_f16(b, w, h)),
                 Slot::ObserverDirection => images.observer_direction = Some(decode_f32(b, w, h)),
                 Slot::SensorDirection => images.sensor_direction = Some(decode_f32(b, w, h)),
-                Slot::SensorRayOrigin => images.sensor_ray_origin = Some(decode_f32(b, w, h)),
-                Slot::SensorRayDirection => images.sensor_ray_direction = Some(decode_f32(b, w, h)),
             }
+        }
+        if !quantities.is_empty() {
+            // Copied in location order, which is the names' (`plan`).
+            let named = crate::shaders::SENSOR_QUANTITIES
+                .iter()
+                .copied()
+                .zip(quantities);
+            images.sensor_quantities = Some(QuantityImages::new(named.collect()));
         }
         Ok(images)
     }
@@ -211,7 +253,12 @@ impl Renderer {
     pub(super) fn plan_copies(&self, readback: Readback, display: Option<DisplayView>) -> Copies {
         match display {
             Some(view) => Copies::display(self.views.display_slot(view)),
-            None => Copies::plan(readback, &self.cube, self.views.slots(readback)),
+            None => Copies::plan(
+                readback,
+                &self.cube,
+                self.views.slots(readback),
+                self.views.ray_map(readback),
+            ),
         }
     }
 

@@ -145,6 +145,7 @@ impl SceneDraw<'_> {
         let color_att: Vec<vk::RenderingAttachmentInfo> = [(a.color, CLEAR_COLOR)]
             .into_iter()
             .chain(a.ids.map(|ids| (ids, CLEAR_ID)))
+            .chain(a.more_colors.iter().map(|&view| (view, CLEAR_COLOR)))
             .map(|(view, clear)| colour(view, clear))
             .collect();
         let depth_att = vk::RenderingAttachmentInfo::default()

@@ -1,32 +1,35 @@
-//! The sensor's ray map on the GPU: two passes over the sensor view that write, per mirror
-//! pixel, the mirror point with the range (`MIRROR_RAY_*ORIGIN_FRAG`) and the reflected
-//! direction with the id of what the ray meets (`MIRROR_RAY_*DIRECTION_FRAG`). The ray itself
-//! is every lookup's (`mirror_hit`, `reflect`); what it meets comes from one of two places
-//! ([`GroundTruth`]):
+//! The sensor's ray map on the GPU: one pass over the sensor view that writes, per mirror
+//! pixel, every per-pixel quantity (`sensor::quantities`; `shaders/include/quantities/`), each
+//! to a full-float colour attachment of its own ([`RayMapTargets`]), from one trace. The ray
+//! itself is every lookup's (`mirror_hit`, `reflect`); what it meets comes from one of two
+//! places ([`GroundTruth`]):
 //!
-//! - traced (`mirror_ray.frag.glsl` built with `TRACED` and the lookup's tracer), when the lookup
-//!   traces (`ray-query`, `bvh`): through the lookup's own set, exactly as the colour pass's
-//!   trace, so the colour, the range and the ids of a frame come from one light path;
-//! - through the cube (`mirror_ray.frag.glsl`, `shaders/include/sensor_ray.glsl`) otherwise:
+//! - traced (`MIRROR_RAY_TRACED_FRAG`, `MIRROR_RAY_BVH_FRAG`), when the lookup traces
+//!   (`ray-query`, `bvh`): through the lookup's own set, exactly as the colour pass's trace, so
+//!   the colour, the range and the ids of a frame come from one light path;
+//! - through the cube (`MIRROR_RAY_CUBE_FRAG`, `shaders/include/sensor_ray.glsl`) otherwise:
 //!   the distance lookup's search along the reflected ray through the cube's depth, and the id
 //!   cube's texel where it lands. That is exact only where the cube's centre saw what the ray
 //!   meets, and the colour's lookup may look elsewhere: the outputs' JSON says which it was.
 //!
-//! The renderer owns the passes rather than a lookup plug-in and makes them on first use.
-//! `sensor::SensorOutputs::from_gpu` turns the two images into the ray map, range and ids.
+//! The renderer owns the pass rather than a lookup plug-in and makes it on first use.
+//! `sensor::SensorOutputs::from_gpu` turns the quantities into the ray map, range and ids.
 
 use std::sync::Arc;
 
 use ash::vk;
 
+use super::draw::Attachments;
+use super::graph::{Resource, Use};
 use super::lookups::TraceSet;
-use super::pipelines::mirror_pipeline;
+use super::pipelines::{depth_only_pipeline, mirror_pipeline};
 use super::targets::{CubeTarget, ViewTarget, DIRECTION_FORMAT};
 use super::Renderer;
 use crate::sensor::GroundTruth;
+use crate::shaders;
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::Device;
-use crate::vk::image::Sampler;
+use crate::vk::image::{Image, ImageView, Sampler};
 use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
 
@@ -37,18 +40,18 @@ pub(super) enum MirrorOutput {
     Colour,
     /// The direction the lookup looked up (`--directions`).
     LookupDirection,
-    /// The ray map's hit point and range.
-    RayOrigin,
-    /// The ray map's reflected direction and id.
-    RayDirection,
+    /// The ray map's quantities.
+    RayMap,
 }
 
-/// The two ray-map pipelines (origin, direction) and the set they read at set 1: the lookup's
-/// trace set, or a set of their own with the cube's depth (binding 1) and the id cube (binding
-/// 2), both read texel by texel. Field order is drop order.
+/// The ray map's pipeline, the depth-only scene pipeline drawn before it into the same
+/// attachments, and the set the ray map reads at set 1: the lookup's trace set, or a set of its
+/// own with the cube's depth (binding 1) and the id cube (binding 2), both read texel by texel.
+/// Field order is drop order.
 pub(super) struct SensorRays {
-    pub origin: Pipeline,
-    pub direction: Pipeline,
+    pub pipeline: Pipeline,
+    /// The scene's depth, under [`RayMapTargets`]' colour attachments.
+    pub scene_depth: Pipeline,
     pub layout: PipelineLayout,
     pub set: vk::DescriptorSet,
     /// The cube path's own set and what it holds (None when the set is the lookup's).
@@ -65,18 +68,12 @@ struct CubeSet {
 impl SensorRays {
     /// The traced passes: the lookup's ray-map shaders, reading its trace set
     /// (`LookupPass::trace_set`).
-    fn traced(
-        device: &Arc<Device>,
-        scene_set_layout: vk::DescriptorSetLayout,
-        trace: TraceSet,
-        push_size: u32,
-    ) -> Result<Self, GpuError> {
-        let layouts = [scene_set_layout, trace.layout];
-        let (origin, direction, layout) =
-            Self::pipelines(device, &layouts, trace.ray_map, push_size)?;
+    fn traced(scene: SceneLayouts<'_>, trace: TraceSet) -> Result<Self, GpuError> {
+        let layouts = [scene.set_layout, trace.layout];
+        let (pipeline, scene_depth, layout) = Self::pipelines(scene, &layouts, trace.ray_map)?;
         Ok(Self {
-            origin,
-            direction,
+            pipeline,
+            scene_depth,
             layout,
             set: trace.set,
             _cube_set: None,
@@ -84,12 +81,8 @@ impl SensorRays {
     }
 
     /// The passes through `cube`, which must have an id cube (`RenderOptions::id_cube`).
-    fn through_cube(
-        device: &Arc<Device>,
-        scene_set_layout: vk::DescriptorSetLayout,
-        cube: &CubeTarget,
-        push_size: u32,
-    ) -> Result<Self, GpuError> {
+    fn through_cube(scene: SceneLayouts<'_>, cube: &CubeTarget) -> Result<Self, GpuError> {
+        let device = scene.device;
         let ids = cube.ids.as_ref().ok_or_else(|| {
             GpuError::Unsupported(
                 "the sensor's ray map reads the id cube, and this renderer was made without \
@@ -113,15 +106,12 @@ impl SensorRays {
         let nearest = Sampler::nearest(device, "sensor ray sampler")?;
         descriptors::write_images(device, set, 1, &[(cube.depth_layers_view.raw, nearest.raw)]);
         descriptors::write_images(device, set, 2, &[(ids.layers_view.raw, nearest.raw)]);
-        let shaders = [
-            crate::shaders::MIRROR_RAY_ORIGIN_FRAG,
-            crate::shaders::MIRROR_RAY_DIRECTION_FRAG,
-        ];
-        let layouts = [scene_set_layout, set_layout.raw];
-        let (origin, direction, layout) = Self::pipelines(device, &layouts, shaders, push_size)?;
+        let layouts = [scene.set_layout, set_layout.raw];
+        let shader = crate::shaders::MIRROR_RAY_CUBE_FRAG;
+        let (pipeline, scene_depth, layout) = Self::pipelines(scene, &layouts, shader)?;
         Ok(Self {
-            origin,
-            direction,
+            pipeline,
+            scene_depth,
             layout,
             set,
             _cube_set: Some(CubeSet {
@@ -132,46 +122,127 @@ impl SensorRays {
         })
     }
 
-    /// The origin and direction pipelines of `shaders` over sets `layouts`.
+    /// The ray map's pipeline of `shader` over sets `layouts`, and the scene's depth-only
+    /// pipeline into the same attachments (a pipeline's colour formats are its pass's).
     fn pipelines(
-        device: &Arc<Device>,
+        scene: SceneLayouts<'_>,
         layouts: &[vk::DescriptorSetLayout; 2],
-        [origin, direction]: [&[u32]; 2],
-        push_size: u32,
+        shader: &[u32],
     ) -> Result<(Pipeline, Pipeline, PipelineLayout), GpuError> {
-        let layout = PipelineLayout::create(device, layouts, push_size, "sensor ray layout")?;
-        let make = |spirv, name| mirror_pipeline(device, &layout, spirv, DIRECTION_FORMAT, name);
-        let origin = make(origin, "sensor ray origin pipeline")?;
-        let direction = make(direction, "sensor ray direction pipeline")?;
-        Ok((origin, direction, layout))
+        let device = scene.device;
+        let formats = vec![DIRECTION_FORMAT; shaders::SENSOR_QUANTITIES.len()];
+        let layout = PipelineLayout::create(device, layouts, scene.push_size, "ray map layout")?;
+        let pipeline = mirror_pipeline(device, &layout, shader, &formats, "ray map pipeline")?;
+        let scene_depth = depth_only_pipeline(
+            device,
+            scene.pipeline_layout,
+            &formats,
+            "ray map scene depth",
+        )?;
+        Ok((pipeline, scene_depth, layout))
     }
 }
 
+/// What the ray map's pipelines are made on: the scene's set layout (set 0) and pipeline
+/// layout, and the push constants' size.
+#[derive(Clone, Copy)]
+struct SceneLayouts<'a> {
+    device: &'a Arc<Device>,
+    set_layout: vk::DescriptorSetLayout,
+    pipeline_layout: &'a PipelineLayout,
+    push_size: u32,
+}
+
+/// The ray map's attachments at the sensor's resolution: one RGBA32F image per quantity, in
+/// location order (`shaders::SENSOR_QUANTITIES`), and the depth they share. Field order is
+/// drop order: views before their images.
+pub(super) struct RayMapTargets {
+    /// Per quantity: its view and image.
+    pub quantities: Vec<(ImageView, Image)>,
+    depth_view: ImageView,
+    depth: Image,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl RayMapTargets {
+    fn create(device: &Arc<Device>, [width, height]: [u32; 2]) -> Result<Self, GpuError> {
+        let [colour, depth] = ViewTarget::descs(DIRECTION_FORMAT, width, height);
+        let view =
+            |image: &Image, name: &str| image.view(vk::ImageViewType::TYPE_2D, 0, 1, 0, 1, name);
+        let quantities = (shaders::SENSOR_QUANTITIES.iter())
+            .map(|name| {
+                let image = Image::create(device, &colour, &format!("ray map {name}"))?;
+                Ok((view(&image, &format!("ray map {name}"))?, image))
+            })
+            .collect::<Result<_, GpuError>>()?;
+        let depth = Image::create(device, &depth, "ray map depth")?;
+        Ok(Self {
+            quantities,
+            depth_view: view(&depth, "ray map depth")?,
+            depth,
+            width,
+            height,
+        })
+    }
+
+    /// Every image as the frame graph tracks it, with how it rests between frames: each
+    /// quantity copied out for the readback, the depth as its pass left it.
+    pub fn resources(&self) -> Vec<(Resource, Use)> {
+        let colours = (self.quantities.iter()).map(|(_, image)| (colour(image), Use::CopySource));
+        let depth = Resource::image(self.depth.raw, self.depth.full_range());
+        colours.chain([(depth, Use::DepthTarget)]).collect()
+    }
+
+    /// The uses of the pass that draws them: each cleared and drawn into.
+    pub fn drawn(&self) -> Vec<(Resource, Use)> {
+        let mut uses = self.resources();
+        for (_, u) in uses.iter_mut().filter(|(_, u)| *u == Use::CopySource) {
+            *u = Use::ColorTarget;
+        }
+        uses
+    }
+
+    /// The pass's attachments, every one cleared; the depth is not kept.
+    pub fn attachments(&self) -> Attachments {
+        let views: Vec<vk::ImageView> = self.quantities.iter().map(|(v, _)| v.raw).collect();
+        Attachments {
+            color: views[0],
+            ids: None,
+            more_colors: views[1..].to_vec(),
+            depth: self.depth_view.raw,
+            size: [self.width, self.height],
+            layers: 1,
+            view_mask: 0,
+            clear: true,
+            store_depth: false,
+        }
+    }
+}
+
+/// `image`'s colour, as the frame graph tracks it.
+pub(super) fn colour(image: &Image) -> Resource {
+    Resource::image(image.raw, image.full_range())
+}
+
 impl Renderer {
-    /// The ray map's passes and two full-float targets at the sensor's resolution, made on
-    /// the first frame that reads the ray map back: traced where the lookup traces, else
-    /// through the cube.
+    /// The ray map's pass and its targets at the sensor's resolution, made on the first frame
+    /// that reads the ray map back: traced where the lookup traces, else through the cube.
     pub(super) fn prepare_sensor_rays(&mut self) -> Result<(), GpuError> {
         if self.views.sensor_rays.is_some() {
             return Ok(());
         }
-        let scene_layout = self.resources.scene_set_layout.raw;
-        let push_size = std::mem::size_of::<super::gpu::Push>() as u32;
-        let passes = match self.mirror.pass.trace_set() {
-            Some(trace) => SensorRays::traced(&self.device, scene_layout, trace, push_size)?,
-            None => SensorRays::through_cube(&self.device, scene_layout, &self.cube, push_size)?,
+        let scene = SceneLayouts {
+            device: &self.device,
+            set_layout: self.resources.scene_set_layout.raw,
+            pipeline_layout: &self.scene_layout,
+            push_size: std::mem::size_of::<super::gpu::Push>() as u32,
         };
-        let [w, h] = self.scene.sensor.resolution;
-        let targets = [
-            ViewTarget::create(&self.device, DIRECTION_FORMAT, w, h, "sensor ray origins")?,
-            ViewTarget::create(
-                &self.device,
-                DIRECTION_FORMAT,
-                w,
-                h,
-                "sensor ray directions",
-            )?,
-        ];
+        let passes = match self.mirror.pass.trace_set() {
+            Some(trace) => SensorRays::traced(scene, trace)?,
+            None => SensorRays::through_cube(scene, &self.cube)?,
+        };
+        let targets = RayMapTargets::create(&self.device, self.scene.sensor.resolution)?;
         self.views.sensor_rays = Some((passes, targets));
         Ok(())
     }

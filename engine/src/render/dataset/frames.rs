@@ -150,8 +150,7 @@ impl FrameWriter {
         let (_, images) =
             (r.render_frame(frame as u64, pose.time_s, readback)).map_err(gpu_failed)?;
         let missing = || DatasetError::NotReadBack { frame };
-        let origin = images.sensor_ray_origin.as_ref().ok_or_else(missing)?;
-        let direction = images.sensor_ray_direction.as_ref().ok_or_else(missing)?;
+        let quantities = images.sensor_quantities.ok_or_else(missing)?;
         let sensor = images.sensor.ok_or_else(missing)?;
         let name = self.lookup.to_string();
         let mut outputs = SensorOutputs::from_gpu(
@@ -159,7 +158,7 @@ impl FrameWriter {
             pose.time_s,
             (&name, self.truth),
             sensor,
-            (origin, direction),
+            quantities,
             None,
         );
         outputs.panorama_seam_rad = self.panoramas.seam(pose.heading_deg.to_radians());

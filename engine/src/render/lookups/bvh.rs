@@ -229,10 +229,7 @@ impl LookupPass for BvhPass {
         Some(TraceSet {
             layout: self.set_layout.raw,
             set: self.set,
-            ray_map: [
-                crate::shaders::MIRROR_RAY_BVH_ORIGIN_FRAG,
-                crate::shaders::MIRROR_RAY_BVH_DIRECTION_FRAG,
-            ],
+            ray_map: crate::shaders::MIRROR_RAY_BVH_FRAG,
         })
     }
 

@@ -239,8 +239,8 @@ pub struct FrameObjects<'a> {
 pub struct TraceSet {
     pub layout: vk::DescriptorSetLayout,
     pub set: vk::DescriptorSet,
-    /// The origin-and-range pass, then the direction-and-id pass.
-    pub ray_map: [&'static [u32]; 2],
+    /// The ray map's pass, which writes every quantity from one trace.
+    pub ray_map: &'static [u32],
 }
 
 /// The two pipelines every lookup draws the mirror with: one writing colour, one writing the
@@ -278,14 +278,14 @@ impl MirrorPipelines {
             device,
             &layout,
             shaders.colour,
-            VIEW_FORMAT,
+            &[VIEW_FORMAT],
             &format!("{name} pipeline"),
         )?;
         let directions = mirror_pipeline(
             device,
             &layout,
             shaders.directions,
-            DIRECTION_FORMAT,
+            &[DIRECTION_FORMAT],
             &format!("{name} direction pipeline"),
         )?;
         Ok(Self {

@@ -118,10 +118,7 @@ impl LookupPass for RayQueryPass {
         Some(TraceSet {
             layout: self.set_layout.raw,
             set: self.set,
-            ray_map: [
-                crate::shaders::MIRROR_RAY_TRACED_ORIGIN_FRAG,
-                crate::shaders::MIRROR_RAY_TRACED_DIRECTION_FRAG,
-            ],
+            ray_map: crate::shaders::MIRROR_RAY_TRACED_FRAG,
         })
     }
 

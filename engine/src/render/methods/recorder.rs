@@ -100,13 +100,19 @@ impl MethodContext<'_> {
         };
         let fragment = ShaderStage::new(vk::ShaderStageFlags::FRAGMENT, shader);
         let stages: Vec<ShaderStage<'_>> = stages.iter().copied().chain([fragment]).collect();
+        // The cube's colour, then the id cube's ids when the fill writes them.
+        let formats = [self.cube_format, crate::render::targets::ID_FORMAT];
+        let color_formats = if self.ids {
+            &formats[..]
+        } else {
+            &formats[..1]
+        };
         crate::render::pipelines::scene_pipeline(
             self.device,
             layout,
             &stages,
             crate::render::pipelines::SceneTargets {
-                color_format: self.cube_format,
-                id_format: self.ids.then_some(crate::render::targets::ID_FORMAT),
+                color_formats,
                 view_mask: self.layout.view_mask(),
             },
             name,
@@ -212,6 +218,7 @@ impl<'a> CubeRecorder<'a> {
             &Attachments {
                 color: self.parts.cube.face_views[face as usize].raw,
                 ids: self.id_view(|ids| ids.face_views[face as usize].raw),
+                more_colors: Vec::new(),
                 depth: self.parts.cube.depth_views[face as usize].raw,
                 size: [size, size],
                 layers: 1,
@@ -270,6 +277,7 @@ impl<'a> CubeRecorder<'a> {
             &Attachments {
                 color: self.parts.cube.layers_view.raw,
                 ids: self.id_view(|ids| ids.layers_view.raw),
+                more_colors: Vec::new(),
                 depth: self.parts.cube.depth_layers_view.raw,
                 size: [size, size],
                 layers: if view_mask != 0 { 0 } else { 6 },
