@@ -356,7 +356,7 @@ fn interior(ids: &[u32], mask: &[bool], width: usize) -> Vec<usize> {
         .collect()
 }
 
-/// A renderer whose lookup changes remakes its ray map's passes for the new one: from the
+/// A renderer whose lookup changes remakes its ray map's pass for the new one: from the
 /// cube path to the trace and back, each frame's outputs are those of a renderer made with
 /// that lookup (the traced passes read the lookup's own set, which the switch replaces).
 #[test]

@@ -199,7 +199,7 @@ fn frames_in_flight_change_nothing_but_the_overlap() {
 }
 
 /// Switching the lookup in place (the viewer's menu) with frames still running waits for
-/// nothing: the old lookup's pass and the ray map's passes made for it are kept until the
+/// nothing: the old lookup's pass and the ray map's pass made for it are kept until the
 /// frames that use them have finished (the validation layer would report an object destroyed
 /// while in use). Every frame comes back, in order, with its own lookup's results: the ray
 /// map, and the tally of `distance-exact`'s frames, read from the pass they were recorded

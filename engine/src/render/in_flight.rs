@@ -294,8 +294,8 @@ impl Renderer {
         if pending.traced {
             report.traced_rays = (self.mirror.pass_recorded_for(pending.number)).tally(s)?;
         }
-        // Nothing after this frame uses what was let go before it: the ray map's passes first,
-        // then the lookup pass whose set and layout they were made with.
+        // Nothing after this frame uses what was let go before it: the ray map's pass first,
+        // then the lookup pass whose set and layout it was made with.
         self.frames.retired.release_through(pending.number);
         self.mirror.release_through(pending.number);
         let images = pending.copies.decode(slot.readback.as_ref())?;

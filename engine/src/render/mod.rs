@@ -97,7 +97,7 @@ pub struct Renderer {
     /// The mirror lookup's pipelines and per-renderer state, and the lookup it is for (the
     /// pass is rebuilt when `scene.mirror.lookup` is switched in place).
     mirror: mirror::Mirror,
-    /// The view passes: their targets, pipelines and the sensor ray map's passes.
+    /// The view passes: their targets, pipelines and the sensor ray map's pass.
     views: passes::ViewPasses,
     /// Set 0 (the scene) and the push constants: every scene pipeline's layout, after them.
     scene_layout: PipelineLayout,
@@ -295,12 +295,12 @@ impl Renderer {
     }
 
     /// The mirror's pass follows the scene's lookup, switched in place. Nothing waits: the old
-    /// pass, and the ray map's passes made for it, are kept until the frames in flight that
+    /// pass, and the ray map's pass made for it, are kept until the frames in flight that
     /// may use them have finished (`retired.rs`).
     fn follow_lookup(&mut self) -> Result<(), GpuError> {
         let in_flight = self.frames.last_in_flight();
         if self.mirror.lookup() != self.scene.mirror.lookup {
-            // The ray map's passes were chosen for the old lookup (and, traced, read its set):
+            // The ray map's pass was chosen for the old lookup (and, traced, read its set):
             // made again for the new one on the next frame that reads them.
             if let Some(rays) = self.views.sensor_rays.take() {
                 self.frames.retire(Box::new(rays));

@@ -1,5 +1,5 @@
 //! Command recording for one frame's views (observer, sensor, pair, and the direction and
-//! ray-map passes); the readback is in `readback.rs`, the pipelines in `pipelines.rs`.
+//! ray-map pass); the readback is in `readback.rs`, the pipelines in `pipelines.rs`.
 
 use ash::vk;
 
@@ -41,7 +41,7 @@ pub(super) fn texel_bytes(slot: Slot) -> u64 {
 }
 
 /// The view passes, a part of the renderer: the view targets, the scene pipelines that draw
-/// into them, and the sensor ray map's passes. They record with the frame's context
+/// into them, and the sensor ray map's pass. They record with the frame's context
 /// ([`FrameParts`]) and own nothing else.
 pub(super) struct ViewPasses {
     /// The sensor ray map's pass and its targets (a quantity each), made on first use.

@@ -1,5 +1,5 @@
 //! Deferred destruction: what the renderer lets go of while frames in flight may still use it
-//! (a lookup's pass switched in place, the ray map's passes made for it) is kept until the last
+//! (a lookup's pass switched in place, the ray map's pass made for it) is kept until the last
 //! frame submitted before it was let go has finished, then dropped, as Granite's per-frame
 //! deletion queues do. Nothing waits for the GPU to replace a part.
 //!

@@ -233,7 +233,7 @@ pub struct FrameObjects<'a> {
     pub every_frame: bool,
 }
 
-/// A tracing lookup's set 1, which the sensor's ray-map passes bind too, and those passes'
+/// A tracing lookup's set 1, which the sensor's ray-map pass binds too, and that pass's
 /// shaders (`mirror_ray.frag.glsl` built with `TRACED` and the lookup's tracer).
 #[derive(Debug, Clone, Copy)]
 pub struct TraceSet {
