@@ -2,6 +2,7 @@
 //! the files they are written to (`render --sensor-outputs`, `reference --sensor-outputs`;
 //! docs/sensor.md lists them).
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use glam::{Mat3, Quat, Vec3};
@@ -49,9 +50,10 @@ pub struct SensorOutputs {
     pub id_model: &'static str,
     /// What each id names.
     pub id_map: IdMap,
-    /// Every per-pixel quantity of the ray map (`sensor::quantities`), by name: what `rays`,
-    /// `range` and `ids` are read from on the GPU, and what a layer of a new quantity reads.
-    pub quantities: QuantityImages,
+    /// The GPU's per-pixel quantities of the ray map (`sensor::quantities`), by name, which
+    /// `rays`, `range` and `ids` were read from; none for the reference, whose quantities
+    /// are computed from those when asked. A layer reads either through [`Self::quantity`].
+    pub gpu_quantities: QuantityImages,
     /// The sensor's colour image the panoramas unwrap.
     pub image: RgbaImage,
     /// The cube map's faces (mip 0), for the panoramas straight from the cube; None for the
@@ -88,31 +90,19 @@ impl SensorOutputs {
         let ids: Vec<u32> = (images.object.pixels.iter().zip(&seen))
             .map(|(o, &s)| if s && o[0] >= 0.0 { o[0] as u32 } else { NO_ID })
             .collect();
-        let optics = SensorOptics::at(scene, t_s);
-        let hits: Vec<Option<PixelHit>> = (rays.rays.iter().zip(&range).zip(&ids))
-            .map(|((ray, &range), &id)| {
-                ray.map(|r| PixelHit {
-                    mirror_point: r.origin - optics.mirror_center,
-                    reflected: r.direction,
-                    range,
-                    id,
-                })
-            })
-            .collect();
-        let quantities = QuantityImages::of_hits(&hits, rays.width, rays.height);
         Self {
             source: "reference".into(),
             ground_truth: GroundTruthRecord::new(GroundTruth::Reference, "reference", scene),
             time_s: t_s,
             scene_origin: scene.origin,
-            optics,
+            optics: SensorOptics::at(scene, t_s),
             rays,
             range,
             range_model: GroundTruth::Reference.range_model(true),
             ids,
             id_model: GroundTruth::Reference.id_model(true),
             id_map: IdMap::of(scene),
-            quantities,
+            gpu_quantities: QuantityImages::default(),
             image: images.color.clone(),
             cube: None,
             panorama_seam_rad: 0.0,
@@ -180,13 +170,37 @@ impl SensorOutputs {
             ids,
             id_model: truth.id_model(truth.exact_for(scene)),
             id_map: IdMap::of(scene),
-            quantities,
+            gpu_quantities: quantities,
             image,
             cube,
             panorama_seam_rad: 0.0,
             geometry: (GeometryFrame::Scene, Rigid::IDENTITY),
             camera: None,
         }
+    }
+
+    /// The image of quantity `q`: the GPU's, or for the reference its half ([`Quantity::of`])
+    /// on each mirror pixel's hit (its ray, range and id), computed now.
+    pub fn quantity(&self, q: &dyn Quantity) -> Cow<'_, RgbaImage> {
+        if let Some(image) = self.gpu_quantities.get(q.name()) {
+            return Cow::Borrowed(image);
+        }
+        let pixels = (self.rays.rays.iter().zip(&self.range).zip(&self.ids))
+            .map(|((ray, &range), &id)| {
+                let hit = |r: &PixelRay| PixelHit {
+                    mirror_point: r.origin - self.optics.mirror_center,
+                    reflected: r.direction,
+                    range,
+                    id,
+                };
+                ray.as_ref().map_or([0.0; 4], |r| q.of(&hit(r)))
+            })
+            .collect();
+        Cow::Owned(RgbaImage {
+            width: self.rays.width,
+            height: self.rays.height,
+            pixels,
+        })
     }
 
     /// Per pixel, the class of what it meets ([`IdMap::classes`]), [`NO_ID`] for none: the

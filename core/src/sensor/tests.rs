@@ -164,3 +164,32 @@ fn range16_is_whole_millimetres_and_zero_for_no_return() {
         [2000, 1234, 0, 0, 65535, 0, 0, 3001]
     );
 }
+
+/// The reference's quantities, computed when asked, are the ray map's own data: on each
+/// mirror pixel the mirror point in render space with the range, the direction with 1 + the
+/// id; 0 (in every channel, the mask) off the mirror.
+#[test]
+fn the_references_quantities_are_its_rays_range_and_ids() {
+    use super::quantities::{DIRECTION_ID, ORIGIN_RANGE};
+    let s = six_colour();
+    let o = reference_outputs(&s);
+    let (origin, direction) = (o.quantity(&ORIGIN_RANGE), o.quantity(&DIRECTION_ID));
+    let mut seen = 0;
+    for (i, ray) in o.rays.rays.iter().enumerate() {
+        let (a, b) = (origin.pixels[i], direction.pixels[i]);
+        let Some(ray) = ray else {
+            assert_eq!((a, b), ([0.0; 4], [0.0; 4]), "pixel {i} off the mirror");
+            continue;
+        };
+        seen += 1;
+        let point = ray.origin - o.optics.mirror_center;
+        assert_eq!(a, [point.x, point.y, point.z, o.range[i]], "pixel {i}");
+        let d = ray.direction;
+        assert_eq!(b, [d.x, d.y, d.z, (o.ids[i] + 1) as f32], "pixel {i}");
+        assert!(
+            o.ids[i] < 6 && o.range[i] > 4.0,
+            "pixel {i}: a wall 5 m away"
+        );
+    }
+    assert!(seen > 1000, "{seen} mirror pixels");
+}

@@ -16,7 +16,7 @@
 //! To add one: a module here with its line in [`ALL`], and its GLSL file beside the others (a
 //! test requires the two lists equal and renders every quantity on each device's traced
 //! lookup against the reference, held to [`Quantity::agree`]). A sensor layer
-//! (`sensor::layers`) then writes it from [`SensorOutputs::quantities`](super::SensorOutputs).
+//! (`sensor::layers`) then writes it from [`SensorOutputs::quantity`](super::SensorOutputs::quantity).
 //! A quantity that needs more of the hit than [`PixelHit`] holds extends it on both sides
 //! (`shaders/include/pixel_hit.glsl` is its GLSL twin).
 
@@ -64,7 +64,7 @@ pub fn named(name: &str) -> Option<&'static dyn Quantity> {
     ALL.iter().copied().find(|q| q.name() == name)
 }
 
-/// One frame's quantity images, by name.
+/// One frame's quantity images from the GPU, by name.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct QuantityImages(Vec<(&'static str, RgbaImage)>);
 
@@ -72,19 +72,6 @@ impl QuantityImages {
     /// Images read back from the GPU, each with its quantity's name.
     pub fn new(images: Vec<(&'static str, RgbaImage)>) -> Self {
         Self(images)
-    }
-
-    /// Every quantity of [`ALL`] from the reference's hits (None: the pixel does not see the
-    /// mirror), `width` x `height`, row 0 at the top.
-    pub fn of_hits(hits: &[Option<PixelHit>], width: u32, height: u32) -> Self {
-        let image = |q: &dyn Quantity| RgbaImage {
-            width,
-            height,
-            pixels: (hits.iter())
-                .map(|h| h.as_ref().map_or([0.0; 4], |h| q.of(h)))
-                .collect(),
-        };
-        Self(ALL.iter().map(|q| (q.name(), image(*q))).collect())
     }
 
     /// The image of the quantity named `name`.
@@ -116,20 +103,18 @@ mod tests {
     }
 
     #[test]
-    fn a_pixel_off_the_mirror_is_zero_and_the_id_marks_the_mirror() {
+    fn the_ray_maps_own_quantities_hold_the_hit() {
         let hit = PixelHit {
             mirror_point: Vec3::new(0.01, -0.02, 0.03),
             reflected: Vec3::X,
             range: 2.5,
             id: 0,
         };
-        let images = QuantityImages::of_hits(&[None, Some(hit)], 2, 1);
-        for (name, image) in images.iter() {
-            assert_eq!(image.pixels[0], [0.0; 4], "{name} off the mirror");
-        }
-        let ids = images.get(DIRECTION_ID.name()).unwrap();
-        assert_eq!(ids.pixels[1], [1.0, 0.0, 0.0, 1.0], "wall 0 is 1 + 0");
-        let origin = images.get(ORIGIN_RANGE.name()).unwrap();
-        assert_eq!(origin.pixels[1], [0.01, -0.02, 0.03, 2.5]);
+        assert_eq!(
+            DIRECTION_ID.of(&hit),
+            [1.0, 0.0, 0.0, 1.0],
+            "wall 0 is 1 + 0"
+        );
+        assert_eq!(ORIGIN_RANGE.of(&hit), [0.01, -0.02, 0.03, 2.5]);
     }
 }
