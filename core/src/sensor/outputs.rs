@@ -50,9 +50,10 @@ pub struct SensorOutputs {
     pub id_model: &'static str,
     /// What each id names.
     pub id_map: IdMap,
-    /// The GPU's per-pixel quantities of the ray map (`sensor::quantities`), by name, which
-    /// `rays`, `range` and `ids` were read from; none for the reference, whose quantities
-    /// are computed from those when asked. A layer reads either through [`Self::quantity`].
+    /// The GPU's per-pixel quantities of the ray map (`sensor::quantities`) beyond its own two,
+    /// which `rays`, `range` and `ids` hold decoded (a frame a dataset's encoders hold then
+    /// costs what it did before the registry); none for the reference. A layer reads any
+    /// quantity through [`Self::quantity`], which computes those not held.
     pub gpu_quantities: QuantityImages,
     /// The sensor's colour image the panoramas unwrap.
     pub image: RgbaImage,
@@ -124,12 +125,12 @@ impl SensorOutputs {
         t_s: f64,
         (lookup, truth): (&str, GroundTruth),
         image: RgbaImage,
-        quantities: QuantityImages,
+        mut quantities: QuantityImages,
         cube: Option<Vec<RgbaImage>>,
     ) -> Self {
-        let registered = |q: &dyn Quantity| {
+        let mut registered = |q: &dyn Quantity| {
             let name = q.name();
-            (quantities.get(name))
+            (quantities.remove(name))
                 .unwrap_or_else(|| panic!("the ray map's pass writes every quantity: {name}"))
         };
         let (origin_range, direction_id) = (registered(&ORIGIN_RANGE), registered(&DIRECTION_ID));
@@ -179,8 +180,9 @@ impl SensorOutputs {
         }
     }
 
-    /// The image of quantity `q`: the GPU's, or for the reference its half ([`Quantity::of`])
-    /// on each mirror pixel's hit (its ray, range and id), computed now.
+    /// The image of quantity `q`: the GPU's where the frame holds it, else [`Quantity::of`] on
+    /// each mirror pixel's hit (its ray, range and id), computed now: the reference's half, or
+    /// for a GPU frame the ray map's own two quantities from what was decoded of them.
     pub fn quantity(&self, q: &dyn Quantity) -> Cow<'_, RgbaImage> {
         if let Some(image) = self.gpu_quantities.get(q.name()) {
             return Cow::Borrowed(image);

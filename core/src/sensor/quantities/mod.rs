@@ -79,6 +79,12 @@ impl QuantityImages {
         self.0.iter().find(|(n, _)| *n == name).map(|(_, i)| i)
     }
 
+    /// Takes the image of the quantity named `name` out.
+    pub fn remove(&mut self, name: &str) -> Option<RgbaImage> {
+        let at = self.0.iter().position(|(n, _)| *n == name)?;
+        Some(self.0.remove(at).1)
+    }
+
     /// Every image with its quantity's name, in the order held.
     pub fn iter(&self) -> impl Iterator<Item = (&'static str, &RgbaImage)> {
         self.0.iter().map(|(n, i)| (*n, i))
