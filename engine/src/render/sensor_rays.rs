@@ -33,6 +33,11 @@ use crate::vk::image::{Image, ImageView, Sampler};
 use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
 
+/// Every Vulkan device renders to 4 colour attachments at once (the spec's minimum of
+/// `maxColorAttachments`), one per quantity: a fifth quantity would need that limit checked,
+/// or a second pass.
+const _: () = assert!(shaders::SENSOR_QUANTITIES.len() <= 4);
+
 /// What the mirror writes in a view pass.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum MirrorOutput {

@@ -6,7 +6,8 @@
 //!   `vec4 quantity_NAME(PixelHit hit)`. engine/build.rs finds every such file and builds the
 //!   ray-map pass (`shaders/mirror_ray.frag.glsl`) to write each to a colour attachment of its
 //!   own, in name order, once per tracer (through the cube, ray query, bvh): one pass traces
-//!   each pixel once, whatever the number of quantities;
+//!   each pixel once, whatever the number of quantities (at most 4, the colour attachments
+//!   every device has: engine/src/render/sensor_rays.rs asserts it);
 //! - the reference's: [`Quantity::of`], on the hit the exact ray map and the reference's
 //!   centre sample give.
 //!
