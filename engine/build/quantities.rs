@@ -15,7 +15,11 @@ pub fn find(dir: &Path) -> Result<Vec<String>, String> {
     let mut names = Vec::new();
     for path in entries.flatten().map(|e| e.path()) {
         let file = path.file_name().unwrap_or_default().to_string_lossy();
-        let Some(name) = file.strip_suffix(".glsl") else {
+        // Hidden files (an editor's lock or backup) are not quantities.
+        let Some(name) = file
+            .strip_suffix(".glsl")
+            .filter(|_| !file.starts_with('.'))
+        else {
             continue;
         };
         if name.is_empty() || !name.chars().all(|c| c.is_ascii_lowercase() || c == '_') {

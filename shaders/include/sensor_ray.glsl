@@ -22,7 +22,7 @@
 #include "mirror.glsl"
 #include "distance_search.glsl"
 
-// Set 1, binding 2 of the sensor ray passes: the id cube, six R32_UINT layers in face order
+// Set 1, binding 2 of the ray map's pass through the cube: the id cube, six R32_UINT layers in face order
 // (binding 1 is the cube's depth, declared by distance_search.glsl).
 layout(set = 1, binding = 2) uniform usampler2DArray cube_ids;
 

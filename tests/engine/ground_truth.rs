@@ -358,7 +358,7 @@ fn interior(ids: &[u32], mask: &[bool], width: usize) -> Vec<usize> {
 
 /// A renderer whose lookup changes remakes its ray map's pass for the new one: from the
 /// cube path to the trace and back, each frame's outputs are those of a renderer made with
-/// that lookup (the traced passes read the lookup's own set, which the switch replaces).
+/// that lookup (the traced pass reads the lookup's own set, which the switch replaces).
 #[test]
 fn switching_the_lookup_remakes_the_ray_map() {
     let Some(gpu) = Gpu::for_lookup(Lookup::RayQuery) else {

@@ -136,7 +136,7 @@ impl CubeFill {
 
 /// The fill's uses: the cube's mip 0 and depth, and with `ids` the id cube, drawn into with
 /// the clean faces kept (their colour, their depth, which is the `distance` lookup's distance
-/// map, and their ids, which the sensor ray passes read). Other fills (the floors) write no
+/// map, and their ids, which the ray-map pass reads through the cube). Other fills (the floors) write no
 /// ids: the id cube keeps what it had and is not declared.
 fn fill_uses(f: &FrameParts, ids: bool) -> Vec<(graph::Resource, Use)> {
     let (depth, id_cube) = f.cube.depth_and_ids();
@@ -148,8 +148,8 @@ fn fill_uses(f: &FrameParts, ids: bool) -> Vec<(graph::Resource, Use)> {
     uses
 }
 
-/// The depth the fill wrote, for the mirror's fragment shaders (distance lookup, sensor ray
-/// passes), and the ids it wrote (sensor ray passes), read from here on. (The colour goes on
+/// The depth the fill wrote, for the mirror's fragment shaders (distance lookup, the ray map's
+/// pass through the cube), and the ids it wrote (the same pass), read from here on. (The colour goes on
 /// to the mip chain.)
 fn read_uses(f: &FrameParts, ids: bool) -> Vec<(graph::Resource, Use)> {
     let (depth, id_cube) = f.cube.depth_and_ids();

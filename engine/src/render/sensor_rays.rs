@@ -71,7 +71,7 @@ struct CubeSet {
 }
 
 impl SensorRays {
-    /// The traced passes: the lookup's ray-map shaders, reading its trace set
+    /// The traced pass: the lookup's ray-map shader, reading its trace set
     /// (`LookupPass::trace_set`).
     fn traced(scene: SceneLayouts<'_>, trace: TraceSet) -> Result<Self, GpuError> {
         let layouts = [scene.set_layout, trace.layout];
@@ -85,7 +85,7 @@ impl SensorRays {
         })
     }
 
-    /// The passes through `cube`, which must have an id cube (`RenderOptions::id_cube`).
+    /// The pass through `cube`, which must have an id cube (`RenderOptions::id_cube`).
     fn through_cube(scene: SceneLayouts<'_>, cube: &CubeTarget) -> Result<Self, GpuError> {
         let device = scene.device;
         let ids = cube.ids.as_ref().ok_or_else(|| {

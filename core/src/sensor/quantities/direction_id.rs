@@ -18,9 +18,11 @@ impl Quantity for DirectionId {
         "the reflected direction and 1 + the id of what it meets (0: not the mirror)"
     }
 
+    /// A reflected ray that met nothing (the reference's `NO_ID`, u32::MAX; the GPU's always
+    /// meets the room) gets 0, as GLSL's `id + 1u` wraps: no id, like a pixel off the mirror.
     fn of(&self, hit: &PixelHit) -> [f32; 4] {
         let r = hit.reflected;
-        [r.x, r.y, r.z, (hit.id + 1) as f32]
+        [r.x, r.y, r.z, hit.id.wrapping_add(1) as f32]
     }
 
     /// The direction to float rounding (both reflect the same ray about the same normal); the

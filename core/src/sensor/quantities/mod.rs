@@ -123,5 +123,10 @@ mod tests {
             "wall 0 is 1 + 0"
         );
         assert_eq!(ORIGIN_RANGE.of(&hit), [0.01, -0.02, 0.03, 2.5]);
+        let nothing = PixelHit {
+            id: crate::sensor::id_map::NO_ID,
+            ..hit
+        };
+        assert_eq!(DIRECTION_ID.of(&nothing)[3], 0.0, "met nothing: no id");
     }
 }
