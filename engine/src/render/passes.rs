@@ -137,23 +137,28 @@ impl ViewPasses {
                 q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, ts);
             }
         }
-        if let (Some((rays, targets)), None) = (self.sensor_rays.as_ref(), display) {
-            if readback.rays {
-                let drawn = (targets.drawn(), targets.attachments());
-                let how = (&rays.scene_depth, MirrorOutput::RayMap);
-                let pass_views = (&[VIEW_SENSOR][..], views);
-                self.record_view(
-                    (f, &mut *graph),
-                    cmd,
-                    drawn,
-                    pass_views,
-                    how,
-                    None,
-                    "ray map",
-                );
-            }
+        if display.is_none() {
+            self.record_ray_map((f, &mut *graph), cmd, views, readback);
         }
         mark(f, cmd, &after);
+    }
+
+    /// The ray map's pass over the sensor view, when `readback` asks for it: the scene's depth,
+    /// then the mirror writing every quantity to its attachment (`sensor_rays.rs`).
+    fn record_ray_map(
+        &self,
+        (f, graph): (&FrameParts, &mut FrameGraph),
+        cmd: vk::CommandBuffer,
+        views: &[ViewBasis],
+        readback: Readback,
+    ) {
+        let (Some((rays, _)), Some(targets)) = (&self.sensor_rays, self.ray_map(readback)) else {
+            return;
+        };
+        let drawn = (targets.drawn(), targets.attachments());
+        let how = (&rays.scene_depth, MirrorOutput::RayMap);
+        let pass_views = (&[VIEW_SENSOR][..], views);
+        self.record_view((f, graph), cmd, drawn, pass_views, how, None, "ray map");
     }
 
     /// Records one view pass: the barriers its `uses` need, then into `attachments` each of
