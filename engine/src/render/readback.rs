@@ -9,7 +9,7 @@ use std::sync::Arc;
 use super::display::{DisplayPixels, DisplayView};
 use super::graph::{self, FrameGraph, Resource, Use};
 use super::passes::{copy_offset, texel_bytes, Slot};
-use super::sensor_rays::{colour, RayMapTargets};
+use super::sensor_rays::RayMapTargets;
 use super::targets::{CubeTarget, ViewTarget};
 use super::*;
 use crate::sensor::quantities::QuantityImages;
@@ -101,7 +101,7 @@ impl Copies {
             copies.views.push(ViewCopy {
                 of,
                 image: image.raw,
-                resource: colour(image),
+                resource: Resource::whole(image),
                 width,
                 height,
                 offset,
@@ -201,9 +201,13 @@ impl Copies {
             let n = u64::from(v.width) * u64::from(v.height) * v.of.texel_bytes();
             let b = &bytes[v.offset as usize..(v.offset + n) as usize];
             let (w, h) = (v.width, v.height);
-            let Copied::View(slot) = v.of else {
-                quantities.push(decode_f32(b, w, h));
-                continue;
+            let slot = match v.of {
+                Copied::View(slot) => slot,
+                Copied::Quantity(i) => {
+                    let name = crate::shaders::SENSOR_QUANTITIES[i];
+                    quantities.push((name, decode_f32(b, w, h)));
+                    continue;
+                }
             };
             match slot {
                 Slot::Observer => images.observer = Some(decode_f16(b, w, h)),
@@ -214,12 +218,7 @@ impl Copies {
             }
         }
         if !quantities.is_empty() {
-            // Copied in location order, which is the names' (`plan`).
-            let named = crate::shaders::SENSOR_QUANTITIES
-                .iter()
-                .copied()
-                .zip(quantities);
-            images.sensor_quantities = Some(QuantityImages::new(named.collect()));
+            images.sensor_quantities = Some(QuantityImages::new(quantities));
         }
         Ok(images)
     }

@@ -194,8 +194,9 @@ impl RayMapTargets {
     /// Every image as the frame graph tracks it, with how it rests between frames: each
     /// quantity copied out for the readback, the depth as its pass left it.
     pub fn resources(&self) -> Vec<(Resource, Use)> {
-        let colours = (self.quantities.iter()).map(|(_, image)| (colour(image), Use::CopySource));
-        let depth = Resource::image(self.depth.raw, self.depth.full_range());
+        let colours =
+            (self.quantities.iter()).map(|(_, image)| (Resource::whole(image), Use::CopySource));
+        let depth = Resource::whole(&self.depth);
         colours.chain([(depth, Use::DepthTarget)]).collect()
     }
 
@@ -223,11 +224,6 @@ impl RayMapTargets {
             store_depth: false,
         }
     }
-}
-
-/// `image`'s colour, as the frame graph tracks it.
-pub(super) fn colour(image: &Image) -> Resource {
-    Resource::image(image.raw, image.full_range())
 }
 
 impl Renderer {

@@ -94,12 +94,7 @@ impl CubeTarget {
         [Some(&self.color), Some(&self.depth), ids]
             .into_iter()
             .flatten()
-            .map(|image| {
-                (
-                    Resource::image(image.raw, image.full_range()),
-                    Use::FragmentRead,
-                )
-            })
+            .map(|image| (Resource::whole(image), Use::FragmentRead))
             .collect()
     }
 
@@ -119,7 +114,7 @@ impl CubeTarget {
     /// The fill's attachments besides the colour's mip 0: the depth, and the ids where there
     /// are (all layers).
     pub(super) fn depth_and_ids(&self) -> (Resource, Option<Resource>) {
-        let whole = |image: &Image| Resource::image(image.raw, image.full_range());
+        let whole = Resource::whole;
         (
             whole(&self.depth),
             self.ids.as_ref().map(|ids| whole(&ids.image)),
@@ -298,15 +293,12 @@ impl ViewTarget {
     pub(super) fn resources(&self) -> [(Resource, Use); 2] {
         [
             (self.color_resource(), Use::CopySource),
-            (
-                Resource::image(self.depth.raw, self.depth.full_range()),
-                Use::DepthTarget,
-            ),
+            (Resource::whole(&self.depth), Use::DepthTarget),
         ]
     }
 
     pub(super) fn color_resource(&self) -> Resource {
-        Resource::image(self.color.raw, self.color.full_range())
+        Resource::whole(&self.color)
     }
 
     /// The uses of a pass that draws it: both cleared and drawn into.

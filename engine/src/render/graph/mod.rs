@@ -176,6 +176,11 @@ impl Resource {
     pub fn image(image: vk::Image, range: vk::ImageSubresourceRange) -> Self {
         Resource::Image(image, Subresources::of(range))
     }
+
+    /// Every subresource of `image`.
+    pub fn whole(image: &crate::vk::image::Image) -> Self {
+        Self::image(image.raw, image.full_range())
+    }
 }
 
 /// A derived barrier: an image's, with its layout transition (from, to: layout, stages and
