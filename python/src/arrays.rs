@@ -12,6 +12,7 @@
 //! | `ids` | (H, W) | uint32 | what it meets: walls 0..5, object i at 6 + i, 2³² − 1 none |
 //! | `classes` | (H, W) | uint32 | the class of what it meets (`sensor.id.json`'s `classes`), 2³² − 1 none |
 //! | `camera` | (H, W, 3) | uint16 | only where the scene has `[sensor.imaging]`: the camera's codes (0..2^bit_depth), noise and all |
+//! | NAME | (H, W, 4) | float32 | each ray-map quantity beyond the two the rows above decode (`specchio::sensor::quantities`): a plug-in reaches Python with no line here |
 
 use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -74,6 +75,12 @@ impl Layers {
             .collect();
         let mask = rays.iter().map(Option::is_some).collect();
         let classes = o.class_ids();
+        let quantities: Vec<_> = further_quantities(&o)
+            .map(|(name, image)| {
+                let samples = image.pixels.iter().flatten().copied().collect();
+                (name, Data::F32(samples), [h, w, 4])
+            })
+            .collect();
         let camera = (o.camera).map(|c| ("camera", Data::U16(c.dn), [h, w, 3]));
         let mut layers = vec![
             ("sensor", Data::F32(rgb(&o.image)), [h, w, 3]),
@@ -86,8 +93,19 @@ impl Layers {
             ("classes", Data::U32(classes), [h, w, 0]),
         ];
         layers.extend(camera);
+        layers.extend(quantities);
         Layers(layers)
     }
+}
+
+/// Every registered ray-map quantity but the ray map's own two, which the arrays above already
+/// hold decoded (`ray_origin`, `range`, `ray_direction`, `ids`): its name and image.
+fn further_quantities(o: &SensorOutputs) -> impl Iterator<Item = (&'static str, RgbaImage)> + '_ {
+    use specchio::sensor::quantities::{Quantity, ALL, DIRECTION_ID, ORIGIN_RANGE};
+    let own = [ORIGIN_RANGE.name(), DIRECTION_ID.name()];
+    (ALL.iter())
+        .filter(move |q| !own.contains(&q.name()))
+        .map(|q| (q.name(), o.quantity(*q).into_owned()))
 }
 
 /// The array shape of a layer of `dims`, after the `batch` dimension if any.

@@ -88,7 +88,7 @@ impl CubeFill {
         device.begin_label(cmd, &format!("cube fill ({name})"));
         let per_face_marks = matches!(fill, Fill::Method) && self.per_face_marks();
         let ids = matches!(fill, Fill::Method);
-        graph::record(device, cmd, &graph.uses(&fill_uses(f, ids)));
+        graph.declare(device, cmd, &fill_uses(f, ids));
         if let (Some(q), false) = (&f.queries.statistics, per_face_marks) {
             q.begin(cmd, 0);
         }
@@ -125,7 +125,7 @@ impl CubeFill {
         if let Some(q) = &f.queries.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, TS_FILL);
         }
-        graph::record(device, cmd, &graph.uses(&read_uses(f, ids)));
+        graph.declare(device, cmd, &read_uses(f, ids));
         super::mips::record((device, graph), cmd, f.cube, plan);
         if let Some(q) = &f.queries.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);

@@ -6,7 +6,7 @@
 
 use ash::vk;
 
-use super::graph::{self, FrameGraph, Resource, Use};
+use super::graph::{FrameGraph, Resource, Use};
 use super::methods::CubePlan;
 use super::targets::CubeTarget;
 use crate::scene::pixel_rect::PixelRect;
@@ -24,7 +24,7 @@ pub(super) fn record(
     plan: &CubePlan,
 ) {
     let chain = Chain::of(cube, plan);
-    let mut declare = |uses: &[(Resource, Use)]| graph::record(dev, cmd, &graph.uses(uses));
+    let mut declare = |uses: &[(Resource, Use)]| graph.declare(dev, cmd, uses);
     if chain.levels == 1 {
         declare(&[(cube.color_levels(0, 1, None), Use::FragmentRead)]);
         return;

@@ -458,10 +458,9 @@ impl Renderer {
             graph.import(buffer, graph::Use::ReadAnywhere, false);
         }
         let uses = |how| copied.iter().map(|&b| (b, how)).collect::<Vec<_>>();
-        let copy = graph.uses(&uses(graph::Use::CopyDestination));
-        graph::record(&device, cmd, &copy);
+        graph.declare(&device, cmd, &uses(graph::Use::CopyDestination));
         slot.uploads.record_copies(cmd)?;
-        graph::record(&device, cmd, &graph.uses(&uses(graph::Use::ReadAnywhere)));
+        graph.declare(&device, cmd, &uses(graph::Use::ReadAnywhere));
         slot.queries.begin_frame(cmd);
         Ok(cmd)
     }
@@ -483,9 +482,9 @@ impl Renderer {
         }
         let results = queries.result_buffers().map(graph::Resource::Buffer);
         let uses: Vec<_> = results.map(|r| (r, graph::Use::CopyDestination)).collect();
-        graph::record(&self.device, cmd, &graph.uses(&uses));
+        graph.declare(&self.device, cmd, &uses);
         queries.copy_results(cmd, stats);
-        graph::record(&self.device, cmd, &graph.finish());
+        graph.rest(&self.device, cmd);
         report.cpu_record_ms = record_start.elapsed().as_secs_f64() * 1e3;
     }
 }

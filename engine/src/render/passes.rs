@@ -6,7 +6,7 @@ use ash::vk;
 use super::draw::Attachments;
 use super::frame_parts::FrameParts;
 use super::gpu::Push;
-use super::graph::{self, FrameGraph, Resource, Use};
+use super::graph::{FrameGraph, Resource, Use};
 use super::pipelines::ViewPipelines;
 use super::resources::{VIEW_OBSERVER, VIEW_PAIR_LEFT, VIEW_PAIR_RIGHT, VIEW_SENSOR};
 use super::sensor_rays::{MirrorOutput, RayMapTargets, SensorRays};
@@ -177,7 +177,7 @@ impl ViewPasses {
     ) {
         let dev = f.draw.device;
         dev.begin_label(cmd, name);
-        graph::record(dev, cmd, &graph.uses(&uses));
+        graph.declare(dev, cmd, &uses);
         if let (Some(q), Some(slot)) = (&f.queries.statistics, stats_slot) {
             q.begin(cmd, slot);
         }

@@ -7,7 +7,7 @@ use ash::vk;
 use std::sync::Arc;
 
 use super::display::{DisplayPixels, DisplayView};
-use super::graph::{self, FrameGraph, Resource, Use};
+use super::graph::{FrameGraph, Resource, Use};
 use super::passes::{copy_offset, texel_bytes, Slot};
 use super::sensor_rays::RayMapTargets;
 use super::targets::{CubeTarget, ViewTarget};
@@ -150,7 +150,7 @@ impl Copies {
         let views = self.views.iter().map(|v| (v.resource, Use::CopySource));
         let into = (Resource::Buffer(buffer.raw), Use::CopyDestination);
         let uses: Vec<_> = cube.chain(views).chain([into]).collect();
-        graph::record(dev, cmd, &graph.uses(&uses));
+        graph.declare(dev, cmd, &uses);
         if let Some(cube) = &self.cube {
             copy_to_buffer(dev, cmd, buffer, (cube.image, 6), [cube.size; 2], 0);
         }

@@ -304,6 +304,22 @@ impl FrameGraph {
         barriers
     }
 
+    /// Records into `cmd` the barriers that make `uses` safe for the commands that follow
+    /// ([`Self::uses`]).
+    pub(crate) fn declare(
+        &mut self,
+        device: &Device,
+        cmd: vk::CommandBuffer,
+        uses: &[(Resource, Use)],
+    ) {
+        record(device, cmd, &self.uses(uses));
+    }
+
+    /// Records into `cmd` the barriers that put every resource back at rest ([`Self::finish`]).
+    pub(crate) fn rest(&mut self, device: &Device, cmd: vk::CommandBuffer) {
+        record(device, cmd, &self.finish());
+    }
+
     /// The barriers that put every resource back at rest, for the next frame: none for a
     /// subresource whose layout and accesses since its last barrier are its resting use's
     /// already (the next frame's first barrier waits for exactly those), nor for one imported
@@ -401,7 +417,7 @@ fn step(state: &mut State, to: Use, is_buffer: bool) -> Option<(vk::ImageLayout,
 /// Records `barriers` (the images' in one call; a memory barrier that another before it
 /// already is, once: buffers are made visible by global memory barriers, so two buffers left
 /// by the same use need one).
-pub(super) fn record(device: &Device, cmd: vk::CommandBuffer, barriers: &[Barrier]) {
+fn record(device: &Device, cmd: vk::CommandBuffer, barriers: &[Barrier]) {
     let images: Vec<ImageBarrier> = (barriers.iter())
         .filter_map(|b| match *b {
             Barrier::Image {
@@ -450,7 +466,7 @@ impl<'a> PassRecorder<'a> {
     /// The commands that follow use `uses`: the barriers they need after everything declared
     /// before are recorded now.
     pub fn declare(&mut self, uses: &[(Resource, Use)]) {
-        record(self.device, self.cmd, &self.graph.uses(uses));
+        self.graph.declare(self.device, self.cmd, uses);
     }
 }
 
