@@ -5,10 +5,10 @@
 //
 // What the ray meets is found as the reference finds it (core/src/reference/geometry.rs
 // `closest_hit`): the room's box first (the walls are not triangles here, but the box's
-// planes), then the objects up to just past that wall, so an object lying on a wall's plane
-// wins the tie. The objects are two levels of trees (core/src/bvh/mod.rs): a top level over
-// the objects' boxes in render space, and one tree per mesh in its model space, entered
-// through the object's inverse transform. One loop walks both (bvh_closest_object); the CPU's
+// planes), then the objects up to a little past that wall (objects_limit), so an object lying
+// on a wall's plane wins the tie. The objects are two levels of trees (core/src/bvh/mod.rs): a
+// top level over the objects' boxes in render space, and one tree per mesh in its model space,
+// entered through the object's inverse transform. One loop walks both (bvh_closest_object); the CPU's
 // core/src/bvh/traverse.rs is the same walk, step for step.
 #ifndef BVH_GLSL
 #define BVH_GLSL
@@ -453,8 +453,8 @@ Reflection trace_reflection(FrameData f, vec3 dir, vec3 hit, vec3 n) {
     float wall_t;
     uint face;
     bool wall = room_crossing(f, origin, r, 0.0, BVH_INFINITY, wall_t, face);
-    // Objects up to the next float past the wall: one on the wall's plane wins.
-    float limit = wall ? uintBitsToFloat(floatBitsToUint(wall_t) + 1u) : BVH_INFINITY;
+    // Objects up to a little past the wall: one on the wall's plane wins.
+    float limit = wall ? objects_limit(origin, wall_t) : BVH_INFINITY;
     BvhHit h = bvh_closest_object(origin, r, 0.0, limit);
     if (h.drawable != OBJECT_NONE) {
         return shade_triangle(f, origin, r, h.t, h.drawable, h.primitive, h.bary);

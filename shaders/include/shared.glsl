@@ -124,6 +124,17 @@ struct MaterialSample {
 // prints them).
 #define BVH_STACK_SIZE 32u
 
+// How far past a wall the traced lookups search the objects, as 2^-ON_WALL_SLACK_EXPONENT of
+// the ray's scale (|o| + t), so that an object lying on a wall's plane wins the tie against the
+// wall (traced_surface.glsl `objects_limit`; core/src/reference/room.rs `objects_limit` says
+// why this much).
+#define ON_WALL_SLACK_EXPONENT 19u
+
+// The ray-query lookups' instance masks: the walls' instances, and the objects', traced apart
+// so that the objects are searched only up to the wall (ray_query.glsl).
+#define RAY_MASK_WALLS 1u
+#define RAY_MASK_OBJECTS 2u
+
 // Descriptor set 0: the scene. Set 1: the environment cube (views only).
 #define SCENE_BINDINGS \
     layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; }; \

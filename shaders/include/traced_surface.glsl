@@ -26,6 +26,18 @@ layout(set = 1, binding = TRACED_SURFACE_BINDING + 2, std430) readonly buffer Ra
 
 #define VERTEX_FLOATS 8u
 
+// How far along a ray from o that crosses a wall at wall_t the objects are searched:
+// 2^-ON_WALL_SLACK_EXPONENT of the ray's scale (|o| + t) past the wall, so that an object lying
+// on the wall's plane (a picture hung flat on it) wins the tie: its triangle's t and the
+// wall's round differently, up to a few floats either side. The reference's
+// core/src/reference/room.rs `objects_limit`, the same floats (no fused operations).
+float objects_limit(vec3 o, float wall_t) {
+    vec3 a = abs(o);
+    precise float scale = max(max(a.x, a.y), a.z) + wall_t;
+    precise float limit = wall_t + scale * (1.0 / float(1u << ON_WALL_SLACK_EXPONENT));
+    return limit;
+}
+
 // Moves p off the surface along n by a few float steps scaled to p's magnitude (Waechter and
 // Binder, Ray Tracing Gems ch. 6), bit for bit as reference::intersect::offset_ray_origin.
 vec3 offset_ray_origin(vec3 p, vec3 n) {

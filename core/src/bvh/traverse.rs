@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use super::build::{MeshBvhs, TopLevel};
 use super::layout::{WideNode, BVH_STACK_SIZE};
 use crate::reference::intersect::ShearedRay;
-use crate::reference::room::RoomBox;
+use crate::reference::room::{objects_limit, RoomBox};
 
 /// What traversals did, summed over their rays.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -233,8 +233,9 @@ pub fn closest_hit(
 }
 
 /// What a ray from inside `room` meets, found as the `bvh` lookup finds it: the room's wall
-/// it leaves through, unless an object is nearer, the objects walked only up to the next
-/// float past the wall (an object lying on a wall's plane wins the tie, as in the reference).
+/// it leaves through, unless an object is nearer, the objects walked only up to a little past
+/// the wall (an object lying on a wall's plane wins the tie, as in the reference:
+/// [`objects_limit`]).
 /// Returns the drawable (walls 0..6 in face order) and the distance.
 pub fn closest_in_room(
     (top, meshes): (&TopLevel, &MeshBvhs),
@@ -244,7 +245,7 @@ pub fn closest_in_room(
     work: &mut Work,
 ) -> Option<(u32, f32)> {
     let wall = room.first_crossing(o, d, t_min, f32::INFINITY);
-    let limit = wall.map_or(f32::INFINITY, |w| f32::from_bits(w.t.to_bits() + 1));
+    let limit = wall.map_or(f32::INFINITY, |w| objects_limit(o, w.t));
     match closest_hit(top, meshes, (o, d), (t_min, limit), work) {
         Some(h) => Some((h.drawable, h.t)),
         None => wall.map(|w| (w.face as u32, w.t)),

@@ -316,5 +316,9 @@ mod tests {
             }
         }
         assert_eq!(BVH_STACK_SIZE, crate::shaders::shared::BVH_STACK_SIZE);
+        assert_eq!(
+            crate::reference::room::ON_WALL_SLACK_EXPONENT,
+            crate::shaders::shared::ON_WALL_SLACK_EXPONENT
+        );
     }
 }

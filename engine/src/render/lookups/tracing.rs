@@ -282,8 +282,8 @@ fn write_structure(
 }
 
 /// The instance record of drawable `index`: its model-to-render transform (row-major 3x4),
-/// its index as the custom index (the shader's key to its ranges and object data), every
-/// ray mask bit, both faces.
+/// its index as the custom index (the shader's key to its ranges and object data), its mask
+/// (a wall's or an object's: ray_query.glsl traces the two apart), both faces.
 fn instance(
     index: usize,
     o: &ObjectData,
@@ -294,7 +294,7 @@ fn instance(
     let matrix: [f32; 12] = std::array::from_fn(|i| rows[i / 4][i % 4]);
     vk::AccelerationStructureInstanceKHR {
         transform: vk::TransformMatrixKHR { matrix },
-        instance_custom_index_and_mask: vk::Packed24_8::new(index as u32, 0xFF),
+        instance_custom_index_and_mask: vk::Packed24_8::new(index as u32, ray_mask(index)),
         instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
             0,
             vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw() as u8,
@@ -303,4 +303,16 @@ fn instance(
             device_handle: blas,
         },
     }
+}
+
+/// The ray mask of drawable `index`: walls 0..6, objects after them (shared.glsl's
+/// `RAY_MASK_WALLS`, `RAY_MASK_OBJECTS`).
+fn ray_mask(index: usize) -> u8 {
+    use crate::shaders::shared::{RAY_MASK_OBJECTS, RAY_MASK_WALLS};
+    let mask = if index < 6 {
+        RAY_MASK_WALLS
+    } else {
+        RAY_MASK_OBJECTS
+    };
+    mask as u8
 }
