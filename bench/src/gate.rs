@@ -47,6 +47,9 @@ pub struct Baseline {
 pub fn read_baseline(path: &Path) -> Result<Baseline> {
     let record = record::read(path)?;
     check_baseline(&record.results)
+        .and_then(|()| once_each("results", &record.results, MethodRow::case))
+        .and_then(|()| once_each("tradeoff", &record.tradeoff, RungRow::case))
+        .and_then(|()| once_each("dynamic", &record.dynamic, Dynamic::case))
         .map_err(|why| anyhow::anyhow!("{}: {why}; it cannot gate a run", path.display()))?;
     Ok(Baseline {
         results: record.results,
@@ -85,6 +88,22 @@ fn check_baseline(results: &[MethodRow]) -> Result<(), String> {
                     ));
                 }
             }
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a list of `rows` that holds a case twice: the gate compares a run's case with the
+/// first copy it finds, so a second copy, however different, was silently never compared.
+fn once_each<T>(list: &str, rows: &[T], case: fn(&T) -> String) -> Result<(), String> {
+    let mut seen = std::collections::HashMap::new();
+    for (i, row) in rows.iter().enumerate() {
+        if let Some(first) = seen.insert(case(row), i) {
+            return Err(format!(
+                "{list}[{i}] is the case of {list}[{first}] again ({}): each case is compared \
+                 once, so one of the two would gate unseen",
+                case(row)
+            ));
         }
     }
     Ok(())
@@ -353,6 +372,22 @@ mod tests {
         let run = [row("six-pass", 0.0, 1), row("instanced", 2.0, 1)];
         let f = check(&base, &run, Some(10.0));
         assert!(f.iter().any(|l| l.contains("no ratio to compare")), "{f:?}");
+    }
+
+    /// A case twice in a list is refused, naming both places: the gate read only the first.
+    #[test]
+    fn a_baseline_holding_a_case_twice_is_refused() {
+        let rows = [
+            row("six-pass", 1.0, 1),
+            row("instanced", 2.0, 1),
+            row("six-pass", 1.0, 999),
+        ];
+        let e = once_each("results", &rows, MethodRow::case).unwrap_err();
+        assert!(
+            e.starts_with("results[2] is the case of results[0] again"),
+            "{e}"
+        );
+        assert!(once_each("results", &rows[..2], MethodRow::case).is_ok());
     }
 
     #[test]

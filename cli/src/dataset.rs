@@ -44,8 +44,9 @@ pub struct Args {
     /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Mirror lookup of the colour image. Default: ray-query where the device has it (colour,
-    /// range and ids traced along one light path), else the scene's.
+    /// Mirror lookup of the colour image. Default: a traced one, so that colour, range and ids
+    /// follow one light path (bvh on CPU drivers, ray-query on a GPU that has ray queries,
+    /// bvh on any other).
     #[arg(long, value_parser = specchio::process::args::lookup)]
     lookup: Option<Lookup>,
     /// Enable the Khronos validation layer; any message makes the command fail.

@@ -75,10 +75,11 @@ pub struct Args {
     #[arg(long)]
     directions: bool,
     /// Also write the sensor outputs: ray map, range and ids, the id map, panoramas from the
-    /// sensor image (and from the cube where there is one), camera.json (docs/sensor.md). On a
-    /// device with ray queries, without --lookup, the colour, range and ids are all traced
-    /// along one light path (the ray-query lookup); otherwise range and ids come through the
-    /// cube, with a warning and camera.json's `ground_truth` saying so.
+    /// sensor image (and from the cube where there is one), camera.json (docs/sensor.md).
+    /// Without --lookup the colour, range and ids are all traced along one light path, on
+    /// every device (bvh on CPU drivers, ray-query on a GPU with ray queries, bvh on any
+    /// other); with a cube lookup range and ids come through the cube, with a warning and
+    /// camera.json's `ground_truth` saying so.
     #[arg(long)]
     sensor_outputs: bool,
     /// Under `on-change`, re-render all six faces on any change instead of only the faces a
@@ -102,11 +103,29 @@ pub struct Args {
     device: Option<String>,
 }
 
+/// Refuses a run whose first or last frame falls at no finite time: each flag is in its own
+/// range, but --frame over a tiny --fps (1 / 4.9e-324) is infinite, which the scene's motion
+/// cannot be evaluated at (an orbiting object silently dropped out of the image).
+fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
+    let last_s = start_s + f64::from(args.frames - 1) / args.fps;
+    if !(start_s.is_finite() && last_s.is_finite()) {
+        bail!(
+            "--fps {}: frames {}..{} fall at no finite time (frame / fps overflows); \
+             give a larger --fps or --time",
+            args.fps,
+            args.frame.unwrap_or(0),
+            args.frame.unwrap_or(0) + u64::from(args.frames - 1)
+        );
+    }
+    Ok(())
+}
+
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Everything that can be wrong with the input is found before the output folder exists
     //    (the numbers' ranges by clap, `specchio::process::args`).
     let scene = load_scene(args)?;
     let start_s = (args.time).unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);
+    frame_times_are_finite(args, start_s)?;
     // Everything is written into a hidden folder beside --out, renamed into place at the end
     // (dropped, it is removed): a failure anywhere below leaves nothing behind.
     let mut out = Transaction::new();
@@ -392,7 +411,8 @@ fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()
 }
 
 /// The lookup the frames use: `--lookup`; else, for `--sensor-outputs`, the first that traces
-/// and that the device runs (`ray-query` where it has ray queries, `bvh` on any other), so that
+/// and that the device runs, the faster there (`bvh` on CPU drivers, `ray-query` on a GPU with
+/// ray queries, `bvh` on any other: each lookup's `ground_truth_rank`), so that
 /// the colour, the range and the ids are traced along one light path; else the scene's.
 fn chosen_lookup(args: &Args, scene: &Scene, device: &DeviceInfo) -> Lookup {
     let traced = || lookups::one_light_path(device).filter(|_| args.sensor_outputs);

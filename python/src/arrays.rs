@@ -162,10 +162,15 @@ pub fn batch_dict<'py>(
             // Through numpy itself: an allocation it cannot make is its MemoryError.
             (None, data) => numpy.call_method1("zeros", (s, data.dtype()))?,
         };
+        // Any overlap, not only the same object: a view or reshape of another layer's array
+        // was filled by both, one over the other. The arrays are C-contiguous (checked), so
+        // overlapping bounds are shared memory.
         for (other, array_b) in dict.iter() {
-            if array_b.is(&array) {
+            let shared = numpy.call_method1("may_share_memory", (&array_b, &array))?;
+            if shared.is_truthy()? {
                 return Err(errors::error(format!(
-                    "out[{key:?}]: the same array as out[{other}]; each layer needs its own"
+                    "out[{key:?}]: shares memory with out[{other}] (the same array, or a view \
+                     of it); each layer needs an array of its own"
                 )));
             }
         }

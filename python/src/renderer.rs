@@ -62,7 +62,8 @@ pub fn check_validation(log: &ValidationLog) -> PyResult<()> {
 ///
 /// `lookup`: the mirror lookup of the colour image (`plain`, `box`, `distance`, `ray-query`,
 /// `distance-exact`, `bvh`); by default one that traces, so that colour, range and ids follow
-/// one light path: ray-query where the device has it, bvh elsewhere. `device`: an index or part of a name (see
+/// one light path: bvh on CPU drivers, ray-query on a GPU that has ray queries, bvh on any
+/// other. `device`: an index or part of a name (see
 /// `specchio.devices()`). `validate`: the Khronos validation layer on; any message raises.
 #[pyclass(module = "specchio")]
 pub struct Renderer {

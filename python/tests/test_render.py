@@ -102,10 +102,11 @@ def test_wrong_buffers_and_poses_are_named(renderer):
         renderer.render_batch(np.array([[np.nan, 3.0, 0.0, 0.0]]))
     with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: heading"):
         renderer.render_batch(np.array([[0.0, 3.0, 0.0, np.inf]]))
-    # The same array for two layers would be written over by both.
+    # The same array for two layers, or a view of it, would be written over by both.
     shared = np.zeros((1, 512, 512, 3), dtype=np.float32)
-    with pytest.raises(specchio.SpecchioError, match=r'the same array as out\[sensor\]'):
-        renderer.render_batch(poses, out={"sensor": shared, "ray_origin": shared})
+    for other in (shared, shared[:], shared.reshape(1, 512, 512, 3)):
+        with pytest.raises(specchio.SpecchioError, match=r'shares memory with out\[sensor\]'):
+            renderer.render_batch(poses, out={"sensor": shared, "ray_origin": other})
     # A key that names no layer (misspelt) is refused, never left unfilled.
     with pytest.raises(specchio.SpecchioError, match=r"out\['sensors'\]: no such layer; .*\"sensor\""):
         renderer.render_batch(poses, out={"sensors": shared})

@@ -112,6 +112,27 @@ fn absurd_arguments_fail_before_writing_anything() {
         );
         assert!(!out.exists(), "{args:?}: no output may be written");
     }
+    // Each flag in its range, their quotient not: frame 1 at 4.9e-324 fps is at no finite time.
+    for args in [
+        vec!["--frame", "1", "--fps", "4.9e-324"],
+        vec!["--frames", "2", "--fps", "4.9e-324"],
+    ] {
+        let out = temp_dir("args");
+        let mut all = vec!["render", scene, "--out", out.to_str().unwrap()];
+        all.extend(&args);
+        let result = specchio(&all);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(
+            result.status.code(),
+            Some(1),
+            "{args:?} must fail:\n{stderr}"
+        );
+        assert!(
+            stderr.contains("--fps") && stderr.contains("no finite time"),
+            "{args:?}: the error must name --fps:\n{stderr}"
+        );
+        assert!(!out.exists(), "{args:?}: no output may be written");
+    }
     // The other commands' numbers, likewise.
     for (args, range) in [
         (

@@ -65,7 +65,7 @@ impl FramePose {
 
     /// The bag's time stamp: the pose's time in nanoseconds, plus the bag's offset.
     pub fn stamp_ns(&self) -> u64 {
-        (self.time_s * 1e9).round() as u64 + super::BAG_TIME_OFFSET_S * 1_000_000_000
+        super::stamp_ns(self.time_s)
     }
 }
 

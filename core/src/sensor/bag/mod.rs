@@ -132,10 +132,15 @@ pub const BAG_TIME_OFFSET_S: u64 = 1;
 /// int32, from which the offset is taken.
 pub const MAX_TIME_S: f64 = (i32::MAX as u64 - BAG_TIME_OFFSET_S) as f64;
 
+/// The bag's time stamp of a pose at `time_s`: nanoseconds, plus the bag's offset.
+pub fn stamp_ns(time_s: f64) -> u64 {
+    (time_s * 1e9).round() as u64 + BAG_TIME_OFFSET_S * 1_000_000_000
+}
+
 /// Refuses poses a bag cannot hold (`times`: each pose's time and where it is given): a time
-/// past [`MAX_TIME_S`], or one not later than the pose before it: tf keeps one transform of a
-/// frame at each time, so two poses at one time would be read as one (a pose grid is all
-/// one time).
+/// past [`MAX_TIME_S`], or one whose stamp is not later than the pose before it: tf keeps one
+/// transform of a frame at each time, so two poses at one stamp would be read as one (a pose
+/// grid is all one time). Stamps, not times: poses 1e-10 s apart share a nanosecond.
 pub fn check_times(times: impl Iterator<Item = (f64, String)>) -> Result<(), String> {
     let mut before: Option<f64> = None;
     for (t, at) in times {
@@ -145,11 +150,12 @@ pub fn check_times(times: impl Iterator<Item = (f64, String)>) -> Result<(), Str
                  (--format mcap)"
             ));
         }
-        if before.is_some_and(|b| t <= b) {
+        if before.is_some_and(|b| stamp_ns(t) <= stamp_ns(b)) {
             return Err(format!(
-                "{at}: {t} s is not later than the pose before it; a ROS 2 bag (--format mcap) \
-                 needs one time per pose, since tf keeps one transform of a frame at each time: \
-                 give the poses increasing times, or write the frames as files"
+                "{at}: {t} s is not later than the pose before it to the nanosecond a ROS 2 \
+                 bag's stamps count (--format mcap); a bag needs one time per pose, since tf \
+                 keeps one transform of a frame at each time: give the poses increasing times, \
+                 or write the frames as files"
             ));
         }
         before = Some(t);

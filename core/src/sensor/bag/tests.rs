@@ -367,6 +367,13 @@ fn poses_a_bag_cannot_stamp_apart_are_refused() {
     );
     let e = check_times([at(3e9, 2)].into_iter()).unwrap_err();
     assert!(e.contains("is past the 2147483646 s"), "{e}");
+    // Later in seconds, one nanosecond stamp: refused too (they were written with one stamp).
+    let e = check_times([at(0.0, 2), at(1e-10, 3)].into_iter()).unwrap_err();
+    assert!(
+        e.starts_with("robot.csv:3: time: 0.0000000001 s is not later") && e.contains("nanosecond"),
+        "{e}"
+    );
+    assert!(check_times([at(0.0, 2), at(1e-9, 3)].into_iter()).is_ok());
 }
 
 #[test]

@@ -290,7 +290,8 @@ impl Plan {
 }
 
 /// The colour image's lookup: the one asked for, else the first that traces and that the
-/// device runs (ray-query where it has ray queries, bvh on any other), so that colour, range
+/// device runs, the faster there (bvh on CPU drivers, ray-query on a GPU with ray queries, bvh
+/// on any other), so that colour, range
 /// and ids follow one light path. A lookup the device cannot run is an error naming what it
 /// lacks.
 pub fn choose_lookup(
