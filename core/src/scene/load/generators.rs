@@ -92,6 +92,18 @@ impl Ctx<'_> {
             .map(|(j, m)| material(&f(&format!("materials[{j}]")), m))
             .collect::<R<Vec<usize>>>()?;
         let size = self.interval(&f("size"), g.size)?;
+        // Every object it may make is an object, within the objects' scales.
+        for choice in &shapes {
+            for end in size {
+                let scale = glam::Vec3::splat(end * choice.scale_per_size);
+                if let Some(why) = super::objects::scale_out_of_range(scale) {
+                    return Err(self.invalid(
+                        &f("size"),
+                        format!("a {} of size {end} m is scaled by {}: {why}", choice.name, scale.x),
+                    ));
+                }
+            }
+        }
         let (region_min, region_max) = self.generator_region(&f, g, room)?;
         let keep_clear = self.non_negative(&f("keep_clear"), g.keep_clear.unwrap_or(0.0))?;
         let moving = self.ranged(

@@ -241,8 +241,8 @@ impl Ctx<'_> {
         Ok((mesh, size))
     }
 
-    /// The shape's size times the object's scale, in one f32 scale that must stay a positive
-    /// finite number (1e30 x 1e30 and 1e-30 x 1e-30 do not).
+    /// The shape's size times the object's scale, in one f32 scale per axis within
+    /// [`OBJECT_SCALE`] (1e30 x 1e30 and 1e-30 x 1e-30 are not even f32s).
     fn object_scale(&self, f: &dyn Fn(&str) -> String, o: &ObjectSpec, size: Vec3) -> R<Vec3> {
         let scale = match o.scale {
             None => Vec3::ONE,
@@ -258,6 +258,9 @@ impl Ctx<'_> {
                     scale
                 ),
             ));
+        }
+        if let Some(why) = scale_out_of_range(scale) {
+            return Err(self.invalid(&f("scale"), format!("size x scale is {scale}: {why}")));
         }
         Ok(scale)
     }
@@ -314,4 +317,24 @@ impl Ctx<'_> {
             (None, None) => Err(self.missing(&f("position"), "where the object is")),
         }
     }
+}
+
+/// The scales (model to render, per axis) an object may have: the exact tracers (the
+/// reference, `bvh`) enter an object through its inverse transform in single precision, whose
+/// entries are the scales' reciprocals and whose determinant their product: below 1e-11 or
+/// above 1e11 an axis leaves too little of the floats (a box 1e-13 m thick had no inverse
+/// at all for `bvh`, and the reference placed it in render space instead: the two disagreed
+/// on a hundred pixels). An object smaller than 1e-11 m or larger than 1e11 m in a room a
+/// single-precision renderer resolves is a mistake in the file.
+pub const OBJECT_SCALE: (f32, f32) = (1e-11, 1e11);
+
+/// Why `scale` is outside [`OBJECT_SCALE`], if it is.
+pub(super) fn scale_out_of_range(scale: Vec3) -> Option<String> {
+    let (lo, hi) = OBJECT_SCALE;
+    (scale.min_element() < lo || scale.max_element() > hi).then(|| {
+        format!(
+            "each axis must be within [{lo:e}, {hi:e}] (the exact tracers move rays into the \
+             object's own space by the inverse scale, in single precision)"
+        )
+    })
 }
