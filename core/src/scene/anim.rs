@@ -44,6 +44,18 @@ pub enum Animation {
     },
 }
 
+/// The distance from `q` to the segment from `a` to `b`.
+fn segment_distance(q: Vec3, a: Vec3, b: Vec3) -> f32 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    let s = if len2 > 0.0 {
+        ((q - a).dot(ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    q.distance(a + ab * s)
+}
+
 /// Maps time onto [0, span] according to `repeat`. `span` > 0.
 fn wrap(t: f64, span: f64, repeat: Repeat) -> f64 {
     match repeat {
@@ -65,6 +77,57 @@ impl Animation {
     ///
     /// For `Linear` and `Orbit`, `position_at(base, 0.0) == base` exactly (bit for bit);
     /// `Keyframes` are absolute and give `positions[0]` at time 0.
+    /// A sphere (centre, radius) holding every position of the path from `base`, at any time:
+    /// a straight path's segment, an orbit's circle (about the foot of `base` on the axis),
+    /// the keys' box (a piecewise-linear path stays in their hull). Padded by a millionth of
+    /// its size, for the rounding of the positions computed along it.
+    pub fn bounding_sphere(&self, base: Vec3) -> (Vec3, f32) {
+        let (centre, radius) = match self {
+            Animation::Linear { to, .. } => (0.5 * (base + *to), 0.5 * base.distance(*to)),
+            Animation::Orbit { center, axis, .. } => {
+                let k = axis.normalize();
+                let foot = *center + k * k.dot(base - *center);
+                (foot, base.distance(foot))
+            }
+            Animation::Keyframes { positions, .. } => {
+                let lo = positions.iter().copied().fold(Vec3::INFINITY, Vec3::min);
+                let hi = positions
+                    .iter()
+                    .copied()
+                    .fold(Vec3::NEG_INFINITY, Vec3::max);
+                (0.5 * (lo + hi), 0.5 * lo.distance(hi))
+            }
+        };
+        let pad = 1e-6 * (radius + centre.abs().max_element());
+        (centre, radius + pad)
+    }
+
+    /// A lower bound on the distance from `q` to every position of the path from `base`, at
+    /// any time: to a straight path's segment, to an orbit's circle, to the nearest of the
+    /// keys' segments. Less a millionth of the sizes involved, for the rounding of the
+    /// positions computed along it.
+    pub fn distance_bound(&self, base: Vec3, q: Vec3) -> f32 {
+        let d = match self {
+            Animation::Linear { to, .. } => segment_distance(q, base, *to),
+            Animation::Orbit { center, axis, .. } => {
+                let k = axis.normalize();
+                let foot = *center + k * k.dot(base - *center);
+                let radius = base.distance(foot);
+                let along = k.dot(q - foot);
+                let across = (q - foot - k * along).length();
+                (across - radius).hypot(along)
+            }
+            Animation::Keyframes { positions, .. } => match positions.as_slice() {
+                [only] => q.distance(*only),
+                keys => (keys.windows(2))
+                    .map(|w| segment_distance(q, w[0], w[1]))
+                    .fold(f32::INFINITY, f32::min),
+            },
+        };
+        let scale = q.abs().max_element() + base.abs().max_element() + d;
+        d - 1e-6 * scale
+    }
+
     pub fn position_at(&self, base: Vec3, t_s: f64) -> Vec3 {
         match self {
             Animation::Linear {
@@ -185,6 +248,61 @@ mod tests {
 
     fn close(a: Vec3, b: Vec3) -> bool {
         (a - b).length() < 1e-5
+    }
+
+    /// The bounds hold every position the path takes: random paths of every kind, random
+    /// points, 4,096 times over two cycles; and they are close (an orbit's circle and a
+    /// segment are met exactly, so the nearest sample is within a sample's step of the bound).
+    #[test]
+    fn the_paths_bounds_hold_every_position() {
+        let mut random = crate::random::SplitMix64::new(11);
+        let mut v = || {
+            Vec3::new(
+                random.unit() as f32 * 10.0 - 5.0,
+                random.unit() as f32 * 10.0 - 5.0,
+                random.unit() as f32 * 10.0 - 5.0,
+            )
+        };
+        for case in 0..300 {
+            let base = v();
+            let a = match case % 3 {
+                0 => Animation::Linear {
+                    to: v(),
+                    duration_s: 3.0,
+                    repeat: Repeat::PingPong,
+                },
+                1 => Animation::Orbit {
+                    center: v(),
+                    axis: v().normalize(),
+                    period_s: 5.0,
+                },
+                _ => Animation::Keyframes {
+                    times_s: vec![0.0, 1.0, 2.5, 4.0],
+                    positions: vec![base, v(), v(), v()],
+                    repeat: Repeat::Loop,
+                },
+            };
+            let q = v();
+            let (centre, radius) = a.bounding_sphere(base);
+            let bound = a.distance_bound(base, q);
+            let mut nearest = f32::INFINITY;
+            for i in 0..4096 {
+                let p = a.position_at(base, f64::from(i) * 10.0 / 4096.0);
+                assert!(
+                    p.distance(centre) <= radius,
+                    "{case}: {p} outside the sphere"
+                );
+                nearest = nearest.min(p.distance(q));
+            }
+            assert!(
+                bound <= nearest,
+                "{case}: bound {bound} > nearest {nearest}"
+            );
+            assert!(
+                nearest - bound < 0.05,
+                "{case}: bound {bound}, nearest {nearest}"
+            );
+        }
     }
 
     #[test]

@@ -99,7 +99,10 @@ impl Ctx<'_> {
                 if let Some(why) = super::objects::scale_out_of_range(scale) {
                     return Err(self.invalid(
                         &f("size"),
-                        format!("a {} of size {end} m is scaled by {}: {why}", choice.name, scale.x),
+                        format!(
+                            "a {} of size {end} m is scaled by {}: {why}",
+                            choice.name, scale.x
+                        ),
                     ));
                 }
             }

@@ -16,6 +16,7 @@ mod format;
 pub mod geometry;
 pub mod grid;
 pub mod motion;
+mod obstacles;
 pub mod ply;
 pub mod rep103;
 pub mod resume;
@@ -26,16 +27,15 @@ pub use error::DatasetError;
 pub use folder::{Folder, Ready};
 pub use format::Format;
 pub use geometry::GeometryFrame;
+pub use obstacles::ObjectBounds;
 pub use resume::RunKey;
 
 use glam::{DMat3, DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
 use super::layers::Layers;
-use super::localise::poses::object_spheres;
 use super::{SensorOptics, SensorOutputs};
-use crate::scene::state::SceneState;
-use crate::scene::{ObjectFrame, Scene};
+use crate::scene::Scene;
 use trajectory::Pose;
 
 /// The index a data loader reads: one JSON line per frame.
@@ -50,34 +50,6 @@ pub struct Frame {
     pub frame: usize,
     pub files: Vec<(std::path::PathBuf, Vec<u8>)>,
     pub index_line: String,
-}
-
-/// Every obstacle's bounding sphere about its own origin ([`object_spheres`]: the objects in
-/// the scene's frame): its index, its centre's offset (model space scaled and turned, which a
-/// later time does not change) and its radius, walked once over the mesh's vertices.
-pub struct ObjectBounds(Vec<(usize, Vec3, f32)>);
-
-impl ObjectBounds {
-    pub fn of(scene: &Scene) -> Self {
-        let state = SceneState::at(scene, 0.0);
-        let obstacles =
-            (0..scene.objects.len()).filter(|&i| scene.objects[i].frame == ObjectFrame::World);
-        // object_spheres gives position + rotation x centre: keep the centre relative to the
-        // object's origin, which is all a later time moves.
-        Self(
-            (obstacles.zip(object_spheres(scene, &state)))
-                .map(|(i, (centre, reach))| (i, centre - state.object_positions[i], reach))
-                .collect(),
-        )
-    }
-
-    /// The spheres at time `t_s`.
-    fn at(&self, scene: &Scene, t_s: f64) -> Vec<(Vec3, f32)> {
-        let state = SceneState::at(scene, t_s);
-        (self.0.iter())
-            .map(|&(i, offset, reach)| (state.object_positions[i] + offset, reach))
-            .collect()
-    }
 }
 
 /// Why the robot cannot stand at a pose: the field of the pose and a sentence. The robot is
@@ -134,19 +106,14 @@ pub fn pose_fits(
         );
         return Err(("position", why));
     }
-    for (centre, reach) in objects.at(scene, pose.time_s) {
-        // Distance from the sphere's centre to the segment from the camera to the mirror.
-        let axis = local - eye;
-        let t = ((centre - eye).dot(axis) / axis.length_squared()).clamp(0.0, 1.0);
-        if (centre - (eye + t * axis)).length() <= r + reach {
-            let why = format!(
-                "the mirror at {} (or the sensor's line of sight up to it) meets an object at \
-                 t = {} s",
-                file(local),
-                pose.time_s
-            );
-            return Err(("position", why));
-        }
+    // The segment from the camera to the mirror, grown by the mirror's reach.
+    if objects.meets_segment((eye, local), r, pose.time_s) {
+        let why = format!(
+            "the mirror at {} (or the sensor's line of sight up to it) meets an object at t = {} s",
+            file(local),
+            pose.time_s
+        );
+        return Err(("position", why));
     }
     Ok(())
 }

@@ -159,10 +159,26 @@ impl Plan {
             Poses::Trajectory(path) => {
                 let poses = trajectory::read(path)?;
                 let objects = sensor_dataset::ObjectBounds::of(&scene);
+                // Said as it goes where it is long (many poses in a crowd that moves).
+                let progress = crate::process::progress::Progress::new(
+                    format!("dataset: checking the poses of {}", path.display()),
+                    poses.len() as u64,
+                    "poses",
+                );
                 for pose in &poses {
+                    if progress.stopped() {
+                        let at = format!(
+                            "while checking the poses, after {} of {}",
+                            progress.done(),
+                            poses.len()
+                        );
+                        let e = crate::process::interrupt::stopped(&at);
+                        return Err(DatasetError::Stopped(e.to_string()));
+                    }
                     sensor_dataset::pose_fits(&scene, &objects, pose).map_err(|(field, why)| {
                         TrajectoryError::invalid(path, Some(pose.at), field, why)
                     })?;
+                    progress.add(1);
                 }
                 (poses, path.display().to_string())
             }
