@@ -523,3 +523,38 @@ fn work_beyond_the_budgets_is_refused_up_front() {
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
 }
+
+/// A `--device` that names no device clearly is refused, listing what it names: an empty or
+/// blank one (in every name) and one in two devices' names; each picked lavapipe silently.
+#[test]
+fn an_unclear_device_is_refused() {
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let devices = common::devices();
+    let mut unclear = vec![
+        (String::new(), "names no device"),
+        (" ".into(), "names no device"),
+    ];
+    // A letter two devices' short names share (lavapipe, swiftshader: "a").
+    match devices.as_slice() {
+        [a, b, ..] => {
+            let shared = a.chars().find(|&c| b.contains(c)).expect("a shared letter");
+            unclear.push((shared.to_string(), "more than one device"));
+        }
+        _ => common::not_applicable("a name two devices share", "one device is installed"),
+    }
+    for (selector, says) in unclear {
+        let out = temp_dir("device");
+        let result = specchio(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--device",
+            &selector,
+        ]);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "{selector:?}:\n{stderr}");
+        assert!(stderr.contains(says), "{selector:?}:\n{stderr}");
+        assert!(!out.exists(), "{selector:?}: no output may be written");
+    }
+}

@@ -344,6 +344,9 @@ pub(super) fn select(
     candidates: &[Candidate],
     selector: Option<&str>,
 ) -> Result<(vk::PhysicalDevice, DeviceInfo, u32), GpuError> {
+    if let Some(s) = selector {
+        refuse_unclear(candidates, s)?;
+    }
     let mut report = Vec::new();
     let mut best: Option<(&Candidate, Rank)> = None;
     for c in candidates {
@@ -378,6 +381,35 @@ pub(super) fn select(
         )),
         None => Err(GpuError::NoDevice(report.join("\n"))),
     }
+}
+
+/// Refuses a selector that names no device clearly: an empty one (it is in every name) and
+/// one that more than one device's names contain (`e`): either would pick a device the user
+/// did not name. An index, or a name one device alone has, is clear.
+fn refuse_unclear(candidates: &[Candidate], selector: &str) -> Result<(), GpuError> {
+    let named: Vec<String> = (candidates.iter())
+        .filter(|c| c.info.selected_by(selector))
+        .map(|c| {
+            format!(
+                "  [{}] {} ({})",
+                c.info.index, c.info.name, c.info.short_name
+            )
+        })
+        .collect();
+    if selector.trim().is_empty() {
+        return Err(GpuError::NoDevice(format!(
+            "  --device {selector:?} names no device: give an index or part of a name \
+             (`specchio info` lists them)"
+        )));
+    }
+    if named.len() > 1 {
+        return Err(GpuError::NoDevice(format!(
+            "  --device {selector:?} is in more than one device's name; give its index or more \
+             of its name:\n{}",
+            named.join("\n")
+        )));
+    }
+    Ok(())
 }
 
 /// How a device ranks for the default choice: GPUs before CPUs, then the one that can run
