@@ -72,7 +72,7 @@ def dataset(
     resume: bool = False,
     ray: bool = False,
     workers: Optional[int] = None,
-    shard_size: int = 8,
+    shard_size: int | None = None,
     worker_env: Optional[dict] = None,
     panorama_frame: str = "robot",
     outputs: Optional[Union[str, list[str]]] = None,
@@ -96,7 +96,8 @@ def dataset(
     or the device differ from that run's (``specchio dataset --resume``, docs/sensor.md).
 
     ``ray=True`` renders on Ray (``specchio.ray.dataset``): ``workers`` actors (default: the
-    cluster's CPUs) each hold a renderer and take shards of ``shard_size`` poses; the files
+    cluster's CPUs) each hold a renderer and take shards of ``shard_size`` poses (default 8;
+    ``workers``, ``worker_env`` and ``shard_size`` are refused without ``ray=True``); the files
     are the same, byte for byte. Ray is started locally unless it is running already or
     ``RAY_ADDRESS`` names a cluster. ``worker_env``: environment variables of the workers
     (e.g. ``{"LP_NUM_THREADS": "1"}`` for lavapipe with one thread each).
@@ -145,15 +146,15 @@ def dataset(
             progress=progress,
             resume=resume,
             workers=workers,
-            shard_size=shard_size,
+            shard_size=8 if shard_size is None else shard_size,
             worker_env=worker_env,
             panorama_frame=panorama_frame,
             outputs=outputs,
             format=format,
             geometry_frame=geometry_frame,
         )
-    if workers is not None or worker_env is not None:
-        raise SpecchioError("workers and worker_env are for ray=True")
+    if workers is not None or worker_env is not None or shard_size is not None:
+        raise SpecchioError("workers, worker_env and shard_size are for ray=True")
     return _dataset_here(
         os.fspath(scene),
         None if trajectory is None else os.fspath(trajectory),

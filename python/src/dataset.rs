@@ -38,8 +38,15 @@ impl PoseSource {
         headings: Option<i128>,
         time: Option<f64>,
     ) -> PyResult<Self> {
-        let headings =
-            (headings.map(|h| crate::args::count("headings", h, 0, u32::MAX))).transpose()?;
+        let headings = (headings.map(|h| {
+            crate::args::count(
+                "headings",
+                h,
+                1,
+                specchio::sensor::dataset::grid::MAX_HEADINGS,
+            )
+        }))
+        .transpose()?;
         match (trajectory, grid) {
             (Some(_), Some(_)) => Err(errors::error(
                 "trajectory and grid: give one of them, not both",

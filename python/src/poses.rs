@@ -45,7 +45,12 @@ pub fn pose_grid<'py>(
     headings: i128,
     time: f64,
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
-    let headings = crate::args::count("headings", headings, 0, u32::MAX)?;
+    let headings = crate::args::count(
+        "headings",
+        headings,
+        1,
+        specchio::sensor::dataset::grid::MAX_HEADINGS,
+    )?;
     let poses = specchio::sensor::dataset::grid::grid(&scene.scene, spacing, headings, time)
         .map_err(|e| scene.error(e))?;
     let rows: Vec<f64> = poses

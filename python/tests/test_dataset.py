@@ -334,8 +334,10 @@ def test_the_pose_grid_is_the_commands(tmp_path):
     assert np.array_equal(grid, want)
     turned = specchio.pose_grid(specchio.Scene(scene), 4.0, headings=4, time=0.0)
     assert turned.shape == (32, 4) and list(turned[:4, 3]) == [0.0, 90.0, 180.0, 270.0]
-    with pytest.raises(specchio.SpecchioError, match=r"thesis-room.toml: --headings"):
-        specchio.pose_grid(specchio.Scene(scene), 4.0, headings=0)
+    # Out of range, however far: the range said is the grid's own (2**64 said 0..4294967295).
+    for headings in (0, 361, 2**64):
+        with pytest.raises(specchio.SpecchioError, match=r"headings: .*from 1 to 360"):
+            specchio.pose_grid(specchio.Scene(scene), 4.0, headings=headings)
 
 
 
@@ -355,7 +357,9 @@ def test_a_grid_dataset_from_python_is_the_commands(tmp_path, monkeypatch):
         ({"out": "x", "trajectory": "t.csv", "grid": 4.0}, "not both"),
         ({"out": "x", "trajectory": "t.csv", "headings": 2}, "a grid's"),
         ({"grid": 4.0}, "out: the dataset's folder is required"),
-        ({"out": "x", "grid": 4.0, "headings": 0}, "--headings: must be 1 to"),
+        ({"out": "x", "grid": 4.0, "headings": 0}, "headings: 0; must be a whole number from 1 to 360"),
+        # Ray's own settings without Ray were ignored silently.
+        ({"out": "x", "grid": 4.0, "shard_size": 0}, "shard_size are for ray=True"),
     ]:
         with pytest.raises(specchio.SpecchioError, match=message):
             specchio.dataset(scene, **bad)

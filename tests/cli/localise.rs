@@ -479,7 +479,20 @@ fn saved_landmarks_are_reused_and_mismatches_refused() {
     wider["landmarks"][3]["signature"]["columns"] = (columns + 1).into();
     let wider_file = first.join("landmarks-wider.json");
     std::fs::write(&wider_file, wider.to_string()).unwrap();
-    let cases: [(&std::path::Path, &[&str], &str); 7] = [
+    // A landmark written twice (it was accepted), and a position past single precision (it
+    // was called "non-finite").
+    let mut twice = json(&saved);
+    let copy = twice["landmarks"][0].clone();
+    twice["landmarks"].as_array_mut().unwrap().push(copy);
+    let twice_file = first.join("landmarks-twice.json");
+    std::fs::write(&twice_file, twice.to_string()).unwrap();
+    let mut huge = json(&saved);
+    huge["landmarks"][1]["position_m"][0] = 1e308.into();
+    let huge_file = first.join("landmarks-huge.json");
+    std::fs::write(&huge_file, huge.to_string()).unwrap();
+    let count = json(&saved)["landmarks"].as_array().unwrap().len();
+    let again = format!("`landmarks[{count}]`: the position of `landmarks[0]` again");
+    let cases: [(&std::path::Path, &[&str], &str); 9] = [
         (&saved, &["--k", "4"], "`coefficients`"),
         (&saved, &["--sources", "reference"], "`source`"),
         (&resized, &[], "`sensor_px`"),
@@ -494,6 +507,12 @@ fn saved_landmarks_are_reused_and_mismatches_refused() {
             &wider_file,
             &[],
             "`landmarks[3]`: 129 columns, where column-shift k=8 makes 128",
+        ),
+        (&twice_file, &[], &again),
+        (
+            &huge_file,
+            &[],
+            "`landmarks[1]`: a position that is not a number of metres",
         ),
     ];
     for (file, extra, field) in cases {

@@ -183,7 +183,14 @@ fn check_signatures(db: &Database, run: &Database) -> Result<(), String> {
         return Err("field `landmarks` is empty".to_owned());
     }
     let (columns, values) = expected_shape(run)?;
+    let mut seen = std::collections::HashMap::new();
     for (i, l) in db.landmarks.iter().enumerate() {
+        if let Some(first) = seen.insert(l.position_m.map(f32::to_bits), i) {
+            return Err(format!(
+                "field `landmarks[{i}]`: the position of `landmarks[{first}]` again (a \
+                 database holds one landmark a place; an edited or damaged file)"
+            ));
+        }
         let s = &l.signature;
         let problem = if s.values.len() != values {
             format!(
@@ -200,7 +207,9 @@ fn check_signatures(db: &Database, run: &Database) -> Result<(), String> {
         } else if !s.values.iter().all(|v| v.is_finite()) {
             "a non-finite signature value".to_owned()
         } else if !l.position_m.iter().all(|v| v.is_finite()) {
-            "a non-finite position".to_owned()
+            // 1e308 reads as an f32 infinity: say what is wrong with the number written.
+            "a position that is not a number of metres within single precision (|x| <= 3.4e38)"
+                .to_owned()
         } else if s.values.iter().all(|&v| v == 0.0) {
             // Every distance to it is the query's own norm: it would match arbitrarily.
             "a signature of zeros, which describes no image (a damaged file)".to_owned()
