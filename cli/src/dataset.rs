@@ -83,7 +83,7 @@ pub struct Args {
 
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Every input checked before the output folder exists.
-    let mut plan = Plan::new(&args.scene, poses(args)?)?;
+    let mut plan = Plan::checking(&args.scene, poses(args)?, &mut checking_progress())?;
     plan.panoramas = args.panorama_frame;
     plan.geometry = args.geometry_frame;
     plan.set_format(args.format)?;
@@ -203,6 +203,24 @@ fn take_up(
 
 /// A stop asked for (Ctrl-C, a signal) at `at`; with `--resume` the finished frames are kept,
 /// so it does not say that nothing was written.
+/// Says the poses' check as it goes where it is long (many poses in a crowd that moves), and
+/// stops it on a signal.
+fn checking_progress() -> impl FnMut(usize, usize) -> Result<(), DatasetError> {
+    let mut progress: Option<Progress> = None;
+    move |done, total| {
+        let p = progress.get_or_insert_with(|| {
+            Progress::new("dataset: checking the poses", total as u64, "poses")
+        });
+        if done > 0 {
+            p.add(1);
+        }
+        stopped(
+            false,
+            &format!("while checking the poses, after {done} of {total}"),
+        )
+    }
+}
+
 fn stopped(resumable: bool, at: &str) -> Result<(), DatasetError> {
     specchio::process::interrupt::check(at).map_err(|e| match resumable {
         true => DatasetError::Stopped(format!("interrupted {at}")),

@@ -98,7 +98,19 @@ impl Plan {
 
     /// [`Plan::read`] with the poses from `poses`.
     pub fn new(scene_path: &Path, poses: Poses<'_>) -> Result<Plan, DatasetError> {
-        let (read, inputs) = digest::while_reading(|| Self::read_inputs(scene_path, poses));
+        Self::checking(scene_path, poses, &mut |_, _| Ok(()))
+    }
+
+    /// [`Plan::new`], calling `checked(done, total)` as a trajectory's poses are checked (the
+    /// command says its progress there, and stops on a signal: an error from it stops the
+    /// check).
+    pub fn checking(
+        scene_path: &Path,
+        poses: Poses<'_>,
+        checked: &mut dyn FnMut(usize, usize) -> Result<(), DatasetError>,
+    ) -> Result<Plan, DatasetError> {
+        let (read, inputs) =
+            digest::while_reading(|| Self::read_inputs(scene_path, poses, checked));
         let (scene, poses, trajectory) = read?;
         // The least a run holds: one frame, rendered then encoded (frames.rs: the pipeline's
         // encoders are as many as the budget holds frames for, none where it holds one).
@@ -153,32 +165,18 @@ impl Plan {
     fn read_inputs(
         scene_path: &Path,
         poses: Poses<'_>,
+        checked: &mut dyn FnMut(usize, usize) -> Result<(), DatasetError>,
     ) -> Result<(Scene, Vec<Pose>, String), DatasetError> {
         let scene = crate::scene::load(scene_path)?;
         let (poses, trajectory) = match poses {
             Poses::Trajectory(path) => {
                 let poses = trajectory::read(path)?;
                 let objects = sensor_dataset::ObjectBounds::of(&scene);
-                // Said as it goes where it is long (many poses in a crowd that moves).
-                let progress = crate::process::progress::Progress::new(
-                    format!("dataset: checking the poses of {}", path.display()),
-                    poses.len() as u64,
-                    "poses",
-                );
-                for pose in &poses {
-                    if progress.stopped() {
-                        let at = format!(
-                            "while checking the poses, after {} of {}",
-                            progress.done(),
-                            poses.len()
-                        );
-                        let e = crate::process::interrupt::stopped(&at);
-                        return Err(DatasetError::Stopped(e.to_string()));
-                    }
+                for (i, pose) in poses.iter().enumerate() {
+                    checked(i, poses.len())?;
                     sensor_dataset::pose_fits(&scene, &objects, pose).map_err(|(field, why)| {
                         TrajectoryError::invalid(path, Some(pose.at), field, why)
                     })?;
-                    progress.add(1);
                 }
                 (poses, path.display().to_string())
             }
