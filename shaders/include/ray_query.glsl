@@ -41,36 +41,39 @@ float committed_t(rayQueryEXT q, float none) {
 
 // The reflected ray from the sphere point `hit` (unit normal n) for the view ray `dir`.
 //
-// Traced as the reference traces it (core/src/reference/geometry.rs `closest_hit`): the
-// walls first (their instances alone), then the objects (theirs alone) only up to a little
-// past the wall the ray crosses (objects_limit), so that an object lying on a wall's plane
-// wins the tie. One query over both committed whichever of two equal distances its rounding
-// put first: a picture hung flat on a wall showed the wall.
+// Traced as the reference traces it (core/src/reference/geometry.rs `closest_hit`), where an
+// object lying on a wall's plane wins the tie: the closest hit over walls and objects first;
+// where that is a wall at t, the objects alone (their ray mask) are asked again over a sliver
+// about t, as far as a little past it (objects_limit), and one met there is what the ray
+// shows. A single query committed whichever of the two equal distances its rounding put
+// first: a picture hung flat on a wall showed the wall.
 Reflection trace_reflection(FrameData f, vec3 dir, vec3 hit, vec3 n) {
     // The reference's R = d - 2 (d.n) n, without fusing.
     precise vec3 r = dir - 2.0 * dot(dir, n) * n;
     vec3 origin = offset_ray_origin(hit, n);
     const float FAR = 1.0e38;
     // Opaque, both faces, closest hit: what the reference's BVH traversal finds.
-    rayQueryEXT walls;
-    rayQueryInitializeEXT(walls, scene_tlas, gl_RayFlagsOpaqueEXT, RAY_MASK_WALLS, origin, 0.0,
-                          r, FAR);
-    while (rayQueryProceedEXT(walls)) {
+    rayQueryEXT q;
+    rayQueryInitializeEXT(q, scene_tlas, gl_RayFlagsOpaqueEXT, 0xFFu, origin, 0.0, r, FAR);
+    while (rayQueryProceedEXT(q)) {
     }
-    float wall_t = committed_t(walls, FAR);
-    float limit = wall_t < FAR ? objects_limit(origin, wall_t) : FAR;
-    rayQueryEXT objects;
-    rayQueryInitializeEXT(objects, scene_tlas, gl_RayFlagsOpaqueEXT, RAY_MASK_OBJECTS, origin,
-                          0.0, r, limit);
-    while (rayQueryProceedEXT(objects)) {
+    float t = committed_t(q, FAR);
+    if (t == FAR) {
+        return no_reflection(origin);
     }
-    if (committed_t(objects, FAR) < FAR) {
-        return shade_committed(f, objects, origin, r);
+    if (rayQueryGetIntersectionInstanceCustomIndexEXT(q, true) < 6) {
+        // A wall: an object within the sliver about it wins.
+        float limit = objects_limit(origin, t);
+        rayQueryEXT on_wall;
+        rayQueryInitializeEXT(on_wall, scene_tlas, gl_RayFlagsOpaqueEXT, RAY_MASK_OBJECTS, origin,
+                              t - (limit - t), r, limit);
+        while (rayQueryProceedEXT(on_wall)) {
+        }
+        if (committed_t(on_wall, FAR) < FAR) {
+            return shade_committed(f, on_wall, origin, r);
+        }
     }
-    if (wall_t < FAR) {
-        return shade_committed(f, walls, origin, r);
-    }
-    return no_reflection(origin);
+    return shade_committed(f, q, origin, r);
 }
 
 #endif

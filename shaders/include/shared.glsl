@@ -130,8 +130,9 @@ struct MaterialSample {
 // why this much).
 #define ON_WALL_SLACK_EXPONENT 19u
 
-// The ray-query lookups' instance masks: the walls' instances, and the objects', traced apart
-// so that the objects are searched only up to the wall (ray_query.glsl).
+// The ray-query lookups' instance masks: the walls' instances, and the objects', which
+// ray_query.glsl asks alone over a sliver about a wall the ray meets (an object on the wall's
+// plane wins the tie).
 #define RAY_MASK_WALLS 1u
 #define RAY_MASK_OBJECTS 2u
 
