@@ -74,6 +74,21 @@ fn every_bad_scene_fails_clearly_without_output() {
     }
 }
 
+/// `specchio render SCENE --out DIR ARGS...`, which must write nothing: its exit code and
+/// stderr.
+fn refused_render(scene: &str, args: &[&str]) -> (Option<i32>, String) {
+    let out = temp_dir("args");
+    let mut all = vec!["render", scene, "--out", out.to_str().unwrap()];
+    all.extend(args);
+    let result = specchio(&all);
+    let stderr = String::from_utf8_lossy(&result.stderr).into_owned();
+    assert!(
+        !out.exists(),
+        "{args:?}: no output may be written:\n{stderr}"
+    );
+    (result.status.code(), stderr)
+}
+
 #[test]
 fn absurd_arguments_fail_before_writing_anything() {
     let scene = root().join("scenes/test/six-colour-room.toml");
@@ -96,42 +111,24 @@ fn absurd_arguments_fail_before_writing_anything() {
         (vec!["--method", "nope"], "one of six-pass"),
         (vec!["--lookup", "nope"], "one of plain"),
     ] {
-        let out = temp_dir("args");
-        let mut all = vec!["render", scene, "--out", out.to_str().unwrap()];
-        all.extend(&args);
-        let result = specchio(&all);
-        let stderr = String::from_utf8_lossy(&result.stderr);
-        assert_eq!(
-            result.status.code(),
-            Some(2),
-            "{args:?} must fail:\n{stderr}"
-        );
+        let (code, stderr) = refused_render(scene, &args);
+        assert_eq!(code, Some(2), "{args:?} must fail:\n{stderr}");
         assert!(
             stderr.contains(args[0].split('=').next().unwrap()) && stderr.contains(range),
             "{args:?}: the error must name the flag and the range {range}:\n{stderr}"
         );
-        assert!(!out.exists(), "{args:?}: no output may be written");
     }
     // Each flag in its range, their quotient not: frame 1 at 4.9e-324 fps is at no finite time.
     for args in [
         vec!["--frame", "1", "--fps", "4.9e-324"],
         vec!["--frames", "2", "--fps", "4.9e-324"],
     ] {
-        let out = temp_dir("args");
-        let mut all = vec!["render", scene, "--out", out.to_str().unwrap()];
-        all.extend(&args);
-        let result = specchio(&all);
-        let stderr = String::from_utf8_lossy(&result.stderr);
-        assert_eq!(
-            result.status.code(),
-            Some(1),
-            "{args:?} must fail:\n{stderr}"
-        );
+        let (code, stderr) = refused_render(scene, &args);
+        assert_eq!(code, Some(1), "{args:?} must fail:\n{stderr}");
         assert!(
             stderr.contains("--fps") && stderr.contains("no finite time"),
             "{args:?}: the error must name --fps:\n{stderr}"
         );
-        assert!(!out.exists(), "{args:?}: no output may be written");
     }
     // The other commands' numbers, likewise.
     for (args, range) in [
@@ -543,18 +540,8 @@ fn an_unclear_device_is_refused() {
         _ => common::not_applicable("a name two devices share", "one device is installed"),
     }
     for (selector, says) in unclear {
-        let out = temp_dir("device");
-        let result = specchio(&[
-            "render",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--device",
-            &selector,
-        ]);
-        let stderr = String::from_utf8_lossy(&result.stderr);
-        assert_eq!(result.status.code(), Some(1), "{selector:?}:\n{stderr}");
+        let (code, stderr) = refused_render(scene.to_str().unwrap(), &["--device", &selector]);
+        assert_eq!(code, Some(1), "{selector:?}:\n{stderr}");
         assert!(stderr.contains(says), "{selector:?}:\n{stderr}");
-        assert!(!out.exists(), "{selector:?}: no output may be written");
     }
 }

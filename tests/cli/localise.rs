@@ -442,54 +442,49 @@ fn saved_landmarks_are_reused_and_mismatches_refused() {
     let saved = first.join("landmarks.json");
 
     let refused = temp_dir("localise-refused");
+    // `saved` changed by `edit`, written beside it as `name`.
+    let edited = |name: &str, edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut v = json(&saved);
+        edit(&mut v);
+        let file = first.join(name);
+        std::fs::write(&file, v.to_string()).unwrap();
+        file
+    };
     // A file written at another sensor size (edited here: the run's own options all fixed).
-    let mut other = json(&saved);
-    other["sensor_px"] = 96.into();
-    let resized = first.join("landmarks-96.json");
-    std::fs::write(&resized, other.to_string()).unwrap();
+    let resized = edited("landmarks-96.json", &|v| v["sensor_px"] = 96.into());
     // A landmark far outside the room (it once gave "recall 100 %, error 0 m"), and one whose
     // signature is all zeros (it matches every query alike).
-    let mut far = json(&saved);
-    far["landmarks"][1]["position_m"][0] = 1e30.into();
-    let far_file = first.join("landmarks-far.json");
-    std::fs::write(&far_file, far.to_string()).unwrap();
-    let mut zeros = json(&saved);
-    let n = zeros["landmarks"][2]["signature"]["values"]
-        .as_array()
-        .unwrap()
-        .len();
-    zeros["landmarks"][2]["signature"]["values"] = vec![0.0; n].into();
-    let zeros_file = first.join("landmarks-zeros.json");
-    std::fs::write(&zeros_file, zeros.to_string()).unwrap();
+    let far_file = edited("landmarks-far.json", &|v| {
+        v["landmarks"][1]["position_m"][0] = 1e30.into()
+    });
+    let zeros_file = edited("landmarks-zeros.json", &|v| {
+        let values = &mut v["landmarks"][2]["signature"]["values"];
+        let n = values.as_array().unwrap().len();
+        *values = vec![0.0; n].into();
+    });
     // Every signature one value longer (consistent among themselves, but not what this
     // run's descriptor makes), and one with a column too many.
-    let mut longer = json(&saved);
-    for l in longer["landmarks"].as_array_mut().unwrap() {
-        l["signature"]["values"]
-            .as_array_mut()
-            .unwrap()
-            .push(0.5.into());
-    }
-    let longer_file = first.join("landmarks-longer.json");
-    std::fs::write(&longer_file, longer.to_string()).unwrap();
-    let mut wider = json(&saved);
-    let columns = wider["landmarks"][3]["signature"]["columns"]
-        .as_u64()
-        .unwrap();
-    wider["landmarks"][3]["signature"]["columns"] = (columns + 1).into();
-    let wider_file = first.join("landmarks-wider.json");
-    std::fs::write(&wider_file, wider.to_string()).unwrap();
+    let longer_file = edited("landmarks-longer.json", &|v| {
+        for l in v["landmarks"].as_array_mut().unwrap() {
+            l["signature"]["values"]
+                .as_array_mut()
+                .unwrap()
+                .push(0.5.into());
+        }
+    });
+    let wider_file = edited("landmarks-wider.json", &|v| {
+        let columns = &mut v["landmarks"][3]["signature"]["columns"];
+        *columns = (columns.as_u64().unwrap() + 1).into();
+    });
     // A landmark written twice (it was accepted), and a position past single precision (it
     // was called "non-finite").
-    let mut twice = json(&saved);
-    let copy = twice["landmarks"][0].clone();
-    twice["landmarks"].as_array_mut().unwrap().push(copy);
-    let twice_file = first.join("landmarks-twice.json");
-    std::fs::write(&twice_file, twice.to_string()).unwrap();
-    let mut huge = json(&saved);
-    huge["landmarks"][1]["position_m"][0] = 1e308.into();
-    let huge_file = first.join("landmarks-huge.json");
-    std::fs::write(&huge_file, huge.to_string()).unwrap();
+    let twice_file = edited("landmarks-twice.json", &|v| {
+        let copy = v["landmarks"][0].clone();
+        v["landmarks"].as_array_mut().unwrap().push(copy);
+    });
+    let huge_file = edited("landmarks-huge.json", &|v| {
+        v["landmarks"][1]["position_m"][0] = 1e308.into()
+    });
     let count = json(&saved)["landmarks"].as_array().unwrap().len();
     let again = format!("`landmarks[{count}]`: the position of `landmarks[0]` again");
     let cases: [(&std::path::Path, &[&str], &str); 9] = [

@@ -44,8 +44,8 @@ pub enum Animation {
     },
 }
 
-/// The distance from `q` to the segment from `a` to `b`.
-fn segment_distance(q: Vec3, a: Vec3, b: Vec3) -> f32 {
+/// The distance from `q` to the segment from `a` to `b` (to `a` where the two are one point).
+pub(crate) fn segment_distance(q: Vec3, a: Vec3, b: Vec3) -> f32 {
     let ab = b - a;
     let len2 = ab.length_squared();
     let s = if len2 > 0.0 {

@@ -33,6 +33,7 @@ pub use crate::files::{
     read_regular_file, FileError, MAX_GLTF_BUFFER_BYTES, MAX_MESH_FILE_BYTES, MAX_SCENE_BYTES,
     MAX_TEXTURE_FILE_BYTES,
 };
+pub(crate) use anim::segment_distance;
 pub use anim::{Animation, Repeat};
 pub use asset::AssetError;
 pub use error::{Location, SceneError};

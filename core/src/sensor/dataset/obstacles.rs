@@ -12,7 +12,7 @@
 use glam::Vec3;
 
 use crate::scene::state::SceneState;
-use crate::scene::{Animation, ObjectFrame, Scene};
+use crate::scene::{segment_distance, Animation, ObjectFrame, Scene};
 use crate::sensor::localise::poses::object_spheres;
 
 /// At most this many cells along an axis (a million in all).
@@ -65,14 +65,6 @@ impl ObjectBounds {
             !never && touches(anim.position_at(*base, t_s) + *offset, *reach)
         })
     }
-}
-
-/// The distance from `q` to the segment from `a` to `b`, as the pose check has always
-/// measured it (the camera at `a`, the mirror at `b`).
-fn segment_distance(q: Vec3, a: Vec3, b: Vec3) -> f32 {
-    let axis = b - a;
-    let t = ((q - a).dot(axis) / axis.length_squared()).clamp(0.0, 1.0);
-    (q - (a + t * axis)).length()
 }
 
 /// Spheres bucketed by their centres in a uniform grid; a query widens its box by the
