@@ -23,11 +23,12 @@ use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 #[derive(clap::Args)]
+#[command(group = clap::ArgGroup::new("poses").args(["trajectory", "grid"]).required(true))]
 pub struct Args {
     /// The scene file (TOML; see docs/scene-format.md).
     scene: PathBuf,
     /// The robot's trajectory: CSV (`time,x,y,z,heading`) or JSON (docs/sensor.md).
-    #[arg(long, required_unless_present = "grid", conflicts_with = "grid")]
+    #[arg(long, conflicts_with = "grid")]
     trajectory: Option<PathBuf>,
     /// Instead of a trajectory, a pose grid: the robot at every place of a square grid of
     /// this spacing (metres) over the floor where it fits, at the mirror's height.

@@ -353,6 +353,12 @@ fn a_pose_grid_makes_a_frame_per_place_and_heading() {
             vec!["--trajectory", "t.csv", "--grid", "4"],
             "cannot be used with",
         ),
+        // Neither source of poses: one choice of two is missing, not both.
+        (
+            vec!["--headings", "2"],
+            "<--trajectory <TRAJECTORY>|--grid <GRID>>",
+        ),
+        (vec![], "<--trajectory <TRAJECTORY>|--grid <GRID>>"),
     ] {
         let bad = dir.join("bad");
         let run = specchio(

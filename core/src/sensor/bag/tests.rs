@@ -401,3 +401,44 @@ fn a_central_mirrors_model_sits_at_its_focus_and_a_sphere_has_none() {
         "no single viewpoint"
     );
 }
+
+/// A file system that takes `room` bytes and then says it is full.
+struct Full {
+    at: Cursor<Vec<u8>>,
+    room: usize,
+}
+
+impl std::io::Write for Full {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.at.get_ref().len() + buf.len() > self.room {
+            return Err(std::io::Error::from_raw_os_error(28));
+        }
+        self.at.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl std::io::Seek for Full {
+    fn seek(&mut self, to: std::io::SeekFrom) -> std::io::Result<u64> {
+        self.at.seek(to)
+    }
+}
+
+#[test]
+fn a_full_disk_is_said_as_the_file_system_says_it() {
+    let files = files();
+    let read = |i: usize, name: &str| Ok(files.get(&(i, name)).cloned());
+    let path = std::path::Path::new("out/bag/bag_0.mcap");
+    for room in [0, 64, 4096] {
+        let out = Full {
+            at: Cursor::new(Vec::new()),
+            room,
+        };
+        let e = write(out, path, 2, &read, &Extras::default()).unwrap_err();
+        assert!(matches!(e, BagError::Io { .. }), "{room}: {e:?}");
+        let os = std::io::Error::from_raw_os_error(28).to_string();
+        assert_eq!(e.to_string(), format!("out/bag/bag_0.mcap: {os}"));
+    }
+}

@@ -210,10 +210,19 @@ impl<W: Write + Seek> Writer<W> {
     }
 }
 
+/// The writer's own failures name the bag; a failed write is said as the file system said it
+/// (mcap's I/O variant reads "from writing, or reading a compression stream", which a user
+/// with a full disk cannot act on).
 fn mcap_error(path: &Path) -> impl Fn(mcap::McapError) -> BagError + '_ {
-    move |source| BagError::Mcap {
-        path: path.to_owned(),
-        source,
+    move |source| match source {
+        mcap::McapError::Io(source) => BagError::Io {
+            path: path.to_owned(),
+            source,
+        },
+        source => BagError::Mcap {
+            path: path.to_owned(),
+            source,
+        },
     }
 }
 
