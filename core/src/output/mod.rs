@@ -48,6 +48,15 @@ pub enum OutputError {
     IsAFolder { path: PathBuf },
     #[error("cannot write {path}: it is {what}; a file output replaces only a regular file")]
     NotAFile { path: PathBuf, what: &'static str },
+    #[error(
+        "cannot write {path}: the output in {output} wrote it (its {manifest} lists it), and a \
+         file output does not replace another output's file; choose another name"
+    )]
+    AnothersFile {
+        path: PathBuf,
+        output: PathBuf,
+        manifest: &'static str,
+    },
     #[error("cannot write {path}: it exists and is not a folder (a file or a symbolic link)")]
     NotAFolder { path: PathBuf },
     #[error(

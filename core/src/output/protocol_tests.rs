@@ -12,6 +12,8 @@ use super::stage::{self, Stage, TOKEN};
 use super::tests::{names, scratch};
 use super::*;
 
+const MANIFEST_NAME: &str = super::manifest::MANIFEST;
+
 /// A render-like output of `out` holding `file`, committed with `hook` in its commit.
 fn render(
     out: &Path,
@@ -312,6 +314,38 @@ fn a_file_output_replaces_only_a_regular_file() {
     assert!(fs::symlink_metadata(&link).unwrap().is_symlink());
     assert_eq!(fs::read(&mine).unwrap(), b"mine");
     assert_eq!(names(&dir).len(), 5, "nothing added: {:?}", names(&dir));
+    fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A file output does not replace what an output folder lists as its own (a heatmap over a
+/// reference's `sensor.png`), nested or not, nor its manifest; a new name beside them is
+/// written, and a plain file of the user's is replaced as before.
+#[test]
+fn a_file_output_never_replaces_an_outputs_file() {
+    let dir = scratch("anothers");
+    let out = dir.join("out");
+    render(&out, "cube/px.exr", None).unwrap();
+    for listed in [
+        "cube/px.exr",
+        "render.json",
+        MANIFEST_NAME,
+        "./cube/../render.json",
+    ] {
+        let target = out.join(listed);
+        let before = fs::read(&target).unwrap();
+        let e = write_json(&target, &serde_json::json!({})).unwrap_err();
+        assert!(
+            matches!(e, OutputError::AnothersFile { .. }),
+            "{listed}: {e}"
+        );
+        assert!(e.to_string().contains(".specchio-files lists it"), "{e}");
+        assert_eq!(fs::read(&target).unwrap(), before, "{listed}");
+    }
+    write_json(&out.join("cube/mine.json"), &serde_json::json!({})).unwrap();
+    let users = dir.join("users.json");
+    fs::write(&users, b"old").unwrap();
+    write_json(&users, &serde_json::json!({})).unwrap();
+    assert_eq!(fs::read(&users).unwrap(), b"{}\n");
     fs::remove_dir_all(&dir).unwrap();
 }
 

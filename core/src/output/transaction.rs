@@ -113,6 +113,7 @@ impl Transaction {
         self.check_new(target, &resolved, &name)?;
         check_not_an_input(target, &resolved, &self.inputs())?;
         check_file_target(target, &resolved)?;
+        check_not_anothers(target, &resolved)?;
         let parent = parent_of(&resolved);
         if !parent.is_dir() {
             return Err(OutputError::NoFolder {
@@ -311,6 +312,42 @@ fn check_file_target(given: &Path, target: &Path) -> Result<(), OutputError> {
         path: given.to_owned(),
         what,
     })
+}
+
+/// A file output never replaces a file that an output folder (this command's or another's)
+/// lists as its own: `compare A B --heatmap ref/sensor.png` would have put a heatmap in a
+/// reference's place, and that folder would still claim it. Every folder above the file that
+/// holds a manifest is asked, under the spelling its listings give (a case fold included).
+/// A new name beside such files is not refused: the folder's next run says it is foreign.
+fn check_not_anothers(given: &Path, target: &Path) -> Result<(), OutputError> {
+    let Some(listed) = fs::symlink_metadata(target)
+        .ok()
+        .and_then(|_| listed_path(target))
+    else {
+        return Ok(()); // nothing there to replace
+    };
+    for folder in listed.ancestors().skip(1) {
+        let manifest = folder.join(super::manifest::MANIFEST);
+        if !fs::symlink_metadata(&manifest).is_ok_and(|m| m.is_file()) {
+            continue;
+        }
+        let Ok(inside) = listed.strip_prefix(folder) else {
+            continue;
+        };
+        let inside = inside
+            .to_string_lossy()
+            .replace(std::path::MAIN_SEPARATOR, "/");
+        if inside == super::manifest::MANIFEST
+            || super::manifest::read_manifest(folder).contains(&inside)
+        {
+            return Err(OutputError::AnothersFile {
+                path: given.to_owned(),
+                output: folder.to_owned(),
+                manifest: super::manifest::MANIFEST,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// A file output's `target` must not be an input, under any name: neither its own entry (a link
