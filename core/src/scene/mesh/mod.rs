@@ -20,6 +20,11 @@ mod shapes;
 pub const MAX_MESH_INDICES: usize = 16 * 1024 * 1024;
 /// Most vertices a mesh may have (16M, 512 MiB of vertex data), for the same reasons.
 pub const MAX_MESH_VERTICES: usize = 16 * 1024 * 1024;
+/// The largest magnitude of a vertex coordinate (model space, after a glTF node's
+/// transforms). Far past any object a scene holds, and below where a triangle's edge cross
+/// product (its area and face normal) overflows single precision (about 9e18): a mesh at
+/// 1e30 was reported as having "no triangles with non-zero area".
+pub const MAX_COORDINATE: f32 = 1e15;
 
 /// An indexed triangle list in object space (or world space for [`Mesh::room_wall`]).
 #[derive(Debug, Clone, PartialEq)]
@@ -210,6 +215,15 @@ fn assemble(parts: Vec<Part>) -> Result<Mesh, AssetError> {
             return Err(AssetError::Mesh(
                 "a vertex position is not finite (after node transforms)".into(),
             ));
+        }
+        if part
+            .positions
+            .iter()
+            .any(|p| p.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(AssetError::Mesh(format!(
+                "a vertex coordinate is past ±{MAX_COORDINATE:e} (after node transforms)"
+            )));
         }
         check_budget(b.indices.len(), part.indices.len(), b.positions.len(), n)?;
         let has_uvs = part.uvs.len() == n && part.uvs.iter().all(|t| t.is_finite());

@@ -62,6 +62,17 @@ impl Reader {
         match keyword {
             "v" => {
                 let [x, y, z] = numbers::<3>("v", args, 3..=7, "v x y z (optionally w or r g b)")?;
+                let far = [x, y, z]
+                    .iter()
+                    .position(|c| c.abs() > super::MAX_COORDINATE);
+                if let Some(k) = far {
+                    return Err(format!(
+                        "`v` value {} `{}` is past the ±{:e} a vertex coordinate may hold",
+                        k + 1,
+                        clip(args[k]),
+                        super::MAX_COORDINATE
+                    ));
+                }
                 self.positions.push(Vec3::new(x, y, z));
             }
             "vt" => {
@@ -267,6 +278,11 @@ mod tests {
         );
         assert!(err("v 0 0\n").starts_with("line 1: `v` with 2 numbers: expected `v x y z"));
         assert!(err("\n\nv 0 nan 0\n").starts_with("line 3: `v` value 2 is nan: must be finite"));
+        let far = err("v 0 0 0\nv -1e30 0 0\n");
+        assert!(
+            far.starts_with("line 2: `v` value 1 `-1e30` is past the ±1e15"),
+            "{far}"
+        );
         assert!(err("v 0 0 0\nf 1 1\n").contains("at least 3 corners"));
         assert!(err("v 0 0 0\nf 0 1 1\n").contains("index 0: OBJ indices start at 1"));
         assert!(err("v 0 0 0\nf 1/2 1 1\n").contains("texture coordinate (vt) 2, but 0"));
