@@ -410,7 +410,8 @@ impl Reader<'_> {
             .into_iter()
             .map(|p| transform.transform_point3(Vec3::from(p)))
             .collect();
-        let far = |p: &Vec3| !(p.abs().max_element() <= super::MAX_COORDINATE);
+        // NaN (an infinite scale times a zero) is not within either.
+        let far = |p: &Vec3| !p.abs().cmple(Vec3::splat(super::MAX_COORDINATE)).all();
         if let Some(e) = placed.iter().position(far) {
             let i = prim.attributes[&Checked::Valid(Semantic::Positions)].value();
             return Err(AssetError::gltf(
@@ -559,7 +560,9 @@ mod tests {
         let h = std::f32::consts::FRAC_1_SQRT_2;
         // Written with four decimals, a quarter turn is nearly unit: the same mesh as exact.
         let exact = shape(node(json!({ "rotation": [0.0, 0.0, h, h] })).unwrap());
-        let written = shape(node(json!({ "rotation": [0.0, 0.0, 0.7071, 0.7071] })).unwrap());
+        let four_decimals = (h * 1e4).round() / 1e4; // 0.7071
+        let written = node(json!({ "rotation": [0.0, 0.0, four_decimals, four_decimals] }));
+        let written = shape(written.unwrap());
         for (a, b) in exact.iter().zip(&written) {
             assert!(a.distance(*b) < 1e-6, "{a} {b}");
         }
