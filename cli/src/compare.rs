@@ -96,7 +96,7 @@ fn angular(args: &Args, face_size: u32) -> Result<ExitCode> {
         );
     }
     let mask = args.mask.as_deref().map(metrics::read_mask).transpose()?;
-    if let Some(m) = &mask {
+    if let (Some(m), Some(path)) = (&mask, &args.mask) {
         if (m.width, m.height) != (test.width, test.height) {
             anyhow::bail!(
                 "the mask is {}x{} but the images are {}x{}",
@@ -106,6 +106,7 @@ fn angular(args: &Args, face_size: u32) -> Result<ExitCode> {
                 test.height
             );
         }
+        m.check_selects(path)?;
     }
     let keep = |x: u32, y: u32| {
         mask.as_ref()

@@ -9,6 +9,7 @@ use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use specchio::files::read_regular_file;
 use specchio::sensor::localise::{DescriptorKind, Signature};
+use specchio::text::num_text;
 
 /// Largest landmarks file read (bytes), so that reading one stays within memory. At the
 /// default settings (a 256² sensor, column-shift k=8: 5,248 values of about 22 bytes each) it
@@ -114,6 +115,13 @@ pub fn parse(
 
 /// The first field that differs from this run's settings, with both values.
 fn check_matches(db: &Database, run: &Database) -> Result<(), String> {
+    // Said as a person reads them: no `Some(8)`, no 300 digits of a tiny spacing.
+    let point = |p: [f64; 3]| format!("[{}]", p.map(num_text).join(", "));
+    let cube = |c: Option<u32>| {
+        c.map_or("none (the reference's images)".to_owned(), |c| {
+            c.to_string()
+        })
+    };
     let fields: [(&str, String, String, &str); 8] = [
         (
             "scene_hash",
@@ -135,8 +143,8 @@ fn check_matches(db: &Database, run: &Database) -> Result<(), String> {
         ),
         (
             "grid_m",
-            db.grid_m.to_string(),
-            run.grid_m.to_string(),
+            num_text(db.grid_m),
+            num_text(run.grid_m),
             "--grid",
         ),
         (
@@ -153,14 +161,14 @@ fn check_matches(db: &Database, run: &Database) -> Result<(), String> {
         ),
         (
             "scene_origin_m",
-            format!("{:?}", db.scene_origin_m),
-            format!("{:?}", run.scene_origin_m),
+            point(db.scene_origin_m),
+            point(run.scene_origin_m),
             "the scene's origin",
         ),
         (
             "cube_px",
-            format!("{:?}", db.cube_px),
-            format!("{:?}", run.cube_px),
+            cube(db.cube_px),
+            cube(run.cube_px),
             "--cube-size",
         ),
     ];
@@ -239,7 +247,7 @@ fn expected_shape(run: &Database) -> Result<(u32, usize), String> {
 
 #[cfg(test)]
 mod tests {
-    use super::fnv1a64;
+    use super::*;
 
     #[test]
     fn fnv1a64_known_answers() {
@@ -247,5 +255,53 @@ mod tests {
         assert_eq!(fnv1a64(b""), "cbf29ce484222325");
         assert_eq!(fnv1a64(b"a"), "af63dc4c8601ec8c");
         assert_eq!(fnv1a64(b"foobar"), "85944171f73967e8");
+    }
+
+    /// A setting that differs is said as a person reads it: no `Some(8)`, no 300 digits.
+    #[test]
+    fn a_differing_setting_is_said_plainly() {
+        let db = Database {
+            format: "specchio-landmarks".into(),
+            version: VERSION,
+            scene: "s.toml".into(),
+            scene_hash: fnv1a64(b""),
+            scene_origin_m: [0.0; 3],
+            source: "box".into(),
+            descriptor: "fourier".into(),
+            coefficients: 8,
+            grid_m: 1e-300,
+            sensor_px: 16,
+            cube_px: Some(8),
+            panorama: serde_json::Value::Null,
+            landmarks: Vec::new(),
+        };
+        let run = Database {
+            cube_px: Some(16),
+            ..db.clone()
+        };
+        let e = check_matches(&db, &run).unwrap_err();
+        assert!(
+            e.starts_with("field `cube_px` is 8, this run has 16 (--cube-size)"),
+            "{e}"
+        );
+        let run = Database {
+            cube_px: None,
+            grid_m: 2e-300,
+            ..db.clone()
+        };
+        let e = check_matches(&db, &run).unwrap_err();
+        assert!(
+            e.starts_with("field `grid_m` is 1e-300, this run has 2e-300"),
+            "{e}"
+        );
+        let run = Database {
+            cube_px: None,
+            ..db.clone()
+        };
+        let e = check_matches(&db, &run).unwrap_err();
+        assert!(
+            e.contains("is 8, this run has none (the reference's images)"),
+            "{e}"
+        );
     }
 }

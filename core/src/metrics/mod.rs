@@ -64,6 +64,11 @@ pub enum MetricsError {
         b_name: String,
         b_size: (u32, u32),
     },
+    #[error(
+        "{path}: the mask selects no pixel (every red value is at most {threshold}): there is \
+         nothing to compare"
+    )]
+    EmptyMask { path: PathBuf, threshold: f32 },
     #[error(transparent)]
     Output(#[from] OutputError),
 }
@@ -77,6 +82,19 @@ pub struct Mask {
 }
 
 impl Mask {
+    /// A mask read from `path` must select some pixel. A comparison of none reports every
+    /// metric as n/a and would exit 0: a script that trusts the exit status would pass an
+    /// all-black mask (an image written over the mask, say).
+    pub fn check_selects(&self, path: &Path) -> Result<(), MetricsError> {
+        if self.selected.contains(&true) {
+            return Ok(());
+        }
+        Err(MetricsError::EmptyMask {
+            path: path.to_owned(),
+            threshold: MASK_THRESHOLD,
+        })
+    }
+
     /// Every pixel whose red channel is above [`MASK_THRESHOLD`].
     pub fn from_red(image: &RgbaImage) -> Mask {
         Mask {
@@ -252,6 +270,7 @@ pub fn compare_files(
     )?;
     if let Some((path, mask)) = &mask {
         same_size_as_mask((&name(reference), &reference_image), (&name(path), mask))?;
+        mask.check_selects(path)?;
     }
     compare(&test_image, &reference_image, mask.as_ref().map(|(_, m)| m))
 }

@@ -307,6 +307,19 @@ fn masks_read_from_exr_and_png_agree() {
     // The PNG stores sRGB-encoded red, which is above half exactly where linear is above ~0.21;
     // the threshold applies to the stored value, so the 0.25 pixel is selected there.
     assert_eq!(read_mask(&png).unwrap().selected, [false, true, true, true]);
+    // A mask that selects nothing is refused, naming the file, not compared as n/a.
+    let black = dir.join("black.png");
+    crate::output::write_png(&black, &image(4, 1, |_, _| [0.0, 1.0, 1.0, 1.0])).unwrap();
+    let e = read_mask(&black)
+        .unwrap()
+        .check_selects(&black)
+        .unwrap_err();
+    assert!(matches!(e, MetricsError::EmptyMask { .. }), "{e}");
+    assert!(
+        e.to_string()
+            .contains("black.png: the mask selects no pixel"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
