@@ -178,6 +178,25 @@ impl SensorOptics {
         Some(self.ndc_to_pixel(ndc))
     }
 
+    /// Whether the camera ray through the image point `q` (pixels) meets the mirror: its
+    /// radial parameter ([`Self::pixel_at`]'s `s`, inverted) is inside the rim's. The camera
+    /// also sees the room beside the mirror, with alpha 1 too, so only the geometry tells the
+    /// two apart.
+    pub fn shows_mirror(&self, q: Vec2) -> bool {
+        let size = Vec2::new(self.width as f32, self.height as f32);
+        let ndc = q / size * 2.0 - Vec2::ONE;
+        let v = &self.view;
+        let (axis, e1, e2) = self.axes();
+        let s = if v.is_orthographic() {
+            let off = (v.right * (ndc.x * v.half_x) + v.down * (ndc.y * v.half_y)).as_dvec3();
+            off.dot(e1).hypot(off.dot(e2))
+        } else {
+            let d = v.forward + v.right * (ndc.x * v.tan_x) + v.down * (ndc.y * v.tan_y);
+            d.as_dvec3().normalize().dot(axis).clamp(-1.0, 1.0).acos()
+        };
+        s < self.rim_parameter()
+    }
+
     /// Elevation (radians) of the reflection of the camera ray at radial parameter `s` (the
     /// angle from the axis of a pinhole's ray, the distance from the axis of an orthographic
     /// one), `s` in [0, rim parameter]. Exact geometry in f64 in the plane through the axis:

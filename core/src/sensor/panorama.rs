@@ -182,7 +182,7 @@ impl PanoramaLayout {
     }
 
     /// Elevation and azimuth of pixel (j, i)'s centre.
-    fn pixel_angles(&self, j: u32, i: u32) -> (f64, f64) {
+    pub fn pixel_angles(&self, j: u32, i: u32) -> (f64, f64) {
         (
             self.elevation(f64::from(i) + 0.5),
             self.azimuth(f64::from(j) + 0.5),
@@ -210,8 +210,14 @@ impl PanoramaLayout {
     }
 
     /// The sensor image `image` unwrapped (see the module documentation); a direction the
-    /// mirror does not show is black with alpha 0.
+    /// mirror does not show is black with alpha 0. Only the image's mirror pixels are
+    /// interpolated: at the rim a bilinear tap falls beside the mirror, on the camera's direct
+    /// view of the room, which mixed into the top row colours up to 14 degrees away.
     pub fn unwrap(&self, optics: &SensorOptics, image: &RgbaImage) -> RgbaImage {
+        let mirror: Vec<bool> = (0..image.height)
+            .flat_map(|y| (0..image.width).map(move |x| (x, y)))
+            .map(|(x, y)| optics.shows_mirror(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)))
+            .collect();
         // A row is one elevation, so the camera-ray angle that sees it (a bisection) is found
         // once per row, not once per pixel: it was most of the localisation sweep's time.
         let thetas: Vec<Option<f64>> = (0..self.height)
@@ -219,7 +225,7 @@ impl PanoramaLayout {
             .collect();
         self.fill(
             |i, _, a| match thetas[i as usize].and_then(|theta| optics.pixel_at(theta, a)) {
-                Some(p) => bilinear(image, p),
+                Some(p) => bilinear_within(image, p, &mirror),
                 None => [0.0; 4],
             },
         )
@@ -249,6 +255,40 @@ fn cylinder_band(top: f64, lowest: f64) -> (f64, f64) {
     } else {
         ((lowest.tan() + 2.0).atan().min(top), lowest)
     }
+}
+
+/// Bilinear sample of `image` at `p` over the pixels `keep` selects (`keep[y * width + x]`),
+/// their weights renormalised; black with alpha 0 where none of the four is kept. Where all
+/// four are, exactly [`bilinear`]'s value.
+fn bilinear_within(image: &RgbaImage, p: Vec2, keep: &[bool]) -> [f32; 4] {
+    let (w, h) = (image.width as i64, image.height as i64);
+    let q = p - Vec2::splat(0.5);
+    let (x0, y0) = (q.x.floor(), q.y.floor());
+    let (fx, fy) = (q.x - x0, q.y - y0);
+    let at = |x: i64, y: i64| (x.clamp(0, w - 1) as u32, y.clamp(0, h - 1) as u32);
+    let (x0, y0) = (x0 as i64, y0 as i64);
+    let taps = [
+        (at(x0, y0), (1.0 - fx) * (1.0 - fy)),
+        (at(x0 + 1, y0), fx * (1.0 - fy)),
+        (at(x0, y0 + 1), (1.0 - fx) * fy),
+        (at(x0 + 1, y0 + 1), fx * fy),
+    ];
+    let kept = |(x, y): (u32, u32)| keep[(y * image.width + x) as usize];
+    if taps.iter().all(|&(xy, _)| kept(xy)) {
+        return bilinear(image, p);
+    }
+    let total: f32 = taps.iter().filter(|&&(xy, _)| kept(xy)).map(|t| t.1).sum();
+    if total <= 0.0 {
+        return [0.0; 4];
+    }
+    let mut sum = [0.0f32; 4];
+    for &((x, y), weight) in taps.iter().filter(|&&(xy, _)| kept(xy)) {
+        let c = image.pixel(x, y);
+        for k in 0..4 {
+            sum[k] += weight / total * c[k];
+        }
+    }
+    sum
 }
 
 /// Bilinear sample of `image` at `p` (pixels; centres at +0.5), edges clamped.

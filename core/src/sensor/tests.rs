@@ -110,6 +110,49 @@ fn an_unwrap_puts_each_wall_in_its_known_column() {
     }
 }
 
+/// Every panorama pixel shows its own direction, the rim's row too: a central mirror (its
+/// reflected rays share a viewpoint) in a room whose walls are painted with the direction
+/// they are seen in (`direction` material), unwrapped from the reference's sensor image. At
+/// the rim a bilinear tap falls beside the mirror, on the camera's direct view of the room:
+/// mixed in, the top row was up to 14 degrees off (the rest under 0.05).
+#[test]
+fn every_panorama_pixel_shows_its_own_direction_up_to_the_rim() {
+    let text = "[room]\ncenter = [0, 3, 0]\nsize = [12, 6, 10]\nwalls = \"d\"\n\
+        [mirror]\nshape = \"hyperboloid\"\ncenter = [0.3, 3, -0.2]\nfocal_distance = 2.0\n\
+        latus_rectum = 2.0\nrim_radius = 1.3\n\
+        [[materials]]\nname = \"d\"\ntype = \"direction\"\n\
+        [sensor]\nresolution = [64, 64]\nup = [0.6, 0, -0.8]\n\
+        [observer]\nresolution = [16, 12]\n[cube]\nface_size = 8\n";
+    let scene = crate::scene::load_str(text, std::path::Path::new("direction-room.toml")).unwrap();
+    let out = reference_outputs(&scene);
+    for kind in PanoramaKind::ALL {
+        let layout = PanoramaLayout::for_sensor(&out.optics, kind);
+        let pano = layout.unwrap(&out.optics, &out.image);
+        let (mut worst, mut shown) = (0.0f64, 0);
+        for i in 0..layout.height {
+            for j in 0..layout.width {
+                let p = pano.pixel(j, i);
+                if p[3] == 0.0 {
+                    continue;
+                }
+                shown += 1;
+                let (e, a) = layout.pixel_angles(j, i);
+                let seen = Vec3::new(p[0], p[1], p[2]) * 2.0 - Vec3::ONE;
+                worst = worst.max(angle(seen, crate::sensor::optics::direction(e, a)));
+            }
+        }
+        assert!(
+            shown > layout.width * layout.height / 2,
+            "{kind:?}: {shown} shown"
+        );
+        assert!(
+            worst.to_degrees() < 1.0,
+            "{kind:?}: {} degrees",
+            worst.to_degrees()
+        );
+    }
+}
+
 /// The column of a known wall point: the corner where the +X and +Z walls meet at the
 /// mirror's height lies at azimuth 45 degrees, and the colour changes from red to blue there
 /// (within the pixel or two that the mirror's non-central rays shift it by).
