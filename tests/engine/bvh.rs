@@ -14,13 +14,17 @@ use specchio::scene::Lookup;
 /// Every scene kind the lookup must get right: the thesis's room, the symmetric room whose
 /// sensor diagonals reflect into room corners (ties by construction), a crowd of 2,000
 /// objects, objects in motion (at t = 1.3 s, the top level rebuilt from their transforms
-/// then), and a central mirror (a hyperboloid, not a sphere).
-const SCENES: [(&str, f64); 5] = [
+/// then), the heaviest benchmark scene (its meshes of up to 100,000 triangles), and every
+/// mirror shape but the sphere: a hyperboloid, a paraboloid (orthographic camera) and a cone.
+const SCENES: [(&str, f64); 8] = [
     ("scenes/thesis-room.toml", 0.0),
     ("scenes/test/six-colour-room.toml", 0.0),
     ("scenes/many-objects.toml", 0.0),
     ("scenes/moving-objects.toml", 1.3),
+    ("scenes/heavy.toml", 0.0),
     ("scenes/hyperbolic-room.toml", 0.0),
+    ("scenes/parabolic-room.toml", 0.0),
+    ("scenes/conical-room.toml", 0.0),
 ];
 
 /// On every driver and scene, every mirror pixel that differs from the reference by more than
