@@ -7,7 +7,6 @@ mod common;
 use std::path::Path;
 
 use common::{root, specchio, temp_dir, Scratch};
-use specchio::scene::Lookup;
 use specchio::sensor::files::{f32_channel, float_channel, read_channels, read_u32_channel};
 use specchio::sensor::outputs::{NO_ID, RAY_CHANNELS};
 
@@ -143,13 +142,25 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
     assert_eq!(truth["colour_agrees"], true);
     assert_traced_layers_are_the_references(&traced, &reference);
 
-    // Every device traces them by default: bvh on a CPU driver or where there are no ray
-    // queries, ray-query on a GPU that has them.
-    let want = default_traced_lookup();
+    // Every device traces them by default: bvh on a CPU driver (here lavapipe, which has ray
+    // queries, and SwiftShader, which has none) or a GPU without ray queries, ray-query on a
+    // GPU that has them (`lookups::one_light_path`'s own test).
     let (default, said) = render("sensor-truth-default", None);
     assert!(!said.contains("warning"), "{said}");
     assert_eq!(camera_json(&default)["ground_truth"]["layers"], "traced");
-    assert_eq!(camera_json(&default)["ground_truth"]["colour"], want);
+    assert_eq!(camera_json(&default)["ground_truth"]["colour"], "bvh");
+    let (swiftshader, said) = render_on(
+        "swiftshader",
+        scene_path,
+        "sensor-truth-default-swiftshader",
+        None,
+    );
+    assert!(!said.contains("warning"), "{said}");
+    let truth = &camera_json(&swiftshader)["ground_truth"];
+    assert_eq!(truth["layers"], "traced");
+    assert_eq!(truth["colour"], "bvh");
+    assert_eq!(truth["colour_agrees"], true);
+    assert_traced_layers_are_the_references(&swiftshader, &reference);
 
     let (cube, said) = render("sensor-truth-cube", Some("plain"));
     assert!(
@@ -162,7 +173,7 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
     assert_eq!(truth["layers"], "cube");
     assert_eq!(truth["colour_agrees"], false);
     assert!(truth["warning"].as_str().unwrap().contains("not traced"));
-    for d in [reference, traced, default, cube] {
+    for d in [reference, traced, default, swiftshader, cube] {
         std::fs::remove_dir_all(d).unwrap();
     }
 }
@@ -175,6 +186,15 @@ fn camera_json(dir: &Path) -> serde_json::Value {
 /// `render --sensor-outputs` of `scene_path` on lavapipe, with `--lookup` when given, into a
 /// scratch folder `name`, asserted to succeed: (the folder, what it said on stderr).
 fn render_on_lavapipe(scene_path: &str, name: &str, lookup: Option<&str>) -> (Scratch, String) {
+    render_on("lavapipe", scene_path, name, lookup)
+}
+
+fn render_on(
+    device: &str,
+    scene_path: &str,
+    name: &str,
+    lookup: Option<&str>,
+) -> (Scratch, String) {
     let out = temp_dir(name);
     let mut args = vec![
         "render",
@@ -183,7 +203,7 @@ fn render_on_lavapipe(scene_path: &str, name: &str, lookup: Option<&str>) -> (Sc
         out.to_str().unwrap(),
         "--sensor-outputs",
         "--device",
-        "lavapipe",
+        device,
     ];
     if let Some(l) = lookup {
         args.extend(["--lookup", l]);
@@ -227,20 +247,6 @@ fn assert_traced_layers_are_the_references(traced: &Path, reference: &Path) {
         .map(|(x, y)| (x - y).abs() / y)
         .fold(0.0f32, f32::max);
     assert!(worst < 1e-4, "range relative error {worst}");
-}
-
-/// The lookup the default device traces the sensor outputs with by default: bvh on a CPU
-/// driver (lavapipe, SwiftShader) or a GPU without ray queries, ray-query on a GPU with them.
-fn default_traced_lookup() -> &'static str {
-    let gpu = common::Gpu::new();
-    let info = gpu.device.info.clone();
-    gpu.finish();
-    let ray_queries = specchio::render::lookups::missing_features(Lookup::RayQuery, &info);
-    if info.is_cpu() || ray_queries.is_some() {
-        "bvh"
-    } else {
-        "ray-query"
-    }
 }
 
 /// Beside the id layer, `sensor.id.json` says what each id is: the six walls (0..6, named,

@@ -335,6 +335,31 @@ pub fn features(lookup: Lookup) -> OptionalFeatures {
 mod tests {
     use super::*;
 
+    /// The exact default by device: bvh on a CPU driver with or without ray queries (lavapipe,
+    /// SwiftShader) and on a GPU without them (the H200 of docs/gpu.md), ray-query on a GPU
+    /// with them. The devices are lavapipe's record in the committed baseline, retyped.
+    #[test]
+    fn the_exact_default_is_bvh_but_on_a_gpu_with_ray_queries() {
+        let baseline = include_str!("../../../../bench/baselines/quick.json");
+        let record: serde_json::Value = serde_json::from_str(baseline).unwrap();
+        let device = |device_type: &str, ray_query: bool| -> DeviceInfo {
+            let mut d = record["device"].clone();
+            d["device_type"] = device_type.into();
+            d["features"]["ray_query"] = ray_query.into();
+            serde_json::from_value(d).unwrap()
+        };
+        for (kind, ray_query, want) in [
+            ("CPU", true, Lookup::Bvh),
+            ("CPU", false, Lookup::Bvh),
+            ("DISCRETE_GPU", false, Lookup::Bvh),
+            ("DISCRETE_GPU", true, Lookup::RayQuery),
+            ("INTEGRATED_GPU", true, Lookup::RayQuery),
+        ] {
+            let got = one_light_path(&device(kind, ray_query));
+            assert_eq!(got, Some(want), "{kind}, ray queries {ray_query}");
+        }
+    }
+
     #[test]
     fn the_registry_makes_one_lookup_per_plugin_in_order() {
         assert_eq!(REGISTRY.len(), Lookup::ALL.len());
