@@ -206,6 +206,13 @@ struct CsvRow {
     observer_angular_p99_deg: Option<Real>,
     pareto: Option<bool>,
     sensor_traced_fraction: Option<Real>,
+    /// A counted trace's work (`bvh`'s sensor frame, the CPU walk's count, which the shader's
+    /// walk follows step for step): rays, wide nodes visited, objects entered, triangles
+    /// tested. Exact and device-independent, as in the JSON record and the gate.
+    trace_rays: Option<u64>,
+    trace_nodes: Option<u64>,
+    trace_instances: Option<u64>,
+    trace_triangles: Option<u64>,
 }
 
 /// The CSV (see [`CsvRow`]): the `method` rows, then the `rung` rows. `path` is staged in
@@ -308,6 +315,10 @@ fn rung_row(r: &RungRow) -> CsvRow {
         observer_angular_p99_deg: real(observer.map(|v| v.angular.p99_deg)),
         pareto: r.pareto,
         sensor_traced_fraction: real(r.sensor_traced_fraction),
+        trace_rays: r.work.trace.as_ref().map(|t| t.rays),
+        trace_nodes: r.work.trace.as_ref().map(|t| t.nodes),
+        trace_instances: r.work.trace.as_ref().map(|t| t.instances),
+        trace_triangles: r.work.trace.as_ref().map(|t| t.triangles),
         ..CsvRow::default()
     }
 }

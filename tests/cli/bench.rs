@@ -101,6 +101,21 @@ fn check_reports(json: &Path, csv: &Path, svg: &Path, peak_bytes: u64) {
     let text = std::fs::read_to_string(csv).unwrap();
     assert_eq!(text.lines().count(), 1 + 8 + 18);
     assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 18);
+    // The bvh rung's counted walk: its rays and nodes; a cube rung counts none.
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (rung, nodes, rays) = (column("rung"), column("trace_nodes"), column("trace_rays"));
+    for line in text.lines().filter(|l| l.starts_with("rung,")) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let count = |c: usize| cells[c].parse::<u64>().ok();
+        match cells[rung] {
+            "bvh" => assert!(
+                count(nodes) >= count(rays) && count(rays) > Some(0),
+                "{line}"
+            ),
+            _ => assert_eq!((cells[nodes], cells[rays]), ("", ""), "{line}"),
+        }
+    }
     check_plot(&std::fs::read_to_string(svg).unwrap());
     check_record(&read_json(json), peak_bytes);
 }
