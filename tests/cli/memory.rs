@@ -2,10 +2,11 @@
 //! (`core/src/memory/estimates.rs`, `specchio::memory`): refused over the budget with the figures and
 //! nothing written, and, where it runs, never using more than it estimated.
 //!
-//! The estimate is read from the refusal under a one-byte budget (`SPECCHIO_MEMORY_BUDGET=1`),
-//! then the same command runs under the default budget and its peak resident memory (from
-//! `wait4`, the child's own) must stay within it, and within twice what it uses (an estimate
-//! too loose to mean anything fails too).
+//! The estimate is read from the refusal under a 1 MiB budget (`SPECCHIO_MEMORY_BUDGET=1MiB`,
+//! below every command's estimate here and above the scene's textures, which are held to the
+//! budget as they load), then the same command runs under the default budget and its peak
+//! resident memory (from `wait4`, the child's own) must stay within it, and within twice what
+//! it uses (an estimate too loose to mean anything fails too).
 
 use std::path::Path;
 use std::process::Command;
@@ -114,9 +115,9 @@ fn each_command_stays_within_its_estimate_and_is_refused_above_the_budget() {
     ];
     let mut failures = Vec::new();
     for args in &cases {
-        let (code, refusal, _) = run(args, Some("1"));
-        assert_eq!(code, Some(1), "{args:?} under a 1-byte budget:\n{refusal}");
-        assert!(refusal.contains("SPECCHIO_MEMORY_BUDGET=1"), "{refusal}");
+        let (code, refusal, _) = run(args, Some("1MiB"));
+        assert_eq!(code, Some(1), "{args:?} under a 1 MiB budget:\n{refusal}");
+        assert!(refusal.contains("SPECCHIO_MEMORY_BUDGET=1MiB"), "{refusal}");
         assert!(
             !out.exists() && !json.exists(),
             "{args:?}: refused, yet wrote its output"
@@ -157,4 +158,54 @@ fn a_budget_that_is_not_a_size_is_refused() {
         "{stderr}"
     );
     assert!(!out.exists());
+}
+
+/// A texture is held to the budget from its header, before its pixels are decoded: a small
+/// file can hold a large image (here 4096² in a few hundred KB: 192 MiB in a renderer). The
+/// refusal names the texture's field, and the process never takes the decoded image's memory
+/// (a peak of 534 MB for an 8192² file before, under a 100 MiB budget).
+#[test]
+fn a_texture_over_the_budget_is_refused_from_its_header() {
+    let dir = temp_dir("memory-texture");
+    std::fs::create_dir_all(&dir).unwrap();
+    let side = 4096;
+    let file = std::fs::File::create(dir.join("big.png")).unwrap();
+    let mut png = png::Encoder::new(std::io::BufWriter::new(file), side, side);
+    png.set_color(png::ColorType::Rgba);
+    // Row by row: a child's peak (wait4's) counts what the parent held when it forked.
+    let mut writer = png.write_header().unwrap();
+    let mut rows = writer.stream_writer().unwrap();
+    let row = vec![128u8; (side * 4) as usize];
+    for _ in 0..side {
+        std::io::Write::write_all(&mut rows, &row).unwrap();
+    }
+    rows.finish().unwrap();
+    let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
+    let scene = dir.join("big.toml");
+    let material = "\n[[materials]]\nname = \"big\"\ntype = \"texture\"\nfile = \"big.png\"\n";
+    let text = text.replacen("[room]", &format!("{material}\n[room]"), 1);
+    let walls = text.find("walls").expect("the room names its walls");
+    let end = walls + text[walls..].find('\n').unwrap();
+    let text = format!("{}walls = \"big\"{}", &text[..walls], &text[end..]);
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let args = [
+        "reference",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let (code, stderr, peak) = run(&args, Some("64MiB"));
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("materials[") && stderr.contains(".file: this texture (4096 x 4096)"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("more than the memory budget of 64.0 MiB"),
+        "{stderr}"
+    );
+    assert!(peak < 48 << 20, "peak {} MiB", peak >> 20);
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -84,6 +84,16 @@ pub fn encode_rgb_samples(
 /// stored (sRGB-encoded): palette and grayscale expanded, 16-bit channels reduced to 8 bits,
 /// missing alpha 255. Each side must be in 1..=`max_side`, checked from the header before any
 /// pixel memory is allocated. The error is a message for the caller to place.
+/// A PNG's size from its header alone (no pixel is decoded): for budgets checked before the
+/// decoding's memory is taken.
+pub fn dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
+    let decoder = ::png::Decoder::new(Cursor::new(bytes));
+    let reader = decoder
+        .read_info()
+        .map_err(|e| format!("not a valid PNG: {e}"))?;
+    Ok((reader.info().width, reader.info().height))
+}
+
 pub fn decode_rgba8(bytes: &[u8], max_side: u32) -> Result<(u32, u32, Vec<u8>), String> {
     let bad = |e: DecodingError| format!("not a valid PNG: {e}");
     let mut decoder = ::png::Decoder::new(Cursor::new(bytes));
@@ -98,6 +108,17 @@ pub fn decode_rgba8(bytes: &[u8], max_side: u32) -> Result<(u32, u32, Vec<u8>), 
     let size = (reader.output_buffer_size()).ok_or("image too large for this machine")?;
     let mut buf = vec![0u8; size];
     let frame = reader.next_frame(&mut buf).map_err(bad)?;
+    let texels = width as usize * height as usize;
+    let packed = frame.line_size == 4 * width as usize && buf.len() >= 4 * texels;
+    if frame.color_type == ::png::ColorType::Rgba
+        && frame.bit_depth == ::png::BitDepth::Eight
+        && packed
+    {
+        // Already RGBA8, rows packed: the decoder's buffer is the texture (no second copy of
+        // an 8192² image).
+        buf.truncate(4 * texels);
+        return Ok((width, height, buf));
+    }
     let rgba8 = expand(&buf, &frame, width, height)?;
     Ok((width, height, rgba8))
 }

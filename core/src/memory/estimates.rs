@@ -81,8 +81,10 @@ const BENCH_RUNG_VIEW_PIXEL_BYTES: u64 = 55;
 /// the same at 512² and 1024² faces).
 const BENCH_ACCURACY_VIEW_PIXEL_BYTES: u64 = 500;
 
+/// The estimate's part for the textures (its refusal then says to shrink them).
+pub(crate) const TEXTURES_PART: &str = "the scene's textures";
 /// A decoded texel of the scene's textures: the decoded image, its upload and its mips.
-const TEXEL_BYTES: u64 = 12;
+pub(crate) const TEXEL_BYTES: u64 = 12;
 
 /// What the scene itself costs a renderer or the reference: its triangles a pass (every
 /// object's, walls included) at `triangle_bytes` each, and its textures.
@@ -98,7 +100,7 @@ fn scene_parts(e: &mut Estimate, scene: &Scene, triangle_bytes: u64) {
         .iter()
         .map(|t| u64::from(t.width) * u64::from(t.height))
         .sum();
-    e.add_many("the scene's textures", texels, TEXEL_BYTES);
+    e.add_many(TEXTURES_PART, texels, TEXEL_BYTES);
 }
 
 fn pixels([w, h]: [u32; 2]) -> u64 {

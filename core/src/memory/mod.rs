@@ -113,6 +113,13 @@ impl Estimate {
         }
         let mut parts = self.parts.clone();
         parts.sort_by_key(|p| std::cmp::Reverse(p.1));
+        // Resolutions cannot help when the textures are most of it.
+        let hint = match parts.first() {
+            Some((what, _)) if what == estimates::TEXTURES_PART => {
+                "the scene's textures are the largest part: use smaller images (materials' file)"
+            }
+            _ => hint,
+        };
         let parts = parts
             .iter()
             .filter(|(_, b)| *b > 0)
@@ -210,6 +217,18 @@ mod tests {
             text,
             "this run would need about 4.3 GiB of memory (layers: 4.0 GiB, images: 256.0 MiB, \
              tree: 1.0 MiB), more than the budget of 1.0 GiB (a test): lower the resolution"
+        );
+        // Where the textures are the largest part, the hint is to shrink them.
+        e.add_many(estimates::TEXTURES_PART, 8192 * 8192, 128);
+        let text = e
+            .check(&budget, "lower the resolution")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            text.ends_with(
+                ": the scene's textures are the largest part: use smaller images (materials' file)"
+            ),
+            "{text}"
         );
         let mut huge = Estimate::new();
         huge.add_many("absurd", u64::MAX, 2).add("more", 1);

@@ -95,16 +95,42 @@ impl Ctx<'_> {
         Ok(())
     }
 
-    /// The distinct textures' decoded bytes, checked as each is added.
-    pub(super) fn texture_budget(&self, field: &str, textures: &[TextureData]) -> R<()> {
-        let total: u64 = textures.iter().map(|t| t.rgba8.len() as u64).sum();
+    /// The distinct textures' decoded bytes with one more of `size` texels (from its header),
+    /// checked before it is decoded: against the scene's cap, and against the process's memory
+    /// budget (what a renderer holds of them: [`crate::memory::estimates::TEXEL_BYTES`] a
+    /// texel), so that the refusal names the texture, not the views' resolutions.
+    pub(super) fn texture_budget(
+        &self,
+        field: &str,
+        textures: &[TextureData],
+        (width, height): (u32, u32),
+    ) -> R<()> {
+        let texels: u64 = (textures.iter())
+            .map(|t| u64::from(t.width) * u64::from(t.height))
+            .sum::<u64>()
+            + u64::from(width) * u64::from(height);
+        let total = texels * 4;
         if total > MAX_TEXTURE_BYTES {
             return Err(self.invalid(
                 field,
                 format!(
-                    "too much texture data: this texture brings the scene's decoded textures to {}, at most {} are allowed",
+                    "too much texture data: this texture ({width} x {height}) brings the scene's decoded textures to {}, at most {} are allowed",
                     mib(total),
                     mib(MAX_TEXTURE_BYTES)
+                ),
+            ));
+        }
+        let budget =
+            crate::memory::Budget::from_env().map_err(|e| self.invalid(field, e.to_string()))?;
+        let held = texels.saturating_mul(crate::memory::estimates::TEXEL_BYTES);
+        if held > budget.bytes {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "this texture ({width} x {height}) brings the scene's textures to about {} in a renderer, more than the memory budget of {} ({}): use a smaller image",
+                    crate::memory::Bytes(held),
+                    crate::memory::Bytes(budget.bytes),
+                    budget.source
                 ),
             ));
         }

@@ -127,14 +127,20 @@ impl Ctx<'_> {
         if let Some(index) = textures.iter().position(|t| t.path == path) {
             return Ok(index);
         }
-        let t = TextureData::from_png(&path).map_err(|message| SceneError::Asset {
+        let asset = |message: String| SceneError::Asset {
             location: self.loc.location(&f("file")),
             field: f("file"),
             asset: path.clone(),
             message,
-        })?;
+        };
+        let bytes = crate::files::read_regular_file(&path, crate::files::MAX_TEXTURE_FILE_BYTES)
+            .map_err(|e| asset(e.to_string()))?;
+        // The budgets hold before the decoding takes its memory (a 535 KB file can hold an
+        // 8192² image: 256 MiB decoded, twice that while decoding).
+        let (width, height) = crate::image::png::dimensions(&bytes).map_err(asset)?;
+        self.texture_budget(&f("file"), textures, (width, height))?;
+        let t = TextureData::from_png_bytes(&bytes, &path).map_err(|e| asset(e.to_string()))?;
         textures.push(t);
-        self.texture_budget(&f("file"), textures)?;
         Ok(textures.len() - 1)
     }
 }
