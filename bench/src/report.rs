@@ -364,8 +364,17 @@ mod tests {
         let text = String::from_utf8(csv_bytes(&record).unwrap()).unwrap();
         assert_eq!(text.lines().count(), 1, "{text}");
         let header: Vec<&str> = text.trim_end().split(',').collect();
-        assert_eq!(header.len(), 33);
+        assert_eq!(header.len(), 37);
         assert_eq!((header[0], header[32]), ("row", "sensor_traced_fraction"));
+        assert_eq!(
+            header[33..],
+            [
+                "trace_rays",
+                "trace_nodes",
+                "trace_instances",
+                "trace_triangles"
+            ]
+        );
     }
 
     #[test]
@@ -380,7 +389,7 @@ mod tests {
         let mut reader = csv::Reader::from_reader(bytes.as_slice());
         let header = reader.headers().unwrap().clone();
         let column = |name: &str| header.iter().position(|h| h == name).unwrap();
-        assert_eq!(header.len(), 33);
+        assert_eq!(header.len(), 37);
         let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.unwrap()).collect();
         assert_eq!(
             rows.len(),
@@ -391,7 +400,7 @@ mod tests {
             .skip(record.speed_vs_error.len())
             .zip(&record.tradeoff)
         {
-            assert_eq!(row.len(), 33);
+            assert_eq!(row.len(), 37);
             assert_eq!(&row[column("scene")], odd);
             assert_eq!(&row[column("row")], "rung");
             assert_eq!(&row[column("rung")], r.rung);
