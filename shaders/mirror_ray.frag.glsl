@@ -19,7 +19,9 @@
 //   that colour, range and ids come from one light path. The range is then measured from the
 //   ray's offset origin, as the reference measures it; a ray that meets nothing (it cannot,
 //   inside a closed room) gets the room box's answer, as the cube path's does.
-// build: mirror_ray_cube=THROUGH_CUBE mirror_ray_traced=TRACED mirror_ray_bvh=TRACED+BVH
+// - mirror_ray_bvh_pretraced: bvh's trace read from the pixel's record, where a compute pass
+//   walked it before the views (pretrace.glsl).
+// build: mirror_ray_cube=THROUGH_CUBE mirror_ray_traced=TRACED mirror_ray_bvh=TRACED+BVH mirror_ray_bvh_pretraced=TRACED+BVH+PRETRACED
 #extension GL_GOOGLE_include_directive : require
 #ifdef TRACED
 #extension GL_EXT_nonuniform_qualifier : require
@@ -39,6 +41,10 @@ PUSH_CONSTANTS;
 #else
 #include "sensor_ray.glsl"
 #endif
+#ifdef PRETRACED
+#define PRETRACE_BINDING (TRACED_SURFACE_BINDING + 3)
+#include "pretrace.glsl"
+#endif
 #include "pixel_hit.glsl"
 #include "sensor_quantities.glsl"
 
@@ -46,7 +52,12 @@ PUSH_CONSTANTS;
 // normal n) meets.
 void range_id(vec3 dir, vec3 hit, vec3 n, vec3 r, out float range, out uint id) {
 #ifdef TRACED
+#ifdef PRETRACED
+    Reflection reflection =
+        unpack_reflection(traced[traced_index(push.view_index, gl_FragCoord.xy)]);
+#else
     Reflection reflection = trace_reflection(frame, dir, hit, n);
+#endif
     range = reflection.range;
     id = reflection.id;
     if (!reflection.found) {
@@ -63,6 +74,11 @@ void main() {
     if (!mirror_hit(view, frame, dir, hit, n)) {
         discard;
     }
+#ifdef PRETRACED
+    if (traced_miss(traced[traced_index(push.view_index, gl_FragCoord.xy)])) {
+        discard;
+    }
+#endif
     PixelHit pixel;
     pixel.mirror_point = hit;
     pixel.reflected = reflect(dir, n); // R = I - 2 (N.I) N, as the CPU's mirror_reflection

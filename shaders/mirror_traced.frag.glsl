@@ -12,7 +12,10 @@
 // - OUTPUT_DIRECTION: the direction from the cube's centre (frame.cube_centre) to the point
 //   the ray meets, as the reference's direction layer; zero where it meets nothing. The
 //   angular error against the reference is then float rounding only.
-// build: mirror_ray_query=OUTPUT_COLOUR+RAY_QUERY mirror_ray_query_direction=OUTPUT_DIRECTION+RAY_QUERY mirror_bvh=OUTPUT_COLOUR+BVH mirror_bvh_direction=OUTPUT_DIRECTION+BVH
+//
+// PRETRACED (the bvh lookup where its walk runs in a compute pass first: pretrace.glsl): the
+// pixel's reflection is read from its record instead of traced here.
+// build: mirror_ray_query=OUTPUT_COLOUR+RAY_QUERY mirror_ray_query_direction=OUTPUT_DIRECTION+RAY_QUERY mirror_bvh=OUTPUT_COLOUR+BVH mirror_bvh_direction=OUTPUT_DIRECTION+BVH mirror_bvh_pretraced=OUTPUT_COLOUR+BVH+PRETRACED mirror_bvh_pretraced_direction=OUTPUT_DIRECTION+BVH+PRETRACED
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_nonuniform_qualifier : require
 #include "shared.glsl"
@@ -26,6 +29,10 @@ PUSH_CONSTANTS;
 #else
 #include "bvh.glsl"
 #endif
+#ifdef PRETRACED
+#define PRETRACE_BINDING (TRACED_SURFACE_BINDING + 3)
+#include "pretrace.glsl"
+#endif
 
 layout(location = 0) out vec4 out_value;
 
@@ -33,9 +40,18 @@ void main() {
     ViewData view = views[push.view_index];
     vec3 hit;
     Reflection reflection;
+#ifdef PRETRACED
+    vec3 dir, n;
+    TracedPixel record = traced[traced_index(push.view_index, gl_FragCoord.xy)];
+    if (traced_miss(record) || !mirror_hit(view, frame, dir, hit, n)) {
+        discard;
+    }
+    reflection = unpack_reflection(record);
+#else
     if (!mirror_reflection(view, frame, hit, reflection)) {
         discard;
     }
+#endif
 #ifdef OUTPUT_COLOUR
     out_value = vec4(reflection.colour, 1.0);
 #else

@@ -50,6 +50,8 @@ pub struct Plan {
     pub frames_in_flight: u32,
     /// The order the tracing rungs hand their acceleration-structure builds.
     pub trace_order: specchio::render::lookups::TraceOrder,
+    /// Where the tracing rungs walk their rays (None: the device's default).
+    pub trace_in: Option<specchio::render::lookups::TraceIn>,
 }
 
 /// A line of the table: on stdout, or on stderr when stdout carries a JSON document.

@@ -50,6 +50,7 @@ pub(crate) fn measure(
         floors: !args.no_floors,
         frames_in_flight: args.frames_in_flight,
         trace_order: args.trace_order,
+        trace_in: args.trace_in,
     };
     let progress = Progress::new(rounds(settled, scenes, &work, &plan));
     progress.say(args.format, headline(settled, scenes.len(), &work));
@@ -278,6 +279,7 @@ fn new_record(
             quick: args.quick,
             full: args.full,
             trace_order: args.trace_order.name().to_owned(),
+            trace_in: args.trace_in.map(|t| t.name().to_owned()),
             dynamic_cube_size,
             refresh: "every-frame (timing); on-change (dynamic)".to_owned(),
         },

@@ -144,6 +144,11 @@ pub struct Args {
     /// worth: docs/accuracy.md).
     #[arg(long, value_parser = specchio::process::args::trace_order, default_value = "split")]
     pub trace_order: specchio::render::lookups::TraceOrder,
+    /// Where the bvh rung walks its rays: fragment (in the mirror's fragment shaders) or
+    /// compute (once a view, in a compute pass before it is drawn). Default: the device's
+    /// (compute on a GPU, fragment on a CPU driver; docs/accuracy.md).
+    #[arg(long, value_parser = specchio::process::args::trace_in)]
+    pub trace_in: Option<specchio::render::lookups::TraceIn>,
 }
 
 /// A rung's label, checked against the ladder.

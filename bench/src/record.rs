@@ -83,6 +83,10 @@ pub struct Settings {
     pub full: bool,
     /// The tracing rungs' build order (`--trace-order`: split or given).
     pub trace_order: String,
+    /// Where the tracing rungs walked their rays (`--trace-in`), when it was given; else the
+    /// device's default (`TraceIn::default_for`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trace_in: Option<String>,
     pub dynamic_cube_size: u32,
     pub refresh: String,
 }

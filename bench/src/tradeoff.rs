@@ -219,6 +219,7 @@ fn renderer(
         refresh: Some(RefreshPolicy::EveryFrame),
         lookup: Some(rung.lookup),
         trace_order: plan.trace_order,
+        trace_in: plan.trace_in,
         ..Default::default()
     };
     Renderer::new(device, scene, &options)

@@ -64,9 +64,12 @@ vec3 from_vertex(FrameData f, vec3 p) {
 }
 
 // The pixel centre's viewport coordinates in [-1, 1].
+#ifndef PIXEL_CENTRE
+#define PIXEL_CENTRE gl_FragCoord.xy
+#endif
 vec2 pixel_ndc(ViewData view) {
     // gl_FragCoord is the pixel centre: the same point the rasterizer samples.
-    return (gl_FragCoord.xy - view.viewport.xy) / view.viewport.zw * 2.0 - 1.0;
+    return (PIXEL_CENTRE - view.viewport.xy) / view.viewport.zw * 2.0 - 1.0;
 }
 
 // False when this pixel's ray misses the mirror. Otherwise the ray's direction, the hit point

@@ -136,6 +136,16 @@ struct MaterialSample {
 #define RAY_MASK_WALLS 1u
 #define RAY_MASK_OBJECTS 2u
 
+// The camera views (observer, sensor, the pair's two) follow the six cube faces in the views
+// block: a pretraced lookup keeps one record a camera-view pixel, in view order from the first
+// (pretrace.glsl; engine/src/render/resources.rs VIEW_OBSERVER).
+#define FIRST_CAMERA_VIEW 6u
+#define CAMERA_VIEWS 4u
+// Bytes of one pretraced pixel's record (pretrace.glsl's TracedPixel), and the side of the
+// pretrace's square workgroup (trace_view.comp).
+#define TRACED_PIXEL_BYTES 32u
+#define TRACE_GROUP_SIDE 8u
+
 // Descriptor set 0: the scene. Set 1: the environment cube (views only).
 #define SCENE_BINDINGS \
     layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; }; \

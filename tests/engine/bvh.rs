@@ -92,3 +92,79 @@ fn a_moving_scene_traces_each_frame_where_its_objects_are() {
     drop(r);
     gpu.finish();
 }
+
+/// The walk in a compute pass before the views (`TraceIn::Compute`, a GPU's default: the
+/// records of `shaders/include/pretrace.glsl`) draws what the fragment shaders' own walk draws,
+/// bit for bit: the observer, the sensor, the pair, both direction images and every quantity
+/// of the sensor's ray map, on every driver, over frames whose objects move (the records are
+/// rewritten each frame after the last frame's reads).
+#[test]
+fn the_compute_walk_draws_what_the_fragment_walk_draws() {
+    use specchio::render::lookups::TraceIn;
+    let readback = Readback {
+        views: true,
+        directions: true,
+        rays: true,
+        ..Default::default()
+    };
+    for device in devices() {
+        let gpu = Gpu::on(&device, Default::default());
+        for (path, times) in [
+            ("scenes/many-objects.toml", &[0.0][..]),
+            ("scenes/hyperbolic-room.toml", &[0.0]),
+            ("scenes/moving-objects.toml", &[0.4, 1.3]),
+        ] {
+            let s = scene(path);
+            let frames = |trace_in| {
+                let options = RenderOptions {
+                    lookup: Some(Lookup::Bvh),
+                    trace_in: Some(trace_in),
+                    frames_in_flight: 2,
+                    ..Default::default()
+                };
+                let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+                let all: Vec<_> = (times.iter().enumerate())
+                    .map(|(i, &t)| r.render_frame(i as u64, t, readback).expect("frame").1)
+                    .collect();
+                drop(r);
+                all
+            };
+            let (fragment, compute) = (frames(TraceIn::Fragment), frames(TraceIn::Compute));
+            for (i, (a, b)) in fragment.iter().zip(&compute).enumerate() {
+                let name = format!("{path} on {device}, frame {i}");
+                for (what, x, y) in [
+                    ("observer", &a.observer, &b.observer),
+                    ("sensor", &a.sensor, &b.sensor),
+                    ("pair", &a.pair, &b.pair),
+                    (
+                        "observer directions",
+                        &a.observer_direction,
+                        &b.observer_direction,
+                    ),
+                    (
+                        "sensor directions",
+                        &a.sensor_direction,
+                        &b.sensor_direction,
+                    ),
+                ] {
+                    assert!(x.is_some(), "{name}: {what} read back");
+                    assert!(x == y, "{name}: {what} differs");
+                }
+                let (qa, qb) = (a.sensor_quantities.as_ref(), b.sensor_quantities.as_ref());
+                let (qa, qb) = (qa.expect("the ray map"), qb.expect("the ray map"));
+                for ((quantity, x), (_, y)) in qa.iter().zip(qb.iter()) {
+                    let differ: Vec<_> = (x.pixels.iter().zip(&y.pixels).enumerate())
+                        .filter(|(_, (p, q))| p != q)
+                        .collect();
+                    assert!(
+                        differ.is_empty(),
+                        "{name}: the ray map's {quantity} differs at {} pixels, first {:?}",
+                        differ.len(),
+                        differ.first()
+                    );
+                }
+            }
+        }
+        gpu.finish();
+    }
+}

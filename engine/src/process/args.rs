@@ -86,6 +86,12 @@ pub fn lookup(text: &str) -> Result<Lookup, String> {
         .ok_or_else(|| format!("`{text}` is not a lookup: one of {}", Lookup::names()))
 }
 
+/// A `--trace-in` value.
+pub fn trace_in(text: &str) -> Result<crate::render::lookups::TraceIn, String> {
+    crate::render::lookups::TraceIn::parse(text.trim())
+        .ok_or_else(|| format!("`{text}` is not where to trace: fragment or compute"))
+}
+
 /// A `--trace-order` value.
 pub fn trace_order(text: &str) -> Result<TraceOrder, String> {
     TraceOrder::ALL

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use super::gpu;
-use super::lookups::{self, LookupPass, TraceOrder};
+use super::lookups::{self, LookupPass, TraceIn, TraceOrder};
 use super::resources::SceneResources;
 use super::retired::Retired;
 use super::targets::CubeTarget;
@@ -13,6 +13,10 @@ use crate::scene::{Lookup, Scene};
 use crate::vk::commands::Submitter;
 use crate::vk::device::Device;
 use crate::vk::GpuError;
+
+/// How a tracing lookup traces: the order it hands its builds, and where it walks its rays
+/// (None: the device's default).
+pub(super) type Tracing = (TraceOrder, Option<TraceIn>);
 
 /// What a lookup's pass is built from: the scene, the device, the scene on it, the cube, the
 /// submitter.
@@ -29,8 +33,8 @@ pub(super) struct Mirror {
     /// Passes switched away from while frames in flight still used them.
     retired: Retired<Box<dyn LookupPass>>,
     lookup: Lookup,
-    /// The order the tracing lookups hand their builds (kept for a lookup switched in place).
-    trace_order: TraceOrder,
+    /// How the tracing lookups trace (kept for a lookup switched in place).
+    tracing: Tracing,
     /// The renderer's frames in flight (a pass keeps per-frame copies of what the host reads).
     frames_in_flight: usize,
 }
@@ -39,14 +43,14 @@ impl Mirror {
     pub fn create(
         inputs: Inputs<'_>,
         lookup: Lookup,
-        trace_order: TraceOrder,
+        tracing: Tracing,
         frames_in_flight: usize,
     ) -> Result<Self, GpuError> {
         Ok(Self {
-            pass: create_pass(inputs, lookup, trace_order, frames_in_flight)?,
+            pass: create_pass(inputs, lookup, tracing, frames_in_flight)?,
             retired: Retired::default(),
             lookup,
-            trace_order,
+            tracing,
             frames_in_flight,
         })
     }
@@ -66,7 +70,7 @@ impl Mirror {
         in_flight: Option<u64>,
     ) -> Result<(), GpuError> {
         if lookup != self.lookup {
-            let new = create_pass(inputs, lookup, self.trace_order, self.frames_in_flight)?;
+            let new = create_pass(inputs, lookup, self.tracing, self.frames_in_flight)?;
             let old = std::mem::replace(&mut self.pass, new);
             self.retired.keep(in_flight, old);
             self.lookup = lookup;
@@ -89,7 +93,7 @@ impl Mirror {
 fn create_pass(
     (scene, device, resources, cube, submitter): Inputs<'_>,
     lookup: Lookup,
-    trace_order: TraceOrder,
+    (trace_order, trace_in): Tracing,
     frames_in_flight: usize,
 ) -> Result<Box<dyn LookupPass>, GpuError> {
     if let Some(why) = lookups::missing_features(lookup, &device.info) {
@@ -106,6 +110,7 @@ fn create_pass(
         push_size: std::mem::size_of::<gpu::Push>() as u32,
         trace_order,
         frames_in_flight,
+        trace_in: trace_in.unwrap_or_else(|| TraceIn::default_for(&device.info)),
     })?;
     // What the plug-in says decides the renderer's id cube before the pass exists.
     assert_eq!(

@@ -114,8 +114,11 @@ impl ViewPasses {
         let (before, after) = undrawn_timestamps(&slots);
         mark(f, cmd, &before);
         let p = &self.pipelines;
+        // The camera views a pretraced lookup has traced this frame (bit v - VIEW_OBSERVER).
+        let mut traced = 0u32;
         for (slot, target) in slots {
             let pass = pass_of(slot);
+            pretrace((f, &mut *graph), cmd, pass.views, &mut traced);
             let scene = match pass.output {
                 MirrorOutput::Colour => &p.colour,
                 _ => &p.depth_only,
@@ -138,7 +141,7 @@ impl ViewPasses {
             }
         }
         if display.is_none() {
-            self.record_ray_map((f, &mut *graph), cmd, views, readback);
+            self.record_ray_map((f, &mut *graph), cmd, views, readback, &mut traced);
         }
         mark(f, cmd, &after);
     }
@@ -151,10 +154,12 @@ impl ViewPasses {
         cmd: vk::CommandBuffer,
         views: &[ViewBasis],
         readback: Readback,
+        traced: &mut u32,
     ) {
         let (Some((rays, _)), Some(targets)) = (&self.sensor_rays, self.ray_map(readback)) else {
             return;
         };
+        pretrace((f, &mut *graph), cmd, &[VIEW_SENSOR], traced);
         let drawn = (targets.drawn(), targets.attachments());
         let how = (&rays.scene_depth, MirrorOutput::RayMap);
         let pass_views = (&[VIEW_SENSOR][..], views);
@@ -305,6 +310,28 @@ fn viewport([width, height]: [u32; 2], v: u32) -> [f32; 4] {
         VIEW_PAIR_LEFT => [0.0, 0.0, half, PAIR_SIZE[1] as f32],
         VIEW_PAIR_RIGHT => [half, 0.0, half, PAIR_SIZE[1] as f32],
         _ => [0.0, 0.0, width as f32, height as f32],
+    }
+}
+
+/// A pretraced lookup's walk of each of `views` the frame has not traced yet (`traced`, bit
+/// v - VIEW_OBSERVER), recorded before the first pass that draws it: the passes after it read
+/// its records (`shaders/include/pretrace.glsl`), so a view's rays are walked once a frame.
+fn pretrace(
+    (f, graph): (&FrameParts, &mut FrameGraph),
+    cmd: vk::CommandBuffer,
+    views: &[u32],
+    traced: &mut u32,
+) {
+    if !f.lookup.pretraces() {
+        return;
+    }
+    for &v in views {
+        let bit = 1 << (v - VIEW_OBSERVER);
+        if *traced & bit == 0 {
+            *traced |= bit;
+            let mut pass = super::graph::PassRecorder::new(f.draw.device, cmd, graph);
+            f.lookup.pretrace(&mut pass, f.draw.resources.scene_set, v);
+        }
     }
 }
 

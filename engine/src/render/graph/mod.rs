@@ -64,6 +64,10 @@ pub enum Use {
     AccelerationBuild,
     /// Traced through by fragment shaders' ray queries.
     AccelerationTraced,
+    /// Written by compute shaders' storage accesses (a pretraced lookup's records).
+    ComputeWrite,
+    /// Read by fragment shaders' storage accesses (the records the compute pass wrote).
+    FragmentStorageRead,
 }
 
 const BLIT_READ: Sync = (
@@ -100,6 +104,14 @@ const TRACED: Sync = (
     vk::PipelineStageFlags2::FRAGMENT_SHADER,
     vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
 );
+const COMPUTE_WRITE: Sync = (
+    vk::PipelineStageFlags2::COMPUTE_SHADER,
+    vk::AccessFlags2::SHADER_STORAGE_WRITE,
+);
+const STORAGE_READ: Sync = (
+    vk::PipelineStageFlags2::FRAGMENT_SHADER,
+    vk::AccessFlags2::SHADER_STORAGE_READ,
+);
 
 impl Use {
     /// The image layout of the use (buffers have none: `UNDEFINED`).
@@ -116,7 +128,9 @@ impl Use {
             | Use::ReadAnywhere
             | Use::FragmentStorage
             | Use::AccelerationBuild
-            | Use::AccelerationTraced => vk::ImageLayout::UNDEFINED,
+            | Use::AccelerationTraced
+            | Use::ComputeWrite
+            | Use::FragmentStorageRead => vk::ImageLayout::UNDEFINED,
         }
     }
 
@@ -135,6 +149,8 @@ impl Use {
             Use::FragmentStorage => STORAGE_RW,
             Use::AccelerationBuild => BUILD_RW,
             Use::AccelerationTraced => TRACED,
+            Use::ComputeWrite => COMPUTE_WRITE,
+            Use::FragmentStorageRead => STORAGE_READ,
         }
     }
 
@@ -151,6 +167,7 @@ impl Use {
                 | Use::Filled
                 | Use::FragmentStorage
                 | Use::AccelerationBuild
+                | Use::ComputeWrite
         )
     }
 

@@ -16,12 +16,14 @@ use ash::vk;
 use glam::{Mat4, UVec4};
 use gpu_allocator::MemoryLocation;
 
+use super::pretrace::{self, Pretrace};
 use super::{
     as_is, FrameObjects, LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders,
-    Rung, Start, TraceSet, Work,
+    Rung, Start, TraceIn, TraceSet, Work,
 };
 use crate::bvh::layout::{BvhInstance, BvhWall, WideNode};
 use crate::bvh::{object_drawable, MeshBvhs, Placed, TopLevel};
+use crate::render::graph::{PassRecorder, Resource, Use};
 use crate::scene::{Lookup, Scene};
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
 use crate::vk::device::{Device, DeviceInfo};
@@ -79,11 +81,14 @@ impl MirrorLookup for Bvh {
 }
 
 /// The set's bindings, in `bvh.glsl`'s order: nodes (both levels), mesh triangles,
-/// instances, walls, then `traced_surface.glsl`'s vertices, indices and drawable ranges.
-const BINDINGS: u32 = 7;
+/// instances, walls, then `traced_surface.glsl`'s vertices, indices and drawable ranges, then
+/// `pretrace.glsl`'s records.
+const BINDINGS: u32 = 8;
 
 /// The bvh lookup's per-renderer state. Field order is drop order.
 struct BvhPass {
+    /// The compute walk, where the device walks there ([`TraceIn::Compute`]).
+    pretrace: Option<Pretrace>,
     pipelines: MirrorPipelines,
     _pool: DescriptorPool,
     set: vk::DescriptorSet,
@@ -101,6 +106,8 @@ struct BvhPass {
     /// meshes' trees.
     nodes: Buffer,
     instances: Buffer,
+    /// The pretraced records (one, unread, where the fragment shaders walk).
+    records: Buffer,
     _fixed: [Buffer; 3],
 }
 
@@ -115,7 +122,9 @@ impl BvhPass {
             (MeshBvhs::build(&scene.meshes).map_err(unsupported)?).shifted(top_room as u32);
         let (nodes, fixed) = fixed_buffers(ctx, &meshes, top_room)?;
         let instances = instance_buffer(device, scene.objects.len())?;
-        let stage = vk::ShaderStageFlags::FRAGMENT;
+        let stage = vk::ShaderStageFlags::FRAGMENT | vk::ShaderStageFlags::COMPUTE;
+        let pretraced = ctx.trace_in == TraceIn::Compute;
+        let records = pretrace::records(ctx, pretraced)?;
         let bindings: Vec<_> = (0..BINDINGS)
             .map(|b| descriptors::binding(b, vk::DescriptorType::STORAGE_BUFFER, 1, stage))
             .collect();
@@ -136,17 +145,31 @@ impl BvhPass {
             &res.vertices,
             &res.indices,
             ranges,
+            &records,
         ];
         for (binding, buffer) in (0..).zip(buffers) {
             let storage = vk::DescriptorType::STORAGE_BUFFER;
             descriptors::write_buffer(device, set, binding, storage, buffer.raw);
         }
-        let shaders = MirrorShaders {
-            colour: crate::shaders::MIRROR_BVH_FRAG,
-            directions: crate::shaders::MIRROR_BVH_DIRECTION_FRAG,
+        let shaders = if pretraced {
+            MirrorShaders {
+                colour: crate::shaders::MIRROR_BVH_PRETRACED_FRAG,
+                directions: crate::shaders::MIRROR_BVH_PRETRACED_DIRECTION_FRAG,
+            }
+        } else {
+            MirrorShaders {
+                colour: crate::shaders::MIRROR_BVH_FRAG,
+                directions: crate::shaders::MIRROR_BVH_DIRECTION_FRAG,
+            }
         };
         let pipelines = MirrorPipelines::create(ctx, set_layout.raw, shaders, "bvh mirror")?;
+        let walk = crate::shaders::TRACE_VIEW_BVH_COMP;
+        let pretrace = (pretraced)
+            .then(|| Pretrace::create(ctx, set_layout.raw, walk))
+            .transpose()?;
         Ok(Self {
+            pretrace,
+            records,
             pipelines,
             _pool: pool,
             set,
@@ -229,8 +252,29 @@ impl LookupPass for BvhPass {
         Some(TraceSet {
             layout: self.set_layout.raw,
             set: self.set,
-            ray_map: crate::shaders::MIRROR_RAY_BVH_FRAG,
+            ray_map: if self.pretrace.is_some() {
+                crate::shaders::MIRROR_RAY_BVH_PRETRACED_FRAG
+            } else {
+                crate::shaders::MIRROR_RAY_BVH_FRAG
+            },
         })
+    }
+
+    fn resources(&self, _slot: usize) -> Vec<(Resource, Use)> {
+        let records = Resource::Buffer(self.records.raw);
+        (self.pretrace.iter())
+            .map(|_| (records, Use::FragmentStorageRead))
+            .collect()
+    }
+
+    fn pretraces(&self) -> bool {
+        self.pretrace.is_some()
+    }
+
+    fn pretrace(&self, pass: &mut PassRecorder<'_>, scene_set: vk::DescriptorSet, view: u32) {
+        if let Some(p) = &self.pretrace {
+            p.record(pass, &self.records, [scene_set, self.set], view);
+        }
     }
 
     /// The top level, rebuilt on the CPU from this frame's object transforms when any of them

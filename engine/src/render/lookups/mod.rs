@@ -16,11 +16,13 @@ mod bvh;
 mod cube;
 mod distance;
 mod distance_exact;
+mod pretrace;
 mod ray_query;
 mod tally;
 mod tracing;
 
 pub use crate::bvh::Work;
+pub use pretrace::TraceIn;
 pub use tally::{FrameTally, TracedRays};
 pub use tracing::TraceOrder;
 
@@ -159,6 +161,9 @@ pub struct LookupContext<'a> {
     /// The renderer's frames in flight: what the host reads back per frame needs one copy
     /// per frame (`tally.rs`).
     pub frames_in_flight: usize,
+    /// Where a tracing lookup walks its rays (`RenderOptions::trace_in`, else the device's
+    /// default).
+    pub trace_in: TraceIn,
 }
 
 /// A lookup's per-renderer state: the pipelines that draw the mirror. `Send`: a renderer may
@@ -211,6 +216,15 @@ pub trait LookupPass: Send {
     /// skipped together, in a floor's frame): what the views' shaders wrote is declared read
     /// there, and the next frame's barriers start from that.
     fn record(&self, _pass: &mut PassRecorder<'_>) {}
+    /// Whether the views' mirror passes read records a compute pass traced
+    /// ([`LookupPass::pretrace`]) rather than tracing themselves.
+    fn pretraces(&self) -> bool {
+        false
+    }
+    /// A pretraced lookup's walk of camera view `view` into its records, before the first
+    /// pass that draws the view; the scene set is set 0. Lookups that do not pretrace record
+    /// nothing.
+    fn pretrace(&self, _pass: &mut PassRecorder<'_>, _scene_set: vk::DescriptorSet, _view: u32) {}
     /// Records what follows the frame's views: results copied for the host into the copy of
     /// frame slot `slot` (one of `LookupContext::frames_in_flight`).
     fn record_after_views(&self, _pass: &mut PassRecorder<'_>, _slot: usize) {}
