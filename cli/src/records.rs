@@ -45,6 +45,10 @@ pub struct RenderSettings {
     /// The order the tracing lookups handed their acceleration-structure builds (`split` or
     /// `given`; only they read it).
     pub trace_order: &'static str,
+    /// Where the bvh lookup walked its rays (`--trace-in`), when given; else the device's
+    /// default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trace_in: Option<&'static str>,
     /// The distance lookup's search steps (used only by it).
     pub distance_steps: u32,
     pub secant_steps: u32,

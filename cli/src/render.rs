@@ -95,6 +95,11 @@ pub struct Args {
     /// to measure what the order is worth on a driver that keeps it: docs/accuracy.md).
     #[arg(long, value_parser = specchio::process::args::trace_order, default_value = "split")]
     trace_order: TraceOrder,
+    /// Where the bvh lookup walks its rays: `fragment` (in the mirror's fragment shaders) or
+    /// `compute` (once a view, in a compute pass before it is drawn). Default: the device's
+    /// (compute on a GPU, fragment on a CPU driver; docs/accuracy.md).
+    #[arg(long, value_parser = specchio::process::args::trace_in)]
+    trace_in: Option<specchio::render::lookups::TraceIn>,
     /// Enable the Khronos validation layer; any message makes the command fail.
     #[arg(long)]
     validate: bool,
@@ -210,6 +215,7 @@ fn render_method(
         // traced ray map of ray-query needs none).
         id_cube: args.sensor_outputs && !lookups::traces_ray_map(lookup),
         trace_order: args.trace_order,
+        trace_in: args.trace_in,
         ..Default::default()
     };
     let mut renderer = Renderer::new(device, scene.clone(), &options)?;
@@ -262,6 +268,7 @@ fn render_record(
             whole_faces: args.whole_faces,
             lookup: args.lookup.unwrap_or(scene.mirror.lookup),
             trace_order: args.trace_order.name(),
+            trace_in: args.trace_in.map(|t| t.name()),
             distance_steps: scene.mirror.distance_steps,
             secant_steps: scene.mirror.secant_steps,
             cube: CubeSettings {

@@ -102,6 +102,10 @@ fn absurd_arguments_fail_before_writing_anything() {
         (vec!["--distance-steps", "257"], "1..=256"),
         (vec!["--secant-steps", "33"], "0..=32"),
         (vec!["--secant-steps=-1"], "0..=32"),
+        (
+            vec!["--trace-in", "gpu"],
+            "not where to trace: fragment or compute",
+        ),
         (vec!["--time", "NaN"], "finite number >= 0"),
         (vec!["--time", "-1"], "finite number >= 0"),
         (vec!["--fps=-3"], "(0, 10000]"),
