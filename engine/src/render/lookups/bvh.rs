@@ -47,8 +47,9 @@ impl MirrorLookup for Bvh {
         true
     }
 
-    /// Second to hardware ray queries on a GPU; first on a CPU driver (lavapipe 25, release,
-    /// 512²: 0.61x to 0.85x ray-query's frame on the four benchmark scenes, docs/accuracy.md).
+    /// Second to hardware ray queries on a GPU (not measured against them: no GPU lent here had
+    /// ray queries); first on a CPU driver (lavapipe 25, release, 512²: 0.57x to 0.85x
+    /// ray-query's frame on the four benchmark scenes, docs/accuracy.md).
     fn ground_truth_rank(&self, device: &DeviceInfo) -> u32 {
         if device.is_cpu() {
             0
