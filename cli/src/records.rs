@@ -45,8 +45,7 @@ pub struct RenderSettings {
     /// The order the tracing lookups handed their acceleration-structure builds (`split` or
     /// `given`; only they read it).
     pub trace_order: &'static str,
-    /// Where the bvh lookup walked its rays (`--trace-in`), when given; else the device's
-    /// default.
+    /// `--trace-in` as given (each run says where it walked: `runs[].trace_in`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub trace_in: Option<&'static str>,
     /// The distance lookup's search steps (used only by it).
@@ -78,6 +77,10 @@ pub struct CubeSettings {
 pub struct RenderRun {
     pub method: Method,
     pub out: String,
+    /// Where the bvh lookup walked its rays, as taken (`fragment` or `compute`: `--trace-in`,
+    /// else the device's default); absent for the other lookups.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trace_in: Option<&'static str>,
     pub refresh_counters: RefreshCounters,
     pub summary: RenderSummary,
     pub frames: Vec<FrameReport>,

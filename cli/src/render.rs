@@ -7,7 +7,7 @@ use std::sync::Arc;
 use anyhow::{bail, Context, Result};
 use specchio::output::{Sink, Transaction};
 use specchio::process::progress::Progress;
-use specchio::render::lookups::{self, TraceOrder};
+use specchio::render::lookups::{self, TraceIn, TraceOrder};
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
 use specchio::scene::camera::FACE_NAMES;
@@ -235,9 +235,16 @@ fn render_method(
         Ok(files) => specchio::say!("  files: {}", files_line(&files)),
         Err(e) => specchio::say!("  files: (cannot list them: {e})"),
     }
+    let walks = lookup == specchio::scene::Lookup::Bvh;
+    let taken = if renderer.pretraced() {
+        TraceIn::Compute
+    } else {
+        TraceIn::Fragment
+    };
     Ok(RenderRun {
         method,
         out: dir.display().to_string(),
+        trace_in: walks.then(|| taken.name()),
         refresh_counters: renderer.counters(),
         summary,
         frames: reports,

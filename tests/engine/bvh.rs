@@ -97,7 +97,7 @@ fn a_moving_scene_traces_each_frame_where_its_objects_are() {
 /// records of `shaders/include/pretrace.glsl`) draws what the fragment shaders' own walk draws,
 /// bit for bit: the observer, the sensor, the pair, both direction images and every quantity
 /// of the sensor's ray map, on every driver, over frames whose objects move (the records are
-/// rewritten each frame after the last frame's reads).
+/// rewritten each frame; each frame here is waited for before the next).
 #[test]
 fn the_compute_walk_draws_what_the_fragment_walk_draws() {
     use specchio::render::lookups::TraceIn;
@@ -123,6 +123,9 @@ fn the_compute_walk_draws_what_the_fragment_walk_draws() {
                     ..Default::default()
                 };
                 let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+                // The path asked for is the path taken (a lost option would compare the
+                // fragment walk with itself).
+                assert_eq!(r.pretraced(), trace_in == TraceIn::Compute, "{path}");
                 let all: Vec<_> = (times.iter().enumerate())
                     .map(|(i, &t)| r.render_frame(i as u64, t, readback).expect("frame").1)
                     .collect();

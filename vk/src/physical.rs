@@ -61,6 +61,10 @@ pub struct DeviceLimits {
     /// `maxMemoryAllocationSize`: the largest single allocation (one image or buffer) the
     /// driver promises to make (lavapipe: 2 GiB); larger requests may fail.
     pub max_memory_allocation_bytes: u64,
+    /// `maxStorageBufferRange`: the most bytes one storage-buffer descriptor may span (at least
+    /// 2^27). Records of an older version lack it (0: unknown).
+    #[serde(default)]
+    pub max_storage_buffer_range: u64,
     /// The largest device-local heap: all the memory our images and buffers can share.
     pub device_local_heap_bytes: u64,
 }
@@ -237,6 +241,7 @@ impl Properties {
             },
             timestamp_period_ns: l.timestamp_period,
             max_memory_allocation_bytes: self.maintenance3.max_memory_allocation_size,
+            max_storage_buffer_range: u64::from(l.max_storage_buffer_range),
             device_local_heap_bytes,
         }
     }

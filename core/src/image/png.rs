@@ -80,10 +80,6 @@ pub fn encode_rgb_samples(
     writer.finish()
 }
 
-/// A PNG of any colour type and bit depth decoded to 8-bit RGBA, rows top to bottom, colour as
-/// stored (sRGB-encoded): palette and grayscale expanded, 16-bit channels reduced to 8 bits,
-/// missing alpha 255. Each side must be in 1..=`max_side`, checked from the header before any
-/// pixel memory is allocated. The error is a message for the caller to place.
 /// A PNG's size from its header alone (no pixel is decoded): for budgets checked before the
 /// decoding's memory is taken.
 pub fn dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
@@ -94,6 +90,10 @@ pub fn dimensions(bytes: &[u8]) -> Result<(u32, u32), String> {
     Ok((reader.info().width, reader.info().height))
 }
 
+/// A PNG of any colour type and bit depth decoded to 8-bit RGBA, rows top to bottom, colour as
+/// stored (sRGB-encoded): palette and grayscale expanded, 16-bit channels reduced to 8 bits,
+/// missing alpha 255. Each side must be in 1..=`max_side`, checked from the header before any
+/// pixel memory is allocated. The error is a message for the caller to place.
 pub fn decode_rgba8(bytes: &[u8], max_side: u32) -> Result<(u32, u32, Vec<u8>), String> {
     let bad = |e: DecodingError| format!("not a valid PNG: {e}");
     let mut decoder = ::png::Decoder::new(Cursor::new(bytes));

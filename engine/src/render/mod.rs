@@ -197,6 +197,12 @@ impl Renderer {
         self.cube_fill.method()
     }
 
+    /// Whether the lookup walks its rays in a compute pass before the views
+    /// (`lookups::TraceIn::Compute` taken), rather than in the mirror's fragment shaders.
+    pub fn pretraced(&self) -> bool {
+        self.mirror.pass.pretraces()
+    }
+
     /// How many frames updated the cube, skipped it, and the faces rendered, so far.
     pub fn counters(&self) -> RefreshCounters {
         self.refresh.counters

@@ -1,7 +1,7 @@
 //! A pretraced lookup's compute walk (`shaders/include/pretrace.glsl` says why): each camera
 //! view's reflections traced once a frame by `trace_view.comp` into one record a pixel, which
 //! the mirror's colour, direction and ray-map passes then read instead of walking. Where it
-//! runs is the device's choice ([`TraceIn`]); the records are the same either way.
+//! runs is the device's choice ([`TraceIn`]); the images are the same either way.
 
 use std::sync::Arc;
 
@@ -16,6 +16,7 @@ use crate::render::PAIR_SIZE;
 use crate::shaders::shared::{TRACED_PIXEL_BYTES, TRACE_GROUP_SIDE};
 use crate::vk::device::{Device, DeviceInfo};
 use crate::vk::memory::{Buffer, BufferDesc};
+use crate::vk::physical::DeviceLimits;
 use crate::vk::pipeline::{Pipeline, PipelineLayout};
 use crate::vk::GpuError;
 
@@ -42,9 +43,10 @@ impl TraceIn {
         Self::ALL.into_iter().find(|t| t.name() == text)
     }
 
-    /// The device's default: a compute pass on a GPU (on the H200 its walk took 0.14 to 0.26
-    /// ms where the fragment shader's took 3.2 to 6.7, docs/gpu.md); the fragment shaders on a
-    /// CPU driver, which run both at about the same speed and rasterize nothing they need not.
+    /// The device's default: a compute pass on a GPU (on the H200 many-objects' sensor view
+    /// took 0.56 ms so, 5.7 in the fragment shaders, docs/gpu.md); the fragment shaders on a
+    /// CPU driver, where the compute pass measured 1.1x to 1.7x their walk (it walks the view's
+    /// whole rectangle; the rasterizer runs the fragment shader on the mirror's pixels alone).
     pub fn default_for(device: &DeviceInfo) -> Self {
         if device.is_cpu() {
             Self::Fragment
@@ -83,12 +85,33 @@ pub fn records(ctx: &LookupContext<'_>, pretraced: bool) -> Result<Buffer, GpuEr
     } else {
         1
     };
+    let size = pixels * u64::from(TRACED_PIXEL_BYTES);
+    check_fits(size, &ctx.device.info.limits)?;
     let desc = BufferDesc {
-        size: pixels * u64::from(TRACED_PIXEL_BYTES),
+        size,
         usage: vk::BufferUsageFlags::STORAGE_BUFFER,
         location: MemoryLocation::GpuOnly,
     };
     Buffer::create(ctx.device, &desc, "pretraced records")
+}
+
+/// One buffer, one descriptor: both must hold the records (views at the loader's 8192² need
+/// 4.3 GB, past a 32-bit storage range and lavapipe's 2 GiB allocations).
+fn check_fits(size: u64, limits: &DeviceLimits) -> Result<(), GpuError> {
+    let range = Some(limits.max_storage_buffer_range).filter(|&r| r > 0);
+    let allocation = limits.max_memory_allocation_bytes;
+    let limit = range.map_or(allocation, |r| r.min(allocation));
+    if size <= limit {
+        return Ok(());
+    }
+    Err(GpuError::Unsupported(format!(
+        "the compute walk keeps {TRACED_PIXEL_BYTES} bytes a pixel of the observer, the sensor \
+         and the two-view image: {} in one buffer, more than this device's {} (its storage \
+         range or allocation limit); lower observer.resolution or sensor.resolution, or walk \
+         in the fragment shaders (--trace-in fragment)",
+        crate::render::budget::bytes_text(size),
+        crate::render::budget::bytes_text(limit)
+    )))
 }
 
 impl Pretrace {
@@ -163,5 +186,30 @@ mod tests {
         for name in ["fragment", "compute"] {
             assert_eq!(TraceIn::parse(name).map(TraceIn::name), Some(name));
         }
+    }
+
+    /// The records fit the smaller of the storage range and the allocation limit, or the
+    /// refusal says how to do without them.
+    #[test]
+    fn records_past_the_devices_limits_are_refused() {
+        let baseline = include_str!("../../../../bench/baselines/quick.json");
+        let record: serde_json::Value = serde_json::from_str(baseline).unwrap();
+        let mut limits: DeviceLimits =
+            serde_json::from_value(record["device"]["limits"].clone()).unwrap();
+        assert_eq!(
+            limits.max_storage_buffer_range, 0,
+            "an older record: unknown"
+        );
+        limits.max_memory_allocation_bytes = 2 << 30;
+        assert!(check_fits(2 << 30, &limits).is_ok());
+        assert!(check_fits((2 << 30) + 1, &limits).is_err());
+        limits.max_storage_buffer_range = (1 << 32) - 1;
+        limits.max_memory_allocation_bytes = 1 << 40;
+        let e = check_fits(4_310_000_000, &limits).unwrap_err().to_string();
+        assert!(
+            e.contains("--trace-in fragment") && e.contains("sensor.resolution"),
+            "{e}"
+        );
+        assert!(check_fits((1 << 32) - 1, &limits).is_ok());
     }
 }

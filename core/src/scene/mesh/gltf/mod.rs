@@ -171,8 +171,8 @@ fn local_transform(node: &gltf::json::Node, n: usize) -> Result<Mat4, AssetError
 
 /// How far a rotation's length may be from 1: what writing a unit quaternion's four floats
 /// with four decimals can cost (0.7071 twice is 0.99998), and far below a scale a user would
-/// mean. glTF's rotations are unit quaternions; used as given, [0, 0, 1, 1] also scaled the
-/// mesh by 2.
+/// mean. glTF's rotations are unit quaternions; used as given, [0, 0, 1, 1] also stretched
+/// the mesh (its x and y axes by the square root of 5).
 const UNIT_SLACK: f32 = 1e-3;
 
 /// A node's rotation `[x, y, z, w]`, made exactly unit; one that is not nearly unit is refused.
@@ -204,7 +204,8 @@ fn affine(node: &gltf::json::Node, n: usize, m: Mat4) -> Result<Mat4, AssetError
             "a node has a matrix or translation, rotation and scale, not both",
         ));
     }
-    if m.row(3) != glam::Vec4::W {
+    // Exporters write the row exactly; a trace of float noise is forgiven and made exact.
+    if m.row(3).distance(glam::Vec4::W) > 1e-6 {
         return Err(AssetError::gltf(
             at,
             format!(
@@ -223,6 +224,11 @@ fn affine(node: &gltf::json::Node, n: usize, m: Mat4) -> Result<Mat4, AssetError
             ));
         }
     }
+    let mut m = m;
+    for column in [&mut m.x_axis, &mut m.y_axis, &mut m.z_axis] {
+        column.w = 0.0;
+    }
+    m.w_axis.w = 1.0;
     Ok(m)
 }
 
@@ -592,6 +598,15 @@ mod tests {
             1.0, 0.0, 0.0, 0.0, 0.5, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
         ];
         assert!(node(json!({ "matrix": identity })).is_ok());
+        let noisy = [
+            1.0, 0.0, 0.0, 1e-9, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ];
+        let exact = shape(node(json!({ "matrix": identity })).unwrap());
+        assert_eq!(
+            shape(node(json!({ "matrix": noisy })).unwrap()),
+            exact,
+            "noise forgiven"
+        );
         refused(
             json!({ "matrix": projective }),
             "nodes[0].matrix",
