@@ -62,8 +62,9 @@ pub struct DeviceLimits {
     /// driver promises to make (lavapipe: 2 GiB); larger requests may fail.
     pub max_memory_allocation_bytes: u64,
     /// `maxStorageBufferRange`: the most bytes one storage-buffer descriptor may span (at least
-    /// 2^27). Records of an older version lack it (0: unknown).
-    #[serde(default)]
+    /// 2^27). Not written into records (their schema is fixed: bench/src/record.rs); one read
+    /// back from a record has 0, unknown.
+    #[serde(skip)]
     pub max_storage_buffer_range: u64,
     /// The largest device-local heap: all the memory our images and buffers can share.
     pub device_local_heap_bytes: u64,
