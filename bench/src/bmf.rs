@@ -41,8 +41,13 @@
 //! | `sensor-flip-mean` | a rung's sensor image against the exact reference at t = 0, 1 sample per pixel (`tradeoff[].sensor.flip_mean`) | mean FLIP | - | FLIP, 0 (identical) to 1 |
 //! | `update-ms` | an animated scene's on-change update of that kind, submit to fence, over the frames with motion (`dynamic[].frames[].rects_ms`, `whole_faces_ms`, `full_ms`) | median | p10, p90 | milliseconds |
 //! | `texels-rendered` | the texels that update re-rendered (`texels_rects`, `texels_full`; whole faces: faces × size²) | median | p10, p90 | texels |
+//! | `trace-nodes-per-ray` | a traced rung's walk over its sensor frame at t = 0 (`bvh`): tree nodes fetched per ray, both levels (`tradeoff[].work.trace`) | exact count / rays | - | nodes per ray |
+//! | `trace-objects-per-ray` | the same walk's objects entered per ray | exact count / rays | - | objects per ray |
+//! | `trace-triangles-per-ray` | the same walk's triangles tested per ray | exact count / rays | - | triangles per ray |
 //!
-//! Smaller is better for all six. The times stay in milliseconds, not Bencher's built-in
+//! Smaller is better for all nine. The three walk counts are exact and the same on every
+//! machine (counted on the CPU by the shader's own walk), so a change in them is a change in
+//! the trees or the walk, never noise: a tracker can hold them to a zero threshold. The times stay in milliseconds, not Bencher's built-in
 //! `latency` (nanoseconds): the record and every other output are in milliseconds, and the two
 //! times are different quantities (a wall time of the fill alone; GPU timestamps of a whole
 //! sensor frame) that should not share one measure, one plot axis and one threshold.
@@ -71,6 +76,8 @@ use super::record::{Dynamic, DynamicFrame, Record, Stats};
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod validator;
 
 /// A measure this output writes (the table in the module's documentation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -87,18 +94,27 @@ pub enum Measure {
     UpdateMs,
     /// The texels that update re-rendered.
     TexelsRendered,
+    /// A traced rung's tree nodes fetched per sensor ray.
+    TraceNodesPerRay,
+    /// A traced rung's objects entered per sensor ray.
+    TraceObjectsPerRay,
+    /// A traced rung's triangles tested per sensor ray.
+    TraceTrianglesPerRay,
 }
 
 impl Measure {
     /// Every measure (the tests check the documentation's table against it).
     #[cfg(test)]
-    pub const ALL: [Measure; 6] = [
+    pub const ALL: [Measure; 9] = [
         Measure::CubeUpdateMs,
         Measure::CubeUpdateInFlightMs,
         Measure::FrameCostMs,
         Measure::SensorFlipMean,
         Measure::UpdateMs,
         Measure::TexelsRendered,
+        Measure::TraceNodesPerRay,
+        Measure::TraceObjectsPerRay,
+        Measure::TraceTrianglesPerRay,
     ];
 
     /// The key under a benchmark, and the measure's slug in Bencher.
@@ -110,6 +126,9 @@ impl Measure {
             Measure::SensorFlipMean => "sensor-flip-mean",
             Measure::UpdateMs => "update-ms",
             Measure::TexelsRendered => "texels-rendered",
+            Measure::TraceNodesPerRay => "trace-nodes-per-ray",
+            Measure::TraceObjectsPerRay => "trace-objects-per-ray",
+            Measure::TraceTrianglesPerRay => "trace-triangles-per-ray",
         }
     }
 }
@@ -154,8 +173,8 @@ impl Metric {
 #[serde(transparent)]
 pub struct Bmf(pub BTreeMap<String, BTreeMap<String, Metric>>);
 
-/// The BMF document of a run: every fill method's cube update time and every rung's frame cost
-/// and sensor error, named as the module's documentation says. An error when two rows would
+/// The BMF document of a run: every fill method's cube update time and every rung's frame cost,
+/// sensor error and (traced rungs) walk per ray, named as the module's documentation says. An error when two rows would
 /// share a benchmark name.
 pub fn bmf(record: &Record) -> Result<Bmf> {
     let device = device_slug(&record.device);
@@ -189,6 +208,17 @@ pub fn bmf(record: &Record) -> Result<Bmf> {
             Measure::SensorFlipMean,
             flip.and_then(Metric::single),
         );
+        if let Some(t) = &r.work.trace {
+            // No ray, no ratio: 0/0 is NaN, which `single` refuses.
+            let per_ray = |count: u64| Metric::single(count as f64 / t.rays as f64);
+            put(measures, Measure::TraceNodesPerRay, per_ray(t.nodes));
+            put(measures, Measure::TraceObjectsPerRay, per_ray(t.instances));
+            put(
+                measures,
+                Measure::TraceTrianglesPerRay,
+                per_ray(t.triangles),
+            );
+        }
     }
     for d in &record.dynamic {
         dynamic(&mut out, d, &device)?;
