@@ -117,7 +117,7 @@ fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
         bail!(
             "--fps {}: frames {}..{} fall at no finite time (frame / fps overflows); \
              give a larger --fps or --time",
-            args.fps,
+            specchio::text::num_text(args.fps),
             args.frame.unwrap_or(0),
             args.frame.unwrap_or(0) + u64::from(args.frames - 1)
         );

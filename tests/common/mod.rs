@@ -31,13 +31,43 @@ pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// Runs the `specchio` binary with `args`, validation on.
+/// Runs the `specchio` binary with `args`, validation on. Whatever it says is held to
+/// [`readable_numbers`].
 pub fn specchio(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(binary())
+    let out = std::process::Command::new(binary())
         .args(args)
         .env("SPECCHIO_VALIDATE", "1")
         .output()
-        .expect("the specchio binary runs")
+        .expect("the specchio binary runs");
+    readable_numbers(args, &out);
+    out
+}
+
+/// The most digits in a row a message may print. An f64 needs 17 significant digits and a
+/// u64 20; a longer run is a float printed with Rust's `{}`, which never switches to an
+/// exponent (`1e-310` comes out as a 0 and 309 more digits): every message must print its
+/// numbers through `specchio::text::num_text`.
+pub const MAX_DIGITS_IN_A_ROW: usize = 24;
+
+/// Fails when the command's stderr, or its stdout where that is text, holds a run of more
+/// than [`MAX_DIGITS_IN_A_ROW`] digits (checked on every run of the binary through these
+/// helpers, so the rule holds for every message any test provokes; an image written to
+/// stdout is bytes, not text, and is left alone).
+pub fn readable_numbers(args: &[&str], out: &std::process::Output) {
+    let text = |b: &Vec<u8>| std::str::from_utf8(b).is_ok();
+    let streams = [("stderr", &out.stderr), ("stdout", &out.stdout)];
+    for (stream, bytes) in streams.into_iter().filter(|(_, b)| text(b)) {
+        let longest = bytes
+            .split(|b| !b.is_ascii_digit())
+            .map(<[u8]>::len)
+            .max()
+            .unwrap_or(0);
+        assert!(
+            longest <= MAX_DIGITS_IN_A_ROW,
+            "specchio {args:?}: its {stream} prints a number of {longest} digits in a row:\n{}",
+            String::from_utf8_lossy(bytes)
+        );
+    }
 }
 
 /// Whether `text` names a staging folder (`.NAME.specchio-` and 32 hex digits,
@@ -85,7 +115,9 @@ pub fn specchio_within(args: &[&str], patience: std::time::Duration) -> std::pro
         }
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    child.wait_with_output().unwrap()
+    let out = child.wait_with_output().unwrap();
+    readable_numbers(args, &out);
+    out
 }
 
 /// What [`run_measured`] gives back: the exit code (None when a signal ended it), stderr,
