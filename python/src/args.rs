@@ -10,17 +10,61 @@ use pyo3::types::{PyBool, PyInt, PyString};
 
 use crate::errors;
 
-/// The whole number `value` of the argument `name`, within `lo..=hi`, or an error naming the
-/// argument and the range (parameters take any int within 128 bits: -1 and 2**64 are
-/// values to refuse by name, not an OverflowError; a float is PyO3's TypeError, which names
-/// the argument).
-pub fn count(name: &str, value: i128, lo: u32, hi: u32) -> PyResult<u32> {
-    match u32::try_from(value) {
-        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
-        _ => Err(errors::error(format!(
-            "{name}: {value}; must be a whole number from {lo} to {hi}"
-        ))),
+/// A Python int as the caller gave it, however large: -1, 2**64 and 2**200 are values to
+/// refuse by name ([`count`]), not an `OverflowError` that names nothing, which PyO3 raises
+/// for an int that does not fit the parameter's Rust type. Anything but an int is PyO3's
+/// `TypeError`, which names the argument.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Whole {
+    /// Within 128 bits.
+    Fits(i128),
+    /// Beyond them: its sign and its length in bits.
+    Beyond { negative: bool, bits: u64 },
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Whole {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        match obj.extract::<i128>() {
+            Ok(v) => Ok(Whole::Fits(v)),
+            Err(e) if !obj.is_instance_of::<PyInt>() => Err(e),
+            Err(_) => Ok(Whole::Beyond {
+                negative: obj.lt(0)?,
+                bits: obj.call_method0("bit_length")?.extract()?,
+            }),
+        }
     }
+}
+
+impl Whole {
+    /// The value for a message: its digits where there are at most 20 (2**64 is written
+    /// out), else its size (2**200 has 61 digits, which no one reads).
+    fn shown(self) -> String {
+        let (negative, bits) = match self {
+            Whole::Fits(v) if v.unsigned_abs() < 10u128.pow(20) => return v.to_string(),
+            Whole::Fits(v) => (v < 0, u64::from(128 - v.unsigned_abs().leading_zeros())),
+            Whole::Beyond { negative, bits } => (negative, bits),
+        };
+        let sign = if negative { "a negative" } else { "an" };
+        format!("{sign} int of {bits} bits")
+    }
+}
+
+/// The whole number `value` of the argument `name`, within `lo..=hi`, or an error naming the
+/// argument, the value and the range.
+pub fn count(name: &str, value: Whole, lo: u32, hi: u32) -> PyResult<u32> {
+    match value {
+        Whole::Fits(v) => match u32::try_from(v) {
+            Ok(v) if (lo..=hi).contains(&v) => return Ok(v),
+            _ => {}
+        },
+        Whole::Beyond { .. } => {}
+    }
+    Err(errors::error(format!(
+        "{name}: {}; must be a whole number from {lo} to {hi}",
+        value.shown()
+    )))
 }
 
 /// A device as `device=` names it: its index (an int, as `specchio.devices()` numbers them)
@@ -33,9 +77,7 @@ pub fn device(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
         return Ok(Some(value.extract()?));
     }
     if value.is_instance_of::<PyInt>() && !value.is_instance_of::<PyBool>() {
-        let index: i128 = value
-            .extract()
-            .map_err(|_| errors::error("device: an index beyond any device"))?;
+        let index: Whole = value.extract()?;
         return Ok(Some(count("device", index, 0, u32::MAX)?.to_string()));
     }
     let shown = value.repr().map_or("?".to_owned(), |r| r.to_string());

@@ -35,7 +35,7 @@ impl PoseSource {
     pub fn new(
         trajectory: Option<PathBuf>,
         grid: Option<f64>,
-        headings: Option<i128>,
+        headings: Option<crate::args::Whole>,
         time: Option<f64>,
     ) -> PyResult<Self> {
         let headings = (headings.map(|h| {
@@ -183,7 +183,7 @@ pub fn dataset(
     progress: Option<Py<PyAny>>,
     resume: bool,
     grid: Option<f64>,
-    headings: Option<i128>,
+    headings: Option<crate::args::Whole>,
     time: Option<f64>,
     panorama_frame: &str,
     outputs: Option<Bound<'_, PyAny>>,

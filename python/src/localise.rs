@@ -100,8 +100,8 @@ impl Descriptor {
 #[pymethods]
 impl Descriptor {
     #[new]
-    #[pyo3(signature = (name="column-shift", k=8))]
-    fn new(name: &str, k: i128) -> PyResult<Self> {
+    #[pyo3(signature = (name="column-shift", k=crate::args::Whole::Fits(8)), text_signature = "(name=\"column-shift\", k=8)")]
+    fn new(name: &str, k: crate::args::Whole) -> PyResult<Self> {
         let kind = DescriptorKind::parse(name).ok_or_else(|| {
             errors::error(format!(
                 "name: {name:?} is not a descriptor; one of {}",

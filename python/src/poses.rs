@@ -37,12 +37,12 @@ pub fn read_trajectory(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny>>
 /// array of x, y, z, heading rows (the scene file's coordinates, degrees), in grid order: what
 /// `Renderer.render_batch` takes, or a trajectory's rows (`time,x,y,z,heading` with the time).
 #[pyfunction]
-#[pyo3(signature = (scene, spacing, headings=1, time=0.0))]
+#[pyo3(signature = (scene, spacing, headings=crate::args::Whole::Fits(1), time=0.0), text_signature = "(scene, spacing, headings=1, time=0.0)")]
 pub fn pose_grid<'py>(
     py: Python<'py>,
     scene: &crate::scene::Scene,
     spacing: f64,
-    headings: i128,
+    headings: crate::args::Whole,
     time: f64,
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
     let headings = crate::args::count(

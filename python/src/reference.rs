@@ -20,13 +20,13 @@ use crate::scene::Scene;
 /// the robot there as `Renderer.render` does; without it the scene is traced as written at
 /// `time`. `spp`: samples per pixel of the colour images (1 traces pixel centres).
 #[pyfunction]
-#[pyo3(signature = (scene, pose=None, time=0.0, spp=1))]
+#[pyo3(signature = (scene, pose=None, time=0.0, spp=crate::args::Whole::Fits(1)), text_signature = "(scene, pose=None, time=0.0, spp=1)")]
 pub fn reference<'py>(
     py: Python<'py>,
     scene: &Scene,
     pose: Option<[f64; 4]>,
     time: f64,
-    spp: i128,
+    spp: crate::args::Whole,
 ) -> PyResult<Bound<'py, PyDict>> {
     let spp = crate::args::count("spp", spp, 1, specchio::reference::MAX_SPP)?;
     if !(time.is_finite() && time >= 0.0) {

@@ -111,6 +111,7 @@ def test_integers_and_rgba_are_panoramas_too():
         (lambda: specchio.Descriptor("sift"), "name: \"sift\" is not a descriptor"),
         (lambda: specchio.Descriptor(k=0), "k: 0; must be a whole number from 1 to 256"),
         (lambda: specchio.Descriptor(k=257), "k: 257"),
+        (lambda: specchio.Descriptor(k=2**200), "k: an int of 201 bits; must be a whole number"),
         (lambda: specchio.Descriptor().describe(np.zeros((4, 8))), "panorama: an array of shape [4, 8]"),
         (lambda: specchio.Descriptor().describe(np.zeros((0, 8, 3))), "panorama: an array of shape [0, 8, 3]"),
         (lambda: specchio.Descriptor().describe([["a"]]), "panorama: not an array of numbers"),

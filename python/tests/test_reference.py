@@ -3,6 +3,7 @@ and specchio.calibrate."""
 
 from __future__ import annotations
 
+import inspect
 import json
 
 import numpy as np
@@ -39,6 +40,10 @@ def test_reference_errors_are_named(thesis):
     # Named, with the range, whatever the int (not an OverflowError naming nothing).
     for bad in (0, -1, 2**64, 4097):
         with pytest.raises(specchio.SpecchioError, match=rf"spp: {bad}; must be a whole number from 1 to 4096"):
+            specchio.reference(thesis, spp=bad)
+    # Beyond any fixed width (PyO3 alone raised a bare OverflowError), said by size.
+    for bad, says in [(2**200, "an int of 201 bits"), (-(2**100), "a negative int of 101 bits")]:
+        with pytest.raises(specchio.SpecchioError, match=rf"spp: {says}; must be a whole number from 1 to 4096"):
             specchio.reference(thesis, spp=bad)
     with pytest.raises(specchio.SpecchioError, match="pose: position"):
         specchio.reference(thesis, pose=(20.0, 3.0, 0.0, 0.0))
@@ -77,3 +82,10 @@ def test_the_calibrations_ros_frames_are_the_datasets(tmp_path):
         rows = np.array(cal[model]["rows"])
         np.testing.assert_allclose(rows @ rows.T, np.eye(3), atol=1e-12)
         assert abs(np.linalg.det(rows) - 1.0) < 1e-12
+
+
+def test_whole_number_parameters_show_their_defaults():
+    # They take any int (to refuse 2**200 by name), and help() still shows the default.
+    assert inspect.signature(specchio.reference).parameters["spp"].default == 1
+    assert inspect.signature(specchio.pose_grid).parameters["headings"].default == 1
+    assert inspect.signature(specchio.Descriptor).parameters["k"].default == 8
