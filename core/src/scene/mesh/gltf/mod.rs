@@ -25,6 +25,13 @@ use nodes::local_transform;
 /// Every triangle-list primitive reached from the document's scenes, as parts.
 pub(super) fn parts(bytes: &[u8], folder: &Path) -> Result<Vec<Part>, AssetError> {
     let container = buffers::container(bytes)?;
+    // A key written twice is refused first: serde_json would keep the last one silently (a
+    // hand-edited node with two `translation`s). Text that is not UTF-8 is left to the
+    // parse below, which says so.
+    if let Ok(text) = std::str::from_utf8(container.json) {
+        crate::files::json::parse_unique_keys(text)
+            .map_err(|e| AssetError::gltf("JSON", e.to_string()))?;
+    }
     let root: Root = serde_json::from_slice(container.json).map_err(|e| {
         AssetError::gltf(
             "JSON",
@@ -459,6 +466,27 @@ mod tests {
         let b = super::super::assemble(edited(|_| {}).unwrap()).unwrap();
         assert_eq!(a.triangle_count(), 6);
         assert_eq!(a, b);
+    }
+
+    /// A node with two `translation`s is refused, naming the key and its line, where
+    /// serde_json alone would have used the second.
+    #[test]
+    fn a_key_written_twice_is_refused() {
+        let text = std::fs::read_to_string(repo("scenes/meshes/pyramid.gltf")).unwrap();
+        let twice = text.replacen(
+            "\"translation\": [",
+            "\"translation\": [9, 9, 9],\n   \"translation\": [",
+            1,
+        );
+        assert_ne!(twice, text);
+        let e = parts(twice.as_bytes(), &repo("scenes/meshes"))
+            .err()
+            .unwrap();
+        let e = e.to_string();
+        assert!(
+            e.contains("the key `translation` is written twice") && e.contains("line 19"),
+            "{e}"
+        );
     }
 
     #[test]
