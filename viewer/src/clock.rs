@@ -76,11 +76,7 @@ impl Figures {
         if elapsed < TITLE_EVERY {
             return None;
         }
-        let fps = f64::from(self.frames) / elapsed.as_secs_f64();
-        let rate = match paused {
-            true => "paused".to_owned(),
-            false => format!("{fps:.1} frames/s"),
-        };
+        let rate = rate_text(paused, Some(f64::from(self.frames) / elapsed.as_secs_f64()));
         self.since = Some(Instant::now());
         self.frames = 0;
         let cube = self
@@ -109,5 +105,30 @@ impl Figures {
             ms.len(),
             1e3 * ms.len() as f64 / total
         );
+    }
+}
+
+/// The frame rate as the title and the menu say it: "paused" while paused, whatever the
+/// frames drawn (each is a change, not a rate), "-" before there is a rate.
+pub fn rate_text(paused: bool, frames_per_s: Option<f64>) -> String {
+    match (paused, frames_per_s.filter(|r| r.is_finite())) {
+        (true, _) => "paused".to_owned(),
+        (false, Some(r)) => format!("{r:.1} frames/s"),
+        (false, None) => "-".to_owned(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::rate_text;
+
+    /// A paused viewer never shows the last rate it ran at (it said "50 frames/s").
+    #[test]
+    fn a_paused_viewer_says_paused_not_a_rate() {
+        assert_eq!(rate_text(true, Some(50.0)), "paused");
+        assert_eq!(rate_text(true, None), "paused");
+        assert_eq!(rate_text(false, Some(50.0)), "50.0 frames/s");
+        assert_eq!(rate_text(false, None), "-");
+        assert_eq!(rate_text(false, Some(f64::INFINITY)), "-");
     }
 }

@@ -404,13 +404,8 @@ fn run_buttons(ui: &mut egui::Ui, s: &Status, actions: &mut Vec<Action>, widgets
 fn figures(ui: &mut egui::Ui, s: &Status) {
     let ms = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.1} ms"));
     // Paused, a frame is drawn only on a change: its time is no rate.
-    let rate = match s.paused {
-        true => "paused".to_owned(),
-        false => s
-            .frame_ms
-            .filter(|&v| v > 0.0)
-            .map_or("-".to_owned(), |v| format!("{:.1} frames/s", 1e3 / v)),
-    };
+    let per_s = s.frame_ms.filter(|&v| v > 0.0).map(|v| 1e3 / v);
+    let rate = crate::clock::rate_text(s.paused, per_s);
     egui::Grid::new("figures").num_columns(2).show(ui, |ui| {
         for (name, value) in [
             ("frame time", format!("{} ({rate})", ms(s.frame_ms))),
