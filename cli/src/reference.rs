@@ -2,9 +2,11 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use anyhow::{bail, Context, Result};
 use specchio::output::{Sink, Transaction};
+use specchio::reference::render::Watch;
 use specchio::reference::{Reference, ReferenceImages, ReferenceStats, MAX_SPP};
 use specchio::sensor::{imaging, SensorOutputs};
 
@@ -47,20 +49,26 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let reference = Reference::new(&scene, args.time);
     // Filled in the order traced: observer, sensor.
     let mut cameras: [ReferenceStats; 2] = Default::default();
-    for (slot, (name, view, [w, h])) in cameras.iter_mut().zip([
-        (
-            "observer",
-            reference.observer_view(),
-            scene.observer.resolution,
+    let ([ow, oh], [sw, sh]) = (scene.observer.resolution, scene.sensor.resolution);
+    // One estimate for the whole command, both cameras, in pixels (their rows differ in
+    // width): an estimate of the observer alone said "about a minute left" with the larger
+    // sensor still to come.
+    let whole = Progress::new(
+        format!(
+            "reference: observer {ow}x{oh} and sensor {sw}x{sh} cameras at {} spp",
+            args.spp
         ),
-        ("sensor", reference.sensor_view(), scene.sensor.resolution),
+        u64::from(ow) * u64::from(oh) + u64::from(sw) * u64::from(sh),
+        "pixels",
+    );
+    for (slot, (name, view, [w, h])) in cameras.iter_mut().zip([
+        ("observer", reference.observer_view(), [ow, oh]),
+        ("sensor", reference.sensor_view(), [sw, sh]),
     ]) {
         specchio::process::interrupt::check(&format!("before tracing the {name} camera"))?;
-        let what = format!("reference: {name} camera, {w}x{h} at {} spp", args.spp);
-        let progress = Progress::new(what, u64::from(h), "rows");
-        let Some((images, stats)) = reference.render_watched(&view, w, h, args.spp, &progress)
-        else {
-            let at = format!("after {} of {h} rows of the {name} camera", progress.done());
+        let rows = CameraRows::new(&whole, w);
+        let Some((images, stats)) = reference.render_watched(&view, w, h, args.spp, &rows) else {
+            let at = format!("after {} of {h} rows of the {name} camera", rows.done());
             return Err(specchio::process::interrupt::stopped(&at).into());
         };
         write_images(&out, &args.out, name, &images)?;
@@ -125,4 +133,37 @@ fn write_images(out: &Transaction, dir: &Path, name: &str, images: &ReferenceIma
     out.write_exr(&dir.join(format!("{name}.distance.exr")), &images.distance)?;
     out.write_exr(&dir.join(format!("{name}.object.exr")), &images.object)?;
     Ok(())
+}
+
+/// One camera's rows, counted into the command's whole progress as pixels and on their own
+/// (for the message of a stop).
+struct CameraRows<'a> {
+    whole: &'a Progress,
+    width: u64,
+    rows: AtomicU64,
+}
+
+impl<'a> CameraRows<'a> {
+    fn new(whole: &'a Progress, width: u32) -> Self {
+        Self {
+            whole,
+            width: u64::from(width),
+            rows: AtomicU64::new(0),
+        }
+    }
+
+    fn done(&self) -> u64 {
+        self.rows.load(Ordering::Relaxed)
+    }
+}
+
+impl Watch for CameraRows<'_> {
+    fn row_done(&self) {
+        self.rows.fetch_add(1, Ordering::Relaxed);
+        self.whole.add(self.width);
+    }
+
+    fn stop(&self) -> bool {
+        self.whole.stopped()
+    }
 }

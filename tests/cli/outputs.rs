@@ -377,16 +377,19 @@ fn an_interrupted_bench_writes_nothing() {
 }
 
 /// Long work is never silent and stops cleanly: a reference sensor of 4096² pixels at 64 spp
-/// (a billion paths: a minute here) says, once its first seconds are measured, how much of it
-/// is done and about how long the rest will take; Ctrl-C then stops it between rows, saying
-/// how far it got, and nothing is written.
+/// (a billion paths: a minute here) says, once its first seconds are measured, how much of the
+/// whole command (both cameras) is done and about how long the rest will take; Ctrl-C then
+/// stops it between rows, saying how far it got, and nothing is written. (The observer is
+/// 64x48, traced before the estimate is due, so the stop comes in the sensor.)
 #[test]
 fn a_long_reference_says_its_estimate_and_stops_cleanly() {
     use std::io::Read;
     let dir = scratch("long-reference");
     let scene = dir.join("big.toml");
     let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
-    let text = text.replace("[sensor]\n", "[sensor]\nresolution = [4096, 4096]\n");
+    let text = text
+        .replace("[sensor]\n", "[sensor]\nresolution = [4096, 4096]\n")
+        .replace("[observer]\n", "[observer]\nresolution = [64, 48]\n");
     std::fs::write(&scene, text).unwrap();
     let out = dir.join("out");
     let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
@@ -412,7 +415,7 @@ fn a_long_reference_says_its_estimate_and_stops_cleanly() {
             }
         })
     };
-    let estimate = "reference: sensor camera, 4096x4096 at 64 spp: ";
+    let estimate = "reference: observer 64x48 and sensor 4096x4096 cameras at 64 spp: ";
     let result = signal_when(child, libc::SIGINT, "the sensor's estimate", || {
         said.lock().unwrap().contains(estimate)
     });
@@ -421,7 +424,8 @@ fn a_long_reference_says_its_estimate_and_stops_cleanly() {
     assert_eq!(result.status.code(), Some(1), "{said}");
     let line = said.lines().find(|l| l.starts_with(estimate)).unwrap();
     assert!(
-        line.contains("of 4096 rows in") && line.contains("left; Ctrl-C stops it cleanly"),
+        // 64 x 48 + 4096 x 4096 pixels in all.
+        line.contains(" of 16780288 pixels in") && line.contains("left; Ctrl-C stops it cleanly"),
         "{line}"
     );
     assert!(
