@@ -5,7 +5,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-use common::{root, specchio, temp_dir};
+use common::{estimate_line, root, specchio, specchio_with, temp_dir, ESTIMATE_AT_ONCE};
 use specchio::sensor::files::{read_channels, read_u32_channel};
 use specchio::sensor::outputs::NO_ID;
 
@@ -29,7 +29,7 @@ fn dataset(
     );
     let mut args = vec!["dataset", s, "--trajectory", t, "--out", o];
     args.extend(extra);
-    (specchio(&args), out)
+    (specchio_with(&args, &[ESTIMATE_AT_ONCE]), out)
 }
 
 fn json(path: &std::path::Path) -> serde_json::Value {
@@ -55,6 +55,10 @@ fn a_trajectory_makes_a_frame_per_pose_with_poses_in_both_frames() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
+    // Its estimate, said after the first frame (at once, under ESTIMATE_AT_ONCE).
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    let line = estimate_line(&stderr, &format!("dataset {}", out.display()), 3, "frames");
+    assert!(line.contains("Ctrl-C stops it cleanly"), "{line}");
     let record = json(&out.join("dataset.json"));
     assert_eq!(record["frames"], 3);
     let lines = index_lines(&out);

@@ -3,7 +3,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-use common::{devices, root, specchio, temp_dir};
+use common::{devices, root, specchio, specchio_with, temp_dir, ESTIMATE_AT_ONCE};
 
 /// Thesis room at grid 4 m: 8 landmarks (the orbiting ball blocks the ninth). Queries at the
 /// landmark positions with random headings must each find their own landmark, and the heading
@@ -258,7 +258,7 @@ fn small_run(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
         "32",
     ];
     args.extend_from_slice(extra);
-    specchio(&args)
+    specchio_with(&args, &[ESTIMATE_AT_ONCE])
 }
 
 fn json(path: &std::path::Path) -> serde_json::Value {
@@ -316,10 +316,23 @@ fn queries_where_an_object_stood_are_off_the_map() {
 fn the_floor_map_has_one_marker_per_query() {
     let out = temp_dir("localise-plot");
     let result = small_run(&out, &[]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{stderr}");
+    // Each long part says its estimate (at once, under ESTIMATE_AT_ONCE): the landmarks' 8
+    // images, the 6 queries' images, the matching of the 6 queries.
+    for (what, total) in [("localise: ", 8), ("localise: ", 6)] {
+        assert!(
+            stderr
+                .lines()
+                .any(|l| l.starts_with(what) && l.contains(&format!(" of {total} images in "))),
+            "no estimate of {total} images:\n{stderr}"
+        );
+    }
     assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
+        stderr.lines().any(|l| l.starts_with("localise: matching ")
+            && l.contains(" of 6 queries in ")
+            && l.contains(" left")),
+        "no estimate of the matching:\n{stderr}"
     );
     let svg = std::fs::read_to_string(out.join("localise.svg")).unwrap();
     assert!(

@@ -34,13 +34,37 @@ pub fn root() -> PathBuf {
 /// Runs the `specchio` binary with `args`, validation on. Whatever it says is held to
 /// [`readable_numbers`].
 pub fn specchio(args: &[&str]) -> std::process::Output {
+    specchio_with(args, &[])
+}
+
+/// [`specchio`] with more environment variables.
+pub fn specchio_with(args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
     let out = std::process::Command::new(binary())
         .args(args)
         .env("SPECCHIO_VALIDATE", "1")
+        .envs(env.iter().copied())
         .output()
         .expect("the specchio binary runs");
     readable_numbers(args, &out);
     out
+}
+
+/// The environment that makes a command say its estimate after its first part, on a machine
+/// of any speed (`process::progress`).
+pub const ESTIMATE_AT_ONCE: (&str, &str) = ("SPECCHIO_ESTIMATE_AFTER_S", "0");
+
+/// The estimate line `command` said for its `what`, checked to name its whole (`total`
+/// `unit`s), the part done, the time left and how to stop it.
+pub fn estimate_line<'a>(stderr: &'a str, what: &str, total: u64, unit: &str) -> &'a str {
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with(&format!("{what}: ")))
+        .unwrap_or_else(|| panic!("no estimate for `{what}`:\n{stderr}"));
+    assert!(
+        line.contains(&format!(" of {total} {unit} in ")) && line.contains(" left"),
+        "{line}"
+    );
+    line
 }
 
 /// The most digits in a row a message may print. An f64 needs 17 significant digits and a

@@ -7,7 +7,7 @@
 //! so short commands print what they always printed.
 
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 use super::interrupt;
@@ -15,6 +15,41 @@ use super::interrupt;
 /// How long the work runs before its estimate is said: long enough to measure a rate, short
 /// enough that the user has not yet waited.
 pub const ESTIMATE_AFTER: Duration = Duration::from_millis(1500);
+/// Seconds to say the estimate after instead ([`ESTIMATE_AFTER`] when unset): `0` makes every
+/// command say it after its first part, which is how the tests see the line on a machine of
+/// any speed.
+pub const ESTIMATE_AFTER_VAR: &str = "SPECCHIO_ESTIMATE_AFTER_S";
+
+/// [`ESTIMATE_AFTER`], or what [`ESTIMATE_AFTER_VAR`] says; a value that is not a number of
+/// seconds from 0 to a day is said once and not used.
+fn estimate_after() -> Duration {
+    static AFTER: OnceLock<Duration> = OnceLock::new();
+    *AFTER.get_or_init(|| {
+        let Some(text) = std::env::var_os(ESTIMATE_AFTER_VAR) else {
+            return ESTIMATE_AFTER;
+        };
+        let text = text.to_string_lossy();
+        match parse_after(&text) {
+            Some(after) => after,
+            None => {
+                eprintln!(
+                    "warning: {ESTIMATE_AFTER_VAR}={text:?} is not a number of seconds from 0 \
+                     to 86400; estimates come after {} s",
+                    ESTIMATE_AFTER.as_secs_f64()
+                );
+                ESTIMATE_AFTER
+            }
+        }
+    })
+}
+
+/// Seconds from 0 to a day, as [`ESTIMATE_AFTER_VAR`] takes them.
+fn parse_after(text: &str) -> Option<Duration> {
+    let s: f64 = text.trim().parse().ok()?;
+    (0.0..=86_400.0)
+        .contains(&s)
+        .then(|| Duration::from_secs_f64(s))
+}
 /// How often a line follows the estimate while the work goes on.
 pub const REPEAT_EVERY: Duration = Duration::from_secs(30);
 
@@ -25,6 +60,8 @@ pub struct Progress {
     total: u64,
     done: AtomicU64,
     start: Instant,
+    /// When the estimate is due ([`estimate_after`]).
+    after: Duration,
     /// When a line was last said (None: not yet).
     said: Mutex<Option<Instant>>,
 }
@@ -39,6 +76,7 @@ impl Progress {
             total,
             done: AtomicU64::new(0),
             start: Instant::now(),
+            after: estimate_after(),
             said: Mutex::new(None),
         }
     }
@@ -47,7 +85,7 @@ impl Progress {
     pub fn add(&self, n: u64) {
         let done = self.done.fetch_add(n, Ordering::Relaxed) + n;
         let elapsed = self.start.elapsed();
-        if elapsed < ESTIMATE_AFTER || done >= self.total {
+        if elapsed < self.after || done >= self.total {
             return;
         }
         let Ok(mut said) = self.said.try_lock() else {
@@ -114,6 +152,18 @@ pub fn duration_text(d: Duration) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The variable takes seconds from 0 to a day; anything else is no value (said, and the
+    /// default kept).
+    #[test]
+    fn the_estimate_delay_is_seconds_from_zero_to_a_day() {
+        assert_eq!(parse_after("0"), Some(Duration::ZERO));
+        assert_eq!(parse_after(" 2.5 "), Some(Duration::from_millis(2500)));
+        assert_eq!(parse_after("86400"), Some(Duration::from_secs(86_400)));
+        for bad in ["", "-1", "nan", "inf", "1e300", "86401", "soon"] {
+            assert_eq!(parse_after(bad), None, "{bad:?}");
+        }
+    }
 
     #[test]
     fn durations_read_as_a_person_says_them() {
