@@ -128,19 +128,50 @@ def test_a_killed_worker_is_restarted_and_its_shard_retried(made, monkeypatch):
         # After the first shard, while the other worker renders: SIGKILL one worker process.
         if killed:
             return
-        ps = subprocess.run(["pgrep", "-af", "ray::"], capture_output=True, text=True)
-        workers = [
-            int(line.split()[0])
-            for line in ps.stdout.splitlines()
-            if line.split(None, 1)[1].startswith("ray::_Worker") and ours(int(line.split()[0]))
-        ]
-        assert workers, ps.stdout
+        workers = our_workers()
+        assert workers, "no worker process to kill"
         os.kill(workers[0], signal.SIGKILL)
         killed.append(workers[0])
 
     specchio.dataset(scene, "robot.csv", "killed", ray=True, workers=2, shard_size=1, progress=kill_a_worker)
     assert killed
     assert tree(work / "killed") == tree(work / "cli")
+
+
+def our_workers() -> list[int]:
+    """The pids of this run's Ray worker actors."""
+    ps = subprocess.run(["pgrep", "-af", "ray::"], capture_output=True, text=True)
+    return [
+        int(line.split()[0])
+        for line in ps.stdout.splitlines()
+        if line.split(None, 1)[1].startswith("ray::_Worker") and ours(int(line.split()[0]))
+    ]
+
+
+def test_a_worker_dead_past_its_restarts_leaves_no_staged_frames(made, monkeypatch):
+    """A worker killed more often than Ray restarts it ends the run with Ray's ActorDiedError,
+    and the frames staged so far are gone at once, while the exception (which holds the run's
+    output in its traceback, as a notebook keeps it) is still alive."""
+    import ray
+
+    work, scene = made
+    monkeypatch.chdir(work)
+    killed = []
+
+    def kill_the_worker(done, total):
+        # After each shard while kills remain: one more death than Ray restarts.
+        if len(killed) > specchio.ray.RETRIES:
+            return
+        workers = our_workers()
+        assert workers, "no worker process to kill"
+        os.kill(workers[0], signal.SIGKILL)
+        killed.append(workers[0])
+
+    with pytest.raises(ray.exceptions.ActorDiedError) as info:
+        specchio.dataset(scene, "robot.csv", "died", ray=True, workers=1, shard_size=1, progress=kill_the_worker)
+    assert info.traceback
+    assert len(killed) == specchio.ray.RETRIES + 1
+    assert not [p.name for p in work.iterdir() if "died" in p.name]
 
 
 def test_a_bad_trajectory_writes_nothing_and_names_line_and_field(made, monkeypatch):
