@@ -47,8 +47,8 @@
 //!
 //! Smaller is better for all nine. The three walk counts are exact and the same on every
 //! machine (counted on the CPU by the shader's own walk), so a change in them is a change in
-//! the trees or the walk, never noise: a tracker can hold them to a zero threshold. The times stay in milliseconds, not Bencher's built-in
-//! `latency` (nanoseconds): the record and every other output are in milliseconds, and the two
+//! the trees or the walk, never noise: a tracker can hold them to a zero threshold. The times
+//! stay in milliseconds, not Bencher's built-in `latency` (nanoseconds): the record and every other output are in milliseconds, and the two
 //! times are different quantities (a wall time of the fill alone; GPU timestamps of a whole
 //! sensor frame) that should not share one measure, one plot axis and one threshold.
 //!
@@ -174,8 +174,8 @@ impl Metric {
 pub struct Bmf(pub BTreeMap<String, BTreeMap<String, Metric>>);
 
 /// The BMF document of a run: every fill method's cube update time and every rung's frame cost,
-/// sensor error and (traced rungs) walk per ray, named as the module's documentation says. An error when two rows would
-/// share a benchmark name.
+/// sensor error and (traced rungs) walk per ray, named as the module's documentation says. An
+/// error when two rows would share a benchmark name.
 pub fn bmf(record: &Record) -> Result<Bmf> {
     let device = device_slug(&record.device);
     let mut out = Builder::default();

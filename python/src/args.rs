@@ -20,12 +20,19 @@ pub enum Whole {
     Fits(i128),
     /// Beyond them: its sign and its length in bits.
     Beyond { negative: bool, bits: u64 },
+    /// A bool, which Python counts as an int and no one means as one.
+    Bool(bool),
 }
 
 impl<'a, 'py> FromPyObject<'a, 'py> for Whole {
     type Error = PyErr;
 
     fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        // Python's bool is an int (True is 1); `spp=True` is a slip, not a count, refused by
+        // name in `count`.
+        if obj.is_instance_of::<PyBool>() {
+            return Ok(Whole::Bool(obj.is_truthy()?));
+        }
         match obj.extract::<i128>() {
             Ok(v) => Ok(Whole::Fits(v)),
             Err(e) if !obj.is_instance_of::<PyInt>() => Err(e),
@@ -45,6 +52,7 @@ impl Whole {
             Whole::Fits(v) if v.unsigned_abs() < 10u128.pow(20) => return v.to_string(),
             Whole::Fits(v) => (v < 0, u64::from(128 - v.unsigned_abs().leading_zeros())),
             Whole::Beyond { negative, bits } => (negative, bits),
+            Whole::Bool(b) => return format!("{} (a bool)", if b { "True" } else { "False" }),
         };
         let sign = if negative { "a negative" } else { "an" };
         format!("{sign} int of {bits} bits")
@@ -59,7 +67,7 @@ pub fn count(name: &str, value: Whole, lo: u32, hi: u32) -> PyResult<u32> {
             Ok(v) if (lo..=hi).contains(&v) => return Ok(v),
             _ => {}
         },
-        Whole::Beyond { .. } => {}
+        Whole::Beyond { .. } | Whole::Bool(_) => {}
     }
     Err(errors::error(format!(
         "{name}: {}; must be a whole number from {lo} to {hi}",

@@ -41,6 +41,9 @@ def test_reference_errors_are_named(thesis):
     for bad in (0, -1, 2**64, 4097):
         with pytest.raises(specchio.SpecchioError, match=rf"spp: {bad}; must be a whole number from 1 to 4096"):
             specchio.reference(thesis, spp=bad)
+    # A bool is an int to Python, not a count here.
+    with pytest.raises(specchio.SpecchioError, match=r"spp: True \(a bool\); must be a whole number"):
+        specchio.reference(thesis, spp=True)
     # Beyond any fixed width (PyO3 alone raised a bare OverflowError), said by size.
     for bad, says in [(2**200, "an int of 201 bits"), (-(2**100), "a negative int of 101 bits")]:
         with pytest.raises(specchio.SpecchioError, match=rf"spp: {says}; must be a whole number from 1 to 4096"):

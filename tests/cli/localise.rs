@@ -320,11 +320,12 @@ fn the_floor_map_has_one_marker_per_query() {
     assert!(result.status.success(), "{stderr}");
     // Each long part says its estimate (at once, under ESTIMATE_AT_ONCE): the landmarks' 8
     // images, the 6 queries' images, the matching of the 6 queries.
-    for (what, total) in [("localise: ", 8), ("localise: ", 6)] {
+    for total in [8, 6] {
+        let said = format!(" of {total} images in ");
         assert!(
             stderr
                 .lines()
-                .any(|l| l.starts_with(what) && l.contains(&format!(" of {total} images in "))),
+                .any(|l| l.starts_with("localise: ") && l.contains(&said)),
             "no estimate of {total} images:\n{stderr}"
         );
     }

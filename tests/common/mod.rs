@@ -16,82 +16,14 @@ use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 /// The traced lookups' images against the reference's.
 pub mod traced;
 
-/// The `specchio` binary: only the CLI crate's tests (tests/cli/) have it, so the engine's
-/// tests, which share this module, compile without it and never call this.
-fn binary() -> &'static str {
-    match option_env!("CARGO_BIN_EXE_specchio") {
-        Some(path) => path,
-        None => panic!("only the tests in tests/cli/ have the specchio binary to run"),
-    }
-}
+/// Running the `specchio` binary as a user does, its messages held to readable numbers.
+mod run;
+pub use run::*;
 
 /// The repository root (every crate's folder is one level below it; tests run with their
 /// crate's folder as working directory).
 pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// Runs the `specchio` binary with `args`, validation on. Whatever it says is held to
-/// [`readable_numbers`].
-pub fn specchio(args: &[&str]) -> std::process::Output {
-    specchio_with(args, &[])
-}
-
-/// [`specchio`] with more environment variables.
-pub fn specchio_with(args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
-    let out = std::process::Command::new(binary())
-        .args(args)
-        .env("SPECCHIO_VALIDATE", "1")
-        .envs(env.iter().copied())
-        .output()
-        .expect("the specchio binary runs");
-    readable_numbers(args, &out);
-    out
-}
-
-/// The environment that makes a command say its estimate after its first part, on a machine
-/// of any speed (`process::progress`).
-pub const ESTIMATE_AT_ONCE: (&str, &str) = ("SPECCHIO_ESTIMATE_AFTER_S", "0");
-
-/// The estimate line `command` said for its `what`, checked to name its whole (`total`
-/// `unit`s), the part done, the time left and how to stop it.
-pub fn estimate_line<'a>(stderr: &'a str, what: &str, total: u64, unit: &str) -> &'a str {
-    let line = stderr
-        .lines()
-        .find(|l| l.starts_with(&format!("{what}: ")))
-        .unwrap_or_else(|| panic!("no estimate for `{what}`:\n{stderr}"));
-    assert!(
-        line.contains(&format!(" of {total} {unit} in ")) && line.contains(" left"),
-        "{line}"
-    );
-    line
-}
-
-/// The most digits in a row a message may print. An f64 needs 17 significant digits and a
-/// u64 20; a longer run is a float printed with Rust's `{}`, which never switches to an
-/// exponent (`1e-310` comes out as a 0 and 309 more digits): every message must print its
-/// numbers through `specchio::text::num_text`.
-pub const MAX_DIGITS_IN_A_ROW: usize = 24;
-
-/// Fails when the command's stderr, or its stdout where that is text, holds a run of more
-/// than [`MAX_DIGITS_IN_A_ROW`] digits (checked on every run of the binary through these
-/// helpers, so the rule holds for every message any test provokes; an image written to
-/// stdout is bytes, not text, and is left alone).
-pub fn readable_numbers(args: &[&str], out: &std::process::Output) {
-    let text = |b: &Vec<u8>| std::str::from_utf8(b).is_ok();
-    let streams = [("stderr", &out.stderr), ("stdout", &out.stdout)];
-    for (stream, bytes) in streams.into_iter().filter(|(_, b)| text(b)) {
-        let longest = bytes
-            .split(|b| !b.is_ascii_digit())
-            .map(<[u8]>::len)
-            .max()
-            .unwrap_or(0);
-        assert!(
-            longest <= MAX_DIGITS_IN_A_ROW,
-            "specchio {args:?}: its {stream} prints a number of {longest} digits in a row:\n{}",
-            String::from_utf8_lossy(bytes)
-        );
-    }
 }
 
 /// Whether `text` names a staging folder (`.NAME.specchio-` and 32 hex digits,
@@ -118,30 +50,6 @@ pub fn staging_folders(target: &Path) -> Vec<String> {
                 .collect()
         })
         .unwrap_or_default()
-}
-
-/// Runs `specchio ARGS`, validation on; one still running after `patience` is killed and
-/// reported (the point is to fail rather than hang the suite when a read blocks).
-pub fn specchio_within(args: &[&str], patience: std::time::Duration) -> std::process::Output {
-    use std::process::Stdio;
-    let mut child = std::process::Command::new(binary())
-        .args(args)
-        .env("SPECCHIO_VALIDATE", "1")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the specchio binary runs");
-    let start = std::time::Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > patience {
-            child.kill().unwrap();
-            panic!("specchio {args:?}: still running after {patience:?}");
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    let out = child.wait_with_output().unwrap();
-    readable_numbers(args, &out);
-    out
 }
 
 /// What [`run_measured`] gives back: the exit code (None when a signal ended it), stderr,

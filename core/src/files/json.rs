@@ -69,10 +69,7 @@ impl<'de> Visitor<'de> for UniqueKeys {
         let mut object = Map::new();
         while let Some(key) = map.next_key::<String>()? {
             if object.contains_key(&key) {
-                return Err(de::Error::custom(format!(
-                    "the key `{key}` is written twice in one object (JSON keeps one of them \
-                     silently; write it once)"
-                )));
+                return Err(twice(&key));
             }
             let value = map.next_value_seed(Seed)?;
             object.insert(key, value);
@@ -92,9 +89,86 @@ impl<'de> de::DeserializeSeed<'de> for Seed {
     }
 }
 
+/// Refuses `text` (with serde_json's line and column) where an object names a key twice,
+/// building nothing: for documents too large to hold twice (a glTF file's embedded buffers),
+/// which a typed parse reads as well.
+pub fn check_unique_keys(text: &str) -> Result<(), serde_json::Error> {
+    let mut de = serde_json::Deserializer::from_str(text);
+    de.deserialize_any(KeysOnly)?;
+    de.end()
+}
+
+/// Walks a JSON value, keeping only each object's keys while it is read.
+#[derive(Clone, Copy)]
+struct KeysOnly;
+
+impl<'de> Visitor<'de> for KeysOnly {
+    type Value = ();
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("any JSON value")
+    }
+
+    fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_u64<E>(self, _: u64) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_str<E>(self, _: &str) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_unit<E>(self) -> Result<(), E> {
+        Ok(())
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        while seq.next_element_seed(self)?.is_some() {}
+        Ok(())
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        let mut keys = std::collections::HashSet::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if !keys.insert(key.clone()) {
+                return Err(twice(&key));
+            }
+            map.next_value_seed(self)?;
+        }
+        Ok(())
+    }
+}
+
+impl<'de> de::DeserializeSeed<'de> for KeysOnly {
+    type Value = ();
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+/// The refusal of a key written twice.
+fn twice<E: de::Error>(key: &str) -> E {
+    E::custom(format!(
+        "the key `{key}` is written twice in one object (JSON keeps one of them silently; \
+         write it once)"
+    ))
+}
+
 #[cfg(test)]
 mod tests {
-    use super::parse_unique_keys;
+    use super::{check_unique_keys, parse_unique_keys};
 
     /// A key twice, at any depth, is refused with its line; the same text without it reads as
     /// serde_json reads it.
@@ -110,5 +184,14 @@ mod tests {
         let plain: serde_json::Value = serde_json::from_str(once).unwrap();
         assert_eq!(parse_unique_keys(once).unwrap(), plain);
         assert!(parse_unique_keys("{} x").is_err(), "trailing text");
+        // The check alone says the same, line included, and passes what the parse passes.
+        let e = check_unique_keys(twice).unwrap_err();
+        assert!(
+            e.to_string().contains("`time` is written twice") && e.line() == 3,
+            "{e}"
+        );
+        assert!(check_unique_keys(nested).is_err());
+        assert!(check_unique_keys(once).is_ok());
+        assert!(check_unique_keys("{} x").is_err(), "trailing text");
     }
 }

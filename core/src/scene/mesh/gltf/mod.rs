@@ -25,19 +25,20 @@ use nodes::local_transform;
 /// Every triangle-list primitive reached from the document's scenes, as parts.
 pub(super) fn parts(bytes: &[u8], folder: &Path) -> Result<Vec<Part>, AssetError> {
     let container = buffers::container(bytes)?;
-    // A key written twice is refused first: serde_json would keep the last one silently (a
-    // hand-edited node with two `translation`s). Text that is not UTF-8 is left to the
-    // parse below, which says so.
-    if let Ok(text) = std::str::from_utf8(container.json) {
-        crate::files::json::parse_unique_keys(text)
-            .map_err(|e| AssetError::gltf("JSON", e.to_string()))?;
-    }
     let root: Root = serde_json::from_slice(container.json).map_err(|e| {
         AssetError::gltf(
             "JSON",
             format!("{e} (a .gltf file is glTF 2.0 JSON; a .glb file starts with `glTF`)"),
         )
     })?;
+    // A key written twice: a struct's field twice is refused by the parse above, but in a
+    // map (a primitive's `attributes`, `extras`) serde_json keeps the last one silently (two
+    // `POSITION`s, the first one dropped). Checked without building a second copy of the
+    // document; the parse above has proven it UTF-8.
+    if let Ok(text) = std::str::from_utf8(container.json) {
+        crate::files::json::check_unique_keys(text)
+            .map_err(|e| AssetError::gltf("JSON", e.to_string()))?;
+    }
     check_header(&root)?;
     let buffers = buffers::load(&root, container.bin, folder)?;
     let mut reader = Reader {
@@ -468,23 +469,26 @@ mod tests {
         assert_eq!(a, b);
     }
 
-    /// A node with two `translation`s is refused, naming the key and its line, where
-    /// serde_json alone would have used the second.
+    /// A primitive with two `POSITION` attributes is refused, naming the key and its line,
+    /// where serde_json alone would have kept the second (a map, unlike a struct's fields,
+    /// takes a key twice).
     #[test]
     fn a_key_written_twice_is_refused() {
         let text = std::fs::read_to_string(repo("scenes/meshes/pyramid.gltf")).unwrap();
-        let twice = text.replacen(
-            "\"translation\": [",
-            "\"translation\": [9, 9, 9],\n   \"translation\": [",
-            1,
-        );
+        let line = text
+            .lines()
+            .position(|l| l.contains("\"POSITION\""))
+            .unwrap()
+            + 2;
+        let twice = text.replacen("\"POSITION\": 1", "\"POSITION\": 0,\n\"POSITION\": 1", 1);
         assert_ne!(twice, text);
         let e = parts(twice.as_bytes(), &repo("scenes/meshes"))
             .err()
             .unwrap();
         let e = e.to_string();
         assert!(
-            e.contains("the key `translation` is written twice") && e.contains("line 19"),
+            e.contains("the key `POSITION` is written twice")
+                && e.contains(&format!("line {line}")),
             "{e}"
         );
     }
