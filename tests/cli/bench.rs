@@ -13,11 +13,13 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn specchio(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_specchio"))
+    let out = Command::new(env!("CARGO_BIN_EXE_specchio"))
         .args(args)
         .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
         .output()
-        .expect("the specchio binary runs")
+        .expect("the specchio binary runs");
+    common::readable_numbers(args, &out);
+    out
 }
 
 /// Fails with the command's stderr unless it succeeded.

@@ -10,11 +10,14 @@ use specchio::output::write_exr;
 #[path = "../common/mod.rs"]
 mod common;
 
+/// Runs `specchio ARGS`, its messages held to readable numbers.
 fn specchio(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_specchio"))
+    let out = Command::new(env!("CARGO_BIN_EXE_specchio"))
         .args(args)
         .output()
-        .expect("the specchio binary runs")
+        .expect("the specchio binary runs");
+    common::readable_numbers(args, &out);
+    out
 }
 
 fn temp_dir(name: &str) -> PathBuf {

@@ -95,9 +95,11 @@ fn view_mask_leak_on(device: &str) {
 
 /// Runs the `specchio` binary from the repository root.
 fn specchio_cli(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
         .args(args)
         .current_dir(root())
         .output()
-        .expect("the specchio binary runs")
+        .expect("the specchio binary runs");
+    common::readable_numbers(args, &out);
+    out
 }
