@@ -4,94 +4,19 @@
 //! slip the user should hear of, with the line it is on.
 
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
-use serde_json::{Map, Value};
+use serde_json::Value;
 
 /// `text` as a JSON value, refused (with serde_json's line and column) where an object names
-/// a key twice.
+/// a key twice: [`check_unique_keys`], then serde_json's own parse (user files here are small;
+/// two passes keep one walker of the keys).
 pub fn parse_unique_keys(text: &str) -> Result<Value, serde_json::Error> {
-    let mut de = serde_json::Deserializer::from_str(text);
-    let value = de.deserialize_any(UniqueKeys)?;
-    de.end()?;
-    Ok(value)
-}
-
-/// A [`Value`] built as serde_json builds one, but refusing a key an object already holds.
-struct UniqueKeys;
-
-impl<'de> Visitor<'de> for UniqueKeys {
-    type Value = Value;
-
-    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str("any JSON value")
-    }
-
-    fn visit_bool<E>(self, v: bool) -> Result<Value, E> {
-        Ok(Value::Bool(v))
-    }
-
-    fn visit_i64<E>(self, v: i64) -> Result<Value, E> {
-        Ok(Value::from(v))
-    }
-
-    fn visit_u64<E>(self, v: u64) -> Result<Value, E> {
-        Ok(Value::from(v))
-    }
-
-    fn visit_f64<E>(self, v: f64) -> Result<Value, E> {
-        Ok(Value::from(v))
-    }
-
-    fn visit_str<E>(self, v: &str) -> Result<Value, E> {
-        Ok(Value::String(v.to_owned()))
-    }
-
-    fn visit_string<E>(self, v: String) -> Result<Value, E> {
-        Ok(Value::String(v))
-    }
-
-    fn visit_unit<E>(self) -> Result<Value, E> {
-        Ok(Value::Null)
-    }
-
-    fn visit_none<E>(self) -> Result<Value, E> {
-        Ok(Value::Null)
-    }
-
-    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
-        let mut items = Vec::new();
-        while let Some(item) = seq.next_element_seed(Seed)? {
-            items.push(item);
-        }
-        Ok(Value::Array(items))
-    }
-
-    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
-        let mut object = Map::new();
-        while let Some(key) = map.next_key::<String>()? {
-            if object.contains_key(&key) {
-                return Err(twice(&key));
-            }
-            let value = map.next_value_seed(Seed)?;
-            object.insert(key, value);
-        }
-        Ok(Value::Object(object))
-    }
-}
-
-/// [`UniqueKeys`] for the values inside arrays and objects.
-struct Seed;
-
-impl<'de> de::DeserializeSeed<'de> for Seed {
-    type Value = Value;
-
-    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<Value, D::Error> {
-        d.deserialize_any(UniqueKeys)
-    }
+    check_unique_keys(text)?;
+    serde_json::from_str(text)
 }
 
 /// Refuses `text` (with serde_json's line and column) where an object names a key twice,
-/// building nothing: for documents too large to hold twice (a glTF file's embedded buffers),
-/// which a typed parse reads as well.
+/// building nothing: a typed parse (or [`parse_unique_keys`]) reads the document after it,
+/// and a glTF file's embedded buffers are never held twice.
 pub fn check_unique_keys(text: &str) -> Result<(), serde_json::Error> {
     let mut de = serde_json::Deserializer::from_str(text);
     de.deserialize_any(KeysOnly)?;
@@ -141,9 +66,13 @@ impl<'de> Visitor<'de> for KeysOnly {
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
         let mut keys = std::collections::HashSet::new();
         while let Some(key) = map.next_key::<String>()? {
-            if !keys.insert(key.clone()) {
-                return Err(twice(&key));
+            if keys.contains(&key) {
+                return Err(de::Error::custom(format!(
+                    "the key `{key}` is written twice in one object (JSON keeps one of them \
+                     silently; write it once)"
+                )));
             }
+            keys.insert(key);
             map.next_value_seed(self)?;
         }
         Ok(())
@@ -156,14 +85,6 @@ impl<'de> de::DeserializeSeed<'de> for KeysOnly {
     fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
         d.deserialize_any(self)
     }
-}
-
-/// The refusal of a key written twice.
-fn twice<E: de::Error>(key: &str) -> E {
-    E::custom(format!(
-        "the key `{key}` is written twice in one object (JSON keeps one of them silently; \
-         write it once)"
-    ))
 }
 
 #[cfg(test)]
