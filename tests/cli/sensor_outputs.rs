@@ -135,12 +135,7 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
     ]);
     let render = |name: &str, lookup: Option<&str>| render_on_lavapipe(scene_path, name, lookup);
     let (traced, said) = render("sensor-truth-traced", Some("ray-query"));
-    assert!(!said.contains("warning"), "{said}");
-    let truth = &camera_json(&traced)["ground_truth"];
-    assert_eq!(truth["layers"], "traced");
-    assert_eq!(truth["colour"], "ray-query");
-    assert_eq!(truth["colour_agrees"], true);
-    assert_traced_layers_are_the_references(&traced, &reference);
+    assert_traced_truth(&traced, &said, "ray-query", &reference);
 
     // Every device traces them by default: bvh on a CPU driver (here lavapipe, which has ray
     // queries, and SwiftShader, which has none) or a GPU without ray queries, ray-query on a
@@ -156,12 +151,7 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
     if provided {
         let name = "sensor-truth-default-swiftshader";
         let (swiftshader, said) = render_on("swiftshader", scene_path, name, None);
-        assert!(!said.contains("warning"), "{said}");
-        let truth = &camera_json(&swiftshader)["ground_truth"];
-        assert_eq!(truth["layers"], "traced");
-        assert_eq!(truth["colour"], "bvh");
-        assert_eq!(truth["colour_agrees"], true);
-        assert_traced_layers_are_the_references(&swiftshader, &reference);
+        assert_traced_truth(&swiftshader, &said, "bvh", &reference);
         std::fs::remove_dir_all(swiftshader).unwrap();
     } else {
         common::skip(
@@ -187,6 +177,17 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
 }
 
 /// The camera.json in `dir`, parsed.
+/// A render (its folder `dir`, what it said) whose ground truth is traced by `colour`,
+/// without a warning, the colour agreeing with the ids, and its layers the reference's.
+fn assert_traced_truth(dir: &Path, said: &str, colour: &str, reference: &Path) {
+    assert!(!said.contains("warning"), "{said}");
+    let truth = &camera_json(dir)["ground_truth"];
+    assert_eq!(truth["layers"], "traced");
+    assert_eq!(truth["colour"], colour);
+    assert_eq!(truth["colour_agrees"], true);
+    assert_traced_layers_are_the_references(dir, reference);
+}
+
 fn camera_json(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("camera.json")).unwrap()).unwrap()
 }
