@@ -14,14 +14,15 @@
 // one module each:
 // - mirror_ray_cube, through the cube (sensor_ray.glsl): the depth search and the id cube,
 //   whatever the colour's lookup;
-// - mirror_ray_traced and mirror_ray_bvh, with a lookup that traces (ray-query; bvh): its
+// - mirror_ray_traced, mirror_ray_bvh and mirror_ray_bvh4 (bvh in its four-wide layout),
+//   with a lookup that traces (ray-query; bvh): its
 //   trace (ray_query.glsl; bvh.glsl), exactly as the colour pass's and the reference's, so
 //   that colour, range and ids come from one light path. The range is then measured from the
 //   ray's offset origin, as the reference measures it; a ray that meets nothing (it cannot,
 //   inside a closed room) gets the room box's answer, as the cube path's does.
 // - mirror_ray_bvh_pretraced: bvh's trace read from the pixel's record, where a compute pass
 //   walked it before the views (pretrace.glsl).
-// build: mirror_ray_cube=THROUGH_CUBE mirror_ray_traced=TRACED mirror_ray_bvh=TRACED+BVH mirror_ray_bvh_pretraced=TRACED+BVH+PRETRACED
+// build: mirror_ray_cube=THROUGH_CUBE mirror_ray_traced=TRACED mirror_ray_bvh=TRACED+BVH mirror_ray_bvh4=TRACED+BVH+BVH4 mirror_ray_bvh_pretraced=TRACED+BVH+PRETRACED
 #extension GL_GOOGLE_include_directive : require
 #ifdef TRACED
 #extension GL_EXT_nonuniform_qualifier : require

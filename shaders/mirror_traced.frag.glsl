@@ -5,7 +5,8 @@
 // - RAY_QUERY (the ray-query lookup): VK_KHR_ray_query through the driver's acceleration
 //   structures (ray_query.glsl);
 // - BVH (the bvh lookup): our own two-level BVH in storage buffers, walked by this shader
-//   (bvh.glsl), on any device.
+//   (bvh.glsl), on any device; with BVH4, in its four-wide layout (the device's choice:
+//   engine/src/render/lookups/bvh.rs).
 //
 // One technique, two outputs (engine/build.rs builds each from this file):
 // - OUTPUT_COLOUR: the colour of the surface the ray meets, shaded as the reference does;
@@ -15,7 +16,7 @@
 //
 // PRETRACED (the bvh lookup where its walk runs in a compute pass first: pretrace.glsl): the
 // pixel's reflection is read from its record instead of traced here.
-// build: mirror_ray_query=OUTPUT_COLOUR+RAY_QUERY mirror_ray_query_direction=OUTPUT_DIRECTION+RAY_QUERY mirror_bvh=OUTPUT_COLOUR+BVH mirror_bvh_direction=OUTPUT_DIRECTION+BVH mirror_bvh_pretraced=OUTPUT_COLOUR+BVH+PRETRACED mirror_bvh_pretraced_direction=OUTPUT_DIRECTION+BVH+PRETRACED
+// build: mirror_ray_query=OUTPUT_COLOUR+RAY_QUERY mirror_ray_query_direction=OUTPUT_DIRECTION+RAY_QUERY mirror_bvh=OUTPUT_COLOUR+BVH mirror_bvh_direction=OUTPUT_DIRECTION+BVH mirror_bvh4=OUTPUT_COLOUR+BVH+BVH4 mirror_bvh4_direction=OUTPUT_DIRECTION+BVH+BVH4 mirror_bvh_pretraced=OUTPUT_COLOUR+BVH+PRETRACED mirror_bvh_pretraced_direction=OUTPUT_DIRECTION+BVH+PRETRACED
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_nonuniform_qualifier : require
 #include "shared.glsl"

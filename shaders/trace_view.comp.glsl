@@ -3,8 +3,8 @@
 // camera view (push.view_index) that sees the mirror, its reflected ray traced exactly as the
 // mirror's fragment shaders trace it (the same mirror_hit at the pixel's centre, the same
 // trace_reflection), the result kept in the pixel's record; a pixel that misses the mirror
-// is marked so (the passes discard there).
-// build: trace_view_bvh=BVH
+// is marked so (the passes discard there). BVH4: the bvh lookup's four-wide layout.
+// build: trace_view_bvh=BVH trace_view_bvh4=BVH+BVH4
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_nonuniform_qualifier : require
 #include "shared.glsl"

@@ -22,6 +22,7 @@
 use std::path::Path;
 
 use anyhow::Result;
+use specchio::bvh::BvhLayout;
 use specchio::render::methods::Method;
 
 use crate::record::{self, Dynamic, MethodRow, RungRow, Stats};
@@ -40,6 +41,9 @@ pub struct Baseline {
     pub driver_info: String,
     /// The frames in flight of its times in flight (`settings.frames_in_flight`).
     pub frames_in_flight: Option<u32>,
+    /// The layout its bvh rung walked (`settings.bvh_layout`; a record from before the
+    /// choice existed walked `cwbvh`).
+    pub bvh_layout: String,
 }
 
 /// Reads the baseline through the record's own types: a key that is misspelt, missing or of
@@ -58,6 +62,7 @@ pub fn read_baseline(path: &Path) -> Result<Baseline> {
         driver_name: record.device.driver_name,
         driver_info: record.device.driver_info,
         frames_in_flight: record.settings.frames_in_flight,
+        bvh_layout: (record.settings.bvh_layout).unwrap_or_else(|| "cwbvh".to_owned()),
     })
 }
 
@@ -158,6 +163,21 @@ pub fn same_driver(
             baseline.driver_info, device.driver_info
         );
     }
+    Ok(())
+}
+
+/// Refuses a baseline whose bvh rung counted its walk in another tree layout than this run's:
+/// its node and triangle counts are another tree's, so comparing them would fail every time
+/// (or, worse, be taken for a regression).
+pub fn same_layout(baseline: &Baseline, layout: BvhLayout, path: &Path) -> Result<()> {
+    let counted = baseline.tradeoff.iter().any(|r| r.work.trace.is_some());
+    anyhow::ensure!(
+        !counted || baseline.bvh_layout == layout.name(),
+        "{} counted the bvh rung's walk in the {} layout, this run walks {}: its trace counters          compare only in the same layout (pick it with --bvh-layout, or record a baseline with          this one)",
+        path.display(),
+        baseline.bvh_layout,
+        layout.name(),
+    );
     Ok(())
 }
 
@@ -461,6 +481,7 @@ mod tests {
             driver_name: "llvmpipe".into(),
             driver_info: String::new(),
             frames_in_flight: Some(2),
+            bvh_layout: "cwbvh".into(),
         };
         let (rows, note) = rows_for(&baseline, Some(3));
         assert!(check(&rows, &worse, Some(10.0)).is_empty());
@@ -537,6 +558,37 @@ mod tests {
         let f = check_rungs(&[traced(250)], &[traced(251)]);
         assert_eq!(f.len(), 1, "{f:?}");
         assert!(f[0].contains("trace_nodes 251 (baseline 250)"), "{f:?}");
+    }
+
+    /// A baseline whose bvh rung counted another layout's walk is refused, naming both
+    /// layouts; one without a counted walk, or in the same layout, is taken.
+    #[test]
+    fn a_baseline_counted_in_another_layout_is_refused() {
+        let mut traced = rung("bvh", 100);
+        traced.work.trace = Some(specchio::bvh::Work::default());
+        let baseline = |tradeoff: Vec<RungRow>, layout: &str| Baseline {
+            results: Vec::new(),
+            tradeoff,
+            dynamic: Vec::new(),
+            driver_name: "llvmpipe".into(),
+            driver_info: String::new(),
+            frames_in_flight: None,
+            bvh_layout: layout.into(),
+        };
+        let path = Path::new("base.json");
+        let other = baseline(vec![traced.clone()], "cwbvh");
+        let err = same_layout(&other, BvhLayout::Bvh4, path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains(
+                "base.json counted the bvh rung's walk in the cwbvh layout, this run walks bvh4"
+            ),
+            "{err}"
+        );
+        assert!(same_layout(&other, BvhLayout::Cwbvh, path).is_ok());
+        let uncounted = baseline(vec![rung("box", 100)], "cwbvh");
+        assert!(same_layout(&uncounted, BvhLayout::Bvh4, path).is_ok());
     }
 
     /// An animated scene's update counters are gated where both runs measured it from the

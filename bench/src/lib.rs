@@ -52,6 +52,18 @@ pub struct Plan {
     pub trace_order: specchio::render::lookups::TraceOrder,
     /// Where the tracing rungs walk their rays (None: the device's default).
     pub trace_in: Option<specchio::render::lookups::TraceIn>,
+    /// How the bvh rung lays out its trees (None: the device's default).
+    pub bvh_layout: Option<specchio::bvh::BvhLayout>,
+}
+
+impl Plan {
+    /// The layout the bvh rung runs on `device`: the plan's, else the device's default.
+    pub fn bvh_layout_on(
+        &self,
+        device: &specchio::vk::device::DeviceInfo,
+    ) -> specchio::bvh::BvhLayout {
+        (self.bvh_layout).unwrap_or_else(|| specchio::render::lookups::default_bvh_layout(device))
+    }
 }
 
 /// A line of the table: on stdout, or on stderr when stdout carries a JSON document.

@@ -40,9 +40,6 @@ pub(crate) fn measure(
         work.features,
     )?;
     drop(instance);
-    if let (Some(b), Some(path)) = (baseline, &args.baseline) {
-        crate::gate::same_driver(b, &device.info, path)?;
-    }
     let plan = Plan {
         frames: settled.frames,
         warmup: settled.warmup,
@@ -51,7 +48,12 @@ pub(crate) fn measure(
         frames_in_flight: args.frames_in_flight,
         trace_order: args.trace_order,
         trace_in: args.trace_in,
+        bvh_layout: args.bvh_layout,
     };
+    if let (Some(b), Some(path)) = (baseline, &args.baseline) {
+        crate::gate::same_driver(b, &device.info, path)?;
+        crate::gate::same_layout(b, plan.bvh_layout_on(&device.info), path)?;
+    }
     let progress = Progress::new(rounds(settled, scenes, &work, &plan));
     progress.say(args.format, headline(settled, scenes.len(), &work));
     let dynamic_size = dynamic_size(&settled.sizes);
@@ -280,6 +282,7 @@ fn new_record(
             full: args.full,
             trace_order: args.trace_order.name().to_owned(),
             trace_in: args.trace_in.map(|t| t.name().to_owned()),
+            bvh_layout: Some(plan.bvh_layout_on(device).name().to_owned()),
             dynamic_cube_size,
             refresh: "every-frame (timing); on-change (dynamic)".to_owned(),
         },

@@ -149,6 +149,11 @@ pub struct Args {
     /// (compute on a GPU, fragment on a CPU driver; docs/accuracy.md).
     #[arg(long, value_parser = specchio::process::args::trace_in)]
     pub trace_in: Option<specchio::render::lookups::TraceIn>,
+    /// How the bvh rung lays out and walks its trees: cwbvh (eight children a node) or bvh4
+    /// (four, nearest first). Default: the device's (bvh4 on SwiftShader, cwbvh elsewhere;
+    /// docs/accuracy.md). Its work counters are the layout's.
+    #[arg(long, value_parser = specchio::process::args::bvh_layout)]
+    pub bvh_layout: Option<specchio::bvh::BvhLayout>,
 }
 
 /// A rung's label, checked against the ladder.

@@ -87,6 +87,11 @@ pub struct Settings {
     /// device's default (`TraceIn::default_for`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub trace_in: Option<String>,
+    /// The layout the bvh rung's trees had (`--bvh-layout`, else the device's default): its
+    /// work counters are that layout's. Absent in records from before it could be chosen
+    /// (all cwbvh).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bvh_layout: Option<String>,
     pub dynamic_cube_size: u32,
     pub refresh: String,
 }

@@ -18,6 +18,7 @@
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
+use specchio::bvh::BvhLayout;
 use specchio::image::RgbaImage;
 use specchio::metrics::compare;
 use specchio::reference::angular::{angles_deg, summarize};
@@ -147,7 +148,7 @@ pub fn measure(
             rung,
             size,
             (r, timed),
-            (stats, exact),
+            (plan.bvh_layout_on(&device.info), stats, exact),
         )?);
     }
     let mut gpu_rows = gpu_rows.into_iter();
@@ -162,14 +163,14 @@ pub fn measure(
     Ok(rows)
 }
 
-/// One device rung's row: its timed frames' costs and counters, and its error against
-/// `exact` (one more frame) where given.
+/// One device rung's row: its timed frames' costs and counters (a traced rung's counted in
+/// `layout`, the one it ran), and its error against `exact` (one more frame) where given.
 fn rung_row(
     (scene_name, scene): (&str, &Scene),
     rung: &Rung,
     size: u32,
     (r, timed): (&mut Renderer, &[FrameReport]),
-    (stats, exact): (bool, Option<&Exact>),
+    (layout, stats, exact): (BvhLayout, bool, Option<&Exact>),
 ) -> Result<RungRow> {
     let (sensor, observer) = match exact {
         Some(exact) => {
@@ -194,7 +195,7 @@ fn rung_row(
         gpu_sensor_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_sensor_ms).collect()),
         cpu_lookup_ms: Stats::of(timed.iter().map(|r| r.cpu_lookup_ms).collect()),
         wall_ms: Stats::of(timed.iter().map(|r| r.submit_wait_ms).collect()),
-        work: work(timed, stats, trace_work(rung, scene, timed.len())?),
+        work: work(timed, stats, trace_work(rung, scene, layout, timed.len())?),
         sensor_traced_fraction: traced_fraction(timed),
         sensor,
         observer,
@@ -220,6 +221,7 @@ fn renderer(
         lookup: Some(rung.lookup),
         trace_order: plan.trace_order,
         trace_in: plan.trace_in,
+        bvh_layout: plan.bvh_layout,
         ..Default::default()
     };
     Renderer::new(device, scene, &options)
@@ -245,11 +247,16 @@ fn traced_fraction(timed: &[FrameReport]) -> Option<f64> {
 
 /// The rung's own count of its trace's work (`MirrorLookup::sensor_work`) at t = 0, the
 /// instant every timed frame renders, times the `frames` timed.
-fn trace_work(rung: &Rung, scene: &Scene, frames: usize) -> Result<Option<specchio::bvh::Work>> {
+fn trace_work(
+    rung: &Rung,
+    scene: &Scene,
+    layout: BvhLayout,
+    frames: usize,
+) -> Result<Option<specchio::bvh::Work>> {
     let mut scene = scene.clone();
     scene.mirror.lookup = rung.lookup;
     (rung.configure)(&mut scene);
-    let Some(work) = lookups::plugin(rung.lookup).sensor_work(&scene, 0.0) else {
+    let Some(work) = lookups::plugin(rung.lookup).sensor_work(&scene, 0.0, layout) else {
         return Ok(None);
     };
     let one = work.map_err(anyhow::Error::msg).context(rung.label)?;

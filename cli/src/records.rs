@@ -48,6 +48,9 @@ pub struct RenderSettings {
     /// `--trace-in` as given (each run says where it walked: `runs[].trace_in`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub trace_in: Option<&'static str>,
+    /// `--bvh-layout` as given (each run says which it walked: `runs[].bvh_layout`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bvh_layout: Option<&'static str>,
     /// The distance lookup's search steps (used only by it).
     pub distance_steps: u32,
     pub secant_steps: u32,
@@ -81,6 +84,10 @@ pub struct RenderRun {
     /// else the device's default); absent for the other lookups.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub trace_in: Option<&'static str>,
+    /// The bvh lookup's tree layout, as taken (`cwbvh` or `bvh4`: `--bvh-layout`, else the
+    /// device's default); absent for the other lookups.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bvh_layout: Option<&'static str>,
     pub refresh_counters: RefreshCounters,
     pub summary: RenderSummary,
     pub frames: Vec<FrameReport>,

@@ -100,6 +100,11 @@ pub struct Args {
     /// (compute on a GPU, fragment on a CPU driver; docs/accuracy.md).
     #[arg(long, value_parser = specchio::process::args::trace_in)]
     trace_in: Option<specchio::render::lookups::TraceIn>,
+    /// How the bvh lookup lays out and walks its trees: `cwbvh` (eight children a node) or
+    /// `bvh4` (four, nearest first). Default: the device's (bvh4 on SwiftShader, cwbvh
+    /// elsewhere; docs/accuracy.md). The same pixels either way.
+    #[arg(long, value_parser = specchio::process::args::bvh_layout)]
+    bvh_layout: Option<specchio::bvh::BvhLayout>,
     /// Enable the Khronos validation layer; any message makes the command fail.
     #[arg(long)]
     validate: bool,
@@ -216,6 +221,7 @@ fn render_method(
         id_cube: args.sensor_outputs && !lookups::traces_ray_map(lookup),
         trace_order: args.trace_order,
         trace_in: args.trace_in,
+        bvh_layout: args.bvh_layout,
         ..Default::default()
     };
     let mut renderer = Renderer::new(device, scene.clone(), &options)?;
@@ -245,6 +251,13 @@ fn render_method(
         method,
         out: dir.display().to_string(),
         trace_in: walks.then(|| taken.name()),
+        bvh_layout: walks.then(|| {
+            let device = &renderer.device.info;
+            let layout = args
+                .bvh_layout
+                .unwrap_or_else(|| lookups::default_bvh_layout(device));
+            layout.name()
+        }),
         refresh_counters: renderer.counters(),
         summary,
         frames: reports,
@@ -276,6 +289,7 @@ fn render_record(
             lookup: args.lookup.unwrap_or(scene.mirror.lookup),
             trace_order: args.trace_order.name(),
             trace_in: args.trace_in.map(|t| t.name()),
+            bvh_layout: args.bvh_layout.map(|l| l.name()),
             distance_steps: scene.mirror.distance_steps,
             secant_steps: scene.mirror.secant_steps,
             cube: CubeSettings {

@@ -115,14 +115,20 @@ struct MaterialSample {
 // Instanced cube fill: gl_InstanceIndex = object << INSTANCE_FACE_BITS | face.
 #define INSTANCE_FACE_BITS 3u
 
-// Entries in the bvh lookup's walk stack (bvh.glsl, core/src/bvh), which walks both levels:
-// each node level leaves at most one entry (the rest of the group it came from), entering an
-// object two (the rest of its node and object groups), and a mesh's tree is walked above the
-// top level's entries, so the top level's depth plus the deepest mesh's must fit. Walks that
-// need more are refused when the trees are built (core/src/bvh/build.rs); the benchmark
-// scenes need at most 11 (heavy.toml: a top level 6 deep, meshes 5; core/src/bvh/tests.rs
-// prints them).
+// Entries in the bvh lookup's walk stack (bvh_cwbvh.glsl, core/src/bvh/cwbvh), which walks
+// both levels: each node level leaves at most one entry (the rest of the group it came from),
+// entering an object two (the rest of its node and object groups), and a mesh's tree is
+// walked above the top level's entries, so the top level's depth plus the deepest mesh's
+// must fit. Walks that need more are refused when the trees are built; the benchmark scenes
+// need at most 11 (heavy.toml: a top level 6 deep, meshes 5; core/src/bvh/tests.rs prints
+// them).
 #define BVH_STACK_SIZE 32u
+
+// The same for the four-wide layout (bvh_bvh4.glsl, core/src/bvh/bvh4): each node the walk
+// passes leaves the children it met but did not go on with (at most three of its four), each
+// with its distance. The benchmark scenes need at most 33 (many-objects.toml's 2,000 objects).
+// 64 entries of 8 bytes: 512 bytes an invocation.
+#define BVH4_STACK_SIZE 64u
 
 // How far past a wall the traced lookups search the objects, as 2^-ON_WALL_SLACK_EXPONENT of
 // the ray's scale (|o| + t), so that an object lying on a wall's plane wins the tie against the

@@ -7,7 +7,9 @@ mod bench_tradeoff;
 #[path = "../common/mod.rs"]
 mod common;
 
-use bench_record::{check_a_changed_rung_counter_fails_naming_it, check_record};
+use bench_record::{
+    check_a_changed_rung_counter_fails_naming_it, check_another_layout_is_refused, check_record,
+};
 use bench_tradeoff::check_plot;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -67,6 +69,7 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     let worse = common::temp_dir("worse.json");
     check_less_work_fails_naming_the_case(&json, &worse);
     check_a_changed_rung_counter_fails_naming_it(&json, &worse);
+    check_another_layout_is_refused(&json);
     check_a_missing_baseline_is_named();
     for f in [json, csv, worse, svg] {
         let _ = std::fs::remove_file(f);

@@ -141,6 +141,21 @@ fn check_provenance(r: &serde_json::Value, peak_bytes: u64) {
     assert!(r["command"].as_str().unwrap().contains("bench"));
     assert!(r["device"]["driver_info"].is_string());
     assert!(r["settings"]["cube_sizes"] == serde_json::json!([64]));
+    // The run is on lavapipe (`--device lavapipe`), whose bvh rung walks the eight-wide
+    // layout unless told otherwise: the layout its counters are of is recorded.
+    assert_eq!(r["settings"]["bvh_layout"], "cwbvh");
+}
+
+/// A gated run whose bvh rung would walk another layout than the baseline's is refused before
+/// it runs, naming both layouts: its counters could not be compared.
+pub fn check_another_layout_is_refused(json: &Path) {
+    let refused = gate_run(json, &["--device", "lavapipe", "--bvh-layout", "bvh4"]);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("counted the bvh rung's walk in the cwbvh layout, this run walks bvh4"),
+        "{stderr}"
+    );
 }
 
 /// A rung's counter and an animated scene's changed: the gate names each case and counter.

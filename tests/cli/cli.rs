@@ -106,6 +106,10 @@ fn absurd_arguments_fail_before_writing_anything() {
             vec!["--trace-in", "gpu"],
             "not where to trace: fragment or compute",
         ),
+        (
+            vec!["--bvh-layout", "bvh8"],
+            "not a BVH layout: cwbvh or bvh4",
+        ),
         (vec!["--time", "NaN"], "finite number >= 0"),
         (vec!["--time", "-1"], "finite number >= 0"),
         (vec!["--fps=-3"], "(0, 10000]"),

@@ -421,7 +421,18 @@ pub fn render_with_lookup(
         lookup: Some(lookup),
         ..Default::default()
     };
-    let mut r = Renderer::new(&gpu.device, s.clone(), &options).expect("renderer");
+    render_with(gpu, s, &options, t_s, readback)
+}
+
+/// Frame 0 of `s` at `t_s` rendered with `options`.
+pub fn render_with(
+    gpu: &Gpu,
+    s: &Scene,
+    options: &RenderOptions,
+    t_s: f64,
+    readback: Readback,
+) -> (FrameReport, FrameImages) {
+    let mut r = Renderer::new(&gpu.device, s.clone(), options).expect("renderer");
     r.render_frame(0, t_s, readback).expect("frame")
 }
 

@@ -5,7 +5,7 @@
 use specchio::image::RgbaImage;
 use specchio::metrics::{compare, Mask};
 use specchio::reference::Reference;
-use specchio::render::Readback;
+use specchio::render::{Readback, RenderOptions};
 use specchio::scene::{Lookup, Scene};
 
 use super::Gpu;
@@ -19,11 +19,22 @@ pub fn same(a: [f32; 4], b: [f32; 4]) -> bool {
 
 /// Observer and sensor colour of a renderer with `lookup` at time `t_s` (frame 0).
 pub fn lookup_images(gpu: &Gpu, s: &Scene, lookup: Lookup, t_s: f64) -> [RgbaImage; 2] {
+    let options = RenderOptions {
+        lookup: Some(lookup),
+        ..Default::default()
+    };
+    images_with(gpu, s, &options, t_s)
+}
+
+/// Observer and sensor colour of a renderer with `options` (a lookup that draws no cube) at
+/// time `t_s` (frame 0).
+pub fn images_with(gpu: &Gpu, s: &Scene, options: &RenderOptions, t_s: f64) -> [RgbaImage; 2] {
     let readback = Readback {
         views: true,
         ..Default::default()
     };
-    let (report, images) = super::render_with_lookup(gpu, s, lookup, t_s, readback);
+    let (report, images) = super::render_with(gpu, s, options, t_s, readback);
+    let lookup = options.lookup.unwrap_or(s.mirror.lookup);
     assert!(!report.cube_updated, "{lookup} must skip the cube fill");
     [images.observer.unwrap(), images.sensor.unwrap()]
 }
@@ -113,7 +124,22 @@ pub struct Agreement {
 /// ([`on_a_diagonal`]: it reflects into a room corner's edge, whatever colours the two walls
 /// show around it).
 pub fn agreement(gpu: &Gpu, (name, s): (&str, &Scene), lookup: Lookup, t_s: f64) -> Agreement {
-    let test = lookup_images(gpu, s, lookup, t_s);
+    let options = RenderOptions {
+        lookup: Some(lookup),
+        ..Default::default()
+    };
+    agreement_with(gpu, (name, s), &options, t_s)
+}
+
+/// [`agreement`] of a renderer with `options`.
+pub fn agreement_with(
+    gpu: &Gpu,
+    (name, s): (&str, &Scene),
+    options: &RenderOptions,
+    t_s: f64,
+) -> Agreement {
+    let lookup = options.lookup.unwrap_or(s.mirror.lookup);
+    let test = images_with(gpu, s, options, t_s);
     let exact = reference_images(s, t_s);
     let mut ties = 0;
     let (mut all, mut on_mirror) = ((0.0, 0u64), (0.0, 0u64));

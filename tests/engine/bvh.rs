@@ -6,8 +6,9 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-use common::traced::{agreement, lookup_images};
+use common::traced::{agreement_with, lookup_images};
 use common::{devices, scene, Gpu};
+use specchio::bvh::BvhLayout;
 use specchio::render::{Readback, RenderOptions, Renderer};
 use specchio::scene::Lookup;
 
@@ -27,8 +28,8 @@ const SCENES: [(&str, f64); 8] = [
     ("scenes/conical-room.toml", 0.0),
 ];
 
-/// On every driver and scene, every mirror pixel that differs from the reference by more than
-/// an 8-bit step is a tie, ties are few (the six-colour room's four sensor diagonals, at most
+/// On every driver and scene, in both tree layouts (each device's default and the other),
+/// every mirror pixel that differs from the reference by more than an 8-bit step is a tie, ties are few (the six-colour room's four sensor diagonals, at most
 /// one pixel wide each, are the most: 4 x 512), and the pooled mean FLIP over the mirror's
 /// pixels is within 0.002. FLIP weighs float-rounding differences of shading in dark regions
 /// heavily: moving-objects' sensor measures 1.1e-3 on the mirror on lavapipe with no pixel off
@@ -38,10 +39,18 @@ const SCENES: [(&str, f64); 8] = [
 fn bvh_matches_the_reference_on_every_driver() {
     for device in devices() {
         let gpu = Gpu::on(&device, Default::default());
-        for (path, t_s) in SCENES {
+        for ((path, t_s), layout) in SCENES
+            .into_iter()
+            .flat_map(|scene| BvhLayout::ALL.map(|l| (scene, l)))
+        {
             let s = scene(path);
-            let name = format!("{path} on {device}");
-            let a = agreement(&gpu, (&name, &s), Lookup::Bvh, t_s);
+            let name = format!("{path} on {device} ({})", layout.name());
+            let options = RenderOptions {
+                lookup: Some(Lookup::Bvh),
+                bvh_layout: Some(layout),
+                ..Default::default()
+            };
+            let a = agreement_with(&gpu, (&name, &s), &options, t_s);
             eprintln!(
                 "{name}: {} tie pixels, pooled FLIP mean {:.6}, on the mirror {:.6}",
                 a.ties, a.flip, a.mirror_flip

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use glam::{Mat4, Vec3};
 
+use super::layout::BvhTriangle;
 use super::*;
 use crate::reference::geometry::{SceneGeometry, Surface};
 use crate::scene::Mesh;
@@ -15,11 +16,11 @@ fn scene(rel: &str) -> Scene {
     crate::scene::load(&root.join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }
 
-/// The triangles (their index in the tree's order) below `node`, each child's decoded box
-/// checked to hold the corners of every triangle below it: the quantized boxes are
-/// conservative at every level.
-fn triangles_below(bvhs: &MeshBvhs, node: u32) -> Vec<u32> {
-    let n = &bvhs.nodes[node as usize];
+/// The triangles below `node` of a `cwbvh` layout (their index in the triangle array), each
+/// child's decoded box checked to hold the corners of every triangle below it: the quantized
+/// boxes are conservative at every level.
+fn cwbvh_triangles_below(bvhs: &cwbvh::MeshTrees, node: u32) -> Vec<BvhTriangle> {
+    let n = bvhs.node(node);
     let mut all = Vec::new();
     let mut inner = 0;
     for slot in 0..8 {
@@ -27,44 +28,76 @@ fn triangles_below(bvhs: &MeshBvhs, node: u32) -> Vec<u32> {
         if meta == 0 {
             continue;
         }
-        let (lo, hi) = n.child_box(slot);
-        let below: Vec<u32> = if meta & (meta << 1) & 0x10 != 0 {
+        let below: Vec<BvhTriangle> = if meta & (meta << 1) & 0x10 != 0 {
             inner += 1;
             // Inner children are stored in slot order from the child base.
             let rank = (n.imask() & ((1 << slot) - 1)).count_ones();
-            triangles_below(bvhs, n.child_base() + rank)
+            cwbvh_triangles_below(bvhs, n.child_base() + rank)
         } else {
             let count = (meta >> 5).count_ones();
             (0..count)
-                .map(|k| n.primitive_base() + (meta & 0x1f) + k)
+                .map(|k| bvhs.triangles[(n.primitive_base() + (meta & 0x1f) + k) as usize])
                 .collect()
         };
-        for &t in &below {
-            let tri = &bvhs.triangles[t as usize];
-            for v in [tri.v0, tri.v1, tri.v2] {
-                assert!(
-                    lo.cmple(v).all() && v.cmple(hi).all(),
-                    "{v} outside {lo}..{hi}"
-                );
-            }
-        }
+        inside(n.child_box(slot), &below);
         all.extend(below);
     }
     assert_eq!(inner, n.imask().count_ones(), "imask names the inner slots");
     all
 }
 
+/// The triangles below record `node` of a `bvh4` layout, each child's box checked as above.
+fn bvh4_triangles_below(bvhs: &bvh4::MeshTrees, node: u32) -> Vec<BvhTriangle> {
+    let n = bvh4::Bvh4Node::of(bvhs.record(node));
+    let mut all = Vec::new();
+    for slot in 0..4 {
+        let below: Vec<BvhTriangle> = match n.child(slot) {
+            bvh4::Child::Empty => continue,
+            bvh4::Child::Inner(r) => bvh4_triangles_below(bvhs, r),
+            bvh4::Child::Leaf { first, count } => (first..first + count)
+                .map(|r| BvhTriangle::of(bvhs.record(r)))
+                .collect(),
+        };
+        inside(n.child_box(slot), &below);
+        all.extend(below);
+    }
+    all
+}
+
+/// Every corner of `triangles` is inside the box `lo..hi`.
+fn inside((lo, hi): (Vec3, Vec3), triangles: &[BvhTriangle]) {
+    for tri in triangles {
+        for v in [tri.v0, tri.v1, tri.v2] {
+            assert!(
+                lo.cmple(v).all() && v.cmple(hi).all(),
+                "{v} outside {lo}..{hi}"
+            );
+        }
+    }
+}
+
+/// The triangles of the tree from `root`, in either layout.
+fn triangles_below(bvhs: &MeshBvhs, root: u32) -> Vec<BvhTriangle> {
+    match bvhs {
+        MeshBvhs::Cwbvh(m) => cwbvh_triangles_below(m, root),
+        MeshBvhs::Bvh4(m) => bvh4_triangles_below(m, root),
+    }
+}
+
 /// Every triangle of every mesh is in exactly one leaf of its mesh's tree, inside that leaf's
 /// box and every box above it, with the mesh's own corners.
 #[test]
 fn every_triangle_is_in_one_leaf_inside_its_boxes() {
-    for rel in ["scenes/many-objects.toml", "scenes/furnished-room.toml"] {
+    for (rel, layout) in ["scenes/many-objects.toml", "scenes/furnished-room.toml"]
+        .into_iter()
+        .flat_map(|rel| BvhLayout::ALL.map(|l| (rel, l)))
+    {
         let s = scene(rel);
-        let bvhs = MeshBvhs::build(&s.meshes).unwrap();
-        for (m, (mesh, root)) in s.meshes.iter().zip(&bvhs.roots).enumerate() {
+        let bvhs = MeshBvhs::build(layout, &s.meshes).unwrap();
+        let rel = format!("{rel} ({})", layout.name());
+        for (m, (mesh, root)) in s.meshes.iter().zip(bvhs.roots()).enumerate() {
             let mut seen = vec![0u32; mesh.indices.len() / 3];
-            for t in triangles_below(&bvhs, root.node) {
-                let tri = &bvhs.triangles[t as usize];
+            for tri in triangles_below(&bvhs, root.node) {
                 seen[tri.primitive as usize] += 1;
                 let at = 3 * tri.primitive as usize;
                 let corners = [0, 1, 2].map(|k| mesh.positions[mesh.indices[at + k] as usize]);
@@ -91,36 +124,48 @@ fn the_smallest_trees() {
         bounds_max: Vec3::new(1.0, 1.0, 0.0),
         closed: false,
     };
-    let bvhs = MeshBvhs::build(std::slice::from_ref(&one)).unwrap();
-    assert_eq!(bvhs.nodes.len(), 1);
-    assert_eq!(triangles_below(&bvhs, 0), [0]);
-    let placed = Placed {
-        mesh: 0,
-        model_to_world: Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)),
-        drawable: 6,
-    };
-    let top = TopLevel::build(&bvhs, &[placed]).unwrap();
-    let mut work = Work::default();
-    let ray = (Vec3::new(0.25, 0.25, 0.0), Vec3::NEG_Z);
-    let hit = closest_hit(&top, &bvhs, ray, (0.0, f32::INFINITY), &mut work).unwrap();
-    assert_eq!((hit.t, hit.drawable, hit.primitive), (2.0, 6, 0));
-    let empty = TopLevel::build(&bvhs, &[]).unwrap();
-    assert_eq!(empty.nodes.len(), 1);
-    assert!(closest_hit(&empty, &bvhs, ray, (0.0, f32::INFINITY), &mut work).is_none());
+    for layout in BvhLayout::ALL {
+        let bvhs = MeshBvhs::build(layout, std::slice::from_ref(&one)).unwrap();
+        // One node (bvh4: and the triangle's record after it).
+        let node = bvhs.node_size();
+        let records = match layout {
+            BvhLayout::Cwbvh => 1,
+            BvhLayout::Bvh4 => 2,
+        };
+        assert_eq!(bvhs.node_bytes().len(), records * node, "{layout:?}");
+        let below = triangles_below(&bvhs, 0);
+        assert_eq!(below.len(), 1, "{layout:?}");
+        assert_eq!(below[0].primitive, 0, "{layout:?}");
+        let placed = Placed {
+            mesh: 0,
+            model_to_world: Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0)),
+            drawable: 6,
+        };
+        let top = TopLevel::build(&bvhs, &[placed]).unwrap();
+        let mut work = Work::default();
+        let ray = (Vec3::new(0.25, 0.25, 0.0), Vec3::NEG_Z);
+        let hit = closest_hit(&top, &bvhs, ray, (0.0, f32::INFINITY), &mut work).unwrap();
+        assert_eq!((hit.t, hit.drawable, hit.primitive), (2.0, 6, 0));
+        let empty = TopLevel::build(&bvhs, &[]).unwrap();
+        assert_eq!(empty.node_bytes().len(), node, "{layout:?}: one empty node");
+        assert!(closest_hit(&empty, &bvhs, ray, (0.0, f32::INFINITY), &mut work).is_none());
+    }
 }
 
 /// A transform without a finite inverse is refused with the drawable it belongs to.
 #[test]
 fn a_singular_transform_is_refused() {
     let s = scene("scenes/thesis-room.toml");
-    let bvhs = MeshBvhs::build(&s.meshes).unwrap();
-    let flat = Placed {
-        mesh: 0,
-        model_to_world: Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0)),
-        drawable: 9,
-    };
-    let err = TopLevel::build(&bvhs, &[flat]).unwrap_err();
-    assert!(err.to_string().contains("drawable 9"), "{err}");
+    for layout in BvhLayout::ALL {
+        let bvhs = MeshBvhs::build(layout, &s.meshes).unwrap();
+        let flat = Placed {
+            mesh: 0,
+            model_to_world: Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0)),
+            drawable: 9,
+        };
+        let err = TopLevel::build(&bvhs, &[flat]).unwrap_err();
+        assert!(err.to_string().contains("drawable 9"), "{err}");
+    }
 }
 
 /// What one ray meets, found as the `bvh` lookup finds it ([`closest_in_room`]).
@@ -146,16 +191,21 @@ fn bvh_hit(
 /// work per ray.
 #[test]
 fn the_trees_meet_what_the_reference_meets() {
-    for rel in [
+    let scenes = [
         "scenes/thesis-room.toml",
         "scenes/moving-objects.toml",
         "scenes/many-objects.toml",
         "scenes/hard/pole-and-box.toml",
-    ] {
+    ];
+    for (rel, layout) in scenes
+        .into_iter()
+        .flat_map(|rel| BvhLayout::ALL.map(|l| (rel, l)))
+    {
         let s = scene(rel);
         let state = crate::scene::state::SceneState::at(&s, 1.3);
         let g = SceneGeometry::build(&s, &state);
-        let meshes = MeshBvhs::build(&s.meshes).unwrap();
+        let meshes = MeshBvhs::build(layout, &s.meshes).unwrap();
+        let rel = format!("{rel} ({})", layout.name());
         let top = TopLevel::build(&meshes, &placed_objects(&s, &state)).unwrap();
         let mut random = crate::random::SplitMix64::new(11);
         let mut unit = || random.unit() as f32;
@@ -245,44 +295,50 @@ fn deep_trees_fit_the_stack_and_deeper_walks_are_refused() {
     let centres: Vec<Vec3> = (mesh.indices.chunks_exact(3))
         .map(|t| t.iter().map(|&k| mesh.positions[k as usize]).sum::<Vec3>() / 3.0)
         .collect();
-    let bvhs = MeshBvhs::build(&[mesh]).expect("a chain's wide tree fits the stack");
-    // Rebuilt balanced: the walk still meets every triangle where it is.
-    let alone = Placed {
-        mesh: 0,
-        model_to_world: Mat4::IDENTITY,
-        drawable: 6,
-    };
-    let one = TopLevel::build(&bvhs, &[alone]).unwrap();
-    for (i, c) in centres.iter().enumerate() {
-        let ray = (*c + Vec3::Z, Vec3::NEG_Z);
-        let hit = closest_hit(&one, &bvhs, ray, (0.0, f32::INFINITY), &mut Work::default());
-        assert_eq!(hit.map(|h| h.primitive), Some(i as u32), "triangle {i}");
-    }
-    let placed: Vec<Placed> = (0..1000)
-        .map(|i| Placed {
+    for layout in BvhLayout::ALL {
+        let bvhs = MeshBvhs::build(layout, std::slice::from_ref(&mesh))
+            .expect("a chain's tree fits the stack");
+        // Rebuilt balanced: the walk still meets every triangle where it is.
+        let alone = Placed {
             mesh: 0,
-            model_to_world: Mat4::from_translation(Vec3::Y * i as f32),
-            drawable: 6 + i,
-        })
-        .collect();
-    let top = TopLevel::build(&bvhs, &placed).expect("1,000 of them");
-    eprintln!(
-        "a {n}-triangle chain: {} levels; with 1,000 of them the walk needs {} of {}",
-        bvhs.roots[0].depth,
-        top.stack,
-        layout::BVH_STACK_SIZE
-    );
-    assert!(top.stack <= layout::BVH_STACK_SIZE);
-    let err = super::build::check_stack(layout::BVH_STACK_SIZE + 1, || "a walk".into());
-    let text = err.unwrap_err().to_string();
-    assert!(
-        text.contains("a walk: its tree needs a traversal stack of 33"),
-        "{text}"
-    );
+            model_to_world: Mat4::IDENTITY,
+            drawable: 6,
+        };
+        let one = TopLevel::build(&bvhs, &[alone]).unwrap();
+        for (i, c) in centres.iter().enumerate() {
+            let ray = (*c + Vec3::Z, Vec3::NEG_Z);
+            let hit = closest_hit(&one, &bvhs, ray, (0.0, f32::INFINITY), &mut Work::default());
+            assert_eq!(hit.map(|h| h.primitive), Some(i as u32), "triangle {i}");
+        }
+        let placed: Vec<Placed> = (0..1000)
+            .map(|i| Placed {
+                mesh: 0,
+                model_to_world: Mat4::from_translation(Vec3::Y * i as f32),
+                drawable: 6 + i,
+            })
+            .collect();
+        let top = TopLevel::build(&bvhs, &placed).expect("1,000 of them");
+        let size = layout.stack_size();
+        eprintln!(
+            "{}: a {n}-triangle chain: {} levels; with 1,000 of them the walk needs {} of {size}",
+            layout.name(),
+            bvhs.roots()[0].depth,
+            top.stack(),
+        );
+        assert!(top.stack() <= size);
+        let err = check_stack(size + 1, size, || "a walk".into());
+        let text = err.unwrap_err().to_string();
+        let expected = format!(
+            "a walk: its tree needs a traversal stack of {} entries; the shader's holds {size}",
+            size + 1
+        );
+        assert_eq!(text, expected);
+    }
 }
 
-/// The benchmark scenes' walks fit the shader's stack with room to spare (printed: the
-/// deepest mesh's need and the whole walk's; shared.glsl quotes them).
+/// The benchmark scenes' walks fit the shader's stack, the eight-wide layout's with room to
+/// spare (printed: the deepest mesh's depth and the whole walk's need; shared.glsl quotes
+/// them).
 #[test]
 fn the_benchmark_scenes_fit_the_stack() {
     for rel in [
@@ -292,22 +348,27 @@ fn the_benchmark_scenes_fit_the_stack() {
         "scenes/heavy.toml",
     ] {
         let s = scene(rel);
-        let meshes = MeshBvhs::build(&s.meshes).unwrap();
-        let state = crate::scene::state::SceneState::at(&s, 0.0);
-        let top = TopLevel::build(&meshes, &placed_objects(&s, &state)).unwrap();
-        let deepest = meshes.roots.iter().map(|r| r.depth).max().unwrap_or(0);
-        eprintln!(
-            "{rel}: {} meshes, {} objects; deepest mesh {deepest} levels, whole walk {} of {}",
-            s.meshes.len(),
-            s.objects.len(),
-            top.stack,
-            layout::BVH_STACK_SIZE
-        );
-        assert!(
-            2 * top.stack <= layout::BVH_STACK_SIZE,
-            "{rel}: {}",
-            top.stack
-        );
+        for layout in BvhLayout::ALL {
+            let meshes = MeshBvhs::build(layout, &s.meshes).unwrap();
+            let state = crate::scene::state::SceneState::at(&s, 0.0);
+            let top = TopLevel::build(&meshes, &placed_objects(&s, &state)).unwrap();
+            let deepest = meshes.roots().iter().map(|r| r.depth).max().unwrap_or(0);
+            let size = layout.stack_size();
+            eprintln!(
+                "{rel} ({}): {} meshes, {} objects; deepest mesh {deepest} levels, whole walk {} of {size}",
+                layout.name(),
+                s.meshes.len(),
+                s.objects.len(),
+                top.stack(),
+            );
+            // The eight-wide walk's need is at most half its stack; the four-wide walk's
+            // bound counts three entries a level (its need on these scenes is up to 33 of 64).
+            let room = match layout {
+                BvhLayout::Cwbvh => size / 2,
+                BvhLayout::Bvh4 => size,
+            };
+            assert!(top.stack() <= room, "{rel}: {}", top.stack());
+        }
     }
 }
 
@@ -321,17 +382,19 @@ fn the_sensors_walk_is_counted_per_mirror_pixel() {
         ("scenes/thesis-room.toml", true),
     ] {
         let s = scene(rel);
-        let work = sensor_work(&s, 0.0).unwrap();
         let pixels = crate::sensor::ray_map::RayMap::exact(&s, 0.0).mirror_pixels() as u64;
-        eprintln!("{rel}: {work:?}");
-        assert_eq!(work.rays, pixels, "{rel}");
-        if objects {
-            assert!(
-                work.nodes > work.rays && work.triangles > 0,
-                "{rel}: {work:?}"
-            );
-        } else {
-            assert_eq!((work.nodes, work.instances, work.triangles), (pixels, 0, 0));
+        for layout in BvhLayout::ALL {
+            let work = sensor_work(&s, 0.0, layout).unwrap();
+            eprintln!("{rel} ({}): {work:?}", layout.name());
+            assert_eq!(work.rays, pixels, "{rel}");
+            if objects {
+                assert!(
+                    work.nodes > work.rays && work.triangles > 0,
+                    "{rel}: {work:?}"
+                );
+            } else {
+                assert_eq!((work.nodes, work.instances, work.triangles), (pixels, 0, 0));
+            }
         }
     }
 }

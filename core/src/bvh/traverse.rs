@@ -1,23 +1,19 @@
-//! The closest object hit through the two levels, on the CPU, step for step as
-//! `shaders/include/bvh.glsl` takes it: the same node test, the same order of children, the
-//! same stack, the same watertight triangle test. The tests trace with it to check the trees
-//! against the reference without a device, and the benchmark counts its work with it (nodes
-//! and triangles per ray are a property of the trees and the rays, the same on every device).
+//! What both layouts' walks share: their work counters, the hit they return, the reciprocal
+//! direction their box tests use. Each walk ([`super::cwbvh::walk`], [`super::bvh4::walk`])
+//! takes its shader's steps on the CPU: the tests trace with them to check the trees against
+//! the reference without a device, and the benchmark counts their work with them (nodes and
+//! triangles per ray are a property of the trees and the rays, the same on every device).
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
-
-use super::build::{MeshBvhs, TopLevel};
-use super::layout::{WideNode, BVH_STACK_SIZE};
-use crate::reference::intersect::ShearedRay;
-use crate::reference::room::{objects_limit, RoomBox};
 
 /// What traversals did, summed over their rays.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Work {
     /// Rays traced.
     pub rays: u64,
-    /// Nodes fetched (each tests its up to eight children's boxes), both levels.
+    /// Nodes fetched (each tests its children's boxes: up to eight in a `cwbvh` node, four
+    /// in a `bvh4` one), both levels.
     pub nodes: u64,
     /// Objects entered: their mesh's tree walked in their model space.
     pub instances: u64,
@@ -70,184 +66,4 @@ pub fn safe_inverse(d: Vec3) -> Vec3 {
         }
     };
     Vec3::new(inv(d.x), inv(d.y), inv(d.z))
-}
-
-/// The ray in the space of the tree being walked.
-#[derive(Clone, Copy)]
-struct LevelRay {
-    o: Vec3,
-    inv: Vec3,
-    /// Per axis, whether the ray runs down it (its reciprocal's sign): the box's planes are
-    /// then met high first.
-    down: [bool; 3],
-    /// Which child slot a walk visits first, per axis one bit (obvhs's builder ordered each
-    /// node's children by the octant of the direction): 4 x up, 2 y up, 1 z up.
-    octant: u32,
-}
-
-impl LevelRay {
-    fn new(o: Vec3, d: Vec3) -> Self {
-        let inv = safe_inverse(d);
-        let up = |x: f32, bit: u32| if x < 0.0 { 0 } else { bit };
-        Self {
-            o,
-            inv,
-            down: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
-            octant: up(d.x, 4) | up(d.y, 2) | up(d.z, 1),
-        }
-    }
-}
-
-/// The children of `n` the ray meets within (t_min, t_max), as a hit mask: an inner child of
-/// slot s sets bit 24 + (s ^ octant), so that the highest bit set is the child to visit
-/// first; a leaf sets its triangles' bits, from its offset, in the low 24.
-fn intersect(n: &WideNode, ray: &LevelRay, t_min: f32, t_max: f32) -> u32 {
-    // The grid in the ray's terms: a plane q steps from the origin is met at q * scale + shift.
-    let scale = n.step() * ray.inv;
-    let shift = (n.origin() - ray.o) * ray.inv;
-    let down = glam::BVec3::from_array(ray.down);
-    let mut hits = 0;
-    for slot in 0..8 {
-        let (lo, hi) = n.planes(slot);
-        // The planes the ray meets first along each axis, and last.
-        let (first, last) = (Vec3::select(down, hi, lo), Vec3::select(down, lo, hi));
-        let near = (first * scale + shift).max_element().max(t_min);
-        let far = (last * scale + shift).min_element().min(t_max);
-        if near <= far {
-            let meta = n.meta(slot);
-            // Inner children's meta is 24 + slot, the only values with bits 3 and 4 both set.
-            let inner = meta & (meta << 1) & 0x10 != 0;
-            let count = meta >> 5;
-            let bit = (meta ^ if inner { ray.octant } else { 0 }) & 0x1f;
-            hits |= count << bit;
-        }
-    }
-    hits
-}
-
-/// The closest object triangle along `o + t d` with t in (t_min, t_max), through the top
-/// level and the meshes' trees; its work is added to `work`.
-///
-/// The walk of Ylitie et al.: a *node group* (the first node of a node's inner children and
-/// a bit per child hit, the nearest highest) and a *triangle group* (the first triangle of a
-/// node's leaves and a bit per triangle hit). The triangles are tested first, then the next
-/// child of the node group is fetched and tested, making the next groups; what remains of a
-/// node group is pushed, and popped when both groups run dry. A top-level "triangle" is an
-/// object: entering it pushes what remains of both groups, moves the ray into the object's
-/// model space and walks its mesh's tree above `floor` on the same stack; once the stack is
-/// back at `floor`, the ray returns to render space.
-pub fn closest_hit(
-    top: &TopLevel,
-    meshes: &MeshBvhs,
-    (o, d): (Vec3, Vec3),
-    (t_min, t_max): (f32, f32),
-    work: &mut Work,
-) -> Option<ObjectHit> {
-    work.rays += 1;
-    let world = LevelRay::new(o, d);
-    let mut ray = world;
-    // In a mesh's tree: its ray prepared for the triangle test, and the object's drawable.
-    let mut mesh: Option<(ShearedRay, u32)> = None;
-    let mut best: Option<ObjectHit> = None;
-    let mut limit = t_max;
-    let mut stack = [(0u32, 0u32); BVH_STACK_SIZE as usize];
-    let (mut height, mut floor) = (0, usize::MAX);
-    // The top level's root, as a group of one inner child (any slot: the count below it is 0).
-    let mut nodes = (0u32, 0x8000_0000u32);
-    let mut triangles = (0u32, 0u32);
-    loop {
-        // The triangles (top level: objects) of the leaves just met.
-        while triangles.1 != 0 {
-            let k = 31 - triangles.1.leading_zeros();
-            triangles.1 &= !(1 << k);
-            let id = triangles.0 + k;
-            if let Some((sheared, drawable)) = mesh {
-                work.triangles += 1;
-                let tri = &meshes.triangles[id as usize];
-                if let Some(h) = sheared.hit_triangle(tri.v0, tri.v1, tri.v2, t_min, limit) {
-                    limit = h.t;
-                    best = Some(ObjectHit {
-                        t: h.t,
-                        drawable,
-                        primitive: tri.primitive,
-                        u: h.u,
-                        v: h.v,
-                    });
-                }
-                continue;
-            }
-            // Enter object `id`.
-            work.instances += 1;
-            for (group, left) in [(nodes, nodes.1 & 0xff00_0000), (triangles, triangles.1)] {
-                if left != 0 {
-                    stack[height] = group;
-                    height += 1;
-                }
-            }
-            let instance = &top.instances[id as usize];
-            let (mo, md) = (instance.point_to_model(o), instance.direction_to_model(d));
-            ray = LevelRay::new(mo, md);
-            mesh = Some((ShearedRay::new(mo, md), instance.drawable()));
-            floor = height;
-            nodes = (instance.root(), 0x8000_0000);
-            triangles = (0, 0);
-        }
-        // The next node of the node group.
-        if nodes.1 & 0xff00_0000 != 0 {
-            let hits = nodes.1;
-            let bit = 31 - hits.leading_zeros();
-            nodes.1 &= !(1 << bit);
-            if nodes.1 & 0xff00_0000 != 0 {
-                stack[height] = nodes;
-                height += 1;
-            }
-            // Its slot, and how many inner children precede it (they are stored in order).
-            let slot = (bit - 24) ^ ray.octant;
-            let index = nodes.0 + (hits & !(u32::MAX << slot)).count_ones();
-            work.nodes += 1;
-            let node = if mesh.is_some() {
-                &meshes.nodes[index as usize]
-            } else {
-                &top.nodes[index as usize]
-            };
-            let met = intersect(node, &ray, t_min, limit);
-            nodes = (node.child_base(), (met & 0xff00_0000) | node.imask());
-            triangles = (node.primitive_base(), met & 0x00ff_ffff);
-            continue;
-        }
-        // Both groups dry: the object's tree is done, or pop.
-        if height == floor {
-            (ray, mesh, floor) = (world, None, usize::MAX);
-        }
-        if height == 0 {
-            return best;
-        }
-        height -= 1;
-        let group = stack[height];
-        if group.1 & 0xff00_0000 != 0 {
-            nodes = group;
-        } else {
-            (nodes, triangles) = ((0, 0), group);
-        }
-    }
-}
-
-/// What a ray from inside `room` meets, found as the `bvh` lookup finds it: the room's wall
-/// it leaves through, unless an object is nearer, the objects walked only up to a little past
-/// the wall (an object lying on a wall's plane wins the tie, as in the reference:
-/// [`objects_limit`]).
-/// Returns the drawable (walls 0..6 in face order) and the distance.
-pub fn closest_in_room(
-    (top, meshes): (&TopLevel, &MeshBvhs),
-    room: &RoomBox,
-    (o, d): (Vec3, Vec3),
-    t_min: f32,
-    work: &mut Work,
-) -> Option<(u32, f32)> {
-    let wall = room.first_crossing(o, d, t_min, f32::INFINITY);
-    let limit = wall.map_or(f32::INFINITY, |w| objects_limit(o, w.t));
-    match closest_hit(top, meshes, (o, d), (t_min, limit), work) {
-        Some(h) => Some((h.drawable, h.t)),
-        None => wall.map(|w| (w.face as u32, w.t)),
-    }
 }

@@ -1,9 +1,9 @@
 //! Trees over boxes, the way both of the project's tracers want them: obvhs builds a binary
-//! tree (PLOC with reinsertion, Meister and Bittner 2018) and collapses it into its compressed
-//! wide form (eight children a node, Ylitie et al. 2017), and a tree too deep for a fixed
-//! traversal stack is rebuilt balanced. The CPU reference walks these trees with obvhs's own
-//! traversal (`reference::objects`); the `bvh` lookup lays them out for its shader (`bvh`).
-//! No Vulkan here.
+//! tree (PLOC with reinsertion, Meister and Bittner 2018), and a tree too deep for a fixed
+//! traversal stack is rebuilt balanced. The CPU reference walks the binary tree collapsed
+//! into obvhs's compressed wide form (eight children a node, Ylitie et al. 2017) with obvhs's
+//! own traversal (`reference::objects`); the `bvh` lookup collapses it four wide for its
+//! shader (`bvh::collapse`). No Vulkan here.
 
 use glam::{Mat4, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
@@ -91,6 +91,17 @@ pub fn transformed_box(m: &Mat4, lo_corner: Vec3, hi_corner: Vec3) -> Aabb {
 /// chain is long. Such a tree is rebuilt balanced ([`balanced`]): a worse tree for rays, but
 /// one whose depth is the logarithm of its leaves, so that no walk overflows its stack.
 pub fn wide_tree<T: Boundable>(items: &[T], leaf: u32) -> Option<CwBvh> {
+    let bvh2 = binary_tree(items)?;
+    let tree = bvh2_to_cwbvh(&bvh2, leaf, true, false);
+    if depth(&tree) <= MAX_DEPTH {
+        return Some(tree);
+    }
+    Some(bvh2_to_cwbvh(&balanced(items), leaf, true, false))
+}
+
+/// The binary tree over `items` (None for none), one item a leaf: obvhs's PLOC with
+/// reinsertion, as `fast_build` makes it, without its debug-build validation.
+pub fn binary_tree<T: Boundable>(items: &[T]) -> Option<Bvh2> {
     if items.is_empty() {
         return None;
     }
@@ -104,17 +115,13 @@ pub fn wide_tree<T: Boundable>(items: &[T], leaf: u32) -> Option<CwBvh> {
         p.search_depth_threshold,
     );
     ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
-    let tree = bvh2_to_cwbvh(&bvh2, leaf, true, false);
-    if depth(&tree) <= MAX_DEPTH {
-        return Some(tree);
-    }
-    Some(bvh2_to_cwbvh(&balanced(items), leaf, true, false))
+    Some(bvh2)
 }
 
 /// The binary tree over `items` that splits every range of leaves at its middle, the leaves
 /// in [`midpoint_split_order`] (each half the nearer half along the range's longest axis): its
 /// depth is ⌈log2 n⌉ + 1, whatever the boxes.
-fn balanced<T: Boundable>(items: &[T]) -> Bvh2 {
+pub fn balanced<T: Boundable>(items: &[T]) -> Bvh2 {
     let boxes: Vec<Aabb> = items.iter().map(Boundable::aabb).collect();
     let ends: Vec<(Vec3, Vec3)> = boxes.iter().map(|b| (b.min.into(), b.max.into())).collect();
     let order = midpoint_split_order(&ends);

@@ -92,6 +92,12 @@ pub fn trace_in(text: &str) -> Result<crate::render::lookups::TraceIn, String> {
         .ok_or_else(|| format!("`{text}` is not where to trace: fragment or compute"))
 }
 
+/// A `--bvh-layout` value.
+pub fn bvh_layout(text: &str) -> Result<crate::bvh::BvhLayout, String> {
+    crate::bvh::BvhLayout::parse(text.trim())
+        .ok_or_else(|| format!("`{text}` is not a BVH layout: cwbvh or bvh4"))
+}
+
 /// A `--trace-order` value.
 pub fn trace_order(text: &str) -> Result<TraceOrder, String> {
     TraceOrder::ALL

@@ -41,6 +41,9 @@ pub struct RenderOptions {
     /// Where a tracing lookup walks its rays: in the mirror's fragment shaders, or once a view
     /// in a compute pass (`--trace-in`; None: the device's default, `TraceIn::default_for`).
     pub trace_in: Option<super::lookups::TraceIn>,
+    /// How the bvh lookup lays out and walks its trees (`--bvh-layout`; None: the device's
+    /// default, `lookups::default_bvh_layout`).
+    pub bvh_layout: Option<crate::bvh::BvhLayout>,
     /// Frames the renderer may have submitted and not finished (`Renderer::submit_frame`),
     /// 1 to `MAX_FRAMES_IN_FLIGHT`; 0 counts as 1. With 1, each frame waits for the one
     /// before; the live viewer keeps 2, so that it records a frame while the GPU runs the last.

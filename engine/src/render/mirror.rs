@@ -16,7 +16,7 @@ use crate::vk::GpuError;
 
 /// How a tracing lookup traces: the order it hands its builds, and where it walks its rays
 /// (None: the device's default).
-pub(super) type Tracing = (TraceOrder, Option<TraceIn>);
+pub(super) type Tracing = (TraceOrder, Option<TraceIn>, Option<crate::bvh::BvhLayout>);
 
 /// What a lookup's pass is built from: the scene, the device, the scene on it, the cube, the
 /// submitter.
@@ -93,7 +93,7 @@ impl Mirror {
 fn create_pass(
     (scene, device, resources, cube, submitter): Inputs<'_>,
     lookup: Lookup,
-    (trace_order, trace_in): Tracing,
+    (trace_order, trace_in, bvh_layout): Tracing,
     frames_in_flight: usize,
 ) -> Result<Box<dyn LookupPass>, GpuError> {
     if let Some(why) = lookups::missing_features(lookup, &device.info) {
@@ -111,6 +111,7 @@ fn create_pass(
         trace_order,
         frames_in_flight,
         trace_in: trace_in.unwrap_or_else(|| TraceIn::default_for(&device.info)),
+        bvh_layout: bvh_layout.unwrap_or_else(|| lookups::default_bvh_layout(&device.info)),
     })?;
     // What the plug-in says decides the renderer's id cube before the pass exists.
     assert_eq!(

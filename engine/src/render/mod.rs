@@ -153,7 +153,7 @@ impl Renderer {
         let mirror = mirror::Mirror::create(
             (&scene, device, &resources, &cube, &submitter),
             scene.mirror.lookup,
-            (options.trace_order, options.trace_in),
+            (options.trace_order, options.trace_in, options.bvh_layout),
             frames_in_flight,
         )?;
         let fill = options.method.create(&methods::MethodContext {

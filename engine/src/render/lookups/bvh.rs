@@ -5,10 +5,10 @@
 //! (SwiftShader, GPUs without ray-tracing hardware), and it traces the sensor's ray map too,
 //! so the ground-truth layers come from the colour's own light path there.
 //!
-//! Its buffers: both levels' nodes in one (the top level's first, every mesh's tree after
-//! them), every mesh's triangles, the walls' frames and the drawables' index ranges, written
-//! once; the top level's nodes and the objects' records rewritten through the frame's uploads
-//! whenever an object moved (a rebuild on the CPU: see [`BvhPass::prepare`]).
+//! Its buffers: both levels' node and triangle records in one (the top level's first, every
+//! mesh's tree after them), the walls' frames and the drawables' index ranges, written once;
+//! the top level's records and the objects rewritten through the frame's uploads whenever an
+//! object moved (a rebuild on the CPU: see [`BvhPass::prepare`]).
 
 use std::sync::Arc;
 
@@ -21,8 +21,8 @@ use super::{
     as_is, FrameObjects, LookupContext, LookupPass, MirrorLookup, MirrorPipelines, MirrorShaders,
     Rung, Start, TraceIn, TraceSet, Work,
 };
-use crate::bvh::layout::{BvhInstance, BvhWall, WideNode};
-use crate::bvh::{object_drawable, MeshBvhs, Placed, TopLevel};
+use crate::bvh::layout::{BvhInstance, BvhWall};
+use crate::bvh::{object_drawable, BvhLayout, MeshBvhs, Placed, TopLevel};
 use crate::render::graph::{PassRecorder, Resource, Use};
 use crate::scene::{Lookup, Scene};
 use crate::vk::descriptors::{self, DescriptorPool, DescriptorSetLayout};
@@ -75,9 +75,30 @@ impl MirrorLookup for Bvh {
         Ok(Box::new(BvhPass::create(ctx)?))
     }
 
-    /// The shader's walk, step for step on the CPU (`bvh::sensor_work`).
-    fn sensor_work(&self, scene: &Scene, t_s: f64) -> Option<Result<Work, String>> {
-        Some(crate::bvh::sensor_work(scene, t_s).map_err(|e| e.to_string()))
+    /// The shader's walk in `layout`, step for step on the CPU (`bvh::sensor_work`).
+    fn sensor_work(
+        &self,
+        scene: &Scene,
+        t_s: f64,
+        layout: BvhLayout,
+    ) -> Option<Result<Work, String>> {
+        Some(crate::bvh::sensor_work(scene, t_s, layout).map_err(|e| e.to_string()))
+    }
+}
+
+/// The faster layout where it was measured (release builds, 512², `specchio bench` over the
+/// four benchmark scenes, 30 November 2026; docs/accuracy.md, "Two, four or eight children a
+/// node"): four-wide on SwiftShader, where a walk's cost is its box tests' arithmetic and the
+/// four-wide walk took 0.56x to 0.75x the eight-wide walk's sensor view; eight-wide on
+/// lavapipe, where a group of invocations steps through a walk together, each step costing
+/// about the same whatever it reads, and the four-wide walk's third more steps took 1.2x to
+/// 1.65x; eight-wide on a GPU (Ylitie et al. designed it for GPUs; not yet measured there
+/// against the other).
+pub fn default_layout(device: &DeviceInfo) -> BvhLayout {
+    if device.short_name == "swiftshader" {
+        BvhLayout::Bvh4
+    } else {
+        BvhLayout::Cwbvh
     }
 }
 
@@ -94,35 +115,37 @@ struct BvhPass {
     _pool: DescriptorPool,
     set: vk::DescriptorSet,
     set_layout: DescriptorSetLayout,
-    /// The meshes' trees as the node buffer holds them: after the top level's room (the
-    /// nodes and triangles are on the device; the roots are what a top level is built from).
+    /// The meshes' trees as the record buffer holds them: after the top level's room (the
+    /// records are on the device; the roots are what a top level is built from).
     meshes: MeshBvhs,
     /// Each object's mesh, in the scene's order.
     mesh_of: Vec<usize>,
     /// The top level's room in the node buffer: where the meshes' trees start.
     mesh_start: u32,
+    /// The sensor ray map's walk in this layout, where the fragment shaders walk.
+    ray_map: &'static [u32],
     /// The objects' transforms the top level was last built from (None: not yet built).
     placed_from: Option<Vec<Mat4>>,
-    /// Both levels' nodes: the top level's room (rewritten when it is rebuilt), then the
-    /// meshes' trees.
+    /// Both levels' nodes (bvh4: node and triangle records): the top level's room (rewritten
+    /// when it is rebuilt), then the meshes' trees.
     nodes: Buffer,
+    /// The objects, as the layout indexes them.
     instances: Buffer,
     /// The pretraced records (one, unread, where the fragment shaders walk).
     records: Buffer,
-    _fixed: [Buffer; 3],
+    _fixed: FixedBuffers,
 }
 
 impl BvhPass {
     fn create(ctx: &LookupContext<'_>) -> Result<Self, GpuError> {
         let device = ctx.device;
         let scene = ctx.scene;
-        // A top level of n objects has at most n - 1 nodes (each has two children at least),
-        // and one at least.
-        let top_room = scene.objects.len().max(1);
+        let layout = ctx.bvh_layout;
+        let top_room = layout.top_room(scene.objects.len());
         let meshes =
-            (MeshBvhs::build(&scene.meshes).map_err(unsupported)?).shifted(top_room as u32);
+            MeshBvhs::build_at(layout, &scene.meshes, top_room as u32).map_err(unsupported)?;
         let (nodes, fixed) = fixed_buffers(ctx, &meshes, top_room)?;
-        let instances = instance_buffer(device, scene.objects.len())?;
+        let instances = instance_buffer(device, top_room)?;
         let stage = vk::ShaderStageFlags::FRAGMENT | vk::ShaderStageFlags::COMPUTE;
         let pretraced = ctx.trace_in == TraceIn::Compute;
         let records = pretrace::records(ctx, pretraced)?;
@@ -137,34 +160,32 @@ impl BvhPass {
         let pool = DescriptorPool::create(device, 1, &[size], "bvh descriptors")?;
         let set = pool.allocate(&set_layout, "bvh set")?;
         let res = ctx.resources;
-        let [triangles, walls, ranges] = &fixed;
         let buffers = [
             &nodes,
-            triangles,
+            // bvh4: the node array again, read as triangles (bvh.glsl).
+            fixed.triangles.as_ref().unwrap_or(&nodes),
             &instances,
-            walls,
+            &fixed.walls,
             &res.vertices,
             &res.indices,
-            ranges,
+            &fixed.ranges,
             &records,
         ];
         for (binding, buffer) in (0..).zip(buffers) {
             let storage = vk::DescriptorType::STORAGE_BUFFER;
             descriptors::write_buffer(device, set, binding, storage, buffer.raw);
         }
+        let code = LayoutShaders::of(layout);
         let shaders = if pretraced {
             MirrorShaders {
                 colour: crate::shaders::MIRROR_BVH_PRETRACED_FRAG,
                 directions: crate::shaders::MIRROR_BVH_PRETRACED_DIRECTION_FRAG,
             }
         } else {
-            MirrorShaders {
-                colour: crate::shaders::MIRROR_BVH_FRAG,
-                directions: crate::shaders::MIRROR_BVH_DIRECTION_FRAG,
-            }
+            code.mirror
         };
         let pipelines = MirrorPipelines::create(ctx, set_layout.raw, shaders, "bvh mirror")?;
-        let walk = crate::shaders::TRACE_VIEW_BVH_COMP;
+        let walk = code.trace_view;
         let pretrace = (pretraced)
             .then(|| Pretrace::create(ctx, set_layout.raw, walk))
             .transpose()?;
@@ -178,6 +199,7 @@ impl BvhPass {
             meshes,
             mesh_of: scene.objects.iter().map(|o| o.mesh).collect(),
             mesh_start: top_room as u32,
+            ray_map: code.ray_map,
             placed_from: None,
             nodes,
             instances,
@@ -186,54 +208,86 @@ impl BvhPass {
     }
 }
 
+/// What a lookup's walk reads and never rewrites, beside the node buffer.
+struct FixedBuffers {
+    /// The meshes' triangles, where the layout keeps them apart from its nodes (cwbvh).
+    triangles: Option<Buffer>,
+    walls: Buffer,
+    ranges: Buffer,
+}
+
 /// The node buffer, its first `top_room` nodes left for the top level and the meshes' trees
-/// after them, and what does not change: the meshes' triangles, the walls' frames and each
-/// drawable's index range (walls first). Device-local; each holds one element at least (a
-/// room without objects has no triangles; a buffer cannot be empty).
+/// after them, and what does not change: the meshes' triangles where the layout keeps them
+/// apart, the walls' frames and each drawable's index range (walls first). Device-local.
 fn fixed_buffers(
     ctx: &LookupContext<'_>,
     meshes: &MeshBvhs,
     top_room: usize,
-) -> Result<(Buffer, [Buffer; 3]), GpuError> {
+) -> Result<(Buffer, FixedBuffers), GpuError> {
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
     let ranges: Vec<UVec4> = (ctx.resources.drawables.iter())
         .map(|d| UVec4::new(d.first_index, d.vertex_offset as u32, 0, 0))
         .collect();
-    let mut nodes = vec![WideNode::default(); top_room];
-    nodes.extend_from_slice(&meshes.nodes);
+    let mut nodes = vec![0u8; top_room * meshes.node_size()];
+    nodes.extend_from_slice(meshes.node_bytes());
     let mut upload = Upload::begin(ctx.device, ctx.submitter)?;
-    let node_usage = storage | vk::BufferUsageFlags::TRANSFER_DST;
-    let node_buffer = upload.buffer(&nodes, node_usage, "bvh nodes")?;
-    let buffers = [
-        upload.buffer(
-            &at_least_one(&meshes.triangles),
-            storage,
-            "bvh mesh triangles",
-        )?,
-        upload.buffer(&BvhWall::of_room(&ctx.scene.room), storage, "bvh walls")?,
-        upload.buffer(&ranges, storage, "bvh drawable ranges")?,
-    ];
+    let usage = storage | vk::BufferUsageFlags::TRANSFER_DST;
+    let node_buffer = upload.buffer(&nodes, usage, "bvh nodes")?;
+    // A room without objects has no triangles; a buffer cannot be empty.
+    let one_triangle = [0u8; std::mem::size_of::<crate::bvh::layout::BvhTriangle>()];
+    let triangles = (meshes.triangle_bytes())
+        .map(|t| if t.is_empty() { &one_triangle[..] } else { t })
+        .map(|t| upload.buffer(t, storage, "bvh mesh triangles"))
+        .transpose()?;
+    let fixed = FixedBuffers {
+        triangles,
+        walls: upload.buffer(&BvhWall::of_room(&ctx.scene.room), storage, "bvh walls")?,
+        ranges: upload.buffer(&ranges, storage, "bvh drawable ranges")?,
+    };
     upload.finish()?;
-    Ok((node_buffer, buffers))
+    Ok((node_buffer, fixed))
 }
 
-/// The objects' records, rewritten with each top level: one per object, one at least.
-fn instance_buffer(device: &Arc<Device>, objects: usize) -> Result<Buffer, GpuError> {
+/// The objects, rewritten with each top level: one per record of the top level's room.
+fn instance_buffer(device: &Arc<Device>, top_room: usize) -> Result<Buffer, GpuError> {
     let desc = BufferDesc {
-        size: (objects.max(1) * std::mem::size_of::<BvhInstance>()) as u64,
+        size: (top_room * std::mem::size_of::<BvhInstance>()) as u64,
         usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
         location: MemoryLocation::GpuOnly,
     };
     Buffer::create(device, &desc, "bvh instances")
 }
 
-/// `items`, or one default item where there are none.
-fn at_least_one<T: Clone + Default>(items: &[T]) -> Vec<T> {
-    let mut all = items.to_vec();
-    if all.is_empty() {
-        all.push(T::default());
+/// A layout's shader modules: the mirror's colour and direction passes, the sensor ray map's
+/// pass and the compute walk.
+struct LayoutShaders {
+    mirror: MirrorShaders,
+    ray_map: &'static [u32],
+    trace_view: &'static [u32],
+}
+
+impl LayoutShaders {
+    fn of(layout: BvhLayout) -> Self {
+        use crate::shaders::*;
+        match layout {
+            BvhLayout::Cwbvh => Self {
+                mirror: MirrorShaders {
+                    colour: MIRROR_BVH_FRAG,
+                    directions: MIRROR_BVH_DIRECTION_FRAG,
+                },
+                ray_map: MIRROR_RAY_BVH_FRAG,
+                trace_view: TRACE_VIEW_BVH_COMP,
+            },
+            BvhLayout::Bvh4 => Self {
+                mirror: MirrorShaders {
+                    colour: MIRROR_BVH4_FRAG,
+                    directions: MIRROR_BVH4_DIRECTION_FRAG,
+                },
+                ray_map: MIRROR_RAY_BVH4_FRAG,
+                trace_view: TRACE_VIEW_BVH4_COMP,
+            },
+        }
     }
-    all
 }
 
 fn unsupported(e: crate::bvh::BvhError) -> GpuError {
@@ -256,7 +310,7 @@ impl LookupPass for BvhPass {
             ray_map: if self.pretrace.is_some() {
                 crate::shaders::MIRROR_RAY_BVH_PRETRACED_FRAG
             } else {
-                crate::shaders::MIRROR_RAY_BVH_FRAG
+                self.ray_map
             },
         })
     }
@@ -301,15 +355,16 @@ impl LookupPass for BvhPass {
             })
             .collect();
         let top = TopLevel::build(&self.meshes, &placed).map_err(unsupported)?;
+        let nodes = top.node_bytes();
         assert!(
-            top.nodes.len() <= self.mesh_start as usize,
-            "a top level of {} objects has {} nodes",
+            nodes.len() <= self.mesh_start as usize * self.meshes.node_size(),
+            "a top level of {} objects has {} bytes of nodes",
             placed.len(),
-            top.nodes.len()
+            nodes.len()
         );
         // Into the node buffer's first nodes, its room for them.
-        uploads.write(&self.nodes, &top.nodes)?;
-        uploads.write(&self.instances, &top.instances)?;
+        uploads.write(&self.nodes, nodes)?;
+        uploads.write(&self.instances, top.instances())?;
         self.placed_from = Some(transforms);
         Ok(())
     }
@@ -319,7 +374,9 @@ impl LookupPass for BvhPass {
 mod tests {
     use std::mem::offset_of;
 
-    use crate::bvh::layout::{BvhTriangle, BVH_STACK_SIZE};
+    use crate::bvh::bvh4::{Bvh4Node, BVH4_STACK_SIZE};
+    use crate::bvh::cwbvh::{WideNode, BVH_STACK_SIZE};
+    use crate::bvh::layout::BvhTriangle;
 
     use super::*;
 
@@ -339,6 +396,9 @@ mod tests {
             member!(WideNode, x_planes),
             member!(WideNode, y_planes),
             member!(WideNode, z_planes),
+            member!(Bvh4Node, grid),
+            member!(Bvh4Node, links),
+            member!(Bvh4Node, planes),
             member!(BvhTriangle, v0),
             member!(BvhTriangle, v1),
             member!(BvhTriangle, v2),
@@ -361,6 +421,7 @@ mod tests {
             }
         }
         assert_eq!(BVH_STACK_SIZE, crate::shaders::shared::BVH_STACK_SIZE);
+        assert_eq!(BVH4_STACK_SIZE, crate::shaders::shared::BVH4_STACK_SIZE);
         assert_eq!(
             crate::reference::room::ON_WALL_SLACK_EXPONENT,
             crate::shaders::shared::ON_WALL_SLACK_EXPONENT

@@ -22,6 +22,7 @@ mod tally;
 mod tracing;
 
 pub use crate::bvh::Work;
+pub use bvh::default_layout as default_bvh_layout;
 pub use pretrace::TraceIn;
 pub use tally::{FrameTally, TracedRays};
 pub use tracing::TraceOrder;
@@ -82,9 +83,15 @@ pub trait MirrorLookup: Sync {
     fn rungs(&self) -> &'static [Rung];
     /// Builds the lookup's mirror pipelines and state for one renderer.
     fn create(&self, ctx: &LookupContext<'_>) -> Result<Box<dyn LookupPass>, GpuError>;
-    /// The work its sensor frame's trace does at `t_s`, counted on the CPU (exact and the same
-    /// on every device: the benchmark records it). None for a lookup with no count of its own.
-    fn sensor_work(&self, _scene: &crate::scene::Scene, _t_s: f64) -> Option<Result<Work, String>> {
+    /// The work its sensor frame's trace does at `t_s` with the trees laid out as `layout`,
+    /// counted on the CPU (exact and the same on every device: the benchmark records it).
+    /// None for a lookup with no count of its own.
+    fn sensor_work(
+        &self,
+        _scene: &crate::scene::Scene,
+        _t_s: f64,
+        _layout: crate::bvh::BvhLayout,
+    ) -> Option<Result<Work, String>> {
         None
     }
 }
@@ -164,6 +171,9 @@ pub struct LookupContext<'a> {
     /// Where a tracing lookup walks its rays (`RenderOptions::trace_in`, else the device's
     /// default).
     pub trace_in: TraceIn,
+    /// How the bvh lookup lays out and walks its trees (`RenderOptions::bvh_layout`, else the
+    /// device's default).
+    pub bvh_layout: crate::bvh::BvhLayout,
 }
 
 /// A lookup's per-renderer state: the pipelines that draw the mirror. `Send`: a renderer may
