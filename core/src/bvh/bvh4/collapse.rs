@@ -71,8 +71,13 @@ pub fn collapse(bvh2: &Bvh2, at: u32) -> Collapsed {
                 todo.push((base + rank, k));
                 continue;
             }
-            // PLOC and the balanced build make one item a leaf; a leaf slot names up to three.
-            let count = n.prim_count.clamp(1, 3);
+            // `crate::trees` (PLOC, the balanced build) makes one item a leaf, which the top
+            // level's walk relies on (it enters a leaf's first object only).
+            assert_eq!(
+                n.prim_count, 1,
+                "a binary tree from crate::trees has one item a leaf"
+            );
+            let count = 1;
             meta[slot] = (((1 << count) - 1) << 5) | next_leaf;
             for p in 0..count {
                 let index = (base as u32 + next_leaf + p) + at;
@@ -100,41 +105,65 @@ fn step_exponent(extent: f32) -> u32 {
     let exponent = (bits >> 23) & 0xff;
     // A mantissa beyond a power of two needs the next one up.
     let e = exponent + u32::from(bits & 0x7f_ffff != 0);
-    let mut e = e.clamp(1, 254);
-    while extent / f32::from_bits(e << 23) > 255.0 && e < 254 {
+    e.clamp(1, 254)
+}
+
+/// One axis of a node's grid: its step's biased exponent, and per child its low and high
+/// plane in steps from `origin` (the children's lowest coordinate). Each decoded plane,
+/// `q * step + origin` in f32 (as `Bvh4Node::child_box` decodes it), lies outside its child's
+/// box: the low one at or below it, the high one at or above it. A step at which the span
+/// rounds to 255 steps exactly can leave the top plane short of the box (the 255th step
+/// lands below the highest coordinate); the next step up is taken then. The walk computes
+/// the planes in the ray's terms, `q * (step / d) + (origin - o) / d`, whose rounding the
+/// boxes' padding covers.
+fn axis_grid(origin: f32, spans: &[(f32, f32)]) -> (u32, Vec<(u32, u32)>) {
+    let top = spans.iter().fold(origin, |m, &(_, hi)| m.max(hi));
+    let mut e = step_exponent(top - origin);
+    loop {
+        let s = f32::from_bits(e << 23);
+        let plane = |q: f32| q * s + origin;
+        let planes: Vec<(f32, f32)> = spans
+            .iter()
+            .map(|&(lo, hi)| {
+                let mut q_lo = ((lo - origin) / s).floor().clamp(0.0, 255.0);
+                while q_lo > 0.0 && plane(q_lo) > lo {
+                    q_lo -= 1.0;
+                }
+                let mut q_hi = ((hi - origin) / s).ceil().clamp(0.0, 255.0);
+                while q_hi < 255.0 && plane(q_hi) < hi {
+                    q_hi += 1.0;
+                }
+                (q_lo, q_hi)
+            })
+            .collect();
+        let covered = (planes.iter().zip(spans)).all(|(&(_, q_hi), &(_, hi))| plane(q_hi) >= hi);
+        if covered || e >= 254 {
+            return (
+                e,
+                planes.iter().map(|&(l, h)| (l as u32, h as u32)).collect(),
+            );
+        }
         e += 1;
     }
-    e
 }
 
 /// The node over `boxes` (1 to 4), its children's boxes rounded outwards onto its grid.
 fn quantized(boxes: &[Aabb], meta: [u32; 4], base: u32) -> Bvh4Node {
-    let lo = boxes.iter().fold(Aabb::INVALID, |a, b| a.union(b));
-    let origin = glam::Vec3::from(lo.min);
-    let extent = glam::Vec3::from(lo.max) - origin;
-    let e = [extent.x, extent.y, extent.z].map(step_exponent);
-    let step = glam::Vec3::from_array(e.map(|e| f32::from_bits(e << 23)));
-    let mut planes = [[0u32; 4]; 6];
-    for (slot, b) in boxes.iter().enumerate() {
-        let (bmin, bmax) = (glam::Vec3::from(b.min), glam::Vec3::from(b.max));
-        for axis in 0..3 {
-            let (o, s) = (origin[axis], step[axis]);
-            // Rounded outwards, then moved out further while the float arithmetic the walk
-            // does (q * step + origin) would land inside the box.
-            let mut q_lo = ((bmin[axis] - o) / s).floor().clamp(0.0, 255.0);
-            while q_lo > 0.0 && q_lo * s + o > bmin[axis] {
-                q_lo -= 1.0;
-            }
-            let mut q_hi = ((bmax[axis] - o) / s).ceil().clamp(0.0, 255.0);
-            while q_hi < 255.0 && q_hi * s + o < bmax[axis] {
-                q_hi += 1.0;
-            }
-            let shift = 8 * slot;
-            planes[2 * axis][slot / 4] |= (q_lo as u32) << shift;
-            planes[2 * axis + 1][slot / 4] |= (q_hi as u32) << shift;
+    let union = boxes.iter().fold(Aabb::INVALID, |a, b| a.union(b));
+    let origin = glam::Vec3::from(union.min);
+    let mut e = [0u32; 3];
+    // Per axis, the children's low and high planes: a byte per slot.
+    let mut low = [0u32; 3];
+    let mut high = [0u32; 3];
+    for axis in 0..3 {
+        let spans: Vec<(f32, f32)> = boxes.iter().map(|b| (b.min[axis], b.max[axis])).collect();
+        let (exponent, planes) = axis_grid(origin[axis], &spans);
+        e[axis] = exponent;
+        for (slot, (q_lo, q_hi)) in planes.into_iter().enumerate() {
+            low[axis] |= q_lo << (8 * slot);
+            high[axis] |= q_hi << (8 * slot);
         }
     }
-    let word = |i: usize| planes[i][0];
     Bvh4Node {
         grid: [
             origin.x.to_bits(),
@@ -145,11 +174,43 @@ fn quantized(boxes: &[Aabb], meta: [u32; 4], base: u32) -> Bvh4Node {
         links: [
             base,
             meta[0] | (meta[1] << 8) | (meta[2] << 16) | (meta[3] << 24),
-            word(0),
-            word(1),
+            low[0],
+            high[0],
         ],
-        planes: [word(2), word(3), word(4), word(5)],
+        planes: [low[1], high[1], low[2], high[2]],
     }
+}
+
+/// The nodes reachable from record `root` (indices from `at`), each before its children: a
+/// walk of the tree without recursion (a chain of nested boxes makes a tree as deep as it is
+/// long, and is measured before it is rebuilt balanced).
+fn nodes_from(records: &[BvhRecord], at: u32, root: u32) -> Vec<(u32, Bvh4Node)> {
+    let mut order = Vec::new();
+    let mut todo = vec![root];
+    while let Some(r) = todo.pop() {
+        let node = Bvh4Node::of(&records[(r - at) as usize]);
+        todo.extend((0..4).filter_map(|slot| match node.child(slot) {
+            Child::Inner(c) => Some(c),
+            _ => None,
+        }));
+        order.push((r, node));
+    }
+    order
+}
+
+/// Per node reachable from `root`, a value made from its children's (`leaf` for a node
+/// without inner children): the nodes taken children first.
+fn fold_up(
+    records: &[BvhRecord],
+    at: u32,
+    root: u32,
+    value: impl Fn(&Bvh4Node, &dyn Fn(u32) -> u32) -> u32,
+) -> u32 {
+    let mut of = vec![0u32; records.len()];
+    for (r, node) in nodes_from(records, at, root).iter().rev() {
+        of[(r - at) as usize] = value(node, &|c| of[(c - at) as usize]);
+    }
+    of[(root - at) as usize]
 }
 
 /// The most stack entries a walk from record `root` of `records` (indices from `at`) holds:
@@ -164,36 +225,71 @@ pub fn stack_need(
     leaves_push: bool,
     leaf_stack: u32,
 ) -> u32 {
-    let node = Bvh4Node::of(&records[(root - at) as usize]);
-    let mut pushable = 0;
-    let mut below = 0;
-    for slot in 0..4 {
-        match node.child(slot) {
-            Child::Empty => {}
-            Child::Inner(r) => {
-                pushable += 1;
-                below = below.max(stack_need(records, at, r, leaves_push, leaf_stack));
-            }
-            Child::Leaf { count, .. } => {
-                if leaves_push {
+    fold_up(records, at, root, |node, below_of| {
+        let (mut pushable, mut below) = (0, 0);
+        for slot in 0..4 {
+            match node.child(slot) {
+                Child::Empty => {}
+                Child::Inner(r) => {
+                    pushable += 1;
+                    below = below.max(below_of(r));
+                }
+                Child::Leaf { count, .. } if leaves_push => {
                     pushable += count;
                     below = below.max(leaf_stack);
                 }
+                Child::Leaf { .. } => {}
             }
         }
-    }
-    pushable.max(1) - 1 + below
+        pushable.max(1) - 1 + below
+    })
 }
 
 /// Node levels on the longest path from record `root`.
 pub fn depth(records: &[BvhRecord], at: u32, root: u32) -> u32 {
-    let node = Bvh4Node::of(&records[(root - at) as usize]);
-    let below = (0..4)
-        .filter_map(|slot| match node.child(slot) {
-            Child::Inner(r) => Some(depth(records, at, r)),
+    fold_up(records, at, root, |node, depth_of| {
+        let below = (0..4).filter_map(|slot| match node.child(slot) {
+            Child::Inner(r) => Some(depth_of(r)),
             _ => None,
-        })
-        .max()
-        .unwrap_or(0);
-    1 + below
+        });
+        1 + below.max().unwrap_or(0)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3A;
+
+    use super::*;
+
+    /// A span that rounds to 255 steps exactly (its top 1.02, its bottom -1044479: the span
+    /// 1044480.02 is 1044480 in f32, 255 steps of 4096) left the top plane 0.02 short of the
+    /// box; every decoded plane now lies outside its child's box, at any scale.
+    #[test]
+    fn every_decoded_box_holds_its_childs_box() {
+        let cases: [[(f32, f32); 2]; 5] = [
+            [(-1_044_479.0, -1_044_000.0), (0.5, 1.02)],
+            [(0.0, 0.0), (0.0, 0.0)],
+            [(-1e-30, 1e-30), (0.0, 2e-30)],
+            [(-3.0e37, -1.0), (1.0, 3.0e37)],
+            [(100.0, 100.5), (100.25, 356.0)],
+        ];
+        for spans in cases {
+            let boxes: Vec<Aabb> = spans
+                .iter()
+                .map(|&(lo, hi)| Aabb {
+                    min: Vec3A::new(lo, -1.0, 2.0),
+                    max: Vec3A::new(hi, 1.0, 2.0),
+                })
+                .collect();
+            let node = quantized(&boxes, [0x21, 0x22, 0, 0], 0);
+            for (slot, b) in boxes.iter().enumerate() {
+                let (lo, hi) = node.child_box(slot);
+                assert!(
+                    lo.cmple(b.min.into()).all() && Vec3A::from(hi).cmpge(b.max).all(),
+                    "{spans:?} slot {slot}: {lo}..{hi} does not hold {b:?}"
+                );
+            }
+        }
+    }
 }
