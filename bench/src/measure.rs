@@ -10,7 +10,7 @@ use specchio::reference::Reference;
 use specchio::render::floors::Floor;
 use specchio::render::lookups;
 use specchio::render::methods::Method;
-use specchio::scene::Scene;
+use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::{self, DeviceInfo, OptionalFeatures};
 use specchio::vk::instance::Instance;
 
@@ -52,7 +52,9 @@ pub(crate) fn measure(
     };
     if let (Some(b), Some(path)) = (baseline, &args.baseline) {
         crate::gate::same_driver(b, &device.info, path)?;
-        crate::gate::same_layout(b, plan.bvh_layout_on(&device.info), path)?;
+        let walks_bvh = (work.rungs.iter()).any(|r| r.lookup() == Some(Lookup::Bvh));
+        let layout = walks_bvh.then(|| plan.bvh_layout_on(&device.info));
+        crate::gate::same_layout(b, layout, path)?;
     }
     let progress = Progress::new(rounds(settled, scenes, &work, &plan));
     progress.say(args.format, headline(settled, scenes.len(), &work));

@@ -251,13 +251,7 @@ fn render_method(
         method,
         out: dir.display().to_string(),
         trace_in: walks.then(|| taken.name()),
-        bvh_layout: walks.then(|| {
-            let device = &renderer.device.info;
-            let layout = args
-                .bvh_layout
-                .unwrap_or_else(|| lookups::default_bvh_layout(device));
-            layout.name()
-        }),
+        bvh_layout: renderer.bvh_layout().map(|l| l.name()),
         refresh_counters: renderer.counters(),
         summary,
         frames: reports,

@@ -16,9 +16,9 @@
 //
 // Nodes and triangles are both 48-byte records in one array, so one word names both: on a
 // CPU driver each word read from a per-invocation address is a separate load, and this node
-// is three 16-byte reads where the eight-wide compressed node (Ylitie et al. 2017) it
-// replaced was five (docs/accuracy.md has the figures). Every member is a whole 16-byte word
-// for the same reason.
+// is three 16-byte reads where the eight-wide compressed node beside it (Ylitie et al. 2017,
+// bvh_cwbvh.glsl) is five. Which layout is faster depends on the device (docs/accuracy.md
+// has the figures). Every member is a whole 16-byte word for the same reason.
 struct Bvh4Node {
     uvec4 grid;   // xyz: the grid's origin (float bits); w: bytes 0..2 each axis's step as a
                   // float's biased exponent
@@ -143,19 +143,22 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
         // Each child as an entry: an inner node at base + rank, or (top level) an object at
         // its leaf's record; in a mesh's tree a leaf is no entry (infinitely far) and its
         // triangles go into one mask instead, a bit per record from the base.
-        uvec4 records = mix((uvec4(base) + (meta & 0x1Fu)) | ENTRY_OBJECT, uvec4(base) + (meta & 3u), inner);
+        uvec4 leaf_records = (uvec4(base) + (meta & 0x1Fu)) | ENTRY_OBJECT;
+        uvec4 records = mix(leaf_records, uvec4(base) + (meta & 3u), inner);
         bvec4 entry_kind = in_mesh ? inner : bvec4(true);
         vec4 t = mix(vec4(BVH_INFINITY), near, bvec4(uvec4(met) & uvec4(entry_kind)));
-        uvec4 leaf_bits = mix(uvec4(0u), (meta >> 5u) << (meta & 0x1Fu), bvec4(uvec4(met) & uvec4(not(inner))));
+        bvec4 leaf_met = bvec4(uvec4(met) & uvec4(not(inner)));
+        uvec4 leaf_bits = mix(uvec4(0u), (meta >> 5u) << (meta & 0x1Fu), leaf_met);
         uint triangles = in_mesh ? (leaf_bits.x | leaf_bits.y | leaf_bits.z | leaf_bits.w) : 0u;
-        // The mesh's triangles met, in record order (core/src/bvh/bvh4/walk.rs tests them so).
+        // The mesh's triangles met, in record order (bvh4/walk.rs tests them in that order).
         while (triangles != 0u) {
             uint k = findLSB(triangles);
             triangles &= triangles - 1u;
             BvhTriangle tri = mesh_triangles[base + k];
             float th;
             vec2 bary;
-            if (hit_triangle(sheared, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, t_min, best.t, th, bary)) {
+            vec3 v0 = tri.v0.xyz, v1 = tri.v1.xyz, v2 = tri.v2.xyz;
+            if (hit_triangle(sheared, v0, v1, v2, t_min, best.t, th, bary)) {
                 best.t = th;
                 best.drawable = drawable;
                 best.primitive = floatBitsToUint(tri.v0.w);

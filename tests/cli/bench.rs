@@ -69,7 +69,7 @@ fn the_gate_passes_an_identical_baseline_and_fails_a_worse_one() {
     let worse = common::temp_dir("worse.json");
     check_less_work_fails_naming_the_case(&json, &worse);
     check_a_changed_rung_counter_fails_naming_it(&json, &worse);
-    check_another_layout_is_refused(&json);
+    check_another_layout_is_refused(&json, &worse);
     check_a_missing_baseline_is_named();
     for f in [json, csv, worse, svg] {
         let _ = std::fs::remove_file(f);
@@ -522,26 +522,26 @@ fn a_damaged_baseline_is_refused_naming_the_key() {
 #[test]
 fn a_validation_message_fails_the_bench_without_output() {
     let json = common::temp_dir("validation.json");
-    let out = Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args([
-            "bench",
-            "--quick",
-            "--methods",
-            "six-pass",
-            "--no-accuracy",
-            "--no-dynamic",
-            "--no-floors",
-            "--json",
-            json.to_str().unwrap(),
-        ])
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .env("SPECCHIO_VALIDATE", "1")
-        .env(
-            "VK_LAYER_ENABLES",
-            "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT",
-        )
-        .output()
-        .expect("the specchio binary runs");
+    let out = common::output_of(
+        Command::new(env!("CARGO_BIN_EXE_specchio"))
+            .args([
+                "bench",
+                "--quick",
+                "--methods",
+                "six-pass",
+                "--no-accuracy",
+                "--no-dynamic",
+                "--no-floors",
+                "--json",
+                json.to_str().unwrap(),
+            ])
+            .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+            .env("SPECCHIO_VALIDATE", "1")
+            .env(
+                "VK_LAYER_ENABLES",
+                "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT",
+            ),
+    );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{stderr}");
     assert!(

@@ -147,13 +147,24 @@ fn check_provenance(r: &serde_json::Value, peak_bytes: u64) {
 }
 
 /// A gated run whose bvh rung would walk another layout than the baseline's is refused before
-/// it runs, naming both layouts: its counters could not be compared.
-pub fn check_another_layout_is_refused(json: &Path) {
+/// it runs, naming both layouts: its counters could not be compared. So is a baseline whose
+/// layout is no layout, naming the key.
+pub fn check_another_layout_is_refused(json: &Path, worse: &Path) {
     let refused = gate_run(json, &["--device", "lavapipe", "--bvh-layout", "bvh4"]);
     let stderr = String::from_utf8_lossy(&refused.stderr);
     assert_eq!(refused.status.code(), Some(1), "{stderr}");
     assert!(
         stderr.contains("counted the bvh rung's walk in the cwbvh layout, this run walks bvh4"),
+        "{stderr}"
+    );
+    let mut base = read_json(json);
+    base["settings"]["bvh_layout"] = serde_json::json!("bvh8");
+    std::fs::write(worse, base.to_string()).unwrap();
+    let refused = gate_run(worse, &["--device", "lavapipe"]);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("settings.bvh_layout \"bvh8\" is not a layout (cwbvh or bvh4)"),
         "{stderr}"
     );
 }

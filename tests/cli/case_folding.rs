@@ -65,12 +65,12 @@ impl Drop for Mount {
 
 /// Runs `args` in `dir`; the exit code and stderr.
 fn run_in(dir: &Path, args: &[&str]) -> (Option<i32>, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args(args)
-        .current_dir(dir)
-        .env("SPECCHIO_VALIDATE", "1")
-        .output()
-        .unwrap();
+    let out = common::output_of(
+        Command::new(env!("CARGO_BIN_EXE_specchio"))
+            .args(args)
+            .current_dir(dir)
+            .env("SPECCHIO_VALIDATE", "1"),
+    );
     (
         out.status.code(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
@@ -139,11 +139,10 @@ fn an_output_never_replaces_its_input_through_a_case_fold_on_fuse_vfat() {
     // The viewer's screenshot goes through the same guard (under Xvfb, run in the mount).
     if let Some(x) = viewer_support::Xvfb::start() {
         use viewer_support::Display;
-        let out = x
-            .command(&["s.toml", "--frames", "2", "--screenshot", "S.TOML"])
-            .current_dir(mnt)
-            .output()
-            .unwrap();
+        let out = common::output_of(
+            x.command(&["s.toml", "--frames", "2", "--screenshot", "S.TOML"])
+                .current_dir(mnt),
+        );
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(
             out.status.code(),

@@ -181,15 +181,15 @@ fn a_validation_message_fails_every_vulkan_command() {
             "8",
         ],
     ] {
-        let result = Command::new(env!("CARGO_BIN_EXE_specchio"))
-            .args(&args)
-            .env("SPECCHIO_VALIDATE", "1")
-            .env(
-                "VK_LAYER_ENABLES",
-                "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT",
-            )
-            .output()
-            .expect("the specchio binary runs");
+        let result = common::output_of(
+            Command::new(env!("CARGO_BIN_EXE_specchio"))
+                .args(&args)
+                .env("SPECCHIO_VALIDATE", "1")
+                .env(
+                    "VK_LAYER_ENABLES",
+                    "VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT",
+                ),
+        );
         let stderr = String::from_utf8_lossy(&result.stderr);
         assert_eq!(result.status.code(), Some(3), "{args:?}:\n{stderr}");
         assert!(
@@ -465,12 +465,12 @@ fn a_cube_larger_than_one_allocation_is_refused_naming_the_option() {
 fn the_loaders_warnings_do_not_count_as_validation_messages() {
     let out = temp_dir("loader-notes");
     let scene = root().join("scenes/test/six-colour-room.toml");
-    let result = Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args(["render", scene.to_str().unwrap(), "--validate", "--out"])
-        .arg(&out)
-        .env("VK_INSTANCE_LAYERS", "VK_LAYER_KHRONOS_validation")
-        .output()
-        .expect("the specchio binary runs");
+    let result = common::output_of(
+        Command::new(env!("CARGO_BIN_EXE_specchio"))
+            .args(["render", scene.to_str().unwrap(), "--validate", "--out"])
+            .arg(&out)
+            .env("VK_INSTANCE_LAYERS", "VK_LAYER_KHRONOS_validation"),
+    );
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert!(result.status.success(), "{stderr}");
     assert!(stderr.contains("[vulkan loader"), "{stderr}");

@@ -151,15 +151,15 @@ fn a_failing_stdout_neither_kills_nor_panics() {
     let dir = scratch("stdout");
     let scene = root().join("scenes/test/six-colour-room.toml");
     let run = |out: &Path, stdout: std::process::Stdio| {
-        Command::new(env!("CARGO_BIN_EXE_specchio"))
-            .args(["render", scene.to_str().unwrap(), "--out"])
-            .arg(out)
-            .args(["--cube-size", "8"])
-            .env("SPECCHIO_VALIDATE", "1")
-            .stdout(stdout)
-            .stderr(std::process::Stdio::piped())
-            .output()
-            .unwrap()
+        common::output_of(
+            Command::new(env!("CARGO_BIN_EXE_specchio"))
+                .args(["render", scene.to_str().unwrap(), "--out"])
+                .arg(out)
+                .args(["--cube-size", "8"])
+                .env("SPECCHIO_VALIDATE", "1")
+                .stdout(stdout)
+                .stderr(std::process::Stdio::piped()),
+        )
     };
     // A pipe whose reader is gone before the first line.
     let mut fds = [0; 2];
@@ -235,13 +235,13 @@ fn two_renders_write_byte_identical_files() {
     let scene = root().join("scenes/test/six-colour-room.toml");
     let run = |name: &str, threads: &str| {
         let out = temp_dir(name);
-        let result = Command::new(env!("CARGO_BIN_EXE_specchio"))
-            .args(["render", scene.to_str().unwrap(), "--out"])
-            .arg(&out)
-            .args(["--cube-size", "64", "--directions"])
-            .env("LP_NUM_THREADS", threads)
-            .output()
-            .unwrap();
+        let result = common::output_of(
+            Command::new(env!("CARGO_BIN_EXE_specchio"))
+                .args(["render", scene.to_str().unwrap(), "--out"])
+                .arg(&out)
+                .args(["--cube-size", "64", "--directions"])
+                .env("LP_NUM_THREADS", threads),
+        );
         assert!(
             result.status.success(),
             "{}",
@@ -422,6 +422,7 @@ fn a_long_reference_says_its_estimate_and_stops_cleanly() {
     });
     reader.join().unwrap();
     let said = said.lock().unwrap().clone();
+    common::readable_text(&["reference", "(stopped)"], "stderr", &said);
     assert_eq!(result.status.code(), Some(1), "{said}");
     let line = said.lines().find(|l| l.starts_with(estimate)).unwrap();
     assert!(

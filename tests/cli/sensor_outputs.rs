@@ -144,6 +144,9 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
     assert!(!said.contains("warning"), "{said}");
     assert_eq!(camera_json(&default)["ground_truth"]["layers"], "traced");
     assert_eq!(camera_json(&default)["ground_truth"]["colour"], "bvh");
+    // Each run says the tree layout its walk took: lavapipe's default, the eight-wide one.
+    assert_eq!(render_json(&default)["runs"][0]["bvh_layout"], "cwbvh");
+    assert!(render_json(&traced)["runs"][0].get("bvh_layout").is_none());
     // SwiftShader, where it is provided (a counted skip where not, which CI refuses).
     let provided = common::root()
         .join(".drivers/swiftshader/vk_swiftshader_icd.json")
@@ -152,6 +155,8 @@ fn sensor_outputs_are_traced_with_ray_query_and_say_where_they_come_from() {
         let name = "sensor-truth-default-swiftshader";
         let (swiftshader, said) = render_on("swiftshader", scene_path, name, None);
         assert_traced_truth(&swiftshader, &said, "bvh", &reference);
+        // SwiftShader's default layout: the four-wide one.
+        assert_eq!(render_json(&swiftshader)["runs"][0]["bvh_layout"], "bvh4");
         std::fs::remove_dir_all(swiftshader).unwrap();
     } else {
         common::skip(
@@ -190,6 +195,11 @@ fn assert_traced_truth(dir: &Path, said: &str, colour: &str, reference: &Path) {
 
 fn camera_json(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("camera.json")).unwrap()).unwrap()
+}
+
+/// The render's record, `render.json`.
+fn render_json(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("render.json")).unwrap()).unwrap()
 }
 
 /// `render --sensor-outputs` of `scene_path` on lavapipe, with `--lookup` when given, into a

@@ -65,13 +65,13 @@ fn edited_thesis_room(name: &str, edits: &[(&str, &str, &str)]) -> Scratch {
 
 #[test]
 fn without_a_display_it_says_so_and_names_render() {
-    let out = Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args(["view", thesis_room().to_str().unwrap()])
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .env_remove("WAYLAND_SOCKET")
-        .output()
-        .unwrap();
+    let out = common::output_of(
+        Command::new(env!("CARGO_BIN_EXE_specchio"))
+            .args(["view", thesis_room().to_str().unwrap()])
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .env_remove("WAYLAND_SOCKET"),
+    );
     let err = text(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
@@ -483,11 +483,10 @@ fn a_lost_device_ends_the_viewer_with_a_message() {
 /// 100 frames of thesis-room with the fault `var` asked for after `after`, run to its end:
 /// what it printed and how it ended, required free of panics and validation messages.
 fn with_fault(x: &Xvfb, var: &str, after: &str) -> std::process::Output {
-    let out = x
-        .command(&[thesis_room().to_str().unwrap(), "--frames", "100"])
-        .env(var, after)
-        .output()
-        .expect("specchio view runs");
+    let out = common::output_of(
+        x.command(&[thesis_room().to_str().unwrap(), "--frames", "100"])
+            .env(var, after),
+    );
     let stderr = text(&out.stderr);
     assert!(!stderr.contains("panicked"), "{var}={after}: {stderr}");
     assert!(!stderr.contains("Validation"), "{var}={after}: {stderr}");

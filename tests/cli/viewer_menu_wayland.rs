@@ -206,6 +206,7 @@ fn a_compositor_that_dies_ends_the_viewer_with_one_message() {
     wayland.kill();
     let start = Instant::now();
     let out = child.wait_with_output().unwrap();
+    common::readable_numbers(&["view", "(its compositor killed)"], &out);
     let stderr = text(&out.stderr);
     eprintln!("after {:?}: {:?}\n{stderr}", start.elapsed(), out.status);
     assert_eq!(out.status.code(), Some(1), "{stderr}");

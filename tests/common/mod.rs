@@ -66,6 +66,7 @@ pub struct Measured {
 pub fn run_measured(mut command: std::process::Command) -> Measured {
     use std::process::Stdio;
     command.stdout(Stdio::null()).stderr(Stdio::piped());
+    let args: Vec<String> = args_of(&command).iter().map(|a| a.to_string()).collect();
     // Reaped below by wait4.
     #[allow(clippy::zombie_processes)]
     let child = command.spawn().expect("the command runs");
@@ -77,6 +78,8 @@ pub fn run_measured(mut command: std::process::Command) -> Measured {
     let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
     let waited = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
     assert_eq!(waited, pid, "wait4");
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    readable_text(&args, "stderr", &stderr);
     Measured {
         code: libc::WIFEXITED(status).then(|| libc::WEXITSTATUS(status)),
         stderr,
@@ -568,5 +571,7 @@ pub fn signal_when(
     }
     // SAFETY: signals our own child process.
     unsafe { libc::kill(child.id() as i32, signal) };
-    child.wait_with_output().unwrap()
+    let out = child.wait_with_output().unwrap();
+    readable_numbers(&[&format!("(stopped at {what})")], &out);
+    out
 }

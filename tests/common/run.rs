@@ -58,21 +58,43 @@ pub const MAX_DIGITS_IN_A_ROW: usize = 24;
 /// to stdout is bytes, not text, and is left alone). A hexadecimal word (a staging folder's
 /// 32 random hex digits, which may hold 25 decimal ones in a row) is a name, not a number.
 pub fn readable_numbers(args: &[&str], out: &std::process::Output) {
-    let text = |b: &Vec<u8>| std::str::from_utf8(b).is_ok();
     let streams = [("stderr", &out.stderr), ("stdout", &out.stdout)];
-    for (stream, bytes) in streams.into_iter().filter(|(_, b)| text(b)) {
-        let longest = bytes
-            .split(|b| !b.is_ascii_hexdigit())
-            .filter(|word| word.iter().all(u8::is_ascii_digit))
-            .map(<[u8]>::len)
-            .max()
-            .unwrap_or(0);
-        assert!(
-            longest <= MAX_DIGITS_IN_A_ROW,
-            "specchio {args:?}: its {stream} prints a number of {longest} digits in a row:\n{}",
-            String::from_utf8_lossy(bytes)
-        );
+    for (stream, bytes) in streams {
+        if let Ok(text) = std::str::from_utf8(bytes) {
+            readable_text(args, stream, text);
+        }
     }
+}
+
+/// [`readable_numbers`] of text the command said on `stream` (a test that reads a running
+/// command's stderr as it comes).
+pub fn readable_text(args: &[&str], stream: &str, text: &str) {
+    let longest = text
+        .split(|c: char| !c.is_ascii_hexdigit())
+        .filter(|word| word.chars().all(|c| c.is_ascii_digit()))
+        .map(str::len)
+        .max()
+        .unwrap_or(0);
+    assert!(
+        longest <= MAX_DIGITS_IN_A_ROW,
+        "specchio {args:?}: its {stream} prints a number of {longest} digits in a row:\n{text}"
+    );
+}
+
+/// Runs `command` (the specchio binary as a test set it up: its environment, its folder, its
+/// streams) to its end; whatever it says is held to [`readable_numbers`], as every run
+/// through these helpers is.
+pub fn output_of(command: &mut std::process::Command) -> std::process::Output {
+    let out = command.output().expect("the command runs");
+    readable_numbers(&args_of(command), &out);
+    out
+}
+
+/// `command`'s arguments, for messages.
+pub fn args_of(command: &std::process::Command) -> Vec<&str> {
+    (command.get_args())
+        .map(|a| a.to_str().unwrap_or("(not UTF-8)"))
+        .collect()
 }
 
 /// Runs `specchio ARGS`, validation on; one still running after `patience` is killed and

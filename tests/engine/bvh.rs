@@ -105,8 +105,9 @@ fn a_moving_scene_traces_each_frame_where_its_objects_are() {
 /// The walk in a compute pass before the views (`TraceIn::Compute`, a GPU's default: the
 /// records of `shaders/include/pretrace.glsl`) draws what the fragment shaders' own walk draws,
 /// bit for bit: the observer, the sensor, the pair, both direction images and every quantity
-/// of the sensor's ray map, on every driver, over frames whose objects move (the records are
-/// rewritten each frame; each frame here is waited for before the next).
+/// of the sensor's ray map, on every driver and in both tree layouts, over frames whose
+/// objects move (the records are rewritten each frame; each frame here is waited for before
+/// the next).
 #[test]
 fn the_compute_walk_draws_what_the_fragment_walk_draws() {
     use specchio::render::lookups::TraceIn;
@@ -118,16 +119,20 @@ fn the_compute_walk_draws_what_the_fragment_walk_draws() {
     };
     for device in devices() {
         let gpu = Gpu::on(&device, Default::default());
-        for (path, times) in [
+        let cases = [
             ("scenes/many-objects.toml", &[0.0][..]),
             ("scenes/hyperbolic-room.toml", &[0.0]),
             ("scenes/moving-objects.toml", &[0.4, 1.3]),
-        ] {
+        ];
+        for ((path, times), layout) in
+            (cases.into_iter()).flat_map(|case| BvhLayout::ALL.map(|l| (case, l)))
+        {
             let s = scene(path);
             let frames = |trace_in| {
                 let options = RenderOptions {
                     lookup: Some(Lookup::Bvh),
                     trace_in: Some(trace_in),
+                    bvh_layout: Some(layout),
                     frames_in_flight: 2,
                     ..Default::default()
                 };
@@ -135,6 +140,7 @@ fn the_compute_walk_draws_what_the_fragment_walk_draws() {
                 // The path asked for is the path taken (a lost option would compare the
                 // fragment walk with itself).
                 assert_eq!(r.pretraced(), trace_in == TraceIn::Compute, "{path}");
+                assert_eq!(r.bvh_layout(), Some(layout), "{path}");
                 let all: Vec<_> = (times.iter().enumerate())
                     .map(|(i, &t)| r.render_frame(i as u64, t, readback).expect("frame").1)
                     .collect();
@@ -143,7 +149,7 @@ fn the_compute_walk_draws_what_the_fragment_walk_draws() {
             };
             let (fragment, compute) = (frames(TraceIn::Fragment), frames(TraceIn::Compute));
             for (i, (a, b)) in fragment.iter().zip(&compute).enumerate() {
-                let name = format!("{path} on {device}, frame {i}");
+                let name = format!("{path} on {device} ({}), frame {i}", layout.name());
                 for (what, x, y) in [
                     ("observer", &a.observer, &b.observer),
                     ("sensor", &a.sensor, &b.sensor),

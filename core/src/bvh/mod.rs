@@ -257,8 +257,9 @@ impl TopLevel {
 
 /// The closest object triangle along `o + t d` with t in (t_min, t_max), through the top
 /// level and the meshes' trees, walked as the shader walks their layout; its work is added to
-/// `work`. None where the two are of different layouts (a top level is built over its
-/// meshes, so only a caller's mix-up makes them differ).
+/// `work`. A top level is built over its meshes ([`TopLevel::build`]), so the two are of one
+/// layout; a pair of two layouts is a caller's mix-up, and stops the program rather than
+/// passing for "no hit".
 pub fn closest_hit(
     top: &TopLevel,
     meshes: &MeshBvhs,
@@ -271,7 +272,7 @@ pub fn closest_hit(
             cwbvh::walk::closest_hit(t, m, ray, range, work)
         }
         (TopLevel::Bvh4(t), MeshBvhs::Bvh4(m)) => bvh4::walk::closest_hit(t, m, ray, range, work),
-        _ => None,
+        _ => unreachable!("a top level walked with meshes of another layout"),
     }
 }
 

@@ -3,7 +3,8 @@
 //! traversal stack is rebuilt balanced. The CPU reference walks the binary tree collapsed
 //! into obvhs's compressed wide form (eight children a node, Ylitie et al. 2017) with obvhs's
 //! own traversal (`reference::objects`); the `bvh` lookup collapses it four wide for its
-//! shader (`bvh::collapse`). No Vulkan here.
+//! shader in its `bvh4` layout (`bvh::bvh4::collapse`) and uses the compressed wide form in
+//! its `cwbvh` one. No Vulkan here.
 
 use glam::{Mat4, Vec3, Vec3A};
 use obvhs::aabb::Aabb;

@@ -203,6 +203,12 @@ impl Renderer {
         self.mirror.pass.pretraces()
     }
 
+    /// How the lookup's trees are laid out, as taken (`RenderOptions::bvh_layout`, else the
+    /// device's default); None for a lookup without trees of its own.
+    pub fn bvh_layout(&self) -> Option<crate::bvh::BvhLayout> {
+        self.mirror.pass.bvh_layout()
+    }
+
     /// How many frames updated the cube, skipped it, and the faces rendered, so far.
     pub fn counters(&self) -> RefreshCounters {
         self.refresh.counters

@@ -526,6 +526,7 @@ impl Running {
             stdout: stdout.clone().into_bytes(),
             stderr,
         };
+        common::readable_numbers(&["view", "(a running viewer)"], &out);
         (out, stdout)
     }
 }

@@ -12,8 +12,9 @@
 //! or eight children a node").
 //!
 //! Building: the binary trees of `crate::trees` (obvhs's PLOC with reinsertion) collapsed four
-//! wide ([`collapse`]); a tree whose walk would need more stack than the shader has is rebuilt
-//! balanced. [`walk`] is the shader's walk on the CPU.
+//! wide ([`collapse`]); a tree whose walk would need more than its share of the shader's stack
+//! (half of it for a mesh's tree, all of it for the top level with its deepest mesh) is
+//! rebuilt balanced. [`walk`] is the shader's walk on the CPU.
 
 pub mod collapse;
 pub mod walk;

@@ -230,6 +230,18 @@ fn fixed_buffers(
         .collect();
     let mut nodes = vec![0u8; top_room * meshes.node_size()];
     nodes.extend_from_slice(meshes.node_bytes());
+    // A shader reads one storage buffer up to the device's range (128 MiB at the least the
+    // spec allows): the bvh4 layout keeps its triangles in its node array, about 67 bytes a
+    // triangle, so a mesh of 2 million triangles may not fit where the range is the least.
+    let range = ctx.device.info.limits.max_storage_buffer_range;
+    let sizes = [Some(nodes.len()), meshes.triangle_bytes().map(<[u8]>::len)];
+    if let Some(size) = sizes.into_iter().flatten().find(|&n| n as u64 > range) {
+        return Err(GpuError::Unsupported(format!(
+            "lookup bvh: the scene's trees ({} layout) need a storage buffer of {size} bytes; \
+             this device binds at most {range} (maxStorageBufferRange)",
+            meshes.layout().name()
+        )));
+    }
     let mut upload = Upload::begin(ctx.device, ctx.submitter)?;
     let usage = storage | vk::BufferUsageFlags::TRANSFER_DST;
     let node_buffer = upload.buffer(&nodes, usage, "bvh nodes")?;
@@ -324,6 +336,10 @@ impl LookupPass for BvhPass {
 
     fn pretraces(&self) -> bool {
         self.pretrace.is_some()
+    }
+
+    fn bvh_layout(&self) -> Option<BvhLayout> {
+        Some(self.meshes.layout())
     }
 
     fn pretrace(&self, pass: &mut PassRecorder<'_>, scene_set: vk::DescriptorSet, view: u32) {

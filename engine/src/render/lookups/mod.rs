@@ -231,6 +231,10 @@ pub trait LookupPass: Send {
     fn pretraces(&self) -> bool {
         false
     }
+    /// How the lookup's trees are laid out, for a lookup that walks trees of its own (bvh).
+    fn bvh_layout(&self) -> Option<crate::bvh::BvhLayout> {
+        None
+    }
     /// A pretraced lookup's walk of camera view `view` into its records, before the first
     /// pass that draws the view; the scene set is set 0. Lookups that do not pretrace record
     /// nothing.
