@@ -190,6 +190,27 @@ struct BvhHit {
     vec2 bary;
 };
 
+// Nothing met yet: the closest hit's distance so far is t_max.
+BvhHit no_object_hit(float t_max) {
+    BvhHit h;
+    h.t = t_max;
+    h.drawable = OBJECT_NONE;
+    h.primitive = 0u;
+    h.bary = vec2(0.0);
+    return h;
+}
+
+// The ray o + t d in object inst's model space: (mo, md), the direction not renormalised,
+// so that t is the same in both spaces (core/src/bvh/layout.rs BvhInstance).
+void object_ray(BvhInstance inst, vec3 o, vec3 d, out vec3 mo, out vec3 md) {
+    mo = vec3(dot(inst.world_to_model[0], vec4(o, 1.0)),
+              dot(inst.world_to_model[1], vec4(o, 1.0)),
+              dot(inst.world_to_model[2], vec4(o, 1.0)));
+    md = vec3(dot(inst.world_to_model[0], vec4(d, 0.0)),
+              dot(inst.world_to_model[1], vec4(d, 0.0)),
+              dot(inst.world_to_model[2], vec4(d, 0.0)));
+}
+
 // The walk through the two levels, bvh_closest_object, in the layout the lookup chose for the
 // device (core/src/bvh/mod.rs says which and why): BVH4 four children a node, nearest first;
 // otherwise the compressed eight-wide BVH.

@@ -99,11 +99,7 @@ void order_entries(inout uint ra, inout float ta, inout uint rb, inout float tb)
 // lives in the invocation's registers or private memory; the trees are refused when built if
 // a walk could overflow it. core/src/bvh/bvh4/walk.rs is this walk on the CPU.
 BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
-    BvhHit best;
-    best.t = t_max;
-    best.drawable = OBJECT_NONE;
-    best.primitive = 0u;
-    best.bary = vec2(0.0);
+    BvhHit best = no_object_hit(t_max);
     const uint NO_FLOOR = 0xFFFFFFFFu;
     const uint NONE = 0xFFFFFFFFu;
     LevelRay world = level_ray(o, d);
@@ -121,12 +117,8 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
     while (true) {
         if ((entry & ENTRY_OBJECT) != 0u) {
             BvhInstance inst = instances[entry & ~ENTRY_OBJECT];
-            vec3 mo = vec3(dot(inst.world_to_model[0], vec4(o, 1.0)),
-                           dot(inst.world_to_model[1], vec4(o, 1.0)),
-                           dot(inst.world_to_model[2], vec4(o, 1.0)));
-            vec3 md = vec3(dot(inst.world_to_model[0], vec4(d, 0.0)),
-                           dot(inst.world_to_model[1], vec4(d, 0.0)),
-                           dot(inst.world_to_model[2], vec4(d, 0.0)));
+            vec3 mo, md;
+            object_ray(inst, o, d, mo, md);
             ray = level_ray(mo, md);
             sheared = shear_ray(mo, md);
             drawable = inst.tree.y;

@@ -96,11 +96,7 @@ uint intersect_node(WideNode n, LevelRay ray, float t_min, float t_max) {
 // lives in the invocation's registers or private memory; the trees are refused when built
 // if a walk could overflow it. core/src/bvh/cwbvh/walk.rs is this walk on the CPU.
 BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
-    BvhHit best;
-    best.t = t_max;
-    best.drawable = OBJECT_NONE;
-    best.primitive = 0u;
-    best.bary = vec2(0.0);
+    BvhHit best = no_object_hit(t_max);
     const uint NO_FLOOR = 0xFFFFFFFFu;
     const uint NODE_BITS = 0xFF000000u;
     LevelRay world = level_ray(o, d);
@@ -141,12 +137,8 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
                 stack[height++] = triangles;
             }
             BvhInstance inst = instances[id];
-            vec3 mo = vec3(dot(inst.world_to_model[0], vec4(o, 1.0)),
-                           dot(inst.world_to_model[1], vec4(o, 1.0)),
-                           dot(inst.world_to_model[2], vec4(o, 1.0)));
-            vec3 md = vec3(dot(inst.world_to_model[0], vec4(d, 0.0)),
-                           dot(inst.world_to_model[1], vec4(d, 0.0)),
-                           dot(inst.world_to_model[2], vec4(d, 0.0)));
+            vec3 mo, md;
+            object_ray(inst, o, d, mo, md);
             ray = level_ray(mo, md);
             sheared = shear_ray(mo, md);
             drawable = inst.tree.y;

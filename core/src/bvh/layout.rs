@@ -7,6 +7,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::scene::{Mesh, Room};
+use crate::trees::PaddedTriangle;
 
 /// 48 bytes, three 16-byte words: a record of the `bvh4` layout's one array, which holds its
 /// nodes and its triangles alike.
@@ -30,6 +31,18 @@ pub struct BvhTriangle {
 }
 
 impl BvhTriangle {
+    /// Triangle `primitive` of a mesh's `triangles` (`super::padded_triangles`).
+    pub fn new(triangles: &[PaddedTriangle], primitive: u32) -> Self {
+        let [v0, v1, v2] = triangles[primitive as usize].0;
+        Self {
+            v0,
+            primitive,
+            v1,
+            v2,
+            ..Default::default()
+        }
+    }
+
     /// This triangle as a record of the `bvh4` layout's array.
     pub fn record(&self) -> BvhRecord {
         bytemuck::cast(*self)

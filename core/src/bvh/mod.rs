@@ -37,7 +37,7 @@ use crate::reference::room::{objects_limit, RoomBox};
 use crate::scene::state::SceneState;
 use crate::scene::{Mesh, Scene};
 use crate::sensor::ray_map::pixel_ray_from;
-use crate::trees::{transformed_box, BoxLeaf};
+use crate::trees::{transformed_box, BoxLeaf, PaddedTriangle};
 use layout::BvhInstance;
 
 /// How the trees are laid out for the shader, and walked.
@@ -127,6 +127,13 @@ pub struct Placed {
     pub mesh: usize,
     pub model_to_world: Mat4,
     pub drawable: u32,
+}
+
+/// A mesh's triangles as a tree's leaves, in the mesh's order.
+pub(crate) fn padded_triangles(mesh: &Mesh) -> Vec<PaddedTriangle> {
+    (mesh.indices.chunks_exact(3))
+        .map(|t| PaddedTriangle([0, 1, 2].map(|k| mesh.positions[t[k] as usize])))
+        .collect()
 }
 
 /// Each object's box (the eight corners of its mesh's padded box, transformed, padded once

@@ -24,9 +24,9 @@ use glam::Vec3;
 use obvhs::Boundable;
 
 use super::layout::{BvhInstance, BvhRecord, BvhTriangle};
-use super::{check_stack, object_boxes, BvhError, MeshRoot, Placed};
+use super::{check_stack, object_boxes, padded_triangles, BvhError, MeshRoot, Placed};
 use crate::scene::Mesh;
-use crate::trees::{balanced, binary_tree, PaddedTriangle};
+use crate::trees::{balanced, binary_tree};
 use collapse::{collapse, depth, stack_need, Collapsed};
 
 /// Entries in this layout's walk stack (shared.glsl's `BVH4_STACK_SIZE`, which says why; a
@@ -176,9 +176,7 @@ impl MeshTrees {
             ..Self::default()
         };
         for (i, mesh) in meshes.iter().enumerate() {
-            let triangles: Vec<PaddedTriangle> = (mesh.indices.chunks_exact(3))
-                .map(|t| PaddedTriangle([0, 1, 2].map(|k| mesh.positions[t[k] as usize])))
-                .collect();
+            let triangles = padded_triangles(mesh);
             let at = start + all.records.len() as u32;
             let need = |c: &Collapsed| stack_need(&c.records, at, at, false, 0);
             let Some((made, stack)) = tree(&triangles, at, need, BVH4_STACK_SIZE / 2) else {
@@ -199,15 +197,7 @@ impl MeshTrees {
             let depth = depth(&made.records, at, at);
             let mut records = made.records;
             for &(record, p) in &made.leaves {
-                let [v0, v1, v2] = triangles[p as usize].0;
-                let triangle = BvhTriangle {
-                    v0,
-                    primitive: p,
-                    v1,
-                    v2,
-                    ..Default::default()
-                };
-                records[(record - at) as usize] = triangle.record();
+                records[(record - at) as usize] = BvhTriangle::new(&triangles, p).record();
             }
             all.records.extend(records);
             all.roots.push(MeshRoot {

@@ -19,9 +19,9 @@ use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
 
 use super::layout::{BvhInstance, BvhTriangle};
-use super::{check_stack, object_boxes, BvhError, MeshRoot, Placed};
+use super::{check_stack, object_boxes, padded_triangles, BvhError, MeshRoot, Placed};
 use crate::scene::Mesh;
-use crate::trees::{depth, wide_tree, PaddedTriangle, MAX_DEPTH};
+use crate::trees::{depth, wide_tree, MAX_DEPTH};
 
 /// Entries in this layout's walk stack (shared.glsl's `BVH_STACK_SIZE`, which says why; a
 /// test in `render::lookups::bvh` holds the two equal, as this module reaches no shader).
@@ -179,25 +179,14 @@ impl MeshTrees {
             ..Self::default()
         };
         for (i, mesh) in meshes.iter().enumerate() {
-            let triangles: Vec<PaddedTriangle> = (mesh.indices.chunks_exact(3))
-                .map(|t| PaddedTriangle([0, 1, 2].map(|k| mesh.positions[t[k] as usize])))
-                .collect();
+            let triangles = padded_triangles(mesh);
             let tree = wide_tree(&triangles, MESH_LEAF_TRIANGLES);
             let first = all.triangles.len() as u32;
             let node = append(tree.as_ref(), &mut all.nodes, start, first);
             let depth = tree.as_ref().map_or(1, depth);
             // The triangles in the tree's primitive order, as its leaves name them.
             let order = tree.as_ref().map_or(&[][..], |t| &t.primitive_indices[..]);
-            all.triangles.extend(order.iter().map(|&p| {
-                let [v0, v1, v2] = triangles[p as usize].0;
-                BvhTriangle {
-                    v0,
-                    primitive: p,
-                    v1,
-                    v2,
-                    ..Default::default()
-                }
-            }));
+            (all.triangles).extend(order.iter().map(|&p| BvhTriangle::new(&triangles, p)));
             let bounds = tree.as_ref().map(|t| t.total_aabb);
             check_stack(depth, BVH_STACK_SIZE, || {
                 format!("mesh {i} ({} triangles)", triangles.len())
