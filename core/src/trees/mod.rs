@@ -20,6 +20,9 @@ use obvhs::{Boundable, BvhBuildParams};
 /// and the balanced fallback of [`wide_tree`]).
 pub mod split_order;
 
+/// Boxes on a node's 8-bit grid, checked to hold their children.
+pub mod quantize;
+
 use split_order::midpoint_split_order;
 
 /// The most node levels a tree from [`wide_tree`] has: half of the 32-entry stacks that walk
@@ -90,14 +93,16 @@ pub fn transformed_box(m: &Mat4, lo_corner: Vec3, hi_corner: Vec3) -> Aabb {
 /// PLOC pairs nearest boxes, which makes a chain of boxes nested in one another (objects
 /// stacked on one spot, triangles at exponentially growing distances) a tree as deep as the
 /// chain is long. Such a tree is rebuilt balanced ([`balanced`]): a worse tree for rays, but
-/// one whose depth is the logarithm of its leaves, so that no walk overflows its stack.
+/// one whose depth is the logarithm of its leaves, so that no walk overflows its stack. Every
+/// node's decoded boxes hold its children's ([`quantize::cover_children`]).
 pub fn wide_tree<T: Boundable>(items: &[T], leaf: u32) -> Option<CwBvh> {
     let bvh2 = binary_tree(items)?;
-    let tree = bvh2_to_cwbvh(&bvh2, leaf, true, false);
-    if depth(&tree) <= MAX_DEPTH {
-        return Some(tree);
+    let mut tree = bvh2_to_cwbvh(&bvh2, leaf, true, false);
+    if depth(&tree) > MAX_DEPTH {
+        tree = bvh2_to_cwbvh(&balanced(items), leaf, true, false);
     }
-    Some(bvh2_to_cwbvh(&balanced(items), leaf, true, false))
+    quantize::cover_children(&mut tree, items);
+    Some(tree)
 }
 
 /// The binary tree over `items` (None for none), one item a leaf: obvhs's PLOC with

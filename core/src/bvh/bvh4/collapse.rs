@@ -12,6 +12,7 @@ use obvhs::bvh2::Bvh2;
 
 use super::{Bvh4Node, Child, META_INNER};
 use crate::bvh::layout::BvhRecord;
+use crate::trees::quantize::axis_grid;
 
 /// A binary tree as four-wide records.
 pub struct Collapsed {
@@ -94,56 +95,6 @@ pub fn collapse(bvh2: &Bvh2, at: u32) -> Collapsed {
         records,
         leaves,
         box_: *bvh2.nodes[0].aabb(),
-    }
-}
-
-/// The smallest power-of-two step (as a float's biased exponent) at which `extent` spans at
-/// most 255 steps.
-fn step_exponent(extent: f32) -> u32 {
-    let per_step = extent / 255.0;
-    let bits = per_step.to_bits();
-    let exponent = (bits >> 23) & 0xff;
-    // A mantissa beyond a power of two needs the next one up.
-    let e = exponent + u32::from(bits & 0x7f_ffff != 0);
-    e.clamp(1, 254)
-}
-
-/// One axis of a node's grid: its step's biased exponent, and per child its low and high
-/// plane in steps from `origin` (the children's lowest coordinate). Each decoded plane,
-/// `q * step + origin` in f32 (as `Bvh4Node::child_box` decodes it), lies outside its child's
-/// box: the low one at or below it, the high one at or above it. A step at which the span
-/// rounds to 255 steps exactly can leave the top plane short of the box (the 255th step
-/// lands below the highest coordinate); the next step up is taken then. The walk computes
-/// the planes in the ray's terms, `q * (step / d) + (origin - o) / d`, whose rounding the
-/// boxes' padding covers.
-fn axis_grid(origin: f32, spans: &[(f32, f32)]) -> (u32, Vec<(u32, u32)>) {
-    let top = spans.iter().fold(origin, |m, &(_, hi)| m.max(hi));
-    let mut e = step_exponent(top - origin);
-    loop {
-        let s = f32::from_bits(e << 23);
-        let plane = |q: f32| q * s + origin;
-        let planes: Vec<(f32, f32)> = spans
-            .iter()
-            .map(|&(lo, hi)| {
-                let mut q_lo = ((lo - origin) / s).floor().clamp(0.0, 255.0);
-                while q_lo > 0.0 && plane(q_lo) > lo {
-                    q_lo -= 1.0;
-                }
-                let mut q_hi = ((hi - origin) / s).ceil().clamp(0.0, 255.0);
-                while q_hi < 255.0 && plane(q_hi) < hi {
-                    q_hi += 1.0;
-                }
-                (q_lo, q_hi)
-            })
-            .collect();
-        let covered = (planes.iter().zip(spans)).all(|(&(_, q_hi), &(_, hi))| plane(q_hi) >= hi);
-        if covered || e >= 254 {
-            return (
-                e,
-                planes.iter().map(|&(l, h)| (l as u32, h as u32)).collect(),
-            );
-        }
-        e += 1;
     }
 }
 
