@@ -7,8 +7,10 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
 use specchio::output::Transaction;
+use specchio::process::interrupt;
+use specchio::process::progress::{Progress, PERCENT};
 use specchio::sensor::central::record::{CalibrationRecord, Summary};
-use specchio::sensor::central::{folder, Calibration};
+use specchio::sensor::central::{folder, Calibration, FitError};
 
 use specchio::process::args::real;
 
@@ -35,14 +37,21 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // All or nothing: written into a hidden folder beside --out, renamed into place at the end.
     let mut out = Transaction::new();
     out.folder(&args.out, folder::RECORD)?;
-    specchio::process::interrupt::catch();
-    let (cal, map) = Calibration::of_scene(&scene, args.time)
-        .with_context(|| format!("{}: cannot fit the central models", args.scene.display()))?;
-    specchio::process::interrupt::check("after fitting the models")?;
+    interrupt::catch();
+    // A 4096² sensor takes seconds: past the first parts the estimate is said.
+    let [w, h] = scene.sensor.resolution;
+    let progress = Progress::new(format!("calibrate: sensor {w}x{h}"), 100, PERCENT);
+    let (cal, map) = match Calibration::of_scene_watched(&scene, args.time, &progress) {
+        Err(FitError::Stopped(next)) => {
+            return Err(interrupt::stopped(&format!("before {next}")).into())
+        }
+        fitted => fitted
+            .with_context(|| format!("{}: cannot fit the central models", args.scene.display()))?,
+    };
     let record = folder::write(&out, &args.out, (&cal, &map), &args.scene, args.time)?;
     print_summary(&record, &cal);
     // A signal that came after the last check still stops the run: nothing is placed.
-    specchio::process::interrupt::check("before placing the output")?;
+    interrupt::check("before placing the output")?;
     out.commit()?;
     Ok(ExitCode::SUCCESS)
 }

@@ -1,13 +1,15 @@
 //! The exact CPU reference and the calibration, from Python.
 
 use std::path::PathBuf;
+use std::sync::Mutex;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use specchio::output::Transaction;
+use specchio::process::progress::{Progress, PERCENT};
 use specchio::reference::Reference;
 use specchio::render::dataset as writer;
-use specchio::sensor::central::{folder, Calibration};
+use specchio::sensor::central::{folder, Calibration, Part, Watch};
 use specchio::sensor::dataset;
 use specchio::sensor::SensorOutputs;
 
@@ -69,7 +71,8 @@ pub fn reference<'py>(
 /// Fits the central models robotics tools calibrate (OpenCV omnidir, Kalibr omni, OCamCalib)
 /// to the sensor's exact ray map at `time` and writes their exports into the folder `out`
 /// (as `specchio calibrate`, docs/sensor-models.md), all or nothing. Returns the summary
-/// (`calibration.json`) as a dict.
+/// (`calibration.json`) as a dict. A large sensor says its estimate on stderr as the command
+/// does; Ctrl-C stops it between parts (`KeyboardInterrupt`), with nothing written.
 #[pyfunction]
 #[pyo3(signature = (scene, out, time=0.0))]
 pub fn calibrate(py: Python<'_>, scene: &Scene, out: PathBuf, time: f64) -> PyResult<Py<PyAny>> {
@@ -83,6 +86,11 @@ pub fn calibrate(py: Python<'_>, scene: &Scene, out: PathBuf, time: f64) -> PyRe
     }
     specchio::memory::estimates::calibrate(&scene.scene)
         .map_err(|e| scene.error(errors::message(&e)))?;
+    let [w, h] = scene.scene.sensor.resolution;
+    let watch = Watched {
+        progress: Progress::new(format!("calibrate: sensor {w}x{h}"), 100, PERCENT),
+        stopped: Mutex::new(None),
+    };
     let record = py.detach(|| -> Result<_, String> {
         // What this call may not replace is what it reads (docs/python.md).
         specchio::files::identity::forget();
@@ -90,18 +98,51 @@ pub fn calibrate(py: Python<'_>, scene: &Scene, out: PathBuf, time: f64) -> PyRe
         staged
             .folder(&out, folder::RECORD)
             .map_err(|e| errors::message(&e))?;
-        let (cal, map) = Calibration::of_scene(&scene.scene, time).map_err(|e| {
-            format!(
-                "{}: cannot fit the central models: {}",
-                scene.path.display(),
-                errors::message(&e)
-            )
-        })?;
+        let (cal, map) =
+            Calibration::of_scene_watched(&scene.scene, time, &watch).map_err(|e| {
+                format!(
+                    "{}: cannot fit the central models: {}",
+                    scene.path.display(),
+                    errors::message(&e)
+                )
+            })?;
         let record = folder::write(&staged, &out, (&cal, &map), &scene.path, time)
             .map_err(|e| errors::message(&e))?;
+        if watch.stop() {
+            return Err("stopped before placing the output: nothing was written".into());
+        }
         staged.commit().map_err(|e| errors::message(&e))?;
         Ok(record)
     });
+    if let Some(e) = watch
+        .stopped
+        .into_inner()
+        .unwrap_or_else(|p| p.into_inner())
+    {
+        return Err(e);
+    }
     let record = record.map_err(errors::error)?;
     errors::json_to_py(py, &record)
+}
+
+/// A calibration said as it goes, as the command says it, and stopped between its parts by
+/// Ctrl-C: the parts run on the calling thread, where Python runs its signal handlers.
+struct Watched {
+    progress: Progress,
+    /// The signal's error (`KeyboardInterrupt`), raised once the call is back.
+    stopped: Mutex<Option<PyErr>>,
+}
+
+impl Watch for Watched {
+    fn part_done(&self, part: Part) {
+        self.progress.add(part.share());
+    }
+
+    fn stop(&self) -> bool {
+        let Err(e) = Python::attach(|py| py.check_signals()) else {
+            return false;
+        };
+        *self.stopped.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+        true
+    }
 }

@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import inspect
 import json
+import os
+import signal
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -92,3 +96,35 @@ def test_whole_number_parameters_show_their_defaults():
     assert inspect.signature(specchio.reference).parameters["spp"].default == 1
     assert inspect.signature(specchio.pose_grid).parameters["headings"].default == 1
     assert inspect.signature(specchio.Descriptor).parameters["k"].default == 8
+
+
+def test_a_large_calibration_says_its_estimate_and_stops_at_ctrl_c(tmp_path):
+    """The largest sensor a calibration takes (4096², seconds of work) says its estimate on
+    stderr as the command does, and Ctrl-C, sent once it has, stops it between parts:
+    KeyboardInterrupt, nothing written. In a Python of its own, where the estimate is said
+    after the first part (the delay is read once a process)."""
+    text = (scene_path("test/six-colour-room")).read_text()
+    path = tmp_path / "large.toml"
+    path.write_text(text.replace("[sensor]\n", "[sensor]\nresolution = [4096, 4096]\n"))
+    script = (
+        "import sys, specchio\n"
+        "try:\n"
+        "    specchio.calibrate(specchio.Scene(sys.argv[1]), sys.argv[2])\n"
+        "except KeyboardInterrupt:\n"
+        "    sys.exit(42)\n"
+    )
+    child = subprocess.Popen(
+        [sys.executable, "-c", script, str(path), str(tmp_path / "stopped")],
+        stderr=subprocess.PIPE, text=True,
+        env={**os.environ, "SPECCHIO_ESTIMATE_AFTER_S": "0"})
+    said = []
+    for line in child.stderr:
+        said.append(line)
+        if line.startswith("calibrate: sensor 4096x4096: "):
+            child.send_signal(signal.SIGINT)
+            break
+    said.extend(child.stderr)
+    assert child.wait(timeout=300) == 42, "".join(said)
+    assert any("10 % done in " in line for line in said), said
+    assert not (tmp_path / "stopped").exists()
+    assert not [p for p in tmp_path.iterdir() if "stopped" in p.name]

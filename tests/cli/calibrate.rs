@@ -11,7 +11,7 @@ use specchio::sensor::central::{export, folder};
 #[path = "../common/mod.rs"]
 mod common;
 
-use common::{root, specchio, temp_dir};
+use common::{root, signal_when, specchio, temp_dir, Stderr, ESTIMATE_AT_ONCE};
 
 fn calibrate(out: &Path) -> CalibrationRecord {
     calibrate_scene("scenes/thesis-room.toml", out)
@@ -305,4 +305,60 @@ fn a_paraboloid_calibrates_to_xi_one() {
     let per_m =
         f64::from(scene.sensor.resolution[1]) / 2.0 / f64::from(scene.sensor.orthographic_half_m);
     calibrates_to(rel, 1.0, 2.0 * p * per_m);
+}
+
+/// The largest sensor a calibration takes (4096², some 15 s here) is never silent and stops
+/// cleanly: past its first part it says how much is done and about how long the rest takes;
+/// Ctrl-C then stops it between parts, saying where, and nothing is written.
+#[test]
+fn a_large_calibration_says_its_estimate_and_stops_cleanly() {
+    let dir = temp_dir("calibrate-large");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("large.toml");
+    let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
+    let text = text.replace("[sensor]\n", "[sensor]\nresolution = [4096, 4096]\n");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(["calibrate", scene.to_str().unwrap(), "--out"])
+        .arg(&out)
+        .env(ESTIMATE_AT_ONCE.0, ESTIMATE_AT_ONCE.1)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stderr = Stderr::of(&mut child);
+    let estimate = "calibrate: sensor 4096x4096: ";
+    let result = signal_when(child, libc::SIGINT, "the estimate", || {
+        stderr.contains(estimate)
+    });
+    let said = stderr.all();
+    common::readable_text(&["calibrate", "(stopped)"], "stderr", &said);
+    assert_eq!(result.status.code(), Some(1), "{said}");
+    let line = said.lines().find(|l| l.starts_with(estimate)).unwrap();
+    // Said after the ray map, the first part: 10 hundredths of the whole.
+    assert!(
+        line.contains("10 % done in ") && line.ends_with("left; Ctrl-C stops it cleanly"),
+        "{line}"
+    );
+    let stops = [
+        "finding the viewpoint",
+        "fitting the omnidir model",
+        "fitting the OCamCalib model",
+        "the residuals",
+        "writing the files",
+        "placing the output",
+    ];
+    let stopped = stops.iter().any(|s| {
+        said.contains(&format!(
+            "error: interrupted before {s}: nothing was written"
+        ))
+    });
+    assert!(stopped, "{said}");
+    assert!(!out.exists(), "nothing written");
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        1,
+        "no staging folder left"
+    );
 }

@@ -8,7 +8,9 @@ use std::process::Command;
 #[path = "../common/mod.rs"]
 mod common;
 
-use common::{render_six_colour, root, signal_when, specchio, temp_dir, Scratch, ESTIMATE_AT_ONCE};
+use common::{
+    render_six_colour, root, signal_when, specchio, temp_dir, Scratch, Stderr, ESTIMATE_AT_ONCE,
+};
 
 /// Every entry under `dir`, as paths relative to it, sorted (empty when `dir` is missing).
 fn tree(dir: &Path) -> Vec<String> {
@@ -382,7 +384,6 @@ fn an_interrupted_bench_writes_nothing() {
 /// stops it between rows, saying how far it got, and nothing is written.
 #[test]
 fn a_long_reference_says_its_estimate_and_stops_cleanly() {
-    use std::io::Read;
     let dir = scratch("long-reference");
     let scene = dir.join("big.toml");
     let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
@@ -400,28 +401,12 @@ fn a_long_reference_says_its_estimate_and_stops_cleanly() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let said = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
-    let mut stderr = child.stderr.take().unwrap();
-    let reader = {
-        let said = said.clone();
-        std::thread::spawn(move || {
-            let mut buf = [0u8; 4096];
-            while let Ok(n) = stderr.read(&mut buf) {
-                if n == 0 {
-                    break;
-                }
-                said.lock()
-                    .unwrap()
-                    .push_str(&String::from_utf8_lossy(&buf[..n]));
-            }
-        })
-    };
+    let stderr = Stderr::of(&mut child);
     let estimate = "reference: observer 64x48 and sensor 4096x4096 cameras at 64 spp: ";
     let result = signal_when(child, libc::SIGINT, "the sensor's estimate", || {
-        said.lock().unwrap().contains(estimate)
+        stderr.contains(estimate)
     });
-    reader.join().unwrap();
-    let said = said.lock().unwrap().clone();
+    let said = stderr.all();
     common::readable_text(&["reference", "(stopped)"], "stderr", &said);
     assert_eq!(result.status.code(), Some(1), "{said}");
     let line = said.lines().find(|l| l.starts_with(estimate)).unwrap();

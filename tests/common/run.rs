@@ -120,3 +120,42 @@ pub fn specchio_within(args: &[&str], patience: std::time::Duration) -> std::pro
     readable_numbers(args, &out);
     out
 }
+
+/// What a running child says on stderr, read as it comes: a thread drains the pipe (so the
+/// child never blocks on it) into a string a test can watch while the child runs.
+pub struct Stderr {
+    said: std::sync::Arc<std::sync::Mutex<String>>,
+    reader: std::thread::JoinHandle<()>,
+}
+
+impl Stderr {
+    /// `child`'s stderr, which must be piped.
+    pub fn of(child: &mut std::process::Child) -> Self {
+        use std::io::Read;
+        let mut stderr = child.stderr.take().expect("stderr piped");
+        let said = std::sync::Arc::new(std::sync::Mutex::new(String::new()));
+        let into = said.clone();
+        let reader = std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            while let Ok(n) = stderr.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                let text = String::from_utf8_lossy(&buf[..n]);
+                into.lock().unwrap().push_str(&text);
+            }
+        });
+        Self { said, reader }
+    }
+
+    /// Whether it has said `text` yet.
+    pub fn contains(&self, text: &str) -> bool {
+        self.said.lock().unwrap().contains(text)
+    }
+
+    /// Everything it said, once the child has closed the pipe.
+    pub fn all(self) -> String {
+        self.reader.join().unwrap();
+        self.said.lock().unwrap().clone()
+    }
+}

@@ -117,21 +117,39 @@ impl Progress {
         } else {
             ""
         };
+        let part = match self.unit {
+            PERCENT => format!("{done} % done"),
+            unit => format!("{done} of {} {unit}", self.total),
+        };
         format!(
-            "{}: {done} of {} {} in {}, about {} left{stop}",
+            "{}: {part} in {}, about {} left{stop}",
             self.what,
-            self.total,
-            self.unit,
             duration_text(elapsed),
             duration_text(left)
         )
     }
 }
 
+/// The unit of work counted in hundredths of the whole ([`Progress::new`] with a total of
+/// 100): said as "40 % done".
+pub const PERCENT: &str = "%";
+
 /// A reference render counts its rows here, and stops between rows at a signal.
 impl crate::reference::render::Watch for Progress {
     fn row_done(&self) {
         self.add(1);
+    }
+
+    fn stop(&self) -> bool {
+        self.stopped()
+    }
+}
+
+/// A calibration counts its parts here by their shares of the whole ([`PERCENT`]), and stops
+/// between parts at a signal.
+impl crate::sensor::central::Watch for Progress {
+    fn part_done(&self, part: crate::sensor::central::Part) {
+        self.add(part.share());
     }
 
     fn stop(&self) -> bool {

@@ -20,6 +20,7 @@
 pub mod export;
 pub mod folder;
 pub mod mei;
+pub mod parts;
 pub mod record;
 pub mod ros;
 pub mod scaramuzza;
@@ -27,6 +28,7 @@ pub mod scaramuzza;
 use glam::{DVec2, DVec3};
 
 pub use mei::MeiModel;
+pub use parts::{Part, Unwatched, Watch};
 pub use scaramuzza::OcamModel;
 
 use super::RayMap;
@@ -62,6 +64,8 @@ pub enum FitError {
         shape: &'static str,
         lowest_deg: f64,
     },
+    #[error("stopped before {0}")]
+    Stopped(&'static str),
 }
 
 /// The sensor camera's axes in world space (unit, right-handed: right x down = forward).
@@ -178,6 +182,15 @@ impl Calibration {
 
     /// Fits both models to the exact ray map of the scene's sensor at time `t_s`.
     pub fn of_scene(scene: &Scene, t_s: f64) -> Result<(Self, RayMap), FitError> {
+        Self::of_scene_watched(scene, t_s, &Unwatched)
+    }
+
+    /// [`Self::of_scene`], each part said to `watch`, which can stop it between parts.
+    pub fn of_scene_watched(
+        scene: &Scene,
+        t_s: f64,
+        watch: &dyn Watch,
+    ) -> Result<(Self, RayMap), FitError> {
         let lowest = crate::sensor::SensorOptics::at(scene, t_s).min_elevation();
         if lowest > -std::f64::consts::FRAC_PI_2 {
             return Err(FitError::NoAxisRay {
@@ -188,23 +201,38 @@ impl Calibration {
         let map = RayMap::exact(scene, t_s);
         let state = SceneState::at(scene, t_s);
         let view = state.sensor_view(scene, map.width as f32 / map.height as f32);
-        let mut calibration = Self::fit(&map, SensorAxes::of_view(&view))?;
+        let axes = SensorAxes::of_view(&view);
+        let parts = Parts(watch);
+        parts.done(Part::Rays, "finding the viewpoint")?;
+        let stride = fit_stride(map.mirror_pixels());
+        let mut calibration = Self::fit_strided(&map, axes, stride, &parts)?;
         calibration.origin = scene.origin;
         Ok((calibration, map))
     }
 
     /// Fits both models to `map`, whose sensor has the axes `axes` (local origin at the world's).
     pub fn fit(map: &RayMap, axes: SensorAxes) -> Result<Self, FitError> {
-        Self::fit_strided(map, axes, fit_stride(map.mirror_pixels()))
+        Self::fit_strided(
+            map,
+            axes,
+            fit_stride(map.mirror_pixels()),
+            &Parts(&Unwatched),
+        )
     }
 
     /// [`Self::fit`] on every `stride`-th row and column of the mirror pixels.
-    fn fit_strided(map: &RayMap, axes: SensorAxes, stride: u32) -> Result<Self, FitError> {
+    fn fit_strided(
+        map: &RayMap,
+        axes: SensorAxes,
+        stride: u32,
+        parts: &Parts,
+    ) -> Result<Self, FitError> {
         // Before the viewpoint's fit, which would call too few rays "parallel".
         if map.mirror_pixels() < 9 {
             return Err(FitError::TooFewPixels(map.mirror_pixels()));
         }
         let (viewpoint, ray_distance_m) = nearest_point(map)?;
+        parts.done(Part::Viewpoint, "fitting the omnidir model")?;
         // Pixel centres: OpenCV's (x, y) and OCamCalib's (row, col) are both 0-based there.
         let pixels = mirror_pixels(map, stride);
         let mei_samples: Vec<Sample> = pixels
@@ -222,6 +250,7 @@ impl Calibration {
             })
             .collect();
         let (mei, mei_fit) = MeiModel::fit(&mei_samples, map.width, map.height)?;
+        parts.done(Part::Omnidir, "fitting the OCamCalib model")?;
         // The largest radius of every mirror pixel, not only of the fit's samples.
         let rho_max = |m: &OcamModel| {
             use rayon::prelude::*;
@@ -234,6 +263,7 @@ impl Calibration {
         };
         let (ocam, ocam_fit, ocam_invpol_error_px) =
             OcamModel::fit(&ocam_samples, map.width, map.height, rho_max)?;
+        parts.done(Part::Ocamcalib, "the residuals")?;
         let mei_residual = residual(map, |px, d| {
             let ray = mei.unproject(px)?;
             Some(angle_deg(ray, to_frame(&axes.omnidir_rows(), d)))
@@ -242,6 +272,7 @@ impl Calibration {
             let ray = ocam.cam2world(DVec2::new(px.y, px.x));
             Some(angle_deg(ray, to_frame(&axes.ocamcalib_rows(), d)))
         });
+        parts.done(Part::Residuals, "writing the files")?;
         Ok(Self {
             width: map.width,
             height: map.height,
@@ -293,6 +324,20 @@ impl Calibration {
             }
         }
         points
+    }
+}
+
+/// A watch as the fit uses it: a part done, then a stop before the next one said.
+struct Parts<'w>(&'w dyn Watch);
+
+impl Parts<'_> {
+    /// `part` said done; stopped (`Stopped(next)`) if the watch says so.
+    fn done(&self, part: Part, next: &'static str) -> Result<(), FitError> {
+        self.0.part_done(part);
+        match self.0.stop() {
+            true => Err(FitError::Stopped(next)),
+            false => Ok(()),
+        }
     }
 }
 

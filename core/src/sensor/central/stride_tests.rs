@@ -23,7 +23,8 @@ fn a_strided_fit_gives_the_models_every_pixel_gives() {
     );
     let state = SceneState::at(&scene, 0.0);
     let axes = SensorAxes::of_view(&state.sensor_view(&scene, 1.0));
-    let [all, strided] = [1, 2].map(|s| Calibration::fit_strided(&map, axes, s).unwrap());
+    let [all, strided] =
+        [1, 2].map(|s| Calibration::fit_strided(&map, axes, s, &Parts(&Unwatched)).unwrap());
     assert!(
         strided.fit_pixels * 3 < all.fit_pixels,
         "{} of {}",
