@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Context, Result};
 use specchio::output::Transaction;
 use specchio::process::interrupt;
-use specchio::process::progress::{Progress, PERCENT};
+use specchio::process::progress;
 use specchio::sensor::central::record::{CalibrationRecord, Summary};
 use specchio::sensor::central::{folder, Calibration, FitError};
 
@@ -39,8 +39,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     out.folder(&args.out, folder::RECORD)?;
     interrupt::catch();
     // A 4096² sensor takes seconds: past the first parts the estimate is said.
-    let [w, h] = scene.sensor.resolution;
-    let progress = Progress::new(format!("calibrate: sensor {w}x{h}"), 100, PERCENT);
+    let progress = progress::calibration("calibrate", scene.sensor.resolution, true);
     let (cal, map) = match Calibration::of_scene_watched(&scene, args.time, &progress) {
         Err(FitError::Stopped(next)) => {
             return Err(interrupt::stopped(&format!("before {next}")).into())

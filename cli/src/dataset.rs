@@ -13,7 +13,7 @@ use anyhow::Result;
 use specchio::output::OutputError;
 use specchio::process::args::{real, whole};
 use specchio::process::probe;
-use specchio::process::progress::Progress;
+use specchio::process::progress::{self, Progress};
 use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::grid;
@@ -87,7 +87,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let mut plan = Plan::checking(&args.scene, poses(args)?, &mut checking_progress())?;
     plan.panoramas = args.panorama_frame;
     plan.geometry = args.geometry_frame;
-    plan.set_format(args.format)?;
+    let resolution = plan.scene.sensor.resolution;
+    let bag_model = progress::calibration("dataset: the bag's unified model", resolution, false);
+    plan.set_format(args.format, &bag_model)?;
     if let Some(why) = plan.omni_missing() {
         eprintln!("warning: {why}");
     }

@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use pyo3::prelude::*;
+use specchio::process::progress;
 use specchio::render::dataset::{self as writer, gpu_failed, FrameWriter, Plan, Poses};
 use specchio::scene::Lookup;
 use specchio::sensor::dataset::DatasetRecord;
@@ -86,7 +87,10 @@ impl PoseSource {
         if let Some(chosen) = choices.outputs {
             plan.choose(chosen)?;
         }
-        plan.set_format(choices.format)?;
+        let resolution = plan.scene.sensor.resolution;
+        let bag_model =
+            progress::calibration("dataset: the bag's unified model", resolution, false);
+        plan.set_format(choices.format, &bag_model)?;
         Ok(plan)
     }
 }

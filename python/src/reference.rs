@@ -6,7 +6,7 @@ use std::sync::Mutex;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use specchio::output::Transaction;
-use specchio::process::progress::{Progress, PERCENT};
+use specchio::process::progress::{self, Progress};
 use specchio::reference::Reference;
 use specchio::render::dataset as writer;
 use specchio::sensor::central::{folder, Calibration, Part, Watch};
@@ -86,9 +86,8 @@ pub fn calibrate(py: Python<'_>, scene: &Scene, out: PathBuf, time: f64) -> PyRe
     }
     specchio::memory::estimates::calibrate(&scene.scene)
         .map_err(|e| scene.error(errors::message(&e)))?;
-    let [w, h] = scene.scene.sensor.resolution;
     let watch = Watched {
-        progress: Progress::new(format!("calibrate: sensor {w}x{h}"), 100, PERCENT),
+        progress: progress::calibration("calibrate", scene.scene.sensor.resolution, true),
         stopped: Mutex::new(None),
     };
     let record = py.detach(|| -> Result<_, String> {

@@ -186,3 +186,37 @@ fn a_format_or_a_time_a_bag_cannot_take_is_refused_before_anything_is_written() 
     );
     assert!(!dir.join("out").exists());
 }
+
+/// A bag of a central mirror fits its unified model before the first frame (seconds, for a
+/// large sensor): the fit says its estimate as `calibrate` does, its parts counted without
+/// the calibration's files, which it does not write.
+#[test]
+fn the_bags_model_says_its_estimate() {
+    let dir = temp_dir("dataset-bag-estimate");
+    std::fs::create_dir_all(&dir).unwrap();
+    let rel = "scenes/hyperbolic-room.toml";
+    let scene = common::scene(rel);
+    let c = scene.origin + scene.mirror.center.as_dvec3();
+    let robot = dir.join("robot.csv");
+    let line = format!("time,x,y,z,heading\n0,{},{},{},0\n", c.x, c.y, c.z);
+    std::fs::write(&robot, line).unwrap();
+    let [w, h] = scene.sensor.resolution;
+    let run = common::specchio_with(
+        &[
+            "dataset",
+            root().join(rel).to_str().unwrap(),
+            "--trajectory",
+            robot.to_str().unwrap(),
+            "--out",
+            dir.join("out").to_str().unwrap(),
+            "--format",
+            "mcap",
+        ],
+        &[common::ESTIMATE_AT_ONCE],
+    );
+    let said = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{said}");
+    // The ray map's 10 of the 66 hundredths of a calibration without its files.
+    let estimate = format!("dataset: the bag's unified model: sensor {w}x{h}: 15 % done in ");
+    assert!(said.contains(&estimate), "{said}");
+}

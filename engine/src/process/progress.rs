@@ -118,7 +118,7 @@ impl Progress {
             ""
         };
         let part = match self.unit {
-            PERCENT => format!("{done} % done"),
+            PERCENT => format!("{} % done", done * 100 / self.total.max(1)),
             unit => format!("{done} of {} {unit}", self.total),
         };
         format!(
@@ -130,8 +130,8 @@ impl Progress {
     }
 }
 
-/// The unit of work counted in hundredths of the whole ([`Progress::new`] with a total of
-/// 100): said as "40 % done".
+/// The unit of work counted in shares of the whole: said as "40 % done", the part done of
+/// [`Progress::new`]'s total in hundredths.
 pub const PERCENT: &str = "%";
 
 /// A reference render counts its rows here, and stops between rows at a signal.
@@ -143,6 +143,18 @@ impl crate::reference::render::Watch for Progress {
     fn stop(&self) -> bool {
         self.stopped()
     }
+}
+
+/// A calibration's progress, said as "`what`: sensor WxH: 40 % done in ...": its parts
+/// counted by their shares, the files' among them where it writes them (`files`; a dataset's
+/// bag fits the unified model and writes no calibration files).
+pub fn calibration(what: &str, [w, h]: [u32; 2], files: bool) -> Progress {
+    use crate::sensor::central::Part;
+    let total = (Part::ALL.iter())
+        .filter(|&&p| files || p != Part::Files)
+        .map(|p| p.share())
+        .sum();
+    Progress::new(format!("{what}: sensor {w}x{h}"), total, PERCENT)
 }
 
 /// A calibration counts its parts here by their shares of the whole ([`PERCENT`]), and stops

@@ -14,7 +14,7 @@ use glam::DVec3;
 
 use super::msgs::Intrinsics;
 use crate::scene::Scene;
-use crate::sensor::central::{export, Calibration, FitError, MeiModel};
+use crate::sensor::central::{export, Calibration, FitError, MeiModel, Watch};
 use crate::sensor::SensorOptics;
 
 /// The TF frame of the unified model.
@@ -45,12 +45,13 @@ impl Omni {
     }
 
     /// The model of `scene`'s sensor (at time 0: the mount and the optics do not change along
-    /// a trajectory), where its mirror is central and small enough to calibrate.
-    pub fn of_scene(scene: &Scene) -> Result<Option<Self>, FitError> {
+    /// a trajectory), where its mirror is central and small enough to calibrate; the
+    /// calibration's parts said to `watch` (every part but the files, which it does not write).
+    pub fn of_scene(scene: &Scene, watch: &dyn Watch) -> Result<Option<Self>, FitError> {
         if scene.mirror.shape.xi().is_none() || Self::missing(scene).is_some() {
             return Ok(None);
         }
-        let (cal, _) = Calibration::of_scene(scene, 0.0)?;
+        let (cal, _) = Calibration::of_scene_watched(scene, 0.0, watch)?;
         let optics = SensorOptics::at(scene, 0.0);
         let view = &optics.view;
         let camera = (view.eye + optics.mirror_center).as_dvec3();

@@ -11,6 +11,7 @@ use glam::{DQuat, DVec3, Vec3};
 use super::frame::FramePose;
 use super::*;
 use crate::image::exr::{encode_channels, Samples};
+use crate::sensor::central::Unwatched;
 use crate::sensor::dataset::{rep103, PoseRecord, RosPose, ScenePose};
 
 /// Where the camera sits on the robot in the test frames.
@@ -380,7 +381,7 @@ fn poses_a_bag_cannot_stamp_apart_are_refused() {
 fn a_central_mirrors_model_sits_at_its_focus_and_a_sphere_has_none() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
     let hyperbolic = crate::scene::load(&root.join("hyperbolic-room.toml")).unwrap();
-    let omni = Omni::of_scene(&hyperbolic).unwrap().unwrap();
+    let omni = Omni::of_scene(&hyperbolic, &Unwatched).unwrap().unwrap();
     // d = 2 m, 4p = 2 m: the camera at the outer focus looks up at the inner one; xi = 2/sqrt(5).
     assert!((omni.viewpoint_in_camera - DVec3::new(0.0, 0.0, 2.0)).length() < 1e-6);
     let info = omni.intrinsics();
@@ -397,7 +398,7 @@ fn a_central_mirrors_model_sits_at_its_focus_and_a_sphere_has_none() {
     );
     let sphere = crate::scene::load(&root.join("thesis-room.toml")).unwrap();
     assert!(
-        Omni::of_scene(&sphere).unwrap().is_none(),
+        Omni::of_scene(&sphere, &Unwatched).unwrap().is_none(),
         "no single viewpoint"
     );
 }

@@ -20,6 +20,7 @@ use super::lookups;
 use crate::files::digest::{self, Digest};
 use crate::scene::{Lookup, RefreshPolicy, Scene};
 use crate::sensor::bag::Omni;
+use crate::sensor::central::Watch;
 use crate::sensor::dataset::grid;
 use crate::sensor::dataset::resume::RunKey;
 use crate::sensor::dataset::trajectory::{self, Place, Pose, TrajectoryError};
@@ -243,8 +244,10 @@ impl Plan {
         IndexLine::of(&record).unwrap_or_default()
     }
 
-    /// Writes the dataset in `format`: refused where a bag cannot hold every pose's time.
-    pub fn set_format(&mut self, format: Format) -> Result<(), DatasetError> {
+    /// Writes the dataset in `format`: refused where a bag cannot hold every pose's time. A
+    /// bag of a central mirror fits its unified model here, its parts said to `watch` (a
+    /// large sensor's fit takes seconds before the first frame).
+    pub fn set_format(&mut self, format: Format, watch: &dyn Watch) -> Result<(), DatasetError> {
         if format.mcap {
             let grid = self.trajectory.starts_with(GRID);
             let at = |p: &Pose| match (grid, p.at) {
@@ -254,7 +257,7 @@ impl Plan {
             };
             let times = self.poses.iter().map(|p| (p.time_s, at(p)));
             crate::sensor::bag::check_times(times).map_err(DatasetError::Invalid)?;
-            self.omni = Omni::of_scene(&self.scene).map_err(|e| {
+            self.omni = Omni::of_scene(&self.scene, watch).map_err(|e| {
                 let scene = self.scene_path.display();
                 DatasetError::Invalid(format!("{scene}: the bag's unified model: {e}"))
             })?;
