@@ -345,7 +345,7 @@ fn a_large_calibration_says_its_estimate_and_stops_cleanly() {
         "finding the viewpoint",
         "fitting the omnidir model",
         "fitting the OCamCalib model",
-        "the residuals",
+        "computing the residuals",
         "writing the files",
         "placing the output",
     ];

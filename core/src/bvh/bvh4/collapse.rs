@@ -24,18 +24,71 @@ pub struct Collapsed {
     pub box_: Aabb,
 }
 
+/// Per binary node, the items below it: its children counted before it, without recursion
+/// (reinsertion leaves no order of indices to rely on).
+fn items_below(bvh2: &Bvh2) -> Vec<u32> {
+    let mut below = vec![0u32; bvh2.nodes.len()];
+    let mut todo = vec![(0usize, false)];
+    while let Some((i, counted)) = todo.pop() {
+        let n = &bvh2.nodes[i];
+        let kids = n.first_index as usize;
+        below[i] = match (n.is_leaf(), counted) {
+            (true, _) => n.prim_count,
+            (false, true) => below[kids] + below[kids + 1],
+            (false, false) => {
+                todo.extend([(i, true), (kids, false), (kids + 1, false)]);
+                continue;
+            }
+        };
+    }
+    below
+}
+
+/// The binary tree with the nodes a four-wide leaf takes whole: those with at most
+/// `leaf_items` items below them.
+struct Binary<'b> {
+    bvh2: &'b Bvh2,
+    below: Vec<u32>,
+    leaf_items: u32,
+}
+
+impl Binary<'_> {
+    /// Whether `node` is a four-wide leaf.
+    fn is_leaf(&self, node: usize) -> bool {
+        self.bvh2.nodes[node].is_leaf() || self.below[node] <= self.leaf_items
+    }
+
+    /// The items of the leaf `node`, in the tree's order.
+    fn items(&self, node: usize) -> Vec<u32> {
+        let mut items = Vec::new();
+        let mut todo = vec![node];
+        while let Some(k) = todo.pop() {
+            let n = &self.bvh2.nodes[k];
+            if n.is_leaf() {
+                let first = n.first_index as usize;
+                let own = &self.bvh2.primitive_indices[first..first + n.prim_count as usize];
+                items.extend_from_slice(own);
+            } else {
+                todo.extend([n.first_index as usize + 1, n.first_index as usize]);
+            }
+        }
+        items
+    }
+}
+
 /// The binary nodes that become `node`'s four-wide node's children (one, a leaf, where `node`
-/// is a leaf: a tree of one item).
-fn children(bvh2: &Bvh2, node: usize) -> Vec<usize> {
+/// is a leaf: a tree of one leaf).
+fn children(tree: &Binary, node: usize) -> Vec<usize> {
+    let bvh2 = tree.bvh2;
     let n = &bvh2.nodes[node];
-    if n.is_leaf() {
+    if tree.is_leaf(node) {
         return vec![node];
     }
     let first = n.first_index as usize;
     let mut kids = vec![first, first + 1];
     while kids.len() < 4 {
         let widest = (0..kids.len())
-            .filter(|&i| !bvh2.nodes[kids[i]].is_leaf())
+            .filter(|&i| !tree.is_leaf(kids[i]))
             .max_by(|&i, &j| {
                 let area = |k: usize| bvh2.nodes[kids[k]].aabb().half_area();
                 area(i).total_cmp(&area(j))
@@ -49,40 +102,36 @@ fn children(bvh2: &Bvh2, node: usize) -> Vec<usize> {
     kids
 }
 
-/// `bvh2` as four-wide records, their indices from `at` (where its root will be in the array).
-pub fn collapse(bvh2: &Bvh2, at: u32) -> Collapsed {
+/// `bvh2` as four-wide records, their indices from `at` (where its root will be in the array),
+/// a leaf holding up to `leaf_items` (1 to 3) items: a subtree of that many is one leaf.
+pub fn collapse(bvh2: &Bvh2, at: u32, leaf_items: u32) -> Collapsed {
+    assert!((1..=3).contains(&leaf_items), "a leaf holds 1 to 3 items");
+    let tree = Binary {
+        bvh2,
+        below: items_below(bvh2),
+        leaf_items,
+    };
     let mut records = vec![BvhRecord::default()];
     let mut leaves = Vec::new();
     let mut todo = vec![(0usize, 0usize)];
     while let Some((record, node)) = todo.pop() {
-        let kids = children(bvh2, node);
+        let kids = children(&tree, node);
         let base = records.len();
-        let inner: Vec<usize> = kids
-            .iter()
-            .copied()
-            .filter(|&k| !bvh2.nodes[k].is_leaf())
-            .collect();
+        let inner: Vec<usize> = kids.iter().copied().filter(|&k| !tree.is_leaf(k)).collect();
         let mut meta = [0u32; 4];
         let mut next_leaf = inner.len() as u32;
         records.resize(base + inner.len(), BvhRecord::default());
         for (slot, &k) in kids.iter().enumerate() {
-            let n = &bvh2.nodes[k];
             if let Some(rank) = inner.iter().position(|&i| i == k) {
                 meta[slot] = META_INNER | rank as u32;
                 todo.push((base + rank, k));
                 continue;
             }
-            // `crate::trees` (PLOC, the balanced build) makes one item a leaf, which the top
-            // level's walk relies on (it enters a leaf's first object only).
-            assert_eq!(
-                n.prim_count, 1,
-                "a binary tree from crate::trees has one item a leaf"
-            );
-            let count = 1;
+            let items = tree.items(k);
+            let count = items.len() as u32;
             meta[slot] = (((1 << count) - 1) << 5) | next_leaf;
-            for p in 0..count {
-                let index = (base as u32 + next_leaf + p) + at;
-                leaves.push((index, bvh2.primitive_indices[(n.first_index + p) as usize]));
+            for (p, item) in (0..).zip(items) {
+                leaves.push(((base as u32 + next_leaf + p) + at, item));
                 records.push(BvhRecord::default());
             }
             next_leaf += count;
@@ -241,6 +290,49 @@ mod tests {
                     "{spans:?} slot {slot}: {lo}..{hi} does not hold {b:?}"
                 );
             }
+        }
+    }
+
+    /// Every item in exactly one leaf, whatever a leaf may hold; a leaf holds at most
+    /// `leaf_items`, and with three some leaf holds more than one (the walk tests them all).
+    #[test]
+    fn every_item_is_in_one_leaf_of_at_most_its_items() {
+        let boxes: Vec<crate::trees::BoxLeaf> = (0..50)
+            .map(|i| {
+                let p = glam::Vec3::new((i % 7) as f32, (i / 7) as f32, (i * 13 % 5) as f32);
+                crate::trees::BoxLeaf(Aabb {
+                    min: (p - 0.4).into(),
+                    max: (p + 0.4).into(),
+                })
+            })
+            .collect();
+        let bvh2 = crate::trees::binary_tree(&boxes).unwrap();
+        for leaf_items in 1..=3 {
+            let made = collapse(&bvh2, 0, leaf_items);
+            let mut items: Vec<u32> = made.leaves.iter().map(|&(_, item)| item).collect();
+            items.sort_unstable();
+            assert_eq!(
+                items,
+                (0..50).collect::<Vec<u32>>(),
+                "leaf_items {leaf_items}"
+            );
+            let leaf_records: Vec<u32> = made.leaves.iter().map(|&(at, _)| at).collect();
+            let counts: Vec<u32> = (0..made.records.len() as u32)
+                .filter(|r| !leaf_records.contains(r))
+                .flat_map(|r| {
+                    let node = Bvh4Node::of(&made.records[r as usize]);
+                    (0..4).filter_map(move |slot| match node.child(slot) {
+                        Child::Leaf { count, .. } => Some(count),
+                        _ => None,
+                    })
+                })
+                .collect();
+            assert!(
+                counts.iter().all(|&c| (1..=leaf_items).contains(&c)),
+                "{counts:?}"
+            );
+            assert_eq!(counts.iter().sum::<u32>(), 50);
+            assert_eq!(leaf_items > 1, counts.iter().any(|&c| c > 1), "{counts:?}");
         }
     }
 }

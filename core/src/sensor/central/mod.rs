@@ -263,7 +263,7 @@ impl Calibration {
         };
         let (ocam, ocam_fit, ocam_invpol_error_px) =
             OcamModel::fit(&ocam_samples, map.width, map.height, rho_max)?;
-        parts.done(Part::Ocamcalib, "the residuals")?;
+        parts.done(Part::Ocamcalib, "computing the residuals")?;
         let mei_residual = residual(map, |px, d| {
             let ray = mei.unproject(px)?;
             Some(angle_deg(ray, to_frame(&axes.omnidir_rows(), d)))
