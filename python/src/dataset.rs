@@ -19,6 +19,7 @@ use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
 use crate::errors;
 use crate::renderer::check_validation;
+use crate::watched::Watched;
 
 /// Where a dataset's poses come from, as Python names them: a trajectory file, or a grid
 /// (`specchio dataset --grid SPACING --headings N --time T`).
@@ -68,7 +69,14 @@ impl PoseSource {
     }
 
     /// The plan of `scene` with these poses, every one checked.
-    pub(crate) fn plan(&self, scene: &Path, choices: &Choices) -> Result<Plan, DatasetError> {
+    /// The plan of a dataset of `scene` from these poses; a bag's unified model fitted here
+    /// stops at Ctrl-C, what Python raised kept in `stopped`.
+    pub(crate) fn plan(
+        &self,
+        scene: &Path,
+        choices: &Choices,
+        stopped: &Mutex<Option<PyErr>>,
+    ) -> Result<Plan, DatasetError> {
         let poses = match self {
             PoseSource::File(path) => Poses::Trajectory(path),
             &PoseSource::Grid {
@@ -88,8 +96,10 @@ impl PoseSource {
             plan.choose(chosen)?;
         }
         let resolution = plan.scene.sensor.resolution;
-        let bag_model =
-            progress::calibration("dataset: the bag's unified model", resolution, false);
+        let bag_model = Watched {
+            progress: progress::calibration("dataset: the bag's unified model", resolution, false),
+            stopped,
+        };
         plan.set_format(choices.format, &bag_model)?;
         Ok(plan)
     }
@@ -246,7 +256,7 @@ fn render(
 ) -> Result<Finished, DatasetError> {
     // What this call may not replace is what it reads (docs/python.md).
     specchio::files::identity::forget();
-    let plan = (job.source).plan(job.scene, &job.choices)?;
+    let plan = (job.source).plan(job.scene, &job.choices, stopped)?;
     let n = plan.poses.len();
     let mut folder = Folder::stage(job.out, n, plan.frame_files())?;
     let (log, dev, lookup) = open_device(job, &plan)?;

@@ -20,6 +20,7 @@ mod reference;
 mod renderer;
 mod scene;
 mod shards;
+mod watched;
 
 use pyo3::prelude::*;
 

@@ -6,16 +6,17 @@ use std::sync::Mutex;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use specchio::output::Transaction;
-use specchio::process::progress::{self, Progress};
+use specchio::process::progress;
 use specchio::reference::Reference;
 use specchio::render::dataset as writer;
-use specchio::sensor::central::{folder, Calibration, Part, Watch};
+use specchio::sensor::central::{folder, Calibration, Watch};
 use specchio::sensor::dataset;
 use specchio::sensor::SensorOutputs;
 
 use crate::arrays::{self, Layers};
 use crate::errors;
 use crate::scene::Scene;
+use crate::watched::{self, Watched};
 
 /// The exact reference of the sensor and observer views (CPU ray tracing, no GPU): the same
 /// dict of arrays as `Renderer.render`, every layer exact. `pose` (x, y, z, heading) stands
@@ -86,9 +87,10 @@ pub fn calibrate(py: Python<'_>, scene: &Scene, out: PathBuf, time: f64) -> PyRe
     }
     specchio::memory::estimates::calibrate(&scene.scene)
         .map_err(|e| scene.error(errors::message(&e)))?;
+    let stopped = Mutex::new(None);
     let watch = Watched {
         progress: progress::calibration("calibrate", scene.scene.sensor.resolution, true),
-        stopped: Mutex::new(None),
+        stopped: &stopped,
     };
     let record = py.detach(|| -> Result<_, String> {
         // What this call may not replace is what it reads (docs/python.md).
@@ -113,35 +115,9 @@ pub fn calibrate(py: Python<'_>, scene: &Scene, out: PathBuf, time: f64) -> PyRe
         staged.commit().map_err(|e| errors::message(&e))?;
         Ok(record)
     });
-    if let Some(e) = watch
-        .stopped
-        .into_inner()
-        .unwrap_or_else(|p| p.into_inner())
-    {
+    if let Some(e) = watched::raised(stopped) {
         return Err(e);
     }
     let record = record.map_err(errors::error)?;
     errors::json_to_py(py, &record)
-}
-
-/// A calibration said as it goes, as the command says it, and stopped between its parts by
-/// Ctrl-C: the parts run on the calling thread, where Python runs its signal handlers.
-struct Watched {
-    progress: Progress,
-    /// The signal's error (`KeyboardInterrupt`), raised once the call is back.
-    stopped: Mutex<Option<PyErr>>,
-}
-
-impl Watch for Watched {
-    fn part_done(&self, part: Part) {
-        self.progress.add(part.share());
-    }
-
-    fn stop(&self) -> bool {
-        let Err(e) = Python::attach(|py| py.check_signals()) else {
-            return false;
-        };
-        *self.stopped.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
-        true
-    }
 }

@@ -69,8 +69,10 @@ impl DatasetFrames {
             .transpose()?
             .map(|n| n as usize);
         let asked = parse_lookup(lookup)?;
+        // No bag here (its format is the driver's): nothing to stop before the frames.
+        let stopped = Mutex::new(None);
         py.detach(|| -> Result<Self, DatasetError> {
-            let plan = source.plan(&scene, &choices)?;
+            let plan = source.plan(&scene, &choices, &stopped)?;
             let instance =
                 Instance::create(&InstanceDesc::from_env(validate)).map_err(gpu_failed)?;
             let log = instance.validation_log();
@@ -224,22 +226,25 @@ impl DatasetOutput {
             outputs.as_ref(),
             format.as_ref(),
         )?;
-        let output = py
-            .detach(|| -> Result<Self, DatasetError> {
-                specchio::files::identity::forget();
-                let plan = source.plan(&scene, &choices)?;
-                let folder = Folder::stage(&out, plan.poses.len(), plan.frame_files())?;
-                Ok(DatasetOutput {
-                    robot: robot_scene(&plan.scene),
-                    plan,
-                    out,
-                    resume,
-                    begun: false,
-                    placed: 0,
-                    folder: Some(folder),
-                })
+        let stopped = Mutex::new(None);
+        let output = py.detach(|| -> Result<Self, DatasetError> {
+            specchio::files::identity::forget();
+            let plan = source.plan(&scene, &choices, &stopped)?;
+            let folder = Folder::stage(&out, plan.poses.len(), plan.frame_files())?;
+            Ok(DatasetOutput {
+                robot: robot_scene(&plan.scene),
+                plan,
+                out,
+                resume,
+                begun: false,
+                placed: 0,
+                folder: Some(folder),
             })
-            .map_err(errors::to_py)?;
+        });
+        if let Some(e) = crate::watched::raised(stopped) {
+            return Err(e);
+        }
+        let output = output.map_err(errors::to_py)?;
         if let Some(text) = output.plan.omni_missing() {
             crate::dataset::warn(py, text)?;
         }

@@ -106,8 +106,11 @@ def test_a_large_calibration_says_its_estimate_and_stops_at_ctrl_c(tmp_path):
     text = (scene_path("test/six-colour-room")).read_text()
     path = tmp_path / "large.toml"
     path.write_text(text.replace("[sensor]\n", "[sensor]\nresolution = [4096, 4096]\n"))
+    # Python's own Ctrl-C handler, whatever the child inherited: a job started in the
+    # background of a script ignores SIGINT, and Python then keeps ignoring it.
     script = (
-        "import sys, specchio\n"
+        "import signal, sys, specchio\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "try:\n"
         "    specchio.calibrate(specchio.Scene(sys.argv[1]), sys.argv[2])\n"
         "except KeyboardInterrupt:\n"
@@ -126,5 +129,43 @@ def test_a_large_calibration_says_its_estimate_and_stops_at_ctrl_c(tmp_path):
     said.extend(child.stderr)
     assert child.wait(timeout=300) == 42, "".join(said)
     assert any("10 % done in " in line for line in said), said
+    assert not (tmp_path / "stopped").exists()
+    assert not [p for p in tmp_path.iterdir() if "stopped" in p.name]
+
+
+def test_a_bags_model_fit_says_its_estimate_and_stops_at_ctrl_c(tmp_path):
+    """A dataset with a ROS 2 bag of a central mirror fits the unified model before its first
+    frame (seconds at 4096²): it says its estimate, and Ctrl-C there raises KeyboardInterrupt
+    with nothing written, as `calibrate` does."""
+    for shared in ("textures", "meshes"):
+        (tmp_path / shared).symlink_to(scene_path("hyperbolic-room").parent / shared)
+    text = scene_path("hyperbolic-room").read_text()
+    path = tmp_path / "large.toml"
+    path.write_text(text.replace("resolution = [512, 512]", "resolution = [4096, 4096]", 1))
+    assert specchio.Scene(path).sensor_size == (4096, 4096)
+    x, y, z = specchio.Scene(path).mirror_position
+    (tmp_path / "t.csv").write_text(f"time,x,y,z,heading\n0,{x!r},{y!r},{z!r},0\n")
+    script = (
+        "import signal, sys, specchio\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        "try:\n"
+        "    specchio.dataset(sys.argv[1], sys.argv[2], sys.argv[3], format='mcap')\n"
+        "except KeyboardInterrupt:\n"
+        "    sys.exit(42)\n"
+    )
+    child = subprocess.Popen(
+        [sys.executable, "-c", script, str(path), str(tmp_path / "t.csv"),
+         str(tmp_path / "stopped")],
+        stderr=subprocess.PIPE, text=True,
+        env={**os.environ, "SPECCHIO_ESTIMATE_AFTER_S": "0"})
+    said = []
+    for line in child.stderr:
+        said.append(line)
+        if line.startswith("dataset: the bag's unified model: sensor 4096x4096: "):
+            child.send_signal(signal.SIGINT)
+            break
+    said.extend(child.stderr)
+    assert child.wait(timeout=300) == 42, "".join(said)
+    assert any("15 % done in " in line for line in said), said
     assert not (tmp_path / "stopped").exists()
     assert not [p for p in tmp_path.iterdir() if "stopped" in p.name]

@@ -59,6 +59,8 @@ pub fn axis_grid(origin: f32, spans: &[(f32, f32)]) -> (u32, Vec<(u32, u32)>) {
             })
             .collect();
         let covered = (planes.iter().zip(spans)).all(|(&(_, q_hi), &(_, hi))| plane(q_hi) >= hi);
+        // The largest step covers any finite span (the padded boxes are finite).
+        debug_assert!(covered || e < 254, "no grid holds {spans:?} from {origin}");
         if covered || e >= 254 {
             return (
                 e,

@@ -129,6 +129,9 @@ pub fn collapse(bvh2: &Bvh2, at: u32, leaf_items: u32) -> Collapsed {
             }
             let items = tree.items(k);
             let count = items.len() as u32;
+            // Three bits of unary: `crate::trees` makes one item a binary leaf, and
+            // `leaf_items` is at most three.
+            debug_assert!((1..=3).contains(&count), "a leaf of {count} items");
             meta[slot] = (((1 << count) - 1) << 5) | next_leaf;
             for (p, item) in (0..).zip(items) {
                 leaves.push(((base as u32 + next_leaf + p) + at, item));

@@ -20,7 +20,7 @@ use super::lookups;
 use crate::files::digest::{self, Digest};
 use crate::scene::{Lookup, RefreshPolicy, Scene};
 use crate::sensor::bag::Omni;
-use crate::sensor::central::Watch;
+use crate::sensor::central::{FitError, Watch};
 use crate::sensor::dataset::grid;
 use crate::sensor::dataset::resume::RunKey;
 use crate::sensor::dataset::trajectory::{self, Place, Pose, TrajectoryError};
@@ -257,9 +257,14 @@ impl Plan {
             };
             let times = self.poses.iter().map(|p| (p.time_s, at(p)));
             crate::sensor::bag::check_times(times).map_err(DatasetError::Invalid)?;
-            self.omni = Omni::of_scene(&self.scene, watch).map_err(|e| {
-                let scene = self.scene_path.display();
-                DatasetError::Invalid(format!("{scene}: the bag's unified model: {e}"))
+            self.omni = Omni::of_scene(&self.scene, watch).map_err(|e| match e {
+                FitError::Stopped(_) => DatasetError::Stopped(
+                    "stopped while fitting the bag's unified model: nothing was written".into(),
+                ),
+                e => {
+                    let scene = self.scene_path.display();
+                    DatasetError::Invalid(format!("{scene}: the bag's unified model: {e}"))
+                }
             })?;
         }
         self.format = format;
