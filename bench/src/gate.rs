@@ -54,9 +54,10 @@ pub fn read_baseline(path: &Path) -> Result<Baseline> {
         None => BvhLayout::Cwbvh,
         Some(name) => BvhLayout::parse(name).ok_or_else(|| {
             anyhow::anyhow!(
-                "{}: settings.bvh_layout {name:?} is not a layout (cwbvh or bvh4); it cannot \
-                 gate a run",
-                path.display()
+                "{}: settings.bvh_layout {} is not a layout (cwbvh or bvh4); it cannot gate a \
+                 run",
+                path.display(),
+                specchio::text::quoted_text(name)
             )
         })?,
     };

@@ -440,10 +440,17 @@ pub fn read(path: &Path) -> Result<Record> {
 
 /// [`read`] on text.
 pub fn parse(text: &str) -> Result<Record> {
-    // serde's message names the key and the line and column; a key written twice is refused
-    // first (serde_json would keep the last one).
+    // A key written twice is refused first (serde_json would keep the last one); a value of
+    // the wrong type is named by its path (`settings.frames`), serde's message alone gives
+    // only the line and column.
     let raw: Value = specchio::files::json::parse_unique_keys(text)?;
-    let record: Record = serde_json::from_str(text)?;
+    let record: Record = serde_path_to_error::deserialize(&mut serde_json::Deserializer::from_str(
+        text,
+    ))
+    .map_err(|e| match e.path().to_string().as_str() {
+        "." => anyhow::anyhow!("{}", e.inner()),
+        path => anyhow::anyhow!("{path}: {}", e.inner()),
+    })?;
     // serde fills a missing `Option` with None; the record writes every key, so a missing
     // one is a damaged or hand-edited file, not an absent value.
     if let Some(key) = first_missing(&raw, &serde_json::to_value(&record)?, "") {
@@ -496,6 +503,25 @@ mod tests {
         let e = format!("{:#}", parse(&bad).unwrap_err());
         assert!(
             e.contains("unknown field `fragment_invocatons`") && e.contains("line"),
+            "{e}"
+        );
+    }
+
+    /// A value of the wrong type is named by its path, not only by a column of a one-line file.
+    #[test]
+    fn a_value_of_the_wrong_type_is_named_by_its_path() {
+        let mut raw: Value = serde_json::from_str(BASELINE).unwrap();
+        raw["settings"]["frames"] = Value::String("5".into());
+        let e = format!("{:#}", parse(&raw.to_string()).unwrap_err());
+        assert!(
+            e.starts_with("settings.frames: invalid type: string \"5\""),
+            "{e}"
+        );
+        let mut raw: Value = serde_json::from_str(BASELINE).unwrap();
+        raw["results"][1]["work"]["vertex_invocations"] = Value::Bool(true);
+        let e = format!("{:#}", parse(&raw.to_string()).unwrap_err());
+        assert!(
+            e.starts_with("results[1].work.vertex_invocations: invalid type"),
             "{e}"
         );
     }

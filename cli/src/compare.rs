@@ -183,11 +183,22 @@ fn to_json(args: &Args, c: &Comparison) -> CompareRecord {
     }
 }
 
+/// A metric for the table: six decimals where that reads (an image's errors are mostly between
+/// 1e-4 and 1e3), else six significant digits with an exponent, so that an HDR image's 3e38
+/// is not printed as 39 digits.
+fn metric_text(v: f64) -> String {
+    match v == 0.0 || (1e-4..1e6).contains(&v.abs()) {
+        true => format!("{v:.6}"),
+        false => format!("{v:.5e}"),
+    }
+}
+
 fn print_table(args: &Args, c: &Comparison) {
-    let num = |v: Option<f64>| v.map_or("n/a".to_owned(), |v| format!("{v:.6}"));
+    let num = |v: Option<f64>| v.map_or("n/a".to_owned(), metric_text);
     let psnr = match c.psnr_db {
         None => "n/a".to_owned(),
         Some(v) if v.is_infinite() => "inf (identical)".to_owned(),
+        Some(v) if v.abs() >= 1e6 => format!("{v:.2e} dB"),
         Some(v) => format!("{v:.2} dB"),
     };
     specchio::say!(

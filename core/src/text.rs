@@ -49,6 +49,58 @@ pub fn count_text(n: u64) -> String {
     }
 }
 
+/// A user's text quoted in a message, shortened to its first 60 characters (and how many it
+/// left out) so that
+/// a corrupt line or a 100,000-character value cannot flood the terminal; quoted and escaped
+/// as Rust's `{:?}` does, so control characters show.
+pub fn quoted_text(text: &str) -> String {
+    const MAX: usize = 60;
+    match text.char_indices().nth(MAX) {
+        Some((i, _)) => format!(
+            "{:?}... ({} more characters)",
+            &text[..i],
+            text[i..].chars().count()
+        ),
+        None => format!("{text:?}"),
+    }
+}
+
+/// The longest run of characters without a space a message keeps whole: a path's length
+/// (Linux allows 4,096 bytes, but no real one comes near); a longer run is a value copied
+/// from a corrupt or hostile input.
+const MAX_WORD: usize = 512;
+/// The most characters a message keeps (an error that lists a scene's names, one after another).
+const MAX_MESSAGE: usize = 4096;
+
+/// An error message bounded for a terminal, whatever an input put into it: a run of more than
+/// [`MAX_WORD`] characters without a space keeps its first 60 and says how many it left out,
+/// and a message of more than [`MAX_MESSAGE`] characters keeps its start and says the same.
+/// Every message the commands and Python say as an error goes through here.
+pub fn bounded_message(text: &str) -> String {
+    let left_out = |n: usize| format!("... ({n} more characters)");
+    let mut out = String::with_capacity(text.len().min(MAX_MESSAGE + 64));
+    for (i, word) in text.split(' ').enumerate() {
+        if i > 0 {
+            out.push(' ');
+        }
+        let chars = word.chars().count();
+        match chars > MAX_WORD {
+            true => {
+                out.extend(word.chars().take(60));
+                out.push_str(&left_out(chars - 60));
+            }
+            false => out.push_str(word),
+        }
+    }
+    let chars = out.chars().count();
+    if chars > MAX_MESSAGE {
+        let keep = MAX_MESSAGE - 64;
+        let cut: String = out.chars().take(keep).collect();
+        return cut + &left_out(chars - keep);
+    }
+    out
+}
+
 /// A time in seconds for a message: milliseconds in the everyday range, scientific notation
 /// outside it.
 pub fn time_text(t: f64) -> String {
@@ -56,5 +108,37 @@ pub fn time_text(t: f64) -> String {
         format!("{t:.3}")
     } else {
         format!("{t:.3e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A message of everyday words and paths is kept as it is; a 100,000-character value keeps
+    /// its first 60 and says how many it left out; a long list stops at its bound.
+    #[test]
+    fn a_message_is_bounded_whatever_its_input() {
+        let plain = "scene.toml:3:9: mirror.lookup: unknown variant `boxx`, expected `box`";
+        assert_eq!(bounded_message(plain), plain);
+        let path = format!("/{}/a.toml: not found", "d".repeat(400));
+        assert_eq!(bounded_message(&path), path);
+        let flood = format!("mirror.lookup: unknown variant `{}`", "x".repeat(100_000));
+        let said = bounded_message(&flood);
+        assert!(said.len() < 200, "{said}");
+        assert!(said.ends_with("... (99942 more characters)"), "{said}");
+        let list = format!("defined: {}", vec!["wall"; 10_000].join(", "));
+        let said = bounded_message(&list);
+        assert!(said.chars().count() < MAX_MESSAGE + 64, "{}", said.len());
+        assert!(said.starts_with("defined: wall, wall") && said.ends_with("more characters)"));
+    }
+
+    /// A quoted value is escaped and at most 60 characters of its own.
+    #[test]
+    fn a_quoted_value_is_short_and_escaped() {
+        assert_eq!(quoted_text("bvh8"), "\"bvh8\"");
+        assert_eq!(quoted_text("a\u{7}b"), "\"a\\u{7}b\"");
+        let long = format!("{:?}... (940 more characters)", "y".repeat(60));
+        assert_eq!(quoted_text(&"y".repeat(1000)), long);
     }
 }

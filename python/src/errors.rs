@@ -26,7 +26,7 @@ pub fn message(e: &(dyn std::error::Error + 'static)) -> String {
         }
         cause = c.source();
     }
-    text
+    specchio::text::bounded_message(&text)
 }
 
 /// Any engine error as a `SpecchioError`.

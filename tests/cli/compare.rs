@@ -330,3 +330,26 @@ fn angular_with_nothing_compared_is_undefined_not_zero() {
     assert!(String::from_utf8_lossy(&text.stdout).contains("n/a"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// An HDR image's extreme values read in the table: an RMSE of 2.1e38 prints with its
+/// exponent, not as 39 digits (the `specchio` helper holds every line to readable numbers).
+#[test]
+fn extreme_errors_print_readably() {
+    let dir = temp_dir("extreme");
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    let mut huge = image(0.0);
+    huge.pixels
+        .iter_mut()
+        .for_each(|p| *p = [3e38, 3e38, 3e38, 1.0]);
+    write_exr(&a, &huge).unwrap();
+    write_exr(&b, &image(0.0)).unwrap();
+    let out = specchio(&["compare", s(&a), s(&b)]);
+    assert!(out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let rmse = stdout.lines().find(|l| l.contains("RMSE:")).unwrap();
+    assert!(
+        rmse.trim().starts_with("RMSE:") && rmse.contains("e38"),
+        "{stdout}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

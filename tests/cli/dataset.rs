@@ -189,6 +189,8 @@ fn a_pose_the_robot_cannot_take_is_refused_before_anything_is_written() {
     let dir = temp_dir("dataset-bad");
     let cases = [
         ("time,x,y,z,heading\n0,0,3,0,0\n1,9,3,0,0\n", "robot.csv:3: position: the mirror (reaching 1 m) at [9, 3, 0] is not entirely inside the room"),
+        // As the file gives it, not rounded to single precision ("inf").
+        ("time,x,y,z,heading\n0,1e39,3,0,0\n", "robot.csv:2: position: the mirror (reaching 1 m) at [1e39, 3, 0] is not entirely inside the room"),
         ("time,x,y,z,heading\n0,0,3,0,0\n1,0,3,zero,0\n", "robot.csv:3: z: `zero` is not a number"),
         ("time,x,y,heading\n", "robot.csv:1: z: the header names no `z` column"),
         ("[{\"time\": 0, \"position\": [0, 3, -3], \"heading\": 0}, {\"time\": 2, \"position\": [0, 3, -3], \"heading\": 0}]", "robot.json: poses[1]: position: the mirror at [0, 3, -3] (or the sensor's line of sight up to it) meets an object at t = 2 s"),

@@ -165,3 +165,44 @@ fn no_output_replaces_an_input_under_another_name() {
     }
     std::fs::remove_dir_all(&*dir).unwrap();
 }
+
+/// A value of 100,000 characters in a scene, or in a baseline, is refused with a message a
+/// terminal can hold: the value's start and how much was left out (the whole value was
+/// repeated before, a 100 KB line).
+#[test]
+fn a_huge_value_is_refused_in_a_short_message() {
+    let dir = temp_dir("huge-value");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
+    let huge = "x".repeat(100_000);
+    let scene = dir.join("scene.toml");
+    let lookup = format!("[mirror]\nlookup = \"{huge}\"\n");
+    std::fs::write(&scene, text.replacen("[mirror]\n", &lookup, 1)).unwrap();
+    let baseline = dir.join("baseline.json");
+    let quick = std::fs::read_to_string(root().join("bench/baselines/quick.json")).unwrap();
+    let mut record: serde_json::Value = serde_json::from_str(&quick).unwrap();
+    record["settings"]["bvh_layout"] = serde_json::Value::String(huge.clone());
+    std::fs::write(&baseline, record.to_string()).unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let out = s(&dir.join("out"));
+    for args in [
+        vec!["render".to_owned(), s(&scene), "--out".into(), out.clone()],
+        vec![
+            "bench".to_owned(),
+            "--quick".into(),
+            "--baseline".into(),
+            s(&baseline),
+        ],
+    ] {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let run = specchio_within(&args);
+        let said = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {said}");
+        assert!(said.len() < 1000, "{args:?}: {} bytes", said.len());
+        assert!(
+            said.contains(&"x".repeat(50)) && said.contains(" more characters)"),
+            "{said}"
+        );
+    }
+    assert!(!dir.join("out").exists());
+}

@@ -21,6 +21,7 @@
 mod heatmap;
 pub mod percentile;
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use crate::files::{read_regular_file, FileError};
@@ -326,8 +327,11 @@ pub fn compare(
     });
 
     // 3. FLIP on 8-bit sRGB, the whole image (its filters are spatial), pooled over the
-    //    compared pixels.
-    let flip_map = flip_map(test, reference);
+    //    compared pixels. A pixel NaN or Inf in either image is left out here too: it takes
+    //    the same finite value in both (the finite one's, else black), so it differs nowhere
+    //    and makes no edge for its neighbours' filters to see.
+    let (test, reference) = finite_alike(test, reference);
+    let flip_map = flip_map(&test, &reference);
     let mut flip: Vec<f32> = (0..n)
         .filter(|&i| compared[i])
         .map(|i| flip_map[i])
@@ -368,6 +372,33 @@ pub fn flip_map(test: &RgbaImage, reference: &RgbaImage) -> Vec<f32> {
         nv_flip::FlipImageRgb8::with_data(img.width, img.height, &bytes)
     };
     nv_flip::flip(to_flip(reference), to_flip(test), FLIP_PIXELS_PER_DEGREE).to_vec()
+}
+
+/// Both images with every pixel that is NaN or Inf in either made the same finite value in
+/// both: the reference's where it is finite, else the test's, else black. Copied only where
+/// there is such a pixel (the images may be large).
+fn finite_alike<'i>(
+    test: &'i RgbaImage,
+    reference: &'i RgbaImage,
+) -> (Cow<'i, RgbaImage>, Cow<'i, RgbaImage>) {
+    let finite = |p: &[f32; 4]| p[..3].iter().all(|v| v.is_finite());
+    let all_finite = |img: &RgbaImage| img.pixels.iter().all(finite);
+    if all_finite(test) && all_finite(reference) {
+        return (Cow::Borrowed(test), Cow::Borrowed(reference));
+    }
+    let (mut test, mut reference) = (test.clone(), reference.clone());
+    for (t, r) in test.pixels.iter_mut().zip(&mut reference.pixels) {
+        if finite(t) && finite(r) {
+            continue;
+        }
+        let value = match (finite(r), finite(t)) {
+            (true, _) => *r,
+            (false, true) => *t,
+            (false, false) => [0.0, 0.0, 0.0, 1.0],
+        };
+        (*t, *r) = (value, value);
+    }
+    (Cow::Owned(test), Cow::Owned(reference))
 }
 
 /// Counts a NaN or Inf pixel; returns whether the pixel is finite.

@@ -141,6 +141,30 @@ fn nan_and_inf_pixels_are_counted_and_excluded() {
     assert_eq!(c.compared, [false, false, true, false]);
 }
 
+/// A NaN or Inf pixel is left out of FLIP as of every metric: where the pixels compared are
+/// equal, FLIP is 0 however the left-out ones lie among them (black NaN pixels between white
+/// ones measured 0.81 before, their edges spread by FLIP's filters).
+#[test]
+fn non_finite_pixels_leave_flip_as_they_leave_the_rest() {
+    let white = image(16, 16, |_, _| [1.0, 1.0, 1.0, 1.0]);
+    let holes = |bad: f32| {
+        image(16, 16, move |x, y| match (x + y) % 2 {
+            0 => [bad, 1.0, 1.0, 1.0],
+            _ => [1.0, 1.0, 1.0, 1.0],
+        })
+    };
+    for bad in [f32::NAN, f32::INFINITY] {
+        for (test, reference) in [(holes(bad), white.clone()), (white.clone(), holes(bad))] {
+            let c = compare(&test, &reference, None).unwrap();
+            assert_eq!(c.pixels_compared, 128);
+            assert_eq!(
+                (c.rmse, c.flip_mean, c.flip_p99),
+                (Some(0.0), Some(0.0), Some(0.0))
+            );
+        }
+    }
+}
+
 /// FLIP of two uniform colours, from its definition (Andersson et al., "FLIP: A Difference
 /// Evaluator for Alternating Images", HPG 2020, section 4), independently of the `nv-flip` code:
 /// a uniform image has no edges or points, so the feature difference is 0 and FLIP is the

@@ -25,7 +25,7 @@ pub fn error_text(e: &(dyn std::error::Error + 'static)) -> String {
             text = format!("{text}: {cause}");
         }
     }
-    text
+    crate::text::bounded_message(&text)
 }
 
 /// The exit status for an error: [`EXIT_VALIDATION`] when the validation layer reported

@@ -100,8 +100,10 @@ impl Ctx<'_> {
                     return Err(self.invalid(
                         &f("size"),
                         format!(
-                            "a {} of size {end} m is scaled by {}: {why}",
-                            choice.name, scale.x
+                            "a {} of size {} m is scaled by {}: {why}",
+                            choice.name,
+                            crate::text::num_text(end),
+                            crate::text::num_text(scale.x)
                         ),
                     ));
                 }

@@ -144,15 +144,16 @@ pub fn stamp_ns(time_s: f64) -> u64 {
 pub fn check_times(times: impl Iterator<Item = (f64, String)>) -> Result<(), String> {
     let mut before: Option<f64> = None;
     for (t, at) in times {
+        let t_text = crate::text::num_text(t);
         if t > MAX_TIME_S {
             return Err(format!(
-                "{at}: {t} s is past the {MAX_TIME_S} s a ROS 2 bag's time stamps hold \
+                "{at}: {t_text} s is past the {MAX_TIME_S} s a ROS 2 bag's time stamps hold \
                  (--format mcap)"
             ));
         }
         if before.is_some_and(|b| stamp_ns(t) <= stamp_ns(b)) {
             return Err(format!(
-                "{at}: {t} s is not later than the pose before it to the nanosecond a ROS 2 \
+                "{at}: {t_text} s is not later than the pose before it to the nanosecond a ROS 2 \
                  bag's stamps count (--format mcap); a bag needs one time per pose, since tf \
                  keeps one transform of a frame at each time: give the poses increasing times, \
                  or write the frames as files"

@@ -49,11 +49,11 @@ pub struct Sample {
 /// Why a central model could not be fitted.
 #[derive(Debug, thiserror::Error)]
 pub enum FitError {
-    #[error("only {0} pixels see the mirror; a central model needs at least 9 (is the sensor turned or moved off the mirror by sensor.tilt or sensor.shift?)")]
+    #[error("only {} the mirror; a central model needs at least 9 ({SEEN_BY})", pixels_seeing(*.0))]
     TooFewPixels(usize),
-    #[error("no starting point for the fit: {0}")]
+    #[error("no starting point for the fit: {0} ({SEEN_BY})")]
     NoStart(&'static str),
-    #[error("the fitted polynomial's elevation does not grow with the radius, so it has no inverse (invpol)")]
+    #[error("the fitted polynomial's elevation does not grow with the radius, so it has no inverse (invpol); the models expect the mirror's image about its axis ({SEEN_BY})")]
     NotMonotonic,
     #[error("no invpol of degree up to {0} could be fitted (every basis was singular)")]
     Invpol(usize),
@@ -66,6 +66,18 @@ pub enum FitError {
     },
     #[error("stopped before {0}")]
     Stopped(&'static str),
+}
+
+/// What decides the pixels a fit sees, for a fit that fails on too few or too odd of them.
+const SEEN_BY: &str = "what the fit sees is set by sensor.resolution, and by sensor.tilt and \
+                       sensor.shift, which turn or move the sensor off the mirror's axis";
+
+/// "N pixels see", "1 pixel sees".
+fn pixels_seeing(n: usize) -> String {
+    match n {
+        1 => "1 pixel sees".to_owned(),
+        n => format!("{n} pixels see"),
+    }
 }
 
 /// The sensor camera's axes in world space (unit, right-handed: right x down = forward).

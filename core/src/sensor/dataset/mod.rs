@@ -85,10 +85,14 @@ pub fn pose_fits(
         format!("[{}, {}, {}]", n(w.x), n(w.y), n(w.z))
     };
     if (local - Vec3::splat(r)).cmplt(lo).any() || (local + Vec3::splat(r)).cmpgt(hi).any() {
+        // The position as the file gives it (rounded to f32 here, 1e39 would read "inf").
+        let p = pose.position;
         let why = format!(
-            "the mirror (reaching {} m) at {} is not entirely inside the room",
+            "the mirror (reaching {} m) at [{}, {}, {}] is not entirely inside the room",
             crate::text::num_text(r),
-            file(local)
+            n(p.x),
+            n(p.y),
+            n(p.z)
         );
         return Err(("position", why));
     }
