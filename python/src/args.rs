@@ -111,6 +111,26 @@ pub fn poses<'py>(
     Ok(array.readonly())
 }
 
+/// One pose, `pose=`: x, y, z, heading as numbers (ints, floats, a list, a numpy array of 4),
+/// refused as `render_batch` refuses a batch's (bools, complex numbers, strings) and in any
+/// other shape, naming `pose`.
+pub fn pose(py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<[f64; 4]> {
+    let (array, shape) = numbers(py, "pose", value, "float64")?;
+    let wrong = || {
+        errors::error(format!(
+            "pose: an array of shape {shape:?}; give x, y, z, heading (4 numbers)"
+        ))
+    };
+    if shape != [4] {
+        return Err(wrong());
+    }
+    let values: Vec<f64> = array
+        .call_method0("tolist")?
+        .extract()
+        .map_err(|_| wrong())?;
+    values.try_into().map_err(|_| wrong())
+}
+
 /// `value` as a numpy array of `dtype` and its shape: any array-like of numbers (signed and
 /// unsigned ints, floats: numpy's kinds for numbers, not `b`ool) converted as numpy converts
 /// it; anything else refused, naming the argument `name`.

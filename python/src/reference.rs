@@ -27,10 +27,11 @@ use crate::watched::{self, Watched};
 pub fn reference<'py>(
     py: Python<'py>,
     scene: &Scene,
-    pose: Option<[f64; 4]>,
+    pose: Option<Bound<'py, PyAny>>,
     time: f64,
     spp: crate::args::Whole,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let pose = pose.map(|p| crate::args::pose(py, &p)).transpose()?;
     let spp = crate::args::count("spp", spp, 1, specchio::reference::MAX_SPP)?;
     if !(time.is_finite() && time >= 0.0) {
         return Err(errors::error(

@@ -152,9 +152,10 @@ impl Renderer {
     fn render<'py>(
         &self,
         py: Python<'py>,
-        pose: Option<[f64; 4]>,
+        pose: Option<Bound<'py, PyAny>>,
         time: f64,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let pose = pose.map(|p| crate::args::pose(py, &p)).transpose()?;
         let pose = match pose {
             Some([x, y, z, heading]) => {
                 let array = numpy::ndarray::arr2(&[[x, y, z, heading]]);

@@ -143,8 +143,14 @@ fn toml_value(value: &Bound<'_, PyAny>) -> Result<toml::Value, String> {
         return Ok(toml::Value::Boolean(b));
     }
     if value.is_instance_of::<PyInt>() {
-        let n: i64 =
-            (value.extract()).map_err(|_| format!("{} is beyond a 64-bit integer", shown()))?;
+        // Its size, not its digits: 10**300 would print 301 of them.
+        let n: i64 = (value.extract()).map_err(|_| {
+            let bits = (value
+                .call_method0("bit_length")
+                .and_then(|b| b.extract::<u64>()))
+            .map_or("?".to_owned(), |b| b.to_string());
+            format!("an int of {bits} bits is beyond a 64-bit integer")
+        })?;
         return Ok(toml::Value::Integer(n));
     }
     if value.is_instance_of::<PyFloat>() {

@@ -101,6 +101,9 @@ def test_a_camera_given_in_python_is_the_scene_files(tmp_path):
     for bad, says in [({"exposure_s": 20}, "imaging: exposure_s: must be"),
                       ({"exposur": 1}, "unknown field `exposur`"),
                       ({"exposure_s": float("nan")}, "imaging: exposure_s: must be a finite number, got nan"),
-                      ({"exposure_s": None}, "imaging: exposure_s: None is not a number")]:
+                      ({"exposure_s": None}, "imaging: exposure_s: None is not a number"),
+                      # Its size, not its 301 digits.
+                      ({"bit_depth": 10**300},
+                       "imaging: bit_depth: an int of 997 bits is beyond a 64-bit integer")]:
         with pytest.raises(specchio.SpecchioError, match=re.escape(says)):
             specchio.Scene(plain, imaging=bad)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import inspect
 import json
+import re
 import os
 import signal
 import subprocess
@@ -169,3 +170,21 @@ def test_a_bags_model_fit_says_its_estimate_and_stops_at_ctrl_c(tmp_path):
     assert any("15 % done in " in line for line in said), said
     assert not (tmp_path / "stopped").exists()
     assert not [p for p in tmp_path.iterdir() if "stopped" in p.name]
+
+
+def test_one_pose_is_refused_as_a_batchs_would_be(thesis, renderer):
+    """`pose=` takes what `render_batch`'s rows take: bools, complex numbers and other shapes
+    are refused naming `pose` (a complex pose rendered before, its imaginary part dropped
+    with only numpy's warning)."""
+    for bad, says in [(np.zeros(4, complex), "pose: not an array of numbers (dtype complex128)"),
+                      (np.array([True, False, False, True]), "pose: not an array of numbers (dtype bool)"),
+                      (np.zeros((4, 1)), "pose: an array of shape [4, 1]"),
+                      (np.array(0.0), "pose: an array of shape []"),
+                      ((0, 3, 0), "pose: an array of shape [3]")]:
+        with pytest.raises(specchio.SpecchioError, match=re.escape(says)):
+            renderer.render(pose=bad)
+        with pytest.raises(specchio.SpecchioError, match=re.escape(says)):
+            specchio.reference(thesis, pose=bad)
+    x, y, z = thesis.mirror_position
+    frame = renderer.render(pose=np.array([x, y, z, 0], dtype=np.float32))
+    assert frame["mask"].any()

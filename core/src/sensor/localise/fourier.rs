@@ -139,9 +139,20 @@ impl Descriptor for FourierSignature {
                 hi = x2;
             }
         }
-        (0.5 * (lo + hi)).rem_euclid(TAU)
+        // The search ends within some 1e-8 rad of the peak (the hill is flat at its top), on
+        // either side: a peak at 0 found at -3e-9 would wrap to just under a full turn (2 pi
+        // for no turn at all), so a turn that close to a full one is none.
+        let turn = (0.5 * (lo + hi)).rem_euclid(TAU);
+        match TAU - turn < FULL_TURN_TOLERANCE {
+            true => 0.0,
+            false => turn,
+        }
     }
 }
+
+/// How close to a full turn a found turn is taken as none: far above the search's precision
+/// (1e-8 rad) and far below a column of any panorama (a 100,000-column one's is 6e-5 rad).
+const FULL_TURN_TOLERANCE: f64 = 1e-6;
 
 #[cfg(test)]
 mod tests {
@@ -206,6 +217,17 @@ mod tests {
             let got = d.turn(&base, &q);
             let err = (got - turn + std::f64::consts::PI).rem_euclid(TAU) - std::f64::consts::PI;
             assert!(err.abs() < 0.01 * col, "turn {turn}: got {got}");
+        }
+    }
+
+    /// A panorama against itself has turned by nothing: 0, not the full turn just under 2 pi
+    /// that a search ending a hair below 0 wrapped to (6.2831853 at every width tried).
+    #[test]
+    fn no_turn_is_zero_not_a_full_turn() {
+        let d = FourierSignature { coefficients: 8 };
+        for n in [64, 128, 360, 1000] {
+            let p = d.describe(&panorama(n, 3, |r, az| (az.cos() + 0.1 * r as f64) as f32));
+            assert_eq!(d.turn(&p, &p), 0.0, "{n} columns");
         }
     }
 
