@@ -84,8 +84,13 @@ pub fn device(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
     if value.is_instance_of::<PyString>() {
         return Ok(Some(value.extract()?));
     }
-    if value.is_instance_of::<PyInt>() && !value.is_instance_of::<PyBool>() {
-        let index: Whole = value.extract()?;
+    // An int, or anything that is one by `__index__` (numpy's integers, which `spp` takes
+    // too); never a bool, which Python counts as an int and no one means as a device.
+    let index = (!value.is_instance_of::<PyBool>())
+        .then(|| value.call_method0("__index__").ok())
+        .flatten();
+    if let Some(index) = index {
+        let index: Whole = index.extract()?;
         return Ok(Some(count("device", index, 0, u32::MAX)?.to_string()));
     }
     let shown = value.repr().map_or("?".to_owned(), |r| r.to_string());

@@ -179,6 +179,25 @@ impl Descriptor {
 /// converted as numpy converts it; anything else is refused naming `panorama`.
 fn panorama_image(py: Python<'_>, panorama: &Bound<'_, PyAny>) -> PyResult<RgbaImage> {
     let refuse = |why: String| errors::error(format!("panorama: {why}"));
+    // Its copies' size before any is made: a broadcast view of 100,000² pixels costs nothing
+    // to pass and 112 GiB to copy.
+    let given: Vec<usize> = py
+        .import("numpy")?
+        .call_method1("shape", (panorama,))
+        .and_then(|s| s.extract())
+        .unwrap_or_default();
+    let values = given.iter().fold(1u64, |n, &d| n.saturating_mul(d as u64));
+    let pixels = given
+        .iter()
+        .take(2)
+        .fold(1u64, |n, &d| n.saturating_mul(d as u64));
+    let mut copies = specchio::memory::Estimate::new();
+    copies.add_many("the panorama as float32, twice", values, 8);
+    copies.add_many("its pixels as RGBA", pixels, 16);
+    let budget = specchio::memory::Budget::from_env().map_err(|e| refuse(errors::message(&e)))?;
+    copies
+        .check(&budget, "give a smaller panorama")
+        .map_err(|e| refuse(errors::message(&e)))?;
     let (array, shape) = crate::args::numbers(py, "panorama", panorama, "float32")?;
     let array = array
         .cast_into::<PyArray3<f32>>()

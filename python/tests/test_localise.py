@@ -127,6 +127,15 @@ def test_bad_arguments_are_refused_by_name(make, needle):
     assert needle in str(e.value)
 
 
+def test_a_panorama_too_large_to_copy_is_refused_before_the_copy(monkeypatch):
+    """A broadcast view costs nothing to pass and its copies 372 GiB: they are measured
+    against the memory budget before any is made, and refused naming `panorama`."""
+    monkeypatch.setenv("SPECCHIO_MEMORY_BUDGET", "1G")
+    huge = np.broadcast_to(np.float32(0.5), (100000, 100000, 3))
+    with pytest.raises(specchio.SpecchioError, match=r"panorama: this run would need about 372\.5 GiB"):
+        specchio.Descriptor().describe(huge)
+
+
 def test_signatures_of_another_descriptor_or_size_are_refused():
     shift, fourier = specchio.Descriptor(), specchio.Descriptor("fourier")
     a = shift.describe(place(7))

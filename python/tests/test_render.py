@@ -141,10 +141,14 @@ def test_lookups_and_devices_are_checked(thesis):
     first = next(d for d in specchio.devices() if d["usable"])
     with specchio.Renderer(thesis, device=first["index"]) as r:
         assert r.device == first["name"]
+    # numpy's integers are indices too, as `spp` takes them.
+    with specchio.Renderer(thesis, device=np.int64(first["index"])) as r:
+        assert r.device == first["name"]
     for bad, says in [
         (-1, r"device: -1; must be a whole number"),
         (2**200, r"device: an int of 201 bits; must be a whole number"),
         (1.5, r"device: 1.5; give an index"),
+        (True, r"device: True; give an index"),
     ]:
         with pytest.raises(specchio.SpecchioError, match=says):
             specchio.Renderer(thesis, device=bad)
