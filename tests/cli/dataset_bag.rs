@@ -163,7 +163,7 @@ fn a_format_or_a_time_a_bag_cannot_take_is_refused_before_anything_is_written() 
     let r = dataset(&dir, "out", &["--format", "mcap"]);
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(!r.status.success());
-    let want = format!("{robot}:3: time: 3000000000 s is past the 2147483646 s");
+    let want = format!("{robot}:3: time: 3e9 s is past the 2147483646 s");
     assert!(err.contains(&want), "{err}");
     assert!(!dir.join("out").exists());
     // A pose grid is all one time, which tf would read as one pose.

@@ -102,14 +102,33 @@ impl Ctx<'_> {
             return Err(self.invalid(
                 &format!("objects[{}].position", k.unwrap_or_default()),
                 format!(
-                    "the robot's part \"{}\" reaches {} m out of the room {when}; a part the \
+                    "the robot's part \"{}\" reaches {} m out of the room {when}{}; a part the \
                      sensor carries must stay inside it",
                     part.name,
-                    num_text(out)
+                    num_text(out),
+                    sensor_moved(&scene.sensor)
                 ),
             ));
         }
         Ok(())
+    }
+}
+
+/// Where the sensor's own settings carry its parts, for a part they carry out of the room:
+/// " (sensor.shift [4.97, 0, 0] m and sensor.tilt 10 degrees move the sensor and what it
+/// carries)", or nothing for a sensor where the mirror puts it.
+fn sensor_moved(sensor: &crate::scene::SensorCamera) -> String {
+    let s = sensor.shift_m;
+    let shift = (s != glam::Vec3::ZERO).then(|| {
+        let [x, y, z] = [s.x, s.y, s.z].map(num_text);
+        format!("sensor.shift [{x}, {y}, {z}] m")
+    });
+    let tilt = (sensor.tilt_deg != 0.0)
+        .then(|| format!("sensor.tilt {} degrees", num_text(sensor.tilt_deg)));
+    match (shift, tilt) {
+        (None, None) => String::new(),
+        (Some(s), None) | (None, Some(s)) => format!(" ({s} moves the sensor and what it carries)"),
+        (Some(s), Some(t)) => format!(" ({s} and {t} move the sensor and what it carries)"),
     }
 }
 

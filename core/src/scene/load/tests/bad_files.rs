@@ -34,6 +34,11 @@ const BAD: &[(&str, Option<u32>, &str)] = &[
         "objects[0].position: the robot's part \"mast\" reaches 0.6 m out of the room at time 0",
     ),
     (
+        "sensor-shift-carries-a-part-out.toml",
+        Some(23),
+        "objects[0].position: the robot's part \"mast\" reaches 0.02 m out of the room at time 0 (sensor.shift [4.97, 0, 0] m moves the sensor and what it carries)",
+    ),
+    (
         "sensor-frame-unknown.toml",
         Some(14),
         "objects[0].frame: unknown variant `robot`, expected `world` or `sensor`",
@@ -167,7 +172,7 @@ const BAD: &[(&str, Option<u32>, &str)] = &[
     ("scale-two-elements.toml", Some(18), "objects[0].scale: invalid length 2"),
     ("scale-overflows-f32.toml", Some(18), "objects[0].scale: size x scale is"),
     ("scale-too-thin.toml", Some(18), "objects[0].scale: size x scale is [1, 0.0000000000001, 1]: each axis must be within [1e-11, 1e11]"),
-    ("generate-size-too-small.toml", Some(18), "generate[0].size: a box of size 0.000000000001 m is scaled by"),
+    ("generate-size-too-small.toml", Some(18), "generate[0].size: a box of size 1e-12 m is scaled by"),
     ("radius-1e-310.toml", Some(4), "mirror.radius: must be positive, got 1e-310 (0 in single precision)"),
     ("radius-beyond-f32.toml", Some(4), "mirror.radius: out of range: at most 3.4028235e38 in magnitude (single precision), got 1e39"),
     ("line-width-rounds-to-zero.toml", Some(19), "materials[1].line_width: must be in (0, 0.5], got 1e-50 (0 in single precision)"),
