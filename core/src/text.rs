@@ -50,9 +50,8 @@ pub fn count_text(n: u64) -> String {
 }
 
 /// A user's text quoted in a message, shortened to its first 60 characters (and how many it
-/// left out) so that
-/// a corrupt line or a 100,000-character value cannot flood the terminal; quoted and escaped
-/// as Rust's `{:?}` does, so control characters show.
+/// left out) so that a corrupt line or a 100,000-character value cannot flood the terminal;
+/// quoted and escaped as Rust's `{:?}` does, so control characters show.
 pub fn quoted_text(text: &str) -> String {
     const MAX: usize = 60;
     match text.char_indices().nth(MAX) {

@@ -57,7 +57,8 @@ pub fn localise(
     if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
         return Err(e);
     }
-    let report = run.map_err(|e| errors::error(format!("{e:#}")))?;
+    let report =
+        run.map_err(|e| errors::error(specchio::text::bounded_message(&format!("{e:#}"))))?;
     errors::json_to_py(py, &report)
 }
 
