@@ -99,36 +99,43 @@ def test_whole_number_parameters_show_their_defaults():
     assert inspect.signature(specchio.Descriptor).parameters["k"].default == 8
 
 
-def test_a_large_calibration_says_its_estimate_and_stops_at_ctrl_c(tmp_path):
-    """The largest sensor a calibration takes (4096², seconds of work) says its estimate on
-    stderr as the command does, and Ctrl-C, sent once it has, stops it between parts:
-    KeyboardInterrupt, nothing written. In a Python of its own, where the estimate is said
-    after the first part (the delay is read once a process)."""
-    text = (scene_path("test/six-colour-room")).read_text()
-    path = tmp_path / "large.toml"
-    path.write_text(text.replace("[sensor]\n", "[sensor]\nresolution = [4096, 4096]\n"))
+def _interrupted_after_estimate(call: str, args: list[str], estimate: str) -> tuple[int, list[str]]:
+    """Runs `specchio.<call>(*sys.argv[1:])` in a Python of its own, its estimate said after
+    the first part (the delay is read once a process), and sends it Ctrl-C once a stderr line
+    starts with `estimate`: its exit status (42 for KeyboardInterrupt) and its stderr lines."""
     # Python's own Ctrl-C handler, whatever the child inherited: a job started in the
     # background of a script ignores SIGINT, and Python then keeps ignoring it.
     script = (
         "import signal, sys, specchio\n"
         "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "try:\n"
-        "    specchio.calibrate(specchio.Scene(sys.argv[1]), sys.argv[2])\n"
+        f"    specchio.{call}\n"
         "except KeyboardInterrupt:\n"
         "    sys.exit(42)\n"
     )
-    child = subprocess.Popen(
-        [sys.executable, "-c", script, str(path), str(tmp_path / "stopped")],
-        stderr=subprocess.PIPE, text=True,
-        env={**os.environ, "SPECCHIO_ESTIMATE_AFTER_S": "0"})
+    child = subprocess.Popen([sys.executable, "-c", script, *args], stderr=subprocess.PIPE,
+                             text=True, env={**os.environ, "SPECCHIO_ESTIMATE_AFTER_S": "0"})
     said = []
     for line in child.stderr:
         said.append(line)
-        if line.startswith("calibrate: sensor 4096x4096: "):
+        if line.startswith(estimate):
             child.send_signal(signal.SIGINT)
             break
     said.extend(child.stderr)
-    assert child.wait(timeout=300) == 42, "".join(said)
+    return child.wait(timeout=300), said
+
+
+def test_a_large_calibration_says_its_estimate_and_stops_at_ctrl_c(tmp_path):
+    """The largest sensor a calibration takes (4096², seconds of work) says its estimate on
+    stderr as the command does, and Ctrl-C, sent once it has, stops it between parts:
+    KeyboardInterrupt, nothing written."""
+    text = (scene_path("test/six-colour-room")).read_text()
+    path = tmp_path / "large.toml"
+    path.write_text(text.replace("[sensor]\n", "[sensor]\nresolution = [4096, 4096]\n"))
+    status, said = _interrupted_after_estimate(
+        "calibrate(specchio.Scene(sys.argv[1]), sys.argv[2])",
+        [str(path), str(tmp_path / "stopped")], "calibrate: sensor 4096x4096: ")
+    assert status == 42, "".join(said)
     assert any("10 % done in " in line for line in said), said
     assert not (tmp_path / "stopped").exists()
     assert not [p for p in tmp_path.iterdir() if "stopped" in p.name]
@@ -146,27 +153,11 @@ def test_a_bags_model_fit_says_its_estimate_and_stops_at_ctrl_c(tmp_path):
     assert specchio.Scene(path).sensor_size == (4096, 4096)
     x, y, z = specchio.Scene(path).mirror_position
     (tmp_path / "t.csv").write_text(f"time,x,y,z,heading\n0,{x!r},{y!r},{z!r},0\n")
-    script = (
-        "import signal, sys, specchio\n"
-        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
-        "try:\n"
-        "    specchio.dataset(sys.argv[1], sys.argv[2], sys.argv[3], format='mcap')\n"
-        "except KeyboardInterrupt:\n"
-        "    sys.exit(42)\n"
-    )
-    child = subprocess.Popen(
-        [sys.executable, "-c", script, str(path), str(tmp_path / "t.csv"),
-         str(tmp_path / "stopped")],
-        stderr=subprocess.PIPE, text=True,
-        env={**os.environ, "SPECCHIO_ESTIMATE_AFTER_S": "0"})
-    said = []
-    for line in child.stderr:
-        said.append(line)
-        if line.startswith("dataset: the bag's unified model: sensor 4096x4096: "):
-            child.send_signal(signal.SIGINT)
-            break
-    said.extend(child.stderr)
-    assert child.wait(timeout=300) == 42, "".join(said)
+    status, said = _interrupted_after_estimate(
+        "dataset(sys.argv[1], sys.argv[2], sys.argv[3], format='mcap')",
+        [str(path), str(tmp_path / "t.csv"), str(tmp_path / "stopped")],
+        "dataset: the bag's unified model: sensor 4096x4096: ")
+    assert status == 42, "".join(said)
     assert any("15 % done in " in line for line in said), said
     assert not (tmp_path / "stopped").exists()
     assert not [p for p in tmp_path.iterdir() if "stopped" in p.name]

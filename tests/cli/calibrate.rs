@@ -11,7 +11,7 @@ use specchio::sensor::central::{export, folder};
 #[path = "../common/mod.rs"]
 mod common;
 
-use common::{root, signal_when, specchio, temp_dir, Stderr, ESTIMATE_AT_ONCE};
+use common::{root, specchio, temp_dir};
 
 fn calibrate(out: &Path) -> CalibrationRecord {
     calibrate_scene("scenes/thesis-room.toml", out)
@@ -319,23 +319,15 @@ fn a_large_calibration_says_its_estimate_and_stops_cleanly() {
     let text = text.replace("[sensor]\n", "[sensor]\nresolution = [4096, 4096]\n");
     std::fs::write(&scene, text).unwrap();
     let out = dir.join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args(["calibrate", scene.to_str().unwrap(), "--out"])
-        .arg(&out)
-        .env(ESTIMATE_AT_ONCE.0, ESTIMATE_AT_ONCE.1)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let stderr = Stderr::of(&mut child);
-    let estimate = "calibrate: sensor 4096x4096: ";
-    let result = signal_when(child, libc::SIGINT, "the estimate", || {
-        stderr.contains(estimate)
-    });
-    let said = stderr.all();
-    common::readable_text(&["calibrate", "(stopped)"], "stderr", &said);
+    let args = [
+        "calibrate",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let (result, said, line) =
+        common::interrupted_after_estimate(&args, "calibrate: sensor 4096x4096: ");
     assert_eq!(result.status.code(), Some(1), "{said}");
-    let line = said.lines().find(|l| l.starts_with(estimate)).unwrap();
     // Said after the ray map, the first part: 10 hundredths of the whole.
     assert!(
         line.contains("10 % done in ") && line.ends_with("left; Ctrl-C stops it cleanly"),

@@ -8,9 +8,7 @@ use std::process::Command;
 #[path = "../common/mod.rs"]
 mod common;
 
-use common::{
-    render_six_colour, root, signal_when, specchio, temp_dir, Scratch, Stderr, ESTIMATE_AT_ONCE,
-};
+use common::{render_six_colour, root, signal_when, specchio, temp_dir, Scratch};
 
 /// Every entry under `dir`, as paths relative to it, sorted (empty when `dir` is missing).
 fn tree(dir: &Path) -> Vec<String> {
@@ -392,24 +390,12 @@ fn a_long_reference_says_its_estimate_and_stops_cleanly() {
         .replace("[observer]\n", "[observer]\nresolution = [64, 48]\n");
     std::fs::write(&scene, text).unwrap();
     let out = dir.join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args(["reference", scene.to_str().unwrap(), "--spp", "64", "--out"])
-        .arg(&out)
-        // Said after the first row, however fast the machine (the work is far longer).
-        .env(ESTIMATE_AT_ONCE.0, ESTIMATE_AT_ONCE.1)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let stderr = Stderr::of(&mut child);
+    let (scene, out_text) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    // Said after the first row, however fast the machine (the work is far longer).
+    let args = ["reference", scene, "--spp", "64", "--out", out_text];
     let estimate = "reference: observer 64x48 and sensor 4096x4096 cameras at 64 spp: ";
-    let result = signal_when(child, libc::SIGINT, "the sensor's estimate", || {
-        stderr.contains(estimate)
-    });
-    let said = stderr.all();
-    common::readable_text(&["reference", "(stopped)"], "stderr", &said);
+    let (result, said, line) = common::interrupted_after_estimate(&args, estimate);
     assert_eq!(result.status.code(), Some(1), "{said}");
-    let line = said.lines().find(|l| l.starts_with(estimate)).unwrap();
     assert!(
         // 64 x 48 + 4096 x 4096 pixels in all.
         line.contains(" of 16780288 pixels in") && line.contains("left; Ctrl-C stops it cleanly"),

@@ -159,3 +159,29 @@ impl Stderr {
         self.said.lock().unwrap().clone()
     }
 }
+
+/// Runs the `specchio` binary with `args`, its estimate said after the first part
+/// ([`ESTIMATE_AT_ONCE`]), and sends it Ctrl-C once a stderr line starts with `estimate`. Its
+/// output, what it said on stderr (held to readable numbers) and that line.
+pub fn interrupted_after_estimate(
+    args: &[&str],
+    estimate: &str,
+) -> (std::process::Output, String, String) {
+    let mut child = std::process::Command::new(binary())
+        .args(args)
+        .env(ESTIMATE_AT_ONCE.0, ESTIMATE_AT_ONCE.1)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the specchio binary runs");
+    let stderr = Stderr::of(&mut child);
+    let result = super::signal_when(child, libc::SIGINT, "the estimate", || {
+        stderr.contains(estimate)
+    });
+    let said = stderr.all();
+    readable_text(&[args[0], "(stopped)"], "stderr", &said);
+    let line = (said.lines().find(|l| l.starts_with(estimate)))
+        .unwrap_or_else(|| panic!("no line starting {estimate:?}:\n{said}"))
+        .to_owned();
+    (result, said, line)
+}
