@@ -68,7 +68,6 @@ impl PoseSource {
         }
     }
 
-    /// The plan of `scene` with these poses, every one checked.
     /// The plan of a dataset of `scene` from these poses; a bag's unified model fitted here
     /// stops at Ctrl-C, what Python raised kept in `stopped`.
     pub(crate) fn plan(

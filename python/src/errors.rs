@@ -31,13 +31,70 @@ pub fn message(e: &(dyn std::error::Error + 'static)) -> String {
 
 /// Any engine error as a `SpecchioError`.
 pub fn to_py<E: std::error::Error + 'static>(e: E) -> PyErr {
-    SpecchioError::new_err(message(&e))
+    error(message(&e))
 }
 
-/// A `SpecchioError` with `text`.
+/// A `SpecchioError` with `text`, the command line's options it names said as this package's
+/// arguments (`python_words`).
 pub fn error(text: impl Into<String>) -> PyErr {
+    SpecchioError::new_err(python_words(&text.into(), &[]))
+}
+
+/// A `SpecchioError` with `text` as the command line says it: for `specchio.localise`, whose
+/// keyword arguments are the command's options.
+pub fn command_error(text: impl Into<String>) -> PyErr {
     SpecchioError::new_err(text.into())
 }
+
+/// The engine's messages are the command line's, and name its options (`--grid: the spacing
+/// must be ...`, `--device "x" names no device`); a Python caller gave an argument, not an
+/// option, and would look for `--grid` in vain. Each phrase here is said as the argument or
+/// the scene field that sets the same thing; `first` comes before the table (a function whose
+/// argument has another name: `pose_grid`'s `spacing` is the command's `--grid`).
+pub fn python_words(text: &str, first: &[(&str, &str)]) -> String {
+    let mut said = String::with_capacity(text.len());
+    let mut rest = text;
+    'text: while let Some(at) = rest.find("--") {
+        let (before, from) = rest.split_at(at);
+        said.push_str(before);
+        let starts_word = !(said.chars().last()).is_some_and(|c| c.is_alphanumeric() || c == '-');
+        for (option, argument) in first.iter().chain(ARGUMENTS) {
+            let Some(after) = from.strip_prefix(option) else {
+                continue;
+            };
+            let ends_word = option.ends_with(' ')
+                || !(after.chars().next()).is_some_and(|c| c.is_alphanumeric() || c == '-');
+            if starts_word && ends_word {
+                said.push_str(argument);
+                rest = after;
+                continue 'text;
+            }
+        }
+        said.push_str("--");
+        rest = &from[2..];
+    }
+    said.push_str(rest);
+    said
+}
+
+/// The command line's options in engine messages, and what sets the same thing from Python.
+/// A phrase ending in a space takes the value after it (`--device "x"` is `device="x"`).
+const ARGUMENTS: &[(&str, &str)] = &[
+    ("--device ", "device="),
+    ("--format mcap", "format=\"mcap\""),
+    ("--grid", "grid"),
+    ("--headings", "headings"),
+    ("--time", "time"),
+    ("--out", "out"),
+    ("--resume", "resume=True"),
+    // The package's renderers take the face size from the scene file alone.
+    ("--cube-size", "cube.face_size"),
+    // The package's renderers walk where the engine chooses; the command can choose.
+    (
+        "--trace-in fragment",
+        "`specchio render --trace-in fragment`",
+    ),
+];
 
 /// A serialisable record as the Python object `json.loads` would give.
 pub fn json_to_py<T: serde::Serialize>(py: Python<'_>, value: &T) -> PyResult<Py<PyAny>> {

@@ -31,8 +31,8 @@ pub fn localise(
     for (key, value) in options.into_iter().flat_map(|d| d.iter()) {
         argv.extend(option(&key.extract::<String>()?, &value)?);
     }
-    let args =
-        specchio_bench::localise::parse(&argv).map_err(|e| errors::error(clap_message(&e)))?;
+    let args = specchio_bench::localise::parse(&argv)
+        .map_err(|e| errors::command_error(clap_message(&e)))?;
     let stopped: Mutex<Option<PyErr>> = Mutex::new(None);
     // Python's pending signals (Ctrl-C), seen on the thread that called only: Python runs
     // its signal handlers there, so a check on a worker (the matching's) would find none,
@@ -58,7 +58,7 @@ pub fn localise(
         return Err(e);
     }
     let report =
-        run.map_err(|e| errors::error(specchio::text::bounded_message(&format!("{e:#}"))))?;
+        run.map_err(|e| errors::command_error(specchio::text::bounded_message(&format!("{e:#}"))))?;
     errors::json_to_py(py, &report)
 }
 

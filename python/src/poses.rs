@@ -52,7 +52,12 @@ pub fn pose_grid<'py>(
         specchio::sensor::dataset::grid::MAX_HEADINGS,
     )?;
     let poses = specchio::sensor::dataset::grid::grid(&scene.scene, spacing, headings, time)
-        .map_err(|e| scene.error(e))?;
+        .map_err(|e| {
+            scene.error(errors::python_words(
+                &e.to_string(),
+                &[("--grid", "spacing")],
+            ))
+        })?;
     let rows: Vec<f64> = poses
         .iter()
         .flat_map(|p| [p.position.x, p.position.y, p.position.z, p.heading_deg])

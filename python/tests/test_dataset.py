@@ -371,6 +371,26 @@ def test_the_pose_grid_is_the_commands(tmp_path):
             specchio.pose_grid(specchio.Scene(scene), 4.0, headings=headings)
 
 
+def test_errors_name_the_arguments_python_was_given_not_the_commands_options(tmp_path):
+    """The engine's messages are the command line's; from Python they say the argument (or
+    the scene field) that sets the same thing, never an option the caller cannot give."""
+    scene = str(scene_path("thesis-room"))
+    cases = [
+        (lambda: specchio.pose_grid(specchio.Scene(scene), 0.0), r"spacing: the spacing must be"),
+        (lambda: specchio.pose_grid(specchio.Scene(scene), 4.0, time=-1.0), r"time: must be"),
+        (lambda: specchio.dataset(scene, out=str(tmp_path / "a"), grid=0.0), r"grid: the spacing"),
+        (
+            lambda: specchio.dataset(scene, out=str(tmp_path / "b"), grid=4.0, time=1e300, format="mcap"),
+            r'time: 1e300 s is past .* \(format="mcap"\)',
+        ),
+        (lambda: specchio.Renderer(specchio.Scene(scene), device=""), r'device="" names no device'),
+    ]
+    for call, says in cases:
+        with pytest.raises(specchio.SpecchioError, match=says) as raised:
+            call()
+        assert "--" not in str(raised.value), raised.value
+
+
 
 def test_a_grid_dataset_from_python_is_the_commands(tmp_path, monkeypatch):
     """`specchio.dataset(..., grid=)` in one process and on Ray: the folder `--grid` writes."""

@@ -359,7 +359,7 @@ pub(super) fn select(
         let matches = selector.is_none_or(|s| c.info.selected_by(s));
         if !matches {
             report.push(format!(
-                "  [{}] {}: not selected by --device {}",
+                "  [{}] {}: not selected by --device {:?}",
                 c.info.index,
                 c.info.name,
                 selector.unwrap_or("")

@@ -9,6 +9,7 @@ use glam::{Vec2, Vec3};
 
 use super::{check_budget, Part};
 use crate::scene::asset::AssetError;
+use crate::text::quoted_text;
 
 /// Statements that carry nothing a mesh of ours needs: object and group names, smoothing
 /// groups, materials (the scene assigns the material), lines, points, parameter-space vertices.
@@ -67,9 +68,9 @@ impl Reader {
                     .position(|c| c.abs() > super::MAX_COORDINATE);
                 if let Some(k) = far {
                     return Err(format!(
-                        "`v` value {} `{}` is past the ±{:e} a vertex coordinate may hold",
+                        "`v` value {} {} is past the ±{:e} a vertex coordinate may hold",
                         k + 1,
-                        clip(args[k]),
+                        quoted_text(args[k]),
                         super::MAX_COORDINATE
                     ));
                 }
@@ -88,8 +89,8 @@ impl Reader {
             k if IGNORED.contains(&k) => {}
             other => {
                 return Err(format!(
-                    "unknown statement `{}`: expected v, vt, vn, f, or one of {} (ignored)",
-                    clip(other),
+                    "unknown statement {}: expected v, vt, vn, f, or one of {} (ignored)",
+                    quoted_text(other),
                     IGNORED.join(", ")
                 ))
             }
@@ -117,7 +118,7 @@ impl Reader {
         for (k, corner) in args.iter().enumerate() {
             let c = self
                 .corner(corner)
-                .map_err(|m| format!("face corner {} `{}`: {m}", k + 1, clip(corner)))?;
+                .map_err(|m| format!("face corner {} {}: {m}", k + 1, quoted_text(corner)))?;
             ids.push(self.vertex(c));
         }
         for t in 1..ids.len() - 1 {
@@ -182,7 +183,7 @@ impl Reader {
 fn resolve(text: &str, len: usize, what: &str) -> Result<u32, String> {
     let n: i64 = text
         .parse()
-        .map_err(|_| format!("`{}` is not an index (a whole number)", clip(text)))?;
+        .map_err(|_| format!("{} is not an index (a whole number)", quoted_text(text)))?;
     let index = if n > 0 {
         n - 1
     } else if n < 0 {
@@ -217,16 +218,16 @@ fn numbers<const N: usize>(
     for (k, text) in args.iter().enumerate() {
         let x: f32 = text.parse().map_err(|_| {
             format!(
-                "`{keyword}` value {} `{}` is not a number",
+                "`{keyword}` value {} {} is not a number",
                 k + 1,
-                clip(text)
+                quoted_text(text)
             )
         })?;
         if !x.is_finite() {
             return Err(format!(
                 "`{keyword}` value {} is {}: must be finite (and within f32 range)",
                 k + 1,
-                clip(text)
+                quoted_text(text)
             ));
         }
         if k < N {
@@ -234,15 +235,6 @@ fn numbers<const N: usize>(
         }
     }
     Ok(out)
-}
-
-/// `text` shortened for a message, so a corrupt line cannot flood the terminal.
-fn clip(text: &str) -> String {
-    const MAX: usize = 40;
-    match text.char_indices().nth(MAX) {
-        Some((i, _)) => format!("{}...", &text[..i]),
-        None => text.to_string(),
-    }
 }
 
 #[cfg(test)]
@@ -273,21 +265,23 @@ mod tests {
     fn bad_statements_name_their_line_and_form() {
         let e = err("v 0 0 0\nv 1 0 0\nf 1 2 3\n");
         assert!(
-            e.starts_with("line 3: face corner 3 `3`: refers to vertex (v) 3, but 2"),
+            e.starts_with("line 3: face corner 3 \"3\": refers to vertex (v) 3, but 2"),
             "{e}"
         );
         assert!(err("v 0 0\n").starts_with("line 1: `v` with 2 numbers: expected `v x y z"));
-        assert!(err("\n\nv 0 nan 0\n").starts_with("line 3: `v` value 2 is nan: must be finite"));
+        assert!(
+            err("\n\nv 0 nan 0\n").starts_with("line 3: `v` value 2 is \"nan\": must be finite")
+        );
         let far = err("v 0 0 0\nv -1e30 0 0\n");
         assert!(
-            far.starts_with("line 2: `v` value 1 `-1e30` is past the ±1e15"),
+            far.starts_with("line 2: `v` value 1 \"-1e30\" is past the ±1e15"),
             "{far}"
         );
         assert!(err("v 0 0 0\nf 1 1\n").contains("at least 3 corners"));
         assert!(err("v 0 0 0\nf 0 1 1\n").contains("index 0: OBJ indices start at 1"));
         assert!(err("v 0 0 0\nf 1/2 1 1\n").contains("texture coordinate (vt) 2, but 0"));
         assert!(err("v 0 0 0\nf 1/1/1/1 1 1\n").contains("too many `/`"));
-        assert!(err("PK\u{3}\u{4} zip").starts_with("line 1: unknown statement `PK"));
+        assert!(err("PK\u{3}\u{4} zip").starts_with("line 1: unknown statement \"PK"));
         let e = parse(b"v 0 0 0\n\xff\xfe\n").err().unwrap().to_string();
         assert!(e.starts_with("line 2: not UTF-8"), "{e}");
     }

@@ -12,6 +12,7 @@ use gltf::json::Root;
 
 use crate::files::{read_regular_file, MAX_GLTF_BUFFER_BYTES};
 use crate::scene::asset::AssetError;
+use crate::text::quoted_text;
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
 const CHUNK_JSON: u32 = 0x4E4F_534A;
@@ -114,8 +115,8 @@ pub(super) fn load(
                         AssetError::gltf(
                             format!("{at}.uri"),
                             format!(
-                                "\"{}\": {e} (external buffers together may hold at most {} MiB)",
-                                clip(uri),
+                                "{}: {e} (external buffers together may hold at most {} MiB)",
+                                quoted_text(uri),
                                 MAX_GLTF_BUFFER_BYTES >> 20
                             ),
                         )
@@ -144,20 +145,24 @@ pub(super) fn load(
 /// The file a relative URI names inside `folder`, or why it may not be read.
 fn resolve_uri(folder: &Path, uri: &str) -> Result<PathBuf, String> {
     let allowed = "allowed: a data: URI, or a relative path inside the glTF file's folder";
-    let decoded = percent_decode(uri)
-        .ok_or_else(|| format!("\"{}\" has a malformed %-escape or is not UTF-8", clip(uri)))?;
+    let decoded = percent_decode(uri).ok_or_else(|| {
+        format!(
+            "{} has a malformed %-escape or is not UTF-8",
+            quoted_text(uri)
+        )
+    })?;
     let first = decoded.split('/').next().unwrap_or("");
     if decoded.is_empty() {
         return Err(format!("is empty; {allowed}"));
     }
     if decoded.starts_with('/') || decoded.contains('\\') || first.contains(':') {
         return Err(format!(
-            "\"{}\" is absolute, has a scheme or a backslash; {allowed}",
-            clip(uri)
+            "{} is absolute, has a scheme or a backslash; {allowed}",
+            quoted_text(uri)
         ));
     }
     if decoded.split('/').any(|s| s == "..") {
-        return Err(format!("\"{}\" uses `..`; {allowed}", clip(uri)));
+        return Err(format!("{} uses `..`; {allowed}", quoted_text(uri)));
     }
     let path = folder.join(&decoded);
     // A symbolic link inside the folder must not lead out of it either. A path that does not
@@ -165,8 +170,8 @@ fn resolve_uri(folder: &Path, uri: &str) -> Result<PathBuf, String> {
     if let (Ok(inside), Ok(target)) = (folder.canonicalize(), path.canonicalize()) {
         if !target.starts_with(&inside) {
             return Err(format!(
-                "\"{}\" is a symbolic link to {}, outside the glTF file's folder; {allowed}",
-                clip(uri),
+                "{} is a symbolic link to {}, outside the glTF file's folder; {allowed}",
+                quoted_text(uri),
                 target.display()
             ));
         }
@@ -199,8 +204,8 @@ fn data_uri(uri: &str) -> Result<Vec<u8>, String> {
     };
     if !header.ends_with(";base64") {
         return Err(format!(
-            "data: URI \"{}\" is not base64; glTF buffers use `data:<type>;base64,<data>`",
-            clip(header)
+            "data: URI {} is not base64; glTF buffers use `data:<type>;base64,<data>`",
+            quoted_text(header)
         ));
     }
     base64(payload).map_err(|m| format!("data: URI: {m}"))
@@ -240,15 +245,6 @@ fn base64(text: &str) -> Result<Vec<u8>, String> {
         return Err("base64 data ends in the middle of a byte".into());
     }
     Ok(out)
-}
-
-/// `text` shortened for a message.
-pub(super) fn clip(text: &str) -> String {
-    const MAX: usize = 60;
-    match text.char_indices().nth(MAX) {
-        Some((i, _)) => format!("{}...", &text[..i]),
-        None => text.to_string(),
-    }
 }
 
 #[cfg(test)]

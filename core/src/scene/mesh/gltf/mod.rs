@@ -14,6 +14,7 @@ use gltf::json::Root;
 
 use super::{check_budget, Part};
 use crate::scene::asset::AssetError;
+use crate::text::quoted_text;
 use accessor::{layout, Want};
 
 mod accessor;
@@ -60,8 +61,8 @@ fn check_header(root: &Root) -> Result<(), AssetError> {
         return Err(AssetError::gltf(
             "asset.version",
             format!(
-                "is \"{}\"; only glTF 2.x is read",
-                buffers::clip(&root.asset.version)
+                "is {}; only glTF 2.x is read",
+                quoted_text(&root.asset.version)
             ),
         ));
     }
@@ -69,8 +70,8 @@ fn check_header(root: &Root) -> Result<(), AssetError> {
         return Err(AssetError::gltf(
             "extensionsRequired[0]",
             format!(
-                "\"{}\" is not supported: only core glTF 2.0 is read (no required extensions)",
-                buffers::clip(ext)
+                "{} is not supported: only core glTF 2.0 is read (no required extensions)",
+                quoted_text(ext)
             ),
         ));
     }
