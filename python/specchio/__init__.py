@@ -156,9 +156,9 @@ def dataset(
     if workers is not None or worker_env is not None or shard_size is not None:
         raise SpecchioError("workers, worker_env and shard_size are for ray=True")
     return _dataset_here(
-        os.fspath(scene),
-        None if trajectory is None else os.fspath(trajectory),
-        os.fspath(out),
+        scene,
+        trajectory,
+        out,
         grid=grid,
         headings=headings,
         time=time,

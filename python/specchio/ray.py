@@ -20,6 +20,7 @@ on the others; docs/python.md).
 from __future__ import annotations
 
 import math
+import numbers
 import os
 from typing import Any, Callable, Optional, Union
 
@@ -59,6 +60,14 @@ class _Worker:
         return indices, f.frames(indices), (f.lookup, f.ground_truth, f.device)
 
 
+def _whole(name: str, value: Any) -> None:
+    """Refuses, naming it, an argument that is not a whole number of at least 1 (a bool is
+    none, though Python counts it as an int)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        shown = repr(value) if len(repr(value)) <= 40 else type(value).__name__
+        raise SpecchioError(f"{name}: {shown}; must be a whole number of at least 1")
+
+
 def init_options() -> dict[str, Any]:
     """How ``dataset`` starts Ray when it is not running: joining ``RAY_ADDRESS``'s cluster,
     or a local one (``address=None``), its workers' output kept out of the driver's."""
@@ -90,12 +99,9 @@ def dataset(
     import ray
     from ray.util import ActorPool
 
-    if shard_size < 1:
-        raise SpecchioError(f"shard_size: {shard_size}; must be at least 1")
-    if workers is not None and workers < 1:
-        raise SpecchioError(f"workers: {workers}; must be at least 1")
-    scene, out = os.fspath(scene), os.fspath(out)
-    trajectory = None if trajectory is None else os.fspath(trajectory)
+    _whole("shard_size", shard_size)
+    if workers is not None:
+        _whole("workers", workers)
     # Where the poses come from, whose frame the panoramas are in and which layers the frames
     # hold: the driver's output and every worker's renderer make the same plan of them.
     plan = {
@@ -109,6 +115,9 @@ def dataset(
     # Every input is checked, and the output staged, before any worker starts.
     # The bag is made by the driver, from the frames the workers rendered.
     output = DatasetOutput(scene, trajectory, out, resume=resume, format=format, **plan)
+    # Paths, checked by DatasetOutput (a str or an os.PathLike).
+    scene, out = os.fspath(scene), os.fspath(out)
+    trajectory = None if trajectory is None else os.fspath(trajectory)
     n = len(output)
     started = not ray.is_initialized()
     if started:

@@ -1,6 +1,8 @@
 //! Arguments from Python, taken as Python gives them and checked with their names: `spp=-1`
 //! is `SpecchioError("spp: -1; must be a whole number from 1 to 4096")`, not an
-//! `OverflowError` that names nothing (as an unsigned parameter gave); `device=0` is the
+//! `OverflowError` that names nothing (as an unsigned parameter gave); `time="0"` is
+//! `SpecchioError("time: '0' (a str); give a number ...")`, not PyO3's `TypeError` whose
+//! message names no argument ([`Given`]); `device=0` is the
 //! first device, as the docs say (an index or part of a name); poses of any numeric dtype
 //! are poses, not a "type mismatch".
 
@@ -10,11 +12,142 @@ use pyo3::types::{PyBool, PyInt, PyString};
 
 use crate::errors;
 
+/// An argument of type `T` as Python gave it, or what came instead: taken whatever it is and
+/// refused by name in [`Given::named`]. PyO3's own refusal of a wrong type ("must be real
+/// number, not str") names the argument only in a note, which `str(e)` and Pythons before
+/// 3.11 do not show.
+#[derive(Debug, Clone)]
+pub enum Given<T> {
+    Is(T),
+    /// What came instead: its value (when short) and its type, `'0' (a str)`.
+    Not(String),
+}
+
+/// What an argument of a Rust type takes, as a message says it, and what Python would convert
+/// to it that no one means (a bool as a number).
+pub trait Wanted {
+    fn wanted() -> String;
+    fn refuses(_obj: &Bound<'_, PyAny>) -> bool {
+        false
+    }
+}
+
+impl Wanted for f64 {
+    fn wanted() -> String {
+        "a number (an int or a float)".to_owned()
+    }
+    fn refuses(obj: &Bound<'_, PyAny>) -> bool {
+        obj.is_instance_of::<PyBool>()
+    }
+}
+
+impl Wanted for bool {
+    fn wanted() -> String {
+        "True or False".to_owned()
+    }
+}
+
+impl Wanted for String {
+    fn wanted() -> String {
+        "a str".to_owned()
+    }
+}
+
+impl Wanted for std::path::PathBuf {
+    fn wanted() -> String {
+        "a path (a str or an os.PathLike)".to_owned()
+    }
+}
+
+impl<'py, T: pyo3::PyClass> Wanted for PyRef<'py, T> {
+    fn wanted() -> String {
+        format!("a specchio.{}", T::NAME)
+    }
+}
+
+impl<'py, T: pyo3::PyClass> Wanted for Vec<PyRef<'py, T>> {
+    fn wanted() -> String {
+        format!("a list of specchio.{}", T::NAME)
+    }
+}
+
+impl<'py> Wanted for Bound<'py, pyo3::types::PyDict> {
+    fn wanted() -> String {
+        "a dict".to_owned()
+    }
+}
+
+impl Wanted for Vec<f64> {
+    fn wanted() -> String {
+        "a list of numbers".to_owned()
+    }
+}
+
+impl<'a, 'py, T> FromPyObject<'a, 'py> for Given<T>
+where
+    T: FromPyObject<'a, 'py> + Wanted,
+{
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        if T::refuses(&obj) {
+            return Ok(Given::Not(described(&obj)));
+        }
+        Ok(match obj.extract::<T>() {
+            Ok(v) => Given::Is(v),
+            Err(_) => Given::Not(described(&obj)),
+        })
+    }
+}
+
+impl<T: Wanted> Given<T> {
+    /// The value, or an error naming the argument `name`, what it was given and what it takes.
+    pub fn named(self, name: &str) -> PyResult<T> {
+        match self {
+            Given::Is(v) => Ok(v),
+            Given::Not(what) => Err(errors::error(format!(
+                "{name}: {what}; give {}",
+                T::wanted()
+            ))),
+        }
+    }
+}
+
+/// An optional argument: `None`, its value, or an error naming it (as [`Given::named`]).
+pub fn maybe<T: Wanted>(name: &str, value: Option<Given<T>>) -> PyResult<Option<T>> {
+    value.map(|v| v.named(name)).transpose()
+}
+
+impl Given<String> {
+    /// A default text, for a signature.
+    pub fn text(text: &str) -> Self {
+        Given::Is(text.to_owned())
+    }
+}
+
+/// `obj` for a message: its value where its `repr` is short, and its type (`'0' (a str)`,
+/// `[1, 2] (a list)`); a long value by its type alone.
+fn described(obj: &Bound<'_, PyAny>) -> String {
+    let kind = obj
+        .get_type()
+        .name()
+        .map_or("?".to_owned(), |n| n.to_string());
+    let article = if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
+        "an"
+    } else {
+        "a"
+    };
+    match obj.repr().map(|r| r.to_string()) {
+        Ok(r) if r.chars().count() <= 40 => format!("{r} ({article} {kind})"),
+        _ => format!("{article} {kind}"),
+    }
+}
+
 /// A Python int as the caller gave it, however large: -1, 2**64 and 2**200 are values to
 /// refuse by name ([`count`]), not an `OverflowError` that names nothing, which PyO3 raises
-/// for an int that does not fit the parameter's Rust type. Anything but an int is PyO3's
-/// `TypeError`, which names the argument.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// for an int that does not fit the parameter's Rust type; anything but an int is refused by
+/// name there too.
+#[derive(Debug, Clone, PartialEq)]
 pub enum Whole {
     /// Within 128 bits.
     Fits(i128),
@@ -22,6 +155,8 @@ pub enum Whole {
     Beyond { negative: bool, bits: u64 },
     /// A bool, which Python counts as an int and no one means as one.
     Bool(bool),
+    /// No int at all: what it was (`1.5 (a float)`).
+    Not(String),
 }
 
 impl<'a, 'py> FromPyObject<'a, 'py> for Whole {
@@ -35,7 +170,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Whole {
         }
         match obj.extract::<i128>() {
             Ok(v) => Ok(Whole::Fits(v)),
-            Err(e) if !obj.is_instance_of::<PyInt>() => Err(e),
+            Err(_) if !obj.is_instance_of::<PyInt>() => Ok(Whole::Not(described(&obj))),
             Err(_) => Ok(Whole::Beyond {
                 negative: obj.lt(0)?,
                 bits: obj.call_method0("bit_length")?.extract()?,
@@ -47,12 +182,13 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Whole {
 impl Whole {
     /// The value for a message: its digits where there are at most 20 (2**64 is written
     /// out), else its size (2**200 has 61 digits, which no one reads).
-    fn shown(self) -> String {
+    fn shown(&self) -> String {
         let (negative, bits) = match self {
             Whole::Fits(v) if v.unsigned_abs() < 10u128.pow(20) => return v.to_string(),
-            Whole::Fits(v) => (v < 0, u64::from(128 - v.unsigned_abs().leading_zeros())),
-            Whole::Beyond { negative, bits } => (negative, bits),
-            Whole::Bool(b) => return format!("{} (a bool)", if b { "True" } else { "False" }),
+            Whole::Fits(v) => (*v < 0, u64::from(128 - v.unsigned_abs().leading_zeros())),
+            Whole::Beyond { negative, bits } => (*negative, *bits),
+            Whole::Bool(b) => return format!("{} (a bool)", if *b { "True" } else { "False" }),
+            Whole::Not(what) => return what.clone(),
         };
         let sign = if negative { "a negative" } else { "an" };
         format!("{sign} int of {bits} bits")
@@ -62,12 +198,12 @@ impl Whole {
 /// The whole number `value` of the argument `name`, within `lo..=hi`, or an error naming the
 /// argument, the value and the range.
 pub fn count(name: &str, value: Whole, lo: u32, hi: u32) -> PyResult<u32> {
-    match value {
-        Whole::Fits(v) => match u32::try_from(v) {
+    match &value {
+        Whole::Fits(v) => match u32::try_from(*v) {
             Ok(v) if (lo..=hi).contains(&v) => return Ok(v),
             _ => {}
         },
-        Whole::Beyond { .. } | Whole::Bool(_) => {}
+        Whole::Beyond { .. } | Whole::Bool(_) | Whole::Not(_) => {}
     }
     Err(errors::error(format!(
         "{name}: {}; must be a whole number from {lo} to {hi}",

@@ -17,6 +17,7 @@ use specchio::sensor::panorama::PanoramaFrame;
 use specchio::vk::device::Device;
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
+use crate::args::{maybe, Given};
 use crate::errors;
 use crate::renderer::check_validation;
 use crate::watched::Watched;
@@ -35,11 +36,13 @@ pub enum PoseSource {
 impl PoseSource {
     /// Exactly one of `trajectory` and `grid`; `headings` and `time` only with a grid.
     pub fn new(
-        trajectory: Option<PathBuf>,
-        grid: Option<f64>,
+        trajectory: Option<Given<PathBuf>>,
+        grid: Option<Given<f64>>,
         headings: Option<crate::args::Whole>,
-        time: Option<f64>,
+        time: Option<Given<f64>>,
     ) -> PyResult<Self> {
+        let (trajectory, grid) = (maybe("trajectory", trajectory)?, maybe("grid", grid)?);
+        let time = maybe("time", time)?;
         let headings = (headings.map(|h| {
             crate::args::count(
                 "headings",
@@ -183,40 +186,42 @@ pub(crate) fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
 /// `resume`, finished frames are kept in `out.partial` and a stopped run goes on from them
 /// (`specchio dataset --resume`). Returns the summary (`dataset.json`) as a dict.
 #[pyfunction]
-#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=false, progress=None, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None, format=None, geometry_frame="scene"))]
+#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=Given::Is(false), progress=None, resume=Given::Is(false), grid=None, headings=None, time=None, panorama_frame=Given::text("robot"), outputs=None, format=None, geometry_frame=Given::text("scene")))]
 #[allow(clippy::too_many_arguments)]
 pub fn dataset(
     py: Python<'_>,
-    scene: PathBuf,
-    trajectory: Option<PathBuf>,
-    out: PathBuf,
-    lookup: Option<&str>,
+    scene: Given<PathBuf>,
+    trajectory: Option<Given<PathBuf>>,
+    out: Given<PathBuf>,
+    lookup: Option<Given<String>>,
     device: Option<Bound<'_, PyAny>>,
-    validate: bool,
+    validate: Given<bool>,
     progress: Option<Py<PyAny>>,
-    resume: bool,
-    grid: Option<f64>,
+    resume: Given<bool>,
+    grid: Option<Given<f64>>,
     headings: Option<crate::args::Whole>,
-    time: Option<f64>,
-    panorama_frame: &str,
+    time: Option<Given<f64>>,
+    panorama_frame: Given<String>,
     outputs: Option<Bound<'_, PyAny>>,
     format: Option<Bound<'_, PyAny>>,
-    geometry_frame: &str,
+    geometry_frame: Given<String>,
 ) -> PyResult<Py<PyAny>> {
+    let (scene, out) = (scene.named("scene")?, out.named("out")?);
+    let resume = resume.named("resume")?;
     let device = crate::args::device(device.as_ref())?;
     let job = Job {
         choices: Choices::parse(
-            panorama_frame,
-            geometry_frame,
+            &panorama_frame.named("panorama_frame")?,
+            &geometry_frame.named("geometry_frame")?,
             outputs.as_ref(),
             format.as_ref(),
         )?,
-        asked: parse_lookup(lookup)?,
+        asked: parse_lookup(maybe("lookup", lookup)?.as_deref())?,
         source: PoseSource::new(trajectory, grid, headings, time)?,
         scene: &scene,
         out: &out,
         device: device.as_deref(),
-        validate,
+        validate: validate.named("validate")?,
         resume,
         progress: progress.as_ref(),
     };

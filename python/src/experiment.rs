@@ -22,10 +22,11 @@ use crate::errors;
 #[pyo3(signature = (scene, out, **options))]
 pub fn localise(
     py: Python<'_>,
-    scene: PathBuf,
-    out: PathBuf,
+    scene: crate::args::Given<PathBuf>,
+    out: crate::args::Given<PathBuf>,
     options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
+    let (scene, out) = (scene.named("scene")?, out.named("out")?);
     let mut argv: Vec<String> = vec!["localise".into(), path_text(&scene)?];
     argv.extend(["--out".into(), path_text(&out)?]);
     for (key, value) in options.into_iter().flat_map(|d| d.iter()) {

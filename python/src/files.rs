@@ -14,7 +14,11 @@ use crate::errors;
 /// `direction.Z`, `mask`; `range`), uint32 for ids (`id`), half floats widened to float32.
 /// The file is read with the same limits as `specchio compare`'s inputs (16384 px a side).
 #[pyfunction]
-pub fn read_exr<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
+pub fn read_exr<'py>(
+    py: Python<'py>,
+    path: crate::args::Given<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let path = path.named("path")?;
     let specchio::image::exr::Layer {
         size: (w, h),
         channels,

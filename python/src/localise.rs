@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 use specchio::image::RgbaImage;
 use specchio::sensor::localise::{self, DescriptorKind};
 
+use crate::args::Given;
 use crate::errors;
 
 /// The largest `k` a descriptor takes (as `specchio localise --k`).
@@ -100,8 +101,10 @@ impl Descriptor {
 #[pymethods]
 impl Descriptor {
     #[new]
-    #[pyo3(signature = (name="column-shift", k=crate::args::Whole::Fits(8)), text_signature = "(name=\"column-shift\", k=8)")]
-    fn new(name: &str, k: crate::args::Whole) -> PyResult<Self> {
+    #[pyo3(signature = (name=crate::args::Given::text("column-shift"), k=crate::args::Whole::Fits(8)), text_signature = "(name=\"column-shift\", k=8)")]
+    fn new(name: crate::args::Given<String>, k: crate::args::Whole) -> PyResult<Self> {
+        let name = name.named("name")?;
+        let name = name.as_str();
         let kind = DescriptorKind::parse(name).ok_or_else(|| {
             errors::error(format!(
                 "name: {name:?} is not a descriptor; one of {}",
@@ -136,8 +139,13 @@ impl Descriptor {
     }
 
     /// How unalike two places are (0 for the same view, whatever the heading).
-    fn distance(&self, a: &Signature, b: &Signature) -> PyResult<f64> {
-        let (a, b) = self.pair(a, b, ["a", "b"])?;
+    fn distance(
+        &self,
+        a: Given<PyRef<'_, Signature>>,
+        b: Given<PyRef<'_, Signature>>,
+    ) -> PyResult<f64> {
+        let (a, b) = (a.named("a")?, b.named("b")?);
+        let (a, b) = self.pair(&a, &b, ["a", "b"])?;
         Ok(self.kind.build(self.k).distance(a, b))
     }
 
@@ -146,9 +154,11 @@ impl Descriptor {
     fn distances<'py>(
         &self,
         py: Python<'py>,
-        database: Vec<PyRef<'py, Signature>>,
-        query: &Signature,
+        database: Given<Vec<PyRef<'py, Signature>>>,
+        query: Given<PyRef<'py, Signature>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (database, query) = (database.named("database")?, query.named("query")?);
+        let query = &*query;
         let mut landmarks = Vec::with_capacity(database.len());
         for (i, s) in database.iter().enumerate() {
             landmarks.push(self.pair(s, query, [&format!("database[{i}]"), "query"])?.0);
@@ -165,8 +175,13 @@ impl Descriptor {
 
     /// The turn in radians, in [0, 2 pi), that maps `landmark`'s panorama onto `query`'s:
     /// the query's column at azimuth a shows what the landmark's shows at a - turn.
-    fn turn(&self, landmark: &Signature, query: &Signature) -> PyResult<f64> {
-        let (l, q) = self.pair(landmark, query, ["landmark", "query"])?;
+    fn turn(
+        &self,
+        landmark: Given<PyRef<'_, Signature>>,
+        query: Given<PyRef<'_, Signature>>,
+    ) -> PyResult<f64> {
+        let (landmark, query) = (landmark.named("landmark")?, query.named("query")?);
+        let (l, q) = self.pair(&landmark, &query, ["landmark", "query"])?;
         Ok(self.kind.build(self.k).turn(l, q))
     }
 

@@ -9,13 +9,15 @@ use numpy::PyArrayMethods;
 use pyo3::prelude::*;
 use specchio::sensor::dataset::trajectory::{self, Place, Pose};
 
+use crate::args::Given;
 use crate::errors;
 
 /// The poses of a trajectory file (CSV or JSON, docs/sensor.md): a list of dicts with
 /// `time` (s), `position` ([x, y, z], m, the file's coordinates) and `heading` (degrees about
 /// +Y). A mistake raises `SpecchioError` naming the file, line or entry, and field.
 #[pyfunction]
-pub fn read_trajectory(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny>>> {
+pub fn read_trajectory(py: Python<'_>, path: Given<PathBuf>) -> PyResult<Vec<Py<PyAny>>> {
+    let path = path.named("path")?;
     let poses = py
         .detach(|| trajectory::read(&path))
         .map_err(errors::to_py)?;
@@ -37,14 +39,16 @@ pub fn read_trajectory(py: Python<'_>, path: PathBuf) -> PyResult<Vec<Py<PyAny>>
 /// array of x, y, z, heading rows (the scene file's coordinates, degrees), in grid order: what
 /// `Renderer.render_batch` takes, or a trajectory's rows (`time,x,y,z,heading` with the time).
 #[pyfunction]
-#[pyo3(signature = (scene, spacing, headings=crate::args::Whole::Fits(1), time=0.0), text_signature = "(scene, spacing, headings=1, time=0.0)")]
+#[pyo3(signature = (scene, spacing, headings=crate::args::Whole::Fits(1), time=crate::args::Given::Is(0.0)), text_signature = "(scene, spacing, headings=1, time=0.0)")]
 pub fn pose_grid<'py>(
     py: Python<'py>,
-    scene: &crate::scene::Scene,
-    spacing: f64,
+    scene: Given<PyRef<'py, crate::scene::Scene>>,
+    spacing: Given<f64>,
     headings: crate::args::Whole,
-    time: f64,
+    time: Given<f64>,
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    let (scene, spacing) = (scene.named("scene")?, spacing.named("spacing")?);
+    let (scene, time) = (&*scene, time.named("time")?);
     let headings = crate::args::count(
         "headings",
         headings,

@@ -13,6 +13,7 @@ use specchio::sensor::central::{folder, Calibration, Watch};
 use specchio::sensor::dataset;
 use specchio::sensor::SensorOutputs;
 
+use crate::args::Given;
 use crate::arrays::{self, Layers};
 use crate::errors;
 use crate::scene::Scene;
@@ -23,14 +24,16 @@ use crate::watched::{self, Watched};
 /// the robot there as `Renderer.render` does; without it the scene is traced as written at
 /// `time`. `spp`: samples per pixel of the colour images (1 traces pixel centres).
 #[pyfunction]
-#[pyo3(signature = (scene, pose=None, time=0.0, spp=crate::args::Whole::Fits(1)), text_signature = "(scene, pose=None, time=0.0, spp=1)")]
+#[pyo3(signature = (scene, pose=None, time=Given::Is(0.0), spp=crate::args::Whole::Fits(1)), text_signature = "(scene, pose=None, time=0.0, spp=1)")]
 pub fn reference<'py>(
     py: Python<'py>,
-    scene: &Scene,
+    scene: Given<PyRef<'py, Scene>>,
     pose: Option<Bound<'py, PyAny>>,
-    time: f64,
+    time: Given<f64>,
     spp: crate::args::Whole,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let (scene, time) = (scene.named("scene")?, time.named("time")?);
+    let scene = &*scene;
     let pose = pose.map(|p| crate::args::pose(py, &p)).transpose()?;
     let spp = crate::args::count("spp", spp, 1, specchio::reference::MAX_SPP)?;
     if !(time.is_finite() && time >= 0.0) {
@@ -76,8 +79,15 @@ pub fn reference<'py>(
 /// (`calibration.json`) as a dict. A large sensor says its estimate on stderr as the command
 /// does; Ctrl-C stops it between parts (`KeyboardInterrupt`), with nothing written.
 #[pyfunction]
-#[pyo3(signature = (scene, out, time=0.0))]
-pub fn calibrate(py: Python<'_>, scene: &Scene, out: PathBuf, time: f64) -> PyResult<Py<PyAny>> {
+#[pyo3(signature = (scene, out, time=Given::Is(0.0)))]
+pub fn calibrate<'py>(
+    py: Python<'py>,
+    scene: Given<PyRef<'py, Scene>>,
+    out: Given<PathBuf>,
+    time: Given<f64>,
+) -> PyResult<Py<PyAny>> {
+    let (scene, out) = (scene.named("scene")?, out.named("out")?);
+    let (scene, time) = (&*scene, time.named("time")?);
     if !(time.is_finite() && time >= 0.0) {
         return Err(errors::error(
             "time: must be a finite number of seconds >= 0",

@@ -11,6 +11,7 @@ use specchio::sensor::dataset::{self, ObjectBounds};
 use specchio::vk::device::{self, Device, DeviceInfo};
 use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
+use crate::args::{maybe, Given};
 use crate::arrays::{self, Layers};
 use crate::scene::Scene;
 use crate::{errors, poses};
@@ -89,14 +90,17 @@ struct Inner {
 #[pymethods]
 impl Renderer {
     #[new]
-    #[pyo3(signature = (scene, lookup=None, device=None, validate=false))]
+    #[pyo3(signature = (scene, lookup=None, device=None, validate=Given::Is(false)))]
     fn new(
         py: Python<'_>,
-        scene: &Scene,
-        lookup: Option<&str>,
+        scene: Given<PyRef<'_, Scene>>,
+        lookup: Option<Given<String>>,
         device: Option<Bound<'_, PyAny>>,
-        validate: bool,
+        validate: Given<bool>,
     ) -> PyResult<Self> {
+        let (scene, validate) = (scene.named("scene")?, validate.named("validate")?);
+        let lookup = maybe("lookup", lookup)?;
+        let lookup = lookup.as_deref();
         let device = crate::args::device(device.as_ref())?;
         let path = scene.path.clone();
         let scene = scene.scene.clone();
@@ -148,13 +152,14 @@ impl Renderer {
     /// scene puts it at `time`, heading 0) and `time` (s): a dict of numpy arrays (see the
     /// module's docs: `sensor`, `observer`, `ray_origin`, `ray_direction`, `mask`, `range`,
     /// `ids`).
-    #[pyo3(signature = (pose=None, time=0.0))]
+    #[pyo3(signature = (pose=None, time=Given::Is(0.0)))]
     fn render<'py>(
         &self,
         py: Python<'py>,
         pose: Option<Bound<'py, PyAny>>,
-        time: f64,
+        time: Given<f64>,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let time = time.named("time")?;
         let pose = pose.map(|p| crate::args::pose(py, &p)).transpose()?;
         let pose = match pose {
             Some([x, y, z, heading]) => {
@@ -176,9 +181,10 @@ impl Renderer {
         &self,
         py: Python<'py>,
         poses: Bound<'py, PyAny>,
-        times: Option<Vec<f64>>,
-        out: Option<Bound<'py, PyDict>>,
+        times: Option<Given<Vec<f64>>>,
+        out: Option<Given<Bound<'py, PyDict>>>,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let (times, out) = (maybe("times", times)?, maybe("out", out)?);
         let poses = crate::args::poses(py, &poses)?;
         let poses = poses::from_array(poses.as_array(), times)?;
         let Some(first) = poses.first() else {

@@ -23,14 +23,16 @@ impl Scene {
     #[pyo3(signature = (path, imaging=None))]
     fn new(
         py: Python<'_>,
-        path: PathBuf,
-        imaging: Option<&Bound<'_, pyo3::types::PyDict>>,
+        path: crate::args::Given<PathBuf>,
+        imaging: Option<crate::args::Given<Bound<'_, pyo3::types::PyDict>>>,
     ) -> PyResult<Self> {
+        let path = path.named("path")?;
+        let imaging = crate::args::maybe("imaging", imaging)?;
         let mut scene = py
             .detach(|| specchio::scene::load(&path))
             .map_err(errors::to_py)?;
         if let Some(table) = imaging {
-            scene.sensor.imaging = Some(camera(&path, table)?);
+            scene.sensor.imaging = Some(camera(&path, &table)?);
         }
         Ok(Scene { scene, path })
     }

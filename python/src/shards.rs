@@ -15,6 +15,7 @@ use specchio::sensor::dataset::{check_frame, resume, DatasetError, Folder, Frame
 use specchio::sensor::GroundTruth;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
+use crate::args::{maybe, Given};
 use crate::dataset::{commit, parse_lookup, with_kept_note, Choices, PoseSource};
 use crate::errors;
 use crate::renderer::check_validation;
@@ -42,33 +43,38 @@ impl DatasetFrames {
     /// quarter of the machine's cores, 1 to 4, within the memory budget; 0: none). A Ray
     /// worker, one of many on its machine, passes 1.
     #[new]
-    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=false, encoders=None, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None, geometry_frame="scene"))]
+    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=Given::Is(false), encoders=None, grid=None, headings=None, time=None, panorama_frame=Given::text("robot"), outputs=None, geometry_frame=Given::text("scene")))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
-        scene: PathBuf,
-        trajectory: Option<PathBuf>,
-        lookup: Option<&str>,
+        scene: Given<PathBuf>,
+        trajectory: Option<Given<PathBuf>>,
+        lookup: Option<Given<String>>,
         device: Option<Bound<'_, PyAny>>,
-        validate: bool,
+        validate: Given<bool>,
         encoders: Option<crate::args::Whole>,
-        grid: Option<f64>,
+        grid: Option<Given<f64>>,
         headings: Option<crate::args::Whole>,
-        time: Option<f64>,
-        panorama_frame: &str,
+        time: Option<Given<f64>>,
+        panorama_frame: Given<String>,
         outputs: Option<Bound<'_, PyAny>>,
-        geometry_frame: &str,
+        geometry_frame: Given<String>,
     ) -> PyResult<Self> {
+        let (scene, validate) = (scene.named("scene")?, validate.named("validate")?);
         let source = PoseSource::new(trajectory, grid, headings, time)?;
         // The workers render frames; the bag, if any, is the driver's (`DatasetOutput`).
-        let choices = Choices::parse(panorama_frame, geometry_frame, outputs.as_ref(), None)?;
+        let frames = (
+            panorama_frame.named("panorama_frame")?,
+            geometry_frame.named("geometry_frame")?,
+        );
+        let choices = Choices::parse(&frames.0, &frames.1, outputs.as_ref(), None)?;
         let device = crate::args::device(device.as_ref())?;
         // At most MAX_ENCODERS: each holds a frame in memory.
         let most = MAX_ENCODERS as u32;
         let encoders = (encoders.map(|n| crate::args::count("encoders", n, 0, most)))
             .transpose()?
             .map(|n| n as usize);
-        let asked = parse_lookup(lookup)?;
+        let asked = parse_lookup(maybe("lookup", lookup)?.as_deref())?;
         // No bag here (its format is the driver's): nothing to stop before the frames.
         let stopped = Mutex::new(None);
         py.detach(|| -> Result<Self, DatasetError> {
@@ -203,26 +209,28 @@ pub struct DatasetOutput {
 #[pymethods]
 impl DatasetOutput {
     #[new]
-    #[pyo3(signature = (scene, trajectory, out, resume=false, grid=None, headings=None, time=None, panorama_frame="robot", outputs=None, format=None, geometry_frame="scene"))]
+    #[pyo3(signature = (scene, trajectory, out, resume=Given::Is(false), grid=None, headings=None, time=None, panorama_frame=Given::text("robot"), outputs=None, format=None, geometry_frame=Given::text("scene")))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
-        scene: PathBuf,
-        trajectory: Option<PathBuf>,
-        out: PathBuf,
-        resume: bool,
-        grid: Option<f64>,
+        scene: Given<PathBuf>,
+        trajectory: Option<Given<PathBuf>>,
+        out: Given<PathBuf>,
+        resume: Given<bool>,
+        grid: Option<Given<f64>>,
         headings: Option<crate::args::Whole>,
-        time: Option<f64>,
-        panorama_frame: &str,
+        time: Option<Given<f64>>,
+        panorama_frame: Given<String>,
         outputs: Option<Bound<'_, PyAny>>,
         format: Option<Bound<'_, PyAny>>,
-        geometry_frame: &str,
+        geometry_frame: Given<String>,
     ) -> PyResult<Self> {
+        let (scene, out) = (scene.named("scene")?, out.named("out")?);
+        let resume = resume.named("resume")?;
         let source = PoseSource::new(trajectory, grid, headings, time)?;
         let choices = Choices::parse(
-            panorama_frame,
-            geometry_frame,
+            &panorama_frame.named("panorama_frame")?,
+            &geometry_frame.named("geometry_frame")?,
             outputs.as_ref(),
             format.as_ref(),
         )?;

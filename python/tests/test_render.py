@@ -158,6 +158,49 @@ def test_lookups_and_devices_are_checked(thesis):
         r.render()
 
 
+def test_a_wrong_type_is_named_by_its_argument(renderer, thesis, tmp_path):
+    """Every argument of the wrong type raises SpecchioError naming it, what it was given
+    and what it takes, in the message itself (PyO3's own TypeError names it only in a note,
+    which str(e) leaves out)."""
+    path = str(scene_path("thesis-room"))
+    d = specchio.Descriptor()
+    poses = np.zeros((1, 4))
+    cases = [
+        (lambda: specchio.pose_grid(thesis, "4"), r"^spacing: '4' \(a str\); give a number"),
+        (lambda: specchio.pose_grid(thesis, 4.0, time=True), r"^time: True \(a bool\); give a number"),
+        (lambda: specchio.pose_grid(thesis, 4.0, headings=1.5), r"^headings: 1.5 \(a float\); must be"),
+        (lambda: specchio.reference(path), r"^scene: '.*thesis-room.toml' \(a str\); give a specchio.Scene"),
+        (lambda: specchio.reference(thesis, time="0"), r"^time: '0' \(a str\)"),
+        (lambda: specchio.calibrate(thesis, tmp_path / "c", time=[0]), r"^time: \[0\] \(a list\)"),
+        (lambda: specchio.Renderer(thesis, validate="yes"), r"^validate: 'yes' \(a str\); give True or False"),
+        (lambda: specchio.Renderer(thesis, lookup=3), r"^lookup: 3 \(an int\); give a str"),
+        (lambda: specchio.Scene(3), r"^path: 3 \(an int\); give a path"),
+        (lambda: specchio.Scene(path, imaging=[]), r"^imaging: \[\] \(a list\); give a dict"),
+        (lambda: specchio.read_exr(None), r"^path: None \(a NoneType\); give a path"),
+        (lambda: specchio.read_trajectory(1.5), r"^path: 1.5 \(a float\); give a path"),
+        (lambda: specchio.dataset(path, out=3, grid=4.0), r"^out: 3 \(an int\); give a path"),
+        (lambda: specchio.dataset(path, out=str(tmp_path / "d"), grid="4"), r"^grid: '4' \(a str\)"),
+        (lambda: specchio.Descriptor(name=3), r"^name: 3 \(an int\); give a str"),
+        (lambda: d.distance("a", "b"), r"^a: 'a' \(a str\); give a specchio.Signature"),
+        (lambda: d.distances(["x"], "q"), r"^database: \['x'\] \(a list\); give a list of specchio.Signature"),
+        (lambda: renderer.render(time="0"), r"^time: '0' \(a str\)"),
+        (lambda: renderer.render_batch(poses, times="x"), r"^times: 'x' \(a str\); give a list of numbers"),
+        (lambda: renderer.render_batch(poses, out=[1]), r"^out: \[1\] \(a list\); give a dict"),
+        (lambda: specchio.localise(3, tmp_path / "l"), r"^scene: 3 \(an int\); give a path"),
+        (
+            lambda: specchio.dataset(path, out=str(tmp_path / "r"), grid=4.0, ray=True, shard_size="8"),
+            r"^shard_size: '8'; must be a whole number",
+        ),
+    ]
+    for call, says in cases:
+        with pytest.raises(specchio.SpecchioError, match=says):
+            call()
+    # A long value is said by its type alone.
+    with pytest.raises(specchio.SpecchioError, match=r"^time: a str; give a number"):
+        renderer.render(time="x" * 1000)
+    assert sorted(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("device", usable_devices())
 def test_every_device_renders_and_says_where_its_labels_come_from(thesis, device):
     with specchio.Renderer(thesis, device=device) as r:
