@@ -41,7 +41,31 @@ impl Renderer {
         };
         (self.mirror.pass).prepare(uploads, &frame)?;
         let lookup_ms = lookup_start.elapsed().as_secs_f64() * 1e3;
+        // At the first frame only: the driver's losses depend on where things are, and a
+        // warning is said once.
+        if !self.snapping_said && self.device.info.short_name == "swiftshader" {
+            self.snapping_said = true;
+            super::snapping::warn(&self.losses_at(state, &views));
+        }
         Ok((bases, lookup_ms))
+    }
+}
+
+impl Renderer {
+    /// What SwiftShader leaves out of the frame at `t_s` (`snapping`), whichever device this
+    /// is: per surface, the views it loses triangles in.
+    pub fn snapping_losses(&self, t_s: f64) -> Vec<String> {
+        let state = SceneState::at(&self.scene, t_s);
+        let bases = view_bases(&self.scene, &state);
+        self.losses_at(
+            &state,
+            &view_data(&self.scene, &bases, self.cube.size as f32),
+        )
+    }
+
+    fn losses_at(&self, state: &SceneState, views: &[ViewData]) -> Vec<String> {
+        let cube = lookups::plugin(self.scene.mirror.lookup).uses_cube();
+        super::snapping::losses(&self.scene, state, views, cube)
     }
 }
 

@@ -38,6 +38,7 @@ pub mod resources;
 mod retired;
 mod scene_draw;
 mod sensor_rays;
+pub mod snapping;
 pub mod targets;
 
 use std::sync::Arc;
@@ -109,6 +110,8 @@ pub struct Renderer {
     refresh: refresh::Refresh,
     /// This frame's drawables: their render-space bounds and their draw order.
     drawn: draw::DrawOrder,
+    /// Whether the first frame's SwiftShader losses were looked for (`snapping`).
+    snapping_said: bool,
     pub scene: Scene,
     pub device: Arc<Device>,
 }
@@ -187,6 +190,7 @@ impl Renderer {
             submitter,
             refresh: refresh::Refresh::new(options.full_updates, options.whole_faces),
             drawn: draw::DrawOrder::default(),
+            snapping_said: false,
             scene,
             device: Arc::clone(device),
         })
