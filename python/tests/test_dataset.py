@@ -389,6 +389,12 @@ def test_errors_name_the_arguments_python_was_given_not_the_commands_options(tmp
         with pytest.raises(specchio.SpecchioError, match=says) as raised:
             call()
         assert "--" not in str(raised.value), raised.value
+    # A path is the user's, whatever it holds: only an option standing alone is said anew.
+    folder = tmp_path / "--grid"
+    folder.mkdir()
+    (folder / "t.csv").write_text("time,x,y,z,heading\n0,0,1,0,zz\n")
+    with pytest.raises(specchio.SpecchioError, match=r"--grid/t.csv:2: heading: `zz` is not a number"):
+        specchio.dataset(scene, str(folder / "t.csv"), out=str(tmp_path / "c"))
 
 
 
