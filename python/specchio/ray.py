@@ -64,7 +64,8 @@ def _whole(name: str, value: Any) -> None:
     """Refuses, naming it, an argument that is not a whole number of at least 1 (a bool is
     none, though Python counts it as an int)."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-        shown = repr(value) if len(repr(value)) <= 40 else type(value).__name__
+        kind = type(value).__name__
+        shown = f"{value!r} (a {kind})" if len(repr(value)) <= 40 else f"a {kind}"
         raise SpecchioError(f"{name}: {shown}; must be a whole number of at least 1")
 
 

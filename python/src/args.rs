@@ -7,6 +7,7 @@
 //! are poses, not a "type mismatch".
 
 use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2};
+use pyo3::exceptions::{PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyInt, PyString};
 
@@ -15,7 +16,9 @@ use crate::errors;
 /// An argument of type `T` as Python gave it, or what came instead: taken whatever it is and
 /// refused by name in [`Given::named`]. PyO3's own refusal of a wrong type ("must be real
 /// number, not str") names the argument only in a note, which `str(e)` and Pythons before
-/// 3.11 do not show.
+/// 3.11 do not show. Every argument a user passes goes through it; the methods only
+/// `specchio.ray` calls between its driver and workers (`DatasetFrames.frames`,
+/// `DatasetOutput.begin`, `place`, `finish`) keep PyO3's own types.
 #[derive(Debug, Clone)]
 pub enum Given<T> {
     Is(T),
@@ -86,6 +89,7 @@ impl Wanted for Vec<f64> {
 impl<'a, 'py, T> FromPyObject<'a, 'py> for Given<T>
 where
     T: FromPyObject<'a, 'py> + Wanted,
+    T::Error: Into<PyErr>,
 {
     type Error = PyErr;
 
@@ -93,10 +97,18 @@ where
         if T::refuses(&obj) {
             return Ok(Given::Not(described(&obj)));
         }
-        Ok(match obj.extract::<T>() {
-            Ok(v) => Given::Is(v),
-            Err(_) => Given::Not(described(&obj)),
-        })
+        let py = obj.py();
+        match obj.extract::<T>().map_err(Into::<PyErr>::into) {
+            Ok(v) => Ok(Given::Is(v)),
+            // Not of the type: said by name in `named`.
+            Err(e) if e.is_instance_of::<PyTypeError>(py) => Ok(Given::Not(described(&obj))),
+            Err(e) if e.is_instance_of::<PyOverflowError>(py) => {
+                Ok(Given::Not(format!("{}, too large for it", described(&obj))))
+            }
+            // Anything else (Ctrl-C or a MemoryError in a `__float__` or `__fspath__`) is
+            // the caller's, as raised.
+            Err(e) => Err(e),
+        }
     }
 }
 
@@ -132,7 +144,7 @@ fn described(obj: &Bound<'_, PyAny>) -> String {
         .get_type()
         .name()
         .map_or("?".to_owned(), |n| n.to_string());
-    let article = if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
+    let article = if kind.starts_with(['a', 'e', 'i', 'o']) {
         "an"
     } else {
         "a"

@@ -186,7 +186,7 @@ pub(crate) fn parse_lookup(lookup: Option<&str>) -> PyResult<Option<Lookup>> {
 /// `resume`, finished frames are kept in `out.partial` and a stopped run goes on from them
 /// (`specchio dataset --resume`). Returns the summary (`dataset.json`) as a dict.
 #[pyfunction]
-#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=Given::Is(false), progress=None, resume=Given::Is(false), grid=None, headings=None, time=None, panorama_frame=Given::text("robot"), outputs=None, format=None, geometry_frame=Given::text("scene")))]
+#[pyo3(signature = (scene, trajectory, out, lookup=None, device=None, validate=Given::Is(false), progress=None, resume=Given::Is(false), grid=None, headings=None, time=None, panorama_frame=Given::text("robot"), outputs=None, format=None, geometry_frame=Given::text("scene")), text_signature = "(scene, trajectory, out, lookup=None, device=None, validate=False, progress=None, resume=False, grid=None, headings=None, time=None, panorama_frame=\"robot\", outputs=None, format=None, geometry_frame=\"scene\")")]
 #[allow(clippy::too_many_arguments)]
 pub fn dataset(
     py: Python<'_>,

@@ -57,16 +57,17 @@ pub fn python_words(text: &str, first: &[(&str, &str)]) -> String {
     'text: while let Some(at) = rest.find("--") {
         let (before, from) = rest.split_at(at);
         said.push_str(before);
-        // An option stands alone: after a space, a parenthesis or a backtick, or first. Not
-        // within a path or a quoted value a user gave (`/data/--grid/t.csv`).
-        let starts_word =
-            (said.chars().last()).is_none_or(|c| c.is_whitespace() || "(`".contains(c));
+        // An option stands alone: after a space or a parenthesis, or first. Not within a path
+        // (`/data/--grid/t.csv`) or a value a user gave, which messages quote in backticks or
+        // double quotes. (A file named exactly as an option and said first is the one case
+        // taken for an option.)
+        let starts_word = (said.chars().last()).is_none_or(|c| c.is_whitespace() || c == '(');
         for (option, argument) in first.iter().chain(ARGUMENTS) {
             let Some(after) = from.strip_prefix(option) else {
                 continue;
             };
             let ends_word = option.ends_with(' ')
-                || (after.chars().next()).is_none_or(|c| c.is_whitespace() || ":),;`".contains(c));
+                || (after.chars().next()).is_none_or(|c| c.is_whitespace() || ":),;".contains(c));
             if starts_word && ends_word {
                 said.push_str(argument);
                 rest = after;

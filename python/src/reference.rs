@@ -79,7 +79,7 @@ pub fn reference<'py>(
 /// (`calibration.json`) as a dict. A large sensor says its estimate on stderr as the command
 /// does; Ctrl-C stops it between parts (`KeyboardInterrupt`), with nothing written.
 #[pyfunction]
-#[pyo3(signature = (scene, out, time=Given::Is(0.0)))]
+#[pyo3(signature = (scene, out, time=Given::Is(0.0)), text_signature = "(scene, out, time=0.0)")]
 pub fn calibrate<'py>(
     py: Python<'py>,
     scene: Given<PyRef<'py, Scene>>,

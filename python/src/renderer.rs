@@ -90,7 +90,7 @@ struct Inner {
 #[pymethods]
 impl Renderer {
     #[new]
-    #[pyo3(signature = (scene, lookup=None, device=None, validate=Given::Is(false)))]
+    #[pyo3(signature = (scene, lookup=None, device=None, validate=Given::Is(false)), text_signature = "(scene, lookup=None, device=None, validate=False)")]
     fn new(
         py: Python<'_>,
         scene: Given<PyRef<'_, Scene>>,
@@ -152,7 +152,7 @@ impl Renderer {
     /// scene puts it at `time`, heading 0) and `time` (s): a dict of numpy arrays (see the
     /// module's docs: `sensor`, `observer`, `ray_origin`, `ray_direction`, `mask`, `range`,
     /// `ids`).
-    #[pyo3(signature = (pose=None, time=Given::Is(0.0)))]
+    #[pyo3(signature = (pose=None, time=Given::Is(0.0)), text_signature = "($self, pose=None, time=0.0)")]
     fn render<'py>(
         &self,
         py: Python<'py>,

@@ -43,7 +43,7 @@ impl DatasetFrames {
     /// quarter of the machine's cores, 1 to 4, within the memory budget; 0: none). A Ray
     /// worker, one of many on its machine, passes 1.
     #[new]
-    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=Given::Is(false), encoders=None, grid=None, headings=None, time=None, panorama_frame=Given::text("robot"), outputs=None, geometry_frame=Given::text("scene")))]
+    #[pyo3(signature = (scene, trajectory, lookup=None, device=None, validate=Given::Is(false), encoders=None, grid=None, headings=None, time=None, panorama_frame=Given::text("robot"), outputs=None, geometry_frame=Given::text("scene")), text_signature = "(scene, trajectory, lookup=None, device=None, validate=False, encoders=None, grid=None, headings=None, time=None, panorama_frame=\"robot\", outputs=None, geometry_frame=\"scene\")")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -209,7 +209,7 @@ pub struct DatasetOutput {
 #[pymethods]
 impl DatasetOutput {
     #[new]
-    #[pyo3(signature = (scene, trajectory, out, resume=Given::Is(false), grid=None, headings=None, time=None, panorama_frame=Given::text("robot"), outputs=None, format=None, geometry_frame=Given::text("scene")))]
+    #[pyo3(signature = (scene, trajectory, out, resume=Given::Is(false), grid=None, headings=None, time=None, panorama_frame=Given::text("robot"), outputs=None, format=None, geometry_frame=Given::text("scene")), text_signature = "(scene, trajectory, out, resume=False, grid=None, headings=None, time=None, panorama_frame=\"robot\", outputs=None, format=None, geometry_frame=\"scene\")")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,

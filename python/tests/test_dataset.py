@@ -395,6 +395,9 @@ def test_errors_name_the_arguments_python_was_given_not_the_commands_options(tmp
     (folder / "t.csv").write_text("time,x,y,z,heading\n0,0,1,0,zz\n")
     with pytest.raises(specchio.SpecchioError, match=r"--grid/t.csv:2: heading: `zz` is not a number"):
         specchio.dataset(scene, str(folder / "t.csv"), out=str(tmp_path / "c"))
+    (tmp_path / "v.csv").write_text("time,x,y,z,heading\n0,0,1,0,--time\n")
+    with pytest.raises(specchio.SpecchioError, match=r"v.csv:2: heading: `--time` is not a number"):
+        specchio.dataset(scene, str(tmp_path / "v.csv"), out=str(tmp_path / "c"))
 
 
 

@@ -92,11 +92,30 @@ def test_the_calibrations_ros_frames_are_the_datasets(tmp_path):
         assert abs(np.linalg.det(rows) - 1.0) < 1e-12
 
 
-def test_whole_number_parameters_show_their_defaults():
-    # They take any int (to refuse 2**200 by name), and help() still shows the default.
+def test_parameters_show_their_defaults():
+    # They take any value (to refuse 2**200 or "0" by name), and help() still shows the
+    # defaults: no `...` where a default is.
     assert inspect.signature(specchio.reference).parameters["spp"].default == 1
     assert inspect.signature(specchio.pose_grid).parameters["headings"].default == 1
     assert inspect.signature(specchio.Descriptor).parameters["k"].default == 8
+    from specchio import _specchio
+
+    for call in [
+        specchio.reference,
+        specchio.pose_grid,
+        specchio.calibrate,
+        specchio.Descriptor,
+        specchio.Renderer,
+        specchio.Renderer.render,
+        _specchio.dataset,
+        specchio.DatasetFrames,
+        specchio.DatasetOutput,
+    ]:
+        shown = inspect.signature(call)
+        assert all(p.default is not Ellipsis for p in shown.parameters.values()), (call, shown)
+    assert inspect.signature(specchio.calibrate).parameters["time"].default == 0.0
+    assert inspect.signature(specchio.Renderer).parameters["validate"].default is False
+    assert inspect.signature(specchio.DatasetOutput).parameters["panorama_frame"].default == "robot"
 
 
 def _interrupted_after_estimate(call: str, args: list[str], estimate: str) -> tuple[int, list[str]]:

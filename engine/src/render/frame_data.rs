@@ -41,31 +41,36 @@ impl Renderer {
         };
         (self.mirror.pass).prepare(uploads, &frame)?;
         let lookup_ms = lookup_start.elapsed().as_secs_f64() * 1e3;
-        // At the first frame only: the driver's losses depend on where things are, and a
-        // warning is said once.
-        if !self.snapping_said && self.device.info.short_name == "swiftshader" {
-            self.snapping_said = true;
-            super::snapping::warn(&self.losses_at(state, &views));
-        }
         Ok((bases, lookup_ms))
     }
 }
 
 impl Renderer {
     /// What SwiftShader leaves out of the frame at `t_s` (`snapping`), whichever device this
-    /// is: per surface, the views it loses triangles in.
+    /// is: per surface, the views it loses triangles in, of every view (the cube's faces where
+    /// the lookup reads a cube).
     pub fn snapping_losses(&self, t_s: f64) -> Vec<String> {
-        let state = SceneState::at(&self.scene, t_s);
-        let bases = view_bases(&self.scene, &state);
-        self.losses_at(
-            &state,
-            &view_data(&self.scene, &bases, self.cube.size as f32),
-        )
+        let cube = lookups::plugin(self.scene.mirror.lookup).uses_cube();
+        let first = if cube { 0 } else { 6 };
+        let every: Vec<u32> = (first..VIEW_COUNT as u32).collect();
+        self.losses_at(&SceneState::at(&self.scene, t_s), &every)
     }
 
-    fn losses_at(&self, state: &SceneState, views: &[ViewData]) -> Vec<String> {
-        let cube = lookups::plugin(self.scene.mirror.lookup).uses_cube();
-        super::snapping::losses(&self.scene, state, views, cube)
+    /// At the first frame, on SwiftShader: what it leaves out of the views this frame draws
+    /// (`drawn`, `ViewData` indices), said once. Only then: a warning is said once, and the
+    /// check costs a pass over every triangle.
+    pub(super) fn say_snapping_losses(&mut self, state: &SceneState, drawn: &[u32]) {
+        if self.snapping_said || self.device.info.short_name != "swiftshader" {
+            return;
+        }
+        self.snapping_said = true;
+        super::snapping::warn(&self.losses_at(state, drawn));
+    }
+
+    fn losses_at(&self, state: &SceneState, drawn: &[u32]) -> Vec<String> {
+        let bases = view_bases(&self.scene, state);
+        let views = view_data(&self.scene, &bases, self.cube.size as f32);
+        super::snapping::losses(&self.scene, state, &views, drawn)
     }
 }
 

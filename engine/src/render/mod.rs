@@ -251,6 +251,9 @@ impl Renderer {
         let (views, cpu_lookup_ms) = self.write_frame_buffers(&state)?;
         let floor = ask.floor();
         let fill_cube = floor.is_some() || self.fills_cube(ask.readback);
+        let mut drawn = self.views.drawn_views(ask.readback, ask.display);
+        drawn.extend((0..6).filter(|_| fill_cube));
+        self.say_snapping_losses(&state, &drawn);
         if ask.readback.rays {
             self.prepare_sensor_rays()?;
         }

@@ -78,6 +78,28 @@ impl ViewPasses {
         slots
     }
 
+    /// The views (`ViewData` indices) the frame that asks for `readback`, or shows `display`,
+    /// draws the scene in: its passes' views, and the sensor's for the ray map.
+    pub fn drawn_views(
+        &self,
+        readback: Readback,
+        display: Option<super::display::DisplayView>,
+    ) -> Vec<u32> {
+        let slots = match display {
+            Some(view) => vec![self.display_slot(view)],
+            None => self.slots(readback),
+        };
+        let mut views: Vec<u32> = (slots.iter())
+            .flat_map(|(slot, _)| pass_of(*slot).views.iter().copied())
+            .collect();
+        if readback.rays {
+            views.push(VIEW_SENSOR);
+        }
+        views.sort_unstable();
+        views.dedup();
+        views
+    }
+
     /// The ray map's targets, when `readback` asks for the ray map.
     pub fn ray_map(&self, readback: Readback) -> Option<&RayMapTargets> {
         (self.sensor_rays.as_ref())

@@ -4,8 +4,9 @@
 //! to a polygon, but sets up the planes it interpolates depth and colours on, and the direction
 //! it walks the polygon's edges in, from the *unclipped* corners, each projected and snapped
 //! to 1/16 pixel (their `w` signs folded in). When those snapped corners have no area, the
-//! depth plane divides by 0 and no pixel passes; when their area has the wrong sign, the
-//! polygon is walked the wrong way round: either way nothing is drawn. It happens to a
+//! planes are 0/0 (a floor's corners on one row of sub-pixels: nothing drawn, measured);
+//! when their area has the wrong sign, the polygon is walked the wrong way round and nothing
+//! is drawn either. It happens to a
 //! triangle that crosses the
 //! view's eye plane nearly edge-on and reaches far: a floor 3 m below a 64² cube face's eye
 //! that reaches 3,500 m to each side projects every corner within half a sub-pixel of the
@@ -29,25 +30,32 @@ use crate::scene::{Mesh, Scene};
 /// Sub-pixel steps a pixel (SwiftShader's `SUBPIXEL_PRECISION_BITS` of 4).
 const SUBPIXELS: f32 = 16.0;
 
-/// The least a view must show of a triangle for its loss to be said: a 4 x 4 block. Below it
-/// the loss is a facet seen edge-on at a silhouette, whose snapped area rounding flips (two
-/// to seven pixels of a thin pole's facets in `scenes/hard/pole-and-box.toml`, the closed
-/// pole's other facets still drawn there): no surface gone.
+/// The least a view must show of a triangle for its loss to be said: 16 pixels, at least one
+/// pixel wide on average (its area over its longest extent). Less is a facet or a sliver seen
+/// edge-on, whose snapped area rounding flips (two to seven pixels of a thin pole's facets in
+/// `scenes/hard/pole-and-box.toml`, the closed pole's other facets still drawn there; a line
+/// half a pixel wide of a table top at the eye's height): no surface gone.
 const SHOWN_PX: f64 = 16.0;
 
 /// Whether SwiftShader draws no pixel of the triangle `clip` (clip-space corners) that the
-/// view at `viewport` (x, y, width, height) shows [`SHOWN_PX`] pixels or more of.
-pub fn dropped(clip: [Vec4; 3], viewport: Vec4) -> bool {
+/// view at `viewport` (x, y, width, height) shows [`SHOWN_PX`] pixels or more of, from its
+/// front: `front` is the sign of [`orientation`]'s negation for a front face (+1 in a camera
+/// view, -1 in a cube face, which sees the world mirrored). A back face is culled on a closed
+/// mesh, and no surface anyone sees on an open one.
+pub fn dropped(clip: [Vec4; 3], viewport: Vec4, front: f64) -> bool {
     let clipped = clip.iter().any(|c| outside(*c));
     if !clipped {
         // Unclipped, the polygon is the snapped triangle itself: the two agree.
         return false;
     }
     let exact = -orientation(clip);
+    if exact * front <= 0.0 {
+        return false;
+    }
     let snapped = snapped_area(clip, viewport);
     let wrong = snapped == 0.0 || (snapped > 0.0) != (exact > 0.0);
-    // Last, as it is the dearest: a triangle that covers no pixel centre loses nothing.
-    exact != 0.0 && wrong && shown_px(clip, viewport) >= SHOWN_PX
+    // Last, as it is the dearest.
+    wrong && shown_px(clip, viewport).is_some_and(|(area, width)| area >= SHOWN_PX && width >= 1.0)
 }
 
 /// SwiftShader's clip test: outside any of `-w <= x, y <= w`, `0 <= z <= w`.
@@ -64,18 +72,23 @@ fn orientation(clip: [Vec4; 3]) -> f64 {
 }
 
 /// The area SwiftShader computes from the unclipped corners, step for step in f32: each
-/// corner projected with `1/w` (`w` = 0 taken as 1), snapped to the nearest 1/16 pixel
-/// (clamped to an int), the area `(y0 - y2) x1 + (y2 - y1) x0 + (y1 - y0) x2`, negated when
-/// an odd number of corners is behind the eye.
+/// corner projected with `1/w` (`w` = ±0 taken as ±1), moved to the viewport (whose origin
+/// is half a pixel in, `X0xF`), snapped to the nearest 1/16 pixel (clamped below 2^31 as its
+/// `RoundIntClamped`, NaN to the top), the area `(y0 - y2) x1 + (y2 - y1) x0 + (y1 - y0) x2`,
+/// negated when an odd number of corners is behind the eye.
 fn snapped_area(clip: [Vec4; 3], viewport: Vec4) -> f32 {
+    const TOP: f32 = 2_147_483_520.0;
     let half = [viewport.z / 2.0 * SUBPIXELS, viewport.w / 2.0 * SUBPIXELS];
     let centre = [
-        (viewport.x + viewport.z / 2.0) * SUBPIXELS,
-        (viewport.y + viewport.w / 2.0) * SUBPIXELS,
+        (viewport.x + viewport.z / 2.0) * SUBPIXELS - SUBPIXELS / 2.0,
+        (viewport.y + viewport.w / 2.0) * SUBPIXELS - SUBPIXELS / 2.0,
     ];
-    let snap = |v: f32| v.round_ties_even() as i32 as f32;
+    let snap = |v: f32| {
+        let v = if v.is_nan() { TOP } else { v.min(TOP) };
+        v.round_ties_even() as i32 as f32
+    };
     let [(x0, y0), (x1, y1), (x2, y2)] = clip.map(|c| {
-        let rhw = 1.0 / if c.w == 0.0 { 1.0 } else { c.w };
+        let rhw = 1.0 / if c.w == 0.0 { 1f32.copysign(c.w) } else { c.w };
         (
             snap(centre[0] + c.x * rhw * half[0]),
             snap(centre[1] + c.y * rhw * half[1]),
@@ -90,10 +103,10 @@ fn snapped_area(clip: [Vec4; 3], viewport: Vec4) -> f32 {
     }
 }
 
-/// The pixels the view shows of the triangle: its area clipped to the view, in f64, where it
-/// covers some pixel centre (crossed with each row of centres it spans); 0 where it covers
-/// none.
-fn shown_px(clip: [Vec4; 3], viewport: Vec4) -> f64 {
+/// What the view shows of the triangle, clipped to it in f64 and projected: its area in
+/// pixels and its mean width (the area over its longest extent), where it covers some pixel
+/// centre (crossed with each row of centres it spans); None where it covers none.
+fn shown_px(clip: [Vec4; 3], viewport: Vec4) -> Option<(f64, f64)> {
     let mut polygon: Vec<DVec4> = clip.iter().map(|c| c.as_dvec4()).collect();
     let planes: [fn(DVec4) -> f64; 6] = [
         |p| p.w - p.x,
@@ -106,7 +119,7 @@ fn shown_px(clip: [Vec4; 3], viewport: Vec4) -> f64 {
     for plane in planes {
         polygon = clip_polygon(&polygon, plane);
         if polygon.len() < 3 {
-            return 0.0;
+            return None;
         }
     }
     let (w, h) = (f64::from(viewport.z), f64::from(viewport.w));
@@ -131,7 +144,7 @@ fn shown_px(clip: [Vec4; 3], viewport: Vec4) -> f64 {
         first <= right - 0.5 && first < w
     });
     if !covers {
-        return 0.0;
+        return None;
     }
     let twice: f64 = (0..screen.len())
         .map(|i| {
@@ -139,7 +152,11 @@ fn shown_px(clip: [Vec4; 3], viewport: Vec4) -> f64 {
             a[0] * b[1] - b[0] * a[1]
         })
         .sum();
-    twice.abs() / 2.0
+    let extent = (screen.iter())
+        .flat_map(|a| screen.iter().map(move |b| (a[0] - b[0]).hypot(a[1] - b[1])))
+        .fold(0.0, f64::max);
+    let area = twice.abs() / 2.0;
+    Some((area, area / extent.max(f64::MIN_POSITIVE)))
 }
 
 /// One Sutherland–Hodgman step: the part of `polygon` where `inside(p) >= 0`.
@@ -170,9 +187,8 @@ fn view_name(i: usize) -> String {
 }
 
 /// What SwiftShader drops of the frame at `state`: per surface (a wall of the room or an
-/// object, by name) the views it loses triangles in. `cube`: whether the cube's faces are
-/// drawn (a lookup that reads no cube fills none).
-pub fn losses(scene: &Scene, state: &SceneState, views: &[ViewData], cube: bool) -> Vec<String> {
+/// object, by name) those of the views `drawn` (indices into `views`) it loses triangles in.
+pub fn losses(scene: &Scene, state: &SceneState, views: &[ViewData], drawn: &[u32]) -> Vec<String> {
     let walls = room_meshes(&scene.room);
     let surfaces = (walls.iter().enumerate())
         .map(|(f, m)| {
@@ -191,10 +207,13 @@ pub fn losses(scene: &Scene, state: &SceneState, views: &[ViewData], cube: bool)
         }));
     let mut said = Vec::new();
     for (name, mesh, to_render) in surfaces {
-        let lost: Vec<String> = (views.iter().enumerate())
-            .filter(|&(i, _)| cube || i >= 6)
-            .filter(|(_, v)| mesh_loses(mesh, v.world_to_clip * to_render, v.viewport))
-            .map(|(i, _)| view_name(i))
+        let lost: Vec<String> = (drawn.iter().map(|&i| i as usize))
+            .filter(|&i| {
+                let front = if i < 6 { -1.0 } else { 1.0 };
+                let to_clip = views[i].world_to_clip * to_render;
+                mesh_loses(mesh, to_clip, views[i].viewport, front)
+            })
+            .map(view_name)
             .collect();
         if !lost.is_empty() {
             said.push(format!("{name} in {}", lost.join(", ")));
@@ -204,7 +223,7 @@ pub fn losses(scene: &Scene, state: &SceneState, views: &[ViewData], cube: bool)
 }
 
 /// Whether any triangle of `mesh`, taken to clip space by `to_clip`, is dropped.
-fn mesh_loses(mesh: &Mesh, to_clip: Mat4, viewport: Vec4) -> bool {
+fn mesh_loses(mesh: &Mesh, to_clip: Mat4, viewport: Vec4, front: f64) -> bool {
     let clip: Vec<Vec4> = (mesh.positions.iter())
         .map(|&p: &Vec3| to_clip * p.extend(1.0))
         .collect();
@@ -214,7 +233,7 @@ fn mesh_loses(mesh: &Mesh, to_clip: Mat4, viewport: Vec4) -> bool {
         return false;
     }
     (mesh.indices.chunks_exact(3))
-        .any(|t| dropped([0, 1, 2].map(|k| clip[t[k] as usize]), viewport))
+        .any(|t| dropped([0, 1, 2].map(|k| clip[t[k] as usize]), viewport, front))
 }
 
 /// Says, once a process for each different text, what SwiftShader drops of the frame: on
@@ -242,13 +261,16 @@ mod tests {
     use super::*;
     use crate::scene::camera::ViewBasis;
 
+    /// A cube face's front: the world is seen mirrored there.
+    const CUBE_FRONT: f64 = -1.0;
+
     /// The two triangles of a square floor `size` m across, 3 m below the eye, in face +X's
-    /// clip space (both windings: culling is not what drops them).
+    /// clip space, in both windings (the floor seen from above, then from below).
     fn floor(size: f32) -> Vec<[Vec4; 3]> {
         let h = size / 2.0;
         let corners = [(-h, -h), (h, -h), (h, h), (-h, h)].map(|(x, z)| Vec3::new(x, -3.0, z));
         let to_clip = ViewBasis::cube_face(Vec3::ZERO, 0).world_to_clip(0.05, 1e5);
-        [[0, 1, 2], [0, 2, 3], [0, 2, 1], [0, 3, 2]]
+        [[0, 2, 1], [0, 3, 2], [0, 1, 2], [0, 2, 3]]
             .map(|t| t.map(|k| to_clip * corners[k].extend(1.0)))
             .to_vec()
     }
@@ -262,13 +284,19 @@ mod tests {
         // The corners' height on a face of C texels: 3 / (S/2) * C/2 * 16 sub-pixels, which
         // rounds to 0 below 1/2: S > 6,144 m at 64², 12,288 m at 128² (both measured so).
         for (c, kept, lost) in [(64.0, 6000.0, 7000.0), (128.0, 12000.0, 12500.0)] {
-            assert!(
-                !floor(kept).iter().any(|&t| dropped(t, face(c))),
-                "{kept} m at {c}"
+            let dropped_at = |size| -> Vec<bool> {
+                (floor(size).iter())
+                    .map(|&t| dropped(t, face(c), CUBE_FRONT))
+                    .collect()
+            };
+            assert_eq!(dropped_at(kept), [false; 4], "{kept} m at {c}");
+            // The triangle that reaches into the face, seen from above; from below (a back
+            // face, culled on a closed mesh, seen by no one on an open one) it is not said.
+            assert_eq!(
+                dropped_at(lost),
+                [true, false, false, false],
+                "{lost} m at {c}"
             );
-            // Of each winding, the triangle that reaches into the face.
-            let dropped: Vec<bool> = floor(lost).iter().map(|&t| dropped(t, face(c))).collect();
-            assert_eq!(dropped, [true, false, true, false], "{lost} m at {c}");
         }
     }
 
@@ -283,27 +311,41 @@ mod tests {
             ]
             .map(|p| to_clip * p.extend(1.0))
         };
-        // In front and wholly inside, then reaching out of the face: drawn as snapped.
-        assert!(!dropped(corners(5.0), face(64.0)));
-        assert!(!dropped(corners(0.5), face(64.0)));
-        // Behind the eye: nothing to draw.
-        assert!(!dropped(corners(-5.0), face(64.0)));
+        for front in [1.0, -1.0] {
+            // In front and wholly inside, then reaching out of the face: drawn as snapped.
+            assert!(!dropped(corners(5.0), face(64.0), front));
+            assert!(!dropped(corners(0.5), face(64.0), front));
+            // Behind the eye: nothing to draw.
+            assert!(!dropped(corners(-5.0), face(64.0), front));
+        }
     }
 
     #[test]
-    fn a_sliver_between_pixel_centres_covers_none() {
+    fn what_is_shown_counts_pixel_centres_and_width() {
         let to_clip = ViewBasis::cube_face(Vec3::ZERO, 0).world_to_clip(0.05, 100.0);
-        // 0.2 texel high at the face's middle row boundary (texel centres at 31.5 and 32.5).
-        let y = 0.2 / 32.0 * 10.0;
-        let sliver = [
-            Vec3::new(10.0, 0.0, -9.0),
-            Vec3::new(10.0, 0.0, 9.0),
-            Vec3::new(10.0, y, 0.0),
-        ]
-        .map(|p| to_clip * p.extend(1.0));
-        // 5.76 texels in area (57.6 wide, 0.2 high), between two rows of centres.
-        assert_eq!(shown_px(sliver, face(64.0)), 0.0);
-        let wide = sliver.map(|c| c * Vec4::new(1.0, 20.0, 1.0, 1.0));
-        assert!((shown_px(wide, face(64.0)) - 115.2).abs() < 1e-3);
+        // `high` texels high from the face's middle row boundary (centres at 31.5 and 32.5),
+        // 57.6 texels wide at its base.
+        let sliver = |high: f32| {
+            let y = high / 32.0 * 10.0;
+            [
+                Vec3::new(10.0, 0.0, -9.0),
+                Vec3::new(10.0, 0.0, 9.0),
+                Vec3::new(10.0, y, 0.0),
+            ]
+            .map(|p| to_clip * p.extend(1.0))
+        };
+        // 5.76 texels in area between two rows of centres: none shown.
+        assert_eq!(shown_px(sliver(0.2), face(64.0)), None);
+        // Across a row of centres, 25.9 texels but 0.45 wide; then 4 texels high.
+        let (area, width) = shown_px(sliver(0.9), face(64.0)).unwrap();
+        assert!(
+            (area - 25.92).abs() < 1e-3 && (width - 0.45).abs() < 1e-3,
+            "{area} {width}"
+        );
+        let (area, width) = shown_px(sliver(4.0), face(64.0)).unwrap();
+        assert!(
+            (area - 115.2).abs() < 1e-3 && (width - 2.0).abs() < 1e-3,
+            "{area} {width}"
+        );
     }
 }
