@@ -20,10 +20,10 @@ on the others; docs/python.md).
 from __future__ import annotations
 
 import math
-import numbers
 import os
 from typing import Any, Callable, Optional, Union
 
+from ._args import whole
 from ._specchio import DatasetFrames, DatasetOutput, SpecchioError
 
 #: How often Ray restarts a dead worker, and retries the shard it held.
@@ -60,15 +60,6 @@ class _Worker:
         return indices, f.frames(indices), (f.lookup, f.ground_truth, f.device)
 
 
-def _whole(name: str, value: Any) -> None:
-    """Refuses, naming it, an argument that is not a whole number of at least 1 (a bool is
-    none, though Python counts it as an int)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
-        kind = type(value).__name__
-        shown = f"{value!r} (a {kind})" if len(repr(value)) <= 40 else f"a {kind}"
-        raise SpecchioError(f"{name}: {shown}; must be a whole number of at least 1")
-
-
 def init_options() -> dict[str, Any]:
     """How ``dataset`` starts Ray when it is not running: joining ``RAY_ADDRESS``'s cluster,
     or a local one (``address=None``), its workers' output kept out of the driver's."""
@@ -100,9 +91,9 @@ def dataset(
     import ray
     from ray.util import ActorPool
 
-    _whole("shard_size", shard_size)
+    whole("shard_size", shard_size)
     if workers is not None:
-        _whole("workers", workers)
+        whole("workers", workers)
     # Where the poses come from, whose frame the panoramas are in and which layers the frames
     # hold: the driver's output and every worker's renderer make the same plan of them.
     plan = {

@@ -191,6 +191,10 @@ def test_a_wrong_type_is_named_by_its_argument(renderer, thesis, tmp_path):
             lambda: specchio.dataset(path, out=str(tmp_path / "r"), grid=4.0, ray=True, shard_size="8"),
             r"^shard_size: '8' \(a str\); must be a whole number",
         ),
+        (
+            lambda: specchio.dataset(path, out=str(tmp_path / "p"), grid=4.0, progress=3),
+            r"^progress: 3 \(an int\); give a function of \(done, total\)",
+        ),
     ]
     for call, says in cases:
         with pytest.raises(specchio.SpecchioError, match=says):

@@ -1,0 +1,31 @@
+"""Arguments checked by name on the Python side, said as the native module says them
+(`time: '0' (a str); give a number ...`)."""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+from ._specchio import SpecchioError
+
+
+def shown(value: Any) -> str:
+    """`value` for a message: its repr and type where the repr is short, else its type."""
+    kind = type(value).__name__
+    kind = f"{'an' if kind[:1] in 'aeio' else 'a'} {kind}"
+    text = repr(value)
+    return f"{text} ({kind})" if len(text) <= 40 else kind
+
+
+def whole(name: str, value: Any) -> None:
+    """Refuses, naming it, an argument that is not a whole number of at least 1 (a bool is
+    none, though Python counts it as an int)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        raise SpecchioError(f"{name}: {shown(value)}; must be a whole number of at least 1")
+
+
+def function_or_none(name: str, value: Any) -> None:
+    """Refuses, naming it, an argument that should be called back and cannot be: before any
+    work, not at the first call."""
+    if value is not None and not callable(value):
+        raise SpecchioError(f"{name}: {shown(value)}; give a function of (done, total), or None")
