@@ -96,6 +96,19 @@ impl Descriptor {
         }
         Ok((x, y))
     }
+
+    /// `then` of the two signatures the arguments `names` gave, each checked to be a
+    /// signature and the pair checked as [`Self::pair`] checks it.
+    fn with_pair<R>(
+        &self,
+        [a, b]: [Given<PyRef<'_, Signature>>; 2],
+        names: [&str; 2],
+        then: impl FnOnce(&localise::Signature, &localise::Signature) -> R,
+    ) -> PyResult<R> {
+        let (a, b) = (a.named(names[0])?, b.named(names[1])?);
+        let (x, y) = self.pair(&a, &b, names)?;
+        Ok(then(x, y))
+    }
 }
 
 #[pymethods]
@@ -144,9 +157,9 @@ impl Descriptor {
         a: Given<PyRef<'_, Signature>>,
         b: Given<PyRef<'_, Signature>>,
     ) -> PyResult<f64> {
-        let (a, b) = (a.named("a")?, b.named("b")?);
-        let (a, b) = self.pair(&a, &b, ["a", "b"])?;
-        Ok(self.kind.build(self.k).distance(a, b))
+        self.with_pair([a, b], ["a", "b"], |a, b| {
+            self.kind.build(self.k).distance(a, b)
+        })
     }
 
     /// The distance of `query` to each signature of `database`, as a float64 array (the
@@ -180,9 +193,9 @@ impl Descriptor {
         landmark: Given<PyRef<'_, Signature>>,
         query: Given<PyRef<'_, Signature>>,
     ) -> PyResult<f64> {
-        let (landmark, query) = (landmark.named("landmark")?, query.named("query")?);
-        let (l, q) = self.pair(&landmark, &query, ["landmark", "query"])?;
-        Ok(self.kind.build(self.k).turn(l, q))
+        self.with_pair([landmark, query], ["landmark", "query"], |l, q| {
+            self.kind.build(self.k).turn(l, q)
+        })
     }
 
     fn __repr__(&self) -> String {

@@ -56,15 +56,22 @@ impl Renderer {
         self.losses_at(&SceneState::at(&self.scene, t_s), &every)
     }
 
-    /// At the first frame, on SwiftShader: what it leaves out of the views this frame draws
-    /// (`drawn`, `ViewData` indices), said once. Only then: a warning is said once, and the
-    /// check costs a pass over every triangle.
-    pub(super) fn say_snapping_losses(&mut self, state: &SceneState, drawn: &[u32]) {
+    /// At the first frame, on SwiftShader: what it leaves out of the views the frame `ask`
+    /// draws (the cube's faces too where `fill_cube`), said once. Only then: a warning is said
+    /// once, and the check costs a pass over every triangle.
+    pub(super) fn say_snapping_losses(
+        &mut self,
+        state: &SceneState,
+        ask: &super::FrameAsk,
+        fill_cube: bool,
+    ) {
         if self.snapping_said || self.device.info.short_name != "swiftshader" {
             return;
         }
         self.snapping_said = true;
-        super::snapping::warn(&self.losses_at(state, drawn));
+        let mut drawn = self.views.drawn_views(ask.readback, ask.display);
+        drawn.extend((0..6).filter(|_| fill_cube));
+        super::snapping::warn(&self.losses_at(state, &drawn));
     }
 
     fn losses_at(&self, state: &SceneState, drawn: &[u32]) -> Vec<String> {

@@ -251,9 +251,7 @@ impl Renderer {
         let (views, cpu_lookup_ms) = self.write_frame_buffers(&state)?;
         let floor = ask.floor();
         let fill_cube = floor.is_some() || self.fills_cube(ask.readback);
-        let mut drawn = self.views.drawn_views(ask.readback, ask.display);
-        drawn.extend((0..6).filter(|_| fill_cube));
-        self.say_snapping_losses(&state, &drawn);
+        self.say_snapping_losses(&state, &ask, fill_cube);
         if ask.readback.rays {
             self.prepare_sensor_rays()?;
         }
