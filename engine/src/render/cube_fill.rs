@@ -33,12 +33,12 @@ pub(super) struct CubeFill {
 }
 
 impl CubeFill {
-    /// `patching` is the caller's choice for a per-face method; a layered scope has one
-    /// scissor for every face, so its rectangles always go under one box a face.
+    /// `patching` is the caller's choice for a per-face method; a layered or multiview scope
+    /// has one scissor for every face, so its rectangles always go under one box a face.
     pub fn new(method: Method, pass: Box<dyn FillPass>, patching: Patching) -> Self {
         let patching = match method.layout() {
-            CubeLayout::Layered => Patching::OneBox,
-            CubeLayout::PerFace | CubeLayout::Multiview => patching,
+            CubeLayout::Layered | CubeLayout::Multiview => Patching::OneBox,
+            CubeLayout::PerFace => patching,
         };
         Self {
             pass,

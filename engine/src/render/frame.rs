@@ -21,8 +21,8 @@ pub struct RenderOptions {
     /// against).
     pub full_updates: bool,
     /// A dirty face re-renders whole instead of only its dirty rectangles (the pixels a
-    /// moved object's old or new bounds project to). Multiview always re-renders whole
-    /// faces (all six).
+    /// moved object's old or new bounds project to). Multiview always re-renders all six
+    /// faces, in the rectangles of every dirty face together.
     pub whole_faces: bool,
     /// How six-pass draws a face's dirty rectangles: the cheaper way by default (the
     /// one-scope methods draw them under one box).

@@ -350,10 +350,10 @@ impl Renderer {
         let drawables = &self.resources.drawables;
         let at = (frame, self.cube.size);
         let mut dirty = (self.refresh).dirty(&self.scene, drawables, at, state, views);
-        if self.method().layout() == methods::CubeLayout::Multiview && dirty.mask != 0 {
-            // A multiview pass clears and draws all six views whole: cull for all six, or
-            // objects seen only in a clean face would vanish from it.
-            dirty = Dirty::faces(0x3F);
+        if self.method().layout() == methods::CubeLayout::Multiview {
+            // A multiview pass clears and draws every view alike: the same rectangles in all
+            // six, each face culled for them, or objects seen only there would vanish.
+            dirty = dirty.in_every_face(self.cube.size);
         }
         self.refresh.count(dirty.mask);
         dirty

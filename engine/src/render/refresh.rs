@@ -35,6 +35,35 @@ impl Dirty {
             ..Self::default()
         }
     }
+
+    /// The same rectangles in all six faces: the union of every dirty face's, merged (their
+    /// bounding box past [`MAX_RECTS_PER_FACE`]); all six faces whole if some dirty face is
+    /// whole or the union covers a face. This is what a multiview scope can re-render: its
+    /// clears and its scissor reach every view alike. Exact: a clean face re-rendered where
+    /// nothing changed gives the pixels it holds (see `methods::multiview`).
+    pub fn in_every_face(self, size: u32) -> Self {
+        const ALL: u8 = 0x3F;
+        let dirty = (0..6).filter(|f| self.mask & (1 << f) != 0);
+        if self.mask == 0 || dirty.clone().any(|f| self.rects[f].is_empty()) {
+            return Self::faces(if self.mask == 0 { 0 } else { ALL });
+        }
+        let all = dirty.flat_map(|f| self.rects[f].iter().copied()).collect();
+        match bounded(pixel_rect::merge(all)) {
+            rects if rects == [PixelRect::whole(size)] => Self::faces(ALL),
+            rects => Self {
+                mask: ALL,
+                rects: std::array::from_fn(|_| rects.clone()),
+            },
+        }
+    }
+}
+
+/// `rects`, or their bounding box when they are more than [`MAX_RECTS_PER_FACE`].
+fn bounded(rects: Vec<PixelRect>) -> Vec<PixelRect> {
+    if rects.len() <= MAX_RECTS_PER_FACE {
+        return rects;
+    }
+    vec![rects.iter().fold(rects[0], |a, b| a.union(b))]
 }
 
 /// Above this many rectangles a face re-renders their bounding box instead: merging is
@@ -163,13 +192,44 @@ fn dirty_rects(
             continue;
         }
         dirty.mask |= 1 << f;
-        let mut rects = pixel_rect::merge(rects);
-        if rects.len() > MAX_RECTS_PER_FACE {
-            rects = vec![rects.iter().fold(rects[0], |a, b| a.union(b))];
-        }
+        let rects = bounded(pixel_rect::merge(rects));
         if rects != [PixelRect::whole(size)] {
             dirty.rects[f] = rects;
         }
     }
     dirty
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rect(x0: u32, y0: u32, x1: u32, y1: u32) -> PixelRect {
+        PixelRect { x0, y0, x1, y1 }
+    }
+
+    /// Multiview's rectangles: every dirty face's, merged, in all six faces; whole faces when
+    /// a dirty face is whole or the union covers a face; nothing when nothing is dirty.
+    #[test]
+    fn every_face_gets_the_union_of_the_dirty_faces_rectangles() {
+        let mut dirty = Dirty::faces(0b100010);
+        dirty.rects[1] = vec![rect(0, 0, 4, 4), rect(20, 20, 24, 24)];
+        dirty.rects[5] = vec![rect(2, 2, 8, 8)];
+        let shared = dirty.clone().in_every_face(64);
+        assert_eq!(shared.mask, 0x3F);
+        for f in 0..6 {
+            assert_eq!(
+                shared.rects[f],
+                [rect(0, 0, 8, 8), rect(20, 20, 24, 24)],
+                "face {f}"
+            );
+        }
+        let mut one_whole = dirty.clone();
+        one_whole.mask |= 1;
+        assert_eq!(one_whole.in_every_face(64), Dirty::faces(0x3F));
+        let mut covering = dirty;
+        covering.rects[5] = vec![rect(0, 0, 64, 64)];
+        assert_eq!(covering.in_every_face(64), Dirty::faces(0x3F));
+        assert_eq!(Dirty::default().in_every_face(64), Dirty::default());
+    }
 }

@@ -92,7 +92,8 @@ pub enum CubeLayout {
     /// draws under one scissor, their union over the faces.
     Layered,
     /// One multiview scope with view mask `0x3F`; the driver replays each draw per view. A
-    /// pipeline's view mask is fixed, so every update re-renders all six faces.
+    /// pipeline's view mask is fixed and a clear reaches every view, so every update
+    /// re-renders all six faces, whole or in the same rectangles.
     Multiview,
 }
 

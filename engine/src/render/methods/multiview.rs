@@ -1,7 +1,9 @@
 //! Multiview fill: one pass with view mask 0x3F over the six-layer cube; each object visible
 //! in some face is drawn once and the driver replays it per view, `gl_ViewIndex` picking the
-//! face. A pipeline's view mask is fixed, so a partial update re-renders all six faces (still
-//! exact: a clean face re-rendered from an unchanged scene gives the same pixels).
+//! face. A pipeline's view mask is fixed, and a clear in the scope reaches every view, so a
+//! partial update re-renders all six faces in the same rectangles, every dirty face's
+//! together (`Dirty::in_every_face`). Still exact: a clean face re-rendered where nothing
+//! changed gives the pixels it holds.
 //!
 //! **lavapipe keeps the view mask after the pass** (Mesa 25.0.7, and unchanged in Mesa's
 //! later sources): `vkCmdEndRendering` does not reset its recorded view mask, so every later

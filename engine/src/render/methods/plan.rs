@@ -14,8 +14,8 @@ pub struct CubePlan {
     /// The frame's draw order (front to back from the cube's centre, walls last).
     pub order: Vec<u32>,
     /// Per dirty face, what re-renders its dirty rectangles (empty: the whole face is
-    /// re-rendered). Only a per-face method gets patches: a layered or multiview scope has one
-    /// scissor for every face.
+    /// re-rendered). A per-face method may get several a face; a layered or multiview scope
+    /// has one scissor for every face, so it gets one a face (`Patching::OneBox`).
     pub patches: [Vec<Patch>; 6],
 }
 

@@ -264,14 +264,15 @@ impl<'a> CubeRecorder<'a> {
 
     /// Opens the one rendering scope of a one-pass method over all six faces and clears what
     /// `plan` re-renders: its dirty faces, or their dirty rectangles, the draws then scissored
-    /// to their union (a multiview scope clears all six: it re-renders them all).
+    /// to their union. A multiview plan has all six faces, whole or with the same rectangles
+    /// (`Dirty::in_every_face`): a clear in a multiview scope reaches every view.
     pub fn begin_cube(&self, plan: &CubePlan) {
         let size = self.face_size();
         let view_mask = self.layout.view_mask();
-        let scissor = plan.scissor().filter(|_| view_mask == 0);
+        let scissor = plan.scissor();
         // Cleared whole by the scope's load op only when every face is re-rendered whole.
         let whole = plan.faces().all(|f| plan.patches[f as usize].is_empty());
-        let all = view_mask != 0 || (plan.dirty == 0x3F && whole);
+        let all = plan.dirty == 0x3F && whole;
         self.parts.draw.begin_rendering(
             self.cmd,
             &Attachments {
@@ -286,7 +287,15 @@ impl<'a> CubeRecorder<'a> {
                 store_depth: true,
             },
         );
-        if !all {
+        if !all && view_mask != 0 {
+            // Layer 0 stands for every view of the mask (the only layer a clear may name
+            // there), so face 0's rectangles clear all six.
+            debug_assert!(plan.dirty == 0x3F);
+            debug_assert!((1..6).all(|f| plan.dirty_rects(f) == plan.dirty_rects(0)));
+            let rects: Vec<(u32, PixelRect)> =
+                plan.dirty_rects(0).into_iter().map(|r| (0, r)).collect();
+            (self.parts.draw).clear_rects(self.cmd, &rects, self.writes_ids());
+        } else if !all {
             let rects: Vec<(u32, PixelRect)> = (plan.faces())
                 .flat_map(|f| match plan.dirty_rects(f as usize)[..] {
                     [] => vec![(f, PixelRect::whole(size))],
