@@ -152,7 +152,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     });
     let left = placed.map_err(|e| say_what_is_kept(e, work.as_deref(), done, n))?;
     for left in left {
-        eprintln!("warning: the work folder is not removed entirely: {left}");
+        specchio::warnings::warn(&format!("the work folder is not removed entirely: {left}"));
     }
     specchio::say!(
         "{} frame(s) of {} along {} ({lookup} lookup, {} ground truth) into {}",

@@ -43,3 +43,4 @@ pub mod sensor;
 pub mod stdout;
 pub mod text;
 pub mod trees;
+pub mod warnings;

@@ -2,6 +2,7 @@
 //! `shards.rs`. Both are the engine's `render::dataset`, so both write the same bytes as
 //! `specchio dataset`.
 
+use crate::said;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -228,7 +229,7 @@ pub fn dataset(
     let stopped: Mutex<Option<PyErr>> = Mutex::new(None);
     // The frames placed when the run stopped (a resumable run keeps them).
     let placed = AtomicUsize::new(0);
-    let result = py.detach(|| render(&job, &stopped, &placed));
+    let result = said::detach(py, || render(&job, &stopped, &placed))?;
     let placed = placed.load(Ordering::Relaxed);
     place_finished(py, result, stopped, job.progress)
         .map_err(|e| with_kept_note(py, e, &out, resume, placed))
@@ -404,7 +405,7 @@ pub(crate) fn with_kept_note(
 
 /// Places a finished dataset; what of its work folder could not be removed is a warning.
 pub(crate) fn commit(py: Python<'_>, ready: Ready) -> PyResult<()> {
-    let left = py.detach(|| ready.commit()).map_err(errors::to_py)?;
+    let left = said::detach(py, || ready.commit())?.map_err(errors::to_py)?;
     if !left.is_empty() {
         let text = format!(
             "the work folder is not removed entirely: {}",

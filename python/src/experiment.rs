@@ -2,6 +2,7 @@
 //! random queries matched to them, the report) run in this process with the command's own
 //! options and checks, stopped by Ctrl-C (docs/python.md, docs/sensor.md "Localisation").
 
+use crate::said;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
@@ -48,13 +49,13 @@ pub fn localise(
             anyhow::anyhow!("stopped {at}: nothing was written")
         })
     };
-    let run = py.detach(|| {
+    let run = said::detach(py, || {
         // What this call may not replace is what it reads (docs/python.md).
         specchio::files::identity::forget();
         let (report, messages) = specchio_bench::localise::localise(&args, &stop)?;
         specchio::process::validation::verdict(&messages)?;
         anyhow::Ok(report)
-    });
+    })?;
     if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
         return Err(e);
     }

@@ -18,6 +18,7 @@ mod localise;
 mod poses;
 mod reference;
 mod renderer;
+mod said;
 mod scene;
 mod shards;
 mod watched;
@@ -36,6 +37,7 @@ fn devices(py: Python<'_>) -> PyResult<Vec<Py<PyAny>>> {
 
 #[pymodule]
 fn _specchio(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    said::hold();
     m.add("SpecchioError", m.py().get_type::<SpecchioError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<scene::Scene>()?;

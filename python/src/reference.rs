@@ -1,5 +1,6 @@
 //! The exact CPU reference and the calibration, from Python.
 
+use crate::said;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
@@ -59,7 +60,7 @@ pub fn reference<'py>(
             robot
         }
     };
-    let layers = py.detach(|| {
+    let layers = said::detach(py, || {
         let reference = Reference::new(&traced, time);
         let [ow, oh] = traced.observer.resolution;
         let (observer, _) = reference.render(&reference.observer_view(), ow, oh, spp);
@@ -69,7 +70,7 @@ pub fn reference<'py>(
         let light = specchio::sensor::imaging::traced_exposure(&traced, time, spp, [sw, sh]);
         outputs.expose(&traced, 0, light.as_ref());
         Layers::new(outputs, &observer.color)
-    });
+    })?;
     arrays::frame_dict(py, layers)
 }
 
@@ -103,7 +104,7 @@ pub fn calibrate<'py>(
         progress: progress::calibration("calibrate", scene.scene.sensor.resolution, true),
         stopped: &stopped,
     };
-    let record = py.detach(|| -> Result<_, String> {
+    let record = said::detach(py, || -> Result<_, String> {
         // What this call may not replace is what it reads (docs/python.md).
         specchio::files::identity::forget();
         let mut staged = Transaction::new();
@@ -125,7 +126,7 @@ pub fn calibrate<'py>(
         }
         staged.commit().map_err(|e| errors::message(&e))?;
         Ok(record)
-    });
+    })?;
     if let Some(e) = watched::raised(stopped) {
         return Err(e);
     }

@@ -1,5 +1,6 @@
 //! `specchio.Renderer`: the robot's sensor on a Vulkan device, rendered at poses.
 
+use crate::said;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use pyo3::prelude::*;
@@ -106,7 +107,7 @@ impl Renderer {
         let scene = scene.scene.clone();
         specchio::memory::estimates::render(&scene, scene.cube.face_size_px, false, true)
             .map_err(|e| errors::error(format!("{}: {}", path.display(), errors::message(&e))))?;
-        let (inner, device_name) = py.detach(|| -> PyResult<(Inner, String)> {
+        let (inner, device_name) = said::detach(py, || -> PyResult<(Inner, String)> {
             let (dev, info, lookup, log) = open(&scene, lookup, device.as_deref(), validate)?;
             let frames = FrameWriter::new(&dev, &scene, lookup).map_err(errors::to_py)?;
             check_validation(&log)?;
@@ -117,7 +118,7 @@ impl Renderer {
                 _device: dev,
             };
             Ok((inner, info.name))
-        })?;
+        })??;
         Ok(Renderer {
             lookup: inner.frames.lookup().to_string(),
             ground_truth: inner.frames.ground_truth().name().to_owned(),
@@ -168,7 +169,7 @@ impl Renderer {
             }
             None => self.scene_pose(time)?,
         };
-        let layers = py.detach(|| self.layers(&pose))?;
+        let layers = said::detach(py, || self.layers(&pose))??;
         arrays::frame_dict(py, layers)
     }
 
@@ -196,13 +197,13 @@ impl Renderer {
         for pose in &poses {
             self.check(pose)?;
         }
-        let layers = py.detach(|| self.layers(first))?;
+        let layers = said::detach(py, || self.layers(first))??;
         let batch = arrays::batch_dict(py, poses.len(), &layers, out.as_ref())?;
         arrays::fill(&batch, 0, layers)?;
         for (b, pose) in poses.iter().enumerate().skip(1) {
             // Ctrl-C between frames.
             py.check_signals()?;
-            let layers = py.detach(|| self.layers(pose))?;
+            let layers = said::detach(py, || self.layers(pose))??;
             arrays::fill(&batch, b, layers)?;
         }
         Ok(batch)
@@ -210,10 +211,10 @@ impl Renderer {
 
     /// Releases the device now (also done when the renderer is garbage-collected).
     fn close(&self, py: Python<'_>) -> PyResult<()> {
-        py.detach(|| {
+        said::detach(py, || {
             *self.lock()? = None;
             Ok(())
-        })
+        })?
     }
 
     fn __enter__(slf: Py<Self>) -> Py<Self> {

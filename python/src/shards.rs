@@ -3,6 +3,7 @@
 //! the driver runs. Both are the engine's `render::dataset`, as `dataset.rs` is, so a pool
 //! writes the same bytes as one process and as `specchio dataset`.
 
+use crate::said;
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
@@ -77,7 +78,7 @@ impl DatasetFrames {
         let asked = parse_lookup(maybe("lookup", lookup)?.as_deref())?;
         // No bag here (its format is the driver's): nothing to stop before the frames.
         let stopped = Mutex::new(None);
-        py.detach(|| -> Result<Self, DatasetError> {
+        said::detach(py, || -> Result<Self, DatasetError> {
             let plan = source.plan(&scene, &choices, &stopped)?;
             let instance =
                 Instance::create(&InstanceDesc::from_env(validate)).map_err(gpu_failed)?;
@@ -104,7 +105,7 @@ impl DatasetFrames {
                 log,
                 _device: dev,
             })
-        })
+        })?
         .map_err(errors::to_py)
     }
 
@@ -141,7 +142,7 @@ impl DatasetFrames {
         // Rendered in order, each frame encoded while the next renders; Python's signals
         // (Ctrl-C) are checked between frames.
         let mut stopped: Option<PyErr> = None;
-        let rendered = py.detach(|| -> PyResult<Vec<Frame>> {
+        let rendered = said::detach(py, || -> PyResult<Vec<Frame>> {
             let mut writer = self.writer()?;
             let mut frames = Vec::with_capacity(indices.len());
             let poses = indices.iter().map(|&i| (i, &self.plan.poses[i]));
@@ -159,7 +160,7 @@ impl DatasetFrames {
             done.map_err(errors::to_py)?;
             check_validation(&self.log)?;
             Ok(frames)
-        });
+        })?;
         if let Some(e) = stopped {
             return Err(e);
         }
@@ -235,7 +236,7 @@ impl DatasetOutput {
             format.as_ref(),
         )?;
         let stopped = Mutex::new(None);
-        let output = py.detach(|| -> Result<Self, DatasetError> {
+        let output = said::detach(py, || -> Result<Self, DatasetError> {
             specchio::files::identity::forget();
             let plan = source.plan(&scene, &choices, &stopped)?;
             let folder = Folder::stage(&out, plan.poses.len(), plan.frame_files())?;
@@ -248,7 +249,7 @@ impl DatasetOutput {
                 placed: 0,
                 folder: Some(folder),
             })
-        });
+        })?;
         if let Some(e) = crate::watched::raised(stopped) {
             return Err(e);
         }
@@ -281,7 +282,7 @@ impl DatasetOutput {
         if self.resume {
             let (plan, folder) = (&self.plan, self.folder.as_mut());
             let folder = folder.ok_or_else(|| errors::error("the dataset was already finished"))?;
-            py.detach(|| folder.resume(&key, &mut plan.index_lines()))
+            said::detach(py, || folder.resume(&key, &mut plan.index_lines()))?
                 .map_err(errors::to_py)?;
         }
         self.begun = true;
@@ -330,10 +331,12 @@ impl DatasetOutput {
         // plan's is refused, not placed.
         let (plan, robot) = (&self.plan, &mut self.robot);
         check_frame(&frame, &plan.frame_files()).map_err(errors::error)?;
-        py.detach(|| plan.prove(&frame, &mut |i| plan.index_line(robot, i)))
-            .map_err(errors::to_py)?;
+        said::detach(py, || {
+            plan.prove(&frame, &mut |i| plan.index_line(robot, i))
+        })?
+        .map_err(errors::to_py)?;
         let folder = self.folder_mut()?;
-        py.detach(|| folder.place(&frame)).map_err(errors::to_py)
+        said::detach(py, || folder.place(&frame))?.map_err(errors::to_py)
     }
 
     /// Gives up the output: its staged files are removed now (a resumable run's work folder

@@ -155,13 +155,13 @@ pub fn recover(stage: &Dir, name: &str, target: &Path) -> bool {
             continue;
         }
         match keep_aside(stage, item, target) {
-            Some(kept) => eprintln!(
-                "specchio: a run killed while it replaced {} left {} in the earlier output that \
-                 the output did not write: kept in {}",
+            Some(kept) => crate::warnings::warn(&format!(
+                "a run killed while it replaced {} left {} in the earlier output that the \
+                 output did not write: kept in {}",
                 target.display(),
                 left.join(", "),
                 kept.display()
-            ),
+            )),
             None => clean = false,
         }
     }

@@ -60,7 +60,7 @@ pub fn catch() {
                 unsafe { signal_hook::low_level::register(signal, move || on_signal(signal)) };
             if let Err(e) = installed {
                 // The run still works; only a signal would then end it the default way.
-                eprintln!("warning: cannot catch signal {signal}: {e}");
+                crate::warnings::warn(&format!("cannot catch signal {signal}: {e}"));
             }
         }
     });

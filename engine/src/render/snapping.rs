@@ -236,15 +236,15 @@ fn mesh_loses(mesh: &Mesh, to_clip: Mat4, viewport: Vec4, front: f64) -> bool {
         .any(|t| dropped([0, 1, 2].map(|k| clip[t[k] as usize]), viewport, front))
 }
 
-/// Says, once a process for each different text, what SwiftShader drops of the frame: on
-/// stderr, since it is what the images will show, not an error.
+/// Says, once a process for each different text, what SwiftShader drops of the frame: a
+/// warning (`crate::warnings`), since it is what the images will show, not an error.
 pub fn warn(lost: &[String]) {
     static SAID: Mutex<Option<HashSet<String>>> = Mutex::new(None);
     if lost.is_empty() {
         return;
     }
     let text = format!(
-        "warning: SwiftShader leaves out triangles of {}: they cross the view's eye plane \
+        "SwiftShader leaves out triangles of {}: they cross the view's eye plane \
          nearly edge-on and reach far, and it sets a clipped triangle up from its unclipped \
          corners snapped to 1/16 pixel, which have no area (docs/scene-format.md); split those \
          surfaces into smaller pieces, raise the cube's face size, or render on lavapipe",
@@ -252,7 +252,7 @@ pub fn warn(lost: &[String]) {
     );
     let mut said = SAID.lock().unwrap_or_else(|e| e.into_inner());
     if said.get_or_insert_with(HashSet::new).insert(text.clone()) {
-        eprintln!("{}", crate::text::bounded_message(&text));
+        crate::warnings::warn(&text);
     }
 }
 

@@ -195,7 +195,9 @@ impl Ready {
             // aside: the dataset is in place all the same, and its work folder done with.
             Err(e @ OutputError::KeptAside { .. }) => {
                 for left in self.work.map(WorkFolder::remove).unwrap_or_default() {
-                    eprintln!("warning: the work folder is not removed entirely: {left}");
+                    crate::warnings::warn(&format!(
+                        "the work folder is not removed entirely: {left}"
+                    ));
                 }
                 Err(e)
             }
