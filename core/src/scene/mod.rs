@@ -46,6 +46,14 @@ pub const MAX_FACE_SIZE_PX: u32 = 8192;
 /// The most samples along a mirror pixel's footprint (`[cube] anisotropy`): 16, the largest
 /// maxAnisotropy GPUs offer; more would cost a sample each for footprints rarely that long.
 pub const MAX_ANISOTROPY: u32 = 16;
+/// The most repeats of a material's pattern per unit of texture coordinate (`tiles`), 2^20:
+/// the shaders place a point in its cell from uv x tiles in single precision, which keeps 4
+/// bits below the cell (a sixteenth of it) at uv = 1 with this many; 3e38 overflowed to
+/// infinity there and wrote NaN pixels.
+pub const MAX_TILES: f32 = 1_048_576.0;
+/// The largest magnitude of a mesh's texture coordinate: uv x [`MAX_TILES`] stays far below
+/// single precision's overflow (uv 1e38 made it infinite, and the pixel NaN).
+pub const MAX_UV: f32 = 1e15;
 /// Largest view image the format accepts on either side (pixels).
 pub const MAX_IMAGE_SIZE_PX: u32 = 8192;
 

@@ -18,6 +18,10 @@ use glam::Vec3;
 const NEAR_PER_RADIUS: f32 = 0.5;
 use crate::scene::FAR_MARGIN;
 
+/// The most far / near may be: 2^100 keeps the farthest depth, near / far, above 2^-100, far
+/// from single precision's smallest normal number (2^-126) and what rasterizing it rounds.
+const MAX_FAR_PER_NEAR: f64 = 1.2676506002282294e30;
+
 impl Ctx<'_> {
     /// `extent` is how far the room reaches from the mirror (see `room.rs`).
     pub(super) fn cube(
@@ -64,6 +68,7 @@ impl Ctx<'_> {
                 ),
             ));
         }
+        self.depth_stays_normal(c, near_m, far_m)?;
         let planes = Planes {
             clearance,
             reach_m,
@@ -150,6 +155,30 @@ impl Ctx<'_> {
             ));
         }
         Ok(o)
+    }
+
+    /// Refuses planes whose reverse-Z depth, near / distance, would leave single precision's
+    /// normal numbers before far: shaders may flush a smaller one to zero, the cleared depth,
+    /// and then draw nothing there (near = 1e-37 left four faces black).
+    fn depth_stays_normal(&self, c: &CubeSpec, near: f32, far: f32) -> R<()> {
+        if f64::from(far) / f64::from(near) <= MAX_FAR_PER_NEAR {
+            return Ok(());
+        }
+        let field = if c.near.is_some() {
+            "cube.near"
+        } else {
+            "cube.far"
+        };
+        Err(self.invalid(
+            field,
+            format!(
+                "near ({} m) and far ({} m) are too far apart: far / near must be at most 2^100 = {} (the depth near / distance, reverse-Z in single precision, must stay a normal number up to far); with this far, near must be at least {} m",
+                num_text(near),
+                num_text(far),
+                num_text(MAX_FAR_PER_NEAR as f32),
+                num_text((f64::from(far) / MAX_FAR_PER_NEAR) as f32)
+            ),
+        ))
     }
 
     /// Refuses planes set in the file that would clip what the mirror shows: a near plane

@@ -84,8 +84,10 @@ impl Ctx<'_> {
                 None => Err(self.missing(&f(name), &format!("{:?} materials need it", m.kind))),
             }
         };
-        let tiles =
-            |default: f64| -> R<f32> { self.positive(&f("tiles"), m.tiles.unwrap_or(default)) };
+        let tiles = |default: f64| -> R<f32> {
+            let range = Range::above(0.0, crate::scene::MAX_TILES);
+            self.ranged(&f("tiles"), m.tiles.unwrap_or(default), range)
+        };
         Ok(match m.kind {
             MaterialType::Color => MaterialKind::Color {
                 color: need(m.color, "color")?,

@@ -93,10 +93,11 @@ impl Range {
 
 /// Says what a value became in single precision when that differs from what was written.
 fn as_used(v: f64, x: f32) -> String {
-    if f64::from(x) == v {
-        num_text(x)
+    let (written, used) = (num_text(v), num_text(x));
+    if f64::from(x) == v || written == used {
+        used
     } else {
-        format!("{} ({} in single precision)", num_text(v), num_text(x))
+        format!("{written} ({used} in single precision)")
     }
 }
 

@@ -225,6 +225,13 @@ fn assemble(parts: Vec<Part>) -> Result<Mesh, AssetError> {
                 "a vertex coordinate is past ±{MAX_COORDINATE:e} (after node transforms)"
             )));
         }
+        let max_uv = crate::scene::MAX_UV;
+        if part.uvs.iter().any(|t| t.abs().max_element() > max_uv) {
+            return Err(AssetError::Mesh(format!(
+                "a texture coordinate is past ±{max_uv:e} (times a material's tiles it would \
+                 leave single precision)"
+            )));
+        }
         check_budget(b.indices.len(), part.indices.len(), b.positions.len(), n)?;
         let has_uvs = part.uvs.len() == n && part.uvs.iter().all(|t| t.is_finite());
         let normals_ok = part.normals.len() == n

@@ -78,6 +78,14 @@ impl Reader {
             }
             "vt" => {
                 let [u, v] = numbers::<2>("vt", args, 1..=3, "vt u [v [w]]")?;
+                let max = crate::scene::MAX_UV;
+                if let Some(k) = [u, v].iter().position(|c| c.abs() > max) {
+                    return Err(format!(
+                        "`vt` value {} {} is past the ±{max:e} a texture coordinate may hold",
+                        k + 1,
+                        quoted_text(args[k]),
+                    ));
+                }
                 // OBJ's v grows upwards; ours grows downwards (image row order).
                 self.uvs.push(Vec2::new(u, 1.0 - v));
             }
@@ -276,6 +284,11 @@ mod tests {
         assert!(
             far.starts_with("line 2: `v` value 1 \"-1e30\" is past the ±1e15"),
             "{far}"
+        );
+        let uv = err("vt 0 3e38\n");
+        assert!(
+            uv.starts_with("line 1: `vt` value 2 \"3e38\" is past the ±1e15"),
+            "{uv}"
         );
         assert!(err("v 0 0 0\nf 1 1\n").contains("at least 3 corners"));
         assert!(err("v 0 0 0\nf 0 1 1\n").contains("index 0: OBJ indices start at 1"));

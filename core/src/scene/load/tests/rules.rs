@@ -168,6 +168,9 @@ fn values_are_checked_as_used_and_planes_fit_the_scene() {
         // Numbers in messages stay short.
         ("[sensor]\noffset = 1e-310\n", "sensor.offset: must be positive, got 1e-310 (0 in single precision)"),
         ("[cube]\nanisotropy = 0\n", "cube.anisotropy: must be in 1..=16, got 0"),
+        // Numbers whose single-precision products would overflow or underflow in the shaders.
+        ("[[materials]]\nname = \"c\"\ntype = \"checker\"\na = [1, 1, 1]\nb = [0, 0, 0]\ntiles = 3e38\n", "materials[1].tiles: must be in (0, 1048576], got 3e38"),
+        ("[cube]\nnear = 1e-37\n", "cube.near: near (1e-37 m) and far (7.757957 m) are too far apart: far / near must be at most 2^100 = 1.2676506e30 (the depth near / distance, reverse-Z in single precision, must stay a normal number up to far); with this far, near must be at least 6.119949e-30 m"),
         // The cube's planes set by hand must not clip what the mirror shows.
         ("[cube]\nnear = 0.6\n", "cube.near: clips reflections"),
         ("[cube]\nfar = 7\n", "cube.far: clips the room: a room corner can be 7.6811457 m"),
