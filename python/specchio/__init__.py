@@ -33,7 +33,7 @@ from ._specchio import (
     read_trajectory,
     reference,
 )
-from ._args import function_or_none
+from ._args import flag, function_or_none
 from ._specchio import dataset as _dataset_here
 
 __all__ = [
@@ -132,6 +132,7 @@ def dataset(
     if out is None:
         raise SpecchioError("out: the dataset's folder is required")
     function_or_none("progress", progress)
+    flag("ray", ray)
     if ray:
         from . import ray as _ray
 

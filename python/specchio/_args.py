@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import numbers
-from typing import Any
+from typing import Any, Optional
 
 from ._specchio import SpecchioError
 
@@ -29,3 +29,26 @@ def function_or_none(name: str, value: Any) -> None:
     work, not at the first call."""
     if value is not None and not callable(value):
         raise SpecchioError(f"{name}: {shown(value)}; give a function of (done, total), or None")
+
+
+def flag(name: str, value: Any) -> None:
+    """Refuses, naming it, a switch that is not True or False: ``ray="no"`` is truthy, and
+    would start a cluster."""
+    if not isinstance(value, bool):
+        raise SpecchioError(f"{name}: {shown(value)}; give True or False")
+
+
+def environment(name: str, value: Any) -> Optional[dict[str, str]]:
+    """A dict of str to str (environment variables) checked by name, or None: a list, a key
+    that is not a str or a value that is not one is refused before any worker starts (a
+    value of None became the string "None" before)."""
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise SpecchioError(f"{name}: {shown(value)}; give a dict of str to str, or None")
+    for key, item in value.items():
+        if not isinstance(key, str) or not key or "=" in key or "\0" in key:
+            raise SpecchioError(f"{name}: the key {shown(key)}; give variable names as str, without '='")
+        if not isinstance(item, str) or "\0" in item:
+            raise SpecchioError(f"{name}[{key!r}]: {shown(item)}; give the value as a str")
+    return dict(value)

@@ -23,7 +23,7 @@ import math
 import os
 from typing import Any, Callable, Optional, Union
 
-from ._args import whole
+from ._args import environment, whole
 from ._specchio import DatasetFrames, DatasetOutput, SpecchioError
 
 #: How often Ray restarts a dead worker, and retries the shard it held.
@@ -94,6 +94,7 @@ def dataset(
     whole("shard_size", shard_size)
     if workers is not None:
         whole("workers", workers)
+    worker_env = environment("worker_env", worker_env)
     # Where the poses come from, whose frame the panoramas are in and which layers the frames
     # hold: the driver's output and every worker's renderer make the same plan of them.
     plan = {
@@ -125,7 +126,7 @@ def dataset(
             "max_task_retries": RETRIES,
         }
         if worker_env:
-            options["runtime_env"] = {"env_vars": {k: str(v) for k, v in worker_env.items()}}
+            options["runtime_env"] = {"env_vars": worker_env}
         worker = ray.remote(**options)(_Worker)
         # The workers read the files themselves: absolute paths, whatever their directory.
         paths = (os.path.abspath(scene), trajectory and os.path.abspath(trajectory))

@@ -40,8 +40,33 @@ impl Wanted for f64 {
         "a number (an int or a float)".to_owned()
     }
     fn refuses(obj: &Bound<'_, PyAny>) -> bool {
-        obj.is_instance_of::<PyBool>()
+        is_bool(obj)
     }
+}
+
+/// Whether `obj` is a bool, Python's or numpy's (`np.True_`, which converts to 1.0 as
+/// readily): never a number anyone means.
+pub fn is_bool(obj: &Bound<'_, PyAny>) -> bool {
+    if obj.is_instance_of::<PyBool>() {
+        return true;
+    }
+    let kind = obj.get_type();
+    let named = |attr: &str| kind.getattr(attr).ok().map(|v| v.to_string());
+    named("__module__").as_deref() == Some("numpy")
+        && matches!(named("__name__").as_deref(), Some("bool" | "bool_"))
+}
+
+/// Whether a list or tuple (nested, as an array-like is) holds a bool anywhere: numpy would
+/// make `(True, 3, 0, 0)` a row of numbers without a word.
+fn holds_bool(obj: &Bound<'_, PyAny>, depth: usize) -> bool {
+    let items = match obj.cast::<pyo3::types::PyList>() {
+        Ok(list) => list.iter().collect::<Vec<_>>(),
+        Err(_) => match obj.cast::<pyo3::types::PyTuple>() {
+            Ok(tuple) => tuple.iter().collect(),
+            Err(_) => return is_bool(obj),
+        },
+    };
+    depth > 0 && items.iter().any(|item| holds_bool(item, depth - 1))
 }
 
 impl Wanted for bool {
@@ -83,6 +108,9 @@ impl<'py> Wanted for Bound<'py, pyo3::types::PyDict> {
 impl Wanted for Vec<f64> {
     fn wanted() -> String {
         "a list of numbers".to_owned()
+    }
+    fn refuses(obj: &Bound<'_, PyAny>) -> bool {
+        holds_bool(obj, 1)
     }
 }
 
@@ -177,7 +205,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Whole {
     fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
         // Python's bool is an int (True is 1); `spp=True` is a slip, not a count, refused by
         // name in `count`.
-        if obj.is_instance_of::<PyBool>() {
+        if is_bool(&obj) {
             return Ok(Whole::Bool(obj.is_truthy()?));
         }
         match obj.extract::<i128>() {
@@ -234,7 +262,7 @@ pub fn device(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
     }
     // An int, or anything that is one by `__index__` (numpy's integers, which `spp` takes
     // too); never a bool, which Python counts as an int and no one means as a device.
-    let index = (!value.is_instance_of::<PyBool>())
+    let index = (!is_bool(value))
         .then(|| value.call_method0("__index__").ok())
         .flatten();
     if let Some(index) = index {
@@ -303,6 +331,10 @@ pub fn numbers<'py>(
     if !matches!(kind.as_str(), "i" | "u" | "f") {
         let dtype = given.getattr("dtype")?.str()?.to_string();
         return Err(not_numbers(format!("dtype {dtype}")));
+    }
+    // Bools among numbers in a list become numbers in the array; refused as a bool alone is.
+    if holds_bool(value, 2) {
+        return Err(not_numbers("a bool among them".to_owned()));
     }
     let shape: Vec<usize> = given.getattr("shape")?.extract()?;
     Ok((given.call_method1("astype", (dtype,))?, shape))

@@ -2,7 +2,6 @@
 //! `shards.rs`. Both are the engine's `render::dataset`, so both write the same bytes as
 //! `specchio dataset`.
 
-use crate::said;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -21,6 +20,7 @@ use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 use crate::args::{maybe, Given};
 use crate::errors;
 use crate::renderer::check_validation;
+use crate::said;
 use crate::watched::Watched;
 
 /// Where a dataset's poses come from, as Python names them: a trajectory file, or a grid

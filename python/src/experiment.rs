@@ -2,7 +2,6 @@
 //! random queries matched to them, the report) run in this process with the command's own
 //! options and checks, stopped by Ctrl-C (docs/python.md, docs/sensor.md "Localisation").
 
-use crate::said;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
@@ -10,6 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyString};
 
 use crate::errors;
+use crate::said;
 
 /// Runs `specchio localise SCENE --out OUT` with `options` as its options: each keyword is
 /// the option of the same name (`queries=600` is `--queries 600`, `cube_size=128` is

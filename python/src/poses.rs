@@ -69,9 +69,37 @@ pub fn pose_grid<'py>(
     numpy::PyArray1::from_vec(py, rows).reshape([poses.len(), 4])
 }
 
+/// How a message names the pose a call was given: `pose` and `time` of one frame (`render`,
+/// `reference`), or `poses[i]` and `times` (`times[i]` when there is one a pose) of a batch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Naming {
+    One,
+    Batch,
+}
+
+impl Naming {
+    /// What a message calls pose `i`.
+    pub fn pose(self, i: usize) -> String {
+        match self {
+            Naming::One => "pose".to_owned(),
+            Naming::Batch => format!("poses[{i}]"),
+        }
+    }
+}
+
+/// The pose `x, y, z, heading` at `time`, named as one frame's.
+pub fn one(pose: [f64; 4], time: f64) -> PyResult<Pose> {
+    let array = numpy::ndarray::arr2(&[pose]);
+    Ok(from_array(array.view(), Some(vec![time]), Naming::One)?.remove(0))
+}
+
 /// The poses of a (B, 4) array of `x, y, z, heading` rows at `times` (one per row, or one
-/// for all), each named `poses[i]` in errors.
-pub fn from_array(rows: ArrayView2<'_, f64>, times: Option<Vec<f64>>) -> PyResult<Vec<Pose>> {
+/// for all), named in errors as `naming` says.
+pub fn from_array(
+    rows: ArrayView2<'_, f64>,
+    times: Option<Vec<f64>>,
+    naming: Naming,
+) -> PyResult<Vec<Pose>> {
     if rows.ncols() != 4 {
         return Err(errors::error(format!(
             "poses: {} columns; each row is x, y, z, heading (4)",
@@ -90,9 +118,11 @@ pub fn from_array(rows: ArrayView2<'_, f64>, times: Option<Vec<f64>>) -> PyResul
             )))
         }
     };
+    let one_time = times.len() == 1 || naming == Naming::One;
     let mut out = Vec::with_capacity(n);
     for (i, (row, &time_s)) in rows.outer_iter().zip(&times).enumerate() {
-        let named = |field: &str, why: &str| errors::error(format!("poses[{i}]: {field}: {why}"));
+        let at = naming.pose(i);
+        let named = |field: &str, why: &str| errors::error(format!("{at}: {field}: {why}"));
         if !row.iter().take(3).all(|v| v.is_finite()) {
             return Err(named("position", "every value must be a finite number"));
         }
@@ -100,7 +130,13 @@ pub fn from_array(rows: ArrayView2<'_, f64>, times: Option<Vec<f64>>) -> PyResul
             return Err(named("heading", "must be a finite number of degrees"));
         }
         if !(time_s.is_finite() && time_s >= 0.0) {
-            return Err(named("time", "must be a finite number of seconds >= 0"));
+            let time = match (naming, one_time) {
+                (Naming::One, _) => "time".to_owned(),
+                (Naming::Batch, true) => "times".to_owned(),
+                (Naming::Batch, false) => format!("times[{i}]"),
+            };
+            let why = "must be a finite number of seconds >= 0";
+            return Err(errors::error(format!("{time}: {why}")));
         }
         out.push(Pose {
             at: Place::Entry(i),

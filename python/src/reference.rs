@@ -1,6 +1,5 @@
 //! The exact CPU reference and the calibration, from Python.
 
-use crate::said;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
@@ -17,6 +16,7 @@ use specchio::sensor::SensorOutputs;
 use crate::args::Given;
 use crate::arrays::{self, Layers};
 use crate::errors;
+use crate::said;
 use crate::scene::Scene;
 use crate::watched::{self, Watched};
 
@@ -49,9 +49,8 @@ pub fn reference<'py>(
         .map_err(|e| scene.error(errors::message(&e)))?;
     let traced = match pose {
         None => scene.scene.clone(),
-        Some([x, y, z, heading]) => {
-            let array = numpy::ndarray::arr2(&[[x, y, z, heading]]);
-            let pose = crate::poses::from_array(array.view(), Some(vec![time]))?.remove(0);
+        Some(pose) => {
+            let pose = crate::poses::one(pose, time)?;
             let objects = dataset::ObjectBounds::of(&scene.scene);
             dataset::pose_fits(&scene.scene, &objects, &pose)
                 .map_err(|(field, why)| errors::error(format!("pose: {field}: {why}")))?;

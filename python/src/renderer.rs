@@ -1,6 +1,5 @@
 //! `specchio.Renderer`: the robot's sensor on a Vulkan device, rendered at poses.
 
-use crate::said;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use pyo3::prelude::*;
@@ -14,8 +13,10 @@ use specchio::vk::instance::{Instance, InstanceDesc, ValidationLog};
 
 use crate::args::{maybe, Given};
 use crate::arrays::{self, Layers};
+use crate::errors;
+use crate::poses::{self, Naming};
+use crate::said;
 use crate::scene::Scene;
-use crate::{errors, poses};
 
 /// Every device the engine sees (usable or not, with why not).
 pub fn device_infos() -> Result<Vec<serde_json::Value>, specchio::vk::GpuError> {
@@ -163,13 +164,10 @@ impl Renderer {
         let time = time.named("time")?;
         let pose = pose.map(|p| crate::args::pose(py, &p)).transpose()?;
         let pose = match pose {
-            Some([x, y, z, heading]) => {
-                let array = numpy::ndarray::arr2(&[[x, y, z, heading]]);
-                poses::from_array(array.view(), Some(vec![time]))?.remove(0)
-            }
+            Some(pose) => poses::one(pose, time)?,
             None => self.scene_pose(time)?,
         };
-        let layers = said::detach(py, || self.layers(&pose))??;
+        let layers = said::detach(py, || self.layers(&pose, Naming::One))??;
         arrays::frame_dict(py, layers)
     }
 
@@ -187,7 +185,7 @@ impl Renderer {
     ) -> PyResult<Bound<'py, PyDict>> {
         let (times, out) = (maybe("times", times)?, maybe("out", out)?);
         let poses = crate::args::poses(py, &poses)?;
-        let poses = poses::from_array(poses.as_array(), times)?;
+        let poses = poses::from_array(poses.as_array(), times, Naming::Batch)?;
         let Some(first) = poses.first() else {
             return Err(errors::error(
                 "poses: an empty batch (give at least one pose)",
@@ -195,15 +193,15 @@ impl Renderer {
         };
         // Every pose checked before the first is rendered.
         for pose in &poses {
-            self.check(pose)?;
+            self.check(pose, Naming::Batch)?;
         }
-        let layers = said::detach(py, || self.layers(first))??;
+        let layers = said::detach(py, || self.layers(first, Naming::Batch))??;
         let batch = arrays::batch_dict(py, poses.len(), &layers, out.as_ref())?;
         arrays::fill(&batch, 0, layers)?;
         for (b, pose) in poses.iter().enumerate().skip(1) {
             // Ctrl-C between frames.
             py.check_signals()?;
-            let layers = said::detach(py, || self.layers(pose))??;
+            let layers = said::detach(py, || self.layers(pose, Naming::Batch))??;
             arrays::fill(&batch, b, layers)?;
         }
         Ok(batch)
@@ -258,10 +256,10 @@ impl Renderer {
     }
 
     /// Whether the robot can stand at `pose`, as a dataset's poses are checked.
-    fn check(&self, pose: &Pose) -> PyResult<()> {
+    fn check(&self, pose: &Pose, naming: Naming) -> PyResult<()> {
         dataset::pose_fits(&self.scene, &self.objects, pose).map_err(|(field, why)| {
             let at = match pose.at {
-                Place::Entry(i) => format!("poses[{i}]"),
+                Place::Entry(i) => naming.pose(i),
                 Place::Line(n) => format!("line {n}"),
             };
             errors::error(format!("{at}: {field}: {why}"))
@@ -269,8 +267,8 @@ impl Renderer {
     }
 
     /// The layers of the next frame, at `pose` (checked first). Called with the GIL released.
-    fn layers(&self, pose: &Pose) -> PyResult<Layers> {
-        self.check(pose)?;
+    fn layers(&self, pose: &Pose, naming: Naming) -> PyResult<Layers> {
+        self.check(pose, naming)?;
         let mut guard = self.lock()?;
         let inner = guard
             .as_mut()

@@ -3,7 +3,6 @@
 //! the driver runs. Both are the engine's `render::dataset`, as `dataset.rs` is, so a pool
 //! writes the same bytes as one process and as `specchio dataset`.
 
-use crate::said;
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
@@ -20,6 +19,7 @@ use crate::args::{maybe, Given};
 use crate::dataset::{commit, parse_lookup, with_kept_note, Choices, PoseSource};
 use crate::errors;
 use crate::renderer::check_validation;
+use crate::said;
 
 /// The most encoders a caller may ask for.
 const MAX_ENCODERS: usize = 16;
@@ -198,8 +198,11 @@ pub struct DatasetOutput {
     plan: Plan,
     out: PathBuf,
     resume: bool,
-    /// Whether `begin` was called: a resumable output places nothing before.
-    begun: bool,
+    /// The lookup and ground truth `begin` bound the dataset to: nothing is placed before,
+    /// every frame placed must have been made by them, and `finish` names them.
+    run: Option<(Lookup, GroundTruth)>,
+    /// How the folder was given up, once it was: "finished" or "closed".
+    ended: &'static str,
     /// The frames placed, kept once `finish` takes the folder (for `note_kept`).
     placed: usize,
     folder: Option<Folder>,
@@ -245,7 +248,8 @@ impl DatasetOutput {
                 plan,
                 out,
                 resume,
-                begun: false,
+                run: None,
+                ended: "finished",
                 placed: 0,
                 folder: Some(folder),
             })
@@ -275,17 +279,18 @@ impl DatasetOutput {
         device: &str,
     ) -> PyResult<Vec<usize>> {
         let (lookup, truth) = parse_run(lookup, ground_truth)?;
-        if self.begun {
+        if self.run.is_some() {
             return Err(errors::error("the dataset was begun already"));
         }
         let key = self.plan.run_key(lookup, truth, device);
         if self.resume {
+            let ended = self.ended_error();
             let (plan, folder) = (&self.plan, self.folder.as_mut());
-            let folder = folder.ok_or_else(|| errors::error("the dataset was already finished"))?;
+            let folder = folder.ok_or(ended)?;
             said::detach(py, || folder.resume(&key, &mut plan.index_lines()))?
                 .map_err(errors::to_py)?;
         }
-        self.begun = true;
+        self.run = Some((lookup, truth));
         Ok(self.folder_mut()?.todo())
     }
 
@@ -313,11 +318,9 @@ impl DatasetOutput {
         files: Vec<(String, Vec<u8>)>,
         index_line: String,
     ) -> PyResult<()> {
-        if self.resume && !self.begun {
-            return Err(errors::error(
-                "a resumable dataset places frames after begin()",
-            ));
-        }
+        let run = self.run.ok_or_else(|| {
+            errors::error("place() comes after begin(), which names the run's lookup")
+        })?;
         let frame = one_frame(&files, self.plan.poses.len())?;
         let frame = Frame {
             frame,
@@ -332,7 +335,7 @@ impl DatasetOutput {
         let (plan, robot) = (&self.plan, &mut self.robot);
         check_frame(&frame, &plan.frame_files()).map_err(errors::error)?;
         said::detach(py, || {
-            plan.prove(&frame, &mut |i| plan.index_line(robot, i))
+            plan.prove(&frame, run, &mut |i| plan.index_line(robot, i))
         })?
         .map_err(errors::to_py)?;
         let folder = self.folder_mut()?;
@@ -346,6 +349,7 @@ impl DatasetOutput {
     fn close(&mut self) {
         if let Some(folder) = self.folder.take() {
             self.placed = folder.done();
+            self.ended = "closed";
         }
     }
 
@@ -353,14 +357,26 @@ impl DatasetOutput {
     /// `ground_truth`, and places the folder. Returns the summary as a dict.
     fn finish(&mut self, py: Python<'_>, lookup: &str, ground_truth: &str) -> PyResult<Py<PyAny>> {
         let (lookup, truth) = parse_run(lookup, ground_truth)?;
+        self.folder_mut()?;
+        match self.run {
+            None => return Err(errors::error("finish() comes after begin()")),
+            Some(run) if run != (lookup, truth) => {
+                return Err(errors::error(format!(
+                    "lookup {:?} and ground_truth {:?}: the frames were made with {:?} and \
+                     {:?}, as begin() was told",
+                    lookup.to_string(),
+                    truth.name(),
+                    run.0.to_string(),
+                    run.1.name()
+                )))
+            }
+            Some(_) => {}
+        }
         if let Some(missing) = self.folder_mut()?.todo().first() {
             return Err(errors::error(format!("frame {missing} was never placed")));
         }
         self.placed = self.folder_mut()?.done();
-        let folder = self
-            .folder
-            .take()
-            .ok_or_else(|| errors::error("the dataset was already finished"))?;
+        let folder = self.folder.take().ok_or_else(|| self.ended_error())?;
         let record = self.plan.record(lookup, truth);
         let summary = errors::json_to_py(py, &record)?;
         let ready = py
@@ -373,9 +389,13 @@ impl DatasetOutput {
 
 impl DatasetOutput {
     fn folder_mut(&mut self) -> PyResult<&mut Folder> {
-        self.folder
-            .as_mut()
-            .ok_or_else(|| errors::error("the dataset was already finished"))
+        let ended = self.ended_error();
+        self.folder.as_mut().ok_or(ended)
+    }
+
+    /// What a call after `finish` or `close` raises.
+    fn ended_error(&self) -> PyErr {
+        errors::error(format!("the dataset was already {}", self.ended))
     }
 }
 

@@ -223,10 +223,19 @@ def test_the_output_takes_only_its_frames_files(made, monkeypatch):
     monkeypatch.chdir(work)
     out = specchio.DatasetOutput(scene, "robot.csv", "parts")
     line = lambda n: json.dumps({"folder": f"frames/{n:06d}", "frame": n})
+    frame = lambda n: [(f"frames/{n:06d}/{name}", b"x") for name in FILES]
+    cli = work / "cli"
+    made_with = json.loads((cli / "dataset.json").read_text())
+    run = (made_with["lookup"], made_with["ground_truth"])
+    # Bound to a run first: its lookup is what every frame must have been made by.
+    with pytest.raises(specchio.SpecchioError, match=r"place\(\) comes after begin\(\)"):
+        out.place(frame(0), line(0))
+    with pytest.raises(specchio.SpecchioError, match=r"finish\(\) comes after begin\(\)"):
+        out.finish(*run)
+    assert out.begin(*run, "lavapipe") == [0, 1, 2, 3, 4]
     for path in ["../escape.txt", "frames/000009/x.exr", "frames/000001/../../x", "/abs", "index.jsonl"]:
         with pytest.raises(specchio.SpecchioError, match="frame folders"):
             out.place([(path, b"x")], line(0))
-    frame = lambda n: [(f"frames/{n:06d}/{name}", b"x") for name in FILES]
     with pytest.raises(specchio.SpecchioError, match="frame 0: no sensor.exr"):
         out.place(frame(0)[1:], line(0))
     no_panorama = [(p, b) for p, b in frame(0) if "panorama" not in p]
@@ -243,11 +252,11 @@ def test_the_output_takes_only_its_frames_files(made, monkeypatch):
     # The right names are not enough: a frame must be this dataset's.
     with pytest.raises(specchio.SpecchioError, match="frame 0: its index line is not the one"):
         out.place(frame(0), line(0))
-    cli = work / "cli"
     index = (cli / "index.jsonl").read_text().splitlines()
     real = lambda n: [(str(p.relative_to(cli)), p.read_bytes()) for p in sorted((cli / f"frames/{n:06d}").iterdir())]
     # A ray map in another frame: only a run that writes one can tell (the default does not).
     every = specchio.DatasetOutput(scene, "robot.csv", "parts-all", outputs="all")
+    every.begin(*run, "lavapipe")
     based = specchio.DatasetFrames(scene, "robot.csv", encoders=0, geometry_frame="base_link", outputs="all")
     ((files, line1),) = based.frames([1])
     with pytest.raises(specchio.SpecchioError, match="frame 1: its ray map is not in the dataset's scene frame"):
@@ -258,14 +267,25 @@ def test_the_output_takes_only_its_frames_files(made, monkeypatch):
     ((files, line1),) = world.frames([1])
     with pytest.raises(specchio.SpecchioError, match="frame 1: its panoramas are not in the dataset's robot frame"):
         out.place(files, line1)
+    # A frame of this dataset made by another lookup: its colour and labels are not the run's.
+    other = "plain" if run[0] != "plain" else "box"
+    boxed = specchio.DatasetFrames(scene, "robot.csv", lookup=other, encoders=0)
+    ((files, line1),) = boxed.frames([1])
+    with pytest.raises(specchio.SpecchioError, match=f"frame 1: it was rendered with the {other} lookup and cube ground truth, not this run's {run[0]} and {run[1]}"):
+        out.place(files, line1)
     out.place(real(0), index[0])
     with pytest.raises(specchio.SpecchioError, match="frame 0 was placed already"):
         out.place(real(0), index[0])
+    # The summary names the run the frames were made by, nothing else.
+    with pytest.raises(specchio.SpecchioError, match=f'lookup "{other}" and ground_truth "cube": the frames were made with "{run[0]}" and "{run[1]}"'):
+        out.finish(other, "cube")
     with pytest.raises(specchio.SpecchioError, match="frame 1 was never placed"):
-        out.finish("plain", "cube")
+        out.finish(*run)
     for n in range(1, 5):
         out.place(real(n), index[n])
-    del out
+    out.close()
+    with pytest.raises(specchio.SpecchioError, match="the dataset was already closed"):
+        out.finish(*run)
     assert not (work / "parts").exists()
 
 

@@ -97,8 +97,17 @@ def test_wrong_buffers_and_poses_are_named(renderer):
         renderer.render_batch(np.zeros((1, 3)))
     with pytest.raises(specchio.SpecchioError, match=r"times: 3 values for 1 poses"):
         renderer.render_batch(poses, times=[0.0, 1.0, 2.0])
-    with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: time"):
+    # Each value is named by the argument it came from: `times`, `times[i]`, `pose`, `time`.
+    with pytest.raises(specchio.SpecchioError, match=r"^times: must be a finite number of seconds"):
         renderer.render_batch(poses, times=[-1.0])
+    with pytest.raises(specchio.SpecchioError, match=r"^times\[1\]: must be a finite number"):
+        renderer.render_batch(np.tile(poses, (2, 1)), times=[0.0, np.nan])
+    with pytest.raises(specchio.SpecchioError, match=r"^time: must be a finite number of seconds"):
+        renderer.render(pose=(0.0, 3.0, 0.0, 0.0), time=np.nan)
+    with pytest.raises(specchio.SpecchioError, match=r"^pose: heading: must be a finite number"):
+        renderer.render(pose=(0.0, 3.0, 0.0, np.nan))
+    with pytest.raises(specchio.SpecchioError, match=r"^pose: position: the mirror .* not entirely inside the room"):
+        renderer.render(pose=(100.0, 3.0, 0.0, 0.0))
     with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: position: every value"):
         renderer.render_batch(np.array([[np.nan, 3.0, 0.0, 0.0]]))
     with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: heading"):
@@ -185,6 +194,10 @@ def test_a_wrong_type_is_named_by_its_argument(renderer, thesis, tmp_path):
         (lambda: d.distance("a", "b"), r"^a: 'a' \(a str\); give a specchio.Signature"),
         (lambda: d.distances(["x"], "q"), r"^database: \['x'\] \(a list\); give a list of specchio.Signature"),
         (lambda: renderer.render(time="0"), r"^time: '0' \(a str\)"),
+        # A bool is no number, numpy's either, nor inside a pose or a list of times.
+        (lambda: renderer.render(time=np.True_), r"^time: (np\.)?True_? \(a bool_?\); give a number"),
+        (lambda: renderer.render(pose=(True, 3.0, 0.0, 0.0)), r"^pose: not an array of numbers \(a bool among them\)"),
+        (lambda: renderer.render_batch(poses, times=[True]), r"^times: \[True\] \(a list\); give a list of numbers"),
         (lambda: renderer.render_batch(poses, times="x"), r"^times: 'x' \(a str\); give a list of numbers"),
         (lambda: renderer.render_batch(poses, out=[1]), r"^out: \[1\] \(a list\); give a dict"),
         (lambda: specchio.localise(3, tmp_path / "l"), r"^scene: 3 \(an int\); give a path"),
@@ -195,6 +208,23 @@ def test_a_wrong_type_is_named_by_its_argument(renderer, thesis, tmp_path):
         (
             lambda: specchio.dataset(path, out=str(tmp_path / "p"), grid=4.0, progress=3),
             r"^progress: 3 \(an int\); give a function of \(done, total\)",
+        ),
+        # A truthy "no" would start a Ray cluster; refused before it does.
+        (
+            lambda: specchio.dataset(path, out=str(tmp_path / "n"), grid=4.0, ray="no"),
+            r"^ray: 'no' \(a str\); give True or False",
+        ),
+        (
+            lambda: specchio.dataset(path, out=str(tmp_path / "e"), grid=4.0, ray=True, worker_env=[1]),
+            r"^worker_env: \[1\] \(a list\); give a dict of str to str",
+        ),
+        (
+            lambda: specchio.dataset(path, out=str(tmp_path / "k"), grid=4.0, ray=True, worker_env={1: "x"}),
+            r"^worker_env: the key 1 \(an int\); give variable names as str",
+        ),
+        (
+            lambda: specchio.dataset(path, out=str(tmp_path / "v"), grid=4.0, ray=True, worker_env={"A": None}),
+            r"^worker_env\['A'\]: None \(a NoneType\); give the value as a str",
         ),
     ]
     for call, says in cases:

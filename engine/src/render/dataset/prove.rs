@@ -1,23 +1,28 @@
 //! A frame rendered elsewhere (a Ray worker's `DatasetFrames`, or one a user made by hand)
 //! proven to be this plan's before the output takes it: its index line the one the plan gives
-//! its pose, and its files made with the plan's choices (the geometry frame of its ray map
-//! and point cloud, the panoramas' frame). The file names are `check_frame`'s; a frame
+//! its pose, its colour and labels made by the run's lookup and ground truth, and its files
+//! made with the plan's choices (the geometry frame of its ray map and point cloud, the
+//! panoramas' frame). The file names are `check_frame`'s; a frame
 //! rendered for another scene, trajectory or choice would otherwise be placed without a word.
 
 use super::Plan;
+use crate::scene::Lookup;
 use crate::sensor::dataset::{DatasetError, Frame, GeometryFrame};
 use crate::sensor::layers::{Layer, CAMERA_FILE, POINTS_FILE};
+use crate::sensor::GroundTruth;
 
 /// How far a recorded panorama seam may be from the plan's (degrees): the record is the
 /// plan's number printed, so only its last digit.
 const SEAM_TOLERANCE_DEG: f64 = 1e-9;
 
 impl Plan {
-    /// Proves `frame` this plan's; `index_of` gives the plan's index lines
+    /// Proves `frame` this plan's, rendered by `run` (the lookup and ground truth the
+    /// dataset's summary will name); `index_of` gives the plan's index lines
     /// ([`Plan::index_lines`]).
     pub fn prove(
         &self,
         frame: &Frame,
+        run: (Lookup, GroundTruth),
         index_of: &mut dyn FnMut(usize) -> String,
     ) -> Result<(), DatasetError> {
         let i = frame.frame;
@@ -41,6 +46,16 @@ impl Plan {
         let camera: serde_json::Value = (file(CAMERA_FILE))
             .and_then(|b| serde_json::from_slice(b).ok())
             .ok_or_else(|| refuse(format!("{CAMERA_FILE} is missing or not JSON")))?;
+        let made = |key: &str| camera.pointer(&format!("/ground_truth/{key}"))?.as_str();
+        let (lookup, truth) = (run.0.to_string(), run.1.name());
+        if made("colour") != Some(&lookup) || made("layers") != Some(truth) {
+            return Err(refuse(format!(
+                "it was rendered with the {} lookup and {} ground truth, not this run's {lookup} \
+                 and {truth}",
+                made("colour").unwrap_or("no"),
+                made("layers").unwrap_or("no"),
+            )));
+        }
         if self.outputs.has(Layer::RAYS) {
             let said = camera.pointer("/files/ray_frame").and_then(|v| v.as_str());
             let want = (self.geometry != GeometryFrame::Scene).then(|| self.geometry.says());
