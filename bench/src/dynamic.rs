@@ -43,6 +43,7 @@ pub fn measure(
     let make = |update| {
         let options = RenderOptions {
             cube_size: Some(size),
+            cube_size_option: Some("--cube-sizes"),
             refresh: Some(RefreshPolicy::OnChange),
             full_updates: matches!(update, Update::Full),
             whole_faces: matches!(update, Update::WholeFaces),

@@ -113,7 +113,7 @@ pub struct Args {
     pub baseline: Option<PathBuf>,
     /// Allowed growth, in percent (0..=10000), of each method's median time relative to
     /// six-pass in the same run, against the baseline's ratio (times are not gated without it).
-    #[arg(long, allow_negative_numbers = true, value_parser = real(0.0, false, 10_000.0))]
+    #[arg(long, requires = "baseline", allow_negative_numbers = true, value_parser = real(0.0, false, 10_000.0))]
     pub max_regression: Option<f64>,
     /// Vulkan device: index or part of its name.
     #[arg(long)]
@@ -186,11 +186,11 @@ pub struct Settled {
 
 /// A list option naming one thing twice would measure it twice under one name (and the gate
 /// could not tell the rows apart).
-fn no_repeats<T: PartialEq + std::fmt::Debug>(option: &str, list: &[T]) -> Result<()> {
+fn no_repeats<T: PartialEq + std::fmt::Display>(option: &str, list: &[T]) -> Result<()> {
     for (i, item) in list.iter().enumerate() {
         anyhow::ensure!(
             !list[..i].contains(item),
-            "{option}: {item:?} is given twice; name each at most once"
+            "{option}: {item} is given twice; name each at most once"
         );
     }
     Ok(())

@@ -86,6 +86,7 @@ fn make_renderers(
     let make = |method| {
         let options = RenderOptions {
             cube_size: Some(size),
+            cube_size_option: Some("--cube-sizes"),
             method,
             frames_in_flight: plan.frames_in_flight as usize,
             refresh: Some(RefreshPolicy::EveryFrame),

@@ -216,6 +216,7 @@ fn renderer(
     (rung.configure)(&mut scene);
     let options = RenderOptions {
         cube_size: Some(size),
+        cube_size_option: Some("--cube-sizes"),
         method: Method::SIX_PASS,
         refresh: Some(RefreshPolicy::EveryFrame),
         lookup: Some(rung.lookup),

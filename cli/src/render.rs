@@ -87,8 +87,9 @@ pub struct Args {
     #[arg(long)]
     full_updates: bool,
     /// Under `on-change`, re-render a dirty face whole instead of only its dirty rectangles
-    /// (the pixels a moved object's old or new bounds project to; six-pass only).
-    #[arg(long)]
+    /// (the pixels a moved object's old or new bounds project to; multiview re-renders all
+    /// six faces, in the dirty faces' rectangles together).
+    #[arg(long, conflicts_with = "full_updates")]
     whole_faces: bool,
     /// The order the tracing lookups (ray-query, distance-exact) hand their acceleration-
     /// structure builds: `split` (spatially coherent, the default) or `given` (the scene's own,
@@ -130,6 +131,45 @@ fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
     Ok(())
 }
 
+/// Refuses an option that would change nothing here, rather than take it without a word (and
+/// record it in render.json as if it had): the update options under a refresh policy that
+/// re-renders every face whole anyway, the bvh walk's options with another lookup.
+fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Result<()> {
+    let updates = [
+        ("--full-updates", args.full_updates),
+        ("--whole-faces", args.whole_faces),
+    ];
+    if let Some((option, _)) = updates.iter().find(|(_, given)| *given) {
+        use specchio::scene::RefreshPolicy;
+        let policy = match scene.refresh {
+            RefreshPolicy::OnChange => None,
+            RefreshPolicy::EveryFrame => Some("\"every-frame\"".to_owned()),
+            RefreshPolicy::EveryN(n) => Some(format!("\"every-n\" (n = {n})")),
+        };
+        if let Some(policy) = policy {
+            bail!(
+                "{option}: changes only updates on change, and {} sets refresh.policy = \
+                 {policy}: every update re-renders all six faces whole; leave it out, or set \
+                 the policy to \"on-change\"",
+                args.scene.display(),
+            );
+        }
+    }
+    let walks = [
+        ("--trace-in", args.trace_in.is_some()),
+        ("--bvh-layout", args.bvh_layout.is_some()),
+    ];
+    if let Some((option, _)) = walks.iter().find(|(_, given)| *given) {
+        if lookup != Lookup::Bvh {
+            bail!(
+                "{option}: only the bvh lookup walks trees of its own, and this run's lookup \
+                 is {lookup}; leave it out, or give --lookup bvh"
+            );
+        }
+    }
+    Ok(())
+}
+
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Everything that can be wrong with the input is found before the output folder exists
     //    (the numbers' ranges by clap, `specchio::process::args`).
@@ -152,6 +192,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if let Some(why) = lookups::missing_features(lookup, &chosen) {
         bail!("lookup {lookup} cannot run on {}: {why}", chosen.name);
     }
+    options_apply(args, &scene, lookup)?;
     let features = lookups::features(lookup);
     let device = probe::device_for(&instance, args.device.as_deref(), &methods, features)?;
     drop(instance);

@@ -206,3 +206,58 @@ fn a_huge_value_is_refused_in_a_short_message() {
     }
     assert!(!dir.join("out").exists());
 }
+
+/// An option that would change nothing here is refused, naming it and why, rather than taken
+/// without a word and recorded in render.json as if it had been applied; nothing is written.
+#[test]
+fn options_that_would_change_nothing_are_refused() {
+    let dir = temp_dir("options-that-change-nothing");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("out");
+    let (out_s, base) = (out.to_str().unwrap(), dir.join("base.json"));
+    let scene = |name: &str| root().join("scenes").join(name);
+    let thesis = scene("thesis-room.toml");
+    let moving = scene("moving-objects.toml");
+    let (thesis, moving) = (thesis.to_str().unwrap(), moving.to_str().unwrap());
+    let small = ["--cube-size", "8", "--frames", "1"];
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["render", thesis, "--out", out_s, "--whole-faces", "--full-updates"],
+            "'--whole-faces' cannot be used with '--full-updates'",
+        ),
+        (
+            vec!["render", moving, "--out", out_s, "--whole-faces"],
+            "--whole-faces: changes only updates on change, and ",
+        ),
+        (
+            vec!["render", moving, "--out", out_s, "--full-updates"],
+            "sets refresh.policy = \"every-frame\": every update re-renders all six faces whole",
+        ),
+        (
+            vec!["render", thesis, "--out", out_s, "--lookup", "plain", "--trace-in", "compute"],
+            "--trace-in: only the bvh lookup walks trees of its own, and this run's lookup is plain",
+        ),
+        (
+            vec!["render", thesis, "--out", out_s, "--lookup", "box", "--bvh-layout", "bvh4"],
+            "--bvh-layout: only the bvh lookup walks trees of its own",
+        ),
+        (
+            vec!["bench", thesis, "--max-regression", "5", "--json", base.to_str().unwrap()],
+            "the following required arguments were not provided:\n  --baseline <BASELINE>",
+        ),
+    ];
+    for (mut args, says) in cases {
+        if args[0] == "render" {
+            args.extend(small);
+        }
+        let run = specchio_within(&args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{args:?} succeeded");
+        assert!(
+            stderr.contains(says),
+            "{args:?}: expected {says:?} in {stderr}"
+        );
+        assert!(!out.exists() && !base.exists(), "{args:?} wrote its output");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

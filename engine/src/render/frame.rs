@@ -14,6 +14,9 @@ use super::methods;
 pub struct RenderOptions {
     /// Overrides the scene's `cube.face_size` (`--cube-size`).
     pub cube_size: Option<u32>,
+    /// The option that set `cube_size`, as messages name it: `--cube-size` unless said
+    /// (the benchmark's is `--cube-sizes`).
+    pub cube_size_option: Option<&'static str>,
     /// How the cube is filled (the device must support it: see `Method::missing_features`).
     pub method: methods::Method,
     /// Under `on-change`, re-render only the faces a moved object touches (old or new bounds).

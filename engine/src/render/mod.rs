@@ -125,7 +125,7 @@ impl Renderer {
         let cube_setting = match options.cube_size {
             Some(size) => {
                 scene.cube.face_size_px = size;
-                "--cube-size"
+                options.cube_size_option.unwrap_or("--cube-size")
             }
             None => "cube.face_size",
         };
