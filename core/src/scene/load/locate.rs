@@ -179,8 +179,76 @@ impl<'a> Locator<'a> {
             SceneError::WrongType {
                 location,
                 field,
-                message,
+                message: plain_words(&message),
             }
         }
+    }
+}
+
+/// serde's message in the words a scene is written in: its Rust types (`expected i64`) said
+/// as what a user writes, and an integer beyond what any count holds said as out of range
+/// (serde reads it as a wider type first: "integer `1e20` as i128").
+fn plain_words(message: &str) -> String {
+    const WHOLE: &str = "a whole number";
+    let words = [
+        ("i64", WHOLE),
+        ("u64", WHOLE),
+        ("i32", WHOLE),
+        ("u32", WHOLE),
+        ("u16", WHOLE),
+        ("u8", WHOLE),
+        ("usize", WHOLE),
+        ("f64", "a number"),
+        ("f32", "a number"),
+        ("a boolean", "true or false"),
+    ];
+    let Some((said, rust)) = message.rsplit_once(", expected ") else {
+        return message.to_owned();
+    };
+    let Some(&(_, plain)) = words.iter().find(|(r, _)| *r == rust) else {
+        return message.to_owned();
+    };
+    let integer = (said.strip_prefix("invalid type: integer `"))
+        .or_else(|| said.strip_prefix("invalid value: integer `"))
+        .and_then(|rest| rest.split_once('`'))
+        .filter(|(_, after)| after.is_empty() || *after == " as i128" || *after == " as u128");
+    match integer {
+        Some((n, _)) if plain == WHOLE => {
+            format!(
+                "{n} is out of range: expected {plain} of at most {}",
+                i64::MAX
+            )
+        }
+        _ => format!("{said}, expected {plain}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::plain_words;
+
+    /// A Rust type is said as what a scene holds; an integer past any count as out of range;
+    /// other messages are kept.
+    #[test]
+    fn serde_types_are_said_as_a_scene_is_written() {
+        let said = |m: &str| plain_words(m);
+        assert_eq!(
+            said("invalid type: floating point `32.0`, expected i64"),
+            "invalid type: floating point `32.0`, expected a whole number"
+        );
+        assert_eq!(
+            said("invalid type: integer `99999999999999999999` as i128, expected i64"),
+            "99999999999999999999 is out of range: expected a whole number of at most 9223372036854775807"
+        );
+        assert_eq!(
+            said("invalid value: integer `18446744073709551615`, expected i64"),
+            "18446744073709551615 is out of range: expected a whole number of at most 9223372036854775807"
+        );
+        assert_eq!(
+            said("invalid type: string \"x\", expected f64"),
+            "invalid type: string \"x\", expected a number"
+        );
+        let kept = "invalid type: integer `5`, expected a material name for all six walls";
+        assert_eq!(said(kept), kept);
     }
 }
