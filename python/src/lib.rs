@@ -28,7 +28,8 @@ use pyo3::prelude::*;
 pub use errors::SpecchioError;
 
 /// The Vulkan devices the engine can use, best first: each a dict of `index`, `name`,
-/// `short_name` (what `device=` accepts), `driver` and the optional features it has.
+/// `short_name` (what `device=` accepts), `driver_name`, `driver_info`, `usable`, `default`,
+/// and its `features` and `limits`.
 #[pyfunction]
 fn devices(py: Python<'_>) -> PyResult<Vec<Py<PyAny>>> {
     let infos = py.detach(renderer::device_infos).map_err(errors::to_py)?;

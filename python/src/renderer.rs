@@ -153,7 +153,7 @@ impl Renderer {
     /// coordinates, metres, and the heading in degrees about +Y; default: the mirror where the
     /// scene puts it at `time`, heading 0) and `time` (s): a dict of numpy arrays (see the
     /// module's docs: `sensor`, `observer`, `ray_origin`, `ray_direction`, `mask`, `range`,
-    /// `ids`).
+    /// `ids`, `classes`, and `camera` where the scene has `[sensor.imaging]`).
     #[pyo3(signature = (pose=None, time=Given::Is(0.0)), text_signature = "($self, pose=None, time=0.0)")]
     fn render<'py>(
         &self,

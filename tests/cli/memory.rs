@@ -158,6 +158,21 @@ fn a_budget_that_is_not_a_size_is_refused() {
         "{stderr}"
     );
     assert!(!out.exists());
+    // A scene with textures reads the budget while loading them: the variable is named with
+    // the file, not blamed on a texture's field.
+    let textured = root().join("scenes/thesis-room.toml");
+    let args = ["reference", textured.to_str().unwrap(), "--out"];
+    let (code, stderr, _) = run(
+        &[&args[..], &[out.to_str().unwrap()]].concat(),
+        Some("lots"),
+    );
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("thesis-room.toml: SPECCHIO_MEMORY_BUDGET=lots is not a size"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("materials["), "{stderr}");
+    assert!(!out.exists());
 }
 
 /// A texture is held to the budget from its header, before its pixels are decoded: a small

@@ -120,6 +120,11 @@ pub enum SceneError {
         message: String,
     },
 
+    /// Something outside the file made loading it fail: an environment variable the loader
+    /// reads (`SPECCHIO_MEMORY_BUDGET`), named rather than blamed on a field of the file.
+    #[error("{}: {message}", file.display())]
+    Environment { file: PathBuf, message: String },
+
     /// A mesh or texture file that a field refers to could not be loaded. `location` is the line
     /// of the referring field in the scene file.
     #[error("{location}: {field}: cannot load {}: {message}", asset.display())]
@@ -135,7 +140,9 @@ impl SceneError {
     /// The scene file the error is about.
     pub fn file(&self) -> &Path {
         match self {
-            SceneError::Io { file, .. } | SceneError::Empty { file } => file,
+            SceneError::Io { file, .. }
+            | SceneError::Empty { file }
+            | SceneError::Environment { file, .. } => file,
             SceneError::Encoding { location, .. }
             | SceneError::Syntax { location, .. }
             | SceneError::UnknownField { location, .. }
@@ -160,6 +167,7 @@ impl SceneError {
         match self {
             SceneError::Io { .. }
             | SceneError::Empty { .. }
+            | SceneError::Environment { .. }
             | SceneError::Encoding { .. }
             | SceneError::Syntax { .. } => None,
             SceneError::UnknownField { field, .. }
@@ -171,7 +179,9 @@ impl SceneError {
 
     fn location(&self) -> Option<&Location> {
         match self {
-            SceneError::Io { .. } | SceneError::Empty { .. } => None,
+            SceneError::Io { .. } | SceneError::Empty { .. } | SceneError::Environment { .. } => {
+                None
+            }
             SceneError::Encoding { location, .. }
             | SceneError::Syntax { location, .. }
             | SceneError::UnknownField { location, .. }

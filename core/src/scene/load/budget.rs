@@ -120,8 +120,13 @@ impl Ctx<'_> {
                 ),
             ));
         }
-        let budget =
-            crate::memory::Budget::from_env().map_err(|e| self.invalid(field, e.to_string()))?;
+        // The variable is the user's, not the file's: said as it is, the file named.
+        let budget = crate::memory::Budget::from_env().map_err(|e| {
+            crate::scene::SceneError::Environment {
+                file: self.loc.file.to_path_buf(),
+                message: e.to_string(),
+            }
+        })?;
         let held = texels.saturating_mul(crate::memory::estimates::TEXEL_BYTES);
         if held > budget.bytes {
             return Err(self.invalid(

@@ -311,15 +311,18 @@ impl std::str::FromStr for Layers {
         };
         let mut bits = 0u16;
         for word in text.split(',').map(str::trim) {
-            let layer = (Layer::ALL.into_iter().find(|l| l.name() == word)).ok_or_else(|| {
-                match word.is_empty() {
-                    true => format!(
+            let layer =
+                (Layer::ALL.into_iter().find(|l| l.name() == word)).ok_or_else(|| match word {
+                    "" => format!(
                         "`{text}`: an empty layer name; the layers: {}, or all, or default",
                         names()
                     ),
-                    false => format!("`{word}` is not a layer: {}, or all, or default", names()),
-                }
-            })?;
+                    "all" | "default" => format!(
+                        "`{word}` stands alone, not among layer names (`{text}`): give `{word}`, \
+                         or the layers by name"
+                    ),
+                    _ => format!("`{word}` is not a layer: {}, or all, or default", names()),
+                })?;
             if bits & layer.bit() != 0 {
                 return Err(format!("`{word}` is named twice"));
             }
@@ -376,6 +379,12 @@ mod tests {
             e,
             "`depth` is not a layer: image, camera, rays, range, range16, ids, panoramas, points, \
              or all, or default"
+        );
+        let e = "all,image".parse::<Layers>().unwrap_err();
+        assert_eq!(
+            e,
+            "`all` stands alone, not among layer names (`all,image`): give `all`, or the layers \
+             by name"
         );
         let standard: Layers = "default".parse().unwrap();
         assert_eq!(standard, Layers::standard());
