@@ -151,14 +151,37 @@ impl Ctx<'_> {
             (None, None) => Ok((60.0, 0.0)),
             (None, Some(tan)) => {
                 let fov = 2.0 * (RIM_MARGIN * tan / aspect.min(1.0)).atan().to_degrees();
-                if !FOV_Y_DEG.contains(fov) {
+                if !FOV_Y_DEG.contains(fov) && fov > FOV_Y_DEG.hi {
                     return Err(self.invalid(
                         "sensor.resolution",
                         format!(
                             "is too narrow for the mirror: fitting its rim across the image's \
-                             width needs a vertical field of view of {} degrees, beyond {}",
+                             width needs a vertical field of view of {} degrees, more than the \
+                             {} a camera may have; give the image more columns",
                             num_text(fov),
-                            FOV_Y_DEG.text_with_in()
+                            num_text(FOV_Y_DEG.hi)
+                        ),
+                    ));
+                }
+                if !FOV_Y_DEG.contains(fov) {
+                    // The mirror looks too small from the camera: its distance where the file
+                    // sets it, else the rim's size.
+                    let field = match (s.offset.is_some(), &mirror.shape.surface) {
+                        (true, _) => "sensor.offset",
+                        (false, crate::mirror::Surface::Sphere { .. }) => "mirror.radius",
+                        (false, _) => "mirror.rim_radius",
+                    };
+                    return Err(self.invalid(
+                        field,
+                        format!(
+                            "the mirror's rim is {} degrees from the camera's axis with the \
+                             camera {} m from the mirror (sensor.offset), and fitting it needs a \
+                             vertical field of view of {} degrees, less than the {} a camera may \
+                             have; bring the camera nearer or make the rim wider",
+                            num_text(tan.atan().to_degrees()),
+                            num_text(offset_m),
+                            num_text(fov),
+                            num_text(FOV_Y_DEG.lo)
                         ),
                     ));
                 }

@@ -108,7 +108,9 @@ fn bad_mirror_shapes_are_refused_naming_the_field() {
         (HYPERBOLOID, "[sensor]\nshift = [20, 0, 0]\n", "sensor.shift: puts the sensor at [20, 1, 0] (t = 0.000 s), outside the room"),
         (HYPERBOLOID, "[sensor]\nshift = [0, -1.5, 0]\n", "sensor.shift: puts the sensor at y = -0.5"),
         // A derived field of view beyond 179.99 degrees: the image too narrow for the rim.
-        ("shape = \"hyperboloid\"\nfocal_distance = 0.5\nlatus_rectum = 10\nrim_radius = 0.4", "[sensor]\nresolution = [1, 8192]\n", "sensor.resolution: is too narrow for the mirror"),
+        ("shape = \"hyperboloid\"\nfocal_distance = 0.5\nlatus_rectum = 10\nrim_radius = 0.4", "[sensor]\nresolution = [1, 8192]\n", "sensor.resolution: is too narrow for the mirror: fitting its rim across the image's width needs a vertical field of view of 179.99089 degrees, more than the 179.99 a camera may have; give the image more columns"),
+        // Below 0.1 degrees: the mirror too small from the camera, said as the distance.
+        ("shape = \"cone\"\nhalf_angle = 45\nrim_radius = 1e-5", "", "mirror.rim_radius: the mirror's rim is 0.00022918312 degrees from the camera's axis with the camera 2.5 m from the mirror (sensor.offset), and fitting it needs a vertical field of view of 0.0004812845 degrees, less than the 0.1 a camera may have"),
         // A room too large for the mirror's reach names the shape's own size field.
         ("shape = \"hyperboloid\"\nfocal_distance = 0.000001\nlatus_rectum = 0.000001\nrim_radius = 0.0000005", "", "mirror.rim_radius: is too small for the room"),
         // Misalignment: a tilt past 45 degrees, a shift into the mirror's reach.
