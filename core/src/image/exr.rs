@@ -147,6 +147,20 @@ pub fn decode_channels(bytes: &[u8]) -> Result<Layer, Error> {
     Ok(Layer { size, channels })
 }
 
+/// The channel names of each layer, from the header alone (for a message about a file that
+/// holds no colour layer).
+pub fn channel_names(bytes: &[u8]) -> Result<Vec<String>, Error> {
+    let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)?;
+    Ok((meta.headers.iter())
+        .flat_map(|h| h.channels.list.iter().map(|c| c.name.to_string()))
+        .collect())
+}
+
+/// Whether `bytes` start as an OpenEXR file does (its four-byte magic number).
+pub fn has_magic(bytes: &[u8]) -> bool {
+    bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01])
+}
+
 /// The first RGBA layer as 32-bit float (alpha 1 when the file has none).
 pub fn decode_rgba(bytes: &[u8]) -> Result<RgbaImage, Error> {
     use ::exr::prelude::{ReadChannels as _, ReadLayers as _};

@@ -155,7 +155,21 @@ impl Comparison {
 /// The first RGBA layer of an OpenEXR file, as 32-bit float (alpha 1 when the file has none).
 pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
     let bytes = read_checked_exr(path)?;
-    exr::decode_rgba(&bytes).map_err(|e| exr_error(path, e))
+    exr::decode_rgba(&bytes).map_err(|e| match exr::channel_names(&bytes) {
+        // A readable file without colour: one of the sensor's single-quantity layers.
+        Ok(names) if !["R", "G", "B"].iter().all(|c| names.iter().any(|n| n == c)) => {
+            MetricsError::Read {
+                path: path.to_owned(),
+                message: format!(
+                    "holds no colour image (channels R, G, B) but {}: this reads colour \
+                     images; a layer such as sensor.range.exr is read by channel name \
+                     (specchio.read_exr in Python)",
+                    names.join(", ")
+                ),
+            }
+        }
+        _ => exr_error(path, e),
+    })
 }
 
 /// Every channel of the first layer of an OpenEXR file by name, with the layer's size
@@ -179,6 +193,14 @@ fn read_checked_exr(path: &Path) -> Result<Vec<u8>, MetricsError> {
             message: other.to_string(),
         },
     })?;
+    if !exr::has_magic(&bytes) {
+        // Said from its first bytes: the parser calls a file shorter than its magic number
+        // truncated.
+        return Err(MetricsError::Read {
+            path: path.to_owned(),
+            message: NOT_EXR.to_owned(),
+        });
+    }
     check_exr_size(path, &bytes)?;
     Ok(bytes)
 }
@@ -207,19 +229,21 @@ fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<(), MetricsError> {
     Ok(())
 }
 
+const NOT_EXR: &str = "not an OpenEXR image (expected the linear .exr files that `specchio \
+     render` and `specchio reference` write)";
+
+/// The parser ran out of bytes: a file cut short, or one whose header or offsets were
+/// damaged so that they point past its end.
+const CUT_SHORT: &str = "the OpenEXR file ends before its header or pixels do: truncated or \
+     damaged";
+
 /// An OpenEXR reading error in words a user can act on.
 fn exr_error(path: &Path, e: exr::Error) -> MetricsError {
     let message = match e {
-        exr::Error::Invalid(why) if why.contains("identifier") => {
-            "not an OpenEXR image (expected the linear .exr files that `specchio render` and \
-             `specchio reference` write)"
-                .to_owned()
-        }
-        exr::Error::Invalid(why) if why.contains("missing bytes") => {
-            "the OpenEXR file is truncated".to_owned()
-        }
+        exr::Error::Invalid(why) if why.contains("identifier") => NOT_EXR.to_owned(),
+        exr::Error::Invalid(why) if why.contains("missing bytes") => CUT_SHORT.to_owned(),
         exr::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
-            "the OpenEXR file is truncated".to_owned()
+            CUT_SHORT.to_owned()
         }
         other => format!("not a readable OpenEXR image: {other}"),
     };

@@ -408,6 +408,8 @@ fn bad_exr_inputs_say_what_is_wrong() {
             huge_data_window(&bytes),
             "at most 16384 px a side",
         ),
+        // Shorter than the magic number: not an EXR at all, not a truncated one.
+        ("hi.exr", b"hi\n".to_vec(), "not an OpenEXR image"),
     ];
     for (name, data, must_say) in cases {
         let path = dir.join(name);
@@ -415,6 +417,16 @@ fn bad_exr_inputs_say_what_is_wrong() {
         let e = read_exr(&path).unwrap_err().to_string();
         assert!(e.contains(name) && e.contains(must_say), "{name}: {e}");
     }
+    // A layer without colour (the sensor's range) is named by its channels.
+    let range = dir.join("range.exr");
+    let layer = vec![("range", crate::image::exr::Samples::F32(vec![1.0; 12]))];
+    let file = std::fs::File::create(&range).unwrap();
+    crate::image::exr::encode_channels(std::io::BufWriter::new(file), (4, 3), layer).unwrap();
+    let e = read_exr(&range).unwrap_err().to_string();
+    assert!(
+        e.contains("holds no colour image (channels R, G, B) but range"),
+        "{e}"
+    );
     let e = read_exr(&dir).unwrap_err().to_string();
     assert!(e.contains("not a regular file"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
