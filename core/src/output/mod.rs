@@ -73,7 +73,10 @@ pub enum OutputError {
         entry: String,
         manifest: &'static str,
     },
-    #[error("cannot write {path}: it names no file or folder")]
+    #[error(
+        "cannot write {path}: it is the file system's root (or resolves to it), which cannot be \
+         replaced as an output; name a folder or file inside it"
+    )]
     NoName { path: PathBuf },
     #[error("cannot write {path}: its name is not valid UTF-8")]
     NotUtf8 { path: PathBuf },

@@ -206,6 +206,14 @@ fn io_failures_name_the_users_path_and_leave_nothing() {
     assert!(err.contains(&missing.display().to_string()), "{err}");
     assert!(!err.contains(".specchio-"), "{err}");
     assert_eq!(names(&dir), ["file"]);
+    // The root has no name to stage beside; a `..` whose folder does not exist cannot be
+    // resolved: each said as what it is.
+    let root = Transaction::new().folder(Path::new("/"), "render.json");
+    let text = root.unwrap_err().to_string();
+    assert!(text.contains("/: it is the file system's root"), "{text}");
+    let unresolved = dir.join("nodir/..");
+    let err = Transaction::new().folder(&unresolved, "render.json");
+    assert!(matches!(err, Err(OutputError::Io { .. })), "{err:?}");
     fs::remove_dir_all(&dir).unwrap();
 }
 

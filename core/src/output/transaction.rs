@@ -437,7 +437,10 @@ fn named(target: &Path) -> Result<(PathBuf, String), OutputError> {
     // the work and then failed with EBUSY. `..` is resolved against the file system instead.
     let resolved = match target.file_name() {
         Some(_) => target.components().collect(),
-        None => fs::canonicalize(target).map_err(|_| no_name())?,
+        None => fs::canonicalize(target).map_err(|source| OutputError::Io {
+            path: target.to_owned(),
+            source,
+        })?,
     };
     let name = resolved.file_name().ok_or_else(no_name)?;
     let name = name.to_str().ok_or_else(|| OutputError::NotUtf8 {
