@@ -84,6 +84,8 @@ fn stage_heatmap(args: &Args) -> Result<Transaction> {
 fn angular(args: &Args, face_size: u32) -> Result<ExitCode> {
     let test = metrics::read_exr(&args.test)?;
     let reference = metrics::read_exr(&args.reference)?;
+    holds_directions(&args.test, &test)?;
+    holds_directions(&args.reference, &reference)?;
     if (test.width, test.height) != (reference.width, reference.height) {
         anyhow::bail!(
             "{} is {}x{} but {} is {}x{}",
@@ -236,4 +238,33 @@ fn print_table(args: &Args, c: &Comparison) {
     if let Some(path) = &args.heatmap {
         specchio::say!("  heatmap:         {}", path.display());
     }
+}
+
+/// Refuses an image that is not a direction image: on every pixel it marks as the mirror's
+/// (alpha 1) one holds a unit vector, as `render --directions` and `reference` write them.
+/// A colour image has alpha 1 everywhere and colours of any length: compared as directions,
+/// it gave angles that mean nothing, with success.
+fn holds_directions(path: &std::path::Path, image: &specchio::image::RgbaImage) -> Result<()> {
+    // The files are f32; a half-float copy still holds lengths within 1e-3 of 1.
+    const TOLERANCE: f32 = 1e-2;
+    let marked = image.pixels.iter().filter(|p| p[3] == 1.0);
+    let (mut seen, mut wrong) = (0usize, None);
+    for p in marked {
+        seen += 1;
+        let length = glam::Vec3::new(p[0], p[1], p[2]).length();
+        if !((length - 1.0).abs() <= TOLERANCE) {
+            wrong.get_or_insert(length);
+        }
+    }
+    if let Some(length) = wrong {
+        anyhow::bail!(
+            "{}: not a direction image: a pixel marked as the mirror's (alpha 1) holds a vector \
+             of length {}, not a unit direction (of {seen} marked); --angular compares the \
+             direction files of `render --directions` and `reference` \
+             (observer.direction.exr, sensor.direction.exr)",
+            path.display(),
+            specchio::text::num_text(length)
+        );
+    }
+    Ok(())
 }

@@ -311,9 +311,12 @@ fn angular_with_nothing_compared_is_undefined_not_zero() {
     for p in &mut empty.pixels {
         p[3] = 0.0;
     }
+    // The other: unit directions everywhere (+Z), marked as the mirror's.
+    let mut up = image(0.0);
+    up.pixels.iter_mut().for_each(|p| *p = [0.0, 0.0, 1.0, 1.0]);
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
     write_exr(&a, &empty).unwrap();
-    write_exr(&b, &image(0.0)).unwrap();
+    write_exr(&b, &up).unwrap();
     let json = json_of(&specchio(&[
         "compare",
         s(&a),
@@ -328,6 +331,24 @@ fn angular_with_nothing_compared_is_undefined_not_zero() {
     }
     let text = specchio(&["compare", s(&a), s(&b), "--angular", "16"]);
     assert!(String::from_utf8_lossy(&text.stdout).contains("n/a"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--angular` refuses a colour image: its pixels are marked (alpha 1) but hold no unit
+/// directions, and compared as directions they gave angles that mean nothing.
+#[test]
+fn angular_refuses_what_is_not_a_direction_image() {
+    let dir = temp_dir("angular-colour");
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    write_exr(&a, &image(0.0)).unwrap();
+    write_exr(&b, &image(0.1)).unwrap();
+    let out = specchio(&["compare", s(&a), s(&b), "--angular", "16"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("a.exr: not a direction image: a pixel marked as the mirror's"),
+        "{stderr}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
