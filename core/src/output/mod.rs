@@ -57,6 +57,16 @@ pub enum OutputError {
         output: PathBuf,
         manifest: &'static str,
     },
+    #[error(
+        "cannot write {path}: it is inside {output}, another command's output folder (its \
+         {manifest} lists what that output wrote); a file of its own there would stop that \
+         command from replacing its output on its next run; choose a path outside it"
+    )]
+    InsideAnOutput {
+        path: PathBuf,
+        output: PathBuf,
+        manifest: &'static str,
+    },
     #[error("cannot write {path}: it exists and is not a folder (a file or a symbolic link)")]
     NotAFolder { path: PathBuf },
     #[error(

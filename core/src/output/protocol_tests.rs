@@ -318,8 +318,9 @@ fn a_file_output_replaces_only_a_regular_file() {
 }
 
 /// A file output does not replace what an output folder lists as its own (a heatmap over a
-/// reference's `sensor.png`), nested or not, nor its manifest; a new name beside them is
-/// written, and a plain file of the user's is replaced as before.
+/// reference's `sensor.png`), nested or not, nor its manifest; nor does it add a new name
+/// beside them (the output would then hold a file it did not write, and could not be
+/// replaced by its command again); a plain file of the user's is replaced as before.
 #[test]
 fn a_file_output_never_replaces_an_outputs_file() {
     let dir = scratch("anothers");
@@ -341,7 +342,9 @@ fn a_file_output_never_replaces_an_outputs_file() {
         assert!(e.to_string().contains(".specchio-files lists it"), "{e}");
         assert_eq!(fs::read(&target).unwrap(), before, "{listed}");
     }
-    write_json(&out.join("cube/mine.json"), &serde_json::json!({})).unwrap();
+    let e = write_json(&out.join("cube/mine.json"), &serde_json::json!({})).unwrap_err();
+    assert!(matches!(e, OutputError::InsideAnOutput { .. }), "{e}");
+    assert!(!out.join("cube/mine.json").exists());
     let users = dir.join("users.json");
     fs::write(&users, b"old").unwrap();
     write_json(&users, &serde_json::json!({})).unwrap();

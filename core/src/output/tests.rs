@@ -124,6 +124,15 @@ fn a_commit_places_the_folder_and_replaces_an_earlier_output() {
         [".specchio-files", "render.json", "second.txt"]
     );
     assert_eq!(names(&dir), ["out"], "no temporary left beside it");
+    // Another command's file may not go inside it, at any depth: the output could then not
+    // be replaced again.
+    for inside in [target.join("heat.png"), target.join("sub/deeper.json")] {
+        fs::create_dir_all(inside.parent().unwrap()).unwrap();
+        let err = Transaction::new().file(&inside).unwrap_err();
+        assert!(matches!(err, OutputError::InsideAnOutput { .. }), "{err:?}");
+    }
+    fs::remove_dir_all(target.join("sub")).unwrap();
+    render("third.txt");
     fs::remove_dir_all(&dir).unwrap();
 }
 

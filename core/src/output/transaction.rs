@@ -324,7 +324,7 @@ fn check_not_anothers(given: &Path, target: &Path) -> Result<(), OutputError> {
         .ok()
         .and_then(|_| listed_path(target))
     else {
-        return Ok(()); // nothing there to replace
+        return check_not_inside_an_output(given, target);
     };
     for folder in listed.ancestors().skip(1) {
         let manifest = folder.join(super::manifest::MANIFEST);
@@ -341,6 +341,26 @@ fn check_not_anothers(given: &Path, target: &Path) -> Result<(), OutputError> {
             || super::manifest::read_manifest(folder).contains(&inside)
         {
             return Err(OutputError::AnothersFile {
+                path: given.to_owned(),
+                output: folder.to_owned(),
+                manifest: super::manifest::MANIFEST,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a new file inside another output's folder (one holding a manifest): that output
+/// would then hold a file it did not write, and its command would refuse to replace it on
+/// its next run (`--heatmap ref/x.png` blocked `reference --out ref`).
+fn check_not_inside_an_output(given: &Path, target: &Path) -> Result<(), OutputError> {
+    let Some(parent) = fs::canonicalize(parent_of(target)).ok() else {
+        return Ok(()); // no folder: said by the caller
+    };
+    for folder in parent.ancestors() {
+        let manifest = folder.join(super::manifest::MANIFEST);
+        if fs::symlink_metadata(&manifest).is_ok_and(|m| m.is_file()) {
+            return Err(OutputError::InsideAnOutput {
                 path: given.to_owned(),
                 output: folder.to_owned(),
                 manifest: super::manifest::MANIFEST,
