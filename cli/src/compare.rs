@@ -252,7 +252,8 @@ fn holds_directions(path: &std::path::Path, image: &specchio::image::RgbaImage) 
     for p in marked {
         seen += 1;
         let length = glam::Vec3::new(p[0], p[1], p[2]).length();
-        if !((length - 1.0).abs() <= TOLERANCE) {
+        // NaN lengths count as wrong too.
+        if (length - 1.0).abs() > TOLERANCE || length.is_nan() {
             wrong.get_or_insert(length);
         }
     }
