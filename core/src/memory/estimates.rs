@@ -83,6 +83,8 @@ const BENCH_ACCURACY_VIEW_PIXEL_BYTES: u64 = 500;
 
 /// The estimate's part for the textures (its refusal then says to shrink them).
 pub(crate) const TEXTURES_PART: &str = "the scene's textures";
+/// What every run takes whatever its sizes: no setting of the scene's can lower it.
+pub(crate) const BASE_PART: &str = "the driver and the program";
 /// A decoded texel of the scene's textures: the decoded image, its upload and its mips.
 pub(crate) const TEXEL_BYTES: u64 = 12;
 
@@ -135,7 +137,7 @@ fn render_estimate(scene: &Scene, face_size_px: u32, directions: bool, frames: u
     let views = pixels(scene.observer.resolution) + pixels(scene.sensor.resolution);
     let face = u64::from(face_size_px);
     let mut e = Estimate::new();
-    e.add("the driver and the renderer", RENDER_BASE_BYTES);
+    e.add(BASE_PART, RENDER_BASE_BYTES);
     scene_parts(&mut e, scene, RENDER_TRIANGLE_BYTES);
     e.add_many("the two views", views, RENDER_VIEW_PIXEL_BYTES);
     e.add_many("the cube", 6 * face * face, RENDER_CUBE_TEXEL_BYTES);
@@ -225,7 +227,7 @@ pub fn localise(
 ) -> Result<(), MemoryError> {
     let face = u64::from(scene.cube.face_size_px);
     let mut e = Estimate::new();
-    e.add("the driver and the renderer", RENDER_BASE_BYTES);
+    e.add(BASE_PART, RENDER_BASE_BYTES);
     scene_parts(
         &mut e,
         scene,
@@ -265,7 +267,7 @@ pub fn bench(
         let rung =
             texels * BENCH_RUNG_TEXEL_BYTES + views * BENCH_RUNG_VIEW_PIXEL_BYTES + per_scene;
         let mut e = Estimate::new();
-        e.add("the driver and the program", RENDER_BASE_BYTES);
+        e.add(BASE_PART, RENDER_BASE_BYTES);
         let timing = (methods as u64).saturating_mul(method);
         let ladder = (rungs as u64).saturating_mul(rung);
         match timing >= ladder {

@@ -113,8 +113,13 @@ impl Estimate {
         }
         let mut parts = self.parts.clone();
         parts.sort_by_key(|p| std::cmp::Reverse(p.1));
-        // Resolutions cannot help when the textures are most of it.
+        // Resolutions cannot help when the textures are most of it, nor anything of the
+        // scene's when the fixed part alone is over the budget.
+        let base = (parts.iter()).find(|(what, _)| what == estimates::BASE_PART);
         let hint = match parts.first() {
+            _ if base.is_some_and(|b| b.1 > budget.bytes) => {
+                "the budget is below what any run takes (the driver and the program): raise it"
+            }
             Some((what, _)) if what == estimates::TEXTURES_PART => {
                 "the scene's textures are the largest part: use smaller images (materials' file)"
             }
@@ -228,6 +233,16 @@ mod tests {
             text.ends_with(
                 ": the scene's textures are the largest part: use smaller images (materials' file)"
             ),
+            "{text}"
+        );
+        // A budget below the fixed part alone: nothing of the scene's can help.
+        let mut base = Estimate::new();
+        base.add(estimates::BASE_PART, 2 << 30)
+            .add("images", 1 << 20);
+        let text = base.check(&budget, "lower the resolution").unwrap_err();
+        let text = text.to_string();
+        assert!(
+            text.ends_with("(the driver and the program): raise it"),
             "{text}"
         );
         let mut huge = Estimate::new();
