@@ -69,7 +69,8 @@ pub enum FitError {
 }
 
 /// What decides the pixels a fit sees, for a fit that fails on too few or too odd of them.
-const SEEN_BY: &str = "what the fit sees is set by sensor.resolution, and by sensor.tilt and \
+const SEEN_BY: &str = "what the fit sees is set by sensor.resolution and sensor.fov_y (a wide \
+                       field of view leaves the mirror few pixels), and by sensor.tilt and \
                        sensor.shift, which turn or move the sensor off the mirror's axis";
 
 /// "N pixels see", "1 pixel sees".
