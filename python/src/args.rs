@@ -16,14 +16,20 @@ use crate::errors;
 /// An argument of type `T` as Python gave it, or what came instead: taken whatever it is and
 /// refused by name in [`Given::named`]. PyO3's own refusal of a wrong type ("must be real
 /// number, not str") names the argument only in a note, which `str(e)` and Pythons before
-/// 3.11 do not show. Every argument a user passes goes through it; the methods only
-/// `specchio.ray` calls between its driver and workers (`DatasetFrames.frames`,
-/// `DatasetOutput.begin`, `place`, `finish`) keep PyO3's own types.
+/// 3.11 do not show. Every argument a user passes goes through it (or, for the frames and
+/// files `specchio.ray` passes between driver and workers, [`indices`] and [`frame_files`]);
+/// `DatasetOutput.begin` and `finish` keep PyO3's own types.
 #[derive(Debug, Clone)]
 pub enum Given<T> {
     Is(T),
     /// What came instead: its value (when short) and its type, `'0' (a str)`.
     Not(String),
+    /// A list whose element `at` is not what it holds: that element, and what it takes.
+    NotAt {
+        at: usize,
+        what: String,
+        wanted: String,
+    },
 }
 
 /// What an argument of a Rust type takes, as a message says it, and what Python would convert
@@ -33,6 +39,27 @@ pub trait Wanted {
     fn refuses(_obj: &Bound<'_, PyAny>) -> bool {
         false
     }
+    /// For a list: its first element that is not what it holds, described, and what an
+    /// element takes (`database[1]: 1 (an int); give a specchio.Signature`).
+    fn wrong_element(_obj: &Bound<'_, PyAny>) -> Option<(usize, String, String)> {
+        None
+    }
+}
+
+/// The first element of a list or tuple `obj` that `fits` refuses, described.
+fn first_unfit(
+    obj: &Bound<'_, PyAny>,
+    fits: impl Fn(&Bound<'_, PyAny>) -> bool,
+) -> Option<(usize, String)> {
+    if obj.is_instance_of::<PyString>() {
+        return None;
+    }
+    let items = obj.try_iter().ok()?;
+    (items.enumerate()).find_map(|(i, item)| {
+        item.ok()
+            .filter(|item| !fits(item))
+            .map(|item| (i, described(&item)))
+    })
 }
 
 impl Wanted for f64 {
@@ -97,6 +124,10 @@ impl<'py, T: pyo3::PyClass> Wanted for Vec<PyRef<'py, T>> {
     fn wanted() -> String {
         format!("a list of specchio.{}", T::NAME)
     }
+    fn wrong_element(obj: &Bound<'_, PyAny>) -> Option<(usize, String, String)> {
+        let (at, what) = first_unfit(obj, |item| item.is_instance_of::<T>())?;
+        Some((at, what, format!("a specchio.{}", T::NAME)))
+    }
 }
 
 impl<'py> Wanted for Bound<'py, pyo3::types::PyDict> {
@@ -112,6 +143,11 @@ impl Wanted for Vec<f64> {
     fn refuses(obj: &Bound<'_, PyAny>) -> bool {
         holds_bool(obj, 1)
     }
+    fn wrong_element(obj: &Bound<'_, PyAny>) -> Option<(usize, String, String)> {
+        let number = |item: &Bound<'_, PyAny>| !is_bool(item) && item.extract::<f64>().is_ok();
+        let (at, what) = first_unfit(obj, number)?;
+        Some((at, what, f64::wanted()))
+    }
 }
 
 impl<'a, 'py, T> FromPyObject<'a, 'py> for Given<T>
@@ -122,6 +158,9 @@ where
     type Error = PyErr;
 
     fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        if let Some((at, what, wanted)) = T::wrong_element(&obj) {
+            return Ok(Given::NotAt { at, what, wanted });
+        }
         if T::refuses(&obj) {
             return Ok(Given::Not(described(&obj)));
         }
@@ -148,6 +187,9 @@ impl<T: Wanted> Given<T> {
             Given::Not(what) => Err(errors::error(format!(
                 "{name}: {what}; give {}",
                 T::wanted()
+            ))),
+            Given::NotAt { at, what, wanted } => Err(errors::error(format!(
+                "{name}[{at}]: {what}; give {wanted}"
             ))),
         }
     }
@@ -338,4 +380,108 @@ pub fn numbers<'py>(
     }
     let shape: Vec<usize> = given.getattr("shape")?.extract()?;
     Ok((given.call_method1("astype", (dtype,))?, shape))
+}
+
+/// A list of frame indices, each named `name[k]` when it is not a whole number below `n`
+/// (a bool is none); a str, or anything that is not a list of them, is refused by `name`.
+pub fn indices(name: &str, value: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<usize>> {
+    let items = (!value.is_instance_of::<PyString>())
+        .then(|| value.try_iter().ok())
+        .flatten()
+        .ok_or_else(|| {
+            errors::error(format!(
+                "{name}: {}; give a list of frame indices",
+                described(value)
+            ))
+        })?;
+    let mut out = Vec::new();
+    for (k, item) in items.enumerate() {
+        let whole: Whole = item?.extract()?;
+        let fits = match &whole {
+            Whole::Fits(v) => usize::try_from(*v).ok().filter(|&i| i < n),
+            _ => None,
+        };
+        let Some(i) = fits else {
+            let range = match n {
+                0 => "there are no frames".to_owned(),
+                n => format!("must be a frame index from 0 to {}", n - 1),
+            };
+            return Err(errors::error(format!(
+                "{name}[{k}]: {}; {range}",
+                whole.shown()
+            )));
+        };
+        out.push(i);
+    }
+    Ok(out)
+}
+
+/// A frame's files as `DatasetFrames.frames` gives them: a list of (path, bytes) pairs, each
+/// refused by its place in `name` when it is not one.
+pub fn frame_files(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<(String, Vec<u8>)>> {
+    let items = (!value.is_instance_of::<PyString>())
+        .then(|| value.try_iter().ok())
+        .flatten()
+        .ok_or_else(|| {
+            errors::error(format!(
+                "{name}: {}; give a list of (path, bytes) pairs",
+                described(value)
+            ))
+        })?;
+    let mut out = Vec::new();
+    for (k, item) in items.enumerate() {
+        let item = item?;
+        let pair = item
+            .extract::<(Bound<'_, PyAny>, Bound<'_, PyAny>)>()
+            .map_err(|_| {
+                errors::error(format!(
+                    "{name}[{k}]: {}; give a (path, bytes) pair",
+                    described(&item)
+                ))
+            })?;
+        let path: String = pair.0.extract().map_err(|_| {
+            errors::error(format!(
+                "{name}[{k}][0]: {}; give the path as a str",
+                described(&pair.0)
+            ))
+        })?;
+        let bytes = pair
+            .1
+            .cast::<pyo3::types::PyBytes>()
+            .map(|b| b.as_bytes().to_vec())
+            .map_err(|_| {
+                errors::error(format!(
+                    "{name}[{k}][1]: {}; give the file's bytes",
+                    described(&pair.1)
+                ))
+            })?;
+        out.push((path, bytes));
+    }
+    Ok(out)
+}
+
+/// Names given as one comma-separated str (`example`) or a list of str, as that str; a list
+/// element that is not a str is named by its place (`outputs[1]: None (a NoneType)`).
+pub fn names_text(name: &str, value: &Bound<'_, PyAny>, example: &str) -> PyResult<String> {
+    if let Ok(text) = value.extract::<String>() {
+        return Ok(text);
+    }
+    let items = value.try_iter().map_err(|_| {
+        errors::error(format!(
+            "{name}: {}; give a str ({example}) or a list of names",
+            described(value)
+        ))
+    })?;
+    let mut names = Vec::new();
+    for (i, item) in items.enumerate() {
+        let item = item?;
+        let text = item.extract::<String>().map_err(|_| {
+            errors::error(format!(
+                "{name}[{i}]: {}; give a name (a str)",
+                described(&item)
+            ))
+        })?;
+        names.push(text);
+    }
+    Ok(names.join(","))
 }

@@ -147,14 +147,7 @@ pub(crate) fn parse_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Opti
     let Some(given) = outputs else {
         return Ok(None);
     };
-    let text = match given.extract::<String>() {
-        Ok(text) => text,
-        Err(_) => (given.extract::<Vec<String>>())
-            .map_err(|_| {
-                errors::error("outputs: a string (\"image,range\") or a list of layer names")
-            })?
-            .join(","),
-    };
+    let text = crate::args::names_text("outputs", given, "\"image,range\"")?;
     text.parse()
         .map(Some)
         .map_err(|e| errors::error(format!("outputs: {e}")))
@@ -162,12 +155,7 @@ pub(crate) fn parse_outputs(outputs: Option<&Bound<'_, PyAny>>) -> PyResult<Opti
 
 /// The dataset's form as Python names it: `"files"`, `"mcap"` or `"files,mcap"`, or a list.
 pub(crate) fn parse_format(format: &Bound<'_, PyAny>) -> PyResult<Format> {
-    let text = match format.extract::<String>() {
-        Ok(text) => text,
-        Err(_) => (format.extract::<Vec<String>>())
-            .map_err(|_| errors::error("format: a string (\"files,mcap\") or a list of names"))?
-            .join(","),
-    };
+    let text = crate::args::names_text("format", format, "\"files,mcap\"")?;
     text.parse()
         .map_err(|e| errors::error(format!("format: {e}")))
 }

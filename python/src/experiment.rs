@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyString};
+use pyo3::types::{PyDict, PyString};
 
 use crate::errors;
 use crate::said;
@@ -79,12 +79,25 @@ fn option(key: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
     }
     // Python's and numpy's booleans (`np.True_` is no `bool`: its type is numpy's `bool`, or
     // `bool_` before numpy 2; it extracts as one).
-    let kind = value.get_type().name()?.to_string();
-    if value.is_instance_of::<PyBool>() || kind == "bool" || kind == "bool_" {
-        return Ok(match value.extract::<bool>()? {
+    if crate::args::is_bool(value) {
+        // A bool is a switch: given to an option that takes a value, clap said only "a
+        // value is required for '--queries'".
+        if takes_value(&flag) {
+            return Err(errors::error(format!(
+                "{key}: {} (a bool); {flag} takes a value ({key}=600, say), not a switch",
+                value.str()?
+            )));
+        }
+        return Ok(match value.is_truthy()? {
             true => vec![flag],
             false => vec![],
         });
+    }
+    if value.is_instance_of::<PyDict>() {
+        // Iterated, a dict gives its keys: `seed={"a": 1}` became `--seed=a`.
+        return Err(errors::error(format!(
+            "{key}: a dict; give the option's value, or a list for a comma list"
+        )));
     }
     let listed = !value.is_instance_of::<PyString>() && value.try_iter().is_ok();
     let text = if listed {
@@ -97,6 +110,18 @@ fn option(key: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
         value.str()?.to_string()
     };
     Ok(vec![format!("{flag}={text}")])
+}
+
+/// Whether the command's option `flag` (`--queries`) takes a value; false for a switch or an
+/// option the command does not have (clap names that one).
+fn takes_value(flag: &str) -> bool {
+    use clap::Args as _;
+    let command = specchio_bench::localise::Args::augment_args(clap::Command::new("localise"));
+    let long = flag.trim_start_matches("--");
+    let found = (command.get_arguments())
+        .find(|a| a.get_long() == Some(long))
+        .is_some_and(|a| a.get_action().takes_values());
+    found
 }
 
 /// Clap's error without its usage lines, the option named as the command names it.

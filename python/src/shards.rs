@@ -132,13 +132,12 @@ impl DatasetFrames {
 
     /// The frames `indices` (into the trajectory's poses): for each, its files as a list of
     /// (path relative to the dataset folder, bytes) and its index line.
-    fn frames<'py>(&self, py: Python<'py>, indices: Vec<usize>) -> PyResult<Vec<FrameFiles<'py>>> {
-        let n = self.plan.poses.len();
-        if let Some(bad) = indices.iter().find(|&&i| i >= n) {
-            return Err(errors::error(format!(
-                "frame {bad}: the trajectory has {n} poses"
-            )));
-        }
+    fn frames<'py>(
+        &self,
+        py: Python<'py>,
+        indices: Bound<'py, PyAny>,
+    ) -> PyResult<Vec<FrameFiles<'py>>> {
+        let indices = crate::args::indices("indices", &indices, self.plan.poses.len())?;
         // Rendered in order, each frame encoded while the next renders; Python's signals
         // (Ctrl-C) are checked between frames.
         let mut stopped: Option<PyErr> = None;
@@ -315,9 +314,11 @@ impl DatasetOutput {
     fn place(
         &mut self,
         py: Python<'_>,
-        files: Vec<(String, Vec<u8>)>,
-        index_line: String,
+        files: Bound<'_, PyAny>,
+        index_line: crate::args::Given<String>,
     ) -> PyResult<()> {
+        let files = crate::args::frame_files("files", &files)?;
+        let index_line = index_line.named("index_line")?;
         let run = self.run.ok_or_else(|| {
             errors::error("place() comes after begin(), which names the run's lookup")
         })?;

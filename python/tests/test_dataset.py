@@ -264,6 +264,22 @@ def test_the_output_takes_only_its_frames_files(made, monkeypatch):
     del every
     assert not (work / "parts-all").exists()
     world = specchio.DatasetFrames(scene, "robot.csv", encoders=0, panorama_frame="world")
+    # Indices and files of the wrong kind are named by their place, not by PyO3's TypeError.
+    for indices, says in [
+        ([-1], r"^indices\[0\]: -1; must be a frame index from 0 to 4"),
+        ([0, 2**70], r"^indices\[1\]: an int of 71 bits; must be a frame index"),
+        ([True], r"^indices\[0\]: True \(a bool\); must be a frame index"),
+        (0, r"^indices: 0 \(an int\); give a list of frame indices"),
+    ]:
+        with pytest.raises(specchio.SpecchioError, match=says):
+            world.frames(indices)
+    for files, says in [
+        ([("frames/000000/camera.json", "str")], r"^files\[0\]\[1\]: 'str' \(a str\); give the file's bytes"),
+        ([("frames/000000/camera.json",)], r"^files\[0\]: .*give a \(path, bytes\) pair"),
+        ("frames", r"^files: 'frames' \(a str\); give a list of \(path, bytes\) pairs"),
+    ]:
+        with pytest.raises(specchio.SpecchioError, match=says):
+            out.place(files, line(0))
     ((files, line1),) = world.frames([1])
     with pytest.raises(specchio.SpecchioError, match="frame 1: its panoramas are not in the dataset's robot frame"):
         out.place(files, line1)

@@ -41,7 +41,10 @@ def test_a_bad_choice_writes_nothing_and_says_why(tmp_path, monkeypatch):
     cases = [
         (["image", "depth"], "outputs: `depth` is not a layer"),
         ("camera", "outputs: camera needs a camera model"),
-        (3, r'outputs: a string \("image,range"\) or a list of layer names'),
+        (3, r'^outputs: 3 \(an int\); give a str \("image,range"\) or a list of names'),
+        # A list's wrong element is named by its place; `all` stands alone.
+        (["image", None], r"^outputs\[1\]: None \(a NoneType\); give a name \(a str\)"),
+        ("all,image", r"^outputs: `all` stands alone, not among layer names"),
     ]
     for outputs, says in cases:
         with pytest.raises(specchio.SpecchioError, match=says):

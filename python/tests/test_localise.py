@@ -191,7 +191,10 @@ def test_localise_runs_the_commands_experiment(tmp_path):
     assert _untimed(again) == _untimed(report)
     for bad, says in [({"queries": 0}, "--queries"), ({"bogus": 1}, "--bogus"),
                       ({"descriptor": "sift"}, "`sift` is not a descriptor"),
-                      ({"seed": -1}, "'-1' for '--seed"), ({"descriptor": "--help"}, "--help")]:
+                      ({"seed": -1}, "'-1' for '--seed"), ({"descriptor": "--help"}, "--help"),
+                      # A bool is no value, a dict no list (its keys were taken as one).
+                      ({"queries": True}, "queries: True (a bool); --queries takes a value"),
+                      ({"seed": {"a": 1}}, "seed: a dict; give the option's value")]:
         with pytest.raises(specchio.SpecchioError, match=re.escape(says)):
             specchio.localise(scene, tmp_path / "bad", **{**options, **bad})
         assert not (tmp_path / "bad").exists()
