@@ -241,7 +241,8 @@ fn print_table(args: &Args, c: &Comparison) {
 }
 
 /// Refuses an image that is not a direction image: on every pixel it marks as the mirror's
-/// (alpha 1) one holds a unit vector, as `render --directions` and `reference` write them.
+/// (alpha 1) one holds a unit vector, or the zero vector of a ray that meets nothing, as
+/// `render --directions` and `reference` write them.
 /// A colour image has alpha 1 everywhere and colours of any length: compared as directions,
 /// it gave angles that mean nothing, with success.
 fn holds_directions(path: &std::path::Path, image: &specchio::image::RgbaImage) -> Result<()> {
@@ -252,6 +253,9 @@ fn holds_directions(path: &std::path::Path, image: &specchio::image::RgbaImage) 
     for p in marked {
         seen += 1;
         let length = glam::Vec3::new(p[0], p[1], p[2]).length();
+        if length == 0.0 {
+            continue; // a ray that meets nothing
+        }
         // NaN lengths count as wrong too.
         if (length - 1.0).abs() > TOLERANCE || length.is_nan() {
             wrong.get_or_insert(length);

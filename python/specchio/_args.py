@@ -49,6 +49,9 @@ def environment(name: str, value: Any) -> Optional[dict[str, str]]:
     for key, item in value.items():
         if not isinstance(key, str) or not key or "=" in key or "\0" in key:
             raise SpecchioError(f"{name}: the key {shown(key)}; give variable names as str, without '='")
-        if not isinstance(item, str) or "\0" in item:
-            raise SpecchioError(f"{name}[{key!r}]: {shown(item)}; give the value as a str")
-    return dict(value)
+        # A number is written as Python writes it (``{"LP_NUM_THREADS": 1}``); None or a
+        # bool would become the word "None" or "True".
+        number = isinstance(item, (int, float)) and not isinstance(item, bool)
+        if not (isinstance(item, str) or number) or "\0" in str(item):
+            raise SpecchioError(f"{name}[{key!r}]: {shown(item)}; give the value as a str (or a number)")
+    return {key: str(item) for key, item in value.items()}

@@ -51,7 +51,10 @@ fn first_unfit(
     obj: &Bound<'_, PyAny>,
     fits: impl Fn(&Bound<'_, PyAny>) -> bool,
 ) -> Option<(usize, String)> {
-    if obj.is_instance_of::<PyString>() {
+    // A list or a tuple: a dict or a set would give its keys or no order.
+    let sequence =
+        obj.is_instance_of::<pyo3::types::PyList>() || obj.is_instance_of::<pyo3::types::PyTuple>();
+    if !sequence {
         return None;
     }
     let items = obj.try_iter().ok()?;

@@ -217,7 +217,7 @@ pub fn dataset(
     let stopped: Mutex<Option<PyErr>> = Mutex::new(None);
     // The frames placed when the run stopped (a resumable run keeps them).
     let placed = AtomicUsize::new(0);
-    let result = said::detach(py, || render(&job, &stopped, &placed))?;
+    let result = said::unsaid(py, || render(&job, &stopped, &placed));
     let placed = placed.load(Ordering::Relaxed);
     place_finished(py, result, stopped, job.progress)
         .map_err(|e| with_kept_note(py, e, &out, resume, placed))
@@ -351,12 +351,19 @@ fn place_finished(
     stopped: Mutex<Option<PyErr>>,
     progress: Option<&Py<PyAny>>,
 ) -> PyResult<Py<PyAny>> {
-    if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
-        return Err(e);
+    // The run's own error first: its warnings then said, never raised in its stead.
+    let stopped = stopped.into_inner().unwrap_or_else(|p| p.into_inner());
+    let result = match (stopped, result) {
+        (Some(e), _) => Err(e),
+        (None, result) => result.map_err(errors::to_py),
+    };
+    if result.is_err() {
+        said::say_unraised(py);
     }
-    let (ready, record, log, omni_missing) = result.map_err(errors::to_py)?;
-    check_validation(&log)?;
+    let (ready, record, log, omni_missing) = result?;
+    check_validation(&log).inspect_err(|_| said::say_unraised(py))?;
     // Said before the folder is placed, so that warnings made errors place nothing.
+    said::say(py)?;
     if let Some(text) = omni_missing {
         warn(py, text)?;
     }
@@ -393,7 +400,9 @@ pub(crate) fn with_kept_note(
 
 /// Places a finished dataset; what of its work folder could not be removed is a warning.
 pub(crate) fn commit(py: Python<'_>, ready: Ready) -> PyResult<()> {
-    let left = said::detach(py, || ready.commit())?.map_err(errors::to_py)?;
+    let placed = said::unsaid(py, || ready.commit());
+    said::say_unraised(py);
+    let left = placed.map_err(errors::to_py)?;
     if !left.is_empty() {
         let text = format!(
             "the work folder is not removed entirely: {}",
@@ -410,7 +419,8 @@ pub(crate) fn warn(py: Python<'_>, text: String) -> PyResult<()> {
     PyErr::warn(
         py,
         &warning,
-        &std::ffi::CString::new(text).unwrap_or_default(),
+        // A NUL would end the C string early; said as the escape it is.
+        &std::ffi::CString::new(text.replace('\0', "\\0")).unwrap_or_default(),
         1,
     )
 }

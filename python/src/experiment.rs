@@ -49,13 +49,15 @@ pub fn localise(
             anyhow::anyhow!("stopped {at}: nothing was written")
         })
     };
-    let run = said::detach(py, || {
+    let run = said::unsaid(py, || {
         // What this call may not replace is what it reads (docs/python.md).
         specchio::files::identity::forget();
         let (report, messages) = specchio_bench::localise::localise(&args, &stop)?;
         specchio::process::validation::verdict(&messages)?;
         anyhow::Ok(report)
-    })?;
+    });
+    // The report is placed (or nothing is): said, never raised.
+    said::say_unraised(py);
     if let Some(e) = stopped.into_inner().unwrap_or_else(|p| p.into_inner()) {
         return Err(e);
     }

@@ -107,6 +107,8 @@ pub fn from_array(
         )));
     }
     let n = rows.nrows();
+    // One time for every pose is named `times`, one a pose `times[i]`.
+    let one_time = naming == Naming::One || times.as_ref().is_some_and(|t| t.len() == 1);
     let times = match times {
         None => vec![0.0; n],
         Some(t) if t.len() == 1 => vec![t[0]; n],
@@ -118,7 +120,6 @@ pub fn from_array(
             )))
         }
     };
-    let one_time = times.len() == 1 || naming == Naming::One;
     let mut out = Vec::with_capacity(n);
     for (i, (row, &time_s)) in rows.outer_iter().zip(&times).enumerate() {
         let at = naming.pose(i);

@@ -68,8 +68,9 @@ pub fn reference<'py>(
         let mut outputs = SensorOutputs::from_reference(&traced, time, &sensor);
         let light = specchio::sensor::imaging::traced_exposure(&traced, time, spp, [sw, sh]);
         outputs.expose(&traced, 0, light.as_ref());
-        Layers::new(outputs, &observer.color)
+        Ok::<_, std::convert::Infallible>(Layers::new(outputs, &observer.color))
     })?;
+    let Ok(layers) = layers;
     arrays::frame_dict(py, layers)
 }
 
@@ -103,7 +104,7 @@ pub fn calibrate<'py>(
         progress: progress::calibration("calibrate", scene.scene.sensor.resolution, true),
         stopped: &stopped,
     };
-    let record = said::detach(py, || -> Result<_, String> {
+    let record = said::unsaid(py, || -> Result<_, String> {
         // What this call may not replace is what it reads (docs/python.md).
         specchio::files::identity::forget();
         let mut staged = Transaction::new();
@@ -125,7 +126,9 @@ pub fn calibrate<'py>(
         }
         staged.commit().map_err(|e| errors::message(&e))?;
         Ok(record)
-    })?;
+    });
+    // Placed, or nothing was: said, never raised.
+    said::say_unraised(py);
     if let Some(e) = watched::raised(stopped) {
         return Err(e);
     }

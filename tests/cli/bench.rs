@@ -365,9 +365,15 @@ const BAD_OPTIONS: [(&[&str], &str, i32); 16] = [
     ),
     (&["--plot", "no/such/folder/p.svg"], "no/such/folder", 1),
     (
-        &["--methods", "instanced", "--max-regression", "10"],
+        &["--methods", "instanced", "--max-regression", "10", "--baseline", "b.json"],
         "include six-pass",
         1,
+    ),
+    // Without a baseline it would gate nothing.
+    (
+        &["--max-regression", "10"],
+        "the following required arguments were not provided:\n  --baseline <BASELINE>",
+        2,
     ),
     (&["no/such/scene.toml"], "no/such/scene.toml", 1),
     (
@@ -377,7 +383,7 @@ const BAD_OPTIONS: [(&[&str], &str, i32); 16] = [
     ),
     (
         &["--rungs", "box,box"],
-        "--rungs: \"box\" is given twice",
+        "--rungs: box is given twice",
         1,
     ),
     (

@@ -39,6 +39,7 @@ pub fn write_numbered(
 ) -> Result<PathBuf, OutputError> {
     let first = first_candidate(folder, prefix, ext);
     let numbered = |n: u32| folder.join(format!("{prefix}-{n:04}.{ext}"));
+    super::transaction::check_not_inside_an_output(&numbered(first), &numbered(first))?;
     let io_error = |source| OutputError::Io {
         path: numbered(first),
         source,

@@ -132,6 +132,21 @@ fn a_commit_places_the_folder_and_replaces_an_earlier_output() {
         assert!(matches!(err, OutputError::InsideAnOutput { .. }), "{err:?}");
     }
     fs::remove_dir_all(target.join("sub")).unwrap();
+    // Nor another output's folder, however deep, nor a numbered file (the viewer's key).
+    let nested = Transaction::new().folder(&target.join("sub/new"), "render.json");
+    assert!(
+        matches!(nested, Err(OutputError::InsideAnOutput { .. })),
+        "{nested:?}"
+    );
+    let shot = crate::output::numbered::write_numbered(&target, "shot", "png", b"x");
+    assert!(
+        matches!(shot, Err(OutputError::InsideAnOutput { .. })),
+        "{shot:?}"
+    );
+    assert_eq!(
+        names(&target),
+        [".specchio-files", "render.json", "second.txt"]
+    );
     render("third.txt");
     fs::remove_dir_all(&dir).unwrap();
 }

@@ -70,6 +70,7 @@ impl Transaction {
     pub fn folder(&mut self, target: &Path, marker: &str) -> Result<(), OutputError> {
         let (resolved, name) = named(target)?;
         self.check_new(target, &resolved, &name)?;
+        check_not_inside_an_output(target, &resolved)?;
         replace::check_replaceable(target, &resolved, marker, &self.inputs())?;
         let parent = parent_of(&resolved);
         self.create_parents(&parent)?;
@@ -350,14 +351,16 @@ fn check_not_anothers(given: &Path, target: &Path) -> Result<(), OutputError> {
     Ok(())
 }
 
-/// Refuses a new file inside another output's folder (one holding a manifest): that output
-/// would then hold a file it did not write, and its command would refuse to replace it on
-/// its next run (`--heatmap ref/x.png` blocked `reference --out ref`).
-fn check_not_inside_an_output(given: &Path, target: &Path) -> Result<(), OutputError> {
-    let Some(parent) = fs::canonicalize(parent_of(target)).ok() else {
-        return Ok(()); // no folder: said by the caller
+/// Refuses a new file or folder inside another output's folder (one holding a manifest):
+/// that output would then hold something it did not write, and its command would refuse to
+/// replace it on its next run (`--heatmap ref/x.png` blocked `reference --out ref`; so did
+/// `render --out ref/sub`). The folders that do not exist yet are skipped up to one that does.
+pub(super) fn check_not_inside_an_output(given: &Path, target: &Path) -> Result<(), OutputError> {
+    let parent = parent_of(target);
+    let Some(existing) = (parent.ancestors()).find_map(|a| fs::canonicalize(a).ok()) else {
+        return Ok(());
     };
-    for folder in parent.ancestors() {
+    for folder in existing.ancestors() {
         let manifest = folder.join(super::manifest::MANIFEST);
         if fs::symlink_metadata(&manifest).is_ok_and(|m| m.is_file()) {
             return Err(OutputError::InsideAnOutput {

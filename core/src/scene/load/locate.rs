@@ -213,7 +213,8 @@ fn plain_words(message: &str) -> String {
         .and_then(|rest| rest.split_once('`'))
         .filter(|(_, after)| after.is_empty() || *after == " as i128" || *after == " as u128");
     match integer {
-        Some((n, _)) if plain == WHOLE => {
+        // What the format reads as i64 (every count): past it, out of range.
+        Some((n, _)) if rust == "i64" => {
             format!(
                 "{n} is out of range: expected {plain} of at most {}",
                 i64::MAX

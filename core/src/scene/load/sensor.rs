@@ -165,17 +165,22 @@ impl Ctx<'_> {
                 }
                 if !FOV_Y_DEG.contains(fov) {
                     // The mirror looks too small from the camera: its distance where the file
-                    // sets it, else the rim's size.
-                    let field = match (s.offset.is_some(), &mirror.shape.surface) {
-                        (true, _) => "sensor.offset",
-                        (false, crate::mirror::Surface::Sphere { .. }) => "mirror.radius",
-                        (false, _) => "mirror.rim_radius",
+                    // sets it (the hyperboloid's focal distance places its camera), else the
+                    // rim's size.
+                    let shape_camera = mirror.shape.camera_distance_m().is_some();
+                    let (field, distance) = match (&mirror.shape.surface, shape_camera) {
+                        (_, true) => ("mirror.focal_distance", "mirror.focal_distance"),
+                        (_, false) if s.offset.is_some() => ("sensor.offset", "sensor.offset"),
+                        (crate::mirror::Surface::Sphere { .. }, _) => {
+                            ("mirror.radius", "sensor.offset")
+                        }
+                        _ => ("mirror.rim_radius", "sensor.offset"),
                     };
                     return Err(self.invalid(
                         field,
                         format!(
                             "the mirror's rim is {} degrees from the camera's axis with the \
-                             camera {} m from the mirror (sensor.offset), and fitting it needs a \
+                             camera {} m from the mirror ({distance}), and fitting it needs a \
                              vertical field of view of {} degrees, less than the {} a camera may \
                              have; bring the camera nearer or make the rim wider",
                             num_text(tan.atan().to_degrees()),

@@ -281,7 +281,9 @@ impl<'a> CubeRecorder<'a> {
                 more_colors: Vec::new(),
                 depth: self.parts.cube.depth_layers_view.raw,
                 size: [size, size],
-                layers: if view_mask != 0 { 0 } else { 6 },
+                // With a view mask the count is ignored; 1, not 0, so that a clear's layer 0
+                // lies within it as validation layers check it.
+                layers: if view_mask != 0 { 1 } else { 6 },
                 view_mask,
                 clear: all,
                 store_depth: true,
