@@ -316,7 +316,7 @@ fn check_threads_are_recorded() {
 }
 
 /// Bad `bench` arguments, what their refusal says, and its code (clap's 2, the run's own 1).
-const BAD_OPTIONS: [(&[&str], &str, i32); 16] = [
+const BAD_OPTIONS: [(&[&str], &str, i32); 17] = [
     (
         &["--cube-sizes", "0"],
         "'--cube-sizes <CUBE_SIZES>': `0` is not a face size: a whole number in 1..=8192",
