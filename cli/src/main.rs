@@ -15,6 +15,7 @@ mod probe;
 mod records;
 mod reference;
 mod render;
+mod render_input;
 
 use std::process::ExitCode;
 

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use specchio::output::{Sink, Transaction};
 use specchio::process::progress::Progress;
 use specchio::render::lookups::{self, TraceIn, TraceOrder};
@@ -20,6 +20,7 @@ use specchio::vk::device::{self, Device, DeviceInfo};
 use crate::records::{
     CubeSettings, NotRun, RenderRecord, RenderRun, RenderSettings, RenderSummary,
 };
+use crate::render_input::{chosen_lookup, frame_times_are_finite, load_scene, options_apply};
 use specchio::process::args::{face_size, real, whole};
 use specchio::process::probe;
 use specchio::vk::instance::{Instance, InstanceDesc};
@@ -33,47 +34,47 @@ pub const MAX_FRAME_INDEX: u64 = 1_000_000_000;
 #[derive(clap::Args)]
 pub struct Args {
     /// The scene file (TOML; see docs/scene-format.md).
-    scene: PathBuf,
+    pub(crate) scene: PathBuf,
     /// Output folder: created with everything in it at the end, or not at all; an earlier
     /// render there is replaced.
     #[arg(long)]
-    out: PathBuf,
+    pub(crate) out: PathBuf,
     /// Scene time of the (first) frame in seconds (finite, >= 0).
     #[arg(long, conflicts_with = "frame", allow_negative_numbers = true,
           value_parser = real(0.0, false, f64::INFINITY))]
-    time: Option<f64>,
+    pub(crate) time: Option<f64>,
     /// Frame number of the (first) frame, 0..=1000000000; its time is N / fps.
     #[arg(long, allow_negative_numbers = true, value_parser = whole(0..=MAX_FRAME_INDEX))]
-    frame: Option<u64>,
+    pub(crate) frame: Option<u64>,
     /// Frames per second for --frame and --frames, in (0, 10000].
     #[arg(long, default_value_t = 30.0, allow_negative_numbers = true,
           value_parser = real(0.0, true, 10_000.0))]
-    fps: f64,
+    pub(crate) fps: f64,
     /// Render K consecutive frames (numbered outputs in DIR/NNNN/), 1..=100000.
     #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_parser = whole(1..=MAX_FRAMES))]
-    frames: u32,
+    pub(crate) frames: u32,
     /// Cube face size in texels (overrides the scene's cube.face_size).
     #[arg(long, allow_negative_numbers = true, value_parser = face_size)]
-    cube_size: Option<u32>,
+    pub(crate) cube_size: Option<u32>,
     /// Cube fill method (`specchio info` lists them, with what this device can run), or all
     /// (each usable one into DIR/<method>/; measurement variants only when named).
     #[arg(long, default_value = "six-pass", value_parser = specchio::process::args::method_or_all)]
-    method: String,
+    pub(crate) method: String,
     /// Mirror lookup (`specchio info` lists them, with what this device can run; see
     /// docs/accuracy.md). Default: the scene's `mirror.lookup`.
     #[arg(long, value_parser = specchio::process::args::lookup)]
-    lookup: Option<Lookup>,
+    pub(crate) lookup: Option<Lookup>,
     /// The distance lookup's linear search steps, 1..=256 (overrides the scene's
     /// mirror.distance_steps; see docs/accuracy.md).
     #[arg(long, allow_negative_numbers = true, value_parser = whole(1..=MAX_DISTANCE_STEPS))]
-    distance_steps: Option<u32>,
+    pub(crate) distance_steps: Option<u32>,
     /// The distance lookup's secant refinements, 0..=32 (overrides mirror.secant_steps).
     #[arg(long, allow_negative_numbers = true, value_parser = whole(0..=MAX_SECANT_STEPS))]
-    secant_steps: Option<u32>,
+    pub(crate) secant_steps: Option<u32>,
     /// Also write, per mirror pixel, the direction looked up in the cube map
     /// (`observer.direction.exr`, `sensor.direction.exr`), to compare with `specchio reference`.
     #[arg(long)]
-    directions: bool,
+    pub(crate) directions: bool,
     /// Also write the sensor outputs: ray map, range and ids, the id map, panoramas from the
     /// sensor image (and from the cube where there is one), camera.json (docs/sensor.md).
     /// Without --lookup the colour, range and ids are all traced along one light path, on
@@ -81,93 +82,37 @@ pub struct Args {
     /// other); with a cube lookup range and ids come through the cube, with a warning and
     /// camera.json's `ground_truth` saying so.
     #[arg(long)]
-    sensor_outputs: bool,
+    pub(crate) sensor_outputs: bool,
     /// Under `on-change`, re-render all six faces on any change instead of only the faces a
     /// moved object touches.
     #[arg(long)]
-    full_updates: bool,
+    pub(crate) full_updates: bool,
     /// Under `on-change`, re-render a dirty face whole instead of only its dirty rectangles
     /// (the pixels a moved object's old or new bounds project to; multiview re-renders all
     /// six faces, in the dirty faces' rectangles together).
     #[arg(long, conflicts_with = "full_updates")]
-    whole_faces: bool,
+    pub(crate) whole_faces: bool,
     /// The order the tracing lookups (ray-query, distance-exact) hand their acceleration-
     /// structure builds: `split` (spatially coherent, the default) or `given` (the scene's own,
     /// to measure what the order is worth on a driver that keeps it: docs/accuracy.md).
     #[arg(long, value_parser = specchio::process::args::trace_order, default_value = "split")]
-    trace_order: TraceOrder,
+    pub(crate) trace_order: TraceOrder,
     /// Where the bvh lookup walks its rays: `fragment` (in the mirror's fragment shaders) or
     /// `compute` (once a view, in a compute pass before it is drawn). Default: the device's
     /// (compute on a GPU, fragment on a CPU driver; docs/accuracy.md).
     #[arg(long, value_parser = specchio::process::args::trace_in)]
-    trace_in: Option<specchio::render::lookups::TraceIn>,
+    pub(crate) trace_in: Option<specchio::render::lookups::TraceIn>,
     /// How the bvh lookup lays out and walks its trees: `cwbvh` (eight children a node) or
     /// `bvh4` (four, nearest first). Default: the device's (bvh4 on SwiftShader, cwbvh
     /// elsewhere; docs/accuracy.md). The same pixels either way.
     #[arg(long, value_parser = specchio::process::args::bvh_layout)]
-    bvh_layout: Option<specchio::bvh::BvhLayout>,
+    pub(crate) bvh_layout: Option<specchio::bvh::BvhLayout>,
     /// Enable the Khronos validation layer; any message makes the command fail.
     #[arg(long)]
-    validate: bool,
+    pub(crate) validate: bool,
     /// Vulkan device: index or part of its name (see `specchio info`).
     #[arg(long)]
-    device: Option<String>,
-}
-
-/// Refuses a run whose first or last frame falls at no finite time: each flag is in its own
-/// range, but --frame over a tiny --fps (1 / 4.9e-324) is infinite, which the scene's motion
-/// cannot be evaluated at (an orbiting object silently dropped out of the image).
-fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
-    let last_s = start_s + f64::from(args.frames - 1) / args.fps;
-    if !(start_s.is_finite() && last_s.is_finite()) {
-        bail!(
-            "--fps {}: frames {}..{} fall at no finite time (frame / fps overflows); \
-             give a larger --fps or --time",
-            specchio::text::num_text(args.fps),
-            args.frame.unwrap_or(0),
-            args.frame.unwrap_or(0) + u64::from(args.frames - 1)
-        );
-    }
-    Ok(())
-}
-
-/// Refuses an option that would change nothing here, rather than take it without a word (and
-/// record it in render.json as if it had): the update options under a refresh policy that
-/// re-renders every face whole anyway, the bvh walk's options with another lookup.
-fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Result<()> {
-    let updates = [
-        ("--full-updates", args.full_updates),
-        ("--whole-faces", args.whole_faces),
-    ];
-    if let Some((option, _)) = updates.iter().find(|(_, given)| *given) {
-        use specchio::scene::RefreshPolicy;
-        let policy = match scene.refresh {
-            RefreshPolicy::OnChange => None,
-            RefreshPolicy::EveryFrame => Some("\"every-frame\"".to_owned()),
-            RefreshPolicy::EveryN(n) => Some(format!("\"every-n\" (n = {n})")),
-        };
-        if let Some(policy) = policy {
-            bail!(
-                "{option}: changes only updates on change, and {} sets refresh.policy = \
-                 {policy}: every update re-renders all six faces whole; leave it out, or set \
-                 the policy to \"on-change\"",
-                args.scene.display(),
-            );
-        }
-    }
-    let walks = [
-        ("--trace-in", args.trace_in.is_some()),
-        ("--bvh-layout", args.bvh_layout.is_some()),
-    ];
-    if let Some((option, _)) = walks.iter().find(|(_, given)| *given) {
-        if lookup != Lookup::Bvh {
-            bail!(
-                "{option}: only the bvh lookup walks trees of its own, and this run's lookup \
-                 is {lookup}; leave it out, or give --lookup bvh"
-            );
-        }
-    }
-    Ok(())
+    pub(crate) device: Option<String>,
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
@@ -219,22 +164,6 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     }
     specchio::process::validation::verdict(&messages)?;
     Ok(ExitCode::SUCCESS)
-}
-
-/// The scene with the command line's search settings, checked against what the command was
-/// asked to write and against the memory it would take.
-fn load_scene(args: &Args) -> Result<Scene> {
-    let mut scene = specchio::scene::load(&args.scene)?;
-    if let Some(n) = args.distance_steps {
-        scene.mirror.distance_steps = n;
-    }
-    if let Some(n) = args.secant_steps {
-        scene.mirror.secant_steps = n;
-    }
-    let face_size_px = args.cube_size.unwrap_or(scene.cube.face_size_px);
-    specchio::memory::estimates::render(&scene, face_size_px, args.directions, args.sensor_outputs)
-        .with_context(|| args.scene.display().to_string())?;
-    Ok(scene)
 }
 
 /// One method's frames, written into its folder, and its summary printed.
@@ -471,15 +400,6 @@ fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()
         }
     }
     Ok(())
-}
-
-/// The lookup the frames use: `--lookup`; else, for `--sensor-outputs`, the first that traces
-/// and that the device runs, the faster there (`bvh` on CPU drivers, `ray-query` on a GPU with
-/// ray queries, `bvh` on any other: each lookup's `ground_truth_rank`), so that
-/// the colour, the range and the ids are traced along one light path; else the scene's.
-fn chosen_lookup(args: &Args, scene: &Scene, device: &DeviceInfo) -> Lookup {
-    let traced = || lookups::one_light_path(device).filter(|_| args.sensor_outputs);
-    args.lookup.or_else(traced).unwrap_or(scene.mirror.lookup)
 }
 
 /// The sensor outputs of one frame from its ray-map images (`Readback::rays`).

@@ -1,0 +1,91 @@
+//! What `specchio render` takes from its arguments before any work: the scene with the
+//! command line's settings (checked against the memory it would take), the frames' times,
+//! the lookup, and the refusal of options that would change nothing.
+
+use anyhow::{bail, Context, Result};
+use specchio::render::lookups;
+use specchio::scene::{Lookup, Scene};
+use specchio::vk::device::DeviceInfo;
+
+use crate::render::Args;
+
+/// Refuses a run whose first or last frame falls at no finite time: each flag is in its own
+/// range, but --frame over a tiny --fps (1 / 4.9e-324) is infinite, which the scene's motion
+/// cannot be evaluated at (an orbiting object silently dropped out of the image).
+pub(crate) fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
+    let last_s = start_s + f64::from(args.frames - 1) / args.fps;
+    if !(start_s.is_finite() && last_s.is_finite()) {
+        bail!(
+            "--fps {}: frames {}..{} fall at no finite time (frame / fps overflows); \
+             give a larger --fps or --time",
+            specchio::text::num_text(args.fps),
+            args.frame.unwrap_or(0),
+            args.frame.unwrap_or(0) + u64::from(args.frames - 1)
+        );
+    }
+    Ok(())
+}
+
+/// Refuses an option that would change nothing here, rather than take it without a word (and
+/// record it in render.json as if it had): the update options under a refresh policy that
+/// re-renders every face whole anyway, the bvh walk's options with another lookup.
+pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Result<()> {
+    let updates = [
+        ("--full-updates", args.full_updates),
+        ("--whole-faces", args.whole_faces),
+    ];
+    if let Some((option, _)) = updates.iter().find(|(_, given)| *given) {
+        use specchio::scene::RefreshPolicy;
+        let policy = match scene.refresh {
+            RefreshPolicy::OnChange => None,
+            RefreshPolicy::EveryFrame => Some("\"every-frame\"".to_owned()),
+            RefreshPolicy::EveryN(n) => Some(format!("\"every-n\" (n = {n})")),
+        };
+        if let Some(policy) = policy {
+            bail!(
+                "{option}: changes only updates on change, and {} sets refresh.policy = \
+                 {policy}: every update re-renders all six faces whole; leave it out, or set \
+                 the policy to \"on-change\"",
+                args.scene.display(),
+            );
+        }
+    }
+    let walks = [
+        ("--trace-in", args.trace_in.is_some()),
+        ("--bvh-layout", args.bvh_layout.is_some()),
+    ];
+    if let Some((option, _)) = walks.iter().find(|(_, given)| *given) {
+        if lookup != Lookup::Bvh {
+            bail!(
+                "{option}: only the bvh lookup walks trees of its own, and this run's lookup \
+                 is {lookup}; leave it out, or give --lookup bvh"
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The scene with the command line's search settings, checked against what the command was
+/// asked to write and against the memory it would take.
+pub(crate) fn load_scene(args: &Args) -> Result<Scene> {
+    let mut scene = specchio::scene::load(&args.scene)?;
+    if let Some(n) = args.distance_steps {
+        scene.mirror.distance_steps = n;
+    }
+    if let Some(n) = args.secant_steps {
+        scene.mirror.secant_steps = n;
+    }
+    let face_size_px = args.cube_size.unwrap_or(scene.cube.face_size_px);
+    specchio::memory::estimates::render(&scene, face_size_px, args.directions, args.sensor_outputs)
+        .with_context(|| args.scene.display().to_string())?;
+    Ok(scene)
+}
+
+/// The lookup the frames use: `--lookup`; else, for `--sensor-outputs`, the first that traces
+/// and that the device runs, the faster there (`bvh` on CPU drivers, `ray-query` on a GPU with
+/// ray queries, `bvh` on any other: each lookup's `ground_truth_rank`), so that
+/// the colour, the range and the ids are traced along one light path; else the scene's.
+pub(crate) fn chosen_lookup(args: &Args, scene: &Scene, device: &DeviceInfo) -> Lookup {
+    let traced = || lookups::one_light_path(device).filter(|_| args.sensor_outputs);
+    args.lookup.or_else(traced).unwrap_or(scene.mirror.lookup)
+}
