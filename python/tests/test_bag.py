@@ -178,7 +178,7 @@ def test_a_bad_format_writes_nothing_and_says_why(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "robot.csv").write_text(ROBOT_CSV)
     scene = str(scene_path("thesis-room"))
-    for fmt, says in (("bag", "format: `bag` is not a format"), (7, "format: a string")):
+    for fmt, says in (("bag", "format: `bag` is not a format"), (7, r"^format: 7 \(an int\); give a str")):
         with pytest.raises(specchio.SpecchioError, match=says):
             specchio.dataset(scene, "robot.csv", "bad", format=fmt)
         assert not (tmp_path / "bad").exists()
