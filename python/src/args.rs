@@ -385,18 +385,23 @@ pub fn numbers<'py>(
     Ok((given.call_method1("astype", (dtype,))?, shape))
 }
 
+/// The items of `value`, an iterable other than a str, or an error naming `name`, what it
+/// was given and `wanted` (a str iterates its characters, which no one means as a list).
+fn items_of<'py>(
+    name: &str,
+    value: &Bound<'py, PyAny>,
+    wanted: &str,
+) -> PyResult<Bound<'py, pyo3::types::PyIterator>> {
+    (!value.is_instance_of::<PyString>())
+        .then(|| value.try_iter().ok())
+        .flatten()
+        .ok_or_else(|| errors::error(format!("{name}: {}; give {wanted}", described(value))))
+}
+
 /// A list of frame indices, each named `name[k]` when it is not a whole number below `n`
 /// (a bool is none); a str, or anything that is not a list of them, is refused by `name`.
 pub fn indices(name: &str, value: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<usize>> {
-    let items = (!value.is_instance_of::<PyString>())
-        .then(|| value.try_iter().ok())
-        .flatten()
-        .ok_or_else(|| {
-            errors::error(format!(
-                "{name}: {}; give a list of frame indices",
-                described(value)
-            ))
-        })?;
+    let items = items_of(name, value, "a list of frame indices")?;
     let mut out = Vec::new();
     for (k, item) in items.enumerate() {
         let whole: Whole = item?.extract()?;
@@ -422,15 +427,7 @@ pub fn indices(name: &str, value: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<u
 /// A frame's files as `DatasetFrames.frames` gives them: a list of (path, bytes) pairs, each
 /// refused by its place in `name` when it is not one.
 pub fn frame_files(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Vec<(String, Vec<u8>)>> {
-    let items = (!value.is_instance_of::<PyString>())
-        .then(|| value.try_iter().ok())
-        .flatten()
-        .ok_or_else(|| {
-            errors::error(format!(
-                "{name}: {}; give a list of (path, bytes) pairs",
-                described(value)
-            ))
-        })?;
+    let items = items_of(name, value, "a list of (path, bytes) pairs")?;
     let mut out = Vec::new();
     for (k, item) in items.enumerate() {
         let item = item?;
@@ -469,12 +466,8 @@ pub fn names_text(name: &str, value: &Bound<'_, PyAny>, example: &str) -> PyResu
     if let Ok(text) = value.extract::<String>() {
         return Ok(text);
     }
-    let items = value.try_iter().map_err(|_| {
-        errors::error(format!(
-            "{name}: {}; give a str ({example}) or a list of names",
-            described(value)
-        ))
-    })?;
+    let wanted = format!("a str ({example}) or a list of names");
+    let items = items_of(name, value, &wanted)?;
     let mut names = Vec::new();
     for (i, item) in items.enumerate() {
         let item = item?;
