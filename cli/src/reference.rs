@@ -2,17 +2,16 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use anyhow::{bail, Context, Result};
 use specchio::output::{Sink, Transaction};
-use specchio::reference::render::Watch;
-use specchio::reference::{Reference, ReferenceImages, ReferenceStats, MAX_SPP};
-use specchio::sensor::{imaging, SensorOutputs};
+use specchio::process::interrupt;
+use specchio::process::traced::{self, StoppedAt};
+use specchio::reference::{Reference, ReferenceImages, MAX_SPP};
+use specchio::sensor::SensorOutputs;
 
 use crate::records::{ReferenceCameras, ReferenceRecord};
 use specchio::process::args::{real, whole};
-use specchio::process::progress::Progress;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -37,7 +36,11 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<ExitCode> {
     // --time and --spp were range-checked by clap (`specchio::process::args`).
     let scene = specchio::scene::load(&args.scene)?;
-    if let Some(why) = specchio::reference::too_many_paths(&scene, args.spp) {
+    let instants = match args.sensor_outputs {
+        true => specchio::sensor::imaging::exposure_renders(&scene),
+        false => 0,
+    };
+    if let Some(why) = specchio::reference::too_many_paths(&scene, args.spp, instants) {
         bail!("{}: --{why}", args.scene.display());
     }
     specchio::memory::estimates::reference(&scene, args.sensor_outputs)
@@ -45,41 +48,23 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // All or nothing: written into a hidden folder beside --out, renamed into place at the end.
     let mut out = Transaction::new();
     out.folder(&args.out, "reference.json")?;
-    specchio::process::interrupt::catch();
+    interrupt::catch();
     let reference = Reference::new(&scene, args.time);
-    // Filled in the order traced: observer, sensor.
-    let mut cameras: [ReferenceStats; 2] = Default::default();
-    let ([ow, oh], [sw, sh]) = (scene.observer.resolution, scene.sensor.resolution);
-    // One estimate for the whole command, both cameras, in pixels (their rows differ in
-    // width): an estimate of the observer alone said "about a minute left" with the larger
-    // sensor still to come.
-    let whole = Progress::new(
-        format!(
-            "reference: observer {ow}x{oh} and sensor {sw}x{sh} cameras at {} spp",
-            args.spp
-        ),
-        u64::from(ow) * u64::from(oh) + u64::from(sw) * u64::from(sh),
-        "pixels",
-    );
-    for (slot, (name, view, [w, h])) in cameras.iter_mut().zip([
-        ("observer", reference.observer_view(), [ow, oh]),
-        ("sensor", reference.sensor_view(), [sw, sh]),
-    ]) {
-        specchio::process::interrupt::check(&format!("before tracing the {name} camera"))?;
-        let rows = CameraRows::new(&whole, w);
-        let Some((images, stats)) = reference.render_watched(&view, w, h, args.spp, &rows) else {
-            let at = format!("after {} of {h} rows of the {name} camera", rows.done());
-            return Err(specchio::process::interrupt::stopped(&at).into());
-        };
-        write_images(&out, &args.out, name, &images)?;
-        if name == "sensor" && args.sensor_outputs {
-            let mut outputs = SensorOutputs::from_reference(&scene, args.time, &images);
-            let light = imaging::traced_exposure(&scene, args.time, args.spp, [w, h]);
-            outputs.expose(&scene, 0, light.as_ref());
-            outputs.write(&out, &args.out)?;
-        }
+    let signalled = || interrupt::check("").is_err();
+    let traced = traced::trace(
+        &reference,
+        (&scene, args.time, args.spp),
+        args.sensor_outputs,
+        "reference",
+        &signalled,
+    )
+    .map_err(|StoppedAt(at)| interrupt::stopped(&at))?;
+    for (name, (images, stats)) in [("observer", &traced.observer), ("sensor", &traced.sensor)] {
+        write_images(&out, &args.out, name, images)?;
         specchio::say!(
-            "{name}: {w}x{h}, {} spp, {} rays in {:.0} ms ({:.2} M rays/s), {} mirror pixels, {} misses",
+            "{name}: {}x{}, {} spp, {} rays in {:.0} ms ({:.2} M rays/s), {} mirror pixels, {} misses",
+            images.color.width,
+            images.color.height,
             stats.spp,
             stats.rays,
             stats.trace_ms,
@@ -87,7 +72,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
             stats.mirror_pixels,
             stats.misses
         );
-        *slot = stats;
+    }
+    if args.sensor_outputs {
+        let mut outputs = SensorOutputs::from_reference(&scene, args.time, &traced.sensor.0);
+        outputs.expose(&scene, 0, traced.light.as_ref());
+        outputs.write(&out, &args.out)?;
     }
     let geometry = &reference.geometry;
     specchio::say!(
@@ -98,7 +87,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         scene.objects.len(),
         geometry.top_build.as_secs_f64() * 1e3
     );
-    let [observer, sensor] = cameras;
+    let [observer, sensor] = [traced.observer.1, traced.sensor.1];
     let record = ReferenceRecord {
         scene: args.scene.display().to_string(),
         time_s: args.time,
@@ -112,7 +101,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     };
     out.write_json(&args.out.join("reference.json"), &record)?;
     // A signal that came after the last check still stops the run: nothing is placed.
-    specchio::process::interrupt::check("before placing the output")?;
+    interrupt::check("before placing the output")?;
     out.commit()?;
     Ok(ExitCode::SUCCESS)
 }
@@ -133,37 +122,4 @@ fn write_images(out: &Transaction, dir: &Path, name: &str, images: &ReferenceIma
     out.write_exr(&dir.join(format!("{name}.distance.exr")), &images.distance)?;
     out.write_exr(&dir.join(format!("{name}.object.exr")), &images.object)?;
     Ok(())
-}
-
-/// One camera's rows, counted into the command's whole progress as pixels and on their own
-/// (for the message of a stop).
-struct CameraRows<'a> {
-    whole: &'a Progress,
-    width: u64,
-    rows: AtomicU64,
-}
-
-impl<'a> CameraRows<'a> {
-    fn new(whole: &'a Progress, width: u32) -> Self {
-        Self {
-            whole,
-            width: u64::from(width),
-            rows: AtomicU64::new(0),
-        }
-    }
-
-    fn done(&self) -> u64 {
-        self.rows.load(Ordering::Relaxed)
-    }
-}
-
-impl Watch for CameraRows<'_> {
-    fn row_done(&self) {
-        self.rows.fetch_add(1, Ordering::Relaxed);
-        self.whole.add(self.width);
-    }
-
-    fn stop(&self) -> bool {
-        self.whole.stopped()
-    }
 }

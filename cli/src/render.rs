@@ -426,6 +426,8 @@ fn write_sensor_outputs(
     // scene's animations, the mirror's included, at each).
     let light = match renderer.scene.sensor.imaging.clone() {
         Some(imaging) => specchio::sensor::imaging::integrate(&imaging, t_s, |t| {
+            // Up to 1024 renders a frame: a signal stops them between two.
+            specchio::process::interrupt::check(&format!("in frame {frame}'s exposure"))?;
             let readback = Readback {
                 sensor: true,
                 ..Default::default()

@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use specchio::output::Transaction;
 use specchio::process::progress;
+use specchio::process::traced::{self, StoppedAt};
 use specchio::reference::Reference;
 use specchio::render::dataset as writer;
 use specchio::sensor::central::{folder, Calibration, Watch};
@@ -23,7 +24,9 @@ use crate::watched::{self, Watched};
 /// The exact reference of the sensor and observer views (CPU ray tracing, no GPU): the same
 /// dict of arrays as `Renderer.render`, every layer exact. `pose` (x, y, z, heading) stands
 /// the robot there as `Renderer.render` does; without it the scene is traced as written at
-/// `time`. `spp`: samples per pixel of the colour images (1 traces pixel centres).
+/// `time`. `spp`: samples per pixel of the colour images (1 traces pixel centres). A long
+/// trace says its estimate on stderr as the command does; Ctrl-C stops it within a pixel
+/// (`KeyboardInterrupt`).
 #[pyfunction]
 #[pyo3(signature = (scene, pose=None, time=Given::Is(0.0), spp=crate::args::Whole::Fits(1)), text_signature = "(scene, pose=None, time=0.0, spp=1)")]
 pub fn reference<'py>(
@@ -42,7 +45,8 @@ pub fn reference<'py>(
             "time: must be a finite number of seconds >= 0",
         ));
     }
-    if let Some(why) = specchio::reference::too_many_paths(&scene.scene, spp) {
+    let instants = specchio::sensor::imaging::exposure_renders(&scene.scene);
+    if let Some(why) = specchio::reference::too_many_paths(&scene.scene, spp, instants) {
         return Err(scene.error(why));
     }
     specchio::memory::estimates::reference(&scene.scene, true)
@@ -59,18 +63,23 @@ pub fn reference<'py>(
             robot
         }
     };
+    let stopped = Mutex::new(None);
     let layers = said::detach(py, || {
-        let reference = Reference::new(&traced, time);
-        let [ow, oh] = traced.observer.resolution;
-        let (observer, _) = reference.render(&reference.observer_view(), ow, oh, spp);
-        let [sw, sh] = traced.sensor.resolution;
-        let (sensor, _) = reference.render(&reference.sensor_view(), sw, sh, spp);
-        let mut outputs = SensorOutputs::from_reference(&traced, time, &sensor);
-        let light = specchio::sensor::imaging::traced_exposure(&traced, time, spp, [sw, sh]);
-        outputs.expose(&traced, 0, light.as_ref());
-        Ok::<_, std::convert::Infallible>(Layers::new(outputs, &observer.color))
+        watched::polled(&stopped, |stop| {
+            let reference = Reference::new(&traced, time);
+            let run = traced::trace(&reference, (&traced, time, spp), true, "reference", stop)?;
+            let mut outputs = SensorOutputs::from_reference(&traced, time, &run.sensor.0);
+            outputs.expose(&traced, 0, run.light.as_ref());
+            Ok::<_, StoppedAt>(Layers::new(outputs, &run.observer.0.color))
+        })
     })?;
-    let Ok(layers) = layers;
+    if let Some(e) = watched::raised(stopped) {
+        if let Err(StoppedAt(at)) = &layers {
+            watched::note(py, &e, &format!("specchio.reference stopped {at}"));
+        }
+        return Err(e);
+    }
+    let layers = layers.map_err(|StoppedAt(at)| errors::error(format!("stopped {at}")))?;
     arrays::frame_dict(py, layers)
 }
 

@@ -122,7 +122,8 @@ def test_parameters_show_their_defaults():
 def _interrupted_after_estimate(call: str, args: list[str], estimate: str) -> tuple[int, list[str]]:
     """Runs `specchio.<call>(*sys.argv[1:])` in a Python of its own, its estimate said after
     the first part (the delay is read once a process), and sends it Ctrl-C once a stderr line
-    starts with `estimate`: its exit status (42 for KeyboardInterrupt) and its stderr lines."""
+    starts with `estimate`: its exit status (42 for KeyboardInterrupt, whose notes it writes
+    to stderr) and its stderr lines."""
     # Python's own Ctrl-C handler, whatever the child inherited: a job started in the
     # background of a script ignores SIGINT, and Python then keeps ignoring it.
     script = (
@@ -130,7 +131,8 @@ def _interrupted_after_estimate(call: str, args: list[str], estimate: str) -> tu
         "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "try:\n"
         f"    specchio.{call}\n"
-        "except KeyboardInterrupt:\n"
+        "except KeyboardInterrupt as stopped:\n"
+        "    print(*getattr(stopped, '__notes__', []), sep='\\n', file=sys.stderr)\n"
         "    sys.exit(42)\n"
     )
     child = subprocess.Popen([sys.executable, "-c", script, *args], stderr=subprocess.PIPE,
@@ -181,6 +183,32 @@ def test_a_bags_model_fit_says_its_estimate_and_stops_at_ctrl_c(tmp_path):
     assert any("15 % done in " in line for line in said), said
     assert not (tmp_path / "stopped").exists()
     assert not [p for p in tmp_path.iterdir() if "stopped" in p.name]
+
+
+def test_a_long_reference_says_its_estimate_and_stops_at_ctrl_c(tmp_path):
+    """A reference whose sensor's exposure spans 1,024 instants (a rolling shutter and motion
+    blur: an exact trace at each, minutes of work) says the whole of it, exposure included,
+    before the bulk, and Ctrl-C stops it within a pixel: KeyboardInterrupt, its note saying
+    where it stopped, as the command says. It used to trace on, silent, for five minutes and
+    only then see the Ctrl-C."""
+    text = (scene_path("test/six-colour-room")).read_text()
+    path = tmp_path / "blurred.toml"
+    path.write_text(text.replace("[sensor]\n", "[sensor]\nresolution = [256, 256]\n")
+                    + "\n[sensor.imaging]\nexposure_s = 0.001\nrolling_shutter_s = 0.015\n"
+                    "motion_blur_samples = 64\n")
+    estimate = "reference: observer "
+    status, said = _interrupted_after_estimate(
+        "reference(specchio.Scene(sys.argv[1]))", [str(path)], estimate)
+    assert status == 42, "".join(said)
+    line = next(line for line in said if line.startswith(estimate))
+    assert "sensor 256x256 cameras at 1 spp, and the sensor's exposure at 1024 instants: " in line
+    # The observer's pixels, the sensor's, and the sensor's again at each instant.
+    observer = specchio.Scene(path).observer_size
+    total = observer[0] * observer[1] + 256 * 256 * 1025
+    assert f" of {total} pixels in " in line, line
+    # Where it stopped: within a camera's rows or the exposure's instants, not at the end.
+    stopped = [line for line in said if line.startswith("specchio.reference stopped after ")]
+    assert stopped and ("rows of the " in stopped[0] or " instants" in stopped[0]), said
 
 
 def test_one_pose_is_refused_as_a_batchs_would_be(thesis, renderer):

@@ -377,42 +377,71 @@ fn an_interrupted_bench_writes_nothing() {
 }
 
 /// Long work is never silent and stops cleanly: a reference sensor of 4096² pixels at 64 spp
-/// (a billion paths: a minute here) says, once its first seconds are measured, how much of the
-/// whole command (both cameras) is done and about how long the rest will take; Ctrl-C then
-/// stops it between rows, saying how far it got, and nothing is written.
+/// (a billion paths: a minute here), or one of 256² whose exposure traces it again at 1,024
+/// instants (minutes: it used to run them silent and deaf to Ctrl-C), says, once its first
+/// seconds are measured, how much of the whole command (both cameras, the exposure) is done
+/// and about how long the rest will take; Ctrl-C then stops it within a pixel, saying how far
+/// it got, and nothing is written.
 #[test]
 fn a_long_reference_says_its_estimate_and_stops_cleanly() {
     let dir = scratch("long-reference");
-    let scene = dir.join("big.toml");
     let text = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
-    let text = text
-        .replace("[sensor]\n", "[sensor]\nresolution = [4096, 4096]\n")
-        .replace("[observer]\n", "[observer]\nresolution = [64, 48]\n");
-    std::fs::write(&scene, text).unwrap();
-    let out = dir.join("out");
-    let (scene, out_text) = (scene.to_str().unwrap(), out.to_str().unwrap());
-    // Said after the first row, however fast the machine (the work is far longer).
-    let args = ["reference", scene, "--spp", "64", "--out", out_text];
-    let estimate = "reference: observer 64x48 and sensor 4096x4096 cameras at 64 spp: ";
-    let (result, said, line) = common::interrupted_after_estimate(&args, estimate);
-    assert_eq!(result.status.code(), Some(1), "{said}");
-    assert!(
-        // 64 x 48 + 4096 x 4096 pixels in all.
-        line.contains(" of 16780288 pixels in") && line.contains("left; Ctrl-C stops it cleanly"),
-        "{line}"
-    );
-    // Stopped wherever the signal found it (the 64x48 observer takes milliseconds), saying
-    // where: in a camera with its own rows, or between the two.
-    let stops = [
-        " of 4096 rows of the sensor camera: nothing was written",
-        " of 48 rows of the observer camera: nothing was written",
-        "error: interrupted before tracing the sensor camera: nothing was written",
+    let exposure = "\n[sensor.imaging]\nexposure_s = 0.001\nrolling_shutter_s = 0.015\n\
+                    motion_blur_samples = 64\n";
+    let cases = [
+        (4096, 64, "", 64 * 48 + 4096 * 4096, ""),
+        (
+            256,
+            1,
+            exposure,
+            64 * 48 + 256 * 256 * 1025,
+            ", and the sensor's exposure at 1024 instants",
+        ),
     ];
-    assert!(
-        said.contains("error: interrupted ") && stops.iter().any(|s| said.contains(s)),
-        "{said}"
-    );
-    assert_eq!(tree(&dir), ["big.toml"], "nothing written");
+    for (side, spp, imaging, pixels, whole) in cases {
+        let scene = dir.join("big.toml");
+        let resolution = format!("[sensor]\nresolution = [{side}, {side}]\n");
+        let case = text
+            .replace("[sensor]\n", &resolution)
+            .replace("[observer]\n", "[observer]\nresolution = [64, 48]\n")
+            + imaging;
+        std::fs::write(&scene, case).unwrap();
+        let out = dir.join("out");
+        let (scene, out_text) = (scene.to_str().unwrap(), out.to_str().unwrap());
+        // Said after the first row, however fast the machine (the work is far longer).
+        let spp_text = spp.to_string();
+        let args = [
+            "reference",
+            scene,
+            "--spp",
+            &spp_text,
+            "--out",
+            out_text,
+            "--sensor-outputs",
+        ];
+        let estimate = format!(
+            "reference: observer 64x48 and sensor {side}x{side} cameras at {spp} spp{whole}: "
+        );
+        let (result, said, line) = common::interrupted_after_estimate(&args, &estimate);
+        assert_eq!(result.status.code(), Some(1), "{said}");
+        let total = format!(" of {pixels} pixels in ");
+        assert!(
+            line.contains(&total) && line.contains("left; Ctrl-C stops it cleanly"),
+            "{line}"
+        );
+        // Stopped wherever the signal found it (the 64x48 observer takes milliseconds),
+        // saying where: in a camera's rows, or in the exposure's instants.
+        let stops = [
+            format!(" of {side} rows of the sensor camera: nothing was written"),
+            " of 48 rows of the observer camera: nothing was written".into(),
+            " of the sensor exposure's 1024 instants: nothing was written".into(),
+        ];
+        assert!(
+            said.contains("error: interrupted after ") && stops.iter().any(|s| said.contains(s)),
+            "{said}"
+        );
+        assert_eq!(tree(&dir), ["big.toml"], "nothing written");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

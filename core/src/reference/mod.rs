@@ -46,22 +46,39 @@ pub const MAX_CAMERA_PATHS: u64 = 1 << 32;
 
 /// Why `spp` samples per pixel are too many for one of the scene's cameras (a sentence that
 /// names the camera and what to change), if they are; also refuses `spp` outside
-/// 1..=[`MAX_SPP`].
-pub fn too_many_paths(scene: &Scene, spp: u32) -> Option<String> {
+/// 1..=[`MAX_SPP`]. The sensor may also trace its exposure at `instants` more times (the
+/// camera image's motion blur and rolling shutter: `sensor::imaging::exposure_renders`), each
+/// a camera of its own: they count with the sensor's paths.
+pub fn too_many_paths(scene: &Scene, spp: u32, instants: usize) -> Option<String> {
     if !(1..=MAX_SPP).contains(&spp) {
         return Some(format!("spp {spp}: must be 1 to {MAX_SPP}"));
     }
+    let instants = instants as u64;
     let cameras = [
-        ("observer", scene.observer.resolution),
-        ("sensor", scene.sensor.resolution),
+        ("observer", scene.observer.resolution, 1),
+        ("sensor", scene.sensor.resolution, 1 + instants),
     ];
-    cameras.into_iter().find_map(|(name, [w, h])| {
-        let paths = u64::from(w) * u64::from(h) * u64::from(spp);
+    cameras.into_iter().find_map(|(name, [w, h], renders)| {
+        let paths = u64::from(w) * u64::from(h) * u64::from(spp) * renders;
+        let over = match renders {
+            1 => format!("spp {spp} at the {name}'s {w}x{h} pixels"),
+            _ => format!(
+                "spp {spp} at the {name}'s {w}x{h} pixels, traced once for the frame and once \
+                 at each of its exposure's {instants} instants (sensor.imaging),"
+            ),
+        };
         (paths > MAX_CAMERA_PATHS).then(|| {
+            let change = match renders {
+                1 => format!("fewer samples or a smaller {name}.resolution"),
+                _ => format!(
+                    "fewer samples, a smaller {name}.resolution, fewer \
+                     sensor.imaging.motion_blur_samples or a shorter \
+                     sensor.imaging.rolling_shutter_s"
+                ),
+            };
             format!(
-                "spp {spp} at the {name}'s {w}x{h} pixels is {paths} camera paths, more than \
-                 the {MAX_CAMERA_PATHS} one camera may trace (minutes to hours on a CPU): fewer \
-                 samples or a smaller {name}.resolution"
+                "{over} is {paths} camera paths, more than the {MAX_CAMERA_PATHS} one camera \
+                 may trace (minutes to hours on a CPU): {change}"
             )
         })
     })
@@ -316,6 +333,26 @@ mod tests {
     use super::{sample_offsets, Reference};
     use glam::Vec2;
     use std::path::Path;
+
+    /// The path budget counts the sensor's exposure: 512² at 4 spp is 2^20 paths, within
+    /// 2^32 alone and with 4,095 more traces, beyond it with 4,096 (said with what to change).
+    #[test]
+    fn the_path_budget_counts_the_exposure() {
+        let text = "[room]\ncenter = [0, 3, 0]\nsize = [10, 6, 10]\nwalls = \"w\"\n\
+            [mirror]\ncenter = [0, 3, 0]\nradius = 1\n\
+            [[materials]]\nname = \"w\"\ntype = \"color\"\ncolor = [0.5, 0.5, 0.5]\n\
+            [sensor]\nresolution = [512, 512]\n";
+        let scene = crate::scene::load_str(text, Path::new("paths.toml")).unwrap();
+        assert_eq!(super::too_many_paths(&scene, 4, 0), None);
+        assert_eq!(super::too_many_paths(&scene, 4, 4095), None);
+        let why = super::too_many_paths(&scene, 4, 4096).expect("beyond the budget");
+        assert!(
+            why.starts_with("spp 4 at the sensor's 512x512 pixels, traced once for the frame and once at each of its exposure's 4096 instants")
+                && why.contains(" is 4296015872 camera paths")
+                && why.ends_with(": fewer samples, a smaller sensor.resolution, fewer sensor.imaging.motion_blur_samples or a shorter sensor.imaging.rolling_shutter_s"),
+            "{why}"
+        );
+    }
 
     /// The shortcut that skips the BVH before the mirror ([`Reference::nothing_before_mirror`])
     /// changes no sample: every ray of a 64 x 64 grid through both cameras traces bit for bit

@@ -32,12 +32,16 @@ struct Sampling<'a> {
     clear: bool,
 }
 
-/// What a long render reports to (`process::progress::Progress` for the command): each row
-/// done, and whether to stop before the next one.
+/// What a long render reports to (`process::traced` for the command and Python): each row
+/// done, and whether to stop before the next pixel.
 pub trait Watch: Sync {
     fn row_done(&self);
     fn stop(&self) -> bool;
 }
+
+/// A watched render that its [`Watch`] stopped: nothing of it is kept.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stopped;
 
 /// No one watching: every row is traced.
 struct Unwatched;
@@ -66,8 +70,9 @@ impl Reference<'_> {
             .expect("an unwatched render is never stopped")
     }
 
-    /// [`Self::render`], each row reported to `watch` as it is done; None when `watch` said to
-    /// stop (the rows not yet started are left untraced).
+    /// [`Self::render`], each row reported to `watch` as it is done; [`Stopped`] when `watch`
+    /// said to stop. It is asked before every pixel, not only every row: a row of 8192 pixels
+    /// at 4096 samples is seconds of work.
     pub fn render_watched(
         &self,
         view: &ViewBasis,
@@ -75,7 +80,7 @@ impl Reference<'_> {
         height: u32,
         spp: u32,
         watch: &dyn Watch,
-    ) -> Option<(ReferenceImages, ReferenceStats)> {
+    ) -> Result<(ReferenceImages, ReferenceStats), Stopped> {
         let spp = spp.clamp(1, MAX_SPP);
         let offsets = sample_offsets(spp);
         let start = Instant::now();
@@ -90,15 +95,12 @@ impl Reference<'_> {
         let rows: Vec<Option<Vec<Pixel>>> = (0..height)
             .into_par_iter()
             .map(|y| {
-                if watch.stop() {
-                    return None;
-                }
-                let row = self.trace_row(&sampling, y, width);
+                let row = self.trace_row(&sampling, y, width, watch)?;
                 watch.row_done();
                 Some(row)
             })
             .collect();
-        let rows: Vec<Vec<Pixel>> = rows.into_iter().collect::<Option<_>>()?;
+        let rows: Vec<Vec<Pixel>> = rows.into_iter().collect::<Option<_>>().ok_or(Stopped)?;
         let trace = start.elapsed();
         // After the timing: a segment query per mirror pixel, not part of the camera paths.
         let hidden: Vec<u32> = rows
@@ -109,16 +111,26 @@ impl Reference<'_> {
         let images = self.images(&pixels, width, height);
         let centre_traced_apart = sampling.centre_index.is_none();
         let stats = self.stats(&pixels, [width, height, spp], centre_traced_apart, trace);
-        Some((images, stats))
+        Ok((images, stats))
     }
 
-    /// Row `y`'s pixels: each sample traced, the colours averaged, the centre kept.
-    fn trace_row(&self, sampling: &Sampling<'_>, y: u32, width: u32) -> Vec<Pixel> {
+    /// Row `y`'s pixels: each sample traced, the colours averaged, the centre kept; None when
+    /// `watch` says to stop before a pixel.
+    fn trace_row(
+        &self,
+        sampling: &Sampling<'_>,
+        y: u32,
+        width: u32,
+        watch: &dyn Watch,
+    ) -> Option<Vec<Pixel>> {
         let camera = sampling.camera;
         let row_terms = camera.row_terms(y);
         let spp = sampling.offsets.len();
         (0..width)
             .map(|x| {
+                if watch.stop() {
+                    return None;
+                }
                 let (mut sum, mut rays, mut misses) = (Vec3::ZERO, 0u32, 0u32);
                 let mut centre = None;
                 for k in 0..spp {
@@ -139,12 +151,12 @@ impl Reference<'_> {
                     rays += c.rays;
                     c
                 });
-                Pixel {
+                Some(Pixel {
                     centre,
                     color: sum / spp as f32,
                     rays,
                     misses,
-                }
+                })
             })
             .collect()
     }

@@ -134,17 +134,6 @@ impl Progress {
 /// [`Progress::new`]'s total in hundredths.
 pub const PERCENT: &str = "%";
 
-/// A reference render counts its rows here, and stops between rows at a signal.
-impl crate::reference::render::Watch for Progress {
-    fn row_done(&self) {
-        self.add(1);
-    }
-
-    fn stop(&self) -> bool {
-        self.stopped()
-    }
-}
-
 /// A calibration's progress, said as "`what`: sensor WxH: 40 % done in ...": its parts
 /// counted by their shares, the files' among them where it writes them (`files`; a dataset's
 /// bag fits the unified model and writes no calibration files).

@@ -54,6 +54,12 @@ impl Schedule {
         ((at - 0.5).ceil().max(0.0) as usize).min(self.instants - self.per_row)
     }
 
+    /// How many instants there are in all: each a render of the sensor's view where there are
+    /// two or more ([`integrate`]).
+    pub fn instants(&self) -> usize {
+        self.instants
+    }
+
     /// How many instants each row sees.
     pub fn per_row(&self) -> usize {
         self.per_row

@@ -14,6 +14,7 @@ use serde::Serialize;
 use super::optics::SensorOptics;
 use crate::image::RgbaImage;
 use crate::random::SplitMix64;
+use crate::reference::render::{Stopped, Watch};
 use crate::reference::Reference;
 pub use crate::scene::imaging::{Imaging, Response};
 use crate::scene::Scene;
@@ -181,20 +182,35 @@ pub fn expose(
     }
 }
 
-/// The light of the sensor camera's whole exposure at `t_s` from the exact reference: the
-/// scene traced at each instant of its [`Schedule`], `spp` samples a pixel, `w`x`h`; None
-/// for an exposure of one instant or a scene without an imaging chain.
-pub fn traced_exposure(scene: &Scene, t_s: f64, spp: u32, [w, h]: [u32; 2]) -> Option<RgbaImage> {
-    let imaging = scene.sensor.imaging.as_ref()?;
-    let traced = integrate(imaging, t_s, |t| {
-        let reference = Reference::new(scene, t);
-        let (images, _) = reference.render(&reference.sensor_view(), w, h, spp);
-        Ok::<_, std::convert::Infallible>(images.color)
-    });
-    match traced {
-        Ok(light) => light,
-        Err(never) => match never {},
+/// How many renders of the sensor's view a frame's exposure takes beyond the frame's own: its
+/// [`Schedule`]'s instants, or 0 for an exposure of one instant or no imaging chain.
+pub fn exposure_renders(scene: &Scene) -> usize {
+    match &scene.sensor.imaging {
+        Some(imaging) => Some(Schedule::of(imaging, 0.0).instants()).filter(|&n| n >= 2),
+        None => None,
     }
+    .unwrap_or(0)
+}
+
+/// The light of the sensor camera's whole exposure at `t_s` from the exact reference: the
+/// scene traced at each instant of its [`Schedule`], `spp` samples a pixel, `w`x`h`, every
+/// row reported to `watch` (which may stop it); None for an exposure of one instant or a
+/// scene without an imaging chain.
+pub fn traced_exposure(
+    scene: &Scene,
+    t_s: f64,
+    spp: u32,
+    [w, h]: [u32; 2],
+    watch: &dyn Watch,
+) -> Result<Option<RgbaImage>, Stopped> {
+    let Some(imaging) = scene.sensor.imaging.as_ref() else {
+        return Ok(None);
+    };
+    integrate(imaging, t_s, |t| {
+        let reference = Reference::new(scene, t);
+        let (images, _) = reference.render_watched(&reference.sensor_view(), w, h, spp, watch)?;
+        Ok(images.color)
+    })
 }
 
 /// Row `row`'s stream of the camera's fixed pattern (PRNU, DSNU): of the seed, not of a frame
