@@ -1,162 +1,86 @@
-//! The cube's mip chain after a fill: mips 1.. of the dirty faces rebuilt by halving blits (a
-//! clean face's mips still match its unchanged mip 0; a face re-rendered only in its dirty
-//! rectangles gets only the texels above them, level by level), then every level of every
-//! face ready for sampling. The barriers name the last readers, so they hold when frames
-//! overlap.
+//! The cube's mip chain after a fill: mips 1.. of all six faces rebuilt by halving blits, then
+//! every level of every face ready for sampling. The barriers name the last readers, so they
+//! hold when frames overlap.
+//!
+//! Always all six faces, whole, whatever the fill re-rendered: that makes an incremental
+//! update's mips the very commands a full update records, on the same level 0, so they are
+//! the same bits on every driver. Rebuilding less is not exact everywhere (both found by an
+//! adversarial pass, 30 November 2026): SwiftShader's linear blit of a cube face reads the
+//! border it keeps from the neighbouring faces, so a clean face's old mips differ near its
+//! edges from what its neighbours' new texels give; and lavapipe's blit of a box of a level
+//! is not bit-identical to the same texels of the whole level's blit (half-float steps).
 
 use ash::vk;
 
-use super::graph::{FrameGraph, Resource, Use};
-use super::methods::CubePlan;
+use super::graph::{FrameGraph, Use};
 use super::targets::CubeTarget;
-use crate::scene::pixel_rect::PixelRect;
 use crate::vk::device::Device;
 
-/// Records the chain for `plan`'s dirty faces, level 0 coming from the fill's colour
-/// attachment. Every use is declared to `graph`, which places the barriers: the
-/// dirty faces' level m is overwritten whole, so its old contents can go, but not before the
-/// last frame's mirror has sampled them (a write after read: with frames in flight that frame
-/// may still be drawing); the graph's source side names those reads.
+/// Records the chain, level 0 coming from the fill's colour attachment. Every use is declared
+/// to `graph`, which places the barriers: level m is overwritten whole, so its old contents
+/// can go, but not before the last frame's mirror has sampled them (a write after read: with
+/// frames in flight that frame may still be drawing); the graph's source side names those
+/// reads.
 pub(super) fn record(
     (dev, graph): (&Device, &mut FrameGraph),
     cmd: vk::CommandBuffer,
     cube: &CubeTarget,
-    plan: &CubePlan,
 ) {
-    let chain = Chain::of(cube, plan);
-    let mut declare = |uses: &[(Resource, Use)]| graph.declare(dev, cmd, uses);
-    if chain.levels == 1 {
-        declare(&[(cube.color_levels(0, 1, None), Use::FragmentRead)]);
+    let levels = cube.mip_levels();
+    let mut declare = |level: u32, count: u32, how: Use| {
+        graph.declare(dev, cmd, &[(cube.color_levels(level, count), how)]);
+    };
+    if levels == 1 {
+        declare(0, 1, Use::FragmentRead);
         return;
     }
     dev.begin_label(cmd, "cube mips");
-    declare(&[(cube.color_levels(0, 1, None), Use::BlitSource)]);
-    for m in 1..chain.levels {
-        declare(&chain.per_face(m, None));
-        chain.blit_down_to(dev, cmd, m);
-        declare(&chain.per_face(m, Some(Use::BlitSource)));
+    declare(0, 1, Use::BlitSource);
+    for m in 1..levels {
+        declare(m, 1, Use::BlitDestination);
+        blit_down_to(dev, cmd, cube, m);
+        declare(m, 1, Use::BlitSource);
     }
-    // Everything the blits touched goes back to sampling; clean faces' levels 1.. never
-    // left it (and need no barrier: a read after reads).
-    let all = cube.color_levels(0, chain.levels, None);
-    declare(&[(all, Use::FragmentRead)]);
+    declare(0, levels, Use::FragmentRead);
     dev.end_label(cmd);
 }
 
-/// The cube's colour image and the faces whose chain is rebuilt.
-struct Chain<'a> {
-    cube: &'a CubeTarget,
-    levels: u32,
-    /// Each dirty face and the bounding box of its dirty rectangles at level 0 (`None`: the
-    /// whole face). One box, not the rectangles: a blit region costs lavapipe some 15 µs
-    /// whatever its size, and many-objects' few dozen rectangles a face over nine levels
-    /// took 18 ms where the whole faces took 5.
-    faces: Vec<(u32, Option<PixelRect>)>,
-}
-
-impl<'a> Chain<'a> {
-    fn of(cube: &'a CubeTarget, plan: &'a CubePlan) -> Self {
-        Self {
-            cube,
-            levels: cube.mip_levels(),
-            faces: (plan.faces())
-                .map(|f| {
-                    let rects = plan.dirty_rects(f as usize);
-                    (f, rects.iter().copied().reduce(|a, b| a.union(&b)))
-                })
-                .collect(),
-        }
-    }
-
-    fn side(&self, level: u32) -> u32 {
-        (self.cube.size >> level).max(1)
-    }
-
-    /// The rectangle of level `m` of a face whose level-0 box is `rect`: each texel above a
-    /// changed one, `None` for the whole level. A rectangle halves exactly only while every
-    /// level above it does (power-of-two sides): a level that does not is rebuilt whole, and
-    /// so is every level below it.
-    fn rect_at(&self, rect: Option<PixelRect>, m: u32) -> Option<PixelRect> {
-        let halving = (1..=m).all(|k| self.side(k - 1) == 2 * self.side(k));
-        let r = rect.filter(|_| halving)?;
-        let up = |x: u32| x.div_ceil(1 << m);
-        Some(PixelRect {
-            x0: r.x0 >> m,
-            y0: r.y0 >> m,
-            x1: up(r.x1),
-            y1: up(r.y1),
-        })
-    }
-
-    /// Level `m` of each dirty face, used as `how`; `None`: as a blit destination, whole
-    /// (old contents dropped) or in its box (the rest kept).
-    fn per_face(&self, m: u32, how: Option<Use>) -> Vec<(Resource, Use)> {
-        (self.faces.iter())
-            .map(|&(f, rect)| {
-                let dst = match self.rect_at(rect, m) {
-                    None => Use::BlitDestination,
-                    Some(_) => Use::BlitKept,
-                };
-                (self.cube.color_levels(m, 1, Some(f)), how.unwrap_or(dst))
-            })
-            .collect()
-    }
-
-    /// Level `m` of each dirty face (or its box), halved from level `m - 1` with a linear
-    /// filter. A box's blit is exactly 2:1 and aligned, so each texel averages the same four
-    /// texels as the whole level's blit would.
-    fn blit_down_to(&self, dev: &Device, cmd: vk::CommandBuffer, m: u32) {
-        let layer = |mip, f| vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: mip,
-            base_array_layer: f,
-            layer_count: 1,
-        };
-        let corners = |r: &PixelRect, k: u32| {
-            let at = |x: u32, y: u32| vk::Offset3D {
-                x: (x * k) as i32,
-                y: (y * k) as i32,
-                z: 0,
-            };
-            [
-                at(r.x0, r.y0),
-                vk::Offset3D {
-                    z: 1,
-                    ..at(r.x1, r.y1)
-                },
-            ]
-        };
-        let mut blits = Vec::new();
-        for &(f, rect) in &self.faces {
-            let blit = |src: [vk::Offset3D; 2], dst: [vk::Offset3D; 2]| {
-                vk::ImageBlit::default()
-                    .src_subresource(layer(m - 1, f))
-                    .src_offsets(src)
-                    .dst_subresource(layer(m, f))
-                    .dst_offsets(dst)
-            };
-            blits.push(match self.rect_at(rect, m) {
-                None => {
-                    let whole = |level| corners(&PixelRect::whole(self.side(level)), 1);
-                    blit(whole(m - 1), whole(m))
-                }
-                Some(r) => blit(corners(&r, 2), corners(&r, 1)),
-            });
-        }
-        let image = self.cube.color.raw;
-        // SAFETY: level m-1 is TRANSFER_SRC, level m of these faces TRANSFER_DST; the format
-        // supports linear blits (checked when the cube was created); every region lies in its
-        // level (a rectangle at level m is within `side(m)`, twice it within `side(m - 1)`).
-        unsafe {
-            dev.raw.cmd_blit_image(
-                cmd,
-                image,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                image,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &blits,
-                vk::Filter::LINEAR,
-            )
-        };
-    }
+/// Level `m` of the six faces, halved from level `m - 1` with a linear filter.
+fn blit_down_to(dev: &Device, cmd: vk::CommandBuffer, cube: &CubeTarget, m: u32) {
+    let layers = |mip| vk::ImageSubresourceLayers {
+        aspect_mask: vk::ImageAspectFlags::COLOR,
+        mip_level: mip,
+        base_array_layer: 0,
+        layer_count: 6,
+    };
+    let corners = |mip: u32| {
+        let side = (cube.size >> mip).max(1) as i32;
+        [
+            vk::Offset3D::default(),
+            vk::Offset3D {
+                x: side,
+                y: side,
+                z: 1,
+            },
+        ]
+    };
+    let blit = vk::ImageBlit::default()
+        .src_subresource(layers(m - 1))
+        .src_offsets(corners(m - 1))
+        .dst_subresource(layers(m))
+        .dst_offsets(corners(m));
+    // SAFETY: level m-1 is TRANSFER_SRC, level m TRANSFER_DST (declared above); the format
+    // supports linear blits (checked when the cube was created); both regions are their
+    // levels whole.
+    unsafe {
+        dev.raw.cmd_blit_image(
+            cmd,
+            cube.color.raw,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            cube.color.raw,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            &[blit],
+            vk::Filter::LINEAR,
+        )
+    };
 }

@@ -98,15 +98,12 @@ impl CubeTarget {
             .collect()
     }
 
-    /// Levels `first..first + count` of face `face` (None: all six faces) of the colour.
-    pub(super) fn color_levels(&self, first: u32, count: u32, face: Option<u32>) -> Resource {
-        let all = self.color.full_range();
+    /// Levels `first..first + count` of the colour's six faces.
+    pub(super) fn color_levels(&self, first: u32, count: u32) -> Resource {
         let range = vk::ImageSubresourceRange {
             base_mip_level: first,
             level_count: count,
-            base_array_layer: face.unwrap_or(all.base_array_layer),
-            layer_count: if face.is_some() { 1 } else { all.layer_count },
-            ..all
+            ..self.color.full_range()
         };
         Resource::image(self.color.raw, range)
     }

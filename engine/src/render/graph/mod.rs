@@ -45,8 +45,6 @@ pub enum Use {
     BlitSource,
     /// Blitted into, whole: earlier contents are not kept.
     BlitDestination,
-    /// Blitted into in part, the rest kept (a face's mips under its dirty rectangles).
-    BlitKept,
     /// Copied from.
     CopySource,
     /// Copied into (a buffer).
@@ -121,7 +119,7 @@ impl Use {
             Use::DepthTarget | Use::DepthKept => vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
             Use::FragmentRead => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Use::BlitSource | Use::CopySource => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            Use::BlitDestination | Use::BlitKept => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            Use::BlitDestination => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             Use::CopyDestination
             | Use::HostRead
             | Use::Filled
@@ -140,7 +138,7 @@ impl Use {
             Use::DepthTarget | Use::DepthKept => DEPTH_RW,
             Use::FragmentRead => SAMPLED,
             Use::BlitSource => BLIT_READ,
-            Use::BlitDestination | Use::BlitKept => BLIT_WRITE,
+            Use::BlitDestination => BLIT_WRITE,
             Use::CopySource => COPY_READ,
             Use::CopyDestination => COPY_WRITE,
             Use::HostRead => (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
@@ -162,7 +160,6 @@ impl Use {
                 | Use::DepthTarget
                 | Use::DepthKept
                 | Use::BlitDestination
-                | Use::BlitKept
                 | Use::CopyDestination
                 | Use::Filled
                 | Use::FragmentStorage

@@ -156,10 +156,10 @@ fn a_resource_never_imported_is_refused() {
     FrameGraph::default().uses(&[(image(9, 1), Use::CopySource)]);
 }
 
-/// A cube of 6 faces and 3 levels after a fill of faces 0 and 2: the mip chain's barriers,
-/// each subresource's derived on its own and merged back, are the ones `mips.rs` placed by
-/// hand (level 0 of all faces in one barrier, each dirty face's level alone, then back to
-/// sampling: all of level 0, levels 1.. of each dirty face).
+/// A cube of 6 faces and 3 levels after a fill, its chain rebuilt for faces 0 and 2 alone (as
+/// `mips.rs` did until it rebuilt all six): the barriers, each subresource's derived on its
+/// own and merged back, are the ones once placed by hand (level 0 of all faces in one barrier,
+/// each face's level alone, then back to sampling: all of level 0, levels 1.. of each face).
 #[test]
 fn the_mip_chain_of_two_dirty_faces_gets_the_hand_placed_barriers() {
     let cube = 5;
