@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use specchio::output::{Sink, Transaction};
 use specchio::process::interrupt;
 use specchio::process::traced::{self, StoppedAt};
-use specchio::reference::{Reference, ReferenceImages, MAX_SPP};
+use specchio::reference::{ReferenceImages, MAX_SPP};
 use specchio::sensor::SensorOutputs;
 
 use crate::records::{ReferenceCameras, ReferenceRecord};
@@ -49,10 +49,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let mut out = Transaction::new();
     out.folder(&args.out, "reference.json")?;
     interrupt::catch();
-    let reference = Reference::new(&scene, args.time);
     let signalled = || interrupt::check("").is_err();
     let traced = traced::trace(
-        &reference,
         (&scene, args.time, args.spp),
         args.sensor_outputs,
         "reference",
@@ -78,7 +76,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         outputs.expose(&scene, 0, traced.light.as_ref());
         outputs.write(&out, &args.out)?;
     }
-    let geometry = &reference.geometry;
+    let geometry = &traced.reference.geometry;
     specchio::say!(
         "BVH: {} object triangles, {} meshes' trees built in {:.1} ms, the top level over {} objects in {:.1} ms; the room's walls are an analytic box",
         geometry.triangle_count(),

@@ -8,7 +8,6 @@ use pyo3::types::PyDict;
 use specchio::output::Transaction;
 use specchio::process::progress;
 use specchio::process::traced::{self, StoppedAt};
-use specchio::reference::Reference;
 use specchio::render::dataset as writer;
 use specchio::sensor::central::{folder, Calibration, Watch};
 use specchio::sensor::dataset;
@@ -64,22 +63,31 @@ pub fn reference<'py>(
         }
     };
     let stopped = Mutex::new(None);
-    let layers = said::detach(py, || {
+    let layers = said::unsaid(py, || {
         watched::polled(&stopped, |stop| {
-            let reference = Reference::new(&traced, time);
-            let run = traced::trace(&reference, (&traced, time, spp), true, "reference", stop)?;
+            let run = traced::trace((&traced, time, spp), true, "reference", stop)?;
             let mut outputs = SensorOutputs::from_reference(&traced, time, &run.sensor.0);
             outputs.expose(&traced, 0, run.light.as_ref());
             Ok::<_, StoppedAt>(Layers::new(outputs, &run.observer.0.color))
         })
-    })?;
+    });
+    // The Ctrl-C first, its warnings unraised beside it: Python has already taken the signal,
+    // so a warning raised in its place would lose it.
     if let Some(e) = watched::raised(stopped) {
         if let Err(StoppedAt(at)) = &layers {
             watched::note(py, &e, &format!("specchio.reference stopped {at}"));
         }
+        said::say_unraised(py);
         return Err(e);
     }
-    let layers = layers.map_err(|StoppedAt(at)| errors::error(format!("stopped {at}")))?;
+    let layers = match layers {
+        Ok(layers) => layers,
+        Err(StoppedAt(at)) => {
+            said::say_unraised(py);
+            return Err(errors::error(format!("stopped {at}")));
+        }
+    };
+    said::say(py)?;
     arrays::frame_dict(py, layers)
 }
 

@@ -75,11 +75,20 @@ pub(crate) fn polled<T: Send>(
     })
 }
 
-/// Adds `text` to `e`'s notes (PEP 678, Python 3.11 on; before that it is left unsaid):
+/// Adds `text` to `e`'s notes (PEP 678): `add_note` from Python 3.11 on, the `__notes__` list
+/// itself before (which the traceback shows only from 3.11; the attribute is there to read):
 /// a `KeyboardInterrupt` that says where the work stopped.
 pub(crate) fn note(py: Python<'_>, e: &PyErr, text: &str) {
     let value = e.value(py);
     if value.hasattr("add_note").unwrap_or(false) {
         let _ = value.call_method1("add_note", (text,));
+        return;
+    }
+    let notes = match value.getattr("__notes__") {
+        Ok(notes) => notes,
+        Err(_) => pyo3::types::PyList::empty(py).into_any(),
+    };
+    if notes.call_method1("append", (text,)).is_ok() {
+        let _ = value.setattr("__notes__", notes);
     }
 }

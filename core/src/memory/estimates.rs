@@ -162,14 +162,15 @@ fn render_estimate(scene: &Scene, face_size_px: u32, directions: bool, frames: u
 
 /// `frames` frames' camera images, where the scene has an imaging chain.
 fn camera_image(e: &mut Estimate, scene: &Scene, frames: u64) {
-    if let Some(imaging) = &scene.sensor.imaging {
+    if scene.sensor.imaging.is_some() {
         let sensor = pixels(scene.sensor.resolution);
         e.add_many(
             "the camera image",
             frames * sensor,
             CAMERA_IMAGE_PIXEL_BYTES,
         );
-        if imaging.motion_blur_samples > 1 {
+        // A rolling shutter alone spans instants too.
+        if crate::sensor::imaging::exposure_renders(scene) > 0 {
             e.add_many("the exposure's sum", sensor, MOTION_BLUR_PIXEL_BYTES);
         }
     }

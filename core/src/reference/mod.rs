@@ -64,7 +64,7 @@ pub fn too_many_paths(scene: &Scene, spp: u32, instants: usize) -> Option<String
             1 => format!("spp {spp} at the {name}'s {w}x{h} pixels"),
             _ => format!(
                 "spp {spp} at the {name}'s {w}x{h} pixels, traced once for the frame and once \
-                 at each of its exposure's {instants} instants (sensor.imaging),"
+                 at each of its exposure's {instants} instants (sensor.imaging):"
             ),
         };
         (paths > MAX_CAMERA_PATHS).then(|| {
@@ -76,8 +76,9 @@ pub fn too_many_paths(scene: &Scene, spp: u32, instants: usize) -> Option<String
                      sensor.imaging.rolling_shutter_s"
                 ),
             };
+            let is = if renders == 1 { " is" } else { "" };
             format!(
-                "{over} is {paths} camera paths, more than the {MAX_CAMERA_PATHS} one camera \
+                "{over}{is} {paths} camera paths, more than the {MAX_CAMERA_PATHS} one camera \
                  may trace (minutes to hours on a CPU): {change}"
             )
         })
@@ -347,8 +348,7 @@ mod tests {
         assert_eq!(super::too_many_paths(&scene, 4, 4095), None);
         let why = super::too_many_paths(&scene, 4, 4096).expect("beyond the budget");
         assert!(
-            why.starts_with("spp 4 at the sensor's 512x512 pixels, traced once for the frame and once at each of its exposure's 4096 instants")
-                && why.contains(" is 4296015872 camera paths")
+            why.starts_with("spp 4 at the sensor's 512x512 pixels, traced once for the frame and once at each of its exposure's 4096 instants (sensor.imaging): 4296015872 camera paths")
                 && why.ends_with(": fewer samples, a smaller sensor.resolution, fewer sensor.imaging.motion_blur_samples or a shorter sensor.imaging.rolling_shutter_s"),
             "{why}"
         );

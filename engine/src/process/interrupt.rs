@@ -75,7 +75,7 @@ pub fn check(progress: &str) -> Result<(), Interrupted> {
 }
 
 /// The error of a command that a signal stopped `progress` (work that saw the signal at its
-/// own check, [`super::progress::Progress::stopped`]).
+/// own check: [`super::progress::Progress::stopped`], a reference run's `stop`).
 pub fn stopped(progress: &str) -> Interrupted {
     Interrupted(progress.to_owned())
 }

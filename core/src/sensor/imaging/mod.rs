@@ -185,11 +185,10 @@ pub fn expose(
 /// How many renders of the sensor's view a frame's exposure takes beyond the frame's own: its
 /// [`Schedule`]'s instants, or 0 for an exposure of one instant or no imaging chain.
 pub fn exposure_renders(scene: &Scene) -> usize {
-    match &scene.sensor.imaging {
-        Some(imaging) => Some(Schedule::of(imaging, 0.0).instants()).filter(|&n| n >= 2),
-        None => None,
-    }
-    .unwrap_or(0)
+    (scene.sensor.imaging.as_ref())
+        .map(|imaging| Schedule::of(imaging, 0.0).instants())
+        .filter(|&n| n >= 2)
+        .unwrap_or(0)
 }
 
 /// The light of the sensor camera's whole exposure at `t_s` from the exact reference: the
