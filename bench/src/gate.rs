@@ -169,9 +169,10 @@ pub fn same_driver(
         named(&device.driver_name, &device.driver_info),
     );
     if baseline.driver_info != device.driver_info {
-        eprintln!(
+        specchio::say_err!(
             "regression gate: warning: baseline driver {} differs from this run's {}",
-            baseline.driver_info, device.driver_info
+            baseline.driver_info,
+            device.driver_info
         );
     }
     Ok(())

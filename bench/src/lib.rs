@@ -70,7 +70,7 @@ impl Plan {
 fn say(format: Format, line: &str) {
     match format {
         Format::Table => specchio::say!("{line}"),
-        Format::Github | Format::Bmf => eprintln!("{line}"),
+        Format::Github | Format::Bmf => specchio::say_err!("{line}"),
     }
 }
 
@@ -180,7 +180,7 @@ fn write_outputs(args: &Args, out: Transaction, record: &Record) -> Result<()> {
 fn gate(args: &Args, baseline: &Baseline, record: &Record) -> ExitCode {
     let (rows, note) = crate::gate::rows_for(baseline, record.settings.frames_in_flight);
     if let Some(note) = note {
-        eprintln!("regression gate: {note}");
+        specchio::say_err!("regression gate: {note}");
     }
     let mut failures = crate::gate::check(&rows, &record.results, args.max_regression);
     failures.extend(crate::gate::check_rungs(
@@ -192,16 +192,16 @@ fn gate(args: &Args, baseline: &Baseline, record: &Record) -> ExitCode {
         &record.dynamic,
     ));
     if !failures.is_empty() {
-        eprintln!(
+        specchio::say_err!(
             "regression gate: {} case(s) got worse or changed:",
             failures.len()
         );
         for f in &failures {
-            eprintln!("  {f}");
+            specchio::say_err!("  {f}");
         }
         return ExitCode::FAILURE;
     }
-    eprintln!(
+    specchio::say_err!(
         "regression gate: passed against {}",
         args.baseline
             .as_ref()

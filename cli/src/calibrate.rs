@@ -82,12 +82,14 @@ fn print_summary(record: &CalibrationRecord, cal: &Calibration) {
     );
     let tolerance = specchio::sensor::central::scaramuzza::INVPOL_TOLERANCE_PX;
     if cal.ocam_invpol_error_px >= tolerance {
-        eprintln!(
+        specchio::say_err!(
             "warning: OCamCalib's invpol (world2cam) is within {:.3} px of its polynomial's \
              inverse, not the {tolerance} px OCamCalib fits to: no degree up to 30 does better \
              over this {}x{} image's radii (calibration.json: ocamcalib.inverse_error_px); \
              cam2world and the omnidir model are not affected",
-            cal.ocam_invpol_error_px, cal.width, cal.height
+            cal.ocam_invpol_error_px,
+            cal.width,
+            cal.height
         );
     }
 }

@@ -91,7 +91,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let bag_model = progress::calibration("dataset: the bag's unified model", resolution, false);
     plan.set_format(args.format, &bag_model)?;
     if let Some(why) = plan.omni_missing() {
-        eprintln!("warning: {why}");
+        specchio::say_err!("warning: {why}");
     }
     plan.choose(args.outputs)?;
     let n = plan.poses.len();
@@ -111,7 +111,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     frames.set_path(&plan.poses);
     let truth = frames.ground_truth();
     if let Some(warning) = truth.warning(&plan.scene) {
-        eprintln!("warning: dataset ({lookup} lookup): {warning}");
+        specchio::say_err!("warning: dataset ({lookup} lookup): {warning}");
     }
     let key = || plan.run_key(lookup, truth, &writer::device_key(&device.info));
     take_up(args, &mut folder, key, &plan)?;
@@ -141,7 +141,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let placed = wrote.and_then(|()| {
         if args.format.mcap {
             // Read back from every frame's files: a step of its own after the last frame.
-            eprintln!(
+            specchio::say_err!(
                 "writing the ROS 2 bag of {n} frame(s) into {}",
                 args.out.join("bag").display()
             );
@@ -199,7 +199,7 @@ fn take_up(
         }
     } else if work.exists() {
         let work = work.display();
-        eprintln!("note: {work} holds a stopped run; --resume goes on from it");
+        specchio::say_err!("note: {work} holds a stopped run; --resume goes on from it");
     }
     Ok(())
 }

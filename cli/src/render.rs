@@ -199,7 +199,7 @@ fn render_method(
         args.sensor_outputs,
         renderer.sensor_ground_truth().warning(&renderer.scene),
     ) {
-        eprintln!("warning: sensor outputs ({lookup} lookup): {warning}");
+        specchio::say_err!("warning: sensor outputs ({lookup} lookup): {warning}");
     }
     let reports = render_frames(args, &mut renderer, start_s, out, &dir)?;
     let summary = summarize(&reports);

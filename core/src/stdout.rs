@@ -25,6 +25,14 @@ pub fn write(args: fmt::Arguments) {
     }
 }
 
+/// Writes `args` to stderr, never panicking: a closed or full stderr (`2>&1 | head -1`, a
+/// full disk) loses the line, never the run. `eprintln!` panics there: a dataset piped to
+/// `head` died at its first progress line, exit 101, nothing written. See [`say_err!`](crate::say_err).
+pub fn write_err(args: fmt::Arguments) {
+    let mut err = io::stderr().lock();
+    let _ = err.write_fmt(args).and_then(|()| err.flush());
+}
+
 /// Ok unless a write to stdout failed for another reason than the reader going away.
 pub fn verdict() -> Result<(), StdoutFailed> {
     match FAILED.lock().unwrap_or_else(|e| e.into_inner()).take() {
@@ -46,6 +54,14 @@ macro_rules! say {
     };
     ($($arg:tt)*) => {
         $crate::stdout::write(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// `eprintln!` for the commands and the library: a line on stderr through [`write_err`].
+#[macro_export]
+macro_rules! say_err {
+    ($($arg:tt)*) => {
+        $crate::stdout::write_err(format_args!("{}\n", format_args!($($arg)*)))
     };
 }
 

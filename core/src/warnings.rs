@@ -19,7 +19,7 @@ pub fn warn(text: &str) {
     let text = crate::text::bounded_message(text);
     match held().as_mut() {
         Some(kept) => kept.push(text),
-        None => eprintln!("warning: {text}"),
+        None => crate::say_err!("warning: {text}"),
     }
 }
 

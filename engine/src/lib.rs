@@ -16,7 +16,7 @@ pub use specchio_core::{
     bvh, files, image, lookup_registry, memory, metrics, mirror, output, random, reference, scene,
     sensor, stdout, text, trees, warnings,
 };
-pub use specchio_core::{say, say_part};
+pub use specchio_core::{say, say_err, say_part};
 pub use specchio_vk as vk;
 
 pub mod process;

@@ -189,6 +189,57 @@ fn a_failing_stdout_neither_kills_nor_panics() {
     std::fs::remove_dir_all(&*dir).unwrap();
 }
 
+/// Standard error that goes away or fills up is no reason to lose a run either: a render of
+/// three frames and a reference, each saying its estimate at once (a progress line on
+/// stderr), write their outputs whole and exit 0 with stderr a closed pipe or full. A dataset
+/// piped to `2>&1 | head -1` used to die at its first progress line (`eprintln!` panics on a
+/// failed write: exit 101, nothing written).
+#[test]
+fn a_failing_stderr_neither_kills_nor_panics() {
+    let dir = scratch("stderr");
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let scene = scene.to_str().unwrap();
+    let run = |args: &[&str], out: &Path, stderr: std::process::Stdio| {
+        common::output_of(
+            Command::new(env!("CARGO_BIN_EXE_specchio"))
+                .args(args)
+                .arg("--out")
+                .arg(out)
+                .env("SPECCHIO_ESTIMATE_AFTER_S", "0")
+                .stdout(std::process::Stdio::null())
+                .stderr(stderr),
+        )
+    };
+    let commands: [(&[&str], &str); 2] = [
+        (
+            &["render", scene, "--cube-size", "8", "--frames", "3"],
+            "render.json",
+        ),
+        (&["reference", scene], "reference.json"),
+    ];
+    for (i, (args, record)) in commands.into_iter().enumerate() {
+        // A pipe whose reader is gone before the first line.
+        let mut fds = [0; 2];
+        // SAFETY: pipe fills two descriptors we then own: the read end is closed at once,
+        // the write end handed to the child as its stderr.
+        assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
+        unsafe { libc::close(fds[0]) };
+        let writer = unsafe { <std::fs::File as std::os::fd::FromRawFd>::from_raw_fd(fds[1]) };
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        for (how, stderr) in [("closed", writer.into()), ("full", full.into())] {
+            let out = dir.join(format!("{how}-{i}"));
+            let result = run(args, &out, stderr);
+            assert_eq!(result.status.code(), Some(0), "{args:?} with stderr {how}");
+            assert!(out.join(record).is_file(), "{args:?} with stderr {how}");
+            assert!(common::staging_folders(&out).is_empty());
+        }
+    }
+    std::fs::remove_dir_all(&*dir).unwrap();
+}
+
 /// Re-running into the same folder (as scripts/run.sh does) replaces the earlier render as a
 /// whole: nothing of the earlier sequence is mixed into the new single frame.
 #[test]
@@ -410,15 +461,11 @@ fn a_long_reference_says_its_estimate_and_stops_cleanly() {
         let (scene, out_text) = (scene.to_str().unwrap(), out.to_str().unwrap());
         // Said after the first row, however fast the machine (the work is far longer).
         let spp_text = spp.to_string();
-        let args = [
-            "reference",
-            scene,
-            "--spp",
-            &spp_text,
-            "--out",
-            out_text,
-            "--sensor-outputs",
-        ];
+        let mut args = vec!["reference", scene, "--spp", &spp_text, "--out", out_text];
+        // The exposure is traced for the sensor outputs alone.
+        if !imaging.is_empty() {
+            args.push("--sensor-outputs");
+        }
         let estimate = format!(
             "reference: observer 64x48 and sensor {side}x{side} cameras at {spp} spp{whole}: "
         );

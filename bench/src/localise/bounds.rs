@@ -77,7 +77,7 @@ fn warn_if_unreadable(plan: &Plan) {
         .saturating_mul(values)
         .saturating_mul(BYTES_PER_VALUE);
     if bytes > database::MAX_LANDMARKS_FILE_BYTES {
-        eprintln!(
+        specchio::say_err!(
             "localise: warning: landmarks.json will be about {} MiB ({} landmarks of {values} \
              values), more than the {} MiB --landmarks reads back; a larger --grid or a smaller \
              --k keeps the database reusable",

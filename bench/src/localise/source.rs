@@ -125,7 +125,7 @@ impl<'a> Robot<'a> {
     ) -> Result<Vec<Signature>> {
         // Said first, so that a long loop is never silent; the bar (on a terminal only)
         // counts its images.
-        eprintln!("localise: {} {what}", poses.len());
+        specchio::say_err!("localise: {} {what}", poses.len());
         let bar = indicatif::ProgressBar::new(poses.len() as u64);
         bar.set_style(
             indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} images, {elapsed}")

@@ -81,7 +81,7 @@ where
 {
     let stdout = crate::stdout::verdict();
     let said = |e: &(dyn std::error::Error + 'static)| {
-        eprintln!("error: {}", error_text(e));
+        crate::say_err!("error: {}", error_text(e));
         exit_status(e)
     };
     match (result, stdout) {

@@ -32,7 +32,7 @@ fn estimate_after() -> Duration {
         match parse_after(&text) {
             Some(after) => after,
             None => {
-                eprintln!(
+                crate::say_err!(
                     "warning: {ESTIMATE_AFTER_VAR}={text:?} is not a number of seconds from 0 \
                      to 86400; estimates come after {} s",
                     ESTIMATE_AFTER.as_secs_f64()
@@ -94,7 +94,7 @@ impl Progress {
         if said.is_some_and(|at| at.elapsed() < REPEAT_EVERY) {
             return;
         }
-        eprintln!("{}", self.line(done, elapsed, said.is_none()));
+        crate::say_err!("{}", self.line(done, elapsed, said.is_none()));
         *said = Some(Instant::now());
     }
 
