@@ -103,6 +103,11 @@ struct MaterialSample {
 #define CHECK_PUSH_CONSTANTS \
     layout(push_constant) uniform CheckPush { uint first; uint count; uint material; uint pad; } check
 
+// cube_mips.comp's push constants: the box of level m to write (origin, size, in texels of
+// that level) on faces first_face onwards, one face a layer of the dispatch.
+#define MIP_BOX_PUSH_CONSTANTS \
+    layout(push_constant) uniform MipBox { ivec2 origin; ivec2 size; int first_face; } box
+
 // Push constants: which view and which object a draw uses; which cube faces a layered pass
 // renders (bit f set: face f; the other faces keep their contents).
 #define PUSH_CONSTANTS \
@@ -151,6 +156,8 @@ struct MaterialSample {
 // pretrace's square workgroup (trace_view.comp).
 #define TRACED_PIXEL_BYTES 32u
 #define TRACE_GROUP_SIDE 8u
+// The side of cube_mips.comp's square workgroup.
+#define MIP_GROUP_SIDE 8u
 
 // Descriptor set 0: the scene. Set 1: the environment cube (views only).
 #define SCENE_BINDINGS \

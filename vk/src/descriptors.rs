@@ -152,3 +152,22 @@ pub fn write_images(
     // SAFETY: the set is not in use by a pending command buffer.
     unsafe { device.raw.update_descriptor_sets(&[write], &[]) };
 }
+
+/// Writes a storage image at `binding`, in the layout storage writes need (`GENERAL`).
+pub fn write_storage_image(
+    device: &Device,
+    set: vk::DescriptorSet,
+    binding: u32,
+    view: vk::ImageView,
+) {
+    let infos = [vk::DescriptorImageInfo::default()
+        .image_view(view)
+        .image_layout(vk::ImageLayout::GENERAL)];
+    let write = vk::WriteDescriptorSet::default()
+        .dst_set(set)
+        .dst_binding(binding)
+        .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+        .image_info(&infos);
+    // SAFETY: the set is not in use by a pending command buffer.
+    unsafe { device.raw.update_descriptor_sets(&[write], &[]) };
+}

@@ -126,7 +126,7 @@ impl CubeFill {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_GRAPHICS, TS_FILL);
         }
         graph.declare(device, cmd, &read_uses(f, ids));
-        super::mips::record((device, graph), cmd, f.cube);
+        super::mips::record((device, graph), cmd, f.cube, plan);
         if let Some(q) = &f.queries.timestamps {
             q.write_timestamp(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, TS_MIPS);
         }
@@ -141,7 +141,7 @@ impl CubeFill {
 fn fill_uses(f: &FrameParts, ids: bool) -> Vec<(graph::Resource, Use)> {
     let (depth, id_cube) = f.cube.depth_and_ids();
     let mut uses = vec![
-        (f.cube.color_levels(0, 1), Use::ColorKept),
+        (f.cube.color_levels(0, 1, None), Use::ColorKept),
         (depth, Use::DepthKept),
     ];
     uses.extend(id_cube.filter(|_| ids).map(|i| (i, Use::ColorKept)));

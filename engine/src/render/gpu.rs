@@ -89,6 +89,16 @@ pub struct CheckPush {
     pub pad: u32,
 }
 
+/// `cube_mips.comp`'s push constants: the box of level m to write (`origin`, `size`, in texels
+/// of that level) on faces `first_face` onwards, one face a layer of the dispatch.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct MipBox {
+    pub origin: [i32; 2],
+    pub size: [i32; 2],
+    pub first_face: i32,
+}
+
 /// One vertex of the scene's vertex buffer (locations 0, 1, 2 of scene.vert).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -206,6 +216,9 @@ mod tests {
             member!(CheckPush, count),
             member!(CheckPush, material),
             member!(CheckPush, pad),
+            member!(MipBox, origin),
+            member!(MipBox, size),
+            member!(MipBox, first_face),
         ]
     }
 

@@ -27,6 +27,7 @@ mod in_flight;
 pub mod lookups;
 pub mod material_check;
 pub mod methods;
+mod mip_pass;
 mod mips;
 mod mirror;
 mod passes;

@@ -85,7 +85,7 @@ impl Copies {
             copies.bytes = 6 * u64::from(cube.size) * u64::from(cube.size) * texel;
             copies.cube = Some(CubeCopy {
                 image: cube.color.raw,
-                mip0: cube.color_levels(0, 1),
+                mip0: cube.color_levels(0, 1, None),
                 size: cube.size,
                 unorm,
             });

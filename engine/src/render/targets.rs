@@ -5,6 +5,7 @@ use std::sync::Arc;
 use ash::vk;
 
 use super::graph::{Resource, Use};
+use super::mip_pass::MipPass;
 use crate::scene::{CubeFormat, CubeSettings, Scene};
 use crate::vk::device::Device;
 use crate::vk::image::{full_mip_count, Image, ImageDesc, ImageView, Sampler};
@@ -71,6 +72,8 @@ impl IdCube {
 /// depth image, one attachment view per face and the cube view the mirror samples; and the
 /// id cube when it is asked for.
 pub struct CubeTarget {
+    /// The mip chain's pass (with mipmaps): its views of the levels go before the colour.
+    pub mips: Option<MipPass>,
     pub ids: Option<IdCube>,
     /// Views first: they must go before their images.
     pub face_views: Vec<ImageView>,
@@ -98,12 +101,15 @@ impl CubeTarget {
             .collect()
     }
 
-    /// Levels `first..first + count` of the colour's six faces.
-    pub(super) fn color_levels(&self, first: u32, count: u32) -> Resource {
+    /// Levels `first..first + count` of face `face` (None: all six faces) of the colour.
+    pub(super) fn color_levels(&self, first: u32, count: u32, face: Option<u32>) -> Resource {
+        let all = self.color.full_range();
         let range = vk::ImageSubresourceRange {
             base_mip_level: first,
             level_count: count,
-            ..self.color.full_range()
+            base_array_layer: face.unwrap_or(all.base_array_layer),
+            layer_count: if face.is_some() { 1 } else { all.layer_count },
+            ..all
         };
         Resource::image(self.color.raw, range)
     }
@@ -127,6 +133,11 @@ impl CubeTarget {
         } else {
             1
         };
+        // Levels 1.. are stored by the mip pass's compute shader.
+        let stored = match mips {
+            1 => vk::ImageUsageFlags::empty(),
+            _ => vk::ImageUsageFlags::STORAGE,
+        };
         ImageDesc::new_cube(
             cube_format(settings.format),
             size,
@@ -134,7 +145,8 @@ impl CubeTarget {
             vk::ImageUsageFlags::COLOR_ATTACHMENT
                 | vk::ImageUsageFlags::SAMPLED
                 | vk::ImageUsageFlags::TRANSFER_SRC
-                | vk::ImageUsageFlags::TRANSFER_DST,
+                | vk::ImageUsageFlags::TRANSFER_DST
+                | stored,
         )
     }
 
@@ -163,7 +175,7 @@ impl CubeTarget {
         let color_desc = Self::color_desc(settings);
         let (format, mips) = (color_desc.format, color_desc.mip_levels);
         if mips > 1 {
-            check_blit_support(device, format)?;
+            check_storage_support(device, format)?;
         }
         let color = Image::create(device, &color_desc, "cube colour")?;
         let depth = Image::create(device, &Self::depth_desc(settings), "cube depth")?;
@@ -174,7 +186,11 @@ impl CubeTarget {
         let cube_view = color.view(vk::ImageViewType::CUBE, 0, 6, 0, mips, "cube (sampled)")?;
         let sampler = cube_sampler(device)?;
         let ids = ids.then(|| IdCube::create(device, settings)).transpose()?;
+        let mips = (mips > 1)
+            .then(|| MipPass::create(device, &color, &sampler))
+            .transpose()?;
         Ok(Self {
+            mips,
             ids,
             face_views,
             depth_views,
@@ -254,7 +270,9 @@ fn cube_sampler(device: &Arc<Device>) -> Result<Sampler, GpuError> {
     )
 }
 
-fn check_blit_support(device: &Device, format: vk::Format) -> Result<(), GpuError> {
+/// The mip pass reads a level through a sampled view and stores the next from a compute
+/// shader: both are required of the two cube formats, and checked all the same.
+fn check_storage_support(device: &Device, format: vk::Format) -> Result<(), GpuError> {
     // SAFETY: plain query.
     let props = unsafe {
         device
@@ -262,14 +280,13 @@ fn check_blit_support(device: &Device, format: vk::Format) -> Result<(), GpuErro
             .raw
             .get_physical_device_format_properties(device.physical, format)
     };
-    let need = vk::FormatFeatureFlags::BLIT_SRC
-        | vk::FormatFeatureFlags::BLIT_DST
-        | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
+    let need = vk::FormatFeatureFlags::STORAGE_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE;
     if props.optimal_tiling_features.contains(need) {
         Ok(())
     } else {
         Err(GpuError::Unsupported(format!(
-            "{format:?} cannot be blitted with linear filtering on this device: set mipmaps = false"
+            "{format:?} cannot be stored by a compute shader on this device, which the cube's \
+             mip chain needs: set mipmaps = false"
         )))
     }
 }

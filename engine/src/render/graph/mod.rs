@@ -66,6 +66,15 @@ pub enum Use {
     ComputeWrite,
     /// Read by fragment shaders' storage accesses (the records the compute pass wrote).
     FragmentStorageRead,
+    /// Read texel by texel by compute shaders through a sampled view (a mip level above the
+    /// one being made).
+    ComputeSampled,
+    /// Stored into by compute shaders, whole: earlier contents are not kept (a mip level of a
+    /// face rebuilt whole).
+    ComputeStored,
+    /// Stored into by compute shaders in part, the rest kept (a face's mips above its dirty
+    /// rectangles).
+    ComputeStoredKept,
 }
 
 const BLIT_READ: Sync = (
@@ -106,6 +115,10 @@ const COMPUTE_WRITE: Sync = (
     vk::PipelineStageFlags2::COMPUTE_SHADER,
     vk::AccessFlags2::SHADER_STORAGE_WRITE,
 );
+const COMPUTE_SAMPLED: Sync = (
+    vk::PipelineStageFlags2::COMPUTE_SHADER,
+    vk::AccessFlags2::SHADER_SAMPLED_READ,
+);
 const STORAGE_READ: Sync = (
     vk::PipelineStageFlags2::FRAGMENT_SHADER,
     vk::AccessFlags2::SHADER_STORAGE_READ,
@@ -120,6 +133,8 @@ impl Use {
             Use::FragmentRead => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Use::BlitSource | Use::CopySource => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
             Use::BlitDestination => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            Use::ComputeSampled => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            Use::ComputeStored | Use::ComputeStoredKept => vk::ImageLayout::GENERAL,
             Use::CopyDestination
             | Use::HostRead
             | Use::Filled
@@ -147,8 +162,9 @@ impl Use {
             Use::FragmentStorage => STORAGE_RW,
             Use::AccelerationBuild => BUILD_RW,
             Use::AccelerationTraced => TRACED,
-            Use::ComputeWrite => COMPUTE_WRITE,
+            Use::ComputeWrite | Use::ComputeStored | Use::ComputeStoredKept => COMPUTE_WRITE,
             Use::FragmentStorageRead => STORAGE_READ,
+            Use::ComputeSampled => COMPUTE_SAMPLED,
         }
     }
 
@@ -165,6 +181,8 @@ impl Use {
                 | Use::FragmentStorage
                 | Use::AccelerationBuild
                 | Use::ComputeWrite
+                | Use::ComputeStored
+                | Use::ComputeStoredKept
         )
     }
 
@@ -173,7 +191,7 @@ impl Use {
     fn discards(self) -> bool {
         matches!(
             self,
-            Use::ColorTarget | Use::DepthTarget | Use::BlitDestination
+            Use::ColorTarget | Use::DepthTarget | Use::BlitDestination | Use::ComputeStored
         )
     }
 }

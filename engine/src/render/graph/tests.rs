@@ -156,8 +156,8 @@ fn a_resource_never_imported_is_refused() {
     FrameGraph::default().uses(&[(image(9, 1), Use::CopySource)]);
 }
 
-/// A cube of 6 faces and 3 levels after a fill, its chain rebuilt for faces 0 and 2 alone (as
-/// `mips.rs` did until it rebuilt all six): the barriers, each subresource's derived on its
+/// A cube of 6 faces and 3 levels after a fill, its chain blitted for faces 0 and 2 alone (as
+/// `mips.rs` did before its compute pass): the barriers, each subresource's derived on its
 /// own and merged back, are the ones once placed by hand (level 0 of all faces in one barrier,
 /// each face's level alone, then back to sampling: all of level 0, levels 1.. of each face).
 #[test]
