@@ -231,24 +231,17 @@ fn dirty_rectangles_are_exact() {
 /// whole faces, and geometry, on every driver, against their full updates.
 #[test]
 fn incremental_mips_are_the_full_updates() {
-    let room = "[room]\ncenter = [0, 3, 0]\nsize = [10, 6, 10]\n\
-        walls = { px = \"red\", nx = \"cyan\", py = \"green\", ny = \"floor\", pz = \"blue\", nz = \"tex\" }\n\
-        [mirror]\ncenter = [0, 3, 0]\nradius = 1.0\nlookup = \"plain\"\n\
-        [[materials]]\nname = \"red\"\ntype = \"color\"\ncolor = [1, 0, 0]\n\
-        [[materials]]\nname = \"cyan\"\ntype = \"color\"\ncolor = [0, 1, 1]\n\
-        [[materials]]\nname = \"green\"\ntype = \"color\"\ncolor = [0, 1, 0]\n\
-        [[materials]]\nname = \"blue\"\ntype = \"color\"\ncolor = [0, 0, 1]\n\
-        [[materials]]\nname = \"floor\"\ntype = \"checker\"\na = [0.9, 0.9, 0.9]\nb = [0.1, 0.1, 0.1]\n\
-        [[materials]]\nname = \"tex\"\ntype = \"texture\"\nfile = \"textures/orientation.png\"\n\
-        [[materials]]\nname = \"ball\"\ntype = \"color\"\ncolor = [0.95, 0.75, 0.1]\n\
-        [observer]\nposition = [0, 3.5, 4.5]\npitch = -6\nresolution = [96, 72]\n\
-        [sensor]\noffset = 2.5\nresolution = [96, 96]\n";
-    let balls = [
+    // The shipped scene (the small ball), and the same room with the larger ball.
+    let rel = "scenes/test/orbit-near-seams.toml";
+    let small = std::fs::read_to_string(root().join(rel)).expect("the scene");
+    let larger = small.replace(
         "radius = 0.2\nposition = [1.4, 3, 0]\n\
          animation = { type = \"orbit\", center = [0, 3, 0], axis = [0.3, 1, 0.2], period = 3.0 }",
         "radius = 0.4\nposition = [2, 1.2, 0]\n\
          animation = { type = \"orbit\", center = [0, 3, 0], period = 8.0 }",
-    ];
+    );
+    assert_ne!(small, larger, "the larger ball replaces the small one");
+    let balls = [small, larger];
     let times: Vec<f64> = (0..6).map(|i| f64::from(i) / 4.0).collect();
     let geometry = Method::parse("geometry").expect("the geometry method");
     let runs = [
@@ -258,12 +251,8 @@ fn incremental_mips_are_the_full_updates() {
     ];
     for device in devices() {
         let (gpu, methods) = Gpu::with_all_methods_on(Some(&device));
-        for (i, ball) in balls.iter().enumerate() {
-            let text =
-                format!("{room}[[objects]]\nshape = \"sphere\"\nmaterial = \"ball\"\n{ball}\n");
-            // Beside the shipped scenes, whose textures it uses.
-            let path = root().join(format!("scenes/orbit-near-seams-{i}.toml"));
-            let s = specchio::scene::load_str(&text, &path).expect("the scene");
+        for (i, text) in balls.iter().enumerate() {
+            let s = specchio::scene::load_str(text, &root().join(rel)).expect("the scene");
             for &(m, updates) in runs.iter().filter(|(m, _)| methods.contains(m)) {
                 let full = cube(&gpu, &s, m, 64, &times, Updates::Full);
                 let incremental = cube(&gpu, &s, m, 64, &times, updates);
