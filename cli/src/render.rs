@@ -57,9 +57,10 @@ pub struct Args {
     #[arg(long, allow_negative_numbers = true, value_parser = face_size)]
     pub(crate) cube_size: Option<u32>,
     /// Cube fill method (`specchio info` lists them, with what this device can run), or all
-    /// (each usable one into DIR/<method>/; measurement variants only when named).
-    #[arg(long, default_value = "six-pass", value_parser = specchio::process::args::method_or_all)]
-    pub(crate) method: String,
+    /// (each usable one into DIR/<method>/; measurement variants only when named). Default:
+    /// six-pass. Only a lookup that samples the cube fills one.
+    #[arg(long, value_parser = specchio::process::args::method_or_all)]
+    pub(crate) method: Option<String>,
     /// Mirror lookup (`specchio info` lists them, with what this device can run; see
     /// docs/accuracy.md). Default: the scene's `mirror.lookup`.
     #[arg(long, value_parser = specchio::process::args::lookup)]
@@ -132,7 +133,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let log = instance.validation_log();
     let validation = instance.validation;
     let chosen = device::choose(&instance, args.device.as_deref())?;
-    let (methods, refused) = pick_methods(&args.method, &chosen)?;
+    let (methods, refused) = pick_methods(args.method_name(), &chosen)?;
     let lookup = chosen_lookup(args, &scene, &chosen);
     if let Some(why) = lookups::missing_features(lookup, &chosen) {
         bail!("lookup {lookup} cannot run on {}: {why}", chosen.name);
@@ -175,7 +176,7 @@ fn render_method(
     start_s: f64,
     out: &Transaction,
 ) -> Result<RenderRun> {
-    let dir = if args.method == "all" {
+    let dir = if args.method_name() == "all" {
         args.out.join(method.name())
     } else {
         args.out.clone()

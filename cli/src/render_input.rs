@@ -30,6 +30,34 @@ pub(crate) fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
 /// record it in render.json as if it had): the update options under a refresh policy that
 /// re-renders every face whole anyway, the bvh walk's options with another lookup.
 pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Result<()> {
+    let plugin = lookups::plugin(lookup);
+    let cube = [
+        ("--method", args.method.is_some()),
+        ("--full-updates", args.full_updates),
+        ("--whole-faces", args.whole_faces),
+    ];
+    if let Some((option, _)) = cube.iter().find(|(_, given)| *given) {
+        if !plugin.uses_cube() {
+            bail!(
+                "{option}: the {lookup} lookup samples no cube map, so none is filled{}; leave \
+                 it out, or give a lookup that samples the cube (--lookup box, say)",
+                chosen_for_outputs(args)
+            );
+        }
+    }
+    let search = [
+        ("--distance-steps", args.distance_steps.is_some()),
+        ("--secant-steps", args.secant_steps.is_some()),
+    ];
+    if let Some((option, _)) = search.iter().find(|(_, given)| *given) {
+        if !plugin.searches_depth() {
+            bail!(
+                "{option}: only the distance lookups search the cube's depth, and this run's \
+                 lookup is {lookup}{}; leave it out, or give --lookup distance",
+                chosen_for_outputs(args)
+            );
+        }
+    }
     let updates = [
         ("--full-updates", args.full_updates),
         ("--whole-faces", args.whole_faces),
@@ -88,4 +116,20 @@ pub(crate) fn load_scene(args: &Args) -> Result<Scene> {
 pub(crate) fn chosen_lookup(args: &Args, scene: &Scene, device: &DeviceInfo) -> Lookup {
     let traced = || lookups::one_light_path(device).filter(|_| args.sensor_outputs);
     args.lookup.or_else(traced).unwrap_or(scene.mirror.lookup)
+}
+
+/// ", chosen for the sensor outputs" where `--sensor-outputs` chose the lookup (no
+/// `--lookup`): the user named none.
+fn chosen_for_outputs(args: &Args) -> &'static str {
+    match (args.lookup, args.sensor_outputs) {
+        (None, true) => " (the lookup --sensor-outputs traces with, given no --lookup)",
+        _ => "",
+    }
+}
+
+impl Args {
+    /// `--method`, or six-pass where it is not given.
+    pub(crate) fn method_name(&self) -> &str {
+        self.method.as_deref().unwrap_or("six-pass")
+    }
 }

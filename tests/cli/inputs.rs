@@ -242,6 +242,25 @@ fn options_that_would_change_nothing_are_refused() {
             "--bvh-layout: only the bvh lookup walks trees of its own",
         ),
         (
+            vec!["render", thesis, "--out", out_s, "--lookup", "bvh", "--method", "mesh"],
+            "--method: the bvh lookup samples no cube map, so none is filled; leave it out",
+        ),
+        (
+            vec!["render", thesis, "--out", out_s, "--sensor-outputs", "--full-updates"],
+            // bvh on a CPU driver, ray-query on a GPU that has ray queries: either fills none.
+            " lookup samples no cube map, so none is filled (the lookup --sensor-outputs traces \
+             with, given no --lookup)",
+        ),
+        (
+            vec!["render", thesis, "--out", out_s, "--lookup", "plain", "--distance-steps", "5"],
+            "--distance-steps: only the distance lookups search the cube's depth, and this \
+             run's lookup is plain",
+        ),
+        (
+            vec!["render", thesis, "--out", out_s, "--lookup", "box", "--secant-steps", "3"],
+            "--secant-steps: only the distance lookups search the cube's depth",
+        ),
+        (
             vec!["bench", thesis, "--max-regression", "5", "--json", base.to_str().unwrap()],
             "the following required arguments were not provided:\n  --baseline <BASELINE>",
         ),

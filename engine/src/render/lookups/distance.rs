@@ -23,6 +23,10 @@ use crate::vk::GpuError;
 pub struct Distance;
 
 impl MirrorLookup for Distance {
+    fn searches_depth(&self) -> bool {
+        true
+    }
+
     fn summary(&self) -> &'static str {
         "the reflected ray searched through the cube's depth, looked up where it meets it \
          (exact for surfaces the cube's centre sees, up to the search's steps)"

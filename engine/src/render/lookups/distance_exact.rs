@@ -42,6 +42,10 @@ const TALLY_BINDING: u32 = TRACE_BINDING + 4;
 pub struct DistanceExact;
 
 impl MirrorLookup for DistanceExact {
+    fn searches_depth(&self) -> bool {
+        true
+    }
+
     fn summary(&self) -> &'static str {
         "the distance search, with the rays it cannot resolve (behind an occluder as the \
          cube's centre sees it) traced exactly (VK_KHR_ray_query)"

@@ -66,6 +66,11 @@ pub trait MirrorLookup: Sync {
     /// Whether the mirror samples the cube map. When not, the renderer skips the cube fill
     /// (unless the cube itself is read back).
     fn uses_cube(&self) -> bool;
+    /// Whether it searches the cube's depth, so that `mirror.distance_steps` and
+    /// `mirror.secant_steps` (`render --distance-steps`, `--secant-steps`) change it.
+    fn searches_depth(&self) -> bool {
+        false
+    }
     /// Whether its pass traces the sensor's ray map through its own set
     /// ([`LookupPass::trace_set`]): the range and ids then follow the colour's own light path,
     /// and the renderer needs no id cube for them. The renderer checks that the pass agrees.
