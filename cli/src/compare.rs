@@ -26,8 +26,9 @@ pub struct Args {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     json: bool,
-    /// Write the per-pixel FLIP error as a colour-mapped PNG (magma; grey: not compared).
-    #[arg(long)]
+    /// Write the per-pixel FLIP error as a colour-mapped PNG (magma; grey: not compared). A
+    /// colour comparison's: not with --angular, which has no FLIP.
+    #[arg(long, conflicts_with = "angular")]
     heatmap: Option<PathBuf>,
     /// The two files are direction images (`render --directions` against the reference's
     /// `NAME.direction.exr`): report the mirror's angular lookup error instead, in degrees and

@@ -261,6 +261,10 @@ fn options_that_would_change_nothing_are_refused() {
             "--secant-steps: only the distance lookups search the cube's depth",
         ),
         (
+            vec!["compare", thesis, thesis, "--angular", "64", "--heatmap", out_s],
+            "'--angular <FACE_SIZE>' cannot be used with '--heatmap <HEATMAP>'",
+        ),
+        (
             vec!["bench", thesis, "--max-regression", "5", "--json", base.to_str().unwrap()],
             "the following required arguments were not provided:\n  --baseline <BASELINE>",
         ),
