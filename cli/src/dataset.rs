@@ -197,7 +197,7 @@ fn take_up(
                 work.display()
             );
         }
-    } else if work.exists() {
+    } else if resume::holds_a_run(&args.out) {
         let work = work.display();
         specchio::say_err!("note: {work} holds a stopped run; --resume goes on from it");
     }

@@ -240,3 +240,29 @@ fn a_run_of_every_layer_resumes_to_the_same_bytes() {
     );
     assert_eq!(files(&out), files(&whole));
 }
+
+/// A `NAME.partial` beside `--out` that is no stopped run (a user's folder of notes, a plain
+/// file) is not called one: `--resume` would refuse it, so nothing suggests it. It used to
+/// get "holds a stopped run; --resume goes on from it".
+#[test]
+fn only_a_stopped_run_is_called_one() {
+    let dir = temp_dir("not-a-run");
+    std::fs::create_dir_all(dir.join("notes.partial")).unwrap();
+    std::fs::write(dir.join("notes.partial/notes.txt"), "mine").unwrap();
+    std::fs::write(dir.join("file.partial"), "mine").unwrap();
+    let trajectory = dir.join("t.csv");
+    std::fs::write(&trajectory, "time,x,y,z,heading\n0,0,3,0,0\n").unwrap();
+    for name in ["notes", "file"] {
+        let out = dir.join(name);
+        let mut a = args(trajectory.to_str().unwrap(), out.to_str().unwrap());
+        a.extend(["--outputs", "image"]);
+        let run = specchio(&a);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(run.status.success(), "{stderr}");
+        assert!(!stderr.contains("stopped run"), "{name}: {stderr}");
+        assert!(
+            dir.join(format!("{name}.partial")).exists(),
+            "left as it was"
+        );
+    }
+}

@@ -67,6 +67,15 @@ pub fn work_path(out: &Path) -> PathBuf {
     out.with_file_name(name)
 }
 
+/// Whether `out`'s work folder is there and looks like a stopped run's: a folder (not a link)
+/// holding a journal. A user's own `NAME.partial`, a file or a folder of notes, is not one:
+/// `--resume` would refuse it, so nothing should suggest it.
+pub fn holds_a_run(out: &Path) -> bool {
+    let path = work_path(out);
+    let folder = fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir());
+    folder && fs::symlink_metadata(path.join(JOURNAL)).is_ok_and(|m| m.is_file())
+}
+
 impl WorkFolder {
     /// Opens `out`'s work folder for a run keyed `key`: creates it when there is none, else
     /// takes it when it is this run's, with the frames it holds done. `index_of(i)` is the
