@@ -12,6 +12,7 @@ use specchio::metrics::{
     REL_MSE_EPSILON,
 };
 use specchio::output::{Sink, Transaction};
+use specchio::process::interrupt;
 use specchio::reference::angular;
 
 #[derive(clap::Args)]
@@ -39,16 +40,21 @@ pub struct Args {
 
 pub fn run(args: &Args) -> Result<ExitCode> {
     let out = stage_heatmap(args)?;
+    // A signal stops the comparison at its next step with the staged heatmap removed (it
+    // used to end the process and leave the staging folder behind).
+    interrupt::catch();
     if let Some(face_size) = args.angular {
         return angular(args, face_size);
     }
     // 1. Read and compare; any bad input stops here, before a file is written.
     let comparison = metrics::compare_files(&args.test, &args.reference, args.mask.as_deref())?;
+    interrupt::check("after comparing")?;
 
     // 2. The heatmap, written atomically.
     if let Some(path) = &args.heatmap {
         let rgb8 = metrics::heatmap_rgb8(&comparison);
         out.write_png_rgb8(path, comparison.width, comparison.height, &rgb8)?;
+        interrupt::check("before placing the heatmap")?;
         out.commit()?;
     }
 
