@@ -39,10 +39,10 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
-    let out = stage_heatmap(args)?;
     // A signal stops the comparison at its next step with the staged heatmap removed (it
-    // used to end the process and leave the staging folder behind).
+    // used to end the process and leave the staging folder behind): caught before staging.
     interrupt::catch();
+    let out = stage_heatmap(args)?;
     if let Some(face_size) = args.angular {
         return angular(args, face_size);
     }

@@ -374,3 +374,43 @@ fn extreme_errors_print_readably() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Ctrl-C during a comparison (two 2048² images, seconds of FLIP) stops it with exit 1,
+/// saying so, and leaves neither the heatmap nor its staging folder; it used to end the
+/// process at once and leave `.NAME.specchio-*` behind.
+#[test]
+fn a_stopped_comparison_leaves_nothing() {
+    let dir = temp_dir("stopped");
+    let side = 2048;
+    let big = |offset: f32| RgbaImage {
+        width: side,
+        height: side,
+        pixels: (0..side * side)
+            .map(|i| {
+                let v = 0.2 + 0.6 * (i % 97) as f32 / 97.0 + offset;
+                [v, 1.0 - v, 0.5, 1.0]
+            })
+            .collect(),
+    };
+    let (a, b, heatmap) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("h.png"));
+    write_exr(&a, &big(0.0)).unwrap();
+    write_exr(&b, &big(0.05)).unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(["compare", s(&a), s(&b), "--heatmap", s(&heatmap)])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Once the heatmap is staged the comparison is under way, and the signal is caught.
+    let staged = || !common::staging_folders(&heatmap).is_empty();
+    let out = common::signal_when(child, libc::SIGINT, "the staged heatmap", staged);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("interrupted") && stderr.contains("nothing was written"),
+        "{stderr}"
+    );
+    assert!(!heatmap.exists());
+    assert!(common::staging_folders(&heatmap).is_empty());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
