@@ -61,7 +61,7 @@ pub struct Args {
     #[arg(long, allow_negative_numbers = true, value_delimiter = ',', value_parser = face_size)]
     pub cube_sizes: Option<Vec<u32>>,
     /// Comma-separated lookup modes for the error measurement (docs/accuracy.md lists them).
-    #[arg(long, value_delimiter = ',', value_parser = lookup, default_value = "plain,box")]
+    #[arg(long, value_delimiter = ',', value_parser = lookup, default_value = "plain,box", conflicts_with = "no_accuracy")]
     pub lookups: Vec<Lookup>,
     /// Timed cube updates per method, floor and run, 1..=100000 [default: 10; --full: 20; --quick: 5].
     #[arg(long, allow_negative_numbers = true, visible_alias = "updates", value_parser = whole(1u32..=100_000))]
@@ -130,7 +130,7 @@ pub struct Args {
     /// Scene time (seconds, 0..=86400) of the dynamic measurement's first frame; its frames
     /// follow 1/30 s apart (moving-objects' mirror moves until 4 s: from 4.2 s only its
     /// objects do).
-    #[arg(long, allow_negative_numbers = true, value_parser = real(0.0, false, 86_400.0), default_value_t = 0.0)]
+    #[arg(long, allow_negative_numbers = true, value_parser = real(0.0, false, 86_400.0), default_value_t = 0.0, conflicts_with = "no_dynamic")]
     pub dynamic_from: f64,
     /// Comma-separated rungs of the trade-off ladder (default: every rung the device can run;
     /// docs/benchmarks.md lists them).
@@ -147,12 +147,12 @@ pub struct Args {
     /// Where the bvh rung walks its rays: fragment (in the mirror's fragment shaders) or
     /// compute (once a view, in a compute pass before it is drawn). Default: the device's
     /// (compute on a GPU, fragment on a CPU driver; docs/accuracy.md).
-    #[arg(long, value_parser = specchio::process::args::trace_in)]
+    #[arg(long, value_parser = specchio::process::args::trace_in, conflicts_with = "no_tradeoff")]
     pub trace_in: Option<specchio::render::lookups::TraceIn>,
     /// How the bvh rung lays out and walks its trees: cwbvh (eight children a node) or bvh4
     /// (four, nearest first). Default: the device's (bvh4 on SwiftShader, cwbvh elsewhere;
     /// docs/accuracy.md). Its work counters are the layout's.
-    #[arg(long, value_parser = specchio::process::args::bvh_layout)]
+    #[arg(long, value_parser = specchio::process::args::bvh_layout, conflicts_with = "no_tradeoff")]
     pub bvh_layout: Option<specchio::bvh::BvhLayout>,
 }
 
@@ -209,6 +209,7 @@ pub fn settle(args: &Args) -> Result<Settled> {
         Some(list) => list.clone(),
     };
     no_list_repeats(args)?;
+    bvh_options_apply(args)?;
     if args.max_regression.is_some() {
         anyhow::ensure!(
             methods.contains(&Method::SIX_PASS),
@@ -218,6 +219,7 @@ pub fn settle(args: &Args) -> Result<Settled> {
     }
     report_folders_exist(args)?;
     let scenes = scenes_of(args);
+    no_scene_twice(&scenes)?;
     if args.bmf.is_some() || args.format == Format::Bmf {
         bmf_names_unique(&scenes)?;
     }
@@ -250,6 +252,44 @@ fn no_list_repeats(args: &Args) -> Result<()> {
     no_repeats("--lookups", &args.lookups)?;
     if let Some(list) = &args.rungs {
         no_repeats("--rungs", list)?;
+    }
+    Ok(())
+}
+
+/// `--trace-in` and `--bvh-layout` change the bvh rung alone: with `--rungs` that leave it
+/// out they would change nothing (and be recorded in the settings as if applied).
+fn bvh_options_apply(args: &Args) -> Result<()> {
+    let given = [
+        ("--trace-in", args.trace_in.is_some()),
+        ("--bvh-layout", args.bvh_layout.is_some()),
+    ];
+    let Some((option, _)) = given.iter().find(|(_, given)| *given) else {
+        return Ok(());
+    };
+    let bvh = |label: &str| rung(label).and_then(|r| r.lookup()) == Some(Lookup::Bvh);
+    if let Some(list) = &args.rungs {
+        anyhow::ensure!(
+            list.iter().any(|l| bvh(l)),
+            "{option}: changes only the bvh rung, and --rungs {} leaves it out; leave it out, \
+             or add bvh to --rungs",
+            list.join(",")
+        );
+    }
+    Ok(())
+}
+
+/// One scene measured twice is one scene's numbers twice (the same file under two spellings
+/// included): refused as a list option's repeats are.
+fn no_scene_twice(scenes: &[PathBuf]) -> Result<()> {
+    let same = |p: &PathBuf| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
+    for (i, a) in scenes.iter().enumerate() {
+        if let Some(b) = scenes[..i].iter().find(|b| same(b) == same(a)) {
+            anyhow::bail!(
+                "{} and {} are one scene: each scene once",
+                b.display(),
+                a.display()
+            );
+        }
     }
     Ok(())
 }

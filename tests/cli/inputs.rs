@@ -219,6 +219,9 @@ fn options_that_would_change_nothing_are_refused() {
     let thesis = scene("thesis-room.toml");
     let moving = scene("moving-objects.toml");
     let (thesis, moving) = (thesis.to_str().unwrap(), moving.to_str().unwrap());
+    // The same file under another spelling.
+    let thesis_again = thesis.replace("/scenes/", "/scenes/./");
+    let b = base.to_str().unwrap();
     let small = ["--cube-size", "8", "--frames", "1"];
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (
@@ -263,6 +266,26 @@ fn options_that_would_change_nothing_are_refused() {
         (
             vec!["compare", thesis, thesis, "--angular", "64", "--heatmap", out_s],
             "'--angular <FACE_SIZE>' cannot be used with '--heatmap <HEATMAP>'",
+        ),
+        (
+            vec!["bench", thesis, "--rungs", "plain", "--trace-in", "compute", "--json", b],
+            "--trace-in: changes only the bvh rung, and --rungs plain leaves it out",
+        ),
+        (
+            vec!["bench", thesis, "--no-tradeoff", "--bvh-layout", "bvh4", "--json", b],
+            "'--no-tradeoff' cannot be used with '--bvh-layout <BVH_LAYOUT>'",
+        ),
+        (
+            vec!["bench", thesis, "--no-dynamic", "--dynamic-from", "3", "--json", b],
+            "'--no-dynamic' cannot be used with '--dynamic-from <DYNAMIC_FROM>'",
+        ),
+        (
+            vec!["bench", thesis, "--no-accuracy", "--lookups", "box", "--json", b],
+            "'--no-accuracy' cannot be used with '--lookups <LOOKUPS>'",
+        ),
+        (
+            vec!["bench", thesis, &thesis_again, "--json", b],
+            "are one scene: each scene once",
         ),
         (
             vec!["bench", thesis, "--max-regression", "5", "--json", base.to_str().unwrap()],
