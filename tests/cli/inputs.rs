@@ -288,6 +288,14 @@ fn options_that_would_change_nothing_are_refused() {
             "are one scene: each scene once",
         ),
         (
+            vec!["localise", thesis, "--out", out_s, "--times", "0,3,0"],
+            "--times: 0 is given twice (items 1 and 3); each time once",
+        ),
+        (
+            vec!["localise", thesis, "--out", out_s, "--sources", "plain,box,plain"],
+            "--sources: plain is given twice (items 1 and 3); each source once",
+        ),
+        (
             vec!["bench", thesis, "--max-regression", "5", "--json", base.to_str().unwrap()],
             "the following required arguments were not provided:\n  --baseline <BASELINE>",
         ),

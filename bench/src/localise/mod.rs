@@ -241,12 +241,12 @@ fn plan(args: &Args) -> Result<Plan> {
     let scene_bytes = read_regular_file(&args.scene, MAX_SCENE_BYTES)
         .with_context(|| format!("reading {}", args.scene.display()))?;
     let scene = robot_scene(specchio::scene::load(&args.scene)?, args.sensor_size);
-    let mut sources = if args.sources.is_empty() {
+    let sources = if args.sources.is_empty() {
         vec![Source::Lookup(scene.mirror.lookup)]
     } else {
         args.sources.clone()
     };
-    dedup(&mut sources);
+    once_each(&sources, &args.times)?;
     let optics = SensorOptics::at(&scene, 0.0);
     let layout = PanoramaLayout::for_sensor(&optics, PanoramaKind::Cylindrical);
     let mut plan = Plan {
@@ -342,13 +342,26 @@ fn descriptor_name(text: &str) -> std::result::Result<String, String> {
 }
 
 /// Keeps the first of each source, in the order given.
-fn dedup(sources: &mut Vec<Source>) {
-    let mut seen = Vec::new();
-    sources.retain(|s| {
-        let new = !seen.contains(s);
-        seen.push(*s);
-        new
-    });
+/// Each source and each time once: a time given twice rendered its queries twice into two
+/// equal rows, a source given twice was merged without a word.
+fn once_each(sources: &[Source], times: &[f64]) -> Result<()> {
+    if let Some((first, again)) = repeated(sources) {
+        let name = sources[first - 1].name();
+        bail!("--sources: {name} is given twice (items {first} and {again}); each source once");
+    }
+    if let Some((first, again)) = repeated(times) {
+        let t = times[first - 1];
+        bail!("--times: {t} is given twice (items {first} and {again}); each time once");
+    }
+    Ok(())
+}
+
+/// The first item given again, as the places (from 1) of its first and second mention.
+fn repeated<T: PartialEq>(items: &[T]) -> Option<(usize, usize)> {
+    (items.iter().enumerate()).find_map(|(i, x)| {
+        let first = items[..i].iter().position(|y| y == x)?;
+        Some((first + 1, i + 1))
+    })
 }
 
 fn names(sources: &[Source]) -> String {
