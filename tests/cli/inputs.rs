@@ -296,6 +296,10 @@ fn options_that_would_change_nothing_are_refused() {
             "--sources: plain is given twice (items 1 and 3); each source once",
         ),
         (
+            vec!["localise", thesis, "--out", out_s, "--sources", "bvh", "--method", "mesh"],
+            "--method: no source here samples a cube map (bvh), so none is filled",
+        ),
+        (
             vec!["bench", thesis, "--max-regression", "5", "--json", base.to_str().unwrap()],
             "the following required arguments were not provided:\n  --baseline <BASELINE>",
         ),

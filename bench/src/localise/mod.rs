@@ -100,9 +100,10 @@ pub struct Args {
     /// Cube face size in texels.
     #[arg(long, default_value_t = 128, allow_negative_numbers = true, value_parser = face_size)]
     cube_size: u32,
-    /// Cube fill method (`specchio info` lists them).
-    #[arg(long, default_value = "six-pass", value_parser = method)]
-    method: Method,
+    /// Cube fill method (`specchio info` lists them). Default: six-pass. Only a source that
+    /// samples the cube fills one.
+    #[arg(long, value_parser = method)]
+    method: Option<Method>,
     /// Enable the Khronos validation layer; any message makes the command fail.
     #[arg(long)]
     validate: bool,
@@ -187,7 +188,7 @@ pub fn localise(args: &Args, stop: Stop) -> Result<(Report, Vec<String>)> {
     };
     let options = RenderOptions {
         cube_size: Some(args.cube_size),
-        method: args.method,
+        method: args.method_or_default(),
         ..Default::default()
     };
 
@@ -247,6 +248,14 @@ fn plan(args: &Args) -> Result<Plan> {
         args.sources.clone()
     };
     once_each(&sources, &args.times)?;
+    let cube = |s: &Source| matches!(s, Source::Lookup(l) if lookups::plugin(*l).uses_cube());
+    if args.method.is_some() && !sources.iter().any(cube) {
+        bail!(
+            "--method: no source here samples a cube map ({}), so none is filled; leave it \
+             out, or add a source that samples the cube (box, say)",
+            names(&sources)
+        );
+    }
     let optics = SensorOptics::at(&scene, 0.0);
     let layout = PanoramaLayout::for_sensor(&optics, PanoramaKind::Cylindrical);
     let mut plan = Plan {
@@ -342,6 +351,13 @@ fn descriptor_name(text: &str) -> std::result::Result<String, String> {
 }
 
 /// Keeps the first of each source, in the order given.
+impl Args {
+    /// `--method`, or six-pass where it is not given.
+    fn method_or_default(&self) -> Method {
+        self.method.unwrap_or(Method::SIX_PASS)
+    }
+}
+
 /// Each source and each time once: a time given twice rendered its queries twice into two
 /// equal rows, a source given twice was merged without a word.
 fn once_each(sources: &[Source], times: &[f64]) -> Result<()> {
@@ -383,7 +399,7 @@ fn open_device(args: &Args, used: &[Lookup]) -> Result<(Arc<Device>, Arc<Validat
     let device = specchio::process::probe::device_for(
         &instance,
         args.device.as_deref(),
-        &[args.method],
+        &[args.method_or_default()],
         features,
     )
     .with_context(|| {
@@ -482,7 +498,7 @@ fn report(
         queries_at_landmarks: args.queries_at_landmarks,
         sensor_px: args.sensor_size,
         cube_px: args.cube_size,
-        method: args.method,
+        method: args.method_or_default(),
         device,
         lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
         sources: images
