@@ -6,6 +6,7 @@
 //! each row one landmark source against one query source at one time.
 
 mod bounds;
+mod checks;
 pub mod database;
 mod plot;
 mod report;
@@ -247,15 +248,8 @@ fn plan(args: &Args) -> Result<Plan> {
     } else {
         args.sources.clone()
     };
-    once_each(&sources, &args.times)?;
-    let cube = |s: &Source| matches!(s, Source::Lookup(l) if lookups::plugin(*l).uses_cube());
-    if args.method.is_some() && !sources.iter().any(cube) {
-        bail!(
-            "--method: no source here samples a cube map ({}), so none is filled; leave it \
-             out, or add a source that samples the cube (box, say)",
-            names(&sources)
-        );
-    }
+    checks::once_each(&sources, &args.times)?;
+    checks::method_applies(args, &sources)?;
     let optics = SensorOptics::at(&scene, 0.0);
     let layout = PanoramaLayout::for_sensor(&optics, PanoramaKind::Cylindrical);
     let mut plan = Plan {
@@ -351,35 +345,6 @@ fn descriptor_name(text: &str) -> std::result::Result<String, String> {
 }
 
 /// Keeps the first of each source, in the order given.
-impl Args {
-    /// `--method`, or six-pass where it is not given.
-    fn method_or_default(&self) -> Method {
-        self.method.unwrap_or(Method::SIX_PASS)
-    }
-}
-
-/// Each source and each time once: a time given twice rendered its queries twice into two
-/// equal rows, a source given twice was merged without a word.
-fn once_each(sources: &[Source], times: &[f64]) -> Result<()> {
-    if let Some((first, again)) = repeated(sources) {
-        let name = sources[first - 1].name();
-        bail!("--sources: {name} is given twice (items {first} and {again}); each source once");
-    }
-    if let Some((first, again)) = repeated(times) {
-        let t = times[first - 1];
-        bail!("--times: {t} is given twice (items {first} and {again}); each time once");
-    }
-    Ok(())
-}
-
-/// The first item given again, as the places (from 1) of its first and second mention.
-fn repeated<T: PartialEq>(items: &[T]) -> Option<(usize, usize)> {
-    (items.iter().enumerate()).find_map(|(i, x)| {
-        let first = items[..i].iter().position(|y| y == x)?;
-        Some((first + 1, i + 1))
-    })
-}
-
 fn names(sources: &[Source]) -> String {
     sources
         .iter()

@@ -1,0 +1,52 @@
+//! What `localise` refuses before any work because it would mean nothing: a source or a time
+//! twice, a fill method where no source fills a cube.
+
+use anyhow::{bail, Result};
+use specchio::render::lookups;
+use specchio::render::methods::Method;
+
+use super::source::Source;
+use super::{names, Args};
+
+impl Args {
+    /// `--method`, or six-pass where it is not given.
+    pub(super) fn method_or_default(&self) -> Method {
+        self.method.unwrap_or(Method::SIX_PASS)
+    }
+}
+
+/// `--method` where some source fills a cube: with none it would be recorded in localise.json
+/// as used.
+pub(super) fn method_applies(args: &Args, sources: &[Source]) -> Result<()> {
+    let cube = |s: &Source| matches!(s, Source::Lookup(l) if lookups::plugin(*l).uses_cube());
+    if args.method.is_some() && !sources.iter().any(cube) {
+        bail!(
+            "--method: no source here samples a cube map ({}), so none is filled; leave it \
+             out, or add a source that samples the cube (box, say)",
+            names(sources)
+        );
+    }
+    Ok(())
+}
+
+/// Each source and each time once: a time given twice rendered its queries twice into two
+/// equal rows, a source given twice was merged without a word.
+pub(super) fn once_each(sources: &[Source], times: &[f64]) -> Result<()> {
+    if let Some((first, again)) = repeated(sources) {
+        let name = sources[first - 1].name();
+        bail!("--sources: {name} is given twice (items {first} and {again}); each source once");
+    }
+    if let Some((first, again)) = repeated(times) {
+        let t = times[first - 1];
+        bail!("--times: {t} is given twice (items {first} and {again}); each time once");
+    }
+    Ok(())
+}
+
+/// The first item given again, as the places (from 1) of its first and second mention.
+fn repeated<T: PartialEq>(items: &[T]) -> Option<(usize, usize)> {
+    (items.iter().enumerate()).find_map(|(i, x)| {
+        let first = items[..i].iter().position(|y| y == x)?;
+        Some((first + 1, i + 1))
+    })
+}
