@@ -224,6 +224,17 @@ pub enum AnimationType {
     Keyframes,
 }
 
+impl AnimationType {
+    /// As a scene writes it (`type = "orbit"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            AnimationType::Linear => "linear",
+            AnimationType::Orbit => "orbit",
+            AnimationType::Keyframes => "keyframes",
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum RepeatSpec {

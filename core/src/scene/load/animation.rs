@@ -56,7 +56,11 @@ impl Ctx<'_> {
             if is_set && !allowed.contains(&name) {
                 return Err(self.unused(
                     &f(name),
-                    &format!("a {:?} animation takes only {:?}", a.kind, allowed),
+                    &format!(
+                        "type = \"{}\" takes only {}",
+                        a.kind.name(),
+                        allowed.join(", ")
+                    ),
                 ));
             }
         }
