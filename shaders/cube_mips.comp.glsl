@@ -1,7 +1,8 @@
 #version 460
 // build: cube_mips_rgba16f=FORMAT_RGBA16F cube_mips_rgba8=FORMAT_RGBA8
 // cube_mips.comp - one level of the cube's mip chain from the level above it: each texel the
-// mean of the 2 x 2 texels above it, summed in one fixed order, in this shader's arithmetic.
+// mean of the texels above it (2 x 2, or up to 3 x 3 where a level's side is odd), summed in
+// one fixed order, in this shader's arithmetic.
 //
 // Why not vkCmdBlitImage, the usual way: a blit is the driver's to filter, and two drivers
 // filter a cube face in ways that break an update on change. SwiftShader keeps a one-texel
@@ -13,8 +14,9 @@
 // rebuilds only the boxes above what it re-rendered gives a full update's bits on every
 // device (docs/methods.md, "Dirty rectangles", item 5).
 //
-// A level of odd side (a 96² face's 3² level) drops its last row and column, as the mip
-// chain's sizes do (side >> 1): texel x reads 2x and 2x + 1, which always lie inside.
+// A level of odd side (a 96² face's 3² level, a 100² face's 25²) is box-filtered over the
+// span each texel covers, three texels an axis, so the chain lines up with how the sampler
+// maps every level onto the face: nothing dropped, nothing shifted.
 
 #extension GL_GOOGLE_include_directive : require
 #include "shared.glsl"
@@ -33,6 +35,18 @@ layout(set = 0, binding = 1, rgba8) uniform writeonly image2DArray level;
 // The box of level m to write, on faces first_face .. first_face + (dispatch depth) - 1.
 MIP_BOX_PUSH_CONSTANTS;
 
+// One axis: the weights of the three texels 2x, 2x + 1, 2x + 2 of a level of `n` that texel x
+// of the next reads. An even level halves exactly: a half each of the first two. An odd one,
+// 2w + 1 texels for w, is box-filtered over the span x (2w + 1) / w .. (x + 1)(2w + 1) / w that
+// texel x covers: (w - x), w and (x + 1) over 2w + 1.
+vec3 weights(int x, int n) {
+    if ((n & 1) == 0) {
+        return vec3(0.5, 0.5, 0.0);
+    }
+    float w = float(n / 2);
+    return vec3(w - float(x), w, float(x) + 1.0) / float(n);
+}
+
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(p, box.size))) {
@@ -40,10 +54,22 @@ void main() {
     }
     ivec2 at = box.origin + p;
     int face = box.first_face + int(gl_GlobalInvocationID.z);
-    ivec2 src = 2 * at;
-    vec4 sum = texelFetch(above, ivec3(src, face), 0);
-    sum += texelFetch(above, ivec3(src + ivec2(1, 0), face), 0);
-    sum += texelFetch(above, ivec3(src + ivec2(0, 1), face), 0);
-    sum += texelFetch(above, ivec3(src + ivec2(1, 1), face), 0);
-    imageStore(level, ivec3(at, face), sum * 0.25);
+    ivec2 n = textureSize(above, 0).xy;
+    vec3 wx = weights(at.x, n.x);
+    vec3 wy = weights(at.y, n.y);
+    // Row by row, tap by tap, always in this order: the same sum wherever it is dispatched.
+    vec4 sum = vec4(0.0);
+    for (int j = 0; j < 3; j++) {
+        if (wy[j] == 0.0) {
+            continue;
+        }
+        vec4 row = vec4(0.0);
+        for (int i = 0; i < 3; i++) {
+            if (wx[i] != 0.0) {
+                row += wx[i] * texelFetch(above, ivec3(2 * at + ivec2(i, j), face), 0);
+            }
+        }
+        sum += wy[j] * row;
+    }
+    imageStore(level, ivec3(at, face), sum);
 }

@@ -278,12 +278,17 @@ fn bvh_options_apply(args: &Args) -> Result<()> {
     Ok(())
 }
 
-/// One scene measured twice is one scene's numbers twice (the same file under two spellings
-/// included): refused as a list option's repeats are.
+/// One scene measured twice is one scene's numbers twice (the same file under two names
+/// included: by its device and inode, which a canonical path misses for a hard link or a
+/// case-folding file system): refused as a list option's repeats are.
 fn no_scene_twice(scenes: &[PathBuf]) -> Result<()> {
-    let same = |p: &PathBuf| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
+    use specchio::files::identity::FileId;
+    let same = |a: &PathBuf, b: &PathBuf| match (FileId::of_path(a), FileId::of_path(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => a == b,
+    };
     for (i, a) in scenes.iter().enumerate() {
-        if let Some(b) = scenes[..i].iter().find(|b| same(b) == same(a)) {
+        if let Some(b) = scenes[..i].iter().find(|b| same(b, a)) {
             anyhow::bail!(
                 "{} and {} are one scene: each scene once",
                 b.display(),

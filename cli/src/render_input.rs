@@ -50,10 +50,13 @@ pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Resul
         ("--secant-steps", args.secant_steps.is_some()),
     ];
     if let Some((option, _)) = search.iter().find(|(_, given)| *given) {
-        if !plugin.searches_depth() {
+        // The ray map of a cube lookup's sensor outputs searches the cube's depth too.
+        let ray_map_searches = args.sensor_outputs && !plugin.traces_ray_map();
+        if !plugin.searches_depth() && !ray_map_searches {
             bail!(
-                "{option}: only the distance lookups search the cube's depth, and this run's \
-                 lookup is {lookup}{}; leave it out, or give --lookup distance",
+                "{option}: only the distance lookups and a cube lookup's sensor outputs search \
+                 the cube's depth, and this run's lookup is {lookup}{}; leave it out, or give \
+                 --lookup distance",
                 chosen_for_outputs(args)
             );
         }

@@ -220,7 +220,12 @@ fn options_that_would_change_nothing_are_refused() {
     let moving = scene("moving-objects.toml");
     let (thesis, moving) = (thesis.to_str().unwrap(), moving.to_str().unwrap());
     // The same file under another spelling.
-    let thesis_again = thesis.replace("/scenes/", "/scenes/./");
+    // One file under two names: a hard link, which a canonical path would miss (a copy of
+    // the scene: the check comes before any scene is read).
+    let (copy, linked) = (dir.join("scene.toml"), dir.join("scene-link.toml"));
+    std::fs::copy(thesis, &copy).unwrap();
+    std::fs::hard_link(&copy, &linked).unwrap();
+    let (copy, thesis_again) = (copy.to_str().unwrap(), linked.to_str().unwrap());
     let b = base.to_str().unwrap();
     let small = ["--cube-size", "8", "--frames", "1"];
     let cases: Vec<(Vec<&str>, &str)> = vec![
@@ -256,12 +261,12 @@ fn options_that_would_change_nothing_are_refused() {
         ),
         (
             vec!["render", thesis, "--out", out_s, "--lookup", "plain", "--distance-steps", "5"],
-            "--distance-steps: only the distance lookups search the cube's depth, and this \
-             run's lookup is plain",
+            "--distance-steps: only the distance lookups and a cube lookup's sensor outputs \
+             search the cube's depth, and this run's lookup is plain",
         ),
         (
             vec!["render", thesis, "--out", out_s, "--lookup", "box", "--secant-steps", "3"],
-            "--secant-steps: only the distance lookups search the cube's depth",
+            "--secant-steps: only the distance lookups and a cube lookup's sensor outputs",
         ),
         (
             vec!["compare", thesis, thesis, "--angular", "64", "--heatmap", out_s],
@@ -284,7 +289,7 @@ fn options_that_would_change_nothing_are_refused() {
             "'--no-accuracy' cannot be used with '--lookups <LOOKUPS>'",
         ),
         (
-            vec!["bench", thesis, &thesis_again, "--json", b],
+            vec!["bench", copy, thesis_again, "--json", b],
             "are one scene: each scene once",
         ),
         (

@@ -36,6 +36,10 @@ fn both_sensor_outputs(rel: &str, name: &str) -> (Scratch, Scratch) {
         "64",
         "--lookup",
         "plain",
+        // The default, given: a cube lookup's ray map searches the cube's depth, so the
+        // search's steps apply and are taken.
+        "--distance-steps",
+        "16",
     ]);
     run_ok(&["reference", scene_path, "--out", c, "--sensor-outputs"]);
     (gpu_dir, cpu_dir)

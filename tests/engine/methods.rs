@@ -227,8 +227,10 @@ fn dirty_rectangles_are_exact() {
 /// from full ones in the mips alone. On lavapipe a box of a level blitted on its own was not
 /// bit-identical to the same texels of the whole level's blit (5 sensor pixels, 4.9e-4); on
 /// SwiftShader a clean face's old mips differed near its edges (24 pixels, 0.18: its linear
-/// blit reads the border the face keeps from its neighbours). Six-pass in rectangles and in
-/// whole faces, and geometry, on every driver, against their full updates.
+/// blit reads the border the face keeps from its neighbours). Now made by `cube_mips.comp`;
+/// also the small ball on 96² faces in rgba8 (levels of odd side, the pass's 8-bit variant).
+/// Six-pass in rectangles and in whole faces, and geometry, on every driver, against their
+/// full updates; the rectangles must leave texels of dirty faces unrendered.
 #[test]
 fn incremental_mips_are_the_full_updates() {
     // The shipped scene (the small ball), and the same room with the larger ball.
@@ -241,7 +243,11 @@ fn incremental_mips_are_the_full_updates() {
          animation = { type = \"orbit\", center = [0, 3, 0], period = 8.0 }",
     );
     assert_ne!(small, larger, "the larger ball replaces the small one");
-    let balls = [small, larger];
+    // And the small one on 96² faces (levels of odd side: 3² reads three texels an axis) in
+    // the 8-bit format (the pass's other variant).
+    let odd = small.replace("face_size = 64", "face_size = 96\nformat = \"rgba8\"");
+    assert_ne!(small, odd, "the odd size replaces the face size");
+    let balls = [(small, 64), (larger, 64), (odd, 96)];
     let times: Vec<f64> = (0..6).map(|i| f64::from(i) / 4.0).collect();
     let geometry = Method::parse("geometry").expect("the geometry method");
     let runs = [
@@ -251,16 +257,21 @@ fn incremental_mips_are_the_full_updates() {
     ];
     for device in devices() {
         let (gpu, methods) = Gpu::with_all_methods_on(Some(&device));
-        for (i, text) in balls.iter().enumerate() {
+        for (i, (text, size)) in balls.iter().enumerate() {
             let s = specchio::scene::load_str(text, &root().join(rel)).expect("the scene");
             for &(m, updates) in runs.iter().filter(|(m, _)| methods.contains(m)) {
-                let full = cube(&gpu, &s, m, 64, &times, Updates::Full);
-                let incremental = cube(&gpu, &s, m, 64, &times, updates);
+                let full = cube(&gpu, &s, m, *size, &times, Updates::Full);
+                let incremental = cube(&gpu, &s, m, *size, &times, updates);
                 let what = format!("ball {i} on {device}, {m}");
                 let saved = assert_same_frames(&full, &incremental, &what);
                 assert!(
                     saved.faces > 0,
                     "{what}: the ball never left a face untouched"
+                );
+                // In rectangles, the boxes above them are what the pass made.
+                assert!(
+                    updates == Updates::Faces || saved.texels_in_dirty_faces > 0,
+                    "{what}: no dirty face was re-rendered in part"
                 );
             }
         }

@@ -344,7 +344,7 @@ fn descriptor_name(text: &str) -> std::result::Result<String, String> {
     }
 }
 
-/// Keeps the first of each source, in the order given.
+/// The sources' names, comma-separated, for messages.
 fn names(sources: &[Source]) -> String {
     sources
         .iter()

@@ -16,10 +16,12 @@ use crate::vk::GpuError;
 
 /// The pass that makes level m from level m - 1: its pipeline (one for the cube's format) and,
 /// per level m, a set naming level m - 1 to read and level m to store. Field order is drop
-/// order: the pipeline before its layout, the sets' pool before their layout, the views
-/// (before the cube's image, which owns this pass).
+/// order: the pipeline before its layout, the sets' pool before their layout, the views last
+/// (`CubeTarget` holds this pass before its colour image, so they go before the image).
 pub struct MipPass {
+    /// `cube_mips.comp` for the cube's format (rgba16f or rgba8).
     pub(super) pipeline: Pipeline,
+    /// One set and the `MipBox` push constants.
     pub(super) layout: PipelineLayout,
     /// `sets[m - 1]` makes level m.
     pub(super) sets: Vec<vk::DescriptorSet>,

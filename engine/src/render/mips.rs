@@ -4,8 +4,9 @@
 //! face ready for sampling. The barriers name the last readers, so they hold when frames
 //! overlap.
 //!
-//! A compute pass of our own, not `vkCmdBlitImage`: each texel is the mean of the four above
-//! it on its own face, in the shader's arithmetic, so a box of a level is the whole level's
+//! A compute pass of our own, not `vkCmdBlitImage`: each texel is the mean of the texels
+//! above it on its own face (four, or up to nine under a level of odd side), in the shader's
+//! arithmetic, so a box of a level is the whole level's
 //! texels there and a clean face's old mips are a full update's, on every device. Blits were
 //! not (an adversarial pass, 30 November 2026): SwiftShader's blit of a cube face reads the
 //! border it keeps from the neighbouring faces, and lavapipe's blit of a box of a level was
@@ -79,19 +80,28 @@ impl<'a> Chain<'a> {
         (self.cube.size >> level).max(1)
     }
 
-    /// The box of level `m` above level 0's `rect`: each texel whose four texels above it
-    /// hold a changed one, level by level (texel x reads 2x and 2x + 1, whatever the sides).
-    /// `None`: the whole level.
+    /// The box of level `m` above level 0's `rect`: each texel that reads a changed one,
+    /// level by level (`cube_mips.comp`: texel x reads 2x and 2x + 1 of an even level, and
+    /// 2x + 2 too of an odd one). `None`: the whole level.
     fn rect_at(&self, rect: Option<PixelRect>, m: u32) -> Option<PixelRect> {
-        let r = rect?;
-        let side = self.side(m);
-        let up = |x: u32| x.div_ceil(1 << m).min(side);
-        Some(PixelRect {
-            x0: (r.x0 >> m).min(side),
-            y0: (r.y0 >> m).min(side),
-            x1: up(r.x1),
-            y1: up(r.y1),
-        })
+        let mut r = rect?;
+        for level in 1..=m {
+            let (above, side) = (self.side(level - 1), self.side(level));
+            // The first texel that reads texel a: a / 2, or (a - 1) / 2 where it may be the
+            // third tap; the last that reads texel b - 1: (b - 1) / 2.
+            let first = |a: u32| match above % 2 {
+                0 => a / 2,
+                _ => a.saturating_sub(1) / 2,
+            };
+            let end = |b: u32| b.div_ceil(2).min(side);
+            r = PixelRect {
+                x0: first(r.x0).min(side),
+                y0: first(r.y0).min(side),
+                x1: end(r.x1),
+                y1: end(r.y1),
+            };
+        }
+        Some(r)
     }
 
     /// Level `m` of the six faces as the pass stores it: a dirty face whole, or in its box,

@@ -271,7 +271,8 @@ fn cube_sampler(device: &Arc<Device>) -> Result<Sampler, GpuError> {
 }
 
 /// The mip pass reads a level through a sampled view and stores the next from a compute
-/// shader: both are required of the two cube formats, and checked all the same.
+/// shader, and the mirror samples the chain trilinearly: all required of the two cube
+/// formats, and checked all the same.
 fn check_storage_support(device: &Device, format: vk::Format) -> Result<(), GpuError> {
     // SAFETY: plain query.
     let props = unsafe {
@@ -280,13 +281,15 @@ fn check_storage_support(device: &Device, format: vk::Format) -> Result<(), GpuE
             .raw
             .get_physical_device_format_properties(device.physical, format)
     };
-    let need = vk::FormatFeatureFlags::STORAGE_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE;
+    let need = vk::FormatFeatureFlags::STORAGE_IMAGE
+        | vk::FormatFeatureFlags::SAMPLED_IMAGE
+        | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
     if props.optimal_tiling_features.contains(need) {
         Ok(())
     } else {
         Err(GpuError::Unsupported(format!(
-            "{format:?} cannot be stored by a compute shader on this device, which the cube's \
-             mip chain needs: set mipmaps = false"
+            "{format:?} cannot be stored by a compute shader or filtered linearly on this \
+             device, which the cube's mip chain needs: set mipmaps = false"
         )))
     }
 }
