@@ -196,7 +196,10 @@ fn quadratic_determined(landmarks: &[[f64; 3]], best: usize, grid_m: f64) -> boo
 fn bad_options_are_refused() {
     let scene = root().join("scenes/thesis-room.toml");
     let out = temp_dir("localise-bad");
-    let many_times = vec!["0"; 200].join(",");
+    let many_times = (0..200)
+        .map(|i| i.to_string())
+        .collect::<Vec<_>>()
+        .join(",");
     let cases: [(&[&str], &str); 13] = [
         (&["--grid", "0"], "--grid"),
         (&["--grid", "nan"], "--grid"),
