@@ -219,7 +219,6 @@ fn options_that_would_change_nothing_are_refused() {
     let thesis = scene("thesis-room.toml");
     let moving = scene("moving-objects.toml");
     let (thesis, moving) = (thesis.to_str().unwrap(), moving.to_str().unwrap());
-    // The same file under another spelling.
     // One file under two names: a hard link, which a canonical path would miss (a copy of
     // the scene: the check comes before any scene is read).
     let (copy, linked) = (dir.join("scene.toml"), dir.join("scene-link.toml"));
