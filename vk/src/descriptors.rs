@@ -144,13 +144,8 @@ pub fn write_images(
                 .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
         })
         .collect();
-    let write = vk::WriteDescriptorSet::default()
-        .dst_set(set)
-        .dst_binding(binding)
-        .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-        .image_info(&infos);
-    // SAFETY: the set is not in use by a pending command buffer.
-    unsafe { device.raw.update_descriptor_sets(&[write], &[]) };
+    let kind = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+    write_image_infos(device, (set, binding), kind, &infos);
 }
 
 /// Writes a storage image at `binding`, in the layout storage writes need (`GENERAL`).
@@ -163,11 +158,22 @@ pub fn write_storage_image(
     let infos = [vk::DescriptorImageInfo::default()
         .image_view(view)
         .image_layout(vk::ImageLayout::GENERAL)];
+    let kind = vk::DescriptorType::STORAGE_IMAGE;
+    write_image_infos(device, (set, binding), kind, &infos);
+}
+
+/// Writes image descriptors of `kind` at `binding` of `set`, array elements 0..infos.len().
+fn write_image_infos(
+    device: &Device,
+    (set, binding): (vk::DescriptorSet, u32),
+    kind: vk::DescriptorType,
+    infos: &[vk::DescriptorImageInfo],
+) {
     let write = vk::WriteDescriptorSet::default()
         .dst_set(set)
         .dst_binding(binding)
-        .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
-        .image_info(&infos);
+        .descriptor_type(kind)
+        .image_info(infos);
     // SAFETY: the set is not in use by a pending command buffer.
     unsafe { device.raw.update_descriptor_sets(&[write], &[]) };
 }
