@@ -27,7 +27,8 @@ struct BvhTriangle {
 };
 // An object in the top level's leaves: render space to its model space (three rows; the
 // direction is not renormalised, so t is the same in both), and its tree: x the root node of
-// its mesh, y its drawable.
+// its mesh, y its drawable, z the bits of its mesh's radius (the ball about the model's
+// origin that holds it: model_ray).
 struct BvhInstance {
     vec4 world_to_model[3];
     uvec4 tree;
@@ -209,6 +210,74 @@ void object_ray(BvhInstance inst, vec3 o, vec3 d, out vec3 mo, out vec3 md) {
     md = vec3(dot(inst.world_to_model[0], vec4(d, 0.0)),
               dot(inst.world_to_model[1], vec4(d, 0.0)),
               dot(inst.world_to_model[2], vec4(d, 0.0)));
+}
+
+// A ray as an object's tree is walked with it, o + s d: render space's t is t0 + s / scale.
+// The top level's is render space's own ray (t0 0 and scale 1, which change no t).
+struct ModelRay {
+    vec3 o;
+    vec3 d;
+    float t0;
+    float scale;
+};
+
+ModelRay unmoved_ray(vec3 o, vec3 d) {
+    ModelRay m;
+    m.o = o;
+    m.d = d;
+    m.t0 = 0.0;
+    m.scale = 1.0;
+    return m;
+}
+
+// Render space's t as the walk counts it, and back.
+float walk_t(ModelRay m, float t) {
+    precise float s = (t - m.t0) * m.scale;
+    return s;
+}
+vec4 render_t(ModelRay m, vec4 s) {
+    precise vec4 t = m.t0 + s / m.scale;
+    return t;
+}
+
+// The ray o + t d entering object inst, as core/src/reference/intersect.rs model_ray, which
+// says why: a ray from far away carries coordinates far larger than the object's own (a box
+// 1e-8 m thick seen from 2 m is 2e8 of its units away, where a float steps by 16, and its two
+// faces were met at one t). A ray that starts outside twice the ball holding the mesh is
+// moved along itself to before the ball, less sixteen float steps of where it started, up to
+// MODEL_RAY_MOVES times, its direction made unit: its hits are then as exact as the object's
+// own coordinates. A ray that leaves the object's surface starts inside the ball and is
+// never moved.
+ModelRay model_ray(BvhInstance inst, vec3 o, vec3 d) {
+    vec3 mo, md;
+    object_ray(inst, o, d, mo, md);
+    float radius = uintBitsToFloat(inst.tree.z);
+    precise float len = sqrt(dot(md, md));
+    precise vec3 u = md / len;
+    precise vec3 p = mo;
+    precise float moved = 0.0;
+    for (uint i = 0u; i < MODEL_RAY_MOVES; ++i) {
+        precise float far = dot(p, p);
+        if (!(far > 4.0 * radius * radius)) {
+            break;
+        }
+        precise float step = -dot(p, u) - radius - sqrt(far) * (16.0 * BVH_EPSILON);
+        // Not ahead (the ray misses the ball), or overflowing products (NaN, infinity).
+        if (!(step > 0.0 && step < BVH_INFINITY)) {
+            break;
+        }
+        p = p + step * u;
+        moved = moved + step;
+    }
+    if (moved == 0.0 || !(len > 0.0 && len < BVH_INFINITY)) {
+        return unmoved_ray(mo, md);
+    }
+    ModelRay m;
+    m.o = p;
+    m.d = u;
+    m.t0 = moved / len;
+    m.scale = len;
+    return m;
 }
 
 // The walk through the two levels, bvh_closest_object, in the layout the lookup chose for the

@@ -104,10 +104,15 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
     const uint NONE = 0xFFFFFFFFu;
     LevelRay world = level_ray(o, d);
     LevelRay ray = world;
-    // In a mesh's tree: the ray prepared for the triangle test, and the object's drawable.
+    // In a mesh's tree: the ray prepared for the triangle test, the object's drawable, and
+    // how the tree counts t (model_ray), with the interval in its units: two faces of a thin
+    // object can be apart by less than a step of render space's t.
     bool in_mesh = false;
     ShearedRay sheared;
     uint drawable = OBJECT_NONE;
+    ModelRay level = unmoved_ray(o, d);
+    float low = t_min;
+    float high = t_max;
     uvec2 stack[BVH4_STACK_SIZE]; // (record, distance's float bits)
     uint height = 0u;
     uint mesh_floor = NO_FLOOR;
@@ -117,17 +122,19 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
     while (true) {
         if ((entry & ENTRY_OBJECT) != 0u) {
             BvhInstance inst = instances[entry & ~ENTRY_OBJECT];
-            vec3 mo, md;
-            object_ray(inst, o, d, mo, md);
-            ray = level_ray(mo, md);
-            sheared = shear_ray(mo, md);
+            level = model_ray(inst, o, d);
+            ray = level_ray(level.o, level.d);
+            sheared = shear_ray(level.o, level.d);
+            low = walk_t(level, t_min);
+            high = walk_t(level, best.t);
             drawable = inst.tree.y;
             in_mesh = true;
             mesh_floor = height;
             entry = inst.tree.x;
         }
         Bvh4Node n = bvh_nodes[entry];
-        vec4 near = intersect_node(n, ray, t_min, best.t);
+        // Where the ray enters the children, in render space's t (as the stack keeps them).
+        vec4 near = render_t(level, intersect_node(n, ray, low, high));
         uint base = n.links.x;
         uvec4 meta = (uvec4(n.links.y) >> uvec4(0u, 8u, 16u, 24u)) & 0xFFu;
         bvec4 met = lessThan(near, vec4(BVH_INFINITY));
@@ -150,8 +157,9 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
             float th;
             vec2 bary;
             vec3 v0 = tri.v0.xyz, v1 = tri.v1.xyz, v2 = tri.v2.xyz;
-            if (hit_triangle(sheared, v0, v1, v2, t_min, best.t, th, bary)) {
-                best.t = th;
+            if (hit_triangle(sheared, v0, v1, v2, low, high, th, bary)) {
+                high = th;
+                best.t = render_t(level, vec4(th)).x;
                 best.drawable = drawable;
                 best.primitive = floatBitsToUint(tri.v0.w);
                 best.bary = bary;
@@ -183,6 +191,9 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
                 ray = world;
                 in_mesh = false;
                 mesh_floor = NO_FLOOR;
+                level = unmoved_ray(o, d);
+                low = t_min;
+                high = best.t;
             }
             if (height == 0u) {
                 return best;

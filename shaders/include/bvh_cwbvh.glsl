@@ -101,10 +101,15 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
     const uint NODE_BITS = 0xFF000000u;
     LevelRay world = level_ray(o, d);
     LevelRay ray = world;
-    // In a mesh's tree: the ray prepared for the triangle test, and the object's drawable.
+    // In a mesh's tree: the ray prepared for the triangle test, the object's drawable, and
+    // how the tree counts t (model_ray), with the interval in its units: two faces of a thin
+    // object can be apart by less than a step of render space's t.
     bool in_mesh = false;
     ShearedRay sheared;
     uint drawable = OBJECT_NONE;
+    ModelRay level = unmoved_ray(o, d);
+    float low = t_min;
+    float high = t_max;
     uvec2 stack[BVH_STACK_SIZE];
     uint height = 0u;
     uint mesh_floor = NO_FLOOR;
@@ -121,8 +126,9 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
                 BvhTriangle tri = mesh_triangles[id];
                 float t;
                 vec2 bary;
-                if (hit_triangle(sheared, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, t_min, best.t, t, bary)) {
-                    best.t = t;
+                if (hit_triangle(sheared, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, low, high, t, bary)) {
+                    high = t;
+                    best.t = render_t(level, vec4(t)).x;
                     best.drawable = drawable;
                     best.primitive = floatBitsToUint(tri.v0.w);
                     best.bary = bary;
@@ -137,10 +143,11 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
                 stack[height++] = triangles;
             }
             BvhInstance inst = instances[id];
-            vec3 mo, md;
-            object_ray(inst, o, d, mo, md);
-            ray = level_ray(mo, md);
-            sheared = shear_ray(mo, md);
+            level = model_ray(inst, o, d);
+            ray = level_ray(level.o, level.d);
+            sheared = shear_ray(level.o, level.d);
+            low = walk_t(level, t_min);
+            high = walk_t(level, best.t);
             drawable = inst.tree.y;
             in_mesh = true;
             mesh_floor = height;
@@ -159,7 +166,7 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
             uint slot = (bit - 24u) ^ ray.octant;
             uint index = nodes.x + bitCount(hits & ~(0xFFFFFFFFu << slot));
             WideNode n = bvh_nodes[index];
-            uint met = intersect_node(n, ray, t_min, best.t);
+            uint met = intersect_node(n, ray, low, high);
             nodes = uvec2(n.links.x, (met & NODE_BITS) | (n.grid.w >> 24u));
             triangles = uvec2(n.links.y, met & 0x00FFFFFFu);
             continue;
@@ -169,6 +176,9 @@ BvhHit bvh_closest_object(vec3 o, vec3 d, float t_min, float t_max) {
             ray = world;
             in_mesh = false;
             mesh_floor = NO_FLOOR;
+            level = unmoved_ray(o, d);
+            low = t_min;
+            high = best.t;
         }
         if (height == 0u) {
             return best;

@@ -135,6 +135,10 @@ struct MaterialSample {
 // 64 entries of 8 bytes: 512 bytes an invocation.
 #define BVH4_STACK_SIZE 64u
 
+// How many times a ray from far away is moved near an object before its tree is walked
+// (bvh.glsl model_ray; core/src/reference/intersect.rs MODEL_RAY_MOVES says why three).
+#define MODEL_RAY_MOVES 3u
+
 // How far past a wall the traced lookups search the objects, as 2^-ON_WALL_SLACK_EXPONENT of
 // the ray's scale (|o| + t), so that an object lying on a wall's plane wins the tie against the
 // wall (traced_surface.glsl `objects_limit`; core/src/reference/room.rs `objects_limit` says

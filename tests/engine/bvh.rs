@@ -16,8 +16,9 @@ use specchio::scene::Lookup;
 /// sensor diagonals reflect into room corners (ties by construction), a crowd of 2,000
 /// objects, objects in motion (at t = 1.3 s, the top level rebuilt from their transforms
 /// then), the heaviest benchmark scene (its meshes of up to 100,000 triangles), and every
-/// mirror shape but the sphere: a hyperboloid, a paraboloid (orthographic camera) and a cone.
-const SCENES: [(&str, f64); 8] = [
+/// mirror shape but the sphere: a hyperboloid, a paraboloid (orthographic camera) and a cone;
+/// and plates 1 mm to 1e-11 m thick, which a walk must meet on their near faces.
+const SCENES: [(&str, f64); 9] = [
     ("scenes/thesis-room.toml", 0.0),
     ("scenes/test/six-colour-room.toml", 0.0),
     ("scenes/many-objects.toml", 0.0),
@@ -26,6 +27,7 @@ const SCENES: [(&str, f64); 8] = [
     ("scenes/hyperbolic-room.toml", 0.0),
     ("scenes/parabolic-room.toml", 0.0),
     ("scenes/conical-room.toml", 0.0),
+    ("scenes/test/thin-plates.toml", 0.0),
 ];
 
 /// On every driver and scene, in both tree layouts (each device's default and the other),

@@ -6,6 +6,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
+use super::MeshRoot;
+use crate::reference::intersect::{model_ray, ModelRay};
 use crate::scene::{Mesh, Room};
 use crate::trees::PaddedTriangle;
 
@@ -64,19 +66,21 @@ pub struct BvhInstance {
     /// direction is not renormalised, so a hit's t is the same in both spaces.
     pub world_to_model: [Vec4; 3],
     /// 0: the root node of the object's mesh in the node array; 1: the drawable it is (6 +
-    /// the scene's object index: the shader's key to its material, normals and triangles).
+    /// the scene's object index: the shader's key to its material, normals and triangles);
+    /// 2: the bits of the mesh's radius, the ball a ray from outside twice of is moved near
+    /// (`reference::intersect::model_ray`).
     pub tree: [u32; 4],
 }
 
 impl BvhInstance {
     /// The instance of `drawable` placed by `model_to_world` (render space), its mesh's tree
     /// at `root`. None when the transform cannot be inverted to finite numbers.
-    pub fn new(model_to_world: &Mat4, root: u32, drawable: u32) -> Option<Self> {
+    pub fn new(model_to_world: &Mat4, root: MeshRoot, drawable: u32) -> Option<Self> {
         let inverse = model_to_world.inverse();
         let rows = [inverse.row(0), inverse.row(1), inverse.row(2)];
         rows.iter().all(|r| r.is_finite()).then_some(Self {
             world_to_model: rows,
-            tree: [root, drawable, 0, 0],
+            tree: [root.node, drawable, root.radius.to_bits(), 0],
         })
     }
 
@@ -86,6 +90,12 @@ impl BvhInstance {
 
     pub fn drawable(&self) -> u32 {
         self.tree[1]
+    }
+
+    /// A ray in render space as the object's tree is walked with it.
+    pub fn ray_to_model(&self, o: Vec3, d: Vec3) -> ModelRay {
+        let radius = f32::from_bits(self.tree[2]);
+        model_ray(self.point_to_model(o), self.direction_to_model(d), radius)
     }
 
     /// `p` (a point, w = 1) in the instance's model space.

@@ -110,13 +110,15 @@ pub(crate) fn check_stack(
     Ok(())
 }
 
-/// Where one mesh's tree starts, the box (model space) that holds all of it, its depth (node
-/// levels on its longest path) and the stack entries a walk of it holds at most.
+/// Where one mesh's tree starts, the box (model space) that holds all of it, the radius of
+/// the ball about its origin that holds it ([`Mesh::radius`]), its depth (node levels on its
+/// longest path) and the stack entries a walk of it holds at most.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MeshRoot {
     pub node: u32,
     pub lo: Vec3,
     pub hi: Vec3,
+    pub radius: f32,
     pub depth: u32,
     pub stack: u32,
 }
@@ -148,7 +150,7 @@ pub(crate) fn object_boxes(
     let mut mesh_stack = 0;
     for o in objects {
         let root = roots[o.mesh];
-        let instance = BvhInstance::new(&o.model_to_world, root.node, o.drawable)
+        let instance = BvhInstance::new(&o.model_to_world, root, o.drawable)
             .ok_or(BvhError::Transform(o.drawable))?;
         let b = transformed_box(&o.model_to_world, root.lo, root.hi);
         boxes.push(BoxLeaf(b));

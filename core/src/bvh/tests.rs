@@ -196,6 +196,7 @@ fn the_trees_meet_what_the_reference_meets() {
         "scenes/moving-objects.toml",
         "scenes/many-objects.toml",
         "scenes/hard/pole-and-box.toml",
+        "scenes/test/thin-plates.toml",
     ];
     for (rel, layout) in scenes
         .into_iter()

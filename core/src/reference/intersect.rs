@@ -253,6 +253,97 @@ pub trait AxisVisitor {
     ) -> Self::Output;
 }
 
+/// The radius of the ball about a model's origin that holds its box `lo..=hi`.
+pub fn model_radius(lo: Vec3, hi: Vec3) -> f32 {
+    lo.abs().max(hi.abs()).length()
+}
+
+/// A ray in an object's model space, `o + s d`, which is the render-space ray at
+/// t = t0 + s / scale ([`model_ray`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModelRay {
+    pub o: Vec3,
+    pub d: Vec3,
+    pub t0: f32,
+    pub scale: f32,
+}
+
+impl ModelRay {
+    /// Render space's t as the walk counts it (exactly t where the ray was not moved).
+    pub fn walk_t(&self, t: f32) -> f32 {
+        (t - self.t0) * self.scale
+    }
+
+    /// The walk's `s` in render space's t.
+    pub fn render_t(&self, s: f32) -> f32 {
+        self.t0 + s / self.scale
+    }
+}
+
+/// How many times [`model_ray`] moves a ray at most: each move leaves it a few millionths as
+/// far as it was, so three bring in a ray from 1e16 of the object's own units, further than a
+/// ray in the loader's scenes starts (1e-11 m thick, the loader's smallest scale, seen from
+/// 100 km).
+pub const MODEL_RAY_MOVES: u32 = 3;
+
+/// The ray `mo + t md` (already in the model space of an object whose mesh lies within
+/// `radius` of its origin) as its tree is walked with it.
+///
+/// Why it may move: a ray from far away carries coordinates far larger than the object's own.
+/// A box 1e-8 m thick seen from 2 m is 2e8 of its own units away, where single precision steps
+/// by 16, so its front and back faces, one unit apart, were met at the same t: the reference
+/// showed the back face on two thirds of such a box's pixels, and the `bvh` lookup on a fifth.
+/// So a ray that starts outside twice the ball is moved along itself to where it passes
+/// nearest the origin, less `radius` and sixteen float steps of where it started, since the
+/// move itself is rounded by about one: where the ray meets the ball at all, it then still
+/// starts before it (a walk never starts inside the mesh: obvhs's node test counts from
+/// t = 0). Once moved it is a few millionths as far as it was, which is not yet near enough
+/// for a box 1e-11 thick (its tree's boxes, quantised in 256 steps of the unit, would still be
+/// below a step of t there), so it is moved again, up to [`MODEL_RAY_MOVES`] times, until it
+/// starts within twice the ball. Its hits are then as exact as the object's own coordinates.
+/// Its direction is made unit, so that the walk counts in the model's own units: the whole
+/// of such a box lay within 1e-8 of render space's t, below obvhs's node test's floor of
+/// 1.2e-7. A ray that misses the ball is left as it is (`t0` 0 and `scale` 1 change no t).
+///
+/// A move does not change the ray, only where t counts from and in what unit (its rounding
+/// shifts the ray by a step of where it started, which in render space is a step of render
+/// space's coordinates); and a ray that leaves the object's own surface starts inside the
+/// ball, so it is never moved and cannot meet the surface it left. `bvh.glsl`'s `model_ray`
+/// is this function; the reference and the `bvh` walks count t in the same way.
+pub fn model_ray(mo: Vec3, md: Vec3, radius: f32) -> ModelRay {
+    let unmoved = ModelRay {
+        o: mo,
+        d: md,
+        t0: 0.0,
+        scale: 1.0,
+    };
+    let len = md.dot(md).sqrt();
+    let d = md / len;
+    // Where the ray starts, and how far along it (in the model's units) that is from `mo`.
+    let (mut o, mut moved) = (mo, 0.0f32);
+    for _ in 0..MODEL_RAY_MOVES {
+        let far = o.dot(o);
+        if far.partial_cmp(&(4.0 * radius * radius)) != Some(std::cmp::Ordering::Greater) {
+            break;
+        }
+        let step = -o.dot(d) - radius - far.sqrt() * (16.0 * f32::EPSILON);
+        // Not ahead (the ray misses the ball), or overflowing products (NaN, infinity).
+        if !(step > 0.0 && step.is_finite()) {
+            break;
+        }
+        (o, moved) = (o + step * d, moved + step);
+    }
+    if moved == 0.0 || !(len > 0.0 && len.is_finite()) {
+        return unmoved;
+    }
+    ModelRay {
+        o,
+        d,
+        t0: moved / len,
+        scale: len,
+    }
+}
+
 /// Moves a ray origin off a surface along its geometric normal by a few float steps, scaled to
 /// the magnitude of the coordinates (Wächter and Binder, "A Fast and Robust Method for Avoiding
 /// Self-Intersection", Ray Tracing Gems ch. 6). `n` must point to the side the ray leaves on.

@@ -25,7 +25,7 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::Boundable;
 
-use super::intersect::{AxisVisitor, ShearedRay, TriangleHit};
+use super::intersect::{model_radius, model_ray, AxisVisitor, ModelRay, ShearedRay, TriangleHit};
 use crate::scene::state::SceneState;
 use crate::scene::{Mesh, Scene};
 use crate::trees::{transformed_box, wide_tree, BoxLeaf, PaddedTriangle};
@@ -55,6 +55,9 @@ pub struct MeshTree {
     uvs: Vec<[Vec2; 3]>,
     /// The union of the triangles' padded boxes (None for no triangles).
     bounds: Option<Aabb>,
+    /// The radius of a ball about the origin that holds the triangles ([`model_ray`]): for a
+    /// mesh's own tree its [`Mesh::radius`], as the `bvh` walks take it.
+    radius: f32,
 }
 
 impl MeshTree {
@@ -67,12 +70,14 @@ impl MeshTree {
             bvh.primitive_indices.iter().map(corners).collect()
         });
         let bounds = (padded.iter().map(Boundable::aabb)).reduce(|a, b| a.union(&b));
+        let radius = bounds.map_or(0.0, |b| model_radius(b.min.into(), b.max.into()));
         Self {
             bvh,
             leaf,
             normals,
             uvs,
             bounds,
+            radius,
         }
     }
 
@@ -87,30 +92,35 @@ impl MeshTree {
         Self::new(corners.collect(), normals.collect(), uvs.collect())
     }
 
-    /// The closest of this tree's triangles along the model-space ray `(o, d)` within the
-    /// interval of `r`: its index in the mesh and the hit.
-    fn closest(&self, o: Vec3, d: Vec3, r: &Ray) -> Option<(u32, TriangleHit)> {
+    /// The closest of this tree's triangles along the model-space ray `m` within the
+    /// interval of `r` (render space's t): its index in the mesh and the hit, its t render
+    /// space's. The walk counts t as `m` does, also in its interval: two faces of a thin
+    /// object can be apart by less than a step of render space's t.
+    fn closest(&self, m: ModelRay, r: &Ray) -> Option<(u32, TriangleHit)> {
         let bvh = self.bvh.as_ref()?;
-        let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), r.tmin, r.tmax);
-        ShearedRay::new(o, d).with_axes(Walk {
+        let ray = Ray::new(m.o.into(), m.d.into(), m.walk_t(r.tmin), m.walk_t(r.tmax));
+        let (primitive, hit) = ShearedRay::new(m.o, m.d).with_axes(Walk {
             tree: self,
             bvh,
             ray,
-        })
+        })?;
+        let t = m.render_t(hit.t);
+        Some((primitive, TriangleHit { t, ..hit }))
     }
 
-    /// How many of this tree's triangles the model-space ray `(o, d)` crosses within
-    /// `(r.tmin, end)`.
-    fn crossings(&self, o: Vec3, d: Vec3, r: &Ray, end: f32) -> u32 {
+    /// How many of this tree's triangles the model-space ray `m` crosses within
+    /// `(r.tmin, end)` (render space's t).
+    fn crossings(&self, m: ModelRay, r: &Ray, end: f32) -> u32 {
         let Some(bvh) = &self.bvh else { return 0 };
-        let sheared = ShearedRay::new(o, d);
-        let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), r.tmin, end);
+        let sheared = ShearedRay::new(m.o, m.d);
+        let (t_min, t_max) = (m.walk_t(r.tmin), m.walk_t(end));
+        let ray = Ray::new(m.o.into(), m.d.into(), t_min, t_max);
         let mut count = 0;
         // Every hit is counted and none accepted (the callback answers "no hit"), so the
         // traversal visits every triangle the segment meets instead of stopping at the first.
-        bvh.ray_traverse(ray, &mut RayHit::none(), |r, id| {
+        bvh.ray_traverse(ray, &mut RayHit::none(), |_, id| {
             let [v0, v1, v2] = self.leaf[id].map(Vec3::from);
-            count += u32::from(sheared.hit_triangle(v0, v1, v2, r.tmin, end).is_some());
+            count += u32::from(sheared.hit_triangle(v0, v1, v2, t_min, t_max).is_some());
             f32::INFINITY
         });
         count
@@ -164,7 +174,10 @@ impl MeshTrees {
         let start = Instant::now();
         let trees = meshes
             .iter()
-            .map(|m| MeshTree::of_mesh(m, |p| p, |n| n))
+            .map(|m| MeshTree {
+                radius: m.radius(),
+                ..MeshTree::of_mesh(m, |p| p, |n| n)
+            })
             .collect();
         Self {
             trees,
@@ -187,6 +200,8 @@ struct Instance {
     tree: TreeOf,
     /// The first three rows of render space to model space: p' = rows · (p, 1).
     to_model: [Vec4; 3],
+    /// The radius of the ball about the model's origin that holds its mesh ([`model_ray`]).
+    radius: f32,
     /// Model space to render space (the identity for a placed tree).
     to_render: Mat4,
     /// Model-space normals to render space (the inverse transpose, as the rasterizer's).
@@ -197,12 +212,13 @@ struct Instance {
 }
 
 impl Instance {
-    fn ray_to_model(&self, o: Vec3, d: Vec3) -> (Vec3, Vec3) {
+    fn ray_to_model(&self, o: Vec3, d: Vec3) -> ModelRay {
         let r = &self.to_model;
         let (p, v) = (o.extend(1.0), d.extend(0.0));
-        (
+        model_ray(
             Vec3::new(r[0].dot(p), r[1].dot(p), r[2].dot(p)),
             Vec3::new(r[0].dot(v), r[1].dot(v), r[2].dot(v)),
+            self.radius,
         )
     }
 }
@@ -273,9 +289,14 @@ impl Objects {
                 let identity = [Vec4::X, Vec4::Y, Vec4::Z];
                 (TreeOf::Placed(placed.len() - 1), identity, Mat4::IDENTITY)
             };
+            let radius = match tree {
+                TreeOf::Mesh(m) => meshes.trees[m].radius,
+                TreeOf::Placed(k) => placed[k].radius,
+            };
             let instance = Instance {
                 tree,
                 to_model,
+                radius,
                 to_render,
                 normal: if entered { normal } else { Mat4::IDENTITY },
                 drawable: 6 + i as u32,
@@ -326,8 +347,7 @@ impl Objects {
         let mut best = None;
         let mut enter = |object: usize, r: &Ray| {
             let instance = &self.instances[object];
-            let (mo, md) = instance.ray_to_model(o, d);
-            match self.tree(instance).closest(mo, md, r) {
+            match self.tree(instance).closest(instance.ray_to_model(o, d), r) {
                 Some((primitive, h)) => {
                     best = Some(ObjectHit {
                         t: h.t,
@@ -367,8 +387,8 @@ impl Objects {
         let ray = Ray::new(Vec3A::from(o), Vec3A::from(d), t_min, end);
         let count = |object: usize, r: &Ray| {
             let instance = &self.instances[object];
-            let (mo, md) = instance.ray_to_model(o, d);
-            self.tree(instance).crossings(mo, md, r, end)
+            self.tree(instance)
+                .crossings(instance.ray_to_model(o, d), r, end)
         };
         match &self.top {
             Some(top) => {

@@ -194,6 +194,7 @@ impl MeshTrees {
                     node: at,
                     lo: Vec3::ZERO,
                     hi: Vec3::ZERO,
+                    radius: mesh.radius(),
                     depth: 1,
                     stack: 0,
                 });
@@ -212,6 +213,7 @@ impl MeshTrees {
                 node: at,
                 lo: made.box_.min.into(),
                 hi: made.box_.max.into(),
+                radius: mesh.radius(),
                 depth,
                 stack,
             });

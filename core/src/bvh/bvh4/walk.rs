@@ -7,7 +7,7 @@ use glam::Vec3;
 use super::{Bvh4Node, Child, MeshTrees, TopTree, BVH4_STACK_SIZE};
 use crate::bvh::layout::BvhTriangle;
 use crate::bvh::traverse::{safe_inverse, ObjectHit, Work};
-use crate::reference::intersect::ShearedRay;
+use crate::reference::intersect::{ModelRay, ShearedRay};
 
 /// The ray in the space of the tree being walked.
 #[derive(Clone, Copy)]
@@ -88,10 +88,14 @@ pub fn closest_hit(
     work.rays += 1;
     let world = LevelRay::new(o, d);
     let mut ray = world;
-    // In a mesh's tree: its ray prepared for the triangle test, and the object's drawable.
-    let mut mesh: Option<(ShearedRay, u32)> = None;
+    // In a mesh's tree: its ray prepared for the triangle test, the object's drawable, and
+    // how the tree counts t (`model_ray`).
+    let mut mesh: Option<(ShearedRay, u32, ModelRay)> = None;
     let mut best: Option<ObjectHit> = None;
+    // The closest hit's t in render space, and the interval in the tree's own t: in a mesh's
+    // tree two faces can be apart by less than a step of render space's t.
     let mut limit = t_max;
+    let (mut low, mut high) = (t_min, t_max);
     let mut stack = [(0u32, 0f32); BVH4_STACK_SIZE as usize];
     let (mut height, mut floor) = (0, usize::MAX);
     // The top level's root.
@@ -103,6 +107,7 @@ pub fn closest_hit(
             loop {
                 if height == floor {
                     (ray, mesh, floor) = (world, None, usize::MAX);
+                    (low, high) = (t_min, limit);
                 }
                 if height == 0 {
                     return best;
@@ -118,9 +123,10 @@ pub fn closest_hit(
         if entry & OBJECT != 0 {
             work.instances += 1;
             let instance = &top.instances[(entry & !OBJECT) as usize];
-            let (mo, md) = (instance.point_to_model(o), instance.direction_to_model(d));
-            ray = LevelRay::new(mo, md);
-            mesh = Some((ShearedRay::new(mo, md), instance.drawable()));
+            let m = instance.ray_to_model(o, d);
+            ray = LevelRay::new(m.o, m.d);
+            mesh = Some((ShearedRay::new(m.o, m.d), instance.drawable(), m));
+            (low, high) = (m.walk_t(t_min), m.walk_t(limit));
             floor = height;
             next = Some(instance.root());
             continue;
@@ -130,7 +136,9 @@ pub fn closest_hit(
             Some(_) => meshes.record(entry),
             None => &top.records[entry as usize],
         });
-        let near = intersect(&node, &ray, t_min, limit);
+        let near = intersect(&node, &ray, low, high);
+        // Where the stack keeps them: in render space's t.
+        let render_t = |t: f32| mesh.map_or(t, |(.., m)| m.render_t(t));
         let mut entries = [(0u32, f32::INFINITY); 4];
         for slot in 0..4 {
             if near[slot] == f32::INFINITY {
@@ -138,17 +146,16 @@ pub fn closest_hit(
             }
             match (node.child(slot), mesh) {
                 (Child::Empty, _) => {}
-                (Child::Inner(r), _) => entries[slot] = (r, near[slot]),
+                (Child::Inner(r), _) => entries[slot] = (r, render_t(near[slot])),
                 (Child::Leaf { first, .. }, None) => entries[slot] = (first | OBJECT, near[slot]),
-                (Child::Leaf { first, count }, Some((sheared, drawable))) => {
+                (Child::Leaf { first, count }, Some((sheared, drawable, m))) => {
                     for id in first..first + count {
                         work.triangles += 1;
                         let tri = BvhTriangle::of(meshes.record(id));
-                        if let Some(h) = sheared.hit_triangle(tri.v0, tri.v1, tri.v2, t_min, limit)
-                        {
-                            limit = h.t;
+                        if let Some(h) = sheared.hit_triangle(tri.v0, tri.v1, tri.v2, low, high) {
+                            (high, limit) = (h.t, m.render_t(h.t));
                             best = Some(ObjectHit {
-                                t: h.t,
+                                t: limit,
                                 drawable,
                                 primitive: tri.primitive,
                                 u: h.u,

@@ -197,6 +197,7 @@ impl MeshTrees {
                 node,
                 lo: bounds.map_or(Vec3::ZERO, |b| b.min.into()),
                 hi: bounds.map_or(Vec3::ZERO, |b| b.max.into()),
+                radius: mesh.radius(),
                 depth,
                 stack: depth,
             });

@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::{MeshTrees, TopTree, WideNode, BVH_STACK_SIZE};
 use crate::bvh::traverse::{safe_inverse, ObjectHit, Work};
-use crate::reference::intersect::ShearedRay;
+use crate::reference::intersect::{ModelRay, ShearedRay};
 
 /// The ray in the space of the tree being walked.
 #[derive(Clone, Copy)]
@@ -82,10 +82,14 @@ pub fn closest_hit(
     work.rays += 1;
     let world = LevelRay::new(o, d);
     let mut ray = world;
-    // In a mesh's tree: its ray prepared for the triangle test, and the object's drawable.
-    let mut mesh: Option<(ShearedRay, u32)> = None;
+    // In a mesh's tree: its ray prepared for the triangle test, the object's drawable, and
+    // how the tree counts t (`model_ray`).
+    let mut mesh: Option<(ShearedRay, u32, ModelRay)> = None;
     let mut best: Option<ObjectHit> = None;
+    // The closest hit's t in render space, and the interval in the tree's own t: in a mesh's
+    // tree two faces can be apart by less than a step of render space's t.
     let mut limit = t_max;
+    let (mut low, mut high) = (t_min, t_max);
     let mut stack = [(0u32, 0u32); BVH_STACK_SIZE as usize];
     let (mut height, mut floor) = (0, usize::MAX);
     // The top level's root, as a group of one inner child (any slot: the count below it is 0).
@@ -97,13 +101,13 @@ pub fn closest_hit(
             let k = 31 - triangles.1.leading_zeros();
             triangles.1 &= !(1 << k);
             let id = triangles.0 + k;
-            if let Some((sheared, drawable)) = mesh {
+            if let Some((sheared, drawable, m)) = mesh {
                 work.triangles += 1;
                 let tri = &meshes.triangles[id as usize];
-                if let Some(h) = sheared.hit_triangle(tri.v0, tri.v1, tri.v2, t_min, limit) {
-                    limit = h.t;
+                if let Some(h) = sheared.hit_triangle(tri.v0, tri.v1, tri.v2, low, high) {
+                    (high, limit) = (h.t, m.render_t(h.t));
                     best = Some(ObjectHit {
-                        t: h.t,
+                        t: limit,
                         drawable,
                         primitive: tri.primitive,
                         u: h.u,
@@ -121,9 +125,10 @@ pub fn closest_hit(
                 }
             }
             let instance = &top.instances[id as usize];
-            let (mo, md) = (instance.point_to_model(o), instance.direction_to_model(d));
-            ray = LevelRay::new(mo, md);
-            mesh = Some((ShearedRay::new(mo, md), instance.drawable()));
+            let m = instance.ray_to_model(o, d);
+            ray = LevelRay::new(m.o, m.d);
+            mesh = Some((ShearedRay::new(m.o, m.d), instance.drawable(), m));
+            (low, high) = (m.walk_t(t_min), m.walk_t(limit));
             floor = height;
             nodes = (instance.root(), 0x8000_0000);
             triangles = (0, 0);
@@ -146,7 +151,7 @@ pub fn closest_hit(
             } else {
                 &top.nodes[index as usize]
             };
-            let met = intersect(node, &ray, t_min, limit);
+            let met = intersect(node, &ray, low, high);
             nodes = (node.child_base(), (met & 0xff00_0000) | node.imask());
             triangles = (node.primitive_base(), met & 0x00ff_ffff);
             continue;
@@ -154,6 +159,7 @@ pub fn closest_hit(
         // Both groups dry: the object's tree is done, or pop.
         if height == floor {
             (ray, mesh, floor) = (world, None, usize::MAX);
+            (low, high) = (t_min, limit);
         }
         if height == 0 {
             return best;

@@ -137,6 +137,13 @@ impl Mesh {
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
+
+    /// The radius of the ball about the model's origin that holds the mesh's box: a ray from
+    /// outside twice that ball is moved near the mesh before it is walked
+    /// (`reference::intersect::model_ray`).
+    pub fn radius(&self) -> f32 {
+        self.bounds_min.abs().max(self.bounds_max.abs()).length()
+    }
 }
 
 impl Mesh {

@@ -439,6 +439,10 @@ mod tests {
         assert_eq!(BVH_STACK_SIZE, crate::shaders::shared::BVH_STACK_SIZE);
         assert_eq!(BVH4_STACK_SIZE, crate::shaders::shared::BVH4_STACK_SIZE);
         assert_eq!(
+            crate::reference::intersect::MODEL_RAY_MOVES,
+            crate::shaders::shared::MODEL_RAY_MOVES
+        );
+        assert_eq!(
             crate::reference::room::ON_WALL_SLACK_EXPONENT,
             crate::shaders::shared::ON_WALL_SLACK_EXPONENT
         );
