@@ -35,7 +35,7 @@ use specchio::output::{Sink, Transaction};
 use specchio::vk::instance::{Instance, InstanceDesc};
 
 use crate::gate::Baseline;
-use options::settle;
+use options::{settle, Settled};
 pub use options::{Args, Format};
 use record::Record;
 use timing::{quantile, Timed};
@@ -101,6 +101,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         .map(|p| specchio::scene::load(p).map_err(anyhow::Error::from))
         .collect::<Result<Vec<_>>>()?;
     out.check_inputs()?;
+    dynamic_applies(&settled, &scenes)?;
     let rungs = if settled.args.no_tradeoff {
         0
     } else {
@@ -213,4 +214,20 @@ fn gate(args: &Args, baseline: &Baseline, record: &Record) -> ExitCode {
 fn wall_median(t: &Timed) -> f64 {
     let mut v: Vec<f64> = t.reports.iter().map(|r| r.submit_wait_ms).collect();
     quantile(&mut v, 0.5)
+}
+
+/// `--dynamic-from` sets where the dynamic measurement starts, which measures only scenes that
+/// move: with none, it would change nothing (and be taken without a word).
+fn dynamic_applies(settled: &Settled, scenes: &[specchio::scene::Scene]) -> Result<()> {
+    if settled.args.dynamic_from.is_some() && !scenes.iter().any(dynamic::animated) {
+        let names: Vec<String> = (settled.scenes.iter())
+            .map(|p| p.display().to_string())
+            .collect();
+        anyhow::bail!(
+            "--dynamic-from: sets where the dynamic measurement starts, and no scene here moves \
+             ({}), so none is measured; leave it out, or add a scene that moves",
+            names.join(", ")
+        );
+    }
+    Ok(())
 }

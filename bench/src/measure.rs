@@ -79,7 +79,7 @@ pub(crate) fn measure(
             )?;
         }
         if !args.no_dynamic && dynamic::animated(scene) {
-            let at = (dynamic_size, args.dynamic_from);
+            let at = (dynamic_size, args.dynamic_from.unwrap_or(0.0));
             let d = dynamic::measure(&device, &name, scene, at, &plan, &tick)?;
             record.dynamic.push(d);
         }

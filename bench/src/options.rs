@@ -129,9 +129,9 @@ pub struct Args {
     pub no_dynamic: bool,
     /// Scene time (seconds, 0..=86400) of the dynamic measurement's first frame; its frames
     /// follow 1/30 s apart (moving-objects' mirror moves until 4 s: from 4.2 s only its
-    /// objects do).
-    #[arg(long, allow_negative_numbers = true, value_parser = real(0.0, false, 86_400.0), default_value_t = 0.0, conflicts_with = "no_dynamic")]
-    pub dynamic_from: f64,
+    /// objects do). Default: 0. Only a scene that moves is measured so.
+    #[arg(long, allow_negative_numbers = true, value_parser = real(0.0, false, 86_400.0), conflicts_with = "no_dynamic")]
+    pub dynamic_from: Option<f64>,
     /// Comma-separated rungs of the trade-off ladder (default: every rung the device can run;
     /// docs/benchmarks.md lists them).
     #[arg(long, value_delimiter = ',', value_parser = rung_label, conflicts_with = "no_tradeoff")]

@@ -94,6 +94,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         specchio::say_err!("warning: {why}");
     }
     plan.choose(args.outputs)?;
+    plan.frames_apply()?;
     let n = plan.poses.len();
     let mut folder = Folder::stage(&args.out, n, plan.frame_files())?;
     specchio::process::interrupt::catch();

@@ -46,10 +46,9 @@ pub struct Args {
     /// Frame number of the (first) frame, 0..=1000000000; its time is N / fps.
     #[arg(long, allow_negative_numbers = true, value_parser = whole(0..=MAX_FRAME_INDEX))]
     pub(crate) frame: Option<u64>,
-    /// Frames per second for --frame and --frames, in (0, 10000].
-    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true,
-          value_parser = real(0.0, true, 10_000.0))]
-    pub(crate) fps: f64,
+    /// Frames per second for --frame and --frames, in (0, 10000]. Default: 30.
+    #[arg(long, allow_negative_numbers = true, value_parser = real(0.0, true, 10_000.0))]
+    pub(crate) fps: Option<f64>,
     /// Render K consecutive frames (numbered outputs in DIR/NNNN/), 1..=100000.
     #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_parser = whole(1..=MAX_FRAMES))]
     pub(crate) frames: u32,
@@ -95,9 +94,10 @@ pub struct Args {
     pub(crate) whole_faces: bool,
     /// The order the tracing lookups (ray-query, distance-exact) hand their acceleration-
     /// structure builds: `split` (spatially coherent, the default) or `given` (the scene's own,
-    /// to measure what the order is worth on a driver that keeps it: docs/accuracy.md).
-    #[arg(long, value_parser = specchio::process::args::trace_order, default_value = "split")]
-    pub(crate) trace_order: TraceOrder,
+    /// to measure what the order is worth on a driver that keeps it: docs/accuracy.md). Only
+    /// those lookups take it.
+    #[arg(long, value_parser = specchio::process::args::trace_order)]
+    pub(crate) trace_order: Option<TraceOrder>,
     /// Where the bvh lookup walks its rays: `fragment` (in the mirror's fragment shaders) or
     /// `compute` (once a view, in a compute pass before it is drawn). Default: the device's
     /// (compute on a GPU, fragment on a CPU driver; docs/accuracy.md).
@@ -120,7 +120,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Everything that can be wrong with the input is found before the output folder exists
     //    (the numbers' ranges by clap, `specchio::process::args`).
     let scene = load_scene(args)?;
-    let start_s = (args.time).unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps);
+    let start_s = (args.time).unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps());
     frame_times_are_finite(args, start_s)?;
     // Everything is written into a hidden folder beside --out, renamed into place at the end
     // (dropped, it is removed): a failure anywhere below leaves nothing behind.
@@ -190,7 +190,7 @@ fn render_method(
         // Range and ids through the cube: only when asked for, so timings never pay (the
         // traced ray map of ray-query needs none).
         id_cube: args.sensor_outputs && !lookups::traces_ray_map(lookup),
-        trace_order: args.trace_order,
+        trace_order: args.trace_order(),
         trace_in: args.trace_in,
         bvh_layout: args.bvh_layout,
         ..Default::default()
@@ -246,13 +246,13 @@ fn render_record(
         origin: scene.origin.to_array(),
         settings: RenderSettings {
             start_time_s: start_s,
-            fps: args.fps,
+            fps: args.fps(),
             frames: args.frames,
             methods,
             full_updates: args.full_updates,
             whole_faces: args.whole_faces,
             lookup: args.lookup.unwrap_or(scene.mirror.lookup),
-            trace_order: args.trace_order.name(),
+            trace_order: args.trace_order().name(),
             trace_in: args.trace_in.map(|t| t.name()),
             bvh_layout: args.bvh_layout.map(|l| l.name()),
             distance_steps: scene.mirror.distance_steps,
@@ -325,7 +325,7 @@ fn render_frames(
             estimate.add(1);
         }
         specchio::process::interrupt::check(&format!("after {i} of {} frame(s)", args.frames))?;
-        let t = start_s + f64::from(i) / args.fps;
+        let t = start_s + f64::from(i) / args.fps();
         // Frame numbers continue from --frame, so `every-n` counts scene frames, not run frames.
         let frame_index = args.frame.unwrap_or(0) + u64::from(i);
         let (report, images) = renderer.render_frame(

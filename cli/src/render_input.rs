@@ -3,7 +3,7 @@
 //! the lookup, and the refusal of options that would change nothing.
 
 use anyhow::{bail, Context, Result};
-use specchio::render::lookups;
+use specchio::render::lookups::{self, TraceOrder};
 use specchio::scene::{Lookup, Scene};
 use specchio::vk::device::DeviceInfo;
 
@@ -13,12 +13,12 @@ use crate::render::Args;
 /// range, but --frame over a tiny --fps (1 / 4.9e-324) is infinite, which the scene's motion
 /// cannot be evaluated at (an orbiting object silently dropped out of the image).
 pub(crate) fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
-    let last_s = start_s + f64::from(args.frames - 1) / args.fps;
+    let last_s = start_s + f64::from(args.frames - 1) / args.fps();
     if !(start_s.is_finite() && last_s.is_finite()) {
         bail!(
             "--fps {}: frames {}..{} fall at no finite time (frame / fps overflows); \
              give a larger --fps or --time",
-            specchio::text::num_text(args.fps),
+            specchio::text::num_text(args.fps()),
             args.frame.unwrap_or(0),
             args.frame.unwrap_or(0) + u64::from(args.frames - 1)
         );
@@ -27,12 +27,21 @@ pub(crate) fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
 }
 
 /// Refuses an option that would change nothing here, rather than take it without a word (and
-/// record it in render.json as if it had): the update options under a refresh policy that
-/// re-renders every face whole anyway, the bvh walk's options with another lookup.
+/// record it in render.json as if it had): the cube's options with a lookup that fills none,
+/// the update options under a refresh policy that re-renders every face whole anyway, the
+/// walks' and builds' options with another lookup, --fps for a single frame at a --time.
 pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Result<()> {
     let plugin = lookups::plugin(lookup);
+    if args.fps.is_some() && args.frame.is_none() && args.frames == 1 {
+        bail!(
+            "--fps: sets the times of --frame and of --frames beyond the first, and this run \
+             renders one frame at --time {}; leave it out, or give --frame or --frames",
+            specchio::text::num_text(args.time.unwrap_or(0.0))
+        );
+    }
     let cube = [
         ("--method", args.method.is_some()),
+        ("--cube-size", args.cube_size.is_some()),
         ("--full-updates", args.full_updates),
         ("--whole-faces", args.whole_faces),
     ];
@@ -93,6 +102,14 @@ pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Resul
             );
         }
     }
+    if args.trace_order.is_some() && !plugin.builds_scene_trace() {
+        bail!(
+            "--trace-order: only the ray-query and distance-exact lookups build acceleration \
+             structures, and this run's lookup is {lookup}{}; leave it out, or give --lookup \
+             ray-query",
+            chosen_for_outputs(args)
+        );
+    }
     Ok(())
 }
 
@@ -134,5 +151,15 @@ impl Args {
     /// `--method`, or six-pass where it is not given.
     pub(crate) fn method_name(&self) -> &str {
         self.method.as_deref().unwrap_or("six-pass")
+    }
+
+    /// `--fps`, or 30 where it is not given.
+    pub(crate) fn fps(&self) -> f64 {
+        self.fps.unwrap_or(30.0)
+    }
+
+    /// `--trace-order`, or split where it is not given.
+    pub(crate) fn trace_order(&self) -> TraceOrder {
+        self.trace_order.unwrap_or(TraceOrder::Split)
     }
 }

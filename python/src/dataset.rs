@@ -104,6 +104,7 @@ impl PoseSource {
             stopped,
         };
         plan.set_format(choices.format, &bag_model)?;
+        plan.frames_apply()?;
         Ok(plan)
     }
 }

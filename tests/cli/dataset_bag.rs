@@ -103,16 +103,33 @@ fn the_bag_is_the_same_beside_the_frames_alone_or_resumed_and_holds_their_sample
     let yaml = std::fs::read_to_string(dir.join("both/bag/metadata.yaml")).unwrap();
     assert!(yaml.contains("storage_identifier: mcap") && yaml.contains("message_count: 19"));
 
-    // The cloud is the camera's whichever frame the PLY files are in.
+    // The cloud is the camera's whichever frame the PLY files are in (with the bag alone no
+    // PLY file is kept, and a geometry frame is refused as changing nothing).
     ok(dataset(
         &dir,
         "based",
         &[
             &all[..],
-            &["--format", "mcap", "--geometry-frame", "base_link"],
+            &["--format", "files,mcap", "--geometry-frame", "base_link"],
         ]
         .concat(),
     ));
+    let alone = dataset(
+        &dir,
+        "alone",
+        &[
+            &all[..],
+            &["--format", "mcap", "--geometry-frame", "base_link"],
+        ]
+        .concat(),
+    );
+    let said = String::from_utf8_lossy(&alone.stderr);
+    assert!(
+        !alone.status.success()
+            && said.contains("geometry frame \"base_link\"")
+            && said.contains("format: mcap"),
+        "{said}"
+    );
     let (a, b) = (
         messages(&dir.join("both"), "/camera/points"),
         messages(&dir.join("based"), "/camera/points"),

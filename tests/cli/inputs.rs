@@ -217,8 +217,12 @@ fn options_that_would_change_nothing_are_refused() {
     let (out_s, base) = (out.to_str().unwrap(), dir.join("base.json"));
     let scene = |name: &str| root().join("scenes").join(name);
     let thesis = scene("thesis-room.toml");
-    let moving = scene("moving-objects.toml");
+    let (moving, still) = (
+        scene("moving-objects.toml"),
+        scene("test/six-colour-room.toml"),
+    );
     let (thesis, moving) = (thesis.to_str().unwrap(), moving.to_str().unwrap());
+    let still = still.to_str().unwrap();
     // One file under two names: a hard link, which a canonical path would miss (a copy of
     // the scene: the check comes before any scene is read).
     let (copy, linked) = (dir.join("scene.toml"), dir.join("scene-link.toml"));
@@ -266,6 +270,33 @@ fn options_that_would_change_nothing_are_refused() {
         (
             vec!["render", thesis, "--out", out_s, "--lookup", "box", "--secant-steps", "3"],
             "--secant-steps: only the distance lookups and a cube lookup's sensor outputs",
+        ),
+        (
+            vec!["render", thesis, "--out", out_s, "--lookup", "bvh"],
+            "--cube-size: the bvh lookup samples no cube map, so none is filled",
+        ),
+        (
+            vec!["render", thesis, "--out", out_s, "--lookup", "box", "--trace-order", "given"],
+            "--trace-order: only the ray-query and distance-exact lookups build acceleration \
+             structures, and this run's lookup is box",
+        ),
+        (
+            vec!["render", thesis, "--out", out_s, "--time", "2", "--fps", "60"],
+            "--fps: sets the times of --frame and of --frames beyond the first, and this run \
+             renders one frame at --time 2",
+        ),
+        (
+            vec!["dataset", thesis, "--out", out_s, "--grid", "4", "--panorama-frame", "world", "--outputs", "image,range"],
+            "panorama frame \"world\": only the panoramas layer is written in it, and this run \
+             keeps none (outputs: image,range; format: files)",
+        ),
+        (
+            vec!["dataset", thesis, "--out", out_s, "--grid", "4", "--geometry-frame", "map", "--outputs", "panoramas"],
+            "geometry frame \"map\": only the rays and points layers are written in it",
+        ),
+        (
+            vec!["bench", still, "--dynamic-from", "3", "--json", b],
+            "--dynamic-from: sets where the dynamic measurement starts, and no scene here moves",
         ),
         (
             vec!["compare", thesis, thesis, "--angular", "64", "--heatmap", out_s],

@@ -100,6 +100,19 @@ pub enum MaterialType {
     Direction,
 }
 
+impl MaterialType {
+    /// As the file writes it (`type = "checker"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            MaterialType::Color => "color",
+            MaterialType::Checker => "checker",
+            MaterialType::Grid => "grid",
+            MaterialType::Texture => "texture",
+            MaterialType::Direction => "direction",
+        }
+    }
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {

@@ -64,7 +64,11 @@ impl Ctx<'_> {
         {
             Some((name, _)) => Err(self.unused(
                 &format!("materials[{i}].{name}"),
-                &format!("a material of type {:?} takes only {:?}", m.kind, allowed),
+                &format!(
+                    "type = \"{}\" takes only {}",
+                    m.kind.name(),
+                    allowed.join(", ")
+                ),
             )),
             None => Ok(()),
         }
@@ -81,7 +85,9 @@ impl Ctx<'_> {
         let need = |v: Option<V3>, name: &str| -> R<Vec3> {
             match v {
                 Some(v) => self.color(&f(name), v),
-                None => Err(self.missing(&f(name), &format!("{:?} materials need it", m.kind))),
+                None => {
+                    Err(self.missing(&f(name), &format!("type = \"{}\" needs it", m.kind.name())))
+                }
             }
         };
         let tiles = |default: f64| -> R<f32> {

@@ -187,7 +187,11 @@ impl Ctx<'_> {
             if is_set && !allowed.contains(&name) {
                 return Err(self.unused(
                     &f(name),
-                    &format!("shape {:?} takes only {:?}", o.shape, allowed),
+                    &format!(
+                        "shape = \"{}\" takes only {}",
+                        o.shape.name(),
+                        allowed.join(", ")
+                    ),
                 ));
             }
         }
@@ -205,8 +209,8 @@ impl Ctx<'_> {
         store: &mut MeshStore,
     ) -> R<(usize, Vec3)> {
         let need = |v: Option<f64>, name: &str| -> R<f32> {
-            let v =
-                v.ok_or_else(|| self.missing(&f(name), &format!("shape {:?} needs it", o.shape)))?;
+            let needs = || format!("shape = \"{}\" needs it", o.shape.name());
+            let v = v.ok_or_else(|| self.missing(&f(name), &needs()))?;
             self.positive(&f(name), v)
         };
         let (size, segments) = match o.shape {

@@ -135,6 +135,7 @@ impl Layer {
     pub const CAMERA: Layer = Layer(&camera::Camera);
     pub const RAYS: Layer = Layer(&rays::Rays);
     pub const POINTS: Layer = Layer(&points::Points);
+    pub const PANORAMAS: Layer = Layer(&panoramas::Panoramas);
 
     /// The registry: every layer, in the order they are listed, written and recorded.
     pub const ALL: [Layer; 8] = [
@@ -144,7 +145,7 @@ impl Layer {
         Layer(&range::Range),
         Layer(&range16::Range16),
         Layer(&ids::Ids),
-        Layer(&panoramas::Panoramas),
+        Layer::PANORAMAS,
         Layer::POINTS,
     ];
 

@@ -26,7 +26,7 @@ use crate::sensor::dataset::resume::RunKey;
 use crate::sensor::dataset::trajectory::{self, Place, Pose, TrajectoryError};
 use crate::sensor::dataset::{self as sensor_dataset, DatasetRecord, IndexLine, PoseRecord};
 use crate::sensor::dataset::{DatasetError, Folder, Format, GeometryFrame, INDEX_FILE};
-use crate::sensor::layers::Layers;
+use crate::sensor::layers::{Layer, Layers};
 use crate::sensor::panorama::PanoramaFrame;
 use crate::sensor::GroundTruth;
 use crate::vk::physical::DeviceInfo;
@@ -150,6 +150,41 @@ impl Plan {
         }
         self.outputs = chosen.for_scene(imaging);
         Ok(())
+    }
+
+    /// Refuses a frame chosen for outputs the run does not keep, which would change nothing
+    /// and be recorded as if it had: the panoramas' `world` frame without the panoramas, a
+    /// geometry frame other than the scene's without the ray map or the point cloud, or either
+    /// with the bag alone (it keeps no frame files, and its point cloud is in the camera's
+    /// frame whatever the files' is). Called once the layers and the format are chosen.
+    pub fn frames_apply(&self) -> Result<(), DatasetError> {
+        let kept = |layers: &[Layer]| {
+            self.format.files && layers.iter().any(|&layer| self.outputs.has(layer))
+        };
+        let unused = if self.panoramas != PanoramaFrame::Robot && !kept(&[Layer::PANORAMAS]) {
+            Some(("panorama", self.panoramas.name(), "layer is", "panoramas"))
+        } else if self.geometry != GeometryFrame::Scene && !kept(&[Layer::RAYS, Layer::POINTS]) {
+            Some((
+                "geometry",
+                self.geometry.name(),
+                "and points layers are",
+                "rays or points",
+            ))
+        } else {
+            None
+        };
+        match unused {
+            None => Ok(()),
+            Some((what, name, written, keep)) => {
+                let first = keep.split(' ').next().unwrap_or(keep);
+                Err(DatasetError::Invalid(format!(
+                    "{what} frame {name:?}: only the {first} {written} written in it, and this \
+                     run keeps none (outputs: {}; format: {}); leave it out, or keep {keep} \
+                     in the frame files",
+                    self.outputs, self.format
+                )))
+            }
+        }
     }
 
     /// The layers each frame holds.

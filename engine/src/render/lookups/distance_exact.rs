@@ -55,6 +55,10 @@ impl MirrorLookup for DistanceExact {
         SceneTrace::NEEDS
     }
 
+    fn builds_scene_trace(&self) -> bool {
+        true
+    }
+
     fn uses_cube(&self) -> bool {
         true
     }

@@ -71,6 +71,11 @@ pub trait MirrorLookup: Sync {
     fn searches_depth(&self) -> bool {
         false
     }
+    /// Whether it builds acceleration structures over the scene (`tracing::SceneTrace`), so
+    /// that `RenderOptions::trace_order` (`render --trace-order`) changes it.
+    fn builds_scene_trace(&self) -> bool {
+        false
+    }
     /// Whether its pass traces the sensor's ray map through its own set
     /// ([`LookupPass::trace_set`]): the range and ids then follow the colour's own light path,
     /// and the renderer needs no id cube for them. The renderer checks that the pass agrees.

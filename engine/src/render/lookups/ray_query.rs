@@ -30,6 +30,10 @@ impl MirrorLookup for RayQuery {
         SceneTrace::NEEDS
     }
 
+    fn builds_scene_trace(&self) -> bool {
+        true
+    }
+
     fn uses_cube(&self) -> bool {
         false
     }

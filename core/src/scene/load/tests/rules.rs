@@ -181,6 +181,11 @@ fn values_are_checked_as_used_and_planes_fit_the_scene() {
         ("[cube]\noffset = [1e30, 0, 0]\n", "cube.offset: puts the cube's centre 1e30 m from"),
         ("[cube]\noffset = [0, 0.5, 0]\nnear = 0.3\n", "cube.near: clips reflections: the near plane's corners are near x sqrt(3) = 0.51961523 m from the cube's centre, outside the mirror's reach (0.5 m from there)"),
         ("[cube]\noffset = [0, 0.5, 0]\nfar = 8\n", "cube.far: clips the room: a room corner can be 8.181146 m"),
+        // A field its type does not take, or lacks, is said with the type as the file writes it.
+        ("[[materials]]\nname = \"c\"\ntype = \"checker\"\na = [1, 1, 1]\nb = [0, 0, 0]\ntiles = 3\ncolor = [1, 0, 0]\n", "materials[1].color: not allowed here: type = \"checker\" takes only a, b, tiles"),
+        ("[[materials]]\nname = \"c\"\ntype = \"checker\"\na = [1, 1, 1]\ntiles = 3\n", "materials[1].b: required field is missing (type = \"checker\" needs it)"),
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nradius = 1\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].radius: not allowed here: shape = \"box\" takes only size"),
+        ("[[objects]]\nshape = \"cylinder\"\nradius = 1\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].height: required field is missing (shape = \"cylinder\" needs it)"),
     ];
     for (extra, needle) in cases {
         let text = format!("{MINIMAL}{extra}");
