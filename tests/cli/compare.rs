@@ -1,7 +1,7 @@
 //! `specchio compare` as a user runs it: known answers in the JSON, exit codes, errors that
 //! name the file, and a heatmap the size of the images (or no file at all on error).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use specchio::image::RgbaImage;
@@ -375,12 +375,9 @@ fn extreme_errors_print_readably() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Ctrl-C during a comparison (two 2048² images, seconds of FLIP) stops it with exit 1,
-/// saying so, and leaves neither the heatmap nor its staging folder; it used to end the
-/// process at once and leave `.NAME.specchio-*` behind.
-#[test]
-fn a_stopped_comparison_leaves_nothing() {
-    let dir = temp_dir("stopped");
+/// A comparison of two 2048² images (seconds of FLIP) with a heatmap, started: the child and
+/// the heatmap's path.
+fn long_comparison(dir: &Path) -> (std::process::Child, PathBuf) {
     let side = 2048;
     let big = |offset: f32| RgbaImage {
         width: side,
@@ -401,6 +398,16 @@ fn a_stopped_comparison_leaves_nothing() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
+    (child, heatmap)
+}
+
+/// Ctrl-C during a comparison stops it with exit 1, saying so, and leaves neither the heatmap
+/// nor its staging folder; it used to end the process at once and leave `.NAME.specchio-*`
+/// behind.
+#[test]
+fn a_stopped_comparison_leaves_nothing() {
+    let dir = temp_dir("stopped");
+    let (child, heatmap) = long_comparison(&dir);
     // Once the heatmap is staged the comparison is under way, and the signal is caught.
     let staged = || !common::staging_folders(&heatmap).is_empty();
     let out = common::signal_when(child, libc::SIGINT, "the staged heatmap", staged);
@@ -412,5 +419,31 @@ fn a_stopped_comparison_leaves_nothing() {
     );
     assert!(!heatmap.exists());
     assert!(common::staging_folders(&heatmap).is_empty());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A second Ctrl-C, 0.7 s after the first and while the comparison still runs, ends the
+/// process at once (exit 130), and it removes its staging folder first: that folder used to
+/// stay, hidden, until a later run into the same output swept it.
+#[test]
+fn a_second_ctrl_c_ends_the_run_at_once_and_leaves_nothing() {
+    let dir = temp_dir("stopped-twice");
+    let (mut child, heatmap) = long_comparison(&dir);
+    let started = std::time::Instant::now();
+    while common::staging_folders(&heatmap).is_empty() {
+        assert!(child.try_wait().unwrap().is_none(), "ended before staging");
+        assert!(started.elapsed().as_secs() < 300, "no staging after 300 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    for pause_ms in [0, 700] {
+        std::thread::sleep(std::time::Duration::from_millis(pause_ms));
+        // SAFETY: signals our own child process.
+        unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    }
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(!heatmap.exists());
+    assert!(common::staging_folders(&heatmap).is_empty(), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

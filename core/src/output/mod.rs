@@ -23,6 +23,7 @@ use crate::image::{exr, png, RgbaImage};
 pub use dir::{Dir, Entry};
 pub use manifest::MANIFEST;
 pub use sink::{json_text, MemoryFiles, Sink};
+pub use stage::remove_live as remove_staging_folders;
 pub use sys::{create_new, open_no_follow, try_lock};
 pub use transaction::Transaction;
 

@@ -24,6 +24,7 @@
 use std::fs::{self, File};
 use std::io::{self, Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use super::dir::Dir;
 use super::sys;
@@ -36,6 +37,45 @@ const INFIX: &str = ".specchio-";
 const HEX_DIGITS: usize = 32;
 /// The most bytes of the target's name a staging folder's name repeats.
 const NAME_BYTES: usize = 160;
+
+/// This process's staging folders, by their random part, and whether each may hold an earlier
+/// output: what [`remove_live`] removes when a second signal ends the process at once.
+static LIVE: Mutex<Vec<(String, PathBuf, bool)>> = Mutex::new(Vec::new());
+
+/// The registry, whatever a thread that panicked holding it left (it is only ever pushed to,
+/// flagged and removed from, each a whole step).
+fn live() -> MutexGuard<'static, Vec<(String, PathBuf, bool)>> {
+    LIVE.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Takes staging folder `hex` out of the registry: it is gone, or the user's now.
+fn forget(hex: &str) {
+    live().retain(|(h, ..)| h != hex);
+}
+
+/// Removes this process's staging folders that hold nothing but its own output, for a process
+/// about to end at once: a second signal does not wait for the run's next check, so the
+/// transaction that would remove them is never dropped. One that may hold an earlier output
+/// (its run was swapping it with the target) is left, with its token, to the next run's
+/// sweep, which recovers it by its manifest; as after SIGKILL. Best effort: a file the run
+/// writes meanwhile can make a removal fail once, so each is tried three times.
+pub fn remove_live() {
+    remove_unswapped(&live());
+}
+
+/// [`remove_live`] over `stages`.
+fn remove_unswapped(stages: &[(String, PathBuf, bool)]) {
+    for (_, dir, may_hold_earlier) in stages {
+        if *may_hold_earlier {
+            continue;
+        }
+        for _ in 0..3 {
+            if fs::remove_dir_all(dir).is_ok() || fs::symlink_metadata(dir).is_err() {
+                break;
+            }
+        }
+    }
+}
 
 /// One output's staging folder, owned by this run: dropped, it is removed with everything in
 /// it (unless [`Stage::keep`] was called because it holds what must not be lost).
@@ -74,6 +114,7 @@ impl Stage {
         }
         token.write_all(token_text(&stage.hex).as_bytes())?;
         stage.lock = Some(token);
+        live().push((stage.hex.clone(), stage.dir.clone(), false));
         Ok(stage)
     }
 
@@ -91,6 +132,10 @@ impl Stage {
     /// recover this folder by manifest rather than remove it.
     pub fn mark_may_hold_earlier_output(&mut self) -> io::Result<()> {
         use std::io::Seek;
+        // First in the registry: from here a second signal leaves the folder to the sweep.
+        for (hex, _, may_hold_earlier) in live().iter_mut() {
+            *may_hold_earlier |= *hex == self.hex;
+        }
         let token = self.lock.as_mut().expect("a created stage holds its token");
         token.set_len(0)?;
         token.rewind()?;
@@ -108,6 +153,7 @@ impl Stage {
     /// back; the error that says so names it). Its token goes first, so that no later run
     /// takes it for a dead run's staging and sweeps it: it is the user's now.
     pub fn keep(&mut self) {
+        forget(&self.hex);
         let _ = fs::remove_file(self.dir.join(TOKEN));
         self.keep = true;
     }
@@ -120,6 +166,7 @@ impl Drop for Stage {
             // lock is free. `remove_dir_all` does not follow links.
             let _ = fs::remove_dir_all(&self.dir);
         }
+        forget(&self.hex);
         self.lock.take();
     }
 }
@@ -213,6 +260,47 @@ pub(super) fn random_hex() -> io::Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The registry follows each stage's life (made, swapping, kept, dropped), and what a
+    /// second signal removes is every stage but one that may hold an earlier output. (The
+    /// test removes from a list of its own: the registry is the whole process's, and other
+    /// tests' stages live in it meanwhile.)
+    #[test]
+    fn a_second_signal_removes_the_stages_that_hold_only_this_runs_output() {
+        let d = scratch("live");
+        let flag = |stage: &Stage| {
+            let found = live().iter().find(|(h, ..)| *h == stage.hex).map(|e| e.2);
+            found
+        };
+        let (plain, mut swapping) = (
+            Stage::create(&d, "a").unwrap(),
+            Stage::create(&d, "b").unwrap(),
+        );
+        fs::write(plain.dir().join("frame.exr"), b"ours").unwrap();
+        swapping.mark_may_hold_earlier_output().unwrap();
+        assert_eq!((flag(&plain), flag(&swapping)), (Some(false), Some(true)));
+        let mine: Vec<_> = (live().iter())
+            .filter(|(h, ..)| *h == plain.hex || *h == swapping.hex)
+            .cloned()
+            .collect();
+        remove_unswapped(&mine);
+        assert!(!plain.dir().exists(), "the run's own output goes");
+        assert!(
+            swapping.dir().join(TOKEN).is_file(),
+            "a swapping stage is the sweep's"
+        );
+        let mut kept = Stage::create(&d, "c").unwrap();
+        kept.keep();
+        assert_eq!(flag(&kept), None, "a kept stage is the user's");
+        let hex = plain.hex.clone();
+        drop(plain);
+        assert!(
+            live().iter().all(|(h, ..)| *h != hex),
+            "a dropped stage is forgotten"
+        );
+        drop((swapping, kept));
+        fs::remove_dir_all(&d).unwrap();
+    }
 
     fn scratch(name: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!("specchio-stage-{}-{name}", std::process::id()));

@@ -5,13 +5,19 @@
 //! had written, instead of the process dying with a hidden half-written folder on disk. A
 //! second signal ends the process at once, but only half a second or more after the first:
 //! `timeout` sends its SIGTERM to the process and then to its process group, and that second
-//! copy must not cut the clean stop short.
+//! copy must not cut the clean stop short. Before it ends, the process removes its staging
+//! folders (`output::remove_staging_folders`), on a thread of its own, since a signal handler may
+//! not touch the file system; a third signal ends it without waiting for that.
 
-use std::sync::atomic::{AtomicBool, AtomicI64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, AtomicI64, Ordering};
 
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 /// When the first signal came, in monotonic-clock milliseconds.
 static FIRST_MS: AtomicI64 = AtomicI64::new(0);
+/// Whether a second signal has asked the cleaning thread to end the process.
+static ENDING: AtomicBool = AtomicBool::new(false);
+/// The write end of the pipe that wakes the cleaning thread; -1 without one.
+static WAKE: AtomicI32 = AtomicI32::new(-1);
 
 /// Signals closer than this to the first are taken for copies of it.
 const REPEAT_MS: i64 = 500;
@@ -25,14 +31,48 @@ fn now_ms() -> i64 {
 }
 
 /// What a stopping signal does: the first one raises the flag; one that comes half a second
-/// or more after it ends the process. Runs in the signal handler: atomics, the clock and
-/// `_exit` only, all async-signal-safe.
+/// or more after it wakes the cleaning thread, which removes the staging folders and ends the
+/// process; one after that (or one with no such thread) ends it at once. Runs in the signal
+/// handler: atomics, the clock, `write` and `_exit` only, all async-signal-safe.
 fn on_signal(signal: libc::c_int) {
     if !INTERRUPTED.swap(true, Ordering::SeqCst) {
         FIRST_MS.store(now_ms(), Ordering::SeqCst);
     } else if now_ms() - FIRST_MS.load(Ordering::SeqCst) >= REPEAT_MS {
-        signal_hook::low_level::exit(128 + signal);
+        let wake = WAKE.load(Ordering::SeqCst);
+        if wake < 0 || ENDING.swap(true, Ordering::SeqCst) {
+            signal_hook::low_level::exit(128 + signal);
+        }
+        let byte = signal as u8;
+        // SAFETY: writes one byte from a live local to the pipe's write end, which stays open
+        // for the life of the process.
+        if unsafe { libc::write(wake, (&byte as *const u8).cast(), 1) } != 1 {
+            signal_hook::low_level::exit(128 + signal);
+        }
     }
+}
+
+/// The thread a second signal wakes: it removes this process's staging folders and ends it
+/// with the signal's status, as the handler would have without it.
+fn start_cleaner() -> std::io::Result<()> {
+    let mut ends = [0 as libc::c_int; 2];
+    // SAFETY: `pipe2` fills the two descriptors it is given.
+    if unsafe { libc::pipe2(ends.as_mut_ptr(), libc::O_CLOEXEC) } != 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    let [read_end, write_end] = ends;
+    std::thread::Builder::new()
+        .name("specchio-signals".into())
+        .spawn(move || {
+            let mut byte = 0u8;
+            // SAFETY: reads one byte into a live local from the pipe's read end, ours alone.
+            let n = unsafe { libc::read(read_end, (&mut byte as *mut u8).cast(), 1) };
+            if n == 1 {
+                crate::output::remove_staging_folders();
+                signal_hook::low_level::exit(128 + libc::c_int::from(byte));
+            }
+        })?;
+    WAKE.store(write_end, Ordering::SeqCst);
+    Ok(())
 }
 
 /// The signals whose default action would end the process with its staging folder on disk:
@@ -53,6 +93,11 @@ const STOPPING: [libc::c_int; 7] = [
 pub fn catch() {
     static INSTALLED: std::sync::Once = std::sync::Once::new();
     INSTALLED.call_once(|| {
+        if let Err(e) = start_cleaner() {
+            // A second signal then ends the process at once, its staging folders left to the
+            // next run's sweep.
+            crate::warnings::warn(&format!("cannot start the signal thread: {e}"));
+        }
         for signal in STOPPING {
             // SAFETY: `on_signal` is async-signal-safe (see there); none of these signals is
             // one signal-hook forbids (SIGKILL, SIGSTOP, the fault signals).
