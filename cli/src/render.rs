@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use anyhow::{bail, Result};
-use specchio::output::{Sink, Transaction};
+use specchio::output::{OutputError, Sink, Transaction};
 use specchio::process::progress::Progress;
 use specchio::render::lookups::{self, TraceIn, TraceOrder};
 use specchio::render::methods::Method;
@@ -345,9 +345,22 @@ fn render_frames(
         } else {
             dir.to_owned()
         };
-        write_frame(out, &frame_dir, &images)?;
-        if args.sensor_outputs {
-            write_sensor_outputs(out, &frame_dir, renderer, (frame_index, t), images)?;
+        let wrote =
+            write_frame(out, &frame_dir, &images).and_then(|()| match args.sensor_outputs {
+                true => write_sensor_outputs(out, &frame_dir, renderer, (frame_index, t), images),
+                false => Ok(()),
+            });
+        // A signal stops a frame's files between two (the transaction checks before each):
+        // said, as between two frames, by how many frames were done.
+        if let Err(e) = wrote {
+            let stop = |c: &(dyn std::error::Error + 'static)| {
+                matches!(c.downcast_ref(), Some(OutputError::Stopped { .. }))
+            };
+            if e.chain().any(stop) {
+                let done = format!("after {i} of {} frame(s)", args.frames);
+                return Err(specchio::process::interrupt::stopped(&done).into());
+            }
+            return Err(e);
         }
         reports.push(report);
         if let Some(p) = &progress {

@@ -337,3 +337,70 @@ fn the_id_map_names_every_id_of_the_layer() {
         [&serde_json::json!("object"), &serde_json::json!(3)]
     );
 }
+
+/// Ctrl-C while the sensor outputs are written stops the run at its next file: the files
+/// still to come (`camera.json` is the last) are not written first, and nothing is left. The
+/// outputs of a 2048² sensor take seconds to encode; a run used to write them all before it
+/// looked at the signal (52 s at 4096², found by an adversarial pass).
+#[test]
+fn a_stop_while_the_outputs_are_written_comes_before_the_next_file() {
+    let dir = temp_dir("outputs-stopped");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(root().join("scenes/thesis-room.toml")).unwrap();
+    let big = text.replace("resolution = [512, 512]", "resolution = [2048, 2048]");
+    assert_ne!(big, text, "the sensor's resolution line");
+    let scene = dir.join("big.toml");
+    std::fs::write(&scene, big).unwrap();
+    std::os::unix::fs::symlink(root().join("scenes/textures"), dir.join("textures")).unwrap();
+    let out = dir.join("out");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .arg("--sensor-outputs")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The staging folder's files, as the run writes them.
+    let staged = |file: &str| {
+        let folders = common::staging_folders(&out);
+        folders
+            .iter()
+            .any(|f| dir.join(f).join("out").join(file).exists())
+    };
+    let started = std::time::Instant::now();
+    while !staged("sensor.id.exr") {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "ended before its outputs"
+        );
+        assert!(
+            started.elapsed().as_secs() < 300,
+            "no sensor outputs after 300 s"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    // SAFETY: signals our own child process.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let mut last_written = false;
+    while child.try_wait().unwrap().is_none() {
+        last_written |= staged("camera.json");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let result = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("interrupted after 0 of 1 frame(s)"),
+        "{stderr}"
+    );
+    assert!(
+        !last_written,
+        "the outputs were all written before the stop"
+    );
+    assert!(!out.exists() && common::staging_folders(&out).is_empty());
+}

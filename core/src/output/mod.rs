@@ -117,6 +117,35 @@ pub enum OutputError {
     Twice { path: PathBuf },
     #[error("{path} is not among this command's outputs (a bug in the caller)")]
     NotStaged { path: PathBuf },
+    #[error("interrupted before {path} was written: nothing was written")]
+    Stopped { path: PathBuf },
+}
+
+/// The check a transaction makes before it encodes and before it writes each file: a process
+/// that catches stopping signals installs it (`process::interrupt::catch`), so that a run
+/// writing many large files (a 4096² sensor's outputs take half a minute) stops at its next
+/// file, not after the last.
+static STOP: std::sync::OnceLock<fn() -> bool> = std::sync::OnceLock::new();
+
+/// Makes every transaction stop at its next file once `stop` says so (set once a process).
+pub fn stop_between_files(stop: fn() -> bool) {
+    let _ = STOP.set(stop);
+}
+
+/// Whether the process was asked to stop ([`stop_between_files`]): for long work between
+/// files, a panorama's rows, say.
+pub fn stop_asked() -> bool {
+    STOP.get().is_some_and(|stop| stop())
+}
+
+/// An error for `path` once the process was asked to stop.
+pub(crate) fn check_stop(path: &Path) -> Result<(), OutputError> {
+    match stop_asked() {
+        true => Err(OutputError::Stopped {
+            path: path.to_owned(),
+        }),
+        false => Ok(()),
+    }
 }
 
 /// What appeared in an earlier output while it was replaced, in words.
@@ -161,7 +190,12 @@ pub(crate) fn png_error(path: &Path, e: png::EncodingError) -> OutputError {
 }
 
 impl Sink for Transaction {
+    fn ready(&self, path: &Path) -> Result<(), OutputError> {
+        check_stop(path)
+    }
+
     fn write_bytes(&self, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+        check_stop(path)?;
         let mut file = self.create(path)?;
         file.write_all(bytes)
             .and_then(|()| file.flush())

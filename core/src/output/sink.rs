@@ -21,17 +21,25 @@ pub trait Sink {
     /// Bytes as they are (CSV, SVG, an encoded image, ...) at `path`.
     fn write_bytes(&self, path: &Path, bytes: &[u8]) -> Result<(), OutputError>;
 
+    /// Asked before a file is encoded: an error stops the writer there (a transaction's, once
+    /// the process was asked to stop: `output::stop_between_files`).
+    fn ready(&self, _path: &Path) -> Result<(), OutputError> {
+        Ok(())
+    }
+
     /// Linear RGBA, 32-bit float, as OpenEXR.
     fn write_exr(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
-        let mut bytes = std::io::Cursor::new(Vec::new());
-        exr::encode_rgba(&mut bytes, image).map_err(|e| exr_error(path, e))?;
+        self.ready(path)?;
+        let mut bytes = Stoppable::new();
+        exr::encode_rgba(&mut bytes, image).map_err(|e| encode_failed(path, e, exr_error))?;
         self.write_bytes(path, bytes.get_ref())
     }
 
     /// [`Self::write_exr`] in half floats ([`exr::encode_rgba_half`]).
     fn write_exr_half(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
-        let mut bytes = std::io::Cursor::new(Vec::new());
-        exr::encode_rgba_half(&mut bytes, image).map_err(|e| exr_error(path, e))?;
+        self.ready(path)?;
+        let mut bytes = Stoppable::new();
+        exr::encode_rgba_half(&mut bytes, image).map_err(|e| encode_failed(path, e, exr_error))?;
         self.write_bytes(path, bytes.get_ref())
     }
 
@@ -43,13 +51,16 @@ pub trait Sink {
         size: (u32, u32),
         channels: Vec<(&str, Samples)>,
     ) -> Result<(), OutputError> {
-        let mut bytes = std::io::Cursor::new(Vec::new());
-        exr::encode_channels(&mut bytes, size, channels).map_err(|e| exr_error(path, e))?;
+        self.ready(path)?;
+        let mut bytes = Stoppable::new();
+        exr::encode_channels(&mut bytes, size, channels)
+            .map_err(|e| encode_failed(path, e, exr_error))?;
         self.write_bytes(path, bytes.get_ref())
     }
 
     /// An 8-bit sRGB RGB preview of a linear image.
     fn write_png(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
+        self.ready(path)?;
         self.write_png_rgb8(path, image.width, image.height, &png::srgb8_rgb(image))
     }
 
@@ -62,9 +73,11 @@ pub trait Sink {
         height: u32,
         rgb8: &[u8],
     ) -> Result<(), OutputError> {
-        let mut bytes = Vec::new();
-        png::encode_rgb8(&mut bytes, width, height, rgb8).map_err(|e| png_error(path, e))?;
-        self.write_bytes(path, &bytes)
+        self.ready(path)?;
+        let mut bytes = Stoppable::new();
+        png::encode_rgb8(&mut bytes, width, height, rgb8)
+            .map_err(|e| encode_failed(path, e, png_error))?;
+        self.write_bytes(path, bytes.get_ref())
     }
 
     /// JSON of any serialisable record, pretty-printed, with a final newline.
@@ -78,6 +91,52 @@ pub trait Sink {
     {
         let text = json_text(path, value)?;
         self.write_bytes(path, text.as_bytes())
+    }
+}
+
+/// An encoder's bytes in memory, refused from the moment the process is asked to stop
+/// (`output::stop_between_files`): the encoders write as they go, so a large image (a 4096²
+/// ray map takes seconds) stops at its next block of lines, not after its last.
+struct Stoppable(std::io::Cursor<Vec<u8>>);
+
+impl Stoppable {
+    fn new() -> Self {
+        Self(std::io::Cursor::new(Vec::new()))
+    }
+
+    fn get_ref(&self) -> &[u8] {
+        self.0.get_ref()
+    }
+}
+
+impl std::io::Write for Stoppable {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if super::stop_asked() {
+            // Not `ErrorKind::Interrupted`, which `write_all` retries for ever.
+            return Err(std::io::Error::other("stopped"));
+        }
+        self.0.write(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl std::io::Seek for Stoppable {
+    fn seek(&mut self, to: std::io::SeekFrom) -> std::io::Result<u64> {
+        self.0.seek(to)
+    }
+}
+
+/// An encoder's error for `path`: a stop where the process was asked to stop (the encoder
+/// failed at [`Stoppable`]'s refusal), else the encoder's own (`as_error`).
+fn encode_failed<E>(path: &Path, e: E, as_error: fn(&Path, E) -> OutputError) -> OutputError {
+    match super::stop_asked() {
+        true => OutputError::Stopped {
+            path: path.to_owned(),
+        },
+        false => as_error(path, e),
     }
 }
 
@@ -122,6 +181,10 @@ impl MemoryFiles {
 }
 
 impl Sink for MemoryFiles {
+    fn ready(&self, path: &Path) -> Result<(), OutputError> {
+        super::check_stop(path)
+    }
+
     fn write_bytes(&self, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         let relative = path
             .strip_prefix(&self.root)

@@ -4,6 +4,7 @@
 
 use std::borrow::Cow;
 use std::path::Path;
+use std::sync::OnceLock;
 
 use glam::{Mat3, Quat, Vec3};
 use serde::Serialize;
@@ -14,7 +15,7 @@ pub use super::id_map::{IdMap, NO_ID};
 use super::imaging::{self, CameraImage};
 use super::layers::{self, Entries, Layers};
 use super::optics::SensorOptics;
-use super::panorama::{PanoramaKind, PanoramaLayout};
+use super::panorama::{mirror_mask, PanoramaKind, PanoramaLayout};
 use super::quantities::{PixelHit, Quantity, QuantityImages, DIRECTION_ID, ORIGIN_RANGE};
 use super::ray_map::{PixelRay, RayMap};
 use crate::image::RgbaImage;
@@ -26,6 +27,15 @@ use crate::scene::Scene;
 pub use super::layers::{
     CAMERA_FILE, ID_FILE, ID_MAP_FILE, RANGE16_FILE, RANGE_FILE, RAYS_FILE, RAY_CHANNELS,
 };
+
+/// A panorama a frame writes, not made yet ([`SensorOutputs::panorama_plans`]): its name
+/// (`sensor.panorama.KIND`, `cube.panorama.KIND`), its layout, and where it is read from.
+pub struct PanoramaPlan {
+    pub name: String,
+    pub layout: PanoramaLayout,
+    /// Looked up in the cube map, else unwrapped from the sensor image.
+    from_cube: bool,
+}
 
 /// One frame's sensor outputs.
 #[derive(Debug, Clone)]
@@ -223,18 +233,47 @@ impl SensorOutputs {
 
     /// The panoramas from the sensor image, and from the cube where there is one.
     pub fn panoramas(&self) -> Vec<(String, PanoramaLayout, RgbaImage)> {
+        let mirror = OnceLock::new();
+        (self.panorama_plans().into_iter())
+            .map(|p| {
+                let image = self.panorama(&p, &mirror);
+                (p.name, p.layout, image)
+            })
+            .collect()
+    }
+
+    /// The panoramas this frame has, not made yet: a writer makes each where it writes it
+    /// ([`Self::panorama`]), so that a stop between two comes before the next one's work.
+    pub fn panorama_plans(&self) -> Vec<PanoramaPlan> {
         let mut all = Vec::new();
         for kind in PanoramaKind::ALL {
             let layout = PanoramaLayout::for_sensor(&self.optics, kind);
             let layout = layout.with_seam(self.panorama_seam_rad);
-            let name = format!("sensor.panorama.{}", kind.name());
-            all.push((name, layout, layout.unwrap(&self.optics, &self.image)));
-            if let Some(faces) = &self.cube {
-                let name = format!("cube.panorama.{}", kind.name());
-                all.push((name, layout, layout.from_cube(faces)));
+            all.push(PanoramaPlan {
+                name: format!("sensor.panorama.{}", kind.name()),
+                layout,
+                from_cube: false,
+            });
+            if self.cube.is_some() {
+                all.push(PanoramaPlan {
+                    name: format!("cube.panorama.{}", kind.name()),
+                    layout,
+                    from_cube: true,
+                });
             }
         }
         all
+    }
+
+    /// `plan`'s panorama; `mirror` keeps the sensor image's mirror mask once one made it.
+    pub fn panorama(&self, plan: &PanoramaPlan, mirror: &OnceLock<Vec<bool>>) -> RgbaImage {
+        match (&self.cube, plan.from_cube) {
+            (Some(faces), true) => plan.layout.from_cube(faces),
+            _ => {
+                let mask = mirror.get_or_init(|| mirror_mask(&self.optics, &self.image));
+                plan.layout.unwrap_within(&self.optics, &self.image, mask)
+            }
+        }
     }
 
     /// Writes the outputs of a single render into `dir` (staged in `out`): the layers of

@@ -214,10 +214,17 @@ impl PanoramaLayout {
     /// interpolated: at the rim a bilinear tap falls beside the mirror, on the camera's direct
     /// view of the room, which mixed into the top row colours up to 14 degrees away.
     pub fn unwrap(&self, optics: &SensorOptics, image: &RgbaImage) -> RgbaImage {
-        let mirror: Vec<bool> = (0..image.height)
-            .flat_map(|y| (0..image.width).map(move |x| (x, y)))
-            .map(|(x, y)| optics.shows_mirror(Vec2::new(x as f32 + 0.5, y as f32 + 0.5)))
-            .collect();
+        self.unwrap_within(optics, image, &mirror_mask(optics, image))
+    }
+
+    /// [`Self::unwrap`] with the image's [`mirror_mask`] made already (every panorama of one
+    /// image shares it: at 4096² it is 16 M pixels to decide).
+    pub fn unwrap_within(
+        &self,
+        optics: &SensorOptics,
+        image: &RgbaImage,
+        mirror: &[bool],
+    ) -> RgbaImage {
         // A row is one elevation, so the camera-ray angle that sees it (a bisection) is found
         // once per row, not once per pixel: it was most of the localisation sweep's time.
         let thetas: Vec<Option<f64>> = (0..self.height)
@@ -225,7 +232,7 @@ impl PanoramaLayout {
             .collect();
         self.fill(
             |i, _, a| match thetas[i as usize].and_then(|theta| optics.pixel_at(theta, a)) {
-                Some(p) => bilinear_within(image, p, &mirror),
+                Some(p) => bilinear_within(image, p, mirror),
                 None => [0.0; 4],
             },
         )
@@ -236,6 +243,19 @@ impl PanoramaLayout {
     pub fn from_cube(&self, faces: &[RgbaImage]) -> RgbaImage {
         self.fill(|_, e, a| sample_cube(faces, direction(e, a)))
     }
+}
+
+/// Per pixel of `image` (the sensor's), whether it shows the mirror: the pixels a panorama's
+/// taps may read. Rows in parallel.
+pub fn mirror_mask(optics: &SensorOptics, image: &RgbaImage) -> Vec<bool> {
+    use rayon::prelude::*;
+    (0..image.height)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            let centre = move |x: u32| Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            (0..image.width).map(move |x| optics.shows_mirror(centre(x)))
+        })
+        .collect()
 }
 
 /// The elevations (top, bottom) the cylindrical panorama spans, of the band [`lowest`, `top`]

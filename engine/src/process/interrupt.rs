@@ -93,6 +93,7 @@ const STOPPING: [libc::c_int; 7] = [
 pub fn catch() {
     static INSTALLED: std::sync::Once = std::sync::Once::new();
     INSTALLED.call_once(|| {
+        crate::output::stop_between_files(|| INTERRUPTED.load(Ordering::SeqCst));
         if let Err(e) = start_cleaner() {
             // A second signal then ends the process at once, its staging folders left to the
             // next run's sweep.

@@ -59,16 +59,21 @@ impl SensorLayer for Panoramas {
     /// Each panorama is unwrapped and encoded beside the others.
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {
         use rayon::prelude::*;
-        let records: Vec<PanoramaRecord> = (w.frame.panoramas().into_par_iter())
-            .map(|(name, layout, image)| {
+        // Made where it is written, after the writer's check: a stop between two panoramas
+        // comes before the next one's unwrap (seconds at 4096²).
+        let mirror = std::sync::OnceLock::new();
+        let records: Vec<PanoramaRecord> = (w.frame.panorama_plans().into_par_iter())
+            .map(|plan| {
+                let (name, exr) = (&plan.name, dir.join(format!("{}.exr", plan.name)));
+                w.out.ready(&exr)?;
+                let image = w.frame.panorama(&plan, &mirror);
                 // Half floats (11 significant bits): a panorama is a resampled view of the
                 // image, which `sensor.exr` keeps in f32 (the GPU renders it in half floats
                 // anyway, the reference in f32); half the bytes (docs/sensor.md). The
                 // renderer's linear values stay far below half's 65504.
-                w.out
-                    .write_exr_half(&dir.join(format!("{name}.exr")), &image)?;
+                w.out.write_exr_half(&exr, &image)?;
                 w.out.write_png(&dir.join(format!("{name}.png")), &image)?;
-                Ok(PanoramaRecord::new(format!("{name}.exr"), &layout))
+                Ok(PanoramaRecord::new(format!("{name}.exr"), &plan.layout))
             })
             .collect::<Result<_, OutputError>>()?;
         Ok(Told {

@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 
 use super::lookups;
 use crate::files::digest::{self, Digest};
+use crate::output::OutputError;
 use crate::scene::{Lookup, RefreshPolicy, Scene};
 use crate::sensor::bag::Omni;
 use crate::sensor::central::{FitError, Watch};
@@ -400,8 +401,18 @@ pub fn write_frames(
 ) -> Result<(), DatasetError> {
     let todo = folder.todo();
     let poses = todo.iter().map(|&i| (i, &plan.poses[i]));
-    frames.frames(poses, between, &mut |frame| {
+    let wrote = frames.frames(poses, between, &mut |frame| {
         folder.place(&frame)?;
         written(folder.done())
-    })
+    });
+    match wrote {
+        // A signal stopped a frame's files where they are encoded or placed (a transaction
+        // checks before each file): said as the caller says a stop between two frames.
+        Err(DatasetError::Output(OutputError::Stopped { .. })) => {
+            let next = folder.todo().first().copied().unwrap_or(plan.poses.len());
+            between(next)?;
+            Err(DatasetError::Stopped(format!("before frame {next}")))
+        }
+        wrote => wrote,
+    }
 }
