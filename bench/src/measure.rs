@@ -187,9 +187,12 @@ fn rounds(settled: &Settled, scenes: &[Scene], work: &Work, plan: &Plan) -> u64 
         .sum()
 }
 
-/// The progress bar, and where a signal stops the run: each round checks.
+/// The progress bar (a terminal's), the estimate said on any stderr past the first seconds
+/// (the bar alone left a log or a pipe silent for minutes), and where a signal stops the run:
+/// each round checks.
 struct Progress {
     bar: indicatif::ProgressBar,
+    estimate: specchio::process::progress::Progress,
     total: u64,
 }
 
@@ -200,12 +203,19 @@ impl Progress {
             indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rounds, {elapsed} {msg}")
                 .expect("a valid template"),
         );
-        Self { bar, total }
+        let estimate = specchio::process::progress::Progress::new("bench", total, "rounds");
+        Self {
+            bar,
+            estimate,
+            total,
+        }
     }
 
     /// One round done; an error once Ctrl-C or SIGTERM came (nothing is written then).
     fn tick(&self) -> Result<()> {
         self.bar.inc(1);
+        // Its rare line (every 30 s) may cross the bar in a terminal; the bar redraws next round.
+        self.estimate.add(1);
         let progress = format!("after {} of {} rounds", self.bar.position(), self.total);
         Ok(interrupt::check(&progress)?)
     }

@@ -427,6 +427,41 @@ fn an_interrupted_bench_writes_nothing() {
     }
 }
 
+/// A long benchmark says its estimate on any stderr, not only in a terminal's bar: it was
+/// silent for minutes in a log (27 s at 4096² faces before its first line). Ctrl-C after it
+/// stops the run.
+#[test]
+fn a_long_bench_says_its_estimate() {
+    let dir = common::temp_dir("bench-estimate");
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("b.json");
+    let scene = common::root().join("scenes/test/six-colour-room.toml");
+    let (scene, json) = (scene.to_str().unwrap(), json.to_str().unwrap());
+    let args = [
+        "bench",
+        scene,
+        "--quick",
+        "--no-accuracy",
+        "--no-floors",
+        "--no-dynamic",
+    ];
+    let long = [
+        "--no-tradeoff",
+        "--methods",
+        "six-pass",
+        "--frames",
+        "100000",
+    ];
+    let all = [&args[..], &long, &["--json", json]].concat();
+    let (result, said, line) = common::interrupted_after_estimate(&all, "bench: ");
+    assert_eq!(result.status.code(), Some(1), "{said}");
+    assert!(
+        line.contains(" of ") && line.contains(" rounds in ") && line.contains("left; Ctrl-C"),
+        "{line}"
+    );
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "{said}");
+}
+
 /// Long work is never silent and stops cleanly: a reference sensor of 4096² pixels at 64 spp
 /// (a billion paths: a minute here), or one of 256² whose exposure traces it again at 1,024
 /// instants (minutes: it used to run them silent and deaf to Ctrl-C), says, once its first
