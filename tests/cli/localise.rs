@@ -322,13 +322,14 @@ fn the_floor_map_has_one_marker_per_query() {
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert!(result.status.success(), "{stderr}");
     // Each long part says its estimate (at once, under ESTIMATE_AT_ONCE): the landmarks' 8
-    // images, the 6 queries' images, the matching of the 6 queries.
-    for total in [8, 6] {
+    // images, the 6 queries' images, the two parts' 14 together, the matching of the 6.
+    for (part, total) in [("", 8), ("", 6), ("the whole run, 2 parts: ", 14)] {
         let said = format!(" of {total} images in ");
+        let start = format!("localise: {part}");
         assert!(
             stderr
                 .lines()
-                .any(|l| l.starts_with("localise: ") && l.contains(&said)),
+                .any(|l| l.starts_with(&start) && l.contains(&said)),
             "no estimate of {total} images:\n{stderr}"
         );
     }

@@ -21,6 +21,7 @@ use anyhow::{bail, Context, Result};
 use glam::Vec3;
 use specchio::files::{read_regular_file, MAX_SCENE_BYTES};
 use specchio::output::{Sink, Transaction};
+use specchio::process::progress::Progress;
 use specchio::render::lookups;
 use specchio::render::methods::Method;
 use specchio::render::RenderOptions;
@@ -195,9 +196,15 @@ pub fn localise(args: &Args, stop: Stop) -> Result<(Report, Vec<String>)> {
 
     // 3. Each source's landmarks (swept, or loaded) and queries.
     let mut images = Vec::with_capacity(plan.sources.len());
+    let whole = source::whole_run(&plan);
     for &source in &plan.sources {
         let mut robot = Robot::new(&plan.body, source, device.as_ref(), &options)?;
-        images.push(describe_all(&plan, source, &mut robot, stop)?);
+        images.push(describe_all(
+            &plan,
+            source,
+            &mut robot,
+            (stop, whole.as_ref()),
+        )?);
     }
     let device_name = device.as_ref().map(|d| d.info.name.clone());
     drop(device);
@@ -383,7 +390,12 @@ fn open_device(args: &Args, used: &[Lookup]) -> Result<(Arc<Device>, Arc<Validat
 
 /// Step 3 for one source: its landmarks (loaded when `--landmarks` holds its source, else
 /// swept and timed) and its queries at every time.
-fn describe_all(plan: &Plan, source: Source, robot: &mut Robot, stop: Stop) -> Result<Images> {
+fn describe_all(
+    plan: &Plan,
+    source: Source,
+    robot: &mut Robot,
+    (stop, whole): (Stop, Option<&Progress>),
+) -> Result<Images> {
     let d = plan.descriptor.as_ref();
     let saved = plan.saved.as_ref().filter(|db| db.source == source.name());
     let (landmarks, sweep_seconds) = match saved {
@@ -395,7 +407,7 @@ fn describe_all(plan: &Plan, source: Source, robot: &mut Robot, stop: Stop) -> R
             let poses: Vec<Pose> = plan.landmark_poses.iter().map(|&p| (p, 0.0)).collect();
             let start = Instant::now();
             let what = format!("{} landmarks", source.name());
-            let landmarks = robot.describe(&poses, 0.0, d, (&what, stop))?;
+            let landmarks = robot.describe(&poses, 0.0, d, (&what, stop, whole))?;
             (landmarks, Some(start.elapsed().as_secs_f64()))
         }
     };
@@ -406,7 +418,7 @@ fn describe_all(plan: &Plan, source: Source, robot: &mut Robot, stop: Stop) -> R
             source.name(),
             specchio::text::num_text(t)
         );
-        queries.push(robot.describe(poses, t, d, (&what, stop))?);
+        queries.push(robot.describe(poses, t, d, (&what, stop, whole))?);
     }
     Ok(Images {
         source,

@@ -115,13 +115,14 @@ impl<'a> Robot<'a> {
     }
 
     /// The descriptor of the image at every pose, at scene time `t_s`; `what` names the
-    /// poses in the progress lines and to `stop`, asked before each image.
+    /// poses in the progress lines and to `stop`, asked before each image; `whole` counts the
+    /// run's images over all its parts ([`whole_run`]).
     pub fn describe(
         &mut self,
         poses: &[Pose],
         t_s: f64,
         descriptor: &dyn Descriptor,
-        (what, stop): (&str, super::Stop),
+        (what, stop, whole): (&str, super::Stop, Option<&Progress>),
     ) -> Result<Vec<Signature>> {
         // Said first, so that a long loop is never silent; the bar (on a terminal only)
         // counts its images.
@@ -137,6 +138,7 @@ impl<'a> Robot<'a> {
             bar.set_position(i as u64);
             if i > 0 {
                 progress.add(1);
+                whole.inspect(|w| w.add(1));
             }
             stop(&format!("after {i} of {} {what}", poses.len()))
         };
@@ -183,8 +185,32 @@ impl<'a> Robot<'a> {
             }
         }
         bar.finish_and_clear();
+        // The part's last image (`check` counts each before the next).
+        if !poses.is_empty() {
+            whole.inspect(|w| w.add(1));
+        }
         Ok(out)
     }
+}
+
+/// The whole run's images, counted over its parts (each source's landmarks, swept unless
+/// `--landmarks` holds them, and its queries at each time), where there is more than one
+/// part: each part says its own estimate, and this one says the run's, at the rate so far
+/// (rough where sources differ in speed: the reference is the slowest).
+pub(super) fn whole_run(plan: &super::Plan) -> Option<Progress> {
+    let swept = |s: Source| (plan.saved.as_ref()).is_none_or(|db| db.source != s.name());
+    let queries: usize = plan.queries.iter().map(Vec::len).sum();
+    let landmarks = plan.landmark_poses.len();
+    let parts: usize = (plan.sources.iter())
+        .map(|&s| usize::from(swept(s)) + plan.times.len())
+        .sum();
+    let images: usize = (plan.sources.iter())
+        .map(|&s| queries + if swept(s) { landmarks } else { 0 })
+        .sum();
+    (parts > 1).then(|| {
+        let what = format!("localise: the whole run, {parts} parts");
+        Progress::new(what, images as u64, "images")
+    })
 }
 
 /// One sensor image from the GPU renderer with the robot at `pose`.
