@@ -143,9 +143,21 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let device = probe::device_for(&instance, args.device.as_deref(), &methods, features)?;
     drop(instance);
 
-    // 3. Frames, per method (`--method all`: each into DIR/<method>/).
+    // 3. Frames, per method (`--method all`: each into DIR/<method>/), each method's frames
+    //    said as they go and, with several methods, the whole run's too.
+    let whole = (methods.len() > 1).then(|| {
+        let what = format!("render {}: {} methods", args.out.display(), methods.len());
+        Progress::new(
+            what,
+            methods.len() as u64 * u64::from(args.frames),
+            "frames",
+        )
+    });
     let runs = (methods.iter())
-        .map(|&method| render_method(args, (&device, lookup), &scene, method, start_s, &out))
+        .map(|&method| {
+            let at = (start_s, whole.as_ref());
+            render_method(args, (&device, lookup), &scene, method, at, &out)
+        })
         .collect::<Result<Vec<_>>>()?;
 
     // 4. The record, once the device is gone (the layer's leak report comes then).
@@ -173,7 +185,7 @@ fn render_method(
     (device, lookup): (&Arc<Device>, Lookup),
     scene: &Scene,
     method: Method,
-    start_s: f64,
+    (start_s, whole): (f64, Option<&Progress>),
     out: &Transaction,
 ) -> Result<RenderRun> {
     let dir = if args.method_name() == "all" {
@@ -202,7 +214,7 @@ fn render_method(
     ) {
         specchio::say_err!("warning: sensor outputs ({lookup} lookup): {warning}");
     }
-    let reports = render_frames(args, &mut renderer, start_s, out, &dir)?;
+    let reports = render_frames(args, &mut renderer, (start_s, whole), out, &dir)?;
     let summary = summarize(&reports);
     let lookup = renderer.scene.mirror.lookup;
     // Said from the folder; a listing that fails costs the line, never the render.
@@ -309,7 +321,7 @@ fn pick_methods(arg: &str, info: &DeviceInfo) -> Result<MethodChoice> {
 fn render_frames(
     args: &Args,
     renderer: &mut Renderer,
-    start_s: f64,
+    (start_s, whole): (f64, Option<&Progress>),
     out: &Transaction,
     dir: &Path,
 ) -> Result<Vec<FrameReport>> {
@@ -366,6 +378,7 @@ fn render_frames(
         if let Some(p) = &progress {
             p.inc(1);
         }
+        whole.inspect(|w| w.add(1));
     }
     if let Some(p) = progress {
         p.finish_and_clear();

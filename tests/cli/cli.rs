@@ -318,6 +318,28 @@ fn method_all_writes_each_usable_method_and_explains_the_others() {
         .iter()
         .all(|s| !s["reason"].as_str().unwrap().is_empty()));
     std::fs::remove_dir_all(&out).unwrap();
+    // The whole run is said as well as each method's frames: said at once here.
+    let out = temp_dir("all-estimate");
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let (scene, o) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    let args = [
+        "render",
+        scene,
+        "--out",
+        o,
+        "--cube-size",
+        "8",
+        "--method",
+        "all",
+    ];
+    let result = common::specchio_with(
+        &[&args[..], &["--frames", "2"]].concat(),
+        &[common::ESTIMATE_AT_ONCE],
+    );
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{stderr}");
+    let what = format!("render {o}: {} methods", ran.len());
+    common::estimate_line(&stderr, &what, 2 * ran.len() as u64, "frames");
 }
 
 #[test]
