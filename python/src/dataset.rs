@@ -264,9 +264,16 @@ fn render(
         let key = plan.run_key(lookup, truth, &writer::device_key(&dev.info));
         folder.resume(&key, &mut plan.index_lines())?;
     }
+    // Without a callback of the caller's, the estimate the command says, on stderr.
+    let todo = (n - folder.done()) as u64;
+    let what = || format!("dataset {}", job.out.display());
     let hooks = Hooks {
         stopped,
         progress: job.progress,
+        estimate: job
+            .progress
+            .is_none()
+            .then(|| progress::Progress::new(what(), todo, "frames")),
         n,
         nothing: if job.resume {
             ""
@@ -305,11 +312,14 @@ fn open_device(
 }
 
 /// Before each frame, Python's signals (Ctrl-C); after each frame written but the last
-/// (which the caller hears of once the folder is placed), the caller's progress. What
-/// Python raised is kept in `stopped`.
+/// (which the caller hears of once the folder is placed), the caller's progress, or without
+/// one the estimate on stderr. What Python raised is kept in `stopped`.
 struct Hooks<'a> {
     stopped: &'a Mutex<Option<PyErr>>,
     progress: Option<&'a Py<PyAny>>,
+    /// Where the caller gave no `progress`: the run's estimate, said on stderr past its first
+    /// 1.5 s as `specchio dataset` says it (a long run was silent).
+    estimate: Option<progress::Progress>,
     /// The frames in all.
     n: usize,
     /// The end of a stop's message: `": nothing was written"` unless the run is resumable.
@@ -334,6 +344,7 @@ impl Hooks<'_> {
     /// After `done` frames: the caller's progress, but after the last.
     fn written(&self, done: usize) -> Result<(), DatasetError> {
         let (n, nothing) = (self.n, self.nothing);
+        self.estimate.as_ref().inspect(|e| e.add(1));
         match (self.progress, done < n) {
             (Some(f), true) => Python::attach(|py| f.call1(py, (done, n)).map(drop)).map_err(|e| {
                 self.keep(e);

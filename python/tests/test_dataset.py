@@ -41,6 +41,21 @@ def test_python_writes_what_the_command_writes(made, monkeypatch):
     assert record["frames"] == 5
 
 
+def test_without_a_progress_callback_it_says_its_estimate(made):
+    """A long dataset is not silent in Python either: without `progress=` it says on stderr
+    what `specchio dataset` says (here at once, as the tests ask)."""
+    import sys
+    work, scene = made
+    script = "import sys, specchio; specchio.dataset(sys.argv[1], 'robot.csv', 'said')"
+    env = {**os.environ, "SPECCHIO_ESTIMATE_AFTER_S": "0"}
+    run = subprocess.run([sys.executable, "-c", script, scene], cwd=work, env=env,
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    lines = [l for l in run.stderr.splitlines() if l.startswith("dataset said: ")]
+    assert lines and " of 5 frames in " in lines[0] and " left" in lines[0], run.stderr
+    assert tree(work / "said") == tree(work / "cli")
+
+
 def test_the_world_frame_is_asked_for_alike_in_python_and_the_command(made, monkeypatch):
     """Panoramas are in the robot's frame unless the scene's is asked for; only they and
     their records differ, and Python asks for it as the command does."""
