@@ -27,7 +27,8 @@ pub(crate) fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
 }
 
 /// Refuses an option that would change nothing here, rather than take it without a word (and
-/// record it in render.json as if it had): the cube's options with a lookup that fills none,
+/// record it in render.json as if it had): the fill's options with a lookup that fills no cube
+/// (not `--cube-size`: the cube is made, and budgeted, for every lookup, so it sizes memory),
 /// the update options under a refresh policy that re-renders every face whole anyway, the
 /// walks' and builds' options with another lookup, --fps for a single frame at a --time.
 pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Result<()> {
@@ -41,7 +42,6 @@ pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Resul
     }
     let cube = [
         ("--method", args.method.is_some()),
-        ("--cube-size", args.cube_size.is_some()),
         ("--full-updates", args.full_updates),
         ("--whole-faces", args.whole_faces),
     ];

@@ -67,6 +67,8 @@ layout(set = 1, binding = BVH_BINDING + 3, std430) readonly buffer WallBlock {
 const float BVH_INFINITY = 1.0 / 0.0;
 // f32::EPSILON: a direction component this close to 0 gets the reciprocal 1/EPSILON.
 const float BVH_EPSILON = 1.1920929e-7;
+// model_ray's least gap before the ball (core/src/reference/intersect.rs MODEL_RAY_GAP).
+const float MODEL_RAY_GAP = 1.0 / float(1u << MODEL_RAY_GAP_EXPONENT);
 
 // The reciprocal direction the box tests use: obvhs's safe inverse (bvh::safe_inverse),
 // finite for every direction, its sign from the component's sign bit (-0 gives -1/EPSILON).
@@ -244,10 +246,10 @@ vec4 render_t(ModelRay m, vec4 s) {
 // says why: a ray from far away carries coordinates far larger than the object's own (a box
 // 1e-8 m thick seen from 2 m is 2e8 of its units away, where a float steps by 16, and its two
 // faces were met at one t). A ray that starts outside twice the ball holding the mesh is
-// moved along itself to before the ball, less sixteen float steps of where it started, up to
-// MODEL_RAY_MOVES times, its direction made unit: its hits are then as exact as the object's
-// own coordinates. A ray that leaves the object's surface starts inside the ball and is
-// never moved.
+// moved along itself to before the ball, less a gap (sixteen float steps of where it started,
+// at least MODEL_RAY_GAP), up to MODEL_RAY_MOVES times, its direction made unit: its hits
+// are then as exact as the object's own coordinates. A ray that leaves the object's surface
+// starts inside the ball and is never moved.
 ModelRay model_ray(BvhInstance inst, vec3 o, vec3 d) {
     vec3 mo, md;
     object_ray(inst, o, d, mo, md);
@@ -261,7 +263,8 @@ ModelRay model_ray(BvhInstance inst, vec3 o, vec3 d) {
         if (!(far > 4.0 * radius * radius)) {
             break;
         }
-        precise float step = -dot(p, u) - radius - sqrt(far) * (16.0 * BVH_EPSILON);
+        precise float gap = max(sqrt(far) * (16.0 * BVH_EPSILON), MODEL_RAY_GAP);
+        precise float step = -dot(p, u) - radius - gap;
         // Not ahead (the ray misses the ball), or overflowing products (NaN, infinity).
         if (!(step > 0.0 && step < BVH_INFINITY)) {
             break;

@@ -375,10 +375,9 @@ fn extreme_errors_print_readably() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A comparison of two 2048² images (seconds of FLIP) with a heatmap, started: the child and
-/// the heatmap's path.
-fn long_comparison(dir: &Path) -> (std::process::Child, PathBuf) {
-    let side = 2048;
+/// A comparison of two `side`² images (2048²: seconds of FLIP) with a heatmap, started: the
+/// child and the heatmap's path.
+fn long_comparison(dir: &Path, side: u32) -> (std::process::Child, PathBuf) {
     let big = |offset: f32| RgbaImage {
         width: side,
         height: side,
@@ -407,7 +406,7 @@ fn long_comparison(dir: &Path) -> (std::process::Child, PathBuf) {
 #[test]
 fn a_stopped_comparison_leaves_nothing() {
     let dir = temp_dir("stopped");
-    let (child, heatmap) = long_comparison(&dir);
+    let (child, heatmap) = long_comparison(&dir, 2048);
     // Once the heatmap is staged the comparison is under way, and the signal is caught.
     let staged = || !common::staging_folders(&heatmap).is_empty();
     let out = common::signal_when(child, libc::SIGINT, "the staged heatmap", staged);
@@ -428,7 +427,9 @@ fn a_stopped_comparison_leaves_nothing() {
 #[test]
 fn a_second_ctrl_c_ends_the_run_at_once_and_leaves_nothing() {
     let dir = temp_dir("stopped-twice");
-    let (mut child, heatmap) = long_comparison(&dir);
+    // 3072²: FLIP alone takes several seconds on this 2-core machine, far beyond the second
+    // signal's 0.7 s on a machine several times faster.
+    let (mut child, heatmap) = long_comparison(&dir, 3072);
     let started = std::time::Instant::now();
     while common::staging_folders(&heatmap).is_empty() {
         assert!(child.try_wait().unwrap().is_none(), "ended before staging");

@@ -272,10 +272,6 @@ fn options_that_would_change_nothing_are_refused() {
             "--secant-steps: only the distance lookups and a cube lookup's sensor outputs",
         ),
         (
-            vec!["render", thesis, "--out", out_s, "--lookup", "bvh"],
-            "--cube-size: the bvh lookup samples no cube map, so none is filled",
-        ),
-        (
             vec!["render", thesis, "--out", out_s, "--lookup", "box", "--trace-order", "given"],
             "--trace-order: only the ray-query and distance-exact lookups build acceleration \
              structures, and this run's lookup is box",

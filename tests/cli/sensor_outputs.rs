@@ -338,10 +338,10 @@ fn the_id_map_names_every_id_of_the_layer() {
     );
 }
 
-/// Ctrl-C while the sensor outputs are written stops the run at its next file: the files
-/// still to come (`camera.json` is the last) are not written first, and nothing is left. The
-/// outputs of a 2048² sensor take seconds to encode; a run used to write them all before it
-/// looked at the signal (52 s at 4096², found by an adversarial pass).
+/// Ctrl-C as the sensor outputs are about to be made and written stops the run at its next
+/// file: the files still to come (`camera.json` is the last) are not written first, and
+/// nothing is left. The outputs of a 2048² sensor take seconds; a run used to write them all
+/// before it looked at the signal (52 s at 4096², found by an adversarial pass).
 #[test]
 fn a_stop_while_the_outputs_are_written_comes_before_the_next_file() {
     let dir = temp_dir("outputs-stopped");
@@ -373,7 +373,9 @@ fn a_stop_while_the_outputs_are_written_comes_before_the_next_file() {
             .any(|f| dir.join(f).join("out").join(file).exists())
     };
     let started = std::time::Instant::now();
-    while !staged("sensor.id.exr") {
+    // The frame's own images come first; the sensor outputs (seconds of work before their
+    // first file) follow them, so the signal always comes before those.
+    while !staged("views.png") {
         assert!(
             child.try_wait().unwrap().is_none(),
             "ended before its outputs"

@@ -49,6 +49,9 @@ pub fn place(
 ) -> Result<Placed, OutputError> {
     let item = s.item();
     let name = OsString::from(&s.name);
+    // Before any rename out of the stage: a second signal's cleaner must not be removing its
+    // files while they become the target's (`stage::remove_live`).
+    s.stage.mark_placing();
     let Kind::Folder { marker } = &s.kind else {
         let stage = s.stage.handle();
         stage

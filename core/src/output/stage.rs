@@ -38,8 +38,9 @@ const HEX_DIGITS: usize = 32;
 /// The most bytes of the target's name a staging folder's name repeats.
 const NAME_BYTES: usize = 160;
 
-/// This process's staging folders, by their random part, and whether each may hold an earlier
-/// output: what [`remove_live`] removes when a second signal ends the process at once.
+/// This process's staging folders, by their random part, and whether each is one the cleaner
+/// must leave (its output is being placed, or it may hold an earlier output): what
+/// [`remove_live`] removes when a second signal ends the process at once.
 static LIVE: Mutex<Vec<(String, PathBuf, bool)>> = Mutex::new(Vec::new());
 
 /// The registry, whatever a thread that panicked holding it left (it is only ever pushed to,
@@ -55,18 +56,20 @@ fn forget(hex: &str) {
 
 /// Removes this process's staging folders that hold nothing but its own output, for a process
 /// about to end at once: a second signal does not wait for the run's next check, so the
-/// transaction that would remove them is never dropped. One that may hold an earlier output
-/// (its run was swapping it with the target) is left, with its token, to the next run's
-/// sweep, which recovers it by its manifest; as after SIGKILL. Best effort: a file the run
-/// writes meanwhile can make a removal fail once, so each is tried three times.
+/// transaction that would remove them is never dropped. One whose output is being placed is
+/// left (a removal racing the rename would empty the placed output: the registry's lock puts
+/// one before the other), and so is one that may hold an earlier output (its run was swapping
+/// it with the target), for the next run's sweep, which recovers it by its manifest; as
+/// after SIGKILL. Best effort: a file the run writes meanwhile can make a removal fail once,
+/// so each is tried three times.
 pub fn remove_live() {
     remove_unswapped(&live());
 }
 
 /// [`remove_live`] over `stages`.
 fn remove_unswapped(stages: &[(String, PathBuf, bool)]) {
-    for (_, dir, may_hold_earlier) in stages {
-        if *may_hold_earlier {
+    for (_, dir, left) in stages {
+        if *left {
             continue;
         }
         for _ in 0..3 {
@@ -128,14 +131,20 @@ impl Stage {
         &self.handle
     }
 
+    /// Leaves the folder to the sweep if a second signal comes from now on: its output is
+    /// about to be renamed out of it (`replace::place`).
+    pub fn mark_placing(&self) {
+        for (hex, _, left) in live().iter_mut() {
+            *left |= *hex == self.hex;
+        }
+    }
+
     /// Says in the token, before an earlier output is swapped in here, that a sweep must
     /// recover this folder by manifest rather than remove it.
     pub fn mark_may_hold_earlier_output(&mut self) -> io::Result<()> {
         use std::io::Seek;
         // First in the registry: from here a second signal leaves the folder to the sweep.
-        for (hex, _, may_hold_earlier) in live().iter_mut() {
-            *may_hold_earlier |= *hex == self.hex;
-        }
+        self.mark_placing();
         let token = self.lock.as_mut().expect("a created stage holds its token");
         token.set_len(0)?;
         token.rewind()?;
@@ -276,15 +285,24 @@ mod tests {
             Stage::create(&d, "a").unwrap(),
             Stage::create(&d, "b").unwrap(),
         );
+        let placing = Stage::create(&d, "p").unwrap();
         fs::write(plain.dir().join("frame.exr"), b"ours").unwrap();
         swapping.mark_may_hold_earlier_output().unwrap();
+        placing.mark_placing();
         assert_eq!((flag(&plain), flag(&swapping)), (Some(false), Some(true)));
+        assert_eq!(flag(&placing), Some(true));
+        let ours = [&plain.hex, &swapping.hex, &placing.hex];
         let mine: Vec<_> = (live().iter())
-            .filter(|(h, ..)| *h == plain.hex || *h == swapping.hex)
+            .filter(|(h, ..)| ours.contains(&h))
             .cloned()
             .collect();
         remove_unswapped(&mine);
         assert!(!plain.dir().exists(), "the run's own output goes");
+        assert!(
+            placing.dir().join(TOKEN).is_file(),
+            "a stage being placed is left"
+        );
+        drop(placing);
         assert!(
             swapping.dir().join(TOKEN).is_file(),
             "a swapping stage is the sweep's"

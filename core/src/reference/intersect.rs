@@ -280,6 +280,13 @@ impl ModelRay {
     }
 }
 
+/// The least gap [`model_ray`] leaves between a moved ray's start and the ball, in the model's
+/// units: 2^-12 (2.4e-4), above the floor of 1e-4 below which obvhs's node test (0.4.0,
+/// `cwbvh::node::EPSILON`) drops a box whatever the ray's own interval, so that no box of the
+/// mesh lies below it. `shared.glsl`'s `MODEL_RAY_GAP_EXPONENT` is the exponent.
+pub const MODEL_RAY_GAP_EXPONENT: u32 = 12;
+pub const MODEL_RAY_GAP: f32 = 1.0 / (1u32 << MODEL_RAY_GAP_EXPONENT) as f32;
+
 /// How many times [`model_ray`] moves a ray at most: each move leaves it a few millionths as
 /// far as it was, so three bring in a ray from 1e16 of the object's own units, further than a
 /// ray in the loader's scenes starts (1e-11 m thick, the loader's smallest scale, seen from
@@ -294,16 +301,17 @@ pub const MODEL_RAY_MOVES: u32 = 3;
 /// by 16, so its front and back faces, one unit apart, were met at the same t: the reference
 /// showed the back face on two thirds of such a box's pixels, and the `bvh` lookup on a fifth.
 /// So a ray that starts outside twice the ball is moved along itself to where it passes
-/// nearest the origin, less `radius` and sixteen float steps of where it started, since the
-/// move itself is rounded by about one: where the ray meets the ball at all, it then still
-/// starts before it (a walk never starts inside the mesh: obvhs's node test counts from
-/// t = 0). Once moved it is a few millionths as far as it was, which is not yet near enough
+/// nearest the origin, less `radius` and a gap: sixteen float steps of where it started (the
+/// move itself is rounded by about one), and at least [`MODEL_RAY_GAP`]: where the ray meets
+/// the ball at all, it then still starts before it, by more than obvhs's node test ignores
+/// (it drops a box the ray leaves within 1e-4 of its start). Once moved it is a few
+/// millionths as far as it was, which is not yet near enough
 /// for a box 1e-11 thick (its tree's boxes, quantised in 256 steps of the unit, would still be
 /// below a step of t there), so it is moved again, up to [`MODEL_RAY_MOVES`] times, until it
 /// starts within twice the ball. Its hits are then as exact as the object's own coordinates.
 /// Its direction is made unit, so that the walk counts in the model's own units: the whole
-/// of such a box lay within 1e-8 of render space's t, below obvhs's node test's floor of
-/// 1.2e-7. A ray that misses the ball is left as it is (`t0` 0 and `scale` 1 change no t).
+/// of such a box lay within 1e-8 of render space's t, below that floor of obvhs's. A ray that
+/// misses the ball is left as it is (`t0` 0 and `scale` 1 change no t).
 ///
 /// A move does not change the ray, only where t counts from and in what unit (its rounding
 /// shifts the ray by a step of where it started, which in render space is a step of render
@@ -326,7 +334,8 @@ pub fn model_ray(mo: Vec3, md: Vec3, radius: f32) -> ModelRay {
         if far.partial_cmp(&(4.0 * radius * radius)) != Some(std::cmp::Ordering::Greater) {
             break;
         }
-        let step = -o.dot(d) - radius - far.sqrt() * (16.0 * f32::EPSILON);
+        let gap = (far.sqrt() * (16.0 * f32::EPSILON)).max(MODEL_RAY_GAP);
+        let step = -o.dot(d) - radius - gap;
         // Not ahead (the ray misses the ball), or overflowing products (NaN, infinity).
         if !(step > 0.0 && step.is_finite()) {
             break;

@@ -4,7 +4,6 @@
 
 use std::borrow::Cow;
 use std::path::Path;
-use std::sync::OnceLock;
 
 use glam::{Mat3, Quat, Vec3};
 use serde::Serialize;
@@ -233,13 +232,19 @@ impl SensorOutputs {
 
     /// The panoramas from the sensor image, and from the cube where there is one.
     pub fn panoramas(&self) -> Vec<(String, PanoramaLayout, RgbaImage)> {
-        let mirror = OnceLock::new();
+        let mirror = self.mirror_mask();
         (self.panorama_plans().into_iter())
             .map(|p| {
                 let image = self.panorama(&p, &mirror);
                 (p.name, p.layout, image)
             })
             .collect()
+    }
+
+    /// Per pixel of the sensor image, whether it shows the mirror: what every panorama
+    /// unwrapped from it reads (made once for them all, before they are made in parallel).
+    pub fn mirror_mask(&self) -> Vec<bool> {
+        mirror_mask(&self.optics, &self.image)
     }
 
     /// The panoramas this frame has, not made yet: a writer makes each where it writes it
@@ -265,14 +270,11 @@ impl SensorOutputs {
         all
     }
 
-    /// `plan`'s panorama; `mirror` keeps the sensor image's mirror mask once one made it.
-    pub fn panorama(&self, plan: &PanoramaPlan, mirror: &OnceLock<Vec<bool>>) -> RgbaImage {
+    /// `plan`'s panorama; `mirror` is the sensor image's [`Self::mirror_mask`].
+    pub fn panorama(&self, plan: &PanoramaPlan, mirror: &[bool]) -> RgbaImage {
         match (&self.cube, plan.from_cube) {
             (Some(faces), true) => plan.layout.from_cube(faces),
-            _ => {
-                let mask = mirror.get_or_init(|| mirror_mask(&self.optics, &self.image));
-                plan.layout.unwrap_within(&self.optics, &self.image, mask)
-            }
+            _ => plan.layout.unwrap_within(&self.optics, &self.image, mirror),
         }
     }
 

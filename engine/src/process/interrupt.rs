@@ -64,11 +64,20 @@ fn start_cleaner() -> std::io::Result<()> {
         .name("specchio-signals".into())
         .spawn(move || {
             let mut byte = 0u8;
-            // SAFETY: reads one byte into a live local from the pipe's read end, ours alone.
-            let n = unsafe { libc::read(read_end, (&mut byte as *mut u8).cast(), 1) };
-            if n == 1 {
-                crate::output::remove_staging_folders();
-                signal_hook::low_level::exit(128 + libc::c_int::from(byte));
+            loop {
+                // SAFETY: reads one byte into a live local from the pipe's read end, ours.
+                let n = unsafe { libc::read(read_end, (&mut byte as *mut u8).cast(), 1) };
+                if n == 1 {
+                    crate::output::remove_staging_folders();
+                    signal_hook::low_level::exit(128 + libc::c_int::from(byte));
+                }
+                let interrupted =
+                    std::io::Error::last_os_error().raw_os_error() == Some(libc::EINTR);
+                if n != -1 || !interrupted {
+                    // No cleaner any more: a second signal ends the process at once.
+                    WAKE.store(-1, Ordering::SeqCst);
+                    return;
+                }
             }
         })?;
     WAKE.store(write_end, Ordering::SeqCst);

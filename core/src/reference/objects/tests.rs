@@ -169,3 +169,46 @@ fn a_thin_box_is_met_on_its_near_face() {
         }
     }
 }
+
+/// A mesh in tiny units of its own (a sphere of diameter 1e-5, scaled up 1e5 times) is met
+/// where the same sphere in unit measure is: a ray moved near it stops short of it by more
+/// than obvhs's node test drops (1e-4 of the model's units, [`super::model_ray`]'s gap), where
+/// sixteen float steps of its start alone would have been 1e-11 and missed every box.
+#[test]
+fn a_mesh_in_tiny_units_is_met_as_in_unit_ones() {
+    let unit = scene("scenes/thesis-room.toml");
+    let mut tiny = unit.clone();
+    let m = tiny.objects[0].mesh;
+    let shrink = 1e-5;
+    for p in tiny.meshes[m].positions.iter_mut() {
+        *p *= shrink;
+    }
+    tiny.meshes[m].bounds_min *= shrink;
+    tiny.meshes[m].bounds_max *= shrink;
+    tiny.objects[0].scale /= shrink;
+    let at = |s: &Scene| {
+        let state = SceneState::at(s, 0.0);
+        let objects = Objects::build(s, &state, Arc::new(MeshTrees::build(&s.meshes)));
+        (
+            objects,
+            state.object_to_render(s, 0).transform_point3(Vec3::ZERO),
+        )
+    };
+    let ((a, centre), (b, _)) = (at(&unit), at(&tiny));
+    for (o, _) in rays_from_mirror(&unit, 300, 13) {
+        let d = (centre - o).normalize();
+        let (ha, hb) = (
+            a.closest(o, d, 0.0, f32::INFINITY),
+            b.closest(o, d, 0.0, f32::INFINITY),
+        );
+        let (Some(ha), Some(hb)) = (ha, hb) else {
+            panic!("unit {ha:?}, tiny {hb:?}, ray {o} {d}");
+        };
+        assert!(
+            (ha.t - hb.t).abs() <= 1e-4 * ha.t,
+            "{} against {}",
+            hb.t,
+            ha.t
+        );
+    }
+}

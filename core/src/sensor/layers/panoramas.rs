@@ -60,9 +60,15 @@ impl SensorLayer for Panoramas {
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {
         use rayon::prelude::*;
         // Made where it is written, after the writer's check: a stop between two panoramas
-        // comes before the next one's unwrap (seconds at 4096²).
-        let mirror = std::sync::OnceLock::new();
-        let records: Vec<PanoramaRecord> = (w.frame.panorama_plans().into_par_iter())
+        // comes before the next one's unwrap (seconds at 4096²). The mirror mask they share
+        // is made first, after a check of its own (not inside the parallel loop: a rayon
+        // loop inside a lazy value that the loop's threads wait on can deadlock).
+        let plans = w.frame.panorama_plans();
+        if let Some(first) = plans.first() {
+            w.out.ready(&dir.join(format!("{}.exr", first.name)))?;
+        }
+        let mirror = w.frame.mirror_mask();
+        let records: Vec<PanoramaRecord> = (plans.into_par_iter())
             .map(|plan| {
                 let (name, exr) = (&plan.name, dir.join(format!("{}.exr", plan.name)));
                 w.out.ready(&exr)?;

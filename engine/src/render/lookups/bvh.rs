@@ -443,6 +443,10 @@ mod tests {
             crate::shaders::shared::MODEL_RAY_MOVES
         );
         assert_eq!(
+            crate::reference::intersect::MODEL_RAY_GAP_EXPONENT,
+            crate::shaders::shared::MODEL_RAY_GAP_EXPONENT
+        );
+        assert_eq!(
             crate::reference::room::ON_WALL_SLACK_EXPONENT,
             crate::shaders::shared::ON_WALL_SLACK_EXPONENT
         );
