@@ -324,12 +324,13 @@ fn the_floor_map_has_one_marker_per_query() {
     // Each long part says its estimate (at once, under ESTIMATE_AT_ONCE): the landmarks' 8
     // images, the 6 queries' images, the two parts' 14 together, the matching of the 6.
     for (part, total) in [("", 8), ("", 6), ("the whole run, 2 parts: ", 14)] {
-        let said = format!(" of {total} images in ");
-        let start = format!("localise: {part}");
+        let (start, said) = (
+            format!("localise: {part}"),
+            format!(" of {total} images in "),
+        );
+        let line = |l: &str| l.starts_with(&start) && l.contains(&said);
         assert!(
-            stderr
-                .lines()
-                .any(|l| l.starts_with(&start) && l.contains(&said)),
+            stderr.lines().any(line),
             "no estimate of {total} images:\n{stderr}"
         );
     }
