@@ -138,6 +138,7 @@ struct MaterialSample {
 // How many times a ray from far away is moved near an object before its tree is walked
 // (bvh.glsl model_ray; core/src/reference/intersect.rs MODEL_RAY_MOVES says why three).
 #define MODEL_RAY_MOVES 3u
+
 // The least gap it leaves before the ball, as 2^-N of the model's units (MODEL_RAY_GAP).
 #define MODEL_RAY_GAP_EXPONENT 12u
 

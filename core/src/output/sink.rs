@@ -89,6 +89,7 @@ pub trait Sink {
     where
         Self: Sized,
     {
+        self.ready(path)?;
         let text = json_text(path, value)?;
         self.write_bytes(path, text.as_bytes())
     }

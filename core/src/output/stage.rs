@@ -63,7 +63,11 @@ fn forget(hex: &str) {
 /// after SIGKILL. Best effort: a file the run writes meanwhile can make a removal fail once,
 /// so each is tried three times.
 pub fn remove_live() {
-    remove_unswapped(&live());
+    let live = live();
+    remove_unswapped(&live);
+    // Kept locked: the process ends at once, and a stage must not be placed (renamed out)
+    // between a removal that failed and the end.
+    std::mem::forget(live);
 }
 
 /// [`remove_live`] over `stages`.
@@ -270,8 +274,9 @@ pub(super) fn random_hex() -> io::Result<String> {
 mod tests {
     use super::*;
 
-    /// The registry follows each stage's life (made, swapping, kept, dropped), and what a
-    /// second signal removes is every stage but one that may hold an earlier output. (The
+    /// The registry follows each stage's life (made, placing, swapping, kept, dropped), and
+    /// what a second signal removes is every stage but one being placed or that may hold an
+    /// earlier output. (The
     /// test removes from a list of its own: the registry is the whole process's, and other
     /// tests' stages live in it meanwhile.)
     #[test]

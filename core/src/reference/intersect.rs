@@ -285,6 +285,7 @@ impl ModelRay {
 /// `cwbvh::node::EPSILON`) drops a box whatever the ray's own interval, so that no box of the
 /// mesh lies below it. `shared.glsl`'s `MODEL_RAY_GAP_EXPONENT` is the exponent.
 pub const MODEL_RAY_GAP_EXPONENT: u32 = 12;
+/// 2^-[`MODEL_RAY_GAP_EXPONENT`].
 pub const MODEL_RAY_GAP: f32 = 1.0 / (1u32 << MODEL_RAY_GAP_EXPONENT) as f32;
 
 /// How many times [`model_ray`] moves a ray at most: each move leaves it a few millionths as
@@ -310,8 +311,9 @@ pub const MODEL_RAY_MOVES: u32 = 3;
 /// below a step of t there), so it is moved again, up to [`MODEL_RAY_MOVES`] times, until it
 /// starts within twice the ball. Its hits are then as exact as the object's own coordinates.
 /// Its direction is made unit, so that the walk counts in the model's own units: the whole
-/// of such a box lay within 1e-8 of render space's t, below that floor of obvhs's. A ray that
-/// misses the ball is left as it is (`t0` 0 and `scale` 1 change no t).
+/// of such a box lay within 1e-8 of render space's t, below a float step of it (2.4e-7 at
+/// t = 2.5), and below obvhs's floor too. A ray that misses the ball is left as it is (`t0` 0
+/// and `scale` 1 change no t).
 ///
 /// A move does not change the ray, only where t counts from and in what unit (its rounding
 /// shifts the ray by a step of where it started, which in render space is a step of render

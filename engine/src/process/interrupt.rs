@@ -60,7 +60,9 @@ fn start_cleaner() -> std::io::Result<()> {
         return Err(std::io::Error::last_os_error());
     }
     let [read_end, write_end] = ends;
-    std::thread::Builder::new()
+    // Before the thread starts: a thread that gave up at once must find it to take it back.
+    WAKE.store(write_end, Ordering::SeqCst);
+    let started = std::thread::Builder::new()
         .name("specchio-signals".into())
         .spawn(move || {
             let mut byte = 0u8;
@@ -79,9 +81,11 @@ fn start_cleaner() -> std::io::Result<()> {
                     return;
                 }
             }
-        })?;
-    WAKE.store(write_end, Ordering::SeqCst);
-    Ok(())
+        });
+    if started.is_err() {
+        WAKE.store(-1, Ordering::SeqCst);
+    }
+    started.map(drop)
 }
 
 /// The signals whose default action would end the process with its staging folder on disk:

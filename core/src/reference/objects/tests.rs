@@ -170,10 +170,11 @@ fn a_thin_box_is_met_on_its_near_face() {
     }
 }
 
-/// A mesh in tiny units of its own (a sphere of diameter 1e-5, scaled up 1e5 times) is met
-/// where the same sphere in unit measure is: a ray moved near it stops short of it by more
-/// than obvhs's node test drops (1e-4 of the model's units, [`super::model_ray`]'s gap), where
-/// sixteen float steps of its start alone would have been 1e-11 and missed every box.
+/// A mesh in tiny units of its own (a sphere of diameter 1e-5, scaled up 6e4 times to a ball
+/// 0.6 m across) is met where the same sphere in unit measure is, by rays from 20 to 40 m
+/// away, which are moved near it ([`super::model_ray`]: asserted): the move stops short of
+/// it by [`super::MODEL_RAY_GAP`], more than obvhs's node test drops (1e-4 of the model's
+/// units), where sixteen float steps of its start alone (1e-9) missed every box.
 #[test]
 fn a_mesh_in_tiny_units_is_met_as_in_unit_ones() {
     let unit = scene("scenes/thesis-room.toml");
@@ -195,8 +196,24 @@ fn a_mesh_in_tiny_units_is_met_as_in_unit_ones() {
         )
     };
     let ((a, centre), (b, _)) = (at(&unit), at(&tiny));
-    for (o, _) in rays_from_mirror(&unit, 300, 13) {
-        let d = (centre - o).normalize();
+    let mut random = crate::random::SplitMix64::new(17);
+    let mut unit_vector = || {
+        let v = Vec3::new(
+            random.unit() as f32,
+            random.unit() as f32,
+            random.unit() as f32,
+        );
+        (v - Vec3::splat(0.5)).normalize()
+    };
+    for k in 0..300 {
+        let far = 20.0 + 20.0 * (k as f32 / 300.0);
+        let o = centre + far * unit_vector();
+        // Aimed within the ball's middle: every ray meets it.
+        let d = (centre + 0.1 * unit_vector() - o).normalize();
+        assert!(
+            b.instances[0].ray_to_model(o, d).t0 > 0.0,
+            "not moved: {o} {d}"
+        );
         let (ha, hb) = (
             a.closest(o, d, 0.0, f32::INFINITY),
             b.closest(o, d, 0.0, f32::INFINITY),
@@ -205,7 +222,7 @@ fn a_mesh_in_tiny_units_is_met_as_in_unit_ones() {
             panic!("unit {ha:?}, tiny {hb:?}, ray {o} {d}");
         };
         assert!(
-            (ha.t - hb.t).abs() <= 1e-4 * ha.t,
+            (ha.t - hb.t).abs() <= 1e-5 * ha.t,
             "{} against {}",
             hb.t,
             ha.t

@@ -32,6 +32,8 @@ impl SensorLayer for Camera {
             return Ok(Told::default());
         };
         let path = dir.join(CAMERA_IMAGE_FILE);
+        // Asked before the encoding, as the sink's own encoders ask (`Sink::ready`).
+        w.out.ready(&path)?;
         let png = camera.png().map_err(|e| png_error(&path, e))?;
         w.out.write_bytes(&path, &png)?;
         Ok(Told {

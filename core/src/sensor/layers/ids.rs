@@ -38,6 +38,8 @@ impl SensorLayer for Ids {
         let size = (o.rays.width, o.rays.height);
         w.out.write_channels(&dir.join(ID_FILE), size, ids)?;
         let map = dir.join(ID_MAP_FILE);
+        // Asked before the encoding, as the sink's own encoders ask (`Sink::ready`).
+        w.out.ready(&map)?;
         w.out
             .write_bytes(&map, json_text(&map, &o.id_map)?.as_bytes())?;
         Ok(Told {

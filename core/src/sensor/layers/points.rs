@@ -48,6 +48,8 @@ impl SensorLayer for Points {
             },
             "id: the drawable the ray met (sensor.id.json)".to_owned(),
         ];
+        // Asked before the cloud is made, as the sink's own encoders ask (`Sink::ready`).
+        w.out.ready(&dir.join(POINTS_FILE))?;
         let mut points = sensor_dataset::points(o);
         for (p, _) in &mut points {
             *p = to.point(*p);

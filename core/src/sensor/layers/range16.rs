@@ -41,6 +41,8 @@ impl SensorLayer for Range16 {
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {
         let o = w.frame;
         let path = dir.join(RANGE16_FILE);
+        // Asked before the encoding, as the sink's own encoders ask (`Sink::ready`).
+        w.out.ready(&path)?;
         let mut png = Vec::new();
         let size = (o.rays.width, o.rays.height);
         crate::image::png::encode_gray16(&mut png, size, &range_mm(&o.range))

@@ -119,3 +119,70 @@ fn every_layer_is_documented() {
         assert!(help().contains(&format!("{name} (")), "{name}: {}", help());
     }
 }
+
+/// A sink that turns down every file once it has taken `left` (as a transaction does once the
+/// process was asked to stop: `output::stop_between_files`), what it took, and how many files
+/// reached it encoded after that (a writer that did not ask first).
+struct Stopping {
+    files: MemoryFiles,
+    left: std::sync::atomic::AtomicUsize,
+    encoded_in_vain: std::sync::atomic::AtomicUsize,
+}
+
+impl crate::output::Sink for Stopping {
+    fn ready(&self, path: &Path) -> Result<(), OutputError> {
+        use std::sync::atomic::Ordering;
+        match self.left.load(Ordering::SeqCst) {
+            0 => Err(OutputError::Stopped {
+                path: path.to_owned(),
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    fn write_bytes(&self, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+        use std::sync::atomic::Ordering;
+        let took =
+            (self.left).fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| n.checked_sub(1));
+        if took.is_err() {
+            self.encoded_in_vain.fetch_add(1, Ordering::SeqCst);
+            return Err(OutputError::Stopped {
+                path: path.to_owned(),
+            });
+        }
+        self.files.write_bytes(path, bytes)
+    }
+}
+
+/// A frame's outputs stop at the writer's refusal: asked before each file is encoded (and
+/// before the panoramas' unwrapping), every layer stops at its next file, the error is the
+/// stop, no file is encoded only to be turned down, and nothing after the stop is written
+/// (`camera.json`, written last, never). Two files are let through, so that the stop comes
+/// in the middle; on one thread, so that which two is fixed.
+#[test]
+fn the_layers_stop_at_the_writers_next_refusal() {
+    let frame = small_frame();
+    let sink = Stopping {
+        files: MemoryFiles::new(Path::new("/frame")),
+        left: std::sync::atomic::AtomicUsize::new(2),
+        encoded_in_vain: std::sync::atomic::AtomicUsize::new(0),
+    };
+    let all = Layers::all().for_scene(true);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let err = one.install(|| {
+        frame
+            .write_chosen(&sink, Path::new("/frame"), all)
+            .unwrap_err()
+    });
+    assert!(matches!(err, OutputError::Stopped { .. }), "{err}");
+    let in_vain = sink
+        .encoded_in_vain
+        .load(std::sync::atomic::Ordering::SeqCst);
+    assert_eq!(in_vain, 0, "files encoded after the stop");
+    let taken = sink.files.into_files();
+    assert_eq!(taken.len(), 2);
+    assert!(taken.iter().all(|(p, _)| p != Path::new(CAMERA_FILE)));
+}
