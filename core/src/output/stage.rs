@@ -64,14 +64,14 @@ fn forget(hex: &str) {
 /// so each is tried three times.
 pub fn remove_live() {
     let live = live();
-    remove_unswapped(&live);
+    remove_unmarked(&live);
     // Kept locked: the process ends at once, and a stage must not be placed (renamed out)
     // between a removal that failed and the end.
     std::mem::forget(live);
 }
 
 /// [`remove_live`] over `stages`.
-fn remove_unswapped(stages: &[(String, PathBuf, bool)]) {
+fn remove_unmarked(stages: &[(String, PathBuf, bool)]) {
     for (_, dir, left) in stages {
         if *left {
             continue;
@@ -301,7 +301,7 @@ mod tests {
             .filter(|(h, ..)| ours.contains(&h))
             .cloned()
             .collect();
-        remove_unswapped(&mine);
+        remove_unmarked(&mine);
         assert!(!plain.dir().exists(), "the run's own output goes");
         assert!(
             placing.dir().join(TOKEN).is_file(),
