@@ -26,7 +26,8 @@
 //! - [`output`]: EXR, PNG and JSON files, written atomically;
 //! - [`stdout`]: standard output that never panics (`say!`), below everything;
 //! - [`text`]: numbers and times written for people;
-//! - [`random`]: the one seeded random sequence (SplitMix64).
+//! - [`random`]: the one seeded random sequence (SplitMix64);
+//! - [`watch`]: long CPU work reported row by row and stopped between parts.
 
 pub mod bvh;
 pub mod files;
@@ -44,3 +45,4 @@ pub mod stdout;
 pub mod text;
 pub mod trees;
 pub mod warnings;
+pub mod watch;

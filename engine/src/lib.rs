@@ -14,7 +14,7 @@
 
 pub use specchio_core::{
     bvh, files, image, lookup_registry, memory, metrics, mirror, output, random, reference, scene,
-    sensor, stdout, text, trees, warnings,
+    sensor, stdout, text, trees, warnings, watch,
 };
 pub use specchio_core::{say, say_err, say_part};
 pub use specchio_vk as vk;

@@ -375,9 +375,14 @@ fn extreme_errors_print_readably() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A comparison of two `side`² images (2048²: seconds of FLIP) with a heatmap, started: the
-/// child and the heatmap's path.
-fn long_comparison(dir: &Path, side: u32) -> (std::process::Child, PathBuf) {
+/// A comparison of two `side`² images (2048²: seconds of FLIP) with a heatmap, started with
+/// `env` and its stderr in a file (so that a test may watch it as it runs): the child, the
+/// heatmap's path and the stderr file's.
+fn long_comparison(
+    dir: &Path,
+    side: u32,
+    env: &[(&str, &str)],
+) -> (std::process::Child, PathBuf, PathBuf) {
     let big = |offset: f32| RgbaImage {
         width: side,
         height: side,
@@ -391,13 +396,20 @@ fn long_comparison(dir: &Path, side: u32) -> (std::process::Child, PathBuf) {
     let (a, b, heatmap) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("h.png"));
     write_exr(&a, &big(0.0)).unwrap();
     write_exr(&b, &big(0.05)).unwrap();
+    let stderr = dir.join("stderr.txt");
     let child = Command::new(env!("CARGO_BIN_EXE_specchio"))
         .args(["compare", s(&a), s(&b), "--heatmap", s(&heatmap)])
+        .envs(env.iter().copied())
         .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
+        .stderr(std::fs::File::create(&stderr).unwrap())
         .spawn()
         .unwrap();
-    (child, heatmap)
+    (child, heatmap, stderr)
+}
+
+/// What the run said on stderr so far.
+fn said(stderr: &Path) -> String {
+    std::fs::read_to_string(stderr).unwrap_or_default()
 }
 
 /// Ctrl-C during a comparison stops it with exit 1, saying so, and leaves neither the heatmap
@@ -406,11 +418,11 @@ fn long_comparison(dir: &Path, side: u32) -> (std::process::Child, PathBuf) {
 #[test]
 fn a_stopped_comparison_leaves_nothing() {
     let dir = temp_dir("stopped");
-    let (child, heatmap) = long_comparison(&dir, 2048);
+    let (child, heatmap, stderr) = long_comparison(&dir, 2048, &[]);
     // Once the heatmap is staged the comparison is under way, and the signal is caught.
     let staged = || !common::staging_folders(&heatmap).is_empty();
     let out = common::signal_when(child, libc::SIGINT, "the staged heatmap", staged);
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = said(&stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(
         stderr.contains("interrupted") && stderr.contains("nothing was written"),
@@ -421,19 +433,67 @@ fn a_stopped_comparison_leaves_nothing() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A second Ctrl-C, 0.7 s after the first and while the comparison still runs, ends the
+/// A long comparison says its estimate once FLIP has begun, and a Ctrl-C then stops it
+/// between bands of FLIP's rows, saying how far it got: FLIP used to be one call of a minute
+/// at 8192², silent, that no signal could cut short.
+#[test]
+fn a_long_comparison_says_its_estimate_and_stops_within_flip() {
+    let dir = temp_dir("estimate");
+    // 3072² in bands of 32 rows: 96 bands, seconds of work after the first has ended.
+    let env = [
+        ("SPECCHIO_ESTIMATE_AFTER_S", "0"),
+        ("SPECCHIO_FLIP_BAND_ROWS", "32"),
+    ];
+    let (child, heatmap, stderr) = long_comparison(&dir, 3072, &env);
+    let estimate = "compare: FLIP of 3072x3072 pixels: ";
+    let out = common::signal_when(child, libc::SIGINT, "the estimate", || {
+        said(&stderr).contains(estimate)
+    });
+    let stderr = said(&stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let line = stderr.lines().find(|l| l.starts_with(estimate)).unwrap();
+    assert!(
+        line.contains(" of 9437184 pixels in ") && line.contains("left; Ctrl-C stops it"),
+        "{line}"
+    );
+    let stop = stderr
+        .lines()
+        .find(|l| l.contains("interrupted after "))
+        .unwrap();
+    let rows: u32 = stop
+        .split("interrupted after ")
+        .nth(1)
+        .and_then(|rest| rest.split(" of 3072 rows of FLIP").next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{stop}"));
+    assert!(rows % 32 == 0 && rows < 3072, "{stop}");
+    assert!(!heatmap.exists());
+    assert!(common::staging_folders(&heatmap).is_empty());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A second Ctrl-C, 0.7 s after the first and while a band of FLIP still runs, ends the
 /// process at once (exit 130), and it removes its staging folder first: that folder used to
 /// stay, hidden, until a later run into the same output swept it.
 #[test]
 fn a_second_ctrl_c_ends_the_run_at_once_and_leaves_nothing() {
     let dir = temp_dir("stopped-twice");
-    // 3072²: FLIP alone takes several seconds on this 2-core machine, far beyond the second
-    // signal's 0.7 s on a machine several times faster.
-    let (mut child, heatmap) = long_comparison(&dir, 3072);
+    // 3072² in two bands of FLIP on one thread: the second band begins as the first one's
+    // estimate is said, and no signal cuts a band short: seconds on this 2-core machine, far
+    // beyond the second signal's 0.7 s on a machine several times faster.
+    let env = [
+        ("SPECCHIO_ESTIMATE_AFTER_S", "0"),
+        ("SPECCHIO_FLIP_BAND_ROWS", "1536"),
+        ("RAYON_NUM_THREADS", "1"),
+    ];
+    let (mut child, heatmap, stderr) = long_comparison(&dir, 3072, &env);
     let started = std::time::Instant::now();
-    while common::staging_folders(&heatmap).is_empty() {
-        assert!(child.try_wait().unwrap().is_none(), "ended before staging");
-        assert!(started.elapsed().as_secs() < 300, "no staging after 300 s");
+    while !said(&stderr).contains("compare: FLIP of 3072x3072 pixels: ") {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "ended before its estimate"
+        );
+        assert!(started.elapsed().as_secs() < 300, "no estimate after 300 s");
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     for pause_ms in [0, 700] {
@@ -442,9 +502,37 @@ fn a_second_ctrl_c_ends_the_run_at_once_and_leaves_nothing() {
         unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     }
     let out = child.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = said(&stderr);
     assert_eq!(out.status.code(), Some(130), "{stderr}");
     assert!(!heatmap.exists());
     assert!(common::staging_folders(&heatmap).is_empty(), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A band height that is not a whole number from 1 is said, and the bands are chosen as
+/// usual: the comparison's figures are the same.
+#[test]
+fn a_bad_band_height_is_said_and_not_used() {
+    let dir = temp_dir("band-rows");
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    write_exr(&a, &image(0.0)).unwrap();
+    write_exr(&b, &image(0.1)).unwrap();
+    let plain = specchio(&["compare", s(&a), s(&b), "--json"]);
+    for bad in ["0", "-3", "many"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_specchio"))
+            .args(["compare", s(&a), s(&b), "--json"])
+            .env("SPECCHIO_FLIP_BAND_ROWS", bad)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        assert!(
+            stderr.contains(&format!(
+                "SPECCHIO_FLIP_BAND_ROWS=\"{bad}\" is not a whole number"
+            )),
+            "{stderr}"
+        );
+        assert_eq!(out.stdout, plain.stdout, "{bad}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

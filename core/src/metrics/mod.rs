@@ -18,6 +18,7 @@
 //! # Ok::<(), metrics::MetricsError>(())
 //! ```
 
+mod flip;
 mod heatmap;
 pub mod percentile;
 
@@ -26,11 +27,12 @@ use std::path::{Path, PathBuf};
 
 use crate::files::{read_regular_file, FileError};
 use crate::image::exr;
-use crate::image::png::linear_to_srgb;
 use crate::image::RgbaImage;
 use crate::output::OutputError;
 use crate::scene::TextureData;
+use crate::watch::{Stopped, Unwatched, Watch};
 
+pub use flip::{flip_map, flip_map_watched, BAND_MARGIN as FLIP_BAND_MARGIN};
 pub use heatmap::{colour_map, heatmap_rgb8, write_heatmap, NOT_COMPARED_RGB8};
 
 /// PSNR's peak signal: linear 1.0 (diffuse white). HDR values above it are not clipped, so an
@@ -72,6 +74,9 @@ pub enum MetricsError {
     EmptyMask { path: PathBuf, threshold: f32 },
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// The caller's watch stopped the comparison before its FLIP was done.
+    #[error("the comparison was stopped before its FLIP map was done")]
+    Stopped,
 }
 
 /// Which pixels take part: `selected[y * width + x]`, rows top to bottom.
@@ -277,12 +282,20 @@ pub fn read_mask(path: &Path) -> Result<Mask, MetricsError> {
     })
 }
 
-/// Reads the files and compares them; a size mismatch names the files.
-pub fn compare_files(
+/// A comparison's images as read from their files: same size, the mask (if any) selecting
+/// some pixel.
+pub struct Inputs {
+    pub test: RgbaImage,
+    pub reference: RgbaImage,
+    pub mask: Option<Mask>,
+}
+
+/// Reads the files for a comparison; a size mismatch or an empty mask names the files.
+pub fn read_inputs(
     test: &Path,
     reference: &Path,
     mask: Option<&Path>,
-) -> Result<Comparison, MetricsError> {
+) -> Result<Inputs, MetricsError> {
     let test_image = read_exr(test)?;
     let reference_image = read_exr(reference)?;
     let mask = mask
@@ -297,7 +310,11 @@ pub fn compare_files(
         same_size_as_mask((&name(reference), &reference_image), (&name(path), mask))?;
         mask.check_selects(path)?;
     }
-    compare(&test_image, &reference_image, mask.as_ref().map(|(_, m)| m))
+    Ok(Inputs {
+        test: test_image,
+        reference: reference_image,
+        mask: mask.map(|(_, m)| m),
+    })
 }
 
 /// Compares `test` with `reference` (same size) over the pixels `mask` selects (all without
@@ -306,6 +323,17 @@ pub fn compare(
     test: &RgbaImage,
     reference: &RgbaImage,
     mask: Option<&Mask>,
+) -> Result<Comparison, MetricsError> {
+    compare_watched(test, reference, mask, &Unwatched)
+}
+
+/// [`compare`], its FLIP reported row by row to `watch`, which may stop it between bands of
+/// rows ([`MetricsError::Stopped`]): FLIP is nearly all of a comparison's time.
+pub fn compare_watched(
+    test: &RgbaImage,
+    reference: &RgbaImage,
+    mask: Option<&Mask>,
+    watch: &dyn Watch,
 ) -> Result<Comparison, MetricsError> {
     same_size(("the test image", test), ("the reference image", reference))?;
     if let Some(mask) = mask {
@@ -350,12 +378,14 @@ pub fn compare(
         10.0 * (PSNR_PEAK * PSNR_PEAK / mse).log10()
     });
 
-    // 3. FLIP on 8-bit sRGB, the whole image (its filters are spatial), pooled over the
+    // 3. FLIP on 8-bit sRGB, the whole image (its filters are spatial; `flip` computes it in
+    //    bands with their filters' reach), pooled over the
     //    compared pixels. A pixel NaN or Inf in either image is left out here too: it takes
     //    the same finite value in both (the finite one's, else black), so it differs nowhere
     //    and makes no edge for its neighbours' filters to see.
     let (test, reference) = finite_alike(test, reference);
-    let flip_map = flip_map(&test, &reference);
+    let flip_map =
+        flip_map_watched(&test, &reference, watch).map_err(|Stopped| MetricsError::Stopped)?;
     let mut flip: Vec<f32> = (0..n)
         .filter(|&i| compared[i])
         .map(|i| flip_map[i])
@@ -380,22 +410,6 @@ pub fn compare(
         flip_map,
         compared,
     })
-}
-
-/// The per-pixel FLIP map (LDR FLIP, [`FLIP_PIXELS_PER_DEGREE`]) of two same-size linear
-/// images, each first encoded to 8-bit sRGB exactly as the PNG previews are
-/// ([`linear_to_srgb`], clamped to [0, 1], NaN as 0).
-pub fn flip_map(test: &RgbaImage, reference: &RgbaImage) -> Vec<f32> {
-    let to_flip = |img: &RgbaImage| {
-        let bytes: Vec<u8> = img
-            .pixels
-            .iter()
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .map(|v| (linear_to_srgb(v) * 255.0).round() as u8)
-            .collect();
-        nv_flip::FlipImageRgb8::with_data(img.width, img.height, &bytes)
-    };
-    nv_flip::flip(to_flip(reference), to_flip(test), FLIP_PIXELS_PER_DEGREE).to_vec()
 }
 
 /// Both images with every pixel that is NaN or Inf in either made the same finite value in

@@ -298,12 +298,12 @@ fn files_are_named_in_errors() {
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
     crate::output::write_exr(&a, &gradient(4, 2)).unwrap();
     crate::output::write_exr(&b, &gradient(2, 2)).unwrap();
-    let text = compare_files(&a, &b, None).unwrap_err().to_string();
+    let text = read_inputs(&a, &b, None).err().unwrap().to_string();
     assert!(text.contains("a.exr") && text.contains("b.exr"), "{text}");
     assert!(text.contains("4x2") && text.contains("2x2"), "{text}");
 
     let missing = dir.join("none.exr");
-    let e = compare_files(&a, &missing, None).unwrap_err();
+    let e = read_inputs(&a, &missing, None).err().unwrap();
     assert!(matches!(e, MetricsError::Missing { .. }));
     assert!(e.to_string().contains("none.exr"));
 

@@ -11,6 +11,7 @@ use super::camera_rays::CameraRays;
 use super::{sample_offsets, Reference, ReferenceImages, ReferenceStats, Sample, MAX_SPP};
 use crate::image::RgbaImage;
 use crate::scene::camera::ViewBasis;
+use crate::watch::{Stopped, Unwatched, Watch};
 
 /// One pixel: its centre sample (for the per-pixel layers), the averaged colour, the rays it
 /// took and how many met nothing.
@@ -30,28 +31,6 @@ struct Sampling<'a> {
     offsets: &'a [Vec2],
     centre_index: Option<usize>,
     clear: bool,
-}
-
-/// What a long render reports to (`process::traced` for the command and Python): each row
-/// done, and whether to stop before the next pixel.
-pub trait Watch: Sync {
-    fn row_done(&self);
-    fn stop(&self) -> bool;
-}
-
-/// A watched render that its [`Watch`] stopped: nothing of it is kept.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Stopped;
-
-/// No one watching: every row is traced.
-struct Unwatched;
-
-impl Watch for Unwatched {
-    fn row_done(&self) {}
-
-    fn stop(&self) -> bool {
-        false
-    }
 }
 
 impl Reference<'_> {
@@ -96,7 +75,7 @@ impl Reference<'_> {
             .into_par_iter()
             .map(|y| {
                 let row = self.trace_row(&sampling, y, width, watch)?;
-                watch.row_done();
+                watch.rows_done(1);
                 Some(row)
             })
             .collect();

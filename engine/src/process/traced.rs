@@ -8,10 +8,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::progress::Progress;
 use crate::image::RgbaImage;
-use crate::reference::render::{Stopped, Watch};
 use crate::reference::{Reference, ReferenceImages, ReferenceStats};
 use crate::scene::Scene;
 use crate::sensor::imaging;
+use crate::watch::{Stopped, Watch};
 
 /// What a reference run traced: the reference it built (its trees, for what the caller says
 /// of them), each camera's images and statistics, and the light of the sensor's whole
@@ -125,9 +125,9 @@ impl<'a> Rows<'a> {
 }
 
 impl Watch for Rows<'_> {
-    fn row_done(&self) {
-        self.rows.fetch_add(1, Ordering::Relaxed);
-        self.whole.add(self.width);
+    fn rows_done(&self, rows: u32) {
+        self.rows.fetch_add(u64::from(rows), Ordering::Relaxed);
+        self.whole.add(self.width * u64::from(rows));
     }
 
     fn stop(&self) -> bool {

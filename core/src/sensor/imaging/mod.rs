@@ -14,10 +14,10 @@ use serde::Serialize;
 use super::optics::SensorOptics;
 use crate::image::RgbaImage;
 use crate::random::SplitMix64;
-use crate::reference::render::{Stopped, Watch};
 use crate::reference::Reference;
 pub use crate::scene::imaging::{Imaging, Response};
 use crate::scene::Scene;
+use crate::watch::{Stopped, Watch};
 pub use exposure::{integrate, Schedule};
 
 mod chain;
