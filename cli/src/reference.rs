@@ -5,8 +5,8 @@ use std::process::ExitCode;
 
 use anyhow::{bail, Context, Result};
 use specchio::output::{Sink, Transaction};
-use specchio::process::interrupt;
 use specchio::process::traced::{self, StoppedAt};
+use specchio::process::{interrupt, progress};
 use specchio::reference::{ReferenceImages, MAX_SPP};
 use specchio::sensor::SensorOutputs;
 
@@ -74,7 +74,8 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     if args.sensor_outputs {
         let mut outputs = SensorOutputs::from_reference(&scene, args.time, &traced.sensor.0);
         outputs.expose(&scene, 0, traced.light.as_ref());
-        outputs.write(&out, &args.out)?;
+        let writing = progress::sensor_outputs("reference", &outputs);
+        outputs.write(&out, &args.out, &|n| writing.add(n))?;
     }
     let geometry = &traced.reference.geometry;
     specchio::say!(

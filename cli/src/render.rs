@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use anyhow::{bail, Result};
 use specchio::output::{OutputError, Sink, Transaction};
-use specchio::process::progress::Progress;
+use specchio::process::progress::{self, Progress};
 use specchio::render::lookups::{self, TraceIn, TraceOrder};
 use specchio::render::methods::Method;
 use specchio::render::{FrameImages, FrameReport, Readback, RenderOptions, Renderer};
@@ -466,7 +466,8 @@ fn write_sensor_outputs(
         None => None,
     };
     outputs.expose(&renderer.scene, frame, light.as_ref());
-    outputs.write(out, dir)?;
+    let writing = progress::sensor_outputs("render", &outputs);
+    outputs.write(out, dir, &|n| writing.add(n))?;
     Ok(())
 }
 

@@ -406,3 +406,32 @@ fn a_stop_while_the_outputs_are_written_comes_before_the_next_file() {
     );
     assert!(!out.exists() && common::staging_folders(&out).is_empty());
 }
+
+/// The writing of the sensor outputs says its own estimate (half a minute at 4096², after a
+/// trace's "about 3 s left"): each layer counted by its samples as it ends.
+#[test]
+fn the_outputs_writing_says_its_estimate() {
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    for command in ["render", "reference"] {
+        let dir = temp_dir(&format!("outputs-estimate-{command}"));
+        let args = [
+            command,
+            scene.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+            "--sensor-outputs",
+        ];
+        let out = common::specchio_with(&args, &[common::ESTIMATE_AT_ONCE]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        let [w, h] = [0, 1].map(|i| camera_json(&dir)["sensor"]["image_size"][i].clone());
+        let what = format!("{command}: the sensor outputs of a {w}x{h} sensor: ");
+        let line = (stderr.lines())
+            .find(|l| l.starts_with(&what))
+            .unwrap_or_else(|| panic!("no estimate for the outputs:\n{stderr}"));
+        assert!(
+            line.contains(" % done in ") && line.contains(" left"),
+            "{line}"
+        );
+    }
+}

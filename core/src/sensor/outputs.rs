@@ -281,19 +281,37 @@ impl SensorOutputs {
     /// Writes the outputs of a single render into `dir` (staged in `out`): the layers of
     /// [`Layers::single_render`] (not the image, which the commands write as their view, nor
     /// the point cloud), and `camera.json`.
-    pub fn write(&self, out: &(impl Sink + Sync), dir: &Path) -> Result<(), OutputError> {
-        self.write_chosen(out, dir, Layers::single_render())
+    /// `written` is told each layer's samples as it ends, out of [`Self::samples`].
+    pub fn write(
+        &self,
+        out: &(impl Sink + Sync),
+        dir: &Path,
+        written: &(dyn Fn(u64) + Sync),
+    ) -> Result<(), OutputError> {
+        self.write_chosen(out, dir, Layers::single_render(), written)
+    }
+
+    /// The samples [`Self::write`] writes: the measure of its time, for an estimate.
+    pub fn samples(&self) -> u64 {
+        Layers::single_render().samples(self)
     }
 
     /// The `chosen` layers (each a plug-in, `layers/`: written beside each other) and
-    /// `camera.json`, which says what each wrote.
+    /// `camera.json`, which says what each wrote; `written` is told each layer's samples as
+    /// it ends.
     pub fn write_chosen(
         &self,
         out: &(impl Sink + Sync),
         dir: &Path,
         chosen: Layers,
+        written: &(dyn Fn(u64) + Sync),
     ) -> Result<(), OutputError> {
-        let told = layers::write(&layers::Writing { frame: self, out }, dir, chosen)?;
+        let writing = layers::Writing {
+            frame: self,
+            out,
+            written,
+        };
+        let told = layers::write(&writing, dir, chosen)?;
         out.write_json(&dir.join(CAMERA_FILE), &self.camera_record(told))
     }
 

@@ -85,7 +85,8 @@ impl Progress {
     pub fn add(&self, n: u64) {
         let done = self.done.fetch_add(n, Ordering::Relaxed) + n;
         let elapsed = self.start.elapsed();
-        if elapsed < self.after || done >= self.total {
+        // Nothing done yet (a part of no work: a layer with no files) gives no rate.
+        if elapsed < self.after || done >= self.total || done == 0 {
             return;
         }
         let Ok(mut said) = self.said.try_lock() else {
@@ -146,6 +147,15 @@ pub fn calibration(what: &str, [w, h]: [u32; 2], files: bool) -> Progress {
     Progress::new(format!("{what}: sensor {w}x{h}"), total, PERCENT)
 }
 
+/// The writing of a single render's sensor outputs (`frame`'s), said as "`what`: the sensor
+/// outputs of a 4096x4096 sensor: 40 % done in ...": each layer counted by its samples as it
+/// ends. A 4096² sensor's take half a minute, after a trace of seconds.
+pub fn sensor_outputs(what: &str, frame: &crate::sensor::SensorOutputs) -> Progress {
+    let [w, h] = [frame.rays.width, frame.rays.height];
+    let what = format!("{what}: the sensor outputs of a {w}x{h} sensor");
+    Progress::new(what, frame.samples(), PERCENT)
+}
+
 /// A calibration counts its parts here by their shares of the whole ([`PERCENT`]), and stops
 /// between parts at a signal.
 impl crate::sensor::central::Watch for Progress {
@@ -204,5 +214,17 @@ mod tests {
         );
         let line = p.line(500, Duration::from_secs(50), false);
         assert!(line.ends_with("about 50 s left"), "{line}");
+    }
+
+    /// Parts of no work give no rate, and no line: with none done, a first line said "about
+    /// 185140906666666 h left" for the sensor outputs' first layer, one with no files.
+    #[test]
+    fn nothing_done_says_nothing() {
+        let mut p = Progress::new("render: the sensor outputs", 1000, PERCENT);
+        p.after = Duration::ZERO;
+        p.add(0);
+        assert!(p.said.lock().unwrap().is_none());
+        p.add(10);
+        assert!(p.said.lock().unwrap().is_some());
     }
 }

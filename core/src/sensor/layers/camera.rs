@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::{SensorLayer, Told, Writing};
+use super::{SensorLayer, SensorOutputs, Told, Writing};
 use crate::output::{png_error, OutputError};
 use crate::sensor::imaging::CAMERA_IMAGE_FILE;
 
@@ -25,6 +25,14 @@ impl SensorLayer for Camera {
 
     fn needs_camera_model(&self) -> bool {
         true
+    }
+
+    /// Its PNG: three 8-bit channels, where the scene has a camera model.
+    fn samples(&self, frame: &SensorOutputs) -> u64 {
+        match frame.camera {
+            Some(_) => 3 * u64::from(frame.rays.width) * u64::from(frame.rays.height),
+            None => 0,
+        }
     }
 
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::{SensorLayer, Told, Writing};
+use super::{SensorLayer, SensorOutputs, Told, Writing};
 use crate::output::json_text;
 use crate::output::OutputError;
 use crate::sensor::files::Samples;
@@ -27,6 +27,11 @@ impl SensorLayer for Ids {
 
     fn files(&self) -> &'static [&'static str] {
         &[ID_FILE, ID_MAP_FILE]
+    }
+
+    /// The id and the class a pixel (the map is small).
+    fn samples(&self, frame: &SensorOutputs) -> u64 {
+        2 * u64::from(frame.rays.width) * u64::from(frame.rays.height)
     }
 
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::{SensorLayer, Told, Writing};
+use super::{SensorLayer, SensorOutputs, Told, Writing};
 use crate::output::OutputError;
 
 /// The image's files: linear EXR, sRGB PNG.
@@ -26,6 +26,11 @@ impl SensorLayer for Image {
     /// Not in a single render's outputs: the commands write the image as their own view.
     fn in_single_render(&self) -> bool {
         false
+    }
+
+    /// RGBA in the EXR and RGB in the PNG.
+    fn samples(&self, frame: &SensorOutputs) -> u64 {
+        7 * u64::from(frame.image.width) * u64::from(frame.image.height)
     }
 
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {

@@ -60,6 +60,9 @@ pub trait SensorLayer: Sync {
     fn needs_camera_model(&self) -> bool {
         false
     }
+    /// How many samples (pixels times channels) its files of `frame` hold: the measure of its
+    /// writing time that an estimate extrapolates (a 4096² sensor's outputs are seconds each).
+    fn samples(&self, frame: &SensorOutputs) -> u64;
     /// Writes its files of `w.frame` into `dir`, and says what `camera.json` records of them.
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError>;
     /// What `camera.json` records when the layer was not chosen: nothing, by default.
@@ -68,10 +71,12 @@ pub trait SensorLayer: Sync {
     }
 }
 
-/// What a layer writes from, and through what.
+/// What a layer writes from, through what, and to whom its samples written are told (a
+/// [`SensorLayer::samples`]'s worth as each layer ends).
 pub struct Writing<'a> {
     pub frame: &'a SensorOutputs,
     pub out: &'a (dyn Sink + Sync),
+    pub written: &'a (dyn Fn(u64) + Sync),
 }
 
 /// What `camera.json` records of a layer's files: entries of its `files` object, and entries
@@ -115,7 +120,11 @@ pub fn write(w: &Writing<'_>, dir: &Path, chosen: Layers) -> Result<Told, Output
     use rayon::prelude::*;
     let told: Vec<Told> = (Layer::ALL.par_iter())
         .map(|layer| match chosen.has(*layer) {
-            true => layer.0.write(w, dir),
+            true => {
+                let told = layer.0.write(w, dir)?;
+                (w.written)(layer.0.samples(w.frame));
+                Ok(told)
+            }
             false => Ok(layer.0.unchosen()),
         })
         .collect::<Result<_, _>>()?;
@@ -266,6 +275,11 @@ impl Layers {
     }
 
     /// Every file a frame of these layers holds, `camera.json` first.
+    /// The samples the layers' files of `frame` hold ([`SensorLayer::samples`]).
+    pub fn samples(self, frame: &SensorOutputs) -> u64 {
+        self.iter().map(|layer| layer.0.samples(frame)).sum()
+    }
+
     pub fn files(self) -> Vec<&'static str> {
         let mut files = vec![CAMERA_FILE];
         files.extend(self.iter().flat_map(|l| l.files().iter().copied()));

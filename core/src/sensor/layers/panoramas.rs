@@ -6,7 +6,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::{SensorLayer, Told, Writing};
+use super::{SensorLayer, SensorOutputs, Told, Writing};
 use crate::output::OutputError;
 use crate::sensor::panorama::{PanoramaKind, PanoramaLayout};
 
@@ -54,6 +54,13 @@ impl SensorLayer for Panoramas {
 
     fn files(&self) -> &'static [&'static str] {
         &[PANORAMA_FILES]
+    }
+
+    /// Each panorama's RGBA in its EXR and RGB in its PNG.
+    fn samples(&self, frame: &SensorOutputs) -> u64 {
+        (frame.panorama_plans().iter())
+            .map(|p| 7 * u64::from(p.layout.width) * u64::from(p.layout.height))
+            .sum()
     }
 
     /// Each panorama is unwrapped and encoded beside the others.

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::{SensorLayer, Told, Writing};
+use super::{SensorLayer, SensorOutputs, Told, Writing};
 use crate::output::OutputError;
 use crate::sensor::dataset::{self as sensor_dataset, GeometryFrame};
 
@@ -32,6 +32,12 @@ impl SensorLayer for Points {
     /// Not in a single render's outputs: a dataset's, not a single render's.
     fn in_single_render(&self) -> bool {
         false
+    }
+
+    /// A point's three coordinates and its id, for every pixel at most (those that met
+    /// something are not known before the cloud is made).
+    fn samples(&self, frame: &SensorOutputs) -> u64 {
+        4 * u64::from(frame.rays.width) * u64::from(frame.rays.height)
     }
 
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {

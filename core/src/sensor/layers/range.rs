@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::{SensorLayer, Told, Writing};
+use super::{SensorLayer, SensorOutputs, Told, Writing};
 use crate::output::OutputError;
 use crate::sensor::files::Samples;
 
@@ -22,6 +22,10 @@ impl SensorLayer for Range {
 
     fn files(&self) -> &'static [&'static str] {
         &[RANGE_FILE]
+    }
+
+    fn samples(&self, frame: &SensorOutputs) -> u64 {
+        u64::from(frame.rays.width) * u64::from(frame.rays.height)
     }
 
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::{SensorLayer, Told, Writing};
+use super::{SensorLayer, SensorOutputs, Told, Writing};
 use crate::output::{png_error, OutputError};
 use crate::sensor::files::{range_mm, RANGE16_UNIT};
 
@@ -36,6 +36,10 @@ impl SensorLayer for Range16 {
 
     fn in_all(&self) -> bool {
         false
+    }
+
+    fn samples(&self, frame: &SensorOutputs) -> u64 {
+        u64::from(frame.rays.width) * u64::from(frame.rays.height)
     }
 
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {

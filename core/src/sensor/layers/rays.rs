@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::{SensorLayer, Told, Writing};
+use super::{SensorLayer, SensorOutputs, Told, Writing};
 use crate::output::OutputError;
 use crate::sensor::dataset::GeometryFrame;
 use crate::sensor::files::Samples;
@@ -40,6 +40,10 @@ impl SensorLayer for Rays {
 
     fn in_default(&self) -> bool {
         false
+    }
+
+    fn samples(&self, frame: &SensorOutputs) -> u64 {
+        RAY_CHANNELS.len() as u64 * u64::from(frame.rays.width) * u64::from(frame.rays.height)
     }
 
     fn write(&self, w: &Writing<'_>, dir: &Path) -> Result<Told, OutputError> {

@@ -43,6 +43,7 @@ fn each_layer_writes_exactly_the_files_it_names() {
         let w = Writing {
             frame: &frame,
             out: &out,
+            written: &|_| {},
         };
         let told = layer.0.write(&w, Path::new("/frame")).unwrap();
         let files: Vec<String> = (out.into_files().into_iter())
@@ -67,6 +68,31 @@ fn each_layer_writes_exactly_the_files_it_names() {
             assert!(!keys.contains(key), "{}: `{key}` twice", layer.name());
             keys.push(key);
         }
+    }
+}
+
+/// The samples the layers tell as they end are the samples they said they would write (what
+/// an estimate of the writing extrapolates), each layer's some.
+#[test]
+fn the_layers_tell_the_samples_they_said() {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let frame = small_frame();
+    let all = Layers::all().for_scene(true);
+    let said = AtomicU64::new(0);
+    let written = |n| {
+        said.fetch_add(n, Ordering::SeqCst);
+    };
+    let out = MemoryFiles::new(Path::new("/frame"));
+    let w = Writing {
+        frame: &frame,
+        out: &out,
+        written: &written,
+    };
+    super::write(&w, Path::new("/frame"), all).unwrap();
+    assert_eq!(said.into_inner(), all.samples(&frame));
+    let pixels = u64::from(frame.rays.width) * u64::from(frame.rays.height);
+    for layer in all.iter() {
+        assert!(layer.0.samples(&frame) >= pixels, "{}", layer.name());
     }
 }
 
@@ -174,7 +200,7 @@ fn the_layers_stop_at_the_writers_next_refusal() {
         .unwrap();
     let err = one.install(|| {
         frame
-            .write_chosen(&sink, Path::new("/frame"), all)
+            .write_chosen(&sink, Path::new("/frame"), all, &|_| {})
             .unwrap_err()
     });
     assert!(matches!(err, OutputError::Stopped { .. }), "{err}");

@@ -448,7 +448,7 @@ fn write_frame(
     layers: Layers,
 ) -> Result<(), OutputError> {
     out.write_json(&dir.join(sensor_dataset::POSE_FILE), pose)?;
-    o.write_chosen(out, dir, layers)
+    o.write_chosen(out, dir, layers, &|_| {})
 }
 
 #[cfg(test)]
