@@ -199,9 +199,8 @@ fn render_method(
         full_updates: args.full_updates,
         whole_faces: args.whole_faces,
         lookup: Some(lookup),
-        // Range and ids through the cube: only when asked for, so timings never pay (the
-        // traced ray map of ray-query needs none).
-        id_cube: args.sensor_outputs && !lookups::traces_ray_map(lookup),
+        lookup_fixed: true,
+        id_cube: crate::render_input::id_cube(args, lookup),
         trace_order: args.trace_order(),
         trace_in: args.trace_in,
         bvh_layout: args.bvh_layout,

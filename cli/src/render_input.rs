@@ -27,8 +27,8 @@ pub(crate) fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
 }
 
 /// Refuses an option that would change nothing here, rather than take it without a word (and
-/// record it in render.json as if it had): the fill's options with a lookup that fills no cube
-/// (not `--cube-size`: the cube is made, and budgeted, for every lookup, so it sizes memory),
+/// record it in render.json as if it had): the fill's options and the cube's size where the
+/// renderer makes no cube (a lookup that samples none, without an id cube),
 /// the update options under a refresh policy that re-renders every face whole anyway, the
 /// walks' and builds' options with another lookup, --fps for a single frame at a --time.
 pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Result<()> {
@@ -41,14 +41,15 @@ pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Resul
         );
     }
     let cube = [
+        ("--cube-size", args.cube_size.is_some()),
         ("--method", args.method.is_some()),
         ("--full-updates", args.full_updates),
         ("--whole-faces", args.whole_faces),
     ];
     if let Some((option, _)) = cube.iter().find(|(_, given)| *given) {
-        if !plugin.uses_cube() {
+        if !needs_cube(args, lookup) {
             bail!(
-                "{option}: the {lookup} lookup samples no cube map, so none is filled{}; leave \
+                "{option}: the {lookup} lookup samples no cube map, so none is made{}; leave \
                  it out, or give a lookup that samples the cube (--lookup box, say)",
                 chosen_for_outputs(args)
             );
@@ -123,10 +124,37 @@ pub(crate) fn load_scene(args: &Args) -> Result<Scene> {
     if let Some(n) = args.secant_steps {
         scene.mirror.secant_steps = n;
     }
-    let face_size_px = args.cube_size.unwrap_or(scene.cube.face_size_px);
+    // No cube where the lookup is known and needs none (`RenderOptions::lookup_fixed`); the
+    // lookup --sensor-outputs picks by the device is not known yet, so its cube is counted.
+    let face_size_px = match known_lookup(args, &scene) {
+        Some(lookup) if !needs_cube(args, lookup) => 0,
+        _ => args.cube_size.unwrap_or(scene.cube.face_size_px),
+    };
     specchio::memory::estimates::render(&scene, face_size_px, args.directions, args.sensor_outputs)
         .with_context(|| args.scene.display().to_string())?;
     Ok(scene)
+}
+
+/// The lookup the frames use where it is known before a device is chosen: `--lookup`, else the
+/// scene's unless `--sensor-outputs` picks one by the device ([`chosen_lookup`]).
+fn known_lookup(args: &Args, scene: &Scene) -> Option<Lookup> {
+    match (args.lookup, args.sensor_outputs) {
+        (Some(lookup), _) => Some(lookup),
+        (None, false) => Some(scene.mirror.lookup),
+        (None, true) => None,
+    }
+}
+
+/// Whether this run's renderer of `lookup` makes a cube: the lookup samples one, or the sensor
+/// outputs' ray map reads range and ids through the id cube.
+pub(crate) fn needs_cube(args: &Args, lookup: Lookup) -> bool {
+    lookups::needs_cube(lookup, id_cube(args, lookup))
+}
+
+/// Whether the renderer makes the id cube: range and ids through the cube only when asked for,
+/// so timings never pay (a lookup that traces the ray map needs none).
+pub(crate) fn id_cube(args: &Args, lookup: Lookup) -> bool {
+    args.sensor_outputs && !lookups::traces_ray_map(lookup)
 }
 
 /// The lookup the frames use: `--lookup`; else, for `--sensor-outputs`, the first that traces

@@ -58,13 +58,10 @@ fn render_and_reference_write_the_chains_codes_of_their_clean_image() {
     let chain = scene.sensor.imaging.clone().unwrap();
     let optics = SensorOptics::at(&scene, 0.0);
     let s = scene_path.to_str().unwrap();
-    for (command, extra) in [
-        ("render", &["--cube-size", "64"][..]),
-        ("reference", &[][..]),
-    ] {
+    for command in ["render", "reference"] {
         let out = dir.join(command);
         let o = out.to_str().unwrap();
-        run_ok(&[&[command, s, "--out", o, "--sensor-outputs"], extra].concat());
+        run_ok(&[command, s, "--out", o, "--sensor-outputs"]);
         let (dn, sbit) = codes(&out.join(CAMERA_IMAGE_FILE));
         assert_eq!(sbit, [12, 12, 12], "{command}");
         let expected = imaging::expose(&chain, &clean(&out), &optics, 0);
@@ -88,17 +85,7 @@ fn render_and_reference_write_the_chains_codes_of_their_clean_image() {
     // A render's frame number is its scene frame's (`--frame`): its draws are that frame's.
     let out = dir.join("frame-3");
     let o = out.to_str().unwrap();
-    run_ok(&[
-        "render",
-        s,
-        "--out",
-        o,
-        "--sensor-outputs",
-        "--cube-size",
-        "64",
-        "--frame",
-        "3",
-    ]);
+    run_ok(&["render", s, "--out", o, "--sensor-outputs", "--frame", "3"]);
     assert_eq!(json(&out.join("camera.json"))["imaging"]["frame"], 3);
     let expected = imaging::expose(&chain, &clean(&out), &optics, 3);
     assert_eq!(codes(&out.join(CAMERA_IMAGE_FILE)).0, expected.dn);

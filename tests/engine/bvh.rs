@@ -188,3 +188,58 @@ fn the_compute_walk_draws_what_the_fragment_walk_draws() {
         gpu.finish();
     }
 }
+
+/// A renderer whose lookup is fixed and samples no cube makes none (`lookup_fixed`): a scene
+/// whose cube faces are 8192² (4 GiB of colour, more than one allocation of lavapipe or
+/// SwiftShader holds; such a run was refused for a cube it never reads) renders with bvh, its
+/// views and ray map the same as a renderer's with the scene's 512² cube. A frame that would
+/// fill the cube, after the lookup is switched in place, is refused.
+#[test]
+fn a_fixed_lookup_that_samples_no_cube_makes_none() {
+    for device in devices() {
+        let gpu = Gpu::on(&device, Default::default());
+        let s = scene("scenes/thesis-room.toml");
+        let mut huge = s.clone();
+        huge.cube.face_size_px = 8192;
+        let fixed = RenderOptions {
+            lookup: Some(Lookup::Bvh),
+            lookup_fixed: true,
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&gpu.device, huge, &fixed).expect("no cube is made");
+        let readback = Readback {
+            views: true,
+            rays: true,
+            ..Default::default()
+        };
+        let (_, made) = r.render_frame(0, 0.0, readback).expect("frame");
+        let usual = RenderOptions {
+            lookup: Some(Lookup::Bvh),
+            ..Default::default()
+        };
+        let mut u = Renderer::new(&gpu.device, s, &usual).expect("renderer");
+        let (_, with_cube) = u.render_frame(0, 0.0, readback).expect("frame");
+        assert!(made.sensor.as_ref().unwrap().pixels == with_cube.sensor.unwrap().pixels);
+        assert!(made.observer.as_ref().unwrap().pixels == with_cube.observer.unwrap().pixels);
+        let bits = |q: specchio::sensor::quantities::QuantityImages| -> Vec<Vec<u32>> {
+            (q.iter())
+                .map(|(_, image)| image.pixels.iter().flatten().map(|v| v.to_bits()).collect())
+                .collect()
+        };
+        let (a, b) = (
+            made.sensor_quantities.unwrap(),
+            with_cube.sensor_quantities.unwrap(),
+        );
+        assert!(bits(a) == bits(b), "the ray maps differ");
+        r.scene.mirror.lookup = Lookup::Box;
+        let Err(refused) = r.render_frame(1, 0.0, readback) else {
+            panic!("a frame that fills the stand-in cube was rendered");
+        };
+        assert!(
+            refused.to_string().contains("made without one"),
+            "{refused}"
+        );
+        drop((r, u));
+        gpu.finish();
+    }
+}

@@ -47,6 +47,13 @@ pub struct RenderOptions {
     /// How the bvh lookup lays out and walks its trees (`--bvh-layout`; None: the device's
     /// default, `lookups::default_bvh_layout`).
     pub bvh_layout: Option<crate::bvh::BvhLayout>,
+    /// The lookup stays as given for the renderer's life: no switch in place, as the viewer's
+    /// keys and the benchmark's accuracy rungs make. A lookup that samples no cube, with no id
+    /// cube asked for, then has no cube: a stand-in of one texel a face is made for the
+    /// bindings, so that a scene's large `cube.face_size` neither takes memory nor stops the
+    /// run at the device's limits (`--lookup bvh` on a scene of 8192² faces was refused for
+    /// a cube it never reads). A frame that would fill it is refused.
+    pub lookup_fixed: bool,
     /// Frames the renderer may have submitted and not finished (`Renderer::submit_frame`),
     /// 1 to `MAX_FRAMES_IN_FLIGHT`; 0 counts as 1. With 1, each frame waits for the one
     /// before; the live viewer keeps 2, so that it records a frame while the GPU runs the last.

@@ -72,6 +72,10 @@ pub const PAIR_SIZE: [u32; 2] = [1200, 450];
 /// that its corners are that far (`ViewBasis::near_plane_for`); their far plane is at infinity.
 pub const CAMERA_NEAR_M: f32 = 0.05;
 
+/// The face size of the stand-in cube of a renderer whose fixed lookup samples none
+/// (`RenderOptions::lookup_fixed`): the bindings need an image, and nothing reads it.
+const STAND_IN_FACE_PX: u32 = 1;
+
 /// How far from a camera at `eye` (render space: the mirror's centre at the origin) its view
 /// keeps everything: [`CAMERA_NEAR_M`], or half the eye's distance to the mirror's surface when
 /// that is less. Every point of the sphere in view is then at least twice the near plane's
@@ -113,6 +117,9 @@ pub struct Renderer {
     drawn: draw::DrawOrder,
     /// Whether the first frame's SwiftShader losses were looked for (`snapping`).
     snapping_said: bool,
+    /// Whether the cube is a one-texel stand-in (`RenderOptions::lookup_fixed`): no frame
+    /// may fill it.
+    cube_stand_in: bool,
     pub scene: Scene,
     pub device: Arc<Device>,
 }
@@ -135,6 +142,11 @@ impl Renderer {
         }
         if let Some(lookup) = options.lookup {
             scene.mirror.lookup = lookup;
+        }
+        let cube_stand_in =
+            options.lookup_fixed && !lookups::needs_cube(scene.mirror.lookup, options.id_cube);
+        if cube_stand_in {
+            scene.cube.face_size_px = STAND_IN_FACE_PX;
         }
         let frames_in_flight = options.frames_in_flight.max(1);
         if frames_in_flight > MAX_FRAMES_IN_FLIGHT {
@@ -192,6 +204,7 @@ impl Renderer {
             refresh: refresh::Refresh::new(options.full_updates, options.whole_faces),
             drawn: draw::DrawOrder::default(),
             snapping_said: false,
+            cube_stand_in,
             scene,
             device: Arc::clone(device),
         })
@@ -246,6 +259,14 @@ impl Renderer {
     /// not wait for the GPU; its results come from the frames' queue.
     fn submit(&mut self, ask: FrameAsk) -> Result<(), GpuError> {
         let record_start = Instant::now();
+        let fills = ask.floor().is_some() || self.fills_cube(ask.readback);
+        if fills && self.cube_stand_in {
+            return Err(GpuError::Unsupported(format!(
+                "a frame that fills the cube map, from a renderer made without one (its \
+                 lookup was fixed, {}, which samples none: RenderOptions::lookup_fixed)",
+                self.scene.mirror.lookup
+            )));
+        }
         self.acquire_slot()?;
         self.follow_lookup()?;
         let state = SceneState::at(&self.scene, ask.t_s);
@@ -343,7 +364,9 @@ impl Renderer {
     fn fills_cube(&self, readback: Readback) -> bool {
         let rays_read_cube =
             readback.rays && self.sensor_ground_truth() == crate::sensor::GroundTruth::Cube;
-        lookups::plugin(self.mirror.lookup()).uses_cube() || readback.cube || rays_read_cube
+        // The scene's lookup, which the mirror's pass follows (`follow_lookup`): asked before
+        // the frame follows a switch too.
+        lookups::plugin(self.scene.mirror.lookup).uses_cube() || readback.cube || rays_read_cube
     }
 
     /// What this frame re-renders (the refresh policy's choice), counted.

@@ -87,6 +87,8 @@ impl FrameWriter {
             lookup: Some(lookup),
             // The traced ray map needs no id cube.
             id_cube: !lookups::traces_ray_map(lookup),
+            // One lookup for the writer's life: a traced one makes no cube.
+            lookup_fixed: true,
             ..Default::default()
         };
         let renderer = Renderer::new(device, robot_scene(scene), &options)?;

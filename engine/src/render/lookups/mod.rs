@@ -346,6 +346,13 @@ pub fn traces_ray_map(lookup: Lookup) -> bool {
     plugin(lookup).traces_ray_map()
 }
 
+/// Whether a renderer of `lookup` needs a cube map: the lookup samples one, or the sensor's
+/// ray map reads range and ids through the id cube (`id_cube`). Else a renderer whose lookup
+/// stays fixed (`RenderOptions::lookup_fixed`) makes none.
+pub fn needs_cube(lookup: Lookup, id_cube: bool) -> bool {
+    plugin(lookup).uses_cube() || id_cube
+}
+
 /// The lookup that traces colour, range and ids along one light path on the device, the
 /// sensor outputs' and datasets' default: of those it runs, the best ranked
 /// ([`MirrorLookup::ground_truth_rank`]): `bvh` on a CPU driver, where it measured cheaper
