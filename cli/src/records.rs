@@ -38,6 +38,8 @@ pub struct RenderSettings {
     pub start_time_s: f64,
     pub fps: f64,
     pub frames: u32,
+    /// The fill methods run: none where the renderer made no cube (a lookup that samples
+    /// none).
     pub methods: Vec<Method>,
     pub full_updates: bool,
     pub whole_faces: bool,
@@ -54,7 +56,8 @@ pub struct RenderSettings {
     /// The distance lookup's search steps (used only by it).
     pub distance_steps: u32,
     pub secant_steps: u32,
-    pub cube: CubeSettings,
+    /// The cube's settings; null where no cube was made.
+    pub cube: Option<CubeSettings>,
     pub refresh: String,
     pub observer_resolution: [u32; 2],
     pub sensor_resolution: [u32; 2],
@@ -78,7 +81,8 @@ pub struct CubeSettings {
 /// One method's frames.
 #[derive(Debug, Serialize)]
 pub struct RenderRun {
-    pub method: Method,
+    /// The method that filled the cube; null where no cube was made.
+    pub method: Option<Method>,
     pub out: String,
     /// Where the bvh lookup walked its rays, as taken (`fragment` or `compute`: `--trace-in`,
     /// else the device's default); absent for the other lookups.

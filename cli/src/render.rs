@@ -164,7 +164,19 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let info = device.info.clone();
     drop(device);
     let messages = log.messages();
-    let mut record = render_record(args, &scene, start_s, (methods, &refused), info, runs);
+    // A lookup that samples no cube has none made (`RenderOptions::lookup_fixed`): no method
+    // ran, and the record says so rather than name six-pass.
+    let methods = match crate::render_input::needs_cube(args, lookup) {
+        true => methods,
+        false => Vec::new(),
+    };
+    let mut record = render_record(
+        (args, &scene, lookup),
+        start_s,
+        (methods, &refused),
+        info,
+        runs,
+    );
     record.settings.validation = validation;
     // Counted once the device was dropped: its leak report is in.
     record.validation_messages = messages.len();
@@ -172,6 +184,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // A signal that came after the last check still stops the run: nothing is placed.
     specchio::process::interrupt::check("before placing the output")?;
     out.commit()?;
+    if args.method_name() == "all" {
+        specchio::say!("record: {}", args.out.join("render.json").display());
+    }
     for (m, why) in &refused {
         specchio::say!("  {m}: not run: {why}");
     }
@@ -216,11 +231,13 @@ fn render_method(
     let reports = render_frames(args, &mut renderer, (start_s, whole), out, &dir)?;
     let summary = summarize(&reports);
     let lookup = renderer.scene.mirror.lookup;
+    let method = crate::render_input::needs_cube(args, lookup).then_some(method);
     // Said from the folder; a listing that fails costs the line, never the render.
     let files = out.written(&dir);
     print_summary(args, (method, lookup), &dir, &reports, &summary);
     match files {
-        Ok(files) => specchio::say!("  files: {}", files_line(&files)),
+        // `--method all` writes render.json above the methods' folders: said once, there.
+        Ok(files) => specchio::say!("  files: {}", files_line(&files, dir == args.out)),
         Err(e) => specchio::say!("  files: (cannot list them: {e})"),
     }
     let walks = lookup == specchio::scene::Lookup::Bvh;
@@ -243,14 +260,14 @@ fn render_method(
 /// `render.json`: the settings the runs had, the device, what did not run, the runs (the
 /// validation setting and the message count are the caller's to fill in).
 fn render_record(
-    args: &Args,
-    scene: &Scene,
+    (args, scene, lookup): (&Args, &Scene, Lookup),
     start_s: f64,
     (methods, refused): (Vec<Method>, &[(Method, String)]),
     device: DeviceInfo,
     runs: Vec<RenderRun>,
 ) -> RenderRecord {
     let cube = &scene.cube;
+    let cube_made = !methods.is_empty();
     RenderRecord {
         scene: args.scene.display().to_string(),
         description: scene.description.clone(),
@@ -262,13 +279,15 @@ fn render_record(
             methods,
             full_updates: args.full_updates,
             whole_faces: args.whole_faces,
-            lookup: args.lookup.unwrap_or(scene.mirror.lookup),
+            // The lookup the frames used: `--sensor-outputs` without `--lookup` picks a traced
+            // one by the device (the scene's was recorded, though not used).
+            lookup,
             trace_order: args.trace_order().name(),
             trace_in: args.trace_in.map(|t| t.name()),
             bvh_layout: args.bvh_layout.map(|l| l.name()),
             distance_steps: scene.mirror.distance_steps,
             secant_steps: scene.mirror.secant_steps,
-            cube: CubeSettings {
+            cube: cube_made.then(|| CubeSettings {
                 face_size_px: args.cube_size.unwrap_or(cube.face_size_px),
                 format: format_name(cube.format),
                 offset_m: cube.offset_m.to_array(),
@@ -276,7 +295,7 @@ fn render_record(
                 far_m: cube.far_m,
                 mipmaps: cube.mipmaps,
                 anisotropy: cube.anisotropy,
-            },
+            }),
             refresh: refresh_name(scene.refresh),
             observer_resolution: scene.observer.resolution,
             sensor_resolution: scene.sensor.resolution,
@@ -494,29 +513,38 @@ fn summarize(reports: &[FrameReport]) -> RenderSummary {
     }
 }
 
+/// The run's lines; `method` is None where no cube was made (a lookup that samples none).
 fn print_summary(
     args: &Args,
-    (method, lookup): (Method, Lookup),
+    (method, lookup): (Option<Method>, Lookup),
     out: &Path,
     reports: &[FrameReport],
     summary: &RenderSummary,
 ) {
     let ms = |v: Option<f64>| v.map_or("n/a".to_owned(), |v| format!("{v:.2} ms"));
+    let filled = match method {
+        Some(method) => format!(" with {method},"),
+        None => ",".to_owned(),
+    };
     specchio::say!(
-        "rendered {} frame(s) of {} with {method}, lookup {lookup}, into {}",
+        "rendered {} frame(s) of {}{filled} lookup {lookup}, into {}",
         reports.len(),
         args.scene.display(),
         out.display()
     );
-    specchio::say!(
-        "  cube updates:       {} of {} frames",
-        summary.cube_updates,
-        reports.len()
-    );
-    specchio::say!(
-        "  cube update (GPU):  {} median",
-        ms(summary.median_gpu_cube_update_ms)
-    );
+    if method.is_none() {
+        specchio::say!("  cube map:           none made (the {lookup} lookup samples none)");
+    } else {
+        specchio::say!(
+            "  cube updates:       {} of {} frames",
+            summary.cube_updates,
+            reports.len()
+        );
+        specchio::say!(
+            "  cube update (GPU):  {} median",
+            ms(summary.median_gpu_cube_update_ms)
+        );
+    }
     specchio::say!(
         "  observer (GPU):     {} median",
         ms(summary.median_gpu_observer_ms)
@@ -531,8 +559,9 @@ fn print_summary(
 /// outputs): an EXR and a PNG of one image as `name.exr/.png`; a sequence's frame folders
 /// (`0000/`, ..., `10000/`, ...), which hold the same names, once, with their count. Linear
 /// in the files (a 100 000-frame sequence has a million). `render.json` is written after this
-/// is said.
-fn files_line(files: &[String]) -> String {
+/// is said, and named where it will be (`record_here`: in this folder, not above it as under
+/// `--method all`), beside the frame folders rather than in each.
+fn files_line(files: &[String], record_here: bool) -> String {
     fn frame(f: &str) -> Option<(&str, &str)> {
         f.split_once('/')
             .filter(|(d, _)| d.len() >= 4 && d.bytes().all(|b| b.is_ascii_digit()))
@@ -563,12 +592,17 @@ fn files_line(files: &[String]) -> String {
             _ => said.push((*name).to_owned()),
         }
     }
-    let mut line = said.join(", ");
-    if folders.len() > 1 {
-        line = format!(
+    let line = said.join(", ");
+    match (folders.len() > 1, record_here) {
+        (true, true) => format!(
+            "in each of {} frame folders (0000/ ...): {line}; render.json beside them",
+            folders.len()
+        ),
+        (true, false) => format!(
             "in each of {} frame folders (0000/ ...): {line}",
             folders.len()
-        );
+        ),
+        (false, true) => line + ", render.json",
+        (false, false) => line,
     }
-    line + ", render.json"
 }

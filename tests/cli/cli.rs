@@ -340,6 +340,16 @@ fn method_all_writes_each_usable_method_and_explains_the_others() {
     assert!(result.status.success(), "{stderr}");
     let what = format!("render {o}: {} methods", ran.len());
     common::estimate_line(&stderr, &what, 2 * ran.len() as u64, "frames");
+    // render.json is above the methods' folders: said once, there, not in each one's files.
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    let files: Vec<&str> = stdout.lines().filter(|l| l.contains("files: ")).collect();
+    assert_eq!(files.len(), ran.len(), "{stdout}");
+    assert!(files.iter().all(|l| !l.contains("render.json")), "{stdout}");
+    assert!(
+        stdout.contains(&format!("record: {o}/render.json")),
+        "{stdout}"
+    );
+    assert!(out.join("render.json").is_file() && !out.join("six-pass/render.json").exists());
 }
 
 #[test]

@@ -435,3 +435,75 @@ fn the_outputs_writing_says_its_estimate() {
         );
     }
 }
+
+/// What a render says and records is what it did: without `--lookup`, `--sensor-outputs`
+/// traces with a lookup the device picks, which `render.json` names (it named the scene's,
+/// unused), with no fill method and no cube where that lookup samples none (it named
+/// six-pass); and every file the `files:` line names exists where it says (it named a
+/// `render.json` in each frame folder, and in each of `--method all`'s).
+#[test]
+fn a_render_says_and_records_what_it_did() {
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let dir = temp_dir("says-what-it-did");
+    let d = dir.to_str().unwrap();
+    let args = [
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        d,
+        "--sensor-outputs",
+        "--frames",
+        "2",
+    ];
+    let out = common::specchio(&args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let said = stdout
+        .lines()
+        .find(|l| l.starts_with("rendered 2 frame(s) of "))
+        .unwrap();
+    let lookup = said
+        .split(" lookup ")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .unwrap();
+    let record = render_json(&dir);
+    assert_eq!(record["settings"]["lookup"], lookup, "{said}");
+    // The traced lookups (bvh, ray-query) sample no cube: none is made.
+    assert!(["bvh", "ray-query"].contains(&lookup), "{said}");
+    assert_eq!(record["settings"]["methods"], serde_json::json!([]));
+    assert!(record["settings"]["cube"].is_null() && record["runs"][0]["method"].is_null());
+    assert!(stdout.contains(&format!(
+        "cube map:           none made (the {lookup} lookup"
+    )));
+    assert!(!said.contains(" with "), "{said}");
+    // Every file named, in each frame folder, and render.json beside them.
+    let files = stdout
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("files: "))
+        .unwrap();
+    let (each, beside) = files.split_once("; ").unwrap();
+    assert_eq!(beside, "render.json beside them");
+    assert!(dir.join("render.json").is_file());
+    let each = each
+        .strip_prefix("in each of 2 frame folders (0000/ ...): ")
+        .unwrap();
+    for name in each.split(", ") {
+        let names = match name.strip_suffix(".exr/.png") {
+            Some(stem) => vec![format!("{stem}.exr"), format!("{stem}.png")],
+            None => vec![name.to_owned()],
+        };
+        for frame in ["0000", "0001"] {
+            for n in &names {
+                assert!(
+                    dir.join(frame).join(n).is_file(),
+                    "{frame}/{n} named: {files}"
+                );
+            }
+        }
+    }
+}
