@@ -48,8 +48,8 @@ fn updates_line(record: &Record, scene: &str, size: u32) -> Option<String> {
     Some(format!(
         "dirty rectangles {:.1} ms, {ratio:.2}x a full update ({:.1} ms), {:.1}% of its \
          texels; whole dirty faces {whole:.2}x",
-        d.rects_ms_median,
-        d.full_ms_median,
+        d.rects_ms_median?,
+        d.full_ms_median?,
         100.0 * texels
     ))
 }

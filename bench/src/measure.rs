@@ -182,7 +182,8 @@ fn rounds(settled: &Settled, scenes: &[Scene], work: &Work, plan: &Plan) -> u64 
             timing
                 + in_flight
                 + u64::from(!work.rungs.is_empty()) * timing
-                + u64::from(!settled.args.no_dynamic && dynamic::animated(s)) * per_loop
+                + u64::from(!settled.args.no_dynamic && dynamic::animated(s))
+                    * u64::from(dynamic::warmup_rounds(plan) + plan.frames)
         })
         .sum()
 }

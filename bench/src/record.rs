@@ -384,13 +384,13 @@ pub struct Dynamic {
     pub from_s: f64,
     pub frames: Vec<DynamicFrame>,
     /// Over the frames where something moved (full update ran): medians, and the ratios of
-    /// the medians to the full update's.
+    /// the medians to the full update's; null where nothing moved (they were 0.00 ms).
     pub changed_frames: usize,
-    pub faces_incremental_median: f64,
-    pub texels_rects_median: f64,
-    pub rects_ms_median: f64,
-    pub whole_faces_ms_median: f64,
-    pub full_ms_median: f64,
+    pub faces_incremental_median: Option<f64>,
+    pub texels_rects_median: Option<f64>,
+    pub rects_ms_median: Option<f64>,
+    pub whole_faces_ms_median: Option<f64>,
+    pub full_ms_median: Option<f64>,
     /// Rectangles over full (time).
     pub ratio: Option<f64>,
     /// Whole dirty faces over full (time).

@@ -19,17 +19,19 @@ pub fn lines(record: &Record) -> Vec<String> {
         }
         for d in record.dynamic.iter().filter(|d| &d.scene == scene) {
             let ratio = |r: Option<f64>| r.map_or("n/a".into(), |r| format!("{r:.2}x"));
+            let ms = |v: Option<f64>| v.map_or("n/a".into(), |v| format!("{v:.2} ms"));
+            let count = |v: Option<f64>| v.map_or("n/a".into(), |v| format!("{v}"));
             out.push(format!(
-                "  dynamic (six-pass, {}², {} frames with motion): dirty rectangles {:.2} ms = {} ({} texels), whole dirty faces {:.2} ms = {} ({} faces), full {:.2} ms (medians)",
+                "  dynamic (six-pass, {}², {} frames with motion): dirty rectangles {} = {} ({} texels), whole dirty faces {} = {} ({} faces), full {} (medians)",
                 d.cube_size,
                 d.changed_frames,
-                d.rects_ms_median,
+                ms(d.rects_ms_median),
                 ratio(d.ratio),
-                d.texels_rects_median,
-                d.whole_faces_ms_median,
+                count(d.texels_rects_median),
+                ms(d.whole_faces_ms_median),
                 ratio(d.whole_faces_ratio),
-                d.faces_incremental_median,
-                d.full_ms_median,
+                count(d.faces_incremental_median),
+                ms(d.full_ms_median),
             ));
         }
     }

@@ -186,7 +186,7 @@ fn the_dirty_rectangles_are_weighed_against_a_full_update() {
     let d = (r.dynamic.iter_mut())
         .find(|d| d.scene == SCENE)
         .expect("the quick baseline measures the thesis room's updates");
-    (d.rects_ms_median, d.full_ms_median) = (1.5, 12.0);
+    (d.rects_ms_median, d.full_ms_median) = (Some(1.5), Some(12.0));
     (d.ratio, d.whole_faces_ratio, d.texels_ratio) = (Some(0.125), Some(0.25), Some(0.004));
     let text = lines(&r);
     let at = (text.iter())
