@@ -33,7 +33,7 @@ pub struct Args {
     json: bool,
     /// Write the per-pixel FLIP error as a colour-mapped PNG (magma; grey: not compared). A
     /// colour comparison's: not with --angular, which has no FLIP.
-    #[arg(long, conflicts_with = "angular")]
+    #[arg(long, conflicts_with = "angular", value_parser = specchio::process::args::png_path)]
     heatmap: Option<PathBuf>,
     /// The two files are direction images (`render --directions` against the reference's
     /// `NAME.direction.exr`): report the mirror's angular lookup error instead, in degrees and

@@ -2,7 +2,8 @@
 //! inodes differ per spelling: vfat mounted through FUSE (`fusefat`), where `t.EXR` and
 //! `T.exr` are one file with two inode numbers, so the identity guard alone let
 //! `compare T.exr r.exr --heatmap t.EXR`, `bench s.toml --json S.TOML` and `view s.toml
-//! --screenshot S.TOML` replace their input and exit 0. Needs root, /dev/fuse, `fusefat` and `mkfs.vfat` (dosfstools; `scripts/setup.sh`
+//! --screenshot S.TOML` replace their input and exit 0. (A heatmap or a screenshot now takes
+//! only a `.png` name, so here it folds onto a PNG input: a mask, a scene named `s.png`.) Needs root, /dev/fuse, `fusefat` and `mkfs.vfat` (dosfstools; `scripts/setup.sh`
 //! installs both); where they are missing the check is skipped, which CI refuses.
 
 #[path = "../common/mod.rs"]
@@ -106,19 +107,52 @@ fn an_output_never_replaces_its_input_through_a_case_fold_on_fuse_vfat() {
         std::fs::read(render.join("sensor.exr")).unwrap(),
     )
     .unwrap();
+    // The heatmap is a PNG (`--heatmap` takes only a .png name): the input it would fold onto
+    // is the mask, a PNG (the render's sensor image, whose red walls select pixels).
+    std::fs::write(
+        mnt.join("M.png"),
+        std::fs::read(render.join("sensor.png")).unwrap(),
+    )
+    .unwrap();
     let scene = root().join("scenes/test/six-colour-room.toml");
     std::fs::write(mnt.join("s.toml"), std::fs::read(&scene).unwrap()).unwrap();
+    // The same scene under a PNG's name: the one input a screenshot can fold onto.
+    std::fs::write(mnt.join("s.png"), std::fs::read(&scene).unwrap()).unwrap();
     let before = |p: &str| std::fs::read(mnt.join(p)).unwrap();
-    let (exr, toml) = (before("T.exr"), before("s.toml"));
+    let (mask, toml) = (before("M.png"), before("s.toml"));
 
     std::fs::create_dir(mnt.join("Sub")).unwrap();
-    std::fs::write(mnt.join("Sub/T.exr"), &exr).unwrap();
+    std::fs::write(mnt.join("Sub/M.png"), &mask).unwrap();
     let cases: [&[&str]; 4] = [
-        &["compare", "T.exr", "r.exr", "--heatmap", "t.EXR"],
+        &[
+            "compare",
+            "T.exr",
+            "r.exr",
+            "--mask",
+            "M.png",
+            "--heatmap",
+            "m.PNG",
+        ],
         // The input named by a spelling its folder does not list, the target by the listed one.
-        &["compare", "t.exr", "r.exr", "--heatmap", "T.EXR"],
+        &[
+            "compare",
+            "T.exr",
+            "r.exr",
+            "--mask",
+            "m.png",
+            "--heatmap",
+            "M.png",
+        ],
         // A parent folder spelled in another case.
-        &["compare", "sub/T.exr", "r.exr", "--heatmap", "SUB/t.exr"],
+        &[
+            "compare",
+            "T.exr",
+            "r.exr",
+            "--mask",
+            "sub/M.png",
+            "--heatmap",
+            "SUB/m.png",
+        ],
         &[
             "bench",
             "s.toml",
@@ -140,24 +174,25 @@ fn an_output_never_replaces_its_input_through_a_case_fold_on_fuse_vfat() {
     if let Some(x) = viewer_support::Xvfb::start() {
         use viewer_support::Display;
         let out = common::output_of(
-            x.command(&["s.toml", "--frames", "2", "--screenshot", "S.TOML"])
+            x.command(&["s.png", "--frames", "2", "--screenshot", "S.PNG"])
                 .current_dir(mnt),
         );
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(
             out.status.code(),
             Some(1),
-            "view --screenshot S.TOML: {stderr}"
+            "view s.png --screenshot S.PNG: {stderr}"
         );
         assert!(stderr.contains("it is the input"), "{stderr}");
     }
-    assert_eq!(before("T.exr"), exr, "the input is untouched");
-    assert_eq!(before("Sub/T.exr"), exr, "the input is untouched");
+    assert_eq!(before("M.png"), mask, "the input is untouched");
+    assert_eq!(before("Sub/M.png"), mask, "the input is untouched");
     assert_eq!(before("s.toml"), toml, "the input is untouched");
+    assert_eq!(before("s.png"), toml, "the input is untouched");
     // Another name is an output as usual.
-    let (code, stderr) = run_in(mnt, &["compare", "T.exr", "r.exr", "--heatmap", "h.exr"]);
+    let (code, stderr) = run_in(mnt, &["compare", "T.exr", "r.exr", "--heatmap", "h.png"]);
     assert_eq!(code, Some(0), "{stderr}");
-    assert!(mnt.join("h.exr").exists());
+    assert!(mnt.join("h.png").exists());
     drop(mount);
     drop(render);
 }

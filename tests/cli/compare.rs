@@ -276,19 +276,24 @@ fn an_unwritable_heatmap_is_named_as_the_user_gave_it() {
 }
 
 /// A heatmap path that names an input (under any spelling) is refused before anything is
-/// written: the input survives byte for byte.
+/// written: the input survives byte for byte. (The heatmap takes only a .png name: the input
+/// here is the mask, a PNG.)
 #[test]
 fn a_heatmap_over_an_input_is_refused_and_the_input_kept() {
     let dir = temp_dir("heatmap-over-input");
     let (test, reference) = (dir.join("test.exr"), dir.join("reference.exr"));
     write_exr(&test, &image(0.1)).unwrap();
     write_exr(&reference, &image(0.0)).unwrap();
-    let before = std::fs::read(&reference).unwrap();
-    let respelled = dir.join(".").join("reference.exr");
+    let mask = dir.join("mask.png");
+    specchio::output::write_png(&mask, &image(0.9)).unwrap();
+    let before = std::fs::read(&mask).unwrap();
+    let respelled = dir.join(".").join("mask.png");
     let out = specchio(&[
         "compare",
         s(&test),
         s(&reference),
+        "--mask",
+        s(&mask),
         "--heatmap",
         s(&respelled),
     ]);
@@ -298,7 +303,7 @@ fn a_heatmap_over_an_input_is_refused_and_the_input_kept() {
         stderr.contains("--heatmap") && stderr.contains("is the input"),
         "{stderr}"
     );
-    assert_eq!(std::fs::read(&reference).unwrap(), before);
+    assert_eq!(std::fs::read(&mask).unwrap(), before);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

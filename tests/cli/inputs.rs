@@ -131,7 +131,8 @@ fn no_output_replaces_an_input_under_another_name() {
         pixels: vec![[0.5; 4]; 16],
     };
     specchio::output::write_exr(&image, &grey).unwrap();
-    std::os::unix::fs::symlink(&image, dir.join("A.EXR")).unwrap();
+    // A link under a PNG's name (the heatmap takes only a .png name) to the compared EXR.
+    std::os::unix::fs::symlink(&image, dir.join("A.png")).unwrap();
     let s = |p: &Path| p.to_str().unwrap().to_owned();
     let quick = ["--quick", "--no-accuracy", "--no-floors", "--no-dynamic"];
     let bench = |json: &Path| -> Vec<String> {
@@ -149,7 +150,7 @@ fn no_output_replaces_an_input_under_another_name() {
                 s(&image),
                 s(&image),
                 "--heatmap".to_owned(),
-                s(&dir.join("A.EXR")),
+                s(&dir.join("A.png")),
             ],
             &image,
         ),
@@ -300,8 +301,22 @@ fn options_that_would_change_nothing_are_refused() {
             "--dynamic-from: sets where the dynamic measurement starts, and no scene here moves",
         ),
         (
-            vec!["compare", thesis, thesis, "--angular", "64", "--heatmap", out_s],
+            vec!["compare", thesis, thesis, "--angular", "64", "--heatmap", "h.png"],
             "'--angular <FACE_SIZE>' cannot be used with '--heatmap <HEATMAP>'",
+        ),
+        // The heatmap is a PNG: under an EXR's name it wrote PNG bytes, and `h.png/` (a
+        // folder's name) wrote a file `h.png`.
+        (
+            vec!["compare", thesis, thesis, "--heatmap", "h.exr"],
+            "`h.exr` is not a PNG file's name: the file is a PNG; name it .png",
+        ),
+        (
+            vec!["compare", thesis, thesis, "--heatmap", "h.png/"],
+            "`h.png/` is not a PNG file's name",
+        ),
+        (
+            vec!["bench", thesis, "--json", "b.json/"],
+            "b.json/: a name that ends in `/` is a folder's; a file name is needed",
         ),
         (
             vec!["bench", thesis, "--rungs", "plain", "--trace-in", "compute", "--json", b],

@@ -76,7 +76,7 @@ pub struct Args {
     #[arg(long, allow_negative_numbers = true, value_parser = whole(1..=MAX_FRAMES))]
     pub frames: Option<u32>,
     /// Save the window's last image as PNG (needs --frames).
-    #[arg(long, requires = "frames")]
+    #[arg(long, requires = "frames", value_parser = specchio::process::args::png_path)]
     pub screenshot: Option<PathBuf>,
     /// Present with MAILBOX (lowest latency, may drop frames) instead of FIFO, where offered.
     #[arg(long)]

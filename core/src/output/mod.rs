@@ -47,6 +47,8 @@ pub enum OutputError {
     NoFolder { path: PathBuf, folder: PathBuf },
     #[error("cannot write {path}: it is a folder; a file name is needed")]
     IsAFolder { path: PathBuf },
+    #[error("cannot write {path}: a name that ends in `/` is a folder's; a file name is needed")]
+    FolderName { path: PathBuf },
     #[error("cannot write {path}: it is {what}; a file output replaces only a regular file")]
     NotAFile { path: PathBuf, what: &'static str },
     #[error(

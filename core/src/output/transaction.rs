@@ -110,6 +110,13 @@ impl Transaction {
     /// Stages the file `target`, whose folder must exist; an existing file is replaced,
     /// unless it is one of the command's inputs.
     pub fn file(&mut self, target: &Path) -> Result<(), OutputError> {
+        // `h.png/` is a folder's name: the components drop the slash, and a file `h.png` was
+        // written under it.
+        if target.as_os_str().as_encoded_bytes().ends_with(b"/") {
+            return Err(OutputError::FolderName {
+                path: target.to_owned(),
+            });
+        }
         let (resolved, name) = named(target)?;
         self.check_new(target, &resolved, &name)?;
         check_not_an_input(target, &resolved, &self.inputs())?;

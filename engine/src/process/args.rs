@@ -43,6 +43,22 @@ pub fn face_size(text: &str) -> Result<u32, String> {
     })
 }
 
+/// The path of a PNG file the command writes (`compare --heatmap`, `view --screenshot`): its
+/// name ends in `.png`, in any case, so that no PNG is written under another format's name
+/// (`--heatmap h.exr` wrote PNG bytes that EXR readers then refused) and no folder's name
+/// (`h.png/`) is taken for a file's.
+pub fn png_path(text: &str) -> Result<std::path::PathBuf, String> {
+    let named = std::path::Path::new(text)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    match named && !text.ends_with('/') {
+        true => Ok(text.into()),
+        false => Err(format!(
+            "`{text}` is not a PNG file's name: the file is a PNG; name it .png"
+        )),
+    }
+}
+
 /// A finite number in `[lo, hi]`, or `(lo, hi]` when `lo_open`; `hi` may be infinite (no
 /// upper bound; the value must still be finite).
 pub fn real(
@@ -109,6 +125,18 @@ pub fn trace_order(text: &str) -> Result<TraceOrder, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A PNG's name ends in .png, in any case; another format's, none, or a folder's is not.
+    #[test]
+    fn png_paths_end_in_png() {
+        for good in ["h.png", "dir/H.PNG", "a.b.Png", "./x.png"] {
+            assert_eq!(png_path(good), Ok(good.into()), "{good}");
+        }
+        for bad in ["h.exr", "h", "h.png/", "dir/", ".png", "h.png.exr", ""] {
+            let e = png_path(bad).unwrap_err();
+            assert!(e.contains("is not a PNG file's name"), "{bad}: {e}");
+        }
+    }
 
     #[test]
     fn whole_numbers_are_checked_against_their_range() {
