@@ -51,7 +51,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         return angular(args, face_size);
     }
     // 1. Read and compare; any bad input stops here, before a file is written.
-    let inputs = metrics::read_inputs(&args.test, &args.reference, args.mask.as_deref())?;
+    let inputs = read_said(args)?;
     interrupt::check("after reading the images")?;
     let comparison = compare_said(&inputs)?;
     interrupt::check("after comparing")?;
@@ -79,51 +79,90 @@ pub fn run(args: &Args) -> Result<ExitCode> {
 /// The comparison with its FLIP said as it goes (an 8192² comparison is about a minute of
 /// FLIP): the estimate once it has run for a moment, and a stop between bands of rows.
 fn compare_said(inputs: &metrics::Inputs) -> Result<Comparison> {
-    let (w, h) = (inputs.reference.width, inputs.reference.height);
-    let rows = FlipRows {
-        width: w,
-        height: h,
-        whole: OnceLock::new(),
-        done: AtomicU64::new(0),
-    };
+    let flip = Said::new(|rows, w| format!("compare: FLIP of {w}x{rows} pixels"));
     let (test, reference) = (&inputs.test, &inputs.reference);
-    match metrics::compare_watched(test, reference, inputs.mask.as_ref(), &rows) {
+    match metrics::compare_watched(test, reference, inputs.mask.as_ref(), &flip) {
         Err(MetricsError::Stopped) => {
-            let at = format!("after {} of {h} rows of FLIP", rows.done.into_inner());
+            let at = format!("after {} of {} rows of FLIP", flip.done(), flip.rows());
             Err(interrupt::stopped(&at).into())
         }
         done => Ok(done?),
     }
 }
 
-/// FLIP's rows counted as pixels into a [`Progress`] whose clock starts as the first band
-/// begins: the sRGB conversions and the linear metrics before it would otherwise count as
-/// FLIP's time (a 4096² comparison's first estimate said 25 s for 5 s of work).
-struct FlipRows {
-    width: u32,
-    height: u32,
-    whole: OnceLock<Progress>,
+/// The images read with their decoding said as it goes (two 8192² EXRs decode for seconds),
+/// and stopped at the next chunk at a signal.
+fn read_said(args: &Args) -> Result<metrics::Inputs> {
+    let images = 2 + usize::from(args.mask.as_ref().is_some_and(|m| is_exr(m)));
+    let reading = Said::new(move |rows, w| {
+        let h = rows / images as u64;
+        format!("compare: reading {images} images of {w}x{h} pixels")
+    });
+    let (test, reference) = (&args.test, &args.reference);
+    match metrics::read_inputs_watched(test, reference, args.mask.as_deref(), &reading) {
+        Err(MetricsError::Stopped) => {
+            let at = format!(
+                "while reading the images ({} of their {} rows decoded)",
+                reading.done(),
+                reading.rows()
+            );
+            Err(interrupt::stopped(&at).into())
+        }
+        read => Ok(read?),
+    }
+}
+
+/// Whether `path` names an EXR, as the metrics read a mask by it.
+fn is_exr(path: &std::path::Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
+/// Work counted in rows into a [`Progress`] of pixels that is made as the work begins
+/// (`Watch::begin`), so its clock starts then: what came before (the reading, the sRGB
+/// conversions before FLIP) would count as its time (a 4096² comparison's first estimate
+/// said 25 s for 5 s of FLIP). `what` names the work from its rows and their width.
+struct Said<F: Fn(u64, u32) -> String + Sync> {
+    what: F,
+    whole: OnceLock<(Progress, u64, u64)>,
     done: AtomicU64,
 }
 
-impl FlipRows {
-    fn progress(&self) -> &Progress {
-        let (w, h) = (self.width, self.height);
-        let pixels = u64::from(w) * u64::from(h);
-        (self.whole).get_or_init(|| {
-            Progress::new(format!("compare: FLIP of {w}x{h} pixels"), pixels, "pixels")
-        })
+impl<F: Fn(u64, u32) -> String + Sync> Said<F> {
+    fn new(what: F) -> Self {
+        Self {
+            what,
+            whole: OnceLock::new(),
+            done: AtomicU64::new(0),
+        }
+    }
+
+    /// Rows done so far, and in all (0 before the work began).
+    fn done(&self) -> u64 {
+        self.done.load(Ordering::Relaxed)
+    }
+
+    fn rows(&self) -> u64 {
+        self.whole.get().map_or(0, |(_, rows, _)| *rows)
     }
 }
 
-impl Watch for FlipRows {
+impl<F: Fn(u64, u32) -> String + Sync> Watch for Said<F> {
+    fn begin(&self, rows: u64, width: u32) {
+        let w = u64::from(width);
+        let progress = Progress::new((self.what)(rows, width), rows * w, "pixels");
+        let _ = self.whole.set((progress, rows, w));
+    }
+
     fn rows_done(&self, rows: u32) {
         self.done.fetch_add(u64::from(rows), Ordering::Relaxed);
-        self.progress().add(u64::from(self.width) * u64::from(rows));
+        if let Some((progress, _, width)) = self.whole.get() {
+            progress.add(u64::from(rows) * width);
+        }
     }
 
     fn stop(&self) -> bool {
-        self.progress().stopped()
+        interrupt::check("").is_err()
     }
 }
 

@@ -6,6 +6,9 @@
 /// What long work reports to: rows done (as each part ends, all its rows at once, so that a
 /// rate is the rate of the work), and whether to stop before the next part.
 pub trait Watch: Sync {
+    /// The work is `rows` rows of `width` pixels, said as it begins where it is known only
+    /// then (the images a comparison reads, from their headers).
+    fn begin(&self, _rows: u64, _width: u32) {}
     fn rows_done(&self, rows: u32);
     fn stop(&self) -> bool;
 }

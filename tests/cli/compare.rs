@@ -438,9 +438,10 @@ fn a_stopped_comparison_leaves_nothing() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A long comparison says its estimate once FLIP has begun, and a Ctrl-C then stops it
-/// between bands of FLIP's rows, saying how far it got: FLIP used to be one call of a minute
-/// at 8192², silent, that no signal could cut short.
+/// A long comparison says its estimates as it reads its images and once FLIP has begun, and a
+/// Ctrl-C then stops it between bands of FLIP's rows, saying how far it got: FLIP used to be
+/// one call of a minute at 8192², silent, that no signal could cut short, after seconds of
+/// silent reading.
 #[test]
 fn a_long_comparison_says_its_estimate_and_stops_within_flip() {
     let dir = temp_dir("estimate");
@@ -460,6 +461,13 @@ fn a_long_comparison_says_its_estimate_and_stops_within_flip() {
     assert!(
         line.contains(" of 9437184 pixels in ") && line.contains("left; Ctrl-C stops it"),
         "{line}"
+    );
+    // The reading before it says its own (two 8192² images decode for seconds).
+    common::estimate_line(
+        &stderr,
+        "compare: reading 2 images of 3072x3072 pixels",
+        2 * 3072 * 3072,
+        "pixels",
     );
     let stop = stderr
         .lines()

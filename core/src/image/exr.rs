@@ -163,7 +163,22 @@ pub fn has_magic(bytes: &[u8]) -> bool {
 
 /// The first RGBA layer as 32-bit float (alpha 1 when the file has none).
 pub fn decode_rgba(bytes: &[u8]) -> Result<RgbaImage, Error> {
+    decode_rgba_watched(bytes, |_| {}, &|| false)
+}
+
+/// [`decode_rgba`], saying its progress (0 to 1) to `progress` as it goes, and ended at the
+/// next chunk it reads once `stop` says so (an error [`is_stopped`] tells): an 8192² image
+/// decodes for seconds.
+pub fn decode_rgba_watched(
+    bytes: &[u8],
+    progress: impl FnMut(f64),
+    stop: &dyn Fn() -> bool,
+) -> Result<RgbaImage, Error> {
     use ::exr::prelude::{ReadChannels as _, ReadLayers as _};
+    let reader = Stoppable {
+        inner: std::io::Cursor::new(bytes),
+        stop,
+    };
     let read = ::exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -180,8 +195,48 @@ pub fn decode_rgba(bytes: &[u8]) -> Result<RgbaImage, Error> {
         )
         .first_valid_layer()
         .all_attributes()
-        .from_buffered(std::io::Cursor::new(bytes))?;
+        .on_progress(progress)
+        .from_buffered(reader)?;
     Ok(read.layer_data.channel_data.pixels)
+}
+
+/// Bytes read until `stop` says otherwise: then each read fails, and the decoder with it.
+struct Stoppable<'a> {
+    inner: std::io::Cursor<&'a [u8]>,
+    stop: &'a dyn Fn() -> bool,
+}
+
+impl std::io::Read for Stoppable<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if (self.stop)() {
+            // Not `Interrupted`: `read_exact` retries that for ever.
+            return Err(std::io::Error::other(DecodeStopped));
+        }
+        self.inner.read(buf)
+    }
+}
+
+impl std::io::Seek for Stoppable<'_> {
+    fn seek(&mut self, to: std::io::SeekFrom) -> std::io::Result<u64> {
+        self.inner.seek(to)
+    }
+}
+
+/// The error a stopped reader gives.
+#[derive(Debug)]
+struct DecodeStopped;
+
+impl std::fmt::Display for DecodeStopped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("stopped")
+    }
+}
+
+impl std::error::Error for DecodeStopped {}
+
+/// Whether `e` is the error of a decoding that its `stop` ended.
+pub fn is_stopped(e: &Error) -> bool {
+    matches!(e, Error::Io(io) if io.get_ref().is_some_and(|e| e.is::<DecodeStopped>()))
 }
 
 /// Every channel of the first layer of the file at `path`, by name (for tests and tools that

@@ -125,6 +125,7 @@ fn in_bands(
     watch: &dyn Watch,
 ) -> Result<Vec<f32>, Stopped> {
     let h = reference.height;
+    watch.begin(u64::from(h), reference.width);
     let bands: Vec<Range<u32>> = (0..h)
         .step_by(rows.max(1) as usize)
         .map(|y| y..y.saturating_add(rows).min(h))

@@ -21,19 +21,21 @@
 mod flip;
 mod heatmap;
 pub mod percentile;
+mod read;
 
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
-use crate::files::{read_regular_file, FileError};
-use crate::image::exr;
 use crate::image::RgbaImage;
 use crate::output::OutputError;
-use crate::scene::TextureData;
 use crate::watch::{Stopped, Unwatched, Watch};
 
 pub use flip::{flip_map, flip_map_watched, BAND_MARGIN as FLIP_BAND_MARGIN};
 pub use heatmap::{colour_map, heatmap_rgb8, write_heatmap, NOT_COMPARED_RGB8};
+pub use read::{
+    read_exr, read_exr_channels, read_inputs, read_inputs_watched, read_mask, Inputs,
+    MAX_INPUT_SIDE_PX,
+};
 
 /// PSNR's peak signal: linear 1.0 (diffuse white). HDR values above it are not clipped, so an
 /// error larger than 1 gives a negative PSNR.
@@ -74,8 +76,8 @@ pub enum MetricsError {
     EmptyMask { path: PathBuf, threshold: f32 },
     #[error(transparent)]
     Output(#[from] OutputError),
-    /// The caller's watch stopped the comparison before its FLIP was done.
-    #[error("the comparison was stopped before its FLIP map was done")]
+    /// The caller's watch stopped the reading or the comparison before it was done.
+    #[error("stopped before the comparison was done")]
     Stopped,
 }
 
@@ -155,166 +157,6 @@ impl Comparison {
     pub fn psnr_is_infinite(&self) -> bool {
         self.psnr_db.is_some_and(f64::is_infinite)
     }
-}
-
-/// The first RGBA layer of an OpenEXR file, as 32-bit float (alpha 1 when the file has none).
-pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
-    let bytes = read_checked_exr(path)?;
-    exr::decode_rgba(&bytes).map_err(|e| match exr::channel_names(&bytes) {
-        // A readable file without colour: one of the sensor's single-quantity layers.
-        Ok(names) if !["R", "G", "B"].iter().all(|c| names.iter().any(|n| n == c)) => {
-            MetricsError::Read {
-                path: path.to_owned(),
-                message: format!(
-                    "holds no colour image (channels R, G, B) but {}: this reads colour \
-                     images; a layer such as sensor.range.exr is read by channel name \
-                     (specchio.read_exr in Python)",
-                    names.join(", ")
-                ),
-            }
-        }
-        _ => exr_error(path, e),
-    })
-}
-
-/// Every channel of the first layer of an OpenEXR file by name, with the layer's size
-/// (width, height), read with the same limits as [`read_exr`] (the Python package's
-/// `read_exr`: the sensor's layers by channel name).
-pub fn read_exr_channels(path: &Path) -> Result<exr::Layer, MetricsError> {
-    let bytes = read_checked_exr(path)?;
-    exr::decode_channels(&bytes).map_err(|e| exr_error(path, e))
-}
-
-/// An OpenEXR file's bytes, in one read through the loaders' regular-file reader (a FIFO
-/// would block, a folder fail late), its header checked against the limits; the decoding
-/// works on these bytes.
-fn read_checked_exr(path: &Path) -> Result<Vec<u8>, MetricsError> {
-    let bytes = read_regular_file(path, MAX_INPUT_FILE_BYTES).map_err(|e| match e {
-        FileError::NotFound { .. } => MetricsError::Missing {
-            path: path.to_owned(),
-        },
-        other => MetricsError::Read {
-            path: path.to_owned(),
-            message: other.to_string(),
-        },
-    })?;
-    if !exr::has_magic(&bytes) {
-        // Said from its first bytes: the parser calls a file shorter than its magic number
-        // truncated.
-        return Err(MetricsError::Read {
-            path: path.to_owned(),
-            message: NOT_EXR.to_owned(),
-        });
-    }
-    check_exr_size(path, &bytes)?;
-    Ok(bytes)
-}
-
-/// The largest image side the metrics read: twice the largest view specchio writes (8192 px),
-/// so a corrupt or hostile header cannot ask for gigabytes before a pixel is read.
-pub const MAX_INPUT_SIDE_PX: usize = 16384;
-
-/// The largest EXR file the metrics read: an uncompressed RGBA f32 image of
-/// [`MAX_INPUT_SIDE_PX`] a side, with room for its header and offset tables.
-const MAX_INPUT_FILE_BYTES: u64 = (MAX_INPUT_SIDE_PX * MAX_INPUT_SIDE_PX * 16) as u64 + (64 << 20);
-
-/// Refuses an EXR whose header declares a layer larger than [`MAX_INPUT_SIDE_PX`] a side,
-/// from the header alone (the pixels would be allocated before they are read).
-fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<(), MetricsError> {
-    for (w, h) in exr::layer_sizes(bytes).map_err(|e| exr_error(path, e))? {
-        if w > MAX_INPUT_SIDE_PX || h > MAX_INPUT_SIDE_PX {
-            return Err(MetricsError::Read {
-                path: path.to_owned(),
-                message: format!(
-                    "the image is {w}x{h}; at most {MAX_INPUT_SIDE_PX} px a side is read"
-                ),
-            });
-        }
-    }
-    Ok(())
-}
-
-const NOT_EXR: &str = "not an OpenEXR image (expected the linear .exr files that `specchio \
-     render` and `specchio reference` write)";
-
-/// The parser ran out of bytes: a file cut short, or one whose header or offsets were
-/// damaged so that they point past its end.
-const CUT_SHORT: &str = "the OpenEXR file ends before its header or pixels do: truncated or \
-     damaged";
-
-/// An OpenEXR reading error in words a user can act on.
-fn exr_error(path: &Path, e: exr::Error) -> MetricsError {
-    let message = match e {
-        exr::Error::Invalid(why) if why.contains("identifier") => NOT_EXR.to_owned(),
-        exr::Error::Invalid(why) if why.contains("missing bytes") => CUT_SHORT.to_owned(),
-        exr::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
-            CUT_SHORT.to_owned()
-        }
-        other => format!("not a readable OpenEXR image: {other}"),
-    };
-    MetricsError::Read {
-        path: path.to_owned(),
-        message,
-    }
-}
-
-/// A mask from an EXR (by extension `.exr`, any case) or any other file decoded as PNG.
-pub fn read_mask(path: &Path) -> Result<Mask, MetricsError> {
-    let is_exr = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    if is_exr {
-        return Ok(Mask::from_red(&read_exr(path)?));
-    }
-    check_exists(path)?;
-    let png = TextureData::from_png(path).map_err(|message| MetricsError::Read {
-        path: path.to_owned(),
-        message,
-    })?;
-    Ok(Mask {
-        width: png.width,
-        height: png.height,
-        selected: png
-            .rgba8
-            .chunks_exact(4)
-            .map(|p| f32::from(p[0]) / 255.0 > MASK_THRESHOLD)
-            .collect(),
-    })
-}
-
-/// A comparison's images as read from their files: same size, the mask (if any) selecting
-/// some pixel.
-pub struct Inputs {
-    pub test: RgbaImage,
-    pub reference: RgbaImage,
-    pub mask: Option<Mask>,
-}
-
-/// Reads the files for a comparison; a size mismatch or an empty mask names the files.
-pub fn read_inputs(
-    test: &Path,
-    reference: &Path,
-    mask: Option<&Path>,
-) -> Result<Inputs, MetricsError> {
-    let test_image = read_exr(test)?;
-    let reference_image = read_exr(reference)?;
-    let mask = mask
-        .map(|m| read_mask(m).map(|mask| (m, mask)))
-        .transpose()?;
-    let name = |p: &Path| p.display().to_string();
-    same_size(
-        (&name(test), &test_image),
-        (&name(reference), &reference_image),
-    )?;
-    if let Some((path, mask)) = &mask {
-        same_size_as_mask((&name(reference), &reference_image), (&name(path), mask))?;
-        mask.check_selects(path)?;
-    }
-    Ok(Inputs {
-        test: test_image,
-        reference: reference_image,
-        mask: mask.map(|(_, m)| m),
-    })
 }
 
 /// Compares `test` with `reference` (same size) over the pixels `mask` selects (all without
@@ -481,20 +323,6 @@ fn check_size(
         b_name: b_name.to_owned(),
         b_size,
     })
-}
-
-/// A missing file gets its own error (the decoders' messages do not always name it).
-fn check_exists(path: &Path) -> Result<(), MetricsError> {
-    match std::fs::metadata(path) {
-        Ok(_) => Ok(()),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(MetricsError::Missing {
-            path: path.to_owned(),
-        }),
-        Err(e) => Err(MetricsError::Read {
-            path: path.to_owned(),
-            message: e.to_string(),
-        }),
-    }
 }
 
 #[cfg(test)]

@@ -1,6 +1,8 @@
 //! Known answers for every metric.
 
 use super::*;
+use crate::scene::TextureData;
+use crate::watch::Watch;
 
 fn image(width: u32, height: u32, f: impl Fn(u32, u32) -> [f32; 4]) -> RgbaImage {
     RgbaImage {
@@ -446,4 +448,77 @@ fn huge_data_window(bytes: &[u8]) -> Vec<u8> {
     out[at + 8..at + 12].copy_from_slice(&99_999i32.to_le_bytes());
     out[at + 12..at + 16].copy_from_slice(&99_999i32.to_le_bytes());
     out
+}
+
+/// A watch of reading: the rows said at `begin`, those decoded, and a stop after `stop_after`.
+struct Reading {
+    begun: std::sync::Mutex<Option<(u64, u32)>>,
+    rows: std::sync::atomic::AtomicU64,
+    stop_after: u64,
+}
+
+impl Reading {
+    fn new(stop_after: u64) -> Self {
+        Self {
+            begun: std::sync::Mutex::new(None),
+            rows: 0.into(),
+            stop_after,
+        }
+    }
+
+    fn rows(&self) -> u64 {
+        self.rows.load(std::sync::atomic::Ordering::SeqCst)
+    }
+}
+
+impl Watch for Reading {
+    fn begin(&self, rows: u64, width: u32) {
+        *self.begun.lock().unwrap() = Some((rows, width));
+    }
+
+    fn rows_done(&self, rows: u32) {
+        (self.rows).fetch_add(u64::from(rows), std::sync::atomic::Ordering::SeqCst);
+    }
+
+    fn stop(&self) -> bool {
+        self.rows() >= self.stop_after
+    }
+}
+
+/// Reading says the rows it will decode (both images, and an EXR mask), reports every one,
+/// and stops at the watch's word with nothing read; a mask of another size is refused from
+/// the headers, before any row is decoded.
+#[test]
+fn reading_is_reported_row_by_row_and_stopped_at_a_word() {
+    let dir = temp_dir("reading");
+    let (a, b, m) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("m.exr"));
+    crate::output::write_exr(&a, &gradient(64, 256)).unwrap();
+    crate::output::write_exr(&b, &gradient(64, 256)).unwrap();
+    crate::output::write_exr(&m, &image(64, 256, |_, _| [1.0; 4])).unwrap();
+    let all = Reading::new(u64::MAX);
+    let read = read_inputs_watched(&a, &b, Some(&m), &all).unwrap();
+    assert_eq!(*all.begun.lock().unwrap(), Some((3 * 256, 64)));
+    assert_eq!(all.rows(), 3 * 256);
+    assert_eq!(read.test, gradient(64, 256));
+    assert_eq!(
+        read.mask.map(|m| m.selected.iter().filter(|&&s| s).count()),
+        Some(64 * 256)
+    );
+    // Stopped within the first image, after its first chunks of 16 rows.
+    let stopped = Reading::new(32);
+    let err = read_inputs_watched(&a, &b, None, &stopped).err().unwrap();
+    assert!(matches!(err, MetricsError::Stopped), "{err}");
+    assert!((32..256).contains(&stopped.rows()), "{}", stopped.rows());
+    // Another size, found from the headers: nothing decoded, and the files named.
+    // (A new file: what this process read, no output of it replaces.)
+    let short = dir.join("short.exr");
+    crate::output::write_exr(&short, &image(64, 255, |_, _| [1.0; 4])).unwrap();
+    let early = Reading::new(u64::MAX);
+    let err = read_inputs_watched(&a, &b, Some(&short), &early)
+        .err()
+        .unwrap();
+    assert!(matches!(err, MetricsError::SizeMismatch { .. }), "{err}");
+    assert!(err.to_string().contains("short.exr is 64x255"), "{err}");
+    assert_eq!((early.rows(), *early.begun.lock().unwrap()), (0, None));
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,0 +1,252 @@
+//! Reading a comparison's images: EXR files through the loaders' one reader, checked against
+//! the limits from their headers before any pixel is decoded, decoded with their rows
+//! reported to a [`Watch`] (an 8192² image decodes for seconds) and stopped at its word; masks
+//! from EXR or PNG.
+
+use std::path::Path;
+
+use super::{check_size, same_size, same_size_as_mask, Mask, MetricsError, MASK_THRESHOLD};
+use crate::files::{read_regular_file, FileError};
+use crate::image::{exr, RgbaImage};
+use crate::scene::TextureData;
+use crate::watch::{Unwatched, Watch};
+
+/// The first RGBA layer of an OpenEXR file, as 32-bit float (alpha 1 when the file has none).
+pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
+    decode(path, &read_checked_exr(path)?, &Unwatched)
+}
+
+/// The colour image of an EXR file's `bytes` (read from `path`), its rows reported to
+/// `watch` as they are decoded; [`MetricsError::Stopped`] when `watch` stops it.
+fn decode(path: &Path, bytes: &[u8], watch: &dyn Watch) -> Result<RgbaImage, MetricsError> {
+    let rows = header_size(bytes).map_or(0, |(_, h)| u64::from(h));
+    let mut said = 0;
+    let progress = |done: f64| {
+        let now = ((done.clamp(0.0, 1.0) * rows as f64) as u64).min(rows);
+        if now > said {
+            watch.rows_done((now - said) as u32);
+            said = now;
+        }
+    };
+    let stop = || watch.stop();
+    exr::decode_rgba_watched(bytes, progress, &stop).map_err(|e| match exr::channel_names(bytes) {
+        _ if exr::is_stopped(&e) => MetricsError::Stopped,
+        // A readable file without colour: one of the sensor's single-quantity layers.
+        Ok(names) if !["R", "G", "B"].iter().all(|c| names.iter().any(|n| n == c)) => {
+            MetricsError::Read {
+                path: path.to_owned(),
+                message: format!(
+                    "holds no colour image (channels R, G, B) but {}: this reads colour \
+                     images; a layer such as sensor.range.exr is read by channel name \
+                     (specchio.read_exr in Python)",
+                    names.join(", ")
+                ),
+            }
+        }
+        _ => exr_error(path, e),
+    })
+}
+
+/// Every channel of the first layer of an OpenEXR file by name, with the layer's size
+/// (width, height), read with the same limits as [`read_exr`] (the Python package's
+/// `read_exr`: the sensor's layers by channel name).
+pub fn read_exr_channels(path: &Path) -> Result<exr::Layer, MetricsError> {
+    let bytes = read_checked_exr(path)?;
+    exr::decode_channels(&bytes).map_err(|e| exr_error(path, e))
+}
+
+/// An OpenEXR file's bytes, in one read through the loaders' regular-file reader (a FIFO
+/// would block, a folder fail late), its header checked against the limits; the decoding
+/// works on these bytes.
+fn read_checked_exr(path: &Path) -> Result<Vec<u8>, MetricsError> {
+    let bytes = read_regular_file(path, MAX_INPUT_FILE_BYTES).map_err(|e| match e {
+        FileError::NotFound { .. } => MetricsError::Missing {
+            path: path.to_owned(),
+        },
+        other => MetricsError::Read {
+            path: path.to_owned(),
+            message: other.to_string(),
+        },
+    })?;
+    if !exr::has_magic(&bytes) {
+        // Said from its first bytes: the parser calls a file shorter than its magic number
+        // truncated.
+        return Err(MetricsError::Read {
+            path: path.to_owned(),
+            message: NOT_EXR.to_owned(),
+        });
+    }
+    check_exr_size(path, &bytes)?;
+    Ok(bytes)
+}
+
+/// The largest image side the metrics read: twice the largest view specchio writes (8192 px),
+/// so a corrupt or hostile header cannot ask for gigabytes before a pixel is read.
+pub const MAX_INPUT_SIDE_PX: usize = 16384;
+
+/// The largest EXR file the metrics read: an uncompressed RGBA f32 image of
+/// [`MAX_INPUT_SIDE_PX`] a side, with room for its header and offset tables.
+const MAX_INPUT_FILE_BYTES: u64 = (MAX_INPUT_SIDE_PX * MAX_INPUT_SIDE_PX * 16) as u64 + (64 << 20);
+
+/// Refuses an EXR whose header declares a layer larger than [`MAX_INPUT_SIDE_PX`] a side,
+/// from the header alone (the pixels would be allocated before they are read).
+fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<(), MetricsError> {
+    for (w, h) in exr::layer_sizes(bytes).map_err(|e| exr_error(path, e))? {
+        if w > MAX_INPUT_SIDE_PX || h > MAX_INPUT_SIDE_PX {
+            return Err(MetricsError::Read {
+                path: path.to_owned(),
+                message: format!(
+                    "the image is {w}x{h}; at most {MAX_INPUT_SIDE_PX} px a side is read"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+const NOT_EXR: &str = "not an OpenEXR image (expected the linear .exr files that `specchio \
+     render` and `specchio reference` write)";
+
+/// The parser ran out of bytes: a file cut short, or one whose header or offsets were
+/// damaged so that they point past its end.
+const CUT_SHORT: &str = "the OpenEXR file ends before its header or pixels do: truncated or \
+     damaged";
+
+/// An OpenEXR reading error in words a user can act on.
+fn exr_error(path: &Path, e: exr::Error) -> MetricsError {
+    let message = match e {
+        exr::Error::Invalid(why) if why.contains("identifier") => NOT_EXR.to_owned(),
+        exr::Error::Invalid(why) if why.contains("missing bytes") => CUT_SHORT.to_owned(),
+        exr::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            CUT_SHORT.to_owned()
+        }
+        other => format!("not a readable OpenEXR image: {other}"),
+    };
+    MetricsError::Read {
+        path: path.to_owned(),
+        message,
+    }
+}
+
+/// A mask from an EXR (by extension `.exr`, any case) or any other file decoded as PNG.
+pub fn read_mask(path: &Path) -> Result<Mask, MetricsError> {
+    if is_exr_name(path) {
+        return Ok(Mask::from_red(&read_exr(path)?));
+    }
+    check_exists(path)?;
+    let png = TextureData::from_png(path).map_err(|message| MetricsError::Read {
+        path: path.to_owned(),
+        message,
+    })?;
+    Ok(Mask {
+        width: png.width,
+        height: png.height,
+        selected: png
+            .rgba8
+            .chunks_exact(4)
+            .map(|p| f32::from(p[0]) / 255.0 > MASK_THRESHOLD)
+            .collect(),
+    })
+}
+
+/// A comparison's images as read from their files: same size, the mask (if any) selecting
+/// some pixel.
+pub struct Inputs {
+    pub test: RgbaImage,
+    pub reference: RgbaImage,
+    pub mask: Option<Mask>,
+}
+
+/// Reads the files for a comparison; a size mismatch or an empty mask names the files.
+pub fn read_inputs(
+    test: &Path,
+    reference: &Path,
+    mask: Option<&Path>,
+) -> Result<Inputs, MetricsError> {
+    read_inputs_watched(test, reference, mask, &Unwatched)
+}
+
+/// [`read_inputs`], the EXR images' rows reported to `watch` as they are decoded (`begin`
+/// says how many there are), stopped at its word ([`MetricsError::Stopped`]). The sizes are
+/// compared from the headers before any pixel is decoded: a mask of another size used to be
+/// found after seconds of decoding at 8192².
+pub fn read_inputs_watched(
+    test: &Path,
+    reference: &Path,
+    mask: Option<&Path>,
+    watch: &dyn Watch,
+) -> Result<Inputs, MetricsError> {
+    let name = |p: &Path| p.display().to_string();
+    let (test_bytes, reference_bytes) = (read_checked_exr(test)?, read_checked_exr(reference)?);
+    let exr_mask = mask.filter(|m| is_exr_name(m));
+    let mask_bytes = exr_mask.map(read_checked_exr).transpose()?;
+    let sizes = (header_size(&test_bytes), header_size(&reference_bytes));
+    if let (Some(a), Some(b)) = sizes {
+        check_size(&name(test), a, &name(reference), b)?;
+    }
+    if let (Some(path), Some(Some(m)), Some(r)) =
+        (exr_mask, mask_bytes.as_deref().map(header_size), sizes.1)
+    {
+        check_size(&name(reference), r, &name(path), m)?;
+    }
+    // A PNG mask is decoded first (8 bits a channel, quick), and its size checked.
+    let png_mask = match mask.filter(|m| !is_exr_name(m)) {
+        Some(path) => Some((path, read_mask(path)?)),
+        None => None,
+    };
+    if let (Some((path, m)), Some(r)) = (&png_mask, sizes.1) {
+        check_size(&name(reference), r, &name(path), (m.width, m.height))?;
+    }
+    let exrs = 2 + u64::from(mask_bytes.is_some());
+    let (width, height) = sizes.1.unwrap_or((0, 0));
+    watch.begin(exrs * u64::from(height), width);
+    let test_image = decode(test, &test_bytes, watch)?;
+    let reference_image = decode(reference, &reference_bytes, watch)?;
+    let mask = match (exr_mask, mask_bytes, png_mask) {
+        (Some(path), Some(bytes), _) => Some((path, Mask::from_red(&decode(path, &bytes, watch)?))),
+        (_, _, png) => png,
+    };
+    same_size(
+        (&name(test), &test_image),
+        (&name(reference), &reference_image),
+    )?;
+    if let Some((path, mask)) = &mask {
+        same_size_as_mask((&name(reference), &reference_image), (&name(path), mask))?;
+        mask.check_selects(path)?;
+    }
+    Ok(Inputs {
+        test: test_image,
+        reference: reference_image,
+        mask: mask.map(|(_, m)| m),
+    })
+}
+
+/// A missing file gets its own error (the decoders' messages do not always name it).
+fn check_exists(path: &Path) -> Result<(), MetricsError> {
+    match std::fs::metadata(path) {
+        Ok(_) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(MetricsError::Missing {
+            path: path.to_owned(),
+        }),
+        Err(e) => Err(MetricsError::Read {
+            path: path.to_owned(),
+            message: e.to_string(),
+        }),
+    }
+}
+
+/// Whether `path` names an EXR file (by its extension, any case): masks are read by it.
+fn is_exr_name(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
+/// The size of the layers an EXR's header declares, where they all have one size (the
+/// decoder reads the first valid layer: with several sizes, the decoded image is checked).
+fn header_size(bytes: &[u8]) -> Option<(u32, u32)> {
+    let sizes = exr::layer_sizes(bytes).ok()?;
+    let (&first, rest) = sizes.split_first()?;
+    rest.iter()
+        .all(|&s| s == first)
+        .then_some((first.0 as u32, first.1 as u32))
+}
