@@ -7,6 +7,7 @@
 mod calibrate;
 mod compare;
 mod dataset;
+mod image_files;
 mod info;
 // Compiled in every build so that its test runs where the tests run (with the viewer).
 #[cfg_attr(feature = "viewer", allow(dead_code))]

@@ -10,6 +10,7 @@ use specchio::process::{interrupt, progress};
 use specchio::reference::{ReferenceImages, MAX_SPP};
 use specchio::sensor::SensorOutputs;
 
+use crate::image_files::ImageFiles;
 use crate::records::{ReferenceCameras, ReferenceRecord};
 use specchio::process::args::{real, whole};
 
@@ -57,8 +58,13 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         &signalled,
     )
     .map_err(|StoppedAt(at)| interrupt::stopped(&at))?;
-    for (name, (images, stats)) in [("observer", &traced.observer), ("sensor", &traced.sensor)] {
-        write_images(&out, &args.out, name, images)?;
+    let cameras = [("observer", &traced.observer), ("sensor", &traced.sensor)];
+    let mut files = ImageFiles::default();
+    for (name, (images, _)) in cameras {
+        image_files(&mut files, &args.out, name, images);
+    }
+    files.write(&out, Some("reference"))?;
+    for (name, (images, stats)) in cameras {
         specchio::say!(
             "{name}: {}x{}, {} spp, {} rays in {:.0} ms ({:.2} M rays/s), {} mirror pixels, {} misses",
             images.color.width,
@@ -111,14 +117,16 @@ fn rayon_threads() -> usize {
         .unwrap_or(1)
 }
 
-fn write_images(out: &Transaction, dir: &Path, name: &str, images: &ReferenceImages) -> Result<()> {
-    out.write_exr(&dir.join(format!("{name}.exr")), &images.color)?;
-    out.write_png(&dir.join(format!("{name}.png")), &images.color)?;
-    out.write_exr(
-        &dir.join(format!("{name}.direction.exr")),
-        &images.direction,
-    )?;
-    out.write_exr(&dir.join(format!("{name}.distance.exr")), &images.distance)?;
-    out.write_exr(&dir.join(format!("{name}.object.exr")), &images.object)?;
-    Ok(())
+/// A camera's image files: its colour (EXR and PNG), and its direction, distance and object
+/// layers.
+fn image_files<'a>(
+    files: &mut ImageFiles<'a>,
+    dir: &Path,
+    name: &str,
+    images: &'a ReferenceImages,
+) {
+    files.exr_and_png(dir, name, &images.color);
+    files.exr(dir.join(format!("{name}.direction.exr")), &images.direction);
+    files.exr(dir.join(format!("{name}.distance.exr")), &images.distance);
+    files.exr(dir.join(format!("{name}.object.exr")), &images.object);
 }

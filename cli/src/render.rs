@@ -1,5 +1,6 @@
 //! `specchio render`: one frame (or a sequence) of a scene, written as EXR + PNG + JSON.
 
+use crate::image_files::ImageFiles;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -376,9 +377,13 @@ fn render_frames(
             dir.to_owned()
         };
         let wrote =
-            write_frame(out, &frame_dir, &images).and_then(|()| match args.sensor_outputs {
-                true => write_sensor_outputs(out, &frame_dir, renderer, (frame_index, t), images),
-                false => Ok(()),
+            write_frame(out, &frame_dir, &images, args.frames == 1).and_then(|()| {
+                match args.sensor_outputs {
+                    true => {
+                        write_sensor_outputs(out, &frame_dir, renderer, (frame_index, t), images)
+                    }
+                    false => Ok(()),
+                }
             });
         // A signal stops a frame's files between two (the transaction checks before each):
         // said, as between two frames, by how many frames were done.
@@ -421,30 +426,31 @@ fn refresh_name(p: RefreshPolicy) -> String {
     }
 }
 
-fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages) -> Result<()> {
+/// A frame's image files: its views, their direction images and the cube's faces, said as
+/// they are written where `said` (a single frame: a sequence says its frames).
+fn write_frame(out: &Transaction, dir: &Path, images: &FrameImages, said: bool) -> Result<()> {
+    let mut files = ImageFiles::default();
     if let Some(img) = &images.observer {
-        out.write_exr(&dir.join("observer.exr"), img)?;
-        out.write_png(&dir.join("observer.png"), img)?;
+        files.exr_and_png(dir, "observer", img);
     }
     if let Some(img) = &images.sensor {
-        out.write_exr(&dir.join("sensor.exr"), img)?;
-        out.write_png(&dir.join("sensor.png"), img)?;
+        files.exr_and_png(dir, "sensor", img);
     }
     if let Some(img) = &images.pair {
-        out.write_png(&dir.join("views.png"), img)?;
+        files.png(dir.join("views.png"), img);
     }
     if let Some(img) = &images.observer_direction {
-        out.write_exr(&dir.join("observer.direction.exr"), img)?;
+        files.exr(dir.join("observer.direction.exr"), img);
     }
     if let Some(img) = &images.sensor_direction {
-        out.write_exr(&dir.join("sensor.direction.exr"), img)?;
+        files.exr(dir.join("sensor.direction.exr"), img);
     }
     if let Some(faces) = &images.cube {
         for (face, img) in FACE_NAMES.iter().zip(faces) {
-            out.write_exr(&dir.join("cube").join(format!("{face}.exr")), img)?;
+            files.exr(dir.join("cube").join(format!("{face}.exr")), img);
         }
     }
-    Ok(())
+    files.write(out, said.then_some("render"))
 }
 
 /// The sensor outputs of one frame from its ray-map images (`Readback::rays`).

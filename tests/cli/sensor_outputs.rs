@@ -408,7 +408,8 @@ fn a_stop_while_the_outputs_are_written_comes_before_the_next_file() {
 }
 
 /// The writing of the sensor outputs says its own estimate (half a minute at 4096², after a
-/// trace's "about 3 s left"): each layer counted by its samples as it ends.
+/// trace's "about 3 s left"): each layer counted by its samples as it ends; and so does the
+/// writing of the views' image files before them (11 s at 4096² for a reference).
 #[test]
 fn the_outputs_writing_says_its_estimate() {
     let scene = root().join("scenes/test/six-colour-room.toml");
@@ -432,6 +433,13 @@ fn the_outputs_writing_says_its_estimate() {
         assert!(
             line.contains(" % done in ") && line.contains(" left"),
             "{line}"
+        );
+        let files = (stderr.lines())
+            .find(|l| l.starts_with(&format!("{command}: writing ")))
+            .unwrap_or_else(|| panic!("no estimate for the image files:\n{stderr}"));
+        assert!(
+            files.contains(" image files: ") && files.contains(" % done in "),
+            "{files}"
         );
     }
 }
