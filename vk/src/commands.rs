@@ -4,7 +4,7 @@
 //! (`render::in_flight`) each own a submitter and wait for it only when its slot comes round.
 
 use std::cell::Cell;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use ash::vk;
 
@@ -110,13 +110,34 @@ impl Submitter {
 
     /// Blocks until the last submission has finished (at once when nothing is in flight).
     pub fn wait(&self) -> Result<(), GpuError> {
+        self.wait_asking(None)
+    }
+
+    /// [`Self::wait`], asking the hook of [`set_long_wait_hook`] every [`WAIT_SLICE_NS`] while
+    /// it waits: for a frame's wait, which may be seconds on a CPU driver (not for teardown's).
+    pub fn wait_watched(&self) -> Result<(), GpuError> {
+        self.wait_asking(LONG_WAIT_HOOK.get().copied())
+    }
+
+    fn wait_asking(&self, hook: Option<fn()>) -> Result<(), GpuError> {
         if !self.in_flight.get() {
             return Ok(());
         }
         let d = &self.device.raw;
-        // SAFETY: the fence belongs to this device; u64::MAX: a CPU driver may be slow, and a
-        // lost device returns an error rather than hanging.
-        let waited = unsafe { d.wait_for_fences(&[self.fence], true, u64::MAX) };
+        // A lost device returns an error rather than hanging; a CPU driver may be slow, so
+        // without a hook the wait has no end.
+        let slice = match hook {
+            Some(_) => WAIT_SLICE_NS,
+            None => u64::MAX,
+        };
+        let waited = loop {
+            // SAFETY: the fence belongs to this device.
+            let waited = unsafe { d.wait_for_fences(&[self.fence], true, slice) };
+            match (waited, hook) {
+                (Err(vk::Result::TIMEOUT), Some(hook)) => hook(),
+                _ => break waited,
+            }
+        };
         super::fault::fence_wait(waited).vk("vkWaitForFences")?;
         // SAFETY: the fence is signalled and not in use.
         unsafe { d.reset_fences(&[self.fence]) }.vk("vkResetFences")?;
@@ -132,6 +153,20 @@ impl Submitter {
         // SAFETY: the fence is live.
         unsafe { self.device.raw.get_fence_status(self.fence) }.vk("vkGetFenceStatus")
     }
+}
+
+/// How long one wait for a frame's fence lasts before [`set_long_wait_hook`]'s hook is asked.
+pub const WAIT_SLICE_NS: u64 = 100_000_000;
+
+/// The hook of [`set_long_wait_hook`].
+static LONG_WAIT_HOOK: OnceLock<fn()> = OnceLock::new();
+
+/// Installs `hook`, called every [`WAIT_SLICE_NS`] while a frame's submission is waited for
+/// ([`Submitter::wait_watched`]); once per process. A command ends the process there at a
+/// signal rather than wait out a GPU frame of seconds (no GPU work can be cut short, and
+/// nothing may be destroyed under it).
+pub fn set_long_wait_hook(hook: fn()) {
+    let _ = LONG_WAIT_HOOK.set(hook);
 }
 
 impl Drop for Submitter {

@@ -107,6 +107,7 @@ pub fn catch() {
     static INSTALLED: std::sync::Once = std::sync::Once::new();
     INSTALLED.call_once(|| {
         crate::output::stop_between_files(|| INTERRUPTED.load(Ordering::SeqCst));
+        crate::vk::commands::set_long_wait_hook(during_a_frame);
         if let Err(e) = start_cleaner() {
             // A second signal then ends the process at once, its staging folders left to the
             // next run's sweep.
@@ -123,6 +124,21 @@ pub fn catch() {
             }
         }
     });
+}
+
+/// Asked every 100 ms while a frame runs on the GPU (`Submitter::wait_watched`): at a signal,
+/// the process ends there, as a second signal's does, with the staging folders removed and the
+/// usual message and status, rather than wait out the frame (an 8192² localisation image is
+/// one frame of 13 s on lavapipe, and no GPU work can be cut short). Nothing is torn down:
+/// the GPU still uses the frame's objects, and the kernel and the driver reclaim them.
+fn during_a_frame() {
+    if !INTERRUPTED.load(Ordering::SeqCst) {
+        return;
+    }
+    crate::output::remove_staging_folders();
+    let stopped: Box<dyn std::error::Error + Send + Sync> =
+        Box::new(Interrupted("during a GPU frame".to_owned()));
+    super::ending::end_without_teardown::<Box<dyn std::error::Error + Send + Sync>>(Err(stopped))
 }
 
 /// An error once a signal has arrived; `progress` says how far the command got.

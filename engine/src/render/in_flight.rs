@@ -283,7 +283,9 @@ impl Renderer {
         );
         self.frames.order.pop_front();
         let slot = &mut self.frames.slots[s];
-        slot.submitter.wait()?;
+        // A frame may run for seconds (an 8192² sensor on a CPU driver): a command's hook may
+        // end the process at a signal meanwhile (`process::interrupt`).
+        slot.submitter.wait_watched()?;
         let Some(mut pending) = slot.pending.take() else {
             return Ok(());
         };

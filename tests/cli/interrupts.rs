@@ -1,0 +1,48 @@
+//! Ctrl-C while the GPU runs a frame: the command ends there within a moment, its staging
+//! folder removed, rather than wait out the frame (no GPU work can be cut short: an 8192²
+//! localisation image is one frame of 13 s on lavapipe, a heavy scene's 8192² bvh sensor
+//! frame 30 s or more).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use common::{root, temp_dir};
+
+/// A render whose one frame is held on the GPU (`SPECCHIO_FAULT_HOLD_FRAME=1`: its
+/// submission waits up to 60 s for a semaphore nothing signals) ends within seconds of a
+/// SIGINT, saying where, with exit 1 and nothing written. It used to wait out the frame.
+#[test]
+fn a_signal_during_a_gpu_frame_ends_the_run_within_a_moment() {
+    let dir = temp_dir("gpu-frame-stop");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = root().join("scenes/test/six-colour-room.toml");
+    let out = dir.join("out");
+    let said = dir.join("stdout.txt");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .env("SPECCHIO_FAULT_HOLD_FRAME", "1")
+        .stdout(std::fs::File::create(&said).unwrap())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let held = || {
+        std::fs::read_to_string(&said).is_ok_and(|s| s.contains("fault: frame 1 held until let go"))
+    };
+    let signalled = std::time::Instant::now();
+    let result = common::signal_when(child, libc::SIGINT, "the held frame", held);
+    let took = signalled.elapsed();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("interrupted during a GPU frame: nothing was written"),
+        "{stderr}"
+    );
+    // Well before the hold's 60 s limit, which is when the frame would have ended.
+    assert!(took.as_secs() < 40, "took {took:?}");
+    assert!(!out.exists() && common::staging_folders(&out).is_empty());
+}
