@@ -81,7 +81,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     //    scenes are read, and the reports checked again against every file they brought
     //    (meshes, textures). They appear together at the end or not at all.
     let settled = settle(args)?;
-    specchio::process::interrupt::catch();
+    specchio::process::interrupt::catch_in_long_frames();
     let mut out = Transaction::new();
     for input in settled.scenes.iter().chain(&settled.args.baseline) {
         out.input(input)?;

@@ -97,7 +97,11 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     plan.frames_apply()?;
     let n = plan.poses.len();
     let mut folder = Folder::stage(&args.out, n, plan.frame_files())?;
-    specchio::process::interrupt::catch();
+    // A run that resumes keeps its finished frames, which its stop says: it waits out a frame.
+    match args.resume {
+        true => specchio::process::interrupt::catch(),
+        false => specchio::process::interrupt::catch_in_long_frames(),
+    }
 
     // 2. The GPU and a renderer whose mirror follows the trajectory.
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;

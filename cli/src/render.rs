@@ -127,7 +127,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // (dropped, it is removed): a failure anywhere below leaves nothing behind.
     let mut out = Transaction::new();
     out.folder(&args.out, "render.json")?;
-    specchio::process::interrupt::catch();
+    specchio::process::interrupt::catch_in_long_frames();
 
     // 2. The GPU, with the features of the methods that will run.
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;

@@ -1,5 +1,5 @@
-//! Ctrl-C while the GPU runs a frame: the command ends there within a moment, its staging
-//! folder removed, rather than wait out the frame (no GPU work can be cut short: an 8192²
+//! Ctrl-C while the GPU runs a frame of a second or more: the command ends there within a
+//! moment, its staging folder removed, rather than wait out the frame (no GPU work can be cut short: an 8192²
 //! localisation image is one frame of 13 s on lavapipe, a heavy scene's 8192² bvh sensor
 //! frame 30 s or more).
 

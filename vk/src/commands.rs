@@ -119,7 +119,7 @@ impl Submitter {
         self.wait_asking(LONG_WAIT_HOOK.get().copied())
     }
 
-    fn wait_asking(&self, hook: Option<fn()>) -> Result<(), GpuError> {
+    fn wait_asking(&self, hook: Option<fn(std::time::Duration)>) -> Result<(), GpuError> {
         if !self.in_flight.get() {
             return Ok(());
         }
@@ -130,11 +130,12 @@ impl Submitter {
             Some(_) => WAIT_SLICE_NS,
             None => u64::MAX,
         };
+        let start = std::time::Instant::now();
         let waited = loop {
             // SAFETY: the fence belongs to this device.
             let waited = unsafe { d.wait_for_fences(&[self.fence], true, slice) };
             match (waited, hook) {
-                (Err(vk::Result::TIMEOUT), Some(hook)) => hook(),
+                (Err(vk::Result::TIMEOUT), Some(hook)) => hook(start.elapsed()),
                 _ => break waited,
             }
         };
@@ -159,13 +160,13 @@ impl Submitter {
 pub const WAIT_SLICE_NS: u64 = 100_000_000;
 
 /// The hook of [`set_long_wait_hook`].
-static LONG_WAIT_HOOK: OnceLock<fn()> = OnceLock::new();
+static LONG_WAIT_HOOK: OnceLock<fn(std::time::Duration)> = OnceLock::new();
 
-/// Installs `hook`, called every [`WAIT_SLICE_NS`] while a frame's submission is waited for
-/// ([`Submitter::wait_watched`]); once per process. A command ends the process there at a
-/// signal rather than wait out a GPU frame of seconds (no GPU work can be cut short, and
-/// nothing may be destroyed under it).
-pub fn set_long_wait_hook(hook: fn()) {
+/// Installs `hook`, called with the time waited so far every [`WAIT_SLICE_NS`] while a
+/// frame's submission is waited for ([`Submitter::wait_watched`]); once per process. A
+/// command ends the process there at a signal rather than wait out a GPU frame of seconds (no
+/// GPU work can be cut short, and nothing may be destroyed under it).
+pub fn set_long_wait_hook(hook: fn(std::time::Duration)) {
     let _ = LONG_WAIT_HOOK.set(hook);
 }
 

@@ -144,7 +144,7 @@ pub type Stop<'a> = &'a (dyn Fn(&str) -> Result<()> + Sync);
 
 /// `specchio localise`: the experiment, its table printed, stopped by the process's signals.
 pub fn run(args: &Args) -> Result<ExitCode> {
-    specchio::process::interrupt::catch();
+    specchio::process::interrupt::catch_in_long_frames();
     let signals = |at: &str| Ok(specchio::process::interrupt::check(at)?);
     let (report, messages) = localise(args, &signals)?;
     report::print_table(&report, &args.out);

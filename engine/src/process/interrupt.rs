@@ -107,7 +107,6 @@ pub fn catch() {
     static INSTALLED: std::sync::Once = std::sync::Once::new();
     INSTALLED.call_once(|| {
         crate::output::stop_between_files(|| INTERRUPTED.load(Ordering::SeqCst));
-        crate::vk::commands::set_long_wait_hook(during_a_frame);
         if let Err(e) = start_cleaner() {
             // A second signal then ends the process at once, its staging folders left to the
             // next run's sweep.
@@ -126,13 +125,26 @@ pub fn catch() {
     });
 }
 
+/// How long a frame's wait must have lasted before a signal ends the process from it: a
+/// shorter frame ends soon, and the command's own check then says where it stopped.
+pub const LONG_FRAME: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// [`catch`], and a signal may end the process from the wait for a long frame ([`LONG_FRAME`]
+/// and more): for a command that keeps nothing of a stopped run (not a dataset that resumes,
+/// whose stop says which frames it kept).
+pub fn catch_in_long_frames() {
+    catch();
+    crate::vk::commands::set_long_wait_hook(during_a_frame);
+}
+
 /// Asked every 100 ms while a frame runs on the GPU (`Submitter::wait_watched`): at a signal,
-/// the process ends there, as a second signal's does, with the staging folders removed and the
-/// usual message and status, rather than wait out the frame (an 8192² localisation image is
-/// one frame of 13 s on lavapipe, and no GPU work can be cut short). Nothing is torn down:
-/// the GPU still uses the frame's objects, and the kernel and the driver reclaim them.
-fn during_a_frame() {
-    if !INTERRUPTED.load(Ordering::SeqCst) {
+/// once the frame has run [`LONG_FRAME`], the process ends there, as a second signal's does,
+/// with the staging folders removed and the usual message and status, rather than wait out
+/// the frame (an 8192² localisation image is one frame of 13 s on lavapipe, and no GPU work
+/// can be cut short). Nothing is torn down: the GPU still uses the frame's objects, and the
+/// kernel and the driver reclaim them.
+fn during_a_frame(waited: std::time::Duration) {
+    if !INTERRUPTED.load(Ordering::SeqCst) || waited < LONG_FRAME {
         return;
     }
     crate::output::remove_staging_folders();
