@@ -210,6 +210,7 @@ pub fn settle(args: &Args) -> Result<Settled> {
     };
     no_list_repeats(args)?;
     bvh_options_apply(args)?;
+    error_reports_apply(args)?;
     if args.max_regression.is_some() {
         anyhow::ensure!(
             methods.contains(&Method::SIX_PASS),
@@ -273,6 +274,27 @@ fn bvh_options_apply(args: &Args) -> Result<()> {
             "{option}: changes only the bvh rung, and --rungs {} leaves it out; leave it out, \
              or add bvh to --rungs",
             list.join(",")
+        );
+    }
+    Ok(())
+}
+
+/// `--csv` and `--plot` hold the methods' speed against their error and the ladder's rungs:
+/// with `--no-accuracy --no-tradeoff` they would hold nothing (a CSV of its header alone, exit
+/// 0), so they are refused as options that change nothing are.
+fn error_reports_apply(args: &Args) -> Result<()> {
+    if !(args.no_accuracy && args.no_tradeoff) {
+        return Ok(());
+    }
+    let given = [
+        ("--csv", args.csv.is_some()),
+        ("--plot", args.plot.is_some()),
+    ];
+    if let Some((option, _)) = given.iter().find(|(_, given)| *given) {
+        anyhow::bail!(
+            "{option}: holds the methods' speed against their error and the trade-off ladder's \
+             rungs, and --no-accuracy --no-tradeoff leave out both; leave it out, or drop one \
+             of them"
         );
     }
     Ok(())

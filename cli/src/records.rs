@@ -46,7 +46,8 @@ pub struct RenderSettings {
     pub lookup: Lookup,
     /// The order the tracing lookups handed their acceleration-structure builds (`split` or
     /// `given`; only they read it).
-    pub trace_order: &'static str,
+    /// The order of the acceleration-structure builds; null for a lookup that builds none.
+    pub trace_order: Option<&'static str>,
     /// `--trace-in` as given (each run says where it walked: `runs[].trace_in`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub trace_in: Option<&'static str>,
@@ -58,7 +59,8 @@ pub struct RenderSettings {
     pub secant_steps: u32,
     /// The cube's settings; null where no cube was made.
     pub cube: Option<CubeSettings>,
-    pub refresh: String,
+    /// The cube's refresh policy; null where no cube was made.
+    pub refresh: Option<String>,
     pub observer_resolution: [u32; 2],
     pub sensor_resolution: [u32; 2],
     pub validation: bool,
@@ -92,7 +94,8 @@ pub struct RenderRun {
     /// device's default); absent for the other lookups.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bvh_layout: Option<&'static str>,
-    pub refresh_counters: RefreshCounters,
+    /// The cube's updates and skips; null where no cube was made.
+    pub refresh_counters: Option<RefreshCounters>,
     pub summary: RenderSummary,
     pub frames: Vec<FrameReport>,
 }

@@ -252,7 +252,7 @@ fn render_method(
         out: dir.display().to_string(),
         trace_in: walks.then(|| taken.name()),
         bvh_layout: renderer.bvh_layout().map(|l| l.name()),
-        refresh_counters: renderer.counters(),
+        refresh_counters: method.is_some().then(|| renderer.counters()),
         summary,
         frames: reports,
     })
@@ -283,7 +283,9 @@ fn render_record(
             // The lookup the frames used: `--sensor-outputs` without `--lookup` picks a traced
             // one by the device (the scene's was recorded, though not used).
             lookup,
-            trace_order: args.trace_order().name(),
+            trace_order: lookups::plugin(lookup)
+                .builds_scene_trace()
+                .then(|| args.trace_order().name()),
             trace_in: args.trace_in.map(|t| t.name()),
             bvh_layout: args.bvh_layout.map(|l| l.name()),
             distance_steps: scene.mirror.distance_steps,
@@ -297,7 +299,7 @@ fn render_record(
                 mipmaps: cube.mipmaps,
                 anisotropy: cube.anisotropy,
             }),
-            refresh: refresh_name(scene.refresh),
+            refresh: cube_made.then(|| refresh_name(scene.refresh)),
             observer_resolution: scene.observer.resolution,
             sensor_resolution: scene.sensor.resolution,
             validation: false,

@@ -124,11 +124,12 @@ pub(crate) fn load_scene(args: &Args) -> Result<Scene> {
     if let Some(n) = args.secant_steps {
         scene.mirror.secant_steps = n;
     }
-    // No cube where the lookup is known and needs none (`RenderOptions::lookup_fixed`); the
-    // lookup --sensor-outputs picks by the device is not known yet, so its cube is counted.
+    // No cube where the lookup needs none (`RenderOptions::lookup_fixed`): one given, or the
+    // traced one --sensor-outputs picks by the device without --lookup.
     let face_size_px = match known_lookup(args, &scene) {
         Some(lookup) if !needs_cube(args, lookup) => 0,
-        _ => args.cube_size.unwrap_or(scene.cube.face_size_px),
+        None => 0,
+        Some(_) => args.cube_size.unwrap_or(scene.cube.face_size_px),
     };
     specchio::memory::estimates::render(&scene, face_size_px, args.directions, args.sensor_outputs)
         .with_context(|| args.scene.display().to_string())?;
@@ -136,7 +137,8 @@ pub(crate) fn load_scene(args: &Args) -> Result<Scene> {
 }
 
 /// The lookup the frames use where it is known before a device is chosen: `--lookup`, else the
-/// scene's unless `--sensor-outputs` picks one by the device ([`chosen_lookup`]).
+/// scene's unless `--sensor-outputs` picks one by the device ([`chosen_lookup`]: a traced one,
+/// which samples no cube).
 fn known_lookup(args: &Args, scene: &Scene) -> Option<Lookup> {
     match (args.lookup, args.sensor_outputs) {
         (Some(lookup), _) => Some(lookup),

@@ -106,7 +106,9 @@ impl Renderer {
         let device = crate::args::device(device.as_ref())?;
         let path = scene.path.clone();
         let scene = scene.scene.clone();
-        specchio::memory::estimates::render(&scene, scene.cube.face_size_px, false, true)
+        // No cube counted yet: the default lookup is a traced one, which makes none; the frame
+        // writer counts it once the lookup is chosen.
+        specchio::memory::estimates::render(&scene, 0, false, true)
             .map_err(|e| errors::error(format!("{}: {}", path.display(), errors::message(&e))))?;
         let (inner, device_name) = said::detach(py, || -> PyResult<(Inner, String)> {
             let (dev, info, lookup, log) = open(&scene, lookup, device.as_deref(), validate)?;

@@ -336,6 +336,19 @@ fn angular_with_nothing_compared_is_undefined_not_zero() {
     }
     let text = specchio(&["compare", s(&a), s(&b), "--angular", "16"]);
     assert!(String::from_utf8_lossy(&text.stdout).contains("n/a"));
+    // Its reading is said as a colour comparison's is (two 8192² direction images read for
+    // 10 s, silently, through a Ctrl-C).
+    let said = common::specchio_with(
+        &["compare", s(&a), s(&b), "--angular", "16"],
+        &[common::ESTIMATE_AT_ONCE],
+    );
+    let stderr = String::from_utf8_lossy(&said.stderr);
+    common::estimate_line(
+        &stderr,
+        "compare: reading 2 images of 16x8 pixels",
+        256,
+        "pixels",
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

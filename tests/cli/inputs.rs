@@ -315,8 +315,13 @@ fn options_that_would_change_nothing_are_refused() {
             "`h.png/` is not a PNG file's name",
         ),
         (
+            vec!["bench", thesis, "--no-accuracy", "--no-tradeoff", "--csv", "c.csv"],
+            "--csv: holds the methods' speed against their error and the trade-off ladder's \
+             rungs, and --no-accuracy --no-tradeoff leave out both",
+        ),
+        (
             vec!["bench", thesis, "--json", "b.json/"],
-            "b.json/: a name that ends in `/` is a folder's; a file name is needed",
+            "b.json/: a name that ends in `/`, `.` or `..` is a folder's; a file name is needed",
         ),
         (
             vec!["bench", thesis, "--rungs", "plain", "--trace-in", "compute", "--json", b],

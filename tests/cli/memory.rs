@@ -224,3 +224,46 @@ fn a_texture_over_the_budget_is_refused_from_its_header() {
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A run whose lookup makes no cube is not charged for one (a scene's 8192² faces were 16.5
+/// GiB of a refusal whose hint, `--cube-size`, was itself refused with that lookup); one whose
+/// lookup makes the cube is, with a hint the command takes (`cube.face_size` for a dataset,
+/// which has no `--cube-size`).
+#[test]
+fn only_a_cube_that_is_made_is_counted() {
+    let dir = temp_dir("memory-cube");
+    let scene = thesis_at(&dir, 64);
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let big = text.replace("face_size = 512", "face_size = 4096");
+    assert_ne!(big, text, "the cube's face size line");
+    std::fs::write(&scene, big).unwrap();
+    // 6 x 4096² texels at 44 bytes: 4.1 GiB, against a budget of 2 GiB.
+    let budget = Some("2GiB");
+    let out = |name: &str| dir.join(name).to_str().unwrap().to_owned();
+    let traced = [
+        vec!["render", &scene, "--lookup", "bvh"],
+        vec!["render", &scene, "--sensor-outputs"],
+        vec!["dataset", &scene, "--grid", "5"],
+    ];
+    for (i, args) in traced.iter().enumerate() {
+        let o = out(&format!("traced-{i}"));
+        let (code, stderr, _) = run(&[&args[..], &["--out", &o]].concat(), budget);
+        assert_eq!(code, Some(0), "{args:?}: {stderr}");
+    }
+    let (code, stderr, _) = run(
+        &["render", &scene, "--lookup", "plain", "--out", &out("p")],
+        budget,
+    );
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("(the cube: ") && stderr.contains("(--cube-size)"),
+        "{stderr}"
+    );
+    let dataset = ["dataset", &scene, "--grid", "5", "--lookup", "plain"];
+    let (code, stderr, _) = run(&[&dataset[..], &["--out", &out("d")]].concat(), budget);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("(the cube: ") && stderr.ends_with("cube.face_size\n"),
+        "{stderr}"
+    );
+}

@@ -485,6 +485,12 @@ fn a_render_says_and_records_what_it_did() {
     assert!(["bvh", "ray-query"].contains(&lookup), "{said}");
     assert_eq!(record["settings"]["methods"], serde_json::json!([]));
     assert!(record["settings"]["cube"].is_null() && record["runs"][0]["method"].is_null());
+    // Nor a refresh policy, its counters, or an order of builds the lookup never makes.
+    let settings = &record["settings"];
+    assert!(settings["refresh"].is_null() && record["runs"][0]["refresh_counters"].is_null());
+    if lookup == "bvh" {
+        assert!(settings["trace_order"].is_null(), "{settings}");
+    }
     assert!(stdout.contains(&format!(
         "cube map:           none made (the {lookup} lookup"
     )));

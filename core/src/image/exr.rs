@@ -98,6 +98,18 @@ pub fn layer_sizes(bytes: &[u8]) -> Result<Vec<(usize, usize)>, Error> {
         .collect())
 }
 
+/// The size of the layer [`decode_rgba`] decodes, from the header alone: the first whose
+/// channels include R, G and B (a file's layers may differ in size).
+pub fn rgba_layer_size(bytes: &[u8]) -> Option<(usize, usize)> {
+    let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false).ok()?;
+    let has = |h: &::exr::meta::header::Header, name: &str| {
+        (h.channels.list.iter()).any(|c| c.name.to_string() == name)
+    };
+    (meta.headers.iter())
+        .find(|h| ["R", "G", "B"].iter().all(|c| has(h, c)))
+        .map(|h| (h.layer_size.0, h.layer_size.1))
+}
+
 /// The most channels a layer may have for [`decode_channels`] (the sensor's ray map has 7).
 pub const MAX_CHANNELS: usize = 64;
 /// The most bytes [`decode_channels`] decodes a layer to: an RGBA float image of 16384 px a
@@ -275,4 +287,49 @@ pub fn u32_channel<'a>(channels: &'a [(String, Channel)], name: &str) -> Option<
         FlatSamples::U32(v) if n == name => Some(v.as_slice()),
         _ => None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ::exr::prelude::{ImageAttributes, IntegerBounds, Layer, LayerAttributes};
+
+    /// The size read from the header is the colour layer's, the one the decoder reads, where
+    /// a file's layers differ in size: a small layer of other channels first.
+    #[test]
+    fn the_colour_layers_size_is_read_from_the_header() {
+        let depth = Layer::new(
+            (8, 8),
+            LayerAttributes::named("depth"),
+            ENCODING,
+            AnyChannels::sort(SmallVec::from_vec(vec![AnyChannel::new(
+                "Z",
+                FlatSamples::F32(vec![1.0; 64]),
+            )])),
+        );
+        let colour = Layer::new(
+            (48, 20),
+            LayerAttributes::named("colour"),
+            ENCODING,
+            AnyChannels::sort(SmallVec::from_vec(
+                ["R", "G", "B", "A"]
+                    .iter()
+                    .enumerate()
+                    .map(|(i, name)| {
+                        let v = [0.5, 0.25, 0.125, 1.0][i];
+                        AnyChannel::new(*name, FlatSamples::F32(vec![v; 48 * 20]))
+                    })
+                    .collect(),
+            )),
+        );
+        let window = IntegerBounds::from_dimensions((48, 20));
+        let image = Image::from_layers(ImageAttributes::new(window), vec![depth, colour]);
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        image.write().to_buffered(&mut bytes).unwrap();
+        let bytes = bytes.into_inner();
+        assert_eq!(layer_sizes(&bytes).unwrap(), [(8, 8), (48, 20)]);
+        assert_eq!(rgba_layer_size(&bytes), Some((48, 20)));
+        let decoded = decode_rgba(&bytes).unwrap();
+        assert_eq!((decoded.width, decoded.height), (48, 20));
+    }
 }

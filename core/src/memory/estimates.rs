@@ -124,13 +124,16 @@ pub fn render(
 /// in memory at once: the one rendering and those held by the encoders
 /// (`render/dataset/frames.rs`; the H200 measured 315 MB with one encoder, 563 MB with four:
 /// 83 MB a frame of a 512² sensor, which the sensor outputs' 330 bytes a pixel bound).
-pub fn dataset(scene: &Scene, frames_held: u64) -> Result<(), MemoryError> {
-    let face = scene.cube.face_size_px;
-    render_estimate(scene, face, false, frames_held).check(&Budget::from_env()?, HINT)
+/// `face_size_px`: the cube's, 0 where the lookup makes none (a traced one, the default).
+pub fn dataset(scene: &Scene, face_size_px: u32, frames_held: u64) -> Result<(), MemoryError> {
+    render_estimate(scene, face_size_px, false, frames_held)
+        .check(&Budget::from_env()?, DATASET_HINT)
 }
 
 const HINT: &str =
     "lower observer.resolution, sensor.resolution or the cube's face size (--cube-size)";
+/// A dataset has no `--cube-size`: the scene's face size is the one to lower.
+const DATASET_HINT: &str = "lower observer.resolution, sensor.resolution or cube.face_size";
 
 /// A renderer of `scene` with `frames` frames' sensor outputs in memory.
 fn render_estimate(scene: &Scene, face_size_px: u32, directions: bool, frames: u64) -> Estimate {
@@ -140,7 +143,10 @@ fn render_estimate(scene: &Scene, face_size_px: u32, directions: bool, frames: u
     e.add(BASE_PART, RENDER_BASE_BYTES);
     scene_parts(&mut e, scene, RENDER_TRIANGLE_BYTES);
     e.add_many("the two views", views, RENDER_VIEW_PIXEL_BYTES);
-    e.add_many("the cube", 6 * face * face, RENDER_CUBE_TEXEL_BYTES);
+    // None where the renderer makes no cube (a lookup that samples none: face size 0).
+    if face > 0 {
+        e.add_many("the cube", 6 * face * face, RENDER_CUBE_TEXEL_BYTES);
+    }
     if directions {
         e.add_many("the direction images", views, RENDER_DIRECTION_PIXEL_BYTES);
     }

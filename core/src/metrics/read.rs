@@ -241,12 +241,9 @@ fn is_exr_name(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }
 
-/// The size of the layers an EXR's header declares, where they all have one size (the
-/// decoder reads the first valid layer: with several sizes, the decoded image is checked).
+/// The size of the colour layer an EXR's header declares, the one the decoder reads (a file's
+/// layers may differ in size: "all layers alike" left a file of an 8192² layer and an 8x8 one
+/// unsized, and its reading's estimate said 9 hours).
 fn header_size(bytes: &[u8]) -> Option<(u32, u32)> {
-    let sizes = exr::layer_sizes(bytes).ok()?;
-    let (&first, rest) = sizes.split_first()?;
-    rest.iter()
-        .all(|&s| s == first)
-        .then_some((first.0 as u32, first.1 as u32))
+    exr::rgba_layer_size(bytes).map(|(w, h)| (w as u32, h as u32))
 }

@@ -25,7 +25,7 @@ pub use manifest::MANIFEST;
 pub use sink::{json_text, MemoryFiles, Sink};
 pub use stage::remove_live as remove_staging_folders;
 pub use sys::{create_new, open_no_follow, try_lock};
-pub use transaction::Transaction;
+pub use transaction::{names_a_folder, Transaction};
 
 /// Why an output could not be written. Each names the user's path; an I/O cause is the
 /// error's `source` (printed after it by `{:#}` in the CLI), not repeated in the message.
@@ -47,7 +47,10 @@ pub enum OutputError {
     NoFolder { path: PathBuf, folder: PathBuf },
     #[error("cannot write {path}: it is a folder; a file name is needed")]
     IsAFolder { path: PathBuf },
-    #[error("cannot write {path}: a name that ends in `/` is a folder's; a file name is needed")]
+    #[error(
+        "cannot write {path}: a name that ends in `/`, `.` or `..` is a folder's; a file name \
+         is needed"
+    )]
     FolderName { path: PathBuf },
     #[error("cannot write {path}: it is {what}; a file output replaces only a regular file")]
     NotAFile { path: PathBuf, what: &'static str },

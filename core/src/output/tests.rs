@@ -238,14 +238,18 @@ fn io_failures_name_the_users_path_and_leave_nothing() {
     let unresolved = dir.join("nodir/..");
     let err = Transaction::new().folder(&unresolved, "render.json");
     assert!(matches!(err, Err(OutputError::Io { .. })), "{err:?}");
-    // A file's name that ends in `/` is a folder's: refused, where a file `h.png` was written.
-    let slashed = PathBuf::from(format!("{}/h.png/", dir.display()));
-    let err = Transaction::new().file(&slashed).unwrap_err();
-    assert!(matches!(err, OutputError::FolderName { .. }), "{err:?}");
-    assert!(
-        err.to_string().contains("h.png/: a name that ends in `/`"),
-        "{err}"
-    );
+    // A file's name that ends in `/`, `/.` or `/..` is a folder's: refused, where a file
+    // `h.png` was written.
+    for end in ["/", "/.", "/.."] {
+        let slashed = PathBuf::from(format!("{}/h.png{end}", dir.display()));
+        let err = Transaction::new().file(&slashed).unwrap_err();
+        assert!(matches!(err, OutputError::FolderName { .. }), "{err:?}");
+        assert!(
+            err.to_string()
+                .contains(&format!("h.png{end}: a name that ends")),
+            "{err}"
+        );
+    }
     assert_eq!(names(&dir), ["file"]);
     fs::remove_dir_all(&dir).unwrap();
 }

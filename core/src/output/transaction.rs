@@ -110,9 +110,9 @@ impl Transaction {
     /// Stages the file `target`, whose folder must exist; an existing file is replaced,
     /// unless it is one of the command's inputs.
     pub fn file(&mut self, target: &Path) -> Result<(), OutputError> {
-        // `h.png/` is a folder's name: the components drop the slash, and a file `h.png` was
-        // written under it.
-        if target.as_os_str().as_encoded_bytes().ends_with(b"/") {
+        // `h.png/` and `h.png/.` are a folder's names: the components drop the slash and the
+        // dot, and a file `h.png` was written under them.
+        if names_a_folder(target) {
             return Err(OutputError::FolderName {
                 path: target.to_owned(),
             });
@@ -478,6 +478,14 @@ fn named(target: &Path) -> Result<(PathBuf, String), OutputError> {
     })?;
     let name = name.to_owned();
     Ok((resolved, name))
+}
+
+/// Whether `path` as written can only name a folder: it ends in `/`, or its last component is
+/// `.` or `..`.
+pub fn names_a_folder(path: &Path) -> bool {
+    let bytes = path.as_os_str().as_encoded_bytes();
+    let last = bytes.rsplit(|&b| b == b'/').next().unwrap_or_default();
+    bytes.ends_with(b"/") || last == b"." || last == b".."
 }
 
 /// The folder holding `path` (`.` for a bare name).

@@ -51,7 +51,7 @@ pub fn png_path(text: &str) -> Result<std::path::PathBuf, String> {
     let named = std::path::Path::new(text)
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    match named && !text.ends_with('/') {
+    match named && !crate::output::names_a_folder(std::path::Path::new(text)) {
         true => Ok(text.into()),
         false => Err(format!(
             "`{text}` is not a PNG file's name: the file is a PNG; name it .png"
@@ -132,7 +132,16 @@ mod tests {
         for good in ["h.png", "dir/H.PNG", "a.b.Png", "./x.png"] {
             assert_eq!(png_path(good), Ok(good.into()), "{good}");
         }
-        for bad in ["h.exr", "h", "h.png/", "dir/", ".png", "h.png.exr", ""] {
+        for bad in [
+            "h.exr",
+            "h",
+            "h.png/",
+            "h.png/.",
+            "dir/",
+            ".png",
+            "h.png.exr",
+            "",
+        ] {
             let e = png_path(bad).unwrap_err();
             assert!(e.contains("is not a PNG file's name"), "{bad}: {e}");
         }

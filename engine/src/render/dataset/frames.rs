@@ -83,10 +83,18 @@ impl FrameWriter {
     /// A renderer of `scene`'s robot on `device` with `lookup` (see
     /// [`choose_lookup`](super::choose_lookup)).
     pub fn new(device: &Arc<Device>, scene: &Scene, lookup: Lookup) -> Result<Self, GpuError> {
+        // The traced ray map needs no id cube.
+        let id_cube = !lookups::traces_ray_map(lookup);
+        // The cube counted where this lookup makes one (the plan counted none).
+        let face = match lookups::needs_cube(lookup, id_cube) {
+            true => scene.cube.face_size_px,
+            false => 0,
+        };
+        crate::memory::estimates::dataset(scene, face, 1)
+            .map_err(|e| GpuError::TooLarge(format!("{lookup} lookup: {e}")))?;
         let options = RenderOptions {
             lookup: Some(lookup),
-            // The traced ray map needs no id cube.
-            id_cube: !lookups::traces_ray_map(lookup),
+            id_cube,
             // One lookup for the writer's life: a traced one makes no cube.
             lookup_fixed: true,
             ..Default::default()
@@ -98,7 +106,7 @@ impl FrameWriter {
             scene: scene.clone(),
             lookup,
             truth,
-            encoders: encoders_for(scene),
+            encoders: encoders_for(scene, face),
             panoramas: PanoramaFrame::Robot,
             geometry: GeometryFrame::Scene,
             layers: Layers::standard().for_scene(scene.sensor.imaging.is_some()),
@@ -424,10 +432,10 @@ fn gone() -> DatasetError {
 /// 512² sensor); 0 (no pipeline) where it holds only the frame rendering. Each frame's encoding is parallel already (its files at once, EXR chunks and
 /// panorama rows on rayon's pool); more encoders fill the stretches that are not (a PNG's
 /// deflate, the point cloud).
-fn encoders_for(scene: &Scene) -> usize {
+fn encoders_for(scene: &Scene, face_size_px: u32) -> usize {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     encoders_within(cores, |held| {
-        crate::memory::estimates::dataset(scene, held).is_ok()
+        crate::memory::estimates::dataset(scene, face_size_px, held).is_ok()
     })
 }
 

@@ -115,8 +115,10 @@ impl Plan {
             digest::while_reading(|| Self::read_inputs(scene_path, poses, checked));
         let (scene, poses, trajectory) = read?;
         // The least a run holds: one frame, rendered then encoded (frames.rs: the pipeline's
-        // encoders are as many as the budget holds frames for, none where it holds one).
-        crate::memory::estimates::dataset(&scene, 1).map_err(|source| DatasetError::Memory {
+        // encoders are as many as the budget holds frames for, none where it holds one). No
+        // cube: the default lookup is a traced one, which makes none; the frame writer counts
+        // it once the lookup is chosen (a cube lookup asked for).
+        crate::memory::estimates::dataset(&scene, 0, 1).map_err(|source| DatasetError::Memory {
             path: scene_path.to_owned(),
             source,
         })?;
