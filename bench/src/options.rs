@@ -98,8 +98,8 @@ pub struct Args {
     /// Write one CSV row per scene, method, face size and lookup.
     #[arg(long)]
     pub csv: Option<PathBuf>,
-    /// Write the speed-against-error plot as SVG.
-    #[arg(long)]
+    /// Write the speed-against-error plot as SVG (a name ending in .svg).
+    #[arg(long, value_parser = specchio::process::args::svg_path)]
     pub plot: Option<PathBuf>,
     /// Write the run in Bencher Metric Format (as `--format bmf` prints it).
     #[arg(long)]

@@ -93,7 +93,7 @@ fn compare_said(inputs: &metrics::Inputs) -> Result<Comparison> {
 /// The images read with their decoding said as it goes (two 8192² EXRs decode for seconds),
 /// and stopped at the next chunk at a signal.
 fn read_said(args: &Args) -> Result<metrics::Inputs> {
-    let images = 2 + usize::from(args.mask.as_ref().is_some_and(|m| is_exr(m)));
+    let images = 2 + usize::from(args.mask.as_deref().is_some_and(metrics::is_exr_name));
     let reading = Said::new(move |rows, w| {
         let h = rows / images as u64;
         format!("compare: reading {images} images of {w}x{h} pixels")
@@ -110,12 +110,6 @@ fn read_said(args: &Args) -> Result<metrics::Inputs> {
         }
         read => Ok(read?),
     }
-}
-
-/// Whether `path` names an EXR, as the metrics read a mask by it.
-fn is_exr(path: &std::path::Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }
 
 /// Work counted in rows into a [`Progress`] of pixels that is made as the work begins

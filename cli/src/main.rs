@@ -17,6 +17,7 @@ mod records;
 mod reference;
 mod render;
 mod render_input;
+mod render_report;
 
 use std::process::ExitCode;
 

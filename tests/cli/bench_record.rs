@@ -206,3 +206,41 @@ pub fn check_a_changed_rung_counter_fails_naming_it(json: &Path, worse: &Path) {
         "{stderr}"
     );
 }
+
+/// A report file named like one of the run's inputs (a scene, the baseline) is refused before
+/// anything runs, and the input is left as it was.
+#[test]
+fn a_report_never_replaces_an_input() {
+    let dir = crate::common::temp_dir("inputs");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.toml");
+    let room = crate::common::root().join("scenes/test/six-colour-room.toml");
+    std::fs::copy(room, &scene).unwrap();
+    let original = std::fs::read(&scene).unwrap();
+    let s = scene.to_str().unwrap();
+    // The plot takes only an .svg name: the input it names is the scene under one.
+    let svg = dir.join("scene.svg");
+    std::fs::copy(&scene, &svg).unwrap();
+    let plot = svg.to_str().unwrap();
+    for (flag, s) in [("--json", s), ("--csv", s), ("--plot", plot)] {
+        // The CSV and the plot hold the ladder here (empty, they are refused for that).
+        let with_ladder: Vec<&str> = "bench --quick --no-accuracy --no-dynamic --no-floors"
+            .split(' ')
+            .collect();
+        let out = match flag {
+            "--json" => crate::lean_quick(&[s, flag, s]),
+            _ => crate::specchio(&[&with_ladder[..], &[s, flag, s][..]].concat()),
+        };
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{flag}: {stderr}");
+        assert!(stderr.contains("it is the input"), "{flag}: {stderr}");
+        assert_eq!(std::fs::read(s).unwrap(), original, "{flag}");
+    }
+    let baseline = dir.join("base.json");
+    std::fs::write(&baseline, b"{}").unwrap();
+    let b = baseline.to_str().unwrap();
+    let out = crate::lean_quick(&["--json", b, "--baseline", b]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("it is the input"));
+    assert_eq!(std::fs::read(&baseline).unwrap(), b"{}");
+}

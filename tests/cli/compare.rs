@@ -458,10 +458,12 @@ fn a_stopped_comparison_leaves_nothing() {
 #[test]
 fn a_long_comparison_says_its_estimate_and_stops_within_flip() {
     let dir = temp_dir("estimate");
-    // 3072² in bands of 32 rows: 96 bands, seconds of work after the first has ended.
+    // 3072² in bands of 32 rows on one thread: 96 bands, seconds of work after the first has
+    // ended on a machine of any number of cores.
     let env = [
         ("SPECCHIO_ESTIMATE_AFTER_S", "0"),
         ("SPECCHIO_FLIP_BAND_ROWS", "32"),
+        ("RAYON_NUM_THREADS", "1"),
     ];
     let (child, heatmap, stderr) = long_comparison(&dir, 3072, &env);
     let estimate = "compare: FLIP of 3072x3072 pixels: ";

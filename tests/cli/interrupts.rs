@@ -45,4 +45,5 @@ fn a_signal_during_a_gpu_frame_ends_the_run_within_a_moment() {
     // Well before the hold's 60 s limit, which is when the frame would have ended.
     assert!(took.as_secs() < 40, "took {took:?}");
     assert!(!out.exists() && common::staging_folders(&out).is_empty());
+    std::fs::remove_dir_all(&*dir).unwrap();
 }

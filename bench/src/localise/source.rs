@@ -103,6 +103,8 @@ impl<'a> Robot<'a> {
                 let options = RenderOptions {
                     // The robot moves every image: the whole cube is re-rendered anyway.
                     refresh: Some(RefreshPolicy::EveryFrame),
+                    // One lookup for the source's life: a traced one makes no cube.
+                    lookup_fixed: true,
                     ..options.clone()
                 };
                 Ok(Self::Gpu {

@@ -124,23 +124,22 @@ fn in_bands(
     margin: u32,
     watch: &dyn Watch,
 ) -> Result<Vec<f32>, Stopped> {
-    let h = reference.height;
+    let (w, h) = (reference.width as usize, reference.height);
     watch.begin(u64::from(h), reference.width);
-    let bands: Vec<Range<u32>> = (0..h)
-        .step_by(rows.max(1) as usize)
-        .map(|y| y..y.saturating_add(rows).min(h))
-        .collect();
-    let maps: Option<Vec<Vec<f32>>> = (bands.par_iter())
-        .map(|band| {
-            if watch.stop() {
-                return None;
-            }
-            let map = band_map(test, reference, band, margin);
-            watch.rows_done(band.len() as u32);
-            Some(map)
-        })
-        .collect();
-    Ok(maps.ok_or(Stopped)?.concat())
+    let rows = rows.max(1);
+    // Each band writes its rows into the one map (bands of `rows` rows, the last shorter).
+    let mut map = vec![0.0f32; w * h as usize];
+    (map.par_chunks_mut((rows as usize * w).max(1)).enumerate()).try_for_each(|(i, out)| {
+        if watch.stop() {
+            return Err(Stopped);
+        }
+        let start = i as u32 * rows;
+        let band = start..start.saturating_add(rows).min(h);
+        out.copy_from_slice(&band_map(test, reference, &band, margin));
+        watch.rows_done(band.len() as u32);
+        Ok(())
+    })?;
+    Ok(map)
 }
 
 /// Band `band`'s rows of the map, computed from the band and `margin` rows either side of it.

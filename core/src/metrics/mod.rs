@@ -33,7 +33,7 @@ use crate::watch::{Stopped, Unwatched, Watch};
 pub use flip::{flip_map, flip_map_watched, BAND_MARGIN as FLIP_BAND_MARGIN};
 pub use heatmap::{colour_map, heatmap_rgb8, write_heatmap, NOT_COMPARED_RGB8};
 pub use read::{
-    read_exr, read_exr_channels, read_inputs, read_inputs_watched, read_mask, Inputs,
+    is_exr_name, read_exr, read_exr_channels, read_inputs, read_inputs_watched, read_mask, Inputs,
     MAX_INPUT_SIDE_PX,
 };
 

@@ -200,8 +200,11 @@ pub fn read_inputs_watched(
     let exrs = 2 + u64::from(mask_bytes.is_some());
     let (width, height) = sizes.1.unwrap_or((0, 0));
     watch.begin(exrs * u64::from(height), width);
+    // Each file's bytes let go once decoded: an uncompressed 8192² EXR is a gigabyte.
     let test_image = decode(test, &test_bytes, watch)?;
+    drop(test_bytes);
     let reference_image = decode(reference, &reference_bytes, watch)?;
+    drop(reference_bytes);
     let mask = match (exr_mask, mask_bytes, png_mask) {
         (Some(path), Some(bytes), _) => Some((path, Mask::from_red(&decode(path, &bytes, watch)?))),
         (_, _, png) => png,
@@ -236,7 +239,7 @@ fn check_exists(path: &Path) -> Result<(), MetricsError> {
 }
 
 /// Whether `path` names an EXR file (by its extension, any case): masks are read by it.
-fn is_exr_name(path: &Path) -> bool {
+pub fn is_exr_name(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }

@@ -48,13 +48,25 @@ pub fn face_size(text: &str) -> Result<u32, String> {
 /// (`--heatmap h.exr` wrote PNG bytes that EXR readers then refused) and no folder's name
 /// (`h.png/`) is taken for a file's.
 pub fn png_path(text: &str) -> Result<std::path::PathBuf, String> {
-    let named = std::path::Path::new(text)
+    file_named(text, "png", "a PNG")
+}
+
+/// The path of an SVG file the command writes (`bench --plot`), as [`png_path`] a PNG's.
+pub fn svg_path(text: &str) -> Result<std::path::PathBuf, String> {
+    file_named(text, "svg", "an SVG")
+}
+
+/// `text` as the path of a file in format `format` ("a PNG"), whose name ends in `.ext` (any
+/// case) and is not a folder's.
+fn file_named(text: &str, ext: &str, format: &str) -> Result<std::path::PathBuf, String> {
+    let path = std::path::Path::new(text);
+    let named = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    match named && !crate::output::names_a_folder(std::path::Path::new(text)) {
+        .is_some_and(|e| e.eq_ignore_ascii_case(ext));
+    match named && !crate::output::names_a_folder(path) {
         true => Ok(text.into()),
         false => Err(format!(
-            "`{text}` is not a PNG file's name: the file is a PNG; name it .png"
+            "`{text}` is not {format} file's name: the file is {format}; name it .{ext}"
         )),
     }
 }
@@ -145,6 +157,12 @@ mod tests {
             let e = png_path(bad).unwrap_err();
             assert!(e.contains("is not a PNG file's name"), "{bad}: {e}");
         }
+        assert_eq!(svg_path("p.SVG"), Ok("p.SVG".into()));
+        let e = svg_path("p.png").unwrap_err();
+        assert!(
+            e.contains("is not an SVG file's name: the file is an SVG; name it .svg"),
+            "{e}"
+        );
     }
 
     #[test]

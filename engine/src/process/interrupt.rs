@@ -125,12 +125,13 @@ pub fn catch() {
     });
 }
 
-/// How long a frame's wait must have lasted before a signal ends the process from it: a
-/// shorter frame ends soon, and the command's own check then says where it stopped.
+/// How long a frame's wait must have lasted before a signal ends the process from it (the
+/// wait's own time, from when the frame is waited for: with frames in flight it may have been
+/// submitted earlier): a shorter wait ends soon, and the command's own check then says where
+/// it stopped.
 pub const LONG_FRAME: std::time::Duration = std::time::Duration::from_secs(1);
 
-/// [`catch`], and a signal may end the process from the wait for a long frame ([`LONG_FRAME`]
-/// and more): for a command that keeps nothing of a stopped run (not a dataset that resumes,
+/// [`catch`], and a signal may end the process from a frame's wait of [`LONG_FRAME`] or more: for a command that keeps nothing of a stopped run (not a dataset that resumes,
 /// whose stop says which frames it kept).
 pub fn catch_in_long_frames() {
     catch();

@@ -259,6 +259,8 @@ impl Renderer {
     /// not wait for the GPU; its results come from the frames' queue.
     fn submit(&mut self, ask: FrameAsk) -> Result<(), GpuError> {
         let record_start = Instant::now();
+        // Asked before anything is recorded, and again below once the frame follows a switch
+        // of lookup (the ray map's ground truth is the pass's, which the switch replaces).
         let fills = ask.floor().is_some() || self.fills_cube(ask.readback);
         if fills && self.cube_stand_in {
             return Err(GpuError::Unsupported(format!(

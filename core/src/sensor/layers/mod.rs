@@ -274,12 +274,12 @@ impl Layers {
         self.iter().filter(|l| l.0.needs_camera_model())
     }
 
-    /// Every file a frame of these layers holds, `camera.json` first.
     /// The samples the layers' files of `frame` hold ([`SensorLayer::samples`]).
     pub fn samples(self, frame: &SensorOutputs) -> u64 {
         self.iter().map(|layer| layer.0.samples(frame)).sum()
     }
 
+    /// Every file a frame of these layers holds, `camera.json` first.
     pub fn files(self) -> Vec<&'static str> {
         let mut files = vec![CAMERA_FILE];
         files.extend(self.iter().flat_map(|l| l.files().iter().copied()));

@@ -71,8 +71,8 @@ fn each_layer_writes_exactly_the_files_it_names() {
     }
 }
 
-/// The samples the layers tell as they end are the samples they said they would write (what
-/// an estimate of the writing extrapolates), each layer's some.
+/// Each layer counts its files' samples (what an estimate of the writing extrapolates): at
+/// least one a pixel for every layer, and told as each ends.
 #[test]
 fn the_layers_tell_the_samples_they_said() {
     use std::sync::atomic::{AtomicU64, Ordering};
