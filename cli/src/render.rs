@@ -478,15 +478,20 @@ fn write_sensor_outputs(
     );
     // The camera image of the whole exposure: the sensor's view at each of its instants (the
     // scene's animations, the mirror's included, at each).
+    // Up to 1024 renders a frame, said as they go (they were silent).
+    let renders = specchio::sensor::imaging::exposure_renders(&renderer.scene) as u64;
+    let what = format!("render: frame {frame}'s exposure at {renders} instants");
+    let exposure = Progress::new(what, renders, "renders");
     let light = match renderer.scene.sensor.imaging.clone() {
         Some(imaging) => specchio::sensor::imaging::integrate(&imaging, t_s, |t| {
-            // Up to 1024 renders a frame: a signal stops them between two.
+            // A signal stops them between two.
             specchio::process::interrupt::check(&format!("in frame {frame}'s exposure"))?;
             let readback = Readback {
                 sensor: true,
                 ..Default::default()
             };
             let (_, images) = renderer.render_frame(frame, t, readback)?;
+            exposure.add(1);
             (images.sensor)
                 .ok_or_else(|| anyhow::anyhow!("the sensor's view was not read back (a bug)"))
         })?,

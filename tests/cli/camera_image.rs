@@ -320,3 +320,30 @@ fn turning_frame(name: &str, imaging: &str) -> Turned {
         centre: [c[0].as_f64().unwrap(), c[1].as_f64().unwrap()],
     }
 }
+
+/// A frame's exposure of several instants (each a render of the sensor's view, up to 1024
+/// a frame) is said as it goes: it was silent.
+#[test]
+fn an_exposure_of_many_instants_says_its_estimate() {
+    let dir = temp_dir("exposure-estimate");
+    let scene = scene_with_camera(&dir);
+    let text = std::fs::read_to_string(&scene).unwrap();
+    std::fs::write(&scene, format!("{text}motion_blur_samples = 4\n")).unwrap();
+    let out = dir.join("out");
+    let args = [
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--sensor-outputs",
+    ];
+    let run = common::specchio_with(&args, &[common::ESTIMATE_AT_ONCE]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    common::estimate_line(
+        &stderr,
+        "render: frame 0's exposure at 4 instants",
+        4,
+        "renders",
+    );
+}
