@@ -356,6 +356,10 @@ fn options_that_would_change_nothing_are_refused() {
             "--method: no source here samples a cube map (bvh), so none is filled",
         ),
         (
+            vec!["localise", thesis, "--out", out_s, "--sources", "reference,bvh", "--cube-size", "64"],
+            "--cube-size: no source here samples a cube map (reference, bvh), so none is filled",
+        ),
+        (
             vec!["bench", thesis, "--max-regression", "5", "--json", base.to_str().unwrap()],
             "the following required arguments were not provided:\n  --baseline <BASELINE>",
         ),

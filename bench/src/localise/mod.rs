@@ -99,9 +99,9 @@ pub struct Args {
     #[arg(long, default_value_t = 256, allow_negative_numbers = true,
           value_parser = whole(16..=MAX_IMAGE_SIZE_PX))]
     sensor_size: u32,
-    /// Cube face size in texels.
-    #[arg(long, default_value_t = 128, allow_negative_numbers = true, value_parser = face_size)]
-    cube_size: u32,
+    /// Cube face size in texels. Default: 128. Only a source that samples the cube fills one.
+    #[arg(long, allow_negative_numbers = true, value_parser = face_size)]
+    cube_size: Option<u32>,
     /// Cube fill method (`specchio info` lists them). Default: six-pass. Only a source that
     /// samples the cube fills one.
     #[arg(long, value_parser = method)]
@@ -189,7 +189,7 @@ pub fn localise(args: &Args, stop: Stop) -> Result<(Report, Vec<String>)> {
         }
     };
     let options = RenderOptions {
-        cube_size: Some(args.cube_size),
+        cube_size: Some(args.cube_size_or_default()),
         method: args.method_or_default(),
         ..Default::default()
     };
@@ -256,7 +256,7 @@ fn plan(args: &Args) -> Result<Plan> {
         args.sources.clone()
     };
     checks::once_each(&sources, &args.times)?;
-    checks::method_applies(args, &sources)?;
+    checks::cube_options_apply(args, &sources)?;
     let optics = SensorOptics::at(&scene, 0.0);
     let layout = PanoramaLayout::for_sensor(&optics, PanoramaKind::Cylindrical);
     let mut plan = Plan {
@@ -466,6 +466,7 @@ fn report(
             rows.push(row);
         }
     }
+    let fills_cube = plan.sources.iter().any(|&s| checks::samples_cube(s));
     Ok(Report {
         scene: args.scene.display().to_string(),
         descriptor: d.name(),
@@ -474,8 +475,8 @@ fn report(
         seed: args.seed,
         queries_at_landmarks: args.queries_at_landmarks,
         sensor_px: args.sensor_size,
-        cube_px: args.cube_size,
-        method: args.method_or_default(),
+        cube_px: fills_cube.then(|| args.cube_size_or_default()),
+        method: fills_cube.then(|| args.method_or_default()),
         device,
         lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
         sources: images
@@ -532,10 +533,7 @@ fn database(args: &Args, plan: &Plan, source: Source, landmarks: Vec<Landmark>) 
         coefficients: args.k,
         grid_m: args.grid,
         sensor_px: args.sensor_size,
-        cube_px: match source {
-            Source::Lookup(_) => Some(args.cube_size),
-            Source::Reference => None,
-        },
+        cube_px: checks::samples_cube(source).then(|| args.cube_size_or_default()),
         panorama: serde_json::to_value(plan.body.layout)
             .expect("a panorama layout is plain numbers"),
         landmarks,

@@ -91,8 +91,9 @@ pub struct Report {
     pub seed: u64,
     pub queries_at_landmarks: bool,
     pub sensor_px: u32,
-    pub cube_px: u32,
-    pub method: Method,
+    /// The cube's face size and fill method; null where no source fills a cube.
+    pub cube_px: Option<u32>,
+    pub method: Option<Method>,
     pub device: Option<String>,
     pub lp_num_threads: Option<String>,
     pub sources: Vec<SourceRun>,
@@ -233,14 +234,18 @@ pub fn print_table(r: &Report, out: &std::path::Path) {
 
 /// The table's title line: the scene and the experiment's settings.
 fn print_title(r: &Report) {
+    let cube = match (r.cube_px, r.method) {
+        (Some(px), Some(m)) => format!("{px}² cube by {m}, "),
+        _ => String::new(),
+    };
     specchio::say!(
-        "localisation in {} (grid {} m, {} k={}, {}² sensor, {}² cube, a panorama column {:.3}°)",
+        "localisation in {} (grid {} m, {} k={}, {}² sensor, {}a panorama column {:.3}°)",
         r.scene,
         r.grid_m,
         r.descriptor,
         r.coefficients,
         r.sensor_px,
-        r.cube_px,
+        cube,
         r.rows
             .first()
             .map_or(f64::NAN, |row| row.summary.column_deg)
