@@ -59,7 +59,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // 2. The heatmap, written atomically.
     if let Some(path) = &args.heatmap {
         let rgb8 = metrics::heatmap_rgb8(&comparison);
-        out.write_png_rgb8(path, comparison.width, comparison.height, &rgb8)?;
+        let size = (comparison.width, comparison.height);
+        let encoding =
+            Said::new(|rows, w| format!("compare: writing the heatmap of {w}x{rows} pixels"));
+        out.write_png_rgb8_watched(path, size, &rgb8, &encoding)?;
         interrupt::check("before placing the heatmap")?;
         out.commit()?;
     }

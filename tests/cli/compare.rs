@@ -451,6 +451,37 @@ fn a_stopped_comparison_leaves_nothing() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A heatmap's encoding is said as its rows go, in bands of 256 (an 8192² heatmap of a noisy
+/// comparison encodes for some seconds, silently until 30 November 2026).
+#[test]
+fn writing_a_heatmap_says_its_estimate() {
+    let dir = temp_dir("heatmap-said");
+    let (a, heat) = (dir.join("a.exr"), dir.join("h.png"));
+    let pixels = vec![[0.5, 0.25, 0.125, 1.0]; 4 * 600];
+    let (width, height) = (4, 600);
+    write_exr(
+        &a,
+        &RgbaImage {
+            width,
+            height,
+            pixels,
+        },
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args(["compare", s(&a), s(&a), "--heatmap", s(&heat)])
+        .env(common::ESTIMATE_AT_ONCE.0, common::ESTIMATE_AT_ONCE.1)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let what = "compare: writing the heatmap of 4x600 pixels";
+    let line = common::estimate_line(&stderr, what, 2400, "pixels");
+    assert!(line.contains(": 1024 of 2400 pixels"), "{line}");
+    assert!(heat.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A long comparison says its estimates as it reads its images and once FLIP has begun, and a
 /// Ctrl-C then stops it between bands of FLIP's rows, saying how far it got: FLIP used to be
 /// one call of a minute at 8192², silent, that no signal could cut short, after seconds of

@@ -71,23 +71,13 @@ fn mib(bytes: u64) -> String {
 }
 
 /// Reads the whole of `path`, which must be a regular file (after following links) of at most
-/// `limit` bytes.
-///
-/// The type is checked before the file is opened, because opening a FIFO for reading blocks
-/// until a writer appears; it is checked again on the open handle in case the path was swapped
-/// in between. The size is checked from the metadata and enforced while reading, so a file that
+/// `limit` bytes ([`open_regular`] checks both). The size is checked from the metadata and enforced while reading, so a file that
 /// grows while it is read still cannot exceed `limit`.
 pub fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> {
     let io_err = |source: io::Error| classify(path, source);
-    let meta = std::fs::metadata(path).map_err(io_err)?;
-    check_regular(path, &meta, limit)?;
-    // Without waiting: if the path became a FIFO since the check, the open returns at once
-    // (`O_NONBLOCK`; it changes nothing for a regular file) and the check below refuses it.
-    let file = open_no_wait(path).map_err(io_err)?;
-    let opened = file.metadata().map_err(io_err)?;
-    check_regular(path, &opened, limit)?;
+    let (file, opened) = open_regular(path, limit)?;
     identity::record(path, &opened);
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    let mut bytes = Vec::with_capacity(opened.len() as usize);
     file.take(limit + 1)
         .read_to_end(&mut bytes)
         .map_err(io_err)?;
@@ -100,6 +90,33 @@ pub fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> 
     }
     digest::note(&bytes);
     Ok(bytes)
+}
+
+/// The first `head` bytes of `path` (all of it where it is shorter), checked as
+/// [`read_regular_file`] checks it: a header read before a large file is read whole.
+pub fn read_regular_file_head(path: &Path, limit: u64, head: u64) -> Result<Vec<u8>, FileError> {
+    let (file, opened) = open_regular(path, limit)?;
+    let mut bytes = Vec::with_capacity(opened.len().min(head) as usize);
+    (file.take(head).read_to_end(&mut bytes)).map_err(|e| classify(path, e))?;
+    Ok(bytes)
+}
+
+/// `path` opened for reading once it is known to be a regular file of at most `limit` bytes,
+/// with its metadata as opened.
+///
+/// The type is checked before the file is opened, because opening a FIFO for reading blocks
+/// until a writer appears; it is checked again on the open handle in case the path was swapped
+/// in between.
+fn open_regular(path: &Path, limit: u64) -> Result<(File, Metadata), FileError> {
+    let io_err = |source: io::Error| classify(path, source);
+    let meta = std::fs::metadata(path).map_err(io_err)?;
+    check_regular(path, &meta, limit)?;
+    // Without waiting: if the path became a FIFO since the check, the open returns at once
+    // (`O_NONBLOCK`; it changes nothing for a regular file) and the check below refuses it.
+    let file = open_no_wait(path).map_err(io_err)?;
+    let opened = file.metadata().map_err(io_err)?;
+    check_regular(path, &opened, limit)?;
+    Ok((file, opened))
 }
 
 /// Opens `path` for reading with `O_NONBLOCK` where the OS has it.

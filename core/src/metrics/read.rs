@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use super::{check_size, same_size, same_size_as_mask, Mask, MetricsError, MASK_THRESHOLD};
-use crate::files::{read_regular_file, FileError};
+use crate::files::{read_regular_file, read_regular_file_head, FileError};
 use crate::image::{exr, RgbaImage};
 use crate::scene::TextureData;
 use crate::watch::{Unwatched, Watch};
@@ -59,16 +59,42 @@ pub fn read_exr_channels(path: &Path) -> Result<exr::Layer, MetricsError> {
 /// would block, a folder fail late), its header checked against the limits; the decoding
 /// works on these bytes.
 fn read_checked_exr(path: &Path) -> Result<Vec<u8>, MetricsError> {
-    let bytes = read_regular_file(path, MAX_INPUT_FILE_BYTES).map_err(|e| match e {
-        FileError::NotFound { .. } => MetricsError::Missing {
-            path: path.to_owned(),
-        },
-        other => MetricsError::Read {
-            path: path.to_owned(),
-            message: other.to_string(),
-        },
-    })?;
-    if !exr::has_magic(&bytes) {
+    let bytes = read_regular_file(path, MAX_INPUT_FILE_BYTES).map_err(|e| file_error(path, e))?;
+    check_exr_head(path, &bytes)?;
+    Ok(bytes)
+}
+
+/// The bytes of an EXR read for its header before the whole file: specchio's headers are a
+/// few hundred bytes, a large multi-part file's some kilobytes.
+const HEAD_BYTES: u64 = 1 << 20;
+
+/// The size of `path`'s colour layer from its first [`HEAD_BYTES`] alone, checked as
+/// [`read_checked_exr`] checks the whole file (an uncompressed 8192² image is a gigabyte, some
+/// seconds to read from a cold disk); none where its header reaches past them, or it has no
+/// colour layer (the whole file's reading says what is wrong then).
+fn exr_head_size(path: &Path) -> Result<Option<(u32, u32)>, MetricsError> {
+    let head = read_regular_file_head(path, MAX_INPUT_FILE_BYTES, HEAD_BYTES)
+        .map_err(|e| file_error(path, e))?;
+    size_from_head(path, &head, head.len() as u64 == HEAD_BYTES)
+}
+
+/// [`exr_head_size`] of a file's first bytes `head`, `cut` where the file goes on past them.
+pub(super) fn size_from_head(
+    path: &Path,
+    head: &[u8],
+    cut: bool,
+) -> Result<Option<Size>, MetricsError> {
+    if cut && exr::has_magic(head) && exr::layer_sizes(head).is_err() {
+        return Ok(None);
+    }
+    check_exr_head(path, head)?;
+    Ok(header_size(head))
+}
+
+/// Refuses bytes that do not start as an EXR does, or whose header declares a layer larger
+/// than the metrics read.
+fn check_exr_head(path: &Path, bytes: &[u8]) -> Result<(), MetricsError> {
+    if !exr::has_magic(bytes) {
         // Said from its first bytes: the parser calls a file shorter than its magic number
         // truncated.
         return Err(MetricsError::Read {
@@ -76,8 +102,20 @@ fn read_checked_exr(path: &Path) -> Result<Vec<u8>, MetricsError> {
             message: NOT_EXR.to_owned(),
         });
     }
-    check_exr_size(path, &bytes)?;
-    Ok(bytes)
+    check_exr_size(path, bytes)
+}
+
+/// A regular-file reader's refusal as the metrics say it.
+fn file_error(path: &Path, e: FileError) -> MetricsError {
+    match e {
+        FileError::NotFound { .. } => MetricsError::Missing {
+            path: path.to_owned(),
+        },
+        other => MetricsError::Read {
+            path: path.to_owned(),
+            message: other.to_string(),
+        },
+    }
 }
 
 /// The largest image side the metrics read: twice the largest view specchio writes (8192 px),
@@ -177,18 +215,21 @@ pub fn read_inputs_watched(
     watch: &dyn Watch,
 ) -> Result<Inputs, MetricsError> {
     let name = |p: &Path| p.display().to_string();
-    let (test_bytes, reference_bytes) = (read_checked_exr(test)?, read_checked_exr(reference)?);
     let exr_mask = mask.filter(|m| is_exr_name(m));
-    let mask_bytes = exr_mask.map(read_checked_exr).transpose()?;
-    let sizes = (header_size(&test_bytes), header_size(&reference_bytes));
-    if let (Some(a), Some(b)) = sizes {
-        check_size(&name(test), a, &name(reference), b)?;
-    }
-    if let (Some(path), Some(Some(m)), Some(r)) =
-        (exr_mask, mask_bytes.as_deref().map(header_size), sizes.1)
-    {
-        check_size(&name(reference), r, &name(path), m)?;
-    }
+    // The sizes compared from each file's first bytes, then from the whole where a header
+    // reached past them: a mask of another size is said before gigabytes are read.
+    let check_sizes = |(t, r): (Option<Size>, Option<Size>), m: Option<Size>| {
+        if let (Some(t), Some(r)) = (t, r) {
+            check_size(&name(test), t, &name(reference), r)?;
+        }
+        match (exr_mask, m, r) {
+            (Some(path), Some(m), Some(r)) => check_size(&name(reference), r, &name(path), m),
+            _ => Ok(()),
+        }
+    };
+    let sizes = (exr_head_size(test)?, exr_head_size(reference)?);
+    let mask_size = exr_mask.map(exr_head_size).transpose()?.flatten();
+    check_sizes(sizes, mask_size)?;
     // A PNG mask is decoded first (8 bits a channel, quick), and its size checked.
     let png_mask = match mask.filter(|m| !is_exr_name(m)) {
         Some(path) => Some((path, read_mask(path)?)),
@@ -197,6 +238,10 @@ pub fn read_inputs_watched(
     if let (Some((path, m)), Some(r)) = (&png_mask, sizes.1) {
         check_size(&name(reference), r, &name(path), (m.width, m.height))?;
     }
+    let (test_bytes, reference_bytes) = (read_checked_exr(test)?, read_checked_exr(reference)?);
+    let mask_bytes = exr_mask.map(read_checked_exr).transpose()?;
+    let sizes = (header_size(&test_bytes), header_size(&reference_bytes));
+    check_sizes(sizes, mask_bytes.as_deref().and_then(header_size))?;
     let exrs = 2 + u64::from(mask_bytes.is_some());
     let (width, height) = sizes.1.unwrap_or((0, 0));
     watch.begin(exrs * u64::from(height), width);
@@ -238,6 +283,9 @@ fn check_exists(path: &Path) -> Result<(), MetricsError> {
     }
 }
 
+/// An image's width and height in pixels.
+type Size = (u32, u32);
+
 /// Whether `path` names an EXR file (by its extension, any case): masks are read by it.
 pub fn is_exr_name(path: &Path) -> bool {
     path.extension()
@@ -247,6 +295,6 @@ pub fn is_exr_name(path: &Path) -> bool {
 /// The size of the colour layer an EXR's header declares, the one the decoder reads (a file's
 /// layers may differ in size: "all layers alike" left a file of an 8192² layer and an 8x8 one
 /// unsized, and its reading's estimate said 9 hours).
-fn header_size(bytes: &[u8]) -> Option<(u32, u32)> {
+fn header_size(bytes: &[u8]) -> Option<Size> {
     exr::rgba_layer_size(bytes).map(|(w, h)| (w as u32, h as u32))
 }

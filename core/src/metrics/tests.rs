@@ -513,12 +513,33 @@ fn reading_is_reported_row_by_row_and_stopped_at_a_word() {
     // (A new file: what this process read, no output of it replaces.)
     let short = dir.join("short.exr");
     crate::output::write_exr(&short, &image(64, 255, |_, _| [1.0; 4])).unwrap();
+    // Nor is any file read whole: their first bytes hold their headers.
     let early = Reading::new(u64::MAX);
-    let err = read_inputs_watched(&a, &b, Some(&short), &early)
-        .err()
-        .unwrap();
+    let (err, read_whole) = crate::files::digest::while_reading(|| {
+        read_inputs_watched(&a, &b, Some(&short), &early)
+            .err()
+            .unwrap()
+    });
     assert!(matches!(err, MetricsError::SizeMismatch { .. }), "{err}");
     assert!(err.to_string().contains("short.exr is 64x255"), "{err}");
     assert_eq!((early.rows(), *early.begun.lock().unwrap()), (0, None));
+    assert_eq!(read_whole, []);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A header read from a file's first bytes gives the colour layer's size; one that reaches
+/// past them gives none (the whole file is read for it), and bytes that are no EXR's are
+/// refused from the first of them.
+#[test]
+fn a_size_is_read_from_the_first_bytes_where_they_hold_the_header() {
+    let dir = temp_dir("heads");
+    let a = dir.join("a.exr");
+    crate::output::write_exr(&a, &gradient(64, 32)).unwrap();
+    let bytes = std::fs::read(&a).unwrap();
+    use super::read::size_from_head;
+    assert_eq!(size_from_head(&a, &bytes, false).unwrap(), Some((64, 32)));
+    assert_eq!(size_from_head(&a, &bytes[..40], true).unwrap(), None);
+    let e = size_from_head(&a, b"P6 64 32", true).unwrap_err();
+    assert!(e.to_string().contains("not an OpenEXR image"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

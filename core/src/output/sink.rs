@@ -16,6 +16,7 @@ use std::sync::Mutex;
 use super::{exr_error, png_error, OutputError};
 use crate::image::exr::{self, Samples};
 use crate::image::{png, RgbaImage};
+use crate::watch::Watch;
 
 pub trait Sink {
     /// Bytes as they are (CSV, SVG, an encoded image, ...) at `path`.
@@ -77,6 +78,25 @@ pub trait Sink {
         let mut bytes = Stoppable::new();
         png::encode_rgb8(&mut bytes, width, height, rgb8)
             .map_err(|e| encode_failed(path, e, png_error))?;
+        self.write_bytes(path, bytes.get_ref())
+    }
+
+    /// [`Sink::write_png_rgb8`], its rows counted to `watch` as they are encoded (an 8192²
+    /// heatmap of a noisy comparison encodes for seconds).
+    fn write_png_rgb8_watched(
+        &self,
+        path: &Path,
+        (width, height): (u32, u32),
+        rgb8: &[u8],
+        watch: &dyn Watch,
+    ) -> Result<(), OutputError> {
+        self.ready(path)?;
+        watch.begin(u64::from(height), width);
+        let mut bytes = Stoppable::new();
+        png::encode_rgb8_watched(&mut bytes, width, height, rgb8, |rows| {
+            watch.rows_done(rows)
+        })
+        .map_err(|e| encode_failed(path, e, png_error))?;
         self.write_bytes(path, bytes.get_ref())
     }
 
