@@ -42,7 +42,7 @@ pub(super) fn cube_options_apply(args: &Args, sources: &[Source]) -> Result<()> 
     if !sources.iter().any(|&s| samples_cube(s)) {
         bail!(
             "{option}: no source here samples a cube map ({}), so none is filled; leave it \
-             out, or add a source that samples the cube (box, say)",
+             out, or name a source that samples the cube in --sources (box, say)",
             names(sources)
         );
     }

@@ -117,11 +117,7 @@ pub fn parse(
 fn check_matches(db: &Database, run: &Database) -> Result<(), String> {
     // Said as a person reads them: no `Some(8)`, no 300 digits of a tiny spacing.
     let point = |p: [f64; 3]| format!("[{}]", p.map(num_text).join(", "));
-    let cube = |c: Option<u32>| {
-        c.map_or("none (a source that samples no cube)".to_owned(), |c| {
-            c.to_string()
-        })
-    };
+    let cube = |c: Option<u32>| c.map_or("missing or null".to_owned(), |c| c.to_string());
     let fields: [(&str, String, String, &str); 8] = [
         (
             "scene_hash",
@@ -308,7 +304,7 @@ mod tests {
         };
         let e = check_matches(&saved, &run_with(Some(16))).unwrap_err();
         assert!(
-            e.contains("is none (a source that samples no cube), this run has 16"),
+            e.contains("field `cube_px` is missing or null, this run has 16 (--cube-size)"),
             "{e}"
         );
         // A traced source reads no cube: the size an older file recorded for it is not asked.

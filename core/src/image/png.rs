@@ -59,13 +59,17 @@ pub fn encode_rgb8_watched(
     encoder.set_depth(::png::BitDepth::Eight);
     encoder.set_source_srgb(::png::SrgbRenderingIntent::Perceptual);
     let mut writer = encoder.write_header()?;
-    let mut stream = writer.stream_writer()?;
+    // IDAT chunks of a megabyte, not the stream's default 4 KiB (some 10,000 chunk headers
+    // in a noisy 4096² image).
+    let mut stream = writer.stream_writer_with_size(1 << 20)?;
     let row_bytes = (width as usize * 3).max(1);
     for band in rgb8.chunks(row_bytes * ROWS_A_BAND) {
         stream.write_all(band)?;
         rows_done((band.len() / row_bytes) as u32);
     }
-    stream.finish()
+    stream.finish()?;
+    // The end chunk written here, its error returned (a drop would write it and lose one).
+    writer.finish()
 }
 
 /// A 16-bit greyscale PNG of `values` (rows top to bottom): integers a reader takes back
