@@ -228,7 +228,7 @@ fn a_texture_over_the_budget_is_refused_from_its_header() {
 /// A run whose lookup makes no cube is not charged for one (a scene's 8192² faces were 16.5
 /// GiB of a refusal whose hint, `--cube-size`, was itself refused with that lookup); one whose
 /// lookup makes the cube is, with a hint the command takes (`cube.face_size` for a dataset,
-/// which has no `--cube-size`).
+/// which has no `--cube-size`), and localise's cube is the one its `--cube-size` makes.
 #[test]
 fn only_a_cube_that_is_made_is_counted() {
     let dir = temp_dir("memory-cube");
@@ -264,6 +264,20 @@ fn only_a_cube_that_is_made_is_counted() {
     assert_eq!(code, Some(1), "{stderr}");
     assert!(
         stderr.contains("(the cube: ") && stderr.ends_with("cube.face_size\n"),
+        "{stderr}"
+    );
+    // localise fills the cube --cube-size makes (128² by default), not the scene's: it was
+    // charged 4096² faces whatever --cube-size said, and its hint could not help.
+    let localise = ["localise", &scene, "--sensor-size", "64", "--grid", "4"];
+    let (l, l2) = (out("l"), out("l2"));
+    let small = [&localise[..], &["--queries", "2", "--out", &l]].concat();
+    let (code, stderr, _) = run(&small, budget);
+    assert_eq!(code, Some(0), "{stderr}");
+    let large = [&localise[..], &["--cube-size", "4096", "--out", &l2]].concat();
+    let (code, stderr, _) = run(&large, budget);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("(the cube: ") && stderr.ends_with("--cube-size\n"),
         "{stderr}"
     );
 }

@@ -96,6 +96,11 @@ pub(super) fn check_memory(args: &Args, plan: &Plan) -> Result<()> {
         * u64::from(specchio::sensor::localise::shift::COLUMNS_PER_K)
         * u64::from(args.k);
     let landmarks = plan.landmark_poses.len() as u64 * plan.sources.len() as u64;
-    specchio::memory::estimates::localise(&plan.body.scene, args.sensor_size, landmarks, values)
+    // The cube `--cube-size` makes, where a source fills one (the scene's own size is not
+    // used: the estimate once counted it whatever --cube-size said, and its hint failed).
+    let fills_cube = plan.sources.iter().any(|&s| super::checks::samples_cube(s));
+    let cube_px = fills_cube.then(|| args.cube_size_or_default());
+    let scene = &plan.body.scene;
+    specchio::memory::estimates::localise(scene, args.sensor_size, cube_px, landmarks, values)
         .with_context(|| args.scene.display().to_string())
 }

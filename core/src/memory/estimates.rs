@@ -224,15 +224,16 @@ pub fn calibrate(scene: &Scene) -> Result<(), MemoryError> {
     e.check(&Budget::from_env()?, "lower sensor.resolution")
 }
 
-/// `specchio localise`: one renderer at a time, a `sensor_px`² sensor, and the landmarks'
-/// signatures (`signature_values` floats each, for `landmarks` landmarks per source).
+/// `specchio localise`: one renderer at a time, a `sensor_px`² sensor, its `cube_px`² cube
+/// where a source fills one, and the landmarks' signatures (`signature_values` floats each,
+/// for `landmarks` landmarks per source).
 pub fn localise(
     scene: &Scene,
     sensor_px: u32,
+    cube_px: Option<u32>,
     landmarks: u64,
     signature_values: u64,
 ) -> Result<(), MemoryError> {
-    let face = u64::from(scene.cube.face_size_px);
     let mut e = Estimate::new();
     e.add(BASE_PART, RENDER_BASE_BYTES);
     scene_parts(
@@ -241,13 +242,19 @@ pub fn localise(
         RENDER_TRIANGLE_BYTES.max(REFERENCE_TRIANGLE_BYTES),
     );
     e.add_many("the sensor", pixels([sensor_px; 2]), LOCALISE_PIXEL_BYTES);
-    e.add_many("the cube", 6 * face * face, RENDER_CUBE_TEXEL_BYTES);
+    if let Some(face) = cube_px.map(u64::from) {
+        e.add_many("the cube", 6 * face * face, RENDER_CUBE_TEXEL_BYTES);
+    }
     e.add_many(
         "the landmarks' signatures",
         landmarks.saturating_mul(signature_values),
         4,
     );
-    e.check(&Budget::from_env()?, "lower --sensor-size or --cube-size")
+    let hint = match cube_px {
+        Some(_) => "lower --sensor-size or --cube-size",
+        None => "lower --sensor-size",
+    };
+    e.check(&Budget::from_env()?, hint)
 }
 
 /// `specchio bench`: scenes and face sizes are measured one after another, so the estimate is

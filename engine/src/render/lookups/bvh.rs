@@ -236,9 +236,13 @@ fn fixed_buffers(
     let range = ctx.device.info.limits.max_storage_buffer_range;
     let sizes = [Some(nodes.len()), meshes.triangle_bytes().map(<[u8]>::len)];
     if let Some(size) = sizes.into_iter().flatten().find(|&n| n as u64 > range) {
+        // Said with the way out: a user who never chose bvh (the sensor outputs' and
+        // datasets' default on a CPU driver) met only the limit.
         return Err(GpuError::Unsupported(format!(
             "lookup bvh: the scene's trees ({} layout) need a storage buffer of {size} bytes; \
-             this device binds at most {range} (maxStorageBufferRange)",
+             this device binds at most {range} (maxStorageBufferRange): trace with the \
+             ray-query lookup where the device has ray queries (`--lookup ray-query`; \
+             `lookup=\"ray-query\"` in Python), or give the meshes fewer triangles",
             meshes.layout().name()
         )));
     }
