@@ -28,6 +28,7 @@ use specchio::render::methods::Method;
 use crate::record::{self, Dynamic, MethodRow, RungRow, Stats};
 
 /// An earlier `specchio bench --json` file: its results and the driver that measured them.
+#[derive(Clone)]
 pub struct Baseline {
     pub results: Vec<MethodRow>,
     /// The trade-off's rungs.
@@ -333,6 +334,76 @@ fn counters_match<const N: usize>(
         }
     }
     true
+}
+
+/// The baseline's scenes spelt as this run spells its own (`scenes`, as given) where one names
+/// the same file: by device and inode where both paths lead to one (a link, another spelling),
+/// else once `.` and `a/..` are taken out of both. Cases were matched by their spelling, so a
+/// baseline taken of `scenes/x.toml` failed a run of `./scenes/x.toml` ("in the baseline but
+/// not measured"), which `bench` itself knew for one scene.
+pub fn spell_as_run(baseline: &mut Baseline, scenes: &[String]) {
+    let spell = |name: &mut String| {
+        if let Some(run) = scenes.iter().find(|s| same_scene(s, name)) {
+            name.clone_from(run);
+        }
+    };
+    baseline
+        .results
+        .iter_mut()
+        .for_each(|r| spell(&mut r.scene));
+    baseline
+        .tradeoff
+        .iter_mut()
+        .for_each(|r| spell(&mut r.scene));
+    baseline
+        .dynamic
+        .iter_mut()
+        .for_each(|r| spell(&mut r.scene));
+}
+
+fn same_scene(a: &str, b: &str) -> bool {
+    use specchio::files::identity::FileId;
+    match (FileId::of_path(Path::new(a)), FileId::of_path(Path::new(b))) {
+        (Some(x), Some(y)) => x == y,
+        _ => lexical(a) == lexical(b),
+    }
+}
+
+/// `path` without its `.` parts, and with each `name/..` taken out.
+fn lexical(path: &str) -> std::path::PathBuf {
+    use std::path::Component;
+    let mut out = std::path::PathBuf::new();
+    for part in Path::new(path).components() {
+        match part {
+            Component::CurDir => {}
+            Component::ParentDir
+                if matches!(out.components().next_back(), Some(Component::Normal(_))) =>
+            {
+                out.pop();
+            }
+            other => out.push(other),
+        }
+    }
+    out
+}
+
+/// The cases this run measured that the baseline lacks (a scene, method, face size or rung
+/// added since): passed without a comparison, so said by name.
+pub fn ungated(
+    baseline: &Baseline,
+    (results, tradeoff, dynamic): (&[MethodRow], &[RungRow], &[Dynamic]),
+) -> Vec<String> {
+    fn new<T>(old: &[T], now: &[T], case: fn(&T) -> String) -> Vec<String> {
+        let known: Vec<String> = old.iter().map(case).collect();
+        now.iter()
+            .map(case)
+            .filter(|c| !known.contains(c))
+            .collect()
+    }
+    let mut cases = new(&baseline.results, results, MethodRow::case);
+    cases.extend(new(&baseline.tradeoff, tradeoff, RungRow::case));
+    cases.extend(new(&baseline.dynamic, dynamic, Dynamic::case));
+    cases
 }
 
 /// One line per baseline case that was not measured.

@@ -297,3 +297,62 @@ fn dynamic_counters_fail_when_changed_and_only_where_both_measured() {
     assert!(check_dynamic(&[dynamic(0.0, 90)], &[dynamic(4.2, 91)]).is_empty());
     assert!(check_dynamic(&[], &[dynamic(0.0, 91)]).is_empty());
 }
+
+/// A baseline's scene under another spelling of this run's (`./`, `a/..`, a link) is this
+/// run's scene, and gates it; a case only this run measured is named, not passed unseen.
+#[test]
+fn a_scene_is_matched_by_its_file_and_new_cases_are_named() {
+    let dir = std::env::temp_dir().join(format!("specchio-gate-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    let file = dir.join("s.toml");
+    std::fs::write(&file, "").unwrap();
+    let link = dir.join("link.toml");
+    let _ = std::fs::remove_file(&link);
+    std::os::unix::fs::symlink(&file, &link).unwrap();
+    let run = file.display().to_string();
+    let d = dir.display();
+    let other = dir.join("other.toml").display().to_string();
+    std::fs::write(&other, "").unwrap();
+    let spellings = [
+        (format!("{d}/./s.toml"), &run),
+        (format!("{d}/sub/../s.toml"), &run),
+        (link.display().to_string(), &run),
+        (other.clone(), &other),
+    ];
+    for (spelt, becomes) in spellings {
+        let mut b = baseline_of(vec![MethodRow {
+            scene: spelt.clone(),
+            ..row("six-pass", 1.0, 1)
+        }]);
+        spell_as_run(&mut b, std::slice::from_ref(&run));
+        assert_eq!(&b.results[0].scene, becomes, "{spelt}");
+    }
+    // Files that are not there are compared by their spelling without `.` and `a/..`.
+    assert_eq!(lexical("./a/b/../c.toml"), Path::new("a/c.toml"));
+    assert_eq!(lexical("../x/./y.toml"), Path::new("../x/y.toml"));
+    let mut b = baseline_of(vec![MethodRow {
+        scene: "./gone/../missing.toml".into(),
+        ..row("six-pass", 1.0, 1)
+    }]);
+    spell_as_run(&mut b, &["missing.toml".into()]);
+    assert_eq!(b.results[0].scene, "missing.toml");
+    // What the baseline lacks is named.
+    let measured = [row("six-pass", 1.0, 1), row("instanced", 1.0, 1)];
+    let base = baseline_of(vec![row("six-pass", 1.0, 1)]);
+    let new = ungated(&base, (&measured, &[], &[]));
+    assert_eq!(new, ["s.toml / instanced / 64²"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A baseline of `results` alone.
+fn baseline_of(results: Vec<MethodRow>) -> Baseline {
+    Baseline {
+        results,
+        tradeoff: Vec::new(),
+        dynamic: Vec::new(),
+        driver_name: "llvmpipe".into(),
+        driver_info: String::new(),
+        frames_in_flight: None,
+        bvh_layout: BvhLayout::Cwbvh,
+    }
+}

@@ -179,9 +179,25 @@ fn write_outputs(args: &Args, out: Transaction, record: &Record) -> Result<()> {
 /// The regression gate's verdict on the record's methods, rungs and animated scenes, printed
 /// on stderr.
 fn gate(args: &Args, baseline: &Baseline, record: &Record) -> ExitCode {
+    let mut baseline = baseline.clone();
+    crate::gate::spell_as_run(&mut baseline, &record.settings.scenes);
+    let baseline = &baseline;
     let (rows, note) = crate::gate::rows_for(baseline, record.settings.frames_in_flight);
     if let Some(note) = note {
         specchio::say_err!("regression gate: {note}");
+    }
+    let measured = (
+        &record.results[..],
+        &record.tradeoff[..],
+        &record.dynamic[..],
+    );
+    let new = crate::gate::ungated(baseline, measured);
+    if !new.is_empty() {
+        specchio::say_err!(
+            "regression gate: {} case(s) not in the baseline, not gated: {}",
+            new.len(),
+            new.join(", ")
+        );
     }
     let mut failures = crate::gate::check(&rows, &record.results, args.max_regression);
     failures.extend(crate::gate::check_rungs(
