@@ -119,6 +119,20 @@ impl Ctx<'_> {
         if g.period.is_some() && moving == 0.0 {
             return Err(self.unused(&f("period"), "period is used only when moving > 0"));
         }
+        // Exactly round(moving × count) objects move (generate.rs): a share that rounds to
+        // none moved nothing, and its period went unused, without a word.
+        let movers = (f64::from(moving) * f64::from(count)).round();
+        if moving > 0.0 && movers == 0.0 {
+            return Err(self.invalid(
+                &f("moving"),
+                format!(
+                    "{} of {count} object(s) is none (exactly round(moving x count) move): give \
+                     at least {}, or 0 for none",
+                    crate::text::num_text(moving),
+                    crate::text::num_text(0.5 / f64::from(count))
+                ),
+            ));
+        }
         let period = self.interval(&f("period"), g.period.unwrap_or([8.0, 20.0]))?;
         Ok(Params {
             name,

@@ -103,6 +103,7 @@ fn generator_rules_with_their_fields() {
         ("count = 10", "count = 10\nkeep_clear = -1"),
         ("count = 10", "count = 10\nmoving = 1.5"),
         ("count = 10", "count = 10\nperiod = [8, 20]"),
+        ("count = 10", "count = 10\nmoving = 0.04"),
         ("count = 10", "count = 10\nmoving = 1\nperiod = [20, 8]"),
         ("count = 10", "count = 10\nname = \" \""),
         ("count = 10", "count = 10\ncolour = 3"),
@@ -136,6 +137,8 @@ fn generator_rules_with_their_fields() {
         "generate[0].keep_clear: must be >= 0",
         "generate[0].moving: must be in [0, 1]",
         "generate[0].period: not allowed here",
+        "generate[0].moving: 0.04 of 10 object(s) is none (exactly round(moving x count) \
+         move): give at least 0.05, or 0 for none",
         "generate[0].period[1]: must be >=",
         "generate[0].name: must not be empty",
         "generate[0].colour: unknown field",
