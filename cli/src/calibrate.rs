@@ -62,10 +62,16 @@ fn print_summary(record: &CalibrationRecord, cal: &Calibration) {
             s.mean, s.p99, s.max
         );
     };
+    // To a tenth of a millimetre, as the distances beside it: `{:?}` printed a viewpoint at
+    // the origin as [-1.2805146162418848e-22, -3.8157153800408385e-10, 2.1826031995858615e-30].
+    let point = record.viewpoint_world.map(|v| match format!("{v:.4}") {
+        t if t.trim_start_matches(['-', '0', '.']).is_empty() => "0.0000".to_owned(),
+        t => t,
+    });
     specchio::say!(
-        "{} mirror pixels; viewpoint {:?} (world, m); rays pass it at mean {:.3}, p99 {:.3}, max {:.3} m",
+        "{} mirror pixels; viewpoint [{}] (world, m); rays pass it at mean {:.3}, p99 {:.3}, max {:.3} m",
         cal.mirror_pixels,
-        record.viewpoint_world,
+        point.join(", "),
         cal.ray_distance_m.mean,
         cal.ray_distance_m.p99,
         cal.ray_distance_m.max

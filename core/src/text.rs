@@ -19,6 +19,16 @@ pub fn length_text(v: glam::Vec3) -> String {
     }
 }
 
+/// A computed number for a message, to four significant digits (`40.13`, not
+/// `40.132545912730585`): a value the program worked out, not one the user gave, which
+/// [`num_text`] repeats exactly.
+pub fn approx_text(v: f64) -> String {
+    match format!("{v:.3e}").parse::<f64>() {
+        Ok(rounded) if v.is_finite() => num_text(rounded),
+        _ => num_text(v),
+    }
+}
+
 pub trait NumText {
     fn text(self) -> String;
 }
@@ -113,6 +123,15 @@ pub fn time_text(t: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A computed value reads to four significant digits, in the everyday range or outside it.
+    #[test]
+    fn a_computed_value_reads_to_four_digits() {
+        assert_eq!(approx_text(40.132545912730585), "40.13");
+        assert_eq!(approx_text(4.999995), "5");
+        assert_eq!(approx_text(-2.5e-7), "-2.5e-7");
+        assert_eq!(approx_text(f64::INFINITY), "inf");
+    }
 
     /// A message of everyday words and paths is kept as it is; a 100,000-character value keeps
     /// its first 60 and says how many it left out; a long list stops at its bound.

@@ -198,7 +198,7 @@ fn a_format_or_a_time_a_bag_cannot_take_is_refused_before_anything_is_written() 
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(!r.status.success());
     assert!(
-        err.contains("--time: 0 s is not later than the pose before it"),
+        err.contains("--grid: a pose grid's ") && err.contains(" poses share one time"),
         "{err}"
     );
     assert!(!dir.join("out").exists());

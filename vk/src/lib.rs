@@ -60,6 +60,10 @@ pub enum GpuError {
     /// A resource larger than the device can hold, found before anything was allocated.
     #[error("too large for this device: {0}")]
     TooLarge(String),
+    /// An estimate of the host memory a run needs over the budget (`SPECCHIO_MEMORY_BUDGET`),
+    /// said as the estimate says it: not the device's limit.
+    #[error("{0}")]
+    OverBudget(String),
     #[error("unsupported: {0}")]
     Unsupported(String),
 }

@@ -64,10 +64,10 @@ fn build(v: &[f64]) -> Result<MirrorShape, ShapeError> {
         return Err(ShapeError {
             field: "rim_radius",
             message: format!(
-                "makes the mirror reach {} m from its viewpoint, as far as its camera at the \
-                 outer focus ({} m below it): the camera would be inside the mirror's reach; a \
-                 smaller rim or a larger focal_distance keeps it outside",
-                number(reach),
+                "makes the mirror reach {} m from its viewpoint, at least as far as its camera \
+                 at the outer focus {} m below it: the camera would be inside the mirror's \
+                 reach; a smaller rim or a larger focal_distance keeps it outside",
+                crate::text::approx_text(reach),
                 number(d)
             ),
         });

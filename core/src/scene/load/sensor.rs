@@ -90,7 +90,7 @@ impl Ctx<'_> {
             return Err(self.invalid(
                 "sensor.offset",
                 format!(
-                    "must be greater than the mirror radius {}, got {}",
+                    "must be greater than the mirror's reach from its centre ({} m), got {}",
                     num_text(mirror.radius_m),
                     num_text(offset_m)
                 ),
@@ -328,9 +328,10 @@ impl Ctx<'_> {
             field,
             format!(
                 "turns or moves the camera so that the {} mirror's rim leaves the image (its \
-                 field of view fits the aligned rim with a {} % margin)",
+                 field of view fits the aligned rim with a {} % margin): a smaller tilt or \
+                 shift, or a larger sensor.fov_y, keeps the rim in view",
                 mirror.shape.name(),
-                num_text((RIM_MARGIN - 1.0) * 100.0)
+                crate::text::approx_text(f64::from(RIM_MARGIN - 1.0) * 100.0)
             ),
         ))
     }

@@ -91,7 +91,7 @@ impl FrameWriter {
             false => 0,
         };
         crate::memory::estimates::dataset(scene, face, 1)
-            .map_err(|e| GpuError::TooLarge(format!("{lookup} lookup: {e}")))?;
+            .map_err(|e| GpuError::OverBudget(format!("{lookup} lookup: {e}")))?;
         let options = RenderOptions {
             lookup: Some(lookup),
             id_cube,

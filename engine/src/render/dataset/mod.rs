@@ -288,6 +288,16 @@ impl Plan {
     pub fn set_format(&mut self, format: Format, watch: &dyn Watch) -> Result<(), DatasetError> {
         if format.mcap {
             let grid = self.trajectory.starts_with(GRID);
+            if grid && self.poses.len() > 1 {
+                // Said of the grid the user gave, not of a `--time` they did not give.
+                return Err(DatasetError::Invalid(format!(
+                    "--grid: a pose grid's {} poses share one time, and a ROS 2 bag (--format \
+                     mcap) needs one time per pose, since tf keeps one transform of a frame at \
+                     each time: write the frames as files, or give a --trajectory whose times \
+                     increase",
+                    self.poses.len()
+                )));
+            }
             let at = |p: &Pose| match (grid, p.at) {
                 (true, _) => "--time".to_owned(),
                 (false, Place::Line(n)) => format!("{}:{n}: time", self.trajectory),

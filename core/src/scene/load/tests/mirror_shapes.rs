@@ -123,7 +123,7 @@ fn bad_mirror_shapes_are_refused_naming_the_field() {
         ("shape = \"paraboloid\"\nlatus_rectum = 2", "", "mirror.rim_radius: required field is missing"),
         ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2", "[sensor]\nfov_y = 60\n", "sensor.fov_y: not allowed here: a paraboloid's camera is orthographic"),
         ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 2500", "", "mirror.rim_radius: is 1250 times the latus rectum"),
-        ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2", "[sensor]\noffset = 1\n", "sensor.offset: must be greater than the mirror radius"),
+        ("shape = \"paraboloid\"\nlatus_rectum = 2\nrim_radius = 1.2", "[sensor]\noffset = 1\n", "sensor.offset: must be greater than the mirror's reach from its centre (1.22 m)"),
         // The cone, and what every shape's fields get from the registry.
         ("shape = \"cone\"\nhalf_angle = 90\nrim_radius = 1", "", "mirror.half_angle: must be in (0.1, 89.9)"),
         ("shape = \"cone\"\nhalf_angle = 0.05\nrim_radius = 1", "", "mirror.half_angle: must be in (0.1, 89.9)"),
