@@ -12,7 +12,7 @@ use specchio::process::progress;
 use specchio::sensor::central::record::{CalibrationRecord, Summary};
 use specchio::sensor::central::{folder, Calibration, FitError};
 
-use specchio::process::args::real;
+use specchio::process::args::seconds;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -23,7 +23,7 @@ pub struct Args {
     out: PathBuf,
     /// Scene time in seconds (finite, >= 0): where the mirror and sensor are.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true,
-          value_parser = real(0.0, false, f64::INFINITY))]
+          value_parser = seconds)]
     time: f64,
 }
 

@@ -11,7 +11,7 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use specchio::output::OutputError;
-use specchio::process::args::{real, whole};
+use specchio::process::args::{real, seconds, whole};
 use specchio::process::probe;
 use specchio::process::progress::{self, Progress};
 use specchio::render::dataset::{self as writer, FrameWriter, Plan, Poses};
@@ -40,7 +40,7 @@ pub struct Args {
     headings: Option<u32>,
     /// With --grid: the scene time of every pose in seconds (finite, >= 0; default 0).
     #[arg(long, requires = "grid", conflicts_with = "trajectory", allow_negative_numbers = true,
-          value_parser = real(0.0, false, f64::INFINITY))]
+          value_parser = seconds)]
     time: Option<f64>,
     /// Output folder (created if missing).
     #[arg(long)]

@@ -12,7 +12,7 @@ use specchio::sensor::SensorOutputs;
 
 use crate::image_files::ImageFiles;
 use crate::records::{ReferenceCameras, ReferenceRecord};
-use specchio::process::args::{real, whole};
+use specchio::process::args::{seconds, whole};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -23,7 +23,7 @@ pub struct Args {
     out: PathBuf,
     /// Scene time in seconds (finite, >= 0).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true,
-          value_parser = real(0.0, false, f64::INFINITY))]
+          value_parser = seconds)]
     time: f64,
     /// Samples per pixel on a fixed stratified grid, 1..=4096; 1 traces pixel centres only.
     #[arg(long, allow_negative_numbers = true, default_value_t = 1, value_parser = whole(1..=MAX_SPP))]

@@ -23,7 +23,7 @@ use crate::records::{
     CubeSettings, NotRun, RenderRecord, RenderRun, RenderSettings, RenderSummary,
 };
 use crate::render_input::{chosen_lookup, frame_times_are_finite, load_scene, options_apply};
-use specchio::process::args::{face_size, real, whole};
+use specchio::process::args::{face_size, real, seconds, whole};
 use specchio::process::probe;
 use specchio::vk::instance::{Instance, InstanceDesc};
 
@@ -43,7 +43,7 @@ pub struct Args {
     pub(crate) out: PathBuf,
     /// Scene time of the (first) frame in seconds (finite, >= 0).
     #[arg(long, conflicts_with = "frame", allow_negative_numbers = true,
-          value_parser = real(0.0, false, f64::INFINITY))]
+          value_parser = seconds)]
     pub(crate) time: Option<f64>,
     /// Frame number of the (first) frame, 0..=1000000000; its time is N / fps.
     #[arg(long, allow_negative_numbers = true, value_parser = whole(0..=MAX_FRAME_INDEX))]

@@ -14,6 +14,16 @@ use crate::render::Args;
 /// cannot be evaluated at (an orbiting object silently dropped out of the image).
 pub(crate) fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
     let last_s = start_s + f64::from(args.frames - 1) / args.fps();
+    let latest = specchio::scene::MAX_SCENE_TIME_S;
+    if last_s.is_finite() && last_s > latest {
+        bail!(
+            "--frame/--frames/--fps: the last frame falls at {} s, past the latest scene time \
+             ({} s), where an animation's phase is lost; give a larger --fps or an earlier \
+             frame",
+            specchio::text::approx_text(last_s),
+            specchio::text::num_text(latest)
+        );
+    }
     if !(start_s.is_finite() && last_s.is_finite()) {
         bail!(
             "--fps {}: frames {}..{} fall at no finite time (frame / fps overflows); \

@@ -130,13 +130,13 @@ pub fn from_array(
         if !row[3].is_finite() {
             return Err(named("heading", "must be a finite number of degrees"));
         }
-        if !(time_s.is_finite() && time_s >= 0.0) {
+        if !specchio::scene::is_scene_time(time_s) {
             let time = match (naming, one_time) {
                 (Naming::One, _) => "time".to_owned(),
                 (Naming::Batch, true) => "times".to_owned(),
                 (Naming::Batch, false) => format!("times[{i}]"),
             };
-            let why = "must be a finite number of seconds >= 0";
+            let why = specchio::scene::SCENE_TIME_RULE;
             return Err(errors::error(format!("{time}: {why}")));
         }
         out.push(Pose {

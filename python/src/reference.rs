@@ -39,10 +39,9 @@ pub fn reference<'py>(
     let scene = &*scene;
     let pose = pose.map(|p| crate::args::pose(py, &p)).transpose()?;
     let spp = crate::args::count("spp", spp, 1, specchio::reference::MAX_SPP)?;
-    if !(time.is_finite() && time >= 0.0) {
-        return Err(errors::error(
-            "time: must be a finite number of seconds >= 0",
-        ));
+    if !specchio::scene::is_scene_time(time) {
+        let rule = specchio::scene::SCENE_TIME_RULE;
+        return Err(errors::error(format!("time: {rule}")));
     }
     let instants = specchio::sensor::imaging::exposure_renders(&scene.scene);
     if let Some(why) = specchio::reference::too_many_paths(&scene.scene, spp, instants) {
@@ -106,10 +105,9 @@ pub fn calibrate<'py>(
 ) -> PyResult<Py<PyAny>> {
     let (scene, out) = (scene.named("scene")?, out.named("out")?);
     let (scene, time) = (&*scene, time.named("time")?);
-    if !(time.is_finite() && time >= 0.0) {
-        return Err(errors::error(
-            "time: must be a finite number of seconds >= 0",
-        ));
+    if !specchio::scene::is_scene_time(time) {
+        let rule = specchio::scene::SCENE_TIME_RULE;
+        return Err(errors::error(format!("time: {rule}")));
     }
     if let Some(why) = Calibration::too_large(&scene.scene) {
         return Err(scene.error(why));

@@ -243,10 +243,9 @@ impl Renderer {
 
     /// The scene's own mirror at `time`, heading 0.
     fn scene_pose(&self, time: f64) -> PyResult<Pose> {
-        if !(time.is_finite() && time >= 0.0) {
-            return Err(errors::error(
-                "time: must be a finite number of seconds >= 0",
-            ));
+        if !specchio::scene::is_scene_time(time) {
+            let rule = specchio::scene::SCENE_TIME_RULE;
+            return Err(errors::error(format!("time: {rule}")));
         }
         let state = specchio::scene::state::SceneState::at(&self.scene, time);
         Ok(Pose {

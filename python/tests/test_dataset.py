@@ -432,7 +432,7 @@ def test_errors_name_the_arguments_python_was_given_not_the_commands_options(tmp
         (lambda: specchio.dataset(scene, out=str(tmp_path / "a"), grid=0.0), r"grid: the spacing"),
         (
             lambda: specchio.dataset(scene, out=str(tmp_path / "b"), grid=4.0, time=1e300, format="mcap"),
-            r'time: 1e300 s is past .* \(format="mcap"\)',
+            r"time: must be a finite number of seconds from 0 to 1e9",
         ),
         (lambda: specchio.Renderer(specchio.Scene(scene), device=""), r'device="" names no device'),
     ]

@@ -36,7 +36,7 @@ use database::{Database, Landmark};
 pub use report::Report;
 use report::SourceRun;
 use source::{Body, Pose, Robot, Source};
-use specchio::process::args::{face_size, method, real, whole};
+use specchio::process::args::{face_size, method, real, seconds, whole};
 
 /// More queries than this is a mistake, not an experiment.
 pub const MAX_QUERIES: u32 = 100_000;
@@ -73,12 +73,12 @@ pub struct Args {
     /// Scene time of the queries in seconds (finite, >= 0); landmarks are taken at 0, so
     /// moving objects have moved.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true,
-          value_parser = real(0.0, false, f64::INFINITY))]
+          value_parser = seconds)]
     time: f64,
     /// Several query times (comma list, each finite and >= 0): one row per time and source,
     /// e.g. `0,3` for "without and with moving objects moved".
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true, conflicts_with = "time",
-          value_parser = real(0.0, false, f64::INFINITY))]
+          value_parser = seconds)]
     times: Vec<f64>,
     /// Image sources (comma list): lookups (`specchio info` lists them) and `reference`, the
     /// exact CPU ray tracer. Default: the scene's lookup.

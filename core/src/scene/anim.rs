@@ -6,6 +6,23 @@
 
 use glam::Vec3;
 
+/// The latest scene time a command takes (s; about 31.7 years): there f64 still resolves
+/// 1.2e-7 s, far below a frame. Past 1e16 s it resolves no second, and at 1e300 an orbit's
+/// phase is gone: `--time 1e300` rendered the image of time 0, with success.
+pub const MAX_SCENE_TIME_S: f64 = 1e9;
+
+/// The largest heading a pose takes (degrees), in either direction: a million degrees still
+/// resolves 1e-10 of one; a heading of 1e300 was taken as 0.
+pub const MAX_HEADING_DEG: f64 = 1e6;
+
+/// Whether `t` is a scene time a command takes: finite, from 0 to [`MAX_SCENE_TIME_S`].
+pub fn is_scene_time(t: f64) -> bool {
+    (0.0..=MAX_SCENE_TIME_S).contains(&t)
+}
+
+/// What a scene time must be, as every refusal of one says it.
+pub const SCENE_TIME_RULE: &str = "must be a finite number of seconds from 0 to 1e9";
+
 /// What happens after the end of a linear or keyframed animation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Repeat {

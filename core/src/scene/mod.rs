@@ -34,7 +34,9 @@ pub use crate::files::{
     MAX_TEXTURE_FILE_BYTES,
 };
 pub(crate) use anim::segment_distance;
-pub use anim::{Animation, Repeat};
+pub use anim::{
+    is_scene_time, Animation, Repeat, MAX_HEADING_DEG, MAX_SCENE_TIME_S, SCENE_TIME_RULE,
+};
 pub use asset::AssetError;
 pub use error::{Location, SceneError};
 pub use load::{imaging_str, load, load_str};

@@ -8,7 +8,7 @@ use std::ops::RangeInclusive;
 
 use crate::render::lookups::TraceOrder;
 use crate::render::methods::Method;
-use crate::scene::{Lookup, MAX_FACE_SIZE_PX};
+use crate::scene::{Lookup, MAX_FACE_SIZE_PX, MAX_SCENE_TIME_S};
 
 /// A whole number in `range`.
 pub fn whole<T>(
@@ -92,6 +92,11 @@ pub fn real(
                 (false, false) => format!("must be a finite number >= {lo}"),
             })
     }
+}
+
+/// A scene time in seconds, from 0 to [`MAX_SCENE_TIME_S`] (`--time`, `--times`).
+pub fn seconds(text: &str) -> Result<f64, String> {
+    real(0.0, false, MAX_SCENE_TIME_S)(text)
 }
 
 /// A registered cube fill method.
@@ -187,14 +192,21 @@ mod tests {
             assert_eq!(fps(bad), Err("must be a number in (0, 10]".into()), "{bad}");
         }
         assert_eq!(real(0.0, false, 1.0)("0"), Ok(0.0));
-        let seconds = real(0.0, false, f64::INFINITY);
-        assert_eq!(seconds("1e300"), Ok(1e300));
+        let unbounded = real(0.0, false, f64::INFINITY);
+        assert_eq!(unbounded("1e300"), Ok(1e300));
+        // A scene time stops where f64 still resolves far below a frame.
+        assert_eq!(seconds("1e9"), Ok(1e9));
+        assert_eq!(
+            seconds("1e300"),
+            Err("must be a number in [0, 1000000000]".into())
+        );
         for bad in ["-1", "inf", "NaN"] {
             assert_eq!(
-                seconds(bad),
+                unbounded(bad),
                 Err("must be a finite number >= 0".into()),
                 "{bad}"
             );
+            assert!(seconds(bad).is_err(), "{bad}");
         }
     }
 

@@ -22,7 +22,7 @@ pub enum GridError {
     Spacing(f64),
     #[error("--headings: must be 1 to {MAX_HEADINGS}, not {0}")]
     Headings(u32),
-    #[error("--time: must be a finite number of seconds >= 0, not {}", crate::text::num_text(*.0))]
+    #[error("--time: {}, not {}", crate::scene::SCENE_TIME_RULE, crate::text::num_text(*.0))]
     Time(f64),
     #[error(
         "--grid: a spacing of {} m gives {} {what}, more than the {max} a \
@@ -61,7 +61,7 @@ pub fn grid(
     if !(1..=MAX_HEADINGS).contains(&headings) {
         return Err(GridError::Headings(headings));
     }
-    if !(time_s.is_finite() && time_s >= 0.0) {
+    if !crate::scene::is_scene_time(time_s) {
         return Err(GridError::Time(time_s));
     }
     let positions = poses::grid(scene, spacing_m, time_s).map_err(|e| match e {

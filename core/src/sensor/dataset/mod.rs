@@ -66,11 +66,14 @@ pub fn pose_fits(
     if !pose.position.is_finite() {
         return Err(("position", "every value must be a finite number".into()));
     }
-    if !pose.heading_deg.is_finite() {
-        return Err(("heading", "must be a finite number of degrees".into()));
+    use crate::scene::{is_scene_time, MAX_HEADING_DEG, SCENE_TIME_RULE};
+    if !(pose.heading_deg.abs() <= MAX_HEADING_DEG) {
+        let rule = format!("{MAX_HEADING_DEG:e}");
+        let why = format!("must be a finite number of degrees from -{rule} to {rule}");
+        return Err(("heading", why));
     }
-    if !(pose.time_s.is_finite() && pose.time_s >= 0.0) {
-        return Err(("time", "must be a finite number of seconds >= 0".into()));
+    if !is_scene_time(pose.time_s) {
+        return Err(("time", SCENE_TIME_RULE.into()));
     }
     let local = local_position(scene, pose);
     let room = &scene.room;
