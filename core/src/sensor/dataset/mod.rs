@@ -67,7 +67,7 @@ pub fn pose_fits(
         return Err(("position", "every value must be a finite number".into()));
     }
     use crate::scene::{is_scene_time, MAX_HEADING_DEG, SCENE_TIME_RULE};
-    if !(pose.heading_deg.abs() <= MAX_HEADING_DEG) {
+    if !(-MAX_HEADING_DEG..=MAX_HEADING_DEG).contains(&pose.heading_deg) {
         let rule = format!("{MAX_HEADING_DEG:e}");
         let why = format!("must be a finite number of degrees from -{rule} to {rule}");
         return Err(("heading", why));
