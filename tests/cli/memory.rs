@@ -77,7 +77,18 @@ fn each_command_stays_within_its_estimate_and_is_refused_above_the_budget() {
     let six = root().join("scenes/test/six-colour-room.toml");
     let six = six.to_str().unwrap();
     let json = dir.join("bench.json");
-    let cases: [Vec<&str>; 6] = [
+    // Two 1024² images for compare (its estimate is from their headers).
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    let gradient = |v: f32| specchio::image::RgbaImage {
+        width: 1024,
+        height: 1024,
+        pixels: (0..1024 * 1024)
+            .map(|i| [v, (i % 1024) as f32 / 1024.0, 0.5, 1.0])
+            .collect(),
+    };
+    specchio::output::write_exr(&a, &gradient(0.25)).unwrap();
+    specchio::output::write_exr(&b, &gradient(0.5)).unwrap();
+    let cases: [Vec<&str>; 7] = [
         // The whole benchmark (every method, the floors, the ladder and its errors) on a
         // small scene; `--json` is its output, removed below like the folders.
         vec![
@@ -100,6 +111,12 @@ fn each_command_stays_within_its_estimate_and_is_refused_above_the_budget() {
         ],
         vec!["reference", &scene, "--out", o, "--sensor-outputs"],
         vec!["calibrate", &scene, "--out", o],
+        vec![
+            "compare",
+            a.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "--json",
+        ],
         vec![
             "localise",
             &scene,

@@ -208,6 +208,27 @@ pub fn reference(scene: &Scene, sensor_outputs: bool) -> Result<(), MemoryError>
     )
 }
 
+/// `specchio compare`'s program, without images (measured 81 MB with two 1024² images'
+/// 48 MB taken out).
+const COMPARE_BASE_BYTES: u64 = 96 * MIB;
+/// A compared pixel: the two decoded images, each file's bytes while it decodes, FLIP's
+/// bands and map, the heatmap (44.6 measured at 8192², 3.07 GB in all, 30 November 2026).
+const COMPARE_PIXEL_BYTES: u64 = 48;
+/// A mask's pixel: its decoded image while it is read, then one flag.
+const COMPARE_MASK_PIXEL_BYTES: u64 = 20;
+
+/// `specchio compare` of two `size` images (from their headers), with a mask or not: an
+/// 8192² comparison holds 3 GB, one at the 16384² the metrics read about 13 GB.
+pub fn compare(size: [u32; 2], mask: bool) -> Result<(), MemoryError> {
+    let mut e = Estimate::new();
+    e.add(BASE_PART, COMPARE_BASE_BYTES);
+    e.add_many("the images", pixels(size), COMPARE_PIXEL_BYTES);
+    if mask {
+        e.add_many("the mask", pixels(size), COMPARE_MASK_PIXEL_BYTES);
+    }
+    e.check(&Budget::from_env()?, "compare smaller images")
+}
+
 /// `specchio calibrate`.
 pub fn calibrate(scene: &Scene) -> Result<(), MemoryError> {
     let mut e = Estimate::new();

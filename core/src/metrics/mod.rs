@@ -76,6 +76,9 @@ pub enum MetricsError {
     EmptyMask { path: PathBuf, threshold: f32 },
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// The comparison's memory estimate, from the headers, is over the budget.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::MemoryError),
     /// The caller's watch stopped the reading or the comparison before it was done.
     #[error("stopped before the comparison was done")]
     Stopped,
