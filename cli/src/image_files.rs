@@ -3,11 +3,13 @@
 //! them for 11 s without a word after its trace's estimate had said "about 2 s left".
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use anyhow::Result;
 use specchio::image::RgbaImage;
 use specchio::output::{Sink, Transaction};
 use specchio::process::progress::{Progress, PERCENT};
+use specchio::watch::Watch;
 
 /// How an image is written: linear RGBA in an EXR (4 samples a pixel), or an 8-bit sRGB
 /// preview in a PNG (3).
@@ -64,14 +66,44 @@ impl<'a> ImageFiles<'a> {
             what.map(|w| Progress::new(format!("{w}: writing {n} image files"), total, PERCENT));
         for file in &self.files {
             let (path, image, kind) = file;
+            // An EXR counted row by row as it encodes (an 8192² one takes seconds), the rest
+            // of a file as it ends.
+            let rows = Rows {
+                said: said.as_ref(),
+                samples_a_row: u64::from(image.width) * kind.samples(),
+                counted: AtomicU64::new(0),
+            };
             match kind {
-                Kind::Exr => out.write_exr(path, image)?,
+                Kind::Exr => out.write_exr_watched(path, image, &rows)?,
                 Kind::Png => out.write_png(path, image)?,
             }
             if let Some(said) = &said {
-                said.add(samples(file));
+                said.add(samples(file) - rows.counted.load(Ordering::Relaxed));
             }
         }
         Ok(())
+    }
+}
+
+/// One file's rows into the files' [`Progress`], in samples.
+struct Rows<'a> {
+    said: Option<&'a Progress>,
+    samples_a_row: u64,
+    counted: AtomicU64,
+}
+
+impl Watch for Rows<'_> {
+    fn begin(&self, _rows: u64, _width: u32) {}
+
+    fn rows_done(&self, rows: u32) {
+        if let Some(said) = self.said {
+            let samples = u64::from(rows) * self.samples_a_row;
+            self.counted.fetch_add(samples, Ordering::Relaxed);
+            said.add(samples);
+        }
+    }
+
+    fn stop(&self) -> bool {
+        false
     }
 }

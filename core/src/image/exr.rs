@@ -28,6 +28,16 @@ pub const ENCODING: Encoding = Encoding {
 
 /// Linear RGBA, 32-bit float.
 pub fn encode_rgba(to: impl Write + Seek, image: &RgbaImage) -> Result<(), Error> {
+    encode_rgba_watched(to, image, |_| {})
+}
+
+/// [`encode_rgba`], its progress (0 to 1) said to `progress` as its chunks are written (an
+/// 8192² image encodes for seconds); the same bytes.
+pub fn encode_rgba_watched(
+    to: impl Write + Seek,
+    image: &RgbaImage,
+    progress: impl FnMut(f64),
+) -> Result<(), Error> {
     let w = image.width as usize;
     let channels = SpecificChannels::rgba(|Vec2(x, y)| {
         let p: [f32; 4] = image.pixels[y * w + x];
@@ -35,6 +45,7 @@ pub fn encode_rgba(to: impl Write + Seek, image: &RgbaImage) -> Result<(), Error
     });
     Image::from_encoded_channels((w, image.height as usize), ENCODING, channels)
         .write()
+        .on_progress(progress)
         .to_buffered(to)
 }
 

@@ -36,6 +36,30 @@ pub trait Sink {
         self.write_bytes(path, bytes.get_ref())
     }
 
+    /// [`Self::write_exr`], its rows counted to `watch` as they are encoded.
+    fn write_exr_watched(
+        &self,
+        path: &Path,
+        image: &RgbaImage,
+        watch: &dyn Watch,
+    ) -> Result<(), OutputError> {
+        self.ready(path)?;
+        let rows = u64::from(image.height);
+        watch.begin(rows, image.width);
+        let mut said = 0;
+        let progress = |done: f64| {
+            let now = ((done.clamp(0.0, 1.0) * rows as f64) as u64).min(rows);
+            if now > said {
+                watch.rows_done((now - said) as u32);
+                said = now;
+            }
+        };
+        let mut bytes = Stoppable::new();
+        exr::encode_rgba_watched(&mut bytes, image, progress)
+            .map_err(|e| encode_failed(path, e, exr_error))?;
+        self.write_bytes(path, bytes.get_ref())
+    }
+
     /// [`Self::write_exr`] in half floats ([`exr::encode_rgba_half`]).
     fn write_exr_half(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
         self.ready(path)?;

@@ -80,6 +80,37 @@ fn exr_bytes_do_not_depend_on_compression_threads() {
     fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A watched EXR counts every row once, in order, as its chunks are written, and is the
+/// same bytes as the unwatched one.
+#[test]
+fn a_watched_exr_counts_its_rows_and_is_the_same_bytes() {
+    use crate::watch::Watch;
+    #[derive(Default)]
+    struct Rows(std::sync::Mutex<Vec<u32>>);
+    impl Watch for Rows {
+        fn begin(&self, rows: u64, width: u32) {
+            assert_eq!((rows, width), (384, 512));
+        }
+        fn rows_done(&self, rows: u32) {
+            self.0.lock().unwrap().push(rows);
+        }
+        fn stop(&self) -> bool {
+            false
+        }
+    }
+    let dir = scratch("exr-watched");
+    let image = image(512, 384);
+    let (plain, watched) = (dir.join("a.exr"), dir.join("b.exr"));
+    write_exr(&plain, &image).unwrap();
+    let rows = Rows::default();
+    one_file(&watched, |out| out.write_exr_watched(&watched, &image, &rows)).unwrap();
+    assert_eq!(fs::read(&plain).unwrap(), fs::read(&watched).unwrap());
+    let counted = rows.0.into_inner().unwrap();
+    assert!(counted.len() > 1, "{counted:?}");
+    assert_eq!(counted.iter().sum::<u32>(), 384);
+    fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn a_dropped_transaction_leaves_nothing_not_even_the_parents_it_made() {
     let dir = scratch("drop");
