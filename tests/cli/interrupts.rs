@@ -9,15 +9,16 @@ mod common;
 use common::{root, temp_dir};
 
 /// A render whose one frame is held on the GPU (`SPECCHIO_FAULT_HOLD_FRAME=1`: its
-/// submission waits up to 60 s for a semaphore nothing signals) ends within seconds of a
-/// SIGINT, saying where, with exit 1 and nothing written. It used to wait out the frame.
+/// submission waits up to 60 s for a semaphore nothing signals) says that it waits for the
+/// frame (once, as an estimate would come), and ends within seconds of a SIGINT, saying where,
+/// with exit 1 and nothing written. It used to wait out the frame, silently.
 #[test]
 fn a_signal_during_a_gpu_frame_ends_the_run_within_a_moment() {
     let dir = temp_dir("gpu-frame-stop");
     std::fs::create_dir_all(&dir).unwrap();
     let scene = root().join("scenes/test/six-colour-room.toml");
     let out = dir.join("out");
-    let said = dir.join("stdout.txt");
+    let (said, errors) = (dir.join("stdout.txt"), dir.join("stderr.txt"));
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
         .args([
             "render",
@@ -26,17 +27,21 @@ fn a_signal_during_a_gpu_frame_ends_the_run_within_a_moment() {
             out.to_str().unwrap(),
         ])
         .env("SPECCHIO_FAULT_HOLD_FRAME", "1")
+        .env(common::ESTIMATE_AT_ONCE.0, common::ESTIMATE_AT_ONCE.1)
         .stdout(std::fs::File::create(&said).unwrap())
-        .stderr(std::process::Stdio::piped())
+        .stderr(std::fs::File::create(&errors).unwrap())
         .spawn()
         .unwrap();
+    let waiting = "waiting for the GPU: one frame has run for ";
     let held = || {
         std::fs::read_to_string(&said).is_ok_and(|s| s.contains("fault: frame 1 held until let go"))
+            && std::fs::read_to_string(&errors).is_ok_and(|s| s.contains(waiting))
     };
     let signalled = std::time::Instant::now();
     let result = common::signal_when(child, libc::SIGINT, "the held frame", held);
     let took = signalled.elapsed();
-    let stderr = String::from_utf8_lossy(&result.stderr);
+    let stderr = std::fs::read_to_string(&errors).unwrap();
+    assert_eq!(stderr.matches(waiting).count(), 1, "{stderr}");
     assert_eq!(result.status.code(), Some(1), "{stderr}");
     assert!(
         stderr.contains("interrupted during a GPU frame: nothing was written"),

@@ -103,7 +103,10 @@ fn a_watched_exr_counts_its_rows_and_is_the_same_bytes() {
     let (plain, watched) = (dir.join("a.exr"), dir.join("b.exr"));
     write_exr(&plain, &image).unwrap();
     let rows = Rows::default();
-    one_file(&watched, |out| out.write_exr_watched(&watched, &image, &rows)).unwrap();
+    one_file(&watched, |out| {
+        out.write_exr_watched(&watched, &image, &rows)
+    })
+    .unwrap();
     assert_eq!(fs::read(&plain).unwrap(), fs::read(&watched).unwrap());
     let counted = rows.0.into_inner().unwrap();
     assert!(counted.len() > 1, "{counted:?}");

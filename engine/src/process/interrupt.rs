@@ -145,13 +145,32 @@ pub fn catch_in_long_frames() {
 /// can be cut short). Nothing is torn down: the GPU still uses the frame's objects, and the
 /// kernel and the driver reclaim them.
 fn during_a_frame(waited: std::time::Duration) {
-    if !INTERRUPTED.load(Ordering::SeqCst) || waited < LONG_FRAME {
+    if !INTERRUPTED.load(Ordering::SeqCst) {
+        say_a_long_frame(waited);
+        return;
+    }
+    if waited < LONG_FRAME {
         return;
     }
     crate::output::remove_staging_folders();
     let stopped: Box<dyn std::error::Error + Send + Sync> =
         Box::new(Interrupted("during a GPU frame".to_owned()));
     super::ending::end_without_teardown::<Box<dyn std::error::Error + Send + Sync>>(Err(stopped))
+}
+
+/// A frame the GPU has worked on for as long as an estimate waits ([`super::progress`]) is
+/// said once, when its wait crosses that time: one 8192² frame is seconds on a CPU driver, and
+/// a GPU frame cannot say how far it has got, so this is the one word of it.
+fn say_a_long_frame(waited: std::time::Duration) {
+    let slice = std::time::Duration::from_nanos(crate::vk::commands::WAIT_SLICE_NS);
+    let after = super::progress::estimate_after().max(slice);
+    if (after..after + slice).contains(&waited) {
+        crate::say_err!(
+            "waiting for the GPU: one frame has run for {} s so far (a frame says nothing of its \
+             progress); Ctrl-C stops it cleanly",
+            format!("{:.1}", waited.as_secs_f64())
+        );
+    }
 }
 
 /// An error once a signal has arrived; `progress` says how far the command got.

@@ -22,7 +22,7 @@ pub const ESTIMATE_AFTER_VAR: &str = "SPECCHIO_ESTIMATE_AFTER_S";
 
 /// [`ESTIMATE_AFTER`], or what [`ESTIMATE_AFTER_VAR`] says; a value that is not a number of
 /// seconds from 0 to a day is said once and not used.
-fn estimate_after() -> Duration {
+pub(crate) fn estimate_after() -> Duration {
     static AFTER: OnceLock<Duration> = OnceLock::new();
     *AFTER.get_or_init(|| {
         let Some(text) = std::env::var_os(ESTIMATE_AFTER_VAR) else {
