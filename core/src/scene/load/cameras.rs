@@ -12,6 +12,10 @@ use crate::scene::{Camera, Mirror, Room};
 /// the camera has no right direction.
 const PITCH_DEG: Range = Range::open(-90.0, 90.0);
 
+/// Yaw, ten turns either way: an f32 of degrees resolves a thousandth of one there, and none
+/// past 1.7e7 (a yaw of 1e30 was accepted and turned the view to whatever it rounded to).
+const YAW_DEG: Range = Range::closed(-3600.0, 3600.0);
+
 /// Vertical field of view of the observer and the sensor. Below 0.1 degrees neighbouring
 /// pixels' rays (at 8192 pixels) differ by less than f32 resolves around a unit vector; above
 /// 179.99 the f32 tangent of half the angle is off by more than 0.1% (the angle is within an
@@ -47,7 +51,7 @@ impl Ctx<'_> {
         };
         let camera = Camera {
             position,
-            yaw_deg: self.num("observer.yaw", s.yaw.unwrap_or(0.0))?,
+            yaw_deg: self.ranged("observer.yaw", s.yaw.unwrap_or(0.0), YAW_DEG)?,
             pitch_deg: self.ranged("observer.pitch", s.pitch.unwrap_or(0.0), PITCH_DEG)?,
             fov_y_deg: self.ranged("observer.fov_y", s.fov_y.unwrap_or(60.0), FOV_Y_DEG)?,
             resolution: self.resolution("observer.resolution", s.resolution, [800, 600])?,

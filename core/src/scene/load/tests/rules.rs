@@ -34,6 +34,7 @@ fn more_rules_with_their_fields() {
         ("[cube]\nanisotropy = 17\n", "cube.anisotropy: must be in 1..=16, got 17"),
         ("[cube]\nformat = \"rgb32\"\n", "cube.format"),
         ("[observer]\npitch = 90\n", "observer.pitch: must be in (-90, 90)"),
+        ("[observer]\nyaw = 1e30\n", "observer.yaw: must be in [-3600, 3600], got 1e30"),
         ("[observer]\nfov_y = 180\n", "observer.fov_y"),
         ("[observer]\nresolution = [0, 10]\n", "observer.resolution[0]"),
         ("[sensor]\nup = [0, 0, 0]\n", "sensor.up"),
