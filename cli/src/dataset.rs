@@ -38,7 +38,7 @@ pub struct Args {
     #[arg(long, requires = "grid", conflicts_with = "trajectory", allow_negative_numbers = true,
           value_parser = whole(1..=grid::MAX_HEADINGS))]
     headings: Option<u32>,
-    /// With --grid: the scene time of every pose in seconds (finite, >= 0; default 0).
+    /// With --grid: the scene time of every pose in seconds (0 to 1e9; default 0).
     #[arg(long, requires = "grid", conflicts_with = "trajectory", allow_negative_numbers = true,
           value_parser = seconds)]
     time: Option<f64>,

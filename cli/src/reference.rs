@@ -21,7 +21,7 @@ pub struct Args {
     /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Scene time in seconds (finite, >= 0).
+    /// Scene time in seconds (0 to 1e9).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true,
           value_parser = seconds)]
     time: f64,

@@ -22,7 +22,7 @@ use specchio::vk::device::{self, Device, DeviceInfo};
 use crate::records::{
     CubeSettings, NotRun, RenderRecord, RenderRun, RenderSettings, RenderSummary,
 };
-use crate::render_input::{chosen_lookup, frame_times_are_finite, load_scene, options_apply};
+use crate::render_input::{chosen_lookup, frame_times_are_in_range, load_scene, options_apply};
 use specchio::process::args::{face_size, real, seconds, whole};
 use specchio::process::probe;
 use specchio::vk::instance::{Instance, InstanceDesc};
@@ -41,7 +41,7 @@ pub struct Args {
     /// render there is replaced.
     #[arg(long)]
     pub(crate) out: PathBuf,
-    /// Scene time of the (first) frame in seconds (finite, >= 0).
+    /// Scene time of the (first) frame in seconds (0 to 1e9).
     #[arg(long, conflicts_with = "frame", allow_negative_numbers = true,
           value_parser = seconds)]
     pub(crate) time: Option<f64>,
@@ -123,7 +123,7 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     //    (the numbers' ranges by clap, `specchio::process::args`).
     let scene = load_scene(args)?;
     let start_s = (args.time).unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps());
-    frame_times_are_finite(args, start_s)?;
+    frame_times_are_in_range(args, start_s)?;
     // Everything is written into a hidden folder beside --out, renamed into place at the end
     // (dropped, it is removed): a failure anywhere below leaves nothing behind.
     let mut out = Transaction::new();

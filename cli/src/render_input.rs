@@ -9,17 +9,18 @@ use specchio::vk::device::DeviceInfo;
 
 use crate::render::Args;
 
-/// Refuses a run whose first or last frame falls at no finite time: each flag is in its own
-/// range, but --frame over a tiny --fps (1 / 4.9e-324) is infinite, which the scene's motion
-/// cannot be evaluated at (an orbiting object silently dropped out of the image).
-pub(crate) fn frame_times_are_finite(args: &Args, start_s: f64) -> Result<()> {
+/// Refuses a run whose first or last frame falls at no finite time, or past the latest scene
+/// time: each flag is in its own range, but --frame over a tiny --fps (1 / 4.9e-324) is
+/// infinite, which the scene's motion cannot be evaluated at (an orbiting object silently
+/// dropped out of the image), and a late one loses an orbit's phase.
+pub(crate) fn frame_times_are_in_range(args: &Args, start_s: f64) -> Result<()> {
     let last_s = start_s + f64::from(args.frames - 1) / args.fps();
     let latest = specchio::scene::MAX_SCENE_TIME_S;
     if last_s.is_finite() && last_s > latest {
         bail!(
-            "--frame/--frames/--fps: the last frame falls at {} s, past the latest scene time \
-             ({} s), where an animation's phase is lost; give a larger --fps or an earlier \
-             frame",
+            "the last frame falls at {} s (--time or --frame, --frames, --fps), past the \
+             latest scene time ({} s), where an animation's phase is lost: give an earlier \
+             --time or --frame, fewer --frames or a larger --fps",
             specchio::text::approx_text(last_s),
             specchio::text::num_text(latest)
         );

@@ -89,6 +89,7 @@ const ARGUMENTS: &[(&str, &str)] = &[
     ("--grid", "grid"),
     ("--headings", "headings"),
     ("--time", "time"),
+    ("--trajectory", "trajectory"),
     ("--out", "out"),
     ("--resume", "resume=True"),
     // The package's renderers take the face size from the scene file alone.

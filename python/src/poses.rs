@@ -127,8 +127,8 @@ pub fn from_array(
         if !row.iter().take(3).all(|v| v.is_finite()) {
             return Err(named("position", "every value must be a finite number"));
         }
-        if !row[3].is_finite() {
-            return Err(named("heading", "must be a finite number of degrees"));
+        if !specchio::scene::is_heading(row[3]) {
+            return Err(named("heading", specchio::scene::HEADING_RULE));
         }
         if !specchio::scene::is_scene_time(time_s) {
             let time = match (naming, one_time) {

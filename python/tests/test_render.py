@@ -108,6 +108,9 @@ def test_wrong_buffers_and_poses_are_named(renderer):
         renderer.render(pose=(0.0, 3.0, 0.0, 0.0), time=np.nan)
     with pytest.raises(specchio.SpecchioError, match=r"^pose: heading: must be a finite number"):
         renderer.render(pose=(0.0, 3.0, 0.0, np.nan))
+    # Refused before it is brought into one turn, which made 1e300 a 0.
+    with pytest.raises(specchio.SpecchioError, match=r"^pose: heading: .* from -1e6 to 1e6"):
+        renderer.render(pose=(0.0, 3.0, 0.0, 1e300))
     with pytest.raises(specchio.SpecchioError, match=r"^pose: position: the mirror .* not entirely inside the room"):
         renderer.render(pose=(100.0, 3.0, 0.0, 0.0))
     with pytest.raises(specchio.SpecchioError, match=r"poses\[0\]: position: every value"):

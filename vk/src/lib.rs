@@ -60,8 +60,8 @@ pub enum GpuError {
     /// A resource larger than the device can hold, found before anything was allocated.
     #[error("too large for this device: {0}")]
     TooLarge(String),
-    /// An estimate of the host memory a run needs over the budget (`SPECCHIO_MEMORY_BUDGET`),
-    /// said as the estimate says it: not the device's limit.
+    /// The host-memory budget (`SPECCHIO_MEMORY_BUDGET`) refused the run (an estimate over
+    /// it, or a budget that is no size), said as the budget says it: not the device's limit.
     #[error("{0}")]
     OverBudget(String),
     #[error("unsupported: {0}")]

@@ -70,12 +70,12 @@ pub struct Args {
     /// Seed of the query poses and headings, 0..=2^64-1.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Scene time of the queries in seconds (finite, >= 0); landmarks are taken at 0, so
+    /// Scene time of the queries in seconds (0 to 1e9); landmarks are taken at 0, so
     /// moving objects have moved.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true,
           value_parser = seconds)]
     time: f64,
-    /// Several query times (comma list, each finite and >= 0): one row per time and source,
+    /// Several query times (comma list, each 0 to 1e9): one row per time and source,
     /// e.g. `0,3` for "without and with moving objects moved".
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true, conflicts_with = "time",
           value_parser = seconds)]

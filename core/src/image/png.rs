@@ -32,13 +32,18 @@ pub fn encode_rgb8(
     height: u32,
     rgb8: &[u8],
 ) -> Result<(), EncodingError> {
+    let mut writer = rgb8_encoder(to, width, height).write_header()?;
+    writer.write_image_data(rgb8)?;
+    writer.finish()
+}
+
+/// An encoder of an 8-bit sRGB RGB image of `width` x `height`.
+fn rgb8_encoder<W: Write>(to: W, width: u32, height: u32) -> ::png::Encoder<'static, W> {
     let mut encoder = ::png::Encoder::new(to, width, height);
     encoder.set_color(::png::ColorType::Rgb);
     encoder.set_depth(::png::BitDepth::Eight);
     encoder.set_source_srgb(::png::SrgbRenderingIntent::Perceptual);
-    let mut writer = encoder.write_header()?;
-    writer.write_image_data(rgb8)?;
-    writer.finish()
+    encoder
 }
 
 /// The rows [`encode_rgb8_watched`] hands the encoder at a time: some 6 MB of an 8192² image.
@@ -54,11 +59,7 @@ pub fn encode_rgb8_watched(
     rgb8: &[u8],
     mut rows_done: impl FnMut(u32),
 ) -> Result<(), EncodingError> {
-    let mut encoder = ::png::Encoder::new(to, width, height);
-    encoder.set_color(::png::ColorType::Rgb);
-    encoder.set_depth(::png::BitDepth::Eight);
-    encoder.set_source_srgb(::png::SrgbRenderingIntent::Perceptual);
-    let mut writer = encoder.write_header()?;
+    let mut writer = rgb8_encoder(to, width, height).write_header()?;
     // IDAT chunks of a megabyte, not the stream's default 4 KiB (some 10,000 chunk headers
     // in a noisy 4096² image).
     let mut stream = writer.stream_writer_with_size(1 << 20)?;

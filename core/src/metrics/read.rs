@@ -231,10 +231,11 @@ pub fn read_inputs_watched(
     let mask_size = exr_mask.map(exr_head_size).transpose()?.flatten();
     check_sizes(sizes, mask_size)?;
     // The memory it takes, before any file is read whole: a comparison at the 16384² the
-    // metrics read holds some 13 GB, and none was estimated.
-    if let Some((w, h)) = sizes.0.or(sizes.1) {
-        crate::memory::estimates::compare([w, h], mask.is_some())?;
-    }
+    // metrics read holds some 13 GB, and none was estimated. (Headers past the first bytes:
+    // from the whole files, before any pixel is decoded.)
+    let estimate = |(w, h): Size| crate::memory::estimates::compare([w, h], mask.is_some());
+    let head_sized = sizes.0.or(sizes.1);
+    head_sized.map(estimate).transpose()?;
     // A PNG mask is decoded first (8 bits a channel, quick), and its size checked.
     let png_mask = match mask.filter(|m| !is_exr_name(m)) {
         Some(path) => Some((path, read_mask(path)?)),
@@ -247,6 +248,9 @@ pub fn read_inputs_watched(
     let mask_bytes = exr_mask.map(read_checked_exr).transpose()?;
     let sizes = (header_size(&test_bytes), header_size(&reference_bytes));
     check_sizes(sizes, mask_bytes.as_deref().and_then(header_size))?;
+    if head_sized.is_none() {
+        sizes.0.or(sizes.1).map(estimate).transpose()?;
+    }
     let exrs = 2 + u64::from(mask_bytes.is_some());
     let (width, height) = sizes.1.unwrap_or((0, 0));
     watch.begin(exrs * u64::from(height), width);

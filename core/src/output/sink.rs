@@ -30,10 +30,7 @@ pub trait Sink {
 
     /// Linear RGBA, 32-bit float, as OpenEXR.
     fn write_exr(&self, path: &Path, image: &RgbaImage) -> Result<(), OutputError> {
-        self.ready(path)?;
-        let mut bytes = Stoppable::new();
-        exr::encode_rgba(&mut bytes, image).map_err(|e| encode_failed(path, e, exr_error))?;
-        self.write_bytes(path, bytes.get_ref())
+        self.write_exr_watched(path, image, &crate::watch::Unwatched)
     }
 
     /// [`Self::write_exr`], its rows counted to `watch` as they are encoded.

@@ -20,8 +20,17 @@ pub fn is_scene_time(t: f64) -> bool {
     (0.0..=MAX_SCENE_TIME_S).contains(&t)
 }
 
-/// What a scene time must be, as every refusal of one says it.
+/// What a scene time must be, as every refusal of one says it ([`MAX_SCENE_TIME_S`]).
 pub const SCENE_TIME_RULE: &str = "must be a finite number of seconds from 0 to 1e9";
+
+/// Whether `h` is a heading a pose takes: finite, within [`MAX_HEADING_DEG`] either way. Asked
+/// before a heading is brought into one turn, which makes 1e300 a 0.
+pub fn is_heading(h: f64) -> bool {
+    (-MAX_HEADING_DEG..=MAX_HEADING_DEG).contains(&h)
+}
+
+/// What a heading must be, as every refusal of one says it ([`MAX_HEADING_DEG`]).
+pub const HEADING_RULE: &str = "must be a finite number of degrees from -1e6 to 1e6";
 
 /// What happens after the end of a linear or keyframed animation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -257,6 +266,22 @@ fn keyframe_position(times: &[f32], positions: &[Vec3], repeat: Repeat, t: f64) 
     let (p0, p1) = (positions[i - 1].as_dvec3(), positions[i].as_dvec3());
     let s = (t - t0) / (t1 - t0);
     Some((p0 + (p1 - p0) * s).as_vec3())
+}
+
+#[cfg(test)]
+mod rules {
+    use super::*;
+
+    /// The rules say the bounds the checks hold.
+    #[test]
+    fn the_rules_name_the_bounds() {
+        let e = |v: f64| format!("{v:e}");
+        assert!(SCENE_TIME_RULE.ends_with(&format!("from 0 to {}", e(MAX_SCENE_TIME_S))));
+        let (lo, hi) = (e(-MAX_HEADING_DEG), e(MAX_HEADING_DEG));
+        assert!(HEADING_RULE.ends_with(&format!("from {lo} to {hi}")));
+        assert!(is_scene_time(MAX_SCENE_TIME_S) && !is_scene_time(MAX_SCENE_TIME_S * 1.01));
+        assert!(is_heading(-MAX_HEADING_DEG) && !is_heading(1e300) && !is_heading(f64::NAN));
+    }
 }
 
 #[cfg(test)]

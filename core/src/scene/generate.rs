@@ -178,11 +178,26 @@ pub(super) fn orbit_fits(env: &Surroundings, p: Vec3, reach: f64) -> bool {
     horizontal_distance(p, env.room_center) + 0.5 * reach <= limit
 }
 
+/// How many of `count` objects move at a share of `moving`: exactly round(moving x count).
+pub(crate) fn movers(moving: f32, count: u32) -> usize {
+    (f64::from(moving) * f64::from(count)).round() as usize
+}
+
+/// The smallest share of `count` objects that moves one (as an f32, which `moving` is).
+pub(crate) fn least_share(count: u32) -> f32 {
+    let mut share = (0.5 / f64::from(count)) as f32;
+    while movers(share, count) == 0 {
+        // The next f32 up (a positive one: its bits as an integer, plus one).
+        share = f32::from_bits(share.to_bits() + 1);
+    }
+    share
+}
+
 /// Expands a generator into objects, in order `name[0]`, `name[1]`, ...
 pub(super) fn expand(p: &Params, env: &Surroundings) -> Result<Vec<Object>, PlacementFailure> {
     let mut rng = SplitMix64::new(p.seed);
     let count = p.count as usize;
-    let mut to_move = (f64::from(p.moving) * f64::from(p.count)).round() as usize;
+    let mut to_move = movers(p.moving, p.count);
     let mut out = Vec::with_capacity(count);
     for k in 0..count {
         // Selection sampling (Knuth's algorithm S): exactly `to_move` of the remaining objects
@@ -304,6 +319,22 @@ mod tests {
             let n = objects.iter().filter(|o| o.animation.is_some()).count();
             assert_eq!(n, expected, "{count} x {moving}");
         }
+    }
+
+    /// The least share said in a refusal moves one object, and the f32 below it none: at
+    /// count 25, 0.5 / 25 = 0.02 rounds below a half as an f32 and moved none.
+    #[test]
+    fn the_least_share_moves_one_object() {
+        for count in 1..=2000 {
+            let least = least_share(count);
+            assert_eq!(movers(least, count), 1, "{count}");
+            assert_eq!(
+                movers(f32::from_bits(least.to_bits() - 1), count),
+                0,
+                "{count}"
+            );
+        }
+        assert_eq!(movers(0.02, 25), 0);
     }
 
     #[test]

@@ -35,7 +35,8 @@ pub use crate::files::{
 };
 pub(crate) use anim::segment_distance;
 pub use anim::{
-    is_scene_time, Animation, Repeat, MAX_HEADING_DEG, MAX_SCENE_TIME_S, SCENE_TIME_RULE,
+    is_heading, is_scene_time, Animation, Repeat, HEADING_RULE, MAX_HEADING_DEG, MAX_SCENE_TIME_S,
+    SCENE_TIME_RULE,
 };
 pub use asset::AssetError;
 pub use error::{Location, SceneError};

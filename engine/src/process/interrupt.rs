@@ -158,13 +158,13 @@ fn during_a_frame(waited: std::time::Duration) {
     super::ending::end_without_teardown::<Box<dyn std::error::Error + Send + Sync>>(Err(stopped))
 }
 
-/// A frame the GPU has worked on for as long as an estimate waits ([`super::progress`]) is
-/// said once, when its wait crosses that time: one 8192² frame is seconds on a CPU driver, and
-/// a GPU frame cannot say how far it has got, so this is the one word of it.
+/// The first frame the GPU has worked on for as long as an estimate waits
+/// ([`super::patience`]) is said, once a process: one 8192² frame is seconds on a CPU driver,
+/// and a GPU frame cannot say how far it has got (later ones are counted by the command's own
+/// estimate, and a line a frame would repeat it).
 fn say_a_long_frame(waited: std::time::Duration) {
-    let slice = std::time::Duration::from_nanos(crate::vk::commands::WAIT_SLICE_NS);
-    let after = super::progress::estimate_after().max(slice);
-    if (after..after + slice).contains(&waited) {
+    static SAID: AtomicBool = AtomicBool::new(false);
+    if waited >= super::patience::estimate_after() && !SAID.swap(true, Ordering::SeqCst) {
         crate::say_err!(
             "waiting for the GPU: one frame has run for {} s so far (a frame says nothing of its \
              progress); Ctrl-C stops it cleanly",

@@ -10,6 +10,7 @@ pub mod allocator;
 pub mod args;
 pub mod ending;
 pub mod interrupt;
+pub mod patience;
 pub mod probe;
 pub mod progress;
 pub mod traced;

@@ -121,15 +121,14 @@ impl Ctx<'_> {
         }
         // Exactly round(moving × count) objects move (generate.rs): a share that rounds to
         // none moved nothing, and its period went unused, without a word.
-        let movers = (f64::from(moving) * f64::from(count)).round();
-        if moving > 0.0 && movers == 0.0 {
+        if moving > 0.0 && crate::scene::generate::movers(moving, count) == 0 {
             return Err(self.invalid(
                 &f("moving"),
                 format!(
                     "{} of {count} object(s) is none (exactly round(moving x count) move): give \
                      at least {}, or 0 for none",
                     crate::text::num_text(moving),
-                    crate::text::num_text(0.5 / f64::from(count))
+                    crate::text::num_text(crate::scene::generate::least_share(count))
                 ),
             ));
         }

@@ -66,11 +66,9 @@ pub fn pose_fits(
     if !pose.position.is_finite() {
         return Err(("position", "every value must be a finite number".into()));
     }
-    use crate::scene::{is_scene_time, MAX_HEADING_DEG, SCENE_TIME_RULE};
-    if !(-MAX_HEADING_DEG..=MAX_HEADING_DEG).contains(&pose.heading_deg) {
-        let rule = format!("{MAX_HEADING_DEG:e}");
-        let why = format!("must be a finite number of degrees from -{rule} to {rule}");
-        return Err(("heading", why));
+    use crate::scene::{is_heading, is_scene_time, HEADING_RULE, SCENE_TIME_RULE};
+    if !is_heading(pose.heading_deg) {
+        return Err(("heading", HEADING_RULE.into()));
     }
     if !is_scene_time(pose.time_s) {
         return Err(("time", SCENE_TIME_RULE.into()));

@@ -317,6 +317,15 @@ fn check(file: &Path, poses: &[Pose]) -> Result<(), TrajectoryError> {
             let why = format!("{} s: must be >= 0", num_text(p.time_s));
             return Err(TrajectoryError::invalid(file, at, "time", why));
         }
+        // Before the headings are brought into one turn (`read`), which makes 1e300 a 0.
+        if !crate::scene::is_heading(p.heading_deg) {
+            let why = format!(
+                "{}: {}",
+                num_text(p.heading_deg),
+                crate::scene::HEADING_RULE
+            );
+            return Err(TrajectoryError::invalid(file, at, "heading", why));
+        }
         if p.time_s < last {
             let why = format!(
                 "{} s is before the pose above ({} s): time never runs backwards",
@@ -437,6 +446,11 @@ mod tests {
             (
                 "time,x,y,z,heading\n0,1,2,3,NaN\n",
                 "t.csv:2: heading: NaN is not finite",
+            ),
+            // Refused before it is brought into one turn, which made it a 0.
+            (
+                "time,x,y,z,heading\n0,1,2,3,1e300\n",
+                "t.csv:2: heading: 1e300: must be a finite number of degrees from -1e6 to 1e6",
             ),
             (
                 "time,x,y,z,heading\n1,1,2,3,0\n0.5,1,2,3,0\n",
