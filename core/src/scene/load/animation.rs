@@ -2,10 +2,18 @@
 
 use glam::Vec3;
 
-use super::numbers::{num_text, unit};
+use super::numbers::{num_text, unit, Range};
 use super::{Ctx, R};
 use crate::scene::anim::{Animation, Repeat};
 use crate::scene::format::{AnimationSpec, AnimationType, RepeatSpec};
+
+/// A duration or a period of motion: a millisecond to the latest scene time. Shorter, an
+/// orbit turns so often by 1 s that its phase is lost to rounding (a period of 1e-30 was
+/// accepted); longer, it never moves within the times a command takes.
+const MOTION_S: Range = Range::closed(1e-3, crate::scene::MAX_SCENE_TIME_S as f32);
+
+/// A key time: from 0 to the latest scene time (a later key is never reached).
+const KEY_TIME_S: Range = Range::closed(0.0, crate::scene::MAX_SCENE_TIME_S as f32);
 
 impl Ctx<'_> {
     /// Converts an animation; `base` is the animated thing's position at rest.
@@ -23,10 +31,11 @@ impl Ctx<'_> {
                     &f("to"),
                     a.to.ok_or_else(|| self.missing(&f("to"), "the end point"))?,
                 )?,
-                duration_s: self.positive(
+                duration_s: self.ranged(
                     &f("duration"),
                     a.duration
                         .ok_or_else(|| self.missing(&f("duration"), "seconds"))?,
+                    MOTION_S,
                 )?,
                 repeat,
             },
@@ -77,10 +86,11 @@ impl Ctx<'_> {
         let axis = self.vec3(&f("axis"), a.axis.unwrap_or([0.0, 1.0, 0.0]))?;
         let axis =
             unit(axis).ok_or_else(|| self.invalid(&f("axis"), "must be a non-zero vector"))?;
-        let period_s = self.positive(
+        let period_s = self.ranged(
             &f("period"),
             a.period
                 .ok_or_else(|| self.missing(&f("period"), "seconds per turn"))?,
+            MOTION_S,
         )?;
         Ok(Animation::Orbit {
             center,
@@ -143,7 +153,7 @@ impl Ctx<'_> {
         let mut times_s: Vec<f32> = Vec::with_capacity(times.len());
         for (i, &t) in times.iter().enumerate() {
             let tf = format!("{field}.times[{i}]");
-            let x = self.num(&tf, t)?;
+            let x = self.ranged(&tf, t, KEY_TIME_S)?;
             if i == 0 && t != 0.0 {
                 return Err(self.invalid(
                     &tf,

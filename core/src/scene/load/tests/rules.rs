@@ -45,7 +45,9 @@ fn more_rules_with_their_fields() {
         ("[[objects]]\nshape = \"cylinder\"\nradius = 1\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].height: required"),
         ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nscale = -1\nmaterial = \"w\"\n", "objects[0].scale"),
         ("[[objects]]\nshape = \"mesh\"\nfile = \"x.stl\"\nposition = [2, 2, 2]\nmaterial = \"w\"\n", "objects[0].file: unsupported"),
-        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"orbit\", center = [0, 0, 0], period = 0 }\n", "objects[0].animation.period: must be positive"),
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"orbit\", center = [0, 0, 0], period = 0 }\n", "objects[0].animation.period: must be in [0.001, 1e9], got 0"),
+        // A period so short that by 1 s the orbit's phase is lost to rounding.
+        ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"orbit\", center = [0, 0, 0], period = 1e-30 }\n", "objects[0].animation.period: must be in [0.001, 1e9], got 1e-30"),
         ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"linear\", to = [0, 0, 0], duration = 1, period = 2 }\n", "objects[0].animation.period: not allowed"),
         ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nanimation = { type = \"keyframes\", times = [0, 1], positions = [[1, 1, 1], [2, 2, 2]] }\n", "objects[0].animation.positions[0]: the first keyframe"),
         ("[[objects]]\nshape = \"box\"\nsize = [1, 1, 1]\nposition = [2, 2, 2]\nmaterial = \"w\"\nclass = \"\"\n", "objects[0].class: must be 1 to 64 letters, digits, `_` or `-`"),
