@@ -175,7 +175,7 @@ pub(crate) fn id_cube(args: &Args, lookup: Lookup) -> bool {
 /// ray queries, `bvh` on any other: each lookup's `ground_truth_rank`), so that
 /// the colour, the range and the ids are traced along one light path; else the scene's.
 pub(crate) fn chosen_lookup(args: &Args, scene: &Scene, device: &DeviceInfo) -> Lookup {
-    let traced = || lookups::one_light_path(device).filter(|_| args.sensor_outputs);
+    let traced = || lookups::one_light_path(device, scene).filter(|_| args.sensor_outputs);
     args.lookup.or_else(traced).unwrap_or(scene.mirror.lookup)
 }
 

@@ -370,7 +370,7 @@ pub fn choose_lookup(
     device: &DeviceInfo,
 ) -> Result<Lookup, DatasetError> {
     let lookup = asked
-        .or_else(|| lookups::one_light_path(device))
+        .or_else(|| lookups::one_light_path(device, scene))
         .unwrap_or(scene.mirror.lookup);
     match lookups::missing_features(lookup, device) {
         Some(why) => Err(DatasetError::Lookup {

@@ -58,6 +58,22 @@ impl MirrorLookup for Bvh {
         }
     }
 
+    /// Every mesh's tree triangles share one storage buffer (the cwbvh layout: 48 bytes a
+    /// triangle, and bvh4 keeps more in its nodes), which a shader binds up to the device's
+    /// `maxStorageBufferRange`: a lower bound, known before any tree is built.
+    fn cannot_hold(&self, scene: &crate::scene::Scene, device: &DeviceInfo) -> Option<String> {
+        let triangles: u64 = scene.meshes.iter().map(|m| m.triangle_count() as u64).sum();
+        let bytes = triangles * std::mem::size_of::<crate::bvh::layout::BvhTriangle>() as u64;
+        let range = device.limits.max_storage_buffer_range;
+        // 0: a device read back from a record, whose range is unknown.
+        (range > 0 && bytes > range).then(|| {
+            format!(
+                "the scene's {triangles} mesh triangles need {bytes} bytes of trees, more than \
+                 this device binds in one storage buffer ({range}, maxStorageBufferRange)"
+            )
+        })
+    }
+
     fn start(&self) -> Start {
         Start::Reflection
     }

@@ -87,6 +87,11 @@ pub trait MirrorLookup: Sync {
     fn ground_truth_rank(&self, _device: &DeviceInfo) -> u32 {
         u32::MAX
     }
+    /// Why it cannot hold `scene` on `device`, where that is known before anything is built
+    /// (None: nothing known against it). A default choice passes over such a lookup.
+    fn cannot_hold(&self, _scene: &crate::scene::Scene, _device: &DeviceInfo) -> Option<String> {
+        None
+    }
     /// The cube-map direction its shader starts from (`FrameData.flags.y`).
     fn start(&self) -> Start;
     /// Its rungs in the benchmark's ladder: the settings it is measured at.
@@ -359,10 +364,17 @@ pub fn needs_cube(lookup: Lookup, id_cube: bool) -> bool {
 /// than lavapipe's ray queries on every benchmark scene, and wherever there are no ray
 /// queries; `ray-query` on a GPU that has them (ray-tracing hardware, presumably faster:
 /// not measured here).
-pub fn one_light_path(info: &DeviceInfo) -> Option<Lookup> {
-    (Lookup::ALL.into_iter())
-        .filter(|&l| traces_ray_map(l) && missing_features(l, info).is_none())
-        .min_by_key(|&l| plugin(l).ground_truth_rank(info))
+pub fn one_light_path(info: &DeviceInfo, scene: &crate::scene::Scene) -> Option<Lookup> {
+    let runs = |&l: &Lookup| traces_ray_map(l) && missing_features(l, info).is_none();
+    let ranked = |l: &Lookup| plugin(*l).ground_truth_rank(info);
+    // Of those that can hold the scene (bvh's trees fit one storage buffer of a bounded
+    // range: about 2.8 M triangles on the CPU drivers), else the best anyway, to say why not.
+    let holds = |&l: &Lookup| plugin(l).cannot_hold(scene, info).is_none();
+    let candidates = || Lookup::ALL.into_iter().filter(runs);
+    candidates()
+        .filter(holds)
+        .min_by_key(ranked)
+        .or_else(|| candidates().min_by_key(ranked))
 }
 
 /// Why the device cannot run `lookup` (None: it can).
@@ -385,13 +397,18 @@ mod tests {
     /// with them. The devices are lavapipe's record in the committed baseline, retyped.
     #[test]
     fn the_exact_default_is_bvh_but_on_a_gpu_with_ray_queries() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let scene = crate::scene::load(&root.join("scenes/thesis-room.toml")).unwrap();
         let baseline = include_str!("../../../../bench/baselines/quick.json");
         let record: serde_json::Value = serde_json::from_str(baseline).unwrap();
         let device = |device_type: &str, ray_query: bool| -> DeviceInfo {
             let mut d = record["device"].clone();
             d["device_type"] = device_type.into();
             d["features"]["ray_query"] = ray_query.into();
-            serde_json::from_value(d).unwrap()
+            let mut info: DeviceInfo = serde_json::from_value(d).unwrap();
+            // The record leaves it out; the specification's least, lavapipe's and SwiftShader's.
+            info.limits.max_storage_buffer_range = 1 << 27;
+            info
         };
         for (kind, ray_query, want) in [
             ("CPU", true, Lookup::Bvh),
@@ -400,9 +417,17 @@ mod tests {
             ("DISCRETE_GPU", true, Lookup::RayQuery),
             ("INTEGRATED_GPU", true, Lookup::RayQuery),
         ] {
-            let got = one_light_path(&device(kind, ray_query));
+            let got = one_light_path(&device(kind, ray_query), &scene);
             assert_eq!(got, Some(want), "{kind}, ray queries {ray_query}");
         }
+        // A device whose storage buffers hold fewer triangles than the scene's: bvh is passed
+        // over for ray-query where the device has ray queries, and kept (to say why) where not.
+        let mut small = device("CPU", true);
+        small.limits.max_storage_buffer_range = 48;
+        assert!(plugin(Lookup::Bvh).cannot_hold(&scene, &small).is_some());
+        assert_eq!(one_light_path(&small, &scene), Some(Lookup::RayQuery));
+        small.features.ray_query = false;
+        assert_eq!(one_light_path(&small, &scene), Some(Lookup::Bvh));
     }
 
     #[test]
