@@ -13,6 +13,19 @@ pub trait Watch: Sync {
     fn stop(&self) -> bool;
 }
 
+/// A progress callback for work that says the fraction of it done (0 to 1: the EXR codec's),
+/// telling `watch` the rows of `rows` it has passed, each once.
+pub fn rows_of_fraction(watch: &dyn Watch, rows: u64) -> impl FnMut(f64) + '_ {
+    let mut said = 0;
+    move |done: f64| {
+        let now = ((done.clamp(0.0, 1.0) * rows as f64) as u64).min(rows);
+        if now > said {
+            watch.rows_done((now - said) as u32);
+            said = now;
+        }
+    }
+}
+
 /// Watched work that its [`Watch`] stopped: nothing of it is kept.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Stopped;

@@ -20,14 +20,7 @@ pub fn read_exr(path: &Path) -> Result<RgbaImage, MetricsError> {
 /// `watch` as they are decoded; [`MetricsError::Stopped`] when `watch` stops it.
 fn decode(path: &Path, bytes: &[u8], watch: &dyn Watch) -> Result<RgbaImage, MetricsError> {
     let rows = header_size(bytes).map_or(0, |(_, h)| u64::from(h));
-    let mut said = 0;
-    let progress = |done: f64| {
-        let now = ((done.clamp(0.0, 1.0) * rows as f64) as u64).min(rows);
-        if now > said {
-            watch.rows_done((now - said) as u32);
-            said = now;
-        }
-    };
+    let progress = crate::watch::rows_of_fraction(watch, rows);
     let stop = || watch.stop();
     exr::decode_rgba_watched(bytes, progress, &stop).map_err(|e| match exr::channel_names(bytes) {
         _ if exr::is_stopped(&e) => MetricsError::Stopped,

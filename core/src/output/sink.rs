@@ -43,14 +43,7 @@ pub trait Sink {
         self.ready(path)?;
         let rows = u64::from(image.height);
         watch.begin(rows, image.width);
-        let mut said = 0;
-        let progress = |done: f64| {
-            let now = ((done.clamp(0.0, 1.0) * rows as f64) as u64).min(rows);
-            if now > said {
-                watch.rows_done((now - said) as u32);
-                said = now;
-            }
-        };
+        let progress = crate::watch::rows_of_fraction(watch, rows);
         let mut bytes = Stoppable::new();
         exr::encode_rgba_watched(&mut bytes, image, progress)
             .map_err(|e| encode_failed(path, e, exr_error))?;
