@@ -32,7 +32,7 @@ void main() {
 #ifdef OUTPUT_COLOUR
     vec3 d_dx, d_dy;
     lookup_gradients(view, frame, lookup, d_dx, d_dy);
-    out_value = vec4(filter_footprint(environment, lookup, d_dx, d_dy, frame.cube.z), 1.0);
+    out_value = vec4(filter_footprint(lookup, d_dx, d_dy, frame.cube.z), 1.0);
 #else
     out_value = vec4(normalize(lookup), 1.0);
 #endif

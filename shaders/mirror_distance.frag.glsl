@@ -39,7 +39,7 @@ void main() {
     // textureGrad reads the gradients relative to the lookup vector's length: give the found
     // direction the box vector's length so that the footprint keeps its angular size.
     vec3 lookup = normalize(found) * length(box);
-    out_value = vec4(filter_footprint(environment, lookup, d_dx, d_dy, frame.cube.z), 1.0);
+    out_value = vec4(filter_footprint(lookup, d_dx, d_dy, frame.cube.z), 1.0);
 #else
     out_value = vec4(normalize(found), 1.0);
 #endif

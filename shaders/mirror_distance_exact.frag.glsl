@@ -54,7 +54,7 @@ void main() {
         vec3 d_dx, d_dy;
         lookup_gradients(view, frame, box, d_dx, d_dy);
         vec3 lookup = normalize(found) * length(box);
-        out_value = vec4(filter_footprint(environment, lookup, d_dx, d_dy, frame.cube.z), 1.0);
+        out_value = vec4(filter_footprint(lookup, d_dx, d_dy, frame.cube.z), 1.0);
     } else {
         out_value = vec4(trace_reflection(frame, dir, hit, n).colour, 1.0);
     }

@@ -23,13 +23,18 @@
 // length), which is what the cube map's texels tile; the sampler then projects each sample's
 // gradients onto its face to choose the level, as for any textureGrad.
 //
-// Needs: the cube map `environment` passed in, max_taps >= 1.
+// Needs: max_taps >= 1, and each sample as FOOTPRINT_TAP(at, gx, gy): by default a
+// trilinear textureGrad of the cube map `environment` declared before this file. The footprint
+// pass (footprint_mark.comp) defines it to mark the texels the sample would read instead,
+// so that what it marks is what this filter reads, tap for tap.
+#ifndef FOOTPRINT_TAP
+#define FOOTPRINT_TAP(at, gx, gy) textureGrad(environment, at, gx, gy).rgb
+#endif
 
-vec3 filter_footprint(samplerCube environment, vec3 lookup, vec3 d_dx, vec3 d_dy,
-                      float max_taps) {
+vec3 filter_footprint(vec3 lookup, vec3 d_dx, vec3 d_dy, float max_taps) {
     float len = length(lookup);
     if (!(len > 0.0)) {
-        return textureGrad(environment, lookup, d_dx, d_dy).rgb; // no direction: as ever
+        return FOOTPRINT_TAP(lookup, d_dx, d_dy); // no direction: as ever
     }
     vec3 axis = lookup / len;
     // Each gradient's part across the lookup direction, as an angle (radians): the part along
@@ -45,7 +50,7 @@ vec3 filter_footprint(samplerCube environment, vec3 lookup, vec3 d_dx, vec3 d_dy
     float taps = clamp(ceil(length(long_side) / max(length(short_side), 1e-30)), 1.0, max_taps);
     if (!(taps > 1.0)) {
         // Isotropic (or max_taps 1, or a degenerate footprint): the sampler's own filter.
-        return textureGrad(environment, lookup, d_dx, d_dy).rgb;
+        return FOOTPRINT_TAP(lookup, d_dx, d_dy);
     }
     // Back at the lookup vector's scale, which textureGrad reads its gradients against.
     vec3 step_along = long_side * (len / taps);
@@ -54,7 +59,7 @@ vec3 filter_footprint(samplerCube environment, vec3 lookup, vec3 d_dx, vec3 d_dy
     for (float k = 0.0; k < taps; k += 1.0) {
         // Sample centres at (k + 1/2) / N of the long side, centred on the pixel's lookup.
         vec3 at = lookup + ((k + 0.5) - 0.5 * taps) * step_along;
-        sum += textureGrad(environment, at, step_along, across).rgb;
+        sum += FOOTPRINT_TAP(at, step_along, across);
     }
     return sum / taps;
 }

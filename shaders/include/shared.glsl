@@ -166,6 +166,14 @@ struct MaterialSample {
 // The side of cube_mips.comp's square workgroup.
 #define MIP_GROUP_SIDE 8u
 
+// footprint_mark.comp's push constants: the view whose pixels it marks, the cube's face side
+// (texels at level 0) and mip levels, and the tiles each face side is cut into
+// (tiles_per_side of tile_side texels); and the side of its square workgroup. The marks are
+// one bit a tile, face after face, row after row (footprint_marks.glsl).
+#define FOOTPRINT_PUSH_CONSTANTS \
+    layout(push_constant) uniform FootprintPush { uint view_index; uint face_size; uint levels; uint tile_side; uint tiles_per_side; uint pad0; uint pad1; uint pad2; } marking
+#define FOOTPRINT_GROUP_SIDE 8u
+
 // Descriptor set 0: the scene. Set 1: the environment cube (views only).
 #define SCENE_BINDINGS \
     layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; }; \

@@ -27,6 +27,15 @@ pub struct RenderOptions {
     /// moved object's old or new bounds project to). Multiview always re-renders all six
     /// faces, in the rectangles of every dirty face together.
     pub whole_faces: bool,
+    /// Fill only the tiles of the cube the drawn views may read (`footprint.rs`): marked by
+    /// a pass over the views before the fill whenever they or the mirror move, the rest left
+    /// unfilled. A frame that reads the cube otherwise (its read-back, the ray map through
+    /// it, a lookup that searches its depth) fills it all. The views' pixels are a full
+    /// fill's.
+    pub footprint: bool,
+    /// With `footprint`: clear the whole cube to a colour no scene makes before its first
+    /// fill, so that a tile the footprint missed would show in the views (the tests).
+    pub footprint_poison: bool,
     /// How six-pass draws a face's dirty rectangles: the cheaper way by default (the
     /// one-scope methods draw them under one box).
     pub patching: methods::Patching,
@@ -108,6 +117,12 @@ pub struct FrameReport {
     /// Texels re-rendered: the dirty faces' area, or their dirty rectangles' where the update
     /// had them.
     pub texels_rendered: u64,
+    /// Texels of level 0 the footprint holds the views may read (`RenderOptions::footprint`;
+    /// None without it).
+    pub footprint_texels: Option<u64>,
+    /// Host time of the footprint's marking pass, submitted and waited for before the frame
+    /// is recorded (ms; 0 for a frame whose footprint was already marked).
+    pub cpu_footprint_ms: f64,
     /// Objects (walls included) drawn into each face; 0 for a face not re-rendered.
     pub draws_per_face: [u32; 6],
     pub cpu_record_ms: f64,

@@ -83,7 +83,7 @@ impl Renderer {
 
 /// The frame's constants: the light, the mirror (render space is centred on its viewpoint)
 /// and its shape, the lookup's start and search steps, the room, the cube.
-fn frame_data(scene: &Scene, state: &SceneState) -> FrameData {
+pub(super) fn frame_data(scene: &Scene, state: &SceneState) -> FrameData {
     let light = scene.light.as_ref();
     let shape = gpu::MirrorShapeData::of(&scene.mirror.shape);
     let room = |sign: f32| {
@@ -115,7 +115,7 @@ fn frame_data(scene: &Scene, state: &SceneState) -> FrameData {
 
 /// The frame's views, in `ViewData` order: the six cube faces, the observer and the sensor
 /// at their own resolutions, then both at the pair's half-width aspect.
-fn view_bases(scene: &Scene, state: &SceneState) -> Vec<ViewBasis> {
+pub(super) fn view_bases(scene: &Scene, state: &SceneState) -> Vec<ViewBasis> {
     let aspect = |[w, h]: [u32; 2]| w as f32 / h as f32;
     let observer = |a| state.observer_view(scene, a);
     let sensor = |a| state.sensor_view(scene, a);
@@ -132,7 +132,7 @@ fn view_bases(scene: &Scene, state: &SceneState) -> Vec<ViewBasis> {
 
 /// Each view's matrices, rays and viewport: a cube face spans the face (`cube_size`) between
 /// the cube's planes; a camera keeps its clearance from the mirror ([`camera_clearance`]).
-fn view_data(scene: &Scene, bases: &[ViewBasis], cube_size: f32) -> Vec<ViewData> {
+pub(super) fn view_data(scene: &Scene, bases: &[ViewBasis], cube_size: f32) -> Vec<ViewData> {
     let [ow, oh] = scene.observer.resolution;
     let [sw, sh] = scene.sensor.resolution;
     let half_w = (PAIR_SIZE[0] / 2) as f32;

@@ -99,6 +99,21 @@ pub struct MipBox {
     pub first_face: i32,
 }
 
+/// `footprint_mark.comp`'s push constants: the view it marks, the cube's face side and mip
+/// levels, and its tiles (`tile_side` texels, `tiles_per_side` a face side).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct FootprintPush {
+    pub view_index: u32,
+    pub face_size: u32,
+    pub levels: u32,
+    pub tile_side: u32,
+    pub tiles_per_side: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
+}
+
 /// One vertex of the scene's vertex buffer (locations 0, 1, 2 of scene.vert).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -219,6 +234,14 @@ mod tests {
             member!(MipBox, origin),
             member!(MipBox, size),
             member!(MipBox, first_face),
+            member!(FootprintPush, view_index),
+            member!(FootprintPush, face_size),
+            member!(FootprintPush, levels),
+            member!(FootprintPush, tile_side),
+            member!(FootprintPush, tiles_per_side),
+            member!(FootprintPush, pad0),
+            member!(FootprintPush, pad1),
+            member!(FootprintPush, pad2),
         ]
     }
 

@@ -18,6 +18,7 @@ pub mod dataset;
 pub mod display;
 mod draw;
 pub mod floors;
+mod footprint;
 mod frame;
 mod frame_data;
 mod frame_parts;
@@ -113,6 +114,8 @@ pub struct Renderer {
     submitter: Submitter,
     /// What the cube shows, which faces a frame re-renders, and the counts of both.
     refresh: refresh::Refresh,
+    /// The tiles of the cube the views read, and those it holds (`RenderOptions::footprint`).
+    footprint: Option<footprint::Footprint>,
     /// This frame's drawables: their render-space bounds and their draw order.
     drawn: draw::DrawOrder,
     /// Whether the first frame's SwiftShader losses were looked for (`snapping`).
@@ -191,6 +194,12 @@ impl Renderer {
             0,
             &[(cube.cube_view.raw, cube.sampler.raw)],
         );
+        let footprint = (options.footprint && !cube_stand_in)
+            .then(|| {
+                let (size, views) = (cube.size, resources::VIEW_COUNT);
+                footprint::Footprint::create(device, (size, views), options.footprint_poison)
+            })
+            .transpose()?;
         Ok(Self {
             frames: in_flight::InFlight::create(device, frames_in_flight)?,
             floor_pipelines: None,
@@ -202,6 +211,7 @@ impl Renderer {
             resources,
             submitter,
             refresh: refresh::Refresh::new(options.full_updates, options.whole_faces),
+            footprint,
             drawn: draw::DrawOrder::default(),
             snapping_said: false,
             cube_stand_in,
@@ -279,6 +289,10 @@ impl Renderer {
         if ask.readback.rays {
             self.prepare_sensor_rays()?;
         }
+        let footprint_ms = match (floor, fill_cube) {
+            (None, true) => self.mark_footprint(&state, &ask)?,
+            _ => 0.0,
+        };
         let (dirty, patching) = match (floor, fill_cube) {
             // A floor stands in for a full update: every face, whole.
             (Some(_), _) => (Dirty::faces(0x3F), Default::default()),
@@ -301,6 +315,8 @@ impl Renderer {
             cube_updated: dirty != 0,
             // A floor's frame times the fill alone: the lookup's host work is not its.
             cpu_lookup_ms: if floor.is_some() { 0.0 } else { cpu_lookup_ms },
+            cpu_footprint_ms: footprint_ms,
+            footprint_texels: self.footprint_texels(),
             ..Default::default()
         };
         let mut graph = self.frame_graph();
@@ -376,6 +392,7 @@ impl Renderer {
         let drawables = &self.resources.drawables;
         let at = (frame, self.cube.size);
         let mut dirty = (self.refresh).dirty(&self.scene, drawables, at, state, views);
+        dirty = self.within_footprint(dirty, state);
         if self.method().layout() == methods::CubeLayout::Multiview {
             // A multiview pass clears and draws every view alike: the same rectangles in all
             // six, each face culled for them, or objects seen only there would vanish.
@@ -422,6 +439,9 @@ impl Renderer {
                 .record(&mut graph::PassRecorder::new(&self.device, cmd, &mut graph));
         }
         if plan.dirty != 0 {
+            if floor.is_none() {
+                self.record_poison(&mut graph, cmd);
+            }
             let graph = (&frame, &mut graph);
             match floor {
                 None => (self.cube_fill).record(graph, cmd, plan, report, cube_fill::Fill::Method),

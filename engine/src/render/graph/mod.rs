@@ -41,6 +41,8 @@ pub enum Use {
     DepthKept,
     /// Sampled or fetched by fragment shaders.
     FragmentRead,
+    /// Cleared whole by a transfer command (`vkCmdClearColorImage`: the footprint's poison).
+    Cleared,
     /// Blitted from.
     BlitSource,
     /// Blitted into, whole: earlier contents are not kept.
@@ -89,6 +91,10 @@ const FILL_WRITE: Sync = (
     vk::PipelineStageFlags2::ALL_TRANSFER,
     vk::AccessFlags2::TRANSFER_WRITE,
 );
+const CLEAR_WRITE: Sync = (
+    vk::PipelineStageFlags2::CLEAR,
+    vk::AccessFlags2::TRANSFER_WRITE,
+);
 const ANY_READ: Sync = (
     vk::PipelineStageFlags2::ALL_COMMANDS,
     vk::AccessFlags2::MEMORY_READ,
@@ -132,7 +138,7 @@ impl Use {
             Use::DepthTarget | Use::DepthKept => vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
             Use::FragmentRead => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Use::BlitSource | Use::CopySource => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            Use::BlitDestination => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            Use::BlitDestination | Use::Cleared => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             Use::ComputeSampled => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Use::ComputeStored | Use::ComputeStoredKept => vk::ImageLayout::GENERAL,
             Use::CopyDestination
@@ -158,6 +164,7 @@ impl Use {
             Use::CopyDestination => COPY_WRITE,
             Use::HostRead => (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
             Use::Filled => FILL_WRITE,
+            Use::Cleared => CLEAR_WRITE,
             Use::ReadAnywhere => ANY_READ,
             Use::FragmentStorage => STORAGE_RW,
             Use::AccelerationBuild => BUILD_RW,
@@ -176,6 +183,7 @@ impl Use {
                 | Use::DepthTarget
                 | Use::DepthKept
                 | Use::BlitDestination
+                | Use::Cleared
                 | Use::CopyDestination
                 | Use::Filled
                 | Use::FragmentStorage
@@ -191,7 +199,11 @@ impl Use {
     fn discards(self) -> bool {
         matches!(
             self,
-            Use::ColorTarget | Use::DepthTarget | Use::BlitDestination | Use::ComputeStored
+            Use::ColorTarget
+                | Use::DepthTarget
+                | Use::BlitDestination
+                | Use::Cleared
+                | Use::ComputeStored
         )
     }
 }

@@ -50,6 +50,10 @@ impl MirrorLookup for CubeLookup {
         true
     }
 
+    fn marks_footprint(&self) -> bool {
+        true
+    }
+
     fn start(&self) -> Start {
         self.start
     }

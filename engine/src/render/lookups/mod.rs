@@ -66,6 +66,13 @@ pub trait MirrorLookup: Sync {
     /// Whether the mirror samples the cube map. When not, the renderer skips the cube fill
     /// (unless the cube itself is read back).
     fn uses_cube(&self) -> bool;
+    /// Whether every read of the cube is a sample of the footprint filter
+    /// (`footprint_filter.glsl`) from `mirror.glsl`'s lookup, which the footprint pass runs
+    /// to mark what the views read (`RenderOptions::footprint`): the cube lookups. A depth
+    /// search reads wherever its search goes.
+    fn marks_footprint(&self) -> bool {
+        false
+    }
     /// Whether it searches the cube's depth, so that `mirror.distance_steps` and
     /// `mirror.secant_steps` (`render --distance-steps`, `--secant-steps`) change it.
     fn searches_depth(&self) -> bool {
