@@ -43,6 +43,9 @@ pub struct RenderSettings {
     pub methods: Vec<Method>,
     pub full_updates: bool,
     pub whole_faces: bool,
+    /// `--footprint`: only the tiles the views read were filled (each frame's
+    /// `footprint_texels`, `cpu_footprint_ms`), and the cube was not written.
+    pub footprint: bool,
     pub lookup: Lookup,
     /// The order the tracing lookups handed their acceleration-structure builds (`split` or
     /// `given`; only they read it).

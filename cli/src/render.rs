@@ -94,6 +94,12 @@ pub struct Args {
     /// six faces, in the dirty faces' rectangles together).
     #[arg(long, conflicts_with = "full_updates")]
     pub(crate) whole_faces: bool,
+    /// Fill only the tiles of the cube the views may read (marked by a pass over the views
+    /// before the fill; docs/methods.md, "The footprint"); the cube is then not written, its
+    /// other tiles being unfilled. Only the cube lookups (plain, box), without
+    /// --sensor-outputs; refused on SwiftShader.
+    #[arg(long)]
+    pub(crate) footprint: bool,
     /// The order the tracing lookups (ray-query, distance-exact) hand their acceleration-
     /// structure builds: `split` (spatially coherent, the default) or `given` (the scene's own,
     /// to measure what the order is worth on a driver that keeps it: docs/accuracy.md). Only
@@ -215,6 +221,7 @@ fn render_method(
         method,
         full_updates: args.full_updates,
         whole_faces: args.whole_faces,
+        footprint: args.footprint,
         lookup: Some(lookup),
         lookup_fixed: true,
         id_cube: crate::render_input::id_cube(args, lookup),
@@ -281,6 +288,7 @@ fn render_record(
             methods,
             full_updates: args.full_updates,
             whole_faces: args.whole_faces,
+            footprint: args.footprint,
             // The lookup the frames used: `--sensor-outputs` without `--lookup` picks a traced
             // one by the device (the scene's was recorded, though not used).
             lookup,
@@ -366,8 +374,9 @@ fn render_frames(
             frame_index,
             t,
             Readback {
-                // A lookup that reads no cube (ray-query) leaves it unfilled: nothing to write.
-                cube: lookups::plugin(renderer.scene.mirror.lookup).uses_cube(),
+                // A lookup that reads no cube (ray-query) leaves it unfilled, and a footprint
+                // all but the tiles the views read: nothing to write.
+                cube: lookups::plugin(renderer.scene.mirror.lookup).uses_cube() && !args.footprint,
                 views: true,
                 directions: args.directions,
                 rays: args.sensor_outputs,

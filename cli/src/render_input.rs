@@ -114,12 +114,37 @@ pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Resul
             );
         }
     }
+    if args.footprint {
+        footprint_applies(args, lookup)?;
+    }
     if args.trace_order.is_some() && !plugin.builds_scene_trace() {
         bail!(
             "--trace-order: only the ray-query and distance-exact lookups build acceleration \
              structures, and this run's lookup is {lookup}{}; leave it out, or give --lookup \
              ray-query",
             chosen_for_outputs(args)
+        );
+    }
+    Ok(())
+}
+
+/// `--footprint` marks what the mirror's footprint filter reads of the cube: with a cube
+/// lookup alone, and with nothing else reading the cube.
+fn footprint_applies(args: &Args, lookup: Lookup) -> Result<()> {
+    if !lookups::plugin(lookup).marks_footprint() {
+        bail!(
+            "--footprint: only the cube lookups' reads of the cube (plain, box) can be \
+             marked, and this run's lookup is {lookup}{}: {}; leave it out, or give --lookup box",
+            chosen_for_outputs(args),
+            match lookups::plugin(lookup).uses_cube() {
+                true => "its search reads the cube's depth wherever it goes",
+                false => "it samples no cube",
+            }
+        );
+    }
+    if args.sensor_outputs {
+        bail!(
+            "--footprint: --sensor-outputs reads the cube's ids and depth for the ray map, all              of them; leave one of the two out"
         );
     }
     Ok(())

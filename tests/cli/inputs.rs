@@ -283,6 +283,15 @@ fn options_that_would_change_nothing_are_refused() {
              structures, and this run's lookup is box",
         ),
         (
+            vec!["render", thesis, "--out", out_s, "--lookup", "distance", "--footprint"],
+            "--footprint: only the cube lookups' reads of the cube (plain, box) can be marked, \
+             and this run's lookup is distance: its search reads the cube's depth",
+        ),
+        (
+            vec!["render", thesis, "--out", out_s, "--lookup", "box", "--footprint", "--sensor-outputs"],
+            "--footprint: --sensor-outputs reads the cube's ids and depth for the ray map",
+        ),
+        (
             vec!["render", thesis, "--out", out_s, "--time", "2", "--fps", "60"],
             "--fps: sets the times of --frame and of --frames beyond the first, and this run \
              renders one frame at --time 2",

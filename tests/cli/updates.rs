@@ -44,3 +44,40 @@ fn updates_on_change_write_the_full_updates_bytes() {
         }
     }
 }
+
+/// `--footprint` fills only the tiles the views read and writes every frame's views as a
+/// whole cube's, byte for byte, records what it filled, and writes no cube.
+#[test]
+fn the_footprint_writes_the_whole_cubes_views() {
+    let scene = "scenes/test/orbit-near-seams.toml";
+    let extra = ["--frames", "4", "--fps", "4", "--lookup", "box"];
+    let (whole, _) = render_scene("footprint-whole", scene, &extra);
+    let mut cut_args = extra.to_vec();
+    cut_args.push("--footprint");
+    let (cut, json) = render_scene("footprint-cut", scene, &cut_args);
+    assert_eq!(json["settings"]["footprint"], true);
+    let frames = json["runs"][0]["frames"].as_array().expect("frames");
+    let face = 64 * 64;
+    for f in frames {
+        let needed = f["footprint_texels"].as_u64().expect("footprint_texels");
+        assert!(needed > 0 && needed <= 6 * face, "{f}");
+        assert!(f["cpu_footprint_ms"].as_f64().is_some(), "{f}");
+    }
+    // Marked once: the views and the mirror stand still.
+    let marked = frames
+        .iter()
+        .filter(|f| f["cpu_footprint_ms"].as_f64() > Some(0.0));
+    assert_eq!(marked.count(), 1, "{frames:?}");
+    for frame in 0..4 {
+        for view in ["sensor.exr", "observer.exr", "views.png"] {
+            let at = format!("{frame:04}/{view}");
+            let (a, b) = (std::fs::read(whole.join(&at)), std::fs::read(cut.join(&at)));
+            assert!(a.expect("whole") == b.expect("footprint"), "{at} differs");
+        }
+        assert!(whole.join(format!("{frame:04}/cube")).exists());
+        assert!(
+            !cut.join(format!("{frame:04}/cube")).exists(),
+            "a cube was written"
+        );
+    }
+}
