@@ -8,12 +8,15 @@
 //! alike), every frame at t = 0, the instant whose error is then measured on one more frame
 //! of each rung against the exact reference's sensor and observer images (1 sample per
 //! pixel). The frame cost is the GPU's own time for the cube update plus the sensor view,
-//! plus the host time of the lookup's own per-frame work (`gpu_cube_ms + gpu_sensor_ms +
-//! cpu_lookup_ms`): the cube fill and its mips for the cube lookups, the acceleration
+//! plus the host time of the lookup's own per-frame work and of a footprint's marks
+//! (`gpu_cube_ms + gpu_sensor_ms + cpu_lookup_ms + cpu_footprint_ms`; the marks are made once,
+//! in the first, untimed frame, as the views stand still): the cube fill and its mips for the
+//! cube lookups, the acceleration
 //! structure's rebuild for ray-query, which skips the fill, the top level's rebuild on the
 //! host for bvh (every frame, as the cube is refilled every frame: the ladder measures a
-//! frame in which something moved). The observer, the side-by-side pair and the readback
-//! copies are left out: they do not belong to the sensor frame.
+//! frame in which something moved). The timed frames draw the sensor alone: the observer and
+//! the side-by-side pair do not belong to the sensor frame (until 1 December 2026 they were
+//! drawn, and left out of the cost), and a footprint rung's footprint is then the sensor's.
 
 use std::sync::Arc;
 
@@ -82,7 +85,12 @@ pub fn labels() -> String {
 /// Why `device` cannot run `step` (None: it can; the host's tracer runs beside any device).
 pub fn missing(step: Step, device: &DeviceInfo) -> Option<String> {
     let lookup = step.lookup()?;
-    specchio::render::lookups::missing_features(lookup, device)
+    let footprint = match step {
+        Step::Lookup(r) if r.footprint => specchio::render::footprint_refusal(device),
+        _ => None,
+    };
+    (specchio::render::lookups::missing_features(lookup, device))
+        .or_else(|| footprint.map(str::to_owned))
 }
 
 /// The exact images a rung's views are compared with: the same instant, pixel centres.
@@ -119,14 +127,15 @@ pub fn measure(
         .collect::<Result<Vec<_>>>()?;
     let mut reports: Vec<Vec<FrameReport>> = vec![Vec::new(); rungs.len()];
     let mut host_frames = Vec::new();
-    let views = Readback {
-        views: true,
+    // The sensor's frame alone: what the cost counts (and a footprint's is the sensor's).
+    let sensor = Readback {
+        sensor: true,
         ..Default::default()
     };
     for _ in 0..plan.runs {
         for round in 0..plan.warmup + plan.frames {
             for (r, timed) in renderers.iter_mut().zip(&mut reports) {
-                let (report, _) = r.render_frame(u64::from(round), 0.0, views)?;
+                let (report, _) = r.render_frame(u64::from(round), 0.0, sensor)?;
                 if round >= plan.warmup {
                     timed.push(report);
                 }
@@ -188,7 +197,9 @@ fn rung_row(
         frame_cost_ms: Stats::of(
             timed
                 .iter()
-                .filter_map(|r| Some(r.gpu_cube_ms? + r.gpu_sensor_ms? + r.cpu_lookup_ms))
+                .filter_map(|r| {
+                    Some(r.gpu_cube_ms? + r.gpu_sensor_ms? + r.cpu_lookup_ms + r.cpu_footprint_ms)
+                })
                 .collect(),
         ),
         gpu_cube_ms: Stats::of(timed.iter().filter_map(|r| r.gpu_cube_ms).collect()),
@@ -220,6 +231,7 @@ fn renderer(
         method: Method::SIX_PASS,
         refresh: Some(RefreshPolicy::EveryFrame),
         lookup: Some(rung.lookup),
+        footprint: rung.footprint,
         trace_order: plan.trace_order,
         trace_in: plan.trace_in,
         bvh_layout: plan.bvh_layout,
@@ -277,7 +289,9 @@ fn work(timed: &[FrameReport], has_stats: bool, trace: Option<specchio::bvh::Wor
         fill_vertex_invocations: sum(&|r| r.fill_stats.map_or(0, |s| s.vertex_invocations)),
         fill_fragment_invocations: sum(&|r| r.fill_stats.map_or(0, |s| s.fragment_invocations)),
         sensor_fragment_invocations: sum(&|r| {
-            r.view_stats.map_or(0, |v| v[1].fragment_invocations)
+            r.view_stats
+                .and_then(|v| v[1])
+                .map_or(0, |s| s.fragment_invocations)
         }),
         trace,
     }

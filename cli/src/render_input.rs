@@ -115,7 +115,7 @@ pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Resul
         }
     }
     if args.footprint {
-        footprint_applies(args, lookup)?;
+        footprint_applies(args, scene, lookup)?;
     }
     if args.trace_order.is_some() && !plugin.builds_scene_trace() {
         bail!(
@@ -130,7 +130,22 @@ pub(crate) fn options_apply(args: &Args, scene: &Scene, lookup: Lookup) -> Resul
 
 /// `--footprint` marks what the mirror's footprint filter reads of the cube: with a cube
 /// lookup alone, and with nothing else reading the cube.
-fn footprint_applies(args: &Args, lookup: Lookup) -> Result<()> {
+fn footprint_applies(args: &Args, scene: &Scene, lookup: Lookup) -> Result<()> {
+    if let specchio::scene::RefreshPolicy::EveryN(n @ 2..) = scene.refresh {
+        bail!(
+            "--footprint: {} sets refresh.policy = \"every-n\" (n = {n}), whose cube shows an \
+             older state between its updates, where a tile the views come to need could be \
+             filled only with the newer one: every tile is filled; leave it out, or set the \
+             policy to \"on-change\" or \"every-frame\"",
+            args.scene.display()
+        );
+    }
+    if args.sensor_outputs {
+        bail!(
+            "--footprint: --sensor-outputs reads the cube's ids and depth for the ray map, all \
+             of them; leave one of the two out"
+        );
+    }
     if !lookups::plugin(lookup).marks_footprint() {
         bail!(
             "--footprint: only the cube lookups' reads of the cube (plain, box) can be \
@@ -140,11 +155,6 @@ fn footprint_applies(args: &Args, lookup: Lookup) -> Result<()> {
                 true => "its search reads the cube's depth wherever it goes",
                 false => "it samples no cube",
             }
-        );
-    }
-    if args.sensor_outputs {
-        bail!(
-            "--footprint: --sensor-outputs reads the cube's ids and depth for the ray map, all              of them; leave one of the two out"
         );
     }
     Ok(())

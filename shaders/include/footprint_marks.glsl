@@ -11,7 +11,8 @@
 //   twice the length: one level coarser. LOD_MARGIN takes that level;
 // - with a LINEAR mipmap mode, levels floor(lambda) and the next (clamped to the chain), and in
 //   each a bilinear 2 x 2 within 1.5 texels of the sample;
-// - across a face edge, the neighbour face's texels (Vulkan filters cube maps seamlessly).
+// - across a face edge, the neighbour face's texels (Vulkan filters cube maps seamlessly,
+//   unfolding the faces texel for texel).
 // A level-L texel is made from its own 2^L x 2^L block of level 0 (cube_mips.comp, a face of
 // power-of-two side; a little wider on an odd side), so marking the level-0 texels within two
 // coarsest-level texels of the sample (four on other sides) marks everything the sample's
@@ -77,18 +78,18 @@ void mark_face_rect(uint f, vec2 lo, vec2 hi) {
     for (int ty = t0.y; ty <= t1.y; ty++) {
         for (int tx = t0.x; tx <= t1.x; tx++) {
             uint i = f * per_face + uint(ty) * marking.tiles_per_side + uint(tx);
-            uint bit = 1u << (i & 31u);
-            // Read first: most samples land on tiles already marked.
-            if ((marks[i >> 5u] & bit) == 0u) {
-                atomicOr(marks[i >> 5u], bit);
-            }
+            // Atomic whatever the bit holds: a plain read beside other invocations' atomics
+            // would be a data race under Vulkan's memory model.
+            atomicOr(marks[i >> 5u], 1u << (i & 31u));
         }
     }
 }
 
-// Marks the face-coordinate rectangle lo..hi of face f, and where it passes an edge, what the
-// neighbour face holds there: the part beyond the edge projected through the cube's centre
-// onto the neighbour's plane (its corners bound it: a central projection keeps lines).
+// Marks the face-coordinate rectangle lo..hi of face f, and where it passes an edge, the
+// neighbour's texels seamless filtering reads there. Vulkan unfolds the faces texel for
+// texel across an edge: a sample d beyond it reads the neighbour's texels d in, along the
+// same stretch of the shared edge. (A projection through the cube's centre would put it only
+// d / (1 + d) in: too shallow where a coarse level's texel spans much of a face.)
 void mark_region(uint f, vec2 lo, vec2 hi) {
     mark_face_rect(f, lo, hi);
     for (int axis = 0; axis < 2; axis++) {
@@ -97,20 +98,27 @@ void mark_region(uint f, vec2 lo, vec2 hi) {
             if (!(beyond > 1.0)) {
                 continue;
             }
-            vec2 edge = vec2(0.0);
-            edge[axis] = 2.0 * float(side);
-            uint g = cube_face(face_direction(f, edge));
-            vec2 b_lo = vec2(1.0e30), b_hi = vec2(-1.0e30);
-            for (int k = 0; k < 4; k++) {
-                vec2 c;
-                c[axis] = float(side) * ((k & 1) == 0 ? 1.0 : beyond);
-                c[1 - axis] = (k & 2) == 0 ? lo[1 - axis] : hi[1 - axis];
-                vec3 frame_g = face_frame(face_direction(f, c), g);
-                vec2 q = frame_g.xy / frame_g.z;
-                b_lo = min(b_lo, q);
-                b_hi = max(b_hi, q);
-            }
-            mark_face_rect(g, b_lo, b_hi);
+            // The edge's middle, its ends under the region, on the neighbour g: points of
+            // the shared edge, which the projection through the centre keeps exactly.
+            vec2 middle = vec2(0.0), a, b;
+            middle[axis] = float(side);
+            a = middle;
+            b = middle;
+            a[1 - axis] = lo[1 - axis];
+            b[1 - axis] = hi[1 - axis];
+            uint g = cube_face(face_direction(f, 2.0 * middle));
+            vec3 m = face_frame(face_direction(f, middle), g);
+            vec3 fa = face_frame(face_direction(f, a), g);
+            vec3 fb = face_frame(face_direction(f, b), g);
+            vec2 qm = m.xy / m.z, qa = fa.xy / fa.z, qb = fb.xy / fb.z;
+            // g's coordinate across the shared edge, and from the edge inwards as far as
+            // the region passes it.
+            int k = abs(qm.x) >= abs(qm.y) ? 0 : 1;
+            float depth = min(beyond - 1.0, 2.0);
+            vec2 g_lo = min(qa, qb), g_hi = max(qa, qb);
+            g_lo[k] = qm[k] > 0.0 ? 1.0 - depth : -1.0;
+            g_hi[k] = qm[k] > 0.0 ? 1.0 : -1.0 + depth;
+            mark_face_rect(g, g_lo, g_hi);
         }
     }
 }

@@ -84,7 +84,7 @@ fn measured_run_with_reports(json: &Path, csv: &Path, svg: &Path) -> common::Mea
         .args([
             "bench",
             "--quick",
-            // Lavapipe, which runs all nine rungs (a GPU without ray queries runs seven).
+            // Lavapipe, which runs all ten rungs (a GPU without ray queries runs eight).
             "--device",
             "lavapipe",
             "--methods",
@@ -102,10 +102,10 @@ fn measured_run_with_reports(json: &Path, csv: &Path, svg: &Path) -> common::Mea
 
 /// The CSV has its rows and rungs; the plot and the JSON record hold what they must.
 fn check_reports(json: &Path, csv: &Path, svg: &Path, peak_bytes: u64) {
-    // The header, two scenes x two methods x two lookups, and two scenes x nine rungs.
+    // The header, two scenes x two methods x two lookups, and two scenes x ten rungs.
     let text = std::fs::read_to_string(csv).unwrap();
-    assert_eq!(text.lines().count(), 1 + 8 + 18);
-    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 18);
+    assert_eq!(text.lines().count(), 1 + 8 + 20);
+    assert_eq!(text.lines().filter(|l| l.starts_with("rung,")).count(), 20);
     // The bvh rung's counted walk: its rays and nodes; a cube rung counts none.
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
     let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
@@ -378,7 +378,7 @@ const BAD_OPTIONS: [(&[&str], &str, i32); 17] = [
     (&["no/such/scene.toml"], "no/such/scene.toml", 1),
     (
         &["--rungs", "box,sphere"],
-        "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, distance-8, distance-16, distance-32, distance-exact, ray-query",
+        "'--rungs <RUNGS>': `sphere` is not a rung: one of plain, box, box-footprint, distance-8, distance-16, distance-32, distance-exact, ray-query",
         2,
     ),
     (

@@ -5,9 +5,10 @@ use specchio::scene::camera::ViewBasis;
 use specchio::scene::state::SceneState;
 
 /// The ladder, in its order.
-const RUNGS: [&str; 9] = [
+const RUNGS: [&str; 10] = [
     "plain",
     "box",
+    "box-footprint",
     "distance-8",
     "distance-16",
     "distance-32",
@@ -135,6 +136,8 @@ fn check_each_rung_nearer_than_the_last(here: &[&serde_json::Value], scene: &str
         };
         let plain = flip(&|r| r == "plain")[0];
         let boxed = flip(&|r| r == "box")[0];
+        // The footprint's views are a whole cube's, bit for bit.
+        assert_eq!(flip(&|r| r == "box-footprint")[0], boxed, "{scene} {view}");
         let cube = flip(&|r| !TRACED.contains(&r));
         let traced = flip(&|r| TRACED.contains(&r));
         assert!(plain > boxed, "{scene} {view}: plain {plain}, box {boxed}");

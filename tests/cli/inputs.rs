@@ -230,6 +230,13 @@ fn options_that_would_change_nothing_are_refused() {
     std::fs::copy(thesis, &copy).unwrap();
     std::fs::hard_link(&copy, &linked).unwrap();
     let (copy, thesis_again) = (copy.to_str().unwrap(), linked.to_str().unwrap());
+    // A room refreshed every 2 frames (no file of its own to find beside it).
+    let every_n = dir.join("every-n.toml");
+    let room = std::fs::read_to_string(still).unwrap();
+    let room_every_n = room.replace("policy = \"every-frame\"", "policy = \"every-n\"\nn = 2");
+    assert_ne!(room, room_every_n);
+    std::fs::write(&every_n, room_every_n).unwrap();
+    let every_n = every_n.to_str().unwrap();
     let b = base.to_str().unwrap();
     // No --cube-size: it is refused itself where no cube is made (a row below).
     let small = ["--frames", "1"];
@@ -290,6 +297,11 @@ fn options_that_would_change_nothing_are_refused() {
         (
             vec!["render", thesis, "--out", out_s, "--lookup", "box", "--footprint", "--sensor-outputs"],
             "--footprint: --sensor-outputs reads the cube's ids and depth for the ray map",
+        ),
+        (
+            vec!["render", every_n, "--out", out_s, "--lookup", "box", "--footprint"],
+            "sets refresh.policy = \"every-n\" (n = 2), whose cube shows an older state between \
+             its updates",
         ),
         (
             vec!["render", thesis, "--out", out_s, "--time", "2", "--fps", "60"],

@@ -30,9 +30,14 @@ struct Run {
     refresh: RefreshPolicy,
 }
 
-fn renderer(gpu: &Gpu, s: &Scene, run: Run, footprint: bool) -> Result<Renderer, String> {
+fn renderer(
+    gpu: &Gpu,
+    s: &Scene,
+    (run, size): (Run, u32),
+    footprint: bool,
+) -> Result<Renderer, String> {
     let options = RenderOptions {
-        cube_size: Some(96),
+        cube_size: Some(size),
         method: run.method,
         lookup: Some(run.lookup),
         refresh: Some(run.refresh),
@@ -94,12 +99,38 @@ fn assert_same_views(whole: &[Views], cut: &[Views], what: &str) -> (u64, u64) {
     (sum(cut), sum(whole))
 }
 
+/// A footprint renderer and a whole cube's, the same frames: every view the same, bit for
+/// bit; returns the first frame's fill by each. SwiftShader refuses the footprint, saying
+/// why (`footprint/mod.rs`): that is asserted instead (None).
+fn compare(
+    gpu: &Gpu,
+    s: &Scene,
+    (run, size): (Run, u32),
+    times: &[(f64, bool)],
+    what: &str,
+) -> Option<(u64, u64)> {
+    let whole = renderer(gpu, s, (run, size), false).expect("the renderer");
+    let cut = match renderer(gpu, s, (run, size), true) {
+        Err(e) if gpu.device.info.short_name == "swiftshader" => {
+            // Its sampler's level of detail is one a quad's, from a pixel that may be off
+            // the mirror.
+            assert!(e.contains("one level of detail for each 2 x 2 quad"), "{e}");
+            return None;
+        }
+        made => made.expect("the renderer with a footprint"),
+    };
+    let (whole, cut) = (frames(whole, times), frames(cut, times));
+    let (filled, full) = assert_same_views(&whole, &cut, what);
+    eprintln!("{what}: {filled} texels filled of a whole cube's {full}");
+    Some((cut[0].texels, whole[0].texels))
+}
+
 /// thesis-room (one ball orbits), many-objects (200 move) and moving-objects while its mirror
-/// moves (the box lookup's footprint moves with the room), on 96² faces (8-texel tiles): with
-/// the sensor alone and then every view (the footprint grows on a frame with nothing else to
-/// update), under on-change and every 2 frames (a newly needed tile between updates re-fills
-/// the whole footprint), every method on every driver. SwiftShader refuses the footprint,
-/// saying why (`footprint/mod.rs`); that is asserted there instead.
+/// moves (the box lookup's footprint moves with the room), on 96² faces (8-texel tiles): the
+/// sensor alone, then every view at the same time (only the footprint changes), the sensor
+/// alone after objects moved, every view again later. Every method on every driver, each with
+/// one of the two cube lookups and one of two policies in turn: on change, and every 2 frames
+/// (whose last frame grows the footprint between updates, so every tile is needed there).
 #[test]
 fn the_footprint_fills_what_the_views_read() {
     let scenes = [
@@ -111,15 +142,13 @@ fn the_footprint_fills_what_the_views_read() {
         let (gpu, methods) = Gpu::with_all_methods_on(Some(&device));
         for (rel, start) in scenes {
             let s = scene(rel);
-            // Frame 1 repeats frame 0's time with every view: only the footprint changes.
             let times = [
                 (start, false),
                 (start, true),
-                (start + 0.3, true),
-                (start + 0.6, false),
+                (start + 0.3, false),
+                (start + 0.6, true),
             ];
             for (k, &method) in methods.iter().enumerate() {
-                // Each method once; the lookups and policies spread over them.
                 let run = Run {
                     method,
                     lookup: [Lookup::Box, Lookup::Plain][k % 2],
@@ -129,27 +158,58 @@ fn the_footprint_fills_what_the_views_read() {
                     "{rel} on {device}, {method}, {:?}, {:?}",
                     run.lookup, run.refresh
                 );
-                let whole = renderer(&gpu, &s, run, false).expect("the renderer");
-                let cut = match renderer(&gpu, &s, run, true) {
-                    Err(e) if device == "swiftshader" => {
-                        // Refused, and said why: its sampler's level of detail is one a
-                        // quad's, from a pixel that may be off the mirror.
-                        assert!(e.contains("one level of detail for each 2 x 2 quad"), "{e}");
-                        continue;
-                    }
-                    made => made.expect("the renderer with a footprint"),
+                let Some((first_cut, first_whole)) = compare(&gpu, &s, (run, 96), &times, &what)
+                else {
+                    continue;
                 };
-                let (whole, cut) = (frames(whole, &times), frames(cut, &times));
-                let (filled, full) = assert_same_views(&whole, &cut, &what);
                 // The sensor alone leaves tiles unfilled (poisoned) on the first fill; but
                 // multiview's, whose clears reach every face alike, covers a face and so fills
-                // all six.
-                let (first_cut, first_whole) = (cut[0].texels, whole[0].texels);
+                // all six, and every 2 frames needs every tile.
+                let every_n = matches!(run.refresh, RefreshPolicy::EveryN(_));
                 assert!(
-                    first_cut < first_whole || method.layout() == CubeLayout::Multiview,
+                    first_cut < first_whole || method.layout() == CubeLayout::Multiview || every_n,
                     "{what}: the sensor's footprint filled {first_cut} of {first_whole}"
                 );
-                eprintln!("{what}: {filled} texels filled of a whole cube's {full}");
+            }
+        }
+        gpu.finish();
+    }
+}
+
+/// Where the sensor reads the cube coarsely (a 128² sensor on 256² faces, 16-texel tiles: its
+/// first fill leaves 32 tiles out, and a reach of a tenth of the marks' made 2 sensor pixels
+/// read the poison, tried) and on faces of a side that is no power of two (100²: 8-texel
+/// tiles cut at the edge, mips of odd side), six-pass and geometry, both cube lookups, on
+/// every driver.
+#[test]
+fn the_footprint_holds_at_coarse_levels_and_odd_sizes() {
+    let rel = "scenes/thesis-room.toml";
+    let text = std::fs::read_to_string(common::root().join(rel)).expect("the scene");
+    let small = text.replace("resolution = [512, 512]", "resolution = [128, 128]");
+    assert_ne!(small, text, "the sensor's resolution replaced");
+    let coarse = specchio::scene::load_str(&small, &common::root().join(rel)).expect("the scene");
+    let odd = scene(rel);
+    let times = [(0.0, false), (0.0, true), (0.4, false), (0.8, true)];
+    for device in devices() {
+        let (gpu, methods) = Gpu::with_all_methods_on(Some(&device));
+        let geometry = Method::parse("geometry").expect("the geometry method");
+        for method in [Method::SIX_PASS, geometry]
+            .into_iter()
+            .filter(|m| methods.contains(m))
+        {
+            for lookup in [Lookup::Box, Lookup::Plain] {
+                let run = Run {
+                    method,
+                    lookup,
+                    refresh: RefreshPolicy::OnChange,
+                };
+                for (s, size, name) in [(&coarse, 256, "a 128² sensor"), (&odd, 100, "100² faces")]
+                {
+                    let what = format!("{name} on {device}, {method}, {lookup:?}");
+                    if let Some((cut, whole)) = compare(&gpu, s, (run, size), &times, &what) {
+                        eprintln!("{what}: the sensor's first fill {cut} of {whole} texels");
+                    }
+                }
             }
         }
         gpu.finish();

@@ -144,7 +144,9 @@ pub struct FrameReport {
     /// feature or when the cube was not updated).
     pub fill_stats: Option<PipelineStats>,
     pub face_stats: Option<[PipelineStats; 6]>,
-    pub view_stats: Option<[PipelineStats; 3]>,
+    /// Observer, sensor, pair: each view's where it was drawn (a frame that draws the sensor
+    /// alone has only the sensor's).
+    pub view_stats: Option<[Option<PipelineStats>; 3]>,
     /// The lookup's traced rays among the observer's and sensor's mirror fragments (only
     /// `distance-exact`, which traces the rays its search cannot resolve).
     pub traced_rays: Option<crate::render::lookups::FrameTally>,

@@ -19,6 +19,7 @@ pub mod display;
 mod draw;
 pub mod floors;
 mod footprint;
+pub use footprint::refusal as footprint_refusal;
 mod frame;
 mod frame_data;
 mod frame_parts;
@@ -316,7 +317,9 @@ impl Renderer {
             // A floor's frame times the fill alone: the lookup's host work is not its.
             cpu_lookup_ms: if floor.is_some() { 0.0 } else { cpu_lookup_ms },
             cpu_footprint_ms: footprint_ms,
-            footprint_texels: self.footprint_texels(),
+            footprint_texels: self
+                .footprint_texels()
+                .filter(|_| fill_cube && floor.is_none()),
             ..Default::default()
         };
         let mut graph = self.frame_graph();
@@ -324,7 +327,13 @@ impl Renderer {
         let graph = self.record_frame((cmd, graph), &plan, &views, &ask, &copies, &mut report);
         // A floor's statistics are its one query's, whatever the method.
         let per_face = floor.is_none() && self.cube_fill.per_face_marks();
-        let views_read = ask.readback.views;
+        // Observer, sensor and pair, or the sensor alone (a window's frame: none).
+        let views_read = match (ask.readback.views, ask.readback.sensor) {
+            _ if ask.display.is_some() => 0,
+            (true, _) => 0b111,
+            (false, true) => 0b010,
+            (false, false) => 0,
+        };
         let stats = StatsRead::of(
             dirty != 0,
             per_face,
@@ -392,7 +401,7 @@ impl Renderer {
         let drawables = &self.resources.drawables;
         let at = (frame, self.cube.size);
         let mut dirty = (self.refresh).dirty(&self.scene, drawables, at, state, views);
-        dirty = self.within_footprint(dirty, state);
+        dirty = self.within_footprint(dirty);
         if self.method().layout() == methods::CubeLayout::Multiview {
             // A multiview pass clears and draws every view alike: the same rectangles in all
             // six, each face culled for them, or objects seen only there would vanish.

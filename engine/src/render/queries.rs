@@ -31,15 +31,15 @@ pub(super) const STATS_COUNT: u32 = 9;
 pub(super) struct StatsRead {
     /// Bit f: statistics query f (a face of six-pass, or slot 0 for a one-pass fill).
     pub fill: u32,
-    /// The three views' queries.
-    pub views: bool,
+    /// Bit v: the query of view v (observer, sensor, pair), drawn this frame.
+    pub views: u32,
 }
 
 impl StatsRead {
     /// The statistics queries a frame reads: after a cube update, the faces a per-face
     /// method (`per_face`) rendered (a query each) or the one-pass fill's query 0; the views'
     /// when asked.
-    pub fn of(update: bool, per_face: bool, face_mask: u32, views: bool) -> StatsRead {
+    pub fn of(update: bool, per_face: bool, face_mask: u32, views: u32) -> StatsRead {
         let fill = match (update, per_face) {
             (false, _) => 0,
             (true, true) => face_mask & 0x3F,
@@ -94,9 +94,12 @@ impl FrameQueries {
             } else if stats.fill != 0 {
                 report.fill_stats = Some(q.statistics(0, 1)?[0]);
             }
-            if stats.views {
-                let s = q.statistics(6, 3)?;
-                report.view_stats = Some(std::array::from_fn(|v| s[v]));
+            if stats.views != 0 {
+                let mut views = [None; 3];
+                for v in (0..3).filter(|v| stats.views & (1 << v) != 0) {
+                    views[v as usize] = Some(q.statistics(6 + v, 1)?[0]);
+                }
+                report.view_stats = Some(views);
             }
         }
         Ok(())
@@ -153,8 +156,8 @@ impl FrameQueries {
             for f in (0..6).filter(|f| read.fill & (1 << f) != 0) {
                 q.copy_results(cmd, f, 1);
             }
-            if read.views {
-                q.copy_results(cmd, 6, 3);
+            for v in (0..3).filter(|v| read.views & (1 << v) != 0) {
+                q.copy_results(cmd, 6 + v, 1);
             }
         }
     }

@@ -9,6 +9,7 @@ use crate::render::graph::{FrameGraph, Use};
 use crate::render::refresh::Dirty;
 use crate::render::{lookups, FrameAsk, Renderer};
 use crate::scene::state::SceneState;
+use crate::scene::RefreshPolicy;
 use crate::sensor::GroundTruth;
 use crate::vk::GpuError;
 
@@ -31,7 +32,10 @@ impl Renderer {
         let Some(footprint) = &mut self.footprint else {
             return Ok(0.0);
         };
-        if ask.readback.cube || rays_read_cube || !marks {
+        // A policy that updates every n frames shows an older state between its updates: a
+        // tile newly needed then could be filled only with this frame's.
+        let every_n = matches!(self.scene.refresh, RefreshPolicy::EveryN(n) if n > 1);
+        if ask.readback.cube || rays_read_cube || !marks || every_n {
             footprint.need_all(size);
             return Ok(0.0);
         }
@@ -44,14 +48,10 @@ impl Renderer {
     }
 
     /// `dirty` cut to the footprint, with the tiles newly needed (`Footprint::restrict`).
-    pub(in crate::render) fn within_footprint(
-        &mut self,
-        dirty: Dirty,
-        state: &SceneState,
-    ) -> Dirty {
-        let (first, stale) = (self.refresh.first_fill(), !self.refresh.shows_state(state));
+    pub(in crate::render) fn within_footprint(&mut self, dirty: Dirty) -> Dirty {
+        let first = self.refresh.first_fill();
         match &mut self.footprint {
-            Some(f) => f.restrict(dirty, first, stale, self.cube.size),
+            Some(f) => f.restrict(dirty, first, self.cube.size),
             None => dirty,
         }
     }
@@ -74,10 +74,7 @@ impl Renderer {
             cmd,
             &[(self.cube.color_levels(0, levels, None), Use::Cleared)],
         );
-        let range = vk::ImageSubresourceRange {
-            level_count: 1,
-            ..self.cube.color.full_range()
-        }; // DEBUG
+        let range = self.cube.color.full_range();
         let colour = vk::ClearColorValue { float32: POISON };
         // SAFETY: the image is in TRANSFER_DST_OPTIMAL, as the graph just declared, and was
         // made with TRANSFER_DST usage.

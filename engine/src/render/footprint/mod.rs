@@ -29,9 +29,9 @@ use crate::vk::device::Device;
 use crate::vk::GpuError;
 
 /// Above this many rectangles a face's update re-renders its changed tiles whole instead of
-/// its dirty rectangles cut by the footprint's: each rectangle costs the host a cull of the
-/// face's drawables, and the pieces of 32 dirty rectangles by a few dozen of the footprint's
-/// grow as their product.
+/// its dirty rectangles cut by the footprint's (the pieces of 32 dirty rectangles by a few
+/// dozen of the footprint's grow as their product), and above it again their bounding box:
+/// each rectangle costs the host a cull of the face's drawables.
 const MAX_PIECES: usize = 64;
 
 /// Why SwiftShader gets no footprint: its sampler reads what no pixel's own samples reach.
@@ -41,11 +41,19 @@ const SWIFTSHADER: &str = "the footprint on SwiftShader: its cube sampler takes 
     what a view reads there cannot be marked from its own pixels (docs/methods.md, \
     \"The footprint\")";
 
+/// Why `device` cannot fill a footprint (None: it can).
+pub fn refusal(device: &crate::vk::device::DeviceInfo) -> Option<&'static str> {
+    (device.short_name == "swiftshader").then_some(SWIFTSHADER)
+}
+
 /// The footprint of a renderer's views and what its cube holds, by tile.
 pub struct Footprint {
     pass: MarkPass,
-    /// What `needed` was marked from (`None`: nothing, or every tile needed).
+    /// What `marked` was marked from (`None`: nothing yet).
     key: Option<Vec<u8>>,
+    /// The tiles the marks said, kept while a frame needs every tile (its read-back, say), so
+    /// that the next is not marked again.
+    marked: Tiles,
     /// The tiles the drawn views may read.
     needed: Tiles,
     /// The tiles that show the state the cube shows.
@@ -60,12 +68,13 @@ impl Footprint {
         (face_size, view_count): (u32, usize),
         poison: bool,
     ) -> Result<Self, GpuError> {
-        if device.info.short_name == "swiftshader" {
-            return Err(GpuError::Unsupported(SWIFTSHADER.into()));
+        if let Some(why) = refusal(&device.info) {
+            return Err(GpuError::Unsupported(why.into()));
         }
         Ok(Self {
             pass: MarkPass::create(device, face_size, view_count)?,
             key: None,
+            marked: Tiles::all(face_size),
             needed: Tiles::all(face_size),
             valid: Tiles::none(face_size),
             poison,
@@ -94,35 +103,35 @@ impl Footprint {
             key.extend(bytemuck::bytes_of(&views[v as usize]));
         }
         if self.key.as_ref() == Some(&key) {
+            self.needed = self.marked.clone();
             return Ok(None);
         }
         let start = Instant::now();
-        self.needed = self.pass.mark(submitter, (frame, views), marked, levels)?;
+        self.marked = self.pass.mark(submitter, (frame, views), marked, levels)?;
+        self.needed = self.marked.clone();
         self.key = Some(key);
         Ok(Some(start.elapsed().as_secs_f64() * 1e3))
     }
 
     /// Every tile is needed this frame: something other than the marked views reads the cube
-    /// (its read-back, the ray map through it, a lookup the pass cannot mark).
+    /// (its read-back, the ray map through it, a lookup the pass cannot mark), or a policy
+    /// that updates every n frames could not fill a tile newly needed between its updates.
     pub fn need_all(&mut self, face_size: u32) {
         self.needed = Tiles::all(face_size);
-        self.key = None;
     }
 
     /// What an update that `dirty` asks for re-renders within the footprint, and what the
-    /// cube then holds. `first_fill`: the cube holds nothing yet; `stale`: it shows another
-    /// state than this frame's (a policy that updates every n frames, between its updates),
-    /// so a tile newly needed cannot be filled alone and the whole footprint is.
-    pub fn restrict(&mut self, dirty: Dirty, first_fill: bool, stale: bool, size: u32) -> Dirty {
+    /// cube then holds. `first_fill`: the cube holds nothing yet. A first fill that would fill
+    /// nothing (no view sees the mirror) fills every tile: the cube's images must leave the
+    /// layout they were made in before a view binds them.
+    pub fn restrict(&mut self, dirty: Dirty, first_fill: bool, size: u32) -> Dirty {
         if first_fill {
             self.valid = Tiles::none(size);
         }
-        let mut dirty = dirty;
-        let newly_needed = !self.needed.without(&self.valid).is_empty();
-        if stale && dirty.mask == 0 && newly_needed {
-            dirty = Dirty::faces(0x3F);
+        let (mut fill, mut valid) = fill_within(&self.needed, &self.valid, &dirty, size);
+        if first_fill && fill.mask == 0 {
+            (fill, valid) = (Dirty::faces(0x3F), Tiles::all(size));
         }
-        let (fill, valid) = fill_within(&self.needed, &self.valid, &dirty, size);
         self.valid = valid;
         fill
     }
@@ -183,6 +192,10 @@ pub fn fill_within(needed: &Tiles, valid: &Tiles, dirty: &Dirty, size: u32) -> (
         }
         if rects.is_empty() {
             continue;
+        }
+        if rects.len() > MAX_PIECES {
+            // Their bounding box: more is re-rendered, all of it exactly.
+            rects = vec![rects.iter().fold(rects[0], |a, b| a.union(b))];
         }
         fill.mask |= 1 << f;
         let area: u64 = rects.iter().map(PixelRect::area).sum();

@@ -130,10 +130,6 @@ impl Tiles {
         self.zip(other, |a, b| a & !b)
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.words.iter().all(|&w| w == 0)
-    }
-
     /// The pixels of tile (tx, ty), cut by the face's edge.
     fn tile_rect(&self, tx: u32, ty: u32) -> PixelRect {
         let at = |t: u32| (t * self.tile).min(self.face_size);

@@ -84,6 +84,7 @@ impl MirrorLookup for Bvh {
             lookup: Lookup::Bvh,
             order: 7,
             configure: as_is,
+            footprint: false,
         }]
     }
 

@@ -26,6 +26,7 @@ pub static PLAIN: CubeLookup = CubeLookup {
         lookup: Lookup::Plain,
         order: 0,
         configure: as_is,
+        footprint: false,
     }],
 };
 
@@ -33,12 +34,23 @@ pub static BOX: CubeLookup = CubeLookup {
     start: Start::RoomBox,
     summary: "the cube map towards where the reflected ray leaves the room's box \
               (parallax-corrected; exact for an empty box room up to texel sampling)",
-    rungs: &[Rung {
-        label: "box",
-        lookup: Lookup::Box,
-        order: 1,
-        configure: as_is,
-    }],
+    rungs: &[
+        Rung {
+            label: "box",
+            lookup: Lookup::Box,
+            order: 1,
+            configure: as_is,
+            footprint: false,
+        },
+        // The same images, the cube filled only where the sensor reads it.
+        Rung {
+            label: "box-footprint",
+            lookup: Lookup::Box,
+            order: 1,
+            configure: as_is,
+            footprint: true,
+        },
+    ],
 };
 
 impl MirrorLookup for CubeLookup {

@@ -49,18 +49,21 @@ impl MirrorLookup for Distance {
                 lookup: Lookup::Distance,
                 order: 2,
                 configure: |s| s.mirror.distance_steps = 8,
+                footprint: false,
             },
             Rung {
                 label: "distance-16",
                 lookup: Lookup::Distance,
                 order: 3,
                 configure: |s| s.mirror.distance_steps = 16,
+                footprint: false,
             },
             Rung {
                 label: "distance-32",
                 lookup: Lookup::Distance,
                 order: 4,
                 configure: |s| s.mirror.distance_steps = 32,
+                footprint: false,
             },
         ]
     }

@@ -74,6 +74,7 @@ impl MirrorLookup for DistanceExact {
             lookup: Lookup::DistanceExact,
             order: 5,
             configure: |s| s.mirror.distance_steps = 16,
+            footprint: false,
         }]
     }
 

@@ -152,6 +152,10 @@ pub struct Rung {
     pub order: u8,
     /// Sets whatever else the rung needs in the scene (the lookup itself is set for it).
     pub configure: fn(&mut crate::scene::Scene),
+    /// Fills only the cube's tiles its sensor reads (`RenderOptions::footprint`; the ladder's
+    /// timed frames draw the sensor alone): its lookup's rung's images, at the footprint's
+    /// cost.
+    pub footprint: bool,
 }
 
 /// A rung that needs nothing beyond its lookup.

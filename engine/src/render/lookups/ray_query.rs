@@ -62,6 +62,7 @@ impl MirrorLookup for RayQuery {
             lookup: Lookup::RayQuery,
             order: 6,
             configure: as_is,
+            footprint: false,
         }]
     }
 
