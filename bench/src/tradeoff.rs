@@ -132,17 +132,20 @@ pub fn measure(
         sensor: true,
         ..Default::default()
     };
+    // The first round is never timed: it fills the cube for the first time, builds a traced
+    // lookup's trees and makes a footprint's marks, work no later frame repeats.
+    let warmup = super::dynamic::warmup_rounds(plan);
     for _ in 0..plan.runs {
-        for round in 0..plan.warmup + plan.frames {
+        for round in 0..warmup + plan.frames {
             for (r, timed) in renderers.iter_mut().zip(&mut reports) {
                 let (report, _) = r.render_frame(u64::from(round), 0.0, sensor)?;
-                if round >= plan.warmup {
+                if round >= warmup {
                     timed.push(report);
                 }
             }
             if host {
                 let (frame, _) = host::frame(scene, &meshes);
-                if round >= plan.warmup {
+                if round >= warmup {
                     host_frames.push(frame);
                 }
             }
@@ -198,7 +201,8 @@ fn rung_row(
             timed
                 .iter()
                 .filter_map(|r| {
-                    Some(r.gpu_cube_ms? + r.gpu_sensor_ms? + r.cpu_lookup_ms + r.cpu_footprint_ms)
+                    let marks = r.cpu_footprint_ms.unwrap_or(0.0);
+                    Some(r.gpu_cube_ms? + r.gpu_sensor_ms? + r.cpu_lookup_ms + marks)
                 })
                 .collect(),
         ),

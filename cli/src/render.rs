@@ -150,6 +150,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     let features = lookups::features(lookup);
     let device = probe::device_for(&instance, args.device.as_deref(), &methods, features)?;
     drop(instance);
+    if let Some(why) = specchio::render::footprint_refusal(&device.info).filter(|_| args.footprint)
+    {
+        bail!("--footprint: {why}; leave it out, or give another --device (lavapipe)");
+    }
 
     // 3. Frames, per method (`--method all`: each into DIR/<method>/), each method's frames
     //    said as they go and, with several methods, the whole run's too.

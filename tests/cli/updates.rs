@@ -51,7 +51,14 @@ fn updates_on_change_write_the_full_updates_bytes() {
 fn the_footprint_writes_the_whole_cubes_views() {
     let scene = "scenes/test/orbit-near-seams.toml";
     let extra = ["--frames", "4", "--fps", "4", "--lookup", "box"];
-    let (whole, _) = render_scene("footprint-whole", scene, &extra);
+    let (whole, plain) = render_scene("footprint-whole", scene, &extra);
+    // Without a footprint: no footprint figures (not zeros, which say "already marked").
+    for f in plain["runs"][0]["frames"].as_array().expect("frames") {
+        assert!(
+            f["footprint_texels"].is_null() && f["cpu_footprint_ms"].is_null(),
+            "{f}"
+        );
+    }
     let mut cut_args = extra.to_vec();
     cut_args.push("--footprint");
     let (cut, json) = render_scene("footprint-cut", scene, &cut_args);
@@ -80,4 +87,48 @@ fn the_footprint_writes_the_whole_cubes_views() {
             "a cube was written"
         );
     }
+}
+
+/// On SwiftShader `--footprint` is refused before anything is written, naming the option, why
+/// and what to do instead.
+#[test]
+fn the_footprint_is_refused_on_swiftshader_naming_it() {
+    let root = common::root();
+    if !root
+        .join(".drivers/swiftshader/vk_swiftshader_icd.json")
+        .exists()
+    {
+        common::skip(
+            "--footprint on SwiftShader",
+            "SwiftShader is not provided here",
+        );
+        return;
+    }
+    let out = common::temp_dir("footprint-swiftshader");
+    let scene = root.join("scenes/test/six-colour-room.toml");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args([
+            "--cube-size",
+            "32",
+            "--footprint",
+            "--device",
+            "swiftshader",
+        ])
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains(
+            "--footprint: the footprint on SwiftShader: its cube sampler takes one level"
+        ) && said.contains("leave it out, or give another --device (lavapipe)"),
+        "{said}"
+    );
+    assert!(!out.exists() && common::staging_folders(&out).is_empty());
 }

@@ -121,8 +121,9 @@ pub struct FrameReport {
     /// None without it).
     pub footprint_texels: Option<u64>,
     /// Host time of the footprint's marking pass, submitted and waited for before the frame
-    /// is recorded (ms; 0 for a frame whose footprint was already marked).
-    pub cpu_footprint_ms: f64,
+    /// is recorded (ms; 0 for a frame whose footprint was already marked; None without a
+    /// footprint).
+    pub cpu_footprint_ms: Option<f64>,
     /// Objects (walls included) drawn into each face; 0 for a face not re-rendered.
     pub draws_per_face: [u32; 6],
     pub cpu_record_ms: f64,

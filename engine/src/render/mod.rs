@@ -316,7 +316,7 @@ impl Renderer {
             cube_updated: dirty != 0,
             // A floor's frame times the fill alone: the lookup's host work is not its.
             cpu_lookup_ms: if floor.is_some() { 0.0 } else { cpu_lookup_ms },
-            cpu_footprint_ms: footprint_ms,
+            cpu_footprint_ms: self.footprint_texels().map(|_| footprint_ms),
             footprint_texels: self
                 .footprint_texels()
                 .filter(|_| fill_cube && floor.is_none()),
