@@ -28,7 +28,9 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
-    let scene = specchio::scene::load(&args.scene)?;
+    interrupt::catch();
+    let loaded = specchio::scene::load(&args.scene);
+    let scene = crate::render_input::unless_stopped(loaded, "while loading the scene")?;
     if let Some(why) = Calibration::too_large(&scene) {
         bail!("{}: {why}", args.scene.display());
     }
@@ -37,7 +39,6 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // All or nothing: written into a hidden folder beside --out, renamed into place at the end.
     let mut out = Transaction::new();
     out.folder(&args.out, folder::RECORD)?;
-    interrupt::catch();
     // A 4096² sensor takes seconds: past the first parts the estimate is said.
     let progress = progress::calibration("calibrate", scene.sensor.resolution, true);
     let (cal, map) = match Calibration::of_scene_watched(&scene, args.time, &progress) {

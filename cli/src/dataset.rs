@@ -83,8 +83,15 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<ExitCode> {
+    // A run that resumes keeps its finished frames, which its stop says: it waits out a frame.
+    // Signals are caught from here: a large mesh takes seconds to load.
+    match args.resume {
+        true => specchio::process::interrupt::catch(),
+        false => specchio::process::interrupt::catch_in_long_frames(),
+    }
     // 1. Every input checked before the output folder exists.
-    let mut plan = Plan::checking(&args.scene, poses(args)?, &mut checking_progress())?;
+    let checked = Plan::checking(&args.scene, poses(args)?, &mut checking_progress());
+    let mut plan = crate::render_input::unless_stopped(checked, "while loading the scene")?;
     plan.panoramas = args.panorama_frame;
     plan.geometry = args.geometry_frame;
     let resolution = plan.scene.sensor.resolution;
@@ -97,11 +104,6 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     plan.frames_apply()?;
     let n = plan.poses.len();
     let mut folder = Folder::stage(&args.out, n, plan.frame_files())?;
-    // A run that resumes keeps its finished frames, which its stop says: it waits out a frame.
-    match args.resume {
-        true => specchio::process::interrupt::catch(),
-        false => specchio::process::interrupt::catch_in_long_frames(),
-    }
 
     // 2. The GPU and a renderer whose mirror follows the trajectory.
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;

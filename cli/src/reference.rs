@@ -36,7 +36,9 @@ pub struct Args {
 
 pub fn run(args: &Args) -> Result<ExitCode> {
     // --time and --spp were range-checked by clap (`specchio::process::args`).
-    let scene = specchio::scene::load(&args.scene)?;
+    interrupt::catch();
+    let loaded = specchio::scene::load(&args.scene);
+    let scene = crate::render_input::unless_stopped(loaded, "while loading the scene")?;
     let instants = match args.sensor_outputs {
         true => specchio::sensor::imaging::exposure_renders(&scene),
         false => 0,
@@ -49,7 +51,6 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     // All or nothing: written into a hidden folder beside --out, renamed into place at the end.
     let mut out = Transaction::new();
     out.folder(&args.out, "reference.json")?;
-    interrupt::catch();
     let signalled = || interrupt::check("").is_err();
     let traced = traced::trace(
         (&scene, args.time, args.spp),

@@ -127,14 +127,16 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<ExitCode> {
     // 1. Everything that can be wrong with the input is found before the output folder exists
     //    (the numbers' ranges by clap, `specchio::process::args`).
-    let scene = load_scene(args)?;
+    // Signals are caught from here: a scene with a mesh of millions of triangles takes
+    // seconds to load, and a Ctrl-C then stops it with a word, not without one.
+    specchio::process::interrupt::catch_in_long_frames();
+    let scene = crate::render_input::unless_stopped(load_scene(args), "while loading the scene")?;
     let start_s = (args.time).unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / args.fps());
     frame_times_are_in_range(args, start_s)?;
     // Everything is written into a hidden folder beside --out, renamed into place at the end
     // (dropped, it is removed): a failure anywhere below leaves nothing behind.
     let mut out = Transaction::new();
     out.folder(&args.out, "render.json")?;
-    specchio::process::interrupt::catch_in_long_frames();
 
     // 2. The GPU, with the features of the methods that will run.
     let instance = Instance::create(&InstanceDesc::from_env(args.validate))?;

@@ -160,6 +160,16 @@ fn footprint_applies(args: &Args, scene: &Scene, lookup: Lookup) -> Result<()> {
     Ok(())
 }
 
+/// `result`, unless a signal came while it was made: then the stop, said as `at` (work a
+/// signal cut short reports the signal, not the error it stopped with).
+pub(crate) fn unless_stopped<T, E>(result: Result<T, E>, at: &str) -> Result<T>
+where
+    E: Into<anyhow::Error>,
+{
+    specchio::process::interrupt::check(at)?;
+    result.map_err(Into::into)
+}
+
 /// The scene with the command line's search settings, checked against what the command was
 /// asked to write and against the memory it would take.
 pub(crate) fn load_scene(args: &Args) -> Result<Scene> {

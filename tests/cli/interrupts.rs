@@ -52,3 +52,69 @@ fn a_signal_during_a_gpu_frame_ends_the_run_within_a_moment() {
     assert!(!out.exists() && common::staging_folders(&out).is_empty());
     std::fs::remove_dir_all(&*dir).unwrap();
 }
+
+/// A render stopped while its scene loads (a mesh of 2 million triangles, seconds of parsing)
+/// says so and ends at once, with exit 1 and nothing written. It used to end without a word
+/// (the signals were caught only once the scene had loaded) or to wait out the load.
+#[test]
+fn a_signal_while_a_large_mesh_loads_stops_with_a_message() {
+    use std::io::Write as _;
+    let dir = temp_dir("load-stop");
+    std::fs::create_dir_all(&dir).unwrap();
+    // A flat grid of 1000 x 1000 quads: 1,002,001 vertices, 2,000,000 triangles, ~80 MB.
+    let mesh = dir.join("sheet.obj");
+    let mut w = std::io::BufWriter::new(std::fs::File::create(&mesh).unwrap());
+    let n = 1000u32;
+    for j in 0..=n {
+        for i in 0..=n {
+            writeln!(w, "v {:.6} {:.6} 0", f64::from(i) / 1e3, f64::from(j) / 1e3).unwrap();
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i + 1;
+            let (b, c, d) = (a + 1, a + n + 2, a + n + 1);
+            writeln!(w, "f {a} {b} {c}\nf {a} {c} {d}").unwrap();
+        }
+    }
+    w.into_inner().unwrap().sync_all().unwrap();
+    let size = std::fs::metadata(&mesh).unwrap().len();
+    let room = std::fs::read_to_string(root().join("scenes/test/six-colour-room.toml")).unwrap();
+    let scene = dir.join("room.toml");
+    let object = "\n[[objects]]\nname = \"sheet\"\nshape = \"mesh\"\nfile = \"sheet.obj\"\n\
+                  position = [3, -0.5, -0.5]\nmaterial = \"red\"\n";
+    std::fs::write(&scene, room + object).unwrap();
+    let out = dir.join("out");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Once the process has read the mesh's bytes it is parsing them.
+    let io = format!("/proc/{}/io", child.id());
+    let read_the_mesh = || {
+        let text = std::fs::read_to_string(&io).unwrap_or_default();
+        let rchar = (text.lines())
+            .find_map(|l| l.strip_prefix("rchar: "))
+            .and_then(|n| n.trim().parse::<u64>().ok());
+        rchar.is_some_and(|r| r >= size)
+    };
+    let signalled = std::time::Instant::now();
+    let result = common::signal_when(child, libc::SIGINT, "the mesh read", read_the_mesh);
+    let took = signalled.elapsed();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("interrupted while loading the scene: nothing was written"),
+        "{stderr}"
+    );
+    assert!(took.as_secs() < 30, "took {took:?}");
+    assert!(!out.exists() && common::staging_folders(&out).is_empty());
+    std::fs::remove_dir_all(&*dir).unwrap();
+}

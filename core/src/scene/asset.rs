@@ -28,6 +28,11 @@ pub enum AssetError {
     /// The mesh as a whole breaks a rule (no triangles, too many, non-finite data).
     #[error("{0}")]
     Mesh(String),
+
+    /// The process was asked to stop while the asset was read (`output::stop_asked`: a
+    /// signal, which the command then reports itself).
+    #[error("interrupted while reading it")]
+    Stopped,
 }
 
 impl AssetError {

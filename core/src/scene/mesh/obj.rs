@@ -41,6 +41,10 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Part, AssetError> {
     // A byte-order mark is not part of the first statement (some editors write one).
     let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
     for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        // A mesh of millions of lines takes seconds: a signal stops it between two.
+        if i % (1 << 16) == 0 && crate::output::stop_asked() {
+            return Err(AssetError::Stopped);
+        }
         let line = i + 1;
         let at = |message: String| AssetError::Obj { line, message };
         let text = std::str::from_utf8(raw).map_err(|_| {
