@@ -82,7 +82,7 @@ impl MirrorLookup for Bvh {
         &[Rung {
             label: "bvh",
             lookup: Lookup::Bvh,
-            order: 7,
+            order: 8,
             configure: as_is,
             footprint: false,
         }]

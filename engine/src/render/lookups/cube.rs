@@ -46,7 +46,7 @@ pub static BOX: CubeLookup = CubeLookup {
         Rung {
             label: "box-footprint",
             lookup: Lookup::Box,
-            order: 1,
+            order: 2,
             configure: as_is,
             footprint: true,
         },

@@ -72,7 +72,7 @@ impl MirrorLookup for DistanceExact {
         &[Rung {
             label: "distance-exact",
             lookup: Lookup::DistanceExact,
-            order: 5,
+            order: 6,
             configure: |s| s.mirror.distance_steps = 16,
             footprint: false,
         }]

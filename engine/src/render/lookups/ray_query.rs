@@ -60,7 +60,7 @@ impl MirrorLookup for RayQuery {
         &[Rung {
             label: "ray-query",
             lookup: Lookup::RayQuery,
-            order: 6,
+            order: 7,
             configure: as_is,
             footprint: false,
         }]
