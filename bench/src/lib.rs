@@ -80,10 +80,10 @@ pub fn run(args: &Args) -> Result<ExitCode> {
     //    report over the scene or the baseline fails at once; then the baseline and the
     //    scenes are read, and the reports checked again against every file they brought
     //    (meshes, textures). They appear together at the end or not at all.
-    // Signals are caught from here: a scene with a large mesh takes seconds to read.
+    // Signals are caught from here, before any scene is read (a large mesh takes seconds).
     specchio::process::interrupt::catch_in_long_frames();
     let settled = settle(args);
-    specchio::process::interrupt::check("while reading the scenes")?;
+    specchio::process::interrupt::check("while checking the options")?;
     let settled = settled?;
     let mut out = Transaction::new();
     for input in settled.scenes.iter().chain(&settled.args.baseline) {
