@@ -98,11 +98,12 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         .as_deref()
         .map(crate::gate::read_baseline)
         .transpose()?;
-    let scenes = settled
-        .scenes
-        .iter()
+    let scenes = (settled.scenes.iter())
         .map(|p| specchio::scene::load(p).map_err(anyhow::Error::from))
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>>>();
+    // A signal while a scene loaded (a large mesh's parse stops at it) is said as one.
+    specchio::process::interrupt::check("while loading the scenes")?;
+    let scenes = scenes?;
     out.check_inputs()?;
     dynamic_applies(&settled, &scenes)?;
     let rungs = if settled.args.no_tradeoff {

@@ -167,8 +167,11 @@ pub fn parse(argv: &[String]) -> std::result::Result<Args, clap::Error> {
 /// The experiment of `args`, written into `args.out` all at once or not at all (`stop` asked
 /// as it goes): its report (`localise.json`) and the validation layer's messages.
 pub fn localise(args: &Args, stop: Stop) -> Result<(Report, Vec<String>)> {
-    // 1. Input, poses, saved landmarks and the output folder, before any GPU work.
-    let plan = plan(args)?;
+    // 1. Input, poses, saved landmarks and the output folder, before any GPU work. A signal
+    // while the scene loaded (a large mesh's parse stops at it) is said as one.
+    let plan = plan(args);
+    stop("while loading the scene")?;
+    let plan = plan?;
     let mut out = Transaction::new();
     out.folder(&args.out, "localise.json")?;
 
