@@ -46,7 +46,9 @@ fn updates_on_change_write_the_full_updates_bytes() {
 }
 
 /// `--footprint` fills only the tiles the views read and writes every frame's views as a
-/// whole cube's, byte for byte, records what it filled, and writes no cube.
+/// whole cube's, byte for byte, records what it filled, and writes no cube. On the default
+/// device: lavapipe here and in CI, or a GPU; never SwiftShader, which refuses the footprint
+/// (the test below holds that refusal).
 #[test]
 fn the_footprint_writes_the_whole_cubes_views() {
     let scene = "scenes/test/orbit-near-seams.toml";

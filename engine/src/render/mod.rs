@@ -327,13 +327,7 @@ impl Renderer {
         let graph = self.record_frame((cmd, graph), &plan, &views, &ask, &copies, &mut report);
         // A floor's statistics are its one query's, whatever the method.
         let per_face = floor.is_none() && self.cube_fill.per_face_marks();
-        // Observer, sensor and pair, or the sensor alone (a window's frame: none).
-        let views_read = match (ask.readback.views, ask.readback.sensor) {
-            _ if ask.display.is_some() => 0,
-            (true, _) => 0b111,
-            (false, true) => 0b010,
-            (false, false) => 0,
-        };
+        let views_read = StatsRead::views_drawn(ask.readback, ask.display.is_some());
         let stats = StatsRead::of(
             dirty != 0,
             per_face,

@@ -36,6 +36,17 @@ pub(super) struct StatsRead {
 }
 
 impl StatsRead {
+    /// The views' queries a frame begins: observer, sensor and pair, or the sensor alone; none
+    /// in a window's frame (`shown`), whose one view keeps no statistics.
+    pub fn views_drawn(readback: super::Readback, shown: bool) -> u32 {
+        match (readback.views, readback.sensor) {
+            _ if shown => 0,
+            (true, _) => 0b111,
+            (false, true) => 0b010,
+            (false, false) => 0,
+        }
+    }
+
     /// The statistics queries a frame reads: after a cube update, the faces a per-face
     /// method (`per_face`) rendered (a query each) or the one-pass fill's query 0; the views'
     /// when asked.
