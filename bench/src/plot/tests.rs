@@ -3,9 +3,10 @@
 use super::*;
 use serde_json::{json, Value};
 
-const RUNGS: [&str; 9] = [
+const RUNGS: [&str; 10] = [
     "plain",
     "box",
+    "box-footprint",
     "distance-8",
     "distance-16",
     "distance-32",
@@ -17,7 +18,7 @@ const RUNGS: [&str; 9] = [
 
 /// The committed quick baseline (two scenes, 64² faces) with its trade-off rows given these
 /// costs and errors, in the ladder's order, per scene, and their Pareto flags.
-fn record(points: [[(f64, f64); 9]; 2]) -> Record {
+fn record(points: [[(f64, f64); 10]; 2]) -> Record {
     let mut raw: Value = serde_json::from_str(include_str!("../../baselines/quick.json"))
         .expect("bench/baselines/quick.json is JSON");
     let scenes: Vec<Value> = raw["settings"]["scenes"].as_array().unwrap().clone();
@@ -40,11 +41,13 @@ fn record(points: [[(f64, f64); 9]; 2]) -> Record {
     serde_json::from_value(raw).expect("the edited baseline is a record")
 }
 
-/// A crowded scene: the cube rungs near 10 and 30 ms, the distance rungs nearly on one spot,
+/// A crowded scene: the cube rungs near 10 and 30 ms (box-footprint at box's error, a little
+/// cheaper, as the footprint measures), the distance rungs nearly on one spot,
 /// tracing at 300, 1500 and 150 ms, the host's tracer at 800 ms.
-const CROWDED: [(f64, f64); 9] = [
+const CROWDED: [(f64, f64); 10] = [
     (10.0, 0.3),
     (11.0, 0.2),
+    (10.6, 0.2),
     (30.0, 0.150),
     (30.5, 0.149),
     (31.0, 0.148),
@@ -54,9 +57,10 @@ const CROWDED: [(f64, f64); 9] = [
     (800.0, 0.0001),
 ];
 /// A quick scene whose ray-query is exact (FLIP 0, drawn at the floor).
-const QUICK: [(f64, f64); 9] = [
+const QUICK: [(f64, f64); 10] = [
     (6.6, 0.25),
     (7.0, 0.05),
+    (7.3, 0.05),
     (17.7, 0.046),
     (22.6, 0.045),
     (31.4, 0.045),
@@ -131,7 +135,7 @@ fn labels_overlap_no_label_and_no_marker() {
             Rect(left, top, left + w, top + h)
         })
         .collect();
-    assert_eq!(boxes.len(), 18);
+    assert_eq!(boxes.len(), 20);
     for (i, a) in boxes.iter().enumerate() {
         for b in &boxes[i + 1..] {
             assert!(!a.overlaps(b), "{a:?} on {b:?}");
