@@ -139,9 +139,10 @@ fn ladder_line(record: &Record, scene: &str, size: u32) -> Option<String> {
     };
     // The most accurate rung is the front's last (dearest) point.
     let &&(best, best_ms, best_flip) = front.last()?;
+    let tie = tied_clause(&rungs, best, best_flip);
     if front.len() == 1 {
         let line = format!(
-            "{} is both the cheapest and the most accurate rung: {best_ms:.1} ms, FLIP {}{}",
+            "{} is both the cheapest and the most accurate rung{tie}: {best_ms:.1} ms, FLIP {}{}",
             best.rung,
             flip_text(best_flip),
             vs_box(best, best_ms)
@@ -161,12 +162,28 @@ fn ladder_line(record: &Record, scene: &str, size: u32) -> Option<String> {
         })
         .collect();
     let line = format!(
-        "front {}; most accurate: {}{}",
+        "front {}; most accurate: {}{tie}{}",
         steps.join(" → "),
         best.rung,
         vs_box(best, best_ms)
     );
     Some(line + &host_clause(&rungs))
+}
+
+/// ` (tied in error with box)`: the other device rungs whose sensor error is `best`'s to the
+/// last bit, or nothing. A rung dearer at the same error is off the front, and the front's
+/// rung would otherwise be called the most accurate alone where it only ties (box-footprint's
+/// images are box's, bit for bit, and which of the two costs less is often the machine's
+/// noise).
+fn tied_clause(rungs: &[(&RungRow, f64, f64)], best: &RungRow, best_flip: f64) -> String {
+    let tied: Vec<&str> = (rungs.iter())
+        .filter(|p| p.0.lookup.is_some() && p.0.rung != best.rung && p.2 == best_flip)
+        .map(|p| p.0.rung.as_str())
+        .collect();
+    if tied.is_empty() {
+        return String::new();
+    }
+    format!(" (tied in error with {})", tied.join(", "))
 }
 
 /// Whether `row` is a device rung that traces every mirror ray (exact as the host's tracer

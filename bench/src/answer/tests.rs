@@ -178,6 +178,51 @@ fn a_front_of_one_rung_is_said_to_be_cheapest_and_most_accurate() {
     );
 }
 
+/// A rung whose error another rung equals exactly (box-footprint's images are box's) is not
+/// called the most accurate alone, on a front of one rung or of several.
+#[test]
+fn a_rung_that_ties_in_error_is_named_beside_the_most_accurate() {
+    let mut r = known();
+    for rung in r.tradeoff.iter_mut().filter(|row| row.scene == SCENE) {
+        match rung.rung.as_str() {
+            "box-footprint" => {
+                rung.frame_cost_ms = stats(6.5);
+                rung.sensor = error(0.2);
+            }
+            "ray-query" | "plain" => {
+                rung.frame_cost_ms = stats(8.0);
+                rung.sensor = error(0.5);
+            }
+            _ => {}
+        }
+    }
+    let text = lines(&r);
+    assert!(
+        text.contains(
+            &"    ladder:  box-footprint is both the cheapest and the most accurate rung \
+              (tied in error with box): 6.5 ms, FLIP 0.200, 0.93x box's frame cost; cpu 30.0 \
+              ms, 3.75x ray-query, the cheapest exact rung on the device"
+                .to_owned()
+        ),
+        "{text:?}"
+    );
+    for rung in r.tradeoff.iter_mut().filter(|row| row.scene == SCENE) {
+        if rung.rung == "plain" {
+            rung.frame_cost_ms = stats(6.0);
+            rung.sensor = error(0.3);
+        }
+    }
+    let text = lines(&r);
+    let ladder = text.iter().find(|l| l.contains("ladder:")).unwrap();
+    assert!(
+        ladder.contains(
+            "→ box-footprint 6.5 ms 0.200; most accurate: box-footprint (tied in \
+             error with box), 0.93x box's frame cost"
+        ),
+        "{ladder}"
+    );
+}
+
 /// An animated scene's updates: the dirty rectangles' time and share of the texels against
 /// a full update's, and the whole faces' ratio, under the scene's heading.
 #[test]
