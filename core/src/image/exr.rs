@@ -101,7 +101,7 @@ pub fn encode_channels(
 /// The size of every layer the header declares, from the header alone (before any pixel
 /// memory is allocated: a reader checks them against its limits first).
 pub fn layer_sizes(bytes: &[u8]) -> Result<Vec<(usize, usize)>, Error> {
-    let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)?;
+    let meta = read_meta(bytes)?;
     Ok(meta
         .headers
         .iter()
@@ -112,13 +112,23 @@ pub fn layer_sizes(bytes: &[u8]) -> Result<Vec<(usize, usize)>, Error> {
 /// The size of the layer [`decode_rgba`] decodes, from the header alone: the first whose
 /// channels include R, G and B (a file's layers may differ in size).
 pub fn rgba_layer_size(bytes: &[u8]) -> Option<(usize, usize)> {
-    let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false).ok()?;
+    let meta = read_meta(bytes).ok()?;
     let has = |h: &::exr::meta::header::Header, name: &str| {
         (h.channels.list.iter()).any(|c| c.name.to_string() == name)
     };
     (meta.headers.iter())
         .find(|h| ["R", "G", "B"].iter().all(|c| has(h, c)))
         .map(|h| (h.layer_size.0, h.layer_size.1))
+}
+
+/// The header, refused where the crate would accept what the format does not: a data or
+/// display window whose corners are inverted (`exr_header.rs`).
+fn read_meta(bytes: &[u8]) -> Result<::exr::meta::MetaData, Error> {
+    if let Some(why) = super::exr_header::inverted_window(bytes) {
+        let why = format!("an inverted window, which OpenEXR does not allow ({why})");
+        return Err(Error::Invalid(why.into()));
+    }
+    ::exr::meta::MetaData::read_from_buffered(bytes, false)
 }
 
 /// The most channels a layer may have for [`decode_channels`] (the sensor's ray map has 7).
@@ -138,7 +148,7 @@ pub struct Layer {
 /// ([`layer_sizes`]); a layer of more than [`MAX_CHANNELS`] channels is refused from the
 /// header, before any pixel memory is allocated.
 pub fn decode_channels(bytes: &[u8]) -> Result<Layer, Error> {
-    let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)?;
+    let meta = read_meta(bytes)?;
     for h in &meta.headers {
         let channels = h.channels.list.len();
         let samples = (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64);
@@ -173,7 +183,7 @@ pub fn decode_channels(bytes: &[u8]) -> Result<Layer, Error> {
 /// The channel names of each layer, from the header alone (for a message about a file that
 /// holds no colour layer).
 pub fn channel_names(bytes: &[u8]) -> Result<Vec<String>, Error> {
-    let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)?;
+    let meta = read_meta(bytes)?;
     Ok((meta.headers.iter())
         .flat_map(|h| h.channels.list.iter().map(|c| c.name.to_string()))
         .collect())
@@ -198,6 +208,7 @@ pub fn decode_rgba_watched(
     stop: &dyn Fn() -> bool,
 ) -> Result<RgbaImage, Error> {
     use ::exr::prelude::{ReadChannels as _, ReadLayers as _};
+    read_meta(bytes)?;
     let reader = Stoppable {
         inner: std::io::Cursor::new(bytes),
         stop,
@@ -265,6 +276,7 @@ pub fn is_stopped(e: &Error) -> bool {
 /// Every channel of the first layer of the file at `path`, by name (for tests and tools that
 /// check the files): floats as f32, ids as u32 (see [`u32_channel`]).
 pub fn read_channels(path: &Path) -> Result<Vec<(String, Channel)>, Error> {
+    read_meta(&std::fs::read(path)?)?;
     let image = ::exr::prelude::read_all_flat_layers_from_file(path)?;
     let layer =
         (image.layer_data.into_iter().next()).ok_or_else(|| Error::Invalid("no layer".into()))?;

@@ -412,6 +412,19 @@ fn bad_exr_inputs_say_what_is_wrong() {
         ),
         // Shorter than the magic number: not an EXR at all, not a truncated one.
         ("hi.exr", b"hi\n".to_vec(), "not an OpenEXR image"),
+        // The crate read this as the 4 x 3 image it was (a window's size taken as the
+        // distance between its corners); one inverted on x by 1 it called damaged data.
+        (
+            "inverted.exr",
+            data_window(&bytes, [3, 0, 0, 2]),
+            "inverted window, which OpenEXR does not allow (dataWindow: xMax 0 is less than \
+             xMin 3)",
+        ),
+        (
+            "inverted-by-one.exr",
+            data_window(&bytes, [0, 0, -1, 2]),
+            "dataWindow: xMax -1 is less than xMin 0",
+        ),
     ];
     for (name, data, must_say) in cases {
         let path = dir.join(name);
@@ -436,6 +449,11 @@ fn bad_exr_inputs_say_what_is_wrong() {
 
 /// `bytes` (a small EXR) with its data window's corner moved to (99999, 99999).
 fn huge_data_window(bytes: &[u8]) -> Vec<u8> {
+    data_window(bytes, [0, 0, 99_999, 99_999])
+}
+
+/// `bytes` (a small EXR) with its data window (xMin, yMin, xMax, yMax) replaced.
+fn data_window(bytes: &[u8], corners: [i32; 4]) -> Vec<u8> {
     let key = b"dataWindow\0box2i\0";
     let at = bytes
         .windows(key.len())
@@ -445,8 +463,9 @@ fn huge_data_window(bytes: &[u8]) -> Vec<u8> {
         + 4; // the attribute's size field
     let mut out = bytes.to_vec();
     // box2i: xMin, yMin, xMax, yMax as little-endian i32.
-    out[at + 8..at + 12].copy_from_slice(&99_999i32.to_le_bytes());
-    out[at + 12..at + 16].copy_from_slice(&99_999i32.to_le_bytes());
+    for (k, c) in corners.iter().enumerate() {
+        out[at + 4 * k..at + 4 * k + 4].copy_from_slice(&c.to_le_bytes());
+    }
     out
 }
 

@@ -1,0 +1,134 @@
+//! What the `exr` crate does not check in an OpenEXR header: that each part's data and
+//! display windows are not inverted. The crate takes a window's size as the distance between
+//! its corners, so a window whose maximum lies below its minimum read as a valid image of
+//! the mirrored size (or failed later, as damaged pixel data); the OpenEXR format requires
+//! max ≥ min on both axes, and its own library refuses such a header.
+//!
+//! The header is a list of attributes, each a name and a type name (both null-terminated),
+//! a little-endian i32 size and that many bytes of value, ended by an empty name; a
+//! multi-part file has one such list per part and an empty list after the last.
+
+/// The version field's multi-part flag.
+const MULTI_PART: u32 = 0x1000;
+
+/// A window attribute whose corners are inverted: `"dataWindow: xMax 0 is less than xMin
+/// 3"`; None when every part's windows are well-formed or the header cannot be walked (the
+/// crate's own reading then says what is wrong: cut short, not an EXR).
+pub fn inverted_window(bytes: &[u8]) -> Option<String> {
+    let version = u32::from_le_bytes(bytes.get(4..8)?.try_into().ok()?);
+    let mut at = 8;
+    loop {
+        let mut attributes = 0;
+        loop {
+            let name = c_string(bytes, &mut at)?;
+            if name.is_empty() {
+                break;
+            }
+            attributes += 1;
+            let kind = c_string(bytes, &mut at)?;
+            let size = i32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?);
+            at += 4;
+            let value = bytes.get(at..at.checked_add(usize::try_from(size).ok()?)?)?;
+            at += value.len();
+            let window = matches!(name, b"dataWindow" | b"displayWindow");
+            if window && kind == b"box2i" && value.len() == 16 {
+                if let Some(why) = inverted(value) {
+                    return Some(format!("{}: {why}", String::from_utf8_lossy(name)));
+                }
+            }
+        }
+        // A single-part header ends at its first empty name; a multi-part file's list of
+        // headers ends with an empty one.
+        if version & MULTI_PART == 0 || attributes == 0 {
+            return None;
+        }
+    }
+}
+
+/// `"xMax 0 is less than xMin 3"` for a box2i (xMin, yMin, xMax, yMax) inverted on an axis.
+fn inverted(value: &[u8]) -> Option<String> {
+    let corner = |i: usize| i32::from_le_bytes(value[4 * i..4 * i + 4].try_into().unwrap());
+    let (x_min, y_min, x_max, y_max) = (corner(0), corner(1), corner(2), corner(3));
+    if x_max < x_min {
+        return Some(format!("xMax {x_max} is less than xMin {x_min}"));
+    }
+    (y_max < y_min).then(|| format!("yMax {y_max} is less than yMin {y_min}"))
+}
+
+/// The null-terminated bytes at `at` (without the null), `at` moved past the null.
+fn c_string<'a>(bytes: &'a [u8], at: &mut usize) -> Option<&'a [u8]> {
+    let rest = bytes.get(*at..)?;
+    let len = rest.iter().position(|&b| b == 0)?;
+    *at += len + 1;
+    Some(&rest[..len])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A header of the attributes given (name, type, value), then a null; multi-part when
+    /// `parts` > 1 (each part the same attributes, then the list's closing null).
+    fn header(attributes: &[(&str, &str, Vec<u8>)], parts: usize) -> Vec<u8> {
+        let mut out = vec![0x76, 0x2f, 0x31, 0x01];
+        let flags = if parts > 1 { MULTI_PART } else { 0 };
+        out.extend((2 | flags).to_le_bytes());
+        for _ in 0..parts {
+            for (name, kind, value) in attributes {
+                out.extend(name.as_bytes());
+                out.push(0);
+                out.extend(kind.as_bytes());
+                out.push(0);
+                out.extend((value.len() as i32).to_le_bytes());
+                out.extend(value);
+            }
+            out.push(0);
+        }
+        if parts > 1 {
+            out.push(0);
+        }
+        out
+    }
+
+    fn window(c: [i32; 4]) -> Vec<u8> {
+        c.iter().flat_map(|v| v.to_le_bytes()).collect()
+    }
+
+    #[test]
+    fn inverted_windows_are_named_and_good_ones_pass() {
+        let good = window([0, 0, 3, 2]);
+        let one_pixel = window([5, 5, 5, 5]);
+        let x = window([3, 0, 0, 2]);
+        let y = window([0, 2, 3, 0]);
+        let other = ("compression", "compression", vec![3u8]);
+        let case = |data: &Vec<u8>, display: &Vec<u8>, parts| {
+            let attributes = [
+                other.clone(),
+                ("dataWindow", "box2i", data.clone()),
+                ("displayWindow", "box2i", display.clone()),
+            ];
+            inverted_window(&header(&attributes, parts))
+        };
+        assert_eq!(case(&good, &good, 1), None);
+        assert_eq!(case(&one_pixel, &good, 1), None);
+        assert_eq!(
+            case(&x, &good, 1).as_deref(),
+            Some("dataWindow: xMax 0 is less than xMin 3")
+        );
+        assert_eq!(
+            case(&good, &y, 1).as_deref(),
+            Some("displayWindow: yMax 0 is less than yMin 2")
+        );
+        // Every part of a multi-part file is walked.
+        assert_eq!(case(&good, &good, 3), None);
+        assert!(case(&x, &good, 2).is_some());
+        // A header cut short, or with a size past the end, is left to the crate.
+        let cut = header(&[("dataWindow", "box2i", x.clone())], 1);
+        assert_eq!(inverted_window(&cut[..cut.len() - 6]), None);
+        let mut lying = header(&[("dataWindow", "box2i", x)], 1);
+        let size_at = 8 + "dataWindow\0box2i\0".len();
+        lying[size_at..size_at + 4].copy_from_slice(&i32::MAX.to_le_bytes());
+        assert_eq!(inverted_window(&lying), None);
+        assert_eq!(inverted_window(b"v/1"), None);
+    }
+}
