@@ -160,6 +160,15 @@ pub(crate) fn object_boxes(
     Ok((boxes, placed, mesh_stack))
 }
 
+/// "building the cwbvh trees of 5120000 triangles": a build said while it runs.
+pub fn trees_text(kind: &str, meshes: &[Mesh]) -> String {
+    let triangles: usize = meshes.iter().map(|m| m.indices.len() / 3).sum();
+    format!(
+        "building the {kind} trees of {} triangles",
+        crate::text::count_text(triangles as u64)
+    )
+}
+
 /// Every mesh's tree, in one layout.
 #[derive(Debug, Clone)]
 pub enum MeshBvhs {
@@ -176,9 +185,12 @@ impl MeshBvhs {
     /// The trees of `meshes`, their nodes numbered from `start` (where they will be in the
     /// shader's node array, after the top level's room).
     pub fn build_at(layout: BvhLayout, meshes: &[Mesh], start: u32) -> Result<Self, BvhError> {
-        Ok(match layout {
-            BvhLayout::Cwbvh => Self::Cwbvh(cwbvh::MeshTrees::build(meshes, start)?),
-            BvhLayout::Bvh4 => Self::Bvh4(bvh4::MeshTrees::build(meshes, start)?),
+        let what = || trees_text(layout.name(), meshes);
+        crate::watch::said_while(what, || {
+            Ok(match layout {
+                BvhLayout::Cwbvh => Self::Cwbvh(cwbvh::MeshTrees::build(meshes, start)?),
+                BvhLayout::Bvh4 => Self::Bvh4(bvh4::MeshTrees::build(meshes, start)?),
+            })
         })
     }
 

@@ -171,6 +171,11 @@ pub struct MeshTrees {
 impl MeshTrees {
     /// The trees of `meshes`, each in its model space.
     pub fn build(meshes: &[Mesh]) -> Self {
+        let what = || crate::bvh::trees_text("reference's", meshes);
+        crate::watch::said_while(what, || Self::build_unsaid(meshes))
+    }
+
+    fn build_unsaid(meshes: &[Mesh]) -> Self {
         let start = Instant::now();
         let trees = meshes
             .iter()

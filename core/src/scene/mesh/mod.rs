@@ -158,14 +158,17 @@ impl Mesh {
     /// [`Mesh::from_obj`] with a typed error.
     pub fn load_obj(path: &Path) -> Result<Mesh, AssetError> {
         let bytes = read_regular_file(path, MAX_MESH_FILE_BYTES)?;
-        Self::from_obj_bytes(&bytes)
+        let size = crate::memory::Bytes(bytes.len() as u64);
+        let what = format!("loading {} ({size})", path.display());
+        let watch = crate::watch::long_work(what, bytes.len() as u64);
+        assemble(vec![obj::parse(&bytes, watch.as_ref())?])
     }
 
     /// Parses OBJ text: faces triangulated as fans, missing normals replaced by flat face
     /// normals, missing uvs by (0, 0), OBJ's bottom-up v flipped to top-down. Materials (.mtl)
     /// are ignored: the scene file assigns the material.
     pub fn from_obj_bytes(bytes: &[u8]) -> Result<Mesh, AssetError> {
-        assemble(vec![obj::parse(bytes)?])
+        assemble(vec![obj::parse(bytes, &crate::watch::Unwatched)?])
     }
 
     /// Loads a glTF 2.0 file, `.gltf` or `.glb` (see [`Mesh::from_gltf_bytes`]); external

@@ -10,6 +10,7 @@ use glam::{Vec2, Vec3};
 use super::{check_budget, Part};
 use crate::scene::asset::AssetError;
 use crate::text::quoted_text;
+use crate::watch::Watch;
 
 /// Statements that carry nothing a mesh of ours needs: object and group names, smoothing
 /// groups, materials (the scene assigns the material), lines, points, parameter-space vertices.
@@ -31,8 +32,8 @@ struct Reader {
     all_normals: bool,
 }
 
-/// Parses OBJ text into one part.
-pub(super) fn parse(bytes: &[u8]) -> Result<Part, AssetError> {
+/// Parses OBJ text into one part, its bytes reported to `watch` as they are read.
+pub(super) fn parse(bytes: &[u8], watch: &dyn Watch) -> Result<Part, AssetError> {
     let mut r = Reader {
         all_uvs: true,
         all_normals: true,
@@ -40,10 +41,17 @@ pub(super) fn parse(bytes: &[u8]) -> Result<Part, AssetError> {
     };
     // A byte-order mark is not part of the first statement (some editors write one).
     let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
+    let mut read = 0;
     for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
-        // A mesh of millions of lines takes seconds: a signal stops it between two.
-        if i % (1 << 16) == 0 && crate::output::stop_asked() {
-            return Err(AssetError::Stopped);
+        // A mesh of millions of lines takes seconds: said as it goes, and a signal stops it
+        // between two blocks of lines.
+        if i % (1 << 16) == 0 {
+            let at = raw.as_ptr() as usize - bytes.as_ptr() as usize;
+            watch.rows_done(u32::try_from(at - read).unwrap_or(u32::MAX));
+            read = at;
+            if crate::output::stop_asked() || watch.stop() {
+                return Err(AssetError::Stopped);
+            }
         }
         let line = i + 1;
         let at = |message: String| AssetError::Obj { line, message };
@@ -252,6 +260,11 @@ fn numbers<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Unwatched, as a mesh parsed from bytes is.
+    fn parse(bytes: &[u8]) -> Result<Part, AssetError> {
+        super::parse(bytes, &crate::watch::Unwatched)
+    }
 
     fn err(text: &str) -> String {
         match parse(text.as_bytes()) {

@@ -159,6 +159,13 @@ impl BvhPass {
         let scene = ctx.scene;
         let layout = ctx.bvh_layout;
         let top_room = layout.top_room(scene.objects.len());
+        // Either layout holds every triangle whole in one buffer: a scene past the device's
+        // range is refused before seconds of building trees it could not bind.
+        let triangles: u64 = (scene.meshes.iter())
+            .map(|m| m.indices.len() as u64 / 3)
+            .sum();
+        let least = triangles * std::mem::size_of::<crate::bvh::layout::BvhTriangle>() as u64;
+        check_range(ctx, layout, least, "at least ")?;
         let meshes =
             MeshBvhs::build_at(layout, &scene.meshes, top_room as u32).map_err(unsupported)?;
         let (nodes, fixed) = fixed_buffers(ctx, &meshes, top_room)?;
@@ -250,18 +257,9 @@ fn fixed_buffers(
     // A shader reads one storage buffer up to the device's range (128 MiB at the least the
     // spec allows): the bvh4 layout keeps its triangles in its node array, about 67 bytes a
     // triangle, so a mesh of 2 million triangles may not fit where the range is the least.
-    let range = ctx.device.info.limits.max_storage_buffer_range;
     let sizes = [Some(nodes.len()), meshes.triangle_bytes().map(<[u8]>::len)];
-    if let Some(size) = sizes.into_iter().flatten().find(|&n| n as u64 > range) {
-        // Said with the way out: a user who never chose bvh (the sensor outputs' and
-        // datasets' default on a CPU driver) met only the limit.
-        return Err(GpuError::Unsupported(format!(
-            "lookup bvh: the scene's trees ({} layout) need a storage buffer of {size} bytes; \
-             this device binds at most {range} (maxStorageBufferRange): trace with the \
-             ray-query lookup where the device has ray queries (`--lookup ray-query`; \
-             `lookup=\"ray-query\"` in Python), or give the meshes fewer triangles",
-            meshes.layout().name()
-        )));
+    for size in sizes.into_iter().flatten() {
+        check_range(ctx, meshes.layout(), size as u64, "")?;
     }
     let mut upload = Upload::begin(ctx.device, ctx.submitter)?;
     let usage = storage | vk::BufferUsageFlags::TRANSFER_DST;
@@ -279,6 +277,28 @@ fn fixed_buffers(
     };
     upload.finish()?;
     Ok((node_buffer, fixed))
+}
+
+/// Refuses a storage buffer of `size` bytes (`qualifier`: "at least " where it is a bound)
+/// past the device's range, said with the way out: a user who never chose bvh (the sensor
+/// outputs' and datasets' default on a CPU driver) met only the limit.
+fn check_range(
+    ctx: &LookupContext<'_>,
+    layout: BvhLayout,
+    size: u64,
+    qualifier: &str,
+) -> Result<(), GpuError> {
+    let range = ctx.device.info.limits.max_storage_buffer_range;
+    if size <= range {
+        return Ok(());
+    }
+    Err(GpuError::Unsupported(format!(
+        "lookup bvh: the scene's trees ({} layout) need a storage buffer of {qualifier}{size} \
+         bytes; this device binds at most {range} (maxStorageBufferRange): trace with the \
+         ray-query lookup where the device has ray queries (`--lookup ray-query`; \
+         `lookup=\"ray-query\"` in Python), or give the meshes fewer triangles",
+        layout.name()
+    )))
 }
 
 /// The objects, rewritten with each top level: one per record of the top level's room.
