@@ -98,8 +98,8 @@ fn main() -> ExitCode {
     specchio::output::survive_file_size_limit();
     add_project_drivers();
     allocator::tune();
-    specchio::process::progress::say_long_work();
     let cli = Cli::parse();
+    specchio::process::progress::say_long_work();
     let result = match cli.command {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),

@@ -46,8 +46,8 @@ pub type LongWork = fn(what: String, total: u64) -> Box<dyn Watch>;
 
 static LONG_WORK: std::sync::OnceLock<LongWork> = std::sync::OnceLock::new();
 
-/// Has [`long_work`] make its watchers with `make` (set once a process): a command that says
-/// its progress installs one (`process::interrupt::catch`); a library user sees nothing.
+/// Has [`long_work`] make its watchers with `make` (set once a process): the command-line
+/// binary installs one (`process::progress::say_long_work`); a library user sees nothing.
 pub fn watch_long_work_with(make: LongWork) {
     let _ = LONG_WORK.set(make);
 }
@@ -62,84 +62,117 @@ pub fn long_work(what: String, total: u64) -> Box<dyn Watch> {
 }
 
 /// How long work that cannot count its parts runs before [`said_while`] says it is still going
-/// (unset: nothing is said, as in a library user's process).
-static PATIENCE: std::sync::OnceLock<std::time::Duration> = std::sync::OnceLock::new();
+/// (unset: nothing is said, as in a library user's process). A function, asked at the first
+/// such work: a malformed `SPECCHIO_ESTIMATE_AFTER_S` is then said by the run it concerns.
+static PATIENCE: std::sync::OnceLock<fn() -> std::time::Duration> = std::sync::OnceLock::new();
 
 /// How often [`said_while`] repeats its line after the first.
 pub const STILL_GOING_EVERY: std::time::Duration = std::time::Duration::from_secs(30);
 
-/// Has [`said_while`] say its work once it has run `after` (set once a process, by a command
-/// that says its progress: `process::interrupt::catch`).
-pub fn say_slow_work_after(after: std::time::Duration) {
+/// The least time [`said_while`] waits, whatever the patience: the tests' runs (patience 0)
+/// build trees of milliseconds, which would otherwise be said or not by a race.
+pub const STILL_GOING_AFTER_AT_LEAST: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// Has [`said_while`] say its work once it has run `after()` (set once a process:
+/// `process::progress::say_long_work`, which the binary's `main` calls).
+pub fn say_slow_work_after(after: fn() -> std::time::Duration) {
     let _ = PATIENCE.set(after);
 }
 
-/// `work`'s result; and where it runs past the process's patience ([`say_slow_work_after`]),
-/// a line on stderr saying `what` is still going, then one every [`STILL_GOING_EVERY`]. For
-/// work of one piece that has no parts to count (a tree over millions of triangles): the
-/// user learns what the wait is, not how long it will be.
-pub fn said_while<T>(what: impl Fn() -> String + Sync, work: impl FnOnce() -> T) -> T {
+/// `work`'s result; and where it runs past the process's patience ([`say_slow_work_after`],
+/// at least [`STILL_GOING_AFTER_AT_LEAST`]), a line on stderr saying `what` is still going,
+/// then one every [`STILL_GOING_EVERY`]. For work of one piece that has no parts to count (a
+/// tree over millions of triangles): the user learns what the wait is, not how long it will
+/// be.
+pub fn said_while<T>(what: impl FnOnce() -> String, work: impl FnOnce() -> T) -> T {
     match PATIENCE.get() {
-        Some(&after) => said_while_to(after, &what, &|line| crate::say_err!("{line}"), work),
+        Some(after) => {
+            let after = after().max(STILL_GOING_AFTER_AT_LEAST);
+            said_while_to(after, what(), |line| crate::say_err!("{line}"), work)
+        }
         None => work(),
     }
 }
 
-/// [`said_while`] after `after`, each line given to `say`.
+/// [`said_while`] after `after`, each line given to `say` by a thread of its own, which is
+/// not waited for: a stderr that blocks holds that thread, not the work's caller. No line
+/// comes once the work has ended (the flag is read under the lock the line is said under).
 fn said_while_to<T>(
     after: std::time::Duration,
-    what: &(dyn Fn() -> String + Sync),
-    say: &(dyn Fn(String) + Sync),
+    what: String,
+    say: impl Fn(String) + Send + 'static,
     work: impl FnOnce() -> T,
 ) -> T {
-    let (done, finished) = std::sync::mpsc::channel::<()>();
-    std::thread::scope(|s| {
-        s.spawn(move || {
+    use std::sync::{Arc, Condvar, Mutex};
+    let ended = Arc::new((Mutex::new(false), Condvar::new()));
+    let watching = Arc::clone(&ended);
+    let timer = std::thread::Builder::new()
+        .name("still going".into())
+        .spawn(move || {
+            let (lock, wake) = &*watching;
             let start = std::time::Instant::now();
-            let mut wait = after;
-            let timed_out = std::sync::mpsc::RecvTimeoutError::Timeout;
-            // Woken by the timeout, or by the sender's drop when the work ends.
-            while finished.recv_timeout(wait) == Err(timed_out) {
+            let mut due = start + after;
+            let mut done = lock.lock().unwrap_or_else(|e| e.into_inner());
+            while !*done {
+                let now = std::time::Instant::now();
+                if now < due {
+                    done = (wake.wait_timeout(done, due - now))
+                        .unwrap_or_else(|e| e.into_inner())
+                        .0;
+                    continue;
+                }
                 let secs = start.elapsed().as_secs_f64();
-                say(format!("{}: still going after {secs:.0} s", what()));
-                wait = STILL_GOING_EVERY;
+                say(format!("{what}: still going after {secs:.0} s"));
+                due = now + STILL_GOING_EVERY;
             }
         });
-        let out = work();
-        drop(done);
-        out
-    })
+    // No thread (the system refused one): the work, unsaid.
+    let out = work();
+    if timer.is_ok() {
+        let (lock, wake) = &*ended;
+        *lock.lock().unwrap_or_else(|e| e.into_inner()) = true;
+        wake.notify_all();
+    }
+    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::sync::Mutex;
+    use std::sync::{Arc, Mutex};
     use std::time::Duration;
 
     /// Work past the patience is said while it runs (the work here waits for the line, so the
-    /// test holds on a machine of any speed); work that ends first says nothing; the result
-    /// comes back either way.
+    /// test holds on a machine of any speed), and nothing after it ended; work that ends first
+    /// says nothing; the result comes back either way.
     #[test]
     fn slow_work_is_said_while_it_runs_and_quick_work_is_not() {
-        let lines = Mutex::new(Vec::new());
+        let lines = Arc::new(Mutex::new(Vec::new()));
         let (heard, hear) = std::sync::mpsc::channel();
-        let heard = Mutex::new(heard);
-        let say = |line: String| {
-            lines.lock().unwrap().push(line);
-            let _ = heard.lock().unwrap().send(());
+        let say = {
+            let lines = Arc::clone(&lines);
+            let heard = Mutex::new(heard);
+            move |line: String| {
+                lines.lock().unwrap().push(line);
+                let _ = heard.lock().unwrap().send(());
+            }
         };
-        let what = || "building the trees of 3 triangles".to_owned();
-        let out = said_while_to(Duration::ZERO, &what, &say, || {
+        let what = "building the trees of 3 triangles".to_owned();
+        let out = said_while_to(Duration::ZERO, what.clone(), say, || {
             hear.recv_timeout(Duration::from_secs(60)).is_ok()
         });
         assert!(out, "no line within a minute");
-        assert_eq!(
-            lines.lock().unwrap().as_slice(),
-            ["building the trees of 3 triangles: still going after 0 s"]
+        std::thread::sleep(Duration::from_millis(50));
+        let said = lines.lock().unwrap().clone();
+        assert_eq!(said.len(), 1, "{said:?}");
+        assert!(
+            said[0].starts_with("building the trees of 3 triangles: still going after "),
+            "{said:?}"
         );
         lines.lock().unwrap().clear();
-        let out = said_while_to(Duration::from_secs(600), &what, &say, || 7);
+        let quiet = Arc::clone(&lines);
+        let say = move |line: String| quiet.lock().unwrap().push(line);
+        let out = said_while_to(Duration::from_secs(600), what, say, || 7);
         assert_eq!(out, 7);
         assert!(lines.lock().unwrap().is_empty());
     }

@@ -306,15 +306,34 @@ fn the_footprint_holds_across_read_backs_and_lookups_switched_in_place() {
                 };
                 let (whole, cut) = (stepped(whole, &steps), stepped(cut, &steps));
                 for (i, ((w, w_cube), (c, c_cube))) in whole.iter().zip(&cut).enumerate() {
-                    let views = |v: &Views| [Some(v.sensor.clone()), v.observer.clone()];
-                    for (a, b) in views(w).iter().zip(views(c)) {
-                        let n = a.as_ref().zip(b.as_ref()).map(|(a, b)| differing(a, b));
-                        assert_eq!(n.unwrap_or(0), 0, "{what}, step {i}: pixels differ");
+                    let at = format!("{what}, step {i}");
+                    let views =
+                        |v: &Views| [Some(v.sensor.clone()), v.observer.clone(), v.pair.clone()];
+                    for (name, (a, b)) in ["sensor", "observer", "pair"]
+                        .iter()
+                        .zip(views(w).iter().zip(views(c)))
+                    {
+                        assert_eq!(
+                            a.is_some(),
+                            b.is_some(),
+                            "{at}: the {name} drawn by one alone"
+                        );
+                        assert_eq!(
+                            a.is_some(),
+                            *name == "sensor" || steps[i].all_views,
+                            "{at}: {name}"
+                        );
+                        if let (Some(a), Some(b)) = (a, b) {
+                            let n = differing(a, &b);
+                            assert_eq!(n, 0, "{at}: {n} {name} pixels differ");
+                        }
                     }
                     // A frame that fills no cube (bvh reads none) has no footprint to say.
                     let fills = steps[i].lookup != "bvh" || steps[i].cube;
-                    assert_eq!(c.footprint.is_some(), fills, "{what}, step {i}: the report");
-                    assert_eq!(w_cube.is_some(), steps[i].cube, "{what}, step {i}");
+                    assert_eq!(c.footprint.is_some(), fills, "{at}: the report");
+                    assert!(w.footprint.is_none(), "{at}: the whole cube's report");
+                    assert_eq!(w_cube.is_some(), steps[i].cube, "{at}: the cube read back");
+                    assert_eq!(c_cube.is_some(), steps[i].cube, "{at}: the cube read back");
                     if let (Some(a), Some(b)) = (w_cube, c_cube) {
                         for (f, (a, b)) in a.iter().zip(b).enumerate() {
                             let n = differing(a, b);

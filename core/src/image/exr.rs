@@ -189,10 +189,7 @@ pub fn channel_names(bytes: &[u8]) -> Result<Vec<String>, Error> {
         .collect())
 }
 
-/// Whether `bytes` start as an OpenEXR file does (its four-byte magic number).
-pub fn has_magic(bytes: &[u8]) -> bool {
-    bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01])
-}
+pub use super::exr_header::has_magic;
 
 /// The first RGBA layer as 32-bit float (alpha 1 when the file has none).
 pub fn decode_rgba(bytes: &[u8]) -> Result<RgbaImage, Error> {
@@ -276,8 +273,16 @@ pub fn is_stopped(e: &Error) -> bool {
 /// Every channel of the first layer of the file at `path`, by name (for tests and tools that
 /// check the files): floats as f32, ids as u32 (see [`u32_channel`]).
 pub fn read_channels(path: &Path) -> Result<Vec<(String, Channel)>, Error> {
-    read_meta(&std::fs::read(path)?)?;
-    let image = ::exr::prelude::read_all_flat_layers_from_file(path)?;
+    use ::exr::prelude::{ReadChannels as _, ReadLayers as _};
+    let bytes = std::fs::read(path)?;
+    read_meta(&bytes)?;
+    let image = ::exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))?;
     let layer =
         (image.layer_data.into_iter().next()).ok_or_else(|| Error::Invalid("no layer".into()))?;
     Ok((layer.channel_data.list.into_iter())

@@ -15,6 +15,9 @@ const MULTI_PART: u32 = 0x1000;
 /// 3"`; None when every part's windows are well-formed or the header cannot be walked (the
 /// crate's own reading then says what is wrong: cut short, not an EXR).
 pub fn inverted_window(bytes: &[u8]) -> Option<String> {
+    if !has_magic(bytes) {
+        return None;
+    }
     let version = u32::from_le_bytes(bytes.get(4..8)?.try_into().ok()?);
     let mut at = 8;
     loop {
@@ -45,6 +48,11 @@ pub fn inverted_window(bytes: &[u8]) -> Option<String> {
     }
 }
 
+/// Whether `bytes` start as an OpenEXR file does (its four-byte magic number).
+pub fn has_magic(bytes: &[u8]) -> bool {
+    bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01])
+}
+
 /// `"xMax 0 is less than xMin 3"` for a box2i (xMin, yMin, xMax, yMax) inverted on an axis.
 fn inverted(value: &[u8]) -> Option<String> {
     let corner = |i: usize| i32::from_le_bytes(value[4 * i..4 * i + 4].try_into().unwrap());
@@ -67,13 +75,16 @@ fn c_string<'a>(bytes: &'a [u8], at: &mut usize) -> Option<&'a [u8]> {
 mod tests {
     use super::*;
 
-    /// A header of the attributes given (name, type, value), then a null; multi-part when
-    /// `parts` > 1 (each part the same attributes, then the list's closing null).
-    fn header(attributes: &[(&str, &str, Vec<u8>)], parts: usize) -> Vec<u8> {
+    /// One attribute: name, type name, value.
+    type Attribute = (&'static str, &'static str, Vec<u8>);
+
+    /// A header of each part's attributes, each part's list ended by a null; multi-part when
+    /// there are several (then an empty list closes them).
+    fn header(parts: &[Vec<Attribute>]) -> Vec<u8> {
         let mut out = vec![0x76, 0x2f, 0x31, 0x01];
-        let flags = if parts > 1 { MULTI_PART } else { 0 };
+        let flags = if parts.len() > 1 { MULTI_PART } else { 0 };
         out.extend((2 | flags).to_le_bytes());
-        for _ in 0..parts {
+        for attributes in parts {
             for (name, kind, value) in attributes {
                 out.extend(name.as_bytes());
                 out.push(0);
@@ -84,7 +95,7 @@ mod tests {
             }
             out.push(0);
         }
-        if parts > 1 {
+        if parts.len() > 1 {
             out.push(0);
         }
         out
@@ -100,32 +111,42 @@ mod tests {
         let one_pixel = window([5, 5, 5, 5]);
         let x = window([3, 0, 0, 2]);
         let y = window([0, 2, 3, 0]);
-        let other = ("compression", "compression", vec![3u8]);
-        let case = |data: &Vec<u8>, display: &Vec<u8>, parts| {
-            let attributes = [
-                other.clone(),
+        let part = |data: &Vec<u8>, display: &Vec<u8>| -> Vec<Attribute> {
+            vec![
+                ("compression", "compression", vec![3u8]),
                 ("dataWindow", "box2i", data.clone()),
                 ("displayWindow", "box2i", display.clone()),
-            ];
-            inverted_window(&header(&attributes, parts))
+            ]
         };
-        assert_eq!(case(&good, &good, 1), None);
-        assert_eq!(case(&one_pixel, &good, 1), None);
+        let case =
+            |data: &Vec<u8>, display: &Vec<u8>| inverted_window(&header(&[part(data, display)]));
+        assert_eq!(case(&good, &good), None);
+        assert_eq!(case(&one_pixel, &good), None);
         assert_eq!(
-            case(&x, &good, 1).as_deref(),
+            case(&x, &good).as_deref(),
             Some("dataWindow: xMax 0 is less than xMin 3")
         );
         assert_eq!(
-            case(&good, &y, 1).as_deref(),
+            case(&good, &y).as_deref(),
             Some("displayWindow: yMax 0 is less than yMin 2")
         );
-        // Every part of a multi-part file is walked.
-        assert_eq!(case(&good, &good, 3), None);
-        assert!(case(&x, &good, 2).is_some());
+        // Every part of a multi-part file is walked: the third's window is found.
+        let good_part = part(&good, &good);
+        let parts = [good_part.clone(), good_part.clone(), good_part.clone()];
+        assert_eq!(inverted_window(&header(&parts)), None);
+        let parts = [good_part.clone(), good_part, part(&good, &y)];
+        assert_eq!(
+            inverted_window(&header(&parts)).as_deref(),
+            Some("displayWindow: yMax 0 is less than yMin 2")
+        );
+        // Without the magic number it is not an EXR header: left to the crate to say so.
+        let mut not_exr = header(&[part(&x, &good)]);
+        not_exr[0] = b'P';
+        assert_eq!(inverted_window(&not_exr), None);
         // A header cut short, or with a size past the end, is left to the crate.
-        let cut = header(&[("dataWindow", "box2i", x.clone())], 1);
+        let cut = header(&[vec![("dataWindow", "box2i", x.clone())]]);
         assert_eq!(inverted_window(&cut[..cut.len() - 6]), None);
-        let mut lying = header(&[("dataWindow", "box2i", x)], 1);
+        let mut lying = header(&[vec![("dataWindow", "box2i", x)]]);
         let size_at = 8 + "dataWindow\0box2i\0".len();
         lying[size_at..size_at + 4].copy_from_slice(&i32::MAX.to_le_bytes());
         assert_eq!(inverted_window(&lying), None);

@@ -5,7 +5,7 @@
 //! transaction) and what errors mean to a user stay with the callers. No Vulkan here.
 
 pub mod exr;
-mod exr_header;
+pub(crate) mod exr_header;
 pub mod png;
 
 /// A linear-HDR RGBA image, rows top to bottom.

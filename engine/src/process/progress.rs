@@ -131,7 +131,7 @@ impl crate::sensor::central::Watch for Progress {
     }
 }
 
-/// Long work below the commands ([`crate::watch::long_work`]: a mesh file's parse) counted in
+/// Long work below the commands ([`crate::watch::long_work`]: an OBJ file's parse) counted in
 /// its own units and said as shares of the whole.
 impl crate::watch::Watch for Progress {
     fn rows_done(&self, units: u32) {
@@ -148,13 +148,13 @@ fn long_work(what: String, total: u64) -> Box<dyn crate::watch::Watch> {
     Box::new(Progress::new(what, total, PERCENT))
 }
 
-/// Has work below the commands say itself as a command's long work does: a mesh file's parse
+/// Has work below the commands say itself as a command's long work does: an OBJ file's parse
 /// by its bytes ([`crate::watch::long_work`]), a mesh's trees once they have taken the
 /// process's patience ([`crate::watch::said_while`]). The command-line binary calls it first
 /// thing; a library user's process (Python's) says nothing.
 pub fn say_long_work() {
     crate::watch::watch_long_work_with(long_work);
-    crate::watch::say_slow_work_after(estimate_after());
+    crate::watch::say_slow_work_after(estimate_after);
 }
 
 /// A duration for a person: "45 s", "3 min 20 s", "2 h 5 min".

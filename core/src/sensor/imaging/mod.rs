@@ -205,8 +205,11 @@ pub fn traced_exposure(
     let Some(imaging) = scene.sensor.imaging.as_ref() else {
         return Ok(None);
     };
+    // The meshes' trees are the same at every instant (only the objects' places move):
+    // built once, not once an instant.
+    let meshes = std::sync::Arc::new(crate::reference::objects::MeshTrees::build(&scene.meshes));
     integrate(imaging, t_s, |t| {
-        let reference = Reference::new(scene, t);
+        let reference = Reference::with_meshes(scene, t, meshes.clone());
         let (images, _) = reference.render_watched(&reference.sensor_view(), w, h, spp, watch)?;
         Ok(images.color)
     })

@@ -62,8 +62,7 @@ impl MirrorLookup for Bvh {
     /// triangle, and bvh4 keeps more in its nodes), which a shader binds up to the device's
     /// `maxStorageBufferRange`: a lower bound, known before any tree is built.
     fn cannot_hold(&self, scene: &crate::scene::Scene, device: &DeviceInfo) -> Option<String> {
-        let triangles: u64 = scene.meshes.iter().map(|m| m.triangle_count() as u64).sum();
-        let bytes = triangles * std::mem::size_of::<crate::bvh::layout::BvhTriangle>() as u64;
+        let (triangles, bytes) = least_tree_bytes(scene);
         let range = device.limits.max_storage_buffer_range;
         // 0: a device read back from a record, whose range is unknown.
         (range > 0 && bytes > range).then(|| {
@@ -159,13 +158,9 @@ impl BvhPass {
         let scene = ctx.scene;
         let layout = ctx.bvh_layout;
         let top_room = layout.top_room(scene.objects.len());
-        // Either layout holds every triangle whole in one buffer: a scene past the device's
-        // range is refused before seconds of building trees it could not bind.
-        let triangles: u64 = (scene.meshes.iter())
-            .map(|m| m.indices.len() as u64 / 3)
-            .sum();
-        let least = triangles * std::mem::size_of::<crate::bvh::layout::BvhTriangle>() as u64;
-        check_range(ctx, layout, least, "at least ")?;
+        // A scene past the device's range is refused before seconds of building trees it
+        // could not bind.
+        check_range(ctx, layout, least_tree_bytes(scene).1, "at least ")?;
         let meshes =
             MeshBvhs::build_at(layout, &scene.meshes, top_room as u32).map_err(unsupported)?;
         let (nodes, fixed) = fixed_buffers(ctx, &meshes, top_room)?;
@@ -277,6 +272,16 @@ fn fixed_buffers(
     };
     upload.finish()?;
     Ok((node_buffer, fixed))
+}
+
+/// The scene's mesh triangles, and the least bytes of the one storage buffer their trees take
+/// in either layout: cwbvh keeps one 48-byte `BvhTriangle` a triangle in a buffer of its own,
+/// bvh4 one such record a triangle in its node array beside its nodes. Known before any tree
+/// is built.
+fn least_tree_bytes(scene: &Scene) -> (u64, u64) {
+    let triangles: u64 = scene.meshes.iter().map(|m| m.triangle_count() as u64).sum();
+    let record = std::mem::size_of::<crate::bvh::layout::BvhTriangle>() as u64;
+    (triangles, triangles * record)
 }
 
 /// Refuses a storage buffer of `size` bytes (`qualifier`: "at least " where it is a bound)
