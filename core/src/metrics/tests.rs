@@ -504,7 +504,7 @@ impl Watch for Reading {
     }
 }
 
-/// Reading says the rows it will decode (both images, and an EXR mask), reports every one,
+/// Reading says the rows it will decode (both images, and a mask), reports every one,
 /// and stops at the watch's word with nothing read; a mask of another size is refused from
 /// the headers, before any row is decoded.
 #[test]
@@ -523,6 +523,14 @@ fn reading_is_reported_row_by_row_and_stopped_at_a_word() {
         read.mask.map(|m| m.selected.iter().filter(|&&s| s).count()),
         Some(64 * 256)
     );
+    // A PNG mask's rows are counted too, once it is decoded (with the images, not before
+    // the count begins).
+    let png = dir.join("m.png");
+    crate::output::write_png(&png, &image(64, 256, |_, _| [1.0; 4])).unwrap();
+    let with_png = Reading::new(u64::MAX);
+    read_inputs_watched(&a, &b, Some(&png), &with_png).unwrap();
+    assert_eq!(*with_png.begun.lock().unwrap(), Some((3 * 256, 64)));
+    assert_eq!(with_png.rows(), 3 * 256);
     // Stopped within the first image, after its first chunks of 16 rows.
     let stopped = Reading::new(32);
     let err = read_inputs_watched(&a, &b, None, &stopped).err().unwrap();
