@@ -23,6 +23,9 @@ pub mod split_order;
 /// Boxes on a node's 8-bit grid, checked to hold their children.
 pub mod quantize;
 
+/// Items of identical boxes, hung below one leaf of PLOC's tree.
+mod duplicates;
+
 use split_order::midpoint_split_order;
 
 /// The most node levels a tree from [`wide_tree`] has: half of the 32-entry stacks that walk
@@ -106,11 +109,24 @@ pub fn wide_tree<T: Boundable>(items: &[T], leaf: u32) -> Option<CwBvh> {
 }
 
 /// The binary tree over `items` (None for none), one item a leaf: obvhs's PLOC with
-/// reinsertion, as `fast_build` makes it, without its debug-build validation.
+/// reinsertion, as `fast_build` makes it, without its debug-build validation; over one box of
+/// each group of identical ones, the group then hung below it (`duplicates.rs`: PLOC's time
+/// grows with the largest such group times the items).
 pub fn binary_tree<T: Boundable>(items: &[T]) -> Option<Bvh2> {
     if items.is_empty() {
         return None;
     }
+    let boxes: Vec<Aabb> = items.iter().map(Boundable::aabb).collect();
+    match duplicates::groups(&boxes) {
+        None => Some(ploc(&boxes)),
+        Some((unique, members)) => Some(duplicates::expand(&ploc(&unique), &members)),
+    }
+}
+
+/// PLOC with reinsertion over `boxes`, one a leaf.
+fn ploc(boxes: &[Aabb]) -> Bvh2 {
+    let items: Vec<BoxLeaf> = boxes.iter().map(|b| BoxLeaf(*b)).collect();
+    let items = &items[..];
     let p = BvhBuildParams::fast_build();
     let indices = (0..items.len() as u32).collect();
     let mut bvh2 = PlocBuilder::with_capacity(items.len()).build(
@@ -121,7 +137,7 @@ pub fn binary_tree<T: Boundable>(items: &[T]) -> Option<Bvh2> {
         p.search_depth_threshold,
     );
     ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
-    Some(bvh2)
+    bvh2
 }
 
 /// The binary tree over `items` that splits every range of leaves at its middle, the leaves
