@@ -32,6 +32,31 @@ struct Reader {
     all_normals: bool,
 }
 
+/// The most corners a face may have: its fan's indices reach the limit of one mesh file.
+const MAX_FACE_CORNERS: usize = super::MAX_MESH_INDICES / 3 + 2;
+/// The most numbers a `v`, `vt` or `vn` statement has (`v x y z r g b`).
+const MAX_NUMBERS: usize = 7;
+
+/// The lines of `bytes`, each ended by LF, CR LF or a CR alone (classic Mac OS files), without
+/// its ending.
+fn lines(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
+    let mut rest = Some(bytes);
+    std::iter::from_fn(move || {
+        let text = rest?;
+        match text.iter().position(|&b| b == b'\n' || b == b'\r') {
+            None => {
+                rest = None;
+                Some(text)
+            }
+            Some(end) => {
+                let crlf = text[end] == b'\r' && text.get(end + 1) == Some(&b'\n');
+                rest = Some(&text[end + if crlf { 2 } else { 1 }..]);
+                Some(&text[..end])
+            }
+        }
+    })
+}
+
 /// Parses OBJ text into one part, its bytes reported to `watch` as they are read.
 pub(super) fn parse(bytes: &[u8], watch: &dyn Watch) -> Result<Part, AssetError> {
     let mut r = Reader {
@@ -42,7 +67,7 @@ pub(super) fn parse(bytes: &[u8], watch: &dyn Watch) -> Result<Part, AssetError>
     // A byte-order mark is not part of the first statement (some editors write one).
     let bytes = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(bytes);
     let mut read = 0;
-    for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+    for (i, raw) in lines(bytes).enumerate() {
         // A mesh of millions of lines takes seconds: said as it goes, and a signal stops it
         // between two blocks of lines.
         if i % (1 << 16) == 0 {
@@ -55,16 +80,29 @@ pub(super) fn parse(bytes: &[u8], watch: &dyn Watch) -> Result<Part, AssetError>
         }
         let line = i + 1;
         let at = |message: String| AssetError::Obj { line, message };
-        let text = std::str::from_utf8(raw).map_err(|_| {
+        // Comments run from '#' to the end of the line, in any encoding (an exporter's
+        // Latin-1 name in one is no reason to refuse the mesh).
+        let code = raw.split(|&b| b == b'#').next().unwrap_or(raw);
+        let text = std::str::from_utf8(code).map_err(|_| {
             at("not UTF-8 text (an OBJ file is text; is this a binary file?)".into())
         })?;
-        // Comments run from '#' to the end of the line.
-        let text = text.split('#').next().unwrap_or("");
         let mut words = text.split_whitespace();
         let Some(keyword) = words.next() else {
             continue;
         };
-        let args: Vec<&str> = words.collect();
+        // The words a statement may have, and one more to tell a line of too many: a line of
+        // 125 million words was collected whole (2.3 GB) before it was refused.
+        let most = match keyword {
+            "f" => MAX_FACE_CORNERS,
+            k if IGNORED.contains(&k) => 0,
+            _ => MAX_NUMBERS,
+        };
+        let args: Vec<&str> = words.by_ref().take(most + 1).collect();
+        if most > 0 && args.len() > most {
+            return Err(at(format!(
+                "`{keyword}` with more than {most} values on one line"
+            )));
+        }
         r.statement(keyword, &args).map_err(at)?;
     }
     Ok(r.finish())
@@ -284,6 +322,30 @@ mod tests {
         // A byte-order mark and CRLF line ends are accepted.
         let p = parse("\u{feff}v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n".as_bytes()).unwrap();
         assert_eq!(p.indices, vec![0, 1, 2]);
+        // So are lines ended by a CR alone (classic Mac OS), and ends mixed in one file; a
+        // comment need not be UTF-8 (an exporter's Latin-1 "café").
+        let p = parse(b"v 0 0 0\rv 1 0 0\r\nv 0 1 0 # caf\xe9\nf 1 2 3\r").unwrap();
+        assert_eq!((p.positions.len(), p.indices.len()), (3, 3));
+        // And the lines are counted across them.
+        assert!(err("v 0 0 0\rv 1 0 0\r\n\rf 1 2 9\n").starts_with("line 4: face corner 3"));
+    }
+
+    /// A line of more words than its statement may have is refused at the first word past
+    /// them, not collected whole first.
+    #[test]
+    fn a_line_of_too_many_values_is_refused_by_its_count() {
+        let e = err(&format!("v{}\n", " 1".repeat(1000)));
+        assert_eq!(e, "line 1: `v` with more than 7 values on one line");
+        let corners = MAX_FACE_CORNERS + 1;
+        let e = err(&format!("v 0 0 0\nf{}\n", " 1".repeat(corners)));
+        assert!(
+            e.starts_with(&format!(
+                "line 2: `f` with more than {MAX_FACE_CORNERS} values"
+            )),
+            "{e}"
+        );
+        // A statement ignored may have any number of words.
+        assert!(parse(format!("g{}\n", " a".repeat(1000)).as_bytes()).is_ok());
     }
 
     #[test]
