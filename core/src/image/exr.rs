@@ -122,10 +122,10 @@ pub fn rgba_layer_size(bytes: &[u8]) -> Option<(usize, usize)> {
 }
 
 /// The header, refused where the crate would accept what the format does not: a data or
-/// display window whose corners are inverted (`exr_header.rs`).
+/// display window whose corners are inverted, an attribute given twice, a channel named twice
+/// (`exr_header.rs`).
 fn read_meta(bytes: &[u8]) -> Result<::exr::meta::MetaData, Error> {
-    if let Some(why) = super::exr_header::inverted_window(bytes) {
-        let why = format!("an inverted window, which OpenEXR does not allow ({why})");
+    if let Some(why) = super::exr_header::header_fault(bytes) {
         return Err(Error::Invalid(why.into()));
     }
     ::exr::meta::MetaData::read_from_buffered(bytes, false)

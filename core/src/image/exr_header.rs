@@ -1,8 +1,12 @@
-//! What the `exr` crate does not check in an OpenEXR header: that each part's data and
-//! display windows are not inverted. The crate takes a window's size as the distance between
-//! its corners, so a window whose maximum lies below its minimum read as a valid image of
-//! the mirrored size (or failed later, as damaged pixel data); the OpenEXR format requires
-//! max ≥ min on both axes, and its own library refuses such a header.
+//! What the `exr` crate does not check in an OpenEXR header, and the format forbids (its own
+//! library refuses each):
+//! - a data or display window inverted: the crate takes a window's size as the distance
+//!   between its corners, so a window whose maximum lies below its minimum read as a valid
+//!   image of the mirrored size (or failed later, as damaged pixel data);
+//! - an attribute given twice in one part's header: the last one won (a second data window
+//!   changed the image's size);
+//! - a channel named twice in a part's channel list: the crate reassigned the channels, and
+//!   a comparison of such a file read the wrong colours without a word.
 //!
 //! The header is a list of attributes, each a name and a type name (both null-terminated),
 //! a little-endian i32 size and that many bytes of value, ended by an empty name; a
@@ -11,35 +15,39 @@
 /// The version field's multi-part flag.
 const MULTI_PART: u32 = 0x1000;
 
-/// A window attribute whose corners are inverted: `"dataWindow: xMax 0 is less than xMin
-/// 3"`; None when every part's windows are well-formed or the header cannot be walked (the
-/// crate's own reading then says what is wrong: cut short, not an EXR).
-pub fn inverted_window(bytes: &[u8]) -> Option<String> {
+/// What the header holds that the format forbids (above), said for a user: `"an inverted
+/// window, which OpenEXR does not allow (dataWindow: xMax 0 is less than xMin 3)"`; None when
+/// there is nothing or the header cannot be walked (the crate's own reading then says what is
+/// wrong: cut short, not an EXR).
+pub fn header_fault(bytes: &[u8]) -> Option<String> {
     if !has_magic(bytes) {
         return None;
     }
     let version = u32::from_le_bytes(bytes.get(4..8)?.try_into().ok()?);
     let mut at = 8;
     loop {
-        let mut attributes = 0;
+        let mut names = std::collections::HashSet::new();
         loop {
             let name = c_string(bytes, &mut at)?;
             if name.is_empty() {
                 break;
             }
-            attributes += 1;
             let kind = c_string(bytes, &mut at)?;
             let size = i32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?);
             at += 4;
             let value = bytes.get(at..at.checked_add(usize::try_from(size).ok()?)?)?;
             at += value.len();
-            let window = matches!(name, b"dataWindow" | b"displayWindow");
-            if window && kind == b"box2i" && value.len() == 16 {
-                if let Some(why) = inverted(value) {
-                    return Some(format!("{}: {why}", String::from_utf8_lossy(name)));
-                }
+            let named = String::from_utf8_lossy(name);
+            if !names.insert(name) {
+                return Some(format!(
+                    "attribute {named} given twice in one header, which OpenEXR does not allow"
+                ));
+            }
+            if let Some(why) = value_fault(&named, kind, value) {
+                return Some(why);
             }
         }
+        let attributes = names.len();
         // A single-part header ends at its first empty name; a multi-part file's list of
         // headers ends with an empty one.
         if version & MULTI_PART == 0 || attributes == 0 {
@@ -51,6 +59,36 @@ pub fn inverted_window(bytes: &[u8]) -> Option<String> {
 /// Whether `bytes` start as an OpenEXR file does (its four-byte magic number).
 pub fn has_magic(bytes: &[u8]) -> bool {
     bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01])
+}
+
+/// What an attribute's value holds that the format forbids: an inverted window, a channel
+/// named twice.
+fn value_fault(name: &str, kind: &[u8], value: &[u8]) -> Option<String> {
+    match kind {
+        b"box2i" if value.len() == 16 => inverted(value)
+            .map(|why| format!("an inverted window, which OpenEXR does not allow ({name}: {why})")),
+        b"chlist" => twice_named(value).map(|channel| {
+            format!("channel {channel} named twice in {name}, which OpenEXR does not allow")
+        }),
+        _ => None,
+    }
+}
+
+/// A name given twice in a channel list: entries of a null-terminated name and 16 bytes
+/// (pixel type, linearity and reserved bytes, x and y sampling), ended by an empty name.
+fn twice_named(list: &[u8]) -> Option<String> {
+    let mut seen = std::collections::HashSet::new();
+    let mut at = 0;
+    loop {
+        let name = c_string(list, &mut at)?;
+        if name.is_empty() {
+            return None;
+        }
+        if !seen.insert(name) {
+            return Some(String::from_utf8_lossy(name).into_owned());
+        }
+        at += 16;
+    }
 }
 
 /// `"xMax 0 is less than xMin 3"` for a box2i (xMin, yMin, xMax, yMax) inverted on an axis.
@@ -119,37 +157,68 @@ mod tests {
             ]
         };
         let case =
-            |data: &Vec<u8>, display: &Vec<u8>| inverted_window(&header(&[part(data, display)]));
+            |data: &Vec<u8>, display: &Vec<u8>| header_fault(&header(&[part(data, display)]));
         assert_eq!(case(&good, &good), None);
         assert_eq!(case(&one_pixel, &good), None);
         assert_eq!(
             case(&x, &good).as_deref(),
-            Some("dataWindow: xMax 0 is less than xMin 3")
+            Some(
+                "an inverted window, which OpenEXR does not allow (dataWindow: xMax 0 is less \
+                 than xMin 3)"
+            )
         );
         assert_eq!(
             case(&good, &y).as_deref(),
-            Some("displayWindow: yMax 0 is less than yMin 2")
+            Some(
+                "an inverted window, which OpenEXR does not allow (displayWindow: yMax 0 is \
+                 less than yMin 2)"
+            )
         );
         // Every part of a multi-part file is walked: the third's window is found.
         let good_part = part(&good, &good);
         let parts = [good_part.clone(), good_part.clone(), good_part.clone()];
-        assert_eq!(inverted_window(&header(&parts)), None);
+        assert_eq!(header_fault(&header(&parts)), None);
         let parts = [good_part.clone(), good_part, part(&good, &y)];
+        assert!(header_fault(&header(&parts)).is_some_and(|w| w.contains("displayWindow: yMax")));
+        // An attribute given twice in a part, and a channel named twice in its list.
+        let mut twice = part(&good, &good);
+        twice.push(("dataWindow", "box2i", good.clone()));
         assert_eq!(
-            inverted_window(&header(&parts)).as_deref(),
-            Some("displayWindow: yMax 0 is less than yMin 2")
+            header_fault(&header(&[twice])).as_deref(),
+            Some("attribute dataWindow given twice in one header, which OpenEXR does not allow")
+        );
+        let channel = |name: &str| {
+            let mut entry = name.as_bytes().to_vec();
+            entry.push(0);
+            entry.extend([0u8; 16]);
+            entry
+        };
+        let list = |names: &[&str]| -> Vec<u8> {
+            let mut out: Vec<u8> = names.iter().flat_map(|n| channel(n)).collect();
+            out.push(0);
+            out
+        };
+        let with_channels = |names: &[&str]| {
+            let mut p = part(&good, &good);
+            p.push(("channels", "chlist", list(names)));
+            header_fault(&header(&[p]))
+        };
+        assert_eq!(with_channels(&["A", "B", "G", "R"]), None);
+        assert_eq!(
+            with_channels(&["B", "G", "R", "R"]).as_deref(),
+            Some("channel R named twice in channels, which OpenEXR does not allow")
         );
         // Without the magic number it is not an EXR header: left to the crate to say so.
         let mut not_exr = header(&[part(&x, &good)]);
         not_exr[0] = b'P';
-        assert_eq!(inverted_window(&not_exr), None);
+        assert_eq!(header_fault(&not_exr), None);
         // A header cut short, or with a size past the end, is left to the crate.
         let cut = header(&[vec![("dataWindow", "box2i", x.clone())]]);
-        assert_eq!(inverted_window(&cut[..cut.len() - 6]), None);
+        assert_eq!(header_fault(&cut[..cut.len() - 6]), None);
         let mut lying = header(&[vec![("dataWindow", "box2i", x)]]);
         let size_at = 8 + "dataWindow\0box2i\0".len();
         lying[size_at..size_at + 4].copy_from_slice(&i32::MAX.to_le_bytes());
-        assert_eq!(inverted_window(&lying), None);
-        assert_eq!(inverted_window(b"v/1"), None);
+        assert_eq!(header_fault(&lying), None);
+        assert_eq!(header_fault(b"v/1"), None);
     }
 }
