@@ -131,6 +131,23 @@ fn read_meta(bytes: &[u8]) -> Result<::exr::meta::MetaData, Error> {
     ::exr::meta::MetaData::read_from_buffered(bytes, false)
 }
 
+/// Where the colour layer [`decode_rgba`] decodes starts (its data window's corner), from the
+/// header alone: specchio writes (0, 0), other tools may crop.
+pub fn rgba_layer_origin(bytes: &[u8]) -> Option<(i32, i32)> {
+    let meta = read_meta(bytes).ok()?;
+    let has = |h: &::exr::meta::header::Header, name: &str| {
+        (h.channels.list.iter()).any(|c| c.name.to_string() == name)
+    };
+    (meta.headers.iter())
+        .find(|h| ["R", "G", "B"].iter().all(|c| has(h, c)))
+        .map(|h| {
+            (
+                h.own_attributes.layer_position.0,
+                h.own_attributes.layer_position.1,
+            )
+        })
+}
+
 /// The most channels a layer may have for [`decode_channels`] (the sensor's ray map has 7).
 pub const MAX_CHANNELS: usize = 64;
 /// The most bytes [`decode_channels`] decodes a layer to: an RGBA float image of 16384 px a

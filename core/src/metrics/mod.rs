@@ -69,6 +69,19 @@ pub enum MetricsError {
         b_name: String,
         b_size: (u32, u32),
     },
+    /// Two images of one size whose data windows start at different pixels: compared pixel
+    /// for pixel, they would be compared shifted.
+    #[error(
+        "data window mismatch: {a_name} starts at ({}, {}), {b_name} at ({}, {}); the images \
+         are compared pixel for pixel, so their windows must start at the same pixel",
+        a_origin.0, a_origin.1, b_origin.0, b_origin.1
+    )]
+    OriginMismatch {
+        a_name: String,
+        a_origin: (i32, i32),
+        b_name: String,
+        b_origin: (i32, i32),
+    },
     #[error(
         "{path}: the mask selects no pixel (every red value is at most {threshold}): there is \
          nothing to compare"

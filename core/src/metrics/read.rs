@@ -260,6 +260,14 @@ pub fn read_inputs_watched(
     let mask_bytes = exr_mask.map(read_checked_exr).transpose()?;
     let sizes = (header_size(&test_bytes), header_size(&reference_bytes));
     check_sizes(sizes, mask_bytes.as_deref().and_then(header_size))?;
+    // The EXR mask's window, where it is one, starts where the reference's does too.
+    let origins = [
+        (test, Some(&test_bytes[..])),
+        (reference, Some(&reference_bytes[..])),
+        (exr_mask.unwrap_or(reference), mask_bytes.as_deref()),
+    ]
+    .map(|(path, bytes)| (name(path), bytes.and_then(exr::rgba_layer_origin)));
+    check_origins(&origins)?;
     if head_sized.is_none() {
         sizes.0.or(sizes.1).map(estimate).transpose()?;
     }
@@ -294,6 +302,23 @@ pub fn read_inputs_watched(
         reference: reference_image,
         mask: mask.map(|(_, m)| m),
     })
+}
+
+/// Every image's data window starting at the same pixel (None: no colour layer, which its
+/// decoding then says).
+fn check_origins(origins: &[(String, Option<(i32, i32)>)]) -> Result<(), MetricsError> {
+    let known: Vec<(&String, (i32, i32))> = (origins.iter())
+        .filter_map(|(name, at)| at.map(|at| (name, at)))
+        .collect();
+    match known.iter().find(|(_, at)| *at != known[0].1) {
+        Some((b_name, b_origin)) => Err(MetricsError::OriginMismatch {
+            a_name: known[0].0.clone(),
+            a_origin: known[0].1,
+            b_name: (*b_name).clone(),
+            b_origin: *b_origin,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// A missing file gets its own error (the decoders' messages do not always name it).

@@ -447,6 +447,52 @@ fn bad_exr_inputs_say_what_is_wrong() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Images whose data windows start at different pixels are refused, naming both corners:
+/// compared pixel for pixel they would be compared shifted (a window at (100, 200) compared
+/// as identical to the same pixels at (0, 0)). Windows that start together, anywhere, are
+/// compared.
+#[test]
+fn images_whose_windows_start_apart_are_refused() {
+    let dir = temp_dir("origins");
+    let at_zero = dir.join("zero.exr");
+    crate::output::write_exr(&at_zero, &gradient(16, 8)).unwrap();
+    let shifted = dir.join("shifted.exr");
+    write_exr_at(&shifted, &gradient(16, 8), (100, 200));
+    let e = read_inputs(&at_zero, &shifted, None).err().unwrap();
+    assert!(matches!(e, MetricsError::OriginMismatch { .. }), "{e}");
+    let said = e.to_string();
+    assert!(
+        said.contains("zero.exr starts at (0, 0), ") && said.contains("shifted.exr at (100, 200)"),
+        "{said}"
+    );
+    // Both shifted alike: compared (the same pixels).
+    let also = dir.join("also.exr");
+    write_exr_at(&also, &gradient(16, 8), (100, 200));
+    let read = read_inputs(&shifted, &also, None).unwrap();
+    assert_eq!(read.test, read.reference);
+    // A mask's window too.
+    let e = read_inputs(&shifted, &also, Some(&at_zero)).err().unwrap();
+    assert!(matches!(e, MetricsError::OriginMismatch { .. }), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `image` as an EXR whose data window starts at `origin`, as a tool that crops writes it.
+fn write_exr_at(path: &std::path::Path, image: &RgbaImage, (x, y): (i32, i32)) {
+    use ::exr::prelude::*;
+    let attributes = LayerAttributes {
+        layer_position: Vec2(x, y),
+        ..LayerAttributes::named("")
+    };
+    let size = (image.width as usize, image.height as usize);
+    let pixels = |p: Vec2<usize>| {
+        let [r, g, b, a] = image.pixels[p.y() * size.0 + p.x()];
+        (r, g, b, a)
+    };
+    let channels = SpecificChannels::rgba(pixels);
+    let layer = Layer::new(size, attributes, Encoding::UNCOMPRESSED, channels);
+    Image::from_layer(layer).write().to_file(path).unwrap();
+}
+
 /// `bytes` (a small EXR) with its data window's corner moved to (99999, 99999).
 fn huge_data_window(bytes: &[u8]) -> Vec<u8> {
     data_window(bytes, [0, 0, 99_999, 99_999])
