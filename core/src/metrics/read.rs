@@ -32,7 +32,10 @@ fn decode(path: &Path, bytes: &[u8], watch: &dyn Watch) -> Result<RgbaImage, Met
                     "holds no colour image (channels R, G, B) but {}: this reads colour \
                      images; a layer such as sensor.range.exr is read by channel name \
                      (specchio.read_exr in Python)",
-                    names.join(", ")
+                    match names.is_empty() {
+                        true => "no channel at all".to_owned(),
+                        false => names.join(", "),
+                    }
                 ),
             }
         }
