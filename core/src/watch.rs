@@ -94,9 +94,10 @@ pub fn said_while<T>(what: impl FnOnce() -> String, work: impl FnOnce() -> T) ->
     }
 }
 
-/// [`said_while`] after `after`, each line given to `say` by a thread of its own, which is
-/// not waited for: a stderr that blocks holds that thread, not the work's caller. No line
-/// comes once the work has ended (the flag is read under the lock the line is said under).
+/// [`said_while`] after `after`, each line given to `say` by a thread of its own, not joined:
+/// a stderr that blocks holds that thread while the work runs, and its caller only if a line
+/// is being said as the work ends (the price of no line after the work: the flag is set under
+/// the lock each line is said under). The flag is set however the work ends, a panic too.
 fn said_while_to<T>(
     after: std::time::Duration,
     what: String,
@@ -127,13 +128,19 @@ fn said_while_to<T>(
             }
         });
     // No thread (the system refused one): the work, unsaid.
-    let out = work();
-    if timer.is_ok() {
-        let (lock, wake) = &*ended;
+    let _ended = timer.is_ok().then_some(Ended(ended));
+    work()
+}
+
+/// Sets the flag [`said_while_to`]'s thread watches, when the work returns or unwinds.
+struct Ended(std::sync::Arc<(std::sync::Mutex<bool>, std::sync::Condvar)>);
+
+impl Drop for Ended {
+    fn drop(&mut self) {
+        let (lock, wake) = &*self.0;
         *lock.lock().unwrap_or_else(|e| e.into_inner()) = true;
         wake.notify_all();
     }
-    out
 }
 
 #[cfg(test)]

@@ -65,8 +65,13 @@ pub fn has_magic(bytes: &[u8]) -> bool {
 /// named twice.
 fn value_fault(name: &str, kind: &[u8], value: &[u8]) -> Option<String> {
     match kind {
-        b"box2i" if value.len() == 16 => inverted(value)
-            .map(|why| format!("an inverted window, which OpenEXR does not allow ({name}: {why})")),
+        // Only the two windows the format requires: an optional box (a tool's own, say) may
+        // be an empty one, min above max, as Imath writes it.
+        b"box2i" if value.len() == 16 && matches!(name, "dataWindow" | "displayWindow") => {
+            inverted(value).map(|why| {
+                format!("an inverted window, which OpenEXR does not allow ({name}: {why})")
+            })
+        }
         b"chlist" => twice_named(value).map(|channel| {
             format!("channel {channel} named twice in {name}, which OpenEXR does not allow")
         }),
@@ -160,6 +165,14 @@ mod tests {
             |data: &Vec<u8>, display: &Vec<u8>| header_fault(&header(&[part(data, display)]));
         assert_eq!(case(&good, &good), None);
         assert_eq!(case(&one_pixel, &good), None);
+        // A box of a tool's own may be empty (Imath's: min INT_MAX, max INT_MIN).
+        let mut own = part(&good, &good);
+        own.push((
+            "originalDataWindow",
+            "box2i",
+            window([i32::MAX, i32::MAX, i32::MIN, i32::MIN]),
+        ));
+        assert_eq!(header_fault(&header(&[own])), None);
         assert_eq!(
             case(&x, &good).as_deref(),
             Some(

@@ -263,6 +263,11 @@ pub fn read_inputs_watched(
     let mask_bytes = exr_mask.map(read_checked_exr).transpose()?;
     let sizes = (header_size(&test_bytes), header_size(&reference_bytes));
     check_sizes(sizes, mask_bytes.as_deref().and_then(header_size))?;
+    // A PNG mask against the reference's size from the whole file, where its first bytes did
+    // not hold the header: still before any image is decoded.
+    if let (Some((path, (_, m))), Some(r)) = (&png_mask, sizes.1) {
+        check_size(&name(reference), r, &name(path), *m)?;
+    }
     // The EXR mask's window, where it is one, starts where the reference's does too.
     let origins = [
         (test, Some(&test_bytes[..])),

@@ -109,24 +109,25 @@ pub fn wide_tree<T: Boundable>(items: &[T], leaf: u32) -> Option<CwBvh> {
 }
 
 /// The binary tree over `items` (None for none), one item a leaf: obvhs's PLOC with
-/// reinsertion, as `fast_build` makes it, without its debug-build validation; over one box of
-/// each group of identical ones, the group then hung below it (`duplicates.rs`: PLOC's time
-/// grows with the largest such group times the items).
+/// reinsertion, as `fast_build` makes it, without its debug-build validation; where many items
+/// share a box, over one box of each such group, the group then hung below it
+/// (`duplicates.rs`: PLOC's time grows with the largest group times the items).
 pub fn binary_tree<T: Boundable>(items: &[T]) -> Option<Bvh2> {
     if items.is_empty() {
         return None;
     }
-    let boxes: Vec<Aabb> = items.iter().map(Boundable::aabb).collect();
+    let boxes: Vec<BoxLeaf> = items.iter().map(|i| BoxLeaf(i.aabb())).collect();
     match duplicates::groups(&boxes) {
         None => Some(ploc(&boxes)),
-        Some((unique, members)) => Some(duplicates::expand(&ploc(&unique), &members)),
+        Some((unique, members, starts)) => {
+            drop(boxes);
+            Some(duplicates::expand(&ploc(&unique), (&members, &starts)))
+        }
     }
 }
 
-/// PLOC with reinsertion over `boxes`, one a leaf.
-fn ploc(boxes: &[Aabb]) -> Bvh2 {
-    let items: Vec<BoxLeaf> = boxes.iter().map(|b| BoxLeaf(*b)).collect();
-    let items = &items[..];
+/// PLOC with reinsertion over `items`, one a leaf.
+fn ploc(items: &[BoxLeaf]) -> Bvh2 {
     let p = BvhBuildParams::fast_build();
     let indices = (0..items.len() as u32).collect();
     let mut bvh2 = PlocBuilder::with_capacity(items.len()).build(

@@ -80,9 +80,14 @@ pub(super) fn parse(bytes: &[u8], watch: &dyn Watch) -> Result<Part, AssetError>
         }
         let line = i + 1;
         let at = |message: String| AssetError::Obj { line, message };
-        // Comments run from '#' to the end of the line, in any encoding (an exporter's
-        // Latin-1 name in one is no reason to refuse the mesh).
+        // Comments run from '#' to the end of the line, in any encoding, and so may the
+        // statements we ignore (an exporter's Latin-1 name in one is no reason to refuse the
+        // mesh).
         let code = raw.split(|&b| b == b'#').next().unwrap_or(raw);
+        let first = code.split(u8::is_ascii_whitespace).find(|w| !w.is_empty());
+        if first.is_some_and(|w| IGNORED.iter().any(|k| k.as_bytes() == w)) {
+            continue;
+        }
         let text = std::str::from_utf8(code).map_err(|_| {
             at("not UTF-8 text (an OBJ file is text; is this a binary file?)".into())
         })?;
@@ -94,8 +99,9 @@ pub(super) fn parse(bytes: &[u8], watch: &dyn Watch) -> Result<Part, AssetError>
         // 125 million words was collected whole (2.3 GB) before it was refused.
         let most = match keyword {
             "f" => MAX_FACE_CORNERS,
-            k if IGNORED.contains(&k) => 0,
-            _ => MAX_NUMBERS,
+            "v" | "vt" | "vn" => MAX_NUMBERS,
+            // Ignored, or unknown (refused by name, which needs none of the words).
+            _ => 0,
         };
         let args: Vec<&str> = words.by_ref().take(most + 1).collect();
         if most > 0 && args.len() > most {
@@ -324,7 +330,7 @@ mod tests {
         assert_eq!(p.indices, vec![0, 1, 2]);
         // So are lines ended by a CR alone (classic Mac OS), and ends mixed in one file; a
         // comment need not be UTF-8 (an exporter's Latin-1 "café").
-        let p = parse(b"v 0 0 0\rv 1 0 0\r\nv 0 1 0 # caf\xe9\nf 1 2 3\r").unwrap();
+        let p = parse(b"v 0 0 0\rv 1 0 0\r\nv 0 1 0 # caf\xe9\ng caf\xe9\nf 1 2 3\r").unwrap();
         assert_eq!((p.positions.len(), p.indices.len()), (3, 3));
         // And the lines are counted across them.
         assert!(err("v 0 0 0\rv 1 0 0\r\n\rf 1 2 9\n").starts_with("line 4: face corner 3"));
@@ -344,8 +350,10 @@ mod tests {
             )),
             "{e}"
         );
-        // A statement ignored may have any number of words.
+        // A statement ignored may have any number of words; an unknown one is named.
         assert!(parse(format!("g{}\n", " a".repeat(1000)).as_bytes()).is_ok());
+        let e = err(&format!("curv2{}\n", " 1".repeat(10)));
+        assert!(e.starts_with("line 1: unknown statement \"curv2\""), "{e}");
     }
 
     #[test]
