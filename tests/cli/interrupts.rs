@@ -19,13 +19,7 @@ fn a_signal_during_a_gpu_frame_ends_the_run_within_a_moment() {
     let scene = root().join("scenes/test/six-colour-room.toml");
     let out = dir.join("out");
     let (said, errors) = (dir.join("stdout.txt"), dir.join("stderr.txt"));
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args([
-            "render",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
+    let child = render(&scene, &out)
         .env("SPECCHIO_FAULT_HOLD_FRAME", "1")
         .env(common::ESTIMATE_AT_ONCE.0, common::ESTIMATE_AT_ONCE.1)
         .stdout(std::fs::File::create(&said).unwrap())
@@ -63,13 +57,7 @@ fn a_signal_while_a_large_mesh_loads_stops_with_a_message() {
     // 1000 x 1000 quads: 1,002,001 vertices, 2,000,000 triangles, ~80 MB.
     let (scene, size) = sheet_scene(&dir, 1000);
     let out = dir.join("out");
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args([
-            "render",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
+    let child = render(&scene, &out)
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()
@@ -136,13 +124,7 @@ fn a_large_mesh_is_said_while_it_loads() {
     std::fs::create_dir_all(&dir).unwrap();
     let (scene, _) = sheet_scene(&dir, 300);
     let out = dir.join("out");
-    let result = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"))
-        .args([
-            "render",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
+    let result = render(&scene, &out)
         .env(common::ESTIMATE_AT_ONCE.0, common::ESTIMATE_AT_ONCE.1)
         .output()
         .unwrap();
@@ -157,4 +139,16 @@ fn a_large_mesh_is_said_while_it_loads() {
         "{line}"
     );
     std::fs::remove_dir_all(&*dir).unwrap();
+}
+
+/// `specchio render SCENE --out OUT`, to be run.
+fn render(scene: &std::path::Path, out: &std::path::Path) -> std::process::Command {
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_specchio"));
+    command.args([
+        "render".as_ref(),
+        scene.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    command
 }

@@ -112,13 +112,16 @@ pub fn layer_sizes(bytes: &[u8]) -> Result<Vec<(usize, usize)>, Error> {
 /// The size of the layer [`decode_rgba`] decodes, from the header alone: the first whose
 /// channels include R, G and B (a file's layers may differ in size).
 pub fn rgba_layer_size(bytes: &[u8]) -> Option<(usize, usize)> {
-    let meta = read_meta(bytes).ok()?;
+    rgba_header(&read_meta(bytes).ok()?).map(|h| (h.layer_size.0, h.layer_size.1))
+}
+
+/// The header of the layer [`decode_rgba`] decodes: the first whose channels include R, G
+/// and B.
+fn rgba_header(meta: &::exr::meta::MetaData) -> Option<&::exr::meta::header::Header> {
     let has = |h: &::exr::meta::header::Header, name: &str| {
         (h.channels.list.iter()).any(|c| c.name.to_string() == name)
     };
-    (meta.headers.iter())
-        .find(|h| ["R", "G", "B"].iter().all(|c| has(h, c)))
-        .map(|h| (h.layer_size.0, h.layer_size.1))
+    (meta.headers.iter()).find(|h| ["R", "G", "B"].iter().all(|c| has(h, c)))
 }
 
 /// The header, refused where the crate would accept what the format does not: a data or
@@ -134,18 +137,10 @@ fn read_meta(bytes: &[u8]) -> Result<::exr::meta::MetaData, Error> {
 /// Where the colour layer [`decode_rgba`] decodes starts (its data window's corner), from the
 /// header alone: specchio writes (0, 0), other tools may crop.
 pub fn rgba_layer_origin(bytes: &[u8]) -> Option<(i32, i32)> {
-    let meta = read_meta(bytes).ok()?;
-    let has = |h: &::exr::meta::header::Header, name: &str| {
-        (h.channels.list.iter()).any(|c| c.name.to_string() == name)
-    };
-    (meta.headers.iter())
-        .find(|h| ["R", "G", "B"].iter().all(|c| has(h, c)))
-        .map(|h| {
-            (
-                h.own_attributes.layer_position.0,
-                h.own_attributes.layer_position.1,
-            )
-        })
+    let position = rgba_header(&read_meta(bytes).ok()?)?
+        .own_attributes
+        .layer_position;
+    Some((position.0, position.1))
 }
 
 /// The most channels a layer may have for [`decode_channels`] (the sensor's ray map has 7).
