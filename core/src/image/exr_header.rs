@@ -6,7 +6,9 @@
 //! - an attribute given twice in one part's header: the last one won (a second data window
 //!   changed the image's size);
 //! - a channel named twice in a part's channel list: the crate reassigned the channels, and
-//!   a comparison of such a file read the wrong colours without a word.
+//!   a comparison of such a file read the wrong colours without a word;
+//! - a multi-part file cut short in a part other than the one read: the crate reads only the
+//!   chunks of the part it decodes, so the file was read as whole.
 //!
 //! The header is a list of attributes, each a name and a type name (both null-terminated),
 //! a little-endian i32 size and that many bytes of value, ended by an empty name; a
@@ -25,7 +27,9 @@ pub fn header_fault(bytes: &[u8]) -> Option<String> {
     }
     let version = u32::from_le_bytes(bytes.get(4..8)?.try_into().ok()?);
     let mut at = 8;
+    let mut parts = Vec::new();
     loop {
+        let mut part = Part::default();
         let mut names = std::collections::HashSet::new();
         loop {
             let name = c_string(bytes, &mut at)?;
@@ -46,14 +50,96 @@ pub fn header_fault(bytes: &[u8]) -> Option<String> {
             if let Some(why) = value_fault(&named, kind, value) {
                 return Some(why);
             }
+            part.read(&named, value);
         }
-        let attributes = names.len();
-        // A single-part header ends at its first empty name; a multi-part file's list of
-        // headers ends with an empty one.
-        if version & MULTI_PART == 0 || attributes == 0 {
+        // A single-part header ends at its first empty name (the crate reads every chunk of
+        // its one part); a multi-part file's list of headers ends with an empty one.
+        if version & MULTI_PART == 0 {
             return None;
         }
+        if names.is_empty() {
+            return cut_short(bytes, at, &parts);
+        }
+        parts.push(part);
     }
+}
+
+/// What a multi-part file's part says of its chunks: how many (`chunkCount`, which such a
+/// file must have) and how each begins (`type`).
+#[derive(Default)]
+struct Part {
+    chunks: Option<u64>,
+    /// Bytes from a chunk's start to its data size field (after the part number): a scan
+    /// line's y, or a tile's four coordinates; None for deep data (left to the crate).
+    size_field: Option<usize>,
+}
+
+impl Part {
+    fn read(&mut self, name: &str, value: &[u8]) {
+        match name {
+            "chunkCount" => {
+                let count = value.try_into().map(i32::from_le_bytes).ok();
+                self.chunks = count.and_then(|c| u64::try_from(c).ok());
+            }
+            "type" => {
+                self.size_field = match value.strip_suffix(b"\0").unwrap_or(value) {
+                    b"scanlineimage" => Some(4),
+                    b"tiledimage" => Some(16),
+                    _ => None,
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// A chunk of a multi-part file that starts or ends past the file's end, from the offset
+/// tables at `at` (one per part, in order); None when none does or the tables cannot be
+/// read. An offset into the tables or the headers is left to the crate, which rebuilds a
+/// damaged table from the chunks themselves.
+fn cut_short(bytes: &[u8], at: usize, parts: &[Part]) -> Option<String> {
+    let counts: Vec<usize> = (parts.iter())
+        .map(|p| usize::try_from(p.chunks?).ok())
+        .collect::<Option<_>>()?;
+    let tables_end = (counts.iter()).try_fold(at, |a, &c| a.checked_add(c.checked_mul(8)?))?;
+    let mut tables = bytes.get(at..tables_end)?.chunks_exact(8);
+    let end = bytes.len() as u64;
+    for (p, (part, &chunks)) in parts.iter().zip(&counts).enumerate() {
+        for k in 0..chunks {
+            let start = u64::from_le_bytes(tables.next()?.try_into().ok()?);
+            if start < tables_end as u64 {
+                continue;
+            }
+            if start >= end
+                || part
+                    .size_field
+                    .is_some_and(|f| !chunk_fits(bytes, start, f))
+            {
+                return Some(format!(
+                    "truncated: part {} of {}, chunk {} of {chunks}, at byte {start}, ends past \
+                     the file's end ({end} bytes)",
+                    p + 1,
+                    parts.len(),
+                    k + 1
+                ));
+            }
+        }
+    }
+    None
+}
+
+/// Whether the chunk at `start`, whose data size field lies `field` bytes past its part
+/// number, ends within `bytes` (a negative size is left to the crate, which says so).
+fn chunk_fits(bytes: &[u8], start: u64, field: usize) -> bool {
+    let size_at = usize::try_from(start)
+        .ok()
+        .and_then(|s| s.checked_add(4 + field));
+    let Some(size) = size_at.and_then(|at| bytes.get(at..at.checked_add(4)?)) else {
+        return false;
+    };
+    let size = i32::from_le_bytes(size.try_into().expect("four bytes"));
+    let after_size = size_at.expect("read above") as u64 + 4;
+    u64::try_from(size).map_or(true, |size| after_size + size <= bytes.len() as u64)
 }
 
 /// Whether `bytes` start as an OpenEXR file does (its four-byte magic number).

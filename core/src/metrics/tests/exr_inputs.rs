@@ -1,5 +1,6 @@
 //! Bad and unusual OpenEXR inputs: refused with what is wrong (not an EXR, cut short, a header
-//! the format forbids, a layer too large), and images whose windows start apart.
+//! the format forbids, a layer too large, a part not read cut short), and images whose
+//! windows start apart.
 
 use super::*;
 
@@ -60,6 +61,15 @@ fn bad_exr_inputs_say_what_is_wrong() {
         e.contains("holds no colour image (channels R, G, B) but range"),
         "{e}"
     );
+    // And one with no channel at all (its channel list emptied) says so.
+    let empty = dir.join("empty.exr");
+    std::fs::write(&empty, without_channels(&bytes)).unwrap();
+    let e = read_exr(&empty).unwrap_err().to_string();
+    assert!(
+        e.contains("empty.exr")
+            && e.contains("holds no colour image (channels R, G, B) but no channel at all"),
+        "{e}"
+    );
     let e = read_exr(&dir).unwrap_err().to_string();
     assert!(e.contains("not a regular file"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
@@ -91,6 +101,74 @@ fn images_whose_windows_start_apart_are_refused() {
     // A mask's window too.
     let e = read_inputs(&shifted, &also, Some(&at_zero)).err().unwrap();
     assert!(matches!(e, MetricsError::OriginMismatch { .. }), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A two-part file cut short in its second part is refused, though the colour part read is
+/// whole: the crate reads only that part's chunks, and read it as whole. Cut in a chunk's
+/// pixels or before a chunk begins, both are said with where, the second part in scan lines
+/// or in tiles; the whole files are read.
+#[test]
+fn a_multi_part_file_cut_short_in_a_part_not_read_is_refused() {
+    use ::exr::prelude::*;
+    let dir = temp_dir("cut-parts");
+    let size = Vec2(8, 64);
+    // The range part's chunks are the file's last: 64 lines of 8 floats (44 bytes each with
+    // their part number, line and size), or 8 tiles of 8 x 8 (280 bytes each with their
+    // part number, four coordinates and size).
+    let lines = Encoding::UNCOMPRESSED;
+    let tiles = Encoding {
+        blocks: Blocks::Tiles(Vec2(8, 8)),
+        ..Encoding::UNCOMPRESSED
+    };
+    let cases = [
+        (
+            lines,
+            "lines",
+            [(10, "chunk 64 of 64"), (100, "chunk 62 of 64")],
+        ),
+        (
+            tiles,
+            "tiles",
+            [(10, "chunk 8 of 8"), (300, "chunk 7 of 8")],
+        ),
+    ];
+    for (encoding, blocks, cuts) in cases {
+        let colour = Layer::new(
+            size,
+            LayerAttributes::named("colour"),
+            Encoding::UNCOMPRESSED,
+            SpecificChannels::rgba(|p: Vec2<usize>| (p.x() as f32, p.y() as f32, 0.5f32, 1f32)),
+        );
+        let range = Layer::new(
+            size,
+            LayerAttributes::named("range"),
+            encoding,
+            SpecificChannels::build()
+                .with_channel("Z")
+                .with_pixel_fn(|p: Vec2<usize>| (p.y() as f32,)),
+        );
+        let whole = dir.join(format!("{blocks}.exr"));
+        (Image::empty(ImageAttributes::new(IntegerBounds::from_dimensions(size))))
+            .with_layer(colour)
+            .with_layer(range)
+            .write()
+            .to_file(&whole)
+            .unwrap();
+        let read = read_exr(&whole).unwrap();
+        assert_eq!((read.width, read.height), (8, 64));
+        let bytes = std::fs::read(&whole).unwrap();
+        for (cut, chunk) in cuts {
+            let name = format!("{blocks}-cut-{cut}.exr");
+            let path = dir.join(&name);
+            std::fs::write(&path, &bytes[..bytes.len() - cut]).unwrap();
+            let e = read_exr(&path).unwrap_err().to_string();
+            assert!(
+                e.contains(&name) && e.contains("truncated: part 2 of 2, ") && e.contains(chunk),
+                "{name}: {e}"
+            );
+        }
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -130,5 +208,22 @@ fn data_window(bytes: &[u8], corners: [i32; 4]) -> Vec<u8> {
     for (k, c) in corners.iter().enumerate() {
         out[at + 4 * k..at + 4 * k + 4].copy_from_slice(&c.to_le_bytes());
     }
+    out
+}
+
+/// `bytes` (a small EXR) with its channel list emptied (the list's terminating null alone);
+/// the pixel data after it is left as it was, so only the header reads.
+fn without_channels(bytes: &[u8]) -> Vec<u8> {
+    let key = b"channels\0chlist\0";
+    let at = bytes
+        .windows(key.len())
+        .position(|w| w == key)
+        .expect("a channels attribute")
+        + key.len();
+    let size = i32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+    let mut out = bytes[..at].to_vec();
+    out.extend(1i32.to_le_bytes());
+    out.push(0);
+    out.extend(&bytes[at + 4 + size..]);
     out
 }
