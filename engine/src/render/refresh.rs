@@ -150,6 +150,15 @@ impl Refresh {
     }
 }
 
+/// A moved object's own bounds placed in render space, where it was or where it is.
+struct MovedBox {
+    /// The axis-aligned box around them, for culling against a face's frustum.
+    aabb: (glam::Vec3, glam::Vec3),
+    /// The placed box's corners, for its rectangle ([`pixel_rect::hull_rect`]): a rotated
+    /// object's axis-aligned box projects onto more pixels than it can cover.
+    corners: [glam::Vec3; 8],
+}
+
 /// The render-space bounds of every object that moved from `old` to `new`, where it was and
 /// where it is.
 fn moved_bounds(
@@ -157,14 +166,18 @@ fn moved_bounds(
     drawables: &[Drawable],
     old: &SceneState,
     new: &SceneState,
-) -> Vec<(glam::Vec3, glam::Vec3)> {
+) -> Vec<MovedBox> {
     let moved = (0..scene.objects.len()).filter(|&i| old.object_moved(new, i));
     moved
         .flat_map(|i| {
             let d = &drawables[6 + i];
             [old, new].map(|s| {
                 let m = s.object_to_render(scene, i);
-                camera::transform_aabb(&m, d.bounds_min, d.bounds_max)
+                MovedBox {
+                    aabb: camera::transform_aabb(&m, d.bounds_min, d.bounds_max),
+                    corners: (pixel_rect::box_corners(d.bounds_min, d.bounds_max))
+                        .map(|c| m.transform_point3(c)),
+                }
             })
         })
         .collect()
@@ -174,19 +187,14 @@ fn moved_bounds(
 /// those bounds project to, merged into disjoint rectangles (a face with more than
 /// [`MAX_RECTS_PER_FACE`] gets their bounding box; one whose rectangles cover it whole gets
 /// no rectangles).
-fn dirty_rects(
-    scene: &Scene,
-    views: &[ViewBasis],
-    size: u32,
-    moved: &[(glam::Vec3, glam::Vec3)],
-) -> Dirty {
+fn dirty_rects(scene: &Scene, views: &[ViewBasis], size: u32, moved: &[MovedBox]) -> Dirty {
     let (near, far) = (scene.cube.near_m, scene.cube.far_m);
     let mut dirty = Dirty::default();
     for (f, view) in views[..6].iter().enumerate() {
         let frustum = camera::Frustum::new(view, near, far);
         let rects: Vec<PixelRect> = (moved.iter())
-            .filter(|&&(lo, hi)| frustum.intersects_aabb(lo, hi))
-            .filter_map(|&(lo, hi)| pixel_rect::box_rect(view, near, size, lo, hi))
+            .filter(|b| frustum.intersects_aabb(b.aabb.0, b.aabb.1))
+            .filter_map(|b| pixel_rect::hull_rect(view, near, size, &b.corners))
             .collect();
         if rects.is_empty() {
             continue;
