@@ -134,6 +134,29 @@ fn read_meta(bytes: &[u8]) -> Result<::exr::meta::MetaData, Error> {
     ::exr::meta::MetaData::read_from_buffered(bytes, false)
 }
 
+/// [`read_meta`] of a whole file's `bytes`, also refusing a multi-part file cut short in a
+/// part (`exr_header::cut_short`): the crate reads only the chunks of the part it decodes.
+/// What decodes pixels reads the header this way; what sizes a file from its first bytes
+/// cannot.
+fn read_whole_meta(bytes: &[u8]) -> Result<::exr::meta::MetaData, Error> {
+    use ::exr::meta::BlockDescription;
+    let meta = read_meta(bytes)?;
+    let parts: Vec<(usize, Option<usize>)> = (meta.headers.iter())
+        .map(|h| {
+            let size_field = match h.blocks {
+                _ if h.deep => None,
+                BlockDescription::ScanLines => Some(4),
+                BlockDescription::Tiles(_) => Some(16),
+            };
+            (h.chunk_count, size_field)
+        })
+        .collect();
+    match super::exr_header::cut_short(bytes, &parts) {
+        Some(why) => Err(Error::Invalid(why.into())),
+        None => Ok(meta),
+    }
+}
+
 /// Where the colour layer [`decode_rgba`] decodes starts (its data window's corner), from the
 /// header alone: specchio writes (0, 0), other tools may crop.
 pub fn rgba_layer_origin(bytes: &[u8]) -> Option<(i32, i32)> {
@@ -160,7 +183,7 @@ pub struct Layer {
 /// ([`layer_sizes`]); a layer of more than [`MAX_CHANNELS`] channels is refused from the
 /// header, before any pixel memory is allocated.
 pub fn decode_channels(bytes: &[u8]) -> Result<Layer, Error> {
-    let meta = read_meta(bytes)?;
+    let meta = read_whole_meta(bytes)?;
     for h in &meta.headers {
         let channels = h.channels.list.len();
         let samples = (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64);
@@ -217,7 +240,7 @@ pub fn decode_rgba_watched(
     stop: &dyn Fn() -> bool,
 ) -> Result<RgbaImage, Error> {
     use ::exr::prelude::{ReadChannels as _, ReadLayers as _};
-    read_meta(bytes)?;
+    read_whole_meta(bytes)?;
     let reader = Stoppable {
         inner: std::io::Cursor::new(bytes),
         stop,
@@ -287,7 +310,7 @@ pub fn is_stopped(e: &Error) -> bool {
 pub fn read_channels(path: &Path) -> Result<Vec<(String, Channel)>, Error> {
     use ::exr::prelude::{ReadChannels as _, ReadLayers as _};
     let bytes = std::fs::read(path)?;
-    read_meta(&bytes)?;
+    read_whole_meta(&bytes)?;
     let image = ::exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()

@@ -8,7 +8,8 @@
 //! - a channel named twice in a part's channel list: the crate reassigned the channels, and
 //!   a comparison of such a file read the wrong colours without a word;
 //! - a multi-part file cut short in a part other than the one read: the crate reads only the
-//!   chunks of the part it decodes, so the file was read as whole.
+//!   chunks of the part it decodes, so the file was read as whole ([`cut_short`], which
+//!   needs the whole file; the rest is checked on the header alone, [`header_fault`]).
 //!
 //! The header is a list of attributes, each a name and a type name (both null-terminated),
 //! a little-endian i32 size and that many bytes of value, ended by an empty name; a
@@ -20,101 +21,94 @@ const MULTI_PART: u32 = 0x1000;
 /// What the header holds that the format forbids (above), said for a user: `"an inverted
 /// window, which OpenEXR does not allow (dataWindow: xMax 0 is less than xMin 3)"`; None when
 /// there is nothing or the header cannot be walked (the crate's own reading then says what is
-/// wrong: cut short, not an EXR).
+/// wrong: cut short, not an EXR). Only the header is read: `bytes` may be the file's first
+/// bytes alone.
 pub fn header_fault(bytes: &[u8]) -> Option<String> {
+    let mut names = std::collections::HashSet::new();
+    let mut part = 0;
+    let visit = |p: usize, name: &[u8], kind: &[u8], value: &[u8]| {
+        if p != part {
+            (part, names) = (p, Default::default());
+        }
+        let named = String::from_utf8_lossy(name);
+        if !names.insert(name.to_vec()) {
+            return Some(format!(
+                "attribute {named} given twice in one header, which OpenEXR does not allow"
+            ));
+        }
+        value_fault(&named, kind, value)
+    };
+    walk(bytes, visit).err().flatten()
+}
+
+/// The headers' attributes, part by part: `visit(part, name, type name, value)` for each, up
+/// to the first fault it says (`Err(Some)`); `Ok` with where the headers end (a multi-part
+/// file's offset tables begin there), and whether the file is multi-part; `Err(None)` where
+/// the bytes are not an EXR header or end inside it.
+fn walk(
+    bytes: &[u8],
+    mut visit: impl FnMut(usize, &[u8], &[u8], &[u8]) -> Option<String>,
+) -> Result<(usize, bool), Option<String>> {
     if !has_magic(bytes) {
-        return None;
+        return Err(None);
     }
-    let version = u32::from_le_bytes(bytes.get(4..8)?.try_into().ok()?);
+    let version = bytes.get(4..8).ok_or(None)?;
+    let version = u32::from_le_bytes(version.try_into().expect("four bytes"));
+    let multi_part = version & MULTI_PART != 0;
     let mut at = 8;
-    let mut parts = Vec::new();
-    loop {
-        let mut part = Part::default();
-        let mut names = std::collections::HashSet::new();
+    for part in 0.. {
+        let mut attributes = 0;
         loop {
-            let name = c_string(bytes, &mut at)?;
+            let name = c_string(bytes, &mut at).ok_or(None)?;
             if name.is_empty() {
                 break;
             }
-            let kind = c_string(bytes, &mut at)?;
-            let size = i32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?);
+            let kind = c_string(bytes, &mut at).ok_or(None)?;
+            let size = bytes.get(at..at + 4).ok_or(None)?;
+            let size = i32::from_le_bytes(size.try_into().expect("four bytes"));
             at += 4;
-            let value = bytes.get(at..at.checked_add(usize::try_from(size).ok()?)?)?;
+            let end = usize::try_from(size).ok().and_then(|s| at.checked_add(s));
+            let value = end.and_then(|end| bytes.get(at..end)).ok_or(None)?;
             at += value.len();
-            let named = String::from_utf8_lossy(name);
-            if !names.insert(name) {
-                return Some(format!(
-                    "attribute {named} given twice in one header, which OpenEXR does not allow"
-                ));
+            attributes += 1;
+            if let Some(why) = visit(part, name, kind, value) {
+                return Err(Some(why));
             }
-            if let Some(why) = value_fault(&named, kind, value) {
-                return Some(why);
-            }
-            part.read(&named, value);
         }
-        // A single-part header ends at its first empty name (the crate reads every chunk of
-        // its one part); a multi-part file's list of headers ends with an empty one.
-        if version & MULTI_PART == 0 {
-            return None;
-        }
-        if names.is_empty() {
-            return cut_short(bytes, at, &parts);
-        }
-        parts.push(part);
-    }
-}
-
-/// What a multi-part file's part says of its chunks: how many (`chunkCount`, which such a
-/// file must have) and how each begins (`type`).
-#[derive(Default)]
-struct Part {
-    chunks: Option<u64>,
-    /// Bytes from a chunk's start to its data size field (after the part number): a scan
-    /// line's y, or a tile's four coordinates; None for deep data (left to the crate).
-    size_field: Option<usize>,
-}
-
-impl Part {
-    fn read(&mut self, name: &str, value: &[u8]) {
-        match name {
-            "chunkCount" => {
-                let count = value.try_into().map(i32::from_le_bytes).ok();
-                self.chunks = count.and_then(|c| u64::try_from(c).ok());
-            }
-            "type" => {
-                self.size_field = match value.strip_suffix(b"\0").unwrap_or(value) {
-                    b"scanlineimage" => Some(4),
-                    b"tiledimage" => Some(16),
-                    _ => None,
-                }
-            }
-            _ => {}
+        // A single-part header ends at its first empty name; a multi-part file's list of
+        // headers ends with an empty one.
+        if !multi_part || attributes == 0 {
+            break;
         }
     }
+    Ok((at, multi_part))
 }
 
-/// A chunk of a multi-part file that starts or ends past the file's end, from the offset
-/// tables at `at` (one per part, in order); None when none does or the tables cannot be
-/// read. An offset into the tables or the headers is left to the crate, which rebuilds a
-/// damaged table from the chunks themselves.
-fn cut_short(bytes: &[u8], at: usize, parts: &[Part]) -> Option<String> {
-    let counts: Vec<usize> = (parts.iter())
-        .map(|p| usize::try_from(p.chunks?).ok())
-        .collect::<Option<_>>()?;
-    let tables_end = (counts.iter()).try_fold(at, |a, &c| a.checked_add(c.checked_mul(8)?))?;
+/// A chunk of a multi-part file's part that starts or ends past the file's end, said for a
+/// user; None when none does, the file is single-part (the crate reads every chunk of its one
+/// part) or the offset tables cannot be read (the crate says so). `parts` are the crate's
+/// reading of the headers, in order: each part's chunk count and the bytes from a chunk's
+/// start to its data size field after the part number (a scan line's y, 4; a tile's four
+/// coordinates, 16; None for deep data, whose chunks are left to the crate). `bytes` must be
+/// the whole file: the crate reads only the chunks of the part it decodes, so a file cut
+/// short in another part read as whole.
+pub fn cut_short(bytes: &[u8], parts: &[(usize, Option<usize>)]) -> Option<String> {
+    let (at, multi_part) = walk(bytes, |_, _, _, _| None).ok()?;
+    if !multi_part {
+        return None;
+    }
+    let tables_end = (parts.iter()).try_fold(at, |a, &(c, _)| a.checked_add(c.checked_mul(8)?))?;
     let mut tables = bytes.get(at..tables_end)?.chunks_exact(8);
     let end = bytes.len() as u64;
-    for (p, (part, &chunks)) in parts.iter().zip(&counts).enumerate() {
+    for (p, &(chunks, size_field)) in parts.iter().enumerate() {
         for k in 0..chunks {
             let start = u64::from_le_bytes(tables.next()?.try_into().ok()?);
+            // An offset into the headers or the tables is not a chunk's: the crate, not
+            // asked to be pedantic, does not check it either.
             if start < tables_end as u64 {
                 continue;
             }
-            if start >= end
-                || part
-                    .size_field
-                    .is_some_and(|f| !chunk_fits(bytes, start, f))
-            {
+            if start >= end || size_field.is_some_and(|f| !chunk_fits(bytes, start, f)) {
                 return Some(format!(
                     "truncated: part {} of {}, chunk {} of {chunks}, at byte {start}, ends past \
                      the file's end ({end} bytes)",
