@@ -48,7 +48,9 @@ pub fn run(args: &Args) -> Result<ExitCode> {
         fitted => fitted
             .with_context(|| format!("{}: cannot fit the central models", args.scene.display()))?,
     };
-    let record = folder::write(&out, &args.out, (&cal, &map), &args.scene, args.time)?;
+    let topic = specchio::sensor::bag::kalibr_image_topic(scene.sensor.imaging.is_some());
+    let scene_and_topic = (args.scene.as_path(), topic);
+    let record = folder::write(&out, &args.out, (&cal, &map), scene_and_topic, args.time)?;
     print_summary(&record, &cal);
     // A signal that came after the last check still stops the run: nothing is placed.
     interrupt::check("before placing the output")?;

@@ -134,7 +134,8 @@ pub fn calibrate<'py>(
                     errors::message(&e)
                 )
             })?;
-        let record = folder::write(&staged, &out, (&cal, &map), &scene.path, time)
+        let topic = specchio::sensor::bag::kalibr_image_topic(scene.scene.sensor.imaging.is_some());
+        let record = folder::write(&staged, &out, (&cal, &map), (&scene.path, topic), time)
             .map_err(|e| errors::message(&e))?;
         if watch.stop() {
             return Err("stopped before placing the output: nothing was written".into());

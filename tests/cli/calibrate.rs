@@ -63,6 +63,13 @@ fn check_exports_hold_the_recorded_models(out: &Path, record: &CalibrationRecord
     let (kalibr, kalibr_size) = export::read_kalibr_yaml(&read("kalibr_camchain.yaml")).unwrap();
     assert_eq!((opencv, opencv_size), (kalibr, kalibr_size));
     assert_eq!(opencv_size, size);
+    // The scenes calibrated here have no [sensor.imaging]: a dataset's bag of them holds the
+    // clean image, which Kalibr's tools are to read.
+    let camchain = read("kalibr_camchain.yaml");
+    assert!(
+        camchain.contains("  rostopic: /camera/image_clean\n"),
+        "{camchain}"
+    );
     let json = record.omnidir.model;
     let pairs = [
         (opencv.fx, json.fx),

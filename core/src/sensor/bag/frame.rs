@@ -5,7 +5,7 @@ use glam::{DQuat, DVec3};
 
 use super::BagError;
 use crate::sensor::dataset::{GeometryFrame, PoseRecord, POSE_FILE};
-use crate::sensor::imaging::CAMERA_IMAGE_FILE;
+pub use crate::sensor::imaging::CAMERA_IMAGE_FILE;
 use crate::sensor::layers::{CAMERA_FILE, ID_FILE, IMAGE_FILES, POINTS_FILE};
 use crate::sensor::layers::{RANGE16_FILE, RANGE_FILE};
 

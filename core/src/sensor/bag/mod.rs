@@ -25,7 +25,7 @@ use glam::{DQuat, DVec3};
 
 use frame::{FramePose, Placed, ReadFile};
 pub use omni::Omni;
-pub use topics::{Topic, TOPICS};
+pub use topics::{kalibr_image_topic, Topic, TOPICS};
 
 /// The bag's folder in the dataset folder, and its files.
 pub const BAG_FOLDER: &str = "bag";
@@ -114,7 +114,8 @@ pub fn write<W: Write + Seek>(
             rotation: DQuat::IDENTITY,
         };
         statics.push(transform(start, CAMERA_OPTICAL, omni::OMNI, &viewpoint));
-        bag.attach(start, &omni.attachments)?;
+        let camera_image = frames > 0 && read(0, frame::CAMERA_IMAGE_FILE)?.is_some();
+        bag.attach(start, &omni.attachments(kalibr_image_topic(camera_image)))?;
     }
     bag.publish(&topics::TF_STATIC, start, &msgs::tf(&statics))?;
     for i in 0..frames {

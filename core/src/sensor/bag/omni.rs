@@ -14,7 +14,7 @@ use glam::DVec3;
 
 use super::msgs::Intrinsics;
 use crate::scene::Scene;
-use crate::sensor::central::{export, Calibration, FitError, MeiModel, Watch};
+use crate::sensor::central::{export, Calibration, FitError, MeiModel, OcamModel, Watch};
 use crate::sensor::SensorOptics;
 
 /// The TF frame of the unified model.
@@ -27,9 +27,8 @@ pub struct Omni {
     pub height: u32,
     /// The single viewpoint in the sensor camera's optical frame (m).
     pub viewpoint_in_camera: DVec3,
-    /// The files `specchio calibrate` writes for the tools, attached to the bag: (name, media
-    /// type, bytes).
-    pub attachments: Vec<(&'static str, &'static str, Vec<u8>)>,
+    /// The OCamCalib model fitted with it, for the attachments.
+    ocam: OcamModel,
 }
 
 impl Omni {
@@ -63,31 +62,37 @@ impl Omni {
             v.dot(axis(view.forward)),
         );
         let (m, w, h) = (cal.mei, cal.width, cal.height);
-        let yaml = "application/yaml";
-        let attachments = vec![
-            (
-                "opencv_omnidir.yaml",
-                yaml,
-                export::opencv_yaml(&m, w, h).into_bytes(),
-            ),
-            (
-                "kalibr_camchain.yaml",
-                yaml,
-                export::kalibr_yaml(&m, w, h).into_bytes(),
-            ),
-            (
-                "ocamcalib_calib_results.txt",
-                "text/plain",
-                export::ocamcalib_txt(&cal.ocam).into_bytes(),
-            ),
-        ];
         Ok(Some(Self {
             model: m,
             width: w,
             height: h,
             viewpoint_in_camera,
-            attachments,
+            ocam: cal.ocam,
         }))
+    }
+
+    /// The files `specchio calibrate` writes for the tools, attached to the bag: (name, media
+    /// type, bytes); the Kalibr camchain names `image_topic`, the bag's camera image topic.
+    pub fn attachments(&self, image_topic: &str) -> Vec<(&'static str, &'static str, Vec<u8>)> {
+        let (m, w, h) = (&self.model, self.width, self.height);
+        let yaml = "application/yaml";
+        vec![
+            (
+                "opencv_omnidir.yaml",
+                yaml,
+                export::opencv_yaml(m, w, h).into_bytes(),
+            ),
+            (
+                "kalibr_camchain.yaml",
+                yaml,
+                export::kalibr_yaml(m, w, h, image_topic).into_bytes(),
+            ),
+            (
+                "ocamcalib_calib_results.txt",
+                "text/plain",
+                export::ocamcalib_txt(&self.ocam).into_bytes(),
+            ),
+        ]
     }
 
     /// `/omni/camera_info`'s numbers.

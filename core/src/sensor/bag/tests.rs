@@ -395,7 +395,8 @@ fn a_central_mirrors_model_sits_at_its_focus_and_a_sphere_has_none() {
     let info = omni.intrinsics();
     assert_eq!(info.distortion_model, "mei");
     assert!((info.d[0] - 2.0 / 5f64.sqrt()).abs() < 1e-6, "{:?}", info.d);
-    let names: Vec<&str> = omni.attachments.iter().map(|a| a.0).collect();
+    let attachments = omni.attachments("/camera/image_clean");
+    let names: Vec<&str> = attachments.iter().map(|a| a.0).collect();
     assert_eq!(
         names,
         [
@@ -409,6 +410,36 @@ fn a_central_mirrors_model_sits_at_its_focus_and_a_sphere_has_none() {
         Omni::of_scene(&sphere, &Unwatched).unwrap().is_none(),
         "no single viewpoint"
     );
+    // The camchain attached to a bag names the image topic the bag holds (Kalibr's tools read
+    // the images from it): the camera's image where the frames have one, else the clean one.
+    let mut files = files();
+    for i in 0..2 {
+        let mut png = Vec::new();
+        crate::image::png::encode_rgb8(&mut png, 4, 2, &[128; 24]).unwrap();
+        files.insert((i, "sensor.png"), png);
+    }
+    let extras = Extras {
+        omni: Some(&omni),
+        ..Extras::default()
+    };
+    for (topic, without_camera) in [("/camera/image_raw", false), ("/camera/image_clean", true)] {
+        if without_camera {
+            files.retain(|(_, name), _| *name != "sensor.camera.png");
+        }
+        let read = |i: usize, n: &str| Ok(files.get(&(i, n)).cloned());
+        let mut out = Cursor::new(Vec::new());
+        write(&mut out, std::path::Path::new("t.mcap"), 2, &read, &extras).unwrap();
+        let bytes = out.into_inner();
+        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+        let camchain = (summary.attachment_indexes.iter())
+            .map(|index| mcap::read::attachment(&bytes, index).unwrap())
+            .find(|a| a.name == "kalibr_camchain.yaml")
+            .unwrap();
+        let text = String::from_utf8(camchain.data.to_vec()).unwrap();
+        assert!(text.contains(&format!("rostopic: {topic}\n")), "{text}");
+        let topics = messages_of(&files, &Extras::default());
+        assert!(topics.contains_key(topic), "{topic} not in the bag");
+    }
 }
 
 /// A file system that takes `room` bytes and then says it is full.

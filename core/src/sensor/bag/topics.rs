@@ -58,6 +58,17 @@ pub const IMAGE_RAW: Topic = Topic {
     latched: false,
     about: "the camera image (layer camera): rgb16 with the code in the top bits, or rgb8",
 };
+/// The image topic a Kalibr camchain names (`rostopic`) for a bag whose frames hold the
+/// camera's image (a scene with `[sensor.imaging]`, a dataset with the layer `camera`) or not:
+/// that image, as a real camera gives it, else the clean image. A calibration alone names the
+/// one a dataset of its scene would hold with the default layers.
+pub fn kalibr_image_topic(camera_image: bool) -> &'static str {
+    match camera_image {
+        true => IMAGE_RAW.name,
+        false => IMAGE_CLEAN.name,
+    }
+}
+
 pub const IMAGE_CLEAN: Topic = Topic {
     name: "/camera/image_clean",
     msg: msgs::image_type,

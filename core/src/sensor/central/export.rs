@@ -59,8 +59,10 @@ pub fn opencv_yaml(m: &MeiModel, width: u32, height: u32) -> String {
     )
 }
 
-/// `kalibr_camchain.yaml` (Kalibr has no skew: the model must have none).
-pub fn kalibr_yaml(m: &MeiModel, width: u32, height: u32) -> String {
+/// `kalibr_camchain.yaml` (Kalibr has no skew: the model must have none), naming `rostopic`
+/// as the camera's image topic: the one a specchio bag holds its images on
+/// (`sensor::bag::kalibr_image_topic`), which Kalibr's tools read the images from.
+pub fn kalibr_yaml(m: &MeiModel, width: u32, height: u32, rostopic: &str) -> String {
     assert_eq!(
         m.skew, 0.0,
         "Kalibr's omni model has no skew; fits here fix it at 0"
@@ -69,7 +71,7 @@ pub fn kalibr_yaml(m: &MeiModel, width: u32, height: u32) -> String {
         "# Kalibr camchain: Mei's unified model (omni) with radtan distortion, fitted by specchio.\n\
          cam0:\n  camera_model: omni\n  intrinsics: [{}]\n  distortion_model: radtan\n  \
          distortion_coeffs: [{}]\n  resolution: [{width}, {height}]\n  cam_overlaps: []\n  \
-         rostopic: /specchio/sensor/image_raw\n",
+         rostopic: {rostopic}\n",
         list(&[m.xi, m.fx, m.fy, m.cx, m.cy]),
         list(&[m.k1, m.k2, m.p1, m.p2]),
     )

@@ -28,12 +28,13 @@ pub const CHECK_POINTS: &str = "check_points.json";
 pub const RECORD: &str = "calibration.json";
 
 /// Writes the folder's files into `dir` through `out`, `calibration.json` last; returns the
-/// record written.
+/// record written. The Kalibr camchain names `image_topic` (`sensor::bag::kalibr_image_topic`
+/// of the scene).
 pub fn write(
     out: &Transaction,
     dir: &Path,
     (cal, map): (&Calibration, &RayMap),
-    scene: &Path,
+    (scene, image_topic): (&Path, &str),
     time_s: f64,
 ) -> Result<CalibrationRecord, OutputError> {
     let (w, h) = (cal.width, cal.height);
@@ -43,7 +44,7 @@ pub fn write(
     )?;
     out.write_bytes(
         &dir.join(KALIBR),
-        export::kalibr_yaml(&cal.mei, w, h).as_bytes(),
+        export::kalibr_yaml(&cal.mei, w, h, image_topic).as_bytes(),
     )?;
     out.write_bytes(
         &dir.join(OCAMCALIB),

@@ -526,7 +526,9 @@ fn the_exports_read_back_to_the_same_models() {
     let (w, h) = (cal.width, cal.height);
     let (mei, size) = export::read_opencv_yaml(&export::opencv_yaml(&cal.mei, w, h)).unwrap();
     assert_eq!((mei, size), (cal.mei, [w, h]));
-    let (mei, size) = export::read_kalibr_yaml(&export::kalibr_yaml(&cal.mei, w, h)).unwrap();
+    let (mei, size) =
+        export::read_kalibr_yaml(&export::kalibr_yaml(&cal.mei, w, h, "/camera/image_clean"))
+            .unwrap();
     assert_eq!((mei, size), (cal.mei, [w, h]));
     let ocam = export::read_ocamcalib_txt(&export::ocamcalib_txt(&cal.ocam)).unwrap();
     assert_eq!(ocam, cal.ocam);
