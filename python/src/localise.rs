@@ -143,6 +143,12 @@ impl Descriptor {
     /// `sensor.panorama.cylindrical.exr`).
     fn describe(&self, py: Python<'_>, panorama: &Bound<'_, PyAny>) -> PyResult<Signature> {
         let image = panorama_image(py, panorama)?;
+        if let Some(why) = self.kind.k_fault(self.k, image.width) {
+            let k = self.k;
+            return Err(errors::error(format!(
+                "k={k}: {why}; a smaller k or a wider panorama"
+            )));
+        }
         let descriptor = self.kind.build(self.k);
         let inner = py.detach(|| descriptor.describe(&image));
         Ok(Signature {

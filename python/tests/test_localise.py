@@ -115,6 +115,15 @@ def test_integers_and_rgba_are_panoramas_too():
         (lambda: specchio.Descriptor().describe(np.zeros((4, 8))), "panorama: an array of shape [4, 8]"),
         (lambda: specchio.Descriptor().describe(np.zeros((0, 8, 3))), "panorama: an array of shape [0, 8, 3]"),
         (lambda: specchio.Descriptor().describe([["a"]]), "panorama: not an array of numbers"),
+        # Past what the panorama holds: every larger k would describe it alike.
+        (
+            lambda: specchio.Descriptor(k=33).describe(np.zeros((4, 512, 3))),
+            "k=33: column-shift takes at most 32 for a panorama 512 columns wide",
+        ),
+        (
+            lambda: specchio.Descriptor("fourier", k=10).describe(np.zeros((4, 16, 3))),
+            "k=10: fourier takes at most 9 for a panorama 16 columns wide",
+        ),
         (
             lambda: specchio.Descriptor().describe(np.full((2, 3, 3), np.nan)),
             "panorama: [0, 0, 0] is NaN",

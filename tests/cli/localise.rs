@@ -15,10 +15,26 @@ fn bad_options_are_refused() {
         .map(|i| i.to_string())
         .collect::<Vec<_>>()
         .join(",");
-    let cases: [(&[&str], &str); 13] = [
+    let cases: [(&[&str], &str); 15] = [
         (&["--grid", "0"], "--grid"),
         (&["--grid", "nan"], "--grid"),
         (&["--k", "0"], "--k"),
+        // Past what the sensor's panorama holds: every larger k would describe alike.
+        (
+            &["--k", "200"],
+            "--k 200: column-shift takes at most 38 for a panorama 608 columns wide",
+        ),
+        (
+            &[
+                "--descriptor",
+                "fourier",
+                "--k",
+                "20",
+                "--sensor-size",
+                "16",
+            ],
+            "--k 20: fourier takes at most 19 for a panorama 36 columns wide (its rows have 19",
+        ),
         (&["--queries", "0"], "--queries"),
         (&["--time", "-1"], "--time"),
         (&["--descriptor", "sift"], "`sift` is not a descriptor"),
@@ -432,4 +448,38 @@ fn the_held_out_room_is_recognised_before_and_after_objects_move() {
             row["query_time_s"]
         );
     }
+}
+
+/// Where the sensor's panorama holds less than the default k (a 16² sensor's is 36 columns:
+/// column-shift takes at most 2), the run takes that most, and says it: the report's line and
+/// both records give the k that made the signatures (columns 32 = 16 k).
+#[test]
+fn the_default_k_is_what_a_small_panorama_holds_and_is_recorded() {
+    let out = temp_dir("localise-small-k");
+    let scene = root().join("scenes/thesis-room.toml");
+    let args = [
+        "localise",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--grid",
+        "4",
+        "--queries",
+        "2",
+        "--sensor-size",
+        "16",
+    ];
+    let result = specchio(&args);
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    assert!(stdout.contains("column-shift k=2, 16² sensor"), "{stdout}");
+    assert_eq!(json(&out.join("localise.json"))["coefficients"], 2);
+    let landmarks = json(&out.join("landmarks.json"));
+    assert_eq!(landmarks["coefficients"], 2);
+    assert_eq!(landmarks["landmarks"][0]["signature"]["columns"], 32);
+    std::fs::remove_dir_all(&out).unwrap();
 }

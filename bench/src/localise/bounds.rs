@@ -58,7 +58,7 @@ pub(super) fn check_work(args: &Args, plan: &Plan) -> Result<()> {
             plan.landmark_poses.len(),
             plan.descriptor.pair_cost(w, h),
             plan.descriptor.name(),
-            args.k
+            plan.k
         );
     }
     warn_if_unreadable(plan);
@@ -94,7 +94,7 @@ pub(super) fn check_memory(args: &Args, plan: &Plan) -> Result<()> {
     // A signature is at most 16k values a panorama row (column-shift; fourier keeps 2k).
     let values = u64::from(plan.body.layout.height)
         * u64::from(specchio::sensor::localise::shift::COLUMNS_PER_K)
-        * u64::from(args.k);
+        * u64::from(plan.k);
     let landmarks = plan.landmark_poses.len() as u64 * plan.sources.len() as u64;
     // The cube `--cube-size` makes, where a source fills one (the scene's own size is not
     // used: the estimate once counted it whatever --cube-size said, and its hint failed).

@@ -43,6 +43,8 @@ pub const MAX_QUERIES: u32 = 100_000;
 /// The largest `--k` (Fourier coefficients per row, or 16 k column-shift columns, at most the
 /// panorama's width): beyond this the signature only grows.
 pub const MAX_COEFFICIENTS: u32 = 256;
+/// `--k` when none is given (128 columns for column-shift: docs/sensor.md).
+const DEFAULT_K: u32 = 8;
 /// The observer is not part of the experiment; it is drawn this small to cost nothing.
 const OBSERVER_PX: u32 = 8;
 
@@ -59,10 +61,11 @@ pub struct Args {
           value_parser = real(0.0, true, 100.0))]
     grid: f64,
     /// Descriptor size, 1..=256 (fourier: the first k DFT terms per panorama row;
-    /// column-shift: 16k columns).
-    #[arg(long, default_value_t = 8, allow_negative_numbers = true,
+    /// column-shift: 16k columns), at most what the sensor's panorama holds (said where it is
+    /// more) [default: 8, or that most where it is less]
+    #[arg(long = "k", value_name = "K", allow_negative_numbers = true,
           value_parser = whole(1..=MAX_COEFFICIENTS))]
-    k: u32,
+    k_given: Option<u32>,
     /// Number of random query poses, 1..=100000.
     #[arg(long, default_value_t = 200, allow_negative_numbers = true,
           value_parser = whole(1..=MAX_QUERIES))]
@@ -117,6 +120,8 @@ pub struct Args {
 /// Everything fixed before the first image: settings, the robot, the poses.
 struct Plan {
     descriptor: Box<dyn Descriptor>,
+    /// The descriptor's size: `--k`, or the default where the panorama holds it.
+    k: u32,
     body: Body,
     sources: Vec<Source>,
     times: Vec<f64>,
@@ -262,8 +267,17 @@ fn plan(args: &Args) -> Result<Plan> {
     checks::cube_options_apply(args, &sources)?;
     let optics = SensorOptics::at(&scene, 0.0);
     let layout = PanoramaLayout::for_sensor(&optics, PanoramaKind::Cylindrical);
+    let k = match args.k_given {
+        Some(k) => k,
+        // A small sensor's panorama may hold less than the default asks.
+        None => DEFAULT_K.min(kind.largest_k(layout.width)),
+    };
+    if let Some(why) = kind.k_fault(k, layout.width) {
+        bail!("--k {k}: {why}; a smaller --k, or a larger --sensor-size for a wider panorama");
+    }
     let mut plan = Plan {
-        descriptor: kind.build(args.k),
+        descriptor: kind.build(k),
+        k,
         body: Body {
             scene,
             layout,
@@ -473,7 +487,7 @@ fn report(
     Ok(Report {
         scene: args.scene.display().to_string(),
         descriptor: d.name(),
-        coefficients: args.k,
+        coefficients: plan.k,
         grid_m: args.grid,
         seed: args.seed,
         queries_at_landmarks: args.queries_at_landmarks,
@@ -533,7 +547,7 @@ fn database(args: &Args, plan: &Plan, source: Source, landmarks: Vec<Landmark>) 
         scene_origin_m: plan.body.scene.origin.to_array(),
         source: source.name().to_owned(),
         descriptor: plan.descriptor.name().to_owned(),
-        coefficients: args.k,
+        coefficients: plan.k,
         grid_m: args.grid,
         sensor_px: args.sensor_size,
         cube_px: checks::samples_cube(source).then(|| args.cube_size_or_default()),

@@ -120,6 +120,37 @@ impl DescriptorKind {
         Self::ALL.map(Self::name).join(", ")
     }
 
+    /// The largest `k` whose descriptor a panorama `width` columns wide holds: a row's
+    /// spectrum has `width / 2 + 1` distinct Fourier coefficients, and column shift takes
+    /// `16 k` of the panorama's own columns. Past it a descriptor keeps what the panorama has,
+    /// so every larger `k` would describe alike under another name.
+    pub fn largest_k(self, width: u32) -> u32 {
+        match self {
+            Self::Fourier => width / 2 + 1,
+            Self::ColumnShift => (width / shift::COLUMNS_PER_K).max(1),
+        }
+    }
+
+    /// Why `k` is past [`Self::largest_k`] of a panorama `width` columns wide, said for a
+    /// user after the option's name: `"fourier takes at most 49 for a panorama 96 columns
+    /// wide (its rows have 49 distinct Fourier coefficients)"`.
+    pub fn k_fault(self, k: u32, width: u32) -> Option<String> {
+        let most = self.largest_k(width);
+        let why = match self {
+            Self::Fourier => format!("its rows have {most} distinct Fourier coefficients"),
+            Self::ColumnShift => format!(
+                "it takes {} k of the panorama's columns",
+                shift::COLUMNS_PER_K
+            ),
+        };
+        (k > most).then(|| {
+            format!(
+                "{} takes at most {most} for a panorama {width} columns wide ({why})",
+                self.name()
+            )
+        })
+    }
+
     /// The descriptor, with `coefficients` its size parameter `k` (Fourier: coefficients per
     /// row; column shift: `16 k` columns).
     pub fn build(self, coefficients: u32) -> Box<dyn Descriptor> {
