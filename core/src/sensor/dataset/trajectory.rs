@@ -102,8 +102,11 @@ pub fn read(path: &Path) -> Result<Vec<Pose>, TrajectoryError> {
     };
     check(path, &poses)?;
     // One turn is enough: a heading of 1e6 degrees would lose its digits in single precision.
+    // Adding +0 makes a file's -0 a 0, which the records would otherwise write as -0.0.
     for p in &mut poses {
-        p.heading_deg = p.heading_deg.rem_euclid(360.0);
+        p.heading_deg = p.heading_deg.rem_euclid(360.0) + 0.0;
+        p.time_s += 0.0;
+        p.position += 0.0;
     }
     Ok(poses)
 }
@@ -362,7 +365,7 @@ mod tests {
     }
 
     /// A byte-order mark before the header (spreadsheets write one) and headings of many
-    /// turns, read as the same turn.
+    /// turns, read as the same turn; a -0 as 0.
     #[test]
     fn a_bom_is_skipped_and_headings_are_one_turn() {
         let dir = std::env::temp_dir().join(format!("specchio-trajectory-{}", std::process::id()));
@@ -370,13 +373,17 @@ mod tests {
         let path = dir.join("bom.csv");
         std::fs::write(
             &path,
-            "\u{feff}time,x,y,z,heading\n0,1,3,2,-90\n1,1,3,2,1e6\n",
+            "\u{feff}time,x,y,z,heading\n-0,1,3,2,-90\n1,1,3,2,1e6\n2,-0,3,2,-0\n",
         )
         .unwrap();
         let poses = read(&path).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(poses[0].heading_deg, 270.0);
         assert_eq!(poses[1].heading_deg, 1e6 % 360.0);
+        // A -0 is read as 0: records would write it as -0.0.
+        let p = &poses[2];
+        let signs = [poses[0].time_s, p.position.x, p.heading_deg].map(|v| v.is_sign_negative());
+        assert_eq!(signs, [false, false, false]);
     }
 
     /// A spreadsheet's quoted header and cells read as plain ones; a file whose text is JSON
