@@ -451,8 +451,8 @@ fn the_held_out_room_is_recognised_before_and_after_objects_move() {
 }
 
 /// Where the sensor's panorama holds less than the default k (a 16² sensor's is 36 columns:
-/// column-shift takes at most 2), the run takes that most, and says it: the report's line and
-/// both records give the k that made the signatures (columns 32 = 16 k).
+/// column-shift takes at most 3, which takes all 36), the run takes that most, and says it:
+/// the report's line and both records give the k that made the signatures.
 #[test]
 fn the_default_k_is_what_a_small_panorama_holds_and_is_recorded() {
     let out = temp_dir("localise-small-k");
@@ -476,10 +476,31 @@ fn the_default_k_is_what_a_small_panorama_holds_and_is_recorded() {
         "{}",
         String::from_utf8_lossy(&result.stderr)
     );
-    assert!(stdout.contains("column-shift k=2, 16² sensor"), "{stdout}");
-    assert_eq!(json(&out.join("localise.json"))["coefficients"], 2);
+    assert!(stdout.contains("column-shift k=3, 16² sensor"), "{stdout}");
+    assert_eq!(json(&out.join("localise.json"))["coefficients"], 3);
     let landmarks = json(&out.join("landmarks.json"));
-    assert_eq!(landmarks["coefficients"], 2);
-    assert_eq!(landmarks["landmarks"][0]["signature"]["columns"], 32);
+    assert_eq!(landmarks["coefficients"], 3);
+    assert_eq!(landmarks["landmarks"][0]["signature"]["columns"], 36);
+    // A file recording a k past what the panorama holds (as runs before 1 December 2026
+    // wrote) is said to be taken again, not only to differ.
+    let saved = out.join("landmarks.json");
+    let old = std::fs::read_to_string(&saved)
+        .unwrap()
+        .replace("\"coefficients\": 3", "\"coefficients\": 8");
+    let old_file = out.with_extension("old.json");
+    std::fs::write(&old_file, old).unwrap();
+    let again = out.with_extension("again");
+    let mut with_saved = args.to_vec();
+    with_saved[3] = again.to_str().unwrap();
+    with_saved.extend(["--landmarks", old_file.to_str().unwrap()]);
+    let result = specchio(&with_saved);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success());
+    assert!(
+        stderr.contains("field `coefficients` is 8: --k 8: column-shift takes at most 3")
+            && stderr.contains("take the landmarks again"),
+        "{stderr}"
+    );
+    std::fs::remove_file(&old_file).unwrap();
     std::fs::remove_dir_all(&out).unwrap();
 }

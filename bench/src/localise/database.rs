@@ -168,6 +168,24 @@ fn check_matches(db: &Database, run: &Database) -> Result<(), String> {
             "--cube-size",
         ),
     ];
+    // Before 1 December 2026 a k past what the panorama holds was cut silently and recorded
+    // as asked: such a file's k cannot be asked for now, so say what to do instead.
+    let kind = specchio::sensor::localise::DescriptorKind::parse(&run.descriptor);
+    let width = run.panorama["width"]
+        .as_u64()
+        .and_then(|w| u32::try_from(w).ok());
+    if let (Some(kind), Some(width)) = (kind, width) {
+        if db.descriptor == run.descriptor && db.coefficients != run.coefficients {
+            if let Some(why) = kind.k_fault(db.coefficients, width) {
+                return Err(format!(
+                    "field `coefficients` is {}: --k {0}: {why}; files written before 1 \
+                     December 2026 recorded a k the panorama could not hold (their signatures \
+                     were made with less): take the landmarks again",
+                    db.coefficients
+                ));
+            }
+        }
+    }
     // A source that samples no cube does not read the field: files written before
     // 30 November 2026 recorded `--cube-size` for traced lookups too.
     let read = |field: &str| field != "cube_px" || run.cube_px.is_some();

@@ -122,12 +122,13 @@ impl DescriptorKind {
 
     /// The largest `k` whose descriptor a panorama `width` columns wide holds: a row's
     /// spectrum has `width / 2 + 1` distinct Fourier coefficients, and column shift takes
-    /// `16 k` of the panorama's own columns. Past it a descriptor keeps what the panorama has,
-    /// so every larger `k` would describe alike under another name.
+    /// `16 k` of the panorama's own columns, all of them from the `k` whose `16 k` first
+    /// reaches `width`. Past it a descriptor keeps what the panorama has, so every larger `k`
+    /// would describe alike under another name.
     pub fn largest_k(self, width: u32) -> u32 {
         match self {
             Self::Fourier => width / 2 + 1,
-            Self::ColumnShift => (width / shift::COLUMNS_PER_K).max(1),
+            Self::ColumnShift => width.div_ceil(shift::COLUMNS_PER_K).max(1),
         }
     }
 
@@ -139,7 +140,7 @@ impl DescriptorKind {
         let why = match self {
             Self::Fourier => format!("its rows have {most} distinct Fourier coefficients"),
             Self::ColumnShift => format!(
-                "it takes {} k of the panorama's columns",
+                "it takes {} k of the panorama's columns, all of them at k = {most}",
                 shift::COLUMNS_PER_K
             ),
         };
