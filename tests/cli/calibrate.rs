@@ -296,6 +296,33 @@ fn bad_input_is_refused_without_output() {
     assert!(!out.exists());
 }
 
+/// A scene with a camera (`[sensor.imaging]`): its dataset's bag holds the camera's image on
+/// `/camera/image_raw`, so that is the topic the camchain names, and the model is the clean
+/// scene's (the camera changes codes, not rays).
+#[test]
+fn a_scene_with_a_camera_names_the_raw_topic() {
+    let dir = temp_dir("calibrate-camera");
+    let six = "scenes/test/six-colour-room.toml";
+    let text = std::fs::read_to_string(root().join(six)).unwrap();
+    let scene = dir.join("camera-room.toml");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        &scene,
+        format!("{text}\n[sensor.imaging]\nexposure_s = 0.004\n"),
+    )
+    .unwrap();
+    let out = dir.join("calibration");
+    let record = calibrate_scene(scene.to_str().unwrap(), &out);
+    let camchain = read_export(&out, "kalibr_camchain.yaml");
+    assert!(
+        camchain.contains("  rostopic: /camera/image_raw\n"),
+        "{camchain}"
+    );
+    let clean = temp_dir("calibrate-camera-clean");
+    let plain = calibrate_scene(six, &clean);
+    assert_eq!(record.omnidir.model, plain.omnidir.model);
+}
+
 /// A paraboloid seen by an orthographic camera is the unified model with xi = 1 and the
 /// focal length 2p times the camera's pixels per metre (Mei and Rives 2007, table 1), no
 /// distortion. Measured: xi off by 7e-10, the focal length by 2e-6 px.
